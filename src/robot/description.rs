@@ -1,0 +1,370 @@
+//! The robot description file (TOML): joint kinds, phi angles, nominal phi-model rows,
+//! nominal couplings, joint limits, link masses, calibration and tool targets.
+//!
+//! Units in the file are those engineers read off drawings (mm, deg, kg); inside, everything
+//! is SI with angles in radians. See `scenarios/robots/asea-irb6l.toml` for a documented example.
+
+use crate::kinematics::{JointKind, PhiJoint, PhiModel, PhiRow};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A problem with a robot description file.
+#[derive(Debug, thiserror::Error)]
+pub enum DescriptionError {
+    /// The file could not be read.
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The TOML is malformed or has an unknown or missing key.
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// What the parser said, with line and column.
+        message: String,
+    },
+    /// A value is out of range or inconsistent with the rest.
+    #[error("{path}: field `{field}`: {message}")]
+    Invalid {
+        /// The file (or `<string>`).
+        path: PathBuf,
+        /// The offending key, e.g. `rows[2].alpha_deg`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// One joint as written in the file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointEntry {
+    /// `revolute` or `prismatic`.
+    pub kind: JointKind,
+    /// The phi angle of eq. (A2) [deg].
+    #[serde(default)]
+    pub phi_deg: f64,
+    /// Lower and upper joint limit [deg] (revolute) or [mm] (prismatic).
+    pub limits: [f64; 2],
+    /// Mass of the link this joint moves [kg].
+    pub mass_kg: f64,
+    /// Centre of mass of that link in its moving frame [mm].
+    pub com_mm: [f64; 3],
+}
+
+/// One row of Table 2 as written in the file.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RowEntry {
+    /// [m]
+    pub a_m: f64,
+    /// [m]
+    pub b_m: f64,
+    /// [deg]
+    pub alpha_deg: f64,
+    /// [deg]
+    pub beta_deg: f64,
+    /// [deg], default 0
+    #[serde(default)]
+    pub gamma_deg: f64,
+    /// [m], default 0
+    #[serde(default)]
+    pub h_m: f64,
+}
+
+impl RowEntry {
+    /// The row in internal units.
+    pub fn to_row(&self) -> PhiRow {
+        PhiRow {
+            a_m: self.a_m,
+            b_m: self.b_m,
+            alpha_rad: self.alpha_deg.to_radians(),
+            beta_rad: self.beta_deg.to_radians(),
+            gamma_rad: self.gamma_deg.to_radians(),
+            h_m: self.h_m,
+        }
+    }
+}
+
+/// A nominal passive coupling as the controller models it (FORMATS.md section 2):
+/// `nominal_passive_{from,to}(u_from) = slope * u_from`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NominalCoupling {
+    /// The driving joint (1-based).
+    pub from: usize,
+    /// The driven joint, always `from + 1` (paper section 3.1).
+    pub to: usize,
+    /// Passive motion of `to` per unit active motion of `from`.
+    pub slope: f64,
+}
+
+/// A rigid placement: translation [mm] and roll-pitch-yaw [deg] (`Rz(yaw) Ry(pitch) Rx(roll)`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Placement {
+    /// [mm]
+    #[serde(default)]
+    pub translation_mm: [f64; 3],
+    /// [deg]
+    #[serde(default)]
+    pub rpy_deg: [f64; 3],
+}
+
+impl Placement {
+    /// The placement as an isometry in metres.
+    pub fn to_isometry(&self) -> Isometry3<f64> {
+        let t = Vector3::from(self.translation_mm) * 1e-3;
+        let [r, p, y] = self.rpy_deg.map(f64::to_radians);
+        Isometry3::from_parts(Translation3::from(t), UnitQuaternion::from_euler_angles(r, p, y))
+    }
+}
+
+/// The tool: its frame in the last link and the three targets used for validation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolEntry {
+    /// The tool frame in the last link's moving frame.
+    #[serde(default)]
+    pub frame: Placement,
+    /// Tool targets 0, 1, 2 in the tool frame [mm] (three non-collinear points).
+    pub targets_mm: Vec<[f64; 3]>,
+}
+
+/// A target fixed on a link: which link (1-based) and where in its moving frame [mm].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkTarget {
+    /// The link carrying the target (1-based; link `k` is moved by joint `k`).
+    pub link: usize,
+    /// Position in that link's moving frame [mm].
+    pub position_mm: [f64; 3],
+}
+
+impl LinkTarget {
+    /// Position in the link's moving frame [m].
+    pub fn position_m(&self) -> Point3<f64> {
+        Point3::from(self.position_mm) * 1e-3
+    }
+}
+
+/// The targets observed while joint `joint` is swept (FORMATS.md section 1): target 0 on the
+/// moved link or beyond (rigidly moved by that joint alone), target 1 (optional) on the next
+/// link out or beyond, for the passive motion (eq. 14).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisTargets {
+    /// The swept joint (1-based).
+    pub joint: usize,
+    /// Target 0.
+    pub target0: LinkTarget,
+    /// Target 1, when the experiment measures a passive coupling into `joint + 1`.
+    #[serde(default)]
+    pub target1: Option<LinkTarget>,
+}
+
+/// A robot description file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotDescription {
+    /// Human-readable name.
+    pub name: String,
+    /// The joints, base first.
+    pub joints: Vec<JointEntry>,
+    /// The nominal phi-model rows (Table 2, nominal), `joints.len() - 1` of them.
+    pub rows: Vec<RowEntry>,
+    /// Nominal passive couplings known to the controller.
+    #[serde(default)]
+    pub couplings: Vec<NominalCoupling>,
+    /// Robot base frame (frame 1) in the instrument frame, for simulated set-ups.
+    #[serde(default)]
+    pub placement: Placement,
+    /// The tool.
+    pub tool: ToolEntry,
+    /// Targets for the axis experiments, one entry per joint.
+    pub axis_targets: Vec<AxisTargets>,
+}
+
+impl RobotDescription {
+    /// Reads and validates a description file.
+    pub fn from_file(path: &Path) -> Result<Self, DescriptionError> {
+        let text = std::fs::read_to_string(path).map_err(|source| DescriptionError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::from_toml_str(&text, path)
+    }
+
+    /// Parses and validates description text; `path` is used in error messages only.
+    pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, DescriptionError> {
+        let d: Self = toml::from_str(text).map_err(|e| DescriptionError::Parse {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        d.validate(path)?;
+        Ok(d)
+    }
+
+    /// The shipped ASEA IRB/L6 description (`scenarios/robots/asea-irb6l.toml`).
+    pub fn asea_irb6l() -> Self {
+        let text = include_str!("../../scenarios/robots/asea-irb6l.toml");
+        Self::from_toml_str(text, Path::new("scenarios/robots/asea-irb6l.toml"))
+            .expect("the shipped ASEA IRB/L6 description is valid (checked by tests)")
+    }
+
+    fn validate(&self, path: &Path) -> Result<(), DescriptionError> {
+        let bad = |field: String, message: String| DescriptionError::Invalid {
+            path: path.to_owned(),
+            field,
+            message,
+        };
+        let n = self.joints.len();
+        if n == 0 {
+            return Err(bad("joints".into(), "at least one joint is required".into()));
+        }
+        if self.rows.len() + 1 != n {
+            return Err(bad(
+                "rows".into(),
+                format!("{} joints need {} rows, found {}", n, n - 1, self.rows.len()),
+            ));
+        }
+        for (k, j) in self.joints.iter().enumerate() {
+            let all = [
+                j.phi_deg,
+                j.limits[0],
+                j.limits[1],
+                j.mass_kg,
+                j.com_mm[0],
+                j.com_mm[1],
+                j.com_mm[2],
+            ];
+            if all.iter().any(|v| !v.is_finite()) {
+                return Err(bad(format!("joints[{k}]"), "values must be finite".into()));
+            }
+            if j.limits[0] >= j.limits[1] {
+                return Err(bad(
+                    format!("joints[{k}].limits"),
+                    "lower limit must be below upper limit".into(),
+                ));
+            }
+            if j.mass_kg < 0.0 {
+                return Err(bad(format!("joints[{k}].mass_kg"), "mass must be >= 0".into()));
+            }
+        }
+        for (k, r) in self.rows.iter().enumerate() {
+            if [r.a_m, r.b_m, r.alpha_deg, r.beta_deg, r.gamma_deg, r.h_m]
+                .iter()
+                .any(|v| !v.is_finite())
+            {
+                return Err(bad(format!("rows[{k}]"), "values must be finite".into()));
+            }
+        }
+        for (k, c) in self.couplings.iter().enumerate() {
+            if c.from == 0 || c.from >= n || c.to != c.from + 1 {
+                return Err(bad(
+                    format!("couplings[{k}]"),
+                    format!(
+                        "a coupling drives joint from+1 from joint `from` in 1..{n}; found {} -> {}",
+                        c.from, c.to
+                    ),
+                ));
+            }
+            if !c.slope.is_finite() {
+                return Err(bad(format!("couplings[{k}].slope"), "must be finite".into()));
+            }
+        }
+        if self.tool.targets_mm.len() != 3 {
+            return Err(bad(
+                "tool.targets_mm".into(),
+                format!(
+                    "exactly 3 tool targets are required, found {}",
+                    self.tool.targets_mm.len()
+                ),
+            ));
+        }
+        let t: Vec<Point3<f64>> = self.tool.targets_mm.iter().map(|p| Point3::from(*p)).collect();
+        if (t[1] - t[0]).cross(&(t[2] - t[0])).norm() < 1.0 {
+            return Err(bad(
+                "tool.targets_mm".into(),
+                "the three tool targets are collinear".into(),
+            ));
+        }
+        for (k, a) in self.axis_targets.iter().enumerate() {
+            if a.joint == 0 || a.joint > n {
+                return Err(bad(format!("axis_targets[{k}].joint"), format!("must be in 1..={n}")));
+            }
+            if a.target0.link < a.joint || a.target0.link > n {
+                return Err(bad(
+                    format!("axis_targets[{k}].target0.link"),
+                    format!("must be in {}..={n} (moved by joint {})", a.joint, a.joint),
+                ));
+            }
+            if let Some(t1) = a.target1 {
+                if t1.link <= a.joint || t1.link > n {
+                    return Err(bad(
+                        format!("axis_targets[{k}].target1.link"),
+                        format!("must be in {}..={n} (beyond the swept joint)", a.joint + 1),
+                    ));
+                }
+            }
+            if self.axis_targets[..k].iter().any(|b| b.joint == a.joint) {
+                return Err(bad(
+                    format!("axis_targets[{k}].joint"),
+                    format!("joint {} appears twice", a.joint),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The nominal phi-model geometry, placed in the instrument frame by `placement`.
+    pub fn nominal_model(&self) -> PhiModel {
+        PhiModel {
+            joints: self
+                .joints
+                .iter()
+                .map(|j| PhiJoint {
+                    kind: j.kind,
+                    phi_rad: j.phi_deg.to_radians(),
+                })
+                .collect(),
+            rows: self.rows.iter().map(RowEntry::to_row).collect(),
+            world_from_base: self.placement.to_isometry(),
+            last_link_from_tool: self.tool.frame.to_isometry(),
+        }
+    }
+
+    /// The nominal slope of the coupling that drives joint `to` (1-based), if any.
+    pub fn nominal_coupling_into(&self, to: usize) -> Option<f64> {
+        self.couplings.iter().find(|c| c.to == to).map(|c| c.slope)
+    }
+
+    /// Tool targets in the tool frame [m].
+    pub fn tool_targets_m(&self) -> Vec<Point3<f64>> {
+        self.tool.targets_mm.iter().map(|p| Point3::from(*p) * 1e-3).collect()
+    }
+
+    /// The axis-experiment targets of joint `joint` (1-based), if the file gives them.
+    pub fn axis_targets_of(&self, joint: usize) -> Option<&AxisTargets> {
+        self.axis_targets.iter().find(|a| a.joint == joint)
+    }
+
+    /// Joint limits in internal units (rad or m).
+    pub fn limits_internal(&self, k: usize) -> [f64; 2] {
+        let j = &self.joints[k];
+        match j.kind {
+            JointKind::Revolute => j.limits.map(f64::to_radians),
+            JointKind::Prismatic => j.limits.map(|v| v * 1e-3),
+        }
+    }
+}

@@ -1,0 +1,224 @@
+//! Transmission and passive-coupling function forms (paper eqs. 8 and 15, section 4).
+//!
+//! These are pure maths shared by the truth model (which evaluates them) and the calibrator
+//! (which fits their coefficients): a form carries no knowledge of any true value.
+
+use serde::{Deserialize, Serialize};
+
+/// A transmission function `theta_c = f(theta_a)`: the command [rad] a joint needs to reach
+/// the actual active displacement `theta_a` [rad] (eq. 8).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Transmission {
+    /// `theta_c = theta_a + sum_k (sin[k-1] sin(k theta_a) + cos[k-1] cos(k theta_a))`;
+    /// the paper's form for joints 1, 2, 3 and 6 is order 1.
+    Harmonic {
+        /// Sine coefficients, order 1 first [rad].
+        sin: Vec<f64>,
+        /// Cosine coefficients, order 1 first [rad].
+        cos: Vec<f64>,
+    },
+    /// A gear of ratio `N` with errors periodic in the gear angle (the paper's joint 5):
+    /// `theta_G = theta_a / N + sum_k (sin[k-1] sin(k theta_a / N) + cos[k-1] cos(k theta_a / N))`
+    /// and, in joint units, `theta_c = N theta_G`.
+    Gear {
+        /// Gear ratio `N` (joint turns per gear turn).
+        ratio: f64,
+        /// Sine coefficients in gear units [rad].
+        sin: Vec<f64>,
+        /// Cosine coefficients in gear units [rad].
+        cos: Vec<f64>,
+    },
+}
+
+impl Transmission {
+    /// The ideal transmission `theta_c = theta_a`.
+    pub fn identity() -> Self {
+        Transmission::Harmonic {
+            sin: vec![],
+            cos: vec![],
+        }
+    }
+
+    /// `theta_c = f(theta_a)`.
+    pub fn command_from_actual(&self, theta_a: f64) -> f64 {
+        match self {
+            Transmission::Harmonic { sin, cos } => theta_a + harmonics(theta_a, sin, cos).0,
+            Transmission::Gear { ratio, sin, cos } => theta_a + ratio * harmonics(theta_a / ratio, sin, cos).0,
+        }
+    }
+
+    /// `d theta_c / d theta_a`.
+    pub fn slope(&self, theta_a: f64) -> f64 {
+        match self {
+            Transmission::Harmonic { sin, cos } => 1.0 + harmonics(theta_a, sin, cos).1,
+            Transmission::Gear { ratio, sin, cos } => 1.0 + harmonics(theta_a / ratio, sin, cos).1,
+        }
+    }
+
+    /// `theta_a = f^-1(theta_c)` by safeguarded Newton iteration; `None` if `f` is not
+    /// monotonic near the solution (coefficients too large for a real transmission).
+    pub fn actual_from_command(&self, theta_c: f64) -> Option<f64> {
+        invert_monotonic(|t| self.command_from_actual(t) - theta_c, |t| self.slope(t), theta_c)
+    }
+}
+
+/// A passive coupling `theta_p = g(theta_a)`: the passive displacement of joint `i+1` [rad]
+/// driven by the active displacement `theta_a` of joint `i` [rad] (eq. 15).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
+pub enum CouplingFunction {
+    /// `g = N t + sum_k (sin[k-1] sin(k N t) + cos[k-1] cos(k N t))`: a gear of ratio `N`
+    /// (bevel gear 4->5: `N = 32/19`; identity 3->4: `N = 1`, no harmonics).
+    Gear {
+        /// Ratio `N`.
+        ratio: f64,
+        /// Sine coefficients [rad].
+        sin: Vec<f64>,
+        /// Cosine coefficients [rad].
+        cos: Vec<f64>,
+    },
+    /// The paper's fractional four-bar form (section 4, joint 2->3):
+    /// `g = atan((n0 sin t + n1 cos t + n2) / (cos t + d0 sin t + d1))`, continuous branch
+    /// through `t = 0`.
+    Fractional {
+        /// `[n0, n1, n2]`.
+        num: [f64; 3],
+        /// `[d0, d1]`.
+        den: [f64; 2],
+    },
+}
+
+impl CouplingFunction {
+    /// A linear coupling `g = slope * t` (the controller's nominal model).
+    pub fn linear(slope: f64) -> Self {
+        CouplingFunction::Gear {
+            ratio: slope,
+            sin: vec![],
+            cos: vec![],
+        }
+    }
+
+    /// `theta_p = g(theta_a)`.
+    pub fn passive(&self, t: f64) -> f64 {
+        match self {
+            CouplingFunction::Gear { ratio, sin, cos } => ratio * t + harmonics(ratio * t, sin, cos).0,
+            CouplingFunction::Fractional { num, den } => {
+                let (s, c) = t.sin_cos();
+                let y = num[0] * s + num[1] * c + num[2];
+                let x = c + den[0] * s + den[1];
+                // atan of the ratio, kept on the branch through t = 0 (x > 0 there).
+                y.atan2(x)
+            }
+        }
+    }
+
+    /// `d g / d t`.
+    pub fn slope(&self, t: f64) -> f64 {
+        match self {
+            CouplingFunction::Gear { ratio, sin, cos } => ratio * (1.0 + harmonics(ratio * t, sin, cos).1),
+            CouplingFunction::Fractional { num, den } => {
+                let (s, c) = t.sin_cos();
+                let y = num[0] * s + num[1] * c + num[2];
+                let x = c + den[0] * s + den[1];
+                let dy = num[0] * c - num[1] * s;
+                let dx = -s + den[0] * c;
+                (x * dy - y * dx) / (x * x + y * y)
+            }
+        }
+    }
+}
+
+/// `(sum_k s_k sin(k x) + c_k cos(k x), d/dx of it)`.
+fn harmonics(x: f64, sin: &[f64], cos: &[f64]) -> (f64, f64) {
+    let (mut v, mut dv) = (0.0, 0.0);
+    for (k, s) in sin.iter().enumerate() {
+        let kf = (k + 1) as f64;
+        let (sk, ck) = (kf * x).sin_cos();
+        v += s * sk;
+        dv += s * kf * ck;
+    }
+    for (k, c) in cos.iter().enumerate() {
+        let kf = (k + 1) as f64;
+        let (sk, ck) = (kf * x).sin_cos();
+        v += c * ck;
+        dv -= c * kf * sk;
+    }
+    (v, dv)
+}
+
+/// Root of a monotonically increasing `h` by Newton from `start`, with bisection fallback.
+pub(crate) fn invert_monotonic(h: impl Fn(f64) -> f64, dh: impl Fn(f64) -> f64, start: f64) -> Option<f64> {
+    let mut t = start;
+    for _ in 0..50 {
+        let r = h(t);
+        if r.abs() < 1e-15 {
+            return Some(t);
+        }
+        let d = dh(t);
+        if d <= 0.0 || !d.is_finite() {
+            return None;
+        }
+        let step = r / d;
+        t -= step;
+        if step.abs() < 1e-15 * (1.0 + t.abs()) {
+            return Some(t);
+        }
+    }
+    (h(t).abs() < 1e-12).then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn paper_joint6_inverts() {
+        let f = Transmission::Harmonic {
+            sin: vec![0.017334],
+            cos: vec![0.002677],
+        };
+        for i in -20..=20 {
+            let a = i as f64 * 0.1;
+            let c = f.command_from_actual(a);
+            assert_relative_eq!(f.actual_from_command(c).unwrap(), a, epsilon = 1e-13);
+        }
+    }
+
+    #[test]
+    fn slopes_match_central_differences() {
+        let t = Transmission::Gear {
+            ratio: 32.0 / 19.0,
+            sin: vec![0.041227, 0.001],
+            cos: vec![-0.000013],
+        };
+        let g = CouplingFunction::Fractional {
+            num: [-0.998132, 0.213253, -0.212863],
+            den: [0.096654, -0.0006941],
+        };
+        let b = CouplingFunction::Gear {
+            ratio: 32.0 / 19.0,
+            sin: vec![-0.040562],
+            cos: vec![0.000018],
+        };
+        let h = 1e-6;
+        for i in -10..=10 {
+            let x = i as f64 * 0.07;
+            let fd = |f: &dyn Fn(f64) -> f64| (f(x + h) - f(x - h)) / (2.0 * h);
+            assert_relative_eq!(t.slope(x), fd(&|v| t.command_from_actual(v)), epsilon = 1e-8);
+            assert_relative_eq!(g.slope(x), fd(&|v| g.passive(v)), epsilon = 1e-8);
+            assert_relative_eq!(b.slope(x), fd(&|v| b.passive(v)), epsilon = 1e-8);
+        }
+    }
+
+    #[test]
+    fn paper_four_bar_is_nearly_minus_identity() {
+        let g = CouplingFunction::Fractional {
+            num: [-0.998132, 0.213253, -0.212863],
+            den: [0.096654, -0.0006941],
+        };
+        assert!(g.passive(0.0).abs() < 1e-3);
+        assert_relative_eq!(g.slope(0.0), -1.0, epsilon = 0.05);
+    }
+}
