@@ -3,4 +3,5 @@
 #![deny(clippy::float_cmp)]
 
 pub mod kinematics;
+pub mod measurement;
 pub mod robot;
