@@ -2,10 +2,17 @@
 //! calibrated to the paper's 0.19 mm net radial error) and the measurement data files
 //! (FORMATS.md section 1).
 
+mod csv_io;
+mod data;
 mod model;
 mod noise_calibration;
 mod theodolite;
 
+pub use csv_io::{
+    MeasurementFileError, format_f64, read_measurements, read_measurements_from, write_measurements,
+    write_measurements_to,
+};
+pub use data::{Experiment, Measurement, MeasurementSet, MeasurementSetError, RowProblem};
 pub use model::{IsotropicNoise, MeasurementModel};
 pub use noise_calibration::{
     Anisotropy, NoiseCalibration, PAPER_NET_RADIAL_RMS_MM, PAPER_RIGHT_STATION_MM, PAPER_ROBOT_BASE_MM, ReferenceVolume,

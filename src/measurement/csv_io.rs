@@ -1,0 +1,514 @@
+//! Reading and writing the measurement CSV (FORMATS.md section 1).
+//!
+//! Header required; columns found by name in any order (surrounding white space ignored);
+//! `#` lines are comments; unknown columns are ignored. Every malformed file gives one
+//! [`MeasurementFileError`] naming the file, the 1-based line and the column.
+
+use super::data::{Measurement, MeasurementSet, RowProblem};
+use std::collections::HashMap;
+use std::fs::OpenOptions;
+use std::io;
+use std::num::FpCategory;
+use std::path::{Path, PathBuf};
+
+/// A problem reading or writing a measurement file.
+#[derive(Debug, thiserror::Error)]
+pub enum MeasurementFileError {
+    /// The file could not be opened, read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: io::Error,
+    },
+    /// The output file exists and overwriting was not allowed.
+    #[error("{path}: file exists; refusing to overwrite it")]
+    Exists {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file is not valid CSV (e.g. not UTF-8, unterminated quote).
+    #[error("{path}:{line}: malformed CSV: {message}")]
+    Csv {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// What the CSV parser said.
+        message: String,
+    },
+    /// The file has no header row.
+    #[error("{path}: empty file: no header row")]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file has a header but no data rows.
+    #[error("{path}:{line}: no measurement rows after the header")]
+    NoRows {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the header.
+        line: u64,
+    },
+    /// A required column is absent from the header.
+    #[error("{path}:{line}: column `{column}`: missing from the header")]
+    MissingColumn {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the header.
+        line: u64,
+        /// The missing column.
+        column: String,
+    },
+    /// A column appears twice in the header.
+    #[error("{path}:{line}: column `{column}`: appears more than once in the header")]
+    DuplicateColumn {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the header.
+        line: u64,
+        /// The column.
+        column: String,
+    },
+    /// The `cmd_k` columns do not match the robot's joint count.
+    #[error("{path}:{line}: column `{column}`: the file has {found} joint command columns, expected {expected}")]
+    JointCount {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the header.
+        line: u64,
+        /// The first offending (extra or missing) `cmd_k` column.
+        column: String,
+        /// Number of `cmd_k` columns in the file.
+        found: usize,
+        /// N.
+        expected: usize,
+    },
+    /// A row ends before this column.
+    #[error("{path}:{line}: column `{column}`: missing value (row shorter than the header)")]
+    MissingField {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+    },
+    /// A value is not a number.
+    #[error("{path}:{line}: column `{column}`: {value:?} is not a number")]
+    NotANumber {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+        /// The text found.
+        value: String,
+    },
+    /// A value is NaN or infinite.
+    #[error("{path}:{line}: column `{column}`: {value:?} is not finite")]
+    NotFinite {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+        /// The text found.
+        value: String,
+    },
+    /// An integer column holds something else.
+    #[error("{path}:{line}: column `{column}`: {value:?} is not a non-negative integer")]
+    NotAnInteger {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+        /// The text found.
+        value: String,
+    },
+    /// An integer column holds a negative value.
+    #[error("{path}:{line}: column `{column}`: {value:?} is negative")]
+    Negative {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+        /// The text found.
+        value: String,
+    },
+    /// A row breaks a data-set rule (range, duplicate key, consistency).
+    #[error("{path}:{line}: column `{column}`: {problem}")]
+    InvalidRow {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+        /// What is wrong (a `DuplicateKey`'s `first_at` is a line number).
+        problem: RowProblem,
+    },
+}
+
+/// Column positions found in the header.
+struct Columns {
+    experiment: usize,
+    moved_joint: usize,
+    step: usize,
+    target: usize,
+    position: [usize; 3],
+    cmd: Vec<usize>,
+    payload_kg: Option<usize>,
+    temperature_c: Option<usize>,
+}
+
+const POSITION_COLUMNS: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
+
+/// Reads a measurement file. `joint_count`: N from the robot description; when `None`, N is
+/// the number of `cmd_k` columns, which must be `cmd_1..cmd_N`.
+pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<MeasurementSet, MeasurementFileError> {
+    let file = std::fs::File::open(path).map_err(|source| MeasurementFileError::Io {
+        path: path.into(),
+        source,
+    })?;
+    read_measurements_from(io::BufReader::new(file), path, joint_count)
+}
+
+/// [`read_measurements`] from any reader; `path` only labels errors.
+pub fn read_measurements_from<R: io::Read>(
+    reader: R,
+    path: &Path,
+    joint_count: Option<usize>,
+) -> Result<MeasurementSet, MeasurementFileError> {
+    let mut bytes = Vec::new();
+    let mut reader = reader;
+    reader
+        .read_to_end(&mut bytes)
+        .map_err(|source| MeasurementFileError::Io {
+            path: path.into(),
+            source,
+        })?;
+    let line_at = |position: Option<&csv::Position>| position.map_or(0, |p| record_line(&bytes, p.byte()));
+    let mut csv = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .flexible(true)
+        .has_headers(true)
+        .from_reader(bytes.as_slice());
+    let csv_error = |e: csv::Error| MeasurementFileError::Csv {
+        path: path.into(),
+        line: line_at(e.position()),
+        message: e.to_string(),
+    };
+    let header = csv.headers().map_err(csv_error)?.clone();
+    if header.is_empty() {
+        return Err(MeasurementFileError::Empty { path: path.into() });
+    }
+    let header_line = line_at(header.position());
+    let columns = find_columns(&header, path, header_line, joint_count)?;
+    let mut rows = Vec::new();
+    let mut lines = Vec::new();
+    for record in csv.records() {
+        let record = record.map_err(csv_error)?;
+        let line = line_at(record.position());
+        let cells = Cells {
+            record: &record,
+            header: &header,
+            path,
+            line,
+        };
+        rows.push(parse_row(&cells, &columns)?);
+        lines.push(line);
+    }
+    if rows.is_empty() {
+        return Err(MeasurementFileError::NoRows {
+            path: path.into(),
+            line: header_line,
+        });
+    }
+    MeasurementSet::new(columns.cmd.len(), rows).map_err(|e| {
+        let column = e.problem.column();
+        let problem = match e.problem {
+            RowProblem::DuplicateKey {
+                experiment,
+                step,
+                target,
+                first_at,
+            } => RowProblem::DuplicateKey {
+                experiment,
+                step,
+                target,
+                first_at: lines[first_at as usize],
+            },
+            other => other,
+        };
+        MeasurementFileError::InvalidRow {
+            path: path.into(),
+            line: lines[e.row],
+            column,
+            problem,
+        }
+    })
+}
+
+/// The 1-based line of the record whose read started at byte `offset`.
+///
+/// The csv crate's positions point at the start of the read, before any comment or blank
+/// lines preceding the record, and its line counter skips comment lines; so skip those
+/// lines here and count newlines.
+fn record_line(bytes: &[u8], offset: u64) -> u64 {
+    let mut start = usize::try_from(offset).unwrap_or(usize::MAX).min(bytes.len());
+    loop {
+        let rest = &bytes[start..];
+        let skippable = rest.first() == Some(&b'#') || rest.starts_with(b"\n") || rest.starts_with(b"\r\n");
+        match rest.iter().position(|&b| b == b'\n') {
+            Some(end) if skippable => start += end + 1,
+            _ => break,
+        }
+    }
+    1 + bytes[..start].iter().filter(|&&b| b == b'\n').count() as u64
+}
+
+fn find_columns(
+    header: &csv::StringRecord,
+    path: &Path,
+    line: u64,
+    joint_count: Option<usize>,
+) -> Result<Columns, MeasurementFileError> {
+    let mut index: HashMap<&str, usize> = HashMap::new();
+    let mut cmd: HashMap<usize, usize> = HashMap::new();
+    for (i, name) in header.iter().map(str::trim).enumerate() {
+        let k = name
+            .strip_prefix("cmd_")
+            .and_then(|k| k.parse::<usize>().ok())
+            .filter(|&k| k >= 1);
+        let known = k.is_some()
+            || [
+                "experiment",
+                "moved_joint",
+                "step",
+                "target",
+                "payload_kg",
+                "temperature_c",
+            ]
+            .contains(&name)
+            || POSITION_COLUMNS.contains(&name);
+        if known && index.insert(name, i).is_some() {
+            return Err(MeasurementFileError::DuplicateColumn {
+                path: path.into(),
+                line,
+                column: name.into(),
+            });
+        }
+        if let Some(k) = k {
+            cmd.insert(k, i);
+        }
+    }
+    let required = |column: &str| {
+        index
+            .get(column)
+            .copied()
+            .ok_or_else(|| MeasurementFileError::MissingColumn {
+                path: path.into(),
+                line,
+                column: column.into(),
+            })
+    };
+    let columns_found = cmd.len();
+    let n = match joint_count {
+        Some(n) => {
+            let extra = cmd.keys().copied().filter(|&k| k > n).min();
+            let missing = (1..=n).find(|k| !cmd.contains_key(k));
+            if let Some(k) = extra.or(missing) {
+                let column = format!("cmd_{k}");
+                return Err(MeasurementFileError::JointCount {
+                    path: path.into(),
+                    line,
+                    column,
+                    found: columns_found,
+                    expected: n,
+                });
+            }
+            n
+        }
+        None => {
+            let n = columns_found;
+            if let Some(k) = (1..=n.max(1)).find(|k| !cmd.contains_key(k)) {
+                return Err(MeasurementFileError::MissingColumn {
+                    path: path.into(),
+                    line,
+                    column: format!("cmd_{k}"),
+                });
+            }
+            n
+        }
+    };
+    Ok(Columns {
+        experiment: required("experiment")?,
+        moved_joint: required("moved_joint")?,
+        step: required("step")?,
+        target: required("target")?,
+        position: [required("x_mm")?, required("y_mm")?, required("z_mm")?],
+        cmd: (1..=n).map(|k| cmd[&k]).collect(),
+        payload_kg: index.get("payload_kg").copied(),
+        temperature_c: index.get("temperature_c").copied(),
+    })
+}
+
+/// One data record with what is needed to name its cells in errors.
+struct Cells<'a> {
+    record: &'a csv::StringRecord,
+    header: &'a csv::StringRecord,
+    path: &'a Path,
+    line: u64,
+}
+
+impl Cells<'_> {
+    fn column(&self, i: usize) -> String {
+        self.header.get(i).unwrap_or_default().trim().to_string()
+    }
+
+    fn text(&self, i: usize) -> Result<&str, MeasurementFileError> {
+        self.record
+            .get(i)
+            .map(str::trim)
+            .ok_or_else(|| MeasurementFileError::MissingField {
+                path: self.path.into(),
+                line: self.line,
+                column: self.column(i),
+            })
+    }
+
+    fn number(&self, i: usize) -> Result<f64, MeasurementFileError> {
+        let text = self.text(i)?;
+        let (path, line, column, value) = (self.path.into(), self.line, self.column(i), text.to_string());
+        match text.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            Ok(_) => Err(MeasurementFileError::NotFinite {
+                path,
+                line,
+                column,
+                value,
+            }),
+            Err(_) => Err(MeasurementFileError::NotANumber {
+                path,
+                line,
+                column,
+                value,
+            }),
+        }
+    }
+
+    fn optional_number(&self, i: Option<usize>, default: f64) -> Result<f64, MeasurementFileError> {
+        match i {
+            Some(i) if !self.record.get(i).unwrap_or_default().trim().is_empty() => self.number(i),
+            _ => Ok(default),
+        }
+    }
+
+    fn integer(&self, i: usize) -> Result<usize, MeasurementFileError> {
+        let text = self.text(i)?;
+        let (path, line, column, value) = (self.path.into(), self.line, self.column(i), text.to_string());
+        match text.parse::<i128>() {
+            Ok(v) if v < 0 => Err(MeasurementFileError::Negative {
+                path,
+                line,
+                column,
+                value,
+            }),
+            Ok(v) => usize::try_from(v).map_err(|_| MeasurementFileError::NotAnInteger {
+                path,
+                line,
+                column,
+                value,
+            }),
+            Err(_) => Err(MeasurementFileError::NotAnInteger {
+                path,
+                line,
+                column,
+                value,
+            }),
+        }
+    }
+}
+
+fn parse_row(cells: &Cells<'_>, columns: &Columns) -> Result<Measurement, MeasurementFileError> {
+    let [x, y, z] = columns.position;
+    Ok(Measurement {
+        experiment: cells.text(columns.experiment)?.to_string(),
+        moved_joint: cells.integer(columns.moved_joint)?,
+        step: cells.integer(columns.step)?,
+        target: cells.integer(columns.target)?,
+        position_mm: [cells.number(x)?, cells.number(y)?, cells.number(z)?],
+        cmd: columns.cmd.iter().map(|&i| cells.number(i)).collect::<Result<_, _>>()?,
+        payload_kg: cells.optional_number(columns.payload_kg, Measurement::DEFAULT_PAYLOAD_KG)?,
+        temperature_c: cells.optional_number(columns.temperature_c, Measurement::DEFAULT_TEMPERATURE_C)?,
+    })
+}
+
+/// Shortest text that parses back to the same `f64` bit pattern (Rust's shortest
+/// round-trip formatting; exponent form outside [1e-5, 1e16) to stay short).
+pub fn format_f64(v: f64) -> String {
+    let a = v.abs();
+    if v.classify() == FpCategory::Zero || (1e-5..1e16).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Writes `set` to `path` with the header
+/// `experiment,moved_joint,step,target,x_mm,y_mm,z_mm,cmd_1..cmd_N,payload_kg,temperature_c`.
+/// Fails with [`MeasurementFileError::Exists`] if the file exists and `overwrite` is false.
+pub fn write_measurements(path: &Path, set: &MeasurementSet, overwrite: bool) -> Result<(), MeasurementFileError> {
+    let io_error = |source| MeasurementFileError::Io {
+        path: path.into(),
+        source,
+    };
+    let file = OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .create_new(!overwrite)
+        .open(path);
+    let file = file.map_err(|source| match source.kind() {
+        io::ErrorKind::AlreadyExists => MeasurementFileError::Exists { path: path.into() },
+        _ => io_error(source),
+    })?;
+    write_measurements_to(io::BufWriter::new(file), set).map_err(io_error)
+}
+
+/// [`write_measurements`] to any writer.
+pub fn write_measurements_to<W: io::Write>(writer: W, set: &MeasurementSet) -> io::Result<()> {
+    // `comment` makes the writer quote an experiment id that starts with `#`.
+    let mut csv = csv::WriterBuilder::new().comment(Some(b'#')).from_writer(writer);
+    let mut header: Vec<String> = ["experiment", "moved_joint", "step", "target"]
+        .map(String::from)
+        .to_vec();
+    header.extend(POSITION_COLUMNS.map(String::from));
+    header.extend((1..=set.joint_count()).map(|k| format!("cmd_{k}")));
+    header.extend(["payload_kg".to_string(), "temperature_c".to_string()]);
+    csv.write_record(&header)?;
+    for m in set.rows() {
+        let mut record = vec![
+            m.experiment.clone(),
+            m.moved_joint.to_string(),
+            m.step.to_string(),
+            m.target.to_string(),
+        ];
+        record.extend(m.position_mm.iter().chain(&m.cmd).map(|&v| format_f64(v)));
+        record.extend([format_f64(m.payload_kg), format_f64(m.temperature_c)]);
+        csv.write_record(&record)?;
+    }
+    csv.flush()
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,191 @@
+//! Malformed-file tests: each error names the file, the line and the column.
+
+use super::*;
+use std::io::Write;
+
+const HEADER: &str = "experiment,moved_joint,step,target,x_mm,y_mm,z_mm,cmd_1,cmd_2";
+
+/// Writes `text` to a temporary file and reads it with N = `joint_count`.
+fn read_text(
+    text: &str,
+    joint_count: Option<usize>,
+) -> (tempfile::NamedTempFile, Result<MeasurementSet, MeasurementFileError>) {
+    let mut file = tempfile::NamedTempFile::new().unwrap();
+    file.write_all(text.as_bytes()).unwrap();
+    file.flush().unwrap();
+    let result = read_measurements(file.path(), joint_count);
+    (file, result)
+}
+
+/// Reads `text`, expects an error, and checks its message names the file, `line` and `column`.
+fn expect_error(text: &str, joint_count: Option<usize>, line: u64, column: &str) -> MeasurementFileError {
+    let (file, result) = read_text(text, joint_count);
+    let error = result.expect_err("malformed file must be rejected");
+    let message = error.to_string();
+    let path = file.path().display().to_string();
+    assert!(message.contains(&path), "{message:?} does not name {path}");
+    assert!(
+        message.contains(&format!(":{line}:")),
+        "{message:?} does not name line {line}"
+    );
+    assert!(
+        message.contains(&format!("`{column}`")),
+        "{message:?} does not name column {column}"
+    );
+    error
+}
+
+#[test]
+fn reads_a_good_file_with_comments_extra_columns_and_any_order() {
+    let text = "# produced by hand\n\
+                cmd_2, note ,target,step,moved_joint,experiment,z_mm,y_mm,x_mm,cmd_1,temperature_c\n\
+                # a comment between rows\n\
+                2.5,hello,0,0,1,axis1,3,2,1,-10,21.5\n\
+                2.5,,1,0,1,axis1,6,5,4,-10,\n";
+    let (_file, result) = read_text(text, Some(2));
+    let set = result.unwrap();
+    assert_eq!(set.joint_count(), 2);
+    let rows = set.rows();
+    assert_eq!(rows.len(), 2);
+    assert_eq!(rows[0].position_mm, [1.0, 2.0, 3.0]);
+    assert_eq!(rows[0].cmd, [-10.0, 2.5]);
+    assert_eq!(rows[0].temperature_c.to_bits(), 21.5f64.to_bits());
+    assert_eq!(
+        rows[1].temperature_c.to_bits(),
+        Measurement::DEFAULT_TEMPERATURE_C.to_bits()
+    );
+    assert_eq!(rows[1].payload_kg.to_bits(), Measurement::DEFAULT_PAYLOAD_KG.to_bits());
+    let (_file, inferred) = read_text(text, None);
+    assert_eq!(inferred.unwrap(), set);
+}
+
+#[test]
+fn missing_column() {
+    let text = "experiment,moved_joint,step,target,x_mm,z_mm,cmd_1,cmd_2\naxis1,1,0,0,1,3,0,0\n";
+    let e = expect_error(text, Some(2), 1, "y_mm");
+    assert!(matches!(e, MeasurementFileError::MissingColumn { .. }));
+}
+
+#[test]
+fn line_numbers_count_comment_lines() {
+    let text = format!("# one\n# two\n{HEADER}\naxis1,1,0,0,1,2,3,0,0\n# three\naxis1,1,1,0,1,oops,3,0,0\n");
+    let e = expect_error(&text, Some(2), 6, "y_mm");
+    assert!(matches!(e, MeasurementFileError::NotANumber { .. }));
+}
+
+#[test]
+fn non_number() {
+    let text = format!("{HEADER}\naxis1,1,0,0,1,2,3,0,zero\n");
+    let e = expect_error(&text, Some(2), 2, "cmd_2");
+    assert!(matches!(e, MeasurementFileError::NotANumber { .. }));
+}
+
+#[test]
+fn nan_and_infinity() {
+    let text = format!("{HEADER}\naxis1,1,0,0,NaN,2,3,0,0\n");
+    let e = expect_error(&text, Some(2), 2, "x_mm");
+    assert!(matches!(e, MeasurementFileError::NotFinite { .. }));
+    let text = format!("{HEADER}\naxis1,1,0,0,1,2,3,0,0\naxis1,1,1,0,1,2,-inf,0,0\n");
+    let e = expect_error(&text, Some(2), 3, "z_mm");
+    assert!(matches!(e, MeasurementFileError::NotFinite { .. }));
+}
+
+#[test]
+fn duplicated_experiment_step_target() {
+    let text = format!("{HEADER}\naxis1,1,0,0,1,2,3,0,0\naxis1,1,0,1,1,2,3,0,0\naxis1,1,0,0,1,2,3,0,0\n");
+    let e = expect_error(&text, Some(2), 4, "experiment,step,target");
+    assert!(matches!(
+        e,
+        MeasurementFileError::InvalidRow {
+            problem: RowProblem::DuplicateKey { first_at: 2, .. },
+            ..
+        }
+    ));
+}
+
+#[test]
+fn moved_joint_out_of_range() {
+    let text = format!("{HEADER}\naxis3,3,0,0,1,2,3,0,0\n");
+    let e = expect_error(&text, Some(2), 2, "moved_joint");
+    assert!(matches!(
+        e,
+        MeasurementFileError::InvalidRow {
+            problem: RowProblem::MovedJointOutOfRange { .. },
+            ..
+        }
+    ));
+}
+
+#[test]
+fn wrong_joint_count() {
+    let text = format!("{HEADER}\naxis1,1,0,0,1,2,3,0,0\n");
+    let e = expect_error(&text, Some(3), 1, "cmd_3");
+    assert!(matches!(
+        e,
+        MeasurementFileError::JointCount {
+            found: 2,
+            expected: 3,
+            ..
+        }
+    ));
+    let e = expect_error(&text, Some(1), 1, "cmd_2");
+    assert!(matches!(
+        e,
+        MeasurementFileError::JointCount {
+            found: 2,
+            expected: 1,
+            ..
+        }
+    ));
+    // Without an expected count the cmd columns must be contiguous.
+    let text = "experiment,moved_joint,step,target,x_mm,y_mm,z_mm,cmd_1,cmd_3\naxis1,1,0,0,1,2,3,0,0\n";
+    let e = expect_error(text, None, 1, "cmd_2");
+    assert!(matches!(e, MeasurementFileError::MissingColumn { .. }));
+}
+
+#[test]
+fn negative_step_and_target() {
+    let text = format!("{HEADER}\naxis1,1,-1,0,1,2,3,0,0\n");
+    let e = expect_error(&text, Some(2), 2, "step");
+    assert!(matches!(e, MeasurementFileError::Negative { .. }));
+    let text = format!("{HEADER}\naxis1,1,0,-2,1,2,3,0,0\n");
+    let e = expect_error(&text, Some(2), 2, "target");
+    assert!(matches!(e, MeasurementFileError::Negative { .. }));
+    let text = format!("{HEADER}\naxis1,1,0.5,0,1,2,3,0,0\n");
+    let e = expect_error(&text, Some(2), 2, "step");
+    assert!(matches!(e, MeasurementFileError::NotAnInteger { .. }));
+}
+
+#[test]
+fn short_row_and_duplicate_column() {
+    let text = format!("{HEADER}\naxis1,1,0,0,1,2,3,0\n");
+    let e = expect_error(&text, Some(2), 2, "cmd_2");
+    assert!(matches!(e, MeasurementFileError::MissingField { .. }));
+    let text = format!("{HEADER},x_mm\naxis1,1,0,0,1,2,3,0,0,1\n");
+    let e = expect_error(&text, Some(2), 1, "x_mm");
+    assert!(matches!(e, MeasurementFileError::DuplicateColumn { .. }));
+}
+
+#[test]
+fn empty_file_and_header_only() {
+    for text in ["", "# only a comment\n"] {
+        let (file, result) = read_text(text, Some(2));
+        let message = result.unwrap_err().to_string();
+        assert!(
+            message.contains(&file.path().display().to_string()) && message.contains("empty"),
+            "{message}"
+        );
+    }
+    let (_file, result) = read_text(&format!("# c\n{HEADER}\n"), Some(2));
+    assert!(matches!(result, Err(MeasurementFileError::NoRows { line: 2, .. })));
+}
+
+#[test]
+fn writer_refuses_to_overwrite() {
+    let (file, result) = read_text(&format!("{HEADER}\naxis1,1,0,0,1,2,3,0,0\n"), Some(2));
+    let set = result.unwrap();
+    let e = write_measurements(file.path(), &set, false).unwrap_err();
+    assert!(matches!(e, MeasurementFileError::Exists { .. }), "{e}");
+    write_measurements(file.path(), &set, true).unwrap();
+    assert_eq!(read_measurements(file.path(), Some(2)).unwrap(), set);
+}

@@ -1,0 +1,333 @@
+//! Measured target positions as read from (or written to) the measurement CSV of
+//! FORMATS.md section 1, grouped by experiment and pose.
+
+use nalgebra::Point3;
+use std::collections::{BTreeMap, HashMap};
+
+/// One observed target in one robot pose: one row of the measurement CSV.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measurement {
+    /// Text id of the experiment (one joint swept, or one set of validation poses).
+    pub experiment: String,
+    /// The joint whose actuator the experiment moves (1..=N), or 0 for validation poses.
+    pub moved_joint: usize,
+    /// 0-based order of the pose within the experiment.
+    pub step: usize,
+    /// Target id (axis experiments: 0 on the moved link, 1 on the next; validation: 0..=2).
+    pub target: usize,
+    /// Measured position in the instrument frame [mm].
+    pub position_mm: [f64; 3],
+    /// Controller commands `cmd_1..cmd_N` in file units: degrees (revolute) or millimetres
+    /// (prismatic).
+    pub cmd: Vec<f64>,
+    /// Payload carried at the tool [kg] (default 0).
+    pub payload_kg: f64,
+    /// Ambient temperature [deg C] (default 20).
+    pub temperature_c: f64,
+}
+
+impl Measurement {
+    /// Default `payload_kg` when the column is absent.
+    pub const DEFAULT_PAYLOAD_KG: f64 = 0.0;
+    /// Default `temperature_c` when the column is absent.
+    pub const DEFAULT_TEMPERATURE_C: f64 = 20.0;
+
+    /// The measured position in metres.
+    pub fn position_m(&self) -> Point3<f64> {
+        Point3::from(self.position_mm.map(|c| c * 1e-3))
+    }
+}
+
+/// What is wrong with one row of a measurement set (position given by the caller).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RowProblem {
+    /// The experiment id is empty or has leading/trailing white space.
+    #[error("experiment id {experiment:?} is empty or has surrounding white space")]
+    BadExperimentName {
+        /// The id.
+        experiment: String,
+    },
+    /// The row has a different number of joint commands from the set.
+    #[error("{found} joint commands, expected {expected}")]
+    JointCount {
+        /// Commands in the row.
+        found: usize,
+        /// Joints of the robot.
+        expected: usize,
+    },
+    /// A number is NaN or infinite.
+    #[error("value {value} is not finite")]
+    NotFinite {
+        /// The column, e.g. `y_mm` or `cmd_3`.
+        column: String,
+        /// The value.
+        value: f64,
+    },
+    /// `moved_joint` is not in `0..=N`.
+    #[error("moved_joint {value} is outside 0..={joint_count}")]
+    MovedJointOutOfRange {
+        /// The value.
+        value: usize,
+        /// N.
+        joint_count: usize,
+    },
+    /// The experiment's rows disagree on which joint it moves.
+    #[error("experiment {experiment:?} moves joint {found} here but joint {first} earlier")]
+    InconsistentMovedJoint {
+        /// The experiment.
+        experiment: String,
+        /// `moved_joint` of its first row.
+        first: usize,
+        /// `moved_joint` of this row.
+        found: usize,
+    },
+    /// Two rows share (experiment, step, target).
+    #[error("duplicate (experiment, step, target) = ({experiment:?}, {step}, {target}), first seen at {first_at}")]
+    DuplicateKey {
+        /// The experiment.
+        experiment: String,
+        /// The step.
+        step: usize,
+        /// The target.
+        target: usize,
+        /// Where the key first appeared: 0-based row index in a [`MeasurementSet`], 1-based
+        /// line in a file.
+        first_at: u64,
+    },
+}
+
+impl RowProblem {
+    /// The column the problem is in (for `DuplicateKey`, the key columns).
+    pub fn column(&self) -> String {
+        match self {
+            Self::BadExperimentName { .. } | Self::InconsistentMovedJoint { .. } => "experiment".into(),
+            Self::JointCount { .. } => "cmd_*".into(),
+            Self::NotFinite { column, .. } => column.clone(),
+            Self::MovedJointOutOfRange { .. } => "moved_joint".into(),
+            Self::DuplicateKey { .. } => "experiment,step,target".into(),
+        }
+    }
+}
+
+/// A row of a [`MeasurementSet`] is invalid.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("row {row}, column `{}`: {problem}", problem.column())]
+pub struct MeasurementSetError {
+    /// 0-based row index.
+    pub row: usize,
+    /// What is wrong.
+    pub problem: RowProblem,
+}
+
+/// All rows of one measurement campaign, in file order, for a robot with N joints.
+///
+/// Invariants (checked by [`MeasurementSet::new`]): every row has N finite commands and a
+/// finite position, `moved_joint` in `0..=N` and constant within an experiment, and
+/// (experiment, step, target) is unique.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeasurementSet {
+    joint_count: usize,
+    rows: Vec<Measurement>,
+}
+
+/// The rows of one experiment, in file order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Experiment<'a> {
+    /// Its id.
+    pub name: &'a str,
+    /// The joint it moves (0: validation poses).
+    pub moved_joint: usize,
+    /// Its rows in file order.
+    pub rows: Vec<&'a Measurement>,
+}
+
+impl<'a> Experiment<'a> {
+    /// Rows keyed by (step, target).
+    pub fn by_step_target(&self) -> BTreeMap<(usize, usize), &'a Measurement> {
+        self.rows.iter().map(|m| ((m.step, m.target), *m)).collect()
+    }
+
+    /// Rows grouped by step (ascending), each group sorted by target.
+    pub fn by_step(&self) -> BTreeMap<usize, Vec<&'a Measurement>> {
+        let mut steps: BTreeMap<usize, Vec<&'a Measurement>> = BTreeMap::new();
+        for ((step, _), m) in self.by_step_target() {
+            steps.entry(step).or_default().push(m);
+        }
+        steps
+    }
+
+    /// The row for (step, target), if that target was observed.
+    pub fn get(&self, step: usize, target: usize) -> Option<&'a Measurement> {
+        self.rows.iter().copied().find(|m| m.step == step && m.target == target)
+    }
+}
+
+impl MeasurementSet {
+    /// Checks the invariants and builds the set.
+    pub fn new(joint_count: usize, rows: Vec<Measurement>) -> Result<Self, MeasurementSetError> {
+        validate(joint_count, &rows)?;
+        Ok(Self { joint_count, rows })
+    }
+
+    /// N, the robot's number of joints (= number of `cmd_k` columns).
+    pub fn joint_count(&self) -> usize {
+        self.joint_count
+    }
+
+    /// All rows in file order.
+    pub fn rows(&self) -> &[Measurement] {
+        &self.rows
+    }
+
+    /// The rows, consuming the set.
+    pub fn into_rows(self) -> Vec<Measurement> {
+        self.rows
+    }
+
+    /// Experiments in order of first appearance, each with its rows in file order.
+    pub fn experiments(&self) -> Vec<Experiment<'_>> {
+        let mut index: HashMap<&str, usize> = HashMap::new();
+        let mut experiments: Vec<Experiment<'_>> = Vec::new();
+        for m in &self.rows {
+            let i = *index.entry(&m.experiment).or_insert_with(|| {
+                experiments.push(Experiment {
+                    name: &m.experiment,
+                    moved_joint: m.moved_joint,
+                    rows: Vec::new(),
+                });
+                experiments.len() - 1
+            });
+            experiments[i].rows.push(m);
+        }
+        experiments
+    }
+
+    /// The experiment named `name`.
+    pub fn experiment(&self, name: &str) -> Option<Experiment<'_>> {
+        self.experiments().into_iter().find(|e| e.name == name)
+    }
+}
+
+/// Checks the [`MeasurementSet`] invariants; the error carries the 0-based row index.
+fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementSetError> {
+    let mut moved: HashMap<&str, usize> = HashMap::new();
+    let mut keys: HashMap<(&str, usize, usize), usize> = HashMap::new();
+    for (row, m) in rows.iter().enumerate() {
+        let fail = |problem| Err(MeasurementSetError { row, problem });
+        if m.experiment.is_empty() || m.experiment.trim() != m.experiment {
+            return fail(RowProblem::BadExperimentName {
+                experiment: m.experiment.clone(),
+            });
+        }
+        if m.cmd.len() != joint_count {
+            return fail(RowProblem::JointCount {
+                found: m.cmd.len(),
+                expected: joint_count,
+            });
+        }
+        let named = ["x_mm", "y_mm", "z_mm"]
+            .map(String::from)
+            .into_iter()
+            .zip(m.position_mm);
+        let commands = m.cmd.iter().enumerate().map(|(k, &c)| (format!("cmd_{}", k + 1), c));
+        let optional = [
+            ("payload_kg".to_string(), m.payload_kg),
+            ("temperature_c".to_string(), m.temperature_c),
+        ];
+        if let Some((column, value)) = named.chain(commands).chain(optional).find(|(_, v)| !v.is_finite()) {
+            return fail(RowProblem::NotFinite { column, value });
+        }
+        if m.moved_joint > joint_count {
+            return fail(RowProblem::MovedJointOutOfRange {
+                value: m.moved_joint,
+                joint_count,
+            });
+        }
+        let first = *moved.entry(&m.experiment).or_insert(m.moved_joint);
+        if first != m.moved_joint {
+            let experiment = m.experiment.clone();
+            return fail(RowProblem::InconsistentMovedJoint {
+                experiment,
+                first,
+                found: m.moved_joint,
+            });
+        }
+        if let Some(&first_row) = keys.get(&(m.experiment.as_str(), m.step, m.target)) {
+            return fail(RowProblem::DuplicateKey {
+                experiment: m.experiment.clone(),
+                step: m.step,
+                target: m.target,
+                first_at: first_row as u64,
+            });
+        }
+        keys.insert((&m.experiment, m.step, m.target), row);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(experiment: &str, moved_joint: usize, step: usize, target: usize) -> Measurement {
+        Measurement {
+            experiment: experiment.into(),
+            moved_joint,
+            step,
+            target,
+            position_mm: [1.0, 2.0, 3.0],
+            cmd: vec![0.0; 2],
+            payload_kg: 0.0,
+            temperature_c: 20.0,
+        }
+    }
+
+    #[test]
+    fn groups_by_experiment_in_file_order() {
+        let rows = vec![
+            row("b", 2, 1, 0),
+            row("a", 1, 0, 0),
+            row("b", 2, 0, 1),
+            row("b", 2, 0, 0),
+        ];
+        let set = MeasurementSet::new(2, rows).unwrap();
+        let experiments = set.experiments();
+        assert_eq!(experiments.iter().map(|e| e.name).collect::<Vec<_>>(), ["b", "a"]);
+        let b = &experiments[0];
+        assert_eq!(
+            b.rows.iter().map(|m| (m.step, m.target)).collect::<Vec<_>>(),
+            [(1, 0), (0, 1), (0, 0)]
+        );
+        assert_eq!(
+            b.by_step_target().keys().copied().collect::<Vec<_>>(),
+            [(0, 0), (0, 1), (1, 0)]
+        );
+        assert_eq!(b.by_step()[&0].iter().map(|m| m.target).collect::<Vec<_>>(), [0, 1]);
+        assert_eq!(b.get(1, 0).map(|m| m.step), Some(1));
+        assert!(b.get(1, 1).is_none());
+    }
+
+    #[test]
+    fn set_rejects_duplicates_and_bad_joints() {
+        let e = MeasurementSet::new(2, vec![row("a", 1, 0, 0), row("a", 1, 0, 0)]).unwrap_err();
+        assert_eq!(e.row, 1);
+        assert!(matches!(e.problem, RowProblem::DuplicateKey { first_at: 0, .. }));
+        let e = MeasurementSet::new(2, vec![row("a", 3, 0, 0)]).unwrap_err();
+        assert!(matches!(
+            e.problem,
+            RowProblem::MovedJointOutOfRange {
+                value: 3,
+                joint_count: 2
+            }
+        ));
+        let e = MeasurementSet::new(2, vec![row("a", 1, 0, 0), row("a", 2, 1, 0)]).unwrap_err();
+        assert!(matches!(
+            e.problem,
+            RowProblem::InconsistentMovedJoint { first: 1, found: 2, .. }
+        ));
+        let mut bad = row("a", 1, 0, 0);
+        bad.position_mm[1] = f64::NAN;
+        let e = MeasurementSet::new(2, vec![bad]).unwrap_err();
+        assert_eq!(e.problem.column(), "y_mm");
+    }
+}
