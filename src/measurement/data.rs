@@ -15,14 +15,14 @@ pub struct Measurement {
     pub step: usize,
     /// Target id (axis experiments: 0 on the moved link, 1 on the next; validation: 0..=2).
     pub target: usize,
-    /// Measured position in the instrument frame [mm].
+    /// Measured position in the instrument frame \[mm\].
     pub position_mm: [f64; 3],
     /// Controller commands `cmd_1..cmd_N` in file units: degrees (revolute) or millimetres
     /// (prismatic).
     pub cmd: Vec<f64>,
-    /// Payload carried at the tool [kg] (default 0).
+    /// Payload carried at the tool \[kg\] (default 0).
     pub payload_kg: f64,
-    /// Ambient temperature [deg C] (default 20).
+    /// Ambient temperature \[deg C\] (default 20).
     pub temperature_c: f64,
 }
 

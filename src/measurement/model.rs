@@ -12,12 +12,12 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IsotropicNoise {
-    /// 3-D RMS of the error vector [mm]; each axis gets `net_radial_rms_mm / sqrt(3)`.
+    /// 3-D RMS of the error vector \[mm\]; each axis gets `net_radial_rms_mm / sqrt(3)`.
     pub net_radial_rms_mm: f64,
 }
 
 impl IsotropicNoise {
-    /// Standard deviation along each axis [m].
+    /// Standard deviation along each axis \[m\].
     pub fn sigma_per_axis_m(&self) -> f64 {
         self.net_radial_rms_mm * 1e-3 / 3f64.sqrt()
     }
@@ -51,7 +51,7 @@ impl MeasurementModel {
         })
     }
 
-    /// One simulated measurement of the true point `p_world_m` (instrument frame) [m].
+    /// One simulated measurement of the true point `p_world_m` (instrument frame) \[m\].
     pub fn measure<R: Rng + ?Sized>(
         &self,
         p_world_m: &Point3<f64>,
@@ -70,7 +70,7 @@ impl MeasurementModel {
         }
     }
 
-    /// First-order covariance of a measurement at `p_world_m` [m^2].
+    /// First-order covariance of a measurement at `p_world_m` \[m^2\].
     pub fn covariance_m2(&self, p_world_m: &Point3<f64>) -> Result<Matrix3<f64>, TriangulationError> {
         match self {
             Self::Theodolite(pair) => pair.covariance_m2(p_world_m),
@@ -78,7 +78,7 @@ impl MeasurementModel {
         }
     }
 
-    /// The instrument's station centres [m], from which lines of sight start; empty for a
+    /// The instrument's station centres \[m\], from which lines of sight start; empty for a
     /// model without stations (isotropic: every target is visible).
     pub fn stations_m(&self) -> Vec<Point3<f64>> {
         match self {

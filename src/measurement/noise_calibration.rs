@@ -13,20 +13,20 @@ use nalgebra::{Point3, SymmetricEigen, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
-/// The paper's net radial error of the instrument [mm] (section 4).
+/// The paper's net radial error of the instrument \[mm\] (section 4).
 pub const PAPER_NET_RADIAL_RMS_MM: f64 = 0.19;
-/// Robot base placement in the instrument frame [mm] (paper's measured axis 1).
+/// Robot base placement in the instrument frame \[mm\] (paper's measured axis 1).
 pub const PAPER_ROBOT_BASE_MM: [f64; 3] = [-3142.3, 4439.4, -526.1];
-/// Default right-station position [mm]: on the x axis, so the robot sees a symmetric pair.
+/// Default right-station position \[mm\]: on the x axis, so the robot sees a symmetric pair.
 pub const PAPER_RIGHT_STATION_MM: [f64; 3] = [-6284.6, 0.0, 0.0];
 
 /// A cube of points over which the net radial error is averaged.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ReferenceVolume {
-    /// Centre of the cube in the instrument frame [m].
+    /// Centre of the cube in the instrument frame \[m\].
     pub centre_m: Point3<f64>,
-    /// Edge length [m].
+    /// Edge length \[m\].
     pub side_m: f64,
     /// Grid points along each edge (at least 1; 1 means the centre only).
     pub points_per_side: usize,
@@ -72,9 +72,9 @@ impl ReferenceVolume {
 /// The shape of the measurement covariance at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Anisotropy {
-    /// Where [m].
+    /// Where \[m\].
     pub point_m: Point3<f64>,
-    /// Principal standard deviations, largest first [m].
+    /// Principal standard deviations, largest first \[m\].
     pub principal_sigmas_m: [f64; 3],
     /// The matching principal directions.
     pub principal_axes: [Unit<Vector3<f64>>; 3],
@@ -98,7 +98,7 @@ impl Anisotropy {
         self.principal_sigmas_m[0] / self.principal_sigmas_m[2]
     }
 
-    /// 3-D RMS of the error vector at this point [m].
+    /// 3-D RMS of the error vector at this point \[m\].
     pub fn radial_rms_m(&self) -> f64 {
         self.principal_sigmas_m.iter().map(|s| s * s).sum::<f64>().sqrt()
     }
@@ -128,11 +128,11 @@ impl fmt::Display for Anisotropy {
 /// The outcome of [`TheodolitePair::calibrated`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NoiseCalibration {
-    /// Calibrated azimuth reading sigma [rad].
+    /// Calibrated azimuth reading sigma \[rad\].
     pub sigma_az_rad: f64,
-    /// Calibrated elevation reading sigma [rad].
+    /// Calibrated elevation reading sigma \[rad\].
     pub sigma_el_rad: f64,
-    /// The net radial error it reproduces over the volume [m].
+    /// The net radial error it reproduces over the volume \[m\].
     pub net_radial_rms_m: f64,
     /// The volume it was averaged over.
     pub volume: ReferenceVolume,
@@ -156,7 +156,7 @@ impl fmt::Display for NoiseCalibration {
 }
 
 impl TheodolitePair {
-    /// Net radial error over `volume`: `sqrt(mean trace(covariance))` [m] (first order).
+    /// Net radial error over `volume`: `sqrt(mean trace(covariance))` \[m\] (first order).
     pub fn net_radial_rms_m(&self, volume: &ReferenceVolume) -> Result<f64, TriangulationError> {
         let points = volume.grid_points();
         let mut sum_m2 = 0.0;

@@ -21,7 +21,7 @@ pub enum TriangulationError {
     OnStationVertical {
         /// 0 = left, 1 = right.
         station: usize,
-        /// Horizontal distance from the station to the target [m].
+        /// Horizontal distance from the station to the target \[m\].
         horizontal_distance_m: f64,
     },
     /// The two lines of sight are (nearly) parallel: their intersection is ill-conditioned.
@@ -30,19 +30,19 @@ pub enum TriangulationError {
          is below the minimum {min_intersection_angle_rad} rad"
     )]
     NearParallel {
-        /// The angle between the two lines of sight [rad].
+        /// The angle between the two lines of sight \[rad\].
         intersection_angle_rad: f64,
-        /// The configured minimum [rad].
+        /// The configured minimum \[rad\].
         min_intersection_angle_rad: f64,
     },
 }
 
-/// Azimuth and elevation of a line of sight from one station [rad].
+/// Azimuth and elevation of a line of sight from one station \[rad\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StationAngles {
-    /// Angle in the horizontal plane from +x towards +y [rad].
+    /// Angle in the horizontal plane from +x towards +y \[rad\].
     pub azimuth_rad: f64,
-    /// Angle above the horizontal plane [rad].
+    /// Angle above the horizontal plane \[rad\].
     pub elevation_rad: f64,
 }
 
@@ -69,15 +69,15 @@ impl StationAngles {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TheodolitePair {
-    /// Centre of the left station in the instrument frame [m] (normally the origin).
+    /// Centre of the left station in the instrument frame \[m\] (normally the origin).
     pub left_station_m: Point3<f64>,
-    /// Centre of the right station in the instrument frame [m].
+    /// Centre of the right station in the instrument frame \[m\].
     pub right_station_m: Point3<f64>,
-    /// Standard deviation of one azimuth reading [rad].
+    /// Standard deviation of one azimuth reading \[rad\].
     pub sigma_az_rad: f64,
-    /// Standard deviation of one elevation reading [rad].
+    /// Standard deviation of one elevation reading \[rad\].
     pub sigma_el_rad: f64,
-    /// Lines of sight meeting at a smaller angle than this are rejected [rad].
+    /// Lines of sight meeting at a smaller angle than this are rejected \[rad\].
     #[serde(default = "default_min_intersection_angle_rad")]
     pub min_intersection_angle_rad: f64,
 }
@@ -88,7 +88,7 @@ fn default_min_intersection_angle_rad() -> f64 {
     0.01
 }
 
-/// Horizontal distance below which a target counts as on a station's vertical [m].
+/// Horizontal distance below which a target counts as on a station's vertical \[m\].
 const MIN_HORIZONTAL_DISTANCE_M: f64 = 1e-9;
 
 impl TheodolitePair {
@@ -108,7 +108,7 @@ impl TheodolitePair {
         }
     }
 
-    /// The two station centres `[left, right]` in the instrument frame [m], e.g. as ray
+    /// The two station centres `[left, right]` in the instrument frame \[m\], e.g. as ray
     /// origins for line-of-sight checks.
     pub fn stations_m(&self) -> [Point3<f64>; 2] {
         [self.left_station_m, self.right_station_m]
@@ -154,7 +154,7 @@ impl TheodolitePair {
     }
 
     /// Jacobian of the triangulated point at `p_m` with respect to the four readings
-    /// `(az_left, el_left, az_right, el_right)` [m/rad].
+    /// `(az_left, el_left, az_right, el_right)` \[m/rad\].
     ///
     /// Implicit differentiation of the closest-point conditions `u1 . r = u2 . r = 0`,
     /// `r = p1 + s u1 - p2 - t u2`, at an exact intersection (`r = 0`):
@@ -180,7 +180,7 @@ impl TheodolitePair {
         Ok(jacobian)
     }
 
-    /// First-order covariance of a measurement of `p_m` [m^2]: `J diag(sigma^2) J^T` with
+    /// First-order covariance of a measurement of `p_m` \[m^2\]: `J diag(sigma^2) J^T` with
     /// `J` from [`Self::triangulation_jacobian`].
     pub fn covariance_m2(&self, p_m: &Point3<f64>) -> Result<Matrix3<f64>, TriangulationError> {
         let j = self.triangulation_jacobian(p_m)?;

@@ -47,8 +47,14 @@ fn reads_a_good_file_with_comments_extra_columns_and_any_order() {
     assert_eq!(set.joint_count(), 2);
     let rows = set.rows();
     assert_eq!(rows.len(), 2);
-    assert_eq!(rows[0].position_mm, [1.0, 2.0, 3.0]);
-    assert_eq!(rows[0].cmd, [-10.0, 2.5]);
+    assert_eq!(
+        rows[0].position_mm.map(f64::to_bits),
+        [1.0f64, 2.0, 3.0].map(f64::to_bits)
+    );
+    assert_eq!(
+        rows[0].cmd.iter().map(|c| c.to_bits()).collect::<Vec<_>>(),
+        [(-10f64).to_bits(), 2.5f64.to_bits()]
+    );
     assert_eq!(rows[0].temperature_c.to_bits(), 21.5f64.to_bits());
     assert_eq!(
         rows[1].temperature_c.to_bits(),
