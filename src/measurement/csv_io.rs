@@ -284,7 +284,12 @@ fn find_columns(
 ) -> Result<Columns, MeasurementFileError> {
     let mut index: HashMap<&str, usize> = HashMap::new();
     let mut cmd: HashMap<usize, usize> = HashMap::new();
-    for (i, name) in header.iter().map(str::trim).enumerate() {
+    // A byte-order mark (spreadsheet exports) is not part of the first column's name.
+    for (i, name) in header
+        .iter()
+        .map(|n| n.trim_start_matches('\u{feff}').trim())
+        .enumerate()
+    {
         let k = name
             .strip_prefix("cmd_")
             .and_then(|k| k.parse::<usize>().ok())
@@ -372,7 +377,12 @@ struct Cells<'a> {
 
 impl Cells<'_> {
     fn column(&self, i: usize) -> String {
-        self.header.get(i).unwrap_or_default().trim().to_string()
+        self.header
+            .get(i)
+            .unwrap_or_default()
+            .trim_start_matches('\u{feff}')
+            .trim()
+            .to_string()
     }
 
     fn text(&self, i: usize) -> Result<&str, MeasurementFileError> {

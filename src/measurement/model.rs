@@ -176,6 +176,19 @@ mod tests {
     }
 
     #[test]
+    fn same_seed_gives_bit_identical_measurements() {
+        let (model, _) = MeasurementModel::paper_theodolites().unwrap();
+        let p = robot_base_m();
+        let run = |seed| {
+            let mut rng = StdRng::seed_from_u64(seed);
+            (0..10)
+                .map(|_| model.measure(&p, &mut rng).unwrap().coords.map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(run(7), run(7));
+    }
+
+    #[test]
     fn model_round_trips_through_toml_and_rejects_unknown_keys() {
         let (model, _) = MeasurementModel::paper_theodolites().unwrap();
         let text = toml::to_string(&model).unwrap();

@@ -24,6 +24,16 @@ pub enum TriangulationError {
         /// Horizontal distance from the station to the target \[m\].
         horizontal_distance_m: f64,
     },
+    /// The closest point of the two sight lines lies behind a station.
+    #[error(
+        "closest point of the sight lines lies behind station {station} (distance along its sight line {distance_m} m)"
+    )]
+    BehindStation {
+        /// 0 = left, 1 = right.
+        station: usize,
+        /// Signed distance along that station's line of sight \[m\].
+        distance_m: f64,
+    },
     /// The two lines of sight are (nearly) parallel: their intersection is ill-conditioned.
     #[error(
         "lines of sight are nearly parallel: intersection angle {intersection_angle_rad} rad \
@@ -211,6 +221,13 @@ impl TheodolitePair {
         let denominator = 1.0 - b * b;
         let s = (b * e - d) / denominator;
         let t = (e - b * d) / denominator;
+        // A sight line is a half-line: a closest point behind a station is not a measurement.
+        if let Some(station) = [s, t].iter().position(|&distance_m| distance_m <= 0.0) {
+            return Err(TriangulationError::BehindStation {
+                station,
+                distance_m: [s, t][station],
+            });
+        }
         Ok(Rays { p1, p2, u1, u2, s, t })
     }
 }
@@ -287,6 +304,19 @@ mod tests {
         assert!(matches!(
             pair.triangulate(a, a),
             Err(TriangulationError::NearParallel { .. })
+        ));
+        // Sight lines meet at (-6.28, -6.28, 0): in front of the left station, behind the right.
+        let left = StationAngles {
+            azimuth_rad: -3.0 * std::f64::consts::FRAC_PI_4,
+            elevation_rad: 0.0,
+        };
+        let right = StationAngles {
+            azimuth_rad: std::f64::consts::FRAC_PI_2,
+            elevation_rad: 0.0,
+        };
+        assert!(matches!(
+            pair.triangulate(left, right),
+            Err(TriangulationError::BehindStation { station: 1, .. })
         ));
         let above = Point3::new(0.0, 0.0, 3.0);
         assert!(matches!(

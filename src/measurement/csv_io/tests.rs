@@ -195,3 +195,9 @@ fn writer_refuses_to_overwrite() {
     write_measurements(file.path(), &set, true).unwrap();
     assert_eq!(read_measurements(file.path(), Some(2)).unwrap(), set);
 }
+
+#[test]
+fn byte_order_mark_is_ignored() {
+    let (_file, result) = read_text(&format!("\u{feff}{HEADER}\naxis1,1,0,0,1,2,3,0,0\n"), Some(2));
+    assert_eq!(result.unwrap().rows()[0].experiment, "axis1");
+}
