@@ -2,5 +2,6 @@
 #![warn(missing_docs)]
 #![deny(clippy::float_cmp)]
 
+pub mod calibration;
 pub mod kinematics;
 pub mod robot;
