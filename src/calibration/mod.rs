@@ -14,7 +14,7 @@ pub mod arc_ml;
 pub mod arc_model;
 pub mod transmission_fit;
 pub mod axis_circle;
-pub mod axis_paper;
+
 pub mod crb;
 
 pub use error::CalibrationError;
