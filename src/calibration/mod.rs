@@ -18,3 +18,5 @@ pub mod axis_circle;
 pub mod crb;
 
 pub use error::CalibrationError;
+pub mod angles;
+pub mod axis_paper;
