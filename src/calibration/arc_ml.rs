@@ -97,7 +97,11 @@ pub struct ArcFit {
 }
 
 /// Starting parameters: circle fit + a linear transmission fit of the circle angles.
-pub fn initial_params(points: &[Point3<f64>], commands_rad: &[f64], form: &TransmissionForm) -> Result<ArcParams, CalibrationError> {
+pub fn initial_params(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    form: &TransmissionForm,
+) -> Result<ArcParams, CalibrationError> {
     let circle = fit_circle(points)?;
     let (u, v) = (circle.u.into_inner(), circle.v.into_inner());
     let mut increments = Vec::with_capacity(points.len());
@@ -122,7 +126,11 @@ pub fn initial_params(points: &[Point3<f64>], commands_rad: &[f64], form: &Trans
 }
 
 /// Maximum-likelihood arc fit of `points` observed at absolute `commands_rad`.
-pub fn fit_arc(points: &[Point3<f64>], commands_rad: &[f64], options: &ArcFitOptions) -> Result<ArcFit, CalibrationError> {
+pub fn fit_arc(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+) -> Result<ArcFit, CalibrationError> {
     let n = points.len();
     if commands_rad.len() != n {
         return Err(CalibrationError::LengthMismatch {
@@ -154,16 +162,23 @@ pub fn fit_arc(points: &[Point3<f64>], commands_rad: &[f64], options: &ArcFitOpt
     let covariance = lsq::inverse_normal(&jw, FIT)?;
     let r = model.whitened_residual(&params, points)?;
     let pred = model.predict(&params)?;
-    let residual_rms = (pred.iter().zip(points).map(|(a, b)| (a - b).norm_squared()).sum::<f64>() / n as f64).sqrt();
+    let residual_rms = (pred
+        .iter()
+        .zip(points)
+        .map(|(a, b)| (a - b).norm_squared())
+        .sum::<f64>()
+        / n as f64)
+        .sqrt();
     let g = axis_quantities_gradient(&params, &options.reference_point);
     let q = &g * &covariance * g.transpose();
     let transmission = options.form.build(&params.coefficients);
-    let actual_start_rad = transmission
-        .actual_from_command(commands_rad[0])
-        .ok_or(CalibrationError::NotInvertible {
-            fit: FIT,
-            command_rad: commands_rad[0],
-        })?;
+    let actual_start_rad =
+        transmission
+            .actual_from_command(commands_rad[0])
+            .ok_or(CalibrationError::NotInvertible {
+                fit: FIT,
+                command_rad: commands_rad[0],
+            })?;
     let identifiability = identifiability(&model, &params, &jw, &covariance, &options.noise)?;
     Ok(ArcFit {
         axis: AxisLine {
@@ -231,15 +246,33 @@ fn identifiability(
         MeasurementNoise::PerPoint(c) => (c.iter().map(|m| m.trace()).sum::<f64>() / (3.0 * c.len() as f64)).sqrt(),
     };
     let mut tilt_sigma_by_span = Vec::new();
-    for s in [span, 2.0 * span, 0.5 * std::f64::consts::PI, std::f64::consts::PI, 1.5 * std::f64::consts::PI] {
-        if s >= span {
-            if let Ok(b) = crb::uniform_arc_crb(params, model.form, model.commands_rad[0], s, model.commands_rad.len(), sigma) {
+    let mut spans = vec![
+        span,
+        2.0 * span,
+        0.5 * std::f64::consts::PI,
+        std::f64::consts::PI,
+        1.5 * std::f64::consts::PI,
+    ];
+    spans.retain(|&s| s >= span);
+    spans.sort_by(f64::total_cmp);
+    spans.dedup();
+    for s in spans {
+        {
+            if let Ok(b) = crb::uniform_arc_crb(
+                params,
+                model.form,
+                model.commands_rad[0],
+                s,
+                model.commands_rad.len(),
+                sigma,
+            ) {
                 tilt_sigma_by_span.push((s, b.direction_sigma_rad()));
             }
         }
     }
     let mut notes = vec![
-        "phase is fitted at step 0: a constant command offset is absorbed by the phase, not by the transmission".to_string(),
+        "phase is fitted at step 0: a constant command offset is absorbed by the phase, not by the transmission"
+            .to_string(),
     ];
     let k = model.form.n_coefficients() / 2;
     for i in 0..k {
@@ -248,7 +281,9 @@ fn identifiability(
         if ratio < 3.0 {
             notes.push(format!(
                 "{} is determined only through the curvature of the sweep: {:.2e} +- {:.2e} rad",
-                names[idx], params.coefficients[k + i], sd[idx]
+                names[idx],
+                params.coefficients[k + i],
+                sd[idx]
             ));
         }
     }
@@ -267,4 +302,75 @@ fn identifiability(
         tilt_sigma_by_span,
         notes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibration::arc_model::ArcModel;
+    use approx::assert_relative_eq;
+    use nalgebra::{Matrix3, Vector3};
+
+    #[test]
+    fn recovers_a_noiseless_gear_sweep_with_per_point_covariance() {
+        let form = TransmissionForm::Gear {
+            ratio: 32.0 / 19.0,
+            order: 1,
+        };
+        let commands: Vec<f64> = (0..16).map(|j| -0.5 + 0.07 * j as f64).collect();
+        let truth = ArcParams {
+            centre: Point3::new(-3.1, 4.4, -0.5),
+            frame: Rotation3::new(Vector3::new(1.2, 0.1, -0.4)),
+            radius: 0.6,
+            phase_rad: 1.0,
+            coefficients: vec![0.041227, -0.000013],
+        };
+        let covs = (0..16)
+            .map(|k| Matrix3::from_diagonal(&Vector3::new(1.0, 2.0, 0.5 + k as f64 * 0.1)) * 1e-8)
+            .collect();
+        let noise = MeasurementNoise::PerPoint(covs);
+        let model = ArcModel::new(form, &commands, &noise).unwrap();
+        let pts = model.predict(&truth).unwrap();
+        let options = ArcFitOptions {
+            form,
+            noise,
+            reference_point: truth.centre,
+            max_iterations: 100,
+        };
+        let fit = fit_arc(&pts, &commands, &options).unwrap();
+        assert_relative_eq!(
+            fit.axis.direction.into_inner(),
+            truth.normal().into_inner(),
+            epsilon = 1e-9
+        );
+        assert_relative_eq!(fit.axis.origin_m, truth.centre, epsilon = 1e-9);
+        for (a, b) in fit.params.coefficients.iter().zip(&truth.coefficients) {
+            assert_relative_eq!(a, b, epsilon = 1e-9);
+        }
+        assert!(fit.residual_rms < 1e-9);
+        let id = &fit.identifiability;
+        assert!(id.condition_number > 1.0 && id.tilt_sigma_rad > 0.0);
+        // Longer spans determine the tilt better.
+        let sig: Vec<f64> = id.tilt_sigma_by_span.iter().map(|s| s.1).collect();
+        assert!(sig.windows(2).all(|w| w[1] < w[0]));
+    }
+
+    #[test]
+    fn mismatched_inputs_are_errors() {
+        let options = ArcFitOptions {
+            form: TransmissionForm::Harmonic { order: 1 },
+            noise: MeasurementNoise::from_rms_3d(1e-4),
+            reference_point: Point3::origin(),
+            max_iterations: 10,
+        };
+        let p = [Point3::origin(); 3];
+        assert!(matches!(
+            fit_arc(&p, &[0.0; 2], &options),
+            Err(CalibrationError::LengthMismatch { .. })
+        ));
+        assert!(matches!(
+            fit_arc(&p, &[0.0, 0.1, 0.2], &options),
+            Err(CalibrationError::TooFewPoints { .. })
+        ));
+    }
 }

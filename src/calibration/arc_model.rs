@@ -137,7 +137,11 @@ pub struct ArcModel {
 
 impl ArcModel {
     /// A model for these commands under this noise.
-    pub fn new(form: TransmissionForm, commands_rad: &[f64], noise: &MeasurementNoise) -> Result<Self, CalibrationError> {
+    pub fn new(
+        form: TransmissionForm,
+        commands_rad: &[f64],
+        noise: &MeasurementNoise,
+    ) -> Result<Self, CalibrationError> {
         Ok(Self {
             form,
             commands_rad: commands_rad.to_vec(),
@@ -152,11 +156,13 @@ impl ArcModel {
 
     /// Names of the parameters, in `delta` order.
     pub fn param_names(&self) -> Vec<String> {
-        ["centre_x", "centre_y", "centre_z", "tilt_u", "tilt_v", "radius", "phase"]
-            .iter()
-            .map(|s| s.to_string())
-            .chain(self.form.coefficient_names())
-            .collect()
+        [
+            "centre_x", "centre_y", "centre_z", "tilt_u", "tilt_v", "radius", "phase",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain(self.form.coefficient_names())
+        .collect()
     }
 
     /// `(D_j, dD_j/dc_k)`: the actual motion since step 0 and its coefficient derivatives
@@ -166,9 +172,10 @@ impl ArcModel {
         let mut theta = Vec::with_capacity(self.commands_rad.len());
         let mut grad = Vec::with_capacity(self.commands_rad.len());
         for &c in &self.commands_rad {
-            let a = f
-                .actual_from_command(c)
-                .ok_or(CalibrationError::NotInvertible { fit: FIT, command_rad: c })?;
+            let a = f.actual_from_command(c).ok_or(CalibrationError::NotInvertible {
+                fit: FIT,
+                command_rad: c,
+            })?;
             let slope = f.slope(a);
             theta.push(a);
             grad.push(self.form.basis(a).iter().map(|b| -b / slope).collect::<Vec<_>>());
@@ -224,7 +231,11 @@ impl ArcModel {
     }
 
     /// Whitened residuals `L^-1 (predicted - observed)` stacked.
-    pub fn whitened_residual(&self, p: &ArcParams, observed: &[Point3<f64>]) -> Result<nalgebra::DVector<f64>, CalibrationError> {
+    pub fn whitened_residual(
+        &self,
+        p: &ArcParams,
+        observed: &[Point3<f64>],
+    ) -> Result<nalgebra::DVector<f64>, CalibrationError> {
         let pred = self.predict(p)?;
         let mut r = nalgebra::DVector::zeros(3 * pred.len());
         for (k, (q, o)) in pred.iter().zip(observed).enumerate() {

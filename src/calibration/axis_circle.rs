@@ -69,7 +69,10 @@ pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError>
         return Err(CalibrationError::ZeroSpan { fit: FIT });
     }
     if s1 / s0 < COLLINEAR_RATIO {
-        return Err(CalibrationError::Collinear { fit: FIT, ratio: s1 / s0 });
+        return Err(CalibrationError::Collinear {
+            fit: FIT,
+            ratio: s1 / s0,
+        });
     }
     let e1: Vector3<f64> = eig.eigenvectors.column(order[0]).into();
     let e2: Vector3<f64> = eig.eigenvectors.column(order[1]).into();
@@ -89,7 +92,10 @@ pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError>
     let (sol, _, _) = lsq::linear_lsq(&a, &y, FIT)?;
     let radius_sq = sol[2] + sol[0] * sol[0] + sol[1] * sol[1];
     if !(radius_sq > 0.0) {
-        return Err(CalibrationError::Collinear { fit: FIT, ratio: s1 / s0 });
+        return Err(CalibrationError::Collinear {
+            fit: FIT,
+            ratio: s1 / s0,
+        });
     }
     let radius = radius_sq.sqrt();
     let centre = Point3::from(mean + sol[0] * e1 + sol[1] * e2);

@@ -63,7 +63,11 @@ pub fn uniform_arc_crb(
     sigma_per_axis: f64,
 ) -> Result<CrbReport, CalibrationError> {
     if n < 2 {
-        return Err(CalibrationError::TooFewPoints { fit: FIT, got: n, needed: 2 });
+        return Err(CalibrationError::TooFewPoints {
+            fit: FIT,
+            got: n,
+            needed: 2,
+        });
     }
     let commands: Vec<f64> = (0..n)
         .map(|j| start_command_rad + span_rad * j as f64 / (n - 1) as f64)
@@ -113,7 +117,10 @@ pub struct Efficiency {
 
 /// Efficiency of the components `range` of per-trial error vectors against the bound's trace.
 pub fn efficiency(crb_variance: f64, errors: &[Vec<f64>], range: std::ops::Range<usize>) -> Efficiency {
-    let sq: Vec<f64> = errors.iter().map(|e| e[range.clone()].iter().map(|x| x * x).sum()).collect();
+    let sq: Vec<f64> = errors
+        .iter()
+        .map(|e| e[range.clone()].iter().map(|x| x * x).sum())
+        .collect();
     let n = sq.len().max(1) as f64;
     let mse = sq.iter().sum::<f64>() / n;
     let var = sq.iter().map(|s| (s - mse).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);

@@ -43,7 +43,11 @@ pub(crate) fn inverse_normal(j: &DMatrix<f64>, fit: &'static str) -> Result<DMat
     }
     let svd = js.svd(false, true);
     let sv = &svd.singular_values;
-    let cond = if sv.min() > 0.0 { sv.max() / sv.min() } else { f64::INFINITY };
+    let cond = if sv.min() > 0.0 {
+        sv.max() / sv.min()
+    } else {
+        f64::INFINITY
+    };
     if !(cond < MAX_CONDITION) {
         return Err(CalibrationError::IllConditioned {
             fit,

@@ -12,8 +12,8 @@ mod lsq;
 
 pub mod arc_ml;
 pub mod arc_model;
-pub mod transmission_fit;
 pub mod axis_circle;
+pub mod transmission_fit;
 
 pub mod crb;
 

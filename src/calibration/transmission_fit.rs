@@ -129,7 +129,9 @@ pub fn fit_transmission(
     let mut result = None;
     for _ in 0..40 {
         let b0 = form.basis(start);
-        let a = DMatrix::from_fn(n - 1, m, |r, c| form.basis(start + actual_increments_rad[r + 1] - d0)[c] - b0[c]);
+        let a = DMatrix::from_fn(n - 1, m, |r, c| {
+            form.basis(start + actual_increments_rad[r + 1] - d0)[c] - b0[c]
+        });
         let y = DVector::from_fn(n - 1, |r, _| {
             commands_rad[r + 1] - c0 - (actual_increments_rad[r + 1] - d0)
         });
@@ -138,7 +140,10 @@ pub fn fit_transmission(
         let next = form
             .build(&coefficients)
             .actual_from_command(c0)
-            .ok_or(CalibrationError::NotInvertible { fit: FIT, command_rad: c0 })?;
+            .ok_or(CalibrationError::NotInvertible {
+                fit: FIT,
+                command_rad: c0,
+            })?;
         let moved = (next - start).abs();
         start = next;
         result = Some((inv, res));

@@ -103,7 +103,10 @@ fn ml_arc_fit_attains_the_crb_on_a_table1_sweep() {
     check("ML direction", &dir);
     check("ML position", &pos);
     for k in 0..2 {
-        check(&format!("ML coefficient {k}"), &efficiency(bound.coefficient_variance[k], &errors, 4 + k..5 + k));
+        check(
+            &format!("ML coefficient {k}"),
+            &efficiency(bound.coefficient_variance[k], &errors, 4 + k..5 + k),
+        );
     }
     // The reported sigma is the empirical scatter (within the Monte-Carlo error).
     assert!((reported_dir / dir.mse - 1.0).abs() <= K_SIGMA * dir.relative_standard_error);
