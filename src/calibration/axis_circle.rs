@@ -91,7 +91,7 @@ pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError>
     let y = DVector::from_fn(n, |r, _| xy[r].0 * xy[r].0 + xy[r].1 * xy[r].1);
     let (sol, _, _) = lsq::linear_lsq(&a, &y, FIT)?;
     let radius_sq = sol[2] + sol[0] * sol[0] + sol[1] * sol[1];
-    if !(radius_sq > 0.0) {
+    if radius_sq.is_nan() || radius_sq <= 0.0 {
         return Err(CalibrationError::Collinear {
             fit: FIT,
             ratio: s1 / s0,

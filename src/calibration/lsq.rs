@@ -48,7 +48,7 @@ pub(crate) fn inverse_normal(j: &DMatrix<f64>, fit: &'static str) -> Result<DMat
     } else {
         f64::INFINITY
     };
-    if !(cond < MAX_CONDITION) {
+    if cond.is_nan() || cond >= MAX_CONDITION {
         return Err(CalibrationError::IllConditioned {
             fit,
             condition_number: cond,
@@ -82,12 +82,15 @@ pub(crate) fn gauss_newton_step(
     Ok(-(inv * (j.transpose() * r)))
 }
 
+/// `(x, (A^T A)^-1, residual)` of a linear least-squares problem.
+pub(crate) type LinearSolution = (DVector<f64>, DMatrix<f64>, DVector<f64>);
+
 /// Linear least squares `min |A x - y|`: `(x, (A^T A)^-1, residual)`.
 pub(crate) fn linear_lsq(
     a: &DMatrix<f64>,
     y: &DVector<f64>,
     fit: &'static str,
-) -> Result<(DVector<f64>, DMatrix<f64>, DVector<f64>), CalibrationError> {
+) -> Result<LinearSolution, CalibrationError> {
     let inv = inverse_normal(a, fit)?;
     let x = &inv * (a.transpose() * y);
     let res = a * &x - y;

@@ -119,7 +119,7 @@ pub fn fit_transmission(
     }
     let span = commands_rad.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
         - commands_rad.iter().fold(f64::INFINITY, |a, &b| a.min(b));
-    if !(span > 0.0) {
+    if span.is_nan() || span <= 0.0 {
         return Err(CalibrationError::ZeroSpan { fit: FIT });
     }
     let c0 = commands_rad[0];
