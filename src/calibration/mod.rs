@@ -20,3 +20,4 @@ pub mod crb;
 pub use error::CalibrationError;
 pub mod angles;
 pub mod axis_paper;
+pub mod coupling_fit;
