@@ -9,7 +9,7 @@ use super::CalibrationError;
 
 const FIT: &str = "observed angles (eqs. 6-7)";
 
-/// Increments `theta^j` from point `j-1` to point `j` [rad] (length `n - 1`), eq. (7):
+/// Increments `theta^j` from point `j-1` to point `j` \[rad\] (length `n - 1`), eq. (7):
 /// `atan2((v^(j-1) x v^j) . z, v^(j-1) . v^j)`.
 pub fn angle_increments(points_in_axis_frame: &[Point3<f64>]) -> Result<Vec<f64>, CalibrationError> {
     if points_in_axis_frame.len() < 2 {
@@ -34,7 +34,7 @@ pub fn angle_increments(points_in_axis_frame: &[Point3<f64>]) -> Result<Vec<f64>
         .collect())
 }
 
-/// Cumulative displacements from step 0 [rad] (length `n`, first element 0).
+/// Cumulative displacements from step 0 \[rad\] (length `n`, first element 0).
 pub fn displacements_from_start(points_in_axis_frame: &[Point3<f64>]) -> Result<Vec<f64>, CalibrationError> {
     let inc = angle_increments(points_in_axis_frame)?;
     let mut out = Vec::with_capacity(inc.len() + 1);

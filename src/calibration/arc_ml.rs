@@ -3,7 +3,7 @@
 //! least-squares problem on the observed points (model in [`super::arc_model`]):
 //! `p_j = c + r (cos(phi0 + D_j) u + sin(phi0 + D_j) v)`, `D_j = f^-1(theta_c^j) - f^-1(theta_c^0)`.
 //!
-//! Levenberg-Marquardt ([`super::lsq`]) started from the circle fit ([`super::axis_circle`])
+//! Levenberg-Marquardt (Marquardt-scaled) started from the circle fit ([`super::axis_circle`])
 //! and a linear transmission fit ([`super::transmission_fit`], eq. 8) of the circle's angles.
 //! Unlike the paper's two-stage procedure, the commanded angles help locate the axis, which
 //! is what makes the estimator efficient (it attains the Cramer-Rao bound, [`super::crb`]).
@@ -51,9 +51,9 @@ pub struct Identifiability {
     pub weak_directions: Vec<WeakDirection>,
     /// Parameter pairs with correlation `|rho| > 0.95`.
     pub strong_correlations: Vec<(String, String, f64)>,
-    /// Largest 1-sigma of the axis tilt [rad].
+    /// Largest 1-sigma of the axis tilt \[rad\].
     pub tilt_sigma_rad: f64,
-    /// `(span [rad], tilt 1-sigma [rad])` predicted by the Cramer-Rao bound for the same
+    /// `(span \[rad\], tilt 1-sigma \[rad\])` predicted by the Cramer-Rao bound for the same
     /// number of points evenly spread over larger spans from the same start.
     pub tilt_sigma_by_span: Vec<(f64, f64)>,
     /// Plain-language findings.
@@ -72,7 +72,7 @@ pub struct ArcFit {
     pub radius: f64,
     /// The fitted transmission `theta_c = f(theta_a)`.
     pub transmission: Transmission,
-    /// `f^-1(theta_c^0)`: actual displacement at step 0 [rad].
+    /// `f^-1(theta_c^0)`: actual displacement at step 0 \[rad\].
     pub actual_start_rad: f64,
     /// Parameter names in covariance order.
     pub param_names: Vec<String>,
@@ -80,11 +80,11 @@ pub struct ArcFit {
     /// a-posteriori variance factor (it trusts the given noise; multiply by
     /// `variance_factor` for the scaled one).
     pub covariance: DMatrix<f64>,
-    /// Covariance of the axis direction's components along `u, v` [rad^2].
+    /// Covariance of the axis direction's components along `u, v` \[rad^2\].
     pub axis_direction_covariance: Matrix2<f64>,
     /// Covariance of the axis point's components along `u, v` (points' unit squared).
     pub axis_position_covariance: Matrix2<f64>,
-    /// 1-sigma of each transmission coefficient [rad] (unscaled covariance).
+    /// 1-sigma of each transmission coefficient \[rad\] (unscaled covariance).
     pub coefficient_sigma: Vec<f64>,
     /// `chi^2 / (3n - p)`; about 1 when the noise model is right.
     pub variance_factor: f64,

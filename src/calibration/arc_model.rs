@@ -84,9 +84,9 @@ pub struct ArcParams {
     pub frame: Rotation3<f64>,
     /// Radius (points' unit).
     pub radius: f64,
-    /// Angle of step 0 about `n`, from `u` [rad].
+    /// Angle of step 0 about `n`, from `u` \[rad\].
     pub phase_rad: f64,
-    /// Transmission coefficients `[sin.., cos..]` [rad].
+    /// Transmission coefficients `[sin.., cos..]` \[rad\].
     pub coefficients: Vec<f64>,
 }
 
@@ -130,7 +130,7 @@ impl ArcParams {
 pub struct ArcModel {
     /// The transmission form whose coefficients are fitted.
     pub form: TransmissionForm,
-    /// Absolute commands `theta_c^j` [rad].
+    /// Absolute commands `theta_c^j` \[rad\].
     pub commands_rad: Vec<f64>,
     pub(crate) whiteners: Vec<Matrix3<f64>>,
 }
@@ -263,7 +263,7 @@ impl ArcModel {
 
 /// Rows of the quantities judged by the estimators, in a reference basis `(u_ref, v_ref)`
 /// perpendicular to the axis: `[dir_u, dir_v, pos_u, pos_v, coefficients..]` where `dir` are
-/// the axis direction's components along `u_ref, v_ref` [rad] and `pos` the components of the
+/// the axis direction's components along `u_ref, v_ref` \[rad\] and `pos` the components of the
 /// axis point closest to `reference` (points' unit).
 pub fn axis_quantities(p: &ArcParams, reference: &Point3<f64>, u_ref: &Vector3<f64>, v_ref: &Vector3<f64>) -> Vec<f64> {
     let n = p.normal();

@@ -33,7 +33,7 @@ pub struct CircleFit {
     pub plane_rms: f64,
     /// RMS of the in-plane radial residuals.
     pub radial_rms: f64,
-    /// Angle subtended by the points about the centre, first to last [rad].
+    /// Angle subtended by the points about the centre, first to last \[rad\].
     pub span_rad: f64,
 }
 

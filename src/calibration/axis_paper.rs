@@ -22,7 +22,7 @@ const FIT: &str = "paper axis fit (eqs. 1-5)";
 /// The result of [`fit_axis_paper`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct PaperAxisFit {
-    /// Angle of `Z_phi0` from the base X axis [rad].
+    /// Angle of `Z_phi0` from the base X axis \[rad\].
     pub phi0_rad: f64,
     /// The fitted row `(a, b, alpha, beta)` (lengths in the points' unit).
     pub row: PhiRow,

@@ -17,7 +17,7 @@ use crate::robot::CouplingFunction;
 
 const FIT: &str = "coupling fit (eqs. 14-15)";
 
-/// Passive displacements of joint `i+1` from step 0 [rad], eqs. (14), (6), (7).
+/// Passive displacements of joint `i+1` from step 0 \[rad\], eqs. (14), (6), (7).
 ///
 /// `base_from_next_axis_start` is the calibrated frame `i+1` at step 0, `axis_i` the
 /// calibrated axis `i` (base frame), `active_from_start_rad[j]` the observed active motion of
@@ -92,7 +92,7 @@ pub struct CouplingFit {
     pub parameters: Vec<f64>,
     /// 1-sigma of each parameter, a-posteriori (`s^2 (J^T J)^-1`).
     pub sigma: Vec<f64>,
-    /// RMS of the residuals [rad].
+    /// RMS of the residuals \[rad\].
     pub residual_rms_rad: f64,
 }
 

@@ -20,16 +20,16 @@ const FIT: &str = "Cramer-Rao bound";
 pub struct CrbReport {
     /// `F^-1` in the local parameters (order of [`ArcModel::param_names`]).
     pub parameter_covariance: DMatrix<f64>,
-    /// Bound on the axis direction's components along the truth's `u, v` [rad^2].
+    /// Bound on the axis direction's components along the truth's `u, v` \[rad^2\].
     pub direction: Matrix2<f64>,
     /// Bound on the axis point's components along `u, v` (points' unit squared).
     pub position: Matrix2<f64>,
-    /// Bound on each transmission coefficient's variance [rad^2].
+    /// Bound on each transmission coefficient's variance \[rad^2\].
     pub coefficient_variance: Vec<f64>,
 }
 
 impl CrbReport {
-    /// Largest 1-sigma of the axis direction [rad].
+    /// Largest 1-sigma of the axis direction \[rad\].
     pub fn direction_sigma_rad(&self) -> f64 {
         self.direction.symmetric_eigenvalues().max().sqrt()
     }

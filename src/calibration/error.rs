@@ -64,7 +64,7 @@ pub enum CalibrationError {
     NotInvertible {
         /// Which fit failed.
         fit: &'static str,
-        /// The command that could not be inverted [rad].
+        /// The command that could not be inverted \[rad\].
         command_rad: f64,
     },
     /// An input value is not finite or out of its domain.

@@ -82,19 +82,19 @@ impl TransmissionForm {
 pub struct TransmissionFit {
     /// The fitted function.
     pub transmission: Transmission,
-    /// Its coefficients `[sin.., cos..]` [rad].
+    /// Its coefficients `[sin.., cos..]` \[rad\].
     pub coefficients: Vec<f64>,
-    /// 1-sigma of each coefficient [rad], from the a-posteriori residual variance
+    /// 1-sigma of each coefficient \[rad\], from the a-posteriori residual variance
     /// (`s^2 (A^T A)^-1`, `s^2 = |res|^2 / (n - 1 - m)`).
     pub sigma: Vec<f64>,
-    /// `theta_a^0 = f^-1(theta_c^0)`: the absolute actual displacement at step 0 [rad].
+    /// `theta_a^0 = f^-1(theta_c^0)`: the absolute actual displacement at step 0 \[rad\].
     pub actual_start_rad: f64,
-    /// RMS of the fit residuals [rad].
+    /// RMS of the fit residuals \[rad\].
     pub residual_rms_rad: f64,
 }
 
 /// Fit eq. (8): `actual_increments_rad[j]` = observed actual displacement from step 0
-/// (eq. 7 accumulated; element 0 is 0), `commands_rad[j]` = absolute command [rad].
+/// (eq. 7 accumulated; element 0 is 0), `commands_rad[j]` = absolute command \[rad\].
 pub fn fit_transmission(
     form: &TransmissionForm,
     actual_increments_rad: &[f64],
