@@ -2,6 +2,7 @@
 #![warn(missing_docs)]
 #![deny(clippy::float_cmp)]
 
+pub mod calibration;
 pub mod kinematics;
 pub mod measurement;
 pub mod robot;

@@ -1,0 +1,376 @@
+//! The default (efficient) rotary-axis estimator: a maximum-likelihood fit of one joint
+//! sweep through the transmission model, folding the paper's eqs. (1)-(8) into one weighted
+//! least-squares problem on the observed points (model in [`super::arc_model`]):
+//! `p_j = c + r (cos(phi0 + D_j) u + sin(phi0 + D_j) v)`, `D_j = f^-1(theta_c^j) - f^-1(theta_c^0)`.
+//!
+//! Levenberg-Marquardt (Marquardt-scaled) started from the circle fit ([`super::axis_circle`])
+//! and a linear transmission fit ([`super::transmission_fit`], eq. 8) of the circle's angles.
+//! Unlike the paper's two-stage procedure, the commanded angles help locate the axis, which
+//! is what makes the estimator efficient (it attains the Cramer-Rao bound, [`super::crb`]).
+
+use nalgebra::{DMatrix, Matrix2, Point3, Rotation3};
+
+use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, N_GEOMETRY, axis_quantities_gradient};
+use super::axis_circle::fit_circle;
+use super::transmission_fit::{TransmissionForm, fit_transmission};
+use super::{CalibrationError, crb, lsq};
+use crate::kinematics::AxisLine;
+use crate::robot::Transmission;
+
+const FIT: &str = "arc maximum-likelihood fit";
+
+/// Options of [`fit_arc`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArcFitOptions {
+    /// Transmission form whose coefficients are fitted with the geometry.
+    pub form: TransmissionForm,
+    /// Measurement noise (weights the fit; the reported covariance assumes it).
+    pub noise: MeasurementNoise,
+    /// The reported axis point is the one closest to this point (points' unit).
+    pub reference_point: Point3<f64>,
+    /// Iteration limit of Levenberg-Marquardt.
+    pub max_iterations: usize,
+}
+
+/// A poorly determined combination of parameters: an eigenvector of the correlation matrix
+/// with a large eigenvalue.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WeakDirection {
+    /// Eigenvalue of the parameter correlation matrix (1 = uncorrelated; large = weak).
+    pub correlation_eigenvalue: f64,
+    /// Parameters taking part (components of magnitude >= 0.3), by name.
+    pub components: Vec<(String, f64)>,
+}
+
+/// Which parameters the sweep determines poorly, and what span would help.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Identifiability {
+    /// 2-norm condition number of the whitened Jacobian with unit-scaled columns.
+    pub condition_number: f64,
+    /// The two weakest parameter combinations.
+    pub weak_directions: Vec<WeakDirection>,
+    /// Parameter pairs with correlation `|rho| > 0.95`.
+    pub strong_correlations: Vec<(String, String, f64)>,
+    /// Largest 1-sigma of the axis tilt \[rad\].
+    pub tilt_sigma_rad: f64,
+    /// `(span \[rad\], tilt 1-sigma \[rad\])` predicted by the Cramer-Rao bound for the same
+    /// number of points evenly spread over larger spans from the same start.
+    pub tilt_sigma_by_span: Vec<(f64, f64)>,
+    /// Plain-language findings.
+    pub notes: Vec<String>,
+}
+
+/// The result of [`fit_arc`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArcFit {
+    /// Parameters at the optimum.
+    pub params: ArcParams,
+    /// The axis: point closest to the reference point (points' unit; the field name says
+    /// metres, true when the points are in metres) and unit direction (the joint's +Z).
+    pub axis: AxisLine,
+    /// Radius of the arc (points' unit).
+    pub radius: f64,
+    /// The fitted transmission `theta_c = f(theta_a)`.
+    pub transmission: Transmission,
+    /// `f^-1(theta_c^0)`: actual displacement at step 0 \[rad\].
+    pub actual_start_rad: f64,
+    /// Parameter names in covariance order.
+    pub param_names: Vec<String>,
+    /// `(J^T W J)^-1` in the local parameters at the optimum, NOT scaled by the
+    /// a-posteriori variance factor (it trusts the given noise; multiply by
+    /// `variance_factor` for the scaled one).
+    pub covariance: DMatrix<f64>,
+    /// Covariance of the axis direction's components along `u, v` \[rad^2\].
+    pub axis_direction_covariance: Matrix2<f64>,
+    /// Covariance of the axis point's components along `u, v` (points' unit squared).
+    pub axis_position_covariance: Matrix2<f64>,
+    /// 1-sigma of each transmission coefficient \[rad\] (unscaled covariance).
+    pub coefficient_sigma: Vec<f64>,
+    /// `chi^2 / (3n - p)`; about 1 when the noise model is right.
+    pub variance_factor: f64,
+    /// RMS length of the point residuals (points' unit).
+    pub residual_rms: f64,
+    /// Levenberg-Marquardt iterations used.
+    pub iterations: usize,
+    /// Identifiability report.
+    pub identifiability: Identifiability,
+}
+
+/// Starting parameters: circle fit + a linear transmission fit of the circle angles.
+pub fn initial_params(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    form: &TransmissionForm,
+) -> Result<ArcParams, CalibrationError> {
+    let circle = fit_circle(points)?;
+    let (u, v) = (circle.u.into_inner(), circle.v.into_inner());
+    let mut increments = Vec::with_capacity(points.len());
+    let mut last = 0.0;
+    for p in points {
+        let d = p - circle.centre;
+        let a = d.dot(&v).atan2(d.dot(&u));
+        // Unwrap: successive steps are far below half a turn.
+        let k = ((last - a) / std::f64::consts::TAU).round();
+        last = a + k * std::f64::consts::TAU;
+        increments.push(last);
+    }
+    let t = fit_transmission(form, &increments, commands_rad)?;
+    let frame = Rotation3::from_basis_unchecked(&[u, v, circle.normal.into_inner()]);
+    Ok(ArcParams {
+        centre: circle.centre,
+        frame,
+        radius: circle.radius,
+        phase_rad: 0.0,
+        coefficients: t.coefficients,
+    })
+}
+
+/// Maximum-likelihood arc fit of `points` observed at absolute `commands_rad`.
+pub fn fit_arc(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+) -> Result<ArcFit, CalibrationError> {
+    let n = points.len();
+    if commands_rad.len() != n {
+        return Err(CalibrationError::LengthMismatch {
+            fit: FIT,
+            what: "commands",
+            got: commands_rad.len(),
+            expected: n,
+        });
+    }
+    let model = ArcModel::new(options.form, commands_rad, &options.noise)?;
+    let p_count = model.n_params();
+    if 3 * n <= p_count {
+        return Err(CalibrationError::TooFewPoints {
+            fit: FIT,
+            got: n,
+            needed: p_count / 3 + 1,
+        });
+    }
+    let start = initial_params(points, commands_rad, &options.form)?;
+    let outcome = lsq::levenberg_marquardt(
+        FIT,
+        start,
+        options.max_iterations,
+        |s| Ok((model.whitened_residual(s, points)?, model.whitened_jacobian(s)?)),
+        |s, d| Ok(s.perturbed(d.as_slice())),
+    )?;
+    let params = outcome.state;
+    let jw = model.whitened_jacobian(&params)?;
+    let covariance = lsq::inverse_normal(&jw, FIT)?;
+    let r = model.whitened_residual(&params, points)?;
+    let pred = model.predict(&params)?;
+    let residual_rms = (pred
+        .iter()
+        .zip(points)
+        .map(|(a, b)| (a - b).norm_squared())
+        .sum::<f64>()
+        / n as f64)
+        .sqrt();
+    let g = axis_quantities_gradient(&params, &options.reference_point);
+    let q = &g * &covariance * g.transpose();
+    let transmission = options.form.build(&params.coefficients);
+    let actual_start_rad =
+        transmission
+            .actual_from_command(commands_rad[0])
+            .ok_or(CalibrationError::NotInvertible {
+                fit: FIT,
+                command_rad: commands_rad[0],
+            })?;
+    let identifiability = identifiability(&model, &params, &jw, &covariance, &options.noise)?;
+    Ok(ArcFit {
+        axis: AxisLine {
+            origin_m: params.axis_point_near(&options.reference_point),
+            direction: params.normal(),
+        },
+        radius: params.radius,
+        transmission,
+        actual_start_rad,
+        param_names: model.param_names(),
+        axis_direction_covariance: q.fixed_view::<2, 2>(0, 0).into(),
+        axis_position_covariance: q.fixed_view::<2, 2>(2, 2).into(),
+        coefficient_sigma: (N_GEOMETRY..p_count).map(|k| covariance[(k, k)].sqrt()).collect(),
+        variance_factor: r.norm_squared() / (3 * n - p_count) as f64,
+        residual_rms,
+        iterations: outcome.iterations,
+        covariance,
+        identifiability,
+        params,
+    })
+}
+
+fn identifiability(
+    model: &ArcModel,
+    params: &ArcParams,
+    jw: &DMatrix<f64>,
+    covariance: &DMatrix<f64>,
+    noise: &MeasurementNoise,
+) -> Result<Identifiability, CalibrationError> {
+    let names = model.param_names();
+    let m = covariance.nrows();
+    let sd: Vec<f64> = (0..m).map(|k| covariance[(k, k)].sqrt()).collect();
+    let corr = DMatrix::from_fn(m, m, |r, c| covariance[(r, c)] / (sd[r] * sd[c]));
+    let eig = corr.clone().symmetric_eigen();
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    let weak_directions = order
+        .iter()
+        .take(2)
+        .map(|&k| WeakDirection {
+            correlation_eigenvalue: eig.eigenvalues[k],
+            components: (0..m)
+                .filter(|&r| eig.eigenvectors[(r, k)].abs() >= 0.3)
+                .map(|r| (names[r].clone(), eig.eigenvectors[(r, k)]))
+                .collect(),
+        })
+        .collect();
+    let mut strong_correlations = Vec::new();
+    for r in 0..m {
+        for c in r + 1..m {
+            if corr[(r, c)].abs() > 0.95 {
+                strong_correlations.push((names[r].clone(), names[c].clone(), corr[(r, c)]));
+            }
+        }
+    }
+    let tilt = covariance.fixed_view::<2, 2>(3, 3).into_owned();
+    let tilt_sigma_rad = tilt.symmetric_eigenvalues().max().sqrt();
+    let span = model
+        .commands_rad
+        .iter()
+        .map(|c| (c - model.commands_rad[0]).abs())
+        .fold(0.0, f64::max);
+    let sigma = match noise {
+        MeasurementNoise::Isotropic { sigma_per_axis } => *sigma_per_axis,
+        MeasurementNoise::PerPoint(c) => (c.iter().map(|m| m.trace()).sum::<f64>() / (3.0 * c.len() as f64)).sqrt(),
+    };
+    let mut tilt_sigma_by_span = Vec::new();
+    let mut spans = vec![
+        span,
+        2.0 * span,
+        0.5 * std::f64::consts::PI,
+        std::f64::consts::PI,
+        1.5 * std::f64::consts::PI,
+    ];
+    spans.retain(|&s| s >= span);
+    spans.sort_by(f64::total_cmp);
+    spans.dedup();
+    for s in spans {
+        {
+            if let Ok(b) = crb::uniform_arc_crb(
+                params,
+                model.form,
+                model.commands_rad[0],
+                s,
+                model.commands_rad.len(),
+                sigma,
+            ) {
+                tilt_sigma_by_span.push((s, b.direction_sigma_rad()));
+            }
+        }
+    }
+    let mut notes = vec![
+        "phase is fitted at step 0: a constant command offset is absorbed by the phase, not by the transmission"
+            .to_string(),
+    ];
+    let k = model.form.n_coefficients() / 2;
+    for i in 0..k {
+        let idx = N_GEOMETRY + k + i;
+        let ratio = params.coefficients[k + i].abs() / sd[idx];
+        if ratio < 3.0 {
+            notes.push(format!(
+                "{} is determined only through the curvature of the sweep: {:.2e} +- {:.2e} rad",
+                names[idx],
+                params.coefficients[k + i],
+                sd[idx]
+            ));
+        }
+    }
+    if tilt_sigma_rad * params.radius > 3.0 * sigma {
+        notes.push(format!(
+            "axis tilt 1-sigma {:.2e} rad moves the arc by {:.2e} (> 3 noise sigma); a longer span helps",
+            tilt_sigma_rad,
+            tilt_sigma_rad * params.radius
+        ));
+    }
+    Ok(Identifiability {
+        condition_number: lsq::scaled_condition_number(jw),
+        weak_directions,
+        strong_correlations,
+        tilt_sigma_rad,
+        tilt_sigma_by_span,
+        notes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibration::arc_model::ArcModel;
+    use approx::assert_relative_eq;
+    use nalgebra::{Matrix3, Vector3};
+
+    #[test]
+    fn recovers_a_noiseless_gear_sweep_with_per_point_covariance() {
+        let form = TransmissionForm::Gear {
+            ratio: 32.0 / 19.0,
+            order: 1,
+        };
+        let commands: Vec<f64> = (0..16).map(|j| -0.5 + 0.07 * j as f64).collect();
+        let truth = ArcParams {
+            centre: Point3::new(-3.1, 4.4, -0.5),
+            frame: Rotation3::new(Vector3::new(1.2, 0.1, -0.4)),
+            radius: 0.6,
+            phase_rad: 1.0,
+            coefficients: vec![0.041227, -0.000013],
+        };
+        let covs = (0..16)
+            .map(|k| Matrix3::from_diagonal(&Vector3::new(1.0, 2.0, 0.5 + k as f64 * 0.1)) * 1e-8)
+            .collect();
+        let noise = MeasurementNoise::PerPoint(covs);
+        let model = ArcModel::new(form, &commands, &noise).unwrap();
+        let pts = model.predict(&truth).unwrap();
+        let options = ArcFitOptions {
+            form,
+            noise,
+            reference_point: truth.centre,
+            max_iterations: 100,
+        };
+        let fit = fit_arc(&pts, &commands, &options).unwrap();
+        assert_relative_eq!(
+            fit.axis.direction.into_inner(),
+            truth.normal().into_inner(),
+            epsilon = 1e-9
+        );
+        assert_relative_eq!(fit.axis.origin_m, truth.centre, epsilon = 1e-9);
+        for (a, b) in fit.params.coefficients.iter().zip(&truth.coefficients) {
+            assert_relative_eq!(a, b, epsilon = 1e-9);
+        }
+        assert!(fit.residual_rms < 1e-9);
+        let id = &fit.identifiability;
+        assert!(id.condition_number > 1.0 && id.tilt_sigma_rad > 0.0);
+        // Longer spans determine the tilt better.
+        let sig: Vec<f64> = id.tilt_sigma_by_span.iter().map(|s| s.1).collect();
+        assert!(sig.windows(2).all(|w| w[1] < w[0]));
+    }
+
+    #[test]
+    fn mismatched_inputs_are_errors() {
+        let options = ArcFitOptions {
+            form: TransmissionForm::Harmonic { order: 1 },
+            noise: MeasurementNoise::from_rms_3d(1e-4),
+            reference_point: Point3::origin(),
+            max_iterations: 10,
+        };
+        let p = [Point3::origin(); 3];
+        assert!(matches!(
+            fit_arc(&p, &[0.0; 2], &options),
+            Err(CalibrationError::LengthMismatch { .. })
+        ));
+        assert!(matches!(
+            fit_arc(&p, &[0.0, 0.1, 0.2], &options),
+            Err(CalibrationError::TooFewPoints { .. })
+        ));
+    }
+}

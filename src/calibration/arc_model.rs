@@ -1,0 +1,358 @@
+//! The measurement model of one joint sweep used by the efficient estimator and the
+//! Cramer-Rao bound: `p_j = c + r (cos(phi0 + D_j) u + sin(phi0 + D_j) v)` with
+//! `D_j = f^-1(theta_c^j) - f^-1(theta_c^0)` (the paper's eqs. 6-8 folded into one model).
+//!
+//! The phase `phi0` is the angle of step 0 about the normal, measured from `u`; writing the
+//! motion relative to step 0 keeps a constant command offset out of the transmission
+//! coefficients (it is confounded with `phi0`). Parameters (the local perturbation vector
+//! `delta`): `[c_x, c_y, c_z, tilt_u, tilt_v, radius, phase, coefficients..]`; the tilts rotate
+//! the frame `(u, v, n)` about its own `u` and `v`, re-anchored after every step.
+
+use nalgebra::{DMatrix, Matrix3, Point3, Rotation3, Unit, Vector3};
+
+use super::CalibrationError;
+use super::transmission_fit::TransmissionForm;
+
+const FIT: &str = "arc model";
+
+/// Number of geometric parameters before the transmission coefficients.
+pub const N_GEOMETRY: usize = 7;
+
+/// Measurement noise of the observed points.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MeasurementNoise {
+    /// Independent, equal noise on each coordinate (points' unit, 1-sigma per axis).
+    Isotropic {
+        /// Standard deviation per coordinate axis.
+        sigma_per_axis: f64,
+    },
+    /// A 3x3 covariance per point (points' unit squared).
+    PerPoint(Vec<Matrix3<f64>>),
+}
+
+impl MeasurementNoise {
+    /// Isotropic noise with the given 3-D RMS error length (the paper's "net radial error"):
+    /// `sigma_per_axis = rms / sqrt(3)`.
+    pub fn from_rms_3d(rms: f64) -> Self {
+        MeasurementNoise::Isotropic {
+            sigma_per_axis: rms / 3f64.sqrt(),
+        }
+    }
+
+    /// `L^-1` with `L L^T` the covariance of point `j`: whitens residuals.
+    pub(crate) fn whiteners(&self, n: usize) -> Result<Vec<Matrix3<f64>>, CalibrationError> {
+        match self {
+            MeasurementNoise::Isotropic { sigma_per_axis } => {
+                if !(*sigma_per_axis > 0.0 && sigma_per_axis.is_finite()) {
+                    return Err(CalibrationError::InvalidInput {
+                        fit: FIT,
+                        what: "sigma must be positive",
+                    });
+                }
+                Ok(vec![Matrix3::identity() / *sigma_per_axis; n])
+            }
+            MeasurementNoise::PerPoint(covs) => {
+                if covs.len() != n {
+                    return Err(CalibrationError::LengthMismatch {
+                        fit: FIT,
+                        what: "covariances",
+                        got: covs.len(),
+                        expected: n,
+                    });
+                }
+                covs.iter()
+                    .map(|c| {
+                        c.cholesky()
+                            .and_then(|ch| ch.l().try_inverse())
+                            .ok_or(CalibrationError::InvalidInput {
+                                fit: FIT,
+                                what: "covariance not positive definite",
+                            })
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
+/// The parameters of the arc model at one point of parameter space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArcParams {
+    /// Circle centre (points' unit).
+    pub centre: Point3<f64>,
+    /// Columns `(u, v, n)`: in-plane basis and the axis direction (right-handed rotation).
+    pub frame: Rotation3<f64>,
+    /// Radius (points' unit).
+    pub radius: f64,
+    /// Angle of step 0 about `n`, from `u` \[rad\].
+    pub phase_rad: f64,
+    /// Transmission coefficients `[sin.., cos..]` \[rad\].
+    pub coefficients: Vec<f64>,
+}
+
+impl ArcParams {
+    /// In-plane unit vector `u`.
+    pub fn u(&self) -> Unit<Vector3<f64>> {
+        Unit::new_unchecked(self.frame.matrix().column(0).into())
+    }
+    /// In-plane unit vector `v = n x u`.
+    pub fn v(&self) -> Unit<Vector3<f64>> {
+        Unit::new_unchecked(self.frame.matrix().column(1).into())
+    }
+    /// The axis direction `n`.
+    pub fn normal(&self) -> Unit<Vector3<f64>> {
+        Unit::new_unchecked(self.frame.matrix().column(2).into())
+    }
+
+    /// The point of the axis closest to `reference`.
+    pub fn axis_point_near(&self, reference: &Point3<f64>) -> Point3<f64> {
+        let n = self.normal();
+        self.centre + n.into_inner() * (reference - self.centre).dot(&n)
+    }
+
+    /// The parameters moved by a local perturbation `delta` (layout in the module doc).
+    pub fn perturbed(&self, delta: &[f64]) -> Self {
+        let mut p = self.clone();
+        p.centre += Vector3::new(delta[0], delta[1], delta[2]);
+        p.frame = self.frame * Rotation3::new(Vector3::new(delta[3], delta[4], 0.0));
+        p.frame.renormalize();
+        p.radius += delta[5];
+        p.phase_rad += delta[6];
+        for (c, d) in p.coefficients.iter_mut().zip(&delta[N_GEOMETRY..]) {
+            *c += d;
+        }
+        p
+    }
+}
+
+/// The arc model for a given command sequence and transmission form.
+#[derive(Clone, Debug)]
+pub struct ArcModel {
+    /// The transmission form whose coefficients are fitted.
+    pub form: TransmissionForm,
+    /// Absolute commands `theta_c^j` \[rad\].
+    pub commands_rad: Vec<f64>,
+    pub(crate) whiteners: Vec<Matrix3<f64>>,
+}
+
+impl ArcModel {
+    /// A model for these commands under this noise.
+    pub fn new(
+        form: TransmissionForm,
+        commands_rad: &[f64],
+        noise: &MeasurementNoise,
+    ) -> Result<Self, CalibrationError> {
+        Ok(Self {
+            form,
+            commands_rad: commands_rad.to_vec(),
+            whiteners: noise.whiteners(commands_rad.len())?,
+        })
+    }
+
+    /// Number of parameters (`7 + coefficients`).
+    pub fn n_params(&self) -> usize {
+        N_GEOMETRY + self.form.n_coefficients()
+    }
+
+    /// Names of the parameters, in `delta` order.
+    pub fn param_names(&self) -> Vec<String> {
+        [
+            "centre_x", "centre_y", "centre_z", "tilt_u", "tilt_v", "radius", "phase",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain(self.form.coefficient_names())
+        .collect()
+    }
+
+    /// `(D_j, dD_j/dc_k)`: the actual motion since step 0 and its coefficient derivatives
+    /// (`d theta_a / d c_k = -b_k(theta_a) / f'(theta_a)`).
+    fn motion(&self, coefficients: &[f64]) -> Result<(Vec<f64>, Vec<Vec<f64>>), CalibrationError> {
+        let f = self.form.build(coefficients);
+        let mut theta = Vec::with_capacity(self.commands_rad.len());
+        let mut grad = Vec::with_capacity(self.commands_rad.len());
+        for &c in &self.commands_rad {
+            let a = f.actual_from_command(c).ok_or(CalibrationError::NotInvertible {
+                fit: FIT,
+                command_rad: c,
+            })?;
+            let slope = f.slope(a);
+            theta.push(a);
+            grad.push(self.form.basis(a).iter().map(|b| -b / slope).collect::<Vec<_>>());
+        }
+        let (a0, g0) = (theta[0], grad[0].clone());
+        let d = theta.iter().map(|a| a - a0).collect();
+        let dg = grad
+            .iter()
+            .map(|g| g.iter().zip(&g0).map(|(x, y)| x - y).collect())
+            .collect();
+        Ok((d, dg))
+    }
+
+    /// The predicted points.
+    pub fn predict(&self, p: &ArcParams) -> Result<Vec<Point3<f64>>, CalibrationError> {
+        let (d, _) = self.motion(&p.coefficients)?;
+        let (u, v) = (p.u().into_inner(), p.v().into_inner());
+        Ok(d.iter()
+            .map(|dj| {
+                let (s, c) = (p.phase_rad + dj).sin_cos();
+                p.centre + p.radius * (c * u + s * v)
+            })
+            .collect())
+    }
+
+    /// `d p_j / d delta` stacked (3n x n_params), unweighted, analytic.
+    pub fn jacobian(&self, p: &ArcParams) -> Result<DMatrix<f64>, CalibrationError> {
+        let (d, dg) = self.motion(&p.coefficients)?;
+        let (u, v, n) = (p.u().into_inner(), p.v().into_inner(), p.normal().into_inner());
+        let m = self.n_params();
+        let mut j = DMatrix::zeros(3 * d.len(), m);
+        for (row, dj) in d.iter().enumerate() {
+            let (s, c) = (p.phase_rad + dj).sin_cos();
+            let radial = c * u + s * v;
+            let tangent = p.radius * (-s * u + c * v);
+            let cols: Vec<Vector3<f64>> = [
+                Vector3::x(),
+                Vector3::y(),
+                Vector3::z(),
+                p.radius * s * n,
+                -p.radius * c * n,
+                radial,
+                tangent,
+            ]
+            .into_iter()
+            .chain(dg[row].iter().map(|g| tangent * *g))
+            .collect();
+            for (k, col) in cols.iter().enumerate() {
+                j.fixed_view_mut::<3, 1>(3 * row, k).copy_from(col);
+            }
+        }
+        Ok(j)
+    }
+
+    /// Whitened residuals `L^-1 (predicted - observed)` stacked.
+    pub fn whitened_residual(
+        &self,
+        p: &ArcParams,
+        observed: &[Point3<f64>],
+    ) -> Result<nalgebra::DVector<f64>, CalibrationError> {
+        let pred = self.predict(p)?;
+        let mut r = nalgebra::DVector::zeros(3 * pred.len());
+        for (k, (q, o)) in pred.iter().zip(observed).enumerate() {
+            r.fixed_rows_mut::<3>(3 * k).copy_from(&(self.whiteners[k] * (q - o)));
+        }
+        Ok(r)
+    }
+
+    /// The whitened Jacobian `L^-1 dp/d delta`.
+    pub fn whitened_jacobian(&self, p: &ArcParams) -> Result<DMatrix<f64>, CalibrationError> {
+        let mut j = self.jacobian(p)?;
+        for (k, w) in self.whiteners.iter().enumerate() {
+            let block = w * j.rows(3 * k, 3);
+            j.rows_mut(3 * k, 3).copy_from(&block);
+        }
+        Ok(j)
+    }
+
+    /// Fisher information `J^T W J` for Gaussian noise.
+    pub fn fisher(&self, p: &ArcParams) -> Result<DMatrix<f64>, CalibrationError> {
+        let j = self.whitened_jacobian(p)?;
+        Ok(j.transpose() * j)
+    }
+}
+
+/// Rows of the quantities judged by the estimators, in a reference basis `(u_ref, v_ref)`
+/// perpendicular to the axis: `[dir_u, dir_v, pos_u, pos_v, coefficients..]` where `dir` are
+/// the axis direction's components along `u_ref, v_ref` \[rad\] and `pos` the components of the
+/// axis point closest to `reference` (points' unit).
+pub fn axis_quantities(p: &ArcParams, reference: &Point3<f64>, u_ref: &Vector3<f64>, v_ref: &Vector3<f64>) -> Vec<f64> {
+    let n = p.normal();
+    let q = p.axis_point_near(reference);
+    [n.dot(u_ref), n.dot(v_ref), q.coords.dot(u_ref), q.coords.dot(v_ref)]
+        .into_iter()
+        .chain(p.coefficients.iter().copied())
+        .collect()
+}
+
+/// Gradient of [`axis_quantities`] with respect to `delta`, in the parameters' own basis
+/// (`u_ref = u`, `v_ref = v`).
+pub fn axis_quantities_gradient(p: &ArcParams, reference: &Point3<f64>) -> DMatrix<f64> {
+    let m = p.coefficients.len();
+    let mut g = DMatrix::zeros(4 + m, N_GEOMETRY + m);
+    let (u, v, n) = (p.u().into_inner(), p.v().into_inner(), p.normal().into_inner());
+    let h = (reference - p.centre).dot(&n);
+    // dn/dtilt_u = -v, dn/dtilt_v = u.
+    g[(0, 4)] = 1.0;
+    g[(1, 3)] = -1.0;
+    for k in 0..3 {
+        g[(2, k)] = u[k];
+        g[(3, k)] = v[k];
+    }
+    g[(2, 4)] = h;
+    g[(3, 3)] = -h;
+    for k in 0..m {
+        g[(4 + k, N_GEOMETRY + k)] = 1.0;
+    }
+    g
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    pub(crate) fn sample_params() -> ArcParams {
+        ArcParams {
+            centre: Point3::new(0.2, -0.4, 0.9),
+            frame: Rotation3::new(Vector3::new(0.3, -0.2, 0.5)),
+            radius: 0.7,
+            phase_rad: 0.4,
+            coefficients: vec![0.0035, -0.0009],
+        }
+    }
+
+    #[test]
+    fn jacobian_matches_central_differences() {
+        let model = ArcModel::new(
+            TransmissionForm::Harmonic { order: 1 },
+            &(0..6).map(|j| -0.2 + 0.15 * j as f64).collect::<Vec<_>>(),
+            &MeasurementNoise::from_rms_3d(1.0),
+        )
+        .unwrap();
+        let p = sample_params();
+        let j = model.jacobian(&p).unwrap();
+        let h = 1e-6;
+        for k in 0..model.n_params() {
+            let mut dp = vec![0.0; model.n_params()];
+            dp[k] = h;
+            let plus = model.predict(&p.perturbed(&dp)).unwrap();
+            dp[k] = -h;
+            let minus = model.predict(&p.perturbed(&dp)).unwrap();
+            for (r, (a, b)) in plus.iter().zip(&minus).enumerate() {
+                let fd = (a - b) / (2.0 * h);
+                for c in 0..3 {
+                    assert_relative_eq!(j[(3 * r + c, k)], fd[c], epsilon = 1e-8);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn quantity_gradient_matches_central_differences() {
+        let p = sample_params();
+        let reference = Point3::new(1.0, 0.5, -0.3);
+        let g = axis_quantities_gradient(&p, &reference);
+        let (u, v) = (p.u().into_inner(), p.v().into_inner());
+        let h = 1e-6;
+        for k in 0..p.coefficients.len() + N_GEOMETRY {
+            let mut dp = vec![0.0; g.ncols()];
+            dp[k] = h;
+            let a = axis_quantities(&p.perturbed(&dp), &reference, &u, &v);
+            dp[k] = -h;
+            let b = axis_quantities(&p.perturbed(&dp), &reference, &u, &v);
+            for r in 0..a.len() {
+                assert_relative_eq!(g[(r, k)], (a[r] - b[r]) / (2.0 * h), epsilon = 1e-7);
+            }
+        }
+    }
+}

@@ -1,0 +1,298 @@
+//! Passive couplings, eqs. (14)-(15): while actuator `i` moves (actuator `i+1` held still), a
+//! second target on link `i+1` is expressed in the moving, already calibrated frame `i+1`
+//! (eq. 14), projected and its angle taken (eqs. 6-7) to give the passive displacement of
+//! joint `i+1`; a coupling function `g(theta_i)` is then fitted by least squares (eq. 15).
+//!
+//! Both forms are fitted to absolute passive values `g(t_j) = passive_start + y_j`, with the
+//! passive displacement at step 0 supplied by the caller (usually the nominal coupling at the
+//! start): increments alone cannot fix the fractional form, whose family is closed under a
+//! constant shift (rotating the `(x, y)` pair of the atan), so its Jacobian on increments is
+//! singular.
+
+use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion};
+
+use super::{CalibrationError, lsq};
+use crate::kinematics::AxisLine;
+use crate::robot::CouplingFunction;
+
+const FIT: &str = "coupling fit (eqs. 14-15)";
+
+/// Passive displacements of joint `i+1` from step 0 \[rad\], eqs. (14), (6), (7).
+///
+/// `base_from_next_axis_start` is the calibrated frame `i+1` at step 0, `axis_i` the
+/// calibrated axis `i` (base frame), `active_from_start_rad[j]` the observed active motion of
+/// joint `i` since step 0 (eq. 7) and `second_target[j]` the observed second target (base).
+pub fn passive_displacements(
+    base_from_next_axis_start: &Isometry3<f64>,
+    axis_i: &AxisLine,
+    active_from_start_rad: &[f64],
+    second_target: &[Point3<f64>],
+) -> Result<Vec<f64>, CalibrationError> {
+    let n = second_target.len();
+    if active_from_start_rad.len() != n {
+        return Err(CalibrationError::LengthMismatch {
+            fit: FIT,
+            what: "active displacements",
+            got: active_from_start_rad.len(),
+            expected: n,
+        });
+    }
+    if n < 2 {
+        return Err(CalibrationError::TooFewPoints {
+            fit: FIT,
+            got: n,
+            needed: 2,
+        });
+    }
+    let o = axis_i.origin_m.coords;
+    let mut out = Vec::with_capacity(n);
+    let mut last = 0.0;
+    for (t, p) in active_from_start_rad.iter().zip(second_target) {
+        let turn =
+            Translation3::from(o) * UnitQuaternion::from_axis_angle(&axis_i.direction, *t) * Translation3::from(-o);
+        let local = (turn * base_from_next_axis_start).inverse() * p;
+        if local.x == 0.0 && local.y == 0.0 {
+            return Err(CalibrationError::InvalidInput {
+                fit: FIT,
+                what: "second target lies on axis i+1",
+            });
+        }
+        let a = local.y.atan2(local.x);
+        let k = ((last - a) / std::f64::consts::TAU).round();
+        last = a + k * std::f64::consts::TAU;
+        out.push(last);
+    }
+    let a0 = out[0];
+    Ok(out.into_iter().map(|a| a - a0).collect())
+}
+
+/// The coupling form to fit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CouplingForm {
+    /// [`CouplingFunction::Gear`] with `order` harmonics; the ratio fixed at `ratio` or
+    /// fitted from it.
+    Gear {
+        /// The ratio (start value when fitted).
+        ratio: f64,
+        /// Fit the ratio too.
+        fit_ratio: bool,
+        /// Number of harmonics.
+        order: usize,
+    },
+    /// [`CouplingFunction::Fractional`]: parameters `[n0, n1, n2, d0, d1]`.
+    Fractional,
+}
+
+/// The result of eq. (15).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CouplingFit {
+    /// The fitted function.
+    pub function: CouplingFunction,
+    /// Fitted parameters: gear `[ratio?, sin.., cos..]`, fractional `[n0, n1, n2, d0, d1]`.
+    pub parameters: Vec<f64>,
+    /// 1-sigma of each parameter, a-posteriori (`s^2 (J^T J)^-1`).
+    pub sigma: Vec<f64>,
+    /// RMS of the residuals \[rad\].
+    pub residual_rms_rad: f64,
+}
+
+fn build(form: &CouplingForm, x: &[f64]) -> CouplingFunction {
+    match *form {
+        CouplingForm::Gear {
+            ratio,
+            fit_ratio,
+            order,
+        } => {
+            let (n, h) = if fit_ratio { (x[0], &x[1..]) } else { (ratio, x) };
+            CouplingFunction::Gear {
+                ratio: n,
+                sin: h[..order].to_vec(),
+                cos: h[order..2 * order].to_vec(),
+            }
+        }
+        CouplingForm::Fractional => CouplingFunction::Fractional {
+            num: [x[0], x[1], x[2]],
+            den: [x[3], x[4]],
+        },
+    }
+}
+
+/// `d g / d x` at `t`.
+fn gradient(form: &CouplingForm, x: &[f64], t: f64) -> Vec<f64> {
+    match *form {
+        CouplingForm::Gear {
+            ratio,
+            fit_ratio,
+            order,
+        } => {
+            let n = if fit_ratio { x[0] } else { ratio };
+            let mut g = Vec::new();
+            if fit_ratio {
+                g.push(t * build(form, x).slope(t) / n);
+            }
+            g.extend((1..=order).map(|k| (k as f64 * n * t).sin()));
+            g.extend((1..=order).map(|k| (k as f64 * n * t).cos()));
+            g
+        }
+        CouplingForm::Fractional => {
+            let (s, c) = t.sin_cos();
+            let y = x[0] * s + x[1] * c + x[2];
+            let xx = c + x[3] * s + x[4];
+            let r2 = xx * xx + y * y;
+            let (gy, gx) = (xx / r2, -y / r2);
+            vec![gy * s, gy * c, gy, gx * s, gx]
+        }
+    }
+}
+
+/// Fit eq. (15): `active_rad[j]` = absolute active displacement of joint `i`,
+/// `passive_from_start_rad[j]` = passive displacement of joint `i+1` since step 0,
+/// `passive_start_rad` = its absolute value at step 0.
+pub fn fit_coupling(
+    form: &CouplingForm,
+    active_rad: &[f64],
+    passive_from_start_rad: &[f64],
+    passive_start_rad: f64,
+) -> Result<CouplingFit, CalibrationError> {
+    let n = active_rad.len();
+    if passive_from_start_rad.len() != n {
+        return Err(CalibrationError::LengthMismatch {
+            fit: FIT,
+            what: "passive displacements",
+            got: passive_from_start_rad.len(),
+            expected: n,
+        });
+    }
+    let target: Vec<f64> = passive_from_start_rad.iter().map(|y| y + passive_start_rad).collect();
+    let x0: Vec<f64> = match *form {
+        CouplingForm::Gear {
+            ratio,
+            fit_ratio,
+            order,
+        } => {
+            let mut x = if fit_ratio { vec![ratio] } else { vec![] };
+            x.extend(std::iter::repeat_n(0.0, 2 * order));
+            x
+        }
+        CouplingForm::Fractional => {
+            // Linear start: n0 s + n1 c + n2 - tan(g) (d0 s + d1) = tan(g) c.
+            let a = DMatrix::from_fn(n, 5, |r, k| {
+                let (s, c) = active_rad[r].sin_cos();
+                let tg = target[r].tan();
+                [s, c, 1.0, -tg * s, -tg][k]
+            });
+            let y = DVector::from_fn(n, |r, _| target[r].tan() * active_rad[r].cos());
+            if n < 5 {
+                return Err(CalibrationError::TooFewPoints {
+                    fit: FIT,
+                    got: n,
+                    needed: 6,
+                });
+            }
+            lsq::linear_lsq(&a, &y, FIT)?.0.iter().copied().collect()
+        }
+    };
+    let m = x0.len();
+    if n <= m {
+        return Err(CalibrationError::TooFewPoints {
+            fit: FIT,
+            got: n,
+            needed: m + 1,
+        });
+    }
+    let eval = |x: &DVector<f64>| -> Result<(DVector<f64>, DMatrix<f64>), CalibrationError> {
+        let g = build(form, x.as_slice());
+        let r = DVector::from_fn(n, |k, _| g.passive(active_rad[k]) - target[k]);
+        let rows: Vec<Vec<f64>> = active_rad.iter().map(|t| gradient(form, x.as_slice(), *t)).collect();
+        Ok((r, DMatrix::from_fn(n, m, |k, c| rows[k][c])))
+    };
+    let out = if m == 0 {
+        DVector::zeros(0)
+    } else {
+        lsq::levenberg_marquardt(FIT, DVector::from_vec(x0), 200, eval, |x, d| Ok(x + d))?.state
+    };
+    let (r, j) = eval(&out)?;
+    let s2 = r.norm_squared() / (n - m).max(1) as f64;
+    let sigma = if m == 0 {
+        vec![]
+    } else {
+        let inv = lsq::inverse_normal(&j, FIT)?;
+        (0..m).map(|k| (s2 * inv[(k, k)]).sqrt()).collect()
+    };
+    Ok(CouplingFit {
+        function: build(form, out.as_slice()),
+        parameters: out.iter().copied().collect(),
+        sigma,
+        residual_rms_rad: (r.norm_squared() / n as f64).sqrt(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use nalgebra::{Unit, Vector3};
+
+    #[test]
+    fn recovers_the_paper_four_bar_and_bevel_gear() {
+        let t: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
+        let cases = [
+            (
+                CouplingForm::Fractional,
+                CouplingFunction::Fractional {
+                    num: [-0.998132, 0.213253, -0.212863],
+                    den: [0.096654, -0.0006941],
+                },
+                vec![-0.998132, 0.213253, -0.212863, 0.096654, -0.0006941],
+            ),
+            (
+                CouplingForm::Gear {
+                    ratio: 1.6,
+                    fit_ratio: true,
+                    order: 1,
+                },
+                CouplingFunction::Gear {
+                    ratio: 32.0 / 19.0,
+                    sin: vec![-0.040562],
+                    cos: vec![0.000018],
+                },
+                vec![32.0 / 19.0, -0.040562, 0.000018],
+            ),
+        ];
+        for (form, truth, params) in cases {
+            let g: Vec<f64> = t.iter().map(|x| truth.passive(*x)).collect();
+            let y: Vec<f64> = g.iter().map(|v| v - g[0]).collect();
+            let fit = fit_coupling(&form, &t, &y, g[0]).unwrap();
+            for (a, b) in fit.parameters.iter().zip(&params) {
+                assert_relative_eq!(a, b, epsilon = 1e-7);
+            }
+        }
+    }
+
+    #[test]
+    fn passive_angles_from_a_moving_frame() {
+        let axis_i = AxisLine {
+            origin_m: Point3::new(0.1, 0.2, 0.0),
+            direction: Unit::new_normalize(Vector3::new(0.0, 0.1, 1.0)),
+        };
+        let next0 = Isometry3::new(Vector3::new(0.8, 0.2, 0.3), Vector3::new(1.4, 0.2, 0.0));
+        let active = [0.0, 0.1, 0.25, 0.3];
+        let passive = [0.0, -0.12, -0.2, -0.35];
+        let o = axis_i.origin_m.coords;
+        let target_local = Point3::new(0.15, 0.05, 0.2);
+        let pts: Vec<Point3<f64>> = active
+            .iter()
+            .zip(passive)
+            .map(|(a, p)| {
+                let turn = Translation3::from(o)
+                    * UnitQuaternion::from_axis_angle(&axis_i.direction, *a)
+                    * Translation3::from(-o);
+                turn * next0 * Isometry3::rotation(Vector3::z() * p) * target_local
+            })
+            .collect();
+        let got = passive_displacements(&next0, &axis_i, &active, &pts).unwrap();
+        for (a, b) in got.iter().zip(passive) {
+            assert_relative_eq!(*a, b, epsilon = 1e-12);
+        }
+    }
+}

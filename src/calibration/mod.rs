@@ -1,0 +1,31 @@
+//! Independent-axis calibration maths (paper sections 2-3, eqs. 1-15) on point sets: axis fits,
+//! observed angles, transmission and coupling fits, and the statistics (Cramer-Rao bound) to
+//! judge them. Pure maths: no files, no CLI, no truth model or simulator.
+//!
+//! - [`axis_circle`]: SVD plane + algebraic (Kasa) circle fit, the initial guess.
+//! - [`arc_model`] + [`arc_ml`]: the default estimator, a maximum-likelihood arc fit through
+//!   the transmission model (efficient: attains the Cramer-Rao bound).
+//! - [`axis_paper`]: the paper's rotary-axis estimator, eqs. (1)-(5).
+//! - [`angles`]: observed angles, eqs. (6)-(7); [`transmission_fit`]: eq. (8).
+//! - [`sliding`]: sliding axes, eqs. (9)-(13); [`coupling_fit`]: couplings, eqs. (14)-(15).
+//! - [`crb`]: Cramer-Rao bound and Monte-Carlo efficiency.
+
+mod error;
+mod lsq;
+
+pub mod angles;
+pub mod arc_ml;
+pub mod arc_model;
+pub mod axis_circle;
+pub mod axis_paper;
+pub mod coupling_fit;
+pub mod crb;
+pub mod sliding;
+pub mod transmission_fit;
+
+pub use arc_ml::{ArcFit, ArcFitOptions, fit_arc};
+pub use arc_model::{ArcModel, ArcParams, MeasurementNoise};
+pub use axis_circle::{CircleFit, fit_circle};
+pub use axis_paper::{PaperAxisFit, fit_axis_paper};
+pub use error::CalibrationError;
+pub use transmission_fit::{TransmissionFit, TransmissionForm, fit_transmission};
