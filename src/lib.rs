@@ -3,6 +3,7 @@
 #![deny(clippy::float_cmp)]
 
 pub mod calibration;
+pub mod campaign;
 pub mod kinematics;
 pub mod measurement;
 pub mod robot;

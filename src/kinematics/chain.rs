@@ -94,9 +94,9 @@ impl PhiModel {
         let mut world_from_frame = Vec::with_capacity(n);
         let mut world_from_link = Vec::with_capacity(n);
         let mut frame = self.world_from_base;
-        for k in 0..n {
+        for (k, (joint, &qk)) in self.joints.iter().zip(q).enumerate() {
             world_from_frame.push(frame);
-            let link = frame * joint_motion(self.joints[k].kind, q[k]);
+            let link = frame * joint_motion(joint.kind, qk);
             world_from_link.push(link);
             if k + 1 < n {
                 frame = link * self.link_from_next_frame(k);
@@ -114,8 +114,8 @@ impl PhiModel {
     pub fn world_from_tool(&self, q: &[f64]) -> Isometry3<f64> {
         let n = self.dof();
         let mut t = self.world_from_base;
-        for k in 0..n {
-            t *= joint_motion(self.joints[k].kind, q[k]);
+        for (k, (joint, &qk)) in self.joints.iter().zip(q).enumerate() {
+            t *= joint_motion(joint.kind, qk);
             if k + 1 < n {
                 t *= self.link_from_next_frame(k);
             }

@@ -177,7 +177,11 @@ mod tests {
 
     #[test]
     fn a2_matches_the_printed_matrix() {
-        for &(phi, theta, d) in &[(0.0, 0.0, 0.0), (1.5707963, 0.3, 0.0), (-0.7, 2.1, 0.25)] {
+        for &(phi, theta, d) in &[
+            (0.0, 0.0, 0.0),
+            (std::f64::consts::FRAC_PI_2, 0.3, 0.0),
+            (-0.7, 2.1, 0.25),
+        ] {
             assert_relative_eq!(
                 frame_from_phi(phi, theta, d).to_homogeneous(),
                 a2_matrix(phi, theta, d),

@@ -304,13 +304,25 @@ impl RobotDescription {
                     format!("must be in {}..={n} (moved by joint {})", a.joint, a.joint),
                 ));
             }
-            if let Some(t1) = a.target1 {
-                if t1.link <= a.joint || t1.link > n {
-                    return Err(bad(
-                        format!("axis_targets[{k}].target1.link"),
-                        format!("must be in {}..={n} (beyond the swept joint)", a.joint + 1),
-                    ));
-                }
+            if self.couplings.iter().any(|c| c.from == a.joint) && a.target0.link != a.joint {
+                return Err(bad(
+                    format!("axis_targets[{k}].target0.link"),
+                    format!(
+                        "joint {} drives a passive coupling into joint {}, so target 0 must sit on link {} itself \
+                         (beyond it, the target would also move by the coupling's actual-vs-nominal error)",
+                        a.joint,
+                        a.joint + 1,
+                        a.joint
+                    ),
+                ));
+            }
+            if let Some(t1) = a.target1
+                && (t1.link <= a.joint || t1.link > n)
+            {
+                return Err(bad(
+                    format!("axis_targets[{k}].target1.link"),
+                    format!("must be in {}..={n} (beyond the swept joint)", a.joint + 1),
+                ));
             }
             if self.axis_targets[..k].iter().any(|b| b.joint == a.joint) {
                 return Err(bad(
@@ -347,6 +359,11 @@ impl RobotDescription {
     /// The nominal slope of the coupling that drives joint `to` (1-based), if any.
     pub fn nominal_coupling_into(&self, to: usize) -> Option<f64> {
         self.couplings.iter().find(|c| c.to == to).map(|c| c.slope)
+    }
+
+    /// The nominal slope of the coupling driven by joint `from` (1-based), if any.
+    pub fn nominal_coupling_from(&self, from: usize) -> Option<f64> {
+        self.couplings.iter().find(|c| c.from == from).map(|c| c.slope)
     }
 
     /// Tool targets in the tool frame [m].

@@ -1,0 +1,12 @@
+//! Measurement campaigns: the plan of axis experiments (Table 1) and validation poses.
+
+mod plan;
+mod simulate;
+mod validation;
+
+pub use plan::{AxisSweep, CalibrationPlan, PlanError, commands_to_internal};
+pub use simulate::{
+    ArmExecutor, CampaignError, CampaignOutput, ExecuteError, Instrument, Observation, PoseConditions,
+    simulate_campaign,
+};
+pub use validation::ValidationPlan;

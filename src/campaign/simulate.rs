@@ -1,0 +1,205 @@
+//! Running a campaign on a simulated robot: the axis experiments of a [`CalibrationPlan`] and
+//! the validation poses, each target measured by an instrument, to measurement rows
+//! (FORMATS.md section 1).
+
+use super::plan::{CalibrationPlan, PlanError, commands_to_internal};
+use super::validation::ValidationPlan;
+use crate::robot::RobotDescription;
+use nalgebra::{Isometry3, Point3};
+use rand::Rng;
+
+/// The simulated "real robot": executes joint commands and says where its links are.
+/// Implemented by the analytic truth model and by the rapier arm; the campaign never sees more.
+pub trait ArmExecutor {
+    /// Drives the arm to `cmd` (internal units: rad, m), under `conditions`, and returns
+    /// `world_from_link` for every link (index `k` = link `k + 1`). Repeatability noise, if
+    /// any, is drawn from `rng`.
+    fn execute<R: Rng + ?Sized>(
+        &mut self,
+        cmd: &[f64],
+        conditions: &PoseConditions,
+        rng: &mut R,
+    ) -> Result<Vec<Isometry3<f64>>, ExecuteError>;
+
+    /// Whether the target at `point_m` (world) is seen by every station at the last executed
+    /// configuration. The analytic model has no bodies and sees everything.
+    fn visible(&self, _point_m: &Point3<f64>) -> bool {
+        true
+    }
+
+    /// The tool frame in the last link's moving frame.
+    fn last_link_from_tool(&self) -> Isometry3<f64>;
+}
+
+/// Conditions of one pose that unmodelled effects depend on (FORMATS.md optional columns).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseConditions {
+    /// Payload at the tool [kg].
+    pub payload_kg: f64,
+    /// Ambient temperature [deg C].
+    pub temperature_c: f64,
+}
+
+impl Default for PoseConditions {
+    fn default() -> Self {
+        PoseConditions {
+            payload_kg: 0.0,
+            temperature_c: 20.0,
+        }
+    }
+}
+
+/// The simulated robot could not execute a command.
+#[derive(Debug, thiserror::Error)]
+#[error("executing commands {cmd_deg:?}: {reason}")]
+pub struct ExecuteError {
+    /// The commands in file units.
+    pub cmd_deg: Vec<f64>,
+    /// Why.
+    pub reason: String,
+}
+
+/// A measuring instrument as the campaign uses it.
+pub trait Instrument {
+    /// The measured position [m] of a target at `point_m` (world = instrument frame).
+    fn measure_point<R: Rng + ?Sized>(&self, point_m: &Point3<f64>, rng: &mut R) -> Point3<f64>;
+}
+
+/// One observed target at one pose, before it is written as a CSV row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Observation {
+    /// Experiment id: `axis<k>` or `validation`.
+    pub experiment: String,
+    /// The swept joint, 0 for validation.
+    pub moved_joint: usize,
+    /// Step within the experiment.
+    pub step: usize,
+    /// Target id.
+    pub target: usize,
+    /// Measured position [mm], instrument frame.
+    pub position_mm: [f64; 3],
+    /// Commands sent [deg or mm].
+    pub cmd: Vec<f64>,
+    /// Conditions of the pose.
+    pub conditions: PoseConditions,
+}
+
+/// What a campaign produced.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CampaignOutput {
+    /// Observations in the order they were made.
+    pub observations: Vec<Observation>,
+    /// Targets that were hidden from a station and so not measured, per experiment id.
+    pub occluded: Vec<(String, usize)>,
+}
+
+/// A campaign could not be simulated.
+#[derive(Debug, thiserror::Error)]
+pub enum CampaignError {
+    /// The plan does not fit the robot.
+    #[error("plan: {0}")]
+    Plan(#[from] PlanError),
+    /// The robot could not execute a command.
+    #[error(transparent)]
+    Execute(#[from] ExecuteError),
+}
+
+/// Runs the axis experiments of `plan` then the validation poses on `arm`, measuring with
+/// `instrument`. Deterministic for a given `rng` state.
+pub fn simulate_campaign<A: ArmExecutor, I: Instrument, R: Rng + ?Sized>(
+    desc: &RobotDescription,
+    plan: &CalibrationPlan,
+    validation: &ValidationPlan,
+    arm: &mut A,
+    instrument: &I,
+    rng: &mut R,
+) -> Result<CampaignOutput, CampaignError> {
+    plan.validate(desc)?;
+    let mut out = CampaignOutput::default();
+    let conditions = PoseConditions::default();
+    for sweep in &plan.sweeps {
+        let experiment = format!("axis{}", sweep.joint);
+        let targets = desc
+            .axis_targets_of(sweep.joint)
+            .expect("validated plan: every swept joint has targets");
+        let mut observed = vec![(0, targets.target0)];
+        if sweep.second_target {
+            observed.push((1, targets.target1.expect("validated plan: second target given")));
+        }
+        for step in 0..sweep.poses() {
+            let cmd = plan.commands(desc, sweep, step);
+            let links = arm.execute(&commands_to_internal(desc, &cmd), &conditions, rng)?;
+            for (id, t) in &observed {
+                let p = links[t.link - 1] * t.position_m();
+                record(
+                    &mut out,
+                    arm,
+                    instrument,
+                    rng,
+                    &experiment,
+                    sweep.joint,
+                    step,
+                    *id,
+                    p,
+                    &cmd,
+                    conditions,
+                );
+            }
+        }
+    }
+    let tool_targets = desc.tool_targets_m();
+    for (step, cmd) in validation.commands(desc, &plan.reference).into_iter().enumerate() {
+        let links = arm.execute(&commands_to_internal(desc, &cmd), &conditions, rng)?;
+        let world_from_tool = links[desc.dof() - 1] * arm.last_link_from_tool();
+        for (id, t) in tool_targets.iter().enumerate() {
+            let p = world_from_tool * t;
+            record(
+                &mut out,
+                arm,
+                instrument,
+                rng,
+                "validation",
+                0,
+                step,
+                id,
+                p,
+                &cmd,
+                conditions,
+            );
+        }
+    }
+    Ok(out)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn record<A: ArmExecutor, I: Instrument, R: Rng + ?Sized>(
+    out: &mut CampaignOutput,
+    arm: &A,
+    instrument: &I,
+    rng: &mut R,
+    experiment: &str,
+    moved_joint: usize,
+    step: usize,
+    target: usize,
+    point_m: Point3<f64>,
+    cmd: &[f64],
+    conditions: PoseConditions,
+) {
+    if !arm.visible(&point_m) {
+        match out.occluded.iter_mut().find(|(e, _)| e == experiment) {
+            Some((_, n)) => *n += 1,
+            None => out.occluded.push((experiment.to_owned(), 1)),
+        }
+        return;
+    }
+    let m = instrument.measure_point(&point_m, rng) * 1e3;
+    out.observations.push(Observation {
+        experiment: experiment.to_owned(),
+        moved_joint,
+        step,
+        target,
+        position_mm: [m.x, m.y, m.z],
+        cmd: cmd.to_vec(),
+        conditions,
+    });
+}

@@ -1,0 +1,56 @@
+//! Validation poses: free joint configurations spread over the workspace, visited after the
+//! axis experiments (FORMATS.md section 1, `moved_joint = 0`).
+
+use crate::robot::RobotDescription;
+use rand::{RngExt, SeedableRng, rngs::StdRng};
+use serde::{Deserialize, Serialize};
+
+/// A seeded set of validation poses drawn uniformly inside per-joint command ranges.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ValidationPlan {
+    /// Number of distinct poses (the paper's figs. 9-10 use a few dozen; FORMATS asks >= 50
+    /// for a simulated campaign).
+    pub poses: usize,
+    /// Per joint, the half-range of commands around the reference [deg or mm]; clipped to
+    /// the joint limits.
+    pub half_range: Vec<f64>,
+    /// Seed of the pose draw (independent of the measurement noise seed).
+    pub seed: u64,
+}
+
+impl ValidationPlan {
+    /// The default workspace set for the IRB/L6: 60 poses, joints 1-3 within +-40/30/35 deg
+    /// (the arm in front of the theodolites), wrist joints 4-6 within +-60/90/90 deg.
+    pub fn workspace_default(dof: usize) -> Self {
+        let ranges = [40.0, 30.0, 35.0, 60.0, 90.0, 90.0];
+        ValidationPlan {
+            poses: 60,
+            half_range: (0..dof).map(|k| ranges.get(k).copied().unwrap_or(30.0)).collect(),
+            seed: 9283,
+        }
+    }
+
+    /// The command vectors (file units), reproducible for a given seed.
+    pub fn commands(&self, desc: &RobotDescription, reference: &[f64]) -> Vec<Vec<f64>> {
+        let mut rng = StdRng::seed_from_u64(self.seed);
+        (0..self.poses)
+            .map(|_| {
+                desc.joints
+                    .iter()
+                    .enumerate()
+                    .map(|(k, j)| {
+                        let half = self.half_range.get(k).copied().unwrap_or(0.0).abs();
+                        let lo = (reference[k] - half).max(j.limits[0]);
+                        let hi = (reference[k] + half).min(j.limits[1]);
+                        if hi > lo {
+                            rng.random_range(lo..=hi)
+                        } else {
+                            reference[k]
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
