@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 pub struct AxisSweep {
     /// The swept joint (1-based).
     pub joint: usize,
-    /// Total displacement [deg] (revolute) or [mm] (prismatic).
+    /// Total displacement \[deg\] (revolute) or \[mm\] (prismatic).
     pub span: f64,
     /// Number of intervals; the experiment observes `intervals + 1` poses.
     pub intervals: usize,
@@ -20,14 +20,14 @@ pub struct AxisSweep {
     /// hold actuator `joint + 1` still.
     #[serde(default)]
     pub second_target: bool,
-    /// Where the sweep starts, relative to the reference pose [deg or mm]; default `-span/2`
+    /// Where the sweep starts, relative to the reference pose \[deg or mm\]; default `-span/2`
     /// (a sweep centred on the reference pose).
     #[serde(default)]
     pub start: Option<f64>,
 }
 
 impl AxisSweep {
-    /// The command of the swept joint at `step`, relative to the reference [deg or mm].
+    /// The command of the swept joint at `step`, relative to the reference \[deg or mm\].
     pub fn offset_at(&self, step: usize) -> f64 {
         self.start.unwrap_or(-self.span / 2.0) + self.span * step as f64 / self.intervals as f64
     }

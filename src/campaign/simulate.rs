@@ -34,9 +34,9 @@ pub trait ArmExecutor {
 /// Conditions of one pose that unmodelled effects depend on (FORMATS.md optional columns).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PoseConditions {
-    /// Payload at the tool [kg].
+    /// Payload at the tool \[kg\].
     pub payload_kg: f64,
-    /// Ambient temperature [deg C].
+    /// Ambient temperature \[deg C\].
     pub temperature_c: f64,
 }
 
@@ -61,7 +61,7 @@ pub struct ExecuteError {
 
 /// A measuring instrument as the campaign uses it.
 pub trait Instrument {
-    /// The measured position [m] of a target at `point_m` (world = instrument frame).
+    /// The measured position \[m\] of a target at `point_m` (world = instrument frame).
     fn measure_point<R: Rng + ?Sized>(&self, point_m: &Point3<f64>, rng: &mut R) -> Point3<f64>;
 }
 
@@ -76,9 +76,9 @@ pub struct Observation {
     pub step: usize,
     /// Target id.
     pub target: usize,
-    /// Measured position [mm], instrument frame.
+    /// Measured position \[mm\], instrument frame.
     pub position_mm: [f64; 3],
-    /// Commands sent [deg or mm].
+    /// Commands sent \[deg or mm\].
     pub cmd: Vec<f64>,
     /// Conditions of the pose.
     pub conditions: PoseConditions,

@@ -12,7 +12,7 @@ pub struct ValidationPlan {
     /// Number of distinct poses (the paper's figs. 9-10 use a few dozen; FORMATS asks >= 50
     /// for a simulated campaign).
     pub poses: usize,
-    /// Per joint, the half-range of commands around the reference [deg or mm]; clipped to
+    /// Per joint, the half-range of commands around the reference \[deg or mm\]; clipped to
     /// the joint limits.
     pub half_range: Vec<f64>,
     /// Seed of the pose draw (independent of the measurement noise seed).

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 pub struct PhiJoint {
     /// Revolute or prismatic.
     pub kind: JointKind,
-    /// The constant angle of Z_phi from X_i [rad] (A2); unused by the last joint.
+    /// The constant angle of Z_phi from X_i \[rad\] (A2); unused by the last joint.
     pub phi_rad: f64,
 }
 
@@ -24,7 +24,7 @@ pub struct PhiJoint {
 pub struct PhiModel {
     /// The `N` joints, base first.
     pub joints: Vec<PhiJoint>,
-    /// The `N - 1` rows of Table 2: `rows[k]` places frame `k + 2` in the `phi_{k+1}` frame.
+    /// The `N - 1` rows of Table 2: `rows\[k\]` places frame `k + 2` in the `phi_{k+1}` frame.
     pub rows: Vec<PhiRow>,
     /// Frame 1 (the robot base frame, Z on axis 1) in the world (instrument) frame.
     pub world_from_base: Isometry3<f64>,
@@ -35,7 +35,7 @@ pub struct PhiModel {
 /// A joint axis as a line in some frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisLine {
-    /// A point on the axis (the origin of frame `i`) [m].
+    /// A point on the axis (the origin of frame `i`) \[m\].
     pub origin_m: Point3<f64>,
     /// The axis direction Z_i.
     pub direction: Unit<Vector3<f64>>,
@@ -44,9 +44,9 @@ pub struct AxisLine {
 /// Every frame of the chain at one joint configuration, in the world frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ChainPoses {
-    /// `world_from_frame[k]`: fixed frame of joint `k + 1` (Z on the axis).
+    /// `world_from_frame\[k\]`: fixed frame of joint `k + 1` (Z on the axis).
     pub world_from_frame: Vec<Isometry3<f64>>,
-    /// `world_from_link[k]`: moving frame of link `k + 1`.
+    /// `world_from_link\[k\]`: moving frame of link `k + 1`.
     pub world_from_link: Vec<Isometry3<f64>>,
     /// The tool frame.
     pub world_from_tool: Isometry3<f64>,

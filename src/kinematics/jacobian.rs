@@ -22,8 +22,8 @@ fn column(
 }
 
 /// The 6 x N geometric Jacobian of the tool frame at `q`, in the world frame: rows 0-2 the
-/// linear velocity of the tool origin [m per joint unit], rows 3-5 the angular velocity
-/// [rad per joint unit].
+/// linear velocity of the tool origin \[m per joint unit\], rows 3-5 the angular velocity
+/// \[rad per joint unit\].
 pub fn geometric_jacobian(model: &PhiModel, q: &[f64]) -> Matrix6xX<f64> {
     let poses = model.poses(q);
     let p = poses.world_from_tool.translation.vector.into();
@@ -39,7 +39,7 @@ pub fn geometric_jacobian(model: &PhiModel, q: &[f64]) -> Matrix6xX<f64> {
 }
 
 /// The 3 x N Jacobian of a point fixed on link `link` (0-based), given in that link's moving
-/// frame [m]: `d(world point)/dq`. Joints beyond `link` do not move it (zero columns).
+/// frame \[m\]: `d(world point)/dq`. Joints beyond `link` do not move it (zero columns).
 pub fn point_jacobian(model: &PhiModel, q: &[f64], link: usize, point_in_link_m: &Point3<f64>) -> Matrix3xX<f64> {
     let poses: ChainPoses = model.poses(q);
     let p = poses.world_from_link[link] * point_in_link_m;

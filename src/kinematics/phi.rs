@@ -13,26 +13,26 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum JointKind {
-    /// Rotation `theta` [rad] about Z_i.
+    /// Rotation `theta` \[rad\] about Z_i.
     Revolute,
-    /// Translation `d` [m] along Z_i.
+    /// Translation `d` \[m\] along Z_i.
     Prismatic,
 }
 
 /// One row of Table 2: the parameters of eq. (A3) relating frame `i+1` to the `phi_i` frame.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PhiRow {
-    /// Translation along Z_phi [m].
+    /// Translation along Z_phi \[m\].
     pub a_m: f64,
-    /// Translation along the rotated X [m].
+    /// Translation along the rotated X \[m\].
     pub b_m: f64,
-    /// Rotation about the rotated X [rad].
+    /// Rotation about the rotated X \[rad\].
     pub alpha_rad: f64,
-    /// Rotation about Z_phi [rad].
+    /// Rotation about Z_phi \[rad\].
     pub beta_rad: f64,
-    /// Extra rotation about Z_{i+1} [rad] (arbitrarily placed frames only).
+    /// Extra rotation about Z_{i+1} \[rad\] (arbitrarily placed frames only).
     pub gamma_rad: f64,
-    /// Extra translation along Z_{i+1} [m] (arbitrarily placed frames only).
+    /// Extra translation along Z_{i+1} \[m\] (arbitrarily placed frames only).
     pub h_m: f64,
 }
 
@@ -112,7 +112,7 @@ fn phi_axes_at_zero() -> UnitQuaternion<f64> {
 ///
 /// `[[-s, 0, c, 0], [c, 0, s, 0], [0, 1, 0, d]]` with `c = cos(phi + theta)`,
 /// `s = sin(phi + theta)`; equal to `Trans(0,0,d) Rot(z, phi + theta) R0` with `R0` the
-/// fixed axis permutation of [`phi_axes_at_zero`].
+/// fixed axis permutation (columns `Y_i`, `Z_i`, `X_i`).
 pub fn frame_from_phi(phi_rad: f64, theta_rad: f64, d_m: f64) -> Isometry3<f64> {
     Isometry3::from_parts(
         Translation3::new(0.0, 0.0, d_m),

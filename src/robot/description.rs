@@ -33,7 +33,7 @@ pub enum DescriptionError {
     Invalid {
         /// The file (or `<string>`).
         path: PathBuf,
-        /// The offending key, e.g. `rows[2].alpha_deg`.
+        /// The offending key, e.g. `rows\[2\].alpha_deg`.
         field: String,
         /// What is wrong.
         message: String,
@@ -46,14 +46,14 @@ pub enum DescriptionError {
 pub struct JointEntry {
     /// `revolute` or `prismatic`.
     pub kind: JointKind,
-    /// The phi angle of eq. (A2) [deg].
+    /// The phi angle of eq. (A2) \[deg\].
     #[serde(default)]
     pub phi_deg: f64,
-    /// Lower and upper joint limit [deg] (revolute) or [mm] (prismatic).
+    /// Lower and upper joint limit \[deg\] (revolute) or \[mm\] (prismatic).
     pub limits: [f64; 2],
-    /// Mass of the link this joint moves [kg].
+    /// Mass of the link this joint moves \[kg\].
     pub mass_kg: f64,
-    /// Centre of mass of that link in its moving frame [mm].
+    /// Centre of mass of that link in its moving frame \[mm\].
     pub com_mm: [f64; 3],
 }
 
@@ -61,18 +61,18 @@ pub struct JointEntry {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RowEntry {
-    /// [m]
+    /// \[m\]
     pub a_m: f64,
-    /// [m]
+    /// \[m\]
     pub b_m: f64,
-    /// [deg]
+    /// \[deg\]
     pub alpha_deg: f64,
-    /// [deg]
+    /// \[deg\]
     pub beta_deg: f64,
-    /// [deg], default 0
+    /// \[deg\], default 0
     #[serde(default)]
     pub gamma_deg: f64,
-    /// [m], default 0
+    /// \[m\], default 0
     #[serde(default)]
     pub h_m: f64,
 }
@@ -104,14 +104,14 @@ pub struct NominalCoupling {
     pub slope: f64,
 }
 
-/// A rigid placement: translation [mm] and roll-pitch-yaw [deg] (`Rz(yaw) Ry(pitch) Rx(roll)`).
+/// A rigid placement: translation \[mm\] and roll-pitch-yaw \[deg\] (`Rz(yaw) Ry(pitch) Rx(roll)`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Placement {
-    /// [mm]
+    /// \[mm\]
     #[serde(default)]
     pub translation_mm: [f64; 3],
-    /// [deg]
+    /// \[deg\]
     #[serde(default)]
     pub rpy_deg: [f64; 3],
 }
@@ -132,22 +132,22 @@ pub struct ToolEntry {
     /// The tool frame in the last link's moving frame.
     #[serde(default)]
     pub frame: Placement,
-    /// Tool targets 0, 1, 2 in the tool frame [mm] (three non-collinear points).
+    /// Tool targets 0, 1, 2 in the tool frame \[mm\] (three non-collinear points).
     pub targets_mm: Vec<[f64; 3]>,
 }
 
-/// A target fixed on a link: which link (1-based) and where in its moving frame [mm].
+/// A target fixed on a link: which link (1-based) and where in its moving frame \[mm\].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinkTarget {
     /// The link carrying the target (1-based; link `k` is moved by joint `k`).
     pub link: usize,
-    /// Position in that link's moving frame [mm].
+    /// Position in that link's moving frame \[mm\].
     pub position_mm: [f64; 3],
 }
 
 impl LinkTarget {
-    /// Position in the link's moving frame [m].
+    /// Position in the link's moving frame \[m\].
     pub fn position_m(&self) -> Point3<f64> {
         Point3::from(self.position_mm) * 1e-3
     }
@@ -366,7 +366,7 @@ impl RobotDescription {
         self.couplings.iter().find(|c| c.from == from).map(|c| c.slope)
     }
 
-    /// Tool targets in the tool frame [m].
+    /// Tool targets in the tool frame \[m\].
     pub fn tool_targets_m(&self) -> Vec<Point3<f64>> {
         self.tool.targets_mm.iter().map(|p| Point3::from(*p) * 1e-3).collect()
     }
