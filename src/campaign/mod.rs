@@ -6,7 +6,7 @@ mod validation;
 
 pub use plan::{AxisSweep, CalibrationPlan, PlanError, commands_to_internal};
 pub use simulate::{
-    ArmExecutor, CampaignError, CampaignOutput, ExecuteError, Instrument, Observation, PoseConditions,
+    ArmExecutor, CampaignError, CampaignOutput, ExecuteError, PoseConditions,
     simulate_campaign,
 };
 pub use validation::ValidationPlan;

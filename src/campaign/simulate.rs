@@ -4,6 +4,7 @@
 
 use super::plan::{CalibrationPlan, PlanError, commands_to_internal};
 use super::validation::ValidationPlan;
+use crate::measurement::{Measurement, MeasurementModel, TriangulationError};
 use crate::robot::RobotDescription;
 use nalgebra::{Isometry3, Point3};
 use rand::Rng;
@@ -59,36 +60,11 @@ pub struct ExecuteError {
     pub reason: String,
 }
 
-/// A measuring instrument as the campaign uses it.
-pub trait Instrument {
-    /// The measured position \[m\] of a target at `point_m` (world = instrument frame).
-    fn measure_point<R: Rng + ?Sized>(&self, point_m: &Point3<f64>, rng: &mut R) -> Point3<f64>;
-}
-
-/// One observed target at one pose, before it is written as a CSV row.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Observation {
-    /// Experiment id: `axis<k>` or `validation`.
-    pub experiment: String,
-    /// The swept joint, 0 for validation.
-    pub moved_joint: usize,
-    /// Step within the experiment.
-    pub step: usize,
-    /// Target id.
-    pub target: usize,
-    /// Measured position \[mm\], instrument frame.
-    pub position_mm: [f64; 3],
-    /// Commands sent \[deg or mm\].
-    pub cmd: Vec<f64>,
-    /// Conditions of the pose.
-    pub conditions: PoseConditions,
-}
-
 /// What a campaign produced.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CampaignOutput {
-    /// Observations in the order they were made.
-    pub observations: Vec<Observation>,
+    /// Measured targets in the order they were observed (rows of FORMATS.md section 1).
+    pub rows: Vec<Measurement>,
     /// Targets that were hidden from a station and so not measured, per experiment id.
     pub occluded: Vec<(String, usize)>,
 }
@@ -102,16 +78,28 @@ pub enum CampaignError {
     /// The robot could not execute a command.
     #[error(transparent)]
     Execute(#[from] ExecuteError),
+    /// The instrument could not measure a target.
+    #[error("measuring {experiment} step {step} target {target}: {source}")]
+    Measure {
+        /// Experiment id.
+        experiment: String,
+        /// Step.
+        step: usize,
+        /// Target.
+        target: usize,
+        /// Why.
+        source: TriangulationError,
+    },
 }
 
 /// Runs the axis experiments of `plan` then the validation poses on `arm`, measuring with
 /// `instrument`. Deterministic for a given `rng` state.
-pub fn simulate_campaign<A: ArmExecutor, I: Instrument, R: Rng + ?Sized>(
+pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
     desc: &RobotDescription,
     plan: &CalibrationPlan,
     validation: &ValidationPlan,
     arm: &mut A,
-    instrument: &I,
+    instrument: &MeasurementModel,
     rng: &mut R,
 ) -> Result<CampaignOutput, CampaignError> {
     plan.validate(desc)?;
@@ -172,10 +160,10 @@ pub fn simulate_campaign<A: ArmExecutor, I: Instrument, R: Rng + ?Sized>(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn record<A: ArmExecutor, I: Instrument, R: Rng + ?Sized>(
+fn record<A: ArmExecutor, R: Rng + ?Sized>(
     out: &mut CampaignOutput,
     arm: &A,
-    instrument: &I,
+    instrument: &MeasurementModel,
     rng: &mut R,
     experiment: &str,
     moved_joint: usize,
@@ -184,22 +172,32 @@ fn record<A: ArmExecutor, I: Instrument, R: Rng + ?Sized>(
     point_m: Point3<f64>,
     cmd: &[f64],
     conditions: PoseConditions,
-) {
+) -> Result<(), CampaignError> {
     if !arm.visible(&point_m) {
         match out.occluded.iter_mut().find(|(e, _)| e == experiment) {
             Some((_, n)) => *n += 1,
             None => out.occluded.push((experiment.to_owned(), 1)),
         }
-        return;
+        return Ok(());
     }
-    let m = instrument.measure_point(&point_m, rng) * 1e3;
-    out.observations.push(Observation {
+    let m = instrument
+        .measure(&point_m, rng)
+        .map_err(|source| CampaignError::Measure {
+            experiment: experiment.to_owned(),
+            step,
+            target,
+            source,
+        })?
+        * 1e3;
+    out.rows.push(Measurement {
         experiment: experiment.to_owned(),
         moved_joint,
         step,
         target,
         position_mm: [m.x, m.y, m.z],
         cmd: cmd.to_vec(),
-        conditions,
+        payload_kg: conditions.payload_kg,
+        temperature_c: conditions.temperature_c,
     });
+    Ok(())
 }
