@@ -7,6 +7,7 @@ mod description;
 mod four_bar;
 mod four_bar_fit;
 mod functions;
+mod perturb;
 mod repeatability;
 mod truth;
 mod truth_error;
@@ -19,6 +20,9 @@ pub use description::{
 pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};
 pub use four_bar_fit::{FourBarFit, fit_four_bar};
 pub use functions::{CouplingFunction, Transmission};
+pub use perturb::{
+    CouplingHarmonicSpread, FourBarSpread, PerturbationSpec, PlacementSpread, RowSpread, Spread, TransmissionSpread, perturb,
+};
 pub use repeatability::{
     RepeatabilityStats, RepeatabilityTarget, calibrate_repeatability_sigmas, repeatability_stats, workspace_poses,
 };
