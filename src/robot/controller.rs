@@ -114,6 +114,9 @@ mod tests {
         assert_relative_eq!(cmd[3], 0.9);
         assert_relative_eq!(cmd[4], 0.5 + 32.0 / 19.0 * 0.5, epsilon = 1e-15);
         assert_relative_eq!(cmd[5], 0.6);
-        assert!(matches!(c.hold_still_commands(7, &cmd0, 0.0), Err(TruthError::BadJoint { .. })));
+        assert!(matches!(
+            c.hold_still_commands(7, &cmd0, 0.0),
+            Err(TruthError::BadJoint { .. })
+        ));
     }
 }

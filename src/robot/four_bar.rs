@@ -37,13 +37,13 @@ pub enum FourBarError {
          axis 3, outside [{min_m}, {max_m}] m"
     )]
     CannotClose {
-        /// The input angle [rad].
+        /// The input angle \[rad\].
         theta_2_rad: f64,
-        /// Distance from `O3` to the crank tip `C` [m].
+        /// Distance from `O3` to the crank tip `C` \[m\].
         distance_m: f64,
-        /// `|r_r - r_l|` [m].
+        /// `|r_r - r_l|` \[m\].
         min_m: f64,
-        /// `r_r + r_l` [m].
+        /// `r_r + r_l` \[m\].
         max_m: f64,
     },
 }
@@ -52,28 +52,28 @@ pub enum FourBarError {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FourBarGeometry {
-    /// `L`: distance from axis 2 to axis 3 [m].
+    /// `L`: distance from axis 2 to axis 3 \[m\].
     pub arm_m: f64,
-    /// `r_c`: crank length on axis 2 [m].
+    /// `r_c`: crank length on axis 2 \[m\].
     pub crank_m: f64,
-    /// `r_r`: coupler rod length [m].
+    /// `r_r`: coupler rod length \[m\].
     pub rod_m: f64,
-    /// `r_l`: lever length on link 3 [m].
+    /// `r_l`: lever length on link 3 \[m\].
     pub lever_m: f64,
-    /// `psi_c`: crank direction from the arm direction at `theta_2 = 0` [rad].
+    /// `psi_c`: crank direction from the arm direction at `theta_2 = 0` \[rad\].
     pub crank_angle_rad: f64,
-    /// `psi_l`: lever direction on link 3 from the arm direction, at zero relative angle [rad].
+    /// `psi_l`: lever direction on link 3 from the arm direction, at zero relative angle \[rad\].
     pub lever_angle_rad: f64,
 }
 
 /// The assembled four-bar at one input angle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FourBarState {
-    /// The passive angle `g = theta_23` [rad].
+    /// The passive angle `g = theta_23` \[rad\].
     pub passive_rad: f64,
-    /// `d g / d theta_2` [-].
+    /// `d g / d theta_2` \[-\].
     pub slope: f64,
-    /// Loop-closure residual `|P - C| - r_r` [m] (zero up to rounding).
+    /// Loop-closure residual `|P - C| - r_r` \[m\] (zero up to rounding).
     pub closure_residual_m: f64,
 }
 
@@ -158,7 +158,7 @@ impl FourBarGeometry {
         Ok(if g_at(1.0)? <= g_at(-1.0)? { 1.0 } else { -1.0 })
     }
 
-    /// Solves the linkage at input angle `theta_2` [rad]: passive angle, its derivative (by
+    /// Solves the linkage at input angle `theta_2` \[rad\]: passive angle, its derivative (by
     /// implicit differentiation of the closure `F = |P - C|^2 - r_r^2 = 0`), and the closure
     /// residual.
     pub fn solve(&self, theta_2: f64) -> Result<FourBarState, FourBarError> {
@@ -186,7 +186,7 @@ impl FourBarGeometry {
         })
     }
 
-    /// The passive angle `theta_23(theta_2)` [rad].
+    /// The passive angle `theta_23(theta_2)` \[rad\].
     pub fn passive(&self, theta_2: f64) -> Result<f64, FourBarError> {
         self.solve(theta_2).map(|s| s.passive_rad)
     }
@@ -199,7 +199,7 @@ mod tests {
 
     fn skewed() -> FourBarGeometry {
         FourBarGeometry {
-            arm_m: 0.6931,
+            arm_m: 0.6932,
             crank_m: 0.21,
             rod_m: 0.70,
             lever_m: 0.19,

@@ -16,9 +16,9 @@ use nalgebra::{DMatrix, DVector};
 pub struct FourBarFit {
     /// The fitted geometry.
     pub geometry: FourBarGeometry,
-    /// Largest `|g_fit(t) - g_target(t)|` over the fitted span [rad].
+    /// Largest `|g_fit(t) - g_target(t)|` over the fitted span \[rad\].
     pub max_abs_error_rad: f64,
-    /// RMS of `g_fit - g_target` over the fitted span [rad].
+    /// RMS of `g_fit - g_target` over the fitted span \[rad\].
     pub rms_error_rad: f64,
 }
 
@@ -55,12 +55,7 @@ pub fn fit_four_bar(
     let ts: Vec<f64> = (0..n)
         .map(|i| -span_rad + 2.0 * span_rad * i as f64 / (n - 1) as f64)
         .collect();
-    let mut p = vec![
-        start.rod_m,
-        start.lever_m,
-        start.crank_angle_rad,
-        start.lever_angle_rad,
-    ];
+    let mut p = vec![start.rod_m, start.lever_m, start.crank_angle_rad, start.lever_angle_rad];
     let mut r = residuals(&start, &ts, target)?;
     let mut cost = r.norm_squared();
     let mut lambda = 1e-3;

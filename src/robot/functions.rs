@@ -6,17 +6,17 @@
 use super::four_bar::{FourBarError, FourBarGeometry};
 use serde::{Deserialize, Serialize};
 
-/// A transmission function `theta_c = f(theta_a)`: the command [rad] a joint needs to reach
-/// the actual active displacement `theta_a` [rad] (eq. 8).
+/// A transmission function `theta_c = f(theta_a)`: the command \[rad\] a joint needs to reach
+/// the actual active displacement `theta_a` \[rad\] (eq. 8).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Transmission {
     /// `theta_c = theta_a + sum_k (sin[k-1] sin(k theta_a) + cos[k-1] cos(k theta_a))`;
     /// the paper's form for joints 1, 2, 3 and 6 is order 1.
     Harmonic {
-        /// Sine coefficients, order 1 first [rad].
+        /// Sine coefficients, order 1 first \[rad\].
         sin: Vec<f64>,
-        /// Cosine coefficients, order 1 first [rad].
+        /// Cosine coefficients, order 1 first \[rad\].
         cos: Vec<f64>,
     },
     /// A gear of ratio `N` with errors periodic in the gear angle (the paper's joint 5):
@@ -25,9 +25,9 @@ pub enum Transmission {
     Gear {
         /// Gear ratio `N` (joint turns per gear turn).
         ratio: f64,
-        /// Sine coefficients in gear units [rad].
+        /// Sine coefficients in gear units \[rad\].
         sin: Vec<f64>,
-        /// Cosine coefficients in gear units [rad].
+        /// Cosine coefficients in gear units \[rad\].
         cos: Vec<f64>,
     },
 }
@@ -64,8 +64,8 @@ impl Transmission {
     }
 }
 
-/// A passive coupling `theta_p = g(theta_a)`: the passive displacement of joint `i+1` [rad]
-/// driven by the active displacement `theta_a` of joint `i` [rad] (eq. 15).
+/// A passive coupling `theta_p = g(theta_a)`: the passive displacement of joint `i+1` \[rad\]
+/// driven by the active displacement `theta_a` of joint `i` \[rad\] (eq. 15).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
 pub enum CouplingFunction {
@@ -74,9 +74,9 @@ pub enum CouplingFunction {
     Gear {
         /// Ratio `N`.
         ratio: f64,
-        /// Sine coefficients [rad].
+        /// Sine coefficients \[rad\].
         sin: Vec<f64>,
-        /// Cosine coefficients [rad].
+        /// Cosine coefficients \[rad\].
         cos: Vec<f64>,
     },
     /// The paper's fractional four-bar form (section 4, joint 2->3):

@@ -21,7 +21,8 @@ pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};
 pub use four_bar_fit::{FourBarFit, fit_four_bar};
 pub use functions::{CouplingFunction, Transmission};
 pub use perturb::{
-    CouplingHarmonicSpread, FourBarSpread, PerturbationSpec, PlacementSpread, RowSpread, Spread, TransmissionSpread, perturb,
+    CouplingHarmonicSpread, FourBarSpread, PerturbationSpec, PlacementSpread, RowSpread, Spread, TransmissionSpread,
+    perturb,
 };
 pub use repeatability::{
     RepeatabilityStats, RepeatabilityTarget, calibrate_repeatability_sigmas, repeatability_stats, workspace_poses,

@@ -90,7 +90,13 @@ impl Spread {
                 let (mut mass, mut second) = (0.0, 0.0);
                 for i in 0..=m {
                     let x = -a + i as f64 * h;
-                    let w = if i == 0 || i == m { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+                    let w = if i == 0 || i == m {
+                        1.0
+                    } else if i % 2 == 1 {
+                        4.0
+                    } else {
+                        2.0
+                    };
                     let d = (-0.5 * x * x).exp();
                     mass += w * d;
                     second += w * x * x * d;
@@ -114,13 +120,13 @@ fn draw<R: Rng + ?Sized>(spread: &Option<Spread>, rng: &mut R) -> f64 {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RowSpread {
-    /// [mm]
+    /// \[mm\]
     pub a_mm: Option<Spread>,
-    /// [mm]
+    /// \[mm\]
     pub b_mm: Option<Spread>,
-    /// [deg]
+    /// \[deg\]
     pub alpha_deg: Option<Spread>,
-    /// [deg]
+    /// \[deg\]
     pub beta_deg: Option<Spread>,
 }
 
@@ -128,9 +134,9 @@ pub struct RowSpread {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlacementSpread {
-    /// Each translation component [mm].
+    /// Each translation component \[mm\].
     pub translation_mm: Option<Spread>,
-    /// Each of roll, pitch, yaw [deg].
+    /// Each of roll, pitch, yaw \[deg\].
     pub rpy_deg: Option<Spread>,
 }
 
@@ -138,9 +144,9 @@ pub struct PlacementSpread {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TransmissionSpread {
-    /// Coefficient of `sin(theta_a)` [rad].
+    /// Coefficient of `sin(theta_a)` \[rad\].
     pub sin_rad: Option<Spread>,
-    /// Coefficient of `cos(theta_a)` [rad].
+    /// Coefficient of `cos(theta_a)` \[rad\].
     pub cos_rad: Option<Spread>,
 }
 
@@ -150,9 +156,9 @@ pub struct TransmissionSpread {
 pub struct CouplingHarmonicSpread {
     /// The driven joint (1-based); the description must couple it to the joint below.
     pub into: usize,
-    /// Coefficient of `sin(N t)` [rad].
+    /// Coefficient of `sin(N t)` \[rad\].
     pub sin_rad: Option<Spread>,
-    /// Coefficient of `cos(N t)` [rad].
+    /// Coefficient of `cos(N t)` \[rad\].
     pub cos_rad: Option<Spread>,
 }
 
@@ -166,9 +172,9 @@ pub struct FourBarSpread {
     pub into: usize,
     /// Nominal dimensions (normally a parallelogram, giving the nominal slope -1).
     pub nominal: FourBarGeometry,
-    /// Spread of each of crank, rod and lever lengths [mm].
+    /// Spread of each of crank, rod and lever lengths \[mm\].
     pub length_mm: Option<Spread>,
-    /// Spread of each of the crank and lever angles [deg].
+    /// Spread of each of the crank and lever angles \[deg\].
     pub angle_deg: Option<Spread>,
 }
 
@@ -182,9 +188,9 @@ pub struct PerturbationSpec {
     /// Base placement.
     #[serde(default)]
     pub placement: PlacementSpread,
-    /// Transducer zero offsets of revolute joints [deg].
+    /// Transducer zero offsets of revolute joints \[deg\].
     pub transducer_offset_deg: Option<Spread>,
-    /// Transducer zero offsets of prismatic joints [mm].
+    /// Transducer zero offsets of prismatic joints \[mm\].
     pub transducer_offset_mm: Option<Spread>,
     /// Transmission errors of revolute joints.
     #[serde(default)]
@@ -194,7 +200,7 @@ pub struct PerturbationSpec {
     pub coupling_harmonics: Vec<CouplingHarmonicSpread>,
     /// A four-bar coupling.
     pub four_bar: Option<FourBarSpread>,
-    /// Repeatability jitter sigma per joint [rad] (revolute) or [m] (prismatic); empty = none.
+    /// Repeatability jitter sigma per joint \[rad\] (revolute) or \[m\] (prismatic); empty = none.
     #[serde(default)]
     pub repeatability_sigma: Vec<f64>,
 }
@@ -330,7 +336,7 @@ pub fn perturb<R: Rng + ?Sized>(
 }
 
 /// Common-normal distance between axes `into - 1` and `into` (1-based) of the actual model at
-/// zero joint values [m] (the two are parallel for a four-bar).
+/// zero joint values \[m\] (the two are parallel for a four-bar).
 fn axis_distance_m(t: &TruthRobot, into: usize) -> f64 {
     let poses = t.model().poses(&vec![0.0; t.dof()]);
     let (a, b) = (poses.axis(into - 2), poses.axis(into - 1));

@@ -32,7 +32,7 @@ fn identity_transmission() -> Transmission {
 pub struct TruthJoint {
     /// Revolute or prismatic.
     pub kind: JointKind,
-    /// The phi angle of eq. (A2) [deg]; equal for the nominal and actual robots (section 4).
+    /// The phi angle of eq. (A2) \[deg\]; equal for the nominal and actual robots (section 4).
     #[serde(default)]
     pub phi_deg: f64,
     /// The actual transmission `theta_c = f(theta_a)` (eq. 8); default identity.
@@ -41,12 +41,12 @@ pub struct TruthJoint {
     /// The actual passive coupling into this joint from the joint below (eq. 15), if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coupling_in: Option<CouplingFunction>,
-    /// Transducer zero offset [rad] (revolute) or [m] (prismatic), subtracted from the actuator
+    /// Transducer zero offset \[rad\] (revolute) or \[m\] (prismatic), subtracted from the actuator
     /// command (fig. 3).
     #[serde(default)]
     pub transducer_offset: f64,
     /// Standard deviation of the Gaussian jitter of the joint value on each execution of a
-    /// command [rad] (revolute) or [m] (prismatic): the robot's repeatability.
+    /// command \[rad\] (revolute) or \[m\] (prismatic): the robot's repeatability.
     #[serde(default)]
     pub repeatability_sigma: f64,
 }
@@ -145,7 +145,11 @@ impl TruthRobot {
         if n == 0 || self.rows.len() + 1 != n {
             return Err(bad(
                 "rows".into(),
-                format!("{n} joints need {} rows, found {}", n.saturating_sub(1), self.rows.len()),
+                format!(
+                    "{n} joints need {} rows, found {}",
+                    n.saturating_sub(1),
+                    self.rows.len()
+                ),
             ));
         }
         for (k, j) in self.joints.iter().enumerate() {
@@ -153,10 +157,16 @@ impl TruthRobot {
                 return Err(bad(format!("joints[{k}]"), "values must be finite".into()));
             }
             if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
-                return Err(bad(format!("joints[{k}].repeatability_sigma"), "must be finite and >= 0".into()));
+                return Err(bad(
+                    format!("joints[{k}].repeatability_sigma"),
+                    "must be finite and >= 0".into(),
+                ));
             }
             if k == 0 && j.coupling_in.is_some() {
-                return Err(bad("joints[0].coupling_in".into(), "the first joint has no joint below it".into()));
+                return Err(bad(
+                    "joints[0].coupling_in".into(),
+                    "the first joint has no joint below it".into(),
+                ));
             }
             if let Some(CouplingFunction::FourBar(g)) = &j.coupling_in {
                 g.validate()
@@ -196,7 +206,7 @@ impl TruthRobot {
         }
     }
 
-    /// The repeatability sigmas of all joints [rad or m].
+    /// The repeatability sigmas of all joints \[rad or m\].
     pub fn repeatability_sigmas(&self) -> Vec<f64> {
         self.joints.iter().map(|j| j.repeatability_sigma).collect()
     }

@@ -29,7 +29,7 @@ pub enum TruthError {
     NotInvertible {
         /// 1-based joint.
         joint: usize,
-        /// The actuator command after offset removal [rad or m].
+        /// The actuator command after offset removal \[rad or m\].
         command: f64,
     },
     /// A four-bar coupling cannot be assembled.
