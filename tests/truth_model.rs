@@ -50,6 +50,15 @@ fn ideal_robot_reaches_exactly_the_commanded_joint_values() {
         ideal.joint_values(&ctrl, &[0.0; 5]),
         Err(TruthError::WrongLength { .. })
     ));
+    // A linkage that cannot close is reported with the joint it drives.
+    let mut jammed = geometric;
+    let mut g = FourBarGeometry::parallelogram(0.69, 0.2, 1.6);
+    g.rod_m = 0.3;
+    jammed.joints[2].coupling_in = Some(CouplingFunction::FourBar(g));
+    assert!(matches!(
+        jammed.joint_values(&ctrl, &[0.0; 6]),
+        Err(TruthError::Coupling { joint: 3, .. })
+    ));
 }
 
 /// Moving actuator `joint` alone with the hold-still commands: the other actuator commands are

@@ -233,6 +233,32 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// Near-parallelogram linkages (manufacturing errors up to a few mm and degrees):
+        /// implicit-differentiation slope vs central differences, and loop closure.
+        #[test]
+        fn slope_and_closure_hold_for_perturbed_parallelograms(
+            crank in 0.1f64..0.4,
+            angle in 1.2f64..1.9,
+            d in proptest::array::uniform4(-0.005f64..0.005),
+            da in -0.05f64..0.05,
+            t in -0.7f64..0.7,
+        ) {
+            let mut g = FourBarGeometry::parallelogram(0.69, crank, angle);
+            g.arm_m += d[0];
+            g.rod_m += d[1];
+            g.lever_m += d[2];
+            g.crank_m += d[3];
+            g.lever_angle_rad += da;
+            let s = g.solve(t).unwrap();
+            let h = 1e-6;
+            let fd = (g.passive(t + h).unwrap() - g.passive(t - h).unwrap()) / (2.0 * h);
+            // Truncation h^2 |g'''| / 6 plus rounding 1e-16 / h, both below 1e-8 here.
+            proptest::prop_assert!((s.slope - fd).abs() < 1e-8, "{} vs {}", s.slope, fd);
+            proptest::prop_assert!(s.closure_residual_m.abs() < 1e-14);
+        }
+    }
+
     #[test]
     fn unreachable_and_bad_dimensions_are_errors() {
         let mut g = skewed();
