@@ -3,6 +3,7 @@
 //! These are pure maths shared by the truth model (which evaluates them) and the calibrator
 //! (which fits their coefficients): a form carries no knowledge of any true value.
 
+use super::four_bar::{FourBarError, FourBarGeometry};
 use serde::{Deserialize, Serialize};
 
 /// A transmission function `theta_c = f(theta_a)`: the command \[rad\] a joint needs to reach
@@ -87,6 +88,9 @@ pub enum CouplingFunction {
         /// `[d0, d1]`.
         den: [f64; 2],
     },
+    /// The geometric four-bar of paper fig. 6, solved by loop closure (see
+    /// [`FourBarGeometry`]); written `form = "four_bar"` with the geometry's keys inline.
+    FourBar(FourBarGeometry),
 }
 
 impl CouplingFunction {
@@ -99,8 +103,34 @@ impl CouplingFunction {
         }
     }
 
-    /// `theta_p = g(theta_a)`.
+    /// `theta_p = g(theta_a)`; NaN where a [`CouplingFunction::FourBar`] cannot close (use
+    /// [`CouplingFunction::try_passive`] to get the reason).
     pub fn passive(&self, t: f64) -> f64 {
+        self.try_passive(t).unwrap_or(f64::NAN)
+    }
+
+    /// `theta_p = g(theta_a)`, or why a four-bar cannot be assembled at `t`.
+    pub fn try_passive(&self, t: f64) -> Result<f64, FourBarError> {
+        Ok(match self {
+            CouplingFunction::FourBar(g) => g.passive(t)?,
+            other => other.closed_form_passive(t),
+        })
+    }
+
+    /// `d g / d t`, or why a four-bar cannot be assembled at `t`.
+    pub fn try_slope(&self, t: f64) -> Result<f64, FourBarError> {
+        Ok(match self {
+            CouplingFunction::FourBar(g) => g.solve(t)?.slope,
+            other => other.closed_form_slope(t),
+        })
+    }
+
+    /// `d g / d t`; NaN where a four-bar cannot close.
+    pub fn slope(&self, t: f64) -> f64 {
+        self.try_slope(t).unwrap_or(f64::NAN)
+    }
+
+    fn closed_form_passive(&self, t: f64) -> f64 {
         match self {
             CouplingFunction::Gear { ratio, sin, cos } => ratio * t + harmonics(ratio * t, sin, cos).0,
             CouplingFunction::Fractional { num, den } => {
@@ -110,11 +140,11 @@ impl CouplingFunction {
                 // atan of the ratio, kept on the branch through t = 0 (x > 0 there).
                 y.atan2(x)
             }
+            CouplingFunction::FourBar(_) => f64::NAN,
         }
     }
 
-    /// `d g / d t`.
-    pub fn slope(&self, t: f64) -> f64 {
+    fn closed_form_slope(&self, t: f64) -> f64 {
         match self {
             CouplingFunction::Gear { ratio, sin, cos } => ratio * (1.0 + harmonics(ratio * t, sin, cos).1),
             CouplingFunction::Fractional { num, den } => {
@@ -125,6 +155,7 @@ impl CouplingFunction {
                 let dx = -s + den[0] * c;
                 (x * dy - y * dx) / (x * x + y * y)
             }
+            CouplingFunction::FourBar(_) => f64::NAN,
         }
     }
 }

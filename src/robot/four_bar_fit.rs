@@ -1,0 +1,152 @@
+//! Offline fit of four-bar dimensions to a given passive curve, used to find a physically
+//! consistent mechanism behind the paper's fitted fractional 2->3 function (section 4).
+//!
+//! Levenberg-Marquardt on four free dimensions (rod, lever, crank angle, lever angle) with the
+//! arm and crank lengths fixed: only ratios matter to an angle, so the arm (the measured
+//! axis-2-to-axis-3 distance) fixes the scale, and the crank length is a design choice the
+//! caller makes (left free, the fit degenerates to a vanishing crank and lever, a mechanism no
+//! one would build). Jacobian by central differences: this runs once, offline, and the closure
+//! solution is smooth away from the dead-centre positions.
+
+use super::four_bar::{FourBarError, FourBarGeometry};
+use nalgebra::{DMatrix, DVector};
+
+/// The result of [`fit_four_bar`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FourBarFit {
+    /// The fitted geometry.
+    pub geometry: FourBarGeometry,
+    /// Largest `|g_fit(t) - g_target(t)|` over the fitted span \[rad\].
+    pub max_abs_error_rad: f64,
+    /// RMS of `g_fit - g_target` over the fitted span \[rad\].
+    pub rms_error_rad: f64,
+}
+
+fn with_params(base: &FourBarGeometry, p: &[f64]) -> FourBarGeometry {
+    FourBarGeometry {
+        arm_m: base.arm_m,
+        crank_m: base.crank_m,
+        rod_m: p[0],
+        lever_m: p[1],
+        crank_angle_rad: p[2],
+        lever_angle_rad: p[3],
+    }
+}
+
+fn residuals(g: &FourBarGeometry, ts: &[f64], target: &dyn Fn(f64) -> f64) -> Result<DVector<f64>, FourBarError> {
+    let mut r = DVector::zeros(ts.len());
+    for (i, &t) in ts.iter().enumerate() {
+        r[i] = g.passive(t)? - target(t);
+    }
+    Ok(r)
+}
+
+/// Least-squares fit of a four-bar whose passive angle matches `target` at `samples` evenly
+/// spaced inputs over `[-span_rad, span_rad]`, starting from `start` (whose `arm_m` and
+/// `crank_m` are kept). Errors if the start cannot be assembled over the span; steps that
+/// would break the assembly are rejected.
+pub fn fit_four_bar(
+    target: &dyn Fn(f64) -> f64,
+    span_rad: f64,
+    samples: usize,
+    start: FourBarGeometry,
+) -> Result<FourBarFit, FourBarError> {
+    let n = samples.max(7);
+    let ts: Vec<f64> = (0..n)
+        .map(|i| -span_rad + 2.0 * span_rad * i as f64 / (n - 1) as f64)
+        .collect();
+    let mut p = vec![start.rod_m, start.lever_m, start.crank_angle_rad, start.lever_angle_rad];
+    let mut r = residuals(&start, &ts, target)?;
+    let mut cost = r.norm_squared();
+    let mut lambda = 1e-3;
+    for _ in 0..200 {
+        let g = with_params(&start, &p);
+        let mut jac = DMatrix::zeros(n, NP);
+        for j in 0..NP {
+            let h = 1e-7 * (1.0 + p[j].abs());
+            let (mut pp, mut pm) = (p.clone(), p.clone());
+            pp[j] += h;
+            pm[j] -= h;
+            let (Ok(rp), Ok(rm)) = (
+                residuals(&with_params(&g, &pp), &ts, target),
+                residuals(&with_params(&g, &pm), &ts, target),
+            ) else {
+                // At the edge of assembly: keep the best point found.
+                return Ok(finish(&g, &r, cost, n));
+            };
+            jac.set_column(j, &((rp - rm) / (2.0 * h)));
+        }
+        let jtj = jac.transpose() * &jac;
+        let jtr = jac.transpose() * &r;
+        let mut improved = false;
+        while lambda < 1e12 {
+            let mut a = jtj.clone();
+            for k in 0..NP {
+                a[(k, k)] += lambda * jtj[(k, k)].max(1e-12);
+            }
+            let Some(step) = a.lu().solve(&-&jtr) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let trial: Vec<f64> = p.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            match residuals(&with_params(&g, &trial), &ts, target) {
+                Ok(rt) if rt.norm_squared() < cost => {
+                    let rel = (cost - rt.norm_squared()) / cost.max(1e-300);
+                    p = trial;
+                    r = rt;
+                    cost = r.norm_squared();
+                    lambda = (lambda / 10.0).max(1e-12);
+                    improved = rel > 1e-14;
+                    break;
+                }
+                _ => lambda *= 10.0,
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    Ok(finish(&with_params(&start, &p), &r, cost, n))
+}
+
+/// Number of fitted dimensions.
+const NP: usize = 4;
+
+fn finish(geometry: &FourBarGeometry, r: &DVector<f64>, cost: f64, n: usize) -> FourBarFit {
+    FourBarFit {
+        geometry: *geometry,
+        max_abs_error_rad: r.amax(),
+        rms_error_rad: (cost / n as f64).sqrt(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::CouplingFunction;
+
+    /// The paper's fitted 2->3 function (section 4).
+    fn paper() -> CouplingFunction {
+        CouplingFunction::Fractional {
+            num: [-0.998132, 0.213253, -0.212863],
+            den: [0.096654, -0.0006941],
+        }
+    }
+
+    #[test]
+    #[ignore = "offline exploration; prints the fit"]
+    fn explore_paper_four_bar_fit() {
+        let f = paper();
+        let target = |t: f64| f.passive(t);
+        let span = 45f64.to_radians();
+        for crank in [0.1, 0.15, 0.2, 0.3, 0.5] {
+            for ang in [45.0f64, 90.0, 135.0, -45.0, -90.0, -135.0] {
+                let start = FourBarGeometry::parallelogram(0.69312, crank, ang.to_radians());
+                match fit_four_bar(&target, span, 91, start) {
+                    Ok(fit) => println!("{crank} {ang}: {fit:?}"),
+                    Err(e) => println!("{crank} {ang}: {e}"),
+                }
+            }
+        }
+    }
+}

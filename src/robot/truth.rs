@@ -1,0 +1,275 @@
+//! The analytic truth model: what the real robot does with the actuator commands of the
+//! fig. 3 controller (paper sections 3 and 4; semantics fixed in FORMATS.md section 2).
+//!
+//! Per joint `k` (1-based): the controller's actuator command `u_k` (after nominal decoupling)
+//! turns the joint by the actual ACTIVE displacement `theta_act_k = f_k^-1(u_k - offset_k)`
+//! (`f_k` = the joint's [`Transmission`], eq. 8; `offset_k` = transducer zero offset), and the
+//! joint value used in the actual phi-model is `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`
+//! (`g` = the actual [`CouplingFunction`] into joint `k`, eq. 15; passive motion travels one
+//! joint only and is driven by the active displacement only, section 3.1).
+//!
+//! Only the simulator and the Monte-Carlo harness may use this module: the calibrator and the
+//! diagnoser never see the truth.
+
+use super::controller::Controller;
+use super::description::{Placement, RobotDescription, RowEntry};
+use super::four_bar::FourBarGeometry;
+use super::functions::{CouplingFunction, Transmission};
+use super::truth_error::TruthError;
+use crate::kinematics::{JointKind, PhiJoint, PhiModel};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+fn identity_transmission() -> Transmission {
+    Transmission::identity()
+}
+
+/// One joint of the truth model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TruthJoint {
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// The phi angle of eq. (A2) \[deg\]; equal for the nominal and actual robots (section 4).
+    #[serde(default)]
+    pub phi_deg: f64,
+    /// The actual transmission `theta_c = f(theta_a)` (eq. 8); default identity.
+    #[serde(default = "identity_transmission")]
+    pub transmission: Transmission,
+    /// The actual passive coupling into this joint from the joint below (eq. 15), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coupling_in: Option<CouplingFunction>,
+    /// Transducer zero offset \[rad\] (revolute) or \[m\] (prismatic), subtracted from the actuator
+    /// command (fig. 3).
+    #[serde(default)]
+    pub transducer_offset: f64,
+    /// Standard deviation of the Gaussian jitter of the joint value on each execution of a
+    /// command \[rad\] (revolute) or \[m\] (prismatic): the robot's repeatability.
+    #[serde(default)]
+    pub repeatability_sigma: f64,
+}
+
+/// A physical four-bar linkage of the robot, documented for the rigid-body simulator. The
+/// analytic model uses the driven joint's `coupling_in`, which may be this geometry
+/// ([`CouplingFunction::FourBar`]) or a fitted form of it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FourBarLinkage {
+    /// The driving joint (1-based); the linkage drives joint `from + 1`.
+    pub from: usize,
+    /// Its dimensions.
+    pub geometry: FourBarGeometry,
+}
+
+/// The simulated real robot (see module docs). Loadable from TOML.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TruthRobot {
+    /// Human-readable name.
+    pub name: String,
+    /// The joints, base first.
+    pub joints: Vec<TruthJoint>,
+    /// The ACTUAL phi-model rows (Table 2, actual columns), `joints.len() - 1` of them.
+    pub rows: Vec<RowEntry>,
+    /// Robot base frame (frame 1) in the instrument frame.
+    #[serde(default)]
+    pub placement: Placement,
+    /// The tool frame in the last link's moving frame.
+    #[serde(default)]
+    pub tool_frame: Placement,
+    /// Physical four-bar linkages (for the rigid-body simulator).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub four_bars: Vec<FourBarLinkage>,
+}
+
+impl TruthRobot {
+    /// A robot with no errors: the nominal geometry, identity transmissions, the nominal
+    /// (linear) couplings, no offsets, no jitter. It reaches exactly the commanded joint values.
+    pub fn ideal(desc: &RobotDescription) -> Self {
+        let joints = desc
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(k, j)| TruthJoint {
+                kind: j.kind,
+                phi_deg: j.phi_deg,
+                transmission: Transmission::identity(),
+                coupling_in: desc.nominal_coupling_into(k + 1).map(CouplingFunction::linear),
+                transducer_offset: 0.0,
+                repeatability_sigma: 0.0,
+            })
+            .collect();
+        Self {
+            name: format!("{} (ideal)", desc.name),
+            joints,
+            rows: desc.rows.clone(),
+            placement: desc.placement,
+            tool_frame: desc.tool.frame,
+            four_bars: vec![],
+        }
+    }
+
+    /// The paper's robot (`scenarios/robots/asea-irb6l-paper-truth.toml`): Table 2 actual
+    /// rows and the section-4 functions.
+    pub fn paper_robot() -> Self {
+        let text = include_str!("../../scenarios/robots/asea-irb6l-paper-truth.toml");
+        Self::from_toml_str(text, Path::new("scenarios/robots/asea-irb6l-paper-truth.toml"))
+            .expect("the shipped paper truth model is valid (checked by tests)")
+    }
+
+    /// Reads and validates a truth-model file.
+    pub fn from_file(path: &Path) -> Result<Self, TruthError> {
+        let text = std::fs::read_to_string(path).map_err(|source| TruthError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::from_toml_str(&text, path)
+    }
+
+    /// Parses and validates truth-model text; `path` labels errors only.
+    pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, TruthError> {
+        let t: Self = toml::from_str(text).map_err(|e| TruthError::Parse {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        t.validate()?;
+        Ok(t)
+    }
+
+    /// Checks sizes, finiteness and linkage dimensions.
+    pub fn validate(&self) -> Result<(), TruthError> {
+        let bad = |field: String, message: String| TruthError::Invalid { field, message };
+        let n = self.joints.len();
+        if n == 0 || self.rows.len() + 1 != n {
+            return Err(bad(
+                "rows".into(),
+                format!(
+                    "{n} joints need {} rows, found {}",
+                    n.saturating_sub(1),
+                    self.rows.len()
+                ),
+            ));
+        }
+        for (k, j) in self.joints.iter().enumerate() {
+            if !(j.phi_deg.is_finite() && j.transducer_offset.is_finite()) {
+                return Err(bad(format!("joints[{k}]"), "values must be finite".into()));
+            }
+            if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
+                return Err(bad(
+                    format!("joints[{k}].repeatability_sigma"),
+                    "must be finite and >= 0".into(),
+                ));
+            }
+            if k == 0 && j.coupling_in.is_some() {
+                return Err(bad(
+                    "joints[0].coupling_in".into(),
+                    "the first joint has no joint below it".into(),
+                ));
+            }
+            if let Some(CouplingFunction::FourBar(g)) = &j.coupling_in {
+                g.validate()
+                    .map_err(|e| bad(format!("joints[{k}].coupling_in"), e.to_string()))?;
+            }
+        }
+        for (k, l) in self.four_bars.iter().enumerate() {
+            if l.from == 0 || l.from >= n {
+                return Err(bad(format!("four_bars[{k}].from"), format!("must be in 1..{n}")));
+            }
+            l.geometry
+                .validate()
+                .map_err(|e| bad(format!("four_bars[{k}].geometry"), e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The actual phi-model geometry, placed in the instrument frame.
+    pub fn model(&self) -> PhiModel {
+        PhiModel {
+            joints: self
+                .joints
+                .iter()
+                .map(|j| PhiJoint {
+                    kind: j.kind,
+                    phi_rad: j.phi_deg.to_radians(),
+                })
+                .collect(),
+            rows: self.rows.iter().map(RowEntry::to_row).collect(),
+            world_from_base: self.placement.to_isometry(),
+            last_link_from_tool: self.tool_frame.to_isometry(),
+        }
+    }
+
+    /// The repeatability sigmas of all joints \[rad or m\].
+    pub fn repeatability_sigmas(&self) -> Vec<f64> {
+        self.joints.iter().map(|j| j.repeatability_sigma).collect()
+    }
+
+    /// The actual active displacement of every joint for actuator commands `u`:
+    /// `theta_act_k = f_k^-1(u_k - offset_k)` (eq. 8 inverted, fig. 3).
+    pub fn active_displacements(&self, u: &[f64]) -> Result<Vec<f64>, TruthError> {
+        if u.len() != self.dof() {
+            return Err(TruthError::WrongLength {
+                what: "actuator commands",
+                expected: self.dof(),
+                found: u.len(),
+            });
+        }
+        self.joints
+            .iter()
+            .zip(u)
+            .enumerate()
+            .map(|(k, (j, &uk))| {
+                let command = uk - j.transducer_offset;
+                j.transmission
+                    .actual_from_command(command)
+                    .ok_or(TruthError::NotInvertible { joint: k + 1, command })
+            })
+            .collect()
+    }
+
+    /// The joint values the robot reaches for joint commands `cmd` sent to `controller`
+    /// (internal units), without repeatability jitter: `q_k = theta_act_k +
+    /// g_{k-1,k}(theta_act_{k-1})`.
+    pub fn joint_values(&self, controller: &Controller, cmd: &[f64]) -> Result<Vec<f64>, TruthError> {
+        if controller.dof() != self.dof() {
+            return Err(TruthError::WrongLength {
+                what: "controller joints",
+                expected: self.dof(),
+                found: controller.dof(),
+            });
+        }
+        let theta = self.active_displacements(&controller.decouple(cmd)?)?;
+        let mut q = theta.clone();
+        for k in 1..q.len() {
+            if let Some(g) = &self.joints[k].coupling_in {
+                q[k] += g
+                    .try_passive(theta[k - 1])
+                    .map_err(|source| TruthError::Coupling { joint: k + 1, source })?;
+            }
+        }
+        Ok(q)
+    }
+
+    /// One execution of the command: [`TruthRobot::joint_values`] plus independent Gaussian
+    /// jitter of standard deviation `repeatability_sigma` on each joint value, drawn from `rng`.
+    pub fn joint_values_executed<R: Rng + ?Sized>(
+        &self,
+        controller: &Controller,
+        cmd: &[f64],
+        rng: &mut R,
+    ) -> Result<Vec<f64>, TruthError> {
+        let mut q = self.joint_values(controller, cmd)?;
+        for (qk, j) in q.iter_mut().zip(&self.joints) {
+            let z: f64 = StandardNormal.sample(rng);
+            *qk += j.repeatability_sigma * z;
+        }
+        Ok(q)
+    }
+}
