@@ -131,7 +131,7 @@ pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
                     p,
                     &cmd,
                     conditions,
-                );
+                )?;
             }
         }
     }
@@ -153,7 +153,7 @@ pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
                 p,
                 &cmd,
                 conditions,
-            );
+            )?;
         }
     }
     Ok(out)

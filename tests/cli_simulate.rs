@@ -1,0 +1,84 @@
+//! `axiscal simulate` end to end: the CSV it writes is accepted by the reader with Table 1's
+//! point counts; bad input is one clear error with exit code 2.
+
+use assert_cmd::Command;
+use axiscal::measurement::read_measurements;
+
+fn axiscal() -> Command {
+    Command::cargo_bin("axiscal").unwrap()
+}
+
+#[test]
+fn simulate_writes_a_table1_campaign_the_reader_accepts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("campaign.csv");
+    axiscal()
+        .args(["simulate", "--seed", "3", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    let set = read_measurements(&out, Some(6)).unwrap();
+    let expect = [
+        ("axis6", 17, 1),
+        ("axis5", 16, 1),
+        ("axis4", 16, 2),
+        ("axis3", 16, 1),
+        ("axis2", 16, 2),
+        ("axis1", 16, 1),
+    ];
+    let experiments = set.experiments();
+    for (e, (name, poses, targets)) in experiments.iter().zip(expect) {
+        assert_eq!(e.name, name);
+        assert_eq!(e.by_step().len(), poses, "{name}");
+        assert_eq!(e.rows.len(), poses * targets, "{name}");
+    }
+    let validation = &experiments[6];
+    assert_eq!(
+        (
+            validation.moved_joint,
+            validation.by_step().len(),
+            validation.rows.len()
+        ),
+        (0, 60, 180)
+    );
+
+    // Same seed, same file, bit for bit; refuses to overwrite without --force.
+    let again = dir.path().join("again.csv");
+    axiscal()
+        .args(["simulate", "--seed", "3", "--out"])
+        .arg(&again)
+        .assert()
+        .success();
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+    let a = axiscal()
+        .args(["simulate", "--seed", "3", "--out"])
+        .arg(&out)
+        .assert()
+        .code(2);
+    let stderr = String::from_utf8_lossy(&a.get_output().stderr).to_string();
+    assert!(
+        stderr.contains("--force") && stderr.contains("campaign.csv"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn bad_robot_file_is_exit_code_2_naming_file_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = dir.path().join("robot.toml");
+    let text = include_str!("../scenarios/robots/asea-irb6l.toml").replacen("mass_kg = 22.0", "mass_kg = -3.0", 1);
+    std::fs::write(&robot, text).unwrap();
+    let a = axiscal()
+        .args(["simulate", "--robot"])
+        .arg(&robot)
+        .arg("--out")
+        .arg(dir.path().join("x.csv"))
+        .assert()
+        .code(2);
+    let stderr = String::from_utf8_lossy(&a.get_output().stderr).to_string();
+    assert!(
+        stderr.contains("robot.toml") && stderr.contains("joints[1].mass_kg"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().filter(|l| l.starts_with("error")).count(), 1, "{stderr}");
+}
