@@ -4,3 +4,4 @@
 
 pub mod kinematics;
 pub mod robot;
+pub mod sim;
