@@ -17,6 +17,7 @@ mod arm;
 mod convert;
 mod servo;
 mod visibility;
+pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg};
 
 pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
 pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport};
