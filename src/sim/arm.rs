@@ -24,9 +24,9 @@ use rapier3d_f64::prelude::{
 /// Mass properties of one link, in its moving frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LinkInertia {
-    /// Mass [kg].
+    /// Mass \[kg\].
     pub mass_kg: f64,
-    /// Centre of mass in the link's moving frame [m].
+    /// Centre of mass in the link's moving frame \[m\].
     pub com_in_link_m: Point3<f64>,
 }
 
@@ -35,7 +35,7 @@ pub struct LinkInertia {
 pub struct LinkPoint {
     /// The link, 0-based (link `k` is moved by joint `k + 1`, as in [`PhiModel::poses`]).
     pub link: usize,
-    /// Position in the link's moving frame [m].
+    /// Position in the link's moving frame \[m\].
     pub position_in_link_m: Point3<f64>,
 }
 
@@ -72,12 +72,12 @@ pub struct LinkShape {
 /// How to build the simulated arm beyond its kinematics and masses.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArmOptions {
-    /// Radius of each link's capsule [m] (one per link); also the radius of the solid
+    /// Radius of each link's capsule \[m\] (one per link); also the radius of the solid
     /// cylinder used for the link's inertia estimate.
     pub link_radius_m: Vec<f64>,
-    /// Payload point mass at the tool-frame origin [kg] (0 for none).
+    /// Payload point mass at the tool-frame origin \[kg\] (0 for none).
     pub payload_kg: f64,
-    /// Gravity in the world frame [m/s^2].
+    /// Gravity in the world frame \[m/s^2\].
     pub gravity_m_s2: Vector3<f64>,
 }
 
@@ -188,9 +188,9 @@ impl SimArm {
         let mut parent = base;
         let mut parent_from_frame = Isometry3::identity();
         let poses = model.poses(&vec![0.0; n]);
-        for k in 0..n {
+        for (k, inertia) in inertias.iter().enumerate() {
             let segment = link_segment(model, k);
-            let mut mprops = link_mass_properties(&inertias[k], segment, options.link_radius_m[k]);
+            let mut mprops = link_mass_properties(inertia, segment, options.link_radius_m[k]);
             if k + 1 == n && options.payload_kg > 0.0 {
                 let tool = model.last_link_from_tool * Point3::origin();
                 mprops += MassProperties::new(point_to_glam(&tool), options.payload_kg, Vector::ZERO);
@@ -364,7 +364,7 @@ impl SimArm {
         self.world_from_link(self.model.dof() - 1) * self.model.last_link_from_tool
     }
 
-    /// A point fixed on a link, in the world frame [m].
+    /// A point fixed on a link, in the world frame \[m\].
     pub fn point_in_world(&self, point: &LinkPoint) -> Point3<f64> {
         let pose = self.world.bodies[self.links[point.link]].position();
         point_from_glam(pose.transform_point(point_to_glam(&point.position_in_link_m)))

@@ -64,7 +64,7 @@ pub enum SimError {
     NotSettled {
         /// Steps taken.
         steps: usize,
-        /// Speed of the fastest watched point at the last step [m/s].
+        /// Speed of the fastest watched point at the last step \[m/s\].
         max_speed_m_s: f64,
     },
 }

@@ -16,9 +16,9 @@ use rapier3d_f64::prelude::{JointAxis, MotorModel};
 /// Servo stiffness and damping per joint.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ServoGains {
-    /// Position gain of each joint's servo [N m/rad] (or [N/m]).
+    /// Position gain of each joint's servo \[N m/rad\] (or \[N/m\]).
     pub stiffness_nm_per_rad: Vec<f64>,
-    /// Velocity gain of each joint's servo [N m s/rad] (or [N s/m]).
+    /// Velocity gain of each joint's servo \[N m s/rad\] (or \[N s/m\]).
     pub damping_nms_per_rad: Vec<f64>,
 }
 
@@ -67,13 +67,13 @@ pub enum Compliance {
 /// Time step, solver and stopping rule of the static-equilibrium solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SettleOptions {
-    /// Time step [s].
+    /// Time step \[s\].
     pub dt_s: f64,
     /// rapier solver iterations per step.
     pub solver_iterations: usize,
     /// Give up after this many steps.
     pub max_steps: usize,
-    /// At rest when every watched point moves slower than this [m/s] ...
+    /// At rest when every watched point moves slower than this \[m/s\] ...
     pub speed_tolerance_m_s: f64,
     /// ... for this many consecutive steps.
     pub quiet_steps: usize,
@@ -97,7 +97,7 @@ impl Default for SettleOptions {
 pub struct SettleReport {
     /// Steps taken.
     pub steps: usize,
-    /// Speed of the fastest watched point at the last step [m/s].
+    /// Speed of the fastest watched point at the last step \[m/s\].
     pub max_speed_m_s: f64,
     /// The joint values at rest (rad or m).
     pub joint_positions: Vec<f64>,
@@ -111,9 +111,12 @@ impl SimArm {
         check_len("commanded joint values", n, q_cmd.len())?;
         check_len("servo stiffness", n, gains.stiffness_nm_per_rad.len())?;
         check_len("servo damping", n, gains.damping_nms_per_rad.len())?;
-        for k in 0..n {
-            check_positive("servo stiffness", k, gains.stiffness_nm_per_rad[k])?;
-            let damping = gains.damping_nms_per_rad[k];
+        let per_joint = q_cmd
+            .iter()
+            .zip(&gains.stiffness_nm_per_rad)
+            .zip(&gains.damping_nms_per_rad);
+        for (k, ((&target, &stiffness), &damping)) in per_joint.enumerate() {
+            check_positive("servo stiffness", k, stiffness)?;
             if !(damping.is_finite() && damping >= 0.0) {
                 return Err(SimError::NotPositive {
                     what: "servo damping",
@@ -134,7 +137,7 @@ impl SimArm {
             link.joint
                 .data
                 .set_motor_model(axis, MotorModel::ForceBased)
-                .set_motor_position(axis, q_cmd[k], gains.stiffness_nm_per_rad[k], damping);
+                .set_motor_position(axis, target, stiffness, damping);
         }
         Ok(())
     }

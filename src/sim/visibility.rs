@@ -37,14 +37,14 @@ pub fn is_visible_from_all(
 /// How [`visible_span_deg`] searches.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpanSearch {
-    /// Coarse step of the half span [deg]; an occlusion narrower than this can be missed.
+    /// Coarse step of the half span \[deg\]; an occlusion narrower than this can be missed.
     pub step_deg: f64,
     /// The search stops here (e.g. the distance from the centre to the nearest joint limit)
-    /// [deg].
+    /// \[deg\].
     pub max_half_span_deg: f64,
     /// Bisection steps refining the edge after the coarse search.
     pub refinements: usize,
-    /// See [`is_visible_from_all`] [m].
+    /// See [`is_visible_from_all`] \[m\].
     pub stop_short_m: f64,
 }
 
@@ -60,7 +60,7 @@ impl Default for SpanSearch {
     }
 }
 
-/// The largest span [deg], symmetric about `q_centre[joint]` with the other joints fixed, over
+/// The largest span \[deg\], symmetric about `q_centre\[joint\]` with the other joints fixed, over
 /// which `target` stays visible from every station (sampled: every coarse step, then the edge
 /// bisected). Zero if the target is hidden at the centre. The arm is left at `q_centre`.
 pub fn visible_span_deg(
@@ -174,6 +174,6 @@ mod tests {
         let hidden = [90f64.to_radians(), 0.0, 0.0, 0.0, 0.0, 0.0];
         let none =
             visible_span_deg(&mut arm, &hidden, 0, &target, &stations(), &SpanSearch::default()).expect("six values");
-        assert_eq!(none, 0.0);
+        approx::assert_abs_diff_eq!(none, 0.0);
     }
 }
