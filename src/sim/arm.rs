@@ -73,7 +73,9 @@ pub struct LinkShape {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArmOptions {
     /// Radius of each link's capsule \[m\] (one per link); also the radius of the solid
-    /// cylinder used for the link's inertia estimate.
+    /// cylinder used for the link's inertia estimate. Targets must lie outside the capsule
+    /// of their own link, or line of sight will find them hidden (the shipped IRB/L6 joint-2
+    /// target sits 60 mm off the upper arm's axis, so radii up to about 55 mm).
     pub link_radius_m: Vec<f64>,
     /// Payload point mass at the tool-frame origin \[kg\] (0 for none).
     pub payload_kg: f64,

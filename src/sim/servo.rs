@@ -307,4 +307,21 @@ mod tests {
         let err = arm.static_equilibrium(&q, &Compliance::Servo(gains), &[], &options);
         assert!(matches!(err, Err(SimError::NotSettled { steps: 3, .. })), "{err:?}");
     }
+
+    /// Same inputs, same machine: bit-identical equilibrium (rapier is deterministic).
+    #[test]
+    fn settling_twice_is_bit_identical() {
+        let run = || {
+            let d = RobotDescription::asea_irb6l();
+            let mut arm = SimArm::from_description(&d.nominal_model(), &d, &ArmOptions::new(6)).expect("valid arm");
+            let q = [0.2, 0.1, -0.3, 0.5, 0.4, -0.2];
+            let gains = ServoGains::with_damping_ratio(&arm, &q, &[3e5; 6], 1.0);
+            arm.static_equilibrium(&q, &Compliance::Servo(gains), &[], &SettleOptions::default())
+                .expect("settles")
+        };
+        let (a, b) = (run(), run());
+        assert_eq!(a.steps, b.steps);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a.joint_positions), bits(&b.joint_positions));
+    }
 }
