@@ -24,9 +24,9 @@ pub struct ServoGains {
 
 impl ServoGains {
     /// Gains with damping `D_k = 2 zeta sqrt(K_k I_k)`, `I_k` the inertia about joint `k` at
-    /// `q` estimated from point masses at the centres of mass of the links beyond it (plus
-    /// their payload) and the links' own cylinder axial inertia `m r^2 / 2` with `r = 0.05 m`
-    /// as a floor. `zeta = 1` gives roughly critical damping of each joint alone.
+    /// `q` estimated from point masses at the centres of mass of the links beyond it (the
+    /// payload is left out) and the links' own cylinder axial inertia `m r^2 / 2` with
+    /// `r = 0.05 m` as a floor. `zeta = 1` gives roughly critical damping of each joint alone.
     pub fn with_damping_ratio(arm: &SimArm, q: &[f64], stiffness_nm_per_rad: &[f64], zeta: f64) -> Self {
         let model = arm.model();
         let poses = model.poses(q);
