@@ -7,3 +7,4 @@ pub mod campaign;
 pub mod kinematics;
 pub mod measurement;
 pub mod robot;
+pub mod sim;

@@ -1,0 +1,70 @@
+//! The physical robot in rapier (reduced-coordinate multibody) and line of sight with parry.
+//!
+//! - [`SimArm`] builds any [`PhiModel`](crate::kinematics::PhiModel) as a rapier multibody:
+//!   a fixed base body at `world_from_base`, one dynamic body per link whose body frame *is*
+//!   the phi-model's moving link frame, and one multibody joint per phi-model joint. In
+//!   kinematic mode the joint values are written straight into the multibody and its forward
+//!   kinematics places the bodies; in dynamic mode position-servo motors with finite
+//!   stiffness hold the arm against gravity and [`SimArm::settle`] finds the static
+//!   equilibrium.
+//! - [`visibility`](self::is_visible_from_all) casts rays from the theodolite stations to a
+//!   target through the link collision shapes.
+//!
+//! rapier's math types are glam; every conversion to and from nalgebra lives in the private
+//! `convert` module.
+
+mod arm;
+mod convert;
+mod servo;
+mod visibility;
+pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg};
+
+pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
+pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport};
+
+/// A problem building or running the simulated arm.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// A per-joint input has the wrong length.
+    #[error("{what}: expected {expected} values (one per joint), found {found}")]
+    WrongLength {
+        /// Which input.
+        what: &'static str,
+        /// The number of joints.
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
+    /// The phi-model does not have `N` joints and `N - 1` rows.
+    #[error("inconsistent phi-model: {joints} joints but {rows} rows")]
+    InconsistentModel {
+        /// Number of joints.
+        joints: usize,
+        /// Number of rows.
+        rows: usize,
+    },
+    /// A value that must be finite and positive is not.
+    #[error("{what} of joint {joint} must be finite and positive, found {value}")]
+    NotPositive {
+        /// Which quantity.
+        what: &'static str,
+        /// The joint (0-based).
+        joint: usize,
+        /// The value given.
+        value: f64,
+    },
+    /// rapier refused a joint (it would have closed a loop in the multibody).
+    #[error("rapier refused multibody joint {joint}")]
+    JointRejected {
+        /// The joint (0-based).
+        joint: usize,
+    },
+    /// The dynamic simulation did not come to rest within the step cap.
+    #[error("the arm did not settle in {steps} steps: fastest watched point still moves at {max_speed_m_s} m/s")]
+    NotSettled {
+        /// Steps taken.
+        steps: usize,
+        /// Speed of the fastest watched point at the last step \[m/s\].
+        max_speed_m_s: f64,
+    },
+}
