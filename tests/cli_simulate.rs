@@ -32,7 +32,17 @@ fn simulate_writes_a_table1_campaign_the_reader_accepts() {
         assert_eq!(e.by_step().len(), poses, "{name}");
         assert_eq!(e.rows.len(), poses * targets, "{name}");
     }
-    let validation = &experiments[6];
+    let tool = &experiments[6];
+    assert_eq!(
+        (
+            tool.name,
+            tool.moved_joint,
+            tool.by_step().len(),
+            tool.rows.len()
+        ),
+        ("tool", 0, 1, 3)
+    );
+    let validation = &experiments[7];
     assert_eq!(
         (
             validation.moved_joint,

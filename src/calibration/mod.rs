@@ -20,6 +20,7 @@ pub mod axis_circle;
 pub mod axis_paper;
 pub mod coupling_fit;
 pub mod crb;
+pub mod procedure;
 pub mod sliding;
 pub mod transmission_fit;
 

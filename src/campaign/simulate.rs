@@ -135,28 +135,65 @@ pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
             }
         }
     }
-    let tool_targets = desc.tool_targets_m();
+    // The three tool targets at the reference pose: the calibrator's tool frame.
+    observe_tool(
+        &mut out,
+        desc,
+        arm,
+        instrument,
+        rng,
+        "tool",
+        0,
+        &plan.reference,
+        conditions,
+    )?;
     for (step, cmd) in validation.commands(desc, &plan.reference).into_iter().enumerate() {
-        let links = arm.execute(&commands_to_internal(desc, &cmd), &conditions, rng)?;
-        let world_from_tool = links[desc.dof() - 1] * arm.last_link_from_tool();
-        for (id, t) in tool_targets.iter().enumerate() {
-            let p = world_from_tool * t;
-            record(
-                &mut out,
-                arm,
-                instrument,
-                rng,
-                "validation",
-                0,
-                step,
-                id,
-                p,
-                &cmd,
-                conditions,
-            )?;
-        }
+        observe_tool(
+            &mut out,
+            desc,
+            arm,
+            instrument,
+            rng,
+            "validation",
+            step,
+            &cmd,
+            conditions,
+        )?;
     }
     Ok(out)
+}
+
+/// Executes `cmd` and observes the three tool targets (a `moved_joint = 0` experiment).
+#[allow(clippy::too_many_arguments)]
+fn observe_tool<A: ArmExecutor, R: Rng + ?Sized>(
+    out: &mut CampaignOutput,
+    desc: &RobotDescription,
+    arm: &mut A,
+    instrument: &MeasurementModel,
+    rng: &mut R,
+    experiment: &str,
+    step: usize,
+    cmd: &[f64],
+    conditions: PoseConditions,
+) -> Result<(), CampaignError> {
+    let links = arm.execute(&commands_to_internal(desc, cmd), &conditions, rng)?;
+    let world_from_tool = links[desc.dof() - 1] * arm.last_link_from_tool();
+    for (id, t) in desc.tool_targets_m().iter().enumerate() {
+        record(
+            out,
+            arm,
+            instrument,
+            rng,
+            experiment,
+            0,
+            step,
+            id,
+            world_from_tool * t,
+            cmd,
+            conditions,
+        )?;
+    }
+    Ok(())
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -4,7 +4,9 @@
 mod chain;
 mod jacobian;
 mod phi;
+mod rigid_fit;
 
 pub use chain::{AxisLine, ChainPoses, PhiJoint, PhiModel};
 pub use jacobian::{geometric_jacobian, point_jacobian};
 pub use phi::{JointKind, PhiRow, frame_from_phi, joint_motion, link_from_phi};
+pub use rigid_fit::rigid_fit;

@@ -55,6 +55,49 @@ pub struct JointEntry {
     pub mass_kg: f64,
     /// Centre of mass of that link in its moving frame \[mm\].
     pub com_mm: [f64; 3],
+    /// The transmission form the calibrator fits; default harmonic of order 1.
+    #[serde(default)]
+    pub transmission_fit: TransmissionFitForm,
+}
+
+/// The form of a joint's transmission function that the calibrator fits (eq. 8).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
+pub enum TransmissionFitForm {
+    /// `theta_c = theta_a + sum_k (s_k sin k theta_a + c_k cos k theta_a)`.
+    Harmonic {
+        /// Number of harmonics (the paper: 1).
+        order: usize,
+    },
+    /// A gear of ratio `N` with harmonics in the gear angle (the paper's joint 5).
+    Gear {
+        /// Joint turns per gear turn.
+        ratio: f64,
+        /// Number of harmonics.
+        order: usize,
+    },
+}
+
+impl Default for TransmissionFitForm {
+    fn default() -> Self {
+        TransmissionFitForm::Harmonic { order: 1 }
+    }
+}
+
+/// The form of a passive coupling function that the calibrator fits (eq. 15).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
+pub enum CouplingFitForm {
+    /// A gear of the nominal ratio with harmonics (the bevel gear 4->5).
+    Gear {
+        /// Number of harmonics.
+        order: usize,
+        /// Fit the ratio too (otherwise the nominal slope is kept).
+        #[serde(default)]
+        fit_ratio: bool,
+    },
+    /// The paper's fractional four-bar form (2->3).
+    Fractional,
 }
 
 /// One row of Table 2 as written in the file.
@@ -102,6 +145,10 @@ pub struct NominalCoupling {
     pub to: usize,
     /// Passive motion of `to` per unit active motion of `from`.
     pub slope: f64,
+    /// The form the calibrator fits when a second target measures this coupling; default a
+    /// gear of ratio `slope` with one harmonic.
+    #[serde(default)]
+    pub fit: Option<CouplingFitForm>,
 }
 
 /// A rigid placement: translation \[mm\] and roll-pitch-yaw \[deg\] (`Rz(yaw) Ry(pitch) Rx(roll)`).

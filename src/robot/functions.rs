@@ -57,6 +57,38 @@ impl Transmission {
         }
     }
 
+    /// The same transmission seen from an actual angle shifted by `shift_rad`:
+    /// `f(theta - C) = f'(theta) - C` exactly, with each harmonic pair rotated by `k C`
+    /// (`k C / N` for a gear). Returns `f'`; a model `theta_a = f^-1(u) + C` is then
+    /// `theta_a = f'^-1(u + C)`, i.e. `f'` with a transducer offset of `-C`.
+    pub fn shifted(&self, shift_rad: f64) -> Transmission {
+        let rotate = |sin: &[f64], cos: &[f64], step: f64| -> (Vec<f64>, Vec<f64>) {
+            let k_max = sin.len().max(cos.len());
+            let (mut s2, mut c2) = (vec![0.0; k_max], vec![0.0; k_max]);
+            for k in 0..k_max {
+                let (s, c) = (sin.get(k).copied().unwrap_or(0.0), cos.get(k).copied().unwrap_or(0.0));
+                let (sk, ck) = ((k + 1) as f64 * step).sin_cos();
+                s2[k] = s * ck + c * sk;
+                c2[k] = c * ck - s * sk;
+            }
+            (s2, c2)
+        };
+        match self {
+            Transmission::Harmonic { sin, cos } => {
+                let (sin, cos) = rotate(sin, cos, shift_rad);
+                Transmission::Harmonic { sin, cos }
+            }
+            Transmission::Gear { ratio, sin, cos } => {
+                let (sin, cos) = rotate(sin, cos, shift_rad / ratio);
+                Transmission::Gear {
+                    ratio: *ratio,
+                    sin,
+                    cos,
+                }
+            }
+        }
+    }
+
     /// `theta_a = f^-1(theta_c)` by safeguarded Newton iteration; `None` if `f` is not
     /// monotonic near the solution (coefficients too large for a real transmission).
     pub fn actual_from_command(&self, theta_c: f64) -> Option<f64> {
@@ -203,6 +235,33 @@ pub(crate) fn invert_monotonic(h: impl Fn(f64) -> f64, dh: impl Fn(f64) -> f64, 
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn shifted_is_exact() {
+        let forms = [
+            Transmission::Harmonic {
+                sin: vec![0.017334, 0.002],
+                cos: vec![0.002677, -0.001],
+            },
+            Transmission::Gear {
+                ratio: 32.0 / 19.0,
+                sin: vec![0.041227],
+                cos: vec![-0.000013],
+            },
+        ];
+        for f in forms {
+            let c = 0.37;
+            let g = f.shifted(c);
+            for i in -10..=10 {
+                let t = i as f64 * 0.13;
+                assert_relative_eq!(
+                    f.command_from_actual(t - c),
+                    g.command_from_actual(t) - c,
+                    epsilon = 1e-14
+                );
+            }
+        }
+    }
 
     #[test]
     fn paper_joint6_inverts() {

@@ -14,8 +14,8 @@ mod truth_error;
 
 pub use controller::Controller;
 pub use description::{
-    AxisTargets, DescriptionError, JointEntry, LinkTarget, NominalCoupling, Placement, RobotDescription, RowEntry,
-    ToolEntry,
+    AxisTargets, CouplingFitForm, DescriptionError, JointEntry, LinkTarget, NominalCoupling, Placement,
+    RobotDescription, RowEntry, ToolEntry, TransmissionFitForm,
 };
 pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};
 pub use four_bar_fit::{FourBarFit, fit_four_bar};

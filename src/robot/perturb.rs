@@ -7,6 +7,7 @@
 //! seeded rng gives the same robot every time.
 
 use super::description::RobotDescription;
+use super::description::TransmissionFitForm;
 use super::four_bar::FourBarGeometry;
 use super::functions::{CouplingFunction, Transmission};
 use super::truth::{FourBarLinkage, TruthRobot};
@@ -296,11 +297,18 @@ pub fn perturb<R: Rng + ?Sized>(
             JointKind::Prismatic => draw(&spec.transducer_offset_mm, rng) * 1e-3,
         };
     }
-    for j in &mut t.joints {
+    // Each joint's transmission error is drawn in the form its description declares (a gear
+    // joint's error is periodic in the gear angle): a robot of the family the calibrator fits.
+    // Forms outside that family are unmodelled effects, switched on separately.
+    for (j, entry) in t.joints.iter_mut().zip(&desc.joints) {
         if j.kind == JointKind::Revolute {
-            j.transmission = Transmission::Harmonic {
-                sin: vec![draw(&spec.transmission.sin_rad, rng)],
-                cos: vec![draw(&spec.transmission.cos_rad, rng)],
+            let (sin, cos) = (
+                vec![draw(&spec.transmission.sin_rad, rng)],
+                vec![draw(&spec.transmission.cos_rad, rng)],
+            );
+            j.transmission = match entry.transmission_fit {
+                TransmissionFitForm::Gear { ratio, .. } => Transmission::Gear { ratio, sin, cos },
+                TransmissionFitForm::Harmonic { .. } => Transmission::Harmonic { sin, cos },
             };
         }
     }

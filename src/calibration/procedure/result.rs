@@ -1,0 +1,184 @@
+//! What the procedure returns: the calibrated robot plus, per axis and coupling, the fit and
+//! its uncertainty. Serialisable: `calibration.json` is loaded again by axiscal.
+
+use super::CalibrationOptions;
+use super::experiments::AxisExperiment;
+use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
+use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
+use crate::calibration::{ArcFit, PaperAxisFit};
+use crate::robot::{CouplingFunction, Transmission, TruthRobot};
+use nalgebra::{Isometry3, Matrix2};
+use serde::{Deserialize, Serialize};
+
+/// One calibrated axis.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AxisReport {
+    /// The joint (1-based).
+    pub joint: usize,
+    /// The experiment it comes from.
+    pub experiment: String,
+    /// `ml` or `paper`.
+    pub estimator: String,
+    /// Poses used.
+    pub points: usize,
+    /// Commanded span of the actuator \[deg\].
+    pub span_deg: f64,
+    /// A point on the axis, instrument frame \[mm\].
+    pub point_mm: [f64; 3],
+    /// Unit direction, instrument frame.
+    pub direction: [f64; 3],
+    /// 1-sigma of the axis direction in two perpendicular directions \[rad\] (principal values).
+    pub direction_sigma_rad: [f64; 2],
+    /// 1-sigma of the axis position across the axis \[mm\] (principal values).
+    pub position_sigma_mm: [f64; 2],
+    /// The fitted transmission `theta_c = f(theta_a)` in the fit's own zero.
+    pub transmission: Transmission,
+    /// Names of its coefficients (`sin1`, `cos1`, ...).
+    pub coefficient_names: Vec<String>,
+    /// 1-sigma of each coefficient \[rad\].
+    pub coefficient_sigma: Vec<f64>,
+    /// RMS of the point residuals \[mm\].
+    pub residual_rms_mm: f64,
+    /// Scaled condition number of the fit.
+    pub condition_number: f64,
+    /// What the data cannot pin down, in words.
+    pub identifiability: Vec<String>,
+}
+
+fn principal_sigmas(c: &Matrix2<f64>) -> [f64; 2] {
+    let e = c.symmetric_eigen().eigenvalues;
+    let (a, b) = (e[0].max(0.0).sqrt(), e[1].max(0.0).sqrt());
+    [a.max(b), a.min(b)]
+}
+
+impl AxisReport {
+    pub(super) fn from_ml(e: &AxisExperiment, fit: &ArcFit, form: &TransmissionForm, span_rad: f64) -> Self {
+        let mut notes = fit.identifiability.notes.clone();
+        for (span, sigma) in &fit.identifiability.tilt_sigma_by_span {
+            notes.push(format!(
+                "axis tilt 1-sigma with a {:.0} deg span: {:.2e} rad",
+                span.to_degrees(),
+                sigma
+            ));
+        }
+        AxisReport {
+            joint: e.joint,
+            experiment: e.name.clone(),
+            estimator: "ml".into(),
+            points: e.target0_m.len(),
+            span_deg: span_rad.to_degrees(),
+            point_mm: (fit.axis.origin_m.coords * 1e3).into(),
+            direction: fit.axis.direction.into_inner().into(),
+            direction_sigma_rad: principal_sigmas(&fit.axis_direction_covariance),
+            position_sigma_mm: principal_sigmas(&fit.axis_position_covariance).map(|s| s * 1e3),
+            transmission: fit.transmission.clone(),
+            coefficient_names: form.coefficient_names(),
+            coefficient_sigma: fit.coefficient_sigma.clone(),
+            residual_rms_mm: fit.residual_rms * 1e3,
+            condition_number: fit.identifiability.condition_number,
+            identifiability: notes,
+        }
+    }
+
+    pub(super) fn from_paper(
+        e: &AxisExperiment,
+        fit: &PaperAxisFit,
+        t: &TransmissionFit,
+        form: &TransmissionForm,
+        span_rad: f64,
+    ) -> Self {
+        AxisReport {
+            joint: e.joint,
+            experiment: e.name.clone(),
+            estimator: "paper".into(),
+            points: e.target0_m.len(),
+            span_deg: span_rad.to_degrees(),
+            point_mm: (fit.axis.origin_m.coords * 1e3).into(),
+            direction: fit.axis.direction.into_inner().into(),
+            // The paper's estimator reports no covariance of the line.
+            direction_sigma_rad: [f64::NAN; 2],
+            position_sigma_mm: [f64::NAN; 2],
+            transmission: t.transmission.clone(),
+            coefficient_names: form.coefficient_names(),
+            coefficient_sigma: t.sigma.clone(),
+            residual_rms_mm: (fit.axial_rms.powi(2) + fit.radial_rms.powi(2)).sqrt() * 1e3,
+            condition_number: fit.condition_number,
+            identifiability: vec![],
+        }
+    }
+}
+
+/// One calibrated passive coupling.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CouplingReport {
+    /// Driving joint (1-based).
+    pub from: usize,
+    /// Driven joint.
+    pub to: usize,
+    /// Experiment it comes from.
+    pub experiment: String,
+    /// Fitted function.
+    pub function: CouplingFunction,
+    /// Parameter names.
+    pub parameter_names: Vec<String>,
+    /// Parameters.
+    pub parameters: Vec<f64>,
+    /// Their 1-sigma.
+    pub sigma: Vec<f64>,
+    /// RMS of the angle residuals \[rad\].
+    pub residual_rms_rad: f64,
+}
+
+impl CouplingReport {
+    pub(super) fn new(from: usize, e: &AxisExperiment, fit: &CouplingFit, form: &CouplingForm) -> Self {
+        let parameter_names = match *form {
+            CouplingForm::Fractional => ["n0", "n1", "n2", "d0", "d1"].map(String::from).to_vec(),
+            CouplingForm::Gear { fit_ratio, order, .. } => {
+                let mut v: Vec<String> = if fit_ratio { vec!["ratio".into()] } else { vec![] };
+                v.extend((1..=order).map(|i| format!("sin{i}")));
+                v.extend((1..=order).map(|i| format!("cos{i}")));
+                v
+            }
+        };
+        CouplingReport {
+            from,
+            to: from + 1,
+            experiment: e.name.clone(),
+            function: fit.function.clone(),
+            parameter_names,
+            parameters: fit.parameters.clone(),
+            sigma: fit.sigma.clone(),
+            residual_rms_rad: fit.residual_rms_rad,
+        }
+    }
+}
+
+/// The tool frame, fitted from the three tool targets at the reference pose.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ToolReport {
+    /// The experiment observed.
+    pub experiment: String,
+    /// Its step.
+    pub step: usize,
+    /// The calibrated tool frame in the last link.
+    pub last_link_from_tool: Isometry3<f64>,
+    /// RMS of the three-point fit \[mm\] (noise only, for a rigid tool).
+    pub fit_rms_mm: f64,
+}
+
+/// The result of [`super::calibrate`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    /// The calibrated robot: actual rows, transmissions, couplings, offsets, tool.
+    pub robot: TruthRobot,
+    /// The common reference pose (file units).
+    pub reference_cmd: Vec<f64>,
+    /// Per joint, base first.
+    pub axes: Vec<AxisReport>,
+    /// Measured couplings.
+    pub couplings: Vec<CouplingReport>,
+    /// The tool frame, when observed at the reference pose.
+    pub tool: Option<ToolReport>,
+    /// The options used.
+    pub options: CalibrationOptions,
+}
