@@ -308,7 +308,7 @@ pub fn solve_ik(
 
 /// IK on the `actual` (calibrated) model, seeded by the closed-form branches of the `nominal`
 /// model ([`nominal_closed_form`]): branches within `opts.limits` are tried first, then the
-/// others; the first one from which the iteration converges is returned. If the nominal
+/// others, each group nearest-to-zero first; the first one from which the iteration converges is returned. If the nominal
 /// model has no closed-form solution (target out of its reach, or not of the IRB/L6 class),
 /// the iteration starts from the middle of the limits (zero without limits).
 pub fn solve_seeded_by_nominal(
@@ -326,7 +326,12 @@ pub fn solve_seeded_by_nominal(
         .map(|branches| branches.into_iter().map(|b| b.q).collect())
         .unwrap_or_default();
     seeds.retain(|s| s.len() == actual.dof());
-    seeds.sort_by_key(|s| outside_limits(s, opts.limits.as_ref()).len());
+    // Branches within the limits first; among those, the one nearest the zero pose.
+    let key = |s: &Vec<f64>| {
+        let size: f64 = s.iter().map(|v| v * v).sum();
+        (outside_limits(s, opts.limits.as_ref()).len(), size)
+    };
+    seeds.sort_by(|a, b| key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal));
     seeds.push(fallback_seed);
     let mut best: Option<IkSolution> = None;
     for seed in &seeds {
@@ -354,4 +359,66 @@ pub fn solve_seeded_by_nominal(
         position_error_m: b.position_error_m,
         orientation_error_rad: b.orientation_error_rad,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::RobotDescription;
+
+    fn model() -> PhiModel {
+        RobotDescription::asea_irb6l().nominal_model()
+    }
+
+    #[test]
+    fn bad_inputs_are_structured_errors() {
+        let m = model();
+        let t = m.world_from_tool(&[0.1; 6]);
+        let opts = IkOptions::default();
+        assert!(matches!(
+            solve_ik(&m, &t, &[0.0; 5], &opts),
+            Err(IkError::WrongLength { what: "seed", expected: 6, found: 5 })
+        ));
+        let nan = [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0];
+        assert!(matches!(solve_ik(&m, &t, &nan, &opts), Err(IkError::NonFinite { what: "seed" })));
+        let short = IkOptions {
+            limits: Some(vec![[-1.0, 1.0]; 2]),
+            ..IkOptions::default()
+        };
+        assert!(matches!(
+            solve_ik(&m, &t, &[0.0; 6], &short),
+            Err(IkError::WrongLength { what: "limits", .. })
+        ));
+    }
+
+    #[test]
+    fn limits_are_reported_and_optionally_enforced() {
+        let m = model();
+        let q = [0.3, 0.2, -0.4, 0.5, 0.7, -1.0];
+        let t = m.world_from_tool(&q);
+        let tight = vec![[-0.1, 0.1]; 6];
+        let report_only = IkOptions {
+            limits: Some(tight.clone()),
+            ..IkOptions::default()
+        };
+        let s = solve_ik(&m, &t, &[0.25, 0.15, -0.35, 0.45, 0.65, -0.95], &report_only).expect("converges");
+        assert_eq!(s.report.joints_outside_limits, vec![0, 1, 2, 3, 4, 5]);
+        let clamped = IkOptions {
+            limits: Some(tight),
+            clamp_to_limits: true,
+            ..IkOptions::default()
+        };
+        let s = levenberg_marquardt(&m, &t, &[0.0; 6], &clamped);
+        assert!(!s.report.converged);
+        assert!(s.q.iter().all(|v| v.abs() <= 0.1));
+    }
+
+    #[test]
+    fn rotation_vector_is_exact_for_tiny_angles() {
+        let axis = Vector3::new(1.0, -2.0, 0.5).normalize();
+        for angle in [1e-14, 1e-9, 0.3, 3.0] {
+            let r = rotation_vector(&UnitQuaternion::from_scaled_axis(axis * angle));
+            approx::assert_relative_eq!(r, axis * angle, max_relative = 1e-12);
+        }
+    }
 }
