@@ -18,22 +18,22 @@
 use super::chain::{AxisLine, PhiModel};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 
-/// Axes closer than this to parallel [rad] are reported as parallel: the DH offset would
+/// Axes closer than this to parallel \[rad\] are reported as parallel: the DH offset would
 /// exceed `L / 1e-9`, i.e. 1e8 m for a 0.1 m link, which no calibration can mean.
 pub const PARALLEL_TOLERANCE_RAD: f64 = 1e-9;
 
 /// The common normal of two axis lines.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CommonNormal {
-    /// Its foot on the first axis [m].
+    /// Its foot on the first axis \[m\].
     pub foot_on_first_m: Point3<f64>,
-    /// Its foot on the second axis [m].
+    /// Its foot on the second axis \[m\].
     pub foot_on_second_m: Point3<f64>,
     /// Its direction `z_first x z_second`, normalised (the DH `x` axis).
     pub direction: Unit<Vector3<f64>>,
-    /// Signed length along `direction` (DH `a`) [m].
+    /// Signed length along `direction` (DH `a`) \[m\].
     pub length_m: f64,
-    /// Twist from the first to the second axis about `direction` (DH `alpha`), in `(0, pi)` [rad].
+    /// Twist from the first to the second axis about `direction` (DH `alpha`), in `(0, pi)` \[rad\].
     pub twist_rad: f64,
 }
 
@@ -70,13 +70,13 @@ pub fn common_normal(first: &AxisLine, second: &AxisLine) -> Option<CommonNormal
 pub struct DhRow {
     /// The joint (1-based).
     pub joint: usize,
-    /// Offset along the joint axis between the two normals [m].
+    /// Offset along the joint axis between the two normals \[m\].
     pub d_m: f64,
-    /// Angle between the two normals about the joint axis, at `q = 0` [rad].
+    /// Angle between the two normals about the joint axis, at `q = 0` \[rad\].
     pub theta_offset_rad: f64,
-    /// Length of the normal to the next axis [m].
+    /// Length of the normal to the next axis \[m\].
     pub a_m: f64,
-    /// Twist from this axis to the next [rad].
+    /// Twist from this axis to the next \[rad\].
     pub alpha_rad: f64,
 }
 
@@ -93,7 +93,7 @@ pub struct DhTable {
 pub struct ParallelPair {
     /// The first joint of the pair (1-based); the second is `first_joint + 1`.
     pub first_joint: usize,
-    /// The angle between the axes [rad] (below [`PARALLEL_TOLERANCE_RAD`]).
+    /// The angle between the axes \[rad\] (below [`PARALLEL_TOLERANCE_RAD`]).
     pub angle_rad: f64,
 }
 
@@ -158,14 +158,14 @@ pub fn dh_from_phi(model: &PhiModel) -> Result<DhTable, DhError> {
 /// What a small tilt does to the DH offset of two parallel axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TiltSensitivity {
-    /// Distance between the (parallel) axes [m].
+    /// Distance between the (parallel) axes \[m\].
     pub separation_m: f64,
-    /// The tilt applied to the second axis, in the plane of both [rad].
+    /// The tilt applied to the second axis, in the plane of both \[rad\].
     pub tilt_rad: f64,
     /// Where the common normal's foot lands on the first axis after the tilt, measured from
-    /// the foot of the perpendicular from the second axis' origin [m]: `-L / tan(tilt)`.
+    /// the foot of the perpendicular from the second axis' origin \[m\]: `-L / tan(tilt)`.
     pub foot_offset_m: f64,
-    /// `d(foot offset)/d(tilt) = L / sin^2(tilt)` [m/rad].
+    /// `d(foot offset)/d(tilt) = L / sin^2(tilt)` \[m/rad\].
     pub offset_per_rad_m: f64,
 }
 
@@ -205,6 +205,7 @@ mod tests {
     use approx::assert_relative_eq;
 
     /// Table 2, actual columns (NOTES-paper.md): metres and degrees.
+    #[allow(clippy::approx_constant)] // -0.6931 m is Table 2's a_2, not -ln 2
     const ACTUAL_ROWS: [[f64; 4]; 5] = [
         [0.00232, 0.0, 90.0, -90.378],
         [-0.6931, 0.00487, 89.828, -179.54],

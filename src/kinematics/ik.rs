@@ -3,7 +3,7 @@
 //! The general solver is a damped least-squares (Levenberg-Marquardt) iteration on the 6-D
 //! tool pose error
 //!
-//! `e(q) = [p_target - p(q); rotvec(R_target R(q)^T)]` (position [m], orientation [rad]),
+//! `e(q) = [p_target - p(q); rotvec(R_target R(q)^T)]` (position \[m\], orientation \[rad\]),
 //!
 //! whose derivative is `-J(q)` with `J` the geometric Jacobian ([`geometric_jacobian`]; exact
 //! for the position rows, and for the orientation rows at `e = 0`). Each step solves
@@ -28,9 +28,9 @@ use std::f64::consts::PI;
 /// Settings of the Levenberg-Marquardt IK solver.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IkOptions {
-    /// Stop when the tool position error is below this [m].
+    /// Stop when the tool position error is below this \[m\].
     pub position_tolerance_m: f64,
-    /// ... and the orientation error (angle of `R_target R^T`) is below this [rad].
+    /// ... and the orientation error (angle of `R_target R^T`) is below this \[rad\].
     pub orientation_tolerance_rad: f64,
     /// Maximum number of Jacobian evaluations.
     pub max_iterations: usize,
@@ -59,9 +59,9 @@ impl Default for IkOptions {
 pub struct IkReport {
     /// Jacobian evaluations used.
     pub iterations: usize,
-    /// Final tool position error [m].
+    /// Final tool position error \[m\].
     pub position_error_m: f64,
-    /// Final tool orientation error: the angle of `R_target R^T` [rad].
+    /// Final tool orientation error: the angle of `R_target R^T` \[rad\].
     pub orientation_error_rad: f64,
     /// Both errors are within the tolerances of [`IkOptions`].
     pub converged: bool,
@@ -90,9 +90,9 @@ pub enum IkError {
     NotConverged {
         /// Jacobian evaluations used.
         iterations: usize,
-        /// Best tool position error reached [m].
+        /// Best tool position error reached \[m\].
         position_error_m: f64,
-        /// Best tool orientation error reached [rad].
+        /// Best tool orientation error reached \[rad\].
         orientation_error_rad: f64,
     },
     /// A seed or limit vector has the wrong length.
@@ -149,14 +149,14 @@ fn check_inputs(model: &PhiModel, target: &Isometry3<f64>, seed: &[f64], opts: &
             found: seed.len(),
         });
     }
-    if let Some(l) = &opts.limits {
-        if l.len() != n {
-            return Err(IkError::WrongLength {
-                what: "limits",
-                expected: n,
-                found: l.len(),
-            });
-        }
+    if let Some(l) = &opts.limits
+        && l.len() != n
+    {
+        return Err(IkError::WrongLength {
+            what: "limits",
+            expected: n,
+            found: l.len(),
+        });
     }
     if seed.iter().any(|v| !v.is_finite()) {
         return Err(IkError::NonFinite { what: "seed" });
@@ -186,12 +186,7 @@ fn outside_limits(q: &[f64], limits: Option<&Vec<[f64; 2]>>) -> Vec<usize> {
 /// # Panics
 /// Never on data; inputs are checked by [`solve_ik`]. Here `seed.len()` must equal the model's
 /// number of joints.
-pub fn levenberg_marquardt(
-    model: &PhiModel,
-    target: &Isometry3<f64>,
-    seed: &[f64],
-    opts: &IkOptions,
-) -> IkSolution {
+pub fn levenberg_marquardt(model: &PhiModel, target: &Isometry3<f64>, seed: &[f64], opts: &IkOptions) -> IkSolution {
     let n = model.dof();
     let mut q = seed.to_vec();
     let limits = opts.limits.as_ref().filter(|_| opts.clamp_to_limits);
@@ -377,10 +372,17 @@ mod tests {
         let opts = IkOptions::default();
         assert!(matches!(
             solve_ik(&m, &t, &[0.0; 5], &opts),
-            Err(IkError::WrongLength { what: "seed", expected: 6, found: 5 })
+            Err(IkError::WrongLength {
+                what: "seed",
+                expected: 6,
+                found: 5
+            })
         ));
         let nan = [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0];
-        assert!(matches!(solve_ik(&m, &t, &nan, &opts), Err(IkError::NonFinite { what: "seed" })));
+        assert!(matches!(
+            solve_ik(&m, &t, &nan, &opts),
+            Err(IkError::NonFinite { what: "seed" })
+        ));
         let short = IkOptions {
             limits: Some(vec![[-1.0, 1.0]; 2]),
             ..IkOptions::default()

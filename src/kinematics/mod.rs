@@ -10,8 +10,8 @@ mod phi;
 
 pub use chain::{AxisLine, ChainPoses, PhiJoint, PhiModel};
 pub use dh::{
-    CommonNormal, DhError, DhRow, DhTable, ParallelPair, TiltSensitivity, common_normal, dh_from_phi,
-    parallel_tilt_sensitivity,
+    CommonNormal, DhError, DhRow, DhTable, PARALLEL_TOLERANCE_RAD, ParallelPair, TiltSensitivity, common_normal,
+    dh_from_phi, parallel_tilt_sensitivity,
 };
 pub use ik::{
     ClosedFormError, ClosedFormSolution, IkError, IkOptions, IkReport, IkSolution, levenberg_marquardt,

@@ -33,10 +33,10 @@ use super::super::phi::JointKind;
 use super::{pose_error, wrap_angle};
 use nalgebra::{Isometry3, Point3, Rotation3, Vector2, Vector3};
 
-/// Geometric tolerance of the class test [m or rad]: far above the ~1e-16 rounding of an
+/// Geometric tolerance of the class test \[m or rad\]: far above the ~1e-16 rounding of an
 /// exactly nominal model, far below any real calibration deviation (~1e-4).
 const CLASS_TOLERANCE: f64 = 1e-9;
-/// A branch is kept when forward kinematics reproduces the target to this [m or rad].
+/// A branch is kept when forward kinematics reproduces the target to this \[m or rad\].
 const VERIFY_TOLERANCE: f64 = 1e-9;
 
 /// Why the nominal closed form does not apply.
@@ -47,7 +47,7 @@ pub enum ClosedFormError {
     NotInClass {
         /// The violated condition.
         condition: &'static str,
-        /// By how much [m or rad, or a count].
+        /// By how much \[m or rad, or a count\].
         deviation: f64,
     },
     /// No branch reaches the target (out of reach or singular).
@@ -58,13 +58,13 @@ pub enum ClosedFormError {
 /// One verified closed-form branch.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ClosedFormSolution {
-    /// Joint values [rad], wrapped into `(-pi, pi]`.
+    /// Joint values \[rad\], wrapped into `(-pi, pi]`.
     pub q: Vec<f64>,
     /// Branch signs `[shoulder, elbow, wrist]`, each `+1` or `-1`.
     pub branch: [i8; 3],
-    /// Forward-kinematics check: tool position error [m].
+    /// Forward-kinematics check: tool position error \[m\].
     pub position_error_m: f64,
-    /// Forward-kinematics check: tool orientation error [rad].
+    /// Forward-kinematics check: tool orientation error \[rad\].
     pub orientation_error_rad: f64,
 }
 
@@ -234,5 +234,9 @@ pub fn nominal_closed_form(
             }
         }
     }
-    if out.is_empty() { Err(ClosedFormError::NoBranch) } else { Ok(out) }
+    if out.is_empty() {
+        Err(ClosedFormError::NoBranch)
+    } else {
+        Ok(out)
+    }
 }
