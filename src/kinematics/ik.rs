@@ -184,8 +184,8 @@ fn outside_limits(q: &[f64], limits: Option<&Vec<[f64; 2]>>) -> Vec<usize> {
 /// (see `report.converged`). Use [`solve_ik`] for a `Result`.
 ///
 /// # Panics
-/// Never on data; inputs are checked by [`solve_ik`]. Here `seed.len()` must equal the model's
-/// number of joints.
+/// If `seed.len()` (or the limits' length) differs from the model's number of joints, a
+/// programming error; [`solve_ik`] checks its inputs and returns [`IkError`] instead.
 pub fn levenberg_marquardt(model: &PhiModel, target: &Isometry3<f64>, seed: &[f64], opts: &IkOptions) -> IkSolution {
     let n = model.dof();
     let mut q = seed.to_vec();

@@ -240,3 +240,30 @@ pub fn nominal_closed_form(
         Ok(out)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::RobotDescription;
+
+    #[test]
+    fn tilted_axes_are_not_in_the_class() {
+        let mut m = RobotDescription::asea_irb6l().nominal_model();
+        m.rows[1].alpha_rad += 0.003;
+        let err = nominal_closed_form(&m, &m.world_from_tool(&[0.1; 6])).unwrap_err();
+        assert!(matches!(
+            err,
+            ClosedFormError::NotInClass {
+                condition: "axis 3 parallel to axis 2",
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn far_targets_have_no_branch() {
+        let m = RobotDescription::asea_irb6l().nominal_model();
+        let far = Isometry3::translation(5.0, 0.0, 0.0) * m.world_from_tool(&[0.1; 6]);
+        assert_eq!(nominal_closed_form(&m, &far), Err(ClosedFormError::NoBranch));
+    }
+}
