@@ -1,12 +1,23 @@
 //! Kinematics of the phi-model (paper appendix, eqs. A1-A4): transforms, forward
-//! kinematics, the geometric Jacobian and inverse kinematics for arbitrary geometry.
+//! kinematics, the geometric Jacobian, inverse kinematics for arbitrary geometry, and the
+//! conversion to Denavit-Hartenberg parameters (and why it fails on parallel axes).
 
 mod chain;
+mod dh;
+mod ik;
 mod jacobian;
 mod phi;
 mod rigid_fit;
 
 pub use chain::{AxisLine, ChainPoses, PhiJoint, PhiModel};
+pub use dh::{
+    CommonNormal, DhError, DhRow, DhTable, PARALLEL_TOLERANCE_RAD, ParallelPair, TiltSensitivity, common_normal,
+    dh_from_phi, parallel_tilt_sensitivity,
+};
+pub use ik::{
+    ClosedFormError, ClosedFormSolution, IkError, IkOptions, IkReport, IkSolution, levenberg_marquardt,
+    nominal_closed_form, pose_error, rotation_vector, solve_ik, solve_seeded_by_nominal,
+};
 pub use jacobian::{geometric_jacobian, point_jacobian};
 pub use phi::{JointKind, PhiRow, frame_from_phi, joint_motion, link_from_phi};
 pub use rigid_fit::rigid_fit;
