@@ -129,3 +129,62 @@ fn noise_free_perturbed_robot_is_reproduced() {
         assert!(worst_inside < bound, "seed {seed}: {worst_inside:e} m >= {bound:e} m");
     }
 }
+
+/// Noisy Table-1 data (0.19 mm 3-D RMS, isotropic): every Table 2 parameter and transmission
+/// coefficient lands within 3 reported sigma of the truth in the calibration's convention
+/// (the noise-free calibration of the same robot), and the normalised errors have unit RMS.
+#[test]
+fn noisy_recovery_is_within_the_reported_sigma() {
+    let truth = noiseless_truth();
+    let desc = RobotDescription::asea_irb6l();
+    let exact = MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: 0.0 });
+    let reference = calibrate(&campaign(&truth, &exact, 1), &desc, &CalibrationOptions::default()).unwrap();
+    let mut z: Vec<f64> = Vec::new();
+    // A parameter fixed by the convention (for example b1 = 0: the base origin is the foot of
+    // the common normal) has zero sigma and must then have zero error.
+    let mut push = |err: f64, sigma: f64| {
+        if sigma == 0.0 {
+            assert!(err.abs() < 1e-9, "parameter fixed by convention moved by {err}");
+        } else {
+            z.push(err / sigma);
+        }
+    };
+    for seed in 10..16 {
+        let cal = calibrate(
+            &campaign(&truth, &MeasurementModel::paper_isotropic(), seed),
+            &desc,
+            &CalibrationOptions::default(),
+        )
+        .unwrap();
+        for ((r, t), s) in cal.robot.rows.iter().zip(&reference.robot.rows).zip(&cal.row_sigma) {
+            push((r.a_m - t.a_m) * 1e3, s.a_mm);
+            push((r.b_m - t.b_m) * 1e3, s.b_mm);
+            push(r.alpha_deg - t.alpha_deg, s.alpha_deg);
+            push(r.beta_deg - t.beta_deg, s.beta_deg);
+        }
+        for (a, t) in cal.axes.iter().zip(&reference.axes) {
+            let coefficients = |x: &axiscal::robot::Transmission| match x {
+                axiscal::robot::Transmission::Harmonic { sin, cos }
+                | axiscal::robot::Transmission::Gear { sin, cos, .. } => {
+                    sin.iter().chain(cos).copied().collect::<Vec<f64>>()
+                }
+            };
+            for ((c, ct), s) in coefficients(&a.transmission)
+                .iter()
+                .zip(coefficients(&t.transmission))
+                .zip(&a.coefficient_sigma)
+            {
+                push(c - ct, *s);
+            }
+        }
+    }
+    let n = z.len() as f64;
+    let rms = (z.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    let outside = z.iter().filter(|v| v.abs() > 3.0).count();
+    println!("{} normalised errors: RMS {rms:.3}, {outside} beyond 3 sigma", z.len());
+    // RMS of n unit normals: standard error 1/sqrt(2n); allow 4 standard errors.
+    assert!((rms - 1.0).abs() < 4.0 / (2.0 * n).sqrt(), "RMS {rms}");
+    // P(|z| > 3) = 0.0027: the expected count is n * 0.0027 (about 0.5 here); 3 or more
+    // happens with probability < 2 % for a correct sigma.
+    assert!(outside <= 2, "{outside} of {n} beyond 3 sigma");
+}

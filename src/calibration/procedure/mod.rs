@@ -12,10 +12,12 @@
 mod experiments;
 mod frames;
 mod result;
+mod uncertainty;
 
 pub use experiments::{AxisExperiment, COMMAND_TOLERANCE, axis_experiments};
 pub use frames::{FramesError, common_normal_feet, model_from_axes};
-pub use result::{AxisReport, Calibration, CouplingReport, ToolReport};
+pub use result::{AxisReport, Calibration, CouplingReport, RowSigma, ToolReport};
+pub use uncertainty::{AxisCovariance, row_sigmas};
 
 use super::arc_model::MeasurementNoise;
 use super::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
@@ -185,7 +187,14 @@ fn fit_one_axis(
                     max_iterations: options.max_iterations,
                 },
             )?;
-            let report = AxisReport::from_ml(e, &fit, &form, span_rad);
+            let g = super::arc_model::axis_quantities_gradient(&fit.params, &centroid);
+            let q = &g * &fit.covariance * g.transpose();
+            let mut report = AxisReport::from_ml(e, &fit, &form, span_rad);
+            report.covariance = Some(AxisCovariance::new(
+                fit.params.u().into_inner(),
+                fit.params.v().into_inner(),
+                &q.fixed_view::<4, 4>(0, 0).into(),
+            ));
             Ok(AxisFitOutcome {
                 axis: fit.axis,
                 transmission: fit.transmission,
@@ -262,6 +271,16 @@ pub fn calibrate(
         .collect();
     let axes: Vec<AxisLine> = fits.iter().map(|(f, _)| f.axis).collect();
     let geometry = model_from_axes(&desc.nominal_model(), &axes, &q_ref)?;
+    let covariances: Vec<Option<AxisCovariance>> = fits.iter().map(|(f, _)| f.report.covariance.clone()).collect();
+    let row_sigma: Vec<RowSigma> = row_sigmas(&desc.nominal_model(), &axes, &q_ref, &covariances)?
+        .into_iter()
+        .map(|[a, b, alpha, beta]| RowSigma {
+            a_mm: a * 1e3,
+            b_mm: b * 1e3,
+            alpha_deg: alpha.to_degrees(),
+            beta_deg: beta.to_degrees(),
+        })
+        .collect();
 
     // Ascending: joint k's zero needs the coupling into k, which needs joint k-1's zero.
     let mut joints: Vec<TruthJoint> = Vec::with_capacity(n);
@@ -350,6 +369,7 @@ pub fn calibrate(
         robot,
         reference_cmd,
         axes: fits.into_iter().map(|(f, _)| f.report).collect(),
+        row_sigma,
         couplings,
         tool,
         options: options.clone(),

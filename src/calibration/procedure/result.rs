@@ -3,6 +3,7 @@
 
 use super::CalibrationOptions;
 use super::experiments::AxisExperiment;
+use super::uncertainty::AxisCovariance;
 use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
 use crate::calibration::{ArcFit, PaperAxisFit};
@@ -43,6 +44,8 @@ pub struct AxisReport {
     pub condition_number: f64,
     /// What the data cannot pin down, in words.
     pub identifiability: Vec<String>,
+    /// Covariance of the line (ML estimator only; the paper's estimator reports none).
+    pub covariance: Option<AxisCovariance>,
 }
 
 fn principal_sigmas(c: &Matrix2<f64>) -> [f64; 2] {
@@ -77,6 +80,7 @@ impl AxisReport {
             residual_rms_mm: fit.residual_rms * 1e3,
             condition_number: fit.identifiability.condition_number,
             identifiability: notes,
+            covariance: None,
         }
     }
 
@@ -104,8 +108,22 @@ impl AxisReport {
             residual_rms_mm: (fit.axial_rms.powi(2) + fit.radial_rms.powi(2)).sqrt() * 1e3,
             condition_number: fit.condition_number,
             identifiability: vec![],
+            covariance: None,
         }
     }
+}
+
+/// 1-sigma of one Table-2 row, in Table 2's units.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RowSigma {
+    /// \[mm\]
+    pub a_mm: f64,
+    /// \[mm\]
+    pub b_mm: f64,
+    /// \[deg\]
+    pub alpha_deg: f64,
+    /// \[deg\]
+    pub beta_deg: f64,
 }
 
 /// One calibrated passive coupling.
@@ -175,6 +193,8 @@ pub struct Calibration {
     pub reference_cmd: Vec<f64>,
     /// Per joint, base first.
     pub axes: Vec<AxisReport>,
+    /// 1-sigma of each Table-2 row of `robot` (propagated from the axes).
+    pub row_sigma: Vec<RowSigma>,
     /// Measured couplings.
     pub couplings: Vec<CouplingReport>,
     /// The tool frame, when observed at the reference pose.
