@@ -188,3 +188,82 @@ fn noisy_recovery_is_within_the_reported_sigma() {
     // happens with probability < 2 % for a correct sigma.
     assert!(outside <= 2, "{outside} of {n} beyond 3 sigma");
 }
+
+/// Bad data: one clear error each, no panic.
+#[test]
+fn bad_campaigns_are_clear_errors() {
+    use axiscal::measurement::Measurement;
+    let desc = RobotDescription::asea_irb6l();
+    let good = campaign(&noiseless_truth(), &MeasurementModel::paper_isotropic(), 3);
+    let opts = CalibrationOptions::default();
+    let run = |rows: Vec<Measurement>| calibrate(&MeasurementSet::new(6, rows).unwrap(), &desc, &opts).unwrap_err();
+
+    // Fewer than 3 points in one sweep.
+    let rows: Vec<_> = good
+        .rows()
+        .iter()
+        .filter(|r| !(r.moved_joint == 1 && r.step >= 2))
+        .cloned()
+        .collect();
+    let e = run(rows).to_string();
+    assert!(e.contains("axis1") && e.contains("points"), "{e}");
+
+    // A zero span: every pose of joint 6's sweep at the same command.
+    let rows: Vec<_> = good
+        .rows()
+        .iter()
+        .cloned()
+        .map(|mut r| {
+            if r.moved_joint == 6 {
+                r.cmd[5] = 0.0;
+            }
+            r
+        })
+        .collect();
+    assert!(matches!(run(rows), ProcedureError::ZeroSpan { joint: 6, .. }));
+
+    // Collinear points: joint 5's targets replaced by points on a line.
+    let rows: Vec<_> = good
+        .rows()
+        .iter()
+        .cloned()
+        .map(|mut r| {
+            if r.moved_joint == 5 {
+                r.position_mm = [r.step as f64, 2.0 * r.step as f64, 0.0];
+            }
+            r
+        })
+        .collect();
+    let e = run(rows).to_string();
+    assert!(e.contains("axis5") && e.contains("collinear"), "{e}");
+
+    // A single target where the 4->5 coupling needs two.
+    let rows: Vec<_> = good
+        .rows()
+        .iter()
+        .filter(|r| !(r.moved_joint == 4 && r.target == 1))
+        .cloned()
+        .collect();
+    assert!(matches!(
+        run(rows),
+        ProcedureError::SecondTargetMissing { joint: 4, .. }
+    ));
+
+    // Inconsistent commands: joint 1 moves during joint 3's sweep.
+    let rows: Vec<_> = good
+        .rows()
+        .iter()
+        .cloned()
+        .map(|mut r| {
+            if r.moved_joint == 3 && r.step == 5 {
+                r.cmd[0] = 1.0;
+            }
+            r
+        })
+        .collect();
+    let e = run(rows);
+    assert!(
+        matches!(e, ProcedureError::InconsistentCommands { joint: 1, step: 5, .. }),
+        "{e}"
+    );
+}

@@ -1,5 +1,6 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
+mod calibrate;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -15,6 +16,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Calibrate a robot from a measurement CSV (axes, transmissions, couplings, offsets).
+    Calibrate(calibrate::Args),
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
 }
@@ -28,6 +31,7 @@ pub struct ThresholdsFailed(pub String);
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Calibrate(args) => calibrate::run(args),
         Command::Simulate(args) => simulate::run(args),
     };
     match result {

@@ -11,13 +11,17 @@
 
 mod experiments;
 mod frames;
+mod report;
 mod result;
 mod uncertainty;
+mod urdf;
 
 pub use experiments::{AxisExperiment, COMMAND_TOLERANCE, axis_experiments};
 pub use frames::{FramesError, common_normal_feet, model_from_axes};
+pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown};
 pub use result::{AxisReport, Calibration, CouplingReport, RowSigma, ToolReport};
 pub use uncertainty::{AxisCovariance, row_sigmas};
+pub use urdf::urdf;
 
 use super::arc_model::MeasurementNoise;
 use super::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};

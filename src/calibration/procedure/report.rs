@@ -1,0 +1,261 @@
+//! The diagnostic report, like the paper's section-4 bullets: what the identified parameters
+//! mean physically, each with its uncertainty and whether the data resolve it (> 3 sigma).
+
+use super::result::Calibration;
+use crate::robot::{RobotDescription, Transmission};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+
+/// Significance threshold in sigmas: a deviation below it is "not resolved by the data".
+pub const SIGNIFICANT_SIGMAS: f64 = 3.0;
+
+/// One statement of the report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Finding {
+    /// What it is about, e.g. `row 2: b` or `joint 6 transmission`.
+    pub subject: String,
+    /// The deviation from the design (or the fitted amplitude).
+    pub value: f64,
+    /// Its 1-sigma (NaN when the estimator reports none).
+    pub sigma: f64,
+    /// Unit of `value` and `sigma`.
+    pub unit: String,
+    /// Whether `|value| > 3 sigma`.
+    pub significant: bool,
+    /// The sentence.
+    pub text: String,
+}
+
+fn finding(subject: String, value: f64, sigma: f64, unit: &str, text: String) -> Finding {
+    let significant = sigma.is_nan() || value.abs() > SIGNIFICANT_SIGMAS * sigma;
+    Finding {
+        subject,
+        value,
+        sigma,
+        unit: unit.into(),
+        significant,
+        text,
+    }
+}
+
+/// Deviations of the Table-2 rows from the design, offsets, transmissions and couplings.
+pub fn findings(cal: &Calibration, desc: &RobotDescription) -> Vec<Finding> {
+    let mut out = Vec::new();
+    for (k, ((r, n), s)) in cal.robot.rows.iter().zip(&desc.rows).zip(&cal.row_sigma).enumerate() {
+        let (i, j) = (k + 1, k + 2);
+        let da = (r.a_m - n.a_m) * 1e3;
+        out.push(finding(
+            format!("row {i}: a"),
+            da,
+            s.a_mm,
+            "mm",
+            format!(
+                "frame {j} (on axis {j}) sits {:.2} +- {:.2} mm from its design position along Z_phi{i}, the direction from axis {i} towards axis {j}",
+                da, s.a_mm
+            ),
+        ));
+        let db = (r.b_m - n.b_m) * 1e3;
+        out.push(finding(
+            format!("row {i}: b"),
+            db,
+            s.b_mm,
+            "mm",
+            format!(
+                "the common normal from Z_phi{i} to axis {j} is {:.2} +- {:.2} mm {} than designed",
+                db.abs(),
+                s.b_mm,
+                if db >= 0.0 { "longer" } else { "shorter" }
+            ),
+        ));
+        let dalpha = r.alpha_deg - n.alpha_deg;
+        out.push(finding(
+            format!("row {i}: alpha"),
+            dalpha,
+            s.alpha_deg,
+            "deg",
+            format!(
+                "axis {j} is tilted {:.3} +- {:.3} deg from its designed angle about the common normal",
+                dalpha, s.alpha_deg
+            ),
+        ));
+        let dbeta = r.beta_deg - n.beta_deg;
+        out.push(finding(
+            format!("row {i}: beta"),
+            dbeta,
+            s.beta_deg,
+            "deg",
+            format!(
+                "axis {j} is turned {:.3} +- {:.3} deg about Z_phi{i} from its designed direction (joint-{i} zero and axis misalignment)",
+                dbeta, s.beta_deg
+            ),
+        ));
+    }
+    for (k, j) in cal.robot.joints.iter().enumerate() {
+        let off = j.transducer_offset.to_degrees();
+        out.push(finding(
+            format!("joint {}: zero offset", k + 1),
+            off,
+            f64::NAN,
+            "deg",
+            format!(
+                "joint {} reads {:.3} deg off its calibrated zero at the reference pose",
+                k + 1,
+                off
+            ),
+        ));
+    }
+    for a in &cal.axes {
+        let (sin, cos) = match &a.transmission {
+            Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => (sin.clone(), cos.clone()),
+        };
+        // A gear's coefficients are in gear units: N times them in joint units.
+        let to_joint = match &a.transmission {
+            Transmission::Gear { ratio, .. } => *ratio,
+            Transmission::Harmonic { .. } => 1.0,
+        };
+        for (h, (s, c)) in sin.iter().zip(&cos).enumerate() {
+            let amp = to_joint * (s * s + c * c).sqrt();
+            let sig = to_joint
+                * a.coefficient_sigma
+                    .get(h)
+                    .copied()
+                    .unwrap_or(f64::NAN)
+                    .max(a.coefficient_sigma.get(sin.len() + h).copied().unwrap_or(f64::NAN));
+            let per = match &a.transmission {
+                Transmission::Gear { ratio, .. } => format!("per {:.3} joint turns", ratio / (h + 1) as f64),
+                Transmission::Harmonic { .. } => format!("{} times per turn", h + 1),
+            };
+            out.push(finding(
+                format!("joint {} transmission harmonic {}", a.joint, h + 1),
+                amp * 1e3,
+                sig * 1e3,
+                "mrad",
+                format!(
+                    "joint {} lags or leads its command by up to {:.2} +- {:.2} mrad, {} (sin {:+.6}, cos {:+.6} rad)",
+                    a.joint,
+                    amp * 1e3,
+                    sig * 1e3,
+                    per,
+                    s,
+                    c
+                ),
+            ));
+        }
+    }
+    for c in &cal.couplings {
+        let rms = c.residual_rms_rad * 1e3;
+        let params: Vec<String> = c
+            .parameter_names
+            .iter()
+            .zip(c.parameters.iter().zip(&c.sigma))
+            .map(|(n, (p, s))| format!("{n} = {p:+.6} +- {s:.6}"))
+            .collect();
+        out.push(finding(
+            format!("coupling {}->{}", c.from, c.to),
+            rms,
+            f64::NAN,
+            "mrad",
+            format!(
+                "passive motion {}->{} fitted as {}; residual {:.3} mrad RMS",
+                c.from,
+                c.to,
+                params.join(", "),
+                rms
+            ),
+        ));
+    }
+    out
+}
+
+/// The report as Markdown.
+pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Calibration of {}\n", desc.name);
+    let _ = writeln!(
+        s,
+        "Data: `{source}`. Estimator: `{:?}`; noise assumed {:.3} mm 3-D RMS.\n",
+        cal.options.estimator, cal.options.noise_rms_3d_mm
+    );
+    let _ = writeln!(s, "## Axes (instrument frame)\n");
+    let _ = writeln!(
+        s,
+        "| joint | experiment | points | span (deg) | point (mm) | direction | dir 1-sigma (mrad) | pos 1-sigma (mm) | residual RMS (mm) |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+    for a in &cal.axes {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.1} | ({:.2}, {:.2}, {:.2}) | ({:.6}, {:.6}, {:.6}) | {:.3} | {:.3} | {:.3} |",
+            a.joint,
+            a.experiment,
+            a.points,
+            a.span_deg,
+            a.point_mm[0],
+            a.point_mm[1],
+            a.point_mm[2],
+            a.direction[0],
+            a.direction[1],
+            a.direction[2],
+            a.direction_sigma_rad[0] * 1e3,
+            a.position_sigma_mm[0],
+            a.residual_rms_mm
+        );
+    }
+    let _ = writeln!(s, "\n## Phi-model parameters (Table 2 form)\n");
+    let _ = writeln!(
+        s,
+        "| row | nominal a, b (m); alpha, beta (deg) | calibrated a (m) | b (m) | alpha (deg) | beta (deg) |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for (k, ((r, n), sg)) in cal.robot.rows.iter().zip(&desc.rows).zip(&cal.row_sigma).enumerate() {
+        let _ = writeln!(
+            s,
+            "| {} | {}, {}; {}, {} | {:.5} +- {:.5} | {:.5} +- {:.5} | {:.4} +- {:.4} | {:.4} +- {:.4} |",
+            k + 1,
+            n.a_m,
+            n.b_m,
+            n.alpha_deg,
+            n.beta_deg,
+            r.a_m,
+            sg.a_mm * 1e-3,
+            r.b_m,
+            sg.b_mm * 1e-3,
+            r.alpha_deg,
+            sg.alpha_deg,
+            r.beta_deg,
+            sg.beta_deg
+        );
+    }
+    if let Some(t) = &cal.tool {
+        let _ = writeln!(
+            s,
+            "\nTool frame from the three tool targets of `{}` step {} (fit RMS {:.3} mm).",
+            t.experiment, t.step, t.fit_rms_mm
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "\nNo tool observation at the reference pose: the tool frame is the nominal one."
+        );
+    }
+    let all = findings(cal, desc);
+    let _ = writeln!(
+        s,
+        "\n## Findings (resolved by the data: > {SIGNIFICANT_SIGMAS} sigma)\n"
+    );
+    for f in all.iter().filter(|f| f.significant) {
+        let _ = writeln!(s, "- {}", f.text);
+    }
+    let _ = writeln!(s, "\n## Not resolved by the data (< {SIGNIFICANT_SIGMAS} sigma)\n");
+    for f in all.iter().filter(|f| !f.significant) {
+        let _ = writeln!(s, "- {}", f.text);
+    }
+    let _ = writeln!(s, "\n## Identifiability\n");
+    for a in &cal.axes {
+        let _ = writeln!(s, "- joint {}: condition number {:.3e}", a.joint, a.condition_number);
+        for note in &a.identifiability {
+            let _ = writeln!(s, "  - {note}");
+        }
+    }
+    s
+}
