@@ -2,7 +2,7 @@
 CARGO ?= cargo
 OUT   ?= results/paper
 
-.PHONY: run test bench lint doc clean-results
+.PHONY: run test bench study lint doc clean-results
 
 ## run: the paper scenario end to end; results under results/
 run:
@@ -12,6 +12,11 @@ run:
 test:
 	$(CARGO) test --all-targets
 	$(CARGO) test --doc
+
+## study: the calibrator's efficiency against the Cramer-Rao bound (ML and the paper's
+## estimator) and the calibration of its reported sigmas, 2000 simulated campaigns
+study:
+	$(CARGO) run --release -- study --trials 2000 --seed 1 --out results/study --force
 
 ## bench: criterion benchmarks (ratios against an in-run baseline)
 bench:

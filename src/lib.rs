@@ -8,3 +8,4 @@ pub mod kinematics;
 pub mod measurement;
 pub mod robot;
 pub mod sim;
+pub mod studies;

@@ -2,6 +2,7 @@
 
 mod calibrate;
 mod simulate;
+mod study;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -18,6 +19,9 @@ struct Cli {
 enum Command {
     /// Calibrate a robot from a measurement CSV (axes, transmissions, couplings, offsets).
     Calibrate(calibrate::Args),
+    /// Monte-Carlo study of the calibrator: efficiency against the Cramer-Rao bound (ML and the
+    /// paper's estimator) and the calibration of the reported uncertainties.
+    Study(study::Args),
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
 }
@@ -33,6 +37,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Calibrate(args) => calibrate::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::Study(args) => study::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,48 @@
+//! `axiscal study`: the calibrator's efficiency against the Cramer-Rao bound and the
+//! calibration of its reported uncertainty, over many simulated campaigns.
+
+use super::calibrate::write_output;
+use anyhow::{Context, Result};
+use axiscal::studies::EfficiencyStudy;
+use std::path::PathBuf;
+
+/// Arguments of `axiscal study`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Number of simulated campaigns.
+    #[arg(long, default_value_t = 200)]
+    trials: usize,
+    /// Study seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Measurement noise, 3-D RMS \[mm\].
+    #[arg(long, default_value_t = 0.19)]
+    noise_mm: f64,
+    /// Output folder (`efficiency.json`, `efficiency.md`).
+    #[arg(long, default_value = "results/study")]
+    out: PathBuf,
+    /// Replace existing output files.
+    #[arg(long)]
+    force: bool,
+}
+
+/// Runs `axiscal study`.
+pub fn run(args: Args) -> Result<()> {
+    let study = EfficiencyStudy {
+        trials: args.trials,
+        seed: args.seed,
+        noise_rms_3d_mm: args.noise_mm,
+    };
+    let report = study.run()?;
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let md = report.markdown();
+    write_output(
+        &args.out,
+        "efficiency.json",
+        &serde_json::to_string_pretty(&report)?,
+        args.force,
+    )?;
+    write_output(&args.out, "efficiency.md", &md, args.force)?;
+    print!("{md}");
+    Ok(())
+}
