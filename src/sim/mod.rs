@@ -15,10 +15,12 @@
 
 mod arm;
 mod convert;
+mod four_bar;
 mod servo;
 mod visibility;
 pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg};
 
+pub use four_bar::FourBarBodies;
 pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
 pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport};
 
