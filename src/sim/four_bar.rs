@@ -109,7 +109,9 @@ impl FourBarBodies {
                 .can_sleep(false),
         );
         let crank = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-            .local_frame1(pose_to_glam(&(parent_from_frame * Isometry3::from_parts(Default::default(), r))))
+            .local_frame1(pose_to_glam(
+                &(parent_from_frame * Isometry3::from_parts(Default::default(), r)),
+            ))
             .local_frame2(pose_to_glam(&Isometry3::from_parts(Default::default(), r)))
             .contacts_enabled(false)
             .build();
@@ -119,12 +121,18 @@ impl FourBarBodies {
             .ok_or(SimError::JointRejected { joint: a })?;
         let rod_body = world.insert_body(
             RigidBodyBuilder::dynamic()
-                .pose(pose_to_glam(&(world_from_frame * Isometry3::translation(crank_tip.x, crank_tip.y, crank_tip.z))))
+                .pose(pose_to_glam(
+                    &(world_from_frame * Isometry3::translation(crank_tip.x, crank_tip.y, crank_tip.z)),
+                ))
                 .additional_mass_properties(bar_mass(1.0, g.rod_m, Vector3::x(), Point3::origin()))
                 .can_sleep(false),
         );
         let rod = GenericJointBuilder::new(JointAxesMask::LOCKED_SPHERICAL_AXES)
-            .local_frame1(pose_to_glam(&Isometry3::translation(crank_tip.x, crank_tip.y, crank_tip.z)))
+            .local_frame1(pose_to_glam(&Isometry3::translation(
+                crank_tip.x,
+                crank_tip.y,
+                crank_tip.z,
+            )))
             .contacts_enabled(false)
             .build();
         let rod_joint = world
@@ -274,7 +282,12 @@ impl FourBarBodies {
         link.joint
             .data
             .set_motor_model(JointAxis::AngX, MotorModel::ForceBased)
-            .set_motor_position(JointAxis::AngX, crank_target_rad, stiffness_nm_per_rad, damping_nms_per_rad);
+            .set_motor_position(
+                JointAxis::AngX,
+                crank_target_rad,
+                stiffness_nm_per_rad,
+                damping_nms_per_rad,
+            );
         Ok(())
     }
 }
