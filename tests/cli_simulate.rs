@@ -45,7 +45,7 @@ fn simulate_writes_a_table1_campaign_the_reader_accepts() {
     // Same seed, same file, bit for bit; refuses to overwrite without --force.
     let again = dir.path().join("again.csv");
     axiscal()
-        .args(["simulate", "--seed", "3", "--out"])
+        .args(["simulate", "--sim", "analytic", "--seed", "3", "--out"])
         .arg(&again)
         .assert()
         .success();
