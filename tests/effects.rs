@@ -11,6 +11,9 @@ use nalgebra::{Isometry3, Point3};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 
+/// One simulated arm: commands and conditions to link poses.
+type Exec = dyn FnMut(&[f64], &PoseConditions) -> Vec<Isometry3<f64>>;
+
 const CMD: [f64; 6] = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
 
 fn truth() -> (RobotDescription, TruthRobot) {
@@ -22,7 +25,7 @@ fn truth() -> (RobotDescription, TruthRobot) {
     (desc, t)
 }
 
-fn arms(effects: &Effects) -> Vec<Box<dyn FnMut(&[f64], &PoseConditions) -> Vec<Isometry3<f64>>>> {
+fn arms(effects: &Effects) -> Vec<Box<Exec>> {
     let (desc, t) = truth();
     let mut a = AnalyticArm::new(t.clone(), Controller::from_description(&desc)).with_effects(effects.clone(), &desc);
     let mut r = RapierArm::new(t, &desc, effects.clone(), RapierArmOptions::new(6));
@@ -82,7 +85,7 @@ fn backlash_separates_the_two_approach_directions_by_the_band() {
     };
     let target = Point3::new(0.08, 0.0, 0.15);
     for mut exec in arms(&effects) {
-        let at = |exec: &mut dyn FnMut(&[f64], &PoseConditions) -> Vec<Isometry3<f64>>, from: f64| {
+        let at = |exec: &mut Exec, from: f64| {
             let mut c = CMD;
             c[5] = from;
             exec(&c, &PoseConditions::default());

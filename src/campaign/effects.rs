@@ -459,7 +459,7 @@ impl JointDriver {
         let mut active = self.truth.active_displacements(&u)?;
         if let Some(last) = &self.last_cmd {
             for ((dir, c), l) in self.approach.iter_mut().zip(cmd).zip(last) {
-                if c != l {
+                if (c - l).abs() > 0.0 {
                     *dir = (c - l).signum();
                 }
             }
