@@ -13,7 +13,7 @@ fn simulate_writes_a_table1_campaign_the_reader_accepts() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("campaign.csv");
     axiscal()
-        .args(["simulate", "--seed", "3", "--out"])
+        .args(["simulate", "--sim", "analytic", "--seed", "3", "--out"])
         .arg(&out)
         .assert()
         .success();
@@ -50,7 +50,7 @@ fn simulate_writes_a_table1_campaign_the_reader_accepts() {
     // Same seed, same file, bit for bit; refuses to overwrite without --force.
     let again = dir.path().join("again.csv");
     axiscal()
-        .args(["simulate", "--seed", "3", "--out"])
+        .args(["simulate", "--sim", "analytic", "--seed", "3", "--out"])
         .arg(&again)
         .assert()
         .success();
@@ -86,4 +86,20 @@ fn bad_robot_file_is_exit_code_2_naming_file_and_field() {
         "{stderr}"
     );
     assert_eq!(stderr.lines().filter(|l| l.starts_with("error")).count(), 1, "{stderr}");
+}
+
+/// The rapier arm (the default) hides targets behind the link capsules: the CLI reports the
+/// occlusion counts and, with `--report-spans`, one largest-visible-span line per experiment.
+#[test]
+fn simulate_on_rapier_reports_occlusions_and_spans() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("campaign.csv");
+    let assert = axiscal()
+        .args(["simulate", "--report-spans", "--seed", "3", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    let stdout = String::from_utf8_lossy(&assert.get_output().stdout).to_string();
+    assert!(stdout.contains("occluded target observations:"), "{stdout}");
+    assert_eq!(stdout.matches("span axis").count(), 6, "{stdout}");
 }

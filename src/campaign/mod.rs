@@ -1,11 +1,19 @@
 //! Measurement campaigns: the plan of axis experiments (Table 1) and validation poses.
 
 mod analytic_arm;
+mod effects;
 mod plan;
 mod simulate;
 mod validation;
 
 pub use analytic_arm::AnalyticArm;
+pub use effects::{
+    AxisWobble, BacklashEffect, ComplianceEffect, DrivenJoints, Effects, EffectsError, GearHarmonic, InstrumentScale,
+    JointDriver, LinkMass, PayloadEffect, ThermalEffect, first_order_deflection,
+};
 pub use plan::{AxisSweep, CalibrationPlan, PlanError, commands_to_internal};
-pub use simulate::{ArmExecutor, CampaignError, CampaignOutput, ExecuteError, PoseConditions, simulate_campaign};
+pub use simulate::{
+    ArmExecutor, CampaignError, CampaignOptions, CampaignOutput, ExecuteError, PoseConditions, simulate_campaign,
+    simulate_campaign_with,
+};
 pub use validation::ValidationPlan;

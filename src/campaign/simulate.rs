@@ -2,6 +2,7 @@
 //! the validation poses, each target measured by an instrument, to measurement rows
 //! (FORMATS.md section 1).
 
+use super::effects::InstrumentScale;
 use super::plan::{CalibrationPlan, PlanError, commands_to_internal};
 use super::validation::ValidationPlan;
 use crate::measurement::{Measurement, MeasurementModel, TriangulationError};
@@ -92,8 +93,18 @@ pub enum CampaignError {
     },
 }
 
+/// Campaign-wide settings beyond the plan.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CampaignOptions {
+    /// Conditions of every pose (payload, temperature).
+    pub conditions: PoseConditions,
+    /// The instrument's scale error, if any: measured coordinates are scaled about the
+    /// instrument origin after the measurement noise.
+    pub instrument_scale: Option<InstrumentScale>,
+}
+
 /// Runs the axis experiments of `plan` then the validation poses on `arm`, measuring with
-/// `instrument`. Deterministic for a given `rng` state.
+/// `instrument`, every pose under default conditions. Deterministic for a given `rng` state.
 pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
     desc: &RobotDescription,
     plan: &CalibrationPlan,
@@ -102,9 +113,34 @@ pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
     instrument: &MeasurementModel,
     rng: &mut R,
 ) -> Result<CampaignOutput, CampaignError> {
+    simulate_campaign_with(
+        desc,
+        plan,
+        validation,
+        arm,
+        instrument,
+        &CampaignOptions::default(),
+        rng,
+    )
+}
+
+/// [`simulate_campaign`] with explicit pose conditions and instrument scale error.
+pub fn simulate_campaign_with<A: ArmExecutor, R: Rng + ?Sized>(
+    desc: &RobotDescription,
+    plan: &CalibrationPlan,
+    validation: &ValidationPlan,
+    arm: &mut A,
+    instrument: &MeasurementModel,
+    options: &CampaignOptions,
+    rng: &mut R,
+) -> Result<CampaignOutput, CampaignError> {
     plan.validate(desc)?;
     let mut out = CampaignOutput::default();
-    let conditions = PoseConditions::default();
+    let conditions = options.conditions;
+    let instrument = Instrument {
+        model: instrument,
+        scale: options.instrument_scale,
+    };
     for sweep in &plan.sweeps {
         let experiment = format!("axis{}", sweep.joint);
         let targets = desc
@@ -122,7 +158,7 @@ pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
                 record(
                     &mut out,
                     arm,
-                    instrument,
+                    &instrument,
                     rng,
                     &experiment,
                     sweep.joint,
@@ -140,7 +176,7 @@ pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
         &mut out,
         desc,
         arm,
-        instrument,
+        &instrument,
         rng,
         "tool",
         0,
@@ -152,7 +188,7 @@ pub fn simulate_campaign<A: ArmExecutor, R: Rng + ?Sized>(
             &mut out,
             desc,
             arm,
-            instrument,
+            &instrument,
             rng,
             "validation",
             step,
@@ -169,7 +205,7 @@ fn observe_tool<A: ArmExecutor, R: Rng + ?Sized>(
     out: &mut CampaignOutput,
     desc: &RobotDescription,
     arm: &mut A,
-    instrument: &MeasurementModel,
+    instrument: &Instrument<'_>,
     rng: &mut R,
     experiment: &str,
     step: usize,
@@ -196,11 +232,17 @@ fn observe_tool<A: ArmExecutor, R: Rng + ?Sized>(
     Ok(())
 }
 
+/// The measurement model with its (optional) scale error.
+struct Instrument<'a> {
+    model: &'a MeasurementModel,
+    scale: Option<InstrumentScale>,
+}
+
 #[allow(clippy::too_many_arguments)]
 fn record<A: ArmExecutor, R: Rng + ?Sized>(
     out: &mut CampaignOutput,
     arm: &A,
-    instrument: &MeasurementModel,
+    instrument: &Instrument<'_>,
     rng: &mut R,
     experiment: &str,
     moved_joint: usize,
@@ -218,14 +260,18 @@ fn record<A: ArmExecutor, R: Rng + ?Sized>(
         return Ok(());
     }
     let m = instrument
+        .model
         .measure(&point_m, rng)
         .map_err(|source| CampaignError::Measure {
             experiment: experiment.to_owned(),
             step,
             target,
             source,
-        })?
-        * 1e3;
+        })?;
+    let m = match instrument.scale {
+        Some(s) => m * (1.0 + s.ppm * 1e-6),
+        None => m,
+    } * 1e3;
     out.rows.push(Measurement {
         experiment: experiment.to_owned(),
         moved_joint,

@@ -2,9 +2,13 @@
 //! written as a measurement CSV (FORMATS.md section 1).
 
 use anyhow::{Context, Result};
-use axiscal::campaign::{AnalyticArm, CalibrationPlan, ValidationPlan, simulate_campaign};
+use axiscal::campaign::{
+    AnalyticArm, ArmExecutor, CalibrationPlan, CampaignOptions, CampaignOutput, Effects, ValidationPlan,
+    simulate_campaign_with,
+};
 use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements};
 use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::sim::{ArmOptions, LinkPoint, RapierArm, RapierArmOptions, SimArm, SpanSearch, visible_span_deg};
 use rand::{SeedableRng, rngs::StdRng};
 use std::path::PathBuf;
 
@@ -28,12 +32,29 @@ pub struct Args {
     /// Seed of the measurement and repeatability noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// The simulated robot: the rapier rigid-body arm (line of sight, compliance) or the
+    /// analytic truth model.
+    #[arg(long, value_enum, default_value_t = Sim::Rapier)]
+    sim: Sim,
+    /// Unmodelled effects (TOML, see `campaign::Effects`).
+    #[arg(long)]
+    effects: Option<PathBuf>,
+    /// Print the largest visible span of each axis experiment's targets (rapier arm, the
+    /// instrument's stations), centred on the plan's reference pose.
+    #[arg(long)]
+    report_spans: bool,
     /// Output CSV.
     #[arg(long)]
     out: PathBuf,
     /// Replace `--out` if it exists (otherwise an existing file is an error).
     #[arg(long)]
     force: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Sim {
+    Rapier,
+    Analytic,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -62,10 +83,34 @@ pub fn run(args: Args) -> Result<()> {
         poses: args.validation_poses,
         ..ValidationPlan::workspace_default(desc.dof())
     };
-    let mut arm = AnalyticArm::new(truth, Controller::from_description(&desc));
+    let effects = match &args.effects {
+        Some(path) => Effects::from_file(path, desc.dof())?,
+        None => Effects::default(),
+    };
+    let options = CampaignOptions {
+        instrument_scale: effects.instrument_scale,
+        ..CampaignOptions::default()
+    };
+    if args.report_spans {
+        report_spans(&desc, &truth, &plan, &instrument)?;
+    }
+    let name = truth.name.clone();
     let mut rng = StdRng::seed_from_u64(args.seed);
-    let out = simulate_campaign(&desc, &plan, &validation, &mut arm, &instrument, &mut rng)
-        .with_context(|| format!("simulating the campaign on {}", arm.truth().name))?;
+    let out = match args.sim {
+        Sim::Analytic => {
+            let mut arm = AnalyticArm::new(truth, Controller::from_description(&desc)).with_effects(effects, &desc);
+            run_campaign(&desc, &plan, &validation, &mut arm, &instrument, &options, &mut rng)
+        }
+        Sim::Rapier => {
+            let rapier_options = RapierArmOptions {
+                stations_m: instrument.stations_m(),
+                ..RapierArmOptions::new(desc.dof())
+            };
+            let mut arm = RapierArm::new(truth, &desc, effects, rapier_options);
+            run_campaign(&desc, &plan, &validation, &mut arm, &instrument, &options, &mut rng)
+        }
+    }
+    .with_context(|| format!("simulating the campaign on {name}"))?;
     let set = MeasurementSet::new(desc.dof(), out.rows).context("assembling the measurement set")?;
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -75,7 +120,7 @@ pub fn run(args: Args) -> Result<()> {
         "wrote {} ({} rows) simulated on {}",
         args.out.display(),
         set.rows().len(),
-        arm.truth().name
+        name
     );
     for e in set.experiments() {
         let steps = e.by_step().len();
@@ -88,8 +133,61 @@ pub fn run(args: Args) -> Result<()> {
             targets.len()
         );
     }
+    let total: usize = out.occluded.iter().map(|(_, n)| n).sum();
+    println!("  occluded target observations: {total}");
     for (experiment, n) in &out.occluded {
         println!("  {experiment}: {n} target observation(s) occluded");
+    }
+    Ok(())
+}
+
+fn run_campaign<A: ArmExecutor>(
+    desc: &RobotDescription,
+    plan: &CalibrationPlan,
+    validation: &ValidationPlan,
+    arm: &mut A,
+    instrument: &MeasurementModel,
+    options: &CampaignOptions,
+    rng: &mut StdRng,
+) -> Result<CampaignOutput> {
+    Ok(simulate_campaign_with(
+        desc, plan, validation, arm, instrument, options, rng,
+    )?)
+}
+
+/// One line per axis experiment: the largest span, symmetric about the reference pose, over
+/// which every target of the experiment stays visible from every station (how the paper chose
+/// its Table 1 spans), next to the planned span.
+fn report_spans(
+    desc: &RobotDescription,
+    truth: &TruthRobot,
+    plan: &CalibrationPlan,
+    instrument: &MeasurementModel,
+) -> Result<()> {
+    let stations = instrument.stations_m();
+    let mut arm = SimArm::from_description(&truth.model(), desc, &ArmOptions::new(desc.dof()))?;
+    let centre = axiscal::campaign::commands_to_internal(desc, &plan.reference);
+    let q = Controller::from_description(desc);
+    let q_centre = truth.joint_values(&q, &centre)?;
+    for sweep in &plan.sweeps {
+        let k = sweep.joint - 1;
+        let [lo, hi] = desc.limits_internal(k);
+        let search = SpanSearch {
+            max_half_span_deg: (q_centre[k] - lo).min(hi - q_centre[k]).to_degrees().max(0.0),
+            ..SpanSearch::default()
+        };
+        let Some(targets) = desc.axis_targets_of(sweep.joint) else {
+            continue;
+        };
+        let mut span_deg = f64::INFINITY;
+        for t in std::iter::once(targets.target0).chain(targets.target1.filter(|_| sweep.second_target)) {
+            let point = LinkPoint::from_target(&t);
+            span_deg = span_deg.min(visible_span_deg(&mut arm, &q_centre, k, &point, &stations, &search)?);
+        }
+        println!(
+            "  span axis{}: largest visible {:.1} deg (planned {:.1} deg)",
+            sweep.joint, span_deg, sweep.span
+        );
     }
     Ok(())
 }

@@ -77,8 +77,11 @@ pub struct ArmOptions {
     /// of their own link, or line of sight will find them hidden (the shipped IRB/L6 joint-2
     /// target sits 60 mm off the upper arm's axis, so radii up to about 55 mm).
     pub link_radius_m: Vec<f64>,
-    /// Payload point mass at the tool-frame origin \[kg\] (0 for none).
+    /// Payload point mass \[kg\] (0 for none).
     pub payload_kg: f64,
+    /// Where the payload sits in the last link's moving frame \[m\]; `None`: the tool-frame
+    /// origin.
+    pub payload_in_last_link_m: Option<Point3<f64>>,
     /// Gravity in the world frame \[m/s^2\].
     pub gravity_m_s2: Vector3<f64>,
 }
@@ -89,6 +92,7 @@ impl ArmOptions {
         Self {
             link_radius_m: vec![0.05; dof],
             payload_kg: 0.0,
+            payload_in_last_link_m: None,
             gravity_m_s2: Vector3::new(0.0, 0.0, -9.81),
         }
     }
@@ -194,7 +198,9 @@ impl SimArm {
             let segment = link_segment(model, k);
             let mut mprops = link_mass_properties(inertia, segment, options.link_radius_m[k]);
             if k + 1 == n && options.payload_kg > 0.0 {
-                let tool = model.last_link_from_tool * Point3::origin();
+                let tool = options
+                    .payload_in_last_link_m
+                    .unwrap_or_else(|| model.last_link_from_tool * Point3::origin());
                 mprops += MassProperties::new(point_to_glam(&tool), options.payload_kg, Vector::ZERO);
             }
             let body = world.insert_body(

@@ -15,11 +15,15 @@
 
 mod arm;
 mod convert;
+mod four_bar;
+mod rapier_arm;
 mod servo;
 mod visibility;
 pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg};
 
 pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
+pub use four_bar::FourBarBodies;
+pub use rapier_arm::{RapierArm, RapierArmOptions};
 pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport};
 
 /// A problem building or running the simulated arm.

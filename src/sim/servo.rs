@@ -142,6 +142,33 @@ impl SimArm {
         Ok(())
     }
 
+    /// Sets one joint's (0-based) force-based position motor; stiffness and damping 0 turn it
+    /// off (a passive joint).
+    pub fn set_joint_motor(
+        &mut self,
+        k: usize,
+        target: f64,
+        stiffness_nm_per_rad: f64,
+        damping_nms_per_rad: f64,
+    ) -> Result<(), SimError> {
+        let axis = match self.model.joints.get(k).map(|j| j.kind) {
+            Some(crate::kinematics::JointKind::Revolute) => JointAxis::AngX,
+            Some(crate::kinematics::JointKind::Prismatic) => JointAxis::LinX,
+            None => return Err(SimError::JointRejected { joint: k }),
+        };
+        let Some((mb, id)) = self.world.multibody_joints.get_mut(self.joints[k]) else {
+            return Err(SimError::JointRejected { joint: k });
+        };
+        let Some(link) = mb.link_mut(id) else {
+            return Err(SimError::JointRejected { joint: k });
+        };
+        link.joint
+            .data
+            .set_motor_model(axis, MotorModel::ForceBased)
+            .set_motor_position(axis, target, stiffness_nm_per_rad, damping_nms_per_rad);
+        Ok(())
+    }
+
     /// Steps the dynamics until every watched point (the tool-frame origin and `watch`) moves
     /// slower than `options.speed_tolerance_m_s` for `options.quiet_steps` steps in a row.
     pub fn settle(&mut self, watch: &[LinkPoint], options: &SettleOptions) -> Result<SettleReport, SimError> {

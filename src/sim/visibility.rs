@@ -126,13 +126,16 @@ mod tests {
         [Point3::origin(), Point3::new(-6.2846, 0.0, 0.0)]
     }
 
-    /// The joint-2 target: 450 mm up the upper arm, 60 mm out along link 2's Z (the world +X
-    /// at q = 0), i.e. 10 mm off the 50 mm capsule. Joint 1 turns that offset about the
-    /// vertical: at -90 deg it faces the stations, at +90 deg it hides behind the upper arm.
+    /// A target 450 mm up the upper arm, 60 mm out along link 2's Z (the world +X at q = 0),
+    /// i.e. 10 mm off the 50 mm capsule. Joint 1 turns that offset about the vertical: at
+    /// -90 deg it faces the stations, at +90 deg it hides behind the upper arm.
     fn arm_and_target() -> (SimArm, LinkPoint) {
         let d = RobotDescription::asea_irb6l();
         let arm = SimArm::from_description(&d.nominal_model(), &d, &ArmOptions::new(6)).expect("valid arm");
-        let target = LinkPoint::from_target(&d.axis_targets_of(2).expect("joint 2 targets").target0);
+        let target = LinkPoint {
+            link: 1,
+            position_in_link_m: Point3::new(-0.45, 0.0, 0.06),
+        };
         (arm, target)
     }
 

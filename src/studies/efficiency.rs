@@ -167,13 +167,11 @@ fn actuator_commands(e: &AxisExperiment, desc: &RobotDescription, controller: &C
         .collect()
 }
 
-/// The paper's estimator on one sweep: eqs. (1)-(5), then (6)-(8). Returns the axis and the
-/// transmission coefficients.
-fn paper_fit(
-    points: &[Point3<f64>],
-    u: &[f64],
-    form: &TransmissionForm,
-) -> Result<(Unit<nalgebra::Vector3<f64>>, Point3<f64>, Vec<f64>), CalibrationError> {
+/// An axis direction, a point on it, and transmission coefficients.
+type AxisEstimate = (Unit<nalgebra::Vector3<f64>>, Point3<f64>, Vec<f64>);
+
+/// The paper's estimator on one sweep: eqs. (1)-(5), then (6)-(8).
+fn paper_fit(points: &[Point3<f64>], u: &[f64], form: &TransmissionForm) -> Result<AxisEstimate, CalibrationError> {
     let circle = fit_circle(points)?;
     let fit = fit_axis_paper(points, Some(&circle.normal), 100)?;
     let mut d = fit.axis.direction;

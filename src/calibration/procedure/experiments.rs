@@ -3,7 +3,7 @@
 //! every other joint is held at (FORMATS.md sections 1-2).
 
 use super::ProcedureError;
-use crate::measurement::{Measurement, MeasurementSet};
+use crate::measurement::MeasurementSet;
 use crate::robot::RobotDescription;
 use nalgebra::Point3;
 
@@ -18,12 +18,16 @@ pub struct AxisExperiment {
     pub name: String,
     /// The swept joint (1-based).
     pub joint: usize,
-    /// Commands per step (file units).
+    /// Commands of every observed step, in step order (file units).
     pub commands: Vec<Vec<f64>>,
-    /// Target 0 per step \[m\], instrument frame.
+    /// Target 0 where it was seen \[m\], instrument frame (an occluded target is absent).
     pub target0_m: Vec<Point3<f64>>,
-    /// Target 1 per step \[m\], when observed at every step.
-    pub target1_m: Option<Vec<Point3<f64>>>,
+    /// Indices into `commands` of the `target0_m` observations.
+    pub target0_steps: Vec<usize>,
+    /// Target 1 where it was seen \[m\].
+    pub target1_m: Vec<Point3<f64>>,
+    /// Indices into `commands` of the `target1_m` observations.
+    pub target1_steps: Vec<usize>,
     /// Whether the commands hold actuator `joint + 1` still (the joint-`joint+1` command
     /// follows the nominal coupling slope).
     pub holds_next_still: bool,
@@ -46,22 +50,15 @@ pub fn axis_experiments(
             });
         }
         let by_step = e.by_step();
-        let mut commands = Vec::new();
-        let (mut t0, mut t1) = (Vec::new(), Vec::new());
+        let mut commands: Vec<Vec<f64>> = Vec::new();
+        let (mut t0, mut s0, mut t1, mut s1) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (step, rows) in &by_step {
-            let row0: Option<&&Measurement> = rows.iter().find(|r| r.target == 0);
-            let Some(row0) = row0 else {
-                return Err(ProcedureError::MissingTarget {
-                    experiment: e.name.to_string(),
-                    step: *step,
-                    target: 0,
-                });
-            };
+            let first = rows[0];
             for r in rows.iter() {
                 if let Some((k, _)) = r
                     .cmd
                     .iter()
-                    .zip(&row0.cmd)
+                    .zip(&first.cmd)
                     .enumerate()
                     .find(|(_, (a, b))| (*a - *b).abs() > COMMAND_TOLERANCE)
                 {
@@ -73,20 +70,26 @@ pub fn axis_experiments(
                     });
                 }
             }
-            commands.push(row0.cmd.clone());
-            t0.push(row0.position_m());
+            let index = commands.len();
+            commands.push(first.cmd.clone());
+            if let Some(r0) = rows.iter().find(|r| r.target == 0) {
+                t0.push(r0.position_m());
+                s0.push(index);
+            }
             if let Some(r1) = rows.iter().find(|r| r.target == 1) {
                 t1.push(r1.position_m());
+                s1.push(index);
             }
         }
         let holds_next_still = check_sweep_commands(e.name, joint, &commands, desc)?;
-        let target1_m = (t1.len() == t0.len() && !t1.is_empty()).then_some(t1);
         out.push(AxisExperiment {
             name: e.name.to_string(),
             joint,
             commands,
             target0_m: t0,
-            target1_m,
+            target0_steps: s0,
+            target1_m: t1,
+            target1_steps: s1,
             holds_next_still,
         });
     }

@@ -89,16 +89,6 @@ pub enum ProcedureError {
         /// Second experiment.
         second: String,
     },
-    /// A pose lacks a target the procedure needs.
-    #[error("experiment {experiment}, step {step}: target {target} is missing")]
-    MissingTarget {
-        /// Experiment.
-        experiment: String,
-        /// Step.
-        step: usize,
-        /// Target.
-        target: usize,
-    },
     /// The swept joint's command does not move.
     #[error("experiment {experiment}: the command of joint {joint} has zero span")]
     ZeroSpan {
@@ -121,7 +111,7 @@ pub enum ProcedureError {
     },
     /// A coupling needs a second target the experiment does not have.
     #[error(
-        "experiment {experiment}: joint {joint} drives a coupling into joint {} that must be measured, but target 1 is not observed at every step",
+        "experiment {experiment}: joint {joint} drives a coupling into joint {} that must be measured, but target 1 is seen at only {seen} step(s) (3 needed)",
         joint + 1
     )]
     SecondTargetMissing {
@@ -129,6 +119,8 @@ pub enum ProcedureError {
         experiment: String,
         /// Joint.
         joint: usize,
+        /// Steps where target 1 was seen.
+        seen: usize,
     },
     /// A fit failed.
     #[error("experiment {experiment} (joint {joint}): {source}")]
@@ -261,8 +253,9 @@ pub fn calibrate(
     for e in &experiments {
         let k = e.joint - 1;
         let u: Vec<f64> = e.commands.iter().map(|c| u_of(c)[k]).collect();
+        let u0: Vec<f64> = e.target0_steps.iter().map(|&j| u[j]).collect();
         let form = transmission_form(desc.joints[k].transmission_fit);
-        let outcome = fit_one_axis(e, &u, form, options).map_err(|source| ProcedureError::Fit {
+        let outcome = fit_one_axis(e, &u0, form, options).map_err(|source| ProcedureError::Fit {
             experiment: e.name.clone(),
             joint: e.joint,
             source,
@@ -418,12 +411,14 @@ fn coupling_into(
     let Some(form) = form else {
         return Ok(Some(nominal));
     };
-    let Some(second) = &e.target1_m else {
+    if e.target1_m.len() < 3 {
         return Err(ProcedureError::SecondTargetMissing {
             experiment: e.name.clone(),
             joint: from,
+            seen: e.target1_m.len(),
         });
-    };
+    }
+    let second = &e.target1_m;
     if !e.holds_next_still {
         return Err(ProcedureError::InconsistentCommands {
             experiment: e.name.clone(),
@@ -437,7 +432,8 @@ fn coupling_into(
         joint: from,
         source,
     };
-    let (fit_from, u) = &fits[k - 1];
+    let (fit_from, u_all) = &fits[k - 1];
+    let u: Vec<f64> = e.target1_steps.iter().map(|&j| u_all[j]).collect();
     let active: Vec<f64> = u
         .iter()
         .map(|&uj| fit_from.transmission.actual_from_command(uj).map(|t| t + shift[k - 1]))

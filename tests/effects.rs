@@ -1,0 +1,160 @@
+//! Each unmodelled effect moves the measured targets in the direction and by the size its
+//! model predicts, on the analytic and the rapier arm.
+
+use axiscal::campaign::{
+    AnalyticArm, ArmExecutor, AxisWobble, BacklashEffect, ComplianceEffect, Effects, PayloadEffect, PoseConditions,
+    ThermalEffect,
+};
+use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::sim::{RapierArm, RapierArmOptions};
+use nalgebra::{Isometry3, Point3};
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+
+/// One simulated arm: commands and conditions to link poses.
+type Exec = dyn FnMut(&[f64], &PoseConditions) -> Vec<Isometry3<f64>>;
+
+const CMD: [f64; 6] = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
+
+fn truth() -> (RobotDescription, TruthRobot) {
+    let desc = RobotDescription::asea_irb6l();
+    let mut t = TruthRobot::paper_robot();
+    for j in &mut t.joints {
+        j.repeatability_sigma = 0.0;
+    }
+    (desc, t)
+}
+
+fn arms(effects: &Effects) -> Vec<Box<Exec>> {
+    let (desc, t) = truth();
+    let mut a = AnalyticArm::new(t.clone(), Controller::from_description(&desc)).with_effects(effects.clone(), &desc);
+    let mut r = RapierArm::new(t, &desc, effects.clone(), RapierArmOptions::new(6));
+    let mut rng = StdRng::seed_from_u64(1);
+    let mut rng2 = StdRng::seed_from_u64(1);
+    vec![
+        Box::new(move |c, p| a.execute(c, p, &mut rng).unwrap()),
+        Box::new(move |c, p| r.execute(c, p, &mut rng2).unwrap()),
+    ]
+}
+
+/// Thermal: all frame origins scale about the base origin (a, b scaled, angles kept), so the
+/// wrist-frame origin's distance from axis 1 grows by exactly alpha dT L.
+#[test]
+fn thermal_expansion_grows_the_reach_by_alpha_dt_l() {
+    let effects = Effects {
+        thermal: Some(ThermalEffect {
+            alpha_per_k: 1.2e-5,
+            reference_c: 20.0,
+        }),
+        ..Effects::default()
+    };
+    let (_, t) = truth();
+    let base = t.model().world_from_base;
+    let radius = |links: &[Isometry3<f64>]| {
+        let p = base.inverse() * (links[5] * Point3::origin());
+        p.x.hypot(p.y)
+    };
+    for mut exec in arms(&effects) {
+        let cold = radius(&exec(&CMD, &PoseConditions::default()));
+        let hot = radius(&exec(
+            &CMD,
+            &PoseConditions {
+                temperature_c: 35.0,
+                ..PoseConditions::default()
+            },
+        ));
+        let predicted = 1.2e-5 * 15.0 * cold;
+        assert!(
+            ((hot - cold) - predicted).abs() < 1e-3 * predicted,
+            "{} vs {predicted}",
+            hot - cold
+        );
+    }
+}
+
+/// Backlash: the same command approached from below and from above differs by the band at
+/// joint 6: the tool target 80 mm off axis 6 moves by band * 80 mm.
+#[test]
+fn backlash_separates_the_two_approach_directions_by_the_band() {
+    let band = 2e-3;
+    let mut bands = vec![0.0; 6];
+    bands[5] = band;
+    let effects = Effects {
+        backlash: Some(BacklashEffect { band_rad: bands }),
+        ..Effects::default()
+    };
+    let target = Point3::new(0.08, 0.0, 0.15);
+    for mut exec in arms(&effects) {
+        let at = |exec: &mut Exec, from: f64| {
+            let mut c = CMD;
+            c[5] = from;
+            exec(&c, &PoseConditions::default());
+            exec(&CMD, &PoseConditions::default())[5] * target
+        };
+        let (below, above) = (at(&mut exec, CMD[5] - 0.1), at(&mut exec, CMD[5] + 0.1));
+        let predicted = band * 0.08;
+        assert!(((below - above).norm() - predicted).abs() < 1e-3 * predicted);
+    }
+}
+
+/// Wobble, order 1, phase -90 deg: the link tilts so a point at radius r leaves the plane of
+/// its arc by + amplitude r along the axis.
+#[test]
+fn wobble_lifts_the_arc_out_of_its_plane_by_amplitude_times_radius() {
+    let amplitude = 1e-3;
+    let effects = Effects {
+        wobble: vec![AxisWobble {
+            joint: 6,
+            amplitude_rad: amplitude,
+            phase_rad: -std::f64::consts::FRAC_PI_2,
+            order: 1,
+        }],
+        ..Effects::default()
+    };
+    let target = Point3::new(0.08, 0.0, 0.0);
+    let mut plain = arms(&Effects::default());
+    for (mut exec, plain) in arms(&effects).into_iter().zip(&mut plain) {
+        let w = exec(&CMD, &PoseConditions::default())[5];
+        let n = plain(&CMD, &PoseConditions::default())[5];
+        let along_axis = (w * target - n * target).dot(&(n.rotation * nalgebra::Vector3::z()));
+        let predicted = amplitude * 0.08;
+        assert!(
+            (along_axis - predicted).abs() < 1e-2 * predicted,
+            "{along_axis} vs {predicted}"
+        );
+    }
+}
+
+/// Compliance and payload: the rapier static equilibrium and the analytic first-order
+/// deflection agree within 2 % of the sag; a payload adds to the sag.
+#[test]
+fn compliance_sag_matches_gravity_torque_over_stiffness() {
+    let mut k = vec![1e8; 6];
+    k[1] = 2e5;
+    let effects = Effects {
+        compliance: Some(ComplianceEffect {
+            stiffness_nm_per_rad: k,
+            gravity_m_s2: [0.0, 0.0, -9.81],
+        }),
+        payload: Some(PayloadEffect {
+            com_in_tool_mm: [0.0, 0.0, 100.0],
+        }),
+        ..Effects::default()
+    };
+    let conditions = PoseConditions {
+        payload_kg: 5.0,
+        ..PoseConditions::default()
+    };
+    let tool = Point3::new(0.0, 0.0, 0.15);
+    let mut rigid = arms(&Effects::default());
+    let rigid_tool = rigid[0](&CMD, &conditions)[5] * tool;
+    let mut out = Vec::new();
+    for mut exec in arms(&effects) {
+        let loaded = exec(&CMD, &conditions)[5] * tool;
+        let empty = exec(&CMD, &PoseConditions::default())[5] * tool;
+        assert!((loaded - rigid_tool).norm() > (empty - rigid_tool).norm());
+        out.push(loaded - rigid_tool);
+    }
+    let relative = (out[0] - out[1]).norm() / out[0].norm();
+    assert!(relative < 0.02, "analytic {:?} rapier {:?}", out[0], out[1]);
+}
