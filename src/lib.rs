@@ -7,4 +7,5 @@ pub mod campaign;
 pub mod kinematics;
 pub mod measurement;
 pub mod robot;
+pub mod scenario;
 pub mod sim;
