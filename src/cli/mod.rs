@@ -1,5 +1,7 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
+mod merge;
+mod run;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -17,6 +19,11 @@ struct Cli {
 enum Command {
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
+    /// Run a Monte-Carlo scenario (`scenarios/*.toml`): trials in parallel, results under
+    /// `results/<name>/`, exit 1 when a threshold fails.
+    Run(run::Args),
+    /// Merge shard results of `run --shard K/N` into one run's results.
+    Merge(merge::Args),
 }
 
 /// A run that completed but whose thresholds did not hold: exit code 1.
@@ -29,6 +36,8 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args),
+        Command::Run(args) => run::run(args),
+        Command::Merge(args) => merge::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

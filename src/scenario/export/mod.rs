@@ -10,6 +10,8 @@ pub mod json;
 pub mod markdown;
 pub mod plot;
 
+pub use self::csv::PartialTrials;
+
 use super::metrics::TrialRecord;
 use super::resolve::ResolvedScenario;
 use super::summary::Summary;
