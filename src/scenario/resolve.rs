@@ -253,27 +253,34 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription) -> Result<Vec<Ca
         ));
     }
     let mut cases = Vec::new();
-    let mut push = |name: String, m: MeasurementSection, plan: CalibrationPlan, key: &str| -> Result<(), KeyError> {
-        plan.validate(robot).map_err(|e| (key.to_owned(), e.to_string()))?;
+    // `keys` = (key blamed for a bad plan, key blamed for a bad instrument).
+    let mut push = |name: String, m: MeasurementSection, plan: CalibrationPlan, keys: (&str, &str)| -> Result<(), KeyError> {
+        plan.validate(robot).map_err(|e| (keys.0.to_owned(), e.to_string()))?;
         cases.push(Case {
             name,
-            measurement: measurement_model(&m, robot).map_err(|e| (key.to_owned(), e))?,
+            measurement: measurement_model(&m, robot).map_err(|e| (keys.1.to_owned(), e))?,
             plan,
         });
         Ok(())
     };
+    const NOISE: &str = "measurement.net_radial_rms_mm";
     if let Some(values) = &sweep.net_radial_rms_mm {
         for v in nonempty(values, "sweep.net_radial_rms_mm")? {
             let m = MeasurementSection {
                 net_radial_rms_mm: *v,
                 ..file.measurement
             };
-            push(format!("net_radial_rms_mm={v}"), m, base_plan.clone(), "sweep.net_radial_rms_mm")?;
+            push(
+                format!("net_radial_rms_mm={v}"),
+                m,
+                base_plan.clone(),
+                ("plan", "sweep.net_radial_rms_mm"),
+            )?;
         }
     } else if let Some(values) = &sweep.span_scale {
         for v in nonempty(values, "sweep.span_scale")? {
             let plan = scaled(&base_plan, *v).map_err(|m| ("sweep.span_scale".to_owned(), m))?;
-            push(format!("span_scale={v}"), file.measurement, plan, "sweep.span_scale")?;
+            push(format!("span_scale={v}"), file.measurement, plan, ("sweep.span_scale", NOISE))?;
         }
     } else if let Some(lists) = &sweep.spans {
         for (i, spans) in nonempty(lists, "sweep.spans")?.iter().enumerate() {
@@ -291,10 +298,10 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription) -> Result<Vec<Ca
             for (s, span) in plan.sweeps.iter_mut().zip(spans) {
                 s.span = *span;
             }
-            push(format!("spans={i}"), file.measurement, plan, "sweep.spans")?;
+            push(format!("spans={i}"), file.measurement, plan, ("sweep.spans", NOISE))?;
         }
     } else {
-        push("base".into(), file.measurement, base_plan, "plan")?;
+        push("base".into(), file.measurement, base_plan, ("plan", NOISE))?;
     }
     Ok(cases)
 }
