@@ -42,7 +42,8 @@ fn ci_smoke_passes_and_writes_every_result() {
     let csv = std::fs::read_to_string(out.join("trials.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4);
     assert!(csv.starts_with("case,trial,seed,uncal_pos_rms_mm,"));
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["all_hold"], true);
     assert!(summary["cases"][0]["metrics"][0]["p95"].is_f64());
 
@@ -89,7 +90,12 @@ fn bad_scenarios_exit_2_naming_file_and_key() {
         format!("[[thresholds]]\nmetric = \"{metric}\"\nstat = \"p95\"\nop = \"{op}\"\nvalue = 1\n")
     };
     let cases = [
-        ("typo.toml", ("trials = 4", "trails = 4"), String::new(), "unknown field `trails`"),
+        (
+            "typo.toml",
+            ("trials = 4", "trails = 4"),
+            String::new(),
+            "unknown field `trails`",
+        ),
         ("zero.toml", ("trials = 4", "trials = 0"), String::new(), "key `trials`"),
         (
             "noise.toml",

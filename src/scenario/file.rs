@@ -79,7 +79,7 @@ pub enum TruthSection {
     /// A fleet: each trial draws a robot around the nominal description.
     Perturbed {
         /// Distributions (`normal`, `uniform`, `truncated_normal`) per kind of quantity.
-        perturbation: PerturbationSpec,
+        perturbation: Box<PerturbationSpec>,
     },
 }
 

@@ -36,7 +36,7 @@ pub enum ResolvedTruth {
     /// A robot drawn per trial around the nominal description.
     Perturbed {
         /// The distributions.
-        perturbation: PerturbationSpec,
+        perturbation: Box<PerturbationSpec>,
     },
 }
 
@@ -135,7 +135,10 @@ impl ResolvedScenario {
                 && !cases.iter().any(|k| &k.name == c)
             {
                 let names: Vec<&str> = cases.iter().map(|k| k.name.as_str()).collect();
-                return Err(invalid(&format!("thresholds[{i}].case"), format!("no case {c:?} (cases: {names:?})")));
+                return Err(invalid(
+                    &format!("thresholds[{i}].case"),
+                    format!("no case {c:?} (cases: {names:?})"),
+                ));
             }
         }
         let name = file.name.clone().unwrap_or_else(|| {
@@ -254,15 +257,16 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription) -> Result<Vec<Ca
     }
     let mut cases = Vec::new();
     // `keys` = (key blamed for a bad plan, key blamed for a bad instrument).
-    let mut push = |name: String, m: MeasurementSection, plan: CalibrationPlan, keys: (&str, &str)| -> Result<(), KeyError> {
-        plan.validate(robot).map_err(|e| (keys.0.to_owned(), e.to_string()))?;
-        cases.push(Case {
-            name,
-            measurement: measurement_model(&m, robot).map_err(|e| (keys.1.to_owned(), e))?,
-            plan,
-        });
-        Ok(())
-    };
+    let mut push =
+        |name: String, m: MeasurementSection, plan: CalibrationPlan, keys: (&str, &str)| -> Result<(), KeyError> {
+            plan.validate(robot).map_err(|e| (keys.0.to_owned(), e.to_string()))?;
+            cases.push(Case {
+                name,
+                measurement: measurement_model(&m, robot).map_err(|e| (keys.1.to_owned(), e))?,
+                plan,
+            });
+            Ok(())
+        };
     const NOISE: &str = "measurement.net_radial_rms_mm";
     if let Some(values) = &sweep.net_radial_rms_mm {
         for v in nonempty(values, "sweep.net_radial_rms_mm")? {
@@ -280,7 +284,12 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription) -> Result<Vec<Ca
     } else if let Some(values) = &sweep.span_scale {
         for v in nonempty(values, "sweep.span_scale")? {
             let plan = scaled(&base_plan, *v).map_err(|m| ("sweep.span_scale".to_owned(), m))?;
-            push(format!("span_scale={v}"), file.measurement, plan, ("sweep.span_scale", NOISE))?;
+            push(
+                format!("span_scale={v}"),
+                file.measurement,
+                plan,
+                ("sweep.span_scale", NOISE),
+            )?;
         }
     } else if let Some(lists) = &sweep.spans {
         for (i, spans) in nonempty(lists, "sweep.spans")?.iter().enumerate() {
@@ -343,7 +352,9 @@ fn measurement_model(m: &MeasurementSection, robot: &RobotDescription) -> Result
         return Err(format!("net radial error {rms_mm} mm must be finite and > 0"));
     }
     Ok(match m.instrument {
-        Instrument::Isotropic => MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: rms_mm }),
+        Instrument::Isotropic => MeasurementModel::Isotropic(IsotropicNoise {
+            net_radial_rms_mm: rms_mm,
+        }),
         Instrument::Theodolite => {
             let base_m = Point3::from(Vector3::from(robot.placement.translation_mm)) * 1e-3;
             let (pair, _) = TheodolitePair::calibrated(

@@ -95,7 +95,10 @@ pub enum CoverageError {
 }
 
 /// Sorts records by unit and checks each unit of `scenario` appears exactly once.
-pub fn complete_run(scenario: &ResolvedScenario, mut records: Vec<TrialRecord>) -> Result<Vec<TrialRecord>, CoverageError> {
+pub fn complete_run(
+    scenario: &ResolvedScenario,
+    mut records: Vec<TrialRecord>,
+) -> Result<Vec<TrialRecord>, CoverageError> {
     let n = scenario.trials;
     records.sort_by_key(|r| r.unit(n));
     for w in records.windows(2) {

@@ -45,7 +45,13 @@ pub struct Threshold {
 impl Threshold {
     /// `p95(metric) <= value`.
     pub fn describe(&self) -> String {
-        format!("{}({}) {} {}", self.stat.name(), self.metric, self.op.symbol(), self.value)
+        format!(
+            "{}({}) {} {}",
+            self.stat.name(),
+            self.metric,
+            self.op.symbol(),
+            self.value
+        )
     }
 
     /// Judges the statistics of this threshold's metric in one case.
@@ -85,7 +91,13 @@ pub struct Verdict {
 impl std::fmt::Display for Verdict {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let word = if self.holds { "ok  " } else { "FAIL" };
-        write!(f, "{word} [{}] {}: observed {:.6}", self.case, self.threshold.describe(), self.observed)?;
+        write!(
+            f,
+            "{word} [{}] {}: observed {:.6}",
+            self.case,
+            self.threshold.describe(),
+            self.observed
+        )?;
         if !self.holds {
             write!(f, " (exceeds the bound by {:.6})", self.excess)?;
         }

@@ -9,7 +9,9 @@ use super::file::SimMode;
 use super::metrics::Metrics;
 use super::resolve::{Case, ResolvedScenario, ResolvedTruth};
 use super::validation_error::validation_errors;
-use crate::campaign::{AnalyticArm, ArmExecutor, CampaignOutput, ValidationPlan, commands_to_internal, simulate_campaign};
+use crate::campaign::{
+    AnalyticArm, ArmExecutor, CampaignOutput, ValidationPlan, commands_to_internal, simulate_campaign,
+};
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, RobotDescription, TruthRobot, perturb};
 use rand::{SeedableRng, rngs::StdRng};
@@ -55,7 +57,9 @@ impl CampaignTrial {
         if scenario.sim == SimMode::Rapier {
             // Seam for the rapier arm: build it from the drawn truth in `run` (see
             // `run_on`), like `AnalyticArm`.
-            return Err("sim = \"rapier\" is not available yet in `axiscal run` (the rapier arm is not wired in)".into());
+            return Err(
+                "sim = \"rapier\" is not available yet in `axiscal run` (the rapier arm is not wired in)".into(),
+            );
         }
         Ok(CampaignTrial {
             desc: scenario.robot.clone(),
@@ -78,8 +82,15 @@ impl CampaignTrial {
 
     /// Simulates the campaign of `case` on `arm` and reduces it to metrics.
     fn run_on<A: ArmExecutor>(&self, mut arm: A, case: &Case, rng: &mut StdRng) -> Result<Metrics, String> {
-        let out = simulate_campaign(&self.desc, &case.plan, &self.validation, &mut arm, &case.measurement, rng)
-            .map_err(|e| format!("simulating the campaign: {e}"))?;
+        let out = simulate_campaign(
+            &self.desc,
+            &case.plan,
+            &self.validation,
+            &mut arm,
+            &case.measurement,
+            rng,
+        )
+        .map_err(|e| format!("simulating the campaign: {e}"))?;
         Ok(self.metrics(&out))
     }
 
@@ -95,7 +106,10 @@ impl CampaignTrial {
         m.push(CAMPAIGN_METRICS[2], e.orient_rms_rad);
         m.push(CAMPAIGN_METRICS[3], e.orient_max_rad);
         m.push(CAMPAIGN_METRICS[4], out.rows.len() as f64);
-        m.push(CAMPAIGN_METRICS[5], out.occluded.iter().map(|(_, n)| *n).sum::<usize>() as f64);
+        m.push(
+            CAMPAIGN_METRICS[5],
+            out.occluded.iter().map(|(_, n)| *n).sum::<usize>() as f64,
+        );
         m
     }
 }

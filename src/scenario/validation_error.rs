@@ -32,7 +32,11 @@ pub struct ValidationErrors {
 /// cross-covariance with the reflection fix) that maps the predicted targets onto the
 /// measured ones; poses with fewer than three measured targets give no orientation error.
 /// With no row at all every field is NaN.
-pub fn validation_errors<F>(rows: &[Measurement], tool_targets_m: &[Point3<f64>], world_from_tool: F) -> ValidationErrors
+pub fn validation_errors<F>(
+    rows: &[Measurement],
+    tool_targets_m: &[Point3<f64>],
+    world_from_tool: F,
+) -> ValidationErrors
 where
     F: Fn(&[f64]) -> Isometry3<f64>,
 {

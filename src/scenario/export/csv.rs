@@ -20,14 +20,23 @@ fn header(names: &[String]) -> Vec<String> {
 }
 
 fn row(scenario: &ResolvedScenario, r: &TrialRecord) -> Vec<String> {
-    [scenario.cases[r.case].name.clone(), r.trial.to_string(), r.seed.to_string()]
-        .into_iter()
-        .chain(r.values.iter().map(|v| format_f64(*v)))
-        .collect()
+    [
+        scenario.cases[r.case].name.clone(),
+        r.trial.to_string(),
+        r.seed.to_string(),
+    ]
+    .into_iter()
+    .chain(r.values.iter().map(|v| format_f64(*v)))
+    .collect()
 }
 
 /// Writes the header and `records` (in the order given) to `w`.
-pub fn write_trials<W: Write>(w: W, scenario: &ResolvedScenario, names: &[String], records: &[TrialRecord]) -> csv::Result<()> {
+pub fn write_trials<W: Write>(
+    w: W,
+    scenario: &ResolvedScenario,
+    names: &[String],
+    records: &[TrialRecord],
+) -> csv::Result<()> {
     let mut w = csv::Writer::from_writer(w);
     w.write_record(header(names))?;
     for r in records {
@@ -115,7 +124,10 @@ pub fn read_trials(path: &Path, scenario: &ResolvedScenario) -> Result<(Vec<Stri
             .ok_or_else(|| bad(line, format!("column `case`: unknown case {name:?}")))?;
         let trial: usize = rec[1].parse().map_err(|e| bad(line, format!("column `trial`: {e}")))?;
         if trial >= scenario.trials {
-            return Err(bad(line, format!("column `trial`: {trial} >= trials {}", scenario.trials)));
+            return Err(bad(
+                line,
+                format!("column `trial`: {trial} >= trials {}", scenario.trials),
+            ));
         }
         let seed: u64 = rec[2].parse().map_err(|e| bad(line, format!("column `seed`: {e}")))?;
         let values = (3..head.len())

@@ -42,7 +42,11 @@ pub fn render(scenario: &ResolvedScenario, summary: &Summary) -> String {
     let _ = writeln!(
         s,
         "\n**{}**",
-        if summary.all_hold { "All thresholds hold." } else { "Some thresholds FAIL." }
+        if summary.all_hold {
+            "All thresholds hold."
+        } else {
+            "Some thresholds FAIL."
+        }
     );
     s
 }

@@ -105,7 +105,13 @@ pub fn write_final(
     let path = dir.join(SUMMARY_MD);
     std::fs::write(&path, markdown::render(scenario, &summary)).map_err(io(&path))?;
     if let Some(i) = names.iter().position(|n| n == &scenario.main_metric) {
-        plot::histogram_svg(&dir.join(format!("hist-{}.svg", names[i])), scenario, &names[i], i, records)?;
+        plot::histogram_svg(
+            &dir.join(format!("hist-{}.svg", names[i])),
+            scenario,
+            &names[i],
+            i,
+            records,
+        )?;
     }
     Ok(summary)
 }
