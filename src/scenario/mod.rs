@@ -2,7 +2,7 @@
 //! trials run in parallel with per-trial seeds, per-case statistics, pass/fail thresholds,
 //! and results written per format.
 //!
-//! - [`file`]: the TOML a user writes ([`ScenarioFile`], `deny_unknown_fields`, units in
+//! - [`file`](mod@file): the TOML a user writes ([`ScenarioFile`], `deny_unknown_fields`, units in
 //!   key names); [`resolve`]: CLI overrides + file -> [`ResolvedScenario`] (self-contained,
 //!   dumped to the results folder, read back by `axiscal merge`).
 //! - [`seed`]: trial seed = SplitMix64 mix of the scenario seed and the trial index.
