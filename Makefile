@@ -12,6 +12,7 @@ run:
 test:
 	$(CARGO) test --all-targets
 	$(CARGO) test --doc
+	$(CARGO) run --quiet -- run scenarios/ci-smoke.toml --force --out results/ci-smoke
 
 ## bench: criterion benchmarks (ratios against an in-run baseline)
 bench:
