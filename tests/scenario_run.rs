@@ -77,3 +77,34 @@ fn a_fleet_draws_a_different_robot_per_trial() {
     assert_ne!(records[0].values[0].to_bits(), records[1].values[0].to_bits());
     assert_eq!(records.iter().map(|r| r.trial).collect::<Vec<_>>(), [0, 1, 2]);
 }
+
+#[test]
+fn sweep_and_plan_errors_name_their_key() {
+    let resolve = |text: &str| {
+        let file: axiscal::scenario::ScenarioFile = toml::from_str(text).unwrap();
+        ResolvedScenario::resolve(file, Path::new("scenarios/x.toml"), Overrides::default())
+            .unwrap_err()
+            .to_string()
+    };
+    let both = resolve("trials = 1\n[sweep]\nspan_scale = [1.0]\nnet_radial_rms_mm = [0.1]\n");
+    assert!(
+        both.contains("scenarios/x.toml") && both.contains("key `sweep`"),
+        "{both}"
+    );
+    let wide = resolve("trials = 1\n[sweep]\nspan_scale = [1.0, 3.0]\n");
+    assert!(
+        wide.contains("key `sweep.span_scale`") && wide.contains("limits"),
+        "{wide}"
+    );
+    let short = resolve("trials = 1\n[sweep]\nspans = [[10.0]]\n");
+    assert!(short.contains("key `sweep.spans`"), "{short}");
+    let effects = resolve("trials = 1\n[effects]\ncompliance = true\n");
+    assert!(
+        effects.contains("key `effects`") && effects.contains("rapier"),
+        "{effects}"
+    );
+    let case = resolve(
+        "trials = 1\n[[thresholds]]\nmetric = \"occluded\"\nstat = \"max\"\nop = \"<=\"\nvalue = 0\ncase = \"nope\"\n",
+    );
+    assert!(case.contains("key `thresholds[0].case`"), "{case}");
+}
