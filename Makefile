@@ -12,6 +12,7 @@ run:
 test:
 	$(CARGO) test --all-targets
 	$(CARGO) test --doc
+	$(CARGO) run --quiet -- run scenarios/ci-smoke.toml --force --out results/ci-smoke
 
 ## study: the calibrator's efficiency against the Cramer-Rao bound (ML and the paper's
 ## estimator) and the calibration of its reported sigmas, 2000 simulated campaigns

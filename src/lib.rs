@@ -7,5 +7,6 @@ pub mod campaign;
 pub mod kinematics;
 pub mod measurement;
 pub mod robot;
+pub mod scenario;
 pub mod sim;
 pub mod studies;

@@ -13,7 +13,7 @@ pub use effects::{
 };
 pub use plan::{AxisSweep, CalibrationPlan, PlanError, commands_to_internal};
 pub use simulate::{
-    ArmExecutor, CampaignError, CampaignOptions, CampaignOutput, ExecuteError, PoseConditions, simulate_campaign,
-    simulate_campaign_with,
+    ArmExecutor, CampaignError, CampaignOptions, CampaignOutput, ExecuteError, PoseConditions, TOOL_EXPERIMENT,
+    simulate_campaign, simulate_campaign_with,
 };
 pub use validation::ValidationPlan;

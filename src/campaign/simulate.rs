@@ -10,6 +10,10 @@ use crate::robot::RobotDescription;
 use nalgebra::{Isometry3, Point3};
 use rand::Rng;
 
+/// Experiment id of the three tool targets observed at the reference pose (trains the
+/// calibrator's tool frame; not a validation pose).
+pub const TOOL_EXPERIMENT: &str = "tool";
+
 /// The simulated "real robot": executes joint commands and says where its links are.
 /// Implemented by the analytic truth model and by the rapier arm; the campaign never sees more.
 pub trait ArmExecutor {
@@ -178,7 +182,7 @@ pub fn simulate_campaign_with<A: ArmExecutor, R: Rng + ?Sized>(
         arm,
         &instrument,
         rng,
-        "tool",
+        TOOL_EXPERIMENT,
         0,
         &plan.reference,
         conditions,

@@ -1,6 +1,8 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
 mod calibrate;
+mod merge;
+mod run;
 mod simulate;
 mod study;
 
@@ -24,6 +26,11 @@ enum Command {
     Study(study::Args),
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
+    /// Run a Monte-Carlo scenario (`scenarios/*.toml`): trials in parallel, results under
+    /// `results/<name>/`, exit 1 when a threshold fails.
+    Run(run::Args),
+    /// Merge shard results of `run --shard K/N` into one run's results.
+    Merge(merge::Args),
 }
 
 /// A run that completed but whose thresholds did not hold: exit code 1.
@@ -38,6 +45,8 @@ pub fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Study(args) => study::run(args),
+        Command::Run(args) => run::run(args),
+        Command::Merge(args) => merge::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,57 @@
+//! `axiscal merge DIR... --out DIR`: combine shard results (`axiscal run --shard K/N`) into the
+//! same results a single run gives, bit for bit.
+
+use anyhow::{Context, Result, bail};
+use axiscal::scenario::export::{self, RESOLVED_FILE, TRIALS_FILE};
+use axiscal::scenario::{ResolvedScenario, complete_run};
+use std::path::PathBuf;
+
+/// Arguments of `axiscal merge`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Shard results folders (each with `scenario.resolved.toml` and `trials.csv`).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Where to write the merged results.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace the results in `--out` if it already holds some.
+    #[arg(long)]
+    force: bool,
+}
+
+/// Runs `axiscal merge`.
+pub fn run(args: Args) -> Result<()> {
+    let first = args.dirs[0].join(RESOLVED_FILE);
+    let resolved_text = std::fs::read_to_string(&first).with_context(|| format!("reading {}", first.display()))?;
+    let scenario = ResolvedScenario::from_resolved_file(&first)?;
+    let mut names: Option<Vec<String>> = None;
+    let mut records = Vec::new();
+    for dir in &args.dirs {
+        let path = dir.join(RESOLVED_FILE);
+        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        if text != resolved_text {
+            bail!(
+                "{} differs from {}: shards of different scenarios (or trials/seed overrides) cannot be merged",
+                path.display(),
+                first.display()
+            );
+        }
+        let (n, r) = export::csv::read_trials(&dir.join(TRIALS_FILE), &scenario)?;
+        match &names {
+            Some(known) if *known != n => bail!(
+                "{}: metric columns {n:?} differ from the first shard's {known:?}",
+                dir.join(TRIALS_FILE).display()
+            ),
+            _ => names = Some(n),
+        }
+        records.extend(r);
+    }
+    let names = names.unwrap_or_default();
+    let records = complete_run(&scenario, records).context("merging the shards")?;
+    scenario.check_metrics(&names, &first)?;
+    export::prepare_dir(&args.out, args.force)?;
+    export::write_resolved(&args.out, &resolved_text)?;
+    let summary = export::write_final(&args.out, &scenario, &names, &records)?;
+    super::run::report(&summary, &args.out)
+}

@@ -1,0 +1,49 @@
+//! Errors of scenario resolution and of runs.
+
+use std::path::PathBuf;
+
+/// A scenario could not be read or resolved.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    /// The file could not be read.
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The TOML is malformed or has an unknown key or a value of the wrong type (the
+    /// message names the key, line and column).
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message.
+        message: String,
+    },
+    /// A key has a value that parses but does not make sense.
+    #[error("{path}: key `{key}`: {message}")]
+    Invalid {
+        /// The scenario file.
+        path: PathBuf,
+        /// The key, dotted (`sweep.spans`).
+        key: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// A trial failed.
+#[derive(Debug, thiserror::Error)]
+#[error("case {case}, trial {trial} (seed {seed}): {message}")]
+pub struct TrialError {
+    /// Case name.
+    pub case: String,
+    /// Trial index.
+    pub trial: usize,
+    /// The trial's seed.
+    pub seed: u64,
+    /// What went wrong.
+    pub message: String,
+}

@@ -1,0 +1,36 @@
+//! Monte-Carlo scenarios: a scenario file (`scenarios/*.toml`) resolved into a checked plan,
+//! trials run in parallel with per-trial seeds, per-case statistics, pass/fail thresholds,
+//! and results written per format.
+//!
+//! - [`file`](mod@file): the TOML a user writes ([`ScenarioFile`], `deny_unknown_fields`, units in
+//!   key names); [`resolve`]: CLI overrides + file -> [`ResolvedScenario`] (self-contained,
+//!   dumped to the results folder, read back by `axiscal merge`).
+//! - [`seed`]: trial seed = SplitMix64 mix of the scenario seed and the trial index.
+//! - [`trial`]: the pluggable [`Trial`]; [`CampaignTrial`] simulates the campaign.
+//! - [`runner`]: rayon over trial units, [`Shard`]s, completeness of merged shards.
+//! - [`stats`], [`threshold`], [`summary`]: pure statistics and verdicts.
+//! - [`export`]: `trials.csv`, `summary.json`, `summary.md`, SVG histogram.
+
+pub mod error;
+pub mod export;
+pub mod file;
+pub mod metrics;
+pub mod resolve;
+pub mod runner;
+pub mod seed;
+pub mod stats;
+pub mod summary;
+pub mod threshold;
+pub mod trial;
+pub mod validation_error;
+
+pub use error::{ScenarioError, TrialError};
+pub use file::{ConditionsSection, Instrument, ScenarioFile, SimMode};
+pub use metrics::{Metrics, TrialRecord};
+pub use resolve::{Case, Overrides, ResolvedScenario, ResolvedTruth};
+pub use runner::{CoverageError, Shard, complete_run, run_units};
+pub use seed::trial_seed;
+pub use stats::{Stat, Stats};
+pub use summary::Summary;
+pub use threshold::{Op, Threshold, Verdict};
+pub use trial::{CAMPAIGN_METRICS, CampaignTrial, Trial};

@@ -1,0 +1,110 @@
+//! Monte-Carlo harness at the library level: thread-count determinism, shipped scenarios
+//! resolve, the resolved dump round-trips.
+
+use axiscal::scenario::export::csv::write_trials;
+use axiscal::scenario::{CampaignTrial, Overrides, ResolvedScenario, SimMode, Trial, run_units};
+use std::path::Path;
+
+fn smoke(trials: usize) -> ResolvedScenario {
+    ResolvedScenario::from_file(
+        Path::new("scenarios/ci-smoke.toml"),
+        Overrides {
+            trials: Some(trials),
+            seed: None,
+        },
+    )
+    .unwrap()
+}
+
+fn trials_csv_with_threads(scenario: &ResolvedScenario, threads: usize) -> Vec<u8> {
+    let trial = CampaignTrial::new(scenario).unwrap();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let records = pool
+        .install(|| run_units(scenario, &trial, 0..scenario.units(), &|_| {}))
+        .unwrap();
+    let mut out = Vec::new();
+    write_trials(&mut out, scenario, &trial.metric_names(), &records).unwrap();
+    out
+}
+
+#[test]
+fn trials_are_bit_identical_for_one_and_two_threads() {
+    let scenario = smoke(6);
+    let one = trials_csv_with_threads(&scenario, 1);
+    let two = trials_csv_with_threads(&scenario, 2);
+    assert_eq!(String::from_utf8(one).unwrap(), String::from_utf8(two).unwrap());
+}
+
+#[test]
+fn shipped_scenarios_resolve_and_their_dump_round_trips() {
+    for name in [
+        "ci-smoke",
+        "paper",
+        "perturbed-fleet",
+        "noise-sweep",
+        "span-study",
+        "compliance",
+    ] {
+        let path = format!("scenarios/{name}.toml");
+        let s = ResolvedScenario::from_file(Path::new(&path), Overrides::default())
+            .unwrap_or_else(|e| panic!("{path}: {e}"));
+        assert_eq!(s.name, name);
+        let text = s.to_toml().unwrap();
+        let back: ResolvedScenario = toml::from_str(&text).unwrap_or_else(|e| panic!("{path} dump: {e}"));
+        assert_eq!(back, s, "{path}: resolved dump does not round-trip");
+        if s.sim == SimMode::Analytic {
+            let trial = CampaignTrial::new(&s).unwrap();
+            s.check_metrics(&trial.metric_names(), Path::new(&path)).unwrap();
+        }
+    }
+    let sweep = ResolvedScenario::from_file(Path::new("scenarios/noise-sweep.toml"), Overrides::default()).unwrap();
+    assert_eq!(sweep.cases.len(), 5);
+    assert_eq!(sweep.cases[0].name, "net_radial_rms_mm=0.05");
+}
+
+#[test]
+fn a_fleet_draws_a_different_robot_per_trial() {
+    let s = ResolvedScenario::from_file(
+        Path::new("scenarios/perturbed-fleet.toml"),
+        Overrides {
+            trials: Some(3),
+            seed: None,
+        },
+    )
+    .unwrap();
+    let trial = CampaignTrial::new(&s).unwrap();
+    let records = run_units(&s, &trial, 0..3, &|_| {}).unwrap();
+    assert_ne!(records[0].values[0].to_bits(), records[1].values[0].to_bits());
+    assert_eq!(records.iter().map(|r| r.trial).collect::<Vec<_>>(), [0, 1, 2]);
+}
+
+#[test]
+fn sweep_and_plan_errors_name_their_key() {
+    let resolve = |text: &str| {
+        let file: axiscal::scenario::ScenarioFile = toml::from_str(text).unwrap();
+        ResolvedScenario::resolve(file, Path::new("scenarios/x.toml"), Overrides::default())
+            .unwrap_err()
+            .to_string()
+    };
+    let both = resolve("trials = 1\n[sweep]\nspan_scale = [1.0]\nnet_radial_rms_mm = [0.1]\n");
+    assert!(
+        both.contains("scenarios/x.toml") && both.contains("key `sweep`"),
+        "{both}"
+    );
+    let wide = resolve("trials = 1\n[sweep]\nspan_scale = [1.0, 3.0]\n");
+    assert!(
+        wide.contains("key `sweep.span_scale`") && wide.contains("limits"),
+        "{wide}"
+    );
+    let short = resolve("trials = 1\n[sweep]\nspans = [[10.0]]\n");
+    assert!(short.contains("key `sweep.spans`"), "{short}");
+    let effects = resolve("trials = 1\n[effects]\ncompliance = true\n");
+    assert!(
+        effects.contains("key `effects`") && effects.contains("rapier"),
+        "{effects}"
+    );
+    let case = resolve(
+        "trials = 1\n[[thresholds]]\nmetric = \"occluded\"\nstat = \"max\"\nop = \"<=\"\nvalue = 0\ncase = \"nope\"\n",
+    );
+    assert!(case.contains("key `thresholds[0].case`"), "{case}");
+}
