@@ -4,6 +4,7 @@
 
 pub mod calibration;
 pub mod campaign;
+pub mod compensation;
 pub mod kinematics;
 pub mod measurement;
 pub mod robot;

@@ -34,12 +34,7 @@ fn simulate_writes_a_table1_campaign_the_reader_accepts() {
     }
     let tool = &experiments[6];
     assert_eq!(
-        (
-            tool.name,
-            tool.moved_joint,
-            tool.by_step().len(),
-            tool.rows.len()
-        ),
+        (tool.name, tool.moved_joint, tool.by_step().len(), tool.rows.len()),
         ("tool", 0, 1, 3)
     );
     let validation = &experiments[7];
