@@ -1,5 +1,7 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
+mod compensate;
+mod evaluate;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -17,6 +19,10 @@ struct Cli {
 enum Command {
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
+    /// Fig. 5 compensation: commands for required tool poses from a calibration.
+    Compensate(compensate::Args),
+    /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
+    Evaluate(evaluate::Args),
 }
 
 /// A run that completed but whose thresholds did not hold: exit code 1.
@@ -29,6 +35,8 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args),
+        Command::Compensate(args) => compensate::run(args),
+        Command::Evaluate(args) => evaluate::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -128,14 +128,20 @@ impl Compensator {
     }
 
     /// Fig. 5 with the IK seeded by `seed` (e.g. the nominal controller's own IK answer, so
-    /// the compensated commands stay on its branch).
+    /// the compensated commands stay on its branch); falls back to [`Compensator::compensate`]
+    /// if the iteration from `seed` does not converge.
     pub fn compensate_from(
         &self,
         world_from_tool: &Isometry3<f64>,
         seed: &[f64],
     ) -> Result<CompensatedPose, CompensationError> {
-        let s = solve_ik(&self.calibrated_model, world_from_tool, seed, &self.ik)?;
-        self.commands_for(s.q, s.report)
+        match solve_ik(&self.calibrated_model, world_from_tool, seed, &self.ik) {
+            Ok(s) => self.commands_for(s.q, s.report),
+            // Near a wrist singularity the iteration can stall from one seed: try the
+            // nominal closed-form branches before giving up.
+            Err(IkError::NotConverged { .. }) => self.compensate(world_from_tool),
+            Err(e) => Err(e.into()),
+        }
     }
 
     /// Steps 2-5 (module docs) for joint values `q` of the calibrated model.
