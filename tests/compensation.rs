@@ -28,7 +28,12 @@ fn noisy_calibration() -> axiscal::calibration::procedure::Calibration {
         &mut StdRng::seed_from_u64(4),
     )
     .unwrap();
-    calibrate(&MeasurementSet::new(6, out.rows).unwrap(), &desc, &CalibrationOptions::default()).unwrap()
+    calibrate(
+        &MeasurementSet::new(6, out.rows).unwrap(),
+        &desc,
+        &CalibrationOptions::default(),
+    )
+    .unwrap()
 }
 
 /// A robot whose truth IS the calibrated model reaches every compensated pose within 1 um
@@ -95,7 +100,10 @@ fn cli_batch_reports_a_failed_pose_and_goes_on() {
     let model = desc.nominal_model();
     let mut csv = String::from("id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\n");
     csv += &pose_line("a", &model.world_from_tool(&[0.1, 0.1, -0.2, 0.3, 0.4, 0.5]));
-    csv += &pose_line("far", &(Isometry3::translation(10.0, 0.0, 0.0) * model.world_from_tool(&[0.0; 6])));
+    csv += &pose_line(
+        "far",
+        &(Isometry3::translation(10.0, 0.0, 0.0) * model.world_from_tool(&[0.0; 6])),
+    );
     csv += &pose_line("b", &model.world_from_tool(&[-0.2, 0.05, 0.1, -0.3, 0.2, -0.5]));
     let poses = dir.path().join("poses.csv");
     std::fs::write(&poses, csv).unwrap();

@@ -74,11 +74,12 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
         let mut v = [0.0; 6];
         for (k, slot) in v.iter_mut().enumerate() {
             let text = field(k + 1);
-            *slot = text
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .with_context(|| format!("{file}:{line}: column `{}`: `{text}` is not a finite number", COLUMNS[k + 1]))?;
+            *slot = text.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| {
+                format!(
+                    "{file}:{line}: column `{}`: `{text}` is not a finite number",
+                    COLUMNS[k + 1]
+                )
+            })?;
         }
         let placement = Placement {
             translation_mm: [v[0], v[1], v[2]],
@@ -100,8 +101,8 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     let text = std::fs::read_to_string(&args.calibration)
         .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
-    let cal: Calibration =
-        serde_json::from_str(&text).with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    let cal: Calibration = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
     let comp = Compensator::new(&cal.robot, &desc)?;
     let poses = read_poses(&args.poses)?;
     let n = desc.dof();
@@ -171,7 +172,10 @@ pub fn run(args: Args) -> Result<()> {
         failed
     );
     if failed > 0 {
-        bail!("{failed} of {} poses could not be compensated (status column)", poses.len());
+        bail!(
+            "{failed} of {} poses could not be compensated (status column)",
+            poses.len()
+        );
     }
     Ok(())
 }

@@ -5,8 +5,8 @@
 
 use anyhow::{Context, Result};
 use axiscal::evaluation::{
-    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperScenario, Region, run_paper_scenario,
-    write_plots,
+    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperScenario, Region,
+    run_paper_scenario, write_plots,
 };
 use axiscal::measurement::MeasurementModel;
 use std::path::{Path, PathBuf};
@@ -88,7 +88,10 @@ pub fn run(args: Args) -> Result<()> {
     w.flush()?;
     let plots = write_plots(r, &args.out)?;
 
-    println!("paper scenario: seed {}, evaluation seed {}", args.seed, args.evaluation_seed);
+    println!(
+        "paper scenario: seed {}, evaluation seed {}",
+        args.seed, args.evaluation_seed
+    );
     println!(
         "ISO 9283 cube edges: {:.0} mm inside the spans, {:.0} mm in the workspace",
         r.iso_cube_edge_m[0] * 1e3,
@@ -96,14 +99,23 @@ pub fn run(args: Args) -> Result<()> {
     );
     let mut inside_ratio = f64::NAN;
     for s in &r.regions {
-        println!("{} ({} poses, {} failed):", s.region.name(), s.position_mm[0].n, s.failures);
+        println!(
+            "{} ({} poses, {} failed):",
+            s.region.name(),
+            s.position_mm[0].n,
+            s.failures
+        );
         println!(
             "  position    [mm]  uncalibrated mean {:7.3} rms {:7.3}   (paper 47.0 mean)",
             s.position_mm[0].mean, s.position_mm[0].rms
         );
         println!(
             "                    calibrated   mean {:7.3} rms {:7.3}   (paper {:.2})  floor rms {:.3}  ratio {:.2}",
-            s.position_mm[1].mean, s.position_mm[1].rms, PAPER_POSITION_ERROR_MM[1], s.position_mm[2].rms, s.ratio_to_floor[0]
+            s.position_mm[1].mean,
+            s.position_mm[1].rms,
+            PAPER_POSITION_ERROR_MM[1],
+            s.position_mm[2].rms,
+            s.ratio_to_floor[0]
         );
         println!(
             "  orientation [rad] uncalibrated mean {:7.4} rms {:7.4}   (paper {:.2})",
@@ -139,7 +151,11 @@ pub fn run(args: Args) -> Result<()> {
     );
     println!(
         "floor check inside the spans: calibrated/floor position RMS = {inside_ratio:.2} ({} {FLOOR_RATIO_LIMIT}x; see README)",
-        if inside_ratio <= FLOOR_RATIO_LIMIT { "within" } else { "ABOVE" }
+        if inside_ratio <= FLOOR_RATIO_LIMIT {
+            "within"
+        } else {
+            "ABOVE"
+        }
     );
     println!("wrote {} and {} plots", args.out.display(), plots.len());
     Ok(())

@@ -18,10 +18,10 @@ use crate::campaign::{
     AnalyticArm, ArmExecutor, CalibrationPlan, CampaignError, ExecuteError, PoseConditions, ValidationPlan,
     simulate_campaign,
 };
-use nalgebra::Isometry3;
 use crate::compensation::{CompensationError, Compensator};
 use crate::measurement::{MeasurementModel, MeasurementSet, MeasurementSetError};
 use crate::robot::{Controller, RobotDescription, TruthRobot};
+use nalgebra::Isometry3;
 use rand::{SeedableRng, rngs::StdRng};
 use serde::{Deserialize, Serialize};
 
@@ -210,7 +210,11 @@ fn campaign_calibration(
 
 /// The test poses of the scenario: ISO 9283 cubes (largest edge up to 0.5 m) and `n` random
 /// poses, inside the calibrated spans and over the validation workspace.
-pub fn scenario_poses(desc: &RobotDescription, n: usize, seed: u64) -> Result<(Vec<TestPose>, [f64; 2]), ScenarioError> {
+pub fn scenario_poses(
+    desc: &RobotDescription,
+    n: usize,
+    seed: u64,
+) -> Result<(Vec<TestPose>, [f64; 2]), ScenarioError> {
     let model = desc.nominal_model();
     let plan = CalibrationPlan::table1(desc.dof());
     let inside = JointRanges::calibrated_spans(desc, &plan);

@@ -23,6 +23,9 @@ pub struct PlotError {
 
 static FONT: Once = Once::new();
 
+/// Draws one plot to a path, PNG (`true`) or SVG.
+type DrawFn<'a> = dyn Fn(&Path, bool) -> Result<(), String> + 'a;
+
 fn register_font() {
     FONT.call_once(|| {
         // The shipped font is a valid TrueType file; a failure would only lose PNG text.
@@ -49,9 +52,16 @@ fn per_pose_chart<DB: DrawingBackend>(
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let n = series.iter().map(|s| s.values.len()).max().unwrap_or(0);
-    let all = series.iter().flat_map(|s| s.values.iter().copied()).filter(|v| *v > 0.0);
+    let all = series
+        .iter()
+        .flat_map(|s| s.values.iter().copied())
+        .filter(|v| *v > 0.0);
     let (lo, hi) = all.fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
-    let (lo, hi) = if lo.is_finite() { (lo / 2.0, hi * 2.0) } else { (1e-3, 1.0) };
+    let (lo, hi) = if lo.is_finite() {
+        (lo / 2.0, hi * 2.0)
+    } else {
+        (1e-3, 1.0)
+    };
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 22))
         .margin(12)
@@ -88,7 +98,11 @@ fn per_pose_chart<DB: DrawingBackend>(
     root.present().map_err(|e| e.to_string())
 }
 
-fn histogram<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, calibrated: &[f64], floor: &[f64]) -> Result<(), String> {
+fn histogram<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    calibrated: &[f64],
+    floor: &[f64],
+) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let hi = calibrated.iter().chain(floor).copied().fold(0.0f64, f64::max).max(1e-6) * 1.05;
     let bins = 20;
@@ -116,7 +130,11 @@ fn histogram<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, calibrated: &[f64
         .draw()
         .map_err(|e| e.to_string())?;
     let bars = |c: &[u32], color: RGBColor, filled: bool| {
-        let style = if filled { color.mix(0.6).filled() } else { color.stroke_width(2) };
+        let style = if filled {
+            color.mix(0.6).filled()
+        } else {
+            color.stroke_width(2)
+        };
         c.iter()
             .enumerate()
             .map(|(i, &n)| Rectangle::new([(i as f64 * width, 0), ((i + 1) as f64 * width, n)], style))
@@ -181,7 +199,7 @@ pub fn write_plots(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Plo
     let position = series(|e| e.position_mm);
     let orientation = series(|e| e.orientation_rad);
     let mut written = Vec::new();
-    let jobs: [(&str, &dyn Fn(&Path, bool) -> Result<(), String>); 3] = [
+    let jobs: [(&str, &DrawFn); 3] = [
         ("fig9_position", &|p: &Path, png: bool| {
             let t = "Fig. 9: tool position error per test pose";
             let y = "position error [mm]";
@@ -195,7 +213,12 @@ pub fn write_plots(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Plo
             let t = "Fig. 10: tool orientation error per test pose";
             let y = "orientation error [rad]";
             if png {
-                per_pose_chart(BitMapBackend::new(p, (1000, 560)).into_drawing_area(), t, y, &orientation)
+                per_pose_chart(
+                    BitMapBackend::new(p, (1000, 560)).into_drawing_area(),
+                    t,
+                    y,
+                    &orientation,
+                )
             } else {
                 per_pose_chart(SVGBackend::new(p, (1000, 560)).into_drawing_area(), t, y, &orientation)
             }

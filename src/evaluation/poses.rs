@@ -196,7 +196,8 @@ mod tests {
         assert_eq!(poses.len(), 5);
         for p in &poses {
             assert!(spans.contains(&p.q_nominal, 1e-9));
-            let e = (model.world_from_tool(&p.q_nominal).translation.vector - p.world_from_tool.translation.vector).norm();
+            let e =
+                (model.world_from_tool(&p.q_nominal).translation.vector - p.world_from_tool.translation.vector).norm();
             assert!(e < 1e-9);
         }
     }
