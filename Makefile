@@ -6,7 +6,8 @@ OUT   ?= results/paper
 
 ## run: the paper scenario end to end; results under results/
 run:
-	$(CARGO) run --release -- simulate --seed 1 --out $(OUT)/campaign.csv
+	$(CARGO) run --release -- simulate --seed 1 --out $(OUT)/campaign.csv --force
+	$(CARGO) run --release -- evaluate --seed 1 --out $(OUT)
 
 ## test: the whole test suite (unit, integration, doc tests)
 test:

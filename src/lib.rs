@@ -4,6 +4,8 @@
 
 pub mod calibration;
 pub mod campaign;
+pub mod compensation;
+pub mod evaluation;
 pub mod kinematics;
 pub mod measurement;
 pub mod robot;

@@ -1,6 +1,8 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
 mod calibrate;
+mod compensate;
+mod evaluate;
 mod merge;
 mod run;
 mod simulate;
@@ -31,6 +33,10 @@ enum Command {
     Run(run::Args),
     /// Merge shard results of `run --shard K/N` into one run's results.
     Merge(merge::Args),
+    /// Fig. 5 compensation: commands for required tool poses from a calibration.
+    Compensate(compensate::Args),
+    /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
+    Evaluate(evaluate::Args),
 }
 
 /// A run that completed but whose thresholds did not hold: exit code 1.
@@ -47,6 +53,8 @@ pub fn main() -> ExitCode {
         Command::Study(args) => study::run(args),
         Command::Run(args) => run::run(args),
         Command::Merge(args) => merge::run(args),
+        Command::Compensate(args) => compensate::run(args),
+        Command::Evaluate(args) => evaluate::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,181 @@
+//! `axiscal compensate`: paper fig. 5 for a batch of required tool poses.
+//!
+//! Input `--poses` CSV (header required, columns by name, `#` lines are comments):
+//! `id, x_mm, y_mm, z_mm, roll_deg, pitch_deg, yaw_deg`: the tool frame in the instrument
+//! frame, rotation `Rz(yaw) Ry(pitch) Rx(roll)`.
+//!
+//! Output `--out` CSV, one row per pose: `id, status, cmd_1_deg..cmd_N_deg, converged,
+//! iterations, position_error_mm, orientation_error_rad, send_x_mm, send_y_mm, send_z_mm,
+//! send_roll_deg, send_pitch_deg, send_yaw_deg` (`send_*`: the nominal direct kinematics of
+//! the commands, the pose to send to a controller that takes poses; `position_error_mm`,
+//! `orientation_error_rad`: the IK residual on the calibrated model).
+//!
+//! Failure policy: a pose whose IK does not converge (out of reach, singular) gets
+//! `status = ik_failed`, empty command and pose columns, and one line on stderr; the batch goes
+//! on, and the command exits with code 2 at the end if any pose failed. A malformed input
+//! file is one error naming the file, the line and the column (exit 2, nothing written).
+
+use anyhow::{Context, Result, bail};
+use axiscal::calibration::procedure::Calibration;
+use axiscal::compensation::{CompensationError, Compensator};
+use axiscal::kinematics::IkError;
+use axiscal::robot::{Placement, RobotDescription};
+use nalgebra::Isometry3;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `axiscal compensate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The calibration (`serde_json` of `Calibration`, written by `axiscal calibrate`).
+    #[arg(long)]
+    calibration: PathBuf,
+    /// Nominal robot description (the unchanged controller uses it).
+    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    robot: PathBuf,
+    /// Required tool poses (CSV, see module docs).
+    #[arg(long)]
+    poses: PathBuf,
+    /// Output commands (CSV).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// One required pose from the input file.
+struct PoseRow {
+    id: String,
+    world_from_tool: Isometry3<f64>,
+}
+
+const COLUMNS: [&str; 7] = ["id", "x_mm", "y_mm", "z_mm", "roll_deg", "pitch_deg", "yaw_deg"];
+
+fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
+    let file = path.display();
+    let mut reader = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("{file}: cannot open"))?;
+    let header = reader
+        .headers()
+        .with_context(|| format!("{file}:1: malformed CSV header"))?
+        .clone();
+    let mut index = [0usize; 7];
+    for (i, name) in COLUMNS.iter().enumerate() {
+        index[i] = header
+            .iter()
+            .position(|h| h == *name)
+            .with_context(|| format!("{file}:1: column `{name}`: missing from the header"))?;
+    }
+    let mut out = Vec::new();
+    for record in reader.records() {
+        let record = record.with_context(|| format!("{file}: malformed CSV"))?;
+        let line = record.position().map_or(0, |p| p.line());
+        let field = |i: usize| record.get(index[i]).unwrap_or("");
+        let mut v = [0.0; 6];
+        for (k, slot) in v.iter_mut().enumerate() {
+            let text = field(k + 1);
+            *slot = text.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| {
+                format!(
+                    "{file}:{line}: column `{}`: `{text}` is not a finite number",
+                    COLUMNS[k + 1]
+                )
+            })?;
+        }
+        let placement = Placement {
+            translation_mm: [v[0], v[1], v[2]],
+            rpy_deg: [v[3], v[4], v[5]],
+        };
+        out.push(PoseRow {
+            id: field(0).to_owned(),
+            world_from_tool: placement.to_isometry(),
+        });
+    }
+    if out.is_empty() {
+        bail!("{file}: no pose rows after the header");
+    }
+    Ok(out)
+}
+
+/// Runs `axiscal compensate`.
+pub fn run(args: Args) -> Result<()> {
+    let desc = RobotDescription::from_file(&args.robot)?;
+    let text = std::fs::read_to_string(&args.calibration)
+        .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
+    let cal: Calibration = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    let comp = Compensator::new(&cal.robot, &desc)?;
+    let poses = read_poses(&args.poses)?;
+    let n = desc.dof();
+    let mut w = csv::Writer::from_path(&args.out).with_context(|| format!("{}: cannot write", args.out.display()))?;
+    let mut header: Vec<String> = vec!["id".into(), "status".into()];
+    header.extend((1..=n).map(|k| format!("cmd_{k}_deg")));
+    for h in [
+        "converged",
+        "iterations",
+        "position_error_mm",
+        "orientation_error_rad",
+        "send_x_mm",
+        "send_y_mm",
+        "send_z_mm",
+        "send_roll_deg",
+        "send_pitch_deg",
+        "send_yaw_deg",
+    ] {
+        header.push(h.into());
+    }
+    w.write_record(&header)?;
+    let mut failed = 0;
+    for p in &poses {
+        let mut row = vec![p.id.clone()];
+        match comp.compensate(&p.world_from_tool) {
+            Ok(c) => {
+                row.push("ok".into());
+                row.extend(c.cmd.iter().map(|v| format!("{:.9}", v.to_degrees())));
+                row.push("true".into());
+                row.push(c.ik.iterations.to_string());
+                row.push(format!("{:.3e}", c.ik.position_error_m * 1e3));
+                row.push(format!("{:.3e}", c.ik.orientation_error_rad));
+                let t = c.nominal_pose_to_send.translation.vector * 1e3;
+                let (r, pi, y) = c.nominal_pose_to_send.rotation.euler_angles();
+                row.extend([t.x, t.y, t.z].iter().map(|v| format!("{v:.6}")));
+                row.extend([r, pi, y].iter().map(|v| format!("{:.9}", v.to_degrees())));
+            }
+            Err(e) => {
+                failed += 1;
+                eprintln!("pose {}: {e}", p.id);
+                let (status, iterations, pos, ori) = match &e {
+                    CompensationError::Ik(IkError::NotConverged {
+                        iterations,
+                        position_error_m,
+                        orientation_error_rad,
+                    }) => (
+                        "ik_failed",
+                        iterations.to_string(),
+                        format!("{:.3e}", position_error_m * 1e3),
+                        format!("{orientation_error_rad:.3e}"),
+                    ),
+                    _ => ("failed", String::new(), String::new(), String::new()),
+                };
+                row.push(status.into());
+                row.extend(std::iter::repeat_n(String::new(), n));
+                row.extend(["false".into(), iterations, pos, ori]);
+                row.extend(std::iter::repeat_n(String::new(), 6));
+            }
+        }
+        w.write_record(&row)?;
+    }
+    w.flush()?;
+    println!(
+        "wrote {} ({} poses, {} failed)",
+        args.out.display(),
+        poses.len(),
+        failed
+    );
+    if failed > 0 {
+        bail!(
+            "{failed} of {} poses could not be compensated (status column)",
+            poses.len()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,162 @@
+//! `axiscal evaluate`: the paper scenario end to end (simulate the paper robot under the
+//! 0.19 mm theodolites -> calibrate -> compensate -> accuracy and repeatability tests), next
+//! to the paper's figures and the noise floor measured in the same run; writes
+//! `evaluation.json`, `poses.csv`, `calibration.json`, `floor_calibration.json` and the plots.
+
+use anyhow::{Context, Result};
+use axiscal::evaluation::{
+    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperScenario, Region,
+    run_paper_scenario, write_plots,
+};
+use axiscal::measurement::MeasurementModel;
+use std::path::{Path, PathBuf};
+
+/// The largest calibrated/floor RMS ratio accepted inside the spans (the issue's 1.1x).
+const FLOOR_RATIO_LIMIT: f64 = 1.1;
+
+/// Arguments of `axiscal evaluate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Seed of the campaign's noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Seed of the test poses and of the evaluation's jitter and noise.
+    #[arg(long, default_value_t = 9283)]
+    evaluation_seed: u64,
+    /// Random test poses per region (inside the spans, workspace).
+    #[arg(long, default_value_t = 30)]
+    random_poses: usize,
+    /// Output directory.
+    #[arg(long, default_value = "results/paper")]
+    out: PathBuf,
+}
+
+fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Runs `axiscal evaluate`.
+pub fn run(args: Args) -> Result<()> {
+    let (instrument, noise) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
+    eprintln!("{noise}");
+    let scenario = PaperScenario {
+        seed: args.seed,
+        evaluation_seed: args.evaluation_seed,
+        random_poses: args.random_poses,
+        instrument,
+    };
+    let out = run_paper_scenario(&scenario)?;
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let r = &out.report;
+    write_json(&args.out.join("evaluation.json"), r)?;
+    write_json(&args.out.join("calibration.json"), &out.calibration)?;
+    write_json(&args.out.join("floor_calibration.json"), &out.floor_calibration)?;
+    let csv_path = args.out.join("poses.csv");
+    let mut w = csv::Writer::from_path(&csv_path).with_context(|| format!("writing {}", csv_path.display()))?;
+    w.write_record([
+        "id",
+        "region",
+        "family",
+        "uncal_position_mm",
+        "uncal_orientation_rad",
+        "cal_position_mm",
+        "cal_orientation_rad",
+        "floor_position_mm",
+        "floor_orientation_rad",
+        "cal_model_position_mm",
+        "floor_model_position_mm",
+        "failure",
+    ])?;
+    let f = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.6}"));
+    for p in &r.poses {
+        w.write_record([
+            p.id.clone(),
+            p.region.name().into(),
+            p.family.clone(),
+            f(Some(p.uncalibrated.position_mm)),
+            f(Some(p.uncalibrated.orientation_rad)),
+            f(p.calibrated.map(|e| e.position_mm)),
+            f(p.calibrated.map(|e| e.orientation_rad)),
+            f(p.floor.map(|e| e.position_mm)),
+            f(p.floor.map(|e| e.orientation_rad)),
+            f(p.calibrated.map(|e| e.model_position_mm)),
+            f(p.floor.map(|e| e.model_position_mm)),
+            p.failure.clone().unwrap_or_default(),
+        ])?;
+    }
+    w.flush()?;
+    let plots = write_plots(r, &args.out)?;
+
+    println!(
+        "paper scenario: seed {}, evaluation seed {}",
+        args.seed, args.evaluation_seed
+    );
+    println!(
+        "ISO 9283 cube edges: {:.0} mm inside the spans, {:.0} mm in the workspace",
+        r.iso_cube_edge_m[0] * 1e3,
+        r.iso_cube_edge_m[1] * 1e3
+    );
+    let mut inside_ratio = f64::NAN;
+    for s in &r.regions {
+        println!(
+            "{} ({} poses, {} failed):",
+            s.region.name(),
+            s.position_mm[0].n,
+            s.failures
+        );
+        println!(
+            "  position    [mm]  uncalibrated mean {:7.3} rms {:7.3}   (paper 47.0 mean)",
+            s.position_mm[0].mean, s.position_mm[0].rms
+        );
+        println!(
+            "                    calibrated   mean {:7.3} rms {:7.3}   (paper {:.2})  floor rms {:.3}  ratio {:.2}",
+            s.position_mm[1].mean,
+            s.position_mm[1].rms,
+            PAPER_POSITION_ERROR_MM[1],
+            s.position_mm[2].rms,
+            s.ratio_to_floor[0]
+        );
+        println!(
+            "  orientation [rad] uncalibrated mean {:7.4} rms {:7.4}   (paper {:.2})",
+            s.orientation_rad[0].mean, s.orientation_rad[0].rms, PAPER_ORIENTATION_ERROR_RAD[0]
+        );
+        println!(
+            "                    calibrated   mean {:7.4} rms {:7.4}   (paper {:.2})  floor rms {:.4}  ratio {:.2}",
+            s.orientation_rad[1].mean,
+            s.orientation_rad[1].rms,
+            PAPER_ORIENTATION_ERROR_RAD[1],
+            s.orientation_rad[2].rms,
+            s.ratio_to_floor[1]
+        );
+        println!(
+            "  model only (no jitter, no noise): position rms {:.3} mm (floor {:.3}, ratio {:.2})",
+            s.model_position_mm[1].rms, s.model_position_mm[2].rms, s.model_ratio_to_floor[0]
+        );
+        if s.region == Region::InsideSpans {
+            inside_ratio = s.ratio_to_floor[0];
+        }
+    }
+    let rep = &r.repeatability;
+    println!(
+        "repeatability ({} poses, mean of 2 executions): observed {:.3} mm / {:.4} rad (paper {:.2} mm / {:.4} rad, \
+         through theodolites); robot alone {:.3} mm / {:.4} rad",
+        rep.poses,
+        rep.observed_radial_mm,
+        rep.observed_orientation_rad,
+        PAPER_REPEATABILITY[0],
+        PAPER_REPEATABILITY[1],
+        rep.robot_radial_mm,
+        rep.robot_orientation_rad
+    );
+    println!(
+        "floor check inside the spans: calibrated/floor position RMS = {inside_ratio:.2} ({} {FLOOR_RATIO_LIMIT}x; see README)",
+        if inside_ratio <= FLOOR_RATIO_LIMIT {
+            "within"
+        } else {
+            "ABOVE"
+        }
+    );
+    println!("wrote {} and {} plots", args.out.display(), plots.len());
+    Ok(())
+}

@@ -1,0 +1,241 @@
+//! Compensation (paper fig. 5): the commands that make the real robot reach a required tool
+//! pose, computed from the CALIBRATED model and fed to the UNCHANGED controller.
+//!
+//! For a required pose `world_from_tool`:
+//! 1. inverse kinematics on the calibrated phi-model (appendix eqs. A1-A4), seeded by the
+//!    nominal closed-form branches ([`solve_seeded_by_nominal`]) or by a given configuration:
+//!    the joint values `q` the robot must reach;
+//! 2. the calibrated couplings undone from joint 1 up (eq. 15 inverted):
+//!    `theta_act_1 = q_1`, `theta_act_k = q_k - g_{k-1,k}(theta_act_{k-1})`;
+//! 3. the calibrated transmissions and transducer offsets applied (eq. 8):
+//!    `u_k = f_k(theta_act_k) + offset_k`, the actuator commands;
+//! 4. the controller's NOMINAL couplings re-applied, so that its own decoupling (fig. 3)
+//!    gives back `u`: `cmd_1 = u_1`, `cmd_{k+1} = u_{k+1} + nominal_slope_{k,k+1} u_k`;
+//! 5. for a controller that takes poses, the nominal direct kinematics of `cmd`: that pose is
+//!    what is sent ([`CompensatedPose::nominal_pose_to_send`]); the controller's nominal
+//!    inverse kinematics returns `cmd` on the same branch.
+//!
+//! Steps 2-4 are the exact inverse of the truth-model semantics
+//! ([`crate::robot::TruthRobot::joint_values`]), so a robot equal to the calibrated model
+//! reaches `q` exactly.
+
+use crate::kinematics::{IkError, IkOptions, IkReport, PhiModel, solve_ik, solve_seeded_by_nominal};
+use crate::robot::{Controller, FourBarError, RobotDescription, TruthRobot};
+use nalgebra::Isometry3;
+
+/// Why a pose cannot be compensated.
+#[derive(Debug, thiserror::Error)]
+pub enum CompensationError {
+    /// The calibrated model and the robot description disagree in their number of joints.
+    #[error("the calibrated robot has {calibrated} joints, the description {nominal}")]
+    JointCount {
+        /// Joints of the calibrated robot.
+        calibrated: usize,
+        /// Joints of the description.
+        nominal: usize,
+    },
+    /// Inverse kinematics on the calibrated model failed (out of reach, singular).
+    #[error("inverse kinematics on the calibrated model: {0}")]
+    Ik(#[from] IkError),
+    /// A calibrated coupling cannot be evaluated at the required active displacement.
+    #[error("coupling into joint {joint}: {source}")]
+    Coupling {
+        /// 1-based driven joint.
+        joint: usize,
+        /// The linkage problem.
+        source: FourBarError,
+    },
+    /// A command is not finite (a coefficient blew up).
+    #[error("joint {joint}: the command is not finite")]
+    NonFinite {
+        /// 1-based joint.
+        joint: usize,
+    },
+}
+
+/// Everything fig. 5 produces for one pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompensatedPose {
+    /// Joint values of the calibrated model that reach the pose \[rad or m\].
+    pub q: Vec<f64>,
+    /// Actual active displacements `theta_act` \[rad or m\].
+    pub theta_act: Vec<f64>,
+    /// Actuator commands `u` (after the controller's decoupling) \[rad or m\].
+    pub actuator: Vec<f64>,
+    /// Joint commands for the unchanged controller \[rad or m\].
+    pub cmd: Vec<f64>,
+    /// Nominal direct kinematics of `cmd`: the pose to send to a controller that takes poses.
+    pub nominal_pose_to_send: Isometry3<f64>,
+    /// How the IK iteration ended.
+    pub ik: IkReport,
+}
+
+/// Fig. 5 for one calibrated robot and its (unchanged) controller.
+#[derive(Clone, Debug)]
+pub struct Compensator {
+    calibrated: TruthRobot,
+    calibrated_model: PhiModel,
+    nominal_model: PhiModel,
+    controller: Controller,
+    ik: IkOptions,
+}
+
+impl Compensator {
+    /// The compensator of `calibrated` (the [`crate::calibration::procedure::Calibration`]'s
+    /// robot) behind the controller of `desc`. IK uses the default tolerances (1e-12 m and
+    /// rad) and reports joints outside the description's limits (seeds inside them first).
+    pub fn new(calibrated: &TruthRobot, desc: &RobotDescription) -> Result<Self, CompensationError> {
+        if calibrated.dof() != desc.dof() {
+            return Err(CompensationError::JointCount {
+                calibrated: calibrated.dof(),
+                nominal: desc.dof(),
+            });
+        }
+        let ik = IkOptions {
+            limits: Some((0..desc.dof()).map(|k| desc.limits_internal(k)).collect()),
+            ..IkOptions::default()
+        };
+        Ok(Compensator {
+            calibrated: calibrated.clone(),
+            calibrated_model: calibrated.model(),
+            nominal_model: desc.nominal_model(),
+            controller: Controller::from_description(desc),
+            ik,
+        })
+    }
+
+    /// Replaces the IK settings.
+    pub fn with_ik_options(mut self, ik: IkOptions) -> Self {
+        self.ik = ik;
+        self
+    }
+
+    /// The nominal model (what the controller believes).
+    pub fn nominal_model(&self) -> &PhiModel {
+        &self.nominal_model
+    }
+
+    /// The calibrated model.
+    pub fn calibrated_model(&self) -> &PhiModel {
+        &self.calibrated_model
+    }
+
+    /// Fig. 5 for `world_from_tool` (instrument frame, metres), the IK seeded by the nominal
+    /// closed-form branches (inside the limits first, nearest the zero pose first).
+    pub fn compensate(&self, world_from_tool: &Isometry3<f64>) -> Result<CompensatedPose, CompensationError> {
+        let s = solve_seeded_by_nominal(&self.calibrated_model, &self.nominal_model, world_from_tool, &self.ik)?;
+        self.commands_for(s.q, s.report)
+    }
+
+    /// Fig. 5 with the IK seeded by `seed` (e.g. the nominal controller's own IK answer, so
+    /// the compensated commands stay on its branch); falls back to [`Compensator::compensate`]
+    /// if the iteration from `seed` does not converge.
+    pub fn compensate_from(
+        &self,
+        world_from_tool: &Isometry3<f64>,
+        seed: &[f64],
+    ) -> Result<CompensatedPose, CompensationError> {
+        match solve_ik(&self.calibrated_model, world_from_tool, seed, &self.ik) {
+            Ok(s) => self.commands_for(s.q, s.report),
+            // Near a wrist singularity the iteration can stall from one seed: try the
+            // nominal closed-form branches before giving up.
+            Err(IkError::NotConverged { .. }) => self.compensate(world_from_tool),
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    /// Steps 2-5 (module docs) for joint values `q` of the calibrated model.
+    fn commands_for(&self, q: Vec<f64>, ik: IkReport) -> Result<CompensatedPose, CompensationError> {
+        let (theta_act, actuator, cmd) = self.joint_commands(&q)?;
+        let nominal_pose_to_send = self.nominal_model.world_from_tool(&cmd);
+        Ok(CompensatedPose {
+            q,
+            theta_act,
+            actuator,
+            cmd,
+            nominal_pose_to_send,
+            ik,
+        })
+    }
+
+    /// Steps 2-4: `(theta_act, u, cmd)` for joint values `q` of the calibrated model.
+    #[allow(clippy::type_complexity)]
+    pub fn joint_commands(&self, q: &[f64]) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>), CompensationError> {
+        let n = self.calibrated.dof();
+        if q.len() != n {
+            return Err(IkError::WrongLength {
+                what: "joint values",
+                expected: n,
+                found: q.len(),
+            }
+            .into());
+        }
+        let mut theta = Vec::with_capacity(n);
+        for (k, j) in self.calibrated.joints.iter().enumerate() {
+            let passive = match (&j.coupling_in, k) {
+                (Some(g), k) if k > 0 => g
+                    .try_passive(theta[k - 1])
+                    .map_err(|source| CompensationError::Coupling { joint: k + 1, source })?,
+                _ => 0.0,
+            };
+            theta.push(q[k] - passive);
+        }
+        let u: Vec<f64> = self
+            .calibrated
+            .joints
+            .iter()
+            .zip(&theta)
+            .map(|(j, &t)| j.transmission.command_from_actual(t) + j.transducer_offset)
+            .collect();
+        let mut cmd = Vec::with_capacity(n);
+        for k in 0..n {
+            let c = match k {
+                0 => u[0],
+                _ => u[k] + self.controller.nominal_passive_into(k + 1, u[k - 1]),
+            };
+            if !c.is_finite() {
+                return Err(CompensationError::NonFinite { joint: k + 1 });
+            }
+            cmd.push(c);
+        }
+        Ok((theta, u, cmd))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn commands_invert_the_truth_semantics() {
+        let desc = RobotDescription::asea_irb6l();
+        let robot = TruthRobot::paper_robot();
+        let comp = Compensator::new(&robot, &desc).unwrap();
+        let controller = Controller::from_description(&desc);
+        let q = [0.2, -0.1, 0.3, -0.5, 0.7, 1.1];
+        let (_, _, cmd) = comp.joint_commands(&q).unwrap();
+        let back = robot.joint_values(&controller, &cmd).unwrap();
+        for (a, b) in back.iter().zip(q) {
+            // The transmission inverse is a Newton iteration to machine precision.
+            assert_relative_eq!(*a, b, epsilon = 1e-12);
+        }
+    }
+
+    #[test]
+    fn an_ideal_robot_needs_no_compensation() {
+        let desc = RobotDescription::asea_irb6l();
+        let comp = Compensator::new(&TruthRobot::ideal(&desc), &desc).unwrap();
+        let q = [0.1, 0.2, -0.3, 0.4, -0.5, 0.6];
+        let target = desc.nominal_model().world_from_tool(&q);
+        let c = comp.compensate(&target).unwrap();
+        for (a, b) in c.cmd.iter().zip(q) {
+            assert_relative_eq!(*a, b, epsilon = 1e-9);
+        }
+        assert_relative_eq!(
+            c.nominal_pose_to_send.to_homogeneous(),
+            target.to_homogeneous(),
+            epsilon = 1e-9
+        );
+    }
+}
