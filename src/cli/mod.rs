@@ -1,6 +1,7 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
 mod calibrate;
+mod import;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -18,6 +19,8 @@ struct Cli {
 enum Command {
     /// Calibrate a robot from a measurement CSV (axes, transmissions, couplings, offsets).
     Calibrate(calibrate::Args),
+    /// Convert measurement data from another group's format to the measurement CSV.
+    Import(import::Args),
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
 }
@@ -32,6 +35,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Calibrate(args) => calibrate::run(args),
+        Command::Import(args) => import::run(args),
         Command::Simulate(args) => simulate::run(args),
     };
     match result {
