@@ -45,7 +45,7 @@ fn imports_the_real_file() {
     }
     // The J2 block reads J3 = -J2: a constant joint 3 relative to the upper arm.
     for m in set.experiment("axis2").unwrap().rows {
-        assert_eq!(m.cmd[2], 0.0);
+        approx::assert_relative_eq!(m.cmd[2], 0.0);
     }
 }
 

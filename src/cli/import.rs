@@ -40,6 +40,9 @@ fn write_csv(out: &Path, force: bool, comment: &str, set: &axiscal::measurement:
     if out.exists() && !force {
         bail!("{} exists; pass --force to replace it", out.display());
     }
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+    }
     let file = std::fs::File::create(out).with_context(|| format!("creating {}", out.display()))?;
     let mut w = std::io::BufWriter::new(file);
     w.write_all(comment.as_bytes())

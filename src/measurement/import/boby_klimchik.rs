@@ -152,14 +152,14 @@ pub fn parse(text: &str, path: &Path) -> Result<MeasurementSet, ImportError> {
         let mut j_deg = [0.0; JOINTS];
         j_deg.copy_from_slice(&values[FIRST_JOINT_FIELD..]);
         let cmd = commands_from_readings(&j_deg).to_vec();
-        for t in 0..TARGETS {
+        for (t, smr) in SMR_OF_TARGET.iter().enumerate() {
             rows.push(Measurement {
                 experiment: format!("axis{joint}"),
                 moved_joint: joint,
                 step: pose % POSES_PER_BLOCK,
                 target: t,
                 position_mm: {
-                    let f = 3 * (SMR_OF_TARGET[t] - 1);
+                    let f = 3 * (smr - 1);
                     [values[f], values[f + 1], values[f + 2]]
                 },
                 cmd: cmd.clone(),

@@ -1,10 +1,11 @@
 use super::*;
+use approx::assert_relative_eq;
 
 /// A well-formed file: pose `p` has SMR coordinates `p + t/10` and joint `p / 6 + 1` at `p`.
 fn good_text() -> String {
     (0..LINES)
         .map(|p| {
-            let mut v = vec![0.0; FIELDS_PER_LINE];
+            let mut v = [0.0; FIELDS_PER_LINE];
             for (c, x) in v.iter_mut().take(9).enumerate() {
                 *x = p as f64 + c as f64 / 10.0;
             }
@@ -33,10 +34,12 @@ fn converts_blocks_to_axis_experiments() {
     let e1 = set.experiment("axis1").unwrap();
     let m = e1.get(2, 1).unwrap();
     // Target 1 is SMR 3: fields 7..=9.
-    assert_eq!(m.position_mm, [2.6, 2.7, 2.8]);
+    for (x, y) in m.position_mm.iter().zip([2.6, 2.7, 2.8]) {
+        assert_relative_eq!(*x, y);
+    }
     // The J2 block's J3 = -J2 reading is a constant relative joint 3.
     for m in set.experiment("axis2").unwrap().rows {
-        assert_eq!(m.cmd[2], 0.0);
+        assert_relative_eq!(m.cmd[2], 0.0);
         assert!(m.cmd[1] > 0.0);
     }
 }
