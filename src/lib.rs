@@ -8,6 +8,7 @@ pub mod compensation;
 pub mod evaluation;
 pub mod kinematics;
 pub mod measurement;
+mod plotting;
 pub mod robot;
 pub mod scenario;
 pub mod sim;

@@ -98,11 +98,9 @@ fn sweep_and_plan_errors_name_their_key() {
     );
     let short = resolve("trials = 1\n[sweep]\nspans = [[10.0]]\n");
     assert!(short.contains("key `sweep.spans`"), "{short}");
-    let effects = resolve("trials = 1\n[effects]\ncompliance = true\n");
-    assert!(
-        effects.contains("key `effects`") && effects.contains("rapier"),
-        "{effects}"
-    );
+    // A stiffness list of the wrong length names the key.
+    let effects = resolve("trials = 1\n[effects.compliance]\nstiffness_nm_per_rad = [1e5, 1e5]\n");
+    assert!(effects.contains("key `effects`"), "{effects}");
     let case = resolve(
         "trials = 1\n[[thresholds]]\nmetric = \"occluded\"\nstat = \"max\"\nop = \"<=\"\nvalue = 0\ncase = \"nope\"\n",
     );

@@ -3,6 +3,7 @@
 mod calibrate;
 mod compensate;
 mod evaluate;
+mod import;
 mod merge;
 mod run;
 mod simulate;
@@ -26,6 +27,8 @@ enum Command {
     /// Monte-Carlo study of the calibrator: efficiency against the Cramer-Rao bound (ML and the
     /// paper's estimator) and the calibration of the reported uncertainties.
     Study(study::Args),
+    /// Convert measurement data from another group's format to the measurement CSV.
+    Import(import::Args),
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
     /// Run a Monte-Carlo scenario (`scenarios/*.toml`): trials in parallel, results under
@@ -49,6 +52,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Calibrate(args) => calibrate::run(args),
+        Command::Import(args) => import::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Study(args) => study::run(args),
         Command::Run(args) => run::run(args),

@@ -9,7 +9,6 @@ use super::paper::PaperReport;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
-use std::sync::Once;
 
 /// Why a plot could not be drawn or written.
 #[derive(Debug, thiserror::Error)]
@@ -21,21 +20,8 @@ pub struct PlotError {
     pub message: String,
 }
 
-static FONT: Once = Once::new();
-
 /// Draws one plot to a path, PNG (`true`) or SVG.
 type DrawFn<'a> = dyn Fn(&Path, bool) -> Result<(), String> + 'a;
-
-fn register_font() {
-    FONT.call_once(|| {
-        // The shipped font is a valid TrueType file; a failure would only lose PNG text.
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            include_bytes!("../../assets/fonts/DejaVuSans.ttf"),
-        );
-    });
-}
 
 /// One series of per-pose values.
 struct Series<'a> {
@@ -162,7 +148,7 @@ fn histogram<DB: DrawingBackend>(
 /// Writes `fig9_position.{png,svg}`, `fig10_orientation.{png,svg}` and
 /// `histogram_position.{png,svg}` into `dir`; returns the files written.
 pub fn write_plots(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
-    register_font();
+    crate::plotting::register_font();
     let pick = |f: fn(&super::ToolError) -> f64, which: usize| -> Vec<f64> {
         report
             .poses

@@ -4,6 +4,7 @@
 
 mod csv_io;
 mod data;
+pub mod import;
 mod model;
 mod noise_calibration;
 mod theodolite;

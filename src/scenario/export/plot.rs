@@ -25,6 +25,7 @@ pub fn histogram_svg(
         message: e,
     };
     let panels = scenario.cases.len().max(1);
+    crate::plotting::register_font();
     let root = SVGBackend::new(path, (720, 260 * panels as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
     let areas = root.split_evenly((panels, 1));
