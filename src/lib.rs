@@ -8,3 +8,5 @@ pub mod kinematics;
 pub mod measurement;
 pub mod robot;
 pub mod sim;
+#[cfg(feature = "viz")]
+pub mod viz;

@@ -1,6 +1,9 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
+#[cfg(feature = "viz")]
+mod record;
 mod simulate;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -17,6 +20,8 @@ struct Cli {
 enum Command {
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
+    /// Open a rerun recording (`.rrd`) in the matching rerun viewer, or print how to install it.
+    View(view::Args),
 }
 
 /// A run that completed but whose thresholds did not hold: exit code 1.
@@ -29,6 +34,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args),
+        Command::View(args) => view::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
