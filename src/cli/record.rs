@@ -12,6 +12,9 @@ use axiscal::viz::{Recorder, four_bar_loop_m};
 use nalgebra::Point3;
 use std::path::Path;
 
+/// The validation error vectors are also drawn this many times longer.
+const ERROR_EXAGGERATION: f64 = 100.0;
+
 /// What the recording is made of.
 pub struct Campaign<'a> {
     /// Nominal description (controller, plan, nominal model for the validation errors).
@@ -107,7 +110,15 @@ pub fn write(path: &Path, c: &Campaign) -> Result<()> {
             rec.set_step(tick);
             log_pose(&rec, c, &model, &controller, cmd).context("replaying a validation pose")?;
             shown += errors.len();
-            rec.log_error_vectors("validation", &predicted[..shown], &measured[..shown], full_scale_m)?;
+            let (from, to) = (&predicted[..shown], &measured[..shown]);
+            rec.log_error_vectors("validation", from, to, full_scale_m, 1.0)?;
+            rec.log_error_vectors(
+                &format!("validation_x{ERROR_EXAGGERATION}"),
+                from,
+                to,
+                full_scale_m,
+                ERROR_EXAGGERATION,
+            )?;
             for e in errors {
                 sum_sq += e * e;
             }

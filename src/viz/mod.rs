@@ -161,14 +161,17 @@ impl Recorder {
     }
 
     /// Logs error vectors as arrows at `world/errors/{name}`, from `from_m[i]` (commanded or
-    /// predicted point) to `to_m[i]` (measured point), each coloured by its length with
-    /// [`error_color`] on the scale `0..=full_scale_m`. Returns the lengths \[m\].
+    /// predicted point) towards `to_m[i]` (measured point), drawn `exaggeration` times their
+    /// length (1 = true scale; millimetre errors on a metre-sized arm need ~100), each
+    /// coloured by its true length with [`error_color`] on the scale `0..=full_scale_m`.
+    /// Returns the true lengths \[m\].
     pub fn log_error_vectors(
         &self,
         name: &str,
         from_m: &[Point3<f64>],
         to_m: &[Point3<f64>],
         full_scale_m: f64,
+        exaggeration: f64,
     ) -> Result<Vec<f64>, VizError> {
         if from_m.len() != to_m.len() {
             return Err(VizError::LengthMismatch {
@@ -179,10 +182,13 @@ impl Recorder {
         }
         let vectors: Vec<_> = from_m.iter().zip(to_m).map(|(a, b)| b - a).collect();
         let lengths: Vec<f64> = vectors.iter().map(|v| v.norm()).collect();
-        let arrows = rerun::Arrows3D::from_vectors(vectors.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]))
-            .with_origins(from_m.iter().map(vec3))
-            .with_radii([0.002_f32])
-            .with_colors(lengths.iter().map(|&l| error_color(l, full_scale_m)));
+        let arrows = rerun::Arrows3D::from_vectors(vectors.iter().map(|v| {
+            let v = v * exaggeration;
+            [v.x as f32, v.y as f32, v.z as f32]
+        }))
+        .with_origins(from_m.iter().map(vec3))
+        .with_radii([0.002_f32])
+        .with_colors(lengths.iter().map(|&l| error_color(l, full_scale_m)));
         self.log(&format!("world/errors/{name}"), &arrows);
         Ok(lengths)
     }
@@ -232,7 +238,7 @@ mod tests {
         }
         let a = [Point3::new(0.0, 0.0, 0.0)];
         let b = [Point3::new(0.001, 0.0, 0.0)];
-        let lengths = rec.log_error_vectors("validation", &a, &b, 0.002).expect("arrows");
+        let lengths = rec.log_error_vectors("validation", &a, &b, 0.002, 1.0).expect("arrows");
         approx::assert_relative_eq!(lengths[0], 0.001);
         rec.save(&path).expect("save");
         let bytes = std::fs::read(&path).expect("read back");
@@ -243,7 +249,7 @@ mod tests {
     #[test]
     fn mismatched_error_vectors_are_an_error() {
         let rec = Recorder::new("axiscal_test").expect("recorder");
-        let err = rec.log_error_vectors("x", &[Point3::origin()], &[], 1.0);
+        let err = rec.log_error_vectors("x", &[Point3::origin()], &[], 1.0, 1.0);
         assert!(matches!(
             err,
             Err(VizError::LengthMismatch {
