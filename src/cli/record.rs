@@ -90,8 +90,10 @@ pub fn write(path: &Path, c: &Campaign) -> Result<()> {
             let world_from_tool = nominal.world_from_tool(&q);
             let errors: Vec<f64> = rows
                 .iter()
-                .map(|r| {
-                    let p = world_from_tool * targets[r.target.min(targets.len() - 1)];
+                // A row naming a tool target the description lacks has nothing to compare to.
+                .filter_map(|r| Some((r, targets.get(r.target)?)))
+                .map(|(r, t)| {
+                    let p = world_from_tool * t;
                     predicted.push(p);
                     measured.push(r.position_m());
                     (r.position_m() - p).norm()
