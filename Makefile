@@ -1,13 +1,26 @@
 # axiscal: the two commands a new user needs are `make run` and `make test`.
 CARGO ?= cargo
 OUT   ?= results/paper
+VENV  ?= .venv
+# The rerun viewer must match the `rerun` crate pinned in Cargo.toml.
+RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' Cargo.toml)
 
-.PHONY: run test bench study lint doc clean-results
+.PHONY: run test bench study lint doc clean-results setup-viewer view
 
-## run: the paper scenario end to end; results under results/
+## run: the paper scenario end to end; results under results/ (with a rerun recording:
+## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
 run:
-	$(CARGO) run --release -- simulate --seed 1 --out $(OUT)/campaign.csv --force
-	$(CARGO) run --release -- evaluate --seed 1 --out $(OUT)
+	$(CARGO) run --profile quick-release --features viz -- simulate --seed 1 --out $(OUT)/campaign.csv --record $(OUT)/campaign.rrd --force
+	$(CARGO) run --profile quick-release --features viz -- evaluate --seed 1 --out $(OUT)
+
+## setup-viewer: the matching rerun viewer (`rerun` binary) in a local virtual environment
+setup-viewer:
+	test -x $(VENV)/bin/python || python3 -m venv $(VENV)
+	$(VENV)/bin/pip install --disable-pip-version-check rerun-sdk==$(RERUN_VERSION)
+
+## view: open the recording of `make run` (prints the install command if no viewer is found)
+view:
+	$(CARGO) run --profile quick-release --features viz -- view $(OUT)/campaign.rrd
 
 ## test: the whole test suite (unit, integration, doc tests)
 test:
@@ -27,6 +40,7 @@ bench:
 lint:
 	$(CARGO) fmt --check
 	$(CARGO) clippy --all-targets -- -D warnings
+	$(CARGO) clippy --all-targets --features viz -- -D warnings
 
 doc:
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps

@@ -13,3 +13,5 @@ pub mod robot;
 pub mod scenario;
 pub mod sim;
 pub mod studies;
+#[cfg(feature = "viz")]
+pub mod viz;

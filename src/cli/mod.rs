@@ -5,9 +5,12 @@ mod compensate;
 mod evaluate;
 mod import;
 mod merge;
+#[cfg(feature = "viz")]
+mod record;
 mod run;
 mod simulate;
 mod study;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -40,6 +43,8 @@ enum Command {
     Compensate(compensate::Args),
     /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
     Evaluate(evaluate::Args),
+    /// Open a rerun recording (`.rrd`) in the matching rerun viewer, or print how to install it.
+    View(view::Args),
 }
 
 /// A run that completed but whose thresholds did not hold: exit code 1.
@@ -59,6 +64,7 @@ pub fn main() -> ExitCode {
         Command::Merge(args) => merge::run(args),
         Command::Compensate(args) => compensate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
+        Command::View(args) => view::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -49,6 +49,11 @@ pub struct Args {
     /// Replace `--out` if it exists (otherwise an existing file is an error).
     #[arg(long)]
     force: bool,
+    /// Also write a rerun recording of the campaign (robot per pose on the `step` timeline,
+    /// measured targets, arc fits, validation errors of the nominal model); view it with
+    /// `axiscal view FILE.rrd`. Needs a build with `--features viz`.
+    #[arg(long, value_name = "FILE.rrd")]
+    record: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -56,6 +61,14 @@ enum Sim {
     Rapier,
     Analytic,
 }
+/// `--record` was given to a build without the `viz` feature.
+#[cfg(not(feature = "viz"))]
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "--record {0} needs the rerun recorder, which this build does not include: rebuild with \
+     `cargo build --release --features viz` (`make run` does)"
+)]
+struct RecordUnavailable(String);
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 enum Instrument {
@@ -65,6 +78,10 @@ enum Instrument {
 
 /// Runs `axiscal simulate`.
 pub fn run(args: Args) -> Result<()> {
+    #[cfg(not(feature = "viz"))]
+    if let Some(path) = &args.record {
+        return Err(RecordUnavailable(path.display().to_string()).into());
+    }
     let desc = RobotDescription::from_file(&args.robot)?;
     let truth = match &args.truth {
         Some(path) => TruthRobot::from_file(path)?,
@@ -137,6 +154,25 @@ pub fn run(args: Args) -> Result<()> {
     println!("  occluded target observations: {total}");
     for (experiment, n) in &out.occluded {
         println!("  {experiment}: {n} target observation(s) occluded");
+    }
+    #[cfg(feature = "viz")]
+    if let Some(path) = &args.record {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        let campaign = super::record::Campaign {
+            desc: &desc,
+            truth: arm.truth(),
+            plan: &plan,
+            set: &set,
+            instrument: &instrument,
+        };
+        super::record::write(path, &campaign).with_context(|| format!("recording {}", path.display()))?;
+        println!(
+            "wrote {} (view it with `axiscal view {}`)",
+            path.display(),
+            path.display()
+        );
     }
     Ok(())
 }

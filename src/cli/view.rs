@@ -1,0 +1,99 @@
+//! `axiscal view FILE.rrd`: opens a recording in the rerun viewer of the version the recording
+//! was written with, or says how to install it.
+
+use anyhow::{Result, bail};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The version of the `rerun` crate pinned in Cargo.toml: recordings are read by the viewer of
+/// the same version (checked against Cargo.toml and Cargo.lock by a test).
+pub const RERUN_VERSION: &str = "0.36.3";
+
+/// The command that installs the matching viewer (the `rerun-sdk` wheel ships the `rerun`
+/// binary).
+pub fn install_command() -> String {
+    format!("pip install rerun-sdk=={RERUN_VERSION}")
+}
+
+/// Arguments of `axiscal view`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The recording (`.rrd`, e.g. written by `axiscal simulate --record FILE.rrd`).
+    file: PathBuf,
+}
+
+/// The viewer binary: `.venv/bin/rerun` (what `make setup-viewer` installs) if present, else
+/// `rerun` on `PATH`.
+fn find_viewer() -> Option<PathBuf> {
+    let venv = Path::new(".venv").join("bin").join("rerun");
+    if venv.is_file() {
+        return Some(venv);
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|dir| dir.join("rerun"))
+        .find(|candidate| candidate.is_file())
+}
+
+/// Runs `axiscal view`. A missing or failing viewer is not an error (exit 0): the recording is
+/// still valid, and this prints what to do.
+pub fn run(args: Args) -> Result<()> {
+    if !args.file.is_file() {
+        bail!("no recording at {}", args.file.display());
+    }
+    let Some(viewer) = find_viewer() else {
+        println!(
+            "The rerun viewer was not found (looked in .venv/bin/ and on PATH). Install the viewer \
+             matching this recording with\n\n    {}\n\n(`make setup-viewer` installs it into .venv), \
+             then run `axiscal view {}` again.",
+            install_command(),
+            args.file.display()
+        );
+        return Ok(());
+    };
+    if let Ok(out) = Command::new(&viewer).arg("--version").output() {
+        let version = String::from_utf8_lossy(&out.stdout);
+        if !version.contains(RERUN_VERSION) {
+            eprintln!(
+                "warning: {} reports `{}`; recordings are written by rerun {RERUN_VERSION} \
+                 (install the match with `{}`)",
+                viewer.display(),
+                version.trim(),
+                install_command()
+            );
+        }
+    }
+    eprintln!("opening {} with {}", args.file.display(), viewer.display());
+    match Command::new(&viewer).arg(&args.file).status() {
+        Ok(status) if status.success() => {}
+        Ok(status) => eprintln!(
+            "warning: the viewer exited with {status} (no display?); the recording is unaffected \
+             (check it with `{} rrd verify {}`)",
+            viewer.display(),
+            args.file.display()
+        ),
+        Err(e) => eprintln!("warning: could not start {}: {e}", viewer.display()),
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn viewer_version_matches_the_pinned_crate() {
+        let manifest = include_str!("../../Cargo.toml");
+        let line = manifest
+            .lines()
+            .find(|l| l.starts_with("rerun = "))
+            .expect("Cargo.toml declares rerun");
+        assert!(line.contains(&format!("version = \"={RERUN_VERSION}\"")), "{line}");
+        let lock = include_str!("../../Cargo.lock");
+        assert!(
+            lock.contains(&format!("name = \"rerun\"\nversion = \"{RERUN_VERSION}\"")),
+            "Cargo.lock pins rerun {RERUN_VERSION}"
+        );
+        assert_eq!(install_command(), "pip install rerun-sdk==0.36.3");
+    }
+}

@@ -1,0 +1,116 @@
+//! Fitted axes (arrows) and arcs (line strips) in a recording.
+
+use super::{Recorder, VizError, colors::experiment_color, vec3};
+use crate::calibration::ArcFit;
+use crate::kinematics::AxisLine;
+use nalgebra::Point3;
+
+/// Number of line-strip vertices of a drawn arc.
+const ARC_SAMPLES: usize = 64;
+
+/// `samples` points of the fitted arc of `fit` over the swept range of `commands_rad`, in the
+/// fit's unit: `p(D) = c + r (cos(phi0 + D) u + sin(phi0 + D) v)` for `D` from the smallest to
+/// the largest `D_j = f^-1(theta_c^j) - f^-1(theta_c^0)` (the arc model of
+/// [`crate::calibration::arc_model`], paper eqs. 6-8). Commands that the fitted transmission
+/// cannot invert are skipped; `None` if none is left.
+pub fn arc_points(fit: &ArcFit, commands_rad: &[f64], samples: usize) -> Option<Vec<Point3<f64>>> {
+    let d: Vec<f64> = commands_rad
+        .iter()
+        .filter_map(|&c| fit.transmission.actual_from_command(c))
+        .map(|a| a - fit.actual_start_rad)
+        .collect();
+    let lo = d.iter().copied().reduce(f64::min)?;
+    let hi = d.iter().copied().reduce(f64::max)?;
+    let p = &fit.params;
+    let (u, v) = (p.u().into_inner(), p.v().into_inner());
+    let samples = samples.max(2);
+    Some(
+        (0..samples)
+            .map(|i| {
+                let dj = lo + (hi - lo) * i as f64 / (samples - 1) as f64;
+                let (s, c) = (p.phase_rad + dj).sin_cos();
+                p.centre + p.radius * (c * u + s * v)
+            })
+            .collect(),
+    )
+}
+
+impl Recorder {
+    /// Logs a joint axis as an arrow at `world/fits/{experiment}/axis`: from `length_m / 2`
+    /// behind the axis point to `length_m / 2` ahead, along `+Z` of the joint (line in metres).
+    pub fn log_axis(&self, experiment: &str, axis: &AxisLine, length_m: f64) {
+        let half = axis.direction.into_inner() * (length_m / 2.0);
+        let start = axis.origin_m - half;
+        let vector = 2.0 * half;
+        let arrow = rerun::Arrows3D::from_vectors([[vector.x as f32, vector.y as f32, vector.z as f32]])
+            .with_origins([vec3(&start)])
+            .with_radii([0.003_f32])
+            .with_colors([experiment_color(experiment)])
+            .with_labels([format!("{experiment} axis")]);
+        self.log(&format!("world/fits/{experiment}/axis"), &arrow);
+    }
+
+    /// Logs a fitted arc of experiment `experiment` at `world/fits/{experiment}/arc` (sampled
+    /// by [`arc_points`] over the commands of the sweep) and its axis (see
+    /// [`Recorder::log_axis`], as long as the arc's diameter). `unit_m` is the length of the
+    /// fit's unit in metres (1e-3 for a fit in millimetres).
+    pub fn log_arc_fit(
+        &self,
+        experiment: &str,
+        fit: &ArcFit,
+        commands_rad: &[f64],
+        unit_m: f64,
+    ) -> Result<(), VizError> {
+        let points = arc_points(fit, commands_rad, ARC_SAMPLES).ok_or(VizError::LengthMismatch {
+            what: "invertible sweep commands",
+            expected: commands_rad.len(),
+            found: 0,
+        })?;
+        let strip: Vec<[f32; 3]> = points.iter().map(|p| vec3(&(p * unit_m))).collect();
+        let arc = rerun::LineStrips3D::new([strip])
+            .with_radii([0.003_f32])
+            .with_colors([experiment_color(experiment)]);
+        self.log(&format!("world/fits/{experiment}/arc"), &arc);
+        let axis = AxisLine {
+            origin_m: fit.axis.origin_m * unit_m,
+            direction: fit.axis.direction,
+        };
+        self.log_axis(experiment, &axis, (2.0 * fit.radius * unit_m).max(0.2));
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibration::{ArcFitOptions, MeasurementNoise, TransmissionForm, fit_arc};
+    use approx::assert_relative_eq;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn arc_points_lie_on_the_fitted_circle_over_the_swept_range() {
+        // An exact arc of radius 0.5 about z through (1, 2, 3), swept over 1 rad.
+        let commands: Vec<f64> = (0..8).map(|j| 0.2 + j as f64 / 7.0).collect();
+        let centre = Point3::new(1.0, 2.0, 3.0);
+        let pts: Vec<Point3<f64>> = commands
+            .iter()
+            .map(|c| centre + 0.5 * Vector3::new(c.cos(), c.sin(), 0.0))
+            .collect();
+        let options = ArcFitOptions {
+            form: TransmissionForm::Harmonic { order: 1 },
+            noise: MeasurementNoise::Isotropic { sigma_per_axis: 1e-4 },
+            reference_point: centre,
+            max_iterations: 50,
+        };
+        let fit = fit_arc(&pts, &commands, &options).expect("fit");
+        let arc = arc_points(&fit, &commands, 16).expect("arc");
+        assert_eq!(arc.len(), 16);
+        for p in &arc {
+            assert_relative_eq!((p - centre).xy().norm(), 0.5, epsilon = 1e-6);
+        }
+        let ends = [arc[0], arc[15]];
+        let firsts = [pts[0], pts[7]];
+        let matched = ends.iter().all(|e| firsts.iter().any(|f| (e - f).norm() < 1e-6));
+        assert!(matched, "arc ends at the first and last measured points");
+    }
+}

@@ -1,0 +1,262 @@
+//! Rerun recordings of a campaign (cargo feature `viz`): an observer that the CLI drives; the
+//! maths never calls it.
+//!
+//! A [`Recorder`] buffers everything in memory and [`Recorder::save`] writes one `.rrd` file
+//! (open it with `axiscal view FILE.rrd`, i.e. the `rerun` viewer of the same version as the
+//! `rerun` crate). Everything is in the world (instrument) frame, in metres, right-handed with
+//! Z up. Entity layout:
+//!
+//! | entity | archetype | what |
+//! |---|---|---|
+//! | `world/robot/link{k}` | `Transform3D` + `TransformAxes3D` | `world_from_link` of link `k` (1-based) |
+//! | `world/robot/skeleton` | `LineStrips3D` | joint-frame origins, base to tool |
+//! | `world/robot/links` | `Boxes3D` | one slim box per segment between joint origins |
+//! | `world/robot/four_bar` | `LineStrips3D` | the closed four-bar loop, when given |
+//! | `world/targets/{experiment}` | `Points3D` | measured targets, one colour per experiment |
+//! | `world/fits/{experiment}/axis` | `Arrows3D` | a fitted joint axis |
+//! | `world/fits/{experiment}/arc` | `LineStrips3D` | the fitted arc over the swept range |
+//! | `world/errors/{name}` | `Arrows3D` | error vectors, coloured by [`error_color`] |
+//! | `scalars/...` | `Scalars` | residuals and errors |
+//!
+//! Two sequence timelines: `step` (a pose counter running through the whole campaign) and
+//! `trial` (a Monte-Carlo trial index); see [`STEP_TIMELINE`], [`TRIAL_TIMELINE`].
+
+mod colors;
+mod fits;
+mod robot;
+
+pub use colors::{ERROR_COLOR_STOPS, error_color, experiment_color};
+pub use fits::arc_points;
+pub use robot::{four_bar_loop_m, segment_boxes};
+
+use nalgebra::Point3;
+use std::path::{Path, PathBuf};
+
+/// The timeline of poses: one tick per commanded pose, through the whole campaign.
+pub const STEP_TIMELINE: &str = "step";
+/// The timeline of Monte-Carlo trials.
+pub const TRIAL_TIMELINE: &str = "trial";
+
+/// A recording could not be made or written.
+#[derive(Debug, thiserror::Error)]
+pub enum VizError {
+    /// The recording stream could not be created.
+    #[error("creating the rerun recording: {source}")]
+    Stream {
+        /// Why.
+        source: rerun::RecordingStreamError,
+    },
+    /// The `.rrd` file could not be created.
+    #[error("writing the rerun recording {path}: {source}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: rerun::sink::FileSinkError,
+    },
+    /// Buffered data could not be flushed to the file.
+    #[error("flushing the rerun recording {path}: {source}")]
+    Flush {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: rerun::sink::SinkFlushError,
+    },
+    /// Some log calls failed (serialisation); the rest of the recording was written.
+    #[error("{count} rerun log call(s) failed, the first: {first}")]
+    Log {
+        /// Number of failed calls.
+        count: usize,
+        /// The first failure.
+        first: String,
+    },
+    /// Two inputs that must match in length do not.
+    #[error("{what}: expected {expected} items, found {found}")]
+    LengthMismatch {
+        /// What was logged.
+        what: &'static str,
+        /// Expected count.
+        expected: usize,
+        /// Found count.
+        found: usize,
+    },
+}
+
+/// Observer that logs a campaign to a rerun recording (see the module docs for the layout).
+#[derive(Debug)]
+pub struct Recorder {
+    stream: rerun::RecordingStream,
+    /// Log calls that failed, and the first failure (reported by [`Recorder::save`]).
+    failures: std::cell::RefCell<(usize, Option<String>)>,
+}
+
+pub(crate) fn vec3(p: &Point3<f64>) -> [f32; 3] {
+    [p.x as f32, p.y as f32, p.z as f32]
+}
+
+impl Recorder {
+    /// A recording buffered in memory under application id `application_id` (e.g. `axiscal`),
+    /// with the world frame declared right-handed, Z up.
+    pub fn new(application_id: &'static str) -> Result<Self, VizError> {
+        let stream = rerun::RecordingStreamBuilder::new(application_id)
+            .buffered()
+            .map_err(|source| VizError::Stream { source })?;
+        let rec = Recorder {
+            stream,
+            failures: Default::default(),
+        };
+        let result = rec
+            .stream
+            .log_static("world", &rerun::ViewCoordinates::RIGHT_HAND_Z_UP());
+        rec.note(result);
+        Ok(rec)
+    }
+
+    /// Remembers a failed log call for [`Recorder::save`].
+    fn note(&self, result: rerun::RecordingStreamResult<()>) {
+        if let Err(e) = result {
+            let mut f = self.failures.borrow_mut();
+            f.0 += 1;
+            f.1.get_or_insert_with(|| e.to_string());
+        }
+    }
+
+    /// Logs `what` at `entity` on the current timelines.
+    pub(crate) fn log<A: rerun::AsComponents + ?Sized>(&self, entity: &str, what: &A) {
+        self.note(self.stream.log(entity, what));
+    }
+
+    /// The underlying stream, for logging anything this type has no method for.
+    pub fn stream(&self) -> &rerun::RecordingStream {
+        &self.stream
+    }
+
+    /// Sets the `step` timeline for everything logged next.
+    pub fn set_step(&self, step: i64) {
+        self.stream.set_time_sequence(STEP_TIMELINE, step);
+    }
+
+    /// Sets the `trial` timeline for everything logged next.
+    pub fn set_trial(&self, trial: i64) {
+        self.stream.set_time_sequence(TRIAL_TIMELINE, trial);
+    }
+
+    /// Clears both timelines: what is logged next is timeless for them (latest-at everywhere).
+    pub fn reset_time(&self) {
+        self.stream.reset_time();
+    }
+
+    /// Logs a scalar at `scalars/{name}` on the current timelines (`name` may contain `/`).
+    pub fn log_scalar(&self, name: &str, value: f64) {
+        self.log(&format!("scalars/{name}"), &rerun::Scalars::single(value));
+    }
+
+    /// Logs measured target positions \[m\] of one experiment at `world/targets/{experiment}`,
+    /// coloured by [`experiment_color`].
+    pub fn log_targets(&self, experiment: &str, points_m: &[Point3<f64>]) {
+        let points = rerun::Points3D::new(points_m.iter().map(vec3))
+            .with_radii([0.006_f32])
+            .with_colors([experiment_color(experiment)]);
+        self.log(&format!("world/targets/{experiment}"), &points);
+    }
+
+    /// Logs error vectors as arrows at `world/errors/{name}`, from `from_m[i]` (commanded or
+    /// predicted point) towards `to_m[i]` (measured point), drawn `exaggeration` times their
+    /// length (1 = true scale; millimetre errors on a metre-sized arm need ~100), each
+    /// coloured by its true length with [`error_color`] on the scale `0..=full_scale_m`.
+    /// Returns the true lengths \[m\].
+    pub fn log_error_vectors(
+        &self,
+        name: &str,
+        from_m: &[Point3<f64>],
+        to_m: &[Point3<f64>],
+        full_scale_m: f64,
+        exaggeration: f64,
+    ) -> Result<Vec<f64>, VizError> {
+        if from_m.len() != to_m.len() {
+            return Err(VizError::LengthMismatch {
+                what: "error vector end points",
+                expected: from_m.len(),
+                found: to_m.len(),
+            });
+        }
+        let vectors: Vec<_> = from_m.iter().zip(to_m).map(|(a, b)| b - a).collect();
+        let lengths: Vec<f64> = vectors.iter().map(|v| v.norm()).collect();
+        let arrows = rerun::Arrows3D::from_vectors(vectors.iter().map(|v| {
+            let v = v * exaggeration;
+            [v.x as f32, v.y as f32, v.z as f32]
+        }))
+        .with_origins(from_m.iter().map(vec3))
+        .with_radii([0.002_f32])
+        .with_colors(lengths.iter().map(|&l| error_color(l, full_scale_m)));
+        self.log(&format!("world/errors/{name}"), &arrows);
+        Ok(lengths)
+    }
+
+    /// Writes everything logged so far, and anything logged later up to drop, to the `.rrd`
+    /// file at `path` (replacing it), then finalises the file (footer written). Fails if any
+    /// log call failed (the file is written all the same).
+    pub fn save(self, path: &Path) -> Result<(), VizError> {
+        self.stream.save(path).map_err(|source| VizError::File {
+            path: path.to_owned(),
+            source,
+        })?;
+        self.stream.flush_blocking().map_err(|source| VizError::Flush {
+            path: path.to_owned(),
+            source,
+        })?;
+        self.stream.finalize_deferred_sinks();
+        match self.failures.take() {
+            (0, _) => Ok(()),
+            (count, first) => Err(VizError::Log {
+                count,
+                first: first.unwrap_or_default(),
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::RobotDescription;
+
+    #[test]
+    fn a_saved_recording_is_a_non_empty_rrd_file() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("x.rrd");
+        let desc = RobotDescription::asea_irb6l();
+        let model = desc.nominal_model();
+        let rec = Recorder::new("axiscal_test").expect("recorder");
+        rec.set_trial(0);
+        for step in 0..3 {
+            rec.set_step(step);
+            let q = vec![0.1 * step as f64; desc.dof()];
+            rec.log_robot(&model, &q);
+            rec.log_targets("axis1", &[model.world_from_tool(&q) * Point3::origin()]);
+            rec.log_scalar("residual_mm", step as f64);
+        }
+        let a = [Point3::new(0.0, 0.0, 0.0)];
+        let b = [Point3::new(0.001, 0.0, 0.0)];
+        let lengths = rec.log_error_vectors("validation", &a, &b, 0.002, 1.0).expect("arrows");
+        approx::assert_relative_eq!(lengths[0], 0.001);
+        rec.save(&path).expect("save");
+        let bytes = std::fs::read(&path).expect("read back");
+        assert!(bytes.len() > 1000, "recording has {} bytes", bytes.len());
+        assert_eq!(&bytes[..4], b"RRF2", "rrd magic");
+    }
+
+    #[test]
+    fn mismatched_error_vectors_are_an_error() {
+        let rec = Recorder::new("axiscal_test").expect("recorder");
+        let err = rec.log_error_vectors("x", &[Point3::origin()], &[], 1.0, 1.0);
+        assert!(matches!(
+            err,
+            Err(VizError::LengthMismatch {
+                expected: 1,
+                found: 0,
+                ..
+            })
+        ));
+    }
+}

@@ -1,0 +1,155 @@
+//! The robot in a recording: link frames, a skeleton through the joint origins, slim boxes
+//! for the links, and the four-bar loop.
+
+use super::{Recorder, vec3};
+use crate::kinematics::PhiModel;
+use crate::robot::FourBarGeometry;
+use nalgebra::{Isometry3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
+
+/// Half-width of the link boxes \[m\].
+const LINK_HALF_WIDTH_M: f32 = 0.025;
+/// Length of the drawn link-frame axes \[m\].
+const FRAME_AXIS_LENGTH_M: f32 = 0.12;
+
+/// One box per segment `points[i] -> points[i+1]` of a polyline: `(centre, half sizes,
+/// rotation)`, the box's local x along the segment, `half_width` across. Zero-length segments
+/// are skipped.
+pub fn segment_boxes(
+    points_m: &[Point3<f64>],
+    half_width_m: f64,
+) -> Vec<(Point3<f64>, Vector3<f64>, UnitQuaternion<f64>)> {
+    points_m
+        .windows(2)
+        .filter_map(|w| {
+            let d = w[1] - w[0];
+            let length = d.norm();
+            if length <= f64::EPSILON {
+                return None;
+            }
+            let rotation = UnitQuaternion::rotation_between(&Vector3::x(), &d)
+                // x and d antiparallel: half a turn about z.
+                .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI));
+            Some((
+                nalgebra::center(&w[0], &w[1]),
+                Vector3::new(length / 2.0, half_width_m, half_width_m),
+                rotation,
+            ))
+        })
+        .collect()
+}
+
+/// The closed loop `O2 -> C -> P -> O3 -> O2` of the 2->3 four-bar (the planar construction
+/// documented with [`FourBarGeometry`]: arm, crank, rod, lever) in the world \[m\]: the linkage's plane is the one
+/// through `O2` (origin of `world_from_frame2`, the fixed frame of axis 2) normal to axis 2;
+/// its planar x axis is the arm direction `O2 -> O3` (projected in the plane) turned back by
+/// `theta_2_rad`, the active displacement of joint 2; `passive_rad` is `g(theta_2)`.
+pub fn four_bar_loop_m(
+    geometry: &FourBarGeometry,
+    world_from_frame2: &Isometry3<f64>,
+    axis3_point_m: &Point3<f64>,
+    theta_2_rad: f64,
+    passive_rad: f64,
+) -> [Point3<f64>; 5] {
+    let o2 = world_from_frame2 * Point3::origin();
+    let n = world_from_frame2 * Vector3::z_axis();
+    let to_o3 = axis3_point_m - o2;
+    let in_plane = to_o3 - n.into_inner() * n.dot(&to_o3);
+    let arm = Unit::try_new(in_plane, 1e-9).unwrap_or(world_from_frame2 * Vector3::x_axis());
+    let ex = Rotation3::from_axis_angle(&n, -theta_2_rad) * arm.into_inner();
+    let ey = n.cross(&ex);
+    let at = |radius: f64, angle: f64| radius * (angle.cos() * ex + angle.sin() * ey);
+    let g = geometry;
+    let o3 = o2 + at(g.arm_m, theta_2_rad);
+    let c = o2 + at(g.crank_m, g.crank_angle_rad);
+    let p = o3 + at(g.lever_m, theta_2_rad + g.lever_angle_rad + passive_rad);
+    [o2, c, p, o3, o2]
+}
+
+impl Recorder {
+    /// Logs the arm of `model` at joint values `q` (rad, m): `world/robot/link{k}` transforms
+    /// (`world_from_link`, with drawn axes), a skeleton line strip through the fixed frames'
+    /// origins and the tool origin, and a slim box per segment.
+    ///
+    /// # Panics
+    /// If `q.len() != model.dof()` (a programming error, as [`PhiModel::poses`]).
+    pub fn log_robot(&self, model: &PhiModel, q: &[f64]) {
+        let poses = model.poses(q);
+        for (k, link) in poses.world_from_link.iter().enumerate() {
+            let t = link.translation.vector;
+            let r = link.rotation.coords; // (i, j, k, w)
+            let transform = rerun::Transform3D::from_translation_rotation(
+                [t.x as f32, t.y as f32, t.z as f32],
+                rerun::Quaternion::from_xyzw([r.x as f32, r.y as f32, r.z as f32, r.w as f32]),
+            );
+            let entity = format!("world/robot/link{}", k + 1);
+            self.log(entity.as_str(), &transform);
+            self.log(entity.as_str(), &rerun::TransformAxes3D::new(FRAME_AXIS_LENGTH_M));
+        }
+        let mut joints: Vec<Point3<f64>> = poses.world_from_frame.iter().map(|f| f * Point3::origin()).collect();
+        joints.push(poses.world_from_tool * Point3::origin());
+        let skeleton = rerun::LineStrips3D::new([joints.iter().map(vec3).collect::<Vec<_>>()])
+            .with_radii([0.004_f32])
+            .with_colors([[40_u8, 40, 40, 255]]);
+        self.log("world/robot/skeleton", &skeleton);
+        let boxes = segment_boxes(&joints, f64::from(LINK_HALF_WIDTH_M));
+        let links = rerun::Boxes3D::from_centers_and_half_sizes(
+            boxes.iter().map(|(c, _, _)| vec3(c)),
+            boxes.iter().map(|(_, h, _)| [h.x as f32, h.y as f32, h.z as f32]),
+        )
+        .with_quaternions(boxes.iter().map(|(_, _, r)| {
+            let c = r.coords;
+            rerun::Quaternion::from_xyzw([c.x as f32, c.y as f32, c.z as f32, c.w as f32])
+        }))
+        .with_colors([[150_u8, 150, 160, 255]]);
+        self.log("world/robot/links", &links);
+    }
+
+    /// Logs the four-bar as a closed line strip at `world/robot/four_bar` (points in the world
+    /// \[m\], e.g. from [`four_bar_loop_m`]).
+    pub fn log_four_bar(&self, points_m: &[Point3<f64>]) {
+        let strip = rerun::LineStrips3D::new([points_m.iter().map(vec3).collect::<Vec<_>>()])
+            .with_radii([0.005_f32])
+            .with_colors([[200_u8, 90, 30, 255]]);
+        self.log("world/robot/four_bar", &strip);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn boxes_span_their_segments() {
+        let pts = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(0.0, 2.0, 0.0),
+            Point3::new(0.0, 2.0, 0.0),
+            Point3::new(-1.0, 2.0, 0.0),
+        ];
+        let boxes = segment_boxes(&pts, 0.1);
+        assert_eq!(boxes.len(), 2, "the zero-length segment is skipped");
+        let (c, h, r) = &boxes[0];
+        assert_relative_eq!(*c, Point3::new(0.0, 1.0, 0.0), epsilon = 1e-12);
+        assert_relative_eq!(h.x, 1.0, epsilon = 1e-12);
+        assert_relative_eq!(r * Vector3::x(), Vector3::y(), epsilon = 1e-12);
+        let (_, _, r) = &boxes[1];
+        assert_relative_eq!(r * Vector3::x(), -Vector3::x(), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn parallelogram_loop_closes_with_its_nominal_passive_angle() {
+        let g = FourBarGeometry::parallelogram(0.7, 0.2, 2.0);
+        let frame2 = Isometry3::translation(1.0, 2.0, 3.0);
+        let theta_2: f64 = 0.3;
+        let axis3 = Point3::new(1.0 + 0.7 * theta_2.cos(), 2.0 + 0.7 * theta_2.sin(), 3.5);
+        let passive = g.passive(theta_2).expect("assembles");
+        let [o2, c, p, o3, end] = four_bar_loop_m(&g, &frame2, &axis3, theta_2, passive);
+        assert_eq!(o2, end);
+        assert_relative_eq!((o3 - o2).norm(), g.arm_m, epsilon = 1e-12);
+        assert_relative_eq!((c - o2).norm(), g.crank_m, epsilon = 1e-12);
+        assert_relative_eq!((p - c).norm(), g.rod_m, epsilon = 1e-9);
+        assert_relative_eq!((p - o3).norm(), g.lever_m, epsilon = 1e-12);
+        assert_relative_eq!(o3, Point3::new(axis3.x, axis3.y, 3.0), epsilon = 1e-12);
+    }
+}
