@@ -112,6 +112,8 @@ pub fn run(args: Args) -> Result<()> {
         report_spans(&desc, &truth, &plan, &instrument)?;
     }
     let name = truth.name.clone();
+    #[cfg(feature = "viz")]
+    let recorded_truth = truth.clone();
     let mut rng = StdRng::seed_from_u64(args.seed);
     let out = match args.sim {
         Sim::Analytic => {
@@ -162,7 +164,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         let campaign = super::record::Campaign {
             desc: &desc,
-            truth: arm.truth(),
+            truth: &recorded_truth,
             plan: &plan,
             set: &set,
             instrument: &instrument,

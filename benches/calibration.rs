@@ -1,0 +1,63 @@
+//! One full 6-axis calibration of a Table-1 campaign (target: < 1 ms in release), against an
+//! in-run baseline: one circle fit per axis (the least any per-axis method must do).
+
+use axiscal::calibration::fit_circle;
+use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
+use axiscal::campaign::{AnalyticArm, CalibrationPlan, ValidationPlan, simulate_campaign};
+use axiscal::measurement::{MeasurementModel, MeasurementSet};
+use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use criterion::{Criterion, criterion_group, criterion_main};
+use rand::{SeedableRng, rngs::StdRng};
+use std::hint::black_box;
+
+fn campaign() -> (RobotDescription, MeasurementSet) {
+    let desc = RobotDescription::asea_irb6l();
+    let mut arm = AnalyticArm::new(TruthRobot::paper_robot(), Controller::from_description(&desc));
+    let validation = ValidationPlan {
+        poses: 0,
+        ..ValidationPlan::workspace_default(6)
+    };
+    let out = simulate_campaign(
+        &desc,
+        &CalibrationPlan::table1(6),
+        &validation,
+        &mut arm,
+        &MeasurementModel::paper_isotropic(),
+        &mut StdRng::seed_from_u64(1),
+    )
+    .expect("the paper campaign simulates");
+    let set = MeasurementSet::new(6, out.rows).expect("consistent rows");
+    (desc, set)
+}
+
+fn bench(c: &mut Criterion) {
+    let (desc, set) = campaign();
+    let sweeps: Vec<Vec<nalgebra::Point3<f64>>> = set
+        .experiments()
+        .iter()
+        .filter(|e| e.moved_joint > 0)
+        .map(|e| {
+            e.rows
+                .iter()
+                .filter(|r| r.target == 0)
+                .map(|r| r.position_m())
+                .collect()
+        })
+        .collect();
+    let mut g = c.benchmark_group("calibration");
+    g.bench_function("baseline/six_circle_fits", |b| {
+        b.iter(|| {
+            for s in &sweeps {
+                black_box(fit_circle(black_box(s)).expect("arc"));
+            }
+        })
+    });
+    let options = CalibrationOptions::default();
+    g.bench_function("full_table1_calibration", |b| {
+        b.iter(|| black_box(calibrate(black_box(&set), &desc, &options).expect("calibrates")))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
