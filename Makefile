@@ -12,6 +12,7 @@ RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' C
 run:
 	$(CARGO) run --profile quick-release --features viz -- simulate --seed 1 --out $(OUT)/campaign.csv --record $(OUT)/campaign.rrd --force
 	$(CARGO) run --profile quick-release --features viz -- evaluate --seed 1 --out $(OUT)
+	$(CARGO) run --profile quick-release --features viz -- run scenarios/paper.toml --force --out $(OUT)/montecarlo
 
 ## setup-viewer: the matching rerun viewer (`rerun` binary) in a local virtual environment
 setup-viewer:
