@@ -78,29 +78,8 @@ fn missing_axis_experiment_is_named() {
 fn noise_free_perturbed_robot_is_reproduced() {
     use axiscal::robot::{PerturbationSpec, perturb};
     let spec = PerturbationSpec::from_toml_str(
-        r#"
-        transducer_offset_deg = { truncated_normal = { sigma = 0.1, limit = 0.15 } }
-        [rows]
-        a_mm = { normal = { sigma = 0.5 } }
-        b_mm = { normal = { sigma = 0.5 } }
-        alpha_deg = { uniform = { half_width = 0.05 } }
-        beta_deg = { normal = { sigma = 0.05 } }
-        [placement]
-        translation_mm = { normal = { sigma = 1.0 } }
-        rpy_deg = { normal = { sigma = 0.01 } }
-        [transmission]
-        sin_rad = { normal = { sigma = 0.002 } }
-        cos_rad = { normal = { sigma = 0.002 } }
-        [[coupling_harmonics]]
-        into = 5
-        sin_rad = { normal = { sigma = 0.01 } }
-        [four_bar]
-        into = 3
-        nominal = { arm_m = 0.69, crank_m = 0.2, rod_m = 0.69, lever_m = 0.2, crank_angle_rad = 1.5708, lever_angle_rad = 1.5708 }
-        length_mm = { normal = { sigma = 0.3 } }
-        angle_deg = { normal = { sigma = 0.05 } }
-        "#,
-        "<test spec>",
+        include_str!("data/perturbation-spec.toml"),
+        "tests/data/perturbation-spec.toml",
     )
     .unwrap();
     let desc = RobotDescription::asea_irb6l();
