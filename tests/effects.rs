@@ -158,3 +158,81 @@ fn compliance_sag_matches_gravity_torque_over_stiffness() {
     let relative = (out[0] - out[1]).norm() / out[0].norm();
     assert!(relative < 0.02, "analytic {:?} rapier {:?}", out[0], out[1]);
 }
+
+/// Gear harmonic: an added `s sin(2 theta)` on joint 6's transmission `theta_c = f(theta_a)`
+/// turns the joint, for the same command, by `-s sin(2 theta) / f'(theta)` to first order
+/// (second order: `s^2`, here 1e-6 of it).
+#[test]
+fn gear_harmonic_turns_the_joint_by_its_transmission_error() {
+    use axiscal::campaign::GearHarmonic;
+    let s = 1e-3;
+    let effects = Effects {
+        gear_harmonics: vec![GearHarmonic {
+            joint: 6,
+            order: 2,
+            sin_rad: s,
+            cos_rad: 0.0,
+        }],
+        ..Effects::default()
+    };
+    let (_, t) = truth();
+    let theta = t.joints[5].transmission.actual_from_command(CMD[5]).unwrap();
+    let slope = t.joints[5].transmission.slope(theta);
+    let predicted = -s * (2.0 * theta).sin() / slope;
+    for (mut with, mut without) in arms(&effects).into_iter().zip(arms(&Effects::default())) {
+        let (a, b) = (
+            with(&CMD, &PoseConditions::default()),
+            without(&CMD, &PoseConditions::default()),
+        );
+        let turn = (b[5].inverse() * a[5]).rotation.scaled_axis();
+        assert!(turn.xy().norm() < 1e-12, "the joint turns about its own axis: {turn:?}");
+        assert!(
+            (turn.z - predicted).abs() < 1e-3 * predicted.abs(),
+            "{} vs {predicted}",
+            turn.z
+        );
+    }
+}
+
+/// Instrument scale: every measured coordinate is (1 + ppm 1e-6) times the true one about the
+/// instrument origin (exact instrument, so nothing else differs).
+#[test]
+fn instrument_scale_scales_every_measured_coordinate() {
+    use axiscal::campaign::{
+        CalibrationPlan, CampaignOptions, InstrumentScale, ValidationPlan, simulate_campaign_with,
+    };
+    use axiscal::measurement::{IsotropicNoise, MeasurementModel};
+    let (desc, t) = truth();
+    let exact = MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: 0.0 });
+    let validation = ValidationPlan {
+        poses: 5,
+        ..ValidationPlan::workspace_default(6)
+    };
+    let run = |scale: Option<InstrumentScale>| {
+        let mut arm = AnalyticArm::new(t.clone(), Controller::from_description(&desc));
+        let options = CampaignOptions {
+            instrument_scale: scale,
+            ..CampaignOptions::default()
+        };
+        simulate_campaign_with(
+            &desc,
+            &CalibrationPlan::table1(6),
+            &validation,
+            &mut arm,
+            &exact,
+            &options,
+            &mut StdRng::seed_from_u64(3),
+        )
+        .unwrap()
+        .rows
+    };
+    let ppm = 40.0;
+    let (plain, scaled) = (run(None), run(Some(InstrumentScale { ppm })));
+    assert_eq!(plain.len(), scaled.len());
+    for (p, q) in plain.iter().zip(&scaled) {
+        for (a, b) in p.position_mm.iter().zip(&q.position_mm) {
+            // Coordinates are a few metres: rounding is ~1e-12 mm.
+            assert!((b - a * (1.0 + ppm * 1e-6)).abs() < 1e-9, "{a} -> {b}");
+        }
+    }
+}
