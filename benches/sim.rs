@@ -70,5 +70,57 @@ fn dynamic(c: &mut Criterion) {
     );
 }
 
-criterion_group!(benches, kinematic, dynamic);
+/// The campaign's executor: commands through the truth's controller and transmissions to
+/// link poses, kinematic (with line of sight from the two stations) and compliant (static
+/// equilibrium under gravity with the compliance scenario's stiffnesses).
+fn rapier_arm(c: &mut Criterion) {
+    use axiscal::campaign::{ArmExecutor, ComplianceEffect, Effects, PoseConditions};
+    use axiscal::measurement::MeasurementModel;
+    use axiscal::robot::TruthRobot;
+    use axiscal::sim::{RapierArm, RapierArmOptions};
+    use rand::{SeedableRng, rngs::StdRng};
+    let d = RobotDescription::asea_irb6l();
+    let (instrument, _) = MeasurementModel::paper_theodolites().expect("theodolites");
+    let options = RapierArmOptions {
+        stations_m: instrument.stations_m(),
+        ..RapierArmOptions::new(6)
+    };
+    let mut kinematic = RapierArm::new(TruthRobot::paper_robot(), &d, Effects::default(), options.clone());
+    let compliance = Effects {
+        compliance: Some(ComplianceEffect {
+            stiffness_nm_per_rad: vec![5e5, 3e5, 3e5, 5e4, 5e4, 2e4],
+            gravity_m_s2: [0.0, 0.0, -9.81],
+        }),
+        ..Effects::default()
+    };
+    let mut compliant = RapierArm::new(TruthRobot::paper_robot(), &d, compliance, options);
+    let model = d.nominal_model();
+    let mut rng = StdRng::seed_from_u64(1);
+    let conditions = PoseConditions::default();
+    let target = nalgebra::Point3::new(-3.1423, 5.3, 0.0);
+    let mut group = c.benchmark_group("rapier_arm_execute");
+    group.throughput(Throughput::Elements(1));
+    group.bench_function("baseline_phi_model_poses", |b| {
+        b.iter(|| black_box(model.poses(black_box(&Q))))
+    });
+    group.bench_function("kinematic_pose_and_line_of_sight", |b| {
+        b.iter(|| {
+            let links = kinematic.execute(black_box(&Q), &conditions, &mut rng).expect("runs");
+            black_box((links, kinematic.visible(&target)))
+        })
+    });
+    group.sample_size(10);
+    group.bench_function("compliant_static_equilibrium", |b| {
+        b.iter(|| {
+            black_box(
+                compliant
+                    .execute(black_box(&Q), &conditions, &mut rng)
+                    .expect("settles"),
+            )
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, kinematic, dynamic, rapier_arm);
 criterion_main!(benches);
