@@ -5,10 +5,11 @@
 //!
 //! Method:
 //! 1. calibrate with the standard procedure; a noise-only Monte-Carlo (the same commands on
-//!    the calibrated robot, [`noise`]) gives the residuals noise alone produces;
+//!    the calibrated robot, [`replica`]) gives the residuals noise alone produces;
 //! 2. validation poses split into training (even) and held-out (odd) halves; the baseline is
 //!    the calibrated model refit on the training tool targets (rows `a`, `b`, `alpha`, joint
-//!    offsets, tool position; Levenberg-Marquardt, [`fit`]);
+//!    offsets, order-1 transmission harmonics, coupling slopes, base and tool frames;
+//!    Levenberg-Marquardt, [`levenberg_marquardt`]);
 //! 3. each [`Candidate`] is fitted on the same training poses on top of the refit and scored
 //!    on the held-out poses by a BIC-like criterion `chi2_heldout + p ln(n_heldout)` (Schwarz
 //!    1978, with the held-out chi-square in place of the likelihood); the confidence is the
