@@ -1,5 +1,6 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
+mod blind;
 mod calibrate;
 mod compensate;
 mod diagnose;
@@ -47,6 +48,8 @@ enum Command {
     /// Sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it,
     /// how far the gap shrinks (diagnosis.json, FORMATS.md section 3).
     Diagnose(diagnose::Args),
+    /// Blind check of `diagnose`: simulated cases with hidden keys, scored (confusion matrix).
+    Blind(blind::Args),
     /// Open a rerun recording (`.rrd`) in the matching rerun viewer, or print how to install it.
     View(view::Args),
 }
@@ -69,6 +72,7 @@ pub fn main() -> ExitCode {
         Command::Compensate(args) => compensate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Diagnose(args) => diagnose::run(args),
+        Command::Blind(args) => blind::run(args),
         Command::View(args) => view::run(args),
     };
     match result {
