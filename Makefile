@@ -5,7 +5,7 @@ VENV  ?= .venv
 # The rerun viewer must match the `rerun` crate pinned in Cargo.toml.
 RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' Cargo.toml)
 
-.PHONY: run test bench study lint doc clean-results setup-viewer view
+.PHONY: run test bench study blind lint doc clean-results setup-viewer view
 
 ## run: the paper scenario end to end; results under results/ (with a rerun recording:
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
@@ -45,3 +45,8 @@ lint:
 
 doc:
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
+
+## blind: blind check of `axiscal diagnose` on 112 simulated cases (hidden keys), confusion
+## matrix under results/blind/summary.md
+blind:
+	$(CARGO) run --release -- blind --cases 112 --seed 1 --out results/blind --force

@@ -2,9 +2,11 @@
 #![warn(missing_docs)]
 #![deny(clippy::float_cmp)]
 
+pub mod blind;
 pub mod calibration;
 pub mod campaign;
 pub mod compensation;
+pub mod diagnosis;
 pub mod evaluation;
 pub mod kinematics;
 pub mod measurement;

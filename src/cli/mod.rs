@@ -1,7 +1,9 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
+mod blind;
 mod calibrate;
 mod compensate;
+mod diagnose;
 mod evaluate;
 mod import;
 mod merge;
@@ -43,6 +45,11 @@ enum Command {
     Compensate(compensate::Args),
     /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
     Evaluate(evaluate::Args),
+    /// Sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it,
+    /// how far the gap shrinks (diagnosis.json, FORMATS.md section 3).
+    Diagnose(diagnose::Args),
+    /// Blind check of `diagnose`: simulated cases with hidden keys, scored (confusion matrix).
+    Blind(blind::Args),
     /// Open a rerun recording (`.rrd`) in the matching rerun viewer, or print how to install it.
     View(view::Args),
 }
@@ -64,6 +71,8 @@ pub fn main() -> ExitCode {
         Command::Merge(args) => merge::run(args),
         Command::Compensate(args) => compensate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
+        Command::Diagnose(args) => diagnose::run(args),
+        Command::Blind(args) => blind::run(args),
         Command::View(args) => view::run(args),
     };
     match result {

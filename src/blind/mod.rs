@@ -1,0 +1,223 @@
+//! Blind check of the diagnoser (`axiscal blind`): draws cases (an effect, its joint and
+//! magnitude, a seed; no-effect cases; an out-of-set "unknown" effect), simulates each on the
+//! paper robot with the analytic arm, writes the CSV and hides the truth in a separate key,
+//! runs [`diagnose`](crate::diagnosis::diagnose) on the CSV alone and scores the answers
+//! ([`score`]). This module sees the truth; the diagnoser never does.
+
+mod score;
+
+pub use score::{BlindScore, ConfusionMatrix, score};
+
+use crate::campaign::{
+    AnalyticArm, ArmExecutor, AxisWobble, BacklashEffect, CalibrationPlan, CampaignOptions, ComplianceEffect, Effects,
+    GearHarmonic, InstrumentScale, PoseConditions, ThermalEffect, ValidationPlan, commands_to_internal,
+    simulate_campaign_with,
+};
+use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
+use crate::robot::{Controller, RobotDescription, TruthRobot};
+use rand::{Rng, RngExt, SeedableRng, rngs::StdRng};
+use serde::{Deserialize, Serialize};
+
+/// Effect names a case can carry (FORMATS.md section 3), plus `unknown` (the out-of-set
+/// order-3 axis wobble, which the diagnoser should call `unexplained`).
+pub const CASE_EFFECTS: [&str; 8] = [
+    "none",
+    "joint_compliance",
+    "backlash",
+    "thermal_expansion",
+    "gear_harmonic",
+    "axis_wobble",
+    "instrument_scale",
+    "unknown",
+];
+
+/// The hidden truth of one case (`key.json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaseKey {
+    /// Case index.
+    pub case: usize,
+    /// Effect drawn (one of [`CASE_EFFECTS`]).
+    pub effect: String,
+    /// What a perfect diagnoser answers: the effect, `unexplained` for `unknown`.
+    pub expected: String,
+    /// Joint of the effect, if any.
+    pub joint: Option<usize>,
+    /// Magnitude in the effect's unit (`magnitude_unit`).
+    pub magnitude: f64,
+    /// Unit of `magnitude`.
+    pub magnitude_unit: String,
+    /// Seed of the simulation (pose draw, noise, jitter).
+    pub seed: u64,
+    /// The effects given to the simulator.
+    pub effects: Effects,
+}
+
+/// Settings of the generator.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlindOptions {
+    /// Validation poses per case (>= 100 for the suite).
+    pub validation_poses: usize,
+    /// Measurement noise, 3-D RMS \[mm\] (isotropic instrument).
+    pub noise_rms_3d_mm: f64,
+    /// Validation temperatures are drawn uniformly in `20 +- temperature_half_range_c`.
+    pub temperature_half_range_c: f64,
+}
+
+impl Default for BlindOptions {
+    fn default() -> Self {
+        BlindOptions {
+            validation_poses: 100,
+            noise_rms_3d_mm: 0.19,
+            temperature_half_range_c: 10.0,
+        }
+    }
+}
+
+/// Draws case `case` of a suite seeded `seed`: effects cycle through [`CASE_EFFECTS`]
+/// (so every effect appears), joints and magnitudes are random.
+pub fn draw_case(seed: u64, case: usize, dof: usize) -> CaseKey {
+    let case_seed = crate::scenario::trial_seed(seed, case);
+    let mut rng = StdRng::seed_from_u64(case_seed ^ 0x5eed_b11d);
+    let effect = CASE_EFFECTS[case % CASE_EFFECTS.len()];
+    draw_effect(effect, case, case_seed, dof, &mut rng)
+}
+
+/// A case with a given effect (magnitudes drawn from `rng`).
+pub fn draw_effect<R: Rng + ?Sized>(effect: &str, case: usize, seed: u64, dof: usize, rng: &mut R) -> CaseKey {
+    let mut e = Effects::default();
+    let phase = rng.random_range(0.0..std::f64::consts::TAU);
+    let (joint, magnitude, unit) = match effect {
+        "joint_compliance" => {
+            // Joints 2 and 3 carry the gravity load of the arm.
+            let joint = rng.random_range(2..=3);
+            let k = 10f64.powf(rng.random_range(4.6..5.3));
+            let mut stiffness = vec![1e12; dof];
+            stiffness[joint - 1] = k;
+            e.compliance = Some(ComplianceEffect {
+                stiffness_nm_per_rad: stiffness,
+                gravity_m_s2: crate::diagnosis::GRAVITY_M_S2,
+            });
+            (Some(joint), k, "N m/rad")
+        }
+        "backlash" => {
+            let joint = rng.random_range(1..=dof);
+            let band = rng.random_range(1.0e-3..3.0e-3);
+            let mut b = vec![0.0; dof];
+            b[joint - 1] = band;
+            e.backlash = Some(BacklashEffect { band_rad: b });
+            (Some(joint), band, "rad (band)")
+        }
+        "thermal_expansion" => {
+            let alpha = rng.random_range(2.0e-5..5.0e-5);
+            e.thermal = Some(ThermalEffect {
+                alpha_per_k: alpha,
+                reference_c: 20.0,
+            });
+            (None, alpha, "1/K")
+        }
+        "gear_harmonic" => {
+            let joint = rng.random_range(1..=dof);
+            let a = rng.random_range(0.5e-3..1.5e-3);
+            e.gear_harmonics.push(GearHarmonic {
+                joint,
+                order: crate::diagnosis::HARMONIC_ORDER,
+                sin_rad: a * phase.sin(),
+                cos_rad: a * phase.cos(),
+            });
+            (Some(joint), a, "rad")
+        }
+        "axis_wobble" | "unknown" => {
+            let joint = rng.random_range(1..=dof);
+            let (order, a) = if effect == "unknown" {
+                (3, rng.random_range(1.0e-3..2.0e-3))
+            } else {
+                (crate::diagnosis::WOBBLE_ORDER, rng.random_range(0.5e-3..1.5e-3))
+            };
+            e.wobble.push(AxisWobble {
+                joint,
+                amplitude_rad: a,
+                phase_rad: phase,
+                order,
+            });
+            (Some(joint), a, "rad")
+        }
+        "instrument_scale" => {
+            let ppm = rng.random_range(200.0..1000.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            e.instrument_scale = Some(InstrumentScale { ppm });
+            (None, ppm, "ppm")
+        }
+        _ => (None, 0.0, "-"),
+    };
+    CaseKey {
+        case,
+        effect: effect.to_owned(),
+        expected: if effect == "unknown" {
+            "unexplained".into()
+        } else {
+            effect.to_owned()
+        },
+        joint,
+        magnitude,
+        magnitude_unit: unit.into(),
+        seed,
+        effects: e,
+    }
+}
+
+/// Simulates a case: the Table-1 axis experiments and the tool observation at 20 deg C, then
+/// `validation_poses` workspace poses at random temperatures, on the paper robot through the
+/// analytic arm with the case's effects (no repeatability jitter), measured with isotropic noise (and the instrument
+/// scale error, if any).
+pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOptions) -> Result<MeasurementSet, String> {
+    // The diagnoser's noise model is the instrument's: no repeatability jitter.
+    let mut truth = TruthRobot::paper_robot();
+    for j in &mut truth.joints {
+        j.repeatability_sigma = 0.0;
+    }
+    let mut arm = AnalyticArm::new(truth, Controller::from_description(desc)).with_effects(key.effects.clone(), desc);
+    let instrument = MeasurementModel::Isotropic(crate::measurement::IsotropicNoise {
+        net_radial_rms_mm: options.noise_rms_3d_mm,
+    });
+    let plan = CalibrationPlan::table1(desc.dof());
+    let mut rng = StdRng::seed_from_u64(key.seed);
+    let none = ValidationPlan {
+        poses: 0,
+        ..ValidationPlan::workspace_default(desc.dof())
+    };
+    let campaign = CampaignOptions {
+        conditions: PoseConditions::default(),
+        instrument_scale: key.effects.instrument_scale,
+    };
+    let mut out = simulate_campaign_with(desc, &plan, &none, &mut arm, &instrument, &campaign, &mut rng)
+        .map_err(|e| e.to_string())?;
+    let validation = ValidationPlan {
+        poses: options.validation_poses,
+        seed: key.seed ^ 0x7a11,
+        ..ValidationPlan::workspace_default(desc.dof())
+    };
+    let scale = 1.0 + key.effects.instrument_scale.map_or(0.0, |s| s.ppm * 1e-6);
+    for (step, cmd) in validation.commands(desc, &plan.reference).into_iter().enumerate() {
+        let conditions = PoseConditions {
+            payload_kg: 0.0,
+            temperature_c: 20.0 + rng.random_range(-1.0..=1.0) * options.temperature_half_range_c,
+        };
+        let links = arm
+            .execute(&commands_to_internal(desc, &cmd), &conditions, &mut rng)
+            .map_err(|e| e.to_string())?;
+        let tool = links[desc.dof() - 1] * arm.last_link_from_tool();
+        for (id, t) in desc.tool_targets_m().iter().enumerate() {
+            let p = instrument.measure(&(tool * t), &mut rng).map_err(|e| e.to_string())?;
+            out.rows.push(Measurement {
+                experiment: "validation".into(),
+                moved_joint: 0,
+                step,
+                target: id,
+                position_mm: [p.x * 1e3 * scale, p.y * 1e3 * scale, p.z * 1e3 * scale],
+                cmd: cmd.clone(),
+                payload_kg: conditions.payload_kg,
+                temperature_c: conditions.temperature_c,
+            });
+        }
+    }
+    MeasurementSet::new(desc.dof(), out.rows).map_err(|e| e.to_string())
+}

@@ -1,0 +1,295 @@
+//! The parametric models the diagnoser fits: the calibrated robot with a geometric refit
+//! (row lengths and twists, joint zero offsets, tool position) plus at most one candidate
+//! effect, each a small extension of the phi-model (paper appendix, eqs. A1-A4) and of the
+//! fig. 3 joint semantics.
+
+use super::poses::Pose;
+use crate::campaign::{AxisWobble, ComplianceEffect, Effects, GearHarmonic, LinkMass, ThermalEffect};
+use crate::kinematics::JointKind;
+use crate::robot::{Controller, RobotDescription, TruthRobot};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Gravity in the instrument frame \[m/s^2\] assumed by the compliance candidate.
+pub const GRAVITY_M_S2: [f64; 3] = [0.0, 0.0, -9.81];
+
+/// Order of the wobble candidate: orders 0 and 1 are a fixed tilt of the axis or of the link,
+/// which the calibrated geometry absorbs exactly; 2 is the lowest order visible afterwards.
+pub const WOBBLE_ORDER: i32 = 2;
+
+/// Order of the gear-harmonic candidate (the calibrator fits order 1).
+pub const HARMONIC_ORDER: usize = 2;
+
+/// A candidate unmodelled effect (FORMATS.md section 3 names).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "effect", rename_all = "snake_case")]
+pub enum Candidate {
+    /// Joint `joint` deflects by `c Q_j(q)`, `Q_j` the gravity torque about it (one
+    /// compliance `c` \[rad/(N m)\]).
+    JointCompliance {
+        /// 1-based joint.
+        joint: usize,
+    },
+    /// The active displacement of `joint` lags by `h` against its approach direction (half
+    /// band `h` \[rad\]).
+    Backlash {
+        /// 1-based joint.
+        joint: usize,
+    },
+    /// Row lengths `a`, `b` scale by `1 + alpha (T - T_ref)`, `T_ref` the axis experiments'
+    /// mean temperature.
+    ThermalExpansion,
+    /// An extra order-2 harmonic (sin, cos \[rad\]) on the joint's transmission (eq. 8).
+    GearHarmonic {
+        /// 1-based joint.
+        joint: usize,
+    },
+    /// A tilt `(x, y)` \[rad\] of the joint's axis turning at [`WOBBLE_ORDER`] times the joint.
+    AxisWobble {
+        /// 1-based joint.
+        joint: usize,
+    },
+    /// Measured coordinates `(1 + ppm 1e-6)` times the true ones about the instrument origin.
+    InstrumentScale,
+}
+
+impl Candidate {
+    /// The FORMATS.md effect name.
+    pub fn effect_name(&self) -> &'static str {
+        match self {
+            Candidate::JointCompliance { .. } => "joint_compliance",
+            Candidate::Backlash { .. } => "backlash",
+            Candidate::ThermalExpansion => "thermal_expansion",
+            Candidate::GearHarmonic { .. } => "gear_harmonic",
+            Candidate::AxisWobble { .. } => "axis_wobble",
+            Candidate::InstrumentScale => "instrument_scale",
+        }
+    }
+
+    /// The joint, or `None` for whole-robot and instrument effects.
+    pub fn joint(&self) -> Option<usize> {
+        match *self {
+            Candidate::JointCompliance { joint }
+            | Candidate::Backlash { joint }
+            | Candidate::GearHarmonic { joint }
+            | Candidate::AxisWobble { joint } => Some(joint),
+            Candidate::ThermalExpansion | Candidate::InstrumentScale => None,
+        }
+    }
+
+    /// Names (with units) of the effect's parameters.
+    pub fn parameter_names(&self) -> Vec<&'static str> {
+        match self {
+            Candidate::JointCompliance { .. } => vec!["compliance_rad_per_nm"],
+            Candidate::Backlash { .. } => vec!["half_band_rad"],
+            Candidate::ThermalExpansion => vec!["alpha_per_k"],
+            Candidate::GearHarmonic { .. } => vec!["sin2_rad", "cos2_rad"],
+            Candidate::AxisWobble { .. } => vec!["tilt_x_rad", "tilt_y_rad"],
+            Candidate::InstrumentScale => vec!["scale_ppm"],
+        }
+    }
+
+    /// Finite-difference steps of the parameters (the model is linear in them to first order).
+    fn steps(&self) -> Vec<f64> {
+        match self {
+            Candidate::JointCompliance { .. } => vec![1e-8],
+            Candidate::Backlash { .. } => vec![1e-5],
+            Candidate::ThermalExpansion => vec![1e-5],
+            Candidate::GearHarmonic { .. } | Candidate::AxisWobble { .. } => vec![1e-5, 1e-5],
+            Candidate::InstrumentScale => vec![10.0],
+        }
+    }
+
+    /// Every candidate for a robot of `dof` revolute joints; thermal expansion only when the
+    /// validation temperatures spread (`temperature_spread`), backlash only for joints whose
+    /// approach direction changes.
+    pub fn all(desc: &RobotDescription, poses: &[Pose], temperature_spread: bool) -> Vec<Candidate> {
+        let mut out = Vec::new();
+        for (k, j) in desc.joints.iter().enumerate() {
+            if j.kind != JointKind::Revolute {
+                continue;
+            }
+            let joint = k + 1;
+            out.push(Candidate::JointCompliance { joint });
+            let flips = poses.iter().any(|p| p.approach[k] > 0.0) && poses.iter().any(|p| p.approach[k] < 0.0);
+            if flips {
+                out.push(Candidate::Backlash { joint });
+            }
+            out.push(Candidate::GearHarmonic { joint });
+            out.push(Candidate::AxisWobble { joint });
+        }
+        if temperature_spread {
+            out.push(Candidate::ThermalExpansion);
+        }
+        out.push(Candidate::InstrumentScale);
+        out
+    }
+}
+
+/// The calibrated robot with the refit parameters and one optional candidate: predicts the
+/// measured tool targets of a pose.
+#[derive(Clone, Debug)]
+pub struct Predictor {
+    base: TruthRobot,
+    controller: Controller,
+    masses: Vec<LinkMass>,
+    tool_targets_m: Vec<Point3<f64>>,
+    reference_c: f64,
+    /// The candidate effect, if any.
+    pub candidate: Option<Candidate>,
+}
+
+impl Predictor {
+    /// The predictor of the calibrated robot `base` for `desc`'s controller, link masses and
+    /// tool targets; `reference_c` is the temperature the calibration holds at.
+    pub fn new(base: &TruthRobot, desc: &RobotDescription, reference_c: f64, candidate: Option<Candidate>) -> Self {
+        Predictor {
+            base: base.clone(),
+            controller: Controller::from_description(desc),
+            masses: LinkMass::from_description(desc),
+            tool_targets_m: desc.tool_targets_m(),
+            reference_c,
+            candidate,
+        }
+    }
+
+    /// Number of geometric refit parameters: per row `a`, `b` \[m\], `alpha`, `beta` \[rad\]; per
+    /// joint a zero offset and an order-1 transmission harmonic (sin, cos) \[rad\] and a
+    /// slope correction of the coupling into it (unused without one); the base
+    /// placement and the tool frame, each a translation \[m\] and a rotation vector \[rad\].
+    pub fn geometric_count(&self) -> usize {
+        4 * self.base.rows.len() + 4 * self.base.dof() + 12
+    }
+
+    /// Index of the coupling-slope correction of joint `k` (0-based, `k >= 1`).
+    fn slope_index(&self, k: usize) -> usize {
+        4 * self.base.rows.len() + 3 * self.base.dof() + k
+    }
+
+    /// Number of parameters of the candidate.
+    pub fn effect_count(&self) -> usize {
+        self.candidate.map_or(0, |c| c.parameter_names().len())
+    }
+
+    /// Finite-difference step of every parameter.
+    pub fn steps(&self) -> Vec<f64> {
+        let mut s = vec![1e-6; self.geometric_count()];
+        if let Some(c) = self.candidate {
+            s.extend(c.steps());
+        }
+        s
+    }
+
+    /// The refit robot and the candidate's effects for `params`.
+    fn robot_and_effects(&self, params: &[f64]) -> (TruthRobot, Effects, f64) {
+        let mut robot = self.base.clone();
+        let rows = robot.rows.len();
+        for (r, row) in robot.rows.iter_mut().enumerate() {
+            row.a_m += params[4 * r];
+            row.b_m += params[4 * r + 1];
+            row.alpha_deg += params[4 * r + 2].to_degrees();
+            row.beta_deg += params[4 * r + 3].to_degrees();
+        }
+        let n = robot.dof();
+        for (k, j) in robot.joints.iter_mut().enumerate() {
+            j.transducer_offset += params[4 * rows + k];
+        }
+        let mut effects = Effects::default();
+        for k in 0..n {
+            effects.gear_harmonics.push(GearHarmonic {
+                joint: k + 1,
+                order: 1,
+                sin_rad: params[4 * rows + n + 2 * k],
+                cos_rad: params[4 * rows + n + 2 * k + 1],
+            });
+        }
+        let e = &params[self.geometric_count()..];
+        let mut scale = 1.0;
+        match self.candidate {
+            Some(Candidate::GearHarmonic { joint }) => effects.gear_harmonics.push(GearHarmonic {
+                joint,
+                order: HARMONIC_ORDER,
+                sin_rad: e[0],
+                cos_rad: e[1],
+            }),
+            Some(Candidate::AxisWobble { joint }) => effects.wobble.push(AxisWobble {
+                joint,
+                amplitude_rad: e[0].hypot(e[1]),
+                phase_rad: e[1].atan2(e[0]),
+                order: WOBBLE_ORDER,
+            }),
+            Some(Candidate::ThermalExpansion) => {
+                effects.thermal = Some(ThermalEffect {
+                    alpha_per_k: e[0],
+                    reference_c: self.reference_c,
+                })
+            }
+            Some(Candidate::InstrumentScale) => scale = 1.0 + e[0] * 1e-6,
+            _ => {}
+        }
+        let robot = effects.truth_with_harmonics(&robot);
+        (robot, effects, scale)
+    }
+
+    /// The refit phi-model: `robot`'s with the base and tool corrections of `params`.
+    fn model(&self, robot: &TruthRobot, params: &[f64]) -> crate::kinematics::PhiModel {
+        let g = self.geometric_count();
+        let iso = |p: &[f64]| {
+            Isometry3::from_parts(
+                Translation3::new(p[0], p[1], p[2]),
+                UnitQuaternion::from_scaled_axis(Vector3::new(p[3], p[4], p[5])),
+            )
+        };
+        let mut model = robot.model();
+        model.world_from_base = iso(&params[g - 12..g - 6]) * model.world_from_base;
+        model.last_link_from_tool *= iso(&params[g - 6..g]);
+        model
+    }
+
+    /// Residuals `measured - predicted` \[m\] (3 per target) of `poses` for `params`; `None`
+    /// when a command cannot be executed by the model (a transmission that does not invert).
+    pub fn residuals(&self, params: &[f64], poses: &[&Pose]) -> Option<Vec<f64>> {
+        let (robot, effects, scale) = self.robot_and_effects(params);
+        let model = self.model(&robot, params);
+        let e = &params[self.geometric_count()..];
+        let mut out = Vec::with_capacity(poses.len() * 9);
+        for pose in poses {
+            let u = self.controller.decouple(&pose.cmd).ok()?;
+            let mut active = robot.active_displacements(&u).ok()?;
+            if let Some(Candidate::Backlash { joint }) = self.candidate {
+                active[joint - 1] -= pose.approach[joint - 1] * e[0];
+            }
+            let mut q = active.clone();
+            for k in 1..q.len() {
+                if let Some(g) = &robot.joints[k].coupling_in {
+                    q[k] += g.try_passive(active[k - 1]).ok()?;
+                    q[k] += params[self.slope_index(k)] * active[k - 1];
+                }
+            }
+            let model_t = effects.thermal_model(&model, pose.temperature_c);
+            if let Some(Candidate::JointCompliance { joint }) = self.candidate {
+                let unit = ComplianceEffect {
+                    stiffness_nm_per_rad: vec![1.0; q.len()],
+                    gravity_m_s2: GRAVITY_M_S2,
+                };
+                let payload = (pose.payload_kg > 0.0).then(|| {
+                    (
+                        pose.payload_kg,
+                        Point3::from(model_t.last_link_from_tool.translation.vector),
+                    )
+                });
+                let torque = crate::campaign::first_order_deflection(&model_t, &q, &self.masses, payload, &unit);
+                q[joint - 1] += e[0] * torque[joint - 1];
+            }
+            let mut links = model_t.poses(&q).world_from_link;
+            effects.apply_wobble(&model_t, &q, &mut links);
+            let tool = links[links.len() - 1] * model_t.last_link_from_tool;
+            for (id, measured) in &pose.targets {
+                let t = self.tool_targets_m.get(*id)?;
+                let p = (tool * t).coords * scale;
+                out.extend((measured.coords - p).iter());
+            }
+        }
+        Some(out)
+    }
+}

@@ -1,0 +1,89 @@
+//! Validation poses as the diagnoser sees them: commands, approach directions from the
+//! command history, conditions and measured tool targets (FORMATS.md section 1).
+
+use crate::campaign::{TOOL_EXPERIMENT, commands_to_internal};
+use crate::measurement::Measurement;
+use crate::robot::RobotDescription;
+use nalgebra::Point3;
+use std::collections::HashMap;
+
+/// One measured validation pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    /// Experiment id.
+    pub experiment: String,
+    /// Step.
+    pub step: usize,
+    /// Commands (internal units: rad, m).
+    pub cmd: Vec<f64>,
+    /// Approach direction of every joint's command: `sign(cmd_k(s) - cmd_k(s-1))` over the
+    /// poses in file order (all experiments), the previous direction when the command did not
+    /// change, 0 before any motion.
+    pub approach: Vec<f64>,
+    /// Ambient temperature \[deg C\].
+    pub temperature_c: f64,
+    /// Payload at the tool \[kg\].
+    pub payload_kg: f64,
+    /// Measured tool targets: (target id, position in the instrument frame \[m\]).
+    pub targets: Vec<(usize, Point3<f64>)>,
+}
+
+/// The validation poses of `rows` (`moved_joint = 0`, not the `tool` experiment), in file
+/// order, with their approach directions taken over every pose of the file.
+pub fn validation_poses(rows: &[Measurement], desc: &RobotDescription) -> Vec<Pose> {
+    let n = desc.dof();
+    let mut index: HashMap<(&str, usize), usize> = HashMap::new();
+    let mut poses: Vec<Pose> = Vec::new();
+    let mut keep: Vec<bool> = Vec::new();
+    let mut last: Option<Vec<f64>> = None;
+    let mut approach = vec![0.0; n];
+    for m in rows {
+        let key = (m.experiment.as_str(), m.step);
+        let i = match index.get(&key) {
+            Some(&i) => i,
+            None => {
+                let cmd = commands_to_internal(desc, &m.cmd);
+                if let Some(l) = &last {
+                    for ((dir, c), p) in approach.iter_mut().zip(&cmd).zip(l) {
+                        if (c - p).abs() > 0.0 {
+                            *dir = (c - p).signum();
+                        }
+                    }
+                }
+                last = Some(cmd.clone());
+                poses.push(Pose {
+                    experiment: m.experiment.clone(),
+                    step: m.step,
+                    cmd,
+                    approach: approach.clone(),
+                    temperature_c: m.temperature_c,
+                    payload_kg: m.payload_kg,
+                    targets: Vec::new(),
+                });
+                keep.push(m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT);
+                index.insert(key, poses.len() - 1);
+                poses.len() - 1
+            }
+        };
+        poses[i].targets.push((m.target, m.position_m()));
+    }
+    poses
+        .into_iter()
+        .zip(keep)
+        .filter(|(p, k)| *k && !p.targets.is_empty())
+        .map(|(p, _)| p)
+        .collect()
+}
+
+/// Deterministic split into training (even positions in file order) and held-out (odd)
+/// poses.
+pub fn split(poses: &[Pose]) -> (Vec<&Pose>, Vec<&Pose>) {
+    let train = poses.iter().step_by(2).collect();
+    let held = poses.iter().skip(1).step_by(2).collect();
+    (train, held)
+}
+
+/// Number of measured targets over `poses`.
+pub fn target_count(poses: &[&Pose]) -> usize {
+    poses.iter().map(|p| p.targets.len()).sum()
+}
