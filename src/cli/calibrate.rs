@@ -40,14 +40,30 @@ pub fn write_output(dir: &Path, name: &str, text: &str, force: bool) -> Result<(
     std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
 }
 
+/// Refuses, before any work is written, to replace any of `names` in `dir` unless `force`.
+pub fn refuse_existing(dir: &Path, names: &[&str], force: bool) -> Result<()> {
+    if !force {
+        for n in names {
+            let p = dir.join(n);
+            if p.exists() {
+                bail!("{} exists; pass --force to replace it", p.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks a `--noise-mm` argument: a positive number of millimetres.
+pub fn check_noise_mm(noise_mm: f64) -> Result<()> {
+    if !(noise_mm.is_finite() && noise_mm > 0.0) {
+        bail!("--noise-mm must be a positive number of millimetres, got {noise_mm}");
+    }
+    Ok(())
+}
+
 /// Runs `axiscal calibrate`.
 pub fn run(args: Args) -> Result<()> {
-    if !(args.noise_mm.is_finite() && args.noise_mm > 0.0) {
-        bail!(
-            "--noise-mm must be a positive number of millimetres, got {}",
-            args.noise_mm
-        );
-    }
+    check_noise_mm(args.noise_mm)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     let set = read_measurements(&args.data, Some(desc.dof()))?;
     let options = CalibrationOptions {
@@ -59,14 +75,7 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let source = args.data.display().to_string();
     let names = ["calibration.json", "report.md", "report.json", "calibrated.urdf"];
-    if !args.force {
-        for n in names {
-            let p = args.out.join(n);
-            if p.exists() {
-                bail!("{} exists; pass --force to replace it", p.display());
-            }
-        }
-    }
+    refuse_existing(&args.out, &names, args.force)?;
     write_output(&args.out, names[0], &serde_json::to_string_pretty(&cal)?, args.force)?;
     write_output(&args.out, names[1], &markdown(&cal, &desc, &source), args.force)?;
     write_output(

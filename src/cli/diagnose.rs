@@ -1,8 +1,8 @@
 //! `axiscal diagnose DATA.csv --robot R --out DIR`: sim-to-real gap diagnosis
 //! (FORMATS.md section 3), writing `diagnosis.json` and `diagnosis.md`.
 
-use super::calibrate::write_output;
-use anyhow::{Context, Result, bail};
+use super::calibrate::{check_noise_mm, refuse_existing, write_output};
+use anyhow::{Context, Result};
 use axiscal::diagnosis::{DiagnosisOptions, diagnose, markdown};
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
@@ -35,12 +35,7 @@ pub struct Args {
 
 /// Runs `axiscal diagnose`.
 pub fn run(args: Args) -> Result<()> {
-    if !(args.noise_mm.is_finite() && args.noise_mm > 0.0) {
-        bail!(
-            "--noise-mm must be a positive number of millimetres, got {}",
-            args.noise_mm
-        );
-    }
+    check_noise_mm(args.noise_mm)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     let set = read_measurements(&args.data, Some(desc.dof()))?;
     let options = DiagnosisOptions {
@@ -52,14 +47,7 @@ pub fn run(args: Args) -> Result<()> {
     let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {}", args.data.display()))?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let names = ["diagnosis.json", "diagnosis.md"];
-    if !args.force {
-        for n in names {
-            let p = args.out.join(n);
-            if p.exists() {
-                bail!("{} exists; pass --force to replace it", p.display());
-            }
-        }
-    }
+    refuse_existing(&args.out, &names, args.force)?;
     let source = args.data.display().to_string();
     write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
     write_output(&args.out, names[1], &markdown(&d, &source), args.force)?;
