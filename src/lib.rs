@@ -15,5 +15,6 @@ pub mod robot;
 pub mod scenario;
 pub mod sim;
 pub mod studies;
+pub mod toml_file;
 #[cfg(feature = "viz")]
 pub mod viz;

@@ -150,7 +150,7 @@ fn truth_files_round_trip_and_reject_unknown_keys() {
     let typo = text.replacen("transducer_offset", "transducer_ofset", 1);
     assert!(matches!(
         TruthRobot::from_toml_str(&typo, Path::new("x")),
-        Err(TruthError::Parse { .. })
+        Err(TruthError::File(axiscal::toml_file::TomlFileError::Parse { .. }))
     ));
 }
 
@@ -241,7 +241,10 @@ fn perturbation_is_deterministic_per_seed() {
     assert!(q.iter().zip(cmd).all(|(q, c)| (q - c).abs() < 0.05), "{q:?}");
     assert!(matches!(a.joints[2].coupling_in, Some(CouplingFunction::FourBar(_))));
     let bad = PerturbationSpec::from_toml_str("[rows]\na_m = { normal = { sigma = 0.5 } }", "<typo>");
-    assert!(matches!(bad, Err(TruthError::Parse { .. })));
+    assert!(matches!(
+        bad,
+        Err(TruthError::File(axiscal::toml_file::TomlFileError::Parse { .. }))
+    ));
 }
 
 #[test]

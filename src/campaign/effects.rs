@@ -23,27 +23,14 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A problem with an effects file.
 #[derive(Debug, thiserror::Error)]
 pub enum EffectsError {
-    /// The file could not be read.
-    #[error("{path}: cannot read: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
-    },
-    /// Malformed TOML or an unknown key.
-    #[error("{path}: {message}")]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// What the parser said.
-        message: String,
-    },
+    /// The file could not be read or parsed.
+    #[error(transparent)]
+    File(#[from] crate::toml_file::TomlFileError),
     /// A value out of range or of the wrong length.
     #[error("effects field `{field}`: {message}")]
     Invalid {
@@ -191,19 +178,12 @@ fn invalid(field: impl Into<String>, message: impl Into<String>) -> EffectsError
 impl Effects {
     /// Reads and validates an effects file for a robot of `dof` joints.
     pub fn from_file(path: &Path, dof: usize) -> Result<Self, EffectsError> {
-        let text = std::fs::read_to_string(path).map_err(|source| EffectsError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::from_toml_str(&text, path, dof)
+        Self::from_toml_str(&crate::toml_file::read(path)?, path, dof)
     }
 
     /// Parses and validates effects text; `path` labels errors only.
     pub fn from_toml_str(text: &str, path: &Path, dof: usize) -> Result<Self, EffectsError> {
-        let e: Self = toml::from_str(text).map_err(|e| EffectsError::Parse {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
+        let e: Self = crate::toml_file::parse(text, path)?;
         e.validate(dof)?;
         Ok(e)
     }

@@ -12,22 +12,9 @@ use std::path::{Path, PathBuf};
 /// A problem with a robot description file.
 #[derive(Debug, thiserror::Error)]
 pub enum DescriptionError {
-    /// The file could not be read.
-    #[error("{path}: cannot read: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
-    },
-    /// The TOML is malformed or has an unknown or missing key.
-    #[error("{path}: {message}")]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// What the parser said, with line and column.
-        message: String,
-    },
+    /// The file could not be read or parsed.
+    #[error(transparent)]
+    File(#[from] crate::toml_file::TomlFileError),
     /// A value is out of range or inconsistent with the rest.
     #[error("{path}: field `{field}`: {message}")]
     Invalid {
@@ -240,19 +227,12 @@ pub struct RobotDescription {
 impl RobotDescription {
     /// Reads and validates a description file.
     pub fn from_file(path: &Path) -> Result<Self, DescriptionError> {
-        let text = std::fs::read_to_string(path).map_err(|source| DescriptionError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::from_toml_str(&text, path)
+        Self::from_toml_str(&crate::toml_file::read(path)?, path)
     }
 
     /// Parses and validates description text; `path` is used in error messages only.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, DescriptionError> {
-        let d: Self = toml::from_str(text).map_err(|e| DescriptionError::Parse {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
+        let d: Self = crate::toml_file::parse(text, path)?;
         d.validate(path)?;
         Ok(d)
     }

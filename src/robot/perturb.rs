@@ -209,10 +209,7 @@ pub struct PerturbationSpec {
 impl PerturbationSpec {
     /// Parses a spec from TOML; `label` names it in errors.
     pub fn from_toml_str(text: &str, label: &str) -> Result<Self, TruthError> {
-        toml::from_str(text).map_err(|e| TruthError::Parse {
-            path: label.into(),
-            message: e.to_string(),
-        })
+        Ok(crate::toml_file::parse(text, std::path::Path::new(label))?)
     }
 
     fn validate(&self, desc: &RobotDescription) -> Result<(), TruthError> {

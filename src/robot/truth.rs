@@ -121,19 +121,12 @@ impl TruthRobot {
 
     /// Reads and validates a truth-model file.
     pub fn from_file(path: &Path) -> Result<Self, TruthError> {
-        let text = std::fs::read_to_string(path).map_err(|source| TruthError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::from_toml_str(&text, path)
+        Self::from_toml_str(&crate::toml_file::read(path)?, path)
     }
 
     /// Parses and validates truth-model text; `path` labels errors only.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, TruthError> {
-        let t: Self = toml::from_str(text).map_err(|e| TruthError::Parse {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
+        let t: Self = crate::toml_file::parse(text, path)?;
         t.validate()?;
         Ok(t)
     }

@@ -1,7 +1,6 @@
 //! Errors of the truth model, its controller and its perturbation.
 
 use super::four_bar::FourBarError;
-use std::path::PathBuf;
 
 /// Why the truth model (or the controller in front of it) cannot produce joint values.
 #[derive(Debug, thiserror::Error)]
@@ -40,22 +39,9 @@ pub enum TruthError {
         /// The linkage problem.
         source: FourBarError,
     },
-    /// A truth-model file cannot be read.
-    #[error("{path}: cannot read: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
-    },
-    /// A truth-model or perturbation file is malformed (line and column in the message).
-    #[error("{path}: {message}")]
-    Parse {
-        /// The file (or a label).
-        path: PathBuf,
-        /// What the parser said.
-        message: String,
-    },
+    /// The file could not be read or parsed.
+    #[error(transparent)]
+    File(#[from] crate::toml_file::TomlFileError),
     /// A value is out of range or inconsistent.
     #[error("field `{field}`: {message}")]
     Invalid {

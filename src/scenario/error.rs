@@ -5,23 +5,9 @@ use std::path::PathBuf;
 /// A scenario could not be read or resolved.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
-    /// The file could not be read.
-    #[error("{path}: cannot read: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
-    /// The TOML is malformed or has an unknown key or a value of the wrong type (the
-    /// message names the key, line and column).
-    #[error("{path}: {message}")]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// The parser's message.
-        message: String,
-    },
+    /// The file could not be read or parsed.
+    #[error(transparent)]
+    File(#[from] crate::toml_file::TomlFileError),
     /// A key has a value that parses but does not make sense.
     #[error("{path}: key `{key}`: {message}")]
     Invalid {

@@ -95,8 +95,7 @@ pub const DEFAULT_MAIN_METRIC: &str = "uncal_pos_rms_mm";
 impl ResolvedScenario {
     /// Reads `path` and resolves it with `overrides`.
     pub fn from_file(path: &Path, overrides: Overrides) -> Result<Self, ScenarioError> {
-        let text = read(path)?;
-        let file: ScenarioFile = toml::from_str(&text).map_err(|e| parse_error(path, e))?;
+        let file: ScenarioFile = crate::toml_file::parse(&crate::toml_file::read(path)?, path)?;
         Self::resolve(file, path, overrides)
     }
 
@@ -213,22 +212,7 @@ impl ResolvedScenario {
 
     /// Reads a dumped resolved scenario (e.g. a shard's).
     pub fn from_resolved_file(path: &Path) -> Result<Self, ScenarioError> {
-        let text = read(path)?;
-        toml::from_str(&text).map_err(|e| parse_error(path, e))
-    }
-}
-
-fn read(path: &Path) -> Result<String, ScenarioError> {
-    std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
-        path: path.to_owned(),
-        source,
-    })
-}
-
-fn parse_error(path: &Path, e: toml::de::Error) -> ScenarioError {
-    ScenarioError::Parse {
-        path: path.to_owned(),
-        message: e.to_string().trim_end().to_owned(),
+        Ok(crate::toml_file::parse(&crate::toml_file::read(path)?, path)?)
     }
 }
 
