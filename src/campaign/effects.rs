@@ -141,6 +141,13 @@ pub struct InstrumentScale {
     pub ppm: f64,
 }
 
+impl InstrumentScale {
+    /// What the scaled instrument reports for a (noisy) measurement `p` (instrument frame).
+    pub fn applied_to(&self, p: &Point3<f64>) -> Point3<f64> {
+        Point3::from(p.coords * (1.0 + self.ppm * 1e-6))
+    }
+}
+
 /// The unmodelled effects (module docs); every table is optional and off when absent.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -390,12 +397,25 @@ pub fn first_order_deflection(
         .collect()
 }
 
+/// An actuator command that changed by no more than this \[rad or m\] has not moved: the
+/// hold-still commands of a coupled joint reproduce its actuator command only to rounding (a
+/// few 1e-16 rad through the fig. 3 decoupling), and no encoder resolves 1e-12.
+pub const UNMOVED_ACTUATOR_RAD: f64 = 1e-12;
+
 /// Commands to joint values with the joint-side effects: the fig. 3 controller, the truth's
 /// transmissions (with [`Effects::gear_harmonics`]), backlash on the active displacements, the
 /// passive couplings, and the repeatability jitter. Keeps the last command for the approach
 /// direction of the backlash (FORMATS.md section 1: the sign of `cmd(s) - cmd(s-1)`; a joint
 /// whose command did not change keeps its previous direction; before any motion the joint
 /// sits in the middle of its band).
+///
+/// Repeatability is a *re-positioning* error: an actuator draws a new jitter only when its
+/// actuator command (after the fig. 3 decoupling) changes; an actuator the command leaves
+/// where it is holds its position, and its previous error, between executions. In a
+/// hold-still axis experiment only the swept actuator is re-positioned, as on the real robot;
+/// every execution of a new pose re-positions every actuator. One standard normal per joint is
+/// drawn from the rng per execution either way, so the random stream does not depend on which
+/// actuators moved.
 #[derive(Clone, Debug)]
 pub struct JointDriver {
     truth: TruthRobot,
@@ -403,6 +423,8 @@ pub struct JointDriver {
     band_rad: Vec<f64>,
     last_cmd: Option<Vec<f64>>,
     approach: Vec<f64>,
+    /// Actuator commands of the last execution and the standard-normal jitter draws they got.
+    last_actuator: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// What [`JointDriver::drive`] produced.
@@ -424,6 +446,7 @@ impl JointDriver {
             band_rad: effects.backlash.as_ref().map_or(vec![0.0; n], |b| b.band_rad.clone()),
             last_cmd: None,
             approach: vec![0.0; n],
+            last_actuator: None,
         }
     }
 
@@ -433,7 +456,8 @@ impl JointDriver {
     }
 
     /// Executes `cmd` (internal units). Draws one standard normal per joint from `rng`, as
-    /// [`TruthRobot::joint_values_executed`] does.
+    /// [`TruthRobot::joint_values_executed`] does, and uses it for the actuators whose command
+    /// changed (see the type's docs).
     pub fn drive<R: Rng + ?Sized>(&mut self, cmd: &[f64], rng: &mut R) -> Result<DrivenJoints, TruthError> {
         let u = self.controller.decouple(cmd)?;
         let mut active = self.truth.active_displacements(&u)?;
@@ -456,10 +480,18 @@ impl JointDriver {
                     .map_err(|source| TruthError::Coupling { joint: k + 1, source })?;
             }
         }
-        for (qk, j) in q.iter_mut().zip(&self.truth.joints) {
-            let z: f64 = StandardNormal.sample(rng);
+        let mut draws: Vec<f64> = (0..q.len()).map(|_| StandardNormal.sample(rng)).collect();
+        if let Some((last_u, last_draws)) = &self.last_actuator {
+            for ((z, (now, before)), held) in draws.iter_mut().zip(u.iter().zip(last_u)).zip(last_draws) {
+                if (now - before).abs() <= UNMOVED_ACTUATOR_RAD {
+                    *z = *held;
+                }
+            }
+        }
+        for ((qk, j), z) in q.iter_mut().zip(&self.truth.joints).zip(&draws) {
             *qk += j.repeatability_sigma * z;
         }
+        self.last_actuator = Some((u, draws));
         Ok(DrivenJoints { active, q })
     }
 }

@@ -40,12 +40,7 @@ fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
 pub fn run(args: Args) -> Result<()> {
     let (instrument, noise) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
     eprintln!("{noise}");
-    let scenario = PaperScenario {
-        seed: args.seed,
-        evaluation_seed: args.evaluation_seed,
-        random_poses: args.random_poses,
-        instrument,
-    };
+    let scenario = PaperScenario::paper(args.seed, args.evaluation_seed, args.random_poses, instrument);
     let out = run_paper_scenario(&scenario)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let r = &out.report;

@@ -15,8 +15,8 @@ use super::accuracy::{EvaluationError, Stats, TestBench, ToolError, pose_rng};
 use super::poses::{JointRanges, Region, TestPose, largest_iso9283_cube, random_poses};
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::campaign::{
-    AnalyticArm, ArmExecutor, CalibrationPlan, CampaignError, ExecuteError, PoseConditions, ValidationPlan,
-    simulate_campaign,
+    AnalyticArm, ArmExecutor, CalibrationPlan, CampaignError, CampaignOptions, Effects, ExecuteError, PoseConditions,
+    ValidationPlan, simulate_campaign_with,
 };
 use crate::compensation::{CompensationError, Compensator};
 use crate::measurement::{MeasurementModel, MeasurementSet, MeasurementSetError};
@@ -43,6 +43,32 @@ pub struct PaperScenario {
     pub random_poses: usize,
     /// The instrument (campaign and evaluation).
     pub instrument: MeasurementModel,
+    /// Unmodelled effects of the real robot and the instrument, in the campaign and in the
+    /// evaluation (not in the noise floor, whose robot is the perfect model).
+    #[serde(default)]
+    pub effects: Effects,
+    /// Temperature of the test poses \[deg C\] (the campaign runs at 20 deg C): what the
+    /// thermal effect acts on.
+    #[serde(default = "default_temperature_c")]
+    pub evaluation_temperature_c: f64,
+}
+
+fn default_temperature_c() -> f64 {
+    PoseConditions::default().temperature_c
+}
+
+impl PaperScenario {
+    /// The paper's settings: 0.19 mm theodolites, no unmodelled effects.
+    pub fn paper(seed: u64, evaluation_seed: u64, random_poses: usize, instrument: MeasurementModel) -> Self {
+        PaperScenario {
+            seed,
+            evaluation_seed,
+            random_poses,
+            instrument,
+            effects: Effects::default(),
+            evaluation_temperature_c: default_temperature_c(),
+        }
+    }
 }
 
 /// Why the scenario could not run.
@@ -184,6 +210,7 @@ impl ArmExecutor for SeparateJitter {
 fn campaign_calibration(
     desc: &RobotDescription,
     truth: &TruthRobot,
+    effects: &Effects,
     instrument: &MeasurementModel,
     seed: u64,
 ) -> Result<Calibration, ScenarioError> {
@@ -193,15 +220,20 @@ fn campaign_calibration(
         ..ValidationPlan::workspace_default(desc.dof())
     };
     let mut arm = SeparateJitter {
-        arm: AnalyticArm::new(truth.clone(), Controller::from_description(desc)),
+        arm: AnalyticArm::new(truth.clone(), Controller::from_description(desc)).with_effects(effects.clone(), desc),
         jitter: pose_rng(seed, usize::MAX),
     };
-    let out = simulate_campaign(
+    let options = CampaignOptions {
+        conditions: PoseConditions::default(),
+        instrument_scale: effects.instrument_scale,
+    };
+    let out = simulate_campaign_with(
         desc,
         &plan,
         &validation,
         &mut arm,
         instrument,
+        &options,
         &mut StdRng::seed_from_u64(seed),
     )?;
     let set = MeasurementSet::new(desc.dof(), out.rows)?;
@@ -242,16 +274,15 @@ pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioErr
     for j in &mut perfect.joints {
         j.repeatability_sigma = 0.0;
     }
-    let calibration = campaign_calibration(&desc, &truth, &s.instrument, s.seed)?;
-    let floor_calibration = campaign_calibration(&desc, &perfect, &s.instrument, s.seed)?;
+    let calibration = campaign_calibration(&desc, &truth, &s.effects, &s.instrument, s.seed)?;
+    let floor_calibration = campaign_calibration(&desc, &perfect, &Effects::default(), &s.instrument, s.seed)?;
     let comp = Compensator::new(&calibration.robot, &desc)?;
     let floor_comp = Compensator::new(&floor_calibration.robot, &desc)?;
-    let bench = TestBench {
-        truth,
-        controller: Controller::from_description(&desc),
-        tool_targets_m: desc.tool_targets_m(),
-        instrument: s.instrument,
+    let conditions = PoseConditions {
+        temperature_c: s.evaluation_temperature_c,
+        ..PoseConditions::default()
     };
+    let bench = TestBench::new(&truth, &desc, &s.effects, s.instrument.clone(), conditions);
     let (poses, iso_cube_edge_m) = scenario_poses(&desc, s.random_poses, s.evaluation_seed)?;
     let mut results = Vec::with_capacity(poses.len());
     for (i, p) in poses.iter().enumerate() {
