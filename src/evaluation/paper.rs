@@ -282,7 +282,7 @@ pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioErr
         temperature_c: s.evaluation_temperature_c,
         ..PoseConditions::default()
     };
-    let bench = TestBench::new(&truth, &desc, &s.effects, s.instrument.clone(), conditions);
+    let bench = TestBench::new(&truth, &desc, &s.effects, s.instrument, conditions);
     let (poses, iso_cube_edge_m) = scenario_poses(&desc, s.random_poses, s.evaluation_seed)?;
     let mut results = Vec::with_capacity(poses.len());
     for (i, p) in poses.iter().enumerate() {
