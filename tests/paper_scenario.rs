@@ -1,6 +1,6 @@
 //! The paper scenario closed in the loop: simulate -> calibrate -> compensate -> evaluate.
 
-use axiscal::evaluation::{PaperScenario, Region, run_paper_scenario};
+use axiscal::evaluation::{PaperScenario, Region, floor_check, run_paper_scenario};
 use axiscal::measurement::MeasurementModel;
 
 fn scenario(seed: u64) -> PaperScenario {
@@ -31,18 +31,8 @@ fn paper_scenario_compensation_beats_the_nominal_controller() {
 /// re-drawn at every step instead of only the actuators that move (README "Compensation").
 #[test]
 fn paper_scenario_calibrated_error_is_within_1_1x_of_the_noise_floor() {
-    let (mut cal, mut floor) = ([0.0; 2], [0.0; 2]);
-    for seed in 1..=3 {
-        let r = run_paper_scenario(&scenario(seed)).unwrap().report;
-        let inside = r.regions.iter().find(|r| r.region == Region::InsideSpans).unwrap();
-        for (i, stats) in [&inside.position_mm, &inside.orientation_rad].into_iter().enumerate() {
-            cal[i] += stats[1].rms.powi(2);
-            floor[i] += stats[2].rms.powi(2);
-        }
-    }
-    for (i, what) in ["position", "orientation"].into_iter().enumerate() {
-        let ratio = (cal[i] / floor[i]).sqrt();
-        println!("{what}: calibrated/floor RMS over seeds 1-3: {ratio:.3}");
-        assert!(ratio <= 1.1, "{what} ratio {ratio:.3}");
-    }
+    let check = floor_check(&scenario(1), 3).unwrap();
+    println!("calibrated/floor RMS over seeds 1-3: {check:?}");
+    assert!(check.ratio[0] <= 1.1, "position {check:?}");
+    assert!(check.ratio[1] <= 1.1, "orientation {check:?}");
 }

@@ -6,7 +6,7 @@
 use anyhow::{Context, Result};
 use axiscal::evaluation::{
     PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperScenario, Region,
-    run_paper_scenario, write_plots,
+    floor_check, run_paper_scenario, write_plots,
 };
 use axiscal::measurement::MeasurementModel;
 use std::path::{Path, PathBuf};
@@ -26,6 +26,10 @@ pub struct Args {
     /// Random test poses per region (inside the spans, workspace).
     #[arg(long, default_value_t = 30)]
     random_poses: usize,
+    /// Also pool the floor check over this many campaign seeds (`seed ..`), written to
+    /// `floor_check.json`; 1: the single run only.
+    #[arg(long, default_value_t = 1)]
+    floor_seeds: u64,
     /// Output directory.
     #[arg(long, default_value = "results/paper")]
     out: PathBuf,
@@ -152,6 +156,25 @@ pub fn run(args: Args) -> Result<()> {
             "ABOVE"
         }
     );
+    if args.floor_seeds > 1 {
+        let check = floor_check(&scenario, args.floor_seeds)?;
+        write_json(&args.out.join("floor_check.json"), &check)?;
+        println!(
+            "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
+             orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
+            check.first_seed,
+            check.first_seed + check.seeds - 1,
+            check.ratio[0],
+            check.position_rms_mm[0],
+            check.position_rms_mm[1],
+            check.ratio[1],
+            if check.ratio.iter().all(|r| *r <= FLOOR_RATIO_LIMIT) {
+                "within"
+            } else {
+                "ABOVE"
+            }
+        );
+    }
     println!("wrote {} and {} plots", args.out.display(), plots.len());
     Ok(())
 }

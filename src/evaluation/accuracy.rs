@@ -236,4 +236,19 @@ impl Stats {
             max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         }
     }
+
+    /// Statistics of the union of the sets that `parts` summarise (all zero when empty).
+    pub fn pooled(parts: &[Stats]) -> Self {
+        let n: usize = parts.iter().map(|p| p.n).sum();
+        if n == 0 {
+            return Stats::default();
+        }
+        let weighted = |f: fn(&Stats) -> f64| parts.iter().map(|p| p.n as f64 * f(p)).sum::<f64>() / n as f64;
+        Stats {
+            n,
+            mean: weighted(|p| p.mean),
+            rms: weighted(|p| p.rms * p.rms).sqrt(),
+            max: parts.iter().filter(|p| p.n > 0).map(|p| p.max).fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
 }

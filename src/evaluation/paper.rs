@@ -306,6 +306,89 @@ pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioErr
     })
 }
 
+/// Calibrated vs noise-floor RMS inside the spans, pooled over several campaign seeds (one
+/// seed's floor alone scatters by a factor of 4: the Table-1 spans leave some transmission
+/// terms poorly determined).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FloorCheck {
+    /// Seeds pooled: `first_seed .. first_seed + seeds`.
+    pub first_seed: u64,
+    /// Number of seeds.
+    pub seeds: u64,
+    /// Pooled RMS inside the spans: calibrated, floor; position \[mm\].
+    pub position_rms_mm: [f64; 2],
+    /// Pooled RMS inside the spans: calibrated, floor; orientation \[rad\].
+    pub orientation_rms_rad: [f64; 2],
+    /// Calibrated / floor pooled RMS: position, orientation.
+    pub ratio: [f64; 2],
+}
+
+/// Runs `template` for seeds `template.seed .. template.seed + seeds` (rayon; pooled in seed
+/// order, so independent of the thread count) and pools the inside-span RMS of the calibrated
+/// and the floor errors.
+pub fn floor_check(template: &PaperScenario, seeds: u64) -> Result<FloorCheck, ScenarioError> {
+    use rayon::prelude::*;
+    let regions: Vec<RegionSummary> = (0..seeds)
+        .into_par_iter()
+        .map(|i| {
+            let s = PaperScenario {
+                seed: template.seed.wrapping_add(i),
+                ..template.clone()
+            };
+            let report = run_paper_scenario(&s)?.report;
+            Ok(report
+                .regions
+                .into_iter()
+                .find(|r| r.region == Region::InsideSpans)
+                .expect("the scenario evaluates inside the spans"))
+        })
+        .collect::<Result<_, ScenarioError>>()?;
+    let pooled = |f: fn(&RegionSummary) -> &[Stats; 3], k: usize| {
+        Stats::pooled(&regions.iter().map(|r| f(r)[k]).collect::<Vec<_>>()).rms
+    };
+    let position_rms_mm = [pooled(|r| &r.position_mm, 1), pooled(|r| &r.position_mm, 2)];
+    let orientation_rms_rad = [pooled(|r| &r.orientation_rad, 1), pooled(|r| &r.orientation_rad, 2)];
+    Ok(FloorCheck {
+        first_seed: template.seed,
+        seeds,
+        ratio: [
+            position_rms_mm[0] / position_rms_mm[1],
+            orientation_rms_rad[0] / orientation_rms_rad[1],
+        ],
+        position_rms_mm,
+        orientation_rms_rad,
+    })
+}
+
+/// The scenario's calibration alone (no noise floor) evaluated on its test poses inside the
+/// calibrated spans: statistics of the observed position error \[mm\] (through the instrument,
+/// as the paper measured its 1.40 mm). Poses whose compensation fails are errors.
+pub fn calibrated_position_error_inside_spans(s: &PaperScenario) -> Result<Stats, ScenarioError> {
+    let desc = RobotDescription::asea_irb6l();
+    let truth = TruthRobot::paper_robot();
+    let calibration = campaign_calibration(&desc, &truth, &s.effects, &s.instrument, s.seed)?;
+    let comp = Compensator::new(&calibration.robot, &desc)?;
+    let conditions = PoseConditions {
+        temperature_c: s.evaluation_temperature_c,
+        ..PoseConditions::default()
+    };
+    let bench = TestBench::new(&truth, &desc, &s.effects, s.instrument, conditions);
+    let (poses, _) = scenario_poses(&desc, s.random_poses, s.evaluation_seed)?;
+    let mut errors = Vec::new();
+    for (i, p) in poses.iter().enumerate().filter(|(_, p)| p.region == Region::InsideSpans) {
+        let fail = |source| ScenarioError::Evaluate {
+            id: p.id.clone(),
+            source,
+        };
+        let cmd = comp.compensate_from(&p.world_from_tool, &p.q_nominal)?.cmd;
+        let e = bench
+            .tool_error(&p.world_from_tool, &cmd, &mut pose_rng(s.evaluation_seed, i))
+            .map_err(fail)?;
+        errors.push(e.position_mm);
+    }
+    Ok(Stats::of(errors))
+}
+
 /// One test pose: nominal commands, compensated commands (scenario and floor calibrations),
 /// each executed with the same jitter and noise.
 pub fn evaluate_pose(
