@@ -85,7 +85,11 @@ pub fn run(args: Args) -> Result<()> {
     let (instrument, _) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
     let scenario = PaperScenario::paper(args.seed, args.evaluation_seed, args.random_poses, instrument);
     let settings = BudgetSettings::paper(scenario, args.seeds.max(1));
-    let effects = if args.effects.is_empty() { BudgetEffect::ALL.to_vec() } else { args.effects };
+    let effects = if args.effects.is_empty() {
+        BudgetEffect::ALL.to_vec()
+    } else {
+        args.effects
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()

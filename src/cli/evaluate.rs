@@ -5,8 +5,8 @@
 
 use anyhow::{Context, Result};
 use axiscal::evaluation::{
-    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperScenario, Region,
-    floor_check, run_paper_scenario, write_plots,
+    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperScenario, Region, floor_check,
+    run_paper_scenario, write_plots,
 };
 use axiscal::measurement::MeasurementModel;
 use std::path::{Path, PathBuf};

@@ -248,7 +248,11 @@ impl Stats {
             n,
             mean: weighted(|p| p.mean),
             rms: weighted(|p| p.rms * p.rms).sqrt(),
-            max: parts.iter().filter(|p| p.n > 0).map(|p| p.max).fold(f64::NEG_INFINITY, f64::max),
+            max: parts
+                .iter()
+                .filter(|p| p.n > 0)
+                .map(|p| p.max)
+                .fold(f64::NEG_INFINITY, f64::max),
         }
     }
 }

@@ -24,8 +24,7 @@
 use super::accuracy::Stats;
 use super::paper::{PAPER_POSITION_ERROR_MM, PaperScenario, ScenarioError, calibrated_position_error_inside_spans};
 use crate::campaign::{
-    AxisWobble, BacklashEffect, ComplianceEffect, Effects, GearHarmonic, InstrumentScale, PoseConditions,
-    ThermalEffect,
+    AxisWobble, BacklashEffect, ComplianceEffect, Effects, GearHarmonic, InstrumentScale, PoseConditions, ThermalEffect,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -112,7 +111,11 @@ impl BudgetEffect {
                     gravity_m_s2: [0.0, 0.0, -9.81],
                 })
             }
-            BudgetEffect::Backlash => effects.backlash = Some(BacklashEffect { band_rad: every(magnitude) }),
+            BudgetEffect::Backlash => {
+                effects.backlash = Some(BacklashEffect {
+                    band_rad: every(magnitude),
+                })
+            }
             BudgetEffect::Thermal => {
                 effects.thermal = Some(ThermalEffect {
                     alpha_per_k: STEEL_ALPHA_PER_K,

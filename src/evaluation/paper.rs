@@ -375,7 +375,11 @@ pub fn calibrated_position_error_inside_spans(s: &PaperScenario) -> Result<Stats
     let bench = TestBench::new(&truth, &desc, &s.effects, s.instrument, conditions);
     let (poses, _) = scenario_poses(&desc, s.random_poses, s.evaluation_seed)?;
     let mut errors = Vec::new();
-    for (i, p) in poses.iter().enumerate().filter(|(_, p)| p.region == Region::InsideSpans) {
+    for (i, p) in poses
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.region == Region::InsideSpans)
+    {
         let fail = |source| ScenarioError::Evaluate {
             id: p.id.clone(),
             source,
