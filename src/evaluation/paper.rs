@@ -69,6 +69,16 @@ impl PaperScenario {
             evaluation_temperature_c: default_temperature_c(),
         }
     }
+
+    /// The test bench of the scenario: `truth` with the scenario's effects, its instrument,
+    /// the test poses at the evaluation temperature.
+    fn test_bench(&self, truth: &TruthRobot, desc: &RobotDescription) -> TestBench {
+        let conditions = PoseConditions {
+            temperature_c: self.evaluation_temperature_c,
+            ..PoseConditions::default()
+        };
+        TestBench::new(truth, desc, &self.effects, self.instrument, conditions)
+    }
 }
 
 /// Why the scenario could not run.
@@ -278,11 +288,7 @@ pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioErr
     let floor_calibration = campaign_calibration(&desc, &perfect, &Effects::default(), &s.instrument, s.seed)?;
     let comp = Compensator::new(&calibration.robot, &desc)?;
     let floor_comp = Compensator::new(&floor_calibration.robot, &desc)?;
-    let conditions = PoseConditions {
-        temperature_c: s.evaluation_temperature_c,
-        ..PoseConditions::default()
-    };
-    let bench = TestBench::new(&truth, &desc, &s.effects, s.instrument, conditions);
+    let bench = s.test_bench(&truth, &desc);
     let (poses, iso_cube_edge_m) = scenario_poses(&desc, s.random_poses, s.evaluation_seed)?;
     let mut results = Vec::with_capacity(poses.len());
     for (i, p) in poses.iter().enumerate() {
@@ -368,11 +374,7 @@ pub fn calibrated_position_error_inside_spans(s: &PaperScenario) -> Result<Stats
     let truth = TruthRobot::paper_robot();
     let calibration = campaign_calibration(&desc, &truth, &s.effects, &s.instrument, s.seed)?;
     let comp = Compensator::new(&calibration.robot, &desc)?;
-    let conditions = PoseConditions {
-        temperature_c: s.evaluation_temperature_c,
-        ..PoseConditions::default()
-    };
-    let bench = TestBench::new(&truth, &desc, &s.effects, s.instrument, conditions);
+    let bench = s.test_bench(&truth, &desc);
     let (poses, _) = scenario_poses(&desc, s.random_poses, s.evaluation_seed)?;
     let mut errors = Vec::new();
     for (i, p) in poses
