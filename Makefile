@@ -11,7 +11,7 @@ RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' C
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
 run:
 	$(CARGO) run --profile quick-release --features viz -- simulate --seed 1 --out $(OUT)/campaign.csv --record $(OUT)/campaign.rrd --force
-	$(CARGO) run --profile quick-release --features viz -- evaluate --seed 1 --floor-seeds 30 --out $(OUT)
+	$(CARGO) run --profile quick-release --features viz -- evaluate --seed 1 --floor-seeds 30 --force --out $(OUT)
 	$(CARGO) run --profile quick-release --features viz -- budget --seeds 30 --force --out results/budget
 	$(CARGO) run --profile quick-release --features viz -- run scenarios/paper.toml --force --out $(OUT)/montecarlo
 

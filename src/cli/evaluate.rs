@@ -3,10 +3,11 @@
 //! to the paper's figures and the noise floor measured in the same run; writes
 //! `evaluation.json`, `poses.csv`, `calibration.json`, `floor_calibration.json` and the plots.
 
+use super::calibrate::refuse_existing;
 use anyhow::{Context, Result};
 use axiscal::evaluation::{
-    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperScenario, Region, floor_check,
-    run_paper_scenario, write_plots,
+    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperScenario, Region,
+    floor_check, run_paper_scenario, write_plots,
 };
 use axiscal::measurement::MeasurementModel;
 use std::path::{Path, PathBuf};
@@ -33,6 +34,9 @@ pub struct Args {
     /// Output directory.
     #[arg(long, default_value = "results/paper")]
     out: PathBuf,
+    /// Replace existing outputs.
+    #[arg(long)]
+    force: bool,
 }
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
@@ -45,6 +49,15 @@ pub fn run(args: Args) -> Result<()> {
     let (instrument, noise) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
     eprintln!("{noise}");
     let scenario = PaperScenario::paper(args.seed, args.evaluation_seed, args.random_poses, instrument);
+    let mut outputs = vec![
+        "evaluation.json",
+        "calibration.json",
+        "floor_calibration.json",
+        "poses.csv",
+        "floor_check.json",
+    ];
+    outputs.extend(PLOT_FILES);
+    refuse_existing(&args.out, &outputs, args.force)?;
     let out = run_paper_scenario(&scenario)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let r = &out.report;

@@ -16,5 +16,5 @@ pub use paper::{
     PaperScenario, PoseResult, RegionSummary, RepeatabilitySummary, ScenarioError,
     calibrated_position_error_inside_spans, evaluate_pose, floor_check, run_paper_scenario, scenario_poses,
 };
-pub use plots::{PlotError, write_plots};
+pub use plots::{PLOT_FILES, PlotError, write_plots};
 pub use poses::{JointRanges, Region, TestPose, iso9283_poses, largest_iso9283_cube, random_poses};
