@@ -117,30 +117,32 @@ pub fn run(args: Args) -> Result<()> {
             s.position_mm[0].n,
             s.failures
         );
-        println!(
-            "  position    [mm]  uncalibrated mean {:7.3} rms {:7.3}   (paper 47.0 mean)",
-            s.position_mm[0].mean, s.position_mm[0].rms
-        );
-        println!(
-            "                    calibrated   mean {:7.3} rms {:7.3}   (paper {:.2})  floor rms {:.3}  ratio {:.2}",
-            s.position_mm[1].mean,
-            s.position_mm[1].rms,
-            PAPER_POSITION_ERROR_MM[1],
-            s.position_mm[2].rms,
-            s.ratio_to_floor[0]
-        );
-        println!(
-            "  orientation [rad] uncalibrated mean {:7.4} rms {:7.4}   (paper {:.2})",
-            s.orientation_rad[0].mean, s.orientation_rad[0].rms, PAPER_ORIENTATION_ERROR_RAD[0]
-        );
-        println!(
-            "                    calibrated   mean {:7.4} rms {:7.4}   (paper {:.2})  floor rms {:.4}  ratio {:.2}",
-            s.orientation_rad[1].mean,
-            s.orientation_rad[1].rms,
-            PAPER_ORIENTATION_ERROR_RAD[1],
-            s.orientation_rad[2].rms,
-            s.ratio_to_floor[1]
-        );
+        let rows = [
+            (
+                "position    [mm] ",
+                &s.position_mm,
+                PAPER_POSITION_ERROR_MM,
+                s.ratio_to_floor[0],
+                3,
+            ),
+            (
+                "orientation [rad]",
+                &s.orientation_rad,
+                PAPER_ORIENTATION_ERROR_RAD,
+                s.ratio_to_floor[1],
+                4,
+            ),
+        ];
+        for (label, st, paper, ratio, p) in rows {
+            println!(
+                "  {label} uncalibrated mean {:7.p$} rms {:7.p$}   (paper {:.2} mean)",
+                st[0].mean, st[0].rms, paper[0]
+            );
+            println!(
+                "                    calibrated   mean {:7.p$} rms {:7.p$}   (paper {:.2})  floor rms {:.p$}  ratio {ratio:.2}",
+                st[1].mean, st[1].rms, paper[1], st[2].rms
+            );
+        }
         println!(
             "  model only (no jitter, no noise): position rms {:.3} mm (floor {:.3}, ratio {:.2})",
             s.model_position_mm[1].rms, s.model_position_mm[2].rms, s.model_ratio_to_floor[0]

@@ -146,15 +146,22 @@ impl TestBench {
             &mut StdRng::seed_from_u64(0),
         )?;
         let executed = self.execute(&self.arm, cmd, &mut StdRng::seed_from_u64(approach_seed), rng)?;
-        let measured = self
-            .tool_targets_m
+        Ok((self.measure_tool_targets(&executed, rng)?, exact))
+    }
+
+    /// The tool targets of a tool pose as the instrument (with its scale error) reports them.
+    fn measure_tool_targets(
+        &self,
+        world_from_tool: &Isometry3<f64>,
+        rng: &mut StdRng,
+    ) -> Result<Vec<Point3<f64>>, TriangulationError> {
+        self.tool_targets_m
             .iter()
             .map(|t| {
-                let m = self.instrument.measure(&(executed * t), rng)?;
+                let m = self.instrument.measure(&(world_from_tool * t), rng)?;
                 Ok(self.instrument_scale.map_or(m, |s| s.applied_to(&m)))
             })
-            .collect::<Result<Vec<_>, TriangulationError>>()?;
-        Ok((measured, exact))
+            .collect()
     }
 
     /// Executes `cmd` once and scores it against `required` (module docs).
@@ -186,14 +193,7 @@ impl TestBench {
         for _ in 0..2 {
             let approach_seed: u64 = rng.random();
             let pose = self.execute(&self.arm, cmd, &mut StdRng::seed_from_u64(approach_seed), rng)?;
-            let measured = self
-                .tool_targets_m
-                .iter()
-                .map(|t| {
-                    let m = self.instrument.measure(&(pose * t), rng)?;
-                    Ok(self.instrument_scale.map_or(m, |s| s.applied_to(&m)))
-                })
-                .collect::<Result<Vec<_>, TriangulationError>>()?;
+            let measured = self.measure_tool_targets(&pose, rng)?;
             let (fit, _) = rigid_fit(&self.tool_targets_m, &measured).ok_or(EvaluationError::DegenerateTool)?;
             observed.push((measured[0], fit));
             actual.push(pose);
