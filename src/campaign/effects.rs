@@ -390,6 +390,53 @@ pub fn first_order_deflection(
         .collect()
 }
 
+/// First-order static deflection through the passive couplings, as the rapier arm's dynamic
+/// mode produces it (`sim::FourBarBodies`, `sim::CoupledTargets`): each actuator `k` sags by
+/// `da_k = tau_k / K_k` and the sag drives the passive coupling into joint `k + 1` like any
+/// active rotation, `dq_k = da_k + g'_{k-1,k}(theta_act_{k-1}) da_{k-1}` (eq. 15
+/// linearised; `g'` the coupling's slope at the active displacement `active[k - 1]`). The
+/// actuator's load is the joint's gravity torque `Q_k` ([`first_order_deflection`] with unit
+/// stiffness), plus, where joint `k` drives joint `k + 1` through one of the truth's
+/// four-bars (a mechanism transmits torque both ways), the reflected `g'_{k,k+1} Q_{k+1}`
+/// (virtual work). The other couplings are kinematic only, as their rapier emulation (see
+/// `sim::CoupledTargets` for the size of the missing gear reaction). Second order in the
+/// deflection, like [`first_order_deflection`].
+#[allow(clippy::too_many_arguments)]
+pub fn coupled_first_order_deflection(
+    model: &PhiModel,
+    q: &[f64],
+    active: &[f64],
+    masses: &[LinkMass],
+    payload: Option<(f64, Point3<f64>)>,
+    compliance: &ComplianceEffect,
+    truth: &TruthRobot,
+) -> Vec<f64> {
+    let unit = ComplianceEffect {
+        stiffness_nm_per_rad: vec![1.0; q.len()],
+        gravity_m_s2: compliance.gravity_m_s2,
+    };
+    let load = first_order_deflection(model, q, masses, payload, &unit);
+    let slope_into = |k: usize| -> f64 {
+        truth
+            .joints
+            .get(k)
+            .and_then(|j| j.coupling_in.as_ref())
+            .map_or(0.0, |g| g.slope(active[k - 1]))
+    };
+    let mut dq = vec![0.0; q.len()];
+    let mut da_below = 0.0;
+    for k in 0..q.len() {
+        let mut tau = load[k];
+        if k + 1 < q.len() && truth.four_bars.iter().any(|l| l.from == k + 1) {
+            tau += slope_into(k + 1) * load[k + 1];
+        }
+        let da = tau / compliance.stiffness_nm_per_rad[k];
+        dq[k] = da + if k > 0 { slope_into(k) * da_below } else { 0.0 };
+        da_below = da;
+    }
+    dq
+}
+
 /// Commands to joint values with the joint-side effects: the fig. 3 controller, the truth's
 /// transmissions (with [`Effects::gear_harmonics`]), backlash on the active displacements, the
 /// passive couplings, and the repeatability jitter. Keeps the last command for the approach

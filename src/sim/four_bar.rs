@@ -33,6 +33,7 @@ use super::arm::SimArm;
 use super::convert::{point_to_glam, pose_to_glam, rotation_from_glam, rotation_to_glam};
 use crate::robot::FourBarLinkage;
 use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
+use parry3d_f64::shape::{Capsule, SharedShape};
 use rapier3d_f64::math::Vector;
 use rapier3d_f64::prelude::{
     GenericJointBuilder, ImpulseJointHandle, JointAxesMask, JointAxis, MassProperties, MultibodyJointHandle,
@@ -64,8 +65,12 @@ fn x_onto_z() -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::new(h, 0.0, -h, 0.0))
 }
 
+/// Radius of the crank and the rod \[m\]: their collision capsules (line of sight) and the
+/// solid cylinders of their inertia estimates.
+pub const BAR_RADIUS_M: f64 = 0.015;
+
 fn bar_mass(mass_kg: f64, length_m: f64, along: Vector3<f64>, from: Point3<f64>) -> MassProperties {
-    let r = 0.015_f64;
+    let r = BAR_RADIUS_M;
     let i_axial = mass_kg * r * r / 2.0;
     let i_trans = mass_kg * (3.0 * r * r + length_m * length_m) / 12.0;
     let frame = UnitQuaternion::rotation_between(&Vector3::z(), &along).unwrap_or_else(UnitQuaternion::identity);
@@ -170,6 +175,11 @@ impl FourBarBodies {
         })
     }
 
+    /// The joint the mechanism drives (0-based), `b = a + 1`.
+    pub fn driven_joint(&self) -> usize {
+        self.a + 1
+    }
+
     /// The linkage this mechanism was built from.
     pub fn linkage(&self) -> &FourBarLinkage {
         &self.linkage
@@ -197,6 +207,22 @@ impl FourBarBodies {
     /// The lever point on link `b` in the world \[m\].
     pub fn lever_point_m(&self, arm: &SimArm) -> Point3<f64> {
         arm.world_from_link(self.a + 1) * self.lever_in_link_b_m
+    }
+
+    /// The crank (from `O2` to the crank tip) and the rod (its full length) as capsules of
+    /// radius [`BAR_RADIUS_M`], posed in the world at the current configuration.
+    pub fn placed_shapes(&self, arm: &SimArm) -> Vec<(Isometry3<f64>, SharedShape)> {
+        let pose = |h: RigidBodyHandle| super::convert::pose_from_glam(arm.world().bodies[h].position());
+        let capsule = |a: Point3<f64>, b: Point3<f64>| {
+            SharedShape::new(Capsule::new(point_to_glam(&a), point_to_glam(&b), BAR_RADIUS_M))
+        };
+        vec![
+            (pose(self.crank_body), capsule(self.o2, self.crank_tip_in_crank_m)),
+            (
+                pose(self.rod_body),
+                capsule(Point3::origin(), Point3::new(self.linkage.geometry.rod_m, 0.0, 0.0)),
+            ),
+        ]
     }
 
     /// Loop-closure error: distance between the rod's far end and the lever point \[m\].

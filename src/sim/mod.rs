@@ -16,13 +16,15 @@
 mod arm;
 mod convert;
 mod four_bar;
+mod gear;
 mod rapier_arm;
 mod servo;
 mod visibility;
 pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg};
 
 pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
-pub use four_bar::FourBarBodies;
+pub use four_bar::{BAR_RADIUS_M, FourBarBodies};
+pub use gear::CoupledTargets;
 pub use rapier_arm::{RapierArm, RapierArmOptions};
 pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport};
 
@@ -62,6 +64,14 @@ pub enum SimError {
     JointRejected {
         /// The joint (0-based).
         joint: usize,
+    },
+    /// A passive coupling cannot be evaluated (a four-bar coupling that cannot close).
+    #[error("coupling into joint {} cannot be evaluated: {source}", joint + 1)]
+    Coupling {
+        /// The driven joint (0-based).
+        joint: usize,
+        /// Why.
+        source: crate::robot::FourBarError,
     },
     /// The dynamic simulation did not come to rest within the step cap.
     #[error("the arm did not settle in {steps} steps: fastest watched point still moves at {max_speed_m_s} m/s")]
