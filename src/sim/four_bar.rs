@@ -65,6 +65,12 @@ fn x_onto_z() -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::new(h, 0.0, -h, 0.0))
 }
 
+/// Mass of the crank \[kg\] (an estimate: a steel bar of the crank's length).
+pub const CRANK_MASS_KG: f64 = 2.0;
+
+/// Mass of the coupler rod \[kg\] (an estimate: a steel tube of the arm's length).
+pub const ROD_MASS_KG: f64 = 1.0;
+
 /// Radius of the crank and the rod \[m\]: their collision capsules (line of sight) and the
 /// solid cylinders of their inertia estimates.
 pub const BAR_RADIUS_M: f64 = 0.015;
@@ -84,7 +90,7 @@ fn bar_mass(mass_kg: f64, length_m: f64, along: Vector3<f64>, from: Point3<f64>)
 
 impl FourBarBodies {
     /// Adds crank, rod and closure to `arm` for `linkage` (driving joint `linkage.from`,
-    /// 1-based); crank and rod get 2 kg and 1 kg. The arm must sit with the mechanism
+    /// 1-based); crank and rod get [`CRANK_MASS_KG`] and [`ROD_MASS_KG`]. The arm must sit with the mechanism
     /// assembled before stepping: call [`FourBarBodies::place`].
     pub fn attach(arm: &mut SimArm, linkage: &FourBarLinkage) -> Result<Self, SimError> {
         let n = arm.model().dof();
@@ -117,7 +123,7 @@ impl FourBarBodies {
         let crank_body = world.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(pose_to_glam(&world_from_frame))
-                .additional_mass_properties(bar_mass(2.0, g.crank_m, crank_tip - o2, o2))
+                .additional_mass_properties(bar_mass(CRANK_MASS_KG, g.crank_m, crank_tip - o2, o2))
                 .can_sleep(false),
         );
         let crank = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
@@ -136,7 +142,7 @@ impl FourBarBodies {
                 .pose(pose_to_glam(
                     &(world_from_frame * Isometry3::translation(crank_tip.x, crank_tip.y, crank_tip.z)),
                 ))
-                .additional_mass_properties(bar_mass(1.0, g.rod_m, Vector3::x(), Point3::origin()))
+                .additional_mass_properties(bar_mass(ROD_MASS_KG, g.rod_m, Vector3::x(), Point3::origin()))
                 .can_sleep(false),
         );
         let rod = GenericJointBuilder::new(JointAxesMask::LOCKED_SPHERICAL_AXES)

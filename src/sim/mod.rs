@@ -23,7 +23,7 @@ mod visibility;
 pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg};
 
 pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
-pub use four_bar::{BAR_RADIUS_M, FourBarBodies};
+pub use four_bar::{BAR_RADIUS_M, CRANK_MASS_KG, FourBarBodies, ROD_MASS_KG};
 pub use gear::CoupledTargets;
 pub use rapier_arm::{RapierArm, RapierArmOptions};
 pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport};
