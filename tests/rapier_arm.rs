@@ -102,7 +102,7 @@ mod dynamic {
         first_order_deflection,
     };
     use axiscal::robot::{Controller, FourBarGeometry, RobotDescription, TruthRobot};
-    use axiscal::sim::{BAR_RADIUS_M, CRANK_MASS_KG, ROD_MASS_KG, RapierArm, RapierArmOptions};
+    use axiscal::sim::{CRANK_MASS_KG, ROD_MASS_KG, RapierArm, RapierArmOptions};
     use rand::SeedableRng;
     use rand::rngs::StdRng;
 
@@ -209,7 +209,6 @@ mod dynamic {
             assert!(gap < 1e-6, "loop gap {gap} m");
             assert!((dq3 - predicted).abs() < bound, "dq3 {dq3} vs {predicted} +- {bound}");
         }
-        let _ = BAR_RADIUS_M;
     }
 
     /// The bevel gear 4 -> 5 emulated by coupled servo targets (`sim::CoupledTargets`): at
@@ -225,7 +224,6 @@ mod dynamic {
     /// by `|g'| (v / r) (dt + tau)`.
     #[test]
     fn the_bevel_gear_follows_joint4s_sag_through_its_error_function() {
-        use axiscal::campaign::ArmExecutor as _;
         let desc = RobotDescription::asea_irb6l();
         let paper = TruthRobot::paper_robot();
         let mut truth = ideal_truth(&desc);
