@@ -284,3 +284,94 @@ mod dynamic {
         assert!((q[4] - law).abs() < bound, "q5 {} vs gear law {law}", q[4]);
     }
 }
+
+mod line_of_sight {
+    use axiscal::campaign::{ArmExecutor, AxisWobble, Effects, PoseConditions};
+    use axiscal::robot::{RobotDescription, TruthRobot};
+    use axiscal::sim::{RapierArm, RapierArmOptions};
+    use nalgebra::{Isometry3, Point3, Vector3};
+    use rand::SeedableRng;
+    use rand::rngs::StdRng;
+
+    const CMD: [f64; 6] = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
+
+    fn executed(
+        truth: &TruthRobot,
+        effects: Effects,
+        stations_m: Vec<Point3<f64>>,
+        four_bar_bodies: bool,
+    ) -> (RapierArm, Vec<Isometry3<f64>>) {
+        let desc = RobotDescription::asea_irb6l();
+        let options = RapierArmOptions {
+            stations_m,
+            four_bar_bodies,
+            ..RapierArmOptions::new(6)
+        };
+        let mut arm = RapierArm::new(truth.clone(), &desc, effects, options);
+        let links = arm
+            .execute(&CMD, &PoseConditions::default(), &mut StdRng::seed_from_u64(1))
+            .expect("executes");
+        (arm, links)
+    }
+
+    /// A station looking at a target across the middle of the coupler rod, along axis 2 (the
+    /// rod lies in the plane normal to it, 0.2 m from the upper arm, so that line passes 0.2 m
+    /// from every link capsule): hidden with the four-bar's bodies, seen without them.
+    #[test]
+    fn a_ray_blocked_only_by_the_rod_is_occluded() {
+        let mut truth = TruthRobot::paper_robot();
+        for j in &mut truth.joints {
+            j.repeatability_sigma = 0.0;
+        }
+        let (probe, links) = executed(&truth, Effects::default(), vec![], true);
+        let sim = probe.sim_arm().expect("built");
+        let rod_m = truth.four_bars[0].geometry.rod_m;
+        let (rod_pose, _) = probe.four_bars()[0].placed_shapes(sim)[1].clone();
+        let middle = rod_pose * Point3::new(rod_m / 2.0, 0.0, 0.0);
+        let axis2 = links[1] * Vector3::z();
+        let station = middle - axis2 * 3.0;
+        let target = middle + axis2 * 0.5;
+        let (with_bodies, _) = executed(&truth, Effects::default(), vec![station], true);
+        let (without, _) = executed(&truth, Effects::default(), vec![station], false);
+        assert!(!with_bodies.visible(&target), "the rod should hide the target");
+        assert!(without.visible(&target), "only the rod is in the way");
+    }
+
+    /// Axis wobble moves the link capsules too: joint 1 tilted by 0.1 rad moves a point
+    /// 0.6 of the way up the upper arm by `d` (42 mm); a ray perpendicular to both the upper
+    /// arm and `d`, passing 30 mm from the wobbled arm's axis on the side it moved to, passes
+    /// about `|d| + 30 mm` (more than 60 mm) from the unwobbled axis: hidden by the 50 mm
+    /// capsule only when the wobble is applied to the shapes.
+    #[test]
+    fn line_of_sight_uses_the_wobbled_link_poses() {
+        let mut truth = TruthRobot::paper_robot();
+        for j in &mut truth.joints {
+            j.repeatability_sigma = 0.0;
+        }
+        let wobble = Effects {
+            wobble: vec![AxisWobble {
+                joint: 1,
+                amplitude_rad: 0.1,
+                phase_rad: 0.0,
+                order: 1,
+            }],
+            ..Effects::default()
+        };
+        let (_, straight) = executed(&truth, Effects::default(), vec![], false);
+        let (_, tilted) = executed(&truth, wobble.clone(), vec![], false);
+        let along = truth.model().link_from_next_frame(1) * Point3::origin();
+        let on_axis = |links: &[Isometry3<f64>]| links[1] * (along * 0.6);
+        let d = on_axis(&tilted) - on_axis(&straight);
+        let u = d.normalize();
+        let arm_dir = (tilted[1] * along - tilted[1] * Point3::origin()).normalize();
+        let w = u.cross(&arm_dir).normalize();
+        let x = on_axis(&tilted) + u * 0.03;
+        let station = x - w * 3.0;
+        let target = x + w * 0.5;
+        assert!(d.norm() > 0.03, "wobble displacement {} m", d.norm());
+        let (tilted_arm, _) = executed(&truth, wobble, vec![station], false);
+        let (straight_arm, _) = executed(&truth, Effects::default(), vec![station], false);
+        assert!(!tilted_arm.visible(&target), "the wobbled upper arm is in the way");
+        assert!(straight_arm.visible(&target), "the unwobbled upper arm is not");
+    }
+}
