@@ -60,7 +60,8 @@ fn kinematic_rapier_arm_agrees_with_the_analytic_arm_to_a_micrometre() {
 
 /// The joint-2 target sits on the upper arm's face towards the stations (-y) at q1 = 0; with
 /// joint 1 at 170 deg it faces away from both theodolites, behind the 50 mm capsule (see
-/// `sim::visibility`): a joint-2 sweep there sees nothing, the analytic arm sees everything.
+/// `sim::visibility`): a joint-2 sweep there sees nothing (no row in the measurement CSV
+/// written and read back), the analytic arm sees everything.
 #[test]
 fn an_occluded_target_is_left_out_of_the_campaign() {
     let desc = RobotDescription::asea_irb6l();
@@ -90,10 +91,23 @@ fn an_occluded_target_is_left_out_of_the_campaign() {
     let axis2 = |rows: &[axiscal::measurement::Measurement]| rows.iter().filter(|r| r.experiment == "axis2").count();
     assert_eq!(axis2(&out.rows), 0, "{} rows measured", axis2(&out.rows));
     assert_eq!(out.occluded, vec![("axis2".to_owned(), 3)]);
+    assert_eq!(csv_rows_of(&out.rows, "axis2"), 0);
     let mut analytic = AnalyticArm::new(truth, Controller::from_description(&desc));
     let out = simulate_campaign(&desc, &plan, &validation, &mut analytic, &instrument, &mut rng).expect("runs");
     assert_eq!(axis2(&out.rows), 3);
     assert!(out.occluded.is_empty());
+    assert_eq!(csv_rows_of(&out.rows, "axis2"), 3);
+}
+
+/// The measurement CSV (FORMATS.md section 1) written from `rows` and read back: how many
+/// rows it holds for `experiment`.
+fn csv_rows_of(rows: &[axiscal::measurement::Measurement], experiment: &str) -> usize {
+    use axiscal::measurement::{MeasurementSet, read_measurements_from, write_measurements_to};
+    let set = MeasurementSet::new(6, rows.to_vec()).expect("valid rows");
+    let mut csv = Vec::new();
+    write_measurements_to(&mut csv, &set).expect("writes");
+    let back = read_measurements_from(csv.as_slice(), std::path::Path::new("campaign.csv"), Some(6)).expect("reads");
+    back.rows().iter().filter(|r| r.experiment == experiment).count()
 }
 
 mod dynamic {

@@ -27,7 +27,7 @@ use super::SimError;
 use super::arm::{ArmBody, ArmOptions, LinkInertia, SimArm};
 use super::four_bar::FourBarBodies;
 use super::gear::CoupledTargets;
-use super::servo::{ServoGains, SettleOptions};
+use super::servo::{ServoGains, SettleOptions, SettleReport};
 use super::visibility::is_visible_from_all;
 use crate::campaign::{ArmExecutor, DrivenJoints, Effects, ExecuteError, JointDriver, PoseConditions};
 use crate::kinematics::PhiModel;
@@ -79,6 +79,7 @@ pub struct RapierArm {
     truth: TruthRobot,
     built: Option<Built>,
     placed_shapes: Vec<(Isometry3<f64>, SharedShape)>,
+    last_settle: Option<SettleReport>,
 }
 
 struct Built {
@@ -108,6 +109,7 @@ impl RapierArm {
             truth,
             built: None,
             placed_shapes: Vec::new(),
+            last_settle: None,
         }
     }
 
@@ -119,6 +121,11 @@ impl RapierArm {
     /// The rapier arm of the last executed pose, if any.
     pub fn sim_arm(&self) -> Option<&SimArm> {
         self.built.as_ref().map(|b| &b.arm)
+    }
+
+    /// The static-equilibrium solve of the last executed pose (dynamic mode only).
+    pub fn last_settle(&self) -> Option<&SettleReport> {
+        self.last_settle.as_ref()
     }
 
     /// The four-bar bodies of the last executed pose.
@@ -194,8 +201,10 @@ impl RapierArm {
                 }
                 let mut coupled = CoupledTargets::new(&self.truth, &built.four_bars, &crank_targets, q, &driven.active);
                 let four_bars = &built.four_bars;
-                arm.settle_with(&[], &self.options.settle, |arm| coupled.update(arm, four_bars))?
-                    .joint_positions
+                let report = arm.settle_with(&[], &self.options.settle, |arm| coupled.update(arm, four_bars))?;
+                let q_rest = report.joint_positions.clone();
+                self.last_settle = Some(report);
+                q_rest
             }
         };
         let n = self.model.dof();
