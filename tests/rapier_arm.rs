@@ -297,6 +297,42 @@ mod dynamic {
         assert!((law - linear).abs() > bound);
         assert!((q[4] - law).abs() < bound, "q5 {} vs gear law {law}", q[4]);
     }
+
+    /// Where the four-bar cannot close at the commanded pose (here a rod too short to reach
+    /// the lever anywhere) the dynamic mode opens the loop: joint 3 keeps its own servo and
+    /// the arm settles as if it had no four-bar, as the analytic first-order deflection
+    /// without the four-bar predicts (within 2 % of the sag, as `tests/effects.rs`).
+    #[test]
+    fn a_four_bar_that_cannot_close_leaves_joint3_to_its_servo() {
+        let desc = RobotDescription::asea_irb6l();
+        let mut truth = ideal_truth(&desc);
+        let mut l = linkage(&desc);
+        l.geometry.rod_m = 0.3;
+        truth.four_bars = vec![l];
+        let mut stiffness = [1e8; 6];
+        stiffness[2] = 2e5;
+        let effects = Effects {
+            compliance: Some(compliance(stiffness)),
+            ..Effects::default()
+        };
+        let (arm, driven) = execute(&truth, &desc, &effects, &PoseConditions::default());
+        let q = arm.sim_arm().expect("built").joint_positions();
+        let mut without = truth.clone();
+        without.four_bars.clear();
+        let dq_analytic = axiscal::campaign::coupled_first_order_deflection(
+            &without.model(),
+            &driven.q,
+            &driven.active,
+            &LinkMass::from_description(&desc),
+            None,
+            &compliance(stiffness),
+            &without,
+        );
+        let dq3 = q[2] - driven.q[2];
+        eprintln!("open loop: dq3 {dq3:.4e} rad, analytic {:.4e}", dq_analytic[2]);
+        assert!(arm.four_bars()[0].closure_error_m(arm.sim_arm().expect("built")) > 0.01);
+        assert!((dq3 - dq_analytic[2]).abs() < 0.02 * dq_analytic[2].abs());
+    }
 }
 
 mod line_of_sight {

@@ -303,6 +303,52 @@ impl FourBarBodies {
         Ok(c)
     }
 
+    /// Switches the loop-closing joint on or off. Off is the dynamic-mode fallback where the
+    /// loop cannot close at the commanded pose (the truth's passive law reaches poses the
+    /// mechanism cannot): joint `b` keeps its own servo, the crank holds still and the rod
+    /// hangs from it, its swing damped (2 N m s/rad per axis, about critical for a 1 kg,
+    /// 0.7 m pendulum) so that it does not keep the arm from settling; on again, the rod
+    /// gets rapier's default damping back.
+    pub fn set_loop_closed(&self, arm: &mut SimArm, closed: bool) -> Result<(), SimError> {
+        let world = arm.world_mut();
+        if let Some(joint) = world.impulse_joints.get_mut(self.closure, true) {
+            joint.data.set_enabled(closed);
+        }
+        let (mb, id) = world
+            .multibody_joints
+            .get_mut(self.rod_joint)
+            .ok_or(SimError::JointRejected { joint: self.a + 1 })?;
+        let dof = mb
+            .link(id)
+            .ok_or(SimError::JointRejected { joint: self.a + 1 })?
+            .assembly_id();
+        let damping = if closed { 0.1 } else { 2.0 };
+        for d in mb.damping_mut().rows_mut(dof, 3).iter_mut() {
+            *d = damping;
+        }
+        Ok(())
+    }
+
+    /// Dynamic mode with the loop open: a servo (stiffness `K`, damping `D`) holds the crank
+    /// where it is; joint `b`'s own servo is left as it is.
+    pub fn hold_crank(
+        &self,
+        arm: &mut SimArm,
+        stiffness_nm_per_rad: f64,
+        damping_nms_per_rad: f64,
+    ) -> Result<(), SimError> {
+        let here = self.crank_angle(arm);
+        super::servo::set_joint_spring(
+            arm.world_mut(),
+            self.crank_joint,
+            JointAxis::AngX,
+            here,
+            stiffness_nm_per_rad,
+            damping_nms_per_rad,
+        )
+        .ok_or(SimError::JointRejected { joint: self.a })
+    }
+
     /// Dynamic mode: joint `b` passive (no servo: the mechanism drives it), and actuator `b`'s
     /// servo (implicit spring of stiffness `K` towards `crank_target_rad`, damping `D`, see
     /// [`SimArm::set_servo`]) on the crank.

@@ -45,28 +45,34 @@ pub struct CoupledTargets {
     q_cmd: Vec<f64>,
     active: Vec<f64>,
     targets: Vec<f64>,
-    /// `(b, crank target)`: joint `b` is driven by a four-bar whose crank holds this angle.
-    cranks: Vec<(usize, f64)>,
+    /// `(b, i, crank target)`: joint `b` is driven by four-bar `i`, whose crank holds this angle.
+    cranks: Vec<(usize, usize, f64)>,
 }
 
 impl CoupledTargets {
     /// The couplings of `truth` into every joint not driven by one of `four_bars`, for the
     /// driver's joint values `q_cmd` and active displacements `active`; `crank_targets` are
-    /// the four-bars' crank targets \[rad\] (same order as `four_bars`).
+    /// the four-bars' crank targets \[rad\] (same order as `four_bars`), `None` for a four-bar
+    /// whose loop is open at this pose (its joint is then servo-driven and coupled here).
     pub fn new(
         truth: &TruthRobot,
         four_bars: &[FourBarBodies],
-        crank_targets: &[f64],
+        crank_targets: &[Option<f64>],
         q_cmd: &[f64],
         active: &[f64],
     ) -> Self {
-        let by_bodies: Vec<usize> = four_bars.iter().map(FourBarBodies::driven_joint).collect();
+        let cranks: Vec<(usize, usize, f64)> = four_bars
+            .iter()
+            .zip(crank_targets)
+            .enumerate()
+            .filter_map(|(i, (fb, c))| c.map(|c| (fb.driven_joint(), i, c)))
+            .collect();
         let couplings = truth
             .joints
             .iter()
             .enumerate()
             .skip(1)
-            .filter(|(k, _)| !by_bodies.contains(k))
+            .filter(|(k, _)| !cranks.iter().any(|(b, _, _)| b == k))
             .filter_map(|(k, j)| j.coupling_in.clone().map(|g| (k, g)))
             .collect();
         Self {
@@ -74,7 +80,7 @@ impl CoupledTargets {
             q_cmd: q_cmd.to_vec(),
             active: active.to_vec(),
             targets: q_cmd.to_vec(),
-            cranks: by_bodies.into_iter().zip(crank_targets.iter().copied()).collect(),
+            cranks,
         }
     }
 
@@ -92,8 +98,8 @@ impl CoupledTargets {
     pub fn update(&mut self, arm: &mut SimArm, four_bars: &[FourBarBodies]) -> Result<(), SimError> {
         for (k, g) in &self.couplings {
             let below = k - 1;
-            let sag = match self.cranks.iter().position(|(b, _)| *b == below) {
-                Some(i) => four_bars[i].crank_angle(arm) - self.cranks[i].1,
+            let sag = match self.cranks.iter().find(|(b, _, _)| *b == below) {
+                Some(&(_, i, crank)) => four_bars[i].crank_angle(arm) - crank,
                 None => arm.joint_position(below) - self.targets[below],
             };
             let a = self.active[below];

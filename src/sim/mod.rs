@@ -4,9 +4,13 @@
 //!   a fixed base body at `world_from_base`, one dynamic body per link whose body frame *is*
 //!   the phi-model's moving link frame, and one multibody joint per phi-model joint. In
 //!   kinematic mode the joint values are written straight into the multibody and its forward
-//!   kinematics places the bodies; in dynamic mode position-servo motors with finite
-//!   stiffness hold the arm against gravity and [`SimArm::settle`] finds the static
-//!   equilibrium.
+//!   kinematics places the bodies; in dynamic mode position servos with finite stiffness
+//!   (implicit joint springs and damping) hold the arm against gravity and
+//!   [`SimArm::settle`] finds the static equilibrium.
+//! - [`FourBarBodies`]: the 2->3 four-bar as crank, rod and loop-closing joint; in dynamic
+//!   mode it drives joint 3. [`CoupledTargets`]: the passive couplings without bodies (the
+//!   bevel gear 4->5) as servo targets that follow the joint below each step.
+//! - [`RapierArm`]: the campaign's executor on top of both modes.
 //! - [`visibility`](self::is_visible_from_all) casts rays from the theodolite stations to a
 //!   target through the link collision shapes.
 //!

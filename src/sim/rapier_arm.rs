@@ -17,7 +17,9 @@
 //!   the compliance is the mechanism's). The other passive couplings (the bevel gear 4->5 with
 //!   its error function, 3->4) are emulated by coupled servo targets updated before every step
 //!   ([`CoupledTargets`]). The arm is stepped to its static equilibrium under gravity and the
-//!   payload.
+//!   payload. Where a four-bar cannot close at the commanded pose (the truth's law reaches
+//!   poses the mechanism cannot) its loop is opened for that pose and its joint keeps its own
+//!   servo ([`FourBarBodies::set_loop_closed`]).
 //!
 //! Axis wobble is applied to the link poses afterwards ([`Effects::apply_wobble`]), and line
 //! of sight uses the same wobbled poses for the link capsules, plus the crank and rod of
@@ -50,7 +52,8 @@ pub struct RapierArmOptions {
     pub damping_ratio: f64,
     /// Settling of the compliant mode.
     pub settle: SettleOptions,
-    /// Build the truth's four-bars as bodies.
+    /// Build the truth's four-bars as bodies: placed in kinematic mode, driving their joint in
+    /// dynamic mode (off: every joint has its own servo and every coupling is emulated).
     pub four_bar_bodies: bool,
 }
 
@@ -188,16 +191,19 @@ impl RapierArm {
                 arm.joint_positions()
             }
             Some(c) => {
-                let crank_targets = built
-                    .four_bars
-                    .iter_mut()
-                    .map(|fb| fb.place(arm))
-                    .collect::<Result<Vec<f64>, SimError>>()?;
+                // A loop that cannot close at this pose is opened (see
+                // `FourBarBodies::set_loop_closed`) and its joint keeps its servo.
+                let crank_targets: Vec<Option<f64>> = built.four_bars.iter_mut().map(|fb| fb.place(arm).ok()).collect();
                 let gains = ServoGains::with_damping_ratio(arm, q, &c.stiffness_nm_per_rad, self.options.damping_ratio);
                 arm.set_servo(q, &gains)?;
-                for (fb, &crank) in built.four_bars.iter().zip(&crank_targets) {
+                for (fb, crank) in built.four_bars.iter().zip(&crank_targets) {
+                    fb.set_loop_closed(arm, crank.is_some())?;
                     let b = fb.driven_joint();
-                    fb.drive(arm, crank, gains.stiffness_nm_per_rad[b], gains.damping_nms_per_rad[b])?;
+                    let (k, d) = (gains.stiffness_nm_per_rad[b], gains.damping_nms_per_rad[b]);
+                    match crank {
+                        Some(crank) => fb.drive(arm, *crank, k, d)?,
+                        None => fb.hold_crank(arm, k, d)?,
+                    }
                 }
                 let mut coupled = CoupledTargets::new(&self.truth, &built.four_bars, &crank_targets, q, &driven.active);
                 let four_bars = &built.four_bars;
