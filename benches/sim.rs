@@ -180,7 +180,7 @@ fn summary() {
         black_box(model.poses(black_box(&Q)));
     });
     println!(
-        "\nsummary (best of 3 batches; ratio = time / baseline {:.3} us):",
+        "\nsummary, time per pose (best of 3 batches; ratio = time / baseline {:.3} us):",
         baseline_s * 1e6
     );
     let line = |name: &str, seconds: f64, steps: Option<usize>| {
@@ -188,7 +188,7 @@ fn summary() {
             format!(", {s} steps/pose, {:.0} steps/s", s as f64 / seconds)
         });
         println!(
-            "  {name:<44} {:>12.3} us/pose  ratio {:>10.1}{per_step}",
+            "  {name:<48} {:>12.3} us  ratio {:>10.3}{per_step}",
             seconds * 1e6,
             seconds / baseline_s
         );
@@ -198,7 +198,7 @@ fn summary() {
         arm.set_joint_positions(black_box(&Q)).expect("six values");
         black_box(arm.world_from_link(5));
     });
-    line("kinematic SimArm pose", kin_s, None);
+    line("kinematic SimArm pose (set q, read links)", kin_s, None);
     let (mut kinematic, mut compliant) = rapier_arms();
     let mut rng = StdRng::seed_from_u64(2);
     let conditions = PoseConditions::default();
@@ -211,8 +211,6 @@ fn summary() {
     let servo = Compliance::Servo(gains(&arm));
     let options = SettleOptions::default();
     let mut steps = 0;
-    let step_s = seconds_per_call(2_000, || arm.world_mut().step());
-    line("dynamic: one step (1 ms, 16 iterations)", step_s, Some(1));
     let settle_s = seconds_per_call(5, || {
         steps = arm
             .static_equilibrium(&Q, &servo, &[], &options)
@@ -220,6 +218,9 @@ fn summary() {
             .steps;
     });
     line("dynamic: settle one pose", settle_s, Some(steps));
+    // At rest under the servos: the cost of one step alone.
+    let step_s = seconds_per_call(2_000, || arm.world_mut().step());
+    line("dynamic: one step at rest (1 ms, 16 iterations)", step_s, Some(1));
     let (mut fb_arm, mut bodies, q) = four_bar_arm();
     let fb_s = seconds_per_call(5, || steps = settle_four_bar(&mut fb_arm, &mut bodies, &q).steps);
     line("dynamic: settle one pose, four-bar bodies", fb_s, Some(steps));
@@ -227,7 +228,7 @@ fn summary() {
         compliant.execute(&Q, &conditions, &mut rng).expect("settles");
         steps = compliant.last_settle().map_or(0, |r| r.steps);
     });
-    line("dynamic RapierArm (four-bar, gear, paper truth)", rapier_s, Some(steps));
+    line("dynamic RapierArm pose (four-bar, gear, paper)", rapier_s, Some(steps));
 }
 
 fn main() {
