@@ -333,6 +333,29 @@ mod dynamic {
         assert!(arm.four_bars()[0].closure_error_m(arm.sim_arm().expect("built")) > 0.01);
         assert!((dq3 - dq_analytic[2]).abs() < 0.02 * dq_analytic[2].abs());
     }
+
+    /// The dynamic mode (four-bar, coupled targets, paper truth) is deterministic: two fresh
+    /// arms give bit-identical link poses.
+    #[test]
+    fn the_dynamic_mode_is_bit_identical_run_twice() {
+        let desc = RobotDescription::asea_irb6l();
+        let truth = TruthRobot::paper_robot();
+        let effects = Effects {
+            compliance: Some(compliance([5e5, 3e5, 3e5, 5e4, 5e4, 2e4])),
+            ..Effects::default()
+        };
+        let run = || {
+            let mut arm = RapierArm::new(truth.clone(), &desc, effects.clone(), RapierArmOptions::new(6));
+            let links = arm
+                .execute(&CMD, &PoseConditions::default(), &mut StdRng::seed_from_u64(3))
+                .expect("settles");
+            links
+                .iter()
+                .flat_map(|l| l.to_homogeneous().iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                .collect::<Vec<u64>>()
+        };
+        assert_eq!(run(), run());
+    }
 }
 
 mod line_of_sight {
