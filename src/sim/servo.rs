@@ -11,11 +11,13 @@
 //! Why springs and not rapier joint motors: a position motor is a soft velocity constraint
 //! solved by the PGS loop next to any loop-closing impulse joint, and with stiff gains the two
 //! fight: measured on rapier 0.36.1 (dt 1 ms, 16 solver iterations, 1e8 N m/rad) the four-bar
-//! closure of [`FourBarBodies`](super::FourBarBodies) held only 0.45-1.8 micrometres and
-//! joint 3 was off by 4-13 microradians, whereas with implicit springs the closure is the only
-//! constraint, its effective mass already contains the servos, and it holds to 1e-11 m.
-//! (A rapier motor with zero stiffness and damping is not "off" either: its zero-softness
-//! constraint locks the joint velocity; a passive joint here has no spring and no damping.)
+//! closure of [`FourBarBodies`](super::FourBarBodies) held only 1.6-1.8 micrometres (0.45 with
+//! 4 PGS iterations per substep) and joint 3 was off by 9-13 microradians (4), whereas with
+//! implicit springs the closure is the only constraint, its effective mass already contains
+//! the servos, and it holds to 2e-12 to 1.3e-10 m. (A rapier motor with zero stiffness and
+//! damping is not "off" either: its zero-softness constraint locks the joint velocity, which
+//! is what opened the loop by centimetres when joint 3 was "released" that way; a passive
+//! joint here has no spring, no damping and no motor.)
 
 use super::SimArm;
 use super::SimError;
