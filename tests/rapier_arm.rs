@@ -322,11 +322,10 @@ mod dynamic {
         let dq_analytic = axiscal::campaign::coupled_first_order_deflection(
             &without.model(),
             &driven.q,
-            &driven.active,
             &LinkMass::from_description(&desc),
             None,
             &compliance(stiffness),
-            &without,
+            &axiscal::campaign::PassiveSlope::of_truth(&without, &driven.active),
         );
         let dq3 = q[2] - driven.q[2];
         eprintln!("open loop: dq3 {dq3:.4e} rad, analytic {:.4e}", dq_analytic[2]);

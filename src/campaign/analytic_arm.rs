@@ -2,7 +2,7 @@
 //! controller into the truth's transmissions and couplings, then the actual phi-model, with
 //! the unmodelled [`Effects`] that need no rigid bodies (compliance to first order).
 
-use super::effects::{Effects, JointDriver, LinkMass, coupled_first_order_deflection};
+use super::effects::{Effects, JointDriver, LinkMass, PassiveSlope, coupled_first_order_deflection};
 use super::simulate::{ArmExecutor, ExecuteError, PoseConditions};
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, RobotDescription, TruthRobot};
@@ -79,15 +79,8 @@ impl ArmExecutor for AnalyticArm {
             let payload = self
                 .effects
                 .payload_in_last_link(&model.last_link_from_tool, conditions);
-            let dq = coupled_first_order_deflection(
-                &model,
-                &q,
-                &driven.active,
-                &self.masses,
-                payload,
-                compliance,
-                &self.truth,
-            );
+            let couplings = PassiveSlope::of_truth(&self.truth, &driven.active);
+            let dq = coupled_first_order_deflection(&model, &q, &self.masses, payload, compliance, &couplings);
             for (qk, d) in q.iter_mut().zip(dq) {
                 *qk += d;
             }
