@@ -4,7 +4,7 @@
 //!
 //! | table | effect | applied to |
 //! |---|---|---|
-//! | `compliance` | joint stiffness `K_k` \[N m/rad\] under gravity: `K dq = Q_gravity(q)` | joint values (rapier: static equilibrium; analytic: first order) |
+//! | `compliance` | actuator stiffness `K_k` \[N m/rad\] under gravity: `K da = Q_gravity(q)`, the sag `da` driving the passive couplings | joint values (rapier: static equilibrium, four-bar as bodies; analytic: first order, [`coupled_first_order_deflection`]) |
 //! | `payload` | the pose's `payload_kg` (from [`PoseConditions`]) at a point of the tool frame | the gravity load of `compliance` (no effect without it) |
 //! | `backlash` | dead band `b_k` \[rad\]: the joint lags `b_k / 2` behind its approach direction | active displacements |
 //! | `thermal` | link growth: rows' `a`, `b` scaled by `1 + alpha (T - T_ref)` | the phi-model |
