@@ -4,7 +4,7 @@
 //!
 //! | table | effect | applied to |
 //! |---|---|---|
-//! | `compliance` | joint stiffness `K_k` \[N m/rad\] under gravity: `K dq = Q_gravity(q)` | joint values (rapier: static equilibrium; analytic: first order) |
+//! | `compliance` | actuator stiffness `K_k` \[N m/rad\] under gravity: `K da = Q_gravity(q)`, the sag `da` driving the passive couplings | joint values (rapier: static equilibrium, four-bar as bodies; analytic: first order, [`coupled_first_order_deflection`]) |
 //! | `payload` | the pose's `payload_kg` (from [`PoseConditions`]) at a point of the tool frame | the gravity load of `compliance` (no effect without it) |
 //! | `backlash` | dead band `b_k` \[rad\]: the joint lags `b_k / 2` behind its approach direction | active displacements |
 //! | `thermal` | link growth: rows' `a`, `b` scaled by `1 + alpha (T - T_ref)` | the phi-model |
@@ -401,6 +401,75 @@ pub fn first_order_deflection(
 /// hold-still commands of a coupled joint reproduce its actuator command only to rounding (a
 /// few 1e-16 rad through the fig. 3 decoupling), and no encoder resolves 1e-12.
 pub const UNMOVED_ACTUATOR_RAD: f64 = 1e-12;
+
+/// How each joint is driven by the one below, for [`coupled_first_order_deflection`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassiveSlope {
+    /// `g'_{k-1,k}`: the slope of the passive coupling into this joint at the active
+    /// displacement of the joint below (0: not coupled) \[-\].
+    pub slope: f64,
+    /// The coupling is a mechanism (a four-bar's bodies) that also carries this joint's load
+    /// back to the actuator below; otherwise it is kinematic only (an emulated gear).
+    pub reflects_load: bool,
+}
+
+impl PassiveSlope {
+    /// The truth's couplings at the active displacements `active`: slopes of every
+    /// `coupling_in`, reflecting the load where one of the truth's four-bars drives the joint.
+    pub fn of_truth(truth: &TruthRobot, active: &[f64]) -> Vec<Self> {
+        truth
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(k, j)| match (&j.coupling_in, k.checked_sub(1)) {
+                (Some(g), Some(below)) => PassiveSlope {
+                    slope: g.slope(active[below]),
+                    reflects_load: truth.four_bars.iter().any(|l| l.from == k),
+                },
+                _ => PassiveSlope::default(),
+            })
+            .collect()
+    }
+}
+
+/// First-order static deflection through the passive couplings, as the rapier arm's dynamic
+/// mode produces it (`sim::FourBarBodies`, `sim::CoupledTargets`): each actuator `k` sags by
+/// `da_k = tau_k / K_k` and the sag drives the passive coupling into joint `k + 1` like any
+/// active rotation, `dq_k = da_k + g'_{k-1,k} da_{k-1}` (eq. 15 linearised; `g'` =
+/// `couplings[k].slope`). The actuator's load is the joint's gravity torque `Q_k`
+/// ([`first_order_deflection`] with unit stiffness), plus, where joint `k` drives joint
+/// `k + 1` through a mechanism (`couplings[k + 1].reflects_load`: a four-bar transmits torque
+/// both ways), the reflected `g'_{k,k+1} Q_{k+1}` (virtual work). The other couplings are
+/// kinematic only, as their rapier emulation (see `sim::CoupledTargets` for the size of the
+/// missing gear reaction). Second order in the deflection, like [`first_order_deflection`].
+/// Needs only coupling slopes, so a model built from the nominal description can use it.
+pub fn coupled_first_order_deflection(
+    model: &PhiModel,
+    q: &[f64],
+    masses: &[LinkMass],
+    payload: Option<(f64, Point3<f64>)>,
+    compliance: &ComplianceEffect,
+    couplings: &[PassiveSlope],
+) -> Vec<f64> {
+    let unit = ComplianceEffect {
+        stiffness_nm_per_rad: vec![1.0; q.len()],
+        gravity_m_s2: compliance.gravity_m_s2,
+    };
+    let load = first_order_deflection(model, q, masses, payload, &unit);
+    let coupling = |k: usize| couplings.get(k).copied().unwrap_or_default();
+    let mut dq = vec![0.0; q.len()];
+    let mut da_below = 0.0;
+    for k in 0..q.len() {
+        let mut tau = load[k];
+        if k + 1 < q.len() && coupling(k + 1).reflects_load {
+            tau += coupling(k + 1).slope * load[k + 1];
+        }
+        let da = tau / compliance.stiffness_nm_per_rad[k];
+        dq[k] = da + coupling(k).slope * da_below;
+        da_below = da;
+    }
+    dq
+}
 
 /// Commands to joint values with the joint-side effects: the fig. 3 controller, the truth's
 /// transmissions (with [`Effects::gear_harmonics`]), backlash on the active displacements, the
