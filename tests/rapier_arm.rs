@@ -99,6 +99,63 @@ fn an_occluded_target_is_left_out_of_the_campaign() {
     assert_eq!(csv_rows_of(&out.rows, "axis2"), 3);
 }
 
+/// `visible_sweep_span` is the campaign's own notion of visibility: the paper's axis-4
+/// experiment (second target on link 5, actuator 5 held still) run by the campaign loses no
+/// target at the span the search reports, and loses one just beyond it (one coarse step of the
+/// search wider); the analytic arm sees everything up to the joint limit.
+#[test]
+fn the_visible_span_is_where_the_campaign_starts_losing_targets() {
+    use axiscal::sim::{SpanSearch, visible_sweep_span};
+    let desc = RobotDescription::asea_irb6l();
+    let mut truth = TruthRobot::paper_robot();
+    for joint in &mut truth.joints {
+        joint.repeatability_sigma = 0.0;
+    }
+    let (instrument, _) = MeasurementModel::paper_theodolites().expect("theodolites");
+    let table1 = CalibrationPlan::table1(desc.dof());
+    let axis4 = table1
+        .sweeps
+        .iter()
+        .find(|s| s.joint == 4)
+        .expect("Table 1 sweeps joint 4")
+        .clone();
+    let options = RapierArmOptions {
+        stations_m: instrument.stations_m(),
+        ..RapierArmOptions::new(desc.dof())
+    };
+    let mut rapier = RapierArm::new(truth.clone(), &desc, Effects::default(), options);
+    let search = SpanSearch {
+        max_half_span_deg: 90.0,
+        ..SpanSearch::default()
+    };
+    let mut rng = StdRng::seed_from_u64(3);
+    let conditions = PoseConditions::default();
+    let span = visible_sweep_span(&mut rapier, &desc, &table1, &axis4, &conditions, &search, &mut rng).expect("runs");
+    assert!(span > 0.0 && span < axis4.span, "span {span} deg");
+    let validation = ValidationPlan {
+        poses: 0,
+        ..ValidationPlan::workspace_default(desc.dof())
+    };
+    let centre = axis4.offset_at(0) + axis4.span / 2.0;
+    let occluded_at = |span_deg: f64, rapier: &mut RapierArm, rng: &mut StdRng| {
+        let plan = CalibrationPlan {
+            sweeps: vec![AxisSweep {
+                span: span_deg,
+                start: Some(centre - span_deg / 2.0),
+                ..axis4.clone()
+            }],
+            ..table1.clone()
+        };
+        let out = simulate_campaign(&desc, &plan, &validation, rapier, &instrument, rng).expect("runs");
+        out.occluded.iter().map(|(_, n)| n).sum::<usize>()
+    };
+    assert_eq!(occluded_at(span, &mut rapier, &mut rng), 0);
+    assert!(occluded_at(span + 2.0 * search.step_deg, &mut rapier, &mut rng) > 0);
+    let mut analytic = AnalyticArm::new(truth, Controller::from_description(&desc));
+    let all = visible_sweep_span(&mut analytic, &desc, &table1, &axis4, &conditions, &search, &mut rng).expect("runs");
+    assert_eq!(all, 2.0 * search.max_half_span_deg);
+}
+
 /// The measurement CSV (FORMATS.md section 1) written from `rows` and read back: how many
 /// rows it holds for `experiment`.
 fn csv_rows_of(rows: &[axiscal::measurement::Measurement], experiment: &str) -> usize {

@@ -3,12 +3,12 @@
 
 use anyhow::{Context, Result};
 use axiscal::campaign::{
-    AnalyticArm, ArmExecutor, CalibrationPlan, CampaignOptions, CampaignOutput, Effects, ValidationPlan,
-    simulate_campaign_with,
+    AnalyticArm, ArmExecutor, CalibrationPlan, CampaignOptions, CampaignOutput, Effects, PoseConditions,
+    ValidationPlan, simulate_campaign_with,
 };
 use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements};
 use axiscal::robot::{Controller, RobotDescription, TruthRobot};
-use axiscal::sim::{ArmOptions, LinkPoint, RapierArm, RapierArmOptions, SimArm, SpanSearch, visible_span_deg};
+use axiscal::sim::{RapierArm, RapierArmOptions, SpanSearch, visible_sweep_span};
 use rand::{SeedableRng, rngs::StdRng};
 use std::path::PathBuf;
 
@@ -108,8 +108,12 @@ pub fn run(args: Args) -> Result<()> {
         instrument_scale: effects.instrument_scale,
         ..CampaignOptions::default()
     };
+    let rapier_options = RapierArmOptions {
+        stations_m: instrument.stations_m(),
+        ..RapierArmOptions::new(desc.dof())
+    };
     if args.report_spans {
-        report_spans(&desc, &truth, &plan, &instrument)?;
+        report_spans(&desc, &truth, &effects, &plan, &rapier_options)?;
     }
     let name = truth.name.clone();
     #[cfg(feature = "viz")]
@@ -121,10 +125,6 @@ pub fn run(args: Args) -> Result<()> {
             run_campaign(&desc, &plan, &validation, &mut arm, &instrument, &options, &mut rng)
         }
         Sim::Rapier => {
-            let rapier_options = RapierArmOptions {
-                stations_m: instrument.stations_m(),
-                ..RapierArmOptions::new(desc.dof())
-            };
             let mut arm = RapierArm::new(truth, &desc, effects, rapier_options);
             run_campaign(&desc, &plan, &validation, &mut arm, &instrument, &options, &mut rng)
         }
@@ -193,35 +193,47 @@ fn run_campaign<A: ArmExecutor>(
     )?)
 }
 
-/// One line per axis experiment: the largest span, symmetric about the reference pose, over
-/// which every target of the experiment stays visible from every station (how the paper chose
-/// its Table 1 spans), next to the planned span.
+/// One line per axis experiment: the largest span, centred like the planned sweep, for which
+/// every target of the experiment is visible from every station at every step (how the paper
+/// chose its Table 1 spans), next to the planned span ([`visible_sweep_span`]). The experiment
+/// is executed on the same rapier arm as the campaign (four-bar bodies, effects), without
+/// repeatability jitter; 1 deg steps up to the nearer joint limit, the edge bisected.
 fn report_spans(
     desc: &RobotDescription,
     truth: &TruthRobot,
+    effects: &Effects,
     plan: &CalibrationPlan,
-    instrument: &MeasurementModel,
+    rapier_options: &RapierArmOptions,
 ) -> Result<()> {
-    let stations = instrument.stations_m();
-    let mut arm = SimArm::from_description(&truth.model(), desc, &ArmOptions::new(desc.dof()))?;
-    let centre = axiscal::campaign::commands_to_internal(desc, &plan.reference);
-    let q = Controller::from_description(desc);
-    let q_centre = truth.joint_values(&q, &centre)?;
+    let mut still = truth.clone();
+    for joint in &mut still.joints {
+        joint.repeatability_sigma = 0.0;
+    }
+    let mut arm = RapierArm::new(still, desc, effects.clone(), rapier_options.clone());
+    let mut rng = StdRng::seed_from_u64(0);
     for sweep in &plan.sweeps {
         let k = sweep.joint - 1;
         let [lo, hi] = desc.limits_internal(k);
+        let centre_cmd = plan.reference[k] + sweep.offset_at(0) + sweep.span / 2.0;
+        let centre = axiscal::campaign::commands_to_internal(desc, &{
+            let mut cmd = plan.reference.clone();
+            cmd[k] = centre_cmd;
+            cmd
+        })[k];
         let search = SpanSearch {
-            max_half_span_deg: (q_centre[k] - lo).min(hi - q_centre[k]).to_degrees().max(0.0),
+            max_half_span_deg: (centre - lo).min(hi - centre).to_degrees().max(0.0),
             ..SpanSearch::default()
         };
-        let Some(targets) = desc.axis_targets_of(sweep.joint) else {
-            continue;
-        };
-        let mut span_deg = f64::INFINITY;
-        for t in std::iter::once(targets.target0).chain(targets.target1.filter(|_| sweep.second_target)) {
-            let point = LinkPoint::from_target(&t);
-            span_deg = span_deg.min(visible_span_deg(&mut arm, &q_centre, k, &point, &stations, &search)?);
-        }
+        let span_deg = visible_sweep_span(
+            &mut arm,
+            desc,
+            plan,
+            sweep,
+            &PoseConditions::default(),
+            &search,
+            &mut rng,
+        )
+        .with_context(|| format!("searching the visible span of axis {}", sweep.joint))?;
         println!(
             "  span axis{}: largest visible {:.1} deg (planned {:.1} deg)",
             sweep.joint, span_deg, sweep.span

@@ -24,7 +24,7 @@ mod gear;
 mod rapier_arm;
 mod servo;
 mod visibility;
-pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg};
+pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg, visible_sweep_span};
 
 pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
 pub use four_bar::{BAR_RADIUS_M, CRANK_MASS_KG, FourBarBodies, ROD_MASS_KG};

@@ -5,9 +5,12 @@
 use super::SimError;
 use super::arm::{LinkPoint, SimArm, check_len};
 use super::convert::{point_to_glam, pose_to_glam, vector_to_glam};
+use crate::campaign::{ArmExecutor, AxisSweep, CalibrationPlan, ExecuteError, PoseConditions, commands_to_internal};
+use crate::robot::RobotDescription;
 use nalgebra::{Isometry3, Point3};
 use parry3d_f64::query::Ray;
 use parry3d_f64::shape::SharedShape;
+use rand::Rng;
 
 /// Whether `target_m` is seen from every station: for each station, the segment from the
 /// station towards the target, stopped `stop_short_m` before the target (so a target sitting
@@ -72,7 +75,7 @@ pub fn visible_span_deg(
     search: &SpanSearch,
 ) -> Result<f64, SimError> {
     check_len("centre joint values", arm.model().dof(), q_centre.len())?;
-    let mut visible_at = |half_deg: f64| -> Result<bool, SimError> {
+    let result = largest_visible_span_deg(search, |half_deg| {
         let mut q = q_centre.to_vec();
         for sign in [1.0, -1.0] {
             q[joint] = q_centre[joint] + sign * half_deg.to_radians();
@@ -83,36 +86,91 @@ pub fn visible_span_deg(
             }
         }
         Ok(true)
-    };
-    let result = (|| {
-        if !visible_at(0.0)? {
-            return Ok(0.0);
-        }
-        let mut ok_deg = 0.0;
-        let mut bad_deg = None;
-        while ok_deg < search.max_half_span_deg {
-            let next = (ok_deg + search.step_deg).min(search.max_half_span_deg);
-            if visible_at(next)? {
-                ok_deg = next;
-            } else {
-                bad_deg = Some(next);
-                break;
-            }
-        }
-        if let Some(mut bad) = bad_deg {
-            for _ in 0..search.refinements {
-                let mid = 0.5 * (ok_deg + bad);
-                if visible_at(mid)? {
-                    ok_deg = mid;
-                } else {
-                    bad = mid;
-                }
-            }
-        }
-        Ok(2.0 * ok_deg)
-    })();
+    });
     arm.set_joint_positions(q_centre)?;
     result
+}
+
+/// The largest span of an axis experiment \[deg or mm\], centred like the planned sweep and
+/// with its number of intervals, for which every target the experiment observes is visible from
+/// every station of `arm` at every step, the experiment executed as the campaign executes it:
+/// the plan's commands ([`CalibrationPlan::commands`]; with a second target the next actuator
+/// holds still where the sweep starts, so the passive joint turns through the whole sweep)
+/// through the controller, the passive couplings and the arm's effects (for
+/// [`RapierArm`](super::RapierArm): the four-bar crank and rod, wobble, sag). Repeatability
+/// jitter, if the arm has any, is drawn from `rng`: give it a truth without jitter for a
+/// reproducible edge.
+pub fn visible_sweep_span<A: ArmExecutor, R: Rng + ?Sized>(
+    arm: &mut A,
+    desc: &RobotDescription,
+    plan: &CalibrationPlan,
+    sweep: &AxisSweep,
+    conditions: &PoseConditions,
+    search: &SpanSearch,
+    rng: &mut R,
+) -> Result<f64, ExecuteError> {
+    let targets: Vec<LinkPoint> = desc
+        .axis_targets_of(sweep.joint)
+        .map(|t| {
+            std::iter::once(t.target0.clone())
+                .chain(t.target1.clone().filter(|_| sweep.second_target))
+                .map(|t| LinkPoint::from_target(&t))
+                .collect()
+        })
+        .unwrap_or_default();
+    largest_visible_span_deg(search, |half| {
+        let centre = sweep.offset_at(0) + sweep.span / 2.0;
+        let widened = AxisSweep {
+            span: 2.0 * half,
+            start: Some(centre - half),
+            ..sweep.clone()
+        };
+        for step in 0..widened.poses() {
+            let cmd = commands_to_internal(desc, &plan.commands(desc, &widened, step));
+            let world_from_link = arm.execute(&cmd, conditions, rng)?;
+            if !targets
+                .iter()
+                .all(|t| arm.visible(&(world_from_link[t.link] * t.position_in_link_m)))
+            {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    })
+}
+
+/// The search of [`SpanSearch`]: the largest half span `h <= max_half_span_deg` with
+/// `visible_at(h)`, stepping by `step_deg` and bisecting the first failing step; returns the
+/// full span `2 h` (0 if hidden at the centre).
+fn largest_visible_span_deg<E>(
+    search: &SpanSearch,
+    mut visible_at: impl FnMut(f64) -> Result<bool, E>,
+) -> Result<f64, E> {
+    if !visible_at(0.0)? {
+        return Ok(0.0);
+    }
+    let mut ok_deg = 0.0;
+    let mut bad_deg = None;
+    while ok_deg < search.max_half_span_deg {
+        let next = (ok_deg + search.step_deg).min(search.max_half_span_deg);
+        if visible_at(next)? {
+            ok_deg = next;
+        } else {
+            bad_deg = Some(next);
+            break;
+        }
+    }
+    if let Some(mut bad) = bad_deg {
+        for _ in 0..search.refinements {
+            let mid = 0.5 * (ok_deg + bad);
+            if visible_at(mid)? {
+                ok_deg = mid;
+            } else {
+                bad = mid;
+            }
+        }
+    }
+    Ok(2.0 * ok_deg)
 }
 
 #[cfg(test)]
