@@ -7,8 +7,8 @@ fn axiscal() -> Command {
     Command::cargo_bin("axiscal").unwrap()
 }
 
-#[test]
-fn calibrate_writes_loadable_results_and_protects_them() {
+/// A temporary folder holding `campaign.csv`, a simulated Table-1 campaign (seed 5).
+fn simulated_campaign() -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("campaign.csv");
     axiscal()
@@ -16,6 +16,12 @@ fn calibrate_writes_loadable_results_and_protects_them() {
         .arg(&data)
         .assert()
         .success();
+    (dir, data)
+}
+
+#[test]
+fn calibrate_writes_loadable_results_and_protects_them() {
+    let (dir, data) = simulated_campaign();
     let out = dir.path().join("cal");
     axiscal()
         .arg("calibrate")
@@ -95,13 +101,7 @@ fn malformed_data_names_file_row_and_column() {
 /// Bad data through the CLI: each kind is one clear error on stderr, exit code 2, no panic.
 #[test]
 fn bad_campaigns_exit_2_with_one_clear_error() {
-    let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("campaign.csv");
-    axiscal()
-        .args(["simulate", "--seed", "5", "--out"])
-        .arg(&data)
-        .assert()
-        .success();
+    let (dir, data) = simulated_campaign();
     let text = std::fs::read_to_string(&data).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
