@@ -11,6 +11,7 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
         trials: 60,
         seed: 7,
         noise_rms_3d_mm: 0.19,
+        repeatability_jitter: false,
     }
     .run()
     .unwrap();
