@@ -31,9 +31,9 @@ test:
 	$(CARGO) run --quiet -- run scenarios/ci-smoke.toml --force --out results/ci-smoke
 
 ## study: the calibrator's efficiency against the Cramer-Rao bound (ML and the paper's
-## estimator) and the calibration of its reported sigmas, 2000 simulated campaigns
+## estimator) and the calibration of its reported sigmas, 20000 simulated campaigns
 study:
-	$(CARGO) run --release -- study --trials 2000 --seed 1 --out results/study --force
+	$(CARGO) run --release -- study --trials 20000 --seed 1 --out results/study --force
 
 ## bench: criterion benchmarks (ratios against an in-run baseline)
 bench:

@@ -11,6 +11,7 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
         trials: 60,
         seed: 7,
         noise_rms_3d_mm: 0.19,
+        repeatability_jitter: false,
     }
     .run()
     .unwrap();
@@ -28,6 +29,10 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
             q.ml_efficiency
         );
         assert!(3.0 * rse < 1.0 && q.ml_efficiency <= 1.0 / (1.0 - 3.0 * rse), "{q:?}");
+        // The reported 1-sigma against the RMS error: its square is reported variance / MSE,
+        // within the same 3 standard errors of the MSE.
+        let r2 = q.ml_sigma_ratio.powi(2);
+        assert!(r2 >= 1.0 / (1.0 + 3.0 * rse) && r2 <= 1.0 / (1.0 - 3.0 * rse), "{q:?}");
     }
     // The paper's estimator (reference study: about 0.6) is on average clearly below ML.
     let mean = |f: &dyn Fn(&axiscal::studies::QuantityEfficiency) -> f64| {

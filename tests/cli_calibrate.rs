@@ -7,8 +7,8 @@ fn axiscal() -> Command {
     Command::cargo_bin("axiscal").unwrap()
 }
 
-#[test]
-fn calibrate_writes_loadable_results_and_protects_them() {
+/// A temporary folder holding `campaign.csv`, a simulated Table-1 campaign (seed 5).
+fn simulated_campaign() -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("campaign.csv");
     axiscal()
@@ -16,6 +16,12 @@ fn calibrate_writes_loadable_results_and_protects_them() {
         .arg(&data)
         .assert()
         .success();
+    (dir, data)
+}
+
+#[test]
+fn calibrate_writes_loadable_results_and_protects_them() {
+    let (dir, data) = simulated_campaign();
     let out = dir.path().join("cal");
     axiscal()
         .arg("calibrate")
@@ -90,4 +96,93 @@ fn malformed_data_names_file_row_and_column() {
         err.contains("bad.csv") && err.contains(":2") && err.contains("z_mm"),
         "{err}"
     );
+}
+
+/// Bad data through the CLI: each kind is one clear error on stderr, exit code 2, no panic.
+#[test]
+fn bad_campaigns_exit_2_with_one_clear_error() {
+    let (dir, data) = simulated_campaign();
+    let text = std::fs::read_to_string(&data).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (moved, step, target, cmd1, cmd6, x) = (
+        col("moved_joint"),
+        col("step"),
+        col("target"),
+        col("cmd_1"),
+        col("cmd_6"),
+        col("x_mm"),
+    );
+    let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
+    let int = |r: &[String], c: usize| r[c].parse::<i64>().unwrap();
+    // (what, edit of the rows, words the error must contain)
+    type Edit = Box<dyn Fn(&mut Vec<Vec<String>>)>;
+    let cases: Vec<(&str, Edit, &[&str])> = vec![
+        (
+            "fewer than 3 points",
+            Box::new(move |rs| rs.retain(|r| !(int(r, moved) == 1 && int(r, step) >= 2))),
+            &["axis1", "points"],
+        ),
+        (
+            "a zero span",
+            Box::new(move |rs| {
+                for r in rs.iter_mut().filter(|r| int(r, moved) == 6) {
+                    r[cmd6] = "0".into();
+                }
+            }),
+            &["axis6", "zero span"],
+        ),
+        (
+            "collinear points",
+            Box::new(move |rs| {
+                for r in rs.iter_mut().filter(|r| int(r, moved) == 5) {
+                    let k = int(r, step) as f64;
+                    (r[x], r[x + 1], r[x + 2]) = (format!("{k}"), format!("{}", 2.0 * k), "0".into());
+                }
+            }),
+            &["axis5", "collinear"],
+        ),
+        (
+            "a single target where the 4->5 coupling needs two",
+            Box::new(move |rs| rs.retain(|r| !(int(r, moved) == 4 && int(r, target) == 1))),
+            &["joint 4", "target"],
+        ),
+        (
+            "inconsistent commands",
+            Box::new(move |rs| {
+                for r in rs.iter_mut().filter(|r| int(r, moved) == 3 && int(r, step) == 5) {
+                    r[cmd1] = "30".into();
+                }
+            }),
+            &["step 5", "cmd_1"],
+        ),
+    ];
+    for (what, edit, words) in cases {
+        let mut rs = rows.clone();
+        edit(&mut rs);
+        let bad = dir.path().join("bad.csv");
+        let body: Vec<String> = rs.iter().map(|r| r.join(",")).collect();
+        std::fs::write(&bad, format!("{}\n{}\n", header.join(","), body.join("\n"))).unwrap();
+        let a = axiscal()
+            .arg("calibrate")
+            .arg(&bad)
+            .arg("--out")
+            .arg(dir.path().join("o"))
+            .arg("--force")
+            .assert()
+            .code(2);
+        let err = String::from_utf8_lossy(&a.get_output().stderr).to_string();
+        println!("{what}: {}", err.trim());
+        assert!(
+            !err.contains("panicked") && err.trim().lines().count() == 1,
+            "{what}: {err}"
+        );
+        // The cause is stated once, not repeated by the error chain.
+        let cause = err.trim().rsplit(": ").next().unwrap();
+        assert_eq!(err.matches(cause).count(), 1, "{what}: {err}");
+        for w in words {
+            assert!(err.contains(w), "{what}: expected {w:?} in {err}");
+        }
+    }
 }

@@ -71,7 +71,9 @@ pub fn run(args: Args) -> Result<()> {
         noise_rms_3d_mm: args.noise_mm,
         ..CalibrationOptions::default()
     };
-    let cal = calibrate(&set, &desc, &options).with_context(|| format!("calibrating {}", args.data.display()))?;
+    // The procedure's message already contains its cause: one line, not the cause twice.
+    let cal =
+        calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let source = args.data.display().to_string();
     let names = ["calibration.json", "report.md", "report.json", "calibrated.urdf"];

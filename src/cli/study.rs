@@ -18,6 +18,9 @@ pub struct Args {
     /// Measurement noise, 3-D RMS \[mm\].
     #[arg(long, default_value_t = 0.19)]
     noise_mm: f64,
+    /// Keep the truth robot's repeatability jitter (not in the bound's noise model).
+    #[arg(long)]
+    repeatability_jitter: bool,
     /// Output folder (`efficiency.json`, `efficiency.md`).
     #[arg(long, default_value = "results/study")]
     out: PathBuf,
@@ -32,6 +35,7 @@ pub fn run(args: Args) -> Result<()> {
         trials: args.trials,
         seed: args.seed,
         noise_rms_3d_mm: args.noise_mm,
+        repeatability_jitter: args.repeatability_jitter,
     };
     let report = study.run()?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
