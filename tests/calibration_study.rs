@@ -12,6 +12,7 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
         seed: 7,
         noise_rms_3d_mm: 0.19,
         repeatability_jitter: false,
+        model_repeatability: false,
     }
     .run()
     .unwrap();

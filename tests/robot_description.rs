@@ -37,6 +37,10 @@ fn inconsistent_values_name_the_field() {
             "joints[1].mass_kg",
         ),
         (
+            SHIPPED.replacen("mass_kg = 22.0", "mass_kg = 22.0\nrepeatability_sigma = -1e-4", 1),
+            "joints[1].repeatability_sigma",
+        ),
+        (
             SHIPPED.replacen("from = 3\nto = 4", "from = 3\nto = 5", 1),
             "couplings[1]",
         ),

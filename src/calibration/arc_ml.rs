@@ -131,6 +131,62 @@ pub fn fit_arc(
     commands_rad: &[f64],
     options: &ArcFitOptions,
 ) -> Result<ArcFit, CalibrationError> {
+    fit_arc_from(points, commands_rad, options, None)
+}
+
+/// [`fit_arc`] when, besides the measurement noise, each point's joint angle carries an
+/// independent Gaussian error of standard deviation `angle_sigma_rad` (a robot's
+/// repeatability: the swept actuator is re-positioned at every step, so each point gets a
+/// fresh error on its actual joint angle).
+///
+/// To first order the angle error moves point `j` along the arc's tangent
+/// `t_j = dp_j/dtheta_j` ([`ArcModel::angle_derivatives`]), so its covariance is
+/// `Sigma_j = Sigma_meas,j + sigma_theta^2 t_j t_j^T` (the effective-variance method, Orear,
+/// Am. J. Phys. 50 (1982) 912, eq. 2; [`MeasurementNoise::with_angle_noise`]). `t_j` depends on
+/// the parameters, so the fit is two-step feasible generalised least squares (Carroll &
+/// Ruppert, *Transformation and Weighting in Regression*, 1988, section 2.1, the
+/// iteratively reweighted estimate stopped after one re-weighting): fit with the measurement
+/// noise alone, evaluate `Sigma_j` at that fit, and refit from it with these per-point
+/// weights. The reported covariance is the refit's `(J^T Sigma^-1 J)^-1`, i.e. it includes the
+/// angle noise. The dependence of `Sigma_j` on the parameters carries information of its own
+/// (the trace term of the Gaussian Fisher information, Kay eq. 3.31), which the refit ignores;
+/// it is of relative order `(sigma / r)^2` against the mean term, far below 1e-6 here.
+///
+/// `angle_sigma_rad == 0` is [`fit_arc`] exactly (one pass, the same arithmetic).
+pub fn fit_arc_with_angle_noise(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+    angle_sigma_rad: f64,
+) -> Result<ArcFit, CalibrationError> {
+    if !(angle_sigma_rad >= 0.0 && angle_sigma_rad.is_finite()) {
+        return Err(CalibrationError::InvalidInput {
+            fit: FIT,
+            what: "angle sigma must be finite and >= 0",
+        });
+    }
+    let first = fit_arc(points, commands_rad, options)?;
+    if angle_sigma_rad == 0.0 {
+        return Ok(first);
+    }
+    let model = ArcModel::new(options.form, commands_rad, &options.noise)?;
+    let noise = options
+        .noise
+        .with_angle_noise(&model.angle_derivatives(&first.params)?, angle_sigma_rad)?;
+    let refit = ArcFitOptions {
+        noise,
+        ..options.clone()
+    };
+    fit_arc_from(points, commands_rad, &refit, Some(first.params))
+}
+
+/// [`fit_arc`] from `start` (default: [`initial_params`]).
+fn fit_arc_from(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+    start: Option<ArcParams>,
+) -> Result<ArcFit, CalibrationError> {
     let n = points.len();
     if commands_rad.len() != n {
         return Err(CalibrationError::LengthMismatch {
@@ -149,7 +205,10 @@ pub fn fit_arc(
             needed: p_count / 3 + 1,
         });
     }
-    let start = initial_params(points, commands_rad, &options.form)?;
+    let start = match start {
+        Some(s) => s,
+        None => initial_params(points, commands_rad, &options.form)?,
+    };
     let outcome = lsq::levenberg_marquardt(
         FIT,
         start,

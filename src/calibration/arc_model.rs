@@ -39,6 +39,50 @@ impl MeasurementNoise {
         }
     }
 
+    /// The 3x3 covariance of point `j` of `n` (points' unit squared).
+    fn covariance(&self, j: usize) -> Matrix3<f64> {
+        match self {
+            MeasurementNoise::Isotropic { sigma_per_axis } => Matrix3::identity() * (sigma_per_axis * sigma_per_axis),
+            MeasurementNoise::PerPoint(covs) => covs[j],
+        }
+    }
+
+    /// This noise plus independent Gaussian noise of standard deviation `angle_sigma_rad` on
+    /// the joint angle of each point, propagated to first order (the "effective variance"
+    /// method, Orear, Am. J. Phys. 50 (1982) 912, eq. 2, for a 3-vector observation):
+    /// `Sigma_j = Sigma_meas,j + sigma_theta^2 t_j t_j^T` with `t_j = dp_j/dtheta_j`
+    /// ([`ArcModel::angle_derivatives`]). Per point, one entry of `angle_derivatives` each.
+    pub fn with_angle_noise(
+        &self,
+        angle_derivatives: &[Vector3<f64>],
+        angle_sigma_rad: f64,
+    ) -> Result<Self, CalibrationError> {
+        if !(angle_sigma_rad >= 0.0 && angle_sigma_rad.is_finite()) {
+            return Err(CalibrationError::InvalidInput {
+                fit: FIT,
+                what: "angle sigma must be finite and >= 0",
+            });
+        }
+        if let MeasurementNoise::PerPoint(covs) = self
+            && covs.len() != angle_derivatives.len()
+        {
+            return Err(CalibrationError::LengthMismatch {
+                fit: FIT,
+                what: "covariances",
+                got: covs.len(),
+                expected: angle_derivatives.len(),
+            });
+        }
+        let s2 = angle_sigma_rad * angle_sigma_rad;
+        Ok(MeasurementNoise::PerPoint(
+            angle_derivatives
+                .iter()
+                .enumerate()
+                .map(|(j, t)| self.covariance(j) + s2 * t * t.transpose())
+                .collect(),
+        ))
+    }
+
     /// `L^-1` with `L L^T` the covariance of point `j`: whitens residuals.
     pub(crate) fn whiteners(&self, n: usize) -> Result<Vec<Matrix3<f64>>, CalibrationError> {
         match self {
@@ -269,6 +313,22 @@ impl ArcModel {
                     .copy_from(&(tangent * *g));
             }
         }
+    }
+
+    /// `d p_j / d theta_j`: how point `j` moves when its own joint angle (the actual
+    /// displacement, `phi0 + D_j` in the model) changes alone, i.e. the arc's tangent
+    /// `r (-sin(phi0 + D_j) u + cos(phi0 + D_j) v)` (points' unit per rad). This is what a
+    /// re-positioning error of the swept joint moves the point by, to first order.
+    pub fn angle_derivatives(&self, p: &ArcParams) -> Result<Vec<Vector3<f64>>, CalibrationError> {
+        let (mut d, mut dg) = (Vec::new(), Vec::new());
+        self.motion_into(&p.coefficients, &mut d, &mut dg)?;
+        let (u, v) = (p.u().into_inner(), p.v().into_inner());
+        Ok(d.iter()
+            .map(|dj| {
+                let (s, c) = (p.phase_rad + dj).sin_cos();
+                p.radius * (-s * u + c * v)
+            })
+            .collect())
     }
 
     /// `d p_j / d delta` stacked (3n x n_params), unweighted, analytic.

@@ -51,6 +51,31 @@ pub fn arc_crb(model: &ArcModel, truth: &ArcParams, reference: &Point3<f64>) -> 
     })
 }
 
+/// The bound for the true parameters `truth` when each point's joint angle also carries
+/// independent Gaussian noise of standard deviation `angle_sigma_rad` (a robot's
+/// repeatability) besides the measurement noise `noise`: the same `F = J^T Sigma^-1 J` with the
+/// per-point covariance `Sigma_j = Sigma_meas,j + sigma_theta^2 t_j t_j^T`, `t_j = dp_j/dtheta_j`
+/// at the truth ([`MeasurementNoise::with_angle_noise`]; exact for the linearised angle noise).
+/// Of the Gaussian Fisher information with a parameter-dependent covariance (Kay eq. 3.31)
+/// this keeps the mean term; the trace term `1/2 tr(Sigma^-1 dSigma Sigma^-1 dSigma)` is of
+/// relative order `(sigma / r)^2`, below 1e-6 for the paper's sweeps. `angle_sigma_rad == 0` is
+/// [`arc_crb`] of the measurement noise.
+pub fn arc_crb_with_angle_noise(
+    form: TransmissionForm,
+    commands_rad: &[f64],
+    noise: &MeasurementNoise,
+    angle_sigma_rad: f64,
+    truth: &ArcParams,
+    reference: &Point3<f64>,
+) -> Result<CrbReport, CalibrationError> {
+    let measurement = ArcModel::new(form, commands_rad, noise)?;
+    if angle_sigma_rad == 0.0 {
+        return arc_crb(&measurement, truth, reference);
+    }
+    let total = noise.with_angle_noise(&measurement.angle_derivatives(truth)?, angle_sigma_rad)?;
+    arc_crb(&ArcModel::new(form, commands_rad, &total)?, truth, reference)
+}
+
 /// The bound for `n` points evenly spread over `span_rad` of command from `start_command_rad`
 /// with these parameters and isotropic noise (reference point: the centre). Used to say
 /// what span would determine a weak axis tilt.

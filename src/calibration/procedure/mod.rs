@@ -26,7 +26,7 @@ pub use urdf::urdf;
 use super::arc_model::MeasurementNoise;
 use super::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
 use super::transmission_fit::TransmissionForm;
-use super::{CalibrationError, angles, fit_arc, fit_axis_paper, fit_circle, fit_transmission};
+use super::{CalibrationError, angles, fit_arc_with_angle_noise, fit_axis_paper, fit_circle, fit_transmission};
 use crate::campaign::commands_to_internal;
 use crate::kinematics::{AxisLine, JointKind, rigid_fit};
 use crate::measurement::MeasurementSet;
@@ -58,6 +58,15 @@ pub struct CalibrationOptions {
     pub noise_rms_3d_mm: f64,
     /// Iteration cap of every nonlinear fit.
     pub max_iterations: usize,
+    /// The robot's repeatability per joint \[rad\] (standard deviation of the joint-value
+    /// error drawn each time an actuator is re-positioned): one value for every joint or one
+    /// per joint. `None` (default): the description's `repeatability_sigma` of each joint
+    /// (0 unless the file gives it). A joint with a non-zero value has its axis fitted with
+    /// [`super::fit_arc_with_angle_noise`] (ML estimator only), so the weights and the reported
+    /// covariance include the angle noise of the sweep; 0 everywhere is the measurement-only
+    /// fit, bit for bit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeatability_sigma_rad: Option<Vec<f64>>,
 }
 
 impl Default for CalibrationOptions {
@@ -66,7 +75,34 @@ impl Default for CalibrationOptions {
             estimator: AxisEstimator::Ml,
             noise_rms_3d_mm: 0.19,
             max_iterations: 100,
+            repeatability_sigma_rad: None,
         }
+    }
+}
+
+impl CalibrationOptions {
+    /// The repeatability \[rad\] the axis fit of each joint of `desc` assumes (see
+    /// [`CalibrationOptions::repeatability_sigma_rad`]).
+    pub fn joint_repeatability_rad(&self, desc: &RobotDescription) -> Result<Vec<f64>, ProcedureError> {
+        let n = desc.dof();
+        let sigmas = match &self.repeatability_sigma_rad {
+            None => desc.joints.iter().map(|j| j.repeatability_sigma).collect(),
+            Some(v) if v.len() == 1 => vec![v[0]; n],
+            Some(v) if v.len() == n => v.clone(),
+            Some(v) => {
+                return Err(ProcedureError::InvalidOption {
+                    field: "repeatability_sigma_rad",
+                    message: format!("needs 1 or {n} values, got {}", v.len()),
+                });
+            }
+        };
+        if let Some(s) = sigmas.iter().find(|s| !(s.is_finite() && **s >= 0.0)) {
+            return Err(ProcedureError::InvalidOption {
+                field: "repeatability_sigma_rad",
+                message: format!("must be finite and >= 0, got {s}"),
+            });
+        }
+        Ok(sigmas)
     }
 }
 
@@ -135,6 +171,14 @@ pub enum ProcedureError {
     /// The axes do not make a phi-model.
     #[error(transparent)]
     Frames(#[from] FramesError),
+    /// An option out of range.
+    #[error("calibration option `{field}`: {message}")]
+    InvalidOption {
+        /// The option.
+        field: &'static str,
+        /// What is wrong.
+        message: String,
+    },
     /// Prismatic joints are not supported by this procedure yet.
     #[error(
         "joint {joint} is prismatic: the campaign procedure handles rotary joints (use calibration::sliding directly)"
@@ -165,6 +209,7 @@ fn fit_one_axis(
     u: &[f64],
     form: TransmissionForm,
     options: &CalibrationOptions,
+    repeatability_rad: f64,
 ) -> Result<AxisFitOutcome, CalibrationError> {
     let noise = MeasurementNoise::from_rms_3d(options.noise_rms_3d_mm * 1e-3);
     let points = &e.target0_m;
@@ -173,7 +218,7 @@ fn fit_one_axis(
         u.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - u.iter().cloned().fold(f64::INFINITY, f64::min);
     match options.estimator {
         AxisEstimator::Ml => {
-            let fit = fit_arc(
+            let fit = fit_arc_with_angle_noise(
                 points,
                 u,
                 &super::ArcFitOptions {
@@ -182,6 +227,7 @@ fn fit_one_axis(
                     reference_point: centroid,
                     max_iterations: options.max_iterations,
                 },
+                repeatability_rad,
             )?;
             let g = super::arc_model::axis_quantities_gradient(&fit.params, &centroid);
             let q = &g * &fit.covariance * g.transpose();
@@ -238,6 +284,7 @@ pub fn calibrate(
     if let Some(k) = desc.joints.iter().position(|j| j.kind == JointKind::Prismatic) {
         return Err(ProcedureError::Prismatic { joint: k + 1 });
     }
+    let repeatability_rad = options.joint_repeatability_rad(desc)?;
     let (experiments, reference_cmd) = axis_experiments(set, desc)?;
     let controller = Controller::from_description(desc);
     let q_ref = commands_to_internal(desc, &reference_cmd);
@@ -255,11 +302,12 @@ pub fn calibrate(
         let u: Vec<f64> = e.commands.iter().map(|c| u_of(c)[k]).collect();
         let u0: Vec<f64> = e.target0_steps.iter().map(|&j| u[j]).collect();
         let form = transmission_form(desc.joints[k].transmission_fit);
-        let outcome = fit_one_axis(e, &u0, form, options).map_err(|source| ProcedureError::Fit {
-            experiment: e.name.clone(),
-            joint: e.joint,
-            source,
-        })?;
+        let outcome =
+            fit_one_axis(e, &u0, form, options, repeatability_rad[k]).map_err(|source| ProcedureError::Fit {
+                experiment: e.name.clone(),
+                joint: e.joint,
+                source,
+            })?;
         fits[k] = Some((outcome, u));
     }
     let fits: Vec<(AxisFitOutcome, Vec<f64>)> = fits
