@@ -7,7 +7,9 @@
 //! [`super::arc_model::axis_quantities`]: axis direction (2), axis position (2) and each
 //! transmission coefficient. Efficiency = CRB variance / empirical mean squared error.
 
-use nalgebra::{DMatrix, Matrix2, Matrix3, Point3, Unit, Vector3};
+use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix4, Point3, Unit, Vector3, Vector4};
+
+use crate::kinematics::AxisLine;
 
 use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, axis_quantities_gradient};
 use super::transmission_fit::TransmissionForm;
@@ -74,6 +76,42 @@ pub fn arc_crb_with_angle_noise(
     }
     let total = noise.with_angle_noise(&measurement.angle_derivatives(truth)?, angle_sigma_rad)?;
     arc_crb(&ArcModel::new(form, commands_rad, &total)?, truth, reference)
+}
+
+/// Covariance of the errors `[dir_u, dir_v, pos_u, pos_v]` of an axis (the quantities of
+/// [`super::arc_model::axis_quantities`] in the basis `u, v` across it; `axis.origin_m` is the
+/// point closest to the reference) caused by the constant errors of the joints held still
+/// BELOW it during its sweep: `(line, sigma)` per held joint, its axis line and the standard
+/// deviation of its joint-value error \[rad\].
+///
+/// A held actuator keeps its re-positioning error through the whole sweep, so the error is a
+/// bias of that experiment, not noise of its points: it turns everything above that joint,
+/// the swept axis included, rigidly about the held joint's axis `(o_i, n_i)` by `e_i`. To first
+/// order the axis direction moves by `e_i n_i x n` and its point by `e_i n_i x (q - o_i)` (the
+/// move along `n` only slides the point along the line), so with independent `e_i ~ N(0,
+/// sigma_i^2)` the covariance is `sum_i sigma_i^2 g_i g_i^T` with
+/// `g_i = [(n_i x n).u, (n_i x n).v, (n_i x (q - o_i)).u, (n_i x (q - o_i)).v]` (first-order
+/// propagation, as for the rows in `procedure::row_sigmas`). Independent of the sweep's own
+/// noise, it adds to the sweep's bound: any estimator unbiased for the displaced arc has at
+/// least `F^-1 + this` about the undisplaced one. Joints held ABOVE the swept one only move
+/// the target on the swept link (a circle about the same axis) and do not enter. The
+/// correlation this error creates between axes swept while the same joint held still is not
+/// modelled.
+pub fn held_joint_axis_covariance(
+    axis: &AxisLine,
+    u: &Vector3<f64>,
+    v: &Vector3<f64>,
+    held: &[(AxisLine, f64)],
+) -> Matrix4<f64> {
+    let n = axis.direction.into_inner();
+    held.iter()
+        .map(|(line, sigma)| {
+            let ni = line.direction.into_inner();
+            let (b, a) = (ni.cross(&n), ni.cross(&(axis.origin_m - line.origin_m)));
+            let g = Vector4::new(b.dot(u), b.dot(v), a.dot(u), a.dot(v));
+            g * g.transpose() * (sigma * sigma)
+        })
+        .fold(Matrix4::zeros(), |acc, c| acc + c)
 }
 
 /// The bound for `n` points evenly spread over `span_rad` of command from `start_command_rad`

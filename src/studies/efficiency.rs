@@ -11,7 +11,7 @@
 //! `tests/calibration_procedure.rs`).
 
 use crate::calibration::arc_model::{ArcParams, MeasurementNoise};
-use crate::calibration::crb::{arc_crb_with_angle_noise, axis_errors, efficiency};
+use crate::calibration::crb::{arc_crb_with_angle_noise, axis_errors, efficiency, held_joint_axis_covariance};
 use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, ProcedureError, axis_experiments, calibrate};
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
@@ -19,6 +19,7 @@ use crate::calibration::{
     fit_transmission,
 };
 use crate::campaign::{AnalyticArm, CalibrationPlan, ValidationPlan, commands_to_internal, simulate_campaign};
+use crate::kinematics::AxisLine;
 use crate::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use crate::robot::{Controller, RobotDescription, TransmissionFitForm, TruthRobot};
 use nalgebra::{Isometry3, Point3, Unit};
@@ -263,7 +264,7 @@ impl EfficiencyStudy {
         }
         let options = CalibrationOptions {
             noise_rms_3d_mm: self.noise_rms_3d_mm,
-            repeatability_sigma_rad: Some(calibrator_rad),
+            repeatability_sigma_rad: Some(calibrator_rad.clone()),
             ..CalibrationOptions::default()
         };
         let outcomes: Vec<TrialOutcome> = (0..self.trials)
@@ -272,7 +273,9 @@ impl EfficiencyStudy {
                 let fit_err = |source| StudyError::Fit { trial: i, source };
                 let set = campaign(truth, &desc, self.noise_rms_3d_mm, trial_seed(self.seed, i as u64));
                 let (experiments, _) = axis_experiments(&set, &desc).expect("the simulated campaign is complete");
-                let (mut ml, mut paper, mut ml_reported) = (Vec::new(), Vec::new(), Vec::new());
+                let (mut ml, mut paper) = (Vec::new(), Vec::new());
+                let mut ml_reported: Vec<Vec<f64>> = Vec::new();
+                let mut fitted: Vec<(usize, ArcParams, AxisLine)> = Vec::new();
                 for (e, t) in experiments.iter().zip(&truths) {
                     let u = actuator_commands(e, &desc, &controller);
                     let fit = fit_arc_with_angle_noise(
@@ -296,6 +299,7 @@ impl EfficiencyStudy {
                         .chain(fit.coefficient_sigma.iter().map(|s| s * s))
                         .collect(),
                     );
+                    fitted.push((e.joint, fit.params.clone(), fit.axis));
                     ml.push(axis_errors(
                         &fit.axis.direction,
                         &fit.axis.origin_m,
@@ -305,6 +309,18 @@ impl EfficiencyStudy {
                     ));
                     let (d, p, c) = paper_fit(&e.target0_m, &u, &t.form).map_err(fit_err)?;
                     paper.push(axis_errors(&d, &p, &c, &t.params, &t.reference));
+                }
+                // The joints held below each swept one: their constant error, as the procedure
+                // reports it (from the calibrator's repeatability and its own fitted axes).
+                for (reported, (joint, params, axis)) in ml_reported.iter_mut().zip(&fitted) {
+                    let held: Vec<(AxisLine, f64)> = fitted
+                        .iter()
+                        .filter(|(i, _, _)| i < joint && calibrator_rad[i - 1] > 0.0)
+                        .map(|(i, _, line)| (*line, calibrator_rad[i - 1]))
+                        .collect();
+                    let c = held_joint_axis_covariance(axis, &params.u(), &params.v(), &held);
+                    reported[0] += c.fixed_view::<2, 2>(0, 0).trace();
+                    reported[1] += c.fixed_view::<2, 2>(2, 2).trace();
                 }
                 let cal =
                     calibrate(&set, &desc, &options).map_err(|source| StudyError::Procedure { trial: i, source })?;
@@ -346,11 +362,34 @@ impl EfficiencyStudy {
                 &t.reference,
             )
             .expect("the bound exists where the fit converged");
+            // The bias of the joints held below: it adds to the bound (see
+            // `held_joint_axis_covariance`).
+            let line = |t: &AxisTruth| AxisLine {
+                origin_m: t.params.axis_point_near(&t.reference),
+                direction: t.params.normal(),
+            };
+            let held: Vec<(AxisLine, f64)> = experiments
+                .iter()
+                .zip(truths)
+                .filter(|(ei, ti)| ei.joint < e.joint && ti.jitter_rad > 0.0)
+                .map(|(_, ti)| (line(ti), ti.jitter_rad))
+                .collect();
+            let bias = held_joint_axis_covariance(&line(t), &t.params.u(), &t.params.v(), &held);
             let ml: Vec<Vec<f64>> = outcomes.iter().map(|o| o.ml[k].clone()).collect();
             let paper: Vec<Vec<f64>> = outcomes.iter().map(|o| o.paper[k].clone()).collect();
             let mut quantities = vec![
-                ("direction".to_string(), crb.direction.trace(), 0..2, 1.0),
-                ("position".to_string(), crb.position.trace(), 2..4, 1e3),
+                (
+                    "direction".to_string(),
+                    crb.direction.trace() + bias.fixed_view::<2, 2>(0, 0).trace(),
+                    0..2,
+                    1.0,
+                ),
+                (
+                    "position".to_string(),
+                    crb.position.trace() + bias.fixed_view::<2, 2>(2, 2).trace(),
+                    2..4,
+                    1e3,
+                ),
             ];
             for (c, v) in t.form.coefficient_names().into_iter().zip(&crb.coefficient_variance) {
                 let i = 4 + quantities.len() - 2;

@@ -310,7 +310,7 @@ pub fn calibrate(
             })?;
         fits[k] = Some((outcome, u));
     }
-    let fits: Vec<(AxisFitOutcome, Vec<f64>)> = fits
+    let mut fits: Vec<(AxisFitOutcome, Vec<f64>)> = fits
         .into_iter()
         .map(|f| f.expect("every joint has an experiment"))
         .collect();
@@ -326,6 +326,21 @@ pub fn calibrate(
             beta_deg: beta.to_degrees(),
         })
         .collect();
+    // The joints below each swept one hold still with their re-positioning error: a bias of
+    // the whole sweep (not noise of its points), added to the axis's reported covariance in
+    // the instrument frame. Not to the rows above: the campaign leaves a held actuator where
+    // it is from one sweep to the next, so the same error turns every axis above it together,
+    // which changes no row (it is an error of that joint's value at the reference, as large as
+    // its repeatability).
+    for (k, (fit, _)) in fits.iter_mut().enumerate() {
+        let held: Vec<(AxisLine, f64)> = (0..k)
+            .filter(|&i| repeatability_rad[i] > 0.0)
+            .map(|i| (axes[i], repeatability_rad[i]))
+            .collect();
+        if !held.is_empty() {
+            fit.report.add_held_joint_covariance(&axes[k], &held);
+        }
+    }
 
     // Ascending: joint k's zero needs the coupling into k, which needs joint k-1's zero.
     let mut joints: Vec<TruthJoint> = Vec::with_capacity(n);
