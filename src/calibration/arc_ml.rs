@@ -412,6 +412,39 @@ mod tests {
     }
 
     #[test]
+    fn zero_angle_noise_is_the_measurement_only_fit_bit_for_bit() {
+        let form = TransmissionForm::Harmonic { order: 1 };
+        let commands: Vec<f64> = (0..12).map(|j| -0.3 + 0.06 * j as f64).collect();
+        let truth = crate::calibration::arc_model::tests::sample_params();
+        let noise = MeasurementNoise::from_rms_3d(1e-4);
+        let model = ArcModel::new(form, &commands, &noise).unwrap();
+        // Deterministic "noise": a fixed pattern of 0.1 mm.
+        let pts: Vec<Point3<f64>> = model
+            .predict(&truth)
+            .unwrap()
+            .iter()
+            .enumerate()
+            .map(|(j, p)| p + Vector3::new((j as f64).sin(), (2.0 * j as f64).cos(), 0.5) * 1e-4)
+            .collect();
+        let options = ArcFitOptions {
+            form,
+            noise,
+            reference_point: truth.centre,
+            max_iterations: 100,
+        };
+        let old = fit_arc(&pts, &commands, &options).unwrap();
+        assert_eq!(fit_arc_with_angle_noise(&pts, &commands, &options, 0.0).unwrap(), old);
+        // With angle noise the reported uncertainty grows (the tangential direction is
+        // noisier), and the estimate stays close.
+        let with = fit_arc_with_angle_noise(&pts, &commands, &options, 2e-4).unwrap();
+        for k in 0..old.covariance.nrows() {
+            assert!(with.covariance[(k, k)] >= old.covariance[(k, k)] * (1.0 - 1e-9), "{k}");
+        }
+        assert!(with.coefficient_sigma[1] > 1.2 * old.coefficient_sigma[1]);
+        assert!(fit_arc_with_angle_noise(&pts, &commands, &options, f64::NAN).is_err());
+    }
+
+    #[test]
     fn mismatched_inputs_are_errors() {
         let options = ArcFitOptions {
             form: TransmissionForm::Harmonic { order: 1 },

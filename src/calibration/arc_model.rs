@@ -438,7 +438,7 @@ pub fn axis_quantities_gradient(p: &ArcParams, reference: &Point3<f64>) -> DMatr
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
@@ -476,6 +476,57 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn angle_derivatives_match_central_differences_of_each_points_angle() {
+        // Point j alone turned by h about the axis: the model with step j's motion D_j + h,
+        // i.e. the phase moved by h evaluated at step j only.
+        let forms = [
+            TransmissionForm::Harmonic { order: 1 },
+            TransmissionForm::Gear {
+                ratio: 32.0 / 19.0,
+                order: 1,
+            },
+        ];
+        for form in forms {
+            let commands: Vec<f64> = (0..7).map(|j| -0.6 + 0.2 * j as f64).collect();
+            let model = ArcModel::new(form, &commands, &MeasurementNoise::from_rms_3d(1.0)).unwrap();
+            let p = sample_params();
+            let t = model.angle_derivatives(&p).unwrap();
+            let h = 1e-6;
+            let mut dp = vec![0.0; model.n_params()];
+            dp[6] = h;
+            let plus = model.predict(&p.perturbed(&dp)).unwrap();
+            dp[6] = -h;
+            let minus = model.predict(&p.perturbed(&dp)).unwrap();
+            for (j, tj) in t.iter().enumerate() {
+                let fd = (plus[j] - minus[j]) / (2.0 * h);
+                assert_relative_eq!(*tj, fd, epsilon = 1e-8);
+                // Tangential: perpendicular to the radius and the axis, of length r.
+                assert_relative_eq!(tj.norm(), p.radius, epsilon = 1e-12);
+                assert!(tj.dot(&p.normal()).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn angle_noise_adds_a_rank_one_term_per_point() {
+        let t = [Vector3::new(0.0, 0.7, 0.0), Vector3::new(-0.3, 0.2, 0.1)];
+        let iso = MeasurementNoise::Isotropic { sigma_per_axis: 1e-4 };
+        let MeasurementNoise::PerPoint(c) = iso.with_angle_noise(&t, 2e-4).unwrap() else {
+            panic!("per-point covariance expected")
+        };
+        for (cj, tj) in c.iter().zip(&t) {
+            let expected = Matrix3::identity() * 1e-8 + tj * tj.transpose() * 4e-8;
+            assert_relative_eq!(*cj, expected, epsilon = 1e-20);
+        }
+        // Along the tangent the variance grows by (sigma_theta |t|)^2; across it, not at all.
+        let across = Vector3::new(1.0, 0.0, 0.0);
+        assert_relative_eq!((across.transpose() * c[0] * across)[0], 1e-8, epsilon = 1e-20);
+        assert!(iso.with_angle_noise(&t, -1.0).is_err());
+        let short = MeasurementNoise::PerPoint(vec![Matrix3::identity()]);
+        assert!(short.with_angle_noise(&t, 1e-4).is_err());
     }
 
     #[test]
