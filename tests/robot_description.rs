@@ -37,7 +37,11 @@ fn inconsistent_values_name_the_field() {
             "joints[1].mass_kg",
         ),
         (
-            SHIPPED.replacen("mass_kg = 22.0", "mass_kg = 22.0\nrepeatability_sigma = -1e-4", 1),
+            SHIPPED.replacen(
+                "com_mm = [-345.0, 0.0, 0.0]\nrepeatability_sigma = 1.1806e-4",
+                "com_mm = [-345.0, 0.0, 0.0]\nrepeatability_sigma = -1e-4",
+                1,
+            ),
             "joints[1].repeatability_sigma",
         ),
         (
