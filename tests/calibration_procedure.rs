@@ -168,7 +168,12 @@ fn recovery_within_reported_sigma(truth: &TruthRobot, options: &CalibrationOptio
         }
     };
     for seed in 10..16 {
-        let cal = calibrate(&campaign(truth, &MeasurementModel::paper_isotropic(), seed), &desc, options).unwrap();
+        let cal = calibrate(
+            &campaign(truth, &MeasurementModel::paper_isotropic(), seed),
+            &desc,
+            options,
+        )
+        .unwrap();
         for ((r, t), s) in cal.robot.rows.iter().zip(&reference.robot.rows).zip(&cal.row_sigma) {
             push((r.a_m - t.a_m) * 1e3, s.a_mm);
             push((r.b_m - t.b_m) * 1e3, s.b_mm);

@@ -7,6 +7,10 @@
 //! and a linear transmission fit ([`super::transmission_fit`], eq. 8) of the circle's angles.
 //! Unlike the paper's two-stage procedure, the commanded angles help locate the axis, which
 //! is what makes the estimator efficient (it attains the Cramer-Rao bound, [`super::crb`]).
+//!
+//! [`fit_arc_with_angle_noise`] adds independent noise on each point's joint angle (a robot's
+//! repeatability) to the measurement noise: a refit with the first-order per-point covariance
+//! `Sigma_meas + sigma_theta^2 t_j t_j^T` (effective variance, Orear 1982).
 
 use nalgebra::{DMatrix, Matrix2, Point3, Rotation3};
 

@@ -6,6 +6,10 @@
 //! Signal Processing I*, eq. 3.30). The quantities judged are those of
 //! [`super::arc_model::axis_quantities`]: axis direction (2), axis position (2) and each
 //! transmission coefficient. Efficiency = CRB variance / empirical mean squared error.
+//!
+//! With a robot's repeatability: [`arc_crb_with_angle_noise`] (angle noise on every point of
+//! the sweep) and [`held_joint_axis_covariance`] (the constant error of the joints held below
+//! it, a bias that adds to the bound).
 
 use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix4, Point3, Unit, Vector3, Vector4};
 

@@ -203,7 +203,12 @@ fn held_joint_covariance_matches_a_finite_rotation_about_the_held_axis() {
         let d = r * n;
         let p = held.origin_m + r * (axis.origin_m - held.origin_m);
         let q = p + d * (axis.origin_m - p).dot(&d);
-        Vector4::new(d.dot(&u), d.dot(&v), (q - axis.origin_m).dot(&u), (q - axis.origin_m).dot(&v))
+        Vector4::new(
+            d.dot(&u),
+            d.dot(&v),
+            (q - axis.origin_m).dot(&u),
+            (q - axis.origin_m).dot(&v),
+        )
     };
     let g = (moved(h) - moved(-h)) / (2.0 * h);
     let expected: Matrix4<f64> = g * g.transpose() * (sigma * sigma);

@@ -8,6 +8,18 @@
 //! `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`, the same semantics as the truth model,
 //! so a calibrated robot is expressed as a [`TruthRobot`]-shaped model (a data type; no truth
 //! value is read).
+//!
+//! Repeatability ([`CalibrationOptions::repeatability_sigma_rad`], default the description's
+//! `repeatability_sigma`): the swept actuator is re-positioned at every step, so its error is
+//! noise on each point's angle, which the ML axis fit weights and reports
+//! ([`super::fit_arc_with_angle_noise`]). The joints held still below a sweep keep one error
+//! through it: a bias of that axis, added to its reported covariance
+//! ([`super::crb::held_joint_axis_covariance`]) but not propagated to the rows (the same held
+//! error turns all axes above the joint together, which changes no row). Not modelled: the
+//! correlation that bias creates between axes, the held error as an error of the joint's
+//! value at the reference, and the repeatability in the paper's estimator. The coupling fits
+//! (eqs. 14-15) report a-posteriori sigmas, so the swept joint's jitter in their residuals is
+//! already counted.
 
 mod experiments;
 mod frames;
