@@ -14,7 +14,9 @@
 
 use nalgebra::{DMatrix, Matrix2, Point3, Rotation3};
 
-use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, N_GEOMETRY, axis_quantities_gradient};
+use super::arc_model::{
+    ArcModel, ArcParams, MeasurementNoise, N_GEOMETRY, axis_quantities_gradient, check_angle_sigma,
+};
 use super::axis_circle::fit_circle;
 use super::transmission_fit::{TransmissionForm, fit_transmission};
 use super::{CalibrationError, crb, lsq};
@@ -163,12 +165,7 @@ pub fn fit_arc_with_angle_noise(
     options: &ArcFitOptions,
     angle_sigma_rad: f64,
 ) -> Result<ArcFit, CalibrationError> {
-    if !(angle_sigma_rad >= 0.0 && angle_sigma_rad.is_finite()) {
-        return Err(CalibrationError::InvalidInput {
-            fit: FIT,
-            what: "angle sigma must be finite and >= 0",
-        });
-    }
+    check_angle_sigma(angle_sigma_rad, FIT)?;
     let first = fit_arc(points, commands_rad, options)?;
     if angle_sigma_rad == 0.0 {
         return Ok(first);

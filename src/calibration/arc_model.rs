@@ -57,12 +57,7 @@ impl MeasurementNoise {
         angle_derivatives: &[Vector3<f64>],
         angle_sigma_rad: f64,
     ) -> Result<Self, CalibrationError> {
-        if !(angle_sigma_rad >= 0.0 && angle_sigma_rad.is_finite()) {
-            return Err(CalibrationError::InvalidInput {
-                fit: FIT,
-                what: "angle sigma must be finite and >= 0",
-            });
-        }
+        check_angle_sigma(angle_sigma_rad, FIT)?;
         if let MeasurementNoise::PerPoint(covs) = self
             && covs.len() != angle_derivatives.len()
         {
@@ -116,6 +111,18 @@ impl MeasurementNoise {
                     .collect()
             }
         }
+    }
+}
+
+/// An angle noise's standard deviation must be finite and >= 0.
+pub(crate) fn check_angle_sigma(angle_sigma_rad: f64, fit: &'static str) -> Result<(), CalibrationError> {
+    if angle_sigma_rad >= 0.0 && angle_sigma_rad.is_finite() {
+        Ok(())
+    } else {
+        Err(CalibrationError::InvalidInput {
+            fit,
+            what: "angle sigma must be finite and >= 0",
+        })
     }
 }
 
@@ -268,17 +275,26 @@ impl ArcModel {
         Ok(())
     }
 
-    /// The predicted points.
-    pub fn predict(&self, p: &ArcParams) -> Result<Vec<Point3<f64>>, CalibrationError> {
+    /// `at(sin, cos, u, v)` of each step's angle `phi0 + D_j`.
+    fn per_step<T>(
+        &self,
+        p: &ArcParams,
+        at: impl Fn(f64, f64, &Vector3<f64>, &Vector3<f64>) -> T,
+    ) -> Result<Vec<T>, CalibrationError> {
         let (mut d, mut dg) = (Vec::new(), Vec::new());
         self.motion_into(&p.coefficients, &mut d, &mut dg)?;
         let (u, v) = (p.u().into_inner(), p.v().into_inner());
         Ok(d.iter()
             .map(|dj| {
                 let (s, c) = (p.phase_rad + dj).sin_cos();
-                p.centre + p.radius * (c * u + s * v)
+                at(s, c, &u, &v)
             })
             .collect())
+    }
+
+    /// The predicted points.
+    pub fn predict(&self, p: &ArcParams) -> Result<Vec<Point3<f64>>, CalibrationError> {
+        self.per_step(p, |s, c, u, v| p.centre + p.radius * (c * u + s * v))
     }
 
     /// Fills the predicted point `j` (when `points` is given) and its 3 Jacobian rows
@@ -320,15 +336,7 @@ impl ArcModel {
     /// `r (-sin(phi0 + D_j) u + cos(phi0 + D_j) v)` (points' unit per rad). This is what a
     /// re-positioning error of the swept joint moves the point by, to first order.
     pub fn angle_derivatives(&self, p: &ArcParams) -> Result<Vec<Vector3<f64>>, CalibrationError> {
-        let (mut d, mut dg) = (Vec::new(), Vec::new());
-        self.motion_into(&p.coefficients, &mut d, &mut dg)?;
-        let (u, v) = (p.u().into_inner(), p.v().into_inner());
-        Ok(d.iter()
-            .map(|dj| {
-                let (s, c) = (p.phase_rad + dj).sin_cos();
-                p.radius * (-s * u + c * v)
-            })
-            .collect())
+        self.per_step(p, |s, c, u, v| p.radius * (-s * u + c * v))
     }
 
     /// `d p_j / d delta` stacked (3n x n_params), unweighted, analytic.
