@@ -88,7 +88,8 @@ pub struct QuantityEfficiency {
     pub joint: usize,
     /// `direction` (2 components), `position` (2) or a transmission coefficient name.
     pub quantity: String,
-    /// Square root of the bound's trace \[rad or mm\].
+    /// Square root of the bound's trace \[rad or mm\] (with jitter: of measurement and angle
+    /// noise, plus the bias of the joints held below for the direction and position).
     pub crb_sigma: f64,
     /// ML estimator: RMS error over the trials.
     pub ml_rms_error: f64,
