@@ -114,10 +114,49 @@ fn noise_free_perturbed_robot_is_reproduced() {
 /// (the noise-free calibration of the same robot), and the normalised errors have unit RMS.
 #[test]
 fn noisy_recovery_is_within_the_reported_sigma() {
-    let truth = noiseless_truth();
+    // Measurement noise only, and a calibrator told so (the description's repeatability
+    // overridden by 0).
+    let measurement_only = CalibrationOptions {
+        repeatability_sigma_rad: Some(vec![0.0]),
+        ..CalibrationOptions::default()
+    };
+    recovery_within_reported_sigma(&noiseless_truth(), &measurement_only);
+    // The paper robot with its repeatability jitter, calibrated with the default options:
+    // the description's repeatability.
+    recovery_within_reported_sigma(&TruthRobot::paper_robot(), &CalibrationOptions::default());
+}
+
+#[test]
+fn zero_repeatability_is_the_measurement_only_calibration_bit_for_bit() {
+    let set = campaign(&TruthRobot::paper_robot(), &MeasurementModel::paper_isotropic(), 3);
+    let mut desc = RobotDescription::asea_irb6l();
+    let zero = CalibrationOptions {
+        repeatability_sigma_rad: Some(vec![0.0; 6]),
+        ..CalibrationOptions::default()
+    };
+    let overridden = calibrate(&set, &desc, &zero).unwrap();
+    let with = calibrate(&set, &desc, &CalibrationOptions::default()).unwrap();
+    for j in &mut desc.joints {
+        j.repeatability_sigma = 0.0;
+    }
+    let mut without = calibrate(&set, &desc, &CalibrationOptions::default()).unwrap();
+    // The same fits and numbers; only the recorded options differ.
+    without.options = zero.clone();
+    assert_eq!(overridden, without);
+    assert_ne!(with.axes, without.axes);
+    let bad = CalibrationOptions {
+        repeatability_sigma_rad: Some(vec![1e-4; 4]),
+        ..CalibrationOptions::default()
+    };
+    let e = calibrate(&set, &desc, &bad).unwrap_err();
+    assert!(e.to_string().contains("repeatability_sigma_rad"), "{e}");
+}
+
+fn recovery_within_reported_sigma(truth: &TruthRobot, options: &CalibrationOptions) {
+    let truth_noiseless = noiseless_truth();
     let desc = RobotDescription::asea_irb6l();
     let exact = MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: 0.0 });
-    let reference = calibrate(&campaign(&truth, &exact, 1), &desc, &CalibrationOptions::default()).unwrap();
+    let reference = calibrate(&campaign(&truth_noiseless, &exact, 1), &desc, options).unwrap();
     let mut z: Vec<f64> = Vec::new();
     // A parameter fixed by the convention (for example b1 = 0: the base origin is the foot of
     // the common normal) has zero sigma and must then have zero error.
@@ -130,9 +169,9 @@ fn noisy_recovery_is_within_the_reported_sigma() {
     };
     for seed in 10..16 {
         let cal = calibrate(
-            &campaign(&truth, &MeasurementModel::paper_isotropic(), seed),
+            &campaign(truth, &MeasurementModel::paper_isotropic(), seed),
             &desc,
-            &CalibrationOptions::default(),
+            options,
         )
         .unwrap();
         for ((r, t), s) in cal.robot.rows.iter().zip(&reference.robot.rows).zip(&cal.row_sigma) {

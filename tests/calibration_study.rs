@@ -12,6 +12,7 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
         seed: 7,
         noise_rms_3d_mm: 0.19,
         repeatability_jitter: false,
+        model_repeatability: false,
     }
     .run()
     .unwrap();
@@ -39,6 +40,35 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
         report.efficiency.iter().map(f).sum::<f64>() / report.efficiency.len() as f64
     };
     assert!(mean(&|q| q.paper_efficiency) < mean(&|q| q.ml_efficiency) - 0.2);
+    for r in &report.row_sigma {
+        assert!((r.ratio - 1.0).abs() < 4.0 * r.relative_standard_error, "{r:?}");
+    }
+}
+
+/// With the truth robot's repeatability jitter, a calibrator told the nominal description's
+/// repeatability is efficient against the jitter-aware bound (angle noise on every point, and
+/// the joints held below each sweep) and reports honest sigmas.
+#[test]
+fn jitter_aware_calibrator_reaches_the_jitter_aware_bound() {
+    let report = EfficiencyStudy {
+        trials: 60,
+        seed: 7,
+        noise_rms_3d_mm: 0.19,
+        repeatability_jitter: true,
+        model_repeatability: true,
+    }
+    .run()
+    .unwrap();
+    for q in &report.efficiency {
+        let rse = q.ml_relative_standard_error;
+        assert!(3.0 * rse < 1.0, "{q:?}");
+        assert!(
+            q.ml_efficiency >= 0.95 / (1.0 + 3.0 * rse) && q.ml_efficiency <= 1.0 / (1.0 - 3.0 * rse),
+            "{q:?}"
+        );
+        let r2 = q.ml_sigma_ratio.powi(2);
+        assert!(r2 >= 1.0 / (1.0 + 3.0 * rse) && r2 <= 1.0 / (1.0 - 3.0 * rse), "{q:?}");
+    }
     for r in &report.row_sigma {
         assert!((r.ratio - 1.0).abs() < 4.0 * r.relative_standard_error, "{r:?}");
     }

@@ -186,3 +186,35 @@ fn bad_campaigns_exit_2_with_one_clear_error() {
         }
     }
 }
+
+#[test]
+fn repeatability_option_is_recorded_and_checked() {
+    let (dir, data) = simulated_campaign();
+    let out = dir.path().join("cal");
+    axiscal()
+        .arg("calibrate")
+        .arg(&data)
+        .args(["--repeatability-rad", "0"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let cal: Calibration =
+        serde_json::from_str(&std::fs::read_to_string(out.join("calibration.json")).unwrap()).unwrap();
+    assert_eq!(cal.options.repeatability_sigma_rad, Some(vec![0.0]));
+    for bad in ["1e-4,2e-4", "-1e-4"] {
+        let a = axiscal()
+            .arg("calibrate")
+            .arg(&data)
+            .arg(format!("--repeatability-rad={bad}"))
+            .arg("--out")
+            .arg(dir.path().join("bad"))
+            .assert()
+            .code(2);
+        let err = String::from_utf8_lossy(&a.get_output().stderr).to_string();
+        assert!(
+            err.contains("--repeatability-rad") && err.trim().lines().count() == 1,
+            "{err}"
+        );
+    }
+}

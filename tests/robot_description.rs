@@ -37,6 +37,14 @@ fn inconsistent_values_name_the_field() {
             "joints[1].mass_kg",
         ),
         (
+            SHIPPED.replacen(
+                "com_mm = [-345.0, 0.0, 0.0]\nrepeatability_sigma = 1.1806e-4",
+                "com_mm = [-345.0, 0.0, 0.0]\nrepeatability_sigma = -1e-4",
+                1,
+            ),
+            "joints[1].repeatability_sigma",
+        ),
+        (
             SHIPPED.replacen("from = 3\nto = 4", "from = 3\nto = 5", 1),
             "couplings[1]",
         ),

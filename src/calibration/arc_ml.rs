@@ -7,10 +7,16 @@
 //! and a linear transmission fit ([`super::transmission_fit`], eq. 8) of the circle's angles.
 //! Unlike the paper's two-stage procedure, the commanded angles help locate the axis, which
 //! is what makes the estimator efficient (it attains the Cramer-Rao bound, [`super::crb`]).
+//!
+//! [`fit_arc_with_angle_noise`] adds independent noise on each point's joint angle (a robot's
+//! repeatability) to the measurement noise: a refit with the first-order per-point covariance
+//! `Sigma_meas + sigma_theta^2 t_j t_j^T` (effective variance, Orear 1982).
 
 use nalgebra::{DMatrix, Matrix2, Point3, Rotation3};
 
-use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, N_GEOMETRY, axis_quantities_gradient};
+use super::arc_model::{
+    ArcModel, ArcParams, MeasurementNoise, N_GEOMETRY, axis_quantities_gradient, check_angle_sigma,
+};
 use super::axis_circle::fit_circle;
 use super::transmission_fit::{TransmissionForm, fit_transmission};
 use super::{CalibrationError, crb, lsq};
@@ -131,6 +137,57 @@ pub fn fit_arc(
     commands_rad: &[f64],
     options: &ArcFitOptions,
 ) -> Result<ArcFit, CalibrationError> {
+    fit_arc_from(points, commands_rad, options, None)
+}
+
+/// [`fit_arc`] when, besides the measurement noise, each point's joint angle carries an
+/// independent Gaussian error of standard deviation `angle_sigma_rad` (a robot's
+/// repeatability: the swept actuator is re-positioned at every step, so each point gets a
+/// fresh error on its actual joint angle).
+///
+/// To first order the angle error moves point `j` along the arc's tangent
+/// `t_j = dp_j/dtheta_j` ([`ArcModel::angle_derivatives`]), so its covariance is
+/// `Sigma_j = Sigma_meas,j + sigma_theta^2 t_j t_j^T` (the effective-variance method, Orear,
+/// Am. J. Phys. 50 (1982) 912, eq. 2; [`MeasurementNoise::with_angle_noise`]). `t_j` depends on
+/// the parameters, so the fit is two-step feasible generalised least squares (Carroll &
+/// Ruppert, *Transformation and Weighting in Regression*, 1988, section 2.1, the
+/// iteratively reweighted estimate stopped after one re-weighting): fit with the measurement
+/// noise alone, evaluate `Sigma_j` at that fit, and refit from it with these per-point
+/// weights. The reported covariance is the refit's `(J^T Sigma^-1 J)^-1`, i.e. it includes the
+/// angle noise. The dependence of `Sigma_j` on the parameters carries information of its own
+/// (the trace term of the Gaussian Fisher information, Kay eq. 3.31), which the refit ignores;
+/// it is of relative order `(sigma / r)^2` against the mean term, far below 1e-6 here.
+///
+/// `angle_sigma_rad == 0` is [`fit_arc`] exactly (one pass, the same arithmetic).
+pub fn fit_arc_with_angle_noise(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+    angle_sigma_rad: f64,
+) -> Result<ArcFit, CalibrationError> {
+    check_angle_sigma(angle_sigma_rad, FIT)?;
+    let first = fit_arc(points, commands_rad, options)?;
+    if angle_sigma_rad == 0.0 {
+        return Ok(first);
+    }
+    let model = ArcModel::new(options.form, commands_rad, &options.noise)?;
+    let noise = options
+        .noise
+        .with_angle_noise(&model.angle_derivatives(&first.params)?, angle_sigma_rad)?;
+    let refit = ArcFitOptions {
+        noise,
+        ..options.clone()
+    };
+    fit_arc_from(points, commands_rad, &refit, Some(first.params))
+}
+
+/// [`fit_arc`] from `start` (default: [`initial_params`]).
+fn fit_arc_from(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+    start: Option<ArcParams>,
+) -> Result<ArcFit, CalibrationError> {
     let n = points.len();
     if commands_rad.len() != n {
         return Err(CalibrationError::LengthMismatch {
@@ -149,7 +206,10 @@ pub fn fit_arc(
             needed: p_count / 3 + 1,
         });
     }
-    let start = initial_params(points, commands_rad, &options.form)?;
+    let start = match start {
+        Some(s) => s,
+        None => initial_params(points, commands_rad, &options.form)?,
+    };
     let outcome = lsq::levenberg_marquardt(
         FIT,
         start,
@@ -350,6 +410,39 @@ mod tests {
         // Longer spans determine the tilt better.
         let sig: Vec<f64> = id.tilt_sigma_by_span.iter().map(|s| s.1).collect();
         assert!(sig.windows(2).all(|w| w[1] < w[0]));
+    }
+
+    #[test]
+    fn zero_angle_noise_is_the_measurement_only_fit_bit_for_bit() {
+        let form = TransmissionForm::Harmonic { order: 1 };
+        let commands: Vec<f64> = (0..12).map(|j| -0.3 + 0.06 * j as f64).collect();
+        let truth = crate::calibration::arc_model::tests::sample_params();
+        let noise = MeasurementNoise::from_rms_3d(1e-4);
+        let model = ArcModel::new(form, &commands, &noise).unwrap();
+        // Deterministic "noise": a fixed pattern of 0.1 mm.
+        let pts: Vec<Point3<f64>> = model
+            .predict(&truth)
+            .unwrap()
+            .iter()
+            .enumerate()
+            .map(|(j, p)| p + Vector3::new((j as f64).sin(), (2.0 * j as f64).cos(), 0.5) * 1e-4)
+            .collect();
+        let options = ArcFitOptions {
+            form,
+            noise,
+            reference_point: truth.centre,
+            max_iterations: 100,
+        };
+        let old = fit_arc(&pts, &commands, &options).unwrap();
+        assert_eq!(fit_arc_with_angle_noise(&pts, &commands, &options, 0.0).unwrap(), old);
+        // With angle noise the reported uncertainty grows (the tangential direction is
+        // noisier), and the estimate stays close.
+        let with = fit_arc_with_angle_noise(&pts, &commands, &options, 2e-4).unwrap();
+        for k in 0..old.covariance.nrows() {
+            assert!(with.covariance[(k, k)] >= old.covariance[(k, k)] * (1.0 - 1e-9), "{k}");
+        }
+        assert!(with.coefficient_sigma[1] > 1.2 * old.coefficient_sigma[1]);
+        assert!(fit_arc_with_angle_noise(&pts, &commands, &options, f64::NAN).is_err());
     }
 
     #[test]

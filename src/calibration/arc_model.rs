@@ -39,6 +39,45 @@ impl MeasurementNoise {
         }
     }
 
+    /// The 3x3 covariance of point `j` of `n` (points' unit squared).
+    fn covariance(&self, j: usize) -> Matrix3<f64> {
+        match self {
+            MeasurementNoise::Isotropic { sigma_per_axis } => Matrix3::identity() * (sigma_per_axis * sigma_per_axis),
+            MeasurementNoise::PerPoint(covs) => covs[j],
+        }
+    }
+
+    /// This noise plus independent Gaussian noise of standard deviation `angle_sigma_rad` on
+    /// the joint angle of each point, propagated to first order (the "effective variance"
+    /// method, Orear, Am. J. Phys. 50 (1982) 912, eq. 2, for a 3-vector observation):
+    /// `Sigma_j = Sigma_meas,j + sigma_theta^2 t_j t_j^T` with `t_j = dp_j/dtheta_j`
+    /// ([`ArcModel::angle_derivatives`]). Per point, one entry of `angle_derivatives` each.
+    pub fn with_angle_noise(
+        &self,
+        angle_derivatives: &[Vector3<f64>],
+        angle_sigma_rad: f64,
+    ) -> Result<Self, CalibrationError> {
+        check_angle_sigma(angle_sigma_rad, FIT)?;
+        if let MeasurementNoise::PerPoint(covs) = self
+            && covs.len() != angle_derivatives.len()
+        {
+            return Err(CalibrationError::LengthMismatch {
+                fit: FIT,
+                what: "covariances",
+                got: covs.len(),
+                expected: angle_derivatives.len(),
+            });
+        }
+        let s2 = angle_sigma_rad * angle_sigma_rad;
+        Ok(MeasurementNoise::PerPoint(
+            angle_derivatives
+                .iter()
+                .enumerate()
+                .map(|(j, t)| self.covariance(j) + s2 * t * t.transpose())
+                .collect(),
+        ))
+    }
+
     /// `L^-1` with `L L^T` the covariance of point `j`: whitens residuals.
     pub(crate) fn whiteners(&self, n: usize) -> Result<Vec<Matrix3<f64>>, CalibrationError> {
         match self {
@@ -72,6 +111,18 @@ impl MeasurementNoise {
                     .collect()
             }
         }
+    }
+}
+
+/// An angle noise's standard deviation must be finite and >= 0.
+pub(crate) fn check_angle_sigma(angle_sigma_rad: f64, fit: &'static str) -> Result<(), CalibrationError> {
+    if angle_sigma_rad >= 0.0 && angle_sigma_rad.is_finite() {
+        Ok(())
+    } else {
+        Err(CalibrationError::InvalidInput {
+            fit,
+            what: "angle sigma must be finite and >= 0",
+        })
     }
 }
 
@@ -224,17 +275,26 @@ impl ArcModel {
         Ok(())
     }
 
-    /// The predicted points.
-    pub fn predict(&self, p: &ArcParams) -> Result<Vec<Point3<f64>>, CalibrationError> {
+    /// `at(sin, cos, u, v)` of each step's angle `phi0 + D_j`.
+    fn per_step<T>(
+        &self,
+        p: &ArcParams,
+        at: impl Fn(f64, f64, &Vector3<f64>, &Vector3<f64>) -> T,
+    ) -> Result<Vec<T>, CalibrationError> {
         let (mut d, mut dg) = (Vec::new(), Vec::new());
         self.motion_into(&p.coefficients, &mut d, &mut dg)?;
         let (u, v) = (p.u().into_inner(), p.v().into_inner());
         Ok(d.iter()
             .map(|dj| {
                 let (s, c) = (p.phase_rad + dj).sin_cos();
-                p.centre + p.radius * (c * u + s * v)
+                at(s, c, &u, &v)
             })
             .collect())
+    }
+
+    /// The predicted points.
+    pub fn predict(&self, p: &ArcParams) -> Result<Vec<Point3<f64>>, CalibrationError> {
+        self.per_step(p, |s, c, u, v| p.centre + p.radius * (c * u + s * v))
     }
 
     /// Fills the predicted point `j` (when `points` is given) and its 3 Jacobian rows
@@ -269,6 +329,14 @@ impl ArcModel {
                     .copy_from(&(tangent * *g));
             }
         }
+    }
+
+    /// `d p_j / d theta_j`: how point `j` moves when its own joint angle (the actual
+    /// displacement, `phi0 + D_j` in the model) changes alone, i.e. the arc's tangent
+    /// `r (-sin(phi0 + D_j) u + cos(phi0 + D_j) v)` (points' unit per rad). This is what a
+    /// re-positioning error of the swept joint moves the point by, to first order.
+    pub fn angle_derivatives(&self, p: &ArcParams) -> Result<Vec<Vector3<f64>>, CalibrationError> {
+        self.per_step(p, |s, c, u, v| p.radius * (-s * u + c * v))
     }
 
     /// `d p_j / d delta` stacked (3n x n_params), unweighted, analytic.
@@ -378,7 +446,7 @@ pub fn axis_quantities_gradient(p: &ArcParams, reference: &Point3<f64>) -> DMatr
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
@@ -416,6 +484,57 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn angle_derivatives_match_central_differences_of_each_points_angle() {
+        // Point j alone turned by h about the axis: the model with step j's motion D_j + h,
+        // i.e. the phase moved by h evaluated at step j only.
+        let forms = [
+            TransmissionForm::Harmonic { order: 1 },
+            TransmissionForm::Gear {
+                ratio: 32.0 / 19.0,
+                order: 1,
+            },
+        ];
+        for form in forms {
+            let commands: Vec<f64> = (0..7).map(|j| -0.6 + 0.2 * j as f64).collect();
+            let model = ArcModel::new(form, &commands, &MeasurementNoise::from_rms_3d(1.0)).unwrap();
+            let p = sample_params();
+            let t = model.angle_derivatives(&p).unwrap();
+            let h = 1e-6;
+            let mut dp = vec![0.0; model.n_params()];
+            dp[6] = h;
+            let plus = model.predict(&p.perturbed(&dp)).unwrap();
+            dp[6] = -h;
+            let minus = model.predict(&p.perturbed(&dp)).unwrap();
+            for (j, tj) in t.iter().enumerate() {
+                let fd = (plus[j] - minus[j]) / (2.0 * h);
+                assert_relative_eq!(*tj, fd, epsilon = 1e-8);
+                // Tangential: perpendicular to the radius and the axis, of length r.
+                assert_relative_eq!(tj.norm(), p.radius, epsilon = 1e-12);
+                assert!(tj.dot(&p.normal()).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn angle_noise_adds_a_rank_one_term_per_point() {
+        let t = [Vector3::new(0.0, 0.7, 0.0), Vector3::new(-0.3, 0.2, 0.1)];
+        let iso = MeasurementNoise::Isotropic { sigma_per_axis: 1e-4 };
+        let MeasurementNoise::PerPoint(c) = iso.with_angle_noise(&t, 2e-4).unwrap() else {
+            panic!("per-point covariance expected")
+        };
+        for (cj, tj) in c.iter().zip(&t) {
+            let expected = Matrix3::identity() * 1e-8 + tj * tj.transpose() * 4e-8;
+            assert_relative_eq!(*cj, expected, epsilon = 1e-20);
+        }
+        // Along the tangent the variance grows by (sigma_theta |t|)^2; across it, not at all.
+        let across = Vector3::new(1.0, 0.0, 0.0);
+        assert_relative_eq!((across.transpose() * c[0] * across)[0], 1e-8, epsilon = 1e-20);
+        assert!(iso.with_angle_noise(&t, -1.0).is_err());
+        let short = MeasurementNoise::PerPoint(vec![Matrix3::identity()]);
+        assert!(short.with_angle_noise(&t, 1e-4).is_err());
     }
 
     #[test]

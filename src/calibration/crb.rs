@@ -6,8 +6,14 @@
 //! Signal Processing I*, eq. 3.30). The quantities judged are those of
 //! [`super::arc_model::axis_quantities`]: axis direction (2), axis position (2) and each
 //! transmission coefficient. Efficiency = CRB variance / empirical mean squared error.
+//!
+//! With a robot's repeatability: [`arc_crb_with_angle_noise`] (angle noise on every point of
+//! the sweep) and [`held_joint_axis_covariance`] (the constant error of the joints held below
+//! it, a bias that adds to the bound).
 
-use nalgebra::{DMatrix, Matrix2, Matrix3, Point3, Unit, Vector3};
+use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix4, Point3, Unit, Vector3, Vector4};
+
+use crate::kinematics::AxisLine;
 
 use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, axis_quantities_gradient};
 use super::transmission_fit::TransmissionForm;
@@ -49,6 +55,67 @@ pub fn arc_crb(model: &ArcModel, truth: &ArcParams, reference: &Point3<f64>) -> 
         coefficient_variance: (0..m).map(|k| q[(4 + k, 4 + k)]).collect(),
         parameter_covariance: cov,
     })
+}
+
+/// The bound for the true parameters `truth` when each point's joint angle also carries
+/// independent Gaussian noise of standard deviation `angle_sigma_rad` (a robot's
+/// repeatability) besides the measurement noise `noise`: the same `F = J^T Sigma^-1 J` with the
+/// per-point covariance `Sigma_j = Sigma_meas,j + sigma_theta^2 t_j t_j^T`, `t_j = dp_j/dtheta_j`
+/// at the truth ([`MeasurementNoise::with_angle_noise`]; exact for the linearised angle noise).
+/// Of the Gaussian Fisher information with a parameter-dependent covariance (Kay eq. 3.31)
+/// this keeps the mean term; the trace term `1/2 tr(Sigma^-1 dSigma Sigma^-1 dSigma)` is of
+/// relative order `(sigma / r)^2`, below 1e-6 for the paper's sweeps. `angle_sigma_rad == 0` is
+/// [`arc_crb`] of the measurement noise.
+pub fn arc_crb_with_angle_noise(
+    form: TransmissionForm,
+    commands_rad: &[f64],
+    noise: &MeasurementNoise,
+    angle_sigma_rad: f64,
+    truth: &ArcParams,
+    reference: &Point3<f64>,
+) -> Result<CrbReport, CalibrationError> {
+    let measurement = ArcModel::new(form, commands_rad, noise)?;
+    if angle_sigma_rad == 0.0 {
+        return arc_crb(&measurement, truth, reference);
+    }
+    let total = noise.with_angle_noise(&measurement.angle_derivatives(truth)?, angle_sigma_rad)?;
+    arc_crb(&ArcModel::new(form, commands_rad, &total)?, truth, reference)
+}
+
+/// Covariance of the errors `[dir_u, dir_v, pos_u, pos_v]` of an axis (the quantities of
+/// [`super::arc_model::axis_quantities`] in the basis `u, v` across it; `axis.origin_m` is the
+/// point closest to the reference) caused by the constant errors of the joints held still
+/// BELOW it during its sweep: `(line, sigma)` per held joint, its axis line and the standard
+/// deviation of its joint-value error \[rad\].
+///
+/// A held actuator keeps its re-positioning error through the whole sweep, so the error is a
+/// bias of that experiment, not noise of its points: it turns everything above that joint,
+/// the swept axis included, rigidly about the held joint's axis `(o_i, n_i)` by `e_i`. To first
+/// order the axis direction moves by `e_i n_i x n` and its point by `e_i n_i x (q - o_i)` (the
+/// move along `n` only slides the point along the line), so with independent `e_i ~ N(0,
+/// sigma_i^2)` the covariance is `sum_i sigma_i^2 g_i g_i^T` with
+/// `g_i = [(n_i x n).u, (n_i x n).v, (n_i x (q - o_i)).u, (n_i x (q - o_i)).v]` (first-order
+/// propagation, as for the rows in `procedure::row_sigmas`). Independent of the sweep's own
+/// noise, it adds to the sweep's bound: any estimator unbiased for the displaced arc has at
+/// least `F^-1 + this` about the undisplaced one. Joints held ABOVE the swept one only move
+/// the target on the swept link (a circle about the same axis) and do not enter. The
+/// correlation this error creates between axes swept while the same joint held still is not
+/// modelled.
+pub fn held_joint_axis_covariance(
+    axis: &AxisLine,
+    u: &Vector3<f64>,
+    v: &Vector3<f64>,
+    held: &[(AxisLine, f64)],
+) -> Matrix4<f64> {
+    let n = axis.direction.into_inner();
+    held.iter()
+        .map(|(line, sigma)| {
+            let ni = line.direction.into_inner();
+            let (b, a) = (ni.cross(&n), ni.cross(&(axis.origin_m - line.origin_m)));
+            let g = Vector4::new(b.dot(u), b.dot(v), a.dot(u), a.dot(v));
+            g * g.transpose() * (sigma * sigma)
+        })
+        .fold(Matrix4::zeros(), |acc, c| acc + c)
 }
 
 /// The bound for `n` points evenly spread over `span_rad` of command from `start_command_rad`

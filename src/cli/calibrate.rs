@@ -26,6 +26,11 @@ pub struct Args {
     /// uncertainties).
     #[arg(long, default_value_t = 0.19)]
     noise_mm: f64,
+    /// The robot's repeatability \[rad\]: standard deviation of a joint value's error per
+    /// re-positioning, one value for every joint or one per joint (comma-separated); 0 = model
+    /// measurement noise only. Default: the robot description's `repeatability_sigma`.
+    #[arg(long, value_delimiter = ',')]
+    repeatability_rad: Option<Vec<f64>>,
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
@@ -69,8 +74,12 @@ pub fn run(args: Args) -> Result<()> {
     let options = CalibrationOptions {
         estimator: args.estimator,
         noise_rms_3d_mm: args.noise_mm,
+        repeatability_sigma_rad: args.repeatability_rad,
         ..CalibrationOptions::default()
     };
+    options
+        .joint_repeatability_rad(&desc)
+        .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
     // The procedure's message already contains its cause: one line, not the cause twice.
     let cal =
         calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;

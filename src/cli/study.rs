@@ -18,9 +18,13 @@ pub struct Args {
     /// Measurement noise, 3-D RMS \[mm\].
     #[arg(long, default_value_t = 0.19)]
     noise_mm: f64,
-    /// Keep the truth robot's repeatability jitter (not in the bound's noise model).
+    /// Keep the truth robot's repeatability jitter (the bound then includes it as angle noise).
     #[arg(long)]
     repeatability_jitter: bool,
+    /// Tell the calibrator the robot's repeatability (the nominal description's
+    /// `repeatability_sigma` per joint); without it the calibrator models measurement noise only.
+    #[arg(long)]
+    model_repeatability: bool,
     /// Output folder (`efficiency.json`, `efficiency.md`).
     #[arg(long, default_value = "results/study")]
     out: PathBuf,
@@ -36,6 +40,7 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.seed,
         noise_rms_3d_mm: args.noise_mm,
         repeatability_jitter: args.repeatability_jitter,
+        model_repeatability: args.model_repeatability,
     };
     let report = study.run()?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;

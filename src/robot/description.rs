@@ -45,6 +45,16 @@ pub struct JointEntry {
     /// The transmission form the calibrator fits; default harmonic of order 1.
     #[serde(default)]
     pub transmission_fit: TransmissionFitForm,
+    /// The robot's known repeatability: standard deviation of the joint-value error drawn
+    /// each time the actuator is re-positioned \[rad\] (revolute) or \[m\] (prismatic); finite
+    /// and >= 0; default 0 (unknown: the calibrator models measurement noise only). The
+    /// calibrator weights its axis fits with it (`calibration::fit_arc_with_angle_noise`).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub repeatability_sigma: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// The form of a joint's transmission function that the calibrator fits (eq. 8).
@@ -281,6 +291,12 @@ impl RobotDescription {
             }
             if j.mass_kg < 0.0 {
                 return Err(bad(format!("joints[{k}].mass_kg"), "mass must be >= 0".into()));
+            }
+            if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
+                return Err(bad(
+                    format!("joints[{k}].repeatability_sigma"),
+                    format!("must be a finite number >= 0 (rad or m), got {}", j.repeatability_sigma),
+                ));
             }
         }
         for (k, r) in self.rows.iter().enumerate() {

@@ -1,20 +1,25 @@
 //! Efficiency of the axis estimators against the Cramer-Rao bound, and calibration of the
 //! reported uncertainty of the Table-2 rows, over many simulated Table-1 campaigns of the
-//! paper robot (isotropic noise, no repeatability jitter: the noise the bound assumes; the
-//! jitter can be switched on to measure what it costs).
+//! paper robot (isotropic noise, no repeatability jitter by default). The jitter can be
+//! switched on: the bound is then that of measurement noise plus independent angle noise of
+//! the truth's repeatability on every point of a sweep ([`arc_crb_with_angle_noise`]), and the
+//! calibrator can be told the nominal description's repeatability
+//! ([`EfficiencyStudy::model_repeatability`]) or not.
 //!
 //! Truth in the calibrator's own terms: the same campaign without noise, fitted the same way
 //! (the paper robot is in the fitted family, so this is exact; see
 //! `tests/calibration_procedure.rs`).
 
-use crate::calibration::arc_model::{ArcModel, ArcParams, MeasurementNoise};
-use crate::calibration::crb::{arc_crb, axis_errors, efficiency};
+use crate::calibration::arc_model::{ArcParams, MeasurementNoise};
+use crate::calibration::crb::{arc_crb_with_angle_noise, axis_errors, efficiency, held_joint_axis_covariance};
 use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, ProcedureError, axis_experiments, calibrate};
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
-    ArcFitOptions, CalibrationError, angles, fit_arc, fit_axis_paper, fit_circle, fit_transmission,
+    ArcFitOptions, CalibrationError, angles, fit_arc, fit_arc_with_angle_noise, fit_axis_paper, fit_circle,
+    fit_transmission,
 };
 use crate::campaign::{AnalyticArm, CalibrationPlan, ValidationPlan, commands_to_internal, simulate_campaign};
+use crate::kinematics::AxisLine;
 use crate::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use crate::robot::{Controller, RobotDescription, TransmissionFitForm, TruthRobot};
 use nalgebra::{Isometry3, Point3, Unit};
@@ -64,11 +69,16 @@ pub struct EfficiencyStudy {
     pub seed: u64,
     /// Measurement noise, 3-D RMS \[mm\].
     pub noise_rms_3d_mm: f64,
-    /// Keep the paper robot's repeatability jitter (off by default: neither the bound nor the
-    /// calibrator's reported sigma models it, so the efficiency is then measured against a
-    /// bound of a different noise model; on, the study shows what the jitter costs).
+    /// Keep the paper robot's repeatability jitter (off by default). On, the bound includes
+    /// it as angle noise on every point of a sweep (what the jitter of the swept actuator is).
     #[serde(default)]
     pub repeatability_jitter: bool,
+    /// Tell the calibrator the robot's repeatability: the nominal description's
+    /// `repeatability_sigma` of each joint, for the axis fits
+    /// ([`fit_arc_with_angle_noise`]) and the procedure. Off (default): the calibrator
+    /// models measurement noise only, whatever the description says.
+    #[serde(default)]
+    pub model_repeatability: bool,
 }
 
 /// Efficiency of one quantity of one axis.
@@ -78,7 +88,8 @@ pub struct QuantityEfficiency {
     pub joint: usize,
     /// `direction` (2 components), `position` (2) or a transmission coefficient name.
     pub quantity: String,
-    /// Square root of the bound's trace \[rad or mm\].
+    /// Square root of the bound's trace \[rad or mm\] (with jitter: of measurement and angle
+    /// noise, plus the bias of the joints held below for the direction and position).
     pub crb_sigma: f64,
     /// ML estimator: RMS error over the trials.
     pub ml_rms_error: f64,
@@ -125,7 +136,12 @@ struct AxisTruth {
     params: ArcParams,
     reference: Point3<f64>,
     form: TransmissionForm,
-    model: ArcModel,
+    /// Actuator commands of the sweep's target-0 points \[rad\].
+    commands_rad: Vec<f64>,
+    /// The simulated repeatability of the swept joint (0 without jitter) \[rad\].
+    jitter_rad: f64,
+    /// The repeatability the calibrator is told \[rad\].
+    calibrator_rad: f64,
 }
 
 struct TrialOutcome {
@@ -207,6 +223,17 @@ impl EfficiencyStudy {
         }
         let truth = if self.repeatability_jitter { &jittered } else { &steady };
         let noise_m = self.noise_rms_3d_mm * 1e-3;
+        let calibrator_rad: Vec<f64> = desc
+            .joints
+            .iter()
+            .map(|j| {
+                if self.model_repeatability {
+                    j.repeatability_sigma
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         // The reference is the jitter-free, noise-free campaign.
         let exact = campaign(&steady, &desc, 0.0, 0);
         let (experiments, _) = axis_experiments(&exact, &desc).expect("the simulated campaign is complete");
@@ -227,16 +254,18 @@ impl EfficiencyStudy {
             )
             .map_err(StudyError::Reference)?;
             let reference = fit.params.centre;
-            let model = ArcModel::new(form, &u, &noise).map_err(StudyError::Reference)?;
             truths.push(AxisTruth {
-                model,
                 params: fit.params,
                 reference,
                 form,
+                commands_rad: u,
+                jitter_rad: truth.joints[e.joint - 1].repeatability_sigma,
+                calibrator_rad: calibrator_rad[e.joint - 1],
             });
         }
         let options = CalibrationOptions {
             noise_rms_3d_mm: self.noise_rms_3d_mm,
+            repeatability_sigma_rad: Some(calibrator_rad.clone()),
             ..CalibrationOptions::default()
         };
         let outcomes: Vec<TrialOutcome> = (0..self.trials)
@@ -245,10 +274,12 @@ impl EfficiencyStudy {
                 let fit_err = |source| StudyError::Fit { trial: i, source };
                 let set = campaign(truth, &desc, self.noise_rms_3d_mm, trial_seed(self.seed, i as u64));
                 let (experiments, _) = axis_experiments(&set, &desc).expect("the simulated campaign is complete");
-                let (mut ml, mut paper, mut ml_reported) = (Vec::new(), Vec::new(), Vec::new());
+                let (mut ml, mut paper) = (Vec::new(), Vec::new());
+                let mut ml_reported: Vec<Vec<f64>> = Vec::new();
+                let mut fitted: Vec<(usize, ArcParams, AxisLine)> = Vec::new();
                 for (e, t) in experiments.iter().zip(&truths) {
                     let u = actuator_commands(e, &desc, &controller);
-                    let fit = fit_arc(
+                    let fit = fit_arc_with_angle_noise(
                         &e.target0_m,
                         &u,
                         &ArcFitOptions {
@@ -257,6 +288,7 @@ impl EfficiencyStudy {
                             reference_point: t.reference,
                             max_iterations: 100,
                         },
+                        t.calibrator_rad,
                     )
                     .map_err(fit_err)?;
                     ml_reported.push(
@@ -268,6 +300,7 @@ impl EfficiencyStudy {
                         .chain(fit.coefficient_sigma.iter().map(|s| s * s))
                         .collect(),
                     );
+                    fitted.push((e.joint, fit.params.clone(), fit.axis));
                     ml.push(axis_errors(
                         &fit.axis.direction,
                         &fit.axis.origin_m,
@@ -277,6 +310,18 @@ impl EfficiencyStudy {
                     ));
                     let (d, p, c) = paper_fit(&e.target0_m, &u, &t.form).map_err(fit_err)?;
                     paper.push(axis_errors(&d, &p, &c, &t.params, &t.reference));
+                }
+                // The joints held below each swept one: their constant error, as the procedure
+                // reports it (from the calibrator's repeatability and its own fitted axes).
+                for (reported, (joint, params, axis)) in ml_reported.iter_mut().zip(&fitted) {
+                    let held: Vec<(AxisLine, f64)> = fitted
+                        .iter()
+                        .filter(|(i, _, _)| i < joint && calibrator_rad[i - 1] > 0.0)
+                        .map(|(i, _, line)| (*line, calibrator_rad[i - 1]))
+                        .collect();
+                    let c = held_joint_axis_covariance(axis, &params.u(), &params.v(), &held);
+                    reported[0] += c.fixed_view::<2, 2>(0, 0).trace();
+                    reported[1] += c.fixed_view::<2, 2>(2, 2).trace();
                 }
                 let cal =
                     calibrate(&set, &desc, &options).map_err(|source| StudyError::Procedure { trial: i, source })?;
@@ -309,12 +354,43 @@ impl EfficiencyStudy {
     ) -> StudyReport {
         let mut eff = Vec::new();
         for (k, (e, t)) in experiments.iter().zip(truths).enumerate() {
-            let crb = arc_crb(&t.model, &t.params, &t.reference).expect("the bound exists where the fit converged");
+            let crb = arc_crb_with_angle_noise(
+                t.form,
+                &t.commands_rad,
+                &MeasurementNoise::from_rms_3d(self.noise_rms_3d_mm * 1e-3),
+                t.jitter_rad,
+                &t.params,
+                &t.reference,
+            )
+            .expect("the bound exists where the fit converged");
+            // The bias of the joints held below: it adds to the bound (see
+            // `held_joint_axis_covariance`).
+            let line = |t: &AxisTruth| AxisLine {
+                origin_m: t.params.axis_point_near(&t.reference),
+                direction: t.params.normal(),
+            };
+            let held: Vec<(AxisLine, f64)> = experiments
+                .iter()
+                .zip(truths)
+                .filter(|(ei, ti)| ei.joint < e.joint && ti.jitter_rad > 0.0)
+                .map(|(_, ti)| (line(ti), ti.jitter_rad))
+                .collect();
+            let bias = held_joint_axis_covariance(&line(t), &t.params.u(), &t.params.v(), &held);
             let ml: Vec<Vec<f64>> = outcomes.iter().map(|o| o.ml[k].clone()).collect();
             let paper: Vec<Vec<f64>> = outcomes.iter().map(|o| o.paper[k].clone()).collect();
             let mut quantities = vec![
-                ("direction".to_string(), crb.direction.trace(), 0..2, 1.0),
-                ("position".to_string(), crb.position.trace(), 2..4, 1e3),
+                (
+                    "direction".to_string(),
+                    crb.direction.trace() + bias.fixed_view::<2, 2>(0, 0).trace(),
+                    0..2,
+                    1.0,
+                ),
+                (
+                    "position".to_string(),
+                    crb.position.trace() + bias.fixed_view::<2, 2>(2, 2).trace(),
+                    2..4,
+                    1e3,
+                ),
             ];
             for (c, v) in t.form.coefficient_names().into_iter().zip(&crb.coefficient_variance) {
                 let i = 4 + quantities.len() - 2;
@@ -418,10 +494,17 @@ impl StudyReport {
 
     /// The report as Markdown tables.
     pub fn markdown(&self) -> String {
-        let jitter = if self.study.repeatability_jitter {
-            "WITH the truth robot's repeatability jitter (which the Cramer-Rao bound and the reported sigma do not model)"
-        } else {
-            "no repeatability jitter (the noise model the Cramer-Rao bound assumes)"
+        let jitter = match (self.study.repeatability_jitter, self.study.model_repeatability) {
+            (true, true) => {
+                "WITH the truth robot's repeatability jitter (in the Cramer-Rao bound as angle noise; the calibrator is told the nominal description's repeatability)"
+            }
+            (true, false) => {
+                "WITH the truth robot's repeatability jitter (in the Cramer-Rao bound as angle noise; the calibrator is NOT told it, so its weights and reported sigma model measurement noise only)"
+            }
+            (false, true) => {
+                "no repeatability jitter (the calibrator nevertheless assumes the nominal description's repeatability)"
+            }
+            (false, false) => "no repeatability jitter (the noise model the Cramer-Rao bound assumes)",
         };
         let mut s = format!(
             "# Calibrator efficiency study\n\n{} simulated Table-1 campaigns of the paper robot, {:.3} mm 3-D RMS isotropic measurement noise and {jitter}, seed {}.\n\n",

@@ -178,3 +178,59 @@ fn direction_sigma_from_the_out_of_plane_block_equals_the_full_bound() {
         }
     }
 }
+
+#[test]
+fn held_joint_covariance_matches_a_finite_rotation_about_the_held_axis() {
+    use nalgebra::{Matrix4, UnitQuaternion};
+    let axis = AxisLine {
+        origin_m: Point3::new(0.1, 0.9, 0.7),
+        direction: Unit::new_normalize(Vector3::new(1.0, 0.2, -0.1)),
+    };
+    let held = AxisLine {
+        origin_m: Point3::new(-0.2, 0.1, 0.0),
+        direction: Unit::new_normalize(Vector3::new(0.1, 0.3, 1.0)),
+    };
+    let n = axis.direction.into_inner();
+    let u = n.cross(&Vector3::z()).normalize();
+    let v = n.cross(&u);
+    let sigma = 1.2e-4;
+    let c = held_joint_axis_covariance(&axis, &u, &v, &[(held, sigma)]);
+    // Central differences of the axis quantities (reference point: the axis point itself)
+    // under a rotation by +-h about the held axis.
+    let h = 1e-6;
+    let moved = |e: f64| {
+        let r = UnitQuaternion::from_axis_angle(&held.direction, e);
+        let d = r * n;
+        let p = held.origin_m + r * (axis.origin_m - held.origin_m);
+        let q = p + d * (axis.origin_m - p).dot(&d);
+        Vector4::new(
+            d.dot(&u),
+            d.dot(&v),
+            (q - axis.origin_m).dot(&u),
+            (q - axis.origin_m).dot(&v),
+        )
+    };
+    let g = (moved(h) - moved(-h)) / (2.0 * h);
+    let expected: Matrix4<f64> = g * g.transpose() * (sigma * sigma);
+    assert_relative_eq!(c, expected, epsilon = 1e-16);
+    // A joint parallel to the axis and through it moves nothing.
+    let through = AxisLine { ..axis };
+    assert_relative_eq!(
+        held_joint_axis_covariance(&axis, &u, &v, &[(through, sigma)]),
+        Matrix4::zeros(),
+        epsilon = 1e-24
+    );
+}
+
+#[test]
+fn angle_noise_bound_is_the_measurement_bound_at_zero_and_grows_with_it() {
+    let s = table1_scenario();
+    let form = TransmissionForm::Harmonic { order: 1 };
+    let plain = arc_crb(&s.model, &s.truth, &s.reference).unwrap();
+    let zero = arc_crb_with_angle_noise(form, &s.commands, &s.noise, 0.0, &s.truth, &s.reference).unwrap();
+    assert_eq!(zero, plain);
+    let jittered = arc_crb_with_angle_noise(form, &s.commands, &s.noise, 1.18e-4, &s.truth, &s.reference).unwrap();
+    for (a, b) in jittered.coefficient_variance.iter().zip(&plain.coefficient_variance) {
+        assert!(a > b, "{a} <= {b}");
+    }
+}

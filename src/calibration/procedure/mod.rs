@@ -8,6 +8,18 @@
 //! `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`, the same semantics as the truth model,
 //! so a calibrated robot is expressed as a [`TruthRobot`]-shaped model (a data type; no truth
 //! value is read).
+//!
+//! Repeatability ([`CalibrationOptions::repeatability_sigma_rad`], default the description's
+//! `repeatability_sigma`): the swept actuator is re-positioned at every step, so its error is
+//! noise on each point's angle, which the ML axis fit weights and reports
+//! ([`super::fit_arc_with_angle_noise`]). The joints held still below a sweep keep one error
+//! through it: a bias of that axis, added to its reported covariance
+//! ([`super::crb::held_joint_axis_covariance`]) but not propagated to the rows (the same held
+//! error turns all axes above the joint together, which changes no row). Not modelled: the
+//! correlation that bias creates between axes, the held error as an error of the joint's
+//! value at the reference, and the repeatability in the paper's estimator. The coupling fits
+//! (eqs. 14-15) report a-posteriori sigmas, so the swept joint's jitter in their residuals is
+//! already counted.
 
 mod experiments;
 mod frames;
@@ -26,7 +38,7 @@ pub use urdf::urdf;
 use super::arc_model::MeasurementNoise;
 use super::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
 use super::transmission_fit::TransmissionForm;
-use super::{CalibrationError, angles, fit_arc, fit_axis_paper, fit_circle, fit_transmission};
+use super::{CalibrationError, angles, fit_arc_with_angle_noise, fit_axis_paper, fit_circle, fit_transmission};
 use crate::campaign::commands_to_internal;
 use crate::kinematics::{AxisLine, JointKind, rigid_fit};
 use crate::measurement::MeasurementSet;
@@ -58,6 +70,15 @@ pub struct CalibrationOptions {
     pub noise_rms_3d_mm: f64,
     /// Iteration cap of every nonlinear fit.
     pub max_iterations: usize,
+    /// The robot's repeatability per joint \[rad\] (standard deviation of the joint-value
+    /// error drawn each time an actuator is re-positioned): one value for every joint or one
+    /// per joint. `None` (default): the description's `repeatability_sigma` of each joint
+    /// (0 unless the file gives it). A joint with a non-zero value has its axis fitted with
+    /// [`super::fit_arc_with_angle_noise`] (ML estimator only), so the weights and the reported
+    /// covariance include the angle noise of the sweep; 0 everywhere is the measurement-only
+    /// fit, bit for bit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeatability_sigma_rad: Option<Vec<f64>>,
 }
 
 impl Default for CalibrationOptions {
@@ -66,7 +87,34 @@ impl Default for CalibrationOptions {
             estimator: AxisEstimator::Ml,
             noise_rms_3d_mm: 0.19,
             max_iterations: 100,
+            repeatability_sigma_rad: None,
         }
+    }
+}
+
+impl CalibrationOptions {
+    /// The repeatability \[rad\] the axis fit of each joint of `desc` assumes (see
+    /// [`CalibrationOptions::repeatability_sigma_rad`]).
+    pub fn joint_repeatability_rad(&self, desc: &RobotDescription) -> Result<Vec<f64>, ProcedureError> {
+        let n = desc.dof();
+        let sigmas = match &self.repeatability_sigma_rad {
+            None => desc.joints.iter().map(|j| j.repeatability_sigma).collect(),
+            Some(v) if v.len() == 1 => vec![v[0]; n],
+            Some(v) if v.len() == n => v.clone(),
+            Some(v) => {
+                return Err(ProcedureError::InvalidOption {
+                    field: "repeatability_sigma_rad",
+                    message: format!("needs 1 or {n} values, got {}", v.len()),
+                });
+            }
+        };
+        if let Some(s) = sigmas.iter().find(|s| !(s.is_finite() && **s >= 0.0)) {
+            return Err(ProcedureError::InvalidOption {
+                field: "repeatability_sigma_rad",
+                message: format!("must be finite and >= 0, got {s}"),
+            });
+        }
+        Ok(sigmas)
     }
 }
 
@@ -135,6 +183,14 @@ pub enum ProcedureError {
     /// The axes do not make a phi-model.
     #[error(transparent)]
     Frames(#[from] FramesError),
+    /// An option out of range.
+    #[error("calibration option `{field}`: {message}")]
+    InvalidOption {
+        /// The option.
+        field: &'static str,
+        /// What is wrong.
+        message: String,
+    },
     /// Prismatic joints are not supported by this procedure yet.
     #[error(
         "joint {joint} is prismatic: the campaign procedure handles rotary joints (use calibration::sliding directly)"
@@ -165,6 +221,7 @@ fn fit_one_axis(
     u: &[f64],
     form: TransmissionForm,
     options: &CalibrationOptions,
+    repeatability_rad: f64,
 ) -> Result<AxisFitOutcome, CalibrationError> {
     let noise = MeasurementNoise::from_rms_3d(options.noise_rms_3d_mm * 1e-3);
     let points = &e.target0_m;
@@ -173,7 +230,7 @@ fn fit_one_axis(
         u.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - u.iter().cloned().fold(f64::INFINITY, f64::min);
     match options.estimator {
         AxisEstimator::Ml => {
-            let fit = fit_arc(
+            let fit = fit_arc_with_angle_noise(
                 points,
                 u,
                 &super::ArcFitOptions {
@@ -182,6 +239,7 @@ fn fit_one_axis(
                     reference_point: centroid,
                     max_iterations: options.max_iterations,
                 },
+                repeatability_rad,
             )?;
             let g = super::arc_model::axis_quantities_gradient(&fit.params, &centroid);
             let q = &g * &fit.covariance * g.transpose();
@@ -238,6 +296,7 @@ pub fn calibrate(
     if let Some(k) = desc.joints.iter().position(|j| j.kind == JointKind::Prismatic) {
         return Err(ProcedureError::Prismatic { joint: k + 1 });
     }
+    let repeatability_rad = options.joint_repeatability_rad(desc)?;
     let (experiments, reference_cmd) = axis_experiments(set, desc)?;
     let controller = Controller::from_description(desc);
     let q_ref = commands_to_internal(desc, &reference_cmd);
@@ -255,14 +314,15 @@ pub fn calibrate(
         let u: Vec<f64> = e.commands.iter().map(|c| u_of(c)[k]).collect();
         let u0: Vec<f64> = e.target0_steps.iter().map(|&j| u[j]).collect();
         let form = transmission_form(desc.joints[k].transmission_fit);
-        let outcome = fit_one_axis(e, &u0, form, options).map_err(|source| ProcedureError::Fit {
-            experiment: e.name.clone(),
-            joint: e.joint,
-            source,
-        })?;
+        let outcome =
+            fit_one_axis(e, &u0, form, options, repeatability_rad[k]).map_err(|source| ProcedureError::Fit {
+                experiment: e.name.clone(),
+                joint: e.joint,
+                source,
+            })?;
         fits[k] = Some((outcome, u));
     }
-    let fits: Vec<(AxisFitOutcome, Vec<f64>)> = fits
+    let mut fits: Vec<(AxisFitOutcome, Vec<f64>)> = fits
         .into_iter()
         .map(|f| f.expect("every joint has an experiment"))
         .collect();
@@ -278,6 +338,21 @@ pub fn calibrate(
             beta_deg: beta.to_degrees(),
         })
         .collect();
+    // The joints below each swept one hold still with their re-positioning error: a bias of
+    // the whole sweep (not noise of its points), added to the axis's reported covariance in
+    // the instrument frame. Not to the rows above: the campaign leaves a held actuator where
+    // it is from one sweep to the next, so the same error turns every axis above it together,
+    // which changes no row (it is an error of that joint's value at the reference, as large as
+    // its repeatability).
+    for (k, (fit, _)) in fits.iter_mut().enumerate() {
+        let held: Vec<(AxisLine, f64)> = (0..k)
+            .filter(|&i| repeatability_rad[i] > 0.0)
+            .map(|i| (axes[i], repeatability_rad[i]))
+            .collect();
+        if !held.is_empty() {
+            fit.report.add_held_joint_covariance(&axes[k], &held);
+        }
+    }
 
     // Ascending: joint k's zero needs the coupling into k, which needs joint k-1's zero.
     let mut joints: Vec<TruthJoint> = Vec::with_capacity(n);

@@ -5,10 +5,12 @@ use super::CalibrationOptions;
 use super::experiments::AxisExperiment;
 use super::uncertainty::AxisCovariance;
 use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
+use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
 use crate::calibration::{ArcFit, PaperAxisFit};
+use crate::kinematics::AxisLine;
 use crate::robot::{CouplingFunction, Transmission, TruthRobot};
-use nalgebra::{Isometry3, Matrix2};
+use nalgebra::{Isometry3, Matrix2, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// One calibrated axis.
@@ -82,6 +84,18 @@ impl AxisReport {
             identifiability: notes,
             covariance: None,
         }
+    }
+
+    /// Adds the bias of the joints held still below this axis during its sweep
+    /// ([`crate::calibration::crb::held_joint_axis_covariance`]) to the line's covariance and
+    /// its principal sigmas. No-op without a covariance (the paper's estimator).
+    pub(super) fn add_held_joint_covariance(&mut self, axis: &AxisLine, held: &[(AxisLine, f64)]) {
+        let Some(c) = &self.covariance else { return };
+        let (u, v) = (Vector3::from(c.u), Vector3::from(c.v));
+        let total = Matrix4::from_fn(|a, b| c.covariance[a][b]) + held_joint_axis_covariance(axis, &u, &v, held);
+        self.direction_sigma_rad = principal_sigmas(&total.fixed_view::<2, 2>(0, 0).into());
+        self.position_sigma_mm = principal_sigmas(&total.fixed_view::<2, 2>(2, 2).into()).map(|s| s * 1e3);
+        self.covariance = Some(AxisCovariance::new(u, v, &total));
     }
 
     pub(super) fn from_paper(
