@@ -112,8 +112,8 @@ pub fn visible_sweep_span<A: ArmExecutor, R: Rng + ?Sized>(
     let targets: Vec<LinkPoint> = desc
         .axis_targets_of(sweep.joint)
         .map(|t| {
-            std::iter::once(t.target0.clone())
-                .chain(t.target1.clone().filter(|_| sweep.second_target))
+            std::iter::once(t.target0)
+                .chain(t.target1.filter(|_| sweep.second_target))
                 .map(|t| LinkPoint::from_target(&t))
                 .collect()
         })
