@@ -19,7 +19,7 @@ fn options() -> DiagnosisOptions {
 #[ignore = "slow in debug builds; run with --release -- --ignored"]
 fn no_effect_is_none_and_json_has_the_fixed_fields() {
     let desc = RobotDescription::asea_irb6l();
-    let key = draw_effect("none", 0, 100, 6, &mut StdRng::seed_from_u64(0));
+    let key = draw_effect("none", 0, 100, &desc, &mut StdRng::seed_from_u64(0));
     let set = simulate_case(&key, &desc, &BlindOptions::default()).unwrap();
     let d = diagnose(&set, &desc, &options()).unwrap();
     assert_eq!(d.effect, "none", "{}", d.verdict);

@@ -75,15 +75,22 @@ impl Default for BlindOptions {
 
 /// Draws case `case` of a suite seeded `seed`: effects cycle through [`CASE_EFFECTS`]
 /// (so every effect appears), joints and magnitudes are random.
-pub fn draw_case(seed: u64, case: usize, dof: usize) -> CaseKey {
+pub fn draw_case(seed: u64, case: usize, desc: &RobotDescription) -> CaseKey {
     let case_seed = crate::scenario::trial_seed(seed, case);
     let mut rng = StdRng::seed_from_u64(case_seed ^ 0x5eed_b11d);
     let effect = CASE_EFFECTS[case % CASE_EFFECTS.len()];
-    draw_effect(effect, case, case_seed, dof, &mut rng)
+    draw_effect(effect, case, case_seed, desc, &mut rng)
 }
 
 /// A case with a given effect (magnitudes drawn from `rng`).
-pub fn draw_effect<R: Rng + ?Sized>(effect: &str, case: usize, seed: u64, dof: usize, rng: &mut R) -> CaseKey {
+pub fn draw_effect<R: Rng + ?Sized>(
+    effect: &str,
+    case: usize,
+    seed: u64,
+    desc: &RobotDescription,
+    rng: &mut R,
+) -> CaseKey {
+    let dof = desc.dof();
     let mut e = Effects::default();
     let phase = rng.random_range(0.0..std::f64::consts::TAU);
     let (joint, magnitude, unit) = match effect {
@@ -120,7 +127,7 @@ pub fn draw_effect<R: Rng + ?Sized>(effect: &str, case: usize, seed: u64, dof: u
             let a = rng.random_range(0.5e-3..1.5e-3);
             e.gear_harmonics.push(GearHarmonic {
                 joint,
-                order: crate::diagnosis::HARMONIC_ORDER,
+                order: crate::diagnosis::unmodelled_harmonic_order(desc, joint),
                 sin_rad: a * phase.sin(),
                 cos_rad: a * phase.cos(),
             });

@@ -4,7 +4,7 @@
 
 use anyhow::{Context, Result, bail};
 use axiscal::blind::{BlindOptions, draw_case, score, simulate_case};
-use axiscal::diagnosis::{DiagnosisOptions, diagnose};
+use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::measurement::{read_measurements, write_measurements};
 use axiscal::robot::RobotDescription;
 use rayon::prelude::*;
@@ -22,6 +22,9 @@ pub struct Args {
     /// Validation poses per case.
     #[arg(long, default_value_t = 100)]
     poses: usize,
+    /// Baseline refit scope of the diagnoser (`identified` or `geometry`).
+    #[arg(long, default_value = "identified")]
+    refit: String,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -40,10 +43,18 @@ pub fn run(args: Args) -> Result<()> {
         validation_poses: args.poses,
         ..BlindOptions::default()
     };
+    let diagnosis_options = DiagnosisOptions {
+        refit: match args.refit.as_str() {
+            "identified" => RefitScope::Identified,
+            "geometry" => RefitScope::Geometry,
+            other => bail!("--refit {other}: expected `identified` or `geometry`"),
+        },
+        ..DiagnosisOptions::default()
+    };
     let results: Vec<_> = (0..args.cases)
         .into_par_iter()
         .map(|i| -> Result<_> {
-            let key = draw_case(args.seed, i, desc.dof());
+            let key = draw_case(args.seed, i, &desc);
             let dir = args.out.join(format!("case-{i:03}"));
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
             let set = simulate_case(&key, &desc, &options).map_err(anyhow::Error::msg)?;
@@ -52,8 +63,8 @@ pub fn run(args: Args) -> Result<()> {
             std::fs::write(dir.join("key.json"), serde_json::to_string_pretty(&key)?)?;
             // The diagnoser sees the CSV alone.
             let blind = read_measurements(&csv, Some(desc.dof()))?;
-            let d = diagnose(&blind, &desc, &DiagnosisOptions::default())
-                .with_context(|| format!("diagnosing {}", csv.display()))?;
+            let d =
+                diagnose(&blind, &desc, &diagnosis_options).with_context(|| format!("diagnosing {}", csv.display()))?;
             std::fs::write(dir.join("diagnosis.json"), serde_json::to_string_pretty(&d)?)?;
             Ok((key, d))
         })

@@ -3,7 +3,7 @@
 
 use super::calibrate::{check_noise_mm, refuse_existing, write_output};
 use anyhow::{Context, Result};
-use axiscal::diagnosis::{DiagnosisOptions, diagnose, markdown};
+use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose, markdown};
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
 use std::path::PathBuf;
@@ -22,15 +22,32 @@ pub struct Args {
     /// Measurement noise of a point, 3-D RMS \[mm\].
     #[arg(long, default_value_t = 0.19)]
     noise_mm: f64,
-    /// Noise-only Monte-Carlo replicas.
-    #[arg(long, default_value_t = 8)]
+    /// Noise-only replicas of the campaign (each recalibrated).
+    #[arg(long, default_value_t = DiagnosisOptions::default().noise_trials)]
     noise_trials: usize,
+    /// Validation-noise draws per replica.
+    #[arg(long, default_value_t = DiagnosisOptions::default().noise_draws)]
+    noise_draws: usize,
+    /// What the baseline refit adjusts besides the geometry: `identified` (also the fitted
+    /// transmission harmonics and coupling slopes) or `geometry`.
+    #[arg(long, value_enum, default_value = "identified")]
+    refit: Refit,
+    /// False-alarm rate of the gap and candidate tests.
+    #[arg(long, default_value_t = DiagnosisOptions::default().false_alarm)]
+    false_alarm: f64,
     /// Seed of the replicas' noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
+}
+
+/// The `--refit` choices ([`RefitScope`]).
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum Refit {
+    Identified,
+    Geometry,
 }
 
 /// Runs `axiscal diagnose`.
@@ -41,6 +58,12 @@ pub fn run(args: Args) -> Result<()> {
     let options = DiagnosisOptions {
         noise_rms_3d_mm: args.noise_mm,
         noise_trials: args.noise_trials,
+        noise_draws: args.noise_draws,
+        false_alarm: args.false_alarm,
+        refit: match args.refit {
+            Refit::Identified => RefitScope::Identified,
+            Refit::Geometry => RefitScope::Geometry,
+        },
         seed: args.seed,
         ..DiagnosisOptions::default()
     };

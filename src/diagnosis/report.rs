@@ -15,14 +15,19 @@ pub fn markdown(d: &Diagnosis, source: &str) -> String {
     );
     let _ = writeln!(
         s,
-        "Held-out gap {:.3} mm -> {:.3} mm (held-out RMS {:.3} mm, noise only {:.3} mm, {} training / {} held-out poses, noise {:.3} mm 3-D RMS).\n",
+        "Held-out gap {:.3} mm -> {:.3} mm (held-out RMS {:.3} mm, noise only {:.3} mm, smallest gap flagged {:.3} mm at false-alarm rate {}; {} training / {} held-out poses, noise {:.3} mm 3-D RMS; refit rank {} of {} parameters; {} noise-only samples).\n",
         d.gap_before_mm,
         d.gap_after_mm,
         d.heldout_rms_before_mm,
         d.noise_only_rms_mm,
+        d.detectable_gap_mm,
+        d.false_alarm,
         d.poses[0],
         d.poses[1],
-        d.noise_rms_3d_mm
+        d.noise_rms_3d_mm,
+        d.refit_rank[0],
+        d.refit_rank[1],
+        d.null_samples
     );
     if !d.parameters.is_empty() {
         let _ = writeln!(s, "| parameter | value | 1-sigma |\n|---|---|---|");
@@ -48,17 +53,20 @@ pub fn markdown(d: &Diagnosis, source: &str) -> String {
     }
     let _ = writeln!(
         s,
-        "\n## Candidates (best first)\n\n| effect | joint | held-out RMS (mm) | gap after (mm) | score | weight |\n|---|---|---|---|---|---|"
+        "\n## Candidates (best first)\n\n| effect | joint | held-out RMS (mm) | gap after (mm) | improvement (chi2) | z | significant | outside refit | weight |\n|---|---|---|---|---|---|---|---|---|"
     );
     for c in &d.candidates {
         let _ = writeln!(
             s,
-            "| {} | {} | {:.4} | {:.4} | {:.1} | {:.3} |",
+            "| {} | {} | {:.4} | {:.4} | {:.1} | {:.1} | {} | {:.3} | {:.3} |",
             c.effect,
             c.joint.map_or("-".into(), |j| j.to_string()),
             c.heldout_rms_mm,
             c.gap_after_mm,
-            c.score,
+            c.improvement_chi2,
+            c.z,
+            if c.significant { "yes" } else { "no" },
+            c.outside_refit_fraction,
             c.weight
         );
     }
