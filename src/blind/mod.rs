@@ -6,7 +6,7 @@
 
 mod score;
 
-pub use score::{BlindScore, ConfusionMatrix, score};
+pub use score::{BlindScore, CaseResult, ConfusionMatrix, case_table, score};
 
 use crate::campaign::{
     AnalyticArm, ArmExecutor, AxisWobble, BacklashEffect, CalibrationPlan, CampaignOptions, ComplianceEffect, Effects,
@@ -18,8 +18,9 @@ use crate::robot::{Controller, RobotDescription, TruthRobot};
 use rand::{Rng, RngExt, SeedableRng, rngs::StdRng};
 use serde::{Deserialize, Serialize};
 
-/// Effect names a case can carry (FORMATS.md section 3), plus `unknown` (the out-of-set
-/// order-3 axis wobble, which the diagnoser should call `unexplained`).
+/// Effect names a case can carry (FORMATS.md section 3), plus `unknown`: an effect outside the
+/// candidate set, which the diagnoser should call `unexplained` (alternately an order-3 axis
+/// wobble and a curvature of the instrument's field, [`InstrumentSag`]).
 pub const CASE_EFFECTS: [&str; 8] = [
     "none",
     "joint_compliance",
@@ -50,6 +51,31 @@ pub struct CaseKey {
     pub seed: u64,
     /// The effects given to the simulator.
     pub effects: Effects,
+    /// An out-of-set instrument error, if any.
+    #[serde(default)]
+    pub sag: Option<InstrumentSag>,
+}
+
+/// An out-of-set instrument error: a paraboloid sag of the measured field, every measured
+/// point moved down by `curvature_per_m |p_xy|^2` (`p_xy` its horizontal distance from the
+/// instrument origin).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InstrumentSag {
+    /// \[1/m\]: the sag in metres per square metre of horizontal distance.
+    pub curvature_per_m: f64,
+}
+
+impl InstrumentSag {
+    /// Applies the sag to a measured position \[mm\].
+    fn apply_mm(&self, p: &mut [f64; 3]) {
+        let r2_m2 = (p[0] * p[0] + p[1] * p[1]) * 1e-6;
+        p[2] -= self.curvature_per_m * r2_m2 * 1e3;
+    }
+}
+
+/// Log-uniform draw in `[lo, hi)`.
+fn log_uniform<R: Rng + ?Sized>(rng: &mut R, lo: f64, hi: f64) -> f64 {
+    (rng.random_range(lo.ln()..hi.ln())).exp()
 }
 
 /// Settings of the generator.
@@ -90,14 +116,17 @@ pub fn draw_effect<R: Rng + ?Sized>(
     desc: &RobotDescription,
     rng: &mut R,
 ) -> CaseKey {
+    // Magnitudes are log-uniform over ranges spanning each effect's detectable size on this
+    // campaign (from about a third of it to ten times it; README "Blind check").
     let dof = desc.dof();
     let mut e = Effects::default();
+    let mut sag = None;
     let phase = rng.random_range(0.0..std::f64::consts::TAU);
     let (joint, magnitude, unit) = match effect {
         "joint_compliance" => {
             // Joints 2 and 3 carry the gravity load of the arm.
             let joint = rng.random_range(2..=3);
-            let k = 10f64.powf(rng.random_range(4.6..5.3));
+            let k = log_uniform(rng, 6.0e3, 2.0e5);
             let mut stiffness = vec![1e12; dof];
             stiffness[joint - 1] = k;
             e.compliance = Some(ComplianceEffect {
@@ -108,14 +137,14 @@ pub fn draw_effect<R: Rng + ?Sized>(
         }
         "backlash" => {
             let joint = rng.random_range(1..=dof);
-            let band = rng.random_range(1.0e-3..3.0e-3);
+            let band = log_uniform(rng, 1.0e-4, 3.0e-3);
             let mut b = vec![0.0; dof];
             b[joint - 1] = band;
             e.backlash = Some(BacklashEffect { band_rad: b });
             (Some(joint), band, "rad (band)")
         }
         "thermal_expansion" => {
-            let alpha = rng.random_range(2.0e-5..5.0e-5);
+            let alpha = log_uniform(rng, 4.0e-6, 1.0e-4);
             e.thermal = Some(ThermalEffect {
                 alpha_per_k: alpha,
                 reference_c: 20.0,
@@ -124,7 +153,7 @@ pub fn draw_effect<R: Rng + ?Sized>(
         }
         "gear_harmonic" => {
             let joint = rng.random_range(1..=dof);
-            let a = rng.random_range(0.5e-3..1.5e-3);
+            let a = log_uniform(rng, 3.0e-4, 1.0e-2);
             e.gear_harmonics.push(GearHarmonic {
                 joint,
                 order: crate::diagnosis::unmodelled_harmonic_order(desc, joint),
@@ -133,23 +162,35 @@ pub fn draw_effect<R: Rng + ?Sized>(
             });
             (Some(joint), a, "rad")
         }
-        "axis_wobble" | "unknown" => {
+        "axis_wobble" => {
             let joint = rng.random_range(1..=dof);
-            let (order, a) = if effect == "unknown" {
-                (3, rng.random_range(1.0e-3..2.0e-3))
-            } else {
-                (crate::diagnosis::WOBBLE_ORDER, rng.random_range(0.5e-3..1.5e-3))
-            };
+            let a = log_uniform(rng, 4.0e-4, 1.0e-2);
             e.wobble.push(AxisWobble {
                 joint,
                 amplitude_rad: a,
                 phase_rad: phase,
-                order,
+                order: crate::diagnosis::WOBBLE_ORDER,
             });
             (Some(joint), a, "rad")
         }
+        "unknown" if (case / CASE_EFFECTS.len()) % 2 == 1 => {
+            let c = log_uniform(rng, 2.0e-4, 2.0e-3);
+            sag = Some(InstrumentSag { curvature_per_m: c });
+            (None, c, "1/m (instrument sag)")
+        }
+        "unknown" => {
+            let joint = rng.random_range(1..=dof);
+            let a = log_uniform(rng, 1.0e-3, 3.0e-3);
+            e.wobble.push(AxisWobble {
+                joint,
+                amplitude_rad: a,
+                phase_rad: phase,
+                order: 3,
+            });
+            (Some(joint), a, "rad (order-3 wobble)")
+        }
         "instrument_scale" => {
-            let ppm = rng.random_range(200.0..1000.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            let ppm = log_uniform(rng, 200.0, 6000.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
             e.instrument_scale = Some(InstrumentScale { ppm });
             (None, ppm, "ppm")
         }
@@ -168,6 +209,7 @@ pub fn draw_effect<R: Rng + ?Sized>(
         magnitude_unit: unit.into(),
         seed,
         effects: e,
+        sag,
     }
 }
 
@@ -226,5 +268,40 @@ pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOpti
             });
         }
     }
+    if let Some(sag) = &key.sag {
+        for m in &mut out.rows {
+            sag.apply_mm(&mut m.position_mm);
+        }
+    }
     MeasurementSet::new(desc.dof(), out.rows).map_err(|e| e.to_string())
+}
+
+/// How large a case's effect is against what the diagnoser can see: its trace after the
+/// baseline refit (held-out RMS of the baseline on the case simulated WITHOUT noise) over the
+/// smallest gap the diagnoser's gap test flags (`detectable_gap_mm`, from its diagnosis of
+/// the noisy case), and the magnitude at which that ratio is 1 (the trace is linear in the
+/// effect: in its magnitude, or in the compliance `1 / stiffness`). `None` without an effect.
+pub fn detectable_size(
+    key: &CaseKey,
+    desc: &RobotDescription,
+    options: &BlindOptions,
+    diagnosis: &crate::diagnosis::DiagnosisOptions,
+    detectable_gap_mm: f64,
+) -> Result<Option<(f64, f64)>, String> {
+    if key.effect == "none" {
+        return Ok(None);
+    }
+    let clean = BlindOptions {
+        noise_rms_3d_mm: 0.0,
+        ..options.clone()
+    };
+    let set = simulate_case(key, desc, &clean)?;
+    let trace_mm = crate::diagnosis::baseline_heldout_rms_mm(&set, desc, diagnosis).map_err(|e| e.to_string())?;
+    let ratio = trace_mm / detectable_gap_mm;
+    let magnitude = if key.effect == "joint_compliance" {
+        key.magnitude * ratio
+    } else {
+        key.magnitude / ratio
+    };
+    Ok(Some((ratio, magnitude)))
 }

@@ -3,7 +3,7 @@
 //! diagnoser reads the CSV back alone; `DIR/summary.{json,md}` hold the score.
 
 use anyhow::{Context, Result, bail};
-use axiscal::blind::{BlindOptions, draw_case, score, simulate_case};
+use axiscal::blind::{BlindOptions, CaseResult, case_table, detectable_size, draw_case, score, simulate_case};
 use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::measurement::{read_measurements, write_measurements};
 use axiscal::robot::RobotDescription;
@@ -66,12 +66,24 @@ pub fn run(args: Args) -> Result<()> {
             let d =
                 diagnose(&blind, &desc, &diagnosis_options).with_context(|| format!("diagnosing {}", csv.display()))?;
             std::fs::write(dir.join("diagnosis.json"), serde_json::to_string_pretty(&d)?)?;
-            Ok((key, d))
+            // Generator side (knows the truth): the effect's trace against the detectable gap.
+            let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)
+                .map_err(anyhow::Error::msg)?;
+            Ok(CaseResult {
+                key,
+                diagnosis: d,
+                size_ratio: size.map(|s| s.0),
+                detectable_magnitude: size.map(|s| s.1),
+            })
         })
         .collect::<Result<_>>()?;
     let s = score(&results);
     std::fs::write(args.out.join("summary.json"), serde_json::to_string_pretty(&s)?)?;
-    std::fs::write(args.out.join("summary.md"), s.markdown())?;
+    std::fs::write(
+        args.out.join("summary.md"),
+        format!("{}\n{}", s.markdown(), case_table(&results)),
+    )?;
+    std::fs::write(args.out.join("cases.json"), serde_json::to_string_pretty(&results)?)?;
     print!("{}", s.markdown());
     Ok(())
 }
