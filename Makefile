@@ -5,13 +5,14 @@ VENV  ?= .venv
 # The rerun viewer must match the `rerun` crate pinned in Cargo.toml.
 RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' Cargo.toml)
 
-.PHONY: run test bench study blind lint doc clean-results setup-viewer view
+.PHONY: run test bench study blind budget lint doc clean-results setup-viewer view
 
 ## run: the paper scenario end to end; results under results/ (with a rerun recording:
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
 run:
 	$(CARGO) run --profile quick-release --features viz -- simulate --seed 1 --out $(OUT)/campaign.csv --record $(OUT)/campaign.rrd --force
-	$(CARGO) run --profile quick-release --features viz -- evaluate --seed 1 --out $(OUT)
+	$(CARGO) run --profile quick-release --features viz -- evaluate --seed 1 --floor-seeds 30 --force --out $(OUT)
+	$(CARGO) run --profile quick-release --features viz -- budget --seeds 30 --force --out results/budget
 	$(CARGO) run --profile quick-release --features viz -- run scenarios/paper.toml --force --out $(OUT)/montecarlo
 
 ## setup-viewer: the matching rerun viewer (`rerun` binary) in a local virtual environment
@@ -45,6 +46,11 @@ lint:
 
 doc:
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
+
+## budget: the paper's gap budget (per unmodelled effect, the magnitude that raises the
+## simulated calibrated error to the paper's 1.40 mm), 30 campaigns per magnitude
+budget:
+	$(CARGO) run --release -- budget --seeds 30 --force --out results/budget
 
 ## blind: blind check of `axiscal diagnose` on 112 simulated cases (hidden keys), confusion
 ## matrix under results/blind/summary.md

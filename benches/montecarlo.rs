@@ -2,11 +2,11 @@
 //! validation poses) next to its in-run baseline (the campaign's measurement rows' nominal
 //! forward kinematics alone), and a batch of trials on a rayon pool of 1 and of 2 threads
 //! (`elements/s` = trials per second; per core = divide by the thread count; the 2-thread
-//! over 1-thread ratio is the speed-up). The rapier mode is not wired into `axiscal run`
-//! yet, so it has no number here.
+//! over 1-thread ratio is the speed-up). The same trial with `sim = "rapier"` (kinematic mode,
+//! line of sight through the link capsules) against the same baseline.
 
 use axiscal::campaign::commands_to_internal;
-use axiscal::scenario::{CampaignTrial, Overrides, ResolvedScenario, Trial, run_units, trial_seed};
+use axiscal::scenario::{CampaignTrial, Overrides, ResolvedScenario, SimMode, Trial, run_units, trial_seed};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::path::Path;
@@ -53,6 +53,18 @@ fn one_trial(c: &mut Criterion) {
         b.iter(|| {
             i += 1;
             black_box(trial.run(case, trial_seed(s.seed, i)).expect("trial runs"))
+        })
+    });
+    let rapier = ResolvedScenario {
+        sim: SimMode::Rapier,
+        ..s.clone()
+    };
+    let rapier_trial = CampaignTrial::new(&rapier).expect("rapier");
+    group.sample_size(10);
+    group.bench_function("paper_trial_rapier", |b| {
+        b.iter(|| {
+            i += 1;
+            black_box(rapier_trial.run(case, trial_seed(s.seed, i)).expect("trial runs"))
         })
     });
     group.finish();

@@ -154,13 +154,12 @@ pub fn fit_arc(
         FIT,
         start,
         options.max_iterations,
-        |s| Ok((model.whitened_residual(s, points)?, model.whitened_jacobian(s)?)),
+        |s| model.whitened_residual_and_jacobian(s, points),
         |s, d| Ok(s.perturbed(d.as_slice())),
     )?;
     let params = outcome.state;
-    let jw = model.whitened_jacobian(&params)?;
+    let (r, jw) = (outcome.residual, outcome.jacobian);
     let covariance = lsq::inverse_normal(&jw, FIT)?;
-    let r = model.whitened_residual(&params, points)?;
     let pred = model.predict(&params)?;
     let residual_rms = (pred
         .iter()
@@ -257,17 +256,15 @@ fn identifiability(
     spans.sort_by(f64::total_cmp);
     spans.dedup();
     for s in spans {
-        {
-            if let Ok(b) = crb::uniform_arc_crb(
-                params,
-                model.form,
-                model.commands_rad[0],
-                s,
-                model.commands_rad.len(),
-                sigma,
-            ) {
-                tilt_sigma_by_span.push((s, b.direction_sigma_rad()));
-            }
+        if let Ok(b) = crb::uniform_arc_direction_sigma(
+            params,
+            model.form,
+            model.commands_rad[0],
+            s,
+            model.commands_rad.len(),
+            sigma,
+        ) {
+            tilt_sigma_by_span.push((s, b));
         }
     }
     let mut notes = vec![

@@ -11,7 +11,7 @@
 use nalgebra::{DMatrix, Matrix3, Point3, Rotation3, Unit, Vector3};
 
 use super::CalibrationError;
-use super::transmission_fit::TransmissionForm;
+use super::transmission_fit::{TransmissionForm, TransmissionValue};
 
 const FIT: &str = "arc model";
 
@@ -133,6 +133,9 @@ pub struct ArcModel {
     /// Absolute commands `theta_c^j` \[rad\].
     pub commands_rad: Vec<f64>,
     pub(crate) whiteners: Vec<Matrix3<f64>>,
+    /// `1 / sigma` when every whitener is that multiple of the identity (the common case):
+    /// whitening is then one scaling, with the same result as the 3x3 products.
+    isotropic_whitener: Option<f64>,
 }
 
 impl ArcModel {
@@ -142,10 +145,16 @@ impl ArcModel {
         commands_rad: &[f64],
         noise: &MeasurementNoise,
     ) -> Result<Self, CalibrationError> {
+        let whiteners = noise.whiteners(commands_rad.len())?;
+        let isotropic_whitener = match noise {
+            MeasurementNoise::Isotropic { .. } => whiteners.first().map(|w| w[(0, 0)]),
+            MeasurementNoise::PerPoint(_) => None,
+        };
         Ok(Self {
             form,
             commands_rad: commands_rad.to_vec(),
-            whiteners: noise.whiteners(commands_rad.len())?,
+            whiteners,
+            isotropic_whitener,
         })
     }
 
@@ -165,33 +174,60 @@ impl ArcModel {
         .collect()
     }
 
-    /// `(D_j, dD_j/dc_k)`: the actual motion since step 0 and its coefficient derivatives
-    /// (`d theta_a / d c_k = -b_k(theta_a) / f'(theta_a)`).
-    fn motion(&self, coefficients: &[f64]) -> Result<(Vec<f64>, Vec<Vec<f64>>), CalibrationError> {
-        let f = self.form.build(coefficients);
-        let mut theta = Vec::with_capacity(self.commands_rad.len());
-        let mut grad = Vec::with_capacity(self.commands_rad.len());
-        for &c in &self.commands_rad {
-            let a = f.actual_from_command(c).ok_or(CalibrationError::NotInvertible {
-                fit: FIT,
-                command_rad: c,
-            })?;
-            let slope = f.slope(a);
-            theta.push(a);
-            grad.push(self.form.basis(a).iter().map(|b| -b / slope).collect::<Vec<_>>());
+    /// The actual motion since step 0, `D_j` into `d` (length n), and its coefficient
+    /// derivatives `dD_j/dc_k` into `dg` (row-major, n x coefficients), using
+    /// `d theta_a / d c_k = -b_k(theta_a) / f'(theta_a)`. Flat buffers and one `sin_cos` per
+    /// harmonic per Newton step: this runs for every point at every iteration of the fit.
+    fn motion_into(&self, coefficients: &[f64], d: &mut Vec<f64>, dg: &mut Vec<f64>) -> Result<(), CalibrationError> {
+        let m = self.form.n_coefficients();
+        let n = self.commands_rad.len();
+        d.clear();
+        dg.clear();
+        d.reserve(n);
+        dg.resize(n * m, 0.0);
+        // Step j's inversion starts from step j-1's solution moved along the second-order
+        // Taylor series of f^-1 (error ~ f''' step^3), so Halley's iteration ends after one
+        // correction; its last evaluation supplies the basis and slope.
+        let mut previous: Option<(f64, f64, TransmissionValue)> = None;
+        for (j, &c) in self.commands_rad.iter().enumerate() {
+            let guess = previous.map_or(c, |(cp, ap, e)| {
+                let step = c - cp;
+                ap + step / e.slope - 0.5 * e.curvature * step * step / e.slope.powi(3)
+            });
+            let row = &mut dg[j * m..(j + 1) * m];
+            let (a, e) = self
+                .form
+                .invert(coefficients, c, guess, row)
+                .ok_or(CalibrationError::NotInvertible {
+                    fit: FIT,
+                    command_rad: c,
+                })?;
+            for b in row.iter_mut() {
+                *b = -*b / e.slope;
+            }
+            d.push(a);
+            previous = Some((c, a, e));
         }
-        let (a0, g0) = (theta[0], grad[0].clone());
-        let d = theta.iter().map(|a| a - a0).collect();
-        let dg = grad
-            .iter()
-            .map(|g| g.iter().zip(&g0).map(|(x, y)| x - y).collect())
-            .collect();
-        Ok((d, dg))
+        if n > 0 {
+            let a0 = d[0];
+            for x in d.iter_mut() {
+                *x -= a0;
+            }
+            let (first, rest) = dg.split_at_mut(m);
+            for row in rest.chunks_exact_mut(m.max(1)) {
+                for (x, y) in row.iter_mut().zip(first.iter()) {
+                    *x -= y;
+                }
+            }
+            first.iter_mut().for_each(|x| *x = 0.0);
+        }
+        Ok(())
     }
 
     /// The predicted points.
     pub fn predict(&self, p: &ArcParams) -> Result<Vec<Point3<f64>>, CalibrationError> {
-        let (d, _) = self.motion(&p.coefficients)?;
+        let (mut d, mut dg) = (Vec::new(), Vec::new());
+        self.motion_into(&p.coefficients, &mut d, &mut dg)?;
         let (u, v) = (p.u().into_inner(), p.v().into_inner());
         Ok(d.iter()
             .map(|dj| {
@@ -201,32 +237,46 @@ impl ArcModel {
             .collect())
     }
 
-    /// `d p_j / d delta` stacked (3n x n_params), unweighted, analytic.
-    pub fn jacobian(&self, p: &ArcParams) -> Result<DMatrix<f64>, CalibrationError> {
-        let (d, dg) = self.motion(&p.coefficients)?;
+    /// Fills the predicted point `j` (when `points` is given) and its 3 Jacobian rows
+    /// (unweighted) from the motion buffers.
+    fn fill(
+        &self,
+        p: &ArcParams,
+        d: &[f64],
+        dg: &[f64],
+        mut points: Option<&mut [Point3<f64>]>,
+        jac: &mut DMatrix<f64>,
+    ) {
+        let m = self.form.n_coefficients();
         let (u, v, n) = (p.u().into_inner(), p.v().into_inner(), p.normal().into_inner());
-        let m = self.n_params();
-        let mut j = DMatrix::zeros(3 * d.len(), m);
         for (row, dj) in d.iter().enumerate() {
             let (s, c) = (p.phase_rad + dj).sin_cos();
             let radial = c * u + s * v;
             let tangent = p.radius * (-s * u + c * v);
-            let cols: Vec<Vector3<f64>> = [
-                Vector3::x(),
-                Vector3::y(),
-                Vector3::z(),
-                p.radius * s * n,
-                -p.radius * c * n,
-                radial,
-                tangent,
-            ]
-            .into_iter()
-            .chain(dg[row].iter().map(|g| tangent * *g))
-            .collect();
-            for (k, col) in cols.iter().enumerate() {
-                j.fixed_view_mut::<3, 1>(3 * row, k).copy_from(col);
+            if let Some(pts) = points.as_deref_mut() {
+                pts[row] = p.centre + p.radius * radial;
+            }
+            let r0 = 3 * row;
+            for k in 0..3 {
+                jac[(r0 + k, k)] = 1.0;
+            }
+            jac.fixed_view_mut::<3, 1>(r0, 3).copy_from(&(p.radius * s * n));
+            jac.fixed_view_mut::<3, 1>(r0, 4).copy_from(&(-p.radius * c * n));
+            jac.fixed_view_mut::<3, 1>(r0, 5).copy_from(&radial);
+            jac.fixed_view_mut::<3, 1>(r0, 6).copy_from(&tangent);
+            for (k, g) in dg[row * m..(row + 1) * m].iter().enumerate() {
+                jac.fixed_view_mut::<3, 1>(r0, N_GEOMETRY + k)
+                    .copy_from(&(tangent * *g));
             }
         }
+    }
+
+    /// `d p_j / d delta` stacked (3n x n_params), unweighted, analytic.
+    pub fn jacobian(&self, p: &ArcParams) -> Result<DMatrix<f64>, CalibrationError> {
+        let (mut d, mut dg) = (Vec::new(), Vec::new());
+        self.motion_into(&p.coefficients, &mut d, &mut dg)?;
+        let mut j = DMatrix::zeros(3 * d.len(), self.n_params());
+        self.fill(p, &d, &dg, None, &mut j);
         Ok(j)
     }
 
@@ -244,14 +294,45 @@ impl ArcModel {
         Ok(r)
     }
 
+    fn whiten_rows(&self, j: &mut DMatrix<f64>) {
+        if let Some(w) = self.isotropic_whitener {
+            *j *= w;
+            return;
+        }
+        for (k, w) in self.whiteners.iter().enumerate() {
+            for c in 0..j.ncols() {
+                let col: Vector3<f64> = j.fixed_view::<3, 1>(3 * k, c).into_owned();
+                j.fixed_view_mut::<3, 1>(3 * k, c).copy_from(&(w * col));
+            }
+        }
+    }
+
     /// The whitened Jacobian `L^-1 dp/d delta`.
     pub fn whitened_jacobian(&self, p: &ArcParams) -> Result<DMatrix<f64>, CalibrationError> {
         let mut j = self.jacobian(p)?;
-        for (k, w) in self.whiteners.iter().enumerate() {
-            let block = w * j.rows(3 * k, 3);
-            j.rows_mut(3 * k, 3).copy_from(&block);
-        }
+        self.whiten_rows(&mut j);
         Ok(j)
+    }
+
+    /// The whitened residual and Jacobian together (one transmission inversion per point):
+    /// what one Levenberg-Marquardt evaluation needs.
+    pub fn whitened_residual_and_jacobian(
+        &self,
+        p: &ArcParams,
+        observed: &[Point3<f64>],
+    ) -> Result<(nalgebra::DVector<f64>, DMatrix<f64>), CalibrationError> {
+        let (mut d, mut dg) = (Vec::new(), Vec::new());
+        self.motion_into(&p.coefficients, &mut d, &mut dg)?;
+        let n = d.len();
+        let mut pred = vec![Point3::origin(); n];
+        let mut j = DMatrix::zeros(3 * n, self.n_params());
+        self.fill(p, &d, &dg, Some(&mut pred), &mut j);
+        self.whiten_rows(&mut j);
+        let mut r = nalgebra::DVector::zeros(3 * n);
+        for (k, (q, o)) in pred.iter().zip(observed).enumerate() {
+            r.fixed_rows_mut::<3>(3 * k).copy_from(&(self.whiteners[k] * (q - o)));
+        }
+        Ok((r, j))
     }
 
     /// Fisher information `J^T W J` for Gaussian noise.

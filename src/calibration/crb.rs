@@ -7,7 +7,7 @@
 //! [`super::arc_model::axis_quantities`]: axis direction (2), axis position (2) and each
 //! transmission coefficient. Efficiency = CRB variance / empirical mean squared error.
 
-use nalgebra::{DMatrix, Matrix2, Point3, Unit, Vector3};
+use nalgebra::{DMatrix, Matrix2, Matrix3, Point3, Unit, Vector3};
 
 use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, axis_quantities_gradient};
 use super::transmission_fit::TransmissionForm;
@@ -74,6 +74,72 @@ pub fn uniform_arc_crb(
         .collect();
     let model = ArcModel::new(form, &commands, &MeasurementNoise::Isotropic { sigma_per_axis })?;
     arc_crb(&model, params, &params.centre)
+}
+
+/// Largest 1-sigma of the axis direction \[rad\] in the bound of [`uniform_arc_crb`] (same
+/// arguments, same value), from a 3x3 problem instead of the full one.
+///
+/// With isotropic noise the Fisher information splits into two blocks. Express the centre in
+/// the frame `(u, v, n)`: the component of point `j` along `n` depends only on
+/// `(c_n, tilt_u, tilt_v)`, with Jacobian row `[1, r sin phi_j, -r cos phi_j]`
+/// (`phi_j = phase + D_j`), while its in-plane components depend on none of them
+/// ([`ArcModel::jacobian`]). So the tilt block of `F^-1` is the tilt block of the inverse of
+/// `F_n = sigma^-2 sum_j [1, r s_j, -r c_j]^T [1, r s_j, -r c_j]`, and the direction bound
+/// (`dir_u = tilt_v`, `dir_v = -tilt_u`) has the same eigenvalues. Cheap enough to run for
+/// every fit's span study.
+pub fn uniform_arc_direction_sigma(
+    params: &ArcParams,
+    form: TransmissionForm,
+    start_command_rad: f64,
+    span_rad: f64,
+    n: usize,
+    sigma_per_axis: f64,
+) -> Result<f64, CalibrationError> {
+    let needed = (super::arc_model::N_GEOMETRY + form.n_coefficients()) / 3 + 1;
+    if n < needed.max(2) {
+        return Err(CalibrationError::TooFewPoints {
+            fit: FIT,
+            got: n,
+            needed: needed.max(2),
+        });
+    }
+    if !(sigma_per_axis > 0.0 && sigma_per_axis.is_finite()) {
+        return Err(CalibrationError::InvalidInput {
+            fit: FIT,
+            what: "sigma must be positive",
+        });
+    }
+    let not_invertible = |command_rad| CalibrationError::NotInvertible { fit: FIT, command_rad };
+    let c = &params.coefficients;
+    let a0 = form
+        .actual_from_command(c, start_command_rad)
+        .ok_or(not_invertible(start_command_rad))?;
+    let mut fisher = Matrix3::zeros();
+    let mut basis = vec![0.0; form.n_coefficients()];
+    let (mut previous_command, mut a) = (start_command_rad, a0);
+    let mut e = form.evaluate(c, a0, &mut basis);
+    for j in 0..n {
+        let command = start_command_rad + span_rad * j as f64 / (n - 1) as f64;
+        // Second-order Taylor start from the previous point, as the arc model does.
+        let step = command - previous_command;
+        let guess = a + step / e.slope - 0.5 * e.curvature * step * step / e.slope.powi(3);
+        (a, e) = form
+            .invert(c, command, guess, &mut basis)
+            .ok_or(not_invertible(command))?;
+        previous_command = command;
+        let (s, co) = (params.phase_rad + a - a0).sin_cos();
+        let row = Vector3::new(1.0, params.radius * s, -params.radius * co);
+        fisher += row * row.transpose();
+    }
+    let cov = (fisher / (sigma_per_axis * sigma_per_axis))
+        .cholesky()
+        .ok_or(CalibrationError::IllConditioned {
+            fit: FIT,
+            condition_number: f64::INFINITY,
+        })?
+        .inverse();
+    let tilt: Matrix2<f64> = cov.fixed_view::<2, 2>(1, 1).into();
+    Ok(tilt.symmetric_eigenvalues().max().sqrt())
 }
 
 /// Errors of an estimated axis and coefficients against the truth, in the quantities of the

@@ -61,20 +61,133 @@ impl TransmissionForm {
         }
     }
 
-    /// `d f / d c_k` at `theta_a`: the basis functions of the (linear-in-coefficients) form.
-    pub fn basis(&self, theta_a: f64) -> Vec<f64> {
-        let (k, scale, x) = match *self {
+    /// `(order, scale, x)`: the harmonics are in `x = theta_a / scale`, `scale` = 1 or the
+    /// gear ratio.
+    fn harmonic_argument(&self, theta_a: f64) -> (usize, f64, f64) {
+        match *self {
             TransmissionForm::Harmonic { order } => (order, 1.0, theta_a),
             TransmissionForm::Gear { ratio, order } => (order, ratio, theta_a / ratio),
-        };
-        let mut b = vec![0.0; 2 * k];
-        for i in 0..k {
-            let (s, c) = ((i + 1) as f64 * x).sin_cos();
-            b[i] = scale * s;
-            b[k + i] = scale * c;
         }
+    }
+
+    /// `d f / d c_k` at `theta_a`: the basis functions of the (linear-in-coefficients) form.
+    pub fn basis(&self, theta_a: f64) -> Vec<f64> {
+        let mut b = vec![0.0; self.n_coefficients()];
+        self.evaluate(&[], theta_a, &mut b);
         b
     }
+
+    /// Writes the basis at `theta_a` into `basis` (length [`Self::n_coefficients`]) and returns
+    /// the slope `f'(theta_a)` of the transmission with `coefficients` (an empty slice: the
+    /// identity), sharing one `sin_cos` per harmonic between them.
+    pub fn basis_and_slope(&self, coefficients: &[f64], theta_a: f64, basis: &mut [f64]) -> f64 {
+        self.evaluate(coefficients, theta_a, basis).slope
+    }
+
+    /// `(f(theta_a), f'(theta_a))` of the transmission with `coefficients`: the values of
+    /// [`Transmission::command_from_actual`] and [`Transmission::slope`] of
+    /// [`Self::build`]`(coefficients)` without building it.
+    pub fn value_and_slope(&self, coefficients: &[f64], theta_a: f64) -> (f64, f64) {
+        let mut basis = [0.0; 8];
+        let e = if self.n_coefficients() <= basis.len() {
+            self.evaluate(coefficients, theta_a, &mut basis[..self.n_coefficients()])
+        } else {
+            self.evaluate(coefficients, theta_a, &mut vec![0.0; self.n_coefficients()])
+        };
+        (e.value, e.slope)
+    }
+
+    /// `f`, `f'`, `f''` at `theta_a` with `coefficients` (missing ones are 0), and the basis
+    /// into `basis`: one `sin_cos` per harmonic for all of them.
+    pub(crate) fn evaluate(&self, coefficients: &[f64], theta_a: f64, basis: &mut [f64]) -> TransmissionValue {
+        let (k, scale, x) = self.harmonic_argument(theta_a);
+        let (mut v, mut vc, mut dv, mut dvc, mut ddv) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for i in 0..k {
+            let kf = (i + 1) as f64;
+            let (s, c) = (kf * x).sin_cos();
+            basis[i] = scale * s;
+            basis[k + i] = scale * c;
+            let (a, b) = (
+                coefficients.get(i).copied().unwrap_or(0.0),
+                coefficients.get(k + i).copied().unwrap_or(0.0),
+            );
+            // Sine terms summed before cosine terms, as `Transmission` does.
+            v += a * s;
+            dv += a * kf * c;
+            vc += b * c;
+            dvc -= b * kf * s;
+            ddv -= kf * kf * (a * s + b * c);
+        }
+        TransmissionValue {
+            value: theta_a + scale * (v + vc),
+            slope: 1.0 + (dv + dvc),
+            curvature: ddv / scale,
+        }
+    }
+
+    /// `theta_a = f^-1(theta_c)` of the transmission with `coefficients`, started from
+    /// `theta_c`; see [`Self::actual_from_command_near`]. `None` where `f` is not increasing.
+    pub fn actual_from_command(&self, coefficients: &[f64], theta_c: f64) -> Option<f64> {
+        self.actual_from_command_near(coefficients, theta_c, theta_c)
+    }
+
+    /// `theta_a = f^-1(theta_c)` started from `guess` (e.g. the solution at the previous
+    /// command of a sweep): the root of [`Transmission::actual_from_command`] to rounding.
+    pub fn actual_from_command_near(&self, coefficients: &[f64], theta_c: f64, guess: f64) -> Option<f64> {
+        let mut basis = vec![0.0; self.n_coefficients()];
+        self.invert(coefficients, theta_c, guess, &mut basis).map(|(t, _)| t)
+    }
+
+    /// Halley's iteration for `f(t) = theta_c` from `guess` (cubic convergence; `f''` comes
+    /// with the same `sin_cos` as `f` and `f'`), with the stopping rules of
+    /// [`Transmission::actual_from_command`] (`|f - theta_c| < 1e-15` or a step below
+    /// `1e-15 (1 + |t|)`). Returns the root and `f`, `f'`, `f''` with the basis (into
+    /// `basis`) at the last point evaluated, which is the root or within that last step of
+    /// it: equal to rounding. The arc model inverts every point at every iteration.
+    pub(crate) fn invert(
+        &self,
+        coefficients: &[f64],
+        theta_c: f64,
+        guess: f64,
+        basis: &mut [f64],
+    ) -> Option<(f64, TransmissionValue)> {
+        let mut t = guess;
+        for _ in 0..50 {
+            let e = self.evaluate(coefficients, t, basis);
+            let r = e.value - theta_c;
+            if r.abs() < 1e-15 {
+                return Some((t, e));
+            }
+            if e.slope <= 0.0 || !e.slope.is_finite() {
+                return None;
+            }
+            let newton = r / e.slope;
+            let denominator = 1.0 - 0.5 * newton * e.curvature / e.slope;
+            // Halley's correction only while it is a small one (far from the root, Newton).
+            let step = if (0.5..2.0).contains(&denominator) {
+                newton / denominator
+            } else {
+                newton
+            };
+            t -= step;
+            if step.abs() < 1e-15 * (1.0 + t.abs()) {
+                return Some((t, e));
+            }
+        }
+        let e = self.evaluate(coefficients, t, basis);
+        ((e.value - theta_c).abs() < 1e-12).then_some((t, e))
+    }
+}
+
+/// A transmission's value and first two derivatives at one actual angle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct TransmissionValue {
+    /// `f(theta_a)` \[rad\].
+    pub value: f64,
+    /// `f'(theta_a)`.
+    pub slope: f64,
+    /// `f''(theta_a)` \[1/rad\].
+    pub curvature: f64,
 }
 
 /// The result of eq. (8).
@@ -127,19 +240,23 @@ pub fn fit_transmission(
     let mut start = c0;
     let mut coefficients = vec![0.0; m];
     let mut result = None;
+    let y = DVector::from_fn(n - 1, |r, _| {
+        commands_rad[r + 1] - c0 - (actual_increments_rad[r + 1] - d0)
+    });
+    let (mut b0, mut b) = (vec![0.0; m], vec![0.0; m]);
+    let mut a = DMatrix::zeros(n - 1, m);
     for _ in 0..40 {
-        let b0 = form.basis(start);
-        let a = DMatrix::from_fn(n - 1, m, |r, c| {
-            form.basis(start + actual_increments_rad[r + 1] - d0)[c] - b0[c]
-        });
-        let y = DVector::from_fn(n - 1, |r, _| {
-            commands_rad[r + 1] - c0 - (actual_increments_rad[r + 1] - d0)
-        });
+        form.basis_and_slope(&[], start, &mut b0);
+        for r in 0..n - 1 {
+            form.basis_and_slope(&[], start + actual_increments_rad[r + 1] - d0, &mut b);
+            for c in 0..m {
+                a[(r, c)] = b[c] - b0[c];
+            }
+        }
         let (x, inv, res) = lsq::linear_lsq(&a, &y, FIT)?;
         coefficients = x.iter().copied().collect();
         let next = form
-            .build(&coefficients)
-            .actual_from_command(c0)
+            .actual_from_command(&coefficients, c0)
             .ok_or(CalibrationError::NotInvertible {
                 fit: FIT,
                 command_rad: c0,
@@ -189,6 +306,30 @@ mod tests {
                 assert_relative_eq!(a, b, epsilon = 1e-10);
             }
             assert_relative_eq!(fit.actual_start_rad, actual[0], epsilon = 1e-12);
+        }
+    }
+
+    #[test]
+    fn form_evaluation_matches_the_built_transmission() {
+        for (form, coeffs) in [
+            (TransmissionForm::Harmonic { order: 1 }, vec![0.0035, -0.0009]),
+            (
+                TransmissionForm::Gear { ratio: 1.7, order: 2 },
+                vec![0.01, -0.02, 0.003, 0.004],
+            ),
+        ] {
+            let f = form.build(&coeffs);
+            for k in 0..20 {
+                let t = -2.0 + 0.2 * k as f64;
+                let (value, slope) = form.value_and_slope(&coeffs, t);
+                assert_relative_eq!(value, f.command_from_actual(t), epsilon = 1e-15);
+                assert_relative_eq!(slope, f.slope(t), epsilon = 1e-15);
+                let mut basis = vec![0.0; coeffs.len()];
+                assert_relative_eq!(form.basis_and_slope(&coeffs, t, &mut basis), slope, epsilon = 1e-15);
+                assert_eq!(basis, form.basis(t));
+                let a = form.actual_from_command(&coeffs, t).unwrap();
+                assert_relative_eq!(a, f.actual_from_command(t).unwrap(), epsilon = 1e-15);
+            }
         }
     }
 

@@ -2,7 +2,7 @@
 //! controller into the truth's transmissions and couplings, then the actual phi-model, with
 //! the unmodelled [`Effects`] that need no rigid bodies (compliance to first order).
 
-use super::effects::{Effects, JointDriver, LinkMass, first_order_deflection};
+use super::effects::{Effects, JointDriver, LinkMass, PassiveSlope, coupled_first_order_deflection};
 use super::simulate::{ArmExecutor, ExecuteError, PoseConditions};
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, RobotDescription, TruthRobot};
@@ -12,8 +12,8 @@ use rand::Rng;
 /// The analytic "real robot": exact kinematics, repeatability jitter, no bodies (so every
 /// target is visible). Effects (see [`AnalyticArm::with_effects`]): backlash, thermal
 /// expansion, gear harmonics and wobble exactly as [`RapierArm`](crate::sim::RapierArm);
-/// compliance and payload by the first-order deflection `dq = K^-1 Q(q)`
-/// ([`first_order_deflection`]) instead of the rigid-body static equilibrium.
+/// compliance and payload by the first-order deflection through the passive couplings
+/// ([`coupled_first_order_deflection`]) instead of the rigid-body static equilibrium.
 #[derive(Clone, Debug)]
 pub struct AnalyticArm {
     truth: TruthRobot,
@@ -67,14 +67,11 @@ impl ArmExecutor for AnalyticArm {
         conditions: &PoseConditions,
         rng: &mut R,
     ) -> Result<Vec<Isometry3<f64>>, ExecuteError> {
-        let mut q = self
-            .driver
-            .drive(cmd, rng)
-            .map_err(|e| ExecuteError {
-                cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
-                reason: e.to_string(),
-            })?
-            .q;
+        let driven = self.driver.drive(cmd, rng).map_err(|e| ExecuteError {
+            cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
+            reason: e.to_string(),
+        })?;
+        let mut q = driven.q;
         let model = self.effects.thermal_model(&self.model, conditions.temperature_c);
         if let Some(compliance) = &self.effects.compliance
             && self.masses.len() == q.len()
@@ -82,7 +79,8 @@ impl ArmExecutor for AnalyticArm {
             let payload = self
                 .effects
                 .payload_in_last_link(&model.last_link_from_tool, conditions);
-            let dq = first_order_deflection(&model, &q, &self.masses, payload, compliance);
+            let couplings = PassiveSlope::of_truth(&self.truth, &driven.active);
+            let dq = coupled_first_order_deflection(&model, &q, &self.masses, payload, compliance, &couplings);
             for (qk, d) in q.iter_mut().zip(dq) {
                 *qk += d;
             }

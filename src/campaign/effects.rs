@@ -4,7 +4,7 @@
 //!
 //! | table | effect | applied to |
 //! |---|---|---|
-//! | `compliance` | joint stiffness `K_k` \[N m/rad\] under gravity: `K dq = Q_gravity(q)` | joint values (rapier: static equilibrium; analytic: first order) |
+//! | `compliance` | actuator stiffness `K_k` \[N m/rad\] under gravity: `K da = Q_gravity(q)`, the sag `da` driving the passive couplings | joint values (rapier: static equilibrium, four-bar as bodies; analytic: first order, [`coupled_first_order_deflection`]) |
 //! | `payload` | the pose's `payload_kg` (from [`PoseConditions`]) at a point of the tool frame | the gravity load of `compliance` (no effect without it) |
 //! | `backlash` | dead band `b_k` \[rad\]: the joint lags `b_k / 2` behind its approach direction | active displacements |
 //! | `thermal` | link growth: rows' `a`, `b` scaled by `1 + alpha (T - T_ref)` | the phi-model |
@@ -139,6 +139,13 @@ pub struct InstrumentScale {
     /// Measured coordinates are `(1 + ppm 1e-6)` times the true ones, about the instrument
     /// origin \[ppm\].
     pub ppm: f64,
+}
+
+impl InstrumentScale {
+    /// What the scaled instrument reports for a (noisy) measurement `p` (instrument frame).
+    pub fn applied_to(&self, p: &Point3<f64>) -> Point3<f64> {
+        Point3::from(p.coords * (1.0 + self.ppm * 1e-6))
+    }
 }
 
 /// The unmodelled effects (module docs); every table is optional and off when absent.
@@ -390,12 +397,94 @@ pub fn first_order_deflection(
         .collect()
 }
 
+/// An actuator command that changed by no more than this \[rad or m\] has not moved: the
+/// hold-still commands of a coupled joint reproduce its actuator command only to rounding (a
+/// few 1e-16 rad through the fig. 3 decoupling), and no encoder resolves 1e-12.
+pub const UNMOVED_ACTUATOR_RAD: f64 = 1e-12;
+
+/// How each joint is driven by the one below, for [`coupled_first_order_deflection`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassiveSlope {
+    /// `g'_{k-1,k}`: the slope of the passive coupling into this joint at the active
+    /// displacement of the joint below (0: not coupled) \[-\].
+    pub slope: f64,
+    /// The coupling is a mechanism (a four-bar's bodies) that also carries this joint's load
+    /// back to the actuator below; otherwise it is kinematic only (an emulated gear).
+    pub reflects_load: bool,
+}
+
+impl PassiveSlope {
+    /// The truth's couplings at the active displacements `active`: slopes of every
+    /// `coupling_in`, reflecting the load where one of the truth's four-bars drives the joint.
+    pub fn of_truth(truth: &TruthRobot, active: &[f64]) -> Vec<Self> {
+        truth
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(k, j)| match (&j.coupling_in, k.checked_sub(1)) {
+                (Some(g), Some(below)) => PassiveSlope {
+                    slope: g.slope(active[below]),
+                    reflects_load: truth.four_bars.iter().any(|l| l.from == k),
+                },
+                _ => PassiveSlope::default(),
+            })
+            .collect()
+    }
+}
+
+/// First-order static deflection through the passive couplings, as the rapier arm's dynamic
+/// mode produces it (`sim::FourBarBodies`, `sim::CoupledTargets`): each actuator `k` sags by
+/// `da_k = tau_k / K_k` and the sag drives the passive coupling into joint `k + 1` like any
+/// active rotation, `dq_k = da_k + g'_{k-1,k} da_{k-1}` (eq. 15 linearised; `g'` =
+/// `couplings[k].slope`). The actuator's load is the joint's gravity torque `Q_k`
+/// ([`first_order_deflection`] with unit stiffness), plus, where joint `k` drives joint
+/// `k + 1` through a mechanism (`couplings[k + 1].reflects_load`: a four-bar transmits torque
+/// both ways), the reflected `g'_{k,k+1} Q_{k+1}` (virtual work). The other couplings are
+/// kinematic only, as their rapier emulation (see `sim::CoupledTargets` for the size of the
+/// missing gear reaction). Second order in the deflection, like [`first_order_deflection`].
+/// Needs only coupling slopes, so a model built from the nominal description can use it.
+pub fn coupled_first_order_deflection(
+    model: &PhiModel,
+    q: &[f64],
+    masses: &[LinkMass],
+    payload: Option<(f64, Point3<f64>)>,
+    compliance: &ComplianceEffect,
+    couplings: &[PassiveSlope],
+) -> Vec<f64> {
+    let unit = ComplianceEffect {
+        stiffness_nm_per_rad: vec![1.0; q.len()],
+        gravity_m_s2: compliance.gravity_m_s2,
+    };
+    let load = first_order_deflection(model, q, masses, payload, &unit);
+    let coupling = |k: usize| couplings.get(k).copied().unwrap_or_default();
+    let mut dq = vec![0.0; q.len()];
+    let mut da_below = 0.0;
+    for k in 0..q.len() {
+        let mut tau = load[k];
+        if k + 1 < q.len() && coupling(k + 1).reflects_load {
+            tau += coupling(k + 1).slope * load[k + 1];
+        }
+        let da = tau / compliance.stiffness_nm_per_rad[k];
+        dq[k] = da + coupling(k).slope * da_below;
+        da_below = da;
+    }
+    dq
+}
+
 /// Commands to joint values with the joint-side effects: the fig. 3 controller, the truth's
 /// transmissions (with [`Effects::gear_harmonics`]), backlash on the active displacements, the
 /// passive couplings, and the repeatability jitter. Keeps the last command for the approach
 /// direction of the backlash (FORMATS.md section 1: the sign of `cmd(s) - cmd(s-1)`; a joint
 /// whose command did not change keeps its previous direction; before any motion the joint
 /// sits in the middle of its band).
+///
+/// Repeatability is a *re-positioning* error: an actuator draws a new jitter only when its
+/// actuator command (after the fig. 3 decoupling) changes; an actuator the command leaves
+/// where it is holds its position, and its previous error, between executions. In a
+/// hold-still axis experiment only the swept actuator is re-positioned, as on the real robot;
+/// every execution of a new pose re-positions every actuator. One standard normal per joint is
+/// drawn from the rng per execution either way, so the random stream does not depend on which
+/// actuators moved.
 #[derive(Clone, Debug)]
 pub struct JointDriver {
     truth: TruthRobot,
@@ -403,6 +492,8 @@ pub struct JointDriver {
     band_rad: Vec<f64>,
     last_cmd: Option<Vec<f64>>,
     approach: Vec<f64>,
+    /// Actuator commands of the last execution and the standard-normal jitter draws they got.
+    last_actuator: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// What [`JointDriver::drive`] produced.
@@ -424,6 +515,7 @@ impl JointDriver {
             band_rad: effects.backlash.as_ref().map_or(vec![0.0; n], |b| b.band_rad.clone()),
             last_cmd: None,
             approach: vec![0.0; n],
+            last_actuator: None,
         }
     }
 
@@ -433,7 +525,8 @@ impl JointDriver {
     }
 
     /// Executes `cmd` (internal units). Draws one standard normal per joint from `rng`, as
-    /// [`TruthRobot::joint_values_executed`] does.
+    /// [`TruthRobot::joint_values_executed`] does, and uses it for the actuators whose command
+    /// changed (see the type's docs).
     pub fn drive<R: Rng + ?Sized>(&mut self, cmd: &[f64], rng: &mut R) -> Result<DrivenJoints, TruthError> {
         let u = self.controller.decouple(cmd)?;
         let mut active = self.truth.active_displacements(&u)?;
@@ -456,10 +549,18 @@ impl JointDriver {
                     .map_err(|source| TruthError::Coupling { joint: k + 1, source })?;
             }
         }
-        for (qk, j) in q.iter_mut().zip(&self.truth.joints) {
-            let z: f64 = StandardNormal.sample(rng);
+        let mut draws: Vec<f64> = (0..q.len()).map(|_| StandardNormal.sample(rng)).collect();
+        if let Some((last_u, last_draws)) = &self.last_actuator {
+            for ((z, (now, before)), held) in draws.iter_mut().zip(u.iter().zip(last_u)).zip(last_draws) {
+                if (now - before).abs() <= UNMOVED_ACTUATOR_RAD {
+                    *z = *held;
+                }
+            }
+        }
+        for ((qk, j), z) in q.iter_mut().zip(&self.truth.joints).zip(&draws) {
             *qk += j.repeatability_sigma * z;
         }
+        self.last_actuator = Some((u, draws));
         Ok(DrivenJoints { active, q })
     }
 }

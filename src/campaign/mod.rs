@@ -9,7 +9,8 @@ mod validation;
 pub use analytic_arm::AnalyticArm;
 pub use effects::{
     AxisWobble, BacklashEffect, ComplianceEffect, DrivenJoints, Effects, EffectsError, GearHarmonic, InstrumentScale,
-    JointDriver, LinkMass, PayloadEffect, ThermalEffect, first_order_deflection,
+    JointDriver, LinkMass, PassiveSlope, PayloadEffect, ThermalEffect, UNMOVED_ACTUATOR_RAD,
+    coupled_first_order_deflection, first_order_deflection,
 };
 pub use plan::{AxisSweep, CalibrationPlan, PlanError, commands_to_internal};
 pub use simulate::{

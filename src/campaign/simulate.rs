@@ -272,10 +272,7 @@ fn record<A: ArmExecutor, R: Rng + ?Sized>(
             target,
             source,
         })?;
-    let m = match instrument.scale {
-        Some(s) => m * (1.0 + s.ppm * 1e-6),
-        None => m,
-    } * 1e3;
+    let m = instrument.scale.map_or(m, |s| s.applied_to(&m)) * 1e3;
     out.rows.push(Measurement {
         experiment: experiment.to_owned(),
         moved_joint,

@@ -3,10 +3,11 @@
 //! to the paper's figures and the noise floor measured in the same run; writes
 //! `evaluation.json`, `poses.csv`, `calibration.json`, `floor_calibration.json` and the plots.
 
+use super::calibrate::refuse_existing;
 use anyhow::{Context, Result};
 use axiscal::evaluation::{
-    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperScenario, Region,
-    run_paper_scenario, write_plots,
+    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperScenario, Region,
+    floor_check, run_paper_scenario, write_plots,
 };
 use axiscal::measurement::MeasurementModel;
 use std::path::{Path, PathBuf};
@@ -26,9 +27,16 @@ pub struct Args {
     /// Random test poses per region (inside the spans, workspace).
     #[arg(long, default_value_t = 30)]
     random_poses: usize,
+    /// Also pool the floor check over this many campaign seeds (`seed ..`), written to
+    /// `floor_check.json`; 1: the single run only.
+    #[arg(long, default_value_t = 1)]
+    floor_seeds: u64,
     /// Output directory.
     #[arg(long, default_value = "results/paper")]
     out: PathBuf,
+    /// Replace existing outputs.
+    #[arg(long)]
+    force: bool,
 }
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
@@ -40,12 +48,16 @@ fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
 pub fn run(args: Args) -> Result<()> {
     let (instrument, noise) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
     eprintln!("{noise}");
-    let scenario = PaperScenario {
-        seed: args.seed,
-        evaluation_seed: args.evaluation_seed,
-        random_poses: args.random_poses,
-        instrument,
-    };
+    let scenario = PaperScenario::paper(args.seed, args.evaluation_seed, args.random_poses, instrument);
+    let mut outputs = vec![
+        "evaluation.json",
+        "calibration.json",
+        "floor_calibration.json",
+        "poses.csv",
+        "floor_check.json",
+    ];
+    outputs.extend(PLOT_FILES);
+    refuse_existing(&args.out, &outputs, args.force)?;
     let out = run_paper_scenario(&scenario)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let r = &out.report;
@@ -105,30 +117,32 @@ pub fn run(args: Args) -> Result<()> {
             s.position_mm[0].n,
             s.failures
         );
-        println!(
-            "  position    [mm]  uncalibrated mean {:7.3} rms {:7.3}   (paper 47.0 mean)",
-            s.position_mm[0].mean, s.position_mm[0].rms
-        );
-        println!(
-            "                    calibrated   mean {:7.3} rms {:7.3}   (paper {:.2})  floor rms {:.3}  ratio {:.2}",
-            s.position_mm[1].mean,
-            s.position_mm[1].rms,
-            PAPER_POSITION_ERROR_MM[1],
-            s.position_mm[2].rms,
-            s.ratio_to_floor[0]
-        );
-        println!(
-            "  orientation [rad] uncalibrated mean {:7.4} rms {:7.4}   (paper {:.2})",
-            s.orientation_rad[0].mean, s.orientation_rad[0].rms, PAPER_ORIENTATION_ERROR_RAD[0]
-        );
-        println!(
-            "                    calibrated   mean {:7.4} rms {:7.4}   (paper {:.2})  floor rms {:.4}  ratio {:.2}",
-            s.orientation_rad[1].mean,
-            s.orientation_rad[1].rms,
-            PAPER_ORIENTATION_ERROR_RAD[1],
-            s.orientation_rad[2].rms,
-            s.ratio_to_floor[1]
-        );
+        let rows = [
+            (
+                "position    [mm] ",
+                &s.position_mm,
+                PAPER_POSITION_ERROR_MM,
+                s.ratio_to_floor[0],
+                3,
+            ),
+            (
+                "orientation [rad]",
+                &s.orientation_rad,
+                PAPER_ORIENTATION_ERROR_RAD,
+                s.ratio_to_floor[1],
+                4,
+            ),
+        ];
+        for (label, st, paper, ratio, p) in rows {
+            println!(
+                "  {label} uncalibrated mean {:7.p$} rms {:7.p$}   (paper {:.2} mean)",
+                st[0].mean, st[0].rms, paper[0]
+            );
+            println!(
+                "                    calibrated   mean {:7.p$} rms {:7.p$}   (paper {:.2})  floor rms {:.p$}  ratio {ratio:.2}",
+                st[1].mean, st[1].rms, paper[1], st[2].rms
+            );
+        }
         println!(
             "  model only (no jitter, no noise): position rms {:.3} mm (floor {:.3}, ratio {:.2})",
             s.model_position_mm[1].rms, s.model_position_mm[2].rms, s.model_ratio_to_floor[0]
@@ -157,6 +171,25 @@ pub fn run(args: Args) -> Result<()> {
             "ABOVE"
         }
     );
+    if args.floor_seeds > 1 {
+        let check = floor_check(&scenario, args.floor_seeds)?;
+        write_json(&args.out.join("floor_check.json"), &check)?;
+        println!(
+            "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
+             orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
+            check.first_seed,
+            check.first_seed + check.seeds - 1,
+            check.ratio[0],
+            check.position_rms_mm[0],
+            check.position_rms_mm[1],
+            check.ratio[1],
+            if check.ratio.iter().all(|r| *r <= FLOOR_RATIO_LIMIT) {
+                "within"
+            } else {
+                "ABOVE"
+            }
+        );
+    }
     println!("wrote {} and {} plots", args.out.display(), plots.len());
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
 mod blind;
+mod budget;
 mod calibrate;
 mod compensate;
 mod diagnose;
@@ -45,6 +46,9 @@ enum Command {
     Compensate(compensate::Args),
     /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
     Evaluate(evaluate::Args),
+    /// The paper's gap budget: per unmodelled effect, the magnitude that raises the simulated
+    /// calibrated error of the paper robot to the paper's 1.40 mm.
+    Budget(budget::Args),
     /// Sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it,
     /// how far the gap shrinks (diagnosis.json, FORMATS.md section 3).
     Diagnose(diagnose::Args),
@@ -71,6 +75,7 @@ pub fn main() -> ExitCode {
         Command::Merge(args) => merge::run(args),
         Command::Compensate(args) => compensate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
+        Command::Budget(args) => budget::run(args),
         Command::Diagnose(args) => diagnose::run(args),
         Command::Blind(args) => blind::run(args),
         Command::View(args) => view::run(args),

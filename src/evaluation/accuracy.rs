@@ -13,11 +13,12 @@
 //! - The same two errors **without measurement noise and jitter** (`model_*`): what the
 //!   robot's kinematic model error alone leaves, the quantity the calibration controls.
 
+use crate::campaign::{AnalyticArm, ArmExecutor, Effects, ExecuteError, InstrumentScale, PoseConditions};
 use crate::kinematics::{rigid_fit, rotation_vector};
 use crate::measurement::{MeasurementModel, TriangulationError};
-use crate::robot::{Controller, TruthError, TruthRobot};
+use crate::robot::{Controller, RobotDescription, TruthRobot};
 use nalgebra::{Isometry3, Point3};
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{RngExt, SeedableRng, rngs::StdRng};
 use serde::{Deserialize, Serialize};
 
 /// Errors of one execution of one command against the required pose.
@@ -38,7 +39,7 @@ pub struct ToolError {
 pub enum EvaluationError {
     /// The robot cannot execute the command.
     #[error("executing the command: {0}")]
-    Execute(#[from] TruthError),
+    Execute(#[from] ExecuteError),
     /// The instrument cannot see a target.
     #[error("measuring a tool target: {0}")]
     Measure(#[from] TriangulationError),
@@ -47,18 +48,28 @@ pub enum EvaluationError {
     DegenerateTool,
 }
 
-/// The simulated real robot, its controller, the tool targets and the instrument.
+/// The simulated real robot behind its unchanged controller, with its unmodelled effects, the
+/// tool targets and the instrument (with its scale error, if any).
 #[derive(Clone, Debug)]
 pub struct TestBench {
-    /// The real robot.
-    pub truth: TruthRobot,
-    /// Its (unchanged, nominal) controller.
-    pub controller: Controller,
+    /// The real robot (truth, controller, effects, repeatability jitter).
+    arm: AnalyticArm,
+    /// The same robot without repeatability: its model error alone.
+    exact_arm: AnalyticArm,
     /// Tool targets in the tool frame \[m\]; target 0 is the tool point.
-    pub tool_targets_m: Vec<Point3<f64>>,
+    tool_targets_m: Vec<Point3<f64>>,
     /// The instrument.
-    pub instrument: MeasurementModel,
+    instrument: MeasurementModel,
+    /// Its scale error (from the effects).
+    instrument_scale: Option<InstrumentScale>,
+    /// Conditions of every test pose.
+    conditions: PoseConditions,
 }
+
+/// How far below or above each joint's command the robot starts \[rad or m\], so that every
+/// joint reaches the test pose moving (a backlash band then shows, a jitter is drawn). The
+/// direction per joint is random per pose (the robot reaches test poses along arbitrary paths).
+pub const APPROACH_STEP: f64 = 0.05;
 
 /// Per-pose random stream: `seed` and the pose index mixed (SplitMix64), so every command
 /// kind evaluated at pose `i` sees the same jitter and measurement noise (common random
@@ -75,22 +86,82 @@ fn angle_between(a: &Isometry3<f64>, b: &Isometry3<f64>) -> f64 {
 }
 
 impl TestBench {
-    /// One execution of `cmd` (jitter drawn from `rng`), the three targets measured.
-    /// Returns the measured targets \[m\] and the tool pose without jitter.
+    /// `truth` behind the nominal controller of `desc`, with `effects` (link masses for
+    /// compliance from `desc`), measured by `instrument`; every test pose under `conditions`.
+    pub fn new(
+        truth: &TruthRobot,
+        desc: &RobotDescription,
+        effects: &Effects,
+        instrument: MeasurementModel,
+        conditions: PoseConditions,
+    ) -> Self {
+        let controller = Controller::from_description(desc);
+        let mut exact = truth.clone();
+        for j in &mut exact.joints {
+            j.repeatability_sigma = 0.0;
+        }
+        TestBench {
+            arm: AnalyticArm::new(truth.clone(), controller.clone()).with_effects(effects.clone(), desc),
+            exact_arm: AnalyticArm::new(exact, controller).with_effects(effects.clone(), desc),
+            tool_targets_m: desc.tool_targets_m(),
+            instrument,
+            instrument_scale: effects.instrument_scale,
+            conditions,
+        }
+    }
+
+    /// Executes `cmd` on a fresh copy of `prototype` after an approach from
+    /// [`APPROACH_STEP`] away in every joint, the directions drawn from `approach`; the
+    /// command's jitter is drawn from `rng`. Returns the tool pose.
+    fn execute(
+        &self,
+        prototype: &AnalyticArm,
+        cmd: &[f64],
+        approach: &mut StdRng,
+        rng: &mut StdRng,
+    ) -> Result<Isometry3<f64>, EvaluationError> {
+        let mut arm = prototype.clone();
+        let start: Vec<f64> = cmd
+            .iter()
+            .map(|c| c - APPROACH_STEP * if approach.random::<bool>() { 1.0 } else { -1.0 })
+            .collect();
+        arm.execute(&start, &self.conditions, approach)?;
+        let links = arm.execute(cmd, &self.conditions, rng)?;
+        Ok(links[links.len() - 1] * arm.last_link_from_tool())
+    }
+
+    /// One execution of `cmd` (jitter drawn from `rng`; approach directions from a stream
+    /// derived from it), the three targets measured. Returns the measured targets \[m\] and the
+    /// tool pose without jitter.
     fn execute_and_measure(
         &self,
         cmd: &[f64],
         rng: &mut StdRng,
     ) -> Result<(Vec<Point3<f64>>, Isometry3<f64>), EvaluationError> {
-        let model = self.truth.model();
-        let exact = model.world_from_tool(&self.truth.joint_values(&self.controller, cmd)?);
-        let executed = model.world_from_tool(&self.truth.joint_values_executed(&self.controller, cmd, rng)?);
-        let measured = self
-            .tool_targets_m
+        let approach_seed: u64 = rng.random();
+        let exact = self.execute(
+            &self.exact_arm,
+            cmd,
+            &mut StdRng::seed_from_u64(approach_seed),
+            &mut StdRng::seed_from_u64(0),
+        )?;
+        let executed = self.execute(&self.arm, cmd, &mut StdRng::seed_from_u64(approach_seed), rng)?;
+        Ok((self.measure_tool_targets(&executed, rng)?, exact))
+    }
+
+    /// The tool targets of a tool pose as the instrument (with its scale error) reports them.
+    fn measure_tool_targets(
+        &self,
+        world_from_tool: &Isometry3<f64>,
+        rng: &mut StdRng,
+    ) -> Result<Vec<Point3<f64>>, TriangulationError> {
+        self.tool_targets_m
             .iter()
-            .map(|t| self.instrument.measure(&(executed * t), rng))
-            .collect::<Result<Vec<_>, _>>()?;
-        Ok((measured, exact))
+            .map(|t| {
+                let m = self.instrument.measure(&(world_from_tool * t), rng)?;
+                Ok(self.instrument_scale.map_or(m, |s| s.applied_to(&m)))
+            })
+            .collect()
     }
 
     /// Executes `cmd` once and scores it against `required` (module docs).
@@ -111,21 +182,18 @@ impl TestBench {
         })
     }
 
-    /// The repeatability test of paper section 4: `cmd` executed twice, the tool measured
-    /// each time. Returns `(observed radial mm, observed orientation rad, robot-only radial
-    /// mm, robot-only orientation rad)`: the distance between the two measured tool points and
-    /// the angle between the two fitted frames, then the same without measurement noise.
+    /// The repeatability test of paper section 4: `cmd` executed twice (each time reached
+    /// from elsewhere), the tool measured each time. Returns `(observed radial mm, observed
+    /// orientation rad, robot-only radial mm, robot-only orientation rad)`: the distance
+    /// between the two measured tool points and the angle between the two fitted frames, then
+    /// the same without measurement noise.
     pub fn repeatability(&self, cmd: &[f64], rng: &mut StdRng) -> Result<[f64; 4], EvaluationError> {
-        let model = self.truth.model();
         let mut observed = Vec::new();
         let mut actual = Vec::new();
         for _ in 0..2 {
-            let pose = model.world_from_tool(&self.truth.joint_values_executed(&self.controller, cmd, rng)?);
-            let measured = self
-                .tool_targets_m
-                .iter()
-                .map(|t| self.instrument.measure(&(pose * t), rng))
-                .collect::<Result<Vec<_>, _>>()?;
+            let approach_seed: u64 = rng.random();
+            let pose = self.execute(&self.arm, cmd, &mut StdRng::seed_from_u64(approach_seed), rng)?;
+            let measured = self.measure_tool_targets(&pose, rng)?;
             let (fit, _) = rigid_fit(&self.tool_targets_m, &measured).ok_or(EvaluationError::DegenerateTool)?;
             observed.push((measured[0], fit));
             actual.push(pose);
@@ -166,6 +234,25 @@ impl Stats {
             mean: v.iter().sum::<f64>() / n,
             rms: (v.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
             max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+
+    /// Statistics of the union of the sets that `parts` summarise (all zero when empty).
+    pub fn pooled(parts: &[Stats]) -> Self {
+        let n: usize = parts.iter().map(|p| p.n).sum();
+        if n == 0 {
+            return Stats::default();
+        }
+        let weighted = |f: fn(&Stats) -> f64| parts.iter().map(|p| p.n as f64 * f(p)).sum::<f64>() / n as f64;
+        Stats {
+            n,
+            mean: weighted(|p| p.mean),
+            rms: weighted(|p| p.rms * p.rms).sqrt(),
+            max: parts
+                .iter()
+                .filter(|p| p.n > 0)
+                .map(|p| p.max)
+                .fold(f64::NEG_INFINITY, f64::max),
         }
     }
 }

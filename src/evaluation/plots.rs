@@ -145,8 +145,18 @@ fn histogram<DB: DrawingBackend>(
     root.present().map_err(|e| e.to_string())
 }
 
-/// Writes `fig9_position.{png,svg}`, `fig10_orientation.{png,svg}` and
-/// `histogram_position.{png,svg}` into `dir`; returns the files written.
+/// The files [`write_plots`] writes into its directory.
+pub const PLOT_FILES: [&str; 6] = [
+    "fig9_position.png",
+    "fig9_position.svg",
+    "fig10_orientation.png",
+    "fig10_orientation.svg",
+    "histogram_position.png",
+    "histogram_position.svg",
+];
+
+/// Writes figs. 9 and 10 and the position histogram ([`PLOT_FILES`]) into `dir`; returns the
+/// files written.
 pub fn write_plots(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     crate::plotting::register_font();
     let pick = |f: fn(&super::ToolError) -> f64, which: usize| -> Vec<f64> {

@@ -25,7 +25,7 @@ pub use perturb::{
     perturb,
 };
 pub use repeatability::{
-    RepeatabilityStats, RepeatabilityTarget, calibrate_repeatability_sigmas, calibrate_uniform_sigma,
+    ObservedThrough, RepeatabilityStats, RepeatabilityTarget, calibrate_repeatability_sigmas, calibrate_uniform_sigma,
     repeatability_stats, workspace_poses,
 };
 pub use truth::{FourBarLinkage, TruthJoint, TruthRobot};

@@ -10,8 +10,8 @@
 //! orientation repeatability then has to come mostly from joint 6.
 
 use super::truth_error::TruthError;
-use crate::kinematics::{PhiModel, geometric_jacobian};
-use nalgebra::{Matrix6xX, Vector6};
+use crate::kinematics::{PhiModel, geometric_jacobian, point_jacobian};
+use nalgebra::{DVector, Matrix3, Matrix6xX, Point3, Vector3, Vector6};
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 
@@ -169,31 +169,76 @@ fn solve_increasing(f: impl Fn(f64) -> f64, target: f64, scale: f64) -> Option<f
     Some(0.5 * (lo + hi))
 }
 
-/// Calibrates ONE jitter sigma shared by every joint \[rad\] so that the mean radial repeatable
-/// error over `poses` matches `mean_radial_mm` (the orientation repeatability then follows).
+/// How a repeatability figure was observed: the distance between two measurements of one
+/// tool point, each through an instrument with the given noise covariance.
+pub struct ObservedThrough<'a> {
+    /// The measured tool point, in the tool frame \[m\].
+    pub point_in_tool_m: Point3<f64>,
+    /// The instrument's noise covariance of a measured point at a world position \[m^2\]
+    /// (`None` where the instrument cannot measure that point).
+    pub covariance_m2: &'a dyn Fn(&Point3<f64>) -> Option<Matrix3<f64>>,
+}
+
+/// Calibrates ONE jitter sigma shared by every joint \[rad\] so that the mean distance between
+/// two *observed* executions of the same command matches `mean_radial_mm` over `poses` (the
+/// orientation repeatability then follows).
 ///
-/// This is the model the paper robot ships with: the paper's repeatability was observed with
-/// the theodolites, and its 0.0033 rad orientation figure is about what the instrument alone
+/// Model: the two observations of the tool point differ by `J_p sqrt(2) sigma z + sqrt(2) L w`
+/// to first order in sigma (`J_p` the point Jacobian, eq. A1 differentiated; `L L^T` the
+/// instrument covariance at the point; `z`, `w` standard normal), solved for sigma on
+/// `pairs_per_pose` common random draws per pose (a deterministic, increasing function of sigma).
+///
+/// This is the model the paper robot ships with: the paper's repeatability (0.34 mm, 0.0033 rad)
+/// was observed with its theodolites. The orientation figure is about what the instrument alone
 /// gives for three targets 80 mm apart (`sqrt(2) * 0.19 mm / 80 mm`), so fitting it with joint
-/// jitter (the two-sigma model below) would put an unphysical 2.8 mrad jitter on joint 6.
+/// jitter (the two-sigma model below) would put an unphysical 2.8 mrad jitter on joint 6; and the
+/// radial figure contains the instrument's share too, which the robot's jitter must not repeat.
+/// Poses where the instrument cannot measure are skipped; an error if none is left or if the
+/// instrument alone already exceeds the target.
 pub fn calibrate_uniform_sigma<R: Rng + ?Sized>(
     model: &PhiModel,
     poses: &[Vec<f64>],
     mean_radial_mm: f64,
+    observed: &ObservedThrough<'_>,
     pairs_per_pose: usize,
     rng: &mut R,
 ) -> Result<f64, TruthError> {
-    if poses.is_empty() || pairs_per_pose == 0 {
+    let invalid = |message: String| TruthError::Invalid {
+        field: "repeatability target".into(),
+        message,
+    };
+    let n = model.dof();
+    let point_in_last_link = model.last_link_from_tool * observed.point_in_tool_m;
+    // Per draw: (robot part per unit sigma, instrument part) of the difference [m].
+    let mut draws: Vec<(Vector3<f64>, Vector3<f64>)> = Vec::with_capacity(poses.len() * pairs_per_pose);
+    for q in poses {
+        let world = model.point_on_link(q, n - 1, &point_in_last_link);
+        let Some(cov) = (observed.covariance_m2)(&world) else {
+            continue;
+        };
+        let l = cov
+            .cholesky()
+            .ok_or_else(|| invalid(format!("instrument covariance at {world} is not positive definite")))?
+            .l();
+        let j = point_jacobian(model, q, n - 1, &point_in_last_link);
+        for _ in 0..pairs_per_pose {
+            let z = DVector::from_fn(n, |_, _| StandardNormal.sample(rng));
+            let w = Vector3::from_fn(|_, _| StandardNormal.sample(rng));
+            draws.push((&j * z * std::f64::consts::SQRT_2, l * w * std::f64::consts::SQRT_2));
+        }
+    }
+    if draws.is_empty() || pairs_per_pose == 0 {
         return Err(TruthError::Invalid {
             field: "poses".into(),
-            message: "at least one pose and one pair per pose are needed".into(),
+            message: "at least one measurable pose and one pair per pose are needed".into(),
         });
     }
-    let jacobians: Vec<Matrix6xX<f64>> = poses.iter().map(|q| geometric_jacobian(model, q)).collect();
-    let lin = Linearised::new(&jacobians, pairs_per_pose, rng);
-    solve_increasing(|s| lin.means(s, s).0, mean_radial_mm, 1e-5).ok_or_else(|| TruthError::Invalid {
-        field: "repeatability target".into(),
-        message: format!("a mean radial repeatability of {mean_radial_mm} mm cannot be met"),
+    let mean_mm = |s: f64| draws.iter().map(|(a, b)| (a * s + b).norm()).sum::<f64>() * 1e3 / draws.len() as f64;
+    solve_increasing(mean_mm, mean_radial_mm, 1e-5).ok_or_else(|| {
+        invalid(format!(
+            "a mean radial repeatability of {mean_radial_mm} mm cannot be met (the instrument alone gives {:.4} mm)",
+            mean_mm(0.0)
+        ))
     })
 }
 

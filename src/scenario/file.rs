@@ -73,7 +73,8 @@ pub enum SimMode {
     /// The analytic truth model ([`AnalyticArm`](crate::campaign::AnalyticArm)).
     #[default]
     Analytic,
-    /// The rapier multibody (line of sight, compliance); not wired in yet.
+    /// The rapier multibody ([`RapierArm`](crate::sim::RapierArm): line of sight, compliance
+    /// by static equilibrium).
     Rapier,
 }
 

@@ -67,7 +67,7 @@ pub struct CampaignTrial {
 }
 
 impl CampaignTrial {
-    /// The trial of `scenario`. Fails for `sim = "rapier"` until the rapier arm is wired in.
+    /// The trial of `scenario` (analytic or rapier arm, as its `sim` key says).
     pub fn new(scenario: &ResolvedScenario) -> Result<Self, String> {
         Ok(CampaignTrial {
             desc: scenario.robot.clone(),

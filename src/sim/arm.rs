@@ -341,7 +341,8 @@ impl SimArm {
             .collect()
     }
 
-    fn joint_position(&self, k: usize) -> f64 {
+    /// Joint `k`'s (0-based) value (rad or m) held by the multibody.
+    pub fn joint_position(&self, k: usize) -> f64 {
         let axis = match self.model.joints[k].kind {
             JointKind::Revolute => 3,
             JointKind::Prismatic => 0,

@@ -18,18 +18,26 @@
 //! Two modes: in kinematic mode [`FourBarBodies::place`] solves the crank angle analytically
 //! (circle-circle intersection) for the link poses the arm already holds and places crank and
 //! rod, so the loop is closed to rounding whatever passive law produced joint `b`; in
-//! dynamic mode [`FourBarBodies::drive`] turns joint `b`'s motor off and puts actuator `b`'s
-//! position motor on the crank: the mechanism then drives joint `b`.
+//! dynamic mode [`FourBarBodies::drive`] takes joint `b`'s servo off and puts actuator `b`'s
+//! servo on the crank: the mechanism then drives joint `b`, and the gravity load of link `b`
+//! and beyond reaches the crank's servo through the rod.
+//!
+//! The closure holds in dynamic mode because the servos are implicit joint springs (see
+//! [`SimArm::set_servo`]): measured (test below, dt 1 ms, 16 solver iterations, crank
+//! 1e6 N m/rad, the other joints 1e8 N m/rad) the loop gap is 2e-12 to 1.3e-10 m and joint 3's
+//! sag is the virtual-work prediction `g'^2 Q_3 / K_c` (about 9e-5 rad) within 2 %, the crank
+//! and rod's own weight.
 
 use super::SimError;
 use super::arm::SimArm;
 use super::convert::{point_to_glam, pose_to_glam, rotation_from_glam, rotation_to_glam};
 use crate::robot::FourBarLinkage;
 use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
+use parry3d_f64::shape::{Capsule, SharedShape};
 use rapier3d_f64::math::Vector;
 use rapier3d_f64::prelude::{
-    GenericJointBuilder, ImpulseJointHandle, JointAxesMask, JointAxis, MassProperties, MotorModel,
-    MultibodyJointHandle, RigidBodyBuilder, RigidBodyHandle, SphericalJointBuilder,
+    GenericJointBuilder, ImpulseJointHandle, JointAxesMask, JointAxis, MassProperties, MultibodyJointHandle,
+    RigidBodyBuilder, RigidBodyHandle, SphericalJointBuilder,
 };
 
 /// The mechanism's bodies and joints in a [`SimArm`]'s world.
@@ -57,8 +65,18 @@ fn x_onto_z() -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::new(h, 0.0, -h, 0.0))
 }
 
+/// Mass of the crank \[kg\] (an estimate: a steel bar of the crank's length).
+pub const CRANK_MASS_KG: f64 = 2.0;
+
+/// Mass of the coupler rod \[kg\] (an estimate: a steel tube of the arm's length).
+pub const ROD_MASS_KG: f64 = 1.0;
+
+/// Radius of the crank and the rod \[m\]: their collision capsules (line of sight) and the
+/// solid cylinders of their inertia estimates.
+pub const BAR_RADIUS_M: f64 = 0.015;
+
 fn bar_mass(mass_kg: f64, length_m: f64, along: Vector3<f64>, from: Point3<f64>) -> MassProperties {
-    let r = 0.015_f64;
+    let r = BAR_RADIUS_M;
     let i_axial = mass_kg * r * r / 2.0;
     let i_trans = mass_kg * (3.0 * r * r + length_m * length_m) / 12.0;
     let frame = UnitQuaternion::rotation_between(&Vector3::z(), &along).unwrap_or_else(UnitQuaternion::identity);
@@ -72,7 +90,7 @@ fn bar_mass(mass_kg: f64, length_m: f64, along: Vector3<f64>, from: Point3<f64>)
 
 impl FourBarBodies {
     /// Adds crank, rod and closure to `arm` for `linkage` (driving joint `linkage.from`,
-    /// 1-based); crank and rod get 2 kg and 1 kg. The arm must sit with the mechanism
+    /// 1-based); crank and rod get [`CRANK_MASS_KG`] and [`ROD_MASS_KG`]. The arm must sit with the mechanism
     /// assembled before stepping: call [`FourBarBodies::place`].
     pub fn attach(arm: &mut SimArm, linkage: &FourBarLinkage) -> Result<Self, SimError> {
         let n = arm.model().dof();
@@ -105,7 +123,7 @@ impl FourBarBodies {
         let crank_body = world.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(pose_to_glam(&world_from_frame))
-                .additional_mass_properties(bar_mass(2.0, g.crank_m, crank_tip - o2, o2))
+                .additional_mass_properties(bar_mass(CRANK_MASS_KG, g.crank_m, crank_tip - o2, o2))
                 .can_sleep(false),
         );
         let crank = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
@@ -124,7 +142,7 @@ impl FourBarBodies {
                 .pose(pose_to_glam(
                     &(world_from_frame * Isometry3::translation(crank_tip.x, crank_tip.y, crank_tip.z)),
                 ))
-                .additional_mass_properties(bar_mass(1.0, g.rod_m, Vector3::x(), Point3::origin()))
+                .additional_mass_properties(bar_mass(ROD_MASS_KG, g.rod_m, Vector3::x(), Point3::origin()))
                 .can_sleep(false),
         );
         let rod = GenericJointBuilder::new(JointAxesMask::LOCKED_SPHERICAL_AXES)
@@ -163,6 +181,11 @@ impl FourBarBodies {
         })
     }
 
+    /// The joint the mechanism drives (0-based), `b = a + 1`.
+    pub fn driven_joint(&self) -> usize {
+        self.a + 1
+    }
+
     /// The linkage this mechanism was built from.
     pub fn linkage(&self) -> &FourBarLinkage {
         &self.linkage
@@ -190,6 +213,22 @@ impl FourBarBodies {
     /// The lever point on link `b` in the world \[m\].
     pub fn lever_point_m(&self, arm: &SimArm) -> Point3<f64> {
         arm.world_from_link(self.a + 1) * self.lever_in_link_b_m
+    }
+
+    /// The crank (from `O2` to the crank tip) and the rod (its full length) as capsules of
+    /// radius [`BAR_RADIUS_M`], posed in the world at the current configuration.
+    pub fn placed_shapes(&self, arm: &SimArm) -> Vec<(Isometry3<f64>, SharedShape)> {
+        let pose = |h: RigidBodyHandle| super::convert::pose_from_glam(arm.world().bodies[h].position());
+        let capsule = |a: Point3<f64>, b: Point3<f64>| {
+            SharedShape::new(Capsule::new(point_to_glam(&a), point_to_glam(&b), BAR_RADIUS_M))
+        };
+        vec![
+            (pose(self.crank_body), capsule(self.o2, self.crank_tip_in_crank_m)),
+            (
+                pose(self.rod_body),
+                capsule(Point3::origin(), Point3::new(self.linkage.geometry.rod_m, 0.0, 0.0)),
+            ),
+        ]
     }
 
     /// Loop-closure error: distance between the rod's far end and the lever point \[m\].
@@ -264,8 +303,55 @@ impl FourBarBodies {
         Ok(c)
     }
 
-    /// Dynamic mode: joint `b`'s motor off (the mechanism drives it), and a force-based
-    /// position motor on the crank towards `crank_target_rad` (actuator `b`).
+    /// Switches the loop-closing joint on or off. Off is the dynamic-mode fallback where the
+    /// loop cannot close at the commanded pose (the truth's passive law reaches poses the
+    /// mechanism cannot): joint `b` keeps its own servo, the crank holds still and the rod
+    /// hangs from it, its swing damped (2 N m s/rad per axis, about critical for a 1 kg,
+    /// 0.7 m pendulum) so that it does not keep the arm from settling; on again, the rod
+    /// gets rapier's default damping back.
+    pub fn set_loop_closed(&self, arm: &mut SimArm, closed: bool) -> Result<(), SimError> {
+        let world = arm.world_mut();
+        if let Some(joint) = world.impulse_joints.get_mut(self.closure, true) {
+            joint.data.set_enabled(closed);
+        }
+        let (mb, id) = world
+            .multibody_joints
+            .get_mut(self.rod_joint)
+            .ok_or(SimError::JointRejected { joint: self.a + 1 })?;
+        let dof = mb
+            .link(id)
+            .ok_or(SimError::JointRejected { joint: self.a + 1 })?
+            .assembly_id();
+        let damping = if closed { 0.1 } else { 2.0 };
+        for d in mb.damping_mut().rows_mut(dof, 3).iter_mut() {
+            *d = damping;
+        }
+        Ok(())
+    }
+
+    /// Dynamic mode with the loop open: a servo (stiffness `K`, damping `D`) holds the crank
+    /// where it is; joint `b`'s own servo is left as it is.
+    pub fn hold_crank(
+        &self,
+        arm: &mut SimArm,
+        stiffness_nm_per_rad: f64,
+        damping_nms_per_rad: f64,
+    ) -> Result<(), SimError> {
+        let here = self.crank_angle(arm);
+        super::servo::set_joint_spring(
+            arm.world_mut(),
+            self.crank_joint,
+            JointAxis::AngX,
+            here,
+            stiffness_nm_per_rad,
+            damping_nms_per_rad,
+        )
+        .ok_or(SimError::JointRejected { joint: self.a })
+    }
+
+    /// Dynamic mode: joint `b` passive (no servo: the mechanism drives it), and actuator `b`'s
+    /// servo (implicit spring of stiffness `K` towards `crank_target_rad`, damping `D`, see
+    /// [`SimArm::set_servo`]) on the crank.
     pub fn drive(
         &self,
         arm: &mut SimArm,
@@ -273,22 +359,16 @@ impl FourBarBodies {
         stiffness_nm_per_rad: f64,
         damping_nms_per_rad: f64,
     ) -> Result<(), SimError> {
-        let b = self.a + 1;
-        arm.set_joint_motor(b, 0.0, 0.0, 0.0)?;
-        let Some((mb, id)) = arm.world.multibody_joints.get_mut(self.crank_joint) else {
-            return Err(SimError::JointRejected { joint: self.a });
-        };
-        let link = mb.link_mut(id).ok_or(SimError::JointRejected { joint: self.a })?;
-        link.joint
-            .data
-            .set_motor_model(JointAxis::AngX, MotorModel::ForceBased)
-            .set_motor_position(
-                JointAxis::AngX,
-                crank_target_rad,
-                stiffness_nm_per_rad,
-                damping_nms_per_rad,
-            );
-        Ok(())
+        arm.set_joint_servo(self.a + 1, 0.0, 0.0, 0.0)?;
+        super::servo::set_joint_spring(
+            arm.world_mut(),
+            self.crank_joint,
+            JointAxis::AngX,
+            crank_target_rad,
+            stiffness_nm_per_rad,
+            damping_nms_per_rad,
+        )
+        .ok_or(SimError::JointRejected { joint: self.a })
     }
 }
 
@@ -324,47 +404,61 @@ mod tests {
         }
     }
 
-    /// Dynamic mode: actuator 3's motor holds the crank at zero, joint 3 is passive, joint 2
-    /// is swept by its servo under gravity; the mechanism drives joint 3. The passive angle
-    /// must match `FourBarGeometry::solve` within the crank's own compliance (link-3 gravity
-    /// torque ~ 14 kg 9.81 m/s^2 0.3 m = 41 N m over 1e8 N m/rad: 4e-7 rad, times the
-    /// |slope| ~ 1 of the linkage), bounded by 1e-5 rad; the loop within 1 micrometre.
+    /// Dynamic mode: actuator 3's servo holds the crank at zero, joint 3 has no servo, joints
+    /// 1, 2, 4-6 are held stiffly (1e8 N m/rad) under gravity; the mechanism drives joint 3.
     ///
-    /// Ignored: measured on rapier 0.36.1, the impulse ball joint between two links of the
-    /// same multibody holds the loop to ~1e-5 m while every joint is free, but not against
-    /// the stiff force-based position motors: with 1e8 (1e5) N m/rad servos on joint 2 and
-    /// the crank the loop opens to 7.8 (5) cm and joint 3 drifts by 0.4-0.9 rad.
+    /// Expected, by virtual work: with `g` the passive law and `g'` its slope, the crank
+    /// carries `tau_c = -g' Q_3` (`Q_3` the gravity torque of links 3-6 about axis 3) plus the
+    /// bars' own weight, at most `tau_bars = 9.81 (m_c r_c / 2 + m_r (r_c + |g'| r_l) / 2)`; the
+    /// crank (stiffness `K_c`) turns by `c = tau_c / K_c` and joint 3 by `-g' c` (the planar
+    /// mechanism gives `theta_23 = g(theta_2 - c)` exactly). So `theta_23 - g(theta_2)` must
+    /// equal `g'^2 Q_3 / K_c` within `|g'| tau_bars / K_c`, plus what the loop gap `e` can
+    /// turn the lever (`e / (r_l sin mu)`, `mu` the transmission angle between rod and lever)
+    /// and the stiff joint 2's own sag (below 1e-8 rad, inside the same margin).
     #[test]
-    #[ignore = "rapier impulse closure does not hold against stiff multibody motors (see doc)"]
     fn the_mechanism_drives_joint3_along_the_analytic_four_bar() {
+        use crate::campaign::{ComplianceEffect, LinkMass, first_order_deflection};
         let (mut arm, mut bodies, g) = nominal_arm_with_four_bar();
-        let stiff = [1e8; 6];
-        let mut worst = (0.0_f64, 0.0_f64);
-        let start = [0.0, -0.3, g.passive(-0.3).unwrap(), 0.0, 0.0, 0.0];
-        arm.set_joint_positions(&start).unwrap();
-        bodies.place(&mut arm).unwrap();
+        let d = RobotDescription::asea_irb6l();
+        let crank_k = 1e6;
         for deg in [-17.0, 0.0, 20.0] {
             let t2 = f64::to_radians(deg);
-            let mut target = start;
-            target[1] = t2;
-            let gains = ServoGains::with_damping_ratio(&arm, &target, &stiff, 1.0);
+            let target = [0.3, t2, g.passive(t2).unwrap(), 0.0, 0.0, 0.0];
+            arm.set_joint_positions(&target).unwrap();
+            bodies.place(&mut arm).unwrap();
+            let gains = ServoGains::with_damping_ratio(&arm, &target, &[1e8; 6], 1.0);
             arm.set_servo(&target, &gains).unwrap();
-            bodies.drive(&mut arm, 0.0, 1e8, gains.damping_nms_per_rad[2]).unwrap();
+            let crank_d = gains.damping_nms_per_rad[2] * (crank_k / 1e8_f64).sqrt();
+            bodies.drive(&mut arm, 0.0, crank_k, crank_d).unwrap();
             let report = arm.settle(&[], &SettleOptions::default()).expect("settles");
-            let q3 = report.joint_positions[2];
-            let reached_t2 = report.joint_positions[1];
-            let analytic = g.passive(reached_t2).unwrap();
+            let q = &report.joint_positions;
+            let c = bodies.crank_angle(&arm);
+            let slope = g.solve(q[1] - c).unwrap().slope;
+            let unit_stiffness = ComplianceEffect {
+                stiffness_nm_per_rad: vec![1.0; 6],
+                gravity_m_s2: [0.0, 0.0, -9.81],
+            };
+            let q3_torque =
+                first_order_deflection(arm.model(), q, &LinkMass::from_description(&d), None, &unit_stiffness)[2];
+            let predicted = slope * slope * q3_torque / crank_k;
+            let tau_bars = 9.81 * (2.0 * g.crank_m / 2.0 + (g.crank_m + slope.abs() * g.lever_m) / 2.0);
+            // Transmission angle in the plane at the mechanism's input theta_2 - c.
+            let t = q[1] - c;
+            let o3 = Vector3::new(t.cos(), t.sin(), 0.0) * g.arm_m;
+            let lever = g.lever_angle_rad + t + (q[2]);
+            let p = o3 + Vector3::new(lever.cos(), lever.sin(), 0.0) * g.lever_m;
+            let tip = Vector3::new(g.crank_angle_rad.cos(), g.crank_angle_rad.sin(), 0.0) * g.crank_m;
+            let sin_mu = (p - tip).normalize().cross(&(p - o3).normalize()).norm();
+            let gap = bodies.closure_error_m(&arm);
+            let bound = slope.abs() * tau_bars / crank_k + gap / (g.lever_m * sin_mu);
+            let sag = q[2] - g.passive(q[1]).unwrap();
             eprintln!(
-                "theta_2 {deg} deg: {} steps, q3 - analytic {:.3e} rad, closure {:.3e} m, crank {:.2e}",
-                report.steps,
-                q3 - analytic,
-                bodies.closure_error_m(&arm),
-                bodies.crank_angle(&arm)
+                "theta_2 {deg} deg: {} steps, sag {sag:.4e} rad, predicted {predicted:.4e}, bound {bound:.2e}, \
+                 closure {gap:.2e} m, crank {c:.3e} rad, sin mu {sin_mu:.2}",
+                report.steps
             );
-            worst.0 = worst.0.max((q3 - analytic).abs());
-            worst.1 = worst.1.max(bodies.closure_error_m(&arm));
+            assert!(gap < 1e-6, "loop closure {gap} m");
+            assert!((sag - predicted).abs() < bound, "sag {sag} vs {predicted} +- {bound}");
         }
-        assert!(worst.0 < 1e-5, "theta_23 disagreement {} rad", worst.0);
-        assert!(worst.1 < 1e-6, "loop closure {} m", worst.1);
     }
 }

@@ -4,9 +4,13 @@
 //!   a fixed base body at `world_from_base`, one dynamic body per link whose body frame *is*
 //!   the phi-model's moving link frame, and one multibody joint per phi-model joint. In
 //!   kinematic mode the joint values are written straight into the multibody and its forward
-//!   kinematics places the bodies; in dynamic mode position-servo motors with finite
-//!   stiffness hold the arm against gravity and [`SimArm::settle`] finds the static
-//!   equilibrium.
+//!   kinematics places the bodies; in dynamic mode position servos with finite stiffness
+//!   (implicit joint springs and damping) hold the arm against gravity and
+//!   [`SimArm::settle`] finds the static equilibrium.
+//! - [`FourBarBodies`]: the 2->3 four-bar as crank, rod and loop-closing joint; in dynamic
+//!   mode it drives joint 3. [`CoupledTargets`]: the passive couplings without bodies (the
+//!   bevel gear 4->5) as servo targets that follow the joint below each step.
+//! - [`RapierArm`]: the campaign's executor on top of both modes.
 //! - [`visibility`](self::is_visible_from_all) casts rays from the theodolite stations to a
 //!   target through the link collision shapes.
 //!
@@ -16,13 +20,15 @@
 mod arm;
 mod convert;
 mod four_bar;
+mod gear;
 mod rapier_arm;
 mod servo;
 mod visibility;
 pub use visibility::{SpanSearch, is_visible_from_all, visible_span_deg};
 
 pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
-pub use four_bar::FourBarBodies;
+pub use four_bar::{BAR_RADIUS_M, CRANK_MASS_KG, FourBarBodies, ROD_MASS_KG};
+pub use gear::CoupledTargets;
 pub use rapier_arm::{RapierArm, RapierArmOptions};
 pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport};
 
@@ -62,6 +68,14 @@ pub enum SimError {
     JointRejected {
         /// The joint (0-based).
         joint: usize,
+    },
+    /// A passive coupling cannot be evaluated (a four-bar coupling that cannot close).
+    #[error("coupling into joint {} cannot be evaluated: {source}", joint + 1)]
+    Coupling {
+        /// The driven joint (0-based).
+        joint: usize,
+        /// Why.
+        source: crate::robot::FourBarError,
     },
     /// The dynamic simulation did not come to rest within the step cap.
     #[error("the arm did not settle in {steps} steps: fastest watched point still moves at {max_speed_m_s} m/s")]

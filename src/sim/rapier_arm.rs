@@ -1,28 +1,37 @@
 //! The rapier arm as the campaign's simulated robot ([`ArmExecutor`]).
 //!
 //! Per command: the [`JointDriver`] (fig. 3 controller, the truth's transmissions with any
-//! extra gear harmonics, backlash, passive couplings, repeatability) gives the joint values;
-//! the phi-model at the pose's temperature (thermal effect) is built as a [`SimArm`] (rebuilt
-//! only when temperature or payload change); with no `compliance` effect the arm is placed
-//! in kinematic mode, otherwise servos of the given stiffness hold it against gravity and the
-//! payload and it is settled to its static equilibrium. The 2->3 four-bar of the truth (if
-//! any) is placed as bodies ([`FourBarBodies::place`], crank solved analytically). Axis
-//! wobble is applied to the link poses afterwards ([`Effects::apply_wobble`]); line of sight
-//! uses the link capsules without it (a sub-milliradian tilt does not change occlusion).
+//! extra gear harmonics, backlash, passive couplings, repeatability) gives the joint values
+//! `q` and the actuators' active displacements; the phi-model at the pose's temperature
+//! (thermal effect) is built as a [`SimArm`] (rebuilt only when temperature or payload
+//! change) with the truth's four-bars as bodies ([`FourBarBodies`]); the arm is placed at
+//! `q` and each four-bar's crank solved to close its loop there ([`FourBarBodies::place`]).
 //!
-//! The bevel gear 4->5 (`N = 32/19` with its error function) is part of the joint values the
-//! driver computes (kinematic mode, and the servo targets of compliant mode): rapier has no
-//! gear joint, and in compliant mode each joint's servo holds its own target, so the gear
-//! acts as two coupled position motors whose targets satisfy
-//! `q_5 = theta_act_5 + g_45(theta_act_4)` exactly; the sag of joint 4 under load is not fed
-//! back into joint 5 (a stiff-gear approximation, documented as such).
+//! - Kinematic mode (no `compliance` effect): that placement is the answer.
+//! - Dynamic mode: servos of the effect's stiffness (implicit springs, [`SimArm::set_servo`])
+//!   hold every joint at `q` except a four-bar's driven joint, which has no servo: actuator
+//!   `b`'s servo holds the crank at the angle just solved, so the mechanism carries link `b`'s
+//!   load and `theta_23` comes out of the loop (for a truth whose 2->3 coupling is not the
+//!   four-bar itself, e.g. the paper's fractional form, the crank angle absorbs the difference
+//!   between the two laws, so at infinite stiffness the arm still reaches `q` exactly and only
+//!   the compliance is the mechanism's). The other passive couplings (the bevel gear 4->5 with
+//!   its error function, 3->4) are emulated by coupled servo targets updated before every step
+//!   ([`CoupledTargets`]). The arm is stepped to its static equilibrium under gravity and the
+//!   payload. Where a four-bar cannot close at the commanded pose (the truth's law reaches
+//!   poses the mechanism cannot) its loop is opened for that pose and its joint keeps its own
+//!   servo ([`FourBarBodies::set_loop_closed`]).
+//!
+//! Axis wobble is applied to the link poses afterwards ([`Effects::apply_wobble`]), and line
+//! of sight uses the same wobbled poses for the link capsules, plus the crank and rod of
+//! each four-bar as capsules.
 
 use super::SimError;
-use super::arm::{ArmOptions, LinkInertia, SimArm};
+use super::arm::{ArmBody, ArmOptions, LinkInertia, SimArm};
 use super::four_bar::FourBarBodies;
-use super::servo::{Compliance, ServoGains, SettleOptions};
+use super::gear::CoupledTargets;
+use super::servo::{ServoGains, SettleOptions, SettleReport};
 use super::visibility::is_visible_from_all;
-use crate::campaign::{ArmExecutor, Effects, ExecuteError, JointDriver, PoseConditions};
+use crate::campaign::{ArmExecutor, DrivenJoints, Effects, ExecuteError, JointDriver, PoseConditions};
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, RobotDescription, TruthRobot};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -43,7 +52,8 @@ pub struct RapierArmOptions {
     pub damping_ratio: f64,
     /// Settling of the compliant mode.
     pub settle: SettleOptions,
-    /// Build the truth's four-bars as bodies.
+    /// Build the truth's four-bars as bodies: placed in kinematic mode, driving their joint in
+    /// dynamic mode (off: every joint has its own servo and every coupling is emulated).
     pub four_bar_bodies: bool,
 }
 
@@ -72,6 +82,7 @@ pub struct RapierArm {
     truth: TruthRobot,
     built: Option<Built>,
     placed_shapes: Vec<(Isometry3<f64>, SharedShape)>,
+    last_settle: Option<SettleReport>,
 }
 
 struct Built {
@@ -101,6 +112,7 @@ impl RapierArm {
             truth,
             built: None,
             placed_shapes: Vec::new(),
+            last_settle: None,
         }
     }
 
@@ -112,6 +124,11 @@ impl RapierArm {
     /// The rapier arm of the last executed pose, if any.
     pub fn sim_arm(&self) -> Option<&SimArm> {
         self.built.as_ref().map(|b| &b.arm)
+    }
+
+    /// The static-equilibrium solve of the last executed pose (dynamic mode only).
+    pub fn last_settle(&self) -> Option<&SettleReport> {
+        self.last_settle.as_ref()
     }
 
     /// The four-bar bodies of the last executed pose.
@@ -137,9 +154,7 @@ impl RapierArm {
         };
         let mut arm = SimArm::new(&model, &self.inertias, &options)?;
         let mut four_bars = Vec::new();
-        // In compliant mode the bodies are left out: the impulse closure does not hold
-        // against the stiff servos (see `four_bar`), and the arm's servos carry the load.
-        if self.options.four_bar_bodies && self.effects.compliance.is_none() {
+        if self.options.four_bar_bodies {
             for l in &self.truth.four_bars {
                 four_bars.push(FourBarBodies::attach(&mut arm, l)?);
             }
@@ -152,7 +167,7 @@ impl RapierArm {
         })
     }
 
-    fn run(&mut self, conditions: &PoseConditions, q: &[f64]) -> Result<Vec<Isometry3<f64>>, SimError> {
+    fn run(&mut self, conditions: &PoseConditions, driven: &DrivenJoints) -> Result<Vec<Isometry3<f64>>, SimError> {
         let stale = self.built.as_ref().is_none_or(|b| {
             b.temperature_c.to_bits() != conditions.temperature_c.to_bits()
                 || b.payload_kg.to_bits() != conditions.payload_kg.to_bits()
@@ -164,27 +179,80 @@ impl RapierArm {
             unreachable!("built above")
         };
         let arm = &mut built.arm;
-        let compliance = match &self.effects.compliance {
-            None => Compliance::Rigid,
-            Some(c) => Compliance::Servo(ServoGains::with_damping_ratio(
-                arm,
-                q,
-                &c.stiffness_nm_per_rad,
-                self.options.damping_ratio,
-            )),
+        let q = &driven.q;
+        arm.set_joint_positions(q)?;
+        let joint_positions = match &self.effects.compliance {
+            None => {
+                for fb in &mut built.four_bars {
+                    // Kinematic placement: a linkage that cannot close here is left where it
+                    // was (the link poses do not depend on it).
+                    let _ = fb.place(arm);
+                }
+                arm.joint_positions()
+            }
+            Some(c) => {
+                // A loop that cannot close at this pose is opened (see
+                // `FourBarBodies::set_loop_closed`) and its joint keeps its servo.
+                let crank_targets: Vec<Option<f64>> = built.four_bars.iter_mut().map(|fb| fb.place(arm).ok()).collect();
+                let gains = ServoGains::with_damping_ratio(arm, q, &c.stiffness_nm_per_rad, self.options.damping_ratio);
+                arm.set_servo(q, &gains)?;
+                for (fb, crank) in built.four_bars.iter().zip(&crank_targets) {
+                    fb.set_loop_closed(arm, crank.is_some())?;
+                    let b = fb.driven_joint();
+                    let (k, d) = (gains.stiffness_nm_per_rad[b], gains.damping_nms_per_rad[b]);
+                    match crank {
+                        Some(crank) => fb.drive(arm, *crank, k, d)?,
+                        None => fb.hold_crank(arm, k, d)?,
+                    }
+                }
+                let mut coupled = CoupledTargets::new(&self.truth, &built.four_bars, &crank_targets, q, &driven.active);
+                let four_bars = &built.four_bars;
+                let report = arm.settle_with(&[], &self.options.settle, |arm| coupled.update(arm, four_bars))?;
+                let q_rest = report.joint_positions.clone();
+                self.last_settle = Some(report);
+                q_rest
+            }
         };
-        let report = arm.static_equilibrium(q, &compliance, &[], &self.options.settle)?;
-        for fb in &mut built.four_bars {
-            // Kinematic placement: a linkage that cannot close here is left where it was.
-            let _ = fb.place(arm);
-        }
         let n = self.model.dof();
         let mut links: Vec<Isometry3<f64>> = (0..n).map(|k| arm.world_from_link(k)).collect();
-        self.placed_shapes = arm.placed_shapes();
         let model = arm.model().clone();
-        self.effects.apply_wobble(&model, &report.joint_positions, &mut links);
+        let unwobbled = links.clone();
+        self.effects.apply_wobble(&model, &joint_positions, &mut links);
+        self.placed_shapes = placed_shapes(arm, &built.four_bars, &unwobbled, &links);
         Ok(links)
     }
+}
+
+/// The collision shapes at the executed pose: each link's shapes moved with the link's wobble
+/// correction (`wobbled * unwobbled^-1`), and each four-bar's crank and rod as capsules moved
+/// with the wobble of the link carrying the crank's axis.
+fn placed_shapes(
+    arm: &SimArm,
+    four_bars: &[FourBarBodies],
+    unwobbled: &[Isometry3<f64>],
+    wobbled: &[Isometry3<f64>],
+) -> Vec<(Isometry3<f64>, SharedShape)> {
+    let correction = |body: ArmBody| match body {
+        ArmBody::Base => Isometry3::identity(),
+        ArmBody::Link(k) => wobbled[k] * unwobbled[k].inverse(),
+    };
+    let mut shapes: Vec<(Isometry3<f64>, SharedShape)> = arm
+        .shapes()
+        .iter()
+        .map(|s| {
+            (
+                correction(s.body) * arm.world_from_body(s.body) * s.body_from_shape,
+                s.shape.clone(),
+            )
+        })
+        .collect();
+    for fb in four_bars {
+        let carrier = fb.driven_joint().checked_sub(2).map_or(ArmBody::Base, ArmBody::Link);
+        for (pose, shape) in fb.placed_shapes(arm) {
+            shapes.push((correction(carrier) * pose, shape));
+        }
+    }
+    shapes
 }
 
 impl ArmExecutor for RapierArm {
@@ -198,8 +266,8 @@ impl ArmExecutor for RapierArm {
             cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
             reason,
         };
-        let q = self.driver.drive(cmd, rng).map_err(|e| fail(e.to_string()))?.q;
-        self.run(conditions, &q).map_err(|e| fail(e.to_string()))
+        let driven = self.driver.drive(cmd, rng).map_err(|e| fail(e.to_string()))?;
+        self.run(conditions, &driven).map_err(|e| fail(e.to_string()))
     }
 
     fn visible(&self, point_m: &Point3<f64>) -> bool {

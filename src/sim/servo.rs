@@ -1,17 +1,29 @@
 //! Dynamic mode: position servos with finite stiffness holding the arm against gravity, and
 //! the static-equilibrium solve.
 //!
-//! Each joint's motor is a rapier position motor with [`MotorModel::ForceBased`], so its
-//! generalised force is `tau_k = -K_k (q_k - q_cmd_k) - D_k dq_k/dt` with `K` in N m/rad
-//! (N/m for prismatic joints). At rest the soft-constraint impulse of the motor is exactly
-//! `K_k (q_cmd_k - q_k) dt` per step, so the equilibrium satisfies `K dq = Q_gravity(q)`, the
-//! usual joint-stiffness model of servo compliance.
+//! Each servo is a rapier *implicit joint spring* (`MultibodyJoint::set_spring`, rest position
+//! = the commanded value) plus the multibody's implicit per-DoF damping: the generalised force
+//! is `tau_k = -K_k (q_k - q_cmd_k) - D_k dq_k/dt` with `K` in N m/rad (N/m for prismatic
+//! joints), and both terms are integrated backward-Euler inside the multibody's mass matrix
+//! (`dt^2 K + dt D` on its diagonal). At rest the equilibrium satisfies `K dq = Q_gravity(q)`,
+//! the usual joint-stiffness model of servo compliance.
+//!
+//! Why springs and not rapier joint motors: a position motor is a soft velocity constraint
+//! solved by the PGS loop next to any loop-closing impulse joint, and with stiff gains the two
+//! fight: measured on rapier 0.36.1 (dt 1 ms, 16 solver iterations, 1e8 N m/rad) the four-bar
+//! closure of [`FourBarBodies`](super::FourBarBodies) held only 1.6-1.8 micrometres (0.45 with
+//! 4 PGS iterations per substep) and joint 3 was off by 9-13 microradians (4), whereas with
+//! implicit springs the closure is the only constraint, its effective mass already contains
+//! the servos, and it holds to 2e-12 to 1.3e-10 m. (A rapier motor with zero stiffness and
+//! damping is not "off" either: its zero-softness constraint locks the joint velocity, which
+//! is what opened the loop by centimetres when joint 3 was "released" that way; a passive
+//! joint here has no spring, no damping and no motor.)
 
 use super::SimArm;
 use super::SimError;
 use super::arm::{LinkPoint, check_len, check_positive};
 use nalgebra::Point3;
-use rapier3d_f64::prelude::{JointAxis, MotorModel};
+use rapier3d_f64::prelude::{JointAxis, MultibodyJointHandle, PhysicsWorld};
 
 /// Servo stiffness and damping per joint.
 #[derive(Clone, Debug, PartialEq)]
@@ -104,18 +116,19 @@ pub struct SettleReport {
 }
 
 impl SimArm {
-    /// Puts the joint motors in position mode towards `q_cmd` with the given gains
-    /// (force-based, so stiffness is in N m/rad).
+    /// Puts every joint's servo (implicit spring and damping, module docs) on `q_cmd` with the
+    /// given gains.
     pub fn set_servo(&mut self, q_cmd: &[f64], gains: &ServoGains) -> Result<(), SimError> {
         let n = self.model.dof();
         check_len("commanded joint values", n, q_cmd.len())?;
         check_len("servo stiffness", n, gains.stiffness_nm_per_rad.len())?;
         check_len("servo damping", n, gains.damping_nms_per_rad.len())?;
-        let per_joint = q_cmd
+        for (k, (&stiffness, &damping)) in gains
+            .stiffness_nm_per_rad
             .iter()
-            .zip(&gains.stiffness_nm_per_rad)
-            .zip(&gains.damping_nms_per_rad);
-        for (k, ((&target, &stiffness), &damping)) in per_joint.enumerate() {
+            .zip(&gains.damping_nms_per_rad)
+            .enumerate()
+        {
             check_positive("servo stiffness", k, stiffness)?;
             if !(damping.is_finite() && damping >= 0.0) {
                 return Err(SimError::NotPositive {
@@ -124,27 +137,22 @@ impl SimArm {
                     value: damping,
                 });
             }
-            let axis = match self.model.joints[k].kind {
-                crate::kinematics::JointKind::Revolute => JointAxis::AngX,
-                crate::kinematics::JointKind::Prismatic => JointAxis::LinX,
-            };
-            let Some((mb, id)) = self.world.multibody_joints.get_mut(self.joints[k]) else {
-                return Err(SimError::JointRejected { joint: k });
-            };
-            let Some(link) = mb.link_mut(id) else {
-                return Err(SimError::JointRejected { joint: k });
-            };
-            link.joint
-                .data
-                .set_motor_model(axis, MotorModel::ForceBased)
-                .set_motor_position(axis, target, stiffness, damping);
+        }
+        for (k, ((&target, &stiffness), &damping)) in q_cmd
+            .iter()
+            .zip(&gains.stiffness_nm_per_rad)
+            .zip(&gains.damping_nms_per_rad)
+            .enumerate()
+        {
+            self.set_joint_servo(k, target, stiffness, damping)?;
         }
         Ok(())
     }
 
-    /// Sets one joint's (0-based) force-based position motor; stiffness and damping 0 turn it
-    /// off (a passive joint).
-    pub fn set_joint_motor(
+    /// Sets one joint's (0-based) servo: implicit spring of stiffness `K` \[N m/rad\] towards
+    /// `target` and damping `D` \[N m s/rad\]; `K = D = 0` makes the joint passive (e.g. driven
+    /// by a four-bar).
+    pub fn set_joint_servo(
         &mut self,
         k: usize,
         target: f64,
@@ -156,22 +164,51 @@ impl SimArm {
             Some(crate::kinematics::JointKind::Prismatic) => JointAxis::LinX,
             None => return Err(SimError::JointRejected { joint: k }),
         };
-        let Some((mb, id)) = self.world.multibody_joints.get_mut(self.joints[k]) else {
-            return Err(SimError::JointRejected { joint: k });
+        let handle = self.joints[k];
+        set_joint_spring(
+            &mut self.world,
+            handle,
+            axis,
+            target,
+            stiffness_nm_per_rad,
+            damping_nms_per_rad,
+        )
+        .ok_or(SimError::JointRejected { joint: k })
+    }
+
+    /// Moves joint `k`'s servo target, keeping its gains (a per-step coupling such as the
+    /// bevel gear sets it every step).
+    pub fn set_joint_servo_target(&mut self, k: usize, target: f64) -> Result<(), SimError> {
+        let axis = match self.model.joints.get(k).map(|j| j.kind) {
+            Some(crate::kinematics::JointKind::Revolute) => 3,
+            Some(crate::kinematics::JointKind::Prismatic) => 0,
+            None => return Err(SimError::JointRejected { joint: k }),
         };
-        let Some(link) = mb.link_mut(id) else {
-            return Err(SimError::JointRejected { joint: k });
-        };
-        link.joint
-            .data
-            .set_motor_model(axis, MotorModel::ForceBased)
-            .set_motor_position(axis, target, stiffness_nm_per_rad, damping_nms_per_rad);
+        let (mb, id) = self
+            .world
+            .multibody_joints
+            .get_mut(self.joints[k])
+            .ok_or(SimError::JointRejected { joint: k })?;
+        let link = mb.link_mut(id).ok_or(SimError::JointRejected { joint: k })?;
+        let (stiffness, _) = link.joint.spring(axis);
+        link.joint.set_spring(axis, stiffness, target);
         Ok(())
     }
 
     /// Steps the dynamics until every watched point (the tool-frame origin and `watch`) moves
     /// slower than `options.speed_tolerance_m_s` for `options.quiet_steps` steps in a row.
     pub fn settle(&mut self, watch: &[LinkPoint], options: &SettleOptions) -> Result<SettleReport, SimError> {
+        self.settle_with(watch, options, |_| Ok(()))
+    }
+
+    /// [`SimArm::settle`] calling `before_step` before every step (e.g. to move a servo target
+    /// that depends on the current joint values, as the bevel gear does).
+    pub fn settle_with(
+        &mut self,
+        watch: &[LinkPoint],
+        options: &SettleOptions,
+        mut before_step: impl FnMut(&mut SimArm) -> Result<(), SimError>,
+    ) -> Result<SettleReport, SimError> {
         self.world.integration_parameters.dt = options.dt_s;
         self.world.integration_parameters.num_solver_iterations = options.solver_iterations;
         let mut points: Vec<LinkPoint> = watch.to_vec();
@@ -184,6 +221,7 @@ impl SimArm {
         let mut quiet = 0;
         let mut max_speed_m_s = f64::INFINITY;
         for step in 1..=options.max_steps {
+            before_step(self)?;
             self.world.step();
             let now: Vec<Point3<f64>> = points.iter().map(|p| self.point_in_world(p)).collect();
             max_speed_m_s = now
@@ -234,6 +272,27 @@ impl SimArm {
             }
         }
     }
+}
+
+/// Puts an implicit spring (`stiffness` towards `target`) and implicit damping on the free
+/// `axis` of a multibody joint, and takes the axis out of rapier's motor mask (module docs).
+/// `None` if the handle is not in the world.
+pub(super) fn set_joint_spring(
+    world: &mut PhysicsWorld,
+    handle: MultibodyJointHandle,
+    axis: JointAxis,
+    target: f64,
+    stiffness: f64,
+    damping: f64,
+) -> Option<()> {
+    let (mb, id) = world.multibody_joints.get_mut(handle)?;
+    let link = mb.link_mut(id)?;
+    let dof = link.assembly_id();
+    let index = axis as usize;
+    link.joint.data.motor_axes.remove(axis.into());
+    link.joint.set_spring(index, stiffness, target);
+    *mb.damping_mut().get_mut(dof)? = damping;
+    Some(())
 }
 
 #[cfg(test)]

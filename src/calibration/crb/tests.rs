@@ -1,6 +1,7 @@
 //! Monte-Carlo checks of the efficient estimator against the Cramer-Rao bound on a
 //! Table-1-like sweep (45 deg, 16 points, r = 0.7 m, 0.19 mm 3-D RMS noise).
 
+use approx::assert_relative_eq;
 use nalgebra::{Point3, Rotation3, Vector3};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
@@ -148,5 +149,32 @@ fn paper_estimator_efficiency_is_measured_side_by_side() {
         );
         // The bound holds for any (nearly unbiased) estimator.
         assert!(e.efficiency <= 1.0 + K_SIGMA * e.relative_standard_error);
+    }
+}
+
+#[test]
+fn direction_sigma_from_the_out_of_plane_block_equals_the_full_bound() {
+    let s = table1_scenario();
+    let sigma = 0.19e-3 / 3f64.sqrt();
+    for (form, coefficients) in [
+        (TransmissionForm::Harmonic { order: 1 }, vec![0.0035, -0.0009]),
+        (
+            TransmissionForm::Gear {
+                ratio: 32.0 / 19.0,
+                order: 2,
+            },
+            vec![0.041227, 0.002, -0.000013, 0.001],
+        ),
+    ] {
+        let params = ArcParams {
+            coefficients,
+            ..s.truth.clone()
+        };
+        for span in [0.3, 0.8, std::f64::consts::PI, 4.5] {
+            let full = uniform_arc_crb(&params, form, -0.2, span, 16, sigma).unwrap();
+            let block = uniform_arc_direction_sigma(&params, form, -0.2, span, 16, sigma).unwrap();
+            // Both are rounding-limited inverses of well-conditioned matrices.
+            assert_relative_eq!(block, full.direction_sigma_rad(), max_relative = 1e-9);
+        }
     }
 }
