@@ -4,7 +4,7 @@
 //! of the fig. 3 joint semantics.
 
 use super::poses::Pose;
-use crate::campaign::{AxisWobble, ComplianceEffect, Effects, GearHarmonic, LinkMass, ThermalEffect};
+use crate::campaign::{AxisWobble, ComplianceEffect, Effects, GearHarmonic, LinkMass, PassiveSlope, ThermalEffect};
 use crate::kinematics::JointKind;
 use crate::robot::{Controller, CouplingFunction, RobotDescription, TransmissionFitForm, TruthRobot};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -33,8 +33,10 @@ pub fn unmodelled_harmonic_order(desc: &RobotDescription, joint: usize) -> usize
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "effect", rename_all = "snake_case")]
 pub enum Candidate {
-    /// Joint `joint` deflects by `c Q_j(q)`, `Q_j` the gravity torque about it (one
-    /// compliance `c` \[rad/(N m)\]).
+    /// Actuator `joint` sags by `c Q_j(q)`, `Q_j` the gravity torque about it (plus the load a
+    /// four-bar reflects), and the sag drives the passive coupling into the next joint (one
+    /// compliance `c` \[rad/(N m)\]; the truth's physics,
+    /// [`coupled_first_order_deflection`](crate::campaign::coupled_first_order_deflection)).
     JointCompliance {
         /// 1-based joint.
         joint: usize,
@@ -174,6 +176,25 @@ fn perturb_coupling(g: Option<&mut CouplingFunction>, d: &[f64]) -> usize {
         }
         Some(CouplingFunction::FourBar(_)) | None => 0,
     }
+}
+
+/// The calibrated couplings at the active displacements `active`, for
+/// [`coupled_first_order_deflection`](crate::campaign::coupled_first_order_deflection): the
+/// slope of every `coupling_in`; the fractional (eq. 15) and four-bar forms are mechanisms that
+/// also carry the driven joint's load back to the actuator below, a gear is kinematic only.
+fn passive_slopes(robot: &TruthRobot, active: &[f64]) -> Vec<PassiveSlope> {
+    robot
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(k, j)| match (&j.coupling_in, k.checked_sub(1)) {
+            (Some(g), Some(below)) => PassiveSlope {
+                slope: g.slope(active[below]),
+                reflects_load: matches!(g, CouplingFunction::Fractional { .. } | CouplingFunction::FourBar(_)),
+            },
+            _ => PassiveSlope::default(),
+        })
+        .collect()
 }
 
 /// The calibrated robot with the refit parameters and one optional candidate: predicts the
@@ -376,8 +397,11 @@ impl Predictor {
             }
             let model_t = effects.thermal_model(&model, pose.temperature_c);
             if let Some(Candidate::JointCompliance { joint }) = self.candidate {
+                // Unit compliance at `joint`, rigid elsewhere: the deflection is linear in `c`.
+                let mut stiffness_nm_per_rad = vec![f64::INFINITY; q.len()];
+                stiffness_nm_per_rad[joint - 1] = 1.0;
                 let unit = ComplianceEffect {
-                    stiffness_nm_per_rad: vec![1.0; q.len()],
+                    stiffness_nm_per_rad,
                     gravity_m_s2: GRAVITY_M_S2,
                 };
                 let payload = (pose.payload_kg > 0.0).then(|| {
@@ -386,8 +410,17 @@ impl Predictor {
                         Point3::from(model_t.last_link_from_tool.translation.vector),
                     )
                 });
-                let torque = crate::campaign::first_order_deflection(&model_t, &q, &self.masses, payload, &unit);
-                q[joint - 1] += e[0] * torque[joint - 1];
+                let dq = crate::campaign::coupled_first_order_deflection(
+                    &model_t,
+                    &q,
+                    &self.masses,
+                    payload,
+                    &unit,
+                    &passive_slopes(&robot, &active),
+                );
+                for (qk, d) in q.iter_mut().zip(dq) {
+                    *qk += e[0] * d;
+                }
             }
             let mut links = model_t.poses(&q).world_from_link;
             effects.apply_wobble(&model_t, &q, &mut links);
