@@ -57,6 +57,15 @@ pub struct BlindScore {
     pub named_precision: f64,
     /// Among correctly named effects, the fraction whose held-out gap shrank by >= 70 %.
     pub shrunk_70: f64,
+    /// Among correctly named effects whose gap before is large enough for a 70 % shrink to be
+    /// resolved (`0.3 gap_before >= detectable_gap_mm`, the smallest gap the noise-only test
+    /// flags), the fraction that shrank by >= 70 %.
+    pub shrunk_70_resolvable: f64,
+    /// Number of those resolvable cases.
+    pub resolvable: usize,
+    /// Among correctly named effects, the fraction that shrank by >= 70 % or whose remaining
+    /// gap is below `detectable_gap_mm` (not distinguishable from noise).
+    pub shrunk_70_or_at_noise: f64,
     /// Median of `gap_after / gap_before` over correctly named effects.
     pub median_gap_ratio: f64,
     /// Mean `gap_before` and `gap_after` over correctly named effects \[mm\].
@@ -82,6 +91,9 @@ struct Tally {
     named: usize,
     named_ok: usize,
     shrunk: usize,
+    resolvable: usize,
+    resolvable_shrunk: usize,
+    shrunk_or_noise: usize,
 }
 
 fn frac(a: usize, b: usize) -> f64 {
@@ -131,7 +143,13 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
             n.named_ok += 1;
             if d.gap_before_mm > 0.0 {
                 ratios.push(d.gap_after_mm / d.gap_before_mm);
-                n.shrunk += usize::from(d.gap_after_mm <= 0.3 * d.gap_before_mm);
+                let shrunk = d.gap_after_mm <= 0.3 * d.gap_before_mm;
+                n.shrunk += usize::from(shrunk);
+                n.shrunk_or_noise += usize::from(shrunk || d.gap_after_mm < d.detectable_gap_mm);
+                if 0.3 * d.gap_before_mm >= d.detectable_gap_mm {
+                    n.resolvable += 1;
+                    n.resolvable_shrunk += usize::from(shrunk);
+                }
             }
             before += d.gap_before_mm;
             after += d.gap_after_mm;
@@ -154,6 +172,9 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
         out_of_set_unexplained: frac(n.out_ok, n.out),
         named_precision: frac(n.named_ok, n.named),
         shrunk_70: frac(n.shrunk, ratios.len()),
+        shrunk_70_resolvable: frac(n.resolvable_shrunk, n.resolvable),
+        resolvable: n.resolvable,
+        shrunk_70_or_at_noise: frac(n.shrunk_or_noise, ratios.len()),
         median_gap_ratio: if ratios.is_empty() {
             f64::NAN
         } else {
@@ -176,7 +197,8 @@ impl BlindScore {
             s,
             "{} cases: in-set effects above their detectable size named right {:.2} ({} cases), right joint {:.2}; \
              below it read `none` or right {:.2} ({} cases); no-effect cases `none` {:.2}; out-of-set `unexplained` {:.2}; \
-             named precision {:.2}; gap shrunk >= 70 % in {:.2} of the found cases (median after/before {:.2}, mean {:.3} -> {:.3} mm); \
+             named precision {:.2}; gap shrunk >= 70 % in {:.2} of the found cases ({:.2} of the {} where the noise resolves it; \
+             shrunk or left below the detectable gap {:.2}; median after/before {:.2}, mean {:.3} -> {:.3} mm); \
              all cases right {:.2}\n",
             self.cases,
             self.detectable_in_set_accuracy,
@@ -188,6 +210,9 @@ impl BlindScore {
             self.out_of_set_unexplained,
             self.named_precision,
             self.shrunk_70,
+            self.shrunk_70_resolvable,
+            self.resolvable,
+            self.shrunk_70_or_at_noise,
             self.median_gap_ratio,
             self.mean_gap_before_after_mm[0],
             self.mean_gap_before_after_mm[1],
