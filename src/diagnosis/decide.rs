@@ -5,7 +5,7 @@ use super::stats::{mean, quantile, std_dev, upper_tail};
 use super::{
     Candidate, CandidateScore, Diagnosis, DiagnosisOptions, LinearFit, NullData, Parameter, Prepared, WhereEntry,
 };
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 /// A candidate's fit and its statistics.
 struct Scored {
@@ -17,12 +17,19 @@ struct Scored {
     z_null: Vec<f64>,
 }
 
-fn fitted_parameters(c: Candidate, fit: &LinearFit, prep: &Prepared, sigma2: f64) -> Vec<Parameter> {
-    let r_train = prep.residuals.rows(0, prep.train_rows).into_owned();
-    let p = fit.params(&r_train);
-    let inside = fit.span.transpose() * &r_train;
+/// The candidate's parameters `p` (after the refit's) with their standard deviations from the
+/// fit's covariance, scaled by the training residual variance when it exceeds the noise's
+/// (`ssr_train` the training SSR left by the fit).
+fn fitted_parameters(
+    c: Candidate,
+    p: &DVector<f64>,
+    fit: &LinearFit,
+    ssr_train: f64,
+    prep: &Prepared,
+    sigma2: f64,
+) -> Vec<Parameter> {
     let dof = prep.train_rows.saturating_sub(fit.rank).max(1);
-    let var = sigma2.max((r_train.norm_squared() - inside.norm_squared()).max(0.0) / dof as f64);
+    let var = sigma2.max(ssr_train.max(0.0) / dof as f64);
     let g = prep.x_geometric.ncols();
     let mut out: Vec<Parameter> = c
         .parameter_names()
@@ -76,7 +83,12 @@ fn score_candidates(prep: &Prepared, null: &NullData, base: &LinearFit, g: (f64,
                 significant: false,
                 outside_refit_fraction: outside,
                 weight: 0.0,
-                parameters: fitted_parameters(*c, &fit, prep, sigma2),
+                parameters: {
+                    let r_train = prep.residuals.rows(0, prep.train_rows).into_owned();
+                    let inside = fit.span.transpose() * &r_train;
+                    let left = r_train.norm_squared() - inside.norm_squared();
+                    fitted_parameters(*c, &fit.params(&r_train), &fit, left, prep, sigma2)
+                },
             },
             chi2,
             chi2_null,
@@ -139,9 +151,6 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         .map(|s| s / sigma2)
         .collect();
     let (g_mean, g_sd, g_q) = (mean(&g_null), std_dev(&g_null), quantile(&g_null, 1.0 - alpha));
-    let rms_before = to_rms_mm(g_obs);
-    let noise_before = to_rms_mm(g_mean);
-    let gap_before = (rms_before.powi(2) - noise_before.powi(2)).max(0.0).sqrt();
     let gap_sigmas = (g_obs - g_mean) / g_sd.max(1e-12);
     let detectable_gap_mm = to_rms_mm(g_q - g_mean);
     let p_gap = upper_tail(&g_null, g_obs);
@@ -170,6 +179,24 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     for s in scored.iter_mut().filter(|s| s.score.significant) {
         s.score.weight = (-(s.chi2 - chi2_min) / 2.0).exp() / z_sum;
     }
+    // The named candidate and the baseline it is compared with, refit beyond their
+    // linearisation (the tests above stay linear, as their null distributions).
+    let mut g_fit = g_obs;
+    if let Some(b) = scored.iter_mut().find(|s| s.score.significant)
+        && let Some((_, x)) = prep.x_candidates.iter().find(|(c, _)| *c == b.candidate)
+        && let (Some(rb), Some(rc)) = (prep.refine(None), prep.refine(Some((b.candidate, x))))
+    {
+        g_fit = g_fit.min(rb.heldout_ssr / sigma2);
+        b.chi2 = b.chi2.min(rc.heldout_ssr / sigma2);
+        let (rms, noise) = (to_rms_mm(b.chi2), to_rms_mm(mean(&b.chi2_null)));
+        b.score.heldout_rms_mm = rms;
+        b.score.gap_after_mm = (rms * rms - noise * noise).max(0.0).sqrt();
+        b.score.improvement_chi2 = g_fit - b.chi2;
+        b.score.parameters = fitted_parameters(b.candidate, &rc.params, &rc.fit, rc.r_train.norm_squared(), prep, sigma2);
+    }
+    let rms_before = to_rms_mm(g_fit);
+    let noise_before = to_rms_mm(g_mean);
+    let gap_before = (rms_before.powi(2) - noise_before.powi(2)).max(0.0).sqrt();
     let best = scored.iter().find(|s| s.score.significant);
     let fraction_closed = match best {
         Some(b) if gap_before > 0.0 => 1.0 - (b.score.gap_after_mm / gap_before).powi(2),
