@@ -218,7 +218,11 @@ impl BlindScore {
             self.mean_gap_before_after_mm[1],
             self.effect_accuracy,
         );
-        let _ = writeln!(s, "| expected \\ diagnosed | {} |", self.confusion.diagnosed.join(" | "));
+        let _ = writeln!(
+            s,
+            "| expected \\ diagnosed | {} |",
+            self.confusion.diagnosed.join(" | ")
+        );
         let _ = writeln!(s, "|---|{}", "---|".repeat(self.confusion.diagnosed.len()));
         for (l, row) in self.confusion.expected.iter().zip(&self.confusion.counts) {
             let cells: Vec<String> = row.iter().map(|c| c.to_string()).collect();
@@ -242,7 +246,11 @@ pub fn case_table(results: &[CaseResult]) -> String {
             k.case,
             k.effect,
             k.joint.map_or("-".into(), |j| j.to_string()),
-            if k.effect == "none" { "-".into() } else { format!("{:.3e}", k.magnitude) },
+            if k.effect == "none" {
+                "-".into()
+            } else {
+                format!("{:.3e}", k.magnitude)
+            },
             k.magnitude_unit,
             opt(r.detectable_magnitude, 2),
             r.size_ratio.map_or("-".into(), |v| format!("{v:.2}")),

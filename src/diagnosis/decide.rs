@@ -192,7 +192,14 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         b.score.heldout_rms_mm = rms;
         b.score.gap_after_mm = (rms * rms - noise * noise).max(0.0).sqrt();
         b.score.improvement_chi2 = g_fit - b.chi2;
-        b.score.parameters = fitted_parameters(b.candidate, &rc.params, &rc.fit, rc.r_train.norm_squared(), prep, sigma2);
+        b.score.parameters = fitted_parameters(
+            b.candidate,
+            &rc.params,
+            &rc.fit,
+            rc.r_train.norm_squared(),
+            prep,
+            sigma2,
+        );
     }
     let rms_before = to_rms_mm(g_fit);
     let noise_before = to_rms_mm(g_mean);

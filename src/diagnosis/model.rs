@@ -434,3 +434,76 @@ impl Predictor {
         Some(out)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::{
+        AnalyticArm, ArmExecutor, CalibrationPlan, PoseConditions, ValidationPlan, commands_to_internal,
+    };
+    use rand::{SeedableRng, rngs::StdRng};
+
+    /// The compliance candidate on the truth robot itself reproduces the analytic arm's
+    /// coupled sag (joint 3's sag drives nothing, joint 2's drives joint 3 through the
+    /// four-bar) to second order in the deflection, far better than an uncoupled sag.
+    #[test]
+    fn compliance_candidate_reproduces_the_coupled_sag() {
+        let desc = RobotDescription::asea_irb6l();
+        let mut truth = TruthRobot::paper_robot();
+        for j in &mut truth.joints {
+            j.repeatability_sigma = 0.0;
+        }
+        let joint = 2;
+        let stiffness_nm_per_rad = 2.0e4;
+        let mut stiffness = vec![f64::INFINITY; desc.dof()];
+        stiffness[joint - 1] = stiffness_nm_per_rad;
+        let effects = Effects {
+            compliance: Some(ComplianceEffect {
+                stiffness_nm_per_rad: stiffness,
+                gravity_m_s2: GRAVITY_M_S2,
+            }),
+            ..Effects::default()
+        };
+        let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(&desc)).with_effects(effects, &desc);
+        let plan = ValidationPlan {
+            poses: 12,
+            ..ValidationPlan::workspace_default(desc.dof())
+        };
+        let reference = CalibrationPlan::table1(desc.dof()).reference;
+        let mut rng = StdRng::seed_from_u64(1);
+        let poses: Vec<Pose> = plan
+            .commands(&desc, &reference)
+            .into_iter()
+            .enumerate()
+            .map(|(step, c)| {
+                let cmd = commands_to_internal(&desc, &c);
+                let links = arm.execute(&cmd, &PoseConditions::default(), &mut rng).unwrap();
+                let tool = links[desc.dof() - 1] * arm.last_link_from_tool();
+                Pose {
+                    experiment: "validation".into(),
+                    step,
+                    cmd,
+                    approach: vec![0.0; desc.dof()],
+                    temperature_c: PoseConditions::default().temperature_c,
+                    payload_kg: 0.0,
+                    targets: desc.tool_targets_m().iter().map(|t| tool * t).enumerate().collect(),
+                }
+            })
+            .collect();
+        let every: Vec<&Pose> = poses.iter().collect();
+        let reference_c = PoseConditions::default().temperature_c;
+        let candidate = Candidate::JointCompliance { joint };
+        let p = Predictor::new(&truth, &desc, reference_c, Some(candidate), RefitScope::Geometry);
+        let rms = |params: &[f64]| {
+            let r = p.residuals(params, &every).unwrap();
+            (r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64).sqrt()
+        };
+        let mut params = vec![0.0; p.geometric_count() + 1];
+        let without = rms(&params);
+        params[p.geometric_count()] = 1.0 / stiffness_nm_per_rad;
+        let with = rms(&params);
+        assert!(without > 1e-4, "the sag is visible: {without} m");
+        // Second order: (deflection)^2 times the reach.
+        assert!(with < 1e-3 * without, "candidate leaves {with} m of {without} m");
+    }
+}
