@@ -3,7 +3,7 @@
 
 use super::calibrate::{check_noise_mm, refuse_existing, write_output};
 use anyhow::{Context, Result};
-use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose, markdown};
+use axiscal::diagnosis::{DiagnosisOptions, RefitScope, axes_markdown, diagnose, diagnose_axes, markdown, validation_poses};
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
 use std::path::PathBuf;
@@ -35,6 +35,9 @@ pub struct Args {
     /// False-alarm rate of the gap and candidate tests.
     #[arg(long, default_value_t = DiagnosisOptions::default().false_alarm)]
     false_alarm: f64,
+    /// Noise-only replicas of the axis-experiments-only mode (data without validation poses).
+    #[arg(long, default_value_t = DiagnosisOptions::default().axis_replicas)]
+    axis_replicas: usize,
     /// Seed of the replicas' noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -65,13 +68,37 @@ pub fn run(args: Args) -> Result<()> {
             Refit::Geometry => RefitScope::Geometry,
         },
         seed: args.seed,
+        axis_replicas: args.axis_replicas,
         ..DiagnosisOptions::default()
     };
+    let source = args.data.display().to_string();
+    let names = ["diagnosis.json", "diagnosis.md"];
+    // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
+    if validation_poses(set.rows(), &desc).len() < 4 {
+        let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+        std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+        refuse_existing(&args.out, &names, args.force)?;
+        write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
+        write_output(&args.out, names[1], &axes_markdown(&d, &source), args.force)?;
+        println!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
+        for w in &d.where_ {
+            println!(
+                "  {:<10} joint {}  residual {:.4} mm  noise only {:.4} mm  ratio {:.2}{}",
+                w.experiment,
+                w.joint.map_or("-".into(), |j| j.to_string()),
+                w.residual_rms_mm,
+                w.noise_only_rms_mm,
+                w.excess_ratio,
+                if d.flagged.iter().any(|f| f.experiment == w.experiment) { "  beyond noise" } else { "" }
+            );
+        }
+        println!("{}: {}", d.effect, d.verdict);
+        println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
+        return Ok(());
+    }
     let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {}", args.data.display()))?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let names = ["diagnosis.json", "diagnosis.md"];
     refuse_existing(&args.out, &names, args.force)?;
-    let source = args.data.display().to_string();
     write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
     write_output(&args.out, names[1], &markdown(&d, &source), args.force)?;
     println!(

@@ -25,6 +25,7 @@
 //! 5. gap = `sqrt(max(0, rms^2 - rms_noise^2))` on the held-out poses, `rms_noise^2` the
 //!    noise-only mean of the same fit.
 
+mod axes;
 mod decide;
 mod features;
 mod linear;
@@ -35,6 +36,7 @@ mod report;
 mod result;
 mod stats;
 
+pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
 pub use linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{Candidate, GRAVITY_M_S2, Predictor, RefitScope, WOBBLE_ORDER, unmodelled_harmonic_order};
 pub use noise::{clean_positions, is_validation, replica};
@@ -93,6 +95,13 @@ pub struct DiagnosisOptions {
     /// at least this fraction of the gap's variance (an effect slightly off its candidate's
     /// form); below it the verdict is `unexplained`.
     pub explained_fraction: f64,
+    /// Noise-only replicas of the axis-experiments-only diagnosis ([`diagnose_axes`]).
+    #[serde(default = "default_axis_replicas")]
+    pub axis_replicas: usize,
+}
+
+fn default_axis_replicas() -> usize {
+    200
 }
 
 impl Default for DiagnosisOptions {
@@ -105,6 +114,7 @@ impl Default for DiagnosisOptions {
             refit: RefitScope::default(),
             false_alarm: 0.01,
             explained_fraction: 0.9,
+            axis_replicas: default_axis_replicas(),
         }
     }
 }

@@ -13,7 +13,8 @@ use rand_distr::{Distribution, StandardNormal};
 use std::collections::HashMap;
 
 /// Noise-free positions of every row of `set` on the calibrated robot \[m\]. Axis-experiment
-/// targets sit at their mean position in their link's frame (estimated from the measurements
+/// targets sit at their mean position in their link's frame (target 0's link for a target the
+/// description does not place) (estimated from the measurements
 /// through the calibrated model); tool targets at the description's tool targets.
 pub fn clean_positions(
     set: &MeasurementSet,
@@ -25,10 +26,11 @@ pub fn clean_positions(
     let tool_targets = desc.tool_targets_m();
     let link_of = |m: &Measurement| -> Option<usize> {
         let t = desc.axis_targets_of(m.moved_joint)?;
-        match m.target {
-            0 => Some(t.target0.link - 1),
-            1 => t.target1.map(|t| t.link - 1),
-            _ => None,
+        // A target the description does not place (e.g. a third reflector) turns rigidly with
+        // target 0: only the experiment's joint moves.
+        match (m.target, t.target1) {
+            (1, Some(t1)) => Some(t1.link - 1),
+            _ => Some(t.target0.link - 1),
         }
     };
     let mut frames = Vec::with_capacity(set.rows().len());
