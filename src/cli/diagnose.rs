@@ -3,7 +3,9 @@
 
 use super::calibrate::{check_noise_mm, refuse_existing, write_output};
 use anyhow::{Context, Result};
-use axiscal::diagnosis::{DiagnosisOptions, RefitScope, axes_markdown, diagnose, diagnose_axes, markdown, validation_poses};
+use axiscal::diagnosis::{
+    DiagnosisOptions, RefitScope, axes_markdown, diagnose, diagnose_axes, markdown, validation_poses,
+};
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
 use std::path::PathBuf;
@@ -89,7 +91,11 @@ pub fn run(args: Args) -> Result<()> {
                 w.residual_rms_mm,
                 w.noise_only_rms_mm,
                 w.excess_ratio,
-                if d.flagged.iter().any(|f| f.experiment == w.experiment) { "  beyond noise" } else { "" }
+                if d.flagged.iter().any(|f| f.experiment == w.experiment) {
+                    "  beyond noise"
+                } else {
+                    ""
+                }
             );
         }
         println!("{}: {}", d.effect, d.verdict);

@@ -137,7 +137,7 @@ impl Candidate {
             out.push(Candidate::AxisWobble { joint });
         }
         let t0 = poses.first().map_or(0.0, |p| p.temperature_c);
-        if poses.iter().any(|p| p.temperature_c != t0) {
+        if poses.iter().any(|p| (p.temperature_c - t0).abs() > 0.0) {
             out.push(Candidate::ThermalExpansion);
         }
         out.push(Candidate::InstrumentScale);
@@ -315,7 +315,6 @@ impl Predictor {
             j.transducer_offset += params[4 * rows + k];
         }
         let mut effects = Effects::default();
-        let mut robot = robot;
         if self.scope == RefitScope::Identified {
             let mut i = self.shape_start();
             for j in robot.joints.iter_mut() {
