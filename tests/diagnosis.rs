@@ -63,13 +63,13 @@ fn assert_found(r: &CaseResult) {
     let (k, d) = (&r.key, &r.diagnosis);
     let ratio = r.size_ratio.unwrap();
     assert!(ratio >= 2.0, "case too small for the test: size ratio {ratio}");
-    assert_eq!(d.effect, k.expected, "{}", d.verdict);
-    assert_eq!(d.joint, k.joint, "{}", d.verdict);
+    assert_eq!(d.outcome.effect, k.expected, "{}", d.verdict);
+    assert_eq!(d.outcome.joint, k.joint, "{}", d.verdict);
     assert!(
-        d.gap_after_mm <= 0.3 * d.gap_before_mm || d.gap_after_mm < d.detectable_gap_mm,
+        d.outcome.gap_after_mm <= 0.3 * d.outcome.gap_before_mm || d.outcome.gap_after_mm < d.detectable_gap_mm,
         "gap {} -> {} mm (detectable {})",
-        d.gap_before_mm,
-        d.gap_after_mm,
+        d.outcome.gap_before_mm,
+        d.outcome.gap_after_mm,
         d.detectable_gap_mm
     );
 }
@@ -78,7 +78,7 @@ fn assert_found(r: &CaseResult) {
 fn no_effect_is_none_and_json_has_the_fixed_fields() {
     let r = run_case("none", 3, |_| {});
     let d = &r.diagnosis;
-    assert_eq!(d.effect, "none", "{}", d.verdict);
+    assert_eq!(d.outcome.effect, "none", "{}", d.verdict);
     let json: serde_json::Value = serde_json::to_value(d).unwrap();
     for field in [
         "effect",
@@ -124,5 +124,5 @@ fn out_of_set_instrument_sag_is_unexplained() {
     let r = run_case("unknown", 7, |k| *k = key.clone());
     let d = &r.diagnosis;
     assert!(r.size_ratio.unwrap() >= 2.0);
-    assert_eq!(d.effect, "unexplained", "{}", d.verdict);
+    assert_eq!(d.outcome.effect, "unexplained", "{}", d.verdict);
 }

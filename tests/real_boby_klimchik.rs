@@ -178,7 +178,7 @@ fn diagnosis_from_arcs_alone_flags_axis_2() {
         ..Default::default()
     };
     let d = axiscal::diagnosis::diagnose_axes(&set, &desc, &options).unwrap();
-    assert_eq!(d.effect, "unexplained", "{}", d.verdict);
+    assert_eq!(d.outcome.effect, "unexplained", "{}", d.verdict);
     assert_eq!(d.where_[0].joint, Some(2));
     assert!(d.flagged.iter().any(|f| f.joint == 2));
     for joint in 4..=6 {

@@ -78,6 +78,23 @@ fn log_uniform<R: Rng + ?Sized>(rng: &mut R, lo: f64, hi: f64) -> f64 {
     (rng.random_range(lo.ln()..hi.ln())).exp()
 }
 
+/// A wobble of a random joint with a log-uniform amplitude in `amplitude_rad`.
+fn draw_wobble<R: Rng + ?Sized>(
+    rng: &mut R,
+    dof: usize,
+    amplitude_rad: [f64; 2],
+    phase_rad: f64,
+    order: i32,
+) -> AxisWobble {
+    let joint = rng.random_range(1..=dof);
+    AxisWobble {
+        joint,
+        amplitude_rad: log_uniform(rng, amplitude_rad[0], amplitude_rad[1]),
+        phase_rad,
+        order,
+    }
+}
+
 /// Settings of the generator.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlindOptions {
@@ -170,15 +187,9 @@ pub fn draw_effect<R: Rng + ?Sized>(
             (Some(joint), a, "rad")
         }
         "axis_wobble" => {
-            let joint = rng.random_range(1..=dof);
-            let a = log_uniform(rng, 4.0e-4, 1.0e-2);
-            e.wobble.push(AxisWobble {
-                joint,
-                amplitude_rad: a,
-                phase_rad: phase,
-                order: crate::diagnosis::WOBBLE_ORDER,
-            });
-            (Some(joint), a, "rad")
+            let w = draw_wobble(rng, dof, [4.0e-4, 1.0e-2], phase, crate::diagnosis::WOBBLE_ORDER);
+            e.wobble.push(w);
+            (Some(w.joint), w.amplitude_rad, "rad")
         }
         "unknown" if (case / CASE_EFFECTS.len()) % 2 == 1 => {
             let c = log_uniform(rng, 2.0e-4, 2.0e-3);
@@ -186,15 +197,9 @@ pub fn draw_effect<R: Rng + ?Sized>(
             (None, c, "1/m (instrument sag)")
         }
         "unknown" => {
-            let joint = rng.random_range(1..=dof);
-            let a = log_uniform(rng, 1.0e-3, 3.0e-3);
-            e.wobble.push(AxisWobble {
-                joint,
-                amplitude_rad: a,
-                phase_rad: phase,
-                order: 3,
-            });
-            (Some(joint), a, "rad (order-3 wobble)")
+            let w = draw_wobble(rng, dof, [1.0e-3, 3.0e-3], phase, 3);
+            e.wobble.push(w);
+            (Some(w.joint), w.amplitude_rad, "rad (order-3 wobble)")
         }
         "instrument_scale" => {
             let ppm = log_uniform(rng, 200.0, 6000.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };

@@ -108,7 +108,7 @@ fn is_named(effect: &str) -> bool {
 pub fn score(results: &[CaseResult]) -> BlindScore {
     let mut labels: Vec<String> = Vec::new();
     for r in results {
-        for l in [&r.key.expected, &r.diagnosis.effect] {
+        for l in [&r.key.expected, &r.diagnosis.outcome.effect] {
             if !labels.contains(l) {
                 labels.push(l.clone());
             }
@@ -122,10 +122,10 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
     let (mut before, mut after) = (0.0, 0.0);
     for r in results {
         let (k, d) = (&r.key, &r.diagnosis);
-        counts[pos(&k.expected)][pos(&d.effect)] += 1;
-        let right = k.expected == d.effect;
+        counts[pos(&k.expected)][pos(&d.outcome.effect)] += 1;
+        let right = k.expected == d.outcome.effect;
         n.correct += usize::from(right);
-        n.named += usize::from(is_named(&d.effect));
+        n.named += usize::from(is_named(&d.outcome.effect));
         if k.effect == "none" {
             n.nones += 1;
             n.nones_ok += usize::from(right);
@@ -137,25 +137,25 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
             n.det_ok += usize::from(right);
         } else {
             n.undet += 1;
-            n.undet_ok += usize::from(right || d.effect == "none");
+            n.undet_ok += usize::from(right || d.outcome.effect == "none");
         }
-        if right && is_named(&d.effect) {
+        if right && is_named(&d.outcome.effect) {
             n.named_ok += 1;
-            if d.gap_before_mm > 0.0 {
-                ratios.push(d.gap_after_mm / d.gap_before_mm);
-                let shrunk = d.gap_after_mm <= 0.3 * d.gap_before_mm;
+            if d.outcome.gap_before_mm > 0.0 {
+                ratios.push(d.outcome.gap_after_mm / d.outcome.gap_before_mm);
+                let shrunk = d.outcome.gap_after_mm <= 0.3 * d.outcome.gap_before_mm;
                 n.shrunk += usize::from(shrunk);
-                n.shrunk_or_noise += usize::from(shrunk || d.gap_after_mm < d.detectable_gap_mm);
-                if 0.3 * d.gap_before_mm >= d.detectable_gap_mm {
+                n.shrunk_or_noise += usize::from(shrunk || d.outcome.gap_after_mm < d.detectable_gap_mm);
+                if 0.3 * d.outcome.gap_before_mm >= d.detectable_gap_mm {
                     n.resolvable += 1;
                     n.resolvable_shrunk += usize::from(shrunk);
                 }
             }
-            before += d.gap_before_mm;
-            after += d.gap_after_mm;
+            before += d.outcome.gap_before_mm;
+            after += d.outcome.gap_after_mm;
             if k.joint.is_some() {
                 n.joint_total += 1;
-                n.joint_ok += usize::from(k.joint == d.joint);
+                n.joint_ok += usize::from(k.joint == d.outcome.joint);
             }
         }
     }
@@ -254,10 +254,10 @@ pub fn case_table(results: &[CaseResult]) -> String {
             k.magnitude_unit,
             opt(r.detectable_magnitude, 2),
             r.size_ratio.map_or("-".into(), |v| format!("{v:.2}")),
-            d.effect,
-            d.joint.map_or("-".into(), |j| j.to_string()),
-            d.gap_before_mm,
-            d.gap_after_mm
+            d.outcome.effect,
+            d.outcome.joint.map_or("-".into(), |j| j.to_string()),
+            d.outcome.gap_before_mm,
+            d.outcome.gap_after_mm
         );
     }
     s

@@ -98,7 +98,7 @@ pub fn run(args: Args) -> Result<()> {
                 }
             );
         }
-        println!("{}: {}", d.effect, d.verdict);
+        println!("{}: {}", d.outcome.effect, d.verdict);
         println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
         return Ok(());
     }
@@ -109,11 +109,11 @@ pub fn run(args: Args) -> Result<()> {
     write_output(&args.out, names[1], &markdown(&d, &source), args.force)?;
     println!(
         "{}{} (confidence {:.2}): gap {:.3} -> {:.3} mm",
-        d.effect,
-        d.joint.map_or(String::new(), |j| format!(" joint {j}")),
-        d.confidence,
-        d.gap_before_mm,
-        d.gap_after_mm
+        d.outcome.effect,
+        d.outcome.joint.map_or(String::new(), |j| format!(" joint {j}")),
+        d.outcome.confidence,
+        d.outcome.gap_before_mm,
+        d.outcome.gap_after_mm
     );
     println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
     Ok(())

@@ -8,7 +8,7 @@
 //! [`crate::diagnosis`]) and says that naming one needs validation poses.
 
 use super::stats::{mean, quantile, upper_tail};
-use super::{DiagnosisError, DiagnosisOptions, WhereEntry, calibrate_for, clean_positions, replica};
+use super::{DiagnosisError, DiagnosisOptions, Outcome, WhereEntry, calibrate_for, clean_positions, replica};
 use crate::measurement::MeasurementSet;
 use crate::robot::RobotDescription;
 use rand::{SeedableRng, rngs::StdRng};
@@ -39,17 +39,11 @@ pub struct FlaggedAxis {
 pub struct AxesDiagnosis {
     /// `axes_only`.
     pub mode: String,
-    /// `none` (every arc at the noise level) or `unexplained` (a gap, no candidate testable).
-    pub effect: String,
-    /// Always null: which joint carries an effect is the `where` ranking's first entry.
-    pub joint: Option<usize>,
-    /// `1 - p` of the most excessive axis against the family-wise null (0 for `none`).
-    pub confidence: f64,
-    /// Excess of the axis-experiment residual RMS over the noise-only RMS, all arcs \[mm\]:
-    /// `sqrt(max(0, rms^2 - rms_noise^2))`.
-    pub gap_before_mm: f64,
-    /// Equal to `gap_before_mm` (nothing fitted).
-    pub gap_after_mm: f64,
+    /// `none` (every arc at the noise level) or `unexplained` (a gap, no candidate testable);
+    /// joint null (the `where` ranking's first entry says where); `gap_after_mm =
+    /// gap_before_mm`, the excess of the arc residual RMS over the noise-only RMS, all arcs.
+    #[serde(flatten)]
+    pub outcome: Outcome,
     /// Per axis, ranked by excess ratio.
     #[serde(rename = "where")]
     pub where_: Vec<WhereEntry>,
@@ -168,11 +162,13 @@ pub fn diagnose_axes(
     };
     Ok(AxesDiagnosis {
         mode: "axes_only".into(),
-        effect: effect.into(),
-        joint: None,
-        confidence,
-        gap_before_mm: gap,
-        gap_after_mm: gap,
+        outcome: Outcome {
+            effect: effect.into(),
+            joint: None,
+            confidence,
+            gap_before_mm: gap,
+            gap_after_mm: gap,
+        },
         where_,
         candidates: vec![],
         flagged,
@@ -188,29 +184,26 @@ pub fn diagnose_axes(
 pub fn axes_markdown(d: &AxesDiagnosis, source: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Sim-to-real gap diagnosis of `{source}` (axis experiments only)\n");
-    let _ = writeln!(s, "**{}**, confidence {:.2}: {}.\n", d.effect, d.confidence, d.verdict);
+    let _ = writeln!(
+        s,
+        "**{}**, confidence {:.2}: {}.\n",
+        d.outcome.effect, d.outcome.confidence, d.verdict
+    );
     let _ = writeln!(
         s,
         "Arc-residual gap over noise {:.3} mm ({} noise-only replicas at {:.3} mm 3-D RMS).\n",
-        d.gap_before_mm, d.replicas, d.noise_rms_3d_mm
+        d.outcome.gap_before_mm, d.replicas, d.noise_rms_3d_mm
     );
-    let _ = writeln!(
-        s,
-        "| experiment | joint | residual RMS (mm) | noise only (mm) | ratio | flagged | consistent with |\n|---|---|---|---|---|---|---|"
-    );
-    for w in &d.where_ {
-        let f = d.flagged.iter().find(|f| f.experiment == w.experiment);
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.4} | {:.4} | {:.2} | {} | {} |",
-            w.experiment,
-            w.joint.map_or("-".into(), |j| j.to_string()),
-            w.residual_rms_mm,
-            w.noise_only_rms_mm,
-            w.excess_ratio,
-            f.map_or("no".into(), |f| format!("yes (p = {:.3})", f.p_value)),
-            f.map_or(String::new(), |f| f.consistent_with.join(", "))
-        );
-    }
+    s.push_str(&super::report::where_table(
+        &d.where_,
+        &["flagged", "consistent with"],
+        |w| {
+            let f = d.flagged.iter().find(|f| f.experiment == w.experiment);
+            vec![
+                f.map_or("no".into(), |f| format!("yes (p = {:.3})", f.p_value)),
+                f.map_or(String::new(), |f| f.consistent_with.join(", ")),
+            ]
+        },
+    ));
     s
 }

@@ -3,7 +3,8 @@
 
 use super::stats::{mean, quantile, std_dev, upper_tail};
 use super::{
-    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, LinearFit, NullData, Parameter, Prepared, WhereEntry,
+    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, LinearFit, NullData, Outcome, Parameter, Prepared,
+    WhereEntry,
 };
 use nalgebra::{DMatrix, DVector};
 
@@ -284,11 +285,13 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     };
     let base_params = prep.x_geometric.ncols();
     Diagnosis {
-        effect,
-        joint,
-        confidence,
-        gap_before_mm: gap_before,
-        gap_after_mm: gap_after,
+        outcome: Outcome {
+            effect,
+            joint,
+            confidence,
+            gap_before_mm: gap_before,
+            gap_after_mm: gap_after,
+        },
         where_: where_entries(prep, null, rms_before, noise_before),
         candidates: scored.into_iter().map(|s| s.score).collect(),
         parameters,

@@ -42,7 +42,7 @@ pub use model::{Candidate, GRAVITY_M_S2, Predictor, RefitScope, WOBBLE_ORDER, un
 pub use noise::{clean_positions, is_validation, replica};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
-pub use result::{CandidateScore, Diagnosis, Parameter, WhereEntry};
+pub use result::{CandidateScore, Diagnosis, Outcome, Parameter, WhereEntry};
 
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::measurement::MeasurementSet;

@@ -183,18 +183,9 @@ fn perturb_coupling(g: Option<&mut CouplingFunction>, d: &[f64]) -> usize {
 /// slope of every `coupling_in`; the fractional (eq. 15) and four-bar forms are mechanisms that
 /// also carry the driven joint's load back to the actuator below, a gear is kinematic only.
 fn passive_slopes(robot: &TruthRobot, active: &[f64]) -> Vec<PassiveSlope> {
-    robot
-        .joints
-        .iter()
-        .enumerate()
-        .map(|(k, j)| match (&j.coupling_in, k.checked_sub(1)) {
-            (Some(g), Some(below)) => PassiveSlope {
-                slope: g.slope(active[below]),
-                reflects_load: matches!(g, CouplingFunction::Fractional { .. } | CouplingFunction::FourBar(_)),
-            },
-            _ => PassiveSlope::default(),
-        })
-        .collect()
+    PassiveSlope::of_robot(robot, active, |_, g| {
+        matches!(g, CouplingFunction::Fractional { .. } | CouplingFunction::FourBar(_))
+    })
 }
 
 /// The calibrated robot with the refit parameters and one optional candidate: predicts the

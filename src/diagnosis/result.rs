@@ -60,9 +60,10 @@ pub struct CandidateScore {
     pub parameters: Vec<Parameter>,
 }
 
-/// The diagnosis (FORMATS.md section 3 plus details).
+/// The FORMATS.md section 3 verdict fields of a diagnosis ([`Diagnosis`],
+/// [`AxesDiagnosis`](super::AxesDiagnosis)).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Diagnosis {
+pub struct Outcome {
     /// `none`, `unexplained`, or a candidate's effect name.
     pub effect: String,
     /// The effect's joint, or `None`.
@@ -70,12 +71,20 @@ pub struct Diagnosis {
     /// Confidence in `effect` (0..1): for a named effect its weight among the significant
     /// candidates; for `none` the gap test's p-value (how often noise alone leaves at least
     /// this held-out residual); for `unexplained` one minus the p-value of the gap left by the
-    /// best candidate.
+    /// best candidate. (Axis-experiments-only mode: `1 - p` of the most excessive axis.)
     pub confidence: f64,
-    /// Held-out gap of the baseline \[mm\].
+    /// Held-out gap of the baseline \[mm\] (axis-experiments-only mode: the arcs' gap).
     pub gap_before_mm: f64,
     /// Held-out gap with the named effect (the baseline's when none is named) \[mm\].
     pub gap_after_mm: f64,
+}
+
+/// The diagnosis (FORMATS.md section 3 plus details).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Diagnosis {
+    /// The FORMATS.md section 3 verdict.
+    #[serde(flatten)]
+    pub outcome: Outcome,
     /// Experiments and workspace features ranked by excess over noise.
     #[serde(rename = "where")]
     pub where_: Vec<WhereEntry>,
