@@ -200,7 +200,13 @@ pub fn axes_markdown(d: &AxesDiagnosis, source: &str) -> String {
         |w| {
             let f = d.flagged.iter().find(|f| f.experiment == w.experiment);
             vec![
-                f.map_or("no".into(), |f| format!("yes (p = {:.3})", f.p_value)),
+                f.map_or("no".into(), |f| {
+                    if f.p_value > 0.0 {
+                        format!("yes (p = {:.3})", f.p_value)
+                    } else {
+                        format!("yes (p < 1/{})", d.replicas)
+                    }
+                }),
                 f.map_or(String::new(), |f| f.consistent_with.join(", ")),
             ]
         },
