@@ -104,6 +104,20 @@ pub struct BlindOptions {
     pub noise_rms_3d_mm: f64,
     /// Validation temperatures are drawn uniformly in `20 +- temperature_half_range_c`.
     pub temperature_half_range_c: f64,
+    /// The simulated robot.
+    pub simulator: Simulator,
+}
+
+/// The simulated robot of a blind suite.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Simulator {
+    /// [`AnalyticArm`]: the truth's kinematics with the effects to first order (compliance
+    /// by `coupled_first_order_deflection`).
+    #[default]
+    Analytic,
+    /// [`crate::sim::RapierArm`]: rapier bodies, the four-bar as bodies, compliance by the
+    /// servos' static equilibrium.
+    Rapier,
 }
 
 impl Default for BlindOptions {
@@ -112,6 +126,7 @@ impl Default for BlindOptions {
             validation_poses: 100,
             noise_rms_3d_mm: 0.19,
             temperature_half_range_c: 10.0,
+            simulator: Simulator::Analytic,
         }
     }
 }
@@ -227,15 +242,34 @@ pub fn draw_effect<R: Rng + ?Sized>(
 
 /// Simulates a case: the Table-1 axis experiments and the tool observation at 20 deg C, then
 /// `validation_poses` workspace poses at random temperatures, on the paper robot through the
-/// analytic arm with the case's effects (no repeatability jitter), measured with isotropic noise (and the instrument
-/// scale error, if any).
+/// options' [`Simulator`] with the case's effects (no repeatability jitter), measured with
+/// isotropic noise (and the instrument scale error, if any).
 pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOptions) -> Result<MeasurementSet, String> {
     // The diagnoser's noise model is the instrument's: no repeatability jitter.
     let mut truth = TruthRobot::paper_robot();
     for j in &mut truth.joints {
         j.repeatability_sigma = 0.0;
     }
-    let mut arm = AnalyticArm::new(truth, Controller::from_description(desc)).with_effects(key.effects.clone(), desc);
+    match options.simulator {
+        Simulator::Analytic => {
+            let mut arm =
+                AnalyticArm::new(truth, Controller::from_description(desc)).with_effects(key.effects.clone(), desc);
+            simulate_on(&mut arm, key, desc, options)
+        }
+        Simulator::Rapier => {
+            let options_rapier = crate::sim::RapierArmOptions::new(desc.dof());
+            let mut arm = crate::sim::RapierArm::new(truth, desc, key.effects.clone(), options_rapier);
+            simulate_on(&mut arm, key, desc, options)
+        }
+    }
+}
+
+fn simulate_on<A: ArmExecutor>(
+    arm: &mut A,
+    key: &CaseKey,
+    desc: &RobotDescription,
+    options: &BlindOptions,
+) -> Result<MeasurementSet, String> {
     let instrument = MeasurementModel::Isotropic(crate::measurement::IsotropicNoise {
         net_radial_rms_mm: options.noise_rms_3d_mm,
     });
@@ -249,8 +283,8 @@ pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOpti
         conditions: PoseConditions::default(),
         instrument_scale: key.effects.instrument_scale,
     };
-    let mut out = simulate_campaign_with(desc, &plan, &none, &mut arm, &instrument, &campaign, &mut rng)
-        .map_err(|e| e.to_string())?;
+    let mut out =
+        simulate_campaign_with(desc, &plan, &none, arm, &instrument, &campaign, &mut rng).map_err(|e| e.to_string())?;
     let validation = ValidationPlan {
         poses: options.validation_poses,
         seed: key.seed ^ 0x7a11,

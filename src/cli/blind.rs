@@ -3,7 +3,9 @@
 //! diagnoser reads the CSV back alone; `DIR/summary.{json,md}` hold the score.
 
 use anyhow::{Context, Result, bail};
-use axiscal::blind::{BlindOptions, CaseResult, case_table, detectable_size, draw_case, score, simulate_case};
+use axiscal::blind::{
+    BlindOptions, CaseResult, Simulator, case_table, detectable_size, draw_case, score, simulate_case,
+};
 use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::measurement::{read_measurements, write_measurements};
 use axiscal::robot::RobotDescription;
@@ -25,6 +27,9 @@ pub struct Args {
     /// Baseline refit scope of the diagnoser (`identified` or `geometry`).
     #[arg(long, default_value = "identified")]
     refit: String,
+    /// Simulated robot: `analytic` (first-order effects, fast) or `rapier` (bodies, servos).
+    #[arg(long, default_value = "analytic")]
+    sim: String,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -41,6 +46,11 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::asea_irb6l();
     let options = BlindOptions {
         validation_poses: args.poses,
+        simulator: match args.sim.as_str() {
+            "analytic" => Simulator::Analytic,
+            "rapier" => Simulator::Rapier,
+            other => bail!("--sim {other}: expected `analytic` or `rapier`"),
+        },
         ..BlindOptions::default()
     };
     let diagnosis_options = DiagnosisOptions {
