@@ -1,6 +1,6 @@
 //! Blind check of the diagnoser (`axiscal blind`): draws cases (an effect, its joint and
 //! magnitude, a seed; no-effect cases; an out-of-set "unknown" effect), simulates each on the
-//! paper robot with the analytic arm, writes the CSV and hides the truth in a separate key,
+//! paper robot (analytic or rapier arm, [`Simulator`]), writes the CSV and hides the truth in a separate key,
 //! runs [`diagnose`](crate::diagnosis::diagnose) on the CSV alone and scores the answers
 //! ([`score`]). This module sees the truth; the diagnoser never does.
 
