@@ -36,12 +36,10 @@ fn run_case(effect: &str, seed: u64, set_magnitude: impl Fn(&mut CaseKey)) -> Ca
     let mut key = draw_effect(effect, 0, seed, &desc, &mut StdRng::seed_from_u64(seed));
     set_magnitude(&mut key);
     let set = simulate_case(&key, &desc, &blind_options()).unwrap();
-    let dir = std::env::temp_dir().join(format!("axiscal-diagnosis-test-{effect}-{seed}"));
-    std::fs::create_dir_all(&dir).unwrap();
-    let csv = dir.join("data.csv");
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("data.csv");
     write_measurements(&csv, &set, true).unwrap();
     let blind = read_measurements(&csv, Some(desc.dof())).unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
     let d = diagnose(&blind, &desc, &diagnosis_options()).unwrap();
     let size = detectable_size(&key, &desc, &blind_options(), &diagnosis_options(), d.detectable_gap_mm).unwrap();
     CaseResult {
