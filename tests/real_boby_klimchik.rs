@@ -165,3 +165,23 @@ fn calibrates_six_axes_and_finds_axes_2_and_3_parallel() {
     );
     assert!(sigmas < 3.0, "axes 2 and 3 are {sigmas:.2} sigma from parallel");
 }
+
+/// `axiscal diagnose` without validation poses: the axis-experiments-only mode puts axis 2's
+/// arc (the sagging 2.6 m arm) beyond the noise-only replicas and the wrist axes within them.
+#[test]
+fn diagnosis_from_arcs_alone_flags_axis_2() {
+    let set = axiscal::measurement::import::boby_klimchik::import_dir(&data_dir()).unwrap();
+    let desc = axiscal::robot::RobotDescription::from_file(&robot()).unwrap();
+    let options = axiscal::diagnosis::DiagnosisOptions {
+        noise_rms_3d_mm: TRACKER_NOISE_MM,
+        axis_replicas: 50,
+        ..Default::default()
+    };
+    let d = axiscal::diagnosis::diagnose_axes(&set, &desc, &options).unwrap();
+    assert_eq!(d.outcome.effect, "unexplained", "{}", d.verdict);
+    assert_eq!(d.where_[0].joint, Some(2));
+    assert!(d.flagged.iter().any(|f| f.joint == 2));
+    for joint in 4..=6 {
+        assert!(!d.flagged.iter().any(|f| f.joint == joint), "{}", d.verdict);
+    }
+}

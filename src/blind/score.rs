@@ -1,10 +1,25 @@
-//! Scoring a blind suite: confusion matrix of the effect (expected vs diagnosed), joint
-//! accuracy, and the gap shrinkage of correctly named effects.
+//! Scoring a blind suite: confusion matrix of the effect (expected vs diagnosed), accuracy on
+//! the in-set cases above their detectable size, joint accuracy, `none` and `unexplained`
+//! rates, and the gap shrinkage of correctly named effects; a per-case table.
 
 use super::CaseKey;
 use crate::diagnosis::Diagnosis;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
+
+/// One scored case.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    /// The hidden truth.
+    pub key: CaseKey,
+    /// The diagnosis of the CSV alone.
+    pub diagnosis: Diagnosis,
+    /// Trace of the effect after the refit over the smallest gap the diagnoser flags (>= 1:
+    /// detectable), `None` without an effect.
+    pub size_ratio: Option<f64>,
+    /// The magnitude at which that ratio is 1 (unit of the key's `magnitude_unit`).
+    pub detectable_magnitude: Option<f64>,
+}
 
 /// Counts of (expected, diagnosed) effect names.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -17,17 +32,40 @@ pub struct ConfusionMatrix {
     pub counts: Vec<Vec<usize>>,
 }
 
-/// The suite's score.
+/// The suite's score (fractions are NaN when their set is empty).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BlindScore {
     /// Cases scored.
     pub cases: usize,
-    /// Fraction with the expected effect name.
+    /// Fraction of all cases with the expected effect name.
     pub effect_accuracy: f64,
+    /// In-set effect cases above their detectable size (size ratio >= 1).
+    pub detectable_in_set: usize,
+    /// Among those, the fraction named right.
+    pub detectable_in_set_accuracy: f64,
     /// Among correctly named per-joint effects, the fraction with the right joint.
     pub joint_accuracy: f64,
+    /// In-set effect cases below their detectable size.
+    pub undetectable_in_set: usize,
+    /// Among those, the fraction read as `none` or named right (never a wrong name).
+    pub undetectable_honest: f64,
+    /// Fraction of no-effect cases read as `none`.
+    pub none_accuracy: f64,
+    /// Fraction of out-of-set cases read as `unexplained`.
+    pub out_of_set_unexplained: f64,
     /// Among cases with a named effect (not `none`/`unexplained`), the fraction correct.
     pub named_precision: f64,
+    /// Among correctly named effects, the fraction whose held-out gap shrank by >= 70 %.
+    pub shrunk_70: f64,
+    /// Among correctly named effects whose gap before is large enough for a 70 % shrink to be
+    /// resolved (`0.3 gap_before >= detectable_gap_mm`, the smallest gap the noise-only test
+    /// flags), the fraction that shrank by >= 70 %.
+    pub shrunk_70_resolvable: f64,
+    /// Number of those resolvable cases.
+    pub resolvable: usize,
+    /// Among correctly named effects, the fraction that shrank by >= 70 % or whose remaining
+    /// gap is below `detectable_gap_mm` (not distinguishable from noise).
+    pub shrunk_70_or_at_noise: f64,
     /// Median of `gap_after / gap_before` over correctly named effects.
     pub median_gap_ratio: f64,
     /// Mean `gap_before` and `gap_after` over correctly named effects \[mm\].
@@ -36,11 +74,41 @@ pub struct BlindScore {
     pub confusion: ConfusionMatrix,
 }
 
+/// Case counts of [`score`].
+#[derive(Default)]
+struct Tally {
+    correct: usize,
+    det: usize,
+    det_ok: usize,
+    joint_total: usize,
+    joint_ok: usize,
+    undet: usize,
+    undet_ok: usize,
+    nones: usize,
+    nones_ok: usize,
+    out: usize,
+    out_ok: usize,
+    named: usize,
+    named_ok: usize,
+    shrunk: usize,
+    resolvable: usize,
+    resolvable_shrunk: usize,
+    shrunk_or_noise: usize,
+}
+
+fn frac(a: usize, b: usize) -> f64 {
+    if b == 0 { f64::NAN } else { a as f64 / b as f64 }
+}
+
+fn is_named(effect: &str) -> bool {
+    effect != "none" && effect != "unexplained"
+}
+
 /// Scores diagnoses against their keys.
-pub fn score(results: &[(CaseKey, Diagnosis)]) -> BlindScore {
+pub fn score(results: &[CaseResult]) -> BlindScore {
     let mut labels: Vec<String> = Vec::new();
-    for (k, d) in results {
-        for l in [&k.expected, &d.effect] {
+    for r in results {
+        for l in [&r.key.expected, &r.diagnosis.outcome.effect] {
             if !labels.contains(l) {
                 labels.push(l.clone());
             }
@@ -49,46 +117,70 @@ pub fn score(results: &[(CaseKey, Diagnosis)]) -> BlindScore {
     labels.sort();
     let mut counts = vec![vec![0; labels.len()]; labels.len()];
     let pos = |l: &String| labels.iter().position(|x| x == l).unwrap_or(0);
-    let (mut correct, mut joint_total, mut joint_ok, mut named, mut named_ok) = (0, 0, 0, 0, 0);
+    let mut n = Tally::default();
     let mut ratios = Vec::new();
     let (mut before, mut after) = (0.0, 0.0);
-    for (k, d) in results {
-        counts[pos(&k.expected)][pos(&d.effect)] += 1;
-        let is_named = d.effect != "none" && d.effect != "unexplained";
-        if is_named {
-            named += 1;
+    for r in results {
+        let (k, d) = (&r.key, &r.diagnosis);
+        counts[pos(&k.expected)][pos(&d.outcome.effect)] += 1;
+        let right = k.expected == d.outcome.effect;
+        n.correct += usize::from(right);
+        n.named += usize::from(is_named(&d.outcome.effect));
+        if k.effect == "none" {
+            n.nones += 1;
+            n.nones_ok += usize::from(right);
+        } else if k.expected == "unexplained" {
+            n.out += 1;
+            n.out_ok += usize::from(right);
+        } else if r.size_ratio.is_some_and(|s| s >= 1.0) {
+            n.det += 1;
+            n.det_ok += usize::from(right);
+        } else {
+            n.undet += 1;
+            n.undet_ok += usize::from(right || d.outcome.effect == "none");
         }
-        if k.expected == d.effect {
-            correct += 1;
-            if is_named {
-                named_ok += 1;
-                if d.gap_before_mm > 0.0 {
-                    ratios.push(d.gap_after_mm / d.gap_before_mm);
+        if right && is_named(&d.outcome.effect) {
+            n.named_ok += 1;
+            if d.outcome.gap_before_mm > 0.0 {
+                ratios.push(d.outcome.gap_after_mm / d.outcome.gap_before_mm);
+                let shrunk = d.outcome.gap_after_mm <= 0.3 * d.outcome.gap_before_mm;
+                n.shrunk += usize::from(shrunk);
+                n.shrunk_or_noise += usize::from(shrunk || d.outcome.gap_after_mm < d.detectable_gap_mm);
+                if 0.3 * d.outcome.gap_before_mm >= d.detectable_gap_mm {
+                    n.resolvable += 1;
+                    n.resolvable_shrunk += usize::from(shrunk);
                 }
-                before += d.gap_before_mm;
-                after += d.gap_after_mm;
             }
-            if k.joint.is_some() && is_named {
-                joint_total += 1;
-                if k.joint == d.joint {
-                    joint_ok += 1;
-                }
+            before += d.outcome.gap_before_mm;
+            after += d.outcome.gap_after_mm;
+            if k.joint.is_some() {
+                n.joint_total += 1;
+                n.joint_ok += usize::from(k.joint == d.outcome.joint);
             }
         }
     }
     ratios.sort_by(f64::total_cmp);
-    let frac = |a: usize, b: usize| if b == 0 { f64::NAN } else { a as f64 / b as f64 };
     BlindScore {
         cases: results.len(),
-        effect_accuracy: frac(correct, results.len()),
-        joint_accuracy: frac(joint_ok, joint_total),
-        named_precision: frac(named_ok, named),
+        effect_accuracy: frac(n.correct, results.len()),
+        detectable_in_set: n.det,
+        detectable_in_set_accuracy: frac(n.det_ok, n.det),
+        joint_accuracy: frac(n.joint_ok, n.joint_total),
+        undetectable_in_set: n.undet,
+        undetectable_honest: frac(n.undet_ok, n.undet),
+        none_accuracy: frac(n.nones_ok, n.nones),
+        out_of_set_unexplained: frac(n.out_ok, n.out),
+        named_precision: frac(n.named_ok, n.named),
+        shrunk_70: frac(n.shrunk, ratios.len()),
+        shrunk_70_resolvable: frac(n.resolvable_shrunk, n.resolvable),
+        resolvable: n.resolvable,
+        shrunk_70_or_at_noise: frac(n.shrunk_or_noise, ratios.len()),
         median_gap_ratio: if ratios.is_empty() {
             f64::NAN
         } else {
             ratios[ratios.len() / 2]
         },
-        mean_gap_before_after_mm: [before / named_ok.max(1) as f64, after / named_ok.max(1) as f64],
+        mean_gap_before_after_mm: [before / n.named_ok.max(1) as f64, after / n.named_ok.max(1) as f64],
         confusion: ConfusionMatrix {
             expected: labels.clone(),
             diagnosed: labels,
@@ -103,14 +195,28 @@ impl BlindScore {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "{} cases: effect accuracy {:.2}, joint accuracy {:.2}, named precision {:.2}, median gap after/before {:.2} (mean {:.3} -> {:.3} mm)\n",
+            "{} cases: in-set effects above their detectable size named right {:.2} ({} cases), right joint {:.2}; \
+             below it read `none` or right {:.2} ({} cases); no-effect cases `none` {:.2}; out-of-set `unexplained` {:.2}; \
+             named precision {:.2}; gap shrunk >= 70 % in {:.2} of the found cases ({:.2} of the {} where the noise resolves it; \
+             shrunk or left below the detectable gap {:.2}; median after/before {:.2}, mean {:.3} -> {:.3} mm); \
+             all cases right {:.2}\n",
             self.cases,
-            self.effect_accuracy,
+            self.detectable_in_set_accuracy,
+            self.detectable_in_set,
             self.joint_accuracy,
+            self.undetectable_honest,
+            self.undetectable_in_set,
+            self.none_accuracy,
+            self.out_of_set_unexplained,
             self.named_precision,
+            self.shrunk_70,
+            self.shrunk_70_resolvable,
+            self.resolvable,
+            self.shrunk_70_or_at_noise,
             self.median_gap_ratio,
             self.mean_gap_before_after_mm[0],
-            self.mean_gap_before_after_mm[1]
+            self.mean_gap_before_after_mm[1],
+            self.effect_accuracy,
         );
         let _ = writeln!(
             s,
@@ -124,4 +230,35 @@ impl BlindScore {
         }
         s
     }
+}
+
+/// Markdown table of every case: truth, size against the detectable size, verdict.
+pub fn case_table(results: &[CaseResult]) -> String {
+    let mut s = String::from(
+        "| case | effect | joint | magnitude | unit | detectable size | size / detectable | diagnosed | joint | gap before -> after (mm) |\n|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let opt = |x: Option<f64>, p: usize| x.map_or("-".to_owned(), |v| format!("{v:.p$e}"));
+    for r in results {
+        let (k, d) = (&r.key, &r.diagnosis);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} -> {:.3} |",
+            k.case,
+            k.effect,
+            k.joint.map_or("-".into(), |j| j.to_string()),
+            if k.effect == "none" {
+                "-".into()
+            } else {
+                format!("{:.3e}", k.magnitude)
+            },
+            k.magnitude_unit,
+            opt(r.detectable_magnitude, 2),
+            r.size_ratio.map_or("-".into(), |v| format!("{v:.2}")),
+            d.outcome.effect,
+            d.outcome.joint.map_or("-".into(), |j| j.to_string()),
+            d.outcome.gap_before_mm,
+            d.outcome.gap_after_mm
+        );
+    }
+    s
 }

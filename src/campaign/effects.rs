@@ -417,14 +417,25 @@ impl PassiveSlope {
     /// The truth's couplings at the active displacements `active`: slopes of every
     /// `coupling_in`, reflecting the load where one of the truth's four-bars drives the joint.
     pub fn of_truth(truth: &TruthRobot, active: &[f64]) -> Vec<Self> {
-        truth
+        Self::of_robot(truth, active, |k, _| truth.four_bars.iter().any(|l| l.from == k))
+    }
+
+    /// `robot`'s couplings at the active displacements `active`: slopes of every
+    /// `coupling_in`, reflecting the load where `reflects(k, g)` says the coupling `g` into
+    /// joint `k` (0-based) is a mechanism.
+    pub fn of_robot(
+        robot: &TruthRobot,
+        active: &[f64],
+        reflects: impl Fn(usize, &crate::robot::CouplingFunction) -> bool,
+    ) -> Vec<Self> {
+        robot
             .joints
             .iter()
             .enumerate()
             .map(|(k, j)| match (&j.coupling_in, k.checked_sub(1)) {
                 (Some(g), Some(below)) => PassiveSlope {
                     slope: g.slope(active[below]),
-                    reflects_load: truth.four_bars.iter().any(|l| l.from == k),
+                    reflects_load: reflects(k, g),
                 },
                 _ => PassiveSlope::default(),
             })

@@ -3,8 +3,10 @@
 //! diagnoser reads the CSV back alone; `DIR/summary.{json,md}` hold the score.
 
 use anyhow::{Context, Result, bail};
-use axiscal::blind::{BlindOptions, draw_case, score, simulate_case};
-use axiscal::diagnosis::{DiagnosisOptions, diagnose};
+use axiscal::blind::{
+    BlindOptions, CaseResult, Simulator, case_table, detectable_size, draw_case, score, simulate_case,
+};
+use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::measurement::{read_measurements, write_measurements};
 use axiscal::robot::RobotDescription;
 use rayon::prelude::*;
@@ -22,6 +24,12 @@ pub struct Args {
     /// Validation poses per case.
     #[arg(long, default_value_t = 100)]
     poses: usize,
+    /// Baseline refit scope of the diagnoser (`identified` or `geometry`).
+    #[arg(long, default_value = "identified")]
+    refit: String,
+    /// Simulated robot: `analytic` (first-order effects, fast) or `rapier` (bodies, servos).
+    #[arg(long, default_value = "analytic")]
+    sim: String,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -38,12 +46,25 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::asea_irb6l();
     let options = BlindOptions {
         validation_poses: args.poses,
+        simulator: match args.sim.as_str() {
+            "analytic" => Simulator::Analytic,
+            "rapier" => Simulator::Rapier,
+            other => bail!("--sim {other}: expected `analytic` or `rapier`"),
+        },
         ..BlindOptions::default()
+    };
+    let diagnosis_options = DiagnosisOptions {
+        refit: match args.refit.as_str() {
+            "identified" => RefitScope::Identified,
+            "geometry" => RefitScope::Geometry,
+            other => bail!("--refit {other}: expected `identified` or `geometry`"),
+        },
+        ..DiagnosisOptions::default()
     };
     let results: Vec<_> = (0..args.cases)
         .into_par_iter()
         .map(|i| -> Result<_> {
-            let key = draw_case(args.seed, i, desc.dof());
+            let key = draw_case(args.seed, i, &desc);
             let dir = args.out.join(format!("case-{i:03}"));
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
             let set = simulate_case(&key, &desc, &options).map_err(anyhow::Error::msg)?;
@@ -52,15 +73,27 @@ pub fn run(args: Args) -> Result<()> {
             std::fs::write(dir.join("key.json"), serde_json::to_string_pretty(&key)?)?;
             // The diagnoser sees the CSV alone.
             let blind = read_measurements(&csv, Some(desc.dof()))?;
-            let d = diagnose(&blind, &desc, &DiagnosisOptions::default())
-                .with_context(|| format!("diagnosing {}", csv.display()))?;
+            let d =
+                diagnose(&blind, &desc, &diagnosis_options).with_context(|| format!("diagnosing {}", csv.display()))?;
             std::fs::write(dir.join("diagnosis.json"), serde_json::to_string_pretty(&d)?)?;
-            Ok((key, d))
+            // Generator side (knows the truth): the effect's trace against the detectable gap.
+            let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)
+                .map_err(anyhow::Error::msg)?;
+            Ok(CaseResult {
+                key,
+                diagnosis: d,
+                size_ratio: size.map(|s| s.0),
+                detectable_magnitude: size.map(|s| s.1),
+            })
         })
         .collect::<Result<_>>()?;
     let s = score(&results);
     std::fs::write(args.out.join("summary.json"), serde_json::to_string_pretty(&s)?)?;
-    std::fs::write(args.out.join("summary.md"), s.markdown())?;
+    std::fs::write(
+        args.out.join("summary.md"),
+        format!("{}\n{}", s.markdown(), case_table(&results)),
+    )?;
+    std::fs::write(args.out.join("cases.json"), serde_json::to_string_pretty(&results)?)?;
     print!("{}", s.markdown());
     Ok(())
 }

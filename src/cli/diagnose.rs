@@ -3,7 +3,9 @@
 
 use super::calibrate::{check_noise_mm, refuse_existing, write_output};
 use anyhow::{Context, Result};
-use axiscal::diagnosis::{DiagnosisOptions, diagnose, markdown};
+use axiscal::diagnosis::{
+    DiagnosisOptions, RefitScope, axes_markdown, diagnose, diagnose_axes, markdown, validation_poses,
+};
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
 use std::path::PathBuf;
@@ -22,15 +24,35 @@ pub struct Args {
     /// Measurement noise of a point, 3-D RMS \[mm\].
     #[arg(long, default_value_t = 0.19)]
     noise_mm: f64,
-    /// Noise-only Monte-Carlo replicas.
-    #[arg(long, default_value_t = 8)]
+    /// Noise-only replicas of the campaign (each recalibrated).
+    #[arg(long, default_value_t = DiagnosisOptions::default().noise_trials)]
     noise_trials: usize,
+    /// Validation-noise draws per replica.
+    #[arg(long, default_value_t = DiagnosisOptions::default().noise_draws)]
+    noise_draws: usize,
+    /// What the baseline refit adjusts besides the geometry: `identified` (also the fitted
+    /// transmission harmonics and coupling slopes) or `geometry`.
+    #[arg(long, value_enum, default_value = "identified")]
+    refit: Refit,
+    /// False-alarm rate of the gap and candidate tests.
+    #[arg(long, default_value_t = DiagnosisOptions::default().false_alarm)]
+    false_alarm: f64,
+    /// Noise-only replicas of the axis-experiments-only mode (data without validation poses).
+    #[arg(long, default_value_t = DiagnosisOptions::default().axis_replicas)]
+    axis_replicas: usize,
     /// Seed of the replicas' noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
+}
+
+/// The `--refit` choices ([`RefitScope`]).
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum Refit {
+    Identified,
+    Geometry,
 }
 
 /// Runs `axiscal diagnose`.
@@ -41,23 +63,57 @@ pub fn run(args: Args) -> Result<()> {
     let options = DiagnosisOptions {
         noise_rms_3d_mm: args.noise_mm,
         noise_trials: args.noise_trials,
+        noise_draws: args.noise_draws,
+        false_alarm: args.false_alarm,
+        refit: match args.refit {
+            Refit::Identified => RefitScope::Identified,
+            Refit::Geometry => RefitScope::Geometry,
+        },
         seed: args.seed,
+        axis_replicas: args.axis_replicas,
         ..DiagnosisOptions::default()
     };
+    let source = args.data.display().to_string();
+    let names = ["diagnosis.json", "diagnosis.md"];
+    // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
+    if validation_poses(set.rows(), &desc).len() < 4 {
+        let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+        std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+        refuse_existing(&args.out, &names, args.force)?;
+        write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
+        write_output(&args.out, names[1], &axes_markdown(&d, &source), args.force)?;
+        println!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
+        for w in &d.where_ {
+            println!(
+                "  {:<10} joint {}  residual {:.4} mm  noise only {:.4} mm  ratio {:.2}{}",
+                w.experiment,
+                w.joint.map_or("-".into(), |j| j.to_string()),
+                w.residual_rms_mm,
+                w.noise_only_rms_mm,
+                w.excess_ratio,
+                if d.flagged.iter().any(|f| f.experiment == w.experiment) {
+                    "  beyond noise"
+                } else {
+                    ""
+                }
+            );
+        }
+        println!("{}: {}", d.outcome.effect, d.verdict);
+        println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
+        return Ok(());
+    }
     let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {}", args.data.display()))?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let names = ["diagnosis.json", "diagnosis.md"];
     refuse_existing(&args.out, &names, args.force)?;
-    let source = args.data.display().to_string();
     write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
     write_output(&args.out, names[1], &markdown(&d, &source), args.force)?;
     println!(
         "{}{} (confidence {:.2}): gap {:.3} -> {:.3} mm",
-        d.effect,
-        d.joint.map_or(String::new(), |j| format!(" joint {j}")),
-        d.confidence,
-        d.gap_before_mm,
-        d.gap_after_mm
+        d.outcome.effect,
+        d.outcome.joint.map_or(String::new(), |j| format!(" joint {j}")),
+        d.outcome.confidence,
+        d.outcome.gap_before_mm,
+        d.outcome.gap_after_mm
     );
     println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
     Ok(())

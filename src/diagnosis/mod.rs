@@ -4,37 +4,54 @@
 //! on training poses, scored on held-out ones), and HOW FAR the gap shrinks.
 //!
 //! Method:
-//! 1. calibrate with the standard procedure; a noise-only Monte-Carlo (the same commands on
-//!    the calibrated robot, [`replica`]) gives the residuals noise alone produces;
-//! 2. validation poses split into training (even) and held-out (odd) halves; the baseline is
-//!    the calibrated model refit on the training tool targets (rows `a`, `b`, `alpha`, joint
-//!    offsets, order-1 transmission harmonics, coupling slopes, base and tool frames;
-//!    Levenberg-Marquardt, [`levenberg_marquardt`]);
-//! 3. each [`Candidate`] is fitted on the same training poses on top of the refit and scored
-//!    on the held-out poses by a BIC-like criterion `chi2_heldout + p ln(n_heldout)` (Schwarz
-//!    1978, with the held-out chi-square in place of the likelihood); the confidence is the
-//!    softmax of `-score/2` over the baseline and the candidates (Akaike/Schwarz weights);
-//! 4. gap = `sqrt(max(0, rms^2 - rms_noise^2))` on the held-out poses. `none` when the
-//!    baseline gap is within `k` sigma of its noise-only spread; `unexplained` when the best
-//!    candidate removes less than a set fraction of the gap (in variance).
+//! 1. calibrate with the standard procedure; validation poses split into training (even) and
+//!    held-out (odd) halves;
+//! 2. the baseline is the calibrated model refined on the training poses by a geometric refit
+//!    (rows `a`, `b`, `alpha`, `beta`, joint zero offsets, base and tool frames; linearised,
+//!    redundant directions dropped by an SVD, [`LinearFit`]); transmission and coupling shapes
+//!    are not refit, so the candidate effects keep their trace (each candidate reports the
+//!    fraction of its signature outside the refit's span);
+//! 3. each [`Candidate`] is fitted on the same training poses on top of the refit; its score is
+//!    the held-out improvement `(SSR_base - SSR_c) / sigma^2`;
+//! 4. thresholds come from noise alone: `noise_trials` replicas of the whole campaign on the
+//!    calibrated robot (recalibrated each, [`replica`]), each with `noise_draws` draws of the
+//!    validation noise, give the null distribution of the baseline's held-out chi-square, of
+//!    every candidate's improvement (standardised to `z`) and of the maximum `z` over the
+//!    candidates. At false-alarm rate `alpha`: `none` when the held-out chi-square is below its
+//!    noise-only `1 - alpha` quantile; otherwise the candidate with the lowest held-out SSR
+//!    among those whose `z` beats the null maximum's quantile is named when the gap it leaves
+//!    is at the noise level (its own null quantile) or it removes `explained_fraction` of the
+//!    gap's variance; else `unexplained`;
+//! 5. gap = `sqrt(max(0, rms^2 - rms_noise^2))` on the held-out poses, `rms_noise^2` the
+//!    noise-only mean of the same fit.
 
-mod fit;
+mod axes;
+mod decide;
+mod features;
+mod linear;
 mod model;
 mod noise;
 mod poses;
 mod report;
+mod result;
+mod stats;
 
-pub use fit::{LsqFit, levenberg_marquardt};
-pub use model::{Candidate, GRAVITY_M_S2, HARMONIC_ORDER, Predictor, WOBBLE_ORDER};
-pub use noise::{clean_positions, replica};
+pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
+pub use linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
+pub use model::{Candidate, GRAVITY_M_S2, Predictor, RefitScope, WOBBLE_ORDER, unmodelled_harmonic_order};
+pub use noise::{clean_positions, is_validation, replica};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
+pub use result::{CandidateScore, Diagnosis, Outcome, Parameter, WhereEntry};
 
-use crate::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate};
+use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::measurement::MeasurementSet;
 use crate::robot::RobotDescription;
+use nalgebra::{DMatrix, DVector};
 use rand::{SeedableRng, rngs::StdRng};
+use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
+use stats::mean;
 
 /// Why a data set could not be diagnosed.
 #[derive(Debug, thiserror::Error)]
@@ -58,196 +75,317 @@ pub enum DiagnosisError {
     },
 }
 
-/// Iteration cap of a candidate's fit (it starts from the converged refit).
-pub const CANDIDATE_ITERATIONS: usize = 8;
-
 /// Options of [`diagnose`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DiagnosisOptions {
     /// Measurement noise, 3-D RMS of a point \[mm\].
     pub noise_rms_3d_mm: f64,
-    /// Noise-only Monte-Carlo replicas.
+    /// Noise-only replicas of the campaign (each recalibrated).
     pub noise_trials: usize,
+    /// Validation-noise draws per replica.
+    pub noise_draws: usize,
     /// Seed of the replicas' noise.
     pub seed: u64,
-    /// A gap counts when `rms^2 - rms_noise^2` exceeds this many sigma of its noise-only
-    /// spread.
-    pub significance_sigmas: f64,
-    /// An effect is named when it removes at least this fraction of the gap's variance.
+    /// What the baseline refit adjusts besides the geometry.
+    pub refit: RefitScope,
+    /// False-alarm rate of the gap test and of the candidate test (family-wise over the
+    /// candidates).
+    pub false_alarm: f64,
+    /// A significant candidate that leaves a significant gap is still named when it removes
+    /// at least this fraction of the gap's variance (an effect slightly off its candidate's
+    /// form); below it the verdict is `unexplained`.
     pub explained_fraction: f64,
-    /// Iteration cap of the refits.
-    pub max_iterations: usize,
+    /// Noise-only replicas of the axis-experiments-only diagnosis ([`diagnose_axes`]).
+    #[serde(default = "default_axis_replicas")]
+    pub axis_replicas: usize,
+}
+
+fn default_axis_replicas() -> usize {
+    200
 }
 
 impl Default for DiagnosisOptions {
     fn default() -> Self {
         DiagnosisOptions {
             noise_rms_3d_mm: 0.19,
-            noise_trials: 8,
+            noise_trials: 16,
+            noise_draws: 32,
             seed: 0,
-            significance_sigmas: 3.0,
-            explained_fraction: 0.5,
-            max_iterations: 60,
+            refit: RefitScope::default(),
+            false_alarm: 0.01,
+            explained_fraction: 0.9,
+            axis_replicas: default_axis_replicas(),
         }
     }
 }
 
-/// One `where` entry: an experiment's residual against its noise-only prediction.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct WhereEntry {
-    /// Experiment id (`validation` entries: the calibrated model on every validation pose;
-    /// `validation_heldout_refit`: the baseline on the held-out poses).
-    pub experiment: String,
-    /// The moved joint, or `None` for validation poses.
-    pub joint: Option<usize>,
-    /// Residual RMS over the noise-only RMS.
-    pub excess_ratio: f64,
-    /// Residual RMS \[mm\].
-    pub residual_rms_mm: f64,
-    /// Noise-only RMS \[mm\] (mean over the replicas, in variance).
-    pub noise_only_rms_mm: f64,
-}
-
-/// A fitted parameter with its 1-sigma.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Parameter {
-    /// Name with unit.
-    pub name: String,
-    /// Value.
-    pub value: f64,
-    /// 1-sigma from the fit's covariance (noise variance the larger of the stated one and the
-    /// fit's residual variance).
-    pub sigma: f64,
-}
-
-/// One scored candidate.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CandidateScore {
-    /// Effect name.
-    pub effect: String,
-    /// Joint, or `None`.
-    pub joint: Option<usize>,
-    /// Held-out position RMS with the effect \[mm\].
-    pub heldout_rms_mm: f64,
-    /// Held-out gap with the effect \[mm\].
-    pub gap_after_mm: f64,
-    /// BIC-like score (lower is better).
-    pub score: f64,
-    /// Softmax weight of `-score/2` over the baseline and all candidates.
-    pub weight: f64,
-    /// Fitted effect parameters.
-    pub parameters: Vec<Parameter>,
-}
-
-/// The diagnosis (FORMATS.md section 3 plus details).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Diagnosis {
-    /// `none`, `unexplained`, or a candidate's effect name.
-    pub effect: String,
-    /// The effect's joint, or `None`.
-    pub joint: Option<usize>,
-    /// Confidence in `effect` (0..1).
-    pub confidence: f64,
-    /// Held-out gap of the baseline \[mm\].
-    pub gap_before_mm: f64,
-    /// Held-out gap with the named effect (the baseline's when none is named) \[mm\].
-    pub gap_after_mm: f64,
-    /// Experiments ranked by excess over noise.
-    #[serde(rename = "where")]
-    pub where_: Vec<WhereEntry>,
-    /// Candidates, best first.
-    pub candidates: Vec<CandidateScore>,
-    /// The named effect's parameters.
-    pub parameters: Vec<Parameter>,
-    /// Noise assumed, 3-D RMS \[mm\].
-    pub noise_rms_3d_mm: f64,
-    /// Training and held-out pose counts.
-    pub poses: [usize; 2],
-    /// Baseline held-out RMS \[mm\].
-    pub heldout_rms_before_mm: f64,
-    /// Noise-only held-out RMS of the baseline \[mm\].
-    pub noise_only_rms_mm: f64,
-    /// Significance of the baseline gap: `(rms^2 - rms_noise^2) / spread` \[sigma\].
-    pub gap_sigmas: f64,
-    /// Fraction of the gap's variance the best candidate removes.
-    pub fraction_closed: f64,
-    /// One sentence.
-    pub verdict: String,
-}
-
-/// The calibrated model refit on the training poses, and its residuals.
-struct Baseline {
-    cal: crate::calibration::procedure::Calibration,
+/// The calibrated model, the validation poses and the linearised problem around it.
+struct Prepared {
+    cal: Calibration,
     predictor: Predictor,
-    fit: LsqFit,
-    /// Held-out residuals of the refit \[m\].
-    heldout: Vec<f64>,
-    /// Validation residuals of the calibrated model on every pose \[m\].
-    validation: Vec<f64>,
+    poses: Vec<Pose>,
+    /// Residual rows of the training poses (the first rows; the held-out ones follow).
+    train_rows: usize,
+    /// Held-out targets.
+    held_targets: usize,
+    /// Observed residuals `measured - calibrated model` \[m\], training rows first.
+    residuals: DVector<f64>,
+    /// Sensitivity to the geometric refit parameters.
+    x_geometric: DMatrix<f64>,
+    /// Sensitivity to each candidate's parameters.
+    x_candidates: Vec<(Candidate, DMatrix<f64>)>,
 }
 
-fn rms_3d_mm(r: &[f64]) -> f64 {
-    (r.iter().map(|x| x * x).sum::<f64>() / (r.len() / 3).max(1) as f64).sqrt() * 1e3
+fn model_error(what: &str) -> DiagnosisError {
+    DiagnosisError::Model {
+        message: format!("the calibrated model cannot execute a validation command ({what})"),
+    }
 }
 
-fn baseline(
+/// Training poses then held-out poses.
+fn ordered(poses: &[Pose]) -> Vec<&Pose> {
+    let (train, held) = split(poses);
+    train.into_iter().chain(held).collect()
+}
+
+fn calibrate_for(
     set: &MeasurementSet,
     desc: &RobotDescription,
-    options: &DiagnosisOptions,
-) -> Result<Baseline, DiagnosisError> {
-    let cal = calibrate(
+    noise_rms_3d_mm: f64,
+) -> Result<Calibration, DiagnosisError> {
+    Ok(calibrate(
         set,
         desc,
         &CalibrationOptions {
-            noise_rms_3d_mm: options.noise_rms_3d_mm,
+            noise_rms_3d_mm,
             ..CalibrationOptions::default()
         },
-    )?;
-    let all = validation_poses(set.rows(), desc);
-    if all.len() < 4 {
-        return Err(DiagnosisError::TooFewPoses {
-            found: all.len(),
-            needed: 4,
-        });
-    }
-    let axis_temps: Vec<f64> = set
+    )?)
+}
+
+/// The temperature the calibration holds at: the axis experiments' mean (20 deg C without).
+fn reference_temperature(set: &MeasurementSet) -> f64 {
+    let axis: Vec<f64> = set
         .rows()
         .iter()
         .filter(|m| m.moved_joint > 0)
         .map(|m| m.temperature_c)
         .collect();
-    let reference_c = if axis_temps.is_empty() {
-        20.0
-    } else {
-        axis_temps.iter().sum::<f64>() / axis_temps.len() as f64
-    };
-    let predictor = Predictor::new(&cal.robot, desc, reference_c, None);
-    let (train, held) = split(&all);
+    if axis.is_empty() { 20.0 } else { mean(&axis) }
+}
+
+fn prepare(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    noise_rms_3d_mm: f64,
+    scope: RefitScope,
+) -> Result<Prepared, DiagnosisError> {
+    let cal = calibrate_for(set, desc, noise_rms_3d_mm)?;
+    let poses = validation_poses(set.rows(), desc);
+    if poses.len() < 4 {
+        return Err(DiagnosisError::TooFewPoses {
+            found: poses.len(),
+            needed: 4,
+        });
+    }
+    let predictor = Predictor::new(&cal.robot, desc, reference_temperature(set), None, scope);
+    let (train, held) = split(&poses);
+    let train_rows = 3 * target_count(&train);
+    let held_targets = target_count(&held);
+    let order = ordered(&poses);
     let zeros = vec![0.0; predictor.geometric_count()];
-    let model_err = |what: &str| DiagnosisError::Model {
-        message: format!("the calibrated model cannot execute a validation command ({what})"),
-    };
-    let every: Vec<&Pose> = all.iter().collect();
-    let validation = predictor
-        .residuals(&zeros, &every)
-        .ok_or_else(|| model_err("all poses"))?;
-    let fit = levenberg_marquardt(
-        |p| predictor.residuals(p, &train),
-        &zeros,
-        &predictor.steps(),
-        options.max_iterations,
-    )
-    .ok_or_else(|| model_err("training poses"))?;
-    let heldout = predictor
-        .residuals(&fit.params, &held)
-        .ok_or_else(|| model_err("held-out poses"))?;
-    Ok(Baseline {
+    let residuals = DVector::from_vec(
+        predictor
+            .residuals(&zeros, &order)
+            .ok_or_else(|| model_error("residuals"))?,
+    );
+    let x_geometric = sensitivity(|p| predictor.residuals(p, &order), &zeros, &predictor.steps())
+        .ok_or_else(|| model_error("refit sensitivity"))?;
+    let mut x_candidates = Vec::new();
+    for c in Candidate::all(desc, &poses) {
+        let mut pred = predictor.clone();
+        pred.candidate = Some(c);
+        let g = pred.geometric_count();
+        let p0 = vec![0.0; g + pred.effect_count()];
+        let steps = pred.steps();
+        let x = sensitivity(
+            |e| {
+                let mut p = p0.clone();
+                p[g..].copy_from_slice(e);
+                pred.residuals(&p, &order)
+            },
+            &vec![0.0; pred.effect_count()],
+            &steps[g..],
+        )
+        .ok_or_else(|| model_error("candidate sensitivity"))?;
+        if x.norm() > 0.0 {
+            x_candidates.push((c, x));
+        }
+    }
+    Ok(Prepared {
         cal,
         predictor,
-        fit,
-        heldout,
-        validation,
+        poses,
+        train_rows,
+        held_targets,
+        residuals,
+        x_geometric,
+        x_candidates,
     })
+}
+
+impl Prepared {
+    fn rows(&self, x: &DMatrix<f64>) -> (DMatrix<f64>, DMatrix<f64>) {
+        let n = x.nrows();
+        (
+            x.rows(0, self.train_rows).into_owned(),
+            x.rows(self.train_rows, n - self.train_rows).into_owned(),
+        )
+    }
+
+    fn baseline_fit(&self) -> LinearFit {
+        let (t, h) = self.rows(&self.x_geometric);
+        LinearFit::new(&t, &h)
+    }
+
+    fn candidate_fit(&self, x_effect: &DMatrix<f64>) -> LinearFit {
+        let x = DMatrix::from_fn(
+            self.x_geometric.nrows(),
+            self.x_geometric.ncols() + x_effect.ncols(),
+            |r, c| {
+                if c < self.x_geometric.ncols() {
+                    self.x_geometric[(r, c)]
+                } else {
+                    x_effect[(r, c - self.x_geometric.ncols())]
+                }
+            },
+        );
+        let (t, h) = self.rows(&x);
+        LinearFit::new(&t, &h)
+    }
+
+    /// Held-out SSR \[m^2\] of `fit` for each data column of `data` (training rows first).
+    fn heldout_ssr(&self, fit: &LinearFit, data: &DMatrix<f64>) -> Vec<f64> {
+        let (t, h) = self.rows(data);
+        let r = fit.heldout(&t, &h);
+        r.column_iter().map(|c| c.norm_squared()).collect()
+    }
+}
+
+/// A fit of the observed data refined beyond its linearisation ([`Prepared::refine`]).
+struct Refined {
+    /// Held-out SSR \[m^2\] of the nonlinear model at the fitted parameters.
+    heldout_ssr: f64,
+    /// Fitted parameters (refit, then the candidate's).
+    params: DVector<f64>,
+    /// The fit linearised at the parameters (their covariance).
+    fit: LinearFit,
+    /// Training residuals at the parameters \[m\].
+    r_train: DVector<f64>,
+}
+
+impl Prepared {
+    /// The observed data fitted by the refit plus `candidate` (with its sensitivity `x_effect`)
+    /// with the nonlinear model: the linearised solution, then Gauss-Newton steps re-linearised
+    /// at the current parameters (kept while the training SSR falls). A large effect moves the
+    /// model far enough that the first-order fit leaves a visible second-order residual;
+    /// noise-only data (the null distributions) do not, so the linear null still applies.
+    fn refine(&self, candidate: Option<(Candidate, &DMatrix<f64>)>) -> Option<Refined> {
+        let mut pred = self.predictor.clone();
+        pred.candidate = candidate.map(|c| c.0);
+        let order = ordered(&self.poses);
+        let steps = pred.steps();
+        let mut fit = match candidate {
+            Some((_, x)) => self.candidate_fit(x),
+            None => self.baseline_fit(),
+        };
+        let train = |r: &DVector<f64>| r.rows(0, self.train_rows).into_owned();
+        let mut params = fit.params(&train(&self.residuals));
+        let mut r = DVector::from_vec(pred.residuals(params.as_slice(), &order)?);
+        for _ in 0..REFINE_STEPS {
+            let x = sensitivity(|q| pred.residuals(q, &order), params.as_slice(), &steps)?;
+            let (t, h) = self.rows(&x);
+            let next_fit = LinearFit::new(&t, &h);
+            let next = &params + next_fit.params(&train(&r));
+            let r_next = DVector::from_vec(pred.residuals(next.as_slice(), &order)?);
+            if train(&r_next).norm_squared() >= train(&r).norm_squared() {
+                break;
+            }
+            (params, r, fit) = (next, r_next, next_fit);
+        }
+        let n = r.len();
+        Some(Refined {
+            heldout_ssr: r.rows(self.train_rows, n - self.train_rows).norm_squared(),
+            params,
+            fit,
+            r_train: train(&r),
+        })
+    }
+}
+
+/// Gauss-Newton steps of [`Prepared::refine`] after the linearised solution.
+const REFINE_STEPS: usize = 2;
+
+/// Noise-only data: `noise_trials` recalibrated replicas times `noise_draws` validation-noise
+/// draws (columns, training rows first), and each replica's axis-experiment residual RMS^2.
+struct NullData {
+    samples: DMatrix<f64>,
+    axis_rms2: Vec<Vec<f64>>,
+}
+
+fn null_data(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    prep: &Prepared,
+    options: &DiagnosisOptions,
+) -> Result<NullData, DiagnosisError> {
+    let noise_m = options.noise_rms_3d_mm * 1e-3;
+    let sigma = noise_m / 3f64.sqrt();
+    let clean = clean_positions(set, &prep.cal, desc)?;
+    let mut rng = StdRng::seed_from_u64(options.seed);
+    let n = prep.residuals.len();
+    let draws = options.noise_draws.max(1);
+    let mut samples = DMatrix::zeros(n, options.noise_trials * draws);
+    let mut axis_rms2 = vec![Vec::new(); prep.cal.axes.len()];
+    let reference_c = reference_temperature(set);
+    for trial in 0..options.noise_trials {
+        let r = replica(set, &clean, noise_m, false, &mut rng)?;
+        let cal = calibrate_for(&r, desc, options.noise_rms_3d_mm)?;
+        for (acc, a) in axis_rms2.iter_mut().zip(&cal.axes) {
+            acc.push(a.residual_rms_mm.powi(2));
+        }
+        let poses = validation_poses(r.rows(), desc);
+        let pred = Predictor::new(&cal.robot, desc, reference_c, None, options.refit);
+        let systematic = pred
+            .residuals(&vec![0.0; pred.geometric_count()], &ordered(&poses))
+            .filter(|s| s.len() == n)
+            .ok_or_else(|| model_error("noise replica"))?;
+        for d in 0..draws {
+            let mut col = samples.column_mut(trial * draws + d);
+            for (x, s) in col.iter_mut().zip(&systematic) {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                *x = s + sigma * z;
+            }
+        }
+    }
+    Ok(NullData { samples, axis_rms2 })
+}
+
+/// Held-out RMS \[mm\] of the baseline (calibration + geometric refit) on `set`: with
+/// noise-free data, the trace an effect leaves after the refit (the blind check's detectable
+/// size).
+pub fn baseline_heldout_rms_mm(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &DiagnosisOptions,
+) -> Result<f64, DiagnosisError> {
+    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit)?;
+    let fit = prep.baseline_fit();
+    let ssr = prep.heldout_ssr(
+        &fit,
+        &DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice()),
+    );
+    Ok((ssr[0] / prep.held_targets.max(1) as f64).sqrt() * 1e3)
 }
 
 /// Diagnoses `set` (module docs). Deterministic for given options.
@@ -256,209 +394,7 @@ pub fn diagnose(
     desc: &RobotDescription,
     options: &DiagnosisOptions,
 ) -> Result<Diagnosis, DiagnosisError> {
-    let base = baseline(set, desc, options)?;
-    let noise_m = options.noise_rms_3d_mm * 1e-3;
-    let sigma2 = noise_m * noise_m / 3.0;
-    // Noise-only replicas of the whole pipeline (calibration + refit).
-    let clean = clean_positions(set, &base.cal, desc)?;
-    let mut rng = StdRng::seed_from_u64(options.seed);
-    let mut mc_heldout2 = Vec::new();
-    let mut mc_validation2 = Vec::new();
-    let mut mc_axis2 = vec![Vec::new(); base.cal.axes.len()];
-    for _ in 0..options.noise_trials {
-        let r = replica(set, &clean, noise_m, &mut rng)?;
-        let b = baseline(&r, desc, options)?;
-        mc_heldout2.push(rms_3d_mm(&b.heldout).powi(2));
-        mc_validation2.push(rms_3d_mm(&b.validation).powi(2));
-        for (acc, a) in mc_axis2.iter_mut().zip(&b.cal.axes) {
-            acc.push(a.residual_rms_mm.powi(2));
-        }
-    }
-    let mean = |v: &[f64]| {
-        if v.is_empty() {
-            f64::NAN
-        } else {
-            v.iter().sum::<f64>() / v.len() as f64
-        }
-    };
-    let held_eq = base.heldout.len();
-    let rms_before = rms_3d_mm(&base.heldout);
-    let noise2 = if mc_heldout2.is_empty() {
-        options.noise_rms_3d_mm.powi(2)
-    } else {
-        mean(&mc_heldout2)
-    };
-    let mc_spread = if mc_heldout2.len() > 1 {
-        (mc_heldout2.iter().map(|x| (x - noise2).powi(2)).sum::<f64>() / (mc_heldout2.len() - 1) as f64).sqrt()
-    } else {
-        0.0
-    };
-    // Chi-square spread of a mean of held_eq squared coordinates (3 per target).
-    let spread = mc_spread.max(noise2 * (2.0 / held_eq.max(1) as f64).sqrt());
-    let gap = |rms2: f64, noise2: f64| (rms2 - noise2).max(0.0).sqrt();
-    let gap_before = gap(rms_before.powi(2), noise2);
-    let gap_sigmas = (rms_before.powi(2) - noise2) / spread;
-
-    // Where.
-    let mut where_: Vec<WhereEntry> = base
-        .cal
-        .axes
-        .iter()
-        .zip(&mc_axis2)
-        .map(|(a, mc)| {
-            let n = mean(mc).sqrt();
-            WhereEntry {
-                experiment: a.experiment.clone(),
-                joint: Some(a.joint),
-                excess_ratio: a.residual_rms_mm / n,
-                residual_rms_mm: a.residual_rms_mm,
-                noise_only_rms_mm: n,
-            }
-        })
-        .collect();
-    let v = rms_3d_mm(&base.validation);
-    let vn = mean(&mc_validation2).sqrt();
-    where_.push(WhereEntry {
-        experiment: "validation".into(),
-        joint: None,
-        excess_ratio: v / vn,
-        residual_rms_mm: v,
-        noise_only_rms_mm: vn,
-    });
-    where_.push(WhereEntry {
-        experiment: "validation_heldout_refit".into(),
-        joint: None,
-        excess_ratio: rms_before / noise2.sqrt(),
-        residual_rms_mm: rms_before,
-        noise_only_rms_mm: noise2.sqrt(),
-    });
-    where_.sort_by(|a, b| b.excess_ratio.total_cmp(&a.excess_ratio));
-
-    // Which.
-    let all = validation_poses(set.rows(), desc);
-    let (train, held) = split(&all);
-    let temps: Vec<f64> = all.iter().map(|p| p.temperature_c).collect();
-    let t_mean = mean(&temps);
-    let t_spread = (temps.iter().map(|t| (t - t_mean).powi(2)).sum::<f64>() / temps.len() as f64).sqrt();
-    let train_eq = 3 * target_count(&train);
-    let score_of = |ssr: f64, p: usize| ssr / sigma2 + p as f64 * (held_eq as f64).ln();
-    let base_score = score_of(rms_before.powi(2) * 1e-6 * (held_eq / 3) as f64, 0);
-    let mut scored: Vec<CandidateScore> = Vec::new();
-    for c in Candidate::all(desc, &all, t_spread > 1.0) {
-        let mut pred = base.predictor.clone();
-        pred.candidate = Some(c);
-        let mut p0 = base.fit.params.clone();
-        p0.extend(std::iter::repeat_n(0.0, pred.effect_count()));
-        let Some(fit) = levenberg_marquardt(|p| pred.residuals(p, &train), &p0, &pred.steps(), CANDIDATE_ITERATIONS)
-        else {
-            continue;
-        };
-        let Some(r) = pred.residuals(&fit.params, &held) else {
-            continue;
-        };
-        let pe = pred.effect_count();
-        let ssr_h: f64 = r.iter().map(|x| x * x).sum();
-        let rms = rms_3d_mm(&r);
-        // Noise-only held-out MSE grows by sigma_3d^2 p / n_train_equations (linear model).
-        let noise2_c = noise2 + options.noise_rms_3d_mm.powi(2) * pe as f64 / train_eq as f64 * 3.0 / 3.0;
-        let var = sigma2.max(fit.ssr_m2 / (fit.equations.saturating_sub(fit.params.len()).max(1)) as f64);
-        let g = pred.geometric_count();
-        let parameters = c
-            .parameter_names()
-            .iter()
-            .enumerate()
-            .map(|(i, name)| Parameter {
-                name: (*name).to_owned(),
-                value: fit.params[g + i],
-                sigma: (fit.normal_inverse[(g + i, g + i)] * var).max(0.0).sqrt(),
-            })
-            .collect();
-        scored.push(CandidateScore {
-            effect: c.effect_name().into(),
-            joint: c.joint(),
-            heldout_rms_mm: rms,
-            gap_after_mm: gap(rms * rms, noise2_c),
-            score: score_of(ssr_h, pe),
-            weight: 0.0,
-            parameters,
-        });
-    }
-    scored.sort_by(|a, b| a.score.total_cmp(&b.score));
-    let best_score = scored.iter().map(|c| c.score).fold(base_score, f64::min);
-    let z: f64 = scored
-        .iter()
-        .map(|c| (-(c.score - best_score) / 2.0).exp())
-        .sum::<f64>()
-        + (-(base_score - best_score) / 2.0).exp();
-    for c in &mut scored {
-        c.weight = (-(c.score - best_score) / 2.0).exp() / z;
-    }
-    let base_weight = (-(base_score - best_score) / 2.0).exp() / z;
-
-    // Decision.
-    let best = scored.first().filter(|c| c.score < base_score);
-    let fraction_closed = match best {
-        Some(b) if gap_before > 0.0 => 1.0 - (b.gap_after_mm / gap_before).powi(2),
-        _ => 0.0,
-    };
-    let (effect, joint, confidence, gap_after, parameters, verdict) = if gap_sigmas < options.significance_sigmas {
-        (
-            "none".to_owned(),
-            None,
-            base_weight.max(1.0 - scored.first().map_or(0.0, |c| c.weight)),
-            gap_before,
-            vec![],
-            format!(
-                "held-out residual {rms_before:.3} mm is at the noise level ({:.3} mm; gap {gap_sigmas:.1} sigma < {})",
-                noise2.sqrt(),
-                options.significance_sigmas
-            ),
-        )
-    } else {
-        match best {
-            Some(b) if fraction_closed >= options.explained_fraction => (
-                b.effect.clone(),
-                b.joint,
-                b.weight,
-                b.gap_after_mm,
-                b.parameters.clone(),
-                format!(
-                    "{}{} closes {:.0} % of the gap's variance ({gap_before:.3} -> {:.3} mm)",
-                    b.effect,
-                    b.joint.map_or(String::new(), |j| format!(" on joint {j}")),
-                    100.0 * fraction_closed,
-                    b.gap_after_mm
-                ),
-            ),
-            _ => (
-                "unexplained".to_owned(),
-                None,
-                (1.0 - fraction_closed.max(0.0)).clamp(0.0, 1.0),
-                gap_before,
-                vec![],
-                format!(
-                    "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma) that no candidate closes by {:.0} % (best: {:.0} %)",
-                    100.0 * options.explained_fraction,
-                    100.0 * fraction_closed.max(0.0)
-                ),
-            ),
-        }
-    };
-    Ok(Diagnosis {
-        effect,
-        joint,
-        confidence,
-        gap_before_mm: gap_before,
-        gap_after_mm: gap_after,
-        where_,
-        candidates: scored,
-        parameters,
-        noise_rms_3d_mm: options.noise_rms_3d_mm,
-        poses: [train.len(), held.len()],
-        heldout_rms_before_mm: rms_before,
-        noise_only_rms_mm: noise2.sqrt(),
-        gap_sigmas,
-        fraction_closed,
-        verdict,
-    })
+    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit)?;
+    let null = null_data(set, desc, &prep, options)?;
+    Ok(decide::decide(&prep, &null, options))
 }

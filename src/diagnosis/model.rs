@@ -1,31 +1,42 @@
 //! The parametric models the diagnoser fits: the calibrated robot with a geometric refit
-//! (row lengths and twists, joint zero offsets, tool position) plus at most one candidate
-//! effect, each a small extension of the phi-model (paper appendix, eqs. A1-A4) and of the
-//! fig. 3 joint semantics.
+//! (row lengths and angles, joint zero offsets, base and tool frames) plus at most one
+//! candidate effect, each a small extension of the phi-model (paper appendix, eqs. A1-A4) and
+//! of the fig. 3 joint semantics.
 
 use super::poses::Pose;
-use crate::campaign::{AxisWobble, ComplianceEffect, Effects, GearHarmonic, LinkMass, ThermalEffect};
+use crate::campaign::{AxisWobble, ComplianceEffect, Effects, GearHarmonic, LinkMass, PassiveSlope, ThermalEffect};
 use crate::kinematics::JointKind;
-use crate::robot::{Controller, RobotDescription, TruthRobot};
+use crate::robot::{Controller, CouplingFunction, RobotDescription, TransmissionFitForm, TruthRobot};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Gravity in the instrument frame \[m/s^2\] assumed by the compliance candidate.
 pub const GRAVITY_M_S2: [f64; 3] = [0.0, 0.0, -9.81];
 
-/// Order of the wobble candidate: orders 0 and 1 are a fixed tilt of the axis or of the link,
-/// which the calibrated geometry absorbs exactly; 2 is the lowest order visible afterwards.
+/// Order of the wobble candidate: order 0 is a fixed tilt of the axis and order 1 a fixed
+/// tilt of the link on its bearing (its points still run on circles about a tilted axis), both
+/// absorbed exactly by the calibrated geometry; 2 is the lowest order visible afterwards.
 pub const WOBBLE_ORDER: i32 = 2;
 
-/// Order of the gear-harmonic candidate (the calibrator fits order 1).
-pub const HARMONIC_ORDER: usize = 2;
+/// The lowest transmission harmonic of `joint` (1-based) that the calibrator does NOT fit:
+/// one above the order of the joint's declared `transmission_fit` (eq. 8), in the
+/// transmission's own angle (the gear angle for a gear form). An extra harmonic of a fitted
+/// order would be a calibration error, not an unmodelled effect.
+pub fn unmodelled_harmonic_order(desc: &RobotDescription, joint: usize) -> usize {
+    match desc.joints.get(joint.wrapping_sub(1)).map(|j| j.transmission_fit) {
+        Some(TransmissionFitForm::Harmonic { order } | TransmissionFitForm::Gear { order, .. }) => order + 1,
+        None => 1,
+    }
+}
 
 /// A candidate unmodelled effect (FORMATS.md section 3 names).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "effect", rename_all = "snake_case")]
 pub enum Candidate {
-    /// Joint `joint` deflects by `c Q_j(q)`, `Q_j` the gravity torque about it (one
-    /// compliance `c` \[rad/(N m)\]).
+    /// Actuator `joint` sags by `c Q_j(q)`, `Q_j` the gravity torque about it (plus the load a
+    /// four-bar reflects), and the sag drives the passive coupling into the next joint (one
+    /// compliance `c` \[rad/(N m)\]; the truth's physics,
+    /// [`coupled_first_order_deflection`](crate::campaign::coupled_first_order_deflection)).
     JointCompliance {
         /// 1-based joint.
         joint: usize,
@@ -39,10 +50,13 @@ pub enum Candidate {
     /// Row lengths `a`, `b` scale by `1 + alpha (T - T_ref)`, `T_ref` the axis experiments'
     /// mean temperature.
     ThermalExpansion,
-    /// An extra order-2 harmonic (sin, cos \[rad\]) on the joint's transmission (eq. 8).
+    /// An extra harmonic (sin, cos \[rad\]) of order `order` on the joint's transmission
+    /// (eq. 8), the lowest order the calibrator does not fit ([`unmodelled_harmonic_order`]).
     GearHarmonic {
         /// 1-based joint.
         joint: usize,
+        /// Harmonic order.
+        order: usize,
     },
     /// A tilt `(x, y)` \[rad\] of the joint's axis turning at [`WOBBLE_ORDER`] times the joint.
     AxisWobble {
@@ -71,7 +85,7 @@ impl Candidate {
         match *self {
             Candidate::JointCompliance { joint }
             | Candidate::Backlash { joint }
-            | Candidate::GearHarmonic { joint }
+            | Candidate::GearHarmonic { joint, .. }
             | Candidate::AxisWobble { joint } => Some(joint),
             Candidate::ThermalExpansion | Candidate::InstrumentScale => None,
         }
@@ -83,7 +97,7 @@ impl Candidate {
             Candidate::JointCompliance { .. } => vec!["compliance_rad_per_nm"],
             Candidate::Backlash { .. } => vec!["half_band_rad"],
             Candidate::ThermalExpansion => vec!["alpha_per_k"],
-            Candidate::GearHarmonic { .. } => vec!["sin2_rad", "cos2_rad"],
+            Candidate::GearHarmonic { .. } => vec!["sin_rad", "cos_rad"],
             Candidate::AxisWobble { .. } => vec!["tilt_x_rad", "tilt_y_rad"],
             Candidate::InstrumentScale => vec!["scale_ppm"],
         }
@@ -100,10 +114,11 @@ impl Candidate {
         }
     }
 
-    /// Every candidate for a robot of `dof` revolute joints; thermal expansion only when the
-    /// validation temperatures spread (`temperature_spread`), backlash only for joints whose
-    /// approach direction changes.
-    pub fn all(desc: &RobotDescription, poses: &[Pose], temperature_spread: bool) -> Vec<Candidate> {
+    /// Every candidate for a robot of revolute joints: per joint compliance, backlash (only
+    /// when the joint's approach direction changes over `poses`), the first unfitted gear
+    /// harmonic and order-2 wobble; thermal expansion only when the validation temperatures
+    /// differ; the instrument scale.
+    pub fn all(desc: &RobotDescription, poses: &[Pose]) -> Vec<Candidate> {
         let mut out = Vec::new();
         for (k, j) in desc.joints.iter().enumerate() {
             if j.kind != JointKind::Revolute {
@@ -115,15 +130,62 @@ impl Candidate {
             if flips {
                 out.push(Candidate::Backlash { joint });
             }
-            out.push(Candidate::GearHarmonic { joint });
+            out.push(Candidate::GearHarmonic {
+                joint,
+                order: unmodelled_harmonic_order(desc, joint),
+            });
             out.push(Candidate::AxisWobble { joint });
         }
-        if temperature_spread {
+        let t0 = poses.first().map_or(0.0, |p| p.temperature_c);
+        if poses.iter().any(|p| (p.temperature_c - t0).abs() > 0.0) {
             out.push(Candidate::ThermalExpansion);
         }
         out.push(Candidate::InstrumentScale);
         out
     }
+}
+
+/// Number of refit coefficients of a coupling: a gear's ratio and harmonics, the fractional
+/// form's numerator and denominator; none for a geometric four-bar (never calibrated).
+fn coupling_parameters(g: Option<&CouplingFunction>) -> usize {
+    match g {
+        Some(CouplingFunction::Gear { sin, cos, .. }) => 1 + sin.len() + cos.len(),
+        Some(CouplingFunction::Fractional { .. }) => 5,
+        Some(CouplingFunction::FourBar(_)) | None => 0,
+    }
+}
+
+/// Adds `d` to the coefficients of `g` (in [`coupling_parameters`] order); returns how many
+/// it used.
+fn perturb_coupling(g: Option<&mut CouplingFunction>, d: &[f64]) -> usize {
+    match g {
+        Some(CouplingFunction::Gear { ratio, sin, cos }) => {
+            *ratio += d[0];
+            let mut i = 1;
+            for c in sin.iter_mut().chain(cos.iter_mut()) {
+                *c += d[i];
+                i += 1;
+            }
+            i
+        }
+        Some(CouplingFunction::Fractional { num, den }) => {
+            for (c, x) in num.iter_mut().chain(den.iter_mut()).zip(d) {
+                *c += x;
+            }
+            5
+        }
+        Some(CouplingFunction::FourBar(_)) | None => 0,
+    }
+}
+
+/// The calibrated couplings at the active displacements `active`, for
+/// [`coupled_first_order_deflection`](crate::campaign::coupled_first_order_deflection): the
+/// slope of every `coupling_in`; the fractional (eq. 15) and four-bar forms are mechanisms that
+/// also carry the driven joint's load back to the actuator below, a gear is kinematic only.
+fn passive_slopes(robot: &TruthRobot, active: &[f64]) -> Vec<PassiveSlope> {
+    PassiveSlope::of_robot(robot, active, |_, g| {
+        matches!(g, CouplingFunction::Fractional { .. } | CouplingFunction::FourBar(_))
+    })
 }
 
 /// The calibrated robot with the refit parameters and one optional candidate: predicts the
@@ -135,14 +197,44 @@ pub struct Predictor {
     masses: Vec<LinkMass>,
     tool_targets_m: Vec<Point3<f64>>,
     reference_c: f64,
+    /// Per joint, the transmission harmonic orders the calibrator fits.
+    harmonic_orders: Vec<usize>,
     /// The candidate effect, if any.
     pub candidate: Option<Candidate>,
+    /// What the baseline refits besides the geometry.
+    pub scope: RefitScope,
+}
+
+/// What the baseline refit adjusts besides the geometry (rows `a`, `b`, `alpha`, `beta`, joint
+/// zero offsets, base and tool frames).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RefitScope {
+    /// The geometry only: the calibrated transmission and coupling shapes stay as the axis
+    /// experiments fitted them.
+    Geometry,
+    /// Also every parameter the calibrator identifies from the shapes of its functions: the
+    /// fitted transmission harmonics (eq. 8, the orders of each joint's `transmission_fit`)
+    /// and every coefficient of each passive coupling (eq. 15: a gear's ratio and harmonics,
+    /// the fractional form's five), whose noise-driven errors (fitted over the axis spans
+    /// only) would otherwise dominate the validation residual.
+    #[default]
+    Identified,
 }
 
 impl Predictor {
     /// The predictor of the calibrated robot `base` for `desc`'s controller, link masses and
     /// tool targets; `reference_c` is the temperature the calibration holds at.
-    pub fn new(base: &TruthRobot, desc: &RobotDescription, reference_c: f64, candidate: Option<Candidate>) -> Self {
+    pub fn new(
+        base: &TruthRobot,
+        desc: &RobotDescription,
+        reference_c: f64,
+        candidate: Option<Candidate>,
+        scope: RefitScope,
+    ) -> Self {
+        let harmonic_orders = (1..=desc.dof())
+            .map(|j| unmodelled_harmonic_order(desc, j).saturating_sub(1))
+            .collect();
         Predictor {
             base: base.clone(),
             controller: Controller::from_description(desc),
@@ -150,20 +242,40 @@ impl Predictor {
             tool_targets_m: desc.tool_targets_m(),
             reference_c,
             candidate,
+            scope,
+            harmonic_orders,
         }
     }
 
-    /// Number of geometric refit parameters: per row `a`, `b` \[m\], `alpha`, `beta` \[rad\]; per
-    /// joint a zero offset and an order-1 transmission harmonic (sin, cos) \[rad\] and a
-    /// slope correction of the coupling into it (unused without one); the base
-    /// placement and the tool frame, each a translation \[m\] and a rotation vector \[rad\].
+    /// Number of baseline refit parameters: per row `a`, `b` \[m\], `alpha`, `beta` \[rad\]; per
+    /// joint a zero offset \[rad\]; with [`RefitScope::Identified`] per joint its fitted
+    /// transmission harmonics (sin, cos per order \[rad\]) and the slope of the coupling into
+    /// it (unused without one); the base placement and the tool frame, each a translation
+    /// \[m\] and a rotation vector \[rad\] (last). Redundant directions, e.g. joint 1's offset
+    /// against the base yaw, are dropped by the fit's SVD.
     pub fn geometric_count(&self) -> usize {
-        4 * self.base.rows.len() + 4 * self.base.dof() + 12
+        4 * self.base.rows.len() + self.base.dof() + self.shape_count() + 12
     }
 
-    /// Index of the coupling-slope correction of joint `k` (0-based, `k >= 1`).
-    fn slope_index(&self, k: usize) -> usize {
-        4 * self.base.rows.len() + 3 * self.base.dof() + k
+    /// Transmission-harmonic and coupling-slope parameters of the refit.
+    fn shape_count(&self) -> usize {
+        match self.scope {
+            RefitScope::Geometry => 0,
+            RefitScope::Identified => {
+                2 * self.harmonic_orders.iter().sum::<usize>()
+                    + self
+                        .base
+                        .joints
+                        .iter()
+                        .map(|j| coupling_parameters(j.coupling_in.as_ref()))
+                        .sum::<usize>()
+            }
+        }
+    }
+
+    /// Index of the first shape parameter.
+    fn shape_start(&self) -> usize {
+        4 * self.base.rows.len() + self.base.dof()
     }
 
     /// Number of parameters of the candidate.
@@ -190,25 +302,33 @@ impl Predictor {
             row.alpha_deg += params[4 * r + 2].to_degrees();
             row.beta_deg += params[4 * r + 3].to_degrees();
         }
-        let n = robot.dof();
         for (k, j) in robot.joints.iter_mut().enumerate() {
             j.transducer_offset += params[4 * rows + k];
         }
         let mut effects = Effects::default();
-        for k in 0..n {
-            effects.gear_harmonics.push(GearHarmonic {
-                joint: k + 1,
-                order: 1,
-                sin_rad: params[4 * rows + n + 2 * k],
-                cos_rad: params[4 * rows + n + 2 * k + 1],
-            });
+        if self.scope == RefitScope::Identified {
+            let mut i = self.shape_start();
+            for j in robot.joints.iter_mut() {
+                i += perturb_coupling(j.coupling_in.as_mut(), &params[i..]);
+            }
+            for (k, &orders) in self.harmonic_orders.iter().enumerate() {
+                for order in 1..=orders {
+                    effects.gear_harmonics.push(GearHarmonic {
+                        joint: k + 1,
+                        order,
+                        sin_rad: params[i],
+                        cos_rad: params[i + 1],
+                    });
+                    i += 2;
+                }
+            }
         }
         let e = &params[self.geometric_count()..];
         let mut scale = 1.0;
         match self.candidate {
-            Some(Candidate::GearHarmonic { joint }) => effects.gear_harmonics.push(GearHarmonic {
+            Some(Candidate::GearHarmonic { joint, order }) => effects.gear_harmonics.push(GearHarmonic {
                 joint,
-                order: HARMONIC_ORDER,
+                order,
                 sin_rad: e[0],
                 cos_rad: e[1],
             }),
@@ -263,13 +383,15 @@ impl Predictor {
             for k in 1..q.len() {
                 if let Some(g) = &robot.joints[k].coupling_in {
                     q[k] += g.try_passive(active[k - 1]).ok()?;
-                    q[k] += params[self.slope_index(k)] * active[k - 1];
                 }
             }
             let model_t = effects.thermal_model(&model, pose.temperature_c);
             if let Some(Candidate::JointCompliance { joint }) = self.candidate {
+                // Unit compliance at `joint`, rigid elsewhere: the deflection is linear in `c`.
+                let mut stiffness_nm_per_rad = vec![f64::INFINITY; q.len()];
+                stiffness_nm_per_rad[joint - 1] = 1.0;
                 let unit = ComplianceEffect {
-                    stiffness_nm_per_rad: vec![1.0; q.len()],
+                    stiffness_nm_per_rad,
                     gravity_m_s2: GRAVITY_M_S2,
                 };
                 let payload = (pose.payload_kg > 0.0).then(|| {
@@ -278,8 +400,17 @@ impl Predictor {
                         Point3::from(model_t.last_link_from_tool.translation.vector),
                     )
                 });
-                let torque = crate::campaign::first_order_deflection(&model_t, &q, &self.masses, payload, &unit);
-                q[joint - 1] += e[0] * torque[joint - 1];
+                let dq = crate::campaign::coupled_first_order_deflection(
+                    &model_t,
+                    &q,
+                    &self.masses,
+                    payload,
+                    &unit,
+                    &passive_slopes(&robot, &active),
+                );
+                for (qk, d) in q.iter_mut().zip(dq) {
+                    *qk += e[0] * d;
+                }
             }
             let mut links = model_t.poses(&q).world_from_link;
             effects.apply_wobble(&model_t, &q, &mut links);
@@ -291,5 +422,78 @@ impl Predictor {
             }
         }
         Some(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::{
+        AnalyticArm, ArmExecutor, CalibrationPlan, PoseConditions, ValidationPlan, commands_to_internal,
+    };
+    use rand::{SeedableRng, rngs::StdRng};
+
+    /// The compliance candidate on the truth robot itself reproduces the analytic arm's
+    /// coupled sag (joint 3's sag drives nothing, joint 2's drives joint 3 through the
+    /// four-bar) to second order in the deflection, far better than an uncoupled sag.
+    #[test]
+    fn compliance_candidate_reproduces_the_coupled_sag() {
+        let desc = RobotDescription::asea_irb6l();
+        let mut truth = TruthRobot::paper_robot();
+        for j in &mut truth.joints {
+            j.repeatability_sigma = 0.0;
+        }
+        let joint = 2;
+        let stiffness_nm_per_rad = 2.0e4;
+        let mut stiffness = vec![f64::INFINITY; desc.dof()];
+        stiffness[joint - 1] = stiffness_nm_per_rad;
+        let effects = Effects {
+            compliance: Some(ComplianceEffect {
+                stiffness_nm_per_rad: stiffness,
+                gravity_m_s2: GRAVITY_M_S2,
+            }),
+            ..Effects::default()
+        };
+        let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(&desc)).with_effects(effects, &desc);
+        let plan = ValidationPlan {
+            poses: 12,
+            ..ValidationPlan::workspace_default(desc.dof())
+        };
+        let reference = CalibrationPlan::table1(desc.dof()).reference;
+        let mut rng = StdRng::seed_from_u64(1);
+        let poses: Vec<Pose> = plan
+            .commands(&desc, &reference)
+            .into_iter()
+            .enumerate()
+            .map(|(step, c)| {
+                let cmd = commands_to_internal(&desc, &c);
+                let links = arm.execute(&cmd, &PoseConditions::default(), &mut rng).unwrap();
+                let tool = links[desc.dof() - 1] * arm.last_link_from_tool();
+                Pose {
+                    experiment: "validation".into(),
+                    step,
+                    cmd,
+                    approach: vec![0.0; desc.dof()],
+                    temperature_c: PoseConditions::default().temperature_c,
+                    payload_kg: 0.0,
+                    targets: desc.tool_targets_m().iter().map(|t| tool * t).enumerate().collect(),
+                }
+            })
+            .collect();
+        let every: Vec<&Pose> = poses.iter().collect();
+        let reference_c = PoseConditions::default().temperature_c;
+        let candidate = Candidate::JointCompliance { joint };
+        let p = Predictor::new(&truth, &desc, reference_c, Some(candidate), RefitScope::Geometry);
+        let rms = |params: &[f64]| {
+            let r = p.residuals(params, &every).unwrap();
+            (r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64).sqrt()
+        };
+        let mut params = vec![0.0; p.geometric_count() + 1];
+        let without = rms(&params);
+        params[p.geometric_count()] = 1.0 / stiffness_nm_per_rad;
+        let with = rms(&params);
+        assert!(without > 1e-4, "the sag is visible: {without} m");
+        // Second order: (deflection)^2 times the reach.
+        assert!(with < 1e-3 * without, "candidate leaves {with} m of {without} m");
     }
 }

@@ -4,7 +4,7 @@
 
 use super::DiagnosisError;
 use crate::calibration::procedure::Calibration;
-use crate::campaign::commands_to_internal;
+use crate::campaign::{TOOL_EXPERIMENT, commands_to_internal};
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::robot::{Controller, RobotDescription};
 use nalgebra::{Point3, Vector3};
@@ -13,7 +13,8 @@ use rand_distr::{Distribution, StandardNormal};
 use std::collections::HashMap;
 
 /// Noise-free positions of every row of `set` on the calibrated robot \[m\]. Axis-experiment
-/// targets sit at their mean position in their link's frame (estimated from the measurements
+/// targets sit at their mean position in their link's frame (target 0's link for a target the
+/// description does not place) (estimated from the measurements
 /// through the calibrated model); tool targets at the description's tool targets.
 pub fn clean_positions(
     set: &MeasurementSet,
@@ -25,10 +26,11 @@ pub fn clean_positions(
     let tool_targets = desc.tool_targets_m();
     let link_of = |m: &Measurement| -> Option<usize> {
         let t = desc.axis_targets_of(m.moved_joint)?;
-        match m.target {
-            0 => Some(t.target0.link - 1),
-            1 => t.target1.map(|t| t.link - 1),
-            _ => None,
+        // A target the description does not place (e.g. a third reflector) turns rigidly with
+        // target 0: only the experiment's joint moves.
+        match (m.target, t.target1) {
+            (1, Some(t1)) => Some(t1.link - 1),
+            _ => Some(t.target0.link - 1),
         }
     };
     let mut frames = Vec::with_capacity(set.rows().len());
@@ -81,12 +83,20 @@ pub fn clean_positions(
         .collect()
 }
 
+/// Whether `m` is a validation measurement (FORMATS.md section 1: `moved_joint = 0`, not the
+/// tool experiment).
+pub fn is_validation(m: &Measurement) -> bool {
+    m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT
+}
+
 /// One noise-only replica: `set`'s rows at `clean` plus isotropic noise of 3-D RMS
-/// `noise_rms_3d_m` (each coordinate `noise_rms_3d_m / sqrt(3)`).
+/// `noise_rms_3d_m` (each coordinate `noise_rms_3d_m / sqrt(3)`); validation rows get noise
+/// only when `validation_noise` (the diagnoser draws theirs separately, many per replica).
 pub fn replica<R: Rng + ?Sized>(
     set: &MeasurementSet,
     clean: &[Point3<f64>],
     noise_rms_3d_m: f64,
+    validation_noise: bool,
     rng: &mut R,
 ) -> Result<MeasurementSet, DiagnosisError> {
     let sigma = noise_rms_3d_m / 3f64.sqrt();
@@ -95,9 +105,10 @@ pub fn replica<R: Rng + ?Sized>(
         .iter()
         .zip(clean)
         .map(|(m, p)| {
+            let noisy = validation_noise || !is_validation(m);
             let mut m = m.clone();
             for (c, x) in m.position_mm.iter_mut().zip(p.iter()) {
-                let z: f64 = StandardNormal.sample(rng);
+                let z: f64 = if noisy { StandardNormal.sample(rng) } else { 0.0 };
                 *c = (x + sigma * z) * 1e3;
             }
             m

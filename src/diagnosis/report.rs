@@ -1,28 +1,33 @@
 //! `diagnosis.md`: the diagnosis in words and tables.
 
-use super::Diagnosis;
+use super::{Diagnosis, WhereEntry};
 use std::fmt::Write;
 
 /// Markdown report of a diagnosis of the data in `source`.
 pub fn markdown(d: &Diagnosis, source: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Sim-to-real gap diagnosis of `{source}`\n");
-    let joint = d.joint.map_or(String::new(), |j| format!(" (joint {j})"));
+    let joint = d.outcome.joint.map_or(String::new(), |j| format!(" (joint {j})"));
     let _ = writeln!(
         s,
         "**{}**{joint}, confidence {:.2}: {}.\n",
-        d.effect, d.confidence, d.verdict
+        d.outcome.effect, d.outcome.confidence, d.verdict
     );
     let _ = writeln!(
         s,
-        "Held-out gap {:.3} mm -> {:.3} mm (held-out RMS {:.3} mm, noise only {:.3} mm, {} training / {} held-out poses, noise {:.3} mm 3-D RMS).\n",
-        d.gap_before_mm,
-        d.gap_after_mm,
+        "Held-out gap {:.3} mm -> {:.3} mm (held-out RMS {:.3} mm, noise only {:.3} mm, smallest gap flagged {:.3} mm at false-alarm rate {}; {} training / {} held-out poses, noise {:.3} mm 3-D RMS; refit rank {} of {} parameters; {} noise-only samples).\n",
+        d.outcome.gap_before_mm,
+        d.outcome.gap_after_mm,
         d.heldout_rms_before_mm,
         d.noise_only_rms_mm,
+        d.detectable_gap_mm,
+        d.false_alarm,
         d.poses[0],
         d.poses[1],
-        d.noise_rms_3d_mm
+        d.noise_rms_3d_mm,
+        d.refit_rank[0],
+        d.refit_rank[1],
+        d.null_samples
     );
     if !d.parameters.is_empty() {
         let _ = writeln!(s, "| parameter | value | 1-sigma |\n|---|---|---|");
@@ -31,36 +36,50 @@ pub fn markdown(d: &Diagnosis, source: &str) -> String {
         }
         s.push('\n');
     }
+    s.push_str("## Where\n\n");
+    s.push_str(&where_table(&d.where_, &[], |_| Vec::new()));
     let _ = writeln!(
         s,
-        "## Where\n\n| experiment | joint | residual RMS (mm) | noise only (mm) | excess |\n|---|---|---|---|---|"
-    );
-    for w in &d.where_ {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.4} | {:.4} | {:.2} |",
-            w.experiment,
-            w.joint.map_or("-".into(), |j| j.to_string()),
-            w.residual_rms_mm,
-            w.noise_only_rms_mm,
-            w.excess_ratio
-        );
-    }
-    let _ = writeln!(
-        s,
-        "\n## Candidates (best first)\n\n| effect | joint | held-out RMS (mm) | gap after (mm) | score | weight |\n|---|---|---|---|---|---|"
+        "\n## Candidates (best first)\n\n| effect | joint | held-out RMS (mm) | gap after (mm) | improvement (chi2) | z | significant | outside refit | weight |\n|---|---|---|---|---|---|---|---|---|"
     );
     for c in &d.candidates {
         let _ = writeln!(
             s,
-            "| {} | {} | {:.4} | {:.4} | {:.1} | {:.3} |",
+            "| {} | {} | {:.4} | {:.4} | {:.1} | {:.1} | {} | {:.3} | {:.3} |",
             c.effect,
             c.joint.map_or("-".into(), |j| j.to_string()),
             c.heldout_rms_mm,
             c.gap_after_mm,
-            c.score,
+            c.improvement_chi2,
+            c.z,
+            if c.significant { "yes" } else { "no" },
+            c.outside_refit_fraction,
             c.weight
         );
+    }
+    s
+}
+
+/// Markdown table of `where` entries, with `extra` columns filled by `cells` per entry.
+pub(super) fn where_table(
+    entries: &[WhereEntry],
+    extra: &[&str],
+    cells: impl Fn(&WhereEntry) -> Vec<String>,
+) -> String {
+    let mut s = String::new();
+    let mut header = vec!["experiment", "joint", "residual RMS (mm)", "noise only (mm)", "excess"];
+    header.extend(extra);
+    let _ = writeln!(s, "| {} |\n|{}", header.join(" | "), "---|".repeat(header.len()));
+    for w in entries {
+        let mut row = vec![
+            w.experiment.clone(),
+            w.joint.map_or("-".into(), |j| j.to_string()),
+            format!("{:.4}", w.residual_rms_mm),
+            format!("{:.4}", w.noise_only_rms_mm),
+            format!("{:.2}", w.excess_ratio),
+        ];
+        row.extend(cells(w));
+        let _ = writeln!(s, "| {} |", row.join(" | "));
     }
     s
 }

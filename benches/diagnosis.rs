@@ -1,0 +1,84 @@
+//! Diagnosis of a Table-1 campaign with 100 validation poses (target: < 30 s on 2 cores; the
+//! default 16 recalibrated noise-only replicas x 32 validation-noise draws), against an
+//! in-run baseline: one standard calibration of the same campaign (the diagnosis runs 17 of
+//! them plus the refits and the candidates).
+
+use axiscal::blind::{BlindOptions, draw_effect, simulate_case};
+use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
+use axiscal::diagnosis::{DiagnosisOptions, diagnose};
+use axiscal::robot::RobotDescription;
+use criterion::{Criterion, criterion_group, criterion_main};
+use rand::{SeedableRng, rngs::StdRng};
+use std::hint::black_box;
+use std::time::Instant;
+
+fn bench(c: &mut Criterion) {
+    // `cargo test --all-targets` (`make test`) runs benchmarks once in a debug build, where a
+    // diagnosis takes ~30 s; `tests/diagnosis.rs` covers it there. Only `cargo bench` runs it.
+    if !std::env::args().any(|a| a == "--bench") {
+        println!("diagnosis bench: skipped outside `cargo bench`");
+        return;
+    }
+    let desc = RobotDescription::asea_irb6l();
+    // A joint-3 compliance case, so the named candidate's nonlinear refinement runs too.
+    let mut key = draw_effect("joint_compliance", 0, 11, &desc, &mut StdRng::seed_from_u64(11));
+    if let Some(c) = key.effects.compliance.as_mut() {
+        c.stiffness_nm_per_rad = vec![1e12; desc.dof()];
+        c.stiffness_nm_per_rad[2] = 8e3;
+    }
+    let set = simulate_case(&key, &desc, &BlindOptions::default()).expect("the case simulates");
+    let calibration = CalibrationOptions::default();
+    let options = DiagnosisOptions::default();
+    let mut g = c.benchmark_group("diagnosis");
+    g.sample_size(10);
+    g.bench_function("baseline/table1_calibration", |b| {
+        b.iter(|| black_box(calibrate(black_box(&set), &desc, &calibration).expect("calibrates")))
+    });
+    g.bench_function("table1_100_validation_poses", |b| {
+        b.iter(|| black_box(diagnose(black_box(&set), &desc, &options).expect("diagnoses")))
+    });
+    g.finish();
+
+    // The ratio to the in-run baseline, which a loaded machine changes far less than the
+    // times: medians of interleaved runs.
+    let time = |f: &dyn Fn(), n: usize| {
+        let start = Instant::now();
+        for _ in 0..n {
+            f();
+        }
+        start.elapsed().as_secs_f64() / n as f64
+    };
+    let (mut base, mut full) = (Vec::new(), Vec::new());
+    for _ in 0..RUNS {
+        base.push(time(
+            &|| {
+                black_box(calibrate(black_box(&set), &desc, &calibration).expect("calibrates"));
+            },
+            BASELINE_BATCH,
+        ));
+        full.push(time(
+            &|| {
+                black_box(diagnose(black_box(&set), &desc, &options).expect("diagnoses"));
+            },
+            1,
+        ));
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (b, f) = (median(&mut base), median(&mut full));
+    println!(
+        "diagnosis/table1_100_validation_poses: {:.3} s = {:.1} x baseline/table1_calibration ({:.2} ms)",
+        f,
+        f / b,
+        b * 1e3
+    );
+}
+
+/// Interleaved runs per median, and baseline calls per timed run.
+const RUNS: usize = 5;
+const BASELINE_BATCH: usize = 10;
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,310 @@
+//! The decision of [`diagnose`](super::diagnose): tests against the noise-only null
+//! distribution (module docs of [`crate::diagnosis`], steps 3-5).
+
+use super::stats::{mean, quantile, std_dev, upper_tail};
+use super::{
+    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, LinearFit, NullData, Outcome, Parameter, Prepared,
+    WhereEntry,
+};
+use nalgebra::{DMatrix, DVector};
+
+/// A candidate's fit and its statistics.
+struct Scored {
+    candidate: Candidate,
+    score: CandidateScore,
+    /// Held-out chi-square of the observation and its null samples.
+    chi2: f64,
+    chi2_null: Vec<f64>,
+    z_null: Vec<f64>,
+}
+
+/// The candidate's parameters `p` (after the refit's) with their standard deviations from the
+/// fit's covariance, scaled by the training residual variance when it exceeds the noise's
+/// (`ssr_train` the training SSR left by the fit).
+fn fitted_parameters(
+    c: Candidate,
+    p: &DVector<f64>,
+    fit: &LinearFit,
+    ssr_train: f64,
+    prep: &Prepared,
+    sigma2: f64,
+) -> Vec<Parameter> {
+    let dof = prep.train_rows.saturating_sub(fit.rank).max(1);
+    let var = sigma2.max(ssr_train.max(0.0) / dof as f64);
+    let g = prep.x_geometric.ncols();
+    let mut out: Vec<Parameter> = c
+        .parameter_names()
+        .iter()
+        .enumerate()
+        .map(|(i, name)| Parameter {
+            name: (*name).to_owned(),
+            value: p[g + i],
+            sigma: (fit.normal_inverse[(g + i, g + i)] * var).max(0.0).sqrt(),
+        })
+        .collect();
+    if let (Candidate::JointCompliance { .. }, Some(c)) = (c, out.first().cloned())
+        && c.value > 0.0
+    {
+        out.push(Parameter {
+            name: "stiffness_nm_per_rad".into(),
+            value: 1.0 / c.value,
+            sigma: c.sigma / (c.value * c.value),
+        });
+    }
+    out
+}
+
+fn score_candidates(prep: &Prepared, null: &NullData, base: &LinearFit, g: (f64, &[f64]), sigma2: f64) -> Vec<Scored> {
+    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
+    let to_rms_mm = |chi2: f64| (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3;
+    let mut out = Vec::new();
+    for (c, x) in &prep.x_candidates {
+        let fit = prep.candidate_fit(x);
+        let outside = base.outside_fraction(&x.rows(0, prep.train_rows).into_owned());
+        let chi2 = prep.heldout_ssr(&fit, &observed)[0] / sigma2;
+        let chi2_null: Vec<f64> = prep
+            .heldout_ssr(&fit, &null.samples)
+            .iter()
+            .map(|s| s / sigma2)
+            .collect();
+        let t_null: Vec<f64> = g.1.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
+        let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
+        let improvement = g.0 - chi2;
+        let rms = to_rms_mm(chi2);
+        let noise = to_rms_mm(mean(&chi2_null));
+        out.push(Scored {
+            candidate: *c,
+            score: CandidateScore {
+                effect: c.effect_name().into(),
+                joint: c.joint(),
+                heldout_rms_mm: rms,
+                gap_after_mm: (rms * rms - noise * noise).max(0.0).sqrt(),
+                improvement_chi2: improvement,
+                z: (improvement - mu) / sd,
+                significant: false,
+                outside_refit_fraction: outside,
+                weight: 0.0,
+                parameters: {
+                    let r_train = prep.residuals.rows(0, prep.train_rows).into_owned();
+                    let inside = fit.span.transpose() * &r_train;
+                    let left = r_train.norm_squared() - inside.norm_squared();
+                    fitted_parameters(*c, &fit.params(&r_train), &fit, left, prep, sigma2)
+                },
+            },
+            chi2,
+            chi2_null,
+            z_null: t_null.iter().map(|t| (t - mu) / sd).collect(),
+        });
+    }
+    out
+}
+
+fn where_entries(prep: &Prepared, null: &NullData, rms_before: f64, noise_before: f64) -> Vec<WhereEntry> {
+    let mut out: Vec<WhereEntry> = prep
+        .cal
+        .axes
+        .iter()
+        .zip(&null.axis_rms2)
+        .map(|(a, mc)| {
+            let n = mean(mc).sqrt();
+            WhereEntry {
+                experiment: a.experiment.clone(),
+                joint: Some(a.joint),
+                excess_ratio: a.residual_rms_mm / n,
+                residual_rms_mm: a.residual_rms_mm,
+                noise_only_rms_mm: n,
+            }
+        })
+        .collect();
+    let targets = (prep.residuals.len() / 3).max(1) as f64;
+    let v = (prep.residuals.norm_squared() / targets).sqrt() * 1e3;
+    let vn = (mean(&null.samples.column_iter().map(|c| c.norm_squared()).collect::<Vec<_>>()) / targets).sqrt() * 1e3;
+    out.push(WhereEntry {
+        experiment: "validation".into(),
+        joint: None,
+        excess_ratio: v / vn,
+        residual_rms_mm: v,
+        noise_only_rms_mm: vn,
+    });
+    out.push(WhereEntry {
+        experiment: "validation_heldout_refit".into(),
+        joint: None,
+        excess_ratio: rms_before / noise_before,
+        residual_rms_mm: rms_before,
+        noise_only_rms_mm: noise_before,
+    });
+    out.extend(super::features::feature_entries(prep, null));
+    out.sort_by(|a, b| b.excess_ratio.total_cmp(&a.excess_ratio));
+    out
+}
+
+/// Tests the observation against the null samples and names the effect.
+pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOptions) -> Diagnosis {
+    let alpha = options.false_alarm;
+    let sigma2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
+    let to_rms_mm = |chi2: f64| (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3;
+    let base = prep.baseline_fit();
+    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
+    let g_obs = prep.heldout_ssr(&base, &observed)[0] / sigma2;
+    let g_null: Vec<f64> = prep
+        .heldout_ssr(&base, &null.samples)
+        .iter()
+        .map(|s| s / sigma2)
+        .collect();
+    let (g_mean, g_sd, g_q) = (mean(&g_null), std_dev(&g_null), quantile(&g_null, 1.0 - alpha));
+    let gap_sigmas = (g_obs - g_mean) / g_sd.max(1e-12);
+    let detectable_gap_mm = to_rms_mm(g_q - g_mean);
+    let p_gap = upper_tail(&g_null, g_obs);
+
+    let mut scored = score_candidates(prep, null, &base, (g_obs, &g_null), sigma2);
+    // Family-wise threshold: the noise-only maximum of z over the candidates.
+    let samples = g_null.len();
+    let max_z: Vec<f64> = (0..samples)
+        .map(|k| scored.iter().map(|s| s.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
+        .collect();
+    let z_threshold = quantile(&max_z, 1.0 - alpha);
+    for s in &mut scored {
+        s.score.significant = s.score.z > z_threshold;
+    }
+    scored.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
+    let chi2_min = scored
+        .iter()
+        .filter(|s| s.score.significant)
+        .map(|s| s.chi2)
+        .fold(f64::INFINITY, f64::min);
+    let z_sum: f64 = scored
+        .iter()
+        .filter(|s| s.score.significant)
+        .map(|s| (-(s.chi2 - chi2_min) / 2.0).exp())
+        .sum();
+    for s in scored.iter_mut().filter(|s| s.score.significant) {
+        s.score.weight = (-(s.chi2 - chi2_min) / 2.0).exp() / z_sum;
+    }
+    // The named candidate and the baseline it is compared with, refit beyond their
+    // linearisation (the tests above stay linear, as their null distributions).
+    let mut g_fit = g_obs;
+    if let Some(b) = scored.iter_mut().find(|s| s.score.significant)
+        && let Some((_, x)) = prep.x_candidates.iter().find(|(c, _)| *c == b.candidate)
+        && let (Some(rb), Some(rc)) = (prep.refine(None), prep.refine(Some((b.candidate, x))))
+    {
+        g_fit = g_fit.min(rb.heldout_ssr / sigma2);
+        b.chi2 = b.chi2.min(rc.heldout_ssr / sigma2);
+        let (rms, noise) = (to_rms_mm(b.chi2), to_rms_mm(mean(&b.chi2_null)));
+        b.score.heldout_rms_mm = rms;
+        b.score.gap_after_mm = (rms * rms - noise * noise).max(0.0).sqrt();
+        b.score.improvement_chi2 = g_fit - b.chi2;
+        b.score.parameters = fitted_parameters(
+            b.candidate,
+            &rc.params,
+            &rc.fit,
+            rc.r_train.norm_squared(),
+            prep,
+            sigma2,
+        );
+    }
+    let rms_before = to_rms_mm(g_fit);
+    let noise_before = to_rms_mm(g_mean);
+    let gap_before = (rms_before.powi(2) - noise_before.powi(2)).max(0.0).sqrt();
+    let best = scored.iter().find(|s| s.score.significant);
+    let fraction_closed = match best {
+        Some(b) if gap_before > 0.0 => 1.0 - (b.score.gap_after_mm / gap_before).powi(2),
+        _ => 0.0,
+    };
+    let named = |b: &Scored| {
+        format!(
+            "{}{}",
+            b.score.effect,
+            b.score.joint.map_or(String::new(), |j| format!(" on joint {j}"))
+        )
+    };
+    let none = || {
+        (
+            "none".to_owned(),
+            None,
+            p_gap,
+            gap_before,
+            vec![],
+            format!(
+                "held-out residual {rms_before:.3} mm is at the noise level (noise only {noise_before:.3} mm; gap {gap_before:.3} mm below the {detectable_gap_mm:.3} mm the test flags at false-alarm rate {alpha}) and no candidate beats noise (z threshold {z_threshold:.1})"
+            ),
+        )
+    };
+    // A significant candidate is tested first (it is the more powerful, targeted test; its
+    // false-alarm rate is family-wise); the omnibus gap test decides `none` vs `unexplained`
+    // only when no candidate beats noise.
+    let (effect, joint, confidence, gap_after, parameters, verdict) = match best {
+        Some(b) => {
+            let remaining_ok = b.chi2 <= quantile(&b.chi2_null, 1.0 - alpha);
+            if remaining_ok || fraction_closed >= options.explained_fraction {
+                (
+                    b.score.effect.clone(),
+                    b.candidate.joint(),
+                    b.score.weight,
+                    b.score.gap_after_mm,
+                    b.score.parameters.clone(),
+                    format!(
+                        "{} (z = {:.1} over the noise-only threshold {z_threshold:.1}) closes {:.0} % of the gap's variance ({gap_before:.3} -> {:.3} mm){}",
+                        named(b),
+                        b.score.z,
+                        100.0 * fraction_closed.max(0.0),
+                        b.score.gap_after_mm,
+                        if remaining_ok {
+                            "; what is left is at the noise level"
+                        } else {
+                            ""
+                        }
+                    ),
+                )
+            } else {
+                (
+                    "unexplained".to_owned(),
+                    None,
+                    1.0 - upper_tail(&b.chi2_null, b.chi2),
+                    gap_before,
+                    vec![],
+                    format!(
+                        "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma); the best candidate, {}, closes only {:.0} % of its variance and leaves {:.3} mm above noise",
+                        named(b),
+                        100.0 * fraction_closed.max(0.0),
+                        b.score.gap_after_mm
+                    ),
+                )
+            }
+        }
+        None if g_obs > g_q => (
+            "unexplained".to_owned(),
+            None,
+            1.0 - p_gap,
+            gap_before,
+            vec![],
+            format!(
+                "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma) and no candidate beats noise (threshold z = {z_threshold:.1})"
+            ),
+        ),
+        None => none(),
+    };
+    let base_params = prep.x_geometric.ncols();
+    Diagnosis {
+        outcome: Outcome {
+            effect,
+            joint,
+            confidence,
+            gap_before_mm: gap_before,
+            gap_after_mm: gap_after,
+        },
+        where_: where_entries(prep, null, rms_before, noise_before),
+        candidates: scored.into_iter().map(|s| s.score).collect(),
+        parameters,
+        noise_rms_3d_mm: options.noise_rms_3d_mm,
+        poses: [prep.poses.len().div_ceil(2), prep.poses.len() / 2],
+        heldout_rms_before_mm: rms_before,
+        noise_only_rms_mm: noise_before,
+        gap_sigmas,
+        detectable_gap_mm,
+        false_alarm: alpha,
+        null_samples: samples,
+        refit_rank: [base.rank, base_params],
+        fraction_closed,
+        verdict,
+    }
+}

@@ -1,0 +1,119 @@
+//! The diagnosis result (FORMATS.md section 3 plus details) and its parts.
+
+use serde::{Deserialize, Serialize};
+
+/// One `where` entry: an experiment's (or a workspace feature's) residual against its
+/// noise-only prediction.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WhereEntry {
+    /// Experiment id (`validation`: the calibrated model on every validation pose;
+    /// `validation_heldout_refit`: the baseline on the held-out poses; `feature:NAME:BIN`:
+    /// the held-out poses of one bin of a workspace feature, see [`crate::diagnosis`]).
+    pub experiment: String,
+    /// The moved joint (or the feature's joint), or `None`.
+    pub joint: Option<usize>,
+    /// Residual RMS over the noise-only RMS.
+    pub excess_ratio: f64,
+    /// Residual RMS \[mm\].
+    pub residual_rms_mm: f64,
+    /// Noise-only RMS \[mm\] (mean over the replicas, in variance).
+    pub noise_only_rms_mm: f64,
+}
+
+/// A fitted parameter with its 1-sigma.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Parameter {
+    /// Name with unit.
+    pub name: String,
+    /// Value.
+    pub value: f64,
+    /// 1-sigma from the linearised fit's covariance (noise variance the larger of the stated
+    /// one and the fit's residual variance).
+    pub sigma: f64,
+}
+
+/// One scored candidate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    /// Effect name.
+    pub effect: String,
+    /// Joint, or `None`.
+    pub joint: Option<usize>,
+    /// Held-out position RMS with the effect \[mm\].
+    pub heldout_rms_mm: f64,
+    /// Held-out gap with the effect \[mm\].
+    pub gap_after_mm: f64,
+    /// Held-out improvement over the baseline, `(SSR_base - SSR_c) / sigma^2` (sigma the
+    /// per-coordinate noise).
+    pub improvement_chi2: f64,
+    /// The improvement in sigmas of its noise-only distribution.
+    pub z: f64,
+    /// Whether `z` beats the noise-only maximum over all candidates at the false-alarm rate.
+    pub significant: bool,
+    /// Fraction of the candidate's signature (norm over the training poses) the baseline
+    /// refit cannot absorb: 0 means the effect leaves no trace after the refit.
+    pub outside_refit_fraction: f64,
+    /// Akaike-type weight `exp(-SSR_c / 2 sigma^2)` over the significant candidates (0 for the
+    /// others).
+    pub weight: f64,
+    /// Fitted effect parameters.
+    pub parameters: Vec<Parameter>,
+}
+
+/// The FORMATS.md section 3 verdict fields of a diagnosis ([`Diagnosis`],
+/// [`AxesDiagnosis`](super::AxesDiagnosis)).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Outcome {
+    /// `none`, `unexplained`, or a candidate's effect name.
+    pub effect: String,
+    /// The effect's joint, or `None`.
+    pub joint: Option<usize>,
+    /// Confidence in `effect` (0..1): for a named effect its weight among the significant
+    /// candidates; for `none` the gap test's p-value (how often noise alone leaves at least
+    /// this held-out residual); for `unexplained` one minus the p-value of the gap left by the
+    /// best candidate. (Axis-experiments-only mode: `1 - p` of the most excessive axis.)
+    pub confidence: f64,
+    /// Held-out gap of the baseline \[mm\] (axis-experiments-only mode: the arcs' gap).
+    pub gap_before_mm: f64,
+    /// Held-out gap with the named effect (the baseline's when none is named) \[mm\].
+    pub gap_after_mm: f64,
+}
+
+/// The diagnosis (FORMATS.md section 3 plus details).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Diagnosis {
+    /// The FORMATS.md section 3 verdict.
+    #[serde(flatten)]
+    pub outcome: Outcome,
+    /// Experiments and workspace features ranked by excess over noise.
+    #[serde(rename = "where")]
+    pub where_: Vec<WhereEntry>,
+    /// Candidates, best (lowest held-out RMS) first.
+    pub candidates: Vec<CandidateScore>,
+    /// The named effect's parameters.
+    pub parameters: Vec<Parameter>,
+    /// Noise assumed, 3-D RMS \[mm\].
+    pub noise_rms_3d_mm: f64,
+    /// Training and held-out pose counts.
+    pub poses: [usize; 2],
+    /// Baseline held-out RMS \[mm\].
+    pub heldout_rms_before_mm: f64,
+    /// Noise-only held-out RMS of the baseline \[mm\].
+    pub noise_only_rms_mm: f64,
+    /// Significance of the baseline gap: held-out chi-square minus its noise-only mean, in
+    /// noise-only standard deviations.
+    pub gap_sigmas: f64,
+    /// The smallest held-out gap the gap test flags at the false-alarm rate \[mm\]: an effect
+    /// whose trace after the refit is smaller reads `none`.
+    pub detectable_gap_mm: f64,
+    /// False-alarm rate of every test.
+    pub false_alarm: f64,
+    /// Noise-only samples behind the thresholds (replicas x validation-noise draws).
+    pub null_samples: usize,
+    /// Rank of the baseline refit (identifiable directions) and its parameter count.
+    pub refit_rank: [usize; 2],
+    /// Fraction of the gap's variance the best candidate removes.
+    pub fraction_closed: f64,
+    /// One sentence.
+    pub verdict: String,
+}
