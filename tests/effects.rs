@@ -2,9 +2,9 @@
 //! model predicts, on the analytic and the rapier arm.
 
 use axiscal::campaign::{
-    AnalyticArm, ArmExecutor, AxisWobble, BacklashEffect, CalibrationPlan, ComplianceEffect, DeflectionError, Effects,
-    JointDriver, LinkMass, PassiveSlope, PayloadEffect, PoseConditions, ThermalEffect, UNMOVED_ACTUATOR_RAD,
-    commands_to_internal, coupled_first_order_deflection, coupled_static_deflection,
+    AnalyticArm, ArmExecutor, AxisWobble, BacklashEffect, CalibrationPlan, ComplianceEffect, CompliantLoad,
+    DeflectionError, Effects, JointDriver, LinkMass, PassiveSlope, PayloadEffect, PoseConditions, ThermalEffect,
+    UNMOVED_ACTUATOR_RAD, commands_to_internal, coupled_first_order_deflection, coupled_static_deflection,
 };
 use axiscal::robot::{Controller, RobotDescription, TruthRobot};
 use axiscal::sim::{RapierArm, RapierArmOptions};
@@ -203,8 +203,13 @@ fn large_compliance_sag_is_the_static_equilibrium_not_the_first_order_one() {
     let masses = LinkMass::from_description(&desc);
     let couplings = PassiveSlope::of_truth(&t, &driven.active);
     let first = coupled_first_order_deflection(&t.model(), &driven.q, &masses, None, &compliance, &couplings);
-    let exact =
-        coupled_static_deflection(&t.model(), &driven.q, &masses, None, &compliance, &couplings).expect("converges");
+    let load = CompliantLoad {
+        masses: &masses,
+        payload: None,
+        compliance: &compliance,
+        couplings: &couplings,
+    };
+    let exact = coupled_static_deflection(&t.model(), &driven.q, &load).expect("converges");
     let first_error = (first[1] - exact[1]).abs() / exact[1].abs();
     eprintln!(
         "tool sag: analytic {:.4} mm, rapier {:.4} mm, relative difference {relative:.2e}; joint 2 sag \
@@ -230,14 +235,15 @@ fn a_joint_softer_than_gravity_stiffness_buckles() {
         gravity_m_s2: [0.0, 0.0, -9.81],
     };
     let q = [0.3, 0.5, 0.1, 0.0, 0.0, 0.0];
-    let result = coupled_static_deflection(
-        &t.model(),
-        &q,
-        &LinkMass::from_description(&desc),
-        None,
-        &compliance,
-        &PassiveSlope::of_truth(&t, &q),
-    );
+    let masses = LinkMass::from_description(&desc);
+    let couplings = PassiveSlope::of_truth(&t, &q);
+    let load = CompliantLoad {
+        masses: &masses,
+        payload: None,
+        compliance: &compliance,
+        couplings: &couplings,
+    };
+    let result = coupled_static_deflection(&t.model(), &q, &load);
     assert!(
         matches!(result, Err(DeflectionError::NotConverged { .. })),
         "{result:?}"

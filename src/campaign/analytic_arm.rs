@@ -3,7 +3,7 @@
 //! the unmodelled [`Effects`] that need no rigid bodies (compliance as the static equilibrium of
 //! the joint springs).
 
-use super::effects::{Effects, JointDriver, LinkMass, PassiveSlope, coupled_static_deflection};
+use super::effects::{CompliantLoad, Effects, JointDriver, LinkMass, PassiveSlope, coupled_static_deflection};
 use super::simulate::{ArmExecutor, ExecuteError, PoseConditions};
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, RobotDescription, TruthRobot};
@@ -82,13 +82,16 @@ impl ArmExecutor for AnalyticArm {
                 .effects
                 .payload_in_last_link(&model.last_link_from_tool, conditions);
             let couplings = PassiveSlope::of_truth(&self.truth, &driven.active);
-            let dq =
-                coupled_static_deflection(&model, &q, &self.masses, payload, compliance, &couplings).map_err(|e| {
-                    ExecuteError {
-                        cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
-                        reason: e.to_string(),
-                    }
-                })?;
+            let load = CompliantLoad {
+                masses: &self.masses,
+                payload,
+                compliance,
+                couplings: &couplings,
+            };
+            let dq = coupled_static_deflection(&model, &q, &load).map_err(|e| ExecuteError {
+                cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
+                reason: e.to_string(),
+            })?;
             for (qk, d) in q.iter_mut().zip(dq) {
                 *qk += d;
             }

@@ -510,6 +510,21 @@ pub enum DeflectionError {
     },
 }
 
+/// What loads the compliant joints and how they are coupled, for
+/// [`coupled_static_deflection`] (the arguments of [`coupled_first_order_deflection`] after
+/// the model and the joint values).
+#[derive(Clone, Copy, Debug)]
+pub struct CompliantLoad<'a> {
+    /// The links' masses.
+    pub masses: &'a [LinkMass],
+    /// The payload as `(mass, position in the last link's frame)`, if any.
+    pub payload: Option<(f64, Point3<f64>)>,
+    /// The joints' stiffnesses and gravity.
+    pub compliance: &'a ComplianceEffect,
+    /// How each joint is driven by the one below.
+    pub couplings: &'a [PassiveSlope],
+}
+
 /// Exact static equilibrium of the compliance model of [`coupled_first_order_deflection`]:
 /// the actuators' springs balance gravity at the DEFLECTED pose, `K da = Q(q + dq)` with
 /// `dq = da + g' da_below` (the coupled equilibrium of the rapier arm's dynamic mode), solved
@@ -524,11 +539,14 @@ pub enum DeflectionError {
 pub fn coupled_static_deflection(
     model: &PhiModel,
     q: &[f64],
-    masses: &[LinkMass],
-    payload: Option<(f64, Point3<f64>)>,
-    compliance: &ComplianceEffect,
-    couplings: &[PassiveSlope],
+    load: &CompliantLoad,
 ) -> Result<Vec<f64>, DeflectionError> {
+    let CompliantLoad {
+        masses,
+        payload,
+        compliance,
+        couplings,
+    } = *load;
     let mut dq = vec![0.0; q.len()];
     let mut last_step = f64::INFINITY;
     let mut contraction = 0.0;

@@ -8,8 +8,8 @@ mod validation;
 
 pub use analytic_arm::AnalyticArm;
 pub use effects::{
-    AxisWobble, BacklashEffect, ComplianceEffect, DeflectionError, DrivenJoints, Effects, EffectsError, GearHarmonic,
-    InstrumentScale, JointDriver, LinkMass, PassiveSlope, PayloadEffect, STATIC_DEFLECTION_MAX_STEPS,
+    AxisWobble, BacklashEffect, ComplianceEffect, CompliantLoad, DeflectionError, DrivenJoints, Effects, EffectsError,
+    GearHarmonic, InstrumentScale, JointDriver, LinkMass, PassiveSlope, PayloadEffect, STATIC_DEFLECTION_MAX_STEPS,
     STATIC_DEFLECTION_TOLERANCE_RAD, ThermalEffect, UNMOVED_ACTUATOR_RAD, coupled_first_order_deflection,
     coupled_static_deflection, first_order_deflection,
 };

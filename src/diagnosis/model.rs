@@ -400,15 +400,13 @@ impl Predictor {
                         Point3::from(model_t.last_link_from_tool.translation.vector),
                     )
                 });
-                let dq = crate::campaign::coupled_static_deflection(
-                    &model_t,
-                    &q,
-                    &self.masses,
+                let load = crate::campaign::CompliantLoad {
+                    masses: &self.masses,
                     payload,
-                    &compliance,
-                    &passive_slopes(&robot, &active),
-                )
-                .ok()?;
+                    compliance: &compliance,
+                    couplings: &passive_slopes(&robot, &active),
+                };
+                let dq = crate::campaign::coupled_static_deflection(&model_t, &q, &load).ok()?;
                 for (qk, d) in q.iter_mut().zip(dq) {
                     *qk += d;
                 }
