@@ -111,8 +111,8 @@ pub struct BlindOptions {
 /// The simulated robot of a blind suite.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Simulator {
-    /// [`AnalyticArm`]: the truth's kinematics with the effects without bodies (compliance
-    /// by the joint springs' static equilibrium, `coupled_static_deflection`).
+    /// [`AnalyticArm`]: the truth's kinematics with the effects to first order (compliance
+    /// by `coupled_first_order_deflection`).
     #[default]
     Analytic,
     /// [`crate::sim::RapierArm`]: rapier bodies, the four-bar as bodies, compliance by the

@@ -1,9 +1,8 @@
 //! The analytic truth model as the campaign's simulated robot: commands through the fig. 3
 //! controller into the truth's transmissions and couplings, then the actual phi-model, with
-//! the unmodelled [`Effects`] that need no rigid bodies (compliance as the static equilibrium of
-//! the joint springs).
+//! the unmodelled [`Effects`] that need no rigid bodies (compliance to first order).
 
-use super::effects::{CompliantLoad, Effects, JointDriver, LinkMass, PassiveSlope, coupled_static_deflection};
+use super::effects::{Effects, JointDriver, LinkMass, PassiveSlope, coupled_first_order_deflection};
 use super::simulate::{ArmExecutor, ExecuteError, PoseConditions};
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, RobotDescription, TruthRobot};
@@ -13,9 +12,8 @@ use rand::Rng;
 /// The analytic "real robot": exact kinematics, repeatability jitter, no bodies (so every
 /// target is visible). Effects (see [`AnalyticArm::with_effects`]): backlash, thermal
 /// expansion, gear harmonics and wobble exactly as [`RapierArm`](crate::sim::RapierArm);
-/// compliance and payload by the static equilibrium of the joint springs through the passive
-/// couplings ([`coupled_static_deflection`]) instead of the rigid bodies' (the four-bar's own
-/// bodies and their weight left out).
+/// compliance and payload by the first-order deflection through the passive couplings
+/// ([`coupled_first_order_deflection`]) instead of the rigid-body static equilibrium.
 #[derive(Clone, Debug)]
 pub struct AnalyticArm {
     truth: TruthRobot,
@@ -82,16 +80,7 @@ impl ArmExecutor for AnalyticArm {
                 .effects
                 .payload_in_last_link(&model.last_link_from_tool, conditions);
             let couplings = PassiveSlope::of_truth(&self.truth, &driven.active);
-            let load = CompliantLoad {
-                masses: &self.masses,
-                payload,
-                compliance,
-                couplings: &couplings,
-            };
-            let dq = coupled_static_deflection(&model, &q, &load).map_err(|e| ExecuteError {
-                cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
-                reason: e.to_string(),
-            })?;
+            let dq = coupled_first_order_deflection(&model, &q, &self.masses, payload, compliance, &couplings);
             for (qk, d) in q.iter_mut().zip(dq) {
                 *qk += d;
             }

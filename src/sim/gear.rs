@@ -20,7 +20,7 @@
 //! `g' = dg/dtheta`, 1.68 for the bevel gear), and that reaction is missing: joint `k - 1`
 //! sags by `Q_{k-1} / K_{k-1}` instead of `(Q_{k-1} + g' Q_k) / K_{k-1}`, an error of
 //! `|g' Q_k| / K_{k-1}` on joint `k - 1` and `g'^2 |Q_k| / K_{k-1}` on joint `k`. The
-//! analytic arm's compliance (`campaign::coupled_static_deflection`) uses
+//! analytic arm's first-order compliance (`campaign::coupled_first_order_deflection`) uses
 //! the same kinematic coupling, so the two agree.
 //!
 //! Measured (`tests/rapier_arm.rs`, joint 4 at 2e4 N m/rad under a 10 kg payload 80 mm off
