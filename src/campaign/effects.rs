@@ -537,12 +537,12 @@ pub struct CompliantLoad<'a> {
 /// coupling slopes stay those at the undeflected active displacements (their change with the
 /// sag is second order in it, times `g''`). Stiffnesses may be infinite (a rigid joint).
 ///
-/// Measured against the rapier arm (`tests/effects.rs`, joint 2 at 2e3 N m/rad): 0.9 % of the
-/// tool sag where the first order is 11 % off. Not (yet) used by [`AnalyticArm`](super::AnalyticArm)
-/// or the diagnoser's compliance candidate: with both on it, the analytic blind suite (seed 2)
-/// fell from 0.98 to 0.84 in-set named right (joint-2 compliance read as a joint-2 gear
-/// harmonic; the candidate's fit is linearised at zero compliance), and the rapier suite's
-/// joint-2 cases did not improve.
+/// Measured against the rapier arm (`tests/effects.rs`, joint 2 at 2e3 N m/rad): 0.8 % off
+/// rapier's joint-2 sag where the first order is 11.5 % off. Not used by
+/// [`AnalyticArm`](super::AnalyticArm) or the diagnoser's compliance candidate: with both on
+/// it, the analytic blind suite (seed 2) fell from 0.98 to 0.84 in-set named right (joint-2
+/// compliance read as a joint-2 gear harmonic; cause not checked, README "Blind check"), and
+/// the rapier suite's joint-2 cases did not improve.
 pub fn coupled_static_deflection(
     model: &PhiModel,
     q: &[f64],
