@@ -1,10 +1,11 @@
 //! `axiscal blind --cases N --seed S --out DIR`: the blind check of the diagnoser. Each case's
 //! CSV goes to `DIR/case-NNN/data.csv`, its hidden truth to `DIR/case-NNN/key.json`; the
-//! diagnoser reads the CSV back alone; `DIR/summary.{json,md}` hold the score.
+//! diagnoser reads the CSV back alone; `DIR/summary.{json,md}` hold the score. `--effect` and
+//! `--joint` run a subset of the drawn cases (same numbers and seeds).
 
 use anyhow::{Context, Result, bail};
 use axiscal::blind::{
-    BlindOptions, CaseResult, Simulator, case_table, detectable_size, draw_case, score, simulate_case,
+    BlindOptions, CASE_EFFECTS, CaseResult, Simulator, case_table, detectable_size, draw_case, score, simulate_case,
 };
 use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::measurement::{read_measurements, write_measurements};
@@ -27,7 +28,14 @@ pub struct Args {
     /// Baseline refit scope of the diagnoser (`identified` or `geometry`).
     #[arg(long, default_value = "identified")]
     refit: String,
-    /// Simulated robot: `analytic` (first-order effects, fast) or `rapier` (bodies, servos).
+    /// Run only the cases (of the `--cases` drawn) with this effect (`CASE_EFFECTS`, e.g.
+    /// `joint_compliance`); their numbers and seeds stay those of the full suite.
+    #[arg(long)]
+    effect: Option<String>,
+    /// Run only the cases (of the `--cases` drawn) whose effect sits on this joint (1-based).
+    #[arg(long)]
+    joint: Option<usize>,
+    /// Simulated robot: `analytic` (effects without bodies, fast) or `rapier` (bodies, servos).
     #[arg(long, default_value = "analytic")]
     sim: String,
     /// Output folder.
@@ -61,10 +69,19 @@ pub fn run(args: Args) -> Result<()> {
         },
         ..DiagnosisOptions::default()
     };
-    let results: Vec<_> = (0..args.cases)
+    if let Some(effect) = &args.effect
+        && !CASE_EFFECTS.contains(&effect.as_str())
+    {
+        bail!("--effect {effect}: expected one of {CASE_EFFECTS:?}");
+    }
+    let keys: Vec<_> = (0..args.cases)
+        .map(|i| (i, draw_case(args.seed, i, &desc)))
+        .filter(|(_, key)| args.effect.as_ref().is_none_or(|e| *e == key.effect))
+        .filter(|(_, key)| args.joint.is_none_or(|j| key.joint == Some(j)))
+        .collect();
+    let results: Vec<_> = keys
         .into_par_iter()
-        .map(|i| -> Result<_> {
-            let key = draw_case(args.seed, i, &desc);
+        .map(|(i, key)| -> Result<_> {
             let dir = args.out.join(format!("case-{i:03}"));
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
             let set = simulate_case(&key, &desc, &options).map_err(anyhow::Error::msg)?;
