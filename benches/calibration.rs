@@ -9,7 +9,8 @@ use axiscal::robot::{Controller, RobotDescription, TruthRobot};
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{SeedableRng, rngs::StdRng};
 use std::hint::black_box;
-use std::time::Instant;
+
+mod common;
 
 fn campaign() -> (RobotDescription, MeasurementSet) {
     let desc = RobotDescription::asea_irb6l();
@@ -61,29 +62,17 @@ fn bench(c: &mut Criterion) {
 
     // The ratio to the in-run baseline, which a loaded machine changes far less than the
     // times: medians of interleaved batches.
-    let time = |f: &dyn Fn()| {
-        let start = Instant::now();
-        for _ in 0..BATCH {
-            f();
-        }
-        start.elapsed().as_secs_f64() / BATCH as f64
-    };
-    let (mut base, mut full) = (Vec::new(), Vec::new());
-    for _ in 0..BATCHES {
-        base.push(time(&|| {
+    let (b, f) = common::interleaved_medians(
+        BATCHES,
+        (BATCH, &|| {
             for s in &sweeps {
                 black_box(fit_circle(black_box(s)).expect("arc"));
             }
-        }));
-        full.push(time(&|| {
+        }),
+        (BATCH, &|| {
             black_box(calibrate(black_box(&set), &desc, &options).expect("calibrates"));
-        }));
-    }
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let (b, f) = (median(&mut base), median(&mut full));
+        }),
+    );
     println!(
         "calibration/full_table1_calibration: {:.1} us = {:.1} x baseline/six_circle_fits ({:.2} us)",
         f * 1e6,

@@ -10,12 +10,13 @@ use axiscal::robot::RobotDescription;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{SeedableRng, rngs::StdRng};
 use std::hint::black_box;
-use std::time::Instant;
+
+mod common;
 
 fn bench(c: &mut Criterion) {
     // `cargo test --all-targets` (`make test`) runs benchmarks once in a debug build, where a
     // diagnosis takes ~30 s; `tests/diagnosis.rs` covers it there. Only `cargo bench` runs it.
-    if !std::env::args().any(|a| a == "--bench") {
+    if !common::is_cargo_bench() {
         println!("diagnosis bench: skipped outside `cargo bench`");
         return;
     }
@@ -41,33 +42,15 @@ fn bench(c: &mut Criterion) {
 
     // The ratio to the in-run baseline, which a loaded machine changes far less than the
     // times: medians of interleaved runs.
-    let time = |f: &dyn Fn(), n: usize| {
-        let start = Instant::now();
-        for _ in 0..n {
-            f();
-        }
-        start.elapsed().as_secs_f64() / n as f64
-    };
-    let (mut base, mut full) = (Vec::new(), Vec::new());
-    for _ in 0..RUNS {
-        base.push(time(
-            &|| {
-                black_box(calibrate(black_box(&set), &desc, &calibration).expect("calibrates"));
-            },
-            BASELINE_BATCH,
-        ));
-        full.push(time(
-            &|| {
-                black_box(diagnose(black_box(&set), &desc, &options).expect("diagnoses"));
-            },
-            1,
-        ));
-    }
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    let (b, f) = (median(&mut base), median(&mut full));
+    let (b, f) = common::interleaved_medians(
+        RUNS,
+        (BASELINE_BATCH, &|| {
+            black_box(calibrate(black_box(&set), &desc, &calibration).expect("calibrates"));
+        }),
+        (1, &|| {
+            black_box(diagnose(black_box(&set), &desc, &options).expect("diagnoses"));
+        }),
+    );
     println!(
         "diagnosis/table1_100_validation_poses: {:.3} s = {:.1} x baseline/table1_calibration ({:.2} ms)",
         f,
