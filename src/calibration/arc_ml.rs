@@ -316,14 +316,15 @@ fn identifiability(
     spans.sort_by(f64::total_cmp);
     spans.dedup();
     for s in spans {
-        if let Ok(b) = crb::uniform_arc_direction_sigma(
+        let sweep = crb::UniformArc {
             params,
-            model.form,
-            model.commands_rad[0],
-            s,
-            model.commands_rad.len(),
-            sigma,
-        ) {
+            form: model.form,
+            start_command_rad: model.commands_rad[0],
+            span_rad: s,
+            n: model.commands_rad.len(),
+            sigma_per_axis: sigma,
+        };
+        if let Ok(b) = sweep.direction_sigma_rad() {
             tilt_sigma_by_span.push((s, b));
         }
     }

@@ -118,95 +118,117 @@ pub fn held_joint_axis_covariance(
         .fold(Matrix4::zeros(), |acc, c| acc + c)
 }
 
-/// The bound for `n` points evenly spread over `span_rad` of command from `start_command_rad`
-/// with these parameters and isotropic noise (reference point: the centre). Used to say
-/// what span would determine a weak axis tilt.
-pub fn uniform_arc_crb(
-    params: &ArcParams,
-    form: TransmissionForm,
-    start_command_rad: f64,
-    span_rad: f64,
-    n: usize,
-    sigma_per_axis: f64,
-) -> Result<CrbReport, CalibrationError> {
-    if n < 2 {
-        return Err(CalibrationError::TooFewPoints {
-            fit: FIT,
-            got: n,
-            needed: 2,
-        });
-    }
-    let commands: Vec<f64> = (0..n)
-        .map(|j| start_command_rad + span_rad * j as f64 / (n - 1) as f64)
-        .collect();
-    let model = ArcModel::new(form, &commands, &MeasurementNoise::Isotropic { sigma_per_axis })?;
-    arc_crb(&model, params, &params.centre)
+/// `n` points evenly spread over `span_rad` of command from `start_command_rad` on an arc with
+/// these parameters, under isotropic noise: the hypothetical sweep the span study asks about
+/// ("what span would determine a weak axis tilt").
+#[derive(Clone, Copy, Debug)]
+pub struct UniformArc<'a> {
+    /// The arc (centre, frame, radius, phase, transmission coefficients).
+    pub params: &'a ArcParams,
+    /// The transmission form of the coefficients.
+    pub form: TransmissionForm,
+    /// First command \[rad\].
+    pub start_command_rad: f64,
+    /// Command span from the first to the last point \[rad\].
+    pub span_rad: f64,
+    /// Number of points (>= 2).
+    pub n: usize,
+    /// Noise per coordinate (the points' unit).
+    pub sigma_per_axis: f64,
 }
 
-/// Largest 1-sigma of the axis direction \[rad\] in the bound of [`uniform_arc_crb`] (same
-/// arguments, same value), from a 3x3 problem instead of the full one.
-///
-/// With isotropic noise the Fisher information splits into two blocks. Express the centre in
-/// the frame `(u, v, n)`: the component of point `j` along `n` depends only on
-/// `(c_n, tilt_u, tilt_v)`, with Jacobian row `[1, r sin phi_j, -r cos phi_j]`
-/// (`phi_j = phase + D_j`), while its in-plane components depend on none of them
-/// ([`ArcModel::jacobian`]). So the tilt block of `F^-1` is the tilt block of the inverse of
-/// `F_n = sigma^-2 sum_j [1, r s_j, -r c_j]^T [1, r s_j, -r c_j]`, and the direction bound
-/// (`dir_u = tilt_v`, `dir_v = -tilt_u`) has the same eigenvalues. Cheap enough to run for
-/// every fit's span study.
-pub fn uniform_arc_direction_sigma(
-    params: &ArcParams,
-    form: TransmissionForm,
-    start_command_rad: f64,
-    span_rad: f64,
-    n: usize,
-    sigma_per_axis: f64,
-) -> Result<f64, CalibrationError> {
-    let needed = (super::arc_model::N_GEOMETRY + form.n_coefficients()) / 3 + 1;
-    if n < needed.max(2) {
-        return Err(CalibrationError::TooFewPoints {
-            fit: FIT,
-            got: n,
-            needed: needed.max(2),
-        });
+impl UniformArc<'_> {
+    /// Command of point `j` \[rad\].
+    fn command_rad(&self, j: usize) -> f64 {
+        self.start_command_rad + self.span_rad * j as f64 / (self.n - 1) as f64
     }
-    if !(sigma_per_axis > 0.0 && sigma_per_axis.is_finite()) {
-        return Err(CalibrationError::InvalidInput {
-            fit: FIT,
-            what: "sigma must be positive",
-        });
+
+    /// The full bound (reference point: the centre).
+    pub fn crb(&self) -> Result<CrbReport, CalibrationError> {
+        if self.n < 2 {
+            return Err(CalibrationError::TooFewPoints {
+                fit: FIT,
+                got: self.n,
+                needed: 2,
+            });
+        }
+        let commands: Vec<f64> = (0..self.n).map(|j| self.command_rad(j)).collect();
+        let model = ArcModel::new(
+            self.form,
+            &commands,
+            &MeasurementNoise::Isotropic {
+                sigma_per_axis: self.sigma_per_axis,
+            },
+        )?;
+        arc_crb(&model, self.params, &self.params.centre)
     }
-    let not_invertible = |command_rad| CalibrationError::NotInvertible { fit: FIT, command_rad };
-    let c = &params.coefficients;
-    let a0 = form
-        .actual_from_command(c, start_command_rad)
-        .ok_or(not_invertible(start_command_rad))?;
-    let mut fisher = Matrix3::zeros();
-    let mut basis = vec![0.0; form.n_coefficients()];
-    let (mut previous_command, mut a) = (start_command_rad, a0);
-    let mut e = form.evaluate(c, a0, &mut basis);
-    for j in 0..n {
-        let command = start_command_rad + span_rad * j as f64 / (n - 1) as f64;
-        // Second-order Taylor start from the previous point, as the arc model does.
-        let step = command - previous_command;
-        let guess = a + step / e.slope - 0.5 * e.curvature * step * step / e.slope.powi(3);
-        (a, e) = form
-            .invert(c, command, guess, &mut basis)
-            .ok_or(not_invertible(command))?;
-        previous_command = command;
-        let (s, co) = (params.phase_rad + a - a0).sin_cos();
-        let row = Vector3::new(1.0, params.radius * s, -params.radius * co);
-        fisher += row * row.transpose();
+
+    /// Largest 1-sigma of the axis direction \[rad\] in [`UniformArc::crb`] (same value), from
+    /// a 3x3 problem instead of the full one.
+    ///
+    /// With isotropic noise the Fisher information splits into two blocks. Express the centre
+    /// in the frame `(u, v, n)`: the component of point `j` along `n` depends only on
+    /// `(c_n, tilt_u, tilt_v)`, with Jacobian row `[1, r sin phi_j, -r cos phi_j]`
+    /// (`phi_j = phase + D_j`), while its in-plane components depend on none of them
+    /// ([`ArcModel::jacobian`]). So the tilt block of `F^-1` is the tilt block of the inverse
+    /// of `F_n = sigma^-2 sum_j [1, r s_j, -r c_j]^T [1, r s_j, -r c_j]`, and the direction
+    /// bound (`dir_u = tilt_v`, `dir_v = -tilt_u`) has the same eigenvalues. Cheap enough to
+    /// run for every fit's span study.
+    pub fn direction_sigma_rad(&self) -> Result<f64, CalibrationError> {
+        let &UniformArc {
+            params,
+            form,
+            start_command_rad,
+            n,
+            sigma_per_axis,
+            ..
+        } = self;
+        let needed = (super::arc_model::N_GEOMETRY + form.n_coefficients()) / 3 + 1;
+        if n < needed.max(2) {
+            return Err(CalibrationError::TooFewPoints {
+                fit: FIT,
+                got: n,
+                needed: needed.max(2),
+            });
+        }
+        if !(sigma_per_axis > 0.0 && sigma_per_axis.is_finite()) {
+            return Err(CalibrationError::InvalidInput {
+                fit: FIT,
+                what: "sigma must be positive",
+            });
+        }
+        let not_invertible = |command_rad| CalibrationError::NotInvertible { fit: FIT, command_rad };
+        let c = &params.coefficients;
+        let a0 = form
+            .actual_from_command(c, start_command_rad)
+            .ok_or(not_invertible(start_command_rad))?;
+        let mut fisher = Matrix3::zeros();
+        let mut basis = vec![0.0; form.n_coefficients()];
+        let (mut previous_command, mut a) = (start_command_rad, a0);
+        let mut e = form.evaluate(c, a0, &mut basis);
+        for j in 0..n {
+            let command = self.command_rad(j);
+            // Second-order Taylor start from the previous point, as the arc model does.
+            let step = command - previous_command;
+            let guess = a + step / e.slope - 0.5 * e.curvature * step * step / e.slope.powi(3);
+            (a, e) = form
+                .invert(c, command, guess, &mut basis)
+                .ok_or(not_invertible(command))?;
+            previous_command = command;
+            let (s, co) = (params.phase_rad + a - a0).sin_cos();
+            let row = Vector3::new(1.0, params.radius * s, -params.radius * co);
+            fisher += row * row.transpose();
+        }
+        let cov = (fisher / (sigma_per_axis * sigma_per_axis))
+            .cholesky()
+            .ok_or(CalibrationError::IllConditioned {
+                fit: FIT,
+                condition_number: f64::INFINITY,
+            })?
+            .inverse();
+        let tilt: Matrix2<f64> = cov.fixed_view::<2, 2>(1, 1).into();
+        Ok(tilt.symmetric_eigenvalues().max().sqrt())
     }
-    let cov = (fisher / (sigma_per_axis * sigma_per_axis))
-        .cholesky()
-        .ok_or(CalibrationError::IllConditioned {
-            fit: FIT,
-            condition_number: f64::INFINITY,
-        })?
-        .inverse();
-    let tilt: Matrix2<f64> = cov.fixed_view::<2, 2>(1, 1).into();
-    Ok(tilt.symmetric_eigenvalues().max().sqrt())
 }
 
 /// Errors of an estimated axis and coefficients against the truth, in the quantities of the

@@ -171,8 +171,15 @@ fn direction_sigma_from_the_out_of_plane_block_equals_the_full_bound() {
             ..s.truth.clone()
         };
         for span in [0.3, 0.8, std::f64::consts::PI, 4.5] {
-            let full = uniform_arc_crb(&params, form, -0.2, span, 16, sigma).unwrap();
-            let block = uniform_arc_direction_sigma(&params, form, -0.2, span, 16, sigma).unwrap();
+            let sweep = UniformArc {
+                params: &params,
+                form,
+                start_command_rad: -0.2,
+                span_rad: span,
+                n: 16,
+                sigma_per_axis: sigma,
+            };
+            let (full, block) = (sweep.crb().unwrap(), sweep.direction_sigma_rad().unwrap());
             // Both are rounding-limited inverses of well-conditioned matrices.
             assert_relative_eq!(block, full.direction_sigma_rad(), max_relative = 1e-9);
         }
