@@ -10,7 +10,7 @@ pub use score::{BlindScore, CaseResult, ConfusionMatrix, case_table, score};
 
 use crate::campaign::{
     AnalyticArm, ArmExecutor, AxisWobble, BacklashEffect, CalibrationPlan, CampaignOptions, ComplianceEffect, Effects,
-    GearHarmonic, InstrumentScale, PoseConditions, ThermalEffect, ValidationPlan, commands_to_internal,
+    GearHarmonic, InstrumentScale, PayloadEffect, PoseConditions, ThermalEffect, ValidationPlan, commands_to_internal,
     simulate_campaign_with,
 };
 use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
@@ -19,8 +19,9 @@ use rand::{Rng, RngExt, SeedableRng, rngs::StdRng};
 use serde::{Deserialize, Serialize};
 
 /// Effect names a case can carry (FORMATS.md section 3), plus `unknown`: an effect outside the
-/// candidate set, which the diagnoser should call `unexplained` (alternately an order-3 axis
-/// wobble and a curvature of the instrument's field, [`InstrumentSag`]).
+/// candidate set, which the diagnoser should call `unexplained` (alternately a joint zero that
+/// drifts with temperature, [`JointZeroDrift`], and a curvature of the instrument's field,
+/// [`InstrumentSag`]).
 pub const CASE_EFFECTS: [&str; 8] = [
     "none",
     "joint_compliance",
@@ -54,6 +55,21 @@ pub struct CaseKey {
     /// An out-of-set instrument error, if any.
     #[serde(default)]
     pub sag: Option<InstrumentSag>,
+    /// An out-of-set joint zero drift, if any.
+    #[serde(default)]
+    pub drift: Option<JointZeroDrift>,
+}
+
+/// An out-of-set joint error: the zero of `joint`'s encoder drifts with the ambient
+/// temperature, so at `T` the actuator stands `rad_per_k (T - 20)` away from where the same
+/// command put it at 20 deg C (the axis experiments' temperature); the passive couplings
+/// follow the actuator. The thermal-expansion candidate scales lengths, never turns a joint.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointZeroDrift {
+    /// 1-based joint.
+    pub joint: usize,
+    /// \[rad/K\] of the joint's own displacement.
+    pub rad_per_k: f64,
 }
 
 /// An out-of-set instrument error: a paraboloid sag of the measured field, every measured
@@ -95,6 +111,10 @@ fn draw_wobble<R: Rng + ?Sized>(
     }
 }
 
+/// The paper robot's rated payload \[kg\] (the ASEA IRB 6 handles 6 kg), the largest
+/// validation payload of a blind case.
+pub const PAYLOAD_MAX_KG: f64 = 6.0;
+
 /// Settings of the generator.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlindOptions {
@@ -104,6 +124,12 @@ pub struct BlindOptions {
     pub noise_rms_3d_mm: f64,
     /// Validation temperatures are drawn uniformly in `20 +- temperature_half_range_c`.
     pub temperature_half_range_c: f64,
+    /// Validation payloads \[kg\] are drawn uniformly in `[0, payload_max_kg]`, the mass
+    /// centred on the tool frame's origin (the axis experiments carry none). Without a
+    /// payload change a joint-2 sag is a function of joint 2's angle alone (the four-bar takes
+    /// link 3's moment to actuator 3), which the calibration fits into joint 2's transmission:
+    /// it is visible only when the arm nearly buckles under its own weight.
+    pub payload_max_kg: f64,
     /// The simulated robot.
     pub simulator: Simulator,
 }
@@ -126,6 +152,7 @@ impl Default for BlindOptions {
             validation_poses: 100,
             noise_rms_3d_mm: 0.19,
             temperature_half_range_c: 10.0,
+            payload_max_kg: PAYLOAD_MAX_KG,
             simulator: Simulator::Analytic,
         }
     }
@@ -153,18 +180,20 @@ pub fn draw_effect<R: Rng + ?Sized>(
     let dof = desc.dof();
     let mut e = Effects::default();
     let mut sag = None;
+    let mut drift = None;
     let phase = rng.random_range(0.0..std::f64::consts::TAU);
     let (joint, magnitude, unit) = match effect {
         "joint_compliance" => {
             // Joints 2 and 3 carry the gravity load of the arm.
             let joint = rng.random_range(2..=3);
-            // The refit absorbs most of joint 2's sag (which drives joint 3 through the
-            // four-bar, so link 3 stays level): on this campaign its detectable stiffness is
-            // about 1.8e3 N m/rad, joint 3's about 2e4 (development suite, seed 7).
+            // The refit absorbs the part of a sag that follows the joint angles alone; the
+            // validation payloads (`BlindOptions::payload_max_kg`) leave the rest. On this
+            // campaign joint 2's detectable stiffness is about 3e4 N m/rad, joint 3's about
+            // 2e5 (development suite, seed 7): draws from about a third of it to ten times.
             let k = if joint == 2 {
-                log_uniform(rng, 5.0e2, 6.0e3)
+                log_uniform(rng, 8.0e3, 1.0e5)
             } else {
-                log_uniform(rng, 2.0e3, 6.0e4)
+                log_uniform(rng, 2.0e4, 6.0e5)
             };
             let mut stiffness = vec![1e12; dof];
             stiffness[joint - 1] = k;
@@ -212,9 +241,12 @@ pub fn draw_effect<R: Rng + ?Sized>(
             (None, c, "1/m (instrument sag)")
         }
         "unknown" => {
-            let w = draw_wobble(rng, dof, [1.0e-3, 3.0e-3], phase, 3);
-            e.wobble.push(w);
-            (Some(w.joint), w.amplitude_rad, "rad (order-3 wobble)")
+            // 0.1-3 mrad over the validation's +-10 K; detectable from about 2e-5 rad/K at
+            // joint 3 to 2.4e-4 at joint 6 (development suite, seed 7).
+            let joint = rng.random_range(1..=dof);
+            let rate = log_uniform(rng, 1.0e-5, 3.0e-4) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            drift = Some(JointZeroDrift { joint, rad_per_k: rate });
+            (Some(joint), rate, "rad/K (joint zero drift)")
         }
         "instrument_scale" => {
             let ppm = log_uniform(rng, 200.0, 6000.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
@@ -237,28 +269,34 @@ pub fn draw_effect<R: Rng + ?Sized>(
         seed,
         effects: e,
         sag,
+        drift,
     }
 }
 
-/// Simulates a case: the Table-1 axis experiments and the tool observation at 20 deg C, then
-/// `validation_poses` workspace poses at random temperatures, on the paper robot through the
-/// options' [`Simulator`] with the case's effects (no repeatability jitter), measured with
-/// isotropic noise (and the instrument scale error, if any).
+/// Simulates a case: the Table-1 axis experiments and the tool observation at 20 deg C without
+/// payload, then `validation_poses` workspace poses at random temperatures and payloads
+/// ([`BlindOptions`]), on the paper robot through the options' [`Simulator`] with the case's
+/// effects (no repeatability jitter; a [`JointZeroDrift`] offsets the executed command),
+/// measured with isotropic noise (and the instrument scale error or sag, if any).
 pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOptions) -> Result<MeasurementSet, String> {
     // The diagnoser's noise model is the instrument's: no repeatability jitter.
     let mut truth = TruthRobot::paper_robot();
     for j in &mut truth.joints {
         j.repeatability_sigma = 0.0;
     }
+    // The validation payloads sit on the tool frame's origin (they load only compliant joints).
+    let effects = Effects {
+        payload: Some(PayloadEffect::default()),
+        ..key.effects.clone()
+    };
     match options.simulator {
         Simulator::Analytic => {
-            let mut arm =
-                AnalyticArm::new(truth, Controller::from_description(desc)).with_effects(key.effects.clone(), desc);
+            let mut arm = AnalyticArm::new(truth, Controller::from_description(desc)).with_effects(effects, desc);
             simulate_on(&mut arm, key, desc, options)
         }
         Simulator::Rapier => {
             let options_rapier = crate::sim::RapierArmOptions::new(desc.dof());
-            let mut arm = crate::sim::RapierArm::new(truth, desc, key.effects.clone(), options_rapier);
+            let mut arm = crate::sim::RapierArm::new(truth, desc, effects, options_rapier);
             simulate_on(&mut arm, key, desc, options)
         }
     }
@@ -293,11 +331,15 @@ fn simulate_on<A: ArmExecutor>(
     let scale = 1.0 + key.effects.instrument_scale.map_or(0.0, |s| s.ppm * 1e-6);
     for (step, cmd) in validation.commands(desc, &plan.reference).into_iter().enumerate() {
         let conditions = PoseConditions {
-            payload_kg: 0.0,
             temperature_c: 20.0 + rng.random_range(-1.0..=1.0) * options.temperature_half_range_c,
+            payload_kg: rng.random_range(0.0..=1.0) * options.payload_max_kg,
         };
+        let mut executed = commands_to_internal(desc, &cmd);
+        if let Some(d) = &key.drift {
+            executed[d.joint - 1] += d.rad_per_k * (conditions.temperature_c - PoseConditions::default().temperature_c);
+        }
         let links = arm
-            .execute(&commands_to_internal(desc, &cmd), &conditions, &mut rng)
+            .execute(&executed, &conditions, &mut rng)
             .map_err(|e| e.to_string())?;
         let tool = links[desc.dof() - 1] * arm.last_link_from_tool();
         for (id, t) in desc.tool_targets_m().iter().enumerate() {

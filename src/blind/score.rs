@@ -51,8 +51,17 @@ pub struct BlindScore {
     pub undetectable_honest: f64,
     /// Fraction of no-effect cases read as `none`.
     pub none_accuracy: f64,
-    /// Fraction of out-of-set cases read as `unexplained`.
+    /// Out-of-set cases above their detectable size.
+    #[serde(default)]
+    pub detectable_out_of_set: usize,
+    /// Among those, the fraction read as `unexplained`.
     pub out_of_set_unexplained: f64,
+    /// Out-of-set cases below their detectable size.
+    #[serde(default)]
+    pub undetectable_out_of_set: usize,
+    /// Among those, the fraction read as `none` or `unexplained` (never a name).
+    #[serde(default)]
+    pub undetectable_out_of_set_honest: f64,
     /// Among cases with a named effect (not `none`/`unexplained`), the fraction correct.
     pub named_precision: f64,
     /// Among correctly named effects, the fraction whose held-out gap shrank by >= 70 %.
@@ -88,6 +97,8 @@ struct Tally {
     nones_ok: usize,
     out: usize,
     out_ok: usize,
+    out_undet: usize,
+    out_undet_ok: usize,
     named: usize,
     named_ok: usize,
     shrunk: usize,
@@ -129,9 +140,12 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
         if k.effect == "none" {
             n.nones += 1;
             n.nones_ok += usize::from(right);
-        } else if k.expected == "unexplained" {
+        } else if k.expected == "unexplained" && r.size_ratio.is_none_or(|s| s >= 1.0) {
             n.out += 1;
             n.out_ok += usize::from(right);
+        } else if k.expected == "unexplained" {
+            n.out_undet += 1;
+            n.out_undet_ok += usize::from(!is_named(&d.outcome.effect));
         } else if r.size_ratio.is_some_and(|s| s >= 1.0) {
             n.det += 1;
             n.det_ok += usize::from(right);
@@ -169,7 +183,10 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
         undetectable_in_set: n.undet,
         undetectable_honest: frac(n.undet_ok, n.undet),
         none_accuracy: frac(n.nones_ok, n.nones),
+        detectable_out_of_set: n.out,
         out_of_set_unexplained: frac(n.out_ok, n.out),
+        undetectable_out_of_set: n.out_undet,
+        undetectable_out_of_set_honest: frac(n.out_undet_ok, n.out_undet),
         named_precision: frac(n.named_ok, n.named),
         shrunk_70: frac(n.shrunk, ratios.len()),
         shrunk_70_resolvable: frac(n.resolvable_shrunk, n.resolvable),
@@ -196,7 +213,8 @@ impl BlindScore {
         let _ = writeln!(
             s,
             "{} cases: in-set effects above their detectable size named right {:.2} ({} cases), right joint {:.2}; \
-             below it read `none` or right {:.2} ({} cases); no-effect cases `none` {:.2}; out-of-set `unexplained` {:.2}; \
+             below it read `none` or right {:.2} ({} cases); no-effect cases `none` {:.2}; out-of-set effects above their \
+             detectable size `unexplained` {:.2} ({} cases), below it `none` or `unexplained` {:.2} ({} cases); \
              named precision {:.2}; gap shrunk >= 70 % in {:.2} of the found cases ({:.2} of the {} where the noise resolves it; \
              shrunk or left below the detectable gap {:.2}; median after/before {:.2}, mean {:.3} -> {:.3} mm); \
              all cases right {:.2}\n",
@@ -208,6 +226,9 @@ impl BlindScore {
             self.undetectable_in_set,
             self.none_accuracy,
             self.out_of_set_unexplained,
+            self.detectable_out_of_set,
+            self.undetectable_out_of_set_honest,
+            self.undetectable_out_of_set,
             self.named_precision,
             self.shrunk_70,
             self.shrunk_70_resolvable,

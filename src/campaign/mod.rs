@@ -10,7 +10,7 @@ pub use analytic_arm::AnalyticArm;
 pub use effects::{
     AxisWobble, BacklashEffect, ComplianceEffect, CompliantLoad, DeflectionError, DrivenJoints, Effects, EffectsError,
     GearHarmonic, InstrumentScale, JointDriver, LinkMass, PassiveSlope, PayloadEffect, STATIC_DEFLECTION_MAX_STEPS,
-    STATIC_DEFLECTION_TOLERANCE_RAD, ThermalEffect, UNMOVED_ACTUATOR_RAD, coupled_first_order_deflection,
+    STATIC_DEFLECTION_ROUNDING_RAD, ThermalEffect, UNMOVED_ACTUATOR_RAD, coupled_first_order_deflection,
     coupled_static_deflection, first_order_deflection,
 };
 pub use plan::{AxisSweep, CalibrationPlan, PlanError, commands_to_internal};
