@@ -18,3 +18,136 @@ pub(crate) fn register_font() {
         );
     });
 }
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor;
+use std::path::{Path, PathBuf};
+
+/// Why a plot could not be drawn or written.
+#[derive(Debug, thiserror::Error)]
+#[error("plot {path}: {message}")]
+pub struct PlotError {
+    /// The file.
+    pub path: PathBuf,
+    /// What plotters said.
+    pub message: String,
+}
+
+/// Draws one plot to a path, PNG (`true`) or SVG.
+pub(crate) type DrawFn<'a> = dyn Fn(&Path, bool) -> Result<(), String> + 'a;
+
+/// Draws every `(name, draw)` job to `dir/name.png` and `dir/name.svg`; returns the files.
+pub(crate) fn write_png_and_svg(dir: &Path, jobs: &[(&str, &DrawFn)]) -> Result<Vec<PathBuf>, PlotError> {
+    register_font();
+    let mut written = Vec::new();
+    for (name, draw) in jobs {
+        for (ext, png) in [("png", true), ("svg", false)] {
+            let path = dir.join(format!("{name}.{ext}"));
+            draw(&path, png).map_err(|message| PlotError {
+                path: path.clone(),
+                message,
+            })?;
+            written.push(path);
+        }
+    }
+    Ok(written)
+}
+
+/// One bar of a [`bar_chart`].
+pub(crate) struct Bar {
+    /// Text beside the bar.
+    pub label: String,
+    /// Length.
+    pub value: f64,
+    /// Fill.
+    pub color: RGBColor,
+}
+
+/// A vertical reference line of a [`bar_chart`] (with its legend entry).
+pub(crate) struct Reference {
+    /// Legend text.
+    pub label: String,
+    /// Position on the value axis.
+    pub value: f64,
+    /// Line colour.
+    pub color: RGBColor,
+}
+
+/// Horizontal bars, the first at the top, from `from` (the value axis' start) to their values,
+/// with vertical reference lines.
+pub(crate) fn bar_chart<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    x_desc: &str,
+    from: f64,
+    bars: &[Bar],
+    references: &[Reference],
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let n = bars.len().max(1);
+    let hi = bars
+        .iter()
+        .map(|b| b.value)
+        .chain(references.iter().map(|r| r.value))
+        .filter(|v| v.is_finite())
+        .fold(from, f64::max);
+    let hi = hi + 0.08 * (hi - from).max(1e-9);
+    let label_width = bars.iter().map(|b| b.label.len()).max().unwrap_or(4) as u32 * 7 + 16;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(label_width.min(360))
+        .build_cartesian_2d(from..hi, 0.0..n as f64)
+        .map_err(|e| e.to_string())?;
+    let row = |i: usize| (n - 1 - i) as f64;
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .y_labels(0)
+        .x_desc(x_desc)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    chart
+        .draw_series(bars.iter().enumerate().map(|(i, b)| {
+            let y = row(i);
+            Rectangle::new(
+                [(from, y + 0.15), (b.value.clamp(from, hi), y + 0.85)],
+                b.color.mix(0.75).filled(),
+            )
+        }))
+        .map_err(|e| e.to_string())?;
+    // Bar labels in the y label area, right-aligned against the axis.
+    let (area_x, _) = chart.plotting_area().get_pixel_range();
+    let style = TextStyle::from(("sans-serif", 13).into_font()).pos(text_anchor::Pos::new(
+        text_anchor::HPos::Right,
+        text_anchor::VPos::Center,
+    ));
+    for (i, b) in bars.iter().enumerate() {
+        let (_, py) = chart.backend_coord(&(from, row(i) + 0.5));
+        root.draw_text(&b.label, &style, (area_x.start - 6, py))
+            .map_err(|e| e.to_string())?;
+    }
+    for r in references {
+        let color = r.color;
+        chart
+            .draw_series(LineSeries::new(
+                [(r.value, 0.0), (r.value, n as f64)],
+                color.stroke_width(2),
+            ))
+            .map_err(|e| e.to_string())?
+            .label(r.label.clone())
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2)));
+    }
+    if !references.is_empty() {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())
+}

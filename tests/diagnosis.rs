@@ -107,6 +107,39 @@ fn no_effect_is_none_and_json_has_the_fixed_fields() {
     assert!(w.get("experiment").is_some() && w.get("joint").is_some() && w.get("excess_ratio").is_some());
     let c = &json["candidates"][0];
     assert!(c.get("effect").is_some() && c.get("joint").is_some() && c.get("heldout_rms_mm").is_some());
+    // WHERE per workspace feature: every varying feature has its bins, and without an effect
+    // each bin's held-out RMS matches the noise-only replicas' within K_SIGMA of a bin's
+    // relative RMS scatter, 1 / sqrt(2 n) for its n >= 27 coordinates (3 poses x 3 targets).
+    for f in [
+        "reach",
+        "payload",
+        "temperature",
+        "joint_angle_2",
+        "gravity_torque_2",
+        "approach_1",
+    ] {
+        assert!(
+            d.where_
+                .iter()
+                .any(|w| w.experiment.starts_with(&format!("feature:{f}:"))),
+            "no `where` bins for {f}"
+        );
+    }
+    let bound = K_SIGMA / (2.0f64 * 27.0).sqrt();
+    for w in d.where_.iter().filter(|w| w.experiment.starts_with("feature:")) {
+        assert!(
+            (w.excess_ratio - 1.0).abs() < bound,
+            "{}: excess {}",
+            w.experiment,
+            w.excess_ratio
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let written = axiscal::diagnosis::write_plots(d, dir.path()).unwrap();
+    assert_eq!(written.len(), axiscal::diagnosis::PLOT_FILES.len());
+    for f in written {
+        assert!(std::fs::metadata(&f).unwrap().len() > 1000, "{} is empty", f.display());
+    }
     let s = score(&[r]);
     assert_eq!(s.none_accuracy, 1.0);
 }

@@ -184,4 +184,10 @@ fn diagnosis_from_arcs_alone_flags_axis_2() {
     for joint in 4..=6 {
         assert!(!d.flagged.iter().any(|f| f.joint == joint), "{}", d.verdict);
     }
+    let dir = tempfile::tempdir().unwrap();
+    let written = axiscal::diagnosis::write_axes_plots(&d, dir.path()).unwrap();
+    assert_eq!(written.len(), axiscal::diagnosis::AXES_PLOT_FILES.len());
+    for f in written {
+        assert!(std::fs::metadata(&f).unwrap().len() > 1000, "{} is empty", f.display());
+    }
 }

@@ -1,10 +1,12 @@
 //! `axiscal diagnose DATA.csv --robot R --out DIR`: sim-to-real gap diagnosis
-//! (FORMATS.md section 3), writing `diagnosis.json` and `diagnosis.md`.
+//! (FORMATS.md section 3), writing `diagnosis.json`, `diagnosis.md` and the plots
+//! (`where.{png,svg}`; with validation poses also `candidates.{png,svg}`).
 
 use super::calibrate::{check_noise_mm, refuse_existing, write_output};
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
-    DiagnosisOptions, RefitScope, axes_markdown, diagnose, diagnose_axes, markdown, validation_poses,
+    AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, RefitScope, axes_markdown, diagnose, diagnose_axes, markdown,
+    validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
@@ -79,9 +81,11 @@ pub fn run(args: Args) -> Result<()> {
     if validation_poses(set.rows(), &desc).len() < 4 {
         let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
         std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-        refuse_existing(&args.out, &names, args.force)?;
+        let all: Vec<&str> = names.iter().chain(&AXES_PLOT_FILES).copied().collect();
+        refuse_existing(&args.out, &all, args.force)?;
         write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
         write_output(&args.out, names[1], &axes_markdown(&d, &source), args.force)?;
+        write_axes_plots(&d, &args.out)?;
         println!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
         for w in &d.where_ {
             println!(
@@ -99,14 +103,16 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
         println!("{}: {}", d.outcome.effect, d.verdict);
-        println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
+        println!("wrote {}/{{{}}}", args.out.display(), all.join(","));
         return Ok(());
     }
     let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {}", args.data.display()))?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    refuse_existing(&args.out, &names, args.force)?;
+    let all: Vec<&str> = names.iter().chain(&PLOT_FILES).copied().collect();
+    refuse_existing(&args.out, &all, args.force)?;
     write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
     write_output(&args.out, names[1], &markdown(&d, &source), args.force)?;
+    write_plots(&d, &args.out)?;
     println!(
         "{}{} (confidence {:.2}): gap {:.3} -> {:.3} mm",
         d.outcome.effect,
@@ -115,6 +121,6 @@ pub fn run(args: Args) -> Result<()> {
         d.outcome.gap_before_mm,
         d.outcome.gap_after_mm
     );
-    println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
+    println!("wrote {}/{{{}}}", args.out.display(), all.join(","));
     Ok(())
 }

@@ -1,8 +1,178 @@
-//! Per-feature `where` entries.
+//! Per-feature `where` entries: the baseline's held-out residual in bins of a workspace
+//! feature (reach, gravity torque, approach direction, joint angle, payload, temperature)
+//! against the same bins of the noise-only replicas, so a gap that lives in one part of the
+//! workspace shows there (module docs of [`crate::diagnosis`], step 5).
 
-use super::{NullData, Prepared, WhereEntry};
+use super::stats::mean;
+use super::{NullData, Pose, Prepared, WhereEntry, split};
+use nalgebra::DMatrix;
 
-/// Held-out residual excess per workspace-feature bin.
-pub(super) fn feature_entries(_prep: &Prepared, _null: &NullData) -> Vec<WhereEntry> {
-    Vec::new()
+/// Bins of a continuous feature: terciles of its held-out values.
+const TERCILES: [&str; 3] = ["low", "mid", "high"];
+
+/// Smallest number of held-out poses in a bin worth reporting.
+const MIN_BIN_POSES: usize = 3;
+
+/// One feature: its name, the joint it belongs to, and per held-out pose its bin label.
+struct Feature {
+    name: String,
+    joint: Option<usize>,
+    bins: Vec<Option<&'static str>>,
+}
+
+/// Tercile labels of `values` (`None` for a pose without a value); no bins when the values do
+/// not vary.
+fn terciles(values: &[Option<f64>]) -> Option<Vec<Option<&'static str>>> {
+    let mut sorted: Vec<f64> = values.iter().flatten().copied().collect();
+    sorted.sort_by(f64::total_cmp);
+    let (first, last) = (*sorted.first()?, *sorted.last()?);
+    if last - first <= 1e-9 * first.abs().max(last.abs()).max(1.0) {
+        return None;
+    }
+    let cut = |f: f64| sorted[((sorted.len() - 1) as f64 * f).round() as usize];
+    let (a, b) = (cut(1.0 / 3.0), cut(2.0 / 3.0));
+    Some(
+        values
+            .iter()
+            .map(|v| {
+                v.map(|v| {
+                    if v <= a {
+                        TERCILES[0]
+                    } else if v <= b {
+                        TERCILES[1]
+                    } else {
+                        TERCILES[2]
+                    }
+                })
+            })
+            .collect(),
+    )
+}
+
+fn features(prep: &Prepared, held: &[&Pose]) -> Vec<Feature> {
+    let per_pose: Vec<_> = held.iter().map(|p| prep.predictor.pose_features(p)).collect();
+    let dof = prep.predictor.dof();
+    let mut out = Vec::new();
+    let mut continuous = |name: String, joint: Option<usize>, values: Vec<Option<f64>>| {
+        if let Some(bins) = terciles(&values) {
+            out.push(Feature { name, joint, bins });
+        }
+    };
+    continuous(
+        "reach".into(),
+        None,
+        per_pose.iter().map(|f| f.as_ref().map(|f| f.reach_m)).collect(),
+    );
+    for k in 0..dof {
+        continuous(
+            format!("gravity_torque_{}", k + 1),
+            Some(k + 1),
+            per_pose
+                .iter()
+                .map(|f| f.as_ref().map(|f| f.gravity_torque_nm[k].abs()))
+                .collect(),
+        );
+        continuous(
+            format!("joint_angle_{}", k + 1),
+            Some(k + 1),
+            per_pose.iter().map(|f| f.as_ref().map(|f| f.q[k])).collect(),
+        );
+    }
+    continuous(
+        "payload".into(),
+        None,
+        held.iter().map(|p| Some(p.payload_kg)).collect(),
+    );
+    continuous(
+        "temperature".into(),
+        None,
+        held.iter().map(|p| Some(p.temperature_c)).collect(),
+    );
+    for k in 0..dof {
+        let bins: Vec<_> = held
+            .iter()
+            .map(|p| match p.approach[k] {
+                a if a > 0.0 => Some("positive"),
+                a if a < 0.0 => Some("negative"),
+                _ => None,
+            })
+            .collect();
+        if bins.contains(&Some("positive")) && bins.contains(&Some("negative")) {
+            out.push(Feature {
+                name: format!("approach_{}", k + 1),
+                joint: Some(k + 1),
+                bins,
+            });
+        }
+    }
+    out
+}
+
+/// Held-out residual excess per workspace-feature bin: for every feature and bin with at
+/// least [`MIN_BIN_POSES`] held-out poses, the baseline's held-out residual RMS over those
+/// poses against the noise-only replicas' (mean over the null samples, in variance).
+pub(super) fn feature_entries(prep: &Prepared, null: &NullData) -> Vec<WhereEntry> {
+    let (_, held) = split(&prep.poses);
+    let base = prep.baseline_fit();
+    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
+    let heldout = |data: &DMatrix<f64>| {
+        let (t, h) = prep.rows(data);
+        base.heldout(&t, &h)
+    };
+    let (r_obs, r_null) = (heldout(&observed), heldout(&null.samples));
+    // Residual rows of every held-out pose (3 per target, in pose order).
+    let mut rows = Vec::with_capacity(held.len());
+    let mut start = 0;
+    for p in &held {
+        let n = 3 * p.targets.len();
+        rows.push(start..start + n);
+        start += n;
+    }
+    let mut out = Vec::new();
+    for f in features(prep, &held) {
+        let mut labels: Vec<&str> = f.bins.iter().flatten().copied().collect();
+        labels.sort_unstable();
+        labels.dedup();
+        for label in labels {
+            let poses: Vec<usize> = (0..held.len()).filter(|&i| f.bins[i] == Some(label)).collect();
+            if poses.len() < MIN_BIN_POSES {
+                continue;
+            }
+            let ssr = |m: &DMatrix<f64>, c: usize| -> f64 {
+                poses
+                    .iter()
+                    .flat_map(|&i| rows[i].clone())
+                    .map(|r| m[(r, c)] * m[(r, c)])
+                    .sum()
+            };
+            let targets = poses.iter().map(|&i| held[i].targets.len()).sum::<usize>().max(1) as f64;
+            let obs = (ssr(&r_obs, 0) / targets).sqrt() * 1e3;
+            let noise =
+                (mean(&(0..r_null.ncols()).map(|c| ssr(&r_null, c)).collect::<Vec<_>>()) / targets).sqrt() * 1e3;
+            out.push(WhereEntry {
+                experiment: format!("feature:{}:{label}", f.name),
+                joint: f.joint,
+                excess_ratio: obs / noise,
+                residual_rms_mm: obs,
+                noise_only_rms_mm: noise,
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn terciles_split_a_varying_feature_and_skip_a_constant_one() {
+        let v: Vec<Option<f64>> = (0..9).map(|i| Some(i as f64)).chain([None]).collect();
+        let b = terciles(&v).unwrap();
+        assert_eq!(&b[..3], &[Some("low"); 3]);
+        assert_eq!(&b[3..6], &[Some("mid"); 3]);
+        assert_eq!(&b[6..9], &[Some("high"); 3]);
+        assert_eq!(b[9], None);
+        assert!(terciles(&[Some(20.0); 5]).is_none());
+    }
 }

@@ -31,6 +31,7 @@ mod features;
 mod linear;
 mod model;
 mod noise;
+mod plots;
 mod poses;
 mod report;
 mod result;
@@ -38,8 +39,11 @@ mod stats;
 
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
 pub use linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
-pub use model::{Candidate, GRAVITY_M_S2, Predictor, RefitScope, WOBBLE_ORDER, unmodelled_harmonic_order};
+pub use model::{
+    Candidate, GRAVITY_M_S2, PoseFeatures, Predictor, RefitScope, WOBBLE_ORDER, unmodelled_harmonic_order,
+};
 pub use noise::{clean_positions, is_validation, replica};
+pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, Outcome, Parameter, WhereEntry};

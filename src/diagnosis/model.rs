@@ -212,6 +212,17 @@ pub struct Predictor {
     pub scope: RefitScope,
 }
 
+/// Workspace features of a validation pose ([`Predictor::pose_features`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseFeatures {
+    /// Joint values on the calibrated robot \[rad or m\].
+    pub q: Vec<f64>,
+    /// Horizontal distance of the tool point from the base's vertical axis \[m\].
+    pub reach_m: f64,
+    /// Gravity torque about every joint, payload included \[N m\].
+    pub gravity_torque_nm: Vec<f64>,
+}
+
 /// What the baseline refit adjusts besides the geometry (rows `a`, `b`, `alpha`, `beta`, joint
 /// zero offsets, base and tool frames).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -427,6 +438,41 @@ impl Predictor {
             couplings: &couplings,
         };
         coupled_static_deflection(model, q, &load).ok()
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.base.dof()
+    }
+
+    /// The workspace features of `pose` on the calibrated robot (no refit, no candidate):
+    /// joint values, the tool point's horizontal distance from the base's vertical axis, and
+    /// the gravity torque about every joint with the pose's payload (the actuator load before
+    /// any coupling, `first_order_deflection` at unit stiffness). `None` when the command
+    /// cannot be executed.
+    pub fn pose_features(&self, pose: &Pose) -> Option<PoseFeatures> {
+        let n = self.base.dof();
+        let (q, _) = self.joint_values(&self.base, &pose.cmd, &pose.approach, &[0.0; 2])?;
+        let model = self.base.model();
+        let tool = model.poses(&q).world_from_link[n - 1] * model.last_link_from_tool;
+        let base = model.world_from_base;
+        let tool_in_base = base.inverse() * Point3::from(tool.translation.vector);
+        let payload = (pose.payload_kg > 0.0).then(|| {
+            (
+                pose.payload_kg,
+                Point3::from(model.last_link_from_tool.translation.vector),
+            )
+        });
+        let unit = ComplianceEffect {
+            stiffness_nm_per_rad: vec![1.0; n],
+            gravity_m_s2: GRAVITY_M_S2,
+        };
+        let gravity_torque_nm = crate::campaign::first_order_deflection(&model, &q, &self.masses, payload, &unit);
+        Some(PoseFeatures {
+            q,
+            reach_m: tool_in_base.x.hypot(tool_in_base.y),
+            gravity_torque_nm,
+        })
     }
 
     /// Residuals `measured - predicted` \[m\] (3 per target) of `poses` for `params`; `None`

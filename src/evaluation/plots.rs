@@ -10,18 +10,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
-/// Why a plot could not be drawn or written.
-#[derive(Debug, thiserror::Error)]
-#[error("plot {path}: {message}")]
-pub struct PlotError {
-    /// The file.
-    pub path: PathBuf,
-    /// What plotters said.
-    pub message: String,
-}
-
-/// Draws one plot to a path, PNG (`true`) or SVG.
-type DrawFn<'a> = dyn Fn(&Path, bool) -> Result<(), String> + 'a;
+use crate::plotting::DrawFn;
+pub use crate::plotting::PlotError;
 
 /// One series of per-pose values.
 struct Series<'a> {
@@ -158,7 +148,6 @@ pub const PLOT_FILES: [&str; 6] = [
 /// Writes figs. 9 and 10 and the position histogram ([`PLOT_FILES`]) into `dir`; returns the
 /// files written.
 pub fn write_plots(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
-    crate::plotting::register_font();
     let pick = |f: fn(&super::ToolError) -> f64, which: usize| -> Vec<f64> {
         report
             .poses
@@ -194,7 +183,6 @@ pub fn write_plots(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Plo
     };
     let position = series(|e| e.position_mm);
     let orientation = series(|e| e.orientation_rad);
-    let mut written = Vec::new();
     let jobs: [(&str, &DrawFn); 3] = [
         ("fig9_position", &|p: &Path, png: bool| {
             let t = "Fig. 9: tool position error per test pose";
@@ -229,15 +217,5 @@ pub fn write_plots(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Plo
             }
         }),
     ];
-    for (name, draw) in jobs {
-        for (ext, png) in [("png", true), ("svg", false)] {
-            let path = dir.join(format!("{name}.{ext}"));
-            draw(&path, png).map_err(|message| PlotError {
-                path: path.clone(),
-                message,
-            })?;
-            written.push(path);
-        }
-    }
-    Ok(written)
+    crate::plotting::write_png_and_svg(dir, &jobs)
 }
