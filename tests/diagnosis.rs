@@ -134,6 +134,12 @@ fn no_effect_is_none_and_json_has_the_fixed_fields() {
             w.excess_ratio
         );
     }
+    // Each feature's contrast test false-alarms at max(alpha, 1 / (samples + 1)), 1/33 with
+    // this test's 32 null samples: over 21 features four or more alarms have probability
+    // 0.3 % (binomial tail).
+    assert!(d.features.len() >= 15, "{} features", d.features.len());
+    let alarms = d.features.iter().filter(|f| f.beyond_noise).count();
+    assert!(alarms < 4, "{alarms} features beyond noise without an effect");
     let dir = tempfile::tempdir().unwrap();
     let written = axiscal::diagnosis::write_plots(d, dir.path()).unwrap();
     assert_eq!(written.len(), axiscal::diagnosis::PLOT_FILES.len());

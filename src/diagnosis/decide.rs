@@ -3,8 +3,8 @@
 
 use super::stats::{mean, quantile, std_dev, upper_tail};
 use super::{
-    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, LinearFit, NullData, Outcome, Parameter, Prepared,
-    WhereEntry,
+    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, FeatureContrast, LinearFit, NullData, Outcome, Parameter,
+    Prepared, WhereEntry,
 };
 use nalgebra::{DMatrix, DVector};
 
@@ -99,7 +99,13 @@ fn score_candidates(prep: &Prepared, null: &NullData, base: &LinearFit, g: (f64,
     out
 }
 
-fn where_entries(prep: &Prepared, null: &NullData, rms_before: f64, noise_before: f64) -> Vec<WhereEntry> {
+fn where_entries(
+    prep: &Prepared,
+    null: &NullData,
+    rms_before: f64,
+    noise_before: f64,
+    false_alarm: f64,
+) -> (Vec<WhereEntry>, Vec<FeatureContrast>) {
     let mut out: Vec<WhereEntry> = prep
         .cal
         .axes
@@ -133,9 +139,10 @@ fn where_entries(prep: &Prepared, null: &NullData, rms_before: f64, noise_before
         residual_rms_mm: rms_before,
         noise_only_rms_mm: noise_before,
     });
-    out.extend(super::features::feature_entries(prep, null));
+    let (features, contrasts) = super::features::feature_entries(prep, null, false_alarm);
+    out.extend(features);
     out.sort_by(|a, b| b.excess_ratio.total_cmp(&a.excess_ratio));
-    out
+    (out, contrasts)
 }
 
 /// Tests the observation against the null samples and names the effect.
@@ -284,6 +291,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         None => none(),
     };
     let base_params = prep.x_geometric.ncols();
+    let (where_, features) = where_entries(prep, null, rms_before, noise_before, alpha);
     Diagnosis {
         outcome: Outcome {
             effect,
@@ -292,7 +300,8 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
             gap_before_mm: gap_before,
             gap_after_mm: gap_after,
         },
-        where_: where_entries(prep, null, rms_before, noise_before),
+        where_,
+        features,
         candidates: scored.into_iter().map(|s| s.score).collect(),
         parameters,
         noise_rms_3d_mm: options.noise_rms_3d_mm,

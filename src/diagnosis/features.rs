@@ -3,8 +3,8 @@
 //! against the same bins of the noise-only replicas, so a gap that lives in one part of the
 //! workspace shows there (module docs of [`crate::diagnosis`], step 5).
 
-use super::stats::mean;
-use super::{NullData, Pose, Prepared, WhereEntry, split};
+use super::stats::{mean, quantile};
+use super::{FeatureContrast, NullData, Pose, Prepared, WhereEntry, split};
 use nalgebra::DMatrix;
 
 /// Bins of a continuous feature: terciles of its held-out values.
@@ -12,6 +12,17 @@ const TERCILES: [&str; 3] = ["low", "mid", "high"];
 
 /// Smallest number of held-out poses in a bin worth reporting.
 const MIN_BIN_POSES: usize = 3;
+
+/// One bin of a feature over the held-out poses.
+struct Bin {
+    label: &'static str,
+    /// Observed SSR \[m^2\].
+    observed: f64,
+    /// SSR of every null sample \[m^2\].
+    null: Vec<f64>,
+    /// Targets in the bin.
+    targets: f64,
+}
 
 /// One feature: its name, the joint it belongs to, and per held-out pose its bin label.
 struct Feature {
@@ -29,8 +40,9 @@ fn terciles(values: &[Option<f64>]) -> Option<Vec<Option<&'static str>>> {
     if last - first <= 1e-9 * first.abs().max(last.abs()).max(1.0) {
         return None;
     }
-    let cut = |f: f64| sorted[((sorted.len() - 1) as f64 * f).round() as usize];
-    let (a, b) = (cut(1.0 / 3.0), cut(2.0 / 3.0));
+    // The largest value of the lowest third and of the lowest two thirds.
+    let n = sorted.len();
+    let (a, b) = (sorted[n.div_ceil(3) - 1], sorted[(2 * n).div_ceil(3) - 1]);
     Some(
         values
             .iter()
@@ -108,10 +120,19 @@ fn features(prep: &Prepared, held: &[&Pose]) -> Vec<Feature> {
     out
 }
 
-/// Held-out residual excess per workspace-feature bin: for every feature and bin with at
-/// least [`MIN_BIN_POSES`] held-out poses, the baseline's held-out residual RMS over those
-/// poses against the noise-only replicas' (mean over the null samples, in variance).
-pub(super) fn feature_entries(prep: &Prepared, null: &NullData) -> Vec<WhereEntry> {
+/// Held-out residual excess per workspace-feature bin, and per feature the contrast between
+/// its bins with its noise-only threshold. For every feature and bin with at least
+/// [`MIN_BIN_POSES`] held-out poses: the baseline's held-out residual RMS over those poses
+/// against the noise-only replicas' (mean over the null samples, in variance). A feature's
+/// contrast is its largest bin ratio over its smallest (1 when the gap is the same
+/// everywhere); the same contrast of every null sample (each bin against the null mean) gives
+/// its `1 - false_alarm` quantile, so a gap that depends on the feature stands out even when
+/// every bin exceeds noise.
+pub(super) fn feature_entries(
+    prep: &Prepared,
+    null: &NullData,
+    false_alarm: f64,
+) -> (Vec<WhereEntry>, Vec<FeatureContrast>) {
     let (_, held) = split(&prep.poses);
     let base = prep.baseline_fit();
     let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
@@ -128,11 +149,13 @@ pub(super) fn feature_entries(prep: &Prepared, null: &NullData) -> Vec<WhereEntr
         rows.push(start..start + n);
         start += n;
     }
-    let mut out = Vec::new();
+    let mut entries = Vec::new();
+    let mut contrasts = Vec::new();
     for f in features(prep, &held) {
         let mut labels: Vec<&str> = f.bins.iter().flatten().copied().collect();
         labels.sort_unstable();
         labels.dedup();
+        let mut bins: Vec<Bin> = Vec::new();
         for label in labels {
             let poses: Vec<usize> = (0..held.len()).filter(|&i| f.bins[i] == Some(label)).collect();
             if poses.len() < MIN_BIN_POSES {
@@ -146,19 +169,44 @@ pub(super) fn feature_entries(prep: &Prepared, null: &NullData) -> Vec<WhereEntr
                     .sum()
             };
             let targets = poses.iter().map(|&i| held[i].targets.len()).sum::<usize>().max(1) as f64;
-            let obs = (ssr(&r_obs, 0) / targets).sqrt() * 1e3;
-            let noise =
-                (mean(&(0..r_null.ncols()).map(|c| ssr(&r_null, c)).collect::<Vec<_>>()) / targets).sqrt() * 1e3;
-            out.push(WhereEntry {
-                experiment: format!("feature:{}:{label}", f.name),
+            bins.push(Bin {
+                label,
+                observed: ssr(&r_obs, 0),
+                null: (0..r_null.ncols()).map(|c| ssr(&r_null, c)).collect(),
+                targets,
+            });
+        }
+        for b in &bins {
+            let obs = (b.observed / b.targets).sqrt() * 1e3;
+            let noise = (mean(&b.null) / b.targets).sqrt() * 1e3;
+            entries.push(WhereEntry {
+                experiment: format!("feature:{}:{}", f.name, b.label),
                 joint: f.joint,
                 excess_ratio: obs / noise,
                 residual_rms_mm: obs,
                 noise_only_rms_mm: noise,
             });
         }
+        if bins.len() < 2 {
+            continue;
+        }
+        let contrast = |ssr: &dyn Fn(&Bin) -> f64| {
+            let ratios: Vec<f64> = bins.iter().map(|b| (ssr(b) / mean(&b.null)).sqrt()).collect();
+            ratios.iter().copied().fold(0.0, f64::max) / ratios.iter().copied().fold(f64::INFINITY, f64::min)
+        };
+        let observed = contrast(&|b| b.observed);
+        let null_contrast: Vec<f64> = (0..r_null.ncols()).map(|c| contrast(&|b| b.null[c])).collect();
+        let threshold = quantile(&null_contrast, 1.0 - false_alarm);
+        contrasts.push(FeatureContrast {
+            feature: f.name,
+            joint: f.joint,
+            contrast: observed,
+            noise_only_threshold: threshold,
+            beyond_noise: observed > threshold,
+        });
     }
-    out
+    contrasts.sort_by(|a, b| (b.contrast / b.noise_only_threshold).total_cmp(&(a.contrast / a.noise_only_threshold)));
+    (entries, contrasts)
 }
 
 #[cfg(test)]

@@ -46,7 +46,7 @@ pub use noise::{clean_positions, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
-pub use result::{CandidateScore, Diagnosis, Outcome, Parameter, WhereEntry};
+pub use result::{CandidateScore, Diagnosis, FeatureContrast, Outcome, Parameter, WhereEntry};
 
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::measurement::MeasurementSet;

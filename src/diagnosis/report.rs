@@ -38,6 +38,24 @@ pub fn markdown(d: &Diagnosis, source: &str) -> String {
     }
     s.push_str("## Where\n\n");
     s.push_str(&where_table(&d.where_, &[], |_| Vec::new()));
+    if !d.features.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n### Where, by workspace feature\n\nContrast: the feature's largest bin excess over its smallest (1: the gap is the same across the feature); threshold: the noise-only replicas' {} quantile of the same contrast.\n\n| feature | joint | contrast | noise-only threshold | beyond noise |\n|---|---|---|---|---|",
+            1.0 - d.false_alarm
+        );
+        for f in &d.features {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.3} | {:.3} | {} |",
+                f.feature,
+                f.joint.map_or("-".into(), |j| j.to_string()),
+                f.contrast,
+                f.noise_only_threshold,
+                if f.beyond_noise { "yes" } else { "no" }
+            );
+        }
+    }
     let _ = writeln!(
         s,
         "\n## Candidates (best first)\n\n| effect | joint | held-out RMS (mm) | gap after (mm) | improvement (chi2) | z | significant | outside refit | weight |\n|---|---|---|---|---|---|---|---|---|"

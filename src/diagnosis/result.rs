@@ -20,6 +20,24 @@ pub struct WhereEntry {
     pub noise_only_rms_mm: f64,
 }
 
+/// How much a workspace feature's bins differ in their held-out excess
+/// ([`WhereEntry`]`::excess_ratio` of `feature:NAME:BIN`): a gap that depends on the feature.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FeatureContrast {
+    /// Feature name (`reach`, `joint_angle_2`, `gravity_torque_3`, `payload`, `temperature`,
+    /// `approach_4`, ...).
+    pub feature: String,
+    /// The feature's joint, or `None`.
+    pub joint: Option<usize>,
+    /// Largest bin excess ratio over the smallest (1: the same everywhere).
+    pub contrast: f64,
+    /// The noise-only replicas' `1 - false_alarm` quantile of the same contrast (per feature,
+    /// not family-wise).
+    pub noise_only_threshold: f64,
+    /// `contrast > noise_only_threshold`.
+    pub beyond_noise: bool,
+}
+
 /// A fitted parameter with its 1-sigma.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Parameter {
@@ -88,6 +106,10 @@ pub struct Diagnosis {
     /// Experiments and workspace features ranked by excess over noise.
     #[serde(rename = "where")]
     pub where_: Vec<WhereEntry>,
+    /// Workspace features by how much the gap depends on them (contrast over its noise-only
+    /// threshold, largest first).
+    #[serde(default)]
+    pub features: Vec<FeatureContrast>,
     /// Candidates, best (lowest held-out RMS) first.
     pub candidates: Vec<CandidateScore>,
     /// The named effect's parameters.
