@@ -5,12 +5,12 @@
 use super::calibrate::{check_noise_mm, refuse_existing, write_output};
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
-    AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, RefitScope, axes_markdown, diagnose, diagnose_axes, markdown,
-    validation_poses, write_axes_plots, write_plots,
+    AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose, diagnose_axes,
+    markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal diagnose`.
 #[derive(Debug, clap::Args)]
@@ -76,16 +76,17 @@ pub fn run(args: Args) -> Result<()> {
         ..DiagnosisOptions::default()
     };
     let source = args.data.display().to_string();
-    let names = ["diagnosis.json", "diagnosis.md"];
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
         let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
-        std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-        let all: Vec<&str> = names.iter().chain(&AXES_PLOT_FILES).copied().collect();
-        refuse_existing(&args.out, &all, args.force)?;
-        write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
-        write_output(&args.out, names[1], &axes_markdown(&d, &source), args.force)?;
-        write_axes_plots(&d, &args.out)?;
+        let report = Report {
+            out: &args.out,
+            json: serde_json::to_string_pretty(&d)?,
+            markdown: axes_markdown(&d, &source),
+            plot_files: &AXES_PLOT_FILES,
+            force: args.force,
+        };
+        let written = report.write(|dir| write_axes_plots(&d, dir))?;
         println!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
         for w in &d.where_ {
             println!(
@@ -103,16 +104,18 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
         println!("{}: {}", d.outcome.effect, d.verdict);
-        println!("wrote {}/{{{}}}", args.out.display(), all.join(","));
+        println!("wrote {written}");
         return Ok(());
     }
-    let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {}", args.data.display()))?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let all: Vec<&str> = names.iter().chain(&PLOT_FILES).copied().collect();
-    refuse_existing(&args.out, &all, args.force)?;
-    write_output(&args.out, names[0], &serde_json::to_string_pretty(&d)?, args.force)?;
-    write_output(&args.out, names[1], &markdown(&d, &source), args.force)?;
-    write_plots(&d, &args.out)?;
+    let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+    let report = Report {
+        out: &args.out,
+        json: serde_json::to_string_pretty(&d)?,
+        markdown: markdown(&d, &source),
+        plot_files: &PLOT_FILES,
+        force: args.force,
+    };
+    let written = report.write(|dir| write_plots(&d, dir))?;
     println!(
         "{}{} (confidence {:.2}): gap {:.3} -> {:.3} mm",
         d.outcome.effect,
@@ -121,6 +124,31 @@ pub fn run(args: Args) -> Result<()> {
         d.outcome.gap_before_mm,
         d.outcome.gap_after_mm
     );
-    println!("wrote {}/{{{}}}", args.out.display(), all.join(","));
+    println!("wrote {written}");
     Ok(())
+}
+
+/// A diagnosis report's files.
+struct Report<'a> {
+    out: &'a Path,
+    json: String,
+    markdown: String,
+    /// The files the plots write.
+    plot_files: &'a [&'a str],
+    force: bool,
+}
+
+impl Report<'_> {
+    /// Writes `diagnosis.json`, `diagnosis.md` and, by `plot`, the plots into `out`, refusing to
+    /// replace any of them without `force`; returns `out/{files}` for the user.
+    fn write(self, plot: impl FnOnce(&Path) -> Result<Vec<PathBuf>, PlotError>) -> Result<String> {
+        let names = ["diagnosis.json", "diagnosis.md"];
+        std::fs::create_dir_all(self.out).with_context(|| format!("creating {}", self.out.display()))?;
+        let all: Vec<&str> = names.iter().chain(self.plot_files).copied().collect();
+        refuse_existing(self.out, &all, self.force)?;
+        write_output(self.out, names[0], &self.json, self.force)?;
+        write_output(self.out, names[1], &self.markdown, self.force)?;
+        plot(self.out)?;
+        Ok(format!("{}/{{{}}}", self.out.display(), all.join(",")))
+    }
 }

@@ -37,6 +37,7 @@ mod report;
 mod result;
 mod stats;
 
+pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
 pub use linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{
