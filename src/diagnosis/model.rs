@@ -185,6 +185,12 @@ fn perturb_coupling(g: Option<&mut CouplingFunction>, d: &[f64]) -> usize {
     }
 }
 
+/// A pose's payload as the candidates assume it: `payload_kg` on the tool frame's origin
+/// (FORMATS.md gives only the mass), in the last link's frame; `None` without one.
+fn payload_at_tool(model: &crate::kinematics::PhiModel, payload_kg: f64) -> Option<(f64, Point3<f64>)> {
+    (payload_kg > 0.0).then(|| (payload_kg, Point3::from(model.last_link_from_tool.translation.vector)))
+}
+
 /// The calibrated couplings at the active displacements `active`, for
 /// [`coupled_static_deflection`]: the
 /// slope of every `coupling_in`; the fractional (eq. 15) and four-bar forms are mechanisms that
@@ -385,19 +391,19 @@ impl Predictor {
     }
 
     /// Joint values `(q, active displacements)` of command `cmd` on `robot` (fig. 3 controller,
-    /// transmissions, the backlash candidate against `approach`, passive couplings); `None`
-    /// when a command cannot be executed.
+    /// transmissions, the backlash candidate's lag `backlash_half_band_rad` against
+    /// `approach`, passive couplings); `None` when a command cannot be executed.
     fn joint_values(
         &self,
         robot: &TruthRobot,
         cmd: &[f64],
         approach: &[f64],
-        e: &[f64],
+        backlash_half_band_rad: f64,
     ) -> Option<(Vec<f64>, Vec<f64>)> {
         let u = self.controller.decouple(cmd).ok()?;
         let mut active = robot.active_displacements(&u).ok()?;
         if let Some(Candidate::Backlash { joint }) = self.candidate {
-            active[joint - 1] -= approach[joint - 1] * e[0];
+            active[joint - 1] -= approach[joint - 1] * backlash_half_band_rad;
         }
         let mut q = active.clone();
         for k in 1..q.len() {
@@ -428,8 +434,7 @@ impl Predictor {
             stiffness_nm_per_rad,
             gravity_m_s2: GRAVITY_M_S2,
         };
-        let payload =
-            (payload_kg > 0.0).then(|| (payload_kg, Point3::from(model.last_link_from_tool.translation.vector)));
+        let payload = payload_at_tool(model, payload_kg);
         let couplings = passive_slopes(robot, active);
         let load = CompliantLoad {
             masses: &self.masses,
@@ -452,17 +457,12 @@ impl Predictor {
     /// cannot be executed.
     pub fn pose_features(&self, pose: &Pose) -> Option<PoseFeatures> {
         let n = self.base.dof();
-        let (q, _) = self.joint_values(&self.base, &pose.cmd, &pose.approach, &[0.0; 2])?;
+        let (q, _) = self.joint_values(&self.base, &pose.cmd, &pose.approach, 0.0)?;
         let model = self.base.model();
         let tool = model.poses(&q).world_from_link[n - 1] * model.last_link_from_tool;
         let base = model.world_from_base;
         let tool_in_base = base.inverse() * Point3::from(tool.translation.vector);
-        let payload = (pose.payload_kg > 0.0).then(|| {
-            (
-                pose.payload_kg,
-                Point3::from(model.last_link_from_tool.translation.vector),
-            )
-        });
+        let payload = payload_at_tool(&model, pose.payload_kg);
         let unit = ComplianceEffect {
             stiffness_nm_per_rad: vec![1.0; n],
             gravity_m_s2: GRAVITY_M_S2,
@@ -482,9 +482,13 @@ impl Predictor {
         let (robot, effects, scale) = self.robot_and_effects(params);
         let model = self.model(&robot, params);
         let e = &params[self.geometric_count()..];
+        let backlash = match self.candidate {
+            Some(Candidate::Backlash { .. }) => e[0],
+            _ => 0.0,
+        };
         let mut out = Vec::with_capacity(poses.len() * 9);
         for pose in poses {
-            let (mut q, active) = self.joint_values(&robot, &pose.cmd, &pose.approach, e)?;
+            let (mut q, active) = self.joint_values(&robot, &pose.cmd, &pose.approach, backlash)?;
             let model_t = effects.thermal_model(&model, pose.temperature_c);
             if let Some(Candidate::JointCompliance { joint }) = self.candidate
                 && e[0] != 0.0
