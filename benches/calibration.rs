@@ -3,9 +3,10 @@
 
 use axiscal::calibration::fit_circle;
 use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
-use axiscal::campaign::{AnalyticArm, CalibrationPlan, ValidationPlan, simulate_campaign};
 use axiscal::measurement::{MeasurementModel, MeasurementSet};
-use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::plan::{CalibrationPlan, ValidationPlan};
+use axiscal::robot::{Controller, RobotDescription};
+use axiscal::sim::{AnalyticArm, simulate_campaign};
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{SeedableRng, rngs::StdRng};
 use std::hint::black_box;
@@ -14,7 +15,7 @@ mod common;
 
 fn campaign() -> (RobotDescription, MeasurementSet) {
     let desc = RobotDescription::asea_irb6l();
-    let mut arm = AnalyticArm::new(TruthRobot::paper_robot(), Controller::from_description(&desc));
+    let mut arm = AnalyticArm::new(axiscal::sim::paper_robot(), Controller::from_description(&desc));
     let validation = ValidationPlan {
         poses: 0,
         ..ValidationPlan::workspace_default(6)

@@ -5,7 +5,7 @@
 //! result reads as "compensation costs N forward kinematics" on any machine.
 
 use axiscal::compensation::Compensator;
-use axiscal::robot::{RobotDescription, TruthRobot};
+use axiscal::robot::RobotDescription;
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -14,10 +14,10 @@ const Q: [f64; 6] = [0.3, 0.2, -0.3, 0.5, 0.7, -1.0];
 fn bench(c: &mut Criterion) {
     let desc = RobotDescription::asea_irb6l();
     // The paper robot as a calibrated model: Table 2 actual rows, every section-4 function.
-    let calibrated = TruthRobot::paper_robot();
+    let calibrated = axiscal::sim::paper_robot();
     let comp = Compensator::new(&calibrated, &desc).unwrap();
     let target = desc.nominal_model().world_from_tool(&Q);
-    let model = calibrated.model();
+    let model = calibrated.phi_model();
     c.benchmark_group("baseline")
         .bench_function("world_from_tool", |b| b.iter(|| model.world_from_tool(black_box(&Q))));
     let mut g = c.benchmark_group("compensation");

@@ -3,9 +3,9 @@
 //! in-run baseline: one standard calibration of the same campaign (the diagnosis runs 17 of
 //! them plus the refits and the candidates).
 
-use axiscal::blind::{BlindOptions, draw_effect, simulate_case};
 use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
 use axiscal::diagnosis::{DiagnosisOptions, diagnose};
+use axiscal::harness::blind::{BlindOptions, draw_effect, simulate_case};
 use axiscal::robot::RobotDescription;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{SeedableRng, rngs::StdRng};

@@ -5,8 +5,8 @@
 //! over 1-thread ratio is the speed-up). The same trial with `sim = "rapier"` (kinematic mode,
 //! line of sight through the link capsules) against the same baseline.
 
-use axiscal::campaign::commands_to_internal;
-use axiscal::scenario::{CampaignTrial, Overrides, ResolvedScenario, SimMode, Trial, run_units, trial_seed};
+use axiscal::harness::scenario::{CampaignTrial, Overrides, ResolvedScenario, SimMode, Trial, run_units, trial_seed};
+use axiscal::robot::commands_to_internal;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::path::Path;

@@ -7,9 +7,11 @@
 //! prints time per pose, steps per pose and steps per second of the dynamic cases, and every
 //! time as a ratio to the baseline measured in the same run.
 
-use axiscal::campaign::{ArmExecutor, ComplianceEffect, Effects, PoseConditions};
 use axiscal::measurement::MeasurementModel;
-use axiscal::robot::{RobotDescription, TruthRobot};
+use axiscal::physics::ComplianceEffect;
+use axiscal::plan::PoseConditions;
+use axiscal::robot::RobotDescription;
+use axiscal::sim::{ArmExecutor, Effects};
 use axiscal::sim::{
     ArmOptions, Compliance, FourBarBodies, RapierArm, RapierArmOptions, ServoGains, SettleOptions, SettleReport, SimArm,
 };
@@ -38,7 +40,7 @@ fn gains(arm: &SimArm) -> ServoGains {
 fn four_bar_arm() -> (SimArm, FourBarBodies, [f64; 6]) {
     let d = RobotDescription::asea_irb6l();
     let mut arm = SimArm::from_description(&d.nominal_model(), &d, &ArmOptions::new(6)).expect("builds");
-    let mut linkage = TruthRobot::paper_robot().four_bars[0];
+    let mut linkage = axiscal::sim::paper_robot().four_bars[0];
     linkage.geometry.arm_m = d.rows[1].a_m.abs();
     let bodies = FourBarBodies::attach(&mut arm, &linkage).expect("attaches");
     let mut q = Q;
@@ -68,7 +70,7 @@ fn rapier_arms() -> (RapierArm, RapierArm) {
         stations_m: instrument.stations_m(),
         ..RapierArmOptions::new(6)
     };
-    let kinematic = RapierArm::new(TruthRobot::paper_robot(), &d, Effects::default(), options.clone());
+    let kinematic = RapierArm::new(axiscal::sim::paper_robot(), &d, Effects::default(), options.clone());
     let compliance = Effects {
         compliance: Some(ComplianceEffect {
             stiffness_nm_per_rad: vec![5e5, 3e5, 3e5, 5e4, 5e4, 2e4],
@@ -78,7 +80,7 @@ fn rapier_arms() -> (RapierArm, RapierArm) {
     };
     (
         kinematic,
-        RapierArm::new(TruthRobot::paper_robot(), &d, compliance, options),
+        RapierArm::new(axiscal::sim::paper_robot(), &d, compliance, options),
     )
 }
 

@@ -2,19 +2,18 @@
 #![warn(missing_docs)]
 #![deny(clippy::float_cmp)]
 
-pub mod blind;
 pub mod calibration;
-pub mod campaign;
 pub mod compensation;
 pub mod diagnosis;
-pub mod evaluation;
+pub mod harness;
 pub mod kinematics;
 pub mod measurement;
+pub mod numerics;
+pub mod physics;
+pub mod plan;
 mod plotting;
 pub mod robot;
-pub mod scenario;
 pub mod sim;
-pub mod studies;
 pub mod toml_file;
 #[cfg(feature = "viz")]
 pub mod viz;

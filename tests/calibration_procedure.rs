@@ -2,12 +2,14 @@
 //! reproduced exactly; noisy data recover Table 2 within the reported uncertainty.
 
 use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate};
-use axiscal::campaign::{AnalyticArm, CalibrationPlan, ValidationPlan, commands_to_internal, simulate_campaign};
 use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
-use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::plan::{CalibrationPlan, ValidationPlan};
+use axiscal::robot::commands_to_internal;
+use axiscal::robot::{Controller, RobotDescription, RobotModel};
+use axiscal::sim::{AnalyticArm, simulate_campaign};
 use rand::{SeedableRng, rngs::StdRng};
 
-fn campaign(truth: &TruthRobot, instrument: &MeasurementModel, seed: u64) -> MeasurementSet {
+fn campaign(truth: &RobotModel, instrument: &MeasurementModel, seed: u64) -> MeasurementSet {
     let desc = RobotDescription::asea_irb6l();
     let plan = CalibrationPlan::table1(6);
     let validation = ValidationPlan::workspace_default(6);
@@ -17,8 +19,8 @@ fn campaign(truth: &TruthRobot, instrument: &MeasurementModel, seed: u64) -> Mea
     MeasurementSet::new(6, out.rows).unwrap()
 }
 
-fn noiseless_truth() -> TruthRobot {
-    let mut truth = TruthRobot::paper_robot();
+fn noiseless_truth() -> RobotModel {
+    let mut truth = axiscal::sim::paper_robot();
     for j in &mut truth.joints {
         j.repeatability_sigma = 0.0;
     }
@@ -27,7 +29,7 @@ fn noiseless_truth() -> TruthRobot {
 
 /// Largest distance between where the truth and the calibrated robot put each tool target,
 /// over the validation poses [m].
-fn worst_tool_target_error(truth: &TruthRobot, calibrated: &TruthRobot, poses: &ValidationPlan) -> f64 {
+fn worst_tool_target_error(truth: &RobotModel, calibrated: &RobotModel, poses: &ValidationPlan) -> f64 {
     let desc = RobotDescription::asea_irb6l();
     let controller = Controller::from_description(&desc);
     let targets = desc.tool_targets_m();
@@ -39,8 +41,8 @@ fn worst_tool_target_error(truth: &TruthRobot, calibrated: &TruthRobot, poses: &
             calibrated.joint_values(&controller, &cmd).unwrap(),
         );
         let (tt, tc) = (
-            truth.model().world_from_tool(&qt),
-            calibrated.model().world_from_tool(&qc),
+            truth.phi_model().world_from_tool(&qt),
+            calibrated.phi_model().world_from_tool(&qc),
         );
         for t in &targets {
             worst = worst.max((tt * t - tc * t).norm());
@@ -76,7 +78,7 @@ fn missing_axis_experiment_is_named() {
 /// represent (the fractional form against a true four-bar).
 #[test]
 fn noise_free_perturbed_robot_is_reproduced() {
-    use axiscal::robot::{PerturbationSpec, perturb};
+    use axiscal::sim::{PerturbationSpec, perturb};
     let spec = PerturbationSpec::from_toml_str(
         include_str!("data/perturbation-spec.toml"),
         "tests/data/perturbation-spec.toml",
@@ -123,12 +125,12 @@ fn noisy_recovery_is_within_the_reported_sigma() {
     recovery_within_reported_sigma(&noiseless_truth(), &measurement_only);
     // The paper robot with its repeatability jitter, calibrated with the default options:
     // the description's repeatability.
-    recovery_within_reported_sigma(&TruthRobot::paper_robot(), &CalibrationOptions::default());
+    recovery_within_reported_sigma(&axiscal::sim::paper_robot(), &CalibrationOptions::default());
 }
 
 #[test]
 fn zero_repeatability_is_the_measurement_only_calibration_bit_for_bit() {
-    let set = campaign(&TruthRobot::paper_robot(), &MeasurementModel::paper_isotropic(), 3);
+    let set = campaign(&axiscal::sim::paper_robot(), &MeasurementModel::paper_isotropic(), 3);
     let mut desc = RobotDescription::asea_irb6l();
     let zero = CalibrationOptions {
         repeatability_sigma_rad: Some(vec![0.0; 6]),
@@ -152,7 +154,7 @@ fn zero_repeatability_is_the_measurement_only_calibration_bit_for_bit() {
     assert!(e.to_string().contains("repeatability_sigma_rad"), "{e}");
 }
 
-fn recovery_within_reported_sigma(truth: &TruthRobot, options: &CalibrationOptions) {
+fn recovery_within_reported_sigma(truth: &RobotModel, options: &CalibrationOptions) {
     let truth_noiseless = noiseless_truth();
     let desc = RobotDescription::asea_irb6l();
     let exact = MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: 0.0 });

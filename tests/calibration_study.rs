@@ -3,7 +3,7 @@
 //! the Table-2 rows matches their scatter. Tolerances are k times the Monte-Carlo standard
 //! error the study itself reports.
 
-use axiscal::studies::EfficiencyStudy;
+use axiscal::harness::studies::EfficiencyStudy;
 
 #[test]
 fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
@@ -36,7 +36,7 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
         assert!(r2 >= 1.0 / (1.0 + 3.0 * rse) && r2 <= 1.0 / (1.0 - 3.0 * rse), "{q:?}");
     }
     // The paper's estimator (reference study: about 0.6) is on average clearly below ML.
-    let mean = |f: &dyn Fn(&axiscal::studies::QuantityEfficiency) -> f64| {
+    let mean = |f: &dyn Fn(&axiscal::harness::studies::QuantityEfficiency) -> f64| {
         report.efficiency.iter().map(f).sum::<f64>() / report.efficiency.len() as f64
     };
     assert!(mean(&|q| q.paper_efficiency) < mean(&|q| q.ml_efficiency) - 0.2);

@@ -1,7 +1,7 @@
 //! Table 1 plan and the hold-still commands of FORMATS.md section 2.
 
 use approx::assert_relative_eq;
-use axiscal::campaign::{CalibrationPlan, PlanError, ValidationPlan};
+use axiscal::plan::{CalibrationPlan, PlanError, ValidationPlan};
 use axiscal::robot::RobotDescription;
 
 #[test]

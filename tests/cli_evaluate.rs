@@ -2,7 +2,7 @@
 //! overwrite them without `--force`.
 
 use assert_cmd::Command;
-use axiscal::evaluation::{PLOT_FILES, PaperReport};
+use axiscal::harness::evaluation::{PLOT_FILES, PaperReport};
 
 fn evaluate(out: &std::path::Path, force: bool) -> assert_cmd::assert::Assert {
     let mut cmd = Command::cargo_bin("axiscal").unwrap();

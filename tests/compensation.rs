@@ -2,19 +2,20 @@
 
 use assert_cmd::Command;
 use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
-use axiscal::campaign::{AnalyticArm, CalibrationPlan, ValidationPlan, simulate_campaign};
 use axiscal::compensation::{CompensationError, Compensator};
-use axiscal::evaluation::{JointRanges, Region, random_poses};
+use axiscal::harness::evaluation::{JointRanges, Region, random_poses};
 use axiscal::kinematics::IkError;
 use axiscal::measurement::{MeasurementModel, MeasurementSet};
-use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::plan::{CalibrationPlan, ValidationPlan};
+use axiscal::robot::{Controller, RobotDescription};
+use axiscal::sim::{AnalyticArm, simulate_campaign};
 use nalgebra::Isometry3;
 use rand::{SeedableRng, rngs::StdRng};
 
 /// A noisy calibration of the paper robot (its model differs from the truth by ~1 mm).
 fn noisy_calibration() -> axiscal::calibration::procedure::Calibration {
     let desc = RobotDescription::asea_irb6l();
-    let mut arm = AnalyticArm::new(TruthRobot::paper_robot(), Controller::from_description(&desc));
+    let mut arm = AnalyticArm::new(axiscal::sim::paper_robot(), Controller::from_description(&desc));
     let validation = ValidationPlan {
         poses: 0,
         ..ValidationPlan::workspace_default(6)
@@ -45,7 +46,7 @@ fn compensation_of_a_robot_equal_to_its_calibrated_model_is_exact() {
     let truth = cal.robot.clone();
     let comp = Compensator::new(&cal.robot, &desc).unwrap();
     let controller = Controller::from_description(&desc);
-    let model = truth.model();
+    let model = truth.phi_model();
     // Joint 5 within +-60 deg: near +-90 deg axes 4 and 6 line up (wrist singularity), where a
     // calibrated model can lose the pose entirely (a per-pose IK failure, tested below).
     let ranges = JointRanges::around_zero(&desc, &[40.0, 30.0, 35.0, 60.0, 60.0, 90.0]);
@@ -66,7 +67,7 @@ fn compensation_of_a_robot_equal_to_its_calibrated_model_is_exact() {
 #[test]
 fn unreachable_pose_is_an_ik_error_for_that_pose() {
     let desc = RobotDescription::asea_irb6l();
-    let comp = Compensator::new(&TruthRobot::paper_robot(), &desc).unwrap();
+    let comp = Compensator::new(&axiscal::sim::paper_robot(), &desc).unwrap();
     let far = Isometry3::translation(10.0, 10.0, 10.0) * desc.nominal_model().world_from_base;
     let e = comp.compensate(&far).unwrap_err();
     assert!(matches!(e, CompensationError::Ik(IkError::NotConverged { .. })), "{e}");

@@ -5,10 +5,10 @@
 //! parameter must lie within `K_SIGMA` of its reported standard deviation of the truth.
 //! Few validation poses and noise replicas keep it fast in a debug build.
 
-use axiscal::blind::{
+use axiscal::diagnosis::{Diagnosis, DiagnosisOptions, diagnose};
+use axiscal::harness::blind::{
     BlindOptions, CaseKey, CaseResult, Simulator, detectable_size, draw_effect, score, simulate_case,
 };
-use axiscal::diagnosis::{Diagnosis, DiagnosisOptions, diagnose};
 use axiscal::measurement::{read_measurements, write_measurements};
 use axiscal::robot::RobotDescription;
 use rand::{SeedableRng, rngs::StdRng};

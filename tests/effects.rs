@@ -1,12 +1,14 @@
 //! Each unmodelled effect moves the measured targets in the direction and by the size its
 //! model predicts, on the analytic and the rapier arm.
 
-use axiscal::campaign::{
-    AnalyticArm, ArmExecutor, AxisWobble, BacklashEffect, CalibrationPlan, ComplianceEffect, CompliantLoad,
-    DeflectionError, Effects, JointDriver, LinkMass, PassiveSlope, PayloadEffect, PoseConditions, ThermalEffect,
-    UNMOVED_ACTUATOR_RAD, commands_to_internal, coupled_first_order_deflection, coupled_static_deflection,
+use axiscal::physics::{
+    AxisWobble, BacklashEffect, ComplianceEffect, CompliantLoad, DeflectionError, LinkMass, PassiveSlope,
+    PayloadEffect, ThermalEffect, coupled_first_order_deflection, coupled_static_deflection,
 };
-use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::plan::{CalibrationPlan, PoseConditions};
+use axiscal::robot::commands_to_internal;
+use axiscal::robot::{Controller, RobotDescription, RobotModel};
+use axiscal::sim::{AnalyticArm, ArmExecutor, Effects, JointDriver, UNMOVED_ACTUATOR_RAD};
 use axiscal::sim::{RapierArm, RapierArmOptions};
 use nalgebra::{Isometry3, Point3};
 use rand::SeedableRng;
@@ -17,9 +19,9 @@ type Exec = dyn FnMut(&[f64], &PoseConditions) -> Vec<Isometry3<f64>>;
 
 const CMD: [f64; 6] = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
 
-fn truth() -> (RobotDescription, TruthRobot) {
+fn truth() -> (RobotDescription, RobotModel) {
     let desc = RobotDescription::asea_irb6l();
-    let mut t = TruthRobot::paper_robot();
+    let mut t = axiscal::sim::paper_robot();
     for j in &mut t.joints {
         j.repeatability_sigma = 0.0;
     }
@@ -50,7 +52,7 @@ fn thermal_expansion_grows_the_reach_by_alpha_dt_l() {
         ..Effects::default()
     };
     let (_, t) = truth();
-    let base = t.model().world_from_base;
+    let base = t.phi_model().world_from_base;
     let radius = |links: &[Isometry3<f64>]| {
         let p = base.inverse() * (links[5] * Point3::origin());
         p.x.hypot(p.y)
@@ -196,14 +198,14 @@ fn large_compliance_sag_is_the_static_equilibrium_not_the_first_order_one() {
     let rapier = arm.sim_arm().expect("built").joint_positions()[1] - driven.q[1];
     let masses = LinkMass::from_description(&desc);
     let couplings = PassiveSlope::of_truth(&t, &driven.active);
-    let first = coupled_first_order_deflection(&t.model(), &driven.q, &masses, None, &compliance, &couplings);
+    let first = coupled_first_order_deflection(&t.phi_model(), &driven.q, &masses, None, &compliance, &couplings);
     let load = CompliantLoad {
         masses: &masses,
         payload: None,
         compliance: &compliance,
         couplings: &couplings,
     };
-    let exact = coupled_static_deflection(&t.model(), &driven.q, &load).expect("converges");
+    let exact = coupled_static_deflection(&t.phi_model(), &driven.q, &load).expect("converges");
     let relative = |dq: f64| (dq - rapier).abs() / rapier.abs();
     eprintln!(
         "joint 2 sag: rapier {rapier:.4e} rad, static {:.4e} ({:.2e} off), first order {:.4e} ({:.2e} off)",
@@ -236,7 +238,7 @@ fn a_joint_softer_than_gravity_stiffness_buckles() {
         compliance: &compliance,
         couplings: &couplings,
     };
-    let result = coupled_static_deflection(&t.model(), &q, &load);
+    let result = coupled_static_deflection(&t.phi_model(), &q, &load);
     assert!(
         matches!(result, Err(DeflectionError::NotConverged { .. })),
         "{result:?}"
@@ -248,7 +250,7 @@ fn a_joint_softer_than_gravity_stiffness_buckles() {
 /// (second order: `s^2`, here 1e-6 of it).
 #[test]
 fn gear_harmonic_turns_the_joint_by_its_transmission_error() {
-    use axiscal::campaign::GearHarmonic;
+    use axiscal::physics::GearHarmonic;
     let s = 1e-3;
     let effects = Effects {
         gear_harmonics: vec![GearHarmonic {
@@ -282,10 +284,10 @@ fn gear_harmonic_turns_the_joint_by_its_transmission_error() {
 /// instrument origin (exact instrument, so nothing else differs).
 #[test]
 fn instrument_scale_scales_every_measured_coordinate() {
-    use axiscal::campaign::{
-        CalibrationPlan, CampaignOptions, InstrumentScale, ValidationPlan, simulate_campaign_with,
-    };
     use axiscal::measurement::{IsotropicNoise, MeasurementModel};
+    use axiscal::physics::InstrumentScale;
+    use axiscal::plan::{CalibrationPlan, ValidationPlan};
+    use axiscal::sim::{CampaignOptions, simulate_campaign_with};
     let (desc, t) = truth();
     let exact = MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: 0.0 });
     let validation = ValidationPlan {
@@ -330,7 +332,7 @@ const ROUNDING_RAD: f64 = 1e-14;
 #[test]
 fn repeatability_jitter_is_redrawn_only_for_actuators_that_move() {
     let desc = RobotDescription::asea_irb6l();
-    let truth = TruthRobot::paper_robot();
+    let truth = axiscal::sim::paper_robot();
     let controller = Controller::from_description(&desc);
     let mut driver = JointDriver::new(&truth, controller.clone(), &Effects::default());
     let plan = CalibrationPlan::table1(6);

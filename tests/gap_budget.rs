@@ -2,7 +2,7 @@
 //! an instrument scale error cannot (the same instrument measures the test), and the result
 //! does not depend on the thread count.
 
-use axiscal::evaluation::{BudgetEffect, BudgetSettings, PaperScenario, Stats, budget_line, pooled_error};
+use axiscal::harness::evaluation::{BudgetEffect, BudgetSettings, PaperScenario, Stats, budget_line, pooled_error};
 use axiscal::measurement::MeasurementModel;
 
 fn settings() -> BudgetSettings {

@@ -1,6 +1,6 @@
 //! The paper scenario closed in the loop: simulate -> calibrate -> compensate -> evaluate.
 
-use axiscal::evaluation::{PaperScenario, Region, floor_check, run_paper_scenario};
+use axiscal::harness::evaluation::{PaperScenario, Region, floor_check, run_paper_scenario};
 use axiscal::measurement::MeasurementModel;
 
 fn scenario(seed: u64) -> PaperScenario {

@@ -1,11 +1,10 @@
 //! The rapier arm as the campaign's real robot: kinematic mode agrees with the analytic truth,
 //! occluded targets are left out of the campaign.
 
-use axiscal::campaign::{
-    AnalyticArm, ArmExecutor, AxisSweep, CalibrationPlan, Effects, PoseConditions, ValidationPlan, simulate_campaign,
-};
 use axiscal::measurement::MeasurementModel;
-use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::plan::{AxisSweep, CalibrationPlan, PoseConditions, ValidationPlan};
+use axiscal::robot::{Controller, RobotDescription};
+use axiscal::sim::{AnalyticArm, ArmExecutor, Effects, simulate_campaign};
 use axiscal::sim::{RapierArm, RapierArmOptions};
 use nalgebra::Point3;
 use rand::rngs::StdRng;
@@ -34,7 +33,7 @@ fn all_targets(desc: &RobotDescription, arm: &impl ArmExecutor) -> Vec<(usize, P
 #[test]
 fn kinematic_rapier_arm_agrees_with_the_analytic_arm_to_a_micrometre() {
     let desc = RobotDescription::asea_irb6l();
-    let truth = TruthRobot::paper_robot();
+    let truth = axiscal::sim::paper_robot();
     let mut analytic = AnalyticArm::new(truth.clone(), Controller::from_description(&desc));
     let mut rapier = RapierArm::new(truth, &desc, Effects::default(), RapierArmOptions::new(desc.dof()));
     let targets = all_targets(&desc, &analytic);
@@ -65,7 +64,7 @@ fn kinematic_rapier_arm_agrees_with_the_analytic_arm_to_a_micrometre() {
 #[test]
 fn an_occluded_target_is_left_out_of_the_campaign() {
     let desc = RobotDescription::asea_irb6l();
-    let truth = TruthRobot::paper_robot();
+    let truth = axiscal::sim::paper_robot();
     let (instrument, _) = MeasurementModel::paper_theodolites().expect("theodolites");
     let plan = CalibrationPlan {
         reference: vec![170.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -107,7 +106,7 @@ fn an_occluded_target_is_left_out_of_the_campaign() {
 fn the_visible_span_is_where_the_campaign_starts_losing_targets() {
     use axiscal::sim::{SpanSearch, visible_sweep_span};
     let desc = RobotDescription::asea_irb6l();
-    let mut truth = TruthRobot::paper_robot();
+    let mut truth = axiscal::sim::paper_robot();
     for joint in &mut truth.joints {
         joint.repeatability_sigma = 0.0;
     }
@@ -168,11 +167,10 @@ fn csv_rows_of(rows: &[axiscal::measurement::Measurement], experiment: &str) -> 
 }
 
 mod dynamic {
-    use axiscal::campaign::{
-        ArmExecutor, ComplianceEffect, DrivenJoints, Effects, JointDriver, LinkMass, PayloadEffect, PoseConditions,
-        first_order_deflection,
-    };
-    use axiscal::robot::{Controller, FourBarGeometry, RobotDescription, TruthRobot};
+    use axiscal::physics::{ComplianceEffect, LinkMass, PayloadEffect, first_order_deflection};
+    use axiscal::plan::PoseConditions;
+    use axiscal::robot::{Controller, FourBarGeometry, RobotDescription, RobotModel};
+    use axiscal::sim::{ArmExecutor, DrivenJoints, Effects, JointDriver};
     use axiscal::sim::{CRANK_MASS_KG, ROD_MASS_KG, RapierArm, RapierArmOptions};
     use rand::SeedableRng;
     use rand::rngs::StdRng;
@@ -181,8 +179,8 @@ mod dynamic {
 
     /// The ideal (nominal) truth without jitter: axes 2 and 3 exactly parallel, so the planar
     /// four-bar law is exact for the spatial mechanism.
-    fn ideal_truth(desc: &RobotDescription) -> TruthRobot {
-        TruthRobot::ideal(desc)
+    fn ideal_truth(desc: &RobotDescription) -> RobotModel {
+        RobotModel::ideal(desc)
     }
 
     fn compliance(stiffness: [f64; 6]) -> ComplianceEffect {
@@ -194,7 +192,7 @@ mod dynamic {
 
     /// Executes `CMD` on the rapier arm and returns it with the driver's joint values.
     fn execute(
-        truth: &TruthRobot,
+        truth: &RobotModel,
         desc: &RobotDescription,
         effects: &Effects,
         conditions: &PoseConditions,
@@ -209,9 +207,9 @@ mod dynamic {
     }
 
     /// Gravity torque about each axis at joint values `q` (no payload).
-    fn gravity_torque(truth: &TruthRobot, desc: &RobotDescription, q: &[f64]) -> Vec<f64> {
+    fn gravity_torque(truth: &RobotModel, desc: &RobotDescription, q: &[f64]) -> Vec<f64> {
         first_order_deflection(
-            &truth.model(),
+            &truth.phi_model(),
             q,
             &LinkMass::from_description(desc),
             None,
@@ -220,7 +218,7 @@ mod dynamic {
     }
 
     fn linkage(desc: &RobotDescription) -> axiscal::robot::FourBarLinkage {
-        let mut l = TruthRobot::paper_robot().four_bars[0];
+        let mut l = axiscal::sim::paper_robot().four_bars[0];
         l.geometry.arm_m = desc.rows[1].a_m.abs();
         l
     }
@@ -296,7 +294,7 @@ mod dynamic {
     #[test]
     fn the_bevel_gear_follows_joint4s_sag_through_its_error_function() {
         let desc = RobotDescription::asea_irb6l();
-        let paper = TruthRobot::paper_robot();
+        let paper = axiscal::sim::paper_robot();
         let mut truth = ideal_truth(&desc);
         truth.joints[4].coupling_in = paper.joints[4].coupling_in.clone();
         truth.joints[3].coupling_in = None;
@@ -319,7 +317,7 @@ mod dynamic {
         let q = sim.joint_positions();
         let s4 = q[3] - driven.q[3];
         let a4 = driven.active[3];
-        let model = truth.model();
+        let model = truth.phi_model();
         let payload = effects.payload_in_last_link(&model.last_link_from_tool, &conditions);
         let q5_torque = first_order_deflection(
             &model,
@@ -376,13 +374,13 @@ mod dynamic {
         let q = arm.sim_arm().expect("built").joint_positions();
         let mut without = truth.clone();
         without.four_bars.clear();
-        let dq_analytic = axiscal::campaign::coupled_first_order_deflection(
-            &without.model(),
+        let dq_analytic = axiscal::physics::coupled_first_order_deflection(
+            &without.phi_model(),
             &driven.q,
             &LinkMass::from_description(&desc),
             None,
             &compliance(stiffness),
-            &axiscal::campaign::PassiveSlope::of_truth(&without, &driven.active),
+            &axiscal::physics::PassiveSlope::of_truth(&without, &driven.active),
         );
         let dq3 = q[2] - driven.q[2];
         eprintln!("open loop: dq3 {dq3:.4e} rad, analytic {:.4e}", dq_analytic[2]);
@@ -395,7 +393,7 @@ mod dynamic {
     #[test]
     fn the_dynamic_mode_is_bit_identical_run_twice() {
         let desc = RobotDescription::asea_irb6l();
-        let truth = TruthRobot::paper_robot();
+        let truth = axiscal::sim::paper_robot();
         let effects = Effects {
             compliance: Some(compliance([5e5, 3e5, 3e5, 5e4, 5e4, 2e4])),
             ..Effects::default()
@@ -415,8 +413,10 @@ mod dynamic {
 }
 
 mod line_of_sight {
-    use axiscal::campaign::{ArmExecutor, AxisWobble, Effects, PoseConditions};
-    use axiscal::robot::{RobotDescription, TruthRobot};
+    use axiscal::physics::AxisWobble;
+    use axiscal::plan::PoseConditions;
+    use axiscal::robot::{RobotDescription, RobotModel};
+    use axiscal::sim::{ArmExecutor, Effects};
     use axiscal::sim::{RapierArm, RapierArmOptions};
     use nalgebra::{Isometry3, Point3, Vector3};
     use rand::SeedableRng;
@@ -425,7 +425,7 @@ mod line_of_sight {
     const CMD: [f64; 6] = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
 
     fn executed(
-        truth: &TruthRobot,
+        truth: &RobotModel,
         effects: Effects,
         stations_m: Vec<Point3<f64>>,
         four_bar_bodies: bool,
@@ -448,7 +448,7 @@ mod line_of_sight {
     /// from every link capsule): hidden with the four-bar's bodies, seen without them.
     #[test]
     fn a_ray_blocked_only_by_the_rod_is_occluded() {
-        let mut truth = TruthRobot::paper_robot();
+        let mut truth = axiscal::sim::paper_robot();
         for j in &mut truth.joints {
             j.repeatability_sigma = 0.0;
         }
@@ -473,7 +473,7 @@ mod line_of_sight {
     /// capsule only when the wobble is applied to the shapes.
     #[test]
     fn line_of_sight_uses_the_wobbled_link_poses() {
-        let mut truth = TruthRobot::paper_robot();
+        let mut truth = axiscal::sim::paper_robot();
         for j in &mut truth.joints {
             j.repeatability_sigma = 0.0;
         }
@@ -488,7 +488,7 @@ mod line_of_sight {
         };
         let (_, straight) = executed(&truth, Effects::default(), vec![], false);
         let (_, tilted) = executed(&truth, wobble.clone(), vec![], false);
-        let along = truth.model().link_from_next_frame(1) * Point3::origin();
+        let along = truth.phi_model().link_from_next_frame(1) * Point3::origin();
         let on_axis = |links: &[Isometry3<f64>]| links[1] * (along * 0.6);
         let d = on_axis(&tilted) - on_axis(&straight);
         let u = d.normalize();

@@ -1,8 +1,8 @@
 //! Monte-Carlo harness at the library level: thread-count determinism, shipped scenarios
 //! resolve, the resolved dump round-trips.
 
-use axiscal::scenario::export::csv::write_trials;
-use axiscal::scenario::{CampaignTrial, Overrides, ResolvedScenario, SimMode, Trial, run_units};
+use axiscal::harness::scenario::export::csv::write_trials;
+use axiscal::harness::scenario::{CampaignTrial, Overrides, ResolvedScenario, SimMode, Trial, run_units};
 use std::path::Path;
 
 fn smoke(trials: usize) -> ResolvedScenario {
@@ -81,7 +81,7 @@ fn a_fleet_draws_a_different_robot_per_trial() {
 #[test]
 fn sweep_and_plan_errors_name_their_key() {
     let resolve = |text: &str| {
-        let file: axiscal::scenario::ScenarioFile = toml::from_str(text).unwrap();
+        let file: axiscal::harness::scenario::ScenarioFile = toml::from_str(text).unwrap();
         ResolvedScenario::resolve(file, Path::new("scenarios/x.toml"), Overrides::default())
             .unwrap_err()
             .to_string()

@@ -4,6 +4,10 @@
 use approx::assert_relative_eq;
 use axiscal::measurement::MeasurementModel;
 use axiscal::robot::*;
+use axiscal::sim::{
+    Effects, JointDriver, ObservedThrough, PerturbationSpec, RepeatabilityTarget, calibrate_uniform_sigma, perturb,
+    repeatability_stats, workspace_poses,
+};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use std::path::Path;
@@ -28,7 +32,7 @@ fn random_commands(desc: &RobotDescription, rng: &mut StdRng) -> Vec<f64> {
 fn ideal_robot_reaches_exactly_the_commanded_joint_values() {
     let desc = RobotDescription::asea_irb6l();
     let ctrl = Controller::from_description(&desc);
-    let ideal = TruthRobot::ideal(&desc);
+    let ideal = RobotModel::ideal(&desc);
     let mut geometric = ideal.clone();
     // The same robot with the geometric parallelogram as its 2->3 coupling.
     geometric.joints[2].coupling_in = Some(CouplingFunction::FourBar(FourBarGeometry::parallelogram(
@@ -44,12 +48,13 @@ fn ideal_robot_reaches_exactly_the_commanded_joint_values() {
                 assert!((a - b).abs() < 1e-14, "{a} vs {b}");
             }
             let mut jitter_rng = StdRng::seed_from_u64(2);
-            assert_eq!(robot.joint_values_executed(&ctrl, &cmd, &mut jitter_rng).unwrap(), q);
+            let mut driver = JointDriver::new(robot, ctrl.clone(), &Effects::default());
+            assert_eq!(driver.drive(&cmd, &mut jitter_rng).unwrap().q, q);
         }
     }
     assert!(matches!(
         ideal.joint_values(&ctrl, &[0.0; 5]),
-        Err(TruthError::WrongLength { .. })
+        Err(ModelError::WrongLength { .. })
     ));
     // A linkage that cannot close is reported with the joint it drives.
     let mut jammed = geometric;
@@ -58,7 +63,7 @@ fn ideal_robot_reaches_exactly_the_commanded_joint_values() {
     jammed.joints[2].coupling_in = Some(CouplingFunction::FourBar(g));
     assert!(matches!(
         jammed.joint_values(&ctrl, &[0.0; 6]),
-        Err(TruthError::Coupling { joint: 3, .. })
+        Err(ModelError::Coupling { joint: 3, .. })
     ));
 }
 
@@ -67,7 +72,7 @@ fn ideal_robot_reaches_exactly_the_commanded_joint_values() {
 fn check_hold_still(joint: usize) {
     let desc = RobotDescription::asea_irb6l();
     let ctrl = Controller::from_description(&desc);
-    let truth = TruthRobot::paper_robot();
+    let truth = axiscal::sim::paper_robot();
     let g = truth.joints[joint].coupling_in.clone().unwrap();
     let cmd0 = vec![0.1, -0.2, 0.15, 0.3, -0.25, 0.4];
     let u0 = ctrl.decouple(&cmd0).unwrap();
@@ -99,7 +104,7 @@ fn hold_still_moves_actuator_4_alone_and_joint_5_passively() {
 #[test]
 #[allow(clippy::approx_constant)] // -0.6931 m is Table 2's a_2, not ln 2
 fn paper_preset_reproduces_the_paper_functions() {
-    let t = TruthRobot::paper_robot();
+    let t = axiscal::sim::paper_robot();
     assert_eq!(t.dof(), 6);
     let n = 32.0 / 19.0;
     let f = |k: usize, a: f64| t.joints[k].transmission.command_from_actual(a);
@@ -132,33 +137,33 @@ fn paper_preset_reproduces_the_paper_functions() {
     }
     assert!(t.joints.iter().all(|j| j.transducer_offset == 0.0));
     // The placement turns the base z axis onto the paper's measured axis 1.
-    let z1 = t.model().poses(&[0.0; 6]).axis(0).direction.into_inner();
+    let z1 = t.phi_model().poses(&[0.0; 6]).axis(0).direction.into_inner();
     let z1_paper = nalgebra::Vector3::new(0.001445, 0.002876, 0.999995).normalize();
     assert!((z1 - z1_paper).norm() < 1e-6, "{z1:?}");
 }
 
 #[test]
 fn truth_files_round_trip_and_reject_unknown_keys() {
-    let t = TruthRobot::paper_robot();
+    let t = axiscal::sim::paper_robot();
     let text = toml::to_string(&t).unwrap();
-    let back = TruthRobot::from_toml_str(&text, Path::new("<round trip>")).unwrap();
+    let back = RobotModel::from_toml_str(&text, Path::new("<round trip>")).unwrap();
     assert_eq!(back, t);
     let mut geometric = t.clone();
     geometric.joints[2].coupling_in = Some(CouplingFunction::FourBar(t.four_bars[0].geometry));
     let text = toml::to_string(&geometric).unwrap();
     assert!(text.contains("form = \"four_bar\""), "{text}");
-    assert_eq!(TruthRobot::from_toml_str(&text, Path::new("x")).unwrap(), geometric);
+    assert_eq!(RobotModel::from_toml_str(&text, Path::new("x")).unwrap(), geometric);
     let typo = text.replacen("transducer_offset", "transducer_ofset", 1);
     assert!(matches!(
-        TruthRobot::from_toml_str(&typo, Path::new("x")),
-        Err(TruthError::File(axiscal::toml_file::TomlFileError::Parse { .. }))
+        RobotModel::from_toml_str(&typo, Path::new("x")),
+        Err(ModelError::File(axiscal::toml_file::TomlFileError::Parse { .. }))
     ));
 }
 
 /// The shipped four-bar is the least-squares four-bar for the paper's fractional form.
 #[test]
 fn paper_four_bar_matches_the_fractional_form_as_closely_as_a_four_bar_can() {
-    let shipped = TruthRobot::paper_robot().four_bars[0];
+    let shipped = axiscal::sim::paper_robot().four_bars[0];
     assert_eq!(shipped.from, 2);
     let frac = paper_fractional();
     let target = |t: f64| frac.passive(t);
@@ -188,8 +193,8 @@ fn paper_four_bar_matches_the_fractional_form_as_closely_as_a_four_bar_can() {
 #[test]
 fn paper_repeatability_sigmas_reproduce_the_paper() {
     let desc = RobotDescription::asea_irb6l();
-    let truth = TruthRobot::paper_robot();
-    let model = truth.model();
+    let truth = axiscal::sim::paper_robot();
+    let model = truth.phi_model();
     let limits: Vec<[f64; 2]> = (0..6).map(|k| desc.limits_internal(k)).collect();
     // The paper observed its repeatability through the theodolites: the distance between two
     // measurements of the tool point.
@@ -273,7 +278,7 @@ fn perturbation_is_deterministic_per_seed() {
     let bad = PerturbationSpec::from_toml_str("[rows]\na_m = { normal = { sigma = 0.5 } }", "<typo>");
     assert!(matches!(
         bad,
-        Err(TruthError::File(axiscal::toml_file::TomlFileError::Parse { .. }))
+        Err(ModelError::File(axiscal::toml_file::TomlFileError::Parse { .. }))
     ));
 }
 

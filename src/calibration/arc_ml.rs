@@ -19,8 +19,9 @@ use super::arc_model::{
 };
 use super::axis_circle::fit_circle;
 use super::transmission_fit::{TransmissionForm, fit_transmission};
-use super::{CalibrationError, crb, lsq};
+use super::{CalibrationError, crb};
 use crate::kinematics::AxisLine;
+use crate::numerics::lsq;
 use crate::robot::Transmission;
 
 const FIT: &str = "arc maximum-likelihood fit";
@@ -211,12 +212,12 @@ fn fit_arc_from(
         None => initial_params(points, commands_rad, &options.form)?,
     };
     let outcome = lsq::levenberg_marquardt(
-        FIT,
         start,
-        options.max_iterations,
+        &lsq::LmOptions::marquardt(FIT, options.max_iterations),
         |s| model.whitened_residual_and_jacobian(s, points),
-        |s, d| Ok(s.perturbed(d.as_slice())),
-    )?;
+        |s, d| Ok::<_, CalibrationError>(s.perturbed(d.as_slice())),
+    )?
+    .converged(FIT, None)?;
     let params = outcome.state;
     let (r, jw) = (outcome.residual, outcome.jacobian);
     let covariance = lsq::inverse_normal(&jw, FIT)?;

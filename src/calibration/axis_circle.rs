@@ -7,7 +7,8 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Point3, Unit, Vector3};
 
-use super::{CalibrationError, lsq};
+use super::CalibrationError;
+use crate::numerics::lsq;
 
 const FIT: &str = "circle fit";
 

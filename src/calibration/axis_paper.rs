@@ -13,9 +13,10 @@
 
 use nalgebra::{DMatrix, DVector, Isometry3, Point3, Unit, Vector3};
 
+use super::CalibrationError;
 use super::axis_circle::fit_circle;
-use super::{CalibrationError, lsq};
 use crate::kinematics::{AxisLine, PhiRow, frame_from_phi};
+use crate::numerics::lsq;
 
 const FIT: &str = "paper axis fit (eqs. 1-5)";
 
@@ -137,28 +138,24 @@ pub fn fit_axis_paper(
     let phi0 = phi0_for(&nominal_direction.map_or(normal, |d| d.into_inner()));
     let start = row_for_line(phi0, &circle.centre, &normal)?;
     let scale = circle.radius;
-    let mut x = DVector::from_vec(vec![start.a_m, start.b_m, start.alpha_rad, start.beta_rad]);
-    let mut iterations = 0;
-    let mut converged = false;
-    while iterations < max_iterations {
-        iterations += 1;
-        let (r, j) = residuals(phi0, x.as_slice(), points, scale);
-        let step = lsq::gauss_newton_step(&j, &r, FIT)?;
-        x += &step;
-        let size = (step[0].abs() + step[1].abs()) / scale + step[2].abs() + step[3].abs();
-        if size < 1e-12 {
-            converged = true;
-            break;
-        }
-    }
-    let (r, j) = residuals(phi0, x.as_slice(), points, scale);
-    if !converged {
-        return Err(CalibrationError::NotConverged {
-            fit: FIT,
-            iterations,
-            residual_rms: (r.norm_squared() / r.len() as f64).sqrt(),
-        });
-    }
+    let x0 = DVector::from_vec(vec![start.a_m, start.b_m, start.alpha_rad, start.beta_rad]);
+    let small = |step: &DVector<f64>| (step[0].abs() + step[1].abs()) / scale + step[2].abs() + step[3].abs() < 1e-12;
+    let options = lsq::LmOptions {
+        damping: lsq::Damping::GaussNewton {
+            truncate_below: None,
+            monotone: false,
+        },
+        small_step: Some(&small),
+        ..lsq::LmOptions::marquardt(FIT, max_iterations)
+    };
+    let outcome = lsq::levenberg_marquardt(
+        x0,
+        &options,
+        |x: &DVector<f64>| Ok::<_, CalibrationError>(residuals(phi0, x.as_slice(), points, scale)),
+        |x, step| Ok(x + step),
+    )?
+    .converged(FIT, None)?;
+    let (x, r, j, iterations) = (outcome.state, outcome.residual, outcome.jacobian, outcome.iterations);
     let row = PhiRow::new(x[0], x[1], x[2], x[3]);
     let base_from_axis = frame_from_phi(phi0, 0.0, 0.0) * row.phi_from_next();
     let mut direction = base_from_axis * Vector3::z();

@@ -11,8 +11,9 @@
 
 use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion};
 
-use super::{CalibrationError, lsq};
+use super::CalibrationError;
 use crate::kinematics::AxisLine;
+use crate::numerics::lsq;
 use crate::robot::CouplingFunction;
 
 const FIT: &str = "coupling fit (eqs. 14-15)";
@@ -209,7 +210,14 @@ pub fn fit_coupling(
     let out = if m == 0 {
         DVector::zeros(0)
     } else {
-        lsq::levenberg_marquardt(FIT, DVector::from_vec(x0), 200, eval, |x, d| Ok(x + d))?.state
+        lsq::levenberg_marquardt(
+            DVector::from_vec(x0),
+            &lsq::LmOptions::marquardt(FIT, 200),
+            eval,
+            |x, d| Ok(x + d),
+        )?
+        .converged(FIT, None)?
+        .state
     };
     let (r, j) = eval(&out)?;
     let s2 = r.norm_squared() / (n - m).max(1) as f64;

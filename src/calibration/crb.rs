@@ -15,9 +15,10 @@ use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix4, Point3, Unit, Vector3, Vector
 
 use crate::kinematics::AxisLine;
 
+use super::CalibrationError;
 use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, axis_quantities_gradient};
 use super::transmission_fit::TransmissionForm;
-use super::{CalibrationError, lsq};
+use crate::numerics::lsq;
 
 const FIT: &str = "Cramer-Rao bound";
 

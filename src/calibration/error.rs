@@ -76,3 +76,23 @@ pub enum CalibrationError {
         what: &'static str,
     },
 }
+
+impl From<crate::numerics::lsq::LsqError> for CalibrationError {
+    fn from(e: crate::numerics::lsq::LsqError) -> Self {
+        use crate::numerics::lsq::LsqError;
+        match e {
+            LsqError::IllConditioned { fit, condition_number } => {
+                CalibrationError::IllConditioned { fit, condition_number }
+            }
+            LsqError::NotConverged {
+                fit,
+                iterations,
+                residual_rms,
+            } => CalibrationError::NotConverged {
+                fit,
+                iterations,
+                residual_rms,
+            },
+        }
+    }
+}

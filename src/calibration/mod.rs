@@ -11,7 +11,6 @@
 //! - [`crb`]: Cramer-Rao bound and Monte-Carlo efficiency.
 
 mod error;
-mod lsq;
 
 pub mod angles;
 pub mod arc_ml;

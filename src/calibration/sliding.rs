@@ -6,9 +6,10 @@
 
 use nalgebra::{DMatrix, DVector, Isometry3, Point3, Rotation3, Unit, Vector3};
 
+use super::CalibrationError;
 use super::axis_paper::phi0_for;
-use super::{CalibrationError, lsq};
 use crate::kinematics::{PhiRow, frame_from_phi};
+use crate::numerics::lsq;
 
 const FIT: &str = "sliding axis fit (eqs. 9-13)";
 
@@ -76,24 +77,27 @@ pub fn fit_sliding_axis(points: &[Point3<f64>], max_iterations: usize) -> Result
     let phi0 = phi0_for(&d);
     let dp = frame_from_phi(phi0, 0.0, 0.0).inverse() * d;
     // Z_i = (sin b sin a, -cos b sin a, cos a) in the phi frame.
-    let mut x = DVector::from_vec(vec![dp.z.clamp(-1.0, 1.0).acos(), dp.x.atan2(-dp.y)]);
-    let mut iterations = 0;
-    loop {
-        iterations += 1;
-        let (r, j, _) = residuals(phi0, x.as_slice(), points);
-        let step = lsq::gauss_newton_step(&j, &r, FIT)?;
-        x += &step;
-        if step.amax() < 1e-13 {
-            break;
-        }
-        if iterations >= max_iterations {
-            return Err(CalibrationError::NotConverged {
-                fit: FIT,
-                iterations,
-                residual_rms: (r.norm_squared() / r.len() as f64).sqrt(),
-            });
-        }
-    }
+    let x0 = DVector::from_vec(vec![dp.z.clamp(-1.0, 1.0).acos(), dp.x.atan2(-dp.y)]);
+    let small = |step: &DVector<f64>| step.amax() < 1e-13;
+    let options = lsq::LmOptions {
+        damping: lsq::Damping::GaussNewton {
+            truncate_below: None,
+            monotone: false,
+        },
+        small_step: Some(&small),
+        ..lsq::LmOptions::marquardt(FIT, max_iterations)
+    };
+    let outcome = lsq::levenberg_marquardt(
+        x0,
+        &options,
+        |x: &DVector<f64>| {
+            let (r, j, _) = residuals(phi0, x.as_slice(), points);
+            Ok::<_, CalibrationError>((r, j))
+        },
+        |x, step| Ok(x + step),
+    )?
+    .converged(FIT, None)?;
+    let (x, iterations) = (outcome.state, outcome.iterations);
     let (_, _, local) = residuals(phi0, x.as_slice(), points);
     let base_from_axis = frame_from_phi(phi0, 0.0, 0.0) * PhiRow::new(0.0, 0.0, x[0], x[1]).phi_from_next();
     let mut direction = base_from_axis * Vector3::z();

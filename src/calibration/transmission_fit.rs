@@ -10,7 +10,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{CalibrationError, lsq};
+use super::CalibrationError;
+use crate::numerics::lsq;
 use crate::robot::Transmission;
 
 const FIT: &str = "transmission fit (eq. 8)";

@@ -4,10 +4,10 @@
 //! `--joint` run a subset of the drawn cases (same numbers and seeds).
 
 use anyhow::{Context, Result, bail};
-use axiscal::blind::{
+use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
+use axiscal::harness::blind::{
     BlindOptions, CASE_EFFECTS, CaseResult, Simulator, case_table, detectable_size, draw_case, score, simulate_case,
 };
-use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::measurement::{read_measurements, write_measurements};
 use axiscal::robot::RobotDescription;
 use rayon::prelude::*;

@@ -4,7 +4,7 @@
 
 use super::calibrate::{refuse_existing, write_output};
 use anyhow::{Context, Result};
-use axiscal::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget};
+use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget};
 use axiscal::measurement::MeasurementModel;
 use std::fmt::Write as _;
 use std::path::PathBuf;

@@ -98,7 +98,7 @@ pub fn run(args: Args) -> Result<()> {
     write_output(
         &args.out,
         names[3],
-        &urdf(&cal.robot.model(), &desc, "calibrated"),
+        &urdf(&cal.robot.phi_model(), &desc, "calibrated"),
         args.force,
     )?;
     println!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());

@@ -5,7 +5,7 @@
 
 use super::calibrate::refuse_existing;
 use anyhow::{Context, Result};
-use axiscal::evaluation::{
+use axiscal::harness::evaluation::{
     PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperScenario, Region,
     floor_check, run_paper_scenario, write_plots,
 };

@@ -2,8 +2,8 @@
 //! same results a single run gives, bit for bit.
 
 use anyhow::{Context, Result, bail};
-use axiscal::scenario::export::{self, RESOLVED_FILE, TRIALS_FILE};
-use axiscal::scenario::{ResolvedScenario, complete_run};
+use axiscal::harness::scenario::export::{self, RESOLVED_FILE, TRIALS_FILE};
+use axiscal::harness::scenario::{ResolvedScenario, complete_run};
 use std::path::PathBuf;
 
 /// Arguments of `axiscal merge`.

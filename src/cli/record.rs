@@ -4,10 +4,11 @@
 
 use anyhow::{Context, Result};
 use axiscal::calibration::{ArcFitOptions, MeasurementNoise, TransmissionForm, fit_arc};
-use axiscal::campaign::{CalibrationPlan, commands_to_internal};
 use axiscal::kinematics::{JointKind, PhiModel};
 use axiscal::measurement::{Measurement, MeasurementModel, MeasurementSet};
-use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::plan::CalibrationPlan;
+use axiscal::robot::commands_to_internal;
+use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::viz::{Recorder, four_bar_loop_m};
 use nalgebra::Point3;
 use std::path::Path;
@@ -20,7 +21,7 @@ pub struct Campaign<'a> {
     /// Nominal description (controller, plan, nominal model for the validation errors).
     pub desc: &'a RobotDescription,
     /// The simulated robot.
-    pub truth: &'a TruthRobot,
+    pub truth: &'a RobotModel,
     /// The axis experiments.
     pub plan: &'a CalibrationPlan,
     /// The measured rows.

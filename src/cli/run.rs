@@ -3,9 +3,11 @@
 
 use super::ThresholdsFailed;
 use anyhow::{Context, Result, bail};
-use axiscal::scenario::export::{self, PartialTrials, SHARD_FILE, TRIALS_FILE};
-use axiscal::scenario::resolve::default_results_dir;
-use axiscal::scenario::{CampaignTrial, Overrides, ResolvedScenario, Shard, Summary, Trial, complete_run, run_units};
+use axiscal::harness::scenario::export::{self, PartialTrials, SHARD_FILE, TRIALS_FILE};
+use axiscal::harness::scenario::resolve::default_results_dir;
+use axiscal::harness::scenario::{
+    CampaignTrial, Overrides, ResolvedScenario, Shard, Summary, Trial, complete_run, run_units,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
@@ -72,7 +74,7 @@ pub fn run(args: Args) -> Result<()> {
             .context("progress template")?,
     );
     let write_error = std::sync::Mutex::new(None);
-    let on_done = |r: &axiscal::scenario::TrialRecord| {
+    let on_done = |r: &axiscal::harness::scenario::TrialRecord| {
         if let Err(e) = partial.append(&scenario, r) {
             write_error.lock().unwrap_or_else(|p| p.into_inner()).get_or_insert(e);
         }

@@ -2,12 +2,10 @@
 //! written as a measurement CSV (FORMATS.md section 1).
 
 use anyhow::{Context, Result};
-use axiscal::campaign::{
-    AnalyticArm, ArmExecutor, CalibrationPlan, CampaignOptions, CampaignOutput, Effects, PoseConditions,
-    ValidationPlan, simulate_campaign_with,
-};
 use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements};
-use axiscal::robot::{Controller, RobotDescription, TruthRobot};
+use axiscal::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
+use axiscal::robot::{Controller, RobotDescription, RobotModel};
+use axiscal::sim::{AnalyticArm, ArmExecutor, CampaignOptions, CampaignOutput, Effects, simulate_campaign_with};
 use axiscal::sim::{RapierArm, RapierArmOptions, SpanSearch, visible_sweep_span};
 use rand::{SeedableRng, rngs::StdRng};
 use std::path::PathBuf;
@@ -84,8 +82,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     let desc = RobotDescription::from_file(&args.robot)?;
     let truth = match &args.truth {
-        Some(path) => TruthRobot::from_file(path)?,
-        None => TruthRobot::paper_robot(),
+        Some(path) => RobotModel::from_file(path)?,
+        None => axiscal::sim::paper_robot(),
     };
     let instrument = match args.instrument {
         Instrument::Theodolite => {
@@ -200,7 +198,7 @@ fn run_campaign<A: ArmExecutor>(
 /// repeatability jitter; 1 deg steps up to the nearer joint limit, the edge bisected.
 fn report_spans(
     desc: &RobotDescription,
-    truth: &TruthRobot,
+    truth: &RobotModel,
     effects: &Effects,
     plan: &CalibrationPlan,
     rapier_options: &RapierArmOptions,
@@ -215,7 +213,7 @@ fn report_spans(
         let k = sweep.joint - 1;
         let [lo, hi] = desc.limits_internal(k);
         let centre_cmd = plan.reference[k] + sweep.offset_at(0) + sweep.span / 2.0;
-        let centre = axiscal::campaign::commands_to_internal(desc, &{
+        let centre = axiscal::robot::commands_to_internal(desc, &{
             let mut cmd = plan.reference.clone();
             cmd[k] = centre_cmd;
             cmd

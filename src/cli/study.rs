@@ -3,7 +3,7 @@
 
 use super::calibrate::write_output;
 use anyhow::{Context, Result};
-use axiscal::studies::EfficiencyStudy;
+use axiscal::harness::studies::EfficiencyStudy;
 use std::path::PathBuf;
 
 /// Arguments of `axiscal study`.

@@ -16,11 +16,11 @@
 //!    inverse kinematics returns `cmd` on the same branch.
 //!
 //! Steps 2-4 are the exact inverse of the truth-model semantics
-//! ([`crate::robot::TruthRobot::joint_values`]), so a robot equal to the calibrated model
+//! ([`crate::robot::RobotModel::joint_values`]), so a robot equal to the calibrated model
 //! reaches `q` exactly.
 
 use crate::kinematics::{IkError, IkOptions, IkReport, PhiModel, solve_ik, solve_seeded_by_nominal};
-use crate::robot::{Controller, FourBarError, RobotDescription, TruthRobot};
+use crate::robot::{Controller, FourBarError, RobotDescription, RobotModel};
 use nalgebra::Isometry3;
 
 /// Why a pose cannot be compensated.
@@ -73,7 +73,7 @@ pub struct CompensatedPose {
 /// Fig. 5 for one calibrated robot and its (unchanged) controller.
 #[derive(Clone, Debug)]
 pub struct Compensator {
-    calibrated: TruthRobot,
+    calibrated: RobotModel,
     calibrated_model: PhiModel,
     nominal_model: PhiModel,
     controller: Controller,
@@ -84,7 +84,7 @@ impl Compensator {
     /// The compensator of `calibrated` (the [`crate::calibration::procedure::Calibration`]'s
     /// robot) behind the controller of `desc`. IK uses the default tolerances (1e-12 m and
     /// rad) and reports joints outside the description's limits (seeds inside them first).
-    pub fn new(calibrated: &TruthRobot, desc: &RobotDescription) -> Result<Self, CompensationError> {
+    pub fn new(calibrated: &RobotModel, desc: &RobotDescription) -> Result<Self, CompensationError> {
         if calibrated.dof() != desc.dof() {
             return Err(CompensationError::JointCount {
                 calibrated: calibrated.dof(),
@@ -97,7 +97,7 @@ impl Compensator {
         };
         Ok(Compensator {
             calibrated: calibrated.clone(),
-            calibrated_model: calibrated.model(),
+            calibrated_model: calibrated.phi_model(),
             nominal_model: desc.nominal_model(),
             controller: Controller::from_description(desc),
             ik,
@@ -210,7 +210,7 @@ mod tests {
     #[test]
     fn commands_invert_the_truth_semantics() {
         let desc = RobotDescription::asea_irb6l();
-        let robot = TruthRobot::paper_robot();
+        let robot = crate::sim::paper_robot();
         let comp = Compensator::new(&robot, &desc).unwrap();
         let controller = Controller::from_description(&desc);
         let q = [0.2, -0.1, 0.3, -0.5, 0.7, 1.1];
@@ -225,7 +225,7 @@ mod tests {
     #[test]
     fn an_ideal_robot_needs_no_compensation() {
         let desc = RobotDescription::asea_irb6l();
-        let comp = Compensator::new(&TruthRobot::ideal(&desc), &desc).unwrap();
+        let comp = Compensator::new(&RobotModel::ideal(&desc), &desc).unwrap();
         let q = [0.1, 0.2, -0.3, 0.4, -0.5, 0.6];
         let target = desc.nominal_model().world_from_tool(&q);
         let c = comp.compensate(&target).unwrap();

@@ -7,9 +7,9 @@
 //! alone: the report lists the candidates an arc can show (module docs of
 //! [`crate::diagnosis`]) and says that naming one needs validation poses.
 
-use super::stats::{mean, quantile, upper_tail};
 use super::{DiagnosisError, DiagnosisOptions, Outcome, WhereEntry, calibrate_for, clean_positions, replica};
 use crate::measurement::MeasurementSet;
+use crate::numerics::stats::{mean, quantile, upper_tail};
 use crate::robot::RobotDescription;
 use rand::{SeedableRng, rngs::StdRng};
 use serde::{Deserialize, Serialize};

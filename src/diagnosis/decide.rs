@@ -1,11 +1,11 @@
 //! The decision of [`diagnose`](super::diagnose): tests against the noise-only null
 //! distribution (module docs of [`crate::diagnosis`], steps 3-5).
 
-use super::stats::{mean, quantile, std_dev, upper_tail};
 use super::{
     Candidate, CandidateScore, Diagnosis, DiagnosisOptions, FeatureContrast, LinearFit, NullData, Outcome, Parameter,
     Prepared, WhereEntry,
 };
+use crate::numerics::stats::{mean, quantile, std_dev, upper_tail};
 use nalgebra::{DMatrix, DVector};
 
 /// A candidate's fit and its statistics.

@@ -3,8 +3,8 @@
 //! against the same bins of the noise-only replicas, so a gap that lives in one part of the
 //! workspace shows there (module docs of [`crate::diagnosis`], step 5).
 
-use super::stats::{mean, quantile};
 use super::{FeatureContrast, NullData, Pose, Prepared, WhereEntry, split};
+use crate::numerics::stats::{mean, quantile};
 use nalgebra::DMatrix;
 
 /// Bins of a continuous feature: terciles of its held-out values.

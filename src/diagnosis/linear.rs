@@ -1,9 +1,10 @@
 //! Linearised least squares of the diagnoser: the residuals of the calibrated model are
 //! linear in the small refit and effect parameters (Gauss-Newton's model, Nocedal & Wright,
 //! Numerical Optimization, 2nd ed., eq. 10.24), so every fit is one truncated-SVD solve on
-//! the training rows (Golub & Van Loan, Matrix Computations, 4th ed., sec. 5.5.4), and its
+//! the training rows ([`TruncatedSvd`]), and its
 //! held-out residuals are a fixed linear map of the data: `r_h - X_h X_t^+ r_t`.
 
+use crate::numerics::lsq::TruncatedSvd;
 use nalgebra::{DMatrix, DVector};
 
 /// Directions of the column-scaled training design whose singular value is below this
@@ -53,45 +54,15 @@ pub struct LinearFit {
 impl LinearFit {
     /// Fits the design `x_train` (training rows) and maps onto `x_held` (held-out rows).
     pub fn new(x_train: &DMatrix<f64>, x_held: &DMatrix<f64>) -> Self {
-        let p = x_train.ncols();
-        let norms: Vec<f64> = (0..p)
-            .map(|c| {
-                let n = x_train.column(c).norm();
-                if n > 0.0 { n } else { 1.0 }
-            })
-            .collect();
-        let mut scaled = x_train.clone();
-        for (c, n) in norms.iter().enumerate() {
-            scaled.column_mut(c).scale_mut(1.0 / n);
-        }
-        let svd = scaled.svd(true, true);
-        let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-            unreachable!("SVD computed with U and V^T")
-        };
-        let s_max = svd.singular_values.iter().cloned().fold(0.0, f64::max);
-        let keep: Vec<usize> = (0..svd.singular_values.len())
-            .filter(|&i| svd.singular_values[i] > NULL_DIRECTION_TOLERANCE * s_max && svd.singular_values[i] > 0.0)
-            .collect();
-        let rank = keep.len();
-        let mut span = DMatrix::zeros(x_train.nrows(), rank);
-        // Scaled-parameter solve: V S^-1 U^T, then unscale.
-        let mut v_over_s = DMatrix::zeros(p, rank);
-        for (j, &i) in keep.iter().enumerate() {
-            span.column_mut(j).copy_from(&u.column(i));
-            let s = svd.singular_values[i];
-            for r in 0..p {
-                v_over_s[(r, j)] = v_t[(i, r)] / s / norms[r];
-            }
-        }
-        let solve = &v_over_s * span.transpose();
-        let normal_inverse = &v_over_s * v_over_s.transpose();
-        let heldout_from_train = x_held * &solve;
+        let svd = TruncatedSvd::new(x_train, NULL_DIRECTION_TOLERANCE);
+        let normal_inverse = &svd.v_over_s * svd.v_over_s.transpose();
+        let heldout_from_train = x_held * &svd.solve;
         LinearFit {
-            solve,
+            solve: svd.solve,
             heldout_from_train,
             normal_inverse,
-            span,
-            rank,
+            span: svd.span,
+            rank: svd.rank,
         }
     }
 

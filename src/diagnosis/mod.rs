@@ -35,7 +35,6 @@ mod plots;
 mod poses;
 mod report;
 mod result;
-mod stats;
 
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
@@ -51,12 +50,13 @@ pub use result::{CandidateScore, Diagnosis, FeatureContrast, Outcome, Parameter,
 
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::measurement::MeasurementSet;
+use crate::numerics::lsq::{Damping, LmOptions, LsqError, levenberg_marquardt_from};
+use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector};
 use rand::{SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
-use stats::mean;
 
 /// Why a data set could not be diagnosed.
 #[derive(Debug, thiserror::Error)]
@@ -292,39 +292,57 @@ struct Refined {
 impl Prepared {
     /// The observed data fitted by the refit plus `candidate` (with its sensitivity `x_effect`)
     /// with the nonlinear model: the linearised solution, then Gauss-Newton steps re-linearised
-    /// at the current parameters (kept while the training SSR falls). A large effect moves the
-    /// model far enough that the first-order fit leaves a visible second-order residual;
-    /// noise-only data (the null distributions) do not, so the linear null still applies.
+    /// at the current parameters (kept while the training SSR falls; the program's one
+    /// least-squares loop, rank-revealing like [`LinearFit`], held-out rows carried along
+    /// unfitted). A large effect moves the model far enough that the first-order fit leaves a
+    /// visible second-order residual; noise-only data (the null distributions) do not, so the
+    /// linear null still applies.
     fn refine(&self, candidate: Option<(Candidate, &DMatrix<f64>)>) -> Option<Refined> {
         let mut pred = self.predictor.clone();
         pred.candidate = candidate.map(|c| c.0);
         let order = ordered(&self.poses);
         let steps = pred.steps();
-        let mut fit = match candidate {
+        // The residual is `measured - predicted`: its Jacobian is minus the sensitivity.
+        let eval = |p: &DVector<f64>| -> Result<(DVector<f64>, DMatrix<f64>), RefineError> {
+            let r = pred.residuals(p.as_slice(), &order).ok_or(RefineError)?;
+            let x = sensitivity(|q| pred.residuals(q, &order), p.as_slice(), &steps).ok_or(RefineError)?;
+            Ok((DVector::from_vec(r), -x))
+        };
+        // The linearised solution is where the tests stand; the refinement starts there.
+        let linear = match candidate {
             Some((_, x)) => self.candidate_fit(x),
             None => self.baseline_fit(),
         };
-        let train = |r: &DVector<f64>| r.rows(0, self.train_rows).into_owned();
-        let mut params = fit.params(&train(&self.residuals));
-        let mut r = DVector::from_vec(pred.residuals(params.as_slice(), &order)?);
-        for _ in 0..REFINE_STEPS {
-            let x = sensitivity(|q| pred.residuals(q, &order), params.as_slice(), &steps)?;
-            let (t, h) = self.rows(&x);
-            let next_fit = LinearFit::new(&t, &h);
-            let next = &params + next_fit.params(&train(&r));
-            let r_next = DVector::from_vec(pred.residuals(next.as_slice(), &order)?);
-            if train(&r_next).norm_squared() >= train(&r).norm_squared() {
-                break;
-            }
-            (params, r, fit) = (next, r_next, next_fit);
-        }
+        let p1 = linear.params(&self.residuals.rows(0, self.train_rows).into_owned());
+        let at_p1 = eval(&p1).ok()?;
+        let options = LmOptions {
+            damping: Damping::GaussNewton {
+                truncate_below: Some(NULL_DIRECTION_TOLERANCE),
+                monotone: true,
+            },
+            fitted_rows: Some(self.train_rows),
+            ..LmOptions::marquardt("diagnosis refit", REFINE_STEPS)
+        };
+        let outcome = levenberg_marquardt_from(p1, at_p1, &options, eval, |p, d| Ok(p + d)).ok()?;
+        let (t, h) = self.rows(&-outcome.jacobian);
+        let r = outcome.residual;
         let n = r.len();
         Some(Refined {
             heldout_ssr: r.rows(self.train_rows, n - self.train_rows).norm_squared(),
-            params,
-            fit,
-            r_train: train(&r),
+            params: outcome.state,
+            fit: LinearFit::new(&t, &h),
+            r_train: r.rows(0, self.train_rows).into_owned(),
         })
+    }
+}
+
+/// The model could not execute a command at some refit parameters.
+#[derive(Debug)]
+struct RefineError;
+
+impl From<LsqError> for RefineError {
+    fn from(_: LsqError) -> Self {
+        RefineError
     }
 }
 

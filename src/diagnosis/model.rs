@@ -4,12 +4,13 @@
 //! of the fig. 3 joint semantics.
 
 use super::poses::Pose;
-use crate::campaign::{
-    AxisWobble, ComplianceEffect, CompliantLoad, Effects, GearHarmonic, LinkMass, PassiveSlope, ThermalEffect,
+use crate::kinematics::JointKind;
+use crate::physics::{
+    AxisWobble, ComplianceEffect, CompliantLoad, GearHarmonic, LinkMass, PassiveSlope, ThermalEffect,
     coupled_static_deflection,
 };
-use crate::kinematics::JointKind;
-use crate::robot::{Controller, CouplingFunction, RobotDescription, TransmissionFitForm, TruthRobot};
+use crate::robot::{Controller, CouplingFunction, RobotDescription, RobotModel, TransmissionFitForm};
+use crate::sim::Effects;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -195,7 +196,7 @@ fn payload_at_tool(model: &crate::kinematics::PhiModel, payload_kg: f64) -> Opti
 /// [`coupled_static_deflection`]: the
 /// slope of every `coupling_in`; the fractional (eq. 15) and four-bar forms are mechanisms that
 /// also carry the driven joint's load back to the actuator below, a gear is kinematic only.
-fn passive_slopes(robot: &TruthRobot, active: &[f64]) -> Vec<PassiveSlope> {
+fn passive_slopes(robot: &RobotModel, active: &[f64]) -> Vec<PassiveSlope> {
     PassiveSlope::of_robot(robot, active, |_, g| {
         matches!(g, CouplingFunction::Fractional { .. } | CouplingFunction::FourBar(_))
     })
@@ -205,7 +206,7 @@ fn passive_slopes(robot: &TruthRobot, active: &[f64]) -> Vec<PassiveSlope> {
 /// measured tool targets of a pose.
 #[derive(Clone, Debug)]
 pub struct Predictor {
-    base: TruthRobot,
+    base: RobotModel,
     controller: Controller,
     masses: Vec<LinkMass>,
     tool_targets_m: Vec<Point3<f64>>,
@@ -250,7 +251,7 @@ impl Predictor {
     /// The predictor of the calibrated robot `base` for `desc`'s controller, link masses and
     /// tool targets; `reference_c` is the temperature the calibration holds at.
     pub fn new(
-        base: &TruthRobot,
+        base: &RobotModel,
         desc: &RobotDescription,
         reference_c: f64,
         candidate: Option<Candidate>,
@@ -317,7 +318,7 @@ impl Predictor {
     }
 
     /// The refit robot and the candidate's effects for `params`.
-    fn robot_and_effects(&self, params: &[f64]) -> (TruthRobot, Effects, f64) {
+    fn robot_and_effects(&self, params: &[f64]) -> (RobotModel, Effects, f64) {
         let mut robot = self.base.clone();
         let rows = robot.rows.len();
         for (r, row) in robot.rows.iter_mut().enumerate() {
@@ -376,7 +377,7 @@ impl Predictor {
     }
 
     /// The refit phi-model: `robot`'s with the base and tool corrections of `params`.
-    fn model(&self, robot: &TruthRobot, params: &[f64]) -> crate::kinematics::PhiModel {
+    fn model(&self, robot: &RobotModel, params: &[f64]) -> crate::kinematics::PhiModel {
         let g = self.geometric_count();
         let iso = |p: &[f64]| {
             Isometry3::from_parts(
@@ -384,7 +385,7 @@ impl Predictor {
                 UnitQuaternion::from_scaled_axis(Vector3::new(p[3], p[4], p[5])),
             )
         };
-        let mut model = robot.model();
+        let mut model = robot.phi_model();
         model.world_from_base = iso(&params[g - 12..g - 6]) * model.world_from_base;
         model.last_link_from_tool *= iso(&params[g - 6..g]);
         model
@@ -395,7 +396,7 @@ impl Predictor {
     /// `approach`, passive couplings); `None` when a command cannot be executed.
     fn joint_values(
         &self,
-        robot: &TruthRobot,
+        robot: &RobotModel,
         cmd: &[f64],
         approach: &[f64],
         backlash_half_band_rad: f64,
@@ -420,7 +421,7 @@ impl Predictor {
     #[allow(clippy::too_many_arguments)]
     fn sag(
         &self,
-        robot: &TruthRobot,
+        robot: &RobotModel,
         model: &crate::kinematics::PhiModel,
         q: &[f64],
         active: &[f64],
@@ -458,7 +459,7 @@ impl Predictor {
     pub fn pose_features(&self, pose: &Pose) -> Option<PoseFeatures> {
         let n = self.base.dof();
         let (q, _) = self.joint_values(&self.base, &pose.cmd, &pose.approach, 0.0)?;
-        let model = self.base.model();
+        let model = self.base.phi_model();
         let tool = model.poses(&q).world_from_link[n - 1] * model.last_link_from_tool;
         let base = model.world_from_base;
         let tool_in_base = base.inverse() * Point3::from(tool.translation.vector);
@@ -467,7 +468,7 @@ impl Predictor {
             stiffness_nm_per_rad: vec![1.0; n],
             gravity_m_s2: GRAVITY_M_S2,
         };
-        let gravity_torque_nm = crate::campaign::first_order_deflection(&model, &q, &self.masses, payload, &unit);
+        let gravity_torque_nm = crate::physics::first_order_deflection(&model, &q, &self.masses, payload, &unit);
         Some(PoseFeatures {
             q,
             reach_m: tool_in_base.x.hypot(tool_in_base.y),
@@ -514,7 +515,9 @@ impl Predictor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::{CalibrationPlan, JointDriver, PoseConditions, ValidationPlan, commands_to_internal};
+    use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
+    use crate::robot::commands_to_internal;
+    use crate::sim::JointDriver;
     use rand::{SeedableRng, rngs::StdRng};
 
     /// The compliance candidate on the truth robot itself reproduces the coupled static
@@ -522,7 +525,7 @@ mod tests {
     #[test]
     fn compliance_candidate_reproduces_the_coupled_sag() {
         let desc = RobotDescription::asea_irb6l();
-        let mut truth = TruthRobot::paper_robot();
+        let mut truth = crate::sim::paper_robot();
         for j in &mut truth.joints {
             j.repeatability_sigma = 0.0;
         }
@@ -536,7 +539,7 @@ mod tests {
         };
         let masses = LinkMass::from_description(&desc);
         let mut driver = JointDriver::new(&truth, Controller::from_description(&desc), &Effects::default());
-        let model = truth.model();
+        let model = truth.phi_model();
         let sagged = |driver: &mut JointDriver, cmd: &[f64]| {
             let d = driver.drive(cmd, &mut StdRng::seed_from_u64(1)).unwrap();
             let couplings = PassiveSlope::of_truth(&truth, &d.active);

@@ -4,8 +4,9 @@
 
 use super::DiagnosisError;
 use crate::calibration::procedure::Calibration;
-use crate::campaign::{TOOL_EXPERIMENT, commands_to_internal};
 use crate::measurement::{Measurement, MeasurementSet};
+use crate::plan::TOOL_EXPERIMENT;
+use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription};
 use nalgebra::{Point3, Vector3};
 use rand::Rng;
@@ -22,7 +23,7 @@ pub fn clean_positions(
     desc: &RobotDescription,
 ) -> Result<Vec<Point3<f64>>, DiagnosisError> {
     let controller = Controller::from_description(desc);
-    let model = cal.robot.model();
+    let model = cal.robot.phi_model();
     let tool_targets = desc.tool_targets_m();
     let link_of = |m: &Measurement| -> Option<usize> {
         let t = desc.axis_targets_of(m.moved_joint)?;

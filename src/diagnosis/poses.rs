@@ -1,9 +1,10 @@
 //! Validation poses as the diagnoser sees them: commands, approach directions from the
 //! command history, conditions and measured tool targets (FORMATS.md section 1).
 
-use crate::campaign::{TOOL_EXPERIMENT, commands_to_internal};
 use crate::measurement::Measurement;
+use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::RobotDescription;
+use crate::robot::commands_to_internal;
 use nalgebra::Point3;
 use std::collections::HashMap;
 

@@ -6,10 +6,9 @@
 //! `e(q) = [p_target - p(q); rotvec(R_target R(q)^T)]` (position \[m\], orientation \[rad\]),
 //!
 //! whose derivative is `-J(q)` with `J` the geometric Jacobian ([`geometric_jacobian`]; exact
-//! for the position rows, and for the orientation rows at `e = 0`). Each step solves
-//! `(J^T J + mu I) dq = J^T e` and the damping `mu` is adapted from the gain ratio of actual to
-//! predicted cost reduction (Nielsen's rule; Madsen, Nielsen & Tingleff, *Methods for
-//! non-linear least squares problems*, 2004, eqs. 3.13-3.16).
+//! for the position rows, and for the orientation rows at `e = 0`), solved by the program's
+//! one Levenberg-Marquardt loop (Marquardt's scaling, `crate::numerics::lsq`) until both
+//! tolerances hold.
 //!
 //! A good seed matters for a 6R arm with up to 8 (or more) solutions: for the IRB/L6 class the
 //! nominal model has a closed form ([`nominal_closed_form`]) whose branches seed the solver on
@@ -22,6 +21,7 @@ pub use closed_form::{ClosedFormError, ClosedFormSolution, nominal_closed_form};
 use super::chain::PhiModel;
 use super::jacobian::geometric_jacobian;
 use super::phi::JointKind;
+use crate::numerics::lsq::{LmOptions, LsqError, Stop, levenberg_marquardt};
 use nalgebra::{DMatrix, DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
 use std::f64::consts::PI;
 
@@ -180,77 +180,53 @@ fn outside_limits(q: &[f64], limits: Option<&Vec<[f64; 2]>>) -> Vec<usize> {
     })
 }
 
-/// Levenberg-Marquardt on the tool pose error from `seed`; never fails on non-convergence
-/// (see `report.converged`). Use [`solve_ik`] for a `Result`.
+/// Levenberg-Marquardt ([`crate::numerics::lsq::levenberg_marquardt`]) on the tool pose
+/// error from `seed`, stopping when both tolerances of `opts` hold; never fails on
+/// non-convergence (see `report.converged`). Use [`solve_ik`] for a `Result`.
 ///
 /// # Panics
 /// If `seed.len()` (or the limits' length) differs from the model's number of joints, a
 /// programming error; [`solve_ik`] checks its inputs and returns [`IkError`] instead.
-pub fn levenberg_marquardt(model: &PhiModel, target: &Isometry3<f64>, seed: &[f64], opts: &IkOptions) -> IkSolution {
+pub fn ik_from_seed(model: &PhiModel, target: &Isometry3<f64>, seed: &[f64], opts: &IkOptions) -> IkSolution {
     let n = model.dof();
-    let mut q = seed.to_vec();
     let limits = opts.limits.as_ref().filter(|_| opts.clamp_to_limits);
+    let mut q0 = seed.to_vec();
     if let Some(l) = limits {
-        clamp(&mut q, l);
+        clamp(&mut q0, l);
     }
-    let mut e = pose_error(target, &model.world_from_tool(&q));
-    let mut cost = 0.5 * e.norm_squared();
-    let done = |e: &Vector6<f64>| {
-        let (p, o) = split_norms(e);
+    let within = |e: &DVector<f64>| {
+        let (p, o) = (e.fixed_rows::<3>(0).norm(), e.fixed_rows::<3>(3).norm());
         p <= opts.position_tolerance_m && o <= opts.orientation_tolerance_rad
     };
-    let mut mu = -1.0;
-    let mut nu = 2.0;
-    let mut iterations = 0;
-    while !done(&e) && iterations < opts.max_iterations {
-        iterations += 1;
-        let j = DMatrix::from_column_slice(6, n, geometric_jacobian(model, &q).as_slice());
-        let jtj = j.transpose() * &j;
-        let g = j.transpose() * DVector::from_column_slice(e.as_slice());
-        if mu < 0.0 {
-            // Initial damping: tau * max diag(J^T J), tau = 1e-3 (Madsen et al., sec. 3.2).
-            mu = 1e-3 * jtj.diagonal().max().max(f64::MIN_POSITIVE);
+    // The pose error's derivative is -J (module docs).
+    let eval = |q: &Vec<f64>| -> Result<(DVector<f64>, DMatrix<f64>), LsqError> {
+        let e = pose_error(target, &model.world_from_tool(q));
+        let j = geometric_jacobian(model, q);
+        Ok((
+            DVector::from_column_slice(e.as_slice()),
+            -DMatrix::from_column_slice(6, n, j.as_slice()),
+        ))
+    };
+    let apply = |q: &Vec<f64>, dq: &DVector<f64>| -> Result<Vec<f64>, LsqError> {
+        let mut next: Vec<f64> = q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
+        if let Some(l) = limits {
+            clamp(&mut next, l);
         }
-        // Inner loop: raise the damping until a step lowers the cost.
-        let mut accepted = false;
-        while !accepted {
-            let a = &jtj + DMatrix::identity(n, n) * mu;
-            let Some(chol) = a.cholesky() else {
-                mu *= nu;
-                nu *= 2.0;
-                continue;
-            };
-            let dq = chol.solve(&g);
-            if dq.norm() <= f64::EPSILON * (1.0 + q.iter().map(|v| v * v).sum::<f64>().sqrt()) {
-                // The step is below the resolution of q: stagnation.
-                return finish(model, q, e, iterations, opts, false);
-            }
-            let mut q_new: Vec<f64> = q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
-            if let Some(l) = limits {
-                clamp(&mut q_new, l);
-            }
-            let e_new = pose_error(target, &model.world_from_tool(&q_new));
-            let cost_new = 0.5 * e_new.norm_squared();
-            let predicted = 0.5 * dq.dot(&(&dq * mu + &g));
-            let rho = (cost - cost_new) / predicted.max(f64::MIN_POSITIVE);
-            if cost_new < cost || done(&e_new) {
-                q = q_new;
-                e = e_new;
-                cost = cost_new;
-                mu *= (1.0_f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-                nu = 2.0;
-                accepted = true;
-            } else {
-                mu *= nu;
-                nu *= 2.0;
-                if !mu.is_finite() {
-                    return finish(model, q, e, iterations, opts, false);
-                }
-            }
-        }
-    }
-    let converged = done(&e);
-    finish(model, q, e, iterations, opts, converged)
+        Ok(next)
+    };
+    let options = LmOptions {
+        target: Some(&within),
+        ..LmOptions::marquardt("inverse kinematics", opts.max_iterations)
+    };
+    // Marquardt damping never fails and neither do `eval` and `apply`; a failure would leave
+    // the seed, reported as not converged.
+    let Ok(outcome) = levenberg_marquardt(q0.clone(), &options, eval, apply) else {
+        let e0 = pose_error(target, &model.world_from_tool(&q0));
+        return finish(model, q0, e0, 0, opts, false);
+    };
+    let e = Vector6::from_column_slice(outcome.residual.as_slice());
+    let converged = outcome.stop == Stop::Target;
+    finish(model, outcome.state, e, outcome.iterations, opts, converged)
 }
 
 fn finish(
@@ -289,7 +265,7 @@ pub fn solve_ik(
     opts: &IkOptions,
 ) -> Result<IkSolution, IkError> {
     check_inputs(model, world_from_tool_target, seed, opts)?;
-    let s = levenberg_marquardt(model, world_from_tool_target, seed, opts);
+    let s = ik_from_seed(model, world_from_tool_target, seed, opts);
     if s.report.converged {
         Ok(s)
     } else {
@@ -330,7 +306,7 @@ pub fn solve_seeded_by_nominal(
     seeds.push(fallback_seed);
     let mut best: Option<IkSolution> = None;
     for seed in &seeds {
-        let s = levenberg_marquardt(actual, world_from_tool_target, seed, opts);
+        let s = ik_from_seed(actual, world_from_tool_target, seed, opts);
         if s.report.converged {
             return Ok(s);
         }
@@ -410,7 +386,7 @@ mod tests {
             clamp_to_limits: true,
             ..IkOptions::default()
         };
-        let s = levenberg_marquardt(&m, &t, &[0.0; 6], &clamped);
+        let s = ik_from_seed(&m, &t, &[0.0; 6], &clamped);
         assert!(!s.report.converged);
         assert!(s.q.iter().all(|v| v.abs() <= 0.1));
     }

@@ -6,7 +6,7 @@
 //! the kinematics helpers from the nominal model and then fed here as joint commands.
 
 use super::description::RobotDescription;
-use super::truth_error::TruthError;
+use super::model_error::ModelError;
 
 /// The fig. 3 controller: joint commands -> actuator commands through the nominal couplings.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,11 +36,11 @@ impl Controller {
         self.slope_into.get(joint.wrapping_sub(1)).copied().unwrap_or(0.0) * u_from
     }
 
-    fn check_len(&self, what: &'static str, v: &[f64]) -> Result<(), TruthError> {
+    fn check_len(&self, what: &'static str, v: &[f64]) -> Result<(), ModelError> {
         if v.len() == self.dof() {
             Ok(())
         } else {
-            Err(TruthError::WrongLength {
+            Err(ModelError::WrongLength {
                 what,
                 expected: self.dof(),
                 found: v.len(),
@@ -50,7 +50,7 @@ impl Controller {
 
     /// Decoupling (FORMATS.md section 2, fig. 3): `u_1 = cmd_1`,
     /// `u_{k+1} = cmd_{k+1} - nominal_passive_{k,k+1}(u_k)`; commands in internal units.
-    pub fn decouple(&self, cmd: &[f64]) -> Result<Vec<f64>, TruthError> {
+    pub fn decouple(&self, cmd: &[f64]) -> Result<Vec<f64>, ModelError> {
         self.check_len("commands", cmd)?;
         let mut u: Vec<f64> = Vec::with_capacity(cmd.len());
         for (k, &c) in cmd.iter().enumerate() {
@@ -67,10 +67,10 @@ impl Controller {
     /// holding actuator `joint + 1` still (paper section 3.1, FORMATS.md section 2):
     /// `cmd_{k+1} = cmd_{k+1}(0) + nominal_passive(u_k) - nominal_passive(u_k(0))`, every other
     /// command as in `cmd_ref`. The last joint has no successor: only its own command changes.
-    pub fn hold_still_commands(&self, joint: usize, cmd_ref: &[f64], new_cmd: f64) -> Result<Vec<f64>, TruthError> {
+    pub fn hold_still_commands(&self, joint: usize, cmd_ref: &[f64], new_cmd: f64) -> Result<Vec<f64>, ModelError> {
         self.check_len("reference commands", cmd_ref)?;
         if joint == 0 || joint > self.dof() {
-            return Err(TruthError::BadJoint { joint, dof: self.dof() });
+            return Err(ModelError::BadJoint { joint, dof: self.dof() });
         }
         let k = joint - 1;
         let u_ref = self.decouple(cmd_ref)?;
@@ -103,7 +103,7 @@ mod tests {
         for (a, b) in u.iter().zip(expected) {
             assert_relative_eq!(*a, b, epsilon = 1e-15);
         }
-        assert!(matches!(c.decouple(&cmd[..5]), Err(TruthError::WrongLength { .. })));
+        assert!(matches!(c.decouple(&cmd[..5]), Err(ModelError::WrongLength { .. })));
     }
 
     #[test]
@@ -116,7 +116,7 @@ mod tests {
         assert_relative_eq!(cmd[5], 0.6);
         assert!(matches!(
             c.hold_still_commands(7, &cmd0, 0.0),
-            Err(TruthError::BadJoint { .. })
+            Err(ModelError::BadJoint { .. })
         ));
     }
 }

@@ -428,3 +428,15 @@ impl RobotDescription {
         }
     }
 }
+
+/// Converts file-unit commands (deg / mm) to internal units (rad / m).
+pub fn commands_to_internal(desc: &RobotDescription, cmd_file: &[f64]) -> Vec<f64> {
+    cmd_file
+        .iter()
+        .zip(&desc.joints)
+        .map(|(c, j)| match j.kind {
+            JointKind::Revolute => c.to_radians(),
+            JointKind::Prismatic => c * 1e-3,
+        })
+        .collect()
+}

@@ -162,7 +162,7 @@ pub fn model_from_axes(nominal: &PhiModel, axes: &[AxisLine], q_ref: &[f64]) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::robot::{RobotDescription, TruthRobot};
+    use crate::robot::RobotDescription;
     use approx::assert_relative_eq;
 
     fn axes_of(model: &PhiModel, q: &[f64]) -> Vec<AxisLine> {
@@ -193,7 +193,7 @@ mod tests {
     #[test]
     fn paper_robot_axes_rebuild_an_equivalent_model() {
         let nominal = RobotDescription::asea_irb6l().nominal_model();
-        let actual = TruthRobot::paper_robot().model();
+        let actual = crate::sim::paper_robot().phi_model();
         let q_ref = [0.1, -0.2, 0.15, 0.3, -0.25, 0.4];
         let m = model_from_axes(&nominal, &axes_of(&actual, &q_ref), &q_ref).unwrap();
         let (am, aa) = (axes_of(&m, &q_ref), axes_of(&actual, &q_ref));

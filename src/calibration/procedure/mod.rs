@@ -6,7 +6,7 @@
 //! Conventions (see README): the calibrated joint values at the reference pose are the
 //! reference commands; `theta_act_k = f_k^-1(u_k - offset_k)` and
 //! `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`, the same semantics as the truth model,
-//! so a calibrated robot is expressed as a [`TruthRobot`]-shaped model (a data type; no truth
+//! so a calibrated robot is expressed as a [`RobotModel`]-shaped model (a data type; no truth
 //! value is read).
 //!
 //! Repeatability ([`CalibrationOptions::repeatability_sigma_rad`], default the description's
@@ -39,12 +39,12 @@ use super::arc_model::MeasurementNoise;
 use super::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
 use super::transmission_fit::TransmissionForm;
 use super::{CalibrationError, angles, fit_arc_with_angle_noise, fit_axis_paper, fit_circle, fit_transmission};
-use crate::campaign::commands_to_internal;
 use crate::kinematics::{AxisLine, JointKind, rigid_fit};
 use crate::measurement::MeasurementSet;
+use crate::robot::commands_to_internal;
 use crate::robot::{
-    Controller, CouplingFitForm, CouplingFunction, Placement, RobotDescription, Transmission, TransmissionFitForm,
-    TruthJoint, TruthRobot,
+    Controller, CouplingFitForm, CouplingFunction, JointModel, Placement, RobotDescription, RobotModel, Transmission,
+    TransmissionFitForm,
 };
 use nalgebra::{Isometry3, Point3};
 use serde::{Deserialize, Serialize};
@@ -355,7 +355,7 @@ pub fn calibrate(
     }
 
     // Ascending: joint k's zero needs the coupling into k, which needs joint k-1's zero.
-    let mut joints: Vec<TruthJoint> = Vec::with_capacity(n);
+    let mut joints: Vec<JointModel> = Vec::with_capacity(n);
     let mut couplings = Vec::new();
     let mut theta_ref: Vec<f64> = Vec::with_capacity(n);
     // The calibrated active angle of joint k is `f_k^-1(u) + shift[k]`.
@@ -404,7 +404,7 @@ pub fn calibrate(
         let c = theta_a_ref - raw_ref;
         theta_ref.push(theta_a_ref);
         shift.push(c);
-        joints.push(TruthJoint {
+        joints.push(JointModel {
             kind: desc.joints[k].kind,
             phi_deg: desc.joints[k].phi_deg,
             transmission: fit.transmission.shifted(c),
@@ -414,7 +414,7 @@ pub fn calibrate(
         });
     }
 
-    let mut robot = TruthRobot {
+    let mut robot = RobotModel {
         name: format!("{} (calibrated)", desc.name),
         joints,
         rows: geometry
@@ -576,7 +576,7 @@ fn gear_passive_start(ratio: f64, order: usize, active: &[f64], passive_from_sta
 fn tool_frame(
     set: &MeasurementSet,
     desc: &RobotDescription,
-    robot: &TruthRobot,
+    robot: &RobotModel,
     reference_cmd: &[f64],
     controller: &Controller,
 ) -> Option<ToolReport> {
@@ -601,7 +601,7 @@ fn tool_frame(
             let q = robot
                 .joint_values(controller, &commands_to_internal(desc, reference_cmd))
                 .ok()?;
-            let link = robot.model().poses(&q).world_from_link[desc.dof() - 1];
+            let link = robot.phi_model().poses(&q).world_from_link[desc.dof() - 1];
             return Some(ToolReport {
                 experiment: e.name.to_string(),
                 step,

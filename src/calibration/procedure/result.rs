@@ -9,7 +9,7 @@ use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
 use crate::calibration::{ArcFit, PaperAxisFit};
 use crate::kinematics::AxisLine;
-use crate::robot::{CouplingFunction, Transmission, TruthRobot};
+use crate::robot::{CouplingFunction, RobotModel, Transmission};
 use nalgebra::{Isometry3, Matrix2, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -202,7 +202,7 @@ pub struct ToolReport {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Calibration {
     /// The calibrated robot: actual rows, transmissions, couplings, offsets, tool.
-    pub robot: TruthRobot,
+    pub robot: RobotModel,
     /// The common reference pose (file units).
     pub reference_cmd: Vec<f64>,
     /// Per joint, base first.

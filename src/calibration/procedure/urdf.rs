@@ -82,7 +82,7 @@ mod tests {
     #[test]
     fn urdf_chain_reproduces_forward_kinematics() {
         let desc = RobotDescription::asea_irb6l();
-        let model = crate::robot::TruthRobot::paper_robot().model();
+        let model = crate::sim::paper_robot().phi_model();
         let text = urdf(&model, &desc, "t");
         let q = [0.3, -0.2, 0.4, 0.5, -0.6, 0.7];
         let mut t = Isometry3::identity();

@@ -1,0 +1,396 @@
+//! Blind check of the diagnoser (`axiscal blind`): draws cases (an effect, its joint and
+//! magnitude, a seed; no-effect cases; an out-of-set "unknown" effect), simulates each on the
+//! paper robot (analytic or rapier arm, [`Simulator`]), writes the CSV and hides the truth in a separate key,
+//! runs [`diagnose`](crate::diagnosis::diagnose) on the CSV alone and scores the answers
+//! ([`score`]). This module sees the truth; the diagnoser never does.
+
+mod score;
+
+pub use score::{BlindScore, CaseResult, ConfusionMatrix, case_table, score};
+
+use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
+use crate::physics::{
+    AxisWobble, BacklashEffect, ComplianceEffect, GearHarmonic, InstrumentScale, PayloadEffect, ThermalEffect,
+};
+use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
+use crate::robot::commands_to_internal;
+use crate::robot::{Controller, RobotDescription};
+use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, simulate_campaign_with};
+use rand::{Rng, RngExt, SeedableRng, rngs::StdRng};
+use serde::{Deserialize, Serialize};
+
+/// Effect names a case can carry (FORMATS.md section 3), plus `unknown`: an effect outside the
+/// candidate set, which the diagnoser should call `unexplained` (alternately a joint zero that
+/// drifts with temperature, [`JointZeroDrift`], and a curvature of the instrument's field,
+/// [`InstrumentSag`]).
+pub const CASE_EFFECTS: [&str; 8] = [
+    "none",
+    "joint_compliance",
+    "backlash",
+    "thermal_expansion",
+    "gear_harmonic",
+    "axis_wobble",
+    "instrument_scale",
+    "unknown",
+];
+
+/// The hidden truth of one case (`key.json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaseKey {
+    /// Case index.
+    pub case: usize,
+    /// Effect drawn (one of [`CASE_EFFECTS`]).
+    pub effect: String,
+    /// What a perfect diagnoser answers: the effect, `unexplained` for `unknown`.
+    pub expected: String,
+    /// Joint of the effect, if any.
+    pub joint: Option<usize>,
+    /// Magnitude in the effect's unit (`magnitude_unit`).
+    pub magnitude: f64,
+    /// Unit of `magnitude`.
+    pub magnitude_unit: String,
+    /// Seed of the simulation (pose draw, noise, jitter).
+    pub seed: u64,
+    /// The effects given to the simulator.
+    pub effects: Effects,
+    /// An out-of-set instrument error, if any.
+    #[serde(default)]
+    pub sag: Option<InstrumentSag>,
+    /// An out-of-set joint zero drift, if any.
+    #[serde(default)]
+    pub drift: Option<JointZeroDrift>,
+}
+
+/// An out-of-set joint error: the zero of `joint`'s encoder drifts with the ambient
+/// temperature, so at `T` the actuator stands `rad_per_k (T - 20)` away from where the same
+/// command put it at 20 deg C (the axis experiments' temperature); the passive couplings
+/// follow the actuator. The thermal-expansion candidate scales lengths, never turns a joint.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointZeroDrift {
+    /// 1-based joint.
+    pub joint: usize,
+    /// \[rad/K\] of the joint's own displacement.
+    pub rad_per_k: f64,
+}
+
+/// An out-of-set instrument error: a paraboloid sag of the measured field, every measured
+/// point moved down by `curvature_per_m |p_xy|^2` (`p_xy` its horizontal distance from the
+/// instrument origin).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InstrumentSag {
+    /// \[1/m\]: the sag in metres per square metre of horizontal distance.
+    pub curvature_per_m: f64,
+}
+
+impl InstrumentSag {
+    /// Applies the sag to a measured position \[mm\].
+    fn apply_mm(&self, p: &mut [f64; 3]) {
+        let r2_m2 = (p[0] * p[0] + p[1] * p[1]) * 1e-6;
+        p[2] -= self.curvature_per_m * r2_m2 * 1e3;
+    }
+}
+
+/// Log-uniform draw in `[lo, hi)`.
+fn log_uniform<R: Rng + ?Sized>(rng: &mut R, lo: f64, hi: f64) -> f64 {
+    (rng.random_range(lo.ln()..hi.ln())).exp()
+}
+
+/// A wobble of a random joint with a log-uniform amplitude in `amplitude_rad`.
+fn draw_wobble<R: Rng + ?Sized>(
+    rng: &mut R,
+    dof: usize,
+    amplitude_rad: [f64; 2],
+    phase_rad: f64,
+    order: i32,
+) -> AxisWobble {
+    let joint = rng.random_range(1..=dof);
+    AxisWobble {
+        joint,
+        amplitude_rad: log_uniform(rng, amplitude_rad[0], amplitude_rad[1]),
+        phase_rad,
+        order,
+    }
+}
+
+/// The paper robot's rated payload \[kg\] (the ASEA IRB 6 handles 6 kg), the largest
+/// validation payload of a blind case.
+pub const PAYLOAD_MAX_KG: f64 = 6.0;
+
+/// Settings of the generator.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlindOptions {
+    /// Validation poses per case (>= 100 for the suite).
+    pub validation_poses: usize,
+    /// Measurement noise, 3-D RMS \[mm\] (isotropic instrument).
+    pub noise_rms_3d_mm: f64,
+    /// Validation temperatures are drawn uniformly in `20 +- temperature_half_range_c`.
+    pub temperature_half_range_c: f64,
+    /// Validation payloads \[kg\] are drawn uniformly in `[0, payload_max_kg]`, the mass
+    /// centred on the tool frame's origin (the axis experiments carry none). Without a
+    /// payload change a joint-2 sag is a function of joint 2's angle alone (the four-bar takes
+    /// link 3's moment to actuator 3), which the calibration fits into joint 2's transmission:
+    /// it is visible only when the arm nearly buckles under its own weight.
+    pub payload_max_kg: f64,
+    /// The simulated robot.
+    pub simulator: Simulator,
+}
+
+/// The simulated robot of a blind suite.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Simulator {
+    /// [`AnalyticArm`]: the truth's kinematics with the effects to first order (compliance
+    /// by `coupled_first_order_deflection`).
+    #[default]
+    Analytic,
+    /// [`crate::sim::RapierArm`]: rapier bodies, the four-bar as bodies, compliance by the
+    /// servos' static equilibrium.
+    Rapier,
+}
+
+impl Default for BlindOptions {
+    fn default() -> Self {
+        BlindOptions {
+            validation_poses: 100,
+            noise_rms_3d_mm: 0.19,
+            temperature_half_range_c: 10.0,
+            payload_max_kg: PAYLOAD_MAX_KG,
+            simulator: Simulator::Analytic,
+        }
+    }
+}
+
+/// Draws case `case` of a suite seeded `seed`: effects cycle through [`CASE_EFFECTS`]
+/// (so every effect appears), joints and magnitudes are random.
+pub fn draw_case(seed: u64, case: usize, desc: &RobotDescription) -> CaseKey {
+    let case_seed = crate::harness::scenario::trial_seed(seed, case);
+    let mut rng = StdRng::seed_from_u64(case_seed ^ 0x5eed_b11d);
+    let effect = CASE_EFFECTS[case % CASE_EFFECTS.len()];
+    draw_effect(effect, case, case_seed, desc, &mut rng)
+}
+
+/// A case with a given effect (magnitudes drawn from `rng`).
+pub fn draw_effect<R: Rng + ?Sized>(
+    effect: &str,
+    case: usize,
+    seed: u64,
+    desc: &RobotDescription,
+    rng: &mut R,
+) -> CaseKey {
+    // Magnitudes are log-uniform over ranges spanning each effect's detectable size on this
+    // campaign (from about a third of it to ten times it; README "Blind check").
+    let dof = desc.dof();
+    let mut e = Effects::default();
+    let mut sag = None;
+    let mut drift = None;
+    let phase = rng.random_range(0.0..std::f64::consts::TAU);
+    let (joint, magnitude, unit) = match effect {
+        "joint_compliance" => {
+            // Joints 2 and 3 carry the gravity load of the arm.
+            let joint = rng.random_range(2..=3);
+            // The refit absorbs the part of a sag that follows the joint angles alone; the
+            // validation payloads (`BlindOptions::payload_max_kg`) leave the rest. On this
+            // campaign joint 2's detectable stiffness is about 3e4 N m/rad, joint 3's about
+            // 2e5 (development suite, seed 7): draws from about a third of it to ten times.
+            let k = if joint == 2 {
+                log_uniform(rng, 8.0e3, 1.0e5)
+            } else {
+                log_uniform(rng, 2.0e4, 6.0e5)
+            };
+            let mut stiffness = vec![1e12; dof];
+            stiffness[joint - 1] = k;
+            e.compliance = Some(ComplianceEffect {
+                stiffness_nm_per_rad: stiffness,
+                gravity_m_s2: crate::diagnosis::GRAVITY_M_S2,
+            });
+            (Some(joint), k, "N m/rad")
+        }
+        "backlash" => {
+            let joint = rng.random_range(1..=dof);
+            let band = log_uniform(rng, 1.0e-4, 3.0e-3);
+            let mut b = vec![0.0; dof];
+            b[joint - 1] = band;
+            e.backlash = Some(BacklashEffect { band_rad: b });
+            (Some(joint), band, "rad (band)")
+        }
+        "thermal_expansion" => {
+            let alpha = log_uniform(rng, 4.0e-6, 1.0e-4);
+            e.thermal = Some(ThermalEffect {
+                alpha_per_k: alpha,
+                reference_c: 20.0,
+            });
+            (None, alpha, "1/K")
+        }
+        "gear_harmonic" => {
+            let joint = rng.random_range(1..=dof);
+            let a = log_uniform(rng, 3.0e-4, 1.0e-2);
+            e.gear_harmonics.push(GearHarmonic {
+                joint,
+                order: crate::diagnosis::unmodelled_harmonic_order(desc, joint),
+                sin_rad: a * phase.sin(),
+                cos_rad: a * phase.cos(),
+            });
+            (Some(joint), a, "rad")
+        }
+        "axis_wobble" => {
+            let w = draw_wobble(rng, dof, [4.0e-4, 1.0e-2], phase, crate::diagnosis::WOBBLE_ORDER);
+            e.wobble.push(w);
+            (Some(w.joint), w.amplitude_rad, "rad")
+        }
+        "unknown" if (case / CASE_EFFECTS.len()) % 2 == 1 => {
+            let c = log_uniform(rng, 2.0e-4, 2.0e-3);
+            sag = Some(InstrumentSag { curvature_per_m: c });
+            (None, c, "1/m (instrument sag)")
+        }
+        "unknown" => {
+            // 0.1-3 mrad over the validation's +-10 K; detectable from about 2e-5 rad/K at
+            // joint 3 to 2.4e-4 at joint 6 (development suite, seed 7).
+            let joint = rng.random_range(1..=dof);
+            let rate = log_uniform(rng, 1.0e-5, 3.0e-4) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            drift = Some(JointZeroDrift { joint, rad_per_k: rate });
+            (Some(joint), rate, "rad/K (joint zero drift)")
+        }
+        "instrument_scale" => {
+            let ppm = log_uniform(rng, 200.0, 6000.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            e.instrument_scale = Some(InstrumentScale { ppm });
+            (None, ppm, "ppm")
+        }
+        _ => (None, 0.0, "-"),
+    };
+    CaseKey {
+        case,
+        effect: effect.to_owned(),
+        expected: if effect == "unknown" {
+            "unexplained".into()
+        } else {
+            effect.to_owned()
+        },
+        joint,
+        magnitude,
+        magnitude_unit: unit.into(),
+        seed,
+        effects: e,
+        sag,
+        drift,
+    }
+}
+
+/// Simulates a case: the Table-1 axis experiments and the tool observation at 20 deg C without
+/// payload, then `validation_poses` workspace poses at random temperatures and payloads
+/// ([`BlindOptions`]), on the paper robot through the options' [`Simulator`] with the case's
+/// effects (no repeatability jitter; a [`JointZeroDrift`] offsets the executed command),
+/// measured with isotropic noise (and the instrument scale error or sag, if any).
+pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOptions) -> Result<MeasurementSet, String> {
+    // The diagnoser's noise model is the instrument's: no repeatability jitter.
+    let mut truth = crate::sim::paper_robot();
+    for j in &mut truth.joints {
+        j.repeatability_sigma = 0.0;
+    }
+    // The validation payloads sit on the tool frame's origin (they load only compliant joints).
+    let effects = Effects {
+        payload: Some(PayloadEffect::default()),
+        ..key.effects.clone()
+    };
+    match options.simulator {
+        Simulator::Analytic => {
+            let mut arm = AnalyticArm::new(truth, Controller::from_description(desc)).with_effects(effects, desc);
+            simulate_on(&mut arm, key, desc, options)
+        }
+        Simulator::Rapier => {
+            let options_rapier = crate::sim::RapierArmOptions::new(desc.dof());
+            let mut arm = crate::sim::RapierArm::new(truth, desc, effects, options_rapier);
+            simulate_on(&mut arm, key, desc, options)
+        }
+    }
+}
+
+fn simulate_on<A: ArmExecutor>(
+    arm: &mut A,
+    key: &CaseKey,
+    desc: &RobotDescription,
+    options: &BlindOptions,
+) -> Result<MeasurementSet, String> {
+    let instrument = MeasurementModel::Isotropic(crate::measurement::IsotropicNoise {
+        net_radial_rms_mm: options.noise_rms_3d_mm,
+    });
+    let plan = CalibrationPlan::table1(desc.dof());
+    let mut rng = StdRng::seed_from_u64(key.seed);
+    let none = ValidationPlan {
+        poses: 0,
+        ..ValidationPlan::workspace_default(desc.dof())
+    };
+    let campaign = CampaignOptions {
+        conditions: PoseConditions::default(),
+        instrument_scale: key.effects.instrument_scale,
+    };
+    let mut out =
+        simulate_campaign_with(desc, &plan, &none, arm, &instrument, &campaign, &mut rng).map_err(|e| e.to_string())?;
+    let validation = ValidationPlan {
+        poses: options.validation_poses,
+        seed: key.seed ^ 0x7a11,
+        ..ValidationPlan::workspace_default(desc.dof())
+    };
+    let scale = 1.0 + key.effects.instrument_scale.map_or(0.0, |s| s.ppm * 1e-6);
+    for (step, cmd) in validation.commands(desc, &plan.reference).into_iter().enumerate() {
+        let conditions = PoseConditions {
+            temperature_c: 20.0 + rng.random_range(-1.0..=1.0) * options.temperature_half_range_c,
+            payload_kg: rng.random_range(0.0..=1.0) * options.payload_max_kg,
+        };
+        let mut executed = commands_to_internal(desc, &cmd);
+        if let Some(d) = &key.drift {
+            executed[d.joint - 1] += d.rad_per_k * (conditions.temperature_c - PoseConditions::default().temperature_c);
+        }
+        let links = arm
+            .execute(&executed, &conditions, &mut rng)
+            .map_err(|e| e.to_string())?;
+        let tool = links[desc.dof() - 1] * arm.last_link_from_tool();
+        for (id, t) in desc.tool_targets_m().iter().enumerate() {
+            let p = instrument.measure(&(tool * t), &mut rng).map_err(|e| e.to_string())?;
+            out.rows.push(Measurement {
+                experiment: "validation".into(),
+                moved_joint: 0,
+                step,
+                target: id,
+                position_mm: [p.x * 1e3 * scale, p.y * 1e3 * scale, p.z * 1e3 * scale],
+                cmd: cmd.clone(),
+                payload_kg: conditions.payload_kg,
+                temperature_c: conditions.temperature_c,
+            });
+        }
+    }
+    if let Some(sag) = &key.sag {
+        for m in &mut out.rows {
+            sag.apply_mm(&mut m.position_mm);
+        }
+    }
+    MeasurementSet::new(desc.dof(), out.rows).map_err(|e| e.to_string())
+}
+
+/// How large a case's effect is against what the diagnoser can see: its trace after the
+/// baseline refit (held-out RMS of the baseline on the case simulated WITHOUT noise) over the
+/// smallest gap the diagnoser's gap test flags (`detectable_gap_mm`, from its diagnosis of
+/// the noisy case), and the magnitude at which that ratio is 1 (the trace is linear in the
+/// effect: in its magnitude, or in the compliance `1 / stiffness`). `None` without an effect.
+pub fn detectable_size(
+    key: &CaseKey,
+    desc: &RobotDescription,
+    options: &BlindOptions,
+    diagnosis: &crate::diagnosis::DiagnosisOptions,
+    detectable_gap_mm: f64,
+) -> Result<Option<(f64, f64)>, String> {
+    if key.effect == "none" {
+        return Ok(None);
+    }
+    let clean = BlindOptions {
+        noise_rms_3d_mm: 0.0,
+        ..options.clone()
+    };
+    let set = simulate_case(key, desc, &clean)?;
+    let trace_mm = crate::diagnosis::baseline_heldout_rms_mm(&set, desc, diagnosis).map_err(|e| e.to_string())?;
+    let ratio = trace_mm / detectable_gap_mm;
+    let magnitude = if key.effect == "joint_compliance" {
+        key.magnitude * ratio
+    } else {
+        key.magnitude / ratio
+    };
+    Ok(Some((ratio, magnitude)))
+}

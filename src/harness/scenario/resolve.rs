@@ -1,0 +1,378 @@
+//! Resolution: scenario file + command-line overrides -> one checked, self-contained
+//! [`ResolvedScenario`] (the robot, truth and instrument inlined, the sweep expanded into
+//! cases), in the manner of ripgrep's low-level -> high-level arguments. The resolved scenario
+//! is what runs, what is dumped to `results/<name>/scenario.resolved.toml`, and what
+//! `axiscal merge` reads back.
+
+use super::error::ScenarioError;
+use super::file::{
+    ConditionsSection, Instrument, MeasurementSection, PlanSection, ScenarioFile, SimMode, TruthSection,
+};
+use super::threshold::Threshold;
+use crate::measurement::{IsotropicNoise, MeasurementModel, PAPER_RIGHT_STATION_MM, ReferenceVolume, TheodolitePair};
+use crate::plan::{CalibrationPlan, ValidationPlan};
+use crate::robot::{RobotDescription, RobotModel};
+use crate::sim::Effects;
+use crate::sim::{PerturbationSpec, perturb};
+use nalgebra::{Point3, Vector3};
+use rand::{SeedableRng, rngs::StdRng};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Command-line values that replace the file's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Overrides {
+    /// Trials per case.
+    pub trials: Option<usize>,
+    /// Scenario seed.
+    pub seed: Option<u64>,
+}
+
+/// The simulated real robot of every trial.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ResolvedTruth {
+    /// The same robot in every trial.
+    Fixed {
+        /// The truth model.
+        robot: RobotModel,
+    },
+    /// A robot drawn per trial around the nominal description.
+    Perturbed {
+        /// The distributions.
+        perturbation: Box<PerturbationSpec>,
+    },
+}
+
+/// One case of a scenario: one value of the swept parameter.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    /// `base`, or `<parameter>=<value>`.
+    pub name: String,
+    /// The instrument.
+    pub measurement: MeasurementModel,
+    /// The calibration plan.
+    pub plan: CalibrationPlan,
+}
+
+/// A checked, self-contained scenario (see module docs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ResolvedScenario {
+    /// Name (results folder).
+    pub name: String,
+    /// What it studies.
+    pub description: String,
+    /// Trials per case.
+    pub trials: usize,
+    /// Scenario seed.
+    pub seed: u64,
+    /// Simulator.
+    pub sim: SimMode,
+    /// The histogram metric.
+    pub main_metric: String,
+    /// Unmodelled effects.
+    pub effects: Effects,
+    /// Pose conditions.
+    pub conditions: ConditionsSection,
+    /// Rapier line of sight on.
+    pub occlusion: bool,
+    /// Pass/fail criteria.
+    pub thresholds: Vec<Threshold>,
+    /// The nominal robot (what the controller, the plan and the calibrator know).
+    pub robot: RobotDescription,
+    /// The real robot.
+    pub truth: ResolvedTruth,
+    /// Validation poses.
+    pub validation: ValidationPlan,
+    /// The cases, in sweep order.
+    pub cases: Vec<Case>,
+}
+
+/// Metric plotted when the file names none.
+pub const DEFAULT_MAIN_METRIC: &str = "uncal_pos_rms_mm";
+
+impl ResolvedScenario {
+    /// Reads `path` and resolves it with `overrides`.
+    pub fn from_file(path: &Path, overrides: Overrides) -> Result<Self, ScenarioError> {
+        let file: ScenarioFile = crate::toml_file::parse(&crate::toml_file::read(path)?, path)?;
+        Self::resolve(file, path, overrides)
+    }
+
+    /// Resolves a parsed file; `path` locates relative paths and labels errors.
+    pub fn resolve(file: ScenarioFile, path: &Path, overrides: Overrides) -> Result<Self, ScenarioError> {
+        let invalid = |key: &str, message: String| ScenarioError::Invalid {
+            path: path.to_owned(),
+            key: key.to_owned(),
+            message,
+        };
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let robot = match &file.robot {
+            Some(p) => RobotDescription::from_file(&dir.join(p)).map_err(|e| invalid("robot", e.to_string()))?,
+            None => RobotDescription::asea_irb6l(),
+        };
+        let trials = overrides.trials.unwrap_or(file.trials);
+        if trials == 0 {
+            return Err(invalid("trials", "must be at least 1".into()));
+        }
+        file.effects
+            .validate(robot.dof())
+            .map_err(|e| invalid("effects", e.to_string()))?;
+        let c = file.conditions;
+        if !(c.payload_kg.is_finite() && c.payload_kg >= 0.0) {
+            return Err(invalid("conditions.payload_kg", "must be finite and >= 0".into()));
+        }
+        if !(c.temperature_c.is_finite() && c.temperature_c > -273.15) {
+            return Err(invalid(
+                "conditions.temperature_c",
+                "must be a finite temperature above absolute zero".into(),
+            ));
+        }
+
+        let truth = resolve_truth(&file.truth, &robot, dir).map_err(|(k, m)| invalid(k, m))?;
+        let validation = file
+            .validation
+            .clone()
+            .unwrap_or_else(|| ValidationPlan::workspace_default(robot.dof()));
+        if validation.poses == 0 || validation.half_range.len() != robot.dof() {
+            return Err(invalid(
+                "validation",
+                format!("needs poses >= 1 and {} half_range values", robot.dof()),
+            ));
+        }
+        let cases = resolve_cases(&file, &robot).map_err(|(k, m)| invalid(&k, m))?;
+        for (i, t) in file.thresholds.iter().enumerate() {
+            if !t.value.is_finite() {
+                return Err(invalid(&format!("thresholds[{i}].value"), "must be finite".into()));
+            }
+            if let Some(c) = &t.case
+                && !cases.iter().any(|k| &k.name == c)
+            {
+                let names: Vec<&str> = cases.iter().map(|k| k.name.as_str()).collect();
+                return Err(invalid(
+                    &format!("thresholds[{i}].case"),
+                    format!("no case {c:?} (cases: {names:?})"),
+                ));
+            }
+        }
+        let name = file.name.clone().unwrap_or_else(|| {
+            path.file_stem()
+                .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().into_owned())
+        });
+        if name.is_empty() || name.contains(['/', '\\']) {
+            return Err(invalid("name", "must be a non-empty folder name".into()));
+        }
+        Ok(ResolvedScenario {
+            name,
+            description: file.description.clone(),
+            trials,
+            seed: overrides.seed.unwrap_or(file.seed),
+            sim: file.sim,
+            main_metric: file.main_metric.clone().unwrap_or_else(|| DEFAULT_MAIN_METRIC.into()),
+            effects: file.effects.clone(),
+            conditions: file.conditions,
+            occlusion: file.occlusion,
+            thresholds: file.thresholds.clone(),
+            robot,
+            truth,
+            validation,
+            cases,
+        })
+    }
+
+    /// Checks that the thresholds and the main metric name metrics the trial produces.
+    pub fn check_metrics(&self, names: &[String], path: &Path) -> Result<(), ScenarioError> {
+        let known = |m: &str| names.iter().any(|n| n == m);
+        let invalid = |key: String, m: &str| ScenarioError::Invalid {
+            path: path.to_owned(),
+            key,
+            message: format!("unknown metric {m:?} (metrics: {})", names.join(", ")),
+        };
+        if !known(&self.main_metric) {
+            return Err(invalid("main_metric".into(), &self.main_metric));
+        }
+        for (i, t) in self.thresholds.iter().enumerate() {
+            if !known(&t.metric) {
+                return Err(invalid(format!("thresholds[{i}].metric"), &t.metric));
+            }
+        }
+        Ok(())
+    }
+
+    /// Total number of trial units (`cases x trials`); unit `u` is trial `u % trials` of case
+    /// `u / trials`.
+    pub fn units(&self) -> usize {
+        self.cases.len() * self.trials
+    }
+
+    /// The resolved scenario as TOML (the dump in the results folder).
+    pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
+        toml::to_string(self)
+    }
+
+    /// Reads a dumped resolved scenario (e.g. a shard's).
+    pub fn from_resolved_file(path: &Path) -> Result<Self, ScenarioError> {
+        Ok(crate::toml_file::parse(&crate::toml_file::read(path)?, path)?)
+    }
+}
+
+fn resolve_truth(
+    truth: &TruthSection,
+    robot: &RobotDescription,
+    dir: &Path,
+) -> Result<ResolvedTruth, (&'static str, String)> {
+    Ok(match truth {
+        TruthSection::Paper => ResolvedTruth::Fixed {
+            robot: crate::sim::paper_robot(),
+        },
+        TruthSection::File { path } => ResolvedTruth::Fixed {
+            robot: RobotModel::from_file(&dir.join(path)).map_err(|e| ("truth.path", e.to_string()))?,
+        },
+        TruthSection::Perturbed { perturbation } => {
+            // One throw-away draw checks the spec against the robot before any trial runs.
+            perturb(robot, perturbation, &mut StdRng::seed_from_u64(0))
+                .map_err(|e| ("truth.perturbation", e.to_string()))?;
+            ResolvedTruth::Perturbed {
+                perturbation: perturbation.clone(),
+            }
+        }
+    })
+}
+
+type KeyError = (String, String);
+
+fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription) -> Result<Vec<Case>, KeyError> {
+    let base_plan = base_plan(&file.plan, robot)?;
+    let sweep = file.sweep.clone().unwrap_or_default();
+    let set = [
+        sweep.net_radial_rms_mm.is_some(),
+        sweep.span_scale.is_some(),
+        sweep.spans.is_some(),
+    ];
+    let count = set.iter().filter(|s| **s).count();
+    if file.sweep.is_some() && count != 1 {
+        return Err((
+            "sweep".into(),
+            format!("set exactly one of net_radial_rms_mm, span_scale, spans (found {count})"),
+        ));
+    }
+    let mut cases = Vec::new();
+    // `keys` = (key blamed for a bad plan, key blamed for a bad instrument).
+    let mut push =
+        |name: String, m: MeasurementSection, plan: CalibrationPlan, keys: (&str, &str)| -> Result<(), KeyError> {
+            plan.validate(robot).map_err(|e| (keys.0.to_owned(), e.to_string()))?;
+            cases.push(Case {
+                name,
+                measurement: measurement_model(&m, robot).map_err(|e| (keys.1.to_owned(), e))?,
+                plan,
+            });
+            Ok(())
+        };
+    const NOISE: &str = "measurement.net_radial_rms_mm";
+    if let Some(values) = &sweep.net_radial_rms_mm {
+        for v in nonempty(values, "sweep.net_radial_rms_mm")? {
+            let m = MeasurementSection {
+                net_radial_rms_mm: *v,
+                ..file.measurement
+            };
+            push(
+                format!("net_radial_rms_mm={v}"),
+                m,
+                base_plan.clone(),
+                ("plan", "sweep.net_radial_rms_mm"),
+            )?;
+        }
+    } else if let Some(values) = &sweep.span_scale {
+        for v in nonempty(values, "sweep.span_scale")? {
+            let plan = scaled(&base_plan, *v).map_err(|m| ("sweep.span_scale".to_owned(), m))?;
+            push(
+                format!("span_scale={v}"),
+                file.measurement,
+                plan,
+                ("sweep.span_scale", NOISE),
+            )?;
+        }
+    } else if let Some(lists) = &sweep.spans {
+        for (i, spans) in nonempty(lists, "sweep.spans")?.iter().enumerate() {
+            if spans.len() != base_plan.sweeps.len() {
+                return Err((
+                    "sweep.spans".into(),
+                    format!(
+                        "list {i} has {} spans, the plan has {} sweeps",
+                        spans.len(),
+                        base_plan.sweeps.len()
+                    ),
+                ));
+            }
+            let mut plan = base_plan.clone();
+            for (s, span) in plan.sweeps.iter_mut().zip(spans) {
+                s.span = *span;
+            }
+            push(format!("spans={i}"), file.measurement, plan, ("sweep.spans", NOISE))?;
+        }
+    } else {
+        push("base".into(), file.measurement, base_plan, ("plan", NOISE))?;
+    }
+    Ok(cases)
+}
+
+fn nonempty<'a, T>(values: &'a [T], key: &str) -> Result<&'a [T], KeyError> {
+    if values.is_empty() {
+        Err((key.to_owned(), "needs at least one value".into()))
+    } else {
+        Ok(values)
+    }
+}
+
+fn base_plan(section: &PlanSection, robot: &RobotDescription) -> Result<CalibrationPlan, KeyError> {
+    let table1 = CalibrationPlan::table1(robot.dof());
+    let plan = CalibrationPlan {
+        reference: section.reference.clone().unwrap_or(table1.reference),
+        sweeps: section.sweeps.clone().unwrap_or(table1.sweeps),
+    };
+    scaled(&plan, section.span_scale).map_err(|m| ("plan.span_scale".into(), m))
+}
+
+fn scaled(plan: &CalibrationPlan, scale: f64) -> Result<CalibrationPlan, String> {
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(format!("span scale {scale} must be finite and > 0"));
+    }
+    let mut plan = plan.clone();
+    for s in &mut plan.sweeps {
+        s.span *= scale;
+        s.start = s.start.map(|x| x * scale);
+    }
+    Ok(plan)
+}
+
+/// The instrument of a measurement section: theodolites at the paper's stations calibrated
+/// over the 2 m cube around the robot's placement, or isotropic noise.
+fn measurement_model(m: &MeasurementSection, robot: &RobotDescription) -> Result<MeasurementModel, String> {
+    let rms_mm = m.net_radial_rms_mm;
+    if !(rms_mm.is_finite() && rms_mm > 0.0) {
+        return Err(format!("net radial error {rms_mm} mm must be finite and > 0"));
+    }
+    Ok(match m.instrument {
+        Instrument::Isotropic => MeasurementModel::Isotropic(IsotropicNoise {
+            net_radial_rms_mm: rms_mm,
+        }),
+        Instrument::Theodolite => {
+            let base_m = Point3::from(Vector3::from(robot.placement.translation_mm)) * 1e-3;
+            let (pair, _) = TheodolitePair::calibrated(
+                Point3::origin(),
+                Point3::from(Vector3::from(PAPER_RIGHT_STATION_MM)) * 1e-3,
+                1.0,
+                rms_mm * 1e-3,
+                &ReferenceVolume::around_robot_base(&base_m),
+            )
+            .map_err(|e| format!("calibrating the theodolites: {e}"))?;
+            MeasurementModel::Theodolite(pair)
+        }
+    })
+}
+
+/// Where a scenario's results go by default: `results/<name>`.
+pub fn default_results_dir(name: &str) -> PathBuf {
+    Path::new("results").join(name)
+}

@@ -1,0 +1,226 @@
+//! The trial function: one simulated campaign per (case, seed), reduced to named metrics.
+//!
+//! [`Trial`] is the pluggable part of the Monte-Carlo harness; [`CampaignTrial`] is the
+//! real one: draw the truth robot, simulate the campaign on it, calibrate, and compare the
+//! nominal and the calibrated models' predictions of the validation targets with their
+//! measurements.
+
+use super::error::TrialError;
+use super::file::SimMode;
+use super::metrics::Metrics;
+use super::resolve::{Case, ResolvedScenario, ResolvedTruth};
+use super::validation_error::validation_errors;
+use crate::calibration::procedure::{CalibrationOptions, calibrate};
+use crate::kinematics::PhiModel;
+use crate::measurement::MeasurementSet;
+use crate::plan::{PoseConditions, ValidationPlan};
+use crate::robot::commands_to_internal;
+use crate::robot::{Controller, RobotDescription, RobotModel};
+use crate::sim::perturb;
+use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, CampaignOutput, Effects, simulate_campaign_with};
+use crate::sim::{RapierArm, RapierArmOptions};
+use rand::{SeedableRng, rngs::StdRng};
+
+/// One Monte-Carlo trial: a pure function of the case and the seed (thread-safe, no I/O).
+pub trait Trial: Sync {
+    /// Names of the metrics every run returns, in order (the columns of `trials.csv`).
+    fn metric_names(&self) -> Vec<String>;
+
+    /// Runs the trial of `case` seeded with `seed`; the metrics follow
+    /// [`Trial::metric_names`].
+    fn run(&self, case: &Case, seed: u64) -> Result<Metrics, String>;
+}
+
+/// The metrics of [`CampaignTrial`], in column order. `uncal_*`: the nominal model's
+/// prediction of the validation targets from the commands; `cal_*`: the calibrated model's
+/// (through the same controller), i.e. what the fig. 5 compensation can achieve to first
+/// order.
+pub const CAMPAIGN_METRICS: [&str; 10] = [
+    "uncal_pos_rms_mm",
+    "uncal_pos_max_mm",
+    "uncal_orient_rms_rad",
+    "uncal_orient_max_rad",
+    "cal_pos_rms_mm",
+    "cal_pos_max_mm",
+    "cal_orient_rms_rad",
+    "cal_orient_max_rad",
+    "measurements",
+    "occluded",
+];
+
+/// Simulates the scenario's campaign on a truth robot and measures the uncalibrated error.
+///
+/// Per trial: an rng seeded with the trial seed draws the truth robot (a fixed robot draws
+/// nothing; a fleet draws [`perturb`]), then the campaign's repeatability jitter and
+/// measurement noise, in that order.
+#[derive(Clone, Debug)]
+pub struct CampaignTrial {
+    desc: RobotDescription,
+    nominal: PhiModel,
+    controller: Controller,
+    truth: ResolvedTruth,
+    validation: ValidationPlan,
+    sim: SimMode,
+    effects: Effects,
+    options: CampaignOptions,
+    occlusion: bool,
+}
+
+impl CampaignTrial {
+    /// The trial of `scenario` (analytic or rapier arm, as its `sim` key says).
+    pub fn new(scenario: &ResolvedScenario) -> Result<Self, String> {
+        Ok(CampaignTrial {
+            desc: scenario.robot.clone(),
+            nominal: scenario.robot.nominal_model(),
+            controller: Controller::from_description(&scenario.robot),
+            truth: scenario.truth.clone(),
+            validation: scenario.validation.clone(),
+            sim: scenario.sim,
+            effects: scenario.effects.clone(),
+            options: CampaignOptions {
+                conditions: PoseConditions {
+                    payload_kg: scenario.conditions.payload_kg,
+                    temperature_c: scenario.conditions.temperature_c,
+                },
+                instrument_scale: scenario.effects.instrument_scale,
+            },
+            occlusion: scenario.occlusion,
+        })
+    }
+
+    fn draw_truth(&self, rng: &mut StdRng) -> Result<RobotModel, String> {
+        match &self.truth {
+            ResolvedTruth::Fixed { robot } => Ok(robot.clone()),
+            ResolvedTruth::Perturbed { perturbation } => {
+                perturb(&self.desc, perturbation, rng).map_err(|e| format!("drawing the robot: {e}"))
+            }
+        }
+    }
+
+    /// Simulates the campaign of `case` on `arm` and reduces it to metrics.
+    fn run_on<A: ArmExecutor>(&self, mut arm: A, case: &Case, rng: &mut StdRng) -> Result<Metrics, String> {
+        let out = simulate_campaign_with(
+            &self.desc,
+            &case.plan,
+            &self.validation,
+            &mut arm,
+            &case.measurement,
+            &self.options,
+            rng,
+        )
+        .map_err(|e| format!("simulating the campaign: {e}"))?;
+        let set =
+            MeasurementSet::new(self.desc.dof(), out.rows.clone()).map_err(|e| format!("measurement set: {e}"))?;
+        // The calibrator is told the instrument's 3-D RMS noise where the robot stands.
+        let base = nalgebra::Point3::from(self.desc.placement.to_isometry().translation.vector);
+        let noise_mm = case
+            .measurement
+            .covariance_m2(&base)
+            .map_err(|e| format!("measurement noise at the robot: {e}"))?
+            .trace()
+            .sqrt()
+            * 1e3;
+        let options = CalibrationOptions {
+            noise_rms_3d_mm: noise_mm,
+            ..CalibrationOptions::default()
+        };
+        let cal = calibrate(&set, &self.desc, &options).map_err(|e| format!("calibrating: {e}"))?;
+        Ok(self.metrics(&out, &cal.robot))
+    }
+
+    fn metrics(&self, out: &CampaignOutput, calibrated: &RobotModel) -> Metrics {
+        let targets = self.desc.tool_targets_m();
+        let e = validation_errors(&out.rows, &targets, |cmd| {
+            // Nominally the robot reaches exactly the commanded joint values (FORMATS.md 2).
+            self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
+        });
+        let model = calibrated.phi_model();
+        let c = validation_errors(&out.rows, &targets, |cmd| {
+            match calibrated.joint_values(&self.controller, &commands_to_internal(&self.desc, cmd)) {
+                Ok(q) => model.world_from_tool(&q),
+                // A command the calibrated transmissions cannot invert: no prediction (NaN
+                // metrics fail every threshold, as they should).
+                Err(_) => nalgebra::Isometry3::translation(f64::NAN, f64::NAN, f64::NAN),
+            }
+        });
+        let mut m = Metrics::new();
+        m.push(CAMPAIGN_METRICS[0], e.pos_rms_mm);
+        m.push(CAMPAIGN_METRICS[1], e.pos_max_mm);
+        m.push(CAMPAIGN_METRICS[2], e.orient_rms_rad);
+        m.push(CAMPAIGN_METRICS[3], e.orient_max_rad);
+        m.push(CAMPAIGN_METRICS[4], c.pos_rms_mm);
+        m.push(CAMPAIGN_METRICS[5], c.pos_max_mm);
+        m.push(CAMPAIGN_METRICS[6], c.orient_rms_rad);
+        m.push(CAMPAIGN_METRICS[7], c.orient_max_rad);
+        m.push(CAMPAIGN_METRICS[8], out.rows.len() as f64);
+        m.push(
+            CAMPAIGN_METRICS[9],
+            out.occluded.iter().map(|(_, n)| *n).sum::<usize>() as f64,
+        );
+        m
+    }
+}
+
+impl Trial for CampaignTrial {
+    fn metric_names(&self) -> Vec<String> {
+        CAMPAIGN_METRICS.iter().map(|s| (*s).to_owned()).collect()
+    }
+
+    fn run(&self, case: &Case, seed: u64) -> Result<Metrics, String> {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let truth = self.draw_truth(&mut rng)?;
+        match self.sim {
+            SimMode::Analytic => {
+                let arm =
+                    AnalyticArm::new(truth, self.controller.clone()).with_effects(self.effects.clone(), &self.desc);
+                self.run_on(arm, case, &mut rng)
+            }
+            SimMode::Rapier => {
+                let options = RapierArmOptions {
+                    stations_m: if self.occlusion {
+                        case.measurement.stations_m()
+                    } else {
+                        vec![]
+                    },
+                    ..RapierArmOptions::new(self.desc.dof())
+                };
+                self.run_on(
+                    RapierArm::new(truth, &self.desc, self.effects.clone(), options),
+                    case,
+                    &mut rng,
+                )
+            }
+        }
+    }
+}
+
+/// Runs `trial` for unit `unit` of `scenario` (see [`ResolvedScenario::units`]) and checks its
+/// metric names.
+pub(crate) fn run_unit<T: Trial + ?Sized>(
+    scenario: &ResolvedScenario,
+    trial: &T,
+    names: &[String],
+    unit: usize,
+) -> Result<super::metrics::TrialRecord, TrialError> {
+    let (case, index) = (unit / scenario.trials, unit % scenario.trials);
+    let seed = super::seed::trial_seed(scenario.seed, index);
+    let err = |message: String| TrialError {
+        case: scenario.cases[case].name.clone(),
+        trial: index,
+        seed,
+        message,
+    };
+    let metrics = trial.run(&scenario.cases[case], seed).map_err(err)?;
+    if metrics.names() != names {
+        return Err(err(format!(
+            "returned metrics {:?}, declared {names:?}",
+            metrics.names()
+        )));
+    }
+    Ok(super::metrics::TrialRecord {
+        case,
+        trial: index,
+        seed,
+        values: metrics.values(),
+    })
+}

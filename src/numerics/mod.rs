@@ -1,0 +1,6 @@
+//! Numerical tools shared by the maths: dense least squares (one Levenberg-Marquardt /
+//! Gauss-Newton loop, covariances, condition numbers) and sample statistics with named
+//! quantile definitions.
+
+pub mod lsq;
+pub mod stats;

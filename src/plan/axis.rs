@@ -1,0 +1,228 @@
+//! The calibration plan: which joint is swept, over what span, in what order (paper Table 1),
+//! the commands each step sends (FORMATS.md section 2), and the validation poses.
+
+use crate::robot::RobotDescription;
+use serde::{Deserialize, Serialize};
+
+/// One axis experiment: joint `joint` swept from `start_deg` (relative to the reference pose)
+/// over `span_deg` in `intervals` equal steps (`intervals + 1` poses), Table 1.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisSweep {
+    /// The swept joint (1-based).
+    pub joint: usize,
+    /// Total displacement \[deg\] (revolute) or \[mm\] (prismatic).
+    pub span: f64,
+    /// Number of intervals; the experiment observes `intervals + 1` poses.
+    pub intervals: usize,
+    /// Observe the second target (passive coupling into `joint + 1`, eq. 14); the commands then
+    /// hold actuator `joint + 1` still.
+    #[serde(default)]
+    pub second_target: bool,
+    /// Where the sweep starts, relative to the reference pose \[deg or mm\]; default `-span/2`
+    /// (a sweep centred on the reference pose).
+    #[serde(default)]
+    pub start: Option<f64>,
+}
+
+impl AxisSweep {
+    /// The command of the swept joint at `step`, relative to the reference \[deg or mm\].
+    pub fn offset_at(&self, step: usize) -> f64 {
+        self.start.unwrap_or(-self.span / 2.0) + self.span * step as f64 / self.intervals as f64
+    }
+
+    /// Number of poses, `intervals + 1`.
+    pub fn poses(&self) -> usize {
+        self.intervals + 1
+    }
+}
+
+/// A problem with a plan.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PlanError {
+    /// A sweep names a joint the robot does not have.
+    #[error("sweep {index}: joint {joint} is not in 1..={dof}")]
+    NoSuchJoint {
+        /// Index of the sweep in the plan.
+        index: usize,
+        /// The joint named.
+        joint: usize,
+        /// Number of joints.
+        dof: usize,
+    },
+    /// A sweep has a zero or negative span or no interval.
+    #[error(
+        "sweep {index} (joint {joint}): span must be > 0 and intervals >= 2 (got span {span}, intervals {intervals})"
+    )]
+    Degenerate {
+        /// Index of the sweep.
+        index: usize,
+        /// The joint.
+        joint: usize,
+        /// Its span.
+        span: f64,
+        /// Its intervals.
+        intervals: usize,
+    },
+    /// A second target is asked for where there is no coupling or no target.
+    #[error("sweep {index} (joint {joint}): {reason}")]
+    SecondTarget {
+        /// Index of the sweep.
+        index: usize,
+        /// The joint.
+        joint: usize,
+        /// What is missing.
+        reason: String,
+    },
+    /// The robot description gives no targets for a swept joint.
+    #[error("sweep {index}: the robot description has no axis_targets entry for joint {joint}")]
+    NoTargets {
+        /// Index of the sweep.
+        index: usize,
+        /// The joint.
+        joint: usize,
+    },
+    /// The sweep leaves the joint limits.
+    #[error(
+        "sweep {index} (joint {joint}): commands {low:.3}..{high:.3} leave the joint limits {limit_low:.3}..{limit_high:.3}"
+    )]
+    OutOfLimits {
+        /// Index of the sweep.
+        index: usize,
+        /// The joint.
+        joint: usize,
+        /// Lowest command.
+        low: f64,
+        /// Highest command.
+        high: f64,
+        /// Lower limit.
+        limit_low: f64,
+        /// Upper limit.
+        limit_high: f64,
+    },
+    /// The reference pose has the wrong length.
+    #[error("reference pose has {found} values, the robot has {dof} joints")]
+    ReferenceLength {
+        /// Values found.
+        found: usize,
+        /// Joints.
+        dof: usize,
+    },
+}
+
+/// The axis experiments in the order they are run, around a common reference pose.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationPlan {
+    /// Commands of the common reference pose, in file units (deg or mm), one per joint.
+    pub reference: Vec<f64>,
+    /// The sweeps, in the order they are run.
+    pub sweeps: Vec<AxisSweep>,
+}
+
+impl CalibrationPlan {
+    /// Paper Table 1, descending order 6..1: spans 50, 60, 90, 45, 45, 48 deg; intervals 16,
+    /// 15, 15, 15, 15, 15; a second target for joints 4 and 2. Reference pose: all zero.
+    pub fn table1(dof: usize) -> Self {
+        let rows = [
+            (6, 50.0, 16, false),
+            (5, 60.0, 15, false),
+            (4, 90.0, 15, true),
+            (3, 45.0, 15, false),
+            (2, 45.0, 15, true),
+            (1, 48.0, 15, false),
+        ];
+        CalibrationPlan {
+            reference: vec![0.0; dof],
+            sweeps: rows
+                .iter()
+                .map(|&(joint, span, intervals, second_target)| AxisSweep {
+                    joint,
+                    span,
+                    intervals,
+                    second_target,
+                    start: None,
+                })
+                .collect(),
+        }
+    }
+
+    /// Checks the plan against a robot: joints exist, spans are real, targets are given,
+    /// second targets only where a nominal coupling leaves the swept joint, limits respected.
+    pub fn validate(&self, desc: &RobotDescription) -> Result<(), PlanError> {
+        let dof = desc.dof();
+        if self.reference.len() != dof {
+            return Err(PlanError::ReferenceLength {
+                found: self.reference.len(),
+                dof,
+            });
+        }
+        for (index, s) in self.sweeps.iter().enumerate() {
+            let joint = s.joint;
+            if joint == 0 || joint > dof {
+                return Err(PlanError::NoSuchJoint { index, joint, dof });
+            }
+            if s.span.is_nan() || s.span <= 0.0 || s.intervals < 2 {
+                return Err(PlanError::Degenerate {
+                    index,
+                    joint,
+                    span: s.span,
+                    intervals: s.intervals,
+                });
+            }
+            let targets = desc
+                .axis_targets_of(joint)
+                .ok_or(PlanError::NoTargets { index, joint })?;
+            if s.second_target {
+                if desc.nominal_coupling_from(joint).is_none() {
+                    return Err(PlanError::SecondTarget {
+                        index,
+                        joint,
+                        reason: format!("no nominal coupling {joint}->{} to measure", joint + 1),
+                    });
+                }
+                if targets.target1.is_none() {
+                    return Err(PlanError::SecondTarget {
+                        index,
+                        joint,
+                        reason: "the robot description gives no target1 for this joint".into(),
+                    });
+                }
+            }
+            let (first, last) = (self.commands(desc, s, 0), self.commands(desc, s, s.intervals));
+            for (j, (a, b)) in first.iter().zip(&last).enumerate() {
+                let [limit_low, limit_high] = desc.joints[j].limits;
+                let (low, high) = (a.min(*b), a.max(*b));
+                if low < limit_low || high > limit_high {
+                    return Err(PlanError::OutOfLimits {
+                        index,
+                        joint: j + 1,
+                        low,
+                        high,
+                        limit_low,
+                        limit_high,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The commands (file units, one per joint) of `sweep` at `step`.
+    ///
+    /// The swept joint moves; with `second_target`, joint `k+1` is commanded with the
+    /// nominal passive displacement so that its actuator holds still (FORMATS.md section 2:
+    /// `cmd_{k+1}(s) = cmd_{k+1}(0) + slope (cmd_k(s) - cmd_k(0))`); every other command stays
+    /// at the reference, so the controller's nominal decoupling keeps those joints' values.
+    pub fn commands(&self, desc: &RobotDescription, sweep: &AxisSweep, step: usize) -> Vec<f64> {
+        let k = sweep.joint - 1;
+        let mut cmd = self.reference.clone();
+        cmd[k] = self.reference[k] + sweep.offset_at(step);
+        if sweep.second_target
+            && let Some(slope) = desc.nominal_coupling_from(sweep.joint)
+        {
+            cmd[k + 1] = self.reference[k + 1] + slope * (sweep.offset_at(step) - sweep.offset_at(0));
+        }
+        cmd
+    }
+}

@@ -1,0 +1,33 @@
+//! What a campaign measures, decided before any measurement: the axis experiments of the
+//! independent-axis method (paper Table 1: which joint is swept, over what span, in what
+//! order) with the hold-still commands of a coupled joint (paper section 3.1,
+//! `docs/formats.md#controller-semantics`), the validation poses, and the conditions each pose
+//! is measured under. Nothing here knows the robot beyond its nominal description.
+
+mod axis;
+mod validation;
+
+pub use axis::{AxisSweep, CalibrationPlan, PlanError};
+pub use validation::ValidationPlan;
+
+/// Experiment id of the three tool targets observed at the reference pose (trains the
+/// calibrator's tool frame; not a validation pose).
+pub const TOOL_EXPERIMENT: &str = "tool";
+
+/// Conditions of one pose that unmodelled effects depend on (FORMATS.md optional columns).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseConditions {
+    /// Payload at the tool \[kg\].
+    pub payload_kg: f64,
+    /// Ambient temperature \[deg C\].
+    pub temperature_c: f64,
+}
+
+impl Default for PoseConditions {
+    fn default() -> Self {
+        PoseConditions {
+            payload_kg: 0.0,
+            temperature_c: 20.0,
+        }
+    }
+}

@@ -1,0 +1,243 @@
+//! The robot model: the phi-model geometry (paper appendix, eqs. A1-A4) plus what turns
+//! actuator commands into joint values (paper sections 3 and 4; semantics in
+//! `docs/formats.md#controller-semantics`). One type serves every robot the program reasons
+//! about: the simulated real robot (`sim`), the calibrated robot (`calibration`) and the ideal
+//! nominal robot ([`RobotModel::ideal`]); which one a value holds is said by its variable or
+//! field name (`truth`, `calibrated`, `nominal`), never by its type.
+//!
+//! Per joint `k` (1-based): the controller's actuator command `u_k` (after nominal decoupling)
+//! turns the joint by the actual ACTIVE displacement `theta_act_k = f_k^-1(u_k - offset_k)`
+//! (`f_k` = the joint's [`Transmission`], eq. 8; `offset_k` = transducer zero offset), and the
+//! joint value used in the actual phi-model is `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`
+//! (`g` = the actual [`CouplingFunction`] into joint `k`, eq. 15; passive motion travels one
+//! joint only and is driven by the active displacement only, section 3.1).
+
+use super::controller::Controller;
+use super::description::{Placement, RobotDescription, RowEntry};
+use super::four_bar::FourBarGeometry;
+use super::functions::{CouplingFunction, Transmission};
+use super::model_error::ModelError;
+use crate::kinematics::{JointKind, PhiJoint, PhiModel};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+fn identity_transmission() -> Transmission {
+    Transmission::identity()
+}
+
+/// One joint of a [`RobotModel`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointModel {
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// The phi angle of eq. (A2) \[deg\]; equal for the nominal and actual robots (section 4).
+    #[serde(default)]
+    pub phi_deg: f64,
+    /// The actual transmission `theta_c = f(theta_a)` (eq. 8); default identity.
+    #[serde(default = "identity_transmission")]
+    pub transmission: Transmission,
+    /// The actual passive coupling into this joint from the joint below (eq. 15), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coupling_in: Option<CouplingFunction>,
+    /// Transducer zero offset \[rad\] (revolute) or \[m\] (prismatic), subtracted from the actuator
+    /// command (fig. 3).
+    #[serde(default)]
+    pub transducer_offset: f64,
+    /// Standard deviation of the Gaussian jitter of the joint value on each execution of a
+    /// command \[rad\] (revolute) or \[m\] (prismatic): the robot's repeatability.
+    #[serde(default)]
+    pub repeatability_sigma: f64,
+}
+
+/// A physical four-bar linkage of the robot, documented for the rigid-body simulator. The
+/// analytic model uses the driven joint's `coupling_in`, which may be this geometry
+/// ([`CouplingFunction::FourBar`]) or a fitted form of it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FourBarLinkage {
+    /// The driving joint (1-based); the linkage drives joint `from + 1`.
+    pub from: usize,
+    /// Its dimensions.
+    pub geometry: FourBarGeometry,
+}
+
+/// A robot as a kinematic-plus-transmission model (see module docs). Loadable from TOML.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotModel {
+    /// Human-readable name.
+    pub name: String,
+    /// The joints, base first.
+    pub joints: Vec<JointModel>,
+    /// The ACTUAL phi-model rows (Table 2, actual columns), `joints.len() - 1` of them.
+    pub rows: Vec<RowEntry>,
+    /// Robot base frame (frame 1) in the instrument frame.
+    #[serde(default)]
+    pub placement: Placement,
+    /// The tool frame in the last link's moving frame.
+    #[serde(default)]
+    pub tool_frame: Placement,
+    /// Physical four-bar linkages (for the rigid-body simulator).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub four_bars: Vec<FourBarLinkage>,
+}
+
+impl RobotModel {
+    /// A robot with no errors: the nominal geometry, identity transmissions, the nominal
+    /// (linear) couplings, no offsets, no jitter. It reaches exactly the commanded joint values.
+    pub fn ideal(desc: &RobotDescription) -> Self {
+        let joints = desc
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(k, j)| JointModel {
+                kind: j.kind,
+                phi_deg: j.phi_deg,
+                transmission: Transmission::identity(),
+                coupling_in: desc.nominal_coupling_into(k + 1).map(CouplingFunction::linear),
+                transducer_offset: 0.0,
+                repeatability_sigma: 0.0,
+            })
+            .collect();
+        Self {
+            name: format!("{} (ideal)", desc.name),
+            joints,
+            rows: desc.rows.clone(),
+            placement: desc.placement,
+            tool_frame: desc.tool.frame,
+            four_bars: vec![],
+        }
+    }
+
+    /// Reads and validates a robot model file (`docs/formats.md#robot-model-file`).
+    pub fn from_file(path: &Path) -> Result<Self, ModelError> {
+        Self::from_toml_str(&crate::toml_file::read(path)?, path)
+    }
+
+    /// Parses and validates robot model text; `path` labels errors only.
+    pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, ModelError> {
+        let t: Self = crate::toml_file::parse(text, path)?;
+        t.validate()?;
+        Ok(t)
+    }
+
+    /// Checks sizes, finiteness and linkage dimensions.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let bad = |field: String, message: String| ModelError::Invalid { field, message };
+        let n = self.joints.len();
+        if n == 0 || self.rows.len() + 1 != n {
+            return Err(bad(
+                "rows".into(),
+                format!(
+                    "{n} joints need {} rows, found {}",
+                    n.saturating_sub(1),
+                    self.rows.len()
+                ),
+            ));
+        }
+        for (k, j) in self.joints.iter().enumerate() {
+            if !(j.phi_deg.is_finite() && j.transducer_offset.is_finite()) {
+                return Err(bad(format!("joints[{k}]"), "values must be finite".into()));
+            }
+            if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
+                return Err(bad(
+                    format!("joints[{k}].repeatability_sigma"),
+                    "must be finite and >= 0".into(),
+                ));
+            }
+            if k == 0 && j.coupling_in.is_some() {
+                return Err(bad(
+                    "joints[0].coupling_in".into(),
+                    "the first joint has no joint below it".into(),
+                ));
+            }
+            if let Some(CouplingFunction::FourBar(g)) = &j.coupling_in {
+                g.validate()
+                    .map_err(|e| bad(format!("joints[{k}].coupling_in"), e.to_string()))?;
+            }
+        }
+        for (k, l) in self.four_bars.iter().enumerate() {
+            if l.from == 0 || l.from >= n {
+                return Err(bad(format!("four_bars[{k}].from"), format!("must be in 1..{n}")));
+            }
+            l.geometry
+                .validate()
+                .map_err(|e| bad(format!("four_bars[{k}].geometry"), e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The actual phi-model geometry, placed in the instrument frame.
+    pub fn phi_model(&self) -> PhiModel {
+        PhiModel {
+            joints: self
+                .joints
+                .iter()
+                .map(|j| PhiJoint {
+                    kind: j.kind,
+                    phi_rad: j.phi_deg.to_radians(),
+                })
+                .collect(),
+            rows: self.rows.iter().map(RowEntry::to_row).collect(),
+            world_from_base: self.placement.to_isometry(),
+            last_link_from_tool: self.tool_frame.to_isometry(),
+        }
+    }
+
+    /// The repeatability sigmas of all joints \[rad or m\].
+    pub fn repeatability_sigmas(&self) -> Vec<f64> {
+        self.joints.iter().map(|j| j.repeatability_sigma).collect()
+    }
+
+    /// The actual active displacement of every joint for actuator commands `u`:
+    /// `theta_act_k = f_k^-1(u_k - offset_k)` (eq. 8 inverted, fig. 3).
+    pub fn active_displacements(&self, u: &[f64]) -> Result<Vec<f64>, ModelError> {
+        if u.len() != self.dof() {
+            return Err(ModelError::WrongLength {
+                what: "actuator commands",
+                expected: self.dof(),
+                found: u.len(),
+            });
+        }
+        self.joints
+            .iter()
+            .zip(u)
+            .enumerate()
+            .map(|(k, (j, &uk))| {
+                let command = uk - j.transducer_offset;
+                j.transmission
+                    .actual_from_command(command)
+                    .ok_or(ModelError::NotInvertible { joint: k + 1, command })
+            })
+            .collect()
+    }
+
+    /// The joint values the robot reaches for joint commands `cmd` sent to `controller`
+    /// (internal units), without repeatability jitter: `q_k = theta_act_k +
+    /// g_{k-1,k}(theta_act_{k-1})`.
+    pub fn joint_values(&self, controller: &Controller, cmd: &[f64]) -> Result<Vec<f64>, ModelError> {
+        if controller.dof() != self.dof() {
+            return Err(ModelError::WrongLength {
+                what: "controller joints",
+                expected: self.dof(),
+                found: controller.dof(),
+            });
+        }
+        let theta = self.active_displacements(&controller.decouple(cmd)?)?;
+        let mut q = theta.clone();
+        for k in 1..q.len() {
+            if let Some(g) = &self.joints[k].coupling_in {
+                q[k] += g
+                    .try_passive(theta[k - 1])
+                    .map_err(|source| ModelError::Coupling { joint: k + 1, source })?;
+            }
+        }
+        Ok(q)
+    }
+}

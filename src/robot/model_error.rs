@@ -1,0 +1,53 @@
+//! Errors of the truth model, its controller and its perturbation.
+
+use super::four_bar::FourBarError;
+
+/// Why the truth model (or the controller in front of it) cannot produce joint values.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// A vector has the wrong number of entries.
+    #[error("{what}: expected {expected} values, found {found}")]
+    WrongLength {
+        /// What the vector is, e.g. `commands`.
+        what: &'static str,
+        /// The robot's number of joints (or the required length).
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
+    /// A joint number outside `1..=dof` (or without a successor where one is needed).
+    #[error("joint {joint} is not valid here (the robot has {dof} joints)")]
+    BadJoint {
+        /// The 1-based joint number given.
+        joint: usize,
+        /// Number of joints.
+        dof: usize,
+    },
+    /// A transmission function is not monotonic near the requested command.
+    #[error("joint {joint}: transmission cannot be inverted at command {command} (not monotonic)")]
+    NotInvertible {
+        /// 1-based joint.
+        joint: usize,
+        /// The actuator command after offset removal \[rad or m\].
+        command: f64,
+    },
+    /// A four-bar coupling cannot be assembled.
+    #[error("coupling into joint {joint}: {source}")]
+    Coupling {
+        /// 1-based driven joint.
+        joint: usize,
+        /// The linkage problem.
+        source: FourBarError,
+    },
+    /// The file could not be read or parsed.
+    #[error(transparent)]
+    File(#[from] crate::toml_file::TomlFileError),
+    /// A value is out of range or inconsistent.
+    #[error("field `{field}`: {message}")]
+    Invalid {
+        /// The offending key, e.g. `joints[2].repeatability_sigma`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}

@@ -1,0 +1,99 @@
+//! The analytic truth model as the campaign's simulated robot: commands through the fig. 3
+//! controller into the truth's transmissions and couplings, then the actual phi-model, with
+//! the unmodelled [`Effects`] that need no rigid bodies (compliance to first order).
+
+use super::campaign::{ArmExecutor, ExecuteError};
+use super::effects::Effects;
+use super::joint_driver::JointDriver;
+use crate::kinematics::PhiModel;
+use crate::physics::{LinkMass, PassiveSlope, coupled_first_order_deflection};
+use crate::plan::PoseConditions;
+use crate::robot::{Controller, RobotDescription, RobotModel};
+use nalgebra::Isometry3;
+use rand::Rng;
+
+/// The analytic "real robot": exact kinematics, repeatability jitter, no bodies (so every
+/// target is visible). Effects (see [`AnalyticArm::with_effects`]): backlash, thermal
+/// expansion, gear harmonics and wobble exactly as [`RapierArm`](crate::sim::RapierArm);
+/// compliance and payload by the first-order deflection through the passive couplings
+/// ([`coupled_first_order_deflection`]) instead of the rigid-body static equilibrium.
+#[derive(Clone, Debug)]
+pub struct AnalyticArm {
+    truth: RobotModel,
+    model: PhiModel,
+    driver: JointDriver,
+    effects: Effects,
+    masses: Vec<LinkMass>,
+}
+
+impl AnalyticArm {
+    /// The truth robot driven by `controller` (built from the nominal description), no effects.
+    pub fn new(truth: RobotModel, controller: Controller) -> Self {
+        let model = truth.phi_model();
+        let effects = Effects::default();
+        AnalyticArm {
+            driver: JointDriver::new(&truth, controller, &effects),
+            truth,
+            model,
+            effects,
+            masses: Vec::new(),
+        }
+    }
+
+    /// The same arm with unmodelled `effects`; the link masses for compliance come from
+    /// `desc` (the truth model carries none).
+    pub fn with_effects(self, effects: Effects, desc: &RobotDescription) -> Self {
+        let controller = Controller::from_description(desc);
+        AnalyticArm {
+            driver: JointDriver::new(&self.truth, controller, &effects),
+            masses: LinkMass::from_description(desc),
+            effects,
+            ..self
+        }
+    }
+
+    /// The truth model.
+    pub fn truth(&self) -> &RobotModel {
+        &self.truth
+    }
+
+    /// The effects in force.
+    pub fn effects(&self) -> &Effects {
+        &self.effects
+    }
+}
+
+impl ArmExecutor for AnalyticArm {
+    fn execute<R: Rng + ?Sized>(
+        &mut self,
+        cmd: &[f64],
+        conditions: &PoseConditions,
+        rng: &mut R,
+    ) -> Result<Vec<Isometry3<f64>>, ExecuteError> {
+        let driven = self.driver.drive(cmd, rng).map_err(|e| ExecuteError {
+            cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
+            reason: e.to_string(),
+        })?;
+        let mut q = driven.q;
+        let model = self.effects.thermal_model(&self.model, conditions.temperature_c);
+        if let Some(compliance) = &self.effects.compliance
+            && self.masses.len() == q.len()
+        {
+            let payload = self
+                .effects
+                .payload_in_last_link(&model.last_link_from_tool, conditions);
+            let couplings = PassiveSlope::of_truth(&self.truth, &driven.active);
+            let dq = coupled_first_order_deflection(&model, &q, &self.masses, payload, compliance, &couplings);
+            for (qk, d) in q.iter_mut().zip(dq) {
+                *qk += d;
+            }
+        }
+        let mut links = model.poses(&q).world_from_link;
+        self.effects.apply_wobble(&model, &q, &mut links);
+        Ok(links)
+    }
+
+    fn last_link_from_tool(&self) -> Isometry3<f64> {
+        self.model.last_link_from_tool
+    }
+}

@@ -1,0 +1,188 @@
+//! Unmodelled effects of the simulated real robot and instrument: what the calibration model
+//! (paper sections 3-4) leaves out, each switched on by the presence of its table in an
+//! effects file (TOML, `deny_unknown_fields`, units in key names).
+//!
+//! | table | effect | applied to |
+//! |---|---|---|
+//! | `compliance` | actuator stiffness `K_k` \[N m/rad\] under gravity: `K da = Q_gravity(q)`, the sag `da` driving the passive couplings | joint values (rapier: static equilibrium, four-bar as bodies; analytic: first order, [`coupled_first_order_deflection`]; exact equilibrium of the same model: [`coupled_static_deflection`]) |
+//! | `payload` | the pose's `payload_kg` (from [`PoseConditions`]) at a point of the tool frame | the gravity load of `compliance` (no effect without it) |
+//! | `backlash` | dead band `b_k` \[rad\]: the joint lags `b_k / 2` behind its approach direction | active displacements |
+//! | `thermal` | link growth: rows' `a`, `b` scaled by `1 + alpha (T - T_ref)` | the phi-model |
+//! | `gear_harmonics` | extra harmonic terms of a joint's transmission (eq. 8) | the truth's transmissions |
+//! | `wobble` | bearing runout: a tilt of the joint axis that turns with the joint | link poses |
+//! | `instrument_scale` | a scale error of the instrument about its origin \[ppm\] | measured coordinates |
+//!
+//! [`JointDriver`] runs the joint-side effects for any [`ArmExecutor`](super::ArmExecutor):
+//! commands -> fig. 3 controller -> actuators with the truth's transmissions (plus gear
+//! harmonics) and backlash -> passive couplings -> repeatability jitter.
+
+use crate::kinematics::PhiModel;
+use crate::physics::{
+    AxisWobble, BacklashEffect, ComplianceEffect, GearHarmonic, InstrumentScale, PayloadEffect, ThermalEffect,
+    apply_wobble, with_gear_harmonics,
+};
+use crate::plan::PoseConditions;
+use crate::robot::RobotModel;
+use nalgebra::{Isometry3, Point3};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A problem with an effects file.
+#[derive(Debug, thiserror::Error)]
+pub enum EffectsError {
+    /// The file could not be read or parsed.
+    #[error(transparent)]
+    File(#[from] crate::toml_file::TomlFileError),
+    /// A value out of range or of the wrong length.
+    #[error("effects field `{field}`: {message}")]
+    Invalid {
+        /// The key, e.g. `backlash.band_rad`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// The unmodelled effects (module docs); every table is optional and off when absent.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Effects {
+    /// Joint compliance under gravity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compliance: Option<ComplianceEffect>,
+    /// Payload at the tool (mass per pose from [`PoseConditions`]); acts through `compliance`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payload: Option<PayloadEffect>,
+    /// Backlash.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub backlash: Option<BacklashEffect>,
+    /// Thermal expansion (temperature per pose from [`PoseConditions`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thermal: Option<ThermalEffect>,
+    /// Extra transmission harmonics.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub gear_harmonics: Vec<GearHarmonic>,
+    /// Axis wobble.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub wobble: Vec<AxisWobble>,
+    /// Instrument scale error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instrument_scale: Option<InstrumentScale>,
+}
+
+fn invalid(field: impl Into<String>, message: impl Into<String>) -> EffectsError {
+    EffectsError::Invalid {
+        field: field.into(),
+        message: message.into(),
+    }
+}
+
+impl Effects {
+    /// Reads and validates an effects file for a robot of `dof` joints.
+    pub fn from_file(path: &Path, dof: usize) -> Result<Self, EffectsError> {
+        Self::from_toml_str(&crate::toml_file::read(path)?, path, dof)
+    }
+
+    /// Parses and validates effects text; `path` labels errors only.
+    pub fn from_toml_str(text: &str, path: &Path, dof: usize) -> Result<Self, EffectsError> {
+        let e: Self = crate::toml_file::parse(text, path)?;
+        e.validate(dof)?;
+        Ok(e)
+    }
+
+    /// Checks lengths, ranges and joint numbers against a robot of `dof` joints.
+    pub fn validate(&self, dof: usize) -> Result<(), EffectsError> {
+        let per_joint = |field: &str, v: &[f64], ok: fn(f64) -> bool| {
+            if v.len() != dof {
+                return Err(invalid(field, format!("needs {dof} values, found {}", v.len())));
+            }
+            match v.iter().position(|x| !ok(*x)) {
+                Some(k) => Err(invalid(format!("{field}[{k}]"), format!("bad value {}", v[k]))),
+                None => Ok(()),
+            }
+        };
+        if let Some(c) = &self.compliance {
+            per_joint("compliance.stiffness_nm_per_rad", &c.stiffness_nm_per_rad, |x| {
+                x.is_finite() && x > 0.0
+            })?;
+            if !c.gravity_m_s2.iter().all(|g| g.is_finite()) {
+                return Err(invalid("compliance.gravity_m_s2", "must be finite"));
+            }
+        }
+        if let Some(p) = &self.payload
+            && !p.com_in_tool_mm.iter().all(|x| x.is_finite())
+        {
+            return Err(invalid("payload.com_in_tool_mm", "must be finite"));
+        }
+        if let Some(b) = &self.backlash {
+            per_joint("backlash.band_rad", &b.band_rad, |x| x.is_finite() && x >= 0.0)?;
+        }
+        if let Some(t) = &self.thermal
+            && !(t.alpha_per_k.is_finite() && t.reference_c.is_finite())
+        {
+            return Err(invalid("thermal", "alpha_per_k and reference_c must be finite"));
+        }
+        let joint_ok = |field: String, joint: usize| {
+            if joint == 0 || joint > dof {
+                Err(invalid(field, format!("joint {joint} is not in 1..={dof}")))
+            } else {
+                Ok(())
+            }
+        };
+        for (i, h) in self.gear_harmonics.iter().enumerate() {
+            joint_ok(format!("gear_harmonics[{i}].joint"), h.joint)?;
+            if h.order == 0 || !(h.sin_rad.is_finite() && h.cos_rad.is_finite()) {
+                return Err(invalid(
+                    format!("gear_harmonics[{i}]"),
+                    "order must be >= 1, coefficients finite",
+                ));
+            }
+        }
+        for (i, w) in self.wobble.iter().enumerate() {
+            joint_ok(format!("wobble[{i}].joint"), w.joint)?;
+            if !(w.amplitude_rad.is_finite() && w.phase_rad.is_finite()) {
+                return Err(invalid(format!("wobble[{i}]"), "amplitude and phase must be finite"));
+            }
+        }
+        if let Some(s) = &self.instrument_scale
+            && !s.ppm.is_finite()
+        {
+            return Err(invalid("instrument_scale.ppm", "must be finite"));
+        }
+        Ok(())
+    }
+
+    /// `truth` with the extra gear harmonics added to its transmissions.
+    pub fn truth_with_harmonics(&self, truth: &RobotModel) -> RobotModel {
+        with_gear_harmonics(truth, &self.gear_harmonics)
+    }
+
+    /// The phi-model at temperature `temperature_c` ([`ThermalEffect::expanded`]; unchanged
+    /// without a thermal effect).
+    pub fn thermal_model(&self, model: &PhiModel, temperature_c: f64) -> PhiModel {
+        match &self.thermal {
+            Some(t) => t.expanded(model, temperature_c),
+            None => model.clone(),
+        }
+    }
+
+    /// Applies the axis wobbles to link poses computed without them ([`apply_wobble`]).
+    pub fn apply_wobble(&self, model: &PhiModel, q: &[f64], links: &mut [Isometry3<f64>]) {
+        apply_wobble(&self.wobble, model, q, links);
+    }
+
+    /// The payload as `(mass, position in the last link's frame)`, if any, for `conditions`.
+    pub fn payload_in_last_link(
+        &self,
+        last_link_from_tool: &Isometry3<f64>,
+        conditions: &PoseConditions,
+    ) -> Option<(f64, Point3<f64>)> {
+        let p = self.payload.as_ref()?;
+        (conditions.payload_kg > 0.0).then(|| {
+            (
+                conditions.payload_kg,
+                last_link_from_tool * (Point3::from(p.com_in_tool_mm) * 1e-3),
+            )
+        })
+    }
+}

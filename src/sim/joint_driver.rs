@@ -1,0 +1,106 @@
+//! Commands to joint values on the simulated robot, with the joint-side effects.
+
+use super::effects::Effects;
+use crate::physics::BacklashEffect;
+use crate::robot::{Controller, ModelError, RobotModel};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// An actuator command that changed by no more than this \[rad or m\] has not moved: the
+/// hold-still commands of a coupled joint reproduce its actuator command only to rounding (a
+/// few 1e-16 rad through the fig. 3 decoupling), and no encoder resolves 1e-12.
+pub const UNMOVED_ACTUATOR_RAD: f64 = 1e-12;
+
+/// Commands to joint values with the joint-side effects: the fig. 3 controller, the truth's
+/// transmissions (with [`Effects::gear_harmonics`]), backlash on the active displacements, the
+/// passive couplings, and the repeatability jitter. Keeps the last command for the approach
+/// direction of the backlash (FORMATS.md section 1: the sign of `cmd(s) - cmd(s-1)`; a joint
+/// whose command did not change keeps its previous direction; before any motion the joint
+/// sits in the middle of its band).
+///
+/// Repeatability is a *re-positioning* error: an actuator draws a new jitter only when its
+/// actuator command (after the fig. 3 decoupling) changes; an actuator the command leaves
+/// where it is holds its position, and its previous error, between executions. In a
+/// hold-still axis experiment only the swept actuator is re-positioned, as on the real robot;
+/// every execution of a new pose re-positions every actuator. One standard normal per joint is
+/// drawn from the rng per execution either way, so the random stream does not depend on which
+/// actuators moved.
+#[derive(Clone, Debug)]
+pub struct JointDriver {
+    truth: RobotModel,
+    controller: Controller,
+    band_rad: Vec<f64>,
+    last_cmd: Option<Vec<f64>>,
+    approach: Vec<f64>,
+    /// Actuator commands of the last execution and the standard-normal jitter draws they got.
+    last_actuator: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+/// What [`JointDriver::drive`] produced.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DrivenJoints {
+    /// Actual active displacement of every actuator \[rad or m\] (after backlash).
+    pub active: Vec<f64>,
+    /// Joint values for the phi-model (with couplings and jitter).
+    pub q: Vec<f64>,
+}
+
+impl JointDriver {
+    /// A driver for `truth` behind `controller`, with the joint-side `effects`.
+    pub fn new(truth: &RobotModel, controller: Controller, effects: &Effects) -> Self {
+        let n = truth.dof();
+        JointDriver {
+            truth: effects.truth_with_harmonics(truth),
+            controller,
+            band_rad: effects.backlash.as_ref().map_or(vec![0.0; n], |b| b.band_rad.clone()),
+            last_cmd: None,
+            approach: vec![0.0; n],
+            last_actuator: None,
+        }
+    }
+
+    /// The truth model (with the gear harmonics added).
+    pub fn truth(&self) -> &RobotModel {
+        &self.truth
+    }
+
+    /// Executes `cmd` (internal units). Draws one standard normal per joint from `rng`, as
+    /// [`RobotModel::joint_values_executed`] does, and uses it for the actuators whose command
+    /// changed (see the type's docs).
+    pub fn drive<R: Rng + ?Sized>(&mut self, cmd: &[f64], rng: &mut R) -> Result<DrivenJoints, ModelError> {
+        let u = self.controller.decouple(cmd)?;
+        let mut active = self.truth.active_displacements(&u)?;
+        if let Some(last) = &self.last_cmd {
+            for ((dir, c), l) in self.approach.iter_mut().zip(cmd).zip(last) {
+                if (c - l).abs() > 0.0 {
+                    *dir = (c - l).signum();
+                }
+            }
+        }
+        self.last_cmd = Some(cmd.to_vec());
+        for ((a, dir), band) in active.iter_mut().zip(&self.approach).zip(&self.band_rad) {
+            *a = BacklashEffect::lagged(*a, *dir, *band);
+        }
+        let mut q = active.clone();
+        for k in 1..q.len() {
+            if let Some(g) = &self.truth.joints[k].coupling_in {
+                q[k] += g
+                    .try_passive(active[k - 1])
+                    .map_err(|source| ModelError::Coupling { joint: k + 1, source })?;
+            }
+        }
+        let mut draws: Vec<f64> = (0..q.len()).map(|_| StandardNormal.sample(rng)).collect();
+        if let Some((last_u, last_draws)) = &self.last_actuator {
+            for ((z, (now, before)), held) in draws.iter_mut().zip(u.iter().zip(last_u)).zip(last_draws) {
+                if (now - before).abs() <= UNMOVED_ACTUATOR_RAD {
+                    *z = *held;
+                }
+            }
+        }
+        for ((qk, j), z) in q.iter_mut().zip(&self.truth.joints).zip(&draws) {
+            *qk += j.repeatability_sigma * z;
+        }
+        self.last_actuator = Some((u, draws));
+        Ok(DrivenJoints { active, q })
+    }
+}
