@@ -57,7 +57,7 @@ fn log_pose(rec: &Recorder, c: &Campaign, model: &PhiModel, controller: &Control
 /// Writes the recording of campaign `c` to `path`.
 pub fn write(path: &Path, c: &Campaign) -> Result<()> {
     let rec = Recorder::new("axiscal")?;
-    let model = c.truth.model();
+    let model = c.truth.phi_model();
     let nominal = c.desc.nominal_model();
     let controller = Controller::from_description(c.desc);
     rec.set_trial(0);
