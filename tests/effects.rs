@@ -197,7 +197,7 @@ fn large_compliance_sag_is_the_static_equilibrium_not_the_first_order_one() {
         .expect("settles");
     let rapier = arm.sim_arm().expect("built").joint_positions()[1] - driven.q[1];
     let masses = LinkMass::from_description(&desc);
-    let couplings = PassiveSlope::of_truth(&t, &driven.active);
+    let couplings = PassiveSlope::of_linkages(&t, &driven.active);
     let first = coupled_first_order_deflection(&t.phi_model(), &driven.q, &masses, None, &compliance, &couplings);
     let load = CompliantLoad {
         masses: &masses,
@@ -231,7 +231,7 @@ fn a_joint_softer_than_gravity_stiffness_buckles() {
     };
     let q = [0.3, 0.5, 0.1, 0.0, 0.0, 0.0];
     let masses = LinkMass::from_description(&desc);
-    let couplings = PassiveSlope::of_truth(&t, &q);
+    let couplings = PassiveSlope::of_linkages(&t, &q);
     let load = CompliantLoad {
         masses: &masses,
         payload: None,

@@ -2,7 +2,7 @@
 //! an instrument scale error cannot (the same instrument measures the test), and the result
 //! does not depend on the thread count.
 
-use axiscal::harness::evaluation::{BudgetEffect, BudgetSettings, PaperScenario, Stats, budget_line, pooled_error};
+use axiscal::harness::evaluation::{BudgetEffect, BudgetSettings, PaperScenario, budget_line, pooled_error};
 use axiscal::measurement::MeasurementModel;
 
 fn settings() -> BudgetSettings {
@@ -43,16 +43,4 @@ fn pooled_error_does_not_depend_on_the_thread_count() {
             .install(|| pooled_error(&s, Some((BudgetEffect::Compliance, 2e-5))).unwrap())
     };
     assert_eq!(run(1), run(2));
-}
-
-#[test]
-fn pooled_statistics_equal_those_of_the_union() {
-    let (a, b) = ([1.0, 2.0, 4.0], [3.0, 0.5]);
-    let all: Vec<f64> = a.iter().chain(&b).copied().collect();
-    let pooled = Stats::pooled(&[Stats::of(a), Stats::of(b)]);
-    let direct = Stats::of(all);
-    assert_eq!(pooled.n, direct.n);
-    assert_eq!(pooled.max, direct.max);
-    approx::assert_relative_eq!(pooled.mean, direct.mean, max_relative = 1e-15);
-    approx::assert_relative_eq!(pooled.rms, direct.rms, max_relative = 1e-15);
 }

@@ -380,7 +380,7 @@ mod dynamic {
             &LinkMass::from_description(&desc),
             None,
             &compliance(stiffness),
-            &axiscal::physics::PassiveSlope::of_truth(&without, &driven.active),
+            &axiscal::physics::PassiveSlope::of_linkages(&without, &driven.active),
         );
         let dq3 = q[2] - driven.q[2];
         eprintln!("open loop: dq3 {dq3:.4e} rad, analytic {:.4e}", dq_analytic[2]);

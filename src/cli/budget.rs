@@ -2,6 +2,7 @@
 //! effect, the magnitude that raises the simulated calibrated position error of the paper
 //! robot inside the spans to the paper's 1.40 mm; writes `budget.json` and `budget.md`.
 
+use super::OneOf;
 use super::calibrate::{refuse_existing, write_output};
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget};
@@ -10,6 +11,16 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 /// Arguments of `axiscal budget`.
+/// The budgeted effects by their command-line names.
+const EFFECTS: &[(&str, BudgetEffect)] = &[
+    ("compliance", BudgetEffect::Compliance),
+    ("backlash", BudgetEffect::Backlash),
+    ("thermal", BudgetEffect::Thermal),
+    ("gear-harmonic", BudgetEffect::GearHarmonic),
+    ("wobble", BudgetEffect::Wobble),
+    ("instrument-scale", BudgetEffect::InstrumentScale),
+];
+
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// First campaign seed; seeds `seed .. seed + seeds` are pooled per magnitude.
@@ -25,7 +36,7 @@ pub struct Args {
     #[arg(long, default_value_t = 30)]
     random_poses: usize,
     /// Effects to budget (default: all).
-    #[arg(long, value_enum, value_delimiter = ',')]
+    #[arg(long, value_parser = OneOf(EFFECTS), value_delimiter = ',')]
     effects: Vec<BudgetEffect>,
     /// Worker threads (default: one per core); the result does not depend on it.
     #[arg(long)]

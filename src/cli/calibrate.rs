@@ -2,6 +2,7 @@
 //! measurement CSV, writing `calibration.json` (loadable again), `report.md`, `report.json`
 //! and `calibrated.urdf`.
 
+use super::OneOf;
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{AxisEstimator, CalibrationOptions, calibrate, findings, markdown, urdf};
 use axiscal::measurement::read_measurements;
@@ -9,6 +10,9 @@ use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal calibrate`.
+/// The estimators by their command-line names.
+const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("paper", AxisEstimator::Paper)];
+
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Measurement CSV (FORMATS.md section 1).
@@ -20,7 +24,7 @@ pub struct Args {
     #[arg(long)]
     out: PathBuf,
     /// Rotary-axis estimator.
-    #[arg(long, value_enum, default_value_t = AxisEstimator::Ml)]
+    #[arg(long, value_parser = OneOf(ESTIMATORS), default_value = "ml")]
     estimator: AxisEstimator,
     /// Measurement noise of a point, 3-D RMS \[mm\] (weights the fits and scales the reported
     /// uncertainties).

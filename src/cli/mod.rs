@@ -15,8 +15,35 @@ mod simulate;
 mod study;
 mod view;
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Parser, Subcommand};
+use std::ffi::OsStr;
 use std::process::ExitCode;
+
+/// A value parser for one of a library enum's values by name: the library's types carry no
+/// clap derive, the command line spells their values here (and `--help` lists them).
+#[derive(Clone, Copy)]
+pub(crate) struct OneOf<T: 'static>(pub &'static [(&'static str, T)]);
+
+impl<T: Clone + Send + Sync + 'static> TypedValueParser for OneOf<T> {
+    type Value = T;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<T, clap::Error> {
+        if let Some((_, v)) = self.0.iter().find(|(name, _)| OsStr::new(name) == value) {
+            return Ok(v.clone());
+        }
+        // clap's own message for a value outside the list.
+        let names = PossibleValuesParser::new(self.0.iter().map(|(name, _)| *name));
+        Err(names
+            .parse_ref(cmd, arg, value)
+            .err()
+            .unwrap_or_else(|| clap::Error::new(clap::error::ErrorKind::InvalidValue).with_cmd(cmd)))
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(self.0.iter().map(|(name, _)| PossibleValue::new(*name))))
+    }
+}
 
 /// Independent-axis robot calibration (Sultan & Wager) with a simulation-backed harness.
 #[derive(Debug, Parser)]

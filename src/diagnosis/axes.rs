@@ -9,7 +9,7 @@
 
 use super::{DiagnosisError, DiagnosisOptions, Outcome, WhereEntry, calibrate_for, clean_positions, replica};
 use crate::measurement::MeasurementSet;
-use crate::numerics::stats::{mean, quantile, upper_tail};
+use crate::numerics::stats::{QuantileMethod, mean, quantile, upper_tail};
 use crate::robot::RobotDescription;
 use rand::{SeedableRng, rngs::StdRng};
 use serde::{Deserialize, Serialize};
@@ -106,7 +106,7 @@ pub fn diagnose_axes(
         })
         .collect();
     let alpha = options.false_alarm;
-    let threshold = quantile(&max_ratio, 1.0 - alpha);
+    let threshold = quantile(&max_ratio, 1.0 - alpha, QuantileMethod::InverseCdf);
     let mut where_ = Vec::new();
     let mut flagged = Vec::new();
     let (mut ss, mut ss_noise, mut points) = (0.0, 0.0, 0usize);

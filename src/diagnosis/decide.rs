@@ -5,7 +5,7 @@ use super::{
     Candidate, CandidateScore, Diagnosis, DiagnosisOptions, FeatureContrast, LinearFit, NullData, Outcome, Parameter,
     Prepared, WhereEntry,
 };
-use crate::numerics::stats::{mean, quantile, std_dev, upper_tail};
+use crate::numerics::stats::{QuantileMethod, mean, quantile, std_dev, upper_tail};
 use nalgebra::{DMatrix, DVector};
 
 /// A candidate's fit and its statistics.
@@ -158,7 +158,11 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         .iter()
         .map(|s| s / sigma2)
         .collect();
-    let (g_mean, g_sd, g_q) = (mean(&g_null), std_dev(&g_null), quantile(&g_null, 1.0 - alpha));
+    let (g_mean, g_sd, g_q) = (
+        mean(&g_null),
+        std_dev(&g_null),
+        quantile(&g_null, 1.0 - alpha, QuantileMethod::InverseCdf),
+    );
     let gap_sigmas = (g_obs - g_mean) / g_sd.max(1e-12);
     let detectable_gap_mm = to_rms_mm(g_q - g_mean);
     let p_gap = upper_tail(&g_null, g_obs);
@@ -169,7 +173,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     let max_z: Vec<f64> = (0..samples)
         .map(|k| scored.iter().map(|s| s.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
         .collect();
-    let z_threshold = quantile(&max_z, 1.0 - alpha);
+    let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
     for s in &mut scored {
         s.score.significant = s.score.z > z_threshold;
     }
@@ -241,7 +245,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     // only when no candidate beats noise.
     let (effect, joint, confidence, gap_after, parameters, verdict) = match best {
         Some(b) => {
-            let remaining_ok = b.chi2 <= quantile(&b.chi2_null, 1.0 - alpha);
+            let remaining_ok = b.chi2 <= quantile(&b.chi2_null, 1.0 - alpha, QuantileMethod::InverseCdf);
             if remaining_ok || fraction_closed >= options.explained_fraction {
                 (
                     b.score.effect.clone(),

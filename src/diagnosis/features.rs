@@ -4,7 +4,7 @@
 //! workspace shows there (module docs of [`crate::diagnosis`], step 5).
 
 use super::{FeatureContrast, NullData, Pose, Prepared, WhereEntry, split};
-use crate::numerics::stats::{mean, quantile};
+use crate::numerics::stats::{QuantileMethod, mean, quantile};
 use nalgebra::DMatrix;
 
 /// Bins of a continuous feature: terciles of its held-out values.
@@ -196,7 +196,7 @@ pub(super) fn feature_entries(
         };
         let observed = contrast(&|b| b.observed);
         let null_contrast: Vec<f64> = (0..r_null.ncols()).map(|c| contrast(&|b| b.null[c])).collect();
-        let threshold = quantile(&null_contrast, 1.0 - false_alarm);
+        let threshold = quantile(&null_contrast, 1.0 - false_alarm, QuantileMethod::InverseCdf);
         contrasts.push(FeatureContrast {
             feature: f.name,
             joint: f.joint,

@@ -6,11 +6,10 @@
 use super::poses::Pose;
 use crate::kinematics::JointKind;
 use crate::physics::{
-    AxisWobble, ComplianceEffect, CompliantLoad, GearHarmonic, LinkMass, PassiveSlope, ThermalEffect,
-    coupled_static_deflection,
+    AxisWobble, ComplianceEffect, CompliantLoad, GearHarmonic, LinkMass, PassiveSlope, ThermalEffect, apply_wobble,
+    coupled_static_deflection, with_gear_harmonics,
 };
 use crate::robot::{Controller, CouplingFunction, RobotDescription, RobotModel, TransmissionFitForm};
-use crate::sim::Effects;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -202,6 +201,25 @@ fn passive_slopes(robot: &RobotModel, active: &[f64]) -> Vec<PassiveSlope> {
     })
 }
 
+/// The effects of a candidate (and the refit's transmission harmonics live in the robot).
+#[derive(Clone, Debug)]
+struct CandidateEffects {
+    wobble: Vec<AxisWobble>,
+    thermal: Option<ThermalEffect>,
+    /// Measured coordinates over true ones.
+    scale: f64,
+}
+
+impl Default for CandidateEffects {
+    fn default() -> Self {
+        CandidateEffects {
+            wobble: Vec::new(),
+            thermal: None,
+            scale: 1.0,
+        }
+    }
+}
+
 /// The calibrated robot with the refit parameters and one optional candidate: predicts the
 /// measured tool targets of a pose.
 #[derive(Clone, Debug)]
@@ -318,7 +336,7 @@ impl Predictor {
     }
 
     /// The refit robot and the candidate's effects for `params`.
-    fn robot_and_effects(&self, params: &[f64]) -> (RobotModel, Effects, f64) {
+    fn robot_and_effects(&self, params: &[f64]) -> (RobotModel, CandidateEffects) {
         let mut robot = self.base.clone();
         let rows = robot.rows.len();
         for (r, row) in robot.rows.iter_mut().enumerate() {
@@ -330,7 +348,8 @@ impl Predictor {
         for (k, j) in robot.joints.iter_mut().enumerate() {
             j.transducer_offset += params[4 * rows + k];
         }
-        let mut effects = Effects::default();
+        let mut effects = CandidateEffects::default();
+        let mut harmonics = Vec::new();
         if self.scope == RefitScope::Identified {
             let mut i = self.shape_start();
             for j in robot.joints.iter_mut() {
@@ -338,7 +357,7 @@ impl Predictor {
             }
             for (k, &orders) in self.harmonic_orders.iter().enumerate() {
                 for order in 1..=orders {
-                    effects.gear_harmonics.push(GearHarmonic {
+                    harmonics.push(GearHarmonic {
                         joint: k + 1,
                         order,
                         sin_rad: params[i],
@@ -349,9 +368,8 @@ impl Predictor {
             }
         }
         let e = &params[self.geometric_count()..];
-        let mut scale = 1.0;
         match self.candidate {
-            Some(Candidate::GearHarmonic { joint, order }) => effects.gear_harmonics.push(GearHarmonic {
+            Some(Candidate::GearHarmonic { joint, order }) => harmonics.push(GearHarmonic {
                 joint,
                 order,
                 sin_rad: e[0],
@@ -369,11 +387,10 @@ impl Predictor {
                     reference_c: self.reference_c,
                 })
             }
-            Some(Candidate::InstrumentScale) => scale = 1.0 + e[0] * 1e-6,
+            Some(Candidate::InstrumentScale) => effects.scale = 1.0 + e[0] * 1e-6,
             _ => {}
         }
-        let robot = effects.truth_with_harmonics(&robot);
-        (robot, effects, scale)
+        (with_gear_harmonics(&robot, &harmonics), effects)
     }
 
     /// The refit phi-model: `robot`'s with the base and tool corrections of `params`.
@@ -480,7 +497,7 @@ impl Predictor {
     /// when a command cannot be executed by the model (a transmission that does not invert,
     /// a compliance under which the arm buckles).
     pub fn residuals(&self, params: &[f64], poses: &[&Pose]) -> Option<Vec<f64>> {
-        let (robot, effects, scale) = self.robot_and_effects(params);
+        let (robot, effects) = self.robot_and_effects(params);
         let model = self.model(&robot, params);
         let e = &params[self.geometric_count()..];
         let backlash = match self.candidate {
@@ -490,7 +507,10 @@ impl Predictor {
         let mut out = Vec::with_capacity(poses.len() * 9);
         for pose in poses {
             let (mut q, active) = self.joint_values(&robot, &pose.cmd, &pose.approach, backlash)?;
-            let model_t = effects.thermal_model(&model, pose.temperature_c);
+            let model_t = match &effects.thermal {
+                Some(t) => t.expanded(&model, pose.temperature_c),
+                None => model.clone(),
+            };
             if let Some(Candidate::JointCompliance { joint }) = self.candidate
                 && e[0] != 0.0
             {
@@ -500,11 +520,11 @@ impl Predictor {
                 }
             }
             let mut links = model_t.poses(&q).world_from_link;
-            effects.apply_wobble(&model_t, &q, &mut links);
+            apply_wobble(&effects.wobble, &model_t, &q, &mut links);
             let tool = links[links.len() - 1] * model_t.last_link_from_tool;
             for (id, measured) in &pose.targets {
                 let t = self.tool_targets_m.get(*id)?;
-                let p = (tool * t).coords * scale;
+                let p = (tool * t).coords * effects.scale;
                 out.extend((measured.coords - p).iter());
             }
         }
@@ -517,7 +537,7 @@ mod tests {
     use super::*;
     use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
     use crate::robot::commands_to_internal;
-    use crate::sim::JointDriver;
+    use crate::sim::{Effects, JointDriver};
     use rand::{SeedableRng, rngs::StdRng};
 
     /// The compliance candidate on the truth robot itself reproduces the coupled static
@@ -542,7 +562,7 @@ mod tests {
         let model = truth.phi_model();
         let sagged = |driver: &mut JointDriver, cmd: &[f64]| {
             let d = driver.drive(cmd, &mut StdRng::seed_from_u64(1)).unwrap();
-            let couplings = PassiveSlope::of_truth(&truth, &d.active);
+            let couplings = PassiveSlope::of_linkages(&truth, &d.active);
             let load = CompliantLoad {
                 masses: &masses,
                 payload: None,

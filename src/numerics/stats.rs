@@ -1,4 +1,8 @@
-//! Sample statistics of the noise-only replicas.
+//! Sample statistics, the one implementation of each: moments, standard errors, the two
+//! quantile definitions the program uses (named, never mixed up), tail fractions, and the
+//! summary of a sample that reports and thresholds read ([`Stats`]).
+
+use serde::{Deserialize, Serialize};
 
 /// Mean (NaN when empty).
 pub fn mean(v: &[f64]) -> f64 {
@@ -9,7 +13,7 @@ pub fn mean(v: &[f64]) -> f64 {
     }
 }
 
-/// Sample standard deviation (0 with fewer than two values).
+/// Sample standard deviation, `n - 1` in the denominator (0 with fewer than two values).
 pub fn std_dev(v: &[f64]) -> f64 {
     if v.len() < 2 {
         return 0.0;
@@ -18,19 +22,56 @@ pub fn std_dev(v: &[f64]) -> f64 {
     (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
 }
 
-/// The empirical `p` quantile: the smallest sample with at least a fraction `p` of the
-/// samples at or below it (NaN when empty).
-pub fn quantile(v: &[f64], p: f64) -> f64 {
+/// The mean and its standard error `s / sqrt(n)` (`s` with `n - 1`, taken as 1 for a single
+/// value so the error is the spread itself, 0).
+pub fn mean_and_standard_error(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// How a quantile is read off a sample (Hyndman & Fan, "Sample quantiles in statistical
+/// packages", *The American Statistician* 50, 1996).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum QuantileMethod {
+    /// Type 1, the inverse of the empirical distribution function: the smallest sample with at
+    /// least a fraction `p` of the samples at or below it. Always a sample value; what a
+    /// Monte-Carlo critical value ("beaten by at most a fraction `1 - p` of the null draws")
+    /// needs.
+    InverseCdf,
+    /// Type 7, linear interpolation of the sorted sample (R's and NumPy's default): with
+    /// `x_(0) <= ... <= x_(n-1)` and `h = (n - 1) p`,
+    /// `Q(p) = x_(floor h) + (h - floor h) (x_(floor h + 1) - x_(floor h))`. What summaries
+    /// of a metric report.
+    Linear,
+}
+
+/// The `p` quantile (`p` in `[0, 1]`) of an ascending, non-empty sample by `method`.
+pub fn quantile_sorted(sorted: &[f64], p: f64, method: QuantileMethod) -> f64 {
+    let n = sorted.len();
+    match method {
+        QuantileMethod::InverseCdf => sorted[((p * n as f64).ceil() as usize).clamp(1, n) - 1],
+        QuantileMethod::Linear => {
+            let h = (n - 1) as f64 * p.clamp(0.0, 1.0);
+            let lo = h.floor() as usize;
+            let hi = (lo + 1).min(n - 1);
+            sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+        }
+    }
+}
+
+/// The `p` quantile of a sample in any order by `method` (NaN when empty).
+pub fn quantile(v: &[f64], p: f64, method: QuantileMethod) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
-    let i = ((p * s.len() as f64).ceil() as usize).clamp(1, s.len()) - 1;
-    s[i]
+    quantile_sorted(&s, p, method)
 }
 
-/// Fraction of `v` at or above `x`.
+/// Fraction of `v` at or above `x` (NaN when empty).
 pub fn upper_tail(v: &[f64], x: f64) -> f64 {
     if v.is_empty() {
         return f64::NAN;
@@ -38,16 +79,148 @@ pub fn upper_tail(v: &[f64], x: f64) -> f64 {
     v.iter().filter(|&&s| s >= x).count() as f64 / v.len() as f64
 }
 
+/// Count, mean, root mean square, median, 95 % quantile and maximum of a sample.
+///
+/// Quantiles are [`QuantileMethod::Linear`]. The mean sums the sorted sample, so the result
+/// does not depend on the order the values arrived in (trials finishing on several threads).
+/// A NaN anywhere makes every statistic NaN (a failed metric must not pass a threshold); an
+/// empty sample gives NaN too.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    /// Number of values.
+    pub n: usize,
+    /// Arithmetic mean.
+    pub mean: f64,
+    /// Root mean square.
+    pub rms: f64,
+    /// 50 % quantile.
+    pub median: f64,
+    /// 95 % quantile.
+    pub p95: f64,
+    /// Largest value.
+    pub max: f64,
+}
+
+impl Stats {
+    fn undefined(n: usize) -> Self {
+        Stats {
+            n,
+            mean: f64::NAN,
+            rms: f64::NAN,
+            median: f64::NAN,
+            p95: f64::NAN,
+            max: f64::NAN,
+        }
+    }
+
+    /// Statistics of `values` (any order).
+    pub fn of(values: &[f64]) -> Self {
+        let n = values.len();
+        if n == 0 || values.iter().any(|v| v.is_nan()) {
+            return Self::undefined(n);
+        }
+        let mut sorted = values.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        Stats {
+            n,
+            mean: sorted.iter().sum::<f64>() / n as f64,
+            rms: (sorted.iter().map(|x| x * x).sum::<f64>() / n as f64).sqrt(),
+            median: quantile_sorted(&sorted, 0.5, QuantileMethod::Linear),
+            p95: quantile_sorted(&sorted, 0.95, QuantileMethod::Linear),
+            max: sorted[n - 1],
+        }
+    }
+
+    /// Statistics of the union of the samples that `parts` summarise: count, mean, RMS and
+    /// maximum are exact; the quantiles of a union cannot be had from the parts' summaries and
+    /// are NaN. Empty parts are skipped; NaN when every part is empty.
+    pub fn pooled(parts: &[Stats]) -> Self {
+        let parts: Vec<&Stats> = parts.iter().filter(|p| p.n > 0).collect();
+        let n: usize = parts.iter().map(|p| p.n).sum();
+        if n == 0 {
+            return Self::undefined(0);
+        }
+        let weighted = |f: fn(&Stats) -> f64| parts.iter().map(|p| p.n as f64 * f(p)).sum::<f64>() / n as f64;
+        Stats {
+            n,
+            mean: weighted(|p| p.mean),
+            rms: weighted(|p| p.rms * p.rms).sqrt(),
+            median: f64::NAN,
+            p95: f64::NAN,
+            max: parts.iter().map(|p| p.max).fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_relative_eq;
 
     #[test]
-    fn quantile_and_tail_of_one_to_hundred() {
+    fn inverse_cdf_quantile_and_tail_of_one_to_hundred() {
         let v: Vec<f64> = (1..=100).map(f64::from).collect();
-        approx::assert_relative_eq!(quantile(&v, 0.99), 99.0);
-        approx::assert_relative_eq!(quantile(&v, 1.0), 100.0);
-        approx::assert_relative_eq!(upper_tail(&v, 96.0), 0.05);
+        assert_relative_eq!(quantile(&v, 0.99, QuantileMethod::InverseCdf), 99.0);
+        assert_relative_eq!(quantile(&v, 1.0, QuantileMethod::InverseCdf), 100.0);
+        assert_relative_eq!(upper_tail(&v, 96.0), 0.05);
         assert!((mean(&v) - 50.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn linear_quantiles_match_numpy() {
+        // numpy.percentile([1..10], [50, 95]) = [5.5, 9.55]
+        let v: Vec<f64> = (1..=10).rev().map(f64::from).collect();
+        let s = Stats::of(&v);
+        assert_eq!(s.n, 10);
+        assert_relative_eq!(s.mean, 5.5);
+        assert_relative_eq!(s.median, 5.5);
+        assert_relative_eq!(s.p95, 9.55, max_relative = 1e-12);
+        assert_relative_eq!(s.max, 10.0);
+        // sqrt(385 / 10)
+        assert_relative_eq!(s.rms, 38.5f64.sqrt(), max_relative = 1e-15);
+        assert_relative_eq!(quantile(&v, 0.95, QuantileMethod::Linear), 9.55, max_relative = 1e-12);
+    }
+
+    #[test]
+    fn single_value_and_degenerate_samples() {
+        let s = Stats::of(&[2.5]);
+        assert_relative_eq!(s.median, 2.5);
+        assert_relative_eq!(s.p95, 2.5);
+        assert!(Stats::of(&[]).mean.is_nan());
+        assert!(Stats::of(&[1.0, f64::NAN]).max.is_nan());
+        assert!(quantile(&[], 0.5, QuantileMethod::Linear).is_nan());
+    }
+
+    #[test]
+    fn order_does_not_change_any_bit() {
+        let v = [0.1, 0.7, 0.2, 1e-9, 3.3, 0.25];
+        let mut w = v;
+        w.reverse();
+        let (a, b) = (Stats::of(&v), Stats::of(&w));
+        assert_eq!(a.mean.to_bits(), b.mean.to_bits());
+        assert_eq!(a.rms.to_bits(), b.rms.to_bits());
+        assert_eq!(a.p95.to_bits(), b.p95.to_bits());
+    }
+
+    #[test]
+    fn pooled_moments_equal_those_of_the_union() {
+        let (a, b) = ([1.0, 2.0, 4.0], [3.0, 7.0]);
+        let union = Stats::of(&[1.0, 2.0, 4.0, 3.0, 7.0]);
+        let pooled = Stats::pooled(&[Stats::of(&a), Stats::of(&b), Stats::of(&[])]);
+        assert_eq!(pooled.n, 5);
+        assert_relative_eq!(pooled.mean, union.mean, max_relative = 1e-15);
+        assert_relative_eq!(pooled.rms, union.rms, max_relative = 1e-15);
+        assert_relative_eq!(pooled.max, 7.0);
+        assert!(pooled.median.is_nan());
+        assert!(Stats::pooled(&[]).mean.is_nan());
+    }
+
+    #[test]
+    fn standard_error_of_a_known_sample() {
+        // s^2 = 2.5 for 1..5; se = sqrt(2.5 / 5)
+        let (m, se) = mean_and_standard_error(&[1.0, 2.0, 3.0, 4.0, 5.0]);
+        assert_relative_eq!(m, 3.0);
+        assert_relative_eq!(se, 0.5f64.sqrt(), max_relative = 1e-15);
+        assert_relative_eq!(std_dev(&[1.0, 2.0, 3.0, 4.0, 5.0]), 2.5f64.sqrt(), max_relative = 1e-15);
     }
 }

@@ -62,10 +62,11 @@ pub struct PassiveSlope {
 }
 
 impl PassiveSlope {
-    /// The truth's couplings at the active displacements `active`: slopes of every
-    /// `coupling_in`, reflecting the load where one of the truth's four-bars drives the joint.
-    pub fn of_truth(truth: &RobotModel, active: &[f64]) -> Vec<Self> {
-        Self::of_robot(truth, active, |k, _| truth.four_bars.iter().any(|l| l.from == k))
+    /// `model`'s couplings at the active displacements `active`: slopes of every
+    /// `coupling_in`, reflecting the load where one of the model's physical four-bar linkages
+    /// (`four_bars`) drives the joint.
+    pub fn of_linkages(model: &RobotModel, active: &[f64]) -> Vec<Self> {
+        Self::of_robot(model, active, |k, _| model.four_bars.iter().any(|l| l.from == k))
     }
 
     /// `robot`'s couplings at the active displacements `active`: slopes of every

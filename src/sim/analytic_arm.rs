@@ -82,7 +82,7 @@ impl ArmExecutor for AnalyticArm {
             let payload = self
                 .effects
                 .payload_in_last_link(&model.last_link_from_tool, conditions);
-            let couplings = PassiveSlope::of_truth(&self.truth, &driven.active);
+            let couplings = PassiveSlope::of_linkages(&self.truth, &driven.active);
             let dq = coupled_first_order_deflection(&model, &q, &self.masses, payload, compliance, &couplings);
             for (qk, d) in q.iter_mut().zip(dq) {
                 *qk += d;

@@ -50,7 +50,7 @@ use nalgebra::{Isometry3, Point3};
 use serde::{Deserialize, Serialize};
 
 /// Which rotary-axis estimator to use.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AxisEstimator {
     /// Maximum-likelihood arc fit through the transmission model (default; efficient).

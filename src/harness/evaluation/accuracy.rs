@@ -15,6 +15,7 @@
 
 use crate::kinematics::{rigid_fit, rotation_vector};
 use crate::measurement::{MeasurementModel, TriangulationError};
+pub use crate::numerics::stats::Stats;
 use crate::physics::InstrumentScale;
 use crate::plan::PoseConditions;
 use crate::robot::{Controller, RobotDescription, RobotModel};
@@ -207,54 +208,5 @@ impl TestBench {
             (actual[0] * t0 - actual[1] * t0).norm() * 1e3,
             angle_between(&actual[0], &actual[1]),
         ])
-    }
-}
-
-/// Summary statistics of a set of errors.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Stats {
-    /// Number of values.
-    pub n: usize,
-    /// Mean.
-    pub mean: f64,
-    /// Root mean square.
-    pub rms: f64,
-    /// Maximum.
-    pub max: f64,
-}
-
-impl Stats {
-    /// Statistics of `values` (all zero when empty).
-    pub fn of(values: impl IntoIterator<Item = f64>) -> Self {
-        let v: Vec<f64> = values.into_iter().collect();
-        if v.is_empty() {
-            return Stats::default();
-        }
-        let n = v.len() as f64;
-        Stats {
-            n: v.len(),
-            mean: v.iter().sum::<f64>() / n,
-            rms: (v.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
-            max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        }
-    }
-
-    /// Statistics of the union of the sets that `parts` summarise (all zero when empty).
-    pub fn pooled(parts: &[Stats]) -> Self {
-        let n: usize = parts.iter().map(|p| p.n).sum();
-        if n == 0 {
-            return Stats::default();
-        }
-        let weighted = |f: fn(&Stats) -> f64| parts.iter().map(|p| p.n as f64 * f(p)).sum::<f64>() / n as f64;
-        Stats {
-            n,
-            mean: weighted(|p| p.mean),
-            rms: weighted(|p| p.rms * p.rms).sqrt(),
-            max: parts
-                .iter()
-                .filter(|p| p.n > 0)
-                .map(|p| p.max)
-                .fold(f64::NEG_INFINITY, f64::max),
-        }
     }
 }

@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 pub const STEEL_ALPHA_PER_K: f64 = 1.2e-5;
 
 /// The candidate effects of the budget (module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum BudgetEffect {
     /// Joint compliance under gravity.

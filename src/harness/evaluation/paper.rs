@@ -392,7 +392,7 @@ pub fn calibrated_position_error_inside_spans(s: &PaperScenario) -> Result<Stats
             .map_err(fail)?;
         errors.push(e.position_mm);
     }
-    Ok(Stats::of(errors))
+    Ok(Stats::of(&errors))
 }
 
 /// One test pose: nominal commands, compensated commands (scenario and floor calibrations),
@@ -441,9 +441,13 @@ fn summarise(region: Region, results: &[PoseResult]) -> RegionSummary {
     let rs: Vec<&PoseResult> = results.iter().filter(|r| r.region == region).collect();
     let kinds = |f: fn(&ToolError) -> f64| -> [Stats; 3] {
         [
-            Stats::of(rs.iter().map(|r| f(&r.uncalibrated))),
-            Stats::of(rs.iter().filter_map(|r| r.calibrated.as_ref().map(f))),
-            Stats::of(rs.iter().filter_map(|r| r.floor.as_ref().map(f))),
+            Stats::of(&rs.iter().map(|r| f(&r.uncalibrated)).collect::<Vec<_>>()),
+            Stats::of(
+                &rs.iter()
+                    .filter_map(|r| r.calibrated.as_ref().map(f))
+                    .collect::<Vec<_>>(),
+            ),
+            Stats::of(&rs.iter().filter_map(|r| r.floor.as_ref().map(f)).collect::<Vec<_>>()),
         ]
     };
     let position_mm = kinds(|e| e.position_mm);

@@ -30,7 +30,7 @@ pub use metrics::{Metrics, TrialRecord};
 pub use resolve::{Case, Overrides, ResolvedScenario, ResolvedTruth};
 pub use runner::{CoverageError, Shard, complete_run, run_units};
 pub use seed::trial_seed;
-pub use stats::{Stat, Stats};
+pub use stats::{Stat, Stats, stat_of};
 pub use summary::Summary;
 pub use threshold::{Op, Threshold, Verdict};
 pub use trial::{CAMPAIGN_METRICS, CampaignTrial, Trial};

@@ -1,6 +1,6 @@
 //! Pass/fail thresholds on statistics of metrics (pure, no I/O).
 
-use super::stats::{Stat, Stats};
+use super::stats::{Stat, Stats, stat_of};
 use serde::{Deserialize, Serialize};
 
 /// The comparison of a threshold.
@@ -56,7 +56,7 @@ impl Threshold {
 
     /// Judges the statistics of this threshold's metric in one case.
     pub fn judge(&self, case: &str, stats: &Stats) -> Verdict {
-        let observed = stats.get(self.stat);
+        let observed = stat_of(stats, self.stat);
         let excess = match self.op {
             Op::AtMost => observed - self.value,
             Op::AtLeast => self.value - observed,
