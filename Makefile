@@ -5,7 +5,7 @@ VENV  ?= .venv
 # The rerun viewer must match the `rerun` crate pinned in Cargo.toml.
 RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' Cargo.toml)
 
-.PHONY: run test bench study blind blind-analytic budget lint doc clean-results setup-viewer view
+.PHONY: run test test-real bench study blind blind-analytic budget lint doc clean-results setup-viewer view
 
 ## run: the paper scenario end to end; results under results/ (with a rerun recording:
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
@@ -24,11 +24,16 @@ setup-viewer:
 view:
 	$(CARGO) run --profile quick-release --features viz -- view $(OUT)/campaign.rrd
 
-## test: the whole test suite (unit, integration, doc tests)
+## test: the whole test suite (unit, integration, doc tests); reads nothing outside the repository
 test:
 	$(CARGO) test --all-targets
 	$(CARGO) test --doc
 	$(CARGO) run --quiet -- run scenarios/ci-smoke.toml --force --out results/ci-smoke
+
+## test-real: the tests on public real data sets, which need ../shared/data/real/ beside the
+## repository (or AXISCAL_SHARED_DIR naming the shared folder)
+test-real:
+	$(CARGO) test --test real_boby_klimchik -- --ignored
 
 ## study: the calibrator's efficiency against the Cramer-Rao bound (ML and the paper's
 ## estimator) and the calibration of its reported sigmas, 20000 simulated campaigns

@@ -1,30 +1,27 @@
 //! The whole procedure on simulated campaigns: noise-free data of the paper robot are
 //! reproduced exactly; noisy data recover Table 2 within the reported uncertainty.
 
+mod common;
+
 use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate};
 use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::commands_to_internal;
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
-use axiscal::sim::{AnalyticArm, simulate_campaign};
 use rand::{SeedableRng, rngs::StdRng};
 
 fn campaign(truth: &RobotModel, instrument: &MeasurementModel, seed: u64) -> MeasurementSet {
-    let desc = RobotDescription::asea_irb6l();
-    let plan = CalibrationPlan::table1(6);
-    let validation = ValidationPlan::workspace_default(6);
-    let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(&desc));
-    let mut rng = StdRng::seed_from_u64(seed);
-    let out = simulate_campaign(&desc, &plan, &validation, &mut arm, instrument, &mut rng).unwrap();
-    MeasurementSet::new(6, out.rows).unwrap()
+    common::analytic_campaign(
+        truth,
+        &CalibrationPlan::table1(6),
+        &ValidationPlan::workspace_default(6),
+        instrument,
+        seed,
+    )
 }
 
 fn noiseless_truth() -> RobotModel {
-    let mut truth = axiscal::sim::paper_robot();
-    for j in &mut truth.joints {
-        j.repeatability_sigma = 0.0;
-    }
-    truth
+    common::paper_robot_without_jitter()
 }
 
 /// Largest distance between where the truth and the calibrated robot put each tool target,

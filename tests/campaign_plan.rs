@@ -1,4 +1,4 @@
-//! Table 1 plan and the hold-still commands of FORMATS.md section 2.
+//! Table 1 plan and the hold-still commands of `docs/formats.md#controller-semantics`.
 
 use approx::assert_relative_eq;
 use axiscal::plan::{CalibrationPlan, PlanError, ValidationPlan};

@@ -1,22 +1,13 @@
 //! `axiscal calibrate` end to end: simulate, calibrate, read the results back.
 
-use assert_cmd::Command;
-use axiscal::calibration::procedure::Calibration;
+mod common;
 
-fn axiscal() -> Command {
-    Command::cargo_bin("axiscal").unwrap()
-}
+use axiscal::calibration::procedure::Calibration;
+use common::{axiscal, simulated_campaign_csv};
 
 /// A temporary folder holding `campaign.csv`, a simulated Table-1 campaign (seed 5).
 fn simulated_campaign() -> (tempfile::TempDir, std::path::PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("campaign.csv");
-    axiscal()
-        .args(["simulate", "--seed", "5", "--out"])
-        .arg(&data)
-        .assert()
-        .success();
-    (dir, data)
+    simulated_campaign_csv(5)
 }
 
 #[test]
@@ -30,8 +21,11 @@ fn calibrate_writes_loadable_results_and_protects_them() {
         .arg(&out)
         .assert()
         .success();
-    let cal: Calibration =
-        serde_json::from_str(&std::fs::read_to_string(out.join("calibration.json")).unwrap()).unwrap();
+    let cal: Calibration = axiscal::json_file::from_str(
+        axiscal::json_file::Schema::CALIBRATION,
+        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
+    )
+    .unwrap();
     assert_eq!(cal.axes.len(), 6);
     assert_eq!(cal.couplings.len(), 2);
     assert!(
@@ -44,9 +38,10 @@ fn calibrate_writes_loadable_results_and_protects_them() {
             .unwrap()
             .contains("<joint name=\"joint6\"")
     );
-    let findings: serde_json::Value =
+    let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    assert!(findings.as_array().is_some_and(|a| !a.is_empty()));
+    assert_eq!(report["schema"], "axiscal.report/1");
+    assert!(report["findings"].as_array().is_some_and(|a| !a.is_empty()));
 
     // Nothing the user has is overwritten without --force.
     let a = axiscal()
@@ -199,8 +194,11 @@ fn repeatability_option_is_recorded_and_checked() {
         .arg(&out)
         .assert()
         .success();
-    let cal: Calibration =
-        serde_json::from_str(&std::fs::read_to_string(out.join("calibration.json")).unwrap()).unwrap();
+    let cal: Calibration = axiscal::json_file::from_str(
+        axiscal::json_file::Schema::CALIBRATION,
+        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
+    )
+    .unwrap();
     assert_eq!(cal.options.repeatability_sigma_rad, Some(vec![0.0]));
     for bad in ["1e-4,2e-4", "-1e-4"] {
         let a = axiscal()

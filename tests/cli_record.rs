@@ -2,11 +2,9 @@
 //! clear error (exit 2); with it a recording is written; `view` without a viewer prints the
 //! install command of the matching viewer and succeeds.
 
-use assert_cmd::Command;
+mod common;
 
-fn axiscal() -> Command {
-    Command::cargo_bin("axiscal").expect("the axiscal binary is built")
-}
+use common::axiscal;
 
 /// The `rerun` crate version pinned in Cargo.toml (`rerun = { version = "=x.y.z", ... }`).
 fn pinned_rerun_version() -> &'static str {

@@ -1,16 +1,10 @@
 //! `axiscal run` and `axiscal merge` end to end: exit codes 0/1/2, results files, shards
 //! merged equal a single run bit for bit, no silent overwrite.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{axiscal, stderr};
 use std::path::Path;
-
-fn axiscal() -> Command {
-    Command::cargo_bin("axiscal").unwrap()
-}
-
-fn stderr(a: &assert_cmd::assert::Assert) -> String {
-    String::from_utf8_lossy(&a.get_output().stderr).into_owned()
-}
 
 /// `ci-smoke.toml` with `from` replaced by `to` and `extra` appended, written into `dir`.
 fn smoke_variant(dir: &Path, name: &str, (from, to): (&str, &str), extra: &str) -> std::path::PathBuf {
@@ -44,6 +38,7 @@ fn ci_smoke_passes_and_writes_every_result() {
     assert!(csv.starts_with("case,trial,seed,uncal_pos_rms_mm,"));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["schema"], "axiscal.summary/1");
     assert_eq!(summary["all_hold"], true);
     assert!(summary["cases"][0]["metrics"][0]["p95"].is_f64());
 

@@ -1,12 +1,10 @@
 //! `axiscal simulate` end to end: the CSV it writes is accepted by the reader with Table 1's
 //! point counts; bad input is one clear error with exit code 2.
 
-use assert_cmd::Command;
-use axiscal::measurement::read_measurements;
+mod common;
 
-fn axiscal() -> Command {
-    Command::cargo_bin("axiscal").unwrap()
-}
+use axiscal::measurement::read_measurements;
+use common::axiscal;
 
 #[test]
 fn simulate_writes_a_table1_campaign_the_reader_accepts() {

@@ -1,40 +1,32 @@
 //! Fig. 5 compensation closed in the loop, library and CLI.
 
+mod common;
+
 use assert_cmd::Command;
 use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
 use axiscal::compensation::{CompensationError, Compensator};
 use axiscal::harness::evaluation::{JointRanges, Region, random_poses};
 use axiscal::kinematics::IkError;
-use axiscal::measurement::{MeasurementModel, MeasurementSet};
+use axiscal::measurement::MeasurementModel;
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription};
-use axiscal::sim::{AnalyticArm, simulate_campaign};
 use nalgebra::Isometry3;
-use rand::{SeedableRng, rngs::StdRng};
 
 /// A noisy calibration of the paper robot (its model differs from the truth by ~1 mm).
 fn noisy_calibration() -> axiscal::calibration::procedure::Calibration {
     let desc = RobotDescription::asea_irb6l();
-    let mut arm = AnalyticArm::new(axiscal::sim::paper_robot(), Controller::from_description(&desc));
     let validation = ValidationPlan {
         poses: 0,
         ..ValidationPlan::workspace_default(6)
     };
-    let out = simulate_campaign(
-        &desc,
+    let set = common::analytic_campaign(
+        &axiscal::sim::paper_robot(),
         &CalibrationPlan::table1(6),
         &validation,
-        &mut arm,
         &MeasurementModel::paper_isotropic(),
-        &mut StdRng::seed_from_u64(4),
-    )
-    .unwrap();
-    calibrate(
-        &MeasurementSet::new(6, out.rows).unwrap(),
-        &desc,
-        &CalibrationOptions::default(),
-    )
-    .unwrap()
+        4,
+    );
+    calibrate(&set, &desc, &CalibrationOptions::default()).unwrap()
 }
 
 /// A robot whose truth IS the calibrated model reaches every compensated pose within 1 um
@@ -75,7 +67,11 @@ fn unreachable_pose_is_an_ik_error_for_that_pose() {
 
 fn write_calibration(dir: &std::path::Path) -> std::path::PathBuf {
     let path = dir.join("calibration.json");
-    std::fs::write(&path, serde_json::to_string(&noisy_calibration()).unwrap()).unwrap();
+    std::fs::write(
+        &path,
+        axiscal::json_file::to_string(axiscal::json_file::Schema::CALIBRATION, &noisy_calibration()).unwrap(),
+    )
+    .unwrap();
     path
 }
 

@@ -28,7 +28,7 @@ fn paper_scenario_compensation_beats_the_nominal_controller() {
 /// campaign with repeatability off), position and orientation, aggregated over seeds 1-3 (one
 /// seed's floor alone scatters by 0.6-2.5 mm: the Table-1 spans leave joint 5's and 6's
 /// harmonic terms poorly determined). It fails by far (1.6x over 30 seeds) when every joint is
-/// re-drawn at every step instead of only the actuators that move (README "Compensation").
+/// re-drawn at every step instead of only the actuators that move (`docs/validation.md`, "The paper scenario").
 #[test]
 fn paper_scenario_calibrated_error_is_within_1_1x_of_the_noise_floor() {
     let check = floor_check(&scenario(1), 3).unwrap();

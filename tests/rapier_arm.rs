@@ -155,7 +155,7 @@ fn the_visible_span_is_where_the_campaign_starts_losing_targets() {
     assert_eq!(all, 2.0 * search.max_half_span_deg);
 }
 
-/// The measurement CSV (FORMATS.md section 1) written from `rows` and read back: how many
+/// The measurement CSV (`docs/formats.md#measurement-csv`) written from `rows` and read back: how many
 /// rows it holds for `experiment`.
 fn csv_rows_of(rows: &[axiscal::measurement::Measurement], experiment: &str) -> usize {
     use axiscal::measurement::{MeasurementSet, read_measurements_from, write_measurements_to};

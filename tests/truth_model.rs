@@ -1,4 +1,4 @@
-//! The analytic truth model: controller semantics (FORMATS.md section 2), the paper preset
+//! The analytic truth model: controller semantics (`docs/formats.md#controller-semantics`), the paper preset
 //! (section 4, Table 2), the four-bar, repeatability and Monte-Carlo perturbation.
 
 use approx::assert_relative_eq;

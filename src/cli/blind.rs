@@ -8,6 +8,7 @@ use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::harness::blind::{
     BlindOptions, CASE_EFFECTS, CaseResult, Simulator, case_table, detectable_size, draw_case, score, simulate_case,
 };
+use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{read_measurements, write_measurements};
 use axiscal::robot::RobotDescription;
 use rayon::prelude::*;
@@ -87,12 +88,12 @@ pub fn run(args: Args) -> Result<()> {
             let set = simulate_case(&key, &desc, &options).map_err(anyhow::Error::msg)?;
             let csv = dir.join("data.csv");
             write_measurements(&csv, &set, true)?;
-            std::fs::write(dir.join("key.json"), serde_json::to_string_pretty(&key)?)?;
+            std::fs::write(dir.join("key.json"), json_file::to_string(Schema::BLIND_KEY, &key)?)?;
             // The diagnoser sees the CSV alone.
             let blind = read_measurements(&csv, Some(desc.dof()))?;
             let d =
                 diagnose(&blind, &desc, &diagnosis_options).with_context(|| format!("diagnosing {}", csv.display()))?;
-            std::fs::write(dir.join("diagnosis.json"), serde_json::to_string_pretty(&d)?)?;
+            std::fs::write(dir.join("diagnosis.json"), json_file::to_string(Schema::DIAGNOSIS, &d)?)?;
             // Generator side (knows the truth): the effect's trace against the detectable gap.
             let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)
                 .map_err(anyhow::Error::msg)?;
@@ -105,12 +106,18 @@ pub fn run(args: Args) -> Result<()> {
         })
         .collect::<Result<_>>()?;
     let s = score(&results);
-    std::fs::write(args.out.join("summary.json"), serde_json::to_string_pretty(&s)?)?;
+    std::fs::write(
+        args.out.join("summary.json"),
+        json_file::to_string(Schema::BLIND_SUMMARY, &s)?,
+    )?;
     std::fs::write(
         args.out.join("summary.md"),
         format!("{}\n{}", s.markdown(), case_table(&results)),
     )?;
-    std::fs::write(args.out.join("cases.json"), serde_json::to_string_pretty(&results)?)?;
+    std::fs::write(
+        args.out.join("cases.json"),
+        json_file::list_to_string(Schema::BLIND_CASES, "cases", &results)?,
+    )?;
     print!("{}", s.markdown());
     Ok(())
 }

@@ -6,6 +6,7 @@ use super::OneOf;
 use super::calibrate::{refuse_existing, write_output};
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget};
+use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementModel;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -111,7 +112,10 @@ pub fn run(args: Args) -> Result<()> {
     write_output(
         &args.out,
         names[0],
-        &serde_json::to_string_pretty(&serde_json::json!({ "settings": settings, "lines": lines }))?,
+        &json_file::to_string(
+            Schema::BUDGET,
+            &serde_json::json!({ "settings": settings, "lines": lines }),
+        )?,
         args.force,
     )?;
     write_output(&args.out, names[1], &md, args.force)?;

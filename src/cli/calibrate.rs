@@ -5,6 +5,7 @@
 use super::OneOf;
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{AxisEstimator, CalibrationOptions, calibrate, findings, markdown, urdf};
+use axiscal::json_file::{self, Schema};
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
@@ -15,7 +16,7 @@ const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("pape
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Measurement CSV (FORMATS.md section 1).
+    /// Measurement CSV (`docs/formats.md#measurement-csv`).
     data: PathBuf,
     /// Nominal robot description (TOML).
     #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
@@ -91,12 +92,17 @@ pub fn run(args: Args) -> Result<()> {
     let source = args.data.display().to_string();
     let names = ["calibration.json", "report.md", "report.json", "calibrated.urdf"];
     refuse_existing(&args.out, &names, args.force)?;
-    write_output(&args.out, names[0], &serde_json::to_string_pretty(&cal)?, args.force)?;
+    write_output(
+        &args.out,
+        names[0],
+        &json_file::to_string(Schema::CALIBRATION, &cal)?,
+        args.force,
+    )?;
     write_output(&args.out, names[1], &markdown(&cal, &desc, &source), args.force)?;
     write_output(
         &args.out,
         names[2],
-        &serde_json::to_string_pretty(&findings(&cal, &desc))?,
+        &json_file::list_to_string(Schema::REPORT, "findings", &findings(&cal, &desc))?,
         args.force,
     )?;
     write_output(

@@ -18,6 +18,7 @@
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::Calibration;
 use axiscal::compensation::{CompensationError, Compensator};
+use axiscal::json_file::{self, Schema};
 use axiscal::kinematics::IkError;
 use axiscal::robot::{Placement, RobotDescription};
 use nalgebra::Isometry3;
@@ -101,7 +102,7 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     let text = std::fs::read_to_string(&args.calibration)
         .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
-    let cal: Calibration = serde_json::from_str(&text)
+    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
         .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
     let comp = Compensator::new(&cal.robot, &desc)?;
     let poses = read_poses(&args.poses)?;

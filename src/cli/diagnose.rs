@@ -1,5 +1,5 @@
 //! `axiscal diagnose DATA.csv --robot R --out DIR`: sim-to-real gap diagnosis
-//! (FORMATS.md section 3), writing `diagnosis.json`, `diagnosis.md` and the plots
+//! (`docs/formats.md#diagnosis-json`), writing `diagnosis.json`, `diagnosis.md` and the plots
 //! (`where.{png,svg}`; with validation poses also `candidates.{png,svg}`).
 
 use super::calibrate::{check_noise_mm, refuse_existing, write_output};
@@ -8,6 +8,7 @@ use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose, diagnose_axes,
     markdown, validation_poses, write_axes_plots, write_plots,
 };
+use axiscal::json_file::{self, Schema};
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
@@ -15,7 +16,7 @@ use std::path::{Path, PathBuf};
 /// Arguments of `axiscal diagnose`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Measurement CSV (FORMATS.md section 1): axis experiments plus validation poses.
+    /// Measurement CSV (`docs/formats.md#measurement-csv`): axis experiments plus validation poses.
     data: PathBuf,
     /// Nominal robot description (TOML).
     #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
@@ -81,7 +82,7 @@ pub fn run(args: Args) -> Result<()> {
         let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
         let report = Report {
             out: &args.out,
-            json: serde_json::to_string_pretty(&d)?,
+            json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
             markdown: axes_markdown(&d, &source),
             plot_files: &AXES_PLOT_FILES,
             force: args.force,
@@ -110,7 +111,7 @@ pub fn run(args: Args) -> Result<()> {
     let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
     let report = Report {
         out: &args.out,
-        json: serde_json::to_string_pretty(&d)?,
+        json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
         markdown: markdown(&d, &source),
         plot_files: &PLOT_FILES,
         force: args.force,

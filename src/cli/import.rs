@@ -1,5 +1,5 @@
 //! `axiscal import FORMAT ...`: converts measurement data written by other groups to the
-//! measurement CSV of FORMATS.md section 1.
+//! measurement CSV of `docs/formats.md#measurement-csv`.
 
 use anyhow::{Context, Result, bail};
 use axiscal::measurement::import::boby_klimchik;

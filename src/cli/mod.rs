@@ -77,7 +77,7 @@ enum Command {
     /// calibrated error of the paper robot to the paper's 1.40 mm.
     Budget(budget::Args),
     /// Sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it,
-    /// how far the gap shrinks (diagnosis.json, FORMATS.md section 3).
+    /// how far the gap shrinks (diagnosis.json, `docs/formats.md#diagnosis-json`).
     Diagnose(diagnose::Args),
     /// Blind check of `diagnose`: simulated cases with hidden keys, scored (confusion matrix).
     Blind(blind::Args),

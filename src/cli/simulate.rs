@@ -1,5 +1,5 @@
 //! `axiscal simulate`: a full Table-1 campaign plus validation poses on a simulated robot,
-//! written as a measurement CSV (FORMATS.md section 1).
+//! written as a measurement CSV (`docs/formats.md#measurement-csv`).
 
 use anyhow::{Context, Result};
 use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements};

@@ -4,6 +4,7 @@
 use super::calibrate::write_output;
 use anyhow::{Context, Result};
 use axiscal::harness::studies::EfficiencyStudy;
+use axiscal::json_file::{self, Schema};
 use std::path::PathBuf;
 
 /// Arguments of `axiscal study`.
@@ -48,7 +49,7 @@ pub fn run(args: Args) -> Result<()> {
     write_output(
         &args.out,
         "efficiency.json",
-        &serde_json::to_string_pretty(&report)?,
+        &json_file::to_string(Schema::STUDY, &report)?,
         args.force,
     )?;
     write_output(&args.out, "efficiency.md", &md, args.force)?;

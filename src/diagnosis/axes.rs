@@ -26,14 +26,14 @@ pub struct FlaggedAxis {
     pub excess_ratio: f64,
     /// Fraction of noise-only replicas with a ratio at least as large on this axis.
     pub p_value: f64,
-    /// Candidate effects (FORMATS.md names) that change along one arc: compliance of this joint
+    /// Candidate effects (`diagnosis.json` names) that change along one arc: compliance of this joint
     /// or one below it, an unfitted gear harmonic or a wobble of this joint. Backlash (one approach direction per sweep),
     /// thermal growth (one temperature) and an instrument scale (a scaled circle is a circle)
     /// leave an arc an arc.
     pub consistent_with: Vec<String>,
 }
 
-/// The result of [`diagnose_axes`] (FORMATS.md section 3 fields; no validation poses, so no
+/// The result of [`diagnose_axes`] (`docs/formats.md#diagnosis-json` fields; no validation poses, so no
 /// candidate is fitted and `gap_after_mm = gap_before_mm`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AxesDiagnosis {

@@ -1,4 +1,4 @@
-//! Sim-to-real gap diagnosis (FORMATS.md section 3): from a measurement CSV and the nominal
+//! Sim-to-real gap diagnosis (`docs/formats.md#diagnosis-json`): from a measurement CSV and the nominal
 //! description only, WHERE the calibrated model misses (axis experiments and validation poses
 //! against what noise alone predicts), WHICH candidate effect explains the miss (each fitted
 //! on training poses, scored on held-out ones), and HOW FAR the gap shrinks.

@@ -32,7 +32,7 @@ pub fn unmodelled_harmonic_order(desc: &RobotDescription, joint: usize) -> usize
     }
 }
 
-/// A candidate unmodelled effect (FORMATS.md section 3 names).
+/// A candidate unmodelled effect (`docs/formats.md#diagnosis-json` names).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "effect", rename_all = "snake_case")]
 pub enum Candidate {
@@ -75,7 +75,7 @@ pub enum Candidate {
 }
 
 impl Candidate {
-    /// The FORMATS.md effect name.
+    /// The effect name of `diagnosis.json` (`docs/formats.md#diagnosis-json`).
     pub fn effect_name(&self) -> &'static str {
         match self {
             Candidate::JointCompliance { .. } => "joint_compliance",
@@ -186,7 +186,7 @@ fn perturb_coupling(g: Option<&mut CouplingFunction>, d: &[f64]) -> usize {
 }
 
 /// A pose's payload as the candidates assume it: `payload_kg` on the tool frame's origin
-/// (FORMATS.md gives only the mass), in the last link's frame; `None` without one.
+/// (the measurement CSV gives only the mass), in the last link's frame; `None` without one.
 fn payload_at_tool(model: &crate::kinematics::PhiModel, payload_kg: f64) -> Option<(f64, Point3<f64>)> {
     (payload_kg > 0.0).then(|| (payload_kg, Point3::from(model.last_link_from_tool.translation.vector)))
 }

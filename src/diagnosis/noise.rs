@@ -84,7 +84,7 @@ pub fn clean_positions(
         .collect()
 }
 
-/// Whether `m` is a validation measurement (FORMATS.md section 1: `moved_joint = 0`, not the
+/// Whether `m` is a validation measurement (`docs/formats.md#measurement-csv`: `moved_joint = 0`, not the
 /// tool experiment).
 pub fn is_validation(m: &Measurement) -> bool {
     m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT

@@ -1,5 +1,5 @@
 //! Validation poses as the diagnoser sees them: commands, approach directions from the
-//! command history, conditions and measured tool targets (FORMATS.md section 1).
+//! command history, conditions and measured tool targets (`docs/formats.md#measurement-csv`).
 
 use crate::measurement::Measurement;
 use crate::plan::TOOL_EXPERIMENT;

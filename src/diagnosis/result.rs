@@ -1,4 +1,4 @@
-//! The diagnosis result (FORMATS.md section 3 plus details) and its parts.
+//! The diagnosis result (`docs/formats.md#diagnosis-json` plus details) and its parts.
 
 use serde::{Deserialize, Serialize};
 
@@ -78,7 +78,7 @@ pub struct CandidateScore {
     pub parameters: Vec<Parameter>,
 }
 
-/// The FORMATS.md section 3 verdict fields of a diagnosis ([`Diagnosis`],
+/// The `docs/formats.md#diagnosis-json` verdict fields of a diagnosis ([`Diagnosis`],
 /// [`AxesDiagnosis`](super::AxesDiagnosis)).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Outcome {
@@ -97,10 +97,10 @@ pub struct Outcome {
     pub gap_after_mm: f64,
 }
 
-/// The diagnosis (FORMATS.md section 3 plus details).
+/// The diagnosis (`docs/formats.md#diagnosis-json` plus details).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Diagnosis {
-    /// The FORMATS.md section 3 verdict.
+    /// The `docs/formats.md#diagnosis-json` verdict.
     #[serde(flatten)]
     pub outcome: Outcome,
     /// Experiments and workspace features ranked by excess over noise.

@@ -1,4 +1,4 @@
-//! Reading and writing the measurement CSV (FORMATS.md section 1).
+//! Reading and writing the measurement CSV (`docs/formats.md#measurement-csv`).
 //!
 //! Header required; columns found by name in any order (surrounding white space ignored);
 //! `#` lines are comments; unknown columns are ignored. Every malformed file gives one

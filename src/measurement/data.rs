@@ -1,5 +1,5 @@
 //! Measured target positions as read from (or written to) the measurement CSV of
-//! FORMATS.md section 1, grouped by experiment and pose.
+//! `docs/formats.md#measurement-csv`, grouped by experiment and pose.
 
 use nalgebra::Point3;
 use std::collections::{BTreeMap, HashMap};

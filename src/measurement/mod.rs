@@ -1,6 +1,6 @@
 //! The instrument: the two-theodolite measurement model (triangulation, angular noise
 //! calibrated to the paper's 0.19 mm net radial error) and the measurement data files
-//! (FORMATS.md section 1).
+//! (`docs/formats.md#measurement-csv`).
 
 mod csv_io;
 mod data;

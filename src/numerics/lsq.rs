@@ -90,7 +90,7 @@ fn norm1(m: &DMatrix<f64>) -> f64 {
 
 /// 2-norm condition number of `J` after scaling every column to unit length (invariant to
 /// the parameters' units): from the eigenvalues of the scaled normal matrix when they are
-/// accurate to ~1e-8 (their ratio below [`CHOLESKY_MAX_CONDITION`]), else from the SVD of
+/// accurate to ~1e-8 (their ratio below `CHOLESKY_MAX_CONDITION`, 1e8), else from the SVD of
 /// the scaled `J`.
 pub fn scaled_condition_number(j: &DMatrix<f64>) -> f64 {
     let (n, _) = scaled_normal(j);
@@ -111,7 +111,7 @@ pub fn scaled_condition_number(j: &DMatrix<f64>) -> f64 {
 }
 
 /// `(J^T J)^-1`: by Cholesky of the column-scaled normal matrix when it is well conditioned
-/// ([`CHOLESKY_MAX_CONDITION`]), else by the SVD of the column-scaled `J`; error if `J` is
+/// (`CHOLESKY_MAX_CONDITION`, 1e8), else by the SVD of the column-scaled `J`; error if `J` is
 /// ill-conditioned (scaled condition number >= [`MAX_CONDITION`]).
 pub fn inverse_normal(j: &DMatrix<f64>, fit: &'static str) -> Result<DMatrix<f64>, LsqError> {
     let (normal, s) = scaled_normal(j);

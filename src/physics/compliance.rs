@@ -24,7 +24,7 @@ pub struct ComplianceEffect {
     pub gravity_m_s2: [f64; 3],
 }
 
-/// Payload: the pose's `payload_kg` ([`PoseConditions`]) as a point mass in the tool frame.
+/// Payload: the pose's `payload_kg` ([`PoseConditions`](crate::plan::PoseConditions)) as a point mass in the tool frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PayloadEffect {
@@ -194,7 +194,7 @@ pub struct CompliantLoad<'a> {
 /// Measured against the rapier arm (`tests/effects.rs`, joint 2 at 2e3 N m/rad): 0.8 % off
 /// rapier's joint-2 sag where the first order is 11.5 % off (the rest is a near-constant 2 %
 /// more load in rapier: the four-bar bodies' own weight). The diagnoser's compliance candidate
-/// uses it; [`AnalyticArm`](super::AnalyticArm) keeps the first order (the two agree to about
+/// uses it; the analytic arm (`sim::AnalyticArm`) keeps the first order (the two agree to about
 /// `K^-1 dQ/dq`, a few per cent of the sag at the blind suite's stiffnesses).
 pub fn coupled_static_deflection(
     model: &PhiModel,

@@ -1,5 +1,5 @@
 //! The calibration plan: which joint is swept, over what span, in what order (paper Table 1),
-//! the commands each step sends (FORMATS.md section 2), and the validation poses.
+//! the commands each step sends (`docs/formats.md#controller-semantics`), and the validation poses.
 
 use crate::robot::RobotDescription;
 use serde::{Deserialize, Serialize};
@@ -211,7 +211,7 @@ impl CalibrationPlan {
     /// The commands (file units, one per joint) of `sweep` at `step`.
     ///
     /// The swept joint moves; with `second_target`, joint `k+1` is commanded with the
-    /// nominal passive displacement so that its actuator holds still (FORMATS.md section 2:
+    /// nominal passive displacement so that its actuator holds still (`docs/formats.md#controller-semantics`:
     /// `cmd_{k+1}(s) = cmd_{k+1}(0) + slope (cmd_k(s) - cmd_k(0))`); every other command stays
     /// at the reference, so the controller's nominal decoupling keeps those joints' values.
     pub fn commands(&self, desc: &RobotDescription, sweep: &AxisSweep, step: usize) -> Vec<f64> {

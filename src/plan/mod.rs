@@ -14,7 +14,7 @@ pub use validation::ValidationPlan;
 /// calibrator's tool frame; not a validation pose).
 pub const TOOL_EXPERIMENT: &str = "tool";
 
-/// Conditions of one pose that unmodelled effects depend on (FORMATS.md optional columns).
+/// Conditions of one pose that unmodelled effects depend on (`docs/formats.md#measurement-csv`, optional columns).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PoseConditions {
     /// Payload at the tool \[kg\].

@@ -1,5 +1,5 @@
 //! Validation poses: free joint configurations spread over the workspace, visited after the
-//! axis experiments (FORMATS.md section 1, `moved_joint = 0`).
+//! axis experiments (`docs/formats.md#measurement-csv`, `moved_joint = 0`).
 
 use crate::robot::RobotDescription;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ValidationPlan {
-    /// Number of distinct poses (the paper's figs. 9-10 use a few dozen; FORMATS asks >= 50
+    /// Number of distinct poses (the paper's figs. 9-10 use a few dozen; the diagnosis wants >= 50
     /// for a simulated campaign).
     pub poses: usize,
     /// Per joint, the half-range of commands around the reference \[deg or mm\]; clipped to

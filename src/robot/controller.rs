@@ -1,4 +1,4 @@
-//! The robot controller of paper fig. 3, with the semantics fixed in FORMATS.md section 2.
+//! The robot controller of paper fig. 3, with the semantics fixed in `docs/formats.md#controller-semantics`.
 //!
 //! The controller is never modified by calibration (paper fig. 5): it always decouples with
 //! the *nominal* passive-motion models of the robot description. Pose commands (nominal
@@ -48,7 +48,7 @@ impl Controller {
         }
     }
 
-    /// Decoupling (FORMATS.md section 2, fig. 3): `u_1 = cmd_1`,
+    /// Decoupling (`docs/formats.md#controller-semantics`, fig. 3): `u_1 = cmd_1`,
     /// `u_{k+1} = cmd_{k+1} - nominal_passive_{k,k+1}(u_k)`; commands in internal units.
     pub fn decouple(&self, cmd: &[f64]) -> Result<Vec<f64>, ModelError> {
         self.check_len("commands", cmd)?;
@@ -64,7 +64,7 @@ impl Controller {
     }
 
     /// Commands that move actuator `joint` (1-based) alone to the new command `new_cmd` while
-    /// holding actuator `joint + 1` still (paper section 3.1, FORMATS.md section 2):
+    /// holding actuator `joint + 1` still (paper section 3.1, `docs/formats.md#controller-semantics`):
     /// `cmd_{k+1} = cmd_{k+1}(0) + nominal_passive(u_k) - nominal_passive(u_k(0))`, every other
     /// command as in `cmd_ref`. The last joint has no successor: only its own command changes.
     pub fn hold_still_commands(&self, joint: usize, cmd_ref: &[f64], new_cmd: f64) -> Result<Vec<f64>, ModelError> {

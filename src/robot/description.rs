@@ -131,7 +131,7 @@ impl RowEntry {
     }
 }
 
-/// A nominal passive coupling as the controller models it (FORMATS.md section 2):
+/// A nominal passive coupling as the controller models it (`docs/formats.md#controller-semantics`):
 /// `nominal_passive_{from,to}(u_from) = slope * u_from`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -197,7 +197,7 @@ impl LinkTarget {
     }
 }
 
-/// The targets observed while joint `joint` is swept (FORMATS.md section 1): target 0 on the
+/// The targets observed while joint `joint` is swept (`docs/formats.md#measurement-csv`): target 0 on the
 /// moved link or beyond (rigidly moved by that joint alone), target 1 (optional) on the next
 /// link out or beyond, for the passive motion (eq. 14).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

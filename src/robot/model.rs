@@ -110,7 +110,7 @@ impl RobotModel {
         }
     }
 
-    /// Reads and validates a robot model file (`docs/formats.md#robot-model-file`).
+    /// Reads and validates a robot model file (`docs/formats.md#robot-model`).
     pub fn from_file(path: &Path) -> Result<Self, ModelError> {
         Self::from_toml_str(&crate::toml_file::read(path)?, path)
     }

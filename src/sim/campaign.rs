@@ -1,6 +1,6 @@
 //! Running a campaign on a simulated robot: the axis experiments of a [`CalibrationPlan`] and
 //! the validation poses, each target measured by an instrument, to measurement rows
-//! (FORMATS.md section 1).
+//! (`docs/formats.md#measurement-csv`).
 
 use crate::measurement::{Measurement, MeasurementModel, TriangulationError};
 use crate::physics::InstrumentScale;
@@ -46,7 +46,7 @@ pub struct ExecuteError {
 /// What a campaign produced.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CampaignOutput {
-    /// Measured targets in the order they were observed (rows of FORMATS.md section 1).
+    /// Measured targets in the order they were observed (rows of `docs/formats.md#measurement-csv`).
     pub rows: Vec<Measurement>,
     /// Targets that were hidden from a station and so not measured, per experiment id.
     pub occluded: Vec<(String, usize)>,

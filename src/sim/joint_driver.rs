@@ -14,7 +14,7 @@ pub const UNMOVED_ACTUATOR_RAD: f64 = 1e-12;
 /// Commands to joint values with the joint-side effects: the fig. 3 controller, the truth's
 /// transmissions (with [`Effects::gear_harmonics`]), backlash on the active displacements, the
 /// passive couplings, and the repeatability jitter. Keeps the last command for the approach
-/// direction of the backlash (FORMATS.md section 1: the sign of `cmd(s) - cmd(s-1)`; a joint
+/// direction of the backlash (`docs/formats.md#measurement-csv`: the sign of `cmd(s) - cmd(s-1)`; a joint
 /// whose command did not change keeps its previous direction; before any motion the joint
 /// sits in the middle of its band).
 ///
@@ -64,9 +64,8 @@ impl JointDriver {
         &self.truth
     }
 
-    /// Executes `cmd` (internal units). Draws one standard normal per joint from `rng`, as
-    /// [`RobotModel::joint_values_executed`] does, and uses it for the actuators whose command
-    /// changed (see the type's docs).
+    /// Executes `cmd` (internal units). Draws one standard normal per joint from `rng` and
+    /// uses it for the actuators whose command changed (see the type's docs).
     pub fn drive<R: Rng + ?Sized>(&mut self, cmd: &[f64], rng: &mut R) -> Result<DrivenJoints, ModelError> {
         let u = self.controller.decouple(cmd)?;
         let mut active = self.truth.active_displacements(&u)?;

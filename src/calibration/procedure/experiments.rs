@@ -1,6 +1,6 @@
 //! The axis experiments of a measurement set as the procedure needs them: one per joint,
 //! target 0 (and target 1) ordered by step, the commands, and the common reference pose
-//! every other joint is held at (FORMATS.md sections 1-2).
+//! every other joint is held at (`docs/formats.md#measurement-csv` and `#controller-semantics`).
 
 use super::ProcedureError;
 use crate::measurement::MeasurementSet;

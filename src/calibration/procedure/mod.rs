@@ -3,7 +3,7 @@
 //! (eqs. 14-15), the actual phi-model at the common reference pose with the section-4 base
 //! frame, joint zero offsets, and the tool frame from the three tool targets.
 //!
-//! Conventions (see README): the calibrated joint values at the reference pose are the
+//! Conventions (`docs/method.md`, "Joint offsets and the reference pose"): the calibrated joint values at the reference pose are the
 //! reference commands; `theta_act_k = f_k^-1(u_k - offset_k)` and
 //! `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`, the same semantics as the truth model,
 //! so a calibrated robot is expressed as a [`RobotModel`]-shaped model (a data type; no truth
@@ -145,7 +145,7 @@ pub enum ProcedureError {
         /// Joint.
         joint: usize,
     },
-    /// Commands contradict the experiment design (FORMATS.md section 2).
+    /// Commands contradict the experiment design (`docs/formats.md#controller-semantics`).
     #[error("experiment {experiment}, step {step}, column cmd_{joint}: {reason}")]
     InconsistentCommands {
         /// Experiment.
@@ -499,7 +499,9 @@ fn coupling_into(
             experiment: e.name.clone(),
             step: 0,
             joint: from + 1,
-            reason: "a coupling is measured only while actuator k+1 is held still (FORMATS.md section 2)".into(),
+            reason:
+                "a coupling is measured only while actuator k+1 is held still (`docs/formats.md#controller-semantics`)"
+                    .into(),
         });
     }
     let fit_err = |source| ProcedureError::Fit {

@@ -19,7 +19,7 @@ use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, simulate_ca
 use rand::{Rng, RngExt, SeedableRng, rngs::StdRng};
 use serde::{Deserialize, Serialize};
 
-/// Effect names a case can carry (FORMATS.md section 3), plus `unknown`: an effect outside the
+/// Effect names a case can carry (`docs/formats.md#diagnosis-json`), plus `unknown`: an effect outside the
 /// candidate set, which the diagnoser should call `unexplained` (alternately a joint zero that
 /// drifts with temperature, [`JointZeroDrift`], and a curvature of the instrument's field,
 /// [`InstrumentSag`]).

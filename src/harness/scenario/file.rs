@@ -9,7 +9,7 @@ use crate::sim::PerturbationSpec;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
-/// A scenario file (see the module docs and README "Monte-Carlo scenarios").
+/// A scenario file (see the module docs and `docs/formats.md#scenario-file`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioFile {
@@ -42,7 +42,7 @@ pub struct ScenarioFile {
     /// [`ValidationPlan::workspace_default`]: keys `poses`, `half_range` \[deg or mm per
     /// joint\], `seed`.
     pub validation: Option<ValidationPlan>,
-    /// Unmodelled effects of the real robot (README "Unmodelled effects"); the analytic arm
+    /// Unmodelled effects of the real robot (`docs/formats.md#effects-file`); the analytic arm
     /// applies compliance and payload to first order, the rapier arm physically.
     #[serde(default)]
     pub effects: Effects,
@@ -162,7 +162,7 @@ impl Default for PlanSection {
     }
 }
 
-/// Conditions every pose of the campaign is measured under (FORMATS.md optional columns);
+/// Conditions every pose of the campaign is measured under (`docs/formats.md#measurement-csv`, optional columns);
 /// the effects that depend on them (payload through compliance, thermal expansion) act only
 /// when switched on in `[effects]`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -131,7 +131,7 @@ impl CampaignTrial {
     fn metrics(&self, out: &CampaignOutput, calibrated: &RobotModel) -> Metrics {
         let targets = self.desc.tool_targets_m();
         let e = validation_errors(&out.rows, &targets, |cmd| {
-            // Nominally the robot reaches exactly the commanded joint values (FORMATS.md 2).
+            // Nominally the robot reaches exactly the commanded joint values (`docs/formats.md#controller-semantics`).
             self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
         });
         let model = calibrated.phi_model();

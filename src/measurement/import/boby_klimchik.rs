@@ -7,7 +7,7 @@
 //! controller's joint readings J1..J6 \[deg\]. Six blocks of six lines, one block per joint
 //! moved alone, in the order J1..J6.
 //!
-//! Conversion (FORMATS.md section 1): block `k` becomes experiment `axis{k}` with
+//! Conversion (`docs/formats.md#measurement-csv`): block `k` becomes experiment `axis{k}` with
 //! `moved_joint = k`, steps in file order, targets 0, 1, 2 = SMRs 2, 3, 1 ([`SMR_OF_TARGET`]):
 //! the procedure fits each axis to target 0, and SMR 1 sits within about 2 mm of axes 4 and 6
 //! (its J4 and J6 arcs have a radius near 1.5 mm and would fix those axes' directions only to
@@ -20,11 +20,11 @@
 //! angle to the upper arm. The controller's J3 is therefore measured against the ground
 //! (the Fanuc-style J2/J3 interaction), and the forearm's angle to the upper arm, the phi-model
 //! joint value of joint 3, is `J3 + J2` (constant in the J2 block, `J3` in the J3 block where
-//! `J2 = 0`). FORMATS.md section 2 requires that an error-free robot reach its commands as
+//! `J2 = 0`). `docs/formats.md#controller-semantics` requires that an error-free robot reach its commands as
 //! phi-model joint values, so the importer writes this kinematic dependency into the command:
 //! `cmd_3 = J3 + J2`. (Keeping `cmd_3 = J3` with a nominal 2->3 coupling of slope -1 would
 //! make the controller hold actuator 3 still, as here, but would also move joint 3 passively
-//! by `-J2`, which the data contradict; see the README's worked example.)
+//! by `-J2`, which the data contradict; see the worked example in `docs/validation.md`.)
 
 use super::super::{Measurement, MeasurementSet, MeasurementSetError};
 use std::path::{Path, PathBuf};
@@ -191,7 +191,7 @@ pub fn import_dir(dir: &Path) -> Result<MeasurementSet, ImportError> {
     parse(&text, &path)
 }
 
-/// The comment lines the importer writes above the CSV header (FORMATS.md: `#` lines are
+/// The comment lines the importer writes above the CSV header (`docs/formats.md#measurement-csv`: `#` lines are
 /// comments), recording the source and the joint-3 conversion.
 pub fn provenance_comment(source: &Path) -> String {
     format!(

@@ -3,7 +3,7 @@
 //! targets, updated before every dynamics step.
 //!
 //! rapier has no gear joint. In the truth model the passive motion of joint `k` is driven by
-//! the *active* rotation of joint `k - 1` (FORMATS.md section 2):
+//! the *active* rotation of joint `k - 1` (`docs/formats.md#controller-semantics`):
 //! `q_k = theta_act_k + g(theta_act_{k-1})`. In dynamic mode joint `k - 1` sags by
 //! `s_{k-1} = q_{k-1} - T_{k-1}` (its position minus its servo's current target; for a joint
 //! driven by a four-bar, the crank's deviation from its target), so the actual rotation of

@@ -1,0 +1,62 @@
+//! Helpers shared by the integration tests (`mod common;` in a test file). Each test binary
+//! uses some of them.
+#![allow(dead_code)]
+
+use assert_cmd::Command;
+use axiscal::measurement::{MeasurementModel, MeasurementSet};
+use axiscal::plan::{CalibrationPlan, ValidationPlan};
+use axiscal::robot::{Controller, RobotDescription, RobotModel};
+use axiscal::sim::{AnalyticArm, simulate_campaign};
+use rand::{SeedableRng, rngs::StdRng};
+
+/// The `axiscal` binary of this build.
+pub fn axiscal() -> Command {
+    Command::cargo_bin("axiscal").expect("the axiscal binary is built")
+}
+
+/// What a finished command wrote to stderr.
+pub fn stderr(a: &assert_cmd::assert::Assert) -> String {
+    String::from_utf8_lossy(&a.get_output().stderr).into_owned()
+}
+
+/// What a finished command wrote to stdout.
+pub fn stdout(a: &assert_cmd::assert::Assert) -> String {
+    String::from_utf8_lossy(&a.get_output().stdout).into_owned()
+}
+
+/// The paper robot with its repeatability jitter switched off (noise-free executions).
+pub fn paper_robot_without_jitter() -> RobotModel {
+    let mut truth = axiscal::sim::paper_robot();
+    for j in &mut truth.joints {
+        j.repeatability_sigma = 0.0;
+    }
+    truth
+}
+
+/// The measurements of `plan` then `validation` on `truth` (the analytic arm behind the
+/// IRB/L6 controller) by `instrument`, random stream from `seed`.
+pub fn analytic_campaign(
+    truth: &RobotModel,
+    plan: &CalibrationPlan,
+    validation: &ValidationPlan,
+    instrument: &MeasurementModel,
+    seed: u64,
+) -> MeasurementSet {
+    let desc = RobotDescription::asea_irb6l();
+    let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(&desc));
+    let mut rng = StdRng::seed_from_u64(seed);
+    let out = simulate_campaign(&desc, plan, validation, &mut arm, instrument, &mut rng).expect("the campaign runs");
+    MeasurementSet::new(desc.dof(), out.rows).expect("a simulated campaign is a valid measurement set")
+}
+
+/// A temporary folder holding `campaign.csv`, written by `axiscal simulate --seed SEED`.
+pub fn simulated_campaign_csv(seed: u64) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let data = dir.path().join("campaign.csv");
+    axiscal()
+        .args(["simulate", "--seed", &seed.to_string(), "--out"])
+        .arg(&data)
+        .assert()
+        .success();
+    (dir, data)
+}
