@@ -145,16 +145,37 @@ fn where_entries(
     (out, contrasts)
 }
 
-/// Tests the observation against the null samples and names the effect.
-pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOptions) -> Diagnosis {
-    let alpha = options.false_alarm;
-    let sigma2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
-    let to_rms_mm = |chi2: f64| (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3;
-    let base = prep.baseline_fit();
+/// The held-out RMS per held-out target in mm of a chi-square `chi2`, given the
+/// per-coordinate noise variance `sigma2` (m^2).
+fn chi2_to_rms_mm(chi2: f64, sigma2: f64, prep: &Prepared) -> f64 {
+    (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3
+}
+
+/// The omnibus gap test (step 4): the baseline refit's held-out chi-square against its
+/// noise-only null distribution.
+struct GapTest {
+    /// Held-out chi-square of the observation under the baseline refit.
+    g_obs: f64,
+    /// The same chi-square for each null sample.
+    g_null: Vec<f64>,
+    /// Mean of `g_null`.
+    g_mean: f64,
+    /// The `1 - alpha` quantile of `g_null`.
+    g_q: f64,
+    /// How many null standard deviations `g_obs` lies above the null mean.
+    gap_sigmas: f64,
+    /// The smallest gap (mm) the test flags at the false-alarm rate.
+    detectable_gap_mm: f64,
+    /// Upper-tail probability of `g_obs` under the null.
+    p_gap: f64,
+}
+
+/// Runs the gap test of the baseline refit `base` at false-alarm rate `alpha`.
+fn gap_test(prep: &Prepared, null: &NullData, base: &LinearFit, sigma2: f64, alpha: f64) -> GapTest {
     let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
-    let g_obs = prep.heldout_ssr(&base, &observed)[0] / sigma2;
+    let g_obs = prep.heldout_ssr(base, &observed)[0] / sigma2;
     let g_null: Vec<f64> = prep
-        .heldout_ssr(&base, &null.samples)
+        .heldout_ssr(base, &null.samples)
         .iter()
         .map(|s| s / sigma2)
         .collect();
@@ -164,19 +185,36 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         quantile(&g_null, 1.0 - alpha, QuantileMethod::InverseCdf),
     );
     let gap_sigmas = (g_obs - g_mean) / g_sd.max(1e-12);
-    let detectable_gap_mm = to_rms_mm(g_q - g_mean);
+    let detectable_gap_mm = chi2_to_rms_mm(g_q - g_mean, sigma2, prep);
     let p_gap = upper_tail(&g_null, g_obs);
+    GapTest {
+        g_obs,
+        g_null,
+        g_mean,
+        g_q,
+        gap_sigmas,
+        detectable_gap_mm,
+        p_gap,
+    }
+}
 
-    let mut scored = score_candidates(prep, null, &base, (g_obs, &g_null), sigma2);
-    // Family-wise threshold: the noise-only maximum of z over the candidates.
-    let samples = g_null.len();
+/// Family-wise threshold: the noise-only maximum of z over the candidates (its `1 - alpha`
+/// quantile over the `samples` null samples); marks the candidates above it significant and
+/// returns it.
+fn mark_significant(scored: &mut [Scored], samples: usize, alpha: f64) -> f64 {
     let max_z: Vec<f64> = (0..samples)
         .map(|k| scored.iter().map(|s| s.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
         .collect();
     let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
-    for s in &mut scored {
+    for s in scored.iter_mut() {
         s.score.significant = s.score.z > z_threshold;
     }
+    z_threshold
+}
+
+/// Sorts the candidates by held-out chi-square and gives the significant ones their weights
+/// `exp(-(chi2 - chi2_min) / 2)`, normalised over the significant candidates.
+fn rank_and_weigh(scored: &mut [Scored]) {
     scored.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
     let chi2_min = scored
         .iter()
@@ -191,8 +229,13 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     for s in scored.iter_mut().filter(|s| s.score.significant) {
         s.score.weight = (-(s.chi2 - chi2_min) / 2.0).exp() / z_sum;
     }
-    // The named candidate and the baseline it is compared with, refit beyond their
-    // linearisation (the tests above stay linear, as their null distributions).
+}
+
+/// The named candidate and the baseline it is compared with, refit beyond their
+/// linearisation (the tests stay linear, as their null distributions). Updates the first
+/// significant candidate's score and returns the baseline's held-out chi-square after the
+/// refit (`g_obs` when there is nothing to refit).
+fn refit_named(prep: &Prepared, scored: &mut [Scored], g_obs: f64, sigma2: f64) -> f64 {
     let mut g_fit = g_obs;
     if let Some(b) = scored.iter_mut().find(|s| s.score.significant)
         && let Some((_, x)) = prep.x_candidates.iter().find(|(c, _)| *c == b.candidate)
@@ -200,7 +243,10 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     {
         g_fit = g_fit.min(rb.heldout_ssr / sigma2);
         b.chi2 = b.chi2.min(rc.heldout_ssr / sigma2);
-        let (rms, noise) = (to_rms_mm(b.chi2), to_rms_mm(mean(&b.chi2_null)));
+        let (rms, noise) = (
+            chi2_to_rms_mm(b.chi2, sigma2, prep),
+            chi2_to_rms_mm(mean(&b.chi2_null), sigma2, prep),
+        );
         b.score.heldout_rms_mm = rms;
         b.score.gap_after_mm = (rms * rms - noise * noise).max(0.0).sqrt();
         b.score.improvement_chi2 = g_fit - b.chi2;
@@ -213,111 +259,194 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
             sigma2,
         );
     }
-    let rms_before = to_rms_mm(g_fit);
-    let noise_before = to_rms_mm(g_mean);
+    g_fit
+}
+
+/// The outcome's fields as decided.
+struct Verdict {
+    /// The named effect, `none` or `unexplained`.
+    effect: String,
+    /// The named effect's joint, if any.
+    joint: Option<usize>,
+    /// Confidence in the outcome.
+    confidence: f64,
+    /// The gap (mm) left after the named effect.
+    gap_after_mm: f64,
+    /// The named effect's fitted parameters.
+    parameters: Vec<Parameter>,
+    /// The sentence explaining the outcome.
+    verdict: String,
+}
+
+/// What the verdict is decided from: the tests' results and the gap before any candidate.
+struct Evidence<'a> {
+    /// The omnibus gap test.
+    gap: &'a GapTest,
+    /// False-alarm rate.
+    alpha: f64,
+    /// The family-wise z threshold.
+    z_threshold: f64,
+    /// Held-out RMS (mm) of the baseline refit.
+    rms_before_mm: f64,
+    /// Its noise-only RMS (mm).
+    noise_before_mm: f64,
+    /// The gap (mm) before any candidate.
+    gap_before_mm: f64,
+    /// Fraction of the gap's variance the best candidate closes.
+    fraction_closed: f64,
+}
+
+/// The name of a candidate with its joint, e.g. `backlash on joint 2`.
+fn named(b: &Scored) -> String {
+    format!(
+        "{}{}",
+        b.score.effect,
+        b.score.joint.map_or(String::new(), |j| format!(" on joint {j}"))
+    )
+}
+
+impl Evidence<'_> {
+    /// A significant candidate is tested first (it is the more powerful, targeted test; its
+    /// false-alarm rate is family-wise); the omnibus gap test decides `none` vs `unexplained`
+    /// only when no candidate beats noise.
+    fn verdict(&self, best: Option<&Scored>, explained_fraction: f64) -> Verdict {
+        match best {
+            Some(b) => self.candidate_verdict(b, explained_fraction),
+            None if self.gap.g_obs > self.gap.g_q => self.unexplained_gap(),
+            None => self.at_noise_level(),
+        }
+    }
+
+    /// The best significant candidate `b` is named when what it leaves is at the noise level
+    /// or it closes `explained_fraction` of the gap's variance; else `unexplained`.
+    fn candidate_verdict(&self, b: &Scored, explained_fraction: f64) -> Verdict {
+        let (alpha, z_threshold, fraction_closed) = (self.alpha, self.z_threshold, self.fraction_closed);
+        let (gap_before, gap_sigmas) = (self.gap_before_mm, self.gap.gap_sigmas);
+        let remaining_ok = b.chi2 <= quantile(&b.chi2_null, 1.0 - alpha, QuantileMethod::InverseCdf);
+        if remaining_ok || fraction_closed >= explained_fraction {
+            Verdict {
+                effect: b.score.effect.clone(),
+                joint: b.candidate.joint(),
+                confidence: b.score.weight,
+                gap_after_mm: b.score.gap_after_mm,
+                parameters: b.score.parameters.clone(),
+                verdict: format!(
+                    "{} (z = {:.1} over the noise-only threshold {z_threshold:.1}) closes {:.0} % of the gap's variance ({gap_before:.3} -> {:.3} mm){}",
+                    named(b),
+                    b.score.z,
+                    100.0 * fraction_closed.max(0.0),
+                    b.score.gap_after_mm,
+                    if remaining_ok {
+                        "; what is left is at the noise level"
+                    } else {
+                        ""
+                    }
+                ),
+            }
+        } else {
+            Verdict {
+                effect: "unexplained".to_owned(),
+                joint: None,
+                confidence: 1.0 - upper_tail(&b.chi2_null, b.chi2),
+                gap_after_mm: gap_before,
+                parameters: vec![],
+                verdict: format!(
+                    "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma); the best candidate, {}, closes only {:.0} % of its variance and leaves {:.3} mm above noise",
+                    named(b),
+                    100.0 * fraction_closed.max(0.0),
+                    b.score.gap_after_mm
+                ),
+            }
+        }
+    }
+
+    /// No candidate beats noise but the gap test flags the gap: `unexplained`.
+    fn unexplained_gap(&self) -> Verdict {
+        let (z_threshold, gap_before, gap_sigmas) = (self.z_threshold, self.gap_before_mm, self.gap.gap_sigmas);
+        Verdict {
+            effect: "unexplained".to_owned(),
+            joint: None,
+            confidence: 1.0 - self.gap.p_gap,
+            gap_after_mm: gap_before,
+            parameters: vec![],
+            verdict: format!(
+                "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma) and no candidate beats noise (threshold z = {z_threshold:.1})"
+            ),
+        }
+    }
+
+    /// Neither a candidate nor the gap test beats noise: `none`.
+    fn at_noise_level(&self) -> Verdict {
+        let (alpha, z_threshold, gap_before) = (self.alpha, self.z_threshold, self.gap_before_mm);
+        let (rms_before, noise_before) = (self.rms_before_mm, self.noise_before_mm);
+        let detectable_gap_mm = self.gap.detectable_gap_mm;
+        Verdict {
+            effect: "none".to_owned(),
+            joint: None,
+            confidence: self.gap.p_gap,
+            gap_after_mm: gap_before,
+            parameters: vec![],
+            verdict: format!(
+                "held-out residual {rms_before:.3} mm is at the noise level (noise only {noise_before:.3} mm; gap {gap_before:.3} mm below the {detectable_gap_mm:.3} mm the test flags at false-alarm rate {alpha}) and no candidate beats noise (z threshold {z_threshold:.1})"
+            ),
+        }
+    }
+}
+
+/// Tests the observation against the null samples and names the effect.
+pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOptions) -> Diagnosis {
+    let alpha = options.false_alarm;
+    let sigma2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
+    let base = prep.baseline_fit();
+    let gap = gap_test(prep, null, &base, sigma2, alpha);
+
+    let mut scored = score_candidates(prep, null, &base, (gap.g_obs, &gap.g_null), sigma2);
+    let samples = gap.g_null.len();
+    let z_threshold = mark_significant(&mut scored, samples, alpha);
+    rank_and_weigh(&mut scored);
+    let g_fit = refit_named(prep, &mut scored, gap.g_obs, sigma2);
+    let rms_before = chi2_to_rms_mm(g_fit, sigma2, prep);
+    let noise_before = chi2_to_rms_mm(gap.g_mean, sigma2, prep);
     let gap_before = (rms_before.powi(2) - noise_before.powi(2)).max(0.0).sqrt();
     let best = scored.iter().find(|s| s.score.significant);
     let fraction_closed = match best {
         Some(b) if gap_before > 0.0 => 1.0 - (b.score.gap_after_mm / gap_before).powi(2),
         _ => 0.0,
     };
-    let named = |b: &Scored| {
-        format!(
-            "{}{}",
-            b.score.effect,
-            b.score.joint.map_or(String::new(), |j| format!(" on joint {j}"))
-        )
+    let evidence = Evidence {
+        gap: &gap,
+        alpha,
+        z_threshold,
+        rms_before_mm: rms_before,
+        noise_before_mm: noise_before,
+        gap_before_mm: gap_before,
+        fraction_closed,
     };
-    let none = || {
-        (
-            "none".to_owned(),
-            None,
-            p_gap,
-            gap_before,
-            vec![],
-            format!(
-                "held-out residual {rms_before:.3} mm is at the noise level (noise only {noise_before:.3} mm; gap {gap_before:.3} mm below the {detectable_gap_mm:.3} mm the test flags at false-alarm rate {alpha}) and no candidate beats noise (z threshold {z_threshold:.1})"
-            ),
-        )
-    };
-    // A significant candidate is tested first (it is the more powerful, targeted test; its
-    // false-alarm rate is family-wise); the omnibus gap test decides `none` vs `unexplained`
-    // only when no candidate beats noise.
-    let (effect, joint, confidence, gap_after, parameters, verdict) = match best {
-        Some(b) => {
-            let remaining_ok = b.chi2 <= quantile(&b.chi2_null, 1.0 - alpha, QuantileMethod::InverseCdf);
-            if remaining_ok || fraction_closed >= options.explained_fraction {
-                (
-                    b.score.effect.clone(),
-                    b.candidate.joint(),
-                    b.score.weight,
-                    b.score.gap_after_mm,
-                    b.score.parameters.clone(),
-                    format!(
-                        "{} (z = {:.1} over the noise-only threshold {z_threshold:.1}) closes {:.0} % of the gap's variance ({gap_before:.3} -> {:.3} mm){}",
-                        named(b),
-                        b.score.z,
-                        100.0 * fraction_closed.max(0.0),
-                        b.score.gap_after_mm,
-                        if remaining_ok {
-                            "; what is left is at the noise level"
-                        } else {
-                            ""
-                        }
-                    ),
-                )
-            } else {
-                (
-                    "unexplained".to_owned(),
-                    None,
-                    1.0 - upper_tail(&b.chi2_null, b.chi2),
-                    gap_before,
-                    vec![],
-                    format!(
-                        "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma); the best candidate, {}, closes only {:.0} % of its variance and leaves {:.3} mm above noise",
-                        named(b),
-                        100.0 * fraction_closed.max(0.0),
-                        b.score.gap_after_mm
-                    ),
-                )
-            }
-        }
-        None if g_obs > g_q => (
-            "unexplained".to_owned(),
-            None,
-            1.0 - p_gap,
-            gap_before,
-            vec![],
-            format!(
-                "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma) and no candidate beats noise (threshold z = {z_threshold:.1})"
-            ),
-        ),
-        None => none(),
-    };
+    let v = evidence.verdict(best, options.explained_fraction);
     let base_params = prep.x_geometric.ncols();
     let (where_, features) = where_entries(prep, null, rms_before, noise_before, alpha);
     Diagnosis {
         outcome: Outcome {
-            effect,
-            joint,
-            confidence,
+            effect: v.effect,
+            joint: v.joint,
+            confidence: v.confidence,
             gap_before_mm: gap_before,
-            gap_after_mm: gap_after,
+            gap_after_mm: v.gap_after_mm,
         },
         where_,
         features,
         candidates: scored.into_iter().map(|s| s.score).collect(),
-        parameters,
+        parameters: v.parameters,
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         poses: [prep.poses.len().div_ceil(2), prep.poses.len() / 2],
         heldout_rms_before_mm: rms_before,
         noise_only_rms_mm: noise_before,
-        gap_sigmas,
-        detectable_gap_mm,
+        gap_sigmas: gap.gap_sigmas,
+        detectable_gap_mm: gap.detectable_gap_mm,
         false_alarm: alpha,
         null_samples: samples,
         refit_rank: [base.rank, base_params],
         fraction_closed,
-        verdict,
+        verdict: v.verdict,
     }
 }
