@@ -261,6 +261,8 @@ fn fit_arc_from(
     })
 }
 
+/// How well the fit determines its parameters: the weakest combinations, the strong
+/// correlations, the axis tilt's sigma (and what larger spans would give), and notes.
 fn identifiability(
     model: &ArcModel,
     params: &ArcParams,
@@ -272,10 +274,31 @@ fn identifiability(
     let m = covariance.nrows();
     let sd: Vec<f64> = (0..m).map(|k| covariance[(k, k)].sqrt()).collect();
     let corr = DMatrix::from_fn(m, m, |r, c| covariance[(r, c)] / (sd[r] * sd[c]));
+    let weak_directions = weak_directions(&corr, &names);
+    let strong_correlations = strong_correlations(&corr, &names);
+    let tilt = covariance.fixed_view::<2, 2>(3, 3).into_owned();
+    let tilt_sigma_rad = tilt.symmetric_eigenvalues().max().sqrt();
+    let sigma = noise_sigma_per_axis(noise);
+    let tilt_sigma_by_span = tilt_sigma_by_span(model, params, sigma);
+    let notes = identifiability_notes(model, params, &names, &sd, tilt_sigma_rad, sigma);
+    Ok(Identifiability {
+        condition_number: lsq::scaled_condition_number(jw),
+        weak_directions,
+        strong_correlations,
+        tilt_sigma_rad,
+        tilt_sigma_by_span,
+        notes,
+    })
+}
+
+/// The two weakest parameter combinations: the eigenvectors of the correlation matrix `corr`
+/// with the largest eigenvalues, with their components of magnitude >= 0.3.
+fn weak_directions(corr: &DMatrix<f64>, names: &[String]) -> Vec<WeakDirection> {
+    let m = corr.nrows();
     let eig = corr.clone().symmetric_eigen();
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-    let weak_directions = order
+    order
         .iter()
         .take(2)
         .map(|&k| WeakDirection {
@@ -285,7 +308,12 @@ fn identifiability(
                 .map(|r| (names[r].clone(), eig.eigenvectors[(r, k)]))
                 .collect(),
         })
-        .collect();
+        .collect()
+}
+
+/// The parameter pairs with correlation `|rho| > 0.95` in `corr`.
+fn strong_correlations(corr: &DMatrix<f64>, names: &[String]) -> Vec<(String, String, f64)> {
+    let m = corr.nrows();
     let mut strong_correlations = Vec::new();
     for r in 0..m {
         for c in r + 1..m {
@@ -294,17 +322,27 @@ fn identifiability(
             }
         }
     }
-    let tilt = covariance.fixed_view::<2, 2>(3, 3).into_owned();
-    let tilt_sigma_rad = tilt.symmetric_eigenvalues().max().sqrt();
+    strong_correlations
+}
+
+/// The measurement noise's standard deviation per axis (m): the isotropic one, or the RMS over
+/// the points' covariances.
+fn noise_sigma_per_axis(noise: &MeasurementNoise) -> f64 {
+    match noise {
+        MeasurementNoise::Isotropic { sigma_per_axis } => *sigma_per_axis,
+        MeasurementNoise::PerPoint(c) => (c.iter().map(|m| m.trace()).sum::<f64>() / (3.0 * c.len() as f64)).sqrt(),
+    }
+}
+
+/// `(span, tilt 1-sigma)` (rad) the Cramer-Rao bound predicts for the same number of points
+/// evenly spread from the same start over this sweep's span and larger ones (twice it, a
+/// quarter, half and three quarters of a turn), with noise `sigma` (m) per axis.
+fn tilt_sigma_by_span(model: &ArcModel, params: &ArcParams, sigma: f64) -> Vec<(f64, f64)> {
     let span = model
         .commands_rad
         .iter()
         .map(|c| (c - model.commands_rad[0]).abs())
         .fold(0.0, f64::max);
-    let sigma = match noise {
-        MeasurementNoise::Isotropic { sigma_per_axis } => *sigma_per_axis,
-        MeasurementNoise::PerPoint(c) => (c.iter().map(|m| m.trace()).sum::<f64>() / (3.0 * c.len() as f64)).sqrt(),
-    };
     let mut tilt_sigma_by_span = Vec::new();
     let mut spans = vec![
         span,
@@ -329,6 +367,20 @@ fn identifiability(
             tilt_sigma_by_span.push((s, b));
         }
     }
+    tilt_sigma_by_span
+}
+
+/// Plain-language findings: the phase convention, the transmission coefficients determined only
+/// through the sweep's curvature, and an axis tilt that moves the arc by more than 3 noise
+/// sigmas (`sigma` per axis, m).
+fn identifiability_notes(
+    model: &ArcModel,
+    params: &ArcParams,
+    names: &[String],
+    sd: &[f64],
+    tilt_sigma_rad: f64,
+    sigma: f64,
+) -> Vec<String> {
     let mut notes = vec![
         "phase is fitted at step 0: a constant command offset is absorbed by the phase, not by the transmission"
             .to_string(),
@@ -353,14 +405,7 @@ fn identifiability(
             tilt_sigma_rad * params.radius
         ));
     }
-    Ok(Identifiability {
-        condition_number: lsq::scaled_condition_number(jw),
-        weak_directions,
-        strong_correlations,
-        tilt_sigma_rad,
-        tilt_sigma_by_span,
-        notes,
-    })
+    notes
 }
 
 #[cfg(test)]
