@@ -276,12 +276,16 @@ fn record_line(bytes: &[u8], offset: u64) -> u64 {
     1 + bytes[..start].iter().filter(|&&b| b == b'\n').count() as u64
 }
 
-fn find_columns(
-    header: &csv::StringRecord,
+/// The header's known columns by name, and the `cmd_k` columns by joint `k` (1-based); a
+/// known column given twice is an error.
+type HeaderColumns<'h> = (HashMap<&'h str, usize>, HashMap<usize, usize>);
+
+/// Indexes the columns of `header` (at `line` of `path`), see [`HeaderColumns`].
+fn index_columns<'h>(
+    header: &'h csv::StringRecord,
     path: &Path,
     line: u64,
-    joint_count: Option<usize>,
-) -> Result<Columns, MeasurementFileError> {
+) -> Result<HeaderColumns<'h>, MeasurementFileError> {
     let mut index: HashMap<&str, usize> = HashMap::new();
     let mut cmd: HashMap<usize, usize> = HashMap::new();
     // A byte-order mark (spreadsheet exports) is not part of the first column's name.
@@ -316,18 +320,19 @@ fn find_columns(
             cmd.insert(k, i);
         }
     }
-    let required = |column: &str| {
-        index
-            .get(column)
-            .copied()
-            .ok_or_else(|| MeasurementFileError::MissingColumn {
-                path: path.into(),
-                line,
-                column: column.into(),
-            })
-    };
+    Ok((index, cmd))
+}
+
+/// The number of joints the `cmd_k` columns (`cmd`: joint to column) give: `joint_count` when
+/// given (exactly `cmd_1..cmd_n` required), else as many as there are, without gaps.
+fn command_joint_count(
+    cmd: &HashMap<usize, usize>,
+    joint_count: Option<usize>,
+    path: &Path,
+    line: u64,
+) -> Result<usize, MeasurementFileError> {
     let columns_found = cmd.len();
-    let n = match joint_count {
+    Ok(match joint_count {
         Some(n) => {
             let extra = cmd.keys().copied().filter(|&k| k > n).min();
             let missing = (1..=n).find(|k| !cmd.contains_key(k));
@@ -354,7 +359,28 @@ fn find_columns(
             }
             n
         }
+    })
+}
+
+/// The columns of the file's `header` (at `line` of `path`), checked against `joint_count`.
+fn find_columns(
+    header: &csv::StringRecord,
+    path: &Path,
+    line: u64,
+    joint_count: Option<usize>,
+) -> Result<Columns, MeasurementFileError> {
+    let (index, cmd) = index_columns(header, path, line)?;
+    let required = |column: &str| {
+        index
+            .get(column)
+            .copied()
+            .ok_or_else(|| MeasurementFileError::MissingColumn {
+                path: path.into(),
+                line,
+                column: column.into(),
+            })
     };
+    let n = command_joint_count(&cmd, joint_count, path, line)?;
     Ok(Columns {
         experiment: required("experiment")?,
         moved_joint: required("moved_joint")?,
