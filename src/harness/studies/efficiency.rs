@@ -71,8 +71,9 @@ pub struct EfficiencyStudy {
     pub repeatability_jitter: bool,
     /// Tell the calibrator the robot's repeatability: the nominal description's
     /// `repeatability_sigma` of each joint, for the axis fits
-    /// ([`fit_arc_with_angle_noise`]) and the procedure. Off (default): the calibrator
-    /// models measurement noise only, whatever the description says.
+    /// ([`fit_arc_with_angle_noise`](crate::calibration::fit_arc_with_angle_noise)) and the
+    /// procedure. Off (default): the calibrator models measurement noise only, whatever the
+    /// description says.
     #[serde(default)]
     pub model_repeatability: bool,
 }
