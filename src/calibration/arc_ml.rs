@@ -12,17 +12,20 @@
 //! repeatability) to the measurement noise: a refit with the first-order per-point covariance
 //! `Sigma_meas + sigma_theta^2 t_j t_j^T` (effective variance, Orear 1982).
 
+mod identifiability;
+
 use nalgebra::{DMatrix, Matrix2, Point3, Rotation3};
 
+use super::CalibrationError;
 use super::arc_model::{
     ArcModel, ArcParams, MeasurementNoise, N_GEOMETRY, axis_quantities_gradient, check_angle_sigma,
 };
 use super::axis_circle::fit_circle;
 use super::transmission_fit::{TransmissionForm, fit_transmission};
-use super::{CalibrationError, crb};
 use crate::kinematics::AxisLine;
 use crate::numerics::lsq;
 use crate::robot::Transmission;
+use identifiability::identifiability;
 
 const FIT: &str = "arc maximum-likelihood fit";
 
@@ -258,108 +261,6 @@ fn fit_arc_from(
         covariance,
         identifiability,
         params,
-    })
-}
-
-fn identifiability(
-    model: &ArcModel,
-    params: &ArcParams,
-    jw: &DMatrix<f64>,
-    covariance: &DMatrix<f64>,
-    noise: &MeasurementNoise,
-) -> Result<Identifiability, CalibrationError> {
-    let names = model.param_names();
-    let m = covariance.nrows();
-    let sd: Vec<f64> = (0..m).map(|k| covariance[(k, k)].sqrt()).collect();
-    let corr = DMatrix::from_fn(m, m, |r, c| covariance[(r, c)] / (sd[r] * sd[c]));
-    let eig = corr.clone().symmetric_eigen();
-    let mut order: Vec<usize> = (0..m).collect();
-    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-    let weak_directions = order
-        .iter()
-        .take(2)
-        .map(|&k| WeakDirection {
-            correlation_eigenvalue: eig.eigenvalues[k],
-            components: (0..m)
-                .filter(|&r| eig.eigenvectors[(r, k)].abs() >= 0.3)
-                .map(|r| (names[r].clone(), eig.eigenvectors[(r, k)]))
-                .collect(),
-        })
-        .collect();
-    let mut strong_correlations = Vec::new();
-    for r in 0..m {
-        for c in r + 1..m {
-            if corr[(r, c)].abs() > 0.95 {
-                strong_correlations.push((names[r].clone(), names[c].clone(), corr[(r, c)]));
-            }
-        }
-    }
-    let tilt = covariance.fixed_view::<2, 2>(3, 3).into_owned();
-    let tilt_sigma_rad = tilt.symmetric_eigenvalues().max().sqrt();
-    let span = model
-        .commands_rad
-        .iter()
-        .map(|c| (c - model.commands_rad[0]).abs())
-        .fold(0.0, f64::max);
-    let sigma = match noise {
-        MeasurementNoise::Isotropic { sigma_per_axis } => *sigma_per_axis,
-        MeasurementNoise::PerPoint(c) => (c.iter().map(|m| m.trace()).sum::<f64>() / (3.0 * c.len() as f64)).sqrt(),
-    };
-    let mut tilt_sigma_by_span = Vec::new();
-    let mut spans = vec![
-        span,
-        2.0 * span,
-        0.5 * std::f64::consts::PI,
-        std::f64::consts::PI,
-        1.5 * std::f64::consts::PI,
-    ];
-    spans.retain(|&s| s >= span);
-    spans.sort_by(f64::total_cmp);
-    spans.dedup();
-    for s in spans {
-        let sweep = crb::UniformArc {
-            params,
-            form: model.form,
-            start_command_rad: model.commands_rad[0],
-            span_rad: s,
-            n: model.commands_rad.len(),
-            sigma_per_axis: sigma,
-        };
-        if let Ok(b) = sweep.direction_sigma_rad() {
-            tilt_sigma_by_span.push((s, b));
-        }
-    }
-    let mut notes = vec![
-        "phase is fitted at step 0: a constant command offset is absorbed by the phase, not by the transmission"
-            .to_string(),
-    ];
-    let k = model.form.n_coefficients() / 2;
-    for i in 0..k {
-        let idx = N_GEOMETRY + k + i;
-        let ratio = params.coefficients[k + i].abs() / sd[idx];
-        if ratio < 3.0 {
-            notes.push(format!(
-                "{} is determined only through the curvature of the sweep: {:.2e} +- {:.2e} rad",
-                names[idx],
-                params.coefficients[k + i],
-                sd[idx]
-            ));
-        }
-    }
-    if tilt_sigma_rad * params.radius > 3.0 * sigma {
-        notes.push(format!(
-            "axis tilt 1-sigma {:.2e} rad moves the arc by {:.2e} (> 3 noise sigma); a longer span helps",
-            tilt_sigma_rad,
-            tilt_sigma_rad * params.radius
-        ));
-    }
-    Ok(Identifiability {
-        condition_number: lsq::scaled_condition_number(jw),
-        weak_directions,
-        strong_correlations,
-        tilt_sigma_rad,
-        tilt_sigma_by_span,
-        notes,
     })
 }
 

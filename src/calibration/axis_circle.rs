@@ -38,9 +38,25 @@ pub struct CircleFit {
     pub span_rad: f64,
 }
 
-/// Fit a circle to `points` (at least 3, not collinear), eqs. none: the paper leaves the
-/// initial guess to the user; this is a standard SVD plane + Kasa fit.
-pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError> {
+/// The plane of an arc's points: their mean, the two in-plane principal directions and the
+/// singular values of the centred points, largest first.
+struct PlaneFit {
+    /// Mean of the points.
+    mean: Vector3<f64>,
+    /// First principal direction.
+    e1: Vector3<f64>,
+    /// Second principal direction.
+    e2: Vector3<f64>,
+    /// The largest singular value.
+    s0: f64,
+    /// The second one.
+    s1: f64,
+    /// The smallest one (the spread out of the plane).
+    s2: f64,
+}
+
+/// At least 3 points, all finite.
+fn check_points(points: &[Point3<f64>]) -> Result<(), CalibrationError> {
     let n = points.len();
     if n < 3 {
         return Err(CalibrationError::TooFewPoints {
@@ -55,6 +71,12 @@ pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError>
             what: "non-finite coordinate",
         });
     }
+    Ok(())
+}
+
+/// The SVD plane fit of the points (not all equal, not collinear).
+fn fit_plane(points: &[Point3<f64>]) -> Result<PlaneFit, CalibrationError> {
+    let n = points.len();
     let mean = points.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / n as f64;
     let scatter: Matrix3<f64> = points
         .iter()
@@ -77,9 +99,23 @@ pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError>
     }
     let e1: Vector3<f64> = eig.eigenvectors.column(order[0]).into();
     let e2: Vector3<f64> = eig.eigenvectors.column(order[1]).into();
-    let mut normal: Vector3<f64> = e1.cross(&e2).normalize();
+    Ok(PlaneFit {
+        mean,
+        e1,
+        e2,
+        s0,
+        s1,
+        s2,
+    })
+}
 
-    // Kasa: x^2 + y^2 = 2 a x + 2 b y + c in the plane coordinates (e1, e2).
+/// Kasa's fit in the plane: `x^2 + y^2 = 2 a x + 2 b y + c` in the plane coordinates `(e1, e2)`;
+/// the centre and the radius.
+fn kasa_circle(points: &[Point3<f64>], plane: &PlaneFit) -> Result<(Point3<f64>, f64), CalibrationError> {
+    let n = points.len();
+    let PlaneFit {
+        mean, e1, e2, s0, s1, ..
+    } = *plane;
     let xy: Vec<(f64, f64)> = points
         .iter()
         .map(|p| ((p.coords - mean).dot(&e1), (p.coords - mean).dot(&e2)))
@@ -100,6 +136,33 @@ pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError>
     }
     let radius = radius_sq.sqrt();
     let centre = Point3::from(mean + sol[0] * e1 + sol[1] * e2);
+    Ok((centre, radius))
+}
+
+/// RMS of the in-plane radial residuals of the points about the circle (`centre`, `normal`,
+/// `radius`).
+fn radial_rms(points: &[Point3<f64>], centre: Point3<f64>, normal: &Unit<Vector3<f64>>, radius: f64) -> f64 {
+    let n = points.len();
+    (points
+        .iter()
+        .map(|p| {
+            let d = p - centre;
+            let inplane = d - d.dot(normal) * normal.into_inner();
+            (inplane.norm() - radius).powi(2)
+        })
+        .sum::<f64>()
+        / n as f64)
+        .sqrt()
+}
+
+/// Fit a circle to `points` (at least 3, not collinear), eqs. none: the paper leaves the
+/// initial guess to the user; this is a standard SVD plane + Kasa fit.
+pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError> {
+    check_points(points)?;
+    let n = points.len();
+    let plane = fit_plane(points)?;
+    let mut normal: Vector3<f64> = plane.e1.cross(&plane.e2).normalize();
+    let (centre, radius) = kasa_circle(points, &plane)?;
 
     // Orient the normal so the sequence turns positively about it.
     let turn: f64 = points
@@ -113,16 +176,7 @@ pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError>
     let u = Unit::new_normalize(to_first - to_first.dot(&normal) * normal);
     let normal = Unit::new_unchecked(normal);
     let v = Unit::new_normalize(normal.cross(&u));
-    let radial_rms = (points
-        .iter()
-        .map(|p| {
-            let d = p - centre;
-            let inplane = d - d.dot(&normal) * normal.into_inner();
-            (inplane.norm() - radius).powi(2)
-        })
-        .sum::<f64>()
-        / n as f64)
-        .sqrt();
+    let radial_rms = radial_rms(points, centre, &normal, radius);
     let last = points[n - 1] - centre;
     let span_rad = last.dot(&v).atan2(last.dot(&u)).rem_euclid(std::f64::consts::TAU);
     Ok(CircleFit {
@@ -131,7 +185,7 @@ pub fn fit_circle(points: &[Point3<f64>]) -> Result<CircleFit, CalibrationError>
         u,
         v,
         radius,
-        plane_rms: s2 / (n as f64).sqrt(),
+        plane_rms: plane.s2 / (n as f64).sqrt(),
         radial_rms,
         span_rad,
     })

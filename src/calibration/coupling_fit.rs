@@ -146,26 +146,17 @@ fn gradient(form: &CouplingForm, x: &[f64], t: f64) -> Vec<f64> {
     }
 }
 
-/// Fit eq. (15): `active_rad[j]` = absolute active displacement of joint `i`,
-/// `passive_from_start_rad[j]` = passive displacement of joint `i+1` since step 0,
-/// `passive_start_rad` = its absolute value at step 0.
-pub fn fit_coupling(
+/// The starting parameters of the eq. (15) fit of `form` to the absolute passive angles
+/// `target_rad`: the nominal ratio and no harmonics for a gear; for the fractional form, the
+/// linear least squares `n0 s + n1 c + n2 - tan(g) (d0 s + d1) = tan(g) c`.
+fn initial_parameters(
     form: &CouplingForm,
     active_rad: &[f64],
-    passive_from_start_rad: &[f64],
-    passive_start_rad: f64,
-) -> Result<CouplingFit, CalibrationError> {
+    target_rad: &[f64],
+) -> Result<Vec<f64>, CalibrationError> {
     let n = active_rad.len();
-    if passive_from_start_rad.len() != n {
-        return Err(CalibrationError::LengthMismatch {
-            fit: FIT,
-            what: "passive displacements",
-            got: passive_from_start_rad.len(),
-            expected: n,
-        });
-    }
-    let target: Vec<f64> = passive_from_start_rad.iter().map(|y| y + passive_start_rad).collect();
-    let x0: Vec<f64> = match *form {
+    let target = target_rad;
+    Ok(match *form {
         CouplingForm::Gear {
             ratio,
             fit_ratio,
@@ -192,7 +183,57 @@ pub fn fit_coupling(
             }
             lsq::linear_lsq(&a, &y, FIT)?.0.iter().copied().collect()
         }
-    };
+    })
+}
+
+/// The residuals `g(active) - target` (rad) of the coupling `form` with parameters `x`, and
+/// their Jacobian.
+fn residuals_and_jacobian(
+    form: &CouplingForm,
+    active_rad: &[f64],
+    target_rad: &[f64],
+    x: &DVector<f64>,
+) -> Result<(DVector<f64>, DMatrix<f64>), CalibrationError> {
+    let (n, m) = (active_rad.len(), x.len());
+    let target = target_rad;
+    let g = build(form, x.as_slice());
+    let r = DVector::from_fn(n, |k, _| g.passive(active_rad[k]) - target[k]);
+    let rows: Vec<Vec<f64>> = active_rad.iter().map(|t| gradient(form, x.as_slice(), *t)).collect();
+    Ok((r, DMatrix::from_fn(n, m, |k, c| rows[k][c])))
+}
+
+/// 1-sigma of each of the `m` parameters, a-posteriori (`s^2 (J^T J)^-1`) from the residuals
+/// `r` of `n` points and their Jacobian `j`.
+fn a_posteriori_sigma(r: &DVector<f64>, j: &DMatrix<f64>, n: usize, m: usize) -> Result<Vec<f64>, CalibrationError> {
+    let s2 = r.norm_squared() / (n - m).max(1) as f64;
+    Ok(if m == 0 {
+        vec![]
+    } else {
+        let inv = lsq::inverse_normal(j, FIT)?;
+        (0..m).map(|k| (s2 * inv[(k, k)]).sqrt()).collect()
+    })
+}
+
+/// Fit eq. (15): `active_rad[j]` = absolute active displacement of joint `i`,
+/// `passive_from_start_rad[j]` = passive displacement of joint `i+1` since step 0,
+/// `passive_start_rad` = its absolute value at step 0.
+pub fn fit_coupling(
+    form: &CouplingForm,
+    active_rad: &[f64],
+    passive_from_start_rad: &[f64],
+    passive_start_rad: f64,
+) -> Result<CouplingFit, CalibrationError> {
+    let n = active_rad.len();
+    if passive_from_start_rad.len() != n {
+        return Err(CalibrationError::LengthMismatch {
+            fit: FIT,
+            what: "passive displacements",
+            got: passive_from_start_rad.len(),
+            expected: n,
+        });
+    }
+    let target: Vec<f64> = passive_from_start_rad.iter().map(|y| y + passive_start_rad).collect();
+    let x0 = initial_parameters(form, active_rad, &target)?;
     let m = x0.len();
     if n <= m {
         return Err(CalibrationError::TooFewPoints {
@@ -201,12 +242,7 @@ pub fn fit_coupling(
             needed: m + 1,
         });
     }
-    let eval = |x: &DVector<f64>| -> Result<(DVector<f64>, DMatrix<f64>), CalibrationError> {
-        let g = build(form, x.as_slice());
-        let r = DVector::from_fn(n, |k, _| g.passive(active_rad[k]) - target[k]);
-        let rows: Vec<Vec<f64>> = active_rad.iter().map(|t| gradient(form, x.as_slice(), *t)).collect();
-        Ok((r, DMatrix::from_fn(n, m, |k, c| rows[k][c])))
-    };
+    let eval = |x: &DVector<f64>| residuals_and_jacobian(form, active_rad, &target, x);
     let out = if m == 0 {
         DVector::zeros(0)
     } else {
@@ -220,13 +256,7 @@ pub fn fit_coupling(
         .state
     };
     let (r, j) = eval(&out)?;
-    let s2 = r.norm_squared() / (n - m).max(1) as f64;
-    let sigma = if m == 0 {
-        vec![]
-    } else {
-        let inv = lsq::inverse_normal(&j, FIT)?;
-        (0..m).map(|k| (s2 * inv[(k, k)]).sqrt()).collect()
-    };
+    let sigma = a_posteriori_sigma(&r, &j, n, m)?;
     Ok(CouplingFit {
         function: build(form, out.as_slice()),
         parameters: out.iter().copied().collect(),

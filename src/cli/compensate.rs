@@ -17,7 +17,7 @@
 
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::Calibration;
-use axiscal::compensation::{CompensationError, Compensator};
+use axiscal::compensation::{CompensatedPose, CompensationError, Compensator};
 use axiscal::json_file::{self, Schema};
 use axiscal::kinematics::IkError;
 use axiscal::robot::{Placement, RobotDescription};
@@ -97,17 +97,8 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
     Ok(out)
 }
 
-/// Runs `axiscal compensate`.
-pub fn run(args: Args) -> Result<()> {
-    let desc = RobotDescription::from_file(&args.robot)?;
-    let text = std::fs::read_to_string(&args.calibration)
-        .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
-    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
-        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
-    let comp = Compensator::new(&cal.robot, &desc)?;
-    let poses = read_poses(&args.poses)?;
-    let n = desc.dof();
-    let mut w = csv::Writer::from_path(&args.out).with_context(|| format!("{}: cannot write", args.out.display()))?;
+/// The output CSV's header for `n` joints.
+fn csv_header(n: usize) -> Vec<String> {
     let mut header: Vec<String> = vec!["id".into(), "status".into()];
     header.extend((1..=n).map(|k| format!("cmd_{k}_deg")));
     for h in [
@@ -124,43 +115,65 @@ pub fn run(args: Args) -> Result<()> {
     ] {
         header.push(h.into());
     }
-    w.write_record(&header)?;
+    header
+}
+
+/// The columns after `id` of a compensated pose `c`.
+fn compensated_columns(row: &mut Vec<String>, c: &CompensatedPose) {
+    row.push("ok".into());
+    row.extend(c.cmd.iter().map(|v| format!("{:.9}", v.to_degrees())));
+    row.push("true".into());
+    row.push(c.ik.iterations.to_string());
+    row.push(format!("{:.3e}", c.ik.position_error_m * 1e3));
+    row.push(format!("{:.3e}", c.ik.orientation_error_rad));
+    let t = c.nominal_pose_to_send.translation.vector * 1e3;
+    let (r, pi, y) = c.nominal_pose_to_send.rotation.euler_angles();
+    row.extend([t.x, t.y, t.z].iter().map(|v| format!("{v:.6}")));
+    row.extend([r, pi, y].iter().map(|v| format!("{:.9}", v.to_degrees())));
+}
+
+/// The columns after `id` of a pose that could not be compensated (`e`), `n` joints.
+fn failed_columns(row: &mut Vec<String>, e: &CompensationError, n: usize) {
+    let (status, iterations, pos, ori) = match e {
+        CompensationError::Ik(IkError::NotConverged {
+            iterations,
+            position_error_m,
+            orientation_error_rad,
+        }) => (
+            "ik_failed",
+            iterations.to_string(),
+            format!("{:.3e}", position_error_m * 1e3),
+            format!("{orientation_error_rad:.3e}"),
+        ),
+        _ => ("failed", String::new(), String::new(), String::new()),
+    };
+    row.push(status.into());
+    row.extend(std::iter::repeat_n(String::new(), n));
+    row.extend(["false".into(), iterations, pos, ori]);
+    row.extend(std::iter::repeat_n(String::new(), 6));
+}
+
+/// Runs `axiscal compensate`.
+pub fn run(args: Args) -> Result<()> {
+    let desc = RobotDescription::from_file(&args.robot)?;
+    let text = std::fs::read_to_string(&args.calibration)
+        .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
+    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
+        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    let comp = Compensator::new(&cal.robot, &desc)?;
+    let poses = read_poses(&args.poses)?;
+    let n = desc.dof();
+    let mut w = csv::Writer::from_path(&args.out).with_context(|| format!("{}: cannot write", args.out.display()))?;
+    w.write_record(csv_header(n))?;
     let mut failed = 0;
     for p in &poses {
         let mut row = vec![p.id.clone()];
         match comp.compensate(&p.world_from_tool) {
-            Ok(c) => {
-                row.push("ok".into());
-                row.extend(c.cmd.iter().map(|v| format!("{:.9}", v.to_degrees())));
-                row.push("true".into());
-                row.push(c.ik.iterations.to_string());
-                row.push(format!("{:.3e}", c.ik.position_error_m * 1e3));
-                row.push(format!("{:.3e}", c.ik.orientation_error_rad));
-                let t = c.nominal_pose_to_send.translation.vector * 1e3;
-                let (r, pi, y) = c.nominal_pose_to_send.rotation.euler_angles();
-                row.extend([t.x, t.y, t.z].iter().map(|v| format!("{v:.6}")));
-                row.extend([r, pi, y].iter().map(|v| format!("{:.9}", v.to_degrees())));
-            }
+            Ok(c) => compensated_columns(&mut row, &c),
             Err(e) => {
                 failed += 1;
                 eprintln!("pose {}: {e}", p.id);
-                let (status, iterations, pos, ori) = match &e {
-                    CompensationError::Ik(IkError::NotConverged {
-                        iterations,
-                        position_error_m,
-                        orientation_error_rad,
-                    }) => (
-                        "ik_failed",
-                        iterations.to_string(),
-                        format!("{:.3e}", position_error_m * 1e3),
-                        format!("{orientation_error_rad:.3e}"),
-                    ),
-                    _ => ("failed", String::new(), String::new(), String::new()),
-                };
-                row.push(status.into());
-                row.extend(std::iter::repeat_n(String::new(), n));
-                row.extend(["false".into(), iterations, pos, ori]);
-                row.extend(std::iter::repeat_n(String::new(), 6));
+                failed_columns(&mut row, &e, n);
             }
         }
         w.write_record(&row)?;

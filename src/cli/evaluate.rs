@@ -6,9 +6,10 @@
 use super::calibrate::refuse_existing;
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{
-    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperScenario, Region,
-    floor_check, run_paper_scenario, write_plots,
+    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperReport, PaperScenario,
+    Region, RepeatabilitySummary, floor_check, run_paper_scenario, write_plots,
 };
+use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementModel;
 use std::path::{Path, PathBuf};
 
@@ -39,8 +40,8 @@ pub struct Args {
     force: bool,
 }
 
-fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
+fn write_json<T: serde::Serialize>(path: &Path, schema: Schema, value: &T) -> Result<()> {
+    let text = json_file::to_string(schema, value)?;
     std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
 }
 
@@ -61,11 +62,49 @@ pub fn run(args: Args) -> Result<()> {
     let out = run_paper_scenario(&scenario)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let r = &out.report;
-    write_json(&args.out.join("evaluation.json"), r)?;
-    write_json(&args.out.join("calibration.json"), &out.calibration)?;
-    write_json(&args.out.join("floor_calibration.json"), &out.floor_calibration)?;
-    let csv_path = args.out.join("poses.csv");
-    let mut w = csv::Writer::from_path(&csv_path).with_context(|| format!("writing {}", csv_path.display()))?;
+    write_json(&args.out.join("evaluation.json"), Schema::EVALUATION, r)?;
+    write_json(
+        &args.out.join("calibration.json"),
+        Schema::CALIBRATION,
+        &out.calibration,
+    )?;
+    write_json(
+        &args.out.join("floor_calibration.json"),
+        Schema::CALIBRATION,
+        &out.floor_calibration,
+    )?;
+    write_poses_csv(&args.out.join("poses.csv"), r)?;
+    let plots = write_plots(r, &args.out)?;
+
+    println!(
+        "paper scenario: seed {}, evaluation seed {}",
+        args.seed, args.evaluation_seed
+    );
+    println!(
+        "ISO 9283 cube edges: {:.0} mm inside the spans, {:.0} mm in the workspace",
+        r.iso_cube_edge_m[0] * 1e3,
+        r.iso_cube_edge_m[1] * 1e3
+    );
+    let inside_ratio = print_regions(r);
+    print_repeatability(&r.repeatability);
+    println!(
+        "floor check inside the spans: calibrated/floor position RMS = {inside_ratio:.2} ({} {FLOOR_RATIO_LIMIT}x; see docs/validation.md)",
+        if inside_ratio <= FLOOR_RATIO_LIMIT {
+            "within"
+        } else {
+            "ABOVE"
+        }
+    );
+    if args.floor_seeds > 1 {
+        pooled_floor_check(&scenario, &args)?;
+    }
+    println!("wrote {} and {} plots", args.out.display(), plots.len());
+    Ok(())
+}
+
+/// Writes every test pose's errors to `csv_path` (`poses.csv`).
+fn write_poses_csv(csv_path: &Path, r: &PaperReport) -> Result<()> {
+    let mut w = csv::Writer::from_path(csv_path).with_context(|| format!("writing {}", csv_path.display()))?;
     w.write_record([
         "id",
         "region",
@@ -98,17 +137,12 @@ pub fn run(args: Args) -> Result<()> {
         ])?;
     }
     w.flush()?;
-    let plots = write_plots(r, &args.out)?;
+    Ok(())
+}
 
-    println!(
-        "paper scenario: seed {}, evaluation seed {}",
-        args.seed, args.evaluation_seed
-    );
-    println!(
-        "ISO 9283 cube edges: {:.0} mm inside the spans, {:.0} mm in the workspace",
-        r.iso_cube_edge_m[0] * 1e3,
-        r.iso_cube_edge_m[1] * 1e3
-    );
+/// Prints each region's accuracy next to the paper's and the floor; returns the calibrated/floor
+/// position RMS ratio inside the spans (NaN when that region is absent).
+fn print_regions(r: &PaperReport) -> f64 {
     let mut inside_ratio = f64::NAN;
     for s in &r.regions {
         println!(
@@ -151,7 +185,11 @@ pub fn run(args: Args) -> Result<()> {
             inside_ratio = s.ratio_to_floor[0];
         }
     }
-    let rep = &r.repeatability;
+    inside_ratio
+}
+
+/// Prints the repeatability test next to the paper's.
+fn print_repeatability(rep: &RepeatabilitySummary) {
     println!(
         "repeatability ({} poses, mean of 2 executions): observed {:.3} mm / {:.4} rad (paper {:.2} mm / {:.4} rad, \
          through theodolites); robot alone {:.3} mm / {:.4} rad",
@@ -163,33 +201,27 @@ pub fn run(args: Args) -> Result<()> {
         rep.robot_radial_mm,
         rep.robot_orientation_rad
     );
+}
+
+/// The floor check pooled over `args.floor_seeds` campaign seeds: written to
+/// `floor_check.json` and printed.
+fn pooled_floor_check(scenario: &PaperScenario, args: &Args) -> Result<()> {
+    let check = floor_check(scenario, args.floor_seeds)?;
+    write_json(&args.out.join("floor_check.json"), Schema::FLOOR_CHECK, &check)?;
     println!(
-        "floor check inside the spans: calibrated/floor position RMS = {inside_ratio:.2} ({} {FLOOR_RATIO_LIMIT}x; see README)",
-        if inside_ratio <= FLOOR_RATIO_LIMIT {
+        "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
+             orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
+        check.first_seed,
+        check.first_seed + check.seeds - 1,
+        check.ratio[0],
+        check.position_rms_mm[0],
+        check.position_rms_mm[1],
+        check.ratio[1],
+        if check.ratio.iter().all(|r| *r <= FLOOR_RATIO_LIMIT) {
             "within"
         } else {
             "ABOVE"
         }
     );
-    if args.floor_seeds > 1 {
-        let check = floor_check(&scenario, args.floor_seeds)?;
-        write_json(&args.out.join("floor_check.json"), &check)?;
-        println!(
-            "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
-             orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
-            check.first_seed,
-            check.first_seed + check.seeds - 1,
-            check.ratio[0],
-            check.position_rms_mm[0],
-            check.position_rms_mm[1],
-            check.ratio[1],
-            if check.ratio.iter().all(|r| *r <= FLOOR_RATIO_LIMIT) {
-                "within"
-            } else {
-                "ABOVE"
-            }
-        );
-    }
-    println!("wrote {} and {} plots", args.out.display(), plots.len());
     Ok(())
 }

@@ -85,14 +85,7 @@ pub fn run(args: Args) -> Result<()> {
         Some(path) => RobotModel::from_file(path)?,
         None => axiscal::sim::paper_robot(),
     };
-    let instrument = match args.instrument {
-        Instrument::Theodolite => {
-            let (model, calibration) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
-            eprintln!("{calibration}");
-            model
-        }
-        Instrument::Isotropic => MeasurementModel::paper_isotropic(),
-    };
+    let instrument = instrument_model(args.instrument)?;
     let plan = CalibrationPlan::table1(desc.dof());
     let validation = ValidationPlan {
         poses: args.validation_poses,
@@ -139,6 +132,36 @@ pub fn run(args: Args) -> Result<()> {
         set.rows().len(),
         name
     );
+    print_experiments(&set, &out.occluded);
+    #[cfg(feature = "viz")]
+    if let Some(path) = &args.record {
+        let campaign = super::record::Campaign {
+            desc: &desc,
+            truth: &recorded_truth,
+            plan: &plan,
+            set: &set,
+            instrument: &instrument,
+        };
+        record_campaign(path, &campaign)?;
+    }
+    Ok(())
+}
+
+/// The measurement model of `kind` (the theodolites' calibration printed to stderr).
+fn instrument_model(kind: Instrument) -> Result<MeasurementModel> {
+    Ok(match kind {
+        Instrument::Theodolite => {
+            let (model, calibration) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
+            eprintln!("{calibration}");
+            model
+        }
+        Instrument::Isotropic => MeasurementModel::paper_isotropic(),
+    })
+}
+
+/// One line per experiment (poses and targets), then the occluded target observations per
+/// experiment (`occluded`).
+fn print_experiments(set: &MeasurementSet, occluded: &[(String, usize)]) {
     for e in set.experiments() {
         let steps = e.by_step().len();
         let targets: std::collections::BTreeSet<usize> = e.rows.iter().map(|r| r.target).collect();
@@ -150,30 +173,25 @@ pub fn run(args: Args) -> Result<()> {
             targets.len()
         );
     }
-    let total: usize = out.occluded.iter().map(|(_, n)| n).sum();
+    let total: usize = occluded.iter().map(|(_, n)| n).sum();
     println!("  occluded target observations: {total}");
-    for (experiment, n) in &out.occluded {
+    for (experiment, n) in occluded {
         println!("  {experiment}: {n} target observation(s) occluded");
     }
-    #[cfg(feature = "viz")]
-    if let Some(path) = &args.record {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        }
-        let campaign = super::record::Campaign {
-            desc: &desc,
-            truth: &recorded_truth,
-            plan: &plan,
-            set: &set,
-            instrument: &instrument,
-        };
-        super::record::write(path, &campaign).with_context(|| format!("recording {}", path.display()))?;
-        println!(
-            "wrote {} (view it with `axiscal view {}`)",
-            path.display(),
-            path.display()
-        );
+}
+
+/// Writes the rerun recording of `campaign` to `path`.
+#[cfg(feature = "viz")]
+fn record_campaign(path: &std::path::Path, campaign: &super::record::Campaign) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
+    super::record::write(path, campaign).with_context(|| format!("recording {}", path.display()))?;
+    println!(
+        "wrote {} (view it with `axiscal view {}`)",
+        path.display(),
+        path.display()
+    );
     Ok(())
 }
 

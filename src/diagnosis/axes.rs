@@ -8,6 +8,7 @@
 //! [`crate::diagnosis`]) and says that naming one needs validation poses.
 
 use super::{DiagnosisError, DiagnosisOptions, Outcome, WhereEntry, calibrate_for, clean_positions, replica};
+use crate::calibration::procedure::Calibration;
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{QuantileMethod, mean, quantile, upper_tail};
 use crate::robot::RobotDescription;
@@ -78,16 +79,17 @@ fn arc_candidates(joint: usize, direction_z: f64) -> Vec<String> {
     out
 }
 
-/// Diagnoses the axis experiments of `set` alone (module docs).
-pub fn diagnose_axes(
+/// The arc-fit residual RMS \[mm\] of every axis (outer index) on each of `replicas`
+/// noise-only replicas of the campaign on the calibrated robot `cal`, each recalibrated.
+fn noise_only_residuals_mm(
     set: &MeasurementSet,
     desc: &RobotDescription,
+    cal: &Calibration,
     options: &DiagnosisOptions,
-) -> Result<AxesDiagnosis, DiagnosisError> {
-    let cal = calibrate_for(set, desc, options.noise_rms_3d_mm)?;
-    let clean = clean_positions(set, &cal, desc)?;
+    replicas: usize,
+) -> Result<Vec<Vec<f64>>, DiagnosisError> {
+    let clean = clean_positions(set, cal, desc)?;
     let mut rng = StdRng::seed_from_u64(options.seed);
-    let replicas = options.axis_replicas.max(2);
     let mut null: Vec<Vec<f64>> = vec![Vec::with_capacity(replicas); cal.axes.len()];
     for _ in 0..replicas {
         let r = replica(set, &clean, options.noise_rms_3d_mm * 1e-3, true, &mut rng)?;
@@ -96,21 +98,39 @@ pub fn diagnose_axes(
             acc.push(a.residual_rms_mm);
         }
     }
-    let means: Vec<f64> = null.iter().map(|v| mean(v)).collect();
-    let max_ratio: Vec<f64> = (0..replicas)
+    Ok(null)
+}
+
+/// Per replica, the largest residual over the axes' noise-only means (`null` per axis, `means`
+/// their means).
+fn max_ratio_per_replica(null: &[Vec<f64>], means: &[f64], replicas: usize) -> Vec<f64> {
+    (0..replicas)
         .map(|i| {
             null.iter()
-                .zip(&means)
+                .zip(means)
                 .map(|(v, m)| v[i] / m)
                 .fold(f64::NEG_INFINITY, f64::max)
         })
-        .collect();
-    let alpha = options.false_alarm;
-    let threshold = quantile(&max_ratio, 1.0 - alpha, QuantileMethod::InverseCdf);
+        .collect()
+}
+
+/// Each axis against its noise-only replicas.
+struct AxisComparison {
+    /// Per axis, ranked by excess ratio.
+    where_: Vec<WhereEntry>,
+    /// The axes beyond the threshold, ranked by excess ratio.
+    flagged: Vec<FlaggedAxis>,
+    /// Excess of the arc residual RMS over the noise-only RMS, all arcs \[mm\].
+    gap_mm: f64,
+}
+
+/// Compares each axis of `cal` with its noise-only residuals `null` (means `means`), flagging
+/// those whose ratio exceeds `threshold`.
+fn compare_axes(cal: &Calibration, null: &[Vec<f64>], means: &[f64], threshold: f64) -> AxisComparison {
     let mut where_ = Vec::new();
     let mut flagged = Vec::new();
     let (mut ss, mut ss_noise, mut points) = (0.0, 0.0, 0usize);
-    for ((a, v), m) in cal.axes.iter().zip(&null).zip(&means) {
+    for ((a, v), m) in cal.axes.iter().zip(null).zip(means) {
         let ratio = a.residual_rms_mm / m;
         ss += a.residual_rms_mm.powi(2) * a.points as f64;
         ss_noise += mean(&v.iter().map(|x| x * x).collect::<Vec<_>>()) * a.points as f64;
@@ -136,8 +156,19 @@ pub fn diagnose_axes(
     flagged.sort_by(|a, b| b.excess_ratio.total_cmp(&a.excess_ratio));
     let n = points.max(1) as f64;
     let gap = ((ss - ss_noise) / n).max(0.0).sqrt();
-    let top_p = upper_tail(&max_ratio, where_.first().map_or(0.0, |w| w.excess_ratio));
-    let (effect, confidence, verdict) = if flagged.is_empty() {
+    AxisComparison {
+        where_,
+        flagged,
+        gap_mm: gap,
+    }
+}
+
+/// The outcome's effect, confidence and verdict: `none` when no axis is flagged, else
+/// `unexplained` (the candidates cannot be fitted without validation poses).
+fn axes_verdict(c: &AxisComparison, max_ratio: &[f64], threshold: f64, alpha: f64) -> (&'static str, f64, String) {
+    let (where_, flagged) = (&c.where_, &c.flagged);
+    let top_p = upper_tail(max_ratio, where_.first().map_or(0.0, |w| w.excess_ratio));
+    if flagged.is_empty() {
         (
             "none",
             0.0,
@@ -159,7 +190,25 @@ pub fn diagnose_axes(
                 list.join(", ")
             ),
         )
-    };
+    }
+}
+
+/// Diagnoses the axis experiments of `set` alone (module docs).
+pub fn diagnose_axes(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &DiagnosisOptions,
+) -> Result<AxesDiagnosis, DiagnosisError> {
+    let cal = calibrate_for(set, desc, options.noise_rms_3d_mm)?;
+    let replicas = options.axis_replicas.max(2);
+    let null = noise_only_residuals_mm(set, desc, &cal, options, replicas)?;
+    let means: Vec<f64> = null.iter().map(|v| mean(v)).collect();
+    let max_ratio = max_ratio_per_replica(&null, &means, replicas);
+    let alpha = options.false_alarm;
+    let threshold = quantile(&max_ratio, 1.0 - alpha, QuantileMethod::InverseCdf);
+    let comparison = compare_axes(&cal, &null, &means, threshold);
+    let (effect, confidence, verdict) = axes_verdict(&comparison, &max_ratio, threshold, alpha);
+    let gap = comparison.gap_mm;
     Ok(AxesDiagnosis {
         mode: "axes_only".into(),
         outcome: Outcome {
@@ -169,9 +218,9 @@ pub fn diagnose_axes(
             gap_before_mm: gap,
             gap_after_mm: gap,
         },
-        where_,
+        where_: comparison.where_,
         candidates: vec![],
-        flagged,
+        flagged: comparison.flagged,
         ratio_threshold: threshold,
         false_alarm: alpha,
         replicas,

@@ -1,12 +1,15 @@
 //! The decision of [`diagnose`](super::diagnose): tests against the noise-only null
 //! distribution (module docs of [`crate::diagnosis`], steps 3-5).
 
+mod verdict;
+
 use super::{
     Candidate, CandidateScore, Diagnosis, DiagnosisOptions, FeatureContrast, LinearFit, NullData, Outcome, Parameter,
     Prepared, WhereEntry,
 };
 use crate::numerics::stats::{QuantileMethod, mean, quantile, std_dev, upper_tail};
 use nalgebra::{DMatrix, DVector};
+use verdict::Evidence;
 
 /// A candidate's fit and its statistics.
 struct Scored {
@@ -145,16 +148,37 @@ fn where_entries(
     (out, contrasts)
 }
 
-/// Tests the observation against the null samples and names the effect.
-pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOptions) -> Diagnosis {
-    let alpha = options.false_alarm;
-    let sigma2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
-    let to_rms_mm = |chi2: f64| (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3;
-    let base = prep.baseline_fit();
+/// The held-out RMS per held-out target in mm of a chi-square `chi2`, given the
+/// per-coordinate noise variance `sigma2` (m^2).
+fn chi2_to_rms_mm(chi2: f64, sigma2: f64, prep: &Prepared) -> f64 {
+    (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3
+}
+
+/// The omnibus gap test (step 4): the baseline refit's held-out chi-square against its
+/// noise-only null distribution.
+struct GapTest {
+    /// Held-out chi-square of the observation under the baseline refit.
+    g_obs: f64,
+    /// The same chi-square for each null sample.
+    g_null: Vec<f64>,
+    /// Mean of `g_null`.
+    g_mean: f64,
+    /// The `1 - alpha` quantile of `g_null`.
+    g_q: f64,
+    /// How many null standard deviations `g_obs` lies above the null mean.
+    gap_sigmas: f64,
+    /// The smallest gap (mm) the test flags at the false-alarm rate.
+    detectable_gap_mm: f64,
+    /// Upper-tail probability of `g_obs` under the null.
+    p_gap: f64,
+}
+
+/// Runs the gap test of the baseline refit `base` at false-alarm rate `alpha`.
+fn gap_test(prep: &Prepared, null: &NullData, base: &LinearFit, sigma2: f64, alpha: f64) -> GapTest {
     let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
-    let g_obs = prep.heldout_ssr(&base, &observed)[0] / sigma2;
+    let g_obs = prep.heldout_ssr(base, &observed)[0] / sigma2;
     let g_null: Vec<f64> = prep
-        .heldout_ssr(&base, &null.samples)
+        .heldout_ssr(base, &null.samples)
         .iter()
         .map(|s| s / sigma2)
         .collect();
@@ -164,19 +188,36 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         quantile(&g_null, 1.0 - alpha, QuantileMethod::InverseCdf),
     );
     let gap_sigmas = (g_obs - g_mean) / g_sd.max(1e-12);
-    let detectable_gap_mm = to_rms_mm(g_q - g_mean);
+    let detectable_gap_mm = chi2_to_rms_mm(g_q - g_mean, sigma2, prep);
     let p_gap = upper_tail(&g_null, g_obs);
+    GapTest {
+        g_obs,
+        g_null,
+        g_mean,
+        g_q,
+        gap_sigmas,
+        detectable_gap_mm,
+        p_gap,
+    }
+}
 
-    let mut scored = score_candidates(prep, null, &base, (g_obs, &g_null), sigma2);
-    // Family-wise threshold: the noise-only maximum of z over the candidates.
-    let samples = g_null.len();
+/// Family-wise threshold: the noise-only maximum of z over the candidates (its `1 - alpha`
+/// quantile over the `samples` null samples); marks the candidates above it significant and
+/// returns it.
+fn mark_significant(scored: &mut [Scored], samples: usize, alpha: f64) -> f64 {
     let max_z: Vec<f64> = (0..samples)
         .map(|k| scored.iter().map(|s| s.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
         .collect();
     let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
-    for s in &mut scored {
+    for s in scored.iter_mut() {
         s.score.significant = s.score.z > z_threshold;
     }
+    z_threshold
+}
+
+/// Sorts the candidates by held-out chi-square and gives the significant ones their weights
+/// `exp(-(chi2 - chi2_min) / 2)`, normalised over the significant candidates.
+fn rank_and_weigh(scored: &mut [Scored]) {
     scored.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
     let chi2_min = scored
         .iter()
@@ -191,8 +232,13 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     for s in scored.iter_mut().filter(|s| s.score.significant) {
         s.score.weight = (-(s.chi2 - chi2_min) / 2.0).exp() / z_sum;
     }
-    // The named candidate and the baseline it is compared with, refit beyond their
-    // linearisation (the tests above stay linear, as their null distributions).
+}
+
+/// The named candidate and the baseline it is compared with, refit beyond their
+/// linearisation (the tests stay linear, as their null distributions). Updates the first
+/// significant candidate's score and returns the baseline's held-out chi-square after the
+/// refit (`g_obs` when there is nothing to refit).
+fn refit_named(prep: &Prepared, scored: &mut [Scored], g_obs: f64, sigma2: f64) -> f64 {
     let mut g_fit = g_obs;
     if let Some(b) = scored.iter_mut().find(|s| s.score.significant)
         && let Some((_, x)) = prep.x_candidates.iter().find(|(c, _)| *c == b.candidate)
@@ -200,7 +246,10 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     {
         g_fit = g_fit.min(rb.heldout_ssr / sigma2);
         b.chi2 = b.chi2.min(rc.heldout_ssr / sigma2);
-        let (rms, noise) = (to_rms_mm(b.chi2), to_rms_mm(mean(&b.chi2_null)));
+        let (rms, noise) = (
+            chi2_to_rms_mm(b.chi2, sigma2, prep),
+            chi2_to_rms_mm(mean(&b.chi2_null), sigma2, prep),
+        );
         b.score.heldout_rms_mm = rms;
         b.score.gap_after_mm = (rms * rms - noise * noise).max(0.0).sqrt();
         b.score.improvement_chi2 = g_fit - b.chi2;
@@ -213,111 +262,63 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
             sigma2,
         );
     }
-    let rms_before = to_rms_mm(g_fit);
-    let noise_before = to_rms_mm(g_mean);
+    g_fit
+}
+
+/// Tests the observation against the null samples and names the effect.
+pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOptions) -> Diagnosis {
+    let alpha = options.false_alarm;
+    let sigma2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
+    let base = prep.baseline_fit();
+    let gap = gap_test(prep, null, &base, sigma2, alpha);
+
+    let mut scored = score_candidates(prep, null, &base, (gap.g_obs, &gap.g_null), sigma2);
+    let samples = gap.g_null.len();
+    let z_threshold = mark_significant(&mut scored, samples, alpha);
+    rank_and_weigh(&mut scored);
+    let g_fit = refit_named(prep, &mut scored, gap.g_obs, sigma2);
+    let rms_before = chi2_to_rms_mm(g_fit, sigma2, prep);
+    let noise_before = chi2_to_rms_mm(gap.g_mean, sigma2, prep);
     let gap_before = (rms_before.powi(2) - noise_before.powi(2)).max(0.0).sqrt();
     let best = scored.iter().find(|s| s.score.significant);
     let fraction_closed = match best {
         Some(b) if gap_before > 0.0 => 1.0 - (b.score.gap_after_mm / gap_before).powi(2),
         _ => 0.0,
     };
-    let named = |b: &Scored| {
-        format!(
-            "{}{}",
-            b.score.effect,
-            b.score.joint.map_or(String::new(), |j| format!(" on joint {j}"))
-        )
+    let evidence = Evidence {
+        gap: &gap,
+        alpha,
+        z_threshold,
+        rms_before_mm: rms_before,
+        noise_before_mm: noise_before,
+        gap_before_mm: gap_before,
+        fraction_closed,
     };
-    let none = || {
-        (
-            "none".to_owned(),
-            None,
-            p_gap,
-            gap_before,
-            vec![],
-            format!(
-                "held-out residual {rms_before:.3} mm is at the noise level (noise only {noise_before:.3} mm; gap {gap_before:.3} mm below the {detectable_gap_mm:.3} mm the test flags at false-alarm rate {alpha}) and no candidate beats noise (z threshold {z_threshold:.1})"
-            ),
-        )
-    };
-    // A significant candidate is tested first (it is the more powerful, targeted test; its
-    // false-alarm rate is family-wise); the omnibus gap test decides `none` vs `unexplained`
-    // only when no candidate beats noise.
-    let (effect, joint, confidence, gap_after, parameters, verdict) = match best {
-        Some(b) => {
-            let remaining_ok = b.chi2 <= quantile(&b.chi2_null, 1.0 - alpha, QuantileMethod::InverseCdf);
-            if remaining_ok || fraction_closed >= options.explained_fraction {
-                (
-                    b.score.effect.clone(),
-                    b.candidate.joint(),
-                    b.score.weight,
-                    b.score.gap_after_mm,
-                    b.score.parameters.clone(),
-                    format!(
-                        "{} (z = {:.1} over the noise-only threshold {z_threshold:.1}) closes {:.0} % of the gap's variance ({gap_before:.3} -> {:.3} mm){}",
-                        named(b),
-                        b.score.z,
-                        100.0 * fraction_closed.max(0.0),
-                        b.score.gap_after_mm,
-                        if remaining_ok {
-                            "; what is left is at the noise level"
-                        } else {
-                            ""
-                        }
-                    ),
-                )
-            } else {
-                (
-                    "unexplained".to_owned(),
-                    None,
-                    1.0 - upper_tail(&b.chi2_null, b.chi2),
-                    gap_before,
-                    vec![],
-                    format!(
-                        "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma); the best candidate, {}, closes only {:.0} % of its variance and leaves {:.3} mm above noise",
-                        named(b),
-                        100.0 * fraction_closed.max(0.0),
-                        b.score.gap_after_mm
-                    ),
-                )
-            }
-        }
-        None if g_obs > g_q => (
-            "unexplained".to_owned(),
-            None,
-            1.0 - p_gap,
-            gap_before,
-            vec![],
-            format!(
-                "gap {gap_before:.3} mm ({gap_sigmas:.1} sigma) and no candidate beats noise (threshold z = {z_threshold:.1})"
-            ),
-        ),
-        None => none(),
-    };
+    let v = evidence.verdict(best, options.explained_fraction);
     let base_params = prep.x_geometric.ncols();
     let (where_, features) = where_entries(prep, null, rms_before, noise_before, alpha);
     Diagnosis {
         outcome: Outcome {
-            effect,
-            joint,
-            confidence,
+            effect: v.effect,
+            joint: v.joint,
+            confidence: v.confidence,
             gap_before_mm: gap_before,
-            gap_after_mm: gap_after,
+            gap_after_mm: v.gap_after_mm,
         },
         where_,
         features,
         candidates: scored.into_iter().map(|s| s.score).collect(),
-        parameters,
+        parameters: v.parameters,
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         poses: [prep.poses.len().div_ceil(2), prep.poses.len() / 2],
         heldout_rms_before_mm: rms_before,
         noise_only_rms_mm: noise_before,
-        gap_sigmas,
-        detectable_gap_mm,
+        gap_sigmas: gap.gap_sigmas,
+        detectable_gap_mm: gap.detectable_gap_mm,
         false_alarm: alpha,
         null_samples: samples,
         refit_rank: [base.rank, base_params],
         fraction_closed,
-        verdict,
+        verdict: v.verdict,
     }
 }

@@ -4,8 +4,10 @@
 //! `#` lines are comments; unknown columns are ignored. Every malformed file gives one
 //! [`MeasurementFileError`] naming the file, the 1-based line and the column.
 
+mod columns;
+
 use super::data::{Measurement, MeasurementSet, RowProblem};
-use std::collections::HashMap;
+use columns::find_columns;
 use std::fs::OpenOptions;
 use std::io;
 use std::num::FpCategory;
@@ -274,97 +276,6 @@ fn record_line(bytes: &[u8], offset: u64) -> u64 {
         }
     }
     1 + bytes[..start].iter().filter(|&&b| b == b'\n').count() as u64
-}
-
-fn find_columns(
-    header: &csv::StringRecord,
-    path: &Path,
-    line: u64,
-    joint_count: Option<usize>,
-) -> Result<Columns, MeasurementFileError> {
-    let mut index: HashMap<&str, usize> = HashMap::new();
-    let mut cmd: HashMap<usize, usize> = HashMap::new();
-    // A byte-order mark (spreadsheet exports) is not part of the first column's name.
-    for (i, name) in header
-        .iter()
-        .map(|n| n.trim_start_matches('\u{feff}').trim())
-        .enumerate()
-    {
-        let k = name
-            .strip_prefix("cmd_")
-            .and_then(|k| k.parse::<usize>().ok())
-            .filter(|&k| k >= 1);
-        let known = k.is_some()
-            || [
-                "experiment",
-                "moved_joint",
-                "step",
-                "target",
-                "payload_kg",
-                "temperature_c",
-            ]
-            .contains(&name)
-            || POSITION_COLUMNS.contains(&name);
-        if known && index.insert(name, i).is_some() {
-            return Err(MeasurementFileError::DuplicateColumn {
-                path: path.into(),
-                line,
-                column: name.into(),
-            });
-        }
-        if let Some(k) = k {
-            cmd.insert(k, i);
-        }
-    }
-    let required = |column: &str| {
-        index
-            .get(column)
-            .copied()
-            .ok_or_else(|| MeasurementFileError::MissingColumn {
-                path: path.into(),
-                line,
-                column: column.into(),
-            })
-    };
-    let columns_found = cmd.len();
-    let n = match joint_count {
-        Some(n) => {
-            let extra = cmd.keys().copied().filter(|&k| k > n).min();
-            let missing = (1..=n).find(|k| !cmd.contains_key(k));
-            if let Some(k) = extra.or(missing) {
-                let column = format!("cmd_{k}");
-                return Err(MeasurementFileError::JointCount {
-                    path: path.into(),
-                    line,
-                    column,
-                    found: columns_found,
-                    expected: n,
-                });
-            }
-            n
-        }
-        None => {
-            let n = columns_found;
-            if let Some(k) = (1..=n.max(1)).find(|k| !cmd.contains_key(k)) {
-                return Err(MeasurementFileError::MissingColumn {
-                    path: path.into(),
-                    line,
-                    column: format!("cmd_{k}"),
-                });
-            }
-            n
-        }
-    };
-    Ok(Columns {
-        experiment: required("experiment")?,
-        moved_joint: required("moved_joint")?,
-        step: required("step")?,
-        target: required("target")?,
-        position: [required("x_mm")?, required("y_mm")?, required("z_mm")?],
-        cmd: (1..=n).map(|k| cmd[&k]).collect(),
-        payload_kg: index.get("payload_kg").copied(),
-        temperature_c: index.get("temperature_c").copied(),
-    })
 }
 
 /// One data record with what is needed to name its cells in errors.

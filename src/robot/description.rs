@@ -4,6 +4,8 @@
 //! Units in the file are those engineers read off drawings (mm, deg, kg); inside, everything
 //! is SI with angles in radians. See `scenarios/robots/asea-irb6l.toml` for a documented example.
 
+mod validate;
+
 use crate::kinematics::{JointKind, PhiJoint, PhiModel, PhiRow};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
@@ -252,129 +254,6 @@ impl RobotDescription {
         let text = include_str!("../../scenarios/robots/asea-irb6l.toml");
         Self::from_toml_str(text, Path::new("scenarios/robots/asea-irb6l.toml"))
             .expect("the shipped ASEA IRB/L6 description is valid (checked by tests)")
-    }
-
-    fn validate(&self, path: &Path) -> Result<(), DescriptionError> {
-        let bad = |field: String, message: String| DescriptionError::Invalid {
-            path: path.to_owned(),
-            field,
-            message,
-        };
-        let n = self.joints.len();
-        if n == 0 {
-            return Err(bad("joints".into(), "at least one joint is required".into()));
-        }
-        if self.rows.len() + 1 != n {
-            return Err(bad(
-                "rows".into(),
-                format!("{} joints need {} rows, found {}", n, n - 1, self.rows.len()),
-            ));
-        }
-        for (k, j) in self.joints.iter().enumerate() {
-            let all = [
-                j.phi_deg,
-                j.limits[0],
-                j.limits[1],
-                j.mass_kg,
-                j.com_mm[0],
-                j.com_mm[1],
-                j.com_mm[2],
-            ];
-            if all.iter().any(|v| !v.is_finite()) {
-                return Err(bad(format!("joints[{k}]"), "values must be finite".into()));
-            }
-            if j.limits[0] >= j.limits[1] {
-                return Err(bad(
-                    format!("joints[{k}].limits"),
-                    "lower limit must be below upper limit".into(),
-                ));
-            }
-            if j.mass_kg < 0.0 {
-                return Err(bad(format!("joints[{k}].mass_kg"), "mass must be >= 0".into()));
-            }
-            if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
-                return Err(bad(
-                    format!("joints[{k}].repeatability_sigma"),
-                    format!("must be a finite number >= 0 (rad or m), got {}", j.repeatability_sigma),
-                ));
-            }
-        }
-        for (k, r) in self.rows.iter().enumerate() {
-            if [r.a_m, r.b_m, r.alpha_deg, r.beta_deg, r.gamma_deg, r.h_m]
-                .iter()
-                .any(|v| !v.is_finite())
-            {
-                return Err(bad(format!("rows[{k}]"), "values must be finite".into()));
-            }
-        }
-        for (k, c) in self.couplings.iter().enumerate() {
-            if c.from == 0 || c.from >= n || c.to != c.from + 1 {
-                return Err(bad(
-                    format!("couplings[{k}]"),
-                    format!(
-                        "a coupling drives joint from+1 from joint `from` in 1..{n}; found {} -> {}",
-                        c.from, c.to
-                    ),
-                ));
-            }
-            if !c.slope.is_finite() {
-                return Err(bad(format!("couplings[{k}].slope"), "must be finite".into()));
-            }
-        }
-        if self.tool.targets_mm.len() != 3 {
-            return Err(bad(
-                "tool.targets_mm".into(),
-                format!(
-                    "exactly 3 tool targets are required, found {}",
-                    self.tool.targets_mm.len()
-                ),
-            ));
-        }
-        let t: Vec<Point3<f64>> = self.tool.targets_mm.iter().map(|p| Point3::from(*p)).collect();
-        if (t[1] - t[0]).cross(&(t[2] - t[0])).norm() < 1.0 {
-            return Err(bad(
-                "tool.targets_mm".into(),
-                "the three tool targets are collinear".into(),
-            ));
-        }
-        for (k, a) in self.axis_targets.iter().enumerate() {
-            if a.joint == 0 || a.joint > n {
-                return Err(bad(format!("axis_targets[{k}].joint"), format!("must be in 1..={n}")));
-            }
-            if a.target0.link < a.joint || a.target0.link > n {
-                return Err(bad(
-                    format!("axis_targets[{k}].target0.link"),
-                    format!("must be in {}..={n} (moved by joint {})", a.joint, a.joint),
-                ));
-            }
-            if self.couplings.iter().any(|c| c.from == a.joint) && a.target0.link != a.joint {
-                return Err(bad(
-                    format!("axis_targets[{k}].target0.link"),
-                    format!(
-                        "joint {} drives a passive coupling into joint {}, so target 0 must sit on link {} itself \
-                         (beyond it, the target would also move by the coupling's actual-vs-nominal error)",
-                        a.joint,
-                        a.joint + 1,
-                        a.joint
-                    ),
-                ));
-            }
-            if let Some(t1) = a.target1
-                && (t1.link <= a.joint || t1.link > n)
-            {
-                return Err(bad(
-                    format!("axis_targets[{k}].target1.link"),
-                    format!("must be in {}..={n} (beyond the swept joint)", a.joint + 1),
-                ));
-            }
-            if self.axis_targets[..k].iter().any(|b| b.joint == a.joint) {
-                return Err(bad(
-                    format!("axis_targets[{k}].joint"),
-                    format!("joint {} appears twice", a.joint),
-                ));
-            }
-        }
-        Ok(())
     }
 
     /// Number of joints.

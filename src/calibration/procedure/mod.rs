@@ -21,8 +21,10 @@
 //! (eqs. 14-15) report a-posteriori sigmas, so the swept joint's jitter in their residuals is
 //! already counted.
 
+mod axis_fit;
 mod experiments;
 mod frames;
+mod joints;
 mod report;
 mod result;
 mod uncertainty;
@@ -35,17 +37,13 @@ pub use result::{AxisReport, Calibration, CouplingReport, RowSigma, ToolReport};
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::urdf;
 
-use super::arc_model::MeasurementNoise;
-use super::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
-use super::transmission_fit::TransmissionForm;
-use super::{CalibrationError, angles, fit_arc_with_angle_noise, fit_axis_paper, fit_circle, fit_transmission};
-use crate::kinematics::{AxisLine, JointKind, rigid_fit};
+use super::CalibrationError;
+use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
-use crate::robot::{
-    Controller, CouplingFitForm, CouplingFunction, JointModel, Placement, RobotDescription, RobotModel, Transmission,
-    TransmissionFitForm,
-};
+use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel};
+use axis_fit::{AxisFitOutcome, actuator_commands, add_held_joint_covariances, fit_axes};
+use joints::Assembly;
 use nalgebra::{Isometry3, Point3};
 use serde::{Deserialize, Serialize};
 
@@ -201,90 +199,6 @@ pub enum ProcedureError {
     },
 }
 
-fn transmission_form(f: TransmissionFitForm) -> TransmissionForm {
-    match f {
-        TransmissionFitForm::Harmonic { order } => TransmissionForm::Harmonic { order },
-        TransmissionFitForm::Gear { ratio, order } => TransmissionForm::Gear { ratio, order },
-    }
-}
-
-/// One fitted axis: the line, the transmission in the fit's own zero (`theta_a = f^-1(u)`
-/// up to a constant) and the report.
-struct AxisFitOutcome {
-    axis: AxisLine,
-    transmission: Transmission,
-    report: AxisReport,
-}
-
-fn fit_one_axis(
-    e: &AxisExperiment,
-    u: &[f64],
-    form: TransmissionForm,
-    options: &CalibrationOptions,
-    repeatability_rad: f64,
-) -> Result<AxisFitOutcome, CalibrationError> {
-    let noise = MeasurementNoise::from_rms_3d(options.noise_rms_3d_mm * 1e-3);
-    let points = &e.target0_m;
-    let centroid = Point3::from(points.iter().map(|p| p.coords).sum::<nalgebra::Vector3<f64>>() / points.len() as f64);
-    let span_rad =
-        u.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - u.iter().cloned().fold(f64::INFINITY, f64::min);
-    match options.estimator {
-        AxisEstimator::Ml => {
-            let fit = fit_arc_with_angle_noise(
-                points,
-                u,
-                &super::ArcFitOptions {
-                    form,
-                    noise,
-                    reference_point: centroid,
-                    max_iterations: options.max_iterations,
-                },
-                repeatability_rad,
-            )?;
-            let g = super::arc_model::axis_quantities_gradient(&fit.params, &centroid);
-            let q = &g * &fit.covariance * g.transpose();
-            let mut report = AxisReport::from_ml(e, &fit, &form, span_rad);
-            report.covariance = Some(AxisCovariance::new(
-                fit.params.u().into_inner(),
-                fit.params.v().into_inner(),
-                &q.fixed_view::<4, 4>(0, 0).into(),
-            ));
-            Ok(AxisFitOutcome {
-                axis: fit.axis,
-                transmission: fit.transmission,
-                report,
-            })
-        }
-        AxisEstimator::Paper => {
-            // Orient the axis so that increasing commands turn positively about it.
-            let circle = fit_circle(points)?;
-            let sign = if u[u.len() - 1] >= u[0] { 1.0 } else { -1.0 };
-            let guess = nalgebra::Unit::new_unchecked(circle.normal.into_inner() * sign);
-            let fit = fit_axis_paper(points, Some(&guess), options.max_iterations)?;
-            let mut axis = fit.axis;
-            if axis.direction.dot(&guess) < 0.0 {
-                axis.direction = -axis.direction;
-            }
-            let frame = Isometry3::face_towards(
-                &axis.origin_m,
-                &(axis.origin_m + axis.direction.into_inner()),
-                &circle.u,
-            );
-            // Points in a frame with Z on the axis: eqs. (6)-(7), then eq. (8).
-            let local: Vec<Point3<f64>> = points.iter().map(|p| frame.inverse_transform_point(p)).collect();
-            let local: Vec<Point3<f64>> = local.iter().map(|p| Point3::new(p.x, p.y, p.z)).collect();
-            let increments = angles::displacements_from_start(&local)?;
-            let t = fit_transmission(&form, &increments, u)?;
-            let report = AxisReport::from_paper(e, &fit, &t, &form, span_rad);
-            Ok(AxisFitOutcome {
-                axis,
-                transmission: t.transmission,
-                report,
-            })
-        }
-    }
-}
-
 /// Calibrates the robot described (nominally) by `desc` from the axis experiments of `set`
 /// (and the tool targets at the reference pose, when observed).
 pub fn calibrate(
@@ -292,7 +206,6 @@ pub fn calibrate(
     desc: &RobotDescription,
     options: &CalibrationOptions,
 ) -> Result<Calibration, ProcedureError> {
-    let n = desc.dof();
     if let Some(k) = desc.joints.iter().position(|j| j.kind == JointKind::Prismatic) {
         return Err(ProcedureError::Prismatic { joint: k + 1 });
     }
@@ -300,36 +213,49 @@ pub fn calibrate(
     let (experiments, reference_cmd) = axis_experiments(set, desc)?;
     let controller = Controller::from_description(desc);
     let q_ref = commands_to_internal(desc, &reference_cmd);
-    let u_of = |cmd: &[f64]| -> Vec<f64> {
-        controller
-            .decouple(&commands_to_internal(desc, cmd))
-            .expect("commands have the description's joint count (checked by MeasurementSet)")
-    };
-    let u_ref = u_of(&reference_cmd);
+    let u_ref = actuator_commands(&controller, desc, &reference_cmd);
 
-    // Axes and transmissions, in the order the experiments were run (Table 1: 6..1).
-    let mut fits: Vec<Option<(AxisFitOutcome, Vec<f64>)>> = (0..n).map(|_| None).collect();
-    for e in &experiments {
-        let k = e.joint - 1;
-        let u: Vec<f64> = e.commands.iter().map(|c| u_of(c)[k]).collect();
-        let u0: Vec<f64> = e.target0_steps.iter().map(|&j| u[j]).collect();
-        let form = transmission_form(desc.joints[k].transmission_fit);
-        let outcome =
-            fit_one_axis(e, &u0, form, options, repeatability_rad[k]).map_err(|source| ProcedureError::Fit {
-                experiment: e.name.clone(),
-                joint: e.joint,
-                source,
-            })?;
-        fits[k] = Some((outcome, u));
-    }
-    let mut fits: Vec<(AxisFitOutcome, Vec<f64>)> = fits
-        .into_iter()
-        .map(|f| f.expect("every joint has an experiment"))
-        .collect();
+    let mut fits = fit_axes(&experiments, desc, &controller, options, &repeatability_rad)?;
     let axes: Vec<AxisLine> = fits.iter().map(|(f, _)| f.axis).collect();
     let geometry = model_from_axes(&desc.nominal_model(), &axes, &q_ref)?;
+    let row_sigma = calibrated_row_sigmas(desc, &axes, &q_ref, &fits)?;
+    add_held_joint_covariances(&mut fits, &axes, &repeatability_rad);
+
+    let assembly = Assembly {
+        desc,
+        experiments: &experiments,
+        fits: &fits,
+        geometry: &geometry,
+        q_ref: &q_ref,
+        u_ref: &u_ref,
+    };
+    let (joints, couplings) = assembly.joint_models()?;
+    let mut robot = calibrated_robot(desc, joints, &geometry);
+    let tool = tool_frame(set, desc, &robot, &reference_cmd, &controller);
+    if let Some(t) = &tool {
+        robot.tool_frame = placement_of(&t.last_link_from_tool);
+    }
+    Ok(Calibration {
+        robot,
+        reference_cmd,
+        axes: fits.into_iter().map(|(f, _)| f.report).collect(),
+        row_sigma,
+        couplings,
+        tool,
+        options: options.clone(),
+    })
+}
+
+/// The standard deviations of the rows (mm, deg) from the axes' covariances as fitted
+/// (before the held joints' bias is added).
+fn calibrated_row_sigmas(
+    desc: &RobotDescription,
+    axes: &[AxisLine],
+    q_ref: &[f64],
+    fits: &[(AxisFitOutcome, Vec<f64>)],
+) -> Result<Vec<RowSigma>, ProcedureError> {
     let covariances: Vec<Option<AxisCovariance>> = fits.iter().map(|(f, _)| f.report.covariance.clone()).collect();
-    let row_sigma: Vec<RowSigma> = row_sigmas(&desc.nominal_model(), &axes, &q_ref, &covariances)?
+    Ok(row_sigmas(&desc.nominal_model(), axes, q_ref, &covariances)?
         .into_iter()
         .map(|[a, b, alpha, beta]| RowSigma {
             a_mm: a * 1e3,
@@ -337,84 +263,13 @@ pub fn calibrate(
             alpha_deg: alpha.to_degrees(),
             beta_deg: beta.to_degrees(),
         })
-        .collect();
-    // The joints below each swept one hold still with their re-positioning error: a bias of
-    // the whole sweep (not noise of its points), added to the axis's reported covariance in
-    // the instrument frame. Not to the rows above: the campaign leaves a held actuator where
-    // it is from one sweep to the next, so the same error turns every axis above it together,
-    // which changes no row (it is an error of that joint's value at the reference, as large as
-    // its repeatability).
-    for (k, (fit, _)) in fits.iter_mut().enumerate() {
-        let held: Vec<(AxisLine, f64)> = (0..k)
-            .filter(|&i| repeatability_rad[i] > 0.0)
-            .map(|i| (axes[i], repeatability_rad[i]))
-            .collect();
-        if !held.is_empty() {
-            fit.report.add_held_joint_covariance(&axes[k], &held);
-        }
-    }
+        .collect())
+}
 
-    // Ascending: joint k's zero needs the coupling into k, which needs joint k-1's zero.
-    let mut joints: Vec<JointModel> = Vec::with_capacity(n);
-    let mut couplings = Vec::new();
-    let mut theta_ref: Vec<f64> = Vec::with_capacity(n);
-    // The calibrated active angle of joint k is `f_k^-1(u) + shift[k]`.
-    let mut shift: Vec<f64> = Vec::with_capacity(n);
-    for k in 0..n {
-        let (fit, _) = &fits[k];
-        let not_invertible = |u: f64| ProcedureError::Fit {
-            experiment: experiments
-                .iter()
-                .find(|e| e.joint == k + 1)
-                .map(|e| e.name.clone())
-                .unwrap_or_default(),
-            joint: k + 1,
-            source: CalibrationError::NotInvertible {
-                fit: "calibrated transmission",
-                command_rad: u,
-            },
-        };
-        let coupling_in: Option<CouplingFunction> = if k == 0 {
-            None
-        } else {
-            coupling_into(
-                k,
-                desc,
-                &experiments,
-                &fits,
-                &shift,
-                &geometry,
-                &q_ref,
-                &u_ref,
-                &mut couplings,
-                options,
-            )?
-        };
-        let passive_ref = match (&coupling_in, k) {
-            (Some(g), k) if k > 0 => g
-                .try_passive(theta_ref[k - 1])
-                .map_err(|_| not_invertible(u_ref[k - 1]))?,
-            _ => 0.0,
-        };
-        let theta_a_ref = q_ref[k] - passive_ref;
-        let raw_ref = fit
-            .transmission
-            .actual_from_command(u_ref[k])
-            .ok_or_else(|| not_invertible(u_ref[k]))?;
-        let c = theta_a_ref - raw_ref;
-        theta_ref.push(theta_a_ref);
-        shift.push(c);
-        joints.push(JointModel {
-            kind: desc.joints[k].kind,
-            phi_deg: desc.joints[k].phi_deg,
-            transmission: fit.transmission.shifted(c),
-            coupling_in,
-            transducer_offset: -c,
-            repeatability_sigma: 0.0,
-        });
-    }
-
-    let mut robot = RobotModel {
+/// The calibrated robot: the joint models on the rows and base placement of the phi-model
+/// `geometry`, with the description's tool frame (replaced when the tool is measured).
+fn calibrated_robot(desc: &RobotDescription, joints: Vec<JointModel>, geometry: &PhiModel) -> RobotModel {
+    RobotModel {
         name: format!("{} (calibrated)", desc.name),
         joints,
         rows: geometry
@@ -432,20 +287,7 @@ pub fn calibrate(
         placement: placement_of(&geometry.world_from_base),
         tool_frame: desc.tool.frame,
         four_bars: vec![],
-    };
-    let tool = tool_frame(set, desc, &robot, &reference_cmd, &controller);
-    if let Some(t) = &tool {
-        robot.tool_frame = placement_of(&t.last_link_from_tool);
     }
-    Ok(Calibration {
-        robot,
-        reference_cmd,
-        axes: fits.into_iter().map(|(f, _)| f.report).collect(),
-        row_sigma,
-        couplings,
-        tool,
-        options: options.clone(),
-    })
 }
 
 /// A placement (mm, roll-pitch-yaw deg) from an isometry.
@@ -455,121 +297,6 @@ fn placement_of(iso: &Isometry3<f64>) -> Placement {
     Placement {
         translation_mm: [t.x, t.y, t.z],
         rpy_deg: [r.to_degrees(), p.to_degrees(), y.to_degrees()],
-    }
-}
-
-/// The coupling into joint `k` (0-based) from joint `k-1`: fitted from the second target of
-/// the joint-`k` sweep (1-based `k`) when observed (eqs. 14-15), else the nominal one.
-#[allow(clippy::too_many_arguments)]
-fn coupling_into(
-    k: usize,
-    desc: &RobotDescription,
-    experiments: &[AxisExperiment],
-    fits: &[(AxisFitOutcome, Vec<f64>)],
-    shift: &[f64],
-    geometry: &crate::kinematics::PhiModel,
-    q_ref: &[f64],
-    u_ref: &[f64],
-    couplings: &mut Vec<CouplingReport>,
-    options: &CalibrationOptions,
-) -> Result<Option<CouplingFunction>, ProcedureError> {
-    let from = k; // 1-based number of the driving joint
-    let Some(slope) = desc.nominal_coupling_from(from) else {
-        return Ok(None);
-    };
-    let nominal = CouplingFunction::linear(slope);
-    let e = experiments
-        .iter()
-        .find(|e| e.joint == from)
-        .expect("every joint has an experiment");
-    let form = desc.couplings.iter().find(|c| c.from == from).and_then(|c| c.fit);
-    let Some(form) = form else {
-        return Ok(Some(nominal));
-    };
-    if e.target1_m.len() < 3 {
-        return Err(ProcedureError::SecondTargetMissing {
-            experiment: e.name.clone(),
-            joint: from,
-            seen: e.target1_m.len(),
-        });
-    }
-    let second = &e.target1_m;
-    if !e.holds_next_still {
-        return Err(ProcedureError::InconsistentCommands {
-            experiment: e.name.clone(),
-            step: 0,
-            joint: from + 1,
-            reason:
-                "a coupling is measured only while actuator k+1 is held still (`docs/formats.md#controller-semantics`)"
-                    .into(),
-        });
-    }
-    let fit_err = |source| ProcedureError::Fit {
-        experiment: e.name.clone(),
-        joint: from,
-        source,
-    };
-    let (fit_from, u_all) = &fits[k - 1];
-    let u: Vec<f64> = e.target1_steps.iter().map(|&j| u_all[j]).collect();
-    let active: Vec<f64> = u
-        .iter()
-        .map(|&uj| fit_from.transmission.actual_from_command(uj).map(|t| t + shift[k - 1]))
-        .collect::<Option<_>>()
-        .ok_or_else(|| {
-            fit_err(CalibrationError::NotInvertible {
-                fit: "coupling active angles",
-                command_rad: u[0],
-            })
-        })?;
-    let theta_ref_from = fit_from
-        .transmission
-        .actual_from_command(u_ref[k - 1])
-        .map(|t| t + shift[k - 1])
-        .unwrap_or(q_ref[k - 1]);
-    // Axis k+1 (1-based) at step 0 of this sweep: the reference frame turned about axis k by
-    // the active motion from the reference to step 0.
-    let mut q0 = q_ref.to_vec();
-    q0[k - 1] += active[0] - theta_ref_from;
-    let frame_next = geometry.poses(&q0).world_from_frame[k];
-    let axis_from = geometry.poses(q_ref).axis(k - 1);
-    let t_from_start: Vec<f64> = active.iter().map(|a| a - active[0]).collect();
-    let passive = passive_displacements(&frame_next, &axis_from, &t_from_start, second).map_err(fit_err)?;
-    let (cform, passive_start) = match form {
-        CouplingFitForm::Fractional => (CouplingForm::Fractional, slope * active[0]),
-        CouplingFitForm::Gear { order, fit_ratio } => {
-            let cform = CouplingForm::Gear {
-                ratio: slope,
-                fit_ratio,
-                order,
-            };
-            (cform, gear_passive_start(slope, order, &active, &passive))
-        }
-    };
-    let fit = fit_coupling(&cform, &active, &passive, passive_start).map_err(fit_err)?;
-    let _ = options;
-    couplings.push(CouplingReport::new(from, e, &fit, &cform));
-    Ok(Some(fit.function))
-}
-
-/// The absolute passive angle at step 0 for a gear form `N t + sum (s sin kNt + c cos kNt)`,
-/// which has no free constant: linear least squares of the increments on `[sin, cos, -1]`.
-fn gear_passive_start(ratio: f64, order: usize, active: &[f64], passive_from_start: &[f64]) -> f64 {
-    let m = active.len();
-    let cols = 2 * order + 1;
-    let mut a = nalgebra::DMatrix::zeros(m, cols);
-    let mut b = nalgebra::DVector::zeros(m);
-    for (j, (&t, &y)) in active.iter().zip(passive_from_start).enumerate() {
-        for h in 0..order {
-            let x = (h + 1) as f64 * ratio * t;
-            a[(j, h)] = x.sin();
-            a[(j, order + h)] = x.cos();
-        }
-        a[(j, 2 * order)] = -1.0;
-        b[j] = y - ratio * t;
-    }
-    match a.svd(true, true).solve(&b, 1e-12) {
-        Ok(x) => x[2 * order],
-        Err(_) => ratio * active[0],
     }
 }
 

@@ -41,6 +41,16 @@ fn finding(subject: String, value: f64, sigma: f64, unit: &str, text: String) ->
 /// Deviations of the Table-2 rows from the design, offsets, transmissions and couplings.
 pub fn findings(cal: &Calibration, desc: &RobotDescription) -> Vec<Finding> {
     let mut out = Vec::new();
+    row_findings(cal, desc, &mut out);
+    zero_offset_findings(cal, &mut out);
+    transmission_findings(cal, &mut out);
+    coupling_findings(cal, &mut out);
+    out
+}
+
+/// The deviations of each row's `a`, `b`, `alpha` and `beta` from the design, appended to
+/// `out`.
+fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Finding>) {
     for (k, ((r, n), s)) in cal.robot.rows.iter().zip(&desc.rows).zip(&cal.row_sigma).enumerate() {
         let (i, j) = (k + 1, k + 2);
         let da = (r.a_m - n.a_m) * 1e3;
@@ -90,6 +100,10 @@ pub fn findings(cal: &Calibration, desc: &RobotDescription) -> Vec<Finding> {
             ),
         ));
     }
+}
+
+/// Each joint's zero offset at the reference pose, appended to `out`.
+fn zero_offset_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     for (k, j) in cal.robot.joints.iter().enumerate() {
         let off = j.transducer_offset.to_degrees();
         out.push(finding(
@@ -104,6 +118,10 @@ pub fn findings(cal: &Calibration, desc: &RobotDescription) -> Vec<Finding> {
             ),
         ));
     }
+}
+
+/// The amplitude of every harmonic of each joint's transmission, appended to `out`.
+fn transmission_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     for a in &cal.axes {
         let (sin, cos) = match &a.transmission {
             Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => (sin.clone(), cos.clone()),
@@ -142,6 +160,10 @@ pub fn findings(cal: &Calibration, desc: &RobotDescription) -> Vec<Finding> {
             ));
         }
     }
+}
+
+/// Each fitted coupling's parameters and residual, appended to `out`.
+fn coupling_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     for c in &cal.couplings {
         let rms = c.residual_rms_rad * 1e3;
         let params: Vec<String> = c
@@ -164,7 +186,6 @@ pub fn findings(cal: &Calibration, desc: &RobotDescription) -> Vec<Finding> {
             ),
         ));
     }
-    out
 }
 
 /// The report as Markdown.
@@ -176,6 +197,16 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
         "Data: `{source}`. Estimator: `{:?}`; noise assumed {:.3} mm 3-D RMS.\n",
         cal.options.estimator, cal.options.noise_rms_3d_mm
     );
+    write_axes_table(&mut s, cal);
+    write_rows_table(&mut s, cal, desc);
+    write_tool(&mut s, cal);
+    write_findings(&mut s, cal, desc);
+    write_identifiability(&mut s, cal);
+    s
+}
+
+/// The table of the fitted axes (instrument frame).
+fn write_axes_table(s: &mut String, cal: &Calibration) {
     let _ = writeln!(s, "## Axes (instrument frame)\n");
     let _ = writeln!(
         s,
@@ -201,6 +232,10 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
             a.residual_rms_mm
         );
     }
+}
+
+/// The table of the calibrated phi-model rows (Table 2 form) with the nominal ones.
+fn write_rows_table(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
     let _ = writeln!(s, "\n## Phi-model parameters (Table 2 form)\n");
     let _ = writeln!(
         s,
@@ -226,6 +261,10 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
             sg.beta_deg
         );
     }
+}
+
+/// Where the tool frame comes from.
+fn write_tool(s: &mut String, cal: &Calibration) {
     if let Some(t) = &cal.tool {
         let _ = writeln!(
             s,
@@ -238,6 +277,10 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
             "\nNo tool observation at the reference pose: the tool frame is the nominal one."
         );
     }
+}
+
+/// The findings, resolved by the data or not.
+fn write_findings(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
     let all = findings(cal, desc);
     let _ = writeln!(
         s,
@@ -250,6 +293,10 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
     for f in all.iter().filter(|f| !f.significant) {
         let _ = writeln!(s, "- {}", f.text);
     }
+}
+
+/// Each axis fit's condition number and identifiability notes.
+fn write_identifiability(s: &mut String, cal: &Calibration) {
     let _ = writeln!(s, "\n## Identifiability\n");
     for a in &cal.axes {
         let _ = writeln!(s, "- joint {}: condition number {:.3e}", a.joint, a.condition_number);
@@ -257,5 +304,4 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
             let _ = writeln!(s, "  - {note}");
         }
     }
-    s
 }

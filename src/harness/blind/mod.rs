@@ -4,14 +4,18 @@
 //! runs [`diagnose`](crate::diagnosis::diagnose) on the CSV alone and scores the answers
 //! ([`score`]). This module sees the truth; the diagnoser never does.
 
+mod draw;
 mod score;
 
 pub use score::{BlindScore, CaseResult, ConfusionMatrix, case_table, score};
 
-use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
-use crate::physics::{
-    AxisWobble, BacklashEffect, ComplianceEffect, GearHarmonic, InstrumentScale, PayloadEffect, ThermalEffect,
+use draw::{
+    draw_backlash, draw_compliance, draw_gear_harmonic, draw_instrument_scale, draw_thermal, draw_wobble,
+    draw_zero_drift, log_uniform,
 };
+
+use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
+use crate::physics::PayloadEffect;
 use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription};
@@ -90,28 +94,6 @@ impl InstrumentSag {
     }
 }
 
-/// Log-uniform draw in `[lo, hi)`.
-fn log_uniform<R: Rng + ?Sized>(rng: &mut R, lo: f64, hi: f64) -> f64 {
-    (rng.random_range(lo.ln()..hi.ln())).exp()
-}
-
-/// A wobble of a random joint with a log-uniform amplitude in `amplitude_rad`.
-fn draw_wobble<R: Rng + ?Sized>(
-    rng: &mut R,
-    dof: usize,
-    amplitude_rad: [f64; 2],
-    phase_rad: f64,
-    order: i32,
-) -> AxisWobble {
-    let joint = rng.random_range(1..=dof);
-    AxisWobble {
-        joint,
-        amplitude_rad: log_uniform(rng, amplitude_rad[0], amplitude_rad[1]),
-        phase_rad,
-        order,
-    }
-}
-
 /// The paper robot's rated payload \[kg\] (the ASEA IRB 6 handles 6 kg), the largest
 /// validation payload of a blind case.
 pub const PAYLOAD_MAX_KG: f64 = 6.0;
@@ -177,60 +159,17 @@ pub fn draw_effect<R: Rng + ?Sized>(
     rng: &mut R,
 ) -> CaseKey {
     // Magnitudes are log-uniform over ranges spanning each effect's detectable size on this
-    // campaign (from about a third of it to ten times it; README "Blind check").
+    // campaign (from about a third of it to ten times it; `docs/diagnosis.md`, "Blind check").
     let dof = desc.dof();
     let mut e = Effects::default();
     let mut sag = None;
     let mut drift = None;
     let phase = rng.random_range(0.0..std::f64::consts::TAU);
     let (joint, magnitude, unit) = match effect {
-        "joint_compliance" => {
-            // Joints 2 and 3 carry the gravity load of the arm.
-            let joint = rng.random_range(2..=3);
-            // The refit absorbs the part of a sag that follows the joint angles alone; the
-            // validation payloads (`BlindOptions::payload_max_kg`) leave the rest. On this
-            // campaign joint 2's detectable stiffness is about 3e4 N m/rad, joint 3's about
-            // 2e5 (development suite, seed 7): draws from about a third of it to ten times.
-            let k = if joint == 2 {
-                log_uniform(rng, 8.0e3, 1.0e5)
-            } else {
-                log_uniform(rng, 2.0e4, 6.0e5)
-            };
-            let mut stiffness = vec![1e12; dof];
-            stiffness[joint - 1] = k;
-            e.compliance = Some(ComplianceEffect {
-                stiffness_nm_per_rad: stiffness,
-                gravity_m_s2: crate::diagnosis::GRAVITY_M_S2,
-            });
-            (Some(joint), k, "N m/rad")
-        }
-        "backlash" => {
-            let joint = rng.random_range(1..=dof);
-            let band = log_uniform(rng, 1.0e-4, 3.0e-3);
-            let mut b = vec![0.0; dof];
-            b[joint - 1] = band;
-            e.backlash = Some(BacklashEffect { band_rad: b });
-            (Some(joint), band, "rad (band)")
-        }
-        "thermal_expansion" => {
-            let alpha = log_uniform(rng, 4.0e-6, 1.0e-4);
-            e.thermal = Some(ThermalEffect {
-                alpha_per_k: alpha,
-                reference_c: 20.0,
-            });
-            (None, alpha, "1/K")
-        }
-        "gear_harmonic" => {
-            let joint = rng.random_range(1..=dof);
-            let a = log_uniform(rng, 3.0e-4, 1.0e-2);
-            e.gear_harmonics.push(GearHarmonic {
-                joint,
-                order: crate::diagnosis::unmodelled_harmonic_order(desc, joint),
-                sin_rad: a * phase.sin(),
-                cos_rad: a * phase.cos(),
-            });
-            (Some(joint), a, "rad")
-        }
+        "joint_compliance" => draw_compliance(rng, dof, &mut e),
+        "backlash" => draw_backlash(rng, dof, &mut e),
+        "thermal_expansion" => draw_thermal(rng, &mut e),
+        "gear_harmonic" => draw_gear_harmonic(rng, desc, phase, &mut e),
         "axis_wobble" => {
             let w = draw_wobble(rng, dof, [4.0e-4, 1.0e-2], phase, crate::diagnosis::WOBBLE_ORDER);
             e.wobble.push(w);
@@ -241,19 +180,8 @@ pub fn draw_effect<R: Rng + ?Sized>(
             sag = Some(InstrumentSag { curvature_per_m: c });
             (None, c, "1/m (instrument sag)")
         }
-        "unknown" => {
-            // 0.1-3 mrad over the validation's +-10 K; detectable from about 2e-5 rad/K at
-            // joint 3 to 2.4e-4 at joint 6 (development suite, seed 7).
-            let joint = rng.random_range(1..=dof);
-            let rate = log_uniform(rng, 1.0e-5, 3.0e-4) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-            drift = Some(JointZeroDrift { joint, rad_per_k: rate });
-            (Some(joint), rate, "rad/K (joint zero drift)")
-        }
-        "instrument_scale" => {
-            let ppm = log_uniform(rng, 200.0, 6000.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-            e.instrument_scale = Some(InstrumentScale { ppm });
-            (None, ppm, "ppm")
-        }
+        "unknown" => draw_zero_drift(rng, dof, &mut drift),
+        "instrument_scale" => draw_instrument_scale(rng, &mut e),
         _ => (None, 0.0, "-"),
     };
     CaseKey {

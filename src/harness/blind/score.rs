@@ -83,28 +83,53 @@ pub struct BlindScore {
     pub confusion: ConfusionMatrix,
 }
 
-/// Case counts of [`score`].
+/// Case counts of [`score`], and the gaps of the correctly named effects.
 #[derive(Default)]
 struct Tally {
+    /// Cases with the expected effect name.
     correct: usize,
+    /// In-set effect cases above their detectable size.
     det: usize,
+    /// Of those, named right.
     det_ok: usize,
+    /// Correctly named per-joint effects.
     joint_total: usize,
+    /// Of those, with the right joint.
     joint_ok: usize,
+    /// In-set effect cases below their detectable size.
     undet: usize,
+    /// Of those, read as `none` or named right.
     undet_ok: usize,
+    /// No-effect cases.
     nones: usize,
+    /// Of those, read as `none`.
     nones_ok: usize,
+    /// Out-of-set cases above their detectable size.
     out: usize,
+    /// Of those, read as `unexplained`.
     out_ok: usize,
+    /// Out-of-set cases below their detectable size.
     out_undet: usize,
+    /// Of those, not given a name.
     out_undet_ok: usize,
+    /// Cases with a named effect.
     named: usize,
+    /// Of those, correct.
     named_ok: usize,
+    /// Correctly named effects whose gap shrank by >= 70 %.
     shrunk: usize,
+    /// Correctly named effects whose 70 % shrink is resolvable.
     resolvable: usize,
+    /// Of those, shrunk by >= 70 %.
     resolvable_shrunk: usize,
+    /// Correctly named effects shrunk by >= 70 % or left at the noise level.
     shrunk_or_noise: usize,
+    /// `gap_after / gap_before` of the correctly named effects with a gap before.
+    gap_ratios: Vec<f64>,
+    /// Sum of `gap_before` over the correctly named effects \[mm\].
+    gap_before_sum_mm: f64,
+    /// Sum of `gap_after` over the correctly named effects \[mm\].
+    gap_after_sum_mm: f64,
 }
 
 fn frac(a: usize, b: usize) -> f64 {
@@ -115,8 +140,8 @@ fn is_named(effect: &str) -> bool {
     effect != "none" && effect != "unexplained"
 }
 
-/// Scores diagnoses against their keys.
-pub fn score(results: &[CaseResult]) -> BlindScore {
+/// The confusion matrix of expected against diagnosed effect names (labels sorted).
+fn confusion_matrix(results: &[CaseResult]) -> ConfusionMatrix {
     let mut labels: Vec<String> = Vec::new();
     for r in results {
         for l in [&r.key.expected, &r.diagnosis.outcome.effect] {
@@ -128,12 +153,23 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
     labels.sort();
     let mut counts = vec![vec![0; labels.len()]; labels.len()];
     let pos = |l: &String| labels.iter().position(|x| x == l).unwrap_or(0);
-    let mut n = Tally::default();
-    let mut ratios = Vec::new();
-    let (mut before, mut after) = (0.0, 0.0);
     for r in results {
         let (k, d) = (&r.key, &r.diagnosis);
         counts[pos(&k.expected)][pos(&d.outcome.effect)] += 1;
+    }
+    ConfusionMatrix {
+        expected: labels.clone(),
+        diagnosed: labels,
+        counts,
+    }
+}
+
+impl Tally {
+    /// Counts case `r` in its category (no effect, out-of-set or in-set, above or below its
+    /// detectable size) and, when it is named right, its gap shrinkage and joint.
+    fn add(&mut self, r: &CaseResult) {
+        let n = self;
+        let (k, d) = (&r.key, &r.diagnosis);
         let right = k.expected == d.outcome.effect;
         n.correct += usize::from(right);
         n.named += usize::from(is_named(&d.outcome.effect));
@@ -154,56 +190,79 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
             n.undet_ok += usize::from(right || d.outcome.effect == "none");
         }
         if right && is_named(&d.outcome.effect) {
-            n.named_ok += 1;
-            if d.outcome.gap_before_mm > 0.0 {
-                ratios.push(d.outcome.gap_after_mm / d.outcome.gap_before_mm);
-                let shrunk = d.outcome.gap_after_mm <= 0.3 * d.outcome.gap_before_mm;
-                n.shrunk += usize::from(shrunk);
-                n.shrunk_or_noise += usize::from(shrunk || d.outcome.gap_after_mm < d.detectable_gap_mm);
-                if 0.3 * d.outcome.gap_before_mm >= d.detectable_gap_mm {
-                    n.resolvable += 1;
-                    n.resolvable_shrunk += usize::from(shrunk);
-                }
-            }
-            before += d.outcome.gap_before_mm;
-            after += d.outcome.gap_after_mm;
-            if k.joint.is_some() {
-                n.joint_total += 1;
-                n.joint_ok += usize::from(k.joint == d.outcome.joint);
-            }
+            n.add_named_right(r);
         }
     }
-    ratios.sort_by(f64::total_cmp);
-    BlindScore {
-        cases: results.len(),
-        effect_accuracy: frac(n.correct, results.len()),
-        detectable_in_set: n.det,
-        detectable_in_set_accuracy: frac(n.det_ok, n.det),
-        joint_accuracy: frac(n.joint_ok, n.joint_total),
-        undetectable_in_set: n.undet,
-        undetectable_honest: frac(n.undet_ok, n.undet),
-        none_accuracy: frac(n.nones_ok, n.nones),
-        detectable_out_of_set: n.out,
-        out_of_set_unexplained: frac(n.out_ok, n.out),
-        undetectable_out_of_set: n.out_undet,
-        undetectable_out_of_set_honest: frac(n.out_undet_ok, n.out_undet),
-        named_precision: frac(n.named_ok, n.named),
-        shrunk_70: frac(n.shrunk, ratios.len()),
-        shrunk_70_resolvable: frac(n.resolvable_shrunk, n.resolvable),
-        resolvable: n.resolvable,
-        shrunk_70_or_at_noise: frac(n.shrunk_or_noise, ratios.len()),
-        median_gap_ratio: if ratios.is_empty() {
-            f64::NAN
-        } else {
-            ratios[ratios.len() / 2]
-        },
-        mean_gap_before_after_mm: [before / n.named_ok.max(1) as f64, after / n.named_ok.max(1) as f64],
-        confusion: ConfusionMatrix {
-            expected: labels.clone(),
-            diagnosed: labels,
-            counts,
-        },
+
+    /// Counts a correctly named case `r`: its gap shrinkage and, for a per-joint effect, its
+    /// joint.
+    fn add_named_right(&mut self, r: &CaseResult) {
+        let n = self;
+        let (k, d) = (&r.key, &r.diagnosis);
+        n.named_ok += 1;
+        if d.outcome.gap_before_mm > 0.0 {
+            n.gap_ratios.push(d.outcome.gap_after_mm / d.outcome.gap_before_mm);
+            let shrunk = d.outcome.gap_after_mm <= 0.3 * d.outcome.gap_before_mm;
+            n.shrunk += usize::from(shrunk);
+            n.shrunk_or_noise += usize::from(shrunk || d.outcome.gap_after_mm < d.detectable_gap_mm);
+            if 0.3 * d.outcome.gap_before_mm >= d.detectable_gap_mm {
+                n.resolvable += 1;
+                n.resolvable_shrunk += usize::from(shrunk);
+            }
+        }
+        n.gap_before_sum_mm += d.outcome.gap_before_mm;
+        n.gap_after_sum_mm += d.outcome.gap_after_mm;
+        if k.joint.is_some() {
+            n.joint_total += 1;
+            n.joint_ok += usize::from(k.joint == d.outcome.joint);
+        }
     }
+
+    /// The score of `cases` cases from the counts (gap ratios sorted) and the confusion matrix.
+    fn into_score(self, cases: usize, confusion: ConfusionMatrix) -> BlindScore {
+        let n = self;
+        let ratios = n.gap_ratios;
+        BlindScore {
+            cases,
+            effect_accuracy: frac(n.correct, cases),
+            detectable_in_set: n.det,
+            detectable_in_set_accuracy: frac(n.det_ok, n.det),
+            joint_accuracy: frac(n.joint_ok, n.joint_total),
+            undetectable_in_set: n.undet,
+            undetectable_honest: frac(n.undet_ok, n.undet),
+            none_accuracy: frac(n.nones_ok, n.nones),
+            detectable_out_of_set: n.out,
+            out_of_set_unexplained: frac(n.out_ok, n.out),
+            undetectable_out_of_set: n.out_undet,
+            undetectable_out_of_set_honest: frac(n.out_undet_ok, n.out_undet),
+            named_precision: frac(n.named_ok, n.named),
+            shrunk_70: frac(n.shrunk, ratios.len()),
+            shrunk_70_resolvable: frac(n.resolvable_shrunk, n.resolvable),
+            resolvable: n.resolvable,
+            shrunk_70_or_at_noise: frac(n.shrunk_or_noise, ratios.len()),
+            median_gap_ratio: if ratios.is_empty() {
+                f64::NAN
+            } else {
+                ratios[ratios.len() / 2]
+            },
+            mean_gap_before_after_mm: [
+                n.gap_before_sum_mm / n.named_ok.max(1) as f64,
+                n.gap_after_sum_mm / n.named_ok.max(1) as f64,
+            ],
+            confusion,
+        }
+    }
+}
+
+/// Scores diagnoses against their keys.
+pub fn score(results: &[CaseResult]) -> BlindScore {
+    let confusion = confusion_matrix(results);
+    let mut n = Tally::default();
+    for r in results {
+        n.add(r);
+    }
+    n.gap_ratios.sort_by(f64::total_cmp);
+    n.into_score(results.len(), confusion)
 }
 
 impl BlindScore {

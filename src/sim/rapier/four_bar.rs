@@ -28,16 +28,18 @@
 //! sag is the virtual-work prediction `g'^2 Q_3 / K_c` (about 9e-5 rad) within 2 %, the crank
 //! and rod's own weight.
 
+mod attach;
+
 use super::SimError;
 use super::arm::SimArm;
-use super::convert::{point_to_glam, pose_to_glam, rotation_from_glam, rotation_to_glam};
+use super::convert::{point_to_glam, rotation_from_glam};
 use crate::robot::FourBarLinkage;
-use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
+use attach::{PlanarLayout, crank_mount, insert_crank, insert_rod, planar_layout};
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use parry3d_f64::shape::{Capsule, SharedShape};
 use rapier3d_f64::math::Vector;
 use rapier3d_f64::prelude::{
-    GenericJointBuilder, ImpulseJointHandle, JointAxesMask, JointAxis, MassProperties, MultibodyJointHandle,
-    RigidBodyBuilder, RigidBodyHandle, SphericalJointBuilder,
+    ImpulseJointHandle, JointAxis, MultibodyJointHandle, RigidBodyHandle, SphericalJointBuilder,
 };
 
 /// The mechanism's bodies and joints in a [`SimArm`]'s world.
@@ -60,11 +62,6 @@ pub struct FourBarBodies {
     crank_angle_rad: f64,
 }
 
-fn x_onto_z() -> UnitQuaternion<f64> {
-    let h = std::f64::consts::FRAC_1_SQRT_2;
-    UnitQuaternion::new_unchecked(Quaternion::new(h, 0.0, -h, 0.0))
-}
-
 /// Mass of the crank \[kg\] (an estimate: a steel bar of the crank's length).
 pub const CRANK_MASS_KG: f64 = 2.0;
 
@@ -74,19 +71,6 @@ pub const ROD_MASS_KG: f64 = 1.0;
 /// Radius of the crank and the rod \[m\]: their collision capsules (line of sight) and the
 /// solid cylinders of their inertia estimates.
 pub const BAR_RADIUS_M: f64 = 0.015;
-
-fn bar_mass(mass_kg: f64, length_m: f64, along: Vector3<f64>, from: Point3<f64>) -> MassProperties {
-    let r = BAR_RADIUS_M;
-    let i_axial = mass_kg * r * r / 2.0;
-    let i_trans = mass_kg * (3.0 * r * r + length_m * length_m) / 12.0;
-    let frame = UnitQuaternion::rotation_between(&Vector3::z(), &along).unwrap_or_else(UnitQuaternion::identity);
-    MassProperties::with_principal_inertia_frame(
-        point_to_glam(&(from + along * (length_m / 2.0))),
-        mass_kg,
-        Vector::new(i_trans, i_trans, i_axial),
-        rotation_to_glam(&frame),
-    )
-}
 
 impl FourBarBodies {
     /// Adds crank, rod and closure to `arm` for `linkage` (driving joint `linkage.from`,
@@ -100,63 +84,19 @@ impl FourBarBodies {
         }
         let g = linkage.geometry;
         let model = arm.model().clone();
-        let t_ab = model.link_from_next_frame(a);
-        let o3 = t_ab * Point3::origin();
-        let o2 = Point3::new(0.0, 0.0, o3.z);
-        let ex = (o3 - o2).normalize();
-        let ey = Vector3::z().cross(&ex);
-        let e = |angle: f64| ex * angle.cos() + ey * angle.sin();
-        let crank_tip = o2 + e(g.crank_angle_rad) * g.crank_m;
-        let lever_in_link_b_m = t_ab.inverse() * (o3 + e(g.lever_angle_rad) * g.lever_m);
-        let (parent, parent_from_frame) = if a == 0 {
-            (arm.base_body(), Isometry3::identity())
-        } else {
-            (arm.link_body(a - 1), model.link_from_next_frame(a - 1))
-        };
-        let world_from_frame = arm.world_from_body(if a == 0 {
-            super::ArmBody::Base
-        } else {
-            super::ArmBody::Link(a - 1)
-        }) * parent_from_frame;
-        let r = x_onto_z();
+        let layout = planar_layout(model.link_from_next_frame(a), &g);
+        let mount = crank_mount(arm, &model, a);
+        let world_from_frame = mount.world_from_frame;
         let world = arm.world_mut();
-        let crank_body = world.insert_body(
-            RigidBodyBuilder::dynamic()
-                .pose(pose_to_glam(&world_from_frame))
-                .additional_mass_properties(bar_mass(CRANK_MASS_KG, g.crank_m, crank_tip - o2, o2))
-                .can_sleep(false),
-        );
-        let crank = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-            .local_frame1(pose_to_glam(
-                &(parent_from_frame * Isometry3::from_parts(Default::default(), r)),
-            ))
-            .local_frame2(pose_to_glam(&Isometry3::from_parts(Default::default(), r)))
-            .contacts_enabled(false)
-            .build();
-        let crank_joint = world
-            .multibody_joints
-            .insert(parent, crank_body, crank, true)
-            .ok_or(SimError::JointRejected { joint: a })?;
-        let rod_body = world.insert_body(
-            RigidBodyBuilder::dynamic()
-                .pose(pose_to_glam(
-                    &(world_from_frame * Isometry3::translation(crank_tip.x, crank_tip.y, crank_tip.z)),
-                ))
-                .additional_mass_properties(bar_mass(ROD_MASS_KG, g.rod_m, Vector3::x(), Point3::origin()))
-                .can_sleep(false),
-        );
-        let rod = GenericJointBuilder::new(JointAxesMask::LOCKED_SPHERICAL_AXES)
-            .local_frame1(pose_to_glam(&Isometry3::translation(
-                crank_tip.x,
-                crank_tip.y,
-                crank_tip.z,
-            )))
-            .contacts_enabled(false)
-            .build();
-        let rod_joint = world
-            .multibody_joints
-            .insert(crank_body, rod_body, rod, true)
-            .ok_or(SimError::JointRejected { joint: a + 1 })?;
+        let (crank_body, crank_joint) = insert_crank(world, mount, &layout, g.crank_m, a)?;
+        let (rod_body, rod_joint) = insert_rod(world, crank_body, world_from_frame, layout.crank_tip_m, g.rod_m, a)?;
+        let PlanarLayout {
+            o2,
+            ex,
+            ey,
+            crank_tip_m: crank_tip,
+            lever_in_link_b_m,
+        } = layout;
         let link_b = arm.link_body(a + 1);
         let closure = SphericalJointBuilder::new()
             .local_anchor1(Vector::new(g.rod_m, 0.0, 0.0))

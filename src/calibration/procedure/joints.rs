@@ -1,0 +1,230 @@
+//! The calibrated joint models, in ascending order: each joint's zero from the reference pose
+//! and the coupling into it from the joint below, fitted from the second target of that
+//! joint's sweep when observed (eqs. 14-15), else the nominal one.
+
+use super::axis_fit::AxisFitOutcome;
+use super::{AxisExperiment, CouplingReport, ProcedureError};
+use crate::calibration::CalibrationError;
+use crate::calibration::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
+use crate::kinematics::PhiModel;
+use crate::robot::{CouplingFitForm, CouplingFunction, JointModel, RobotDescription};
+
+/// The fitted axes of a campaign and the reference pose the joint models are assembled from.
+pub(super) struct Assembly<'a> {
+    /// The nominal description.
+    pub(super) desc: &'a RobotDescription,
+    /// The axis experiments.
+    pub(super) experiments: &'a [AxisExperiment],
+    /// Each joint's axis fit with its actuator commands (rad) at every step of its sweep.
+    pub(super) fits: &'a [(AxisFitOutcome, Vec<f64>)],
+    /// The phi-model of the fitted axes.
+    pub(super) geometry: &'a PhiModel,
+    /// The joint values at the reference pose (rad).
+    pub(super) q_ref: &'a [f64],
+    /// The actuator commands at the reference pose (rad).
+    pub(super) u_ref: &'a [f64],
+}
+
+impl Assembly<'_> {
+    /// The joint models with the fitted couplings' reports. Ascending: joint k's zero needs the
+    /// coupling into k, which needs joint k-1's zero.
+    pub(super) fn joint_models(&self) -> Result<(Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
+        let (desc, q_ref, u_ref) = (self.desc, self.q_ref, self.u_ref);
+        let n = desc.dof();
+        let mut joints: Vec<JointModel> = Vec::with_capacity(n);
+        let mut couplings = Vec::new();
+        let mut theta_ref: Vec<f64> = Vec::with_capacity(n);
+        // The calibrated active angle of joint k is `f_k^-1(u) + shift[k]`.
+        let mut shift: Vec<f64> = Vec::with_capacity(n);
+        for k in 0..n {
+            let (fit, _) = &self.fits[k];
+            let coupling_in: Option<CouplingFunction> = if k == 0 {
+                None
+            } else {
+                self.coupling_into(k, &shift, &mut couplings)?
+            };
+            let passive_ref = match (&coupling_in, k) {
+                (Some(g), k) if k > 0 => g
+                    .try_passive(theta_ref[k - 1])
+                    .map_err(|_| self.not_invertible(k, u_ref[k - 1]))?,
+                _ => 0.0,
+            };
+            let theta_a_ref = q_ref[k] - passive_ref;
+            let raw_ref = fit
+                .transmission
+                .actual_from_command(u_ref[k])
+                .ok_or_else(|| self.not_invertible(k, u_ref[k]))?;
+            let c = theta_a_ref - raw_ref;
+            theta_ref.push(theta_a_ref);
+            shift.push(c);
+            joints.push(JointModel {
+                kind: desc.joints[k].kind,
+                phi_deg: desc.joints[k].phi_deg,
+                transmission: fit.transmission.shifted(c),
+                coupling_in,
+                transducer_offset: -c,
+                repeatability_sigma: 0.0,
+            });
+        }
+        Ok((joints, couplings))
+    }
+
+    /// The error of joint `k`'s (0-based) calibrated transmission not inverting the command
+    /// `u` (rad).
+    fn not_invertible(&self, k: usize, u: f64) -> ProcedureError {
+        ProcedureError::Fit {
+            experiment: self
+                .experiments
+                .iter()
+                .find(|e| e.joint == k + 1)
+                .map(|e| e.name.clone())
+                .unwrap_or_default(),
+            joint: k + 1,
+            source: CalibrationError::NotInvertible {
+                fit: "calibrated transmission",
+                command_rad: u,
+            },
+        }
+    }
+
+    /// The coupling into joint `k` (0-based) from joint `k-1`: fitted from the second target of
+    /// the joint-`k` sweep (1-based `k`) when observed (eqs. 14-15), else the nominal one.
+    /// `shift` holds the zero shifts of the joints below; a fitted coupling's report is pushed
+    /// onto `couplings`.
+    fn coupling_into(
+        &self,
+        k: usize,
+        shift: &[f64],
+        couplings: &mut Vec<CouplingReport>,
+    ) -> Result<Option<CouplingFunction>, ProcedureError> {
+        let desc = self.desc;
+        let from = k; // 1-based number of the driving joint
+        let Some(slope) = desc.nominal_coupling_from(from) else {
+            return Ok(None);
+        };
+        let nominal = CouplingFunction::linear(slope);
+        let e = self
+            .experiments
+            .iter()
+            .find(|e| e.joint == from)
+            .expect("every joint has an experiment");
+        let form = desc.couplings.iter().find(|c| c.from == from).and_then(|c| c.fit);
+        let Some(form) = form else {
+            return Ok(Some(nominal));
+        };
+        if e.target1_m.len() < 3 {
+            return Err(ProcedureError::SecondTargetMissing {
+                experiment: e.name.clone(),
+                joint: from,
+                seen: e.target1_m.len(),
+            });
+        }
+        if !e.holds_next_still {
+            return Err(ProcedureError::InconsistentCommands {
+                experiment: e.name.clone(),
+                step: 0,
+                joint: from + 1,
+                reason: "a coupling is measured only while actuator k+1 is held still (`docs/formats.md#controller-semantics`)".into(),
+            });
+        }
+        self.fit_measured_coupling(k, e, slope, form, shift, couplings)
+            .map(Some)
+    }
+
+    /// Fits the coupling into joint `k` (0-based) from the second target of sweep `e` of joint
+    /// `k-1` (eqs. 14-15), nominal slope `slope`, and pushes its report onto `couplings`.
+    fn fit_measured_coupling(
+        &self,
+        k: usize,
+        e: &AxisExperiment,
+        slope: f64,
+        form: CouplingFitForm,
+        shift: &[f64],
+        couplings: &mut Vec<CouplingReport>,
+    ) -> Result<CouplingFunction, ProcedureError> {
+        let (geometry, q_ref) = (self.geometry, self.q_ref);
+        let from = k;
+        let second = &e.target1_m;
+        let fit_err = |source| fit_error(e, from, source);
+        let active = self.sweep_active_angles(k, e, shift)?;
+        let (fit_from, _) = &self.fits[k - 1];
+        let theta_ref_from = fit_from
+            .transmission
+            .actual_from_command(self.u_ref[k - 1])
+            .map(|t| t + shift[k - 1])
+            .unwrap_or(q_ref[k - 1]);
+        // Axis k+1 (1-based) at step 0 of this sweep: the reference frame turned about axis k by
+        // the active motion from the reference to step 0.
+        let mut q0 = q_ref.to_vec();
+        q0[k - 1] += active[0] - theta_ref_from;
+        let frame_next = geometry.poses(&q0).world_from_frame[k];
+        let axis_from = geometry.poses(q_ref).axis(k - 1);
+        let t_from_start: Vec<f64> = active.iter().map(|a| a - active[0]).collect();
+        let passive = passive_displacements(&frame_next, &axis_from, &t_from_start, second).map_err(fit_err)?;
+        let (cform, passive_start) = match form {
+            CouplingFitForm::Fractional => (CouplingForm::Fractional, slope * active[0]),
+            CouplingFitForm::Gear { order, fit_ratio } => {
+                let cform = CouplingForm::Gear {
+                    ratio: slope,
+                    fit_ratio,
+                    order,
+                };
+                (cform, gear_passive_start(slope, order, &active, &passive))
+            }
+        };
+        let fit = fit_coupling(&cform, &active, &passive, passive_start).map_err(fit_err)?;
+        couplings.push(CouplingReport::new(from, e, &fit, &cform));
+        Ok(fit.function)
+    }
+
+    /// The calibrated active angles (rad) of the driving joint `k-1` (0-based) at the steps of
+    /// sweep `e` where its second target was seen.
+    fn sweep_active_angles(&self, k: usize, e: &AxisExperiment, shift: &[f64]) -> Result<Vec<f64>, ProcedureError> {
+        let (fit_from, u_all) = &self.fits[k - 1];
+        let u: Vec<f64> = e.target1_steps.iter().map(|&j| u_all[j]).collect();
+        u.iter()
+            .map(|&uj| fit_from.transmission.actual_from_command(uj).map(|t| t + shift[k - 1]))
+            .collect::<Option<_>>()
+            .ok_or_else(|| {
+                fit_error(
+                    e,
+                    k,
+                    CalibrationError::NotInvertible {
+                        fit: "coupling active angles",
+                        command_rad: u[0],
+                    },
+                )
+            })
+    }
+}
+
+/// The error of a coupling fit of sweep `e` driven by joint `from` (1-based).
+fn fit_error(e: &AxisExperiment, from: usize, source: CalibrationError) -> ProcedureError {
+    ProcedureError::Fit {
+        experiment: e.name.clone(),
+        joint: from,
+        source,
+    }
+}
+
+/// The absolute passive angle at step 0 for a gear form `N t + sum (s sin kNt + c cos kNt)`,
+/// which has no free constant: linear least squares of the increments on `[sin, cos, -1]`.
+fn gear_passive_start(ratio: f64, order: usize, active: &[f64], passive_from_start: &[f64]) -> f64 {
+    let m = active.len();
+    let cols = 2 * order + 1;
+    let mut a = nalgebra::DMatrix::zeros(m, cols);
+    let mut b = nalgebra::DVector::zeros(m);
+    for (j, (&t, &y)) in active.iter().zip(passive_from_start).enumerate() {
+        for h in 0..order {
+            let x = (h + 1) as f64 * ratio * t;
+            a[(j, h)] = x.sin();
+            a[(j, order + h)] = x.cos();
+        }
+        a[(j, 2 * order)] = -1.0;
+        b[j] = y - ratio * t;
+    }
+    match a.svd(true, true).solve(&b, 1e-12) {
+        Ok(x) => x[2 * order],
+        Err(_) => ratio * active[0],
+    }
+}

@@ -1,0 +1,123 @@
+//! Finding the columns of a measurement CSV by name in its header (module docs of
+//! [`super`]): the known columns, each at most once, and `cmd_1..cmd_N`.
+
+use super::{Columns, MeasurementFileError, POSITION_COLUMNS};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// The header's known columns by name, and the `cmd_k` columns by joint `k` (1-based); a
+/// known column given twice is an error.
+type HeaderColumns<'h> = (HashMap<&'h str, usize>, HashMap<usize, usize>);
+
+/// Indexes the columns of `header` (at `line` of `path`), see [`HeaderColumns`].
+fn index_columns<'h>(
+    header: &'h csv::StringRecord,
+    path: &Path,
+    line: u64,
+) -> Result<HeaderColumns<'h>, MeasurementFileError> {
+    let mut index: HashMap<&str, usize> = HashMap::new();
+    let mut cmd: HashMap<usize, usize> = HashMap::new();
+    // A byte-order mark (spreadsheet exports) is not part of the first column's name.
+    for (i, name) in header
+        .iter()
+        .map(|n| n.trim_start_matches('\u{feff}').trim())
+        .enumerate()
+    {
+        let k = name
+            .strip_prefix("cmd_")
+            .and_then(|k| k.parse::<usize>().ok())
+            .filter(|&k| k >= 1);
+        let known = k.is_some()
+            || [
+                "experiment",
+                "moved_joint",
+                "step",
+                "target",
+                "payload_kg",
+                "temperature_c",
+            ]
+            .contains(&name)
+            || POSITION_COLUMNS.contains(&name);
+        if known && index.insert(name, i).is_some() {
+            return Err(MeasurementFileError::DuplicateColumn {
+                path: path.into(),
+                line,
+                column: name.into(),
+            });
+        }
+        if let Some(k) = k {
+            cmd.insert(k, i);
+        }
+    }
+    Ok((index, cmd))
+}
+
+/// The number of joints the `cmd_k` columns (`cmd`: joint to column) give: `joint_count` when
+/// given (exactly `cmd_1..cmd_n` required), else as many as there are, without gaps.
+fn command_joint_count(
+    cmd: &HashMap<usize, usize>,
+    joint_count: Option<usize>,
+    path: &Path,
+    line: u64,
+) -> Result<usize, MeasurementFileError> {
+    let columns_found = cmd.len();
+    Ok(match joint_count {
+        Some(n) => {
+            let extra = cmd.keys().copied().filter(|&k| k > n).min();
+            let missing = (1..=n).find(|k| !cmd.contains_key(k));
+            if let Some(k) = extra.or(missing) {
+                let column = format!("cmd_{k}");
+                return Err(MeasurementFileError::JointCount {
+                    path: path.into(),
+                    line,
+                    column,
+                    found: columns_found,
+                    expected: n,
+                });
+            }
+            n
+        }
+        None => {
+            let n = columns_found;
+            if let Some(k) = (1..=n.max(1)).find(|k| !cmd.contains_key(k)) {
+                return Err(MeasurementFileError::MissingColumn {
+                    path: path.into(),
+                    line,
+                    column: format!("cmd_{k}"),
+                });
+            }
+            n
+        }
+    })
+}
+
+/// The columns of the file's `header` (at `line` of `path`), checked against `joint_count`.
+pub(super) fn find_columns(
+    header: &csv::StringRecord,
+    path: &Path,
+    line: u64,
+    joint_count: Option<usize>,
+) -> Result<Columns, MeasurementFileError> {
+    let (index, cmd) = index_columns(header, path, line)?;
+    let required = |column: &str| {
+        index
+            .get(column)
+            .copied()
+            .ok_or_else(|| MeasurementFileError::MissingColumn {
+                path: path.into(),
+                line,
+                column: column.into(),
+            })
+    };
+    let n = command_joint_count(&cmd, joint_count, path, line)?;
+    Ok(Columns {
+        experiment: required("experiment")?,
+        moved_joint: required("moved_joint")?,
+        step: required("step")?,
+        target: required("target")?,
+        position: [required("x_mm")?, required("y_mm")?, required("z_mm")?],
+        cmd: (1..=n).map(|k| cmd[&k]).collect(),
+        payload_kg: index.get("payload_kg").copied(),
+        temperature_c: index.get("temperature_c").copied(),
+    })
+}

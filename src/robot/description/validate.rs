@@ -1,0 +1,171 @@
+//! The checks of a description's values ([`RobotDescription::from_toml_str`]): the first
+//! invalid field is reported with the file's path.
+
+use super::{DescriptionError, RobotDescription};
+use nalgebra::Point3;
+use std::path::Path;
+
+/// An invalid field of a description and what is wrong with it.
+type Invalid = (String, String);
+
+impl RobotDescription {
+    /// Checks the description's values; the first field found invalid is reported with `path`.
+    pub(super) fn validate(&self, path: &Path) -> Result<(), DescriptionError> {
+        self.check_counts()
+            .and_then(|()| self.check_joints())
+            .and_then(|()| self.check_rows())
+            .and_then(|()| self.check_couplings())
+            .and_then(|()| self.check_tool())
+            .and_then(|()| self.check_axis_targets())
+            .map_err(|(field, message)| DescriptionError::Invalid {
+                path: path.to_owned(),
+                field,
+                message,
+            })
+    }
+
+    /// At least one joint, and one row fewer than joints.
+    fn check_counts(&self) -> Result<(), Invalid> {
+        let n = self.joints.len();
+        if n == 0 {
+            return Err(("joints".into(), "at least one joint is required".into()));
+        }
+        if self.rows.len() + 1 != n {
+            return Err((
+                "rows".into(),
+                format!("{} joints need {} rows, found {}", n, n - 1, self.rows.len()),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Each joint's values are finite, its limits ordered, its mass and repeatability >= 0.
+    fn check_joints(&self) -> Result<(), Invalid> {
+        for (k, j) in self.joints.iter().enumerate() {
+            let all = [
+                j.phi_deg,
+                j.limits[0],
+                j.limits[1],
+                j.mass_kg,
+                j.com_mm[0],
+                j.com_mm[1],
+                j.com_mm[2],
+            ];
+            if all.iter().any(|v| !v.is_finite()) {
+                return Err((format!("joints[{k}]"), "values must be finite".into()));
+            }
+            if j.limits[0] >= j.limits[1] {
+                return Err((
+                    format!("joints[{k}].limits"),
+                    "lower limit must be below upper limit".into(),
+                ));
+            }
+            if j.mass_kg < 0.0 {
+                return Err((format!("joints[{k}].mass_kg"), "mass must be >= 0".into()));
+            }
+            if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
+                return Err((
+                    format!("joints[{k}].repeatability_sigma"),
+                    format!("must be a finite number >= 0 (rad or m), got {}", j.repeatability_sigma),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Each row's values are finite.
+    fn check_rows(&self) -> Result<(), Invalid> {
+        for (k, r) in self.rows.iter().enumerate() {
+            if [r.a_m, r.b_m, r.alpha_deg, r.beta_deg, r.gamma_deg, r.h_m]
+                .iter()
+                .any(|v| !v.is_finite())
+            {
+                return Err((format!("rows[{k}]"), "values must be finite".into()));
+            }
+        }
+        Ok(())
+    }
+
+    /// Each coupling drives joint `from + 1` from joint `from` within the robot, with a finite
+    /// slope.
+    fn check_couplings(&self) -> Result<(), Invalid> {
+        let n = self.joints.len();
+        for (k, c) in self.couplings.iter().enumerate() {
+            if c.from == 0 || c.from >= n || c.to != c.from + 1 {
+                return Err((
+                    format!("couplings[{k}]"),
+                    format!(
+                        "a coupling drives joint from+1 from joint `from` in 1..{n}; found {} -> {}",
+                        c.from, c.to
+                    ),
+                ));
+            }
+            if !c.slope.is_finite() {
+                return Err((format!("couplings[{k}].slope"), "must be finite".into()));
+            }
+        }
+        Ok(())
+    }
+
+    /// Exactly three tool targets, not collinear.
+    fn check_tool(&self) -> Result<(), Invalid> {
+        if self.tool.targets_mm.len() != 3 {
+            return Err((
+                "tool.targets_mm".into(),
+                format!(
+                    "exactly 3 tool targets are required, found {}",
+                    self.tool.targets_mm.len()
+                ),
+            ));
+        }
+        let t: Vec<Point3<f64>> = self.tool.targets_mm.iter().map(|p| Point3::from(*p)).collect();
+        if (t[1] - t[0]).cross(&(t[2] - t[0])).norm() < 1.0 {
+            return Err(("tool.targets_mm".into(), "the three tool targets are collinear".into()));
+        }
+        Ok(())
+    }
+
+    /// Each axis target's joint is in the robot and appears once; target 0 is moved by the
+    /// joint (on the joint's own link when it drives a coupling) and target 1 beyond it.
+    fn check_axis_targets(&self) -> Result<(), Invalid> {
+        let n = self.joints.len();
+        for (k, a) in self.axis_targets.iter().enumerate() {
+            if a.joint == 0 || a.joint > n {
+                return Err((format!("axis_targets[{k}].joint"), format!("must be in 1..={n}")));
+            }
+            if a.target0.link < a.joint || a.target0.link > n {
+                return Err((
+                    format!("axis_targets[{k}].target0.link"),
+                    format!("must be in {}..={n} (moved by joint {})", a.joint, a.joint),
+                ));
+            }
+            if self.couplings.iter().any(|c| c.from == a.joint) && a.target0.link != a.joint {
+                return Err((
+                    format!("axis_targets[{k}].target0.link"),
+                    format!(
+                        "joint {} drives a passive coupling into joint {}, so target 0 must sit on link {} itself \
+                         (beyond it, the target would also move by the coupling's actual-vs-nominal error)",
+                        a.joint,
+                        a.joint + 1,
+                        a.joint
+                    ),
+                ));
+            }
+            if let Some(t1) = a.target1
+                && (t1.link <= a.joint || t1.link > n)
+            {
+                return Err((
+                    format!("axis_targets[{k}].target1.link"),
+                    format!("must be in {}..={n} (beyond the swept joint)", a.joint + 1),
+                ));
+            }
+            if self.axis_targets[..k].iter().any(|b| b.joint == a.joint) {
+                return Err((
+                    format!("axis_targets[{k}].joint"),
+                    format!("joint {} appears twice", a.joint),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
