@@ -54,7 +54,7 @@
 //! use axiscal::plan::{CalibrationPlan, ValidationPlan};
 //! use axiscal::robot::{Controller, RobotDescription};
 //! use axiscal::sim::{AnalyticArm, paper_robot, simulate_campaign};
-//! use rand::{SeedableRng, rngs::StdRng};
+//! use rand::{SeedableRng, rngs::ChaCha12Rng};
 //!
 //! let desc = RobotDescription::asea_irb6l();
 //! let mut truth = paper_robot();
@@ -69,7 +69,7 @@
 //!     &no_validation,
 //!     &mut arm,
 //!     &MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: 0.0 }),
-//!     &mut StdRng::seed_from_u64(1),
+//!     &mut ChaCha12Rng::seed_from_u64(1),
 //! )?;
 //! let data = MeasurementSet::new(6, campaign.rows)?;
 //! let cal = calibrate(&data, &desc, &CalibrationOptions::default())?;

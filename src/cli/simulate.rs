@@ -7,7 +7,7 @@ use axiscal::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::sim::{AnalyticArm, ArmExecutor, CampaignOptions, CampaignOutput, Effects, simulate_campaign_with};
 use axiscal::sim::{RapierArm, RapierArmOptions, SpanSearch, visible_sweep_span};
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::path::PathBuf;
 
 /// Arguments of `axiscal simulate`.
@@ -109,7 +109,7 @@ pub fn run(args: Args) -> Result<()> {
     let name = truth.name.clone();
     #[cfg(feature = "viz")]
     let recorded_truth = truth.clone();
-    let mut rng = StdRng::seed_from_u64(args.seed);
+    let mut rng = ChaCha12Rng::seed_from_u64(args.seed);
     let out = match args.sim {
         Sim::Analytic => {
             let mut arm = AnalyticArm::new(truth, Controller::from_description(&desc)).with_effects(effects, &desc);
@@ -202,7 +202,7 @@ fn run_campaign<A: ArmExecutor>(
     arm: &mut A,
     instrument: &MeasurementModel,
     options: &CampaignOptions,
-    rng: &mut StdRng,
+    rng: &mut ChaCha12Rng,
 ) -> Result<CampaignOutput> {
     Ok(simulate_campaign_with(
         desc, plan, validation, arm, instrument, options, rng,
@@ -226,7 +226,7 @@ fn report_spans(
         joint.repeatability_sigma = 0.0;
     }
     let mut arm = RapierArm::new(still, desc, effects.clone(), rapier_options.clone());
-    let mut rng = StdRng::seed_from_u64(0);
+    let mut rng = ChaCha12Rng::seed_from_u64(0);
     for sweep in &plan.sweeps {
         let k = sweep.joint - 1;
         let [lo, hi] = desc.limits_internal(k);

@@ -12,7 +12,7 @@ use crate::calibration::procedure::Calibration;
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{QuantileMethod, mean, quantile, upper_tail};
 use crate::robot::RobotDescription;
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
@@ -89,7 +89,7 @@ fn noise_only_residuals_mm(
     replicas: usize,
 ) -> Result<Vec<Vec<f64>>, DiagnosisError> {
     let clean = clean_positions(set, cal, desc)?;
-    let mut rng = StdRng::seed_from_u64(options.seed);
+    let mut rng = ChaCha12Rng::seed_from_u64(options.seed);
     let mut null: Vec<Vec<f64>> = vec![Vec::with_capacity(replicas); cal.axes.len()];
     for _ in 0..replicas {
         let r = replica(set, &clean, options.noise_rms_3d_mm * 1e-3, true, &mut rng)?;

@@ -54,7 +54,7 @@ use crate::numerics::lsq::{Damping, LmOptions, LsqError, levenberg_marquardt_fro
 use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector};
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
@@ -365,7 +365,7 @@ fn null_data(
     let noise_m = options.noise_rms_3d_mm * 1e-3;
     let sigma = noise_m / 3f64.sqrt();
     let clean = clean_positions(set, &prep.cal, desc)?;
-    let mut rng = StdRng::seed_from_u64(options.seed);
+    let mut rng = ChaCha12Rng::seed_from_u64(options.seed);
     let n = prep.residuals.len();
     let draws = options.noise_draws.max(1);
     let mut samples = DMatrix::zeros(n, options.noise_trials * draws);

@@ -538,7 +538,7 @@ mod tests {
     use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
     use crate::robot::commands_to_internal;
     use crate::sim::{Effects, JointDriver};
-    use rand::{SeedableRng, rngs::StdRng};
+    use rand::{SeedableRng, rngs::ChaCha12Rng};
 
     /// The compliance candidate on the truth robot itself reproduces the coupled static
     /// equilibrium (joint 2's sag drives joint 3 through the four-bar) to rounding.
@@ -561,7 +561,7 @@ mod tests {
         let mut driver = JointDriver::new(&truth, Controller::from_description(&desc), &Effects::default());
         let model = truth.phi_model();
         let sagged = |driver: &mut JointDriver, cmd: &[f64]| {
-            let d = driver.drive(cmd, &mut StdRng::seed_from_u64(1)).unwrap();
+            let d = driver.drive(cmd, &mut ChaCha12Rng::seed_from_u64(1)).unwrap();
             let couplings = PassiveSlope::of_linkages(&truth, &d.active);
             let load = CompliantLoad {
                 masses: &masses,

@@ -94,7 +94,7 @@ mod tests {
     use crate::measurement::noise_calibration::{PAPER_ROBOT_BASE_MM, ReferenceVolume};
     use approx::assert_relative_eq;
     use rand::SeedableRng;
-    use rand::rngs::StdRng;
+    use rand::rngs::ChaCha12Rng;
     use rand_distr::Uniform;
 
     const SAMPLES: usize = 10_000;
@@ -111,7 +111,7 @@ mod tests {
         let volume = ReferenceVolume::paper();
         let half = volume.side_m / 2.0;
         let coordinate = Uniform::new(-half, half).unwrap();
-        let mut rng = StdRng::seed_from_u64(seed);
+        let mut rng = ChaCha12Rng::seed_from_u64(seed);
         let mut sum_m2 = 0.0;
         for _ in 0..SAMPLES {
             let offset = Vector3::from_fn(|_, _| coordinate.sample(&mut rng));
@@ -140,7 +140,7 @@ mod tests {
     /// Tolerance: 4 standard errors.
     fn check_covariance(model: &MeasurementModel, seed: u64) {
         let p = robot_base_m() + Vector3::new(0.3, -0.2, 0.8);
-        let mut rng = StdRng::seed_from_u64(seed);
+        let mut rng = ChaCha12Rng::seed_from_u64(seed);
         let errors: Vec<Vector3<f64>> = (0..SAMPLES).map(|_| model.measure(&p, &mut rng).unwrap() - p).collect();
         let n = SAMPLES as f64;
         let mean = errors.iter().sum::<Vector3<f64>>() / n;
@@ -180,7 +180,7 @@ mod tests {
         let (model, _) = MeasurementModel::paper_theodolites().unwrap();
         let p = robot_base_m();
         let run = |seed| {
-            let mut rng = StdRng::seed_from_u64(seed);
+            let mut rng = ChaCha12Rng::seed_from_u64(seed);
             (0..10)
                 .map(|_| model.measure(&p, &mut rng).unwrap().coords.map(f64::to_bits))
                 .collect::<Vec<_>>()

@@ -2,7 +2,7 @@
 //! axis experiments (`docs/formats.md#measurement-csv`, `moved_joint = 0`).
 
 use crate::robot::RobotDescription;
-use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 
 /// A seeded set of validation poses drawn uniformly inside per-joint command ranges.
@@ -33,7 +33,7 @@ impl ValidationPlan {
 
     /// The command vectors (file units), reproducible for a given seed.
     pub fn commands(&self, desc: &RobotDescription, reference: &[f64]) -> Vec<Vec<f64>> {
-        let mut rng = StdRng::seed_from_u64(self.seed);
+        let mut rng = ChaCha12Rng::seed_from_u64(self.seed);
         (0..self.poses)
             .map(|_| {
                 desc.joints

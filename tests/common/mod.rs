@@ -7,7 +7,7 @@ use axiscal::measurement::{MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::sim::{AnalyticArm, simulate_campaign};
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 
 /// The `axiscal` binary of this build.
 pub fn axiscal() -> Command {
@@ -44,7 +44,7 @@ pub fn analytic_campaign(
 ) -> MeasurementSet {
     let desc = RobotDescription::asea_irb6l();
     let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(&desc));
-    let mut rng = StdRng::seed_from_u64(seed);
+    let mut rng = ChaCha12Rng::seed_from_u64(seed);
     let out = simulate_campaign(&desc, plan, validation, &mut arm, instrument, &mut rng).expect("the campaign runs");
     MeasurementSet::new(desc.dof(), out.rows).expect("a simulated campaign is a valid measurement set")
 }

@@ -20,7 +20,7 @@ use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription};
 use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, simulate_campaign_with};
-use rand::{Rng, RngExt, SeedableRng, rngs::StdRng};
+use rand::{Rng, RngExt, SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 
 /// Effect names a case can carry (`docs/formats.md#diagnosis-json`), plus `unknown`: an effect outside the
@@ -145,7 +145,7 @@ impl Default for BlindOptions {
 /// (so every effect appears), joints and magnitudes are random.
 pub fn draw_case(seed: u64, case: usize, desc: &RobotDescription) -> CaseKey {
     let case_seed = crate::harness::scenario::trial_seed(seed, case);
-    let mut rng = StdRng::seed_from_u64(case_seed ^ 0x5eed_b11d);
+    let mut rng = ChaCha12Rng::seed_from_u64(case_seed ^ 0x5eed_b11d);
     let effect = CASE_EFFECTS[case % CASE_EFFECTS.len()];
     draw_effect(effect, case, case_seed, desc, &mut rng)
 }
@@ -241,7 +241,7 @@ fn simulate_on<A: ArmExecutor>(
         net_radial_rms_mm: options.noise_rms_3d_mm,
     });
     let plan = CalibrationPlan::table1(desc.dof());
-    let mut rng = StdRng::seed_from_u64(key.seed);
+    let mut rng = ChaCha12Rng::seed_from_u64(key.seed);
     let none = ValidationPlan {
         poses: 0,
         ..ValidationPlan::workspace_default(desc.dof())

@@ -21,7 +21,7 @@ use crate::plan::PoseConditions;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::{AnalyticArm, ArmExecutor, Effects, ExecuteError};
 use nalgebra::{Isometry3, Point3};
-use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 
 /// Errors of one execution of one command against the required pose.
@@ -77,11 +77,11 @@ pub const APPROACH_STEP: f64 = 0.05;
 /// Per-pose random stream: `seed` and the pose index mixed (SplitMix64), so every command
 /// kind evaluated at pose `i` sees the same jitter and measurement noise (common random
 /// numbers) and the result does not depend on the evaluation order.
-pub fn pose_rng(seed: u64, index: usize) -> StdRng {
+pub fn pose_rng(seed: u64, index: usize) -> ChaCha12Rng {
     let mut z = seed ^ (index as u64).wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    StdRng::seed_from_u64(z ^ (z >> 31))
+    ChaCha12Rng::seed_from_u64(z ^ (z >> 31))
 }
 
 fn angle_between(a: &Isometry3<f64>, b: &Isometry3<f64>) -> f64 {
@@ -120,8 +120,8 @@ impl TestBench {
         &self,
         prototype: &AnalyticArm,
         cmd: &[f64],
-        approach: &mut StdRng,
-        rng: &mut StdRng,
+        approach: &mut ChaCha12Rng,
+        rng: &mut ChaCha12Rng,
     ) -> Result<Isometry3<f64>, EvaluationError> {
         let mut arm = prototype.clone();
         let start: Vec<f64> = cmd
@@ -139,16 +139,16 @@ impl TestBench {
     fn execute_and_measure(
         &self,
         cmd: &[f64],
-        rng: &mut StdRng,
+        rng: &mut ChaCha12Rng,
     ) -> Result<(Vec<Point3<f64>>, Isometry3<f64>), EvaluationError> {
         let approach_seed: u64 = rng.random();
         let exact = self.execute(
             &self.exact_arm,
             cmd,
-            &mut StdRng::seed_from_u64(approach_seed),
-            &mut StdRng::seed_from_u64(0),
+            &mut ChaCha12Rng::seed_from_u64(approach_seed),
+            &mut ChaCha12Rng::seed_from_u64(0),
         )?;
-        let executed = self.execute(&self.arm, cmd, &mut StdRng::seed_from_u64(approach_seed), rng)?;
+        let executed = self.execute(&self.arm, cmd, &mut ChaCha12Rng::seed_from_u64(approach_seed), rng)?;
         Ok((self.measure_tool_targets(&executed, rng)?, exact))
     }
 
@@ -156,7 +156,7 @@ impl TestBench {
     fn measure_tool_targets(
         &self,
         world_from_tool: &Isometry3<f64>,
-        rng: &mut StdRng,
+        rng: &mut ChaCha12Rng,
     ) -> Result<Vec<Point3<f64>>, TriangulationError> {
         self.tool_targets_m
             .iter()
@@ -172,7 +172,7 @@ impl TestBench {
         &self,
         required: &Isometry3<f64>,
         cmd: &[f64],
-        rng: &mut StdRng,
+        rng: &mut ChaCha12Rng,
     ) -> Result<ToolError, EvaluationError> {
         let (measured, exact) = self.execute_and_measure(cmd, rng)?;
         let (fit, _) = rigid_fit(&self.tool_targets_m, &measured).ok_or(EvaluationError::DegenerateTool)?;
@@ -190,12 +190,12 @@ impl TestBench {
     /// orientation rad, robot-only radial mm, robot-only orientation rad)`: the distance
     /// between the two measured tool points and the angle between the two fitted frames, then
     /// the same without measurement noise.
-    pub fn repeatability(&self, cmd: &[f64], rng: &mut StdRng) -> Result<[f64; 4], EvaluationError> {
+    pub fn repeatability(&self, cmd: &[f64], rng: &mut ChaCha12Rng) -> Result<[f64; 4], EvaluationError> {
         let mut observed = Vec::new();
         let mut actual = Vec::new();
         for _ in 0..2 {
             let approach_seed: u64 = rng.random();
-            let pose = self.execute(&self.arm, cmd, &mut StdRng::seed_from_u64(approach_seed), rng)?;
+            let pose = self.execute(&self.arm, cmd, &mut ChaCha12Rng::seed_from_u64(approach_seed), rng)?;
             let measured = self.measure_tool_targets(&pose, rng)?;
             let (fit, _) = rigid_fit(&self.tool_targets_m, &measured).ok_or(EvaluationError::DegenerateTool)?;
             observed.push((measured[0], fit));

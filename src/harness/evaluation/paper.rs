@@ -22,7 +22,7 @@ use crate::sim::{
     AnalyticArm, ArmExecutor, CampaignError, CampaignOptions, Effects, ExecuteError, simulate_campaign_with,
 };
 use nalgebra::Isometry3;
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 
 /// The paper's mean position error before / after calibration \[mm\] (section 4).
@@ -199,7 +199,7 @@ pub struct PaperOutcome {
 /// without repeatability: the scenario and its noise floor then differ by the jitter alone.
 struct SeparateJitter {
     arm: AnalyticArm,
-    jitter: StdRng,
+    jitter: ChaCha12Rng,
 }
 
 impl ArmExecutor for SeparateJitter {
@@ -244,7 +244,7 @@ fn campaign_calibration(
         &mut arm,
         instrument,
         &options,
-        &mut StdRng::seed_from_u64(seed),
+        &mut ChaCha12Rng::seed_from_u64(seed),
     )?;
     let set = MeasurementSet::new(desc.dof(), out.rows)?;
     Ok(calibrate(&set, desc, &CalibrationOptions::default())?)

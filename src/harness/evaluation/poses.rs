@@ -10,7 +10,7 @@ use crate::plan::CalibrationPlan;
 use crate::robot::RobotDescription;
 use crate::robot::commands_to_internal;
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
-use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 
 /// Where a test pose lies.
@@ -96,7 +96,7 @@ impl JointRanges {
 
 /// `n` configurations uniform in `ranges`, from `seed`.
 pub fn random_poses(model: &PhiModel, ranges: &JointRanges, region: Region, n: usize, seed: u64) -> Vec<TestPose> {
-    let mut rng = StdRng::seed_from_u64(seed);
+    let mut rng = ChaCha12Rng::seed_from_u64(seed);
     (0..n)
         .map(|i| {
             let q: Vec<f64> = ranges

@@ -15,7 +15,7 @@ use crate::robot::{RobotDescription, RobotModel};
 use crate::sim::Effects;
 use crate::sim::{PerturbationSpec, perturb};
 use nalgebra::{Point3, Vector3};
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -231,7 +231,7 @@ fn resolve_truth(
         },
         TruthSection::Perturbed { perturbation } => {
             // One throw-away draw checks the spec against the robot before any trial runs.
-            perturb(robot, perturbation, &mut StdRng::seed_from_u64(0))
+            perturb(robot, perturbation, &mut ChaCha12Rng::seed_from_u64(0))
                 .map_err(|e| ("truth.perturbation", e.to_string()))?;
             ResolvedTruth::Perturbed {
                 perturbation: perturbation.clone(),

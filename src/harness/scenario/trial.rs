@@ -19,7 +19,7 @@ use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::perturb;
 use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, CampaignOutput, Effects, simulate_campaign_with};
 use crate::sim::{RapierArm, RapierArmOptions};
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 
 /// One Monte-Carlo trial: a pure function of the case and the seed (thread-safe, no I/O).
 pub trait Trial: Sync {
@@ -88,7 +88,7 @@ impl CampaignTrial {
         })
     }
 
-    fn draw_truth(&self, rng: &mut StdRng) -> Result<RobotModel, String> {
+    fn draw_truth(&self, rng: &mut ChaCha12Rng) -> Result<RobotModel, String> {
         match &self.truth {
             ResolvedTruth::Fixed { robot } => Ok(robot.clone()),
             ResolvedTruth::Perturbed { perturbation } => {
@@ -98,7 +98,7 @@ impl CampaignTrial {
     }
 
     /// Simulates the campaign of `case` on `arm` and reduces it to metrics.
-    fn run_on<A: ArmExecutor>(&self, mut arm: A, case: &Case, rng: &mut StdRng) -> Result<Metrics, String> {
+    fn run_on<A: ArmExecutor>(&self, mut arm: A, case: &Case, rng: &mut ChaCha12Rng) -> Result<Metrics, String> {
         let out = simulate_campaign_with(
             &self.desc,
             &case.plan,
@@ -167,7 +167,7 @@ impl Trial for CampaignTrial {
     }
 
     fn run(&self, case: &Case, seed: u64) -> Result<Metrics, String> {
-        let mut rng = StdRng::seed_from_u64(seed);
+        let mut rng = ChaCha12Rng::seed_from_u64(seed);
         let truth = self.draw_truth(&mut rng)?;
         match self.sim {
             SimMode::Analytic => {

@@ -18,7 +18,7 @@ use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription, RobotModel, TransmissionFitForm};
 use crate::sim::{AnalyticArm, simulate_campaign};
 use nalgebra::{Isometry3, Point3, Unit};
-use rand::{SeedableRng, rngs::StdRng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 
 /// One axis as the noise-free campaign gives it, and what its trials are fitted with.
 pub(super) struct AxisTruth {
@@ -73,7 +73,7 @@ pub(super) fn campaign(truth: &RobotModel, desc: &RobotDescription, noise_mm: f6
         &validation,
         &mut arm,
         &instrument,
-        &mut StdRng::seed_from_u64(seed),
+        &mut ChaCha12Rng::seed_from_u64(seed),
     )
     .expect("the paper campaign runs on the paper robot");
     MeasurementSet::new(desc.dof(), out.rows).expect("simulated rows are consistent")
