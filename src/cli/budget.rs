@@ -11,7 +11,6 @@ use axiscal::measurement::MeasurementModel;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// Arguments of `axiscal budget`.
 /// The budgeted effects by their command-line names.
 const EFFECTS: &[(&str, BudgetEffect)] = &[
     ("compliance", BudgetEffect::Compliance),
@@ -22,6 +21,7 @@ const EFFECTS: &[(&str, BudgetEffect)] = &[
     ("instrument-scale", BudgetEffect::InstrumentScale),
 ];
 
+/// Arguments of `axiscal budget`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// First campaign seed; seeds `seed .. seed + seeds` are pooled per magnitude.

@@ -10,10 +10,10 @@ use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
 
-/// Arguments of `axiscal calibrate`.
 /// The estimators by their command-line names.
 const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("paper", AxisEstimator::Paper)];
 
+/// Arguments of `axiscal calibrate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Measurement CSV (`docs/formats.md#measurement-csv`).
@@ -39,6 +39,12 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
+    /// Also write a rerun recording: the measured targets per experiment with their fitted
+    /// arcs, axes and residual vectors, the nominal and the calibrated robot side by side at
+    /// every pose, the validation errors of both. View it with `axiscal view FILE.rrd`. Needs
+    /// a build with `--features viz`.
+    #[arg(long, value_name = "FILE.rrd")]
+    record: Option<PathBuf>,
 }
 
 /// Writes `text` to `dir/name`, refusing to replace a file unless `force`.
@@ -74,6 +80,7 @@ pub fn check_noise_mm(noise_mm: f64) -> Result<()> {
 /// Runs `axiscal calibrate`.
 pub fn run(args: Args) -> Result<()> {
     check_noise_mm(args.noise_mm)?;
+    super::record::ensure_recordable(args.record.as_deref(), args.force)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     let set = read_measurements(&args.data, Some(desc.dof()))?;
     let options = CalibrationOptions {
@@ -124,5 +131,15 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
+    #[cfg(feature = "viz")]
+    if let Some(path) = &args.record {
+        let campaign = super::record::calibrated::CalibratedCampaign {
+            desc: &desc,
+            set: &set,
+            calibration: &cal,
+            verdict: None,
+        };
+        super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
+    }
     Ok(())
 }

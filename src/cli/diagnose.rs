@@ -9,7 +9,7 @@ use axiscal::diagnosis::{
     markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::read_measurements;
+use axiscal::measurement::{MeasurementSet, read_measurements};
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
 
@@ -49,6 +49,12 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
+    /// Also write a rerun recording: the data with their fitted arcs and residual vectors,
+    /// the nominal and the calibrated robot side by side at every pose, the validation errors,
+    /// the verdict in the notes. View it with `axiscal view FILE.rrd`. Needs a build with
+    /// `--features viz`.
+    #[arg(long, value_name = "FILE.rrd")]
+    record: Option<PathBuf>,
 }
 
 /// The `--refit` choices ([`RefitScope`]).
@@ -61,6 +67,7 @@ enum Refit {
 /// Runs `axiscal diagnose`.
 pub fn run(args: Args) -> Result<()> {
     check_noise_mm(args.noise_mm)?;
+    super::record::ensure_recordable(args.record.as_deref(), args.force)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     let set = read_measurements(&args.data, Some(desc.dof()))?;
     let options = DiagnosisOptions {
@@ -106,7 +113,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         println!("{}: {}", d.outcome.effect, d.verdict);
         println!("wrote {written}");
-        return Ok(());
+        return record(&args, &desc, &set, &format!("{}: {}", d.outcome.effect, d.verdict));
     }
     let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
     let report = Report {
@@ -117,7 +124,7 @@ pub fn run(args: Args) -> Result<()> {
         force: args.force,
     };
     let written = report.write(|dir| write_plots(&d, dir))?;
-    println!(
+    let headline = format!(
         "{}{} (confidence {:.2}): gap {:.3} -> {:.3} mm",
         d.outcome.effect,
         d.outcome.joint.map_or(String::new(), |j| format!(" joint {j}")),
@@ -125,7 +132,31 @@ pub fn run(args: Args) -> Result<()> {
         d.outcome.gap_before_mm,
         d.outcome.gap_after_mm
     );
+    println!("{headline}");
     println!("wrote {written}");
+    record(&args, &desc, &set, &format!("{headline}. {}", d.verdict))
+}
+
+/// The `--record` recording of the diagnosed data (the standard calibration, the verdict in
+/// the notes); nothing without `--record`.
+#[cfg_attr(not(feature = "viz"), allow(unused_variables))]
+fn record(args: &Args, desc: &RobotDescription, set: &MeasurementSet, verdict: &str) -> Result<()> {
+    #[cfg(feature = "viz")]
+    if let Some(path) = &args.record {
+        let options = axiscal::calibration::procedure::CalibrationOptions {
+            noise_rms_3d_mm: args.noise_mm,
+            ..Default::default()
+        };
+        let calibration = axiscal::calibration::procedure::calibrate(set, desc, &options)
+            .map_err(|e| anyhow::anyhow!("calibrating {} for the recording: {e}", args.data.display()))?;
+        let campaign = super::record::calibrated::CalibratedCampaign {
+            desc,
+            set,
+            calibration: &calibration,
+            verdict: Some(verdict),
+        };
+        super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
+    }
     Ok(())
 }
 

@@ -8,7 +8,6 @@ mod diagnose;
 mod evaluate;
 mod import;
 mod merge;
-#[cfg(feature = "viz")]
 mod record;
 mod run;
 mod simulate;

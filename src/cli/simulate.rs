@@ -59,14 +59,6 @@ enum Sim {
     Rapier,
     Analytic,
 }
-/// `--record` was given to a build without the `viz` feature.
-#[cfg(not(feature = "viz"))]
-#[derive(Debug, thiserror::Error)]
-#[error(
-    "--record {0} needs the rerun recorder, which this build does not include: rebuild with \
-     `cargo build --release --features viz` (`make run` does)"
-)]
-struct RecordUnavailable(String);
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 enum Instrument {
@@ -76,10 +68,7 @@ enum Instrument {
 
 /// Runs `axiscal simulate`.
 pub fn run(args: Args) -> Result<()> {
-    #[cfg(not(feature = "viz"))]
-    if let Some(path) = &args.record {
-        return Err(RecordUnavailable(path.display().to_string()).into());
-    }
+    super::record::ensure_recordable(args.record.as_deref(), args.force)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     let truth = match &args.truth {
         Some(path) => RobotModel::from_file(path)?,
@@ -135,14 +124,14 @@ pub fn run(args: Args) -> Result<()> {
     print_experiments(&set, &out.occluded);
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
-        let campaign = super::record::Campaign {
+        let campaign = super::record::simulated::Campaign {
             desc: &desc,
             truth: &recorded_truth,
             plan: &plan,
             set: &set,
             instrument: &instrument,
         };
-        record_campaign(path, &campaign)?;
+        super::record::save(path, |p| super::record::simulated::write(p, &campaign))?;
     }
     Ok(())
 }
@@ -178,21 +167,6 @@ fn print_experiments(set: &MeasurementSet, occluded: &[(String, usize)]) {
     for (experiment, n) in occluded {
         println!("  {experiment}: {n} target observation(s) occluded");
     }
-}
-
-/// Writes the rerun recording of `campaign` to `path`.
-#[cfg(feature = "viz")]
-fn record_campaign(path: &std::path::Path, campaign: &super::record::Campaign) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    super::record::write(path, campaign).with_context(|| format!("recording {}", path.display()))?;
-    println!(
-        "wrote {} (view it with `axiscal view {}`)",
-        path.display(),
-        path.display()
-    );
-    Ok(())
 }
 
 fn run_campaign<A: ArmExecutor>(
