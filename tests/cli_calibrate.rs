@@ -36,7 +36,7 @@ fn calibrate_writes_loadable_results_and_protects_them() {
     assert!(
         std::fs::read_to_string(out.join("calibrated.urdf"))
             .unwrap()
-            .contains("<joint name=\"joint6\"")
+            .contains("<joint name=\"joint_6\"")
     );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();

@@ -7,6 +7,7 @@ mod compensate;
 mod diagnose;
 mod evaluate;
 mod import;
+mod joints;
 mod merge;
 mod record;
 mod run;
@@ -70,6 +71,9 @@ enum Command {
     Merge(merge::Args),
     /// Fig. 5 compensation: commands for required tool poses from a calibration.
     Compensate(compensate::Args),
+    /// The calibrated joint values of controller commands: what a URDF or a ROS
+    /// `joint_states` publisher must be fed instead of the raw readings.
+    Joints(joints::Args),
     /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
     Evaluate(evaluate::Args),
     /// The paper's gap budget: per unmodelled effect, the magnitude that raises the simulated
@@ -100,6 +104,7 @@ pub fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         Command::Merge(args) => merge::run(args),
         Command::Compensate(args) => compensate::run(args),
+        Command::Joints(args) => joints::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Budget(args) => budget::run(args),
         Command::Diagnose(args) => diagnose::run(args),

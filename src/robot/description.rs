@@ -53,6 +53,14 @@ pub struct JointEntry {
     /// calibrator weights its axis fits with it (`calibration::fit_arc_with_angle_noise`).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub repeatability_sigma: f64,
+    /// Largest joint speed \[deg/s\] (revolute) or \[mm/s\] (prismatic), from the robot's
+    /// data sheet; optional, used by exports (the URDF's `<limit velocity>`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_velocity: Option<f64>,
+    /// Largest actuator effort \[N m\] (revolute) or \[N\] (prismatic), from the robot's data
+    /// sheet; optional, used by exports (the URDF's `<limit effort>`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_effort: Option<f64>,
 }
 
 fn is_zero(x: &f64) -> bool {

@@ -24,6 +24,7 @@
 mod axis_fit;
 mod experiments;
 mod frames;
+mod joint_map;
 mod joints;
 mod report;
 mod result;
@@ -32,10 +33,15 @@ mod urdf;
 
 pub use experiments::{AxisExperiment, COMMAND_TOLERANCE, axis_experiments};
 pub use frames::{FramesError, common_normal_feet, model_from_axes};
+pub use joint_map::{
+    JointMap, MapRow, MapTable, ZeroOffsetFit, calibrated_joint_values, controller_zero_offsets, joint_map,
+};
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown};
 pub use result::{AxisReport, Calibration, CouplingReport, RowSigma, ToolReport};
 pub use uncertainty::{AxisCovariance, row_sigmas};
-pub use urdf::urdf;
+pub use urdf::{
+    RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
+};
 
 use super::CalibrationError;
 use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
