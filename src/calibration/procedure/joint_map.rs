@@ -167,7 +167,7 @@ pub fn joint_map(cal: &Calibration, desc: &RobotDescription, step: f64) -> Joint
 /// robot (for a controller that takes nothing but zero offsets): `delta` minimising
 /// `sum |base^-1 FK_nominal(cmd + delta) t - base_cal^-1 FK_calibrated(q(cmd)) t|^2` over the
 /// poses and the tool targets `t`, each robot in its own base frame (the numerics' one
-/// Levenberg-Marquardt loop, Jacobian [`point_jacobian`]).
+/// Levenberg-Marquardt loop, Jacobian [`crate::kinematics::point_jacobian`]).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ZeroOffsetFit {
     /// Per joint, the offset to ADD to a controller reading (equivalently, to subtract from a
