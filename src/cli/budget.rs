@@ -3,7 +3,7 @@
 //! robot inside the spans to the paper's 1.40 mm; writes `budget.json` and `budget.md`.
 
 use super::OneOf;
-use super::calibrate::{refuse_existing, write_output};
+use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget};
 use axiscal::json_file::{self, Schema};
@@ -92,8 +92,8 @@ fn markdown(settings: &BudgetSettings, lines: &[BudgetLine]) -> String {
 /// Runs `axiscal budget`.
 pub fn run(args: Args) -> Result<()> {
     let names = ["budget.json", "budget.md"];
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    refuse_existing(&args.out, &names, args.force)?;
+    let outputs = Outputs::new(args.force);
+    outputs.check_in(&args.out, &names)?;
     let (instrument, _) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
     let scenario = PaperScenario::paper(args.seed, args.evaluation_seed, args.random_poses, instrument);
     let settings = BudgetSettings::paper(scenario, args.seeds.max(1));
@@ -109,16 +109,15 @@ pub fn run(args: Args) -> Result<()> {
     let lines = pool.install(|| gap_budget(&settings, &effects))?;
     let md = markdown(&settings, &lines);
     print!("{md}");
-    write_output(
+    outputs.write_in(
         &args.out,
         names[0],
-        &json_file::to_string(
+        json_file::to_string(
             Schema::BUDGET,
             &serde_json::json!({ "settings": settings, "lines": lines }),
         )?,
-        args.force,
     )?;
-    write_output(&args.out, names[1], &md, args.force)?;
-    eprintln!("wrote {}", args.out.display());
+    outputs.write_in(&args.out, names[1], &md)?;
+    println!("wrote {}", args.out.display());
     Ok(())
 }

@@ -3,12 +3,13 @@
 //! and `calibrated.urdf`.
 
 use super::OneOf;
-use anyhow::{Context, Result, bail};
+use super::output::Outputs;
+use anyhow::{Result, bail};
 use axiscal::calibration::procedure::{AxisEstimator, CalibrationOptions, calibrate, findings, markdown, urdf};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Arguments of `axiscal calibrate`.
 /// The estimators by their command-line names.
@@ -41,28 +42,6 @@ pub struct Args {
     force: bool,
 }
 
-/// Writes `text` to `dir/name`, refusing to replace a file unless `force`.
-pub fn write_output(dir: &Path, name: &str, text: &str, force: bool) -> Result<()> {
-    let path = dir.join(name);
-    if path.exists() && !force {
-        bail!("{} exists; pass --force to replace it", path.display());
-    }
-    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
-}
-
-/// Refuses, before any work is written, to replace any of `names` in `dir` unless `force`.
-pub fn refuse_existing(dir: &Path, names: &[&str], force: bool) -> Result<()> {
-    if !force {
-        for n in names {
-            let p = dir.join(n);
-            if p.exists() {
-                bail!("{} exists; pass --force to replace it", p.display());
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Checks a `--noise-mm` argument: a positive number of millimetres.
 pub fn check_noise_mm(noise_mm: f64) -> Result<()> {
     if !(noise_mm.is_finite() && noise_mm > 0.0) {
@@ -88,29 +67,20 @@ pub fn run(args: Args) -> Result<()> {
     // The procedure's message already contains its cause: one line, not the cause twice.
     let cal =
         calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let source = args.data.display().to_string();
     let names = ["calibration.json", "report.md", "report.json", "calibrated.urdf"];
-    refuse_existing(&args.out, &names, args.force)?;
-    write_output(
-        &args.out,
-        names[0],
-        &json_file::to_string(Schema::CALIBRATION, &cal)?,
-        args.force,
-    )?;
-    write_output(&args.out, names[1], &markdown(&cal, &desc, &source), args.force)?;
-    write_output(
+    let outputs = Outputs::new(args.force)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot);
+    outputs.check_in(&args.out, &names)?;
+    outputs.write_in(&args.out, names[0], json_file::to_string(Schema::CALIBRATION, &cal)?)?;
+    outputs.write_in(&args.out, names[1], markdown(&cal, &desc, &source))?;
+    outputs.write_in(
         &args.out,
         names[2],
-        &json_file::list_to_string(Schema::REPORT, "findings", &findings(&cal, &desc))?,
-        args.force,
+        json_file::list_to_string(Schema::REPORT, "findings", &findings(&cal, &desc))?,
     )?;
-    write_output(
-        &args.out,
-        names[3],
-        &urdf(&cal.robot.phi_model(), &desc, "calibrated"),
-        args.force,
-    )?;
+    outputs.write_in(&args.out, names[3], urdf(&cal.robot.phi_model(), &desc, "calibrated"))?;
     println!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
     println!("  joint  points  span(deg)  residual RMS (mm)  direction 1-sigma (mrad)");
     for a in &cal.axes {

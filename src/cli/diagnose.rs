@@ -2,7 +2,8 @@
 //! (`docs/formats.md#diagnosis-json`), writing `diagnosis.json`, `diagnosis.md` and the plots
 //! (`where.{png,svg}`; with validation poses also `candidates.{png,svg}`).
 
-use super::calibrate::{check_noise_mm, refuse_existing, write_output};
+use super::calibrate::check_noise_mm;
+use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose, diagnose_axes,
@@ -77,6 +78,9 @@ pub fn run(args: Args) -> Result<()> {
         ..DiagnosisOptions::default()
     };
     let source = args.data.display().to_string();
+    let outputs = Outputs::new(args.force)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot);
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
         let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
@@ -85,7 +89,7 @@ pub fn run(args: Args) -> Result<()> {
             json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
             markdown: axes_markdown(&d, &source),
             plot_files: &AXES_PLOT_FILES,
-            force: args.force,
+            outputs: &outputs,
         };
         let written = report.write(|dir| write_axes_plots(&d, dir))?;
         println!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
@@ -114,7 +118,7 @@ pub fn run(args: Args) -> Result<()> {
         json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
         markdown: markdown(&d, &source),
         plot_files: &PLOT_FILES,
-        force: args.force,
+        outputs: &outputs,
     };
     let written = report.write(|dir| write_plots(&d, dir))?;
     println!(
@@ -136,7 +140,7 @@ struct Report<'a> {
     markdown: String,
     /// The files the plots write.
     plot_files: &'a [&'a str],
-    force: bool,
+    outputs: &'a Outputs,
 }
 
 impl Report<'_> {
@@ -146,9 +150,9 @@ impl Report<'_> {
         let names = ["diagnosis.json", "diagnosis.md"];
         std::fs::create_dir_all(self.out).with_context(|| format!("creating {}", self.out.display()))?;
         let all: Vec<&str> = names.iter().chain(self.plot_files).copied().collect();
-        refuse_existing(self.out, &all, self.force)?;
-        write_output(self.out, names[0], &self.json, self.force)?;
-        write_output(self.out, names[1], &self.markdown, self.force)?;
+        self.outputs.check_in(self.out, &all)?;
+        self.outputs.write_in(self.out, names[0], &self.json)?;
+        self.outputs.write_in(self.out, names[1], &self.markdown)?;
         plot(self.out)?;
         Ok(format!("{}/{{{}}}", self.out.display(), all.join(",")))
     }

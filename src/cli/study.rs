@@ -1,8 +1,8 @@
 //! `axiscal study`: the calibrator's efficiency against the Cramer-Rao bound and the
 //! calibration of its reported uncertainty, over many simulated campaigns.
 
-use super::calibrate::write_output;
-use anyhow::{Context, Result};
+use super::output::Outputs;
+use anyhow::Result;
 use axiscal::harness::studies::EfficiencyStudy;
 use axiscal::json_file::{self, Schema};
 use std::path::PathBuf;
@@ -43,16 +43,13 @@ pub fn run(args: Args) -> Result<()> {
         repeatability_jitter: args.repeatability_jitter,
         model_repeatability: args.model_repeatability,
     };
+    let names = ["efficiency.json", "efficiency.md"];
+    let outputs = Outputs::new(args.force);
+    outputs.check_in(&args.out, &names)?;
     let report = study.run()?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let md = report.markdown();
-    write_output(
-        &args.out,
-        "efficiency.json",
-        &json_file::to_string(Schema::STUDY, &report)?,
-        args.force,
-    )?;
-    write_output(&args.out, "efficiency.md", &md, args.force)?;
+    outputs.write_in(&args.out, names[0], json_file::to_string(Schema::STUDY, &report)?)?;
+    outputs.write_in(&args.out, names[1], &md)?;
     print!("{md}");
     Ok(())
 }
