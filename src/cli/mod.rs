@@ -8,10 +8,12 @@ mod diagnose;
 mod evaluate;
 mod import;
 mod merge;
+mod options;
 mod output;
 #[cfg(feature = "viz")]
 mod record;
 mod run;
+mod signals;
 mod simulate;
 mod study;
 mod view;

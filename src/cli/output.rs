@@ -88,11 +88,6 @@ impl Outputs {
         this
     }
 
-    /// Whether `--force` was given.
-    pub fn force(&self) -> bool {
-        self.force
-    }
-
     /// Refuses `path` as an output if it is an input of this command (whatever `--force`).
     pub fn check_not_input(&self, path: &Path) -> Result<()> {
         let Some(out) = canonical(path) else { return Ok(()) };
@@ -162,8 +157,7 @@ impl Outputs {
             name.to_string_lossy(),
             std::process::id()
         ));
-        let file =
-            std::fs::File::create(&temporary).with_context(|| format!("creating {}", temporary.display()))?;
+        let file = std::fs::File::create(&temporary).with_context(|| format!("creating {}", temporary.display()))?;
         Ok(OutputFile {
             writer: Some(std::io::BufWriter::new(file)),
             temporary,
@@ -194,7 +188,10 @@ impl OutputFile {
     pub fn commit(mut self) -> Result<()> {
         let target = self.target.display().to_string();
         if let Some(w) = self.writer.take() {
-            let file = w.into_inner().map_err(|e| e.into_error()).with_context(|| format!("writing {target}"))?;
+            let file = w
+                .into_inner()
+                .map_err(|e| e.into_error())
+                .with_context(|| format!("writing {target}"))?;
             file.sync_all().with_context(|| format!("writing {target}"))?;
         }
         std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"))

@@ -313,21 +313,28 @@ impl Cells<'_> {
 
     fn number(&self, i: usize) -> Result<f64, MeasurementFileError> {
         let text = self.text(i)?;
-        let (path, line, column, value) = (self.path.into(), self.line, self.column(i), text.to_string());
+        // The error's strings are built only on the error path: this runs for every cell.
+        let parts = || (self.path.into(), self.line, self.column(i), text.to_string());
         match text.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => Err(MeasurementFileError::NotFinite {
-                path,
-                line,
-                column,
-                value,
-            }),
-            Err(_) => Err(MeasurementFileError::NotANumber {
-                path,
-                line,
-                column,
-                value,
-            }),
+            Ok(_) => {
+                let (path, line, column, value) = parts();
+                Err(MeasurementFileError::NotFinite {
+                    path,
+                    line,
+                    column,
+                    value,
+                })
+            }
+            Err(_) => {
+                let (path, line, column, value) = parts();
+                Err(MeasurementFileError::NotANumber {
+                    path,
+                    line,
+                    column,
+                    value,
+                })
+            }
         }
     }
 
@@ -340,6 +347,9 @@ impl Cells<'_> {
 
     fn integer(&self, i: usize) -> Result<usize, MeasurementFileError> {
         let text = self.text(i)?;
+        if let Ok(v) = text.parse::<usize>() {
+            return Ok(v);
+        }
         let (path, line, column, value) = (self.path.into(), self.line, self.column(i), text.to_string());
         match text.parse::<i128>() {
             Ok(v) if v < 0 => Err(MeasurementFileError::Negative {
@@ -348,13 +358,7 @@ impl Cells<'_> {
                 column,
                 value,
             }),
-            Ok(v) => usize::try_from(v).map_err(|_| MeasurementFileError::NotAnInteger {
-                path,
-                line,
-                column,
-                value,
-            }),
-            Err(_) => Err(MeasurementFileError::NotAnInteger {
+            _ => Err(MeasurementFileError::NotAnInteger {
                 path,
                 line,
                 column,
