@@ -15,6 +15,7 @@
 //! on, and the command exits with code 2 at the end if any pose failed. A malformed input
 //! file is one error naming the file, the line and the column (exit 2, nothing written).
 
+use super::checks;
 use super::output::{Outputs, commit_csv};
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::Calibration;
@@ -43,6 +44,13 @@ pub struct Args {
     /// Replace `--out` if it exists (never one of this command's inputs).
     #[arg(long)]
     force: bool,
+    /// Use the calibration even though it was made with another robot description (a
+    /// different geometry hash) than `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
+    /// Skip the unit sanity check of the description's lengths.
+    #[arg(long)]
+    skip_unit_check: bool,
 }
 
 /// One required pose from the input file.
@@ -169,6 +177,14 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
     let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
         .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    checks::same_robot(
+        cal.description.as_ref(),
+        &args.calibration,
+        &desc,
+        &args.robot,
+        args.allow_other_robot,
+    )?;
     let comp = Compensator::new(&cal.robot, &desc)?;
     let poses = read_poses(&args.poses)?;
     let n = desc.dof();

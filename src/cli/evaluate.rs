@@ -3,6 +3,7 @@
 //! to the paper's figures and the noise floor measured in the same run; writes
 //! `evaluation.json`, `poses.csv`, `calibration.json`, `floor_calibration.json` and the plots.
 
+use super::options::InRange;
 use super::output::{Outputs, commit_csv};
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{
@@ -26,11 +27,11 @@ pub struct Args {
     #[arg(long, default_value_t = 9283)]
     evaluation_seed: u64,
     /// Random test poses per region (inside the spans, workspace).
-    #[arg(long, default_value_t = 30)]
+    #[arg(long, default_value_t = 30, value_parser = InRange::closed(1usize, 1_000_000, ""))]
     random_poses: usize,
     /// Also pool the floor check over this many campaign seeds (`seed ..`), written to
     /// `floor_check.json`; 1: the single run only.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = InRange::closed(1u64, 100_000, ""))]
     floor_seeds: u64,
     /// Output directory.
     #[arg(long, default_value = "results/paper")]

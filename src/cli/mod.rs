@@ -3,6 +3,7 @@
 mod blind;
 mod budget;
 mod calibrate;
+mod checks;
 mod compensate;
 mod diagnose;
 mod evaluate;

@@ -115,6 +115,16 @@ impl Outputs {
         Ok(())
     }
 
+    /// Refuses a folder output `dir` that exists and is not empty, unless `--force` (then its
+    /// files are replaced one by one as they are written).
+    pub fn check_empty_dir(&self, dir: &Path) -> Result<()> {
+        let not_empty = std::fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_some());
+        if not_empty && !self.force {
+            bail!("{} is not empty; pass --force to replace its files", dir.display());
+        }
+        self.check_not_input(dir)
+    }
+
     /// [`Outputs::check`] for each of `names` in `dir`, before any of them is written.
     pub fn check_in(&self, dir: &Path, names: &[&str]) -> Result<()> {
         names.iter().try_for_each(|n| self.check(&dir.join(n)))

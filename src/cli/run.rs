@@ -6,14 +6,14 @@
 //! summary marked partial and exits 130 or 143; `--resume` continues such a folder; a lock
 //! file refuses a second run into the same folder.
 
-use super::options::{THREADS, duration_words, thread_pool};
+use super::options::{InRange, THREADS, duration_words, thread_pool};
 use super::output::Outputs;
 use super::{Interrupted, ThresholdsFailed, signals};
 use anyhow::{Context, Result, bail};
 use axiscal::harness::scenario::export::{
     self, PartialTrials, RESOLVED_FILE, RUN_FILES, RunLock, SHARD_FILE, TRIALS_FILE,
 };
-use axiscal::harness::scenario::resolve::default_results_dir;
+use axiscal::harness::scenario::resolve::{MAX_UNITS, default_results_dir};
 use axiscal::harness::scenario::{
     CampaignTrial, Overrides, ResolvedScenario, Shard, Summary, Trial, TrialRecord, complete_run, run_units_until,
 };
@@ -46,11 +46,14 @@ pub struct Args {
     #[arg(long)]
     resume: bool,
     /// Override the scenario's number of trials per case.
-    #[arg(long)]
+    #[arg(long, value_parser = InRange::closed(1usize, MAX_UNITS, ""))]
     trials: Option<usize>,
     /// Override the scenario's seed.
     #[arg(long)]
     seed: Option<u64>,
+    /// Skip the unit sanity check of the scenario's robot description.
+    #[arg(long)]
+    skip_unit_check: bool,
 }
 
 /// What a run works on, once resolved.
@@ -66,6 +69,7 @@ struct Plan {
 /// Runs `axiscal run`.
 pub fn run(args: Args) -> Result<()> {
     let plan = resolve(&args)?;
+    super::checks::description_units(&plan.scenario.robot, &args.scenario, args.skip_unit_check)?;
     let outputs = Outputs::new(args.force).input("SCENARIO", &args.scenario);
     for name in RUN_FILES {
         outputs.check_not_input(&plan.out.join(name))?;

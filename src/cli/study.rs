@@ -1,6 +1,7 @@
 //! `axiscal study`: the calibrator's efficiency against the Cramer-Rao bound and the
 //! calibration of its reported uncertainty, over many simulated campaigns.
 
+use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::Result;
 use axiscal::harness::studies::EfficiencyStudy;
@@ -11,13 +12,13 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Number of simulated campaigns.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = InRange::closed(1usize, 100_000_000, ""))]
     trials: usize,
     /// Study seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Measurement noise, 3-D RMS \[mm\].
-    #[arg(long, default_value_t = 0.19)]
+    #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
     noise_mm: f64,
     /// Keep the truth robot's repeatability jitter (the bound then includes it as angle noise).
     #[arg(long)]
