@@ -63,7 +63,7 @@ pub fn description_slips(desc: &RobotDescription) -> Vec<UnitSlip> {
                     field: format!("rows[{i}].{key}"),
                     message: format!(
                         "{v} m is longer than any robot link ({MAX_ROW_LENGTH_M} m): the rows are in metres; it looks \
-                         like millimetres ({} m?)",
+                         like millimetres ({:.4} m?)",
                         v * 1e-3
                     ),
                 });
@@ -173,13 +173,25 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
             ),
         });
     }
-    for (r, joint, name) in angle.into_iter().filter(|a| slipped(a.0)) {
+    let bad: Vec<&(f64, usize, String)> = angle.iter().filter(|a| slipped(a.0)).collect();
+    if let (Some(lo), Some(hi)) = (
+        bad.iter().map(|a| a.0).min_by(f64::total_cmp),
+        bad.iter().map(|a| a.0).max_by(f64::total_cmp),
+    ) {
+        let columns: Vec<String> = bad.iter().map(|a| format!("cmd_{}", a.1)).collect();
+        let experiments: Vec<&str> = bad.iter().map(|a| a.2.as_str()).collect();
+        let times = if bad.len() == 1 {
+            format!("{lo:.3}")
+        } else {
+            format!("{lo:.3} to {hi:.3}")
+        };
         slips.push(UnitSlip {
-            field: format!("cmd_{joint}"),
+            field: columns.join(","),
             message: format!(
-                "in {name} the targets turn {r:.3} times the commanded span read as degrees: the commands look like {} \
+                "the targets turn {times} times the commanded span read as degrees ({}): the commands look like {} \
                  rather than degrees",
-                likely(r)
+                experiments.join(", "),
+                likely(median(bad.iter().map(|a| a.0).collect()))
             ),
         });
     }
