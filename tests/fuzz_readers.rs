@@ -91,8 +91,30 @@ fn seeds(reader: Reader) -> Vec<Vec<u8>> {
 
 /// Tokens that readers treat specially, spliced in by the mutator.
 const TOKENS: [&str; 24] = [
-    ",", "\n", "\r\n", "#", "\"", "NaN", "inf", "-inf", "1e308", "-1e308", "1e-320", "-0", "0",
-    "99999999999999999999999", "-1", "=", "[", "]", "{", "}", ";", "\t", "\u{feff}", "null",
+    ",",
+    "\n",
+    "\r\n",
+    "#",
+    "\"",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e308",
+    "-1e308",
+    "1e-320",
+    "-0",
+    "0",
+    "99999999999999999999999",
+    "-1",
+    "=",
+    "[",
+    "]",
+    "{",
+    "}",
+    ";",
+    "\t",
+    "\u{feff}",
+    "null",
 ];
 
 /// One edit of a file.
@@ -108,7 +130,8 @@ enum Edit {
 fn edit() -> impl Strategy<Value = Edit> {
     prop_oneof![
         (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Edit::Flip(i, b)),
-        (any::<usize>(), prop::sample::select(TOKENS.to_vec())).prop_map(|(i, t)| Edit::Insert(i, t.as_bytes().to_vec())),
+        (any::<usize>(), prop::sample::select(TOKENS.to_vec()))
+            .prop_map(|(i, t)| Edit::Insert(i, t.as_bytes().to_vec())),
         (any::<usize>(), prop::collection::vec(any::<u8>(), 1..8)).prop_map(|(i, b)| Edit::Insert(i, b)),
         (any::<usize>(), 1usize..64).prop_map(|(i, n)| Edit::Delete(i, n)),
         (any::<usize>(), 1usize..256).prop_map(|(i, n)| Edit::Duplicate(i, n)),
@@ -177,9 +200,10 @@ fn exercise(reader: Reader, bytes: &[u8]) -> Result<(), TestCaseError> {
         Reader::Scenario => {
             let path = Path::new("scenarios/fuzz.toml");
             let parsed = axiscal::toml_file::parse::<ScenarioFile>(&text, path);
-            match parsed.map_err(|e| e.to_string()).and_then(|f| {
-                ResolvedScenario::resolve(f, path, Overrides::default()).map_err(|e| e.to_string())
-            }) {
+            match parsed
+                .map_err(|e| e.to_string())
+                .and_then(|f| ResolvedScenario::resolve(f, path, Overrides::default()).map_err(|e| e.to_string()))
+            {
                 Ok(s) => {
                     let _ = s.to_toml();
                 }
@@ -213,7 +237,9 @@ fn fuzz(reader: Reader, cases: u32, rng: TestRng) {
     };
     let mut runner = TestRunner::new_with_rng(config, rng);
     let strategy = (0..seeds.len(), prop::collection::vec(edit(), 1..6));
-    let result = runner.run(&strategy, |(seed, edits)| exercise(reader, &apply(seeds[seed].clone(), &edits)));
+    let result = runner.run(&strategy, |(seed, edits)| {
+        exercise(reader, &apply(seeds[seed].clone(), &edits))
+    });
     if let Err(e) = result {
         let text = format!("{e}");
         let dir = Path::new("target/fuzz-failures");
@@ -238,7 +264,10 @@ fn every_reader_survives_a_fixed_set_of_mutants() {
 #[test]
 #[ignore = "long: `make fuzz` runs it for FUZZ_SECONDS (default 600)"]
 fn fuzz_readers_for_a_set_time() {
-    let seconds: u64 = std::env::var("FUZZ_SECONDS").ok().and_then(|s| s.parse().ok()).unwrap_or(600);
+    let seconds: u64 = std::env::var("FUZZ_SECONDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(600);
     let deadline = Instant::now() + Duration::from_secs(seconds);
     let mut rounds = 0u64;
     let start_seed = std::time::SystemTime::now()
