@@ -50,7 +50,7 @@ fn likely(ratio: f64) -> &'static str {
 }
 
 fn slipped(ratio: f64) -> bool {
-    ratio.is_finite() && ratio > 0.0 && (ratio > SLIP_FACTOR || ratio < 1.0 / SLIP_FACTOR)
+    ratio.is_finite() && ratio > 0.0 && !(1.0 / SLIP_FACTOR..=SLIP_FACTOR).contains(&ratio)
 }
 
 /// Row lengths that look like millimetres in a description whose rows are in metres.
