@@ -3,7 +3,10 @@
 //! and `calibrated.urdf`.
 
 use super::OneOf;
-use anyhow::{Context, Result, bail};
+use super::checks;
+use super::options::NOISE_MM;
+use super::output::Outputs;
+use anyhow::Result;
 use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, UrdfOptions, UrdfRoot, calibrate, findings, joint_map,
     joints_without_speed_limits, markdown, raw_reading_deviation, ros_name, urdf,
@@ -12,7 +15,7 @@ use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{MeasurementSet, read_measurements};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The estimators by their command-line names.
 const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("paper", AxisEstimator::Paper)];
@@ -46,7 +49,7 @@ pub struct Args {
     estimator: AxisEstimator,
     /// Measurement noise of a point, 3-D RMS \[mm\] (weights the fits and scales the reported
     /// uncertainties).
-    #[arg(long, default_value_t = 0.19)]
+    #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
     noise_mm: f64,
     /// The robot's repeatability \[rad\]: standard deviation of a joint value's error per
     /// re-positioning, one value for every joint or one per joint (comma-separated); 0 = model
@@ -72,34 +75,21 @@ pub struct Args {
     /// a build with `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
-}
-
-/// Writes `text` to `dir/name`, refusing to replace a file unless `force`.
-pub fn write_output(dir: &Path, name: &str, text: &str, force: bool) -> Result<()> {
-    let path = dir.join(name);
-    if path.exists() && !force {
-        bail!("{} exists; pass --force to replace it", path.display());
-    }
-    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
-}
-
-/// Refuses, before any work is written, to replace any of `names` in `dir` unless `force`.
-pub fn refuse_existing(dir: &Path, names: &[&str], force: bool) -> Result<()> {
-    if !force {
-        for n in names {
-            let p = dir.join(n);
-            if p.exists() {
-                bail!("{} exists; pass --force to replace it", p.display());
-            }
-        }
-    }
-    Ok(())
+    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
+    /// deg, description lengths in mm instead of m) when the units are right after all.
+    #[arg(long)]
+    skip_unit_check: bool,
+    /// Calibrate even when DATA records another robot description than `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
 }
 
 /// What `calibrate` writes, rendered before anything is written.
 struct OutputTexts {
-    /// The contents of [`OUTPUTS`], in order.
-    files: Vec<String>,
+    /// The files of [`OUTPUTS`] that are written, by name, in order.
+    files: Vec<(&'static str, String)>,
+    /// Outputs left out, with the reason (printed as warnings).
+    left_out: Vec<String>,
     /// The URDF-fed-raw-readings line printed after the axes table.
     deviation_line: String,
     /// Joints whose URDF speed and effort limits are unknown.
@@ -137,16 +127,26 @@ fn output_texts(
         root: args.urdf_root,
     };
     let map = joint_map(cal, desc, args.joint_map_step);
-    let files = vec![
-        json_file::to_string(Schema::CALIBRATION, cal)?,
-        markdown(cal, desc, source) + &deviation.markdown(),
-        json_file::list_to_string(Schema::REPORT, "findings", &report_findings)?,
-        urdf(&cal.robot.phi_model(), desc, &urdf_options),
-        super::joints::joint_map_csv(&map, &desc.name),
-        super::joints::zero_offsets_csv(cal, desc, &poses)?,
+    let mut files = vec![
+        (OUTPUTS[0], json_file::to_string(Schema::CALIBRATION, cal)?),
+        (OUTPUTS[1], markdown(cal, desc, source) + &deviation.markdown()),
+        (
+            OUTPUTS[2],
+            json_file::list_to_string(Schema::REPORT, "findings", &report_findings)?,
+        ),
+        (OUTPUTS[3], urdf(&cal.robot.phi_model(), desc, &urdf_options)),
+        (OUTPUTS[4], super::joints::joint_map_csv(&map, &desc.name)),
     ];
+    // The zero offsets are a convenience for controllers that take nothing else: when their
+    // fit fails, the calibration stands and the file is left out with the reason.
+    let mut left_out = Vec::new();
+    match super::joints::zero_offsets_csv(cal, desc, &poses) {
+        Ok(text) => files.push((OUTPUTS[5], text)),
+        Err(e) => left_out.push(format!("{} not written: {e:#}", OUTPUTS[5])),
+    }
     Ok(OutputTexts {
         files,
+        left_out,
         deviation_line: format!(
             "  URDF fed raw controller readings: tool off by up to {:.3} mm, {:.3} mrad over {} poses (use joint_map.csv / `axiscal joints`)",
             deviation.max_position_mm, deviation.max_orientation_mrad, deviation.poses
@@ -155,20 +155,25 @@ fn output_texts(
     })
 }
 
-/// Checks a `--noise-mm` argument: a positive number of millimetres.
-pub fn check_noise_mm(noise_mm: f64) -> Result<()> {
-    if !(noise_mm.is_finite() && noise_mm > 0.0) {
-        bail!("--noise-mm must be a positive number of millimetres, got {noise_mm}");
-    }
-    Ok(())
-}
-
 /// Runs `axiscal calibrate`.
 pub fn run(args: Args) -> Result<()> {
-    check_noise_mm(args.noise_mm)?;
-    super::record::ensure_recordable(args.record.as_deref(), args.force)?;
+    let outputs = Outputs::new(args.force)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot);
+    outputs.check_in(&args.out, &OUTPUTS)?;
+    super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
+    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    let recorded = checks::data_identity(&args.data);
+    checks::same_robot(
+        recorded.as_ref(),
+        &args.data,
+        &desc,
+        &args.robot,
+        args.allow_other_robot,
+    )?;
     let set = read_measurements(&args.data, Some(desc.dof()))?;
+    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = CalibrationOptions {
         estimator: args.estimator,
         noise_rms_3d_mm: args.noise_mm,
@@ -183,10 +188,15 @@ pub fn run(args: Args) -> Result<()> {
         calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    refuse_existing(&args.out, &OUTPUTS, args.force)?;
-    for (name, text) in OUTPUTS.iter().zip(&texts.files) {
-        write_output(&args.out, name, text, args.force)?;
+    for (name, text) in &texts.files {
+        outputs.write_in(&args.out, name, text)?;
+    }
+    // An output left out must not leave an earlier run's file beside the new calibration.
+    for stale in OUTPUTS.iter().filter(|n| !texts.files.iter().any(|(w, _)| w == *n)) {
+        let path = args.out.join(stale);
+        if path.exists() {
+            std::fs::remove_file(&path).map_err(|e| anyhow::anyhow!("removing the stale {}: {e}", path.display()))?;
+        }
     }
     println!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
     println!("  joint  points  span(deg)  residual RMS (mm)  direction 1-sigma (mrad)");
@@ -207,7 +217,11 @@ pub fn run(args: Args) -> Result<()> {
             texts.missing_speed_limits
         );
     }
-    println!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
+    for warning in &texts.left_out {
+        eprintln!("warning: {warning}");
+    }
+    let written: Vec<&str> = texts.files.iter().map(|(name, _)| *name).collect();
+    println!("wrote {}/{{{}}}", args.out.display(), written.join(","));
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
         let campaign = super::record::calibrated::CalibratedCampaign {

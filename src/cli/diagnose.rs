@@ -2,7 +2,9 @@
 //! (`docs/formats.md#diagnosis-json`), writing `diagnosis.json`, `diagnosis.md` and the plots
 //! (`where.{png,svg}`; with validation poses also `candidates.{png,svg}`).
 
-use super::calibrate::{check_noise_mm, refuse_existing, write_output};
+use super::checks;
+use super::options::{InRange, NOISE_MM};
+use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose, diagnose_axes,
@@ -25,23 +27,23 @@ pub struct Args {
     #[arg(long)]
     out: PathBuf,
     /// Measurement noise of a point, 3-D RMS \[mm\].
-    #[arg(long, default_value_t = 0.19)]
+    #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
     noise_mm: f64,
     /// Noise-only replicas of the campaign (each recalibrated).
-    #[arg(long, default_value_t = DiagnosisOptions::default().noise_trials)]
+    #[arg(long, default_value_t = DiagnosisOptions::default().noise_trials, value_parser = InRange::closed(2usize, 100_000, ""))]
     noise_trials: usize,
     /// Validation-noise draws per replica.
-    #[arg(long, default_value_t = DiagnosisOptions::default().noise_draws)]
+    #[arg(long, default_value_t = DiagnosisOptions::default().noise_draws, value_parser = InRange::closed(1usize, 10_000, ""))]
     noise_draws: usize,
     /// What the baseline refit adjusts besides the geometry: `identified` (also the fitted
     /// transmission harmonics and coupling slopes) or `geometry`.
     #[arg(long, value_enum, default_value = "identified")]
     refit: Refit,
     /// False-alarm rate of the gap and candidate tests.
-    #[arg(long, default_value_t = DiagnosisOptions::default().false_alarm)]
+    #[arg(long, default_value_t = DiagnosisOptions::default().false_alarm, value_parser = InRange::above(0.0, 0.5, ""))]
     false_alarm: f64,
     /// Noise-only replicas of the axis-experiments-only mode (data without validation poses).
-    #[arg(long, default_value_t = DiagnosisOptions::default().axis_replicas)]
+    #[arg(long, default_value_t = DiagnosisOptions::default().axis_replicas, value_parser = InRange::closed(2usize, 1_000_000, ""))]
     axis_replicas: usize,
     /// Seed of the replicas' noise.
     #[arg(long, default_value_t = 0)]
@@ -55,6 +57,13 @@ pub struct Args {
     /// `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
+    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
+    /// deg, description lengths in mm instead of m).
+    #[arg(long)]
+    skip_unit_check: bool,
+    /// Diagnose even when DATA records another robot description than `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
 }
 
 /// The `--refit` choices ([`RefitScope`]).
@@ -66,10 +75,22 @@ enum Refit {
 
 /// Runs `axiscal diagnose`.
 pub fn run(args: Args) -> Result<()> {
-    check_noise_mm(args.noise_mm)?;
-    super::record::ensure_recordable(args.record.as_deref(), args.force)?;
+    let outputs = Outputs::new(args.force)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot);
+    super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
+    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    let recorded = checks::data_identity(&args.data);
+    checks::same_robot(
+        recorded.as_ref(),
+        &args.data,
+        &desc,
+        &args.robot,
+        args.allow_other_robot,
+    )?;
     let set = read_measurements(&args.data, Some(desc.dof()))?;
+    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: args.noise_mm,
         noise_trials: args.noise_trials,
@@ -92,7 +113,7 @@ pub fn run(args: Args) -> Result<()> {
             json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
             markdown: axes_markdown(&d, &source),
             plot_files: &AXES_PLOT_FILES,
-            force: args.force,
+            outputs: &outputs,
         };
         let written = report.write(|dir| write_axes_plots(&d, dir))?;
         println!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
@@ -121,7 +142,7 @@ pub fn run(args: Args) -> Result<()> {
         json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
         markdown: markdown(&d, &source),
         plot_files: &PLOT_FILES,
-        force: args.force,
+        outputs: &outputs,
     };
     let written = report.write(|dir| write_plots(&d, dir))?;
     let headline = format!(
@@ -133,6 +154,15 @@ pub fn run(args: Args) -> Result<()> {
         d.outcome.gap_after_mm
     );
     println!("{headline}");
+    if d.outcome.effect == "none" {
+        println!(
+            "  with {} validation poses ({} held out) the smallest gap this test flags is {:.3} mm; a smaller effect \
+             reads `none`: measure more validation poses to resolve it",
+            d.poses[0] + d.poses[1],
+            d.poses[1],
+            d.detectable_gap_mm
+        );
+    }
     println!("wrote {written}");
     record(&args, &desc, &set, &format!("{headline}. {}", d.verdict))
 }
@@ -167,7 +197,7 @@ struct Report<'a> {
     markdown: String,
     /// The files the plots write.
     plot_files: &'a [&'a str],
-    force: bool,
+    outputs: &'a Outputs,
 }
 
 impl Report<'_> {
@@ -177,9 +207,9 @@ impl Report<'_> {
         let names = ["diagnosis.json", "diagnosis.md"];
         std::fs::create_dir_all(self.out).with_context(|| format!("creating {}", self.out.display()))?;
         let all: Vec<&str> = names.iter().chain(self.plot_files).copied().collect();
-        refuse_existing(self.out, &all, self.force)?;
-        write_output(self.out, names[0], &self.json, self.force)?;
-        write_output(self.out, names[1], &self.markdown, self.force)?;
+        self.outputs.check_in(self.out, &all)?;
+        self.outputs.write_in(self.out, names[0], &self.json)?;
+        self.outputs.write_in(self.out, names[1], &self.markdown)?;
         plot(self.out)?;
         Ok(format!("{}/{{{}}}", self.out.display(), all.join(",")))
     }

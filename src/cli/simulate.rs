@@ -1,13 +1,16 @@
 //! `axiscal simulate`: a full Table-1 campaign plus validation poses on a simulated robot,
 //! written as a measurement CSV (`docs/formats.md#measurement-csv`).
 
+use super::options::InRange;
+use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements};
+use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements_to};
 use axiscal::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::sim::{AnalyticArm, ArmExecutor, CampaignOptions, CampaignOutput, Effects, simulate_campaign_with};
 use axiscal::sim::{RapierArm, RapierArmOptions, SpanSearch, visible_sweep_span};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `axiscal simulate`.
@@ -25,7 +28,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Instrument::Theodolite)]
     instrument: Instrument,
     /// Number of validation poses (three tool targets each).
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, 1_000_000, ""))]
     validation_poses: usize,
     /// Seed of the measurement and repeatability noise.
     #[arg(long, default_value_t = 1)]
@@ -52,6 +55,9 @@ pub struct Args {
     /// `axiscal view FILE.rrd`. Needs a build with `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
+    /// Skip the unit sanity check of the description's lengths.
+    #[arg(long)]
+    skip_unit_check: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -68,8 +74,22 @@ enum Instrument {
 
 /// Runs `axiscal simulate`.
 pub fn run(args: Args) -> Result<()> {
-    super::record::ensure_recordable(args.record.as_deref(), args.force)?;
+    let outputs = [("--truth", &args.truth), ("--effects", &args.effects)]
+        .into_iter()
+        .fold(
+            Outputs::new(args.force).input("--robot", &args.robot),
+            |o, (what, path)| match path {
+                Some(p) => o.input(what, p),
+                None => o,
+            },
+        );
+    outputs.check(&args.out)?;
+    super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
+    if let Some(record) = &args.record {
+        Outputs::new(true).input("--out", &args.out).check_not_input(record)?;
+    }
     let desc = RobotDescription::from_file(&args.robot)?;
+    super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
     let truth = match &args.truth {
         Some(path) => RobotModel::from_file(path)?,
         None => axiscal::sim::paper_robot(),
@@ -111,10 +131,11 @@ pub fn run(args: Args) -> Result<()> {
     }
     .with_context(|| format!("simulating the campaign on {name}"))?;
     let set = MeasurementSet::new(desc.dof(), out.rows).context("assembling the measurement set")?;
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    write_measurements(&args.out, &set, args.force).context("pass --force to replace an existing file")?;
+    let mut file = outputs.create(&args.out)?;
+    file.write_all(super::checks::identity_comment(&desc).as_bytes())
+        .and_then(|()| write_measurements_to(&mut file, &set))
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    file.commit()?;
     println!(
         "wrote {} ({} rows) simulated on {}",
         args.out.display(),
@@ -136,12 +157,15 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The measurement model of `kind` (the theodolites' calibration printed to stderr).
+/// The measurement model of `kind` (the theodolites' calibration printed to stderr with
+/// `--verbose`).
 fn instrument_model(kind: Instrument) -> Result<MeasurementModel> {
     Ok(match kind {
         Instrument::Theodolite => {
             let (model, calibration) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
-            eprintln!("{calibration}");
+            if super::verbose() {
+                eprintln!("{calibration}");
+            }
             model
         }
         Instrument::Isotropic => MeasurementModel::paper_isotropic(),

@@ -4,7 +4,10 @@
 //! Units in the file are those engineers read off drawings (mm, deg, kg); inside, everything
 //! is SI with angles in radians. See `scenarios/robots/asea-irb6l.toml` for a documented example.
 
+mod identity;
 mod validate;
+
+pub use identity::DescriptionIdentity;
 
 use crate::kinematics::{JointKind, PhiJoint, PhiModel, PhiRow};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};

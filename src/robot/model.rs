@@ -118,7 +118,14 @@ impl RobotModel {
     /// Parses and validates robot model text; `path` labels errors only.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, ModelError> {
         let t: Self = crate::toml_file::parse(text, path)?;
-        t.validate()?;
+        t.validate().map_err(|e| match e {
+            ModelError::Invalid { field, message } => ModelError::InvalidIn {
+                path: path.to_owned(),
+                field,
+                message,
+            },
+            other => other,
+        })?;
         Ok(t)
     }
 

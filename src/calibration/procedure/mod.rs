@@ -249,6 +249,7 @@ pub fn calibrate(
         couplings,
         tool,
         options: options.clone(),
+        description: Some(desc.identity()),
     })
 }
 

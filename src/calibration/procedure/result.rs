@@ -9,7 +9,7 @@ use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
 use crate::calibration::{ArcFit, PaperAxisFit};
 use crate::kinematics::AxisLine;
-use crate::robot::{CouplingFunction, RobotModel, Transmission};
+use crate::robot::{CouplingFunction, DescriptionIdentity, RobotModel, Transmission};
 use nalgebra::{Isometry3, Matrix2, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -215,4 +215,8 @@ pub struct Calibration {
     pub tool: Option<ToolReport>,
     /// The options used.
     pub options: CalibrationOptions,
+    /// The nominal description the calibration was made with (name and geometry hash);
+    /// absent in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<DescriptionIdentity>,
 }

@@ -9,9 +9,10 @@ pub mod calibrated;
 #[cfg(feature = "viz")]
 pub mod simulated;
 
+use super::output::Outputs;
 #[cfg(feature = "viz")]
 use anyhow::Context;
-use anyhow::{Result, bail};
+use anyhow::Result;
 use std::path::Path;
 
 /// `--record` was given to a build without the `viz` feature.
@@ -23,16 +24,14 @@ use std::path::Path;
 pub struct RecordUnavailable(String);
 
 /// Fails early, before any work, when `--record` was given but this build cannot record, or
-/// when the recording would replace a file without `force`.
-pub fn ensure_recordable(path: Option<&Path>, force: bool) -> Result<()> {
+/// when the recording may not be written (an input of the command, or an existing file without
+/// `--force`: [`Outputs::check`]).
+pub fn ensure_recordable(path: Option<&Path>, outputs: &Outputs) -> Result<()> {
     let Some(path) = path else { return Ok(()) };
     if !cfg!(feature = "viz") {
         return Err(RecordUnavailable(path.display().to_string()).into());
     }
-    if path.exists() && !force {
-        bail!("{} exists; pass --force to replace it", path.display());
-    }
-    Ok(())
+    outputs.check(path)
 }
 
 /// Writes a recording to `path` with `write` (its folder created) and says where it is.
