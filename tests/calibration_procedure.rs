@@ -180,15 +180,11 @@ fn recovery_within_reported_sigma(truth: &RobotModel, options: &CalibrationOptio
             push(r.beta_deg - t.beta_deg, s.beta_deg);
         }
         for (a, t) in cal.axes.iter().zip(&reference.axes) {
-            let coefficients = |x: &axiscal::robot::Transmission| match x {
-                axiscal::robot::Transmission::Harmonic { sin, cos }
-                | axiscal::robot::Transmission::Gear { sin, cos, .. } => {
-                    sin.iter().chain(cos).copied().collect::<Vec<f64>>()
-                }
-            };
-            for ((c, ct), s) in coefficients(&a.transmission)
+            for ((c, ct), s) in a
+                .transmission
+                .coefficients()
                 .iter()
-                .zip(coefficients(&t.transmission))
+                .zip(t.transmission.coefficients())
                 .zip(&a.coefficient_sigma)
             {
                 push(c - ct, *s);

@@ -301,9 +301,11 @@ pub fn perturb<R: Rng + ?Sized>(
                 vec![draw(&spec.transmission.sin_rad, rng)],
                 vec![draw(&spec.transmission.cos_rad, rng)],
             );
-            j.transmission = match entry.transmission_fit {
+            j.transmission = match entry.transmission_fit_form() {
                 TransmissionFitForm::Gear { ratio, .. } => Transmission::Gear { ratio, sin, cos },
-                TransmissionFitForm::Harmonic { .. } => Transmission::Harmonic { sin, cos },
+                TransmissionFitForm::Harmonic { .. } | TransmissionFitForm::Polynomial { .. } => {
+                    Transmission::Harmonic { sin, cos }
+                }
             };
         }
     }

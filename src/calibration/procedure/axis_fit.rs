@@ -10,16 +10,8 @@ use crate::calibration::{
 };
 use crate::kinematics::AxisLine;
 use crate::robot::commands_to_internal;
-use crate::robot::{Controller, RobotDescription, Transmission, TransmissionFitForm};
+use crate::robot::{Controller, RobotDescription, Transmission};
 use nalgebra::{Isometry3, Point3};
-
-/// The fit form of a transmission as the description gives it.
-fn transmission_form(f: TransmissionFitForm) -> TransmissionForm {
-    match f {
-        TransmissionFitForm::Harmonic { order } => TransmissionForm::Harmonic { order },
-        TransmissionFitForm::Gear { ratio, order } => TransmissionForm::Gear { ratio, order },
-    }
-}
 
 /// One fitted axis: the line, the transmission in the fit's own zero (`theta_a = f^-1(u)`
 /// up to a constant) and the report.
@@ -129,7 +121,7 @@ pub(super) fn fit_axes(
             .map(|c| actuator_commands(controller, desc, c)[k])
             .collect();
         let u0: Vec<f64> = e.target0_steps.iter().map(|&j| u[j]).collect();
-        let form = transmission_form(desc.joints[k].transmission_fit);
+        let form = TransmissionForm::from(desc.joints[k].transmission_fit_form());
         let outcome =
             fit_one_axis(e, &u0, form, options, repeatability_rad[k]).map_err(|source| ProcedureError::Fit {
                 experiment: e.name.clone(),

@@ -120,18 +120,20 @@ fn zero_offset_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     }
 }
 
-/// The amplitude of every harmonic of each joint's transmission, appended to `out`.
+/// The amplitude of every harmonic of each joint's transmission (eq. 8) and each sliding
+/// joint's scale error and nonlinearity (eq. 13), appended to `out`.
 fn transmission_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     for a in &cal.axes {
-        let (sin, cos) = match &a.transmission {
-            Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => (sin.clone(), cos.clone()),
+        let (sin, cos, to_joint) = match &a.transmission {
+            Transmission::Polynomial { c, .. } => {
+                polynomial_findings(a.joint, c, &a.coefficient_sigma, out);
+                continue;
+            }
+            Transmission::Harmonic { sin, cos } => (sin, cos, 1.0),
+            // A gear's coefficients are in gear units: N times them in joint units.
+            Transmission::Gear { ratio, sin, cos } => (sin, cos, *ratio),
         };
-        // A gear's coefficients are in gear units: N times them in joint units.
-        let to_joint = match &a.transmission {
-            Transmission::Gear { ratio, .. } => *ratio,
-            Transmission::Harmonic { .. } => 1.0,
-        };
-        for (h, (s, c)) in sin.iter().zip(&cos).enumerate() {
+        for (h, (s, c)) in sin.iter().zip(cos).enumerate() {
             let amp = to_joint * (s * s + c * c).sqrt();
             let sig = to_joint
                 * a.coefficient_sigma
@@ -141,7 +143,7 @@ fn transmission_findings(cal: &Calibration, out: &mut Vec<Finding>) {
                     .max(a.coefficient_sigma.get(sin.len() + h).copied().unwrap_or(f64::NAN));
             let per = match &a.transmission {
                 Transmission::Gear { ratio, .. } => format!("per {:.3} joint turns", ratio / (h + 1) as f64),
-                Transmission::Harmonic { .. } => format!("{} times per turn", h + 1),
+                _ => format!("{} times per turn", h + 1),
             };
             out.push(finding(
                 format!("joint {} transmission harmonic {}", a.joint, h + 1),
@@ -156,6 +158,42 @@ fn transmission_findings(cal: &Calibration, out: &mut Vec<Finding>) {
                     per,
                     s,
                     c
+                ),
+            ));
+        }
+    }
+}
+
+/// A sliding joint's scale error (ppm) and higher-order terms (um at 100 mm), eq. (13).
+fn polynomial_findings(joint: usize, c: &[f64], sigma: &[f64], out: &mut Vec<Finding>) {
+    for (i, ck) in c.iter().enumerate() {
+        let s = sigma.get(i).copied().unwrap_or(f64::NAN);
+        if i == 0 {
+            out.push(finding(
+                format!("joint {joint} scale error"),
+                ck * 1e6,
+                s * 1e6,
+                "ppm",
+                format!(
+                    "sliding joint {joint} travels {:.1} +- {:.1} ppm {} than commanded (scale error, eq. 13)",
+                    (ck * 1e6).abs(),
+                    s * 1e6,
+                    if *ck > 0.0 { "less" } else { "more" }
+                ),
+            ));
+        } else {
+            // The term's size at 100 mm of travel, in micrometres.
+            let at = 0.1f64.powi(i as i32 + 1) * 1e6;
+            out.push(finding(
+                format!("joint {joint} nonlinearity order {}", i + 1),
+                ck * at,
+                s * at,
+                "um at 100 mm",
+                format!(
+                    "sliding joint {joint}: the order-{} term of its transmission is {:.2} +- {:.2} um at 100 mm of travel",
+                    i + 1,
+                    ck * at,
+                    s * at
                 ),
             ));
         }
