@@ -93,7 +93,10 @@ fn displacements(
     for &u in commands {
         let (s, value) = form
             .invert(coefficients, u, guess, &mut basis)
-            .ok_or(CalibrationError::NotInvertible { fit: FIT, command_rad: u })?;
+            .ok_or(CalibrationError::NotInvertible {
+                fit: FIT,
+                command_rad: u,
+            })?;
         guess = s;
         // f(g(u)) = u: dg/dc_k = -basis_k(g) / f'(g).
         out.push((s, basis.iter().map(|b| -b / value.slope).collect::<Vec<f64>>()));
@@ -162,7 +165,8 @@ fn initial(points: &[Point3<f64>], commands: &[f64], m: usize) -> Result<LinePar
     if (points[last] - points[0]).dot(&n) * (commands[last] - commands[0]) < 0.0 {
         n = -n;
     }
-    let rot = Rotation3::rotation_between(&Vector3::z(), &n).unwrap_or_else(|| Rotation3::new(Vector3::x() * std::f64::consts::PI));
+    let rot = Rotation3::rotation_between(&Vector3::z(), &n)
+        .unwrap_or_else(|| Rotation3::new(Vector3::x() * std::f64::consts::PI));
     Ok(LineParams {
         start: points[0],
         frame: rot,
@@ -219,9 +223,21 @@ pub fn fit_line(
     let (_, j_iso, raw_iso) = residual_and_jacobian(form, commands_m, points, &first.state, iso)?;
     let g_iso = lsq::inverse_normal(&j_iso, FIT)? / (sigma_per_axis * sigma_per_axis);
     let along = vec![Vector3::z(); n];
-    let moments = ResidualMoments::of_fit(&(&j_iso * sigma_per_axis), &g_iso, &raw_iso, Some((&along, repeatability)));
-    let weights = [1.0 / sigma_per_axis, 1.0 / (sigma_per_axis.powi(2) + repeatability.powi(2)).sqrt()];
-    let outcome = if repeatability > 0.0 { run(first.state, weights)? } else { first };
+    let moments = ResidualMoments::of_fit(
+        &(&j_iso * sigma_per_axis),
+        &g_iso,
+        &raw_iso,
+        Some((&along, repeatability)),
+    );
+    let weights = [
+        1.0 / sigma_per_axis,
+        1.0 / (sigma_per_axis.powi(2) + repeatability.powi(2)).sqrt(),
+    ];
+    let outcome = if repeatability > 0.0 {
+        run(first.state, weights)?
+    } else {
+        first
+    };
     let params = outcome.state;
     let (_, jw, raw) = residual_and_jacobian(form, commands_m, points, &params, weights)?;
     let covariance = lsq::inverse_normal(&jw, FIT)?;
@@ -232,7 +248,9 @@ pub fn fit_line(
     Ok(LineFit {
         direction: Unit::new_normalize(params.axis(2)),
         transmission: form.build(&params.coefficients),
-        coefficient_sigma: (N_GEOMETRY..N_GEOMETRY + m).map(|k| covariance[(k, k)].sqrt()).collect(),
+        coefficient_sigma: (N_GEOMETRY..N_GEOMETRY + m)
+            .map(|k| covariance[(k, k)].sqrt())
+            .collect(),
         direction_covariance,
         condition_number: lsq::scaled_condition_number(&jw),
         residuals: raw,
@@ -251,7 +269,10 @@ mod tests {
     fn sample() -> (Vec<Point3<f64>>, Vec<f64>, Vector3<f64>, Vec<f64>) {
         let dir = Vector3::new(0.3, -0.2, 0.93).normalize();
         let truth = vec![-4e-4, 0.05];
-        let f = Transmission::Polynomial { c0: 0.0, c: truth.clone() };
+        let f = Transmission::Polynomial {
+            c0: 0.0,
+            c: truth.clone(),
+        };
         let commands: Vec<f64> = (0..12).map(|j| -0.1 + 0.02 * j as f64).collect();
         let s0 = f.actual_from_command(commands[0]).unwrap();
         let start = Point3::new(1.2, -0.4, 0.3);
@@ -291,9 +312,13 @@ mod tests {
         for c in 0..j.ncols() {
             let mut d = vec![0.0; j.ncols()];
             d[c] = h;
-            let plus = residual_and_jacobian(&form, &commands, &pts, &p.perturbed(&d), w).unwrap().0;
+            let plus = residual_and_jacobian(&form, &commands, &pts, &p.perturbed(&d), w)
+                .unwrap()
+                .0;
             d[c] = -h;
-            let minus = residual_and_jacobian(&form, &commands, &pts, &p.perturbed(&d), w).unwrap().0;
+            let minus = residual_and_jacobian(&form, &commands, &pts, &p.perturbed(&d), w)
+                .unwrap()
+                .0;
             let fd = (plus - minus) / (2.0 * h);
             for r in 0..fd.len() {
                 assert_relative_eq!(j[(r, c)], fd[r], epsilon = 1e-5, max_relative = 1e-5);

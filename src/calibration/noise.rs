@@ -176,6 +176,9 @@ mod tests {
         }
         // Binomial(400, 0.95): 4 standard deviations is 17 misses either way.
         let rate = covered as f64 / trials as f64;
-        assert!((rate - 0.95).abs() < 4.0 * (0.95f64 * 0.05 / trials as f64).sqrt(), "{rate}");
+        assert!(
+            (rate - 0.95).abs() < 4.0 * (0.95f64 * 0.05 / trials as f64).sqrt(),
+            "{rate}"
+        );
     }
 }
