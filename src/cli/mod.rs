@@ -4,6 +4,7 @@ mod blind;
 mod budget;
 mod calibrate;
 mod compensate;
+mod describe;
 mod diagnose;
 mod evaluate;
 mod import;
@@ -57,6 +58,9 @@ struct Cli {
 enum Command {
     /// Calibrate a robot from a measurement CSV (axes, transmissions, couplings, offsets).
     Calibrate(calibrate::Args),
+    /// The phi-model of a robot description (rows, phi angles, axes); for a DH table or a URDF,
+    /// its forward kinematics checked against the source at random poses.
+    Describe(describe::Args),
     /// Monte-Carlo study of the calibrator: efficiency against the Cramer-Rao bound (ML and the
     /// paper's estimator) and the calibration of the reported uncertainties.
     Study(study::Args),
@@ -95,6 +99,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Calibrate(args) => calibrate::run(args),
+        Command::Describe(args) => describe::run(args),
         Command::Import(args) => import::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Study(args) => study::run(args),

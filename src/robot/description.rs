@@ -346,8 +346,12 @@ impl RobotDescription {
     }
 
     /// [`Self::from_toml_str`] with the chain the geometry was converted from (`dh` or
-    /// `urdf`), for checking the conversion (`axiscal describe`).
-    pub fn with_source(text: &str, path: &Path) -> Result<(Self, Option<SourceChain>), DescriptionError> {
+    /// `urdf`) and its base's placement in the instrument frame as written, for checking the
+    /// conversion (`axiscal describe`).
+    pub fn with_source(
+        text: &str,
+        path: &Path,
+    ) -> Result<(Self, Option<(SourceChain, Isometry3<f64>)>), DescriptionError> {
         let mut d: Self = crate::toml_file::parse(text, path)?;
         let source = d.convert_source(path)?;
         d.validate(path)?;

@@ -18,8 +18,9 @@ fn invalid(path: &Path, field: impl Into<String>, message: impl Into<String>) ->
 }
 
 impl RobotDescription {
-    /// Converts `dh` rows or a `urdf` file to the phi-model in place; returns the source chain.
-    pub(super) fn convert_source(&mut self, path: &Path) -> Result<Option<SourceChain>, DescriptionError> {
+    /// Converts `dh` rows or a `urdf` file to the phi-model in place; returns the source chain
+/// and the placement of its base as written.
+    pub(super) fn convert_source(&mut self, path: &Path) -> Result<Option<(SourceChain, Isometry3<f64>)>, DescriptionError> {
         let has_dh = self.dh_convention.is_some() || self.joints.iter().any(|j| j.dh.is_some());
         let source = match (has_dh, self.urdf.clone()) {
             (false, None) => return Ok(None),
@@ -47,7 +48,8 @@ impl RobotDescription {
                 "phi is chosen by the conversion rule: leave `phi_deg` out",
             ));
         }
-        let model = phi_model_of(&source, &self.placement.to_isometry())
+        let written = self.placement.to_isometry();
+        let model = phi_model_of(&source, &written)
             .ok_or_else(|| invalid(path, "joints", "the geometry has a singular row (coincident axes)"))?;
         for (j, p) in self.joints.iter_mut().zip(&model.joints) {
             j.phi_deg = p.phi_rad.to_degrees();
@@ -58,7 +60,7 @@ impl RobotDescription {
         self.tool.frame = Placement::from_isometry(&model.last_link_from_tool);
         self.dh_convention = None;
         self.urdf = None;
-        Ok(Some(source))
+        Ok(Some((source, written)))
     }
 
     /// The DH chain of the joints' `dh` rows.
