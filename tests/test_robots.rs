@@ -26,13 +26,20 @@ struct TestRobot {
 
 fn robot(name: &str) -> TestRobot {
     let desc = RobotDescription::from_file(Path::new(&format!("scenarios/robots/{name}.toml"))).unwrap();
-    let plan = if name == "arm6-dh" {
-        let path = Path::new("scenarios/robots/arm6-jitter-plan.toml");
-        axiscal::toml_file::parse(&axiscal::toml_file::read(path).unwrap(), path).unwrap()
-    } else {
-        CalibrationPlan::for_robot(&desc)
+    let plan_file = match name {
+        "arm6-dh" => Some("scenarios/robots/arm6-jitter-plan.toml"),
+        "table-prpp" => Some("scenarios/robots/table-prpp-plan.toml"),
+        _ => None,
     };
-    let spec = PerturbationSpec::from_toml_str(include_str!("data/test-robot-spec.toml"), "test-robot-spec.toml").unwrap();
+    let plan = match plan_file {
+        Some(path) => {
+            let path = Path::new(path);
+            axiscal::toml_file::parse(&axiscal::toml_file::read(path).unwrap(), path).unwrap()
+        }
+        None => CalibrationPlan::for_robot(&desc),
+    };
+    let spec =
+        PerturbationSpec::from_toml_str(include_str!("data/test-robot-spec.toml"), "test-robot-spec.toml").unwrap();
     let truth = perturb(&desc, &spec, &mut ChaCha12Rng::seed_from_u64(1)).unwrap();
     TestRobot { desc, plan, truth }
 }
@@ -43,9 +50,18 @@ fn campaign(r: &TestRobot, noise_mm: f64, seed: u64) -> MeasurementSet {
         poses: 0,
         ..ValidationPlan::workspace_default(r.desc.dof())
     };
-    let instrument = MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: noise_mm });
-    let out = simulate_campaign(&r.desc, &r.plan, &validation, &mut arm, &instrument, &mut ChaCha12Rng::seed_from_u64(seed))
-        .expect("the campaign runs");
+    let instrument = MeasurementModel::Isotropic(IsotropicNoise {
+        net_radial_rms_mm: noise_mm,
+    });
+    let out = simulate_campaign(
+        &r.desc,
+        &r.plan,
+        &validation,
+        &mut arm,
+        &instrument,
+        &mut ChaCha12Rng::seed_from_u64(seed),
+    )
+    .expect("the campaign runs");
     MeasurementSet::new(r.desc.dof(), out.rows).unwrap()
 }
 
@@ -75,7 +91,13 @@ fn normalised_errors(cal: &Calibration, reference: &Calibration) -> Vec<f64> {
         push(r.beta_deg - t.beta_deg, s.beta_deg);
     }
     for (a, t) in cal.axes.iter().zip(&reference.axes) {
-        for ((c, ct), s) in a.transmission.coefficients().iter().zip(t.transmission.coefficients()).zip(&a.coefficient_sigma) {
+        for ((c, ct), s) in a
+            .transmission
+            .coefficients()
+            .iter()
+            .zip(t.transmission.coefficients())
+            .zip(&a.coefficient_sigma)
+        {
             push(c - ct, *s);
         }
     }
@@ -103,7 +125,10 @@ fn assert_calibrated_within_sigma(name: &str, seeds: std::ops::Range<u64>) {
     assert!((rms - 1.0).abs() < 4.0 / (2.0 * n as f64).sqrt(), "{name}: RMS {rms}");
     // P(|z| > 3) = 0.0027: beyond n * 0.0027 + 4 sqrt(n * 0.0027) is below 1e-4 for a right sigma.
     let expected = n as f64 * 0.0027;
-    assert!((outside as f64) <= expected + 4.0 * expected.sqrt() + 1.0, "{name}: {outside} of {n} beyond 3 sigma");
+    assert!(
+        (outside as f64) <= expected + 4.0 * expected.sqrt() + 1.0,
+        "{name}: {outside} of {n} beyond 3 sigma"
+    );
 }
 
 #[test]

@@ -84,7 +84,10 @@ pub fn run(args: Args) -> Result<()> {
         check_noise_mm(n)?;
     }
     if !(args.held_tolerance.is_finite() && args.held_tolerance >= 0.0) {
-        bail!("--held-tolerance must be a number >= 0 (deg or mm), got {}", args.held_tolerance);
+        bail!(
+            "--held-tolerance must be a number >= 0 (deg or mm), got {}",
+            args.held_tolerance
+        );
     }
     let desc = RobotDescription::from_file(&args.robot)?;
     let set = read_measurements(&args.data, Some(desc.dof())).with_context(|| {
@@ -111,7 +114,13 @@ pub fn run(args: Args) -> Result<()> {
         calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let source = args.data.display().to_string();
-    let names = ["calibration.json", "report.md", "report.json", "calibrated.urdf", "residuals.csv"];
+    let names = [
+        "calibration.json",
+        "report.md",
+        "report.json",
+        "calibrated.urdf",
+        "residuals.csv",
+    ];
     refuse_existing(&args.out, &names, args.force)?;
     write_output(
         &args.out,
@@ -135,13 +144,15 @@ pub fn run(args: Args) -> Result<()> {
     write_output(&args.out, names[4], &residuals_csv(&cal), args.force)?;
     println!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
     print_scope(&cal);
-    println!("  joint  points  span(deg)  residual RMS (mm)  direction 1-sigma (mrad)");
+    println!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
     for a in &cal.axes {
+        let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
         println!(
-            "  {:>5}  {:>6}  {:>9.1}  {:>17.4}  {:>24.4}",
+            "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
             a.joint,
             a.points,
             a.span_deg,
+            unit,
             a.residual_rms_mm,
             a.direction_sigma_rad[0] * 1e3
         );
@@ -174,7 +185,10 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
         }
     }
     if !cal.not_calibrated.is_empty() {
-        println!("  not calibrated (no axis experiment, kept nominal): joints {:?}", cal.not_calibrated);
+        println!(
+            "  not calibrated (no axis experiment, kept nominal): joints {:?}",
+            cal.not_calibrated
+        );
     }
     if let Some(b) = &cal.base_rule {
         println!("  base frame: {}", b.text);

@@ -30,7 +30,11 @@ pub fn run(args: Args) -> Result<()> {
     let text = std::fs::read_to_string(&args.robot).with_context(|| format!("reading {}", args.robot.display()))?;
     let (desc, source) = RobotDescription::with_source(&text, &args.robot)?;
     let model = desc.nominal_model();
-    println!("# {} ({} joints): phi-model rows (paper Table 2 form), file units", desc.name, desc.dof());
+    println!(
+        "# {} ({} joints): phi-model rows (paper Table 2 form), file units",
+        desc.name,
+        desc.dof()
+    );
     for (k, j) in desc.joints.iter().enumerate() {
         println!(
             "joint {}: {:<9} phi_deg = {:>12.6}  limits = [{}, {}]",
@@ -45,15 +49,30 @@ pub fn run(args: Args) -> Result<()> {
         print_row(k, r);
     }
     let p = desc.placement;
-    println!("placement: translation_mm = {:?}, rpy_deg = {:?}", p.translation_mm, p.rpy_deg);
-    println!("tool.frame: translation_mm = {:?}, rpy_deg = {:?}", desc.tool.frame.translation_mm, desc.tool.frame.rpy_deg);
+    println!(
+        "placement: translation_mm = {:?}, rpy_deg = {:?}",
+        p.translation_mm, p.rpy_deg
+    );
+    println!(
+        "tool.frame: translation_mm = {:?}, rpy_deg = {:?}",
+        desc.tool.frame.translation_mm, desc.tool.frame.rpy_deg
+    );
     let poses = model.poses(&vec![0.0; desc.dof()]);
     println!("axes at the zero pose (instrument frame):");
     for k in 0..desc.dof() {
         let a = poses.axis(k);
         let o = a.origin_m * 1e3;
         let d = a.direction;
-        println!("  axis {}: point ({:.3}, {:.3}, {:.3}) mm, direction ({:.6}, {:.6}, {:.6})", k + 1, o.x, o.y, o.z, d.x, d.y, d.z);
+        println!(
+            "  axis {}: point ({:.3}, {:.3}, {:.3}) mm, direction ({:.6}, {:.6}, {:.6})",
+            k + 1,
+            o.x,
+            o.y,
+            o.z,
+            d.x,
+            d.y,
+            d.z
+        );
     }
     let Some((source, world_from_source)) = source else {
         println!("geometry given as phi rows: nothing to check");
@@ -62,7 +81,11 @@ pub fn run(args: Args) -> Result<()> {
     let mut rng = ChaCha12Rng::seed_from_u64(args.seed);
     let (mut worst_m, mut worst_rad): (f64, f64) = (0.0, 0.0);
     for _ in 0..args.poses {
-        let cmd: Vec<f64> = desc.joints.iter().map(|j| rng.random_range(j.limits[0]..=j.limits[1])).collect();
+        let cmd: Vec<f64> = desc
+            .joints
+            .iter()
+            .map(|j| rng.random_range(j.limits[0]..=j.limits[1]))
+            .collect();
         let q = commands_to_internal(&desc, &cmd);
         let (a, b) = (world_from_source * source.base_from_tool(&q), model.world_from_tool(&q));
         worst_m = worst_m.max((a.translation.vector - b.translation.vector).norm());
@@ -76,7 +99,9 @@ pub fn run(args: Args) -> Result<()> {
         worst_rad
     );
     if worst_m > FK_TOLERANCE || worst_rad > FK_TOLERANCE {
-        bail!("the converted phi-model differs from the source by {worst_m:.3e} m, {worst_rad:.3e} rad (tolerance {FK_TOLERANCE:e})");
+        bail!(
+            "the converted phi-model differs from the source by {worst_m:.3e} m, {worst_rad:.3e} rad (tolerance {FK_TOLERANCE:e})"
+        );
     }
     Ok(())
 }

@@ -96,7 +96,12 @@ pub fn run(args: Args) -> Result<()> {
             let text = axiscal::toml_file::read(path)?;
             axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?
         }
-        None if desc.dof() == 6 && desc.joints.iter().all(|j| j.kind == axiscal::kinematics::JointKind::Revolute) => {
+        None if desc.dof() == 6
+            && desc
+                .joints
+                .iter()
+                .all(|j| j.kind == axiscal::kinematics::JointKind::Revolute) =>
+        {
             CalibrationPlan::table1(6)
         }
         None => CalibrationPlan::for_robot(&desc),

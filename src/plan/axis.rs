@@ -162,13 +162,20 @@ impl CalibrationPlan {
 
     /// Table 1 generalised to any joint mix: every joint swept once, last joint first, 15
     /// intervals, around a reference at 0 (or the middle of the limits when 0 is outside):
-    /// a revolute joint over 45 deg, a prismatic one over half its range; the second target
+    /// a revolute joint over 90 deg, a prismatic one over half its range (each within its
+    /// limits); the second target
     /// wherever the description fits a coupling (`couplings[].fit`) and gives a `target1`.
     pub fn for_robot(desc: &RobotDescription) -> Self {
         let reference: Vec<f64> = desc
             .joints
             .iter()
-            .map(|j| if j.limits[0] < 0.0 && j.limits[1] > 0.0 { 0.0 } else { 0.5 * (j.limits[0] + j.limits[1]) })
+            .map(|j| {
+                if j.limits[0] < 0.0 && j.limits[1] > 0.0 {
+                    0.0
+                } else {
+                    0.5 * (j.limits[0] + j.limits[1])
+                }
+            })
             .collect();
         let sweeps = (1..=desc.dof())
             .rev()
@@ -176,7 +183,7 @@ impl CalibrationPlan {
                 let j = &desc.joints[joint - 1];
                 let room = 2.0 * (reference[joint - 1] - j.limits[0]).min(j.limits[1] - reference[joint - 1]);
                 let span = match j.kind {
-                    crate::kinematics::JointKind::Revolute => 45f64.min(0.9 * room),
+                    crate::kinematics::JointKind::Revolute => 90f64.min(0.9 * room),
                     crate::kinematics::JointKind::Prismatic => 0.5 * (j.limits[1] - j.limits[0]).min(room),
                 };
                 let fitted = desc.couplings.iter().any(|c| c.from == joint && c.fit.is_some());
@@ -207,7 +214,11 @@ impl CalibrationPlan {
             .map(|s| {
                 let n = seen.entry(s.joint).or_insert(0usize);
                 *n += 1;
-                if *n == 1 { format!("axis{}", s.joint) } else { format!("axis{}-{}", s.joint, n) }
+                if *n == 1 {
+                    format!("axis{}", s.joint)
+                } else {
+                    format!("axis{}-{}", s.joint, n)
+                }
             })
             .collect()
     }

@@ -12,6 +12,8 @@
 //!    with its Z-axis directed along the calibrated axis of the first joint. The common
 //!    normal directed from the axis of the first joint to the second joint-axis coincides with
 //!    the Y-axis of the base system."). Every degree of freedom is observed.
+//!    Which axes are parallel is decided on the nominal model (the design): observed axes of a
+//!    parallel pair are never exactly parallel, and their small tilt must fix nothing.
 //! 2. Otherwise (axis 1 slides, axes 1 and 2 parallel, or axis 1 or 2 not swept), the rigid
 //!    motion is fixed in order: the first observed axis turns the nominal one onto its
 //!    direction (smallest rotation) and, if rotary, moves it onto its line; the first later
@@ -24,11 +26,12 @@
 //!
 //! **Rows**, joint by joint: the `phi_i` frame at the reference displacement (eq. A2) and the
 //! row `(a, b, alpha, beta)` that puts `Z_{i+1}` on the observed axis `i+1` in DH fashion
-//! (eq. A3, [`row_to_line`]). A sliding axis has only a direction (eq. 9): its row keeps the
-//! observed direction through the nominal frame origin (the line's position is a convention;
-//! `a`, `b` stay nominal when the direction does). An axis not swept keeps its nominal row (its place on the link below).
+//! (eq. A3, [`row_to_line`]). A sliding axis has only a direction (eq. 9): its row takes
+//! `alpha`, `beta` from the observed direction and keeps the nominal `a`, `b` (the line's
+//! position, a convention). An axis not swept keeps its nominal row (its place on the link
+//! below).
 
-use crate::kinematics::{AxisLine, JointKind, PhiModel, frame_from_phi, row_to_line};
+use crate::kinematics::{AxisLine, JointKind, PhiModel, PhiRow, frame_from_phi, row_to_line};
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -133,13 +136,12 @@ fn base_motion(kinds: &[JointKind], nominal: &[AxisLine], observed: &[Option<Axi
         unobserved.push(format!("position across axis {} (sliding)", f + 1));
     }
     let z = of.direction.into_inner();
+    // Which axes are parallel is the design's business: nearly parallel observed axes (a
+    // parallel pair measured with noise) must not fix anything by their tiny tilt.
+    let design_parallel = |a: usize, b: usize| parallel(&nominal[a].direction, &nominal[b].direction);
     let pivot = t * nf.origin_m;
     // 2. Rotation about the first axis.
-    let by_direction = seen
-        .iter()
-        .skip(1)
-        .copied()
-        .find(|&k| !parallel(&z, &line(k).direction));
+    let by_direction = seen.iter().skip(1).copied().find(|&k| !design_parallel(f, k));
     let by_offset = || {
         seen.iter().skip(1).copied().find(|&k| {
             rotary(f) && rotary(k) && {
@@ -193,11 +195,7 @@ fn base_motion(kinds: &[JointKind], nominal: &[AxisLine], observed: &[Option<Axi
         Some(d * (fo - fn_).dot(&d))
     };
     if rotary(f) {
-        match rot_lines
-            .iter()
-            .copied()
-            .find(|&k| k != f && !parallel(&z, &line(k).direction))
-        {
+        match rot_lines.iter().copied().find(|&k| k != f && !design_parallel(f, k)) {
             Some(k) => {
                 anchors.push(k + 1);
                 if let Some(s) = shift(&t, f, k) {
@@ -214,11 +212,7 @@ fn base_motion(kinds: &[JointKind], nominal: &[AxisLine], observed: &[Option<Axi
                 let w = oa.origin_m - na;
                 let across = w - oa.direction.into_inner() * w.dot(&oa.direction);
                 t = Isometry3::translation(across.x, across.y, across.z) * t;
-                match rot_lines
-                    .iter()
-                    .copied()
-                    .find(|&k| k != a && !parallel(&oa.direction, &line(k).direction))
-                {
+                match rot_lines.iter().copied().find(|&k| k != a && !design_parallel(a, k)) {
                     Some(k) => {
                         anchors.push(k + 1);
                         if let Some(s) = shift(&t, a, k) {
@@ -282,11 +276,13 @@ fn section4_link1(nominal: &PhiModel, a1: &AxisLine, a2: &AxisLine) -> Option<Is
 fn base_frame(nominal: &PhiModel, axes: &[Option<AxisLine>], q_ref: &[f64]) -> (Isometry3<f64>, BaseRule) {
     let kinds: Vec<JointKind> = nominal.joints.iter().map(|j| j.kind).collect();
     let motion = |q| crate::kinematics::joint_motion(kinds[0], q);
+    let poses = nominal.poses(q_ref);
+    let nominal_axes: Vec<AxisLine> = (0..nominal.dof()).map(|k| poses.axis(k)).collect();
     if kinds.len() > 1
         && kinds[0] == JointKind::Revolute
         && kinds[1] == JointKind::Revolute
         && let (Some(a1), Some(a2)) = (axes[0], axes[1])
-        && !parallel(&a1.direction, &a2.direction)
+        && !parallel(&nominal_axes[0].direction, &nominal_axes[1].direction)
         && let Some(link1) = section4_link1(nominal, &a1, &a2)
     {
         let rule = BaseRule {
@@ -299,8 +295,6 @@ fn base_frame(nominal: &PhiModel, axes: &[Option<AxisLine>], q_ref: &[f64]) -> (
         };
         return (link1 * motion(q_ref[0]).inverse(), rule);
     }
-    let poses = nominal.poses(q_ref);
-    let nominal_axes: Vec<AxisLine> = (0..nominal.dof()).map(|k| poses.axis(k)).collect();
     let (t, rule) = base_motion(&kinds, &nominal_axes, axes);
     (t * nominal.world_from_base, rule)
 }
@@ -342,7 +336,7 @@ pub fn model_from_axes(
             };
             let nominal_row = nominal.rows[k];
             if nominal.joints[k + 1].kind == JointKind::Prismatic {
-                // Only the direction is observed: the line through the nominal frame origin.
+                // Only the direction is observed: any line; the nominal frame origin's.
                 local.origin_m = nominal_row.phi_from_next() * Point3::origin();
             }
             let row = row_to_line(&local, nominal_row.beta_rad).ok_or(FramesError::PhiParallel {
@@ -355,7 +349,17 @@ pub fn model_from_axes(
                     .acos()
                     .min(std::f64::consts::PI - local.direction.z.abs().acos()),
             })?;
-            model.rows[k] = row;
+            model.rows[k] = if nominal.joints[k + 1].kind == JointKind::Prismatic {
+                // Only the direction is observed (eq. 9): `a`, `b` (and `gamma`, `h`) stay
+                // nominal; the direction `Rot(z, beta) Rot(x, alpha) z` is the observed one.
+                PhiRow {
+                    alpha_rad: row.alpha_rad,
+                    beta_rad: row.beta_rad,
+                    ..nominal_row
+                }
+            } else {
+                row
+            };
         }
         world_from_frame = world_from_phi * model.rows[k].phi_from_next();
     }
@@ -432,11 +436,26 @@ mod tests {
     #[test]
     fn parallel_base_axes_use_the_sequential_rule() {
         use crate::kinematics::{DhConvention, DhParams, SourceChain, phi_model_of};
-        let dh = |d: f64, a: f64, alpha_deg: f64| DhParams { d_m: d, theta_rad: 0.0, a_m: a, alpha_rad: alpha_deg.to_radians() };
+        let dh = |d: f64, a: f64, alpha_deg: f64| DhParams {
+            d_m: d,
+            theta_rad: 0.0,
+            a_m: a,
+            alpha_rad: alpha_deg.to_radians(),
+        };
         let scara = SourceChain::Dh {
             convention: DhConvention::Classic,
-            kinds: vec![JointKind::Revolute, JointKind::Revolute, JointKind::Prismatic, JointKind::Revolute],
-            rows: vec![dh(0.4, 0.35, 0.0), dh(0.0, 0.3, 180.0), dh(0.0, 0.0, 0.0), dh(0.1, 0.0, 0.0)],
+            kinds: vec![
+                JointKind::Revolute,
+                JointKind::Revolute,
+                JointKind::Prismatic,
+                JointKind::Revolute,
+            ],
+            rows: vec![
+                dh(0.4, 0.35, 0.0),
+                dh(0.0, 0.3, 180.0),
+                dh(0.0, 0.0, 0.0),
+                dh(0.1, 0.0, 0.0),
+            ],
             flange_from_tool: Isometry3::identity(),
         };
         let nominal = phi_model_of(&scara, &Isometry3::translation(1.0, 2.0, 0.0)).unwrap();
@@ -445,7 +464,10 @@ mod tests {
         // second axis 1 mm further out.
         let actual = {
             let mut m = nominal.clone();
-            m.world_from_base = Isometry3::new(nalgebra::Vector3::new(0.003, 0.0, 0.001), nalgebra::Vector3::new(0.002, 0.0, 0.0)) * m.world_from_base;
+            m.world_from_base = Isometry3::new(
+                nalgebra::Vector3::new(0.003, 0.0, 0.001),
+                nalgebra::Vector3::new(0.002, 0.0, 0.0),
+            ) * m.world_from_base;
             m.rows[0].a_m += 0.001;
             m
         };
@@ -462,7 +484,11 @@ mod tests {
         for (k, (x, y)) in got.iter().zip(&axes).enumerate() {
             assert!((x.direction.into_inner() - y.direction.into_inner()).norm() < 1e-9);
             if k != 2 {
-                assert!((x.origin_m - y.origin_m).cross(&y.direction).norm() < 1e-9, "axis {}", k + 1);
+                assert!(
+                    (x.origin_m - y.origin_m).cross(&y.direction).norm() < 1e-9,
+                    "axis {}",
+                    k + 1
+                );
             }
         }
     }

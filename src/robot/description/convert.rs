@@ -19,8 +19,11 @@ fn invalid(path: &Path, field: impl Into<String>, message: impl Into<String>) ->
 
 impl RobotDescription {
     /// Converts `dh` rows or a `urdf` file to the phi-model in place; returns the source chain
-/// and the placement of its base as written.
-    pub(super) fn convert_source(&mut self, path: &Path) -> Result<Option<(SourceChain, Isometry3<f64>)>, DescriptionError> {
+    /// and the placement of its base as written.
+    pub(super) fn convert_source(
+        &mut self,
+        path: &Path,
+    ) -> Result<Option<(SourceChain, Isometry3<f64>)>, DescriptionError> {
         let has_dh = self.dh_convention.is_some() || self.joints.iter().any(|j| j.dh.is_some());
         let source = match (has_dh, self.urdf.clone()) {
             (false, None) => return Ok(None),
