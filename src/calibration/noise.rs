@@ -8,9 +8,14 @@
 //! (the robot's repeatability on the swept joint), `E |r|^2 = sigma^2 (3n - p) +
 //! sum_j s^2 |(I - H) t_j|^2` (Seber & Lee, *Linear Regression Analysis*, 2nd ed., thm. 3.3,
 //! with the jitter's covariance added). Pooled over the fits,
-//! `sigma^2 = (sum |r|^2 - sum s^2 J) / nu`, `nu = sum (3n - p)`, and `nu sigma_hat^2 / sigma^2`
-//! is approximately chi-square with `nu` degrees of freedom (exact without jitter), which
-//! gives the interval. The 3-D RMS noise (the paper's "net radial error") is `sqrt(3) sigma`.
+//! `sigma^2 = (sum |r|^2 - sum s^2 J) / nu`, `nu = sum (3n - p)`. Without jitter
+//! `nu sigma_hat^2 / sigma^2` is chi-square with `nu` degrees of freedom; with it, the
+//! quadratic form's variance `2 tr(C^2)`, `C = sigma^2 (I - H) + s^2 (I - H) T T^T (I - H)`,
+//! is `2 (sigma^4 nu + 2 sigma^2 s^2 J + s^4 K)`, `K = |T^T (I - H) T|_F^2`, and the estimate is
+//! taken as chi-square with Satterthwaite's effective degrees of freedom
+//! `nu_eff = 2 (sigma^2 nu)^2 / Var` (Satterthwaite, *Biometrics Bulletin* 2 (1946) 110),
+//! which gives the interval. The 3-D RMS noise (the paper's "net radial error") is
+//! `sqrt(3) sigma`.
 
 use crate::numerics::stats::{chi_square_cdf, chi_square_quantile};
 use nalgebra::{DMatrix, Vector3};
@@ -28,6 +33,9 @@ pub struct ResidualMoments {
     pub jitter_m2: f64,
     /// The jitter's standard deviation the fit assumed (rad or m); 0 for none.
     pub jitter_sigma: f64,
+    /// `K = |T^T (I - H) T|_F^2` per unit jitter variance squared (module docs).
+    #[serde(default)]
+    pub jitter_m4: f64,
 }
 
 impl ResidualMoments {
@@ -44,24 +52,37 @@ impl ResidualMoments {
         let n = residuals_m.len();
         let p = jacobian.ncols();
         let rss_m2 = residuals_m.iter().map(|r| r.norm_squared()).sum();
-        let (jitter_m2, jitter_sigma) = match jitter {
+        let (jitter_m2, jitter_m4, jitter_sigma) = match jitter {
             Some((tangents, sigma)) if sigma > 0.0 => {
-                // |(I - H) t|^2 = |t|^2 - w^T G w, w = J_j^T t_j (H idempotent, G = (J^T J)^-1).
-                let mut sum = 0.0;
-                for (j, t) in tangents.iter().enumerate() {
-                    let block = jacobian.rows(3 * j, 3);
-                    let w = block.transpose() * t;
-                    sum += t.norm_squared() - (w.transpose() * covariance_unit * &w)[(0, 0)];
+                // M = T^T (I - H) T: M_ij = t_i.t_j delta_ij - w_i^T G w_j, w_i = J_i^T t_i
+                // (H = J G J^T, G = (J^T J)^-1); J = trace M, K = |M|_F^2.
+                let w: Vec<nalgebra::DVector<f64>> = tangents
+                    .iter()
+                    .enumerate()
+                    .map(|(j, t)| jacobian.rows(3 * j, 3).transpose() * t)
+                    .collect();
+                let gw: Vec<nalgebra::DVector<f64>> = w.iter().map(|x| covariance_unit * x).collect();
+                let (mut trace, mut frob) = (0.0, 0.0);
+                for i in 0..tangents.len() {
+                    for j in 0..tangents.len() {
+                        let mut m = -w[i].dot(&gw[j]);
+                        if i == j {
+                            m += tangents[i].norm_squared();
+                            trace += m;
+                        }
+                        frob += m * m;
+                    }
                 }
-                (sum, sigma)
+                (trace, frob, sigma)
             }
-            _ => (0.0, 0.0),
+            _ => (0.0, 0.0, 0.0),
         };
         ResidualMoments {
             rss_m2,
             dof: (3 * n).saturating_sub(p),
             jitter_m2,
             jitter_sigma,
+            jitter_m4,
         }
     }
 }
@@ -84,6 +105,8 @@ pub struct NoiseEstimate {
     pub confidence: f64,
     /// Pooled degrees of freedom.
     pub dof: usize,
+    /// Satterthwaite's effective degrees of freedom of the estimate (= `dof` without jitter).
+    pub effective_dof: f64,
     /// Fits pooled.
     pub fits: usize,
     /// The share of the squared residuals the assumed joint jitter (repeatability) explains,
@@ -101,16 +124,30 @@ pub fn estimate_noise(parts: &[ResidualMoments]) -> Option<NoiseEstimate> {
     let jitter: f64 = parts.iter().map(|p| p.jitter_sigma.powi(2) * p.jitter_m2).sum();
     let nu = dof as f64;
     let s2 = ((rss - jitter) / nu).max(0.0);
+    // Var(rss) / 2 at sigma^2 = s2 (module docs).
+    let half_var: f64 = parts
+        .iter()
+        .map(|p| {
+            let v = p.jitter_sigma.powi(2);
+            s2 * s2 * p.dof as f64 + 2.0 * s2 * v * p.jitter_m2 + v * v * p.jitter_m4
+        })
+        .sum();
+    let effective = if half_var > 0.0 {
+        (s2 * nu).powi(2) / half_var
+    } else {
+        nu
+    };
     let alpha = 1.0 - NOISE_CONFIDENCE;
     let to_mm = |var_per_axis: f64| (3.0 * var_per_axis).sqrt() * 1e3;
     Some(NoiseEstimate {
         rms_3d_mm: to_mm(s2),
         interval_mm: [
-            to_mm(nu * s2 / chi_square_quantile(1.0 - alpha / 2.0, nu)),
-            to_mm(nu * s2 / chi_square_quantile(alpha / 2.0, nu)),
+            to_mm(effective * s2 / chi_square_quantile(1.0 - alpha / 2.0, effective)),
+            to_mm(effective * s2 / chi_square_quantile(alpha / 2.0, effective)),
         ],
         confidence: NOISE_CONFIDENCE,
         dof,
+        effective_dof: effective,
         fits: parts.len(),
         jitter_share: if rss > 0.0 { (jitter / rss).min(1.0) } else { 0.0 },
     })
@@ -118,9 +155,9 @@ pub fn estimate_noise(parts: &[ResidualMoments]) -> Option<NoiseEstimate> {
 
 impl NoiseEstimate {
     /// The two-sided chi-square p-value of a given 3-D RMS noise `given_mm` against the
-    /// residuals: `X = nu s^2 / (given^2 / 3)`, `p = 2 min(F(X), 1 - F(X))`.
+    /// residuals: `X = nu_eff s^2 / (given^2 / 3)`, `p = 2 min(F(X), 1 - F(X))`.
     pub fn p_value(&self, given_mm: f64) -> f64 {
-        let nu = self.dof as f64;
+        let nu = self.effective_dof;
         let x = nu * (self.rms_3d_mm / given_mm).powi(2);
         let f = chi_square_cdf(x, nu);
         (2.0 * f.min(1.0 - f)).min(1.0)
