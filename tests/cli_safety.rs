@@ -604,10 +604,13 @@ fn messages_are_one_clear_line() {
         .assert()
         .code(2);
     assert!(error_of(&a).contains("pass --force"));
-    // diagnose: a calibration error once.
+    // diagnose: a calibration error once (joint 3's sweep cut to its first two steps).
     let bad = dir.path().join("short.csv");
     let text = std::fs::read_to_string(&g).unwrap();
-    let kept: Vec<&str> = text.lines().filter(|l| !l.starts_with("axis3,")).collect();
+    let kept: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.starts_with("axis3,") || ["0", "1"].contains(&l.split(',').nth(2).unwrap()))
+        .collect();
     std::fs::write(&bad, kept.join("\n") + "\n").unwrap();
     let a = axiscal()
         .arg("diagnose")

@@ -74,7 +74,9 @@ fn an_occluded_target_is_left_out_of_the_campaign() {
             intervals: 2,
             second_target: false,
             start: None,
+            held_at: None,
         }],
+        held_jitter: None,
     };
     let validation = ValidationPlan {
         poses: 0,

@@ -4,12 +4,12 @@
 
 use super::OneOf;
 use super::checks;
-use super::options::NOISE_MM;
+use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::Result;
 use axiscal::calibration::procedure::{
-    AxisEstimator, Calibration, CalibrationOptions, UrdfOptions, UrdfRoot, calibrate, findings, joint_map,
-    joints_without_speed_limits, markdown, raw_reading_deviation, ros_name, urdf,
+    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, findings,
+    joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, ros_name, urdf,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{MeasurementSet, read_measurements};
@@ -24,12 +24,13 @@ const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("pape
 const URDF_ROOTS: &[(&str, UrdfRoot)] = &[("base_link", UrdfRoot::BaseLink), ("instrument", UrdfRoot::Instrument)];
 
 /// The files `calibrate` writes into its output folder.
-const OUTPUTS: [&str; 6] = [
+const OUTPUTS: [&str; 7] = [
     "calibration.json",
     "report.md",
     "report.json",
     "calibrated.urdf",
     "joint_map.csv",
+    "residuals.csv",
     "zero_offsets.csv",
 ];
 
@@ -48,9 +49,14 @@ pub struct Args {
     #[arg(long, value_parser = OneOf(ESTIMATORS), default_value = "ml")]
     estimator: AxisEstimator,
     /// Measurement noise of a point, 3-D RMS \[mm\] (weights the fits and scales the reported
-    /// uncertainties).
-    #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
-    noise_mm: f64,
+    /// uncertainties). Default: estimated from the fits' residuals (reported with its
+    /// interval); a given value the residuals contradict is flagged in the report.
+    #[arg(long, value_parser = NOISE_MM)]
+    noise_mm: Option<f64>,
+    /// How far a held joint may wander within one axis experiment \[deg or mm\]: recorded
+    /// encoder values within it are modelled, beyond it the experiment moves two joints.
+    #[arg(long, default_value_t = DEFAULT_HELD_TOLERANCE, value_parser = InRange::closed(0.0, 360.0, "deg or mm"))]
+    held_tolerance: f64,
     /// The robot's repeatability \[rad\]: standard deviation of a joint value's error per
     /// re-positioning, one value for every joint or one per joint (comma-separated); 0 = model
     /// measurement noise only. Default: the robot description's `repeatability_sigma`.
@@ -136,13 +142,14 @@ fn output_texts(
         ),
         (OUTPUTS[3], urdf(&cal.robot.phi_model(), desc, &urdf_options)),
         (OUTPUTS[4], super::joints::joint_map_csv(&map, &desc.name)),
+        (OUTPUTS[5], residuals_csv(cal)),
     ];
     // The zero offsets are a convenience for controllers that take nothing else: when their
     // fit fails, the calibration stands and the file is left out with the reason.
     let mut left_out = Vec::new();
     match super::joints::zero_offsets_csv(cal, desc, &poses) {
-        Ok(text) => files.push((OUTPUTS[5], text)),
-        Err(e) => left_out.push(format!("{} not written: {e:#}", OUTPUTS[5])),
+        Ok(text) => files.push((OUTPUTS[6], text)),
+        Err(e) => left_out.push(format!("{} not written: {e:#}", OUTPUTS[6])),
     }
     Ok(OutputTexts {
         files,
@@ -176,7 +183,9 @@ pub fn run(args: Args) -> Result<()> {
     checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = CalibrationOptions {
         estimator: args.estimator,
-        noise_rms_3d_mm: args.noise_mm,
+        noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),
+        estimate_noise: args.noise_mm.is_none(),
+        held_tolerance: args.held_tolerance,
         repeatability_sigma_rad: args.repeatability_rad.clone(),
         ..CalibrationOptions::default()
     };
@@ -199,13 +208,16 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     println!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
-    println!("  joint  points  span(deg)  residual RMS (mm)  direction 1-sigma (mrad)");
+    print_scope(&cal);
+    println!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
     for a in &cal.axes {
+        let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
         println!(
-            "  {:>5}  {:>6}  {:>9.1}  {:>17.4}  {:>24.4}",
+            "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
             a.joint,
             a.points,
             a.span_deg,
+            unit,
             a.residual_rms_mm,
             a.direction_sigma_rad[0] * 1e3
         );
@@ -233,4 +245,38 @@ pub fn run(args: Args) -> Result<()> {
         super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
     }
     Ok(())
+}
+
+/// The noise (estimated, used, contradicted), joints not calibrated, the base-frame rule.
+fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
+    if let Some(n) = &cal.noise {
+        if let Some(e) = &n.estimate {
+            println!(
+                "  noise from the residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, {} dof); fits weighted with {:.4} mm ({})",
+                e.rms_3d_mm,
+                e.confidence * 100.0,
+                e.interval_mm[0],
+                e.interval_mm[1],
+                e.dof,
+                n.used_rms_3d_mm,
+                n.source
+            );
+        }
+        if n.given_contradicted {
+            println!(
+                "  WARNING: the residuals contradict --noise-mm {:.4} (chi-square p = {:.2e}); see report.md",
+                n.used_rms_3d_mm,
+                n.given_p_value.unwrap_or(f64::NAN)
+            );
+        }
+    }
+    if !cal.not_calibrated.is_empty() {
+        println!(
+            "  not calibrated (no axis experiment, kept nominal): joints {:?}",
+            cal.not_calibrated
+        );
+    }
+    if let Some(b) = &cal.base_rule {
+        println!("  base frame: {}", b.text);
+    }
 }

@@ -5,6 +5,7 @@ mod budget;
 mod calibrate;
 mod checks;
 mod compensate;
+mod describe;
 mod diagnose;
 mod evaluate;
 mod import;
@@ -112,6 +113,9 @@ fn clap_one_line(e: &clap::Error) -> String {
 enum Command {
     /// Calibrate a robot from a measurement CSV (axes, transmissions, couplings, offsets).
     Calibrate(calibrate::Args),
+    /// The phi-model of a robot description (rows, phi angles, axes); for a DH table or a URDF,
+    /// its forward kinematics checked against the source at random poses.
+    Describe(describe::Args),
     /// Monte-Carlo study of the calibrator: efficiency against the Cramer-Rao bound (ML and the
     /// paper's estimator) and the calibration of the reported uncertainties.
     Study(study::Args),
@@ -182,6 +186,7 @@ pub fn main() -> ExitCode {
     VERBOSE.store(cli.verbose, std::sync::atomic::Ordering::Relaxed);
     let result = match cli.command {
         Command::Calibrate(args) => calibrate::run(args),
+        Command::Describe(args) => describe::run(args),
         Command::Import(args) => import::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Study(args) => study::run(args),

@@ -27,6 +27,11 @@ pub struct Args {
     /// isotropic Gaussian noise of the same 3-D RMS.
     #[arg(long, value_enum, default_value_t = Instrument::Theodolite)]
     instrument: Instrument,
+    /// The campaign plan (TOML: `reference`, `[[sweeps]]`, `held_jitter`;
+    /// `docs/formats.md#plan-file`). Default: paper Table 1 for a six-joint revolute arm, its
+    /// generalisation (`CalibrationPlan::for_robot`) for any other robot.
+    #[arg(long)]
+    plan: Option<PathBuf>,
     /// Number of validation poses (three tool targets each).
     #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, 1_000_000, ""))]
     validation_poses: usize,
@@ -95,7 +100,21 @@ pub fn run(args: Args) -> Result<()> {
         None => axiscal::sim::paper_robot(),
     };
     let instrument = instrument_model(args.instrument)?;
-    let plan = CalibrationPlan::table1(desc.dof());
+    let plan = match &args.plan {
+        Some(path) => {
+            let text = axiscal::toml_file::read(path)?;
+            axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?
+        }
+        None if desc.dof() == 6
+            && desc
+                .joints
+                .iter()
+                .all(|j| j.kind == axiscal::kinematics::JointKind::Revolute) =>
+        {
+            CalibrationPlan::table1(6)
+        }
+        None => CalibrationPlan::for_robot(&desc),
+    };
     let validation = ValidationPlan {
         poses: args.validation_poses,
         ..ValidationPlan::workspace_default(desc.dof())

@@ -26,8 +26,16 @@ pub const WOBBLE_ORDER: i32 = 2;
 /// transmission's own angle (the gear angle for a gear form). An extra harmonic of a fitted
 /// order would be a calibration error, not an unmodelled effect.
 pub fn unmodelled_harmonic_order(desc: &RobotDescription, joint: usize) -> usize {
-    match desc.joints.get(joint.wrapping_sub(1)).map(|j| j.transmission_fit) {
-        Some(TransmissionFitForm::Harmonic { order } | TransmissionFitForm::Gear { order, .. }) => order + 1,
+    match desc
+        .joints
+        .get(joint.wrapping_sub(1))
+        .map(|j| j.transmission_fit_form())
+    {
+        Some(
+            TransmissionFitForm::Harmonic { order }
+            | TransmissionFitForm::Gear { order, .. }
+            | TransmissionFitForm::Polynomial { order },
+        ) => order + 1,
         None => 1,
     }
 }

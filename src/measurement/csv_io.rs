@@ -89,7 +89,9 @@ pub enum MeasurementFileError {
         column: String,
     },
     /// The `cmd_k` columns do not match the robot's joint count.
-    #[error("{path}:{line}: column `{column}`: the file has {found} joint command columns, expected {expected}")]
+    #[error(
+        "{path}:{line}: column `{column}`: the file has {found} joint command columns, expected {expected} (every joint of the robot description, also joints not swept: a file cut to fewer joints is refused)"
+    )]
     JointCount {
         /// The file.
         path: PathBuf,

@@ -22,7 +22,7 @@ pub struct GearHarmonic {
 }
 
 /// `model` with the extra `harmonics` added to its joints' transmissions (a harmonic of a
-/// joint the model does not have is ignored).
+/// joint the model does not have, or of a sliding joint, is ignored).
 pub fn with_gear_harmonics(model: &RobotModel, harmonics: &[GearHarmonic]) -> RobotModel {
     let mut m = model.clone();
     for h in harmonics {
@@ -31,6 +31,8 @@ pub fn with_gear_harmonics(model: &RobotModel, harmonics: &[GearHarmonic]) -> Ro
         };
         let (sin, cos) = match &mut joint.transmission {
             Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => (sin, cos),
+            // A sliding joint's screw has no angle to carry a harmonic.
+            Transmission::Polynomial { .. } => continue,
         };
         for v in [&mut *sin, &mut *cos] {
             if v.len() < h.order {
