@@ -23,6 +23,9 @@ const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("pape
 /// The URDF roots by their command-line names.
 const URDF_ROOTS: &[(&str, UrdfRoot)] = &[("base_link", UrdfRoot::BaseLink), ("instrument", UrdfRoot::Instrument)];
 
+/// The most poses the URDF deviation and the zero-offset fit use.
+const EXPORT_POSES: usize = 500;
+
 /// The files `calibrate` writes into its output folder.
 const OUTPUTS: [&str; 7] = [
     "calibration.json",
@@ -112,15 +115,19 @@ fn output_texts(
 ) -> Result<OutputTexts> {
     // The deviation over the data's validation poses, else over seeded poses around the
     // reference.
-    let mut poses: Vec<Vec<f64>> = set
+    let all: Vec<Vec<f64>> = set
         .experiments()
         .iter()
         .filter(|e| e.moved_joint == 0 && e.name != TOOL_EXPERIMENT)
         .flat_map(|e| e.by_step().into_values().map(|rows| rows[0].cmd.clone()))
         .collect();
+    // At most EXPORT_POSES of them, evenly spaced through the file: a million-row file must
+    // not make these checks the slowest part of the calibration.
+    let stride = all.len().div_ceil(EXPORT_POSES).max(1);
+    let mut poses: Vec<Vec<f64>> = all.into_iter().step_by(stride).collect();
     if poses.is_empty() {
         let plan = ValidationPlan {
-            poses: 500,
+            poses: EXPORT_POSES,
             ..ValidationPlan::workspace_default(desc.dof())
         };
         poses = plan.commands(desc, &cal.reference_cmd);
