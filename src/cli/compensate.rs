@@ -18,9 +18,7 @@
 use super::checks;
 use super::output::{Outputs, commit_csv};
 use anyhow::{Context, Result, bail};
-use axiscal::calibration::procedure::Calibration;
 use axiscal::compensation::{CompensatedPose, CompensationError, Compensator};
-use axiscal::json_file::{self, Schema};
 use axiscal::kinematics::IkError;
 use axiscal::robot::{Placement, RobotDescription};
 use nalgebra::Isometry3;
@@ -173,10 +171,7 @@ pub fn run(args: Args) -> Result<()> {
         .input("--robot", &args.robot);
     outputs.check(&args.out)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    let text = std::fs::read_to_string(&args.calibration)
-        .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
-    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
-        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    let cal = super::checks::read_calibration(&args.calibration)?;
     checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
     checks::same_robot(
         cal.description.as_ref(),

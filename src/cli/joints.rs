@@ -7,7 +7,6 @@ use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{
     Calibration, JointMap, MapTable, calibrated_joint_values, controller_zero_offsets,
 };
-use axiscal::json_file::{self, Schema};
 use axiscal::kinematics::JointKind;
 use axiscal::measurement::format_f64;
 use axiscal::robot::RobotDescription;
@@ -36,10 +35,7 @@ pub struct Args {
 /// Runs `axiscal joints`.
 pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
-    let text = std::fs::read_to_string(&args.calibration)
-        .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
-    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
-        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    let cal = super::checks::read_calibration(&args.calibration)?;
     if cal.robot.dof() != desc.dof() {
         bail!(
             "{} has {} joints but {} describes {}",
