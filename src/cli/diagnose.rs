@@ -21,7 +21,7 @@ pub struct Args {
     /// Measurement CSV (`docs/formats.md#measurement-csv`): axis experiments plus validation poses.
     data: PathBuf,
     /// Nominal robot description (TOML).
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]

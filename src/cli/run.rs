@@ -25,7 +25,8 @@ use std::time::Instant;
 /// Arguments of `axiscal run`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Scenario file (TOML), e.g. `scenarios/paper.toml`.
+    /// Scenario file (TOML), e.g. `scenarios/paper.toml`, or a shipped scenario's name (`paper`).
+    #[arg(value_parser = super::options::scenario_file)]
     scenario: PathBuf,
     /// Worker threads (default: one per core; 1..=1024).
     #[arg(long, value_parser = THREADS)]
