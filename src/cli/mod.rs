@@ -13,6 +13,7 @@ mod joints;
 mod merge;
 mod options;
 mod output;
+mod plan;
 mod record;
 mod run;
 mod signals;
@@ -121,6 +122,9 @@ enum Command {
     Study(study::Args),
     /// Convert measurement data from another group's format to the measurement CSV.
     Import(import::Args),
+    /// The measurement plan for a real robot: every point to measure, with every joint's
+    /// command, the target and whether each station should see it (`docs/formats.md#measurement-plan`).
+    Plan(plan::Args),
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
     /// Run a Monte-Carlo scenario (`scenarios/*.toml`): trials in parallel, results under
@@ -188,6 +192,7 @@ pub fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate::run(args),
         Command::Describe(args) => describe::run(args),
         Command::Import(args) => import::run(args),
+        Command::Plan(args) => plan::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Study(args) => study::run(args),
         Command::Run(args) => run::run(args),

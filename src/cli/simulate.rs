@@ -100,21 +100,7 @@ pub fn run(args: Args) -> Result<()> {
         None => axiscal::sim::paper_robot(),
     };
     let instrument = instrument_model(args.instrument)?;
-    let plan = match &args.plan {
-        Some(path) => {
-            let text = axiscal::toml_file::read(path)?;
-            axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?
-        }
-        None if desc.dof() == 6
-            && desc
-                .joints
-                .iter()
-                .all(|j| j.kind == axiscal::kinematics::JointKind::Revolute) =>
-        {
-            CalibrationPlan::table1(6)
-        }
-        None => CalibrationPlan::for_robot(&desc),
-    };
+    let plan = super::plan::campaign_plan(&desc, args.plan.as_deref())?;
     let validation = ValidationPlan {
         poses: args.validation_poses,
         ..ValidationPlan::workspace_default(desc.dof())
