@@ -7,8 +7,8 @@ use axiscal::measurement::import::boby_klimchik;
 use axiscal::measurement::import::points::{LengthUnit, PlanSheet, join_points};
 use axiscal::measurement::import::table::Table;
 use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide};
-use axiscal::robot::RobotDescription;
 use axiscal::measurement::write_measurements_to;
+use axiscal::robot::RobotDescription;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -128,7 +128,12 @@ fn write_csv(
 }
 
 /// Writes `comment` and `set` to `out` through `outputs` (which names the inputs).
-fn write_csv_from(out: &Path, outputs: Outputs, comment: &str, set: &axiscal::measurement::MeasurementSet) -> Result<()> {
+fn write_csv_from(
+    out: &Path,
+    outputs: Outputs,
+    comment: &str,
+    set: &axiscal::measurement::MeasurementSet,
+) -> Result<()> {
     let mut file = outputs.create(out)?;
     file.write_all(comment.as_bytes())
         .and_then(|_| write_measurements_to(&mut file, set))
@@ -169,7 +174,12 @@ fn import_points(a: &PointsArgs) -> Result<()> {
     let outputs = Outputs::new(a.force).input("PLAN", &a.plan).input("EXPORT", &a.export);
     outputs.check(&a.out)?;
     let plan = PlanSheet::from_table(&Table::read(&a.plan)?)?;
-    let joined = join_points(&plan, &Table::read(&a.export)?, a.units.map(Into::into), a.allow_missing)?;
+    let joined = join_points(
+        &plan,
+        &Table::read(&a.export)?,
+        a.units.map(Into::into),
+        a.allow_missing,
+    )?;
     let recorded: String = plan
         .comments
         .iter()
@@ -197,7 +207,10 @@ fn import_points(a: &PointsArgs) -> Result<()> {
         joined.spread_ratio
     );
     if !joined.missing_hidden.is_empty() {
-        println!("  {} point(s) the plan marks hidden are missing (expected)", joined.missing_hidden.len());
+        println!(
+            "  {} point(s) the plan marks hidden are missing (expected)",
+            joined.missing_hidden.len()
+        );
     }
     if !joined.missing_visible.is_empty() {
         eprintln!(
@@ -233,7 +246,12 @@ fn import_wide(a: &WideArgs) -> Result<()> {
         a.file.display()
     );
     write_csv_from(&a.out, outputs, &comment, &set)?;
-    println!("imported {} rows from {} to {}", set.rows().len(), a.file.display(), a.out.display());
+    println!(
+        "imported {} rows from {} to {}",
+        set.rows().len(),
+        a.file.display(),
+        a.out.display()
+    );
     for e in set.experiments() {
         println!("  {:<10} moved_joint {}  {} rows", e.name, e.moved_joint, e.rows.len());
     }

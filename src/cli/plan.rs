@@ -59,7 +59,9 @@ pub struct Args {
 }
 
 fn joint_value(text: &str) -> Result<(usize, f64), String> {
-    let (j, v) = text.split_once('=').ok_or_else(|| format!("`{text}`: expected J=SPAN, e.g. 2=40"))?;
+    let (j, v) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}`: expected J=SPAN, e.g. 2=40"))?;
     let joint = j.trim().parse().map_err(|_| format!("`{j}` is not a joint number"))?;
     let value: f64 = v.trim().parse().map_err(|_| format!("`{v}` is not a number"))?;
     if !(value.is_finite() && value > 0.0) {

@@ -115,7 +115,17 @@ pub fn planned_points(
     let controller = Controller::from_description(desc);
     let model = desc.nominal_model();
     let mut points = Vec::new();
-    for (pose, Pose { experiment, moved_joint, step, cmd, targets }) in poses.into_iter().enumerate() {
+    for (
+        pose,
+        Pose {
+            experiment,
+            moved_joint,
+            step,
+            cmd,
+            targets,
+        },
+    ) in poses.into_iter().enumerate()
+    {
         let q = nominal
             .joint_values(&controller, &commands_to_internal(desc, &cmd))
             .map_err(|e| PlanError::Invalid {
@@ -152,7 +162,12 @@ pub fn write_plan_csv<W: Write>(mut w: W, header_comment: &str, points: &[Planne
     w.write_all(header_comment.as_bytes())?;
     let dof = points.first().map_or(0, |p| p.cmd.len());
     let stations = points.first().map_or(0, |p| p.visible.len());
-    let mut header = vec!["point".to_owned(), "pose".into(), "experiment".into(), "moved_joint".into()];
+    let mut header = vec![
+        "point".to_owned(),
+        "pose".into(),
+        "experiment".into(),
+        "moved_joint".into(),
+    ];
     header.extend(["step".into(), "target".into()]);
     header.extend((1..=dof).map(|k| format!("cmd_{k}")));
     header.extend(["nominal_x_mm".into(), "nominal_y_mm".into(), "nominal_z_mm".into()]);

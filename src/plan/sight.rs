@@ -67,7 +67,11 @@ pub fn segment_distance_m(p1: &Point3<f64>, q1: &Point3<f64>, p2: &Point3<f64>, 
         } else {
             let b = d1.dot(&d2);
             let denom = a * e - b * b;
-            let mut s = if denom > TINY { ((b * f - c * e) / denom).clamp(0.0, 1.0) } else { 0.0 };
+            let mut s = if denom > TINY {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             let mut t = (b * s + f) / e;
             if t < 0.0 {
                 t = 0.0;

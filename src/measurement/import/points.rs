@@ -128,7 +128,9 @@ impl PlanSheet {
                 t.required(&["nominal_z_mm"])?,
             ],
         };
-        let sight: Vec<usize> = (0..t.header.len()).filter(|&k| t.header[k].starts_with("visible_")).collect();
+        let sight: Vec<usize> = (0..t.header.len())
+            .filter(|&k| t.header[k].starts_with("visible_"))
+            .collect();
         let mut rows = Vec::with_capacity(t.rows.len());
         for (line, cells) in &t.rows {
             rows.push(plan_row(t, *line, cells, &c, joint_count, &sight)?);
@@ -335,7 +337,8 @@ pub fn join_points(
             list(&missing_visible)
         )));
     }
-    let ratio = spread_ratio(&pairs).ok_or_else(|| file_error("fewer than 3 distinct points: cannot check units".into()))?;
+    let ratio =
+        spread_ratio(&pairs).ok_or_else(|| file_error("fewer than 3 distinct points: cannot check units".into()))?;
     let (unit, detected) = match stated.or(named) {
         Some(u) => (u, false),
         None => (detect_unit(ratio).ok_or_else(|| unit_error(path, ratio))?, true),
@@ -386,7 +389,11 @@ fn unit_error(path: &std::path::Path, ratio: f64) -> PointsError {
 
 fn list(ids: &[usize]) -> String {
     let shown: Vec<String> = ids.iter().take(10).map(ToString::to_string).collect();
-    let more = if ids.len() > 10 { format!(" and {} more", ids.len() - 10) } else { String::new() };
+    let more = if ids.len() > 10 {
+        format!(" and {} more", ids.len() - 10)
+    } else {
+        String::new()
+    };
     format!("{}{more}", shown.join(", "))
 }
 

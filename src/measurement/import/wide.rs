@@ -3,8 +3,8 @@
 //! or degrees) and the markers' coordinates (`m1_x,m1_y,m1_z,m2_x,...`).
 //!
 //! Experiments are recovered from the joint values: a run of at least three consecutive poses
-//! between which only joint `k` changes (and joint `k+1` with it, as a hold-still command
-//! does) is an axis experiment `axis<k>` (a later run of the same joint `axis<k>-2`, ...); every
+//! between which only joint `k` changes, always in the same direction (and joint `k+1` with
+//! it, as a hold-still command does), is an axis experiment `axis<k>` (a later run of the same joint `axis<k>-2`, ...); every
 //! other pose belongs to the free-pose experiment `poses` (`moved_joint = 0`). Marker `i` is
 //! target `i - 1`; an empty or `nan` marker cell is a marker not seen at that pose (no row).
 
@@ -115,7 +115,11 @@ fn marker(
     columns: &[usize; 3],
     unit: LengthUnit,
 ) -> Result<Option<[f64; 3]>, PointsError> {
-    let absent = |c: usize| cells.get(c).is_none_or(|s| s.is_empty() || s.eq_ignore_ascii_case("nan"));
+    let absent = |c: usize| {
+        cells
+            .get(c)
+            .is_none_or(|s| s.is_empty() || s.eq_ignore_ascii_case("nan"))
+    };
     let missing = columns.iter().filter(|&&c| absent(c)).count();
     match missing {
         3 => Ok(None),
@@ -153,8 +157,12 @@ fn segment(poses: &[Pose], tolerance: f64) -> Vec<(String, usize, usize)> {
             start += 1;
             continue;
         };
+        let direction = (poses[start + 1].1[k] - poses[start].1[k]).signum();
         let mut end = start + 1;
-        while end + 1 < n && swept_joint(&poses[end].1, &poses[end + 1].1, tolerance) == Some(k) {
+        while end + 1 < n
+            && swept_joint(&poses[end].1, &poses[end + 1].1, tolerance) == Some(k)
+            && (poses[end + 1].1[k] - poses[end].1[k]).signum() == direction
+        {
             end += 1;
         }
         if end - start + 1 >= 3 {
