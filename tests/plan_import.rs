@@ -217,12 +217,15 @@ fn each_mismatch_is_one_clear_error() {
     assert!(e.contains("points are in mm") && e.contains("unit slip"), "{e}");
 }
 
+/// One pose of a wide table: experiment, step, joint values (text), markers 1-3 \[m\].
+type WidePose = (String, String, Vec<String>, [Option<[f64; 3]>; 3]);
+
 /// The simulated campaign as a wide table (one row per pose: `q1..q6` in radians, markers
 /// `m1_*..m3_*` in metres, a marker not measured at a pose left empty), written with this
 /// test's own code.
 fn wide_table(data: &Path) -> String {
     let (h, rows) = read_plain_csv(data);
-    let mut poses: Vec<(String, String, Vec<String>, [Option<[f64; 3]>; 3])> = Vec::new();
+    let mut poses: Vec<WidePose> = Vec::new();
     for r in &rows {
         let key = (r[col(&h, "experiment")].clone(), r[col(&h, "step")].clone());
         if poses.last().is_none_or(|p| (p.0.clone(), p.1.clone()) != key) {

@@ -157,11 +157,11 @@ fn segment(poses: &[Pose], tolerance: f64) -> Vec<(String, usize, usize)> {
             start += 1;
             continue;
         };
-        let direction = (poses[start + 1].1[k] - poses[start].1[k]).signum();
+        let rising = poses[start + 1].1[k] > poses[start].1[k];
         let mut end = start + 1;
         while end + 1 < n
             && swept_joint(&poses[end].1, &poses[end + 1].1, tolerance) == Some(k)
-            && (poses[end + 1].1[k] - poses[end].1[k]).signum() == direction
+            && (poses[end + 1].1[k] > poses[end].1[k]) == rising
         {
             end += 1;
         }
