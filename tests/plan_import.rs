@@ -78,6 +78,19 @@ fn numbers(a: &serde_json::Value, b: &serde_json::Value, path: &str, out: &mut V
     }
 }
 
+/// Calibrates `direct.csv` into `cal-direct` and `data` into `out`.
+fn calibrate_both(d: &Path, data: &str, out: &str) {
+    for (data, out) in [("direct.csv", "cal-direct"), (data, out)] {
+        axiscal()
+            .arg("calibrate")
+            .arg(d.join(data))
+            .arg("--out")
+            .arg(d.join(out))
+            .assert()
+            .success();
+    }
+}
+
 fn simulate_and_plan(dir: &Path) {
     axiscal()
         .args(["plan", "--robot", "asea-irb6l", "--validation-poses", "10", "--out"])
@@ -124,15 +137,7 @@ fn plan_export_import_calibrate_matches_the_direct_csv() {
         "{}",
         common::stdout(&imported)
     );
-    for (data, out) in [("direct.csv", "cal-direct"), ("imported.csv", "cal-imported")] {
-        axiscal()
-            .arg("calibrate")
-            .arg(d.join(data))
-            .arg("--out")
-            .arg(d.join(out))
-            .assert()
-            .success();
-    }
+    calibrate_both(d, "imported.csv", "cal-imported");
     let json = |p: &str| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(d.join(p).join("calibration.json")).unwrap()).unwrap()
     };
@@ -275,15 +280,7 @@ fn a_wide_table_in_radians_and_metres_calibrates_like_the_direct_csv() {
     for k in 1..=6 {
         assert!(out.contains(&format!("axis{k} ")), "{out}");
     }
-    for (data, out) in [("direct.csv", "cal-direct"), ("wide-imported.csv", "cal-wide")] {
-        axiscal()
-            .arg("calibrate")
-            .arg(d.join(data))
-            .arg("--out")
-            .arg(d.join(out))
-            .assert()
-            .success();
-    }
+    calibrate_both(d, "wide-imported.csv", "cal-wide");
     // The two calibrations stop their iterative fits at slightly different points (the input
     // differs by rounding only), so they are compared where it matters: the calibrated tool
     // positions at the campaign's validation poses agree to a thousandth of the measurement
