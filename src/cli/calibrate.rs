@@ -43,7 +43,7 @@ pub struct Args {
     /// Measurement CSV (`docs/formats.md#measurement-csv`).
     data: PathBuf,
     /// Nominal robot description (TOML).
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]
@@ -65,6 +65,9 @@ pub struct Args {
     /// measurement noise only. Default: the robot description's `repeatability_sigma`.
     #[arg(long, value_delimiter = ',')]
     repeatability_rad: Option<Vec<f64>>,
+    /// Print `report.json` on stdout (the human-readable lines go to stderr, or nowhere with `--quiet`).
+    #[arg(long)]
+    json: bool,
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
@@ -174,6 +177,7 @@ pub fn run(args: Args) -> Result<()> {
     let outputs = Outputs::new(args.force)
         .input("DATA", &args.data)
         .input("--robot", &args.robot);
+    super::set_json(args.json);
     outputs.check_in(&args.out, &OUTPUTS)?;
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
@@ -214,12 +218,12 @@ pub fn run(args: Args) -> Result<()> {
             std::fs::remove_file(&path).map_err(|e| anyhow::anyhow!("removing the stale {}: {e}", path.display()))?;
         }
     }
-    println!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
+    say!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
     print_scope(&cal);
-    println!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
+    say!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
     for a in &cal.axes {
         let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
-        println!(
+        say!(
             "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
             a.joint,
             a.points,
@@ -229,7 +233,7 @@ pub fn run(args: Args) -> Result<()> {
             a.direction_sigma_rad[0] * 1e3
         );
     }
-    println!("{}", texts.deviation_line);
+    say!("{}", texts.deviation_line);
     if !texts.missing_speed_limits.is_empty() {
         eprintln!(
             "warning: the description gives no max_velocity/max_effort for joint(s) {:?}: their URDF <limit> says velocity=0 effort=0",
@@ -240,7 +244,8 @@ pub fn run(args: Args) -> Result<()> {
         eprintln!("warning: {warning}");
     }
     let written: Vec<&str> = texts.files.iter().map(|(name, _)| *name).collect();
-    println!("wrote {}/{{{}}}", args.out.display(), written.join(","));
+    say!("wrote {}/{{{}}}", args.out.display(), written.join(","));
+    super::emit_json(&args.out.join(OUTPUTS[2]))?;
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
         let campaign = super::record::calibrated::CalibratedCampaign {
@@ -258,7 +263,7 @@ pub fn run(args: Args) -> Result<()> {
 fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
     if let Some(n) = &cal.noise {
         if let Some(e) = &n.estimate {
-            println!(
+            say!(
                 "  noise from the residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, {} dof); fits weighted with {:.4} mm ({})",
                 e.rms_3d_mm,
                 e.confidence * 100.0,
@@ -270,7 +275,7 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
             );
         }
         if n.given_contradicted {
-            println!(
+            say!(
                 "  WARNING: the residuals contradict --noise-mm {:.4} (chi-square p = {:.2e}); see report.md",
                 n.used_rms_3d_mm,
                 n.given_p_value.unwrap_or(f64::NAN)
@@ -278,12 +283,12 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
         }
     }
     if !cal.not_calibrated.is_empty() {
-        println!(
+        say!(
             "  not calibrated (no axis experiment, kept nominal): joints {:?}",
             cal.not_calibrated
         );
     }
     if let Some(b) = &cal.base_rule {
-        println!("  base frame: {}", b.text);
+        say!("  base frame: {}", b.text);
     }
 }

@@ -31,7 +31,7 @@ pub struct Args {
     #[arg(long)]
     calibration: PathBuf,
     /// Nominal robot description (the unchanged controller uses it).
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Required tool poses (CSV, see module docs).
     #[arg(long)]

@@ -20,7 +20,7 @@ pub struct Args {
     #[arg(long)]
     calibration: PathBuf,
     /// Nominal robot description (TOML) the calibration was made with.
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// One pose's commands as the controller reads them, `cmd_1 .. cmd_N` (deg or mm), e.g.
     /// `-- 10 -20.5 30 0 45 90` (`--` lets the first value be negative).
