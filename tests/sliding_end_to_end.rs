@@ -291,3 +291,39 @@ fn rapier_sliding_joints_agree_with_the_analytic_arm() {
         assert!(worst_m < 1e-6, "{name}: {worst_m:e} m");
     }
 }
+
+/// A measurement file cut to fewer joints than the description (a reduced robot's columns) is
+/// one error naming the file, the line and the missing column, exit code 2, nothing written.
+#[test]
+fn a_file_with_fewer_command_columns_than_joints_is_one_clear_error() {
+    let (dir, _out, _) = simulate_and_calibrate("table-prpp", Some("scenarios/robots/table-prpp-plan.toml"));
+    let full = std::fs::read_to_string(dir.path().join("campaign.csv")).unwrap();
+    // Drop the last command column (cmd_4, the 11th field) from every data line.
+    let reduced: String = full
+        .lines()
+        .map(|l| match l.starts_with('#') {
+            true => format!("{l}\n"),
+            false => {
+                let mut f: Vec<&str> = l.split(',').collect();
+                f.remove(10);
+                format!("{}\n", f.join(","))
+            }
+        })
+        .collect();
+    let data = dir.path().join("reduced.csv");
+    std::fs::write(&data, reduced).unwrap();
+    let out = dir.path().join("reduced-cal");
+    let a = axiscal()
+        .args(["calibrate", "--robot", "scenarios/robots/table-prpp.toml", "--out"])
+        .arg(&out)
+        .arg(&data)
+        .assert()
+        .code(2);
+    let err = stderr(&a);
+    assert!(
+        err.contains("reduced.csv:2: column `cmd_4`: the file has 3 joint command columns, expected 4"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!out.exists(), "nothing written");
+}
