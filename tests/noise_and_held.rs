@@ -8,7 +8,7 @@ use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel, commands_to_internal};
 use axiscal::sim::{AnalyticArm, PerturbationSpec, perturb, simulate_campaign};
-use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::path::Path;
 
 /// Table-1 campaigns of the paper robot (with its repeatability) measured with 0.19 mm
@@ -197,19 +197,7 @@ fn model_error_mm(truth: &RobotModel, calibrated: &RobotModel, desc: &RobotDescr
     let mut sum = 0.0;
     let n = 200;
     for _ in 0..n {
-        let cmd: Vec<f64> = plan
-            .reference
-            .iter()
-            .enumerate()
-            .map(|(k, r)| {
-                let half = plan
-                    .sweeps
-                    .iter()
-                    .find(|s| s.joint == k + 1)
-                    .map_or(0.0, |s| s.span / 2.0);
-                r + rng.random_range(-half..=half)
-            })
-            .collect();
+        let cmd = common::commands_in_spans(plan, &mut rng);
         let cmd = commands_to_internal(desc, &cmd);
         let (qt, qc) = (
             truth.joint_values(&controller, &cmd).unwrap(),

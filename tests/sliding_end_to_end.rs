@@ -54,24 +54,11 @@ fn campaign(desc: &RobotDescription, truth: &RobotModel, seed: u64) -> Measureme
 /// (joint 2) is kept bent by at least 20 deg: stretched, the nominal arm reaches points up to
 /// the link-length errors (~1 mm) beyond the real arm's reach, which no compensation reaches.
 fn random_commands(desc: &RobotDescription, rng: &mut ChaCha12Rng) -> Vec<f64> {
-    let plan = CalibrationPlan::for_robot(desc);
-    let scara = desc.name.starts_with("SCARA");
-    plan.reference
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            let half = plan
-                .sweeps
-                .iter()
-                .find(|s| s.joint == k + 1)
-                .map_or(0.0, |s| s.span / 2.0);
-            let v = rng.random_range(-half..=half);
-            match (scara, k) {
-                (true, 1) if v.abs() < 20.0 => r + 20f64.copysign(v),
-                _ => r + v,
-            }
-        })
-        .collect()
+    let mut cmd = common::commands_in_spans(&CalibrationPlan::for_robot(desc), rng);
+    if desc.name.starts_with("SCARA") && cmd[1].abs() < 20.0 {
+        cmd[1] = 20f64.copysign(cmd[1]);
+    }
+    cmd
 }
 
 /// Where `robot` puts the tool frame's origin for internal-unit commands `cmd` \[m\].
@@ -216,17 +203,7 @@ fn cli_compensates_a_sliding_robot_in_mm() {
     for i in 0..5 {
         let cmd = commands_to_internal(&desc, &random_commands(&desc, &mut rng));
         let p = nominal.world_from_tool(&ideal.joint_values(&controller, &cmd).unwrap());
-        let t = p.translation.vector * 1e3;
-        let (r, pi, y) = p.rotation.euler_angles();
-        poses.push_str(&format!(
-            "p{i},{},{},{},{},{},{}\n",
-            t.x,
-            t.y,
-            t.z,
-            r.to_degrees(),
-            pi.to_degrees(),
-            y.to_degrees()
-        ));
+        poses.push_str(&common::pose_line(&format!("p{i}"), &p));
     }
     let poses_file = dir.path().join("poses.csv");
     std::fs::write(&poses_file, poses).unwrap();
