@@ -103,9 +103,13 @@ fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Findin
     }
 }
 
-/// Each joint's zero offset at the reference pose, appended to `out`.
+/// Each calibrated joint's zero offset at the reference pose, appended to `out`.
 fn zero_offset_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     for (k, j) in cal.robot.joints.iter().enumerate() {
+        // A joint without an axis experiment keeps its nominal zero: nothing was measured.
+        if !cal.axes.iter().any(|a| a.joint == k + 1) {
+            continue;
+        }
         let (off, unit) = match j.kind {
             JointKind::Revolute => (j.transducer_offset.to_degrees(), "deg"),
             JointKind::Prismatic => (j.transducer_offset * 1e3, "mm"),
