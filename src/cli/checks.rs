@@ -2,7 +2,9 @@
 //! the identity of the robot description a calibration or a data file was made with
 //! (`--allow-other-robot`).
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
+use axiscal::calibration::procedure::Calibration;
+use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::unit_check::{UnitSlip, description_slips, measurement_slips};
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
@@ -88,4 +90,11 @@ pub fn same_robot(
         _ => {}
     }
     Ok(())
+}
+
+/// The calibration in `path` (`calibration.json` written by `axiscal calibrate`).
+pub fn read_calibration(path: &Path) -> Result<Calibration> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    json_file::from_str(Schema::CALIBRATION, &text)
+        .with_context(|| format!("{}: not a calibration JSON", path.display()))
 }
