@@ -5,10 +5,9 @@
 use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use axiscal::diagnosis::{PositionSummary, Validation, ValidationOptions, validate, validation_residuals_csv};
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::read_measurements;
 use axiscal::robot::RobotDescription;
 use std::path::PathBuf;
 
@@ -59,32 +58,14 @@ pub fn run(args: Args) -> Result<()> {
     outputs.check_in(&args.out, &OUTPUTS)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let cal = checks::read_calibration(&args.calibration)?;
-    checks::same_robot(
-        cal.description.as_ref(),
-        &args.calibration,
-        &desc,
-        &args.robot,
-        args.allow_other_robot,
-    )?;
-    checks::same_robot(
-        checks::data_identity(&args.data).as_ref(),
+    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
+    let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
         args.allow_other_robot,
+        args.skip_unit_check,
     )?;
-    if cal.robot.dof() != desc.dof() {
-        bail!(
-            "{} has {} joints but {} describes {}",
-            args.calibration.display(),
-            cal.robot.dof(),
-            args.robot.display(),
-            desc.dof()
-        );
-    }
-    let set = read_measurements(&args.data, Some(desc.dof()))?;
-    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = match (args.noise_mm, &cal.noise) {
         (Some(mm), _) => noise_options(mm, "given", args.false_alarm),
         (None, Some(n)) => noise_options(n.used_rms_3d_mm, "calibration", args.false_alarm),

@@ -23,13 +23,13 @@
 //! slightly worse than it is (the excess is reported as `excess_rms_mm`).
 
 use super::DiagnosisError;
-use super::noise::clean_positions;
+use super::noise::{calibrated_joint_values, clean_positions};
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::rigid_fit;
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::numerics::stats::chi_square_cdf;
 use crate::plan::TOOL_EXPERIMENT;
-use crate::robot::{Controller, RobotDescription, commands_to_internal};
+use crate::robot::{Controller, RobotDescription};
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
@@ -327,12 +327,7 @@ fn orientation_summary(
         let Some(normal_inv) = normal.try_inverse() else {
             continue;
         };
-        let q = cal
-            .robot
-            .joint_values(&controller, &commands_to_internal(desc, &m.cmd))
-            .map_err(|e| DiagnosisError::Model {
-                message: format!("experiment {} step {}: {e}", m.experiment, m.step),
-            })?;
+        let q = calibrated_joint_values(cal, &controller, desc, m)?;
         let predicted = model.world_from_tool(&q);
         let w = (predicted.rotation.inverse() * measured_frame.rotation).scaled_axis();
         angles_mrad.push(w.norm() * 1e3);
