@@ -172,15 +172,8 @@ pub fn run(args: Args) -> Result<()> {
         .input("--robot", &args.robot);
     outputs.check(&args.out)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    let cal = super::checks::read_calibration(&args.calibration)?;
     checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    checks::same_robot(
-        cal.description.as_ref(),
-        &args.calibration,
-        &desc,
-        &args.robot,
-        args.allow_other_robot,
-    )?;
+    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
     let comp = Compensator::new(&cal.robot, &desc)?;
     let poses = read_poses(&args.poses)?;
     let n = desc.dof();

@@ -34,7 +34,7 @@ pub struct Args {
 /// Runs `axiscal joints`.
 pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
-    let cal = super::checks::read_calibration(&args.calibration)?;
+    let cal = super::checks::read_calibration_file(&args.calibration)?;
     if cal.robot.dof() != desc.dof() {
         bail!(
             "{} has {} joints but {} describes {}",

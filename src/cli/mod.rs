@@ -34,6 +34,7 @@ mod run;
 mod signals;
 mod simulate;
 mod study;
+mod validate;
 mod view;
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -202,6 +203,9 @@ enum Command {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
+    /// Validate a calibration on measured data: every point predicted, `residuals.csv` and
+    /// `summary.json` (RMS, mean, max against the noise, chi-square verdicts).
+    Validate(validate::Args),
     /// Open a rerun recording (`.rrd`) in the matching rerun viewer, or print how to install it.
     View(view::Args),
 }
@@ -259,6 +263,7 @@ pub fn main() -> ExitCode {
         Command::Budget(args) => budget::run(args),
         Command::Diagnose(args) => diagnose::run(args),
         Command::Blind(args) => blind::run(args),
+        Command::Validate(args) => validate::run(args),
         Command::View(args) => view::run(args),
         Command::Completions { shell } => {
             use clap::CommandFactory;

@@ -35,6 +35,7 @@ mod plots;
 mod poses;
 mod report;
 mod result;
+mod validate;
 
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
@@ -47,6 +48,10 @@ pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, Outcome, Parameter, WhereEntry};
+pub use validate::{
+    ChiSquare, OrientationSummary, PointKind, PositionSummary, Validation, ValidationOptions, ValidationResidual,
+    validate, validation_residuals_csv,
+};
 
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::measurement::MeasurementSet;

@@ -36,12 +36,7 @@ pub fn clean_positions(
     };
     let mut frames = Vec::with_capacity(set.rows().len());
     for m in set.rows() {
-        let q = cal
-            .robot
-            .joint_values(&controller, &commands_to_internal(desc, &m.cmd))
-            .map_err(|e| DiagnosisError::Model {
-                message: format!("experiment {} step {}: {e}", m.experiment, m.step),
-            })?;
+        let q = calibrated_joint_values(cal, &controller, desc, m)?;
         frames.push(model.poses(&q));
     }
     // Mean link-frame position of each axis target.
@@ -82,6 +77,21 @@ pub fn clean_positions(
             }
         })
         .collect()
+}
+
+/// The calibrated joint values of `m`'s commands (the controller, then `cal`'s transmissions
+/// and couplings).
+pub(super) fn calibrated_joint_values(
+    cal: &Calibration,
+    controller: &Controller,
+    desc: &RobotDescription,
+    m: &Measurement,
+) -> Result<Vec<f64>, DiagnosisError> {
+    cal.robot
+        .joint_values(controller, &commands_to_internal(desc, &m.cmd))
+        .map_err(|e| DiagnosisError::Model {
+            message: format!("experiment {} step {}: {e}", m.experiment, m.step),
+        })
 }
 
 /// Whether `m` is a validation measurement (`docs/formats.md#measurement-csv`: `moved_joint = 0`, not the

@@ -21,14 +21,15 @@ pub struct Finding {
     pub sigma: f64,
     /// Unit of `value` and `sigma`.
     pub unit: String,
-    /// Whether `|value| > 3 sigma`.
+    /// Whether `|value| > 3 sigma`; never without a finite positive sigma (a value whose
+    /// uncertainty is not known is not resolved by the data, it is untested).
     pub significant: bool,
     /// The sentence.
     pub text: String,
 }
 
 fn finding(subject: String, value: f64, sigma: f64, unit: &str, text: String) -> Finding {
-    let significant = sigma.is_nan() || value.abs() > SIGNIFICANT_SIGMAS * sigma;
+    let significant = has_sigma(sigma) && value.abs() > SIGNIFICANT_SIGMAS * sigma;
     Finding {
         subject,
         value,
@@ -37,6 +38,11 @@ fn finding(subject: String, value: f64, sigma: f64, unit: &str, text: String) ->
         significant,
         text,
     }
+}
+
+/// Whether `sigma` is a real 1-sigma (finite and positive).
+fn has_sigma(sigma: f64) -> bool {
+    sigma.is_finite() && sigma > 0.0
 }
 
 /// Deviations of the Table-2 rows from the design, offsets, transmissions and couplings.
@@ -481,7 +487,11 @@ fn write_findings(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
         let _ = writeln!(s, "- {}", f.text);
     }
     let _ = writeln!(s, "\n## Not resolved by the data (< {SIGNIFICANT_SIGMAS} sigma)\n");
-    for f in all.iter().filter(|f| !f.significant) {
+    for f in all.iter().filter(|f| !f.significant && has_sigma(f.sigma)) {
+        let _ = writeln!(s, "- {}", f.text);
+    }
+    let _ = writeln!(s, "\n## No uncertainty reported (not tested against the data)\n");
+    for f in all.iter().filter(|f| !has_sigma(f.sigma)) {
         let _ = writeln!(s, "- {}", f.text);
     }
 }
@@ -494,5 +504,22 @@ fn write_identifiability(s: &mut String, cal: &Calibration) {
         for note in &a.identifiability {
             let _ = writeln!(s, "  - {note}");
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn significant_only_from_a_real_sigma() {
+        let f = |value: f64, sigma: f64| finding("x".into(), value, sigma, "mm", String::new()).significant;
+        let threshold = SIGNIFICANT_SIGMAS;
+        assert!(f(1.01 * threshold, 1.0));
+        assert!(!f(0.99 * threshold, 1.0));
+        // No sigma, or a degenerate one: never significant, however large the value.
+        assert!(!f(1e6, f64::NAN));
+        assert!(!f(1e6, 0.0));
+        assert!(!f(1e6, f64::INFINITY));
     }
 }
