@@ -1,8 +1,9 @@
-//! One full 6-axis calibration of a Table-1 campaign (target: < 1 ms in release), against an
-//! in-run baseline: one circle fit per axis (the least any per-axis method must do).
+//! One full 6-axis calibration of a Table-1 campaign, and the lean path of the Monte-Carlo
+//! trials (`calibrate_model`: the model only; target <= 50x the baseline), against an in-run
+//! baseline: one circle fit per axis (the least any per-axis method must do).
 
 use axiscal::calibration::fit_circle;
-use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
+use axiscal::calibration::procedure::{CalibrationOptions, Detail, calibrate, calibrate_model};
 use axiscal::measurement::{MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription};
@@ -59,6 +60,9 @@ fn bench(c: &mut Criterion) {
     g.bench_function("full_table1_calibration", |b| {
         b.iter(|| black_box(calibrate(black_box(&set), &desc, &options).expect("calibrates")))
     });
+    g.bench_function("lean_table1_calibration", |b| {
+        b.iter(|| black_box(calibrate_model(black_box(&set), &desc, &options, Detail::Model).expect("calibrates")))
+    });
     g.finish();
 
     // The ratio to the in-run baseline, which a loaded machine changes far less than the
@@ -80,6 +84,28 @@ fn bench(c: &mut Criterion) {
         f / b,
         b * 1e6
     );
+    for (name, detail) in [
+        ("model", Detail::Model),
+        ("model_and_covariance", Detail::ModelAndCovariance),
+    ] {
+        let (b, l) = common::interleaved_medians(
+            BATCHES,
+            (BATCH, &|| {
+                for s in &sweeps {
+                    black_box(fit_circle(black_box(s)).expect("arc"));
+                }
+            }),
+            (BATCH, &|| {
+                black_box(calibrate_model(black_box(&set), &desc, &options, detail).expect("calibrates"));
+            }),
+        );
+        println!(
+            "calibration/lean_table1_calibration ({name}): {:.1} us = {:.1} x baseline/six_circle_fits ({:.2} us)",
+            l * 1e6,
+            l / b,
+            b * 1e6
+        );
+    }
 }
 
 /// Calls per timed batch and batches per median, for the ratio.
