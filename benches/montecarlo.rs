@@ -119,7 +119,7 @@ fn summary() {
             black_box(model.poses(black_box(q)));
         }
     };
-    let seed = std::cell::Cell::new(0u64);
+    let seed = std::cell::Cell::new(0usize);
     let run = |t: &CampaignTrial, s: &ResolvedScenario| {
         seed.set(seed.get() + 1);
         black_box(t.run(&s.cases[0], trial_seed(s.seed, seed.get())).expect("trial runs"));
@@ -137,7 +137,9 @@ fn summary() {
         .iter()
         .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build().expect("pool"))
         .collect();
-    let batch = |p: &rayon::ThreadPool| p.install(|| black_box(run_units(&s, &trial, 0..4 * BATCH, &|_| {})));
+    let batch = |p: &rayon::ThreadPool| {
+        p.install(|| black_box(run_units(&s, &trial, 0..4 * BATCH, &|_| {})));
+    };
     let (one, two) = common::interleaved_medians(5, (1, &|| batch(&pools[0])), (1, &|| batch(&pools[1])));
     println!(
         "montecarlo/{} analytic trials: 1 thread {:.1} ms, 2 threads {:.1} ms: speed-up {:.2}x",
@@ -167,7 +169,7 @@ fn dynamic_summary() {
         }
     }
     let b = fk_start.elapsed().as_secs_f64() / 100.0;
-    let mut times: Vec<f64> = (0..5u64)
+    let mut times: Vec<f64> = (0..5usize)
         .map(|i| {
             let start = Instant::now();
             black_box(trial.run(&s.cases[0], trial_seed(s.seed, i)).expect("trial runs"));

@@ -279,12 +279,7 @@ pub fn calibrate_model(
         Detail::ModelAndCovariance
     };
     calibrate_as(set, desc, options, detail, &|ctx, state, reference_cmd, passes| {
-        let (robot, _, row_sigma) = ctx.finish_model(set, &state, &reference_cmd)?;
-        Ok(FittedModel {
-            robot,
-            row_sigma,
-            held_passes: passes,
-        })
+        Ok(ctx.finish_model(set, &state, &reference_cmd, passes)?.0)
     })
 }
 
@@ -502,7 +497,8 @@ impl<'a> Context<'a> {
         set: &MeasurementSet,
         state: &Assembled,
         reference_cmd: &[f64],
-    ) -> Result<(RobotModel, Option<ToolReport>, Option<Vec<RowSigma>>), ProcedureError> {
+        passes: usize,
+    ) -> Result<(FittedModel, Option<ToolReport>), ProcedureError> {
         let row_sigma = match self.detail {
             Detail::Model => None,
             _ => Some(calibrated_row_sigmas(self.desc, &state.axes, self.q_ref, &state.fits)?),
@@ -512,7 +508,12 @@ impl<'a> Context<'a> {
         if let Some(t) = &tool {
             robot.tool_frame = Placement::from_isometry(&t.last_link_from_tool);
         }
-        Ok((robot, tool, row_sigma))
+        let model = FittedModel {
+            robot,
+            row_sigma,
+            held_passes: passes,
+        };
+        Ok((model, tool))
     }
 
     /// The calibration of the last pass: [`Context::finish_model`] plus the report's extras
@@ -524,7 +525,7 @@ impl<'a> Context<'a> {
         reference_cmd: Vec<f64>,
         passes: usize,
     ) -> Result<Calibration, ProcedureError> {
-        let (robot, tool, row_sigma) = self.finish_model(set, &state, &reference_cmd)?;
+        let (FittedModel { robot, row_sigma, .. }, tool) = self.finish_model(set, &state, &reference_cmd, passes)?;
         let Assembled {
             mut fits,
             axes,
