@@ -67,42 +67,32 @@ fn bench(c: &mut Criterion) {
 
     // The ratio to the in-run baseline, which a loaded machine changes far less than the
     // times: medians of interleaved batches.
-    let (b, f) = common::interleaved_medians(
-        BATCHES,
-        (BATCH, &|| {
-            for s in &sweeps {
-                black_box(fit_circle(black_box(s)).expect("arc"));
-            }
-        }),
-        (BATCH, &|| {
-            black_box(calibrate(black_box(&set), &desc, &options).expect("calibrates"));
-        }),
-    );
-    println!(
-        "calibration/full_table1_calibration: {:.1} us = {:.1} x baseline/six_circle_fits ({:.2} us)",
-        f * 1e6,
-        f / b,
-        b * 1e6
-    );
-    for (name, detail) in [
-        ("model", Detail::Model),
-        ("model_and_covariance", Detail::ModelAndCovariance),
-    ] {
-        let (b, l) = common::interleaved_medians(
-            BATCHES,
-            (BATCH, &|| {
-                for s in &sweeps {
-                    black_box(fit_circle(black_box(s)).expect("arc"));
-                }
-            }),
-            (BATCH, &|| {
-                black_box(calibrate_model(black_box(&set), &desc, &options, detail).expect("calibrates"));
-            }),
-        );
+    let circles = || {
+        for s in &sweeps {
+            black_box(fit_circle(black_box(s)).expect("arc"));
+        }
+    };
+    let full = || {
+        black_box(calibrate(black_box(&set), &desc, &options).expect("calibrates"));
+    };
+    let (set_ref, desc_ref, options_ref) = (&set, &desc, &options);
+    let lean = |detail| {
+        move || {
+            black_box(calibrate_model(black_box(set_ref), desc_ref, options_ref, detail).expect("calibrates"));
+        }
+    };
+    let (model, with_covariance) = (lean(Detail::Model), lean(Detail::ModelAndCovariance));
+    let measured: [(&str, &dyn Fn()); 3] = [
+        ("full_table1_calibration", &full),
+        ("lean_table1_calibration (model)", &model),
+        ("lean_table1_calibration (model_and_covariance)", &with_covariance),
+    ];
+    for (name, f) in measured {
+        let (b, t) = common::interleaved_medians(BATCHES, (BATCH, &circles), (BATCH, f));
         println!(
-            "calibration/lean_table1_calibration ({name}): {:.1} us = {:.1} x baseline/six_circle_fits ({:.2} us)",
-            l * 1e6,
-            l / b,
+            "calibration/{name}: {:.1} us = {:.1} x baseline/six_circle_fits ({:.2} us)",
+            t * 1e6,
+            t / b,
             b * 1e6
         );
     }
