@@ -138,12 +138,12 @@ fn summary() {
         .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build().expect("pool"))
         .collect();
     let batch = |p: &rayon::ThreadPool| {
-        p.install(|| black_box(run_units(&s, &trial, 0..4 * BATCH, &|_| {})));
+        p.install(|| black_box(run_units(&s, &trial, 0..BATCH, &|_| {})));
     };
     let (one, two) = common::interleaved_medians(5, (1, &|| batch(&pools[0])), (1, &|| batch(&pools[1])));
     println!(
         "montecarlo/{} analytic trials: 1 thread {:.1} ms, 2 threads {:.1} ms: speed-up {:.2}x",
-        4 * BATCH,
+        BATCH,
         one * 1e3,
         two * 1e3,
         one / two
