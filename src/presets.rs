@@ -76,6 +76,8 @@ pub const PRESETS: &[Preset] = &[
     shipped!(Scenario, "paper", "scenarios/paper.toml"),
     shipped!(Scenario, "perturbed-fleet", "scenarios/perturbed-fleet.toml"),
     shipped!(Scenario, "span-study", "scenarios/span-study.toml"),
+    shipped!(Scenario, "scara-rrpr", "scenarios/scara-rrpr.toml"),
+    shipped!(Scenario, "table-prpp", "scenarios/table-prpp.toml"),
 ];
 
 /// A name that is neither an existing file nor a shipped file.
