@@ -12,7 +12,7 @@ use axiscal::calibration::procedure::{
     joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, ros_name, urdf,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::{MeasurementSet, read_measurements};
+use axiscal::measurement::MeasurementSet;
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
 use std::path::PathBuf;
@@ -182,16 +182,13 @@ pub fn run(args: Args) -> Result<()> {
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let recorded = checks::data_identity(&args.data);
-    checks::same_robot(
-        recorded.as_ref(),
+    let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
         args.allow_other_robot,
+        args.skip_unit_check,
     )?;
-    let set = read_measurements(&args.data, Some(desc.dof()))?;
-    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = CalibrationOptions {
         estimator: args.estimator,
         noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),

@@ -11,7 +11,7 @@ use axiscal::diagnosis::{
     markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::{MeasurementSet, read_measurements};
+use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
 
@@ -85,16 +85,13 @@ pub fn run(args: Args) -> Result<()> {
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let recorded = checks::data_identity(&args.data);
-    checks::same_robot(
-        recorded.as_ref(),
+    let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
         args.allow_other_robot,
+        args.skip_unit_check,
     )?;
-    let set = read_measurements(&args.data, Some(desc.dof()))?;
-    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: args.noise_mm,
         noise_trials: args.noise_trials,

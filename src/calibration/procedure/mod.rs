@@ -610,18 +610,7 @@ fn calibrated_robot(desc: &RobotDescription, joints: Vec<JointModel>, geometry: 
     RobotModel {
         name: format!("{} (calibrated)", desc.name),
         joints,
-        rows: geometry
-            .rows
-            .iter()
-            .map(|r| crate::robot::RowEntry {
-                a_m: r.a_m,
-                b_m: r.b_m,
-                alpha_deg: r.alpha_rad.to_degrees(),
-                beta_deg: r.beta_rad.to_degrees(),
-                gamma_deg: r.gamma_rad.to_degrees(),
-                h_m: r.h_m,
-            })
-            .collect(),
+        rows: geometry.rows.iter().map(crate::robot::RowEntry::from_row).collect(),
         placement: Placement::from_isometry(&geometry.world_from_base),
         tool_frame: desc.tool.frame,
         four_bars: vec![],
