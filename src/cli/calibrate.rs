@@ -87,13 +87,8 @@ pub struct Args {
     /// a build with `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
-    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
-    /// deg, description lengths in mm instead of m) when the units are right after all.
-    #[arg(long)]
-    skip_unit_check: bool,
-    /// Calibrate even when DATA records another robot description than `--robot`.
-    #[arg(long)]
-    allow_other_robot: bool,
+    #[command(flatten)]
+    checks: checks::Overrides,
 }
 
 /// What `calibrate` writes, rendered before anything is written.
@@ -181,13 +176,13 @@ pub fn run(args: Args) -> Result<()> {
     outputs.check_in(&args.out, &OUTPUTS)?;
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
-        args.allow_other_robot,
-        args.skip_unit_check,
+        args.checks.allow_other_robot,
+        args.checks.skip_unit_check,
     )?;
     let options = CalibrationOptions {
         estimator: args.estimator,

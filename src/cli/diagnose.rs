@@ -60,13 +60,8 @@ pub struct Args {
     /// `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
-    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
-    /// deg, description lengths in mm instead of m).
-    #[arg(long)]
-    skip_unit_check: bool,
-    /// Diagnose even when DATA records another robot description than `--robot`.
-    #[arg(long)]
-    allow_other_robot: bool,
+    #[command(flatten)]
+    checks: checks::Overrides,
 }
 
 /// The `--refit` choices ([`RefitScope`]).
@@ -84,13 +79,13 @@ pub fn run(args: Args) -> Result<()> {
         .input("--robot", &args.robot);
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
-        args.allow_other_robot,
-        args.skip_unit_check,
+        args.checks.allow_other_robot,
+        args.checks.skip_unit_check,
     )?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: args.noise_mm,
