@@ -111,6 +111,7 @@ pub mod csv_lines;
 pub mod diagnosis;
 pub mod harness;
 pub mod json_file;
+pub mod json_schema;
 pub mod kinematics;
 pub mod measurement;
 pub mod numerics;

@@ -51,7 +51,7 @@ fn noise_check(seeds: std::ops::Range<u64>) -> (f64, f64, f64, f64) {
             .unwrap()
             .estimate
             .unwrap();
-        if e.interval_mm[0] <= 0.19 && 0.19 <= e.interval_mm[1] {
+        if e.interval.low_mm <= 0.19 && 0.19 <= e.interval.high_mm {
             covered += 1.0;
         }
         sum += e.rms_3d_mm;

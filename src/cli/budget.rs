@@ -114,7 +114,10 @@ pub fn run(args: Args) -> Result<()> {
         names[0],
         json_file::to_string(
             Schema::BUDGET,
-            &serde_json::json!({ "settings": settings, "lines": lines }),
+            &axiscal::harness::evaluation::BudgetReport {
+                settings: settings.clone(),
+                lines: lines.clone(),
+            },
         )?,
     )?;
     outputs.write_in(&args.out, names[1], &md)?;

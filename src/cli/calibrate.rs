@@ -222,7 +222,7 @@ pub fn run(args: Args) -> Result<()> {
             a.span_deg,
             unit,
             a.residual_rms_mm,
-            a.direction_sigma_rad[0] * 1e3
+            a.direction_sigma.major_rad * 1e3
         );
     }
     say!("{}", texts.deviation_line);
@@ -259,8 +259,8 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
                 "  noise from the residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, {} dof); fits weighted with {:.4} mm ({})",
                 e.rms_3d_mm,
                 e.confidence * 100.0,
-                e.interval_mm[0],
-                e.interval_mm[1],
+                e.interval.low_mm,
+                e.interval.high_mm,
                 e.dof,
                 n.used_rms_3d_mm,
                 n.source

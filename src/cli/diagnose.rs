@@ -159,8 +159,8 @@ pub fn run(args: Args) -> Result<()> {
         say!(
             "  with {} validation poses ({} held out) the smallest gap this test flags is {:.3} mm; a smaller effect \
              reads `none`: measure more validation poses to resolve it",
-            d.poses[0] + d.poses[1],
-            d.poses[1],
+            d.poses.training + d.poses.held_out,
+            d.poses.held_out,
             d.detectable_gap_mm
         );
     }

@@ -104,8 +104,8 @@ fn evaluate(args: &Args) -> Result<()> {
     );
     say!(
         "ISO 9283 cube edges: {:.0} mm inside the spans, {:.0} mm in the workspace",
-        r.iso_cube_edge_m[0] * 1e3,
-        r.iso_cube_edge_m[1] * 1e3
+        r.iso_cube_edge.inside_spans_m * 1e3,
+        r.iso_cube_edge.workspace_m * 1e3
     );
     let inside_ratio = print_regions(r);
     print_repeatability(&r.repeatability);
@@ -171,7 +171,7 @@ fn print_regions(r: &PaperReport) -> f64 {
         say!(
             "{} ({} poses, {} failed):",
             s.region.name(),
-            s.position_mm[0].n,
+            s.position_mm.uncalibrated.n,
             s.failures
         );
         let rows = [
@@ -179,40 +179,40 @@ fn print_regions(r: &PaperReport) -> f64 {
                 "position    [mm] ",
                 &s.position_mm,
                 PAPER_POSITION_ERROR_MM,
-                s.ratio_to_floor[0],
+                s.ratio_to_floor.position,
                 3,
             ),
             (
                 "orientation [rad]",
                 &s.orientation_rad,
                 PAPER_ORIENTATION_ERROR_RAD,
-                s.ratio_to_floor[1],
+                s.ratio_to_floor.orientation,
                 4,
             ),
         ];
         for (label, st, paper, ratio, p) in rows {
             say!(
                 "  {label} uncalibrated mean {:7.p$} rms {:7.p$}   (paper {:.2} mean)",
-                st[0].mean,
-                st[0].rms,
+                st.uncalibrated.mean,
+                st.uncalibrated.rms,
                 paper[0]
             );
             say!(
                 "                    calibrated   mean {:7.p$} rms {:7.p$}   (paper {:.2})  floor rms {:.p$}  ratio {ratio:.2}",
-                st[1].mean,
-                st[1].rms,
+                st.calibrated.mean,
+                st.calibrated.rms,
                 paper[1],
-                st[2].rms
+                st.floor.rms
             );
         }
         say!(
             "  model only (no jitter, no noise): position rms {:.3} mm (floor {:.3}, ratio {:.2})",
-            s.model_position_mm[1].rms,
-            s.model_position_mm[2].rms,
-            s.model_ratio_to_floor[0]
+            s.model_position_mm.calibrated.rms,
+            s.model_position_mm.floor.rms,
+            s.model_ratio_to_floor.position
         );
         if s.region == Region::InsideSpans {
-            inside_ratio = s.ratio_to_floor[0];
+            inside_ratio = s.ratio_to_floor.position;
         }
     }
     inside_ratio
@@ -243,11 +243,11 @@ fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args) ->
              orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
         check.first_seed,
         check.first_seed + check.seeds - 1,
-        check.ratio[0],
-        check.position_rms_mm[0],
-        check.position_rms_mm[1],
-        check.ratio[1],
-        if check.ratio.iter().all(|r| *r <= FLOOR_RATIO_LIMIT) {
+        check.ratio.position,
+        check.position_rms.calibrated_mm,
+        check.position_rms.floor_mm,
+        check.ratio.orientation,
+        if check.ratio.position <= FLOOR_RATIO_LIMIT && check.ratio.orientation <= FLOOR_RATIO_LIMIT {
             "within"
         } else {
             "ABOVE"

@@ -23,8 +23,9 @@ pub struct Args {
     /// The calibration (`calibration.json` written by `axiscal calibrate`).
     #[arg(long)]
     calibration: PathBuf,
-    /// Nominal robot description (TOML) the calibration was made with.
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    /// Nominal robot description (TOML) the calibration was made with, or a shipped robot's
+    /// name (`asea-irb6l`).
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]

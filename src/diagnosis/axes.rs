@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
 /// One flagged axis and the candidate effects its arc can show.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FlaggedAxis {
     /// The experiment.
     pub experiment: String,
@@ -36,7 +36,7 @@ pub struct FlaggedAxis {
 
 /// The result of [`diagnose_axes`] (`docs/formats.md#diagnosis-json` fields; no validation poses, so no
 /// candidate is fitted and `gap_after_mm = gap_before_mm`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct AxesDiagnosis {
     /// `axes_only`.
     pub mode: String,

@@ -86,7 +86,7 @@ pub enum DiagnosisError {
 }
 
 /// Options of [`diagnose`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct DiagnosisOptions {
     /// Measurement noise, 3-D RMS of a point \[mm\].
     pub noise_rms_3d_mm: f64,

@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 pub const STEEL_ALPHA_PER_K: f64 = 1.2e-5;
 
 /// The candidate effects of the budget (module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum BudgetEffect {
     /// Joint compliance under gravity.
@@ -151,7 +151,7 @@ impl BudgetEffect {
 }
 
 /// Settings of [`gap_budget`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BudgetSettings {
     /// The scenario every magnitude is run on (its effects are replaced); seeds
     /// `scenario.seed .. scenario.seed + seeds` are pooled.
@@ -177,8 +177,17 @@ impl BudgetSettings {
     }
 }
 
+/// `budget.json`: the settings and one line per effect.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct BudgetReport {
+    /// The settings.
+    pub settings: BudgetSettings,
+    /// One line per effect.
+    pub lines: Vec<BudgetLine>,
+}
+
 /// One line of the budget.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BudgetLine {
     /// The effect.
     pub effect: BudgetEffect,

@@ -10,7 +10,9 @@ mod plots;
 mod poses;
 
 pub use accuracy::{APPROACH_STEP, EvaluationError, Stats, TestBench, ToolError, pose_rng};
-pub use budget::{BudgetEffect, BudgetLine, BudgetSettings, STEEL_ALPHA_PER_K, budget_line, gap_budget, pooled_error};
+pub use budget::{
+    BudgetEffect, BudgetLine, BudgetReport, BudgetSettings, STEEL_ALPHA_PER_K, budget_line, gap_budget, pooled_error,
+};
 pub use paper::{
     FloorCheck, PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PaperOutcome, PaperReport,
     PaperScenario, PoseResult, RegionSummary, RepeatabilitySummary, ScenarioError,

@@ -57,7 +57,7 @@ pub enum StudyError {
 }
 
 /// The study's settings.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct EfficiencyStudy {
     /// Number of simulated campaigns.
     pub trials: usize,
@@ -79,7 +79,7 @@ pub struct EfficiencyStudy {
 }
 
 /// Efficiency of one quantity of one axis.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct QuantityEfficiency {
     /// Joint (1-based).
     pub joint: usize,
@@ -104,7 +104,7 @@ pub struct QuantityEfficiency {
 }
 
 /// Reported against empirical uncertainty of one Table-2 parameter.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RowSigmaCheck {
     /// e.g. `row 2 b`.
     pub parameter: String,
@@ -119,7 +119,7 @@ pub struct RowSigmaCheck {
 }
 
 /// The study's result.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct StudyReport {
     /// Settings.
     pub study: EfficiencyStudy,
