@@ -119,6 +119,7 @@ pub mod physics;
 pub mod plan;
 mod plotting;
 pub mod presets;
+pub mod progress;
 pub mod robot;
 pub mod sim;
 pub mod toml_file;

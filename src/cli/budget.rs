@@ -6,7 +6,7 @@ use super::OneOf;
 use super::options::{InRange, THREADS, thread_pool};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget};
+use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget_with};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementModel;
 use std::fmt::Write as _;
@@ -105,7 +105,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let pool = thread_pool(args.threads)?;
     let progress = super::progress::Progress::stage(&format!("gap budget: {} effect(s)", effects.len()));
-    let lines = pool.install(|| gap_budget(&settings, &effects))?;
+    let lines = pool.install(|| gap_budget_with(&settings, &effects, &progress))?;
     drop(progress);
     let md = markdown(&settings, &lines);
     print!("{md}");

@@ -7,8 +7,8 @@ use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
-    AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose, diagnose_axes,
-    markdown, validation_poses, write_axes_plots, write_plots,
+    AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
+    diagnose_with, markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -104,7 +104,7 @@ pub fn run(args: Args) -> Result<()> {
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
         let progress = super::progress::Progress::stage("diagnosing the axis experiments (noise-only replicas)");
-        let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+        let d = diagnose_axes_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
         drop(progress);
         let report = Report {
             out: &args.out,
@@ -136,7 +136,7 @@ pub fn run(args: Args) -> Result<()> {
         return record(&args, &desc, &set, &format!("{}: {}", d.outcome.effect, d.verdict));
     }
     let progress = super::progress::Progress::stage("diagnosing (refits, candidates, noise-only replicas)");
-    let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+    let d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
     drop(progress);
     let report = Report {
         out: &args.out,

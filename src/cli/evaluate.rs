@@ -5,10 +5,11 @@
 
 use super::options::{InRange, THREADS, thread_pool};
 use super::output::{Outputs, commit_csv};
+use super::progress::Progress;
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{
     PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperReport, PaperScenario,
-    Region, RepeatabilitySummary, floor_check, run_paper_scenario, write_plots,
+    Region, RepeatabilitySummary, floor_check_with, run_paper_scenario_with, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementModel;
@@ -77,7 +78,7 @@ fn evaluate(args: &Args) -> Result<()> {
     let guard = Outputs::new(args.force);
     guard.check_in(&args.out, &outputs)?;
     let progress = super::progress::Progress::stage("paper scenario: simulate, calibrate, compensate, evaluate");
-    let out = run_paper_scenario(&scenario)?;
+    let out = run_paper_scenario_with(&scenario, &progress)?;
     drop(progress);
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let r = &out.report;
@@ -118,8 +119,8 @@ fn evaluate(args: &Args) -> Result<()> {
         }
     );
     if args.floor_seeds > 1 {
-        let _progress = super::progress::Progress::stage("floor check over the campaign seeds");
-        pooled_floor_check(&guard, &scenario, args)?;
+        let progress = super::progress::Progress::stage("floor check over the campaign seeds");
+        pooled_floor_check(&guard, &scenario, args, &progress)?;
     }
     say!("wrote {} and {} plots", args.out.display(), plots.len());
     super::emit_json(&args.out.join("evaluation.json"))?;
@@ -235,8 +236,8 @@ fn print_repeatability(rep: &RepeatabilitySummary) {
 
 /// The floor check pooled over `args.floor_seeds` campaign seeds: written to
 /// `floor_check.json` and printed.
-fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args) -> Result<()> {
-    let check = floor_check(scenario, args.floor_seeds)?;
+fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args, progress: &Progress) -> Result<()> {
+    let check = floor_check_with(scenario, args.floor_seeds, progress)?;
     write_json(guard, &args.out.join("floor_check.json"), Schema::FLOOR_CHECK, &check)?;
     say!(
         "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \

@@ -263,5 +263,22 @@ pub fn budget_line(settings: &BudgetSettings, effect: BudgetEffect) -> Result<Bu
 
 /// The whole budget: one line per effect of `effects`.
 pub fn gap_budget(settings: &BudgetSettings, effects: &[BudgetEffect]) -> Result<Vec<BudgetLine>, ScenarioError> {
-    effects.iter().map(|e| budget_line(settings, *e)).collect()
+    gap_budget_with(settings, effects, &crate::progress::Silent)
+}
+
+/// [`gap_budget`], counting the effects done on `progress`.
+pub fn gap_budget_with(
+    settings: &BudgetSettings,
+    effects: &[BudgetEffect],
+    progress: &dyn crate::progress::Progress,
+) -> Result<Vec<BudgetLine>, ScenarioError> {
+    progress.start(effects.len(), "effects");
+    effects
+        .iter()
+        .map(|e| {
+            let line = budget_line(settings, *e);
+            progress.inc();
+            line
+        })
+        .collect()
 }

@@ -339,6 +339,14 @@ pub fn scenario_poses(
 
 /// Runs the paper scenario (module docs). Deterministic for given settings.
 pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioError> {
+    run_paper_scenario_with(s, &crate::progress::Silent)
+}
+
+/// [`run_paper_scenario`], counting the test poses evaluated on `progress`.
+pub fn run_paper_scenario_with(
+    s: &PaperScenario,
+    progress: &dyn crate::progress::Progress,
+) -> Result<PaperOutcome, ScenarioError> {
     let desc = RobotDescription::asea_irb6l();
     let truth = crate::sim::paper_robot();
     let mut perfect = truth.clone();
@@ -352,8 +360,10 @@ pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioErr
     let bench = s.test_bench(&truth, &desc);
     let (poses, iso_cube_edge_m) = scenario_poses(&desc, s.random_poses, s.evaluation_seed)?;
     let mut results = Vec::with_capacity(poses.len());
+    progress.start(poses.len(), "test poses");
     for (i, p) in poses.iter().enumerate() {
         results.push(evaluate_pose(&bench, &comp, &floor_comp, p, s.evaluation_seed, i)?);
+        progress.inc();
     }
     let regions = [Region::InsideSpans, Region::Workspace]
         .into_iter()
@@ -397,7 +407,17 @@ pub struct FloorCheck {
 /// order, so independent of the thread count) and pools the inside-span RMS of the calibrated
 /// and the floor errors.
 pub fn floor_check(template: &PaperScenario, seeds: u64) -> Result<FloorCheck, ScenarioError> {
+    floor_check_with(template, seeds, &crate::progress::Silent)
+}
+
+/// [`floor_check`], counting the campaign seeds done on `progress`.
+pub fn floor_check_with(
+    template: &PaperScenario,
+    seeds: u64,
+    progress: &dyn crate::progress::Progress,
+) -> Result<FloorCheck, ScenarioError> {
     use rayon::prelude::*;
+    progress.start(seeds as usize, "campaign seeds");
     let regions: Vec<RegionSummary> = (0..seeds)
         .into_par_iter()
         .map(|i| {
@@ -406,6 +426,7 @@ pub fn floor_check(template: &PaperScenario, seeds: u64) -> Result<FloorCheck, S
                 ..template.clone()
             };
             let report = run_paper_scenario(&s)?.report;
+            progress.inc();
             Ok(report
                 .regions
                 .into_iter()

@@ -155,6 +155,11 @@ fn jittered_and_steady_robots() -> (RobotModel, RobotModel) {
 impl EfficiencyStudy {
     /// Runs the study (in parallel; bit-identical for any thread count).
     pub fn run(&self) -> Result<StudyReport, StudyError> {
+        self.run_with(&crate::progress::Silent)
+    }
+
+    /// [`Self::run`], counting the trials done on `progress`.
+    pub fn run_with(&self, progress: &dyn crate::progress::Progress) -> Result<StudyReport, StudyError> {
         let desc = RobotDescription::asea_irb6l();
         let controller = Controller::from_description(&desc);
         let (jittered, steady) = jittered_and_steady_robots();
@@ -178,9 +183,14 @@ impl EfficiencyStudy {
             noise_rms_3d_mm: self.noise_rms_3d_mm,
             seed: self.seed,
         };
+        progress.start(self.trials, "trials");
         let outcomes: Vec<TrialOutcome> = (0..self.trials)
             .into_par_iter()
-            .map(|i| trials.run(i))
+            .map(|i| {
+                let outcome = trials.run(i);
+                progress.inc();
+                outcome
+            })
             .collect::<Result<_, _>>()?;
         Ok(self.summarise(&experiments, &truths, &outcomes))
     }
