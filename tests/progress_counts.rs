@@ -11,7 +11,6 @@ use axiscal::harness::evaluation::{
 };
 use axiscal::harness::studies::EfficiencyStudy;
 use axiscal::measurement::MeasurementModel;
-use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::progress::Progress;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -82,16 +81,7 @@ fn evaluation_counts_its_test_poses_and_budget_its_effects() {
 #[test]
 fn diagnosis_counts_its_noise_only_replicas() {
     let desc = axiscal::robot::RobotDescription::asea_irb6l();
-    let set = common::analytic_campaign(
-        &axiscal::sim::paper_robot(),
-        &CalibrationPlan::table1(6),
-        &ValidationPlan {
-            poses: 0,
-            ..ValidationPlan::workspace_default(6)
-        },
-        &MeasurementModel::paper_isotropic(),
-        11,
-    );
+    let set = common::axes_only_campaign(11);
     let options = axiscal::diagnosis::DiagnosisOptions {
         axis_replicas: 5,
         ..Default::default()

@@ -50,6 +50,21 @@ pub fn analytic_campaign(
     MeasurementSet::new(desc.dof(), out.rows).expect("a simulated campaign is a valid measurement set")
 }
 
+/// The Table-1 axis experiments alone (no validation poses) of the paper robot, with its
+/// jitter, through the paper's isotropic instrument, random stream from `seed`.
+pub fn axes_only_campaign(seed: u64) -> MeasurementSet {
+    analytic_campaign(
+        &axiscal::sim::paper_robot(),
+        &CalibrationPlan::table1(6),
+        &ValidationPlan {
+            poses: 0,
+            ..ValidationPlan::workspace_default(6)
+        },
+        &MeasurementModel::paper_isotropic(),
+        seed,
+    )
+}
+
 /// A temporary folder holding `campaign.csv`, written by `axiscal simulate --seed SEED`.
 pub fn simulated_campaign_csv(seed: u64) -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().expect("a temporary folder");

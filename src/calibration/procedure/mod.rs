@@ -41,7 +41,8 @@ pub use joint_map::{
 };
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, residuals_csv};
 pub use result::{
-    AxisReport, Calibration, CouplingReport, NoiseReport, PointResidual, RowSigma, SweepReport, ToolReport,
+    AxisReport, Calibration, CouplingReport, DirectionSigma, HeldOffset, NoiseReport, PointResidual, PositionSigma,
+    RowSigma, SweepReport, ToolPose, ToolReport,
 };
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
