@@ -23,6 +23,8 @@
 //! | [`numerics`] | the one least-squares loop and the statistics |
 //! | [`sim`] | the simulated real robot (analytic and rapier arms): the answer key |
 //! | [`harness`] | evaluation, Monte-Carlo scenarios, studies, the blind check |
+//! | [`json_file`], [`json_schema`] | the versioned JSON outputs and their JSON Schemas (`docs/schemas/`) |
+//! | [`progress`] | counts of long work, for whoever shows them |
 //! | `viz` | rerun recordings (cargo feature `viz`) |
 //!
 //! `calibration`, `compensation` and `diagnosis` see only measurements and the nominal

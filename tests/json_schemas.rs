@@ -302,34 +302,8 @@ fn run(dir: &Path, args: &[&str]) {
 
 /// Runs every command that writes JSON, small; returns the JSON files written.
 fn outputs(d: &Path) -> Vec<PathBuf> {
-    run(
-        d,
-        &[
-            "simulate",
-            "--sim",
-            "analytic",
-            "--validation-poses",
-            "8",
-            "--seed",
-            "5",
-            "--out",
-            "data.csv",
-        ],
-    );
-    run(
-        d,
-        &[
-            "simulate",
-            "--sim",
-            "analytic",
-            "--validation-poses",
-            "0",
-            "--seed",
-            "6",
-            "--out",
-            "axes.csv",
-        ],
-    );
+    common::simulate_analytic(d, 8, 5, "data.csv");
+    common::simulate_analytic(d, 0, 6, "axes.csv");
     run(d, &["calibrate", "data.csv", "--out", "cal"]);
     run(
         d,

@@ -76,23 +76,10 @@ fn joints_of(cal: &Path, cmd: &[f64]) -> Vec<f64> {
 /// `--urdf-root root` and axiscal's own model, over a few command vectors turned into joint
 /// values by `axiscal joints`. The URDF's tool pose is in its root link: the instrument frame,
 /// or the base frame (`base_link`), where axiscal's is `world_from_base^-1 world_from_tool`.
-fn urdf_vs_axiscal(root: &str, seed: &str) -> (f64, f64) {
+fn urdf_vs_axiscal(root: &str, seed: u64) -> (f64, f64) {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    axiscal()
-        .args([
-            "simulate",
-            "--sim",
-            "analytic",
-            "--validation-poses",
-            "8",
-            "--seed",
-            seed,
-            "--out",
-        ])
-        .arg(d.join("data.csv"))
-        .assert()
-        .success();
+    common::simulate_analytic(d, 8, seed, "data.csv");
     let calibrated = axiscal()
         .arg("calibrate")
         .arg(d.join("data.csv"))
@@ -145,7 +132,7 @@ const WORST_RAD: f64 = 1e-9;
 
 #[test]
 fn urdf_rs_forward_kinematics_fed_the_joint_map_reproduces_the_tool_pose() {
-    let (mm, rad) = urdf_vs_axiscal("instrument", "21");
+    let (mm, rad) = urdf_vs_axiscal("instrument", 21);
     assert!(mm <= WORST_MM, "{mm} mm");
     assert!(rad <= WORST_RAD, "{rad} rad");
 }
@@ -155,7 +142,7 @@ fn urdf_rs_forward_kinematics_fed_the_joint_map_reproduces_the_tool_pose() {
 /// pose (`world_from_base^-1`), not out of the file.
 #[test]
 fn base_link_rooted_urdf_reproduces_the_tool_pose_in_the_base_frame() {
-    let (mm, rad) = urdf_vs_axiscal("base_link", "22");
+    let (mm, rad) = urdf_vs_axiscal("base_link", 22);
     assert!(mm <= WORST_MM, "{mm} mm");
     assert!(rad <= WORST_RAD, "{rad} rad");
 }

@@ -104,7 +104,7 @@ pub fn run(args: Args) -> Result<()> {
         args.effects
     };
     let pool = thread_pool(args.threads)?;
-    let progress = super::progress::Progress::stage(&format!("gap budget: {} effect(s)", effects.len()));
+    let progress = super::progress::Progress::stage("gap budget");
     let lines = pool.install(|| gap_budget_with(&settings, &effects, &progress))?;
     drop(progress);
     let md = markdown(&settings, &lines);

@@ -103,7 +103,7 @@ pub fn run(args: Args) -> Result<()> {
     let source = args.data.display().to_string();
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
-        let progress = super::progress::Progress::stage("diagnosing the axis experiments (noise-only replicas)");
+        let progress = super::progress::Progress::stage("diagnosing the axes");
         let d = diagnose_axes_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
         drop(progress);
         let report = Report {
@@ -135,7 +135,7 @@ pub fn run(args: Args) -> Result<()> {
         super::emit_json(&args.out.join("diagnosis.json"))?;
         return record(&args, &desc, &set, &format!("{}: {}", d.outcome.effect, d.verdict));
     }
-    let progress = super::progress::Progress::stage("diagnosing (refits, candidates, noise-only replicas)");
+    let progress = super::progress::Progress::stage("diagnosing");
     let d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
     drop(progress);
     let report = Report {

@@ -77,7 +77,7 @@ fn evaluate(args: &Args) -> Result<()> {
     outputs.extend(PLOT_FILES);
     let guard = Outputs::new(args.force);
     guard.check_in(&args.out, &outputs)?;
-    let progress = super::progress::Progress::stage("paper scenario: simulate, calibrate, compensate, evaluate");
+    let progress = super::progress::Progress::stage("paper scenario");
     let out = run_paper_scenario_with(&scenario, &progress)?;
     drop(progress);
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -119,7 +119,7 @@ fn evaluate(args: &Args) -> Result<()> {
         }
     );
     if args.floor_seeds > 1 {
-        let progress = super::progress::Progress::stage("floor check over the campaign seeds");
+        let progress = super::progress::Progress::stage("floor check");
         pooled_floor_check(&guard, &scenario, args, &progress)?;
     }
     say!("wrote {} and {} plots", args.out.display(), plots.len());

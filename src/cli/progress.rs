@@ -58,7 +58,7 @@ impl Progress {
 
 impl axiscal::progress::Progress for Progress {
     fn start(&self, total: usize, unit: &str) {
-        let template = format!("{{msg}}: {{bar:30}} {{pos}}/{{len}} {unit}  {{elapsed}} elapsed, ETA {{eta}}");
+        let template = format!("{{msg}} {{bar:20}} {{pos}}/{{len}} {unit}, {{elapsed}}, ETA {{eta}}");
         if let Ok(style) = ProgressStyle::with_template(&template) {
             self.0.set_style(style);
         }

@@ -65,6 +65,20 @@ pub fn axes_only_campaign(seed: u64) -> MeasurementSet {
     )
 }
 
+/// `axiscal simulate --sim analytic --validation-poses POSES --seed SEED --out OUT`, run in
+/// `dir`.
+pub fn simulate_analytic(dir: &std::path::Path, poses: usize, seed: u64, out: &str) {
+    axiscal()
+        .current_dir(dir)
+        .args(["simulate", "--sim", "analytic", "--validation-poses"])
+        .arg(poses.to_string())
+        .arg("--seed")
+        .arg(seed.to_string())
+        .args(["--out", out])
+        .assert()
+        .success();
+}
+
 /// A temporary folder holding `campaign.csv`, written by `axiscal simulate --seed SEED`.
 pub fn simulated_campaign_csv(seed: u64) -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().expect("a temporary folder");
