@@ -44,8 +44,8 @@ impl Schema {
     pub const BLIND_KEY: Schema = Schema::v1("blind_key");
     /// `budget.json` of `budget`.
     pub const BUDGET: Schema = Schema::v1("budget");
-    /// `efficiency.json` of `study`.
-    pub const STUDY: Schema = Schema::v1("study");
+    /// `efficiency.json` of `study`. 2: units in the names of the sigmas.
+    pub const STUDY: Schema = Schema::new("study", 2, 2);
     /// `summary.json` of `validate`.
     pub const VALIDATION: Schema = Schema::v1("validation");
 

@@ -57,7 +57,7 @@ fn versioned(schema: Schema, mut body: Value) -> Value {
     let Some(root) = body.as_object_mut() else {
         return body;
     };
-    root.insert("title".into(), json!(format!("axiscal {}", schema.id())));
+    root.insert("title".into(), json!(schema.id()));
     let properties = root.entry("properties").or_insert_with(|| json!({}));
     if let Some(p) = properties.as_object_mut() {
         p.insert(

@@ -87,8 +87,10 @@ pub struct QuantityEfficiency {
     pub quantity: String,
     /// Square root of the bound's trace \[rad or mm\] (with jitter: of measurement and angle
     /// noise, plus the bias of the joints held below for the direction and position).
+    #[serde(rename = "crb_sigma_rad_or_mm")]
     pub crb_sigma: f64,
-    /// ML estimator: RMS error over the trials.
+    /// ML estimator: RMS error over the trials \[rad or mm\].
+    #[serde(rename = "ml_rms_error_rad_or_mm")]
     pub ml_rms_error: f64,
     /// ML estimator: the 1-sigma it reports (square root of the mean reported variance
     /// trace) over its RMS error; the target is within 15 % of 1.
@@ -109,8 +111,10 @@ pub struct RowSigmaCheck {
     /// e.g. `row 2 b`.
     pub parameter: String,
     /// Mean reported 1-sigma \[mm or deg\].
+    #[serde(rename = "reported_sigma_mm_or_deg")]
     pub reported_sigma: f64,
-    /// Standard deviation of the estimates over the trials.
+    /// Standard deviation of the estimates over the trials \[mm or deg\].
+    #[serde(rename = "empirical_sigma_mm_or_deg")]
     pub empirical_sigma: f64,
     /// `reported / empirical`.
     pub ratio: f64,
