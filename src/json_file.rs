@@ -2,8 +2,8 @@
 //! version of its layout and the version of axiscal that wrote it, as its first two fields
 //! (`docs/formats.md#versioning`).
 
-use serde::Serialize;
 use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
 
 /// The version of axiscal that writes a file (the crate version).
 pub const AXISCAL_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -17,36 +17,60 @@ pub struct Schema {
     pub name: &'static str,
     /// Major version of its layout.
     pub major: u32,
+    /// The oldest major version a reader of this axiscal still reads (older names through
+    /// serde aliases); equal to `major` for files axiscal does not read back.
+    pub oldest_read: u32,
 }
 
 impl Schema {
-    /// `calibration.json`, `floor_calibration.json`.
-    pub const CALIBRATION: Schema = Schema::v1("calibration");
+    /// `calibration.json`, `floor_calibration.json`. 2: named fields instead of pairs, the
+    /// tool pose in mm, units in the names (`docs/formats.md#versioning`); 1 still reads.
+    pub const CALIBRATION: Schema = Schema::new("calibration", 2, 1);
     /// `report.json` of `calibrate` (findings under `findings`).
     pub const REPORT: Schema = Schema::v1("report");
-    /// `diagnosis.json` (both modes).
-    pub const DIAGNOSIS: Schema = Schema::v1("diagnosis");
+    /// `diagnosis.json` (both modes). 2: `poses`, `refit_rank` with named fields.
+    pub const DIAGNOSIS: Schema = Schema::new("diagnosis", 2, 2);
     /// `summary.json` of a Monte-Carlo run.
     pub const SUMMARY: Schema = Schema::v1("summary");
-    /// `evaluation.json` of `evaluate`.
-    pub const EVALUATION: Schema = Schema::v1("evaluation");
-    /// `floor_check.json` of `evaluate`.
-    pub const FLOOR_CHECK: Schema = Schema::v1("floor_check");
-    /// `summary.json` of `blind`.
-    pub const BLIND_SUMMARY: Schema = Schema::v1("blind_summary");
-    /// `cases.json` of `blind` (cases under `cases`).
-    pub const BLIND_CASES: Schema = Schema::v1("blind_cases");
+    /// `evaluation.json` of `evaluate`. 2: named fields instead of positional arrays.
+    pub const EVALUATION: Schema = Schema::new("evaluation", 2, 2);
+    /// `floor_check.json` of `evaluate`. 2: named fields instead of positional arrays.
+    pub const FLOOR_CHECK: Schema = Schema::new("floor_check", 2, 2);
+    /// `summary.json` of `blind`. 2: `mean_gap` with named fields.
+    pub const BLIND_SUMMARY: Schema = Schema::new("blind_summary", 2, 2);
+    /// `cases.json` of `blind` (cases under `cases`). 2: each case's diagnosis at 2.
+    pub const BLIND_CASES: Schema = Schema::new("blind_cases", 2, 2);
     /// `key.json` of a blind case.
     pub const BLIND_KEY: Schema = Schema::v1("blind_key");
     /// `budget.json` of `budget`.
     pub const BUDGET: Schema = Schema::v1("budget");
-    /// `efficiency.json` of `study`.
-    pub const STUDY: Schema = Schema::v1("study");
+    /// `efficiency.json` of `study`. 2: units in the names of the sigmas.
+    pub const STUDY: Schema = Schema::new("study", 2, 2);
     /// `summary.json` of `validate`.
     pub const VALIDATION: Schema = Schema::v1("validation");
 
     const fn v1(name: &'static str) -> Schema {
-        Schema { name, major: 1 }
+        Schema::new(name, 1, 1)
+    }
+
+    const fn new(name: &'static str, major: u32, oldest_read: u32) -> Schema {
+        Schema {
+            name,
+            major,
+            oldest_read,
+        }
+    }
+
+    /// Whether a file whose `schema` is `id` is this layout in a version this axiscal reads.
+    fn reads(&self, id: &str) -> bool {
+        id.strip_prefix("axiscal.")
+            .and_then(|rest| rest.split_once('/'))
+            .is_some_and(|(name, major)| {
+                name == self.name
+                    && major
+                        .parse::<u32>()
+                        .is_ok_and(|m| (self.oldest_read..=self.major).contains(&m))
+            })
     }
 
     /// The `schema` field's value, `axiscal.<name>/<major>`.
@@ -73,7 +97,7 @@ pub enum JsonFileError {
     },
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct Versioned<'a, T: Serialize + ?Sized> {
     schema: String,
     axiscal_version: &'static str,
@@ -97,17 +121,18 @@ pub fn list_to_string<T: Serialize>(schema: Schema, key: &str, items: &[T]) -> s
     to_string(schema, &body)
 }
 
-/// Reads a file written by [`to_string`]: its `schema` must be `schema` (a file without one
-/// predates versioning and is read as major version 1); `schema` and `axiscal_version` are
-/// removed before the rest is parsed as `T`.
+/// Reads a file written by [`to_string`]: its `schema` must be `schema`'s name with a major
+/// version from `schema.oldest_read` to `schema.major` (a file without one predates versioning
+/// and is read as major version 1; older layouts read through serde aliases); `schema` and
+/// `axiscal_version` are removed before the rest is parsed as `T`.
 pub fn from_str<T: DeserializeOwned>(schema: Schema, text: &str) -> Result<T, JsonFileError> {
     let mut value: serde_json::Value = serde_json::from_str(text)?;
     if let Some(object) = value.as_object_mut() {
         let found = object.remove("schema");
         object.remove("axiscal_version");
         match found {
-            Some(serde_json::Value::String(s)) if s == schema.id() => {}
-            None if schema.major == 1 => {}
+            Some(serde_json::Value::String(s)) if schema.reads(&s) => {}
+            None if schema.oldest_read == 1 => {}
             other => {
                 return Err(JsonFileError::WrongSchema {
                     found: other.map_or_else(|| "none".to_owned(), |v| v.to_string()),
@@ -119,12 +144,52 @@ pub fn from_str<T: DeserializeOwned>(schema: Schema, text: &str) -> Result<T, Js
     Ok(serde_json::from_value(value)?)
 }
 
+/// One value as it may appear in a file: the current layout (`T`, named fields) or the one
+/// before it (`P`, e.g. a positional array), tried in that order.
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum NamedOrOld<T, P> {
+    Named(T),
+    Old(P),
+}
+
+/// Reads a field that is `T` (named fields) now and was `P` (a positional array, a tuple)
+/// before: `#[serde(deserialize_with = "json_file::named_or_old::<_, T, P>")]`, so files
+/// written before the rename still read (`docs/formats.md#versioning`).
+pub fn named_or_old<'de, D, T, P>(d: D) -> Result<T, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: serde::Deserialize<'de> + From<P>,
+    P: serde::Deserialize<'de>,
+{
+    Ok(match NamedOrOld::<T, P>::deserialize(d)? {
+        NamedOrOld::Named(t) => t,
+        NamedOrOld::Old(p) => T::from(p),
+    })
+}
+
+/// [`named_or_old`] for each element of a list.
+pub fn each_named_or_old<'de, D, T, P>(d: D) -> Result<Vec<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: serde::Deserialize<'de> + From<P>,
+    P: serde::Deserialize<'de>,
+{
+    let items = Vec::<NamedOrOld<T, P>>::deserialize(d)?;
+    Ok(items
+        .into_iter()
+        .map(|i| match i {
+            NamedOrOld::Named(t) => t,
+            NamedOrOld::Old(p) => T::from(p),
+        })
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde::Deserialize;
 
-    #[derive(Debug, PartialEq, Serialize, Deserialize)]
+    #[derive(Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
     #[serde(deny_unknown_fields)]
     struct Body {
         zeta_mm: f64,
@@ -144,7 +209,7 @@ mod tests {
             .filter_map(|l| l.split('"').next())
             .collect();
         assert_eq!(keys, ["schema", "axiscal_version", "zeta_mm", "alpha"]);
-        assert!(text.contains("\"axiscal.calibration/1\""));
+        assert!(text.contains("\"axiscal.calibration/2\""));
         assert_eq!(from_str::<Body>(Schema::CALIBRATION, &text).unwrap(), body);
         // Before versioning: no schema, same layout.
         assert_eq!(
@@ -165,18 +230,23 @@ mod tests {
         .unwrap();
         let e = from_str::<Body>(Schema::CALIBRATION, &text).unwrap_err();
         assert!(e.to_string().contains("axiscal.report/1"), "{e}");
-        let v2 = text.replace("axiscal.report/1", "axiscal.calibration/2");
+        let v3 = text.replace("axiscal.report/1", "axiscal.calibration/3");
         assert!(matches!(
-            from_str::<Body>(Schema::CALIBRATION, &v2),
+            from_str::<Body>(Schema::CALIBRATION, &v3),
             Err(JsonFileError::WrongSchema { .. })
         ));
+        // Version 1 still reads; an evaluation (not read back) reads its own major only.
+        let v1 = text.replace("axiscal.report/1", "axiscal.calibration/1");
+        assert!(from_str::<Body>(Schema::CALIBRATION, &v1).is_ok());
+        let e1 = text.replace("axiscal.report/1", "axiscal.evaluation/1");
+        assert!(from_str::<Body>(Schema::EVALUATION, &e1).is_err());
     }
 
     #[test]
     fn a_list_sits_under_its_key() {
         let text = list_to_string(Schema::BLIND_CASES, "cases", &[1, 2, 3]).unwrap();
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-        assert_eq!(v["schema"], "axiscal.blind_cases/1");
+        assert_eq!(v["schema"], "axiscal.blind_cases/2");
         assert_eq!(v["cases"], serde_json::json!([1, 2, 3]));
     }
 }

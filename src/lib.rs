@@ -23,6 +23,8 @@
 //! | [`numerics`] | the one least-squares loop and the statistics |
 //! | [`sim`] | the simulated real robot (analytic and rapier arms): the answer key |
 //! | [`harness`] | evaluation, Monte-Carlo scenarios, studies, the blind check |
+//! | [`json_file`], [`json_schema`] | the versioned JSON outputs and their JSON Schemas (`docs/schemas/`) |
+//! | [`progress`] | counts of long work, for whoever shows them |
 //! | `viz` | rerun recordings (cargo feature `viz`) |
 //!
 //! `calibration`, `compensation` and `diagnosis` see only measurements and the nominal
@@ -111,6 +113,7 @@ pub mod csv_lines;
 pub mod diagnosis;
 pub mod harness;
 pub mod json_file;
+pub mod json_schema;
 pub mod kinematics;
 pub mod measurement;
 pub mod numerics;
@@ -118,6 +121,7 @@ pub mod physics;
 pub mod plan;
 mod plotting;
 pub mod presets;
+pub mod progress;
 pub mod robot;
 pub mod sim;
 pub mod toml_file;

@@ -49,7 +49,7 @@ fn calibrate_and_diagnose_json_is_the_whole_stdout() {
         .arg(dir.path().join("diag"))
         .assert()
         .success();
-    assert_eq!(json_of(&stdout(&d))["schema"], "axiscal.diagnosis/1");
+    assert_eq!(json_of(&stdout(&d))["schema"], "axiscal.diagnosis/2");
 }
 
 #[test]

@@ -35,23 +35,14 @@ fn noise_check(seeds: std::ops::Range<u64>) -> (f64, f64, f64, f64) {
     let n = seeds.clone().count() as f64;
     let (mut covered, mut sum, mut worst, mut within) = (0.0, 0.0, 0.19, 0.0);
     for seed in seeds {
-        let set = common::analytic_campaign(
-            &axiscal::sim::paper_robot(),
-            &CalibrationPlan::table1(6),
-            &ValidationPlan {
-                poses: 0,
-                ..ValidationPlan::workspace_default(6)
-            },
-            &MeasurementModel::paper_isotropic(),
-            seed,
-        );
+        let set = common::axes_only_campaign(seed);
         let e = calibrate(&set, &desc, &CalibrationOptions::default())
             .unwrap()
             .noise
             .unwrap()
             .estimate
             .unwrap();
-        if e.interval_mm[0] <= 0.19 && 0.19 <= e.interval_mm[1] {
+        if e.interval.low_mm <= 0.19 && 0.19 <= e.interval.high_mm {
             covered += 1.0;
         }
         sum += e.rms_3d_mm;
@@ -84,16 +75,7 @@ fn noise_estimate_over_200_campaigns() {
 /// A given noise the residuals contradict is flagged; the true one is not.
 #[test]
 fn contradicting_given_noise_is_flagged() {
-    let set = common::analytic_campaign(
-        &axiscal::sim::paper_robot(),
-        &CalibrationPlan::table1(6),
-        &ValidationPlan {
-            poses: 0,
-            ..ValidationPlan::workspace_default(6)
-        },
-        &MeasurementModel::paper_isotropic(),
-        5,
-    );
+    let set = common::axes_only_campaign(5);
     let desc = RobotDescription::asea_irb6l();
     let at = |mm: f64| {
         let o = CalibrationOptions {

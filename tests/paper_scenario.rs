@@ -18,7 +18,7 @@ fn paper_scenario_compensation_beats_the_nominal_controller() {
     assert_eq!(inside.failures, 0);
     // The nominal error is ~12 mm; the noise-driven calibrated model error ~1-2 mm.
     assert!(
-        inside.position_mm[1].rms < inside.position_mm[0].rms / 4.0,
+        inside.position_mm.calibrated.rms < inside.position_mm.uncalibrated.rms / 4.0,
         "{:?}",
         inside.position_mm
     );
@@ -33,6 +33,6 @@ fn paper_scenario_compensation_beats_the_nominal_controller() {
 fn paper_scenario_calibrated_error_is_within_1_1x_of_the_noise_floor() {
     let check = floor_check(&scenario(1), 3).unwrap();
     println!("calibrated/floor RMS over seeds 1-3: {check:?}");
-    assert!(check.ratio[0] <= 1.1, "position {check:?}");
-    assert!(check.ratio[1] <= 1.1, "orientation {check:?}");
+    assert!(check.ratio.position <= 1.1, "position {check:?}");
+    assert!(check.ratio.orientation <= 1.1, "orientation {check:?}");
 }

@@ -22,7 +22,7 @@ use nalgebra::{DMatrix, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// The residual moments of one fit, for the pooled estimate.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ResidualMoments {
     /// Sum of squared residual lengths \[m^2\].
     pub rss_m2: f64,
@@ -94,13 +94,33 @@ pub const NOISE_CONFIDENCE: f64 = 0.95;
 /// (two-sided chi-square test).
 pub const NOISE_TEST_LEVEL: f64 = 0.01;
 
+/// A confidence interval of the noise level.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct NoiseInterval {
+    /// Lower end \[mm\].
+    pub low_mm: f64,
+    /// Upper end \[mm\].
+    pub high_mm: f64,
+}
+
+/// Before schema 2: `[low, high]`.
+impl From<[f64; 2]> for NoiseInterval {
+    fn from([low_mm, high_mm]: [f64; 2]) -> Self {
+        NoiseInterval { low_mm, high_mm }
+    }
+}
+
 /// The instrument noise estimated from the pooled residuals.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct NoiseEstimate {
     /// Estimated 3-D RMS noise of a point \[mm\].
     pub rms_3d_mm: f64,
-    /// Its [`NOISE_CONFIDENCE`] interval \[mm\].
-    pub interval_mm: [f64; 2],
+    /// Its [`NOISE_CONFIDENCE`] interval.
+    #[serde(
+        alias = "interval_mm",
+        deserialize_with = "crate::json_file::named_or_old::<_, NoiseInterval, [f64; 2]>"
+    )]
+    pub interval: NoiseInterval,
     /// Confidence of the interval.
     pub confidence: f64,
     /// Pooled degrees of freedom.
@@ -143,10 +163,10 @@ pub fn estimate_noise(parts: &[ResidualMoments]) -> Option<NoiseEstimate> {
     let to_mm = |var_per_axis: f64| (3.0 * var_per_axis).sqrt() * 1e3;
     Some(NoiseEstimate {
         rms_3d_mm: to_mm(s2),
-        interval_mm: [
-            to_mm(effective * s2 / chi_square_quantile(1.0 - alpha / 2.0, effective)),
-            to_mm(effective * s2 / chi_square_quantile(alpha / 2.0, effective)),
-        ],
+        interval: NoiseInterval {
+            low_mm: to_mm(effective * s2 / chi_square_quantile(1.0 - alpha / 2.0, effective)),
+            high_mm: to_mm(effective * s2 / chi_square_quantile(alpha / 2.0, effective)),
+        },
         confidence: NOISE_CONFIDENCE,
         dof,
         effective_dof: effective,
@@ -208,7 +228,7 @@ mod tests {
             assert_eq!(parts[0].dof, 3 * n - 3);
             let e = estimate_noise(&parts).unwrap();
             let truth = 3f64.sqrt() * sigma * 1e3;
-            if e.interval_mm[0] <= truth && truth <= e.interval_mm[1] {
+            if e.interval.low_mm <= truth && truth <= e.interval.high_mm {
                 covered += 1;
             }
             assert!(!e.contradicts(e.rms_3d_mm));

@@ -6,7 +6,7 @@ use super::OneOf;
 use super::options::{InRange, THREADS, thread_pool};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget};
+use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget_with};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementModel;
 use std::fmt::Write as _;
@@ -104,8 +104,8 @@ pub fn run(args: Args) -> Result<()> {
         args.effects
     };
     let pool = thread_pool(args.threads)?;
-    let progress = super::progress::Progress::stage(&format!("gap budget: {} effect(s)", effects.len()));
-    let lines = pool.install(|| gap_budget(&settings, &effects))?;
+    let progress = super::progress::Progress::stage("gap budget");
+    let lines = pool.install(|| gap_budget_with(&settings, &effects, &progress))?;
     drop(progress);
     let md = markdown(&settings, &lines);
     print!("{md}");
@@ -114,7 +114,10 @@ pub fn run(args: Args) -> Result<()> {
         names[0],
         json_file::to_string(
             Schema::BUDGET,
-            &serde_json::json!({ "settings": settings, "lines": lines }),
+            &axiscal::harness::evaluation::BudgetReport {
+                settings: settings.clone(),
+                lines: lines.clone(),
+            },
         )?,
     )?;
     outputs.write_in(&args.out, names[1], &md)?;

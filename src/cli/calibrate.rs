@@ -87,13 +87,8 @@ pub struct Args {
     /// a build with `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
-    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
-    /// deg, description lengths in mm instead of m) when the units are right after all.
-    #[arg(long)]
-    skip_unit_check: bool,
-    /// Calibrate even when DATA records another robot description than `--robot`.
-    #[arg(long)]
-    allow_other_robot: bool,
+    #[command(flatten)]
+    checks: checks::Overrides,
 }
 
 /// What `calibrate` writes, rendered before anything is written.
@@ -181,13 +176,13 @@ pub fn run(args: Args) -> Result<()> {
     outputs.check_in(&args.out, &OUTPUTS)?;
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
-        args.allow_other_robot,
-        args.skip_unit_check,
+        args.checks.allow_other_robot,
+        args.checks.skip_unit_check,
     )?;
     let options = CalibrationOptions {
         estimator: args.estimator,
@@ -227,7 +222,7 @@ pub fn run(args: Args) -> Result<()> {
             a.span_deg,
             unit,
             a.residual_rms_mm,
-            a.direction_sigma_rad[0] * 1e3
+            a.direction_sigma.major_rad * 1e3
         );
     }
     say!("{}", texts.deviation_line);
@@ -264,8 +259,8 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
                 "  noise from the residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, {} dof); fits weighted with {:.4} mm ({})",
                 e.rms_3d_mm,
                 e.confidence * 100.0,
-                e.interval_mm[0],
-                e.interval_mm[1],
+                e.interval.low_mm,
+                e.interval.high_mm,
                 e.dof,
                 n.used_rms_3d_mm,
                 n.source

@@ -15,6 +15,20 @@ use std::path::Path;
 /// data were made with: this prefix, then the identity as JSON.
 pub const IDENTITY_COMMENT: &str = "# axiscal.description ";
 
+/// The two overrides of these checks, shared by the commands that read a description with a
+/// calibration or data made for it (`calibrate`, `diagnose`, `validate`, `compensate`).
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct Overrides {
+    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
+    /// deg, description lengths in mm instead of m) when the units are right after all.
+    #[arg(long)]
+    pub skip_unit_check: bool,
+    /// Go on even when the calibration or DATA records another robot description than
+    /// `--robot` (a different geometry hash).
+    #[arg(long)]
+    pub allow_other_robot: bool,
+}
+
 /// One error naming `file` and every slip, or nothing.
 fn refuse_slips(file: &Path, slips: &[UnitSlip]) -> Result<()> {
     if slips.is_empty() {

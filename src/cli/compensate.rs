@@ -43,13 +43,8 @@ pub struct Args {
     /// Replace `--out` if it exists (never one of this command's inputs).
     #[arg(long)]
     force: bool,
-    /// Use the calibration even though it was made with another robot description (a
-    /// different geometry hash) than `--robot`.
-    #[arg(long)]
-    allow_other_robot: bool,
-    /// Skip the unit sanity check of the description's lengths.
-    #[arg(long)]
-    skip_unit_check: bool,
+    #[command(flatten)]
+    checks: checks::Overrides,
 }
 
 /// One required pose from the input file.
@@ -172,8 +167,8 @@ pub fn run(args: Args) -> Result<()> {
         .input("--robot", &args.robot);
     outputs.check(&args.out)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
+    checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
+    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
     let comp = Compensator::new(&cal.robot, &desc)?;
     let poses = read_poses(&args.poses)?;
     let n = desc.dof();

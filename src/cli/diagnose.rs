@@ -7,8 +7,8 @@ use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
-    AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose, diagnose_axes,
-    markdown, validation_poses, write_axes_plots, write_plots,
+    AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
+    diagnose_with, markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -60,13 +60,8 @@ pub struct Args {
     /// `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
-    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
-    /// deg, description lengths in mm instead of m).
-    #[arg(long)]
-    skip_unit_check: bool,
-    /// Diagnose even when DATA records another robot description than `--robot`.
-    #[arg(long)]
-    allow_other_robot: bool,
+    #[command(flatten)]
+    checks: checks::Overrides,
 }
 
 /// The `--refit` choices ([`RefitScope`]).
@@ -84,13 +79,13 @@ pub fn run(args: Args) -> Result<()> {
         .input("--robot", &args.robot);
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
-        args.allow_other_robot,
-        args.skip_unit_check,
+        args.checks.allow_other_robot,
+        args.checks.skip_unit_check,
     )?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: args.noise_mm,
@@ -108,8 +103,8 @@ pub fn run(args: Args) -> Result<()> {
     let source = args.data.display().to_string();
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
-        let progress = super::progress::Progress::stage("diagnosing the axis experiments (noise-only replicas)");
-        let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+        let progress = super::progress::Progress::stage("diagnosing the axes");
+        let d = diagnose_axes_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
         drop(progress);
         let report = Report {
             out: &args.out,
@@ -140,8 +135,8 @@ pub fn run(args: Args) -> Result<()> {
         super::emit_json(&args.out.join("diagnosis.json"))?;
         return record(&args, &desc, &set, &format!("{}: {}", d.outcome.effect, d.verdict));
     }
-    let progress = super::progress::Progress::stage("diagnosing (refits, candidates, noise-only replicas)");
-    let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+    let progress = super::progress::Progress::stage("diagnosing");
+    let d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
     drop(progress);
     let report = Report {
         out: &args.out,
@@ -164,8 +159,8 @@ pub fn run(args: Args) -> Result<()> {
         say!(
             "  with {} validation poses ({} held out) the smallest gap this test flags is {:.3} mm; a smaller effect \
              reads `none`: measure more validation poses to resolve it",
-            d.poses[0] + d.poses[1],
-            d.poses[1],
+            d.poses.training + d.poses.held_out,
+            d.poses.held_out,
             d.detectable_gap_mm
         );
     }

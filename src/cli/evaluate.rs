@@ -5,10 +5,11 @@
 
 use super::options::{InRange, THREADS, thread_pool};
 use super::output::{Outputs, commit_csv};
+use super::progress::Progress;
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{
     PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperReport, PaperScenario,
-    Region, RepeatabilitySummary, floor_check, run_paper_scenario, write_plots,
+    Region, RepeatabilitySummary, floor_check_with, run_paper_scenario_with, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementModel;
@@ -76,8 +77,8 @@ fn evaluate(args: &Args) -> Result<()> {
     outputs.extend(PLOT_FILES);
     let guard = Outputs::new(args.force);
     guard.check_in(&args.out, &outputs)?;
-    let progress = super::progress::Progress::stage("paper scenario: simulate, calibrate, compensate, evaluate");
-    let out = run_paper_scenario(&scenario)?;
+    let progress = super::progress::Progress::stage("paper scenario");
+    let out = run_paper_scenario_with(&scenario, &progress)?;
     drop(progress);
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let r = &out.report;
@@ -104,8 +105,8 @@ fn evaluate(args: &Args) -> Result<()> {
     );
     say!(
         "ISO 9283 cube edges: {:.0} mm inside the spans, {:.0} mm in the workspace",
-        r.iso_cube_edge_m[0] * 1e3,
-        r.iso_cube_edge_m[1] * 1e3
+        r.iso_cube_edge.inside_spans_m * 1e3,
+        r.iso_cube_edge.workspace_m * 1e3
     );
     let inside_ratio = print_regions(r);
     print_repeatability(&r.repeatability);
@@ -118,8 +119,8 @@ fn evaluate(args: &Args) -> Result<()> {
         }
     );
     if args.floor_seeds > 1 {
-        let _progress = super::progress::Progress::stage("floor check over the campaign seeds");
-        pooled_floor_check(&guard, &scenario, args)?;
+        let progress = super::progress::Progress::stage("floor check");
+        pooled_floor_check(&guard, &scenario, args, &progress)?;
     }
     say!("wrote {} and {} plots", args.out.display(), plots.len());
     super::emit_json(&args.out.join("evaluation.json"))?;
@@ -171,7 +172,7 @@ fn print_regions(r: &PaperReport) -> f64 {
         say!(
             "{} ({} poses, {} failed):",
             s.region.name(),
-            s.position_mm[0].n,
+            s.position_mm.uncalibrated.n,
             s.failures
         );
         let rows = [
@@ -179,40 +180,40 @@ fn print_regions(r: &PaperReport) -> f64 {
                 "position    [mm] ",
                 &s.position_mm,
                 PAPER_POSITION_ERROR_MM,
-                s.ratio_to_floor[0],
+                s.ratio_to_floor.position,
                 3,
             ),
             (
                 "orientation [rad]",
                 &s.orientation_rad,
                 PAPER_ORIENTATION_ERROR_RAD,
-                s.ratio_to_floor[1],
+                s.ratio_to_floor.orientation,
                 4,
             ),
         ];
         for (label, st, paper, ratio, p) in rows {
             say!(
                 "  {label} uncalibrated mean {:7.p$} rms {:7.p$}   (paper {:.2} mean)",
-                st[0].mean,
-                st[0].rms,
+                st.uncalibrated.mean,
+                st.uncalibrated.rms,
                 paper[0]
             );
             say!(
                 "                    calibrated   mean {:7.p$} rms {:7.p$}   (paper {:.2})  floor rms {:.p$}  ratio {ratio:.2}",
-                st[1].mean,
-                st[1].rms,
+                st.calibrated.mean,
+                st.calibrated.rms,
                 paper[1],
-                st[2].rms
+                st.floor.rms
             );
         }
         say!(
             "  model only (no jitter, no noise): position rms {:.3} mm (floor {:.3}, ratio {:.2})",
-            s.model_position_mm[1].rms,
-            s.model_position_mm[2].rms,
-            s.model_ratio_to_floor[0]
+            s.model_position_mm.calibrated.rms,
+            s.model_position_mm.floor.rms,
+            s.model_ratio_to_floor.position
         );
         if s.region == Region::InsideSpans {
-            inside_ratio = s.ratio_to_floor[0];
+            inside_ratio = s.ratio_to_floor.position;
         }
     }
     inside_ratio
@@ -235,19 +236,19 @@ fn print_repeatability(rep: &RepeatabilitySummary) {
 
 /// The floor check pooled over `args.floor_seeds` campaign seeds: written to
 /// `floor_check.json` and printed.
-fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args) -> Result<()> {
-    let check = floor_check(scenario, args.floor_seeds)?;
+fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args, progress: &Progress) -> Result<()> {
+    let check = floor_check_with(scenario, args.floor_seeds, progress)?;
     write_json(guard, &args.out.join("floor_check.json"), Schema::FLOOR_CHECK, &check)?;
     say!(
         "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
              orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
         check.first_seed,
         check.first_seed + check.seeds - 1,
-        check.ratio[0],
-        check.position_rms_mm[0],
-        check.position_rms_mm[1],
-        check.ratio[1],
-        if check.ratio.iter().all(|r| *r <= FLOOR_RATIO_LIMIT) {
+        check.ratio.position,
+        check.position_rms.calibrated_mm,
+        check.position_rms.floor_mm,
+        check.ratio.orientation,
+        if check.ratio.position <= FLOOR_RATIO_LIMIT && check.ratio.orientation <= FLOOR_RATIO_LIMIT {
             "within"
         } else {
             "ABOVE"

@@ -1,7 +1,9 @@
 //! The one progress display of every command that can take more than a second (`run`,
 //! `blind`, `study`, `budget`, `evaluate`, `diagnose`): on stderr, hidden when stderr is not a
 //! terminal (a pipe, a CI log) or with `--quiet`, cleared when done. Counted work shows a bar
-//! with the count and ETA; work inside one library call shows what runs and the elapsed time.
+//! with the count and ETA, also when the library does the counting (it reports through
+//! `axiscal::progress::Progress`, a [`Progress::stage`] passed to it); until the library
+//! knows the count, a spinner shows what runs and the elapsed time.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -50,6 +52,21 @@ impl Progress {
 
     /// One more unit done.
     pub fn inc(&self) {
+        self.0.inc(1);
+    }
+}
+
+impl axiscal::progress::Progress for Progress {
+    fn start(&self, total: usize, unit: &str) {
+        let template = format!("{{msg}} {{bar:20}} {{pos}}/{{len}} {unit}, {{elapsed}}, ETA {{eta}}");
+        if let Ok(style) = ProgressStyle::with_template(&template) {
+            self.0.set_style(style);
+        }
+        self.0.set_length(total as u64);
+        self.0.set_position(0);
+    }
+
+    fn inc(&self) {
         self.0.inc(1);
     }
 }

@@ -51,8 +51,8 @@ pub fn run(args: Args) -> Result<()> {
     let names = ["efficiency.json", "efficiency.md"];
     let outputs = Outputs::new(args.force);
     outputs.check_in(&args.out, &names)?;
-    let progress = super::progress::Progress::stage(&format!("efficiency study: {} trials", args.trials));
-    let report = super::options::thread_pool(args.threads)?.install(|| study.run())?;
+    let progress = super::progress::Progress::stage("efficiency study");
+    let report = super::options::thread_pool(args.threads)?.install(|| study.run_with(&progress))?;
     drop(progress);
     let md = report.markdown();
     outputs.write_in(&args.out, names[0], json_file::to_string(Schema::STUDY, &report)?)?;

@@ -23,8 +23,9 @@ pub struct Args {
     /// The calibration (`calibration.json` written by `axiscal calibrate`).
     #[arg(long)]
     calibration: PathBuf,
-    /// Nominal robot description (TOML) the calibration was made with.
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    /// Nominal robot description (TOML) the calibration was made with, or a shipped robot's
+    /// name (`asea-irb6l`).
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]
@@ -39,14 +40,8 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
-    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
-    /// deg, description lengths in mm instead of m).
-    #[arg(long)]
-    skip_unit_check: bool,
-    /// Validate even when the calibration or DATA records another robot description than
-    /// `--robot`.
-    #[arg(long)]
-    allow_other_robot: bool,
+    #[command(flatten)]
+    checks: checks::Overrides,
 }
 
 /// Runs `axiscal validate`.
@@ -57,14 +52,14 @@ pub fn run(args: Args) -> Result<()> {
         .input("--robot", &args.robot);
     outputs.check_in(&args.out, &OUTPUTS)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
+    checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
+    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
     let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
-        args.allow_other_robot,
-        args.skip_unit_check,
+        args.checks.allow_other_robot,
+        args.checks.skip_unit_check,
     )?;
     let options = match (args.noise_mm, &cal.noise) {
         (Some(mm), _) => noise_options(mm, "given", args.false_alarm),

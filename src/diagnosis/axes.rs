@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
 /// One flagged axis and the candidate effects its arc can show.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FlaggedAxis {
     /// The experiment.
     pub experiment: String,
@@ -36,7 +36,7 @@ pub struct FlaggedAxis {
 
 /// The result of [`diagnose_axes`] (`docs/formats.md#diagnosis-json` fields; no validation poses, so no
 /// candidate is fitted and `gap_after_mm = gap_before_mm`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct AxesDiagnosis {
     /// `axes_only`.
     pub mode: String,
@@ -87,7 +87,9 @@ fn noise_only_residuals_mm(
     cal: &Calibration,
     options: &DiagnosisOptions,
     replicas: usize,
+    progress: &dyn crate::progress::Progress,
 ) -> Result<Vec<Vec<f64>>, DiagnosisError> {
+    progress.start(replicas, "noise-only replicas");
     let clean = clean_positions(set, cal, desc)?;
     let mut rng = ChaCha12Rng::seed_from_u64(options.seed);
     let mut null: Vec<Vec<f64>> = vec![Vec::with_capacity(replicas); cal.axes.len()];
@@ -97,6 +99,7 @@ fn noise_only_residuals_mm(
         for (acc, a) in null.iter_mut().zip(&c.axes) {
             acc.push(a.residual_rms_mm);
         }
+        progress.inc();
     }
     Ok(null)
 }
@@ -199,9 +202,19 @@ pub fn diagnose_axes(
     desc: &RobotDescription,
     options: &DiagnosisOptions,
 ) -> Result<AxesDiagnosis, DiagnosisError> {
+    diagnose_axes_with(set, desc, options, &crate::progress::Silent)
+}
+
+/// [`diagnose_axes`], counting the noise-only replicas on `progress`.
+pub fn diagnose_axes_with(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &DiagnosisOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<AxesDiagnosis, DiagnosisError> {
     let cal = calibrate_for(set, desc, options.noise_rms_3d_mm)?;
     let replicas = options.axis_replicas.max(2);
-    let null = noise_only_residuals_mm(set, desc, &cal, options, replicas)?;
+    let null = noise_only_residuals_mm(set, desc, &cal, options, replicas, progress)?;
     let means: Vec<f64> = null.iter().map(|v| mean(v)).collect();
     let max_ratio = max_ratio_per_replica(&null, &means, replicas);
     let alpha = options.false_alarm;

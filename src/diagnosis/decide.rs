@@ -310,14 +310,20 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         candidates: scored.into_iter().map(|s| s.score).collect(),
         parameters: v.parameters,
         noise_rms_3d_mm: options.noise_rms_3d_mm,
-        poses: [prep.poses.len().div_ceil(2), prep.poses.len() / 2],
+        poses: super::result::PoseSplit {
+            training: prep.poses.len().div_ceil(2),
+            held_out: prep.poses.len() / 2,
+        },
         heldout_rms_before_mm: rms_before,
         noise_only_rms_mm: noise_before,
         gap_sigmas: gap.gap_sigmas,
         detectable_gap_mm: gap.detectable_gap_mm,
         false_alarm: alpha,
         null_samples: samples,
-        refit_rank: [base.rank, base_params],
+        refit_rank: super::result::RefitRank {
+            rank: base.rank,
+            parameters: base_params,
+        },
         fraction_closed,
         verdict: v.verdict,
     }

@@ -38,7 +38,7 @@ mod result;
 mod validate;
 
 pub use crate::plotting::PlotError;
-pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
+pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnose_axes_with};
 pub use linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{
     Candidate, GRAVITY_M_S2, PoseFeatures, Predictor, RefitScope, WOBBLE_ORDER, unmodelled_harmonic_order,
@@ -86,7 +86,7 @@ pub enum DiagnosisError {
 }
 
 /// Options of [`diagnose`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct DiagnosisOptions {
     /// Measurement noise, 3-D RMS of a point \[mm\].
     pub noise_rms_3d_mm: f64,
@@ -366,7 +366,9 @@ fn null_data(
     desc: &RobotDescription,
     prep: &Prepared,
     options: &DiagnosisOptions,
+    progress: &dyn crate::progress::Progress,
 ) -> Result<NullData, DiagnosisError> {
+    progress.start(options.noise_trials, "noise-only replicas");
     let noise_m = options.noise_rms_3d_mm * 1e-3;
     let sigma = noise_m / 3f64.sqrt();
     let clean = clean_positions(set, &prep.cal, desc)?;
@@ -395,6 +397,7 @@ fn null_data(
                 *x = s + sigma * z;
             }
         }
+        progress.inc();
     }
     Ok(NullData { samples, axis_rms2 })
 }
@@ -422,7 +425,17 @@ pub fn diagnose(
     desc: &RobotDescription,
     options: &DiagnosisOptions,
 ) -> Result<Diagnosis, DiagnosisError> {
+    diagnose_with(set, desc, options, &crate::progress::Silent)
+}
+
+/// [`diagnose`], counting the noise-only replicas (the bulk of the work) on `progress`.
+pub fn diagnose_with(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &DiagnosisOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<Diagnosis, DiagnosisError> {
     let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit)?;
-    let null = null_data(set, desc, &prep, options)?;
+    let null = null_data(set, desc, &prep, options, progress)?;
     Ok(decide::decide(&prep, &null, options))
 }

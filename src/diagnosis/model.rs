@@ -41,7 +41,7 @@ pub fn unmodelled_harmonic_order(desc: &RobotDescription, joint: usize) -> usize
 }
 
 /// A candidate unmodelled effect (`docs/formats.md#diagnosis-json` names).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "effect", rename_all = "snake_case")]
 pub enum Candidate {
     /// Actuator `joint` sags by `c Q_j(q + dq)`, `Q_j` the gravity torque about it (plus the
@@ -258,7 +258,7 @@ pub struct PoseFeatures {
 
 /// What the baseline refit adjusts besides the geometry (rows `a`, `b`, `alpha`, `beta`, joint
 /// zero offsets, base and tool frames).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum RefitScope {
     /// The geometry only: the calibrated transmission and coupling shapes stay as the axis

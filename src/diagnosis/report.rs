@@ -22,11 +22,11 @@ pub fn markdown(d: &Diagnosis, source: &str) -> String {
         d.noise_only_rms_mm,
         d.detectable_gap_mm,
         d.false_alarm,
-        d.poses[0],
-        d.poses[1],
+        d.poses.training,
+        d.poses.held_out,
         d.noise_rms_3d_mm,
-        d.refit_rank[0],
-        d.refit_rank[1],
+        d.refit_rank.rank,
+        d.refit_rank.parameters,
         d.null_samples
     );
     if !d.parameters.is_empty() {

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 /// One `where` entry: an experiment's (or a workspace feature's) residual against its
 /// noise-only prediction.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct WhereEntry {
     /// Experiment id (`validation`: the calibrated model on every validation pose;
     /// `validation_heldout_refit`: the baseline on the held-out poses; `feature:NAME:BIN`:
@@ -22,7 +22,7 @@ pub struct WhereEntry {
 
 /// How much a workspace feature's bins differ in their held-out excess
 /// ([`WhereEntry`]`::excess_ratio` of `feature:NAME:BIN`): a gap that depends on the feature.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FeatureContrast {
     /// Feature name (`reach`, `joint_angle_2`, `gravity_torque_3`, `payload`, `temperature`,
     /// `approach_4`, ...).
@@ -39,7 +39,7 @@ pub struct FeatureContrast {
 }
 
 /// A fitted parameter with its 1-sigma.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Parameter {
     /// Name with unit.
     pub name: String,
@@ -51,7 +51,7 @@ pub struct Parameter {
 }
 
 /// One scored candidate.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CandidateScore {
     /// Effect name.
     pub effect: String,
@@ -80,7 +80,7 @@ pub struct CandidateScore {
 
 /// The `docs/formats.md#diagnosis-json` verdict fields of a diagnosis ([`Diagnosis`],
 /// [`AxesDiagnosis`](super::AxesDiagnosis)).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Outcome {
     /// `none`, `unexplained`, or a candidate's effect name.
     pub effect: String,
@@ -98,7 +98,7 @@ pub struct Outcome {
 }
 
 /// The diagnosis (`docs/formats.md#diagnosis-json` plus details).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Diagnosis {
     /// The `docs/formats.md#diagnosis-json` verdict.
     #[serde(flatten)]
@@ -117,7 +117,7 @@ pub struct Diagnosis {
     /// Noise assumed, 3-D RMS \[mm\].
     pub noise_rms_3d_mm: f64,
     /// Training and held-out pose counts.
-    pub poses: [usize; 2],
+    pub poses: PoseSplit,
     /// Baseline held-out RMS \[mm\].
     pub heldout_rms_before_mm: f64,
     /// Noise-only held-out RMS of the baseline \[mm\].
@@ -133,9 +133,27 @@ pub struct Diagnosis {
     /// Noise-only samples behind the thresholds (replicas x validation-noise draws).
     pub null_samples: usize,
     /// Rank of the baseline refit (identifiable directions) and its parameter count.
-    pub refit_rank: [usize; 2],
+    pub refit_rank: RefitRank,
     /// Fraction of the gap's variance the best candidate removes.
     pub fraction_closed: f64,
     /// One sentence.
     pub verdict: String,
+}
+
+/// How the validation poses were split.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct PoseSplit {
+    /// Poses the refits are fitted on.
+    pub training: usize,
+    /// Poses held out, where the gaps are measured.
+    pub held_out: usize,
+}
+
+/// The baseline refit's identifiable directions.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct RefitRank {
+    /// Rank (identifiable directions).
+    pub rank: usize,
+    /// Parameters refitted.
+    pub parameters: usize,
 }

@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Options of [`validate`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ValidationOptions {
     /// Measurement noise of a point, 3-D RMS \[mm\] (`> 0`).
     pub noise_rms_3d_mm: f64,
@@ -46,7 +46,7 @@ pub struct ValidationOptions {
 }
 
 /// Which kind of measured point a residual belongs to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PointKind {
     /// A validation pose (`moved_joint = 0`, not `tool`).
@@ -58,7 +58,7 @@ pub enum PointKind {
 }
 
 /// One measured point against its prediction (a row of `residuals.csv`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ValidationResidual {
     /// Experiment id.
     pub experiment: String,
@@ -79,7 +79,7 @@ pub struct ValidationResidual {
 }
 
 /// A chi-square verdict of residuals against their predicted uncertainty.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ChiSquare {
     /// The statistic.
     pub value: f64,
@@ -120,7 +120,7 @@ impl ChiSquare {
 }
 
 /// Position residuals of one kind of point.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PositionSummary {
     /// Measured points.
     pub points: usize,
@@ -142,7 +142,7 @@ pub struct PositionSummary {
 }
 
 /// Orientation errors of the poses with three tool targets.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct OrientationSummary {
     /// Poses.
     pub poses: usize,
@@ -159,7 +159,7 @@ pub struct OrientationSummary {
 }
 
 /// The result of [`validate`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Validation {
     /// The noise the residuals are tested against, 3-D RMS \[mm\].
     pub noise_rms_3d_mm: f64,

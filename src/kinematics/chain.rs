@@ -11,7 +11,7 @@ use nalgebra::{Isometry3, Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// One joint of the phi-model: its kind and its constant angle `phi_i` (A2).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PhiJoint {
     /// Revolute or prismatic.
     pub kind: JointKind,

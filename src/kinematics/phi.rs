@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vect
 use serde::{Deserialize, Serialize};
 
 /// The kind of a joint: the variable it moves.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum JointKind {
     /// Rotation `theta` \[rad\] about Z_i.
@@ -20,7 +20,7 @@ pub enum JointKind {
 }
 
 /// One row of Table 2: the parameters of eq. (A3) relating frame `i+1` to the `phi_i` frame.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PhiRow {
     /// Translation along Z_phi \[m\].
     pub a_m: f64,

@@ -9,7 +9,7 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 /// Isotropic Gaussian position noise.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct IsotropicNoise {
     /// 3-D RMS of the error vector \[mm\]; each axis gets `net_radial_rms_mm / sqrt(3)`.
@@ -27,7 +27,7 @@ impl IsotropicNoise {
 ///
 /// In a scenario TOML: `kind = "theodolite"` with the fields of [`TheodolitePair`], or
 /// `kind = "isotropic"` with `net_radial_rms_mm`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum MeasurementModel {
     /// Two theodolites with angular noise; the point is triangulated.

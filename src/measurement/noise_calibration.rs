@@ -21,10 +21,11 @@ pub const PAPER_ROBOT_BASE_MM: [f64; 3] = [-3142.3, 4439.4, -526.1];
 pub const PAPER_RIGHT_STATION_MM: [f64; 3] = [-6284.6, 0.0, 0.0];
 
 /// A cube of points over which the net radial error is averaged.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ReferenceVolume {
     /// Centre of the cube in the instrument frame \[m\].
+    #[schemars(with = "[f64; 3]")]
     pub centre_m: Point3<f64>,
     /// Edge length \[m\].
     pub side_m: f64,

@@ -76,12 +76,14 @@ impl StationAngles {
 }
 
 /// Two theodolite stations with Gaussian angular reading noise.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TheodolitePair {
     /// Centre of the left station in the instrument frame \[m\] (normally the origin).
+    #[schemars(with = "[f64; 3]")]
     pub left_station_m: Point3<f64>,
     /// Centre of the right station in the instrument frame \[m\].
+    #[schemars(with = "[f64; 3]")]
     pub right_station_m: Point3<f64>,
     /// Standard deviation of one azimuth reading \[rad\].
     pub sigma_az_rad: f64,

@@ -89,7 +89,7 @@ pub fn upper_tail(v: &[f64], x: f64) -> f64 {
 /// does not depend on the order the values arrived in (trials finishing on several threads).
 /// A NaN anywhere makes every statistic NaN (a failed metric must not pass a threshold); an
 /// empty sample gives NaN too.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Stats {
     /// Number of values.
     pub n: usize,

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Backlash: a direction-dependent dead band per joint.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BacklashEffect {
     /// Width of the dead band of each joint \[rad\] (>= 0).

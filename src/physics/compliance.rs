@@ -14,7 +14,7 @@ fn default_gravity() -> [f64; 3] {
 }
 
 /// Joint compliance: each joint's servo/drive stiffness.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ComplianceEffect {
     /// Stiffness per joint \[N m/rad\] (N/m for prismatic joints), finite and > 0.
@@ -25,7 +25,7 @@ pub struct ComplianceEffect {
 }
 
 /// Payload: the pose's `payload_kg` ([`PoseConditions`](crate::plan::PoseConditions)) as a point mass in the tool frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PayloadEffect {
     /// Where the payload's centre of mass sits in the tool frame \[mm\].

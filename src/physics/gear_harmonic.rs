@@ -5,7 +5,7 @@ use crate::robot::{RobotModel, Transmission};
 use serde::{Deserialize, Serialize};
 
 /// One extra harmonic term of a joint's transmission `theta_c = f(theta_a)` (eq. 8).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GearHarmonic {
     /// The joint (1-based).

@@ -4,7 +4,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 /// A scale error of the instrument.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InstrumentScale {
     /// Measured coordinates are `(1 + ppm 1e-6)` times the true ones, about the instrument

@@ -8,7 +8,7 @@ fn default_reference_c() -> f64 {
 }
 
 /// Thermal expansion of the links.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ThermalEffect {
     /// Linear expansion coefficient \[1/K\] (steel about 1.2e-5, aluminium 2.3e-5).

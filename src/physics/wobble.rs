@@ -16,7 +16,7 @@ fn default_order() -> i32 {
 /// at radius `r` leaves the nominal plane of its arc by `-amplitude r sin(phase)` and its path
 /// is still a circle (about a tilted axis). Orders `n >= 3` (or `n <= -1`) bend the path out of
 /// any plane by up to `amplitude r`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AxisWobble {
     /// The joint (1-based).

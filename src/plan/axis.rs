@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 /// One axis experiment: joint `joint` swept from `start_deg` (relative to the reference pose)
 /// over `span_deg` in `intervals` equal steps (`intervals + 1` poses), Table 1.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AxisSweep {
     /// The swept joint (1-based).
@@ -122,7 +122,7 @@ pub enum PlanError {
 }
 
 /// The axis experiments in the order they are run, around a common reference pose.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CalibrationPlan {
     /// Commands of the common reference pose, in file units (deg or mm), one per joint.

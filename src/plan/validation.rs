@@ -6,7 +6,7 @@ use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 
 /// A seeded set of validation poses drawn uniformly inside per-joint command ranges.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ValidationPlan {
     /// Number of distinct poses (the paper's figs. 9-10 use a few dozen; the diagnosis wants >= 50

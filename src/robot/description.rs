@@ -35,7 +35,7 @@ pub enum DescriptionError {
 }
 
 /// One joint as written in the file.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JointEntry {
     /// `revolute` or `prismatic`.
@@ -93,7 +93,7 @@ impl JointEntry {
 }
 
 /// One row of a Denavit-Hartenberg table as written in the file (file units).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DhEntry {
     /// Offset along the joint axis \[mm\] (a prismatic joint's command adds to it).
@@ -108,7 +108,7 @@ pub struct DhEntry {
 }
 
 /// Which Denavit-Hartenberg convention the `dh` rows follow.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DhConventionEntry {
     /// Classic DH: `Rz(theta) Tz(d) Tx(a) Rx(alpha)` per joint, joint `i` about `z_{i-1}`.
@@ -118,7 +118,7 @@ pub enum DhConventionEntry {
 }
 
 /// A URDF file the joints and geometry come from.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct UrdfEntry {
     /// The URDF file, relative to the description file.
@@ -132,7 +132,7 @@ pub struct UrdfEntry {
 }
 
 /// The form of a joint's transmission function that the calibrator fits (eq. 8).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TransmissionFitForm {
     /// `theta_c = theta_a + sum_k (s_k sin k theta_a + c_k cos k theta_a)`.
@@ -156,7 +156,7 @@ pub enum TransmissionFitForm {
 }
 
 /// The form of a passive coupling function that the calibrator fits (eq. 15).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
 pub enum CouplingFitForm {
     /// A gear of the nominal ratio with harmonics (the bevel gear 4->5).
@@ -172,7 +172,7 @@ pub enum CouplingFitForm {
 }
 
 /// One row of Table 2 as written in the file.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RowEntry {
     /// \[m\]
@@ -219,7 +219,7 @@ impl RowEntry {
 
 /// A nominal passive coupling as the controller models it (`docs/formats.md#controller-semantics`):
 /// `nominal_passive_{from,to}(u_from) = slope * u_from`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NominalCoupling {
     /// The driving joint (1-based).
@@ -235,7 +235,7 @@ pub struct NominalCoupling {
 }
 
 /// A rigid placement: translation \[mm\] and roll-pitch-yaw \[deg\] (`Rz(yaw) Ry(pitch) Rx(roll)`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Placement {
     /// \[mm\]
@@ -266,7 +266,7 @@ impl Placement {
 }
 
 /// The tool: its frame in the last link and the three targets used for validation.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ToolEntry {
     /// The tool frame in the last link's moving frame (with `dh` rows: in the last DH frame;
@@ -280,7 +280,7 @@ pub struct ToolEntry {
 }
 
 /// A target fixed on a link: which link (1-based) and where in its moving frame \[mm\].
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LinkTarget {
     /// The link carrying the target (1-based; link `k` is moved by joint `k`).
@@ -299,7 +299,7 @@ impl LinkTarget {
 /// The targets observed while joint `joint` is swept (`docs/formats.md#measurement-csv`): target 0 on the
 /// moved link or beyond (rigidly moved by that joint alone), target 1 (optional) on the next
 /// link out or beyond, for the passive motion (eq. 14).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AxisTargets {
     /// The swept joint (1-based).
@@ -316,7 +316,7 @@ pub struct AxisTargets {
 pub type SourceCheck = (SourceChain, Isometry3<f64>);
 
 /// A robot description file.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RobotDescription {
     /// Human-readable name.

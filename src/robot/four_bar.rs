@@ -49,7 +49,7 @@ pub enum FourBarError {
 }
 
 /// Dimensions of the 2->3 four-bar (module docs give the planar construction).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FourBarGeometry {
     /// `L`: distance from axis 2 to axis 3 \[m\].

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 /// A transmission function `theta_c = f(theta_a)`: the command \[rad\] a joint needs to reach
 /// the actual active displacement `theta_a` \[rad\] (eq. 8).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Transmission {
     /// `theta_c = theta_a + sum_k (sin\[k-1\] sin(k theta_a) + cos\[k-1\] cos(k theta_a))`;
@@ -168,7 +168,7 @@ fn shifted_polynomial(c0: f64, c: &[f64], shift: f64) -> Transmission {
 
 /// A passive coupling `theta_p = g(theta_a)`: the passive displacement of joint `i+1` \[rad\]
 /// driven by the active displacement `theta_a` of joint `i` \[rad\] (eq. 15).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
 pub enum CouplingFunction {
     /// `g = N t + sum_k (sin\[k-1\] sin(k N t) + cos\[k-1\] cos(k N t))`: a gear of ratio `N`

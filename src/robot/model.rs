@@ -26,7 +26,7 @@ fn identity_transmission() -> Transmission {
 }
 
 /// One joint of a [`RobotModel`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JointModel {
     /// Revolute or prismatic.
@@ -42,18 +42,18 @@ pub struct JointModel {
     pub coupling_in: Option<CouplingFunction>,
     /// Transducer zero offset \[rad\] (revolute) or \[m\] (prismatic), subtracted from the actuator
     /// command (fig. 3).
-    #[serde(default)]
+    #[serde(default, rename = "transducer_offset_rad_or_m", alias = "transducer_offset")]
     pub transducer_offset: f64,
     /// Standard deviation of the Gaussian jitter of the joint value on each execution of a
     /// command \[rad\] (revolute) or \[m\] (prismatic): the robot's repeatability.
-    #[serde(default)]
+    #[serde(default, rename = "repeatability_sigma_rad_or_m", alias = "repeatability_sigma")]
     pub repeatability_sigma: f64,
 }
 
 /// A physical four-bar linkage of the robot, documented for the rigid-body simulator. The
 /// analytic model uses the driven joint's `coupling_in`, which may be this geometry
 /// ([`CouplingFunction::FourBar`]) or a fitted form of it.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FourBarLinkage {
     /// The driving joint (1-based); the linkage drives joint `from + 1`.
@@ -63,7 +63,7 @@ pub struct FourBarLinkage {
 }
 
 /// A robot as a kinematic-plus-transmission model (see module docs). Loadable from TOML.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RobotModel {
     /// Human-readable name.
@@ -149,7 +149,7 @@ impl RobotModel {
             }
             if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
                 return Err(bad(
-                    format!("joints[{k}].repeatability_sigma"),
+                    format!("joints[{k}].repeatability_sigma_rad_or_m"),
                     "must be finite and >= 0".into(),
                 ));
             }

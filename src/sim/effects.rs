@@ -62,7 +62,7 @@ pub const MAX_ALPHA_PER_K: f64 = 1e-3;
 pub const MAX_SCALE_PPM: f64 = 1e4;
 
 /// The unmodelled effects (module docs); every table is optional and off when absent.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Effects {
     /// Joint compliance under gravity.

@@ -16,7 +16,7 @@ use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
 
 /// A zero-mean distribution of one perturbation, in the unit its key names.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Spread {
     /// Gaussian, standard deviation `sigma`.
@@ -116,7 +116,7 @@ fn draw<R: Rng + ?Sized>(spread: &Option<Spread>, rng: &mut R) -> f64 {
 }
 
 /// Spreads of every phi-model row (eq. A3).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RowSpread {
     /// \[mm\]
@@ -130,7 +130,7 @@ pub struct RowSpread {
 }
 
 /// Spreads of the base placement, per component.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PlacementSpread {
     /// Each translation component \[mm\].
@@ -140,7 +140,7 @@ pub struct PlacementSpread {
 }
 
 /// Spreads of the order-1 harmonic transmission error of each revolute joint (eq. 8).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TransmissionSpread {
     /// Coefficient of `sin(theta_a)` \[rad\].
@@ -153,7 +153,7 @@ pub struct TransmissionSpread {
 }
 
 /// Spreads of an order-1 harmonic on a gear coupling (e.g. the 4->5 bevel gear, eq. 15).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CouplingHarmonicSpread {
     /// The driven joint (1-based); the description must couple it to the joint below.
@@ -167,7 +167,7 @@ pub struct CouplingHarmonicSpread {
 /// A four-bar coupling with manufacturing errors. The description holds no linkage
 /// dimensions, so the nominal geometry is given here; its arm is replaced by the perturbed
 /// distance between the two joint axes, keeping the linkage consistent with the geometry.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FourBarSpread {
     /// The driven joint (1-based).
@@ -181,7 +181,7 @@ pub struct FourBarSpread {
 }
 
 /// How to perturb a nominal robot (see module docs).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PerturbationSpec {
     /// Phi-model rows.

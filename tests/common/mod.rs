@@ -50,6 +50,35 @@ pub fn analytic_campaign(
     MeasurementSet::new(desc.dof(), out.rows).expect("a simulated campaign is a valid measurement set")
 }
 
+/// The Table-1 axis experiments alone (no validation poses) of the paper robot, with its
+/// jitter, through the paper's isotropic instrument, random stream from `seed`.
+pub fn axes_only_campaign(seed: u64) -> MeasurementSet {
+    analytic_campaign(
+        &axiscal::sim::paper_robot(),
+        &CalibrationPlan::table1(6),
+        &ValidationPlan {
+            poses: 0,
+            ..ValidationPlan::workspace_default(6)
+        },
+        &MeasurementModel::paper_isotropic(),
+        seed,
+    )
+}
+
+/// `axiscal simulate --sim analytic --validation-poses POSES --seed SEED --out OUT`, run in
+/// `dir`.
+pub fn simulate_analytic(dir: &std::path::Path, poses: usize, seed: u64, out: &str) {
+    axiscal()
+        .current_dir(dir)
+        .args(["simulate", "--sim", "analytic", "--validation-poses"])
+        .arg(poses.to_string())
+        .arg("--seed")
+        .arg(seed.to_string())
+        .args(["--out", out])
+        .assert()
+        .success();
+}
+
 /// A temporary folder holding `campaign.csv`, written by `axiscal simulate --seed SEED`.
 pub fn simulated_campaign_csv(seed: u64) -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().expect("a temporary folder");

@@ -62,7 +62,7 @@ pub enum FramesError {
 }
 
 /// Which rule placed the calibrated base frame (module docs), and what it leaves nominal.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BaseRule {
     /// `section4` or `sequential`.
     pub rule: String,

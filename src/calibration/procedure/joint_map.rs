@@ -27,7 +27,7 @@ pub fn calibrated_joint_values(
 }
 
 /// Which function a [`MapRow`] tabulates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum MapTable {
     /// `active_k(u)`: input the actuator command `u_k`, output the joint's active
@@ -39,7 +39,7 @@ pub enum MapTable {
 }
 
 /// One row of the joint map: `output = table_joint(input)`, in file units (deg or mm).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct MapRow {
     /// The function.
     pub table: MapTable,
@@ -168,7 +168,7 @@ pub fn joint_map(cal: &Calibration, desc: &RobotDescription, step: f64) -> Joint
 /// `sum |base^-1 FK_nominal(cmd + delta) t - base_cal^-1 FK_calibrated(q(cmd)) t|^2` over the
 /// poses and the tool targets `t`, each robot in its own base frame (the numerics' one
 /// Levenberg-Marquardt loop, Jacobian [`crate::kinematics::point_jacobian`]).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ZeroOffsetFit {
     /// Per joint, the offset to ADD to a controller reading (equivalently, to subtract from a
     /// command) so the nominal kinematics reproduce the calibrated robot best \[deg or mm\].

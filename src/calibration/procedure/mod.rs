@@ -41,7 +41,8 @@ pub use joint_map::{
 };
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, residuals_csv};
 pub use result::{
-    AxisReport, Calibration, CouplingReport, NoiseReport, PointResidual, RowSigma, SweepReport, ToolReport,
+    AxisReport, Calibration, CouplingReport, DirectionSigma, HeldOffset, NoiseReport, PointResidual, PositionSigma,
+    RowSigma, SweepReport, ToolPose, ToolReport,
 };
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
@@ -61,7 +62,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 /// Which rotary-axis estimator to use.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum AxisEstimator {
     /// Maximum-likelihood arc fit through the transmission model (default; efficient).
@@ -72,7 +73,7 @@ pub enum AxisEstimator {
 }
 
 /// Options of the procedure.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CalibrationOptions {
     /// The axis estimator.
@@ -96,7 +97,11 @@ pub struct CalibrationOptions {
     pub estimate_noise: bool,
     /// How far a held joint may wander within one axis experiment (deg for a revolute, mm for
     /// a prismatic joint; `docs/formats.md#held-joints`).
-    #[serde(default = "default_held_tolerance")]
+    #[serde(
+        default = "default_held_tolerance",
+        rename = "held_tolerance_deg_or_mm",
+        alias = "held_tolerance"
+    )]
     pub held_tolerance: f64,
 }
 

@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 pub const SIGNIFICANT_SIGMAS: f64 = 3.0;
 
 /// One statement of the report.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Finding {
     /// What it is about, e.g. `row 2: b` or `joint 6 transmission`.
     pub subject: String,
@@ -269,8 +269,8 @@ fn write_noise(s: &mut String, cal: &Calibration) {
                 e.dof,
                 e.rms_3d_mm,
                 e.confidence * 100.0,
-                e.interval_mm[0],
-                e.interval_mm[1],
+                e.interval.low_mm,
+                e.interval.high_mm,
                 if e.jitter_share > 0.0 {
                     format!(
                         " (the assumed joint repeatability explains {:.0} % of the squared residuals, subtracted)",
@@ -349,7 +349,11 @@ fn write_sweeps(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|");
     for (j, w) in rows {
-        let held: Vec<String> = w.held_offsets.iter().map(|(k, v)| format!("{k}: {v:.4}")).collect();
+        let held: Vec<String> = w
+            .held_offsets
+            .iter()
+            .map(|h| format!("{}: {:.4}", h.joint, h.offset_deg_or_mm))
+            .collect();
         let own = match (w.own_axis_angle_mrad, w.own_axis_offset_mm) {
             (Some(a), Some(o)) => format!("{a:.3} mrad, {o:.3} mm"),
             (Some(a), None) => format!("{a:.3} mrad"),
@@ -410,7 +414,7 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
         // A sliding axis has a direction only (eq. 9): no position, so no position sigma.
         let (unit, position_sigma) = match a.kind.as_str() {
             "prismatic" => ("mm", "- (sliding)".to_owned()),
-            _ => ("deg", format!("{:.3}", a.position_sigma_mm[0])),
+            _ => ("deg", format!("{:.3}", a.position_sigma.major_mm)),
         };
         let _ = writeln!(
             s,
@@ -425,7 +429,7 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
             a.direction[0],
             a.direction[1],
             a.direction[2],
-            a.direction_sigma_rad[0] * 1e3,
+            a.direction_sigma.major_rad * 1e3,
             a.residual_rms_mm
         );
     }

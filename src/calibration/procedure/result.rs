@@ -11,13 +11,14 @@ use crate::calibration::line_ml::LineFit;
 use crate::calibration::noise::NoiseEstimate;
 use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
 use crate::calibration::{ArcFit, PaperAxisFit};
+use crate::json_file;
 use crate::kinematics::AxisLine;
 use crate::robot::{CouplingFunction, DescriptionIdentity, RobotModel, Transmission};
 use nalgebra::{Isometry3, Matrix2, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// One calibrated axis.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct AxisReport {
     /// The joint (1-based).
     pub joint: usize,
@@ -33,12 +34,21 @@ pub struct AxisReport {
     pub point_mm: [f64; 3],
     /// Unit direction, instrument frame.
     pub direction: [f64; 3],
-    /// 1-sigma of the axis direction in two perpendicular directions \[rad\] (principal values).
-    pub direction_sigma_rad: [f64; 2],
-    /// 1-sigma of the axis position across the axis \[mm\] (principal values); NaN (null in
-    /// JSON) for a sliding axis, which has a direction only (eq. 9).
-    #[serde(deserialize_with = "nan_from_null")]
-    pub position_sigma_mm: [f64; 2],
+    /// 1-sigma of the axis direction in two perpendicular directions (principal values).
+    #[serde(
+        rename = "direction_sigma",
+        alias = "direction_sigma_rad",
+        deserialize_with = "json_file::named_or_old::<_, DirectionSigma, [f64; 2]>"
+    )]
+    pub direction_sigma: DirectionSigma,
+    /// 1-sigma of the axis position across the axis (principal values); NaN (null in JSON) for
+    /// a sliding axis, which has a direction only (eq. 9).
+    #[serde(
+        rename = "position_sigma",
+        alias = "position_sigma_mm",
+        deserialize_with = "json_file::named_or_old::<_, PositionSigma, [Option<f64>; 2]>"
+    )]
+    pub position_sigma: PositionSigma,
     /// The fitted transmission `theta_c = f(theta_a)` in the fit's own zero.
     pub transmission: Transmission,
     /// Names of its coefficients (`sin1`, `cos1`, ...).
@@ -62,12 +72,62 @@ pub struct AxisReport {
     pub sweeps: Vec<SweepReport>,
 }
 
+/// The principal 1-sigmas of an axis direction, largest first.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct DirectionSigma {
+    /// The largest \[rad\].
+    pub major_rad: f64,
+    /// The smallest \[rad\].
+    pub minor_rad: f64,
+}
+
+impl From<[f64; 2]> for DirectionSigma {
+    fn from([major_rad, minor_rad]: [f64; 2]) -> Self {
+        DirectionSigma { major_rad, minor_rad }
+    }
+}
+
+/// The principal 1-sigmas of an axis position across the axis, largest first; NaN (null in
+/// JSON) for a sliding axis.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct PositionSigma {
+    /// The largest \[mm\].
+    #[serde(deserialize_with = "nan_from_null")]
+    #[schemars(with = "Option<f64>")]
+    pub major_mm: f64,
+    /// The smallest \[mm\].
+    #[serde(deserialize_with = "nan_from_null")]
+    #[schemars(with = "Option<f64>")]
+    pub minor_mm: f64,
+}
+
+impl PositionSigma {
+    /// A sliding axis's: none.
+    pub const NONE: PositionSigma = PositionSigma {
+        major_mm: f64::NAN,
+        minor_mm: f64::NAN,
+    };
+}
+
+impl From<[f64; 2]> for PositionSigma {
+    fn from([major_mm, minor_mm]: [f64; 2]) -> Self {
+        PositionSigma { major_mm, minor_mm }
+    }
+}
+
+/// Before schema 2 (`[major, minor]`, null for a sliding axis).
+impl From<[Option<f64>; 2]> for PositionSigma {
+    fn from(v: [Option<f64>; 2]) -> Self {
+        v.map(|x| x.unwrap_or(f64::NAN)).into()
+    }
+}
+
 fn revolute() -> String {
     "revolute".into()
 }
 
 /// One sweep of a jointly fitted axis.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct SweepReport {
     /// The experiment.
     pub experiment: String,
@@ -75,11 +135,12 @@ pub struct SweepReport {
     pub points: usize,
     /// RMS of its points' residuals in the joint fit \[mm\].
     pub residual_rms_mm: f64,
-    /// The held joints whose value in this sweep differs from the reference pose: `(joint,
-    /// median offset)` in file units (deg or mm).
-    pub held_offsets: Vec<(usize, f64)>,
-    /// Largest deviation of a held joint from its median within the sweep (file units): the
+    /// The held joints whose value in this sweep differs from the reference pose.
+    #[serde(deserialize_with = "json_file::each_named_or_old::<_, HeldOffset, (usize, f64)>")]
+    pub held_offsets: Vec<HeldOffset>,
+    /// Largest deviation of a held joint from its median within the sweep \[deg or mm\]: the
     /// recorded wander the procedure modelled.
+    #[serde(rename = "held_wander_deg_or_mm", alias = "held_wander")]
     pub held_wander: f64,
     /// With several sweeps: the angle between this sweep's own axis and the joint fit's
     /// \[mrad\] (null when fitted alone or not fittable alone).
@@ -89,8 +150,27 @@ pub struct SweepReport {
     pub own_axis_offset_mm: Option<f64>,
 }
 
+/// A held joint whose value in a sweep differs from the reference pose.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct HeldOffset {
+    /// The joint (1-based).
+    pub joint: usize,
+    /// Its median offset from the reference pose \[deg or mm\] (file units of the joint).
+    pub offset_deg_or_mm: f64,
+}
+
+/// Before schema 2: `[joint, offset]`.
+impl From<(usize, f64)> for HeldOffset {
+    fn from((joint, offset_deg_or_mm): (usize, f64)) -> Self {
+        HeldOffset {
+            joint,
+            offset_deg_or_mm,
+        }
+    }
+}
+
 /// The residual of one observed point in its axis fit (`residuals.csv`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PointResidual {
     /// Experiment.
     pub experiment: String,
@@ -138,8 +218,8 @@ impl AxisReport {
             span_deg: span_rad.to_degrees(),
             point_mm: (fit.axis.origin_m.coords * 1e3).into(),
             direction: fit.axis.direction.into_inner().into(),
-            direction_sigma_rad: principal_sigmas(&fit.axis_direction_covariance),
-            position_sigma_mm: principal_sigmas(&fit.axis_position_covariance).map(|s| s * 1e3),
+            direction_sigma: principal_sigmas(&fit.axis_direction_covariance).into(),
+            position_sigma: principal_sigmas(&fit.axis_position_covariance).map(|s| s * 1e3).into(),
             transmission: fit.transmission.clone(),
             coefficient_names: form.coefficient_names(),
             coefficient_sigma: fit.coefficient_sigma.clone(),
@@ -173,8 +253,8 @@ impl AxisReport {
             span_deg: span_m * 1e3,
             point_mm: (fit.params.start.coords * 1e3).into(),
             direction: fit.direction.into_inner().into(),
-            direction_sigma_rad: principal_sigmas(&fit.direction_covariance),
-            position_sigma_mm: [f64::NAN; 2],
+            direction_sigma: principal_sigmas(&fit.direction_covariance).into(),
+            position_sigma: PositionSigma::NONE,
             transmission: fit.transmission.clone(),
             coefficient_names: form.coefficient_names(),
             coefficient_sigma: fit.coefficient_sigma.clone(),
@@ -200,9 +280,11 @@ impl AxisReport {
             total.fixed_view_mut::<2, 2>(0, 2).fill(0.0);
             total.fixed_view_mut::<2, 2>(2, 0).fill(0.0);
         } else {
-            self.position_sigma_mm = principal_sigmas(&total.fixed_view::<2, 2>(2, 2).into()).map(|s| s * 1e3);
+            self.position_sigma = principal_sigmas(&total.fixed_view::<2, 2>(2, 2).into())
+                .map(|s| s * 1e3)
+                .into();
         }
-        self.direction_sigma_rad = principal_sigmas(&total.fixed_view::<2, 2>(0, 0).into());
+        self.direction_sigma = principal_sigmas(&total.fixed_view::<2, 2>(0, 0).into()).into();
         self.covariance = Some(AxisCovariance::new(u, v, &total));
     }
 
@@ -222,8 +304,8 @@ impl AxisReport {
             point_mm: (fit.axis.origin_m.coords * 1e3).into(),
             direction: fit.axis.direction.into_inner().into(),
             // The paper's estimator reports no covariance of the line.
-            direction_sigma_rad: [f64::NAN; 2],
-            position_sigma_mm: [f64::NAN; 2],
+            direction_sigma: [f64::NAN; 2].into(),
+            position_sigma: PositionSigma::NONE,
             transmission: t.transmission.clone(),
             coefficient_names: form.coefficient_names(),
             coefficient_sigma: t.sigma.clone(),
@@ -238,7 +320,7 @@ impl AxisReport {
 }
 
 /// 1-sigma of one Table-2 row, in Table 2's units.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RowSigma {
     /// \[mm\]
     pub a_mm: f64,
@@ -251,7 +333,7 @@ pub struct RowSigma {
 }
 
 /// One calibrated passive coupling.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CouplingReport {
     /// Driving joint (1-based).
     pub from: usize,
@@ -296,20 +378,80 @@ impl CouplingReport {
 }
 
 /// The tool frame, fitted from the three tool targets at the reference pose.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ToolReport {
     /// The experiment observed.
     pub experiment: String,
     /// Its step.
     pub step: usize,
-    /// The calibrated tool frame in the last link.
+    /// The calibrated tool frame in the last link (in the file: [`ToolPose`]).
+    #[serde(with = "tool_pose")]
+    #[schemars(with = "ToolPose")]
     pub last_link_from_tool: Isometry3<f64>,
     /// RMS of the three-point fit \[mm\] (noise only, for a rigid tool).
     pub fit_rms_mm: f64,
 }
 
+/// A frame in the file: translation in mm and rotation as a unit quaternion `[x, y, z, w]`
+/// (exact, unlike roll-pitch-yaw).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct ToolPose {
+    /// Translation \[mm\].
+    pub translation_mm: [f64; 3],
+    /// Rotation, unit quaternion `[x, y, z, w]`.
+    pub rotation_xyzw: [f64; 4],
+}
+
+/// Before schema 2: nalgebra's layout, translation in metres.
+#[derive(Deserialize)]
+struct ToolPoseM {
+    translation: [f64; 3],
+    rotation: [f64; 4],
+}
+
+impl From<ToolPoseM> for ToolPose {
+    fn from(p: ToolPoseM) -> Self {
+        ToolPose {
+            translation_mm: p.translation.map(|x| x * 1e3),
+            rotation_xyzw: p.rotation,
+        }
+    }
+}
+
+/// `Isometry3` (metres) as [`ToolPose`] (mm), reading the old layout too.
+mod tool_pose {
+    use super::{ToolPose, ToolPoseM};
+    use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+
+    pub fn serialize<S: serde::Serializer>(iso: &Isometry3<f64>, s: S) -> Result<S::Ok, S::Error> {
+        let t = iso.translation.vector * 1e3;
+        let q = iso.rotation.quaternion().coords;
+        serde::Serialize::serialize(
+            &ToolPose {
+                translation_mm: [t.x, t.y, t.z],
+                rotation_xyzw: [q.x, q.y, q.z, q.w],
+            },
+            s,
+        )
+    }
+
+    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Isometry3<f64>, D::Error> {
+        let p: ToolPose = crate::json_file::named_or_old::<_, ToolPose, ToolPoseM>(d)?;
+        let [x, y, z] = p.translation_mm.map(|v| v / 1e3);
+        let [i, j, k, w] = p.rotation_xyzw;
+        let q = Quaternion::new(w, i, j, k);
+        // As written (bit for bit) when it is a unit quaternion to rounding; else normalised.
+        let rotation = if (q.norm() - 1.0).abs() < 1e-12 {
+            UnitQuaternion::new_unchecked(q)
+        } else {
+            UnitQuaternion::new_normalize(q)
+        };
+        Ok(Isometry3::from_parts(Translation3::new(x, y, z), rotation))
+    }
+}
+
 /// The result of [`super::calibrate`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Calibration {
     /// The calibrated robot: actual rows, transmissions, couplings, offsets, tool.
     pub robot: RobotModel,
@@ -347,7 +489,7 @@ pub struct Calibration {
 }
 
 /// The measurement noise of a calibration (`docs/formats.md#calibration-json`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct NoiseReport {
     /// The estimate from the pooled residuals (null without degrees of freedom).
     pub estimate: Option<NoiseEstimate>,
@@ -362,7 +504,7 @@ pub struct NoiseReport {
 }
 
 /// Reads numbers that JSON writes as null when they are NaN (`serde_json` writes NaN as null).
-fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
-    let v: [Option<f64>; 2] = Deserialize::deserialize(d)?;
-    Ok(v.map(|x| x.unwrap_or(f64::NAN)))
+fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v: Option<f64> = Deserialize::deserialize(d)?;
+    Ok(v.unwrap_or(f64::NAN))
 }

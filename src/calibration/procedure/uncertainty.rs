@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 /// Covariance of one axis line: `[tilt_u, tilt_v, shift_u, shift_v]` in the basis `(u, v)`
 /// perpendicular to it (direction components \[rad\], position \[m\]; a sliding axis has no
 /// position: its shift block is zero).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct AxisCovariance {
     /// First basis vector across the axis.
     pub u: [f64; 3],

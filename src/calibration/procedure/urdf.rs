@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 
 /// Which link is the URDF's root.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum UrdfRoot {
     /// `base_link`, the robot's base frame (frame 1: Z on axis 1), as ROS-Industrial expects.
@@ -174,7 +174,7 @@ pub fn urdf(model: &PhiModel, desc: &RobotDescription, options: &UrdfOptions) ->
 /// instead of the calibrated joint values: the largest tool-point distance \[mm\] and tool
 /// rotation \[mrad\] between `FK_calibrated(q(cmd))` and `FK_calibrated(cmd)` over `commands`
 /// (file units), with the command where each occurs.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RawReadingDeviation {
     /// Commands compared.
     pub poses: usize,

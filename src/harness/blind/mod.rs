@@ -39,7 +39,7 @@ pub const CASE_EFFECTS: [&str; 8] = [
 ];
 
 /// The hidden truth of one case (`key.json`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseKey {
     /// Case index.
     pub case: usize,
@@ -69,7 +69,7 @@ pub struct CaseKey {
 /// temperature, so at `T` the actuator stands `rad_per_k (T - 20)` away from where the same
 /// command put it at 20 deg C (the axis experiments' temperature); the passive couplings
 /// follow the actuator. The thermal-expansion candidate scales lengths, never turns a joint.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct JointZeroDrift {
     /// 1-based joint.
     pub joint: usize,
@@ -80,7 +80,7 @@ pub struct JointZeroDrift {
 /// An out-of-set instrument error: a paraboloid sag of the measured field, every measured
 /// point moved down by `curvature_per_m |p_xy|^2` (`p_xy` its horizontal distance from the
 /// instrument origin).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct InstrumentSag {
     /// \[1/m\]: the sag in metres per square metre of horizontal distance.
     pub curvature_per_m: f64,

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
 /// One scored case.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseResult {
     /// The hidden truth.
     pub key: CaseKey,
@@ -22,7 +22,7 @@ pub struct CaseResult {
 }
 
 /// Counts of (expected, diagnosed) effect names.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ConfusionMatrix {
     /// Row labels (expected answers).
     pub expected: Vec<String>,
@@ -32,8 +32,24 @@ pub struct ConfusionMatrix {
     pub counts: Vec<Vec<usize>>,
 }
 
+/// A held-out gap before and after the named effect is added.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct GapBeforeAfter {
+    /// Before \[mm\].
+    pub before_mm: f64,
+    /// After \[mm\].
+    pub after_mm: f64,
+}
+
+/// Before schema 2: `[before, after]`.
+impl From<[f64; 2]> for GapBeforeAfter {
+    fn from([before_mm, after_mm]: [f64; 2]) -> Self {
+        GapBeforeAfter { before_mm, after_mm }
+    }
+}
+
 /// The suite's score (fractions are NaN when their set is empty).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BlindScore {
     /// Cases scored.
     pub cases: usize,
@@ -77,8 +93,12 @@ pub struct BlindScore {
     pub shrunk_70_or_at_noise: f64,
     /// Median of `gap_after / gap_before` over correctly named effects.
     pub median_gap_ratio: f64,
-    /// Mean `gap_before` and `gap_after` over correctly named effects \[mm\].
-    pub mean_gap_before_after_mm: [f64; 2],
+    /// Mean `gap_before` and `gap_after` over correctly named effects.
+    #[serde(
+        alias = "mean_gap_before_after_mm",
+        deserialize_with = "crate::json_file::named_or_old::<_, GapBeforeAfter, [f64; 2]>"
+    )]
+    pub mean_gap: GapBeforeAfter,
     /// The confusion matrix.
     pub confusion: ConfusionMatrix,
 }
@@ -245,10 +265,10 @@ impl Tally {
             } else {
                 ratios[ratios.len() / 2]
             },
-            mean_gap_before_after_mm: [
-                n.gap_before_sum_mm / n.named_ok.max(1) as f64,
-                n.gap_after_sum_mm / n.named_ok.max(1) as f64,
-            ],
+            mean_gap: GapBeforeAfter {
+                before_mm: n.gap_before_sum_mm / n.named_ok.max(1) as f64,
+                after_mm: n.gap_after_sum_mm / n.named_ok.max(1) as f64,
+            },
             confusion,
         }
     }
@@ -294,8 +314,8 @@ impl BlindScore {
             self.resolvable,
             self.shrunk_70_or_at_noise,
             self.median_gap_ratio,
-            self.mean_gap_before_after_mm[0],
-            self.mean_gap_before_after_mm[1],
+            self.mean_gap.before_mm,
+            self.mean_gap.after_mm,
             self.effect_accuracy,
         );
         let _ = writeln!(

@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 pub const STEEL_ALPHA_PER_K: f64 = 1.2e-5;
 
 /// The candidate effects of the budget (module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum BudgetEffect {
     /// Joint compliance under gravity.
@@ -151,7 +151,7 @@ impl BudgetEffect {
 }
 
 /// Settings of [`gap_budget`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BudgetSettings {
     /// The scenario every magnitude is run on (its effects are replaced); seeds
     /// `scenario.seed .. scenario.seed + seeds` are pooled.
@@ -177,8 +177,17 @@ impl BudgetSettings {
     }
 }
 
+/// `budget.json`: the settings and one line per effect.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct BudgetReport {
+    /// The settings.
+    pub settings: BudgetSettings,
+    /// One line per effect.
+    pub lines: Vec<BudgetLine>,
+}
+
 /// One line of the budget.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BudgetLine {
     /// The effect.
     pub effect: BudgetEffect,
@@ -254,5 +263,22 @@ pub fn budget_line(settings: &BudgetSettings, effect: BudgetEffect) -> Result<Bu
 
 /// The whole budget: one line per effect of `effects`.
 pub fn gap_budget(settings: &BudgetSettings, effects: &[BudgetEffect]) -> Result<Vec<BudgetLine>, ScenarioError> {
-    effects.iter().map(|e| budget_line(settings, *e)).collect()
+    gap_budget_with(settings, effects, &crate::progress::Silent)
+}
+
+/// [`gap_budget`], counting the effects done on `progress`.
+pub fn gap_budget_with(
+    settings: &BudgetSettings,
+    effects: &[BudgetEffect],
+    progress: &dyn crate::progress::Progress,
+) -> Result<Vec<BudgetLine>, ScenarioError> {
+    progress.start(effects.len(), "effects");
+    effects
+        .iter()
+        .map(|e| {
+            let line = budget_line(settings, *e);
+            progress.inc();
+            line
+        })
+        .collect()
 }

@@ -35,7 +35,7 @@ pub const PAPER_ORIENTATION_ERROR_RAD: [f64; 2] = [0.05, 0.01];
 pub const PAPER_REPEATABILITY: [f64; 2] = [0.34, 0.0033];
 
 /// Settings of [`run_paper_scenario`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PaperScenario {
     /// Seed of the campaign's measurement and repeatability noise.
     pub seed: u64,
@@ -112,7 +112,7 @@ pub enum ScenarioError {
 }
 
 /// The result of one test pose.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PoseResult {
     /// Pose id.
     pub id: String,
@@ -134,29 +134,77 @@ pub struct PoseResult {
     pub failure: Option<String>,
 }
 
+/// One quantity of the uncalibrated robot, the calibrated one and the noise floor (a
+/// calibration from noise-free-robot data); the unit is the one of the key holding it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct ByCalibration<T> {
+    /// With the nominal commands.
+    pub uncalibrated: T,
+    /// With the calibration's compensated commands.
+    pub calibrated: T,
+    /// With the noise-floor calibration's compensated commands.
+    pub floor: T,
+}
+
+/// A dimensionless quantity of the position and of the orientation error.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct PositionOrientation {
+    /// Of the position error.
+    pub position: f64,
+    /// Of the orientation error.
+    pub orientation: f64,
+}
+
+/// Edges of the ISO 9283 cubes.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct CubeEdges {
+    /// Inside the calibrated spans \[m\].
+    pub inside_spans_m: f64,
+    /// In the workspace \[m\].
+    pub workspace_m: f64,
+}
+
+/// Calibrated and noise-floor values of a length \[mm\].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct CalibratedFloorMm {
+    /// Of the calibration \[mm\].
+    pub calibrated_mm: f64,
+    /// Of the noise-floor calibration \[mm\].
+    pub floor_mm: f64,
+}
+
+/// Calibrated and noise-floor values of an angle \[rad\].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct CalibratedFloorRad {
+    /// Of the calibration \[rad\].
+    pub calibrated_rad: f64,
+    /// Of the noise-floor calibration \[rad\].
+    pub floor_rad: f64,
+}
+
 /// Statistics of one region.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RegionSummary {
     /// The region.
     pub region: Region,
-    /// Position error \[mm\]: uncalibrated, calibrated, floor (observed).
-    pub position_mm: [Stats; 3],
-    /// Orientation error \[rad\]: uncalibrated, calibrated, floor (observed).
-    pub orientation_rad: [Stats; 3],
-    /// Model position error \[mm\] (no jitter, no noise): uncalibrated, calibrated, floor.
-    pub model_position_mm: [Stats; 3],
-    /// Model orientation error \[rad\]: uncalibrated, calibrated, floor.
-    pub model_orientation_rad: [Stats; 3],
-    /// Calibrated / floor RMS: position, orientation (observed).
-    pub ratio_to_floor: [f64; 2],
-    /// Calibrated / floor RMS of the model errors: position, orientation.
-    pub model_ratio_to_floor: [f64; 2],
+    /// Position error \[mm\] (observed).
+    pub position_mm: ByCalibration<Stats>,
+    /// Orientation error \[rad\] (observed).
+    pub orientation_rad: ByCalibration<Stats>,
+    /// Model position error \[mm\] (no jitter, no noise).
+    pub model_position_mm: ByCalibration<Stats>,
+    /// Model orientation error \[rad\].
+    pub model_orientation_rad: ByCalibration<Stats>,
+    /// Calibrated / floor RMS (observed).
+    pub ratio_to_floor: PositionOrientation,
+    /// Calibrated / floor RMS of the model errors.
+    pub model_ratio_to_floor: PositionOrientation,
     /// Poses whose compensation failed.
     pub failures: usize,
 }
 
 /// The repeatability test (section 4).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RepeatabilitySummary {
     /// Poses tested (each command executed twice).
     pub poses: usize,
@@ -171,12 +219,12 @@ pub struct RepeatabilitySummary {
 }
 
 /// Everything the scenario measured.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PaperReport {
     /// The settings.
     pub scenario: PaperScenario,
-    /// Edge of the ISO 9283 cube inside the spans and in the workspace \[m\].
-    pub iso_cube_edge_m: [f64; 2],
+    /// Edges of the ISO 9283 cubes inside the spans and in the workspace.
+    pub iso_cube_edge: CubeEdges,
     /// Per pose.
     pub poses: Vec<PoseResult>,
     /// Per region.
@@ -291,6 +339,14 @@ pub fn scenario_poses(
 
 /// Runs the paper scenario (module docs). Deterministic for given settings.
 pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioError> {
+    run_paper_scenario_with(s, &crate::progress::Silent)
+}
+
+/// [`run_paper_scenario`], counting the test poses evaluated on `progress`.
+pub fn run_paper_scenario_with(
+    s: &PaperScenario,
+    progress: &dyn crate::progress::Progress,
+) -> Result<PaperOutcome, ScenarioError> {
     let desc = RobotDescription::asea_irb6l();
     let truth = crate::sim::paper_robot();
     let mut perfect = truth.clone();
@@ -304,8 +360,10 @@ pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioErr
     let bench = s.test_bench(&truth, &desc);
     let (poses, iso_cube_edge_m) = scenario_poses(&desc, s.random_poses, s.evaluation_seed)?;
     let mut results = Vec::with_capacity(poses.len());
+    progress.start(poses.len(), "test poses");
     for (i, p) in poses.iter().enumerate() {
         results.push(evaluate_pose(&bench, &comp, &floor_comp, p, s.evaluation_seed, i)?);
+        progress.inc();
     }
     let regions = [Region::InsideSpans, Region::Workspace]
         .into_iter()
@@ -315,7 +373,10 @@ pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioErr
     Ok(PaperOutcome {
         report: PaperReport {
             scenario: s.clone(),
-            iso_cube_edge_m,
+            iso_cube_edge: CubeEdges {
+                inside_spans_m: iso_cube_edge_m[0],
+                workspace_m: iso_cube_edge_m[1],
+            },
             poses: results,
             regions,
             repeatability,
@@ -328,25 +389,35 @@ pub fn run_paper_scenario(s: &PaperScenario) -> Result<PaperOutcome, ScenarioErr
 /// Calibrated vs noise-floor RMS inside the spans, pooled over several campaign seeds (one
 /// seed's floor alone scatters by a factor of 4: the Table-1 spans leave some transmission
 /// terms poorly determined).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FloorCheck {
     /// Seeds pooled: `first_seed .. first_seed + seeds`.
     pub first_seed: u64,
     /// Number of seeds.
     pub seeds: u64,
-    /// Pooled RMS inside the spans: calibrated, floor; position \[mm\].
-    pub position_rms_mm: [f64; 2],
-    /// Pooled RMS inside the spans: calibrated, floor; orientation \[rad\].
-    pub orientation_rms_rad: [f64; 2],
-    /// Calibrated / floor pooled RMS: position, orientation.
-    pub ratio: [f64; 2],
+    /// Pooled RMS of the position error inside the spans.
+    pub position_rms: CalibratedFloorMm,
+    /// Pooled RMS of the orientation error inside the spans.
+    pub orientation_rms: CalibratedFloorRad,
+    /// Calibrated / floor pooled RMS.
+    pub ratio: PositionOrientation,
 }
 
 /// Runs `template` for seeds `template.seed .. template.seed + seeds` (rayon; pooled in seed
 /// order, so independent of the thread count) and pools the inside-span RMS of the calibrated
 /// and the floor errors.
 pub fn floor_check(template: &PaperScenario, seeds: u64) -> Result<FloorCheck, ScenarioError> {
+    floor_check_with(template, seeds, &crate::progress::Silent)
+}
+
+/// [`floor_check`], counting the campaign seeds done on `progress`.
+pub fn floor_check_with(
+    template: &PaperScenario,
+    seeds: u64,
+    progress: &dyn crate::progress::Progress,
+) -> Result<FloorCheck, ScenarioError> {
     use rayon::prelude::*;
+    progress.start(seeds as usize, "campaign seeds");
     let regions: Vec<RegionSummary> = (0..seeds)
         .into_par_iter()
         .map(|i| {
@@ -355,6 +426,7 @@ pub fn floor_check(template: &PaperScenario, seeds: u64) -> Result<FloorCheck, S
                 ..template.clone()
             };
             let report = run_paper_scenario(&s)?.report;
+            progress.inc();
             Ok(report
                 .regions
                 .into_iter()
@@ -362,20 +434,24 @@ pub fn floor_check(template: &PaperScenario, seeds: u64) -> Result<FloorCheck, S
                 .expect("the scenario evaluates inside the spans"))
         })
         .collect::<Result<_, ScenarioError>>()?;
-    let pooled = |f: fn(&RegionSummary) -> &[Stats; 3], k: usize| {
-        Stats::pooled(&regions.iter().map(|r| f(r)[k]).collect::<Vec<_>>()).rms
+    let pooled = |f: fn(&RegionSummary) -> Stats| Stats::pooled(&regions.iter().map(f).collect::<Vec<_>>()).rms;
+    let position_rms = CalibratedFloorMm {
+        calibrated_mm: pooled(|r| r.position_mm.calibrated),
+        floor_mm: pooled(|r| r.position_mm.floor),
     };
-    let position_rms_mm = [pooled(|r| &r.position_mm, 1), pooled(|r| &r.position_mm, 2)];
-    let orientation_rms_rad = [pooled(|r| &r.orientation_rad, 1), pooled(|r| &r.orientation_rad, 2)];
+    let orientation_rms = CalibratedFloorRad {
+        calibrated_rad: pooled(|r| r.orientation_rad.calibrated),
+        floor_rad: pooled(|r| r.orientation_rad.floor),
+    };
     Ok(FloorCheck {
         first_seed: template.seed,
         seeds,
-        ratio: [
-            position_rms_mm[0] / position_rms_mm[1],
-            orientation_rms_rad[0] / orientation_rms_rad[1],
-        ],
-        position_rms_mm,
-        orientation_rms_rad,
+        ratio: PositionOrientation {
+            position: position_rms.calibrated_mm / position_rms.floor_mm,
+            orientation: orientation_rms.calibrated_rad / orientation_rms.floor_rad,
+        },
+        position_rms,
+        orientation_rms,
     })
 }
 
@@ -454,26 +530,32 @@ pub fn evaluate_pose(
 
 fn summarise(region: Region, results: &[PoseResult]) -> RegionSummary {
     let rs: Vec<&PoseResult> = results.iter().filter(|r| r.region == region).collect();
-    let kinds = |f: fn(&ToolError) -> f64| -> [Stats; 3] {
-        [
-            Stats::of(&rs.iter().map(|r| f(&r.uncalibrated)).collect::<Vec<_>>()),
-            Stats::of(
+    let kinds = |f: fn(&ToolError) -> f64| -> ByCalibration<Stats> {
+        ByCalibration {
+            uncalibrated: Stats::of(&rs.iter().map(|r| f(&r.uncalibrated)).collect::<Vec<_>>()),
+            calibrated: Stats::of(
                 &rs.iter()
                     .filter_map(|r| r.calibrated.as_ref().map(f))
                     .collect::<Vec<_>>(),
             ),
-            Stats::of(&rs.iter().filter_map(|r| r.floor.as_ref().map(f)).collect::<Vec<_>>()),
-        ]
+            floor: Stats::of(&rs.iter().filter_map(|r| r.floor.as_ref().map(f)).collect::<Vec<_>>()),
+        }
     };
     let position_mm = kinds(|e| e.position_mm);
     let orientation_rad = kinds(|e| e.orientation_rad);
     let model_position_mm = kinds(|e| e.model_position_mm);
     let model_orientation_rad = kinds(|e| e.model_orientation_rad);
-    let ratio = |s: &[Stats; 3]| s[1].rms / s[2].rms;
+    let ratio = |s: &ByCalibration<Stats>| s.calibrated.rms / s.floor.rms;
     RegionSummary {
         region,
-        ratio_to_floor: [ratio(&position_mm), ratio(&orientation_rad)],
-        model_ratio_to_floor: [ratio(&model_position_mm), ratio(&model_orientation_rad)],
+        ratio_to_floor: PositionOrientation {
+            position: ratio(&position_mm),
+            orientation: ratio(&orientation_rad),
+        },
+        model_ratio_to_floor: PositionOrientation {
+            position: ratio(&model_position_mm),
+            orientation: ratio(&model_orientation_rad),
+        },
         position_mm,
         orientation_rad,
         model_position_mm,

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 /// A scenario file (see the module docs and `docs/formats.md#scenario-file`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioFile {
     /// Name; default the file stem. Results go to `results/<name>/`.
@@ -71,7 +71,7 @@ fn default_occlusion() -> bool {
 }
 
 /// Which simulator plays the real robot.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum SimMode {
     /// The analytic truth model ([`AnalyticArm`](crate::sim::AnalyticArm)).
@@ -83,7 +83,7 @@ pub enum SimMode {
 }
 
 /// Where the simulated real robot comes from.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TruthSection {
     /// The paper's robot: Table 2 actual rows and the section-4 functions.
@@ -102,7 +102,7 @@ pub enum TruthSection {
 }
 
 /// Which instrument and how noisy.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Instrument {
     /// Two theodolites at the paper's stations, angular noise calibrated to the net radial
@@ -114,7 +114,7 @@ pub enum Instrument {
 }
 
 /// The measurement model.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MeasurementSection {
     /// Theodolites or isotropic noise.
@@ -139,7 +139,7 @@ impl Default for MeasurementSection {
 }
 
 /// The calibration plan: paper Table 1 unless `sweeps` is given.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PlanSection {
     /// Commands of the common reference pose \[deg or mm\]; default all zero.
@@ -169,7 +169,7 @@ impl Default for PlanSection {
 /// Conditions every pose of the campaign is measured under (`docs/formats.md#measurement-csv`, optional columns);
 /// the effects that depend on them (payload through compliance, thermal expansion) act only
 /// when switched on in `[effects]`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ConditionsSection {
     /// Payload at the tool \[kg\] (default 0).
@@ -195,7 +195,7 @@ impl Default for ConditionsSection {
 
 /// One swept parameter (set exactly one key); every value becomes a case named
 /// `<key>=<value>` (spans: `spans=<index>`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SweepSection {
     /// Net radial measurement error \[mm\], replacing `measurement.net_radial_rms_mm`.

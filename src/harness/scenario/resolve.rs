@@ -29,7 +29,7 @@ pub struct Overrides {
 }
 
 /// The simulated real robot of every trial.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ResolvedTruth {
     /// The same robot in every trial.
@@ -45,7 +45,7 @@ pub enum ResolvedTruth {
 }
 
 /// One case of a scenario: one value of the swept parameter.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Case {
     /// `base`, or `<parameter>=<value>`.
@@ -57,7 +57,7 @@ pub struct Case {
 }
 
 /// A checked, self-contained scenario (see module docs).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ResolvedScenario {
     /// Name (results folder).

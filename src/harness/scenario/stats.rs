@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Which statistic of a metric a threshold looks at.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Stat {
     /// Arithmetic mean.

@@ -8,7 +8,7 @@ use super::threshold::{Op, Threshold, Verdict};
 use serde::{Deserialize, Serialize};
 
 /// Statistics of one metric in one case.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct MetricSummary {
     /// Metric name.
     pub metric: String,
@@ -22,7 +22,7 @@ pub struct MetricSummary {
 pub const FAILURE_RATE: &str = "failure_rate";
 
 /// Statistics of one case.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseSummary {
     /// Case name.
     pub case: String,
@@ -39,7 +39,7 @@ pub struct CaseSummary {
 }
 
 /// What `summary.json` holds.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Summary {
     /// Scenario name.
     pub scenario: String,

@@ -4,7 +4,7 @@ use super::stats::{Stat, Stats, stat_of};
 use serde::{Deserialize, Serialize};
 
 /// The comparison of a threshold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Op {
     /// The statistic must be at most the value.
     #[serde(rename = "<=")]
@@ -26,7 +26,7 @@ impl Op {
 
 /// `stat(metric) op value`, e.g. `p95(uncal_pos_rms_mm) <= 5`, in every case of the scenario
 /// or only in `case`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Threshold {
     /// Metric name (a column of `trials.csv`; its unit is in its name).
@@ -76,7 +76,7 @@ impl Threshold {
 }
 
 /// The outcome of one threshold in one case.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Verdict {
     /// The threshold.
     pub threshold: Threshold,

@@ -57,7 +57,7 @@ pub enum StudyError {
 }
 
 /// The study's settings.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct EfficiencyStudy {
     /// Number of simulated campaigns.
     pub trials: usize,
@@ -79,7 +79,7 @@ pub struct EfficiencyStudy {
 }
 
 /// Efficiency of one quantity of one axis.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct QuantityEfficiency {
     /// Joint (1-based).
     pub joint: usize,
@@ -87,8 +87,10 @@ pub struct QuantityEfficiency {
     pub quantity: String,
     /// Square root of the bound's trace \[rad or mm\] (with jitter: of measurement and angle
     /// noise, plus the bias of the joints held below for the direction and position).
+    #[serde(rename = "crb_sigma_rad_or_mm")]
     pub crb_sigma: f64,
-    /// ML estimator: RMS error over the trials.
+    /// ML estimator: RMS error over the trials \[rad or mm\].
+    #[serde(rename = "ml_rms_error_rad_or_mm")]
     pub ml_rms_error: f64,
     /// ML estimator: the 1-sigma it reports (square root of the mean reported variance
     /// trace) over its RMS error; the target is within 15 % of 1.
@@ -104,13 +106,15 @@ pub struct QuantityEfficiency {
 }
 
 /// Reported against empirical uncertainty of one Table-2 parameter.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RowSigmaCheck {
     /// e.g. `row 2 b`.
     pub parameter: String,
     /// Mean reported 1-sigma \[mm or deg\].
+    #[serde(rename = "reported_sigma_mm_or_deg")]
     pub reported_sigma: f64,
-    /// Standard deviation of the estimates over the trials.
+    /// Standard deviation of the estimates over the trials \[mm or deg\].
+    #[serde(rename = "empirical_sigma_mm_or_deg")]
     pub empirical_sigma: f64,
     /// `reported / empirical`.
     pub ratio: f64,
@@ -119,7 +123,7 @@ pub struct RowSigmaCheck {
 }
 
 /// The study's result.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct StudyReport {
     /// Settings.
     pub study: EfficiencyStudy,
@@ -155,6 +159,11 @@ fn jittered_and_steady_robots() -> (RobotModel, RobotModel) {
 impl EfficiencyStudy {
     /// Runs the study (in parallel; bit-identical for any thread count).
     pub fn run(&self) -> Result<StudyReport, StudyError> {
+        self.run_with(&crate::progress::Silent)
+    }
+
+    /// [`Self::run`], counting the trials done on `progress`.
+    pub fn run_with(&self, progress: &dyn crate::progress::Progress) -> Result<StudyReport, StudyError> {
         let desc = RobotDescription::asea_irb6l();
         let controller = Controller::from_description(&desc);
         let (jittered, steady) = jittered_and_steady_robots();
@@ -178,9 +187,14 @@ impl EfficiencyStudy {
             noise_rms_3d_mm: self.noise_rms_3d_mm,
             seed: self.seed,
         };
+        progress.start(self.trials, "trials");
         let outcomes: Vec<TrialOutcome> = (0..self.trials)
             .into_par_iter()
-            .map(|i| trials.run(i))
+            .map(|i| {
+                let outcome = trials.run(i);
+                progress.inc();
+                outcome
+            })
             .collect::<Result<_, _>>()?;
         Ok(self.summarise(&experiments, &truths, &outcomes))
     }

@@ -6,7 +6,7 @@ use super::RobotDescription;
 use serde::{Deserialize, Serialize};
 
 /// Which description a calibration (or a data file) was made with.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DescriptionIdentity {
     /// The description's `name`.
