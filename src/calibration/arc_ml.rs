@@ -30,6 +30,12 @@ use identifiability::identifiability;
 
 const FIT: &str = "arc maximum-likelihood fit";
 
+/// The fit stops where the Gauss-Newton step would lower the (whitened) cost by at most this
+/// ([`lsq::LmOptions::negligible_decrease`]): within about `sqrt(1e-10)` = 1e-5 standard
+/// deviations of the optimum, far below the estimate's own uncertainty, and well above the
+/// cost's rounding noise (~1e-14 of a cost of ~3n), where further iterations only wander.
+const NEGLIGIBLE_DECREASE: f64 = 1e-10;
+
 /// Options of [`fit_arc`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArcFitOptions {
@@ -267,9 +273,13 @@ fn fit_arc_from(
         Some(s) => s,
         None => initial_params(points, commands_rad, &options.form)?,
     };
+    let lm = lsq::LmOptions {
+        negligible_decrease: Some(NEGLIGIBLE_DECREASE),
+        ..lsq::LmOptions::marquardt(FIT, options.max_iterations)
+    };
     let outcome = lsq::levenberg_marquardt(
         start,
-        &lsq::LmOptions::marquardt(FIT, options.max_iterations),
+        &lm,
         |s| model.whitened_residual_and_jacobian(s, points),
         |s, d| Ok::<_, CalibrationError>(s.perturbed(d.as_slice())),
     )?
