@@ -171,14 +171,20 @@ pub fn fit_arc(
 }
 
 /// Whether a fit runs the identifiability study ([`Identifiability`]: the correlation
-/// eigen-analysis and the Cramer-Rao tilt for larger spans) after the estimate. The estimate,
-/// its covariance and the residual moments are the same either way, bit for bit.
+/// eigen-analysis and the Cramer-Rao tilt for larger spans) after the estimate, and whether it
+/// computes the residual moments (for the noise estimate, [`super::noise`]). The estimate and
+/// its covariance are the same in every case, bit for bit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Studies {
     /// Run it (what a calibration report shows).
     Run,
     /// Skip it (a Monte-Carlo trial only needs the estimate): [`Identifiability::not_studied`].
+    /// The residual moments are computed.
     Skip,
+    /// Skip the study and the residuals: only the estimate and its covariance (a trial that
+    /// does not estimate the noise). [`ArcFit::moments`] is then
+    /// [`ResidualMoments::default`] and [`ArcFit::residual_rms`] NaN (not computed).
+    EstimateOnly,
 }
 
 /// [`fit_arc`] when, besides the measurement noise, each point's joint angle carries an
@@ -229,6 +235,9 @@ pub fn fit_arc_with_angle_noise_studies(
         noise,
         ..options.clone()
     };
+    if studies == Studies::EstimateOnly {
+        return fit_arc_from(points, commands_rad, &refit, Some(first.params), studies);
+    }
     // The noise estimate reads the measurement-only fit, with the jitter's share.
     let (_, jw) = model.whitened_residual_and_jacobian(&first.params, points)?;
     let residuals: Vec<Vector3<f64>> = model
@@ -287,10 +296,14 @@ fn fit_arc_from(
     let params = outcome.state;
     let (r, jw) = (outcome.residual, outcome.jacobian);
     let covariance = lsq::inverse_normal(&jw, FIT)?;
-    let pred = model.predict(&params)?;
-    let residuals: Vec<Vector3<f64>> = pred.iter().zip(points).map(|(a, b)| b - a).collect();
-    let residual_rms = (residuals.iter().map(|r| r.norm_squared()).sum::<f64>() / n as f64).sqrt();
-    let moments = ResidualMoments::of_fit(&jw, &covariance, &residuals, None);
+    let (residual_rms, moments) = if studies == Studies::EstimateOnly {
+        (f64::NAN, ResidualMoments::default())
+    } else {
+        let pred = model.predict(&params)?;
+        let residuals: Vec<Vector3<f64>> = pred.iter().zip(points).map(|(a, b)| b - a).collect();
+        let rms = (residuals.iter().map(|r| r.norm_squared()).sum::<f64>() / n as f64).sqrt();
+        (rms, ResidualMoments::of_fit(&jw, &covariance, &residuals, None))
+    };
     let g = axis_quantities_gradient(&params, &options.reference_point);
     let q = &g * &covariance * g.transpose();
     let transmission = options.form.build(&params.coefficients);
@@ -303,7 +316,7 @@ fn fit_arc_from(
             })?;
     let identifiability = match studies {
         Studies::Run => identifiability(&model, &params, &jw, &covariance, &options.noise)?,
-        Studies::Skip => Identifiability::not_studied(),
+        Studies::Skip | Studies::EstimateOnly => Identifiability::not_studied(),
     };
     Ok(ArcFit {
         axis: AxisLine {
