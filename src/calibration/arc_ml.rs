@@ -224,7 +224,12 @@ pub fn fit_arc_with_angle_noise_studies(
     studies: Studies,
 ) -> Result<ArcFit, CalibrationError> {
     check_angle_sigma(angle_sigma_rad, FIT)?;
-    let first = fit_arc_from(points, commands_rad, options, None, studies)?;
+    // With angle noise only the refit is reported: the first fit skips the study.
+    let first_studies = match studies {
+        Studies::Run if angle_sigma_rad > 0.0 => Studies::Skip,
+        other => other,
+    };
+    let (first, first_residuals) = fit_arc_core(points, commands_rad, options, None, first_studies)?;
     if angle_sigma_rad == 0.0 {
         return Ok(first);
     }
@@ -235,20 +240,12 @@ pub fn fit_arc_with_angle_noise_studies(
         noise,
         ..options.clone()
     };
-    if studies == Studies::EstimateOnly {
-        return fit_arc_from(points, commands_rad, &refit, Some(first.params), studies);
-    }
-    // The noise estimate reads the measurement-only fit, with the jitter's share.
-    let (_, jw) = model.whitened_residual_and_jacobian(&first.params, points)?;
-    let residuals: Vec<Vector3<f64>> = model
-        .predict(&first.params)?
-        .iter()
-        .zip(points)
-        .map(|(a, b)| b - a)
-        .collect();
-    let moments = ResidualMoments::of_fit(&jw, &first.covariance, &residuals, Some((&tangents, angle_sigma_rad)));
     let mut fit = fit_arc_from(points, commands_rad, &refit, Some(first.params), studies)?;
-    fit.moments = moments;
+    // The noise estimate reads the measurement-only fit (its whitened Jacobian and residuals
+    // at its optimum), with the jitter's share.
+    if let Some((jw, residuals)) = first_residuals {
+        fit.moments = ResidualMoments::of_fit(&jw, &first.covariance, &residuals, Some((&tangents, angle_sigma_rad)));
+    }
     Ok(fit)
 }
 
@@ -260,6 +257,21 @@ fn fit_arc_from(
     start: Option<ArcParams>,
     studies: Studies,
 ) -> Result<ArcFit, CalibrationError> {
+    fit_arc_core(points, commands_rad, options, start, studies).map(|(fit, _)| fit)
+}
+
+/// The whitened Jacobian at the optimum and the point residuals (observed - predicted).
+type FitResiduals = (DMatrix<f64>, Vec<Vector3<f64>>);
+
+/// [`fit_arc_from`], with the whitened Jacobian and the residuals at the optimum (unless
+/// `studies` is [`Studies::EstimateOnly`]).
+fn fit_arc_core(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+    start: Option<ArcParams>,
+    studies: Studies,
+) -> Result<(ArcFit, Option<FitResiduals>), CalibrationError> {
     let n = points.len();
     if commands_rad.len() != n {
         return Err(CalibrationError::LengthMismatch {
@@ -296,13 +308,14 @@ fn fit_arc_from(
     let params = outcome.state;
     let (r, jw) = (outcome.residual, outcome.jacobian);
     let covariance = lsq::inverse_normal(&jw, FIT)?;
-    let (residual_rms, moments) = if studies == Studies::EstimateOnly {
-        (f64::NAN, ResidualMoments::default())
+    let (residual_rms, moments, residuals) = if studies == Studies::EstimateOnly {
+        (f64::NAN, ResidualMoments::default(), None)
     } else {
         let pred = model.predict(&params)?;
         let residuals: Vec<Vector3<f64>> = pred.iter().zip(points).map(|(a, b)| b - a).collect();
         let rms = (residuals.iter().map(|r| r.norm_squared()).sum::<f64>() / n as f64).sqrt();
-        (rms, ResidualMoments::of_fit(&jw, &covariance, &residuals, None))
+        let moments = ResidualMoments::of_fit(&jw, &covariance, &residuals, None);
+        (rms, moments, Some(residuals))
     };
     let g = axis_quantities_gradient(&params, &options.reference_point);
     let q = &g * &covariance * g.transpose();
@@ -318,7 +331,7 @@ fn fit_arc_from(
         Studies::Run => identifiability(&model, &params, &jw, &covariance, &options.noise)?,
         Studies::Skip | Studies::EstimateOnly => Identifiability::not_studied(),
     };
-    Ok(ArcFit {
+    let fit = ArcFit {
         axis: AxisLine {
             origin_m: params.axis_point_near(&options.reference_point),
             direction: params.normal(),
@@ -337,7 +350,8 @@ fn fit_arc_from(
         identifiability,
         moments,
         params,
-    })
+    };
+    Ok((fit, residuals.map(|r| (jw, r))))
 }
 
 #[cfg(test)]
