@@ -30,6 +30,12 @@ use identifiability::identifiability;
 
 const FIT: &str = "arc maximum-likelihood fit";
 
+/// The fit stops where the Gauss-Newton step would lower the (whitened) cost by at most this
+/// ([`lsq::LmOptions::negligible_decrease`]): within about `sqrt(1e-10)` = 1e-5 standard
+/// deviations of the optimum, far below the estimate's own uncertainty, and well above the
+/// cost's rounding noise (~1e-14 of a cost of ~3n), where further iterations only wander.
+const NEGLIGIBLE_DECREASE: f64 = 1e-10;
+
 /// Options of [`fit_arc`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArcFitOptions {
@@ -165,14 +171,20 @@ pub fn fit_arc(
 }
 
 /// Whether a fit runs the identifiability study ([`Identifiability`]: the correlation
-/// eigen-analysis and the Cramer-Rao tilt for larger spans) after the estimate. The estimate,
-/// its covariance and the residual moments are the same either way, bit for bit.
+/// eigen-analysis and the Cramer-Rao tilt for larger spans) after the estimate, and whether it
+/// computes the residual moments (for the noise estimate, [`super::noise`]). The estimate and
+/// its covariance are the same in every case, bit for bit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Studies {
     /// Run it (what a calibration report shows).
     Run,
     /// Skip it (a Monte-Carlo trial only needs the estimate): [`Identifiability::not_studied`].
+    /// The residual moments are computed.
     Skip,
+    /// Skip the study and the residuals: only the estimate and its covariance (a trial that
+    /// does not estimate the noise). [`ArcFit::moments`] is then
+    /// [`ResidualMoments::default`] and [`ArcFit::residual_rms`] NaN (not computed).
+    EstimateOnly,
 }
 
 /// [`fit_arc`] when, besides the measurement noise, each point's joint angle carries an
@@ -212,7 +224,12 @@ pub fn fit_arc_with_angle_noise_studies(
     studies: Studies,
 ) -> Result<ArcFit, CalibrationError> {
     check_angle_sigma(angle_sigma_rad, FIT)?;
-    let first = fit_arc_from(points, commands_rad, options, None, studies)?;
+    // With angle noise only the refit is reported: the first fit skips the study.
+    let first_studies = match studies {
+        Studies::Run if angle_sigma_rad > 0.0 => Studies::Skip,
+        other => other,
+    };
+    let (first, first_residuals) = fit_arc_core(points, commands_rad, options, None, first_studies)?;
     if angle_sigma_rad == 0.0 {
         return Ok(first);
     }
@@ -223,17 +240,12 @@ pub fn fit_arc_with_angle_noise_studies(
         noise,
         ..options.clone()
     };
-    // The noise estimate reads the measurement-only fit, with the jitter's share.
-    let (_, jw) = model.whitened_residual_and_jacobian(&first.params, points)?;
-    let residuals: Vec<Vector3<f64>> = model
-        .predict(&first.params)?
-        .iter()
-        .zip(points)
-        .map(|(a, b)| b - a)
-        .collect();
-    let moments = ResidualMoments::of_fit(&jw, &first.covariance, &residuals, Some((&tangents, angle_sigma_rad)));
     let mut fit = fit_arc_from(points, commands_rad, &refit, Some(first.params), studies)?;
-    fit.moments = moments;
+    // The noise estimate reads the measurement-only fit (its whitened Jacobian and residuals
+    // at its optimum), with the jitter's share.
+    if let Some((jw, residuals)) = first_residuals {
+        fit.moments = ResidualMoments::of_fit(&jw, &first.covariance, &residuals, Some((&tangents, angle_sigma_rad)));
+    }
     Ok(fit)
 }
 
@@ -245,6 +257,21 @@ fn fit_arc_from(
     start: Option<ArcParams>,
     studies: Studies,
 ) -> Result<ArcFit, CalibrationError> {
+    fit_arc_core(points, commands_rad, options, start, studies).map(|(fit, _)| fit)
+}
+
+/// The whitened Jacobian at the optimum and the point residuals (observed - predicted).
+type FitResiduals = (DMatrix<f64>, Vec<Vector3<f64>>);
+
+/// [`fit_arc_from`], with the whitened Jacobian and the residuals at the optimum (unless
+/// `studies` is [`Studies::EstimateOnly`]).
+fn fit_arc_core(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+    start: Option<ArcParams>,
+    studies: Studies,
+) -> Result<(ArcFit, Option<FitResiduals>), CalibrationError> {
     let n = points.len();
     if commands_rad.len() != n {
         return Err(CalibrationError::LengthMismatch {
@@ -267,9 +294,13 @@ fn fit_arc_from(
         Some(s) => s,
         None => initial_params(points, commands_rad, &options.form)?,
     };
+    let lm = lsq::LmOptions {
+        negligible_decrease: Some(NEGLIGIBLE_DECREASE),
+        ..lsq::LmOptions::marquardt(FIT, options.max_iterations)
+    };
     let outcome = lsq::levenberg_marquardt(
         start,
-        &lsq::LmOptions::marquardt(FIT, options.max_iterations),
+        &lm,
         |s| model.whitened_residual_and_jacobian(s, points),
         |s, d| Ok::<_, CalibrationError>(s.perturbed(d.as_slice())),
     )?
@@ -277,10 +308,15 @@ fn fit_arc_from(
     let params = outcome.state;
     let (r, jw) = (outcome.residual, outcome.jacobian);
     let covariance = lsq::inverse_normal(&jw, FIT)?;
-    let pred = model.predict(&params)?;
-    let residuals: Vec<Vector3<f64>> = pred.iter().zip(points).map(|(a, b)| b - a).collect();
-    let residual_rms = (residuals.iter().map(|r| r.norm_squared()).sum::<f64>() / n as f64).sqrt();
-    let moments = ResidualMoments::of_fit(&jw, &covariance, &residuals, None);
+    let (residual_rms, moments, residuals) = if studies == Studies::EstimateOnly {
+        (f64::NAN, ResidualMoments::default(), None)
+    } else {
+        let pred = model.predict(&params)?;
+        let residuals: Vec<Vector3<f64>> = pred.iter().zip(points).map(|(a, b)| b - a).collect();
+        let rms = (residuals.iter().map(|r| r.norm_squared()).sum::<f64>() / n as f64).sqrt();
+        let moments = ResidualMoments::of_fit(&jw, &covariance, &residuals, None);
+        (rms, moments, Some(residuals))
+    };
     let g = axis_quantities_gradient(&params, &options.reference_point);
     let q = &g * &covariance * g.transpose();
     let transmission = options.form.build(&params.coefficients);
@@ -293,9 +329,9 @@ fn fit_arc_from(
             })?;
     let identifiability = match studies {
         Studies::Run => identifiability(&model, &params, &jw, &covariance, &options.noise)?,
-        Studies::Skip => Identifiability::not_studied(),
+        Studies::Skip | Studies::EstimateOnly => Identifiability::not_studied(),
     };
-    Ok(ArcFit {
+    let fit = ArcFit {
         axis: AxisLine {
             origin_m: params.axis_point_near(&options.reference_point),
             direction: params.normal(),
@@ -314,7 +350,8 @@ fn fit_arc_from(
         identifiability,
         moments,
         params,
-    })
+    };
+    Ok((fit, residuals.map(|r| (jw, r))))
 }
 
 #[cfg(test)]

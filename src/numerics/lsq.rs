@@ -237,6 +237,15 @@ pub struct LmOptions<'a> {
     pub target: Option<&'a VectorTest<'a>>,
     /// A step for which this holds is not taken and ends the run ([`Stop::SmallStep`]).
     pub small_step: Option<&'a VectorTest<'a>>,
+    /// Marquardt damping only: the run ends ([`Stop::SmallStep`]) at an iterate whose
+    /// Gauss-Newton step would lower the cost by at most this, i.e. whose Newton decrement
+    /// (Boyd & Vandenberghe, *Convex Optimization*, sec. 9.5.1, with the Gauss-Newton Hessian
+    /// `2 J^T J`) satisfies `lambda^2 / 2 = g^T (J^T J)^-1 g <= tol`, `g = J^T r`. For whitened
+    /// residuals `g^T (J^T J)^-1 g` is the squared length of the remaining step in units of the
+    /// parameters' standard deviations (the metric of the covariance `(J^T J)^-1`), so `tol =
+    /// 1e-10` stops within about 1e-5 sigma of the optimum instead of iterating in the cost's
+    /// rounding noise. `None`: no such rule.
+    pub negligible_decrease: Option<f64>,
 }
 
 impl LmOptions<'_> {
@@ -249,6 +258,7 @@ impl LmOptions<'_> {
             fitted_rows: None,
             target: None,
             small_step: None,
+            negligible_decrease: None,
         }
     }
 }
@@ -352,6 +362,12 @@ pub fn levenberg_marquardt_from<S: Clone, E: From<LsqError>>(
         let Some(mut step) = step else {
             return Ok(done(state, r, j, it, Stop::Gradient));
         };
+        if options
+            .negligible_decrease
+            .is_some_and(|tol| step.gauss_newton_decrease().is_some_and(|d| d <= tol))
+        {
+            return Ok(done(state, r, j, it - 1, Stop::SmallStep));
+        }
         let mut accepted = None;
         while let Some(delta) = step.solve(&mut lambda) {
             if options.small_step.is_some_and(|small| small(&delta)) {
@@ -418,6 +434,15 @@ impl Step {
                 ..
             } => Step::GaussNewton(Some(-TruncatedSvd::new(j, t).solve(r))),
         }))
+    }
+
+    /// The cost decrease `g^T (J^T J)^-1 g` the undamped (Gauss-Newton) step predicts
+    /// (Marquardt only; `None` when `J^T J` is not positive definite).
+    fn gauss_newton_decrease(&self) -> Option<f64> {
+        match self {
+            Step::GaussNewton(_) => None,
+            Step::Marquardt { jtj, g, .. } => jtj.clone().cholesky().map(|ch| g.dot(&ch.solve(g))),
+        }
     }
 
     /// The step at damping `lambda` (raised while the damped normal matrix is not positive
@@ -502,5 +527,55 @@ impl TruncatedSvd {
     /// The minimum-norm (in scaled parameters) least-squares solution for data `y`.
     pub fn solve(&self, y: &DVector<f64>) -> DVector<f64> {
         &self.solve * y
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `y = a exp(b x)` with unit (whitened) noise: residual and Jacobian at `p = (a, b)`.
+    fn exponential(p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), LsqError> {
+        let n = 12;
+        let mut r = DVector::zeros(n);
+        let mut j = DMatrix::zeros(n, 2);
+        for k in 0..n {
+            let x = 0.25 * k as f64;
+            // Data from a = 2, b = -0.7 with a fixed pattern of unit-scale "noise".
+            let y = 2.0 * (-0.7 * x).exp() * 40.0 + (1.7 * k as f64).sin();
+            let e = (p[1] * x).exp();
+            r[k] = p[0] * e * 40.0 - y;
+            j[(k, 0)] = e * 40.0;
+            j[(k, 1)] = p[0] * x * e * 40.0;
+        }
+        Ok((r, j))
+    }
+
+    #[test]
+    fn negligible_decrease_stops_within_its_tolerance_in_sigma_units() {
+        let start = DVector::from_vec(vec![1.0, -0.2]);
+        let apply = |s: &DVector<f64>, d: &DVector<f64>| Ok::<_, LsqError>(s + d);
+        let full = levenberg_marquardt(start.clone(), &LmOptions::marquardt("test", 200), exponential, apply).unwrap();
+        let tol = 1e-10;
+        let options = LmOptions {
+            negligible_decrease: Some(tol),
+            ..LmOptions::marquardt("test", 200)
+        };
+        let early = levenberg_marquardt(start.clone(), &options, exponential, apply).unwrap();
+        assert_eq!(early.stop, Stop::SmallStep);
+        assert!(early.iterations <= full.iterations);
+        // The distance to the fully iterated optimum in the covariance metric (sigma units):
+        // the remaining Gauss-Newton step is at most sqrt(tol) long, and near the optimum it
+        // is the distance to it up to second-order terms (a factor 2 of margin).
+        let d = &early.state - &full.state;
+        let mahalanobis = (d.transpose() * gram(&full.jacobian) * &d)[0].sqrt();
+        assert!(mahalanobis <= 2.0 * tol.sqrt(), "{mahalanobis:e}");
+        // A tolerance above the first step's decrease stops before any step.
+        let coarse = LmOptions {
+            negligible_decrease: Some(1e12),
+            ..LmOptions::marquardt("test", 200)
+        };
+        let none = levenberg_marquardt(start.clone(), &coarse, exponential, apply).unwrap();
+        assert_eq!((none.iterations, none.state), (0, start));
     }
 }

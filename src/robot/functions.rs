@@ -69,19 +69,30 @@ impl Transmission {
 
     /// `theta_c = f(theta_a)`.
     pub fn command_from_actual(&self, theta_a: f64) -> f64 {
-        match self {
-            Transmission::Harmonic { sin, cos } => theta_a + harmonics(theta_a, sin, cos).0,
-            Transmission::Gear { ratio, sin, cos } => theta_a + ratio * harmonics(theta_a / ratio, sin, cos).0,
-            Transmission::Polynomial { c0, c } => theta_a + c0 + polynomial(theta_a, c).0,
-        }
+        self.value_and_slope(theta_a).0
     }
 
     /// `d theta_c / d theta_a`.
     pub fn slope(&self, theta_a: f64) -> f64 {
+        self.value_and_slope(theta_a).1
+    }
+
+    /// `(f(theta_a), f'(theta_a))` from one evaluation of the harmonics (one `sin_cos` per
+    /// harmonic) or of the polynomial: what each Newton step of the inversion needs.
+    pub fn value_and_slope(&self, theta_a: f64) -> (f64, f64) {
         match self {
-            Transmission::Harmonic { sin, cos } => 1.0 + harmonics(theta_a, sin, cos).1,
-            Transmission::Gear { ratio, sin, cos } => 1.0 + harmonics(theta_a / ratio, sin, cos).1,
-            Transmission::Polynomial { c, .. } => 1.0 + polynomial(theta_a, c).1,
+            Transmission::Harmonic { sin, cos } => {
+                let (v, dv) = harmonics(theta_a, sin, cos);
+                (theta_a + v, 1.0 + dv)
+            }
+            Transmission::Gear { ratio, sin, cos } => {
+                let (v, dv) = harmonics(theta_a / ratio, sin, cos);
+                (theta_a + ratio * v, 1.0 + dv)
+            }
+            Transmission::Polynomial { c0, c } => {
+                let (v, dv, _) = polynomial(theta_a, c);
+                (theta_a + c0 + v, 1.0 + dv)
+            }
         }
     }
 
@@ -140,7 +151,13 @@ impl Transmission {
     /// `theta_a = f^-1(theta_c)` by safeguarded Newton iteration; `None` if `f` is not
     /// monotonic near the solution (coefficients too large for a real transmission).
     pub fn actual_from_command(&self, theta_c: f64) -> Option<f64> {
-        invert_monotonic(|t| self.command_from_actual(t) - theta_c, |t| self.slope(t), theta_c)
+        invert_monotonic(
+            |t| {
+                let (value, slope) = self.value_and_slope(t);
+                (value - theta_c, slope)
+            },
+            theta_c,
+        )
     }
 }
 
@@ -262,33 +279,46 @@ impl CouplingFunction {
     }
 }
 
-/// `(sum_k s_k sin(k x) + c_k cos(k x), d/dx of it)`.
+/// `(sum_k s_k sin(k x) + c_k cos(k x), d/dx of it)`, the sine terms summed before the cosine
+/// terms; one `sin_cos` per harmonic (the first eight kept for the cosine terms).
 fn harmonics(x: f64, sin: &[f64], cos: &[f64]) -> (f64, f64) {
+    let mut kept = [(0.0, 0.0); 8];
+    let n_kept = sin.len().max(cos.len()).min(kept.len());
+    for (k, sc) in kept.iter_mut().enumerate().take(n_kept) {
+        *sc = ((k + 1) as f64 * x).sin_cos();
+    }
+    let sin_cos = |k: usize| {
+        if k < n_kept {
+            kept[k]
+        } else {
+            ((k + 1) as f64 * x).sin_cos()
+        }
+    };
     let (mut v, mut dv) = (0.0, 0.0);
     for (k, s) in sin.iter().enumerate() {
         let kf = (k + 1) as f64;
-        let (sk, ck) = (kf * x).sin_cos();
+        let (sk, ck) = sin_cos(k);
         v += s * sk;
         dv += s * kf * ck;
     }
     for (k, c) in cos.iter().enumerate() {
         let kf = (k + 1) as f64;
-        let (sk, ck) = (kf * x).sin_cos();
+        let (sk, ck) = sin_cos(k);
         v += c * ck;
         dv -= c * kf * sk;
     }
     (v, dv)
 }
 
-/// Root of a monotonically increasing `h` by Newton from `start`, with bisection fallback.
-pub(crate) fn invert_monotonic(h: impl Fn(f64) -> f64, dh: impl Fn(f64) -> f64, start: f64) -> Option<f64> {
+/// Root of a monotonically increasing `h` by Newton from `start`: `h_and_slope(t)` returns
+/// `(h(t), h'(t))` from one evaluation.
+pub(crate) fn invert_monotonic(h_and_slope: impl Fn(f64) -> (f64, f64), start: f64) -> Option<f64> {
     let mut t = start;
     for _ in 0..50 {
-        let r = h(t);
+        let (r, d) = h_and_slope(t);
         if r.abs() < 1e-15 {
             return Some(t);
         }
-        let d = dh(t);
         if d <= 0.0 || !d.is_finite() {
             return None;
         }
@@ -298,7 +328,7 @@ pub(crate) fn invert_monotonic(h: impl Fn(f64) -> f64, dh: impl Fn(f64) -> f64, 
             return Some(t);
         }
     }
-    (h(t).abs() < 1e-12).then_some(t)
+    (h_and_slope(t).0.abs() < 1e-12).then_some(t)
 }
 
 #[cfg(test)]

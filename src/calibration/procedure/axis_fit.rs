@@ -172,10 +172,11 @@ fn fit_arc_ml(
         reference_point: centroid,
         max_iterations: options.max_iterations,
     };
-    let studies = if detail == Detail::Report {
-        Studies::Run
-    } else {
-        Studies::Skip
+    // A model without a report needs the residual moments only to estimate the noise.
+    let studies = match detail {
+        Detail::Report => Studies::Run,
+        _ if options.estimate_noise => Studies::Skip,
+        _ => Studies::EstimateOnly,
     };
     let fit = fit_arc_with_angle_noise_studies(points, u, &arc_options, repeatability_rad, studies)?;
     let mut report = AxisReport::from_arc(data.joint(), &data.name(), points.len(), &fit, &form, span(u));
@@ -193,7 +194,7 @@ fn fit_arc_ml(
             axis: fit.axis,
             transmission: fit.transmission,
             report,
-            moments: Some(fit.moments),
+            moments: (studies != Studies::EstimateOnly).then_some(fit.moments),
             residuals: vec![],
         });
     }

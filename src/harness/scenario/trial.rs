@@ -136,9 +136,17 @@ impl CampaignTrial {
             self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
         });
         let model = calibrated.phi_model();
-        // A command the calibrated transmissions cannot invert fails the trial, naming the pose.
+        // The calibrated model's tool frame at each validation pose (once per pose, not per
+        // target row); a command the calibrated transmissions cannot invert fails the trial,
+        // naming the pose.
+        let mut predicted: Vec<(&[f64], nalgebra::Isometry3<f64>)> = Vec::new();
+        let mut last: Option<(&str, usize)> = None;
         for row in out.rows.iter().filter(|r| r.moved_joint == 0) {
-            calibrated
+            if last == Some((row.experiment.as_str(), row.step)) {
+                continue;
+            }
+            last = Some((row.experiment.as_str(), row.step));
+            let q = calibrated
                 .joint_values(&self.controller, &commands_to_internal(&self.desc, &row.cmd))
                 .map_err(|e| {
                     format!(
@@ -146,12 +154,13 @@ impl CampaignTrial {
                         row.experiment, row.step
                     )
                 })?;
+            predicted.push((&row.cmd, model.world_from_tool(&q)));
         }
         let c = validation_errors(&out.rows, &targets, |cmd| {
-            match calibrated.joint_values(&self.controller, &commands_to_internal(&self.desc, cmd)) {
-                Ok(q) => model.world_from_tool(&q),
-                Err(_) => nalgebra::Isometry3::translation(f64::NAN, f64::NAN, f64::NAN),
-            }
+            predicted
+                .iter()
+                .find(|(c, _)| *c == cmd)
+                .map_or(nalgebra::Isometry3::translation(f64::NAN, f64::NAN, f64::NAN), |p| p.1)
         });
         let mut m = Metrics::new();
         m.push(CAMPAIGN_METRICS[0], e.pos_rms_mm);
