@@ -249,4 +249,18 @@ mod tests {
         assert_eq!(v["schema"], "axiscal.blind_cases/2");
         assert_eq!(v["cases"], serde_json::json!([1, 2, 3]));
     }
+
+    proptest::proptest! {
+        /// A value written and read back is the same value to the bit (serde_json's
+        /// `float_roundtrip`): a calibration read back compensates exactly as written.
+        #[test]
+        fn every_finite_number_reads_back_to_the_bit(bits in proptest::num::u64::ANY) {
+            let x = f64::from_bits(bits);
+            proptest::prop_assume!(x.is_finite());
+            let body = Body { zeta_mm: x, alpha: vec![] };
+            let text = to_string(Schema::CALIBRATION, &body).unwrap();
+            let back: Body = from_str(Schema::CALIBRATION, &text).unwrap();
+            proptest::prop_assert_eq!(back.zeta_mm.to_bits(), x.to_bits(), "{}", text);
+        }
+    }
 }
