@@ -45,10 +45,7 @@ fn arms(effects: &Effects) -> Vec<Box<Exec>> {
 #[test]
 fn thermal_expansion_grows_the_reach_by_alpha_dt_l() {
     let effects = Effects {
-        thermal: Some(ThermalEffect {
-            alpha_per_k: 1.2e-5,
-            reference_c: 20.0,
-        }),
+        thermal: Some(ThermalEffect::uniform(1.2e-5, 20.0)),
         ..Effects::default()
     };
     let (_, t) = truth();
@@ -83,7 +80,10 @@ fn backlash_separates_the_two_approach_directions_by_the_band() {
     let mut bands = vec![0.0; 6];
     bands[5] = band;
     let effects = Effects {
-        backlash: Some(BacklashEffect { band_rad: bands }),
+        backlash: Some(BacklashEffect {
+            band_rad: bands,
+            direction: Default::default(),
+        }),
         ..Effects::default()
     };
     let target = Point3::new(0.08, 0.0, 0.15);
@@ -111,6 +111,7 @@ fn wobble_lifts_the_arc_out_of_its_plane_by_amplitude_times_radius() {
             amplitude_rad: amplitude,
             phase_rad: -std::f64::consts::FRAC_PI_2,
             order: 1,
+            fixed_direction_rad: None,
         }],
         ..Effects::default()
     };
@@ -258,6 +259,7 @@ fn gear_harmonic_turns_the_joint_by_its_transmission_error() {
             order: 2,
             sin_rad: s,
             cos_rad: 0.0,
+            period: Default::default(),
         }],
         ..Effects::default()
     };

@@ -26,6 +26,7 @@ pub(super) fn draw_wobble<R: Rng + ?Sized>(
         amplitude_rad: log_uniform(rng, amplitude_rad[0], amplitude_rad[1]),
         phase_rad,
         order,
+        fixed_direction_rad: None,
     }
 }
 
@@ -60,17 +61,17 @@ pub(super) fn draw_backlash<R: Rng + ?Sized>(rng: &mut R, dof: usize, e: &mut Ef
     let band = log_uniform(rng, 1.0e-4, 3.0e-3);
     let mut b = vec![0.0; dof];
     b[joint - 1] = band;
-    e.backlash = Some(BacklashEffect { band_rad: b });
+    e.backlash = Some(BacklashEffect {
+        band_rad: b,
+        direction: Default::default(),
+    });
     (Some(joint), band, "rad (band)")
 }
 
 /// A thermal expansion coefficient (reference 20 deg C), into `e`.
 pub(super) fn draw_thermal<R: Rng + ?Sized>(rng: &mut R, e: &mut Effects) -> DrawnMagnitude {
     let alpha = log_uniform(rng, 4.0e-6, 1.0e-4);
-    e.thermal = Some(ThermalEffect {
-        alpha_per_k: alpha,
-        reference_c: 20.0,
-    });
+    e.thermal = Some(ThermalEffect::uniform(alpha, 20.0));
     (None, alpha, "1/K")
 }
 
@@ -90,6 +91,7 @@ pub(super) fn draw_gear_harmonic<R: Rng + ?Sized>(
         order: crate::diagnosis::unmodelled_harmonic_order(desc, joint),
         sin_rad: a * phase.sin(),
         cos_rad: a * phase.cos(),
+        period: Default::default(),
     });
     (Some(joint), a, "rad")
 }

@@ -94,14 +94,15 @@ struct Built {
 }
 
 impl RapierArm {
-    /// The truth robot behind the controller of `desc` (masses from `desc`), with `effects`.
+    /// The truth robot behind the controller of `desc`, with `effects` (link masses from
+    /// [`Effects::truth_link_masses`]: the effects' own, else `desc`'s).
     pub fn new(truth: RobotModel, desc: &RobotDescription, effects: Effects, options: RapierArmOptions) -> Self {
-        let inertias = desc
-            .joints
+        let inertias = effects
+            .truth_link_masses(desc)
             .iter()
-            .map(|j| LinkInertia {
-                mass_kg: j.mass_kg,
-                com_in_link_m: Point3::from(j.com_mm) * 1e-3,
+            .map(|m| LinkInertia {
+                mass_kg: m.mass_kg,
+                com_in_link_m: Point3::from(m.com_mm) * 1e-3,
             })
             .collect();
         RapierArm {
