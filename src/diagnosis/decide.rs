@@ -36,7 +36,7 @@ fn fitted_parameters(
     let var = sigma2.max(ssr_train.max(0.0) / dof as f64);
     let g = prep.x_geometric.ncols();
     let mut out: Vec<Parameter> = c
-        .parameter_names()
+        .parameter_names(prep.predictor.shape())
         .iter()
         .enumerate()
         .map(|(i, name)| Parameter {

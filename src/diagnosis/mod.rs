@@ -40,9 +40,10 @@ pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
 pub use linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{
-    Candidate, GRAVITY_M_S2, PoseFeatures, Predictor, RefitScope, WOBBLE_ORDER, unmodelled_harmonic_order,
+    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MassModel, ModelShape, PoseFeatures, Predictor, RefitScope,
+    SpringSite, ThermalLinks, TiltShape, is_geared, unmodelled_harmonic_order,
 };
-pub use noise::{clean_positions, is_validation, replica};
+pub use noise::{CleanCampaign, NoiseModel, ValidationRows, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
@@ -55,7 +56,6 @@ use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 /// Why a data set could not be diagnosed.
@@ -193,7 +193,7 @@ fn prepare(
             needed: 4,
         });
     }
-    let predictor = Predictor::new(&cal.robot, desc, reference_temperature(set), None, scope);
+    let predictor = Predictor::new(&cal.robot, desc, reference_temperature(set), scope);
     let (train, held) = split(&poses);
     let train_rows = 3 * target_count(&train);
     let held_targets = target_count(&held);
@@ -207,9 +207,8 @@ fn prepare(
     let x_geometric = sensitivity(|p| predictor.residuals(p, &order), &zeros, &predictor.steps())
         .ok_or_else(|| model_error("refit sensitivity"))?;
     let mut x_candidates = Vec::new();
-    for c in Candidate::all(desc, &poses) {
-        let mut pred = predictor.clone();
-        pred.candidate = Some(c);
+    for c in Candidate::library(desc, &poses, DEFAULT_MAX_HARMONIC_ORDER) {
+        let pred = predictor.with_candidates(&[c]);
         let g = pred.geometric_count();
         let p0 = vec![0.0; g + pred.effect_count()];
         let steps = pred.steps();
@@ -298,8 +297,8 @@ impl Prepared {
     /// visible second-order residual; noise-only data (the null distributions) do not, so the
     /// linear null still applies.
     fn refine(&self, candidate: Option<(Candidate, &DMatrix<f64>)>) -> Option<Refined> {
-        let mut pred = self.predictor.clone();
-        pred.candidate = candidate.map(|c| c.0);
+        let members: Vec<Candidate> = candidate.iter().map(|c| c.0).collect();
+        let pred = self.predictor.with_candidates(&members);
         let order = ordered(&self.poses);
         let steps = pred.steps();
         // The residual is `measured - predicted`: its Jacobian is minus the sensitivity.
@@ -362,9 +361,10 @@ fn null_data(
     prep: &Prepared,
     options: &DiagnosisOptions,
 ) -> Result<NullData, DiagnosisError> {
-    let noise_m = options.noise_rms_3d_mm * 1e-3;
-    let sigma = noise_m / 3f64.sqrt();
-    let clean = clean_positions(set, &prep.cal, desc)?;
+    let noise = noise_model(desc, options.noise_rms_3d_mm)?;
+    let tool_targets = prep.predictor.tool_targets_m().to_vec();
+    let clean = CleanCampaign::new(set, &prep.cal, desc, &tool_targets)?;
+    let rows = validation_rows(&prep.cal, desc, &tool_targets, &prep.poses)?;
     let mut rng = ChaCha12Rng::seed_from_u64(options.seed);
     let n = prep.residuals.len();
     let draws = options.noise_draws.max(1);
@@ -372,26 +372,51 @@ fn null_data(
     let mut axis_rms2 = vec![Vec::new(); prep.cal.axes.len()];
     let reference_c = reference_temperature(set);
     for trial in 0..options.noise_trials {
-        let r = replica(set, &clean, noise_m, false, &mut rng)?;
+        let r = replica(set, &clean, &noise, false, &mut rng)?;
         let cal = calibrate_for(&r, desc, options.noise_rms_3d_mm)?;
         for (acc, a) in axis_rms2.iter_mut().zip(&cal.axes) {
             acc.push(a.residual_rms_mm.powi(2));
         }
         let poses = validation_poses(r.rows(), desc);
-        let pred = Predictor::new(&cal.robot, desc, reference_c, None, options.refit);
+        let pred = Predictor::new(&cal.robot, desc, reference_c, options.refit);
         let systematic = pred
             .residuals(&vec![0.0; pred.geometric_count()], &ordered(&poses))
             .filter(|s| s.len() == n)
             .ok_or_else(|| model_error("noise replica"))?;
         for d in 0..draws {
-            let mut col = samples.column_mut(trial * draws + d);
-            for (x, s) in col.iter_mut().zip(&systematic) {
-                let z: f64 = StandardNormal.sample(&mut rng);
-                *x = s + sigma * z;
-            }
+            let mut col: Vec<f64> = systematic.clone();
+            rows.validation_draw(&noise, &mut col, &mut rng);
+            samples.column_mut(trial * draws + d).copy_from_slice(&col);
         }
     }
     Ok(NullData { samples, axis_rms2 })
+}
+
+/// What the noise-only replicas draw: the instrument noise `noise_rms_3d_mm` and the robot's
+/// repeatability as `calibrate` models it (the description's `repeatability_sigma`).
+fn noise_model(desc: &RobotDescription, noise_rms_3d_mm: f64) -> Result<NoiseModel, DiagnosisError> {
+    Ok(NoiseModel {
+        noise_rms_3d_m: noise_rms_3d_mm * 1e-3,
+        repeatability_rad: CalibrationOptions::default().joint_repeatability_rad(desc)?,
+    })
+}
+
+/// The validation poses `poses` (file order) on `cal` with their residual rows in the
+/// training-then-held-out order of [`ordered`].
+fn validation_rows(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    tool_targets_m: &[nalgebra::Point3<f64>],
+    poses: &[Pose],
+) -> Result<ValidationRows, DiagnosisError> {
+    // Training poses are the even file positions, held-out the odd ones (`split`).
+    let mut first_row = vec![0; poses.len()];
+    let mut row = 0;
+    for i in (0..poses.len()).step_by(2).chain((1..poses.len()).step_by(2)) {
+        first_row[i] = row;
+        row += 3 * poses[i].targets.len();
+    }
+    ValidationRows::new(cal, desc, tool_targets_m, poses, |i, k| first_row[i] + 3 * k)
 }
 
 /// Held-out RMS \[mm\] of the baseline (calibration + geometric refit) on `set`: with

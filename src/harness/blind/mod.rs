@@ -94,6 +94,10 @@ impl InstrumentSag {
     }
 }
 
+/// Order of the blind suite's wobble: a tilt rotating twice per joint turn (orders 0 and 1 of
+/// a rotating tilt are absorbed by the calibrated geometry; 2 is the lowest visible after it).
+const BLIND_WOBBLE_ORDER: i32 = 2;
+
 /// The paper robot's rated payload \[kg\] (the ASEA IRB 6 handles 6 kg), the largest
 /// validation payload of a blind case.
 pub const PAYLOAD_MAX_KG: f64 = 6.0;
@@ -171,7 +175,7 @@ pub fn draw_effect<R: Rng + ?Sized>(
         "thermal_expansion" => draw_thermal(rng, &mut e),
         "gear_harmonic" => draw_gear_harmonic(rng, desc, phase, &mut e),
         "axis_wobble" => {
-            let w = draw_wobble(rng, dof, [4.0e-4, 1.0e-2], phase, crate::diagnosis::WOBBLE_ORDER);
+            let w = draw_wobble(rng, dof, [4.0e-4, 1.0e-2], phase, BLIND_WOBBLE_ORDER);
             e.wobble.push(w);
             (Some(w.joint), w.amplitude_rad, "rad")
         }
