@@ -5,7 +5,9 @@ VENV  ?= .venv
 # The rerun viewer must match the `rerun` crate pinned in Cargo.toml.
 RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' Cargo.toml)
 
-.PHONY: run test test-real bench study blind blind-analytic budget lint doc clean-results setup-viewer view
+FUZZ_SECONDS ?= 600
+
+.PHONY: run test test-real bench fuzz study blind blind-analytic budget lint doc clean-results setup-viewer view
 
 ## run: the paper scenario end to end; results under results/ (with a rerun recording:
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
@@ -39,6 +41,12 @@ test-real:
 ## estimator) and the calibration of its reported sigmas, 20000 simulated campaigns
 study:
 	$(CARGO) run --release -- study --trials 20000 --seed 1 --out results/study --force
+
+## fuzz: mutants of valid files against every reader (measurement CSV, descriptions, scenarios,
+## effects, calibration.json) for FUZZ_SECONDS seconds (default 600); a failure is written to
+## target/fuzz-failures/
+fuzz:
+	FUZZ_SECONDS=$(FUZZ_SECONDS) $(CARGO) test --release --test fuzz_readers -- --ignored --nocapture
 
 ## bench: criterion benchmarks (ratios against an in-run baseline)
 bench:

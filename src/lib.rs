@@ -107,6 +107,7 @@
 
 pub mod calibration;
 pub mod compensation;
+pub mod csv_lines;
 pub mod diagnosis;
 pub mod harness;
 pub mod json_file;

@@ -64,6 +64,61 @@ fn record_writes_a_non_empty_recording() {
     assert_eq!(&bytes[..4], b"RRF2", "rrd magic");
 }
 
+#[cfg(not(feature = "viz"))]
+#[test]
+fn calibrate_and_diagnose_record_without_the_viz_feature_fail_before_any_work() {
+    let (dir, data) = common::simulated_campaign_csv(3);
+    for command in ["calibrate", "diagnose"] {
+        let out = dir.path().join(command);
+        let a = axiscal()
+            .arg(command)
+            .arg(&data)
+            .arg("--out")
+            .arg(&out)
+            .arg("--record")
+            .arg(dir.path().join("x.rrd"))
+            .assert()
+            .code(2);
+        assert!(
+            common::stderr(&a).contains("--features viz"),
+            "{command}: {}",
+            common::stderr(&a)
+        );
+        assert!(!out.exists(), "{command} wrote its outputs before failing");
+    }
+}
+
+/// A recording of measured data through `calibrate --record` and `diagnose --record`: written,
+/// non-empty, and not replaced without `--force`.
+#[cfg(feature = "viz")]
+#[test]
+fn calibrate_and_diagnose_record_the_measured_data() {
+    let (dir, data) = common::simulated_campaign_csv(3);
+    for command in ["calibrate", "diagnose"] {
+        let rrd = dir.path().join(format!("{command}.rrd"));
+        let run = |force: bool| {
+            let mut c = axiscal();
+            c.arg(command)
+                .arg(&data)
+                .arg("--out")
+                .arg(dir.path().join(command))
+                .arg("--record")
+                .arg(&rrd);
+            if force {
+                c.arg("--force");
+            }
+            c.assert()
+        };
+        run(false).success();
+        let bytes = std::fs::read(&rrd).expect("recording written");
+        assert!(bytes.len() > 10_000, "{command}: recording has {} bytes", bytes.len());
+        assert_eq!(&bytes[..4], b"RRF2", "rrd magic");
+        let again = run(false).code(2);
+        assert!(common::stderr(&again).contains("--force"), "{}", common::stderr(&again));
+        run(true).success();
+    }
+}
+
 #[test]
 fn view_without_a_viewer_prints_the_matching_install_command() {
     let dir = tempfile::tempdir().expect("temp dir");

@@ -25,8 +25,9 @@ fn measurement_set() -> impl Strategy<Value = MeasurementSet> {
             0usize..3,
             [finite(), finite(), finite()],
             prop::collection::vec(finite(), n),
-            finite(),
-            finite(),
+            // Payloads are not negative, temperatures above absolute zero (both checked).
+            finite().prop_map(f64::abs),
+            finite().prop_filter("above absolute zero", |t| *t > -273.15),
         );
         (
             Just(n),

@@ -14,13 +14,14 @@
 
 mod identifiability;
 
-use nalgebra::{DMatrix, Matrix2, Point3, Rotation3};
+use nalgebra::{DMatrix, Matrix2, Point3, Rotation3, Vector3};
 
 use super::CalibrationError;
 use super::arc_model::{
     ArcModel, ArcParams, MeasurementNoise, N_GEOMETRY, axis_quantities_gradient, check_angle_sigma,
 };
 use super::axis_circle::fit_circle;
+use super::noise::ResidualMoments;
 use super::transmission_fit::{TransmissionForm, fit_transmission};
 use crate::kinematics::AxisLine;
 use crate::numerics::lsq;
@@ -104,6 +105,10 @@ pub struct ArcFit {
     pub iterations: usize,
     /// Identifiability report.
     pub identifiability: Identifiability,
+    /// Residual moments of the measurement-noise-only fit, with the swept joint's jitter
+    /// term when [`fit_arc_with_angle_noise`] was given one (for the noise estimate,
+    /// [`super::noise`]).
+    pub moments: ResidualMoments,
 }
 
 /// Starting parameters: circle fit + a linear transmission fit of the circle angles.
@@ -175,14 +180,24 @@ pub fn fit_arc_with_angle_noise(
         return Ok(first);
     }
     let model = ArcModel::new(options.form, commands_rad, &options.noise)?;
-    let noise = options
-        .noise
-        .with_angle_noise(&model.angle_derivatives(&first.params)?, angle_sigma_rad)?;
+    let tangents = model.angle_derivatives(&first.params)?;
+    let noise = options.noise.with_angle_noise(&tangents, angle_sigma_rad)?;
     let refit = ArcFitOptions {
         noise,
         ..options.clone()
     };
-    fit_arc_from(points, commands_rad, &refit, Some(first.params))
+    // The noise estimate reads the measurement-only fit, with the jitter's share.
+    let (_, jw) = model.whitened_residual_and_jacobian(&first.params, points)?;
+    let residuals: Vec<Vector3<f64>> = model
+        .predict(&first.params)?
+        .iter()
+        .zip(points)
+        .map(|(a, b)| b - a)
+        .collect();
+    let moments = ResidualMoments::of_fit(&jw, &first.covariance, &residuals, Some((&tangents, angle_sigma_rad)));
+    let mut fit = fit_arc_from(points, commands_rad, &refit, Some(first.params))?;
+    fit.moments = moments;
+    Ok(fit)
 }
 
 /// [`fit_arc`] from `start` (default: [`initial_params`]).
@@ -225,13 +240,9 @@ fn fit_arc_from(
     let (r, jw) = (outcome.residual, outcome.jacobian);
     let covariance = lsq::inverse_normal(&jw, FIT)?;
     let pred = model.predict(&params)?;
-    let residual_rms = (pred
-        .iter()
-        .zip(points)
-        .map(|(a, b)| (a - b).norm_squared())
-        .sum::<f64>()
-        / n as f64)
-        .sqrt();
+    let residuals: Vec<Vector3<f64>> = pred.iter().zip(points).map(|(a, b)| b - a).collect();
+    let residual_rms = (residuals.iter().map(|r| r.norm_squared()).sum::<f64>() / n as f64).sqrt();
+    let moments = ResidualMoments::of_fit(&jw, &covariance, &residuals, None);
     let g = axis_quantities_gradient(&params, &options.reference_point);
     let q = &g * &covariance * g.transpose();
     let transmission = options.form.build(&params.coefficients);
@@ -260,6 +271,7 @@ fn fit_arc_from(
         iterations: outcome.iterations,
         covariance,
         identifiability,
+        moments,
         params,
     })
 }
@@ -269,7 +281,7 @@ mod tests {
     use super::*;
     use crate::calibration::arc_model::ArcModel;
     use approx::assert_relative_eq;
-    use nalgebra::{Matrix3, Vector3};
+    use nalgebra::Matrix3;
 
     #[test]
     fn recovers_a_noiseless_gear_sweep_with_per_point_covariance() {

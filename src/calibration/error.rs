@@ -60,7 +60,11 @@ pub enum CalibrationError {
         residual_rms: f64,
     },
     /// A fitted transmission function is not invertible (not monotonic) at some command.
-    #[error("{fit}: transmission not invertible at command {command_rad} rad")]
+    #[error(
+        "{fit}: transmission not invertible at command {command_rad} rad: the fitted harmonics make it \
+         non-monotonic, which means the sweep is too short or too noisy to resolve them (ill-conditioned): \
+         widen the span or fit fewer harmonics (`transmission_fit`)"
+    )]
     NotInvertible {
         /// Which fit failed.
         fit: &'static str,

@@ -8,6 +8,8 @@
 //! - [`axis_paper`]: the paper's rotary-axis estimator, eqs. (1)-(5).
 //! - [`angles`]: observed angles, eqs. (6)-(7); [`transmission_fit`]: eq. (8).
 //! - [`sliding`]: sliding axes, eqs. (9)-(13); [`coupling_fit`]: couplings, eqs. (14)-(15).
+//! - [`line_ml`]: the maximum-likelihood sliding-axis fit (eqs. 9-13 in one model).
+//! - [`noise`]: the instrument noise estimated from the pooled fit residuals.
 //! - [`crb`]: Cramer-Rao bound and Monte-Carlo efficiency.
 
 mod error;
@@ -19,6 +21,8 @@ pub mod axis_circle;
 pub mod axis_paper;
 pub mod coupling_fit;
 pub mod crb;
+pub mod line_ml;
+pub mod noise;
 pub mod procedure;
 pub mod sliding;
 pub mod transmission_fit;

@@ -32,18 +32,41 @@ pub enum TransmissionForm {
         /// Number of harmonics.
         order: usize,
     },
+    /// [`Transmission::Polynomial`] of a sliding joint (eq. 13): coefficients `[c_1..c_order]`
+    /// of `s_c = s + sum_k c_k s^k` (m), `c_1` the scale error.
+    Polynomial {
+        /// Highest power.
+        order: usize,
+    },
+}
+
+impl From<crate::robot::TransmissionFitForm> for TransmissionForm {
+    fn from(f: crate::robot::TransmissionFitForm) -> Self {
+        use crate::robot::TransmissionFitForm as F;
+        match f {
+            F::Harmonic { order } => TransmissionForm::Harmonic { order },
+            F::Gear { ratio, order } => TransmissionForm::Gear { ratio, order },
+            F::Polynomial { order } => TransmissionForm::Polynomial { order },
+        }
+    }
 }
 
 impl TransmissionForm {
-    /// Number of coefficients (`2 * order`).
+    /// Number of coefficients (`2 * order`; `order` for a polynomial).
     pub fn n_coefficients(&self) -> usize {
         match self {
             TransmissionForm::Harmonic { order } | TransmissionForm::Gear { order, .. } => 2 * order,
+            TransmissionForm::Polynomial { order } => *order,
         }
     }
 
-    /// Names of the coefficients, e.g. `sin1`, `cos1`.
+    /// Names of the coefficients, e.g. `sin1`, `cos1` (`scale`, `c2`, .. for a polynomial).
     pub fn coefficient_names(&self) -> Vec<String> {
+        if let TransmissionForm::Polynomial { order } = self {
+            return (1..=*order)
+                .map(|k| if k == 1 { "scale".to_string() } else { format!("c{k}") })
+                .collect();
+        }
         let k = self.n_coefficients() / 2;
         (1..=k)
             .map(|i| format!("sin{i}"))
@@ -53,12 +76,20 @@ impl TransmissionForm {
 
     /// The transmission with these coefficients.
     pub fn build(&self, coefficients: &[f64]) -> Transmission {
+        if let TransmissionForm::Polynomial { .. } = self {
+            return Transmission::Polynomial {
+                c0: 0.0,
+                c: coefficients.to_vec(),
+            };
+        }
         let k = self.n_coefficients() / 2;
         let sin = coefficients[..k].to_vec();
         let cos = coefficients[k..2 * k].to_vec();
         match *self {
-            TransmissionForm::Harmonic { .. } => Transmission::Harmonic { sin, cos },
             TransmissionForm::Gear { ratio, .. } => Transmission::Gear { ratio, sin, cos },
+            TransmissionForm::Harmonic { .. } | TransmissionForm::Polynomial { .. } => {
+                Transmission::Harmonic { sin, cos }
+            }
         }
     }
 
@@ -68,6 +99,28 @@ impl TransmissionForm {
         match *self {
             TransmissionForm::Harmonic { order } => (order, 1.0, theta_a),
             TransmissionForm::Gear { ratio, order } => (order, ratio, theta_a / ratio),
+            TransmissionForm::Polynomial { .. } => (0, 1.0, theta_a),
+        }
+    }
+
+    /// [`Self::evaluate`] of a polynomial: basis `s^k`, `k = 1..order`.
+    fn evaluate_polynomial(order: usize, coefficients: &[f64], s: f64, basis: &mut [f64]) -> TransmissionValue {
+        let (mut v, mut dv, mut ddv) = (0.0, 0.0, 0.0);
+        let (mut power, mut power_minus) = (1.0, 0.0); // s^(k-1), s^(k-2)
+        for (i, b) in basis.iter_mut().enumerate().take(order) {
+            let k = (i + 1) as f64;
+            let c = coefficients.get(i).copied().unwrap_or(0.0);
+            *b = power * s;
+            v += c * power * s;
+            dv += c * k * power;
+            ddv += c * k * (k - 1.0) * power_minus;
+            power_minus = power;
+            power *= s;
+        }
+        TransmissionValue {
+            value: s + v,
+            slope: 1.0 + dv,
+            curvature: ddv,
         }
     }
 
@@ -101,6 +154,9 @@ impl TransmissionForm {
     /// `f`, `f'`, `f''` at `theta_a` with `coefficients` (missing ones are 0), and the basis
     /// into `basis`: one `sin_cos` per harmonic for all of them.
     pub(crate) fn evaluate(&self, coefficients: &[f64], theta_a: f64, basis: &mut [f64]) -> TransmissionValue {
+        if let TransmissionForm::Polynomial { order } = *self {
+            return Self::evaluate_polynomial(order, coefficients, theta_a, basis);
+        }
         let (k, scale, x) = self.harmonic_argument(theta_a);
         let (mut v, mut vc, mut dv, mut dvc, mut ddv) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for i in 0..k {
@@ -318,6 +374,7 @@ mod tests {
                 TransmissionForm::Gear { ratio: 1.7, order: 2 },
                 vec![0.01, -0.02, 0.003, 0.004],
             ),
+            (TransmissionForm::Polynomial { order: 3 }, vec![2e-4, -0.05, 0.3]),
         ] {
             let f = form.build(&coeffs);
             for k in 0..20 {

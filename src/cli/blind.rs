@@ -3,13 +3,15 @@
 //! diagnoser reads the CSV back alone; `DIR/summary.{json,md}` hold the score. `--effect` and
 //! `--joint` run a subset of the drawn cases (same numbers and seeds).
 
+use super::options::InRange;
+use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::harness::blind::{
     BlindOptions, CASE_EFFECTS, CaseResult, Simulator, case_table, detectable_size, draw_case, score, simulate_case,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::{read_measurements, write_measurements};
+use axiscal::measurement::{read_measurements, write_measurements_to};
 use axiscal::robot::RobotDescription;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -18,13 +20,13 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Number of cases.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = InRange::closed(1usize, 1_000_000, ""))]
     cases: usize,
     /// Suite seed.
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Validation poses per case.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = InRange::closed(4usize, 1_000_000, ""))]
     poses: usize,
     /// Baseline refit scope of the diagnoser (`identified` or `geometry`).
     #[arg(long, default_value = "identified")]
@@ -49,10 +51,12 @@ pub struct Args {
 
 /// Runs `axiscal blind`.
 pub fn run(args: Args) -> Result<()> {
-    if args.out.exists() && std::fs::read_dir(&args.out)?.next().is_some() && !args.force {
-        bail!("{} is not empty; pass --force to replace its files", args.out.display());
-    }
+    let outputs = Outputs::new(args.force);
+    outputs.check_empty_dir(&args.out)?;
     let desc = RobotDescription::asea_irb6l();
+    if let Some(j) = args.joint.filter(|j| *j == 0 || *j > desc.dof()) {
+        bail!("--joint {j}: must be in 1..={} (a joint of {})", desc.dof(), desc.name);
+    }
     let options = BlindOptions {
         validation_poses: args.poses,
         simulator: match args.sim.as_str() {
@@ -84,16 +88,20 @@ pub fn run(args: Args) -> Result<()> {
         .into_par_iter()
         .map(|(i, key)| -> Result<_> {
             let dir = args.out.join(format!("case-{i:03}"));
-            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
             let set = simulate_case(&key, &desc, &options).map_err(anyhow::Error::msg)?;
             let csv = dir.join("data.csv");
-            write_measurements(&csv, &set, true)?;
-            std::fs::write(dir.join("key.json"), json_file::to_string(Schema::BLIND_KEY, &key)?)?;
+            let mut text = super::checks::identity_comment(&desc).into_bytes();
+            write_measurements_to(&mut text, &set)?;
+            outputs.write(&csv, text)?;
+            outputs.write(&dir.join("key.json"), json_file::to_string(Schema::BLIND_KEY, &key)?)?;
             // The diagnoser sees the CSV alone.
             let blind = read_measurements(&csv, Some(desc.dof()))?;
             let d =
                 diagnose(&blind, &desc, &diagnosis_options).with_context(|| format!("diagnosing {}", csv.display()))?;
-            std::fs::write(dir.join("diagnosis.json"), json_file::to_string(Schema::DIAGNOSIS, &d)?)?;
+            outputs.write(
+                &dir.join("diagnosis.json"),
+                json_file::to_string(Schema::DIAGNOSIS, &d)?,
+            )?;
             // Generator side (knows the truth): the effect's trace against the detectable gap.
             let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)
                 .map_err(anyhow::Error::msg)?;
@@ -106,16 +114,19 @@ pub fn run(args: Args) -> Result<()> {
         })
         .collect::<Result<_>>()?;
     let s = score(&results);
-    std::fs::write(
-        args.out.join("summary.json"),
+    outputs.write_in(
+        &args.out,
+        "summary.json",
         json_file::to_string(Schema::BLIND_SUMMARY, &s)?,
     )?;
-    std::fs::write(
-        args.out.join("summary.md"),
+    outputs.write_in(
+        &args.out,
+        "summary.md",
         format!("{}\n{}", s.markdown(), case_table(&results)),
     )?;
-    std::fs::write(
-        args.out.join("cases.json"),
+    outputs.write_in(
+        &args.out,
+        "cases.json",
         json_file::list_to_string(Schema::BLIND_CASES, "cases", &results)?,
     )?;
     print!("{}", s.markdown());

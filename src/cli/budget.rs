@@ -3,7 +3,8 @@
 //! robot inside the spans to the paper's 1.40 mm; writes `budget.json` and `budget.md`.
 
 use super::OneOf;
-use super::calibrate::{refuse_existing, write_output};
+use super::options::{InRange, THREADS, thread_pool};
+use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget};
 use axiscal::json_file::{self, Schema};
@@ -11,7 +12,6 @@ use axiscal::measurement::MeasurementModel;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// Arguments of `axiscal budget`.
 /// The budgeted effects by their command-line names.
 const EFFECTS: &[(&str, BudgetEffect)] = &[
     ("compliance", BudgetEffect::Compliance),
@@ -22,25 +22,26 @@ const EFFECTS: &[(&str, BudgetEffect)] = &[
     ("instrument-scale", BudgetEffect::InstrumentScale),
 ];
 
+/// Arguments of `axiscal budget`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// First campaign seed; seeds `seed .. seed + seeds` are pooled per magnitude.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Campaigns pooled per magnitude.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, value_parser = InRange::closed(1u64, 100_000, ""))]
     seeds: u64,
     /// Seed of the test poses and of the evaluation's jitter and noise.
     #[arg(long, default_value_t = 9283)]
     evaluation_seed: u64,
     /// Random test poses inside the spans per campaign.
-    #[arg(long, default_value_t = 30)]
+    #[arg(long, default_value_t = 30, value_parser = InRange::closed(1usize, 1_000_000, ""))]
     random_poses: usize,
     /// Effects to budget (default: all).
     #[arg(long, value_parser = OneOf(EFFECTS), value_delimiter = ',')]
     effects: Vec<BudgetEffect>,
     /// Worker threads (default: one per core); the result does not depend on it.
-    #[arg(long)]
+    #[arg(long, value_parser = THREADS)]
     threads: Option<usize>,
     /// Output directory.
     #[arg(long, default_value = "results/budget")]
@@ -92,33 +93,29 @@ fn markdown(settings: &BudgetSettings, lines: &[BudgetLine]) -> String {
 /// Runs `axiscal budget`.
 pub fn run(args: Args) -> Result<()> {
     let names = ["budget.json", "budget.md"];
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    refuse_existing(&args.out, &names, args.force)?;
+    let outputs = Outputs::new(args.force);
+    outputs.check_in(&args.out, &names)?;
     let (instrument, _) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
     let scenario = PaperScenario::paper(args.seed, args.evaluation_seed, args.random_poses, instrument);
-    let settings = BudgetSettings::paper(scenario, args.seeds.max(1));
+    let settings = BudgetSettings::paper(scenario, args.seeds);
     let effects = if args.effects.is_empty() {
         BudgetEffect::ALL.to_vec()
     } else {
         args.effects
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
-        .build()
-        .context("building the thread pool")?;
+    let pool = thread_pool(args.threads)?;
     let lines = pool.install(|| gap_budget(&settings, &effects))?;
     let md = markdown(&settings, &lines);
     print!("{md}");
-    write_output(
+    outputs.write_in(
         &args.out,
         names[0],
-        &json_file::to_string(
+        json_file::to_string(
             Schema::BUDGET,
             &serde_json::json!({ "settings": settings, "lines": lines }),
         )?,
-        args.force,
     )?;
-    write_output(&args.out, names[1], &md, args.force)?;
-    eprintln!("wrote {}", args.out.display());
+    outputs.write_in(&args.out, names[1], &md)?;
+    println!("wrote {}", args.out.display());
     Ok(())
 }

@@ -3,17 +3,38 @@
 //! and `calibrated.urdf`.
 
 use super::OneOf;
-use anyhow::{Context, Result, bail};
-use axiscal::calibration::procedure::{AxisEstimator, CalibrationOptions, calibrate, findings, markdown, urdf};
+use super::checks;
+use super::options::{InRange, NOISE_MM};
+use super::output::Outputs;
+use anyhow::Result;
+use axiscal::calibration::procedure::{
+    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, findings,
+    joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, ros_name, urdf,
+};
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::read_measurements;
+use axiscal::measurement::{MeasurementSet, read_measurements};
+use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-/// Arguments of `axiscal calibrate`.
 /// The estimators by their command-line names.
 const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("paper", AxisEstimator::Paper)];
 
+/// The URDF roots by their command-line names.
+const URDF_ROOTS: &[(&str, UrdfRoot)] = &[("base_link", UrdfRoot::BaseLink), ("instrument", UrdfRoot::Instrument)];
+
+/// The files `calibrate` writes into its output folder.
+const OUTPUTS: [&str; 7] = [
+    "calibration.json",
+    "report.md",
+    "report.json",
+    "calibrated.urdf",
+    "joint_map.csv",
+    "residuals.csv",
+    "zero_offsets.csv",
+];
+
+/// Arguments of `axiscal calibrate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Measurement CSV (`docs/formats.md#measurement-csv`).
@@ -28,9 +49,14 @@ pub struct Args {
     #[arg(long, value_parser = OneOf(ESTIMATORS), default_value = "ml")]
     estimator: AxisEstimator,
     /// Measurement noise of a point, 3-D RMS \[mm\] (weights the fits and scales the reported
-    /// uncertainties).
-    #[arg(long, default_value_t = 0.19)]
-    noise_mm: f64,
+    /// uncertainties). Default: estimated from the fits' residuals (reported with its
+    /// interval); a given value the residuals contradict is flagged in the report.
+    #[arg(long, value_parser = NOISE_MM)]
+    noise_mm: Option<f64>,
+    /// How far a held joint may wander within one axis experiment \[deg or mm\]: recorded
+    /// encoder values within it are modelled, beyond it the experiment moves two joints.
+    #[arg(long, default_value_t = DEFAULT_HELD_TOLERANCE, value_parser = InRange::closed(0.0, 360.0, "deg or mm"))]
+    held_tolerance: f64,
     /// The robot's repeatability \[rad\]: standard deviation of a joint value's error per
     /// re-positioning, one value for every joint or one per joint (comma-separated); 0 = model
     /// measurement noise only. Default: the robot description's `repeatability_sigma`.
@@ -39,47 +65,128 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
+    /// The URDF's root link: `base_link` (the robot's base frame, ROS-Industrial) or
+    /// `instrument` (the measuring instrument's frame, the base placed in it).
+    #[arg(long, value_parser = OneOf(URDF_ROOTS), default_value = "base_link")]
+    urdf_root: UrdfRoot,
+    /// The URDF's robot name (default: the description's name as a ROS name).
+    #[arg(long)]
+    urdf_name: Option<String>,
+    /// Step of the tabulated joint map (`joint_map.csv`) \[deg or mm\].
+    #[arg(long, default_value_t = 0.1)]
+    joint_map_step: f64,
+    /// Also write a rerun recording: the measured targets per experiment with their fitted
+    /// arcs, axes and residual vectors, the nominal and the calibrated robot side by side at
+    /// every pose, the validation errors of both. View it with `axiscal view FILE.rrd`. Needs
+    /// a build with `--features viz`.
+    #[arg(long, value_name = "FILE.rrd")]
+    record: Option<PathBuf>,
+    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
+    /// deg, description lengths in mm instead of m) when the units are right after all.
+    #[arg(long)]
+    skip_unit_check: bool,
+    /// Calibrate even when DATA records another robot description than `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
 }
 
-/// Writes `text` to `dir/name`, refusing to replace a file unless `force`.
-pub fn write_output(dir: &Path, name: &str, text: &str, force: bool) -> Result<()> {
-    let path = dir.join(name);
-    if path.exists() && !force {
-        bail!("{} exists; pass --force to replace it", path.display());
-    }
-    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
+/// What `calibrate` writes, rendered before anything is written.
+struct OutputTexts {
+    /// The files of [`OUTPUTS`] that are written, by name, in order.
+    files: Vec<(&'static str, String)>,
+    /// Outputs left out, with the reason (printed as warnings).
+    left_out: Vec<String>,
+    /// The URDF-fed-raw-readings line printed after the axes table.
+    deviation_line: String,
+    /// Joints whose URDF speed and effort limits are unknown.
+    missing_speed_limits: Vec<usize>,
 }
 
-/// Refuses, before any work is written, to replace any of `names` in `dir` unless `force`.
-pub fn refuse_existing(dir: &Path, names: &[&str], force: bool) -> Result<()> {
-    if !force {
-        for n in names {
-            let p = dir.join(n);
-            if p.exists() {
-                bail!("{} exists; pass --force to replace it", p.display());
-            }
-        }
+/// Renders every output of `calibrate` (see [`OUTPUTS`]).
+fn output_texts(
+    args: &Args,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    cal: &Calibration,
+    source: &str,
+) -> Result<OutputTexts> {
+    // The deviation over the data's validation poses, else over seeded poses around the
+    // reference.
+    let mut poses: Vec<Vec<f64>> = set
+        .experiments()
+        .iter()
+        .filter(|e| e.moved_joint == 0 && e.name != TOOL_EXPERIMENT)
+        .flat_map(|e| e.by_step().into_values().map(|rows| rows[0].cmd.clone()))
+        .collect();
+    if poses.is_empty() {
+        let plan = ValidationPlan {
+            poses: 500,
+            ..ValidationPlan::workspace_default(desc.dof())
+        };
+        poses = plan.commands(desc, &cal.reference_cmd);
     }
-    Ok(())
-}
-
-/// Checks a `--noise-mm` argument: a positive number of millimetres.
-pub fn check_noise_mm(noise_mm: f64) -> Result<()> {
-    if !(noise_mm.is_finite() && noise_mm > 0.0) {
-        bail!("--noise-mm must be a positive number of millimetres, got {noise_mm}");
+    let deviation = raw_reading_deviation(cal, desc, &poses);
+    let mut report_findings = findings(cal, desc);
+    report_findings.extend(deviation.findings());
+    let urdf_options = UrdfOptions {
+        robot_name: args.urdf_name.clone().unwrap_or_else(|| ros_name(&desc.name)),
+        root: args.urdf_root,
+    };
+    let map = joint_map(cal, desc, args.joint_map_step);
+    let mut files = vec![
+        (OUTPUTS[0], json_file::to_string(Schema::CALIBRATION, cal)?),
+        (OUTPUTS[1], markdown(cal, desc, source) + &deviation.markdown()),
+        (
+            OUTPUTS[2],
+            json_file::list_to_string(Schema::REPORT, "findings", &report_findings)?,
+        ),
+        (OUTPUTS[3], urdf(&cal.robot.phi_model(), desc, &urdf_options)),
+        (OUTPUTS[4], super::joints::joint_map_csv(&map, &desc.name)),
+        (OUTPUTS[5], residuals_csv(cal)),
+    ];
+    // The zero offsets are a convenience for controllers that take nothing else: when their
+    // fit fails, the calibration stands and the file is left out with the reason.
+    let mut left_out = Vec::new();
+    match super::joints::zero_offsets_csv(cal, desc, &poses) {
+        Ok(text) => files.push((OUTPUTS[6], text)),
+        Err(e) => left_out.push(format!("{} not written: {e:#}", OUTPUTS[6])),
     }
-    Ok(())
+    Ok(OutputTexts {
+        files,
+        left_out,
+        deviation_line: format!(
+            "  URDF fed raw controller readings: tool off by up to {:.3} mm, {:.3} mrad over {} poses (use joint_map.csv / `axiscal joints`)",
+            deviation.max_position_mm, deviation.max_orientation_mrad, deviation.poses
+        ),
+        missing_speed_limits: joints_without_speed_limits(desc),
+    })
 }
 
 /// Runs `axiscal calibrate`.
 pub fn run(args: Args) -> Result<()> {
-    check_noise_mm(args.noise_mm)?;
+    let outputs = Outputs::new(args.force)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot);
+    outputs.check_in(&args.out, &OUTPUTS)?;
+    super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
+    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    let recorded = checks::data_identity(&args.data);
+    checks::same_robot(
+        recorded.as_ref(),
+        &args.data,
+        &desc,
+        &args.robot,
+        args.allow_other_robot,
+    )?;
     let set = read_measurements(&args.data, Some(desc.dof()))?;
+    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = CalibrationOptions {
         estimator: args.estimator,
-        noise_rms_3d_mm: args.noise_mm,
-        repeatability_sigma_rad: args.repeatability_rad,
+        noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),
+        estimate_noise: args.noise_mm.is_none(),
+        held_tolerance: args.held_tolerance,
+        repeatability_sigma_rad: args.repeatability_rad.clone(),
         ..CalibrationOptions::default()
     };
     options
@@ -88,41 +195,88 @@ pub fn run(args: Args) -> Result<()> {
     // The procedure's message already contains its cause: one line, not the cause twice.
     let cal =
         calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let source = args.data.display().to_string();
-    let names = ["calibration.json", "report.md", "report.json", "calibrated.urdf"];
-    refuse_existing(&args.out, &names, args.force)?;
-    write_output(
-        &args.out,
-        names[0],
-        &json_file::to_string(Schema::CALIBRATION, &cal)?,
-        args.force,
-    )?;
-    write_output(&args.out, names[1], &markdown(&cal, &desc, &source), args.force)?;
-    write_output(
-        &args.out,
-        names[2],
-        &json_file::list_to_string(Schema::REPORT, "findings", &findings(&cal, &desc))?,
-        args.force,
-    )?;
-    write_output(
-        &args.out,
-        names[3],
-        &urdf(&cal.robot.phi_model(), &desc, "calibrated"),
-        args.force,
-    )?;
+    let texts = output_texts(&args, &desc, &set, &cal, &source)?;
+    for (name, text) in &texts.files {
+        outputs.write_in(&args.out, name, text)?;
+    }
+    // An output left out must not leave an earlier run's file beside the new calibration.
+    for stale in OUTPUTS.iter().filter(|n| !texts.files.iter().any(|(w, _)| w == *n)) {
+        let path = args.out.join(stale);
+        if path.exists() {
+            std::fs::remove_file(&path).map_err(|e| anyhow::anyhow!("removing the stale {}: {e}", path.display()))?;
+        }
+    }
     println!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
-    println!("  joint  points  span(deg)  residual RMS (mm)  direction 1-sigma (mrad)");
+    print_scope(&cal);
+    println!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
     for a in &cal.axes {
+        let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
         println!(
-            "  {:>5}  {:>6}  {:>9.1}  {:>17.4}  {:>24.4}",
+            "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
             a.joint,
             a.points,
             a.span_deg,
+            unit,
             a.residual_rms_mm,
             a.direction_sigma_rad[0] * 1e3
         );
     }
-    println!("wrote {}/{{{}}}", args.out.display(), names.join(","));
+    println!("{}", texts.deviation_line);
+    if !texts.missing_speed_limits.is_empty() {
+        eprintln!(
+            "warning: the description gives no max_velocity/max_effort for joint(s) {:?}: their URDF <limit> says velocity=0 effort=0",
+            texts.missing_speed_limits
+        );
+    }
+    for warning in &texts.left_out {
+        eprintln!("warning: {warning}");
+    }
+    let written: Vec<&str> = texts.files.iter().map(|(name, _)| *name).collect();
+    println!("wrote {}/{{{}}}", args.out.display(), written.join(","));
+    #[cfg(feature = "viz")]
+    if let Some(path) = &args.record {
+        let campaign = super::record::calibrated::CalibratedCampaign {
+            desc: &desc,
+            set: &set,
+            calibration: &cal,
+            verdict: None,
+        };
+        super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
+    }
     Ok(())
+}
+
+/// The noise (estimated, used, contradicted), joints not calibrated, the base-frame rule.
+fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
+    if let Some(n) = &cal.noise {
+        if let Some(e) = &n.estimate {
+            println!(
+                "  noise from the residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, {} dof); fits weighted with {:.4} mm ({})",
+                e.rms_3d_mm,
+                e.confidence * 100.0,
+                e.interval_mm[0],
+                e.interval_mm[1],
+                e.dof,
+                n.used_rms_3d_mm,
+                n.source
+            );
+        }
+        if n.given_contradicted {
+            println!(
+                "  WARNING: the residuals contradict --noise-mm {:.4} (chi-square p = {:.2e}); see report.md",
+                n.used_rms_3d_mm,
+                n.given_p_value.unwrap_or(f64::NAN)
+            );
+        }
+    }
+    if !cal.not_calibrated.is_empty() {
+        println!(
+            "  not calibrated (no axis experiment, kept nominal): joints {:?}",
+            cal.not_calibrated
+        );
+    }
+    if let Some(b) = &cal.base_rule {
+        println!("  base frame: {}", b.text);
+    }
 }

@@ -15,6 +15,8 @@
 //! on, and the command exits with code 2 at the end if any pose failed. A malformed input
 //! file is one error naming the file, the line and the column (exit 2, nothing written).
 
+use super::checks;
+use super::output::{Outputs, commit_csv};
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::Calibration;
 use axiscal::compensation::{CompensatedPose, CompensationError, Compensator};
@@ -39,6 +41,16 @@ pub struct Args {
     /// Output commands (CSV).
     #[arg(long)]
     out: PathBuf,
+    /// Replace `--out` if it exists (never one of this command's inputs).
+    #[arg(long)]
+    force: bool,
+    /// Use the calibration even though it was made with another robot description (a
+    /// different geometry hash) than `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
+    /// Skip the unit sanity check of the description's lengths.
+    #[arg(long)]
+    skip_unit_check: bool,
 }
 
 /// One required pose from the input file.
@@ -155,15 +167,28 @@ fn failed_columns(row: &mut Vec<String>, e: &CompensationError, n: usize) {
 
 /// Runs `axiscal compensate`.
 pub fn run(args: Args) -> Result<()> {
+    let outputs = Outputs::new(args.force)
+        .input("--calibration", &args.calibration)
+        .input("--poses", &args.poses)
+        .input("--robot", &args.robot);
+    outputs.check(&args.out)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     let text = std::fs::read_to_string(&args.calibration)
         .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
     let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
         .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    checks::same_robot(
+        cal.description.as_ref(),
+        &args.calibration,
+        &desc,
+        &args.robot,
+        args.allow_other_robot,
+    )?;
     let comp = Compensator::new(&cal.robot, &desc)?;
     let poses = read_poses(&args.poses)?;
     let n = desc.dof();
-    let mut w = csv::Writer::from_path(&args.out).with_context(|| format!("{}: cannot write", args.out.display()))?;
+    let mut w = csv::Writer::from_writer(outputs.create(&args.out)?);
     w.write_record(csv_header(n))?;
     let mut failed = 0;
     for p in &poses {
@@ -178,7 +203,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         w.write_record(&row)?;
     }
-    w.flush()?;
+    commit_csv(w)?;
     println!(
         "wrote {} ({} poses, {} failed)",
         args.out.display(),

@@ -2,14 +2,16 @@
 //! (`docs/formats.md#diagnosis-json`), writing `diagnosis.json`, `diagnosis.md` and the plots
 //! (`where.{png,svg}`; with validation poses also `candidates.{png,svg}`).
 
-use super::calibrate::{check_noise_mm, refuse_existing, write_output};
+use super::checks;
+use super::options::{InRange, NOISE_MM};
+use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose, diagnose_axes,
     markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::read_measurements;
+use axiscal::measurement::{MeasurementSet, read_measurements};
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
 
@@ -25,23 +27,23 @@ pub struct Args {
     #[arg(long)]
     out: PathBuf,
     /// Measurement noise of a point, 3-D RMS \[mm\].
-    #[arg(long, default_value_t = 0.19)]
+    #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
     noise_mm: f64,
     /// Noise-only replicas of the campaign (each recalibrated).
-    #[arg(long, default_value_t = DiagnosisOptions::default().noise_trials)]
+    #[arg(long, default_value_t = DiagnosisOptions::default().noise_trials, value_parser = InRange::closed(2usize, 100_000, ""))]
     noise_trials: usize,
     /// Validation-noise draws per replica.
-    #[arg(long, default_value_t = DiagnosisOptions::default().noise_draws)]
+    #[arg(long, default_value_t = DiagnosisOptions::default().noise_draws, value_parser = InRange::closed(1usize, 10_000, ""))]
     noise_draws: usize,
     /// What the baseline refit adjusts besides the geometry: `identified` (also the fitted
     /// transmission harmonics and coupling slopes) or `geometry`.
     #[arg(long, value_enum, default_value = "identified")]
     refit: Refit,
     /// False-alarm rate of the gap and candidate tests.
-    #[arg(long, default_value_t = DiagnosisOptions::default().false_alarm)]
+    #[arg(long, default_value_t = DiagnosisOptions::default().false_alarm, value_parser = InRange::above(0.0, 0.5, ""))]
     false_alarm: f64,
     /// Noise-only replicas of the axis-experiments-only mode (data without validation poses).
-    #[arg(long, default_value_t = DiagnosisOptions::default().axis_replicas)]
+    #[arg(long, default_value_t = DiagnosisOptions::default().axis_replicas, value_parser = InRange::closed(2usize, 1_000_000, ""))]
     axis_replicas: usize,
     /// Seed of the replicas' noise.
     #[arg(long, default_value_t = 0)]
@@ -49,6 +51,19 @@ pub struct Args {
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
+    /// Also write a rerun recording: the data with their fitted arcs and residual vectors,
+    /// the nominal and the calibrated robot side by side at every pose, the validation errors,
+    /// the verdict in the notes. View it with `axiscal view FILE.rrd`. Needs a build with
+    /// `--features viz`.
+    #[arg(long, value_name = "FILE.rrd")]
+    record: Option<PathBuf>,
+    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
+    /// deg, description lengths in mm instead of m).
+    #[arg(long)]
+    skip_unit_check: bool,
+    /// Diagnose even when DATA records another robot description than `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
 }
 
 /// The `--refit` choices ([`RefitScope`]).
@@ -60,9 +75,22 @@ enum Refit {
 
 /// Runs `axiscal diagnose`.
 pub fn run(args: Args) -> Result<()> {
-    check_noise_mm(args.noise_mm)?;
+    let outputs = Outputs::new(args.force)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot);
+    super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
+    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    let recorded = checks::data_identity(&args.data);
+    checks::same_robot(
+        recorded.as_ref(),
+        &args.data,
+        &desc,
+        &args.robot,
+        args.allow_other_robot,
+    )?;
     let set = read_measurements(&args.data, Some(desc.dof()))?;
+    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: args.noise_mm,
         noise_trials: args.noise_trials,
@@ -85,7 +113,7 @@ pub fn run(args: Args) -> Result<()> {
             json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
             markdown: axes_markdown(&d, &source),
             plot_files: &AXES_PLOT_FILES,
-            force: args.force,
+            outputs: &outputs,
         };
         let written = report.write(|dir| write_axes_plots(&d, dir))?;
         println!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
@@ -106,7 +134,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         println!("{}: {}", d.outcome.effect, d.verdict);
         println!("wrote {written}");
-        return Ok(());
+        return record(&args, &desc, &set, &format!("{}: {}", d.outcome.effect, d.verdict));
     }
     let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
     let report = Report {
@@ -114,10 +142,10 @@ pub fn run(args: Args) -> Result<()> {
         json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
         markdown: markdown(&d, &source),
         plot_files: &PLOT_FILES,
-        force: args.force,
+        outputs: &outputs,
     };
     let written = report.write(|dir| write_plots(&d, dir))?;
-    println!(
+    let headline = format!(
         "{}{} (confidence {:.2}): gap {:.3} -> {:.3} mm",
         d.outcome.effect,
         d.outcome.joint.map_or(String::new(), |j| format!(" joint {j}")),
@@ -125,7 +153,40 @@ pub fn run(args: Args) -> Result<()> {
         d.outcome.gap_before_mm,
         d.outcome.gap_after_mm
     );
+    println!("{headline}");
+    if d.outcome.effect == "none" {
+        println!(
+            "  with {} validation poses ({} held out) the smallest gap this test flags is {:.3} mm; a smaller effect \
+             reads `none`: measure more validation poses to resolve it",
+            d.poses[0] + d.poses[1],
+            d.poses[1],
+            d.detectable_gap_mm
+        );
+    }
     println!("wrote {written}");
+    record(&args, &desc, &set, &format!("{headline}. {}", d.verdict))
+}
+
+/// The `--record` recording of the diagnosed data (the standard calibration, the verdict in
+/// the notes); nothing without `--record`.
+#[cfg_attr(not(feature = "viz"), allow(unused_variables))]
+fn record(args: &Args, desc: &RobotDescription, set: &MeasurementSet, verdict: &str) -> Result<()> {
+    #[cfg(feature = "viz")]
+    if let Some(path) = &args.record {
+        let options = axiscal::calibration::procedure::CalibrationOptions {
+            noise_rms_3d_mm: args.noise_mm,
+            ..Default::default()
+        };
+        let calibration = axiscal::calibration::procedure::calibrate(set, desc, &options)
+            .map_err(|e| anyhow::anyhow!("calibrating {} for the recording: {e}", args.data.display()))?;
+        let campaign = super::record::calibrated::CalibratedCampaign {
+            desc,
+            set,
+            calibration: &calibration,
+            verdict: Some(verdict),
+        };
+        super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
+    }
     Ok(())
 }
 
@@ -136,7 +197,7 @@ struct Report<'a> {
     markdown: String,
     /// The files the plots write.
     plot_files: &'a [&'a str],
-    force: bool,
+    outputs: &'a Outputs,
 }
 
 impl Report<'_> {
@@ -146,9 +207,9 @@ impl Report<'_> {
         let names = ["diagnosis.json", "diagnosis.md"];
         std::fs::create_dir_all(self.out).with_context(|| format!("creating {}", self.out.display()))?;
         let all: Vec<&str> = names.iter().chain(self.plot_files).copied().collect();
-        refuse_existing(self.out, &all, self.force)?;
-        write_output(self.out, names[0], &self.json, self.force)?;
-        write_output(self.out, names[1], &self.markdown, self.force)?;
+        self.outputs.check_in(self.out, &all)?;
+        self.outputs.write_in(self.out, names[0], &self.json)?;
+        self.outputs.write_in(self.out, names[1], &self.markdown)?;
         plot(self.out)?;
         Ok(format!("{}/{{{}}}", self.out.display(), all.join(",")))
     }

@@ -3,7 +3,8 @@
 //! to the paper's figures and the noise floor measured in the same run; writes
 //! `evaluation.json`, `poses.csv`, `calibration.json`, `floor_calibration.json` and the plots.
 
-use super::calibrate::refuse_existing;
+use super::options::InRange;
+use super::output::{Outputs, commit_csv};
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{
     PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperReport, PaperScenario,
@@ -26,11 +27,11 @@ pub struct Args {
     #[arg(long, default_value_t = 9283)]
     evaluation_seed: u64,
     /// Random test poses per region (inside the spans, workspace).
-    #[arg(long, default_value_t = 30)]
+    #[arg(long, default_value_t = 30, value_parser = InRange::closed(1usize, 1_000_000, ""))]
     random_poses: usize,
     /// Also pool the floor check over this many campaign seeds (`seed ..`), written to
     /// `floor_check.json`; 1: the single run only.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = InRange::closed(1u64, 100_000, ""))]
     floor_seeds: u64,
     /// Output directory.
     #[arg(long, default_value = "results/paper")]
@@ -40,15 +41,16 @@ pub struct Args {
     force: bool,
 }
 
-fn write_json<T: serde::Serialize>(path: &Path, schema: Schema, value: &T) -> Result<()> {
-    let text = json_file::to_string(schema, value)?;
-    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+fn write_json<T: serde::Serialize>(outputs: &Outputs, path: &Path, schema: Schema, value: &T) -> Result<()> {
+    outputs.write(path, json_file::to_string(schema, value)?)
 }
 
 /// Runs `axiscal evaluate`.
 pub fn run(args: Args) -> Result<()> {
     let (instrument, noise) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
-    eprintln!("{noise}");
+    if super::verbose() {
+        eprintln!("{noise}");
+    }
     let scenario = PaperScenario::paper(args.seed, args.evaluation_seed, args.random_poses, instrument);
     let mut outputs = vec![
         "evaluation.json",
@@ -58,22 +60,25 @@ pub fn run(args: Args) -> Result<()> {
         "floor_check.json",
     ];
     outputs.extend(PLOT_FILES);
-    refuse_existing(&args.out, &outputs, args.force)?;
+    let guard = Outputs::new(args.force);
+    guard.check_in(&args.out, &outputs)?;
     let out = run_paper_scenario(&scenario)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let r = &out.report;
-    write_json(&args.out.join("evaluation.json"), Schema::EVALUATION, r)?;
+    write_json(&guard, &args.out.join("evaluation.json"), Schema::EVALUATION, r)?;
     write_json(
+        &guard,
         &args.out.join("calibration.json"),
         Schema::CALIBRATION,
         &out.calibration,
     )?;
     write_json(
+        &guard,
         &args.out.join("floor_calibration.json"),
         Schema::CALIBRATION,
         &out.floor_calibration,
     )?;
-    write_poses_csv(&args.out.join("poses.csv"), r)?;
+    write_poses_csv(&guard, &args.out.join("poses.csv"), r)?;
     let plots = write_plots(r, &args.out)?;
 
     println!(
@@ -96,15 +101,15 @@ pub fn run(args: Args) -> Result<()> {
         }
     );
     if args.floor_seeds > 1 {
-        pooled_floor_check(&scenario, &args)?;
+        pooled_floor_check(&guard, &scenario, &args)?;
     }
     println!("wrote {} and {} plots", args.out.display(), plots.len());
     Ok(())
 }
 
 /// Writes every test pose's errors to `csv_path` (`poses.csv`).
-fn write_poses_csv(csv_path: &Path, r: &PaperReport) -> Result<()> {
-    let mut w = csv::Writer::from_path(csv_path).with_context(|| format!("writing {}", csv_path.display()))?;
+fn write_poses_csv(guard: &Outputs, csv_path: &Path, r: &PaperReport) -> Result<()> {
+    let mut w = csv::Writer::from_writer(guard.create(csv_path)?);
     w.write_record([
         "id",
         "region",
@@ -136,8 +141,7 @@ fn write_poses_csv(csv_path: &Path, r: &PaperReport) -> Result<()> {
             p.failure.clone().unwrap_or_default(),
         ])?;
     }
-    w.flush()?;
-    Ok(())
+    commit_csv(w)
 }
 
 /// Prints each region's accuracy next to the paper's and the floor; returns the calibrated/floor
@@ -205,9 +209,9 @@ fn print_repeatability(rep: &RepeatabilitySummary) {
 
 /// The floor check pooled over `args.floor_seeds` campaign seeds: written to
 /// `floor_check.json` and printed.
-fn pooled_floor_check(scenario: &PaperScenario, args: &Args) -> Result<()> {
+fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args) -> Result<()> {
     let check = floor_check(scenario, args.floor_seeds)?;
-    write_json(&args.out.join("floor_check.json"), Schema::FLOOR_CHECK, &check)?;
+    write_json(guard, &args.out.join("floor_check.json"), Schema::FLOOR_CHECK, &check)?;
     println!(
         "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
              orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",

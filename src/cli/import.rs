@@ -1,7 +1,8 @@
 //! `axiscal import FORMAT ...`: converts measurement data written by other groups to the
 //! measurement CSV of `docs/formats.md#measurement-csv`.
 
-use anyhow::{Context, Result, bail};
+use super::output::Outputs;
+use anyhow::{Context, Result};
 use axiscal::measurement::import::boby_klimchik;
 use axiscal::measurement::write_measurements_to;
 use std::io::Write;
@@ -36,28 +37,36 @@ struct DirArgs {
     force: bool,
 }
 
-fn write_csv(out: &Path, force: bool, comment: &str, set: &axiscal::measurement::MeasurementSet) -> Result<()> {
-    if out.exists() && !force {
-        bail!("{} exists; pass --force to replace it", out.display());
-    }
-    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
-    }
-    let file = std::fs::File::create(out).with_context(|| format!("creating {}", out.display()))?;
-    let mut w = std::io::BufWriter::new(file);
-    w.write_all(comment.as_bytes())
-        .and_then(|_| write_measurements_to(&mut w, set))
-        .and_then(|_| w.flush())
-        .with_context(|| format!("writing {}", out.display()))
+/// Writes `comment` and `set` to `out`, never over `source` (the file imported).
+fn write_csv(
+    out: &Path,
+    force: bool,
+    source: &Path,
+    comment: &str,
+    set: &axiscal::measurement::MeasurementSet,
+) -> Result<()> {
+    let outputs = Outputs::new(force).input("DIR", source);
+    let mut file = outputs.create(out)?;
+    file.write_all(comment.as_bytes())
+        .and_then(|_| write_measurements_to(&mut file, set))
+        .with_context(|| format!("writing {}", out.display()))?;
+    file.commit()
 }
 
 /// Runs `axiscal import`.
 pub fn run(args: Args) -> Result<()> {
     match args.format {
         Format::BobyKlimchik(a) => {
-            let set = boby_klimchik::import_dir(&a.dir)?;
             let source = a.dir.join(boby_klimchik::DATA_FILE);
-            write_csv(&a.out, a.force, &boby_klimchik::provenance_comment(&source), &set)?;
+            Outputs::new(a.force).input("DIR", &source).check(&a.out)?;
+            let set = boby_klimchik::import_dir(&a.dir)?;
+            write_csv(
+                &a.out,
+                a.force,
+                &source,
+                &boby_klimchik::provenance_comment(&source),
+                &set,
+            )?;
             println!(
                 "imported {} poses ({} experiments, {} targets each) from {} to {}",
                 set.rows().len() / boby_klimchik::TARGETS,

@@ -1,8 +1,9 @@
 //! `axiscal merge DIR... --out DIR`: combine shard results (`axiscal run --shard K/N`) into the
 //! same results a single run gives, bit for bit.
 
+use super::output::Outputs;
 use anyhow::{Context, Result, bail};
-use axiscal::harness::scenario::export::{self, RESOLVED_FILE, TRIALS_FILE};
+use axiscal::harness::scenario::export::{self, RESOLVED_FILE, RUN_FILES, RunLock, TRIALS_FILE};
 use axiscal::harness::scenario::{ResolvedScenario, complete_run};
 use std::path::PathBuf;
 
@@ -50,6 +51,11 @@ pub fn run(args: Args) -> Result<()> {
     let names = names.unwrap_or_default();
     let records = complete_run(&scenario, records).context("merging the shards")?;
     scenario.check_metrics(&names, &first)?;
+    let outputs = Outputs::new(args.force).inputs_in("a shard", &args.dirs, &[RESOLVED_FILE, TRIALS_FILE]);
+    for name in RUN_FILES {
+        outputs.check_not_input(&args.out.join(name))?;
+    }
+    let _lock = RunLock::acquire(&args.out)?;
     export::prepare_dir(&args.out, args.force)?;
     export::write_resolved(&args.out, &resolved_text)?;
     let summary = export::write_final(&args.out, &scenario, &names, &records)?;

@@ -3,14 +3,19 @@
 mod blind;
 mod budget;
 mod calibrate;
+mod checks;
 mod compensate;
+mod describe;
 mod diagnose;
 mod evaluate;
 mod import;
+mod joints;
 mod merge;
-#[cfg(feature = "viz")]
+mod options;
+mod output;
 mod record;
 mod run;
+mod signals;
 mod simulate;
 mod study;
 mod view;
@@ -49,14 +54,68 @@ impl<T: Clone + Send + Sync + 'static> TypedValueParser for OneOf<T> {
 #[derive(Debug, Parser)]
 #[command(name = "axiscal", version, about)]
 struct Cli {
+    /// Also print details (e.g. the instrument's calibration) on stderr.
+    #[arg(long, short, global = true)]
+    verbose: bool,
     #[command(subcommand)]
     command: Command,
+}
+
+/// Whether `--verbose` was given.
+static VERBOSE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether `--verbose` was given: details go to stderr only then.
+pub fn verbose() -> bool {
+    VERBOSE.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// The error as one line: each cause in the chain once (a cause whose text the message
+/// already holds is left out: many I/O errors are both shown by their wrapper and its
+/// source), line breaks folded into `; `.
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut message = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if message.contains(text.trim()) {
+            continue;
+        }
+        if !message.is_empty() {
+            message.push_str(": ");
+        }
+        message.push_str(text.trim());
+    }
+    fold_lines(&message)
+}
+
+/// `text` on one line: lines trimmed, the empty ones dropped, the rest joined by `; `.
+fn fold_lines(text: &str) -> String {
+    text.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// A command-line error of clap as one line (its usage and "for more information" lines are
+/// left out; `axiscal COMMAND --help` lists every option).
+fn clap_one_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let lines: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .collect();
+    let joined = lines.join("; ");
+    joined.strip_prefix("error: ").unwrap_or(&joined).to_owned()
 }
 
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Calibrate a robot from a measurement CSV (axes, transmissions, couplings, offsets).
     Calibrate(calibrate::Args),
+    /// The phi-model of a robot description (rows, phi angles, axes); for a DH table or a URDF,
+    /// its forward kinematics checked against the source at random poses.
+    Describe(describe::Args),
     /// Monte-Carlo study of the calibrator: efficiency against the Cramer-Rao bound (ML and the
     /// paper's estimator) and the calibration of the reported uncertainties.
     Study(study::Args),
@@ -71,6 +130,9 @@ enum Command {
     Merge(merge::Args),
     /// Fig. 5 compensation: commands for required tool poses from a calibration.
     Compensate(compensate::Args),
+    /// The calibrated joint values of controller commands: what a URDF or a ROS
+    /// `joint_states` publisher must be fed instead of the raw readings.
+    Joints(joints::Args),
     /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
     Evaluate(evaluate::Args),
     /// The paper's gap budget: per unmodelled effect, the magnitude that raises the simulated
@@ -90,17 +152,48 @@ enum Command {
 #[error("{0}")]
 pub struct ThresholdsFailed(pub String);
 
+/// A run stopped by SIGINT or SIGTERM after saving what it had: exit code 128 + the signal
+/// (130, 143), as shells report a process killed by it.
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct Interrupted {
+    /// The signal number.
+    pub signal: i32,
+    /// What was saved and how to continue.
+    pub message: String,
+}
+
+impl Interrupted {
+    fn exit_code(&self) -> u8 {
+        u8::try_from(128 + self.signal).unwrap_or(130)
+    }
+}
+
 /// Parses the command line, runs the subcommand and maps its outcome to an exit code.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => {
+            // --help, --version: printed to stdout, exit 0.
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            eprintln!("error: {} (see `axiscal help`)", clap_one_line(&e));
+            return ExitCode::from(2);
+        }
+    };
+    VERBOSE.store(cli.verbose, std::sync::atomic::Ordering::Relaxed);
     let result = match cli.command {
         Command::Calibrate(args) => calibrate::run(args),
+        Command::Describe(args) => describe::run(args),
         Command::Import(args) => import::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Study(args) => study::run(args),
         Command::Run(args) => run::run(args),
         Command::Merge(args) => merge::run(args),
         Command::Compensate(args) => compensate::run(args),
+        Command::Joints(args) => joints::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Budget(args) => budget::run(args),
         Command::Diagnose(args) => diagnose::run(args),
@@ -110,8 +203,10 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
-            if e.downcast_ref::<ThresholdsFailed>().is_some() {
+            eprintln!("error: {}", one_line(&e));
+            if let Some(interrupted) = e.downcast_ref::<Interrupted>() {
+                ExitCode::from(interrupted.exit_code())
+            } else if e.downcast_ref::<ThresholdsFailed>().is_some() {
                 ExitCode::from(1)
             } else {
                 ExitCode::from(2)

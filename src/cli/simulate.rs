@@ -1,13 +1,16 @@
 //! `axiscal simulate`: a full Table-1 campaign plus validation poses on a simulated robot,
 //! written as a measurement CSV (`docs/formats.md#measurement-csv`).
 
+use super::options::InRange;
+use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements};
+use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements_to};
 use axiscal::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::sim::{AnalyticArm, ArmExecutor, CampaignOptions, CampaignOutput, Effects, simulate_campaign_with};
 use axiscal::sim::{RapierArm, RapierArmOptions, SpanSearch, visible_sweep_span};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `axiscal simulate`.
@@ -24,8 +27,13 @@ pub struct Args {
     /// isotropic Gaussian noise of the same 3-D RMS.
     #[arg(long, value_enum, default_value_t = Instrument::Theodolite)]
     instrument: Instrument,
+    /// The campaign plan (TOML: `reference`, `[[sweeps]]`, `held_jitter`;
+    /// `docs/formats.md#plan-file`). Default: paper Table 1 for a six-joint revolute arm, its
+    /// generalisation (`CalibrationPlan::for_robot`) for any other robot.
+    #[arg(long)]
+    plan: Option<PathBuf>,
     /// Number of validation poses (three tool targets each).
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, 1_000_000, ""))]
     validation_poses: usize,
     /// Seed of the measurement and repeatability noise.
     #[arg(long, default_value_t = 1)]
@@ -52,6 +60,9 @@ pub struct Args {
     /// `axiscal view FILE.rrd`. Needs a build with `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
+    /// Skip the unit sanity check of the description's lengths.
+    #[arg(long)]
+    skip_unit_check: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -59,14 +70,6 @@ enum Sim {
     Rapier,
     Analytic,
 }
-/// `--record` was given to a build without the `viz` feature.
-#[cfg(not(feature = "viz"))]
-#[derive(Debug, thiserror::Error)]
-#[error(
-    "--record {0} needs the rerun recorder, which this build does not include: rebuild with \
-     `cargo build --release --features viz` (`make run` does)"
-)]
-struct RecordUnavailable(String);
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 enum Instrument {
@@ -76,17 +79,42 @@ enum Instrument {
 
 /// Runs `axiscal simulate`.
 pub fn run(args: Args) -> Result<()> {
-    #[cfg(not(feature = "viz"))]
-    if let Some(path) = &args.record {
-        return Err(RecordUnavailable(path.display().to_string()).into());
+    let outputs = [("--truth", &args.truth), ("--effects", &args.effects)]
+        .into_iter()
+        .fold(
+            Outputs::new(args.force).input("--robot", &args.robot),
+            |o, (what, path)| match path {
+                Some(p) => o.input(what, p),
+                None => o,
+            },
+        );
+    outputs.check(&args.out)?;
+    super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
+    if let Some(record) = &args.record {
+        Outputs::new(true).input("--out", &args.out).check_not_input(record)?;
     }
     let desc = RobotDescription::from_file(&args.robot)?;
+    super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
     let truth = match &args.truth {
         Some(path) => RobotModel::from_file(path)?,
         None => axiscal::sim::paper_robot(),
     };
     let instrument = instrument_model(args.instrument)?;
-    let plan = CalibrationPlan::table1(desc.dof());
+    let plan = match &args.plan {
+        Some(path) => {
+            let text = axiscal::toml_file::read(path)?;
+            axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?
+        }
+        None if desc.dof() == 6
+            && desc
+                .joints
+                .iter()
+                .all(|j| j.kind == axiscal::kinematics::JointKind::Revolute) =>
+        {
+            CalibrationPlan::table1(6)
+        }
+        None => CalibrationPlan::for_robot(&desc),
+    };
     let validation = ValidationPlan {
         poses: args.validation_poses,
         ..ValidationPlan::workspace_default(desc.dof())
@@ -122,10 +150,11 @@ pub fn run(args: Args) -> Result<()> {
     }
     .with_context(|| format!("simulating the campaign on {name}"))?;
     let set = MeasurementSet::new(desc.dof(), out.rows).context("assembling the measurement set")?;
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    write_measurements(&args.out, &set, args.force).context("pass --force to replace an existing file")?;
+    let mut file = outputs.create(&args.out)?;
+    file.write_all(super::checks::identity_comment(&desc).as_bytes())
+        .and_then(|()| write_measurements_to(&mut file, &set))
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    file.commit()?;
     println!(
         "wrote {} ({} rows) simulated on {}",
         args.out.display(),
@@ -135,24 +164,27 @@ pub fn run(args: Args) -> Result<()> {
     print_experiments(&set, &out.occluded);
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
-        let campaign = super::record::Campaign {
+        let campaign = super::record::simulated::Campaign {
             desc: &desc,
             truth: &recorded_truth,
             plan: &plan,
             set: &set,
             instrument: &instrument,
         };
-        record_campaign(path, &campaign)?;
+        super::record::save(path, |p| super::record::simulated::write(p, &campaign))?;
     }
     Ok(())
 }
 
-/// The measurement model of `kind` (the theodolites' calibration printed to stderr).
+/// The measurement model of `kind` (the theodolites' calibration printed to stderr with
+/// `--verbose`).
 fn instrument_model(kind: Instrument) -> Result<MeasurementModel> {
     Ok(match kind {
         Instrument::Theodolite => {
             let (model, calibration) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
-            eprintln!("{calibration}");
+            if super::verbose() {
+                eprintln!("{calibration}");
+            }
             model
         }
         Instrument::Isotropic => MeasurementModel::paper_isotropic(),
@@ -178,21 +210,6 @@ fn print_experiments(set: &MeasurementSet, occluded: &[(String, usize)]) {
     for (experiment, n) in occluded {
         println!("  {experiment}: {n} target observation(s) occluded");
     }
-}
-
-/// Writes the rerun recording of `campaign` to `path`.
-#[cfg(feature = "viz")]
-fn record_campaign(path: &std::path::Path, campaign: &super::record::Campaign) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    super::record::write(path, campaign).with_context(|| format!("recording {}", path.display()))?;
-    println!(
-        "wrote {} (view it with `axiscal view {}`)",
-        path.display(),
-        path.display()
-    );
-    Ok(())
 }
 
 fn run_campaign<A: ArmExecutor>(

@@ -1,8 +1,9 @@
 //! `axiscal study`: the calibrator's efficiency against the Cramer-Rao bound and the
 //! calibration of its reported uncertainty, over many simulated campaigns.
 
-use super::calibrate::write_output;
-use anyhow::{Context, Result};
+use super::options::{InRange, NOISE_MM};
+use super::output::Outputs;
+use anyhow::Result;
 use axiscal::harness::studies::EfficiencyStudy;
 use axiscal::json_file::{self, Schema};
 use std::path::PathBuf;
@@ -11,13 +12,13 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Number of simulated campaigns.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = InRange::closed(1usize, 100_000_000, ""))]
     trials: usize,
     /// Study seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Measurement noise, 3-D RMS \[mm\].
-    #[arg(long, default_value_t = 0.19)]
+    #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
     noise_mm: f64,
     /// Keep the truth robot's repeatability jitter (the bound then includes it as angle noise).
     #[arg(long)]
@@ -43,16 +44,13 @@ pub fn run(args: Args) -> Result<()> {
         repeatability_jitter: args.repeatability_jitter,
         model_repeatability: args.model_repeatability,
     };
+    let names = ["efficiency.json", "efficiency.md"];
+    let outputs = Outputs::new(args.force);
+    outputs.check_in(&args.out, &names)?;
     let report = study.run()?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let md = report.markdown();
-    write_output(
-        &args.out,
-        "efficiency.json",
-        &json_file::to_string(Schema::STUDY, &report)?,
-        args.force,
-    )?;
-    write_output(&args.out, "efficiency.md", &md, args.force)?;
+    outputs.write_in(&args.out, names[0], json_file::to_string(Schema::STUDY, &report)?)?;
+    outputs.write_in(&args.out, names[1], &md)?;
     print!("{md}");
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Kinematics of the phi-model (paper appendix, eqs. A1-A4): transforms, forward
 //! kinematics, the geometric Jacobian, inverse kinematics for arbitrary geometry, and the
-//! conversion to Denavit-Hartenberg parameters (and why it fails on parallel axes).
+//! conversion to Denavit-Hartenberg parameters (and why it fails on parallel axes), and the
+//! conversion of classic DH, modified DH and URDF chains to the phi-model.
 
 mod chain;
 mod dh;
@@ -8,6 +9,7 @@ mod ik;
 mod jacobian;
 mod phi;
 mod rigid_fit;
+mod source;
 
 pub use chain::{AxisLine, ChainPoses, PhiJoint, PhiModel};
 pub use dh::{
@@ -21,3 +23,4 @@ pub use ik::{
 pub use jacobian::{geometric_jacobian, point_jacobian};
 pub use phi::{JointKind, PhiRow, frame_from_phi, joint_motion, link_from_phi};
 pub use rigid_fit::rigid_fit;
+pub use source::{DhConvention, DhParams, SourceChain, UrdfJoint, phi_model_of, phi_rule, row_to_line};

@@ -7,6 +7,7 @@
 mod columns;
 
 use super::data::{Measurement, MeasurementSet, RowProblem};
+use crate::csv_lines::LineTracking;
 use columns::find_columns;
 use std::fs::OpenOptions;
 use std::io;
@@ -64,6 +65,19 @@ pub enum MeasurementFileError {
         /// The missing column.
         column: String,
     },
+    /// The header is one column holding another separator (`;`, tab): not comma-separated.
+    #[error(
+        "{path}:{line}: the header is a single column containing {separator}: the file looks {separator}-separated, \
+         but the measurement CSV is comma-separated with decimal points (re-export it as CSV)"
+    )]
+    WrongSeparator {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the header.
+        line: u64,
+        /// The separator found, in words (`';'`, `a tab`).
+        separator: String,
+    },
     /// A column appears twice in the header.
     #[error("{path}:{line}: column `{column}`: appears more than once in the header")]
     DuplicateColumn {
@@ -75,7 +89,9 @@ pub enum MeasurementFileError {
         column: String,
     },
     /// The `cmd_k` columns do not match the robot's joint count.
-    #[error("{path}:{line}: column `{column}`: the file has {found} joint command columns, expected {expected}")]
+    #[error(
+        "{path}:{line}: column `{column}`: the file has {found} joint command columns, expected {expected} (every joint of the robot description, also joints not swept: a file cut to fewer joints is refused)"
+    )]
     JointCount {
         /// The file.
         path: PathBuf,
@@ -184,30 +200,34 @@ pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<Meas
     read_measurements_from(io::BufReader::new(file), path, joint_count)
 }
 
-/// [`read_measurements`] from any reader; `path` only labels errors.
+/// [`read_measurements`] from any reader; `path` only labels errors. One streaming pass:
+/// time linear in the file, memory that of the rows kept (line numbers from
+/// [`crate::csv_lines`]).
 pub fn read_measurements_from<R: io::Read>(
     reader: R,
     path: &Path,
     joint_count: Option<usize>,
 ) -> Result<MeasurementSet, MeasurementFileError> {
-    let mut bytes = Vec::new();
-    let mut reader = reader;
-    reader
-        .read_to_end(&mut bytes)
-        .map_err(|source| MeasurementFileError::Io {
-            path: path.into(),
-            source,
-        })?;
-    let line_at = |position: Option<&csv::Position>| position.map_or(0, |p| record_line(&bytes, p.byte()));
+    let (reader, index) = LineTracking::new(reader);
+    let line_at = |position: Option<&csv::Position>| position.map_or(0, |p| index.line_of(p.byte()));
     let mut csv = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .flexible(true)
         .has_headers(true)
-        .from_reader(bytes.as_slice());
-    let csv_error = |e: csv::Error| MeasurementFileError::Csv {
-        path: path.into(),
-        line: line_at(e.position()),
-        message: e.to_string(),
+        .from_reader(reader);
+    let csv_error = |e: csv::Error| {
+        let (line, message) = (line_at(e.position()), e.to_string());
+        match e.into_kind() {
+            csv::ErrorKind::Io(source) => MeasurementFileError::Io {
+                path: path.into(),
+                source,
+            },
+            _ => MeasurementFileError::Csv {
+                path: path.into(),
+                line,
+                message,
+            },
+        }
     };
     let header = csv.headers().map_err(csv_error)?.clone();
     if header.is_empty() {
@@ -217,8 +237,12 @@ pub fn read_measurements_from<R: io::Read>(
     let columns = find_columns(&header, path, header_line, joint_count)?;
     let mut rows = Vec::new();
     let mut lines = Vec::new();
-    for record in csv.records() {
-        let record = record.map_err(csv_error)?;
+    let mut record = csv::StringRecord::new();
+    while csv.read_record(&mut record).map_err(csv_error)? {
+        // A blank line (csv-core also returns a trailing comment split over two reads so).
+        if record.len() == 1 && record[0].trim().is_empty() {
+            continue;
+        }
         let line = line_at(record.position());
         let cells = Cells {
             record: &record,
@@ -260,24 +284,6 @@ pub fn read_measurements_from<R: io::Read>(
     })
 }
 
-/// The 1-based line of the record whose read started at byte `offset`.
-///
-/// The csv crate's positions point at the start of the read, before any comment or blank
-/// lines preceding the record, and its line counter skips comment lines; so skip those
-/// lines here and count newlines.
-fn record_line(bytes: &[u8], offset: u64) -> u64 {
-    let mut start = usize::try_from(offset).unwrap_or(usize::MAX).min(bytes.len());
-    loop {
-        let rest = &bytes[start..];
-        let skippable = rest.first() == Some(&b'#') || rest.starts_with(b"\n") || rest.starts_with(b"\r\n");
-        match rest.iter().position(|&b| b == b'\n') {
-            Some(end) if skippable => start += end + 1,
-            _ => break,
-        }
-    }
-    1 + bytes[..start].iter().filter(|&&b| b == b'\n').count() as u64
-}
-
 /// One data record with what is needed to name its cells in errors.
 struct Cells<'a> {
     record: &'a csv::StringRecord,
@@ -309,21 +315,28 @@ impl Cells<'_> {
 
     fn number(&self, i: usize) -> Result<f64, MeasurementFileError> {
         let text = self.text(i)?;
-        let (path, line, column, value) = (self.path.into(), self.line, self.column(i), text.to_string());
+        // The error's strings are built only on the error path: this runs for every cell.
+        let parts = || (self.path.into(), self.line, self.column(i), text.to_string());
         match text.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => Err(MeasurementFileError::NotFinite {
-                path,
-                line,
-                column,
-                value,
-            }),
-            Err(_) => Err(MeasurementFileError::NotANumber {
-                path,
-                line,
-                column,
-                value,
-            }),
+            Ok(_) => {
+                let (path, line, column, value) = parts();
+                Err(MeasurementFileError::NotFinite {
+                    path,
+                    line,
+                    column,
+                    value,
+                })
+            }
+            Err(_) => {
+                let (path, line, column, value) = parts();
+                Err(MeasurementFileError::NotANumber {
+                    path,
+                    line,
+                    column,
+                    value,
+                })
+            }
         }
     }
 
@@ -336,6 +349,9 @@ impl Cells<'_> {
 
     fn integer(&self, i: usize) -> Result<usize, MeasurementFileError> {
         let text = self.text(i)?;
+        if let Ok(v) = text.parse::<usize>() {
+            return Ok(v);
+        }
         let (path, line, column, value) = (self.path.into(), self.line, self.column(i), text.to_string());
         match text.parse::<i128>() {
             Ok(v) if v < 0 => Err(MeasurementFileError::Negative {
@@ -344,13 +360,7 @@ impl Cells<'_> {
                 column,
                 value,
             }),
-            Ok(v) => usize::try_from(v).map_err(|_| MeasurementFileError::NotAnInteger {
-                path,
-                line,
-                column,
-                value,
-            }),
-            Err(_) => Err(MeasurementFileError::NotAnInteger {
+            _ => Err(MeasurementFileError::NotAnInteger {
                 path,
                 line,
                 column,

@@ -63,6 +63,17 @@ pub enum RowProblem {
         /// The value.
         value: f64,
     },
+    /// A value outside its physical range (a negative payload, a temperature below absolute
+    /// zero).
+    #[error("{value} is outside {expected}")]
+    OutOfRange {
+        /// The column.
+        column: String,
+        /// The value.
+        value: f64,
+        /// The range, in words.
+        expected: &'static str,
+    },
     /// `moved_joint` is not in `0..=N`.
     #[error("moved_joint {value} is outside 0..={joint_count}")]
     MovedJointOutOfRange {
@@ -102,7 +113,7 @@ impl RowProblem {
         match self {
             Self::BadExperimentName { .. } | Self::InconsistentMovedJoint { .. } => "experiment".into(),
             Self::JointCount { .. } => "cmd_*".into(),
-            Self::NotFinite { column, .. } => column.clone(),
+            Self::NotFinite { column, .. } | Self::OutOfRange { column, .. } => column.clone(),
             Self::MovedJointOutOfRange { .. } => "moved_joint".into(),
             Self::DuplicateKey { .. } => "experiment,step,target".into(),
         }
@@ -208,6 +219,26 @@ impl MeasurementSet {
     }
 }
 
+/// The first value of `m` that is NaN or infinite, with its column name (names are built
+/// only then: this runs for every row of a file).
+fn first_not_finite(m: &Measurement) -> Option<(String, f64)> {
+    let all = m
+        .position_mm
+        .iter()
+        .chain(&m.cmd)
+        .chain([&m.payload_kg, &m.temperature_c]);
+    let i = all.clone().position(|v| !v.is_finite())?;
+    let value = all.copied().nth(i)?;
+    let n = m.cmd.len();
+    let column = match i {
+        0..=2 => ["x_mm", "y_mm", "z_mm"][i].to_string(),
+        _ if i < 3 + n => format!("cmd_{}", i - 2),
+        _ if i == 3 + n => "payload_kg".into(),
+        _ => "temperature_c".into(),
+    };
+    Some((column, value))
+}
+
 /// Checks the [`MeasurementSet`] invariants; the error carries the 0-based row index.
 fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementSetError> {
     let mut moved: HashMap<&str, usize> = HashMap::new();
@@ -225,17 +256,22 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 expected: joint_count,
             });
         }
-        let named = ["x_mm", "y_mm", "z_mm"]
-            .map(String::from)
-            .into_iter()
-            .zip(m.position_mm);
-        let commands = m.cmd.iter().enumerate().map(|(k, &c)| (format!("cmd_{}", k + 1), c));
-        let optional = [
-            ("payload_kg".to_string(), m.payload_kg),
-            ("temperature_c".to_string(), m.temperature_c),
-        ];
-        if let Some((column, value)) = named.chain(commands).chain(optional).find(|(_, v)| !v.is_finite()) {
+        if let Some((column, value)) = first_not_finite(m) {
             return fail(RowProblem::NotFinite { column, value });
+        }
+        if m.payload_kg < 0.0 {
+            return fail(RowProblem::OutOfRange {
+                column: "payload_kg".into(),
+                value: m.payload_kg,
+                expected: "0 kg and above (a payload has no negative mass)",
+            });
+        }
+        if m.temperature_c <= -273.15 {
+            return fail(RowProblem::OutOfRange {
+                column: "temperature_c".into(),
+                value: m.temperature_c,
+                expected: "temperatures above absolute zero (-273.15 deg C)",
+            });
         }
         if m.moved_joint > joint_count {
             return fail(RowProblem::MovedJointOutOfRange {

@@ -8,6 +8,7 @@ pub mod import;
 mod model;
 mod noise_calibration;
 mod theodolite;
+pub mod unit_check;
 
 pub use csv_io::{
     MeasurementFileError, format_f64, read_measurements, read_measurements_from, write_measurements,

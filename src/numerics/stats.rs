@@ -1,7 +1,11 @@
 //! Sample statistics, the one implementation of each: moments, standard errors, the two
 //! quantile definitions the program uses (named, never mixed up), tail fractions, and the
-//! summary of a sample that reports and thresholds read ([`Stats`]).
+//! summary of a sample that reports and thresholds read ([`Stats`]), and the chi-square
+//! distribution (the calibration's noise estimate).
 
+mod chi_square;
+
+pub use chi_square::{chi_square_cdf, chi_square_quantile, ln_gamma, regularized_lower_gamma};
 use serde::{Deserialize, Serialize};
 
 /// Mean (NaN when empty).

@@ -46,8 +46,8 @@ fn is_transmission(p: &HarmonicPeriod) -> bool {
 }
 
 /// `model` with the extra transmission-period `harmonics` added to its joints' transmissions (a
-/// harmonic of a joint the model does not have is ignored; joint-period ones are applied to
-/// the displacement, [`joint_period_error_rad`]).
+/// harmonic of a joint the model does not have, or of a sliding joint, is ignored; joint-period
+/// ones are applied to the displacement, [`joint_period_error_rad`]).
 pub fn with_gear_harmonics(model: &RobotModel, harmonics: &[GearHarmonic]) -> RobotModel {
     let mut m = model.clone();
     for h in harmonics.iter().filter(|h| h.period == HarmonicPeriod::Transmission) {
@@ -56,6 +56,8 @@ pub fn with_gear_harmonics(model: &RobotModel, harmonics: &[GearHarmonic]) -> Ro
         };
         let (sin, cos) = match &mut joint.transmission {
             Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => (sin, cos),
+            // A sliding joint's screw has no angle to carry a harmonic.
+            Transmission::Polynomial { .. } => continue,
         };
         for v in [&mut *sin, &mut *cos] {
             if v.len() < h.order {

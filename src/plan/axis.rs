@@ -23,6 +23,11 @@ pub struct AxisSweep {
     /// (a sweep centred on the reference pose).
     #[serde(default)]
     pub start: Option<f64>,
+    /// The other joints' offsets from the reference pose during this sweep (file units, one
+    /// per joint; the swept joint's entry is ignored): a sweep at another pose, e.g. a joint
+    /// swept again at another position of the joint below. Default: at the reference.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_at: Option<Vec<f64>>,
 }
 
 impl AxisSweep {
@@ -118,6 +123,12 @@ pub struct CalibrationPlan {
     pub reference: Vec<f64>,
     /// The sweeps, in the order they are run.
     pub sweeps: Vec<AxisSweep>,
+    /// Simulation only: the held joints' recorded values wander, each step and joint by a
+    /// uniform `|x|` in `[min, max]` with a random sign (file units), as encoder readings of a
+    /// real controller do (`docs/formats.md#held-joints`); the robot stands at the recorded
+    /// value. Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_jitter: Option<[f64; 2]>,
 }
 
 impl CalibrationPlan {
@@ -142,9 +153,74 @@ impl CalibrationPlan {
                     intervals,
                     second_target,
                     start: None,
+                    held_at: None,
                 })
                 .collect(),
+            held_jitter: None,
         }
+    }
+
+    /// Table 1 generalised to any joint mix: every joint swept once, last joint first, 15
+    /// intervals, around a reference at 0 (or the middle of the limits when 0 is outside):
+    /// a revolute joint over 90 deg, a prismatic one over half its range (each within its
+    /// limits); the second target
+    /// wherever the description fits a coupling (`couplings[].fit`) and gives a `target1`.
+    pub fn for_robot(desc: &RobotDescription) -> Self {
+        let reference: Vec<f64> = desc
+            .joints
+            .iter()
+            .map(|j| {
+                if j.limits[0] < 0.0 && j.limits[1] > 0.0 {
+                    0.0
+                } else {
+                    0.5 * (j.limits[0] + j.limits[1])
+                }
+            })
+            .collect();
+        let sweeps = (1..=desc.dof())
+            .rev()
+            .map(|joint| {
+                let j = &desc.joints[joint - 1];
+                let room = 2.0 * (reference[joint - 1] - j.limits[0]).min(j.limits[1] - reference[joint - 1]);
+                let span = match j.kind {
+                    crate::kinematics::JointKind::Revolute => 90f64.min(0.9 * room),
+                    crate::kinematics::JointKind::Prismatic => 0.5 * (j.limits[1] - j.limits[0]).min(room),
+                };
+                let fitted = desc.couplings.iter().any(|c| c.from == joint && c.fit.is_some());
+                let second_target = fitted && desc.axis_targets_of(joint).is_some_and(|t| t.target1.is_some());
+                AxisSweep {
+                    joint,
+                    span,
+                    intervals: 15,
+                    second_target,
+                    start: None,
+                    held_at: None,
+                }
+            })
+            .collect();
+        CalibrationPlan {
+            reference,
+            sweeps,
+            held_jitter: None,
+        }
+    }
+
+    /// The experiment id of each sweep: `axis<k>`, and `axis<k>-2`, `axis<k>-3`, .. for a
+    /// joint swept again.
+    pub fn experiment_names(&self) -> Vec<String> {
+        let mut seen = std::collections::HashMap::new();
+        self.sweeps
+            .iter()
+            .map(|s| {
+                let n = seen.entry(s.joint).or_insert(0usize);
+                *n += 1;
+                if *n == 1 {
+                    format!("axis{}", s.joint)
+                } else {
+                    format!("axis{}-{}", s.joint, n)
+                }
+            })
+            .collect()
     }
 
     /// Checks the plan against a robot: joints exist, spans are real, targets are given,
@@ -217,11 +293,16 @@ impl CalibrationPlan {
     pub fn commands(&self, desc: &RobotDescription, sweep: &AxisSweep, step: usize) -> Vec<f64> {
         let k = sweep.joint - 1;
         let mut cmd = self.reference.clone();
+        if let Some(at) = &sweep.held_at {
+            for (c, a) in cmd.iter_mut().zip(at) {
+                *c += a;
+            }
+        }
         cmd[k] = self.reference[k] + sweep.offset_at(step);
         if sweep.second_target
             && let Some(slope) = desc.nominal_coupling_from(sweep.joint)
         {
-            cmd[k + 1] = self.reference[k + 1] + slope * (sweep.offset_at(step) - sweep.offset_at(0));
+            cmd[k + 1] += slope * (sweep.offset_at(step) - sweep.offset_at(0));
         }
         cmd
     }

@@ -4,9 +4,14 @@
 //! Units in the file are those engineers read off drawings (mm, deg, kg); inside, everything
 //! is SI with angles in radians. See `scenarios/robots/asea-irb6l.toml` for a documented example.
 
+mod identity;
 mod validate;
 
-use crate::kinematics::{JointKind, PhiJoint, PhiModel, PhiRow};
+mod convert;
+
+pub use identity::DescriptionIdentity;
+
+use crate::kinematics::{JointKind, PhiJoint, PhiModel, PhiRow, SourceChain};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -40,23 +45,90 @@ pub struct JointEntry {
     pub phi_deg: f64,
     /// Lower and upper joint limit \[deg\] (revolute) or \[mm\] (prismatic).
     pub limits: [f64; 2],
-    /// Mass of the link this joint moves \[kg\].
-    pub mass_kg: f64,
-    /// Centre of mass of that link in its moving frame \[mm\].
-    pub com_mm: [f64; 3],
-    /// The transmission form the calibrator fits; default harmonic of order 1.
+    /// Mass of the link this joint moves \[kg\]; default 0 (needed only where gravity and
+    /// compliance are simulated).
     #[serde(default)]
-    pub transmission_fit: TransmissionFitForm,
+    pub mass_kg: f64,
+    /// Centre of mass of that link in its moving frame \[mm\]; default the origin.
+    #[serde(default)]
+    pub com_mm: [f64; 3],
+    /// The transmission form the calibrator fits; default
+    /// [`JointEntry::transmission_fit_form`] (harmonic of order 1 for a revolute joint, a
+    /// scale error for a prismatic one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transmission_fit: Option<TransmissionFitForm>,
+    /// The joint's row of a Denavit-Hartenberg table (the description's `dh_convention`);
+    /// converted to `phi_deg` and `rows` when the file is read.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dh: Option<DhEntry>,
     /// The robot's known repeatability: standard deviation of the joint-value error drawn
     /// each time the actuator is re-positioned \[rad\] (revolute) or \[m\] (prismatic); finite
     /// and >= 0; default 0 (unknown: the calibrator models measurement noise only). The
     /// calibrator weights its axis fits with it (`calibration::fit_arc_with_angle_noise`).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub repeatability_sigma: f64,
+    /// Largest joint speed \[deg/s\] (revolute) or \[mm/s\] (prismatic), from the robot's
+    /// data sheet; optional, used by exports (the URDF's `<limit velocity>`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_velocity: Option<f64>,
+    /// Largest actuator effort \[N m\] (revolute) or \[N\] (prismatic), from the robot's data
+    /// sheet; optional, used by exports (the URDF's `<limit effort>`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_effort: Option<f64>,
 }
 
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
+}
+
+impl JointEntry {
+    /// The transmission form the calibrator fits: the file's `transmission_fit`, else a
+    /// harmonic of order 1 (revolute, eq. 8) or a scale error (prismatic, eq. 13).
+    pub fn transmission_fit_form(&self) -> TransmissionFitForm {
+        self.transmission_fit.unwrap_or(match self.kind {
+            JointKind::Revolute => TransmissionFitForm::Harmonic { order: 1 },
+            JointKind::Prismatic => TransmissionFitForm::Polynomial { order: 1 },
+        })
+    }
+}
+
+/// One row of a Denavit-Hartenberg table as written in the file (file units).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DhEntry {
+    /// Offset along the joint axis \[mm\] (a prismatic joint's command adds to it).
+    pub d_mm: f64,
+    /// Angle about the joint axis \[deg\] (a revolute joint's command adds to it).
+    #[serde(default)]
+    pub theta_deg: f64,
+    /// Length of the common normal \[mm\].
+    pub a_mm: f64,
+    /// Twist about the common normal \[deg\].
+    pub alpha_deg: f64,
+}
+
+/// Which Denavit-Hartenberg convention the `dh` rows follow.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DhConventionEntry {
+    /// Classic DH: `Rz(theta) Tz(d) Tx(a) Rx(alpha)` per joint, joint `i` about `z_{i-1}`.
+    Classic,
+    /// Modified DH (Craig): `Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)`, joint `i` about `z_i`.
+    Modified,
+}
+
+/// A URDF file the joints and geometry come from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UrdfEntry {
+    /// The URDF file, relative to the description file.
+    pub file: PathBuf,
+    /// The link the chain starts from (default: the URDF's root link).
+    #[serde(default)]
+    pub base_link: Option<String>,
+    /// The link the tool is fixed to (default: the end of the only chain from the base).
+    #[serde(default)]
+    pub tip_link: Option<String>,
 }
 
 /// The form of a joint's transmission function that the calibrator fits (eq. 8).
@@ -75,12 +147,12 @@ pub enum TransmissionFitForm {
         /// Number of harmonics.
         order: usize,
     },
-}
-
-impl Default for TransmissionFitForm {
-    fn default() -> Self {
-        TransmissionFitForm::Harmonic { order: 1 }
-    }
+    /// A sliding joint's `S_c = S + sum_k c_k S^k`, `k = 1..order` (eq. 13): order 1 is a
+    /// scale error, higher orders its nonlinearity.
+    Polynomial {
+        /// Highest power.
+        order: usize,
+    },
 }
 
 /// The form of a passive coupling function that the calibrator fits (eq. 15).
@@ -120,6 +192,18 @@ pub struct RowEntry {
 }
 
 impl RowEntry {
+    /// A row in file units from internal units.
+    pub fn from_row(r: &PhiRow) -> Self {
+        RowEntry {
+            a_m: r.a_m,
+            b_m: r.b_m,
+            alpha_deg: r.alpha_rad.to_degrees(),
+            beta_deg: r.beta_rad.to_degrees(),
+            gamma_deg: r.gamma_rad.to_degrees(),
+            h_m: r.h_m,
+        }
+    }
+
     /// The row in internal units.
     pub fn to_row(&self) -> PhiRow {
         PhiRow {
@@ -163,6 +247,16 @@ pub struct Placement {
 }
 
 impl Placement {
+    /// The placement of an isometry (metres) in file units.
+    pub fn from_isometry(iso: &Isometry3<f64>) -> Self {
+        let (r, p, y) = iso.rotation.euler_angles();
+        let t = iso.translation.vector * 1e3;
+        Placement {
+            translation_mm: [t.x, t.y, t.z],
+            rpy_deg: [r.to_degrees(), p.to_degrees(), y.to_degrees()],
+        }
+    }
+
     /// The placement as an isometry in metres.
     pub fn to_isometry(&self) -> Isometry3<f64> {
         let t = Vector3::from(self.translation_mm) * 1e-3;
@@ -172,13 +266,16 @@ impl Placement {
 }
 
 /// The tool: its frame in the last link and the three targets used for validation.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ToolEntry {
-    /// The tool frame in the last link's moving frame.
+    /// The tool frame in the last link's moving frame (with `dh` rows: in the last DH frame;
+    /// with `urdf`: in the tip link).
     #[serde(default)]
     pub frame: Placement,
-    /// Tool targets 0, 1, 2 in the tool frame \[mm\] (three non-collinear points).
+    /// Tool targets 0, 1, 2 in the tool frame \[mm\] (three non-collinear points), or none: the
+    /// tool frame then stays nominal in a calibration.
+    #[serde(default)]
     pub targets_mm: Vec<[f64; 3]>,
 }
 
@@ -214,15 +311,28 @@ pub struct AxisTargets {
     pub target1: Option<LinkTarget>,
 }
 
+/// A description's source chain (DH table or URDF) and its base's placement in the instrument
+/// frame, for checking the conversion.
+pub type SourceCheck = (SourceChain, Isometry3<f64>);
+
 /// A robot description file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotDescription {
     /// Human-readable name.
     pub name: String,
-    /// The joints, base first.
+    /// The joints, base first (from `urdf` when absent there).
+    #[serde(default)]
     pub joints: Vec<JointEntry>,
-    /// The nominal phi-model rows (Table 2, nominal), `joints.len() - 1` of them.
+    /// The convention of the joints' `dh` rows, when the geometry is given as a DH table.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dh_convention: Option<DhConventionEntry>,
+    /// A URDF file giving the geometry (and the joints when `joints` is empty).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub urdf: Option<UrdfEntry>,
+    /// The nominal phi-model rows (Table 2, nominal), `joints.len() - 1` of them (converted
+    /// from `dh` or `urdf` when those are given).
+    #[serde(default)]
     pub rows: Vec<RowEntry>,
     /// Nominal passive couplings known to the controller.
     #[serde(default)]
@@ -230,9 +340,11 @@ pub struct RobotDescription {
     /// Robot base frame (frame 1) in the instrument frame, for simulated set-ups.
     #[serde(default)]
     pub placement: Placement,
-    /// The tool.
+    /// The tool (default: the last link's frame, no targets).
+    #[serde(default)]
     pub tool: ToolEntry,
-    /// Targets for the axis experiments, one entry per joint.
+    /// Targets for the axis experiments, one entry per joint (simulation and diagnosis).
+    #[serde(default)]
     pub axis_targets: Vec<AxisTargets>,
 }
 
@@ -242,11 +354,20 @@ impl RobotDescription {
         Self::from_toml_str(&crate::toml_file::read(path)?, path)
     }
 
-    /// Parses and validates description text; `path` is used in error messages only.
+    /// Parses and validates description text; `path` names the file in messages and locates
+    /// a `urdf` file. `dh` rows and `urdf` geometry are converted to the phi-model.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, DescriptionError> {
-        let d: Self = crate::toml_file::parse(text, path)?;
+        Ok(Self::with_source(text, path)?.0)
+    }
+
+    /// [`Self::from_toml_str`] with the chain the geometry was converted from (`dh` or
+    /// `urdf`) and its base's placement in the instrument frame as written, for checking the
+    /// conversion (`axiscal describe`).
+    pub fn with_source(text: &str, path: &Path) -> Result<(Self, Option<SourceCheck>), DescriptionError> {
+        let mut d: Self = crate::toml_file::parse(text, path)?;
+        let source = d.convert_source(path)?;
         d.validate(path)?;
-        Ok(d)
+        Ok((d, source))
     }
 
     /// The shipped ASEA IRB/L6 description (`scenarios/robots/asea-irb6l.toml`).

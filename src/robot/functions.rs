@@ -30,6 +30,32 @@ pub enum Transmission {
         /// Cosine coefficients in gear units \[rad\].
         cos: Vec<f64>,
     },
+    /// A sliding joint's transmission (eq. 13): `s_c = s_a + c0 + sum_k c\[k-1\] s_a^k` in
+    /// metres; `c\[0\]` is the scale error (dimensionless), `c\[1\]..` the nonlinearity
+    /// (`c_k` in m^(1-k)), `c0` a constant (m, 0 unless the model was shifted to a new zero).
+    Polynomial {
+        /// Constant term \[m\].
+        #[serde(default)]
+        c0: f64,
+        /// `c_1, c_2, ..`: scale error, then the higher orders.
+        c: Vec<f64>,
+    },
+}
+
+/// `(sum_k c_k s^k, d/ds of it, d2/ds2 of it)` for `k = 1..`.
+fn polynomial(s: f64, c: &[f64]) -> (f64, f64, f64) {
+    let (mut v, mut dv, mut ddv) = (0.0, 0.0, 0.0);
+    let mut power = 1.0; // s^(k-1)
+    let mut power_minus = 0.0; // s^(k-2), 0 for k = 1
+    for (i, ck) in c.iter().enumerate() {
+        let k = (i + 1) as f64;
+        v += ck * power * s;
+        dv += ck * k * power;
+        ddv += ck * k * (k - 1.0) * power_minus;
+        power_minus = power;
+        power *= s;
+    }
+    (v, dv, ddv)
 }
 
 impl Transmission {
@@ -46,6 +72,7 @@ impl Transmission {
         match self {
             Transmission::Harmonic { sin, cos } => theta_a + harmonics(theta_a, sin, cos).0,
             Transmission::Gear { ratio, sin, cos } => theta_a + ratio * harmonics(theta_a / ratio, sin, cos).0,
+            Transmission::Polynomial { c0, c } => theta_a + c0 + polynomial(theta_a, c).0,
         }
     }
 
@@ -54,6 +81,26 @@ impl Transmission {
         match self {
             Transmission::Harmonic { sin, cos } => 1.0 + harmonics(theta_a, sin, cos).1,
             Transmission::Gear { ratio, sin, cos } => 1.0 + harmonics(theta_a / ratio, sin, cos).1,
+            Transmission::Polynomial { c, .. } => 1.0 + polynomial(theta_a, c).1,
+        }
+    }
+
+    /// The coefficients in the order the calibrator fits them: `[sin.., cos..]`, or `[c_1..]`
+    /// for a polynomial (its constant, a zero convention, left out).
+    pub fn coefficients(&self) -> Vec<f64> {
+        match self {
+            Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => {
+                sin.iter().chain(cos).copied().collect()
+            }
+            Transmission::Polynomial { c, .. } => c.clone(),
+        }
+    }
+
+    /// The identity of a joint kind: no harmonics (revolute) or no scale error (prismatic).
+    pub fn identity_for(kind: crate::kinematics::JointKind) -> Self {
+        match kind {
+            crate::kinematics::JointKind::Revolute => Self::identity(),
+            crate::kinematics::JointKind::Prismatic => Transmission::Polynomial { c0: 0.0, c: vec![] },
         }
     }
 
@@ -86,6 +133,7 @@ impl Transmission {
                     cos,
                 }
             }
+            Transmission::Polynomial { c0, c } => shifted_polynomial(*c0, c, shift_rad),
         }
     }
 
@@ -93,6 +141,28 @@ impl Transmission {
     /// monotonic near the solution (coefficients too large for a real transmission).
     pub fn actual_from_command(&self, theta_c: f64) -> Option<f64> {
         invert_monotonic(|t| self.command_from_actual(t) - theta_c, |t| self.slope(t), theta_c)
+    }
+}
+
+/// `f'(s) = f(s - C) + C` for `f(s) = s + c0 + sum_k c_k s^k`, expanded by the binomial
+/// theorem: `f'(s) = s + c0' + sum_i c_i' s^i` with `c_i' = sum_{k >= i} c_k binom(k, i) (-C)^(k-i)`.
+fn shifted_polynomial(c0: f64, c: &[f64], shift: f64) -> Transmission {
+    let n = c.len();
+    let mut out = vec![0.0; n + 1]; // index i: coefficient of s^i
+    out[0] = c0;
+    for (idx, ck) in c.iter().enumerate() {
+        let k = idx + 1;
+        let mut binom = 1.0;
+        for (i, o) in out.iter_mut().enumerate().take(k + 1) {
+            if i > 0 {
+                binom = binom * (k - i + 1) as f64 / i as f64;
+            }
+            *o += ck * binom * (-shift).powi((k - i) as i32);
+        }
+    }
+    Transmission::Polynomial {
+        c0: out[0],
+        c: out[1..].to_vec(),
     }
 }
 
@@ -247,6 +317,10 @@ mod tests {
                 ratio: 32.0 / 19.0,
                 sin: vec![0.041227],
                 cos: vec![-0.000013],
+            },
+            Transmission::Polynomial {
+                c0: 0.001,
+                c: vec![2e-4, -0.03, 0.5],
             },
         ];
         for f in forms {

@@ -13,8 +13,9 @@ mod model_error;
 
 pub use controller::Controller;
 pub use description::{
-    AxisTargets, CouplingFitForm, DescriptionError, JointEntry, LinkTarget, NominalCoupling, Placement,
-    RobotDescription, RowEntry, ToolEntry, TransmissionFitForm, commands_to_internal,
+    AxisTargets, CouplingFitForm, DescriptionError, DescriptionIdentity, DhConventionEntry, DhEntry, JointEntry,
+    LinkTarget, NominalCoupling, Placement, RobotDescription, RowEntry, ToolEntry, TransmissionFitForm, UrdfEntry,
+    commands_to_internal,
 };
 pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};
 pub use four_bar_fit::{FourBarFit, fit_four_bar};

@@ -118,7 +118,14 @@ impl RobotModel {
     /// Parses and validates robot model text; `path` labels errors only.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, ModelError> {
         let t: Self = crate::toml_file::parse(text, path)?;
-        t.validate()?;
+        t.validate().map_err(|e| match e {
+            ModelError::Invalid { field, message } => ModelError::InvalidIn {
+                path: path.to_owned(),
+                field,
+                message,
+            },
+            other => other,
+        })?;
         Ok(t)
     }
 
@@ -229,7 +236,13 @@ impl RobotModel {
                 found: controller.dof(),
             });
         }
-        let theta = self.active_displacements(&controller.decouple(cmd)?)?;
+        self.joint_values_from_actuators(&controller.decouple(cmd)?)
+    }
+
+    /// The joint values for actuator commands `u` (after the controller's decoupling):
+    /// `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`.
+    pub fn joint_values_from_actuators(&self, u: &[f64]) -> Result<Vec<f64>, ModelError> {
+        let theta = self.active_displacements(u)?;
         let mut q = theta.clone();
         for k in 1..q.len() {
             if let Some(g) = &self.joints[k].coupling_in {

@@ -50,4 +50,14 @@ pub enum ModelError {
         /// What is wrong.
         message: String,
     },
+    /// [`ModelError::Invalid`] in a file.
+    #[error("{path}: field `{field}`: {message}")]
+    InvalidIn {
+        /// The robot model file.
+        path: std::path::PathBuf,
+        /// The offending key.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
 }

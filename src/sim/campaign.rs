@@ -123,8 +123,7 @@ pub fn simulate_campaign_with<A: ArmExecutor, R: Rng + ?Sized>(
         model: instrument,
         scale: options.instrument_scale,
     };
-    for sweep in &plan.sweeps {
-        let experiment = format!("axis{}", sweep.joint);
+    for (sweep, experiment) in plan.sweeps.iter().zip(plan.experiment_names()) {
         let targets = desc
             .axis_targets_of(sweep.joint)
             .expect("validated plan: every swept joint has targets");
@@ -133,7 +132,10 @@ pub fn simulate_campaign_with<A: ArmExecutor, R: Rng + ?Sized>(
             observed.push((1, targets.target1.expect("validated plan: second target given")));
         }
         for step in 0..sweep.poses() {
-            let cmd = plan.commands(desc, sweep, step);
+            let mut cmd = plan.commands(desc, sweep, step);
+            if let Some(range) = plan.held_jitter {
+                wander_held(&mut cmd, sweep.joint, range, rng);
+            }
             let links = arm.execute(&commands_to_internal(desc, &cmd), &conditions, rng)?;
             for (id, t) in &observed {
                 let p = links[t.link - 1] * t.position_m();
@@ -179,6 +181,18 @@ pub fn simulate_campaign_with<A: ArmExecutor, R: Rng + ?Sized>(
         )?;
     }
     Ok(out)
+}
+
+/// The held joints' recorded values (every joint but `joint`) moved by a uniform `|x|` in
+/// `[min, max]` with a random sign each (file units): the robot stands where its encoders say.
+fn wander_held<R: Rng + ?Sized>(cmd: &mut [f64], joint: usize, [min, max]: [f64; 2], rng: &mut R) {
+    use rand::RngExt;
+    for (j, c) in cmd.iter_mut().enumerate() {
+        if j + 1 != joint {
+            let size = if max > min { rng.random_range(min..=max) } else { min };
+            *c += if rng.random_bool(0.5) { size } else { -size };
+        }
+    }
 }
 
 /// Executes `cmd` and observes the three tool targets (a `moved_joint = 0` experiment).

@@ -42,7 +42,25 @@ pub enum EffectsError {
         /// What is wrong.
         message: String,
     },
+    /// [`EffectsError::Invalid`] in a file.
+    #[error("{path}: effects field `{field}`: {message}")]
+    InvalidIn {
+        /// The effects file.
+        path: std::path::PathBuf,
+        /// The key.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
 }
+
+/// Physical ranges of the effects (beyond them a value is a slip, not an effect): the small-angle
+/// forms hold up to [`MAX_SMALL_ANGLE_RAD`].
+pub const MAX_SMALL_ANGLE_RAD: f64 = 0.1;
+/// Largest thermal expansion coefficient accepted \[1/K\] (metals 1e-5 to 3e-5, plastics 2e-4).
+pub const MAX_ALPHA_PER_K: f64 = 1e-3;
+/// Largest instrument scale error accepted \[ppm\] (1 %).
+pub const MAX_SCALE_PPM: f64 = 1e4;
 
 /// The unmodelled effects (module docs); every table is optional and off when absent.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -100,6 +118,14 @@ fn per_joint_minus_one(field: &str, v: &[f64], dof: usize) -> Result<(), Effects
     }
 }
 
+/// `e` with the accepted range appended to its message.
+fn with_range(e: EffectsError, range: &str) -> EffectsError {
+    match e {
+        EffectsError::Invalid { field, message } => invalid(field, format!("{message}; must be {range}")),
+        other => other,
+    }
+}
+
 fn invalid(field: impl Into<String>, message: impl Into<String>) -> EffectsError {
     EffectsError::Invalid {
         field: field.into(),
@@ -116,7 +142,14 @@ impl Effects {
     /// Parses and validates effects text; `path` labels errors only.
     pub fn from_toml_str(text: &str, path: &Path, dof: usize) -> Result<Self, EffectsError> {
         let e: Self = crate::toml_file::parse(text, path)?;
-        e.validate(dof)?;
+        e.validate(dof).map_err(|err| match err {
+            EffectsError::Invalid { field, message } => EffectsError::InvalidIn {
+                path: path.to_owned(),
+                field,
+                message,
+            },
+            other => other,
+        })?;
         Ok(e)
     }
 
@@ -145,11 +178,26 @@ impl Effects {
             return Err(invalid("payload.com_in_tool_mm", "must be finite"));
         }
         if let Some(b) = &self.backlash {
-            per_joint("backlash.band_rad", &b.band_rad, |x| x.is_finite() && x >= 0.0)?;
+            per_joint("backlash.band_rad", &b.band_rad, |x| {
+                x.is_finite() && (0.0..=MAX_SMALL_ANGLE_RAD).contains(&x)
+            })
+            .map_err(|e| with_range(e, "in 0..=0.1 rad"))?;
         }
         if let Some(t) = &self.thermal {
-            if !(t.alpha_per_k.is_finite() && t.reference_c.is_finite()) {
-                return Err(invalid("thermal", "alpha_per_k and reference_c must be finite"));
+            if !(t.alpha_per_k.is_finite() && t.alpha_per_k.abs() <= MAX_ALPHA_PER_K) {
+                return Err(invalid(
+                    "thermal.alpha_per_k",
+                    format!(
+                        "{} must be finite and within +-{MAX_ALPHA_PER_K} 1/K (steel: 1.2e-5)",
+                        t.alpha_per_k
+                    ),
+                ));
+            }
+            if !(t.reference_c.is_finite() && t.reference_c > -273.15) {
+                return Err(invalid(
+                    "thermal.reference_c",
+                    "must be a temperature above absolute zero",
+                ));
             }
             if !t.alpha_per_k_rows.is_empty() {
                 per_joint_minus_one("thermal.alpha_per_k_rows", &t.alpha_per_k_rows, dof)?;
@@ -165,23 +213,36 @@ impl Effects {
         };
         for (i, h) in self.gear_harmonics.iter().enumerate() {
             joint_ok(format!("gear_harmonics[{i}].joint"), h.joint)?;
-            if h.order == 0 || !(h.sin_rad.is_finite() && h.cos_rad.is_finite()) {
+            let small = |x: f64| x.is_finite() && x.abs() <= MAX_SMALL_ANGLE_RAD;
+            if h.order == 0 || !(small(h.sin_rad) && small(h.cos_rad)) {
                 return Err(invalid(
                     format!("gear_harmonics[{i}]"),
-                    "order must be >= 1, coefficients finite",
+                    format!("order must be >= 1, sin_rad and cos_rad within +-{MAX_SMALL_ANGLE_RAD} rad"),
                 ));
             }
         }
         for (i, w) in self.wobble.iter().enumerate() {
             joint_ok(format!("wobble[{i}].joint"), w.joint)?;
-            if !(w.amplitude_rad.is_finite() && w.phase_rad.is_finite()) {
-                return Err(invalid(format!("wobble[{i}]"), "amplitude and phase must be finite"));
+            if !(w.amplitude_rad.is_finite() && w.amplitude_rad.abs() <= MAX_SMALL_ANGLE_RAD) {
+                return Err(invalid(
+                    format!("wobble[{i}].amplitude_rad"),
+                    format!(
+                        "{} must be within +-{MAX_SMALL_ANGLE_RAD} rad (a bearing runout is a small tilt)",
+                        w.amplitude_rad
+                    ),
+                ));
+            }
+            if !w.phase_rad.is_finite() {
+                return Err(invalid(format!("wobble[{i}].phase_rad"), "must be finite"));
             }
         }
         if let Some(s) = &self.instrument_scale
-            && !s.ppm.is_finite()
+            && !(s.ppm.is_finite() && s.ppm.abs() <= MAX_SCALE_PPM)
         {
-            return Err(invalid("instrument_scale.ppm", "must be finite"));
+            return Err(invalid(
+                "instrument_scale.ppm",
+                format!("{} must be within +-{MAX_SCALE_PPM} ppm (1 %)", s.ppm),
+            ));
         }
         Ok(())
     }

@@ -147,6 +147,9 @@ pub struct TransmissionSpread {
     pub sin_rad: Option<Spread>,
     /// Coefficient of `cos(theta_a)` \[rad\].
     pub cos_rad: Option<Spread>,
+    /// Scale error of each prismatic joint (eq. 13, `S_c = (1 + c_1) S`) \[ppm\].
+    #[serde(default)]
+    pub scale_ppm: Option<Spread>,
 }
 
 /// Spreads of an order-1 harmonic on a gear coupling (e.g. the 4->5 bevel gear, eq. 15).
@@ -222,6 +225,7 @@ impl PerturbationSpec {
             ("transducer_offset_mm", &self.transducer_offset_mm),
             ("transmission.sin_rad", &self.transmission.sin_rad),
             ("transmission.cos_rad", &self.transmission.cos_rad),
+            ("transmission.scale_ppm", &self.transmission.scale_ppm),
         ];
         for (field, s) in spreads {
             if let Some(s) = s {
@@ -301,9 +305,16 @@ pub fn perturb<R: Rng + ?Sized>(
                 vec![draw(&spec.transmission.sin_rad, rng)],
                 vec![draw(&spec.transmission.cos_rad, rng)],
             );
-            j.transmission = match entry.transmission_fit {
+            j.transmission = match entry.transmission_fit_form() {
                 TransmissionFitForm::Gear { ratio, .. } => Transmission::Gear { ratio, sin, cos },
-                TransmissionFitForm::Harmonic { .. } => Transmission::Harmonic { sin, cos },
+                TransmissionFitForm::Harmonic { .. } | TransmissionFitForm::Polynomial { .. } => {
+                    Transmission::Harmonic { sin, cos }
+                }
+            };
+        } else if spec.transmission.scale_ppm.is_some() {
+            j.transmission = Transmission::Polynomial {
+                c0: 0.0,
+                c: vec![draw(&spec.transmission.scale_ppm, rng) * 1e-6],
             };
         }
     }

@@ -16,7 +16,13 @@
 //! | `world/fits/{experiment}/axis` | `Arrows3D` | a fitted joint axis |
 //! | `world/fits/{experiment}/arc` | `LineStrips3D` | the fitted arc over the swept range |
 //! | `world/errors/{name}` | `Arrows3D` | error vectors, coloured by [`error_color`] |
+//! | `world/nominal`, `world/calibrated` | as `world/robot` | the nominal and the calibrated robot side by side (recordings of real data) |
+//! | `world/residuals/{experiment}` | `Arrows3D` | measured minus fitted point of an axis experiment, exaggerated |
 //! | `scalars/...` | `Scalars` | residuals and errors |
+//! | `notes/{name}` | `TextDocument` | what the recording shows, verdicts (Markdown) |
+//!
+//! [`Recorder::send_default_blueprint`] stores a layout with the recording (3-D world,
+//! scalars, notes), so it opens readable.
 //!
 //! Two sequence timelines: `step` (a pose counter running through the whole campaign) and
 //! `trial` (a Monte-Carlo trial index); see [`STEP_TIMELINE`], [`TRIAL_TIMELINE`].
@@ -27,7 +33,7 @@ mod robot;
 
 pub use colors::{ERROR_COLOR_STOPS, error_color, experiment_color};
 pub use fits::arc_points;
-pub use robot::{four_bar_loop_m, segment_boxes};
+pub use robot::{ROBOT_COLOR, four_bar_loop_m, segment_boxes};
 
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
@@ -173,6 +179,27 @@ impl Recorder {
         full_scale_m: f64,
         exaggeration: f64,
     ) -> Result<Vec<f64>, VizError> {
+        self.log_vectors(
+            &format!("world/errors/{name}"),
+            from_m,
+            to_m,
+            full_scale_m,
+            exaggeration,
+        )
+    }
+
+    /// Logs vectors `from_m[i] -> to_m[i]` as arrows at the entity `entity`, drawn
+    /// `exaggeration` times their length and coloured by their true length with
+    /// [`error_color`] on `0..=full_scale_m` (see [`Recorder::log_error_vectors`]). Returns
+    /// the true lengths \[m\].
+    pub fn log_vectors(
+        &self,
+        entity: &str,
+        from_m: &[Point3<f64>],
+        to_m: &[Point3<f64>],
+        full_scale_m: f64,
+        exaggeration: f64,
+    ) -> Result<Vec<f64>, VizError> {
         if from_m.len() != to_m.len() {
             return Err(VizError::LengthMismatch {
                 what: "error vector end points",
@@ -189,8 +216,41 @@ impl Recorder {
         .with_origins(from_m.iter().map(vec3))
         .with_radii([0.002_f32])
         .with_colors(lengths.iter().map(|&l| error_color(l, full_scale_m)));
-        self.log(&format!("world/errors/{name}"), &arrows);
+        self.log(entity, &arrows);
         Ok(lengths)
+    }
+
+    /// Logs a Markdown note at `notes/{name}` (timeless for the timelines in use when logged
+    /// with [`Recorder::reset_time`] first): what the recording shows, a verdict.
+    pub fn log_note(&self, name: &str, markdown: &str) {
+        self.log(
+            &format!("notes/{name}"),
+            &rerun::TextDocument::new(markdown).with_media_type(rerun::MediaType::markdown()),
+        );
+    }
+
+    /// Sends the default layout with the recording, so that it opens readable: the 3-D world
+    /// (robots, targets, fits, residual and error vectors) on the left, the scalars and the
+    /// notes stacked on the right, the time panel on the `step` timeline.
+    pub fn send_default_blueprint(&self) {
+        use rerun::blueprint::{
+            Blueprint, BlueprintActivation, Horizontal, Spatial3DView, TextDocumentView, TimePanel, TimeSeriesView,
+            Vertical,
+        };
+        let layout = Horizontal::new([
+            Spatial3DView::new("3D").with_origin("/world").into(),
+            Vertical::new([
+                TimeSeriesView::new("residuals and errors")
+                    .with_origin("/scalars")
+                    .into(),
+                TextDocumentView::new("notes").with_origin("/notes").into(),
+            ])
+            .with_row_shares([0.6, 0.4])
+            .into(),
+        ])
+        .with_column_shares([0.68, 0.32]);
+        let blueprint = Blueprint::new(layout).with_time_panel(TimePanel::new().with_timeline(STEP_TIMELINE));
+        self.note(blueprint.send(&self.stream, BlueprintActivation::default()));
     }
 
     /// Writes everything logged so far, and anything logged later up to drop, to the `.rrd`

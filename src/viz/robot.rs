@@ -8,6 +8,8 @@ use nalgebra::{Isometry3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
 
 /// Half-width of the link boxes \[m\].
 const LINK_HALF_WIDTH_M: f32 = 0.025;
+/// Colour of the robot of [`Recorder::log_robot`] (the simulated one).
+pub const ROBOT_COLOR: [u8; 4] = [150, 150, 160, 255];
 /// Length of the drawn link-frame axes \[m\].
 const FRAME_AXIS_LENGTH_M: f32 = 0.12;
 
@@ -66,13 +68,24 @@ pub fn four_bar_loop_m(
 }
 
 impl Recorder {
-    /// Logs the arm of `model` at joint values `q` (rad, m): `world/robot/link{k}` transforms
-    /// (`world_from_link`, with drawn axes), a skeleton line strip through the fixed frames'
-    /// origins and the tool origin, and a slim box per segment.
+    /// Logs the arm of `model` at joint values `q` (rad, m) under `world/robot`, in grey (see
+    /// [`Recorder::log_robot_as`]).
     ///
     /// # Panics
     /// If `q.len() != model.dof()` (a programming error, as [`PhiModel::poses`]).
     pub fn log_robot(&self, model: &PhiModel, q: &[f64]) {
+        self.log_robot_as("world/robot", model, q, ROBOT_COLOR);
+    }
+
+    /// Logs the arm of `model` at joint values `q` (rad, m) under the entity `root` (e.g.
+    /// `world/nominal`, `world/calibrated`, so that two robots stand side by side):
+    /// `{root}/link{k}` transforms (`world_from_link`, with drawn axes), a skeleton line strip
+    /// through the fixed frames' origins and the tool origin, and a slim box per segment in
+    /// `color`.
+    ///
+    /// # Panics
+    /// If `q.len() != model.dof()` (a programming error, as [`PhiModel::poses`]).
+    pub fn log_robot_as(&self, root: &str, model: &PhiModel, q: &[f64], color: [u8; 4]) {
         let poses = model.poses(q);
         for (k, link) in poses.world_from_link.iter().enumerate() {
             let t = link.translation.vector;
@@ -81,7 +94,7 @@ impl Recorder {
                 [t.x as f32, t.y as f32, t.z as f32],
                 rerun::Quaternion::from_xyzw([r.x as f32, r.y as f32, r.z as f32, r.w as f32]),
             );
-            let entity = format!("world/robot/link{}", k + 1);
+            let entity = format!("{root}/link{}", k + 1);
             self.log(entity.as_str(), &transform);
             self.log(entity.as_str(), &rerun::TransformAxes3D::new(FRAME_AXIS_LENGTH_M));
         }
@@ -90,7 +103,7 @@ impl Recorder {
         let skeleton = rerun::LineStrips3D::new([joints.iter().map(vec3).collect::<Vec<_>>()])
             .with_radii([0.004_f32])
             .with_colors([[40_u8, 40, 40, 255]]);
-        self.log("world/robot/skeleton", &skeleton);
+        self.log(&format!("{root}/skeleton"), &skeleton);
         let boxes = segment_boxes(&joints, f64::from(LINK_HALF_WIDTH_M));
         let links = rerun::Boxes3D::from_centers_and_half_sizes(
             boxes.iter().map(|(c, _, _)| vec3(c)),
@@ -100,8 +113,8 @@ impl Recorder {
             let c = r.coords;
             rerun::Quaternion::from_xyzw([c.x as f32, c.y as f32, c.z as f32, c.w as f32])
         }))
-        .with_colors([[150_u8, 150, 160, 255]]);
-        self.log("world/robot/links", &links);
+        .with_colors([color]);
+        self.log(&format!("{root}/links"), &links);
     }
 
     /// Logs the four-bar as a closed line strip at `world/robot/four_bar` (points in the world

@@ -1,28 +1,29 @@
-//! Every axis of a campaign from its own experiment: the ML arc fit through the transmission
-//! model, or the paper's estimator (eqs. 1-5, then eqs. 6-8), and the held joints'
-//! repeatability added to each axis's covariance.
+//! Every swept axis from its experiments: the ML arc fit through the transmission model (or
+//! the paper's estimator, eqs. 1-5 then 6-8) for a rotary joint, the ML line fit (or eqs. 9-13)
+//! for a sliding one; several sweeps of one joint jointly as one axis; the held joints'
+//! repeatability added to each axis's covariance; the per-point residuals.
 
-use super::{AxisCovariance, AxisEstimator, AxisExperiment, AxisReport, CalibrationOptions, ProcedureError};
-use crate::calibration::arc_model::{MeasurementNoise, axis_quantities_gradient};
+use super::{
+    AxisCovariance, AxisEstimator, AxisExperiment, AxisReport, CalibrationOptions, PointResidual, ProcedureError,
+    SweepReport,
+};
+use crate::calibration::arc_model::{ArcModel, MeasurementNoise, axis_quantities_gradient};
+use crate::calibration::line_ml::fit_line;
+use crate::calibration::noise::ResidualMoments;
+use crate::calibration::sliding::{fit_sliding_axis, fit_sliding_function};
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
-    ArcFitOptions, CalibrationError, angles, fit_arc_with_angle_noise, fit_axis_paper, fit_circle, fit_transmission,
+    ArcFitOptions, CalibrationError, angles, fit_arc, fit_arc_with_angle_noise, fit_axis_paper, fit_circle,
+    fit_transmission,
 };
-use crate::kinematics::AxisLine;
+use crate::kinematics::{AxisLine, JointKind};
 use crate::robot::commands_to_internal;
-use crate::robot::{Controller, RobotDescription, Transmission, TransmissionFitForm};
-use nalgebra::{Isometry3, Point3};
+use crate::robot::{Controller, RobotDescription, Transmission};
+use nalgebra::{Isometry3, Point3, Unit, Vector3};
 
-/// The fit form of a transmission as the description gives it.
-fn transmission_form(f: TransmissionFitForm) -> TransmissionForm {
-    match f {
-        TransmissionFitForm::Harmonic { order } => TransmissionForm::Harmonic { order },
-        TransmissionFitForm::Gear { ratio, order } => TransmissionForm::Gear { ratio, order },
-    }
-}
-
-/// One fitted axis: the line, the transmission in the fit's own zero (`theta_a = f^-1(u)`
-/// up to a constant) and the report.
+/// One fitted axis: the line (a sliding axis: its direction through the target's first
+/// point), the transmission in the fit's own zero (`theta_a = f^-1(u)` up to a constant) and
+/// the report.
 pub(super) struct AxisFitOutcome {
     /// The fitted axis (instrument frame).
     pub(super) axis: AxisLine,
@@ -30,118 +31,390 @@ pub(super) struct AxisFitOutcome {
     pub(super) transmission: Transmission,
     /// The axis's report.
     pub(super) report: AxisReport,
+    /// Residual moments for the noise estimate (none for the paper's estimator).
+    pub(super) moments: Option<ResidualMoments>,
+    /// Per-point residuals.
+    pub(super) residuals: Vec<PointResidual>,
 }
 
-/// Fits the axis of experiment `e` from target 0 and the actuator commands `u` (rad) of its
-/// observations, with the estimator of `options`.
-fn fit_one_axis(
-    e: &AxisExperiment,
-    u: &[f64],
-    form: TransmissionForm,
-    options: &CalibrationOptions,
-    repeatability_rad: f64,
-) -> Result<AxisFitOutcome, CalibrationError> {
-    let noise = MeasurementNoise::from_rms_3d(options.noise_rms_3d_mm * 1e-3);
-    let points = &e.target0_m;
-    let centroid = Point3::from(points.iter().map(|p| p.coords).sum::<nalgebra::Vector3<f64>>() / points.len() as f64);
-    let span_rad =
-        u.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - u.iter().cloned().fold(f64::INFINITY, f64::min);
-    match options.estimator {
-        AxisEstimator::Ml => {
-            let fit = fit_arc_with_angle_noise(
-                points,
-                u,
-                &ArcFitOptions {
-                    form,
-                    noise,
-                    reference_point: centroid,
-                    max_iterations: options.max_iterations,
-                },
-                repeatability_rad,
-            )?;
-            let g = axis_quantities_gradient(&fit.params, &centroid);
-            let q = &g * &fit.covariance * g.transpose();
-            let mut report = AxisReport::from_ml(e, &fit, &form, span_rad);
-            report.covariance = Some(AxisCovariance::new(
-                fit.params.u().into_inner(),
-                fit.params.v().into_inner(),
-                &q.fixed_view::<4, 4>(0, 0).into(),
-            ));
-            Ok(AxisFitOutcome {
-                axis: fit.axis,
-                transmission: fit.transmission,
-                report,
-            })
-        }
-        AxisEstimator::Paper => {
-            // Orient the axis so that increasing commands turn positively about it.
-            let circle = fit_circle(points)?;
-            let sign = if u[u.len() - 1] >= u[0] { 1.0 } else { -1.0 };
-            let guess = nalgebra::Unit::new_unchecked(circle.normal.into_inner() * sign);
-            let fit = fit_axis_paper(points, Some(&guess), options.max_iterations)?;
-            let mut axis = fit.axis;
-            if axis.direction.dot(&guess) < 0.0 {
-                axis.direction = -axis.direction;
-            }
-            let frame = Isometry3::face_towards(
-                &axis.origin_m,
-                &(axis.origin_m + axis.direction.into_inner()),
-                &circle.u,
-            );
-            // Points in a frame with Z on the axis: eqs. (6)-(7), then eq. (8).
-            let local: Vec<Point3<f64>> = points.iter().map(|p| frame.inverse_transform_point(p)).collect();
-            let local: Vec<Point3<f64>> = local.iter().map(|p| Point3::new(p.x, p.y, p.z)).collect();
-            let increments = angles::displacements_from_start(&local)?;
-            let t = fit_transmission(&form, &increments, u)?;
-            let report = AxisReport::from_paper(e, &fit, &t, &form, span_rad);
-            Ok(AxisFitOutcome {
-                axis,
-                transmission: t.transmission,
-                report,
-            })
-        }
-    }
+/// The points of one joint's sweeps: target 0 of each, the actuator command of the joint at
+/// each point, and where each point comes from.
+pub(super) struct JointData<'a> {
+    /// The sweeps.
+    pub(super) sweeps: Vec<&'a AxisExperiment>,
+    /// Target-0 points of each sweep (corrected to the design pose or as measured).
+    pub(super) points: Vec<Vec<Point3<f64>>>,
 }
-/// The actuator commands (rad, the controller's decoupled `u`) of the file commands `cmd`.
+
+/// The actuator commands (rad or m, the controller's decoupled `u`) of the file commands `cmd`.
 pub(super) fn actuator_commands(controller: &Controller, desc: &RobotDescription, cmd: &[f64]) -> Vec<f64> {
     controller
         .decouple(&commands_to_internal(desc, cmd))
         .expect("commands have the description's joint count (checked by MeasurementSet)")
 }
 
-/// Axes and transmissions, in the order the experiments were run (Table 1: 6..1): each
-/// joint's fit with the actuator commands (rad) of its joint at every step of its sweep,
-/// indexed by joint (0-based).
-pub(super) fn fit_axes(
-    experiments: &[AxisExperiment],
+fn span(u: &[f64]) -> f64 {
+    u.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - u.iter().cloned().fold(f64::INFINITY, f64::min)
+}
+
+/// The rotary residual of `p` against the predicted point `pred` on the arc (centre `c`,
+/// normal `n`): `[radial, tangential, axial]`.
+fn arc_components(p: &Point3<f64>, pred: &Point3<f64>, c: &Point3<f64>, n: &Vector3<f64>) -> [f64; 3] {
+    let e = p - pred;
+    let w = pred - c;
+    let radial = (w - n * w.dot(n)).normalize();
+    let tangential = n.cross(&radial);
+    [e.dot(&radial), e.dot(&tangential), e.dot(n)]
+}
+
+impl JointData<'_> {
+    fn joint(&self) -> usize {
+        self.sweeps[0].joint
+    }
+
+    fn name(&self) -> String {
+        self.sweeps
+            .iter()
+            .map(|e| e.name.as_str())
+            .collect::<Vec<_>>()
+            .join("+")
+    }
+
+    /// All points and the joint's actuator command at each.
+    fn flat(&self, controller: &Controller, desc: &RobotDescription) -> (Vec<Point3<f64>>, Vec<f64>) {
+        let k = self.joint() - 1;
+        let mut pts = Vec::new();
+        let mut u = Vec::new();
+        for (e, p) in self.sweeps.iter().zip(&self.points) {
+            pts.extend(p.iter().copied());
+            u.extend(
+                e.target0_steps
+                    .iter()
+                    .map(|&i| actuator_commands(controller, desc, &e.commands[i])[k]),
+            );
+        }
+        (pts, u)
+    }
+
+    /// `(experiment, step)` of each flat point.
+    fn labels(&self) -> Vec<(String, usize)> {
+        self.sweeps
+            .iter()
+            .flat_map(|e| e.target0_steps.iter().map(move |&i| (e.name.clone(), e.steps[i])))
+            .collect()
+    }
+}
+
+/// Fits one joint's axis from its sweeps with the estimator of `options`.
+pub(super) fn fit_joint(
+    data: &JointData<'_>,
     desc: &RobotDescription,
     controller: &Controller,
     options: &CalibrationOptions,
-    repeatability_rad: &[f64],
-) -> Result<Vec<(AxisFitOutcome, Vec<f64>)>, ProcedureError> {
-    let n = desc.dof();
-    let mut fits: Vec<Option<(AxisFitOutcome, Vec<f64>)>> = (0..n).map(|_| None).collect();
-    for e in experiments {
-        let k = e.joint - 1;
-        let u: Vec<f64> = e
-            .commands
-            .iter()
-            .map(|c| actuator_commands(controller, desc, c)[k])
-            .collect();
-        let u0: Vec<f64> = e.target0_steps.iter().map(|&j| u[j]).collect();
-        let form = transmission_form(desc.joints[k].transmission_fit);
-        let outcome =
-            fit_one_axis(e, &u0, form, options, repeatability_rad[k]).map_err(|source| ProcedureError::Fit {
-                experiment: e.name.clone(),
-                joint: e.joint,
-                source,
-            })?;
-        fits[k] = Some((outcome, u));
+    noise_mm: f64,
+    repeatability: f64,
+) -> Result<AxisFitOutcome, ProcedureError> {
+    let joint = data.joint();
+    let (points, u) = data.flat(controller, desc);
+    let form = TransmissionForm::from(desc.joints[joint - 1].transmission_fit_form());
+    let err = |source| ProcedureError::Fit {
+        experiment: data.name(),
+        joint,
+        source,
+    };
+    let kind = desc.joints[joint - 1].kind;
+    let paper = options.estimator == AxisEstimator::Paper;
+    if paper && data.sweeps.len() > 1 {
+        return Err(ProcedureError::InvalidOption {
+            field: "estimator",
+            message: format!(
+                "joint {joint} is swept {} times ({}): the paper's estimator fits one sweep per joint; use the ML estimator",
+                data.sweeps.len(),
+                data.name()
+            ),
+        });
     }
-    Ok(fits
+    let sigma = noise_mm * 1e-3 / 3f64.sqrt();
+    let mut out = match (kind, paper) {
+        (JointKind::Revolute, false) => {
+            fit_arc_ml(data, &points, &u, form, options, sigma, repeatability).map_err(err)?
+        }
+        (JointKind::Revolute, true) => fit_arc_paper(data, &points, &u, form, options).map_err(err)?,
+        (JointKind::Prismatic, false) => {
+            fit_line_ml(data, &points, &u, form, options, sigma, repeatability).map_err(err)?
+        }
+        (JointKind::Prismatic, true) => fit_line_paper(data, &points, &u, form, options).map_err(err)?,
+    };
+    out.report.sweeps = sweep_reports(data, &out, desc, controller, options, sigma);
+    Ok(out)
+}
+
+fn fit_arc_ml(
+    data: &JointData<'_>,
+    points: &[Point3<f64>],
+    u: &[f64],
+    form: TransmissionForm,
+    options: &CalibrationOptions,
+    sigma: f64,
+    repeatability_rad: f64,
+) -> Result<AxisFitOutcome, CalibrationError> {
+    let centroid = Point3::from(points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / points.len() as f64);
+    let arc_options = ArcFitOptions {
+        form,
+        noise: MeasurementNoise::Isotropic { sigma_per_axis: sigma },
+        reference_point: centroid,
+        max_iterations: options.max_iterations,
+    };
+    let fit = fit_arc_with_angle_noise(points, u, &arc_options, repeatability_rad)?;
+    let g = axis_quantities_gradient(&fit.params, &centroid);
+    let q = &g * &fit.covariance * g.transpose();
+    let mut report = AxisReport::from_arc(data.joint(), &data.name(), points.len(), &fit, &form, span(u));
+    report.covariance = Some(AxisCovariance::new(
+        fit.params.u().into_inner(),
+        fit.params.v().into_inner(),
+        &q.fixed_view::<4, 4>(0, 0).into(),
+    ));
+    let pred = ArcModel::new(form, u, &arc_options.noise)?.predict(&fit.params)?;
+    let n = fit.params.normal().into_inner();
+    let residuals = data
+        .labels()
         .into_iter()
-        .map(|f| f.expect("every joint has an experiment"))
-        .collect())
+        .zip(points.iter().zip(&pred))
+        .map(|((experiment, step), (p, pr))| PointResidual {
+            experiment,
+            joint: data.joint(),
+            step,
+            target: 0,
+            components_mm: arc_components(p, pr, &fit.params.centre, &n).map(|c| c * 1e3),
+            sliding: false,
+        })
+        .collect();
+    Ok(AxisFitOutcome {
+        axis: fit.axis,
+        transmission: fit.transmission.clone(),
+        report,
+        moments: Some(fit.moments),
+        residuals,
+    })
+}
+
+fn fit_line_ml(
+    data: &JointData<'_>,
+    points: &[Point3<f64>],
+    u: &[f64],
+    form: TransmissionForm,
+    options: &CalibrationOptions,
+    sigma: f64,
+    repeatability_m: f64,
+) -> Result<AxisFitOutcome, CalibrationError> {
+    let fit = fit_line(points, u, &form, sigma, repeatability_m, options.max_iterations)?;
+    let report = AxisReport::from_line(data.joint(), &data.name(), &fit, &form, span(u));
+    let residuals = data
+        .labels()
+        .into_iter()
+        .zip(&fit.residuals)
+        .map(|((experiment, step), r)| PointResidual {
+            experiment,
+            joint: data.joint(),
+            step,
+            target: 0,
+            components_mm: [r.x * 1e3, r.y * 1e3, r.z * 1e3],
+            sliding: true,
+        })
+        .collect();
+    Ok(AxisFitOutcome {
+        axis: AxisLine {
+            origin_m: fit.params.start,
+            direction: fit.direction,
+        },
+        transmission: fit.transmission.clone(),
+        report,
+        moments: Some(fit.moments),
+        residuals,
+    })
+}
+
+/// The paper's estimator, eqs. (1)-(5), then eqs. (6)-(8) (one sweep).
+fn fit_arc_paper(
+    data: &JointData<'_>,
+    points: &[Point3<f64>],
+    u: &[f64],
+    form: TransmissionForm,
+    options: &CalibrationOptions,
+) -> Result<AxisFitOutcome, CalibrationError> {
+    // Orient the axis so that increasing commands turn positively about it.
+    let circle = fit_circle(points)?;
+    let sign = if u[u.len() - 1] >= u[0] { 1.0 } else { -1.0 };
+    let guess = Unit::new_unchecked(circle.normal.into_inner() * sign);
+    let fit = fit_axis_paper(points, Some(&guess), options.max_iterations)?;
+    let mut axis = fit.axis;
+    if axis.direction.dot(&guess) < 0.0 {
+        axis.direction = -axis.direction;
+    }
+    let frame = Isometry3::face_towards(
+        &axis.origin_m,
+        &(axis.origin_m + axis.direction.into_inner()),
+        &circle.u,
+    );
+    // Points in a frame with Z on the axis: eqs. (6)-(7), then eq. (8).
+    let local: Vec<Point3<f64>> = points.iter().map(|p| frame.inverse_transform_point(p)).collect();
+    let increments = angles::displacements_from_start(&local)?;
+    let t = fit_transmission(&form, &increments, u)?;
+    let report = AxisReport::from_paper(data.sweeps[0], &fit, &t, &form, span(u));
+    Ok(AxisFitOutcome {
+        axis,
+        transmission: t.transmission,
+        report,
+        moments: None,
+        residuals: vec![],
+    })
+}
+
+/// The paper's sliding-axis estimator, eqs. (9)-(12), then eq. (13) (one sweep).
+fn fit_line_paper(
+    data: &JointData<'_>,
+    points: &[Point3<f64>],
+    u: &[f64],
+    form: TransmissionForm,
+    options: &CalibrationOptions,
+) -> Result<AxisFitOutcome, CalibrationError> {
+    let fit = fit_sliding_axis(points, options.max_iterations)?;
+    let f = fit_sliding_function(&fit.displacements, u, form.n_coefficients())?;
+    // S_c - S_c^0 = sum_k c_k S^k with S from step 0: f(S) = S + u_0 + (c_1 - 1) S + c_2 S^2 ..
+    let mut c = f.coefficients.clone();
+    c[0] -= 1.0;
+    let transmission = Transmission::Polynomial { c0: u[0], c };
+    let e = data.sweeps[0];
+    let report = AxisReport {
+        joint: e.joint,
+        experiment: e.name.clone(),
+        estimator: "paper".into(),
+        points: points.len(),
+        span_deg: span(u) * 1e3,
+        point_mm: (points[0].coords * 1e3).into(),
+        direction: fit.direction.into_inner().into(),
+        // The paper's estimator reports no covariance of the line.
+        direction_sigma_rad: [f64::NAN; 2],
+        position_sigma_mm: [f64::NAN; 2],
+        transmission: transmission.clone(),
+        coefficient_names: form.coefficient_names(),
+        coefficient_sigma: f.sigma.clone(),
+        residual_rms_mm: f.residual_rms * 1e3,
+        condition_number: f64::NAN,
+        identifiability: vec![],
+        covariance: None,
+        kind: "prismatic".into(),
+        sweeps: vec![],
+    };
+    Ok(AxisFitOutcome {
+        axis: AxisLine {
+            origin_m: points[0],
+            direction: fit.direction,
+        },
+        transmission,
+        report,
+        moments: None,
+        residuals: vec![],
+    })
+}
+
+/// Per sweep of a joint: its points, residual RMS in the joint fit, held offsets and wander,
+/// and (several sweeps) how far its own axis lies from the joint's.
+fn sweep_reports(
+    data: &JointData<'_>,
+    out: &AxisFitOutcome,
+    desc: &RobotDescription,
+    controller: &Controller,
+    options: &CalibrationOptions,
+    sigma: f64,
+) -> Vec<SweepReport> {
+    let k = data.joint() - 1;
+    let mut start = 0;
+    data.sweeps
+        .iter()
+        .zip(&data.points)
+        .map(|(e, pts)| {
+            let res = &out.residuals.get(start..start + pts.len()).unwrap_or(&[]);
+            start += pts.len();
+            let rms = (res
+                .iter()
+                .map(|r| r.components_mm.iter().map(|c| c * c).sum::<f64>())
+                .sum::<f64>()
+                / pts.len().max(1) as f64)
+                .sqrt();
+            let (offsets, wander) = held_offsets(e, desc, &out.report);
+            let own = (data.sweeps.len() > 1)
+                .then(|| own_axis(e, pts, k, desc, controller, options, sigma, &out.axis))
+                .flatten();
+            SweepReport {
+                experiment: e.name.clone(),
+                points: pts.len(),
+                residual_rms_mm: rms,
+                held_offsets: offsets,
+                held_wander: wander,
+                own_axis_angle_mrad: own.map(|o| o.0),
+                own_axis_offset_mm: own.and_then(|o| o.1),
+            }
+        })
+        .collect()
+}
+
+/// The held joints of `e` whose median differs from the reference (recorded in the report's
+/// experiment's reference, file units), and the largest wander about the medians.
+fn held_offsets(e: &AxisExperiment, desc: &RobotDescription, _report: &AxisReport) -> (Vec<(usize, f64)>, f64) {
+    use crate::numerics::stats::{QuantileMethod, quantile};
+    let mut offsets = Vec::new();
+    let mut wander: f64 = 0.0;
+    for j in (0..desc.dof()).filter(|&j| e.holds_constant(j)) {
+        let v: Vec<f64> = e.commands.iter().map(|c| c[j]).collect();
+        let m = quantile(&v, 0.5, QuantileMethod::Linear);
+        wander = v.iter().fold(wander, |w, x| w.max((x - m).abs()));
+        offsets.push((j + 1, m));
+    }
+    (offsets, wander)
+}
+
+/// This sweep's own axis against the joint's: angle \[mrad\] and (rotary) offset \[mm\].
+#[allow(clippy::too_many_arguments)]
+fn own_axis(
+    e: &AxisExperiment,
+    pts: &[Point3<f64>],
+    k: usize,
+    desc: &RobotDescription,
+    controller: &Controller,
+    options: &CalibrationOptions,
+    sigma: f64,
+    joint_axis: &AxisLine,
+) -> Option<(f64, Option<f64>)> {
+    let u: Vec<f64> = e
+        .target0_steps
+        .iter()
+        .map(|&i| actuator_commands(controller, desc, &e.commands[i])[k])
+        .collect();
+    let form = TransmissionForm::from(desc.joints[k].transmission_fit_form());
+    let dir_angle = |d: &Vector3<f64>| d.angle(&joint_axis.direction) * 1e3;
+    match desc.joints[k].kind {
+        JointKind::Revolute => {
+            let fit = fit_arc(
+                pts,
+                &u,
+                &ArcFitOptions {
+                    form,
+                    noise: MeasurementNoise::Isotropic { sigma_per_axis: sigma },
+                    reference_point: joint_axis.origin_m,
+                    max_iterations: options.max_iterations,
+                },
+            )
+            .ok()?;
+            let w = fit.axis.origin_m - joint_axis.origin_m;
+            let across = w - joint_axis.direction.into_inner() * w.dot(&joint_axis.direction);
+            Some((dir_angle(&fit.axis.direction), Some(across.norm() * 1e3)))
+        }
+        JointKind::Prismatic => {
+            let fit = fit_line(pts, &u, &form, sigma, 0.0, options.max_iterations).ok()?;
+            Some((dir_angle(&fit.direction), None))
+        }
+    }
 }
 
 /// The joints below each swept one hold still with their re-positioning error: a bias of
@@ -149,19 +422,24 @@ pub(super) fn fit_axes(
 /// the instrument frame. Not to the rows above: the campaign leaves a held actuator where
 /// it is from one sweep to the next, so the same error turns every axis above it together,
 /// which changes no row (it is an error of that joint's value at the reference, as large as
-/// its repeatability).
+/// its repeatability). Only rotary joints below turn an axis; a sliding joint's error moves
+/// it parallel, which changes no direction and (for a rotary axis) is its position's bias,
+/// not modelled.
 pub(super) fn add_held_joint_covariances(
-    fits: &mut [(AxisFitOutcome, Vec<f64>)],
-    axes: &[AxisLine],
-    repeatability_rad: &[f64],
+    fits: &mut [Option<AxisFitOutcome>],
+    axes: &[Option<AxisLine>],
+    kinds: &[JointKind],
+    repeatability: &[f64],
 ) {
-    for (k, (fit, _)) in fits.iter_mut().enumerate() {
+    for k in 0..fits.len() {
         let held: Vec<(AxisLine, f64)> = (0..k)
-            .filter(|&i| repeatability_rad[i] > 0.0)
-            .map(|i| (axes[i], repeatability_rad[i]))
+            .filter(|&i| repeatability[i] > 0.0 && kinds[i] == JointKind::Revolute)
+            .filter_map(|i| axes[i].map(|a| (a, repeatability[i])))
             .collect();
-        if !held.is_empty() {
-            fit.report.add_held_joint_covariance(&axes[k], &held);
+        if let (Some(fit), Some(axis)) = (&mut fits[k], axes[k])
+            && !held.is_empty()
+        {
+            fit.report.add_held_joint_covariance(&axis, &held);
         }
     }
 }

@@ -1,15 +1,28 @@
-//! The axis experiments of a measurement set as the procedure needs them: one per joint,
-//! target 0 (and target 1) ordered by step, the commands, and the common reference pose
-//! every other joint is held at (`docs/formats.md#measurement-csv` and `#controller-semantics`).
+//! The axis experiments of a measurement set as the procedure needs them: target 0 (and
+//! target 1) ordered by step, the recorded commands of every step, which joints each
+//! experiment holds, and the common reference pose (`docs/formats.md#measurement-csv`,
+//! `#held-joints` and `#controller-semantics`).
+//!
+//! Any subset of joints may be swept, a joint any number of times. A held joint's recorded
+//! values are taken as recorded (the pose the robot stood at; the procedure models them,
+//! [`super::held`]); within one experiment they must stay within the held tolerance of their
+//! median, else the experiment moves two joints and is an error naming the joint and how far
+//! it moved. Between experiments the held values may differ (sweeps at other poses).
 
 use super::ProcedureError;
+use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
+use crate::numerics::stats::{QuantileMethod, quantile};
 use crate::robot::RobotDescription;
 use nalgebra::Point3;
 
-/// Commands that should be equal are taken as equal within this \[deg or mm\]: CSV files
-/// written by other programs round the commands they print.
+/// The commands of the targets of one pose must agree within this \[deg or mm\]: CSV files
+/// written by other programs round the commands they print, but one pose has one reading.
 pub const COMMAND_TOLERANCE: f64 = 1e-6;
+
+/// How far a held joint may move within one axis experiment (file units: deg for a revolute,
+/// mm for a prismatic joint); the default of `CalibrationOptions::held_tolerance`.
+pub const DEFAULT_HELD_TOLERANCE: f64 = 0.5;
 
 /// One axis experiment.
 #[derive(Clone, Debug)]
@@ -18,8 +31,10 @@ pub struct AxisExperiment {
     pub name: String,
     /// The swept joint (1-based).
     pub joint: usize,
-    /// Commands of every observed step, in step order (file units).
+    /// Commands of every observed step, in step order (file units, as recorded).
     pub commands: Vec<Vec<f64>>,
+    /// The file's step number of each entry of `commands`.
+    pub steps: Vec<usize>,
     /// Target 0 where it was seen \[m\], instrument frame (an occluded target is absent).
     pub target0_m: Vec<Point3<f64>>,
     /// Indices into `commands` of the `target0_m` observations.
@@ -33,176 +48,181 @@ pub struct AxisExperiment {
     pub holds_next_still: bool,
 }
 
-/// Collects the axis experiments, checks their commands, and finds the reference pose.
+impl AxisExperiment {
+    /// Whether joint `j` (0-based) is held at a constant command in this experiment.
+    pub fn holds_constant(&self, j: usize) -> bool {
+        j + 1 != self.joint && !(j == self.joint && self.holds_next_still)
+    }
+}
+
+/// Collects the axis experiments and checks their commands (held tolerance `tolerance`, file
+/// units), and finds the reference pose: per joint, the median of its held values over every
+/// step of every experiment that holds it (the first sweep's step 0 for a joint no experiment
+/// holds).
+pub fn axis_experiments_with(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    tolerance: f64,
+) -> Result<(Vec<AxisExperiment>, Vec<f64>), ProcedureError> {
+    let mut out: Vec<AxisExperiment> = Vec::new();
+    for e in set.experiments().into_iter().filter(|e| e.moved_joint > 0) {
+        let mut x = AxisExperiment {
+            name: e.name.to_string(),
+            joint: e.moved_joint,
+            commands: Vec::new(),
+            steps: Vec::new(),
+            target0_m: Vec::new(),
+            target0_steps: Vec::new(),
+            target1_m: Vec::new(),
+            target1_steps: Vec::new(),
+            holds_next_still: false,
+        };
+        for (step, rows) in &e.by_step() {
+            let first = rows[0];
+            if let Some(r) = rows.iter().find(|r| {
+                r.cmd
+                    .iter()
+                    .zip(&first.cmd)
+                    .any(|(a, b)| (a - b).abs() > COMMAND_TOLERANCE)
+            }) {
+                let k = r
+                    .cmd
+                    .iter()
+                    .zip(&first.cmd)
+                    .position(|(a, b)| (a - b).abs() > COMMAND_TOLERANCE);
+                return Err(ProcedureError::InconsistentCommands {
+                    experiment: e.name.to_string(),
+                    step: *step,
+                    joint: k.unwrap_or(0) + 1,
+                    reason: "two targets of one pose carry different commands".into(),
+                });
+            }
+            let index = x.commands.len();
+            x.commands.push(first.cmd.clone());
+            x.steps.push(*step);
+            if let Some(r0) = rows.iter().find(|r| r.target == 0) {
+                x.target0_m.push(r0.position_m());
+                x.target0_steps.push(index);
+            }
+            if let Some(r1) = rows.iter().find(|r| r.target == 1) {
+                x.target1_m.push(r1.position_m());
+                x.target1_steps.push(index);
+            }
+        }
+        x.holds_next_still = check_sweep_commands(&x, desc, tolerance)?;
+        out.push(x);
+    }
+    if out.is_empty() {
+        return Err(ProcedureError::NoAxisExperiment);
+    }
+    let reference = reference_pose(&out, desc.dof());
+    Ok((out, reference))
+}
+
+/// [`axis_experiments_with`] at the default held tolerance.
 pub fn axis_experiments(
     set: &MeasurementSet,
     desc: &RobotDescription,
 ) -> Result<(Vec<AxisExperiment>, Vec<f64>), ProcedureError> {
-    let n = desc.dof();
-    let mut out: Vec<AxisExperiment> = Vec::new();
-    for e in set.experiments().into_iter().filter(|e| e.moved_joint > 0) {
-        let joint = e.moved_joint;
-        if let Some(first) = out.iter().find(|x| x.joint == joint) {
-            return Err(ProcedureError::DuplicateAxis {
-                joint,
-                first: first.name.clone(),
-                second: e.name.to_string(),
-            });
-        }
-        let by_step = e.by_step();
-        let mut commands: Vec<Vec<f64>> = Vec::new();
-        let (mut t0, mut s0, mut t1, mut s1) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for (step, rows) in &by_step {
-            let first = rows[0];
-            for r in rows.iter() {
-                if let Some((k, _)) = r
-                    .cmd
-                    .iter()
-                    .zip(&first.cmd)
-                    .enumerate()
-                    .find(|(_, (a, b))| (*a - *b).abs() > COMMAND_TOLERANCE)
-                {
-                    return Err(ProcedureError::InconsistentCommands {
-                        experiment: e.name.to_string(),
-                        step: *step,
-                        joint: k + 1,
-                        reason: "two targets of one pose carry different commands".into(),
-                    });
-                }
-            }
-            let index = commands.len();
-            commands.push(first.cmd.clone());
-            if let Some(r0) = rows.iter().find(|r| r.target == 0) {
-                t0.push(r0.position_m());
-                s0.push(index);
-            }
-            if let Some(r1) = rows.iter().find(|r| r.target == 1) {
-                t1.push(r1.position_m());
-                s1.push(index);
-            }
-        }
-        let holds_next_still = check_sweep_commands(e.name, joint, &commands, desc)?;
-        out.push(AxisExperiment {
-            name: e.name.to_string(),
-            joint,
-            commands,
-            target0_m: t0,
-            target0_steps: s0,
-            target1_m: t1,
-            target1_steps: s1,
-            holds_next_still,
-        });
+    axis_experiments_with(set, desc, DEFAULT_HELD_TOLERANCE)
+}
+
+/// The unit of a joint's file values.
+fn unit(desc: &RobotDescription, j: usize) -> &'static str {
+    match desc.joints[j].kind {
+        JointKind::Revolute => "deg",
+        JointKind::Prismatic => "mm",
     }
-    for joint in 1..=n {
-        if !out.iter().any(|e| e.joint == joint) {
-            return Err(ProcedureError::MissingAxis { joint });
-        }
-    }
-    let reference = reference_pose(&out, n)?;
-    Ok((out, reference))
+}
+
+/// The largest deviation of `values` from their median, and the step where it is.
+fn spread(values: &[f64]) -> (f64, usize, f64) {
+    let m = quantile(values, 0.5, QuantileMethod::Linear);
+    let (i, d) = values
+        .iter()
+        .map(|v| (v - m).abs())
+        .enumerate()
+        .fold((0, 0.0), |best, (i, d)| if d > best.1 { (i, d) } else { best });
+    (d, i, m)
 }
 
 /// The swept joint must move; joint `k+1` either stays or follows the nominal coupling
-/// (hold-still); every other joint stays. Returns whether joint `k+1` follows.
-fn check_sweep_commands(
-    name: &str,
-    joint: usize,
-    commands: &[Vec<f64>],
-    desc: &RobotDescription,
-) -> Result<bool, ProcedureError> {
-    let k = joint - 1;
-    let first = &commands[0];
-    let span = commands.iter().map(|c| c[k]).fold(f64::NEG_INFINITY, f64::max)
-        - commands.iter().map(|c| c[k]).fold(f64::INFINITY, f64::min);
+/// (hold-still), within `tolerance`; every other joint stays within `tolerance` of its median.
+/// Returns whether joint `k+1` follows.
+fn check_sweep_commands(e: &AxisExperiment, desc: &RobotDescription, tolerance: f64) -> Result<bool, ProcedureError> {
+    let (k, commands) = (e.joint - 1, &e.commands);
+    let column = |j: usize| -> Vec<f64> { commands.iter().map(|c| c[j]).collect() };
+    let swept = column(k);
+    let span =
+        swept.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - swept.iter().cloned().fold(f64::INFINITY, f64::min);
     if span.is_nan() || span <= COMMAND_TOLERANCE {
         return Err(ProcedureError::ZeroSpan {
-            experiment: name.to_owned(),
-            joint,
+            experiment: e.name.clone(),
+            joint: e.joint,
         });
     }
-    let slope = desc.nominal_coupling_from(joint);
-    let next_moves = k + 1 < first.len()
-        && commands
-            .iter()
-            .any(|c| (c[k + 1] - first[k + 1]).abs() > COMMAND_TOLERANCE);
-    for (step, c) in commands.iter().enumerate() {
-        for j in 0..c.len() {
-            if j == k || (j == k + 1 && next_moves) {
-                continue;
+    let too_far = |j: usize, i: usize, d: f64, what: &str| ProcedureError::InconsistentCommands {
+        experiment: e.name.clone(),
+        step: e.steps[i],
+        joint: j + 1,
+        reason: format!(
+            "joint {} is held while joint {} is swept but {what} by {d:.4} {} (held tolerance {tolerance} {}; `--held-tolerance`)",
+            j + 1,
+            e.joint,
+            unit(desc, j),
+            unit(desc, j)
+        ),
+    };
+    let mut follows = false;
+    if k + 1 < desc.dof() {
+        let next = column(k + 1);
+        let (d_const, i_const, _) = spread(&next);
+        let follower = desc.nominal_coupling_from(e.joint).map(|s| {
+            let resid: Vec<f64> = next.iter().zip(&swept).map(|(c, u)| c - s * (u - swept[0])).collect();
+            spread(&resid)
+        });
+        match follower {
+            Some((d_f, _, _)) if d_f < d_const && d_f <= tolerance => follows = true,
+            Some((d_f, i_f, _)) if d_const > tolerance && d_f > tolerance => {
+                return Err(too_far(
+                    k + 1,
+                    i_f,
+                    d_f,
+                    "its command leaves the hold-still formula cmd(0) + slope (cmd_k - cmd_k(0))",
+                ));
             }
-            if (c[j] - first[j]).abs() > COMMAND_TOLERANCE {
-                return Err(ProcedureError::InconsistentCommands {
-                    experiment: name.to_owned(),
-                    step,
-                    joint: j + 1,
-                    reason: format!("joint {} moves while joint {joint} is swept", j + 1),
-                });
-            }
-        }
-        if next_moves {
-            let Some(s) = slope else {
-                return Err(ProcedureError::InconsistentCommands {
-                    experiment: name.to_owned(),
-                    step,
-                    joint: joint + 1,
-                    reason: format!(
-                        "joint {} moves but has no nominal coupling from joint {joint}",
-                        joint + 1
-                    ),
-                });
-            };
-            let expect = first[k + 1] + s * (c[k] - first[k]);
-            if (c[k + 1] - expect).abs() > COMMAND_TOLERANCE.max(1e-9 * expect.abs()) {
-                return Err(ProcedureError::InconsistentCommands {
-                    experiment: name.to_owned(),
-                    step,
-                    joint: joint + 1,
-                    reason: format!(
-                        "hold-still command {:.6} differs from cmd(0) + {s} * (cmd_{joint} - cmd_{joint}(0)) = {expect:.6}",
-                        c[k + 1]
-                    ),
-                });
-            }
+            _ if d_const > tolerance => return Err(too_far(k + 1, i_const, d_const, "moves")),
+            _ => {}
         }
     }
-    Ok(next_moves)
+    for j in (0..desc.dof()).filter(|&j| j != k && j != k + 1) {
+        let (d, i, _) = spread(&column(j));
+        if d > tolerance {
+            return Err(too_far(j, i, d, "moves"));
+        }
+    }
+    Ok(follows)
 }
 
-/// The value every joint is held at while other joints are swept.
-fn reference_pose(experiments: &[AxisExperiment], n: usize) -> Result<Vec<f64>, ProcedureError> {
-    let mut reference: Vec<Option<(f64, &str)>> = vec![None; n];
-    for e in experiments {
-        for (j, slot) in reference.iter_mut().enumerate() {
-            // Skip the swept joint and a hold-still joint k+1 (index `e.joint`): they move.
-            if j + 1 == e.joint || (j == e.joint && e.holds_next_still) {
-                continue;
-            }
-            let value = e.commands[0][j];
-            match slot {
-                None => *slot = Some((value, &e.name)),
-                Some((v, first)) if (*v - value).abs() > COMMAND_TOLERANCE => {
-                    return Err(ProcedureError::InconsistentCommands {
-                        experiment: e.name.to_string(),
-                        step: 0,
-                        joint: j + 1,
-                        reason: format!("reference command {value} differs from {v} in experiment {first}"),
-                    });
-                }
-                Some(_) => {}
-            }
-        }
-    }
-    Ok(reference
-        .into_iter()
-        .enumerate()
-        .map(|(j, r)| {
-            r.map(|(v, _)| v).unwrap_or_else(|| {
+/// Per joint, the median of its held values over every step of the experiments that hold it;
+/// for a joint no experiment holds, step 0 of its first sweep.
+fn reference_pose(experiments: &[AxisExperiment], n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|j| {
+            let held: Vec<f64> = experiments
+                .iter()
+                .filter(|e| e.holds_constant(j))
+                .flat_map(|e| e.commands.iter().map(move |c| c[j]))
+                .collect();
+            if held.is_empty() {
                 experiments
                     .iter()
                     .find(|e| e.joint == j + 1)
                     .map(|e| e.commands[0][j])
                     .unwrap_or(0.0)
-            })
+            } else {
+                quantile(&held, 0.5, QuantileMethod::Linear)
+            }
         })
-        .collect())
+        .collect()
 }

@@ -1,13 +1,15 @@
 //! The calibrated joint models, in ascending order: each joint's zero from the reference pose
 //! and the coupling into it from the joint below, fitted from the second target of that
-//! joint's sweep when observed (eqs. 14-15), else the nominal one.
+//! joint's sweep when observed (eqs. 14-15), else the nominal one. A joint no experiment
+//! sweeps keeps its nominal model (identity transmission, nominal coupling, zero offset).
 
-use super::axis_fit::AxisFitOutcome;
+use super::axis_fit::{AxisFitOutcome, actuator_commands};
 use super::{AxisExperiment, CouplingReport, ProcedureError};
 use crate::calibration::CalibrationError;
 use crate::calibration::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
 use crate::kinematics::PhiModel;
-use crate::robot::{CouplingFitForm, CouplingFunction, JointModel, RobotDescription};
+use crate::robot::{Controller, CouplingFitForm, CouplingFunction, JointModel, RobotDescription, Transmission};
+use nalgebra::Point3;
 
 /// The fitted axes of a campaign and the reference pose the joint models are assembled from.
 pub(super) struct Assembly<'a> {
@@ -15,8 +17,12 @@ pub(super) struct Assembly<'a> {
     pub(super) desc: &'a RobotDescription,
     /// The axis experiments.
     pub(super) experiments: &'a [AxisExperiment],
-    /// Each joint's axis fit with its actuator commands (rad) at every step of its sweep.
-    pub(super) fits: &'a [(AxisFitOutcome, Vec<f64>)],
+    /// Each joint's axis fit (`None`: not swept).
+    pub(super) fits: &'a [Option<AxisFitOutcome>],
+    /// Target 1 of each experiment (same order), at its design pose.
+    pub(super) target1: &'a [Vec<Point3<f64>>],
+    /// The nominal controller.
+    pub(super) controller: &'a Controller,
     /// The phi-model of the fitted axes.
     pub(super) geometry: &'a PhiModel,
     /// The joint values at the reference pose (rad).
@@ -37,7 +43,6 @@ impl Assembly<'_> {
         // The calibrated active angle of joint k is `f_k^-1(u) + shift[k]`.
         let mut shift: Vec<f64> = Vec::with_capacity(n);
         for k in 0..n {
-            let (fit, _) = &self.fits[k];
             let coupling_in: Option<CouplingFunction> = if k == 0 {
                 None
             } else {
@@ -50,6 +55,20 @@ impl Assembly<'_> {
                 _ => 0.0,
             };
             let theta_a_ref = q_ref[k] - passive_ref;
+            let Some(fit) = &self.fits[k] else {
+                // Not swept: the nominal joint (its value at the reference is the command).
+                theta_ref.push(theta_a_ref);
+                shift.push(theta_a_ref - u_ref[k]);
+                joints.push(JointModel {
+                    kind: desc.joints[k].kind,
+                    phi_deg: desc.joints[k].phi_deg,
+                    transmission: Transmission::identity_for(desc.joints[k].kind),
+                    coupling_in,
+                    transducer_offset: u_ref[k] - theta_a_ref,
+                    repeatability_sigma: 0.0,
+                });
+                continue;
+            };
             let raw_ref = fit
                 .transmission
                 .actual_from_command(u_ref[k])
@@ -103,15 +122,26 @@ impl Assembly<'_> {
             return Ok(None);
         };
         let nominal = CouplingFunction::linear(slope);
-        let e = self
+        let form = desc.couplings.iter().find(|c| c.from == from).and_then(|c| c.fit);
+        // The driving joint's sweep that measures the coupling: the first with target 1 seen
+        // at three or more steps while actuator k+1 is held, else the first sweep.
+        let sweeps: Vec<(usize, &AxisExperiment)> = self
             .experiments
             .iter()
-            .find(|e| e.joint == from)
-            .expect("every joint has an experiment");
-        let form = desc.couplings.iter().find(|c| c.from == from).and_then(|c| c.fit);
-        let Some(form) = form else {
+            .enumerate()
+            .filter(|(_, e)| e.joint == from)
+            .collect();
+        let (Some(form), Some(&(first_index, first))) = (form, sweeps.first()) else {
             return Ok(Some(nominal));
         };
+        if self.fits[k - 1].is_none() {
+            return Ok(Some(nominal));
+        }
+        let (index, e) = sweeps
+            .iter()
+            .copied()
+            .find(|(_, e)| e.target1_m.len() >= 3 && e.holds_next_still)
+            .unwrap_or((first_index, first));
         if e.target1_m.len() < 3 {
             return Err(ProcedureError::SecondTargetMissing {
                 experiment: e.name.clone(),
@@ -127,7 +157,7 @@ impl Assembly<'_> {
                 reason: "a coupling is measured only while actuator k+1 is held still (`docs/formats.md#controller-semantics`)".into(),
             });
         }
-        self.fit_measured_coupling(k, e, slope, form, shift, couplings)
+        self.fit_measured_coupling(k, (index, e), slope, form, shift, couplings)
             .map(Some)
     }
 
@@ -136,7 +166,7 @@ impl Assembly<'_> {
     fn fit_measured_coupling(
         &self,
         k: usize,
-        e: &AxisExperiment,
+        (index, e): (usize, &AxisExperiment),
         slope: f64,
         form: CouplingFitForm,
         shift: &[f64],
@@ -144,10 +174,10 @@ impl Assembly<'_> {
     ) -> Result<CouplingFunction, ProcedureError> {
         let (geometry, q_ref) = (self.geometry, self.q_ref);
         let from = k;
-        let second = &e.target1_m;
+        let second = &self.target1[index];
         let fit_err = |source| fit_error(e, from, source);
         let active = self.sweep_active_angles(k, e, shift)?;
-        let (fit_from, _) = &self.fits[k - 1];
+        let fit_from = self.fits[k - 1].as_ref().expect("checked by coupling_into");
         let theta_ref_from = fit_from
             .transmission
             .actual_from_command(self.u_ref[k - 1])
@@ -180,8 +210,12 @@ impl Assembly<'_> {
     /// The calibrated active angles (rad) of the driving joint `k-1` (0-based) at the steps of
     /// sweep `e` where its second target was seen.
     fn sweep_active_angles(&self, k: usize, e: &AxisExperiment, shift: &[f64]) -> Result<Vec<f64>, ProcedureError> {
-        let (fit_from, u_all) = &self.fits[k - 1];
-        let u: Vec<f64> = e.target1_steps.iter().map(|&j| u_all[j]).collect();
+        let fit_from = self.fits[k - 1].as_ref().expect("checked by coupling_into");
+        let u: Vec<f64> = e
+            .target1_steps
+            .iter()
+            .map(|&j| actuator_commands(self.controller, self.desc, &e.commands[j])[k - 1])
+            .collect();
         u.iter()
             .map(|&uj| fit_from.transmission.actual_from_command(uj).map(|t| t + shift[k - 1]))
             .collect::<Option<_>>()

@@ -24,27 +24,40 @@
 mod axis_fit;
 mod experiments;
 mod frames;
+mod held;
+mod joint_map;
 mod joints;
 mod report;
 mod result;
 mod uncertainty;
 mod urdf;
 
-pub use experiments::{AxisExperiment, COMMAND_TOLERANCE, axis_experiments};
-pub use frames::{FramesError, common_normal_feet, model_from_axes};
-pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown};
-pub use result::{AxisReport, Calibration, CouplingReport, RowSigma, ToolReport};
+pub use experiments::{
+    AxisExperiment, COMMAND_TOLERANCE, DEFAULT_HELD_TOLERANCE, axis_experiments, axis_experiments_with,
+};
+pub use frames::{BaseRule, FramesError, common_normal_feet, model_from_axes};
+pub use joint_map::{
+    JointMap, MapRow, MapTable, ZeroOffsetFit, calibrated_joint_values, controller_zero_offsets, joint_map,
+};
+pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, residuals_csv};
+pub use result::{
+    AxisReport, Calibration, CouplingReport, NoiseReport, PointResidual, RowSigma, SweepReport, ToolReport,
+};
 pub use uncertainty::{AxisCovariance, row_sigmas};
-pub use urdf::urdf;
+pub use urdf::{
+    RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
+};
 
 use super::CalibrationError;
+use super::noise::estimate_noise;
 use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel};
-use axis_fit::{AxisFitOutcome, actuator_commands, add_held_joint_covariances, fit_axes};
+use axis_fit::{AxisFitOutcome, JointData, actuator_commands, add_held_joint_covariances, fit_joint};
+use held::{Corrector, design_distance, exactly_as_designed};
 use joints::Assembly;
-use nalgebra::{Isometry3, Point3};
+use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 /// Which rotary-axis estimator to use.
@@ -77,6 +90,18 @@ pub struct CalibrationOptions {
     /// fit, bit for bit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub repeatability_sigma_rad: Option<Vec<f64>>,
+    /// Weight the fits with the noise estimated from the residuals (`noise_rms_3d_mm` is then
+    /// only the first pass's value): what `axiscal calibrate` does without `--noise-mm`.
+    #[serde(default)]
+    pub estimate_noise: bool,
+    /// How far a held joint may wander within one axis experiment (deg for a revolute, mm for
+    /// a prismatic joint; `docs/formats.md#held-joints`).
+    #[serde(default = "default_held_tolerance")]
+    pub held_tolerance: f64,
+}
+
+fn default_held_tolerance() -> f64 {
+    DEFAULT_HELD_TOLERANCE
 }
 
 impl Default for CalibrationOptions {
@@ -86,6 +111,8 @@ impl Default for CalibrationOptions {
             noise_rms_3d_mm: 0.19,
             max_iterations: 100,
             repeatability_sigma_rad: None,
+            estimate_noise: false,
+            held_tolerance: DEFAULT_HELD_TOLERANCE,
         }
     }
 }
@@ -119,22 +146,22 @@ impl CalibrationOptions {
 /// Why a campaign could not be calibrated.
 #[derive(Debug, thiserror::Error)]
 pub enum ProcedureError {
-    /// The set has no experiment sweeping this joint.
-    #[error("no axis experiment moves joint {joint} (moved_joint = {joint})")]
-    MissingAxis {
-        /// The joint.
-        joint: usize,
+    /// The set has no axis experiment at all.
+    #[error("no axis experiment (no row with moved_joint > 0): nothing to calibrate")]
+    NoAxisExperiment,
+    /// The fit-and-correct passes for the held joints' recorded values did not settle.
+    #[error(
+        "the correction for the held joints' recorded values did not converge in {passes} passes (last change {change_mm:.3e} mm)"
+    )]
+    HeldNotConverged {
+        /// Passes made.
+        passes: usize,
+        /// Largest change of a corrected point in the last pass \[mm\].
+        change_mm: f64,
     },
-    /// Two experiments sweep the same joint.
-    #[error("experiments {first} and {second} both move joint {joint}")]
-    DuplicateAxis {
-        /// The joint.
-        joint: usize,
-        /// First experiment.
-        first: String,
-        /// Second experiment.
-        second: String,
-    },
+    /// The recorded values could not be evaluated on the calibrated model.
+    #[error("modelling the held joints' recorded values: {0}")]
+    Held(#[from] crate::robot::ModelError),
     /// The swept joint's command does not move.
     #[error("experiment {experiment}: the command of joint {joint} has zero span")]
     ZeroSpan {
@@ -189,72 +216,278 @@ pub enum ProcedureError {
         /// What is wrong.
         message: String,
     },
-    /// Prismatic joints are not supported by this procedure yet.
-    #[error(
-        "joint {joint} is prismatic: the campaign procedure handles rotary joints (use calibration::sliding directly)"
-    )]
-    Prismatic {
-        /// Joint.
-        joint: usize,
-    },
 }
 
 /// Calibrates the robot described (nominally) by `desc` from the axis experiments of `set`
-/// (and the tool targets at the reference pose, when observed).
+/// (and the tool targets at the reference pose, when observed). With
+/// [`CalibrationOptions::estimate_noise`] the fits are weighted, in a second run, with the
+/// noise the first run's residuals estimate.
 pub fn calibrate(
     set: &MeasurementSet,
     desc: &RobotDescription,
     options: &CalibrationOptions,
 ) -> Result<Calibration, ProcedureError> {
-    if let Some(k) = desc.joints.iter().position(|j| j.kind == JointKind::Prismatic) {
-        return Err(ProcedureError::Prismatic { joint: k + 1 });
+    let first = calibrate_at(set, desc, options, options.noise_rms_3d_mm)?;
+    let estimate = first.noise.as_ref().and_then(|n| n.estimate.clone());
+    match estimate {
+        Some(e) if options.estimate_noise && e.rms_3d_mm > 0.0 => calibrate_at(set, desc, options, e.rms_3d_mm),
+        _ => Ok(first),
     }
-    let repeatability_rad = options.joint_repeatability_rad(desc)?;
-    let (experiments, reference_cmd) = axis_experiments(set, desc)?;
+}
+
+/// Most fit-and-correct passes for recorded held joints before giving up.
+const MAX_HELD_PASSES: usize = 12;
+
+/// One state of the procedure: the fits of every joint and the model they assemble to.
+struct Assembled {
+    fits: Vec<Option<AxisFitOutcome>>,
+    axes: Vec<Option<AxisLine>>,
+    base_rule: BaseRule,
+    robot: RobotModel,
+    couplings: Vec<CouplingReport>,
+    /// Target-0 points of each joint's sweeps as fitted (to test the passes' convergence).
+    points: Vec<Point3<f64>>,
+}
+
+/// The calibration with the fits weighted by `noise_mm` (3-D RMS).
+fn calibrate_at(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    noise_mm: f64,
+) -> Result<Calibration, ProcedureError> {
+    let repeatability = options.joint_repeatability_rad(desc)?;
+    let (experiments, reference_cmd) = axis_experiments_with(set, desc, options.held_tolerance)?;
     let controller = Controller::from_description(desc);
     let q_ref = commands_to_internal(desc, &reference_cmd);
     let u_ref = actuator_commands(&controller, desc, &reference_cmd);
-
-    let mut fits = fit_axes(&experiments, desc, &controller, options, &repeatability_rad)?;
-    let axes: Vec<AxisLine> = fits.iter().map(|(f, _)| f.axis).collect();
-    let geometry = model_from_axes(&desc.nominal_model(), &axes, &q_ref)?;
-    let row_sigma = calibrated_row_sigmas(desc, &axes, &q_ref, &fits)?;
-    add_held_joint_covariances(&mut fits, &axes, &repeatability_rad);
-
-    let assembly = Assembly {
+    let ctx = Context {
         desc,
+        options,
+        controller: &controller,
         experiments: &experiments,
-        fits: &fits,
-        geometry: &geometry,
         q_ref: &q_ref,
         u_ref: &u_ref,
+        repeatability: &repeatability,
+        noise_mm,
     };
-    let (joints, couplings) = assembly.joint_models()?;
-    let mut robot = calibrated_robot(desc, joints, &geometry);
-    let tool = tool_frame(set, desc, &robot, &reference_cmd, &controller);
-    if let Some(t) = &tool {
-        robot.tool_frame = placement_of(&t.last_link_from_tool);
+    let exact = exactly_as_designed(&experiments, &reference_cmd, desc);
+    // First pass: each joint from its sweep nearest the design, as measured.
+    let raw_t1: Vec<Vec<Point3<f64>>> = experiments.iter().map(|e| e.target1_m.clone()).collect();
+    let mut state = ctx.assemble(|k| ctx.first_sweep(k, &reference_cmd, exact), &raw_t1)?;
+    let mut passes = 1;
+    if !exact {
+        let tolerance_m = (1e-3 * noise_mm * 1e-3 / 3f64.sqrt()).max(1e-12);
+        let mut change = f64::INFINITY;
+        while change > tolerance_m {
+            if passes >= MAX_HELD_PASSES {
+                return Err(ProcedureError::HeldNotConverged {
+                    passes,
+                    change_mm: change * 1e3,
+                });
+            }
+            let corrector = Corrector {
+                model: &state.robot,
+                controller: &controller,
+                desc,
+                reference_cmd: &reference_cmd,
+            };
+            let t0: Vec<Vec<Point3<f64>>> = experiments
+                .iter()
+                .map(|e| corrector.corrected(e, 0))
+                .collect::<Result<_, _>>()?;
+            let t1: Vec<Vec<Point3<f64>>> = experiments
+                .iter()
+                .map(|e| corrector.corrected(e, 1))
+                .collect::<Result<_, _>>()?;
+            let next = ctx.assemble(|k| ctx.all_sweeps(k, &t0), &t1)?;
+            change = if next.points.len() == state.points.len() && passes > 1 {
+                next.points
+                    .iter()
+                    .zip(&state.points)
+                    .map(|(a, b)| (a - b).norm())
+                    .fold(0.0, f64::max)
+            } else {
+                f64::INFINITY
+            };
+            state = next;
+            passes += 1;
+        }
     }
-    Ok(Calibration {
-        robot,
-        reference_cmd,
-        axes: fits.into_iter().map(|(f, _)| f.report).collect(),
-        row_sigma,
-        couplings,
-        tool,
-        options: options.clone(),
-    })
+    ctx.finish(set, state, reference_cmd, passes)
+}
+
+/// What every pass of the procedure shares.
+struct Context<'a> {
+    desc: &'a RobotDescription,
+    options: &'a CalibrationOptions,
+    controller: &'a Controller,
+    experiments: &'a [AxisExperiment],
+    q_ref: &'a [f64],
+    u_ref: &'a [f64],
+    repeatability: &'a [f64],
+    noise_mm: f64,
+}
+
+impl<'a> Context<'a> {
+    /// Joint `k`'s (0-based) data of the first pass: every sweep when the campaign is exactly
+    /// as designed (one each), else the sweep nearest the design, as measured.
+    fn first_sweep(&self, k: usize, reference: &[f64], exact: bool) -> Option<JointData<'a>> {
+        let mut sweeps: Vec<&AxisExperiment> = self.experiments.iter().filter(|e| e.joint == k + 1).collect();
+        if !exact && sweeps.len() > 1 {
+            let best = sweeps
+                .iter()
+                .copied()
+                .min_by(|a, b| design_distance(a, reference).total_cmp(&design_distance(b, reference)))?;
+            sweeps = vec![best];
+        }
+        let points = sweeps.iter().map(|e| e.target0_m.clone()).collect();
+        (!sweeps.is_empty()).then_some(JointData { sweeps, points })
+    }
+
+    /// Joint `k`'s data: every sweep with the corrected target-0 points `t0` (by experiment).
+    fn all_sweeps(&self, k: usize, t0: &[Vec<Point3<f64>>]) -> Option<JointData<'a>> {
+        let (sweeps, points): (Vec<&AxisExperiment>, Vec<Vec<Point3<f64>>>) = self
+            .experiments
+            .iter()
+            .zip(t0)
+            .filter(|(e, _)| e.joint == k + 1)
+            .map(|(e, p)| (e, p.clone()))
+            .unzip();
+        (!sweeps.is_empty()).then_some(JointData { sweeps, points })
+    }
+
+    /// Fits every swept joint from `data(k)` and assembles the model (target 1 of each
+    /// experiment: `target1`).
+    fn assemble(
+        &self,
+        data: impl Fn(usize) -> Option<JointData<'a>>,
+        target1: &[Vec<Point3<f64>>],
+    ) -> Result<Assembled, ProcedureError> {
+        let n = self.desc.dof();
+        let mut fits = Vec::with_capacity(n);
+        let mut points = Vec::new();
+        for k in 0..n {
+            fits.push(match data(k) {
+                Some(d) => {
+                    points.extend(d.points.iter().flatten().copied());
+                    Some(fit_joint(
+                        &d,
+                        self.desc,
+                        self.controller,
+                        self.options,
+                        self.noise_mm,
+                        self.repeatability[k],
+                    )?)
+                }
+                None => None,
+            });
+        }
+        let axes: Vec<Option<AxisLine>> = fits.iter().map(|f| f.as_ref().map(|f| f.axis)).collect();
+        let (geometry, base_rule) = model_from_axes(&self.desc.nominal_model(), &axes, self.q_ref)?;
+        let assembly = Assembly {
+            desc: self.desc,
+            experiments: self.experiments,
+            fits: &fits,
+            target1,
+            controller: self.controller,
+            geometry: &geometry,
+            q_ref: self.q_ref,
+            u_ref: self.u_ref,
+        };
+        let (joints, couplings) = assembly.joint_models()?;
+        let robot = calibrated_robot(self.desc, joints, &geometry);
+        Ok(Assembled {
+            fits,
+            axes,
+            base_rule,
+            robot,
+            couplings,
+            points,
+        })
+    }
+
+    /// The calibration of the last pass: row sigmas, held joints' covariance, tool, noise.
+    fn finish(
+        &self,
+        set: &MeasurementSet,
+        state: Assembled,
+        reference_cmd: Vec<f64>,
+        passes: usize,
+    ) -> Result<Calibration, ProcedureError> {
+        let Assembled {
+            mut fits,
+            axes,
+            base_rule,
+            mut robot,
+            couplings,
+            ..
+        } = state;
+        let row_sigma = calibrated_row_sigmas(self.desc, &axes, self.q_ref, &fits)?;
+        let kinds: Vec<JointKind> = self.desc.joints.iter().map(|j| j.kind).collect();
+        add_held_joint_covariances(&mut fits, &axes, &kinds, self.repeatability);
+        let tool = tool_frame(set, self.desc, &robot, &reference_cmd, self.controller);
+        if let Some(t) = &tool {
+            robot.tool_frame = Placement::from_isometry(&t.last_link_from_tool);
+        }
+        let noise = self.noise_report(&fits);
+        let not_calibrated = (1..=fits.len()).filter(|k| fits[k - 1].is_none()).collect();
+        let mut residuals = Vec::new();
+        let mut axes_reports = Vec::new();
+        for f in fits.into_iter().flatten() {
+            residuals.extend(f.residuals);
+            axes_reports.push(f.report);
+        }
+        Ok(Calibration {
+            robot,
+            reference_cmd,
+            axes: axes_reports,
+            row_sigma,
+            couplings,
+            tool,
+            options: self.options.clone(),
+            base_rule: Some(base_rule),
+            not_calibrated,
+            noise: Some(noise),
+            held_passes: passes,
+            residuals,
+            description: Some(self.desc.identity()),
+        })
+    }
+
+    /// The noise estimate of the fits and how the noise used relates to it.
+    fn noise_report(&self, fits: &[Option<AxisFitOutcome>]) -> NoiseReport {
+        let moments: Vec<_> = fits.iter().flatten().filter_map(|f| f.moments).collect();
+        let estimate = estimate_noise(&moments);
+        let given = !self.options.estimate_noise;
+        let p = estimate
+            .as_ref()
+            .filter(|_| given)
+            .map(|e| e.p_value(self.options.noise_rms_3d_mm));
+        NoiseReport {
+            used_rms_3d_mm: self.noise_mm,
+            source: if given { "given" } else { "estimated" }.into(),
+            given_p_value: p,
+            given_contradicted: estimate
+                .as_ref()
+                .is_some_and(|e| given && e.contradicts(self.options.noise_rms_3d_mm)),
+            estimate,
+        }
+    }
 }
 
 /// The standard deviations of the rows (mm, deg) from the axes' covariances as fitted
 /// (before the held joints' bias is added).
 fn calibrated_row_sigmas(
     desc: &RobotDescription,
-    axes: &[AxisLine],
+    axes: &[Option<AxisLine>],
     q_ref: &[f64],
-    fits: &[(AxisFitOutcome, Vec<f64>)],
+    fits: &[Option<AxisFitOutcome>],
 ) -> Result<Vec<RowSigma>, ProcedureError> {
-    let covariances: Vec<Option<AxisCovariance>> = fits.iter().map(|(f, _)| f.report.covariance.clone()).collect();
+    let covariances: Vec<Option<AxisCovariance>> = fits
+        .iter()
+        .map(|f| f.as_ref().and_then(|f| f.report.covariance.clone()))
+        .collect();
     Ok(row_sigmas(&desc.nominal_model(), axes, q_ref, &covariances)?
         .into_iter()
         .map(|[a, b, alpha, beta]| RowSigma {
@@ -284,19 +517,9 @@ fn calibrated_robot(desc: &RobotDescription, joints: Vec<JointModel>, geometry: 
                 h_m: r.h_m,
             })
             .collect(),
-        placement: placement_of(&geometry.world_from_base),
+        placement: Placement::from_isometry(&geometry.world_from_base),
         tool_frame: desc.tool.frame,
         four_bars: vec![],
-    }
-}
-
-/// A placement (mm, roll-pitch-yaw deg) from an isometry.
-fn placement_of(iso: &Isometry3<f64>) -> Placement {
-    let (r, p, y) = iso.rotation.euler_angles();
-    let t = iso.translation.vector * 1e3;
-    Placement {
-        translation_mm: [t.x, t.y, t.z],
-        rpy_deg: [r.to_degrees(), p.to_degrees(), y.to_degrees()],
     }
 }
 
@@ -310,6 +533,9 @@ fn tool_frame(
     controller: &Controller,
 ) -> Option<ToolReport> {
     let targets = desc.tool_targets_m();
+    if targets.len() < 3 {
+        return None;
+    }
     let experiments = set.experiments();
     let candidates = experiments.iter().filter(|e| e.moved_joint == 0);
     for e in candidates {

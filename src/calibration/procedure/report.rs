@@ -120,18 +120,20 @@ fn zero_offset_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     }
 }
 
-/// The amplitude of every harmonic of each joint's transmission, appended to `out`.
+/// The amplitude of every harmonic of each joint's transmission (eq. 8) and each sliding
+/// joint's scale error and nonlinearity (eq. 13), appended to `out`.
 fn transmission_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     for a in &cal.axes {
-        let (sin, cos) = match &a.transmission {
-            Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => (sin.clone(), cos.clone()),
+        let (sin, cos, to_joint) = match &a.transmission {
+            Transmission::Polynomial { c, .. } => {
+                polynomial_findings(a.joint, c, &a.coefficient_sigma, out);
+                continue;
+            }
+            Transmission::Harmonic { sin, cos } => (sin, cos, 1.0),
+            // A gear's coefficients are in gear units: N times them in joint units.
+            Transmission::Gear { ratio, sin, cos } => (sin, cos, *ratio),
         };
-        // A gear's coefficients are in gear units: N times them in joint units.
-        let to_joint = match &a.transmission {
-            Transmission::Gear { ratio, .. } => *ratio,
-            Transmission::Harmonic { .. } => 1.0,
-        };
-        for (h, (s, c)) in sin.iter().zip(&cos).enumerate() {
+        for (h, (s, c)) in sin.iter().zip(cos).enumerate() {
             let amp = to_joint * (s * s + c * c).sqrt();
             let sig = to_joint
                 * a.coefficient_sigma
@@ -141,7 +143,7 @@ fn transmission_findings(cal: &Calibration, out: &mut Vec<Finding>) {
                     .max(a.coefficient_sigma.get(sin.len() + h).copied().unwrap_or(f64::NAN));
             let per = match &a.transmission {
                 Transmission::Gear { ratio, .. } => format!("per {:.3} joint turns", ratio / (h + 1) as f64),
-                Transmission::Harmonic { .. } => format!("{} times per turn", h + 1),
+                _ => format!("{} times per turn", h + 1),
             };
             out.push(finding(
                 format!("joint {} transmission harmonic {}", a.joint, h + 1),
@@ -156,6 +158,42 @@ fn transmission_findings(cal: &Calibration, out: &mut Vec<Finding>) {
                     per,
                     s,
                     c
+                ),
+            ));
+        }
+    }
+}
+
+/// A sliding joint's scale error (ppm) and higher-order terms (um at 100 mm), eq. (13).
+fn polynomial_findings(joint: usize, c: &[f64], sigma: &[f64], out: &mut Vec<Finding>) {
+    for (i, ck) in c.iter().enumerate() {
+        let s = sigma.get(i).copied().unwrap_or(f64::NAN);
+        if i == 0 {
+            out.push(finding(
+                format!("joint {joint} scale error"),
+                ck * 1e6,
+                s * 1e6,
+                "ppm",
+                format!(
+                    "sliding joint {joint} travels {:.1} +- {:.1} ppm {} than commanded (scale error, eq. 13)",
+                    (ck * 1e6).abs(),
+                    s * 1e6,
+                    if *ck > 0.0 { "less" } else { "more" }
+                ),
+            ));
+        } else {
+            // The term's size at 100 mm of travel, in micrometres.
+            let at = 0.1f64.powi(i as i32 + 1) * 1e6;
+            out.push(finding(
+                format!("joint {joint} nonlinearity order {}", i + 1),
+                ck * at,
+                s * at,
+                "um at 100 mm",
+                format!(
+                    "sliding joint {joint}: the order-{} term of its transmission is {:.2} +- {:.2} um at 100 mm of travel",
+                    i + 1,
+                    ck * at,
+                    s * at
                 ),
             ));
         }
@@ -192,16 +230,157 @@ fn coupling_findings(cal: &Calibration, out: &mut Vec<Finding>) {
 pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration of {}\n", desc.name);
-    let _ = writeln!(
-        s,
-        "Data: `{source}`. Estimator: `{:?}`; noise assumed {:.3} mm 3-D RMS.\n",
-        cal.options.estimator, cal.options.noise_rms_3d_mm
-    );
+    let _ = writeln!(s, "Data: `{source}`. Estimator: `{:?}`.\n", cal.options.estimator);
+    write_noise(&mut s, cal);
+    write_scope(&mut s, cal);
     write_axes_table(&mut s, cal);
+    write_sweeps(&mut s, cal, desc);
     write_rows_table(&mut s, cal, desc);
     write_tool(&mut s, cal);
     write_findings(&mut s, cal, desc);
     write_identifiability(&mut s, cal);
+    s
+}
+
+/// The noise estimated from the residuals, the noise used, and a contradiction if any.
+fn write_noise(s: &mut String, cal: &Calibration) {
+    let Some(n) = &cal.noise else { return };
+    let _ = writeln!(s, "## Noise\n");
+    match &n.estimate {
+        Some(e) => {
+            let _ = writeln!(
+                s,
+                "Estimated from the residuals of {} axis fits ({} degrees of freedom): {:.4} mm 3-D RMS, {:.0} % interval {:.4} - {:.4} mm{}.",
+                e.fits,
+                e.dof,
+                e.rms_3d_mm,
+                e.confidence * 100.0,
+                e.interval_mm[0],
+                e.interval_mm[1],
+                if e.jitter_share > 0.0 {
+                    format!(
+                        " (the assumed joint repeatability explains {:.0} % of the squared residuals, subtracted)",
+                        e.jitter_share * 100.0
+                    )
+                } else {
+                    String::new()
+                }
+            );
+        }
+        None => {
+            let _ = writeln!(s, "Not estimated (the paper's estimator reports no residual moments).");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\nThe fits are weighted with {:.4} mm ({}).",
+        n.used_rms_3d_mm, n.source
+    );
+    if n.given_contradicted {
+        let _ = writeln!(
+            s,
+            "\n**The residuals contradict the given noise of {:.4} mm** (chi-square test, p = {:.2e}): the reported uncertainties are too {}; calibrate without `--noise-mm` to use the estimate.",
+            n.used_rms_3d_mm,
+            n.given_p_value.unwrap_or(f64::NAN),
+            if n.estimate.as_ref().is_some_and(|e| e.rms_3d_mm > n.used_rms_3d_mm) {
+                "small"
+            } else {
+                "large"
+            }
+        );
+    }
+    let _ = writeln!(s);
+}
+
+/// The base-frame rule, joints not calibrated, the held-joint passes.
+fn write_scope(s: &mut String, cal: &Calibration) {
+    if let Some(b) = &cal.base_rule {
+        let _ = writeln!(s, "Base frame: {}.\n", b.text);
+    }
+    if !cal.not_calibrated.is_empty() {
+        let list: Vec<String> = cal.not_calibrated.iter().map(|j| j.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "Not calibrated (no axis experiment): joint(s) {}; their rows, transmissions and couplings are the nominal ones.\n",
+            list.join(", ")
+        );
+    }
+    if cal.held_passes > 1 {
+        let _ = writeln!(
+            s,
+            "Held joints as recorded: the recorded values of the held joints (and sweeps at other poses) were modelled in {} fit-and-correct passes.\n",
+            cal.held_passes
+        );
+    }
+}
+
+/// Per jointly fitted axis with several sweeps (or recorded wander): what differs.
+fn write_sweeps(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
+    let rows: Vec<(usize, &super::SweepReport)> = cal
+        .axes
+        .iter()
+        .flat_map(|a| a.sweeps.iter().map(move |w| (a.joint, w)))
+        .filter(|(j, w)| {
+            cal.axes.iter().filter(|a| a.joint == *j).count() > 0
+                && (w.held_wander > 0.0 || w.own_axis_angle_mrad.is_some())
+        })
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "\n## Sweeps\n");
+    let _ = writeln!(
+        s,
+        "| joint | experiment | points | residual RMS (mm) | held joints (file units) | held wander | own axis vs joint axis |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for (j, w) in rows {
+        let held: Vec<String> = w.held_offsets.iter().map(|(k, v)| format!("{k}: {v:.4}")).collect();
+        let own = match (w.own_axis_angle_mrad, w.own_axis_offset_mm) {
+            (Some(a), Some(o)) => format!("{a:.3} mrad, {o:.3} mm"),
+            (Some(a), None) => format!("{a:.3} mrad"),
+            _ => "-".into(),
+        };
+        let unit = if desc
+            .joints
+            .iter()
+            .any(|x| x.kind == crate::kinematics::JointKind::Prismatic)
+        {
+            "deg/mm"
+        } else {
+            "deg"
+        };
+        let _ = writeln!(
+            s,
+            "| {j} | {} | {} | {:.4} | {} | {:.4} {unit} | {own} |",
+            w.experiment,
+            w.points,
+            w.residual_rms_mm,
+            held.join(", "),
+            w.held_wander
+        );
+    }
+}
+
+/// `residuals.csv`: one row per observed point of the axis fits (`docs/formats.md#residuals-csv`).
+pub fn residuals_csv(cal: &Calibration) -> String {
+    let mut s = String::from(
+        "experiment,moved_joint,step,target,kind,radial_mm,tangential_mm,axial_mm,across_u_mm,across_v_mm,along_mm\n",
+    );
+    for r in &cal.residuals {
+        let [a, b, c] = r.components_mm;
+        let quoted = if r.experiment.contains([',', '"']) || r.experiment.starts_with('#') {
+            format!("\"{}\"", r.experiment.replace('"', "\"\""))
+        } else {
+            r.experiment.clone()
+        };
+        let cells = if r.sliding {
+            format!("sliding,,,,{a:.6},{b:.6},{c:.6}")
+        } else {
+            format!("rotary,{a:.6},{b:.6},{c:.6},,,")
+        };
+        let _ = writeln!(s, "{quoted},{},{},{},{cells}", r.joint, r.step, r.target);
+    }
     s
 }
 
@@ -274,7 +453,7 @@ fn write_tool(s: &mut String, cal: &Calibration) {
     } else {
         let _ = writeln!(
             s,
-            "\nNo tool observation at the reference pose: the tool frame is the nominal one."
+            "\nNo tool observation at the reference pose (or no tool targets in the description): the tool frame is the nominal one, and so is the tool's place along any axis direction the axes do not fix."
         );
     }
 }

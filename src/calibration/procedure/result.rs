@@ -3,13 +3,16 @@
 
 use super::CalibrationOptions;
 use super::experiments::AxisExperiment;
+use super::frames::BaseRule;
 use super::uncertainty::AxisCovariance;
 use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::crb::held_joint_axis_covariance;
+use crate::calibration::line_ml::LineFit;
+use crate::calibration::noise::NoiseEstimate;
 use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
 use crate::calibration::{ArcFit, PaperAxisFit};
 use crate::kinematics::AxisLine;
-use crate::robot::{CouplingFunction, RobotModel, Transmission};
+use crate::robot::{CouplingFunction, DescriptionIdentity, RobotModel, Transmission};
 use nalgebra::{Isometry3, Matrix2, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -48,6 +51,58 @@ pub struct AxisReport {
     pub identifiability: Vec<String>,
     /// Covariance of the line (ML estimator only; the paper's estimator reports none).
     pub covariance: Option<AxisCovariance>,
+    /// `revolute` or `prismatic` (a sliding axis has a direction only: its `point_mm` is the
+    /// target's line at the first step and its position sigma is null).
+    #[serde(default = "revolute")]
+    pub kind: String,
+    /// The sweeps fitted jointly as this axis, and what differs between them.
+    #[serde(default)]
+    pub sweeps: Vec<SweepReport>,
+}
+
+fn revolute() -> String {
+    "revolute".into()
+}
+
+/// One sweep of a jointly fitted axis.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SweepReport {
+    /// The experiment.
+    pub experiment: String,
+    /// Points of target 0 used.
+    pub points: usize,
+    /// RMS of its points' residuals in the joint fit \[mm\].
+    pub residual_rms_mm: f64,
+    /// The held joints whose value in this sweep differs from the reference pose: `(joint,
+    /// median offset)` in file units (deg or mm).
+    pub held_offsets: Vec<(usize, f64)>,
+    /// Largest deviation of a held joint from its median within the sweep (file units): the
+    /// recorded wander the procedure modelled.
+    pub held_wander: f64,
+    /// With several sweeps: the angle between this sweep's own axis and the joint fit's
+    /// \[mrad\] (null when fitted alone or not fittable alone).
+    pub own_axis_angle_mrad: Option<f64>,
+    /// With several sweeps (rotary): the distance of this sweep's own axis from the joint
+    /// fit's at the axis point \[mm\].
+    pub own_axis_offset_mm: Option<f64>,
+}
+
+/// The residual of one observed point in its axis fit (`residuals.csv`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointResidual {
+    /// Experiment.
+    pub experiment: String,
+    /// Swept joint.
+    pub joint: usize,
+    /// Step.
+    pub step: usize,
+    /// Target.
+    pub target: usize,
+    /// Rotary axes: `[radial, tangential, axial]`; sliding axes: `[across u, across v, along]`
+    /// \[mm\] (observed minus fitted).
+    pub components_mm: [f64; 3],
+    /// Whether the axis slides.
+    pub sliding: bool,
 }
 
 fn principal_sigmas(c: &Matrix2<f64>) -> [f64; 2] {
@@ -57,7 +112,14 @@ fn principal_sigmas(c: &Matrix2<f64>) -> [f64; 2] {
 }
 
 impl AxisReport {
-    pub(super) fn from_ml(e: &AxisExperiment, fit: &ArcFit, form: &TransmissionForm, span_rad: f64) -> Self {
+    pub(super) fn from_arc(
+        joint: usize,
+        experiment: &str,
+        points: usize,
+        fit: &ArcFit,
+        form: &TransmissionForm,
+        span_rad: f64,
+    ) -> Self {
         let mut notes = fit.identifiability.notes.clone();
         for (span, sigma) in &fit.identifiability.tilt_sigma_by_span {
             notes.push(format!(
@@ -67,10 +129,10 @@ impl AxisReport {
             ));
         }
         AxisReport {
-            joint: e.joint,
-            experiment: e.name.clone(),
+            joint,
+            experiment: experiment.to_string(),
             estimator: "ml".into(),
-            points: e.target0_m.len(),
+            points,
             span_deg: span_rad.to_degrees(),
             point_mm: (fit.axis.origin_m.coords * 1e3).into(),
             direction: fit.axis.direction.into_inner().into(),
@@ -83,6 +145,43 @@ impl AxisReport {
             condition_number: fit.identifiability.condition_number,
             identifiability: notes,
             covariance: None,
+            kind: revolute(),
+            sweeps: vec![],
+        }
+    }
+
+    pub(super) fn from_line(
+        joint: usize,
+        experiment: &str,
+        fit: &LineFit,
+        form: &TransmissionForm,
+        span_m: f64,
+    ) -> Self {
+        let mut c = Matrix4::zeros();
+        c.fixed_view_mut::<2, 2>(0, 0).copy_from(&fit.direction_covariance);
+        let (u, v) = (
+            fit.params.frame.matrix().column(0).into(),
+            fit.params.frame.matrix().column(1).into(),
+        );
+        AxisReport {
+            joint,
+            experiment: experiment.to_string(),
+            estimator: "ml".into(),
+            points: fit.residuals.len(),
+            span_deg: span_m * 1e3,
+            point_mm: (fit.params.start.coords * 1e3).into(),
+            direction: fit.direction.into_inner().into(),
+            direction_sigma_rad: principal_sigmas(&fit.direction_covariance),
+            position_sigma_mm: [f64::NAN; 2],
+            transmission: fit.transmission.clone(),
+            coefficient_names: form.coefficient_names(),
+            coefficient_sigma: fit.coefficient_sigma.clone(),
+            residual_rms_mm: fit.residual_rms * 1e3,
+            condition_number: fit.condition_number,
+            identifiability: vec!["a sliding axis has a direction only (eq. 9): its position is a convention".into()],
+            covariance: Some(AxisCovariance::new(u, v, &c)),
+            kind: "prismatic".into(),
+            sweeps: vec![],
         }
     }
 
@@ -92,9 +191,16 @@ impl AxisReport {
     pub(super) fn add_held_joint_covariance(&mut self, axis: &AxisLine, held: &[(AxisLine, f64)]) {
         let Some(c) = &self.covariance else { return };
         let (u, v) = (Vector3::from(c.u), Vector3::from(c.v));
-        let total = Matrix4::from_fn(|a, b| c.covariance[a][b]) + held_joint_axis_covariance(axis, &u, &v, held);
+        let mut total = Matrix4::from_fn(|a, b| c.covariance[a][b]) + held_joint_axis_covariance(axis, &u, &v, held);
+        if self.kind == "prismatic" {
+            // Only the direction of a sliding axis is used.
+            total.fixed_view_mut::<2, 2>(2, 2).fill(0.0);
+            total.fixed_view_mut::<2, 2>(0, 2).fill(0.0);
+            total.fixed_view_mut::<2, 2>(2, 0).fill(0.0);
+        } else {
+            self.position_sigma_mm = principal_sigmas(&total.fixed_view::<2, 2>(2, 2).into()).map(|s| s * 1e3);
+        }
         self.direction_sigma_rad = principal_sigmas(&total.fixed_view::<2, 2>(0, 0).into());
-        self.position_sigma_mm = principal_sigmas(&total.fixed_view::<2, 2>(2, 2).into()).map(|s| s * 1e3);
         self.covariance = Some(AxisCovariance::new(u, v, &total));
     }
 
@@ -123,6 +229,8 @@ impl AxisReport {
             condition_number: fit.condition_number,
             identifiability: vec![],
             covariance: None,
+            kind: revolute(),
+            sweeps: vec![],
         }
     }
 }
@@ -215,4 +323,38 @@ pub struct Calibration {
     pub tool: Option<ToolReport>,
     /// The options used.
     pub options: CalibrationOptions,
+    /// The nominal description the calibration was made with (name and geometry hash);
+    /// absent in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<DescriptionIdentity>,
+    /// How the base frame was placed (`docs/method.md`, "Base frame").
+    #[serde(default)]
+    pub base_rule: Option<BaseRule>,
+    /// Joints not swept by any experiment: kept nominal, "not calibrated" (1-based).
+    #[serde(default)]
+    pub not_calibrated: Vec<usize>,
+    /// The noise: estimated from the residuals, the value used, and the test of a given one.
+    #[serde(default)]
+    pub noise: Option<NoiseReport>,
+    /// Fit-and-correct passes for the held joints' recorded values (1: none needed).
+    #[serde(default)]
+    pub held_passes: usize,
+    /// Per-point residuals of the axis fits (written as `residuals.csv`, not in the JSON).
+    #[serde(skip)]
+    pub residuals: Vec<PointResidual>,
+}
+
+/// The measurement noise of a calibration (`docs/formats.md#calibration-json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NoiseReport {
+    /// The estimate from the pooled residuals (null without degrees of freedom).
+    pub estimate: Option<NoiseEstimate>,
+    /// The 3-D RMS noise the fits were weighted with \[mm\].
+    pub used_rms_3d_mm: f64,
+    /// `given` (`--noise-mm`) or `estimated`.
+    pub source: String,
+    /// For a given noise: the two-sided chi-square p-value of it against the residuals.
+    pub given_p_value: Option<f64>,
+    /// For a given noise: whether the residuals contradict it (p < 0.01).
+    pub given_contradicted: bool,
 }

@@ -1,7 +1,7 @@
 //! Uncertainty of the Table-2 rows: first-order propagation of every axis's covariance
 //! through the construction of [`super::model_from_axes`] (`C_rows = J C_axes J^T`, `J` by
 //! central differences of the construction; the axes are independent, each from its own
-//! experiment).
+//! experiments).
 
 use super::frames::{FramesError, model_from_axes};
 use crate::kinematics::{AxisLine, PhiModel};
@@ -9,7 +9,8 @@ use nalgebra::{DMatrix, Matrix4, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Covariance of one axis line: `[tilt_u, tilt_v, shift_u, shift_v]` in the basis `(u, v)`
-/// perpendicular to it (direction components \[rad\], position \[m\]).
+/// perpendicular to it (direction components \[rad\], position \[m\]; a sliding axis has no
+/// position: its shift block is zero).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AxisCovariance {
     /// First basis vector across the axis.
@@ -61,26 +62,29 @@ fn row_vector(m: &PhiModel) -> Vec<f64> {
 /// (`None` for an axis without one contributes nothing: the result is then a lower bound).
 pub fn row_sigmas(
     nominal: &PhiModel,
-    axes: &[AxisLine],
+    axes: &[Option<AxisLine>],
     q_ref: &[f64],
     covariances: &[Option<AxisCovariance>],
 ) -> Result<Vec<[f64; 4]>, FramesError> {
-    let base = row_vector(&model_from_axes(nominal, axes, q_ref)?);
+    let build = |axes: &[Option<AxisLine>]| model_from_axes(nominal, axes, q_ref).map(|(m, _)| row_vector(&m));
+    let base = build(axes)?;
     let mut total = DMatrix::<f64>::zeros(base.len(), base.len());
     // Steps well above rounding (1e-16 relative) and far below the curvature scale.
     let h = 1e-7;
     for (i, cov) in covariances.iter().enumerate() {
-        let Some(cov) = cov else { continue };
+        let (Some(cov), Some(axis)) = (cov, axes[i]) else {
+            continue;
+        };
         let mut jac = DMatrix::<f64>::zeros(base.len(), 4);
         for k in 0..4 {
+            if cov.covariance[k][k] == 0.0 {
+                continue;
+            }
             let mut plus = axes.to_vec();
-            plus[i] = cov.perturbed(&axes[i], k, h);
+            plus[i] = Some(cov.perturbed(&axis, k, h));
             let mut minus = axes.to_vec();
-            minus[i] = cov.perturbed(&axes[i], k, -h);
-            let (p, m) = (
-                row_vector(&model_from_axes(nominal, &plus, q_ref)?),
-                row_vector(&model_from_axes(nominal, &minus, q_ref)?),
-            );
+            minus[i] = Some(cov.perturbed(&axis, k, -h));
+            let (p, m) = (build(&plus)?, build(&minus)?);
             for r in 0..base.len() {
                 jac[(r, k)] = (p[r] - m[r]) / (2.0 * h);
             }

@@ -156,8 +156,16 @@ impl ModelShape {
 /// transmission's own angle (the gear angle for a gear form). An extra harmonic of a fitted
 /// order would be a calibration error, not an unmodelled effect.
 pub fn unmodelled_harmonic_order(desc: &RobotDescription, joint: usize) -> usize {
-    match desc.joints.get(joint.wrapping_sub(1)).map(|j| j.transmission_fit) {
-        Some(TransmissionFitForm::Harmonic { order } | TransmissionFitForm::Gear { order, .. }) => order + 1,
+    match desc
+        .joints
+        .get(joint.wrapping_sub(1))
+        .map(|j| j.transmission_fit_form())
+    {
+        Some(
+            TransmissionFitForm::Harmonic { order }
+            | TransmissionFitForm::Gear { order, .. }
+            | TransmissionFitForm::Polynomial { order },
+        ) => order + 1,
         None => 1,
     }
 }
@@ -166,7 +174,9 @@ pub fn unmodelled_harmonic_order(desc: &RobotDescription, joint: usize) -> usize
 /// in the joint's own.
 pub fn is_geared(desc: &RobotDescription, joint: usize) -> bool {
     matches!(
-        desc.joints.get(joint.wrapping_sub(1)).map(|j| j.transmission_fit),
+        desc.joints
+            .get(joint.wrapping_sub(1))
+            .map(|j| j.transmission_fit_form()),
         Some(TransmissionFitForm::Gear { .. })
     )
 }

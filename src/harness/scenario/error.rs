@@ -19,17 +19,3 @@ pub enum ScenarioError {
         message: String,
     },
 }
-
-/// A trial failed.
-#[derive(Debug, thiserror::Error)]
-#[error("case {case}, trial {trial} (seed {seed}): {message}")]
-pub struct TrialError {
-    /// Case name.
-    pub case: String,
-    /// Trial index.
-    pub trial: usize,
-    /// The trial's seed.
-    pub seed: u64,
-    /// What went wrong.
-    pub message: String,
-}

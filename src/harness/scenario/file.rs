@@ -60,6 +60,10 @@ pub struct ScenarioFile {
     /// Pass/fail criteria (exit code 1 when one fails).
     #[serde(default)]
     pub thresholds: Vec<Threshold>,
+    /// The largest fraction of each case's trials that may fail (calibration not converged,
+    /// ...) before the run fails (exit 1); in `0..=1`, default 0: any failed trial fails it.
+    #[serde(default)]
+    pub max_failure_rate: f64,
 }
 
 fn default_occlusion() -> bool {

@@ -38,7 +38,7 @@ impl Metrics {
 }
 
 /// One finished trial: which case, which trial, its seed and its metric values (in the
-/// order of the trial's `metric_names`).
+/// order of the trial's `metric_names`), or why it failed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrialRecord {
     /// Case index in the resolved scenario.
@@ -47,13 +47,20 @@ pub struct TrialRecord {
     pub trial: usize,
     /// The trial's seed.
     pub seed: u64,
-    /// Metric values.
+    /// Metric values (empty when the trial failed).
     pub values: Vec<f64>,
+    /// Why the trial failed (one line); `None` when it succeeded.
+    pub error: Option<String>,
 }
 
 impl TrialRecord {
     /// The record's unit index, `case * trials + trial`.
     pub fn unit(&self, trials: usize) -> usize {
         self.case * trials + self.trial
+    }
+
+    /// Whether the trial succeeded (then `values` holds every metric, all finite).
+    pub fn succeeded(&self) -> bool {
+        self.error.is_none()
     }
 }

@@ -24,11 +24,11 @@ pub mod threshold;
 pub mod trial;
 pub mod validation_error;
 
-pub use error::{ScenarioError, TrialError};
+pub use error::ScenarioError;
 pub use file::{ConditionsSection, Instrument, ScenarioFile, SimMode};
 pub use metrics::{Metrics, TrialRecord};
 pub use resolve::{Case, Overrides, ResolvedScenario, ResolvedTruth};
-pub use runner::{CoverageError, Shard, complete_run, run_units};
+pub use runner::{CoverageError, Shard, complete_run, run_units, run_units_until};
 pub use seed::trial_seed;
 pub use stats::{Stat, Stats, stat_of};
 pub use summary::Summary;

@@ -80,6 +80,9 @@ pub struct ResolvedScenario {
     pub occlusion: bool,
     /// Pass/fail criteria.
     pub thresholds: Vec<Threshold>,
+    /// The largest fraction of a case's trials that may fail (a verdict per case).
+    #[serde(default)]
+    pub max_failure_rate: f64,
     /// The nominal robot (what the controller, the plan and the calibrator know).
     pub robot: RobotDescription,
     /// The real robot.
@@ -142,6 +145,7 @@ impl ResolvedScenario {
             ));
         }
         let cases = resolve_cases(&file, &robot).map_err(|(k, m)| invalid(&k, m))?;
+        check_size(&file, trials, cases.len()).map_err(|(k, m)| invalid(k, m))?;
         for (i, t) in file.thresholds.iter().enumerate() {
             if !t.value.is_finite() {
                 return Err(invalid(&format!("thresholds[{i}].value"), "must be finite".into()));
@@ -174,6 +178,7 @@ impl ResolvedScenario {
             conditions: file.conditions,
             occlusion: file.occlusion,
             thresholds: file.thresholds.clone(),
+            max_failure_rate: file.max_failure_rate,
             robot,
             truth,
             validation,
@@ -215,6 +220,31 @@ impl ResolvedScenario {
     pub fn from_resolved_file(path: &Path) -> Result<Self, ScenarioError> {
         Ok(crate::toml_file::parse(&crate::toml_file::read(path)?, path)?)
     }
+}
+
+/// The most trial units (`cases x trials`) a run may have: every finished trial's record is
+/// kept in memory for the summary (about 150 bytes with the campaign's ten metrics).
+pub const MAX_UNITS: usize = 100_000_000;
+
+/// `max_failure_rate` is a fraction, and `trials x cases` fits [`MAX_UNITS`].
+fn check_size(file: &ScenarioFile, trials: usize, cases: usize) -> Result<(), (&'static str, String)> {
+    let rate = file.max_failure_rate;
+    if !(0.0..=1.0).contains(&rate) {
+        return Err((
+            "max_failure_rate",
+            format!("must be in 0..=1 (a fraction of the trials), got {rate}"),
+        ));
+    }
+    if trials.saturating_mul(cases) > MAX_UNITS {
+        return Err((
+            "trials",
+            format!(
+                "{trials} trials x {cases} case(s) exceed the limit of {MAX_UNITS} trial runs (each kept in memory \
+                 for the summary); split the study into several scenarios or seeds"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn resolve_truth(
@@ -326,10 +356,21 @@ fn nonempty<'a, T>(values: &'a [T], key: &str) -> Result<&'a [T], KeyError> {
 }
 
 fn base_plan(section: &PlanSection, robot: &RobotDescription) -> Result<CalibrationPlan, KeyError> {
-    let table1 = CalibrationPlan::table1(robot.dof());
+    // Paper Table 1 for a six-joint arm, its generalisation for any other joint mix.
+    let table1 = if robot.dof() == 6
+        && robot
+            .joints
+            .iter()
+            .all(|j| j.kind == crate::kinematics::JointKind::Revolute)
+    {
+        CalibrationPlan::table1(robot.dof())
+    } else {
+        CalibrationPlan::for_robot(robot)
+    };
     let plan = CalibrationPlan {
         reference: section.reference.clone().unwrap_or(table1.reference),
         sweeps: section.sweeps.clone().unwrap_or(table1.sweeps),
+        held_jitter: None,
     };
     scaled(&plan, section.span_scale).map_err(|m| ("plan.span_scale".into(), m))
 }

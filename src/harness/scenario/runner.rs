@@ -1,12 +1,12 @@
 //! Running trial units in parallel (rayon) and sharding them; pure apart from the observer.
 
-use super::error::TrialError;
 use super::metrics::TrialRecord;
 use super::resolve::ResolvedScenario;
 use super::trial::{Trial, run_unit};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::str::FromStr;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The `K`-th of `N` disjoint, contiguous ranges of trial units (`--shard K/N`, 1-based).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,21 +50,38 @@ impl std::fmt::Display for Shard {
 
 /// Runs `units` of `scenario` in parallel on the current rayon pool, calling `on_done` (from
 /// worker threads, in completion order) as each finishes. Returns the records sorted by
-/// unit. Every trial's seed depends only on its index, so the result is bit-identical for
-/// any thread count.
+/// unit; a trial that fails is a record with its error ([`TrialRecord::error`]), the run goes
+/// on. Every trial's seed depends only on its index, so the result is bit-identical for any
+/// thread count.
 pub fn run_units<T: Trial + ?Sized>(
     scenario: &ResolvedScenario,
     trial: &T,
     units: Range<usize>,
     on_done: &(dyn Fn(&TrialRecord) + Sync),
-) -> Result<Vec<TrialRecord>, TrialError> {
+) -> Vec<TrialRecord> {
+    run_units_until(scenario, trial, units.collect(), on_done, &AtomicBool::new(false))
+}
+
+/// [`run_units`] of any `units` (e.g. the ones an interrupted run left) that starts no
+/// further unit once `stop` is set (the units in flight finish
+/// and are returned; an interrupted run keeps them).
+pub fn run_units_until<T: Trial + ?Sized>(
+    scenario: &ResolvedScenario,
+    trial: &T,
+    units: Vec<usize>,
+    on_done: &(dyn Fn(&TrialRecord) + Sync),
+    stop: &AtomicBool,
+) -> Vec<TrialRecord> {
     let names = trial.metric_names();
     units
         .into_par_iter()
-        .map(|u| {
-            let r = run_unit(scenario, trial, &names, u)?;
+        .filter_map(|u| {
+            if stop.load(Ordering::Relaxed) {
+                return None;
+            }
+            let r = run_unit(scenario, trial, &names, u);
             on_done(&r);
-            Ok(r)
+            Some(r)
         })
         .collect()
 }

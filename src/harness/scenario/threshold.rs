@@ -45,6 +45,9 @@ pub struct Threshold {
 impl Threshold {
     /// `p95(metric) <= value`.
     pub fn describe(&self) -> String {
+        if self.metric == super::summary::FAILURE_RATE {
+            return format!("{} {} {}", self.metric, self.op.symbol(), self.value);
+        }
         format!(
             "{}({}) {} {}",
             self.stat.name(),

@@ -5,7 +5,6 @@
 //! nominal and the calibrated models' predictions of the validation targets with their
 //! measurements.
 
-use super::error::TrialError;
 use super::file::SimMode;
 use super::metrics::Metrics;
 use super::resolve::{Case, ResolvedScenario, ResolvedTruth};
@@ -125,21 +124,30 @@ impl CampaignTrial {
             ..CalibrationOptions::default()
         };
         let cal = calibrate(&set, &self.desc, &options).map_err(|e| format!("calibrating: {e}"))?;
-        Ok(self.metrics(&out, &cal.robot))
+        self.metrics(&out, &cal.robot)
     }
 
-    fn metrics(&self, out: &CampaignOutput, calibrated: &RobotModel) -> Metrics {
+    fn metrics(&self, out: &CampaignOutput, calibrated: &RobotModel) -> Result<Metrics, String> {
         let targets = self.desc.tool_targets_m();
         let e = validation_errors(&out.rows, &targets, |cmd| {
             // Nominally the robot reaches exactly the commanded joint values (`docs/formats.md#controller-semantics`).
             self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
         });
         let model = calibrated.phi_model();
+        // A command the calibrated transmissions cannot invert fails the trial, naming the pose.
+        for row in out.rows.iter().filter(|r| r.moved_joint == 0) {
+            calibrated
+                .joint_values(&self.controller, &commands_to_internal(&self.desc, &row.cmd))
+                .map_err(|e| {
+                    format!(
+                        "the calibrated model cannot predict {} step {}: {e}",
+                        row.experiment, row.step
+                    )
+                })?;
+        }
         let c = validation_errors(&out.rows, &targets, |cmd| {
             match calibrated.joint_values(&self.controller, &commands_to_internal(&self.desc, cmd)) {
                 Ok(q) => model.world_from_tool(&q),
-                // A command the calibrated transmissions cannot invert: no prediction (NaN
-                // metrics fail every threshold, as they should).
                 Err(_) => nalgebra::Isometry3::translation(f64::NAN, f64::NAN, f64::NAN),
             }
         });
@@ -157,7 +165,7 @@ impl CampaignTrial {
             CAMPAIGN_METRICS[9],
             out.occluded.iter().map(|(_, n)| *n).sum::<usize>() as f64,
         );
-        m
+        Ok(m)
     }
 }
 
@@ -194,33 +202,46 @@ impl Trial for CampaignTrial {
     }
 }
 
-/// Runs `trial` for unit `unit` of `scenario` (see [`ResolvedScenario::units`]) and checks its
-/// metric names.
+/// Runs `trial` for unit `unit` of `scenario` (see [`ResolvedScenario::units`]). A trial
+/// that fails, returns other metric names than declared or a value that is not finite becomes
+/// a failed record: its error, on one line, instead of its values.
 pub(crate) fn run_unit<T: Trial + ?Sized>(
     scenario: &ResolvedScenario,
     trial: &T,
     names: &[String],
     unit: usize,
-) -> Result<super::metrics::TrialRecord, TrialError> {
+) -> super::metrics::TrialRecord {
     let (case, index) = (unit / scenario.trials, unit % scenario.trials);
     let seed = super::seed::trial_seed(scenario.seed, index);
-    let err = |message: String| TrialError {
-        case: scenario.cases[case].name.clone(),
-        trial: index,
-        seed,
-        message,
+    let outcome = trial.run(&scenario.cases[case], seed).and_then(|metrics| {
+        if metrics.names() != names {
+            return Err(format!("returned metrics {:?}, declared {names:?}", metrics.names()));
+        }
+        let values = metrics.values();
+        match values.iter().position(|v| !v.is_finite()) {
+            Some(i) => Err(format!("metric {} is {} (not finite)", names[i], values[i])),
+            None => Ok(values),
+        }
+    });
+    let (values, error) = match outcome {
+        Ok(values) => (values, None),
+        Err(message) => (Vec::new(), Some(one_line(&message))),
     };
-    let metrics = trial.run(&scenario.cases[case], seed).map_err(err)?;
-    if metrics.names() != names {
-        return Err(err(format!(
-            "returned metrics {:?}, declared {names:?}",
-            metrics.names()
-        )));
-    }
-    Ok(super::metrics::TrialRecord {
+    super::metrics::TrialRecord {
         case,
         trial: index,
         seed,
-        values: metrics.values(),
-    })
+        values,
+        error,
+    }
+}
+
+/// `message` on one line (a trials.csv cell): line breaks folded into `; `.
+fn one_line(message: &str) -> String {
+    message
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ")
 }

@@ -98,6 +98,19 @@ pub(super) fn find_columns(
     line: u64,
     joint_count: Option<usize>,
 ) -> Result<Columns, MeasurementFileError> {
+    if header.len() == 1 {
+        let name = header.get(0).unwrap_or_default();
+        let separator = [(';', "`;`"), ('\t', "a tab"), ('|', "`|`")]
+            .into_iter()
+            .find(|(c, _)| name.contains(*c));
+        if let Some((_, separator)) = separator {
+            return Err(MeasurementFileError::WrongSeparator {
+                path: path.into(),
+                line,
+                separator: separator.into(),
+            });
+        }
+    }
     let (index, cmd) = index_columns(header, path, line)?;
     let required = |column: &str| {
         index

@@ -69,6 +69,16 @@ impl RobotDescription {
                     format!("must be a finite number >= 0 (rad or m), got {}", j.repeatability_sigma),
                 ));
             }
+            for (key, value) in [("max_velocity", j.max_velocity), ("max_effort", j.max_effort)] {
+                if let Some(v) = value
+                    && !(v.is_finite() && v > 0.0)
+                {
+                    return Err((
+                        format!("joints[{k}].{key}"),
+                        format!("must be a positive number, got {v}"),
+                    ));
+                }
+            }
         }
         Ok(())
     }

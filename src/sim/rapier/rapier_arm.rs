@@ -32,6 +32,7 @@ use super::gear::CoupledTargets;
 use super::servo::{ServoGains, SettleOptions, SettleReport};
 use super::visibility::is_visible_from_all;
 use crate::kinematics::PhiModel;
+use crate::physics::{ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_static_deflection};
 use crate::plan::PoseConditions;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::{ArmExecutor, DrivenJoints, Effects, ExecuteError, JointDriver};
@@ -207,6 +208,23 @@ impl RapierArm {
                         None => fb.hold_crank(arm, k, d)?,
                     }
                 }
+                if self.options.settle.warm_start {
+                    let prediction = Prediction {
+                        truth: &self.truth,
+                        inertias: &self.inertias,
+                        effects: &self.effects,
+                        four_bar_bodies: self.options.four_bar_bodies,
+                    };
+                    let start = prediction.equilibrium(conditions, arm.model(), driven, c);
+                    if let Some(start) = start {
+                        arm.set_joint_positions(&start)?;
+                        for fb in &mut built.four_bars {
+                            // The loop is re-closed geometrically at the predicted pose; the
+                            // crank's servo keeps its target at the command.
+                            let _ = fb.place(arm);
+                        }
+                    }
+                }
                 let mut coupled = CoupledTargets::new(&self.truth, &built.four_bars, &crank_targets, q, &driven.active);
                 let four_bars = &built.four_bars;
                 let report = arm.settle_with(&[], &self.options.settle, |arm| coupled.update(arm, four_bars))?;
@@ -222,6 +240,50 @@ impl RapierArm {
         self.effects.apply_wobble(&model, &joint_positions, &mut links);
         self.placed_shapes = placed_shapes(arm, &built.four_bars, &unwobbled, &links);
         Ok(links)
+    }
+}
+
+/// What the analytic prediction of the arm's static equilibrium needs.
+struct Prediction<'a> {
+    truth: &'a RobotModel,
+    inertias: &'a [LinkInertia],
+    effects: &'a Effects,
+    /// Whether the truth's four-bars are bodies (they carry the driven joint's load back to
+    /// the actuator below) or emulated couplings (kinematic only).
+    four_bar_bodies: bool,
+}
+
+impl Prediction<'_> {
+    /// The static equilibrium the analytic compliance model predicts for the driven joint
+    /// values (`physics::coupled_static_deflection` on `model`, the arm as built: thermal
+    /// state, payload): the warm start of [`SettleOptions::warm_start`]. It leaves out the
+    /// four-bar bars' own weight. `None` when the model finds no equilibrium (the settle then
+    /// starts from the command, as without a warm start).
+    fn equilibrium(
+        &self,
+        conditions: &PoseConditions,
+        model: &PhiModel,
+        driven: &DrivenJoints,
+        compliance: &ComplianceEffect,
+    ) -> Option<Vec<f64>> {
+        let masses: Vec<LinkMass> = self
+            .inertias
+            .iter()
+            .map(|i| LinkMass::at(i.mass_kg, i.com_in_link_m))
+            .collect();
+        let couplings = PassiveSlope::of_robot(self.truth, &driven.active, |k, _| {
+            self.four_bar_bodies && self.truth.four_bars.iter().any(|l| l.from == k)
+        });
+        let load = CompliantLoad {
+            masses: &masses,
+            payload: self
+                .effects
+                .payload_in_last_link(&model.last_link_from_tool, conditions),
+            compliance,
+            couplings: &couplings,
+        };
+        let dq = coupled_static_deflection(model, &driven.q, &load).ok()?;
+        Some(driven.q.iter().zip(dq).map(|(q, d)| q + d).collect())
     }
 }
 

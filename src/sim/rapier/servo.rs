@@ -89,10 +89,17 @@ pub struct SettleOptions {
     pub speed_tolerance_m_s: f64,
     /// ... for this many consecutive steps.
     pub quiet_steps: usize,
+    /// Start the compliant arm from the static equilibrium the analytic model predicts
+    /// (`physics::coupled_static_deflection`: the joints' springs against gravity and payload,
+    /// sags carried through the couplings) instead of the undeflected command, so the time
+    /// stepping only confirms it (what the prediction leaves out, e.g. the four-bar bars' own
+    /// weight, settles in a few steps).
+    pub warm_start: bool,
 }
 
 impl Default for SettleOptions {
-    /// 1 ms steps, 16 solver iterations, 1 micrometre per second for 20 steps, at most 20 s.
+    /// 1 ms steps, 16 solver iterations, 1 micrometre per second for 20 steps, at most 20 s,
+    /// warm start on.
     fn default() -> Self {
         Self {
             dt_s: 1e-3,
@@ -100,6 +107,7 @@ impl Default for SettleOptions {
             max_steps: 20_000,
             speed_tolerance_m_s: 1e-6,
             quiet_steps: 20,
+            warm_start: true,
         }
     }
 }

@@ -1,6 +1,7 @@
-//! `trials.csv`: `case,trial,seed,<metric...>`, one row per trial. Numbers are written with
-//! [`format_f64`] (shortest round-trip text), so reading a file back gives the same bits and
-//! merged shards summarise exactly like a single run.
+//! `trials.csv`: `case,trial,seed,<metric...>,error`, one row per trial: a trial that
+//! succeeded has its metrics and an empty `error`, one that failed empty metrics and its error.
+//! Numbers are written with [`format_f64`] (shortest round-trip text), so reading a file back
+//! gives the same bits and merged shards summarise exactly like a single run.
 
 use super::{ExportError, io};
 use crate::harness::scenario::metrics::TrialRecord;
@@ -11,22 +12,31 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+/// The last column: why a trial failed (empty when it succeeded).
+pub const ERROR_COLUMN: &str = "error";
+
 fn header(names: &[String]) -> Vec<String> {
     ["case", "trial", "seed"]
         .iter()
         .map(|s| (*s).to_owned())
         .chain(names.iter().cloned())
+        .chain([ERROR_COLUMN.to_owned()])
         .collect()
 }
 
-fn row(scenario: &ResolvedScenario, r: &TrialRecord) -> Vec<String> {
+fn row(scenario: &ResolvedScenario, names: usize, r: &TrialRecord) -> Vec<String> {
+    let values: Vec<String> = match &r.error {
+        None => r.values.iter().map(|v| format_f64(*v)).collect(),
+        Some(_) => vec![String::new(); names],
+    };
     [
         scenario.cases[r.case].name.clone(),
         r.trial.to_string(),
         r.seed.to_string(),
     ]
     .into_iter()
-    .chain(r.values.iter().map(|v| format_f64(*v)))
+    .chain(values)
+    .chain([r.error.clone().unwrap_or_default()])
     .collect()
 }
 
@@ -40,7 +50,7 @@ pub fn write_trials<W: Write>(
     let mut w = csv::Writer::from_writer(w);
     w.write_record(header(names))?;
     for r in records {
-        w.write_record(row(scenario, r))?;
+        w.write_record(row(scenario, names.len(), r))?;
     }
     w.flush()?;
     Ok(())
@@ -69,6 +79,7 @@ fn csv_error(path: &Path, e: csv::Error) -> ExportError {
 /// done. The final, sorted file replaces it at the end of the run.
 pub struct PartialTrials {
     path: PathBuf,
+    names: usize,
     writer: Mutex<csv::Writer<File>>,
 }
 
@@ -81,22 +92,65 @@ impl PartialTrials {
         writer.flush().map_err(io(path))?;
         Ok(PartialTrials {
             path: path.to_owned(),
+            names: names.len(),
             writer: Mutex::new(writer),
+        })
+    }
+
+    /// Opens the trials file of an interrupted run for appending, after cutting off a last
+    /// row left without its line end (the process was killed while writing it).
+    pub fn resume(path: &Path, names: &[String]) -> Result<Self, ExportError> {
+        let text = std::fs::read(path).map_err(io(path))?;
+        let whole = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let file = std::fs::OpenOptions::new().write(true).open(path).map_err(io(path))?;
+        file.set_len(whole as u64).map_err(io(path))?;
+        if whole == 0 {
+            drop(file);
+            return Self::create(path, names);
+        }
+        let file = std::fs::OpenOptions::new().append(true).open(path).map_err(io(path))?;
+        Ok(PartialTrials {
+            path: path.to_owned(),
+            names: names.len(),
+            writer: Mutex::new(csv::Writer::from_writer(file)),
         })
     }
 
     /// Appends one finished trial.
     pub fn append(&self, scenario: &ResolvedScenario, r: &TrialRecord) -> Result<(), ExportError> {
         let mut w = self.writer.lock().unwrap_or_else(|p| p.into_inner());
-        w.write_record(row(scenario, r)).map_err(|e| csv_error(&self.path, e))?;
+        w.write_record(row(scenario, self.names, r))
+            .map_err(|e| csv_error(&self.path, e))?;
         w.flush().map_err(io(&self.path))
     }
 }
 
-/// Reads a trials file of `scenario`: the metric names (header after `case,trial,seed`) and
-/// the records, in file order.
+/// Reads a trials file of `scenario`: the metric names (header after `case,trial,seed`, before
+/// `error`) and the records, in file order. A file without the `error` column (written before
+/// failed trials were recorded) has none. A row without its line end at the end of the file
+/// (a run killed while writing it) is dropped when `allow_torn_end`.
 pub fn read_trials(path: &Path, scenario: &ResolvedScenario) -> Result<(Vec<String>, Vec<TrialRecord>), ExportError> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| csv_error(path, e))?;
+    read_trials_with(path, scenario, false)
+}
+
+/// [`read_trials`] of an interrupted run's file: its unfinished last row is dropped.
+pub fn read_partial_trials(
+    path: &Path,
+    scenario: &ResolvedScenario,
+) -> Result<(Vec<String>, Vec<TrialRecord>), ExportError> {
+    read_trials_with(path, scenario, true)
+}
+
+fn read_trials_with(
+    path: &Path,
+    scenario: &ResolvedScenario,
+    allow_torn_end: bool,
+) -> Result<(Vec<String>, Vec<TrialRecord>), ExportError> {
+    let mut bytes = std::fs::read(path).map_err(io(path))?;
+    if allow_torn_end {
+        bytes.truncate(bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1));
+    }
+    let mut reader = csv::Reader::from_reader(bytes.as_slice());
     let head: Vec<String> = reader
         .headers()
         .map_err(|e| csv_error(path, e))?
@@ -111,38 +165,62 @@ pub fn read_trials(path: &Path, scenario: &ResolvedScenario) -> Result<(Vec<Stri
     if head.len() < 3 || head[..3] != ["case", "trial", "seed"] {
         return Err(bad(1, "header must start with case,trial,seed".into()));
     }
-    let names = head[3..].to_vec();
+    let has_error = head.last().is_some_and(|h| h == ERROR_COLUMN);
+    let names = head[3..head.len() - usize::from(has_error)].to_vec();
     let mut records = Vec::new();
     for rec in reader.records() {
         let rec = rec.map_err(|e| csv_error(path, e))?;
         let line = rec.position().map_or(0, |p| p.line());
-        let name = &rec[0];
-        let case = scenario
-            .cases
-            .iter()
-            .position(|c| c.name == name)
-            .ok_or_else(|| bad(line, format!("column `case`: unknown case {name:?}")))?;
-        let trial: usize = rec[1].parse().map_err(|e| bad(line, format!("column `trial`: {e}")))?;
-        if trial >= scenario.trials {
+        if rec.len() != head.len() {
             return Err(bad(
                 line,
-                format!("column `trial`: {trial} >= trials {}", scenario.trials),
+                format!("{} columns, the header has {}", rec.len(), head.len()),
             ));
         }
-        let seed: u64 = rec[2].parse().map_err(|e| bad(line, format!("column `seed`: {e}")))?;
-        let values = (3..head.len())
-            .map(|i| {
-                rec[i]
-                    .parse::<f64>()
-                    .map_err(|e| bad(line, format!("column `{}`: {e}", head[i])))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        records.push(TrialRecord {
-            case,
-            trial,
-            seed,
-            values,
-        });
+        records.push(parse_row(&rec, &head, &names, has_error, scenario).map_err(|m| bad(line, m))?);
     }
     Ok((names, records))
+}
+
+/// One row of a trials file (`rec`, header `head`).
+fn parse_row(
+    rec: &csv::StringRecord,
+    head: &[String],
+    names: &[String],
+    has_error: bool,
+    scenario: &ResolvedScenario,
+) -> Result<TrialRecord, String> {
+    let name = &rec[0];
+    let case = scenario
+        .cases
+        .iter()
+        .position(|c| c.name == name)
+        .ok_or_else(|| format!("column `case`: unknown case {name:?}"))?;
+    let trial: usize = rec[1].parse().map_err(|e| format!("column `trial`: {e}"))?;
+    if trial >= scenario.trials {
+        return Err(format!("column `trial`: {trial} >= trials {}", scenario.trials));
+    }
+    let seed: u64 = rec[2].parse().map_err(|e| format!("column `seed`: {e}"))?;
+    let error = Some(rec[head.len() - 1].to_owned()).filter(|e| has_error && !e.is_empty());
+    let values = if error.is_some() {
+        Vec::new()
+    } else {
+        (3..3 + names.len())
+            .map(|i| match rec[i].parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                Ok(v) => Err(format!(
+                    "column `{}`: {v} is not finite (a trial's metrics are)",
+                    head[i]
+                )),
+                Err(e) => Err(format!("column `{}`: {:?}: {e}", head[i], &rec[i])),
+            })
+            .collect::<Result<Vec<_>, _>>()?
+    };
+    Ok(TrialRecord {
+        case,
+        trial,
+        seed,
+        values,
+        error,
+    })
 }

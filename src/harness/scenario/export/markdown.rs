@@ -19,8 +19,17 @@ pub fn render(scenario: &ResolvedScenario, summary: &Summary) -> String {
         scenario.sim,
         scenario.cases.len()
     );
+    if summary.partial {
+        let done: usize = summary.cases.iter().map(|c| c.trials).sum();
+        let _ = writeln!(
+            s,
+            "**PARTIAL RUN: interrupted after {done} of {} trials.** The statistics and verdicts below are over \
+             the finished trials only; `axiscal run --resume` completes the run.\n",
+            scenario.units()
+        );
+    }
     for c in &summary.cases {
-        let _ = writeln!(s, "## Case `{}` ({} trials)\n", c.case, c.trials);
+        let _ = writeln!(s, "## Case `{}` ({} trials, {} failed)\n", c.case, c.trials, c.failed);
         let _ = writeln!(s, "| metric | mean | median | p95 | max |\n|---|---:|---:|---:|---:|");
         for m in &c.metrics {
             let st = &m.stats;
@@ -44,6 +53,8 @@ pub fn render(scenario: &ResolvedScenario, summary: &Summary) -> String {
         "\n**{}**",
         if summary.all_hold {
             "All thresholds hold."
+        } else if summary.partial {
+            "Partial run: not judged complete."
         } else {
             "Some thresholds FAIL."
         }

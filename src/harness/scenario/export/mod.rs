@@ -27,6 +27,15 @@ pub const SUMMARY_JSON: &str = "summary.json";
 pub const SUMMARY_MD: &str = "summary.md";
 /// Which shard a folder holds.
 pub const SHARD_FILE: &str = "shard.txt";
+/// Held (an OS file lock) while a run or merge writes into the folder.
+pub const LOCK_FILE: &str = ".axiscal.lock";
+/// Every file a run or merge writes, besides `hist-<metric>.svg` (see [`is_run_output`]).
+pub const RUN_FILES: [&str; 5] = [RESOLVED_FILE, TRIALS_FILE, SUMMARY_JSON, SUMMARY_MD, SHARD_FILE];
+
+/// Whether a file named `name` is one a run or merge writes.
+pub fn is_run_output(name: &str) -> bool {
+    RUN_FILES.contains(&name) || (name.starts_with("hist-") && name.ends_with(".svg"))
+}
 
 /// Writing results failed.
 #[derive(Debug, thiserror::Error)]
@@ -40,10 +49,22 @@ pub enum ExportError {
         source: std::io::Error,
     },
     /// The results folder already holds results.
-    #[error("{path} already holds results; pass --force to replace them or choose another --out")]
+    #[error("{path} {state}; pass --force to replace them (or choose another --out)")]
     Exists {
         /// The folder.
         path: PathBuf,
+        /// What it holds, in words (a complete run, a partial one and how to continue it).
+        state: String,
+    },
+    /// Another run writes into the folder.
+    #[error(
+        "{path}: another axiscal run or merge is writing into this folder ({holder}); wait for it or choose another --out"
+    )]
+    Locked {
+        /// The folder.
+        path: PathBuf,
+        /// What the lock file says about its holder.
+        holder: String,
     },
     /// A trials file is malformed.
     #[error("{path}: line {line}: {message}")]
@@ -72,16 +93,96 @@ pub(crate) fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ExportError + '_
     }
 }
 
-/// Creates `dir` for a new run. A folder that exists and is not empty is refused unless
-/// `force` (then the files of a run are replaced; other files stay).
+/// What `dir`'s results are, in words, for a refusal to replace them.
+pub fn describe_results(dir: &Path) -> String {
+    let trials = dir.join(TRIALS_FILE);
+    let rows = std::fs::read(&trials)
+        .map(|b| b.iter().filter(|&&c| c == b'\n').count().saturating_sub(1))
+        .ok();
+    let summary = std::fs::read_to_string(dir.join(SUMMARY_JSON)).ok();
+    let partial = summary.as_deref().is_some_and(|s| s.contains("\"partial\": true"));
+    match (rows, summary) {
+        (Some(n), None) if !dir.join(SHARD_FILE).exists() => format!(
+            "holds a PARTIAL run ({n} trial(s) in {TRIALS_FILE}, no summary: interrupted or failed); continue it with \
+             `axiscal run SCENARIO --out {} --resume`",
+            dir.display()
+        ),
+        (Some(n), Some(_)) if partial => format!(
+            "holds a PARTIAL run ({n} trial(s) finished, summary marked partial); continue it with `axiscal run \
+             SCENARIO --out {} --resume`",
+            dir.display()
+        ),
+        (Some(n), _) => format!("holds the results of a run ({n} trial(s))"),
+        (None, _) => "is not empty".into(),
+    }
+}
+
+/// Creates `dir` for a new run. A folder holding anything but the lock file is refused unless
+/// `force`; with `force` the files of an earlier run ([`is_run_output`]) are deleted first
+/// (other files stay), so no old summary sits beside new trials.
 pub fn prepare_dir(dir: &Path, force: bool) -> Result<(), ExportError> {
     if dir.exists() {
-        let mut entries = std::fs::read_dir(dir).map_err(io(dir))?;
-        if entries.next().is_some() && !force {
-            return Err(ExportError::Exists { path: dir.to_owned() });
+        let entries: Vec<String> = std::fs::read_dir(dir)
+            .map_err(io(dir))?
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n != LOCK_FILE)
+            .collect();
+        if !entries.is_empty() && !force {
+            return Err(ExportError::Exists {
+                path: dir.to_owned(),
+                state: describe_results(dir),
+            });
+        }
+        for name in entries.iter().filter(|n| is_run_output(n)) {
+            let path = dir.join(name);
+            std::fs::remove_file(&path).map_err(io(&path))?;
         }
     }
     std::fs::create_dir_all(dir).map_err(io(dir))
+}
+
+/// The lock a run or merge holds on its results folder (released when dropped, or by the
+/// system when the process dies).
+#[derive(Debug)]
+pub struct RunLock {
+    _file: std::fs::File,
+}
+
+impl RunLock {
+    /// Creates `dir` and takes its lock, writing this process's id and host into the lock
+    /// file; fails with [`ExportError::Locked`] when another process holds it.
+    pub fn acquire(dir: &Path) -> Result<Self, ExportError> {
+        use std::io::{Read, Seek, Write};
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        let path = dir.join(LOCK_FILE);
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(io(&path))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let mut holder = String::new();
+                let _ = file.read_to_string(&mut holder);
+                return Err(ExportError::Locked {
+                    path: dir.to_owned(),
+                    holder: holder.trim().to_owned(),
+                });
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(io(&path)(e)),
+        }
+        let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
+        let me = format!("pid {} on {}", std::process::id(), host.trim());
+        file.set_len(0)
+            .and_then(|()| file.rewind())
+            .and_then(|()| file.write_all(me.as_bytes()))
+            .map_err(io(&path))?;
+        Ok(RunLock { _file: file })
+    }
 }
 
 /// Writes the resolved scenario dump.

@@ -32,7 +32,7 @@ pub fn histogram_svg(
     for (c, (case, area)) in scenario.cases.iter().zip(&areas).enumerate() {
         let values: Vec<f64> = records
             .iter()
-            .filter(|r| r.case == c)
+            .filter(|r| r.case == c && r.succeeded())
             .map(|r| r.values[index])
             .filter(|v| v.is_finite())
             .collect();

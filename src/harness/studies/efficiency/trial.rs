@@ -15,7 +15,7 @@ use crate::kinematics::AxisLine;
 use crate::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use crate::plan::{CalibrationPlan, ValidationPlan};
 use crate::robot::commands_to_internal;
-use crate::robot::{Controller, RobotDescription, RobotModel, TransmissionFitForm};
+use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::{AnalyticArm, simulate_campaign};
 use nalgebra::{Isometry3, Point3, Unit};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
@@ -51,13 +51,6 @@ pub(super) struct TrialOutcome {
 }
 
 /// The fit form of a transmission as the description gives it.
-fn form_of(f: TransmissionFitForm) -> TransmissionForm {
-    match f {
-        TransmissionFitForm::Harmonic { order } => TransmissionForm::Harmonic { order },
-        TransmissionFitForm::Gear { ratio, order } => TransmissionForm::Gear { ratio, order },
-    }
-}
-
 pub(super) fn campaign(truth: &RobotModel, desc: &RobotDescription, noise_mm: f64, seed: u64) -> MeasurementSet {
     let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(desc));
     let instrument = MeasurementModel::Isotropic(IsotropicNoise {
@@ -124,7 +117,7 @@ pub(super) fn reference_truths(
     let mut truths: Vec<AxisTruth> = Vec::new();
     for e in &experiments {
         let u = actuator_commands(e, desc, controller);
-        let form = form_of(desc.joints[e.joint - 1].transmission_fit);
+        let form = TransmissionForm::from(desc.joints[e.joint - 1].transmission_fit_form());
         let noise = MeasurementNoise::from_rms_3d(noise_m);
         let fit = fit_arc(
             &e.target0_m,

@@ -1,20 +1,17 @@
-//! `--record FILE.rrd` of `axiscal simulate` (feature `viz`): replays the simulated campaign
-//! into a rerun recording. The robot is drawn as the truth model reaches each command
-//! (without repeatability jitter); targets and errors are the measured rows.
+//! `--record FILE.rrd` of `axiscal simulate`: replays the simulated campaign into a rerun
+//! recording. The robot is drawn as the truth model reaches each command (without
+//! repeatability jitter); targets and errors are the measured rows.
 
+use super::{ERROR_EXAGGERATION, log_arc_fits};
 use anyhow::{Context, Result};
-use axiscal::calibration::{ArcFitOptions, MeasurementNoise, TransmissionForm, fit_arc};
 use axiscal::kinematics::{JointKind, PhiModel};
-use axiscal::measurement::{Measurement, MeasurementModel, MeasurementSet};
+use axiscal::measurement::{MeasurementModel, MeasurementSet};
 use axiscal::plan::CalibrationPlan;
 use axiscal::robot::commands_to_internal;
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::viz::{Recorder, four_bar_loop_m};
 use nalgebra::Point3;
 use std::path::Path;
-
-/// The validation error vectors are also drawn this many times longer.
-const ERROR_EXAGGERATION: f64 = 100.0;
 
 /// What the recording is made of.
 pub struct Campaign<'a> {
@@ -57,6 +54,7 @@ fn log_pose(rec: &Recorder, c: &Campaign, model: &PhiModel, controller: &Control
 /// Writes the recording of campaign `c` to `path`.
 pub fn write(path: &Path, c: &Campaign) -> Result<()> {
     let rec = Recorder::new("axiscal")?;
+    rec.send_default_blueprint();
     let model = c.truth.phi_model();
     let nominal = c.desc.nominal_model();
     let controller = Controller::from_description(c.desc);
@@ -78,7 +76,8 @@ pub fn write(path: &Path, c: &Campaign) -> Result<()> {
             tick += 1;
         }
         if c.desc.joints[sweep.joint - 1].kind == JointKind::Revolute {
-            log_arc_fits(&rec, c, &name, sweep.joint, &experiment.by_step_target());
+            let covariance = |p: &Point3<f64>| Ok(c.instrument.covariance_m2(p)?);
+            log_arc_fits(&rec, &covariance, &name, sweep.joint, &experiment.by_step_target());
         }
     }
     if let Some(validation) = c.set.experiment("validation") {
@@ -133,46 +132,4 @@ pub fn write(path: &Path, c: &Campaign) -> Result<()> {
     }
     rec.save(path)?;
     Ok(())
-}
-
-/// Fits an arc to each target of an axis experiment and logs it, with its residual.
-fn log_arc_fits(
-    rec: &Recorder,
-    c: &Campaign,
-    name: &str,
-    joint: usize,
-    rows: &std::collections::BTreeMap<(usize, usize), &Measurement>,
-) {
-    let targets: std::collections::BTreeSet<usize> = rows.keys().map(|(_, t)| *t).collect();
-    for target in targets {
-        let (points, commands): (Vec<Point3<f64>>, Vec<f64>) = rows
-            .iter()
-            .filter(|((_, t), _)| *t == target)
-            .map(|(_, r)| (r.position_m(), r.cmd[joint - 1].to_radians()))
-            .unzip();
-        let covariances: Result<Vec<_>, _> = points.iter().map(|p| c.instrument.covariance_m2(p)).collect();
-        let covariances = match covariances {
-            Ok(cov) => cov,
-            Err(e) => {
-                eprintln!("warning: no arc fit for {name} target {target}: {e}");
-                continue;
-            }
-        };
-        let options = ArcFitOptions {
-            form: TransmissionForm::Harmonic { order: 1 },
-            noise: MeasurementNoise::PerPoint(covariances),
-            reference_point: points.first().copied().unwrap_or_else(Point3::origin),
-            max_iterations: 100,
-        };
-        match fit_arc(&points, &commands, &options) {
-            Ok(fit) => {
-                let label = format!("{name}/target{target}");
-                if let Err(e) = rec.log_arc_fit(&label, &fit, &commands, 1.0) {
-                    eprintln!("warning: not drawing the arc of {label}: {e}");
-                }
-                rec.log_scalar(&format!("fits/{label}/residual_rms_mm"), fit.residual_rms * 1e3);
-            }
-            Err(e) => eprintln!("warning: no arc fit for {name} target {target}: {e}"),
-        }
-    }
 }

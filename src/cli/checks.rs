@@ -1,0 +1,91 @@
+//! Checks between a command's inputs before any work: unit slips (`--skip-unit-check`) and
+//! the identity of the robot description a calibration or a data file was made with
+//! (`--allow-other-robot`).
+
+use anyhow::{Result, bail};
+use axiscal::measurement::MeasurementSet;
+use axiscal::measurement::unit_check::{UnitSlip, description_slips, measurement_slips};
+use axiscal::robot::{DescriptionIdentity, RobotDescription};
+use std::io::BufRead;
+use std::path::Path;
+
+/// The comment line that records, in a measurement CSV written by axiscal, the description the
+/// data were made with: this prefix, then the identity as JSON.
+pub const IDENTITY_COMMENT: &str = "# axiscal.description ";
+
+/// One error naming `file` and every slip, or nothing.
+fn refuse_slips(file: &Path, slips: &[UnitSlip]) -> Result<()> {
+    if slips.is_empty() {
+        return Ok(());
+    }
+    let all: Vec<String> = slips.iter().map(|s| format!("`{}`: {}", s.field, s.message)).collect();
+    bail!(
+        "{}: {}; if the units are right after all, pass --skip-unit-check",
+        file.display(),
+        all.join("; ")
+    )
+}
+
+/// The description's own lengths (`rows[].a_m` in mm), unless `skip`.
+pub fn description_units(desc: &RobotDescription, path: &Path, skip: bool) -> Result<()> {
+    if skip {
+        return Ok(());
+    }
+    refuse_slips(path, &description_slips(desc))
+}
+
+/// The data's coordinates and commands against the description, unless `skip`.
+pub fn data_units(set: &MeasurementSet, desc: &RobotDescription, data: &Path, skip: bool) -> Result<()> {
+    if skip {
+        return Ok(());
+    }
+    refuse_slips(data, &measurement_slips(set, desc))
+}
+
+/// The identity a measurement CSV written by axiscal records (its leading `#` lines), if any.
+pub fn data_identity(path: &Path) -> Option<DescriptionIdentity> {
+    let file = std::fs::File::open(path).ok()?;
+    std::io::BufReader::new(file)
+        .lines()
+        .map_while(Result::ok)
+        .take_while(|l| l.starts_with('#'))
+        .find_map(|l| serde_json::from_str(l.strip_prefix(IDENTITY_COMMENT)?).ok())
+}
+
+/// The comment line recording `desc` in a measurement CSV (with its line end).
+pub fn identity_comment(desc: &RobotDescription) -> String {
+    let json = serde_json::to_string(&desc.identity()).unwrap_or_default();
+    format!("{IDENTITY_COMMENT}{json}\n")
+}
+
+/// Refuses `source` (made with `recorded`) with the description `desc` read from `robot`
+/// when their geometries differ, unless `allow`. Without a record it warns (older files).
+pub fn same_robot(
+    recorded: Option<&DescriptionIdentity>,
+    source: &Path,
+    desc: &RobotDescription,
+    robot: &Path,
+    allow: bool,
+) -> Result<()> {
+    let current = desc.identity();
+    match recorded {
+        Some(r) if r.geometry_hash != current.geometry_hash && !allow => bail!(
+            "{} was made with the robot description {r}, but --robot {} is {current}: results would be wrong for \
+             this robot; pass --allow-other-robot if the change is intended",
+            source.display(),
+            robot.display()
+        ),
+        Some(r) if r.geometry_hash != current.geometry_hash => eprintln!(
+            "warning: {} was made with {r}, --robot {} is {current} (--allow-other-robot)",
+            source.display(),
+            robot.display()
+        ),
+        None if source.extension().is_some_and(|e| e == "json") => eprintln!(
+            "warning: {} records no robot description (written by an older axiscal): cannot check it matches --robot {}",
+            source.display(),
+            robot.display()
+        ),
+        _ => {}
+    }
+    Ok(())
+}

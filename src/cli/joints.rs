@@ -1,0 +1,195 @@
+//! `axiscal joints --calibration CAL.json CMD...`: the calibrated joint values of controller
+//! commands (what a URDF, a ROS `joint_states` publisher or any kinematic-chain tool must be
+//! fed), for one pose on the command line or every row of a CSV; and the CSV renderings of the
+//! joint map and the controller zero offsets that `calibrate` writes (`docs/formats.md#joint-map`).
+
+use anyhow::{Context, Result, bail};
+use axiscal::calibration::procedure::{
+    Calibration, JointMap, MapTable, calibrated_joint_values, controller_zero_offsets,
+};
+use axiscal::json_file::{self, Schema};
+use axiscal::kinematics::JointKind;
+use axiscal::measurement::format_f64;
+use axiscal::robot::RobotDescription;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Arguments of `axiscal joints`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The calibration (`calibration.json` written by `axiscal calibrate`).
+    #[arg(long)]
+    calibration: PathBuf,
+    /// Nominal robot description (TOML) the calibration was made with.
+    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    robot: PathBuf,
+    /// One pose's commands as the controller reads them, `cmd_1 .. cmd_N` (deg or mm), e.g.
+    /// `-- 10 -20.5 30 0 45 90` (`--` lets the first value be negative).
+    #[arg(allow_negative_numbers = true)]
+    commands: Vec<f64>,
+    /// A CSV with columns `cmd_1 .. cmd_N` (any other columns are copied): every row gets
+    /// `q_1 .. q_N` appended. Written to stdout.
+    #[arg(long, conflicts_with = "commands")]
+    csv: Option<PathBuf>,
+}
+
+/// Runs `axiscal joints`.
+pub fn run(args: Args) -> Result<()> {
+    let desc = RobotDescription::from_file(&args.robot)?;
+    let text = std::fs::read_to_string(&args.calibration)
+        .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
+    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
+        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    if cal.robot.dof() != desc.dof() {
+        bail!(
+            "{} has {} joints but {} describes {}",
+            args.calibration.display(),
+            cal.robot.dof(),
+            args.robot.display(),
+            desc.dof()
+        );
+    }
+    match &args.csv {
+        Some(path) => convert_csv(&cal, &desc, path),
+        None => {
+            if args.commands.len() != desc.dof() {
+                bail!(
+                    "give {} commands (cmd_1 .. cmd_{}), got {}",
+                    desc.dof(),
+                    desc.dof(),
+                    args.commands.len()
+                );
+            }
+            let q = file_units(&desc, &calibrated_joint_values(&cal, &desc, &args.commands)?);
+            println!("{}", q.iter().map(|v| format_f64(*v)).collect::<Vec<_>>().join(" "));
+            Ok(())
+        }
+    }
+}
+
+/// Joint values in file units (deg or mm).
+fn file_units(desc: &RobotDescription, q: &[f64]) -> Vec<f64> {
+    q.iter()
+        .zip(&desc.joints)
+        .map(|(v, j)| match j.kind {
+            JointKind::Revolute => v.to_degrees(),
+            JointKind::Prismatic => v * 1e3,
+        })
+        .collect()
+}
+
+/// Appends `q_1 .. q_N` to every row of the CSV at `path`, to stdout.
+fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Result<()> {
+    let mut reader = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let header = reader
+        .headers()
+        .with_context(|| format!("{}: no header", path.display()))?
+        .clone();
+    let columns: Vec<usize> = (1..=desc.dof())
+        .map(|k| {
+            let name = format!("cmd_{k}");
+            header
+                .iter()
+                .position(|h| h == name)
+                .with_context(|| format!("{}: no column `{name}`", path.display()))
+        })
+        .collect::<Result<_>>()?;
+    let mut out = csv::Writer::from_writer(std::io::stdout().lock());
+    let mut head: Vec<String> = header.iter().map(str::to_owned).collect();
+    head.extend((1..=desc.dof()).map(|k| format!("q_{k}")));
+    out.write_record(&head)?;
+    for (i, record) in reader.records().enumerate() {
+        let record = record.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
+        let line = record.position().map_or(i as u64 + 2, |p| p.line());
+        let cmd: Vec<f64> = columns
+            .iter()
+            .zip(1..)
+            .map(|(&c, k)| {
+                let field = record.get(c).unwrap_or("");
+                field.parse::<f64>().ok().filter(|v| v.is_finite()).with_context(|| {
+                    format!(
+                        "{}:{line}: column `cmd_{k}`: `{field}` is not a finite number",
+                        path.display()
+                    )
+                })
+            })
+            .collect::<Result<_>>()?;
+        let q = calibrated_joint_values(cal, desc, &cmd).with_context(|| {
+            format!(
+                "{}:{line}: the calibrated robot cannot execute these commands",
+                path.display()
+            )
+        })?;
+        let mut row: Vec<String> = record.iter().map(str::to_owned).collect();
+        row.extend(file_units(desc, &q).iter().map(|v| format_f64(*v)));
+        out.write_record(&row)?;
+    }
+    out.flush()?;
+    Ok(())
+}
+
+/// `joint_map.csv` (`docs/formats.md#joint-map`).
+pub fn joint_map_csv(map: &JointMap, robot_name: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# axiscal joint map of {robot_name}: calibrated joint values from controller commands"
+    );
+    let _ = writeln!(
+        s,
+        "# q_k = active_k(u_k) + passive_k(active_(k-1)); u_1 = cmd_1, u_k = cmd_k - slope_k u_(k-1), slope_k: {}",
+        map.decoupling_slopes
+            .iter()
+            .enumerate()
+            .map(|(k, s)| format!("{}={}", k + 1, format_f64(*s)))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    let _ = writeln!(
+        s,
+        "# linear interpolation in this table is within {:.3e} (deg or mm) of the exact values",
+        map.max_interpolation_error
+    );
+    let _ = writeln!(s, "table,joint,input,output,input_unit,output_unit");
+    for r in &map.rows {
+        let table = match r.table {
+            MapTable::Active => "active",
+            MapTable::Passive => "passive",
+        };
+        let _ = writeln!(
+            s,
+            "{table},{},{},{},{},{}",
+            r.joint,
+            format_f64(r.input),
+            format_f64(r.output),
+            r.input_unit,
+            r.output_unit
+        );
+    }
+    s
+}
+
+/// `zero_offsets.csv` (`docs/formats.md#zero-offsets`): the zero offsets a controller that
+/// takes nothing else can use, fitted over `commands` (file units).
+pub fn zero_offsets_csv(cal: &Calibration, desc: &RobotDescription, commands: &[Vec<f64>]) -> Result<String> {
+    let fit = controller_zero_offsets(cal, desc, commands).context("fitting the controller zero offsets")?;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# zero offsets for a controller that takes nothing else: ADD `offset` to a joint reading (subtract it from a command) and the nominal kinematics reproduce the calibrated robot best"
+    );
+    let _ = writeln!(
+        s,
+        "# tool-target RMS, nominal vs calibrated, over {} poses: {:.3} mm without offsets, {:.3} mm with them (what offsets alone cannot take)",
+        fit.poses, fit.rms_before_mm, fit.rms_after_mm
+    );
+    s.push_str("joint,offset,unit\n");
+    for (k, (offset, unit)) in fit.offsets.iter().zip(&fit.units).enumerate() {
+        let _ = writeln!(s, "{},{},{unit}", k + 1, format_f64(*offset));
+    }
+    Ok(s)
+}

@@ -1,0 +1,175 @@
+//! Numeric options: a value parser that refuses a number outside its range and says the range,
+//! and the worker-thread option shared by the commands that run in parallel.
+
+use anyhow::{Context, Result, bail};
+use clap::builder::TypedValueParser;
+use std::ffi::OsStr;
+use std::fmt::Display;
+use std::str::FromStr;
+
+/// A number in `min..=max` (or `min < x` when `min_open`), as a clap value parser whose error
+/// states the range and what the option means.
+#[derive(Clone, Copy, Debug)]
+pub struct InRange<T: 'static> {
+    /// The smallest value (excluded when `min_open`).
+    pub min: T,
+    /// The largest value.
+    pub max: T,
+    /// Whether `min` itself is refused (e.g. a noise level must be above 0).
+    pub min_open: bool,
+    /// The unit, for the message (`mm`, `rad`, or empty).
+    pub unit: &'static str,
+}
+
+impl<T: Copy> InRange<T> {
+    /// `min..=max`.
+    pub const fn closed(min: T, max: T, unit: &'static str) -> Self {
+        InRange {
+            min,
+            max,
+            min_open: false,
+            unit,
+        }
+    }
+
+    /// `min < x <= max`.
+    pub const fn above(min: T, max: T, unit: &'static str) -> Self {
+        InRange {
+            min,
+            max,
+            min_open: true,
+            unit,
+        }
+    }
+}
+
+impl<T: Display + Copy> InRange<T> {
+    /// The range in words, e.g. `in 1..=100000` or `above 0 and at most 100 mm`.
+    pub fn describe(&self) -> String {
+        let unit = if self.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", self.unit)
+        };
+        if self.min_open {
+            format!("above {} and at most {}{unit}", self.min, self.max)
+        } else {
+            format!("in {}..={}{unit}", self.min, self.max)
+        }
+    }
+}
+
+impl<T> InRange<T>
+where
+    T: FromStr + PartialOrd + Display + Copy,
+{
+    /// Parses `text` and checks the range; the error states the range.
+    pub fn check(&self, text: &str) -> Result<T, String> {
+        let value: T = text
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{text}` is not a number; must be {}", self.describe()))?;
+        let low_ok = if self.min_open {
+            value > self.min
+        } else {
+            value >= self.min
+        };
+        // NaN fails both comparisons.
+        if !(low_ok && value <= self.max) {
+            return Err(format!("{value} is out of range; must be {}", self.describe()));
+        }
+        Ok(value)
+    }
+}
+
+impl<T> TypedValueParser for InRange<T>
+where
+    T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
+{
+    type Value = T;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<T, clap::Error> {
+        let text = value.to_string_lossy();
+        self.check(&text).map_err(|reason| {
+            let name = arg.map_or_else(|| "value".to_owned(), |a| format!("--{}", a.get_id()));
+            clap::Error::raw(
+                clap::error::ErrorKind::ValueValidation,
+                format!("invalid value for {}: {reason}\n", name.replace('_', "-")),
+            )
+            .with_cmd(cmd)
+        })
+    }
+}
+
+/// A measurement noise level, 3-D RMS \[mm\].
+pub const NOISE_MM: InRange<f64> = InRange::above(0.0, 100.0, "mm");
+
+/// Worker threads: 1 to this many.
+pub const MAX_THREADS: usize = 1024;
+/// `--threads`' range.
+pub const THREADS: InRange<usize> = InRange::closed(1, MAX_THREADS, "");
+
+/// A rayon pool of `threads` workers (default: one per core), with a warning when the count is
+/// far beyond the cores (it only adds start-up time and memory; results do not depend on it).
+pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if let Some(n) = threads {
+        if n == 0 || n > MAX_THREADS {
+            bail!("--threads {n}: must be {}", THREADS.describe());
+        }
+        if n > 4 * cores {
+            eprintln!(
+                "warning: --threads {n} on {cores} core(s): more than 4 threads per core only costs start-up time and \
+                 memory (results are the same for any count)"
+            );
+        }
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .context("building the thread pool")
+}
+
+/// Human-readable duration of `seconds` (`45 s`, `3.2 h`, `12 years`).
+pub fn duration_words(seconds: f64) -> String {
+    const HOUR: f64 = 3600.0;
+    const DAY: f64 = 24.0 * HOUR;
+    const YEAR: f64 = 365.25 * DAY;
+    if seconds < 120.0 {
+        format!("{seconds:.0} s")
+    } else if seconds < 2.0 * HOUR {
+        format!("{:.0} min", seconds / 60.0)
+    } else if seconds < 2.0 * DAY {
+        format!("{:.1} h", seconds / HOUR)
+    } else if seconds < YEAR {
+        format!("{:.0} days", seconds / DAY)
+    } else {
+        format!("{:.3e} years", seconds / YEAR)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_refuse_outside_values_and_say_the_range() {
+        let p = InRange::above(0.0, 0.5, "");
+        assert!(p.check("0").unwrap_err().contains("above 0 and at most 0.5"));
+        assert!(p.check("NaN").is_err());
+        assert!(p.check("1.5").is_err());
+        assert!(p.check("x").unwrap_err().contains("not a number"));
+        assert_eq!(p.check("0.01"), Ok(0.01));
+        let n = InRange::closed(1usize, 10, "");
+        assert!(n.check("0").unwrap_err().contains("in 1..=10"));
+        assert_eq!(n.check("10"), Ok(10));
+    }
+
+    #[test]
+    fn durations_read_naturally() {
+        assert_eq!(duration_words(5.0), "5 s");
+        assert_eq!(duration_words(600.0), "10 min");
+        assert_eq!(duration_words(36000.0), "10.0 h");
+        assert!(duration_words(1e12).ends_with("years"));
+    }
+}

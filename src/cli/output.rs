@@ -1,0 +1,276 @@
+//! Where every command writes: one guard, so that nothing the user wrote is replaced without
+//! `--force`, and never a file the same command reads.
+//!
+//! A command names its inputs ([`Outputs::input`]) and its outputs; an output is refused when
+//! it is one of the inputs (compared as canonical paths, and on Unix also as the same file
+//! reached by a hard link), and when it exists and `--force` was not given. Text outputs are
+//! written to a temporary file beside the target and renamed over it, so an interrupted write
+//! never leaves a half-written file in place of the old one.
+
+use anyhow::{Context, Result, bail};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// One file the command reads, with the option or argument that named it.
+#[derive(Debug)]
+struct Input {
+    what: String,
+    path: PathBuf,
+    canonical: PathBuf,
+}
+
+/// The outputs of one command run (see the module docs).
+#[derive(Debug)]
+pub struct Outputs {
+    force: bool,
+    inputs: Vec<Input>,
+}
+
+/// `path` with its folder resolved (symbolic links, `..`), also when the file does not exist
+/// yet; `None` when the folder does not exist either (then it cannot be an input).
+fn canonical(path: &Path) -> Option<PathBuf> {
+    if let Ok(p) = path.canonicalize() {
+        return Some(p);
+    }
+    let name = path.file_name()?;
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    Some(canonical(parent)?.join(name))
+}
+
+/// Whether `a` and `b` are the same existing file (a hard link of it counts).
+#[cfg(unix)]
+fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(_: &Path, _: &Path) -> bool {
+    false
+}
+
+impl Outputs {
+    /// Outputs of a command run with `--force` given or not.
+    pub fn new(force: bool) -> Self {
+        Outputs {
+            force,
+            inputs: Vec::new(),
+        }
+    }
+
+    /// Registers `path`, named by `what` (e.g. `--calibration`), as an input. A path that does
+    /// not exist is kept too: the command's reader reports it.
+    pub fn input(mut self, what: &str, path: &Path) -> Self {
+        if let Some(canonical) = canonical(path) {
+            self.inputs.push(Input {
+                what: what.to_owned(),
+                path: path.to_owned(),
+                canonical,
+            });
+        }
+        self
+    }
+
+    /// Registers `files` in each of `dirs` as inputs (e.g. the shards a merge reads).
+    pub fn inputs_in(self, what: &str, dirs: &[PathBuf], files: &[&str]) -> Self {
+        let mut this = self;
+        for dir in dirs {
+            for f in files {
+                this = this.input(what, &dir.join(f));
+            }
+        }
+        this
+    }
+
+    /// Refuses `path` as an output if it is an input of this command (whatever `--force`).
+    pub fn check_not_input(&self, path: &Path) -> Result<()> {
+        let Some(out) = canonical(path) else { return Ok(()) };
+        if let Some(i) = self
+            .inputs
+            .iter()
+            .find(|i| i.canonical == out || same_file(&i.path, path))
+        {
+            bail!(
+                "{} is this command's own input ({} {}): refusing to write over it, even with --force; choose another output",
+                path.display(),
+                i.what,
+                i.path.display()
+            );
+        }
+        Ok(())
+    }
+
+    /// Checks that `path` may be written: not an input, and absent unless `--force`.
+    pub fn check(&self, path: &Path) -> Result<()> {
+        self.check_not_input(path)?;
+        if !self.force && path.symlink_metadata().is_ok() {
+            bail!("{} exists; pass --force to replace it", path.display());
+        }
+        Ok(())
+    }
+
+    /// Refuses a folder output `dir` that exists and is not empty, unless `--force` (then its
+    /// files are replaced one by one as they are written).
+    pub fn check_empty_dir(&self, dir: &Path) -> Result<()> {
+        let not_empty = std::fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_some());
+        if not_empty && !self.force {
+            bail!("{} is not empty; pass --force to replace its files", dir.display());
+        }
+        self.check_not_input(dir)
+    }
+
+    /// [`Outputs::check`] for each of `names` in `dir`, before any of them is written.
+    pub fn check_in(&self, dir: &Path, names: &[&str]) -> Result<()> {
+        names.iter().try_for_each(|n| self.check(&dir.join(n)))
+    }
+
+    /// Creates the folder of `path` (if it has one) for an output.
+    pub fn create_parent(path: &Path) -> Result<()> {
+        match path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => {
+                std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Writes `contents` to `path` after [`Outputs::check`], through a temporary file renamed
+    /// over the target.
+    pub fn write(&self, path: &Path, contents: impl AsRef<[u8]>) -> Result<()> {
+        let mut file = self.create(path)?;
+        file.write_all(contents.as_ref())
+            .with_context(|| format!("writing {}", path.display()))?;
+        file.commit()
+    }
+
+    /// [`Outputs::write`] of `dir/name`.
+    pub fn write_in(&self, dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> Result<()> {
+        self.write(&dir.join(name), contents)
+    }
+
+    /// Opens `path` for writing after [`Outputs::check`]: the bytes go to a temporary file
+    /// that [`OutputFile::commit`] renames over `path` (dropped uncommitted, it is removed).
+    pub fn create(&self, path: &Path) -> Result<OutputFile> {
+        self.check(path)?;
+        Self::create_parent(path)?;
+        let name = path
+            .file_name()
+            .with_context(|| format!("{}: not a file name", path.display()))?;
+        let temporary = path.with_file_name(format!(
+            ".{}.axiscal-{}.tmp",
+            name.to_string_lossy(),
+            std::process::id()
+        ));
+        let file = std::fs::File::create(&temporary).with_context(|| format!("creating {}", temporary.display()))?;
+        Ok(OutputFile {
+            writer: Some(std::io::BufWriter::new(file)),
+            temporary,
+            target: path.to_owned(),
+        })
+    }
+}
+
+/// Flushes a CSV writer on an [`OutputFile`] and commits the file.
+pub fn commit_csv(writer: csv::Writer<OutputFile>) -> Result<()> {
+    let target = writer.get_ref().target.display().to_string();
+    writer
+        .into_inner()
+        .map_err(|e| e.into_error())
+        .with_context(|| format!("writing {target}"))?
+        .commit()
+}
+
+/// An output being written (see [`Outputs::create`]).
+pub struct OutputFile {
+    writer: Option<std::io::BufWriter<std::fs::File>>,
+    temporary: PathBuf,
+    target: PathBuf,
+}
+
+impl OutputFile {
+    /// Flushes the file and puts it in place of the target.
+    pub fn commit(mut self) -> Result<()> {
+        let target = self.target.display().to_string();
+        if let Some(w) = self.writer.take() {
+            let file = w
+                .into_inner()
+                .map_err(|e| e.into_error())
+                .with_context(|| format!("writing {target}"))?;
+            file.sync_all().with_context(|| format!("writing {target}"))?;
+        }
+        std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"))
+    }
+}
+
+impl Write for OutputFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match &mut self.writer {
+            Some(w) => w.write(buf),
+            None => Err(std::io::Error::other("output already committed")),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.writer.as_mut().map_or(Ok(()), |w| w.flush())
+    }
+}
+
+impl Drop for OutputFile {
+    fn drop(&mut self) {
+        if self.writer.take().is_some() {
+            let _ = std::fs::remove_file(&self.temporary);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_input_is_refused_by_any_spelling_and_even_with_force() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("poses.csv");
+        std::fs::write(&input, "id\n").unwrap();
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        let outputs = Outputs::new(true).input("--poses", &input);
+        let other_spelling = dir.path().join("sub").join("..").join("poses.csv");
+        let e = outputs.check(&other_spelling).unwrap_err().to_string();
+        assert!(e.contains("own input (--poses"), "{e}");
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("link.csv");
+            std::os::unix::fs::symlink(&input, &link).unwrap();
+            assert!(outputs.check(&link).is_err());
+            let hard = dir.path().join("hard.csv");
+            std::fs::hard_link(&input, &hard).unwrap();
+            assert!(outputs.check(&hard).is_err());
+        }
+        assert!(outputs.check(&dir.path().join("new.csv")).is_ok());
+        assert_eq!(std::fs::read_to_string(&input).unwrap(), "id\n");
+    }
+
+    #[test]
+    fn an_existing_output_needs_force_and_is_replaced_whole() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a").join("out.txt");
+        Outputs::new(false).write(&out, "one").unwrap();
+        let e = Outputs::new(false).write(&out, "two").unwrap_err().to_string();
+        assert!(e.contains("pass --force"), "{e}");
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "one");
+        // Dropped before commit: the old file stays, no temporary is left behind.
+        let mut f = Outputs::new(true).create(&out).unwrap();
+        f.write_all(b"half").unwrap();
+        drop(f);
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "one");
+        assert_eq!(std::fs::read_dir(out.parent().unwrap()).unwrap().count(), 1);
+        Outputs::new(true).write(&out, "two").unwrap();
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "two");
+    }
+}

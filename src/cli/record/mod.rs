@@ -1,0 +1,54 @@
+//! `--record FILE.rrd` (feature `viz`): rerun recordings of a campaign. `simulate` replays the
+//! simulated campaign with the simulated robot ([`simulated`]); `calibrate` and `diagnose`
+//! replay measured data, real or simulated, with the nominal and the calibrated robot side by
+//! side ([`calibrated`]). Both draw the measured targets per experiment, the arcs and axes
+//! fitted to them with their residual vectors, and send a default layout with the file.
+
+#[cfg(feature = "viz")]
+pub mod calibrated;
+#[cfg(feature = "viz")]
+pub mod simulated;
+
+use super::output::Outputs;
+#[cfg(feature = "viz")]
+use anyhow::Context;
+use anyhow::Result;
+use std::path::Path;
+
+/// `--record` was given to a build without the `viz` feature.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "--record {0} needs the rerun recorder, which this build does not include: rebuild with \
+     `cargo build --release --features viz` (`make run` does)"
+)]
+pub struct RecordUnavailable(String);
+
+/// Fails early, before any work, when `--record` was given but this build cannot record, or
+/// when the recording may not be written (an input of the command, or an existing file without
+/// `--force`: [`Outputs::check`]).
+pub fn ensure_recordable(path: Option<&Path>, outputs: &Outputs) -> Result<()> {
+    let Some(path) = path else { return Ok(()) };
+    if !cfg!(feature = "viz") {
+        return Err(RecordUnavailable(path.display().to_string()).into());
+    }
+    outputs.check(path)
+}
+
+/// Writes a recording to `path` with `write` (its folder created) and says where it is.
+#[cfg(feature = "viz")]
+pub fn save(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    write(path).with_context(|| format!("recording {}", path.display()))?;
+    println!(
+        "wrote {} (view it with `axiscal view {}`)",
+        path.display(),
+        path.display()
+    );
+    Ok(())
+}
+#[cfg(feature = "viz")]
+mod arcs;
+#[cfg(feature = "viz")]
+pub use arcs::{ERROR_EXAGGERATION, log_arc_fits};

@@ -1,0 +1,203 @@
+//! Physical line numbers for CSV records read in one streaming pass.
+//!
+//! The csv crate reports where a record's read started (a byte offset) but its line counter
+//! skips `#` comment lines, so a message would name the wrong line. [`LineTracking`] wraps
+//! the source: as bytes pass through it notes where each line starts and whether that line is
+//! a comment or blank; [`LineIndex::line_of`] then turns a record's byte offset into the
+//! 1-based line of its first content line. Offsets are asked in increasing order (records
+//! come in file order), so the index forgets every line start behind the last offset asked:
+//! time is linear in the file and memory bounded by the reader's look-ahead.
+
+use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::io::Read;
+use std::rc::Rc;
+
+/// What a line starts with, as far as record positions care.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LineKind {
+    /// Not seen yet (the line's first byte has not passed).
+    Unknown,
+    /// Starts with `\r`: blank if `\n` follows.
+    CarriageReturn,
+    /// A `#` comment or an empty line: the csv reader skips it before a record.
+    Skipped,
+    /// Anything else.
+    Content,
+}
+
+#[derive(Debug, Default)]
+struct Index {
+    /// Bytes passed through so far.
+    passed: u64,
+    /// Line starts (byte offset, kind) not yet behind the last offset asked.
+    starts: VecDeque<(u64, LineKind)>,
+    /// Line starts already dropped from the front of `starts`.
+    dropped: u64,
+}
+
+impl Index {
+    fn note(&mut self, bytes: &[u8]) {
+        for (i, &b) in bytes.iter().enumerate() {
+            let at = self.passed + i as u64;
+            if let Some(last) = self.starts.back_mut() {
+                match last.1 {
+                    LineKind::Unknown => {
+                        last.1 = match b {
+                            b'#' | b'\n' => LineKind::Skipped,
+                            b'\r' => LineKind::CarriageReturn,
+                            _ => LineKind::Content,
+                        }
+                    }
+                    LineKind::CarriageReturn => {
+                        last.1 = if b == b'\n' {
+                            LineKind::Skipped
+                        } else {
+                            LineKind::Content
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            if b == b'\n' {
+                self.starts.push_back((at + 1, LineKind::Unknown));
+            }
+        }
+        self.passed += bytes.len() as u64;
+    }
+}
+
+/// The line starts seen by a [`LineTracking`] reader (shared with it).
+#[derive(Clone, Debug)]
+pub struct LineIndex(Rc<RefCell<Index>>);
+
+impl LineIndex {
+    /// The 1-based line of the record whose read started at byte `offset`: the first line at
+    /// or after `offset` that is neither a comment nor blank. Offsets must not decrease from
+    /// one call to the next (an earlier offset gives a line at or after the last one asked).
+    pub fn line_of(&self, offset: u64) -> u64 {
+        let mut index = self.0.borrow_mut();
+        // Drop every line that starts before `offset`, then every skipped line that has a
+        // successor (a trailing comment without a newline is where the record would start).
+        while let Some(&(start, kind)) = index.starts.front() {
+            let skip_blank = start >= offset && kind == LineKind::Skipped && index.starts.len() > 1;
+            // The csv reader ends a CRLF record at `\r`: the next record's read starts at the
+            // `\n`, one byte before its line (a line of that single byte would be blank).
+            let before = index.starts.get(1).is_some_and(|next| next.0 <= offset + 1);
+            if before || skip_blank {
+                index.starts.pop_front();
+                index.dropped += 1;
+            } else {
+                break;
+            }
+        }
+        index.dropped + 1
+    }
+}
+
+/// A reader that notes line starts in a [`LineIndex`] as bytes pass through.
+pub struct LineTracking<R> {
+    inner: R,
+    index: LineIndex,
+}
+
+impl<R: Read> LineTracking<R> {
+    /// Wraps `inner`; the returned index answers for the bytes read through the wrapper.
+    pub fn new(inner: R) -> (Self, LineIndex) {
+        let index = LineIndex(Rc::new(RefCell::new(Index {
+            starts: VecDeque::from([(0, LineKind::Unknown)]),
+            ..Index::default()
+        })));
+        (
+            LineTracking {
+                inner,
+                index: index.clone(),
+            },
+            index,
+        )
+    }
+}
+
+impl<R: Read> Read for LineTracking<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.index.0.borrow_mut().note(&buf[..n]);
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reads `text` as CSV with `#` comments through the tracker in chunks of `chunk` bytes;
+    /// the line of the header and of each record.
+    fn record_lines(text: &str, chunk: usize) -> Vec<u64> {
+        struct Chunked<'a>(&'a [u8], usize);
+        impl Read for Chunked<'_> {
+            fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+                let n = self.0.len().min(self.1).min(buf.len());
+                buf[..n].copy_from_slice(&self.0[..n]);
+                self.0 = &self.0[n..];
+                Ok(n)
+            }
+        }
+        let (reader, index) = LineTracking::new(Chunked(text.as_bytes(), chunk));
+        let mut csv = csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .has_headers(false)
+            .flexible(true)
+            .from_reader(reader);
+        // csv-core returns a trailing comment without a newline, split over two reads, as one
+        // empty record: readers skip those like blank lines.
+        csv.records()
+            .map(Result::unwrap)
+            .filter(|r| !(r.len() == 1 && r[0].is_empty()))
+            .map(|r| index.line_of(r.position().unwrap().byte()))
+            .collect()
+    }
+
+    /// The same numbers counted the slow, obvious way: each record's first field is its line.
+    fn expected(text: &str) -> Vec<u64> {
+        text.lines()
+            .filter(|l| !l.trim_end_matches('\r').is_empty() && !l.starts_with('#'))
+            .filter_map(|l| l.split(',').next()?.trim().parse().ok())
+            .collect()
+    }
+
+    #[test]
+    fn comments_blank_lines_and_crlf_are_counted() {
+        let text = "# c\n2,a\n\n# c\n# c\n6,b\r\n7,c\r\n\r\n#\r\n10,d\n# end";
+        for chunk in [1, 2, 3, 7, 64] {
+            assert_eq!(record_lines(text, chunk), expected(text), "chunk {chunk}");
+        }
+        assert_eq!(expected(text), [2, 6, 7, 10]);
+    }
+
+    #[test]
+    fn a_quoted_field_over_two_lines_keeps_the_count() {
+        let text = "1,\"a\n# not a comment\"\n3,b\n";
+        assert_eq!(record_lines(text, 4), [1, 3]);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_mix_of_lines_gives_each_record_its_line(
+            kinds in proptest::collection::vec(0u8..5, 1..60),
+            chunk in 1usize..20,
+        ) {
+            let mut text = String::new();
+            for (i, k) in kinds.iter().enumerate() {
+                let line = i + 1;
+                text += &match k {
+                    0 => "# comment\n".to_string(),
+                    1 => "\n".to_string(),
+                    2 => "\r\n".to_string(),
+                    3 => format!("{line},x\r\n"),
+                    _ => format!("{line},y\n"),
+                };
+            }
+            proptest::prop_assert_eq!(record_lines(&text, chunk), expected(&text));
+        }
+    }
+}

@@ -1,0 +1,220 @@
+//! Unit sanity checks: the slips that otherwise pass silently and give wrong numbers.
+//!
+//! - Coordinates in metres (or inches, micrometres) in the `x_mm, y_mm, z_mm` columns: the
+//!   radius of each axis experiment's arc against the radius the description's geometry gives
+//!   its target.
+//! - Commands in radians in the `cmd_k` columns (degrees expected for a revolute joint): the
+//!   angle the target turns through against the commanded span.
+//! - Description row lengths in millimetres where metres are expected (`a_m = -690`).
+//!
+//! Each estimate is a median over many point triples of a circle through three points (a
+//! second, differently written path from the calibrator's fits), and a slip is reported only
+//! when the ratio is beyond [`SLIP_FACTOR`] from 1: the slips are factors of 25.4, 57.3 and
+//! 1000, while a real robot differs from its nominal description by percent.
+
+use crate::kinematics::JointKind;
+use crate::measurement::{Measurement, MeasurementSet};
+use crate::robot::{RobotDescription, commands_to_internal};
+use nalgebra::{Point3, Vector3};
+
+/// A ratio this far from 1 (either way) is a unit slip, not a robot's deviation.
+pub const SLIP_FACTOR: f64 = 5.0;
+/// The longest plausible row length \[m\] of a robot arm.
+pub const MAX_ROW_LENGTH_M: f64 = 20.0;
+
+/// One likely unit slip, in words.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UnitSlip {
+    /// Where: a column (`x_mm,y_mm,z_mm`, `cmd_3`) or a description field (`rows[1].a_m`).
+    pub field: String,
+    /// What was found and what it likely is.
+    pub message: String,
+}
+
+/// Known slips by their factor: (factor, what data in those units look like).
+const KNOWN: [(f64, &str); 6] = [
+    (1e-3, "metres"),
+    (1e3, "micrometres"),
+    (1.0 / 25.4, "inches"),
+    (1e-1, "centimetres"),
+    (180.0 / std::f64::consts::PI, "radians"),
+    (std::f64::consts::PI / 180.0, "another unit"),
+];
+
+/// The known unit nearest (in log scale) to `ratio`.
+fn likely(ratio: f64) -> &'static str {
+    KNOWN
+        .iter()
+        .min_by(|a, b| (a.0.ln() - ratio.ln()).abs().total_cmp(&(b.0.ln() - ratio.ln()).abs()))
+        .map_or("another unit", |k| k.1)
+}
+
+fn slipped(ratio: f64) -> bool {
+    ratio.is_finite() && ratio > 0.0 && !(1.0 / SLIP_FACTOR..=SLIP_FACTOR).contains(&ratio)
+}
+
+/// Row lengths that look like millimetres in a description whose rows are in metres.
+pub fn description_slips(desc: &RobotDescription) -> Vec<UnitSlip> {
+    let mut slips = Vec::new();
+    for (i, r) in desc.rows.iter().enumerate() {
+        for (key, v) in [("a_m", r.a_m), ("b_m", r.b_m), ("h_m", r.h_m)] {
+            if v.abs() > MAX_ROW_LENGTH_M {
+                slips.push(UnitSlip {
+                    field: format!("rows[{i}].{key}"),
+                    message: format!(
+                        "{v} m is longer than any robot link ({MAX_ROW_LENGTH_M} m): the rows are in metres; it looks \
+                         like millimetres ({:.4} m?)",
+                        v * 1e-3
+                    ),
+                });
+            }
+        }
+    }
+    slips
+}
+
+/// Centre, radius and the angle from `a` over `b` to `c` of the circle through three points,
+/// or `None` when they are (nearly) collinear.
+fn circle_through(a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> Option<(f64, f64)> {
+    let (u, v) = (b - a, c - a);
+    let w = u.cross(&v);
+    let w2 = w.norm_squared();
+    if w2 <= 1e-12 * u.norm_squared() * v.norm_squared() {
+        return None;
+    }
+    // Circumcentre of a triangle in 3-D.
+    let centre = a + (v.cross(&w) * u.norm_squared() + w.cross(&u) * v.norm_squared()) / (2.0 * w2);
+    let angle = |p: &Point3<f64>, q: &Point3<f64>| (p - centre).angle(&(q - centre));
+    Some(((a - centre).norm(), angle(a, b) + angle(b, c)))
+}
+
+/// Median of `values` (NaN when empty).
+fn median(mut values: Vec<f64>) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// One axis experiment's target-0 arc: median radius \[file length units\] and the ratio of
+/// the turned angle to the commanded span (both read in degrees).
+fn arc_of(rows: &[&Measurement], k: usize) -> Option<(f64, f64)> {
+    let m = rows.len() / 3;
+    if m == 0 {
+        return None;
+    }
+    let (mut radii, mut ratios) = (Vec::new(), Vec::new());
+    for i in 0..m {
+        let (a, b, c) = (rows[i], rows[i + m], rows[i + 2 * m]);
+        let p = |r: &Measurement| Point3::from(Vector3::from(r.position_mm));
+        let commanded = (c.cmd[k] - a.cmd[k]).abs();
+        if let Some((radius, angle)) = circle_through(&p(a), &p(b), &p(c))
+            && commanded > 0.0
+        {
+            radii.push(radius);
+            ratios.push(angle.to_degrees() / commanded);
+        }
+    }
+    Some((median(radii), median(ratios)))
+}
+
+/// The radius \[mm\] the description gives the target of `rows` (target 0 of joint `joint`,
+/// 1-based) about its axis at the first row's commands.
+fn nominal_radius_mm(desc: &RobotDescription, joint: usize, first: &Measurement) -> Option<f64> {
+    let target = desc.axis_targets_of(joint)?.target0;
+    let model = desc.nominal_model();
+    let q = commands_to_internal(desc, &first.cmd);
+    let poses = model.poses(&q);
+    let axis = poses.axis(joint - 1);
+    let p = poses.world_from_link.get(target.link - 1)? * target.position_m();
+    let d = p - axis.origin_m;
+    Some((d - axis.direction.into_inner() * d.dot(&axis.direction)).norm() * 1e3)
+}
+
+/// Coordinates and commands whose units look wrong (module docs), judged over the revolute axis
+/// experiments' target 0.
+pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
+    let (mut scale, mut angle) = (Vec::new(), Vec::new());
+    for e in set.experiments().iter().filter(|e| e.moved_joint > 0) {
+        let joint = e.moved_joint;
+        if desc.joints.get(joint - 1).is_none_or(|j| j.kind != JointKind::Revolute) {
+            continue;
+        }
+        let by_step = e.by_step_target();
+        let rows: Vec<&Measurement> = by_step.iter().filter(|((_, t), _)| *t == 0).map(|(_, m)| *m).collect();
+        let Some((radius, turn_ratio)) = arc_of(&rows, joint - 1) else {
+            continue;
+        };
+        if let Some(nominal) = nominal_radius_mm(desc, joint, rows[0]).filter(|r| *r > 1.0) {
+            scale.push((
+                radius / nominal,
+                format!(
+                    "{}: target 0 turns on a radius of {radius:.4} where the description gives {nominal:.1} mm",
+                    e.name
+                ),
+            ));
+        }
+        angle.push((turn_ratio, joint, e.name.to_string()));
+    }
+    let mut slips = Vec::new();
+    let ratio = median(scale.iter().map(|s| s.0).collect());
+    if slipped(ratio)
+        && let Some((_, example)) = scale
+            .iter()
+            .min_by(|a, b| (a.0 - ratio).abs().total_cmp(&(b.0 - ratio).abs()))
+    {
+        slips.push(UnitSlip {
+            field: "x_mm,y_mm,z_mm".into(),
+            message: format!(
+                "the measured arcs are {ratio:.4} times the size the description gives them ({example}): the \
+                 coordinates look like {} rather than millimetres",
+                likely(ratio)
+            ),
+        });
+    }
+    let bad: Vec<&(f64, usize, String)> = angle.iter().filter(|a| slipped(a.0)).collect();
+    if let (Some(lo), Some(hi)) = (
+        bad.iter().map(|a| a.0).min_by(f64::total_cmp),
+        bad.iter().map(|a| a.0).max_by(f64::total_cmp),
+    ) {
+        let columns: Vec<String> = bad.iter().map(|a| format!("cmd_{}", a.1)).collect();
+        let experiments: Vec<&str> = bad.iter().map(|a| a.2.as_str()).collect();
+        let times = if bad.len() == 1 {
+            format!("{lo:.3}")
+        } else {
+            format!("{lo:.3} to {hi:.3}")
+        };
+        slips.push(UnitSlip {
+            field: columns.join(","),
+            message: format!(
+                "the targets turn {times} times the commanded span read as degrees ({}): the commands look like {} \
+                 rather than degrees",
+                experiments.join(", "),
+                likely(median(bad.iter().map(|a| a.0).collect()))
+            ),
+        });
+    }
+    slips
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_circle_through_three_points_has_its_radius_and_angle() {
+        let on = |t: f64| Point3::new(1.0 + 2.0 * t.cos(), -3.0, 0.5 + 2.0 * t.sin());
+        let (r, a) = circle_through(&on(0.1), &on(0.5), &on(1.2)).unwrap();
+        assert!((r - 2.0).abs() < 1e-12 && (a - 1.1).abs() < 1e-12, "{r} {a}");
+        assert!(circle_through(&on(0.1), &on(0.1), &on(0.2)).is_none());
+    }
+
+    #[test]
+    fn the_likely_unit_is_the_nearest_known_factor() {
+        assert_eq!(likely(0.0011), "metres");
+        assert_eq!(likely(57.0), "radians");
+        assert_eq!(likely(0.04), "inches");
+        assert!(!slipped(1.3) && !slipped(0.8) && slipped(1e-3) && slipped(57.3) && !slipped(f64::NAN));
+    }
+}

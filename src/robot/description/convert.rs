@@ -1,0 +1,259 @@
+//! Geometry given as a Denavit-Hartenberg table (`dh` rows, classic or modified) or as a URDF
+//! file, converted to the phi-model rows and phi angles when a description is read
+//! ([`crate::kinematics::phi_model_of`], the phi rule in its docs). After the conversion the
+//! description holds `phi_deg`, `rows`, `placement` and `tool.frame` like any other, and no
+//! `dh` or `urdf` key (a resolved scenario inlines the converted form).
+
+use super::{DescriptionError, DhConventionEntry, JointEntry, Placement, RobotDescription, RowEntry, UrdfEntry};
+use crate::kinematics::{DhConvention, DhParams, JointKind, SourceChain, UrdfJoint, phi_model_of};
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use std::path::Path;
+
+fn invalid(path: &Path, field: impl Into<String>, message: impl Into<String>) -> DescriptionError {
+    DescriptionError::Invalid {
+        path: path.to_owned(),
+        field: field.into(),
+        message: message.into(),
+    }
+}
+
+impl RobotDescription {
+    /// Converts `dh` rows or a `urdf` file to the phi-model in place; returns the source chain
+    /// and the placement of its base as written.
+    pub(super) fn convert_source(
+        &mut self,
+        path: &Path,
+    ) -> Result<Option<(SourceChain, Isometry3<f64>)>, DescriptionError> {
+        let has_dh = self.dh_convention.is_some() || self.joints.iter().any(|j| j.dh.is_some());
+        let source = match (has_dh, self.urdf.clone()) {
+            (false, None) => return Ok(None),
+            (true, Some(_)) => {
+                return Err(invalid(
+                    path,
+                    "urdf",
+                    "give either `dh` rows or a `urdf` file, not both",
+                ));
+            }
+            (true, None) => self.dh_source(path)?,
+            (false, Some(u)) => self.urdf_source(&u, path)?,
+        };
+        if !self.rows.is_empty() {
+            return Err(invalid(
+                path,
+                "rows",
+                "the rows are converted from the `dh` table or the URDF: leave `rows` out",
+            ));
+        }
+        if let Some(k) = self.joints.iter().position(|j| j.phi_deg != 0.0) {
+            return Err(invalid(
+                path,
+                format!("joints[{k}].phi_deg"),
+                "phi is chosen by the conversion rule: leave `phi_deg` out",
+            ));
+        }
+        let written = self.placement.to_isometry();
+        let model = phi_model_of(&source, &written)
+            .ok_or_else(|| invalid(path, "joints", "the geometry has a singular row (coincident axes)"))?;
+        for (j, p) in self.joints.iter_mut().zip(&model.joints) {
+            j.phi_deg = p.phi_rad.to_degrees();
+            j.dh = None;
+        }
+        self.rows = model.rows.iter().map(RowEntry::from_row).collect();
+        self.placement = Placement::from_isometry(&model.world_from_base);
+        self.tool.frame = Placement::from_isometry(&model.last_link_from_tool);
+        self.dh_convention = None;
+        self.urdf = None;
+        Ok(Some((source, written)))
+    }
+
+    /// The DH chain of the joints' `dh` rows.
+    fn dh_source(&self, path: &Path) -> Result<SourceChain, DescriptionError> {
+        let convention = match self.dh_convention {
+            Some(DhConventionEntry::Classic) => DhConvention::Classic,
+            Some(DhConventionEntry::Modified) => DhConvention::Modified,
+            None => {
+                return Err(invalid(
+                    path,
+                    "dh_convention",
+                    "the joints have `dh` rows: say `dh_convention = \"classic\"` or `\"modified\"`",
+                ));
+            }
+        };
+        let mut rows = Vec::with_capacity(self.joints.len());
+        for (k, j) in self.joints.iter().enumerate() {
+            let d =
+                j.dh.ok_or_else(|| invalid(path, format!("joints[{k}].dh"), "every joint needs its `dh` row"))?;
+            if ![d.d_mm, d.theta_deg, d.a_mm, d.alpha_deg].iter().all(|v| v.is_finite()) {
+                return Err(invalid(path, format!("joints[{k}].dh"), "values must be finite"));
+            }
+            rows.push(DhParams {
+                d_m: d.d_mm * 1e-3,
+                theta_rad: d.theta_deg.to_radians(),
+                a_m: d.a_mm * 1e-3,
+                alpha_rad: d.alpha_deg.to_radians(),
+            });
+        }
+        Ok(SourceChain::Dh {
+            convention,
+            kinds: self.joints.iter().map(|j| j.kind).collect(),
+            rows,
+            flange_from_tool: self.tool.frame.to_isometry(),
+        })
+    }
+
+    /// The URDF chain from `u.base_link` to `u.tip_link`; fills `joints` from it when empty.
+    fn urdf_source(&mut self, u: &UrdfEntry, path: &Path) -> Result<SourceChain, DescriptionError> {
+        let file = path.parent().unwrap_or(Path::new(".")).join(&u.file);
+        let text = std::fs::read_to_string(&file)
+            .map_err(|e| invalid(path, "urdf.file", format!("reading {}: {e}", file.display())))?;
+        let robot = urdf_rs::read_from_string(&text)
+            .map_err(|e| invalid(path, "urdf.file", format!("{}: {e}", file.display())))?;
+        let chain = urdf_chain(&robot, u).map_err(|m| invalid(path, "urdf", format!("{}: {m}", file.display())))?;
+        let (joints, tail, entries) = chain;
+        if self.joints.is_empty() {
+            self.joints = entries;
+        } else if self.joints.len() != joints.len() || self.joints.iter().zip(&joints).any(|(a, b)| a.kind != b.kind) {
+            return Err(invalid(
+                path,
+                "joints",
+                format!(
+                    "the URDF chain has {} movable joints ({}); `joints` must match them in number and kind, or be left out",
+                    joints.len(),
+                    joints
+                        .iter()
+                        .map(|j| format!("{:?}", j.kind).to_lowercase())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        Ok(SourceChain::Urdf {
+            joints,
+            last_link_from_tool: tail * self.tool.frame.to_isometry(),
+        })
+    }
+}
+
+/// A URDF pose as an isometry (rpy: `Rz(yaw) Ry(pitch) Rx(roll)`, fixed axes, as URDF defines).
+fn pose(p: &urdf_rs::Pose) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(p.xyz[0], p.xyz[1], p.xyz[2]),
+        UnitQuaternion::from_euler_angles(p.rpy[0], p.rpy[1], p.rpy[2]),
+    )
+}
+
+/// What [`urdf_chain`] finds: the movable joints, the last joint's child to the tip, the joint
+/// entries.
+type UrdfChain = (Vec<UrdfJoint>, Isometry3<f64>, Vec<JointEntry>);
+
+/// The movable joints from the base link to the tip link (fixed joints merged into the next
+/// joint's origin), the fixed transform from the last movable joint's child to the tip, and
+/// joint entries (kind, limits in deg or mm) for a description without `joints`.
+fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String> {
+    let children: std::collections::HashSet<&str> = robot.joints.iter().map(|j| j.child.link.as_str()).collect();
+    let base = match &u.base_link {
+        Some(b) => b.clone(),
+        None => robot
+            .links
+            .iter()
+            .find(|l| !children.contains(l.name.as_str()))
+            .map(|l| l.name.clone())
+            .ok_or("no root link")?,
+    };
+    // Walk down from the base; at a branch the tip must be named.
+    let mut path: Vec<&urdf_rs::Joint> = Vec::new();
+    let mut link = base.clone();
+    loop {
+        if u.tip_link.as_deref() == Some(link.as_str()) {
+            break;
+        }
+        let next: Vec<&urdf_rs::Joint> = robot.joints.iter().filter(|j| j.parent.link == link).collect();
+        let pick = match (next.len(), &u.tip_link) {
+            (0, None) => break,
+            (0, Some(t)) => return Err(format!("tip link `{t}` is not below base link `{base}`")),
+            (1, _) => next[0],
+            (_, None) => return Err(format!("link `{link}` branches: name the `tip_link`")),
+            (_, Some(t)) => *next
+                .iter()
+                .find(|j| reaches(robot, &j.child.link, t))
+                .ok_or_else(|| format!("tip link `{t}` is not below base link `{base}`"))?,
+        };
+        path.push(pick);
+        link = pick.child.link.clone();
+    }
+    let mut joints = Vec::new();
+    let mut entries = Vec::new();
+    let mut pending = Isometry3::identity();
+    for j in path {
+        let kind = match j.joint_type {
+            urdf_rs::JointType::Fixed => {
+                pending *= pose(&j.origin);
+                continue;
+            }
+            urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointKind::Revolute,
+            urdf_rs::JointType::Prismatic => JointKind::Prismatic,
+            ref other => {
+                return Err(format!(
+                    "joint `{}` is {other:?}: only revolute, continuous, prismatic and fixed joints form a serial arm",
+                    j.name
+                ));
+            }
+        };
+        let axis = Vector3::from(*j.axis.xyz);
+        if !axis.iter().all(|c| c.is_finite()) || axis.norm() == 0.0 {
+            return Err(format!("joint `{}` has a zero axis", j.name));
+        }
+        joints.push(UrdfJoint {
+            kind,
+            parent_from_joint: pending * pose(&j.origin),
+            axis: Unit::new_normalize(axis),
+        });
+        pending = Isometry3::identity();
+        entries.push(joint_entry(j, kind));
+    }
+    if joints.is_empty() {
+        return Err(format!("no movable joint between `{base}` and the tip"));
+    }
+    Ok((joints, pending, entries))
+}
+
+/// Whether `target` is `link` or below it.
+fn reaches(robot: &urdf_rs::Robot, link: &str, target: &str) -> bool {
+    link == target
+        || robot
+            .joints
+            .iter()
+            .filter(|j| j.parent.link == link)
+            .any(|j| reaches(robot, &j.child.link, target))
+}
+
+/// A joint entry from a URDF joint: its kind and limits (deg or mm; a continuous joint or one
+/// without limits gets +-360 deg or +-1000 mm), its speed (deg/s or mm/s) and effort limits
+/// where the URDF gives them (a 0 there means "not given").
+fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> JointEntry {
+    let scale = match kind {
+        JointKind::Revolute => 180.0 / std::f64::consts::PI,
+        JointKind::Prismatic => 1e3,
+    };
+    let (lo, hi) = (j.limit.lower * scale, j.limit.upper * scale);
+    let limits = if j.joint_type != urdf_rs::JointType::Continuous && lo.is_finite() && hi.is_finite() && lo < hi {
+        [lo, hi]
+    } else {
+        match kind {
+            JointKind::Revolute => [-360.0, 360.0],
+            JointKind::Prismatic => [-1000.0, 1000.0],
+        }
+    };
+    JointEntry {
+        kind,
+        phi_deg: 0.0,
+        limits,
+        mass_kg: 0.0,
+        com_mm: [0.0; 3],
+        transmission_fit: None,
+        dh: None,
+        repeatability_sigma: 0.0,
+        max_velocity: (j.limit.velocity > 0.0).then_some(j.limit.velocity * scale),
+        max_effort: (j.limit.effort > 0.0).then_some(j.limit.effort),
+    }
+}
