@@ -38,10 +38,10 @@ mod result;
 
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
-pub use linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
+pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{
-    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MassModel, ModelShape, PoseFeatures, Predictor, RefitScope,
-    SpringSite, ThermalLinks, TiltShape, is_geared, unmodelled_harmonic_order,
+    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,
+    Predictor, RefitScope, SpringSite, ThermalLinks, TiltShape, is_geared, unmodelled_harmonic_order,
 };
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};

@@ -193,7 +193,7 @@ pub fn is_validation(m: &Measurement) -> bool {
 
 /// One noise-only replica: `set`'s rows at `clean`, jittered and with isotropic noise
 /// ([`NoiseModel`]); validation rows get neither only when `validation_noise` is false (the
-/// diagnoser draws theirs separately, many per replica, [`validation_draw`]).
+/// diagnoser draws theirs separately, many per replica, [`ValidationRows::validation_draw`]).
 pub fn replica<R: Rng + ?Sized>(
     set: &MeasurementSet,
     clean: &CleanCampaign,
@@ -226,13 +226,17 @@ pub fn replica<R: Rng + ?Sized>(
     MeasurementSet::new(set.joint_count(), rows).map_err(|e| model_error(format!("noise replica: {e}")))
 }
 
+/// One validation pose on the calibrated robot: joint values, actuator commands, and per target
+/// (first residual row, target in the last link's frame, noise-free position).
+type ValidationPose = (Vec<f64>, Vec<f64>, Vec<(usize, Point3<f64>, Point3<f64>)>);
+
 /// The validation poses of a campaign on the calibrated robot, for drawing their noise: per
 /// pose (file order) its joint values, actuator commands and the residual rows of its targets.
 pub struct ValidationRows {
     model: PhiModel,
     /// Per pose: joint values, actuator commands, and per target (first residual row, target
     /// in the last link's frame, noise-free position).
-    poses: Vec<(Vec<f64>, Vec<f64>, Vec<(usize, Point3<f64>, Point3<f64>)>)>,
+    poses: Vec<ValidationPose>,
 }
 
 impl ValidationRows {

@@ -323,7 +323,8 @@ impl Candidate {
     pub fn library(desc: &RobotDescription, poses: &[Pose], max_harmonic_order: usize) -> Vec<Candidate> {
         let varies = |f: &dyn Fn(&Pose) -> f64| {
             let first = poses.first().map_or(0.0, f);
-            poses.iter().any(|p| f(p) != first)
+            // Copied file values: any difference at all is a variation.
+            poses.iter().any(|p| f(p).to_bits() != first.to_bits())
         };
         let payload_varies = varies(&|p| p.payload_kg);
         let mut out = Vec::new();
@@ -385,7 +386,10 @@ fn backlash_members(poses: &[Pose], joint: usize) -> Vec<Candidate> {
             direction: ApproachSource::Command,
         });
     }
-    let differs = poses.iter().any(|p| p.actuator_approach[k] != p.approach[k]);
+    // Directions are exactly -1, 0 or 1.
+    let differs = poses
+        .iter()
+        .any(|p| p.actuator_approach[k].to_bits() != p.approach[k].to_bits());
     if differs && flips(&|p| p.actuator_approach[k]) {
         out.push(Candidate::Backlash {
             joint,

@@ -11,8 +11,8 @@ mod effect_set;
 mod tests;
 
 pub use candidate::{
-    Candidate, DEFAULT_MAX_HARMONIC_ORDER, MassModel, ModelShape, SpringSite, ThermalLinks, TiltShape, is_geared,
-    unmodelled_harmonic_order,
+    Candidate, DEFAULT_MAX_HARMONIC_ORDER, MIN_THERMAL_ROW_M, MassModel, ModelShape, SpringSite, ThermalLinks,
+    TiltShape, is_geared, unmodelled_harmonic_order,
 };
 
 use super::poses::Pose;
