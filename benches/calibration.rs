@@ -1,8 +1,9 @@
-//! One full 6-axis calibration of a Table-1 campaign (target: < 1 ms in release), against an
-//! in-run baseline: one circle fit per axis (the least any per-axis method must do).
+//! One full 6-axis calibration of a Table-1 campaign, and the lean path of the Monte-Carlo
+//! trials (`calibrate_model`: the model only; target <= 50x the baseline), against an in-run
+//! baseline: one circle fit per axis (the least any per-axis method must do).
 
 use axiscal::calibration::fit_circle;
-use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
+use axiscal::calibration::procedure::{CalibrationOptions, Detail, calibrate, calibrate_model};
 use axiscal::measurement::{MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription};
@@ -59,27 +60,42 @@ fn bench(c: &mut Criterion) {
     g.bench_function("full_table1_calibration", |b| {
         b.iter(|| black_box(calibrate(black_box(&set), &desc, &options).expect("calibrates")))
     });
+    g.bench_function("lean_table1_calibration", |b| {
+        b.iter(|| black_box(calibrate_model(black_box(&set), &desc, &options, Detail::Model).expect("calibrates")))
+    });
     g.finish();
 
     // The ratio to the in-run baseline, which a loaded machine changes far less than the
     // times: medians of interleaved batches.
-    let (b, f) = common::interleaved_medians(
-        BATCHES,
-        (BATCH, &|| {
-            for s in &sweeps {
-                black_box(fit_circle(black_box(s)).expect("arc"));
-            }
-        }),
-        (BATCH, &|| {
-            black_box(calibrate(black_box(&set), &desc, &options).expect("calibrates"));
-        }),
-    );
-    println!(
-        "calibration/full_table1_calibration: {:.1} us = {:.1} x baseline/six_circle_fits ({:.2} us)",
-        f * 1e6,
-        f / b,
-        b * 1e6
-    );
+    let circles = || {
+        for s in &sweeps {
+            black_box(fit_circle(black_box(s)).expect("arc"));
+        }
+    };
+    let full = || {
+        black_box(calibrate(black_box(&set), &desc, &options).expect("calibrates"));
+    };
+    let (set_ref, desc_ref, options_ref) = (&set, &desc, &options);
+    let lean = |detail| {
+        move || {
+            black_box(calibrate_model(black_box(set_ref), desc_ref, options_ref, detail).expect("calibrates"));
+        }
+    };
+    let (model, with_covariance) = (lean(Detail::Model), lean(Detail::ModelAndCovariance));
+    let measured: [(&str, &dyn Fn()); 3] = [
+        ("full_table1_calibration", &full),
+        ("lean_table1_calibration (model)", &model),
+        ("lean_table1_calibration (model_and_covariance)", &with_covariance),
+    ];
+    for (name, f) in measured {
+        let (b, t) = common::interleaved_medians(BATCHES, (BATCH, &circles), (BATCH, f));
+        println!(
+            "calibration/{name}: {:.1} us = {:.1} x baseline/six_circle_fits ({:.2} us)",
+            t * 1e6,
+            t / b,
+            b * 1e6
+        );
+    }
 }
 
 /// Calls per timed batch and batches per median, for the ratio.

@@ -4,12 +4,21 @@
 //! (`elements/s` = trials per second; per core = divide by the thread count; the 2-thread
 //! over 1-thread ratio is the speed-up). The same trial with `sim = "rapier"` (kinematic mode,
 //! line of sight through the link capsules) against the same baseline.
+//!
+//! After criterion's groups a summary prints, from interleaved timings (medians; a loaded
+//! machine slows both sides alike), each trial as a ratio to its baseline, the trials per
+//! second per core, the 2-thread speed-up, and the rapier arm in dynamic mode (the
+//! `compliance` scenario: four-bar bodies, gear coupling, compliance, payload, line of sight)
+//! with its own baseline (the nominal forward kinematics of its poses).
 
 use axiscal::harness::scenario::{CampaignTrial, Overrides, ResolvedScenario, SimMode, Trial, run_units, trial_seed};
 use axiscal::robot::commands_to_internal;
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{Criterion, Throughput};
 use std::hint::black_box;
 use std::path::Path;
+use std::time::Instant;
+
+mod common;
 
 const BATCH: usize = 16;
 
@@ -24,12 +33,11 @@ fn paper() -> ResolvedScenario {
     .expect("the shipped paper scenario resolves")
 }
 
-fn one_trial(c: &mut Criterion) {
-    let s = paper();
-    let trial = CampaignTrial::new(&s).expect("analytic");
+/// The joint values of every pose of `s`'s first case (calibration sweeps, validation poses):
+/// the baseline's work is their nominal forward kinematics.
+fn trial_commands(s: &ResolvedScenario) -> Vec<Vec<f64>> {
     let case = &s.cases[0];
     let desc = &s.robot;
-    let model = desc.nominal_model();
     let mut commands: Vec<Vec<f64>> = Vec::new();
     for sweep in &case.plan.sweeps {
         for step in 0..sweep.poses() {
@@ -39,6 +47,15 @@ fn one_trial(c: &mut Criterion) {
     for cmd in s.validation.commands(desc, &case.plan.reference) {
         commands.push(commands_to_internal(desc, &cmd));
     }
+    commands
+}
+
+fn one_trial(c: &mut Criterion) {
+    let s = paper();
+    let trial = CampaignTrial::new(&s).expect("analytic");
+    let case = &s.cases[0];
+    let model = s.robot.nominal_model();
+    let commands = trial_commands(&s);
     let mut group = c.benchmark_group("analytic_trial");
     group.throughput(Throughput::Elements(1));
     group.bench_function("baseline_nominal_fk_of_every_pose", |b| {
@@ -88,5 +105,93 @@ fn threads(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, one_trial, threads);
-criterion_main!(benches);
+/// Calls per timed batch and batches per median of the summary's ratios.
+const BATCHES: usize = 15;
+
+/// The summary: ratios to the in-run baselines (module docs).
+fn summary() {
+    let s = paper();
+    let trial = CampaignTrial::new(&s).expect("analytic");
+    let commands = trial_commands(&s);
+    let model = s.robot.nominal_model();
+    let fk = || {
+        for q in &commands {
+            black_box(model.poses(black_box(q)));
+        }
+    };
+    let seed = std::cell::Cell::new(0usize);
+    let run = |t: &CampaignTrial, s: &ResolvedScenario| {
+        seed.set(seed.get() + 1);
+        black_box(t.run(&s.cases[0], trial_seed(s.seed, seed.get())).expect("trial runs"));
+    };
+    let (b, t) = common::interleaved_medians(BATCHES, (20, &fk), (20, &|| run(&trial, &s)));
+    println!(
+        "\nmontecarlo/analytic paper trial ({} poses): {:.3} ms = {:.0} x baseline (nominal FK of its poses, {:.2} us); {:.0} trials/s/core",
+        commands.len(),
+        t * 1e3,
+        t / b,
+        b * 1e6,
+        1.0 / t
+    );
+    let pools: Vec<rayon::ThreadPool> = [1, 2]
+        .iter()
+        .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build().expect("pool"))
+        .collect();
+    let batch = |p: &rayon::ThreadPool| {
+        p.install(|| black_box(run_units(&s, &trial, 0..BATCH, &|_| {})));
+    };
+    let (one, two) = common::interleaved_medians(5, (1, &|| batch(&pools[0])), (1, &|| batch(&pools[1])));
+    println!(
+        "montecarlo/{} analytic trials: 1 thread {:.1} ms, 2 threads {:.1} ms: speed-up {:.2}x",
+        BATCH,
+        one * 1e3,
+        two * 1e3,
+        one / two
+    );
+    dynamic_summary();
+}
+
+/// The rapier arm in dynamic mode: one trial of the `compliance` scenario (timed one at a time:
+/// a trial takes long enough for the clock), against the nominal FK of its poses.
+fn dynamic_summary() {
+    if !common::is_cargo_bench() {
+        return; // a dynamic rapier trial in a debug build is too slow for the smoke test
+    }
+    let s = ResolvedScenario::from_file(Path::new("scenarios/compliance.toml"), Overrides::default())
+        .expect("the shipped compliance scenario resolves");
+    let trial = CampaignTrial::new(&s).expect("rapier");
+    let commands = trial_commands(&s);
+    let model = s.robot.nominal_model();
+    let fk_start = Instant::now();
+    for _ in 0..100 {
+        for q in &commands {
+            black_box(model.poses(black_box(q)));
+        }
+    }
+    let b = fk_start.elapsed().as_secs_f64() / 100.0;
+    let mut times: Vec<f64> = (0..5usize)
+        .map(|i| {
+            let start = Instant::now();
+            black_box(trial.run(&s.cases[0], trial_seed(s.seed, i)).expect("trial runs"));
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    let t = times[times.len() / 2];
+    println!(
+        "montecarlo/rapier dynamic trial (compliance scenario, {} poses): {:.1} ms = {:.0} x baseline ({:.2} us); {:.1} trials/s/core",
+        commands.len(),
+        t * 1e3,
+        t / b,
+        b * 1e6,
+        1.0 / t
+    );
+}
+
+fn main() {
+    let mut c = Criterion::default().configure_from_args();
+    one_trial(&mut c);
+    threads(&mut c);
+    summary();
+    c.final_summary();
+}

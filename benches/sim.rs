@@ -231,6 +231,14 @@ fn summary() {
         steps = compliant.last_settle().map_or(0, |r| r.steps);
     });
     line("dynamic RapierArm pose (four-bar, gear, paper)", rapier_s, Some(steps));
+    println!(
+        "  dynamic settles in rapier steps (settle time / one step at rest {:.3} us): plain {:.1}, four-bar {:.1}, \
+         RapierArm four-bar + gear {:.1}",
+        step_s * 1e6,
+        settle_s / step_s,
+        fb_s / step_s,
+        rapier_s / step_s
+    );
 }
 
 fn main() {

@@ -42,6 +42,8 @@ impl Schema {
     pub const BUDGET: Schema = Schema::v1("budget");
     /// `efficiency.json` of `study`.
     pub const STUDY: Schema = Schema::v1("study");
+    /// `summary.json` of `validate`.
+    pub const VALIDATION: Schema = Schema::v1("validation");
 
     const fn v1(name: &'static str) -> Schema {
         Schema { name, major: 1 }

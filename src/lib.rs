@@ -117,6 +117,7 @@ pub mod numerics;
 pub mod physics;
 pub mod plan;
 mod plotting;
+pub mod presets;
 pub mod robot;
 pub mod sim;
 pub mod toml_file;

@@ -25,9 +25,10 @@ pub enum TomlFileError {
     },
 }
 
-/// Reads a whole file as text.
+/// Reads a whole file as text (a shipped file's virtual path serves its compiled-in text:
+/// [`crate::presets`]).
 pub fn read(path: &Path) -> Result<String, TomlFileError> {
-    std::fs::read_to_string(path).map_err(|source| TomlFileError::Io {
+    crate::presets::read_text(path).map_err(|source| TomlFileError::Io {
         path: path.to_owned(),
         source,
     })

@@ -10,6 +10,7 @@ use axiscal::kinematics::IkError;
 use axiscal::measurement::MeasurementModel;
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription};
+use common::pose_line;
 use nalgebra::Isometry3;
 
 /// A noisy calibration of the paper robot (its model differs from the truth by ~1 mm).
@@ -73,20 +74,6 @@ fn write_calibration(dir: &std::path::Path) -> std::path::PathBuf {
     )
     .unwrap();
     path
-}
-
-fn pose_line(id: &str, p: &Isometry3<f64>) -> String {
-    let t = p.translation.vector * 1e3;
-    let (r, pi, y) = p.rotation.euler_angles();
-    format!(
-        "{id},{},{},{},{},{},{}\n",
-        t.x,
-        t.y,
-        t.z,
-        r.to_degrees(),
-        pi.to_degrees(),
-        y.to_degrees()
-    )
 }
 
 #[test]

@@ -197,3 +197,44 @@ fn joints_prints_the_exact_calibrated_joint_values() {
         common::stderr(&a)
     );
 }
+
+/// A calibration whose robot lost a row (a damaged or hand-edited file, as the fuzzer found)
+/// is one error naming the file and the field for `joints` and `compensate`, never a panic.
+#[test]
+fn a_damaged_calibration_robot_is_one_clear_error() {
+    let desc = RobotDescription::asea_irb6l();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("calibration.json");
+    let text = axiscal::json_file::to_string(axiscal::json_file::Schema::CALIBRATION, &paper_calibration(&desc))
+        .expect("json");
+    let mut json: serde_json::Value = serde_json::from_str(&text).expect("parses");
+    json["robot"]["rows"].as_array_mut().expect("rows").remove(2);
+    std::fs::write(&path, serde_json::to_string(&json).expect("json")).expect("write");
+    let poses = dir.path().join("poses.csv");
+    std::fs::write(
+        &poses,
+        "id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\nref,-3151.5,5345.8,167.8,179.56,0.23,-89.01\n",
+    )
+    .expect("write");
+    let joints = common::axiscal()
+        .args(["joints", "--calibration"])
+        .arg(&path)
+        .args(["--", "0", "0", "0", "0", "0", "0"])
+        .assert()
+        .code(2);
+    let compensate = common::axiscal()
+        .args(["compensate", "--calibration"])
+        .arg(&path)
+        .arg("--poses")
+        .arg(&poses)
+        .arg("--out")
+        .arg(dir.path().join("commands.csv"))
+        .assert()
+        .code(2);
+    for a in [joints, compensate] {
+        let err = common::stderr(&a);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("calibration.json") && err.contains("rows"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}

@@ -8,7 +8,7 @@ use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel, commands_to_internal};
 use axiscal::sim::{AnalyticArm, PerturbationSpec, perturb, simulate_campaign};
-use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::path::Path;
 
 /// Table-1 campaigns of the paper robot (with its repeatability) measured with 0.19 mm
@@ -16,8 +16,11 @@ use std::path::Path;
 /// covers 0.19 mm in most campaigns (`make noise-check`: 200 campaigns).
 #[test]
 fn noise_estimate_matches_the_simulated_noise() {
-    let (coverage, mean, worst) = noise_check(0..30);
-    println!("30 campaigns: interval covers 0.19 mm in {coverage:.3}, mean estimate {mean:.4} mm, worst {worst:.4} mm");
+    let (coverage, mean, worst, within) = noise_check(0..30);
+    println!(
+        "30 campaigns: interval covers 0.19 mm in {coverage:.3}, mean estimate {mean:.4} mm, worst {worst:.4} mm, \
+         {within:.3} within 10 %"
+    );
     // Mean of 30 estimates of ~230 dof each: standard error 0.19 / sqrt(2 * 230 * 30) ~ 0.2 %.
     assert!((mean / 0.19 - 1.0).abs() < 0.03, "mean {mean}");
     assert!((worst / 0.19 - 1.0).abs() < 0.2, "worst {worst}");
@@ -26,11 +29,11 @@ fn noise_estimate_matches_the_simulated_noise() {
 }
 
 /// `(fraction of seeds whose interval covers 0.19 mm, mean estimate, the estimate farthest
-/// from 0.19 mm)`.
-fn noise_check(seeds: std::ops::Range<u64>) -> (f64, f64, f64) {
+/// from 0.19 mm, fraction of seeds whose estimate is within 10 % of 0.19 mm)`.
+fn noise_check(seeds: std::ops::Range<u64>) -> (f64, f64, f64, f64) {
     let desc = RobotDescription::asea_irb6l();
     let n = seeds.clone().count() as f64;
-    let (mut covered, mut sum, mut worst) = (0.0, 0.0, 0.19);
+    let (mut covered, mut sum, mut worst, mut within) = (0.0, 0.0, 0.19, 0.0);
     for seed in seeds {
         let set = common::analytic_campaign(
             &axiscal::sim::paper_robot(),
@@ -52,22 +55,30 @@ fn noise_check(seeds: std::ops::Range<u64>) -> (f64, f64, f64) {
             covered += 1.0;
         }
         sum += e.rms_3d_mm;
+        if (e.rms_3d_mm / 0.19 - 1.0).abs() <= 0.1 {
+            within += 1.0;
+        }
         if (e.rms_3d_mm - 0.19).abs() > (worst - 0.19f64).abs() {
             worst = e.rms_3d_mm;
         }
     }
-    (covered / n, sum / n, worst)
+    (covered / n, sum / n, worst, within / n)
 }
 
 /// The full check of docs/validation.md (`make noise-check`): 200 campaigns.
 #[test]
 #[ignore = "200 campaigns: make noise-check"]
 fn noise_estimate_over_200_campaigns() {
-    let (coverage, mean, worst) = noise_check(1000..1200);
+    let (coverage, mean, worst, within) = noise_check(1000..1200);
     println!(
-        "200 campaigns: interval covers 0.19 mm in {coverage:.3}, mean estimate {mean:.4} mm, worst {worst:.4} mm"
+        "200 campaigns: interval covers 0.19 mm in {coverage:.3}, mean estimate {mean:.4} mm, worst {worst:.4} mm, \
+         {within:.3} within 10 %"
     );
-    assert!(coverage >= 0.9);
+    assert!(coverage >= 0.9, "coverage {coverage}");
+    // ~230 dof: one estimate's relative standard error is 1/sqrt(2 * 230) ~ 4.7 %, so 10 % is
+    // ~2.1 standard errors (~96 % of estimates); 90 % leaves 200 campaigns 4 standard errors.
+    assert!(within >= 0.9, "within 10 %: {within}");
+    assert!((mean / 0.19 - 1.0).abs() < 0.1, "mean {mean}");
 }
 
 /// A given noise the residuals contradict is flagged; the true one is not.
@@ -186,19 +197,7 @@ fn model_error_mm(truth: &RobotModel, calibrated: &RobotModel, desc: &RobotDescr
     let mut sum = 0.0;
     let n = 200;
     for _ in 0..n {
-        let cmd: Vec<f64> = plan
-            .reference
-            .iter()
-            .enumerate()
-            .map(|(k, r)| {
-                let half = plan
-                    .sweeps
-                    .iter()
-                    .find(|s| s.joint == k + 1)
-                    .map_or(0.0, |s| s.span / 2.0);
-                r + rng.random_range(-half..=half)
-            })
-            .collect();
+        let cmd = common::commands_in_spans(plan, &mut rng);
         let cmd = commands_to_internal(desc, &cmd);
         let (qt, qc) = (
             truth.joint_values(&controller, &cmd).unwrap(),

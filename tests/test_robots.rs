@@ -119,8 +119,16 @@ fn check(name: &str, seeds: std::ops::Range<u64>) -> (f64, usize, usize) {
 }
 
 fn assert_calibrated_within_sigma(name: &str, seeds: std::ops::Range<u64>) {
-    let (rms, outside, n) = check(name, seeds);
-    println!("{name}: {n} normalised errors, RMS {rms:.3}, {outside} beyond 3 sigma");
+    let (rms, outside, n) = check(name, seeds.clone());
+    println!(
+        "{name}: seeds {}..{}, {n} normalised errors, RMS {rms:.3}, {outside} beyond 3 sigma",
+        seeds.start, seeds.end
+    );
+    assert_within_sigma(name, rms, outside, n);
+}
+
+/// The two checks of a calibration's reported sigmas over `n` normalised errors.
+fn assert_within_sigma(name: &str, rms: f64, outside: usize, n: usize) {
     // RMS of n unit normals: standard error 1/sqrt(2n); 4 standard errors.
     assert!((rms - 1.0).abs() < 4.0 / (2.0 * n as f64).sqrt(), "{name}: RMS {rms}");
     // P(|z| > 3) = 0.0027: beyond n * 0.0027 + 4 sqrt(n * 0.0027) is below 1e-4 for a right sigma.
@@ -155,7 +163,18 @@ fn arm_with_a_repeated_sweep_and_wandering_held_joints_is_calibrated_within_its_
 #[test]
 #[ignore = "50 seeds per robot: make test-robots"]
 fn fifty_seeds_per_test_robot() {
-    for name in ["table-prpp", "positioner-2axis", "scara-rrpr", "arm6-dh"] {
-        assert_calibrated_within_sigma(name, 1000..1050);
+    // Every robot is checked and printed before any assertion fails.
+    let names = ["table-prpp", "positioner-2axis", "scara-rrpr", "arm6-dh"];
+    let results: Vec<_> = names
+        .iter()
+        .map(|name| {
+            let (rms, outside, n) = check(name, 1000..1050);
+            println!("{name}: seeds 1000..1050, {n} normalised errors, RMS {rms:.3}, {outside} beyond 3 sigma");
+            (name, rms, outside, n)
+        })
+        .collect();
+    for (name, rms, outside, n) in results {
+        assert!((0.8..=1.25).contains(&rms), "{name}: RMS {rms} outside 0.8-1.25");
+        assert_within_sigma(name, rms, outside, n);
     }
 }

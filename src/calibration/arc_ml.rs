@@ -71,6 +71,21 @@ pub struct Identifiability {
     pub notes: Vec<String>,
 }
 
+impl Identifiability {
+    /// The value of a fit that skipped the study ([`Studies::Skip`]): no finding, and NaN for
+    /// the numbers (not computed, never a made-up zero).
+    pub fn not_studied() -> Self {
+        Identifiability {
+            condition_number: f64::NAN,
+            weak_directions: vec![],
+            strong_correlations: vec![],
+            tilt_sigma_rad: f64::NAN,
+            tilt_sigma_by_span: vec![],
+            notes: vec![],
+        }
+    }
+}
+
 /// The result of [`fit_arc`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArcFit {
@@ -146,7 +161,18 @@ pub fn fit_arc(
     commands_rad: &[f64],
     options: &ArcFitOptions,
 ) -> Result<ArcFit, CalibrationError> {
-    fit_arc_from(points, commands_rad, options, None)
+    fit_arc_from(points, commands_rad, options, None, Studies::Run)
+}
+
+/// Whether a fit runs the identifiability study ([`Identifiability`]: the correlation
+/// eigen-analysis and the Cramer-Rao tilt for larger spans) after the estimate. The estimate,
+/// its covariance and the residual moments are the same either way, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Studies {
+    /// Run it (what a calibration report shows).
+    Run,
+    /// Skip it (a Monte-Carlo trial only needs the estimate): [`Identifiability::not_studied`].
+    Skip,
 }
 
 /// [`fit_arc`] when, besides the measurement noise, each point's joint angle carries an
@@ -174,8 +200,19 @@ pub fn fit_arc_with_angle_noise(
     options: &ArcFitOptions,
     angle_sigma_rad: f64,
 ) -> Result<ArcFit, CalibrationError> {
+    fit_arc_with_angle_noise_studies(points, commands_rad, options, angle_sigma_rad, Studies::Run)
+}
+
+/// [`fit_arc_with_angle_noise`] with the identifiability study run or skipped (`studies`).
+pub fn fit_arc_with_angle_noise_studies(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+    angle_sigma_rad: f64,
+    studies: Studies,
+) -> Result<ArcFit, CalibrationError> {
     check_angle_sigma(angle_sigma_rad, FIT)?;
-    let first = fit_arc(points, commands_rad, options)?;
+    let first = fit_arc_from(points, commands_rad, options, None, studies)?;
     if angle_sigma_rad == 0.0 {
         return Ok(first);
     }
@@ -195,7 +232,7 @@ pub fn fit_arc_with_angle_noise(
         .map(|(a, b)| b - a)
         .collect();
     let moments = ResidualMoments::of_fit(&jw, &first.covariance, &residuals, Some((&tangents, angle_sigma_rad)));
-    let mut fit = fit_arc_from(points, commands_rad, &refit, Some(first.params))?;
+    let mut fit = fit_arc_from(points, commands_rad, &refit, Some(first.params), studies)?;
     fit.moments = moments;
     Ok(fit)
 }
@@ -206,6 +243,7 @@ fn fit_arc_from(
     commands_rad: &[f64],
     options: &ArcFitOptions,
     start: Option<ArcParams>,
+    studies: Studies,
 ) -> Result<ArcFit, CalibrationError> {
     let n = points.len();
     if commands_rad.len() != n {
@@ -253,7 +291,10 @@ fn fit_arc_from(
                 fit: FIT,
                 command_rad: commands_rad[0],
             })?;
-    let identifiability = identifiability(&model, &params, &jw, &covariance, &options.noise)?;
+    let identifiability = match studies {
+        Studies::Run => identifiability(&model, &params, &jw, &covariance, &options.noise)?,
+        Studies::Skip => Identifiability::not_studied(),
+    };
     Ok(ArcFit {
         axis: AxisLine {
             origin_m: params.axis_point_near(&options.reference_point),

@@ -27,7 +27,7 @@ pub mod procedure;
 pub mod sliding;
 pub mod transmission_fit;
 
-pub use arc_ml::{ArcFit, ArcFitOptions, fit_arc, fit_arc_with_angle_noise};
+pub use arc_ml::{ArcFit, ArcFitOptions, Studies, fit_arc, fit_arc_with_angle_noise, fit_arc_with_angle_noise_studies};
 pub use arc_model::{ArcModel, ArcParams, MeasurementNoise};
 pub use axis_circle::{CircleFit, fit_circle};
 pub use axis_paper::{PaperAxisFit, fit_axis_paper};

@@ -3,7 +3,7 @@
 //! diagnoser reads the CSV back alone; `DIR/summary.{json,md}` hold the score. `--effect` and
 //! `--joint` run a subset of the drawn cases (same numbers and seeds).
 
-use super::options::InRange;
+use super::options::{InRange, THREADS, thread_pool};
 use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
@@ -47,6 +47,9 @@ pub struct Args {
     /// Replace an existing non-empty output folder.
     #[arg(long)]
     force: bool,
+    /// Worker threads (default: one per core; 1..=1024); the result does not depend on it.
+    #[arg(long, value_parser = THREADS)]
+    threads: Option<usize>,
 }
 
 /// Runs `axiscal blind`.
@@ -84,35 +87,41 @@ pub fn run(args: Args) -> Result<()> {
         .filter(|(_, key)| args.effect.as_ref().is_none_or(|e| *e == key.effect))
         .filter(|(_, key)| args.joint.is_none_or(|j| key.joint == Some(j)))
         .collect();
-    let results: Vec<_> = keys
-        .into_par_iter()
-        .map(|(i, key)| -> Result<_> {
-            let dir = args.out.join(format!("case-{i:03}"));
-            let set = simulate_case(&key, &desc, &options).map_err(anyhow::Error::msg)?;
-            let csv = dir.join("data.csv");
-            let mut text = super::checks::identity_comment(&desc).into_bytes();
-            write_measurements_to(&mut text, &set)?;
-            outputs.write(&csv, text)?;
-            outputs.write(&dir.join("key.json"), json_file::to_string(Schema::BLIND_KEY, &key)?)?;
-            // The diagnoser sees the CSV alone.
-            let blind = read_measurements(&csv, Some(desc.dof()))?;
-            let d =
-                diagnose(&blind, &desc, &diagnosis_options).with_context(|| format!("diagnosing {}", csv.display()))?;
-            outputs.write(
-                &dir.join("diagnosis.json"),
-                json_file::to_string(Schema::DIAGNOSIS, &d)?,
-            )?;
-            // Generator side (knows the truth): the effect's trace against the detectable gap.
-            let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)
-                .map_err(anyhow::Error::msg)?;
-            Ok(CaseResult {
-                key,
-                diagnosis: d,
-                size_ratio: size.map(|s| s.0),
-                detectable_magnitude: size.map(|s| s.1),
+    let progress = super::progress::Progress::counted(keys.len(), "cases");
+    let pool = thread_pool(args.threads)?;
+    let results: Vec<_> = pool.install(|| {
+        keys.into_par_iter()
+            .map(|(i, key)| -> Result<_> {
+                let dir = args.out.join(format!("case-{i:03}"));
+                let set = simulate_case(&key, &desc, &options).map_err(anyhow::Error::msg)?;
+                let csv = dir.join("data.csv");
+                let mut text = super::checks::identity_comment(&desc).into_bytes();
+                write_measurements_to(&mut text, &set)?;
+                outputs.write(&csv, text)?;
+                outputs.write(&dir.join("key.json"), json_file::to_string(Schema::BLIND_KEY, &key)?)?;
+                // The diagnoser sees the CSV alone.
+                let blind = read_measurements(&csv, Some(desc.dof()))?;
+                let d = diagnose(&blind, &desc, &diagnosis_options)
+                    .with_context(|| format!("diagnosing {}", csv.display()))?;
+                outputs.write(
+                    &dir.join("diagnosis.json"),
+                    json_file::to_string(Schema::DIAGNOSIS, &d)?,
+                )?;
+                // Generator side (knows the truth): the effect's trace against the detectable gap.
+                let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)
+                    .map_err(anyhow::Error::msg)?;
+                let result = CaseResult {
+                    key,
+                    diagnosis: d,
+                    size_ratio: size.map(|s| s.0),
+                    detectable_magnitude: size.map(|s| s.1),
+                };
+                progress.inc();
+                Ok(result)
             })
-        })
-        .collect::<Result<_>>()?;
+            .collect::<Result<_>>()
+    })?;
+    drop(progress);
     let s = score(&results);
     outputs.write_in(
         &args.out,

@@ -104,7 +104,9 @@ pub fn run(args: Args) -> Result<()> {
         args.effects
     };
     let pool = thread_pool(args.threads)?;
+    let progress = super::progress::Progress::stage(&format!("gap budget: {} effect(s)", effects.len()));
     let lines = pool.install(|| gap_budget(&settings, &effects))?;
+    drop(progress);
     let md = markdown(&settings, &lines);
     print!("{md}");
     outputs.write_in(

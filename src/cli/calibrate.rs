@@ -12,7 +12,7 @@ use axiscal::calibration::procedure::{
     joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, ros_name, urdf,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::{MeasurementSet, read_measurements};
+use axiscal::measurement::MeasurementSet;
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
 use std::path::PathBuf;
@@ -22,6 +22,9 @@ const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("pape
 
 /// The URDF roots by their command-line names.
 const URDF_ROOTS: &[(&str, UrdfRoot)] = &[("base_link", UrdfRoot::BaseLink), ("instrument", UrdfRoot::Instrument)];
+
+/// The most poses the URDF deviation and the zero-offset fit use.
+const EXPORT_POSES: usize = 500;
 
 /// The files `calibrate` writes into its output folder.
 const OUTPUTS: [&str; 7] = [
@@ -40,7 +43,7 @@ pub struct Args {
     /// Measurement CSV (`docs/formats.md#measurement-csv`).
     data: PathBuf,
     /// Nominal robot description (TOML).
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]
@@ -62,6 +65,9 @@ pub struct Args {
     /// measurement noise only. Default: the robot description's `repeatability_sigma`.
     #[arg(long, value_delimiter = ',')]
     repeatability_rad: Option<Vec<f64>>,
+    /// Print `report.json` on stdout (the human-readable lines go to stderr, or nowhere with `--quiet`).
+    #[arg(long)]
+    json: bool,
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
@@ -112,15 +118,19 @@ fn output_texts(
 ) -> Result<OutputTexts> {
     // The deviation over the data's validation poses, else over seeded poses around the
     // reference.
-    let mut poses: Vec<Vec<f64>> = set
+    let all: Vec<Vec<f64>> = set
         .experiments()
         .iter()
         .filter(|e| e.moved_joint == 0 && e.name != TOOL_EXPERIMENT)
         .flat_map(|e| e.by_step().into_values().map(|rows| rows[0].cmd.clone()))
         .collect();
+    // At most EXPORT_POSES of them, evenly spaced through the file: a million-row file must
+    // not make these checks the slowest part of the calibration.
+    let stride = all.len().div_ceil(EXPORT_POSES).max(1);
+    let mut poses: Vec<Vec<f64>> = all.into_iter().step_by(stride).collect();
     if poses.is_empty() {
         let plan = ValidationPlan {
-            poses: 500,
+            poses: EXPORT_POSES,
             ..ValidationPlan::workspace_default(desc.dof())
         };
         poses = plan.commands(desc, &cal.reference_cmd);
@@ -167,20 +177,18 @@ pub fn run(args: Args) -> Result<()> {
     let outputs = Outputs::new(args.force)
         .input("DATA", &args.data)
         .input("--robot", &args.robot);
+    super::set_json(args.json);
     outputs.check_in(&args.out, &OUTPUTS)?;
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let recorded = checks::data_identity(&args.data);
-    checks::same_robot(
-        recorded.as_ref(),
+    let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
         args.allow_other_robot,
+        args.skip_unit_check,
     )?;
-    let set = read_measurements(&args.data, Some(desc.dof()))?;
-    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = CalibrationOptions {
         estimator: args.estimator,
         noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),
@@ -207,12 +215,12 @@ pub fn run(args: Args) -> Result<()> {
             std::fs::remove_file(&path).map_err(|e| anyhow::anyhow!("removing the stale {}: {e}", path.display()))?;
         }
     }
-    println!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
+    say!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
     print_scope(&cal);
-    println!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
+    say!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
     for a in &cal.axes {
         let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
-        println!(
+        say!(
             "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
             a.joint,
             a.points,
@@ -222,7 +230,7 @@ pub fn run(args: Args) -> Result<()> {
             a.direction_sigma_rad[0] * 1e3
         );
     }
-    println!("{}", texts.deviation_line);
+    say!("{}", texts.deviation_line);
     if !texts.missing_speed_limits.is_empty() {
         eprintln!(
             "warning: the description gives no max_velocity/max_effort for joint(s) {:?}: their URDF <limit> says velocity=0 effort=0",
@@ -233,7 +241,8 @@ pub fn run(args: Args) -> Result<()> {
         eprintln!("warning: {warning}");
     }
     let written: Vec<&str> = texts.files.iter().map(|(name, _)| *name).collect();
-    println!("wrote {}/{{{}}}", args.out.display(), written.join(","));
+    say!("wrote {}/{{{}}}", args.out.display(), written.join(","));
+    super::emit_json(&args.out.join(OUTPUTS[2]))?;
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
         let campaign = super::record::calibrated::CalibratedCampaign {
@@ -251,7 +260,7 @@ pub fn run(args: Args) -> Result<()> {
 fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
     if let Some(n) = &cal.noise {
         if let Some(e) = &n.estimate {
-            println!(
+            say!(
                 "  noise from the residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, {} dof); fits weighted with {:.4} mm ({})",
                 e.rms_3d_mm,
                 e.confidence * 100.0,
@@ -263,7 +272,7 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
             );
         }
         if n.given_contradicted {
-            println!(
+            say!(
                 "  WARNING: the residuals contradict --noise-mm {:.4} (chi-square p = {:.2e}); see report.md",
                 n.used_rms_3d_mm,
                 n.given_p_value.unwrap_or(f64::NAN)
@@ -271,12 +280,12 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
         }
     }
     if !cal.not_calibrated.is_empty() {
-        println!(
+        say!(
             "  not calibrated (no axis experiment, kept nominal): joints {:?}",
             cal.not_calibrated
         );
     }
     if let Some(b) = &cal.base_rule {
-        println!("  base frame: {}", b.text);
+        say!("  base frame: {}", b.text);
     }
 }

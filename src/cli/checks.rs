@@ -2,7 +2,9 @@
 //! the identity of the robot description a calibration or a data file was made with
 //! (`--allow-other-robot`).
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
+use axiscal::calibration::procedure::Calibration;
+use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::unit_check::{UnitSlip, description_slips, measurement_slips};
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
@@ -88,4 +90,51 @@ pub fn same_robot(
         _ => {}
     }
     Ok(())
+}
+
+/// Reads a `calibration.json` (`docs/formats.md#calibration-json`) and checks its robot model's
+/// shape and values ([`axiscal::robot::RobotModel::validate`]): a damaged file is one error
+/// naming the file and the field, never a panic later.
+pub fn read_calibration_file(path: &Path) -> Result<Calibration> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
+        .with_context(|| format!("{}: not a calibration JSON", path.display()))?;
+    cal.robot
+        .validate()
+        .with_context(|| format!("{}: `robot`", path.display()))?;
+    Ok(cal)
+}
+
+/// The calibration in `path` (`calibration.json` written by `axiscal calibrate`), checked
+/// against the description `desc` read from `robot`: the same joint count, and the same
+/// geometry unless `allow` ([`same_robot`]).
+pub fn read_calibration(path: &Path, desc: &RobotDescription, robot: &Path, allow: bool) -> Result<Calibration> {
+    let cal = read_calibration_file(path)?;
+    same_robot(cal.description.as_ref(), path, desc, robot, allow)?;
+    if cal.robot.dof() != desc.dof() {
+        bail!(
+            "{} has {} joints but {} describes {}",
+            path.display(),
+            cal.robot.dof(),
+            robot.display(),
+            desc.dof()
+        );
+    }
+    Ok(cal)
+}
+
+/// The measurement CSV `data` for the description `desc` read from `robot`: the robot it
+/// records must be `desc` unless `allow` ([`same_robot`]), its units are checked unless
+/// `skip_units` ([`data_units`]).
+pub fn read_data(
+    data: &Path,
+    desc: &RobotDescription,
+    robot: &Path,
+    allow: bool,
+    skip_units: bool,
+) -> Result<MeasurementSet> {
+    same_robot(data_identity(data).as_ref(), data, desc, robot, allow)?;
+    let set = axiscal::measurement::read_measurements(data, Some(desc.dof()))?;
+    data_units(&set, desc, data, skip_units)?;
+    Ok(set)
 }

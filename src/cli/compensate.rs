@@ -4,7 +4,8 @@
 //! `id, x_mm, y_mm, z_mm, roll_deg, pitch_deg, yaw_deg`: the tool frame in the instrument
 //! frame, rotation `Rz(yaw) Ry(pitch) Rx(roll)`.
 //!
-//! Output `--out` CSV, one row per pose: `id, status, cmd_1_deg..cmd_N_deg, converged,
+//! Output `--out` CSV, one row per pose: `id, status, cmd_1_deg..cmd_N_deg (`_mm` for a
+//! sliding joint), converged,
 //! iterations, position_error_mm, orientation_error_rad, send_x_mm, send_y_mm, send_z_mm,
 //! send_roll_deg, send_pitch_deg, send_yaw_deg` (`send_*`: the nominal direct kinematics of
 //! the commands, the pose to send to a controller that takes poses; `position_error_mm`,
@@ -18,11 +19,9 @@
 use super::checks;
 use super::output::{Outputs, commit_csv};
 use anyhow::{Context, Result, bail};
-use axiscal::calibration::procedure::Calibration;
 use axiscal::compensation::{CompensatedPose, CompensationError, Compensator};
-use axiscal::json_file::{self, Schema};
 use axiscal::kinematics::IkError;
-use axiscal::robot::{Placement, RobotDescription};
+use axiscal::robot::{Placement, RobotDescription, commands_to_file, file_unit};
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
 
@@ -33,7 +32,7 @@ pub struct Args {
     #[arg(long)]
     calibration: PathBuf,
     /// Nominal robot description (the unchanged controller uses it).
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Required tool poses (CSV, see module docs).
     #[arg(long)]
@@ -109,10 +108,10 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
     Ok(out)
 }
 
-/// The output CSV's header for `n` joints.
-fn csv_header(n: usize) -> Vec<String> {
+/// The output CSV's header for the joints of `desc` (`cmd_k_deg` or, sliding, `cmd_k_mm`).
+fn csv_header(desc: &RobotDescription) -> Vec<String> {
     let mut header: Vec<String> = vec!["id".into(), "status".into()];
-    header.extend((1..=n).map(|k| format!("cmd_{k}_deg")));
+    header.extend((0..desc.dof()).map(|k| format!("cmd_{}_{}", k + 1, file_unit(desc, k))));
     for h in [
         "converged",
         "iterations",
@@ -131,9 +130,9 @@ fn csv_header(n: usize) -> Vec<String> {
 }
 
 /// The columns after `id` of a compensated pose `c`.
-fn compensated_columns(row: &mut Vec<String>, c: &CompensatedPose) {
+fn compensated_columns(row: &mut Vec<String>, c: &CompensatedPose, desc: &RobotDescription) {
     row.push("ok".into());
-    row.extend(c.cmd.iter().map(|v| format!("{:.9}", v.to_degrees())));
+    row.extend(commands_to_file(desc, &c.cmd).iter().map(|v| format!("{v:.9}")));
     row.push("true".into());
     row.push(c.ik.iterations.to_string());
     row.push(format!("{:.3e}", c.ik.position_error_m * 1e3));
@@ -173,28 +172,18 @@ pub fn run(args: Args) -> Result<()> {
         .input("--robot", &args.robot);
     outputs.check(&args.out)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    let text = std::fs::read_to_string(&args.calibration)
-        .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
-    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
-        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
     checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    checks::same_robot(
-        cal.description.as_ref(),
-        &args.calibration,
-        &desc,
-        &args.robot,
-        args.allow_other_robot,
-    )?;
+    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
     let comp = Compensator::new(&cal.robot, &desc)?;
     let poses = read_poses(&args.poses)?;
     let n = desc.dof();
     let mut w = csv::Writer::from_writer(outputs.create(&args.out)?);
-    w.write_record(csv_header(n))?;
+    w.write_record(csv_header(&desc))?;
     let mut failed = 0;
     for p in &poses {
         let mut row = vec![p.id.clone()];
         match comp.compensate(&p.world_from_tool) {
-            Ok(c) => compensated_columns(&mut row, &c),
+            Ok(c) => compensated_columns(&mut row, &c, &desc),
             Err(e) => {
                 failed += 1;
                 eprintln!("pose {}: {e}", p.id);

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 /// Arguments of `axiscal describe`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Robot description (TOML; phi rows, `dh` rows or a `urdf` file).
+    /// Robot description (TOML; phi rows, `dh` rows or a `urdf` file), or a shipped one's name.
+    #[arg(value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Random poses (uniform within the joint limits) for the forward-kinematics check.
     #[arg(long, default_value_t = 1000)]
@@ -27,7 +28,7 @@ const FK_TOLERANCE: f64 = 1e-9;
 
 /// Runs `axiscal describe`.
 pub fn run(args: Args) -> Result<()> {
-    let text = std::fs::read_to_string(&args.robot).with_context(|| format!("reading {}", args.robot.display()))?;
+    let text = axiscal::presets::read_text(&args.robot).with_context(|| format!("reading {}", args.robot.display()))?;
     let (desc, source) = RobotDescription::with_source(&text, &args.robot)?;
     let model = desc.nominal_model();
     println!(

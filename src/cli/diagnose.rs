@@ -11,7 +11,7 @@ use axiscal::diagnosis::{
     markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::{MeasurementSet, read_measurements};
+use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
 
@@ -21,7 +21,7 @@ pub struct Args {
     /// Measurement CSV (`docs/formats.md#measurement-csv`): axis experiments plus validation poses.
     data: PathBuf,
     /// Nominal robot description (TOML).
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]
@@ -48,6 +48,9 @@ pub struct Args {
     /// Seed of the replicas' noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Print `diagnosis.json` on stdout (the human-readable lines go to stderr, or nowhere with `--quiet`).
+    #[arg(long)]
+    json: bool,
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
@@ -75,22 +78,20 @@ enum Refit {
 
 /// Runs `axiscal diagnose`.
 pub fn run(args: Args) -> Result<()> {
+    super::set_json(args.json);
     let outputs = Outputs::new(args.force)
         .input("DATA", &args.data)
         .input("--robot", &args.robot);
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let recorded = checks::data_identity(&args.data);
-    checks::same_robot(
-        recorded.as_ref(),
+    let set = checks::read_data(
         &args.data,
         &desc,
         &args.robot,
         args.allow_other_robot,
+        args.skip_unit_check,
     )?;
-    let set = read_measurements(&args.data, Some(desc.dof()))?;
-    checks::data_units(&set, &desc, &args.data, args.skip_unit_check)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: args.noise_mm,
         noise_trials: args.noise_trials,
@@ -107,7 +108,9 @@ pub fn run(args: Args) -> Result<()> {
     let source = args.data.display().to_string();
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
+        let progress = super::progress::Progress::stage("diagnosing the axis experiments (noise-only replicas)");
         let d = diagnose_axes(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+        drop(progress);
         let report = Report {
             out: &args.out,
             json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
@@ -116,9 +119,9 @@ pub fn run(args: Args) -> Result<()> {
             outputs: &outputs,
         };
         let written = report.write(|dir| write_axes_plots(&d, dir))?;
-        println!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
+        say!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
         for w in &d.where_ {
-            println!(
+            say!(
                 "  {:<10} joint {}  residual {:.4} mm  noise only {:.4} mm  ratio {:.2}{}",
                 w.experiment,
                 w.joint.map_or("-".into(), |j| j.to_string()),
@@ -132,11 +135,14 @@ pub fn run(args: Args) -> Result<()> {
                 }
             );
         }
-        println!("{}: {}", d.outcome.effect, d.verdict);
-        println!("wrote {written}");
+        say!("{}: {}", d.outcome.effect, d.verdict);
+        say!("wrote {written}");
+        super::emit_json(&args.out.join("diagnosis.json"))?;
         return record(&args, &desc, &set, &format!("{}: {}", d.outcome.effect, d.verdict));
     }
+    let progress = super::progress::Progress::stage("diagnosing (refits, candidates, noise-only replicas)");
     let d = diagnose(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+    drop(progress);
     let report = Report {
         out: &args.out,
         json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
@@ -153,9 +159,9 @@ pub fn run(args: Args) -> Result<()> {
         d.outcome.gap_before_mm,
         d.outcome.gap_after_mm
     );
-    println!("{headline}");
+    say!("{headline}");
     if d.outcome.effect == "none" {
-        println!(
+        say!(
             "  with {} validation poses ({} held out) the smallest gap this test flags is {:.3} mm; a smaller effect \
              reads `none`: measure more validation poses to resolve it",
             d.poses[0] + d.poses[1],
@@ -163,7 +169,8 @@ pub fn run(args: Args) -> Result<()> {
             d.detectable_gap_mm
         );
     }
-    println!("wrote {written}");
+    say!("wrote {written}");
+    super::emit_json(&args.out.join("diagnosis.json"))?;
     record(&args, &desc, &set, &format!("{headline}. {}", d.verdict))
 }
 

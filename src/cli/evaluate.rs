@@ -3,7 +3,7 @@
 //! to the paper's figures and the noise floor measured in the same run; writes
 //! `evaluation.json`, `poses.csv`, `calibration.json`, `floor_calibration.json` and the plots.
 
-use super::options::InRange;
+use super::options::{InRange, THREADS, thread_pool};
 use super::output::{Outputs, commit_csv};
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{
@@ -36,6 +36,13 @@ pub struct Args {
     /// Output directory.
     #[arg(long, default_value = "results/paper")]
     out: PathBuf,
+    /// Print `evaluation.json` on stdout (the human-readable lines go to stderr, or nowhere
+    /// with `--quiet`).
+    #[arg(long)]
+    json: bool,
+    /// Worker threads (default: one per core; 1..=1024); the result does not depend on it.
+    #[arg(long, value_parser = THREADS)]
+    threads: Option<usize>,
     /// Replace existing outputs.
     #[arg(long)]
     force: bool,
@@ -47,6 +54,13 @@ fn write_json<T: serde::Serialize>(outputs: &Outputs, path: &Path, schema: Schem
 
 /// Runs `axiscal evaluate`.
 pub fn run(args: Args) -> Result<()> {
+    super::set_json(args.json);
+    let pool = thread_pool(args.threads)?;
+    pool.install(|| evaluate(&args))
+}
+
+/// `axiscal evaluate` on the current thread pool.
+fn evaluate(args: &Args) -> Result<()> {
     let (instrument, noise) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
     if super::verbose() {
         eprintln!("{noise}");
@@ -62,7 +76,9 @@ pub fn run(args: Args) -> Result<()> {
     outputs.extend(PLOT_FILES);
     let guard = Outputs::new(args.force);
     guard.check_in(&args.out, &outputs)?;
+    let progress = super::progress::Progress::stage("paper scenario: simulate, calibrate, compensate, evaluate");
     let out = run_paper_scenario(&scenario)?;
+    drop(progress);
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let r = &out.report;
     write_json(&guard, &args.out.join("evaluation.json"), Schema::EVALUATION, r)?;
@@ -81,18 +97,19 @@ pub fn run(args: Args) -> Result<()> {
     write_poses_csv(&guard, &args.out.join("poses.csv"), r)?;
     let plots = write_plots(r, &args.out)?;
 
-    println!(
+    say!(
         "paper scenario: seed {}, evaluation seed {}",
-        args.seed, args.evaluation_seed
+        args.seed,
+        args.evaluation_seed
     );
-    println!(
+    say!(
         "ISO 9283 cube edges: {:.0} mm inside the spans, {:.0} mm in the workspace",
         r.iso_cube_edge_m[0] * 1e3,
         r.iso_cube_edge_m[1] * 1e3
     );
     let inside_ratio = print_regions(r);
     print_repeatability(&r.repeatability);
-    println!(
+    say!(
         "floor check inside the spans: calibrated/floor position RMS = {inside_ratio:.2} ({} {FLOOR_RATIO_LIMIT}x; see docs/validation.md)",
         if inside_ratio <= FLOOR_RATIO_LIMIT {
             "within"
@@ -101,9 +118,11 @@ pub fn run(args: Args) -> Result<()> {
         }
     );
     if args.floor_seeds > 1 {
-        pooled_floor_check(&guard, &scenario, &args)?;
+        let _progress = super::progress::Progress::stage("floor check over the campaign seeds");
+        pooled_floor_check(&guard, &scenario, args)?;
     }
-    println!("wrote {} and {} plots", args.out.display(), plots.len());
+    say!("wrote {} and {} plots", args.out.display(), plots.len());
+    super::emit_json(&args.out.join("evaluation.json"))?;
     Ok(())
 }
 
@@ -149,7 +168,7 @@ fn write_poses_csv(guard: &Outputs, csv_path: &Path, r: &PaperReport) -> Result<
 fn print_regions(r: &PaperReport) -> f64 {
     let mut inside_ratio = f64::NAN;
     for s in &r.regions {
-        println!(
+        say!(
             "{} ({} poses, {} failed):",
             s.region.name(),
             s.position_mm[0].n,
@@ -172,18 +191,25 @@ fn print_regions(r: &PaperReport) -> f64 {
             ),
         ];
         for (label, st, paper, ratio, p) in rows {
-            println!(
+            say!(
                 "  {label} uncalibrated mean {:7.p$} rms {:7.p$}   (paper {:.2} mean)",
-                st[0].mean, st[0].rms, paper[0]
+                st[0].mean,
+                st[0].rms,
+                paper[0]
             );
-            println!(
+            say!(
                 "                    calibrated   mean {:7.p$} rms {:7.p$}   (paper {:.2})  floor rms {:.p$}  ratio {ratio:.2}",
-                st[1].mean, st[1].rms, paper[1], st[2].rms
+                st[1].mean,
+                st[1].rms,
+                paper[1],
+                st[2].rms
             );
         }
-        println!(
+        say!(
             "  model only (no jitter, no noise): position rms {:.3} mm (floor {:.3}, ratio {:.2})",
-            s.model_position_mm[1].rms, s.model_position_mm[2].rms, s.model_ratio_to_floor[0]
+            s.model_position_mm[1].rms,
+            s.model_position_mm[2].rms,
+            s.model_ratio_to_floor[0]
         );
         if s.region == Region::InsideSpans {
             inside_ratio = s.ratio_to_floor[0];
@@ -194,7 +220,7 @@ fn print_regions(r: &PaperReport) -> f64 {
 
 /// Prints the repeatability test next to the paper's.
 fn print_repeatability(rep: &RepeatabilitySummary) {
-    println!(
+    say!(
         "repeatability ({} poses, mean of 2 executions): observed {:.3} mm / {:.4} rad (paper {:.2} mm / {:.4} rad, \
          through theodolites); robot alone {:.3} mm / {:.4} rad",
         rep.poses,
@@ -212,7 +238,7 @@ fn print_repeatability(rep: &RepeatabilitySummary) {
 fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args) -> Result<()> {
     let check = floor_check(scenario, args.floor_seeds)?;
     write_json(guard, &args.out.join("floor_check.json"), Schema::FLOOR_CHECK, &check)?;
-    println!(
+    say!(
         "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
              orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
         check.first_seed,

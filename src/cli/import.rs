@@ -4,7 +4,11 @@
 use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::measurement::import::boby_klimchik;
+use axiscal::measurement::import::points::{LengthUnit, PlanSheet, join_points};
+use axiscal::measurement::import::table::Table;
+use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide};
 use axiscal::measurement::write_measurements_to;
+use axiscal::robot::RobotDescription;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -22,6 +26,81 @@ enum Format {
     /// blocks of six poses, three SMRs each (targets 0,1,2 = SMRs 2,3,1). cmd_3 = J3 + J2 (the controller reads J3
     /// against the ground).
     BobyKlimchik(DirArgs),
+    /// An instrument's point export (`id,x,y,z[,sigma]`, ids or row order, mm or m) joined to
+    /// the plan of `axiscal plan` (`docs/formats.md#point-export`).
+    Points(PointsArgs),
+    /// A wide pose table (one row per pose: `q1..qN` + `m1_x,m1_y,m1_z,...`), as FIGAROH and lab
+    /// scripts write it; axis experiments recovered from the joint values
+    /// (`docs/formats.md#wide-format`).
+    Wide(WideArgs),
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum Unit {
+    Mm,
+    M,
+}
+
+impl From<Unit> for LengthUnit {
+    fn from(u: Unit) -> Self {
+        match u {
+            Unit::Mm => LengthUnit::Mm,
+            Unit::M => LengthUnit::M,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum Angle {
+    Rad,
+    Deg,
+}
+
+/// `import points PLAN EXPORT --out DATA`.
+#[derive(Debug, clap::Args)]
+struct PointsArgs {
+    /// The measurement plan (`axiscal plan`).
+    plan: PathBuf,
+    /// The instrument's export (CSV: `id,x,y,z`, optional uncertainty column).
+    export: PathBuf,
+    /// The export's length unit; default: from the column names (`x_mm`, `x_m`) or detected
+    /// from the points' spread against the plan's nominal points (and stated on stdout).
+    #[arg(long, value_enum)]
+    units: Option<Unit>,
+    /// Accept planned points the export lacks although the plan expects them visible.
+    #[arg(long)]
+    allow_missing: bool,
+    /// Output measurement CSV.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
+}
+
+/// `import wide FILE --robot R --angles rad|deg --units mm|m --out DATA`.
+#[derive(Debug, clap::Args)]
+struct WideArgs {
+    /// The wide table (CSV).
+    file: PathBuf,
+    /// The robot description (joint count and kinds), or a shipped one's name.
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    robot: PathBuf,
+    /// Unit of the revolute joint values.
+    #[arg(long, value_enum)]
+    angles: Angle,
+    /// Unit of the marker coordinates and the prismatic joint values.
+    #[arg(long, value_enum)]
+    units: Unit,
+    /// Joint values within this of each other hold the joint still (deg or mm).
+    #[arg(long, default_value_t = 1e-6)]
+    still_tolerance: f64,
+    /// Output measurement CSV.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
 }
 
 /// A data-set folder and the output file.
@@ -45,7 +124,16 @@ fn write_csv(
     comment: &str,
     set: &axiscal::measurement::MeasurementSet,
 ) -> Result<()> {
-    let outputs = Outputs::new(force).input("DIR", source);
+    write_csv_from(out, Outputs::new(force).input("DIR", source), comment, set)
+}
+
+/// Writes `comment` and `set` to `out` through `outputs` (which names the inputs).
+fn write_csv_from(
+    out: &Path,
+    outputs: Outputs,
+    comment: &str,
+    set: &axiscal::measurement::MeasurementSet,
+) -> Result<()> {
     let mut file = outputs.create(out)?;
     file.write_all(comment.as_bytes())
         .and_then(|_| write_measurements_to(&mut file, set))
@@ -56,6 +144,8 @@ fn write_csv(
 /// Runs `axiscal import`.
 pub fn run(args: Args) -> Result<()> {
     match args.format {
+        Format::Points(a) => import_points(&a),
+        Format::Wide(a) => import_wide(&a),
         Format::BobyKlimchik(a) => {
             let source = a.dir.join(boby_klimchik::DATA_FILE);
             Outputs::new(a.force).input("DIR", &source).check(&a.out)?;
@@ -78,4 +168,92 @@ pub fn run(args: Args) -> Result<()> {
             Ok(())
         }
     }
+}
+
+fn import_points(a: &PointsArgs) -> Result<()> {
+    let outputs = Outputs::new(a.force).input("PLAN", &a.plan).input("EXPORT", &a.export);
+    outputs.check(&a.out)?;
+    let plan = PlanSheet::from_table(&Table::read(&a.plan)?)?;
+    let joined = join_points(
+        &plan,
+        &Table::read(&a.export)?,
+        a.units.map(Into::into),
+        a.allow_missing,
+    )?;
+    let recorded: String = plan
+        .comments
+        .iter()
+        .filter(|c| c.starts_with("axiscal.description "))
+        .map(|c| format!("# {c}\n"))
+        .collect();
+    let comment = format!(
+        "{recorded}# imported by `axiscal import points` from {} (unit {}) joined to the plan {}\n",
+        a.export.display(),
+        joined.unit.name(),
+        a.plan.display()
+    );
+    write_csv_from(&a.out, outputs, &comment, &joined.set)?;
+    let how = if joined.detected { "detected" } else { "stated" };
+    println!(
+        "imported {} of {} planned points from {} to {}",
+        joined.set.rows().len(),
+        plan.rows.len(),
+        a.export.display(),
+        a.out.display()
+    );
+    println!(
+        "  unit: {} ({how}; the points spread {:.4} times the plan's nominal points in mm)",
+        joined.unit.name(),
+        joined.spread_ratio
+    );
+    if !joined.missing_hidden.is_empty() {
+        println!(
+            "  {} point(s) the plan marks hidden are missing (expected)",
+            joined.missing_hidden.len()
+        );
+    }
+    if !joined.missing_visible.is_empty() {
+        eprintln!(
+            "warning: {} point(s) the plan expects visible are missing (--allow-missing)",
+            joined.missing_visible.len()
+        );
+    }
+    if !joined.sigmas_mm.is_empty() {
+        let rms = (joined.sigmas_mm.iter().map(|s| s * s).sum::<f64>() / joined.sigmas_mm.len() as f64).sqrt();
+        let max = joined.sigmas_mm.iter().copied().fold(0.0, f64::max);
+        println!(
+            "  per-point uncertainty: RMS {rms:.4} mm, largest {max:.4} mm (the measurement CSV has no column for it: \
+             pass the 3-D RMS to diagnose --noise-mm)"
+        );
+    }
+    Ok(())
+}
+
+fn import_wide(a: &WideArgs) -> Result<()> {
+    let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
+    outputs.check(&a.out)?;
+    let desc = RobotDescription::from_file(&a.robot)?;
+    let options = WideOptions {
+        kinds: desc.joints.iter().map(|j| j.kind).collect(),
+        radians: matches!(a.angles, Angle::Rad),
+        lengths: a.units.into(),
+        still_tolerance: a.still_tolerance,
+    };
+    let set = read_wide(&Table::read(&a.file)?, &options)?;
+    let comment = format!(
+        "{}# imported by `axiscal import wide` from {}\n",
+        super::checks::identity_comment(&desc),
+        a.file.display()
+    );
+    write_csv_from(&a.out, outputs, &comment, &set)?;
+    println!(
+        "imported {} rows from {} to {}",
+        set.rows().len(),
+        a.file.display(),
+        a.out.display()
+    );
+    for e in set.experiments() {
+        println!("  {:<10} moved_joint {}  {} rows", e.name, e.moved_joint, e.rows.len());
+    }
+    Ok(())
 }

@@ -7,10 +7,8 @@ use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{
     Calibration, JointMap, MapTable, calibrated_joint_values, controller_zero_offsets,
 };
-use axiscal::json_file::{self, Schema};
-use axiscal::kinematics::JointKind;
 use axiscal::measurement::format_f64;
-use axiscal::robot::RobotDescription;
+use axiscal::robot::{RobotDescription, commands_to_file};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -21,7 +19,7 @@ pub struct Args {
     #[arg(long)]
     calibration: PathBuf,
     /// Nominal robot description (TOML) the calibration was made with.
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// One pose's commands as the controller reads them, `cmd_1 .. cmd_N` (deg or mm), e.g.
     /// `-- 10 -20.5 30 0 45 90` (`--` lets the first value be negative).
@@ -36,10 +34,7 @@ pub struct Args {
 /// Runs `axiscal joints`.
 pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
-    let text = std::fs::read_to_string(&args.calibration)
-        .with_context(|| format!("{}: cannot read", args.calibration.display()))?;
-    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
-        .with_context(|| format!("{}: not a calibration JSON", args.calibration.display()))?;
+    let cal = super::checks::read_calibration_file(&args.calibration)?;
     if cal.robot.dof() != desc.dof() {
         bail!(
             "{} has {} joints but {} describes {}",
@@ -60,22 +55,11 @@ pub fn run(args: Args) -> Result<()> {
                     args.commands.len()
                 );
             }
-            let q = file_units(&desc, &calibrated_joint_values(&cal, &desc, &args.commands)?);
+            let q = commands_to_file(&desc, &calibrated_joint_values(&cal, &desc, &args.commands)?);
             println!("{}", q.iter().map(|v| format_f64(*v)).collect::<Vec<_>>().join(" "));
             Ok(())
         }
     }
-}
-
-/// Joint values in file units (deg or mm).
-fn file_units(desc: &RobotDescription, q: &[f64]) -> Vec<f64> {
-    q.iter()
-        .zip(&desc.joints)
-        .map(|(v, j)| match j.kind {
-            JointKind::Revolute => v.to_degrees(),
-            JointKind::Prismatic => v * 1e3,
-        })
-        .collect()
 }
 
 /// Appends `q_1 .. q_N` to every row of the CSV at `path`, to stdout.
@@ -125,7 +109,7 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Re
             )
         })?;
         let mut row: Vec<String> = record.iter().map(str::to_owned).collect();
-        row.extend(file_units(desc, &q).iter().map(|v| format_f64(*v)));
+        row.extend(commands_to_file(desc, &q).iter().map(|v| format_f64(*v)));
         out.write_record(&row)?;
     }
     out.flush()?;

@@ -1,5 +1,19 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
+/// A human-readable line of a command that has `--json`: on stdout normally; with `--json`
+/// (stdout holds the JSON document alone) on stderr, or nowhere with `--quiet`.
+macro_rules! say {
+    ($($t:tt)*) => {
+        if crate::cli::json_mode() {
+            if !crate::cli::quiet() {
+                eprintln!($($t)*);
+            }
+        } else {
+            println!($($t)*);
+        }
+    };
+}
+
 mod blind;
 mod budget;
 mod calibrate;
@@ -13,11 +27,14 @@ mod joints;
 mod merge;
 mod options;
 mod output;
+mod plan;
+mod progress;
 mod record;
 mod run;
 mod signals;
 mod simulate;
 mod study;
+mod validate;
 mod view;
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -57,12 +74,46 @@ struct Cli {
     /// Also print details (e.g. the instrument's calibration) on stderr.
     #[arg(long, short, global = true)]
     verbose: bool,
+    /// No progress display (it is also hidden when stderr is not a terminal); with `--json`,
+    /// no human-readable lines either.
+    #[arg(long, short, global = true)]
+    quiet: bool,
     #[command(subcommand)]
     command: Command,
 }
 
 /// Whether `--verbose` was given.
 static VERBOSE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether `--quiet` was given.
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// Whether the running command was given `--json`.
+static JSON: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether `--quiet` was given.
+pub fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Whether the running command prints its summary as JSON on stdout (`--json`).
+pub fn json_mode() -> bool {
+    JSON.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Sets `--json` for the running command (the commands that have it call this first).
+pub fn set_json(on: bool) {
+    JSON.store(on, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// With `--json`, prints the JSON document the command wrote at `path` on stdout.
+pub fn emit_json(path: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    if json_mode() {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading back {}", path.display()))?;
+        println!("{}", text.trim_end());
+    }
+    Ok(())
+}
 
 /// Whether `--verbose` was given: details go to stderr only then.
 pub fn verbose() -> bool {
@@ -121,6 +172,9 @@ enum Command {
     Study(study::Args),
     /// Convert measurement data from another group's format to the measurement CSV.
     Import(import::Args),
+    /// The measurement plan for a real robot: every point to measure, with every joint's
+    /// command, the target and whether each station should see it (`docs/formats.md#measurement-plan`).
+    Plan(plan::Args),
     /// Simulate a measurement campaign (Table-1 axis experiments + validation poses) to CSV.
     Simulate(simulate::Args),
     /// Run a Monte-Carlo scenario (`scenarios/*.toml`): trials in parallel, results under
@@ -143,6 +197,15 @@ enum Command {
     Diagnose(diagnose::Args),
     /// Blind check of `diagnose`: simulated cases with hidden keys, scored (confusion matrix).
     Blind(blind::Args),
+    /// Print a shell completion script (`axiscal completions bash > ~/.local/share/bash-completion/completions/axiscal`).
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Validate a calibration on measured data: every point predicted, `residuals.csv` and
+    /// `summary.json` (RMS, mean, max against the noise, chi-square verdicts).
+    Validate(validate::Args),
     /// Open a rerun recording (`.rrd`) in the matching rerun viewer, or print how to install it.
     View(view::Args),
 }
@@ -184,10 +247,12 @@ pub fn main() -> ExitCode {
         }
     };
     VERBOSE.store(cli.verbose, std::sync::atomic::Ordering::Relaxed);
+    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
     let result = match cli.command {
         Command::Calibrate(args) => calibrate::run(args),
         Command::Describe(args) => describe::run(args),
         Command::Import(args) => import::run(args),
+        Command::Plan(args) => plan::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Study(args) => study::run(args),
         Command::Run(args) => run::run(args),
@@ -198,7 +263,13 @@ pub fn main() -> ExitCode {
         Command::Budget(args) => budget::run(args),
         Command::Diagnose(args) => diagnose::run(args),
         Command::Blind(args) => blind::run(args),
+        Command::Validate(args) => validate::run(args),
         Command::View(args) => view::run(args),
+        Command::Completions { shell } => {
+            use clap::CommandFactory;
+            clap_complete::generate(shell, &mut Cli::command(), "axiscal", &mut std::io::stdout());
+            Ok(())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

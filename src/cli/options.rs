@@ -2,9 +2,11 @@
 //! and the worker-thread option shared by the commands that run in parallel.
 
 use anyhow::{Context, Result, bail};
+use axiscal::presets::Kind;
 use clap::builder::TypedValueParser;
 use std::ffi::OsStr;
 use std::fmt::Display;
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 /// A number in `min..=max` (or `min < x` when `min_open`), as a clap value parser whose error
@@ -128,6 +130,17 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
         .num_threads(threads.unwrap_or(0))
         .build()
         .context("building the thread pool")
+}
+
+/// A robot description, truth model or plan on the command line: an existing file, or the
+/// name of a shipped one (`asea-irb6l`; `axiscal::presets`). The error lists the shipped names.
+pub fn robot_file(text: &str) -> Result<PathBuf, String> {
+    axiscal::presets::resolve(Path::new(text), Kind::Robot).map_err(|e| e.to_string())
+}
+
+/// A scenario on the command line: an existing file or a shipped scenario's name (`paper`).
+pub fn scenario_file(text: &str) -> Result<PathBuf, String> {
+    axiscal::presets::resolve(Path::new(text), Kind::Scenario).map_err(|e| e.to_string())
 }
 
 /// Human-readable duration of `seconds` (`45 s`, `3.2 h`, `12 years`).

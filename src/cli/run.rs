@@ -17,7 +17,6 @@ use axiscal::harness::scenario::resolve::{MAX_UNITS, default_results_dir};
 use axiscal::harness::scenario::{
     CampaignTrial, Overrides, ResolvedScenario, Shard, Summary, Trial, TrialRecord, complete_run, run_units_until,
 };
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
@@ -25,8 +24,12 @@ use std::time::Instant;
 /// Arguments of `axiscal run`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Scenario file (TOML), e.g. `scenarios/paper.toml`.
+    /// Scenario file (TOML), e.g. `scenarios/paper.toml`, or a shipped scenario's name (`paper`).
+    #[arg(value_parser = super::options::scenario_file)]
     scenario: PathBuf,
+    /// Print `summary.json` on stdout (the human-readable lines go to stderr).
+    #[arg(long)]
+    json: bool,
     /// Worker threads (default: one per core; 1..=1024).
     #[arg(long, value_parser = THREADS)]
     threads: Option<usize>,
@@ -68,6 +71,7 @@ struct Plan {
 
 /// Runs `axiscal run`.
 pub fn run(args: Args) -> Result<()> {
+    super::set_json(args.json);
     let plan = resolve(&args)?;
     super::checks::description_units(&plan.scenario.robot, &args.scenario, args.skip_unit_check)?;
     let outputs = Outputs::new(args.force).input("SCENARIO", &args.scenario);
@@ -184,7 +188,7 @@ fn run_missing(
     let have: std::collections::BTreeSet<usize> = done.iter().map(|r| r.unit(n)).collect();
     let units = plan.shard.units(scenario.units());
     let todo: Vec<usize> = units.clone().filter(|u| !have.contains(u)).collect();
-    println!(
+    say!(
         "{}: {} case(s) x {} trial(s); units {}..{} (shard {}): {} to run{} into {}",
         scenario.name,
         scenario.cases.len(),
@@ -200,11 +204,7 @@ fn run_missing(
         },
         plan.out.display()
     );
-    let bar = ProgressBar::new(todo.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed} elapsed, ETA {eta}")
-            .context("progress template")?,
-    );
+    let bar = super::progress::Progress::counted(todo.len(), "trials");
     let write_error = Mutex::new(None);
     let estimate = EtaWarning::new(todo.len(), pool.current_num_threads());
     let on_done = |r: &TrialRecord| {
@@ -212,10 +212,10 @@ fn run_missing(
             write_error.lock().unwrap_or_else(|p| p.into_inner()).get_or_insert(e);
         }
         estimate.finished();
-        bar.inc(1);
+        bar.inc();
     };
     let new = pool.install(|| run_units_until(scenario, &plan.trial, todo, &on_done, &signals::STOP));
-    bar.finish_and_clear();
+    drop(bar);
     if let Some(e) = write_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
         return Err(e.into());
     }
@@ -318,7 +318,7 @@ fn finish(plan: &Plan, records: Vec<TrialRecord>) -> Result<()> {
         std::fs::write(&path, format!("{}\nunits {}..{}\n", plan.shard, units.start, units.end))
             .with_context(|| format!("writing {}", path.display()))?;
         let failed = records.iter().filter(|r| !r.succeeded()).count();
-        println!(
+        say!(
             "shard {}: {} trial(s) ({failed} failed) written to {}; combine the shards with `axiscal merge`",
             plan.shard,
             records.len(),
@@ -328,23 +328,28 @@ fn finish(plan: &Plan, records: Vec<TrialRecord>) -> Result<()> {
     }
     let records = complete_run(scenario, records)?;
     let summary = export::write_final(out, scenario, &plan.names, &records)?;
+    super::emit_json(&out.join(export::SUMMARY_JSON))?;
     report(&summary, out)
 }
 
 /// Prints the verdicts; an error naming every failed threshold when one fails.
 pub fn report(summary: &Summary, out: &Path) -> Result<()> {
-    println!("results in {}", out.display());
+    say!("results in {}", out.display());
     for c in &summary.cases {
-        println!("case {} ({} trials, {} failed)", c.case, c.trials, c.failed);
+        say!("case {} ({} trials, {} failed)", c.case, c.trials, c.failed);
         for m in &c.metrics {
-            println!(
+            say!(
                 "  {:<22} mean {:>12.6}  median {:>12.6}  p95 {:>12.6}  max {:>12.6}",
-                m.metric, m.stats.mean, m.stats.median, m.stats.p95, m.stats.max
+                m.metric,
+                m.stats.mean,
+                m.stats.median,
+                m.stats.p95,
+                m.stats.max
             );
         }
     }
     for v in &summary.verdicts {
-        println!("{v}");
+        say!("{v}");
     }
     let failed = summary.failures();
     if failed.is_empty() {

@@ -17,11 +17,11 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Nominal robot description (TOML); the controller and the plan use it.
-    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Truth model of the simulated robot (TOML); default: the paper robot (Table 2 actual
     /// rows and the section-4 functions).
-    #[arg(long)]
+    #[arg(long, value_parser = super::options::robot_file)]
     truth: Option<PathBuf>,
     /// Measurement noise: two theodolites calibrated to 0.19 mm net radial error, or
     /// isotropic Gaussian noise of the same 3-D RMS.
@@ -30,7 +30,7 @@ pub struct Args {
     /// The campaign plan (TOML: `reference`, `[[sweeps]]`, `held_jitter`;
     /// `docs/formats.md#plan-file`). Default: paper Table 1 for a six-joint revolute arm, its
     /// generalisation (`CalibrationPlan::for_robot`) for any other robot.
-    #[arg(long)]
+    #[arg(long, value_parser = super::options::robot_file)]
     plan: Option<PathBuf>,
     /// Number of validation poses (three tool targets each).
     #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, 1_000_000, ""))]
@@ -100,21 +100,7 @@ pub fn run(args: Args) -> Result<()> {
         None => axiscal::sim::paper_robot(),
     };
     let instrument = instrument_model(args.instrument)?;
-    let plan = match &args.plan {
-        Some(path) => {
-            let text = axiscal::toml_file::read(path)?;
-            axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?
-        }
-        None if desc.dof() == 6
-            && desc
-                .joints
-                .iter()
-                .all(|j| j.kind == axiscal::kinematics::JointKind::Revolute) =>
-        {
-            CalibrationPlan::table1(6)
-        }
-        None => CalibrationPlan::for_robot(&desc),
-    };
+    let plan = super::plan::campaign_plan(&desc, args.plan.as_deref())?;
     let validation = ValidationPlan {
         poses: args.validation_poses,
         ..ValidationPlan::workspace_default(desc.dof())

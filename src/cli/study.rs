@@ -1,6 +1,7 @@
 //! `axiscal study`: the calibrator's efficiency against the Cramer-Rao bound and the
 //! calibration of its reported uncertainty, over many simulated campaigns.
 
+use super::options::THREADS;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::Result;
@@ -30,6 +31,9 @@ pub struct Args {
     /// Output folder (`efficiency.json`, `efficiency.md`).
     #[arg(long, default_value = "results/study")]
     out: PathBuf,
+    /// Worker threads (default: one per core; 1..=1024); the result does not depend on it.
+    #[arg(long, value_parser = THREADS)]
+    threads: Option<usize>,
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
@@ -47,7 +51,9 @@ pub fn run(args: Args) -> Result<()> {
     let names = ["efficiency.json", "efficiency.md"];
     let outputs = Outputs::new(args.force);
     outputs.check_in(&args.out, &names)?;
-    let report = study.run()?;
+    let progress = super::progress::Progress::stage(&format!("efficiency study: {} trials", args.trials));
+    let report = super::options::thread_pool(args.threads)?.install(|| study.run())?;
+    drop(progress);
     let md = report.markdown();
     outputs.write_in(&args.out, names[0], json_file::to_string(Schema::STUDY, &report)?)?;
     outputs.write_in(&args.out, names[1], &md)?;

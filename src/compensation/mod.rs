@@ -26,6 +26,9 @@ use nalgebra::Isometry3;
 /// Why a pose cannot be compensated.
 #[derive(Debug, thiserror::Error)]
 pub enum CompensationError {
+    /// The calibrated model is not a consistent robot (a damaged or hand-edited file).
+    #[error("the calibrated robot: {0}")]
+    Model(#[from] crate::robot::ModelError),
     /// The calibrated model and the robot description disagree in their number of joints.
     #[error("the calibrated robot has {calibrated} joints, the description {nominal}")]
     JointCount {
@@ -85,6 +88,7 @@ impl Compensator {
     /// robot) behind the controller of `desc`. IK uses the default tolerances (1e-12 m and
     /// rad) and reports joints outside the description's limits (seeds inside them first).
     pub fn new(calibrated: &RobotModel, desc: &RobotDescription) -> Result<Self, CompensationError> {
+        calibrated.validate()?;
         if calibrated.dof() != desc.dof() {
             return Err(CompensationError::JointCount {
                 calibrated: calibrated.dof(),

@@ -35,6 +35,7 @@ mod plots;
 mod poses;
 mod report;
 mod result;
+mod validate;
 
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
@@ -43,11 +44,15 @@ pub use model::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,
     Predictor, RefitScope, SpringSite, ThermalLinks, TiltShape, is_geared, unmodelled_harmonic_order,
 };
-pub use noise::{CleanCampaign, NoiseModel, ValidationRows, is_validation, replica};
+pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, Outcome, Parameter, WhereEntry};
+pub use validate::{
+    ChiSquare, OrientationSummary, PointKind, PositionSummary, Validation, ValidationOptions, ValidationResidual,
+    validate, validation_residuals_csv,
+};
 
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::measurement::MeasurementSet;

@@ -82,13 +82,9 @@ impl CleanCampaign {
         let model = cal.robot.phi_model();
         let mut joint_values = Vec::with_capacity(set.rows().len());
         for m in set.rows() {
-            let cmd = commands_to_internal(desc, &m.cmd);
-            let q = cal
-                .robot
-                .joint_values(&controller, &cmd)
-                .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))?;
+            let q = calibrated_joint_values(cal, &controller, desc, m)?;
             let u = controller
-                .decouple(&cmd)
+                .decouple(&commands_to_internal(desc, &m.cmd))
                 .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))?;
             joint_values.push((q, u));
         }
@@ -183,6 +179,29 @@ impl<'a> Jitter<'a> {
         self.last = Some((u.to_vec(), z));
         dq
     }
+}
+
+/// Noise-free positions of every row of `set` on the calibrated robot \[m\], tool targets at
+/// the description's ([`CleanCampaign::positions`]).
+pub fn clean_positions(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+) -> Result<Vec<Point3<f64>>, DiagnosisError> {
+    Ok(CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?.positions())
+}
+
+/// The calibrated joint values of `m`'s commands (the controller, then `cal`'s transmissions
+/// and couplings).
+pub(super) fn calibrated_joint_values(
+    cal: &Calibration,
+    controller: &Controller,
+    desc: &RobotDescription,
+    m: &Measurement,
+) -> Result<Vec<f64>, DiagnosisError> {
+    cal.robot
+        .joint_values(controller, &commands_to_internal(desc, &m.cmd))
+        .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))
 }
 
 /// Whether `m` is a validation measurement (`docs/formats.md#measurement-csv`: `moved_joint = 0`, not the

@@ -10,6 +10,15 @@
 //! one Levenberg-Marquardt loop (Marquardt's scaling, `crate::numerics::lsq`) until both
 //! tolerances hold.
 //!
+//! A robot with fewer than six joints cannot reach every pose, and a calibrated model of one
+//! generally misses the poses its nominal model reaches (a tilted axis turns its reachable
+//! set). For such a model the iteration minimises `|e_p|^2 + (w |e_o|)^2` with the orientation
+//! weighted by [`REDUCED_ORIENTATION_WEIGHT_M`] (position first: a positioning table or a SCARA
+//! is asked for a point, its orientation about the axes it lacks is what it gives) and
+//! converges at the least-squares pose: a stationary point of that cost with the position
+//! error within [`REDUCED_POSITION_TOLERANCE_M`]. The report's errors are then the part of the
+//! pose the robot cannot reach.
+//!
 //! A good seed matters for a 6R arm with up to 8 (or more) solutions: for the IRB/L6 class the
 //! nominal model has a closed form ([`nominal_closed_form`]) whose branches seed the solver on
 //! the actual model ([`solve_seeded_by_nominal`]).
@@ -24,6 +33,18 @@ use super::phi::JointKind;
 use crate::numerics::lsq::{LmOptions, LsqError, Stop, levenberg_marquardt};
 use nalgebra::{DMatrix, DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
 use std::f64::consts::PI;
+
+/// Weight of the orientation error against the position error \[m/rad\] for a model with
+/// fewer than six joints (module docs): 1 mrad counts as 1 um, so the position is reached first
+/// and the orientation is the best the remaining freedom gives.
+pub const REDUCED_ORIENTATION_WEIGHT_M: f64 = 1e-3;
+
+/// The position error a model with fewer than six joints must reach at its least-squares
+/// pose \[m\]: the weighted orientation error moves the optimum's position by about
+/// `w^2 |e_o| * lever`, below 1e-8 m for `|e_o|` < 10 mrad and a 1 m lever, and 1 um is far
+/// below any instrument's noise. A pose whose position the robot cannot reach (a two-axis
+/// positioner asked for a point off its reachable surface) is not converged.
+pub const REDUCED_POSITION_TOLERANCE_M: f64 = 1e-6;
 
 /// Settings of the Levenberg-Marquardt IK solver.
 #[derive(Clone, Debug, PartialEq)]
@@ -194,18 +215,20 @@ pub fn ik_from_seed(model: &PhiModel, target: &Isometry3<f64>, seed: &[f64], opt
     if let Some(l) = limits {
         clamp(&mut q0, l);
     }
+    // Fewer than six joints: the weighted least-squares pose (module docs).
+    let reduced = n < 6;
+    let w = if reduced { REDUCED_ORIENTATION_WEIGHT_M } else { 1.0 };
     let within = |e: &DVector<f64>| {
         let (p, o) = (e.fixed_rows::<3>(0).norm(), e.fixed_rows::<3>(3).norm());
         p <= opts.position_tolerance_m && o <= opts.orientation_tolerance_rad
     };
-    // The pose error's derivative is -J (module docs).
+    // The pose error's derivative is -J (module docs); the orientation rows scaled by `w`.
     let eval = |q: &Vec<f64>| -> Result<(DVector<f64>, DMatrix<f64>), LsqError> {
-        let e = pose_error(target, &model.world_from_tool(q));
-        let j = geometric_jacobian(model, q);
-        Ok((
-            DVector::from_column_slice(e.as_slice()),
-            -DMatrix::from_column_slice(6, n, j.as_slice()),
-        ))
+        let mut e = pose_error(target, &model.world_from_tool(q));
+        let mut j = -DMatrix::from_column_slice(6, n, geometric_jacobian(model, q).as_slice());
+        e.fixed_rows_mut::<3>(3).scale_mut(w);
+        j.rows_mut(3, 3).scale_mut(w);
+        Ok((DVector::from_column_slice(e.as_slice()), j))
     };
     let apply = |q: &Vec<f64>, dq: &DVector<f64>| -> Result<Vec<f64>, LsqError> {
         let mut next: Vec<f64> = q.iter().zip(dq.iter()).map(|(a, b)| a + b).collect();
@@ -215,6 +238,7 @@ pub fn ik_from_seed(model: &PhiModel, target: &Isometry3<f64>, seed: &[f64], opt
         Ok(next)
     };
     let options = LmOptions {
+        // An exact pose (or, reduced, an exact position with the orientation reachable).
         target: Some(&within),
         ..LmOptions::marquardt("inverse kinematics", opts.max_iterations)
     };
@@ -224,8 +248,10 @@ pub fn ik_from_seed(model: &PhiModel, target: &Isometry3<f64>, seed: &[f64], opt
         let e0 = pose_error(target, &model.world_from_tool(&q0));
         return finish(model, q0, e0, 0, opts, false);
     };
-    let e = Vector6::from_column_slice(outcome.residual.as_slice());
-    let converged = outcome.stop == Stop::Target;
+    let e = pose_error(target, &model.world_from_tool(&outcome.state));
+    let stationary = matches!(outcome.stop, Stop::Gradient | Stop::CostStalled | Stop::NoDecrease);
+    let converged = outcome.stop == Stop::Target
+        || (reduced && stationary && e.fixed_rows::<3>(0).norm() <= REDUCED_POSITION_TOLERANCE_M);
     finish(model, outcome.state, e, outcome.iterations, opts, converged)
 }
 
@@ -281,18 +307,24 @@ pub fn solve_ik(
 /// model ([`nominal_closed_form`]): branches within `opts.limits` are tried first, then the
 /// others, each group nearest-to-zero first; the first one from which the iteration converges is returned. If the nominal
 /// model has no closed-form solution (target out of its reach, or not of the IRB/L6 class),
-/// the iteration starts from the middle of the limits (zero without limits).
+/// the iteration starts from the middle of the limits (zero without limits), then from a
+/// quarter of each range above and below it (+-pi/4 rad or m without limits).
 pub fn solve_seeded_by_nominal(
     actual: &PhiModel,
     nominal: &PhiModel,
     world_from_tool_target: &Isometry3<f64>,
     opts: &IkOptions,
 ) -> Result<IkSolution, IkError> {
-    let fallback_seed: Vec<f64> = match &opts.limits {
-        Some(l) => l.iter().map(|[lo, hi]| 0.5 * (lo + hi)).collect(),
-        None => vec![0.0; actual.dof()],
-    };
-    check_inputs(actual, world_from_tool_target, &fallback_seed, opts)?;
+    // Without a closed form: the middle of the limits, then a quarter of the range to either
+    // side (a SCARA's elbow is singular at the middle, straight), first converged wins.
+    let fallback_seeds: Vec<Vec<f64>> = [0.0, 0.25, -0.25]
+        .iter()
+        .map(|f| match &opts.limits {
+            Some(l) => l.iter().map(|[lo, hi]| 0.5 * (lo + hi) + f * (hi - lo)).collect(),
+            None => vec![f * PI; actual.dof()],
+        })
+        .collect();
+    check_inputs(actual, world_from_tool_target, &fallback_seeds[0], opts)?;
     let mut seeds: Vec<Vec<f64>> = nominal_closed_form(nominal, world_from_tool_target)
         .map(|branches| branches.into_iter().map(|b| b.q).collect())
         .unwrap_or_default();
@@ -303,7 +335,7 @@ pub fn solve_seeded_by_nominal(
         (outside_limits(s, opts.limits.as_ref()).len(), size)
     };
     seeds.sort_by(|a, b| key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal));
-    seeds.push(fallback_seed);
+    seeds.extend(fallback_seeds);
     let mut best: Option<IkSolution> = None;
     for seed in &seeds {
         let s = ik_from_seed(actual, world_from_tool_target, seed, opts);

@@ -17,8 +17,9 @@ pub use dh::{
     dh_from_phi, parallel_tilt_sensitivity,
 };
 pub use ik::{
-    ClosedFormError, ClosedFormSolution, IkError, IkOptions, IkReport, IkSolution, ik_from_seed, nominal_closed_form,
-    pose_error, rotation_vector, solve_ik, solve_seeded_by_nominal,
+    ClosedFormError, ClosedFormSolution, IkError, IkOptions, IkReport, IkSolution, REDUCED_ORIENTATION_WEIGHT_M,
+    REDUCED_POSITION_TOLERANCE_M, ik_from_seed, nominal_closed_form, pose_error, rotation_vector, solve_ik,
+    solve_seeded_by_nominal,
 };
 pub use jacobian::{geometric_jacobian, point_jacobian};
 pub use phi::{JointKind, PhiRow, frame_from_phi, joint_motion, link_from_phi};

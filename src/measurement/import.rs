@@ -1,4 +1,7 @@
-//! Importers: measurement files written by other groups, converted to the measurement CSV of
-//! `docs/formats.md#measurement-csv`. One module per source format.
+//! Importers: measurement files written by other groups or exported by instruments, converted
+//! to the measurement CSV of `docs/formats.md#measurement-csv`. One module per source format.
 
 pub mod boby_klimchik;
+pub mod points;
+pub mod table;
+pub mod wide;

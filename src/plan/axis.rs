@@ -105,6 +105,12 @@ pub enum PlanError {
         /// Upper limit.
         limit_high: f64,
     },
+    /// A planned pose the nominal robot cannot take (e.g. a target on no link).
+    #[error("{message}")]
+    Invalid {
+        /// What is wrong.
+        message: String,
+    },
     /// The reference pose has the wrong length.
     #[error("reference pose has {found} values, the robot has {dof} joints")]
     ReferenceLength {

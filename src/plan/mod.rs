@@ -5,9 +5,12 @@
 //! is measured under. Nothing here knows the robot beyond its nominal description.
 
 mod axis;
+mod sheet;
+pub mod sight;
 mod validation;
 
 pub use axis::{AxisSweep, CalibrationPlan, PlanError};
+pub use sheet::{PlannedPoint, SightOptions, VALIDATION_EXPERIMENT, planned_points, write_plan_csv};
 pub use validation::ValidationPlan;
 
 /// Experiment id of the three tool targets observed at the reference pose (trains the

@@ -440,3 +440,24 @@ pub fn commands_to_internal(desc: &RobotDescription, cmd_file: &[f64]) -> Vec<f6
         })
         .collect()
 }
+
+/// Converts internal-unit joint values or commands (rad / m) to file units (deg / mm), the
+/// inverse of [`commands_to_internal`].
+pub fn commands_to_file(desc: &RobotDescription, cmd_internal: &[f64]) -> Vec<f64> {
+    cmd_internal
+        .iter()
+        .zip(&desc.joints)
+        .map(|(c, j)| match j.kind {
+            JointKind::Revolute => c.to_degrees(),
+            JointKind::Prismatic => c * 1e3,
+        })
+        .collect()
+}
+
+/// The unit suffix of joint `k`'s file values: `deg` (revolute) or `mm` (prismatic).
+pub fn file_unit(desc: &RobotDescription, k: usize) -> &'static str {
+    match desc.joints[k].kind {
+        JointKind::Revolute => "deg",
+        JointKind::Prismatic => "mm",
+    }
+}

@@ -15,7 +15,7 @@ pub use controller::Controller;
 pub use description::{
     AxisTargets, CouplingFitForm, DescriptionError, DescriptionIdentity, DhConventionEntry, DhEntry, JointEntry,
     LinkTarget, NominalCoupling, Placement, RobotDescription, RowEntry, ToolEntry, TransmissionFitForm, UrdfEntry,
-    commands_to_internal,
+    commands_to_file, commands_to_internal, file_unit,
 };
 pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};
 pub use four_bar_fit::{FourBarFit, fit_four_bar};

@@ -71,10 +71,10 @@ impl ArmExecutor for AnalyticArm {
         conditions: &PoseConditions,
         rng: &mut R,
     ) -> Result<Vec<Isometry3<f64>>, ExecuteError> {
-        let driven = self.driver.drive(cmd, rng).map_err(|e| ExecuteError {
-            cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
-            reason: e.to_string(),
-        })?;
+        let driven = self
+            .driver
+            .drive(cmd, rng)
+            .map_err(|e| ExecuteError::new(&self.model, cmd, e.to_string()))?;
         let mut q = driven.q;
         let model = self.effects.thermal_model(&self.model, conditions.temperature_c);
         if let Some(compliance) = &self.effects.compliance

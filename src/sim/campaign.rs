@@ -2,6 +2,7 @@
 //! the validation poses, each target measured by an instrument, to measurement rows
 //! (`docs/formats.md#measurement-csv`).
 
+use crate::kinematics::{JointKind, PhiModel};
 use crate::measurement::{Measurement, MeasurementModel, TriangulationError};
 use crate::physics::InstrumentScale;
 use crate::plan::{CalibrationPlan, PlanError, PoseConditions, TOOL_EXPERIMENT, ValidationPlan};
@@ -35,12 +36,27 @@ pub trait ArmExecutor {
 
 /// The simulated robot could not execute a command.
 #[derive(Debug, thiserror::Error)]
-#[error("executing commands {cmd_deg:?}: {reason}")]
+#[error("executing commands {cmd_file:?} (deg or mm): {reason}")]
 pub struct ExecuteError {
-    /// The commands in file units.
-    pub cmd_deg: Vec<f64>,
+    /// The commands in file units (deg for a revolute joint, mm for a sliding one).
+    pub cmd_file: Vec<f64>,
     /// Why.
     pub reason: String,
+}
+
+impl ExecuteError {
+    /// The error of internal-unit commands `cmd` of `model`'s joints (rad or m).
+    pub fn new(model: &PhiModel, cmd: &[f64], reason: String) -> Self {
+        let cmd_file = cmd
+            .iter()
+            .zip(&model.joints)
+            .map(|(c, j)| match j.kind {
+                JointKind::Revolute => c.to_degrees(),
+                JointKind::Prismatic => c * 1e3,
+            })
+            .collect();
+        ExecuteError { cmd_file, reason }
+    }
 }
 
 /// What a campaign produced.

@@ -7,7 +7,8 @@ use axiscal::measurement::{MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::sim::{AnalyticArm, simulate_campaign};
-use rand::{SeedableRng, rngs::ChaCha12Rng};
+use nalgebra::Isometry3;
+use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 
 /// The `axiscal` binary of this build.
 pub fn axiscal() -> Command {
@@ -59,4 +60,36 @@ pub fn simulated_campaign_csv(seed: u64) -> (tempfile::TempDir, std::path::PathB
         .assert()
         .success();
     (dir, data)
+}
+
+/// Random commands (file units) uniformly within each swept joint's span around the plan's
+/// reference (joints not swept stay at the reference).
+pub fn commands_in_spans(plan: &CalibrationPlan, rng: &mut ChaCha12Rng) -> Vec<f64> {
+    plan.reference
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let half = plan
+                .sweeps
+                .iter()
+                .find(|s| s.joint == k + 1)
+                .map_or(0.0, |s| s.span / 2.0);
+            r + rng.random_range(-half..=half)
+        })
+        .collect()
+}
+
+/// One row of a `compensate --poses` CSV: `id` and the pose `p` in mm and deg.
+pub fn pose_line(id: &str, p: &Isometry3<f64>) -> String {
+    let t = p.translation.vector * 1e3;
+    let (r, pi, y) = p.rotation.euler_angles();
+    format!(
+        "{id},{},{},{},{},{},{}\n",
+        t.x,
+        t.y,
+        t.z,
+        r.to_degrees(),
+        pi.to_degrees(),
+        y.to_degrees()
+    )
 }

@@ -4,8 +4,8 @@
 //! repeatability added to each axis's covariance; the per-point residuals.
 
 use super::{
-    AxisCovariance, AxisEstimator, AxisExperiment, AxisReport, CalibrationOptions, PointResidual, ProcedureError,
-    SweepReport,
+    AxisCovariance, AxisEstimator, AxisExperiment, AxisReport, CalibrationOptions, Detail, PointResidual,
+    ProcedureError, SweepReport,
 };
 use crate::calibration::arc_model::{ArcModel, MeasurementNoise, axis_quantities_gradient};
 use crate::calibration::line_ml::fit_line;
@@ -13,8 +13,8 @@ use crate::calibration::noise::ResidualMoments;
 use crate::calibration::sliding::{fit_sliding_axis, fit_sliding_function};
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
-    ArcFitOptions, CalibrationError, angles, fit_arc, fit_arc_with_angle_noise, fit_axis_paper, fit_circle,
-    fit_transmission,
+    ArcFitOptions, CalibrationError, Studies, angles, fit_arc, fit_arc_with_angle_noise_studies, fit_axis_paper,
+    fit_circle, fit_transmission,
 };
 use crate::kinematics::{AxisLine, JointKind};
 use crate::robot::commands_to_internal;
@@ -113,6 +113,7 @@ pub(super) fn fit_joint(
     options: &CalibrationOptions,
     noise_mm: f64,
     repeatability: f64,
+    detail: Detail,
 ) -> Result<AxisFitOutcome, ProcedureError> {
     let joint = data.joint();
     let (points, u) = data.flat(controller, desc);
@@ -137,18 +138,23 @@ pub(super) fn fit_joint(
     let sigma = noise_mm * 1e-3 / 3f64.sqrt();
     let mut out = match (kind, paper) {
         (JointKind::Revolute, false) => {
-            fit_arc_ml(data, &points, &u, form, options, sigma, repeatability).map_err(err)?
+            fit_arc_ml(data, &points, &u, form, options, sigma, repeatability, detail).map_err(err)?
         }
         (JointKind::Revolute, true) => fit_arc_paper(data, &points, &u, form, options).map_err(err)?,
         (JointKind::Prismatic, false) => {
-            fit_line_ml(data, &points, &u, form, options, sigma, repeatability).map_err(err)?
+            fit_line_ml(data, &points, &u, form, options, sigma, repeatability, detail).map_err(err)?
         }
         (JointKind::Prismatic, true) => fit_line_paper(data, &points, &u, form, options).map_err(err)?,
     };
-    out.report.sweeps = sweep_reports(data, &out, desc, controller, options, sigma);
+    if detail == Detail::Report {
+        out.report.sweeps = sweep_reports(data, &out, desc, controller, options, sigma);
+    }
     Ok(out)
 }
 
+/// The ML arc fit of one joint; the identifiability study, the covariance and the residuals
+/// only as far as `detail` asks.
+#[allow(clippy::too_many_arguments)]
 fn fit_arc_ml(
     data: &JointData<'_>,
     points: &[Point3<f64>],
@@ -157,6 +163,7 @@ fn fit_arc_ml(
     options: &CalibrationOptions,
     sigma: f64,
     repeatability_rad: f64,
+    detail: Detail,
 ) -> Result<AxisFitOutcome, CalibrationError> {
     let centroid = Point3::from(points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / points.len() as f64);
     let arc_options = ArcFitOptions {
@@ -165,15 +172,31 @@ fn fit_arc_ml(
         reference_point: centroid,
         max_iterations: options.max_iterations,
     };
-    let fit = fit_arc_with_angle_noise(points, u, &arc_options, repeatability_rad)?;
-    let g = axis_quantities_gradient(&fit.params, &centroid);
-    let q = &g * &fit.covariance * g.transpose();
+    let studies = if detail == Detail::Report {
+        Studies::Run
+    } else {
+        Studies::Skip
+    };
+    let fit = fit_arc_with_angle_noise_studies(points, u, &arc_options, repeatability_rad, studies)?;
     let mut report = AxisReport::from_arc(data.joint(), &data.name(), points.len(), &fit, &form, span(u));
-    report.covariance = Some(AxisCovariance::new(
-        fit.params.u().into_inner(),
-        fit.params.v().into_inner(),
-        &q.fixed_view::<4, 4>(0, 0).into(),
-    ));
+    if detail != Detail::Model {
+        let g = axis_quantities_gradient(&fit.params, &centroid);
+        let q = &g * &fit.covariance * g.transpose();
+        report.covariance = Some(AxisCovariance::new(
+            fit.params.u().into_inner(),
+            fit.params.v().into_inner(),
+            &q.fixed_view::<4, 4>(0, 0).into(),
+        ));
+    }
+    if detail != Detail::Report {
+        return Ok(AxisFitOutcome {
+            axis: fit.axis,
+            transmission: fit.transmission,
+            report,
+            moments: Some(fit.moments),
+            residuals: vec![],
+        });
+    }
     let pred = ArcModel::new(form, u, &arc_options.noise)?.predict(&fit.params)?;
     let n = fit.params.normal().into_inner();
     let residuals = data
@@ -198,6 +221,8 @@ fn fit_arc_ml(
     })
 }
 
+/// The ML line fit of one sliding joint; the residuals only for a report (`detail`).
+#[allow(clippy::too_many_arguments)]
 fn fit_line_ml(
     data: &JointData<'_>,
     points: &[Point3<f64>],
@@ -206,11 +231,16 @@ fn fit_line_ml(
     options: &CalibrationOptions,
     sigma: f64,
     repeatability_m: f64,
+    detail: Detail,
 ) -> Result<AxisFitOutcome, CalibrationError> {
     let fit = fit_line(points, u, &form, sigma, repeatability_m, options.max_iterations)?;
     let report = AxisReport::from_line(data.joint(), &data.name(), &fit, &form, span(u));
-    let residuals = data
-        .labels()
+    let labels = if detail == Detail::Report {
+        data.labels()
+    } else {
+        vec![]
+    };
+    let residuals = labels
         .into_iter()
         .zip(&fit.residuals)
         .map(|((experiment, step), r)| PointResidual {

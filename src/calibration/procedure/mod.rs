@@ -49,7 +49,7 @@ pub use urdf::{
 };
 
 use super::CalibrationError;
-use super::noise::estimate_noise;
+use super::noise::{NoiseEstimate, estimate_noise};
 use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
@@ -218,19 +218,88 @@ pub enum ProcedureError {
     },
 }
 
+/// How much a calibration computes besides the fitted model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Detail {
+    /// The fitted model only: what a Monte-Carlo trial needs ([`calibrate_model`]).
+    Model,
+    /// The model and the 1-sigma of its rows ([`FittedModel::row_sigma`]).
+    ModelAndCovariance,
+    /// Everything [`Calibration`] holds: per-axis reports with their covariances and
+    /// identifiability studies, per-sweep reports, residuals, the noise report ([`calibrate`]).
+    Report,
+}
+
+/// The lean result of [`calibrate_model`]: the fitted model, as [`calibrate`] would fit it
+/// bit for bit, without the report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FittedModel {
+    /// The calibrated robot (the same value as [`Calibration::robot`]).
+    pub robot: RobotModel,
+    /// 1-sigma of each row ([`Calibration::row_sigma`]); `Some` with
+    /// [`Detail::ModelAndCovariance`] only.
+    pub row_sigma: Option<Vec<RowSigma>>,
+    /// Fit-and-correct passes for the held joints' recorded values.
+    pub held_passes: usize,
+}
+
 /// Calibrates the robot described (nominally) by `desc` from the axis experiments of `set`
 /// (and the tool targets at the reference pose, when observed). With
 /// [`CalibrationOptions::estimate_noise`] the fits are weighted, in a second run, with the
-/// noise the first run's residuals estimate.
+/// noise the first run's residuals estimate. This is [`calibrate_model`]'s path with the
+/// report's extras added at the end.
 pub fn calibrate(
     set: &MeasurementSet,
     desc: &RobotDescription,
     options: &CalibrationOptions,
 ) -> Result<Calibration, ProcedureError> {
-    let first = calibrate_at(set, desc, options, options.noise_rms_3d_mm)?;
-    let estimate = first.noise.as_ref().and_then(|n| n.estimate.clone());
+    calibrate_as(
+        set,
+        desc,
+        options,
+        Detail::Report,
+        &|ctx, state, reference_cmd, passes| ctx.finish(set, state, reference_cmd, passes),
+    )
+}
+
+/// The lean path for Monte-Carlo trials: the same procedure as [`calibrate`] (the same code,
+/// the same model bit for bit), without what only a report needs: no identifiability span
+/// studies, per-sweep reports, residual lists or noise report, and the axes' covariances
+/// only when `detail` is [`Detail::ModelAndCovariance`] (then `row_sigma` is filled).
+/// [`Detail::Report`] is taken as [`Detail::ModelAndCovariance`].
+pub fn calibrate_model(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    detail: Detail,
+) -> Result<FittedModel, ProcedureError> {
+    let detail = if detail == Detail::Model {
+        Detail::Model
+    } else {
+        Detail::ModelAndCovariance
+    };
+    calibrate_as(set, desc, options, detail, &|ctx, state, reference_cmd, passes| {
+        Ok(ctx.finish_model(set, &state, &reference_cmd, passes)?.0)
+    })
+}
+
+/// Turns the last pass's state, the reference commands and the pass count into a result.
+type Finish<'f, T> = dyn Fn(&Context<'_>, Assembled, Vec<f64>, usize) -> Result<T, ProcedureError> + 'f;
+
+/// The procedure at `detail`, finished by `finish`; with [`CalibrationOptions::estimate_noise`]
+/// run again with the noise the first run's residual moments estimate.
+fn calibrate_as<T>(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    detail: Detail,
+    finish: &Finish<'_, T>,
+) -> Result<T, ProcedureError> {
+    let (first, estimate) = calibrate_at(set, desc, options, options.noise_rms_3d_mm, detail, finish)?;
     match estimate {
-        Some(e) if options.estimate_noise && e.rms_3d_mm > 0.0 => calibrate_at(set, desc, options, e.rms_3d_mm),
+        Some(e) if options.estimate_noise && e.rms_3d_mm > 0.0 => {
+            Ok(calibrate_at(set, desc, options, e.rms_3d_mm, detail, finish)?.0)
+        }
         _ => Ok(first),
     }
 }
@@ -249,13 +318,16 @@ struct Assembled {
     points: Vec<Point3<f64>>,
 }
 
-/// The calibration with the fits weighted by `noise_mm` (3-D RMS).
-fn calibrate_at(
+/// The calibration with the fits weighted by `noise_mm` (3-D RMS), and the noise its
+/// residuals estimate (when [`CalibrationOptions::estimate_noise`] asks for it).
+fn calibrate_at<T>(
     set: &MeasurementSet,
     desc: &RobotDescription,
     options: &CalibrationOptions,
     noise_mm: f64,
-) -> Result<Calibration, ProcedureError> {
+    detail: Detail,
+    finish: &Finish<'_, T>,
+) -> Result<(T, Option<NoiseEstimate>), ProcedureError> {
     let repeatability = options.joint_repeatability_rad(desc)?;
     let (experiments, reference_cmd) = axis_experiments_with(set, desc, options.held_tolerance)?;
     let controller = Controller::from_description(desc);
@@ -270,6 +342,7 @@ fn calibrate_at(
         u_ref: &u_ref,
         repeatability: &repeatability,
         noise_mm,
+        detail,
     };
     let exact = exactly_as_designed(&experiments, &reference_cmd, desc);
     // First pass: each joint from its sweep nearest the design, as measured.
@@ -314,7 +387,13 @@ fn calibrate_at(
             passes += 1;
         }
     }
-    ctx.finish(set, state, reference_cmd, passes)
+    let estimate = if options.estimate_noise {
+        let moments: Vec<_> = state.fits.iter().flatten().filter_map(|f| f.moments).collect();
+        estimate_noise(&moments)
+    } else {
+        None
+    };
+    Ok((finish(&ctx, state, reference_cmd, passes)?, estimate))
 }
 
 /// What every pass of the procedure shares.
@@ -327,6 +406,8 @@ struct Context<'a> {
     u_ref: &'a [f64],
     repeatability: &'a [f64],
     noise_mm: f64,
+    /// What the fits compute besides the model.
+    detail: Detail,
 }
 
 impl<'a> Context<'a> {
@@ -378,6 +459,7 @@ impl<'a> Context<'a> {
                         self.options,
                         self.noise_mm,
                         self.repeatability[k],
+                        self.detail,
                     )?)
                 }
                 None => None,
@@ -407,7 +489,35 @@ impl<'a> Context<'a> {
         })
     }
 
-    /// The calibration of the last pass: row sigmas, held joints' covariance, tool, noise.
+    /// The model of the last pass with its tool frame (when measured) and, unless `detail` is
+    /// [`Detail::Model`], the rows' sigmas (from the axes' covariances as fitted, before the
+    /// held joints' bias is added): what every path needs.
+    fn finish_model(
+        &self,
+        set: &MeasurementSet,
+        state: &Assembled,
+        reference_cmd: &[f64],
+        passes: usize,
+    ) -> Result<(FittedModel, Option<ToolReport>), ProcedureError> {
+        let row_sigma = match self.detail {
+            Detail::Model => None,
+            _ => Some(calibrated_row_sigmas(self.desc, &state.axes, self.q_ref, &state.fits)?),
+        };
+        let mut robot = state.robot.clone();
+        let tool = tool_frame(set, self.desc, &robot, reference_cmd, self.controller);
+        if let Some(t) = &tool {
+            robot.tool_frame = Placement::from_isometry(&t.last_link_from_tool);
+        }
+        let model = FittedModel {
+            robot,
+            row_sigma,
+            held_passes: passes,
+        };
+        Ok((model, tool))
+    }
+
+    /// The calibration of the last pass: [`Context::finish_model`] plus the report's extras
+    /// (held joints' covariance, axis reports, noise report, residuals).
     fn finish(
         &self,
         set: &MeasurementSet,
@@ -415,21 +525,16 @@ impl<'a> Context<'a> {
         reference_cmd: Vec<f64>,
         passes: usize,
     ) -> Result<Calibration, ProcedureError> {
+        let (FittedModel { robot, row_sigma, .. }, tool) = self.finish_model(set, &state, &reference_cmd, passes)?;
         let Assembled {
             mut fits,
             axes,
             base_rule,
-            mut robot,
             couplings,
             ..
         } = state;
-        let row_sigma = calibrated_row_sigmas(self.desc, &axes, self.q_ref, &fits)?;
         let kinds: Vec<JointKind> = self.desc.joints.iter().map(|j| j.kind).collect();
         add_held_joint_covariances(&mut fits, &axes, &kinds, self.repeatability);
-        let tool = tool_frame(set, self.desc, &robot, &reference_cmd, self.controller);
-        if let Some(t) = &tool {
-            robot.tool_frame = Placement::from_isometry(&t.last_link_from_tool);
-        }
         let noise = self.noise_report(&fits);
         let not_calibrated = (1..=fits.len()).filter(|k| fits[k - 1].is_none()).collect();
         let mut residuals = Vec::new();
@@ -442,7 +547,7 @@ impl<'a> Context<'a> {
             robot,
             reference_cmd,
             axes: axes_reports,
-            row_sigma,
+            row_sigma: row_sigma.unwrap_or_default(),
             couplings,
             tool,
             options: self.options.clone(),
@@ -505,18 +610,7 @@ fn calibrated_robot(desc: &RobotDescription, joints: Vec<JointModel>, geometry: 
     RobotModel {
         name: format!("{} (calibrated)", desc.name),
         joints,
-        rows: geometry
-            .rows
-            .iter()
-            .map(|r| crate::robot::RowEntry {
-                a_m: r.a_m,
-                b_m: r.b_m,
-                alpha_deg: r.alpha_rad.to_degrees(),
-                beta_deg: r.beta_rad.to_degrees(),
-                gamma_deg: r.gamma_rad.to_degrees(),
-                h_m: r.h_m,
-            })
-            .collect(),
+        rows: geometry.rows.iter().map(crate::robot::RowEntry::from_row).collect(),
         placement: Placement::from_isometry(&geometry.world_from_base),
         tool_frame: desc.tool.frame,
         four_bars: vec![],

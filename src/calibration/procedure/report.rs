@@ -2,6 +2,7 @@
 //! mean physically, each with its uncertainty and whether the data resolve it (> 3 sigma).
 
 use super::result::Calibration;
+use crate::kinematics::JointKind;
 use crate::robot::{RobotDescription, Transmission};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
@@ -20,14 +21,15 @@ pub struct Finding {
     pub sigma: f64,
     /// Unit of `value` and `sigma`.
     pub unit: String,
-    /// Whether `|value| > 3 sigma`.
+    /// Whether `|value| > 3 sigma`; never without a finite positive sigma (a value whose
+    /// uncertainty is not known is not resolved by the data, it is untested).
     pub significant: bool,
     /// The sentence.
     pub text: String,
 }
 
 fn finding(subject: String, value: f64, sigma: f64, unit: &str, text: String) -> Finding {
-    let significant = sigma.is_nan() || value.abs() > SIGNIFICANT_SIGMAS * sigma;
+    let significant = has_sigma(sigma) && value.abs() > SIGNIFICANT_SIGMAS * sigma;
     Finding {
         subject,
         value,
@@ -36,6 +38,11 @@ fn finding(subject: String, value: f64, sigma: f64, unit: &str, text: String) ->
         significant,
         text,
     }
+}
+
+/// Whether `sigma` is a real 1-sigma (finite and positive).
+fn has_sigma(sigma: f64) -> bool {
+    sigma.is_finite() && sigma > 0.0
 }
 
 /// Deviations of the Table-2 rows from the design, offsets, transmissions and couplings.
@@ -102,17 +109,24 @@ fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Findin
     }
 }
 
-/// Each joint's zero offset at the reference pose, appended to `out`.
+/// Each calibrated joint's zero offset at the reference pose, appended to `out`.
 fn zero_offset_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     for (k, j) in cal.robot.joints.iter().enumerate() {
-        let off = j.transducer_offset.to_degrees();
+        // A joint without an axis experiment keeps its nominal zero: nothing was measured.
+        if !cal.axes.iter().any(|a| a.joint == k + 1) {
+            continue;
+        }
+        let (off, unit) = match j.kind {
+            JointKind::Revolute => (j.transducer_offset.to_degrees(), "deg"),
+            JointKind::Prismatic => (j.transducer_offset * 1e3, "mm"),
+        };
         out.push(finding(
             format!("joint {}: zero offset", k + 1),
             off,
             f64::NAN,
-            "deg",
+            unit,
             format!(
-                "joint {} reads {:.3} deg off its calibrated zero at the reference pose",
+                "joint {} reads {:.3} {unit} off its calibrated zero at the reference pose",
                 k + 1,
                 off
             ),
@@ -389,13 +403,18 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
     let _ = writeln!(s, "## Axes (instrument frame)\n");
     let _ = writeln!(
         s,
-        "| joint | experiment | points | span (deg) | point (mm) | direction | dir 1-sigma (mrad) | pos 1-sigma (mm) | residual RMS (mm) |"
+        "| joint | experiment | points | span (deg or mm) | point (mm) | direction | dir 1-sigma (mrad) | pos 1-sigma (mm) | residual RMS (mm) |"
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
     for a in &cal.axes {
+        // A sliding axis has a direction only (eq. 9): no position, so no position sigma.
+        let (unit, position_sigma) = match a.kind.as_str() {
+            "prismatic" => ("mm", "- (sliding)".to_owned()),
+            _ => ("deg", format!("{:.3}", a.position_sigma_mm[0])),
+        };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.1} | ({:.2}, {:.2}, {:.2}) | ({:.6}, {:.6}, {:.6}) | {:.3} | {:.3} | {:.3} |",
+            "| {} | {} | {} | {:.1} {unit} | ({:.2}, {:.2}, {:.2}) | ({:.6}, {:.6}, {:.6}) | {:.3} | {position_sigma} | {:.3} |",
             a.joint,
             a.experiment,
             a.points,
@@ -407,7 +426,6 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
             a.direction[1],
             a.direction[2],
             a.direction_sigma_rad[0] * 1e3,
-            a.position_sigma_mm[0],
             a.residual_rms_mm
         );
     }
@@ -424,7 +442,7 @@ fn write_rows_table(s: &mut String, cal: &Calibration, desc: &RobotDescription) 
     for (k, ((r, n), sg)) in cal.robot.rows.iter().zip(&desc.rows).zip(&cal.row_sigma).enumerate() {
         let _ = writeln!(
             s,
-            "| {} | {}, {}; {}, {} | {:.5} +- {:.5} | {:.5} +- {:.5} | {:.4} +- {:.4} | {:.4} +- {:.4} |",
+            "| {} | {:.6}, {:.6}; {:.4}, {:.4} | {:.5} +- {:.5} | {:.5} +- {:.5} | {:.4} +- {:.4} | {:.4} +- {:.4} |",
             k + 1,
             n.a_m,
             n.b_m,
@@ -469,7 +487,11 @@ fn write_findings(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
         let _ = writeln!(s, "- {}", f.text);
     }
     let _ = writeln!(s, "\n## Not resolved by the data (< {SIGNIFICANT_SIGMAS} sigma)\n");
-    for f in all.iter().filter(|f| !f.significant) {
+    for f in all.iter().filter(|f| !f.significant && has_sigma(f.sigma)) {
+        let _ = writeln!(s, "- {}", f.text);
+    }
+    let _ = writeln!(s, "\n## No uncertainty reported (not tested against the data)\n");
+    for f in all.iter().filter(|f| !has_sigma(f.sigma)) {
         let _ = writeln!(s, "- {}", f.text);
     }
 }
@@ -482,5 +504,22 @@ fn write_identifiability(s: &mut String, cal: &Calibration) {
         for note in &a.identifiability {
             let _ = writeln!(s, "  - {note}");
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn significant_only_from_a_real_sigma() {
+        let f = |value: f64, sigma: f64| finding("x".into(), value, sigma, "mm", String::new()).significant;
+        let threshold = SIGNIFICANT_SIGMAS;
+        assert!(f(1.01 * threshold, 1.0));
+        assert!(!f(0.99 * threshold, 1.0));
+        // No sigma, or a degenerate one: never significant, however large the value.
+        assert!(!f(1e6, f64::NAN));
+        assert!(!f(1e6, 0.0));
+        assert!(!f(1e6, f64::INFINITY));
     }
 }

@@ -35,7 +35,9 @@ pub struct AxisReport {
     pub direction: [f64; 3],
     /// 1-sigma of the axis direction in two perpendicular directions \[rad\] (principal values).
     pub direction_sigma_rad: [f64; 2],
-    /// 1-sigma of the axis position across the axis \[mm\] (principal values).
+    /// 1-sigma of the axis position across the axis \[mm\] (principal values); NaN (null in
+    /// JSON) for a sliding axis, which has a direction only (eq. 9).
+    #[serde(deserialize_with = "nan_from_null")]
     pub position_sigma_mm: [f64; 2],
     /// The fitted transmission `theta_c = f(theta_a)` in the fit's own zero.
     pub transmission: Transmission,
@@ -357,4 +359,10 @@ pub struct NoiseReport {
     pub given_p_value: Option<f64>,
     /// For a given noise: whether the residuals contradict it (p < 0.01).
     pub given_contradicted: bool,
+}
+
+/// Reads numbers that JSON writes as null when they are NaN (`serde_json` writes NaN as null).
+fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    let v: [Option<f64>; 2] = Deserialize::deserialize(d)?;
+    Ok(v.map(|x| x.unwrap_or(f64::NAN)))
 }

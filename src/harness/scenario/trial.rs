@@ -9,7 +9,7 @@ use super::file::SimMode;
 use super::metrics::Metrics;
 use super::resolve::{Case, ResolvedScenario, ResolvedTruth};
 use super::validation_error::validation_errors;
-use crate::calibration::procedure::{CalibrationOptions, calibrate};
+use crate::calibration::procedure::{CalibrationOptions, Detail, calibrate_model};
 use crate::kinematics::PhiModel;
 use crate::measurement::MeasurementSet;
 use crate::plan::{PoseConditions, ValidationPlan};
@@ -123,7 +123,9 @@ impl CampaignTrial {
             noise_rms_3d_mm: noise_mm,
             ..CalibrationOptions::default()
         };
-        let cal = calibrate(&set, &self.desc, &options).map_err(|e| format!("calibrating: {e}"))?;
+        // The lean path: a trial needs the model, not the report.
+        let cal =
+            calibrate_model(&set, &self.desc, &options, Detail::Model).map_err(|e| format!("calibrating: {e}"))?;
         self.metrics(&out, &cal.robot)
     }
 

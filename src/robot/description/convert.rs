@@ -104,7 +104,7 @@ impl RobotDescription {
     /// The URDF chain from `u.base_link` to `u.tip_link`; fills `joints` from it when empty.
     fn urdf_source(&mut self, u: &UrdfEntry, path: &Path) -> Result<SourceChain, DescriptionError> {
         let file = path.parent().unwrap_or(Path::new(".")).join(&u.file);
-        let text = std::fs::read_to_string(&file)
+        let text = crate::presets::read_text(&file)
             .map_err(|e| invalid(path, "urdf.file", format!("reading {}: {e}", file.display())))?;
         let robot = urdf_rs::read_from_string(&text)
             .map_err(|e| invalid(path, "urdf.file", format!("{}: {e}", file.display())))?;

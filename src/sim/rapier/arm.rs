@@ -181,7 +181,11 @@ impl SimArm {
         check_len("link inertias", n, inertias.len())?;
         check_len("link radii", n, options.link_radius_m.len())?;
         for (k, li) in inertias.iter().enumerate() {
-            check_positive("mass_kg", k, li.mass_kg)?;
+            check_positive(
+                "mass_kg (the rapier arm needs every link's mass_kg and com_mm in the description; without them simulate with --sim analytic)",
+                k,
+                li.mass_kg,
+            )?;
             check_positive("link radius", k, options.link_radius_m[k])?;
         }
         let mut world = PhysicsWorld::new();

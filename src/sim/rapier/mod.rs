@@ -55,7 +55,7 @@ pub enum SimError {
         rows: usize,
     },
     /// A value that must be finite and positive is not.
-    #[error("{what} of joint {joint} must be finite and positive, found {value}")]
+    #[error("{what} of joint {} must be finite and positive, found {value}", joint + 1)]
     NotPositive {
         /// Which quantity.
         what: &'static str,

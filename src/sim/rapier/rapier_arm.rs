@@ -326,12 +326,12 @@ impl ArmExecutor for RapierArm {
         conditions: &PoseConditions,
         rng: &mut R,
     ) -> Result<Vec<Isometry3<f64>>, ExecuteError> {
-        let fail = |reason: String| ExecuteError {
-            cmd_deg: cmd.iter().map(|c| c.to_degrees()).collect(),
-            reason,
-        };
-        let driven = self.driver.drive(cmd, rng).map_err(|e| fail(e.to_string()))?;
-        self.run(conditions, &driven).map_err(|e| fail(e.to_string()))
+        let driven = self
+            .driver
+            .drive(cmd, rng)
+            .map_err(|e| ExecuteError::new(&self.model, cmd, e.to_string()))?;
+        self.run(conditions, &driven)
+            .map_err(|e| ExecuteError::new(&self.model, cmd, e.to_string()))
     }
 
     fn visible(&self, point_m: &Point3<f64>) -> bool {

@@ -5,7 +5,7 @@
 use super::{StudyError, trial_seed};
 use crate::calibration::arc_model::{ArcParams, MeasurementNoise};
 use crate::calibration::crb::{axis_errors, held_joint_axis_covariance};
-use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, axis_experiments, calibrate};
+use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, Detail, axis_experiments, calibrate_model};
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
     ArcFitOptions, CalibrationError, angles, fit_arc, fit_arc_with_angle_noise, fit_axis_paper, fit_circle,
@@ -183,7 +183,9 @@ impl Trials<'_> {
         let (experiments, _) = axis_experiments(&set, desc).expect("the simulated campaign is complete");
         let mut axes = self.fit_axes(i, &experiments)?;
         self.add_held_joint_variances(&mut axes);
-        let cal = calibrate(&set, desc, self.options).map_err(|source| StudyError::Procedure { trial: i, source })?;
+        // The lean path with the rows' covariance: the study reads the rows and their sigmas.
+        let cal = calibrate_model(&set, desc, self.options, Detail::ModelAndCovariance)
+            .map_err(|source| StudyError::Procedure { trial: i, source })?;
         Ok(TrialOutcome {
             ml: axes.ml,
             paper: axes.paper,
@@ -196,6 +198,7 @@ impl Trials<'_> {
                 .collect(),
             row_sigma: cal
                 .row_sigma
+                .unwrap_or_default()
                 .iter()
                 .map(|s| [s.a_mm, s.b_mm, s.alpha_deg, s.beta_deg])
                 .collect(),

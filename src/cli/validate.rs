@@ -1,0 +1,132 @@
+//! `axiscal validate --calibration CAL.json DATA.csv --out DIR`: every measured point of DATA
+//! predicted by the calibration, written as `residuals.csv` and `summary.json`
+//! (`docs/formats.md#validation-summary-json`).
+
+use super::checks;
+use super::options::{InRange, NOISE_MM};
+use super::output::Outputs;
+use anyhow::{Context, Result};
+use axiscal::diagnosis::{PositionSummary, Validation, ValidationOptions, validate, validation_residuals_csv};
+use axiscal::json_file::{self, Schema};
+use axiscal::robot::RobotDescription;
+use std::path::PathBuf;
+
+/// The files `validate` writes into its output folder.
+const OUTPUTS: [&str; 2] = ["residuals.csv", "summary.json"];
+
+/// Arguments of `axiscal validate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Measurement CSV (`docs/formats.md#measurement-csv`): validation poses, axis experiments
+    /// or both, measured with the calibrated robot.
+    data: PathBuf,
+    /// The calibration (`calibration.json` written by `axiscal calibrate`).
+    #[arg(long)]
+    calibration: PathBuf,
+    /// Nominal robot description (TOML) the calibration was made with.
+    #[arg(long, default_value = "scenarios/robots/asea-irb6l.toml")]
+    robot: PathBuf,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Measurement noise of a point, 3-D RMS \[mm\], of DATA's instrument. Default: the noise
+    /// the calibration was weighted with (its estimate from the residuals, or its `--noise-mm`).
+    #[arg(long, value_parser = NOISE_MM)]
+    noise_mm: Option<f64>,
+    /// Two-sided false-alarm rate of the chi-square verdicts.
+    #[arg(long, default_value_t = 0.01, value_parser = InRange::above(0.0, 0.5, ""))]
+    false_alarm: f64,
+    /// Replace existing output files.
+    #[arg(long)]
+    force: bool,
+    /// Skip the unit sanity checks (coordinates in m instead of mm, commands in rad instead of
+    /// deg, description lengths in mm instead of m).
+    #[arg(long)]
+    skip_unit_check: bool,
+    /// Validate even when the calibration or DATA records another robot description than
+    /// `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
+}
+
+/// Runs `axiscal validate`.
+pub fn run(args: Args) -> Result<()> {
+    let outputs = Outputs::new(args.force)
+        .input("--calibration", &args.calibration)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot);
+    outputs.check_in(&args.out, &OUTPUTS)?;
+    let desc = RobotDescription::from_file(&args.robot)?;
+    checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
+    let set = checks::read_data(
+        &args.data,
+        &desc,
+        &args.robot,
+        args.allow_other_robot,
+        args.skip_unit_check,
+    )?;
+    let options = match (args.noise_mm, &cal.noise) {
+        (Some(mm), _) => noise_options(mm, "given", args.false_alarm),
+        (None, Some(n)) => noise_options(n.used_rms_3d_mm, "calibration", args.false_alarm),
+        (None, None) => noise_options(cal.options.noise_rms_3d_mm, "calibration", args.false_alarm),
+    };
+    let v = validate(&set, &cal, &desc, &options).with_context(|| format!("validating on {}", args.data.display()))?;
+    outputs.write_in(&args.out, OUTPUTS[0], validation_residuals_csv(&v))?;
+    outputs.write_in(&args.out, OUTPUTS[1], json_file::to_string(Schema::VALIDATION, &v)?)?;
+    print_summary(&v);
+    println!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
+    Ok(())
+}
+
+/// The options with the noise `mm` from `source`.
+fn noise_options(mm: f64, source: &str, false_alarm: f64) -> ValidationOptions {
+    ValidationOptions {
+        noise_rms_3d_mm: mm,
+        noise_source: source.into(),
+        false_alarm,
+    }
+}
+
+/// The summaries on stdout.
+fn print_summary(v: &Validation) {
+    println!("{}", v.verdict);
+    println!(
+        "  noise {:.4} mm 3-D RMS ({}); chi-square verdicts at false-alarm rate {}",
+        v.noise_rms_3d_mm, v.noise_source, v.false_alarm
+    );
+    let line = |name: &str, s: &Option<PositionSummary>| {
+        if let Some(s) = s {
+            println!(
+                "  {name:<10} {:>5} points  RMS {:.4} mm  mean {:.4} mm  max {:.4} mm  noise alone {:.4} mm  {}",
+                s.points,
+                s.rms_mm,
+                s.mean_mm,
+                s.max_mm,
+                s.predicted_rms_mm,
+                s.chi_square.as_ref().map_or("-".into(), |c| format!(
+                    "chi2/dof {:.3} ({} dof, p {:.3}) {}",
+                    c.per_dof, c.dof, c.p_value, c.verdict
+                ))
+            );
+        }
+    };
+    line("validation", &v.validation);
+    line("tool", &v.tool);
+    line("axis", &v.axis);
+    if let Some(o) = &v.orientation {
+        println!(
+            "  {:<10} {:>5} poses   RMS {:.4} mrad  mean {:.4} mrad  max {:.4} mrad  noise alone {:.4} mrad  {}",
+            "orientation",
+            o.poses,
+            o.rms_mrad,
+            o.mean_mrad,
+            o.max_mrad,
+            o.predicted_rms_mrad,
+            o.chi_square.as_ref().map_or("-".into(), |c| format!(
+                "chi2/dof {:.3} ({} dof) {}",
+                c.per_dof, c.dof, c.verdict
+            ))
+        );
+    }
+}

@@ -1,0 +1,134 @@
+//! A small CSV table as instruments and lab scripts export it: a header row (the first line
+//! that is not a `#` comment or blank), columns found by name (case and surrounding white space
+//! ignored), every cell kept with its 1-based physical line for messages.
+
+use super::points::PointsError;
+use std::path::{Path, PathBuf};
+
+/// A read table.
+#[derive(Debug)]
+pub struct Table {
+    /// The file.
+    pub path: PathBuf,
+    /// The column names, trimmed, lower case.
+    pub header: Vec<String>,
+    /// The data rows: 1-based line and cells.
+    pub rows: Vec<(usize, Vec<String>)>,
+    /// The comment lines before the header (without their `#`).
+    pub comments: Vec<String>,
+}
+
+impl Table {
+    /// Reads `path` (a shipped file's virtual path too).
+    pub fn read(path: &Path) -> Result<Self, PointsError> {
+        let text = crate::presets::read_text(path).map_err(|source| PointsError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses `text`; `path` labels messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, PointsError> {
+        let mut header: Option<Vec<String>> = None;
+        let mut rows = Vec::new();
+        let mut comments = Vec::new();
+        for (i, line) in text.trim_start_matches('\u{feff}').lines().enumerate() {
+            let trimmed = line.trim();
+            if trimmed.is_empty() || trimmed.starts_with('#') {
+                if header.is_none() && trimmed.starts_with('#') {
+                    comments.push(trimmed.trim_start_matches('#').trim().to_owned());
+                }
+                continue;
+            }
+            let cells = split(line).map_err(|message| PointsError::Row {
+                path: path.to_owned(),
+                line: i + 1,
+                field: String::new(),
+                message,
+            })?;
+            match &header {
+                None => header = Some(cells.iter().map(|c| c.to_lowercase()).collect()),
+                Some(_) => rows.push((i + 1, cells)),
+            }
+        }
+        let header = header.ok_or_else(|| PointsError::File {
+            path: path.to_owned(),
+            message: "no header row".into(),
+        })?;
+        for (k, name) in header.iter().enumerate() {
+            if header[..k].contains(name) {
+                return Err(PointsError::File {
+                    path: path.to_owned(),
+                    message: format!("column {name:?} appears twice"),
+                });
+            }
+        }
+        Ok(Table {
+            path: path.to_owned(),
+            header,
+            rows,
+            comments,
+        })
+    }
+
+    /// The index of the first column named one of `names`.
+    pub fn column(&self, names: &[&str]) -> Option<usize> {
+        names.iter().find_map(|n| self.header.iter().position(|h| h == n))
+    }
+
+    /// The index of a column named one of `names`, or an error naming the file and the names.
+    pub fn required(&self, names: &[&str]) -> Result<usize, PointsError> {
+        self.column(names).ok_or_else(|| PointsError::File {
+            path: self.path.clone(),
+            message: format!("no column {} (columns: {})", names.join(" or "), self.header.join(",")),
+        })
+    }
+
+    /// The cell at `column` of the row at `line`, or an error naming file, line and column.
+    pub fn cell<'a>(&'a self, line: usize, cells: &'a [String], column: usize) -> Result<&'a str, PointsError> {
+        cells.get(column).map(String::as_str).ok_or_else(|| PointsError::Row {
+            path: self.path.clone(),
+            line,
+            field: self.header[column].clone(),
+            message: "missing (the row is shorter than the header)".into(),
+        })
+    }
+
+    /// A finite number at `column`.
+    pub fn number(&self, line: usize, cells: &[String], column: usize) -> Result<f64, PointsError> {
+        let text = self.cell(line, cells, column)?;
+        text.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| self.row_error(line, column, format!("{text:?} is not a finite number")))
+    }
+
+    /// A non-negative integer at `column`.
+    pub fn integer(&self, line: usize, cells: &[String], column: usize) -> Result<usize, PointsError> {
+        let text = self.cell(line, cells, column)?;
+        text.parse::<usize>()
+            .map_err(|_| self.row_error(line, column, format!("{text:?} is not a non-negative integer")))
+    }
+
+    /// An error at `line`, `column`.
+    pub fn row_error(&self, line: usize, column: usize, message: String) -> PointsError {
+        PointsError::Row {
+            path: self.path.clone(),
+            line,
+            field: self.header.get(column).cloned().unwrap_or_default(),
+            message,
+        }
+    }
+}
+
+/// One CSV line's cells (RFC 4180 quoting within the line), trimmed.
+fn split(line: &str) -> Result<Vec<String>, String> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(line.as_bytes());
+    let mut record = csv::StringRecord::new();
+    reader.read_record(&mut record).map_err(|e| e.to_string())?;
+    Ok(record.iter().map(|c| c.trim().to_owned()).collect())
+}

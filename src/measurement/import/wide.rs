@@ -1,0 +1,195 @@
+//! Wide-format pose tables, as FIGAROH and many lab scripts write them
+//! (`docs/formats.md#wide-format`): one row per robot pose, the joint values (`q1..qN`, radians
+//! or degrees) and the markers' coordinates (`m1_x,m1_y,m1_z,m2_x,...`).
+//!
+//! Experiments are recovered from the joint values: a run of at least three consecutive poses
+//! between which only joint `k` changes, always in the same direction (and joint `k+1` with
+//! it, as a hold-still command does), is an axis experiment `axis<k>` (a later run of the same joint `axis<k>-2`, ...); every
+//! other pose belongs to the free-pose experiment `poses` (`moved_joint = 0`). Marker `i` is
+//! target `i - 1`; an empty or `nan` marker cell is a marker not seen at that pose (no row).
+
+use super::points::{LengthUnit, PointsError};
+use super::table::Table;
+use crate::kinematics::JointKind;
+use crate::measurement::{Measurement, MeasurementSet};
+
+/// How the wide table is to be read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WideOptions {
+    /// The robot's joints, base first (revolute values are converted to degrees).
+    pub kinds: Vec<JointKind>,
+    /// Whether revolute joint values are in radians (else degrees).
+    pub radians: bool,
+    /// Unit of the marker coordinates and of prismatic joint values.
+    pub lengths: LengthUnit,
+    /// Two poses whose joint value differs by at most this (file units after conversion, deg or
+    /// mm) hold the joint still.
+    pub still_tolerance: f64,
+}
+
+/// Joint column names accepted for joint `k` (1-based), in order of preference.
+pub fn joint_column_names(k: usize) -> [String; 6] {
+    [
+        format!("q{k}"),
+        format!("q_{k}"),
+        format!("j{k}"),
+        format!("joint{k}"),
+        format!("joint_{k}"),
+        format!("cmd_{k}"),
+    ]
+}
+
+/// The poses of a wide table: per row its line, commands (file units) and markers.
+type Pose = (usize, Vec<f64>, Vec<Option<[f64; 3]>>);
+
+/// Reads the table into measurement rows (`docs/formats.md#wide-format`).
+pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, PointsError> {
+    let joints = options
+        .kinds
+        .iter()
+        .enumerate()
+        .map(|(k, _)| {
+            let names = joint_column_names(k + 1);
+            t.required(&names.iter().map(String::as_str).collect::<Vec<_>>())
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let markers: Vec<[usize; 3]> = (1..)
+        .map_while(|i| {
+            let c = |a: &str| t.column(&[&format!("m{i}_{a}")]);
+            Some([c("x")?, c("y")?, c("z")?])
+        })
+        .collect();
+    if markers.is_empty() {
+        return Err(t.required(&["m1_x"]).unwrap_err());
+    }
+    let mut poses: Vec<Pose> = Vec::with_capacity(t.rows.len());
+    for (line, cells) in &t.rows {
+        let cmd = joints
+            .iter()
+            .zip(&options.kinds)
+            .map(|(&c, kind)| {
+                let v = t.number(*line, cells, c)?;
+                Ok(match kind {
+                    JointKind::Revolute if options.radians => v.to_degrees(),
+                    JointKind::Revolute => v,
+                    JointKind::Prismatic => v * options.lengths.to_mm(),
+                })
+            })
+            .collect::<Result<Vec<_>, PointsError>>()?;
+        let seen = markers
+            .iter()
+            .map(|m| marker(t, *line, cells, m, options.lengths))
+            .collect::<Result<Vec<_>, _>>()?;
+        poses.push((*line, cmd, seen));
+    }
+    let experiments = segment(&poses, options.still_tolerance);
+    let mut rows = Vec::new();
+    for (pose, (name, moved_joint, step)) in poses.iter().zip(experiments) {
+        for (target, p) in pose.2.iter().enumerate() {
+            if let Some(p) = p {
+                rows.push(Measurement {
+                    experiment: name.clone(),
+                    moved_joint,
+                    step,
+                    target,
+                    position_mm: *p,
+                    cmd: pose.1.clone(),
+                    payload_kg: Measurement::DEFAULT_PAYLOAD_KG,
+                    temperature_c: Measurement::DEFAULT_TEMPERATURE_C,
+                });
+            }
+        }
+    }
+    MeasurementSet::new(options.kinds.len(), rows).map_err(|source| PointsError::Set {
+        path: t.path.clone(),
+        source,
+    })
+}
+
+/// One marker's position \[mm\], `None` when its three cells are empty or `nan`; a partly
+/// given marker is an error.
+fn marker(
+    t: &Table,
+    line: usize,
+    cells: &[String],
+    columns: &[usize; 3],
+    unit: LengthUnit,
+) -> Result<Option<[f64; 3]>, PointsError> {
+    let absent = |c: usize| {
+        cells
+            .get(c)
+            .is_none_or(|s| s.is_empty() || s.eq_ignore_ascii_case("nan"))
+    };
+    let missing = columns.iter().filter(|&&c| absent(c)).count();
+    match missing {
+        3 => Ok(None),
+        0 => Ok(Some([
+            t.number(line, cells, columns[0])? * unit.to_mm(),
+            t.number(line, cells, columns[1])? * unit.to_mm(),
+            t.number(line, cells, columns[2])? * unit.to_mm(),
+        ])),
+        _ => {
+            let c = columns.iter().copied().find(|&c| absent(c)).unwrap_or(columns[0]);
+            Err(t.row_error(line, c, "empty while the marker's other coordinates are given".into()))
+        }
+    }
+}
+
+/// The lowest joint that changes between two poses, if only it (and the next joint, a
+/// hold-still command) changes.
+fn swept_joint(a: &[f64], b: &[f64], tolerance: f64) -> Option<usize> {
+    let moved: Vec<usize> = (0..a.len()).filter(|&k| (a[k] - b[k]).abs() > tolerance).collect();
+    match moved.as_slice() {
+        [k] => Some(*k),
+        [k, next] if *next == k + 1 => Some(*k),
+        _ => None,
+    }
+}
+
+/// Per pose: experiment id, moved joint (1-based, 0 for free poses) and step.
+fn segment(poses: &[Pose], tolerance: f64) -> Vec<(String, usize, usize)> {
+    let n = poses.len();
+    let mut out: Vec<Option<(usize, usize, usize)>> = vec![None; n];
+    let mut runs_of_joint = vec![0usize; poses.first().map_or(0, |p| p.1.len())];
+    let mut start = 0;
+    while start + 1 < n {
+        let Some(k) = swept_joint(&poses[start].1, &poses[start + 1].1, tolerance) else {
+            start += 1;
+            continue;
+        };
+        let rising = poses[start + 1].1[k] > poses[start].1[k];
+        let mut end = start + 1;
+        while end + 1 < n
+            && swept_joint(&poses[end].1, &poses[end + 1].1, tolerance) == Some(k)
+            && (poses[end + 1].1[k] > poses[end].1[k]) == rising
+        {
+            end += 1;
+        }
+        if end - start + 1 >= 3 {
+            runs_of_joint[k] += 1;
+            for (step, slot) in out[start..=end].iter_mut().enumerate() {
+                *slot = Some((k, runs_of_joint[k], step));
+            }
+            start = end + 1;
+        } else {
+            start += 1;
+        }
+    }
+    let mut free_step = 0;
+    out.into_iter()
+        .map(|o| match o {
+            Some((k, run, step)) => {
+                let name = if run == 1 {
+                    format!("axis{}", k + 1)
+                } else {
+                    format!("axis{}-{run}", k + 1)
+                };
+                (name, k + 1, step)
+            }
+            None => {
+                free_step += 1;
+                ("poses".to_owned(), 0, free_step - 1)
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,215 @@
+//! The shipped robot descriptions, truth models, plans (`scenarios/robots/*.toml`) and
+//! scenarios (`scenarios/*.toml`), compiled into the program so that an installed binary finds
+//! them from any folder.
+//!
+//! A shipped file has a *virtual path* under [`SHIPPED_ROOT`] (e.g.
+//! `<shipped>/scenarios/robots/asea-irb6l.toml`): the readers ([`read_text`], and through it
+//! [`crate::toml_file::read`]) serve its compiled-in text, and a file it names (a scenario's
+//! `robot = "robots/..."`) resolves against its folder like any file's reference does, so it
+//! reaches the shipped file too. A real file of the same relative path is never consulted.
+
+use std::path::{Component, Path, PathBuf};
+
+/// The root of the virtual paths of the shipped files (not a folder on disk).
+pub const SHIPPED_ROOT: &str = "<shipped>";
+
+/// What a shipped file is, for the list shown when a name is not found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// A robot description, truth model or campaign plan (`scenarios/robots/`).
+    Robot,
+    /// A Monte-Carlo scenario (`scenarios/`).
+    Scenario,
+}
+
+/// One shipped file.
+#[derive(Debug, Clone, Copy)]
+pub struct Preset {
+    /// Its name on the command line (the file stem, e.g. `asea-irb6l`).
+    pub name: &'static str,
+    /// Its path in the source tree, relative to the repository (e.g. `scenarios/robots/x.toml`).
+    pub source_path: &'static str,
+    /// What it is.
+    pub kind: Kind,
+    /// Its text.
+    pub text: &'static str,
+}
+
+macro_rules! shipped {
+    ($kind:ident, $name:literal, $path:literal) => {
+        Preset {
+            name: $name,
+            source_path: $path,
+            kind: Kind::$kind,
+            text: include_str!(concat!("../", $path)),
+        }
+    };
+}
+
+/// Every shipped file (a test checks the list against the folders).
+pub const PRESETS: &[Preset] = &[
+    shipped!(Robot, "arm6-dh-truth", "scenarios/robots/arm6-dh-truth.toml"),
+    shipped!(Robot, "arm6-dh", "scenarios/robots/arm6-dh.toml"),
+    shipped!(Robot, "arm6-jitter-plan", "scenarios/robots/arm6-jitter-plan.toml"),
+    shipped!(Robot, "arm6-joint1-plan", "scenarios/robots/arm6-joint1-plan.toml"),
+    shipped!(
+        Robot,
+        "asea-irb6l-paper-truth",
+        "scenarios/robots/asea-irb6l-paper-truth.toml"
+    ),
+    shipped!(Robot, "asea-irb6l", "scenarios/robots/asea-irb6l.toml"),
+    shipped!(Robot, "boby-klimchik-arm", "scenarios/robots/boby-klimchik-arm.toml"),
+    shipped!(
+        Robot,
+        "positioner-2axis-truth",
+        "scenarios/robots/positioner-2axis-truth.toml"
+    ),
+    shipped!(Robot, "positioner-2axis", "scenarios/robots/positioner-2axis.toml"),
+    shipped!(Robot, "scara-rrpr-truth", "scenarios/robots/scara-rrpr-truth.toml"),
+    shipped!(Robot, "scara-rrpr", "scenarios/robots/scara-rrpr.toml"),
+    shipped!(Robot, "table-prpp-plan", "scenarios/robots/table-prpp-plan.toml"),
+    shipped!(Robot, "table-prpp-truth", "scenarios/robots/table-prpp-truth.toml"),
+    shipped!(Robot, "table-prpp", "scenarios/robots/table-prpp.toml"),
+    shipped!(Scenario, "ci-smoke", "scenarios/ci-smoke.toml"),
+    shipped!(Scenario, "compliance", "scenarios/compliance.toml"),
+    shipped!(Scenario, "noise-sweep", "scenarios/noise-sweep.toml"),
+    shipped!(Scenario, "paper", "scenarios/paper.toml"),
+    shipped!(Scenario, "perturbed-fleet", "scenarios/perturbed-fleet.toml"),
+    shipped!(Scenario, "span-study", "scenarios/span-study.toml"),
+    shipped!(Scenario, "scara-rrpr", "scenarios/scara-rrpr.toml"),
+    shipped!(Scenario, "table-prpp", "scenarios/table-prpp.toml"),
+];
+
+/// A name that is neither an existing file nor a shipped file.
+#[derive(Debug, thiserror::Error)]
+#[error("{given}: no such file, and not a shipped {what} (shipped: {names})")]
+pub struct UnknownPreset {
+    /// What the user gave.
+    pub given: String,
+    /// `robot file` or `scenario`.
+    pub what: &'static str,
+    /// The shipped names of that kind, comma-separated.
+    pub names: String,
+}
+
+impl Preset {
+    /// Its virtual path (`<shipped>/scenarios/...`).
+    pub fn virtual_path(&self) -> PathBuf {
+        Path::new(SHIPPED_ROOT).join(self.source_path)
+    }
+}
+
+/// The names of the shipped files of `kind`.
+pub fn names(kind: Kind) -> Vec<&'static str> {
+    PRESETS.iter().filter(|p| p.kind == kind).map(|p| p.name).collect()
+}
+
+/// The path to read for `given` on the command line: `given` itself when it is an existing
+/// file (a user's file always wins), else the virtual path of the shipped file of that name
+/// (`asea-irb6l`, also with `.toml`), else an error listing the shipped names of `kind`.
+pub fn resolve(given: &Path, kind: Kind) -> Result<PathBuf, UnknownPreset> {
+    if given.is_file() || given.starts_with(SHIPPED_ROOT) {
+        return Ok(given.to_owned());
+    }
+    let text = given.to_string_lossy();
+    let stem = text.strip_suffix(".toml").unwrap_or(&text);
+    // The old default spelled the path in the checkout: accept it anywhere.
+    let by_path = PRESETS.iter().find(|p| given.ends_with(p.source_path));
+    match PRESETS.iter().find(|p| p.name == stem).or(by_path) {
+        Some(p) => Ok(p.virtual_path()),
+        None => Err(UnknownPreset {
+            given: text.into_owned(),
+            what: match kind {
+                Kind::Robot => "robot file",
+                Kind::Scenario => "scenario",
+            },
+            names: names(kind).join(", "),
+        }),
+    }
+}
+
+/// `path` with `.` and `..` folded lexically (a virtual path has no links to follow).
+fn lexical(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+/// The compiled-in text of a virtual path, `None` for any other path.
+pub fn shipped_text(path: &Path) -> Option<&'static str> {
+    let inner = lexical(path);
+    let relative = inner.strip_prefix(SHIPPED_ROOT).ok()?;
+    PRESETS
+        .iter()
+        .find(|p| Path::new(p.source_path) == relative)
+        .map(|p| p.text)
+}
+
+/// Reads a text file, or serves a shipped file's text for its virtual path (a virtual path
+/// that names no shipped file is "not found").
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    if path.starts_with(SHIPPED_ROOT) {
+        return shipped_text(path)
+            .map(str::to_owned)
+            .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "no such shipped file"));
+    }
+    std::fs::read_to_string(path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_list_holds_every_shipped_toml_file_once() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut on_disk: Vec<String> = ["scenarios", "scenarios/robots"]
+            .iter()
+            .flat_map(|dir| {
+                std::fs::read_dir(root.join(dir))
+                    .unwrap()
+                    .map(|e| e.unwrap().path())
+                    .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                    .map(|p| p.strip_prefix(root).unwrap().to_string_lossy().into_owned())
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        on_disk.sort();
+        let mut listed: Vec<String> = PRESETS.iter().map(|p| p.source_path.to_owned()).collect();
+        listed.sort();
+        assert_eq!(listed, on_disk, "add a new shipped file to PRESETS");
+        for p in PRESETS {
+            let stem = Path::new(p.source_path).file_stem().unwrap();
+            assert_eq!(stem, p.name);
+        }
+    }
+
+    #[test]
+    fn names_resolve_to_shipped_text_and_references_resolve_against_the_naming_file() {
+        let robot = resolve(Path::new("asea-irb6l"), Kind::Robot).unwrap();
+        assert_eq!(
+            read_text(&robot).unwrap(),
+            include_str!("../scenarios/robots/asea-irb6l.toml")
+        );
+        // A scenario's `robot = "robots/x.toml"`, joined to the scenario's folder.
+        let scenario = resolve(Path::new("paper.toml"), Kind::Scenario).unwrap();
+        let named = scenario.parent().unwrap().join("robots/../robots/scara-rrpr.toml");
+        assert_eq!(
+            read_text(&named).unwrap(),
+            include_str!("../scenarios/robots/scara-rrpr.toml")
+        );
+        let e = resolve(Path::new("no-such-robot"), Kind::Robot)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("asea-irb6l") && !e.contains("ci-smoke"), "{e}");
+        assert!(read_text(&Path::new(SHIPPED_ROOT).join("x.toml")).is_err());
+    }
+}
