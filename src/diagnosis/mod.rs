@@ -41,14 +41,15 @@ pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes};
 pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{
-    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,
-    Predictor, RefitScope, SpringSite, ThermalLinks, TiltShape, is_geared, unmodelled_harmonic_order,
+    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
+    MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures, Predictor, RefitScope,
+    SIGN_K_SIGMA, SpringSite, ThermalLinks, TiltShape, implausible, is_geared, unmodelled_harmonic_order,
 };
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
-pub use result::{CandidateScore, Diagnosis, FeatureContrast, Outcome, Parameter, WhereEntry};
+pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
 pub use validate::{
     ChiSquare, OrientationSummary, PointKind, PositionSummary, Validation, ValidationOptions, ValidationResidual,
     validate, validation_residuals_csv,
@@ -184,11 +185,14 @@ fn reference_temperature(set: &MeasurementSet) -> f64 {
     if axis.is_empty() { 20.0 } else { mean(&axis) }
 }
 
+/// The calibration, the validation poses, the observed residuals and the refit's sensitivity;
+/// each candidate's sensitivity too when `with_candidates` (the baseline alone needs none).
 fn prepare(
     set: &MeasurementSet,
     desc: &RobotDescription,
     noise_rms_3d_mm: f64,
     scope: RefitScope,
+    with_candidates: bool,
 ) -> Result<Prepared, DiagnosisError> {
     let cal = calibrate_for(set, desc, noise_rms_3d_mm)?;
     let poses = validation_poses(set.rows(), desc);
@@ -212,7 +216,12 @@ fn prepare(
     let x_geometric = sensitivity(|p| predictor.residuals(p, &order), &zeros, &predictor.steps())
         .ok_or_else(|| model_error("refit sensitivity"))?;
     let mut x_candidates = Vec::new();
-    for c in Candidate::library(desc, &poses, DEFAULT_MAX_HARMONIC_ORDER) {
+    let library = if with_candidates {
+        Candidate::library(desc, &poses, DEFAULT_MAX_HARMONIC_ORDER)
+    } else {
+        Vec::new()
+    };
+    for c in library {
         let pred = predictor.with_candidates(&[c]);
         let g = pred.geometric_count();
         let p0 = vec![0.0; g + pred.effect_count()];
@@ -432,7 +441,7 @@ pub fn baseline_heldout_rms_mm(
     desc: &RobotDescription,
     options: &DiagnosisOptions,
 ) -> Result<f64, DiagnosisError> {
-    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit)?;
+    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit, false)?;
     let fit = prep.baseline_fit();
     let ssr = prep.heldout_ssr(
         &fit,
@@ -441,13 +450,29 @@ pub fn baseline_heldout_rms_mm(
     Ok((ssr[0] / prep.held_targets.max(1) as f64).sqrt() * 1e3)
 }
 
+/// The instrument noise (3-D RMS) of `set` estimated from its axis-experiment residuals, as
+/// `calibrate` estimates it without a given noise ([`crate::calibration::noise::estimate_noise`]:
+/// the pooled arc-fit residuals, the share the description's repeatability explains
+/// subtracted); `None` without degrees of freedom. An effect that bends the arcs inflates it
+/// (a conservative diagnosis, never a false alarm from it).
+pub fn estimated_noise(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+) -> Result<Option<crate::calibration::noise::NoiseEstimate>, DiagnosisError> {
+    let options = CalibrationOptions {
+        estimate_noise: true,
+        ..CalibrationOptions::default()
+    };
+    Ok(calibrate(set, desc, &options)?.noise.and_then(|n| n.estimate))
+}
+
 /// Diagnoses `set` (module docs). Deterministic for given options.
 pub fn diagnose(
     set: &MeasurementSet,
     desc: &RobotDescription,
     options: &DiagnosisOptions,
 ) -> Result<Diagnosis, DiagnosisError> {
-    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit)?;
+    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit, true)?;
     let null = null_data(set, desc, &prep, options)?;
     Ok(decide::decide(&prep, &null, options))
 }

@@ -7,12 +7,16 @@
 mod candidate;
 mod compliance;
 mod effect_set;
+mod plausible;
 #[cfg(test)]
 mod tests;
 
 pub use candidate::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, MIN_THERMAL_ROW_M, MassModel, ModelShape, SpringSite, ThermalLinks,
     TiltShape, is_geared, unmodelled_harmonic_order,
+};
+pub use plausible::{
+    MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, SIGN_K_SIGMA, implausible,
 };
 
 use super::poses::Pose;
