@@ -5,9 +5,7 @@
 mod common;
 
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
-use axiscal::diagnosis::{
-    CleanCampaign, NoiseModel, PointKind, Validation, ValidationOptions, replica, validate,
-};
+use axiscal::diagnosis::{CleanCampaign, NoiseModel, PointKind, Validation, ValidationOptions, replica, validate};
 use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::RobotDescription;

@@ -43,7 +43,9 @@ fn not_negative(params: &[Parameter], name: &str, what: &str) -> Option<String> 
 }
 
 fn at_most(v: f64, limit: f64, what: &str) -> Option<String> {
-    (!(v.abs() <= limit)).then(|| format!("{what} {v:.3e} is beyond the plausible {limit:.1e}"))
+    // A NaN is out of range too.
+    let within = v.abs() <= limit;
+    (!within).then(|| format!("{what} {v:.3e} is beyond the plausible {limit:.1e}"))
 }
 
 /// Why `candidate`'s fitted `params` are physically implausible, or `None` when they are in

@@ -417,9 +417,10 @@ pub fn case_table(results: &[CaseResult]) -> String {
         let (k, d) = (&r.key, &r.diagnosis);
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} -> {:.3} |",
+            "| {} | {} ({}) | {} | {} | {} | {} | {} | {} | {} | {:.3} -> {:.3} |",
             k.case,
-            format!("{} ({})", k.effect, k.shape),
+            k.effect,
+            k.shape,
             k.joint.map_or("-".into(), |j| j.to_string()),
             if k.effect == "none" {
                 "-".into()
