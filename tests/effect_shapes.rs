@@ -3,6 +3,8 @@
 //! thermal expansion and the real links' masses unlike the description's. Each is checked
 //! against an independent evaluation of its definition.
 
+mod common;
+
 use axiscal::physics::{ApproachSource, BacklashEffect, ComplianceEffect, GearHarmonic, HarmonicPeriod, ThermalEffect};
 use axiscal::plan::PoseConditions;
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
@@ -12,12 +14,7 @@ use rand::SeedableRng;
 use rand::rngs::ChaCha12Rng;
 
 fn truth() -> (RobotDescription, RobotModel) {
-    let desc = RobotDescription::asea_irb6l();
-    let mut t = axiscal::sim::paper_robot();
-    for j in &mut t.joints {
-        j.repeatability_sigma = 0.0;
-    }
-    (desc, t)
+    (RobotDescription::asea_irb6l(), common::paper_robot_without_jitter())
 }
 
 /// The active displacements of `cmds` executed in turn by a driver with `effects`.

@@ -1,6 +1,8 @@
 //! Each unmodelled effect moves the measured targets in the direction and by the size its
 //! model predicts, on the analytic and the rapier arm.
 
+mod common;
+
 use axiscal::physics::{
     AxisWobble, BacklashEffect, ComplianceEffect, CompliantLoad, DeflectionError, LinkMass, PassiveSlope,
     PayloadEffect, ThermalEffect, coupled_first_order_deflection, coupled_static_deflection,
@@ -20,12 +22,7 @@ type Exec = dyn FnMut(&[f64], &PoseConditions) -> Vec<Isometry3<f64>>;
 const CMD: [f64; 6] = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
 
 fn truth() -> (RobotDescription, RobotModel) {
-    let desc = RobotDescription::asea_irb6l();
-    let mut t = axiscal::sim::paper_robot();
-    for j in &mut t.joints {
-        j.repeatability_sigma = 0.0;
-    }
-    (desc, t)
+    (RobotDescription::asea_irb6l(), common::paper_robot_without_jitter())
 }
 
 fn arms(effects: &Effects) -> Vec<Box<Exec>> {

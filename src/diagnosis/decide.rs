@@ -59,18 +59,12 @@ fn fitted_parameters(
 }
 
 fn score_candidates(prep: &Prepared, null: &NullData, base: &LinearFit, g: (f64, &[f64]), sigma2: f64) -> Vec<Scored> {
-    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
     let to_rms_mm = |chi2: f64| (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3;
     let mut out = Vec::new();
     for (c, x) in &prep.x_candidates {
         let fit = prep.candidate_fit(x);
         let outside = base.outside_fraction(&x.rows(0, prep.train_rows).into_owned());
-        let chi2 = prep.heldout_ssr(&fit, &observed)[0] / sigma2;
-        let chi2_null: Vec<f64> = prep
-            .heldout_ssr(&fit, &null.samples)
-            .iter()
-            .map(|s| s / sigma2)
-            .collect();
+        let (chi2, chi2_null) = prep.heldout_chi2(x, null, sigma2);
         let t_null: Vec<f64> = g.1.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
         let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
         let improvement = g.0 - chi2;

@@ -282,6 +282,20 @@ impl Prepared {
         LinearFit::new(&t, &h)
     }
 
+    /// Held-out chi-square (SSR over the per-coordinate noise variance `sigma2`) of the refit
+    /// plus an effect of sensitivity `x_effect`: on the observation, and on every null sample.
+    fn heldout_chi2(&self, x_effect: &DMatrix<f64>, null: &NullData, sigma2: f64) -> (f64, Vec<f64>) {
+        let fit = self.candidate_fit(x_effect);
+        let observed = DMatrix::from_column_slice(self.residuals.len(), 1, self.residuals.as_slice());
+        let chi2 = self.heldout_ssr(&fit, &observed)[0] / sigma2;
+        let null = self
+            .heldout_ssr(&fit, &null.samples)
+            .iter()
+            .map(|s| s / sigma2)
+            .collect();
+        (chi2, null)
+    }
+
     /// Held-out SSR \[m^2\] of `fit` for each data column of `data` (training rows first).
     fn heldout_ssr(&self, fit: &LinearFit, data: &DMatrix<f64>) -> Vec<f64> {
         let (t, h) = self.rows(data);

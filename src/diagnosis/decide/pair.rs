@@ -60,17 +60,7 @@ pub(super) fn second_effect(
     (g_obs, sigma2, alpha): (f64, f64, f64),
 ) -> Option<Pair> {
     let x_first = &prep.x_candidates.iter().find(|(c, _)| *c == first.candidate)?.1;
-    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
-    let chi2_of = |x: &DMatrix<f64>| {
-        let fit = prep.candidate_fit(x);
-        let obs = prep.heldout_ssr(&fit, &observed)[0] / sigma2;
-        let nul: Vec<f64> = prep
-            .heldout_ssr(&fit, &null.samples)
-            .iter()
-            .map(|s| s / sigma2)
-            .collect();
-        (obs, nul)
-    };
+    let chi2_of = |x: &DMatrix<f64>| prep.heldout_chi2(x, null, sigma2);
     let (chi2_first, null_first) = chi2_of(x_first);
     let mut trials: Vec<Trial> = prep
         .x_candidates
