@@ -76,12 +76,12 @@ doc:
 budget:
 	$(CARGO) run --release -- budget --seeds 30 --force --out results/budget
 
-## blind: blind check of `axiscal diagnose` on 112 cases simulated on the rapier arm (hidden
-## keys; ~7 min on 2 cores), confusion matrix under results/blind/summary.md
+## blind: blind check of `axiscal diagnose` on 162 shape-varying cases on the rapier arm (hidden
+## keys; 35-60 min on 2 busy shared cores), confusion matrix and per-member table under results/blind/summary.md
 blind:
-	$(CARGO) run --release -- blind --cases 112 --seed 2 --sim rapier --out results/blind --force
+	$(CARGO) run --release -- blind --cases 162 --seed 2 --sim rapier --out results/blind --force
 
-## blind-analytic: the same 112 cases on the analytic arm (first-order compliance, ~1 min),
+## blind-analytic: the same 162 cases on the analytic arm (first-order compliance, 7 CPU-min),
 ## results/blind-analytic/summary.md
 blind-analytic:
-	$(CARGO) run --release -- blind --cases 112 --seed 2 --out results/blind-analytic --force
+	$(CARGO) run --release -- blind --cases 162 --seed 2 --out results/blind-analytic --force

@@ -1,6 +1,8 @@
 //! Each unmodelled effect moves the measured targets in the direction and by the size its
 //! model predicts, on the analytic and the rapier arm.
 
+mod common;
+
 use axiscal::physics::{
     AxisWobble, BacklashEffect, ComplianceEffect, CompliantLoad, DeflectionError, LinkMass, PassiveSlope,
     PayloadEffect, ThermalEffect, coupled_first_order_deflection, coupled_static_deflection,
@@ -20,12 +22,7 @@ type Exec = dyn FnMut(&[f64], &PoseConditions) -> Vec<Isometry3<f64>>;
 const CMD: [f64; 6] = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
 
 fn truth() -> (RobotDescription, RobotModel) {
-    let desc = RobotDescription::asea_irb6l();
-    let mut t = axiscal::sim::paper_robot();
-    for j in &mut t.joints {
-        j.repeatability_sigma = 0.0;
-    }
-    (desc, t)
+    (RobotDescription::asea_irb6l(), common::paper_robot_without_jitter())
 }
 
 fn arms(effects: &Effects) -> Vec<Box<Exec>> {
@@ -45,10 +42,7 @@ fn arms(effects: &Effects) -> Vec<Box<Exec>> {
 #[test]
 fn thermal_expansion_grows_the_reach_by_alpha_dt_l() {
     let effects = Effects {
-        thermal: Some(ThermalEffect {
-            alpha_per_k: 1.2e-5,
-            reference_c: 20.0,
-        }),
+        thermal: Some(ThermalEffect::uniform(1.2e-5, 20.0)),
         ..Effects::default()
     };
     let (_, t) = truth();
@@ -83,7 +77,10 @@ fn backlash_separates_the_two_approach_directions_by_the_band() {
     let mut bands = vec![0.0; 6];
     bands[5] = band;
     let effects = Effects {
-        backlash: Some(BacklashEffect { band_rad: bands }),
+        backlash: Some(BacklashEffect {
+            band_rad: bands,
+            direction: Default::default(),
+        }),
         ..Effects::default()
     };
     let target = Point3::new(0.08, 0.0, 0.15);
@@ -111,6 +108,7 @@ fn wobble_lifts_the_arc_out_of_its_plane_by_amplitude_times_radius() {
             amplitude_rad: amplitude,
             phase_rad: -std::f64::consts::FRAC_PI_2,
             order: 1,
+            fixed_direction_rad: None,
         }],
         ..Effects::default()
     };
@@ -258,6 +256,7 @@ fn gear_harmonic_turns_the_joint_by_its_transmission_error() {
             order: 2,
             sin_rad: s,
             cos_rad: 0.0,
+            period: Default::default(),
         }],
         ..Effects::default()
     };

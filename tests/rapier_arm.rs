@@ -554,6 +554,7 @@ mod line_of_sight {
                 amplitude_rad: 0.1,
                 phase_rad: 0.0,
                 order: 1,
+                fixed_direction_rad: None,
             }],
             ..Effects::default()
         };

@@ -5,7 +5,7 @@
 mod common;
 
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
-use axiscal::diagnosis::{PointKind, Validation, ValidationOptions, clean_positions, replica, validate};
+use axiscal::diagnosis::{CleanCampaign, NoiseModel, PointKind, Validation, ValidationOptions, replica, validate};
 use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -111,13 +111,18 @@ fn chi_square_per_dof_is_one_on_noise_only_data() {
     let desc = RobotDescription::asea_irb6l();
     let cal = calibration(&desc);
     let template = campaign(0.19, 30, 17);
-    let clean = clean_positions(&template, &cal, &desc).unwrap();
+    let clean = CleanCampaign::new(&template, &cal, &desc, &desc.tool_targets_m()).unwrap();
     let noise_mm = 0.19;
+    // The campaign's robot has no repeatability jitter (`calibration`): instrument noise only.
+    let noise = NoiseModel {
+        noise_rms_3d_m: noise_mm * 1e-3,
+        repeatability_rad: vec![0.0; desc.dof()],
+    };
     let mut rng = ChaCha12Rng::seed_from_u64(20_161);
     let trials = 40;
     let runs: Vec<Validation> = (0..trials)
         .map(|_| {
-            let set = replica(&template, &clean, noise_mm * 1e-3, true, &mut rng).unwrap();
+            let set = replica(&template, &clean, &noise, true, &mut rng).unwrap();
             validate(&set, &cal, &desc, &options(noise_mm)).unwrap()
         })
         .collect();

@@ -8,7 +8,7 @@ use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
-    diagnose_with, markdown, validation_poses, write_axes_plots, write_plots,
+    diagnose_with, estimated_noise, markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -26,9 +26,10 @@ pub struct Args {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
-    /// Measurement noise of a point, 3-D RMS \[mm\].
-    #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
-    noise_mm: f64,
+    /// Measurement noise of a point, 3-D RMS \[mm\] (default: estimated from the axis
+    /// experiments' residuals, as `calibrate` does without it).
+    #[arg(long, value_parser = NOISE_MM)]
+    noise_mm: Option<f64>,
     /// Noise-only replicas of the campaign (each recalibrated).
     #[arg(long, default_value_t = DiagnosisOptions::default().noise_trials, value_parser = InRange::closed(2usize, 100_000, ""))]
     noise_trials: usize,
@@ -87,8 +88,9 @@ pub fn run(args: Args) -> Result<()> {
         args.checks.allow_other_robot,
         args.checks.skip_unit_check,
     )?;
+    let (noise_mm, noise_source) = noise(&args, &set, &desc)?;
     let options = DiagnosisOptions {
-        noise_rms_3d_mm: args.noise_mm,
+        noise_rms_3d_mm: noise_mm,
         noise_trials: args.noise_trials,
         noise_draws: args.noise_draws,
         false_alarm: args.false_alarm,
@@ -115,6 +117,12 @@ pub fn run(args: Args) -> Result<()> {
         };
         let written = report.write(|dir| write_axes_plots(&d, dir))?;
         say!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
+        if noise_source == "estimated" {
+            say!(
+                "  the noise was estimated from these same arcs: only an axis far worse than the others can be flagged; \
+                 give --noise-mm for a test against the instrument's noise"
+            );
+        }
         for w in &d.where_ {
             say!(
                 "  {:<10} joint {}  residual {:.4} mm  noise only {:.4} mm  ratio {:.2}{}",
@@ -136,7 +144,8 @@ pub fn run(args: Args) -> Result<()> {
         return record(&args, &desc, &set, &format!("{}: {}", d.outcome.effect, d.verdict));
     }
     let progress = super::progress::Progress::stage("diagnosing");
-    let d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
+    let mut d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
+    d.noise_source = noise_source.into();
     drop(progress);
     let report = Report {
         out: &args.out,
@@ -169,6 +178,34 @@ pub fn run(args: Args) -> Result<()> {
     record(&args, &desc, &set, &format!("{headline}. {}", d.verdict))
 }
 
+/// The noise of the diagnosis \[mm\] and its source: `--noise-mm`, or the estimate from the
+/// axis experiments' residuals (said on stderr; an error when the data cannot give one).
+fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(f64, &'static str)> {
+    if let Some(n) = args.noise_mm {
+        return Ok((n, "given"));
+    }
+    let e = estimated_noise(set, desc)
+        .with_context(|| format!("estimating the noise of {}", args.data.display()))?
+        .filter(|e| e.rms_3d_mm > 0.0)
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "{}: the axis experiments leave no residual to estimate the noise from; give --noise-mm",
+                args.data.display()
+            )
+        })?;
+    say!(
+        "noise estimated from the axis experiments' residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, \
+         {} dof, repeatability share {:.0} %); give --noise-mm to use the instrument's own figure",
+        e.rms_3d_mm,
+        e.confidence * 100.0,
+        e.interval.low_mm,
+        e.interval.high_mm,
+        e.dof,
+        e.jitter_share * 100.0
+    );
+    Ok((e.rms_3d_mm, "estimated"))
+}
+
 /// The `--record` recording of the diagnosed data (the standard calibration, the verdict in
 /// the notes); nothing without `--record`.
 #[cfg_attr(not(feature = "viz"), allow(unused_variables))]
@@ -176,7 +213,8 @@ fn record(args: &Args, desc: &RobotDescription, set: &MeasurementSet, verdict: &
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
         let options = axiscal::calibration::procedure::CalibrationOptions {
-            noise_rms_3d_mm: args.noise_mm,
+            noise_rms_3d_mm: args.noise_mm.unwrap_or_default(),
+            estimate_noise: args.noise_mm.is_none(),
             ..Default::default()
         };
         let calibration = axiscal::calibration::procedure::calibrate(set, desc, &options)

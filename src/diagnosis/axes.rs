@@ -7,7 +7,8 @@
 //! alone: the report lists the candidates an arc can show (module docs of
 //! [`crate::diagnosis`]) and says that naming one needs validation poses.
 
-use super::{DiagnosisError, DiagnosisOptions, Outcome, WhereEntry, calibrate_for, clean_positions, replica};
+use super::noise::CleanCampaign;
+use super::{DiagnosisError, DiagnosisOptions, Outcome, WhereEntry, calibrate_for, noise_model, replica};
 use crate::calibration::procedure::Calibration;
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{QuantileMethod, mean, quantile, upper_tail};
@@ -90,11 +91,12 @@ fn noise_only_residuals_mm(
     progress: &dyn crate::progress::Progress,
 ) -> Result<Vec<Vec<f64>>, DiagnosisError> {
     progress.start(replicas, "noise-only replicas");
-    let clean = clean_positions(set, cal, desc)?;
+    let clean = CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?;
+    let noise = noise_model(desc, options.noise_rms_3d_mm)?;
     let mut rng = ChaCha12Rng::seed_from_u64(options.seed);
     let mut null: Vec<Vec<f64>> = vec![Vec::with_capacity(replicas); cal.axes.len()];
     for _ in 0..replicas {
-        let r = replica(set, &clean, options.noise_rms_3d_mm * 1e-3, true, &mut rng)?;
+        let r = replica(set, &clean, &noise, true, &mut rng)?;
         let c = calibrate_for(&r, desc, options.noise_rms_3d_mm)?;
         for (acc, a) in null.iter_mut().zip(&c.axes) {
             acc.push(a.residual_rms_mm);

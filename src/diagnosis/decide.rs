@@ -1,11 +1,12 @@
 //! The decision of [`diagnose`](super::diagnose): tests against the noise-only null
 //! distribution (module docs of [`crate::diagnosis`], steps 3-5).
 
+mod pair;
 mod verdict;
 
 use super::{
-    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, FeatureContrast, LinearFit, NullData, Outcome, Parameter,
-    Prepared, WhereEntry,
+    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, FeatureContrast, LinearFit, NamedEffect, NullData, Outcome,
+    Parameter, Pose, Prepared, WhereEntry, implausible,
 };
 use crate::numerics::stats::{QuantileMethod, mean, quantile, std_dev, upper_tail};
 use nalgebra::{DMatrix, DVector};
@@ -21,9 +22,9 @@ struct Scored {
     z_null: Vec<f64>,
 }
 
-/// The candidate's parameters `p` (after the refit's) with their standard deviations from the
-/// fit's covariance, scaled by the training residual variance when it exceeds the noise's
-/// (`ssr_train` the training SSR left by the fit).
+/// The candidate's parameters, the last of `p` (after the refit's and any other candidate's),
+/// with their standard deviations from the fit's covariance, scaled by the training residual
+/// variance when it exceeds the noise's (`ssr_train` the training SSR left by the fit).
 fn fitted_parameters(
     c: Candidate,
     p: &DVector<f64>,
@@ -34,9 +35,9 @@ fn fitted_parameters(
 ) -> Vec<Parameter> {
     let dof = prep.train_rows.saturating_sub(fit.rank).max(1);
     let var = sigma2.max(ssr_train.max(0.0) / dof as f64);
-    let g = prep.x_geometric.ncols();
-    let mut out: Vec<Parameter> = c
-        .parameter_names()
+    let names = c.parameter_names(prep.predictor.shape());
+    let g = p.len() - names.len();
+    let mut out: Vec<Parameter> = names
         .iter()
         .enumerate()
         .map(|(i, name)| Parameter {
@@ -58,18 +59,12 @@ fn fitted_parameters(
 }
 
 fn score_candidates(prep: &Prepared, null: &NullData, base: &LinearFit, g: (f64, &[f64]), sigma2: f64) -> Vec<Scored> {
-    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
     let to_rms_mm = |chi2: f64| (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3;
     let mut out = Vec::new();
     for (c, x) in &prep.x_candidates {
         let fit = prep.candidate_fit(x);
         let outside = base.outside_fraction(&x.rows(0, prep.train_rows).into_owned());
-        let chi2 = prep.heldout_ssr(&fit, &observed)[0] / sigma2;
-        let chi2_null: Vec<f64> = prep
-            .heldout_ssr(&fit, &null.samples)
-            .iter()
-            .map(|s| s / sigma2)
-            .collect();
+        let (chi2, chi2_null) = prep.heldout_chi2(x, null, sigma2);
         let t_null: Vec<f64> = g.1.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
         let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
         let improvement = g.0 - chi2;
@@ -93,6 +88,7 @@ fn score_candidates(prep: &Prepared, null: &NullData, base: &LinearFit, g: (f64,
                     let left = r_train.norm_squared() - inside.norm_squared();
                     fitted_parameters(*c, &fit.params(&r_train), &fit, left, prep, sigma2)
                 },
+                implausible: None,
             },
             chi2,
             chi2_null,
@@ -215,6 +211,33 @@ fn mark_significant(scored: &mut [Scored], samples: usize, alpha: f64) -> f64 {
     z_threshold
 }
 
+/// Why `s`'s fitted parameters are implausible ([`implausible`]), with a compliance member's
+/// largest sag over the validation poses.
+fn implausibility(prep: &Prepared, s: &Scored) -> Option<String> {
+    implausible_fit(prep, s.candidate, &s.score.parameters)
+}
+
+/// Why `candidate`'s fitted `parameters` are implausible ([`implausible`]).
+fn implausible_fit(prep: &Prepared, candidate: Candidate, parameters: &[Parameter]) -> Option<String> {
+    let n = candidate.parameter_names(prep.predictor.shape()).len();
+    let effect: Vec<f64> = parameters.iter().take(n).map(|p| p.value).collect();
+    let poses: Vec<&Pose> = prep.poses.iter().collect();
+    let sag = prep.predictor.largest_sag_rad(candidate, &effect, &poses);
+    implausible(candidate, parameters, sag)
+}
+
+/// Checks the significant candidates' parameters against their physical ranges.
+fn check_plausibility(prep: &Prepared, scored: &mut [Scored]) {
+    for s in scored.iter_mut().filter(|s| s.score.significant) {
+        s.score.implausible = implausibility(prep, s);
+    }
+}
+
+/// Whether `s` can be named: significant with plausible parameters.
+fn nameable(s: &Scored) -> bool {
+    s.score.significant && s.score.implausible.is_none()
+}
+
 /// Sorts the candidates by held-out chi-square and gives the significant ones their weights
 /// `exp(-(chi2 - chi2_min) / 2)`, normalised over the significant candidates.
 fn rank_and_weigh(scored: &mut [Scored]) {
@@ -240,7 +263,7 @@ fn rank_and_weigh(scored: &mut [Scored]) {
 /// refit (`g_obs` when there is nothing to refit).
 fn refit_named(prep: &Prepared, scored: &mut [Scored], g_obs: f64, sigma2: f64) -> f64 {
     let mut g_fit = g_obs;
-    if let Some(b) = scored.iter_mut().find(|s| s.score.significant)
+    if let Some(b) = scored.iter_mut().find(|s| nameable(s))
         && let Some((_, x)) = prep.x_candidates.iter().find(|(c, _)| *c == b.candidate)
         && let (Some(rb), Some(rc)) = (prep.refine(None), prep.refine(Some((b.candidate, x))))
     {
@@ -261,8 +284,70 @@ fn refit_named(prep: &Prepared, scored: &mut [Scored], g_obs: f64, sigma2: f64) 
             prep,
             sigma2,
         );
+        b.score.implausible = implausibility(prep, b);
     }
     g_fit
+}
+
+/// The verdict on the first effect `b` with the second of `pair` (module docs of [`pair`]):
+/// the pair is named when what it leaves is at the noise level or it closes enough of the
+/// gap; `effect` and `joint` are then the one with the larger share, `effects` lists both.
+fn two_effects(
+    prep: &Prepared,
+    evidence: &mut Evidence,
+    b: &Scored,
+    pair: pair::Pair,
+    sigma2: f64,
+    explained_fraction: f64,
+) -> (verdict::Verdict, Vec<NamedEffect>) {
+    let (rms, noise) = (
+        chi2_to_rms_mm(pair.chi2, sigma2, prep),
+        chi2_to_rms_mm(mean(&pair.chi2_null), sigma2, prep),
+    );
+    let gap_after = (rms * rms - noise * noise).max(0.0).sqrt();
+    let duo = Scored {
+        candidate: b.candidate,
+        score: CandidateScore {
+            heldout_rms_mm: rms,
+            gap_after_mm: gap_after,
+            ..b.score.clone()
+        },
+        chi2: pair.chi2,
+        chi2_null: pair.chi2_null,
+        z_null: Vec::new(),
+    };
+    if evidence.gap_before_mm > 0.0 {
+        evidence.fraction_closed = 1.0 - (gap_after / evidence.gap_before_mm).powi(2);
+    }
+    let mut v = evidence.verdict(Some(&duo), explained_fraction);
+    if v.effect == "unexplained" {
+        return (v, Vec::new());
+    }
+    let second = NamedEffect {
+        effect: pair.second.effect_name().into(),
+        joint: pair.second.joint(),
+        share: pair.shares[1],
+    };
+    v.verdict += &format!(
+        "; together with {}{} (z = {:.1} over the threshold {:.1} on top of the first; shares of the closed gap {:.0} % and {:.0} %)",
+        second.effect,
+        second.joint.map_or(String::new(), |j| format!(" on joint {j}")),
+        pair.z,
+        pair.z_threshold,
+        100.0 * pair.shares[0],
+        100.0 * pair.shares[1]
+    );
+    let first = NamedEffect {
+        effect: v.effect.clone(),
+        joint: v.joint,
+        share: pair.shares[0],
+    };
+    if second.share > first.share {
+        v.effect = second.effect.clone();
+        v.joint = second.joint;
+        v.parameters = pair.parameters;
+    }
+    (v, vec![first, second])
 }
 
 /// Tests the observation against the null samples and names the effect.
@@ -276,16 +361,17 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     let samples = gap.g_null.len();
     let z_threshold = mark_significant(&mut scored, samples, alpha);
     rank_and_weigh(&mut scored);
+    check_plausibility(prep, &mut scored);
     let g_fit = refit_named(prep, &mut scored, gap.g_obs, sigma2);
     let rms_before = chi2_to_rms_mm(g_fit, sigma2, prep);
     let noise_before = chi2_to_rms_mm(gap.g_mean, sigma2, prep);
     let gap_before = (rms_before.powi(2) - noise_before.powi(2)).max(0.0).sqrt();
-    let best = scored.iter().find(|s| s.score.significant);
+    let best = scored.iter().find(|s| nameable(s));
     let fraction_closed = match best {
         Some(b) if gap_before > 0.0 => 1.0 - (b.score.gap_after_mm / gap_before).powi(2),
         _ => 0.0,
     };
-    let evidence = Evidence {
+    let mut evidence = Evidence {
         gap: &gap,
         alpha,
         z_threshold,
@@ -294,7 +380,22 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         gap_before_mm: gap_before,
         fraction_closed,
     };
-    let v = evidence.verdict(best, options.explained_fraction);
+    let pair = best.and_then(|b| pair::second_effect(prep, null, &scored, b, (gap.g_obs, sigma2, alpha)));
+    let (mut v, effects) = match (best, pair) {
+        (Some(b), Some(pair)) => two_effects(prep, &mut evidence, b, pair, sigma2, options.explained_fraction),
+        _ => (evidence.verdict(best, options.explained_fraction), Vec::new()),
+    };
+    let fraction_closed = evidence.fraction_closed;
+    if best.is_none()
+        && let Some(s) = scored.iter().find(|s| s.score.significant)
+    {
+        v.verdict += &format!(
+            "; {}{} beats noise but is not named: {}",
+            s.score.effect,
+            s.score.joint.map_or(String::new(), |j| format!(" on joint {j}")),
+            s.score.implausible.as_deref().unwrap_or("implausible")
+        );
+    }
     let base_params = prep.x_geometric.ncols();
     let (where_, features) = where_entries(prep, null, rms_before, noise_before, alpha);
     Diagnosis {
@@ -307,9 +408,11 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         },
         where_,
         features,
+        effects,
         candidates: scored.into_iter().map(|s| s.score).collect(),
         parameters: v.parameters,
         noise_rms_3d_mm: options.noise_rms_3d_mm,
+        noise_source: "given".into(),
         poses: super::result::PoseSplit {
             training: prep.poses.len().div_ceil(2),
             held_out: prep.poses.len() / 2,

@@ -39,15 +39,17 @@ mod validate;
 
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnose_axes_with};
-pub use linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
+pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{
-    Candidate, GRAVITY_M_S2, PoseFeatures, Predictor, RefitScope, WOBBLE_ORDER, unmodelled_harmonic_order,
+    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
+    MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures, Predictor, RefitScope,
+    SIGN_K_SIGMA, SpringSite, ThermalLinks, TiltShape, implausible, is_geared, unmodelled_harmonic_order,
 };
-pub use noise::{clean_positions, is_validation, replica};
+pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
-pub use result::{CandidateScore, Diagnosis, FeatureContrast, Outcome, Parameter, WhereEntry};
+pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
 pub use validate::{
     ChiSquare, OrientationSummary, PointKind, PositionSummary, Validation, ValidationOptions, ValidationResidual,
     validate, validation_residuals_csv,
@@ -60,7 +62,6 @@ use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 /// Why a data set could not be diagnosed.
@@ -184,11 +185,14 @@ fn reference_temperature(set: &MeasurementSet) -> f64 {
     if axis.is_empty() { 20.0 } else { mean(&axis) }
 }
 
+/// The calibration, the validation poses, the observed residuals and the refit's sensitivity;
+/// each candidate's sensitivity too when `with_candidates` (the baseline alone needs none).
 fn prepare(
     set: &MeasurementSet,
     desc: &RobotDescription,
     noise_rms_3d_mm: f64,
     scope: RefitScope,
+    with_candidates: bool,
 ) -> Result<Prepared, DiagnosisError> {
     let cal = calibrate_for(set, desc, noise_rms_3d_mm)?;
     let poses = validation_poses(set.rows(), desc);
@@ -198,7 +202,7 @@ fn prepare(
             needed: 4,
         });
     }
-    let predictor = Predictor::new(&cal.robot, desc, reference_temperature(set), None, scope);
+    let predictor = Predictor::new(&cal.robot, desc, reference_temperature(set), scope);
     let (train, held) = split(&poses);
     let train_rows = 3 * target_count(&train);
     let held_targets = target_count(&held);
@@ -212,9 +216,13 @@ fn prepare(
     let x_geometric = sensitivity(|p| predictor.residuals(p, &order), &zeros, &predictor.steps())
         .ok_or_else(|| model_error("refit sensitivity"))?;
     let mut x_candidates = Vec::new();
-    for c in Candidate::all(desc, &poses) {
-        let mut pred = predictor.clone();
-        pred.candidate = Some(c);
+    let library = if with_candidates {
+        Candidate::library(desc, &poses, DEFAULT_MAX_HARMONIC_ORDER)
+    } else {
+        Vec::new()
+    };
+    for c in library {
+        let pred = predictor.with_candidates(&[c]);
         let g = pred.geometric_count();
         let p0 = vec![0.0; g + pred.effect_count()];
         let steps = pred.steps();
@@ -274,6 +282,20 @@ impl Prepared {
         LinearFit::new(&t, &h)
     }
 
+    /// Held-out chi-square (SSR over the per-coordinate noise variance `sigma2`) of the refit
+    /// plus an effect of sensitivity `x_effect`: on the observation, and on every null sample.
+    fn heldout_chi2(&self, x_effect: &DMatrix<f64>, null: &NullData, sigma2: f64) -> (f64, Vec<f64>) {
+        let fit = self.candidate_fit(x_effect);
+        let observed = DMatrix::from_column_slice(self.residuals.len(), 1, self.residuals.as_slice());
+        let chi2 = self.heldout_ssr(&fit, &observed)[0] / sigma2;
+        let null = self
+            .heldout_ssr(&fit, &null.samples)
+            .iter()
+            .map(|s| s / sigma2)
+            .collect();
+        (chi2, null)
+    }
+
     /// Held-out SSR \[m^2\] of `fit` for each data column of `data` (training rows first).
     fn heldout_ssr(&self, fit: &LinearFit, data: &DMatrix<f64>) -> Vec<f64> {
         let (t, h) = self.rows(data);
@@ -303,8 +325,8 @@ impl Prepared {
     /// visible second-order residual; noise-only data (the null distributions) do not, so the
     /// linear null still applies.
     fn refine(&self, candidate: Option<(Candidate, &DMatrix<f64>)>) -> Option<Refined> {
-        let mut pred = self.predictor.clone();
-        pred.candidate = candidate.map(|c| c.0);
+        let members: Vec<Candidate> = candidate.iter().map(|c| c.0).collect();
+        let pred = self.predictor.with_candidates(&members);
         let order = ordered(&self.poses);
         let steps = pred.steps();
         // The residual is `measured - predicted`: its Jacobian is minus the sensitivity.
@@ -369,9 +391,10 @@ fn null_data(
     progress: &dyn crate::progress::Progress,
 ) -> Result<NullData, DiagnosisError> {
     progress.start(options.noise_trials, "noise-only replicas");
-    let noise_m = options.noise_rms_3d_mm * 1e-3;
-    let sigma = noise_m / 3f64.sqrt();
-    let clean = clean_positions(set, &prep.cal, desc)?;
+    let noise = noise_model(desc, options.noise_rms_3d_mm)?;
+    let tool_targets = prep.predictor.tool_targets_m().to_vec();
+    let clean = CleanCampaign::new(set, &prep.cal, desc, &tool_targets)?;
+    let rows = validation_rows(&prep.cal, desc, &tool_targets, &prep.poses)?;
     let mut rng = ChaCha12Rng::seed_from_u64(options.seed);
     let n = prep.residuals.len();
     let draws = options.noise_draws.max(1);
@@ -379,27 +402,52 @@ fn null_data(
     let mut axis_rms2 = vec![Vec::new(); prep.cal.axes.len()];
     let reference_c = reference_temperature(set);
     for trial in 0..options.noise_trials {
-        let r = replica(set, &clean, noise_m, false, &mut rng)?;
+        let r = replica(set, &clean, &noise, false, &mut rng)?;
         let cal = calibrate_for(&r, desc, options.noise_rms_3d_mm)?;
         for (acc, a) in axis_rms2.iter_mut().zip(&cal.axes) {
             acc.push(a.residual_rms_mm.powi(2));
         }
         let poses = validation_poses(r.rows(), desc);
-        let pred = Predictor::new(&cal.robot, desc, reference_c, None, options.refit);
+        let pred = Predictor::new(&cal.robot, desc, reference_c, options.refit);
         let systematic = pred
             .residuals(&vec![0.0; pred.geometric_count()], &ordered(&poses))
             .filter(|s| s.len() == n)
             .ok_or_else(|| model_error("noise replica"))?;
         for d in 0..draws {
-            let mut col = samples.column_mut(trial * draws + d);
-            for (x, s) in col.iter_mut().zip(&systematic) {
-                let z: f64 = StandardNormal.sample(&mut rng);
-                *x = s + sigma * z;
-            }
+            let mut col: Vec<f64> = systematic.clone();
+            rows.validation_draw(&noise, &mut col, &mut rng);
+            samples.column_mut(trial * draws + d).copy_from_slice(&col);
         }
         progress.inc();
     }
     Ok(NullData { samples, axis_rms2 })
+}
+
+/// What the noise-only replicas draw: the instrument noise `noise_rms_3d_mm` and the robot's
+/// repeatability as `calibrate` models it (the description's `repeatability_sigma`).
+fn noise_model(desc: &RobotDescription, noise_rms_3d_mm: f64) -> Result<NoiseModel, DiagnosisError> {
+    Ok(NoiseModel {
+        noise_rms_3d_m: noise_rms_3d_mm * 1e-3,
+        repeatability_rad: CalibrationOptions::default().joint_repeatability_rad(desc)?,
+    })
+}
+
+/// The validation poses `poses` (file order) on `cal` with their residual rows in the
+/// training-then-held-out order of [`ordered`].
+fn validation_rows(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    tool_targets_m: &[nalgebra::Point3<f64>],
+    poses: &[Pose],
+) -> Result<ValidationRows, DiagnosisError> {
+    // Training poses are the even file positions, held-out the odd ones (`split`).
+    let mut first_row = vec![0; poses.len()];
+    let mut row = 0;
+    for i in (0..poses.len()).step_by(2).chain((1..poses.len()).step_by(2)) {
+        first_row[i] = row;
+        row += 3 * poses[i].targets.len();
+    }
+    ValidationRows::new(cal, desc, tool_targets_m, poses, |i, k| first_row[i] + 3 * k)
 }
 
 /// Held-out RMS \[mm\] of the baseline (calibration + geometric refit) on `set`: with
@@ -410,13 +458,29 @@ pub fn baseline_heldout_rms_mm(
     desc: &RobotDescription,
     options: &DiagnosisOptions,
 ) -> Result<f64, DiagnosisError> {
-    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit)?;
+    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit, false)?;
     let fit = prep.baseline_fit();
     let ssr = prep.heldout_ssr(
         &fit,
         &DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice()),
     );
     Ok((ssr[0] / prep.held_targets.max(1) as f64).sqrt() * 1e3)
+}
+
+/// The instrument noise (3-D RMS) of `set` estimated from its axis-experiment residuals, as
+/// `calibrate` estimates it without a given noise ([`crate::calibration::noise::estimate_noise`]:
+/// the pooled arc-fit residuals, the share the description's repeatability explains
+/// subtracted); `None` without degrees of freedom. An effect that bends the arcs inflates it
+/// (a conservative diagnosis, never a false alarm from it).
+pub fn estimated_noise(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+) -> Result<Option<crate::calibration::noise::NoiseEstimate>, DiagnosisError> {
+    let options = CalibrationOptions {
+        estimate_noise: true,
+        ..CalibrationOptions::default()
+    };
+    Ok(calibrate(set, desc, &options)?.noise.and_then(|n| n.estimate))
 }
 
 /// Diagnoses `set` (module docs). Deterministic for given options.
@@ -435,7 +499,7 @@ pub fn diagnose_with(
     options: &DiagnosisOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<Diagnosis, DiagnosisError> {
-    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit)?;
+    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit, true)?;
     let null = null_data(set, desc, &prep, options, progress)?;
     Ok(decide::decide(&prep, &null, options))
 }

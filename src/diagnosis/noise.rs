@@ -1,10 +1,20 @@
 //! Noise-only replicas of a campaign: the same commands on the CALIBRATED robot, each target
-//! where the calibrated model puts it, plus isotropic Gaussian noise of the stated 3-D RMS
-//! (the "Monte-Carlo of the same commands on the calibrated robot" of the diagnosis).
+//! where the calibrated model puts it, moved by the robot's repeatability jitter and by
+//! isotropic Gaussian instrument noise of the stated 3-D RMS (the "Monte-Carlo of the same
+//! commands on the calibrated robot" of the diagnosis).
+//!
+//! The jitter is the one `calibrate` models (`CalibrationOptions::repeatability_sigma_rad`,
+//! default the description's `repeatability_sigma`): a Gaussian error of each joint value,
+//! drawn anew each time the joint's actuator is re-positioned (its actuator command changes by
+//! more than [`UNMOVED_ACTUATOR_RAD`]) and held while it is not, so in an axis experiment only
+//! the swept joint jitters from step to step.
 
 use super::DiagnosisError;
+use super::poses::Pose;
 use crate::calibration::procedure::Calibration;
+use crate::kinematics::PhiModel;
 use crate::measurement::{Measurement, MeasurementSet};
+use crate::physics::UNMOVED_ACTUATOR_RAD;
 use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription};
@@ -13,70 +23,172 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use std::collections::HashMap;
 
-/// Noise-free positions of every row of `set` on the calibrated robot \[m\]. Axis-experiment
-/// targets sit at their mean position in their link's frame (target 0's link for a target the
-/// description does not place) (estimated from the measurements
-/// through the calibrated model); tool targets at the description's tool targets.
+/// What a noise-only replica draws: the instrument's noise and the robot's repeatability.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoiseModel {
+    /// Instrument noise, 3-D RMS of a point \[m\] (each coordinate `/ sqrt(3)`).
+    pub noise_rms_3d_m: f64,
+    /// Repeatability of each joint: standard deviation of its value per re-positioning
+    /// \[rad or m\].
+    pub repeatability_rad: Vec<f64>,
+}
+
+/// One row of a campaign on the calibrated robot, noise-free.
+#[derive(Clone, Debug)]
+struct CleanRow {
+    /// The calibrated joint values of the row's command.
+    q: Vec<f64>,
+    /// Its actuator commands (fig. 3 decoupling): when they change, the joints re-position.
+    u: Vec<f64>,
+    /// The link carrying the target (0-based) and the target in its moving frame \[m\].
+    link: usize,
+    point_in_link_m: Point3<f64>,
+}
+
+/// A campaign's rows on the calibrated robot: where every target is without noise, and what
+/// the jitter moves. Axis-experiment targets sit at their mean position in their link's frame
+/// (target 0's link for a target the description does not place), estimated from the
+/// measurements through the calibrated model; tool targets at `tool_targets_m` (tool frame).
+#[derive(Clone, Debug)]
+pub struct CleanCampaign {
+    model: PhiModel,
+    rows: Vec<CleanRow>,
+}
+
+fn model_error(message: String) -> DiagnosisError {
+    DiagnosisError::Model { message }
+}
+
+/// The link (0-based) carrying the target of axis-experiment row `m`: a target the
+/// description does not place (e.g. a third reflector) turns rigidly with target 0, since only
+/// the experiment's joint moves.
+fn axis_target_link(desc: &RobotDescription, m: &Measurement) -> Option<usize> {
+    let t = desc.axis_targets_of(m.moved_joint)?;
+    match (m.target, t.target1) {
+        (1, Some(t1)) => Some(t1.link - 1),
+        _ => Some(t.target0.link - 1),
+    }
+}
+
+impl CleanCampaign {
+    /// The rows of `set` on the calibrated robot `cal` (module docs).
+    pub fn new(
+        set: &MeasurementSet,
+        cal: &Calibration,
+        desc: &RobotDescription,
+        tool_targets_m: &[Point3<f64>],
+    ) -> Result<Self, DiagnosisError> {
+        let controller = Controller::from_description(desc);
+        let model = cal.robot.phi_model();
+        let mut joint_values = Vec::with_capacity(set.rows().len());
+        for m in set.rows() {
+            let q = calibrated_joint_values(cal, &controller, desc, m)?;
+            let u = controller
+                .decouple(&commands_to_internal(desc, &m.cmd))
+                .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))?;
+            joint_values.push((q, u));
+        }
+        // Mean link-frame position of each axis target.
+        let mut sums: HashMap<(&str, usize), (Vector3<f64>, usize)> = HashMap::new();
+        for (m, (q, _)) in set.rows().iter().zip(&joint_values) {
+            if m.moved_joint > 0
+                && let Some(l) = axis_target_link(desc, m)
+            {
+                let p = model.poses(q).world_from_link[l].inverse() * m.position_m();
+                let e = sums
+                    .entry((m.experiment.as_str(), m.target))
+                    .or_insert((Vector3::zeros(), 0));
+                e.0 += p.coords;
+                e.1 += 1;
+            }
+        }
+        let last = desc.dof() - 1;
+        let rows = set
+            .rows()
+            .iter()
+            .zip(joint_values)
+            .map(|(m, (q, u))| {
+                let (link, point_in_link_m) = if m.moved_joint > 0 {
+                    let l = axis_target_link(desc, m).ok_or_else(|| {
+                        model_error(format!(
+                            "experiment {}: target {} of joint {} is not in the description",
+                            m.experiment, m.target, m.moved_joint
+                        ))
+                    })?;
+                    let (s, n) = sums[&(m.experiment.as_str(), m.target)];
+                    (l, Point3::from(s / n as f64))
+                } else {
+                    let t = tool_targets_m.get(m.target).ok_or_else(|| {
+                        model_error(format!(
+                            "experiment {}: tool target {} is not in the description",
+                            m.experiment, m.target
+                        ))
+                    })?;
+                    (last, model.last_link_from_tool * t)
+                };
+                Ok(CleanRow {
+                    q,
+                    u,
+                    link,
+                    point_in_link_m,
+                })
+            })
+            .collect::<Result<_, DiagnosisError>>()?;
+        Ok(CleanCampaign { model, rows })
+    }
+
+    /// Noise-free positions of every row \[m\].
+    pub fn positions(&self) -> Vec<Point3<f64>> {
+        self.rows.iter().map(|r| self.position(r, None)).collect()
+    }
+
+    /// Where row `r`'s target is with the joint values moved by `dq`.
+    fn position(&self, r: &CleanRow, dq: Option<&[f64]>) -> Point3<f64> {
+        let q: Vec<f64> = match dq {
+            Some(d) => r.q.iter().zip(d).map(|(a, b)| a + b).collect(),
+            None => r.q.clone(),
+        };
+        self.model.poses(&q).world_from_link[r.link] * r.point_in_link_m
+    }
+}
+
+/// The repeatability jitter of a sequence of executions (module docs): each execution draws
+/// one standard normal per joint (so the random stream does not depend on which actuators
+/// moved) and keeps the previous draw of every joint whose actuator did not move.
+struct Jitter<'a> {
+    sigma: &'a [f64],
+    last: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+impl<'a> Jitter<'a> {
+    fn new(sigma: &'a [f64]) -> Self {
+        Jitter { sigma, last: None }
+    }
+
+    /// The joint-value errors of an execution at actuator commands `u`.
+    fn draw<R: Rng + ?Sized>(&mut self, u: &[f64], rng: &mut R) -> Vec<f64> {
+        let mut z: Vec<f64> = u.iter().map(|_| StandardNormal.sample(rng)).collect();
+        if let Some((last_u, last_z)) = &self.last {
+            for ((z, (now, before)), held) in z.iter_mut().zip(u.iter().zip(last_u)).zip(last_z) {
+                if (now - before).abs() <= UNMOVED_ACTUATOR_RAD {
+                    *z = *held;
+                }
+            }
+        }
+        let dq = z.iter().zip(self.sigma).map(|(z, s)| z * s).collect();
+        self.last = Some((u.to_vec(), z));
+        dq
+    }
+}
+
+/// Noise-free positions of every row of `set` on the calibrated robot \[m\], tool targets at
+/// the description's ([`CleanCampaign::positions`]).
 pub fn clean_positions(
     set: &MeasurementSet,
     cal: &Calibration,
     desc: &RobotDescription,
 ) -> Result<Vec<Point3<f64>>, DiagnosisError> {
-    let controller = Controller::from_description(desc);
-    let model = cal.robot.phi_model();
-    let tool_targets = desc.tool_targets_m();
-    let link_of = |m: &Measurement| -> Option<usize> {
-        let t = desc.axis_targets_of(m.moved_joint)?;
-        // A target the description does not place (e.g. a third reflector) turns rigidly with
-        // target 0: only the experiment's joint moves.
-        match (m.target, t.target1) {
-            (1, Some(t1)) => Some(t1.link - 1),
-            _ => Some(t.target0.link - 1),
-        }
-    };
-    let mut frames = Vec::with_capacity(set.rows().len());
-    for m in set.rows() {
-        let q = calibrated_joint_values(cal, &controller, desc, m)?;
-        frames.push(model.poses(&q));
-    }
-    // Mean link-frame position of each axis target.
-    let mut sums: HashMap<(&str, usize), (Vector3<f64>, usize)> = HashMap::new();
-    for (m, f) in set.rows().iter().zip(&frames) {
-        if m.moved_joint > 0
-            && let Some(l) = link_of(m)
-        {
-            let p = f.world_from_link[l].inverse() * m.position_m();
-            let e = sums
-                .entry((m.experiment.as_str(), m.target))
-                .or_insert((Vector3::zeros(), 0));
-            e.0 += p.coords;
-            e.1 += 1;
-        }
-    }
-    set.rows()
-        .iter()
-        .zip(&frames)
-        .map(|(m, f)| {
-            if m.moved_joint > 0 {
-                let l = link_of(m).ok_or_else(|| DiagnosisError::Model {
-                    message: format!(
-                        "experiment {}: target {} of joint {} is not in the description",
-                        m.experiment, m.target, m.moved_joint
-                    ),
-                })?;
-                let (s, n) = sums[&(m.experiment.as_str(), m.target)];
-                Ok(f.world_from_link[l] * Point3::from(s / n as f64))
-            } else {
-                let t = tool_targets.get(m.target).ok_or_else(|| DiagnosisError::Model {
-                    message: format!(
-                        "experiment {}: tool target {} is not in the description",
-                        m.experiment, m.target
-                    ),
-                })?;
-                Ok(f.world_from_tool * t)
-            }
-        })
-        .collect()
+    Ok(CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?.positions())
 }
 
 /// The calibrated joint values of `m`'s commands (the controller, then `cal`'s transmissions
@@ -89,9 +201,7 @@ pub(super) fn calibrated_joint_values(
 ) -> Result<Vec<f64>, DiagnosisError> {
     cal.robot
         .joint_values(controller, &commands_to_internal(desc, &m.cmd))
-        .map_err(|e| DiagnosisError::Model {
-            message: format!("experiment {} step {}: {e}", m.experiment, m.step),
-        })
+        .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))
 }
 
 /// Whether `m` is a validation measurement (`docs/formats.md#measurement-csv`: `moved_joint = 0`, not the
@@ -100,32 +210,106 @@ pub fn is_validation(m: &Measurement) -> bool {
     m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT
 }
 
-/// One noise-only replica: `set`'s rows at `clean` plus isotropic noise of 3-D RMS
-/// `noise_rms_3d_m` (each coordinate `noise_rms_3d_m / sqrt(3)`); validation rows get noise
-/// only when `validation_noise` (the diagnoser draws theirs separately, many per replica).
+/// One noise-only replica: `set`'s rows at `clean`, jittered and with isotropic noise
+/// ([`NoiseModel`]); validation rows get neither only when `validation_noise` is false (the
+/// diagnoser draws theirs separately, many per replica, [`ValidationRows::validation_draw`]).
 pub fn replica<R: Rng + ?Sized>(
     set: &MeasurementSet,
-    clean: &[Point3<f64>],
-    noise_rms_3d_m: f64,
+    clean: &CleanCampaign,
+    noise: &NoiseModel,
     validation_noise: bool,
     rng: &mut R,
 ) -> Result<MeasurementSet, DiagnosisError> {
-    let sigma = noise_rms_3d_m / 3f64.sqrt();
-    let rows = set
-        .rows()
-        .iter()
-        .zip(clean)
-        .map(|(m, p)| {
-            let noisy = validation_noise || !is_validation(m);
-            let mut m = m.clone();
-            for (c, x) in m.position_mm.iter_mut().zip(p.iter()) {
-                let z: f64 = if noisy { StandardNormal.sample(rng) } else { 0.0 };
-                *c = (x + sigma * z) * 1e3;
+    let sigma = noise.noise_rms_3d_m / 3f64.sqrt();
+    let mut jitter = Jitter::new(&noise.repeatability_rad);
+    let mut execution: Option<((&str, usize), Vec<f64>)> = None;
+    let mut rows = Vec::with_capacity(set.rows().len());
+    for (m, r) in set.rows().iter().zip(&clean.rows) {
+        let mut out = m.clone();
+        let p = if validation_noise || !is_validation(m) {
+            let key = (m.experiment.as_str(), m.step);
+            if execution.as_ref().is_none_or(|(k, _)| *k != key) {
+                execution = Some((key, jitter.draw(&r.u, rng)));
             }
-            m
-        })
-        .collect();
-    MeasurementSet::new(set.joint_count(), rows).map_err(|e| DiagnosisError::Model {
-        message: format!("noise replica: {e}"),
-    })
+            let dq = execution.as_ref().map(|(_, d)| d.as_slice());
+            clean.position(r, dq).coords
+                + Vector3::from_fn(|_, _| sigma * Distribution::<f64>::sample(&StandardNormal, rng))
+        } else {
+            clean.position(r, None).coords
+        };
+        for (c, x) in out.position_mm.iter_mut().zip(p.iter()) {
+            *c = x * 1e3;
+        }
+        rows.push(out);
+    }
+    MeasurementSet::new(set.joint_count(), rows).map_err(|e| model_error(format!("noise replica: {e}")))
+}
+
+/// One validation pose on the calibrated robot: joint values, actuator commands, and per target
+/// (first residual row, target in the last link's frame, noise-free position).
+type ValidationPose = (Vec<f64>, Vec<f64>, Vec<(usize, Point3<f64>, Point3<f64>)>);
+
+/// The validation poses of a campaign on the calibrated robot, for drawing their noise: per
+/// pose (file order) its joint values, actuator commands and the residual rows of its targets.
+pub struct ValidationRows {
+    model: PhiModel,
+    /// Per pose: joint values, actuator commands, and per target (first residual row, target
+    /// in the last link's frame, noise-free position).
+    poses: Vec<ValidationPose>,
+}
+
+impl ValidationRows {
+    /// The validation poses `poses` (file order) on the calibrated robot `cal`, their tool
+    /// targets at `tool_targets_m` (tool frame); `row_of(pose, k)` is the first residual row of
+    /// the pose's `k`-th target.
+    pub fn new(
+        cal: &Calibration,
+        desc: &RobotDescription,
+        tool_targets_m: &[Point3<f64>],
+        poses: &[Pose],
+        row_of: impl Fn(usize, usize) -> usize,
+    ) -> Result<Self, DiagnosisError> {
+        let controller = Controller::from_description(desc);
+        let model = cal.robot.phi_model();
+        let n = desc.dof();
+        let mut out = Vec::with_capacity(poses.len());
+        for (i, pose) in poses.iter().enumerate() {
+            let fail = |e: crate::robot::ModelError| model_error(format!("validation step {}: {e}", pose.step));
+            let q = cal.robot.joint_values(&controller, &pose.cmd).map_err(fail)?;
+            let u = controller.decouple(&pose.cmd).map_err(fail)?;
+            let link = model.poses(&q).world_from_link[n - 1];
+            let mut targets = Vec::with_capacity(pose.targets.len());
+            for (k, (id, _)) in pose.targets.iter().enumerate() {
+                let t = tool_targets_m
+                    .get(*id)
+                    .ok_or_else(|| model_error(format!("tool target {id} is not in the description")))?;
+                let in_link = model.last_link_from_tool * t;
+                targets.push((row_of(i, k), in_link, link * in_link));
+            }
+            out.push((q, u, targets));
+        }
+        Ok(ValidationRows { model, poses: out })
+    }
+
+    /// Adds one draw of the validation noise to `column` (residual rows, `measured -
+    /// predicted`): the jitter's displacement of every target and isotropic instrument noise.
+    pub fn validation_draw<R: Rng + ?Sized>(&self, noise: &NoiseModel, column: &mut [f64], rng: &mut R) {
+        let sigma = noise.noise_rms_3d_m / 3f64.sqrt();
+        let mut jitter = Jitter::new(&noise.repeatability_rad);
+        let jittered = noise.repeatability_rad.iter().any(|s| *s > 0.0);
+        for (q, u, targets) in &self.poses {
+            let dq = jitter.draw(u, rng);
+            let link = jittered.then(|| {
+                let q: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
+                self.model.poses(&q).world_from_link[q.len() - 1]
+            });
+            for (row, in_link, clean) in targets {
+                let moved = link.map_or(Vector3::zeros(), |l| l * in_link - clean);
+                for c in 0..3 {
+                    let z: f64 = StandardNormal.sample(rng);
+                    column[row + c] += moved[c] + sigma * z;
+                }
+            }
+        }
+    }
 }

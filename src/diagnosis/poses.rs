@@ -2,9 +2,10 @@
 //! command history, conditions and measured tool targets (`docs/formats.md#measurement-csv`).
 
 use crate::measurement::Measurement;
+use crate::physics::{ApproachTracker, UNMOVED_ACTUATOR_RAD};
 use crate::plan::TOOL_EXPERIMENT;
-use crate::robot::RobotDescription;
 use crate::robot::commands_to_internal;
+use crate::robot::{Controller, RobotDescription};
 use nalgebra::Point3;
 use std::collections::HashMap;
 
@@ -21,6 +22,10 @@ pub struct Pose {
     /// poses in file order (all experiments), the previous direction when the command did not
     /// change, 0 before any motion.
     pub approach: Vec<f64>,
+    /// The same for every joint's actuator command (after the fig. 3 decoupling with the
+    /// description's nominal couplings; a change of at most [`UNMOVED_ACTUATOR_RAD`] is no
+    /// motion): where a backlash in the actuator sits.
+    pub actuator_approach: Vec<f64>,
     /// Ambient temperature \[deg C\].
     pub temperature_c: f64,
     /// Payload at the tool \[kg\].
@@ -30,33 +35,32 @@ pub struct Pose {
 }
 
 /// The validation poses of `rows` (`moved_joint = 0`, not the `tool` experiment), in file
-/// order, with their approach directions taken over every pose of the file.
+/// order, with their approach directions (command and actuator) taken over every pose of the
+/// file.
 pub fn validation_poses(rows: &[Measurement], desc: &RobotDescription) -> Vec<Pose> {
     let n = desc.dof();
+    let controller = Controller::from_description(desc);
     let mut index: HashMap<(&str, usize), usize> = HashMap::new();
     let mut poses: Vec<Pose> = Vec::new();
     let mut keep: Vec<bool> = Vec::new();
-    let mut last: Option<Vec<f64>> = None;
-    let mut approach = vec![0.0; n];
+    let mut by_command = ApproachTracker::new(n, 0.0);
+    let mut by_actuator = ApproachTracker::new(n, UNMOVED_ACTUATOR_RAD);
     for m in rows {
         let key = (m.experiment.as_str(), m.step);
         let i = match index.get(&key) {
             Some(&i) => i,
             None => {
                 let cmd = commands_to_internal(desc, &m.cmd);
-                if let Some(l) = &last {
-                    for ((dir, c), p) in approach.iter_mut().zip(&cmd).zip(l) {
-                        if (c - p).abs() > 0.0 {
-                            *dir = (c - p).signum();
-                        }
-                    }
-                }
-                last = Some(cmd.clone());
+                let approach = by_command.step(&cmd).to_vec();
+                // The file's command count was checked against the description on reading.
+                let u = controller.decouple(&cmd).unwrap_or_else(|_| cmd.clone());
+                let actuator_approach = by_actuator.step(&u).to_vec();
                 poses.push(Pose {
                     experiment: m.experiment.clone(),
                     step: m.step,
                     cmd,
-                    approach: approach.clone(),
+                    approach,
+                    actuator_approach,
                     temperature_c: m.temperature_c,
                     payload_kg: m.payload_kg,
                     targets: Vec::new(),

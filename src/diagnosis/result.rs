@@ -76,6 +76,10 @@ pub struct CandidateScore {
     pub weight: f64,
     /// Fitted effect parameters.
     pub parameters: Vec<Parameter>,
+    /// Why the fitted parameters are physically implausible (`docs/diagnosis.md`,
+    /// "Plausibility"; checked for significant candidates only): such a candidate is not named.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub implausible: Option<String>,
 }
 
 /// The `docs/formats.md#diagnosis-json` verdict fields of a diagnosis ([`Diagnosis`],
@@ -97,6 +101,22 @@ pub struct Outcome {
     pub gap_after_mm: f64,
 }
 
+/// One of several named effects (`docs/formats.md#diagnosis-json`, `effects`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct NamedEffect {
+    /// Effect name.
+    pub effect: String,
+    /// Its joint, or `None`.
+    pub joint: Option<usize>,
+    /// Its share of the closed gap (Shapley value over the two orders of adding them; the
+    /// shares sum to 1).
+    pub share: f64,
+}
+
+fn given() -> String {
+    "given".into()
+}
+
 /// The diagnosis (`docs/formats.md#diagnosis-json` plus details).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Diagnosis {
@@ -110,12 +130,20 @@ pub struct Diagnosis {
     /// threshold, largest first).
     #[serde(default)]
     pub features: Vec<FeatureContrast>,
+    /// Present when two effects are named: each with its share of the closed gap; the
+    /// verdict's `effect` and `joint` are the one with the larger share.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub effects: Vec<NamedEffect>,
     /// Candidates, best (lowest held-out RMS) first.
     pub candidates: Vec<CandidateScore>,
     /// The named effect's parameters.
     pub parameters: Vec<Parameter>,
     /// Noise assumed, 3-D RMS \[mm\].
     pub noise_rms_3d_mm: f64,
+    /// Where `noise_rms_3d_mm` comes from: `given` (`--noise-mm`) or `estimated` (from the
+    /// axis experiments' residuals, [`estimated_noise`](super::estimated_noise)).
+    #[serde(default = "given")]
+    pub noise_source: String,
     /// Training and held-out pose counts.
     pub poses: PoseSplit,
     /// Baseline held-out RMS \[mm\].

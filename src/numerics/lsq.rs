@@ -486,13 +486,24 @@ impl TruncatedSvd {
     /// The truncated SVD of `x`, keeping singular values above `relative_tolerance` times the
     /// largest.
     pub fn new(x: &DMatrix<f64>, relative_tolerance: f64) -> Self {
+        let norms: Vec<f64> = (0..x.ncols()).map(|c| x.column(c).norm()).collect();
+        Self::scaled(x, &norms, |s_max| relative_tolerance * s_max)
+    }
+
+    /// The truncated SVD of `x` with column `c` scaled by `1 / reference_norms[c]` (instead of
+    /// its own length), keeping singular values above `absolute_tolerance`: the rank of a block
+    /// of columns after something was projected out of them, measured against the columns as
+    /// they were before (a column lying wholly inside the projected span keeps only rounding,
+    /// which must be dropped, not scaled up).
+    pub fn with_reference_norms(x: &DMatrix<f64>, reference_norms: &[f64], absolute_tolerance: f64) -> Self {
+        Self::scaled(x, reference_norms, |_| absolute_tolerance)
+    }
+
+    /// The SVD of `x` with column `c` divided by `norms[c]` (1 where it is 0), keeping the
+    /// singular values above `threshold(s_max)`.
+    fn scaled(x: &DMatrix<f64>, norms: &[f64], threshold: impl Fn(f64) -> f64) -> Self {
         let p = x.ncols();
-        let norms: Vec<f64> = (0..p)
-            .map(|c| {
-                let n = x.column(c).norm();
-                if n > 0.0 { n } else { 1.0 }
-            })
-            .collect();
+        let norms: Vec<f64> = norms.iter().map(|&n| if n > 0.0 { n } else { 1.0 }).collect();
         let mut scaled = x.clone();
         for (c, n) in norms.iter().enumerate() {
             scaled.column_mut(c).scale_mut(1.0 / n);
@@ -502,8 +513,9 @@ impl TruncatedSvd {
             unreachable!("SVD computed with U and V^T")
         };
         let s_max = svd.singular_values.iter().cloned().fold(0.0, f64::max);
+        let below = threshold(s_max);
         let keep: Vec<usize> = (0..svd.singular_values.len())
-            .filter(|&i| svd.singular_values[i] > relative_tolerance * s_max && svd.singular_values[i] > 0.0)
+            .filter(|&i| svd.singular_values[i] > below && svd.singular_values[i] > 0.0)
             .collect();
         let rank = keep.len();
         let mut span = DMatrix::zeros(x.nrows(), rank);

@@ -40,13 +40,14 @@ impl AnalyticArm {
         }
     }
 
-    /// The same arm with unmodelled `effects`; the link masses for compliance come from
-    /// `desc` (the truth model carries none).
+    /// The same arm with unmodelled `effects`; the link masses for compliance are the
+    /// effects' own, else `desc`'s ([`Effects::truth_link_masses`]; the truth model carries
+    /// none).
     pub fn with_effects(self, effects: Effects, desc: &RobotDescription) -> Self {
         let controller = Controller::from_description(desc);
         AnalyticArm {
             driver: JointDriver::new(&self.truth, controller, &effects),
-            masses: LinkMass::from_description(desc),
+            masses: effects.truth_gravity_masses(desc),
             effects,
             ..self
         }

@@ -11,6 +11,7 @@
 //! | `gear_harmonics` | extra harmonic terms of a joint's transmission (eq. 8) | the truth's transmissions |
 //! | `wobble` | bearing runout: a tilt of the joint axis that turns with the joint | link poses |
 //! | `instrument_scale` | a scale error of the instrument about its origin \[ppm\] | measured coordinates |
+//! | `link_masses` | the real links' masses and centres of mass (default: the description's) | the gravity load of `compliance` (and the rapier bodies) |
 //!
 //! [`JointDriver`] runs the joint-side effects for any [`ArmExecutor`](super::ArmExecutor):
 //! commands -> fig. 3 controller -> actuators with the truth's transmissions (plus gear
@@ -18,11 +19,11 @@
 
 use crate::kinematics::PhiModel;
 use crate::physics::{
-    AxisWobble, BacklashEffect, ComplianceEffect, GearHarmonic, InstrumentScale, PayloadEffect, ThermalEffect,
-    apply_wobble, with_gear_harmonics,
+    AxisWobble, BacklashEffect, ComplianceEffect, GearHarmonic, InstrumentScale, LinkMass, PayloadEffect,
+    ThermalEffect, apply_wobble, with_gear_harmonics,
 };
 use crate::plan::PoseConditions;
-use crate::robot::RobotModel;
+use crate::robot::{RobotDescription, RobotModel};
 use nalgebra::{Isometry3, Point3};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -86,6 +87,35 @@ pub struct Effects {
     /// Instrument scale error.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub instrument_scale: Option<InstrumentScale>,
+    /// The real links' masses, one per joint (default, empty: the description's): the
+    /// simulated robot's mass distribution need not be the one the description guesses.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub link_masses: Vec<LinkMassEntry>,
+}
+
+/// The mass of one real link, as [`Effects::link_masses`] gives it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LinkMassEntry {
+    /// \[kg\], > 0.
+    pub mass_kg: f64,
+    /// Centre of mass in the link's moving frame \[mm\].
+    pub com_mm: [f64; 3],
+}
+
+/// Checks a per-row list (one value per link between two joints): `dof - 1` finite values.
+fn per_joint_minus_one(field: &str, v: &[f64], dof: usize) -> Result<(), EffectsError> {
+    let rows = dof.saturating_sub(1);
+    if v.len() != rows {
+        return Err(invalid(
+            field,
+            format!("needs {rows} values (one per row), found {}", v.len()),
+        ));
+    }
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(k) => Err(invalid(format!("{field}[{k}]"), format!("bad value {}", v[k]))),
+        None => Ok(()),
+    }
 }
 
 /// `e` with the accepted range appended to its message.
@@ -169,7 +199,11 @@ impl Effects {
                     "must be a temperature above absolute zero",
                 ));
             }
+            if !t.alpha_per_k_rows.is_empty() {
+                per_joint_minus_one("thermal.alpha_per_k_rows", &t.alpha_per_k_rows, dof)?;
+            }
         }
+        self.validate_link_masses(dof)?;
         let joint_ok = |field: String, joint: usize| {
             if joint == 0 || joint > dof {
                 Err(invalid(field, format!("joint {joint} is not in 1..={dof}")))
@@ -211,6 +245,54 @@ impl Effects {
             ));
         }
         Ok(())
+    }
+
+    /// Checks `link_masses`: none, or one positive mass and finite centre per joint.
+    fn validate_link_masses(&self, dof: usize) -> Result<(), EffectsError> {
+        if self.link_masses.is_empty() {
+            return Ok(());
+        }
+        if self.link_masses.len() != dof {
+            return Err(invalid(
+                "link_masses",
+                format!("needs {dof} entries, found {}", self.link_masses.len()),
+            ));
+        }
+        for (k, m) in self.link_masses.iter().enumerate() {
+            if !(m.mass_kg.is_finite() && m.mass_kg > 0.0) {
+                return Err(invalid(
+                    format!("link_masses[{k}].mass_kg"),
+                    format!("bad value {}", m.mass_kg),
+                ));
+            }
+            if !m.com_mm.iter().all(|x| x.is_finite()) {
+                return Err(invalid(format!("link_masses[{k}].com_mm"), "must be finite"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The real links' masses: [`Effects::link_masses`], or `desc`'s when none are given.
+    pub fn truth_link_masses(&self, desc: &RobotDescription) -> Vec<LinkMassEntry> {
+        if self.link_masses.is_empty() {
+            desc.joints
+                .iter()
+                .map(|j| LinkMassEntry {
+                    mass_kg: j.mass_kg,
+                    com_mm: j.com_mm,
+                })
+                .collect()
+        } else {
+            self.link_masses.clone()
+        }
+    }
+
+    /// [`Effects::truth_link_masses`] as the gravity model's [`LinkMass`]es.
+    pub fn truth_gravity_masses(&self, desc: &RobotDescription) -> Vec<LinkMass> {
+        self.truth_link_masses(desc)
+            .iter()
+            .map(|m| LinkMass::at(m.mass_kg, Point3::from(m.com_mm) * 1e-3))
+            .collect()
     }
 
     /// `truth` with the extra gear harmonics added to its transmissions.

@@ -1,22 +1,21 @@
 //! Commands to joint values on the simulated robot, with the joint-side effects.
 
 use super::effects::Effects;
-use crate::physics::BacklashEffect;
+use crate::physics::{ApproachSource, ApproachTracker, BacklashEffect, GearHarmonic, add_joint_period_errors};
 use crate::robot::{Controller, ModelError, RobotModel};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-/// An actuator command that changed by no more than this \[rad or m\] has not moved: the
-/// hold-still commands of a coupled joint reproduce its actuator command only to rounding (a
-/// few 1e-16 rad through the fig. 3 decoupling), and no encoder resolves 1e-12.
-pub const UNMOVED_ACTUATOR_RAD: f64 = 1e-12;
+pub use crate::physics::UNMOVED_ACTUATOR_RAD;
 
 /// Commands to joint values with the joint-side effects: the fig. 3 controller, the truth's
-/// transmissions (with [`Effects::gear_harmonics`]), backlash on the active displacements, the
-/// passive couplings, and the repeatability jitter. Keeps the last command for the approach
-/// direction of the backlash (`docs/formats.md#measurement-csv`: the sign of `cmd(s) - cmd(s-1)`; a joint
-/// whose command did not change keeps its previous direction; before any motion the joint
-/// sits in the middle of its band).
+/// transmissions (with [`Effects::gear_harmonics`]: transmission-period terms in the
+/// transmission, joint-period ones on the active displacement), backlash on the active
+/// displacements, the passive couplings, and the repeatability jitter. Keeps the last command
+/// for the approach direction of the backlash (`docs/formats.md#measurement-csv`: the sign of
+/// `cmd(s) - cmd(s-1)`, or of the actuator command's change for a backlash signed by the
+/// actuator ([`ApproachSource`]); a joint whose command did not change keeps its previous
+/// direction; before any motion the joint sits in the middle of its band).
 ///
 /// Repeatability is a *re-positioning* error: an actuator draws a new jitter only when its
 /// actuator command (after the fig. 3 decoupling) changes; an actuator the command leaves
@@ -30,8 +29,10 @@ pub struct JointDriver {
     truth: RobotModel,
     controller: Controller,
     band_rad: Vec<f64>,
-    last_cmd: Option<Vec<f64>>,
-    approach: Vec<f64>,
+    direction: ApproachSource,
+    command_approach: ApproachTracker,
+    actuator_approach: ApproachTracker,
+    joint_harmonics: Vec<GearHarmonic>,
     /// Actuator commands of the last execution and the standard-normal jitter draws they got.
     last_actuator: Option<(Vec<f64>, Vec<f64>)>,
 }
@@ -53,8 +54,13 @@ impl JointDriver {
             truth: effects.truth_with_harmonics(truth),
             controller,
             band_rad: effects.backlash.as_ref().map_or(vec![0.0; n], |b| b.band_rad.clone()),
-            last_cmd: None,
-            approach: vec![0.0; n],
+            direction: effects
+                .backlash
+                .as_ref()
+                .map_or(ApproachSource::Command, |b| b.direction),
+            command_approach: ApproachTracker::new(n, 0.0),
+            actuator_approach: ApproachTracker::new(n, UNMOVED_ACTUATOR_RAD),
+            joint_harmonics: effects.gear_harmonics.clone(),
             last_actuator: None,
         }
     }
@@ -69,15 +75,14 @@ impl JointDriver {
     pub fn drive<R: Rng + ?Sized>(&mut self, cmd: &[f64], rng: &mut R) -> Result<DrivenJoints, ModelError> {
         let u = self.controller.decouple(cmd)?;
         let mut active = self.truth.active_displacements(&u)?;
-        if let Some(last) = &self.last_cmd {
-            for ((dir, c), l) in self.approach.iter_mut().zip(cmd).zip(last) {
-                if (c - l).abs() > 0.0 {
-                    *dir = (c - l).signum();
-                }
-            }
-        }
-        self.last_cmd = Some(cmd.to_vec());
-        for ((a, dir), band) in active.iter_mut().zip(&self.approach).zip(&self.band_rad) {
+        add_joint_period_errors(&self.joint_harmonics, &mut active);
+        let by_command = self.command_approach.step(cmd);
+        let by_actuator = self.actuator_approach.step(&u);
+        let approach = match self.direction {
+            ApproachSource::Command => by_command,
+            ApproachSource::Actuator => by_actuator,
+        };
+        for ((a, dir), band) in active.iter_mut().zip(approach).zip(&self.band_rad) {
             *a = BacklashEffect::lagged(*a, *dir, *band);
         }
         let mut q = active.clone();

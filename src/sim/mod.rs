@@ -27,7 +27,7 @@ pub use campaign::{
     ArmExecutor, CampaignError, CampaignOptions, CampaignOutput, ExecuteError, simulate_campaign,
     simulate_campaign_with,
 };
-pub use effects::{Effects, EffectsError};
+pub use effects::{Effects, EffectsError, LinkMassEntry};
 pub use joint_driver::{DrivenJoints, JointDriver, UNMOVED_ACTUATOR_RAD};
 pub use paper::{PAPER_ROBOT_FILE, paper_robot};
 pub use perturb::{

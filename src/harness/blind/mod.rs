@@ -7,15 +7,14 @@
 mod draw;
 mod score;
 
-pub use score::{BlindScore, CaseResult, ConfusionMatrix, case_table, score};
+pub use score::{BlindScore, CaseResult, ConfusionMatrix, ShapeRow, case_table, diagnosed_label, score};
 
 use draw::{
-    draw_backlash, draw_compliance, draw_gear_harmonic, draw_instrument_scale, draw_thermal, draw_wobble,
+    draw_backlash, draw_compliance, draw_gear_harmonic, draw_instrument_scale, draw_masses, draw_thermal, draw_wobble,
     draw_zero_drift, log_uniform,
 };
 
 use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
-use crate::physics::PayloadEffect;
 use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription};
@@ -27,7 +26,7 @@ use serde::{Deserialize, Serialize};
 /// candidate set, which the diagnoser should call `unexplained` (alternately a joint zero that
 /// drifts with temperature, [`JointZeroDrift`], and a curvature of the instrument's field,
 /// [`InstrumentSag`]).
-pub const CASE_EFFECTS: [&str; 8] = [
+pub const CASE_EFFECTS: [&str; 9] = [
     "none",
     "joint_compliance",
     "backlash",
@@ -36,7 +35,26 @@ pub const CASE_EFFECTS: [&str; 8] = [
     "axis_wobble",
     "instrument_scale",
     "unknown",
+    TWO_EFFECTS,
 ];
+
+/// The two-effect case: a joint compliance and a backlash at once (both from the upper part of
+/// their ranges), expected as `backlash+joint_compliance` (the names of the diagnosis'
+/// `effects`, sorted) with both on their joints.
+pub const TWO_EFFECTS: &str = "backlash+joint_compliance";
+
+/// The second effect of a two-effect case.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct SecondEffect {
+    /// Effect name.
+    pub effect: String,
+    /// Its joint, if any.
+    pub joint: Option<usize>,
+    /// Magnitude in `magnitude_unit`.
+    pub magnitude: f64,
+    /// Unit of `magnitude`.
+    pub magnitude_unit: String,
+}
 
 /// The hidden truth of one case (`key.json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -63,6 +81,12 @@ pub struct CaseKey {
     /// An out-of-set joint zero drift, if any.
     #[serde(default)]
     pub drift: Option<JointZeroDrift>,
+    /// The second effect of a two-effect case.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub second: Option<SecondEffect>,
+    /// The drawn member of the effect's family (e.g. `order_1_fixed`), `-` without one.
+    #[serde(default)]
+    pub shape: String,
 }
 
 /// An out-of-set joint error: the zero of `joint`'s encoder drifts with the ambient
@@ -115,6 +139,10 @@ pub struct BlindOptions {
     pub payload_max_kg: f64,
     /// The simulated robot.
     pub simulator: Simulator,
+    /// Whether the truth re-positions with its repeatability jitter (the paper robot's
+    /// `repeatability_sigma`, which the description gives the diagnoser and `calibrate`
+    /// models). Off only for the noise-free trace of [`detectable_size`].
+    pub repeatability: bool,
 }
 
 /// The simulated robot of a blind suite.
@@ -137,6 +165,7 @@ impl Default for BlindOptions {
             temperature_half_range_c: 10.0,
             payload_max_kg: PAYLOAD_MAX_KG,
             simulator: Simulator::Analytic,
+            repeatability: true,
         }
     }
 }
@@ -164,14 +193,29 @@ pub fn draw_effect<R: Rng + ?Sized>(
     let mut e = Effects::default();
     let mut sag = None;
     let mut drift = None;
+    let mut second = None;
     let phase = rng.random_range(0.0..std::f64::consts::TAU);
+    // Every case's truth has its own link masses and payload centre (they load only a
+    // compliant joint).
+    draw_masses(rng, desc, &mut e);
     let (joint, magnitude, unit) = match effect {
-        "joint_compliance" => draw_compliance(rng, dof, &mut e),
-        "backlash" => draw_backlash(rng, dof, &mut e),
-        "thermal_expansion" => draw_thermal(rng, &mut e),
+        "joint_compliance" => draw_compliance(rng, dof, false, &mut e),
+        "backlash" => draw_backlash(rng, dof, false, &mut e),
+        TWO_EFFECTS => {
+            let first = draw_compliance(rng, dof, true, &mut e);
+            let (joint, magnitude, unit) = draw_backlash(rng, dof, true, &mut e);
+            second = Some(SecondEffect {
+                effect: "backlash".into(),
+                joint,
+                magnitude,
+                magnitude_unit: unit.into(),
+            });
+            first
+        }
+        "thermal_expansion" => draw_thermal(rng, dof, &mut e),
         "gear_harmonic" => draw_gear_harmonic(rng, desc, phase, &mut e),
         "axis_wobble" => {
-            let w = draw_wobble(rng, dof, [4.0e-4, 1.0e-2], phase, crate::diagnosis::WOBBLE_ORDER);
+            let w = draw_wobble(rng, dof, [4.0e-4, 1.0e-2], phase);
             e.wobble.push(w);
             (Some(w.joint), w.amplitude_rad, "rad")
         }
@@ -186,6 +230,7 @@ pub fn draw_effect<R: Rng + ?Sized>(
     };
     CaseKey {
         case,
+        shape: shape_of(&e),
         effect: effect.to_owned(),
         expected: if effect == "unknown" {
             "unexplained".into()
@@ -199,23 +244,67 @@ pub fn draw_effect<R: Rng + ?Sized>(
         effects: e,
         sag,
         drift,
+        second,
     }
+}
+
+/// The family member an effect set's shapes belong to (`docs/diagnosis.md`, "Blind check").
+fn shape_of(e: &Effects) -> String {
+    let mut parts = Vec::new();
+    if let Some(w) = e.wobble.first() {
+        let kind = if w.fixed_direction_rad.is_some() {
+            "fixed"
+        } else {
+            "rotating"
+        };
+        parts.push(format!("order_{}_{kind}", w.order));
+    }
+    if let Some(h) = e.gear_harmonics.first() {
+        let period = match h.period {
+            crate::physics::HarmonicPeriod::Transmission => "transmission",
+            crate::physics::HarmonicPeriod::Joint => "joint",
+        };
+        parts.push(format!("order_{}_{period}", h.order));
+    }
+    if let Some(t) = &e.thermal {
+        parts.push(
+            if t.alpha_per_k_rows.is_empty() {
+                "uniform"
+            } else {
+                "per_link"
+            }
+            .into(),
+        );
+    }
+    if let Some(b) = &e.backlash {
+        parts.push(match b.direction {
+            crate::physics::ApproachSource::Command => "command_direction".into(),
+            crate::physics::ApproachSource::Actuator => "actuator_direction".into(),
+        });
+    }
+    if e.compliance.is_some() {
+        parts.push("other_masses".into());
+    }
+    if parts.is_empty() { "-".into() } else { parts.join("+") }
 }
 
 /// Simulates a case: the Table-1 axis experiments and the tool observation at 20 deg C without
 /// payload, then `validation_poses` workspace poses at random temperatures and payloads
 /// ([`BlindOptions`]), on the paper robot through the options' [`Simulator`] with the case's
-/// effects (no repeatability jitter; a [`JointZeroDrift`] offsets the executed command),
-/// measured with isotropic noise (and the instrument scale error or sag, if any).
+/// effects and its repeatability jitter (unless `options.repeatability` is off; a
+/// [`JointZeroDrift`] offsets the executed command), measured with isotropic noise (and the
+/// instrument scale error or sag, if any).
 pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOptions) -> Result<MeasurementSet, String> {
-    // The diagnoser's noise model is the instrument's: no repeatability jitter.
     let mut truth = crate::sim::paper_robot();
-    for j in &mut truth.joints {
-        j.repeatability_sigma = 0.0;
+    if !options.repeatability {
+        for j in &mut truth.joints {
+            j.repeatability_sigma = 0.0;
+        }
     }
-    // The validation payloads sit on the tool frame's origin (they load only compliant joints).
+    // The validation payloads sit where the key puts them (default: the tool frame's origin;
+    // they load only compliant joints).
     let effects = Effects {
-        payload: Some(PayloadEffect::default()),
+        payload: Some(key.effects.payload.unwrap_or_default()),
         ..key.effects.clone()
     };
     match options.simulator {
@@ -294,7 +383,8 @@ fn simulate_on<A: ArmExecutor>(
 }
 
 /// How large a case's effect is against what the diagnoser can see: its trace after the
-/// baseline refit (held-out RMS of the baseline on the case simulated WITHOUT noise) over the
+/// baseline refit (held-out RMS of the baseline on the case simulated WITHOUT noise and
+/// without repeatability jitter) over the
 /// smallest gap the diagnoser's gap test flags (`detectable_gap_mm`, from its diagnosis of
 /// the noisy case), and the magnitude at which that ratio is 1 (the trace is linear in the
 /// effect: in its magnitude, or in the compliance `1 / stiffness`). `None` without an effect.
@@ -310,6 +400,7 @@ pub fn detectable_size(
     }
     let clean = BlindOptions {
         noise_rms_3d_mm: 0.0,
+        repeatability: false,
         ..options.clone()
     };
     let set = simulate_case(key, desc, &clean)?;

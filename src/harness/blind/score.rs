@@ -99,8 +99,77 @@ pub struct BlindScore {
         deserialize_with = "crate::json_file::named_or_old::<_, GapBeforeAfter, [f64; 2]>"
     )]
     pub mean_gap: GapBeforeAfter,
+    /// Two-effect cases.
+    #[serde(default)]
+    pub two_effect_cases: usize,
+    /// Among those, the fraction with both effects named on their joints.
+    #[serde(default)]
+    pub two_effects_both_named: f64,
+    /// Per drawn family member of the in-set cases above their detectable size: how many,
+    /// and how many named right.
+    #[serde(default)]
+    pub shapes: Vec<ShapeRow>,
     /// The confusion matrix.
     pub confusion: ConfusionMatrix,
+}
+
+/// One family member's line of [`BlindScore::shapes`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct ShapeRow {
+    /// The case's effect.
+    pub effect: String,
+    /// The drawn member (`CaseKey::shape`).
+    pub shape: String,
+    /// Cases above their detectable size.
+    pub cases: usize,
+    /// Of those, named right.
+    pub named_right: usize,
+}
+
+/// The diagnosed answer as a case label: the sorted names of `effects` joined by `+` when two
+/// effects are named, else the verdict's effect.
+pub fn diagnosed_label(d: &Diagnosis) -> String {
+    if d.effects.len() >= 2 {
+        let mut names: Vec<&str> = d.effects.iter().map(|e| e.effect.as_str()).collect();
+        names.sort_unstable();
+        names.join("+")
+    } else {
+        d.outcome.effect.clone()
+    }
+}
+
+/// Whether a two-effect case's both effects are named on their joints.
+fn both_named(k: &CaseKey, d: &Diagnosis) -> bool {
+    let on = |effect: &str, joint: Option<usize>| d.effects.iter().any(|e| e.effect == effect && e.joint == joint);
+    k.second
+        .as_ref()
+        .is_some_and(|s| on(&s.effect, s.joint) && on("joint_compliance", k.joint))
+}
+
+/// The per-member rows of the in-set cases above their detectable size.
+fn shape_rows(results: &[CaseResult]) -> Vec<ShapeRow> {
+    let mut rows: Vec<ShapeRow> = Vec::new();
+    for r in results {
+        let k = &r.key;
+        if k.expected == "unexplained" || k.effect == "none" || !r.size_ratio.is_some_and(|s| s >= 1.0) {
+            continue;
+        }
+        let right = k.expected == diagnosed_label(&r.diagnosis);
+        match rows.iter_mut().find(|x| x.effect == k.effect && x.shape == k.shape) {
+            Some(x) => {
+                x.cases += 1;
+                x.named_right += usize::from(right);
+            }
+            None => rows.push(ShapeRow {
+                effect: k.effect.clone(),
+                shape: k.shape.clone(),
+                cases: 1,
+                named_right: usize::from(right),
+            }),
+        }
+    }
+    rows.sort_by(|a, b| (&a.effect, &a.shape).cmp(&(&b.effect, &b.shape)));
+    rows
 }
 
 /// Case counts of [`score`], and the gaps of the correctly named effects.
@@ -150,6 +219,10 @@ struct Tally {
     gap_before_sum_mm: f64,
     /// Sum of `gap_after` over the correctly named effects \[mm\].
     gap_after_sum_mm: f64,
+    /// Two-effect cases.
+    two: usize,
+    /// Of those, both named on their joints.
+    two_both: usize,
 }
 
 fn frac(a: usize, b: usize) -> f64 {
@@ -164,9 +237,9 @@ fn is_named(effect: &str) -> bool {
 fn confusion_matrix(results: &[CaseResult]) -> ConfusionMatrix {
     let mut labels: Vec<String> = Vec::new();
     for r in results {
-        for l in [&r.key.expected, &r.diagnosis.outcome.effect] {
-            if !labels.contains(l) {
-                labels.push(l.clone());
+        for l in [r.key.expected.clone(), diagnosed_label(&r.diagnosis)] {
+            if !labels.contains(&l) {
+                labels.push(l);
             }
         }
     }
@@ -175,7 +248,7 @@ fn confusion_matrix(results: &[CaseResult]) -> ConfusionMatrix {
     let pos = |l: &String| labels.iter().position(|x| x == l).unwrap_or(0);
     for r in results {
         let (k, d) = (&r.key, &r.diagnosis);
-        counts[pos(&k.expected)][pos(&d.outcome.effect)] += 1;
+        counts[pos(&k.expected)][pos(&diagnosed_label(d))] += 1;
     }
     ConfusionMatrix {
         expected: labels.clone(),
@@ -190,9 +263,15 @@ impl Tally {
     fn add(&mut self, r: &CaseResult) {
         let n = self;
         let (k, d) = (&r.key, &r.diagnosis);
-        let right = k.expected == d.outcome.effect;
+        let right = k.expected == diagnosed_label(d);
         n.correct += usize::from(right);
         n.named += usize::from(is_named(&d.outcome.effect));
+        if k.second.is_some() {
+            n.two += 1;
+            n.two_both += usize::from(right && both_named(k, d));
+            n.named_ok += usize::from(right);
+            return;
+        }
         if k.effect == "none" {
             n.nones += 1;
             n.nones_ok += usize::from(right);
@@ -239,7 +318,7 @@ impl Tally {
     }
 
     /// The score of `cases` cases from the counts (gap ratios sorted) and the confusion matrix.
-    fn into_score(self, cases: usize, confusion: ConfusionMatrix) -> BlindScore {
+    fn into_score(self, cases: usize, confusion: ConfusionMatrix, shapes: Vec<ShapeRow>) -> BlindScore {
         let n = self;
         let ratios = n.gap_ratios;
         BlindScore {
@@ -269,6 +348,9 @@ impl Tally {
                 before_mm: n.gap_before_sum_mm / n.named_ok.max(1) as f64,
                 after_mm: n.gap_after_sum_mm / n.named_ok.max(1) as f64,
             },
+            two_effect_cases: n.two,
+            two_effects_both_named: frac(n.two_both, n.two),
+            shapes,
             confusion,
         }
     }
@@ -282,7 +364,7 @@ pub fn score(results: &[CaseResult]) -> BlindScore {
         n.add(r);
     }
     n.gap_ratios.sort_by(f64::total_cmp);
-    n.into_score(results.len(), confusion)
+    n.into_score(results.len(), confusion, shape_rows(results))
 }
 
 impl BlindScore {
@@ -320,6 +402,19 @@ impl BlindScore {
         );
         let _ = writeln!(
             s,
+            "two-effect cases (compliance and backlash): {} , both named on their joints {:.2}\n",
+            self.two_effect_cases, self.two_effects_both_named
+        );
+        let _ = writeln!(
+            s,
+            "| effect | drawn member | cases above detectable | named right |\n|---|---|---|---|"
+        );
+        for r in &self.shapes {
+            let _ = writeln!(s, "| {} | {} | {} | {} |", r.effect, r.shape, r.cases, r.named_right);
+        }
+        let _ = writeln!(s);
+        let _ = writeln!(
+            s,
             "| expected \\ diagnosed | {} |",
             self.confusion.diagnosed.join(" | ")
         );
@@ -342,9 +437,10 @@ pub fn case_table(results: &[CaseResult]) -> String {
         let (k, d) = (&r.key, &r.diagnosis);
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} -> {:.3} |",
+            "| {} | {} ({}) | {} | {} | {} | {} | {} | {} | {} | {:.3} -> {:.3} |",
             k.case,
             k.effect,
+            k.shape,
             k.joint.map_or("-".into(), |j| j.to_string()),
             if k.effect == "none" {
                 "-".into()
@@ -354,7 +450,7 @@ pub fn case_table(results: &[CaseResult]) -> String {
             k.magnitude_unit,
             opt(r.detectable_magnitude, 2),
             r.size_ratio.map_or("-".into(), |v| format!("{v:.2}")),
-            d.outcome.effect,
+            diagnosed_label(d),
             d.outcome.joint.map_or("-".into(), |j| j.to_string()),
             d.outcome.gap_before_mm,
             d.outcome.gap_after_mm

@@ -114,13 +114,11 @@ impl BudgetEffect {
             BudgetEffect::Backlash => {
                 effects.backlash = Some(BacklashEffect {
                     band_rad: every(magnitude),
+                    direction: Default::default(),
                 })
             }
             BudgetEffect::Thermal => {
-                effects.thermal = Some(ThermalEffect {
-                    alpha_per_k: STEEL_ALPHA_PER_K,
-                    reference_c: temperature_c,
-                });
+                effects.thermal = Some(ThermalEffect::uniform(STEEL_ALPHA_PER_K, temperature_c));
                 temperature_c += magnitude;
             }
             BudgetEffect::GearHarmonic => {
@@ -130,6 +128,7 @@ impl BudgetEffect {
                         order: 2,
                         sin_rad: magnitude,
                         cos_rad: 0.0,
+                        period: Default::default(),
                     })
                     .collect()
             }
@@ -140,6 +139,7 @@ impl BudgetEffect {
                         amplitude_rad: magnitude,
                         phase_rad: 0.0,
                         order: 2,
+                        fixed_direction_rad: None,
                     })
                     .collect()
             }

@@ -95,14 +95,15 @@ struct Built {
 }
 
 impl RapierArm {
-    /// The truth robot behind the controller of `desc` (masses from `desc`), with `effects`.
+    /// The truth robot behind the controller of `desc`, with `effects` (link masses from
+    /// [`Effects::truth_link_masses`]: the effects' own, else `desc`'s).
     pub fn new(truth: RobotModel, desc: &RobotDescription, effects: Effects, options: RapierArmOptions) -> Self {
-        let inertias = desc
-            .joints
+        let inertias = effects
+            .truth_link_masses(desc)
             .iter()
-            .map(|j| LinkInertia {
-                mass_kg: j.mass_kg,
-                com_in_link_m: Point3::from(j.com_mm) * 1e-3,
+            .map(|m| LinkInertia {
+                mass_kg: m.mass_kg,
+                com_in_link_m: Point3::from(m.com_mm) * 1e-3,
             })
             .collect();
         RapierArm {
@@ -268,10 +269,7 @@ impl Prediction<'_> {
         let masses: Vec<LinkMass> = self
             .inertias
             .iter()
-            .map(|i| LinkMass {
-                mass_kg: i.mass_kg,
-                com_in_link_m: i.com_in_link_m,
-            })
+            .map(|i| LinkMass::at(i.mass_kg, i.com_in_link_m))
             .collect();
         let couplings = PassiveSlope::of_robot(self.truth, &driven.active, |k, _| {
             self.four_bar_bodies && self.truth.four_bars.iter().any(|l| l.from == k)

@@ -20,15 +20,17 @@ fn x_onto_z() -> UnitQuaternion<f64> {
     UnitQuaternion::new_unchecked(Quaternion::new(h, 0.0, -h, 0.0))
 }
 
-/// Mass properties of a solid bar of `mass_kg`, `length_m` and radius [`BAR_RADIUS_M`]: centre
-/// of mass at `from + along * (length_m / 2)`, the bar's axis along `along`.
+/// Mass properties of a solid bar of `mass_kg`, `length_m` and radius [`BAR_RADIUS_M`] from
+/// `from` in the direction of `along` (any length; only its direction is used): centre of mass
+/// at the bar's midpoint, `from + (length_m / 2) along / |along|`, the bar's axis along `along`.
 fn bar_mass(mass_kg: f64, length_m: f64, along: Vector3<f64>, from: Point3<f64>) -> MassProperties {
     let r = BAR_RADIUS_M;
     let i_axial = mass_kg * r * r / 2.0;
     let i_trans = mass_kg * (3.0 * r * r + length_m * length_m) / 12.0;
     let frame = UnitQuaternion::rotation_between(&Vector3::z(), &along).unwrap_or_else(UnitQuaternion::identity);
+    let direction = along.try_normalize(0.0).unwrap_or_else(Vector3::z);
     MassProperties::with_principal_inertia_frame(
-        point_to_glam(&(from + along * (length_m / 2.0))),
+        point_to_glam(&(from + direction * (length_m / 2.0))),
         mass_kg,
         Vector::new(i_trans, i_trans, i_axial),
         rotation_to_glam(&frame),
@@ -157,4 +159,32 @@ pub(super) fn insert_rod(
         .insert(crank_body, rod_body, rod, true)
         .ok_or(SimError::JointRejected { joint: a + 1 })?;
     Ok((rod_body, rod_joint))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::rapier::convert::point_from_glam;
+    use approx::assert_relative_eq;
+
+    /// The crank is built with `along` the full crank vector (tip minus foot, length
+    /// `crank_m`), the rod with a unit vector: either way the centre of mass is at the bar's
+    /// midpoint, and the mass and the inertia about the bar's own axis are those of the
+    /// solid cylinder.
+    #[test]
+    fn a_bar_has_its_centre_of_mass_at_its_midpoint_whatever_the_length_of_along() {
+        let from = Point3::new(0.1, -0.3, 0.7);
+        let direction = Vector3::new(1.0, 2.0, -0.5).normalize();
+        for length_m in [0.2, 1.0, 2.5] {
+            for along in [direction, direction * length_m] {
+                let m = bar_mass(CRANK_MASS_KG, length_m, along, from);
+                assert_relative_eq!(
+                    point_from_glam(m.local_com),
+                    from + direction * (length_m / 2.0),
+                    epsilon = 1e-15
+                );
+                assert_relative_eq!(m.mass(), CRANK_MASS_KG, max_relative = 1e-15);
+            }
+        }
+    }
 }

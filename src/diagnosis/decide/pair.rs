@@ -1,0 +1,120 @@
+//! Two effects at once (`docs/diagnosis.md`, "Two effects"): forward selection over the
+//! families. With the first effect `b` chosen, every candidate of another kind (another family
+//! or joint) is fitted together with it on top of the refit, and its held-out improvement over
+//! `b` alone is standardised against the same noise-only samples; the threshold is the
+//! `1 - alpha` quantile of the noise-only maximum over those candidates (family-wise, as for
+//! the first). The best significant candidate with plausible parameters is the second effect.
+//! Each effect's share of the closed gap is its Shapley value over the two orders of adding
+//! them (Shapley, 1953; for two players the mean of the two marginal contributions).
+
+use super::{NullData, Prepared, Scored, fitted_parameters, implausible_fit};
+use crate::diagnosis::{Candidate, Parameter};
+use crate::numerics::stats::{QuantileMethod, mean, quantile, std_dev};
+use nalgebra::DMatrix;
+
+/// The second effect and the pair's fit.
+pub(super) struct Pair {
+    /// The second candidate.
+    pub(super) second: Candidate,
+    /// Its fitted parameters (with the first's and the refit's).
+    pub(super) parameters: Vec<Parameter>,
+    /// Held-out chi-square of the pair, and of its noise-only samples.
+    pub(super) chi2: f64,
+    pub(super) chi2_null: Vec<f64>,
+    /// The second's improvement over the first alone, in noise-only standard deviations, and
+    /// the family-wise threshold it beat.
+    pub(super) z: f64,
+    pub(super) z_threshold: f64,
+    /// Shares of the closed gap (first, second), summing to 1.
+    pub(super) shares: [f64; 2],
+}
+
+/// Columns of `a` then `b`.
+fn side_by_side(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    DMatrix::from_fn(a.nrows(), a.ncols() + b.ncols(), |r, c| {
+        if c < a.ncols() {
+            a[(r, c)]
+        } else {
+            b[(r, c - a.ncols())]
+        }
+    })
+}
+
+/// One second candidate's held-out chi-square with the first, and its null samples.
+struct Trial {
+    candidate: Candidate,
+    x: DMatrix<f64>,
+    chi2: f64,
+    chi2_null: Vec<f64>,
+    z: f64,
+    z_null: Vec<f64>,
+}
+
+/// The second effect on top of `first` (module docs), if one is significant and plausible.
+/// `g_obs` is the baseline's held-out chi-square (linear), `scored` every candidate alone.
+pub(super) fn second_effect(
+    prep: &Prepared,
+    null: &NullData,
+    scored: &[Scored],
+    first: &Scored,
+    (g_obs, sigma2, alpha): (f64, f64, f64),
+) -> Option<Pair> {
+    let x_first = &prep.x_candidates.iter().find(|(c, _)| *c == first.candidate)?.1;
+    let chi2_of = |x: &DMatrix<f64>| prep.heldout_chi2(x, null, sigma2);
+    let (chi2_first, null_first) = chi2_of(x_first);
+    let mut trials: Vec<Trial> = prep
+        .x_candidates
+        .iter()
+        .filter(|(c, _)| !c.same_kind(&first.candidate))
+        .map(|(c, x_c)| {
+            let x = side_by_side(x_first, x_c);
+            let (chi2, chi2_null) = chi2_of(&x);
+            let t_null: Vec<f64> = null_first.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
+            let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
+            Trial {
+                candidate: *c,
+                x,
+                chi2,
+                chi2_null,
+                z: (chi2_first - chi2 - mu) / sd,
+                z_null: t_null.iter().map(|t| (t - mu) / sd).collect(),
+            }
+        })
+        .collect();
+    let samples = null.samples.ncols();
+    let max_z: Vec<f64> = (0..samples)
+        .map(|k| trials.iter().map(|t| t.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
+        .collect();
+    let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
+    trials.retain(|t| t.z > z_threshold);
+    trials.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
+    let r_train = prep.residuals.rows(0, prep.train_rows).into_owned();
+    trials.into_iter().find_map(|t| {
+        let fit = prep.candidate_fit(&t.x);
+        let inside = fit.span.transpose() * &r_train;
+        let left = r_train.norm_squared() - inside.norm_squared();
+        let parameters = fitted_parameters(t.candidate, &fit.params(&r_train), &fit, left, prep, sigma2);
+        if implausible_fit(prep, t.candidate, &parameters).is_some() {
+            return None;
+        }
+        let alone = scored
+            .iter()
+            .find(|s| s.candidate == t.candidate)
+            .map_or(g_obs, |s| s.chi2);
+        let total = g_obs - t.chi2;
+        let share_first = if total > 0.0 {
+            (((g_obs - chi2_first) + (alone - t.chi2)) / 2.0 / total).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        Some(Pair {
+            second: t.candidate,
+            parameters,
+            chi2: t.chi2,
+            chi2_null: t.chi2_null,
+            z: t.z,
+            z_threshold,
+            shares: [share_first, 1.0 - share_first],
+        })
+    })
+}

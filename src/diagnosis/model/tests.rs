@@ -1,0 +1,225 @@
+//! Each candidate member, at the true parameters of the effect the simulator draws in the same
+//! shape, reproduces the simulated measurements to rounding: the simulator's code path
+//! (`sim::JointDriver`, `sim::AnalyticArm`, `physics`) and the predictor's are written apart.
+
+use super::*;
+use crate::diagnosis::poses::validation_poses;
+use crate::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
+use crate::physics::{
+    AxisWobble, BacklashEffect, CompliantLoad, HarmonicPeriod, PassiveSlope, coupled_static_deflection,
+};
+use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
+use crate::robot::commands_to_internal;
+use crate::sim::{AnalyticArm, Effects, JointDriver, simulate_campaign};
+use rand::{SeedableRng, rngs::ChaCha12Rng};
+
+fn truth() -> (RobotDescription, RobotModel) {
+    let desc = RobotDescription::asea_irb6l();
+    let mut truth = crate::sim::paper_robot();
+    for j in &mut truth.joints {
+        j.repeatability_sigma = 0.0;
+    }
+    (desc, truth)
+}
+
+/// The validation poses of a noise-free Table-1 campaign (analytic arm) with `effects`.
+fn simulated_poses(effects: &Effects) -> Vec<Pose> {
+    let (desc, truth) = truth();
+    let mut arm = AnalyticArm::new(truth, Controller::from_description(&desc)).with_effects(effects.clone(), &desc);
+    let exact = MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: 0.0 });
+    let validation = ValidationPlan {
+        poses: 16,
+        ..ValidationPlan::workspace_default(desc.dof())
+    };
+    let out = simulate_campaign(
+        &desc,
+        &CalibrationPlan::table1(desc.dof()),
+        &validation,
+        &mut arm,
+        &exact,
+        &mut ChaCha12Rng::seed_from_u64(3),
+    )
+    .expect("simulates");
+    let set = MeasurementSet::new(desc.dof(), out.rows).expect("valid");
+    validation_poses(set.rows(), &desc)
+}
+
+/// RMS \[m\] of the predictor's residuals on `poses` with `candidate` at `effect_params`
+/// (refit at zero), and without it.
+fn rms_with_and_without(candidate: Candidate, effect_params: &[f64], poses: &[Pose]) -> (f64, f64) {
+    let (desc, truth) = truth();
+    let p = Predictor::new(
+        &truth,
+        &desc,
+        PoseConditions::default().temperature_c,
+        RefitScope::Geometry,
+    );
+    let every: Vec<&Pose> = poses.iter().collect();
+    let rms = |p: &Predictor, params: &[f64]| {
+        let r = p.residuals(params, &every).expect("predicts");
+        (r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64).sqrt()
+    };
+    let without = rms(&p, &vec![0.0; p.geometric_count()]);
+    let with_c = p.with_candidates(&[candidate]);
+    let mut params = vec![0.0; with_c.geometric_count()];
+    params.extend_from_slice(effect_params);
+    (rms(&with_c, &params), without)
+}
+
+/// The members that reproduce the simulator's shapes exactly: a fixed-direction wobble of
+/// order 1 (general tilt member), a joint-period harmonic of the geared joint 5, a backlash
+/// of joint 3 signed by its actuator (joint 3 is driven through the 2->3 coupling, so its
+/// actuator's direction differs from its command's).
+#[test]
+fn tilt_harmonic_and_backlash_members_reproduce_the_simulators_shapes() {
+    let swash = AxisWobble {
+        joint: 4,
+        amplitude_rad: 3e-3,
+        phase_rad: 0.4,
+        order: 1,
+        fixed_direction_rad: Some(-0.9),
+    };
+    let s = swash.series();
+    let harmonic = crate::physics::GearHarmonic {
+        joint: 5,
+        order: 2,
+        sin_rad: 2e-3,
+        cos_rad: -1e-3,
+        period: HarmonicPeriod::Joint,
+    };
+    let mut band_rad = vec![0.0; 6];
+    band_rad[2] = 3e-3;
+    let cases = [
+        (
+            Effects {
+                wobble: vec![swash],
+                ..Effects::default()
+            },
+            Candidate::AxisWobble {
+                joint: 4,
+                order: 1,
+                shape: TiltShape::General,
+            },
+            vec![s.cos_rad[0], s.cos_rad[1], s.sin_rad[0], s.sin_rad[1]],
+        ),
+        (
+            Effects {
+                gear_harmonics: vec![harmonic],
+                ..Effects::default()
+            },
+            Candidate::GearHarmonic {
+                joint: 5,
+                order: 2,
+                period: HarmonicPeriod::Joint,
+            },
+            vec![2e-3, -1e-3],
+        ),
+        (
+            Effects {
+                backlash: Some(BacklashEffect {
+                    band_rad,
+                    direction: ApproachSource::Actuator,
+                }),
+                ..Effects::default()
+            },
+            Candidate::Backlash {
+                joint: 3,
+                direction: ApproachSource::Actuator,
+            },
+            vec![1.5e-3],
+        ),
+    ];
+    for (effects, candidate, params) in cases {
+        let poses = simulated_poses(&effects);
+        let (with, without) = rms_with_and_without(candidate, &params, &poses);
+        assert!(without > 1e-5, "{candidate:?}: the effect is visible ({without} m)");
+        // Rounding of the forward kinematics over a 2 m reach.
+        assert!(with < 1e-12, "{candidate:?} leaves {with} m of {without} m");
+    }
+}
+
+/// The compliance candidate with the description's masses on the truth robot itself reproduces
+/// the coupled static equilibrium (joint 2's sag drives joint 3 through the four-bar) to
+/// rounding; the lumped member at the description's products (compliance times each link's
+/// mass and first moment, the payload's compliance) and the payload-offset member at a zero
+/// offset give the same residuals.
+#[test]
+fn compliance_members_reproduce_the_coupled_sag() {
+    let (desc, truth) = truth();
+    let joint = 2;
+    let stiffness_nm_per_rad = 2.0e4;
+    let mut stiffness = vec![f64::INFINITY; desc.dof()];
+    stiffness[joint - 1] = stiffness_nm_per_rad;
+    let compliance = ComplianceEffect {
+        stiffness_nm_per_rad: stiffness,
+        gravity_m_s2: GRAVITY_M_S2,
+    };
+    let masses = LinkMass::from_description(&desc);
+    let mut driver = JointDriver::new(&truth, Controller::from_description(&desc), &Effects::default());
+    let model = truth.phi_model();
+    let sagged = |driver: &mut JointDriver, cmd: &[f64]| {
+        let d = driver.drive(cmd, &mut ChaCha12Rng::seed_from_u64(1)).unwrap();
+        let couplings = PassiveSlope::of_linkages(&truth, &d.active);
+        let load = CompliantLoad {
+            masses: &masses,
+            payload: None,
+            compliance: &compliance,
+            couplings: &couplings,
+        };
+        let dq = coupled_static_deflection(&model, &d.q, &load).unwrap();
+        let q: Vec<f64> = d.q.iter().zip(&dq).map(|(a, b)| a + b).collect();
+        model.poses(&q).world_from_link[desc.dof() - 1] * model.last_link_from_tool
+    };
+    let plan = ValidationPlan {
+        poses: 12,
+        ..ValidationPlan::workspace_default(desc.dof())
+    };
+    let reference = CalibrationPlan::table1(desc.dof()).reference;
+    let poses: Vec<Pose> = plan
+        .commands(&desc, &reference)
+        .into_iter()
+        .enumerate()
+        .map(|(step, c)| {
+            let cmd = commands_to_internal(&desc, &c);
+            let tool = sagged(&mut driver, &cmd);
+            Pose {
+                experiment: "validation".into(),
+                step,
+                cmd,
+                approach: vec![0.0; desc.dof()],
+                actuator_approach: vec![0.0; desc.dof()],
+                temperature_c: PoseConditions::default().temperature_c,
+                payload_kg: 0.0,
+                targets: desc.tool_targets_m().iter().map(|t| tool * t).enumerate().collect(),
+            }
+        })
+        .collect();
+    let c = 1.0 / stiffness_nm_per_rad;
+    let description = Candidate::JointCompliance {
+        joint,
+        spring: SpringSite::Actuator,
+        masses: MassModel::Description,
+    };
+    let (with, without) = rms_with_and_without(description, &[c], &poses);
+    assert!(without > 1e-4, "the sag is visible: {without} m");
+    // Rounding of the equilibrium (1e-13 rad) times the reach.
+    assert!(with < 1e-11, "candidate leaves {with} m of {without} m");
+    let offset = Candidate::JointCompliance {
+        joint,
+        spring: SpringSite::Actuator,
+        masses: MassModel::PayloadOffset,
+    };
+    assert!(rms_with_and_without(offset, &[c, 0.0, 0.0, 0.0], &poses).0 < 1e-11);
+    let mut lumped_params = Vec::new();
+    for m in &masses[joint - 1..] {
+        lumped_params.push(c * m.mass_kg);
+        lumped_params.extend((m.first_moment_kg_m * c).iter());
+    }
+    lumped_params.extend([c, 0.0, 0.0, 0.0]);
+    let lumped = Candidate::JointCompliance {
+        joint,
+        spring: SpringSite::Actuator,
+        masses: MassModel::Lumped,
+    };
+    assert!(rms_with_and_without(lumped, &lumped_params, &poses).0 < 1e-11);
+}
