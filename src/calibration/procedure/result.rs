@@ -4,6 +4,7 @@
 use super::CalibrationOptions;
 use super::experiments::AxisExperiment;
 use super::frames::BaseRule;
+use super::propagation::{FrameSigma, ZeroOffsetSigma};
 use super::uncertainty::AxisCovariance;
 use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::crb::held_joint_axis_covariance;
@@ -265,8 +266,14 @@ pub struct CouplingReport {
     pub parameter_names: Vec<String>,
     /// Parameters.
     pub parameters: Vec<f64>,
-    /// Their 1-sigma.
+    /// Their 1-sigma: propagated from the fitted axes and transmissions the passive angles
+    /// are built on and from the second target's noise (`calibration::procedure`'s
+    /// propagation); the coupling fit's own a-posteriori sigma on the lean path.
     pub sigma: Vec<f64>,
+    /// The coupling fit's own a-posteriori 1-sigma (`s^2 (J^T J)^-1`: the second target's
+    /// noise only, as the fitted axes were exact); for comparison with `sigma`.
+    #[serde(default)]
+    pub fit_only_sigma: Vec<f64>,
     /// RMS of the angle residuals \[rad\].
     pub residual_rms_rad: f64,
 }
@@ -290,6 +297,7 @@ impl CouplingReport {
             parameter_names,
             parameters: fit.parameters.clone(),
             sigma: fit.sigma.clone(),
+            fit_only_sigma: fit.sigma.clone(),
             residual_rms_rad: fit.residual_rms_rad,
         }
     }
@@ -306,6 +314,10 @@ pub struct ToolReport {
     pub last_link_from_tool: Isometry3<f64>,
     /// RMS of the three-point fit \[mm\] (noise only, for a rigid tool).
     pub fit_rms_mm: f64,
+    /// 1-sigma of the tool frame in its own axes, propagated from the axes, couplings and
+    /// tool targets (absent on the lean path and in older files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<FrameSigma>,
 }
 
 /// The result of [`super::calibrate`].
@@ -321,6 +333,10 @@ pub struct Calibration {
     pub row_sigma: Vec<RowSigma>,
     /// Measured couplings.
     pub couplings: Vec<CouplingReport>,
+    /// 1-sigma of each joint's zero offset (`transducer_offset`), propagated from the axis
+    /// fits and the couplings (empty in files written before it was reported).
+    #[serde(default)]
+    pub zero_offset_sigma: Vec<ZeroOffsetSigma>,
     /// The tool frame, when observed at the reference pose.
     pub tool: Option<ToolReport>,
     /// The options used.

@@ -5,7 +5,9 @@
 use super::{StudyError, trial_seed};
 use crate::calibration::arc_model::{ArcParams, MeasurementNoise};
 use crate::calibration::crb::{axis_errors, held_joint_axis_covariance};
-use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, Detail, axis_experiments, calibrate_model};
+use crate::calibration::procedure::{
+    AxisExperiment, CalibrationOptions, Detail, FittedModel, axis_experiments, calibrate_model,
+};
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
     ArcFitOptions, CalibrationError, angles, fit_arc, fit_arc_with_angle_noise, fit_axis_paper, fit_circle,
@@ -48,6 +50,39 @@ pub(super) struct TrialOutcome {
     pub(super) rows: Vec<[f64; 4]>,
     /// Their reported sigmas, in the same units.
     pub(super) row_sigma: Vec<[f64; 4]>,
+    /// The derived quantities (couplings, zero offsets, tool frame): name, value and reported
+    /// 1-sigma; a coupling parameter also under `(fit only)` with its fit's own sigma.
+    pub(super) derived: Vec<(String, f64, f64)>,
+}
+
+/// The couplings', zero offsets' and tool frame's values and reported 1-sigma of `cal` (rad,
+/// mm and mrad; the tool frame relative to the description's).
+fn derived_quantities(cal: &FittedModel, desc: &RobotDescription) -> Vec<(String, f64, f64)> {
+    let mut out = Vec::new();
+    for c in &cal.couplings {
+        for (i, name) in c.parameter_names.iter().enumerate() {
+            let label = format!("coupling {}->{} {name}", c.from, c.to);
+            out.push((label.clone(), c.parameters[i], c.sigma[i]));
+            out.push((format!("{label} (fit only)"), c.parameters[i], c.fit_only_sigma[i]));
+        }
+    }
+    let Some(d) = &cal.derived_sigma else {
+        return out;
+    };
+    for (k, (j, s)) in cal.robot.joints.iter().zip(&d.zero_offsets).enumerate() {
+        out.push((format!("joint {} zero offset", k + 1), j.transducer_offset, *s));
+    }
+    if let Some(t) = d.tool {
+        let rel = desc.tool.frame.to_isometry().inverse() * cal.robot.tool_frame.to_isometry();
+        let (p, r) = (rel.translation.vector * 1e3, rel.rotation.scaled_axis() * 1e3);
+        let sigma = [t.x_mm, t.y_mm, t.z_mm, t.rx_mrad, t.ry_mrad, t.rz_mrad];
+        let names = ["x mm", "y mm", "z mm", "rx mrad", "ry mrad", "rz mrad"];
+        for (i, name) in names.iter().enumerate() {
+            let v = if i < 3 { p[i] } else { r[i - 3] };
+            out.push((format!("tool {name}"), v, sigma[i]));
+        }
+    }
+    out
 }
 
 /// The fit form of a transmission as the description gives it.
@@ -186,6 +221,7 @@ impl Trials<'_> {
         // The lean path with the rows' covariance: the study reads the rows and their sigmas.
         let cal = calibrate_model(&set, desc, self.options, Detail::ModelAndCovariance)
             .map_err(|source| StudyError::Procedure { trial: i, source })?;
+        let derived = derived_quantities(&cal, desc);
         Ok(TrialOutcome {
             ml: axes.ml,
             paper: axes.paper,
@@ -202,6 +238,7 @@ impl Trials<'_> {
                 .iter()
                 .map(|s| [s.a_mm, s.b_mm, s.alpha_deg, s.beta_deg])
                 .collect(),
+            derived,
         })
     }
 
