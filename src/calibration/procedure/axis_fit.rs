@@ -352,6 +352,7 @@ fn fit_line_paper(
         identifiability: vec![],
         covariance: None,
         kind: "prismatic".into(),
+        harmonics: vec![],
         sweeps: vec![],
     };
     Ok(AxisFitOutcome {

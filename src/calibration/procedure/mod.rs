@@ -43,7 +43,8 @@ pub use joint_map::{
 pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, residuals_csv};
 pub use result::{
-    AxisReport, Calibration, CouplingReport, NoiseReport, PointResidual, RowSigma, SweepReport, ToolReport,
+    AxisReport, Calibration, CouplingReport, HarmonicReport, NoiseReport, PointResidual, RowSigma, SweepReport,
+    ToolReport, harmonics,
 };
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{

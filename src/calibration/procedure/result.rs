@@ -6,6 +6,7 @@ use super::experiments::AxisExperiment;
 use super::frames::BaseRule;
 use super::propagation::{FrameSigma, ZeroOffsetSigma};
 use super::uncertainty::AxisCovariance;
+use crate::calibration::arc_model::N_GEOMETRY;
 use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::line_ml::LineFit;
@@ -58,6 +59,11 @@ pub struct AxisReport {
     /// target's line at the first step and its position sigma is null).
     #[serde(default = "revolute")]
     pub kind: String,
+    /// Each harmonic of a rotary joint's transmission as amplitude and phase, with their
+    /// 1-sigma from the coefficients' covariance (empty for a sliding joint and in older
+    /// files).
+    #[serde(default)]
+    pub harmonics: Vec<HarmonicReport>,
     /// The sweeps fitted jointly as this axis, and what differs between them.
     #[serde(default)]
     pub sweeps: Vec<SweepReport>,
@@ -150,6 +156,9 @@ impl AxisReport {
             covariance: None,
             kind: revolute(),
             sweeps: vec![],
+            harmonics: harmonics(&fit.transmission, &|a, b| {
+                fit.covariance[(N_GEOMETRY + a, N_GEOMETRY + b)]
+            }),
         }
     }
 
@@ -184,6 +193,7 @@ impl AxisReport {
             identifiability: vec!["a sliding axis has a direction only (eq. 9): its position is a convention".into()],
             covariance: Some(AxisCovariance::new(u, v, &c)),
             kind: "prismatic".into(),
+            harmonics: vec![],
             sweeps: vec![],
         }
     }
@@ -234,8 +244,55 @@ impl AxisReport {
             covariance: None,
             kind: revolute(),
             sweeps: vec![],
+            // The paper's estimator gives no correlation of the coefficients: taken as none.
+            harmonics: harmonics(&t.transmission, &|a, b| if a == b { t.sigma[a].powi(2) } else { 0.0 }),
         }
     }
+}
+
+/// One harmonic of a transmission (eq. 8) as amplitude and phase,
+/// `s sin(k x) + c cos(k x) = A sin(k x + phase)`, with first-order 1-sigma from the
+/// covariance of `(s, c)` (gradients `(s, c) / A` and `(c, -s) / A^2`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HarmonicReport {
+    /// Harmonic order `k`.
+    pub order: usize,
+    /// Amplitude in joint angle (a gear's: N times its gear-angle amplitude) \[rad\].
+    pub amplitude_rad: f64,
+    /// Its 1-sigma \[rad\].
+    pub amplitude_sigma_rad: f64,
+    /// Phase \[rad\].
+    pub phase_rad: f64,
+    /// Its 1-sigma \[rad\] (first order: meaningless when the amplitude is within a few
+    /// sigma of zero).
+    pub phase_sigma_rad: f64,
+}
+
+/// The harmonics of `transmission` (none for a polynomial), `cov(a, b)` the covariance of its
+/// coefficients `[sin.., cos..]` \[rad^2\].
+pub fn harmonics(transmission: &Transmission, cov: &dyn Fn(usize, usize) -> f64) -> Vec<HarmonicReport> {
+    let (sin, cos, to_joint) = match transmission {
+        Transmission::Harmonic { sin, cos } => (sin, cos, 1.0),
+        Transmission::Gear { ratio, sin, cos } => (sin, cos, *ratio),
+        Transmission::Polynomial { .. } => return vec![],
+    };
+    let k = sin.len();
+    (0..k)
+        .map(|h| {
+            let (s, c) = (sin[h], cos[h]);
+            let a = s.hypot(c);
+            let (ss, cc, sc) = (cov(h, h), cov(k + h, k + h), cov(h, k + h));
+            let var_a = (s * s * ss + c * c * cc + 2.0 * s * c * sc) / (a * a);
+            let var_p = (c * c * ss + s * s * cc - 2.0 * s * c * sc) / (a * a * a * a);
+            HarmonicReport {
+                order: h + 1,
+                amplitude_rad: to_joint * a,
+                amplitude_sigma_rad: to_joint * var_a.max(0.0).sqrt(),
+                phase_rad: c.atan2(s),
+                phase_sigma_rad: var_p.max(0.0).sqrt(),
+            }
+        })
+        .collect()
 }
 
 /// 1-sigma of one Table-2 row, in Table 2's units.

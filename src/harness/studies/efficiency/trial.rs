@@ -3,10 +3,10 @@
 //! axis estimators and the procedure's Table-2 rows.
 
 use super::{StudyError, trial_seed};
-use crate::calibration::arc_model::{ArcParams, MeasurementNoise};
+use crate::calibration::arc_model::{ArcParams, MeasurementNoise, N_GEOMETRY};
 use crate::calibration::crb::{axis_errors, held_joint_axis_covariance};
 use crate::calibration::procedure::{
-    AxisExperiment, CalibrationOptions, Detail, FittedModel, axis_experiments, calibrate_model,
+    AxisExperiment, CalibrationOptions, Detail, FittedModel, axis_experiments, calibrate_model, harmonics,
 };
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
@@ -188,6 +188,8 @@ struct TrialAxes {
     ml_reported: Vec<Vec<f64>>,
     /// Per joint (1-based): the ML fit's parameters and axis.
     fitted: Vec<(usize, ArcParams, AxisLine)>,
+    /// Each harmonic's amplitude and phase with their reported 1-sigma.
+    harmonics: Vec<(String, f64, f64)>,
 }
 
 /// What every trial shares.
@@ -221,7 +223,8 @@ impl Trials<'_> {
         // The lean path with the rows' covariance: the study reads the rows and their sigmas.
         let cal = calibrate_model(&set, desc, self.options, Detail::ModelAndCovariance)
             .map_err(|source| StudyError::Procedure { trial: i, source })?;
-        let derived = derived_quantities(&cal, desc);
+        let mut derived = std::mem::take(&mut axes.harmonics);
+        derived.extend(derived_quantities(&cal, desc));
         Ok(TrialOutcome {
             ml: axes.ml,
             paper: axes.paper,
@@ -250,6 +253,7 @@ impl Trials<'_> {
         let (mut ml, mut paper) = (Vec::new(), Vec::new());
         let mut ml_reported: Vec<Vec<f64>> = Vec::new();
         let mut fitted: Vec<(usize, ArcParams, AxisLine)> = Vec::new();
+        let mut harmonic = Vec::new();
         for (e, t) in experiments.iter().zip(self.truths) {
             let u = actuator_commands(e, desc, controller);
             let fit = fit_arc_with_angle_noise(
@@ -274,6 +278,12 @@ impl Trials<'_> {
                 .collect(),
             );
             fitted.push((e.joint, fit.params.clone(), fit.axis));
+            let cov = |a: usize, b: usize| fit.covariance[(N_GEOMETRY + a, N_GEOMETRY + b)];
+            for h in harmonics(&fit.transmission, &cov) {
+                let name = format!("joint {} harmonic {}", e.joint, h.order);
+                harmonic.push((format!("{name} amplitude"), h.amplitude_rad, h.amplitude_sigma_rad));
+                harmonic.push((format!("{name} phase"), h.phase_rad, h.phase_sigma_rad));
+            }
             ml.push(axis_errors(
                 &fit.axis.direction,
                 &fit.axis.origin_m,
@@ -289,6 +299,7 @@ impl Trials<'_> {
             paper,
             ml_reported,
             fitted,
+            harmonics: harmonic,
         })
     }
 
