@@ -478,22 +478,11 @@ impl<'a> Context<'a> {
             });
         }
         let axes: Vec<Option<AxisLine>> = fits.iter().map(|f| f.as_ref().map(|f| f.axis)).collect();
-        let (geometry, base_rule) = model_from_axes(&self.desc.nominal_model(), &axes, self.q_ref)?;
         let transmissions: Vec<Option<Transmission>> = fits
             .iter()
             .map(|f| f.as_ref().map(|f| f.transmission.clone()))
             .collect();
-        let assembly = Assembly {
-            desc: self.desc,
-            experiments: self.experiments,
-            transmissions: &transmissions,
-            target1,
-            controller: self.controller,
-            geometry: &geometry,
-            q_ref: self.q_ref,
-            u_ref: self.u_ref,
-        };
-        let (joints, couplings) = assembly.joint_models()?;
+        let (geometry, base_rule, joints, couplings) = self.joints_from(&axes, &transmissions, target1)?;
         let robot = calibrated_robot(self.desc, joints, &geometry);
         Ok(Assembled {
             fits,
@@ -548,18 +537,16 @@ impl<'a> Context<'a> {
         Ok((model, tool))
     }
 
-    /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
-    /// `axes` and `transmissions`, the second targets `target1` and the tool targets `tool`
-    /// (measured at the reference pose) give.
-    fn derived(
+    /// The phi-model of the fitted `axes` (with its base rule) and the joint models and
+    /// fitted couplings on it, from the fitted `transmissions` and the second targets
+    /// `target1`.
+    fn joints_from(
         &self,
         axes: &[Option<AxisLine>],
         transmissions: &[Option<Transmission>],
         target1: &[Vec<Point3<f64>>],
-        tool: Option<&[Point3<f64>]>,
-        reference_cmd: &[f64],
-    ) -> Result<Derived, ProcedureError> {
-        let (geometry, _) = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
+    ) -> Result<(PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
+        let (geometry, base_rule) = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
         let assembly = Assembly {
             desc: self.desc,
             experiments: self.experiments,
@@ -571,6 +558,21 @@ impl<'a> Context<'a> {
             u_ref: self.u_ref,
         };
         let (joints, couplings) = assembly.joint_models()?;
+        Ok((geometry, base_rule, joints, couplings))
+    }
+
+    /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
+    /// `axes` and `transmissions`, the second targets `target1` and the tool targets `tool`
+    /// (measured at the reference pose) give.
+    fn derived(
+        &self,
+        axes: &[Option<AxisLine>],
+        transmissions: &[Option<Transmission>],
+        target1: &[Vec<Point3<f64>>],
+        tool: Option<&[Point3<f64>]>,
+        reference_cmd: &[f64],
+    ) -> Result<Derived, ProcedureError> {
+        let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1)?;
         let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
         values.extend(joints.iter().map(|j| j.transducer_offset));
         let tool = tool.and_then(|measured| {

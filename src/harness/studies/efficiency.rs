@@ -368,6 +368,22 @@ fn derived_sigma_checks(outcomes: &[TrialOutcome]) -> Vec<RowSigmaCheck> {
     out
 }
 
+/// A Markdown section `## {head} | reported | empirical | ratio |` of the `checks`.
+fn sigma_table(head: &str, checks: &[RowSigmaCheck]) -> String {
+    let mut s = format!("\n## {head} | reported | empirical | ratio |\n|---|---|---|---|\n");
+    for r in checks {
+        s += &format!(
+            "| {} | {:.4e} | {:.4e} | {:.3} +- {:.3} |\n",
+            r.parameter,
+            r.reported_sigma,
+            r.empirical_sigma,
+            r.ratio,
+            r.ratio * r.relative_standard_error
+        );
+    }
+    s
+}
+
 /// Smallest and mean of some values, with the label of the smallest.
 fn min_and_mean<'a>(values: impl Iterator<Item = (String, f64)> + 'a) -> (String, f64, f64) {
     let (mut label, mut min, mut sum, mut n) = (String::new(), f64::INFINITY, 0.0, 0.0);
@@ -451,28 +467,14 @@ impl StudyReport {
                 q.paper_efficiency * q.paper_relative_standard_error
             );
         }
-        s += "\n## Reported against empirical 1-sigma of the Table-2 rows\n\n| parameter | reported | empirical | ratio |\n|---|---|---|---|\n";
-        for r in &self.row_sigma {
-            s += &format!(
-                "| {} | {:.4e} | {:.4e} | {:.3} +- {:.3} |\n",
-                r.parameter,
-                r.reported_sigma,
-                r.empirical_sigma,
-                r.ratio,
-                r.ratio * r.relative_standard_error
-            );
-        }
-        s += "\n## Reported against empirical 1-sigma of the couplings, zero offsets and tool frame\n\n(rad for couplings and zero offsets, mm and mrad for the tool frame; `(fit only)`: the coupling fit's own a-posteriori sigma, without the axes and transmissions it is built on)\n\n| quantity | reported | empirical | ratio |\n|---|---|---|---|\n";
-        for r in &self.derived_sigma {
-            s += &format!(
-                "| {} | {:.4e} | {:.4e} | {:.3} +- {:.3} |\n",
-                r.parameter,
-                r.reported_sigma,
-                r.empirical_sigma,
-                r.ratio,
-                r.ratio * r.relative_standard_error
-            );
-        }
+        s += &sigma_table(
+            "Reported against empirical 1-sigma of the Table-2 rows\n\n| parameter",
+            &self.row_sigma,
+        );
+        s += &sigma_table(
+            "Reported against empirical 1-sigma of the harmonics, couplings, zero offsets and tool frame\n\n(rad for harmonics, couplings and zero offsets, mm and mrad for the tool frame; only harmonics resolved > 5 sigma; `(fit only)`: the coupling fit's own a-posteriori sigma, without the axes and transmissions it is built on)\n\n| quantity",
+            &self.derived_sigma,
+        );
         s
     }
 }
