@@ -472,6 +472,13 @@ fn write_tool(s: &mut String, cal: &Calibration) {
             "\nTool frame from the three tool targets of `{}` step {} (fit RMS {:.3} mm).",
             t.experiment, t.step, t.fit_rms_mm
         );
+        if let Some(g) = &t.sigma {
+            let _ = writeln!(
+                s,
+                "Its 1-sigma in its own axes (propagated; includes the last joint's zero offset, which it absorbs): x {:.3}, y {:.3}, z {:.3} mm; about x {:.3}, y {:.3}, z {:.3} mrad.",
+                g.x_mm, g.y_mm, g.z_mm, g.rx_mrad, g.ry_mrad, g.rz_mrad
+            );
+        }
     } else {
         let _ = writeln!(
             s,
