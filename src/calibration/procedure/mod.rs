@@ -17,9 +17,10 @@
 //! ([`super::crb::held_joint_axis_covariance`]) but not propagated to the rows (the same held
 //! error turns all axes above the joint together, which changes no row). Not modelled: the
 //! correlation that bias creates between axes, the held error as an error of the joint's
-//! value at the reference, and the repeatability in the paper's estimator. The coupling fits
-//! (eqs. 14-15) report a-posteriori sigmas, so the swept joint's jitter in their residuals is
-//! already counted.
+//! value at the reference, and the repeatability in the paper's estimator. The couplings
+//! (eqs. 14-15), zero offsets and tool frame get a 1-sigma propagated from the axis fits and
+//! the second and tool targets (`propagation`); the coupling fit's own a-posteriori sigma is
+//! kept beside it (`CouplingReport::fit_only_sigma`).
 
 mod axis_fit;
 mod experiments;
