@@ -638,6 +638,26 @@ impl<'a> Context<'a> {
                 reference_cmd,
             )
         })?;
+        // The swept joint's repeatability turns each second target about its axis, step by
+        // step (independent angle noise, as for the axis fits).
+        let jitter: Vec<(usize, usize)> = used
+            .iter()
+            .copied()
+            .filter(|&(i, _)| self.repeatability[self.experiments[i].joint - 1] > 0.0)
+            .collect();
+        for &(i, j) in &jitter {
+            let joint = self.experiments[i].joint - 1;
+            let Some(axis) = axes[joint] else { continue };
+            let turn = |h: f64| {
+                let mut moved = target1.clone();
+                let o = axis.origin_m;
+                moved[i][j] = o + nalgebra::UnitQuaternion::from_axis_angle(&axis.direction, h) * (moved[i][j] - o);
+                moved
+            };
+            prop.add_independent(1, self.repeatability[joint], |_, h| {
+                self.derived(axes, &transmissions, &turn(h), tool, reference_cmd)
+            })?;
+        }
         if let Some(points) = &tool_points {
             let lists = vec![points.clone()];
             let at: Vec<(usize, usize)> = (0..points.len()).map(|j| (0, j)).collect();

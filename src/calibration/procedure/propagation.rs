@@ -12,8 +12,10 @@
 //! the driving joint's fitted transmission and the frame it is measured in from the fitted
 //! axes, whose errors are common to every point of the sweep and do not average out.
 //!
-//! Not counted: the held joints' repeatability bias (as for the rows) and, on campaigns whose
-//! held joints needed correction passes, the dependence of the corrected points on the model.
+//! The swept joint's repeatability turns each second target about the driving axis, one
+//! independent angle per step. Not counted: the held joints' repeatability bias (as for the
+//! rows), the joints' repeatability at the tool observation and, on campaigns whose held
+//! joints needed correction passes, the dependence of the corrected points on the model.
 
 use crate::calibration::arc_model::ArcParams;
 use crate::calibration::line_ml::LineParams;
