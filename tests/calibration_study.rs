@@ -43,6 +43,22 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
     for r in &report.row_sigma {
         assert!((r.ratio - 1.0).abs() < 4.0 * r.relative_standard_error, "{r:?}");
     }
+    // Couplings, zero offsets and tool frame: the propagated sigma matches the scatter, while
+    // the coupling fit's own sigma (the second target's noise only) does not for 4->5, whose
+    // passive angles inherit the errors of joint 4's transmission and of axes 4 and 5.
+    let (fit_only, propagated): (Vec<_>, Vec<_>) = report
+        .derived_sigma
+        .iter()
+        .partition(|r| r.parameter.ends_with("(fit only)"));
+    assert!(propagated.len() >= 5 + 2 + 6 + 6, "{propagated:?}");
+    for r in propagated {
+        assert!((r.ratio - 1.0).abs() < 4.0 * r.relative_standard_error, "{r:?}");
+    }
+    let wrist = fit_only
+        .iter()
+        .find(|r| r.parameter.starts_with("coupling 4->5 sin1"))
+        .unwrap();
+    assert!(wrist.ratio < 1.0 - 4.0 * wrist.relative_standard_error, "{wrist:?}");
 }
 
 /// With the truth robot's repeatability jitter, a calibrator told the nominal description's

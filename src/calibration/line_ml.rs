@@ -40,11 +40,12 @@ pub struct LineParams {
 
 impl LineParams {
     /// Column `i` of the frame.
-    fn axis(&self, i: usize) -> Vector3<f64> {
+    pub(crate) fn axis(&self, i: usize) -> Vector3<f64> {
         self.frame.matrix().column(i).into()
     }
 
-    fn perturbed(&self, d: &[f64]) -> Self {
+    /// The parameters moved by a local perturbation `d` (layout in the module doc).
+    pub(crate) fn perturbed(&self, d: &[f64]) -> Self {
         let mut p = self.clone();
         p.start += Vector3::new(d[0], d[1], d[2]);
         p.frame = self.frame * Rotation3::new(Vector3::new(d[3], d[4], 0.0));

@@ -3,6 +3,7 @@
 //! for a sliding one; several sweeps of one joint jointly as one axis; the held joints'
 //! repeatability added to each axis's covariance; the per-point residuals.
 
+use super::propagation::LocalFit;
 use super::{
     AxisCovariance, AxisEstimator, AxisExperiment, AxisReport, CalibrationOptions, Detail, PointResidual,
     ProcedureError, SweepReport,
@@ -35,6 +36,9 @@ pub(super) struct AxisFitOutcome {
     pub(super) moments: Option<ResidualMoments>,
     /// Per-point residuals.
     pub(super) residuals: Vec<PointResidual>,
+    /// The ML fit's parameters and covariance, to propagate (not for the paper's estimator,
+    /// nor on the lean path without covariance).
+    pub(super) local: Option<LocalFit>,
 }
 
 /// The points of one joint's sweeps: target 0 of each, the actuator command of the joint at
@@ -189,6 +193,12 @@ fn fit_arc_ml(
             &q.fixed_view::<4, 4>(0, 0).into(),
         ));
     }
+    let local = (detail != Detail::Model).then(|| LocalFit::Arc {
+        params: fit.params.clone(),
+        reference: centroid,
+        form,
+        covariance: fit.covariance.clone(),
+    });
     if detail != Detail::Report {
         return Ok(AxisFitOutcome {
             axis: fit.axis,
@@ -196,6 +206,7 @@ fn fit_arc_ml(
             report,
             moments: (studies != Studies::EstimateOnly).then_some(fit.moments),
             residuals: vec![],
+            local,
         });
     }
     let pred = ArcModel::new(form, u, &arc_options.noise)?.predict(&fit.params)?;
@@ -219,6 +230,7 @@ fn fit_arc_ml(
         report,
         moments: Some(fit.moments),
         residuals,
+        local,
     })
 }
 
@@ -262,6 +274,11 @@ fn fit_line_ml(
         report,
         moments: Some(fit.moments),
         residuals,
+        local: (detail != Detail::Model).then(|| LocalFit::Line {
+            params: fit.params.clone(),
+            form,
+            covariance: fit.covariance.clone(),
+        }),
     })
 }
 
@@ -298,6 +315,7 @@ fn fit_arc_paper(
         report,
         moments: None,
         residuals: vec![],
+        local: None,
     })
 }
 
@@ -335,6 +353,7 @@ fn fit_line_paper(
         identifiability: vec![],
         covariance: None,
         kind: "prismatic".into(),
+        harmonics: vec![],
         sweeps: vec![],
     };
     Ok(AxisFitOutcome {
@@ -346,6 +365,7 @@ fn fit_line_paper(
         report,
         moments: None,
         residuals: vec![],
+        local: None,
     })
 }
 

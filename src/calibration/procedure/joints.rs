@@ -3,7 +3,7 @@
 //! joint's sweep when observed (eqs. 14-15), else the nominal one. A joint no experiment
 //! sweeps keeps its nominal model (identity transmission, nominal coupling, zero offset).
 
-use super::axis_fit::{AxisFitOutcome, actuator_commands};
+use super::axis_fit::actuator_commands;
 use super::{AxisExperiment, CouplingReport, ProcedureError};
 use crate::calibration::CalibrationError;
 use crate::calibration::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
@@ -17,8 +17,8 @@ pub(super) struct Assembly<'a> {
     pub(super) desc: &'a RobotDescription,
     /// The axis experiments.
     pub(super) experiments: &'a [AxisExperiment],
-    /// Each joint's axis fit (`None`: not swept).
-    pub(super) fits: &'a [Option<AxisFitOutcome>],
+    /// Each joint's fitted transmission, in the fit's own zero (`None`: not swept).
+    pub(super) transmissions: &'a [Option<Transmission>],
     /// Target 1 of each experiment (same order), at its design pose.
     pub(super) target1: &'a [Vec<Point3<f64>>],
     /// The nominal controller.
@@ -55,7 +55,7 @@ impl Assembly<'_> {
                 _ => 0.0,
             };
             let theta_a_ref = q_ref[k] - passive_ref;
-            let Some(fit) = &self.fits[k] else {
+            let Some(transmission) = &self.transmissions[k] else {
                 // Not swept: the nominal joint (its value at the reference is the command).
                 theta_ref.push(theta_a_ref);
                 shift.push(theta_a_ref - u_ref[k]);
@@ -69,8 +69,7 @@ impl Assembly<'_> {
                 });
                 continue;
             };
-            let raw_ref = fit
-                .transmission
+            let raw_ref = transmission
                 .actual_from_command(u_ref[k])
                 .ok_or_else(|| self.not_invertible(k, u_ref[k]))?;
             let c = theta_a_ref - raw_ref;
@@ -79,7 +78,7 @@ impl Assembly<'_> {
             joints.push(JointModel {
                 kind: desc.joints[k].kind,
                 phi_deg: desc.joints[k].phi_deg,
-                transmission: fit.transmission.shifted(c),
+                transmission: transmission.shifted(c),
                 coupling_in,
                 transducer_offset: -c,
                 repeatability_sigma: 0.0,
@@ -134,7 +133,7 @@ impl Assembly<'_> {
         let (Some(form), Some(&(first_index, first))) = (form, sweeps.first()) else {
             return Ok(Some(nominal));
         };
-        if self.fits[k - 1].is_none() {
+        if self.transmissions[k - 1].is_none() {
             return Ok(Some(nominal));
         }
         let (index, e) = sweeps
@@ -177,9 +176,8 @@ impl Assembly<'_> {
         let second = &self.target1[index];
         let fit_err = |source| fit_error(e, from, source);
         let active = self.sweep_active_angles(k, e, shift)?;
-        let fit_from = self.fits[k - 1].as_ref().expect("checked by coupling_into");
-        let theta_ref_from = fit_from
-            .transmission
+        let from_transmission = self.transmissions[k - 1].as_ref().expect("checked by coupling_into");
+        let theta_ref_from = from_transmission
             .actual_from_command(self.u_ref[k - 1])
             .map(|t| t + shift[k - 1])
             .unwrap_or(q_ref[k - 1]);
@@ -210,14 +208,14 @@ impl Assembly<'_> {
     /// The calibrated active angles (rad) of the driving joint `k-1` (0-based) at the steps of
     /// sweep `e` where its second target was seen.
     fn sweep_active_angles(&self, k: usize, e: &AxisExperiment, shift: &[f64]) -> Result<Vec<f64>, ProcedureError> {
-        let fit_from = self.fits[k - 1].as_ref().expect("checked by coupling_into");
+        let from_transmission = self.transmissions[k - 1].as_ref().expect("checked by coupling_into");
         let u: Vec<f64> = e
             .target1_steps
             .iter()
             .map(|&j| actuator_commands(self.controller, self.desc, &e.commands[j])[k - 1])
             .collect();
         u.iter()
-            .map(|&uj| fit_from.transmission.actual_from_command(uj).map(|t| t + shift[k - 1]))
+            .map(|&uj| from_transmission.actual_from_command(uj).map(|t| t + shift[k - 1]))
             .collect::<Option<_>>()
             .ok_or_else(|| {
                 fit_error(

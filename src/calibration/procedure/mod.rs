@@ -17,9 +17,10 @@
 //! ([`super::crb::held_joint_axis_covariance`]) but not propagated to the rows (the same held
 //! error turns all axes above the joint together, which changes no row). Not modelled: the
 //! correlation that bias creates between axes, the held error as an error of the joint's
-//! value at the reference, and the repeatability in the paper's estimator. The coupling fits
-//! (eqs. 14-15) report a-posteriori sigmas, so the swept joint's jitter in their residuals is
-//! already counted.
+//! value at the reference, and the repeatability in the paper's estimator. The couplings
+//! (eqs. 14-15), zero offsets and tool frame get a 1-sigma propagated from the axis fits and
+//! the second and tool targets (`propagation`); the coupling fit's own a-posteriori sigma is
+//! kept beside it (`CouplingReport::fit_only_sigma`).
 
 mod axis_fit;
 mod experiments;
@@ -27,6 +28,7 @@ mod frames;
 mod held;
 mod joint_map;
 mod joints;
+mod propagation;
 mod report;
 mod result;
 mod uncertainty;
@@ -39,10 +41,11 @@ pub use frames::{BaseRule, FramesError, common_normal_feet, model_from_axes};
 pub use joint_map::{
     JointMap, MapRow, MapTable, ZeroOffsetFit, calibrated_joint_values, controller_zero_offsets, joint_map,
 };
+pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, residuals_csv};
 pub use result::{
-    AxisReport, Calibration, CouplingReport, DirectionSigma, HeldOffset, NoiseReport, PointResidual, PositionSigma,
-    RowSigma, SweepReport, ToolPose, ToolReport,
+    AxisReport, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport, PointResidual,
+    PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
 };
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
@@ -54,11 +57,12 @@ use super::noise::{NoiseEstimate, estimate_noise};
 use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
-use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel};
+use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel, Transmission};
 use axis_fit::{AxisFitOutcome, JointData, actuator_commands, add_held_joint_covariances, fit_joint};
 use held::{Corrector, design_distance, exactly_as_designed};
 use joints::Assembly;
-use nalgebra::Point3;
+use nalgebra::{Isometry3, Point3};
+use propagation::{Derived, Propagation, moved_point};
 use serde::{Deserialize, Serialize};
 
 /// Which rotary-axis estimator to use.
@@ -246,6 +250,12 @@ pub struct FittedModel {
     pub row_sigma: Option<Vec<RowSigma>>,
     /// Fit-and-correct passes for the held joints' recorded values.
     pub held_passes: usize,
+    /// The fitted couplings' reports (their `sigma` propagated with
+    /// [`Detail::ModelAndCovariance`], else the coupling fits' own a-posteriori sigma).
+    pub couplings: Vec<CouplingReport>,
+    /// The propagated 1-sigma of the couplings, zero offsets and tool frame; `Some` with
+    /// [`Detail::ModelAndCovariance`] only.
+    pub derived_sigma: Option<DerivedSigma>,
 }
 
 /// Calibrates the robot described (nominally) by `desc` from the axis experiments of `set`
@@ -321,6 +331,8 @@ struct Assembled {
     couplings: Vec<CouplingReport>,
     /// Target-0 points of each joint's sweeps as fitted (to test the passes' convergence).
     points: Vec<Point3<f64>>,
+    /// Target 1 of each experiment as the couplings were fitted from it.
+    target1: Vec<Vec<Point3<f64>>>,
 }
 
 /// The calibration with the fits weighted by `noise_mm` (3-D RMS), and the noise its
@@ -471,18 +483,11 @@ impl<'a> Context<'a> {
             });
         }
         let axes: Vec<Option<AxisLine>> = fits.iter().map(|f| f.as_ref().map(|f| f.axis)).collect();
-        let (geometry, base_rule) = model_from_axes(&self.desc.nominal_model(), &axes, self.q_ref)?;
-        let assembly = Assembly {
-            desc: self.desc,
-            experiments: self.experiments,
-            fits: &fits,
-            target1,
-            controller: self.controller,
-            geometry: &geometry,
-            q_ref: self.q_ref,
-            u_ref: self.u_ref,
-        };
-        let (joints, couplings) = assembly.joint_models()?;
+        let transmissions: Vec<Option<Transmission>> = fits
+            .iter()
+            .map(|f| f.as_ref().map(|f| f.transmission.clone()))
+            .collect();
+        let (geometry, base_rule, joints, couplings) = self.joints_from(&axes, &transmissions, target1)?;
         let robot = calibrated_robot(self.desc, joints, &geometry);
         Ok(Assembled {
             fits,
@@ -491,6 +496,7 @@ impl<'a> Context<'a> {
             robot,
             couplings,
             points,
+            target1: target1.to_vec(),
         })
     }
 
@@ -509,16 +515,162 @@ impl<'a> Context<'a> {
             _ => Some(calibrated_row_sigmas(self.desc, &state.axes, self.q_ref, &state.fits)?),
         };
         let mut robot = state.robot.clone();
-        let tool = tool_frame(set, self.desc, &robot, reference_cmd, self.controller);
+        let mut tool = tool_frame(set, self.desc, &robot, reference_cmd, self.controller);
         if let Some(t) = &tool {
             robot.tool_frame = Placement::from_isometry(&t.last_link_from_tool);
+        }
+        let mut couplings = state.couplings.clone();
+        let derived_sigma = match self.detail {
+            Detail::Model => None,
+            _ => Some(self.derived_sigma(set, state, reference_cmd)?),
+        };
+        if let Some(d) = &derived_sigma {
+            for (c, s) in couplings.iter_mut().zip(&d.couplings) {
+                c.sigma = s.clone();
+            }
+            if let Some(t) = &mut tool {
+                t.sigma = d.tool;
+            }
         }
         let model = FittedModel {
             robot,
             row_sigma,
             held_passes: passes,
+            couplings,
+            derived_sigma,
         };
         Ok((model, tool))
+    }
+
+    /// The phi-model of the fitted `axes` (with its base rule) and the joint models and
+    /// fitted couplings on it, from the fitted `transmissions` and the second targets
+    /// `target1`.
+    fn joints_from(
+        &self,
+        axes: &[Option<AxisLine>],
+        transmissions: &[Option<Transmission>],
+        target1: &[Vec<Point3<f64>>],
+    ) -> Result<(PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
+        let (geometry, base_rule) = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
+        let assembly = Assembly {
+            desc: self.desc,
+            experiments: self.experiments,
+            transmissions,
+            target1,
+            controller: self.controller,
+            geometry: &geometry,
+            q_ref: self.q_ref,
+            u_ref: self.u_ref,
+        };
+        let (joints, couplings) = assembly.joint_models()?;
+        Ok((geometry, base_rule, joints, couplings))
+    }
+
+    /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
+    /// `axes` and `transmissions`, the second targets `target1` and the tool targets `tool`
+    /// (measured at the reference pose) give.
+    fn derived(
+        &self,
+        axes: &[Option<AxisLine>],
+        transmissions: &[Option<Transmission>],
+        target1: &[Vec<Point3<f64>>],
+        tool: Option<&[Point3<f64>]>,
+        reference_cmd: &[f64],
+    ) -> Result<Derived, ProcedureError> {
+        let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1)?;
+        let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
+        values.extend(joints.iter().map(|j| j.transducer_offset));
+        let tool = tool.and_then(|measured| {
+            let robot = calibrated_robot(self.desc, joints, &geometry);
+            last_link_from_tool(measured, self.desc, &robot, reference_cmd, self.controller).map(|(f, _)| f)
+        });
+        Ok(Derived {
+            values,
+            coupling_sizes: couplings.iter().map(|c| c.parameters.len()).collect(),
+            tool,
+        })
+    }
+
+    /// The propagated 1-sigma of the derived quantities of `state` (`propagation`): through
+    /// every ML axis fit's covariance, the noise of the second targets the couplings are
+    /// fitted from, and that of the tool targets.
+    fn derived_sigma(
+        &self,
+        set: &MeasurementSet,
+        state: &Assembled,
+        reference_cmd: &[f64],
+    ) -> Result<DerivedSigma, ProcedureError> {
+        let transmissions: Vec<Option<Transmission>> = state
+            .fits
+            .iter()
+            .map(|f| f.as_ref().map(|f| f.transmission.clone()))
+            .collect();
+        let tool_points = tool_observation(set, self.desc, reference_cmd).map(|o| o.measured);
+        let tool = tool_points.as_deref();
+        let (axes, target1) = (&state.axes, &state.target1);
+        let base = self.derived(axes, &transmissions, target1, tool, reference_cmd)?;
+        let mut prop = Propagation::new(base.values.len() + if base.tool.is_some() { 6 } else { 0 });
+        for (k, local) in state.fits.iter().enumerate() {
+            let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {
+                continue;
+            };
+            prop.add(local.covariance(), |i, h| {
+                let mut delta = vec![0.0; local.covariance().nrows()];
+                delta[i] = h;
+                let (axis, transmission) = local.rebuilt(&delta);
+                let (mut a, mut t) = (axes.clone(), transmissions.clone());
+                a[k] = Some(axis);
+                t[k] = Some(transmission);
+                self.derived(&a, &t, target1, tool, reference_cmd)
+            })?;
+        }
+        let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
+        // Only the second targets of the sweeps a coupling is fitted from move anything.
+        let used: Vec<(usize, usize)> = self
+            .experiments
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| state.couplings.iter().any(|c| c.experiment == e.name))
+            .flat_map(|(i, _)| (0..target1[i].len()).map(move |j| (i, j)))
+            .collect();
+        prop.add_independent(3 * used.len(), sigma, |k, h| {
+            self.derived(
+                axes,
+                &transmissions,
+                &moved_point(target1, &used, k, h),
+                tool,
+                reference_cmd,
+            )
+        })?;
+        // The swept joint's repeatability turns each second target about its axis, step by
+        // step (independent angle noise, as for the axis fits).
+        let jitter: Vec<(usize, usize)> = used
+            .iter()
+            .copied()
+            .filter(|&(i, _)| self.repeatability[self.experiments[i].joint - 1] > 0.0)
+            .collect();
+        for &(i, j) in &jitter {
+            let joint = self.experiments[i].joint - 1;
+            let Some(axis) = axes[joint] else { continue };
+            let turn = |h: f64| {
+                let mut moved = target1.clone();
+                let o = axis.origin_m;
+                moved[i][j] = o + nalgebra::UnitQuaternion::from_axis_angle(&axis.direction, h) * (moved[i][j] - o);
+                moved
+            };
+            prop.add_independent(1, self.repeatability[joint], |_, h| {
+                self.derived(axes, &transmissions, &turn(h), tool, reference_cmd)
+            })?;
+        }
+        if let Some(points) = &tool_points {
+            let lists = vec![points.clone()];
+            let at: Vec<(usize, usize)> = (0..points.len()).map(|j| (0, j)).collect();
+            prop.add_independent(3 * points.len(), sigma, |k, h| {
+                let moved = moved_point(&lists, &at, k, h);
+                self.derived(axes, &transmissions, target1, Some(&moved[0]), reference_cmd)
+            })?;
+        }
+        Ok(base.sigma(&prop.covariance))
     }
 
     /// The calibration of the last pass: [`Context::finish_model`] plus the report's extras
@@ -530,12 +682,19 @@ impl<'a> Context<'a> {
         reference_cmd: Vec<f64>,
         passes: usize,
     ) -> Result<Calibration, ProcedureError> {
-        let (FittedModel { robot, row_sigma, .. }, tool) = self.finish_model(set, &state, &reference_cmd, passes)?;
+        let (model, tool) = self.finish_model(set, &state, &reference_cmd, passes)?;
+        let FittedModel {
+            robot,
+            row_sigma,
+            couplings,
+            derived_sigma,
+            ..
+        } = model;
+        let zero_offset_sigma = zero_offset_sigmas(self.desc, derived_sigma.as_ref());
         let Assembled {
             mut fits,
             axes,
             base_rule,
-            couplings,
             ..
         } = state;
         let kinds: Vec<JointKind> = self.desc.joints.iter().map(|j| j.kind).collect();
@@ -554,6 +713,7 @@ impl<'a> Context<'a> {
             axes: axes_reports,
             row_sigma: row_sigma.unwrap_or_default(),
             couplings,
+            zero_offset_sigma,
             tool,
             options: self.options.clone(),
             base_rule: Some(base_rule),
@@ -584,6 +744,30 @@ impl<'a> Context<'a> {
             estimate,
         }
     }
+}
+
+/// The zero offsets' 1-sigma of `derived` per joint of `desc`, in its joint's unit.
+fn zero_offset_sigmas(desc: &RobotDescription, derived: Option<&DerivedSigma>) -> Vec<ZeroOffsetSigma> {
+    let Some(d) = derived else {
+        return vec![];
+    };
+    d.zero_offsets
+        .iter()
+        .zip(&desc.joints)
+        .enumerate()
+        .map(|(k, (s, j))| match j.kind {
+            JointKind::Revolute => ZeroOffsetSigma {
+                joint: k + 1,
+                sigma_rad: Some(*s),
+                sigma_mm: None,
+            },
+            JointKind::Prismatic => ZeroOffsetSigma {
+                joint: k + 1,
+                sigma_rad: None,
+                sigma_mm: Some(s * 1e3),
+            },
+        })
+        .collect()
 }
 
 /// The standard deviations of the rows (mm, deg) from the axes' covariances as fitted
@@ -622,6 +806,64 @@ fn calibrated_robot(desc: &RobotDescription, joints: Vec<JointModel>, geometry: 
     }
 }
 
+/// The three tool targets as observed at the reference pose: experiment `tool`, or the first
+/// validation pose whose commands are the reference.
+struct ToolObservation {
+    /// The experiment observed.
+    experiment: String,
+    /// Its step.
+    step: usize,
+    /// The measured targets (instrument frame) \[m\].
+    measured: Vec<Point3<f64>>,
+}
+
+/// The first observation of every tool target at the reference pose, if any.
+fn tool_observation(set: &MeasurementSet, desc: &RobotDescription, reference_cmd: &[f64]) -> Option<ToolObservation> {
+    let count = desc.tool_targets_m().len();
+    if count < 3 {
+        return None;
+    }
+    let experiments = set.experiments();
+    for e in experiments.iter().filter(|e| e.moved_joint == 0) {
+        for (step, rows) in e.by_step() {
+            let at_ref = rows.iter().all(|r| {
+                r.cmd
+                    .iter()
+                    .zip(reference_cmd)
+                    .all(|(a, b)| (a - b).abs() <= COMMAND_TOLERANCE)
+            });
+            let measured: Option<Vec<Point3<f64>>> = (0..count)
+                .map(|t| rows.iter().find(|r| r.target == t).map(|r| r.position_m()))
+                .collect();
+            if let (true, Some(measured)) = (at_ref, measured) {
+                return Some(ToolObservation {
+                    experiment: e.name.to_string(),
+                    step,
+                    measured,
+                });
+            }
+        }
+    }
+    None
+}
+
+/// The tool frame in the last link of `robot` from the tool targets `measured` at the
+/// reference pose (three-point rigid fit), with the fit's RMS \[m\].
+fn last_link_from_tool(
+    measured: &[Point3<f64>],
+    desc: &RobotDescription,
+    robot: &RobotModel,
+    reference_cmd: &[f64],
+    controller: &Controller,
+) -> Option<(Isometry3<f64>, f64)> {
+    let (world_from_tool, rms_m) = rigid_fit(&desc.tool_targets_m(), measured)?;
+    let q = robot
+        .joint_values(controller, &commands_to_internal(desc, reference_cmd))
+        .ok()?;
+    let link = robot.phi_model().poses(&q).world_from_link[desc.dof() - 1];
+    Some((link.inverse() * world_from_tool, rms_m))
+}
+
 /// The tool frame from the three tool targets observed at the reference pose: experiment
 /// `tool`, or any validation pose whose commands are the reference.
 fn tool_frame(
@@ -631,38 +873,13 @@ fn tool_frame(
     reference_cmd: &[f64],
     controller: &Controller,
 ) -> Option<ToolReport> {
-    let targets = desc.tool_targets_m();
-    if targets.len() < 3 {
-        return None;
-    }
-    let experiments = set.experiments();
-    let candidates = experiments.iter().filter(|e| e.moved_joint == 0);
-    for e in candidates {
-        for (step, rows) in e.by_step() {
-            let at_ref = rows.iter().all(|r| {
-                r.cmd
-                    .iter()
-                    .zip(reference_cmd)
-                    .all(|(a, b)| (a - b).abs() <= COMMAND_TOLERANCE)
-            });
-            let measured: Option<Vec<Point3<f64>>> = (0..targets.len())
-                .map(|t| rows.iter().find(|r| r.target == t).map(|r| r.position_m()))
-                .collect();
-            let (true, Some(measured)) = (at_ref, measured) else {
-                continue;
-            };
-            let (world_from_tool, rms_m) = rigid_fit(&targets, &measured)?;
-            let q = robot
-                .joint_values(controller, &commands_to_internal(desc, reference_cmd))
-                .ok()?;
-            let link = robot.phi_model().poses(&q).world_from_link[desc.dof() - 1];
-            return Some(ToolReport {
-                experiment: e.name.to_string(),
-                step,
-                last_link_from_tool: link.inverse() * world_from_tool,
-                fit_rms_mm: rms_m * 1e3,
-            });
-        }
-    }
-    None
+    let seen = tool_observation(set, desc, reference_cmd)?;
+    let (frame, rms_m) = last_link_from_tool(&seen.measured, desc, robot, reference_cmd, controller)?;
+    Some(ToolReport {
+        experiment: seen.experiment,
+        step: seen.step,
+        last_link_from_tool: frame,
+        fit_rms_mm: rms_m * 1e3,
+        sigma: None,
+    })
 }

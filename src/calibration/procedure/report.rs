@@ -112,6 +112,11 @@ fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Findin
 /// Each calibrated joint's zero offset at the reference pose, appended to `out`.
 fn zero_offset_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     for (k, j) in cal.robot.joints.iter().enumerate() {
+        let sigma = cal
+            .zero_offset_sigma
+            .iter()
+            .find(|s| s.joint == k + 1)
+            .and_then(|s| s.sigma_rad.map(f64::to_degrees).or(s.sigma_mm));
         // A joint without an axis experiment keeps its nominal zero: nothing was measured.
         if !cal.axes.iter().any(|a| a.joint == k + 1) {
             continue;
@@ -123,12 +128,13 @@ fn zero_offset_findings(cal: &Calibration, out: &mut Vec<Finding>) {
         out.push(finding(
             format!("joint {}: zero offset", k + 1),
             off,
-            f64::NAN,
+            sigma.unwrap_or(f64::NAN),
             unit,
             format!(
-                "joint {} reads {:.3} {unit} off its calibrated zero at the reference pose",
+                "joint {} reads {:.3} +- {:.3} {unit} off its calibrated zero at the reference pose",
                 k + 1,
-                off
+                off,
+                sigma.unwrap_or(f64::NAN)
             ),
         ));
     }
@@ -148,13 +154,11 @@ fn transmission_findings(cal: &Calibration, out: &mut Vec<Finding>) {
             Transmission::Gear { ratio, sin, cos } => (sin, cos, *ratio),
         };
         for (h, (s, c)) in sin.iter().zip(cos).enumerate() {
-            let amp = to_joint * (s * s + c * c).sqrt();
-            let sig = to_joint
-                * a.coefficient_sigma
-                    .get(h)
-                    .copied()
-                    .unwrap_or(f64::NAN)
-                    .max(a.coefficient_sigma.get(sin.len() + h).copied().unwrap_or(f64::NAN));
+            // Amplitude and its 1-sigma along the (sin, cos) direction, from the coefficients'
+            // covariance (`HarmonicReport`); a report without them (older files) says none.
+            let (amp, sig) = a.harmonics.get(h).map_or((to_joint * s.hypot(*c), f64::NAN), |r| {
+                (r.amplitude_rad, r.amplitude_sigma_rad)
+            });
             let per = match &a.transmission {
                 Transmission::Gear { ratio, .. } => format!("per {:.3} joint turns", ratio / (h + 1) as f64),
                 _ => format!("{} times per turn", h + 1),
@@ -472,6 +476,13 @@ fn write_tool(s: &mut String, cal: &Calibration) {
             "\nTool frame from the three tool targets of `{}` step {} (fit RMS {:.3} mm).",
             t.experiment, t.step, t.fit_rms_mm
         );
+        if let Some(g) = &t.sigma {
+            let _ = writeln!(
+                s,
+                "Its 1-sigma in its own axes (propagated; includes the last joint's zero offset, which it absorbs): x {:.3}, y {:.3}, z {:.3} mm; about x {:.3}, y {:.3}, z {:.3} mrad.",
+                g.x_mm, g.y_mm, g.z_mm, g.rx_mrad, g.ry_mrad, g.rz_mrad
+            );
+        }
     } else {
         let _ = writeln!(
             s,

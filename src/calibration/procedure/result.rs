@@ -4,7 +4,9 @@
 use super::CalibrationOptions;
 use super::experiments::AxisExperiment;
 use super::frames::BaseRule;
+use super::propagation::{FrameSigma, ZeroOffsetSigma};
 use super::uncertainty::AxisCovariance;
+use crate::calibration::arc_model::N_GEOMETRY;
 use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::line_ml::LineFit;
@@ -67,6 +69,11 @@ pub struct AxisReport {
     /// target's line at the first step and its position sigma is null).
     #[serde(default = "revolute")]
     pub kind: String,
+    /// Each harmonic of a rotary joint's transmission as amplitude and phase, with their
+    /// 1-sigma from the coefficients' covariance (empty for a sliding joint and in older
+    /// files).
+    #[serde(default)]
+    pub harmonics: Vec<HarmonicReport>,
     /// The sweeps fitted jointly as this axis, and what differs between them.
     #[serde(default)]
     pub sweeps: Vec<SweepReport>,
@@ -229,6 +236,9 @@ impl AxisReport {
             covariance: None,
             kind: revolute(),
             sweeps: vec![],
+            harmonics: harmonics(&fit.transmission, &|a, b| {
+                fit.covariance[(N_GEOMETRY + a, N_GEOMETRY + b)]
+            }),
         }
     }
 
@@ -263,6 +273,7 @@ impl AxisReport {
             identifiability: vec!["a sliding axis has a direction only (eq. 9): its position is a convention".into()],
             covariance: Some(AxisCovariance::new(u, v, &c)),
             kind: "prismatic".into(),
+            harmonics: vec![],
             sweeps: vec![],
         }
     }
@@ -315,8 +326,55 @@ impl AxisReport {
             covariance: None,
             kind: revolute(),
             sweeps: vec![],
+            // The paper's estimator gives no correlation of the coefficients: taken as none.
+            harmonics: harmonics(&t.transmission, &|a, b| if a == b { t.sigma[a].powi(2) } else { 0.0 }),
         }
     }
+}
+
+/// One harmonic of a transmission (eq. 8) as amplitude and phase,
+/// `s sin(k x) + c cos(k x) = A sin(k x + phase)`, with first-order 1-sigma from the
+/// covariance of `(s, c)` (gradients `(s, c) / A` and `(c, -s) / A^2`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct HarmonicReport {
+    /// Harmonic order `k`.
+    pub order: usize,
+    /// Amplitude in joint angle (a gear's: N times its gear-angle amplitude) \[rad\].
+    pub amplitude_rad: f64,
+    /// Its 1-sigma \[rad\].
+    pub amplitude_sigma_rad: f64,
+    /// Phase \[rad\].
+    pub phase_rad: f64,
+    /// Its 1-sigma \[rad\] (first order: meaningless when the amplitude is within a few
+    /// sigma of zero).
+    pub phase_sigma_rad: f64,
+}
+
+/// The harmonics of `transmission` (none for a polynomial), `cov(a, b)` the covariance of its
+/// coefficients `[sin.., cos..]` \[rad^2\].
+pub fn harmonics(transmission: &Transmission, cov: &dyn Fn(usize, usize) -> f64) -> Vec<HarmonicReport> {
+    let (sin, cos, to_joint) = match transmission {
+        Transmission::Harmonic { sin, cos } => (sin, cos, 1.0),
+        Transmission::Gear { ratio, sin, cos } => (sin, cos, *ratio),
+        Transmission::Polynomial { .. } => return vec![],
+    };
+    let k = sin.len();
+    (0..k)
+        .map(|h| {
+            let (s, c) = (sin[h], cos[h]);
+            let a = s.hypot(c);
+            let (ss, cc, sc) = (cov(h, h), cov(k + h, k + h), cov(h, k + h));
+            let var_a = (s * s * ss + c * c * cc + 2.0 * s * c * sc) / (a * a);
+            let var_p = (c * c * ss + s * s * cc - 2.0 * s * c * sc) / (a * a * a * a);
+            HarmonicReport {
+                order: h + 1,
+                amplitude_rad: to_joint * a,
+                amplitude_sigma_rad: to_joint * var_a.max(0.0).sqrt(),
+                phase_rad: c.atan2(s),
+                phase_sigma_rad: var_p.max(0.0).sqrt(),
+            }
+        })
+        .collect()
 }
 
 /// 1-sigma of one Table-2 row, in Table 2's units.
@@ -347,8 +405,14 @@ pub struct CouplingReport {
     pub parameter_names: Vec<String>,
     /// Parameters.
     pub parameters: Vec<f64>,
-    /// Their 1-sigma.
+    /// Their 1-sigma: propagated from the fitted axes and transmissions the passive angles
+    /// are built on and from the second target's noise (`calibration::procedure`'s
+    /// propagation); the coupling fit's own a-posteriori sigma on the lean path.
     pub sigma: Vec<f64>,
+    /// The coupling fit's own a-posteriori 1-sigma (`s^2 (J^T J)^-1`: the second target's
+    /// noise only, as the fitted axes were exact); for comparison with `sigma`.
+    #[serde(default)]
+    pub fit_only_sigma: Vec<f64>,
     /// RMS of the angle residuals \[rad\].
     pub residual_rms_rad: f64,
 }
@@ -372,6 +436,7 @@ impl CouplingReport {
             parameter_names,
             parameters: fit.parameters.clone(),
             sigma: fit.sigma.clone(),
+            fit_only_sigma: fit.sigma.clone(),
             residual_rms_rad: fit.residual_rms_rad,
         }
     }
@@ -390,6 +455,10 @@ pub struct ToolReport {
     pub last_link_from_tool: Isometry3<f64>,
     /// RMS of the three-point fit \[mm\] (noise only, for a rigid tool).
     pub fit_rms_mm: f64,
+    /// 1-sigma of the tool frame in its own axes, propagated from the axes, couplings and
+    /// tool targets (absent on the lean path and in older files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<FrameSigma>,
 }
 
 /// A frame in the file: translation in mm and rotation as a unit quaternion `[x, y, z, w]`
@@ -463,6 +532,10 @@ pub struct Calibration {
     pub row_sigma: Vec<RowSigma>,
     /// Measured couplings.
     pub couplings: Vec<CouplingReport>,
+    /// 1-sigma of each joint's zero offset (`transducer_offset`), propagated from the axis
+    /// fits and the couplings (empty in files written before it was reported).
+    #[serde(default)]
+    pub zero_offset_sigma: Vec<ZeroOffsetSigma>,
     /// The tool frame, when observed at the reference pose.
     pub tool: Option<ToolReport>,
     /// The options used.

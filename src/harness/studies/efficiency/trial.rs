@@ -3,9 +3,11 @@
 //! axis estimators and the procedure's Table-2 rows.
 
 use super::{StudyError, trial_seed};
-use crate::calibration::arc_model::{ArcParams, MeasurementNoise};
+use crate::calibration::arc_model::{ArcParams, MeasurementNoise, N_GEOMETRY};
 use crate::calibration::crb::{axis_errors, held_joint_axis_covariance};
-use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, Detail, axis_experiments, calibrate_model};
+use crate::calibration::procedure::{
+    AxisExperiment, CalibrationOptions, Detail, FittedModel, axis_experiments, calibrate_model, harmonics,
+};
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
     ArcFitOptions, CalibrationError, angles, fit_arc, fit_arc_with_angle_noise, fit_axis_paper, fit_circle,
@@ -48,6 +50,39 @@ pub(super) struct TrialOutcome {
     pub(super) rows: Vec<[f64; 4]>,
     /// Their reported sigmas, in the same units.
     pub(super) row_sigma: Vec<[f64; 4]>,
+    /// The derived quantities (couplings, zero offsets, tool frame): name, value and reported
+    /// 1-sigma; a coupling parameter also under `(fit only)` with its fit's own sigma.
+    pub(super) derived: Vec<(String, f64, f64)>,
+}
+
+/// The couplings', zero offsets' and tool frame's values and reported 1-sigma of `cal` (rad,
+/// mm and mrad; the tool frame relative to the description's).
+fn derived_quantities(cal: &FittedModel, desc: &RobotDescription) -> Vec<(String, f64, f64)> {
+    let mut out = Vec::new();
+    for c in &cal.couplings {
+        for (i, name) in c.parameter_names.iter().enumerate() {
+            let label = format!("coupling {}->{} {name}", c.from, c.to);
+            out.push((label.clone(), c.parameters[i], c.sigma[i]));
+            out.push((format!("{label} (fit only)"), c.parameters[i], c.fit_only_sigma[i]));
+        }
+    }
+    let Some(d) = &cal.derived_sigma else {
+        return out;
+    };
+    for (k, (j, s)) in cal.robot.joints.iter().zip(&d.zero_offsets).enumerate() {
+        out.push((format!("joint {} zero offset", k + 1), j.transducer_offset, *s));
+    }
+    if let Some(t) = d.tool {
+        let rel = desc.tool.frame.to_isometry().inverse() * cal.robot.tool_frame.to_isometry();
+        let (p, r) = (rel.translation.vector * 1e3, rel.rotation.scaled_axis() * 1e3);
+        let sigma = [t.x_mm, t.y_mm, t.z_mm, t.rx_mrad, t.ry_mrad, t.rz_mrad];
+        let names = ["x mm", "y mm", "z mm", "rx mrad", "ry mrad", "rz mrad"];
+        for (i, name) in names.iter().enumerate() {
+            let v = if i < 3 { p[i] } else { r[i - 3] };
+            out.push((format!("tool {name}"), v, sigma[i]));
+        }
+    }
+    out
 }
 
 /// The fit form of a transmission as the description gives it.
@@ -153,6 +188,8 @@ struct TrialAxes {
     ml_reported: Vec<Vec<f64>>,
     /// Per joint (1-based): the ML fit's parameters and axis.
     fitted: Vec<(usize, ArcParams, AxisLine)>,
+    /// Each harmonic's amplitude and phase with their reported 1-sigma.
+    harmonics: Vec<(String, f64, f64)>,
 }
 
 /// What every trial shares.
@@ -186,6 +223,8 @@ impl Trials<'_> {
         // The lean path with the rows' covariance: the study reads the rows and their sigmas.
         let cal = calibrate_model(&set, desc, self.options, Detail::ModelAndCovariance)
             .map_err(|source| StudyError::Procedure { trial: i, source })?;
+        let mut derived = std::mem::take(&mut axes.harmonics);
+        derived.extend(derived_quantities(&cal, desc));
         Ok(TrialOutcome {
             ml: axes.ml,
             paper: axes.paper,
@@ -202,6 +241,7 @@ impl Trials<'_> {
                 .iter()
                 .map(|s| [s.a_mm, s.b_mm, s.alpha_deg, s.beta_deg])
                 .collect(),
+            derived,
         })
     }
 
@@ -213,6 +253,7 @@ impl Trials<'_> {
         let (mut ml, mut paper) = (Vec::new(), Vec::new());
         let mut ml_reported: Vec<Vec<f64>> = Vec::new();
         let mut fitted: Vec<(usize, ArcParams, AxisLine)> = Vec::new();
+        let mut harmonic = Vec::new();
         for (e, t) in experiments.iter().zip(self.truths) {
             let u = actuator_commands(e, desc, controller);
             let fit = fit_arc_with_angle_noise(
@@ -237,6 +278,12 @@ impl Trials<'_> {
                 .collect(),
             );
             fitted.push((e.joint, fit.params.clone(), fit.axis));
+            let cov = |a: usize, b: usize| fit.covariance[(N_GEOMETRY + a, N_GEOMETRY + b)];
+            for h in harmonics(&fit.transmission, &cov) {
+                let name = format!("joint {} harmonic {}", e.joint, h.order);
+                harmonic.push((format!("{name} amplitude"), h.amplitude_rad, h.amplitude_sigma_rad));
+                harmonic.push((format!("{name} phase"), h.phase_rad, h.phase_sigma_rad));
+            }
             ml.push(axis_errors(
                 &fit.axis.direction,
                 &fit.axis.origin_m,
@@ -252,6 +299,7 @@ impl Trials<'_> {
             paper,
             ml_reported,
             fitted,
+            harmonics: harmonic,
         })
     }
 

@@ -1,0 +1,311 @@
+//! Uncertainty of what the procedure derives from the fitted axes: the passive couplings
+//! (eqs. 14-15), the joint zero offsets and the tool frame. Each is a function of the axis
+//! fits (axis line and transmission of every swept joint), of the second targets the
+//! couplings are fitted from and of the tool targets; first-order propagation
+//!
+//! `C_out = sum_k J_k C_k J_k^T + sigma^2 J_t J_t^T`,
+//!
+//! `C_k` the covariance of fit `k`'s local parameters (the fits are independent, each from its
+//! own sweep), `sigma` the measurement noise per coordinate and `J` by central differences of
+//! the whole assembly ([`super::Context::derived`]). A coupling fit's own a-posteriori sigma
+//! counts only the second target's noise: the active angles it is fitted against come from
+//! the driving joint's fitted transmission and the frame it is measured in from the fitted
+//! axes, whose errors are common to every point of the sweep and do not average out.
+//!
+//! The swept joint's repeatability turns each second target about the driving axis, one
+//! independent angle per step. Not counted: the held joints' repeatability bias (as for the
+//! rows), the joints' repeatability at the tool observation and, on campaigns whose held
+//! joints needed correction passes, the dependence of the corrected points on the model.
+
+use crate::calibration::arc_model::ArcParams;
+use crate::calibration::line_ml::LineParams;
+use crate::calibration::transmission_fit::TransmissionForm;
+use crate::kinematics::AxisLine;
+use crate::robot::Transmission;
+use nalgebra::{DMatrix, Isometry3, Point3, Unit, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// An ML axis fit's parameters at the optimum and their covariance, to rebuild the axis and
+/// the transmission at perturbed parameters.
+#[derive(Clone, Debug)]
+pub(super) enum LocalFit {
+    /// A rotary joint's arc fit ([`crate::calibration::fit_arc`]).
+    Arc {
+        /// Parameters at the optimum.
+        params: ArcParams,
+        /// The reference point the axis point is taken nearest to \[m\].
+        reference: Point3<f64>,
+        /// The transmission form.
+        form: TransmissionForm,
+        /// Covariance of the local parameters.
+        covariance: DMatrix<f64>,
+    },
+    /// A sliding joint's line fit ([`crate::calibration::line_ml::fit_line`]).
+    Line {
+        /// Parameters at the optimum.
+        params: LineParams,
+        /// The transmission form.
+        form: TransmissionForm,
+        /// Covariance of the local parameters.
+        covariance: DMatrix<f64>,
+    },
+}
+
+impl LocalFit {
+    /// Covariance of the local parameters.
+    pub(super) fn covariance(&self) -> &DMatrix<f64> {
+        match self {
+            LocalFit::Arc { covariance, .. } | LocalFit::Line { covariance, .. } => covariance,
+        }
+    }
+
+    /// The axis and the transmission (in the fit's own zero) at the parameters moved by the
+    /// local perturbation `delta`, as the fit builds them at its optimum.
+    pub(super) fn rebuilt(&self, delta: &[f64]) -> (AxisLine, Transmission) {
+        match self {
+            LocalFit::Arc {
+                params,
+                reference,
+                form,
+                ..
+            } => {
+                let p = params.perturbed(delta);
+                let axis = AxisLine {
+                    origin_m: p.axis_point_near(reference),
+                    direction: p.normal(),
+                };
+                (axis, form.build(&p.coefficients))
+            }
+            LocalFit::Line { params, form, .. } => {
+                let p = params.perturbed(delta);
+                let axis = AxisLine {
+                    origin_m: p.start,
+                    direction: Unit::new_normalize(p.axis(2)),
+                };
+                (axis, form.build(&p.coefficients))
+            }
+        }
+    }
+}
+
+/// The 1-sigma of a position and of an orientation, per axis of a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct FrameSigma {
+    /// Along x \[mm\].
+    pub x_mm: f64,
+    /// Along y \[mm\].
+    pub y_mm: f64,
+    /// Along z \[mm\].
+    pub z_mm: f64,
+    /// About x \[mrad\].
+    pub rx_mrad: f64,
+    /// About y \[mrad\].
+    pub ry_mrad: f64,
+    /// About z \[mrad\].
+    pub rz_mrad: f64,
+}
+
+/// The 1-sigma of a joint's zero offset (`transducer_offset`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct ZeroOffsetSigma {
+    /// Joint (1-based).
+    pub joint: usize,
+    /// 1-sigma of a rotary joint's offset \[rad\] (null for a sliding joint).
+    pub sigma_rad: Option<f64>,
+    /// 1-sigma of a sliding joint's offset \[mm\] (null for a rotary joint).
+    pub sigma_mm: Option<f64>,
+}
+
+/// The propagated 1-sigma of the derived quantities.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct DerivedSigma {
+    /// Per fitted coupling (in the order of the couplings' reports): each parameter's 1-sigma.
+    pub couplings: Vec<Vec<f64>>,
+    /// Per joint (base first): the zero offset's 1-sigma (rad or m).
+    pub zero_offsets: Vec<f64>,
+    /// The tool frame's (in the tool frame), when measured.
+    pub tool: Option<FrameSigma>,
+}
+
+/// The derived quantities as one vector (couplings' parameters, zero offsets, tool frame
+/// translation \[m\] and rotation \[rad\]) with the layout to read it back.
+#[derive(Clone, Debug)]
+pub(super) struct Derived {
+    /// Couplings' parameters, then zero offsets.
+    pub(super) values: Vec<f64>,
+    /// Number of parameters of each coupling.
+    pub(super) coupling_sizes: Vec<usize>,
+    /// The tool frame in the last link.
+    pub(super) tool: Option<Isometry3<f64>>,
+}
+
+impl Derived {
+    /// `(self - other) / step` as a column: the values, then the tool frame's translation
+    /// and rotation vector, both in the tool frame of `other`.
+    pub(super) fn difference(&self, other: &Derived, step: f64) -> Vec<f64> {
+        let mut d: Vec<f64> = self
+            .values
+            .iter()
+            .zip(&other.values)
+            .map(|(a, b)| (a - b) / step)
+            .collect();
+        if let (Some(a), Some(b)) = (self.tool, other.tool) {
+            let rel = b.inverse() * a;
+            d.extend(rel.translation.vector.iter().map(|x| x / step));
+            d.extend(rel.rotation.scaled_axis().iter().map(|x| x / step));
+        }
+        d
+    }
+
+    /// The 1-sigma of every derived quantity from the diagonal of their covariance `c`.
+    pub(super) fn sigma(&self, c: &DMatrix<f64>) -> DerivedSigma {
+        let s = |i: usize| c[(i, i)].max(0.0).sqrt();
+        let mut at = 0;
+        let mut couplings = Vec::new();
+        for &n in &self.coupling_sizes {
+            couplings.push((at..at + n).map(s).collect());
+            at += n;
+        }
+        let zero_offsets = (at..self.values.len()).map(s).collect();
+        let t = self.values.len();
+        let tool = self.tool.map(|_| FrameSigma {
+            x_mm: s(t) * 1e3,
+            y_mm: s(t + 1) * 1e3,
+            z_mm: s(t + 2) * 1e3,
+            rx_mrad: s(t + 3) * 1e3,
+            ry_mrad: s(t + 4) * 1e3,
+            rz_mrad: s(t + 5) * 1e3,
+        });
+        DerivedSigma {
+            couplings,
+            zero_offsets,
+            tool,
+        }
+    }
+}
+
+/// Accumulates `J C J^T` from central differences: `eval(delta)` is the derived vector at
+/// inputs moved by `delta` along one input direction.
+pub(super) struct Propagation {
+    /// The running covariance.
+    pub(super) covariance: DMatrix<f64>,
+}
+
+impl Propagation {
+    /// An empty sum for `n` derived quantities.
+    pub(super) fn new(n: usize) -> Self {
+        Propagation {
+            covariance: DMatrix::zeros(n, n),
+        }
+    }
+
+    /// Adds `J C J^T` for inputs with covariance `c`: column `k` of `J` from
+    /// `eval(k, +h_k)` and `eval(k, -h_k)`, `h_k = 1e-3 sqrt(c_kk)` (far below the curvature
+    /// scale, the parameters move by a thousandth of their sigma; well above rounding at
+    /// the metre and radian scale of the inputs, 1e-3 sigma >= 1e-9 for any sigma >= 1 um).
+    pub(super) fn add<E>(
+        &mut self,
+        c: &DMatrix<f64>,
+        mut eval: impl FnMut(usize, f64) -> Result<Derived, E>,
+    ) -> Result<(), E> {
+        let n = self.covariance.nrows();
+        let mut jac = DMatrix::<f64>::zeros(n, c.nrows());
+        for k in 0..c.nrows() {
+            if c[(k, k)] <= 0.0 {
+                continue;
+            }
+            let h = 1e-3 * c[(k, k)].sqrt();
+            let (p, m) = (eval(k, h)?, eval(k, -h)?);
+            for (r, v) in p.difference(&m, 2.0 * h).into_iter().enumerate().take(n) {
+                jac[(r, k)] = v;
+            }
+        }
+        self.covariance += &jac * c * jac.transpose();
+        Ok(())
+    }
+
+    /// Adds `sigma^2 J J^T` for `count` independent inputs of 1-sigma `sigma`.
+    pub(super) fn add_independent<E>(
+        &mut self,
+        count: usize,
+        sigma: f64,
+        eval: impl FnMut(usize, f64) -> Result<Derived, E>,
+    ) -> Result<(), E> {
+        if count == 0 || sigma <= 0.0 {
+            return Ok(());
+        }
+        self.add(&DMatrix::from_diagonal_element(count, count, sigma * sigma), eval)
+    }
+}
+
+/// `points` with coordinate `k % 3` of point `at[k / 3]` (list, index) moved by `h`.
+pub(super) fn moved_point(
+    points: &[Vec<Point3<f64>>],
+    at: &[(usize, usize)],
+    k: usize,
+    h: f64,
+) -> Vec<Vec<Point3<f64>>> {
+    let mut out = points.to_vec();
+    let (list, i) = at[k / 3];
+    out[list][i] += Vector3::ith(k % 3, h);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A derived vector that is a known function of two inputs `x`: values
+    /// `[x0 + 2 x1, x0 x1]`, no tool.
+    fn derived_of(x: [f64; 2]) -> Derived {
+        Derived {
+            values: vec![x[0] + 2.0 * x[1], x[0] * x[1]],
+            coupling_sizes: vec![2],
+            tool: None,
+        }
+    }
+
+    /// The central differences of `add` against the analytic `J C J^T` (J = [[1, 2], [x1,
+    /// x0]]): agreement to rounding of the steps (the first row is linear, the second
+    /// bilinear: central differences are exact up to rounding, ~1e-16 / 1e-3 relative).
+    #[test]
+    fn propagation_matches_the_analytic_jacobian() {
+        let x = [0.3, -1.7];
+        let c = DMatrix::from_row_slice(2, 2, &[4e-6, 1e-6, 1e-6, 9e-6]);
+        let mut p = Propagation::new(2);
+        p.add(&c, |k, h| {
+            let mut y = x;
+            y[k] += h;
+            Ok::<_, ()>(derived_of(y))
+        })
+        .unwrap();
+        let j = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, x[1], x[0]]);
+        let expected = &j * &c * j.transpose();
+        assert!((&p.covariance - &expected).abs().max() <= 1e-9 * expected.abs().max());
+        let s = derived_of(x).sigma(&p.covariance);
+        assert_eq!(s.couplings.len(), 1);
+        assert!((s.couplings[0][0] - expected[(0, 0)].sqrt()).abs() < 1e-12);
+    }
+
+    /// Independent inputs: `sigma^2 J J^T`; a tool frame moved along x and about z gives
+    /// exactly those columns.
+    #[test]
+    fn independent_inputs_and_tool_columns() {
+        let tool = |h: f64, which: usize| Derived {
+            values: vec![],
+            coupling_sizes: vec![],
+            tool: Some(if which == 0 {
+                Isometry3::translation(h, 0.0, 0.0)
+            } else {
+                Isometry3::rotation(Vector3::z() * h)
+            }),
+        };
+        let mut p = Propagation::new(6);
+        p.add_independent(2, 0.01, |k, h| Ok::<_, ()>(tool(h, k))).unwrap();
+        let s = tool(0.0, 0).sigma(&p.covariance).tool.unwrap();
+        assert!((s.x_mm - 10.0).abs() < 1e-9 && (s.rz_mrad - 10.0).abs() < 1e-9, "{s:?}");
+        assert!(s.y_mm.abs() < 1e-9 && s.rx_mrad.abs() < 1e-9, "{s:?}");
+        let moved = moved_point(&[vec![Point3::origin(); 2]], &[(0, 1)], 2, 0.5);
+        assert_eq!(moved[0][1], Point3::new(0.0, 0.0, 0.5));
+    }
+}
