@@ -253,13 +253,15 @@ fn errors_of(file: &Path) -> (String, Vec<String>) {
 
 /// Keys whose value is a list of numbers that is not positional: a vector in a stated frame
 /// (`x, y, z`), a quaternion, a per-joint or per-coefficient list, a matrix.
-const NUMBER_LISTS: [&str; 22] = [
+const NUMBER_LISTS: [&str; 25] = [
     "gravity_m_s2",
     "stiffness_nm_per_rad",
     "translation_mm",
     "rpy_deg",
     "rotation_xyzw",
     "point_mm",
+    "com_mm",
+    "com_in_tool_mm",
     "direction",
     "u",
     "v",
@@ -271,6 +273,7 @@ const NUMBER_LISTS: [&str; 22] = [
     "coefficient_sigma",
     "parameters",
     "sigma",
+    "fit_only_sigma",
     "reference_cmd",
     "left_station_m",
     "right_station_m",
