@@ -105,43 +105,7 @@ pub fn run(args: Args) -> Result<()> {
     let source = args.data.display().to_string();
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
-        let progress = super::progress::Progress::stage("diagnosing the axes");
-        let d = diagnose_axes_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
-        drop(progress);
-        let report = Report {
-            out: &args.out,
-            json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
-            markdown: axes_markdown(&d, &source),
-            plot_files: &AXES_PLOT_FILES,
-            outputs: &outputs,
-        };
-        let written = report.write(|dir| write_axes_plots(&d, dir))?;
-        say!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
-        if noise_source == "estimated" {
-            say!(
-                "  the noise was estimated from these same arcs: only an axis far worse than the others can be flagged; \
-                 give --noise-mm for a test against the instrument's noise"
-            );
-        }
-        for w in &d.where_ {
-            say!(
-                "  {:<10} joint {}  residual {:.4} mm  noise only {:.4} mm  ratio {:.2}{}",
-                w.experiment,
-                w.joint.map_or("-".into(), |j| j.to_string()),
-                w.residual_rms_mm,
-                w.noise_only_rms_mm,
-                w.excess_ratio,
-                if d.flagged.iter().any(|f| f.experiment == w.experiment) {
-                    "  beyond noise"
-                } else {
-                    ""
-                }
-            );
-        }
-        say!("{}: {}", d.outcome.effect, d.verdict);
-        say!("wrote {written}");
-        super::emit_json(&args.out.join("diagnosis.json"))?;
-        return record(&args, &desc, &set, &format!("{}: {}", d.outcome.effect, d.verdict));
+        return run_axes(&args, &desc, &set, &options, &outputs, noise_source);
     }
     let progress = super::progress::Progress::stage("diagnosing");
     let mut d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
@@ -176,6 +140,55 @@ pub fn run(args: Args) -> Result<()> {
     say!("wrote {written}");
     super::emit_json(&args.out.join("diagnosis.json"))?;
     record(&args, &desc, &set, &format!("{headline}. {}", d.verdict))
+}
+
+/// `axiscal diagnose` on a campaign without validation poses: the axis experiments only.
+fn run_axes(
+    args: &Args,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    options: &DiagnosisOptions,
+    outputs: &Outputs,
+    noise_source: &str,
+) -> Result<()> {
+    let source = args.data.display().to_string();
+    let progress = super::progress::Progress::stage("diagnosing the axes");
+    let d = diagnose_axes_with(set, desc, options, &progress).with_context(|| format!("diagnosing {source}"))?;
+    drop(progress);
+    let report = Report {
+        out: &args.out,
+        json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
+        markdown: axes_markdown(&d, &source),
+        plot_files: &AXES_PLOT_FILES,
+        outputs,
+    };
+    let written = report.write(|dir| write_axes_plots(&d, dir))?;
+    say!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
+    if noise_source == "estimated" {
+        say!(
+            "  the noise was estimated from these same arcs: only an axis far worse than the others can be flagged; \
+             give --noise-mm for a test against the instrument's noise"
+        );
+    }
+    for w in &d.where_ {
+        say!(
+            "  {:<10} joint {}  residual {:.4} mm  noise only {:.4} mm  ratio {:.2}{}",
+            w.experiment,
+            w.joint.map_or("-".into(), |j| j.to_string()),
+            w.residual_rms_mm,
+            w.noise_only_rms_mm,
+            w.excess_ratio,
+            if d.flagged.iter().any(|f| f.experiment == w.experiment) {
+                "  beyond noise"
+            } else {
+                ""
+            }
+        );
+    }
+    say!("{}: {}", d.outcome.effect, d.verdict);
+    say!("wrote {written}");
+    super::emit_json(&args.out.join("diagnosis.json"))?;
+    record(args, desc, set, &format!("{}: {}", d.outcome.effect, d.verdict))
 }
 
 /// The noise of the diagnosis \[mm\] and its source: `--noise-mm`, or the estimate from the
