@@ -139,7 +139,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     say!("wrote {written}");
     super::emit_json(&args.out.join("diagnosis.json"))?;
-    record(&args, &desc, &set, &format!("{headline}. {}", d.verdict))
+    record(&args, &desc, &set, noise_mm, &format!("{headline}. {}", d.verdict))
 }
 
 /// `axiscal diagnose` on a campaign without validation poses: the axis experiments only.
@@ -188,7 +188,13 @@ fn run_axes(
     say!("{}: {}", d.outcome.effect, d.verdict);
     say!("wrote {written}");
     super::emit_json(&args.out.join("diagnosis.json"))?;
-    record(args, desc, set, &format!("{}: {}", d.outcome.effect, d.verdict))
+    record(
+        args,
+        desc,
+        set,
+        options.noise_rms_3d_mm,
+        &format!("{}: {}", d.outcome.effect, d.verdict),
+    )
 }
 
 /// The noise of the diagnosis \[mm\] and its source: `--noise-mm`, or the estimate from the
@@ -219,14 +225,15 @@ fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(
     Ok((e.rms_3d_mm, "estimated"))
 }
 
-/// The `--record` recording of the diagnosed data (the standard calibration, the verdict in
-/// the notes); nothing without `--record`.
+/// The `--record` recording of the diagnosed data (the standard calibration, weighted first
+/// with the diagnosis's noise `noise_mm` and estimating it again when `--noise-mm` is not
+/// given; the verdict in the notes); nothing without `--record`.
 #[cfg_attr(not(feature = "viz"), allow(unused_variables))]
-fn record(args: &Args, desc: &RobotDescription, set: &MeasurementSet, verdict: &str) -> Result<()> {
+fn record(args: &Args, desc: &RobotDescription, set: &MeasurementSet, noise_mm: f64, verdict: &str) -> Result<()> {
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
         let options = axiscal::calibration::procedure::CalibrationOptions {
-            noise_rms_3d_mm: args.noise_mm.unwrap_or_default(),
+            noise_rms_3d_mm: noise_mm,
             estimate_noise: args.noise_mm.is_none(),
             ..Default::default()
         };
