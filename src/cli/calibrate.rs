@@ -177,13 +177,7 @@ pub fn run(args: Args) -> Result<()> {
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
-    let set = checks::read_data(
-        &args.data,
-        &desc,
-        &args.robot,
-        args.checks.allow_other_robot,
-        args.checks.skip_unit_check,
-    )?;
+    let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     let options = CalibrationOptions {
         estimator: args.estimator,
         noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),

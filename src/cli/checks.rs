@@ -138,17 +138,17 @@ pub fn read_calibration(path: &Path, desc: &RobotDescription, robot: &Path, allo
 }
 
 /// The measurement CSV `data` for the description `desc` read from `robot`: the robot it
-/// records must be `desc` unless `allow` ([`same_robot`]), its units are checked unless
-/// `skip_units` ([`data_units`]).
-pub fn read_data(
-    data: &Path,
-    desc: &RobotDescription,
-    robot: &Path,
-    allow: bool,
-    skip_units: bool,
-) -> Result<MeasurementSet> {
-    same_robot(data_identity(data).as_ref(), data, desc, robot, allow)?;
+/// records must be `desc` unless `overrides.allow_other_robot` ([`same_robot`]), its units are
+/// checked unless `overrides.skip_unit_check` ([`data_units`]).
+pub fn read_data(data: &Path, desc: &RobotDescription, robot: &Path, overrides: Overrides) -> Result<MeasurementSet> {
+    same_robot(
+        data_identity(data).as_ref(),
+        data,
+        desc,
+        robot,
+        overrides.allow_other_robot,
+    )?;
     let set = axiscal::measurement::read_measurements(data, Some(desc.dof()))?;
-    data_units(&set, desc, data, skip_units)?;
+    data_units(&set, desc, data, overrides.skip_unit_check)?;
     Ok(set)
 }

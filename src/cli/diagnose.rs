@@ -81,13 +81,7 @@ pub fn run(args: Args) -> Result<()> {
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
-    let set = checks::read_data(
-        &args.data,
-        &desc,
-        &args.robot,
-        args.checks.allow_other_robot,
-        args.checks.skip_unit_check,
-    )?;
+    let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     let (noise_mm, noise_source) = noise(&args, &set, &desc)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: noise_mm,
