@@ -6,7 +6,7 @@
 use super::axis_fit::actuator_commands;
 use super::{AxisExperiment, CouplingReport, ProcedureError};
 use crate::calibration::CalibrationError;
-use crate::calibration::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
+use crate::calibration::coupling_fit::{CouplingForm, fit_coupling, passive_displacements, refit_coupling};
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, CouplingFitForm, CouplingFunction, JointModel, RobotDescription, Transmission};
 use nalgebra::Point3;
@@ -29,6 +29,9 @@ pub(super) struct Assembly<'a> {
     pub(super) q_ref: &'a [f64],
     /// The actuator commands at the reference pose (rad).
     pub(super) u_ref: &'a [f64],
+    /// The couplings' parameters of a previous assembly of nearly the same data, by driven
+    /// joint (0-based): refitted by Gauss-Newton steps from those instead of from scratch.
+    pub(super) warm: Option<&'a [Option<Vec<f64>>]>,
 }
 
 impl Assembly<'_> {
@@ -200,7 +203,11 @@ impl Assembly<'_> {
                 (cform, gear_passive_start(slope, order, &active, &passive))
             }
         };
-        let fit = fit_coupling(&cform, &active, &passive, passive_start).map_err(fit_err)?;
+        let fit = match self.warm.and_then(|w| w[k].as_deref()) {
+            Some(x0) => refit_coupling(&cform, &active, &passive, passive_start, x0),
+            None => fit_coupling(&cform, &active, &passive, passive_start),
+        }
+        .map_err(fit_err)?;
         couplings.push(CouplingReport::new(from, e, &fit, &cform));
         Ok(fit.function)
     }

@@ -487,7 +487,7 @@ impl<'a> Context<'a> {
             .iter()
             .map(|f| f.as_ref().map(|f| f.transmission.clone()))
             .collect();
-        let (geometry, base_rule, joints, couplings) = self.joints_from(&axes, &transmissions, target1)?;
+        let (geometry, base_rule, joints, couplings) = self.joints_from(&axes, &transmissions, target1, None)?;
         let robot = calibrated_robot(self.desc, joints, &geometry);
         Ok(Assembled {
             fits,
@@ -544,12 +544,15 @@ impl<'a> Context<'a> {
 
     /// The phi-model of the fitted `axes` (with its base rule) and the joint models and
     /// fitted couplings on it, from the fitted `transmissions` and the second targets
-    /// `target1`.
+    /// `target1`. With `warm` (the couplings' parameters of a previous assembly, by driven
+    /// joint) the couplings are refitted by Gauss-Newton steps from those
+    /// ([`crate::calibration::coupling_fit::refit_coupling`]).
     fn joints_from(
         &self,
         axes: &[Option<AxisLine>],
         transmissions: &[Option<Transmission>],
         target1: &[Vec<Point3<f64>>],
+        warm: Option<&[Option<Vec<f64>>]>,
     ) -> Result<(PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
         let (geometry, base_rule) = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
         let assembly = Assembly {
@@ -561,6 +564,7 @@ impl<'a> Context<'a> {
             geometry: &geometry,
             q_ref: self.q_ref,
             u_ref: self.u_ref,
+            warm,
         };
         let (joints, couplings) = assembly.joint_models()?;
         Ok((geometry, base_rule, joints, couplings))
@@ -568,32 +572,47 @@ impl<'a> Context<'a> {
 
     /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
     /// `axes` and `transmissions`, the second targets `target1` and the tool targets `tool`
-    /// (measured at the reference pose) give.
+    /// (measured at the reference pose) give; couplings refitted from `warm` as in
+    /// [`Context::joints_from`]. With the calibrated robot, for [`Context::with_tool`].
     fn derived(
         &self,
-        axes: &[Option<AxisLine>],
-        transmissions: &[Option<Transmission>],
+        (axes, transmissions): (&[Option<AxisLine>], &[Option<Transmission>]),
         target1: &[Vec<Point3<f64>>],
         tool: Option<&[Point3<f64>]>,
         reference_cmd: &[f64],
-    ) -> Result<Derived, ProcedureError> {
-        let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1)?;
+        warm: Option<&[Option<Vec<f64>>]>,
+    ) -> Result<(Derived, RobotModel), ProcedureError> {
+        let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1, warm)?;
         let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
         values.extend(joints.iter().map(|j| j.transducer_offset));
-        let tool = tool.and_then(|measured| {
-            let robot = calibrated_robot(self.desc, joints, &geometry);
-            last_link_from_tool(measured, self.desc, &robot, reference_cmd, self.controller).map(|(f, _)| f)
-        });
-        Ok(Derived {
+        let robot = calibrated_robot(self.desc, joints, &geometry);
+        let derived = Derived {
             values,
             coupling_sizes: couplings.iter().map(|c| c.parameters.len()).collect(),
-            tool,
-        })
+            tool: None,
+        };
+        Ok((self.with_tool(derived, &robot, tool, reference_cmd), robot))
+    }
+
+    /// `derived` with the tool frame of `robot` from the tool targets `tool` (none without).
+    fn with_tool(
+        &self,
+        derived: Derived,
+        robot: &RobotModel,
+        tool: Option<&[Point3<f64>]>,
+        reference_cmd: &[f64],
+    ) -> Derived {
+        let tool = tool.and_then(|measured| {
+            last_link_from_tool(measured, self.desc, robot, reference_cmd, self.controller).map(|(f, _)| f)
+        });
+        Derived { tool, ..derived }
     }
 
     /// The propagated 1-sigma of the derived quantities of `state` (`propagation`): through
     /// every ML axis fit's covariance, the noise of the second targets the couplings are
-    /// fitted from, and that of the tool targets.
+    /// fitted from, and that of the tool targets. The perturbed assemblies refit the couplings
+    /// by Gauss-Newton steps from `state`'s (their first-order response, which is what the
+    /// propagation differentiates); the tool targets move only the tool frame.
     fn derived_sigma(
         &self,
         set: &MeasurementSet,
@@ -608,7 +627,12 @@ impl<'a> Context<'a> {
         let tool_points = tool_observation(set, self.desc, reference_cmd).map(|o| o.measured);
         let tool = tool_points.as_deref();
         let (axes, target1) = (&state.axes, &state.target1);
-        let base = self.derived(axes, &transmissions, target1, tool, reference_cmd)?;
+        let mut warm: Vec<Option<Vec<f64>>> = vec![None; self.desc.dof()];
+        for c in &state.couplings {
+            warm[c.from] = Some(c.parameters.clone());
+        }
+        let warm = Some(warm.as_slice());
+        let (base, robot) = self.derived((axes, &transmissions), target1, tool, reference_cmd, None)?;
         let mut prop = Propagation::new(base.values.len() + if base.tool.is_some() { 6 } else { 0 });
         for (k, local) in state.fits.iter().enumerate() {
             let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {
@@ -621,7 +645,7 @@ impl<'a> Context<'a> {
                 let (mut a, mut t) = (axes.clone(), transmissions.clone());
                 a[k] = Some(axis);
                 t[k] = Some(transmission);
-                self.derived(&a, &t, target1, tool, reference_cmd)
+                Ok::<_, ProcedureError>(self.derived((&a, &t), target1, tool, reference_cmd, warm)?.0)
             })?;
         }
         let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
@@ -633,15 +657,13 @@ impl<'a> Context<'a> {
             .filter(|(_, e)| state.couplings.iter().any(|c| c.experiment == e.name))
             .flat_map(|(i, _)| (0..target1[i].len()).map(move |j| (i, j)))
             .collect();
-        prop.add_independent(3 * used.len(), sigma, |k, h| {
-            self.derived(
-                axes,
-                &transmissions,
-                &moved_point(target1, &used, k, h),
-                tool,
-                reference_cmd,
+        let moved = |target1: &[Vec<Point3<f64>>]| {
+            Ok::<_, ProcedureError>(
+                self.derived((axes, &transmissions), target1, tool, reference_cmd, warm)?
+                    .0,
             )
-        })?;
+        };
+        prop.add_independent(3 * used.len(), sigma, |k, h| moved(&moved_point(target1, &used, k, h)))?;
         // The swept joint's repeatability turns each second target about its axis, step by
         // step (independent angle noise, as for the axis fits).
         let jitter: Vec<(usize, usize)> = used
@@ -658,16 +680,14 @@ impl<'a> Context<'a> {
                 moved[i][j] = o + nalgebra::UnitQuaternion::from_axis_angle(&axis.direction, h) * (moved[i][j] - o);
                 moved
             };
-            prop.add_independent(1, self.repeatability[joint], |_, h| {
-                self.derived(axes, &transmissions, &turn(h), tool, reference_cmd)
-            })?;
+            prop.add_independent(1, self.repeatability[joint], |_, h| moved(&turn(h)))?;
         }
         if let Some(points) = &tool_points {
             let lists = vec![points.clone()];
             let at: Vec<(usize, usize)> = (0..points.len()).map(|j| (0, j)).collect();
             prop.add_independent(3 * points.len(), sigma, |k, h| {
                 let moved = moved_point(&lists, &at, k, h);
-                self.derived(axes, &transmissions, target1, Some(&moved[0]), reference_cmd)
+                Ok::<_, ProcedureError>(self.with_tool(base.clone(), &robot, Some(&moved[0]), reference_cmd))
             })?;
         }
         Ok(base.sigma(&prop.covariance))
