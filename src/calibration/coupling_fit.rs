@@ -302,16 +302,20 @@ pub fn refit_coupling(
     }
     let target: Vec<f64> = passive_from_start_rad.iter().map(|y| y + passive_start_rad).collect();
     let mut x = DVector::from_column_slice(x0);
-    let (mut r, mut j) = residuals_and_jacobian(form, active_rad, &target, &x)?;
-    for _ in 0..if m == 0 { 0 } else { REFIT_STEPS } {
-        let (step, _, _) = lsq::linear_lsq(&j, &(-&r), FIT)?;
-        x += step;
-        (r, j) = residuals_and_jacobian(form, active_rad, &target, &x)?;
+    let mut r = DVector::zeros(0);
+    for step in 0..=if m == 0 { 0 } else { REFIT_STEPS } {
+        let (residuals, j) = residuals_and_jacobian(form, active_rad, &target, &x)?;
+        r = residuals;
+        if step < REFIT_STEPS && m > 0 {
+            x += lsq::linear_lsq(&j, &(-&r), FIT)?.0;
+        }
     }
+    // No a-posteriori sigma: a refit's only reader is the propagation, which takes the
+    // parameters (inverting the normal matrix again would cost a tenth of a calibration).
     Ok(CouplingFit {
         function: build(form, x.as_slice()),
         parameters: x.iter().copied().collect(),
-        sigma: a_posteriori_sigma(&r, &j, n, m)?,
+        sigma: vec![f64::NAN; m],
         residual_rms_rad: (r.norm_squared() / n as f64).sqrt(),
     })
 }

@@ -74,7 +74,7 @@ pub(super) struct RecordedCoupling {
 
 impl RecordedCoupling {
     /// The active motion since step 0 (rad).
-    pub(super) fn from_start(&self) -> Vec<f64> {
+    pub(super) fn active_from_start(&self) -> Vec<f64> {
         self.active.iter().map(|a| a - self.active[0]).collect()
     }
 

@@ -711,7 +711,7 @@ impl<'a> Context<'a> {
             source,
         };
         let second = &target1[coupling.index];
-        let from_start = coupling.from_start();
+        let from_start = coupling.active_from_start();
         let passive =
             passive_displacements(&coupling.frame_next, &coupling.axis_from, &from_start, second).map_err(fit_err)?;
         let gradients = passive_angle_gradients(&coupling.frame_next, &coupling.axis_from, &from_start, second);
