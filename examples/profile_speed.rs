@@ -8,33 +8,12 @@
 use axiscal::calibration::fit_circle;
 use axiscal::calibration::procedure::{CalibrationOptions, Detail, calibrate, calibrate_model};
 use axiscal::harness::scenario::{CampaignTrial, Overrides, ResolvedScenario, Trial, trial_seed};
-use axiscal::measurement::{MeasurementModel, MeasurementSet};
-use axiscal::plan::{CalibrationPlan, ValidationPlan};
-use axiscal::robot::{Controller, RobotDescription};
-use axiscal::sim::{AnalyticArm, simulate_campaign};
-use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::hint::black_box;
 use std::path::Path;
 
-fn campaign() -> (RobotDescription, MeasurementSet) {
-    let desc = RobotDescription::asea_irb6l();
-    let mut arm = AnalyticArm::new(axiscal::sim::paper_robot(), Controller::from_description(&desc));
-    let validation = ValidationPlan {
-        poses: 0,
-        ..ValidationPlan::workspace_default(6)
-    };
-    let out = simulate_campaign(
-        &desc,
-        &CalibrationPlan::table1(6),
-        &validation,
-        &mut arm,
-        &MeasurementModel::paper_isotropic(),
-        &mut ChaCha12Rng::seed_from_u64(1),
-    )
-    .expect("the paper campaign simulates");
-    let set = MeasurementSet::new(6, out.rows).expect("consistent rows");
-    (desc, set)
-}
+#[path = "../benches/table1/mod.rs"]
+mod table1;
+use table1::{campaign, target0_sweeps};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -42,18 +21,7 @@ fn main() {
     let n: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10);
     let (desc, set) = campaign();
     let options = CalibrationOptions::default();
-    let sweeps: Vec<Vec<nalgebra::Point3<f64>>> = set
-        .experiments()
-        .iter()
-        .filter(|e| e.moved_joint > 0)
-        .map(|e| {
-            e.rows
-                .iter()
-                .filter(|r| r.target == 0)
-                .map(|r| r.position_m())
-                .collect()
-        })
-        .collect();
+    let sweeps = target0_sweeps(&set);
     let scenario = ResolvedScenario::from_file(
         Path::new("scenarios/paper.toml"),
         Overrides {

@@ -223,6 +223,24 @@ fn a_posteriori_sigma(r: &DVector<f64>, j: &DMatrix<f64>, n: usize, m: usize) ->
     })
 }
 
+/// The absolute passive angles `passive_start + y_j` the eq. (15) fit is fitted to, checked
+/// to be one per active angle (`n`).
+fn absolute_targets(
+    n: usize,
+    passive_from_start_rad: &[f64],
+    passive_start_rad: f64,
+) -> Result<Vec<f64>, CalibrationError> {
+    if passive_from_start_rad.len() != n {
+        return Err(CalibrationError::LengthMismatch {
+            fit: FIT,
+            what: "passive displacements",
+            got: passive_from_start_rad.len(),
+            expected: n,
+        });
+    }
+    Ok(passive_from_start_rad.iter().map(|y| y + passive_start_rad).collect())
+}
+
 /// Fit eq. (15): `active_rad[j]` = absolute active displacement of joint `i`,
 /// `passive_from_start_rad[j]` = passive displacement of joint `i+1` since step 0,
 /// `passive_start_rad` = its absolute value at step 0.
@@ -233,15 +251,7 @@ pub fn fit_coupling(
     passive_start_rad: f64,
 ) -> Result<CouplingFit, CalibrationError> {
     let n = active_rad.len();
-    if passive_from_start_rad.len() != n {
-        return Err(CalibrationError::LengthMismatch {
-            fit: FIT,
-            what: "passive displacements",
-            got: passive_from_start_rad.len(),
-            expected: n,
-        });
-    }
-    let target: Vec<f64> = passive_from_start_rad.iter().map(|y| y + passive_start_rad).collect();
+    let target = absolute_targets(n, passive_from_start_rad, passive_start_rad)?;
     let x0 = initial_parameters(form, active_rad, &target)?;
     let m = x0.len();
     if n <= m {
@@ -292,15 +302,7 @@ pub fn refit_coupling(
     x0: &[f64],
 ) -> Result<CouplingFit, CalibrationError> {
     let (n, m) = (active_rad.len(), x0.len());
-    if passive_from_start_rad.len() != n {
-        return Err(CalibrationError::LengthMismatch {
-            fit: FIT,
-            what: "passive displacements",
-            got: passive_from_start_rad.len(),
-            expected: n,
-        });
-    }
-    let target: Vec<f64> = passive_from_start_rad.iter().map(|y| y + passive_start_rad).collect();
+    let target = absolute_targets(n, passive_from_start_rad, passive_start_rad)?;
     let mut x = DVector::from_column_slice(x0);
     let mut r = DVector::zeros(0);
     for step in 0..=if m == 0 { 0 } else { REFIT_STEPS } {
@@ -365,10 +367,10 @@ mod tests {
     use approx::assert_relative_eq;
     use nalgebra::{Unit, Vector3};
 
-    #[test]
-    fn recovers_the_paper_four_bar_and_bevel_gear() {
-        let t: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
-        let cases = [
+    /// The paper's four-bar (fractional form) and bevel gear couplings with the forms that
+    /// fit them, and their parameters in the fits' order.
+    fn paper_couplings() -> [(CouplingForm, CouplingFunction, Vec<f64>); 2] {
+        [
             (
                 CouplingForm::Fractional,
                 CouplingFunction::Fractional {
@@ -390,7 +392,13 @@ mod tests {
                 },
                 vec![32.0 / 19.0, -0.040562, 0.000018],
             ),
-        ];
+        ]
+    }
+
+    #[test]
+    fn recovers_the_paper_four_bar_and_bevel_gear() {
+        let t: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
+        let cases = paper_couplings();
         for (form, truth, params) in cases {
             let g: Vec<f64> = t.iter().map(|x| truth.passive(*x)).collect();
             let y: Vec<f64> = g.iter().map(|v| v - g[0]).collect();
@@ -411,28 +419,8 @@ mod tests {
     fn gauss_newton_refit_is_the_response_of_the_fit() {
         use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
         let t: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
-        let forms = [
-            (
-                CouplingForm::Fractional,
-                CouplingFunction::Fractional {
-                    num: [-0.998132, 0.213253, -0.212863],
-                    den: [0.096654, -0.0006941],
-                },
-            ),
-            (
-                CouplingForm::Gear {
-                    ratio: 1.6,
-                    fit_ratio: true,
-                    order: 1,
-                },
-                CouplingFunction::Gear {
-                    ratio: 32.0 / 19.0,
-                    sin: vec![-0.040562],
-                    cos: vec![0.000018],
-                },
-            ),
-        ];
-        for (seed, (form, truth)) in forms.iter().enumerate() {
+        let forms = paper_couplings();
+        for (seed, (form, truth, _)) in forms.iter().enumerate() {
             let mut rng = ChaCha12Rng::seed_from_u64(seed as u64 + 11);
             let noise_rad = 2e-4;
             let g: Vec<f64> = t
