@@ -4,50 +4,17 @@
 
 use axiscal::calibration::fit_circle;
 use axiscal::calibration::procedure::{CalibrationOptions, Detail, calibrate, calibrate_model};
-use axiscal::measurement::{MeasurementModel, MeasurementSet};
-use axiscal::plan::{CalibrationPlan, ValidationPlan};
-use axiscal::robot::{Controller, RobotDescription};
-use axiscal::sim::{AnalyticArm, simulate_campaign};
 use criterion::{Criterion, criterion_group, criterion_main};
-use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::hint::black_box;
 
 mod common;
-
-fn campaign() -> (RobotDescription, MeasurementSet) {
-    let desc = RobotDescription::asea_irb6l();
-    let mut arm = AnalyticArm::new(axiscal::sim::paper_robot(), Controller::from_description(&desc));
-    let validation = ValidationPlan {
-        poses: 0,
-        ..ValidationPlan::workspace_default(6)
-    };
-    let out = simulate_campaign(
-        &desc,
-        &CalibrationPlan::table1(6),
-        &validation,
-        &mut arm,
-        &MeasurementModel::paper_isotropic(),
-        &mut ChaCha12Rng::seed_from_u64(1),
-    )
-    .expect("the paper campaign simulates");
-    let set = MeasurementSet::new(6, out.rows).expect("consistent rows");
-    (desc, set)
-}
+#[path = "table1/mod.rs"]
+mod table1;
+use table1::{campaign, target0_sweeps};
 
 fn bench(c: &mut Criterion) {
     let (desc, set) = campaign();
-    let sweeps: Vec<Vec<nalgebra::Point3<f64>>> = set
-        .experiments()
-        .iter()
-        .filter(|e| e.moved_joint > 0)
-        .map(|e| {
-            e.rows
-                .iter()
-                .filter(|r| r.target == 0)
-                .map(|r| r.position_m())
-                .collect()
-        })
-        .collect();
+    let sweeps = target0_sweeps(&set);
     let mut g = c.benchmark_group("calibration");
     g.bench_function("baseline/six_circle_fits", |b| {
         b.iter(|| {

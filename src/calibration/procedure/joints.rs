@@ -6,10 +6,14 @@
 use super::axis_fit::actuator_commands;
 use super::{AxisExperiment, CouplingReport, ProcedureError};
 use crate::calibration::CalibrationError;
-use crate::calibration::coupling_fit::{CouplingForm, fit_coupling, passive_displacements};
+use crate::calibration::coupling_fit::{
+    CouplingForm, fit_coupling, fixed_coupling, passive_displacements, refit_coupling,
+};
+use crate::kinematics::AxisLine;
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, CouplingFitForm, CouplingFunction, JointModel, RobotDescription, Transmission};
-use nalgebra::Point3;
+use nalgebra::{Isometry3, Point3};
+use std::cell::RefCell;
 
 /// The fitted axes of a campaign and the reference pose the joint models are assembled from.
 pub(super) struct Assembly<'a> {
@@ -29,6 +33,65 @@ pub(super) struct Assembly<'a> {
     pub(super) q_ref: &'a [f64],
     /// The actuator commands at the reference pose (rad).
     pub(super) u_ref: &'a [f64],
+    /// How the couplings are fitted (from scratch, refitted, fixed) and whether their inputs
+    /// are recorded.
+    pub(super) refit: Refit<'a>,
+}
+
+/// How [`Assembly::joint_models`] fits the couplings: by default from scratch.
+#[derive(Clone, Copy, Default)]
+pub(super) struct Refit<'a> {
+    /// The couplings' parameters of a previous assembly of nearly the same data, by driven
+    /// joint (0-based): refitted by Gauss-Newton steps from those instead of from scratch
+    /// ([`refit_coupling`]).
+    pub(super) warm: Option<&'a [Option<Vec<f64>>]>,
+    /// The coupling into this joint (0-based) not fitted but set to these parameters.
+    pub(super) fixed: Option<(usize, &'a [f64])>,
+    /// Where to record every fitted coupling's inputs.
+    pub(super) record: Option<&'a RefCell<Vec<RecordedCoupling>>>,
+}
+
+/// A fitted coupling's inputs other than the second targets, and its parameters: refits it
+/// from moved second targets (the propagation's first-order response).
+pub(super) struct RecordedCoupling {
+    /// Driven joint (0-based).
+    pub(super) k: usize,
+    /// Index of the experiment whose second targets it is fitted from.
+    pub(super) index: usize,
+    /// Calibrated frame `k` at step 0 of the sweep.
+    pub(super) frame_next: Isometry3<f64>,
+    /// Calibrated axis `k-1`.
+    pub(super) axis_from: AxisLine,
+    /// Absolute active angles of the driving joint (rad).
+    pub(super) active: Vec<f64>,
+    /// The form fitted.
+    pub(super) form: CouplingForm,
+    /// The nominal slope (the fractional form's passive start is `slope * active[0]`).
+    pub(super) slope: f64,
+    /// The fitted parameters.
+    pub(super) parameters: Vec<f64>,
+}
+
+impl RecordedCoupling {
+    /// The active motion since step 0 (rad).
+    pub(super) fn active_from_start(&self) -> Vec<f64> {
+        self.active.iter().map(|a| a - self.active[0]).collect()
+    }
+
+    /// The parameters refitted ([`refit_coupling`]) to the passive displacements `passive`.
+    pub(super) fn refit(&self, passive: &[f64]) -> Result<Vec<f64>, CalibrationError> {
+        let start = passive_start(&self.form, self.slope, &self.active, passive);
+        Ok(refit_coupling(&self.form, &self.active, passive, start, &self.parameters)?.parameters)
+    }
+}
+
+/// The absolute passive angle at step 0 the coupling fit of `form` uses: the nominal
+/// coupling's for the fractional form, the harmonics' least squares for a gear.
+fn passive_start(form: &CouplingForm, slope: f64, active: &[f64], passive: &[f64]) -> f64 {
+    match *form {
+        CouplingForm::Fractional => slope * active[0],
+        CouplingForm::Gear { order, .. } => gear_passive_start(slope, order, active, passive),
+    }
 }
 
 impl Assembly<'_> {
@@ -189,18 +252,33 @@ impl Assembly<'_> {
         let axis_from = geometry.poses(q_ref).axis(k - 1);
         let t_from_start: Vec<f64> = active.iter().map(|a| a - active[0]).collect();
         let passive = passive_displacements(&frame_next, &axis_from, &t_from_start, second).map_err(fit_err)?;
-        let (cform, passive_start) = match form {
-            CouplingFitForm::Fractional => (CouplingForm::Fractional, slope * active[0]),
-            CouplingFitForm::Gear { order, fit_ratio } => {
-                let cform = CouplingForm::Gear {
-                    ratio: slope,
-                    fit_ratio,
-                    order,
-                };
-                (cform, gear_passive_start(slope, order, &active, &passive))
-            }
+        let cform = match form {
+            CouplingFitForm::Fractional => CouplingForm::Fractional,
+            CouplingFitForm::Gear { order, fit_ratio } => CouplingForm::Gear {
+                ratio: slope,
+                fit_ratio,
+                order,
+            },
         };
-        let fit = fit_coupling(&cform, &active, &passive, passive_start).map_err(fit_err)?;
+        let start = passive_start(&cform, slope, &active, &passive);
+        let fit = match (self.refit.fixed, self.refit.warm.and_then(|w| w[k].as_deref())) {
+            (Some((j, x)), _) if j == k => Ok(fixed_coupling(&cform, x)),
+            (_, Some(x0)) => refit_coupling(&cform, &active, &passive, start, x0),
+            _ => fit_coupling(&cform, &active, &passive, start),
+        }
+        .map_err(fit_err)?;
+        if let Some(record) = self.refit.record {
+            record.borrow_mut().push(RecordedCoupling {
+                k,
+                index,
+                frame_next,
+                axis_from,
+                active,
+                form: cform,
+                slope,
+                parameters: fit.parameters.clone(),
+            });
+        }
         couplings.push(CouplingReport::new(from, e, &fit, &cform));
         Ok(fit.function)
     }

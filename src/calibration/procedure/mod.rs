@@ -53,6 +53,7 @@ pub use urdf::{
 };
 
 use super::CalibrationError;
+use super::coupling_fit::{passive_angle_gradients, passive_displacements};
 use super::noise::{NoiseEstimate, estimate_noise};
 use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
@@ -60,10 +61,11 @@ use crate::robot::commands_to_internal;
 use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel, Transmission};
 use axis_fit::{AxisFitOutcome, JointData, actuator_commands, add_held_joint_covariances, fit_joint};
 use held::{Corrector, design_distance, exactly_as_designed};
-use joints::Assembly;
-use nalgebra::{Isometry3, Point3};
+use joints::{Assembly, RecordedCoupling, Refit};
+use nalgebra::{DMatrix, Isometry3, Point3};
 use propagation::{Derived, Propagation, moved_point};
 use serde::{Deserialize, Serialize};
+use std::cell::RefCell;
 
 /// Which rotary-axis estimator to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -487,7 +489,8 @@ impl<'a> Context<'a> {
             .iter()
             .map(|f| f.as_ref().map(|f| f.transmission.clone()))
             .collect();
-        let (geometry, base_rule, joints, couplings) = self.joints_from(&axes, &transmissions, target1)?;
+        let (geometry, base_rule, joints, couplings) =
+            self.joints_from(&axes, &transmissions, target1, Refit::default())?;
         let robot = calibrated_robot(self.desc, joints, &geometry);
         Ok(Assembled {
             fits,
@@ -544,12 +547,15 @@ impl<'a> Context<'a> {
 
     /// The phi-model of the fitted `axes` (with its base rule) and the joint models and
     /// fitted couplings on it, from the fitted `transmissions` and the second targets
-    /// `target1`.
+    /// `target1`. With `warm` (the couplings' parameters of a previous assembly, by driven
+    /// joint) the couplings are refitted by Gauss-Newton steps from those
+    /// ([`crate::calibration::coupling_fit::refit_coupling`]).
     fn joints_from(
         &self,
         axes: &[Option<AxisLine>],
         transmissions: &[Option<Transmission>],
         target1: &[Vec<Point3<f64>>],
+        refit: Refit,
     ) -> Result<(PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
         let (geometry, base_rule) = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
         let assembly = Assembly {
@@ -561,6 +567,7 @@ impl<'a> Context<'a> {
             geometry: &geometry,
             q_ref: self.q_ref,
             u_ref: self.u_ref,
+            refit,
         };
         let (joints, couplings) = assembly.joint_models()?;
         Ok((geometry, base_rule, joints, couplings))
@@ -568,32 +575,49 @@ impl<'a> Context<'a> {
 
     /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
     /// `axes` and `transmissions`, the second targets `target1` and the tool targets `tool`
-    /// (measured at the reference pose) give.
+    /// (measured at the reference pose) give; couplings refitted from `warm` as in
+    /// [`Context::joints_from`]. With the calibrated robot, for [`Context::with_tool`].
     fn derived(
         &self,
-        axes: &[Option<AxisLine>],
-        transmissions: &[Option<Transmission>],
+        (axes, transmissions): (&[Option<AxisLine>], &[Option<Transmission>]),
         target1: &[Vec<Point3<f64>>],
         tool: Option<&[Point3<f64>]>,
         reference_cmd: &[f64],
-    ) -> Result<Derived, ProcedureError> {
-        let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1)?;
+        refit: Refit,
+    ) -> Result<(Derived, RobotModel), ProcedureError> {
+        let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1, refit)?;
         let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
         values.extend(joints.iter().map(|j| j.transducer_offset));
-        let tool = tool.and_then(|measured| {
-            let robot = calibrated_robot(self.desc, joints, &geometry);
-            last_link_from_tool(measured, self.desc, &robot, reference_cmd, self.controller).map(|(f, _)| f)
-        });
-        Ok(Derived {
+        let robot = calibrated_robot(self.desc, joints, &geometry);
+        let derived = Derived {
             values,
             coupling_sizes: couplings.iter().map(|c| c.parameters.len()).collect(),
-            tool,
-        })
+            tool: None,
+        };
+        Ok((self.with_tool(derived, &robot, tool, reference_cmd), robot))
+    }
+
+    /// `derived` with the tool frame of `robot` from the tool targets `tool` (none without).
+    fn with_tool(
+        &self,
+        derived: Derived,
+        robot: &RobotModel,
+        tool: Option<&[Point3<f64>]>,
+        reference_cmd: &[f64],
+    ) -> Derived {
+        let tool = tool.and_then(|measured| {
+            last_link_from_tool(measured, self.desc, robot, reference_cmd, self.controller).map(|(f, _)| f)
+        });
+        Derived { tool, ..derived }
     }
 
     /// The propagated 1-sigma of the derived quantities of `state` (`propagation`): through
     /// every ML axis fit's covariance, the noise of the second targets the couplings are
-    /// fitted from, and that of the tool targets.
+    /// fitted from, and that of the tool targets. The perturbed assemblies refit the couplings
+    /// by Gauss-Newton steps from `state`'s (their first-order response, which is what the
+    /// propagation differentiates); the tool targets move only the tool frame; the second
+    /// targets move the rest only through their coupling's parameters
+    /// ([`Context::second_target_sigma`]).
     fn derived_sigma(
         &self,
         set: &MeasurementSet,
@@ -608,7 +632,20 @@ impl<'a> Context<'a> {
         let tool_points = tool_observation(set, self.desc, reference_cmd).map(|o| o.measured);
         let tool = tool_points.as_deref();
         let (axes, target1) = (&state.axes, &state.target1);
-        let base = self.derived(axes, &transmissions, target1, tool, reference_cmd)?;
+        let mut warm: Vec<Option<Vec<f64>>> = vec![None; self.desc.dof()];
+        for c in &state.couplings {
+            warm[c.from] = Some(c.parameters.clone());
+        }
+        let record = RefCell::new(Vec::new());
+        let recording = Refit {
+            record: Some(&record),
+            ..Refit::default()
+        };
+        let (base, robot) = self.derived((axes, &transmissions), target1, tool, reference_cmd, recording)?;
+        let warm = Refit {
+            warm: Some(&warm),
+            ..Refit::default()
+        };
         let mut prop = Propagation::new(base.values.len() + if base.tool.is_some() { 6 } else { 0 });
         for (k, local) in state.fits.iter().enumerate() {
             let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {
@@ -621,56 +658,96 @@ impl<'a> Context<'a> {
                 let (mut a, mut t) = (axes.clone(), transmissions.clone());
                 a[k] = Some(axis);
                 t[k] = Some(transmission);
-                self.derived(&a, &t, target1, tool, reference_cmd)
+                Ok::<_, ProcedureError>(self.derived((&a, &t), target1, tool, reference_cmd, warm)?.0)
             })?;
         }
-        let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
-        // Only the second targets of the sweeps a coupling is fitted from move anything.
-        let used: Vec<(usize, usize)> = self
-            .experiments
-            .iter()
-            .enumerate()
-            .filter(|(_, e)| state.couplings.iter().any(|c| c.experiment == e.name))
-            .flat_map(|(i, _)| (0..target1[i].len()).map(move |j| (i, j)))
-            .collect();
-        prop.add_independent(3 * used.len(), sigma, |k, h| {
-            self.derived(
-                axes,
-                &transmissions,
-                &moved_point(target1, &used, k, h),
-                tool,
-                reference_cmd,
-            )
-        })?;
-        // The swept joint's repeatability turns each second target about its axis, step by
-        // step (independent angle noise, as for the axis fits).
-        let jitter: Vec<(usize, usize)> = used
-            .iter()
-            .copied()
-            .filter(|&(i, _)| self.repeatability[self.experiments[i].joint - 1] > 0.0)
-            .collect();
-        for &(i, j) in &jitter {
-            let joint = self.experiments[i].joint - 1;
-            let Some(axis) = axes[joint] else { continue };
-            let turn = |h: f64| {
-                let mut moved = target1.clone();
-                let o = axis.origin_m;
-                moved[i][j] = o + nalgebra::UnitQuaternion::from_axis_angle(&axis.direction, h) * (moved[i][j] - o);
-                moved
-            };
-            prop.add_independent(1, self.repeatability[joint], |_, h| {
-                self.derived(axes, &transmissions, &turn(h), tool, reference_cmd)
+        for coupling in record.into_inner() {
+            let c = self.second_target_sigma(&coupling, axes, target1)?;
+            prop.add(&c, |i, h| {
+                let mut x = coupling.parameters.clone();
+                x[i] += h;
+                let fixed = Refit {
+                    fixed: Some((coupling.k, &x)),
+                    ..warm
+                };
+                Ok::<_, ProcedureError>(
+                    self.derived((axes, &transmissions), target1, tool, reference_cmd, fixed)?
+                        .0,
+                )
             })?;
         }
         if let Some(points) = &tool_points {
+            let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
             let lists = vec![points.clone()];
             let at: Vec<(usize, usize)> = (0..points.len()).map(|j| (0, j)).collect();
             prop.add_independent(3 * points.len(), sigma, |k, h| {
                 let moved = moved_point(&lists, &at, k, h);
-                self.derived(axes, &transmissions, target1, Some(&moved[0]), reference_cmd)
+                Ok::<_, ProcedureError>(self.with_tool(base.clone(), &robot, Some(&moved[0]), reference_cmd))
             })?;
         }
         Ok(base.sigma(&prop.covariance))
+    }
+
+    /// The covariance of a fitted coupling's parameters from the noise of its second targets
+    /// (each coordinate `sigma`, the measurement noise) and the swept joint's repeatability
+    /// (each target turned about the driving axis, one independent angle per step), the
+    /// coupling's inputs otherwise fixed: `S C_y S^T`. The passive displacements
+    /// `y_j = a_j - a_0` have `C_y = diag(v_j) + v_0` (`j, l >= 1`) with
+    /// `v_j = sigma^2 |g_j|^2 + rep^2 (g_j . (u x (p_j - o)))^2`, `g_j` the angle's gradient
+    /// ([`passive_angle_gradients`]); `S = d x / d y` by central differences of the refit
+    /// (`h = 1e-3` of each `sqrt(v)`, as in [`Propagation::add`]). Chained with the
+    /// assembly's derivatives with respect to the coupling's parameters this is the
+    /// propagation of the second targets' noise (they move nothing else).
+    fn second_target_sigma(
+        &self,
+        coupling: &RecordedCoupling,
+        axes: &[Option<AxisLine>],
+        target1: &[Vec<Point3<f64>>],
+    ) -> Result<DMatrix<f64>, ProcedureError> {
+        let experiment = &self.experiments[coupling.index];
+        let fit_err = |source| ProcedureError::Fit {
+            experiment: experiment.name.clone(),
+            joint: coupling.k,
+            source,
+        };
+        let second = &target1[coupling.index];
+        let from_start = coupling.active_from_start();
+        let passive =
+            passive_displacements(&coupling.frame_next, &coupling.axis_from, &from_start, second).map_err(fit_err)?;
+        let gradients = passive_angle_gradients(&coupling.frame_next, &coupling.axis_from, &from_start, second);
+        let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
+        let joint = experiment.joint - 1;
+        let turn = axes[joint].filter(|_| self.repeatability[joint] > 0.0);
+        let v: Vec<f64> = gradients
+            .iter()
+            .zip(second)
+            .map(|(g, p)| {
+                let jitter = turn.map_or(0.0, |a| {
+                    (self.repeatability[joint] * g.dot(&a.direction.cross(&(p - a.origin_m)))).powi(2)
+                });
+                sigma * sigma * g.norm_squared() + jitter
+            })
+            .collect();
+        let n = passive.len();
+        let c_y = DMatrix::from_fn(n, n, |j, l| match (j, l) {
+            (0, _) | (_, 0) => 0.0,
+            (j, l) => v[0] + if j == l { v[j] } else { 0.0 },
+        });
+        let m = coupling.parameters.len();
+        let mut s = DMatrix::zeros(m, n);
+        for j in 1..n {
+            let h = 1e-3 * c_y[(j, j)].sqrt();
+            let at = |h: f64| {
+                let mut y = passive.clone();
+                y[j] += h;
+                coupling.refit(&y).map_err(fit_err)
+            };
+            let (plus, minus) = (at(h)?, at(-h)?);
+            for i in 0..m {
+                s[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
+            }
+        }
+        Ok(&s * c_y * s.transpose())
     }
 
     /// The calibration of the last pass: [`Context::finish_model`] plus the report's extras

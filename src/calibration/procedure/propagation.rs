@@ -7,7 +7,13 @@
 //!
 //! `C_k` the covariance of fit `k`'s local parameters (the fits are independent, each from its
 //! own sweep), `sigma` the measurement noise per coordinate and `J` by central differences of
-//! the whole assembly ([`super::Context::derived`]). A coupling fit's own a-posteriori sigma
+//! the whole assembly ([`super::Context::derived`]), whose couplings are refitted by
+//! Gauss-Newton steps from the fitted ones (`coupling_fit::refit_coupling`). The second
+//! targets move the derived quantities only through their coupling's parameters `x`: their
+//! term is `J_x C_x J_x^T`, `C_x` from the targets' noise through the passive angles'
+//! analytic gradients and the refit (`Context::second_target_sigma`) and `J_x` by central
+//! differences of the assembly with the coupling set to moved parameters; the tool targets
+//! move only the tool frame. A coupling fit's own a-posteriori sigma
 //! counts only the second target's noise: the active angles it is fitted against come from
 //! the driving joint's fitted transmission and the frame it is measured in from the fitted
 //! axes, whose errors are common to every point of the sweep and do not average out.
