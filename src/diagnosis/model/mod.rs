@@ -16,7 +16,8 @@ pub use candidate::{
     TiltShape, is_geared, unmodelled_harmonic_order,
 };
 pub use plausible::{
-    MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, SIGN_K_SIGMA, implausible,
+    MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K,
+    SIGN_K_SIGMA, implausible,
 };
 
 use super::poses::Pose;
