@@ -88,13 +88,26 @@ fn assert_found(r: &CaseResult) {
     assert!(ratio >= 2.0, "case too small for the test: size ratio {ratio}");
     assert_eq!(d.outcome.effect, k.expected, "{}", d.verdict);
     assert_eq!(d.outcome.joint, k.joint, "{}", d.verdict);
+    assert_gap_closed(d);
+}
+
+/// The named effect's gap shrank by 70 % or to below the detectable gap.
+fn assert_gap_closed(d: &Diagnosis) {
     assert!(
         d.outcome.gap_after_mm <= 0.3 * d.outcome.gap_before_mm || d.outcome.gap_after_mm < d.detectable_gap_mm,
-        "gap {} -> {} mm (detectable {})",
+        "gap {} -> {} mm (detectable {}): {}",
         d.outcome.gap_before_mm,
         d.outcome.gap_after_mm,
-        d.detectable_gap_mm
+        d.detectable_gap_mm,
+        d.verdict
     );
+}
+
+/// `d` names `effect` on `joint` and closes its gap.
+fn assert_named(d: &Diagnosis, effect: &str, joint: usize) {
+    assert_eq!(d.outcome.effect, effect, "{}", d.verdict);
+    assert_eq!(d.outcome.joint, Some(joint), "{}", d.verdict);
+    assert_gap_closed(d);
 }
 
 #[test]
@@ -356,13 +369,7 @@ fn independent_swash_of_joint_1_is_an_axis_wobble() {
             * amplitude_rad
             * (theta + phase_rad).sin()
     });
-    assert_eq!(d.outcome.effect, "axis_wobble", "{}", d.verdict);
-    assert_eq!(d.outcome.joint, Some(1), "{}", d.verdict);
-    assert!(
-        d.outcome.gap_after_mm <= 0.3 * d.outcome.gap_before_mm || d.outcome.gap_after_mm < d.detectable_gap_mm,
-        "{}",
-        d.verdict
-    );
+    assert_named(&d, "axis_wobble", 1);
 }
 
 /// A 5 mrad order-3 harmonic of joint 1's angle at a phase of 2.2 rad (the calibrator fits
@@ -372,11 +379,5 @@ fn independent_swash_of_joint_1_is_an_axis_wobble() {
 fn independent_order_3_harmonic_of_joint_1_is_a_gear_harmonic() {
     let (amplitude_rad, phase_rad) = (5e-3, 2.2);
     let d = diagnose_joint_1_effect(|theta| nalgebra::Vector3::z() * amplitude_rad * (3.0 * theta + phase_rad).sin());
-    assert_eq!(d.outcome.effect, "gear_harmonic", "{}", d.verdict);
-    assert_eq!(d.outcome.joint, Some(1), "{}", d.verdict);
-    assert!(
-        d.outcome.gap_after_mm <= 0.3 * d.outcome.gap_before_mm || d.outcome.gap_after_mm < d.detectable_gap_mm,
-        "{}",
-        d.verdict
-    );
+    assert_named(&d, "gear_harmonic", 1);
 }
