@@ -46,6 +46,10 @@ pub struct Args {
     /// Noise-only replicas of the axis-experiments-only mode (data without validation poses).
     #[arg(long, default_value_t = DiagnosisOptions::default().axis_replicas, value_parser = InRange::closed(2usize, 1_000_000, ""))]
     axis_replicas: usize,
+    /// Score with the description's tool targets as they are, not refined from the
+    /// validation poses (the refinement and its warning still run).
+    #[arg(long)]
+    nominal_tool_targets: bool,
     /// Seed of the replicas' noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -94,6 +98,7 @@ pub fn run(args: Args) -> Result<()> {
         },
         seed: args.seed,
         axis_replicas: args.axis_replicas,
+        refine_tool_targets: !args.nominal_tool_targets,
         ..DiagnosisOptions::default()
     };
     let source = args.data.display().to_string();
@@ -105,6 +110,9 @@ pub fn run(args: Args) -> Result<()> {
     let mut d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
     d.noise_source = noise_source.into();
     drop(progress);
+    if let Some(warning) = d.tool_targets.as_ref().and_then(|t| t.warning()) {
+        eprintln!("warning: {warning}");
+    }
     let report = Report {
         out: &args.out,
         json: json_file::to_string(Schema::DIAGNOSIS, &d)?,

@@ -413,6 +413,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         parameters: v.parameters,
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         noise_source: "given".into(),
+        tool_targets: None,
         poses: super::result::PoseSplit {
             training: prep.poses.len().div_ceil(2),
             held_out: prep.poses.len() / 2,

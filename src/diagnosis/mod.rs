@@ -35,6 +35,7 @@ mod plots;
 mod poses;
 mod report;
 mod result;
+mod targets;
 mod validate;
 
 pub use crate::plotting::PlotError;
@@ -42,14 +43,16 @@ pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnos
 pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
-    MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures, Predictor, RefitScope,
-    SIGN_K_SIGMA, SpringSite, ThermalLinks, TiltShape, implausible, is_geared, unmodelled_harmonic_order,
+    MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,
+    Predictor, RefitScope, SIGN_K_SIGMA, SpringSite, ThermalLinks, TiltShape, implausible, is_geared,
+    unmodelled_harmonic_order,
 };
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
+pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
 pub use validate::{
     ChiSquare, OrientationSummary, PointKind, PositionSummary, Validation, ValidationOptions, ValidationResidual,
     validate, validation_residuals_csv,
@@ -109,6 +112,14 @@ pub struct DiagnosisOptions {
     /// Noise-only replicas of the axis-experiments-only diagnosis ([`diagnose_axes`]).
     #[serde(default = "default_axis_replicas")]
     pub axis_replicas: usize,
+    /// Refine the tool targets from the training poses before scoring (`diagnosis::targets`);
+    /// `false` scores with the description's (the behaviour before issue 17, for comparison).
+    #[serde(default = "default_refine_tool_targets")]
+    pub refine_tool_targets: bool,
+}
+
+fn default_refine_tool_targets() -> bool {
+    true
 }
 
 fn default_axis_replicas() -> usize {
@@ -126,6 +137,7 @@ impl Default for DiagnosisOptions {
             false_alarm: 0.01,
             explained_fraction: 0.9,
             axis_replicas: default_axis_replicas(),
+            refine_tool_targets: true,
         }
     }
 }
@@ -499,7 +511,37 @@ pub fn diagnose_with(
     options: &DiagnosisOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<Diagnosis, DiagnosisError> {
+    let nominal = prepare(set, desc, options.noise_rms_3d_mm, options.refit, false)?;
+    let tool_targets = refined_tool_targets(&nominal, options.noise_rms_3d_mm);
+    drop(nominal);
+    let refined = tool_targets
+        .as_ref()
+        .filter(|_| options.refine_tool_targets)
+        .map(|t| t.description(desc));
+    let desc = refined.as_ref().unwrap_or(desc);
     let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit, true)?;
     let null = null_data(set, desc, &prep, options, progress)?;
-    Ok(decide::decide(&prep, &null, options))
+    let mut d = decide::decide(&prep, &null, options);
+    d.tool_targets = tool_targets;
+    Ok(d)
+}
+
+/// The tool targets refined from the training poses and compared with the description's
+/// ([`targets`] module docs); `None` without tool targets or when the refit's refinement
+/// fails (the diagnosis then scores with the description's).
+fn refined_tool_targets(prep: &Prepared, noise_rms_3d_mm: f64) -> Option<ToolTargets> {
+    if prep.predictor.tool_targets_m().is_empty() {
+        return None;
+    }
+    let refined = prep.refine(None)?;
+    let dof = prep.train_rows.saturating_sub(refined.fit.rank).max(1);
+    let sigma2 = (noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
+    let variance = sigma2.max(refined.r_train.norm_squared() / dof as f64);
+    targets::compare(
+        prep.predictor.tool_targets_m(),
+        |p| prep.predictor.refit_tool_targets_m(p),
+        &refined.params,
+        &refined.fit,
+        variance,
+    )
 }

@@ -36,6 +36,9 @@ pub fn markdown(d: &Diagnosis, source: &str) -> String {
         }
         s.push('\n');
     }
+    if let Some(t) = &d.tool_targets {
+        tool_targets_section(&mut s, t);
+    }
     s.push_str("## Where\n\n");
     s.push_str(&where_table(&d.where_, &[], |_| Vec::new()));
     if !d.features.is_empty() {
@@ -100,4 +103,27 @@ pub(super) fn where_table(
         let _ = writeln!(s, "| {} |", row.join(" | "));
     }
     s
+}
+
+/// The tool targets refined from the training poses against the description's.
+fn tool_targets_section(s: &mut String, t: &super::ToolTargets) {
+    if let Some(w) = t.warning() {
+        let _ = writeln!(s, "**Warning**: {w}.\n");
+    }
+    if t.distances.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "Tool targets refined from the training poses (distances between targets; far off beyond {} sigma):\n\n| targets | nominal [mm] | refined [mm] | 1-sigma [mm] | sigmas off |\n|---|---|---|---|---|",
+        super::FAR_SIGMAS
+    );
+    for d in &t.distances {
+        let _ = writeln!(
+            s,
+            "| {}-{} | {:.3} | {:.3} | {:.3} | {:.1} |",
+            d.targets[0], d.targets[1], d.nominal_mm, d.refined_mm, d.sigma_mm, d.sigmas_off
+        );
+    }
+    s.push('\n');
 }

@@ -144,6 +144,11 @@ pub struct Diagnosis {
     /// axis experiments' residuals, [`estimated_noise`](super::estimated_noise)).
     #[serde(default = "given")]
     pub noise_source: String,
+    /// The tool targets the diagnosis scored with, refined from the training poses, against
+    /// the description's (`far` when the nominal guess is far off); absent when the refit
+    /// could not be refined.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool_targets: Option<super::ToolTargets>,
     /// Training and held-out pose counts.
     pub poses: PoseSplit,
     /// Baseline held-out RMS \[mm\].

@@ -16,7 +16,8 @@ pub use candidate::{
     TiltShape, is_geared, unmodelled_harmonic_order,
 };
 pub use plausible::{
-    MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, SIGN_K_SIGMA, implausible,
+    MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K,
+    SIGN_K_SIGMA, implausible,
 };
 
 use super::poses::Pose;
@@ -70,6 +71,14 @@ fn perturb_coupling(g: Option<&mut CouplingFunction>, d: &[f64]) -> usize {
 /// without one.
 fn payload_at_tool(model: &crate::kinematics::PhiModel, payload_kg: f64) -> Option<(f64, Point3<f64>)> {
     (payload_kg > 0.0).then(|| (payload_kg, Point3::from(model.last_link_from_tool.translation.vector)))
+}
+
+/// A frame correction from a refit's translation \[m\] and rotation vector \[rad\] `p`.
+fn frame_correction(p: &[f64]) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(p[0], p[1], p[2]),
+        UnitQuaternion::from_scaled_axis(Vector3::new(p[3], p[4], p[5])),
+    )
 }
 
 /// The calibrated robot with the refit parameters and any candidates: predicts the measured
@@ -158,6 +167,14 @@ impl Predictor {
     /// The tool targets in the tool frame \[m\].
     pub fn tool_targets_m(&self) -> &[Point3<f64>] {
         &self.tool_targets_m
+    }
+
+    /// The tool targets at the refit's parameters `params`, in the calibrated tool frame
+    /// (the refit's tool-frame correction applied to its corrected targets) \[m\].
+    pub fn refit_tool_targets_m(&self, params: &[f64]) -> Vec<Point3<f64>> {
+        let g = self.geometric_count();
+        let tool = frame_correction(&params[g - 6..g]);
+        self.targets(params).iter().map(|t| tool * t).collect()
     }
 
     /// The parameter layout's dependence on the robot.
@@ -266,15 +283,9 @@ impl Predictor {
     /// The refit phi-model: `robot`'s with the base and tool corrections of `params`.
     fn model(&self, robot: &RobotModel, params: &[f64]) -> crate::kinematics::PhiModel {
         let g = self.geometric_count();
-        let iso = |p: &[f64]| {
-            Isometry3::from_parts(
-                Translation3::new(p[0], p[1], p[2]),
-                UnitQuaternion::from_scaled_axis(Vector3::new(p[3], p[4], p[5])),
-            )
-        };
         let mut model = robot.phi_model();
-        model.world_from_base = iso(&params[g - 12..g - 6]) * model.world_from_base;
-        model.last_link_from_tool *= iso(&params[g - 6..g]);
+        model.world_from_base = frame_correction(&params[g - 12..g - 6]) * model.world_from_base;
+        model.last_link_from_tool *= frame_correction(&params[g - 6..g]);
         model
     }
 

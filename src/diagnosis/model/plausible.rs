@@ -16,6 +16,12 @@ pub const MAX_HALF_BAND_RAD: f64 = 0.02;
 /// Largest plausible thermal expansion coefficient \[1/K\] (steel 1.2e-5, aluminium 2.3e-5,
 /// engineering plastics up to 2e-4).
 pub const MAX_ALPHA_PER_K: f64 = 3e-4;
+/// Most negative plausible thermal expansion coefficient of a link \[1/K\]: structural
+/// materials expand when heated; the most negative coefficient of one used in arms is carbon
+/// fibre composite's along the fibre, about -1e-6 (invar +1e-6, steel 1.2e-5). A fit more
+/// negative than this by more than `SIGN_K_SIGMA` of its sigma imitates something else (a
+/// joint zero drifting with temperature bends per-link coefficients of both signs).
+pub const MIN_ALPHA_PER_K: f64 = -2e-6;
 /// Largest plausible instrument scale error \[ppm\] (1 %; trackers are within 10 ppm).
 pub const MAX_SCALE_PPM: f64 = 1e4;
 /// Largest plausible distance of a payload's centre of mass from the tool frame's origin \[m\].
@@ -75,9 +81,19 @@ pub fn implausible(candidate: Candidate, params: &[Parameter], largest_sag_rad: 
         ),
         Candidate::Backlash { .. } => not_negative(params, "half_band_rad", "half band [rad]")
             .or_else(|| at_most(value(params, "half_band_rad")?.0, MAX_HALF_BAND_RAD, "half band [rad]")),
-        Candidate::ThermalExpansion { .. } => params
-            .iter()
-            .find_map(|p| at_most(p.value, MAX_ALPHA_PER_K, &format!("{} [1/K]", p.name))),
+        Candidate::ThermalExpansion { .. } => params.iter().find_map(|p| {
+            let what = format!("{} [1/K]", p.name);
+            let contracts = p.value < MIN_ALPHA_PER_K - SIGN_K_SIGMA * p.sigma;
+            contracts
+                .then(|| {
+                    format!(
+                        "{what} {:.3e} is below {MIN_ALPHA_PER_K:.0e} by more than {SIGN_K_SIGMA} sigma ({:.1e}): links do \
+                         not shrink when heated",
+                        p.value, p.sigma
+                    )
+                })
+                .or_else(|| at_most(p.value, MAX_ALPHA_PER_K, &what))
+        }),
         Candidate::InstrumentScale => at_most(value(params, "scale_ppm")?.0, MAX_SCALE_PPM, "scale [ppm]"),
         Candidate::JointCompliance { .. } => compliance(params, largest_sag_rad),
     }
@@ -162,5 +178,19 @@ mod tests {
             implausible(c, &[p("compliance_rad_per_nm", 1e-4, 1e-6)], Some(0.03)),
             None
         );
+    }
+
+    #[test]
+    fn a_link_that_shrinks_when_heated_beyond_its_sigma_is_implausible() {
+        let t = Candidate::ThermalExpansion {
+            links: crate::diagnosis::ThermalLinks::PerLink,
+        };
+        let steel = [p("alpha_row1_per_k", 1.2e-5, 1e-6), p("alpha_row2_per_k", 1.1e-5, 1e-6)];
+        assert_eq!(implausible(t, &steel, None), None);
+        // Carbon fibre, and a negative value within its noise of the bound: in range.
+        assert_eq!(implausible(t, &[p("alpha_row1_per_k", -1e-6, 1e-6)], None), None);
+        assert_eq!(implausible(t, &[p("alpha_row1_per_k", -6e-6, 2e-6)], None), None);
+        let shrinking = [p("alpha_row1_per_k", 1.2e-5, 1e-6), p("alpha_row2_per_k", -3e-5, 2e-6)];
+        assert!(implausible(t, &shrinking, None).is_some());
     }
 }
