@@ -54,6 +54,7 @@ pub use urdf::{
 
 use super::CalibrationError;
 use super::noise::{NoiseEstimate, estimate_noise};
+use super::tool_accuracy::ModelCovariance;
 use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
@@ -256,6 +257,9 @@ pub struct FittedModel {
     /// The propagated 1-sigma of the couplings, zero offsets and tool frame; `Some` with
     /// [`Detail::ModelAndCovariance`] only.
     pub derived_sigma: Option<DerivedSigma>,
+    /// The covariance of the calibrated model's parameters
+    /// ([`crate::calibration::tool_accuracy`]); `Some` from [`calibrate`] only.
+    pub model_covariance: Option<ModelCovariance>,
 }
 
 /// Calibrates the robot described (nominally) by `desc` from the axis experiments of `set`
@@ -520,9 +524,12 @@ impl<'a> Context<'a> {
             robot.tool_frame = Placement::from_isometry(&t.last_link_from_tool);
         }
         let mut couplings = state.couplings.clone();
-        let derived_sigma = match self.detail {
-            Detail::Model => None,
-            _ => Some(self.derived_sigma(set, state, reference_cmd)?),
+        let (derived_sigma, model_covariance) = match self.detail {
+            Detail::Model => (None, None),
+            _ => {
+                let (d, m) = self.derived_sigma(set, state, reference_cmd)?;
+                (Some(d), m)
+            }
         };
         if let Some(d) = &derived_sigma {
             for (c, s) in couplings.iter_mut().zip(&d.couplings) {
@@ -538,6 +545,7 @@ impl<'a> Context<'a> {
             held_passes: passes,
             couplings,
             derived_sigma,
+            model_covariance,
         };
         Ok((model, tool))
     }
@@ -580,14 +588,19 @@ impl<'a> Context<'a> {
         let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1)?;
         let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
         values.extend(joints.iter().map(|j| j.transducer_offset));
-        let tool = tool.and_then(|measured| {
-            let robot = calibrated_robot(self.desc, joints, &geometry);
-            last_link_from_tool(measured, self.desc, &robot, reference_cmd, self.controller).map(|(f, _)| f)
+        let with_robot = self.detail == Detail::Report;
+        let mut robot = (tool.is_some() || with_robot).then(|| calibrated_robot(self.desc, joints, &geometry));
+        let tool = tool.zip(robot.as_ref()).and_then(|(measured, robot)| {
+            last_link_from_tool(measured, self.desc, robot, reference_cmd, self.controller).map(|(f, _)| f)
         });
+        if let (Some(r), Some(t)) = (&mut robot, &tool) {
+            r.tool_frame = Placement::from_isometry(t);
+        }
         Ok(Derived {
             values,
             coupling_sizes: couplings.iter().map(|c| c.parameters.len()).collect(),
             tool,
+            robot: robot.filter(|_| with_robot),
         })
     }
 
@@ -599,7 +612,7 @@ impl<'a> Context<'a> {
         set: &MeasurementSet,
         state: &Assembled,
         reference_cmd: &[f64],
-    ) -> Result<DerivedSigma, ProcedureError> {
+    ) -> Result<(DerivedSigma, Option<ModelCovariance>), ProcedureError> {
         let transmissions: Vec<Option<Transmission>> = state
             .fits
             .iter()
@@ -609,7 +622,7 @@ impl<'a> Context<'a> {
         let tool = tool_points.as_deref();
         let (axes, target1) = (&state.axes, &state.target1);
         let base = self.derived(axes, &transmissions, target1, tool, reference_cmd)?;
-        let mut prop = Propagation::new(base.values.len() + if base.tool.is_some() { 6 } else { 0 });
+        let mut prop = Propagation::new(base.len());
         for (k, local) in state.fits.iter().enumerate() {
             let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {
                 continue;
@@ -670,7 +683,7 @@ impl<'a> Context<'a> {
                 self.derived(axes, &transmissions, target1, Some(&moved[0]), reference_cmd)
             })?;
         }
-        Ok(base.sigma(&prop.covariance))
+        Ok((base.sigma(&prop.covariance), base.model_covariance(&prop.covariance)))
     }
 
     /// The calibration of the last pass: [`Context::finish_model`] plus the report's extras
@@ -688,6 +701,7 @@ impl<'a> Context<'a> {
             row_sigma,
             couplings,
             derived_sigma,
+            model_covariance,
             ..
         } = model;
         let zero_offset_sigma = zero_offset_sigmas(self.desc, derived_sigma.as_ref());
@@ -722,6 +736,8 @@ impl<'a> Context<'a> {
             held_passes: passes,
             residuals,
             description: Some(self.desc.identity()),
+            model_covariance,
+            tool_accuracy: None,
         })
     }
 
