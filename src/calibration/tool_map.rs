@@ -17,9 +17,11 @@ const CELLS: (usize, usize) = (12, 9);
 
 const SIZE: (u32, u32) = (900, 640);
 
-/// Per cell `(reach range, height range, RMS sigma mm)` of the occupied cells, and the
-/// largest RMS.
-fn cells(points: &[MapPoint]) -> (Vec<([f64; 2], [f64; 2], f64)>, [f64; 4]) {
+/// One occupied cell: reach range \[m\], height range \[m\], RMS position 1-sigma \[mm\].
+type Cell = ([f64; 2], [f64; 2], f64);
+
+/// The occupied cells and the plotted extent `[reach lo, hi, height lo, hi]` \[m\].
+fn cells(points: &[MapPoint]) -> (Vec<Cell>, [f64; 4]) {
     let lim = |f: &dyn Fn(&MapPoint) -> f64| {
         points
             .iter()
@@ -90,24 +92,20 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -
             Rectangle::new([(a * 1e3, c * 1e3), (b * 1e3, d * 1e3)], colour(t(*v)).filled())
         }))
         .map_err(e)?;
-    let steps = 50;
+    let steps: i32 = 50;
     for k in 0..steps {
-        let y0 = 60 + (steps - 1 - k) as i32 * 8;
+        let y0 = 60 + (steps - 1 - k) * 8;
         bar.draw(&Rectangle::new(
             [(20, y0), (45, y0 + 8)],
-            colour(k as f64 / (steps - 1) as f64).filled(),
+            colour(f64::from(k) / f64::from(steps - 1)).filled(),
         ))
         .map_err(e)?;
     }
     let font = ("sans-serif", 14).into_font();
     bar.draw(&Text::new(format!("{hi:.3}"), (50, 58), font.clone()))
         .map_err(e)?;
-    bar.draw(&Text::new(
-        format!("{lo:.3}"),
-        (50, 60 + steps as i32 * 8 - 12),
-        font.clone(),
-    ))
-    .map_err(e)?;
+    bar.draw(&Text::new(format!("{lo:.3}"), (50, 60 + steps * 8 - 12), font.clone()))
+        .map_err(e)?;
     bar.draw(&Text::new("mm", (20, 40), font)).map_err(e)?;
     root.present().map_err(|e| e.to_string())
 }
