@@ -335,8 +335,8 @@ pub fn tool_pose(robot: &RobotModel, controller: &Controller, cmd: &[f64]) -> Re
 pub struct ToolSigmaSummary {
     /// Poses evaluated.
     pub poses: usize,
-    /// Per joint, the command range the poses are drawn from (uniform, seeded) \[deg or mm\].
-    pub ranges_deg_or_mm: Vec<[f64; 2]>,
+    /// Per joint, the command range the poses are drawn from (uniform, seeded).
+    pub ranges: Vec<CommandRange>,
     /// RMS over the poses of the position 1-sigma norm \[mm\].
     pub position_rms_mm: f64,
     /// Its largest value \[mm\].
@@ -345,6 +345,17 @@ pub struct ToolSigmaSummary {
     pub orientation_rms_mrad: f64,
     /// Its largest value \[mrad\].
     pub orientation_max_mrad: f64,
+}
+
+/// One joint's command range.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct CommandRange {
+    /// Joint (1-based).
+    pub joint: usize,
+    /// Lowest command \[deg or mm\].
+    pub low_deg_or_mm: f64,
+    /// Highest command \[deg or mm\].
+    pub high_deg_or_mm: f64,
 }
 
 impl ToolSigmaSummary {
@@ -356,7 +367,15 @@ impl ToolSigmaSummary {
         let max = |f: &dyn Fn(&PoseSigma) -> f64| sigmas.iter().map(f).fold(0.0, f64::max);
         ToolSigmaSummary {
             poses: sigmas.len(),
-            ranges_deg_or_mm,
+            ranges: ranges_deg_or_mm
+                .iter()
+                .enumerate()
+                .map(|(k, &[low_deg_or_mm, high_deg_or_mm])| CommandRange {
+                    joint: k + 1,
+                    low_deg_or_mm,
+                    high_deg_or_mm,
+                })
+                .collect(),
             position_rms_mm: rms(&|s| s.position_norm_mm),
             position_max_mm: max(&|s| s.position_norm_mm),
             orientation_rms_mrad: rms(&|s| s.orientation_norm_mrad),
