@@ -7,7 +7,7 @@ RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' C
 
 FUZZ_SECONDS ?= 600
 
-.PHONY: run test test-real test-robots noise-check bench fuzz study blind blind-analytic budget lint doc clean-results setup-viewer view
+.PHONY: run test test-real test-robots noise-check tool-accuracy bench fuzz study blind blind-analytic budget lint doc clean-results setup-viewer view
 
 ## run: the paper scenario end to end; results under results/ (with a rerun recording:
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
@@ -47,6 +47,11 @@ test-robots:
 ## interval coverage >= 90 %)
 noise-check:
 	$(CARGO) test --release --test noise_and_held -- --ignored --nocapture
+
+## tool-accuracy: the predicted tool 1-sigma against a Monte-Carlo of 2000 calibrations of the
+## paper robot, inside the calibrated spans and over the workspace (within 10 %)
+tool-accuracy:
+	$(CARGO) test --release --test tool_accuracy -- --ignored --nocapture
 
 ## study: the calibrator's efficiency against the Cramer-Rao bound (ML and the paper's
 ## estimator) and the calibration of its reported sigmas, 20000 simulated campaigns

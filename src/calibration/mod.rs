@@ -25,6 +25,8 @@ pub mod line_ml;
 pub mod noise;
 pub mod procedure;
 pub mod sliding;
+pub mod tool_accuracy;
+pub mod tool_map;
 pub mod transmission_fit;
 
 pub use arc_ml::{ArcFit, ArcFitOptions, Studies, fit_arc, fit_arc_with_angle_noise, fit_arc_with_angle_noise_studies};

@@ -7,10 +7,13 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::Result;
+use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, findings,
     joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, ros_name, urdf,
 };
+use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
+use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
@@ -174,6 +177,7 @@ pub fn run(args: Args) -> Result<()> {
         .input("--robot", &args.robot);
     super::set_json(args.json);
     outputs.check_in(&args.out, &OUTPUTS)?;
+    outputs.check_in(&args.out, &TOOL_MAP_FILES)?;
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
@@ -190,12 +194,18 @@ pub fn run(args: Args) -> Result<()> {
         .joint_repeatability_rad(&desc)
         .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
     // The procedure's message already contains its cause: one line, not the cause twice.
-    let cal =
+    let mut cal =
         calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
+    let map = predict_tool_accuracy(&mut cal, &desc, &set, args.held_tolerance)?;
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
     for (name, text) in &texts.files {
         outputs.write_in(&args.out, name, text)?;
+    }
+    let mut written: Vec<&str> = texts.files.iter().map(|(name, _)| *name).collect();
+    if !map.is_empty() {
+        write_tool_map(&map, &args.out)?;
+        written.extend(TOOL_MAP_FILES);
     }
     // An output left out must not leave an earlier run's file beside the new calibration.
     for stale in OUTPUTS.iter().filter(|n| !texts.files.iter().any(|(w, _)| w == *n)) {
@@ -219,6 +229,17 @@ pub fn run(args: Args) -> Result<()> {
             a.direction_sigma.major_rad * 1e3
         );
     }
+    if let Some(a) = &cal.tool_accuracy {
+        say!(
+            "  predicted tool 1-sigma: inside the spans RMS {:.3} mm / {:.3} mrad (max {:.3} mm), workspace RMS {:.3} mm / {:.3} mrad (max {:.3} mm)",
+            a.spans.position_rms_mm,
+            a.spans.orientation_rms_mrad,
+            a.spans.position_max_mm,
+            a.workspace.position_rms_mm,
+            a.workspace.orientation_rms_mrad,
+            a.workspace.position_max_mm
+        );
+    }
     say!("{}", texts.deviation_line);
     if !texts.missing_speed_limits.is_empty() {
         eprintln!(
@@ -229,7 +250,6 @@ pub fn run(args: Args) -> Result<()> {
     for warning in &texts.left_out {
         eprintln!("warning: {warning}");
     }
-    let written: Vec<&str> = texts.files.iter().map(|(name, _)| *name).collect();
     say!("wrote {}/{{{}}}", args.out.display(), written.join(","));
     super::emit_json(&args.out.join(OUTPUTS[2]))?;
     #[cfg(feature = "viz")]
@@ -243,6 +263,27 @@ pub fn run(args: Args) -> Result<()> {
         super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
     }
     Ok(())
+}
+
+/// Fills `cal.tool_accuracy` (inside the spans of `set`'s sweeps and over the joint limits)
+/// and returns the workspace poses for the map (none without a model covariance).
+fn predict_tool_accuracy(
+    cal: &mut Calibration,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    held_tolerance: f64,
+) -> Result<Vec<MapPoint>> {
+    let (experiments, _) = axis_experiments_with(set, desc, held_tolerance)?;
+    let spans = swept_ranges(&experiments, &cal.reference_cmd);
+    let prediction = predict(cal, desc, spans, PredictionOptions::default())
+        .map_err(|e| anyhow::anyhow!("predicting the tool accuracy: {e}"))?;
+    Ok(match prediction {
+        Some((accuracy, map)) => {
+            cal.tool_accuracy = Some(accuracy);
+            map
+        }
+        None => vec![],
+    })
 }
 
 /// The noise (estimated, used, contradicted), joints not calibrated, the base-frame rule.

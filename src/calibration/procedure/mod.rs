@@ -55,6 +55,7 @@ pub use urdf::{
 use super::CalibrationError;
 use super::coupling_fit::{passive_angle_gradients, passive_displacements};
 use super::noise::{NoiseEstimate, estimate_noise};
+use super::tool_accuracy::ModelCovariance;
 use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
@@ -258,6 +259,9 @@ pub struct FittedModel {
     /// The propagated 1-sigma of the couplings, zero offsets and tool frame; `Some` with
     /// [`Detail::ModelAndCovariance`] only.
     pub derived_sigma: Option<DerivedSigma>,
+    /// The covariance of the calibrated model's parameters
+    /// ([`crate::calibration::tool_accuracy`]); `Some` from [`calibrate`] only.
+    pub model_covariance: Option<ModelCovariance>,
 }
 
 /// Calibrates the robot described (nominally) by `desc` from the axis experiments of `set`
@@ -523,9 +527,12 @@ impl<'a> Context<'a> {
             robot.tool_frame = Placement::from_isometry(&t.last_link_from_tool);
         }
         let mut couplings = state.couplings.clone();
-        let derived_sigma = match self.detail {
-            Detail::Model => None,
-            _ => Some(self.derived_sigma(set, state, reference_cmd)?),
+        let (derived_sigma, model_covariance) = match self.detail {
+            Detail::Model => (None, None),
+            _ => {
+                let (d, m) = self.derived_sigma(set, state, reference_cmd)?;
+                (Some(d), m)
+            }
         };
         if let Some(d) = &derived_sigma {
             for (c, s) in couplings.iter_mut().zip(&d.couplings) {
@@ -541,6 +548,7 @@ impl<'a> Context<'a> {
             held_passes: passes,
             couplings,
             derived_sigma,
+            model_covariance,
         };
         Ok((model, tool))
     }
@@ -593,11 +601,13 @@ impl<'a> Context<'a> {
             values,
             coupling_sizes: couplings.iter().map(|c| c.parameters.len()).collect(),
             tool: None,
+            robot: None,
         };
         Ok((self.with_tool(derived, &robot, tool, reference_cmd), robot))
     }
 
-    /// `derived` with the tool frame of `robot` from the tool targets `tool` (none without).
+    /// `derived` with the tool frame of `robot` from the tool targets `tool` (none without)
+    /// and, on the report path, the whole model with that tool frame (for its covariance).
     fn with_tool(
         &self,
         derived: Derived,
@@ -608,7 +618,14 @@ impl<'a> Context<'a> {
         let tool = tool.and_then(|measured| {
             last_link_from_tool(measured, self.desc, robot, reference_cmd, self.controller).map(|(f, _)| f)
         });
-        Derived { tool, ..derived }
+        let robot = (self.detail == Detail::Report).then(|| {
+            let mut model = robot.clone();
+            if let Some(t) = &tool {
+                model.tool_frame = Placement::from_isometry(t);
+            }
+            model
+        });
+        Derived { tool, robot, ..derived }
     }
 
     /// The propagated 1-sigma of the derived quantities of `state` (`propagation`): through
@@ -623,7 +640,7 @@ impl<'a> Context<'a> {
         set: &MeasurementSet,
         state: &Assembled,
         reference_cmd: &[f64],
-    ) -> Result<DerivedSigma, ProcedureError> {
+    ) -> Result<(DerivedSigma, Option<ModelCovariance>), ProcedureError> {
         let transmissions: Vec<Option<Transmission>> = state
             .fits
             .iter()
@@ -646,7 +663,7 @@ impl<'a> Context<'a> {
             warm: Some(&warm),
             ..Refit::default()
         };
-        let mut prop = Propagation::new(base.values.len() + if base.tool.is_some() { 6 } else { 0 });
+        let mut prop = Propagation::new(base.len());
         for (k, local) in state.fits.iter().enumerate() {
             let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {
                 continue;
@@ -685,7 +702,7 @@ impl<'a> Context<'a> {
                 Ok::<_, ProcedureError>(self.with_tool(base.clone(), &robot, Some(&moved[0]), reference_cmd))
             })?;
         }
-        Ok(base.sigma(&prop.covariance))
+        Ok((base.sigma(&prop.covariance), base.model_covariance(&prop.covariance)))
     }
 
     /// The covariance of a fitted coupling's parameters from the noise of its second targets
@@ -765,6 +782,7 @@ impl<'a> Context<'a> {
             row_sigma,
             couplings,
             derived_sigma,
+            model_covariance,
             ..
         } = model;
         let zero_offset_sigma = zero_offset_sigmas(self.desc, derived_sigma.as_ref());
@@ -799,6 +817,8 @@ impl<'a> Context<'a> {
             held_passes: passes,
             residuals,
             description: Some(self.desc.identity()),
+            model_covariance,
+            tool_accuracy: None,
         })
     }
 

@@ -25,9 +25,10 @@
 
 use crate::calibration::arc_model::ArcParams;
 use crate::calibration::line_ml::LineParams;
+use crate::calibration::tool_accuracy::{ModelCovariance, model_difference, model_parameter_names};
 use crate::calibration::transmission_fit::TransmissionForm;
 use crate::kinematics::AxisLine;
-use crate::robot::Transmission;
+use crate::robot::{RobotModel, Transmission};
 use nalgebra::{DMatrix, Isometry3, Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -143,6 +144,9 @@ pub(super) struct Derived {
     pub(super) coupling_sizes: Vec<usize>,
     /// The tool frame in the last link.
     pub(super) tool: Option<Isometry3<f64>>,
+    /// The whole calibrated model, for its parameters' covariance
+    /// ([`crate::calibration::tool_accuracy`]; the report path only).
+    pub(super) robot: Option<RobotModel>,
 }
 
 impl Derived {
@@ -160,7 +164,26 @@ impl Derived {
             d.extend(rel.translation.vector.iter().map(|x| x / step));
             d.extend(rel.rotation.scaled_axis().iter().map(|x| x / step));
         }
+        if let (Some(a), Some(b)) = (&self.robot, &other.robot) {
+            d.extend(model_difference(a, b, step));
+        }
         d
+    }
+
+    /// How many numbers [`Derived::difference`] gives.
+    pub(super) fn len(&self) -> usize {
+        let tool = if self.tool.is_some() { 6 } else { 0 };
+        self.values.len() + tool + self.robot.as_ref().map_or(0, |r| model_parameter_names(r).len())
+    }
+
+    /// The covariance of the model's parameters: the trailing block of `c`.
+    pub(super) fn model_covariance(&self, c: &DMatrix<f64>) -> Option<ModelCovariance> {
+        let names = model_parameter_names(self.robot.as_ref()?);
+        let at = c.nrows() - names.len();
+        Some(ModelCovariance::new(
+            names.clone(),
+            &c.view((at, at), (names.len(), names.len())).into_owned(),
+        ))
     }
 
     /// The 1-sigma of every derived quantity from the diagonal of their covariance `c`.
@@ -268,6 +291,7 @@ mod tests {
             values: vec![x[0] + 2.0 * x[1], x[0] * x[1]],
             coupling_sizes: vec![2],
             tool: None,
+            robot: None,
         }
     }
 
@@ -300,6 +324,7 @@ mod tests {
         let tool = |h: f64, which: usize| Derived {
             values: vec![],
             coupling_sizes: vec![],
+            robot: None,
             tool: Some(if which == 0 {
                 Isometry3::translation(h, 0.0, 0.0)
             } else {

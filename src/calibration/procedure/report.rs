@@ -255,9 +255,41 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
     write_sweeps(&mut s, cal, desc);
     write_rows_table(&mut s, cal, desc);
     write_tool(&mut s, cal);
+    write_tool_accuracy(&mut s, cal);
     write_findings(&mut s, cal, desc);
     write_identifiability(&mut s, cal);
     s
+}
+
+/// The predicted tool 1-sigma inside the spans and over the workspace, when predicted.
+fn write_tool_accuracy(s: &mut String, cal: &Calibration) {
+    let Some(a) = &cal.tool_accuracy else { return };
+    let _ = writeln!(
+        s,
+        "## Predicted tool accuracy
+"
+    );
+    let _ = writeln!(
+        s,
+        "The calibrated model's parameter covariance through the tool Jacobian (`docs/method.md`, \"Predicted tool accuracy\"): 1-sigma of the compensated tool point and orientation at {} poses inside the spans and {} over the workspace, drawn uniformly (seed {}).\n",
+        a.spans.poses, a.workspace.poses, a.seed
+    );
+    let _ = writeln!(
+        s,
+        "| poses | position RMS (mm) | position max (mm) | orientation RMS (mrad) | orientation max (mrad) |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|");
+    for (name, t) in [
+        ("inside the calibrated spans", &a.spans),
+        ("workspace (joint limits)", &a.workspace),
+    ] {
+        let _ = writeln!(
+            s,
+            "| {name} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            t.position_rms_mm, t.position_max_mm, t.orientation_rms_mrad, t.orientation_max_mrad
+        );
+    }
+    let _ = writeln!(s, "\nMap over reach and height: `tool_sigma_map.png` / `.svg`.\n");
 }
 
 /// The noise estimated from the residuals, the noise used, and a contradiction if any.

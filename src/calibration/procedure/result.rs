@@ -11,6 +11,7 @@ use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::line_ml::LineFit;
 use crate::calibration::noise::NoiseEstimate;
+use crate::calibration::tool_accuracy::{ModelCovariance, ToolAccuracy};
 use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
 use crate::calibration::{ArcFit, PaperAxisFit};
 use crate::json_file;
@@ -556,6 +557,16 @@ pub struct Calibration {
     /// Fit-and-correct passes for the held joints' recorded values (1: none needed).
     #[serde(default)]
     pub held_passes: usize,
+    /// The covariance of the calibrated model's parameters, propagated from the axis fits and
+    /// the second and tool targets ([`crate::calibration::tool_accuracy`]); absent in older
+    /// files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_covariance: Option<ModelCovariance>,
+    /// The predicted tool 1-sigma inside the calibrated spans and over the workspace
+    /// ([`crate::calibration::tool_accuracy::predict`]): filled when a report is written
+    /// (`axiscal calibrate`), not by [`super::calibrate`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool_accuracy: Option<ToolAccuracy>,
     /// Per-point residuals of the axis fits (written as `residuals.csv`, not in the JSON).
     #[serde(skip)]
     pub residuals: Vec<PointResidual>,

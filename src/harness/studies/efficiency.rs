@@ -12,6 +12,8 @@
 
 mod trial;
 
+pub(super) use trial::campaign;
+
 use crate::calibration::CalibrationError;
 use crate::calibration::arc_model::MeasurementNoise;
 use crate::calibration::crb::{arc_crb_with_angle_noise, efficiency, held_joint_axis_covariance};

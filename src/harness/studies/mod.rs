@@ -2,5 +2,7 @@
 //! here, so these live outside `calibration/`, which never sees it).
 
 mod efficiency;
+mod tool_accuracy;
 
 pub use efficiency::{EfficiencyStudy, QuantityEfficiency, RowSigmaCheck, StudyError, StudyReport, trial_seed};
+pub use tool_accuracy::{ToolAccuracyCheck, ToolAccuracyError, ToolAccuracyStudy};

@@ -86,7 +86,12 @@ fn derived_quantities(cal: &FittedModel, desc: &RobotDescription) -> Vec<(String
 }
 
 /// The fit form of a transmission as the description gives it.
-pub(super) fn campaign(truth: &RobotModel, desc: &RobotDescription, noise_mm: f64, seed: u64) -> MeasurementSet {
+pub(in crate::harness::studies) fn campaign(
+    truth: &RobotModel,
+    desc: &RobotDescription,
+    noise_mm: f64,
+    seed: u64,
+) -> MeasurementSet {
     let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(desc));
     let instrument = MeasurementModel::Isotropic(IsotropicNoise {
         net_radial_rms_mm: noise_mm,

@@ -1,0 +1,124 @@
+//! The map of the predicted tool 1-sigma over reach and height (PNG and SVG, plotters, the
+//! shipped font): the workspace poses of [`super::tool_accuracy::predict`] binned by where
+//! their tool point is (distance from the base's z axis, height above its xy plane), each
+//! cell coloured by the RMS position 1-sigma norm of its poses; empty cells stay white.
+
+use super::tool_accuracy::MapPoint;
+use crate::plotting::{DrawFn, PlotError, write_png_and_svg};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// The files [`write_tool_map`] writes.
+pub const TOOL_MAP_FILES: [&str; 2] = ["tool_sigma_map.png", "tool_sigma_map.svg"];
+
+/// Cells across reach and height.
+const CELLS: (usize, usize) = (12, 9);
+
+const SIZE: (u32, u32) = (900, 640);
+
+/// One occupied cell: reach range \[m\], height range \[m\], RMS position 1-sigma \[mm\].
+type Cell = ([f64; 2], [f64; 2], f64);
+
+/// The occupied cells and the plotted extent `[reach lo, hi, height lo, hi]` \[m\].
+fn cells(points: &[MapPoint]) -> (Vec<Cell>, [f64; 4]) {
+    let lim = |f: &dyn Fn(&MapPoint) -> f64| {
+        points
+            .iter()
+            .map(f)
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], v| [a.min(v), b.max(v)])
+    };
+    let ([r0, r1], [h0, h1]) = (lim(&|p| p.reach_m), lim(&|p| p.height_m));
+    let (dr, dh) = (
+        ((r1 - r0) / CELLS.0 as f64).max(1e-9),
+        ((h1 - h0) / CELLS.1 as f64).max(1e-9),
+    );
+    let mut sums = vec![(0.0, 0usize); CELLS.0 * CELLS.1];
+    for p in points {
+        let i = (((p.reach_m - r0) / dr) as usize).min(CELLS.0 - 1);
+        let j = (((p.height_m - h0) / dh) as usize).min(CELLS.1 - 1);
+        let cell = &mut sums[j * CELLS.0 + i];
+        cell.0 += p.sigma.position_norm_mm.powi(2);
+        cell.1 += 1;
+    }
+    let out = sums
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, n))| *n > 0)
+        .map(|(k, (s, n))| {
+            let (i, j) = ((k % CELLS.0) as f64, (k / CELLS.0) as f64);
+            (
+                [r0 + i * dr, r0 + (i + 1.0) * dr],
+                [h0 + j * dh, h0 + (j + 1.0) * dh],
+                (s / *n as f64).sqrt(),
+            )
+        })
+        .collect();
+    (out, [r0, r1 + dr * 1e-6, h0, h1 + dh * 1e-6])
+}
+
+/// Blue (low) through green to red (high).
+fn colour(t: f64) -> HSLColor {
+    HSLColor(0.66 * (1.0 - t.clamp(0.0, 1.0)), 0.85, 0.5)
+}
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -> Result<(), String> {
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let (cells, [r0, r1, h0, h1]) = cells(points);
+    let (lo, hi) = cells
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), c| (a.min(c.2), b.max(c.2)));
+    let (main, bar) = root.split_horizontally(SIZE.0 - 110);
+    let mut chart = ChartBuilder::on(&main)
+        .caption(
+            "Predicted tool position 1-sigma over the workspace [mm]",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(r0 * 1e3..r1 * 1e3, h0 * 1e3..h1 * 1e3)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("reach from the base z axis [mm]")
+        .y_desc("height above the base [mm]")
+        .draw()
+        .map_err(e)?;
+    let t = |v: f64| if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+    chart
+        .draw_series(cells.iter().map(|([a, b], [c, d], v)| {
+            Rectangle::new([(a * 1e3, c * 1e3), (b * 1e3, d * 1e3)], colour(t(*v)).filled())
+        }))
+        .map_err(e)?;
+    let steps: i32 = 50;
+    for k in 0..steps {
+        let y0 = 60 + (steps - 1 - k) * 8;
+        bar.draw(&Rectangle::new(
+            [(20, y0), (45, y0 + 8)],
+            colour(f64::from(k) / f64::from(steps - 1)).filled(),
+        ))
+        .map_err(e)?;
+    }
+    let font = ("sans-serif", 14).into_font();
+    bar.draw(&Text::new(format!("{hi:.3}"), (50, 58), font.clone()))
+        .map_err(e)?;
+    bar.draw(&Text::new(format!("{lo:.3}"), (50, 60 + steps * 8 - 12), font.clone()))
+        .map_err(e)?;
+    bar.draw(&Text::new("mm", (20, 40), font)).map_err(e)?;
+    root.present().map_err(|e| e.to_string())
+}
+
+/// Writes the map of `points` into `dir` ([`TOOL_MAP_FILES`]).
+pub fn write_tool_map(points: &[MapPoint], dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+    let job = |path: &Path, png: bool| {
+        if png {
+            draw(BitMapBackend::new(path, SIZE).into_drawing_area(), points)
+        } else {
+            draw(SVGBackend::new(path, SIZE).into_drawing_area(), points)
+        }
+    };
+    let jobs: [(&str, &DrawFn); 1] = [("tool_sigma_map", &job)];
+    write_png_and_svg(dir, &jobs)
+}
