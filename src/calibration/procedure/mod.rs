@@ -720,6 +720,7 @@ impl<'a> Context<'a> {
             not_calibrated,
             noise: Some(noise),
             held_passes: passes,
+            refinement: None,
             residuals,
             description: Some(self.desc.identity()),
         })

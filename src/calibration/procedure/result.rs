@@ -556,6 +556,11 @@ pub struct Calibration {
     /// Fit-and-correct passes for the held joints' recorded values (1: none needed).
     #[serde(default)]
     pub held_passes: usize,
+    /// Present when `robot` was refined on the file's free poses (`calibrate --refine`): the
+    /// refinement's summary. `axes`, `couplings` and the sigmas above stay the axis
+    /// experiments' (unrefined) estimates; `robot` is the refined model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<crate::calibration::refine::Refinement>,
     /// Per-point residuals of the axis fits (written as `residuals.csv`, not in the JSON).
     #[serde(skip)]
     pub residuals: Vec<PointResidual>,
