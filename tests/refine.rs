@@ -9,28 +9,16 @@ mod common;
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
 use axiscal::calibration::refine::RefineOptions;
 use axiscal::diagnosis::{ValidationOptions, refine_calibration, validate};
-use axiscal::measurement::{IsotropicNoise, Measurement, MeasurementModel, MeasurementSet};
-use axiscal::plan::{CalibrationPlan, ValidationPlan};
+use axiscal::measurement::{Measurement, MeasurementSet};
 use axiscal::robot::RobotDescription;
-use common::{axiscal, paper_robot_without_jitter, stderr};
+use common::{axiscal, stderr};
 
 const NOISE_MM: f64 = 0.19;
 
 /// The jitter-free paper robot's Table-1 campaign with `poses` free poses, split into the
 /// training file (axis experiments, free poses at even steps) and the test file (odd steps).
 fn split_campaign(poses: usize, seed: u64) -> (MeasurementSet, MeasurementSet) {
-    let set = common::analytic_campaign(
-        &paper_robot_without_jitter(),
-        &CalibrationPlan::table1(6),
-        &ValidationPlan {
-            poses,
-            ..ValidationPlan::workspace_default(6)
-        },
-        &MeasurementModel::Isotropic(IsotropicNoise {
-            net_radial_rms_mm: NOISE_MM,
-        }),
-        seed,
-    );
+    let set = common::jitter_free_campaign(NOISE_MM, poses, seed);
     let free = |m: &Measurement| m.experiment == "validation";
     let (test, train): (Vec<Measurement>, Vec<Measurement>) =
         set.rows().iter().cloned().partition(|m| free(m) && m.step % 2 == 1);
