@@ -338,6 +338,7 @@ impl Prepared {
             fit: "diagnosis refit",
             max_steps: REFINE_STEPS,
             truncate_below: NULL_DIRECTION_TOLERANCE,
+            small_step: None,
         };
         let out = refine_from_linear(
             |p| pred.residuals(p, &order),

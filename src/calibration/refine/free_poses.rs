@@ -435,10 +435,14 @@ where
     let linear = LinearFit::new(&x_z, &DMatrix::zeros(0, rank));
     let kept = &dirs.kept;
     let u_of = |z: &[f64]| (kept * DVector::from_column_slice(z)).as_slice().to_vec();
+    // Converged when a step would move the predicted points by less than 1 % of one noise
+    // sigma in all (a fraction of the refined parameters' own sigma): not worth a Jacobian.
+    let negligible = |delta: &DVector<f64>| (&x_z * delta).norm() < 1e-2 * sigma_c;
     let how = GaussNewtonSteps {
         fit: "refinement on free poses",
         max_steps: options.max_steps,
         truncate_below: NULL_DIRECTION_TOLERANCE,
+        small_step: Some(&negligible),
     };
     if rank == 0 {
         return Err(RefineError::NothingIdentified);

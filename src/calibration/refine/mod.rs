@@ -27,7 +27,7 @@ pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use prior::unrefined_sigma;
 pub use report::markdown;
 
-use crate::numerics::lsq::{Damping, LmOptions, LsqError, Stop, levenberg_marquardt_from};
+use crate::numerics::lsq::{Damping, LmOptions, LsqError, Stop, VectorTest, levenberg_marquardt_from};
 use nalgebra::{DMatrix, DVector};
 
 /// A fit refined beyond its linearisation ([`refine_from_linear`]).
@@ -47,14 +47,16 @@ pub struct Refined {
 }
 
 /// How [`refine_from_linear`] iterates.
-#[derive(Clone, Copy, Debug)]
-pub struct GaussNewtonSteps {
+#[derive(Clone, Copy)]
+pub struct GaussNewtonSteps<'a> {
     /// Names the fit in errors.
     pub fit: &'static str,
     /// Gauss-Newton steps at most after the linearised solution.
     pub max_steps: usize,
     /// Relative singular-value threshold of each step's rank-revealing solve.
     pub truncate_below: f64,
+    /// A step for which this holds is negligible: not taken, the refinement has converged.
+    pub small_step: Option<&'a VectorTest<'a>>,
 }
 
 /// The model could not execute a command at some parameters.
@@ -79,7 +81,7 @@ pub fn refine_from_linear<F>(
     linear: &LinearFit,
     r0_train: &DVector<f64>,
     train_rows: usize,
-    how: GaussNewtonSteps,
+    how: GaussNewtonSteps<'_>,
 ) -> Option<Refined>
 where
     F: Fn(&[f64]) -> Option<Vec<f64>>,
@@ -98,6 +100,7 @@ where
             monotone: true,
         },
         fitted_rows: Some(train_rows),
+        small_step: how.small_step,
         ..LmOptions::marquardt(how.fit, how.max_steps)
     };
     let outcome = levenberg_marquardt_from(p1, at_p1, &options, eval, |p, d| Ok(p + d)).ok()?;
