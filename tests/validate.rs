@@ -6,8 +6,7 @@ mod common;
 
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
 use axiscal::diagnosis::{CleanCampaign, NoiseModel, PointKind, Validation, ValidationOptions, replica, validate};
-use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
-use axiscal::plan::{CalibrationPlan, ValidationPlan};
+use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
 use common::{axiscal, paper_robot_without_jitter, stdout};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
@@ -15,18 +14,7 @@ use rand::{SeedableRng, rngs::ChaCha12Rng};
 /// A campaign of the jitter-free paper robot: Table 1 and `poses` validation poses, measured
 /// with isotropic noise of 3-D RMS `noise_mm`.
 fn campaign(noise_mm: f64, poses: usize, seed: u64) -> MeasurementSet {
-    common::analytic_campaign(
-        &paper_robot_without_jitter(),
-        &CalibrationPlan::table1(6),
-        &ValidationPlan {
-            poses,
-            ..ValidationPlan::workspace_default(6)
-        },
-        &MeasurementModel::Isotropic(IsotropicNoise {
-            net_radial_rms_mm: noise_mm,
-        }),
-        seed,
-    )
+    common::jitter_free_campaign(noise_mm, poses, seed)
 }
 
 /// A calibration of the paper robot from a noisy campaign (its own seed).

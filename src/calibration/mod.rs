@@ -11,6 +11,8 @@
 //! - [`line_ml`]: the maximum-likelihood sliding-axis fit (eqs. 9-13 in one model).
 //! - [`noise`]: the instrument noise estimated from the pooled fit residuals.
 //! - [`crb`]: Cramer-Rao bound and Monte-Carlo efficiency.
+//! - [`refine`]: the calibrated model refined on free poses (`calibrate --refine`, the
+//!   diagnosis's baseline refit).
 
 mod error;
 
@@ -24,6 +26,7 @@ pub mod crb;
 pub mod line_ml;
 pub mod noise;
 pub mod procedure;
+pub mod refine;
 pub mod sliding;
 pub mod tool_accuracy;
 pub mod tool_map;

@@ -14,6 +14,8 @@ use axiscal::calibration::procedure::{
 };
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
+use axiscal::calibration::refine::RefineOptions;
+use axiscal::diagnosis::refine_calibration;
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
@@ -90,6 +92,15 @@ pub struct Args {
     /// a build with `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
+    /// Refine the calibrated model on the file's free poses (experiments named `validation`,
+    /// `moved_joint = 0`): the identifiable combination of rows, zero offsets, transmission
+    /// harmonics, couplings, base and tool frames, with its covariance, the changes in sigmas
+    /// and a k-fold held-out check (`docs/method.md`, "Refinement on free poses").
+    #[arg(long)]
+    refine: bool,
+    /// Folds of `--refine`'s held-out check.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(2..))]
+    refine_folds: u64,
     #[command(flatten)]
     checks: checks::Overrides,
 }
@@ -197,6 +208,13 @@ pub fn run(args: Args) -> Result<()> {
     let mut cal =
         calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
     let map = predict_tool_accuracy(&mut cal, &desc, &set, args.held_tolerance)?;
+    // The prediction describes the axis experiments' model and its propagated covariance;
+    // `--refine` reports its own covariance and held-out check beside it.
+    let cal = if args.refine {
+        refine(&args, &set, &desc, cal)?
+    } else {
+        cal
+    };
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
     for (name, text) in &texts.files {
@@ -284,6 +302,39 @@ fn predict_tool_accuracy(
         }
         None => vec![],
     })
+}
+
+/// `cal` refined on the free poses of `set` (`--refine`), its summary printed.
+fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calibration) -> Result<Calibration> {
+    let options = RefineOptions {
+        noise_rms_3d_mm: cal
+            .noise
+            .as_ref()
+            .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm),
+        folds: args.refine_folds as usize,
+        ..RefineOptions::default()
+    };
+    let refined = refine_calibration(set, desc, &cal, &options)
+        .map_err(|e| anyhow::anyhow!("--refine on {}: {e}", args.data.display()))?;
+    if let Some(r) = &refined.refinement {
+        say!(
+            "refined on {} free poses: rank {} of {} parameters ({} directions dropped), RMS {:.4} -> {:.4} mm (noise alone {:.4} mm); {}-fold held-out RMS {:.4} -> {:.4} mm",
+            r.poses,
+            r.rank,
+            r.parameters,
+            r.dropped.len(),
+            r.rms_before_mm,
+            r.rms_after_mm,
+            r.expected_rms_after_mm,
+            r.folds.len(),
+            r.heldout_rms_before_mm,
+            r.heldout_rms_after_mm
+        );
+        if !r.converged {
+            eprintln!("warning: --refine: the Gauss-Newton steps reached their limit without converging");
+        }
+    }
+    Ok(refined)
 }
 
 /// The noise (estimated, used, contradicted), joints not calibrated, the base-frame rule.

@@ -28,19 +28,19 @@
 mod axes;
 mod decide;
 mod features;
-mod linear;
 mod model;
 mod noise;
 mod plots;
 mod poses;
+mod refine;
 mod report;
 mod result;
 mod targets;
 mod validate;
 
+pub use crate::calibration::refine::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnose_axes_with};
-pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use model::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
     MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,
@@ -50,6 +50,7 @@ pub use model::{
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, validation_poses};
+pub use refine::refine_calibration;
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
 pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
@@ -59,8 +60,8 @@ pub use validate::{
 };
 
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
+use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear};
 use crate::measurement::MeasurementSet;
-use crate::numerics::lsq::{Damping, LmOptions, LsqError, levenberg_marquardt_from};
 use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector};
@@ -331,57 +332,42 @@ struct Refined {
 impl Prepared {
     /// The observed data fitted by the refit plus `candidate` (with its sensitivity `x_effect`)
     /// with the nonlinear model: the linearised solution, then Gauss-Newton steps re-linearised
-    /// at the current parameters (kept while the training SSR falls; the program's one
-    /// least-squares loop, rank-revealing like [`LinearFit`], held-out rows carried along
-    /// unfitted). A large effect moves the model far enough that the first-order fit leaves a
-    /// visible second-order residual; noise-only data (the null distributions) do not, so the
-    /// linear null still applies.
+    /// at the current parameters ([`refine_from_linear`], shared with `calibrate --refine`;
+    /// rank-revealing like [`LinearFit`], held-out rows carried along unfitted). A large effect
+    /// moves the model far enough that the first-order fit leaves a visible second-order
+    /// residual; noise-only data (the null distributions) do not, so the linear null still
+    /// applies.
     fn refine(&self, candidate: Option<(Candidate, &DMatrix<f64>)>) -> Option<Refined> {
         let members: Vec<Candidate> = candidate.iter().map(|c| c.0).collect();
         let pred = self.predictor.with_candidates(&members);
         let order = ordered(&self.poses);
-        let steps = pred.steps();
-        // The residual is `measured - predicted`: its Jacobian is minus the sensitivity.
-        let eval = |p: &DVector<f64>| -> Result<(DVector<f64>, DMatrix<f64>), RefineError> {
-            let r = pred.residuals(p.as_slice(), &order).ok_or(RefineError)?;
-            let x = sensitivity(|q| pred.residuals(q, &order), p.as_slice(), &steps).ok_or(RefineError)?;
-            Ok((DVector::from_vec(r), -x))
-        };
         // The linearised solution is where the tests stand; the refinement starts there.
         let linear = match candidate {
             Some((_, x)) => self.candidate_fit(x),
             None => self.baseline_fit(),
         };
-        let p1 = linear.params(&self.residuals.rows(0, self.train_rows).into_owned());
-        let at_p1 = eval(&p1).ok()?;
-        let options = LmOptions {
-            damping: Damping::GaussNewton {
-                truncate_below: Some(NULL_DIRECTION_TOLERANCE),
-                monotone: true,
-            },
-            fitted_rows: Some(self.train_rows),
-            ..LmOptions::marquardt("diagnosis refit", REFINE_STEPS)
+        let how = GaussNewtonSteps {
+            fit: "diagnosis refit",
+            max_steps: REFINE_STEPS,
+            truncate_below: NULL_DIRECTION_TOLERANCE,
+            small_step: None,
         };
-        let outcome = levenberg_marquardt_from(p1, at_p1, &options, eval, |p, d| Ok(p + d)).ok()?;
-        let (t, h) = self.rows(&-outcome.jacobian);
-        let r = outcome.residual;
+        let out = refine_from_linear(
+            |p| pred.residuals(p, &order),
+            &pred.steps(),
+            &linear,
+            &self.residuals.rows(0, self.train_rows).into_owned(),
+            self.train_rows,
+            how,
+        )?;
+        let r = out.residual;
         let n = r.len();
         Some(Refined {
             heldout_ssr: r.rows(self.train_rows, n - self.train_rows).norm_squared(),
-            params: outcome.state,
-            fit: LinearFit::new(&t, &h),
+            params: out.params,
+            fit: out.fit,
             r_train: r.rows(0, self.train_rows).into_owned(),
         })
-    }
-}
-
-/// The model could not execute a command at some refit parameters.
-#[derive(Debug)]
-struct RefineError;
-
-impl From<LsqError> for RefineError {
-    fn from(_: LsqError) -> Self {
-        RefineError
     }
 }
 

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use assert_cmd::Command;
-use axiscal::measurement::{MeasurementModel, MeasurementSet};
+use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::sim::{AnalyticArm, simulate_campaign};
@@ -48,6 +48,23 @@ pub fn analytic_campaign(
     let mut rng = ChaCha12Rng::seed_from_u64(seed);
     let out = simulate_campaign(&desc, plan, validation, &mut arm, instrument, &mut rng).expect("the campaign runs");
     MeasurementSet::new(desc.dof(), out.rows).expect("a simulated campaign is a valid measurement set")
+}
+
+/// A campaign of the jitter-free paper robot: Table 1 and `poses` validation poses, measured
+/// with isotropic noise of 3-D RMS `noise_mm`, random stream from `seed`.
+pub fn jitter_free_campaign(noise_mm: f64, poses: usize, seed: u64) -> MeasurementSet {
+    analytic_campaign(
+        &paper_robot_without_jitter(),
+        &CalibrationPlan::table1(6),
+        &ValidationPlan {
+            poses,
+            ..ValidationPlan::workspace_default(6)
+        },
+        &MeasurementModel::Isotropic(IsotropicNoise {
+            net_radial_rms_mm: noise_mm,
+        }),
+        seed,
+    )
 }
 
 /// The Table-1 axis experiments alone (no validation poses) of the paper robot, with its

@@ -815,6 +815,7 @@ impl<'a> Context<'a> {
             not_calibrated,
             noise: Some(noise),
             held_passes: passes,
+            refinement: None,
             residuals,
             description: Some(self.desc.identity()),
             model_covariance,

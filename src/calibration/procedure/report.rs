@@ -258,6 +258,9 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
     write_tool_accuracy(&mut s, cal);
     write_findings(&mut s, cal, desc);
     write_identifiability(&mut s, cal);
+    if let Some(r) = &cal.refinement {
+        s += &crate::calibration::refine::markdown(r);
+    }
     s
 }
 

@@ -567,6 +567,11 @@ pub struct Calibration {
     /// (`axiscal calibrate`), not by [`super::calibrate`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tool_accuracy: Option<ToolAccuracy>,
+    /// Present when `robot` was refined on the file's free poses (`calibrate --refine`): the
+    /// refinement's summary. `axes`, `couplings` and the sigmas above stay the axis
+    /// experiments' (unrefined) estimates; `robot` is the refined model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<crate::calibration::refine::Refinement>,
     /// Per-point residuals of the axis fits (written as `residuals.csv`, not in the JSON).
     #[serde(skip)]
     pub residuals: Vec<PointResidual>,

@@ -7,6 +7,7 @@
 mod candidate;
 mod compliance;
 mod effect_set;
+mod layout;
 mod plausible;
 #[cfg(test)]
 mod tests;

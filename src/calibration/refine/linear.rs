@@ -1,5 +1,6 @@
-//! Linearised least squares of the diagnoser: the residuals of the calibrated model are
-//! linear in the small refit and effect parameters (Gauss-Newton's model, Nocedal & Wright,
+//! Linearised least squares of a refinement on free poses (the diagnoser's and `calibrate
+//! --refine`'s): the residuals of the calibrated model are linear in the small refit and
+//! effect parameters (Gauss-Newton's model, Nocedal & Wright,
 //! Numerical Optimization, 2nd ed., eq. 10.24), so every fit is one truncated-SVD solve on
 //! the training rows ([`TruncatedSvd`]), and its
 //! held-out residuals are a fixed linear map of the data: `r_h - X_h X_t^+ r_t`.
