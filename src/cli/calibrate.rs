@@ -12,9 +12,9 @@ use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, findings,
     joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, ros_name, urdf,
 };
+use axiscal::calibration::refine::RefineOptions;
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
-use axiscal::calibration::refine::RefineOptions;
 use axiscal::diagnosis::refine_calibration;
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
