@@ -383,6 +383,18 @@ fn rms_mm(r: &[f64]) -> f64 {
     (r.iter().map(|x| x * x).sum::<f64>() / points as f64).sqrt() * 1e3
 }
 
+/// Enough free poses for the folds (at least two) and a positive noise.
+fn check_inputs(poses: usize, options: &RefineOptions) -> Result<(), RefineError> {
+    let needed = options.folds.max(2);
+    if poses < needed {
+        return Err(RefineError::TooFewPoses { found: poses, needed });
+    }
+    if options.noise_rms_3d_mm.is_nan() || options.noise_rms_3d_mm <= 0.0 {
+        return Err(RefineError::Noise(options.noise_rms_3d_mm));
+    }
+    Ok(())
+}
+
 /// Refines the calibrated model on free poses (module docs).
 ///
 /// `residuals(p, poses)` gives `measured - predicted` \[m\] (three rows per measured target) of
@@ -401,16 +413,7 @@ pub fn refine_free_poses<F>(
 where
     F: Fn(&[f64], &[usize]) -> Option<Vec<f64>>,
 {
-    let needed = options.folds.max(2);
-    if targets_per_pose.len() < needed {
-        return Err(RefineError::TooFewPoses {
-            found: targets_per_pose.len(),
-            needed,
-        });
-    }
-    if options.noise_rms_3d_mm.is_nan() || options.noise_rms_3d_mm <= 0.0 {
-        return Err(RefineError::Noise(options.noise_rms_3d_mm));
-    }
+    check_inputs(targets_per_pose.len(), options)?;
     let free: Vec<usize> = (0..layout.len()).filter(|&i| !layout[i].fixed()).collect();
     let scale: Vec<f64> = free
         .iter()
