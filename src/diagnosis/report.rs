@@ -122,7 +122,7 @@ fn tool_targets_section(s: &mut String, t: &super::ToolTargets) {
         let _ = writeln!(
             s,
             "| {}-{} | {:.3} | {:.3} | {:.3} | {:.1} |",
-            d.targets[0], d.targets[1], d.nominal_mm, d.refined_mm, d.sigma_mm, d.sigmas_off
+            d.first_target, d.second_target, d.nominal_mm, d.refined_mm, d.sigma_mm, d.sigmas_off
         );
     }
     s.push('\n');

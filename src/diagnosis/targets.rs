@@ -33,8 +33,10 @@ pub const FAR_SIGMAS: f64 = 4.0;
 /// One distance between two tool targets, nominal and refined.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct TargetDistance {
-    /// The two targets (CSV `target` ids).
-    pub targets: [usize; 2],
+    /// The first target of the pair (its CSV `target` id).
+    pub first_target: usize,
+    /// The second target of the pair (its CSV `target` id).
+    pub second_target: usize,
     /// The description's distance \[mm\].
     pub nominal_mm: f64,
     /// Refined from the training poses \[mm\].
@@ -74,8 +76,8 @@ impl ToolTargets {
                 "the description's tool targets are far off: targets {} and {} are {:.3} mm apart in the \
                  description, {:.3} +- {:.3} mm from the validation poses ({:.1} sigma); the diagnosis \
                  used the refined targets {}",
-                worst.targets[0],
-                worst.targets[1],
+                worst.first_target,
+                worst.second_target,
                 worst.nominal_mm,
                 worst.refined_mm,
                 worst.sigma_mm,
@@ -138,7 +140,8 @@ where
         .map(|(k, (targets, (n, r)))| {
             let sigma = cov[(k, k)].max(0.0).sqrt();
             TargetDistance {
-                targets,
+                first_target: targets[0],
+                second_target: targets[1],
                 nominal_mm: n * 1e3,
                 refined_mm: r * 1e3,
                 sigma_mm: sigma * 1e3,
