@@ -200,7 +200,7 @@ fn wrong_tool_targets_are_refined(data: &MeasurementSet, right: &Diagnosis) {
     assert!(t.far && t.warning().is_some(), "{:?}", t.distances);
     let truth = desc.tool_targets_m();
     for d in &t.distances {
-        let true_mm = (truth[d.targets[0]] - truth[d.targets[1]]).norm() * 1e3;
+        let true_mm = (truth[d.first_target] - truth[d.second_target]).norm() * 1e3;
         assert!(
             (d.refined_mm - true_mm).abs() <= K_SIGMA * d.sigma_mm,
             "{d:?}, true {true_mm} mm"
