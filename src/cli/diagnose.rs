@@ -86,7 +86,7 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
-    let (noise_mm, noise_source) = noise(&args, &set, &desc)?;
+    let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: noise_mm,
         noise_trials: args.noise_trials,
@@ -99,6 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.seed,
         axis_replicas: args.axis_replicas,
         refine_tool_targets: !args.nominal_tool_targets,
+        noise_dof,
         ..DiagnosisOptions::default()
     };
     let source = args.data.display().to_string();
@@ -199,11 +200,12 @@ fn run_axes(
     )
 }
 
-/// The noise of the diagnosis \[mm\] and its source: `--noise-mm`, or the estimate from the
-/// axis experiments' residuals (said on stderr; an error when the data cannot give one).
-fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(f64, &'static str)> {
+/// The noise of the diagnosis \[mm\], its source and, when estimated, the estimate's degrees of
+/// freedom: `--noise-mm`, or the estimate from the axis experiments' residuals (said on stderr;
+/// an error when the data cannot give one).
+fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(f64, &'static str, Option<f64>)> {
     if let Some(n) = args.noise_mm {
-        return Ok((n, "given"));
+        return Ok((n, "given", None));
     }
     let e = estimated_noise(set, desc)
         .with_context(|| format!("estimating the noise of {}", args.data.display()))?
@@ -224,7 +226,7 @@ fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(
         e.dof,
         e.jitter_share * 100.0
     );
-    Ok((e.rms_3d_mm, "estimated"))
+    Ok((e.rms_3d_mm, "estimated", Some(e.effective_dof)))
 }
 
 /// The `--record` recording of the diagnosed data (the standard calibration, weighted first
