@@ -119,7 +119,7 @@ pub struct DiagnosisOptions {
     pub refine_tool_targets: bool,
     /// Degrees of freedom of the noise estimate when `noise_rms_3d_mm` was estimated from the
     /// data (`None`: given, known). The replicas then draw the noise level from the estimate's
-    /// sampling distribution ([`noise_level_draw`]), so that a low estimate (on few arcs) widens
+    /// sampling distribution (`s * sqrt(dof / X)`, `X ~ chi^2(dof)`), so that a low estimate (on few arcs) widens
     /// the noise-only spread instead of passing for a gap.
     #[serde(default)]
     pub noise_dof: Option<f64>,
