@@ -124,7 +124,7 @@ pub(super) fn compare<F>(
     variance: f64,
 ) -> Option<ToolTargets>
 where
-    F: Fn(&[f64]) -> Vec<Point3<f64>>,
+    F: Fn(&[f64]) -> Vec<Point3<f64>> + Sync,
 {
     let at = refined(params.as_slice());
     let d = |p: &[f64]| Some(distances_m(&refined(p)));

@@ -508,7 +508,7 @@ impl TruncatedSvd {
         for (c, n) in norms.iter().enumerate() {
             scaled.column_mut(c).scale_mut(1.0 / n);
         }
-        let svd = scaled.svd(true, true);
+        let svd = super::svd::thin_svd(scaled, true);
         let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
             unreachable!("SVD computed with U and V^T")
         };

@@ -15,6 +15,7 @@ use super::linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 use super::{GaussNewtonSteps, refine_from_linear};
 use crate::numerics::lsq::Stop;
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// One correction parameter of the refined model, in the refit's layout.
@@ -301,7 +302,7 @@ struct Directions {
 impl Directions {
     fn new(x: &DMatrix<f64>, sigma_c: f64) -> Self {
         let n = x.ncols();
-        let svd = x.clone().svd(false, true);
+        let svd = crate::numerics::svd::thin_svd(x.clone(), false);
         let v_t = svd.v_t.unwrap_or_else(|| DMatrix::identity(n, n));
         let s = &svd.singular_values;
         let s_max = s.iter().cloned().fold(0.0, f64::max);
@@ -362,7 +363,7 @@ struct Scaled<'a, F> {
     scale: Vec<f64>,
 }
 
-impl<F: Fn(&[f64], &[usize]) -> Option<Vec<f64>>> Scaled<'_, F> {
+impl<F: Fn(&[f64], &[usize]) -> Option<Vec<f64>> + Sync> Scaled<'_, F> {
     /// The caller's parameters of `u` (unrefined sigmas of the free parameters).
     fn embed(&self, u: &[f64]) -> Vec<f64> {
         let mut p = vec![0.0; self.layout.len()];
@@ -411,7 +412,7 @@ pub fn refine_free_poses<F>(
     options: &RefineOptions,
 ) -> Result<RefinementResult, RefineError>
 where
-    F: Fn(&[f64], &[usize]) -> Option<Vec<f64>>,
+    F: Fn(&[f64], &[usize]) -> Option<Vec<f64>> + Sync,
 {
     check_inputs(targets_per_pose.len(), options)?;
     let free: Vec<usize> = (0..layout.len()).filter(|&i| !layout[i].fixed()).collect();
@@ -507,7 +508,8 @@ struct Fold {
 
 /// The k-fold held-out check, linearised at the unrefined model (the refinement's first step):
 /// per fold, the directions kept on its training poses, their fit, and the held-out rows'
-/// residual before and after.
+/// residual before and after. The folds are independent: they run in parallel on the current
+/// rayon pool (each the same arithmetic whatever the thread count).
 fn k_fold(r0: &DVector<f64>, x_u: &DMatrix<f64>, targets: &[usize], folds: usize, sigma_c: f64) -> Vec<Fold> {
     let mut starts = Vec::with_capacity(targets.len());
     let mut at = 0;
@@ -522,6 +524,7 @@ fn k_fold(r0: &DVector<f64>, x_u: &DMatrix<f64>, targets: &[usize], folds: usize
             .collect()
     };
     (0..folds)
+        .into_par_iter()
         .map(|f| {
             let (train, held) = (rows_of(false, f), rows_of(true, f));
             let x_t = x_u.select_rows(&train);

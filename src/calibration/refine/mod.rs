@@ -84,7 +84,7 @@ pub fn refine_from_linear<F>(
     how: GaussNewtonSteps<'_>,
 ) -> Option<Refined>
 where
-    F: Fn(&[f64]) -> Option<Vec<f64>>,
+    F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
 {
     // The residual is `measured - predicted`: its Jacobian is minus the sensitivity.
     let eval = |p: &DVector<f64>| -> Result<(DVector<f64>, DMatrix<f64>), Unexecutable> {
