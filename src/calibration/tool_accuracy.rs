@@ -63,9 +63,12 @@ enum Stored {
     Deg,
 }
 
-/// Calls `f(name, value, how stored)` (the name made only when asked) on every scalar of `robot` the vector holds between
-/// the two placements, in vector order.
-fn visit_scalars(robot: &mut RobotModel, f: &mut dyn FnMut(&dyn Fn() -> String, &mut f64, Stored)) {
+/// A visitor of the model's scalars: `(name, made only when called; value; how stored)`.
+type ScalarVisitor<'a> = dyn FnMut(&dyn Fn() -> String, &mut f64, Stored) + 'a;
+
+/// Calls `f(name, value, how stored)` (the name made only when asked) on every scalar of
+/// `robot` the vector holds between the two placements, in vector order.
+fn visit_scalars(robot: &mut RobotModel, f: &mut ScalarVisitor<'_>) {
     for (i, r) in robot.rows.iter_mut().enumerate() {
         let row = i + 1;
         f(&|| format!("row {row} a [m]"), &mut r.a_m, Stored::Si);
@@ -113,12 +116,7 @@ fn visit_scalars(robot: &mut RobotModel, f: &mut dyn FnMut(&dyn Fn() -> String, 
 }
 
 /// Calls `f` on harmonic coefficients `sin..` then `cos..` \[rad\].
-fn visit_harmonics(
-    f: &mut dyn FnMut(&dyn Fn() -> String, &mut f64, Stored),
-    prefix: &dyn Fn() -> String,
-    sin: &mut [f64],
-    cos: &mut [f64],
-) {
+fn visit_harmonics(f: &mut ScalarVisitor<'_>, prefix: &dyn Fn() -> String, sin: &mut [f64], cos: &mut [f64]) {
     for (k, s) in sin.iter_mut().enumerate() {
         f(&|| format!("{} sin{} [rad]", prefix(), k + 1), s, Stored::Si);
     }
