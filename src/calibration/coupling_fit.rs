@@ -200,7 +200,7 @@ fn residuals_and_jacobian(
     let (n, m) = (active_rad.len(), x.len());
     let target = target_rad;
     let g = build(form, x.as_slice());
-    let r = DVector::from_fn(n, |k, _| g.passive(active_rad[k]) - target[k]);
+    let r = residuals_of(&g, active_rad, target);
     // One scratch row for all points, copied into the column-major Jacobian.
     let mut j = DMatrix::zeros(n, m);
     let mut row = vec![0.0; m];
@@ -209,6 +209,11 @@ fn residuals_and_jacobian(
         j.row_mut(k).iter_mut().zip(&row).for_each(|(a, b)| *a = *b);
     }
     Ok((r, j))
+}
+
+/// The residuals `g(t_k) - target_k` of the coupling `g`.
+fn residuals_of(g: &CouplingFunction, active_rad: &[f64], target_rad: &[f64]) -> DVector<f64> {
+    DVector::from_fn(active_rad.len(), |k, _| g.passive(active_rad[k]) - target_rad[k])
 }
 
 /// 1-sigma of each of the `m` parameters, a-posteriori (`s^2 (J^T J)^-1`) from the residuals
@@ -304,14 +309,12 @@ pub fn refit_coupling(
     let (n, m) = (active_rad.len(), x0.len());
     let target = absolute_targets(n, passive_from_start_rad, passive_start_rad)?;
     let mut x = DVector::from_column_slice(x0);
-    let mut r = DVector::zeros(0);
-    for step in 0..=if m == 0 { 0 } else { REFIT_STEPS } {
-        let (residuals, j) = residuals_and_jacobian(form, active_rad, &target, &x)?;
-        r = residuals;
-        if step < REFIT_STEPS && m > 0 {
-            x += lsq::linear_lsq(&j, &(-&r), FIT)?.0;
-        }
+    for _ in 0..if m == 0 { 0 } else { REFIT_STEPS } {
+        let (r, j) = residuals_and_jacobian(form, active_rad, &target, &x)?;
+        x += lsq::linear_lsq(&j, &(-&r), FIT)?.0;
     }
+    // The last residuals without the Jacobian (the same arithmetic).
+    let r = residuals_of(&build(form, x.as_slice()), active_rad, &target);
     // No a-posteriori sigma: a refit's only reader is the propagation, which takes the
     // parameters (inverting the normal matrix again would cost a tenth of a calibration).
     Ok(CouplingFit {

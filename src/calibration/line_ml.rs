@@ -25,7 +25,7 @@ use crate::robot::Transmission;
 const FIT: &str = "sliding axis maximum-likelihood fit (eqs. 9-13)";
 
 /// Number of geometric parameters before the transmission coefficients.
-const N_GEOMETRY: usize = 5;
+pub(crate) const N_GEOMETRY: usize = 5;
 
 /// The parameters of the line model.
 #[derive(Clone, Debug, PartialEq)]

@@ -63,48 +63,51 @@ enum Stored {
     Deg,
 }
 
-/// Calls `f(name, value, how stored)` on every scalar of `robot` the vector holds between
-/// the two placements, in vector order.
-fn visit_scalars(robot: &mut RobotModel, f: &mut dyn FnMut(String, &mut f64, Stored)) {
+/// A visitor of the model's scalars: `(name, made only when called; value; how stored)`.
+type ScalarVisitor<'a> = dyn FnMut(&dyn Fn() -> String, &mut f64, Stored) + 'a;
+
+/// Calls `f(name, value, how stored)` (the name made only when asked) on every scalar of
+/// `robot` the vector holds between the two placements, in vector order.
+fn visit_scalars(robot: &mut RobotModel, f: &mut ScalarVisitor<'_>) {
     for (i, r) in robot.rows.iter_mut().enumerate() {
         let row = i + 1;
-        f(format!("row {row} a [m]"), &mut r.a_m, Stored::Si);
-        f(format!("row {row} b [m]"), &mut r.b_m, Stored::Si);
-        f(format!("row {row} alpha [rad]"), &mut r.alpha_deg, Stored::Deg);
-        f(format!("row {row} beta [rad]"), &mut r.beta_deg, Stored::Deg);
-        f(format!("row {row} gamma [rad]"), &mut r.gamma_deg, Stored::Deg);
-        f(format!("row {row} h [m]"), &mut r.h_m, Stored::Si);
+        f(&|| format!("row {row} a [m]"), &mut r.a_m, Stored::Si);
+        f(&|| format!("row {row} b [m]"), &mut r.b_m, Stored::Si);
+        f(&|| format!("row {row} alpha [rad]"), &mut r.alpha_deg, Stored::Deg);
+        f(&|| format!("row {row} beta [rad]"), &mut r.beta_deg, Stored::Deg);
+        f(&|| format!("row {row} gamma [rad]"), &mut r.gamma_deg, Stored::Deg);
+        f(&|| format!("row {row} h [m]"), &mut r.h_m, Stored::Si);
     }
     for (i, j) in robot.joints.iter_mut().enumerate() {
         let joint = i + 1;
-        f(format!("joint {joint} phi [rad]"), &mut j.phi_deg, Stored::Deg);
+        f(&|| format!("joint {joint} phi [rad]"), &mut j.phi_deg, Stored::Deg);
         f(
-            format!("joint {joint} zero offset [rad or m]"),
+            &|| format!("joint {joint} zero offset [rad or m]"),
             &mut j.transducer_offset,
             Stored::Si,
         );
         match &mut j.transmission {
             Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => {
-                visit_harmonics(f, &format!("joint {joint} transmission"), sin, cos);
+                visit_harmonics(f, &|| format!("joint {joint} transmission"), sin, cos);
             }
             Transmission::Polynomial { c, .. } => {
                 for (k, v) in c.iter_mut().enumerate() {
-                    f(format!("joint {joint} transmission c{}", k + 1), v, Stored::Si);
+                    f(&|| format!("joint {joint} transmission c{}", k + 1), v, Stored::Si);
                 }
             }
         }
-        let from = format!("coupling {}->{joint}", joint - 1);
+        let from = || format!("coupling {}->{joint}", joint - 1);
         match &mut j.coupling_in {
             Some(CouplingFunction::Gear { ratio, sin, cos }) => {
-                f(format!("{from} ratio"), ratio, Stored::Si);
+                f(&|| format!("{} ratio", from()), ratio, Stored::Si);
                 visit_harmonics(f, &from, sin, cos);
             }
             Some(CouplingFunction::Fractional { num, den }) => {
                 for (k, v) in num.iter_mut().enumerate() {
-                    f(format!("{from} n{k}"), v, Stored::Si);
+                    f(&|| format!("{} n{k}", from()), v, Stored::Si);
                 }
                 for (k, v) in den.iter_mut().enumerate() {
-                    f(format!("{from} d{k}"), v, Stored::Si);
+                    f(&|| format!("{} d{k}", from()), v, Stored::Si);
                 }
             }
             Some(CouplingFunction::FourBar(_)) | None => {}
@@ -113,12 +116,12 @@ fn visit_scalars(robot: &mut RobotModel, f: &mut dyn FnMut(String, &mut f64, Sto
 }
 
 /// Calls `f` on harmonic coefficients `sin..` then `cos..` \[rad\].
-fn visit_harmonics(f: &mut dyn FnMut(String, &mut f64, Stored), prefix: &str, sin: &mut [f64], cos: &mut [f64]) {
+fn visit_harmonics(f: &mut ScalarVisitor<'_>, prefix: &dyn Fn() -> String, sin: &mut [f64], cos: &mut [f64]) {
     for (k, s) in sin.iter_mut().enumerate() {
-        f(format!("{prefix} sin{} [rad]", k + 1), s, Stored::Si);
+        f(&|| format!("{} sin{} [rad]", prefix(), k + 1), s, Stored::Si);
     }
     for (k, c) in cos.iter_mut().enumerate() {
-        f(format!("{prefix} cos{} [rad]", k + 1), c, Stored::Si);
+        f(&|| format!("{} cos{} [rad]", prefix(), k + 1), c, Stored::Si);
     }
 }
 
@@ -130,7 +133,7 @@ fn placement_names(what: &str) -> [String; 6] {
 /// The names (with units) of `robot`'s parameter vector: base placement, scalars, tool frame.
 pub fn model_parameter_names(robot: &RobotModel) -> Vec<String> {
     let mut names: Vec<String> = placement_names("base").into();
-    visit_scalars(&mut robot.clone(), &mut |name, _, _| names.push(name));
+    visit_scalars(&mut robot.clone(), &mut |name, _, _| names.push(name()));
     names.extend(placement_names("tool"));
     names
 }

@@ -49,6 +49,32 @@ pub(super) struct Refit<'a> {
     pub(super) fixed: Option<(usize, &'a [f64])>,
     /// Where to record every fitted coupling's inputs.
     pub(super) record: Option<&'a RefCell<Vec<RecordedCoupling>>>,
+    /// The couplings' inputs of the recording assembly and their warm refits: a refit whose
+    /// inputs are those of the recording (a propagation column that moves another joint's
+    /// fit) is computed once and reused, bit for bit the same.
+    pub(super) memo: Option<&'a RefCell<Vec<CouplingMemo>>>,
+    /// The phi-model of the axes when it is already known (the axes are those it was built
+    /// from): not built again.
+    pub(super) geometry: Option<&'a (PhiModel, super::BaseRule)>,
+}
+
+/// What a coupling fit depends on besides the fixed data (experiments, second targets,
+/// reference pose, controller): the base placement and the rows below the driven joint (its
+/// frames), the driving joint's transmission and zero shift.
+#[derive(Clone, PartialEq)]
+struct CouplingInputs {
+    world_from_base: Isometry3<f64>,
+    rows: Vec<crate::kinematics::PhiRow>,
+    transmission: Option<Transmission>,
+    shift: f64,
+}
+
+/// One coupling's recorded inputs and, once computed, its warm refit on them.
+pub(super) struct CouplingMemo {
+    /// Driven joint (0-based).
+    k: usize,
+    inputs: CouplingInputs,
+    refit: Option<(CouplingFunction, CouplingReport)>,
 }
 
 /// A fitted coupling's inputs other than the second targets, and its parameters: refits it
@@ -219,12 +245,60 @@ impl Assembly<'_> {
                 reason: "a coupling is measured only while actuator k+1 is held still (`docs/formats.md#controller-semantics`)".into(),
             });
         }
-        self.fit_measured_coupling(k, (index, e), slope, form, shift, couplings)
-            .map(Some)
+        self.memoized(k, shift, couplings, || {
+            self.fit_measured_coupling(k, (index, e), slope, form, shift)
+        })
+        .map(Some)
+    }
+
+    /// The coupling into joint `k` (0-based) that `fit` fits from the zero shifts `shift` of
+    /// the joints below, its report pushed onto `couplings`; taken from [`Refit::memo`] when
+    /// its inputs are the recorded ones and already refitted there.
+    fn memoized(
+        &self,
+        k: usize,
+        shift: &[f64],
+        couplings: &mut Vec<CouplingReport>,
+        fit: impl FnOnce() -> Result<(CouplingFunction, CouplingReport), ProcedureError>,
+    ) -> Result<CouplingFunction, ProcedureError> {
+        let inputs = CouplingInputs {
+            world_from_base: self.geometry.world_from_base,
+            rows: self.geometry.rows[..k].to_vec(),
+            transmission: self.transmissions[k - 1].clone(),
+            shift: shift[k - 1],
+        };
+        let memo = match (self.refit.memo, self.refit.fixed, self.refit.warm) {
+            (Some(m), fixed, Some(_)) if fixed.is_none_or(|(j, _)| j != k) => Some(m),
+            _ => None,
+        };
+        let hit = memo.and_then(|m| {
+            m.borrow()
+                .iter()
+                .find(|entry| entry.k == k && entry.inputs == inputs)
+                .and_then(|entry| entry.refit.clone())
+        });
+        if let Some((function, report)) = hit {
+            couplings.push(report);
+            return Ok(function);
+        }
+        let (function, report) = fit()?;
+        if let Some(m) = self.refit.memo {
+            let mut m = m.borrow_mut();
+            if memo.is_some() {
+                if let Some(entry) = m.iter_mut().find(|entry| entry.k == k && entry.inputs == inputs) {
+                    entry.refit = Some((function.clone(), report.clone()));
+                }
+            } else if self.refit.record.is_some() {
+                m.push(CouplingMemo { k, inputs, refit: None });
+            }
+        }
+        couplings.push(report);
+        Ok(function)
     }
 
     /// Fits the coupling into joint `k` (0-based) from the second target of sweep `e` of joint
-    /// `k-1` (eqs. 14-15), nominal slope `slope`, and pushes its report onto `couplings`.
+    /// `k-1` (eqs. 14-15), nominal slope `slope` (or refits it, as `refit` asks), with its
+    /// report.
     fn fit_measured_coupling(
         &self,
         k: usize,
@@ -232,8 +306,7 @@ impl Assembly<'_> {
         slope: f64,
         form: CouplingFitForm,
         shift: &[f64],
-        couplings: &mut Vec<CouplingReport>,
-    ) -> Result<CouplingFunction, ProcedureError> {
+    ) -> Result<(CouplingFunction, CouplingReport), ProcedureError> {
         let (geometry, q_ref) = (self.geometry, self.q_ref);
         let from = k;
         let second = &self.target1[index];
@@ -279,8 +352,8 @@ impl Assembly<'_> {
                 parameters: fit.parameters.clone(),
             });
         }
-        couplings.push(CouplingReport::new(from, e, &fit, &cform));
-        Ok(fit.function)
+        let report = CouplingReport::new(from, e, &fit, &cform);
+        Ok((fit.function, report))
     }
 
     /// The calibrated active angles (rad) of the driving joint `k-1` (0-based) at the steps of

@@ -64,7 +64,7 @@ use axis_fit::{AxisFitOutcome, JointData, actuator_commands, add_held_joint_cova
 use held::{Corrector, design_distance, exactly_as_designed};
 use joints::{Assembly, RecordedCoupling, Refit};
 use nalgebra::{DMatrix, Isometry3, Point3};
-use propagation::{Derived, Propagation, moved_point};
+use propagation::{Derived, Propagation, add_axis_fit, moved_point};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
 
@@ -565,7 +565,10 @@ impl<'a> Context<'a> {
         target1: &[Vec<Point3<f64>>],
         refit: Refit,
     ) -> Result<(PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
-        let (geometry, base_rule) = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
+        let (geometry, base_rule) = match refit.geometry {
+            Some((geometry, rule)) => (geometry.clone(), rule.clone()),
+            None => model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?,
+        };
         let assembly = Assembly {
             desc: self.desc,
             experiments: self.experiments,
@@ -582,14 +585,14 @@ impl<'a> Context<'a> {
     }
 
     /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
-    /// `axes` and `transmissions`, the second targets `target1` and the tool targets `tool`
-    /// (measured at the reference pose) give; couplings refitted from `warm` as in
+    /// `axes` and `transmissions`, the second targets `target1` and the tool frame `tool`
+    /// (the rigid fit of the tool targets measured at the reference pose) give; couplings refitted from `warm` as in
     /// [`Context::joints_from`]. With the calibrated robot, for [`Context::with_tool`].
     fn derived(
         &self,
         (axes, transmissions): (&[Option<AxisLine>], &[Option<Transmission>]),
         target1: &[Vec<Point3<f64>>],
-        tool: Option<&[Point3<f64>]>,
+        tool: Option<&Isometry3<f64>>,
         reference_cmd: &[f64],
         refit: Refit,
     ) -> Result<(Derived, RobotModel), ProcedureError> {
@@ -606,17 +609,18 @@ impl<'a> Context<'a> {
         Ok((self.with_tool(derived, &robot, tool, reference_cmd), robot))
     }
 
-    /// `derived` with the tool frame of `robot` from the tool targets `tool` (none without)
-    /// and, on the report path, the whole model with that tool frame (for its covariance).
+    /// `derived` with the tool frame of `robot` from the measured tool frame `tool` (the
+    /// tool targets' rigid fit, none without) and, on the report path, the whole model with
+    /// that tool frame (for its covariance).
     fn with_tool(
         &self,
         derived: Derived,
         robot: &RobotModel,
-        tool: Option<&[Point3<f64>]>,
+        tool: Option<&Isometry3<f64>>,
         reference_cmd: &[f64],
     ) -> Derived {
-        let tool = tool.and_then(|measured| {
-            last_link_from_tool(measured, self.desc, robot, reference_cmd, self.controller).map(|(f, _)| f)
+        let tool = tool.and_then(|world_from_tool| {
+            last_link_from(world_from_tool, self.desc, robot, reference_cmd, self.controller)
         });
         let robot = (self.detail == Detail::Report).then(|| {
             let mut model = robot.clone();
@@ -647,35 +651,50 @@ impl<'a> Context<'a> {
             .map(|f| f.as_ref().map(|f| f.transmission.clone()))
             .collect();
         let tool_points = tool_observation(set, self.desc, reference_cmd).map(|o| o.measured);
-        let tool = tool_points.as_deref();
+        let tool_fit = |points: &[Point3<f64>]| rigid_fit(&self.desc.tool_targets_m(), points).map(|(w, _)| w);
+        let world_from_tool = tool_points.as_deref().and_then(tool_fit);
+        let tool = world_from_tool.as_ref();
         let (axes, target1) = (&state.axes, &state.target1);
         let mut warm: Vec<Option<Vec<f64>>> = vec![None; self.desc.dof()];
         for c in &state.couplings {
             warm[c.from] = Some(c.parameters.clone());
         }
         let record = RefCell::new(Vec::new());
+        let memo = RefCell::new(Vec::new());
         let recording = Refit {
             record: Some(&record),
+            memo: Some(&memo),
             ..Refit::default()
         };
         let (base, robot) = self.derived((axes, &transmissions), target1, tool, reference_cmd, recording)?;
         let warm = Refit {
             warm: Some(&warm),
+            memo: Some(&memo),
             ..Refit::default()
         };
+        let geometry = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
         let mut prop = Propagation::new(base.len());
         for (k, local) in state.fits.iter().enumerate() {
             let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {
                 continue;
             };
-            prop.add(local.covariance(), |i, h| {
-                let mut delta = vec![0.0; local.covariance().nrows()];
-                delta[i] = h;
-                let (axis, transmission) = local.rebuilt(&delta);
+            let axis = axes[k].expect("a fitted joint has its axis");
+            add_axis_fit(&mut prop, local, &axis, |axis, transmission| {
                 let (mut a, mut t) = (axes.clone(), transmissions.clone());
-                a[k] = Some(axis);
-                t[k] = Some(transmission);
-                Ok::<_, ProcedureError>(self.derived((&a, &t), target1, tool, reference_cmd, warm)?.0)
+                if transmission.is_some() {
+                    t[k] = transmission;
+                }
+                let refit = match axis {
+                    Some(axis) => {
+                        a[k] = Some(axis);
+                        warm
+                    }
+                    None => Refit {
+                        geometry: Some(&geometry),
+                        ..warm
+                    },
+                };
+                Ok::<_, ProcedureError>(self.derived((&a, &t), target1, tool, reference_cmd, refit)?.0)
             })?;
         }
         for coupling in record.into_inner() {
@@ -685,6 +704,7 @@ impl<'a> Context<'a> {
                 x[i] += h;
                 let fixed = Refit {
                     fixed: Some((coupling.k, &x)),
+                    geometry: Some(&geometry),
                     ..warm
                 };
                 Ok::<_, ProcedureError>(
@@ -699,7 +719,8 @@ impl<'a> Context<'a> {
             let at: Vec<(usize, usize)> = (0..points.len()).map(|j| (0, j)).collect();
             prop.add_independent(3 * points.len(), sigma, |k, h| {
                 let moved = moved_point(&lists, &at, k, h);
-                Ok::<_, ProcedureError>(self.with_tool(base.clone(), &robot, Some(&moved[0]), reference_cmd))
+                let moved_tool = tool_fit(&moved[0]);
+                Ok::<_, ProcedureError>(self.with_tool(base.clone(), &robot, moved_tool.as_ref(), reference_cmd))
             })?;
         }
         Ok((base.sigma(&prop.covariance), base.model_covariance(&prop.covariance)))
@@ -955,11 +976,26 @@ fn last_link_from_tool(
     controller: &Controller,
 ) -> Option<(Isometry3<f64>, f64)> {
     let (world_from_tool, rms_m) = rigid_fit(&desc.tool_targets_m(), measured)?;
+    Some((
+        last_link_from(&world_from_tool, desc, robot, reference_cmd, controller)?,
+        rms_m,
+    ))
+}
+
+/// The tool frame in the last link of `robot` from the measured tool frame `world_from_tool`
+/// at the reference pose.
+fn last_link_from(
+    world_from_tool: &Isometry3<f64>,
+    desc: &RobotDescription,
+    robot: &RobotModel,
+    reference_cmd: &[f64],
+    controller: &Controller,
+) -> Option<Isometry3<f64>> {
     let q = robot
         .joint_values(controller, &commands_to_internal(desc, reference_cmd))
         .ok()?;
     let link = robot.phi_model().poses(&q).world_from_link[desc.dof() - 1];
-    Some((link.inverse() * world_from_tool, rms_m))
+    Some(link.inverse() * world_from_tool)
 }
 
 /// The tool frame from the three tool targets observed at the reference pose: experiment

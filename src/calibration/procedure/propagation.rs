@@ -8,7 +8,11 @@
 //! `C_k` the covariance of fit `k`'s local parameters (the fits are independent, each from its
 //! own sweep), `sigma` the measurement noise per coordinate and `J` by central differences of
 //! the whole assembly ([`super::Context::derived`]), whose couplings are refitted by
-//! Gauss-Newton steps from the fitted ones (`coupling_fit::refit_coupling`). The second
+//! Gauss-Newton steps from the fitted ones (`coupling_fit::refit_coupling`). An arc fit's
+//! covariance is carried to its axis line's four coordinates and its transmission's
+//! coefficients first ([`add_axis_fit`]), so the assembly is differentiated along what it
+//! depends on; a column that moves neither the axes nor a coupling's inputs reuses the
+//! fitted frames and that coupling's refit (the same arithmetic, done once). The second
 //! targets move the derived quantities only through their coupling's parameters `x`: their
 //! term is `J_x C_x J_x^T`, `C_x` from the targets' noise through the passive angles'
 //! analytic gradients and the refit (`Context::second_target_sigma`) and `J_x` by central
@@ -59,6 +63,22 @@ pub(super) enum LocalFit {
 }
 
 impl LocalFit {
+    /// Whether local parameter `i` moves the axis or the transmission at all: an arc's radius
+    /// and phase (`arc_model`'s `delta[5]`, `delta[6]`) do not, so their Jacobian columns are
+    /// exactly zero and need no evaluation.
+    pub(super) fn moves_model(&self, i: usize) -> bool {
+        !matches!(self, LocalFit::Arc { .. }) || !(i == 5 || i == 6)
+    }
+
+    /// Whether local parameter `i` moves the axis line (the geometric ones; the rest are the
+    /// transmission's coefficients).
+    pub(super) fn moves_axis(&self, i: usize) -> bool {
+        match self {
+            LocalFit::Arc { .. } => i < crate::calibration::arc_model::N_GEOMETRY,
+            LocalFit::Line { .. } => i < crate::calibration::line_ml::N_GEOMETRY,
+        }
+    }
+
     /// Covariance of the local parameters.
     pub(super) fn covariance(&self) -> &DMatrix<f64> {
         match self {
@@ -93,6 +113,109 @@ impl LocalFit {
             }
         }
     }
+}
+
+/// Coordinates of lines near an axis line `(o, d)`: `[tilt_u, tilt_v, shift_u, shift_v]`, the
+/// line through `o + shift_u u + shift_v v` along `d + tilt_u u + tilt_v v` (`u`, `v` across
+/// `d`). A line's four degrees of freedom: what the assembly depends on, where an arc fit has
+/// five geometric parameters (the centre's component along the axis only slides the line
+/// along itself).
+pub(super) struct LineCoordinates {
+    axis: AxisLine,
+    u: Vector3<f64>,
+    v: Vector3<f64>,
+}
+
+impl LineCoordinates {
+    /// Around `axis`.
+    pub(super) fn new(axis: AxisLine) -> Self {
+        let d = axis.direction.into_inner();
+        let pick = if d.x.abs() < 0.6 { Vector3::x() } else { Vector3::y() };
+        let u = d.cross(&pick).normalize();
+        let v = d.cross(&u);
+        LineCoordinates { axis, u, v }
+    }
+
+    /// The line at coordinates `q`.
+    pub(super) fn line(&self, q: &[f64; 4]) -> AxisLine {
+        let (o, d) = (self.axis.origin_m, self.axis.direction.into_inner());
+        AxisLine {
+            origin_m: o + self.u * q[2] + self.v * q[3],
+            direction: Unit::new_normalize(d + self.u * q[0] + self.v * q[1]),
+        }
+    }
+
+    /// The coordinates of `line` (not perpendicular to the axis): its direction scaled to a
+    /// unit component along `d`, its point in the plane through `o` across `d`.
+    pub(super) fn coordinates(&self, line: &AxisLine) -> [f64; 4] {
+        let (o, d) = (self.axis.origin_m, self.axis.direction.into_inner());
+        let along = line.direction.dot(&d);
+        let t = line.direction.into_inner() / along;
+        let p = line.origin_m + t * (o - line.origin_m).dot(&d);
+        [
+            t.dot(&self.u),
+            t.dot(&self.v),
+            (p - o).dot(&self.u),
+            (p - o).dot(&self.v),
+        ]
+    }
+}
+
+/// Adds the propagation of one axis fit's covariance: `eval(axis, transmission)` is the
+/// derived vector with the fit's axis and transmission moved (`None`: as fitted). An arc
+/// fit's covariance is first carried to its axis line's coordinates ([`LineCoordinates`])
+/// and transmission coefficients, `C_q = L C L^T` with `L` by central differences of the
+/// rebuilt axis (steps `1e-3` of each sigma, as [`Propagation::add`]): four assembly columns
+/// for the line instead of five for the arc's geometry, and none for its radius and phase.
+/// A line fit's (sliding joint: the direction only) goes column by column.
+pub(super) fn add_axis_fit<E>(
+    prop: &mut Propagation,
+    local: &LocalFit,
+    axis: &AxisLine,
+    mut eval: impl FnMut(Option<AxisLine>, Option<Transmission>) -> Result<Derived, E>,
+) -> Result<(), E> {
+    let c = local.covariance();
+    let n = c.nrows();
+    let moved = |i: usize, h: f64| {
+        let mut delta = vec![0.0; n];
+        delta[i] = h;
+        local.rebuilt(&delta)
+    };
+    if matches!(local, LocalFit::Line { .. }) {
+        return prop.add_where(
+            c,
+            |i| local.moves_model(i),
+            |i, h| {
+                let (a, t) = moved(i, h);
+                eval(local.moves_axis(i).then_some(a), Some(t))
+            },
+        );
+    }
+    let coordinates = LineCoordinates::new(*axis);
+    let geometric = crate::calibration::arc_model::N_GEOMETRY;
+    let m = n - geometric;
+    let mut l = DMatrix::<f64>::zeros(4 + m, n);
+    for j in (0..geometric).filter(|&j| local.moves_model(j) && c[(j, j)] > 0.0) {
+        let h = 1e-3 * c[(j, j)].sqrt();
+        let (plus, minus) = (moved(j, h).0, moved(j, -h).0);
+        let (qp, qm) = (coordinates.coordinates(&plus), coordinates.coordinates(&minus));
+        for r in 0..4 {
+            l[(r, j)] = (qp[r] - qm[r]) / (2.0 * h);
+        }
+    }
+    for i in 0..m {
+        l[(4 + i, geometric + i)] = 1.0;
+    }
+    let c_q = &l * c * l.transpose();
+    prop.add(&c_q, |i, h| {
+        if i < 4 {
+            let mut q = [0.0; 4];
+            q[i] = h;
+            eval(Some(coordinates.line(&q)), None)
+        } else {
+            eval(None, Some(moved(geometric + i - 4, h).1))
+        }
+    })
 }
 
 /// The 1-sigma of a position and of an orientation, per axis of a frame.
@@ -235,12 +358,23 @@ impl Propagation {
     pub(super) fn add<E>(
         &mut self,
         c: &DMatrix<f64>,
+        eval: impl FnMut(usize, f64) -> Result<Derived, E>,
+    ) -> Result<(), E> {
+        self.add_where(c, |_| true, eval)
+    }
+
+    /// [`Propagation::add`] with the columns of the inputs `k` where `moves(k)` is false
+    /// known to be zero (not evaluated).
+    pub(super) fn add_where<E>(
+        &mut self,
+        c: &DMatrix<f64>,
+        moves: impl Fn(usize) -> bool,
         mut eval: impl FnMut(usize, f64) -> Result<Derived, E>,
     ) -> Result<(), E> {
         let n = self.covariance.nrows();
         let mut jac = DMatrix::<f64>::zeros(n, c.nrows());
         for k in 0..c.nrows() {
-            if c[(k, k)] <= 0.0 {
+            if c[(k, k)] <= 0.0 || !moves(k) {
                 continue;
             }
             let h = 1e-3 * c[(k, k)].sqrt();
@@ -315,6 +449,107 @@ mod tests {
         let s = derived_of(x).sigma(&p.covariance);
         assert_eq!(s.couplings.len(), 1);
         assert!((s.couplings[0][0] - expected[(0, 0)].sqrt()).abs() < 1e-12);
+    }
+
+    /// An arc fit with a first-order harmonic transmission and local covariance `c`.
+    fn arc_fit(covariance: DMatrix<f64>) -> LocalFit {
+        LocalFit::Arc {
+            params: ArcParams {
+                centre: Point3::new(0.1, -0.2, 0.7),
+                frame: nalgebra::Rotation3::new(Vector3::new(0.3, -0.2, 0.5)),
+                radius: 0.4,
+                phase_rad: 0.2,
+                coefficients: vec![1e-3, -2e-3],
+            },
+            reference: Point3::new(0.5, 0.5, 0.5),
+            form: TransmissionForm::Harmonic { order: 1 },
+            covariance,
+        }
+    }
+
+    /// The columns `add_where` skips are those that move neither the axis nor the
+    /// transmission: an arc's radius and phase rebuild exactly the unperturbed axis and
+    /// transmission; every other local parameter moves one of them, and the transmission's
+    /// coefficients move only the transmission (the axis to rounding: the frame is
+    /// re-orthonormalised).
+    #[test]
+    fn skipped_columns_move_nothing() {
+        let n = 2 + crate::calibration::arc_model::N_GEOMETRY;
+        let fit = arc_fit(DMatrix::identity(n, n));
+        let (axis0, t0) = fit.rebuilt(&vec![0.0; n]);
+        for i in 0..n {
+            let mut delta = vec![0.0; n];
+            delta[i] = 1e-4;
+            let (axis, t) = fit.rebuilt(&delta);
+            let axis_moved = (axis.origin_m - axis0.origin_m).norm()
+                + (axis.direction.into_inner() - axis0.direction.into_inner()).norm();
+            assert_eq!(fit.moves_model(i), axis_moved > 0.0 || t != t0, "parameter {i}");
+            if fit.moves_model(i) {
+                assert_eq!(fit.moves_axis(i), axis_moved > 1e-12, "parameter {i}: {axis_moved}");
+            }
+        }
+    }
+
+    /// The line coordinates invert: `coordinates(line(q)) = q`.
+    #[test]
+    fn line_coordinates_round_trip() {
+        let axis = AxisLine {
+            origin_m: Point3::new(0.2, -0.1, 0.4),
+            direction: Unit::new_normalize(Vector3::new(0.9, 0.3, -0.2)),
+        };
+        let c = LineCoordinates::new(axis);
+        let q = [2e-3, -1e-3, 5e-4, -7e-4];
+        let back = c.coordinates(&c.line(&q));
+        for (a, b) in back.iter().zip(&q) {
+            assert!((a - b).abs() < 1e-15, "{back:?} {q:?}");
+        }
+    }
+
+    /// `add_axis_fit` through the line coordinates against the arc's local parameters column
+    /// by column (a second path: central differences of the rebuilt axis), for a derived
+    /// vector that depends on the line only (the foot of the perpendicular from a fixed
+    /// point, the direction) and on the transmission's coefficients: the two covariances
+    /// agree to the central differences' truncation (steps of 1e-3 sigma: ~1e-6 relative).
+    #[test]
+    fn line_coordinates_propagate_as_the_local_parameters() {
+        let n = 2 + crate::calibration::arc_model::N_GEOMETRY;
+        let a = DMatrix::from_fn(n, n, |i, j| {
+            ((i * 7 + j * 3) % 5) as f64 * 1e-3 + if i == j { 4e-3 } else { 0.0 }
+        });
+        let fit = arc_fit(&a * a.transpose());
+        let (axis0, t0) = fit.rebuilt(&vec![0.0; n]);
+        let p = Point3::new(-0.3, 0.8, 0.1);
+        let derived = |axis: &AxisLine, t: &Transmission| {
+            let d = axis.direction.into_inner();
+            let foot = axis.origin_m + d * (p - axis.origin_m).dot(&d);
+            let Transmission::Harmonic { sin, cos } = t else {
+                panic!("harmonic")
+            };
+            Derived {
+                values: vec![foot.x, foot.y, foot.z, d.x, d.y, d.z, sin[0], cos[0]],
+                coupling_sizes: vec![],
+                tool: None,
+                robot: None,
+            }
+        };
+        let mut chained = Propagation::new(8);
+        add_axis_fit(&mut chained, &fit, &axis0, |axis, t| {
+            Ok::<_, ()>(derived(&axis.unwrap_or(axis0), &t.unwrap_or_else(|| t0.clone())))
+        })
+        .unwrap();
+        let mut direct = Propagation::new(8);
+        direct
+            .add(fit.covariance(), |i, h| {
+                let mut delta = vec![0.0; n];
+                delta[i] = h;
+                let (axis, t) = fit.rebuilt(&delta);
+                Ok::<_, ()>(derived(&axis, &t))
+            })
+            .unwrap();
+        let scale = direct.covariance.abs().max();
+        let diff = (&chained.covariance - &direct.covariance).abs().max();
+        assert!(diff <= 1e-6 * scale, "{diff} of {scale}");
+        assert!(chained.covariance[(0, 0)] > 0.0 && chained.covariance[(6, 6)] > 0.0);
     }
 
     /// Independent inputs: `sigma^2 J J^T`; a tool frame moved along x and about z gives
