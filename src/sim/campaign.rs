@@ -32,6 +32,13 @@ pub trait ArmExecutor {
 
     /// The tool frame in the last link's moving frame.
     fn last_link_from_tool(&self) -> Isometry3<f64>;
+
+    /// The static-equilibrium solves of the poses executed so far, for an arm that settles
+    /// each pose by time stepping (the rapier arm in dynamic mode); `None` for one that does
+    /// not.
+    fn settles(&self) -> Option<crate::sim::SettleTally> {
+        None
+    }
 }
 
 /// The simulated robot could not execute a command.

@@ -36,8 +36,8 @@ pub use perturb::{
 };
 pub use rapier::{
     ArmBody, ArmOptions, BAR_RADIUS_M, CRANK_MASS_KG, Compliance, CoupledTargets, FourBarBodies, LinkInertia,
-    LinkPoint, LinkShape, ROD_MASS_KG, RapierArm, RapierArmOptions, ServoGains, SettleOptions, SettleReport, SimArm,
-    SimError, SpanSearch, is_visible_from_all, visible_span_deg, visible_sweep_span,
+    LinkPoint, LinkShape, ROD_MASS_KG, RapierArm, RapierArmOptions, ServoGains, SettleOptions, SettleReport,
+    SettleTally, SimArm, SimError, SpanSearch, is_visible_from_all, visible_span_deg, visible_sweep_span,
 };
 pub use repeatability::{
     ObservedThrough, RepeatabilityStats, RepeatabilityTarget, calibrate_repeatability_sigmas, calibrate_uniform_sigma,

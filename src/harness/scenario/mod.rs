@@ -33,4 +33,4 @@ pub use seed::trial_seed;
 pub use stats::{Stat, Stats, stat_of};
 pub use summary::Summary;
 pub use threshold::{Op, Threshold, Verdict};
-pub use trial::{CAMPAIGN_METRICS, CampaignTrial, Trial};
+pub use trial::{CAMPAIGN_METRICS, CampaignTrial, SETTLE_METRICS, Trial};

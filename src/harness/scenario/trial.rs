@@ -47,6 +47,12 @@ pub const CAMPAIGN_METRICS: [&str; 10] = [
     "occluded",
 ];
 
+/// The metrics a trial on the rapier arm in dynamic mode (a `compliance` effect) adds after
+/// [`CAMPAIGN_METRICS`]: the static-equilibrium solves of its poses (`sim::SettleTally`),
+/// mean and largest rapier steps per pose (the long-step approach included) and the largest
+/// tool speed left at the end of a settle \[micrometre/s\].
+pub const SETTLE_METRICS: [&str; 3] = ["settle_steps_mean", "settle_steps_max", "settle_speed_max_um_s"];
+
 /// Simulates the scenario's campaign on a truth robot and measures the uncalibrated error.
 ///
 /// Per trial: an rng seeded with the trial seed draws the truth robot (a fixed robot draws
@@ -87,6 +93,12 @@ impl CampaignTrial {
         })
     }
 
+    /// Whether the trial runs the rapier arm in dynamic mode (it then reports
+    /// [`SETTLE_METRICS`]).
+    fn settles(&self) -> bool {
+        self.sim == SimMode::Rapier && self.effects.compliance.is_some()
+    }
+
     fn draw_truth(&self, rng: &mut ChaCha12Rng) -> Result<RobotModel, String> {
         match &self.truth {
             ResolvedTruth::Fixed { robot } => Ok(robot.clone()),
@@ -108,6 +120,7 @@ impl CampaignTrial {
             rng,
         )
         .map_err(|e| format!("simulating the campaign: {e}"))?;
+        let settles = arm.settles();
         let set =
             MeasurementSet::new(self.desc.dof(), out.rows.clone()).map_err(|e| format!("measurement set: {e}"))?;
         // The calibrator is told the instrument's 3-D RMS noise where the robot stands.
@@ -126,7 +139,13 @@ impl CampaignTrial {
         // The lean path: a trial needs the model, not the report.
         let cal =
             calibrate_model(&set, &self.desc, &options, Detail::Model).map_err(|e| format!("calibrating: {e}"))?;
-        self.metrics(&out, &cal.robot)
+        let mut m = self.metrics(&out, &cal.robot)?;
+        if let Some(t) = settles {
+            m.push(SETTLE_METRICS[0], t.mean_steps());
+            m.push(SETTLE_METRICS[1], t.max_steps as f64);
+            m.push(SETTLE_METRICS[2], t.max_speed_m_s * 1e6);
+        }
+        Ok(m)
     }
 
     fn metrics(&self, out: &CampaignOutput, calibrated: &RobotModel) -> Result<Metrics, String> {
@@ -182,7 +201,8 @@ impl CampaignTrial {
 
 impl Trial for CampaignTrial {
     fn metric_names(&self) -> Vec<String> {
-        CAMPAIGN_METRICS.iter().map(|s| (*s).to_owned()).collect()
+        let settle: &[&str] = if self.settles() { &SETTLE_METRICS } else { &[] };
+        CAMPAIGN_METRICS.iter().chain(settle).map(|s| (*s).to_owned()).collect()
     }
 
     fn run(&self, case: &Case, seed: u64) -> Result<Metrics, String> {

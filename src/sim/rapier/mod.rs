@@ -31,7 +31,7 @@ pub use arm::{ArmBody, ArmOptions, LinkInertia, LinkPoint, LinkShape, SimArm};
 pub use four_bar::{BAR_RADIUS_M, CRANK_MASS_KG, FourBarBodies, ROD_MASS_KG};
 pub use gear::CoupledTargets;
 pub use rapier_arm::{RapierArm, RapierArmOptions};
-pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport};
+pub use servo::{Compliance, ServoGains, SettleOptions, SettleReport, SettleTally};
 
 /// A problem building or running the simulated arm.
 #[derive(Debug, thiserror::Error)]

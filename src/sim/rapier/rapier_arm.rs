@@ -29,7 +29,7 @@ use super::SimError;
 use super::arm::{ArmBody, ArmOptions, LinkInertia, SimArm};
 use super::four_bar::FourBarBodies;
 use super::gear::CoupledTargets;
-use super::servo::{ServoGains, SettleOptions, SettleReport};
+use super::servo::{ServoGains, SettleOptions, SettleReport, SettleTally};
 use super::visibility::is_visible_from_all;
 use crate::kinematics::PhiModel;
 use crate::physics::{ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_static_deflection};
@@ -85,6 +85,7 @@ pub struct RapierArm {
     built: Option<Built>,
     placed_shapes: Vec<(Isometry3<f64>, SharedShape)>,
     last_settle: Option<SettleReport>,
+    settles: SettleTally,
 }
 
 struct Built {
@@ -116,6 +117,7 @@ impl RapierArm {
             built: None,
             placed_shapes: Vec::new(),
             last_settle: None,
+            settles: SettleTally::default(),
         }
     }
 
@@ -132,6 +134,12 @@ impl RapierArm {
     /// The static-equilibrium solve of the last executed pose (dynamic mode only).
     pub fn last_settle(&self) -> Option<&SettleReport> {
         self.last_settle.as_ref()
+    }
+
+    /// Every static-equilibrium solve since the arm was made (dynamic mode; empty in
+    /// kinematic mode).
+    pub fn settles(&self) -> &SettleTally {
+        &self.settles
     }
 
     /// The four-bar bodies of the last executed pose.
@@ -229,6 +237,7 @@ impl RapierArm {
                 let four_bars = &built.four_bars;
                 let report = arm.settle_with(&[], &self.options.settle, |arm| coupled.update(arm, four_bars))?;
                 let q_rest = report.joint_positions.clone();
+                self.settles.add(&report);
                 self.last_settle = Some(report);
                 q_rest
             }
@@ -345,5 +354,9 @@ impl ArmExecutor for RapierArm {
 
     fn last_link_from_tool(&self) -> Isometry3<f64> {
         self.model.last_link_from_tool
+    }
+
+    fn settles(&self) -> Option<SettleTally> {
+        self.effects.compliance.as_ref().map(|_| self.settles)
     }
 }

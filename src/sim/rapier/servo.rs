@@ -95,11 +95,26 @@ pub struct SettleOptions {
     /// stepping only confirms it (what the prediction leaves out, e.g. the four-bar bars' own
     /// weight, settles in a few steps).
     pub warm_start: bool,
+    /// Before the settle proper, approach the equilibrium with this many steps at most of
+    /// length [`SettleOptions::approach_dt_s`] (0: no approach). See [`SimArm::settle_with`].
+    pub approach_max_steps: usize,
+    /// Length of an approach step \[s\]: much longer than the servos' time constants, so
+    /// rapier's backward-Euler step of the implicit springs and damping lands near the static
+    /// equilibrium in each step instead of following the motion.
+    pub approach_dt_s: f64,
 }
 
 impl Default for SettleOptions {
     /// 1 ms steps, 16 solver iterations, 1 micrometre per second for 20 steps, at most 20 s,
-    /// warm start on.
+    /// warm start on, an approach of at most 50 steps of 10 ms.
+    ///
+    /// The approach's step: on the paper arm of the `compliance` scenario (stiffnesses 2e4-5e5
+    /// N m/rad, 10 kg payload, four-bar bodies and gear, 8 poses) the approach took 13-17
+    /// steps of 10 ms and the settle proper then the bare 20 quiet steps (36 in all, against
+    /// 130-138 from the warm start alone); steps of 5 ms took 24-30 approach steps, steps of
+    /// 20 ms left a rest that the 1 ms steps moved away from again (20-36 steps after 10
+    /// approach steps; the loop closure's constraint stabilisation depends on the step
+    /// length), and steps of 200 ms 90-120.
     fn default() -> Self {
         Self {
             dt_s: 1e-3,
@@ -108,19 +123,66 @@ impl Default for SettleOptions {
             speed_tolerance_m_s: 1e-6,
             quiet_steps: 20,
             warm_start: true,
+            approach_max_steps: 50,
+            approach_dt_s: 0.01,
         }
     }
+}
+
+/// A stopping rule of [`SimArm::step_until_quiet`].
+struct Quiet {
+    max_steps: usize,
+    /// A step moving every watched point by less than this \[m\] is quiet.
+    distance_m: f64,
+    /// Consecutive quiet steps that end the stepping.
+    steps: usize,
 }
 
 /// The outcome of a settle.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SettleReport {
-    /// Steps taken.
+    /// Steps of length [`SettleOptions::dt_s`] taken (the settle proper).
     pub steps: usize,
+    /// Approach steps taken before them ([`SettleOptions::approach_max_steps`]).
+    pub approach_steps: usize,
     /// Speed of the fastest watched point at the last step \[m/s\].
     pub max_speed_m_s: f64,
     /// The joint values at rest (rad or m).
     pub joint_positions: Vec<f64>,
+}
+
+/// The settles of a series of poses, summed up: what a dynamic-mode campaign cost and how
+/// still it ended (a trial's `settle_*` metrics).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SettleTally {
+    /// Poses settled.
+    pub poses: usize,
+    /// Steps of all of them, approach steps included.
+    pub steps: usize,
+    /// The most steps one pose took, approach steps included.
+    pub max_steps: usize,
+    /// The largest speed of a watched point at the end of a settle \[m/s\].
+    pub max_speed_m_s: f64,
+}
+
+impl SettleTally {
+    /// Adds one pose's settle.
+    pub fn add(&mut self, report: &SettleReport) {
+        let steps = report.steps + report.approach_steps;
+        self.poses += 1;
+        self.steps += steps;
+        self.max_steps = self.max_steps.max(steps);
+        self.max_speed_m_s = self.max_speed_m_s.max(report.max_speed_m_s);
+    }
+
+    /// Mean steps per pose (0 with no pose).
+    pub fn mean_steps(&self) -> f64 {
+        if self.poses == 0 {
+            0.0
+        } else {
+            self.steps as f64 / self.poses as f64
+        }
+    }
 }
 
 impl SimArm {
@@ -211,50 +273,91 @@ impl SimArm {
 
     /// [`SimArm::settle`] calling `before_step` before every step (e.g. to move a servo target
     /// that depends on the current joint values, as the bevel gear does).
+    ///
+    /// With an approach ([`SettleOptions::approach_max_steps`] > 0) the arm first takes steps
+    /// of [`SettleOptions::approach_dt_s`] until one moves every watched point by less than
+    /// the settle's own stopping distance (`speed_tolerance_m_s * dt_s`). rapier integrates
+    /// the servo springs and damping backward-Euler, which is L-stable: a step much longer
+    /// than the servos' time constants maps the arm close to the static equilibrium of the
+    /// springs, gravity and the constraints (a joint of time constant `tau` keeps about
+    /// `tau / dt` of its distance per step), rather than following its motion. The approach
+    /// only chooses where the settle proper starts: that is the same stepping at `dt_s` to
+    /// `quiet_steps` quiet steps as without it, so the rest it reports is rapier's at the
+    /// settle's time step, and what the approach left (a velocity, a constraint error of the
+    /// long steps) settles there.
     pub fn settle_with(
         &mut self,
         watch: &[LinkPoint],
         options: &SettleOptions,
         mut before_step: impl FnMut(&mut SimArm) -> Result<(), SimError>,
     ) -> Result<SettleReport, SimError> {
-        self.world.integration_parameters.dt = options.dt_s;
-        self.world.integration_parameters.num_solver_iterations = options.solver_iterations;
         let mut points: Vec<LinkPoint> = watch.to_vec();
         let last = self.model.dof() - 1;
         points.push(LinkPoint {
             link: last,
             position_in_link_m: self.model.last_link_from_tool * Point3::origin(),
         });
+        self.world.integration_parameters.num_solver_iterations = options.solver_iterations;
+        let stop_distance_m = options.speed_tolerance_m_s * options.dt_s;
+        let mut approach_steps = 0;
+        if options.approach_max_steps > 0 {
+            self.world.integration_parameters.dt = options.approach_dt_s;
+            let approach = Quiet {
+                max_steps: options.approach_max_steps,
+                distance_m: stop_distance_m,
+                steps: 1,
+            };
+            approach_steps = self.step_until_quiet(&points, &approach, &mut before_step)?.0;
+        }
+        self.world.integration_parameters.dt = options.dt_s;
+        let settle = Quiet {
+            max_steps: options.max_steps,
+            distance_m: stop_distance_m,
+            steps: options.quiet_steps,
+        };
+        let (steps, max_distance_m, quiet) = self.step_until_quiet(&points, &settle, &mut before_step)?;
+        let max_speed_m_s = max_distance_m / options.dt_s;
+        if !quiet {
+            return Err(SimError::NotSettled {
+                steps: options.max_steps,
+                max_speed_m_s,
+            });
+        }
+        Ok(SettleReport {
+            steps,
+            approach_steps,
+            max_speed_m_s,
+            joint_positions: self.joint_positions(),
+        })
+    }
+
+    /// Steps (`before_step` before each) until the watched `points` have moved less than
+    /// `rule.distance_m` in `rule.steps` consecutive steps, or `rule.max_steps` were taken:
+    /// the steps taken, the largest move of the last step \[m\] and whether it came to rest.
+    fn step_until_quiet(
+        &mut self,
+        points: &[LinkPoint],
+        rule: &Quiet,
+        before_step: &mut impl FnMut(&mut SimArm) -> Result<(), SimError>,
+    ) -> Result<(usize, f64, bool), SimError> {
         let mut previous: Vec<Point3<f64>> = points.iter().map(|p| self.point_in_world(p)).collect();
         let mut quiet = 0;
-        let mut max_speed_m_s = f64::INFINITY;
-        for step in 1..=options.max_steps {
+        let mut max_distance_m = f64::INFINITY;
+        for step in 1..=rule.max_steps {
             before_step(self)?;
             self.world.step();
-            let now: Vec<Point3<f64>> = points.iter().map(|p| self.point_in_world(p)).collect();
-            max_speed_m_s = now
-                .iter()
-                .zip(&previous)
-                .map(|(a, b)| (a - b).norm() / options.dt_s)
-                .fold(0.0, f64::max);
-            previous = now;
-            quiet = if max_speed_m_s < options.speed_tolerance_m_s {
-                quiet + 1
-            } else {
-                0
-            };
-            if quiet >= options.quiet_steps {
-                return Ok(SettleReport {
-                    steps: step,
-                    max_speed_m_s,
-                    joint_positions: self.joint_positions(),
-                });
+            max_distance_m = 0.0;
+            for (p, before) in points.iter().zip(previous.iter_mut()) {
+                let now = self.point_in_world(p);
+                max_distance_m = f64::max(max_distance_m, (now - *before).norm());
+                *before = now;
+            }
+            quiet = if max_distance_m < rule.distance_m { quiet + 1 } else { 0 };
+            if quiet >= rule.steps {
+                return Ok((step, max_distance_m, true));
             }
         }
-        Err(SimError::NotSettled {
-            steps: options.max_steps,
-            max_speed_m_s,
-        })
+        Ok((rule.max_steps, max_distance_m, false))
     }
 
     /// The static equilibrium at command `q_cmd`: with [`Compliance::Rigid`] the arm is placed
@@ -271,6 +374,7 @@ impl SimArm {
         match compliance {
             Compliance::Rigid => Ok(SettleReport {
                 steps: 0,
+                approach_steps: 0,
                 max_speed_m_s: 0.0,
                 joint_positions: self.joint_positions(),
             }),
