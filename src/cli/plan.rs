@@ -175,7 +175,10 @@ pub fn run(args: Args) -> Result<()> {
     let plan_out = args.plan_out.clone().unwrap_or_else(|| args.out.with_extension("toml"));
     if args.optimize {
         if plan_out == args.out {
-            bail!("--plan-out {} is the plan CSV --out; choose another path", plan_out.display());
+            bail!(
+                "--plan-out {} is the plan CSV --out; choose another path",
+                plan_out.display()
+            );
         }
         outputs.check(&plan_out)?;
     } else if args.points.is_some() || args.plan_out.is_some() || !args.workspace_half_range.is_empty() {

@@ -4,25 +4,28 @@
 //!
 //! The search is deterministic coordinate descent seeded by the given plan (paper Table 1 by
 //! default) with its intervals scaled to the point budget ([`with_point_budget`]). Each round:
-//! 1. **Spans**, sweep by sweep: the largest span that keeps every command within the limits
-//!    (bisection, no calibration, 0.1 deg/mm resolution), the current span x 0.8 and x 1.25, and the middle between the current and
-//!    the largest; the best feasible one is taken when it lowers the predicted position RMS.
-//!    Sweeps stay centred on the reference (as the workspace is).
+//! 1. **Spans and placement**, sweep by sweep: the largest span that keeps every command within
+//!    the limits (bisection, no calibration, 0.1 deg/mm resolution), half-way to it from the
+//!    current span, the current span x 1.25 and x 0.8; a sweep with a second target is tried
+//!    both with its follower joint starting at the reference and centred on it (`held_at`,
+//!    [`Search::placed`]). The best feasible candidate is taken when it lowers the predicted
+//!    position RMS. Sweeps stay centred on the reference (as the workspace is).
 //! 2. **Points**, for each ordered pair of sweeps (a, b): move `m` poses' worth of points from
 //!    a to b (`m` = 4, 2, 1, the first that helps; a sweep with a second target costs two
 //!    points a pose, so a move keeps the total exactly), never below
 //!    [`OptimizeOptions::min_intervals`].
 //!
 //! A point the nominal arm hides from a station is planned (it counts against the budget) but
-//! not measured, so the prediction, not a constraint, keeps the sight lines. Rounds repeat until one changes nothing (or [`OptimizeOptions::max_rounds`]). Which joints
-//! are swept, in what order, and which carry a second target stay as in the seed: a second
-//! target is what measures a coupling, and without it the coupling would be taken as nominal
-//! and drop out of the predicted covariance (an apparent gain that is a blind spot). Cost: one
-//! calibration of a noise-free campaign per candidate (~10 ms in a release build), about 25 +
-//! 30 x (1..3) candidates a round, a few hundred for the paper robot.
+//! not measured, so the prediction, not a constraint, keeps the sight lines. Rounds repeat
+//! until one changes nothing (or [`OptimizeOptions::max_rounds`]). Which joints are swept, in
+//! what order, and which carry a second target stay as in the seed: a second target is what
+//! measures a coupling, and without it the coupling would be taken as nominal and drop out of
+//! the predicted covariance (an apparent gain that is a blind spot). Cost: one calibration of
+//! a noise-free campaign per candidate (~30 ms in a release build), about 30 + 30 x (1..3)
+//! candidates a round, a few hundred for the paper robot.
 
-use super::predict::{PlanObjective, PlanPrediction, PredictError};
 use super::CalibrationPlan;
+use super::predict::{PlanObjective, PlanPrediction, PredictError};
 use crate::kinematics::JointKind;
 use crate::robot::RobotDescription;
 
@@ -81,11 +84,17 @@ pub fn with_point_budget(plan: &CalibrationPlan, points: usize) -> Option<Calibr
         let share = (s.poses() * targets(s)) as f64 * points as f64 / total;
         s.intervals = ((share / targets(s) as f64).round() as usize).saturating_sub(1).max(2);
     }
-    let singles: Vec<usize> = (0..out.sweeps.len()).filter(|&i| !out.sweeps[i].second_target).collect();
+    let singles: Vec<usize> = (0..out.sweeps.len())
+        .filter(|&i| !out.sweeps[i].second_target)
+        .collect();
     let mut turn = 0;
     while axis_points(&out) != points {
         let pairs_only = singles.is_empty();
-        let i = if pairs_only { turn % out.sweeps.len() } else { singles[turn % singles.len()] };
+        let i = if pairs_only {
+            turn % out.sweeps.len()
+        } else {
+            singles[turn % singles.len()]
+        };
         let have = axis_points(&out);
         let t = targets(&out.sweeps[i]);
         if have < points && points - have >= t {
@@ -130,8 +139,39 @@ impl Search<'_> {
         plan.validate(self.desc).is_ok()
     }
 
-    /// The largest span of sweep `i` (centred) that is feasible, by bisection to 0.1 deg/mm.
-    fn largest_span(&self, i: usize) -> f64 {
+    /// The plan with sweep `i` over `span`, centred on the reference; with `centre_follower`
+    /// (a sweep with a second target only) the follower joint `k + 1`, which moves one way by
+    /// `slope x span` to hold its actuator still, starts at `-slope x span / 2` from the
+    /// reference (`held_at`), so that it too is centred and the span can grow to the limits.
+    fn placed(&self, i: usize, span: f64, centre_follower: bool) -> CalibrationPlan {
+        let mut plan = self.best.clone();
+        let sweep = &mut plan.sweeps[i];
+        sweep.span = span;
+        let slope = self
+            .desc
+            .nominal_coupling_from(sweep.joint)
+            .filter(|_| sweep.second_target);
+        if let Some(slope) = slope {
+            let follower = sweep.joint; // 0-based index of joint k + 1
+            let mut held = sweep.held_at.clone().unwrap_or_else(|| vec![0.0; self.desc.dof()]);
+            held[follower] = if centre_follower { -slope * span / 2.0 } else { 0.0 };
+            sweep.held_at = held.iter().any(|v| *v != 0.0).then_some(held);
+        }
+        plan
+    }
+
+    /// Whether sweep `i` of the best plan has its follower centred (see [`Search::placed`]).
+    fn follower_centred(&self, i: usize) -> bool {
+        let sweep = &self.best.sweeps[i];
+        sweep
+            .held_at
+            .as_ref()
+            .is_some_and(|h| h.get(sweep.joint).is_some_and(|v| *v != 0.0))
+    }
+
+    /// The largest span of sweep `i` (placed as [`Search::placed`]) within the limits, by
+    /// bisection to 0.1 deg/mm.
+    fn largest_span(&self, i: usize, centre_follower: bool) -> f64 {
         let joint = &self.desc.joints[self.best.sweeps[i].joint - 1];
         let range = joint.limits[1] - joint.limits[0];
         let cap = match joint.kind {
@@ -139,18 +179,14 @@ impl Search<'_> {
             JointKind::Revolute => range.min(350.0),
             JointKind::Prismatic => range,
         };
-        let with_span = |span: f64| {
-            let mut p = self.best.clone();
-            p.sweeps[i].span = span;
-            p
-        };
-        let (mut lo, mut hi) = (self.best.sweeps[i].span, cap);
-        if self.feasible(&with_span(hi)) {
+        let feasible = |span: f64| self.feasible(&self.placed(i, span, centre_follower));
+        let (mut lo, mut hi) = (0.0, cap);
+        if feasible(hi) {
             return hi;
         }
         while hi - lo > 0.1 {
             let mid = 0.5 * (lo + hi);
-            if self.feasible(&with_span(mid)) {
+            if feasible(mid) {
                 lo = mid;
             } else {
                 hi = mid;
@@ -161,16 +197,27 @@ impl Search<'_> {
 
     /// Step 1 of a round for sweep `i`; whether it changed the plan.
     fn improve_span(&mut self, i: usize) -> bool {
-        let current = self.best.sweeps[i].span;
-        let largest = self.largest_span(i).max(current);
+        let current = (self.best.sweeps[i].span, self.follower_centred(i));
+        let placements: &[bool] = if self.best.sweeps[i].second_target {
+            &[false, true]
+        } else {
+            &[false]
+        };
         let round = |x: f64| (x * 10.0).round() / 10.0;
-        let mut spans = vec![largest, round(0.5 * (current + largest)), round(current * 1.25), round(current * 0.8)];
-        spans.dedup();
-        let base = self.best.clone();
+        let mut candidates = Vec::new();
+        for &centred in placements {
+            let largest = self.largest_span(i, centred);
+            let s = current.0;
+            for span in [largest, round(0.5 * (s + largest)), round(s * 1.25), round(s * 0.8)] {
+                if span > 0.0 && span <= largest && (span, centred) != current && !candidates.contains(&(span, centred))
+                {
+                    candidates.push((span, centred));
+                }
+            }
+        }
         let mut changed = false;
-        for span in spans.into_iter().filter(|&s| s > 0.0 && s <= largest && s != current) {
-            let mut plan = base.clone();
-            plan.sweeps[i].span = span;
+        for (span, centred) in candidates {
+            let plan = self.placed(i, span, centred);
             if self.feasible(&plan) {
                 changed |= self.try_plan(plan);
             }

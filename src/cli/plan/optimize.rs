@@ -52,8 +52,7 @@ pub(super) fn run(
     options
         .joint_repeatability_rad(desc)
         .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
-    let objective = PlanObjective::new(desc, &seed, &workspace, sight, &options)
-        .context("predicting the seed plan")?;
+    let objective = PlanObjective::new(desc, &seed, &workspace, sight, &options).context("predicting the seed plan")?;
     let found = optimize(
         &objective,
         desc,
@@ -90,7 +89,11 @@ pub(super) fn run(
             b.span,
             a.poses(),
             b.poses(),
-            if b.second_target { " (two targets)" } else { "" }
+            match (b.second_target, &b.held_at) {
+                (true, Some(_)) => " (two targets, the follower joint centred)",
+                (true, None) => " (two targets)",
+                _ => "",
+            }
         );
     }
     Ok(found.plan)

@@ -348,7 +348,9 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> R
             let key = || "sweep.plans".to_owned();
             let text = crate::toml_file::read(&path).map_err(|e| (key(), e.to_string()))?;
             let plan: CalibrationPlan = crate::toml_file::parse(&text, &path).map_err(|e| (key(), e.to_string()))?;
-            let stem = path.file_stem().map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+            let stem = path
+                .file_stem()
+                .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
             push(format!("plan={stem}"), file.measurement, plan, ("sweep.plans", NOISE))?;
         }
     } else {

@@ -142,7 +142,12 @@ impl CampaignTrial {
 
     /// RMS over the validation poses of the distance between the calibrated and the truth
     /// model's tool points at the same commands \[mm\] (kinematics only).
-    fn tool_error_rms_mm(&self, out: &CampaignOutput, calibrated: &RobotModel, truth: &RobotModel) -> Result<f64, String> {
+    fn tool_error_rms_mm(
+        &self,
+        out: &CampaignOutput,
+        calibrated: &RobotModel,
+        truth: &RobotModel,
+    ) -> Result<f64, String> {
         let (model, truth_model) = (calibrated.phi_model(), truth.phi_model());
         let mut last: Option<(&str, usize)> = None;
         let (mut sum_m2, mut count) = (0.0, 0usize);
@@ -155,7 +160,8 @@ impl CampaignTrial {
             let failed = |e: crate::robot::ModelError| format!("{} step {}: {e}", row.experiment, row.step);
             let q = calibrated.joint_values(&self.controller, &cmd).map_err(failed)?;
             let q_truth = truth.joint_values(&self.controller, &cmd).map_err(failed)?;
-            let d = model.world_from_tool(&q).translation.vector - truth_model.world_from_tool(&q_truth).translation.vector;
+            let d =
+                model.world_from_tool(&q).translation.vector - truth_model.world_from_tool(&q_truth).translation.vector;
             sum_m2 += d.norm_squared();
             count += 1;
         }
