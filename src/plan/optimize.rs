@@ -7,8 +7,8 @@
 //! 1. **Spans and placement**, sweep by sweep: the largest span that keeps every command within
 //!    the limits (bisection, no calibration, 0.1 deg/mm resolution), half-way to it from the
 //!    current span, the current span x 1.25 and x 0.8; a sweep with a second target is tried
-//!    both with its follower joint starting at the reference and centred on it (`held_at`,
-//!    [`Search::placed`]). The best feasible candidate is taken when it lowers the predicted
+//!    both with its follower joint starting at the reference and centred on it
+//!    (`held_at = -slope x span / 2`). The best feasible candidate is taken when it lowers the predicted
 //!    position RMS. Sweeps stay centred on the reference (as the workspace is).
 //! 2. **Points**, for each ordered pair of sweeps (a, b): move `m` poses' worth of points from
 //!    a to b (`m` = 4, 2, 1, the first that helps; a sweep with a second target costs two
