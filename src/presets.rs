@@ -58,6 +58,16 @@ pub const PRESETS: &[Preset] = &[
         "scenarios/robots/asea-irb6l-paper-truth.toml"
     ),
     shipped!(Robot, "asea-irb6l", "scenarios/robots/asea-irb6l.toml"),
+    shipped!(
+        Robot,
+        "asea-irb6l-optimized-plan",
+        "scenarios/robots/asea-irb6l-optimized-plan.toml"
+    ),
+    shipped!(
+        Robot,
+        "asea-irb6l-table1-plan",
+        "scenarios/robots/asea-irb6l-table1-plan.toml"
+    ),
     shipped!(Robot, "boby-klimchik-arm", "scenarios/robots/boby-klimchik-arm.toml"),
     shipped!(
         Robot,
@@ -75,6 +85,7 @@ pub const PRESETS: &[Preset] = &[
     shipped!(Scenario, "noise-sweep", "scenarios/noise-sweep.toml"),
     shipped!(Scenario, "paper", "scenarios/paper.toml"),
     shipped!(Scenario, "perturbed-fleet", "scenarios/perturbed-fleet.toml"),
+    shipped!(Scenario, "plan-optimize", "scenarios/plan-optimize.toml"),
     shipped!(Scenario, "span-study", "scenarios/span-study.toml"),
     shipped!(Scenario, "scara-rrpr", "scenarios/scara-rrpr.toml"),
     shipped!(Scenario, "table-prpp", "scenarios/table-prpp.toml"),

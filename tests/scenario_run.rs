@@ -43,6 +43,7 @@ fn shipped_scenarios_resolve_and_their_dump_round_trips() {
         "noise-sweep",
         "span-study",
         "compliance",
+        "plan-optimize",
     ] {
         let path = format!("scenarios/{name}.toml");
         let s = ResolvedScenario::from_file(Path::new(&path), Overrides::default())

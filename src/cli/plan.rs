@@ -4,7 +4,9 @@
 //! poses (`--plan`, `--span`, `--intervals`, `--order`, `--validation-poses`) is made here;
 //! the writer (`axiscal::plan::write_plan_csv`) takes any list of points.
 
-use super::options::InRange;
+mod optimize;
+
+use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::kinematics::JointKind;
@@ -50,6 +52,42 @@ pub struct Args {
     /// Radius of the links' capsules for the line of sight \[mm\].
     #[arg(long, default_value_t = 50.0, value_parser = InRange::above(0.0, 10_000.0, "mm"))]
     link_radius_mm: f64,
+    /// Choose the spans and the points per sweep that minimise the predicted tool error over
+    /// the workspace (`docs/method.md#plans-that-buy-accuracy`), seeded by `--plan` (default
+    /// Table 1) at the same number of points; also writes the plan TOML (`--plan-out`).
+    #[arg(long)]
+    optimize: bool,
+    /// With `--optimize`: the axis experiments' total of points (each target at each pose).
+    /// Default: the seed plan's (Table 1: 129).
+    #[arg(long, value_parser = InRange::closed(8usize, 1_000_000, ""))]
+    points: Option<usize>,
+    /// With `--optimize`: the workspace, per joint the half-range of commands around the
+    /// reference (deg or mm, comma-separated, clipped to the limits). Default: the validation
+    /// poses' (IRB/L6: 40,30,35,60,90,90).
+    #[arg(long, value_delimiter = ',', value_parser = InRange::above(0.0, 1e6, "deg or mm"))]
+    workspace_half_range: Vec<f64>,
+    /// With `--optimize`: workspace poses the predicted RMS is taken over (drawn with
+    /// `--validation-seed`).
+    #[arg(long, default_value_t = 200, value_parser = InRange::closed(1usize, 100_000, ""))]
+    workspace_poses: usize,
+    /// With `--optimize`: the instrument's noise, 3-D RMS of a point \[mm\] (the paper's 0.19).
+    #[arg(long, default_value_t = axiscal::measurement::PAPER_NET_RADIAL_RMS_MM, value_parser = NOISE_MM)]
+    noise_mm: f64,
+    /// With `--optimize`: the robot's repeatability \[rad\] the calibration models, one value or
+    /// one per joint. Default: the description's `repeatability_sigma`.
+    #[arg(long, value_delimiter = ',')]
+    repeatability_rad: Option<Vec<f64>>,
+    /// With `--optimize`: the fewest intervals a sweep keeps (its fits need points).
+    #[arg(long, default_value_t = axiscal::plan::OptimizeOptions::default().min_intervals, value_parser = InRange::closed(2usize, 100_000, ""))]
+    min_intervals: usize,
+    /// With `--optimize`: the most rounds of the search; 0 predicts the seed plan (`--plan`
+    /// at `--points`) without changing it.
+    #[arg(long, default_value_t = axiscal::plan::OptimizeOptions::default().max_rounds, value_parser = InRange::closed(0usize, 1000, ""))]
+    max_rounds: usize,
+    /// With `--optimize`: where to write the optimised plan TOML (`docs/formats.md#plan-file`).
+    /// Default: `--out` with the extension `toml`.
+    #[arg(long)]
+    plan_out: Option<PathBuf>,
     /// Output plan CSV.
     #[arg(long)]
     out: PathBuf,
@@ -134,8 +172,20 @@ pub fn run(args: Args) -> Result<()> {
         outputs = outputs.input("--plan", p);
     }
     outputs.check(&args.out)?;
+    let plan_out = args.plan_out.clone().unwrap_or_else(|| args.out.with_extension("toml"));
+    if args.optimize {
+        if plan_out == args.out {
+            bail!(
+                "--plan-out {} is the plan CSV --out; choose another path",
+                plan_out.display()
+            );
+        }
+        outputs.check(&plan_out)?;
+    } else if args.points.is_some() || args.plan_out.is_some() || !args.workspace_half_range.is_empty() {
+        bail!("--points, --plan-out and --workspace-half-range need --optimize");
+    }
     let desc = RobotDescription::from_file(&args.robot)?;
-    let plan = adjusted(campaign_plan(&desc, args.plan.as_deref())?, &args)?;
+    let mut plan = adjusted(campaign_plan(&desc, args.plan.as_deref())?, &args)?;
     let default_validation = ValidationPlan::workspace_default(desc.dof());
     let validation = ValidationPlan {
         poses: args.validation_poses,
@@ -154,6 +204,12 @@ pub fn run(args: Args) -> Result<()> {
         link_radius_m: args.link_radius_mm * 1e-3,
         stop_short_m: 2e-3,
     };
+    if args.optimize {
+        plan = optimize::run(&args, &desc, &plan, &validation, &sight)?;
+        let text = toml::to_string(&plan).context("writing the optimised plan as TOML")?;
+        outputs.write(&plan_out, format!("{}{text}", optimize::toml_comment(&args, &desc)))?;
+        println!("wrote {}", plan_out.display());
+    }
     let points = planned_points(&desc, &plan, &validation, &sight)
         .with_context(|| format!("planning the campaign of {}", args.robot.display()))?;
     let comment = header_comment(&desc, &stations_mm, args.link_radius_mm);

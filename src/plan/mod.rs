@@ -5,11 +5,15 @@
 //! is measured under. Nothing here knows the robot beyond its nominal description.
 
 mod axis;
+pub mod optimize;
+pub mod predict;
 mod sheet;
 pub mod sight;
 mod validation;
 
 pub use axis::{AxisSweep, CalibrationPlan, PlanError};
+pub use optimize::{OptimizeOptions, Optimized, optimize, with_point_budget};
+pub use predict::{PlanObjective, PlanPrediction, PredictError};
 pub use sheet::{PlannedPoint, SightOptions, VALIDATION_EXPERIMENT, planned_points, write_plan_csv};
 pub use validation::ValidationPlan;
 

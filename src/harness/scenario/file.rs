@@ -204,4 +204,7 @@ pub struct SweepSection {
     pub span_scale: Option<Vec<f64>>,
     /// Whole span lists \[deg or mm\], one per plan sweep in plan order, replacing the spans.
     pub spans: Option<Vec<Vec<f64>>>,
+    /// Whole plan files (`docs/formats.md#plan-file`, relative to the scenario file), each
+    /// replacing the plan; the case is named `plan=<file stem>`.
+    pub plans: Option<Vec<PathBuf>>,
 }

@@ -144,7 +144,7 @@ impl ResolvedScenario {
                 format!("needs poses >= 1 and {} half_range values", robot.dof()),
             ));
         }
-        let cases = resolve_cases(&file, &robot).map_err(|(k, m)| invalid(&k, m))?;
+        let cases = resolve_cases(&file, &robot, dir).map_err(|(k, m)| invalid(&k, m))?;
         check_size(&file, trials, cases.len()).map_err(|(k, m)| invalid(k, m))?;
         for (i, t) in file.thresholds.iter().enumerate() {
             if !t.value.is_finite() {
@@ -272,19 +272,20 @@ fn resolve_truth(
 
 type KeyError = (String, String);
 
-fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription) -> Result<Vec<Case>, KeyError> {
+fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> Result<Vec<Case>, KeyError> {
     let base_plan = base_plan(&file.plan, robot)?;
     let sweep = file.sweep.clone().unwrap_or_default();
     let set = [
         sweep.net_radial_rms_mm.is_some(),
         sweep.span_scale.is_some(),
         sweep.spans.is_some(),
+        sweep.plans.is_some(),
     ];
     let count = set.iter().filter(|s| **s).count();
     if file.sweep.is_some() && count != 1 {
         return Err((
             "sweep".into(),
-            format!("set exactly one of net_radial_rms_mm, span_scale, spans (found {count})"),
+            format!("set exactly one of net_radial_rms_mm, span_scale, spans, plans (found {count})"),
         ));
     }
     let mut cases = Vec::new();
@@ -340,6 +341,17 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription) -> Result<Vec<Ca
                 s.span = *span;
             }
             push(format!("spans={i}"), file.measurement, plan, ("sweep.spans", NOISE))?;
+        }
+    } else if let Some(paths) = &sweep.plans {
+        for path in nonempty(paths, "sweep.plans")? {
+            let path = dir.join(path);
+            let key = || "sweep.plans".to_owned();
+            let text = crate::toml_file::read(&path).map_err(|e| (key(), e.to_string()))?;
+            let plan: CalibrationPlan = crate::toml_file::parse(&text, &path).map_err(|e| (key(), e.to_string()))?;
+            let stem = path
+                .file_stem()
+                .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+            push(format!("plan={stem}"), file.measurement, plan, ("sweep.plans", NOISE))?;
         }
     } else {
         push("base".into(), file.measurement, base_plan, ("plan", NOISE))?;

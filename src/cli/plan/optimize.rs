@@ -1,0 +1,131 @@
+//! `axiscal plan --optimize`: the search ([`axiscal::plan::optimize`]) run from the command
+//! line's settings, its result printed next to the seed plan's at the same number of points.
+
+use super::Args;
+use anyhow::{Context, Result, bail};
+use axiscal::calibration::procedure::CalibrationOptions;
+use axiscal::plan::optimize::axis_points;
+use axiscal::plan::{
+    CalibrationPlan, OptimizeOptions, PlanObjective, PlanPrediction, SightOptions, ValidationPlan, optimize,
+    with_point_budget,
+};
+use axiscal::robot::RobotDescription;
+
+/// The workspace of the prediction: `--workspace-half-range` (default the validation poses'),
+/// `--workspace-poses` poses drawn with the validation seed.
+fn workspace(args: &Args, desc: &RobotDescription, validation: &ValidationPlan) -> Result<ValidationPlan> {
+    let half_range = if args.workspace_half_range.is_empty() {
+        validation.half_range.clone()
+    } else if args.workspace_half_range.len() == desc.dof() {
+        args.workspace_half_range.clone()
+    } else {
+        bail!(
+            "--workspace-half-range: {} values, the robot has {} joints",
+            args.workspace_half_range.len(),
+            desc.dof()
+        );
+    };
+    Ok(ValidationPlan {
+        poses: args.workspace_poses,
+        half_range,
+        seed: validation.seed,
+    })
+}
+
+/// Runs the search from `seed_plan` and prints the result; returns the optimised plan.
+pub(super) fn run(
+    args: &Args,
+    desc: &RobotDescription,
+    seed_plan: &CalibrationPlan,
+    validation: &ValidationPlan,
+    sight: &SightOptions,
+) -> Result<CalibrationPlan> {
+    let points = args.points.unwrap_or_else(|| axis_points(seed_plan));
+    let seed = with_point_budget(seed_plan, points)
+        .with_context(|| format!("--points {points}: the plan's sweeps cannot measure exactly {points} points"))?;
+    let workspace = workspace(args, desc, validation)?;
+    let options = CalibrationOptions {
+        noise_rms_3d_mm: args.noise_mm,
+        repeatability_sigma_rad: args.repeatability_rad.clone(),
+        ..CalibrationOptions::default()
+    };
+    options
+        .joint_repeatability_rad(desc)
+        .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
+    let objective = PlanObjective::new(desc, &seed, &workspace, sight, &options).context("predicting the seed plan")?;
+    let found = optimize(
+        &objective,
+        desc,
+        &seed,
+        OptimizeOptions {
+            min_intervals: args.min_intervals,
+            max_rounds: args.max_rounds,
+        },
+    )?;
+    println!(
+        "workspace: {} poses, joints within +-{} (deg or mm) of the reference, seed {}; noise {} mm; {} axis points",
+        objective.workspace_poses(),
+        join(&workspace.half_range),
+        workspace.seed,
+        args.noise_mm,
+        points
+    );
+    println!(
+        "searched {} candidate plans in {} rounds (coordinate descent over spans, moves of points between sweeps)",
+        found.candidates, found.rounds
+    );
+    let name = if args.plan.is_some() { "seed plan" } else { "Table 1" };
+    print_prediction(name, &found.seed);
+    print_prediction("optimised", &found.prediction);
+    println!(
+        "  predicted tool position RMS {:.2}x lower than {name}'s at the same number of points",
+        found.seed.position_rms_mm / found.prediction.position_rms_mm
+    );
+    for (a, b) in seed.sweeps.iter().zip(&found.plan.sweeps) {
+        println!(
+            "  joint {}: span {} -> {}, poses {} -> {}{}",
+            a.joint,
+            a.span,
+            b.span,
+            a.poses(),
+            b.poses(),
+            match (b.second_target, &b.held_at) {
+                (true, Some(_)) => " (two targets, the follower joint centred)",
+                (true, None) => " (two targets)",
+                _ => "",
+            }
+        );
+    }
+    Ok(found.plan)
+}
+
+fn join(values: &[f64]) -> String {
+    values.iter().map(|v| v.to_string()).collect::<Vec<_>>().join("/")
+}
+
+fn print_prediction(name: &str, p: &PlanPrediction) {
+    let top: Vec<String> = p
+        .breakdown_mm2
+        .iter()
+        .take(4)
+        .map(|(g, v)| format!("{g} {:.0} %", 100.0 * v / p.position_rms_mm.powi(2)))
+        .collect();
+    println!(
+        "  {name:<10} predicted tool 1-sigma over the workspace: position RMS {:.3} mm, orientation RMS {:.3} mrad ({} points, {} hidden); largest shares: {}",
+        p.position_rms_mm,
+        p.orientation_rms_mrad,
+        p.axis_points,
+        p.hidden_points,
+        top.join(", ")
+    );
+}
+
+/// The comment on top of the optimised plan TOML: how it was made.
+pub(super) fn toml_comment(args: &Args, desc: &RobotDescription) -> String {
+    format!(
+        "# axiscal plan --optimize for {}: spans and points per sweep minimising the predicted tool\n\
+         # error over the workspace (docs/method.md#plans-that-buy-accuracy); noise {} mm.\n\
+         # Use with `axiscal simulate --plan` or `axiscal plan --plan`.\n",
+        desc.name, args.noise_mm
+    )
+}
