@@ -114,7 +114,7 @@ pub fn run(args: Args) -> Result<()> {
                     key,
                     diagnosis: d,
                     size_ratio: size.map(|s| s.0),
-                    detectable_magnitude: size.map(|s| s.1),
+                    detectable_magnitude: size.and_then(|s| s.1),
                 };
                 progress.inc();
                 Ok(result)

@@ -64,7 +64,7 @@ fn score_candidates(prep: &Prepared, null: &NullData, base: &LinearFit, g: (f64,
     for (c, x) in &prep.x_candidates {
         let fit = prep.candidate_fit(x);
         let outside = base.outside_fraction(&x.rows(0, prep.train_rows).into_owned());
-        let (chi2, chi2_null) = prep.heldout_chi2(x, null, sigma2);
+        let (chi2, chi2_null) = prep.heldout_chi2(&fit, null, sigma2);
         let t_null: Vec<f64> = g.1.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
         let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
         let improvement = g.0 - chi2;
@@ -173,8 +173,7 @@ struct GapTest {
 fn gap_test(prep: &Prepared, null: &NullData, base: &LinearFit, sigma2: f64, alpha: f64) -> GapTest {
     let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
     let g_obs = prep.heldout_ssr(base, &observed)[0] / sigma2;
-    let g_null: Vec<f64> = prep
-        .heldout_ssr(base, &null.samples)
+    let g_null: Vec<f64> = super::column_ssr(&base.heldout(&null.train, &null.held))
         .iter()
         .map(|s| s / sigma2)
         .collect();

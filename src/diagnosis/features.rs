@@ -140,7 +140,7 @@ pub(super) fn feature_entries(
         let (t, h) = prep.rows(data);
         base.heldout(&t, &h)
     };
-    let (r_obs, r_null) = (heldout(&observed), heldout(&null.samples));
+    let (r_obs, r_null) = (heldout(&observed), base.heldout(&null.train, &null.held));
     // Residual rows of every held-out pose (3 per target, in pose order).
     let mut rows = Vec::with_capacity(held.len());
     let mut start = 0;

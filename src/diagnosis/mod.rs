@@ -302,14 +302,13 @@ impl Prepared {
         LinearFit::new(&t, &h)
     }
 
-    /// Held-out chi-square (SSR over the per-coordinate noise variance `sigma2`) of the refit
-    /// plus an effect of sensitivity `x_effect`: on the observation, and on every null sample.
-    fn heldout_chi2(&self, x_effect: &DMatrix<f64>, null: &NullData, sigma2: f64) -> (f64, Vec<f64>) {
-        let fit = self.candidate_fit(x_effect);
+    /// Held-out chi-square (SSR over the per-coordinate noise variance `sigma2`) of `fit`, the
+    /// refit plus an effect ([`Prepared::candidate_fit`]): on the observation, and on every
+    /// null sample.
+    fn heldout_chi2(&self, fit: &LinearFit, null: &NullData, sigma2: f64) -> (f64, Vec<f64>) {
         let observed = DMatrix::from_column_slice(self.residuals.len(), 1, self.residuals.as_slice());
-        let chi2 = self.heldout_ssr(&fit, &observed)[0] / sigma2;
-        let null = self
-            .heldout_ssr(&fit, &null.samples)
+        let chi2 = self.heldout_ssr(fit, &observed)[0] / sigma2;
+        let null = column_ssr(&fit.heldout(&null.train, &null.held))
             .iter()
             .map(|s| s / sigma2)
             .collect();
@@ -319,9 +318,13 @@ impl Prepared {
     /// Held-out SSR \[m^2\] of `fit` for each data column of `data` (training rows first).
     fn heldout_ssr(&self, fit: &LinearFit, data: &DMatrix<f64>) -> Vec<f64> {
         let (t, h) = self.rows(data);
-        let r = fit.heldout(&t, &h);
-        r.column_iter().map(|c| c.norm_squared()).collect()
+        column_ssr(&fit.heldout(&t, &h))
     }
+}
+
+/// Sum of squares of each column.
+fn column_ssr(r: &DMatrix<f64>) -> Vec<f64> {
+    r.column_iter().map(|c| c.norm_squared()).collect()
 }
 
 /// A fit of the observed data refined beyond its linearisation ([`Prepared::refine`]).
@@ -385,6 +388,10 @@ const REFINE_STEPS: usize = 2;
 /// draws (columns, training rows first), and each replica's axis-experiment residual RMS^2.
 struct NullData {
     samples: DMatrix<f64>,
+    /// `samples`' training rows (split once: every candidate's test reads them).
+    train: DMatrix<f64>,
+    /// `samples`' held-out rows.
+    held: DMatrix<f64>,
     axis_rms2: Vec<Vec<f64>>,
 }
 
@@ -434,7 +441,13 @@ fn null_data(
         }
         progress.inc();
     }
-    Ok(NullData { samples, axis_rms2 })
+    let (train, held) = prep.rows(&samples);
+    Ok(NullData {
+        samples,
+        train,
+        held,
+        axis_rms2,
+    })
 }
 
 /// The factor on the noise level for one noise-only draw: 1 for a given noise; for one

@@ -60,7 +60,7 @@ pub(super) fn second_effect(
     (g_obs, sigma2, alpha): (f64, f64, f64),
 ) -> Option<Pair> {
     let x_first = &prep.x_candidates.iter().find(|(c, _)| *c == first.candidate)?.1;
-    let chi2_of = |x: &DMatrix<f64>| prep.heldout_chi2(x, null, sigma2);
+    let chi2_of = |x: &DMatrix<f64>| prep.heldout_chi2(&prep.candidate_fit(x), null, sigma2);
     let (chi2_first, null_first) = chi2_of(x_first);
     let mut trials: Vec<Trial> = prep
         .x_candidates

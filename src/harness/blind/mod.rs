@@ -382,19 +382,33 @@ fn simulate_on<A: ArmExecutor>(
     MeasurementSet::new(desc.dof(), out.rows).map_err(|e| e.to_string())
 }
 
+/// An effect whose noise-free trace after the baseline refit is below this fraction of the
+/// detectable gap is absorbed by the refit, not small: [`detectable_size`] reports it as
+/// unobservable. Rounding argument: the refit's arc fits stop within about `sqrt(1e-10)` =
+/// 1e-5 standard deviations of their optimum (`calibration::arc_ml`'s negligible decrease),
+/// which moves the predictions by at most ~1e-5 of the noise per coordinate, and the
+/// detectable gap is of the noise's order (0.08-0.10 mm for 0.11 mm per coordinate); a trace
+/// below 1e-5 of it is the fit's own stopping tolerance. A uniform instrument scale traces
+/// ~1e-11 mm (every length of the refit scales with it), the smallest drawn in-set effect
+/// (a third of its detectable size) ~3e-2 mm: nine orders of magnitude either side.
+pub const ABSORBED_TRACE_FRACTION: f64 = 1e-5;
+
 /// How large a case's effect is against what the diagnoser can see: its trace after the
 /// baseline refit (held-out RMS of the baseline on the case simulated WITHOUT noise and
 /// without repeatability jitter) over the
 /// smallest gap the diagnoser's gap test flags (`detectable_gap_mm`, from its diagnosis of
 /// the noisy case), and the magnitude at which that ratio is 1 (the trace is linear in the
 /// effect: in its magnitude, or in the compliance `1 / stiffness`). `None` without an effect.
+/// An effect the refit absorbs (trace below [`ABSORBED_TRACE_FRACTION`] of the detectable
+/// gap, e.g. a uniform instrument scale when every length is fitted) has ratio 0 and no
+/// detectable magnitude (`None`): no magnitude makes it visible on this campaign.
 pub fn detectable_size(
     key: &CaseKey,
     desc: &RobotDescription,
     options: &BlindOptions,
     diagnosis: &crate::diagnosis::DiagnosisOptions,
     detectable_gap_mm: f64,
-) -> Result<Option<(f64, f64)>, String> {
+) -> Result<Option<(f64, Option<f64>)>, String> {
     if key.effect == "none" {
         return Ok(None);
     }
@@ -405,11 +419,14 @@ pub fn detectable_size(
     };
     let set = simulate_case(key, desc, &clean)?;
     let trace_mm = crate::diagnosis::baseline_heldout_rms_mm(&set, desc, diagnosis).map_err(|e| e.to_string())?;
+    if trace_mm < ABSORBED_TRACE_FRACTION * detectable_gap_mm {
+        return Ok(Some((0.0, None)));
+    }
     let ratio = trace_mm / detectable_gap_mm;
     let magnitude = if key.effect == "joint_compliance" {
         key.magnitude * ratio
     } else {
         key.magnitude / ratio
     };
-    Ok(Some((ratio, magnitude)))
+    Ok(Some((ratio, Some(magnitude))))
 }

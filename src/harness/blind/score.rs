@@ -15,9 +15,10 @@ pub struct CaseResult {
     /// The diagnosis of the CSV alone.
     pub diagnosis: Diagnosis,
     /// Trace of the effect after the refit over the smallest gap the diagnoser flags (>= 1:
-    /// detectable), `None` without an effect.
+    /// detectable; 0 when the refit absorbs the effect), `None` without an effect.
     pub size_ratio: Option<f64>,
-    /// The magnitude at which that ratio is 1 (unit of the key's `magnitude_unit`).
+    /// The magnitude at which that ratio is 1 (unit of the key's `magnitude_unit`); `None`
+    /// without an effect or when the refit absorbs it (no magnitude is detectable).
     pub detectable_magnitude: Option<f64>,
 }
 
@@ -448,7 +449,10 @@ pub fn case_table(results: &[CaseResult]) -> String {
                 format!("{:.3e}", k.magnitude)
             },
             k.magnitude_unit,
-            opt(r.detectable_magnitude, 2),
+            match (r.detectable_magnitude, r.size_ratio) {
+                (None, Some(_)) => "absorbed".into(),
+                (m, _) => opt(m, 2),
+            },
             r.size_ratio.map_or("-".into(), |v| format!("{v:.2}")),
             diagnosed_label(d),
             d.outcome.joint.map_or("-".into(), |j| j.to_string()),
