@@ -78,8 +78,11 @@ pub fn axis_points(plan: &CalibrationPlan) -> usize {
 /// sweep's share as in `plan`, at least 2 intervals); the remainder from rounding is given to,
 /// or taken from, the one-target sweeps in turn. `None` when `points` cannot be met exactly.
 pub fn with_point_budget(plan: &CalibrationPlan, points: usize) -> Option<CalibrationPlan> {
-    let mut out = plan.clone();
     let total = axis_points(plan) as f64;
+    if plan.sweeps.is_empty() || total == 0.0 {
+        return None;
+    }
+    let mut out = plan.clone();
     for s in &mut out.sweeps {
         let share = (s.poses() * targets(s)) as f64 * points as f64 / total;
         s.intervals = ((share / targets(s) as f64).round() as usize).saturating_sub(1).max(2);
@@ -87,22 +90,30 @@ pub fn with_point_budget(plan: &CalibrationPlan, points: usize) -> Option<Calibr
     let singles: Vec<usize> = (0..out.sweeps.len())
         .filter(|&i| !out.sweeps[i].second_target)
         .collect();
-    let mut turn = 0;
+    let order: Vec<usize> = if singles.is_empty() {
+        (0..out.sweeps.len()).collect()
+    } else {
+        singles
+    };
+    // Above the budget a sweep gives up one pose; below it takes one only where that does not
+    // overshoot, so the count moves monotonically once below: it ends when the budget is met
+    // or when a whole round of sweeps can move no further.
+    let (mut turn, mut idle) = (0, 0);
     while axis_points(&out) != points {
-        let pairs_only = singles.is_empty();
-        let i = if pairs_only {
-            turn % out.sweeps.len()
-        } else {
-            singles[turn % singles.len()]
-        };
+        if idle >= order.len() {
+            return None;
+        }
+        let i = order[turn % order.len()];
         let have = axis_points(&out);
         let t = targets(&out.sweeps[i]);
         if have < points && points - have >= t {
             out.sweeps[i].intervals += 1;
+            idle = 0;
         } else if have > points && out.sweeps[i].intervals > 2 {
             out.sweeps[i].intervals -= 1;
-        } else if pairs_only || turn > 4 * out.sweeps.len() * points.max(1) {
-            return None;
+            idle = 0;
+        } else {
+            idle += 1;
         }
         turn += 1;
     }
@@ -285,4 +296,34 @@ pub fn optimize(
         candidates: search.candidates,
         rounds,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Table 1 met exactly at several budgets (including odd ones, which only its one-target
+    /// sweeps can absorb); an empty plan and a budget a two-target-only plan cannot meet are
+    /// `None`, not a panic or an endless loop.
+    #[test]
+    fn the_point_budget_is_met_exactly_or_refused() {
+        let table1 = CalibrationPlan::table1(6);
+        for points in [60, 101, 129, 200, 333] {
+            let plan = with_point_budget(&table1, points).expect("reachable");
+            assert_eq!(axis_points(&plan), points);
+            assert!(plan.sweeps.iter().all(|s| s.intervals >= 2));
+        }
+        let empty = CalibrationPlan {
+            sweeps: vec![],
+            ..table1.clone()
+        };
+        assert!(with_point_budget(&empty, 50).is_none());
+        let pairs = CalibrationPlan {
+            sweeps: table1.sweeps.iter().filter(|s| s.second_target).cloned().collect(),
+            ..table1
+        };
+        let even = with_point_budget(&pairs, 60).expect("an even budget of pairs");
+        assert_eq!(axis_points(&even), 60);
+        assert!(with_point_budget(&pairs, 61).is_none());
+    }
 }

@@ -205,7 +205,13 @@ fn calibrate_plan(
     options: &CalibrationOptions,
 ) -> Result<(RobotModel, DMatrix<f64>, [usize; 2]), PredictError> {
     let (set, axis_points) = noise_free_campaign(desc, plan, sight)?;
-    let fit = calibrate(&set, desc, options)?;
+    // The noise is the prediction's input: an estimate from noise-free data would be ~0 and
+    // collapse the covariance.
+    let options = CalibrationOptions {
+        estimate_noise: false,
+        ..options.clone()
+    };
+    let fit = calibrate(&set, desc, &options)?;
     let cov = fit
         .model_covariance
         .ok_or_else(|| PredictError::Covariance("no model covariance".into()))?;
