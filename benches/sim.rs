@@ -215,7 +215,7 @@ fn summary() {
     let mut steps = 0;
     let settle_s = seconds_per_call(5, || {
         let r = arm.static_equilibrium(&Q, &servo, &[], &options).expect("settles");
-        steps = r.steps + r.approach_steps;
+        steps = r.total_steps();
     });
     line("dynamic: settle one pose", settle_s, Some(steps));
     // At rest under the servos: the cost of one step alone.
@@ -224,12 +224,12 @@ fn summary() {
     let (mut fb_arm, mut bodies, q) = four_bar_arm();
     let fb_s = seconds_per_call(5, || {
         let r = settle_four_bar(&mut fb_arm, &mut bodies, &q);
-        steps = r.steps + r.approach_steps;
+        steps = r.total_steps();
     });
     line("dynamic: settle one pose, four-bar bodies", fb_s, Some(steps));
     let rapier_s = seconds_per_call(5, || {
         compliant.execute(&Q, &conditions, &mut rng).expect("settles");
-        steps = compliant.last_settle().map_or(0, |r| r.steps + r.approach_steps);
+        steps = compliant.last_settle().map_or(0, |r| r.total_steps());
     });
     line("dynamic RapierArm pose (four-bar, gear, paper)", rapier_s, Some(steps));
     println!(

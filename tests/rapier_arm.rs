@@ -483,7 +483,7 @@ mod dynamic {
             // bars' weight the whole settle takes less than half the steps.
             assert!(fast_report.steps <= warm_report.steps);
             if four_bar_bodies {
-                assert!(2 * (fast_report.steps + fast_report.approach_steps) < warm_report.steps);
+                assert!(2 * fast_report.total_steps() < warm_report.steps);
             }
             assert!(warm_report.steps < cold_report.steps);
         }

@@ -9,7 +9,6 @@ mod optimize;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result, bail};
-use axiscal::kinematics::JointKind;
 use axiscal::measurement::PAPER_RIGHT_STATION_MM;
 use axiscal::plan::{CalibrationPlan, SightOptions, ValidationPlan, planned_points, write_plan_csv};
 use axiscal::robot::RobotDescription;
@@ -125,10 +124,7 @@ pub fn campaign_plan(desc: &RobotDescription, path: Option<&Path>) -> Result<Cal
             let text = axiscal::toml_file::read(path)?;
             axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?
         }
-        None if desc.dof() == 6 && desc.joints.iter().all(|j| j.kind == JointKind::Revolute) => {
-            CalibrationPlan::table1(6)
-        }
-        None => CalibrationPlan::for_robot(desc),
+        None => CalibrationPlan::default_for(desc),
     })
 }
 

@@ -166,6 +166,21 @@ impl CalibrationPlan {
         }
     }
 
+    /// The plan used where none is given: paper Table 1 for a six-joint revolute arm,
+    /// [`CalibrationPlan::for_robot`] for any other joint mix.
+    pub fn default_for(desc: &RobotDescription) -> Self {
+        let six_revolute = desc.dof() == 6
+            && desc
+                .joints
+                .iter()
+                .all(|j| j.kind == crate::kinematics::JointKind::Revolute);
+        if six_revolute {
+            Self::table1(6)
+        } else {
+            Self::for_robot(desc)
+        }
+    }
+
     /// Table 1 generalised to any joint mix: every joint swept once, last joint first, 15
     /// intervals, around a reference at 0 (or the middle of the limits when 0 is outside):
     /// a revolute joint over 90 deg, a prismatic one over half its range (each within its

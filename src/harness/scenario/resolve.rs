@@ -368,17 +368,7 @@ fn nonempty<'a, T>(values: &'a [T], key: &str) -> Result<&'a [T], KeyError> {
 }
 
 fn base_plan(section: &PlanSection, robot: &RobotDescription) -> Result<CalibrationPlan, KeyError> {
-    // Paper Table 1 for a six-joint arm, its generalisation for any other joint mix.
-    let table1 = if robot.dof() == 6
-        && robot
-            .joints
-            .iter()
-            .all(|j| j.kind == crate::kinematics::JointKind::Revolute)
-    {
-        CalibrationPlan::table1(robot.dof())
-    } else {
-        CalibrationPlan::for_robot(robot)
-    };
+    let table1 = CalibrationPlan::default_for(robot);
     let plan = CalibrationPlan {
         reference: section.reference.clone().unwrap_or(table1.reference),
         sweeps: section.sweeps.clone().unwrap_or(table1.sweeps),

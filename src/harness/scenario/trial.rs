@@ -11,7 +11,7 @@ use super::resolve::{Case, ResolvedScenario, ResolvedTruth};
 use super::validation_error::validation_errors;
 use crate::calibration::procedure::{CalibrationOptions, Detail, calibrate_model};
 use crate::kinematics::PhiModel;
-use crate::measurement::MeasurementSet;
+use crate::measurement::{Measurement, MeasurementSet};
 use crate::plan::{PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription, RobotModel};
@@ -167,13 +167,8 @@ impl CampaignTrial {
         truth: &RobotModel,
     ) -> Result<f64, String> {
         let (model, truth_model) = (calibrated.phi_model(), truth.phi_model());
-        let mut last: Option<(&str, usize)> = None;
         let (mut sum_m2, mut count) = (0.0, 0usize);
-        for row in out.rows.iter().filter(|r| r.moved_joint == 0) {
-            if last == Some((row.experiment.as_str(), row.step)) {
-                continue;
-            }
-            last = Some((row.experiment.as_str(), row.step));
+        for row in measured_poses(&out.rows) {
             let cmd = commands_to_internal(&self.desc, &row.cmd);
             let failed = |e: crate::robot::ModelError| format!("{} step {}: {e}", row.experiment, row.step);
             let q = calibrated.joint_values(&self.controller, &cmd).map_err(failed)?;
@@ -183,7 +178,12 @@ impl CampaignTrial {
             sum_m2 += d.norm_squared();
             count += 1;
         }
-        Ok((sum_m2 / count.max(1) as f64).sqrt() * 1e3)
+        // No pose measured (all occluded): no number, as `validation_errors` gives.
+        Ok(if count == 0 {
+            f64::NAN
+        } else {
+            (sum_m2 / count as f64).sqrt() * 1e3
+        })
     }
 
     fn metrics(&self, out: &CampaignOutput, calibrated: &RobotModel) -> Result<Metrics, String> {
@@ -197,12 +197,7 @@ impl CampaignTrial {
         // target row); a command the calibrated transmissions cannot invert fails the trial,
         // naming the pose.
         let mut predicted: Vec<(&[f64], nalgebra::Isometry3<f64>)> = Vec::new();
-        let mut last: Option<(&str, usize)> = None;
-        for row in out.rows.iter().filter(|r| r.moved_joint == 0) {
-            if last == Some((row.experiment.as_str(), row.step)) {
-                continue;
-            }
-            last = Some((row.experiment.as_str(), row.step));
+        for row in measured_poses(&out.rows) {
             let q = calibrated
                 .joint_values(&self.controller, &commands_to_internal(&self.desc, &row.cmd))
                 .map_err(|e| {
@@ -235,6 +230,18 @@ impl CampaignTrial {
         );
         Ok(m)
     }
+}
+
+/// The first row of each measured pose with no moved joint (the validation poses and the tool
+/// observation), in file order: a pose's targets are consecutive rows of one step.
+fn measured_poses(rows: &[Measurement]) -> impl Iterator<Item = &Measurement> {
+    let mut last: Option<(&str, usize)> = None;
+    rows.iter().filter(|r| r.moved_joint == 0).filter(move |r| {
+        let pose = Some((r.experiment.as_str(), r.step));
+        let first = last != pose;
+        last = pose;
+        first
+    })
 }
 
 impl Trial for CampaignTrial {
@@ -315,4 +322,42 @@ fn one_line(message: &str) -> String {
         .filter(|l| !l.is_empty())
         .collect::<Vec<_>>()
         .join("; ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(experiment: &str, moved_joint: usize, step: usize, target: usize) -> Measurement {
+        Measurement {
+            experiment: experiment.into(),
+            moved_joint,
+            step,
+            target,
+            position_mm: [0.0; 3],
+            cmd: vec![step as f64],
+            payload_kg: 0.0,
+            temperature_c: 20.0,
+        }
+    }
+
+    #[test]
+    fn measured_poses_gives_each_pose_with_no_moved_joint_once() {
+        let rows = [
+            row("j1", 1, 0, 0),
+            row("tool", 0, 0, 0),
+            row("tool", 0, 0, 1),
+            row("validation", 0, 0, 0),
+            row("validation", 0, 0, 2),
+            row("validation", 0, 1, 1),
+            row("j2", 2, 1, 0),
+            row("validation", 0, 2, 0),
+        ];
+        let poses: Vec<(&str, usize)> = measured_poses(&rows).map(|r| (r.experiment.as_str(), r.step)).collect();
+        assert_eq!(
+            poses,
+            [("tool", 0), ("validation", 0), ("validation", 1), ("validation", 2)]
+        );
+        assert_eq!(measured_poses(&rows[..1]).count(), 0);
+    }
 }

@@ -165,10 +165,17 @@ pub struct SettleTally {
     pub max_speed_m_s: f64,
 }
 
+impl SettleReport {
+    /// Every step the settle took: the approach's and the settle proper's.
+    pub fn total_steps(&self) -> usize {
+        self.steps + self.approach_steps
+    }
+}
+
 impl SettleTally {
     /// Adds one pose's settle.
     pub fn add(&mut self, report: &SettleReport) {
-        let steps = report.steps + report.approach_steps;
+        let steps = report.total_steps();
         self.poses += 1;
         self.steps += steps;
         self.max_steps = self.max_steps.max(steps);
