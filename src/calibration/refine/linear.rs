@@ -3,7 +3,8 @@
 //! effect parameters (Gauss-Newton's model, Nocedal & Wright,
 //! Numerical Optimization, 2nd ed., eq. 10.24), so every fit is one truncated-SVD solve on
 //! the training rows ([`TruncatedSvd`]), and its
-//! held-out residuals are a fixed linear map of the data: `r_h - X_h X_t^+ r_t`.
+//! held-out residuals are a fixed linear map of the data: `r_h - X_h X_t^+ r_t`, applied as
+//! `r_h - X_h (X_t^+ r_t)` (through the few parameters, never the rows-by-rows matrix).
 
 use crate::numerics::lsq::TruncatedSvd;
 use nalgebra::{DMatrix, DVector};
@@ -41,8 +42,8 @@ where
 pub struct LinearFit {
     /// `p = solve * r_t` (parameters \[model units\]).
     solve: DMatrix<f64>,
-    /// `X_h X_t^+`: the held-out prediction of the fit per training residual.
-    pub heldout_from_train: DMatrix<f64>,
+    /// `X_h`: the design's held-out rows (the fit's held-out prediction is `X_h p`).
+    x_held: DMatrix<f64>,
     /// `(X_t^T X_t)^+` on the kept directions (times the per-coordinate noise variance: the
     /// parameter covariance).
     pub normal_inverse: DMatrix<f64>,
@@ -57,10 +58,9 @@ impl LinearFit {
     pub fn new(x_train: &DMatrix<f64>, x_held: &DMatrix<f64>) -> Self {
         let svd = TruncatedSvd::new(x_train, NULL_DIRECTION_TOLERANCE);
         let normal_inverse = &svd.v_over_s * svd.v_over_s.transpose();
-        let heldout_from_train = x_held * &svd.solve;
         LinearFit {
             solve: svd.solve,
-            heldout_from_train,
+            x_held: x_held.clone(),
             normal_inverse,
             span: svd.span,
             rank: svd.rank,
@@ -73,9 +73,10 @@ impl LinearFit {
     }
 
     /// Held-out residuals after the fit, for data columns split into training and held-out
-    /// rows (one column per data set).
+    /// rows (one column per data set): `held - X_h (X_t^+ train)`, about `rows / (2 rank)`
+    /// times fewer operations than through `X_h X_t^+`.
     pub fn heldout(&self, train: &DMatrix<f64>, held: &DMatrix<f64>) -> DMatrix<f64> {
-        held - &self.heldout_from_train * train
+        held - &self.x_held * (&self.solve * train)
     }
 
     /// Fraction of the norm of `x` (training rows) outside the fit's span: how much of a
