@@ -5,8 +5,8 @@ mod pair;
 mod verdict;
 
 use super::{
-    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, FeatureContrast, LinearFit, NamedEffect, NullData, Outcome,
-    Parameter, Pose, Prepared, WhereEntry, implausible,
+    Candidate, CandidateScore, Diagnosis, DiagnosisOptions, FeatureContrast, LinearFit, NULL_DIRECTION_TOLERANCE,
+    NamedEffect, NullData, Outcome, Parameter, Pose, Prepared, WhereEntry, implausible,
 };
 use crate::numerics::stats::{QuantileMethod, mean, quantile, std_dev, upper_tail};
 use nalgebra::{DMatrix, DVector};
@@ -205,9 +205,19 @@ fn mark_significant(scored: &mut [Scored], samples: usize, alpha: f64) -> f64 {
         .collect();
     let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
     for s in scored.iter_mut() {
-        s.score.significant = s.score.z > z_threshold;
+        s.score.significant = s.score.z > z_threshold && !s.absorbed();
     }
     z_threshold
+}
+
+impl Scored {
+    /// The refit absorbs the candidate (its training columns lie inside the refit's span up
+    /// to [`NULL_DIRECTION_TOLERANCE`], e.g. a uniform instrument scale): its improvement is
+    /// rounding, so its z standardises rounding noise and is never significant. It stays in
+    /// the family-wise maximum (conservative).
+    fn absorbed(&self) -> bool {
+        self.score.outside_refit_fraction < NULL_DIRECTION_TOLERANCE
+    }
 }
 
 /// Why `s`'s fitted parameters are implausible ([`implausible`]), with a compliance member's
@@ -429,5 +439,55 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         },
         fraction_closed,
         verdict: v.verdict,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scored(candidate: Candidate, z_null: Vec<f64>, z: f64, outside: f64) -> Scored {
+        Scored {
+            candidate,
+            score: CandidateScore {
+                effect: candidate.effect_name().into(),
+                joint: candidate.joint(),
+                heldout_rms_mm: 0.3,
+                gap_after_mm: 0.0,
+                improvement_chi2: 1.0,
+                z,
+                significant: false,
+                outside_refit_fraction: outside,
+                weight: 0.0,
+                parameters: Vec::new(),
+                implausible: None,
+            },
+            chi2: 0.0,
+            chi2_null: Vec::new(),
+            z_null,
+        }
+    }
+
+    /// A candidate the refit absorbs is never significant, whatever its z (rounding noise
+    /// standardised by rounding noise); it still counts in the family-wise maximum.
+    #[test]
+    fn an_absorbed_candidate_is_never_significant() {
+        let null: Vec<f64> = (0..200).map(|k| (k as f64 / 199.0) * 3.0).collect();
+        let harmonic = Candidate::GearHarmonic {
+            joint: 5,
+            order: 2,
+            period: crate::physics::HarmonicPeriod::Transmission,
+        };
+        let mut s = vec![
+            scored(Candidate::InstrumentScale, null.clone(), 10.0, 1e-11),
+            scored(harmonic, vec![0.0; 200], 10.0, 0.5),
+        ];
+        let threshold = mark_significant(&mut s, 200, 0.05);
+        assert!(
+            threshold > 2.8,
+            "the absorbed candidate's noise sets the maximum: {threshold}"
+        );
+        assert!(!s[0].score.significant);
+        assert!(s[1].score.significant);
     }
 }

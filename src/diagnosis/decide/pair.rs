@@ -86,7 +86,8 @@ pub(super) fn second_effect(
         .map(|k| trials.iter().map(|t| t.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
         .collect();
     let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
-    trials.retain(|t| t.z > z_threshold);
+    let absorbed = |c: Candidate| scored.iter().any(|s| s.candidate == c && s.absorbed());
+    trials.retain(|t| t.z > z_threshold && !absorbed(t.candidate));
     trials.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
     let r_train = prep.residuals.rows(0, prep.train_rows).into_owned();
     trials.into_iter().find_map(|t| {
