@@ -329,16 +329,7 @@ mod tests {
     use super::*;
 
     fn row(experiment: &str, moved_joint: usize, step: usize, target: usize) -> Measurement {
-        Measurement {
-            experiment: experiment.into(),
-            moved_joint,
-            step,
-            target,
-            position_mm: [0.0; 3],
-            cmd: vec![step as f64],
-            payload_kg: 0.0,
-            temperature_c: 20.0,
-        }
+        Measurement::test_row(experiment, moved_joint, step, target)
     }
 
     #[test]
