@@ -158,6 +158,10 @@ pub struct DerivedEfficiency {
     pub variance_over_scatter: Option<f64>,
     /// Relative standard error of the mean squared error, hence of `efficiency`.
     pub relative_standard_error: f64,
+    /// Its share in a direction the estimator's conventions leave unfixed and the points do
+    /// not determine (column-scaled; no bound from 1e-5 up).
+    #[serde(default)]
+    pub undetermined_share: Option<f64>,
 }
 
 /// The study's result.
@@ -452,7 +456,7 @@ fn derived_sigma_checks(outcomes: &[TrialOutcome]) -> Vec<RowSigmaCheck> {
 fn derived_efficiency(bound: &ConvergedBound, outcomes: &[TrialOutcome]) -> Vec<DerivedEfficiency> {
     let n = outcomes.len() as f64;
     let mut out = Vec::new();
-    for (name, converged, crb_var) in &bound.quantities {
+    for (name, converged, crb_var, share) in &bound.quantities {
         let Some(i) = outcomes
             .first()
             .and_then(|o| o.derived.iter().position(|d| d.0 == *name))
@@ -482,6 +486,7 @@ fn derived_efficiency(bound: &ConvergedBound, outcomes: &[TrialOutcome]) -> Vec<
             efficiency: crb_var.map(|_| e.efficiency),
             variance_over_scatter: crb_var.map(|v| v / (scatter * scatter)),
             relative_standard_error: e.relative_standard_error,
+            undetermined_share: *share,
         });
     }
     out
@@ -615,7 +620,7 @@ impl StudyReport {
              constrained bound on it (on the parameters estimable without conventions it \
              equals the rank-revealing bound to {:.1e}). That subspace still holds {} direction(s) \
              the points do not determine; the parameters with a share in it get no bound: {}.\n\n\
-             | quantity | CRB sigma | RMS error | efficiency (CRB / MSE) | CRB / scatter^2 | mean error (bias) |\n|---|---|---|---|---|---|\n",
+             | quantity | CRB sigma | RMS error | efficiency (CRB / MSE) | CRB / scatter^2 | mean error (bias) | undetermined share |\n|---|---|---|---|---|---|---|\n",
             b.parameters,
             b.coordinates,
             b.rank,
@@ -639,14 +644,15 @@ impl StudyReport {
         for d in &self.derived_efficiency {
             let se = d.relative_standard_error;
             s += &format!(
-                "| {} | {} | {:.3e} | {} | {} | {:.2e} +- {:.2e} |\n",
+                "| {} | {} | {:.3e} | {} | {} | {:.2e} +- {:.2e} | {:.1e} |\n",
                 d.quantity,
                 opt(d.crb_sigma, &|v| format!("{v:.3e}")),
                 d.rms_error,
                 opt(d.efficiency, &|v| format!("{v:.3} +- {:.3}", v * se)),
                 opt(d.variance_over_scatter, &|v| format!("{v:.3} +- {:.3}", v * se)),
                 d.mean_error,
-                d.mean_error_standard_error
+                d.mean_error_standard_error,
+                d.undetermined_share.unwrap_or(f64::NAN)
             );
         }
         let pairs = |v: &[(String, f64)], prec: usize| {
@@ -656,8 +662,9 @@ impl StudyReport {
                 .join(", ")
         };
         s += &format!(
-            "\nSecond route: whole-campaign bound / per-arc bound of each transmission coefficient \
-             (1 where no other experiment informs it): {}.\n\nForm misfit of each coupling \
+            "\nSecond route: whole-campaign bound / per-arc bound of each transmission harmonic \
+             (var sin_k + var cos_k; 1 where no other experiment informs it, below 1 where one \
+             does): {}.\n\nForm misfit of each coupling \
              (the noise-free fit's angle residual RMS, rad): {}.\n",
             pairs(&b.transmission_bound_ratio, 4),
             b.coupling_form_residual_rad

@@ -73,9 +73,10 @@ pub struct CampaignBoundSummary {
     /// do not change along them), with that share (column-scaled unit vector's length off the
     /// row space); none of them is given a bound.
     pub unidentifiable: Vec<(String, f64)>,
-    /// Per joint and transmission coefficient: the whole-campaign bound over the per-arc
-    /// bound the axis efficiency uses (the second route; 1 where the other experiments carry
-    /// no information on that coefficient, below 1 where they add some).
+    /// Per joint and harmonic order: the whole-campaign bound of `var(sin_k) + var(cos_k)`
+    /// over the per-arc bound's (the axis efficiency's): the second route, 1 where the other
+    /// experiments carry no information on that joint's transmission, below 1 where they add
+    /// some (the whole campaign holds the arc's points and its model maps onto the arc's).
     pub transmission_bound_ratio: Vec<(String, f64)>,
     /// Per coupling: the noise-free fit's angle residual RMS \[rad\], the misfit of the fitted
     /// form to the truth's coupling (0 when the truth is of the fitted form).
@@ -85,8 +86,9 @@ pub struct CampaignBoundSummary {
 /// The noise-free fit's derived quantities with their whole-campaign bound.
 pub(super) struct ConvergedBound {
     /// Per derived quantity: name, the noise-free fit's value, the bound's variance (the
-    /// quantity's unit squared; `None` if not estimable or not in the vector).
-    pub(super) quantities: Vec<(String, f64, Option<f64>)>,
+    /// quantity's unit squared; `None` if not estimable or not in the vector) and its share in
+    /// a direction the conventions leave unfixed (`None` if not in the vector).
+    pub(super) quantities: Vec<(String, f64, Option<f64>, Option<f64>)>,
     /// What the bound rests on.
     pub(super) summary: CampaignBoundSummary,
 }
@@ -241,32 +243,12 @@ pub(super) fn converged_bound(
     let quantities = derived_quantities(&lean, desc)
         .into_iter()
         .map(|(name, value, _)| {
-            let variance = vector_name(&name, names).and_then(|(k, s)| b.convention.variance[k].map(|v| v * s * s));
-            (name, value, variance)
+            let at = vector_name(&name, names);
+            let variance = at.and_then(|(k, s)| b.convention.variance[k].map(|v| v * s * s));
+            (name, value, variance, at.map(|(k, _)| b.convention.null_share[k]))
         })
         .collect();
-    let mut transmission_bound_ratio = Vec::new();
-    for (e, t) in experiments.iter().zip(truths) {
-        let arc = arc_crb_with_angle_noise(
-            t.form,
-            &t.commands_rad,
-            &MeasurementNoise::from_rms_3d(noise_m),
-            0.0,
-            &t.params,
-            &t.reference,
-        )
-        .map_err(StudyError::Reference)?;
-        for (c, v) in t.form.coefficient_names().into_iter().zip(&arc.coefficient_variance) {
-            let name = format!("joint {} transmission {c} [rad]", e.joint);
-            if let Some(w) = names
-                .iter()
-                .position(|n| *n == name)
-                .and_then(|k| b.estimable.variance[k])
-            {
-                transmission_bound_ratio.push((format!("joint {} {c}", e.joint), w / v));
-            }
-        }
-    }
+    let transmission_bound_ratio = transmission_ratios(&b, noise_m, experiments, truths)?;
     let bound = &b.estimable;
     let summary = CampaignBoundSummary {
         parameters: bound.parameters,
@@ -295,6 +277,54 @@ pub(super) fn converged_bound(
             .collect(),
     };
     Ok(ConvergedBound { quantities, summary })
+}
+
+/// Per joint and harmonic order: the whole-campaign bound (held to the conventions) of
+/// `var(sin_k) + var(cos_k)` over the per-arc bound's (the axis efficiency's,
+/// [`arc_crb_with_angle_noise`] without angle noise), where both are bounded. The sum, because
+/// the model holds the transmission in the calibrated zero (`Transmission::shifted`), which
+/// turns each (sin_k, cos_k) pair by a fixed angle against the arc fit's own zero: the trace
+/// does not change under that turn.
+fn transmission_ratios(
+    b: &Bounds,
+    noise_m: f64,
+    experiments: &[AxisExperiment],
+    truths: &[AxisTruth],
+) -> Result<Vec<(String, f64)>, StudyError> {
+    let mut out = Vec::new();
+    for (e, t) in experiments.iter().zip(truths) {
+        let arc = arc_crb_with_angle_noise(
+            t.form,
+            &t.commands_rad,
+            &MeasurementNoise::from_rms_3d(noise_m),
+            0.0,
+            &t.params,
+            &t.reference,
+        )
+        .map_err(StudyError::Reference)?;
+        let names = t.form.coefficient_names();
+        let arc_var = |c: &str| names.iter().position(|n| n == c).map(|i| arc.coefficient_variance[i]);
+        let campaign_var = |c: &str| {
+            let name = format!("joint {} transmission {c} [rad]", e.joint);
+            b.names
+                .iter()
+                .position(|n| *n == name)
+                .and_then(|k| b.convention.variance[k])
+        };
+        for order in 1.. {
+            let (s, c) = (format!("sin{order}"), format!("cos{order}"));
+            let (Some(arc_s), Some(arc_c)) = (arc_var(&s), arc_var(&c)) else {
+                break;
+            };
+            if let (Some(w_s), Some(w_c)) = (campaign_var(&s), campaign_var(&c)) {
+                out.push((
+                    format!("joint {} order {order}", e.joint),
+                    (w_s + w_c) / (arc_s + arc_c),
+                ));
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The largest relative difference between the two bounds over the estimable parameters
