@@ -29,10 +29,11 @@ use crate::calibration::crb::{
     CampaignBound, ESTIMABLE_TOLERANCE, arc_crb_with_angle_noise, convention_bound, covariance_range, fisher_bound,
 };
 use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, Detail, calibrate, calibrate_model};
-use crate::calibration::refine::sensitivity;
+use crate::calibration::refine::{NULL_DIRECTION_TOLERANCE, sensitivity};
 use crate::calibration::tool_accuracy::{model_moved, model_parameter_names};
 use crate::diagnosis::CleanCampaign;
 use crate::measurement::MeasurementSet;
+use crate::numerics::lsq::TruncatedSvd;
 use crate::robot::{RobotDescription, RobotModel};
 use nalgebra::{DMatrix, Vector3};
 use serde::{Deserialize, Serialize};
@@ -164,10 +165,52 @@ impl<'a> CampaignPrediction<'a> {
         names
     }
 
+    /// The subspace `u` (columns, free model parameters) restricted to the directions that
+    /// keep every fractional coupling's start convention (`g(theta_0) = slope theta_0` at the
+    /// driving joint's active angle `theta_0` at the sweep's first step, `passive_start` of the
+    /// procedure: the fractional family is closed under a constant shift, which the joint's
+    /// zero absorbs, so the points do not fix it). Its gradient by central differences
+    /// ([`sensitivity`], the same steps).
+    fn with_starts(&self, u: DMatrix<f64>, starts: &[FractionalStart]) -> Result<DMatrix<f64>, StudyError> {
+        if starts.is_empty() {
+            return Ok(u);
+        }
+        let h = |p: &[f64]| -> Option<Vec<f64>> {
+            let mut robot = self.robot.clone();
+            for (&k, &x) in self.free.iter().zip(p) {
+                if x != 0.0 {
+                    robot = model_moved(&robot, k, x);
+                }
+            }
+            starts
+                .iter()
+                .map(|s| {
+                    let theta = robot.active_displacements(&s.actuators_rad).ok()?[s.to - 1];
+                    let g = robot.joints[s.to].coupling_in.as_ref()?.try_passive(theta).ok()?;
+                    Some(g - s.slope * theta)
+                })
+                .collect()
+        };
+        let p0 = vec![0.0; self.free.len()];
+        let grad = sensitivity(h, &p0, &self.steps[..self.free.len()])
+            .ok_or_else(|| StudyError::Bound("the coupling start convention cannot be evaluated".into()))?;
+        // The complement of the constraints' rows within u: the null space of `grad u`.
+        let gu = &grad * &u;
+        let projector =
+            DMatrix::identity(u.ncols(), u.ncols()) - TruncatedSvd::new(&gu, NULL_DIRECTION_TOLERANCE).solve * &gu;
+        Ok(&u * TruncatedSvd::new(&projector, NULL_DIRECTION_TOLERANCE).span)
+    }
+
     /// The bound with isotropic noise of 3-D RMS `noise_m` per point: the rank-revealing one
     /// and the one held to the estimator's conventions (the range of the model covariance
-    /// `covariance`, restricted to the free parameters).
-    pub(super) fn bound(&self, noise_m: f64, covariance: &DMatrix<f64>) -> Result<Bounds, StudyError> {
+    /// `covariance`, restricted to the free parameters, and the fractional couplings' start
+    /// conventions `starts`).
+    pub(super) fn bound(
+        &self,
+        noise_m: f64,
+        covariance: &DMatrix<f64>,
+        starts: &[FractionalStart],
+    ) -> Result<Bounds, StudyError> {
         let p0 = vec![0.0; self.steps.len()];
         let sigma = noise_m / 3f64.sqrt();
         let j = sensitivity(|p| self.predict(p), &p0, &self.steps)
@@ -175,7 +218,7 @@ impl<'a> CampaignPrediction<'a> {
         let free = DMatrix::from_fn(self.free.len(), self.free.len(), |r, c| {
             covariance[(self.free[r], self.free[c])]
         });
-        let u = covariance_range(&free);
+        let u = self.with_starts(covariance_range(&free), starts)?;
         let targets = j.ncols() - self.free.len();
         Ok(Bounds {
             names: self.names(),
@@ -184,6 +227,44 @@ impl<'a> CampaignPrediction<'a> {
             convention_rank: u.ncols(),
         })
     }
+}
+
+/// The start convention of a fractional coupling into joint `to` (0-based): the driving
+/// joint's actuator commands at the sweep's first step \[rad\] and the nominal slope.
+pub(super) struct FractionalStart {
+    /// The driven joint (0-based).
+    pub(super) to: usize,
+    /// Actuator commands of the sweep's first second-target row \[rad\].
+    pub(super) actuators_rad: Vec<f64>,
+    /// The nominal slope.
+    pub(super) slope: f64,
+}
+
+/// The start conventions of `cal`'s fractional couplings on the campaign `set`.
+fn fractional_starts(
+    set: &MeasurementSet,
+    couplings: &[crate::calibration::procedure::CouplingReport],
+    desc: &RobotDescription,
+) -> Vec<FractionalStart> {
+    let controller = crate::robot::Controller::from_description(desc);
+    couplings
+        .iter()
+        .filter(|c| matches!(c.function, crate::robot::CouplingFunction::Fractional { .. }))
+        .filter_map(|c| {
+            let row = set
+                .rows()
+                .iter()
+                .find(|m| m.experiment == c.experiment && m.target == 1)?;
+            let actuators_rad = controller
+                .decouple(&crate::robot::commands_to_internal(desc, &row.cmd))
+                .ok()?;
+            Some(FractionalStart {
+                to: c.to - 1,
+                actuators_rad,
+                slope: desc.nominal_coupling_into(c.to)?,
+            })
+        })
+        .collect()
 }
 
 /// The whole-campaign bounds of every parameter.
@@ -238,7 +319,8 @@ pub(super) fn converged_bound(
         .ok_or_else(|| StudyError::Bound("the calibration gives no model covariance".into()))?
         .matrix();
     let prediction = CampaignPrediction::new(&exact, &full.robot, &covariance, desc)?;
-    let b = prediction.bound(noise_m, &covariance)?;
+    let starts = fractional_starts(&exact, &full.couplings, desc);
+    let b = prediction.bound(noise_m, &covariance, &starts)?;
     let names = &b.names;
     let quantities = derived_quantities(&lean, desc)
         .into_iter()
@@ -336,4 +418,74 @@ fn convention_agreement(b: &Bounds) -> f64 {
         .zip(&b.convention.variance)
         .filter_map(|(e, c)| Some((c.as_ref()? / e.as_ref()? - 1.0).abs()))
         .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::trial::reference_truths;
+    use super::*;
+    use crate::robot::Controller;
+
+    const NOISE_M: f64 = 0.19e-3;
+
+    /// The paper robot without jitter, its description and the study's calibrator options.
+    fn setting() -> (RobotDescription, RobotModel, CalibrationOptions) {
+        let desc = RobotDescription::asea_irb6l();
+        let mut steady = crate::sim::paper_robot();
+        for j in &mut steady.joints {
+            j.repeatability_sigma = 0.0;
+        }
+        let options = CalibrationOptions {
+            noise_rms_3d_mm: NOISE_M * 1e3,
+            repeatability_sigma_rad: Some(vec![0.0; desc.dof()]),
+            ..CalibrationOptions::default()
+        };
+        (desc, steady, options)
+    }
+
+    /// Relative agreement of two bounds computed by different routes: central differences at
+    /// a thousandth of each sigma leave ~1e-10 of the scaled Jacobian's norm (its null
+    /// singular values), amplified by the condition of the arc's information (~1e3-1e4).
+    const ROUTE_TOLERANCE: f64 = 1e-5;
+
+    #[test]
+    fn one_sweep_campaign_gives_the_per_arc_bound_and_the_whole_campaign_never_exceeds_it() {
+        let (desc, steady, options) = setting();
+        let controller = Controller::from_description(&desc);
+        let (experiments, truths) = reference_truths(&desc, &controller, &steady, &steady, &[0.0; 6], NOISE_M).unwrap();
+        let exact = campaign(&steady, &desc, 0.0, 0);
+        let full = calibrate(&exact, &desc, &options).unwrap();
+        let covariance = full.model_covariance.as_ref().unwrap().matrix();
+        for joint in [1, 6] {
+            // Only the sweep's target-0 points: the arc fit's data, through the chain.
+            let k = experiments.iter().position(|e| e.joint == joint).unwrap();
+            let rows = exact
+                .rows()
+                .iter()
+                .filter(|m| m.experiment == experiments[k].name && m.target == 0)
+                .cloned()
+                .collect();
+            let set = MeasurementSet::new(desc.dof(), rows).unwrap();
+            let b = CampaignPrediction::new(&set, &full.robot, &covariance, &desc)
+                .unwrap()
+                .bound(NOISE_M, &covariance, &[])
+                .unwrap();
+            let ratios = transmission_ratios(&b, NOISE_M, &experiments[k..=k], &truths[k..=k]).unwrap();
+            assert!(!ratios.is_empty(), "joint {joint}: no bounded harmonic");
+            for (name, r) in ratios {
+                assert!((r - 1.0).abs() < ROUTE_TOLERANCE, "{name}: {r}");
+            }
+        }
+        // The whole campaign holds every sweep's points: never less information.
+        let whole = converged_bound(&desc, &steady, &options, NOISE_M, &experiments, &truths).unwrap();
+        assert!(!whole.summary.transmission_bound_ratio.is_empty());
+        for (name, r) in &whole.summary.transmission_bound_ratio {
+            assert!(*r <= 1.0 + ROUTE_TOLERANCE, "{name}: {r}");
+        }
+        assert!(
+            whole.summary.convention_agreement < ROUTE_TOLERANCE,
+            "{:?}",
+            whole.summary
+        );
+    }
 }
