@@ -13,10 +13,19 @@
 //! moved along its vector by [`model_moved`] (the propagation's and the tool accuracy's) and
 //! linearised by central differences ([`campaign_bound`]).
 //!
-//! It is evaluated where the estimator converges on the noise-free campaign (the analytic
-//! arm's four-bar 2->3 is not of the fractional form fitted, so that point is not the truth):
-//! the trials' errors are taken about that point, and the form's misfit is reported apart (the
-//! noise-free coupling fit's residual).
+//! It is evaluated where the estimator converges on the noise-free campaign (when the truth's
+//! coupling is not of the fitted form, e.g. a four-bar against the fractional form, that point
+//! is not the truth): the trials' errors are taken about that point, and the form's misfit is
+//! reported apart (the noise-free coupling fit's residual).
+//!
+//! The vector has gauge freedoms (each joint's zero against the next row and its target, the
+//! fractional coupling's constant against the driven joint's zero, ...). The rank-revealing
+//! bound ([`fisher_bound`]) gives a number to the estimable parameters only; the estimator
+//! fixes the freedoms by its conventions, so the derived quantities get the bound held to them
+//! ([`convention_bound`]): the range of the propagated model covariance (the subspace the
+//! linearised estimator moves in) intersected with each fractional coupling's start
+//! convention ([`FractionalStart`]). A parameter still sharing a direction the points do not
+//! determine gets no number.
 //!
 //! Bound for the jitter-off case only: with the repeatability jitter a held joint's error is
 //! shared by a whole experiment (correlated noise the isotropic Fisher information does not
