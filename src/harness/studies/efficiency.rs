@@ -616,7 +616,8 @@ impl StudyReport {
              direction(s) (gauge freedoms), spanned by {} parameter(s) (with their share): {}. \
              The estimator fixes them by its conventions (each joint's zero at the reference pose, \
              the base frame on the axes): its model parameters move in a {}-dimensional subspace \
-             (the range of the propagated model covariance), and the bound below is the \
+             (the range of the propagated model covariance, with each fractional coupling's \
+             start convention), and the bound below is the \
              constrained bound on it (on the parameters estimable without conventions it \
              equals the rank-revealing bound to {:.1e}). That subspace still holds {} direction(s) \
              the points do not determine; the parameters with a share in it get no bound: {}.\n\n\
