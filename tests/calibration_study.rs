@@ -59,6 +59,20 @@ fn ml_estimator_reaches_the_bound_and_reported_sigma_is_calibrated() {
         .find(|r| r.parameter.starts_with("coupling 4->5 sin1"))
         .unwrap();
     assert!(wrist.ratio < 1.0 - 4.0 * wrist.relative_standard_error, "{wrist:?}");
+    // The whole-campaign bound: no estimator beats it (allowing the MSE to be 3 standard
+    // errors low), and the tool frame, which no convention ties to the couplings, has one.
+    assert!(report.campaign_bound.is_some());
+    for d in &report.derived_efficiency {
+        if let Some(e) = d.efficiency {
+            let rse = d.relative_standard_error;
+            assert!(3.0 * rse < 1.0 && e <= 1.0 / (1.0 - 3.0 * rse), "{d:?}");
+        }
+    }
+    let tool = report
+        .derived_efficiency
+        .iter()
+        .filter(|d| d.quantity.starts_with("tool"));
+    assert_eq!(tool.filter(|d| d.crb_sigma.is_some()).count(), 6);
 }
 
 /// With the truth robot's repeatability jitter, a calibrator told the nominal description's

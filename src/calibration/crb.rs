@@ -20,6 +20,11 @@ use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, axis_quantities_gr
 use super::transmission_fit::TransmissionForm;
 use crate::numerics::lsq;
 
+mod campaign;
+pub use campaign::{
+    CampaignBound, ESTIMABLE_TOLERANCE, convention_bound, covariance_range, fisher_bound, fisher_bound_of,
+};
+
 const FIT: &str = "Cramer-Rao bound";
 
 /// The Cramer-Rao bound of one sweep.

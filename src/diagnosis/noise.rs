@@ -17,7 +17,7 @@ use crate::measurement::{Measurement, MeasurementSet};
 use crate::physics::UNMOVED_ACTUATOR_RAD;
 use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::commands_to_internal;
-use crate::robot::{Controller, RobotDescription};
+use crate::robot::{Controller, ModelError, RobotDescription, RobotModel};
 use nalgebra::{Point3, Vector3};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -43,6 +43,18 @@ struct CleanRow {
     /// The link carrying the target (0-based) and the target in its moving frame \[m\].
     link: usize,
     point_in_link_m: Point3<f64>,
+    /// An axis target: its index among the campaign's (experiment, target) pairs; a tool
+    /// target: its position in the tool frame \[m\].
+    target: RowTarget,
+}
+
+/// What a row measures.
+#[derive(Clone, Copy, Debug)]
+enum RowTarget {
+    /// An axis target, by its index among the campaign's (experiment, target) pairs.
+    Axis(usize),
+    /// A tool target at this position in the tool frame \[m\].
+    Tool(Point3<f64>),
 }
 
 /// A campaign's rows on the calibrated robot: where every target is without noise, and what
@@ -78,26 +90,37 @@ impl CleanCampaign {
         desc: &RobotDescription,
         tool_targets_m: &[Point3<f64>],
     ) -> Result<Self, DiagnosisError> {
+        Self::on_robot(set, &cal.robot, desc, tool_targets_m)
+    }
+
+    /// [`Self::new`] on the model `robot` (e.g. the one a calibration converges to).
+    pub fn on_robot(
+        set: &MeasurementSet,
+        robot: &RobotModel,
+        desc: &RobotDescription,
+        tool_targets_m: &[Point3<f64>],
+    ) -> Result<Self, DiagnosisError> {
         let controller = Controller::from_description(desc);
-        let model = cal.robot.phi_model();
+        let model = robot.phi_model();
         let mut joint_values = Vec::with_capacity(set.rows().len());
         for m in set.rows() {
-            let q = calibrated_joint_values(cal, &controller, desc, m)?;
+            let q = calibrated_joint_values(robot, &controller, desc, m)?;
             let u = controller
                 .decouple(&commands_to_internal(desc, &m.cmd))
                 .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))?;
             joint_values.push((q, u));
         }
         // Mean link-frame position of each axis target.
-        let mut sums: HashMap<(&str, usize), (Vector3<f64>, usize)> = HashMap::new();
+        let mut sums: HashMap<(&str, usize), (Vector3<f64>, usize, usize)> = HashMap::new();
         for (m, (q, _)) in set.rows().iter().zip(&joint_values) {
             if m.moved_joint > 0
                 && let Some(l) = axis_target_link(desc, m)
             {
                 let p = model.poses(q).world_from_link[l].inverse() * m.position_m();
+                let group = sums.len();
                 let e = sums
                     .entry((m.experiment.as_str(), m.target))
-                    .or_insert((Vector3::zeros(), 0));
+                    .or_insert((Vector3::zeros(), 0, group));
                 e.0 += p.coords;
                 e.1 += 1;
             }
@@ -108,15 +131,15 @@ impl CleanCampaign {
             .iter()
             .zip(joint_values)
             .map(|(m, (q, u))| {
-                let (link, point_in_link_m) = if m.moved_joint > 0 {
+                let (link, point_in_link_m, target) = if m.moved_joint > 0 {
                     let l = axis_target_link(desc, m).ok_or_else(|| {
                         model_error(format!(
                             "experiment {}: target {} of joint {} is not in the description",
                             m.experiment, m.target, m.moved_joint
                         ))
                     })?;
-                    let (s, n) = sums[&(m.experiment.as_str(), m.target)];
-                    (l, Point3::from(s / n as f64))
+                    let (s, n, group) = sums[&(m.experiment.as_str(), m.target)];
+                    (l, Point3::from(s / n as f64), RowTarget::Axis(group))
                 } else {
                     let t = tool_targets_m.get(m.target).ok_or_else(|| {
                         model_error(format!(
@@ -124,17 +147,56 @@ impl CleanCampaign {
                             m.experiment, m.target
                         ))
                     })?;
-                    (last, model.last_link_from_tool * t)
+                    (last, model.last_link_from_tool * t, RowTarget::Tool(*t))
                 };
                 Ok(CleanRow {
                     q,
                     u,
                     link,
                     point_in_link_m,
+                    target,
                 })
             })
             .collect::<Result<_, DiagnosisError>>()?;
         Ok(CleanCampaign { model, rows })
+    }
+
+    /// The number of axis targets (one per experiment and target): the nuisance positions of
+    /// [`Self::positions_on`].
+    pub fn axis_target_count(&self) -> usize {
+        self.rows
+            .iter()
+            .filter_map(|r| match r.target {
+                RowTarget::Axis(g) => Some(g + 1),
+                RowTarget::Tool(_) => None,
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// The campaign predicted by another model of the same structure (e.g. the calibrated one
+    /// moved along its parameter vector): every row's actuator commands through `robot`'s
+    /// transmissions and couplings (eqs. A1-A4; the joint readings are never used), the axis
+    /// targets at their positions in their links' frames moved by `axis_target_shift_m` (per
+    /// target, [`Self::axis_target_count`]), the tool targets through `robot`'s tool frame
+    /// \[m\]. What the whole-campaign Cramer-Rao bound differentiates.
+    pub fn positions_on(
+        &self,
+        robot: &RobotModel,
+        axis_target_shift_m: &[Vector3<f64>],
+    ) -> Result<Vec<Point3<f64>>, ModelError> {
+        let model = robot.phi_model();
+        self.rows
+            .iter()
+            .map(|r| {
+                let q = robot.joint_values_from_actuators(&r.u)?;
+                let point = match r.target {
+                    RowTarget::Axis(g) => r.point_in_link_m + axis_target_shift_m[g],
+                    RowTarget::Tool(t) => model.last_link_from_tool * t,
+                };
+                Ok(model.poses(&q).world_from_link[r.link] * point)
+            })
+            .collect()
     }
 
     /// Noise-free positions of every row \[m\].
@@ -191,15 +253,15 @@ pub fn clean_positions(
     Ok(CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?.positions())
 }
 
-/// The calibrated joint values of `m`'s commands (the controller, then `cal`'s transmissions
+/// The joint values of `m`'s commands on `robot` (the controller, then its transmissions
 /// and couplings).
 pub(super) fn calibrated_joint_values(
-    cal: &Calibration,
+    robot: &RobotModel,
     controller: &Controller,
     desc: &RobotDescription,
     m: &Measurement,
 ) -> Result<Vec<f64>, DiagnosisError> {
-    cal.robot
+    robot
         .joint_values(controller, &commands_to_internal(desc, &m.cmd))
         .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))
 }

@@ -327,7 +327,7 @@ fn orientation_summary(
         let Some(normal_inv) = normal.try_inverse() else {
             continue;
         };
-        let q = calibrated_joint_values(cal, &controller, desc, m)?;
+        let q = calibrated_joint_values(&cal.robot, &controller, desc, m)?;
         let predicted = model.world_from_tool(&q);
         let w = (predicted.rotation.inverse() * measured_frame.rotation).scaled_axis();
         angles_mrad.push(w.norm() * 1e3);

@@ -10,8 +10,10 @@
 //! (the paper robot is in the fitted family, so this is exact; see
 //! `tests/calibration_procedure.rs`).
 
+mod campaign_bound;
 mod trial;
 
+pub use campaign_bound::CampaignBoundSummary;
 pub(super) use trial::campaign;
 
 use crate::calibration::CalibrationError;
@@ -20,6 +22,7 @@ use crate::calibration::crb::{arc_crb_with_angle_noise, efficiency, held_joint_a
 use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, ProcedureError};
 use crate::kinematics::AxisLine;
 use crate::robot::{Controller, RobotDescription, RobotModel};
+use campaign_bound::{ConvergedBound, converged_bound};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
@@ -56,6 +59,12 @@ pub enum StudyError {
     /// The noise-free reference fit failed.
     #[error("noise-free reference: {0}")]
     Reference(CalibrationError),
+    /// The noise-free campaign's calibration (the whole-campaign bound's point) failed.
+    #[error("noise-free calibration: {0}")]
+    Converged(ProcedureError),
+    /// The whole-campaign bound could not be evaluated.
+    #[error("whole-campaign Cramer-Rao bound: {0}")]
+    Bound(String),
 }
 
 /// The study's settings.
@@ -124,6 +133,37 @@ pub struct RowSigmaCheck {
     pub relative_standard_error: f64,
 }
 
+/// Efficiency of one derived quantity (coupling coefficient, zero offset, tool frame
+/// component) against the whole-campaign Cramer-Rao bound, the trials' errors taken about the
+/// noise-free fit's value (the point the estimator converges to, where the bound is evaluated).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct DerivedEfficiency {
+    /// As in [`StudyReport::derived_sigma`] (its unit in the name: rad unless `mm`/`mrad`).
+    pub quantity: String,
+    /// The noise-free fit's value.
+    pub converged_value: f64,
+    /// Square root of the bound; null where the quantity is not estimable from the campaign.
+    pub crb_sigma: Option<f64>,
+    /// RMS of the trials' errors about the converged value.
+    pub rms_error: f64,
+    /// Mean of those errors (the noise-induced bias).
+    pub mean_error: f64,
+    /// Its Monte-Carlo standard error (`scatter / sqrt(trials)`).
+    pub mean_error_standard_error: f64,
+    /// Standard deviation of the trials' values.
+    pub scatter: f64,
+    /// CRB variance / mean squared error (null without a bound).
+    pub efficiency: Option<f64>,
+    /// CRB variance / scatter^2 (the efficiency with the bias taken out; null without a bound).
+    pub variance_over_scatter: Option<f64>,
+    /// Relative standard error of the mean squared error, hence of `efficiency`.
+    pub relative_standard_error: f64,
+    /// Its share in a direction the estimator's conventions leave unfixed and the points do
+    /// not determine (column-scaled; no bound from 1e-5 up).
+    #[serde(default)]
+    pub undetermined_share: Option<f64>,
+}
+
 /// The study's result.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct StudyReport {
@@ -137,6 +177,13 @@ pub struct StudyReport {
     /// parameter's fit-only sigma, for comparison).
     #[serde(default)]
     pub derived_sigma: Vec<RowSigmaCheck>,
+    /// Couplings, zero offsets and tool frame against the whole-campaign bound (empty with the
+    /// repeatability jitter: the bound is for measurement noise only).
+    #[serde(default)]
+    pub derived_efficiency: Vec<DerivedEfficiency>,
+    /// What the whole-campaign bound rests on (null with the repeatability jitter).
+    #[serde(default)]
+    pub campaign_bound: Option<CampaignBoundSummary>,
 }
 
 /// One quantity of an axis whose efficiency is measured: its name, the bound's variance (trace
@@ -183,6 +230,19 @@ impl EfficiencyStudy {
             repeatability_sigma_rad: Some(calibrator_rad.clone()),
             ..CalibrationOptions::default()
         };
+        // Once per study: the whole-campaign bound (measurement noise only).
+        let bound = if self.repeatability_jitter {
+            None
+        } else {
+            Some(converged_bound(
+                &desc,
+                &steady,
+                &options,
+                noise_m,
+                &experiments,
+                &truths,
+            )?)
+        };
         let trials = Trials {
             desc: &desc,
             controller: &controller,
@@ -202,7 +262,12 @@ impl EfficiencyStudy {
                 outcome
             })
             .collect::<Result<_, _>>()?;
-        Ok(self.summarise(&experiments, &truths, &outcomes))
+        let mut report = self.summarise(&experiments, &truths, &outcomes);
+        if let Some(b) = bound {
+            report.derived_efficiency = derived_efficiency(&b, &outcomes);
+            report.campaign_bound = Some(b.summary);
+        }
+        Ok(report)
     }
 
     /// The repeatability \[rad\] the calibrator is told for each joint of `desc`: the
@@ -237,6 +302,8 @@ impl EfficiencyStudy {
             efficiency: eff,
             row_sigma: row_sigma_checks(outcomes),
             derived_sigma: derived_sigma_checks(outcomes),
+            derived_efficiency: vec![],
+            campaign_bound: None,
         }
     }
 
@@ -384,6 +451,47 @@ fn derived_sigma_checks(outcomes: &[TrialOutcome]) -> Vec<RowSigmaCheck> {
     out
 }
 
+/// The efficiency of every derived quantity of `bound` over the trials' `outcomes` (matched
+/// by name: the trials' and the noise-free fit's derived quantities come from the same code).
+fn derived_efficiency(bound: &ConvergedBound, outcomes: &[TrialOutcome]) -> Vec<DerivedEfficiency> {
+    let n = outcomes.len() as f64;
+    let mut out = Vec::new();
+    for (name, converged, crb_var, share) in &bound.quantities {
+        let Some(i) = outcomes
+            .first()
+            .and_then(|o| o.derived.iter().position(|d| d.0 == *name))
+        else {
+            continue;
+        };
+        // `(fit only)`: the same values with another sigma.
+        if name.ends_with(')') {
+            continue;
+        }
+        let errors: Vec<Vec<f64>> = outcomes.iter().map(|o| vec![o.derived[i].1 - converged]).collect();
+        let mean = errors.iter().map(|e| e[0]).sum::<f64>() / n;
+        let scatter = (errors.iter().map(|e| (e[0] - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
+        // A quantity the procedure fixes (a joint not swept) does not move: nothing to judge.
+        if scatter < 1e-12 {
+            continue;
+        }
+        let e = efficiency(crb_var.unwrap_or(f64::NAN), &errors, 0..1);
+        out.push(DerivedEfficiency {
+            quantity: name.clone(),
+            converged_value: *converged,
+            crb_sigma: crb_var.map(f64::sqrt),
+            rms_error: e.mse.sqrt(),
+            mean_error: mean,
+            mean_error_standard_error: scatter / n.sqrt(),
+            scatter,
+            efficiency: crb_var.map(|_| e.efficiency),
+            variance_over_scatter: crb_var.map(|v| v / (scatter * scatter)),
+            relative_standard_error: e.relative_standard_error,
+            undetermined_share: *share,
+        });
+    }
+    out
+}
+
 /// A Markdown section `## {head} | reported | empirical | ratio |` of the `checks`.
 fn sigma_table(head: &str, checks: &[RowSigmaCheck]) -> String {
     let mut s = format!("\n## {head} | reported | empirical | ratio |\n|---|---|---|---|\n");
@@ -490,6 +598,81 @@ impl StudyReport {
         s += &sigma_table(
             "Reported against empirical 1-sigma of the harmonics, couplings, zero offsets and tool frame\n\n(rad for harmonics, couplings and zero offsets, mm and mrad for the tool frame; only harmonics resolved > 5 sigma; `(fit only)`: the coupling fit's own a-posteriori sigma, without the axes and transmissions it is built on)\n\n| quantity",
             &self.derived_sigma,
+        );
+        s += &self.campaign_markdown();
+        s
+    }
+
+    /// The derived quantities against the whole-campaign bound, and what it rests on.
+    fn campaign_markdown(&self) -> String {
+        let Some(b) = &self.campaign_bound else {
+            return "\n## Couplings, zero offsets and tool frame against the whole-campaign Cramer-Rao bound\n\nNot computed: the bound is for measurement noise only (no repeatability jitter).\n".into();
+        };
+        let mut s = format!(
+            "\n## Couplings, zero offsets and tool frame against the whole-campaign Cramer-Rao bound\n\n\
+             Fisher information of every point of the campaign from the complete parameter vector \
+             ({} parameters: the model's estimated ones and 3 per axis target; {} coordinates), \
+             evaluated at the noise-free fit; errors about that fit. Rank {}: {} unidentifiable \
+             direction(s) (gauge freedoms), spanned by {} parameter(s) (with their share): {}. \
+             The estimator fixes them by its conventions (each joint's zero at the reference pose, \
+             the base frame on the axes): its model parameters move in a {}-dimensional subspace \
+             (the range of the propagated model covariance, with each fractional coupling's \
+             start convention), and the bound below is the \
+             constrained bound on it (on the parameters estimable without conventions it \
+             equals the rank-revealing bound to {:.1e}). That subspace still holds {} direction(s) \
+             the points do not determine; the parameters with a share in it get no bound: {}.\n\n\
+             | quantity | CRB sigma | RMS error | efficiency (CRB / MSE) | CRB / scatter^2 | mean error (bias) | undetermined share |\n|---|---|---|---|---|---|---|\n",
+            b.parameters,
+            b.coordinates,
+            b.rank,
+            b.parameters - b.rank,
+            b.unidentifiable.len(),
+            b.unidentifiable
+                .iter()
+                .map(|(n, share)| format!("{n} ({share:.1e})"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            b.convention_rank,
+            b.convention_agreement,
+            b.convention_null_directions,
+            b.convention_unidentifiable
+                .iter()
+                .map(|(n, share)| format!("{n} ({share:.1e})"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let opt = |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map_or("no bound".to_string(), f);
+        for d in &self.derived_efficiency {
+            let se = d.relative_standard_error;
+            s += &format!(
+                "| {} | {} | {:.3e} | {} | {} | {:.2e} +- {:.2e} | {:.1e} |\n",
+                d.quantity,
+                opt(d.crb_sigma, &|v| format!("{v:.3e}")),
+                d.rms_error,
+                opt(d.efficiency, &|v| format!("{v:.3} +- {:.3}", v * se)),
+                opt(d.variance_over_scatter, &|v| format!("{v:.3} +- {:.3}", v * se)),
+                d.mean_error,
+                d.mean_error_standard_error,
+                d.undetermined_share.unwrap_or(f64::NAN)
+            );
+        }
+        let pairs = |v: &[(String, f64)], prec: usize| {
+            v.iter()
+                .map(|(n, x)| format!("{n} {x:.prec$}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        s += &format!(
+            "\nSecond route: whole-campaign bound / per-arc bound of each transmission harmonic \
+             (var sin_k + var cos_k; 1 where no other experiment informs it, below 1 where one \
+             does): {}.\n\nForm misfit of each coupling \
+             (the noise-free fit's angle residual RMS, rad): {}.\n",
+            pairs(&b.transmission_bound_ratio, 4),
+            b.coupling_form_residual_rad
+                .iter()
+                .map(|(n, x)| format!("{n} {x:.2e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
         s
     }

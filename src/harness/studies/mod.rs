@@ -4,5 +4,8 @@
 mod efficiency;
 mod tool_accuracy;
 
-pub use efficiency::{EfficiencyStudy, QuantityEfficiency, RowSigmaCheck, StudyError, StudyReport, trial_seed};
+pub use efficiency::{
+    CampaignBoundSummary, DerivedEfficiency, EfficiencyStudy, QuantityEfficiency, RowSigmaCheck, StudyError,
+    StudyReport, trial_seed,
+};
 pub use tool_accuracy::{ToolAccuracyCheck, ToolAccuracyError, ToolAccuracyStudy};

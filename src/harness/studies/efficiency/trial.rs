@@ -57,7 +57,7 @@ pub(super) struct TrialOutcome {
 
 /// The couplings', zero offsets' and tool frame's values and reported 1-sigma of `cal` (rad,
 /// mm and mrad; the tool frame relative to the description's).
-fn derived_quantities(cal: &FittedModel, desc: &RobotDescription) -> Vec<(String, f64, f64)> {
+pub(super) fn derived_quantities(cal: &FittedModel, desc: &RobotDescription) -> Vec<(String, f64, f64)> {
     let mut out = Vec::new();
     for c in &cal.couplings {
         for (i, name) in c.parameter_names.iter().enumerate() {
