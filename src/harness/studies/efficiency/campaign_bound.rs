@@ -457,11 +457,8 @@ mod tests {
     /// singular values), amplified by the condition of the arc's information (~1e3-1e4).
     const ROUTE_TOLERANCE: f64 = 1e-5;
 
-    /// See the test's comment: a measured gap (1.7 %) with margin, not a derived tolerance.
-    const ONE_SWEEP_GAP: f64 = 0.03;
-
     #[test]
-    fn one_sweep_campaign_gives_the_per_arc_bound_and_the_whole_campaign_never_exceeds_it() {
+    fn neither_one_sweep_nor_the_whole_campaign_exceeds_the_per_arc_bound() {
         let (desc, steady, options) = setting();
         let controller = Controller::from_description(&desc);
         let (experiments, truths) = reference_truths(&desc, &controller, &steady, &steady, &[0.0; 6], NOISE_M).unwrap();
@@ -487,10 +484,10 @@ mod tests {
             for (name, r) in ratios {
                 // Never above the per-arc bound (the chain holds the arc's information). Equality
                 // is expected and not reached: measured 0.99923 (joint 1) and 0.98283 (joint
-                // 6), a gap not yet explained (open; the study reports the ratios); the lower
-                // limit is that measurement with margin, not a derived tolerance.
+                // 6), a gap not yet explained (open, docs/validation.md; the study reports the
+                // ratios), so no lower limit is asserted.
+                eprintln!("joint {joint} {name}: one-sweep bound / per-arc bound {r:.5}");
                 assert!(r <= 1.0 + ROUTE_TOLERANCE, "{name}: {r}");
-                assert!(r > 1.0 - ONE_SWEEP_GAP, "{name}: {r}");
             }
         }
         // The whole campaign holds every sweep's points: never less information.
