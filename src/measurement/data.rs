@@ -160,9 +160,13 @@ impl<'a> Experiment<'a> {
 
     /// Rows grouped by step (ascending), each group sorted by target.
     pub fn by_step(&self) -> BTreeMap<usize, Vec<&'a Measurement>> {
+        // (step, target) is unique in a set (`MeasurementSet::new` refuses duplicates), so a
+        // sort orders the rows as `by_step_target` would.
+        let mut rows = self.rows.clone();
+        rows.sort_unstable_by_key(|m| (m.step, m.target));
         let mut steps: BTreeMap<usize, Vec<&'a Measurement>> = BTreeMap::new();
-        for ((step, _), m) in self.by_step_target() {
-            steps.entry(step).or_default().push(m);
+        for group in rows.chunk_by(|a, b| a.step == b.step) {
+            steps.insert(group[0].step, group.to_vec());
         }
         steps
     }
@@ -200,6 +204,13 @@ impl MeasurementSet {
         let mut index: HashMap<&str, usize> = HashMap::new();
         let mut experiments: Vec<Experiment<'_>> = Vec::new();
         for m in &self.rows {
+            // An experiment's rows usually follow each other: no lookup for those.
+            if let Some(last) = experiments.last_mut()
+                && last.name == m.experiment
+            {
+                last.rows.push(m);
+                continue;
+            }
             let i = *index.entry(&m.experiment).or_insert_with(|| {
                 experiments.push(Experiment {
                     name: &m.experiment,
