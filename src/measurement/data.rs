@@ -252,8 +252,11 @@ fn first_not_finite(m: &Measurement) -> Option<(String, f64)> {
 
 /// Checks the [`MeasurementSet`] invariants; the error carries the 0-based row index.
 fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementSetError> {
-    let mut moved: HashMap<&str, usize> = HashMap::new();
-    let mut keys: HashMap<(&str, usize, usize), usize> = HashMap::new();
+    // Experiment name -> (index, moved joint); consecutive rows of one experiment reuse the
+    // last lookup, and the duplicate check keys on the index (no string hashing per row).
+    let mut moved: HashMap<&str, (usize, usize)> = HashMap::new();
+    let mut last: Option<(&str, (usize, usize))> = None;
+    let mut keys: HashMap<(usize, usize, usize), usize> = HashMap::new();
     for (row, m) in rows.iter().enumerate() {
         let fail = |problem| Err(MeasurementSetError { row, problem });
         if m.experiment.is_empty() || m.experiment.trim() != m.experiment {
@@ -290,7 +293,15 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 joint_count,
             });
         }
-        let first = *moved.entry(&m.experiment).or_insert(m.moved_joint);
+        let (index, first) = match last {
+            Some((name, entry)) if name == m.experiment => entry,
+            _ => {
+                let next = moved.len();
+                let entry = *moved.entry(&m.experiment).or_insert((next, m.moved_joint));
+                last = Some((&m.experiment, entry));
+                entry
+            }
+        };
         if first != m.moved_joint {
             let experiment = m.experiment.clone();
             return fail(RowProblem::InconsistentMovedJoint {
@@ -299,7 +310,7 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 found: m.moved_joint,
             });
         }
-        if let Some(&first_row) = keys.get(&(m.experiment.as_str(), m.step, m.target)) {
+        if let Some(&first_row) = keys.get(&(index, m.step, m.target)) {
             return fail(RowProblem::DuplicateKey {
                 experiment: m.experiment.clone(),
                 step: m.step,
@@ -307,7 +318,7 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 first_at: first_row as u64,
             });
         }
-        keys.insert((&m.experiment, m.step, m.target), row);
+        keys.insert((index, m.step, m.target), row);
     }
     Ok(())
 }
