@@ -22,7 +22,7 @@ use super::arc_model::{
 };
 use super::axis_circle::fit_circle;
 use super::noise::ResidualMoments;
-use super::transmission_fit::{TransmissionForm, fit_transmission};
+use super::transmission_fit::{TransmissionForm, fit_transmission_passes};
 use crate::kinematics::AxisLine;
 use crate::numerics::lsq;
 use crate::robot::Transmission;
@@ -132,6 +132,11 @@ pub struct ArcFit {
     pub moments: ResidualMoments,
 }
 
+/// The eq.-8 passes of the starting point ([`fit_transmission_passes`]): its coefficients
+/// are then within about the coefficients' size squared (~1e-5 rad) of eq. 8's fixed point,
+/// which the maximum-likelihood fit moves anyway.
+const START_PASSES: usize = 1;
+
 /// Starting parameters: circle fit + a linear transmission fit of the circle angles.
 pub fn initial_params(
     points: &[Point3<f64>],
@@ -150,7 +155,7 @@ pub fn initial_params(
         last = a + k * std::f64::consts::TAU;
         increments.push(last);
     }
-    let t = fit_transmission(form, &increments, commands_rad)?;
+    let t = fit_transmission_passes(form, &increments, commands_rad, START_PASSES)?;
     let frame = Rotation3::from_basis_unchecked(&[u, v, circle.normal.into_inner()]);
     Ok(ArcParams {
         centre: circle.centre,
@@ -229,22 +234,72 @@ pub fn fit_arc_with_angle_noise_studies(
         Studies::Run if angle_sigma_rad > 0.0 => Studies::Skip,
         other => other,
     };
+    if angle_sigma_rad > 0.0 && studies == Studies::EstimateOnly {
+        // Only the first fit's estimate is read (for the weights): no covariance.
+        let model = checked_model(points, commands_rad, options)?;
+        let start = initial_params(points, commands_rad, &options.form)?;
+        let first = estimate(&model, points, options, start)?;
+        let tangents = model.angle_derivatives_from(&first.jacobian);
+        return refit_with_angle_noise(
+            points,
+            commands_rad,
+            options,
+            angle_sigma_rad,
+            (first.state, tangents, None),
+            studies,
+        );
+    }
     let (first, first_residuals) = fit_arc_core(points, commands_rad, options, None, first_studies)?;
     if angle_sigma_rad == 0.0 {
         return Ok(first);
     }
     let model = ArcModel::new(options.form, commands_rad, &options.noise)?;
-    let tangents = model.angle_derivatives(&first.params)?;
+    let tangents = first_residuals
+        .as_ref()
+        .and_then(|(jw, _)| model.angle_derivatives_from(jw));
+    let residuals = first_residuals.map(|r| (r, first.covariance));
+    refit_with_angle_noise(
+        points,
+        commands_rad,
+        options,
+        angle_sigma_rad,
+        (first.params, tangents, residuals),
+        studies,
+    )
+}
+
+/// The measurement-only fit: its parameters, its tangents `dp_j/dtheta_j` when the
+/// Jacobian at its optimum gave them ([`ArcModel::angle_derivatives_from`]), and its whitened
+/// Jacobian and residuals with its covariance (for the noise moments).
+type FirstFit = (
+    ArcParams,
+    Option<Vec<Vector3<f64>>>,
+    Option<(FitResiduals, DMatrix<f64>)>,
+);
+
+/// The refit of [`fit_arc_with_angle_noise_studies`] from the measurement-only fit `first`.
+fn refit_with_angle_noise(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+    angle_sigma_rad: f64,
+    (first, tangents, first_residuals): FirstFit,
+    studies: Studies,
+) -> Result<ArcFit, CalibrationError> {
+    let tangents = match tangents {
+        Some(t) => t,
+        None => ArcModel::new(options.form, commands_rad, &options.noise)?.angle_derivatives(&first)?,
+    };
     let noise = options.noise.with_angle_noise(&tangents, angle_sigma_rad)?;
     let refit = ArcFitOptions {
         noise,
         ..options.clone()
     };
-    let mut fit = fit_arc_from(points, commands_rad, &refit, Some(first.params), studies)?;
+    let mut fit = fit_arc_from(points, commands_rad, &refit, Some(first), studies)?;
     // The noise estimate reads the measurement-only fit (its whitened Jacobian and residuals
     // at its optimum), with the jitter's share.
-    if let Some((jw, residuals)) = first_residuals {
-        fit.moments = ResidualMoments::of_fit(&jw, &first.covariance, &residuals, Some((&tangents, angle_sigma_rad)));
+    if let Some(((jw, residuals), covariance)) = first_residuals {
+        fit.moments = ResidualMoments::of_fit(&jw, &covariance, &residuals, Some((&tangents, angle_sigma_rad)));
     }
     Ok(fit)
 }
@@ -273,41 +328,16 @@ fn fit_arc_core(
     studies: Studies,
 ) -> Result<(ArcFit, Option<FitResiduals>), CalibrationError> {
     let n = points.len();
-    if commands_rad.len() != n {
-        return Err(CalibrationError::LengthMismatch {
-            fit: FIT,
-            what: "commands",
-            got: commands_rad.len(),
-            expected: n,
-        });
-    }
-    let model = ArcModel::new(options.form, commands_rad, &options.noise)?;
+    let model = checked_model(points, commands_rad, options)?;
     let p_count = model.n_params();
-    if 3 * n <= p_count {
-        return Err(CalibrationError::TooFewPoints {
-            fit: FIT,
-            got: n,
-            needed: p_count / 3 + 1,
-        });
-    }
     let start = match start {
         Some(s) => s,
         None => initial_params(points, commands_rad, &options.form)?,
     };
-    let lm = lsq::LmOptions {
-        negligible_decrease: Some(NEGLIGIBLE_DECREASE),
-        ..lsq::LmOptions::marquardt(FIT, options.max_iterations)
-    };
-    let outcome = lsq::levenberg_marquardt(
-        start,
-        &lm,
-        |s| model.whitened_residual_and_jacobian(s, points),
-        |s, d| Ok::<_, CalibrationError>(s.perturbed(d.as_slice())),
-    )?
-    .converged(FIT, None)?;
+    let outcome = estimate(&model, points, options, start)?;
     let params = outcome.state;
     let (r, jw) = (outcome.residual, outcome.jacobian);
-    let covariance = lsq::inverse_normal(&jw, FIT)?;
+    let covariance = lsq::inverse_normal_given(&jw, outcome.normal, FIT)?;
     let (residual_rms, moments, residuals) = if studies == Studies::EstimateOnly {
         (f64::NAN, ResidualMoments::default(), None)
     } else {
@@ -352,6 +382,53 @@ fn fit_arc_core(
         params,
     };
     Ok((fit, residuals.map(|r| (jw, r))))
+}
+
+/// The arc model of these points and commands, checked: as many commands as points, and
+/// more coordinates than parameters.
+fn checked_model(
+    points: &[Point3<f64>],
+    commands_rad: &[f64],
+    options: &ArcFitOptions,
+) -> Result<ArcModel, CalibrationError> {
+    let n = points.len();
+    if commands_rad.len() != n {
+        return Err(CalibrationError::LengthMismatch {
+            fit: FIT,
+            what: "commands",
+            got: commands_rad.len(),
+            expected: n,
+        });
+    }
+    let model = ArcModel::new(options.form, commands_rad, &options.noise)?;
+    if 3 * n <= model.n_params() {
+        return Err(CalibrationError::TooFewPoints {
+            fit: FIT,
+            got: n,
+            needed: model.n_params() / 3 + 1,
+        });
+    }
+    Ok(model)
+}
+
+/// The Levenberg-Marquardt estimate of `model`'s parameters from `start` (converged).
+fn estimate(
+    model: &ArcModel,
+    points: &[Point3<f64>],
+    options: &ArcFitOptions,
+    start: ArcParams,
+) -> Result<lsq::LmOutcome<ArcParams>, CalibrationError> {
+    let lm = lsq::LmOptions {
+        negligible_decrease: Some(NEGLIGIBLE_DECREASE),
+        ..lsq::LmOptions::marquardt(FIT, options.max_iterations)
+    };
+    Ok(lsq::levenberg_marquardt(
+        start,
+        &lm,
+        |s| model.whitened_residual_and_jacobian(s, points),
+        |s, d| Ok::<_, CalibrationError>(s.perturbed(d.as_slice())),
+    )?
+    .converged(FIT, None)?)
 }
 
 #[cfg(test)]

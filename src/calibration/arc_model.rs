@@ -15,6 +15,9 @@ use super::transmission_fit::{TransmissionForm, TransmissionValue};
 
 const FIT: &str = "arc model";
 
+/// Transmission coefficients an evaluation of the model keeps on the stack.
+const INLINE_COEFFICIENTS: usize = 8;
+
 /// Number of geometric parameters before the transmission coefficients.
 pub const N_GEOMETRY: usize = 7;
 
@@ -225,27 +228,36 @@ impl ArcModel {
         .collect()
     }
 
-    /// The actual motion since step 0, `D_j` into `d` (length n), and its coefficient
-    /// derivatives `dD_j/dc_k` into `dg` (row-major, n x coefficients), using
-    /// `d theta_a / d c_k = -b_k(theta_a) / f'(theta_a)`. Flat buffers and one `sin_cos` per
-    /// harmonic per Newton step: this runs for every point at every iteration of the fit.
-    fn motion_into(&self, coefficients: &[f64], d: &mut Vec<f64>, dg: &mut Vec<f64>) -> Result<(), CalibrationError> {
+    /// Visits every step `j` in order with the actual motion since step 0, `D_j`, and its
+    /// coefficient derivatives `dD_j/dc_k` (a slice of length coefficients), using
+    /// `d theta_a / d c_k = -b_k(theta_a) / f'(theta_a)`. No heap buffer (up to
+    /// `INLINE_COEFFICIENTS` coefficients) and one `sin_cos` per harmonic per Newton step:
+    /// this runs for every point at every iteration of the fit.
+    fn for_each_motion(
+        &self,
+        coefficients: &[f64],
+        mut visit: impl FnMut(usize, f64, &[f64]),
+    ) -> Result<(), CalibrationError> {
         let m = self.form.n_coefficients();
-        let n = self.commands_rad.len();
-        d.clear();
-        dg.clear();
-        d.reserve(n);
-        dg.resize(n * m, 0.0);
+        let (mut row_inline, mut first_inline) = ([0.0; INLINE_COEFFICIENTS], [0.0; INLINE_COEFFICIENTS]);
+        let (mut row_heap, mut first_heap) = (Vec::new(), Vec::new());
+        let (row, first) = if m <= INLINE_COEFFICIENTS {
+            (&mut row_inline[..m], &mut first_inline[..m])
+        } else {
+            row_heap.resize(m, 0.0);
+            first_heap.resize(m, 0.0);
+            (&mut row_heap[..], &mut first_heap[..])
+        };
         // Step j's inversion starts from step j-1's solution moved along the second-order
         // Taylor series of f^-1 (error ~ f''' step^3), so Halley's iteration ends after one
         // correction; its last evaluation supplies the basis and slope.
         let mut previous: Option<(f64, f64, TransmissionValue)> = None;
+        let mut a0 = 0.0;
         for (j, &c) in self.commands_rad.iter().enumerate() {
             let guess = previous.map_or(c, |(cp, ap, e)| {
                 let step = c - cp;
                 ap + step / e.slope - 0.5 * e.curvature * step * step / e.slope.powi(3)
             });
-            let row = &mut dg[j * m..(j + 1) * m];
             let (a, e) = self
                 .form
                 .invert(coefficients, c, guess, row)
@@ -256,23 +268,26 @@ impl ArcModel {
             for b in row.iter_mut() {
                 *b = -*b / e.slope;
             }
-            d.push(a);
-            previous = Some((c, a, e));
-        }
-        if n > 0 {
-            let a0 = d[0];
-            for x in d.iter_mut() {
-                *x -= a0;
-            }
-            let (first, rest) = dg.split_at_mut(m);
-            for row in rest.chunks_exact_mut(m.max(1)) {
+            if j == 0 {
+                a0 = a;
+                first.copy_from_slice(row);
+                row.iter_mut().for_each(|x| *x = 0.0);
+            } else {
                 for (x, y) in row.iter_mut().zip(first.iter()) {
                     *x -= y;
                 }
             }
-            first.iter_mut().for_each(|x| *x = 0.0);
+            visit(j, a - a0, row);
+            previous = Some((c, a, e));
         }
         Ok(())
+    }
+
+    /// The actual motions since step 0, `D_j`, of every step.
+    fn motion(&self, coefficients: &[f64]) -> Result<Vec<f64>, CalibrationError> {
+        let mut d = Vec::with_capacity(self.commands_rad.len());
+        self.for_each_motion(coefficients, |_, dj, _| d.push(dj))?;
+        Ok(d)
     }
 
     /// `at(sin, cos, u, v)` of each step's angle `phi0 + D_j`.
@@ -281,8 +296,7 @@ impl ArcModel {
         p: &ArcParams,
         at: impl Fn(f64, f64, &Vector3<f64>, &Vector3<f64>) -> T,
     ) -> Result<Vec<T>, CalibrationError> {
-        let (mut d, mut dg) = (Vec::new(), Vec::new());
-        self.motion_into(&p.coefficients, &mut d, &mut dg)?;
+        let d = self.motion(&p.coefficients)?;
         let (u, v) = (p.u().into_inner(), p.v().into_inner());
         Ok(d.iter()
             .map(|dj| {
@@ -297,38 +311,35 @@ impl ArcModel {
         self.per_step(p, |s, c, u, v| p.centre + p.radius * (c * u + s * v))
     }
 
-    /// Fills the predicted point `j` (when `points` is given) and its 3 Jacobian rows
-    /// (unweighted) from the motion buffers.
-    fn fill(
-        &self,
+    /// Fills the 3 Jacobian rows (unweighted) of step `row` from its motion `dj` and
+    /// coefficient derivatives `dg`, and returns its predicted point; `(u, v, n)` are `p`'s.
+    fn fill_row(
         p: &ArcParams,
-        d: &[f64],
-        dg: &[f64],
-        mut points: Option<&mut [Point3<f64>]>,
+        (u, v, n): (&Vector3<f64>, &Vector3<f64>, &Vector3<f64>),
+        (row, dj, dg): (usize, f64, &[f64]),
         jac: &mut DMatrix<f64>,
-    ) {
-        let m = self.form.n_coefficients();
-        let (u, v, n) = (p.u().into_inner(), p.v().into_inner(), p.normal().into_inner());
-        for (row, dj) in d.iter().enumerate() {
-            let (s, c) = (p.phase_rad + dj).sin_cos();
-            let radial = c * u + s * v;
-            let tangent = p.radius * (-s * u + c * v);
-            if let Some(pts) = points.as_deref_mut() {
-                pts[row] = p.centre + p.radius * radial;
-            }
-            let r0 = 3 * row;
-            for k in 0..3 {
-                jac[(r0 + k, k)] = 1.0;
-            }
-            jac.fixed_view_mut::<3, 1>(r0, 3).copy_from(&(p.radius * s * n));
-            jac.fixed_view_mut::<3, 1>(r0, 4).copy_from(&(-p.radius * c * n));
-            jac.fixed_view_mut::<3, 1>(r0, 5).copy_from(&radial);
-            jac.fixed_view_mut::<3, 1>(r0, 6).copy_from(&tangent);
-            for (k, g) in dg[row * m..(row + 1) * m].iter().enumerate() {
-                jac.fixed_view_mut::<3, 1>(r0, N_GEOMETRY + k)
-                    .copy_from(&(tangent * *g));
-            }
+    ) -> Point3<f64> {
+        let (s, c) = (p.phase_rad + dj).sin_cos();
+        let radial = c * u + s * v;
+        let tangent = p.radius * (-s * u + c * v);
+        let r0 = 3 * row;
+        for k in 0..3 {
+            jac[(r0 + k, k)] = 1.0;
         }
+        jac.fixed_view_mut::<3, 1>(r0, 3).copy_from(&(p.radius * s * n));
+        jac.fixed_view_mut::<3, 1>(r0, 4).copy_from(&(-p.radius * c * n));
+        jac.fixed_view_mut::<3, 1>(r0, 5).copy_from(&radial);
+        jac.fixed_view_mut::<3, 1>(r0, 6).copy_from(&tangent);
+        for (k, g) in dg.iter().enumerate() {
+            jac.fixed_view_mut::<3, 1>(r0, N_GEOMETRY + k)
+                .copy_from(&(tangent * *g));
+        }
+        p.centre + p.radius * radial
+    }
+
+    /// `(u, v, n)` of `p`.
+    fn basis_of(p: &ArcParams) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+        (p.u().into_inner(), p.v().into_inner(), p.normal().into_inner())
     }
 
     /// `d p_j / d theta_j`: how point `j` moves when its own joint angle (the actual
@@ -339,12 +350,29 @@ impl ArcModel {
         self.per_step(p, |s, c, u, v| p.radius * (-s * u + c * v))
     }
 
+    /// [`Self::angle_derivatives`] read from the phase column of a whitened Jacobian at `p`
+    /// ([`Self::whitened_residual_and_jacobian`]: `d p_j / d phase` is the same tangent),
+    /// unwhitened by the one scale factor; `None` unless the whitening is that one scaling
+    /// (isotropic noise). Equal to [`Self::angle_derivatives`] to rounding (one product and
+    /// one quotient), without inverting the transmission again.
+    pub fn angle_derivatives_from(&self, whitened_jacobian: &DMatrix<f64>) -> Option<Vec<Vector3<f64>>> {
+        let w = self.isotropic_whitener?;
+        (whitened_jacobian.nrows() == 3 * self.commands_rad.len() && whitened_jacobian.ncols() == self.n_params()).then(
+            || {
+                (0..self.commands_rad.len())
+                    .map(|j| whitened_jacobian.fixed_view::<3, 1>(3 * j, 6).into_owned() / w)
+                    .collect()
+            },
+        )
+    }
+
     /// `d p_j / d delta` stacked (3n x n_params), unweighted, analytic.
     pub fn jacobian(&self, p: &ArcParams) -> Result<DMatrix<f64>, CalibrationError> {
-        let (mut d, mut dg) = (Vec::new(), Vec::new());
-        self.motion_into(&p.coefficients, &mut d, &mut dg)?;
-        let mut j = DMatrix::zeros(3 * d.len(), self.n_params());
-        self.fill(p, &d, &dg, None, &mut j);
+        let mut j = DMatrix::zeros(3 * self.commands_rad.len(), self.n_params());
+        let (u, v, n) = Self::basis_of(p);
+        self.for_each_motion(&p.coefficients, |row, dj, dg| {
+            Self::fill_row(p, (&u, &v, &n), (row, dj, dg), &mut j);
+        })?;
         Ok(j)
     }
 
@@ -389,17 +417,24 @@ impl ArcModel {
         p: &ArcParams,
         observed: &[Point3<f64>],
     ) -> Result<(nalgebra::DVector<f64>, DMatrix<f64>), CalibrationError> {
-        let (mut d, mut dg) = (Vec::new(), Vec::new());
-        self.motion_into(&p.coefficients, &mut d, &mut dg)?;
-        let n = d.len();
-        let mut pred = vec![Point3::origin(); n];
-        let mut j = DMatrix::zeros(3 * n, self.n_params());
-        self.fill(p, &d, &dg, Some(&mut pred), &mut j);
-        self.whiten_rows(&mut j);
-        let mut r = nalgebra::DVector::zeros(3 * n);
-        for (k, (q, o)) in pred.iter().zip(observed).enumerate() {
-            r.fixed_rows_mut::<3>(3 * k).copy_from(&(self.whiteners[k] * (q - o)));
+        let n = self.commands_rad.len();
+        if observed.len() != n {
+            return Err(CalibrationError::LengthMismatch {
+                fit: FIT,
+                what: "observed points",
+                got: observed.len(),
+                expected: n,
+            });
         }
+        let mut j = DMatrix::zeros(3 * n, self.n_params());
+        let mut r = nalgebra::DVector::zeros(3 * n);
+        let (u, v, normal) = Self::basis_of(p);
+        self.for_each_motion(&p.coefficients, |row, dj, dg| {
+            let q = Self::fill_row(p, (&u, &v, &normal), (row, dj, dg), &mut j);
+            r.fixed_rows_mut::<3>(3 * row)
+                .copy_from(&(self.whiteners[row] * (q - observed[row])));
+        })?;
+        self.whiten_rows(&mut j);
         Ok((r, j))
     }
 
@@ -516,6 +551,25 @@ pub(crate) mod tests {
                 assert!(tj.dot(&p.normal()).abs() < 1e-12);
             }
         }
+    }
+
+    #[test]
+    fn angle_derivatives_from_the_whitened_jacobian_are_the_tangents() {
+        let commands: Vec<f64> = (0..7).map(|j| -0.6 + 0.2 * j as f64).collect();
+        let form = TransmissionForm::Gear { ratio: 1.7, order: 1 };
+        let p = sample_params();
+        let iso = ArcModel::new(form, &commands, &MeasurementNoise::from_rms_3d(3e-4)).unwrap();
+        let observed = iso.predict(&p).unwrap();
+        let (_, jw) = iso.whitened_residual_and_jacobian(&p, &observed).unwrap();
+        let from = iso.angle_derivatives_from(&jw).unwrap();
+        for (a, b) in from.iter().zip(&iso.angle_derivatives(&p).unwrap()) {
+            // One product and one quotient by the whitener: a few ulps of |t| = r.
+            assert_relative_eq!(*a, *b, epsilon = 4.0 * f64::EPSILON * p.radius);
+        }
+        assert!(iso.angle_derivatives_from(&jw.rows(0, 3).into_owned()).is_none());
+        let per_point = MeasurementNoise::PerPoint(vec![Matrix3::identity() * 1e-8; commands.len()]);
+        let aniso = ArcModel::new(form, &commands, &per_point).unwrap();
+        assert!(aniso.angle_derivatives_from(&jw).is_none());
     }
 
     #[test]

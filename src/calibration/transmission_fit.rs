@@ -270,6 +270,22 @@ pub fn fit_transmission(
     actual_increments_rad: &[f64],
     commands_rad: &[f64],
 ) -> Result<TransmissionFit, CalibrationError> {
+    fit_transmission_passes(form, actual_increments_rad, commands_rad, MAX_PASSES)
+}
+
+/// The fixed-point passes of [`fit_transmission`] until `theta_a^0` moves by < 1e-14 rad.
+const MAX_PASSES: usize = 40;
+
+/// [`fit_transmission`] with at most `max_passes` fixed-point passes for `theta_a^0`. Each
+/// pass multiplies the error of `theta_a^0` by about the coefficients' size (the slope of
+/// `f^-1` differs from 1 by that much), so a starting point that a maximum-likelihood fit
+/// refines needs only one or two.
+pub(crate) fn fit_transmission_passes(
+    form: &TransmissionForm,
+    actual_increments_rad: &[f64],
+    commands_rad: &[f64],
+    max_passes: usize,
+) -> Result<TransmissionFit, CalibrationError> {
     let n = commands_rad.len();
     let m = form.n_coefficients();
     if actual_increments_rad.len() != n {
@@ -302,7 +318,7 @@ pub fn fit_transmission(
     });
     let (mut b0, mut b) = (vec![0.0; m], vec![0.0; m]);
     let mut a = DMatrix::zeros(n - 1, m);
-    for _ in 0..40 {
+    for _ in 0..max_passes.max(1) {
         form.basis_and_slope(&[], start, &mut b0);
         for r in 0..n - 1 {
             form.basis_and_slope(&[], start + actual_increments_rad[r + 1] - d0, &mut b);

@@ -160,9 +160,13 @@ impl<'a> Experiment<'a> {
 
     /// Rows grouped by step (ascending), each group sorted by target.
     pub fn by_step(&self) -> BTreeMap<usize, Vec<&'a Measurement>> {
+        // (step, target) is unique in a set (`MeasurementSet::new` refuses duplicates), so a
+        // sort orders the rows as `by_step_target` would.
+        let mut rows = self.rows.clone();
+        rows.sort_unstable_by_key(|m| (m.step, m.target));
         let mut steps: BTreeMap<usize, Vec<&'a Measurement>> = BTreeMap::new();
-        for ((step, _), m) in self.by_step_target() {
-            steps.entry(step).or_default().push(m);
+        for group in rows.chunk_by(|a, b| a.step == b.step) {
+            steps.insert(group[0].step, group.to_vec());
         }
         steps
     }
@@ -200,6 +204,13 @@ impl MeasurementSet {
         let mut index: HashMap<&str, usize> = HashMap::new();
         let mut experiments: Vec<Experiment<'_>> = Vec::new();
         for m in &self.rows {
+            // An experiment's rows usually follow each other: no lookup for those.
+            if let Some(last) = experiments.last_mut()
+                && last.name == m.experiment
+            {
+                last.rows.push(m);
+                continue;
+            }
             let i = *index.entry(&m.experiment).or_insert_with(|| {
                 experiments.push(Experiment {
                     name: &m.experiment,
@@ -241,8 +252,11 @@ fn first_not_finite(m: &Measurement) -> Option<(String, f64)> {
 
 /// Checks the [`MeasurementSet`] invariants; the error carries the 0-based row index.
 fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementSetError> {
-    let mut moved: HashMap<&str, usize> = HashMap::new();
-    let mut keys: HashMap<(&str, usize, usize), usize> = HashMap::new();
+    // Experiment name -> (index, moved joint); consecutive rows of one experiment reuse the
+    // last lookup, and the duplicate check keys on the index (no string hashing per row).
+    let mut moved: HashMap<&str, (usize, usize)> = HashMap::new();
+    let mut last: Option<(&str, (usize, usize))> = None;
+    let mut keys: HashMap<(usize, usize, usize), usize> = HashMap::new();
     for (row, m) in rows.iter().enumerate() {
         let fail = |problem| Err(MeasurementSetError { row, problem });
         if m.experiment.is_empty() || m.experiment.trim() != m.experiment {
@@ -279,7 +293,15 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 joint_count,
             });
         }
-        let first = *moved.entry(&m.experiment).or_insert(m.moved_joint);
+        let (index, first) = match last {
+            Some((name, entry)) if name == m.experiment => entry,
+            _ => {
+                let next = moved.len();
+                let entry = *moved.entry(&m.experiment).or_insert((next, m.moved_joint));
+                last = Some((&m.experiment, entry));
+                entry
+            }
+        };
         if first != m.moved_joint {
             let experiment = m.experiment.clone();
             return fail(RowProblem::InconsistentMovedJoint {
@@ -288,7 +310,7 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 found: m.moved_joint,
             });
         }
-        if let Some(&first_row) = keys.get(&(m.experiment.as_str(), m.step, m.target)) {
+        if let Some(&first_row) = keys.get(&(index, m.step, m.target)) {
             return fail(RowProblem::DuplicateKey {
                 experiment: m.experiment.clone(),
                 step: m.step,
@@ -296,7 +318,7 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 first_at: first_row as u64,
             });
         }
-        keys.insert((&m.experiment, m.step, m.target), row);
+        keys.insert((index, m.step, m.target), row);
     }
     Ok(())
 }

@@ -69,8 +69,8 @@ pub fn gram(j: &DMatrix<f64>) -> DMatrix<f64> {
 }
 
 /// The column-scaled normal matrix `N = S^-1 J^T J S^-1` (unit diagonal) and the scales `S`.
-fn scaled_normal(j: &DMatrix<f64>) -> (DMatrix<f64>, DVector<f64>) {
-    let mut n = gram(j);
+fn scaled_normal(j: &DMatrix<f64>, jtj: Option<DMatrix<f64>>) -> (DMatrix<f64>, DVector<f64>) {
+    let mut n = jtj.unwrap_or_else(|| gram(j));
     let s = DVector::from_iterator(
         n.ncols(),
         n.diagonal().iter().map(|&d| if d > 0.0 { d.sqrt() } else { 1.0 }),
@@ -93,7 +93,7 @@ fn norm1(m: &DMatrix<f64>) -> f64 {
 /// accurate to ~1e-8 (their ratio below `CHOLESKY_MAX_CONDITION`, 1e8), else from the SVD of
 /// the scaled `J`.
 pub fn scaled_condition_number(j: &DMatrix<f64>) -> f64 {
-    let (n, _) = scaled_normal(j);
+    let (n, _) = scaled_normal(j, None);
     let ev = n.symmetric_eigenvalues();
     let (max, min) = (ev.max(), ev.min());
     if min > 0.0 && max / min < CHOLESKY_MAX_CONDITION {
@@ -114,7 +114,17 @@ pub fn scaled_condition_number(j: &DMatrix<f64>) -> f64 {
 /// (`CHOLESKY_MAX_CONDITION`, 1e8), else by the SVD of the column-scaled `J`; error if `J` is
 /// ill-conditioned (scaled condition number >= [`MAX_CONDITION`]).
 pub fn inverse_normal(j: &DMatrix<f64>, fit: &'static str) -> Result<DMatrix<f64>, LsqError> {
-    let (normal, s) = scaled_normal(j);
+    inverse_normal_given(j, None, fit)
+}
+
+/// [`inverse_normal`] with `J^T J` already at hand (`Some(gram(j))`, e.g.
+/// [`LmOutcome::normal`]): the same arithmetic without forming it again.
+pub fn inverse_normal_given(
+    j: &DMatrix<f64>,
+    jtj: Option<DMatrix<f64>>,
+    fit: &'static str,
+) -> Result<DMatrix<f64>, LsqError> {
+    let (normal, s) = scaled_normal(j, jtj);
     let n = j.ncols();
     if let Some(ch) = normal.clone().cholesky() {
         let mut inv = ch.inverse();
@@ -276,6 +286,9 @@ pub struct LmOutcome<S> {
     pub jacobian: DMatrix<f64>,
     /// Why the run stopped.
     pub stop: Stop,
+    /// `J^T J` ([`gram`]) of the final Jacobian when the run formed it and every row is
+    /// fitted (a stop by [`LmOptions::negligible_decrease`]), for [`inverse_normal_given`].
+    pub normal: Option<DMatrix<f64>>,
 }
 
 impl<S> LmOutcome<S> {
@@ -350,6 +363,7 @@ pub fn levenberg_marquardt_from<S: Clone, E: From<LsqError>>(
         residual: r,
         jacobian: j,
         stop,
+        normal: None,
     };
     for it in 1..=options.max_iterations {
         if reached(&r) {
@@ -366,7 +380,14 @@ pub fn levenberg_marquardt_from<S: Clone, E: From<LsqError>>(
             .negligible_decrease
             .is_some_and(|tol| step.gauss_newton_decrease().is_some_and(|d| d <= tol))
         {
-            return Ok(done(state, r, j, it - 1, Stop::SmallStep));
+            let normal = match (&step, rows) {
+                (Step::Marquardt { jtj, .. }, None) => Some(jtj.clone()),
+                _ => None,
+            };
+            return Ok(LmOutcome {
+                normal,
+                ..done(state, r, j, it - 1, Stop::SmallStep)
+            });
         }
         let mut accepted = None;
         while let Some(delta) = step.solve(&mut lambda) {

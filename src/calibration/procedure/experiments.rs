@@ -66,18 +66,20 @@ pub fn axis_experiments_with(
 ) -> Result<(Vec<AxisExperiment>, Vec<f64>), ProcedureError> {
     let mut out: Vec<AxisExperiment> = Vec::new();
     for e in set.experiments().into_iter().filter(|e| e.moved_joint > 0) {
+        let by_step = e.by_step();
+        let n = by_step.len();
         let mut x = AxisExperiment {
             name: e.name.to_string(),
             joint: e.moved_joint,
-            commands: Vec::new(),
-            steps: Vec::new(),
-            target0_m: Vec::new(),
-            target0_steps: Vec::new(),
-            target1_m: Vec::new(),
-            target1_steps: Vec::new(),
+            commands: Vec::with_capacity(n),
+            steps: Vec::with_capacity(n),
+            target0_m: Vec::with_capacity(n),
+            target0_steps: Vec::with_capacity(n),
+            target1_m: Vec::with_capacity(n),
+            target1_steps: Vec::with_capacity(n),
             holds_next_still: false,
         };
-        for (step, rows) in &e.by_step() {
+        for (step, rows) in &by_step {
             let first = rows[0];
             if let Some(r) = rows.iter().find(|r| {
                 r.cmd
