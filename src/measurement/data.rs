@@ -324,9 +324,10 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
 }
 
 #[cfg(test)]
-impl Measurement {
-    /// A row for unit tests: at (1, 2, 3) mm, two commands at 0, no payload, 20 degC.
-    pub(crate) fn test_row(experiment: &str, moved_joint: usize, step: usize, target: usize) -> Measurement {
+mod tests {
+    use super::*;
+
+    fn row(experiment: &str, moved_joint: usize, step: usize, target: usize) -> Measurement {
         Measurement {
             experiment: experiment.into(),
             moved_joint,
@@ -337,15 +338,6 @@ impl Measurement {
             payload_kg: 0.0,
             temperature_c: 20.0,
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn row(experiment: &str, moved_joint: usize, step: usize, target: usize) -> Measurement {
-        Measurement::test_row(experiment, moved_joint, step, target)
     }
 
     #[test]

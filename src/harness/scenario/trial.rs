@@ -328,12 +328,25 @@ fn one_line(message: &str) -> String {
 mod tests {
     use super::*;
 
-    fn row(experiment: &str, moved_joint: usize, step: usize, target: usize) -> Measurement {
-        Measurement::test_row(experiment, moved_joint, step, target)
-    }
-
     #[test]
     fn measured_poses_gives_each_pose_with_no_moved_joint_once() {
+        let at_rest = Measurement {
+            experiment: String::new(),
+            moved_joint: 0,
+            step: 0,
+            target: 0,
+            position_mm: [0.0; 3],
+            cmd: Vec::new(),
+            payload_kg: 0.0,
+            temperature_c: 20.0,
+        };
+        let row = |experiment: &str, moved_joint, step, target| Measurement {
+            experiment: experiment.into(),
+            moved_joint,
+            step,
+            target,
+            ..at_rest.clone()
+        };
         let rows = [
             row("j1", 1, 0, 0),
             row("tool", 0, 0, 0),
