@@ -85,6 +85,24 @@ impl PhiModel {
     /// # Panics
     /// If `q.len() != self.dof()`: a programming error, not a data error.
     pub fn poses(&self, q: &[f64]) -> ChainPoses {
+        self.poses_by(q, |k| self.link_from_next_frame(k))
+    }
+
+    /// The tool frame in the world frame at joint values `q`.
+    pub fn world_from_tool(&self, q: &[f64]) -> Isometry3<f64> {
+        self.world_from_tool_by(q, |k| self.link_from_next_frame(k))
+    }
+
+    /// The model's constant frames computed once, for the forward kinematics of many poses
+    /// of one model: the same numbers as [`PhiModel::poses`] and
+    /// [`PhiModel::world_from_tool`], bit for bit, without recomputing eq. (A1)'s fixed
+    /// factors (four of every joint's five rotations) at each pose.
+    pub fn fixed_frames(&self) -> FixedFrames {
+        FixedFrames::new(self.clone())
+    }
+
+    /// [`PhiModel::poses`] with `link_from_next(k)` for [`PhiModel::link_from_next_frame`].
+    fn poses_by(&self, q: &[f64], link_from_next: impl Fn(usize) -> Isometry3<f64>) -> ChainPoses {
         assert_eq!(
             q.len(),
             self.dof(),
@@ -99,7 +117,7 @@ impl PhiModel {
             let link = frame * joint_motion(joint.kind, qk);
             world_from_link.push(link);
             if k + 1 < n {
-                frame = link * self.link_from_next_frame(k);
+                frame = link * link_from_next(k);
             }
         }
         let world_from_tool = world_from_link[n - 1] * self.last_link_from_tool;
@@ -110,14 +128,15 @@ impl PhiModel {
         }
     }
 
-    /// The tool frame in the world frame at joint values `q`.
-    pub fn world_from_tool(&self, q: &[f64]) -> Isometry3<f64> {
+    /// [`PhiModel::world_from_tool`] with `link_from_next(k)` for
+    /// [`PhiModel::link_from_next_frame`].
+    fn world_from_tool_by(&self, q: &[f64], link_from_next: impl Fn(usize) -> Isometry3<f64>) -> Isometry3<f64> {
         let n = self.dof();
         let mut t = self.world_from_base;
         for (k, (joint, &qk)) in self.joints.iter().zip(q).enumerate() {
             t *= joint_motion(joint.kind, qk);
             if k + 1 < n {
-                t *= self.link_from_next_frame(k);
+                t *= link_from_next(k);
             }
         }
         t * self.last_link_from_tool
@@ -126,5 +145,96 @@ impl PhiModel {
     /// A point fixed on link `k` (0-based), given in that link's moving frame, in the world.
     pub fn point_on_link(&self, q: &[f64], k: usize, point_in_link_m: &Point3<f64>) -> Point3<f64> {
         self.poses(q).world_from_link[k] * point_in_link_m
+    }
+}
+
+/// A model with its constant frames, `frame_{k+1}` in `link_k` for every joint
+/// ([`PhiModel::link_from_next_frame`]), computed once: the forward kinematics of many poses
+/// of one model without recomputing them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FixedFrames {
+    model: PhiModel,
+    link_from_next_frame: Vec<Isometry3<f64>>,
+}
+
+impl FixedFrames {
+    /// The frames of `model`.
+    pub fn new(model: PhiModel) -> Self {
+        let link_from_next_frame = (0..model.dof().saturating_sub(1))
+            .map(|k| model.link_from_next_frame(k))
+            .collect();
+        FixedFrames {
+            model,
+            link_from_next_frame,
+        }
+    }
+
+    /// The model these frames are of.
+    pub fn model(&self) -> &PhiModel {
+        &self.model
+    }
+
+    /// [`PhiModel::poses`], bit for bit.
+    ///
+    /// # Panics
+    /// If `q.len() != self.model().dof()`: a programming error, not a data error.
+    pub fn poses(&self, q: &[f64]) -> ChainPoses {
+        self.model.poses_by(q, |k| self.link_from_next_frame[k])
+    }
+
+    /// [`PhiModel::world_from_tool`], bit for bit.
+    pub fn world_from_tool(&self, q: &[f64]) -> Isometry3<f64> {
+        self.model.world_from_tool_by(q, |k| self.link_from_next_frame[k])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A model of `kinds` with rows, phi angles and base placement from `x` (any values).
+    fn model(kinds: &[JointKind], x: &[f64]) -> PhiModel {
+        let at = |i: usize| x[i % x.len()];
+        PhiModel {
+            joints: kinds
+                .iter()
+                .enumerate()
+                .map(|(k, &kind)| PhiJoint { kind, phi_rad: at(7 * k) })
+                .collect(),
+            rows: (0..kinds.len() - 1)
+                .map(|k| PhiRow {
+                    a_m: at(7 * k + 1),
+                    beta_rad: at(7 * k + 2),
+                    b_m: at(7 * k + 3),
+                    alpha_rad: at(7 * k + 4),
+                    h_m: at(7 * k + 5),
+                    gamma_rad: at(7 * k + 6),
+                })
+                .collect(),
+            world_from_base: Isometry3::new(Vector3::new(at(1), at(2), at(3)), Vector3::new(at(4), at(5), at(6))),
+            last_link_from_tool: Isometry3::new(Vector3::new(at(3), at(1), at(2)), Vector3::new(at(6), at(4), at(5))),
+        }
+    }
+
+    proptest! {
+        /// The fixed frames give the model's own forward kinematics bit for bit, on chains
+        /// of any length and joint mix (a second route: the per-pose path recomputes every
+        /// rotation).
+        #[test]
+        fn fixed_frames_are_the_models_kinematics_bit_for_bit(
+            kinds in prop::collection::vec(prop::bool::ANY, 1..8),
+            x in prop::collection::vec(-3.0f64..3.0, 7..60),
+            q in prop::collection::vec(-3.0f64..3.0, 8),
+        ) {
+            let kinds: Vec<JointKind> =
+                kinds.iter().map(|&r| if r { JointKind::Revolute } else { JointKind::Prismatic }).collect();
+            let m = model(&kinds, &x);
+            let q = &q[..kinds.len()];
+            let frames = m.fixed_frames();
+            prop_assert_eq!(frames.poses(q), m.poses(q));
+            prop_assert_eq!(frames.world_from_tool(q), m.world_from_tool(q));
+            prop_assert_eq!(frames.world_from_tool(q), m.poses(q).world_from_tool);
+        }
     }
 }

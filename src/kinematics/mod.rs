@@ -11,7 +11,7 @@ mod phi;
 mod rigid_fit;
 mod source;
 
-pub use chain::{AxisLine, ChainPoses, PhiJoint, PhiModel};
+pub use chain::{AxisLine, ChainPoses, FixedFrames, PhiJoint, PhiModel};
 pub use dh::{
     CommonNormal, DhError, DhRow, DhTable, PARALLEL_TOLERANCE_RAD, ParallelPair, TiltSensitivity, common_normal,
     dh_from_phi, parallel_tilt_sensitivity,

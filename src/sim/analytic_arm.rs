@@ -5,7 +5,7 @@
 use super::campaign::{ArmExecutor, ExecuteError};
 use super::effects::Effects;
 use super::joint_driver::JointDriver;
-use crate::kinematics::PhiModel;
+use crate::kinematics::FixedFrames;
 use crate::physics::{LinkMass, PassiveSlope, coupled_first_order_deflection};
 use crate::plan::PoseConditions;
 use crate::robot::{Controller, RobotDescription, RobotModel};
@@ -20,7 +20,8 @@ use rand::Rng;
 #[derive(Clone, Debug)]
 pub struct AnalyticArm {
     truth: RobotModel,
-    model: PhiModel,
+    /// The truth's phi-model with its constant frames (the poses of every step).
+    frames: FixedFrames,
     driver: JointDriver,
     effects: Effects,
     masses: Vec<LinkMass>,
@@ -29,12 +30,12 @@ pub struct AnalyticArm {
 impl AnalyticArm {
     /// The truth robot driven by `controller` (built from the nominal description), no effects.
     pub fn new(truth: RobotModel, controller: Controller) -> Self {
-        let model = truth.phi_model();
+        let frames = FixedFrames::new(truth.phi_model());
         let effects = Effects::default();
         AnalyticArm {
             driver: JointDriver::new(&truth, controller, &effects),
             truth,
-            model,
+            frames,
             effects,
             masses: Vec::new(),
         }
@@ -74,9 +75,16 @@ impl ArmExecutor for AnalyticArm {
         let driven = self
             .driver
             .drive(cmd, rng)
-            .map_err(|e| ExecuteError::new(&self.model, cmd, e.to_string()))?;
+            .map_err(|e| ExecuteError::new(self.frames.model(), cmd, e.to_string()))?;
         let mut q = driven.q;
-        let model = self.effects.thermal_model(&self.model, conditions.temperature_c);
+        // Thermal expansion changes the rows with the pose's temperature; else the truth's
+        // constant frames serve every pose.
+        let expanded = self.effects.expanded_model(self.frames.model(), conditions.temperature_c);
+        let frames = match expanded {
+            Some(model) => &FixedFrames::new(model),
+            None => &self.frames,
+        };
+        let model = frames.model();
         if let Some(compliance) = &self.effects.compliance
             && self.masses.len() == q.len()
         {
@@ -84,17 +92,17 @@ impl ArmExecutor for AnalyticArm {
                 .effects
                 .payload_in_last_link(&model.last_link_from_tool, conditions);
             let couplings = PassiveSlope::of_linkages(&self.truth, &driven.active);
-            let dq = coupled_first_order_deflection(&model, &q, &self.masses, payload, compliance, &couplings);
+            let dq = coupled_first_order_deflection(model, &q, &self.masses, payload, compliance, &couplings);
             for (qk, d) in q.iter_mut().zip(dq) {
                 *qk += d;
             }
         }
-        let mut links = model.poses(&q).world_from_link;
-        self.effects.apply_wobble(&model, &q, &mut links);
+        let mut links = frames.poses(&q).world_from_link;
+        self.effects.apply_wobble(model, &q, &mut links);
         Ok(links)
     }
 
     fn last_link_from_tool(&self) -> Isometry3<f64> {
-        self.model.last_link_from_tool
+        self.frames.model().last_link_from_tool
     }
 }

@@ -303,10 +303,12 @@ impl Effects {
     /// The phi-model at temperature `temperature_c` ([`ThermalEffect::expanded`]; unchanged
     /// without a thermal effect).
     pub fn thermal_model(&self, model: &PhiModel, temperature_c: f64) -> PhiModel {
-        match &self.thermal {
-            Some(t) => t.expanded(model, temperature_c),
-            None => model.clone(),
-        }
+        self.expanded_model(model, temperature_c).unwrap_or_else(|| model.clone())
+    }
+
+    /// [`Effects::thermal_model`] when it differs from `model` (a thermal effect in force).
+    pub fn expanded_model(&self, model: &PhiModel, temperature_c: f64) -> Option<PhiModel> {
+        self.thermal.as_ref().map(|t| t.expanded(model, temperature_c))
     }
 
     /// Applies the axis wobbles to link poses computed without them ([`apply_wobble`]).

@@ -10,7 +10,8 @@ use super::metrics::Metrics;
 use super::resolve::{Case, ResolvedScenario, ResolvedTruth};
 use super::validation_error::validation_errors;
 use crate::calibration::procedure::{CalibrationOptions, Detail, calibrate_model};
-use crate::kinematics::PhiModel;
+use crate::kinematics::FixedFrames;
+use nalgebra::Isometry3;
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::plan::{PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
@@ -64,7 +65,8 @@ pub const SETTLE_METRICS: [&str; 3] = ["settle_steps_mean", "settle_steps_max", 
 #[derive(Clone, Debug)]
 pub struct CampaignTrial {
     desc: RobotDescription,
-    nominal: PhiModel,
+    /// The nominal phi-model with its constant frames.
+    nominal: FixedFrames,
     controller: Controller,
     truth: ResolvedTruth,
     validation: ValidationPlan,
@@ -79,7 +81,7 @@ impl CampaignTrial {
     pub fn new(scenario: &ResolvedScenario) -> Result<Self, String> {
         Ok(CampaignTrial {
             desc: scenario.robot.clone(),
-            nominal: scenario.robot.nominal_model(),
+            nominal: FixedFrames::new(scenario.robot.nominal_model()),
             controller: Controller::from_description(&scenario.robot),
             truth: scenario.truth.clone(),
             validation: scenario.validation.clone(),
@@ -148,8 +150,9 @@ impl CampaignTrial {
         // The lean path: a trial needs the model, not the report.
         let cal =
             calibrate_model(&set, &self.desc, &options, Detail::Model).map_err(|e| format!("calibrating: {e}"))?;
-        let mut m = self.metrics(&out, &cal.robot)?;
-        m.push(CAMPAIGN_METRICS[10], self.tool_error_rms_mm(&out, &cal.robot, truth)?);
+        let predicted = self.predicted_tool(&out, &cal.robot)?;
+        let mut m = self.metrics(&out, &predicted);
+        m.push(CAMPAIGN_METRICS[10], self.tool_error_rms_mm(&predicted, truth)?);
         if let Some(t) = settles {
             m.push(SETTLE_METRICS[0], t.mean_steps());
             m.push(SETTLE_METRICS[1], t.max_steps as f64);
@@ -158,61 +161,65 @@ impl CampaignTrial {
         Ok(m)
     }
 
-    /// RMS over the validation poses of the distance between the calibrated and the truth
-    /// model's tool points at the same commands \[mm\] (kinematics only).
-    fn tool_error_rms_mm(
+    /// The calibrated model's tool frame at each measured pose ([`measured_poses`]: once per
+    /// pose, not per target row), with the pose's first row; a command the calibrated
+    /// transmissions cannot invert fails the trial, naming the pose.
+    fn predicted_tool<'o>(
         &self,
-        out: &CampaignOutput,
+        out: &'o CampaignOutput,
         calibrated: &RobotModel,
-        truth: &RobotModel,
-    ) -> Result<f64, String> {
-        let (model, truth_model) = (calibrated.phi_model(), truth.phi_model());
-        let (mut sum_m2, mut count) = (0.0, 0usize);
-        for row in measured_poses(&out.rows) {
+    ) -> Result<Vec<(&'o Measurement, Isometry3<f64>)>, String> {
+        let model = FixedFrames::new(calibrated.phi_model());
+        measured_poses(&out.rows)
+            .map(|row| {
+                let q = calibrated
+                    .joint_values(&self.controller, &commands_to_internal(&self.desc, &row.cmd))
+                    .map_err(|e| {
+                        format!(
+                            "the calibrated model cannot predict {} step {}: {e}",
+                            row.experiment, row.step
+                        )
+                    })?;
+                Ok((row, model.world_from_tool(&q)))
+            })
+            .collect()
+    }
+
+    /// RMS over the measured poses of the distance between the calibrated model's tool
+    /// points (`predicted`, [`CampaignTrial::predicted_tool`]) and the truth model's at the
+    /// same commands \[mm\] (kinematics only).
+    fn tool_error_rms_mm(&self, predicted: &[(&Measurement, Isometry3<f64>)], truth: &RobotModel) -> Result<f64, String> {
+        let truth_model = FixedFrames::new(truth.phi_model());
+        let mut sum_m2 = 0.0;
+        for (row, world_from_tool) in predicted {
             let cmd = commands_to_internal(&self.desc, &row.cmd);
-            let failed = |e: crate::robot::ModelError| format!("{} step {}: {e}", row.experiment, row.step);
-            let q = calibrated.joint_values(&self.controller, &cmd).map_err(failed)?;
-            let q_truth = truth.joint_values(&self.controller, &cmd).map_err(failed)?;
-            let d =
-                model.world_from_tool(&q).translation.vector - truth_model.world_from_tool(&q_truth).translation.vector;
+            let q_truth = truth
+                .joint_values(&self.controller, &cmd)
+                .map_err(|e| format!("{} step {}: {e}", row.experiment, row.step))?;
+            let d = world_from_tool.translation.vector - truth_model.world_from_tool(&q_truth).translation.vector;
             sum_m2 += d.norm_squared();
-            count += 1;
         }
         // No pose measured (all occluded): no number, as `validation_errors` gives.
-        Ok(if count == 0 {
+        Ok(if predicted.is_empty() {
             f64::NAN
         } else {
-            (sum_m2 / count as f64).sqrt() * 1e3
+            (sum_m2 / predicted.len() as f64).sqrt() * 1e3
         })
     }
 
-    fn metrics(&self, out: &CampaignOutput, calibrated: &RobotModel) -> Result<Metrics, String> {
+    /// The validation errors of the nominal model and of the calibrated one (its tool frame
+    /// at each measured pose: `predicted`).
+    fn metrics(&self, out: &CampaignOutput, predicted: &[(&Measurement, Isometry3<f64>)]) -> Metrics {
         let targets = self.desc.tool_targets_m();
         let e = validation_errors(&out.rows, &targets, |cmd| {
             // Nominally the robot reaches exactly the commanded joint values (`docs/formats.md#controller-semantics`).
             self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
         });
-        let model = calibrated.phi_model();
-        // The calibrated model's tool frame at each validation pose (once per pose, not per
-        // target row); a command the calibrated transmissions cannot invert fails the trial,
-        // naming the pose.
-        let mut predicted: Vec<(&[f64], nalgebra::Isometry3<f64>)> = Vec::new();
-        for row in measured_poses(&out.rows) {
-            let q = calibrated
-                .joint_values(&self.controller, &commands_to_internal(&self.desc, &row.cmd))
-                .map_err(|e| {
-                    format!(
-                        "the calibrated model cannot predict {} step {}: {e}",
-                        row.experiment, row.step
-                    )
-                })?;
-            predicted.push((&row.cmd, model.world_from_tool(&q)));
-        }
         let c = validation_errors(&out.rows, &targets, |cmd| {
             predicted
                 .iter()
-                .find(|(c, _)| *c == cmd)
-                .map_or(nalgebra::Isometry3::translation(f64::NAN, f64::NAN, f64::NAN), |p| p.1)
+                .find(|(row, _)| row.cmd == cmd)
+                .map_or(Isometry3::translation(f64::NAN, f64::NAN, f64::NAN), |p| p.1)
         });
         let mut m = Metrics::new();
         m.push(CAMPAIGN_METRICS[0], e.pos_rms_mm);
@@ -228,7 +235,7 @@ impl CampaignTrial {
             CAMPAIGN_METRICS[9],
             out.occluded.iter().map(|(_, n)| *n).sum::<usize>() as f64,
         );
-        Ok(m)
+        m
     }
 }
 
