@@ -200,7 +200,10 @@ mod tests {
             joints: kinds
                 .iter()
                 .enumerate()
-                .map(|(k, &kind)| PhiJoint { kind, phi_rad: at(7 * k) })
+                .map(|(k, &kind)| PhiJoint {
+                    kind,
+                    phi_rad: at(7 * k),
+                })
                 .collect(),
             rows: (0..kinds.len() - 1)
                 .map(|k| PhiRow {

@@ -79,7 +79,9 @@ impl ArmExecutor for AnalyticArm {
         let mut q = driven.q;
         // Thermal expansion changes the rows with the pose's temperature; else the truth's
         // constant frames serve every pose.
-        let expanded = self.effects.expanded_model(self.frames.model(), conditions.temperature_c);
+        let expanded = self
+            .effects
+            .expanded_model(self.frames.model(), conditions.temperature_c);
         let frames = match expanded {
             Some(model) => &FixedFrames::new(model),
             None => &self.frames,

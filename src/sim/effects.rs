@@ -303,7 +303,8 @@ impl Effects {
     /// The phi-model at temperature `temperature_c` ([`ThermalEffect::expanded`]; unchanged
     /// without a thermal effect).
     pub fn thermal_model(&self, model: &PhiModel, temperature_c: f64) -> PhiModel {
-        self.expanded_model(model, temperature_c).unwrap_or_else(|| model.clone())
+        self.expanded_model(model, temperature_c)
+            .unwrap_or_else(|| model.clone())
     }
 
     /// [`Effects::thermal_model`] when it differs from `model` (a thermal effect in force).

@@ -11,14 +11,14 @@ use super::resolve::{Case, ResolvedScenario, ResolvedTruth};
 use super::validation_error::validation_errors;
 use crate::calibration::procedure::{CalibrationOptions, Detail, calibrate_model};
 use crate::kinematics::FixedFrames;
-use nalgebra::Isometry3;
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::plan::{PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::perturb;
-use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, CampaignOutput, Effects, simulate_campaign_with};
+use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, simulate_campaign_with};
 use crate::sim::{RapierArm, RapierArmOptions};
+use nalgebra::Isometry3;
 use rand::{SeedableRng, rngs::ChaCha12Rng};
 
 /// One Monte-Carlo trial: a pure function of the case and the seed (thread-safe, no I/O).
@@ -132,8 +132,8 @@ impl CampaignTrial {
         )
         .map_err(|e| format!("simulating the campaign: {e}"))?;
         let settles = arm.settles();
-        let set =
-            MeasurementSet::new(self.desc.dof(), out.rows.clone()).map_err(|e| format!("measurement set: {e}"))?;
+        let occluded: usize = out.occluded.iter().map(|(_, n)| *n).sum();
+        let set = MeasurementSet::new(self.desc.dof(), out.rows).map_err(|e| format!("measurement set: {e}"))?;
         // The calibrator is told the instrument's 3-D RMS noise where the robot stands.
         let base = nalgebra::Point3::from(self.desc.placement.to_isometry().translation.vector);
         let noise_mm = case
@@ -150,8 +150,8 @@ impl CampaignTrial {
         // The lean path: a trial needs the model, not the report.
         let cal =
             calibrate_model(&set, &self.desc, &options, Detail::Model).map_err(|e| format!("calibrating: {e}"))?;
-        let predicted = self.predicted_tool(&out, &cal.robot)?;
-        let mut m = self.metrics(&out, &predicted);
+        let predicted = self.predicted_tool(set.rows(), &cal.robot)?;
+        let mut m = self.metrics(set.rows(), occluded, &predicted);
         m.push(CAMPAIGN_METRICS[10], self.tool_error_rms_mm(&predicted, truth)?);
         if let Some(t) = settles {
             m.push(SETTLE_METRICS[0], t.mean_steps());
@@ -164,13 +164,13 @@ impl CampaignTrial {
     /// The calibrated model's tool frame at each measured pose ([`measured_poses`]: once per
     /// pose, not per target row), with the pose's first row; a command the calibrated
     /// transmissions cannot invert fails the trial, naming the pose.
-    fn predicted_tool<'o>(
+    fn predicted_tool<'r>(
         &self,
-        out: &'o CampaignOutput,
+        rows: &'r [Measurement],
         calibrated: &RobotModel,
-    ) -> Result<Vec<(&'o Measurement, Isometry3<f64>)>, String> {
+    ) -> Result<Vec<(&'r Measurement, Isometry3<f64>)>, String> {
         let model = FixedFrames::new(calibrated.phi_model());
-        measured_poses(&out.rows)
+        measured_poses(rows)
             .map(|row| {
                 let q = calibrated
                     .joint_values(&self.controller, &commands_to_internal(&self.desc, &row.cmd))
@@ -188,7 +188,11 @@ impl CampaignTrial {
     /// RMS over the measured poses of the distance between the calibrated model's tool
     /// points (`predicted`, [`CampaignTrial::predicted_tool`]) and the truth model's at the
     /// same commands \[mm\] (kinematics only).
-    fn tool_error_rms_mm(&self, predicted: &[(&Measurement, Isometry3<f64>)], truth: &RobotModel) -> Result<f64, String> {
+    fn tool_error_rms_mm(
+        &self,
+        predicted: &[(&Measurement, Isometry3<f64>)],
+        truth: &RobotModel,
+    ) -> Result<f64, String> {
         let truth_model = FixedFrames::new(truth.phi_model());
         let mut sum_m2 = 0.0;
         for (row, world_from_tool) in predicted {
@@ -208,14 +212,15 @@ impl CampaignTrial {
     }
 
     /// The validation errors of the nominal model and of the calibrated one (its tool frame
-    /// at each measured pose: `predicted`).
-    fn metrics(&self, out: &CampaignOutput, predicted: &[(&Measurement, Isometry3<f64>)]) -> Metrics {
+    /// at each measured pose: `predicted`) over the campaign's `rows`, with the number of
+    /// `occluded` targets.
+    fn metrics(&self, rows: &[Measurement], occluded: usize, predicted: &[(&Measurement, Isometry3<f64>)]) -> Metrics {
         let targets = self.desc.tool_targets_m();
-        let e = validation_errors(&out.rows, &targets, |cmd| {
+        let e = validation_errors(rows, &targets, |cmd| {
             // Nominally the robot reaches exactly the commanded joint values (`docs/formats.md#controller-semantics`).
             self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
         });
-        let c = validation_errors(&out.rows, &targets, |cmd| {
+        let c = validation_errors(rows, &targets, |cmd| {
             predicted
                 .iter()
                 .find(|(row, _)| row.cmd == cmd)
@@ -230,11 +235,8 @@ impl CampaignTrial {
         m.push(CAMPAIGN_METRICS[5], c.pos_max_mm);
         m.push(CAMPAIGN_METRICS[6], c.orient_rms_rad);
         m.push(CAMPAIGN_METRICS[7], c.orient_max_rad);
-        m.push(CAMPAIGN_METRICS[8], out.rows.len() as f64);
-        m.push(
-            CAMPAIGN_METRICS[9],
-            out.occluded.iter().map(|(_, n)| *n).sum::<usize>() as f64,
-        );
+        m.push(CAMPAIGN_METRICS[8], rows.len() as f64);
+        m.push(CAMPAIGN_METRICS[9], occluded as f64);
         m
     }
 }
