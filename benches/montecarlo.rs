@@ -19,6 +19,8 @@ use std::path::Path;
 use std::time::Instant;
 
 mod common;
+#[path = "table1/mod.rs"]
+mod table1;
 
 const BATCH: usize = 16;
 
@@ -132,6 +134,21 @@ fn summary() {
         t / b,
         b * 1e6,
         1.0 / t
+    );
+    // The calibration benchmark's baseline, for a machine-independent trial target: issue
+    // 19 pairs 0.25 ms with 50x six circle fits, so 0.5 ms a trial is about 100x.
+    let sweeps = table1::target0_sweeps(&table1::campaign().1);
+    let circles = || {
+        for p in &sweeps {
+            black_box(axiscal::calibration::fit_circle(black_box(p)).expect("arc"));
+        }
+    };
+    let (c, t) = common::interleaved_medians(BATCHES, (20, &circles), (20, &|| run(&trial, &s)));
+    println!(
+        "montecarlo/analytic paper trial: {:.3} ms = {:.0} x six circle fits ({:.2} us)",
+        t * 1e3,
+        t / c,
+        c * 1e6
     );
     let pools: Vec<rayon::ThreadPool> = [1, 2]
         .iter()
