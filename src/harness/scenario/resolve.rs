@@ -6,7 +6,7 @@
 
 use super::error::ScenarioError;
 use super::file::{
-    ConditionsSection, Instrument, MeasurementSection, PlanSection, ScenarioFile, SimMode, TruthSection,
+    ConditionsSection, Instrument, MeasurementSection, PlanSection, ScenarioFile, SimMode, SweepSection, TruthSection,
 };
 use super::threshold::Threshold;
 use crate::measurement::{IsotropicNoise, MeasurementModel, PAPER_RIGHT_STATION_MM, ReferenceVolume, TheodolitePair};
@@ -274,7 +274,50 @@ type KeyError = (String, String);
 
 fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> Result<Vec<Case>, KeyError> {
     let base_plan = base_plan(&file.plan, robot)?;
-    let sweep = file.sweep.clone().unwrap_or_default();
+    let drafts = match &file.sweep {
+        Some(sweep) => swept_cases(sweep, file.measurement, &base_plan, dir)?,
+        None => vec![Draft {
+            name: "base".into(),
+            measurement: file.measurement,
+            plan: base_plan,
+            keys: ("plan", NOISE),
+        }],
+    };
+    drafts
+        .into_iter()
+        .map(|d| {
+            d.plan
+                .validate(robot)
+                .map_err(|e| (d.keys.0.to_owned(), e.to_string()))?;
+            Ok(Case {
+                name: d.name,
+                measurement: measurement_model(&d.measurement, robot).map_err(|e| (d.keys.1.to_owned(), e))?,
+                plan: d.plan,
+            })
+        })
+        .collect()
+}
+
+/// The key blamed for a bad instrument when the case keeps the file's.
+const NOISE: &str = "measurement.net_radial_rms_mm";
+
+/// A case before its checks: its name, instrument and plan, with the keys blamed for a bad
+/// plan and for a bad instrument.
+struct Draft {
+    name: String,
+    measurement: MeasurementSection,
+    plan: CalibrationPlan,
+    keys: (&'static str, &'static str),
+}
+
+/// The cases of a `[sweep]` section: exactly one of its lists, one case per value, each a
+/// variation of the file's `measurement` and `base_plan` (plan files relative to `dir`).
+fn swept_cases(
+    sweep: &SweepSection,
+    measurement: MeasurementSection,
+    base_plan: &CalibrationPlan,
+    dir: &Path,
+) -> Result<Vec<Draft>, KeyError> {
     let set = [
         sweep.net_radial_rms_mm.is_some(),
         sweep.span_scale.is_some(),
@@ -282,68 +325,70 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> R
         sweep.plans.is_some(),
     ];
     let count = set.iter().filter(|s| **s).count();
-    if file.sweep.is_some() && count != 1 {
+    if count != 1 {
         return Err((
             "sweep".into(),
             format!("set exactly one of net_radial_rms_mm, span_scale, spans, plans (found {count})"),
         ));
     }
-    let mut cases = Vec::new();
-    // `keys` = (key blamed for a bad plan, key blamed for a bad instrument).
-    let mut push =
-        |name: String, m: MeasurementSection, plan: CalibrationPlan, keys: (&str, &str)| -> Result<(), KeyError> {
-            plan.validate(robot).map_err(|e| (keys.0.to_owned(), e.to_string()))?;
-            cases.push(Case {
-                name,
-                measurement: measurement_model(&m, robot).map_err(|e| (keys.1.to_owned(), e))?,
-                plan,
-            });
-            Ok(())
-        };
-    const NOISE: &str = "measurement.net_radial_rms_mm";
+    let draft = |name: String, measurement, plan, keys| Draft {
+        name,
+        measurement,
+        plan,
+        keys,
+    };
     if let Some(values) = &sweep.net_radial_rms_mm {
-        for v in nonempty(values, "sweep.net_radial_rms_mm")? {
-            let m = MeasurementSection {
-                net_radial_rms_mm: *v,
-                ..file.measurement
-            };
-            push(
-                format!("net_radial_rms_mm={v}"),
-                m,
-                base_plan.clone(),
-                ("plan", "sweep.net_radial_rms_mm"),
-            )?;
-        }
-    } else if let Some(values) = &sweep.span_scale {
-        for v in nonempty(values, "sweep.span_scale")? {
-            let plan = scaled(&base_plan, *v).map_err(|m| ("sweep.span_scale".to_owned(), m))?;
-            push(
-                format!("span_scale={v}"),
-                file.measurement,
-                plan,
-                ("sweep.span_scale", NOISE),
-            )?;
-        }
-    } else if let Some(lists) = &sweep.spans {
-        for (i, spans) in nonempty(lists, "sweep.spans")?.iter().enumerate() {
-            if spans.len() != base_plan.sweeps.len() {
-                return Err((
-                    "sweep.spans".into(),
-                    format!(
+        let keys = ("plan", "sweep.net_radial_rms_mm");
+        return Ok(nonempty(values, "sweep.net_radial_rms_mm")?
+            .iter()
+            .map(|v| {
+                let m = MeasurementSection {
+                    net_radial_rms_mm: *v,
+                    ..measurement
+                };
+                draft(format!("net_radial_rms_mm={v}"), m, base_plan.clone(), keys)
+            })
+            .collect());
+    }
+    if let Some(values) = &sweep.span_scale {
+        return nonempty(values, "sweep.span_scale")?
+            .iter()
+            .map(|v| {
+                let plan = scaled(base_plan, *v).map_err(|m| ("sweep.span_scale".to_owned(), m))?;
+                Ok(draft(
+                    format!("span_scale={v}"),
+                    measurement,
+                    plan,
+                    ("sweep.span_scale", NOISE),
+                ))
+            })
+            .collect();
+    }
+    if let Some(lists) = &sweep.spans {
+        return nonempty(lists, "sweep.spans")?
+            .iter()
+            .enumerate()
+            .map(|(i, spans)| {
+                if spans.len() != base_plan.sweeps.len() {
+                    let found = format!(
                         "list {i} has {} spans, the plan has {} sweeps",
                         spans.len(),
                         base_plan.sweeps.len()
-                    ),
-                ));
-            }
-            let mut plan = base_plan.clone();
-            for (s, span) in plan.sweeps.iter_mut().zip(spans) {
-                s.span = *span;
-            }
-            push(format!("spans={i}"), file.measurement, plan, ("sweep.spans", NOISE))?;
-        }
-    } else if let Some(paths) = &sweep.plans {
-        for path in nonempty(paths, "sweep.plans")? {
+                    );
+                    return Err(("sweep.spans".into(), found));
+                }
+                let mut plan = base_plan.clone();
+                for (s, span) in plan.sweeps.iter_mut().zip(spans) {
+                    s.span = *span;
+                }
+                Ok(draft(format!("spans={i}"), measurement, plan, ("sweep.spans", NOISE)))
+            })
+            .collect();
+    }
+    let paths = sweep.plans.as_deref().unwrap_or_default();
+    nonempty(paths, "sweep.plans")?
+        .iter()
+        .map(|path| {
             let path = dir.join(path);
             let key = || "sweep.plans".to_owned();
             let text = crate::toml_file::read(&path).map_err(|e| (key(), e.to_string()))?;
@@ -351,12 +396,9 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> R
             let stem = path
                 .file_stem()
                 .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-            push(format!("plan={stem}"), file.measurement, plan, ("sweep.plans", NOISE))?;
-        }
-    } else {
-        push("base".into(), file.measurement, base_plan, ("plan", NOISE))?;
-    }
-    Ok(cases)
+            Ok(draft(format!("plan={stem}"), measurement, plan, ("sweep.plans", NOISE)))
+        })
+        .collect()
 }
 
 fn nonempty<'a, T>(values: &'a [T], key: &str) -> Result<&'a [T], KeyError> {
