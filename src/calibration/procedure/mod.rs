@@ -591,7 +591,8 @@ impl<'a> Context<'a> {
     /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
     /// `axes` and `transmissions`, the second targets `target1` and the tool frame `tool`
     /// (the rigid fit of the tool targets measured at the reference pose) give; couplings refitted from `warm` as in
-    /// [`Context::joints_from`]. With the calibrated robot, for [`Context::with_tool`].
+    /// [`Context::joints_from`]. With the calibrated robot's last link at the reference pose
+    /// (when there is a tool frame), for [`Context::with_tool`].
     fn derived(
         &self,
         (axes, transmissions): (&[Option<AxisLine>], &[Option<Transmission>]),
@@ -599,35 +600,41 @@ impl<'a> Context<'a> {
         tool: Option<&Isometry3<f64>>,
         reference_cmd: &[f64],
         refit: Refit,
-    ) -> Result<(Derived, RobotModel), ProcedureError> {
+    ) -> Result<(Derived, Option<Isometry3<f64>>), ProcedureError> {
         let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1, refit)?;
         let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
         values.extend(joints.iter().map(|j| j.transducer_offset));
         let robot = calibrated_robot(self.desc, joints, &geometry);
+        let world_from_link =
+            tool.and_then(|_| world_from_last_link(self.desc, &robot, reference_cmd, self.controller));
         let derived = Derived {
             values,
             coupling_sizes: couplings.iter().map(|c| c.parameters.len()).collect(),
             tool: None,
             robot: None,
         };
-        Ok((self.with_tool(derived, &robot, tool, reference_cmd), robot))
+        let robot = (self.detail == Detail::Report).then_some(robot);
+        Ok((
+            self.with_tool(derived, robot, world_from_link.as_ref(), tool),
+            world_from_link,
+        ))
     }
 
-    /// `derived` with the tool frame of `robot` from the measured tool frame `tool` (the
-    /// tool targets' rigid fit, none without) and, on the report path, the whole model with
-    /// that tool frame (for its covariance).
+    /// `derived` with the tool frame in the last link (`world_from_link`, the robot's at the
+    /// reference pose) from the measured tool frame `tool` (the tool targets' rigid fit, none
+    /// without) and, on the report path, the whole model `robot` with that tool frame (for
+    /// its covariance).
     fn with_tool(
         &self,
         derived: Derived,
-        robot: &RobotModel,
+        robot: Option<RobotModel>,
+        world_from_link: Option<&Isometry3<f64>>,
         tool: Option<&Isometry3<f64>>,
-        reference_cmd: &[f64],
     ) -> Derived {
-        let tool = tool.and_then(|world_from_tool| {
-            last_link_from(world_from_tool, self.desc, robot, reference_cmd, self.controller)
-        });
-        let robot = (self.detail == Detail::Report).then(|| {
-            let mut model = robot.clone();
+        let tool = tool
+            .zip(world_from_link)
+            .map(|(world_from_tool, link)| link.inverse() * world_from_tool);
+        let robot = robot.map(|mut model| {
             if let Some(t) = &tool {
                 model.tool_frame = Placement::from_isometry(t);
             }
@@ -668,7 +675,7 @@ impl<'a> Context<'a> {
             angles: Some(&angles),
             ..Refit::default()
         };
-        let (base, robot) = self.derived((axes, &transmissions), target1, tool, reference_cmd, recording)?;
+        let (base, world_from_link) = self.derived((axes, &transmissions), target1, tool, reference_cmd, recording)?;
         let record = record.into_inner();
         let mut responses: Vec<Option<CouplingResponse>> = vec![None; self.desc.dof()];
         for c in &record {
@@ -728,7 +735,9 @@ impl<'a> Context<'a> {
             prop.add_independent(3 * points.len(), sigma, |k, h| {
                 let moved = moved_point(&lists, &at, k, h);
                 let moved_tool = tool_fit(&moved[0]);
-                Ok::<_, ProcedureError>(self.with_tool(base.clone(), &robot, moved_tool.as_ref(), reference_cmd))
+                let mut moved = base.clone();
+                let robot = moved.robot.take();
+                Ok::<_, ProcedureError>(self.with_tool(moved, robot, world_from_link.as_ref(), moved_tool.as_ref()))
             })?;
         }
         Ok((base.sigma(&prop.covariance), base.model_covariance(&prop.covariance)))
@@ -984,11 +993,22 @@ fn last_link_from(
     reference_cmd: &[f64],
     controller: &Controller,
 ) -> Option<Isometry3<f64>> {
+    let link = world_from_last_link(desc, robot, reference_cmd, controller)?;
+    Some(link.inverse() * world_from_tool)
+}
+
+/// The last link of `robot` at the reference pose (none where its joint values cannot be
+/// computed).
+fn world_from_last_link(
+    desc: &RobotDescription,
+    robot: &RobotModel,
+    reference_cmd: &[f64],
+    controller: &Controller,
+) -> Option<Isometry3<f64>> {
     let q = robot
         .joint_values(controller, &commands_to_internal(desc, reference_cmd))
         .ok()?;
-    let link = robot.phi_model().poses(&q).world_from_link[desc.dof() - 1];
-    Some(link.inverse() * world_from_tool)
+    Some(robot.phi_model().poses(&q).world_from_link[desc.dof() - 1])
 }
 
 /// The tool frame from the three tool targets observed at the reference pose: experiment
