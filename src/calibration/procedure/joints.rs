@@ -523,29 +523,14 @@ mod tests {
     #[test]
     fn passive_sensitivity_matches_central_differences_of_the_refit() {
         let active: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
-        let cases = [
-            (
-                CouplingForm::Fractional,
-                CouplingFunction::Fractional {
-                    num: [-0.998132, 0.213253, -0.212863],
-                    den: [0.096654, -0.0006941],
-                },
-                -1.0,
-            ),
-            (
-                CouplingForm::Gear {
-                    ratio: 1.6,
-                    fit_ratio: true,
-                    order: 1,
-                },
-                CouplingFunction::Gear {
-                    ratio: 32.0 / 19.0,
-                    sin: vec![-0.040562],
-                    cos: vec![0.000018],
-                },
-                1.6,
-            ),
-        ];
+        // The nominal slope: the parallelogram's for the four-bar, the gear's own ratio.
+        let cases = crate::calibration::coupling_fit::tests::paper_couplings().map(|(form, truth, _)| {
+            let slope = match form {
+                CouplingForm::Gear { ratio, .. } => ratio,
+                CouplingForm::Fractional => -1.0,
+            };
+            (form, truth, slope)
+        });
         for (form, truth, slope) in cases {
             let g: Vec<f64> = active
                 .iter()
