@@ -624,17 +624,22 @@ pub(crate) mod tests {
         }
     }
 
-    /// The residuals' second derivatives ([`add_hessian`]) against central differences of
-    /// the analytic gradient ([`gradient_into`], through the project's finite-difference
-    /// tool) for the fractional form and gears with the ratio fitted or fixed, two harmonics,
-    /// at several angles: step 1e-6, truncation O(h^2 g^(4)) ~ 1e-12 and rounding ~ eps / h ~
-    /// 2e-10 of O(1) values, so 1e-8 (plus 1e-8 of the largest entry) bounds both.
-    #[test]
-    fn residual_hessians_match_central_differences_of_the_gradient() {
-        let cases = derivative_cases();
-        for (form, x) in cases {
-            let m = x.len();
-            for t in [-0.6, -0.1, 0.35, 0.8] {
+    proptest::proptest! {
+        /// The residuals' second derivatives ([`add_hessian`]) against central differences
+        /// of the analytic gradient ([`gradient_into`], through the project's
+        /// finite-difference tool) for the fractional form and gears with the ratio fitted or
+        /// fixed, two harmonics, at any angle in [-1, 1] rad and parameters moved by up to
+        /// 0.05 from [`derivative_cases`]: step 1e-6, truncation O(h^2 g^(4)) ~ 1e-12 and
+        /// rounding ~ eps / h ~ 2e-10 of O(1) values, so 1e-8 (plus 1e-8 of the largest
+        /// entry) bounds both.
+        #[test]
+        fn residual_hessians_match_central_differences_of_the_gradient(
+            t in -1.0..1.0f64,
+            moves in proptest::collection::vec(-0.05..0.05f64, 5),
+        ) {
+            for (form, x0) in derivative_cases() {
+                let m = x0.len();
+                let x: Vec<f64> = x0.iter().zip(&moves).map(|(a, b)| a + b).collect();
                 let mut hessian = DMatrix::zeros(m, m);
                 add_hessian(&form, &x, t, 1.0, &mut hessian);
                 let gradient = |p: &[f64]| {
@@ -644,9 +649,9 @@ pub(crate) mod tests {
                 };
                 let fd = crate::calibration::refine::sensitivity(gradient, &x, &vec![1e-6; m]).unwrap();
                 let tolerance = 1e-8 * (1.0 + hessian.abs().max());
-                assert!(
+                proptest::prop_assert!(
                     (&hessian - &fd).abs().max() <= tolerance,
-                    "{form:?} at {t}: {hessian} vs {fd}"
+                    "{:?} at {}: {} vs {}", form, t, hessian, fd
                 );
             }
         }
