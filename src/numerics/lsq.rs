@@ -178,6 +178,40 @@ fn inverse_normal_svd(j: &DMatrix<f64>, fit: &'static str) -> Result<DMatrix<f64
     Ok(inv)
 }
 
+/// The inverse of a symmetric matrix `h` (e.g. a cost's exact Hessian `J^T J + sum r_i
+/// d2r_i`, which need not be positive definite away from a minimum): by the eigen-decomposition
+/// of `S^-1 h S^-1`, `S = diag(sqrt|h_kk|)` (invariant to the parameters' units), `V diag(1 /
+/// lambda) V^T`; error if that scaled matrix's condition number `max |lambda| / min |lambda|`
+/// is at least [`MAX_CONDITION`] (as for `J`: the scaled normal matrix's condition is the
+/// square of `J`'s, so this admits `J` up to 1e6).
+pub fn inverse_symmetric(h: &DMatrix<f64>, fit: &'static str) -> Result<DMatrix<f64>, LsqError> {
+    let n = h.nrows();
+    let s: Vec<f64> = (0..n)
+        .map(|k| {
+            let d = h[(k, k)].abs();
+            if d > 0.0 { d.sqrt() } else { 1.0 }
+        })
+        .collect();
+    let scaled = DMatrix::from_fn(n, n, |r, c| h[(r, c)] / (s[r] * s[c]));
+    let eigen = scaled.symmetric_eigen();
+    let (max, min) = eigen
+        .eigenvalues
+        .iter()
+        .fold((0.0f64, f64::INFINITY), |(a, b), l| (a.max(l.abs()), b.min(l.abs())));
+    let cond = if min > 0.0 { max / min } else { f64::INFINITY };
+    if cond.is_nan() || cond >= MAX_CONDITION {
+        return Err(LsqError::IllConditioned {
+            fit,
+            condition_number: cond,
+        });
+    }
+    let v = &eigen.eigenvectors;
+    Ok(DMatrix::from_fn(n, n, |r, c| {
+        let sum: f64 = (0..n).map(|k| v[(r, k)] * v[(c, k)] / eigen.eigenvalues[k]).sum();
+        sum / (s[r] * s[c])
+    }))
+}
+
 /// `(x, (A^T A)^-1, residual)` of a linear least-squares problem.
 pub type LinearSolution = (DVector<f64>, DMatrix<f64>, DVector<f64>);
 
@@ -582,6 +616,24 @@ mod tests {
             j[(k, 1)] = p[0] * x * e * 40.0;
         }
         Ok((r, j))
+    }
+
+    /// The symmetric inverse of an indefinite matrix with parameters of very different units
+    /// (scales 1e-3 to 1e3): `h h^-1 = I` to rounding of the scaled matrix (condition ~10,
+    /// so 1e-12 has a margin of ~1e3); a singular one is refused as ill-conditioned.
+    #[test]
+    fn symmetric_inverse_of_an_indefinite_matrix_and_a_singular_one() {
+        let core = DMatrix::from_row_slice(3, 3, &[2.0, 0.5, -0.3, 0.5, -1.5, 0.2, -0.3, 0.2, 1.0]);
+        let s = [1e-3, 1.0, 1e3];
+        let h = DMatrix::from_fn(3, 3, |r, c| core[(r, c)] * s[r] * s[c]);
+        let inv = inverse_symmetric(&h, "test").unwrap();
+        let scaled_product = DMatrix::from_fn(3, 3, |r, c| (&h * &inv)[(r, c)] * s[c] / s[r]);
+        assert!((scaled_product - DMatrix::identity(3, 3)).abs().max() < 1e-12);
+        let singular = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 4.0]);
+        assert!(matches!(
+            inverse_symmetric(&singular, "test"),
+            Err(LsqError::IllConditioned { .. })
+        ));
     }
 
     #[test]

@@ -7,12 +7,12 @@ use super::axis_fit::actuator_commands;
 use super::{AxisExperiment, CouplingReport, ProcedureError};
 use crate::calibration::CalibrationError;
 use crate::calibration::coupling_fit::{
-    CouplingForm, fit_coupling, fixed_coupling, passive_displacements, refit_coupling,
+    CouplingForm, CouplingResponse, fit_coupling, fixed_coupling, passive_displacements,
 };
 use crate::kinematics::AxisLine;
 use crate::kinematics::PhiModel;
 use crate::robot::{Controller, CouplingFitForm, CouplingFunction, JointModel, RobotDescription, Transmission};
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{DMatrix, Isometry3, Point3};
 use std::cell::RefCell;
 
 /// The fitted axes of a campaign and the reference pose the joint models are assembled from.
@@ -21,12 +21,13 @@ pub(super) struct Assembly<'a> {
     pub(super) desc: &'a RobotDescription,
     /// The axis experiments.
     pub(super) experiments: &'a [AxisExperiment],
+    /// Each experiment's swept actuator command (rad) at the steps its target 1 was seen
+    /// ([`swept_commands_at_target1`]; they do not depend on the model).
+    pub(super) target1_commands: &'a [Vec<f64>],
     /// Each joint's fitted transmission, in the fit's own zero (`None`: not swept).
     pub(super) transmissions: &'a [Option<Transmission>],
     /// Target 1 of each experiment (same order), at its design pose.
     pub(super) target1: &'a [Vec<Point3<f64>>],
-    /// The nominal controller.
-    pub(super) controller: &'a Controller,
     /// The phi-model of the fitted axes.
     pub(super) geometry: &'a PhiModel,
     /// The joint values at the reference pose (rad).
@@ -41,10 +42,10 @@ pub(super) struct Assembly<'a> {
 /// How [`Assembly::joint_models`] fits the couplings: by default from scratch.
 #[derive(Clone, Copy, Default)]
 pub(super) struct Refit<'a> {
-    /// The couplings' parameters of a previous assembly of nearly the same data, by driven
-    /// joint (0-based): refitted by Gauss-Newton steps from those instead of from scratch
-    /// ([`refit_coupling`]).
-    pub(super) warm: Option<&'a [Option<Vec<f64>>]>,
+    /// The couplings' responses at the optimum of a previous assembly of nearly the same
+    /// data, by driven joint (0-based): refitted by one Newton step from that optimum instead
+    /// of from scratch ([`CouplingResponse::refit`]).
+    pub(super) warm: Option<&'a [Option<CouplingResponse>]>,
     /// The coupling into this joint (0-based) not fitted but set to these parameters.
     pub(super) fixed: Option<(usize, &'a [f64])>,
     /// Where to record every fitted coupling's inputs.
@@ -53,6 +54,10 @@ pub(super) struct Refit<'a> {
     /// inputs are those of the recording (a propagation column that moves another joint's
     /// fit) is computed once and reused, bit for bit the same.
     pub(super) memo: Option<&'a RefCell<Vec<CouplingMemo>>>,
+    /// The driving joints' inverted transmissions at the couplings' sweeps, recorded by the
+    /// recording assembly: a column that does not move a driving joint's transmission reuses
+    /// them (the same arithmetic).
+    pub(super) angles: Option<&'a RefCell<Vec<RawAngles>>>,
     /// The phi-model of the axes when it is already known (the axes are those it was built
     /// from): not built again.
     pub(super) geometry: Option<&'a (PhiModel, super::BaseRule)>,
@@ -69,6 +74,16 @@ struct CouplingInputs {
     shift: f64,
 }
 
+/// A driving joint's transmission inverted at a coupling sweep's target-1 commands and at
+/// the reference command ([`Assembly::raw_active_angles`]).
+pub(super) struct RawAngles {
+    /// The sweep (experiment index).
+    index: usize,
+    transmission: Transmission,
+    raw: Vec<f64>,
+    raw_ref: Option<f64>,
+}
+
 /// One coupling's recorded inputs and, once computed, its warm refit on them.
 pub(super) struct CouplingMemo {
     /// Driven joint (0-based).
@@ -77,8 +92,8 @@ pub(super) struct CouplingMemo {
     refit: Option<(CouplingFunction, CouplingReport)>,
 }
 
-/// A fitted coupling's inputs other than the second targets, and its parameters: refits it
-/// from moved second targets (the propagation's first-order response).
+/// A fitted coupling's inputs other than the second targets, its parameters and its
+/// first-order response to its data (the propagation's).
 pub(super) struct RecordedCoupling {
     /// Driven joint (0-based).
     pub(super) k: usize,
@@ -96,6 +111,8 @@ pub(super) struct RecordedCoupling {
     pub(super) slope: f64,
     /// The fitted parameters.
     pub(super) parameters: Vec<f64>,
+    /// The fit's response at these parameters to its data.
+    pub(super) response: CouplingResponse,
 }
 
 impl RecordedCoupling {
@@ -104,10 +121,23 @@ impl RecordedCoupling {
         self.active.iter().map(|a| a - self.active[0]).collect()
     }
 
-    /// The parameters refitted ([`refit_coupling`]) to the passive displacements `passive`.
-    pub(super) fn refit(&self, passive: &[f64]) -> Result<Vec<f64>, CalibrationError> {
-        let start = passive_start(&self.form, self.slope, &self.active, passive);
-        Ok(refit_coupling(&self.form, &self.active, passive, start, &self.parameters)?.parameters)
+    /// `S = d x / d y`, the fitted parameters' derivative with respect to the passive
+    /// displacements they are fitted to (`y`; eq. 15's targets are `y_j + start`):
+    /// `S = H^-1 J^T (I + 1 w^T)` ([`CouplingResponse::target_sensitivity`]), `w = d start /
+    /// d y` (zero for the fractional form, whose start is the nominal coupling's; a gear's
+    /// start is linear in `y`, [`gear_passive_start_weights`]).
+    pub(super) fn passive_sensitivity(&self) -> Result<DMatrix<f64>, CalibrationError> {
+        let mut s = self.response.target_sensitivity(&self.active)?;
+        if let CouplingForm::Gear { order, .. } = self.form {
+            let w = gear_passive_start_weights(self.slope, order, &self.active);
+            let row_sums: Vec<f64> = s.row_iter().map(|r| r.sum()).collect();
+            for (i, total) in row_sums.iter().enumerate() {
+                for (j, wj) in w.iter().enumerate() {
+                    s[(i, j)] += total * wj;
+                }
+            }
+        }
+        Ok(s)
     }
 }
 
@@ -311,20 +341,6 @@ impl Assembly<'_> {
         let from = k;
         let second = &self.target1[index];
         let fit_err = |source| fit_error(e, from, source);
-        let active = self.sweep_active_angles(k, e, shift)?;
-        let from_transmission = self.transmissions[k - 1].as_ref().expect("checked by coupling_into");
-        let theta_ref_from = from_transmission
-            .actual_from_command(self.u_ref[k - 1])
-            .map(|t| t + shift[k - 1])
-            .unwrap_or(q_ref[k - 1]);
-        // Axis k+1 (1-based) at step 0 of this sweep: the reference frame turned about axis k by
-        // the active motion from the reference to step 0.
-        let mut q0 = q_ref.to_vec();
-        q0[k - 1] += active[0] - theta_ref_from;
-        let frame_next = geometry.poses(&q0).world_from_frame[k];
-        let axis_from = geometry.poses(q_ref).axis(k - 1);
-        let t_from_start: Vec<f64> = active.iter().map(|a| a - active[0]).collect();
-        let passive = passive_displacements(&frame_next, &axis_from, &t_from_start, second).map_err(fit_err)?;
         let cform = match form {
             CouplingFitForm::Fractional => CouplingForm::Fractional,
             CouplingFitForm::Gear { order, fit_ratio } => CouplingForm::Gear {
@@ -333,15 +349,33 @@ impl Assembly<'_> {
                 order,
             },
         };
+        if let Some((_, x)) = self.refit.fixed.filter(|&(j, _)| j == k) {
+            // Set, not fitted: its data (those of the recording assembly) are not needed.
+            let fit = fixed_coupling(&cform, x);
+            let report = CouplingReport::new(from, e, &fit, &cform);
+            return Ok((fit.function, report));
+        }
+        let (raw, raw_ref) = self.raw_active_angles(k, (index, e))?;
+        let active: Vec<f64> = raw.iter().map(|t| t + shift[k - 1]).collect();
+        let theta_ref_from = raw_ref.map(|t| t + shift[k - 1]).unwrap_or(q_ref[k - 1]);
+        // Axis k+1 (1-based) at step 0 of this sweep: the reference frame turned about axis k by
+        // the active motion from the reference to step 0.
+        let mut q0 = q_ref.to_vec();
+        q0[k - 1] += active[0] - theta_ref_from;
+        let frame_next = geometry.poses(&q0).world_from_frame[k];
+        let axis_from = geometry.poses(q_ref).axis(k - 1);
+        let t_from_start: Vec<f64> = active.iter().map(|a| a - active[0]).collect();
+        let passive = passive_displacements(&frame_next, &axis_from, &t_from_start, second).map_err(fit_err)?;
         let start = passive_start(&cform, slope, &active, &passive);
-        let fit = match (self.refit.fixed, self.refit.warm.and_then(|w| w[k].as_deref())) {
-            (Some((j, x)), _) if j == k => Ok(fixed_coupling(&cform, x)),
-            (_, Some(x0)) => refit_coupling(&cform, &active, &passive, start, x0),
-            _ => fit_coupling(&cform, &active, &passive, start),
+        let fit = match self.refit.warm.and_then(|w| w[k].as_ref()) {
+            Some(response) => response.refit(&active, &passive, start),
+            None => fit_coupling(&cform, &active, &passive, start),
         }
         .map_err(fit_err)?;
         if let Some(record) = self.refit.record {
+            let response = CouplingResponse::at(&cform, &active, &passive, start, &fit.parameters).map_err(fit_err)?;
             record.borrow_mut().push(RecordedCoupling {
+                response,
                 k,
                 index,
                 frame_next,
@@ -356,17 +390,31 @@ impl Assembly<'_> {
         Ok((fit.function, report))
     }
 
-    /// The calibrated active angles (rad) of the driving joint `k-1` (0-based) at the steps of
-    /// sweep `e` where its second target was seen.
-    fn sweep_active_angles(&self, k: usize, e: &AxisExperiment, shift: &[f64]) -> Result<Vec<f64>, ProcedureError> {
+    /// The driving joint `k-1`'s (0-based) transmission inverted (rad, before its zero shift)
+    /// at the steps of sweep `index` where its second target was seen, and at the reference
+    /// command (`None`: not invertible there); taken from [`Refit::angles`] when that
+    /// transmission's are recorded there (the same arithmetic), recorded by a recording
+    /// assembly.
+    fn raw_active_angles(
+        &self,
+        k: usize,
+        (index, e): (usize, &AxisExperiment),
+    ) -> Result<(Vec<f64>, Option<f64>), ProcedureError> {
         let from_transmission = self.transmissions[k - 1].as_ref().expect("checked by coupling_into");
-        let u: Vec<f64> = e
-            .target1_steps
+        if let Some(cache) = self.refit.angles {
+            let hit = cache
+                .borrow()
+                .iter()
+                .find(|a| a.index == index && &a.transmission == from_transmission)
+                .map(|a| (a.raw.clone(), a.raw_ref));
+            if let Some(hit) = hit {
+                return Ok(hit);
+            }
+        }
+        let u = &self.target1_commands[index];
+        let raw: Vec<f64> = u
             .iter()
-            .map(|&j| actuator_commands(self.controller, self.desc, &e.commands[j])[k - 1])
-            .collect();
-        u.iter()
-            .map(|&uj| from_transmission.actual_from_command(uj).map(|t| t + shift[k - 1]))
+            .map(|&uj| from_transmission.actual_from_command(uj))
             .collect::<Option<_>>()
             .ok_or_else(|| {
                 fit_error(
@@ -377,8 +425,36 @@ impl Assembly<'_> {
                         command_rad: u[0],
                     },
                 )
-            })
+            })?;
+        let raw_ref = from_transmission.actual_from_command(self.u_ref[k - 1]);
+        if let (Some(cache), Some(_)) = (self.refit.angles, self.refit.record) {
+            cache.borrow_mut().push(RawAngles {
+                index,
+                transmission: from_transmission.clone(),
+                raw: raw.clone(),
+                raw_ref,
+            });
+        }
+        Ok((raw, raw_ref))
     }
+}
+
+/// Each experiment's swept actuator command (rad) at the steps where its target 1 was seen
+/// (what [`Assembly::target1_commands`] holds).
+pub(super) fn swept_commands_at_target1(
+    experiments: &[AxisExperiment],
+    controller: &Controller,
+    desc: &RobotDescription,
+) -> Vec<Vec<f64>> {
+    experiments
+        .iter()
+        .map(|e| {
+            e.target1_steps
+                .iter()
+                .map(|&j| actuator_commands(controller, desc, &e.commands[j])[e.joint - 1])
+                .collect()
+        })
+        .collect()
 }
 
 /// The error of a coupling fit of sweep `e` driven by joint `from` (1-based).
@@ -391,23 +467,104 @@ fn fit_error(e: &AxisExperiment, from: usize, source: CalibrationError) -> Proce
 }
 
 /// The absolute passive angle at step 0 for a gear form `N t + sum (s sin kNt + c cos kNt)`,
-/// which has no free constant: linear least squares of the increments on `[sin, cos, -1]`.
+/// which has no free constant: linear least squares of the increments `y - N t` on
+/// [`gear_start_design`].
 fn gear_passive_start(ratio: f64, order: usize, active: &[f64], passive_from_start: &[f64]) -> f64 {
-    let m = active.len();
-    let cols = 2 * order + 1;
-    let mut a = nalgebra::DMatrix::zeros(m, cols);
-    let mut b = nalgebra::DVector::zeros(m);
-    for (j, (&t, &y)) in active.iter().zip(passive_from_start).enumerate() {
+    let a = gear_start_design(ratio, order, active);
+    let b = nalgebra::DVector::from_fn(active.len(), |j, _| passive_from_start[j] - ratio * active[j]);
+    match a.svd(true, true).solve(&b, 1e-12) {
+        Ok(x) => x[2 * order],
+        Err(_) => ratio * active[0],
+    }
+}
+
+/// The design `[sin kNt, cos kNt, -1]` of the gear form's start ([`gear_passive_start`]).
+fn gear_start_design(ratio: f64, order: usize, active: &[f64]) -> DMatrix<f64> {
+    let mut a = DMatrix::zeros(active.len(), 2 * order + 1);
+    for (j, &t) in active.iter().enumerate() {
         for h in 0..order {
             let x = (h + 1) as f64 * ratio * t;
             a[(j, h)] = x.sin();
             a[(j, order + h)] = x.cos();
         }
         a[(j, 2 * order)] = -1.0;
-        b[j] = y - ratio * t;
     }
-    match a.svd(true, true).solve(&b, 1e-12) {
-        Ok(x) => x[2 * order],
-        Err(_) => ratio * active[0],
+    a
+}
+
+/// The weights `w` of the gear form's start, `start = w . (y - N t)` ([`gear_passive_start`]
+/// is linear in the increments `y`): the last row of the pseudo-inverse of
+/// [`gear_start_design`] (singular values below 1e-12 dropped, as there); empty when its SVD
+/// fails (the start is then the nominal `N t_0`, which `y` does not move).
+fn gear_passive_start_weights(ratio: f64, order: usize, active: &[f64]) -> Vec<f64> {
+    match gear_start_design(ratio, order, active)
+        .svd(true, true)
+        .pseudo_inverse(1e-12)
+    {
+        Ok(p) => p.row(2 * order).iter().copied().collect(),
+        Err(_) => Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::AxisLine;
+    use nalgebra::{Unit, Vector3};
+
+    /// `passive_sensitivity` against central differences (the project's finite-difference
+    /// tool, [`crate::calibration::refine::sensitivity`]) of the Newton refit with the start
+    /// recomputed from the moved displacements (the refit's derivative at the optimum is the
+    /// optimum's: [`CouplingResponse`]), for the fractional form (start fixed) and a fitted
+    /// gear (start a least-squares function of the displacements, which the chain rule's
+    /// `w` carries): agreement to the differences' truncation at steps of 1e-7 rad (~1e-6
+    /// relative; the refit is linear in the displacements, so only rounding is left),
+    /// checked at 1e-5 of the largest entry.
+    #[test]
+    fn passive_sensitivity_matches_central_differences_of_the_refit() {
+        let active: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
+        // The nominal slope: the parallelogram's for the four-bar, the gear's own ratio.
+        let cases = crate::calibration::coupling_fit::tests::paper_couplings().map(|(form, truth, _)| {
+            let slope = match form {
+                CouplingForm::Gear { ratio, .. } => ratio,
+                CouplingForm::Fractional => -1.0,
+            };
+            (form, truth, slope)
+        });
+        for (form, truth, slope) in cases {
+            let g: Vec<f64> = active
+                .iter()
+                .enumerate()
+                .map(|(j, t)| truth.passive(*t) + 1e-4 * ((j * 5 % 7) as f64 - 3.0))
+                .collect();
+            let passive: Vec<f64> = g.iter().map(|v| v - g[0]).collect();
+            let start = passive_start(&form, slope, &active, &passive);
+            let fit = fit_coupling(&form, &active, &passive, start).unwrap();
+            let response = CouplingResponse::at(&form, &active, &passive, start, &fit.parameters).unwrap();
+            let coupling = RecordedCoupling {
+                k: 1,
+                index: 0,
+                frame_next: Isometry3::identity(),
+                axis_from: AxisLine {
+                    origin_m: Point3::origin(),
+                    direction: Unit::new_normalize(Vector3::z()),
+                },
+                active: active.clone(),
+                form,
+                slope,
+                parameters: fit.parameters.clone(),
+                response: response.clone(),
+            };
+            let analytic = coupling.passive_sensitivity().unwrap();
+            let refit = |y: &[f64]| {
+                let start = passive_start(&form, slope, &active, y);
+                let x = response.refit(&active, y, start).unwrap().parameters;
+                Some(x.iter().map(|v| -v).collect())
+            };
+            let fd = crate::calibration::refine::sensitivity(refit, &passive, &vec![1e-7; passive.len()]).unwrap();
+            let scale = analytic.abs().max();
+            let diff = (&analytic - &fd).abs().max();
+            assert!(diff <= 1e-5 * scale, "{form:?}: {diff:e} of {scale:e}");
+        }
     }
 }

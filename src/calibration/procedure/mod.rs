@@ -53,7 +53,7 @@ pub use urdf::{
 };
 
 use super::CalibrationError;
-use super::coupling_fit::{passive_angle_gradients, passive_displacements};
+use super::coupling_fit::{CouplingResponse, passive_angle_gradients};
 use super::noise::{NoiseEstimate, estimate_noise};
 use super::tool_accuracy::ModelCovariance;
 use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
@@ -62,7 +62,7 @@ use crate::robot::commands_to_internal;
 use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel, Transmission};
 use axis_fit::{AxisFitOutcome, JointData, actuator_commands, add_held_joint_covariances, fit_joint};
 use held::{Corrector, design_distance, exactly_as_designed};
-use joints::{Assembly, RecordedCoupling, Refit};
+use joints::{Assembly, RecordedCoupling, Refit, swept_commands_at_target1};
 use nalgebra::{DMatrix, Isometry3, Point3};
 use propagation::{Derived, Propagation, add_axis_fit, moved_point};
 use serde::{Deserialize, Serialize};
@@ -356,11 +356,13 @@ fn calibrate_at<T>(
     let controller = Controller::from_description(desc);
     let q_ref = commands_to_internal(desc, &reference_cmd);
     let u_ref = actuator_commands(&controller, desc, &reference_cmd);
+    let target1_commands = swept_commands_at_target1(&experiments, &controller, desc);
     let ctx = Context {
         desc,
         options,
         controller: &controller,
         experiments: &experiments,
+        target1_commands: &target1_commands,
         q_ref: &q_ref,
         u_ref: &u_ref,
         repeatability: &repeatability,
@@ -425,6 +427,8 @@ struct Context<'a> {
     options: &'a CalibrationOptions,
     controller: &'a Controller,
     experiments: &'a [AxisExperiment],
+    /// Each experiment's swept actuator command at its target-1 steps.
+    target1_commands: &'a [Vec<f64>],
     q_ref: &'a [f64],
     u_ref: &'a [f64],
     repeatability: &'a [f64],
@@ -555,9 +559,9 @@ impl<'a> Context<'a> {
 
     /// The phi-model of the fitted `axes` (with its base rule) and the joint models and
     /// fitted couplings on it, from the fitted `transmissions` and the second targets
-    /// `target1`. With `warm` (the couplings' parameters of a previous assembly, by driven
-    /// joint) the couplings are refitted by Gauss-Newton steps from those
-    /// ([`crate::calibration::coupling_fit::refit_coupling`]).
+    /// `target1`. With `warm` (the couplings' responses at a previous assembly's optimum, by driven
+    /// joint) the couplings are refitted by one Newton step from those
+    /// ([`crate::calibration::coupling_fit::CouplingResponse::refit`]).
     fn joints_from(
         &self,
         axes: &[Option<AxisLine>],
@@ -572,9 +576,9 @@ impl<'a> Context<'a> {
         let assembly = Assembly {
             desc: self.desc,
             experiments: self.experiments,
+            target1_commands: self.target1_commands,
             transmissions,
             target1,
-            controller: self.controller,
             geometry: &geometry,
             q_ref: self.q_ref,
             u_ref: self.u_ref,
@@ -587,7 +591,8 @@ impl<'a> Context<'a> {
     /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
     /// `axes` and `transmissions`, the second targets `target1` and the tool frame `tool`
     /// (the rigid fit of the tool targets measured at the reference pose) give; couplings refitted from `warm` as in
-    /// [`Context::joints_from`]. With the calibrated robot, for [`Context::with_tool`].
+    /// [`Context::joints_from`]. With the calibrated robot's last link at the reference pose
+    /// (when there is a tool frame), for [`Context::with_tool`].
     fn derived(
         &self,
         (axes, transmissions): (&[Option<AxisLine>], &[Option<Transmission>]),
@@ -595,35 +600,41 @@ impl<'a> Context<'a> {
         tool: Option<&Isometry3<f64>>,
         reference_cmd: &[f64],
         refit: Refit,
-    ) -> Result<(Derived, RobotModel), ProcedureError> {
+    ) -> Result<(Derived, Option<Isometry3<f64>>), ProcedureError> {
         let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1, refit)?;
         let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
         values.extend(joints.iter().map(|j| j.transducer_offset));
         let robot = calibrated_robot(self.desc, joints, &geometry);
+        let world_from_link =
+            tool.and_then(|_| world_from_last_link(self.desc, &robot, reference_cmd, self.controller));
         let derived = Derived {
             values,
             coupling_sizes: couplings.iter().map(|c| c.parameters.len()).collect(),
             tool: None,
             robot: None,
         };
-        Ok((self.with_tool(derived, &robot, tool, reference_cmd), robot))
+        let robot = (self.detail == Detail::Report).then_some(robot);
+        Ok((
+            self.with_tool(derived, robot, world_from_link.as_ref(), tool),
+            world_from_link,
+        ))
     }
 
-    /// `derived` with the tool frame of `robot` from the measured tool frame `tool` (the
-    /// tool targets' rigid fit, none without) and, on the report path, the whole model with
-    /// that tool frame (for its covariance).
+    /// `derived` with the tool frame in the last link (`world_from_link`, the robot's at the
+    /// reference pose) from the measured tool frame `tool` (the tool targets' rigid fit, none
+    /// without) and, on the report path, the whole model `robot` with that tool frame (for
+    /// its covariance).
     fn with_tool(
         &self,
         derived: Derived,
-        robot: &RobotModel,
+        robot: Option<RobotModel>,
+        world_from_link: Option<&Isometry3<f64>>,
         tool: Option<&Isometry3<f64>>,
-        reference_cmd: &[f64],
     ) -> Derived {
-        let tool = tool.and_then(|world_from_tool| {
-            last_link_from(world_from_tool, self.desc, robot, reference_cmd, self.controller)
-        });
-        let robot = (self.detail == Detail::Report).then(|| {
-            let mut model = robot.clone();
+        let tool = tool
+            .zip(world_from_link)
+            .map(|(world_from_tool, link)| link.inverse() * world_from_tool);
+        let robot = robot.map(|mut model| {
             if let Some(t) = &tool {
                 model.tool_frame = Placement::from_isometry(t);
             }
@@ -635,7 +646,7 @@ impl<'a> Context<'a> {
     /// The propagated 1-sigma of the derived quantities of `state` (`propagation`): through
     /// every ML axis fit's covariance, the noise of the second targets the couplings are
     /// fitted from, and that of the tool targets. The perturbed assemblies refit the couplings
-    /// by Gauss-Newton steps from `state`'s (their first-order response, which is what the
+    /// by one Newton step from `state`'s (their first-order response, which is what the
     /// propagation differentiates); the tool targets move only the tool frame; the second
     /// targets move the rest only through their coupling's parameters
     /// ([`Context::second_target_sigma`]).
@@ -655,21 +666,25 @@ impl<'a> Context<'a> {
         let world_from_tool = tool_points.as_deref().and_then(tool_fit);
         let tool = world_from_tool.as_ref();
         let (axes, target1) = (&state.axes, &state.target1);
-        let mut warm: Vec<Option<Vec<f64>>> = vec![None; self.desc.dof()];
-        for c in &state.couplings {
-            warm[c.from] = Some(c.parameters.clone());
-        }
         let record = RefCell::new(Vec::new());
         let memo = RefCell::new(Vec::new());
+        let angles = RefCell::new(Vec::new());
         let recording = Refit {
             record: Some(&record),
             memo: Some(&memo),
+            angles: Some(&angles),
             ..Refit::default()
         };
-        let (base, robot) = self.derived((axes, &transmissions), target1, tool, reference_cmd, recording)?;
+        let (base, world_from_link) = self.derived((axes, &transmissions), target1, tool, reference_cmd, recording)?;
+        let record = record.into_inner();
+        let mut responses: Vec<Option<CouplingResponse>> = vec![None; self.desc.dof()];
+        for c in &record {
+            responses[c.k] = Some(c.response.clone());
+        }
         let warm = Refit {
-            warm: Some(&warm),
+            warm: Some(&responses),
             memo: Some(&memo),
+            angles: Some(&angles),
             ..Refit::default()
         };
         let geometry = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
@@ -697,7 +712,7 @@ impl<'a> Context<'a> {
                 Ok::<_, ProcedureError>(self.derived((&a, &t), target1, tool, reference_cmd, refit)?.0)
             })?;
         }
-        for coupling in record.into_inner() {
+        for coupling in record {
             let c = self.second_target_sigma(&coupling, axes, target1)?;
             prop.add(&c, |i, h| {
                 let mut x = coupling.parameters.clone();
@@ -720,7 +735,9 @@ impl<'a> Context<'a> {
             prop.add_independent(3 * points.len(), sigma, |k, h| {
                 let moved = moved_point(&lists, &at, k, h);
                 let moved_tool = tool_fit(&moved[0]);
-                Ok::<_, ProcedureError>(self.with_tool(base.clone(), &robot, moved_tool.as_ref(), reference_cmd))
+                let mut moved = base.clone();
+                let robot = moved.robot.take();
+                Ok::<_, ProcedureError>(self.with_tool(moved, robot, world_from_link.as_ref(), moved_tool.as_ref()))
             })?;
         }
         Ok((base.sigma(&prop.covariance), base.model_covariance(&prop.covariance)))
@@ -732,8 +749,8 @@ impl<'a> Context<'a> {
     /// coupling's inputs otherwise fixed: `S C_y S^T`. The passive displacements
     /// `y_j = a_j - a_0` have `C_y = diag(v_j) + v_0` (`j, l >= 1`) with
     /// `v_j = sigma^2 |g_j|^2 + rep^2 (g_j . (u x (p_j - o)))^2`, `g_j` the angle's gradient
-    /// ([`passive_angle_gradients`]); `S = d x / d y` by central differences of the refit
-    /// (`h = 1e-3` of each `sqrt(v)`, as in [`Propagation::add`]). Chained with the
+    /// ([`passive_angle_gradients`]); `S = d x / d y` from the fit's exact Hessian at its
+    /// optimum ([`RecordedCoupling::passive_sensitivity`]). Chained with the
     /// assembly's derivatives with respect to the coupling's parameters this is the
     /// propagation of the second targets' noise (they move nothing else).
     fn second_target_sigma(
@@ -750,8 +767,6 @@ impl<'a> Context<'a> {
         };
         let second = &target1[coupling.index];
         let from_start = coupling.active_from_start();
-        let passive =
-            passive_displacements(&coupling.frame_next, &coupling.axis_from, &from_start, second).map_err(fit_err)?;
         let gradients = passive_angle_gradients(&coupling.frame_next, &coupling.axis_from, &from_start, second);
         let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
         let joint = experiment.joint - 1;
@@ -766,25 +781,12 @@ impl<'a> Context<'a> {
                 sigma * sigma * g.norm_squared() + jitter
             })
             .collect();
-        let n = passive.len();
+        let n = from_start.len();
         let c_y = DMatrix::from_fn(n, n, |j, l| match (j, l) {
             (0, _) | (_, 0) => 0.0,
             (j, l) => v[0] + if j == l { v[j] } else { 0.0 },
         });
-        let m = coupling.parameters.len();
-        let mut s = DMatrix::zeros(m, n);
-        for j in 1..n {
-            let h = 1e-3 * c_y[(j, j)].sqrt();
-            let at = |h: f64| {
-                let mut y = passive.clone();
-                y[j] += h;
-                coupling.refit(&y).map_err(fit_err)
-            };
-            let (plus, minus) = (at(h)?, at(-h)?);
-            for i in 0..m {
-                s[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
-            }
-        }
+        let s = coupling.passive_sensitivity().map_err(fit_err)?;
         Ok(&s * c_y * s.transpose())
     }
 
@@ -991,11 +993,22 @@ fn last_link_from(
     reference_cmd: &[f64],
     controller: &Controller,
 ) -> Option<Isometry3<f64>> {
+    let link = world_from_last_link(desc, robot, reference_cmd, controller)?;
+    Some(link.inverse() * world_from_tool)
+}
+
+/// The last link of `robot` at the reference pose (none where its joint values cannot be
+/// computed).
+fn world_from_last_link(
+    desc: &RobotDescription,
+    robot: &RobotModel,
+    reference_cmd: &[f64],
+    controller: &Controller,
+) -> Option<Isometry3<f64>> {
     let q = robot
         .joint_values(controller, &commands_to_internal(desc, reference_cmd))
         .ok()?;
-    let link = robot.phi_model().poses(&q).world_from_link[desc.dof() - 1];
-    Some(link.inverse() * world_from_tool)
+    Some(robot.phi_model().poses(&q).world_from_link[desc.dof() - 1])
 }
 
 /// The tool frame from the three tool targets observed at the reference pose: experiment

@@ -7,15 +7,15 @@
 //!
 //! `C_k` the covariance of fit `k`'s local parameters (the fits are independent, each from its
 //! own sweep), `sigma` the measurement noise per coordinate and `J` by central differences of
-//! the whole assembly ([`super::Context::derived`]), whose couplings are refitted by
-//! Gauss-Newton steps from the fitted ones (`coupling_fit::refit_coupling`). An arc fit's
+//! the whole assembly ([`super::Context::derived`]), whose couplings are refitted by one
+//! Newton step with the exact Hessian at the fitted optimum (`coupling_fit::CouplingResponse`). An arc fit's
 //! covariance is carried to its axis line's four coordinates and its transmission's
 //! coefficients first ([`add_axis_fit`]), so the assembly is differentiated along what it
 //! depends on; a column that moves neither the axes nor a coupling's inputs reuses the
 //! fitted frames and that coupling's refit (the same arithmetic, done once). The second
 //! targets move the derived quantities only through their coupling's parameters `x`: their
 //! term is `J_x C_x J_x^T`, `C_x` from the targets' noise through the passive angles'
-//! analytic gradients and the refit (`Context::second_target_sigma`) and `J_x` by central
+//! analytic gradients and the fit's exact Hessian (`Context::second_target_sigma`) and `J_x` by central
 //! differences of the assembly with the coupling set to moved parameters; the tool targets
 //! move only the tool frame. A coupling fit's own a-posteriori sigma
 //! counts only the second target's noise: the active angles it is fitted against come from
