@@ -174,6 +174,11 @@ impl FixedFrames {
         &self.model
     }
 
+    /// The model, consuming the frames.
+    pub fn into_model(self) -> PhiModel {
+        self.model
+    }
+
     /// [`PhiModel::poses`], bit for bit.
     ///
     /// # Panics

@@ -310,9 +310,9 @@ fn base_convention(nominal: &PhiModel) -> Option<(f64, f64)> {
     Some((n.y.atan2(n.x), (a1.origin_m - foot).dot(&a1.direction)))
 }
 
-/// Section 4's base frame (module docs): link 1 at the reference, from observed axes 1 and 2.
-fn section4_link1(nominal: &PhiModel, a1: &AxisLine, a2: &AxisLine) -> Option<Isometry3<f64>> {
-    let (psi, d) = base_convention(nominal)?;
+/// Section 4's base frame (module docs): link 1 at the reference, from observed axes 1 and 2,
+/// with the nominal base convention `(psi, d)` ([`base_convention`]).
+fn section4_link1((psi, d): (f64, f64), a1: &AxisLine, a2: &AxisLine) -> Option<Isometry3<f64>> {
     let (foot, _) = common_normal_feet(a1, a2)?;
     let z1 = a1.direction.into_inner();
     let normal = Unit::new_normalize(z1.cross(&a2.direction));
@@ -324,17 +324,17 @@ fn section4_link1(nominal: &PhiModel, a1: &AxisLine, a2: &AxisLine) -> Option<Is
 }
 
 /// The calibrated base frame (frame 1 in the world) and the rule used.
-fn base_frame(nominal: &PhiModel, axes: &[Option<AxisLine>], q_ref: &[f64]) -> (Isometry3<f64>, BaseRule) {
-    let kinds: Vec<JointKind> = nominal.joints.iter().map(|j| j.kind).collect();
+fn base_frame(nominal: &NominalGeometry, axes: &[Option<AxisLine>]) -> (Isometry3<f64>, BaseRule) {
+    let (model, q_ref, nominal_axes) = (&nominal.model, &nominal.q_ref, &nominal.axes);
+    let kinds: Vec<JointKind> = model.joints.iter().map(|j| j.kind).collect();
     let motion = |q| crate::kinematics::joint_motion(kinds[0], q);
-    let poses = nominal.poses(q_ref);
-    let nominal_axes: Vec<AxisLine> = (0..nominal.dof()).map(|k| poses.axis(k)).collect();
     if kinds.len() > 1
         && kinds[0] == JointKind::Revolute
         && kinds[1] == JointKind::Revolute
         && let (Some(a1), Some(a2)) = (axes[0], axes[1])
         && !parallel(&nominal_axes[0].direction, &nominal_axes[1].direction)
-        && let Some(link1) = section4_link1(nominal, &a1, &a2)
+        && let Some(convention) = nominal.convention
+        && let Some(link1) = section4_link1(convention, &a1, &a2)
     {
         let rule = BaseRule {
             rule: "section4".into(),
@@ -346,8 +346,42 @@ fn base_frame(nominal: &PhiModel, axes: &[Option<AxisLine>], q_ref: &[f64]) -> (
         };
         return (link1 * motion(q_ref[0]).inverse(), rule);
     }
-    let (t, rule) = base_motion(&kinds, &nominal_axes, axes);
-    (t * nominal.world_from_base, rule)
+    let (t, rule) = base_motion(&kinds, nominal_axes, axes);
+    (t * model.world_from_base, rule)
+}
+
+/// What [`model_from_axes`] takes from the nominal model, computed once for the many models of
+/// one calibration (its propagation rebuilds the model for every perturbed axis): the nominal
+/// model, the reference joint values, the nominal axes there and the base convention.
+#[derive(Clone, Debug)]
+pub struct NominalGeometry {
+    model: PhiModel,
+    q_ref: Vec<f64>,
+    axes: Vec<AxisLine>,
+    convention: Option<(f64, f64)>,
+}
+
+impl NominalGeometry {
+    /// The nominal `model` at joint values `q_ref` (an error if their counts differ).
+    pub fn new(model: PhiModel, q_ref: &[f64]) -> Result<Self, FramesError> {
+        let n = model.dof();
+        if q_ref.len() != n {
+            return Err(FramesError::Count {
+                axes: n,
+                reference: q_ref.len(),
+                dof: n,
+            });
+        }
+        let poses = model.poses(q_ref);
+        let axes = (0..n).map(|k| poses.axis(k)).collect();
+        let convention = base_convention(&model);
+        Ok(NominalGeometry {
+            model,
+            q_ref: q_ref.to_vec(),
+            axes,
+            convention,
+        })
+    }
 }
 
 /// The actual phi-model whose axes, at joint values `q_ref`, are the observed `axes` (world
@@ -369,52 +403,68 @@ pub fn model_from_axes(
             dof: n,
         });
     }
-    let mut model = nominal.clone();
-    let (world_from_base, rule) = base_frame(nominal, axes, q_ref);
-    model.world_from_base = world_from_base;
-    let mut world_from_frame = model.world_from_base;
-    for k in 0..n - 1 {
-        let j = nominal.joints[k];
-        let (theta, dist) = match j.kind {
-            JointKind::Revolute => (q_ref[k], 0.0),
-            JointKind::Prismatic => (0.0, q_ref[k]),
-        };
-        let world_from_phi = world_from_frame * frame_from_phi(j.phi_rad, theta, dist);
-        if let Some(next) = &axes[k + 1] {
-            let mut local = AxisLine {
-                origin_m: world_from_phi.inverse_transform_point(&next.origin_m),
-                direction: Unit::new_normalize(world_from_phi.inverse_transform_vector(&next.direction)),
-            };
-            let nominal_row = nominal.rows[k];
-            if nominal.joints[k + 1].kind == JointKind::Prismatic {
-                // Only the direction is observed: any line; the nominal frame origin's.
-                local.origin_m = nominal_row.phi_from_next() * Point3::origin();
-            }
-            let row = row_to_line(&local, nominal_row.beta_rad).ok_or(FramesError::PhiParallel {
-                joint: k + 1,
-                next: k + 2,
-                angle_rad: local
-                    .direction
-                    .z
-                    .abs()
-                    .acos()
-                    .min(std::f64::consts::PI - local.direction.z.abs().acos()),
-            })?;
-            model.rows[k] = if nominal.joints[k + 1].kind == JointKind::Prismatic {
-                // Only the direction is observed (eq. 9): `a`, `b` (and `gamma`, `h`) stay
-                // nominal; the direction `Rot(z, beta) Rot(x, alpha) z` is the observed one.
-                PhiRow {
-                    alpha_rad: row.alpha_rad,
-                    beta_rad: row.beta_rad,
-                    ..nominal_row
-                }
-            } else {
-                row
-            };
+    NominalGeometry::new(nominal.clone(), q_ref)?.model_from_axes(axes)
+}
+
+impl NominalGeometry {
+    /// [`model_from_axes`] of this nominal model and reference.
+    pub fn model_from_axes(&self, axes: &[Option<AxisLine>]) -> Result<(PhiModel, BaseRule), FramesError> {
+        let (nominal, q_ref) = (&self.model, &self.q_ref[..]);
+        let n = nominal.dof();
+        if axes.len() != n {
+            return Err(FramesError::Count {
+                axes: axes.len(),
+                reference: q_ref.len(),
+                dof: n,
+            });
         }
-        world_from_frame = world_from_phi * model.rows[k].phi_from_next();
+        let mut model = nominal.clone();
+        let (world_from_base, rule) = base_frame(self, axes);
+        model.world_from_base = world_from_base;
+        let mut world_from_frame = model.world_from_base;
+        for k in 0..n - 1 {
+            let j = nominal.joints[k];
+            let (theta, dist) = match j.kind {
+                JointKind::Revolute => (q_ref[k], 0.0),
+                JointKind::Prismatic => (0.0, q_ref[k]),
+            };
+            let world_from_phi = world_from_frame * frame_from_phi(j.phi_rad, theta, dist);
+            if let Some(next) = &axes[k + 1] {
+                let mut local = AxisLine {
+                    origin_m: world_from_phi.inverse_transform_point(&next.origin_m),
+                    direction: Unit::new_normalize(world_from_phi.inverse_transform_vector(&next.direction)),
+                };
+                let nominal_row = nominal.rows[k];
+                if nominal.joints[k + 1].kind == JointKind::Prismatic {
+                    // Only the direction is observed: any line; the nominal frame origin's.
+                    local.origin_m = nominal_row.phi_from_next() * Point3::origin();
+                }
+                let row = row_to_line(&local, nominal_row.beta_rad).ok_or(FramesError::PhiParallel {
+                    joint: k + 1,
+                    next: k + 2,
+                    angle_rad: local
+                        .direction
+                        .z
+                        .abs()
+                        .acos()
+                        .min(std::f64::consts::PI - local.direction.z.abs().acos()),
+                })?;
+                model.rows[k] = if nominal.joints[k + 1].kind == JointKind::Prismatic {
+                    // Only the direction is observed (eq. 9): `a`, `b` (and `gamma`, `h`) stay
+                    // nominal; the direction `Rot(z, beta) Rot(x, alpha) z` is the observed one.
+                    PhiRow {
+                        alpha_rad: row.alpha_rad,
+                        beta_rad: row.beta_rad,
+                        ..nominal_row
+                    }
+                } else {
+                    row
+                };
+            }
+            world_from_frame = world_from_phi * model.rows[k].phi_from_next();
+        }
+        Ok((model, rule))
     }
-    Ok((model, rule))
 }
 
 #[cfg(test)]

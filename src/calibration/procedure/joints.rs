@@ -10,7 +10,7 @@ use crate::calibration::coupling_fit::{
     CouplingForm, CouplingResponse, fit_coupling, fixed_coupling, passive_displacements,
 };
 use crate::kinematics::AxisLine;
-use crate::kinematics::PhiModel;
+use crate::kinematics::{FixedFrames, PhiModel};
 use crate::robot::{Controller, CouplingFitForm, CouplingFunction, JointModel, RobotDescription, Transmission};
 use nalgebra::{DMatrix, Isometry3, Point3};
 use std::cell::RefCell;
@@ -28,8 +28,8 @@ pub(super) struct Assembly<'a> {
     pub(super) transmissions: &'a [Option<Transmission>],
     /// Target 1 of each experiment (same order), at its design pose.
     pub(super) target1: &'a [Vec<Point3<f64>>],
-    /// The phi-model of the fitted axes.
-    pub(super) geometry: &'a PhiModel,
+    /// The phi-model of the fitted axes, with its constant frames.
+    pub(super) geometry: &'a FixedFrames,
     /// The joint values at the reference pose (rad).
     pub(super) q_ref: &'a [f64],
     /// The actuator commands at the reference pose (rad).
@@ -292,8 +292,8 @@ impl Assembly<'_> {
         fit: impl FnOnce() -> Result<(CouplingFunction, CouplingReport), ProcedureError>,
     ) -> Result<CouplingFunction, ProcedureError> {
         let inputs = CouplingInputs {
-            world_from_base: self.geometry.world_from_base,
-            rows: self.geometry.rows[..k].to_vec(),
+            world_from_base: self.geometry.model().world_from_base,
+            rows: self.geometry.model().rows[..k].to_vec(),
             transmission: self.transmissions[k - 1].clone(),
             shift: shift[k - 1],
         };

@@ -37,7 +37,7 @@ mod urdf;
 pub use experiments::{
     AxisExperiment, COMMAND_TOLERANCE, DEFAULT_HELD_TOLERANCE, axis_experiments, axis_experiments_with,
 };
-pub use frames::{BaseRule, FramesError, common_normal_feet, model_from_axes};
+pub use frames::{BaseRule, FramesError, NominalGeometry, common_normal_feet, model_from_axes};
 pub use joint_map::{
     JointMap, MapRow, MapTable, ZeroOffsetFit, calibrated_joint_values, controller_zero_offsets, joint_map,
 };
@@ -56,7 +56,7 @@ use super::CalibrationError;
 use super::coupling_fit::{CouplingResponse, passive_angle_gradients};
 use super::noise::{NoiseEstimate, estimate_noise};
 use super::tool_accuracy::ModelCovariance;
-use crate::kinematics::{AxisLine, JointKind, PhiModel, rigid_fit};
+use crate::kinematics::{AxisLine, FixedFrames, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel, Transmission};
@@ -357,6 +357,7 @@ fn calibrate_at<T>(
     let q_ref = commands_to_internal(desc, &reference_cmd);
     let u_ref = actuator_commands(&controller, desc, &reference_cmd);
     let target1_commands = swept_commands_at_target1(&experiments, &controller, desc);
+    let nominal = NominalGeometry::new(desc.nominal_model(), &q_ref)?;
     let ctx = Context {
         desc,
         options,
@@ -365,6 +366,7 @@ fn calibrate_at<T>(
         target1_commands: &target1_commands,
         q_ref: &q_ref,
         u_ref: &u_ref,
+        nominal: &nominal,
         repeatability: &repeatability,
         noise_mm,
         detail,
@@ -431,6 +433,8 @@ struct Context<'a> {
     target1_commands: &'a [Vec<f64>],
     q_ref: &'a [f64],
     u_ref: &'a [f64],
+    /// The nominal model's part of the frames from the axes, at `q_ref`.
+    nominal: &'a NominalGeometry,
     repeatability: &'a [f64],
     noise_mm: f64,
     /// What the fits compute besides the model.
@@ -571,8 +575,9 @@ impl<'a> Context<'a> {
     ) -> Result<(PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
         let (geometry, base_rule) = match refit.geometry {
             Some((geometry, rule)) => (geometry.clone(), rule.clone()),
-            None => model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?,
+            None => self.nominal.model_from_axes(axes)?,
         };
+        let geometry = FixedFrames::new(geometry);
         let assembly = Assembly {
             desc: self.desc,
             experiments: self.experiments,
@@ -585,7 +590,7 @@ impl<'a> Context<'a> {
             refit,
         };
         let (joints, couplings) = assembly.joint_models()?;
-        Ok((geometry, base_rule, joints, couplings))
+        Ok((geometry.into_model(), base_rule, joints, couplings))
     }
 
     /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
@@ -687,7 +692,7 @@ impl<'a> Context<'a> {
             angles: Some(&angles),
             ..Refit::default()
         };
-        let geometry = model_from_axes(&self.desc.nominal_model(), axes, self.q_ref)?;
+        let geometry = self.nominal.model_from_axes(axes)?;
         let mut prop = Propagation::new(base.len());
         for (k, local) in state.fits.iter().enumerate() {
             let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {

@@ -3,7 +3,7 @@
 //! central differences of the construction; the axes are independent, each from its own
 //! experiments).
 
-use super::frames::{FramesError, model_from_axes};
+use super::frames::{FramesError, NominalGeometry, model_from_axes};
 use crate::kinematics::{AxisLine, PhiModel};
 use nalgebra::{DMatrix, Matrix4, Unit, Vector3};
 use serde::{Deserialize, Serialize};
@@ -66,8 +66,10 @@ pub fn row_sigmas(
     q_ref: &[f64],
     covariances: &[Option<AxisCovariance>],
 ) -> Result<Vec<[f64; 4]>, FramesError> {
-    let build = |axes: &[Option<AxisLine>]| model_from_axes(nominal, axes, q_ref).map(|(m, _)| row_vector(&m));
-    let base = build(axes)?;
+    let base = row_vector(&model_from_axes(nominal, axes, q_ref)?.0);
+    // The nominal model's part computed once for the perturbed models.
+    let geometry = NominalGeometry::new(nominal.clone(), q_ref)?;
+    let build = |axes: &[Option<AxisLine>]| geometry.model_from_axes(axes).map(|(m, _)| row_vector(&m));
     let mut total = DMatrix::<f64>::zeros(base.len(), base.len());
     // Steps well above rounding (1e-16 relative) and far below the curvature scale.
     let h = 1e-7;
