@@ -196,27 +196,44 @@ fn gap_test(prep: &Prepared, null: &NullData, base: &LinearFit, sigma2: f64, alp
     }
 }
 
-/// Family-wise threshold: the noise-only maximum of z over the candidates (its `1 - alpha`
-/// quantile over the `samples` null samples); marks the candidates above it significant and
-/// returns it.
+/// Family-wise threshold: the `1 - alpha` quantile (over the `samples` null samples) of the
+/// noise-only maximum of z over the candidates the refit does not absorb; marks those above
+/// it significant and returns it.
 fn mark_significant(scored: &mut [Scored], samples: usize, alpha: f64) -> f64 {
-    let max_z: Vec<f64> = (0..samples)
-        .map(|k| scored.iter().map(|s| s.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
-        .collect();
-    let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
+    let z_threshold = family_threshold(scored.iter().filter(|s| !s.absorbed()).map(|s| &s.z_null[..]), samples, alpha);
     for s in scored.iter_mut() {
         s.score.significant = s.score.z > z_threshold && !s.absorbed();
     }
     z_threshold
 }
 
+/// The `1 - alpha` quantile over `samples` noise-only samples of the maximum of the tested
+/// candidates' null z (`z_nulls`, one slice per candidate); `+inf` when none is tested.
+fn family_threshold<'a>(z_nulls: impl Iterator<Item = &'a [f64]> + Clone, samples: usize, alpha: f64) -> f64 {
+    if z_nulls.clone().next().is_none() {
+        return f64::INFINITY;
+    }
+    let max_z: Vec<f64> = (0..samples)
+        .map(|k| z_nulls.clone().map(|z| z[k]).fold(f64::NEG_INFINITY, f64::max))
+        .collect();
+    quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf)
+}
+
+/// Whether a candidate whose training columns have `outside_fraction` of their norm outside
+/// what is fitted below it (the refit, and a first effect for a second) is absorbed by it:
+/// below [`NULL_DIRECTION_TOLERANCE`] (e.g. a uniform instrument scale, which every refitted
+/// length absorbs). Its improvement is then rounding and its z standardises rounding noise:
+/// it is never significant and takes no part in the family-wise null maximum (with it, the
+/// threshold moved with the rounding: 3.7 -> 4.1 on one blind case for a 1e-6-sigma change of
+/// the calibration).
+fn absorbed_fraction(outside_fraction: f64) -> bool {
+    outside_fraction < NULL_DIRECTION_TOLERANCE
+}
+
 impl Scored {
-    /// The refit absorbs the candidate (its training columns lie inside the refit's span up
-    /// to [`NULL_DIRECTION_TOLERANCE`], e.g. a uniform instrument scale): its improvement is
-    /// rounding, so its z standardises rounding noise and is never significant. It stays in
-    /// the family-wise maximum (conservative).
+    /// The refit absorbs the candidate ([`absorbed_fraction`]).
     fn absorbed(&self) -> bool {
-        self.score.outside_refit_fraction < NULL_DIRECTION_TOLERANCE
+        absorbed_fraction(self.score.outside_refit_fraction)
     }
 }
 
@@ -469,7 +486,7 @@ mod tests {
     }
 
     /// A candidate the refit absorbs is never significant, whatever its z (rounding noise
-    /// standardised by rounding noise); it still counts in the family-wise maximum.
+    /// standardised by rounding noise), and takes no part in the family-wise maximum.
     #[test]
     fn an_absorbed_candidate_is_never_significant() {
         let null: Vec<f64> = (0..200).map(|k| (k as f64 / 199.0) * 3.0).collect();
@@ -483,10 +500,7 @@ mod tests {
             scored(harmonic, vec![0.0; 200], 10.0, 0.5),
         ];
         let threshold = mark_significant(&mut s, 200, 0.05);
-        assert!(
-            threshold > 2.8,
-            "the absorbed candidate's noise sets the maximum: {threshold}"
-        );
+        assert_eq!(threshold, 0.0, "the maximum is the other candidate's null z alone");
         assert!(!s[0].score.significant);
         assert!(s[1].score.significant);
     }

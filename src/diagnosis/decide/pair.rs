@@ -7,9 +7,9 @@
 //! Each effect's share of the closed gap is its Shapley value over the two orders of adding
 //! them (Shapley, 1953; for two players the mean of the two marginal contributions).
 
-use super::{NullData, Prepared, Scored, fitted_parameters, implausible_fit};
+use super::{NullData, Prepared, Scored, absorbed_fraction, family_threshold, fitted_parameters, implausible_fit};
 use crate::diagnosis::{Candidate, Parameter};
-use crate::numerics::stats::{QuantileMethod, mean, quantile, std_dev};
+use crate::numerics::stats::{mean, std_dev};
 use nalgebra::DMatrix;
 
 /// The second effect and the pair's fit.
@@ -43,6 +43,9 @@ fn side_by_side(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
 /// One second candidate's held-out chi-square with the first, and its null samples.
 struct Trial {
     candidate: Candidate,
+    /// The refit and the first absorb it ([`absorbed_fraction`]): neither tested nor in the
+    /// family-wise maximum.
+    absorbed: bool,
     x: DMatrix<f64>,
     chi2: f64,
     chi2_null: Vec<f64>,
@@ -62,6 +65,7 @@ pub(super) fn second_effect(
     let x_first = &prep.x_candidates.iter().find(|(c, _)| *c == first.candidate)?.1;
     let chi2_of = |x: &DMatrix<f64>| prep.heldout_chi2(&prep.candidate_fit(x), null, sigma2);
     let (chi2_first, null_first) = chi2_of(x_first);
+    let fit_first = prep.candidate_fit(x_first);
     let mut trials: Vec<Trial> = prep
         .x_candidates
         .iter()
@@ -73,6 +77,7 @@ pub(super) fn second_effect(
             let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
             Trial {
                 candidate: *c,
+                absorbed: absorbed_fraction(fit_first.outside_fraction(&x_c.rows(0, prep.train_rows).into_owned())),
                 x,
                 chi2,
                 chi2_null,
@@ -81,13 +86,9 @@ pub(super) fn second_effect(
             }
         })
         .collect();
-    let samples = null.samples.ncols();
-    let max_z: Vec<f64> = (0..samples)
-        .map(|k| trials.iter().map(|t| t.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
-        .collect();
-    let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
-    let absorbed = |c: Candidate| scored.iter().any(|s| s.candidate == c && s.absorbed());
-    trials.retain(|t| t.z > z_threshold && !absorbed(t.candidate));
+    let tested = trials.iter().filter(|t| !t.absorbed).map(|t| &t.z_null[..]);
+    let z_threshold = family_threshold(tested, null.samples.ncols(), alpha);
+    trials.retain(|t| t.z > z_threshold && !t.absorbed);
     trials.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
     let r_train = prep.residuals.rows(0, prep.train_rows).into_owned();
     trials.into_iter().find_map(|t| {
