@@ -302,19 +302,6 @@ impl Prepared {
         LinearFit::new(&t, &h)
     }
 
-    /// Held-out chi-square (SSR over the per-coordinate noise variance `sigma2`) of `fit`, the
-    /// refit plus an effect ([`Prepared::candidate_fit`]): on the observation, and on every
-    /// null sample.
-    fn heldout_chi2(&self, fit: &LinearFit, null: &NullData, sigma2: f64) -> (f64, Vec<f64>) {
-        let observed = DMatrix::from_column_slice(self.residuals.len(), 1, self.residuals.as_slice());
-        let chi2 = self.heldout_ssr(fit, &observed)[0] / sigma2;
-        let null = column_ssr(&fit.heldout(&null.train, &null.held))
-            .iter()
-            .map(|s| s / sigma2)
-            .collect();
-        (chi2, null)
-    }
-
     /// Held-out SSR \[m^2\] of `fit` for each data column of `data` (training rows first).
     fn heldout_ssr(&self, fit: &LinearFit, data: &DMatrix<f64>) -> Vec<f64> {
         let (t, h) = self.rows(data);
