@@ -94,11 +94,7 @@ impl Residualised {
     }
 
     /// The observation `(training, held-out)` rows and the noise-only samples' after `base`.
-    fn of(
-        base: &LinearFit,
-        observed: &(DMatrix<f64>, DMatrix<f64>),
-        null: (&DMatrix<f64>, &DMatrix<f64>),
-    ) -> Self {
+    fn of(base: &LinearFit, observed: &(DMatrix<f64>, DMatrix<f64>), null: (&DMatrix<f64>, &DMatrix<f64>)) -> Self {
         Residualised {
             obs: base.residualise(&observed.0, &observed.1),
             null: base.residualise(null.0, null.1),
@@ -282,7 +278,11 @@ fn gap_test(prep: &Prepared, null: &NullData, base: &LinearFit, sigma2: f64, alp
 /// noise-only maximum of z over the candidates the refit does not absorb; marks those above
 /// it significant and returns it.
 fn mark_significant(scored: &mut [Scored], samples: usize, alpha: f64) -> f64 {
-    let z_threshold = family_threshold(scored.iter().filter(|s| !s.absorbed()).map(|s| &s.z_null[..]), samples, alpha);
+    let z_threshold = family_threshold(
+        scored.iter().filter(|s| !s.absorbed()).map(|s| &s.z_null[..]),
+        samples,
+        alpha,
+    );
     for s in scored.iter_mut() {
         s.score.significant = s.score.z > z_threshold && !s.absorbed();
     }
@@ -488,7 +488,8 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         gap_before_mm: gap_before,
         fraction_closed,
     };
-    let pair = best.and_then(|b| pair::second_effect(prep, (&base, &after_base), &scored, b, (gap.g_obs, sigma2, alpha)));
+    let pair =
+        best.and_then(|b| pair::second_effect(prep, (&base, &after_base), &scored, b, (gap.g_obs, sigma2, alpha)));
     let (mut v, effects) = match (best, pair) {
         (Some(b), Some(pair)) => two_effects(prep, &mut evidence, b, pair, sigma2, options.explained_fraction),
         _ => (evidence.verdict(best, options.explained_fraction), Vec::new()),
@@ -693,7 +694,10 @@ mod tests {
             outside.push(check(&after_base, &[], &[], x).1);
         }
         assert!(outside[0] > 0.05 && outside[2] > 0.05, "outside the refit: {outside:?}");
-        assert!(absorbed_fraction(outside[1]), "the second candidate lies in the refit's span");
+        assert!(
+            absorbed_fraction(outside[1]),
+            "the second candidate lies in the refit's span"
+        );
         // A second effect on top of the first.
         let first = base.block(&[], &split(&s.candidates[0]).0, &split(&s.candidates[0]).1);
         let after_first = after_base.after(&first);
@@ -717,7 +721,11 @@ mod tests {
             scored(harmonic, vec![0.0; 200], 10.0, 0.5),
         ];
         let threshold = mark_significant(&mut s, 200, 0.05);
-        assert_eq!(threshold, 0.0, "the maximum is the other candidate's null z alone");
+        assert_eq!(
+            threshold.to_bits(),
+            0f64.to_bits(),
+            "the maximum is the other candidate's null z alone"
+        );
         assert!(!s[0].score.significant);
         assert!(s[1].score.significant);
     }

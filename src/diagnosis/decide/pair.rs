@@ -10,8 +10,8 @@
 //! them (Shapley, 1953; for two players the mean of the two marginal contributions).
 
 use super::{
-    Block, FitParams, LinearFit, Prepared, Residualised, Scored, absorbed_fraction, candidate_block,
-    family_threshold, fitted_parameters, implausible_fit,
+    Block, FitParams, LinearFit, Prepared, Residualised, Scored, absorbed_fraction, candidate_block, family_threshold,
+    fitted_parameters, implausible_fit,
 };
 use crate::diagnosis::{Candidate, Parameter};
 use crate::numerics::stats::{mean, std_dev};

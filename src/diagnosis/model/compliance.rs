@@ -5,11 +5,11 @@
 use super::candidate::{Candidate, MassModel, SpringSite};
 use super::effect_set::EffectSet;
 use super::{GRAVITY_M_S2, Predictor};
+use crate::diagnosis::poses::Pose;
 use crate::kinematics::PhiModel;
 use crate::physics::{
     ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_first_order_deflection, coupled_static_deflection,
 };
-use crate::diagnosis::poses::Pose;
 use crate::robot::{CouplingFunction, RobotModel};
 use nalgebra::{DMatrix, Vector3};
 

@@ -254,15 +254,22 @@ fn compliance_sensitivities_match_central_differences() {
         .filter(|c| matches!(c, Candidate::JointCompliance { .. }))
         .collect();
     assert!(
-        compliance.iter().any(|c| matches!(c, Candidate::JointCompliance { masses: MassModel::Lumped, .. }))
-            && compliance.len() >= 6,
+        compliance.iter().any(|c| matches!(
+            c,
+            Candidate::JointCompliance {
+                masses: MassModel::Lumped,
+                ..
+            }
+        )) && compliance.len() >= 6,
         "{compliance:?}"
     );
     for c in compliance {
         let pred = p.with_candidates(&[c]);
         let g = pred.geometric_count();
         let steps = pred.steps();
-        let analytic = pred.compliance_sensitivity(c, &joint_x, &every).expect("a compliance member");
+        let analytic = pred
+            .compliance_sensitivity(c, &joint_x, &every)
+            .expect("a compliance member");
         let numeric = crate::calibration::refine::sensitivity(
             |e| {
                 let mut params = vec![0.0; g];
