@@ -145,7 +145,7 @@ impl Predictor {
     /// `joint_x` ([`Predictor::joint_sensitivity`] at zero): chain rule `X = J_q (d sag / d e)`.
     /// The sag is the fixed point `dq = C(q + dq; e)` of [`coupled_static_deflection`], whose
     /// map `C` is linear in the loads and the loads linear in `e`
-    /// ([`Predictor::compliance_masses`]); at `e = 0` the sag is zero, so `d sag / d e_i` is
+    /// (`compliance_masses`); at `e = 0` the sag is zero, so `d sag / d e_i` is
     /// the first-order map of the unit load `e_i` at the undeflected pose,
     /// [`coupled_first_order_deflection`], exactly. `None` for another candidate or a command
     /// the model cannot execute.
