@@ -241,21 +241,17 @@ fn prepare(
     } else {
         Vec::new()
     };
+    let joint_x = match library.iter().any(|c| matches!(c, Candidate::JointCompliance { .. })) {
+        true => Some(
+            predictor
+                .joint_sensitivity(&zeros, &order)
+                .ok_or_else(|| model_error("joint sensitivity"))?,
+        ),
+        false => None,
+    };
     for c in library {
-        let pred = predictor.with_candidates(&[c]);
-        let g = pred.geometric_count();
-        let p0 = vec![0.0; g + pred.effect_count()];
-        let steps = pred.steps();
-        let x = sensitivity(
-            |e| {
-                let mut p = p0.clone();
-                p[g..].copy_from_slice(e);
-                pred.residuals(&p, &order)
-            },
-            &vec![0.0; pred.effect_count()],
-            &steps[g..],
-        )
-        .ok_or_else(|| model_error("candidate sensitivity"))?;
+        let x = candidate_sensitivity(&predictor, c, joint_x.as_ref(), &order)
+            .ok_or_else(|| model_error("candidate sensitivity"))?;
         if x.norm() > 0.0 {
             x_candidates.push((c, x));
         }
@@ -270,6 +266,35 @@ fn prepare(
         x_geometric,
         x_candidates,
     })
+}
+
+/// The sensitivity of the residual rows of `order` to candidate `c`'s parameters at zero: a
+/// compliance member's by the chain rule through its sag ([`Predictor::compliance_sensitivity`],
+/// from the joints' sensitivity `joint_x`), every other's by central differences.
+fn candidate_sensitivity(
+    predictor: &Predictor,
+    c: Candidate,
+    joint_x: Option<&DMatrix<f64>>,
+    order: &[&Pose],
+) -> Option<DMatrix<f64>> {
+    let pred = predictor.with_candidates(&[c]);
+    if let Some(j) = joint_x
+        && let Some(x) = pred.compliance_sensitivity(c, j, order)
+    {
+        return Some(x);
+    }
+    let g = pred.geometric_count();
+    let p0 = vec![0.0; g + pred.effect_count()];
+    let steps = pred.steps();
+    sensitivity(
+        |e| {
+            let mut p = p0.clone();
+            p[g..].copy_from_slice(e);
+            pred.residuals(&p, order)
+        },
+        &vec![0.0; pred.effect_count()],
+        &steps[g..],
+    )
 }
 
 impl Prepared {
@@ -300,19 +325,6 @@ impl Prepared {
         );
         let (t, h) = self.rows(&x);
         LinearFit::new(&t, &h)
-    }
-
-    /// Held-out chi-square (SSR over the per-coordinate noise variance `sigma2`) of `fit`, the
-    /// refit plus an effect ([`Prepared::candidate_fit`]): on the observation, and on every
-    /// null sample.
-    fn heldout_chi2(&self, fit: &LinearFit, null: &NullData, sigma2: f64) -> (f64, Vec<f64>) {
-        let observed = DMatrix::from_column_slice(self.residuals.len(), 1, self.residuals.as_slice());
-        let chi2 = self.heldout_ssr(fit, &observed)[0] / sigma2;
-        let null = column_ssr(&fit.heldout(&null.train, &null.held))
-            .iter()
-            .map(|s| s / sigma2)
-            .collect();
-        (chi2, null)
     }
 
     /// Held-out SSR \[m^2\] of `fit` for each data column of `data` (training rows first).

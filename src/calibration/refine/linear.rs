@@ -15,24 +15,36 @@ use nalgebra::{DMatrix, DVector};
 pub const NULL_DIRECTION_TOLERANCE: f64 = 1e-7;
 
 /// Central-difference sensitivity `X = d prediction / d p = -d residual / d p` at `p0` of a
-/// residual function `f` (`measured - predicted`). The columns are independent evaluations:
-/// they run in parallel on the current rayon pool, each computed by the same arithmetic
-/// whatever the thread count (bit for bit the serial result).
+/// residual function `f` (`measured - predicted`): `2 len(p0)` evaluations of `f` (the centre
+/// itself is not evaluated; `None` when an evaluation fails or two differ in length). The
+/// columns are independent evaluations: they run in parallel on the current rayon pool, each
+/// computed by the same arithmetic whatever the thread count (bit for bit the serial result).
 pub fn sensitivity<F>(f: F, p0: &[f64], steps: &[f64]) -> Option<DMatrix<f64>>
 where
     F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
 {
     use rayon::prelude::*;
-    let n = f(p0)?.len();
+    if p0.is_empty() {
+        return Some(DMatrix::zeros(f(p0)?.len(), 0));
+    }
     let column = |c: usize| -> Option<Vec<f64>> {
         let mut q = p0.to_vec();
         q[c] = p0[c] + steps[c];
         let plus = f(&q)?;
         q[c] = p0[c] - steps[c];
         let minus = f(&q)?;
-        Some((0..n).map(|i| -(plus[i] - minus[i]) / (2.0 * steps[c])).collect())
+        (plus.len() == minus.len()).then(|| {
+            plus.iter()
+                .zip(&minus)
+                .map(|(p, m)| -(p - m) / (2.0 * steps[c]))
+                .collect()
+        })
     };
     let columns: Vec<Vec<f64>> = (0..p0.len()).into_par_iter().map(column).collect::<Option<_>>()?;
+    let n = columns[0].len();
+    if columns.iter().any(|c| c.len() != n) {
+        return None;
+    }
     Some(DMatrix::from_fn(n, p0.len(), |i, c| columns[c][i]))
 }
 

@@ -2,15 +2,19 @@
 //! families. With the first effect `b` chosen, every candidate of another kind (another family
 //! or joint) is fitted together with it on top of the refit, and its held-out improvement over
 //! `b` alone is standardised against the same noise-only samples; the threshold is the
-//! `1 - alpha` quantile of the noise-only maximum over those candidates (family-wise, as for
-//! the first). The best significant candidate with plausible parameters is the second effect.
+//! `1 - alpha` quantile of the noise-only maximum over those candidates that the refit and the
+//! first do not absorb (family-wise, as for the first). Every fit is a Frisch-Waugh-Lovell
+//! block on top of the refit and the first effect's block (the joint fit's residuals and
+//! parameters, `calibration::refine::Block`). The best significant candidate with plausible parameters is the second effect.
 //! Each effect's share of the closed gap is its Shapley value over the two orders of adding
 //! them (Shapley, 1953; for two players the mean of the two marginal contributions).
 
-use super::{NullData, Prepared, Scored, fitted_parameters, implausible_fit};
+use super::{
+    Block, FitParams, LinearFit, Prepared, Residualised, Scored, absorbed_fraction, candidate_block, family_threshold,
+    fitted_parameters, implausible_fit,
+};
 use crate::diagnosis::{Candidate, Parameter};
-use crate::numerics::stats::{QuantileMethod, mean, quantile, std_dev};
-use nalgebra::DMatrix;
+use crate::numerics::stats::{mean, std_dev};
 
 /// The second effect and the pair's fit.
 pub(super) struct Pair {
@@ -29,51 +33,51 @@ pub(super) struct Pair {
     pub(super) shares: [f64; 2],
 }
 
-/// Columns of `a` then `b`.
-fn side_by_side(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
-    DMatrix::from_fn(a.nrows(), a.ncols() + b.ncols(), |r, c| {
-        if c < a.ncols() {
-            a[(r, c)]
-        } else {
-            b[(r, c - a.ncols())]
-        }
-    })
-}
-
 /// One second candidate's held-out chi-square with the first, and its null samples.
 struct Trial {
     candidate: Candidate,
-    x: DMatrix<f64>,
+    /// Its columns on top of the refit and the first.
+    block: Block,
     chi2: f64,
     chi2_null: Vec<f64>,
     z: f64,
     z_null: Vec<f64>,
 }
 
+impl Trial {
+    /// The refit and the first absorb it ([`absorbed_fraction`] of its block's outside
+    /// fraction): neither tested nor in the family-wise maximum.
+    fn absorbed(&self) -> bool {
+        absorbed_fraction(self.block.outside_fraction)
+    }
+}
+
 /// The second effect on top of `first` (module docs), if one is significant and plausible.
-/// `g_obs` is the baseline's held-out chi-square (linear), `scored` every candidate alone.
+/// `g_obs` is the baseline's held-out chi-square (linear), `scored` every candidate alone;
+/// every fit is a Frisch-Waugh-Lovell [`Block`] on top of the refit `base` and the first's.
 pub(super) fn second_effect(
     prep: &Prepared,
-    null: &NullData,
+    (base, after_base): (&LinearFit, &Residualised),
     scored: &[Scored],
     first: &Scored,
     (g_obs, sigma2, alpha): (f64, f64, f64),
 ) -> Option<Pair> {
     let x_first = &prep.x_candidates.iter().find(|(c, _)| *c == first.candidate)?.1;
-    let chi2_of = |x: &DMatrix<f64>| prep.heldout_chi2(&prep.candidate_fit(x), null, sigma2);
-    let (chi2_first, null_first) = chi2_of(x_first);
+    let b_first = candidate_block(prep, base, &[], x_first);
+    let (chi2_first, null_first) = after_base.heldout_chi2(&b_first, sigma2);
+    let after_first = after_base.after(&b_first);
     let mut trials: Vec<Trial> = prep
         .x_candidates
         .iter()
         .filter(|(c, _)| !c.same_kind(&first.candidate))
         .map(|(c, x_c)| {
-            let x = side_by_side(x_first, x_c);
-            let (chi2, chi2_null) = chi2_of(&x);
+            let block = candidate_block(prep, base, &[&b_first], x_c);
+            let (chi2, chi2_null) = after_first.heldout_chi2(&block, sigma2);
             let t_null: Vec<f64> = null_first.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
             let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
             Trial {
                 candidate: *c,
-                x,
+                block,
                 chi2,
                 chi2_null,
                 z: (chi2_first - chi2 - mu) / sd,
@@ -81,20 +85,20 @@ pub(super) fn second_effect(
             }
         })
         .collect();
-    let samples = null.samples.ncols();
-    let max_z: Vec<f64> = (0..samples)
-        .map(|k| trials.iter().map(|t| t.z_null[k]).fold(f64::NEG_INFINITY, f64::max))
-        .collect();
-    let z_threshold = quantile(&max_z, 1.0 - alpha, QuantileMethod::InverseCdf);
-    let absorbed = |c: Candidate| scored.iter().any(|s| s.candidate == c && s.absorbed());
-    trials.retain(|t| t.z > z_threshold && !absorbed(t.candidate));
+    let tested = trials.iter().filter(|t| !t.absorbed()).map(|t| &t.z_null[..]);
+    let z_threshold = family_threshold(tested, null_first.len(), alpha);
+    trials.retain(|t| t.z > z_threshold && !t.absorbed());
     trials.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
-    let r_train = prep.residuals.rows(0, prep.train_rows).into_owned();
+    let rank_below = base.rank + b_first.rank;
     trials.into_iter().find_map(|t| {
-        let fit = prep.candidate_fit(&t.x);
-        let inside = fit.span.transpose() * &r_train;
-        let left = r_train.norm_squared() - inside.norm_squared();
-        let parameters = fitted_parameters(t.candidate, &fit.params(&r_train), &fit, left, prep, sigma2);
+        let (p, left) = after_first.params(&t.block);
+        let parameters = fitted_parameters(
+            t.candidate,
+            FitParams::of_block(&t.block, &p, rank_below),
+            left,
+            prep,
+            sigma2,
+        );
         if implausible_fit(prep, t.candidate, &parameters).is_some() {
             return None;
         }

@@ -5,10 +5,18 @@
 use super::candidate::{Candidate, MassModel, SpringSite};
 use super::effect_set::EffectSet;
 use super::{GRAVITY_M_S2, Predictor};
+use crate::diagnosis::poses::Pose;
 use crate::kinematics::PhiModel;
-use crate::physics::{ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_static_deflection};
+use crate::physics::{
+    ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_first_order_deflection, coupled_static_deflection,
+};
 use crate::robot::{CouplingFunction, RobotModel};
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, Vector3};
+
+/// Step \[rad\] of the joint offsets in [`Predictor::joint_sensitivity`]: moves the targets by
+/// about 1e-6 m, where the central difference's rounding (about `eps x 1 m / 1e-6 m`, 2e-10
+/// relative) and its truncation (`(1e-6)^2 / 6` of the next derivative) are both negligible.
+const JOINT_STEP_RAD: f64 = 1e-6;
 
 /// The calibrated couplings at the active displacements `active`, for
 /// [`coupled_static_deflection`]: the slope of every `coupling_in`; the fractional (eq. 15)
@@ -117,5 +125,74 @@ impl Predictor {
             }
         }
         Some(total)
+    }
+
+    /// The sensitivity `d prediction / d q` of the residual rows of `poses` (as
+    /// [`Predictor::residuals`] at `params`) to a joint offset common to every pose: the rows
+    /// of one pose depend on its own joint values only, so they are that pose's Jacobian. By
+    /// central differences ([`crate::calibration::refine::sensitivity`], the one tool).
+    pub fn joint_sensitivity(&self, params: &[f64], poses: &[&Pose]) -> Option<DMatrix<f64>> {
+        let n = self.dof();
+        crate::calibration::refine::sensitivity(
+            |offset| self.residuals_offset(params, poses, offset),
+            &vec![0.0; n],
+            &vec![JOINT_STEP_RAD; n],
+        )
+    }
+
+    /// The sensitivity `X = d prediction / d e` of compliance candidate `candidate` at `e = 0`
+    /// (the refit at zero) on the residual rows of `poses`, from the joints' sensitivity
+    /// `joint_x` ([`Predictor::joint_sensitivity`] at zero): chain rule `X = J_q (d sag / d e)`.
+    /// The sag is the fixed point `dq = C(q + dq; e)` of [`coupled_static_deflection`], whose
+    /// map `C` is linear in the loads and the loads linear in `e`
+    /// (`compliance_masses`); at `e = 0` the sag is zero, so `d sag / d e_i` is
+    /// the first-order map of the unit load `e_i` at the undeflected pose,
+    /// [`coupled_first_order_deflection`], exactly. `None` for another candidate or a command
+    /// the model cannot execute.
+    pub fn compliance_sensitivity(
+        &self,
+        candidate: Candidate,
+        joint_x: &DMatrix<f64>,
+        poses: &[&Pose],
+    ) -> Option<DMatrix<f64>> {
+        let Candidate::JointCompliance { joint, spring, masses } = candidate else {
+            return None;
+        };
+        let count = candidate.parameter_names(&self.shape).len();
+        let zeros = vec![0.0; self.geometric_count() + self.effect_count()];
+        let (robot, effects) = self.robot_and_effects(&zeros);
+        let model = self.model(&robot, &zeros);
+        let n = self.dof();
+        let mut stiffness_nm_per_rad = vec![f64::INFINITY; n];
+        stiffness_nm_per_rad[joint - 1] = 1.0;
+        let compliance = ComplianceEffect {
+            stiffness_nm_per_rad,
+            gravity_m_s2: GRAVITY_M_S2,
+        };
+        let mut x = DMatrix::zeros(joint_x.nrows(), count);
+        let mut row = 0;
+        for pose in poses {
+            let (q, active) = self.joint_values(&robot, &effects, pose)?;
+            let model_t = effects.model_at(&model, pose.temperature_c);
+            let mut couplings = passive_slopes(&robot, &active);
+            if spring == SpringSite::Joint
+                && let Some(out) = couplings.get_mut(joint)
+            {
+                *out = PassiveSlope::default();
+            }
+            let rows = 3 * pose.targets.len();
+            let j_q = joint_x.rows(row, rows);
+            let mut unit = vec![0.0; count];
+            for i in 0..count {
+                unit[i] = 1.0;
+                let loads = self.compliance_masses(&model_t, masses, joint, &unit, pose.payload_kg);
+                unit[i] = 0.0;
+                let dq = coupled_first_order_deflection(&model_t, &q, &loads, None, &compliance, &couplings);
+                x.view_mut((row, i), (rows, 1))
+                    .copy_from(&(j_q * nalgebra::DVector::from_vec(dq)));
+            }
+            row += rows;
+        }
+        (row == joint_x.nrows()).then_some(x)
     }
 }

@@ -357,6 +357,12 @@ impl Predictor {
     /// when a command cannot be executed by the model (a transmission that does not invert,
     /// a compliance under which the arm buckles).
     pub fn residuals(&self, params: &[f64], poses: &[&Pose]) -> Option<Vec<f64>> {
+        self.residuals_offset(params, poses, &[])
+    }
+
+    /// [`Predictor::residuals`] with the joint values of every pose offset by `offset_rad`
+    /// (after the sag; empty: none): the function [`Predictor::joint_sensitivity`] differences.
+    fn residuals_offset(&self, params: &[f64], poses: &[&Pose], offset_rad: &[f64]) -> Option<Vec<f64>> {
         let (robot, effects) = self.robot_and_effects(params);
         let model = self.model(&robot, params);
         let targets = self.targets(params);
@@ -366,6 +372,9 @@ impl Predictor {
             let model_t = effects.model_at(&model, pose.temperature_c);
             let sag = self.sag(&robot, &model_t, &effects, &q, &active, pose.payload_kg)?;
             for (qk, d) in q.iter_mut().zip(sag) {
+                *qk += d;
+            }
+            for (qk, d) in q.iter_mut().zip(offset_rad) {
                 *qk += d;
             }
             let mut links = model_t.poses(&q).world_from_link;

@@ -223,3 +223,73 @@ fn compliance_members_reproduce_the_coupled_sag() {
     };
     assert!(rms_with_and_without(lumped, &lumped_params, &poses).0 < 1e-11);
 }
+
+/// Every compliance member's analytic sensitivity (the chain rule through its sag,
+/// [`Predictor::compliance_sensitivity`]) against central differences of the whole predictor
+/// ([`crate::calibration::refine::sensitivity`], the project's one finite-difference tool), on
+/// the poses of a Table-1 campaign with a payload varying (so the payload members are in the
+/// library). Tolerance from the difference's rounding: the predictions are below 3 m, so
+/// `plus - minus` carries at most about `4 eps x 3 m` of rounding, divided by the `2 h` of the
+/// member's step `h`; a factor 10 over that, plus 1e-7 of the column's largest entry for the
+/// joint Jacobian's own central differences (rounding 2e-10 relative at its 1e-6 rad step).
+#[test]
+fn compliance_sensitivities_match_central_differences() {
+    let (desc, truth) = truth();
+    let mut poses = simulated_poses(&Effects::default());
+    for (k, p) in poses.iter_mut().enumerate() {
+        p.payload_kg = [0.0, 5.0, 12.0][k % 3];
+    }
+    let every: Vec<&Pose> = poses.iter().collect();
+    let p = Predictor::new(
+        &truth,
+        &desc,
+        PoseConditions::default().temperature_c,
+        RefitScope::Identified,
+    );
+    let zeros = vec![0.0; p.geometric_count()];
+    let joint_x = p.joint_sensitivity(&zeros, &every).expect("predicts");
+    let library = Candidate::library(&desc, &poses, DEFAULT_MAX_HARMONIC_ORDER);
+    let compliance: Vec<Candidate> = library
+        .into_iter()
+        .filter(|c| matches!(c, Candidate::JointCompliance { .. }))
+        .collect();
+    assert!(
+        compliance.iter().any(|c| matches!(
+            c,
+            Candidate::JointCompliance {
+                masses: MassModel::Lumped,
+                ..
+            }
+        )) && compliance.len() >= 6,
+        "{compliance:?}"
+    );
+    for c in compliance {
+        let pred = p.with_candidates(&[c]);
+        let g = pred.geometric_count();
+        let steps = pred.steps();
+        let analytic = pred
+            .compliance_sensitivity(c, &joint_x, &every)
+            .expect("a compliance member");
+        let numeric = crate::calibration::refine::sensitivity(
+            |e| {
+                let mut params = vec![0.0; g];
+                params.extend_from_slice(e);
+                pred.residuals(&params, &every)
+            },
+            &vec![0.0; pred.effect_count()],
+            &steps[g..],
+        )
+        .expect("predicts");
+        assert_eq!(analytic.shape(), numeric.shape());
+        for i in 0..analytic.ncols() {
+            let (a, n) = (analytic.column(i), numeric.column(i));
+            let largest = n.amax();
+            let tolerance = 10.0 * 4.0 * f64::EPSILON * 3.0 / (2.0 * steps[g + i]) + 1e-7 * largest;
+            let off = (a - n).amax();
+            assert!(
+                off <= tolerance,
+                "{c:?} parameter {i}: {off:e} off (column up to {largest:e}, tolerance {tolerance:e})"
+            );
+        }
+    }
+}
