@@ -86,9 +86,11 @@ impl EffectSet {
 
     /// The phi-model at temperature `temperature_c`.
     pub(super) fn model_at(&self, model: &PhiModel, temperature_c: f64) -> PhiModel {
-        match &self.thermal {
-            Some(t) => t.expanded(model, temperature_c),
-            None => model.clone(),
-        }
+        self.expanded_at(model, temperature_c).unwrap_or_else(|| model.clone())
+    }
+
+    /// [`EffectSet::model_at`] when it differs from `model` (a thermal effect in the set).
+    pub(super) fn expanded_at(&self, model: &PhiModel, temperature_c: f64) -> Option<PhiModel> {
+        self.thermal.as_ref().map(|t| t.expanded(model, temperature_c))
     }
 }

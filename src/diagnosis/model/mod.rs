@@ -22,6 +22,7 @@ pub use plausible::{
 };
 
 use super::poses::Pose;
+use crate::kinematics::FixedFrames;
 use crate::physics::{
     ApproachSource, ComplianceEffect, GearHarmonic, LinkMass, add_joint_period_errors, apply_axis_tilts,
     first_order_deflection, with_gear_harmonics,
@@ -364,21 +365,27 @@ impl Predictor {
     /// (after the sag; empty: none): the function [`Predictor::joint_sensitivity`] differences.
     fn residuals_offset(&self, params: &[f64], poses: &[&Pose], offset_rad: &[f64]) -> Option<Vec<f64>> {
         let (robot, effects) = self.robot_and_effects(params);
-        let model = self.model(&robot, params);
+        let frames = FixedFrames::new(self.model(&robot, params));
         let targets = self.targets(params);
         let mut out = Vec::with_capacity(poses.len() * 9);
         for pose in poses {
             let (mut q, active) = self.joint_values(&robot, &effects, pose)?;
-            let model_t = effects.model_at(&model, pose.temperature_c);
-            let sag = self.sag(&robot, &model_t, &effects, &q, &active, pose.payload_kg)?;
+            // A thermal candidate changes the rows with the pose's temperature; else the
+            // model's constant frames serve every pose.
+            let frames_t = match effects.expanded_at(frames.model(), pose.temperature_c) {
+                Some(model_t) => &FixedFrames::new(model_t),
+                None => &frames,
+            };
+            let model_t = frames_t.model();
+            let sag = self.sag(&robot, model_t, &effects, &q, &active, pose.payload_kg)?;
             for (qk, d) in q.iter_mut().zip(sag) {
                 *qk += d;
             }
             for (qk, d) in q.iter_mut().zip(offset_rad) {
                 *qk += d;
             }
-            let mut links = model_t.poses(&q).world_from_link;
-            apply_axis_tilts(&effects.tilts, &model_t, &q, &mut links);
+            let mut links = frames_t.poses(&q).world_from_link;
+            apply_axis_tilts(&effects.tilts, model_t, &q, &mut links);
             let tool = links[links.len() - 1] * model_t.last_link_from_tool;
             for (id, measured) in &pose.targets {
                 let t = targets.get(*id)?;
