@@ -382,31 +382,7 @@ impl NominalGeometry {
             convention,
         })
     }
-}
 
-/// The actual phi-model whose axes, at joint values `q_ref`, are the observed `axes` (world
-/// frame; `None` for an axis not swept; a sliding axis's origin is ignored), with the nominal
-/// model's joint kinds, phi angles, base convention and tool (module docs).
-///
-/// The calibrated joint values at the reference pose are `q_ref` by definition: the constant
-/// difference from the robot's own zero goes into the transducer offsets.
-pub fn model_from_axes(
-    nominal: &PhiModel,
-    axes: &[Option<AxisLine>],
-    q_ref: &[f64],
-) -> Result<(PhiModel, BaseRule), FramesError> {
-    let n = nominal.dof();
-    if axes.len() != n || q_ref.len() != n {
-        return Err(FramesError::Count {
-            axes: axes.len(),
-            reference: q_ref.len(),
-            dof: n,
-        });
-    }
-    NominalGeometry::new(nominal.clone(), q_ref)?.model_from_axes(axes)
-}
-
-impl NominalGeometry {
     /// [`model_from_axes`] of this nominal model and reference.
     pub fn model_from_axes(&self, axes: &[Option<AxisLine>]) -> Result<(PhiModel, BaseRule), FramesError> {
         let (nominal, q_ref) = (&self.model, &self.q_ref[..]);
@@ -465,6 +441,28 @@ impl NominalGeometry {
         }
         Ok((model, rule))
     }
+}
+
+/// The actual phi-model whose axes, at joint values `q_ref`, are the observed `axes` (world
+/// frame; `None` for an axis not swept; a sliding axis's origin is ignored), with the nominal
+/// model's joint kinds, phi angles, base convention and tool (module docs).
+///
+/// The calibrated joint values at the reference pose are `q_ref` by definition: the constant
+/// difference from the robot's own zero goes into the transducer offsets.
+pub fn model_from_axes(
+    nominal: &PhiModel,
+    axes: &[Option<AxisLine>],
+    q_ref: &[f64],
+) -> Result<(PhiModel, BaseRule), FramesError> {
+    let n = nominal.dof();
+    if axes.len() != n || q_ref.len() != n {
+        return Err(FramesError::Count {
+            axes: axes.len(),
+            reference: q_ref.len(),
+            dof: n,
+        });
+    }
+    NominalGeometry::new(nominal.clone(), q_ref)?.model_from_axes(axes)
 }
 
 #[cfg(test)]
