@@ -223,7 +223,10 @@ fn summary() {
     // pass (the unit of the earlier "settle in steps" figures).
     let step_s = seconds_per_call(2_000, || arm.world_mut().step());
     line(
-        &format!("dynamic: one step at rest (1 ms, {} iterations)", options.solver_iterations),
+        &format!(
+            "dynamic: one step at rest (1 ms, {} iterations)",
+            options.solver_iterations
+        ),
         step_s,
         Some(1),
     );
