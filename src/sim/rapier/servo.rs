@@ -22,7 +22,7 @@
 use super::SimArm;
 use super::SimError;
 use super::arm::{LinkPoint, check_len, check_positive};
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use rapier3d_f64::prelude::{JointAxis, MultibodyJointHandle, PhysicsWorld};
 
 /// Servo stiffness and damping per joint.
@@ -87,8 +87,18 @@ pub struct SettleOptions {
     pub max_steps: usize,
     /// At rest when every watched point moves slower than this \[m/s\] ...
     pub speed_tolerance_m_s: f64,
-    /// ... for this many consecutive steps.
+    /// ... for this many consecutive steps, or (the decay rule, [`SettleOptions::decay_steps`])
+    /// earlier, when the motion left is known to be smaller than
+    /// [`SettleOptions::distance_left_m`].
     pub quiet_steps: usize,
+    /// The decay rule: the stepping also ends when, for this many consecutive quiet steps,
+    /// every watched point kept moving the same way by less each step and the geometric tail
+    /// of its steps is below [`SettleOptions::distance_left_m`] (0: off, only the
+    /// `quiet_steps` rule; see [`SimArm::settle_with`]).
+    pub decay_steps: usize,
+    /// Bound on the distance every watched point has left to go when the decay rule ends the
+    /// stepping \[m\].
+    pub distance_left_m: f64,
     /// Start the compliant arm from the static equilibrium the analytic model predicts
     /// (`physics::coupled_static_deflection`: the joints' springs against gravity and payload,
     /// sags carried through the couplings) instead of the undeflected command, so the time
@@ -105,8 +115,18 @@ pub struct SettleOptions {
 }
 
 impl Default for SettleOptions {
-    /// 1 ms steps, 16 solver iterations, 1 micrometre per second for 20 steps, at most 20 s,
-    /// warm start on, an approach of at most 50 steps of 10 ms.
+    /// 1 ms steps, 8 solver iterations, 1 micrometre per second for 20 steps, at most 20 s,
+    /// warm start on, an approach of at most 50 steps of 10 ms; the decay rule over 2 steps
+    /// with 20 nm left, the distance the 20 quiet steps let a point creep (20 steps of less
+    /// than `1 um/s * 1 ms`).
+    ///
+    /// The solver iterations are rapier's substeps (each rebuilds the multibody's mass
+    /// matrix, most of a step's cost). 8 instead of the former 16 halve a step: the rest they
+    /// find lies as close to that of pure 1 ms stepping with 16 from the undeflected command as
+    /// the rest with 16 does (`tests/rapier_arm.rs`, 36 settles of three stiffness sets,
+    /// payloads, poses, four-bar bodies and emulated: largest tool difference 3.5e-8 m with 8,
+    /// 3.8e-8 m with 16); with 4 it was 8.4e-8 m, a shift of the four-bar's rest (the loop
+    /// closure's constraint stabilisation depends on the substep length).
     ///
     /// The approach's step: on the paper arm of the `compliance` scenario (stiffnesses 2e4-5e5
     /// N m/rad, 10 kg payload, four-bar bodies and gear, 8 poses) the approach took 13-17
@@ -118,10 +138,12 @@ impl Default for SettleOptions {
     fn default() -> Self {
         Self {
             dt_s: 1e-3,
-            solver_iterations: 16,
+            solver_iterations: 8,
             max_steps: 20_000,
             speed_tolerance_m_s: 1e-6,
             quiet_steps: 20,
+            decay_steps: 2,
+            distance_left_m: 2e-8,
             warm_start: true,
             approach_max_steps: 50,
             approach_dt_s: 0.01,
@@ -136,6 +158,63 @@ struct Quiet {
     distance_m: f64,
     /// Consecutive quiet steps that end the stepping.
     steps: usize,
+    /// The decay rule (`None`: off): consecutive decaying quiet steps and the bound on the
+    /// geometric tail \[m\] that end the stepping.
+    decay: Option<(usize, f64)>,
+}
+
+/// How the stepping ended.
+struct Stop {
+    /// Steps taken.
+    steps: usize,
+    /// Largest move of a watched point in the last step \[m\].
+    last_move_m: f64,
+    /// Whether a rule ended it (not the step cap).
+    quiet: bool,
+    /// The decay rule's bound on the distance left, when that rule ended it \[m\].
+    distance_left_m: Option<f64>,
+}
+
+/// One watched point's last two step displacements (the decay rule of
+/// [`SimArm::settle_with`]).
+struct Track {
+    at: Point3<f64>,
+    last: Vector3<f64>,
+    ratios: [f64; 2],
+}
+
+impl Track {
+    fn new(at: Point3<f64>) -> Self {
+        Self {
+            at,
+            last: Vector3::zeros(),
+            ratios: [f64::INFINITY; 2],
+        }
+    }
+
+    /// Moves to `now`: the length of the step \[m\].
+    fn advance(&mut self, now: Point3<f64>) -> f64 {
+        let d = now - self.at;
+        let ratio = if d.dot(&self.last) > 0.0 {
+            d.norm() / self.last.norm()
+        } else {
+            f64::INFINITY
+        };
+        self.ratios = [self.ratios[1], ratio];
+        self.at = now;
+        self.last = d;
+        d.norm()
+    }
+
+    /// The geometric tail `|d| r / (1 - r)` with `r` the larger of the last two ratios, if
+    /// the last step decayed (same direction, shorter) \[m\].
+    fn tail_m(&self) -> Option<f64> {
+        let r = self.ratios[1];
+        (r < 1.0).then(|| {
+            let r = r.max(self.ratios[0]).min(1.0);
+            self.last.norm() * r / (1.0 - r)
+        })
+    }
 }
 
 /// The outcome of a settle.
@@ -147,6 +226,9 @@ pub struct SettleReport {
     pub approach_steps: usize,
     /// Speed of the fastest watched point at the last step \[m/s\].
     pub max_speed_m_s: f64,
+    /// When the decay rule ended the settle: its bound on the distance any watched point had
+    /// left to go \[m\] (`None`: the `quiet_steps` rule ended it, or no settle was needed).
+    pub distance_left_m: Option<f64>,
     /// The joint values at rest (rad or m).
     pub joint_positions: Vec<f64>,
 }
@@ -283,15 +365,39 @@ impl SimArm {
     ///
     /// With an approach ([`SettleOptions::approach_max_steps`] > 0) the arm first takes steps
     /// of [`SettleOptions::approach_dt_s`] until one moves every watched point by less than
-    /// the settle's own stopping distance (`speed_tolerance_m_s * dt_s`). rapier integrates
-    /// the servo springs and damping backward-Euler, which is L-stable: a step much longer
-    /// than the servos' time constants maps the arm close to the static equilibrium of the
-    /// springs, gravity and the constraints (a joint of time constant `tau` keeps about
-    /// `tau / dt` of its distance per step), rather than following its motion. The approach
-    /// only chooses where the settle proper starts: that is the same stepping at `dt_s` to
-    /// `quiet_steps` quiet steps as without it, so the rest it reports is rapier's at the
-    /// settle's time step, and what the approach left (a velocity, a constraint error of the
-    /// long steps) settles there.
+    /// the settle's own stopping distance (`speed_tolerance_m_s * dt_s`), or, with the decay
+    /// rule on, until its steps move less than `speed_tolerance_m_s * approach_dt_s` and decay
+    /// (below). rapier integrates the servo springs and damping
+    /// backward-Euler, which is L-stable: a step much longer than the servos' time constants
+    /// maps the arm close to the static equilibrium of the springs, gravity and the
+    /// constraints (a joint of time constant `tau` keeps about `tau / dt` of its distance per
+    /// step), rather than following its motion. The approach only chooses where the settle
+    /// proper starts: that is the same stepping at `dt_s` (and `solver_iterations`) as
+    /// without it, so the rest it reports is rapier's at the settle's time step, and what the
+    /// approach left (a velocity, a constraint error of the long steps) settles there. The
+    /// settle proper ends after `quiet_steps` quiet steps or, earlier, by the decay rule, with
+    /// its bound on the distance left in [`SettleReport::distance_left_m`].
+    ///
+    /// The decay rule: near rest the stepping is linear, `s_{n+1} = A s_n`, and once its
+    /// slowest mode dominates (a real eigenvalue `0 < r < 1`: the servos are critically
+    /// damped or more, and backward Euler keeps such modes real) every point's step
+    /// displacement is `d_{n+1} = r d_n`, so the distance it has left is the geometric tail
+    /// `|d_n| r / (1 - r)`. A step *decays* for a point when its displacement keeps the
+    /// direction of the previous one (`d_n . d_{n-1} > 0`) and shrinks (`r_n = |d_n| /
+    /// |d_{n-1}| < 1`); the rule ends the stepping after [`SettleOptions::decay_steps`]
+    /// consecutive quiet steps that decay for every watched point with
+    /// `|d_n| r / (1 - r) <` [`SettleOptions::distance_left_m`], `r` the larger of the point's
+    /// last two ratios. A turning point (the velocity through zero, the displacement
+    /// reversing) or a growing mode breaks the run: quiet steps alone do not prove rest there.
+    ///
+    /// Why the approach keeps the settle's solver iterations (rapier's substeps): the rest
+    /// of the arm with the four-bar's bodies depends on the substep length (the loop
+    /// closure's constraint stabilisation), so an approach of fewer, longer substeps lands
+    /// where the 1 ms steps move away from again (measured: 10 ms approach steps of 4 substeps
+    /// instead of 16 cost more substeps in all, the settle proper taking up to 303 steps
+    /// instead of 63); likewise a quasi-static approach (velocities zeroed before every long
+    /// step, a Newton-like iteration that converged in 3-5 steps) found a rest 88-956 steps of
+    /// 1 ms away from rapier's.
     pub fn settle_with(
         &mut self,
         watch: &[LinkPoint],
@@ -306,65 +412,107 @@ impl SimArm {
         });
         self.world.integration_parameters.num_solver_iterations = options.solver_iterations;
         let stop_distance_m = options.speed_tolerance_m_s * options.dt_s;
+        let decay = (options.decay_steps > 0).then_some((options.decay_steps, options.distance_left_m));
         let mut approach_steps = 0;
         if options.approach_max_steps > 0 {
             self.world.integration_parameters.dt = options.approach_dt_s;
-            let approach = Quiet {
-                max_steps: options.approach_max_steps,
-                distance_m: stop_distance_m,
-                steps: 1,
+            let approach = match decay {
+                // The approach hands over to the settle proper once its own steps decay.
+                Some(_) => Quiet {
+                    max_steps: options.approach_max_steps,
+                    distance_m: options.speed_tolerance_m_s * options.approach_dt_s,
+                    steps: usize::MAX,
+                    decay,
+                },
+                None => Quiet {
+                    max_steps: options.approach_max_steps,
+                    distance_m: stop_distance_m,
+                    steps: 1,
+                    decay: None,
+                },
             };
-            approach_steps = self.step_until_quiet(&points, &approach, &mut before_step)?.0;
+            approach_steps = self.step_until_quiet(&points, &approach, &mut before_step)?.steps;
         }
         self.world.integration_parameters.dt = options.dt_s;
         let settle = Quiet {
             max_steps: options.max_steps,
             distance_m: stop_distance_m,
             steps: options.quiet_steps,
+            decay,
         };
-        let (steps, max_distance_m, quiet) = self.step_until_quiet(&points, &settle, &mut before_step)?;
-        let max_speed_m_s = max_distance_m / options.dt_s;
-        if !quiet {
+        let stop = self.step_until_quiet(&points, &settle, &mut before_step)?;
+        let max_speed_m_s = stop.last_move_m / options.dt_s;
+        if !stop.quiet {
             return Err(SimError::NotSettled {
                 steps: options.max_steps,
                 max_speed_m_s,
             });
         }
         Ok(SettleReport {
-            steps,
+            steps: stop.steps,
             approach_steps,
             max_speed_m_s,
+            distance_left_m: stop.distance_left_m,
             joint_positions: self.joint_positions(),
         })
     }
 
     /// Steps (`before_step` before each) until the watched `points` have moved less than
-    /// `rule.distance_m` in `rule.steps` consecutive steps, or `rule.max_steps` were taken:
-    /// the steps taken, the largest move of the last step \[m\] and whether it came to rest.
+    /// `rule.distance_m` in `rule.steps` consecutive steps, or the decay rule of
+    /// [`SimArm::settle_with`] holds (`rule.decay = (k, bound)`), or `rule.max_steps` were
+    /// taken.
     fn step_until_quiet(
         &mut self,
         points: &[LinkPoint],
         rule: &Quiet,
         before_step: &mut impl FnMut(&mut SimArm) -> Result<(), SimError>,
-    ) -> Result<(usize, f64, bool), SimError> {
-        let mut previous: Vec<Point3<f64>> = points.iter().map(|p| self.point_in_world(p)).collect();
-        let mut quiet = 0;
-        let mut max_distance_m = f64::INFINITY;
+    ) -> Result<Stop, SimError> {
+        let mut tracks: Vec<Track> = points.iter().map(|p| Track::new(self.point_in_world(p))).collect();
+        let (mut quiet, mut decaying) = (0, 0);
+        let mut last_move_m = f64::INFINITY;
         for step in 1..=rule.max_steps {
             before_step(self)?;
             self.world.step();
-            max_distance_m = 0.0;
-            for (p, before) in points.iter().zip(previous.iter_mut()) {
-                let now = self.point_in_world(p);
-                max_distance_m = f64::max(max_distance_m, (now - *before).norm());
-                *before = now;
+            last_move_m = 0.0;
+            let mut decays = true;
+            let mut left_m: f64 = 0.0;
+            for (p, track) in points.iter().zip(tracks.iter_mut()) {
+                let moved = track.advance(self.point_in_world(p));
+                last_move_m = last_move_m.max(moved);
+                match track.tail_m() {
+                    Some(tail) => left_m = left_m.max(tail),
+                    None => decays = false,
+                }
             }
-            quiet = if max_distance_m < rule.distance_m { quiet + 1 } else { 0 };
+            let is_quiet = last_move_m < rule.distance_m;
+            quiet = if is_quiet { quiet + 1 } else { 0 };
+            decaying = if is_quiet && decays { decaying + 1 } else { 0 };
             if quiet >= rule.steps {
-                return Ok((step, max_distance_m, true));
+                return Ok(Stop {
+                    steps: step,
+                    last_move_m,
+                    quiet: true,
+                    distance_left_m: None,
+                });
+            }
+            if let Some((k, bound_m)) = rule.decay
+                && decaying >= k
+                && left_m < bound_m
+            {
+                return Ok(Stop {
+                    steps: step,
+                    last_move_m,
+                    quiet: true,
+                    distance_left_m: Some(left_m),
+                });
             }
         }
-        Ok((rule.max_steps, max_distance_m, false))
+        Ok(Stop {
+            steps: rule.max_steps,
+            last_move_m,
+            quiet: false,
+            distance_left_m: None,
+        })
     }
 
     /// The static equilibrium at command `q_cmd`: with [`Compliance::Rigid`] the arm is placed
@@ -383,6 +531,7 @@ impl SimArm {
                 steps: 0,
                 approach_steps: 0,
                 max_speed_m_s: 0.0,
+                distance_left_m: None,
                 joint_positions: self.joint_positions(),
             }),
             Compliance::Servo(gains) => {
@@ -505,12 +654,14 @@ mod tests {
         let mut arm = SimArm::from_description(&d.nominal_model(), &d, &ArmOptions::new(6)).expect("valid arm");
         let q = [0.0; 6];
         let gains = ServoGains::with_damping_ratio(&arm, &q, &[2e5; 6], 1.0);
+        // Two steps: too few for either rule (the decay rule needs two decaying steps after a
+        // first one, the quiet rule 20 quiet steps).
         let options = SettleOptions {
-            max_steps: 3,
+            max_steps: 2,
             ..SettleOptions::default()
         };
         let err = arm.static_equilibrium(&q, &Compliance::Servo(gains), &[], &options);
-        assert!(matches!(err, Err(SimError::NotSettled { steps: 3, .. })), "{err:?}");
+        assert!(matches!(err, Err(SimError::NotSettled { steps: 2, .. })), "{err:?}");
     }
 
     /// Same inputs, same machine: bit-identical equilibrium (rapier is deterministic).
