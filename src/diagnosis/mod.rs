@@ -60,7 +60,7 @@ pub use validate::{
 };
 
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
-use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear};
+use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear_with};
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
@@ -233,7 +233,8 @@ fn prepare(
             .residuals(&zeros, &order)
             .ok_or_else(|| model_error("residuals"))?,
     );
-    let x_geometric = sensitivity(|p| predictor.residuals(p, &order), &zeros, &predictor.steps())
+    let x_geometric = predictor
+        .sensitivity(&zeros, 0..zeros.len(), &order, &predictor.steps())
         .ok_or_else(|| model_error("refit sensitivity"))?;
     let mut x_candidates = Vec::new();
     let library = if with_candidates {
@@ -285,16 +286,7 @@ fn candidate_sensitivity(
     }
     let g = pred.geometric_count();
     let p0 = vec![0.0; g + pred.effect_count()];
-    let steps = pred.steps();
-    sensitivity(
-        |e| {
-            let mut p = p0.clone();
-            p[g..].copy_from_slice(e);
-            pred.residuals(&p, order)
-        },
-        &vec![0.0; pred.effect_count()],
-        &steps[g..],
-    )
+    pred.sensitivity(&p0, g..p0.len(), order, &pred.steps())
 }
 
 impl Prepared {
@@ -354,7 +346,7 @@ struct Refined {
 impl Prepared {
     /// The observed data fitted by the refit plus `candidate` (with its sensitivity `x_effect`)
     /// with the nonlinear model: the linearised solution, then Gauss-Newton steps re-linearised
-    /// at the current parameters ([`refine_from_linear`], shared with `calibrate --refine`;
+    /// at the current parameters ([`refine_from_linear_with`], shared with `calibrate --refine`;
     /// rank-revealing like [`LinearFit`], held-out rows carried along unfitted). A large effect
     /// moves the model far enough that the first-order fit leaves a visible second-order
     /// residual; noise-only data (the null distributions) do not, so the linear null still
@@ -374,9 +366,10 @@ impl Prepared {
             truncate_below: NULL_DIRECTION_TOLERANCE,
             small_step: None,
         };
-        let out = refine_from_linear(
+        let steps = pred.steps();
+        let out = refine_from_linear_with(
             |p| pred.residuals(p, &order),
-            &pred.steps(),
+            |p| pred.sensitivity(p, 0..p.len(), &order, &steps),
             &linear,
             &self.residuals.rows(0, self.train_rows).into_owned(),
             self.train_rows,

@@ -86,10 +86,36 @@ pub fn refine_from_linear<F>(
 where
     F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
 {
+    refine_from_linear_with(
+        &residuals,
+        |p| sensitivity(&residuals, p, steps),
+        linear,
+        r0_train,
+        train_rows,
+        how,
+    )
+}
+
+/// [`refine_from_linear`] with the re-linearisation `linearise` (the sensitivity
+/// `X = -d residual / d p` at `p`, `None` when the model cannot execute a command there) given
+/// by the caller: the central differences of [`sensitivity`] computed by a caller that knows
+/// which of its work a column can reuse (the diagnosis's predictor keeps the joint values).
+pub fn refine_from_linear_with<F, G>(
+    residuals: F,
+    linearise: G,
+    linear: &LinearFit,
+    r0_train: &DVector<f64>,
+    train_rows: usize,
+    how: GaussNewtonSteps<'_>,
+) -> Option<Refined>
+where
+    F: Fn(&[f64]) -> Option<Vec<f64>>,
+    G: Fn(&[f64]) -> Option<DMatrix<f64>>,
+{
     // The residual is `measured - predicted`: its Jacobian is minus the sensitivity.
     let eval = |p: &DVector<f64>| -> Result<(DVector<f64>, DMatrix<f64>), Unexecutable> {
         let r = residuals(p.as_slice()).ok_or(Unexecutable)?;
-        let x = sensitivity(&residuals, p.as_slice(), steps).ok_or(Unexecutable)?;
+        let x = linearise(p.as_slice()).ok_or(Unexecutable)?;
         Ok((DVector::from_vec(r), -x))
     };
     let p1 = linear.params(r0_train);

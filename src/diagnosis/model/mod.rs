@@ -29,7 +29,7 @@ use crate::physics::{
 };
 use crate::robot::{Controller, CouplingFunction, RobotDescription, RobotModel};
 use effect_set::EffectSet;
-use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Gravity in the instrument frame \[m/s^2\] assumed by the compliance candidates.
@@ -99,6 +99,13 @@ pub struct Predictor {
     pub candidates: Vec<Candidate>,
     /// What the baseline refits besides the geometry.
     pub scope: RefitScope,
+}
+
+/// The joint values `(q, active displacements)` of every pose of an evaluation
+/// ([`Predictor::joint_values`]) and the [`Predictor::joint_key`] of its parameters.
+struct JointMemo {
+    key: Vec<u64>,
+    values: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
 /// Workspace features of a validation pose ([`Predictor::pose_features`]).
@@ -358,18 +365,92 @@ impl Predictor {
     /// when a command cannot be executed by the model (a transmission that does not invert,
     /// a compliance under which the arm buckles).
     pub fn residuals(&self, params: &[f64], poses: &[&Pose]) -> Option<Vec<f64>> {
-        self.residuals_offset(params, poses, &[])
+        self.residuals_offset(params, poses, &[], None)
+    }
+
+    /// The parameters of `params` the joint values depend on ([`Predictor::joint_values`]):
+    /// the zero offsets, the identified shapes (transmission harmonics, coupling
+    /// coefficients) and the harmonic and backlash candidates' parameters, as bits. Two
+    /// parameter vectors with the same key give the same joint values bit for bit (rows, tool
+    /// targets, base and tool frames and the other candidates act after them).
+    fn joint_key(&self, params: &[f64]) -> Vec<u64> {
+        let mut key: Vec<u64> = params[4 * self.base.rows.len()..self.targets_start()]
+            .iter()
+            .map(|p| p.to_bits())
+            .collect();
+        let mut at = self.geometric_count();
+        for c in &self.candidates {
+            let n = c.parameter_names(&self.shape).len();
+            if matches!(c, Candidate::GearHarmonic { .. } | Candidate::Backlash { .. }) {
+                key.extend(params[at..at + n].iter().map(|p| p.to_bits()));
+            }
+            at += n;
+        }
+        key
+    }
+
+    /// The joint values of `poses` at `params`, for the evaluations near `params` that do not
+    /// move them; `None` when a command cannot be executed.
+    fn joint_memo(&self, params: &[f64], poses: &[&Pose]) -> Option<JointMemo> {
+        let (robot, effects) = self.robot_and_effects(params);
+        let values = poses
+            .iter()
+            .map(|pose| self.joint_values(&robot, &effects, pose))
+            .collect::<Option<_>>()?;
+        Some(JointMemo {
+            key: self.joint_key(params),
+            values,
+        })
+    }
+
+    /// The sensitivity `X = d prediction / d p` of the residual rows of `poses` to the
+    /// parameters `columns` at `params`: the central differences of [`Predictor::residuals`]
+    /// by the project's one tool ([`crate::calibration::refine::sensitivity`]) with the steps
+    /// `steps[columns]`, bit for bit, but with the poses' joint values (the transmission
+    /// inversions, most of an evaluation) computed once at `params` and reused by every
+    /// column whose parameter does not move them ([`Predictor::joint_key`]: rows, tool
+    /// targets, frames, the tilt, thermal, scale and compliance candidates'). `None` when a
+    /// command cannot be executed.
+    pub fn sensitivity(
+        &self,
+        params: &[f64],
+        columns: std::ops::Range<usize>,
+        poses: &[&Pose],
+        steps: &[f64],
+    ) -> Option<DMatrix<f64>> {
+        let memo = self.joint_memo(params, poses);
+        crate::calibration::refine::sensitivity(
+            |e| {
+                let mut p = params.to_vec();
+                p[columns.clone()].copy_from_slice(e);
+                self.residuals_offset(&p, poses, &[], memo.as_ref())
+            },
+            &params[columns.clone()],
+            &steps[columns.clone()],
+        )
     }
 
     /// [`Predictor::residuals`] with the joint values of every pose offset by `offset_rad`
-    /// (after the sag; empty: none): the function [`Predictor::joint_sensitivity`] differences.
-    fn residuals_offset(&self, params: &[f64], poses: &[&Pose], offset_rad: &[f64]) -> Option<Vec<f64>> {
+    /// (after the sag; empty: none): the function [`Predictor::joint_sensitivity`]
+    /// differences. The joint values come from `memo` when it was computed at the same
+    /// [`Predictor::joint_key`] (the same values bit for bit).
+    fn residuals_offset(
+        &self,
+        params: &[f64],
+        poses: &[&Pose],
+        offset_rad: &[f64],
+        memo: Option<&JointMemo>,
+    ) -> Option<Vec<f64>> {
         let (robot, effects) = self.robot_and_effects(params);
         let frames = FixedFrames::new(self.model(&robot, params));
         let targets = self.targets(params);
+        let memo = memo.filter(|m| m.values.len() == poses.len() && m.key == self.joint_key(params));
         let mut out = Vec::with_capacity(poses.len() * 9);
-        for pose in poses {
-            let (mut q, active) = self.joint_values(&robot, &effects, pose)?;
+        for (i, pose) in poses.iter().enumerate() {
+            let (mut q, active) = match memo {
+                Some(m) => m.values[i].clone(),
+                None => self.joint_values(&robot, &effects, pose)?,
+            };
             // A thermal candidate changes the rows with the pose's temperature; else the
             // model's constant frames serve every pose.
             let frames_t = match effects.expanded_at(frames.model(), pose.temperature_c) {
