@@ -112,12 +112,18 @@ impl Residualised {
     /// Held-out chi-square after `block` (on top of what these residuals are after): on the
     /// observation, and on every noise-only sample.
     fn heldout_chi2(&self, block: &Block, sigma2: f64) -> (f64, Vec<f64>) {
-        let chi2 = block.held_after(&self.obs.0, &self.obs.1).norm_squared() / sigma2;
-        let null = super::column_ssr(&block.held_after(&self.null.0, &self.null.1))
-            .iter()
-            .map(|s| s / sigma2)
-            .collect();
-        (chi2, null)
+        self.heldout_chi2_all(&[block], sigma2).remove(0)
+    }
+
+    /// [`Residualised::heldout_chi2`] for each of `blocks`, computed together
+    /// ([`Block::heldout_ssr_of`]).
+    fn heldout_chi2_all(&self, blocks: &[&Block], sigma2: f64) -> Vec<(f64, Vec<f64>)> {
+        let obs = Block::heldout_ssr_of(blocks, &self.obs.0, &self.obs.1);
+        let null = Block::heldout_ssr_of(blocks, &self.null.0, &self.null.1);
+        obs.into_iter()
+            .zip(null)
+            .map(|(o, n)| (o[0] / sigma2, n.iter().map(|s| s / sigma2).collect()))
+            .collect()
     }
 
     /// `block`'s fitted parameters for the observation and the training SSR they leave.
@@ -143,10 +149,11 @@ fn score_candidates(
     sigma2: f64,
 ) -> Vec<Scored> {
     let to_rms_mm = |chi2: f64| (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3;
+    let rows: Vec<_> = prep.x_candidates.iter().map(|(_, x)| prep.rows(x)).collect();
+    let blocks = base.blocks(&[], &rows);
+    let chi2s = after_base.heldout_chi2_all(&blocks.iter().collect::<Vec<_>>(), sigma2);
     let mut out = Vec::new();
-    for (c, x) in &prep.x_candidates {
-        let block = candidate_block(prep, base, &[], x);
-        let (chi2, chi2_null) = after_base.heldout_chi2(&block, sigma2);
+    for (((c, _), block), (chi2, chi2_null)) in prep.x_candidates.iter().zip(&blocks).zip(chi2s) {
         let t_null: Vec<f64> = g.1.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
         let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
         let improvement = g.0 - chi2;
