@@ -101,11 +101,14 @@ pub struct Predictor {
     pub scope: RefitScope,
 }
 
-/// The joint values `(q, active displacements)` of every pose of an evaluation
-/// ([`Predictor::joint_values`]) and the [`Predictor::joint_key`] of its parameters.
+/// The work of an evaluation that the evaluations near it can reuse: per pose the actuator
+/// commands (fig. 3 decoupling) and the active displacements (the transmissions' inversions,
+/// eq. 8), with the transducer offset and transmission of every joint they were computed
+/// with, and the model's constant frames (eq. A1).
 struct JointMemo {
-    key: Vec<u64>,
-    values: Vec<(Vec<f64>, Vec<f64>)>,
+    transmissions: Vec<(f64, crate::robot::Transmission)>,
+    poses: Vec<(Vec<f64>, Vec<f64>)>,
+    frames: FixedFrames,
 }
 
 /// Workspace features of a validation pose ([`Predictor::pose_features`]).
@@ -313,7 +316,18 @@ impl Predictor {
     /// couplings); `None` when the command cannot be executed.
     fn joint_values(&self, robot: &RobotModel, effects: &EffectSet, pose: &Pose) -> Option<(Vec<f64>, Vec<f64>)> {
         let u = self.controller.decouple(&pose.cmd).ok()?;
-        let mut active = robot.active_displacements(&u).ok()?;
+        let active = robot.active_displacements(&u).ok()?;
+        self.joint_values_from(robot, effects, pose, active)
+    }
+
+    /// [`Predictor::joint_values`] from the transmissions' active displacements `active`.
+    fn joint_values_from(
+        &self,
+        robot: &RobotModel,
+        effects: &EffectSet,
+        pose: &Pose,
+        mut active: Vec<f64>,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
         add_joint_period_errors(&effects.harmonics, &mut active);
         for &(k, source, half_band_rad) in &effects.backlash {
             let approach = match source {
@@ -368,49 +382,51 @@ impl Predictor {
         self.residuals_offset(params, poses, &[], None)
     }
 
-    /// The parameters of `params` the joint values depend on ([`Predictor::joint_values`]):
-    /// the zero offsets, the identified shapes (transmission harmonics, coupling
-    /// coefficients) and the harmonic and backlash candidates' parameters, as bits. Two
-    /// parameter vectors with the same key give the same joint values bit for bit (rows, tool
-    /// targets, base and tool frames and the other candidates act after them).
-    fn joint_key(&self, params: &[f64]) -> Vec<u64> {
-        let mut key: Vec<u64> = params[4 * self.base.rows.len()..self.targets_start()]
-            .iter()
-            .map(|p| p.to_bits())
-            .collect();
-        let mut at = self.geometric_count();
-        for c in &self.candidates {
-            let n = c.parameter_names(&self.shape).len();
-            if matches!(c, Candidate::GearHarmonic { .. } | Candidate::Backlash { .. }) {
-                key.extend(params[at..at + n].iter().map(|p| p.to_bits()));
-            }
-            at += n;
-        }
-        key
-    }
-
-    /// The joint values of `poses` at `params`, for the evaluations near `params` that do not
-    /// move them; `None` when a command cannot be executed.
+    /// The transmissions' work for `poses` at `params`, for the evaluations near `params`
+    /// ([`JointMemo`]); `None` when a command cannot be executed.
     fn joint_memo(&self, params: &[f64], poses: &[&Pose]) -> Option<JointMemo> {
-        let (robot, effects) = self.robot_and_effects(params);
-        let values = poses
+        let (robot, _) = self.robot_and_effects(params);
+        let poses = poses
             .iter()
-            .map(|pose| self.joint_values(&robot, &effects, pose))
+            .map(|pose| {
+                let u = self.controller.decouple(&pose.cmd).ok()?;
+                let active = robot.active_displacements(&u).ok()?;
+                Some((u, active))
+            })
             .collect::<Option<_>>()?;
         Some(JointMemo {
-            key: self.joint_key(params),
-            values,
+            frames: FixedFrames::new(self.model(&robot, params)),
+            transmissions: robot
+                .joints
+                .iter()
+                .map(|j| (j.transducer_offset, j.transmission.clone()))
+                .collect(),
+            poses,
         })
+    }
+
+    /// The active displacements of pose `i` of `memo` on `robot`: the memo's, with those of
+    /// the joints whose transducer offset or transmission differs from the memo's
+    /// (`changed`) inverted again as [`RobotModel::active_displacements`] does.
+    fn active_from_memo(&self, robot: &RobotModel, memo: &JointMemo, changed: &[usize], i: usize) -> Option<Vec<f64>> {
+        let (u, active) = &memo.poses[i];
+        let mut active = active.clone();
+        for &k in changed {
+            let j = &robot.joints[k];
+            active[k] = j.transmission.actual_from_command(u[k] - j.transducer_offset)?;
+        }
+        Some(active)
     }
 
     /// The sensitivity `X = d prediction / d p` of the residual rows of `poses` to the
     /// parameters `columns` at `params`: the central differences of [`Predictor::residuals`]
     /// by the project's one tool ([`crate::calibration::refine::sensitivity`]) with the steps
-    /// `steps[columns]`, bit for bit, but with the poses' joint values (the transmission
-    /// inversions, most of an evaluation) computed once at `params` and reused by every
-    /// column whose parameter does not move them ([`Predictor::joint_key`]: rows, tool
-    /// targets, frames, the tilt, thermal, scale and compliance candidates'). `None` when a
-    /// command cannot be executed.
+    /// `steps[columns]`, bit for bit, but with the transmission inversions (most of an
+    /// evaluation) done once at `params` ([`JointMemo`]): a column redoes only the joint its
+    /// parameter moves (a zero offset, a transmission harmonic), none for the rest (rows,
+    /// couplings, tool targets, frames, the backlash, tilt, thermal, scale and compliance
+    /// candidates'); likewise the model's constant frames, of which a row's column redoes
+    /// one. `None` when a command cannot be executed.
     pub fn sensitivity(
         &self,
         params: &[f64],
@@ -432,8 +448,9 @@ impl Predictor {
 
     /// [`Predictor::residuals`] with the joint values of every pose offset by `offset_rad`
     /// (after the sag; empty: none): the function [`Predictor::joint_sensitivity`]
-    /// differences. The joint values come from `memo` when it was computed at the same
-    /// [`Predictor::joint_key`] (the same values bit for bit).
+    /// differences. With a `memo` of the same poses, the active displacements of the joints
+    /// whose transmission is the memo's and the frames of the rows that are its come from it
+    /// (the same values bit for bit).
     fn residuals_offset(
         &self,
         params: &[f64],
@@ -442,13 +459,27 @@ impl Predictor {
         memo: Option<&JointMemo>,
     ) -> Option<Vec<f64>> {
         let (robot, effects) = self.robot_and_effects(params);
-        let frames = FixedFrames::new(self.model(&robot, params));
+        let memo = memo.filter(|m| m.poses.len() == poses.len());
+        let frames = match memo {
+            Some(m) => FixedFrames::new_near(self.model(&robot, params), &m.frames),
+            None => FixedFrames::new(self.model(&robot, params)),
+        };
         let targets = self.targets(params);
-        let memo = memo.filter(|m| m.values.len() == poses.len() && m.key == self.joint_key(params));
+        let changed: Vec<usize> = memo.map_or_else(Vec::new, |m| {
+            (robot.joints.iter().zip(&m.transmissions).enumerate())
+                .filter(|(_, (j, (offset, t)))| {
+                    j.transducer_offset.to_bits() != offset.to_bits() || j.transmission != *t
+                })
+                .map(|(k, _)| k)
+                .collect()
+        });
         let mut out = Vec::with_capacity(poses.len() * 9);
         for (i, pose) in poses.iter().enumerate() {
             let (mut q, active) = match memo {
-                Some(m) => m.values[i].clone(),
+                Some(m) => {
+                    let active = self.active_from_memo(&robot, m, &changed, i)?;
+                    self.joint_values_from(&robot, &effects, pose, active)?
+                }
                 None => self.joint_values(&robot, &effects, pose)?,
             };
             // A thermal candidate changes the rows with the pose's temperature; else the
