@@ -118,11 +118,21 @@ impl Residualised {
     /// [`Residualised::heldout_chi2`] for each of `blocks`, computed together
     /// ([`Block::heldout_ssr_of`]).
     fn heldout_chi2_all(&self, blocks: &[&Block], sigma2: f64) -> Vec<(f64, Vec<f64>)> {
-        let obs = Block::heldout_ssr_of(blocks, &self.obs.0, &self.obs.1);
-        let null = Block::heldout_ssr_of(blocks, &self.null.0, &self.null.1);
-        obs.into_iter()
-            .zip(null)
-            .map(|(o, n)| (o[0] / sigma2, n.iter().map(|s| s / sigma2).collect()))
+        // The observation first, then the null samples: one call for both.
+        let both = |(o, n): (&DMatrix<f64>, &DMatrix<f64>)| {
+            DMatrix::from_fn(
+                o.nrows(),
+                1 + n.ncols(),
+                |r, c| if c == 0 { o[(r, 0)] } else { n[(r, c - 1)] },
+            )
+        };
+        let ssr = Block::heldout_ssr_of(
+            blocks,
+            &both((&self.obs.0, &self.null.0)),
+            &both((&self.obs.1, &self.null.1)),
+        );
+        ssr.into_iter()
+            .map(|s| (s[0] / sigma2, s[1..].iter().map(|s| s / sigma2).collect()))
             .collect()
     }
 
@@ -185,7 +195,7 @@ fn score_candidates(
 
 fn where_entries(
     prep: &Prepared,
-    null: &NullData,
+    (null, after_base): (&NullData, &Residualised),
     rms_before: f64,
     noise_before: f64,
     false_alarm: f64,
@@ -223,7 +233,8 @@ fn where_entries(
         residual_rms_mm: rms_before,
         noise_only_rms_mm: noise_before,
     });
-    let (features, contrasts) = super::features::feature_entries(prep, null, false_alarm);
+    let (features, contrasts) =
+        super::features::feature_entries(prep, (&after_base.obs.1, &after_base.null.1), false_alarm);
     out.extend(features);
     out.sort_by(|a, b| b.excess_ratio.total_cmp(&a.excess_ratio));
     (out, contrasts)
@@ -254,11 +265,11 @@ struct GapTest {
     p_gap: f64,
 }
 
-/// Runs the gap test of the baseline refit `base` at false-alarm rate `alpha`.
-fn gap_test(prep: &Prepared, null: &NullData, base: &LinearFit, sigma2: f64, alpha: f64) -> GapTest {
-    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
-    let g_obs = prep.heldout_ssr(base, &observed)[0] / sigma2;
-    let g_null: Vec<f64> = super::column_ssr(&base.heldout(&null.train, &null.held))
+/// Runs the gap test of the baseline refit at false-alarm rate `alpha` on the observation's
+/// and the null samples' residuals after it (`after_base`).
+fn gap_test(prep: &Prepared, after_base: &Residualised, sigma2: f64, alpha: f64) -> GapTest {
+    let g_obs = super::column_ssr(&after_base.obs.1)[0] / sigma2;
+    let g_null: Vec<f64> = super::column_ssr(&after_base.null.1)
         .iter()
         .map(|s| s / sigma2)
         .collect();
@@ -380,7 +391,7 @@ fn refit_named(prep: &Prepared, scored: &mut [Scored], g_obs: f64, sigma2: f64) 
     let mut g_fit = g_obs;
     if let Some(b) = scored.iter_mut().find(|s| nameable(s))
         && let Some((_, x)) = prep.x_candidates.iter().find(|(c, _)| *c == b.candidate)
-        && let (Some(rb), Some(rc)) = (prep.refine(None), prep.refine(Some((b.candidate, x))))
+        && let (Some(rb), Some(rc)) = (prep.refine(None, false), prep.refine(Some((b.candidate, x)), true))
     {
         g_fit = g_fit.min(rb.heldout_ssr / sigma2);
         b.chi2 = b.chi2.min(rc.heldout_ssr / sigma2);
@@ -469,10 +480,9 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     let alpha = options.false_alarm;
     let sigma2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
     let base = prep.baseline_fit();
-    let gap = gap_test(prep, null, &base, sigma2, alpha);
-
-    let after_base = Residualised::new(prep, null, &base);
-    let mut scored = score_candidates(prep, (&base, &after_base), (gap.g_obs, &gap.g_null), sigma2);
+    let after_base = Residualised::new(prep, null, base);
+    let gap = gap_test(prep, &after_base, sigma2, alpha);
+    let mut scored = score_candidates(prep, (base, &after_base), (gap.g_obs, &gap.g_null), sigma2);
     let samples = gap.g_null.len();
     let z_threshold = mark_significant(&mut scored, samples, alpha);
     rank_and_weigh(&mut scored);
@@ -496,7 +506,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         fraction_closed,
     };
     let pair =
-        best.and_then(|b| pair::second_effect(prep, (&base, &after_base), &scored, b, (gap.g_obs, sigma2, alpha)));
+        best.and_then(|b| pair::second_effect(prep, (base, &after_base), &scored, b, (gap.g_obs, sigma2, alpha)));
     let (mut v, effects) = match (best, pair) {
         (Some(b), Some(pair)) => two_effects(prep, &mut evidence, b, pair, sigma2, options.explained_fraction),
         _ => (evidence.verdict(best, options.explained_fraction), Vec::new()),
@@ -513,7 +523,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         );
     }
     let base_params = prep.x_geometric.ncols();
-    let (where_, features) = where_entries(prep, null, rms_before, noise_before, alpha);
+    let (where_, features) = where_entries(prep, (null, &after_base), rms_before, noise_before, alpha);
     Diagnosis {
         outcome: Outcome {
             effect: v.effect,

@@ -131,6 +131,8 @@ pub struct Block {
     /// `held V S^-1` on the kept directions: the held-out prediction of a unit fit along each
     /// column of `span` (`held * solve = held_basis * span^T`).
     held_basis: DMatrix<f64>,
+    /// `held_basis^T held_basis`.
+    held_gram: DMatrix<f64>,
 }
 
 impl LinearFit {
@@ -208,9 +210,11 @@ impl Block {
         let total: f64 = norms.iter().map(|n| n * n).sum::<f64>().sqrt();
         let outside_fraction = if total > 0.0 { train.norm() / total } else { 0.0 };
         let svd = TruncatedSvd::with_reference_norms(&train, norms, NULL_DIRECTION_TOLERANCE);
+        let held_basis = &held * &svd.v_over_s;
         Block {
             normal_inverse: &svd.v_over_s * svd.v_over_s.transpose(),
-            held_basis: &held * &svd.v_over_s,
+            held_gram: held_basis.tr_mul(&held_basis),
+            held_basis,
             span: svd.span,
             solve: svd.solve,
             rank: svd.rank,
@@ -268,8 +272,7 @@ impl Block {
         let mut at = 0;
         let mut out = Vec::with_capacity(blocks.len());
         for b in blocks {
-            let k = b.rank;
-            let gram = b.held_basis.transpose() * &b.held_basis;
+            let (k, gram) = (b.rank, &b.held_gram);
             let (q_b, c_b) = (q.rows(at, k), c.rows(at, k));
             let ssr = (0..e_held.ncols())
                 .map(|j| {
