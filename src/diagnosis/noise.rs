@@ -371,7 +371,7 @@ impl ValidationRows {
             let dq = jitter.draw(u, rng);
             let link = jittered.then(|| {
                 let q: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
-                self.frames.poses(&q).world_from_link[q.len() - 1]
+                self.frames.world_from_last_link(&q)
             });
             for (row, in_link, clean) in targets {
                 let moved = link.map_or(Vector3::zeros(), |l| l * in_link - clean);

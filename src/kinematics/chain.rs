@@ -209,6 +209,25 @@ impl FixedFrames {
         self.model.poses_by(q, |k| self.link_from_next_frame[k])
     }
 
+    /// The last link's moving frame in the world, `poses(q).world_from_link[N - 1]` bit for bit
+    /// (the same products in the same order), without building the other frames.
+    ///
+    /// # Panics
+    /// If `q.len() != self.model().dof()`: a programming error, not a data error.
+    pub fn world_from_last_link(&self, q: &[f64]) -> Isometry3<f64> {
+        let n = self.model.dof();
+        assert_eq!(q.len(), n, "joint vector length must equal the number of joints");
+        let mut frame = self.model.world_from_base;
+        for (k, (joint, &qk)) in self.model.joints.iter().zip(q).enumerate() {
+            let link = frame * joint_motion(joint.kind, qk);
+            if k + 1 == n {
+                return link;
+            }
+            frame = link * self.link_from_next_frame[k];
+        }
+        frame
+    }
+
     /// [`PhiModel::world_from_tool`], bit for bit.
     pub fn world_from_tool(&self, q: &[f64]) -> Isometry3<f64> {
         self.model.world_from_tool_by(q, |k| self.link_from_next_frame[k])
@@ -265,6 +284,7 @@ mod tests {
             prop_assert_eq!(frames.poses(q), m.poses(q));
             prop_assert_eq!(frames.world_from_tool(q), m.world_from_tool(q));
             prop_assert_eq!(frames.world_from_tool(q), m.poses(q).world_from_tool);
+            prop_assert_eq!(frames.world_from_last_link(q), m.poses(q).world_from_link[kinds.len() - 1]);
         }
 
         /// Frames taken from another model's where a joint and its row are the same are the

@@ -496,9 +496,15 @@ impl Predictor {
             for (qk, d) in q.iter_mut().zip(offset_rad) {
                 *qk += d;
             }
-            let mut links = frames_t.poses(&q).world_from_link;
-            apply_axis_tilts(&effects.tilts, model_t, &q, &mut links);
-            let tool = links[links.len() - 1] * model_t.last_link_from_tool;
+            // Without a tilt only the last link's frame is needed (the same numbers).
+            let last_link = if effects.tilts.is_empty() {
+                frames_t.world_from_last_link(&q)
+            } else {
+                let mut links = frames_t.poses(&q).world_from_link;
+                apply_axis_tilts(&effects.tilts, model_t, &q, &mut links);
+                links[links.len() - 1]
+            };
+            let tool = last_link * model_t.last_link_from_tool;
             for (id, measured) in &pose.targets {
                 let t = targets.get(*id)?;
                 let p = (tool * t).coords * effects.scale;
