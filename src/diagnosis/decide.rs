@@ -169,7 +169,7 @@ fn score_candidates(
         let improvement = g.0 - chi2;
         let rms = to_rms_mm(chi2);
         let noise = to_rms_mm(mean(&chi2_null));
-        let (p, left) = after_base.params(&block);
+        let (p, left) = after_base.params(block);
         out.push(Scored {
             candidate: *c,
             score: CandidateScore {
@@ -182,7 +182,7 @@ fn score_candidates(
                 significant: false,
                 outside_refit_fraction: block.outside_fraction,
                 weight: 0.0,
-                parameters: fitted_parameters(*c, FitParams::of_block(&block, &p, base.rank), left, prep, sigma2),
+                parameters: fitted_parameters(*c, FitParams::of_block(block, &p, base.rank), left, prep, sigma2),
                 implausible: None,
             },
             chi2,

@@ -166,8 +166,8 @@ pub(super) fn feature_entries(
             let targets = poses.iter().map(|&i| held[i].targets.len()).sum::<usize>().max(1) as f64;
             bins.push(Bin {
                 label,
-                observed: ssr(&r_obs, 0),
-                null: (0..r_null.ncols()).map(|c| ssr(&r_null, c)).collect(),
+                observed: ssr(r_obs, 0),
+                null: (0..r_null.ncols()).map(|c| ssr(r_null, c)).collect(),
                 targets,
             });
         }

@@ -361,13 +361,8 @@ mod tests {
     fn heldout_sums_of_many_blocks_are_each_blocks() {
         let n = 30;
         let t: Vec<f64> = (0..2 * n).map(|i| i as f64 / (2 * n) as f64).collect();
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut noise = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rng = <rand::rngs::ChaCha12Rng as rand::SeedableRng>::seed_from_u64(7);
+        let mut noise = move || -> f64 { rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut rng) };
         let g = DMatrix::from_fn(2 * n, 2, |r, c| if c == 0 { 1.0 } else { t[r] });
         let xs = [
             DMatrix::from_fn(2 * n, 1, |r, _| (3.0 * t[r]).sin()),

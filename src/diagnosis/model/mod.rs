@@ -422,7 +422,7 @@ impl Predictor {
     /// parameters `columns` at `params`: the central differences of [`Predictor::residuals`]
     /// by the project's one tool ([`crate::calibration::refine::sensitivity`]) with the steps
     /// `steps[columns]`, bit for bit, but with the transmission inversions (most of an
-    /// evaluation) done once at `params` ([`JointMemo`]): a column redoes only the joint its
+    /// evaluation) done once at `params` (kept in a private memo): a column redoes only the joint its
     /// parameter moves (a zero offset, a transmission harmonic), none for the rest (rows,
     /// couplings, tool targets, frames, the backlash, tilt, thermal, scale and compliance
     /// candidates'); likewise the model's constant frames, of which a row's column redoes
