@@ -112,12 +112,28 @@ impl Residualised {
     /// Held-out chi-square after `block` (on top of what these residuals are after): on the
     /// observation, and on every noise-only sample.
     fn heldout_chi2(&self, block: &Block, sigma2: f64) -> (f64, Vec<f64>) {
-        let chi2 = block.held_after(&self.obs.0, &self.obs.1).norm_squared() / sigma2;
-        let null = super::column_ssr(&block.held_after(&self.null.0, &self.null.1))
-            .iter()
-            .map(|s| s / sigma2)
-            .collect();
-        (chi2, null)
+        self.heldout_chi2_all(&[block], sigma2).remove(0)
+    }
+
+    /// [`Residualised::heldout_chi2`] for each of `blocks`, computed together
+    /// ([`Block::heldout_ssr_of`]).
+    fn heldout_chi2_all(&self, blocks: &[&Block], sigma2: f64) -> Vec<(f64, Vec<f64>)> {
+        // The observation first, then the null samples: one call for both.
+        let both = |(o, n): (&DMatrix<f64>, &DMatrix<f64>)| {
+            DMatrix::from_fn(
+                o.nrows(),
+                1 + n.ncols(),
+                |r, c| if c == 0 { o[(r, 0)] } else { n[(r, c - 1)] },
+            )
+        };
+        let ssr = Block::heldout_ssr_of(
+            blocks,
+            &both((&self.obs.0, &self.null.0)),
+            &both((&self.obs.1, &self.null.1)),
+        );
+        ssr.into_iter()
+            .map(|s| (s[0] / sigma2, s[1..].iter().map(|s| s / sigma2).collect()))
+            .collect()
     }
 
     /// `block`'s fitted parameters for the observation and the training SSR they leave.
@@ -143,16 +159,17 @@ fn score_candidates(
     sigma2: f64,
 ) -> Vec<Scored> {
     let to_rms_mm = |chi2: f64| (chi2.max(0.0) * sigma2 / prep.held_targets.max(1) as f64).sqrt() * 1e3;
+    let rows: Vec<_> = prep.x_candidates.iter().map(|(_, x)| prep.rows(x)).collect();
+    let blocks = base.blocks(&[], &rows);
+    let chi2s = after_base.heldout_chi2_all(&blocks.iter().collect::<Vec<_>>(), sigma2);
     let mut out = Vec::new();
-    for (c, x) in &prep.x_candidates {
-        let block = candidate_block(prep, base, &[], x);
-        let (chi2, chi2_null) = after_base.heldout_chi2(&block, sigma2);
+    for (((c, _), block), (chi2, chi2_null)) in prep.x_candidates.iter().zip(&blocks).zip(chi2s) {
         let t_null: Vec<f64> = g.1.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
         let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
         let improvement = g.0 - chi2;
         let rms = to_rms_mm(chi2);
         let noise = to_rms_mm(mean(&chi2_null));
-        let (p, left) = after_base.params(&block);
+        let (p, left) = after_base.params(block);
         out.push(Scored {
             candidate: *c,
             score: CandidateScore {
@@ -165,7 +182,7 @@ fn score_candidates(
                 significant: false,
                 outside_refit_fraction: block.outside_fraction,
                 weight: 0.0,
-                parameters: fitted_parameters(*c, FitParams::of_block(&block, &p, base.rank), left, prep, sigma2),
+                parameters: fitted_parameters(*c, FitParams::of_block(block, &p, base.rank), left, prep, sigma2),
                 implausible: None,
             },
             chi2,
@@ -178,7 +195,7 @@ fn score_candidates(
 
 fn where_entries(
     prep: &Prepared,
-    null: &NullData,
+    (null, after_base): (&NullData, &Residualised),
     rms_before: f64,
     noise_before: f64,
     false_alarm: f64,
@@ -216,7 +233,8 @@ fn where_entries(
         residual_rms_mm: rms_before,
         noise_only_rms_mm: noise_before,
     });
-    let (features, contrasts) = super::features::feature_entries(prep, null, false_alarm);
+    let (features, contrasts) =
+        super::features::feature_entries(prep, (&after_base.obs.1, &after_base.null.1), false_alarm);
     out.extend(features);
     out.sort_by(|a, b| b.excess_ratio.total_cmp(&a.excess_ratio));
     (out, contrasts)
@@ -247,11 +265,11 @@ struct GapTest {
     p_gap: f64,
 }
 
-/// Runs the gap test of the baseline refit `base` at false-alarm rate `alpha`.
-fn gap_test(prep: &Prepared, null: &NullData, base: &LinearFit, sigma2: f64, alpha: f64) -> GapTest {
-    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
-    let g_obs = prep.heldout_ssr(base, &observed)[0] / sigma2;
-    let g_null: Vec<f64> = super::column_ssr(&base.heldout(&null.train, &null.held))
+/// Runs the gap test of the baseline refit at false-alarm rate `alpha` on the observation's
+/// and the null samples' residuals after it (`after_base`).
+fn gap_test(prep: &Prepared, after_base: &Residualised, sigma2: f64, alpha: f64) -> GapTest {
+    let g_obs = super::column_ssr(&after_base.obs.1)[0] / sigma2;
+    let g_null: Vec<f64> = super::column_ssr(&after_base.null.1)
         .iter()
         .map(|s| s / sigma2)
         .collect();
@@ -373,7 +391,7 @@ fn refit_named(prep: &Prepared, scored: &mut [Scored], g_obs: f64, sigma2: f64) 
     let mut g_fit = g_obs;
     if let Some(b) = scored.iter_mut().find(|s| nameable(s))
         && let Some((_, x)) = prep.x_candidates.iter().find(|(c, _)| *c == b.candidate)
-        && let (Some(rb), Some(rc)) = (prep.refine(None), prep.refine(Some((b.candidate, x))))
+        && let (Some(rb), Some(rc)) = (prep.refine(None, false), prep.refine(Some((b.candidate, x)), true))
     {
         g_fit = g_fit.min(rb.heldout_ssr / sigma2);
         b.chi2 = b.chi2.min(rc.heldout_ssr / sigma2);
@@ -462,10 +480,9 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     let alpha = options.false_alarm;
     let sigma2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
     let base = prep.baseline_fit();
-    let gap = gap_test(prep, null, &base, sigma2, alpha);
-
-    let after_base = Residualised::new(prep, null, &base);
-    let mut scored = score_candidates(prep, (&base, &after_base), (gap.g_obs, &gap.g_null), sigma2);
+    let after_base = Residualised::new(prep, null, base);
+    let gap = gap_test(prep, &after_base, sigma2, alpha);
+    let mut scored = score_candidates(prep, (base, &after_base), (gap.g_obs, &gap.g_null), sigma2);
     let samples = gap.g_null.len();
     let z_threshold = mark_significant(&mut scored, samples, alpha);
     rank_and_weigh(&mut scored);
@@ -489,7 +506,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         fraction_closed,
     };
     let pair =
-        best.and_then(|b| pair::second_effect(prep, (&base, &after_base), &scored, b, (gap.g_obs, sigma2, alpha)));
+        best.and_then(|b| pair::second_effect(prep, (base, &after_base), &scored, b, (gap.g_obs, sigma2, alpha)));
     let (mut v, effects) = match (best, pair) {
         (Some(b), Some(pair)) => two_effects(prep, &mut evidence, b, pair, sigma2, options.explained_fraction),
         _ => (evidence.verdict(best, options.explained_fraction), Vec::new()),
@@ -506,7 +523,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         );
     }
     let base_params = prep.x_geometric.ncols();
-    let (where_, features) = where_entries(prep, null, rms_before, noise_before, alpha);
+    let (where_, features) = where_entries(prep, (null, &after_base), rms_before, noise_before, alpha);
     Diagnosis {
         outcome: Outcome {
             effect: v.effect,

@@ -3,7 +3,7 @@
 //! against the same bins of the noise-only replicas, so a gap that lives in one part of the
 //! workspace shows there (module docs of [`crate::diagnosis`], step 5).
 
-use super::{FeatureContrast, NullData, Pose, Prepared, WhereEntry, split};
+use super::{FeatureContrast, Pose, Prepared, WhereEntry, split};
 use crate::numerics::stats::{QuantileMethod, mean, quantile};
 use nalgebra::DMatrix;
 
@@ -128,19 +128,14 @@ fn features(prep: &Prepared, held: &[&Pose]) -> Vec<Feature> {
 /// everywhere); the same contrast of every null sample (each bin against the null mean) gives
 /// its `1 - false_alarm` quantile, so a gap that depends on the feature stands out even when
 /// every bin exceeds noise.
+/// `(r_obs, r_null)` are the observation's and the null samples' held-out residuals after the
+/// baseline refit.
 pub(super) fn feature_entries(
     prep: &Prepared,
-    null: &NullData,
+    (r_obs, r_null): (&DMatrix<f64>, &DMatrix<f64>),
     false_alarm: f64,
 ) -> (Vec<WhereEntry>, Vec<FeatureContrast>) {
     let (_, held) = split(&prep.poses);
-    let base = prep.baseline_fit();
-    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
-    let heldout = |data: &DMatrix<f64>| {
-        let (t, h) = prep.rows(data);
-        base.heldout(&t, &h)
-    };
-    let (r_obs, r_null) = (heldout(&observed), base.heldout(&null.train, &null.held));
     // Residual rows of every held-out pose (3 per target, in pose order).
     let mut rows = Vec::with_capacity(held.len());
     let mut start = 0;
@@ -171,8 +166,8 @@ pub(super) fn feature_entries(
             let targets = poses.iter().map(|&i| held[i].targets.len()).sum::<usize>().max(1) as f64;
             bins.push(Bin {
                 label,
-                observed: ssr(&r_obs, 0),
-                null: (0..r_null.ncols()).map(|c| ssr(&r_null, c)).collect(),
+                observed: ssr(r_obs, 0),
+                null: (0..r_null.ncols()).map(|c| ssr(r_null, c)).collect(),
                 targets,
             });
         }

@@ -60,7 +60,7 @@ pub use validate::{
 };
 
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
-use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear};
+use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear_with};
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
@@ -163,6 +163,9 @@ struct Prepared {
     residuals: DVector<f64>,
     /// Sensitivity to the geometric refit parameters.
     x_geometric: DMatrix<f64>,
+    /// The baseline refit's linear fit of `x_geometric` (computed once: every test, the
+    /// features and the refinements start from it).
+    baseline: LinearFit,
     /// Sensitivity to each candidate's parameters.
     x_candidates: Vec<(Candidate, DMatrix<f64>)>,
 }
@@ -233,7 +236,8 @@ fn prepare(
             .residuals(&zeros, &order)
             .ok_or_else(|| model_error("residuals"))?,
     );
-    let x_geometric = sensitivity(|p| predictor.residuals(p, &order), &zeros, &predictor.steps())
+    let x_geometric = predictor
+        .sensitivity(&zeros, 0..zeros.len(), &order, &predictor.steps())
         .ok_or_else(|| model_error("refit sensitivity"))?;
     let mut x_candidates = Vec::new();
     let library = if with_candidates {
@@ -256,6 +260,11 @@ fn prepare(
             x_candidates.push((c, x));
         }
     }
+    let n = x_geometric.nrows();
+    let baseline = LinearFit::new(
+        &x_geometric.rows(0, train_rows).into_owned(),
+        &x_geometric.rows(train_rows, n - train_rows).into_owned(),
+    );
     Ok(Prepared {
         cal,
         predictor,
@@ -264,6 +273,7 @@ fn prepare(
         held_targets,
         residuals,
         x_geometric,
+        baseline,
         x_candidates,
     })
 }
@@ -285,16 +295,7 @@ fn candidate_sensitivity(
     }
     let g = pred.geometric_count();
     let p0 = vec![0.0; g + pred.effect_count()];
-    let steps = pred.steps();
-    sensitivity(
-        |e| {
-            let mut p = p0.clone();
-            p[g..].copy_from_slice(e);
-            pred.residuals(&p, order)
-        },
-        &vec![0.0; pred.effect_count()],
-        &steps[g..],
-    )
+    pred.sensitivity(&p0, g..p0.len(), order, &pred.steps())
 }
 
 impl Prepared {
@@ -306,9 +307,8 @@ impl Prepared {
         )
     }
 
-    fn baseline_fit(&self) -> LinearFit {
-        let (t, h) = self.rows(&self.x_geometric);
-        LinearFit::new(&t, &h)
+    fn baseline_fit(&self) -> &LinearFit {
+        &self.baseline
     }
 
     fn candidate_fit(&self, x_effect: &DMatrix<f64>) -> LinearFit {
@@ -345,7 +345,8 @@ struct Refined {
     heldout_ssr: f64,
     /// Fitted parameters (refit, then the candidate's).
     params: DVector<f64>,
-    /// The fit linearised at the parameters (their covariance).
+    /// The fit linearised at the parameters (their covariance; before the last step when
+    /// refined without `with_fit`).
     fit: LinearFit,
     /// Training residuals at the parameters \[m\].
     r_train: DVector<f64>,
@@ -354,18 +355,24 @@ struct Refined {
 impl Prepared {
     /// The observed data fitted by the refit plus `candidate` (with its sensitivity `x_effect`)
     /// with the nonlinear model: the linearised solution, then Gauss-Newton steps re-linearised
-    /// at the current parameters ([`refine_from_linear`], shared with `calibrate --refine`;
+    /// at the current parameters ([`refine_from_linear_with`], shared with `calibrate --refine`;
     /// rank-revealing like [`LinearFit`], held-out rows carried along unfitted). A large effect
     /// moves the model far enough that the first-order fit leaves a visible second-order
     /// residual; noise-only data (the null distributions) do not, so the linear null still
     /// applies.
-    fn refine(&self, candidate: Option<(Candidate, &DMatrix<f64>)>) -> Option<Refined> {
+    /// Without `with_fit`, [`Refined::fit`] is linearised before the last step (for a caller
+    /// that needs the residuals only: one linearisation less).
+    fn refine(&self, candidate: Option<(Candidate, &DMatrix<f64>)>, with_fit: bool) -> Option<Refined> {
         let members: Vec<Candidate> = candidate.iter().map(|c| c.0).collect();
         let pred = self.predictor.with_candidates(&members);
         let order = ordered(&self.poses);
         // The linearised solution is where the tests stand; the refinement starts there.
+        let with_candidate;
         let linear = match candidate {
-            Some((_, x)) => self.candidate_fit(x),
+            Some((_, x)) => {
+                with_candidate = self.candidate_fit(x);
+                &with_candidate
+            }
             None => self.baseline_fit(),
         };
         let how = GaussNewtonSteps {
@@ -373,11 +380,13 @@ impl Prepared {
             max_steps: REFINE_STEPS,
             truncate_below: NULL_DIRECTION_TOLERANCE,
             small_step: None,
+            fit_at_end: with_fit,
         };
-        let out = refine_from_linear(
+        let steps = pred.steps();
+        let out = refine_from_linear_with(
             |p| pred.residuals(p, &order),
-            &pred.steps(),
-            &linear,
+            |p| pred.sensitivity(p, 0..p.len(), &order, &steps),
+            linear,
             &self.residuals.rows(0, self.train_rows).into_owned(),
             self.train_rows,
             how,
@@ -515,7 +524,7 @@ pub fn baseline_heldout_rms_mm(
     let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit, false)?;
     let fit = prep.baseline_fit();
     let ssr = prep.heldout_ssr(
-        &fit,
+        fit,
         &DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice()),
     );
     Ok((ssr[0] / prep.held_targets.max(1) as f64).sqrt() * 1e3)
@@ -575,7 +584,7 @@ fn refined_tool_targets(prep: &Prepared, noise_rms_3d_mm: f64) -> Option<ToolTar
     if prep.predictor.tool_targets_m().is_empty() {
         return None;
     }
-    let refined = prep.refine(None)?;
+    let refined = prep.refine(None, true)?;
     let dof = prep.train_rows.saturating_sub(refined.fit.rank).max(1);
     let sigma2 = (noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
     let variance = sigma2.max(refined.r_train.norm_squared() / dof as f64);

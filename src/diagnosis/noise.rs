@@ -12,7 +12,7 @@
 use super::DiagnosisError;
 use super::poses::Pose;
 use crate::calibration::procedure::Calibration;
-use crate::kinematics::PhiModel;
+use crate::kinematics::FixedFrames;
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::physics::UNMOVED_ACTUATOR_RAD;
 use crate::plan::TOOL_EXPERIMENT;
@@ -63,7 +63,8 @@ enum RowTarget {
 /// measurements through the calibrated model; tool targets at `tool_targets_m` (tool frame).
 #[derive(Clone, Debug)]
 pub struct CleanCampaign {
-    model: PhiModel,
+    /// The calibrated model with its constant frames (computed once for every row).
+    frames: FixedFrames,
     rows: Vec<CleanRow>,
 }
 
@@ -158,7 +159,10 @@ impl CleanCampaign {
                 })
             })
             .collect::<Result<_, DiagnosisError>>()?;
-        Ok(CleanCampaign { model, rows })
+        Ok(CleanCampaign {
+            frames: FixedFrames::new(model),
+            rows,
+        })
     }
 
     /// The number of axis targets (one per experiment and target): the nuisance positions of
@@ -210,7 +214,7 @@ impl CleanCampaign {
             Some(d) => r.q.iter().zip(d).map(|(a, b)| a + b).collect(),
             None => r.q.clone(),
         };
-        self.model.poses(&q).world_from_link[r.link] * r.point_in_link_m
+        self.frames.poses(&q).world_from_link[r.link] * r.point_in_link_m
     }
 }
 
@@ -314,7 +318,8 @@ type ValidationPose = (Vec<f64>, Vec<f64>, Vec<(usize, Point3<f64>, Point3<f64>)
 /// The validation poses of a campaign on the calibrated robot, for drawing their noise: per
 /// pose (file order) its joint values, actuator commands and the residual rows of its targets.
 pub struct ValidationRows {
-    model: PhiModel,
+    /// The calibrated model with its constant frames.
+    frames: FixedFrames,
     /// Per pose: joint values, actuator commands, and per target (first residual row, target
     /// in the last link's frame, noise-free position).
     poses: Vec<ValidationPose>,
@@ -350,7 +355,10 @@ impl ValidationRows {
             }
             out.push((q, u, targets));
         }
-        Ok(ValidationRows { model, poses: out })
+        Ok(ValidationRows {
+            frames: FixedFrames::new(model),
+            poses: out,
+        })
     }
 
     /// Adds one draw of the validation noise to `column` (residual rows, `measured -
@@ -363,7 +371,7 @@ impl ValidationRows {
             let dq = jitter.draw(u, rng);
             let link = jittered.then(|| {
                 let q: Vec<f64> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
-                self.model.poses(&q).world_from_link[q.len() - 1]
+                self.frames.world_from_last_link(&q)
             });
             for (row, in_link, clean) in targets {
                 let moved = link.map_or(Vector3::zeros(), |l| l * in_link - clean);

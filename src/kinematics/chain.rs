@@ -169,6 +169,28 @@ impl FixedFrames {
         }
     }
 
+    /// The frames of `model`, each taken from `near` where its joint and row are `near`'s
+    /// (the same numbers as [`FixedFrames::new`], bit for bit): the frames of a model that
+    /// differs from another in a few rows, e.g. a central difference's.
+    pub fn new_near(model: PhiModel, near: &FixedFrames) -> Self {
+        let link_from_next_frame = (0..model.dof().saturating_sub(1))
+            .map(|k| {
+                let same = near.link_from_next_frame.len() > k
+                    && model.joints[k] == near.model.joints[k]
+                    && model.rows[k] == near.model.rows[k];
+                if same {
+                    near.link_from_next_frame[k]
+                } else {
+                    model.link_from_next_frame(k)
+                }
+            })
+            .collect();
+        FixedFrames {
+            model,
+            link_from_next_frame,
+        }
+    }
+
     /// The model these frames are of.
     pub fn model(&self) -> &PhiModel {
         &self.model
@@ -185,6 +207,25 @@ impl FixedFrames {
     /// If `q.len() != self.model().dof()`: a programming error, not a data error.
     pub fn poses(&self, q: &[f64]) -> ChainPoses {
         self.model.poses_by(q, |k| self.link_from_next_frame[k])
+    }
+
+    /// The last link's moving frame in the world, `poses(q).world_from_link[N - 1]` bit for bit
+    /// (the same products in the same order), without building the other frames.
+    ///
+    /// # Panics
+    /// If `q.len() != self.model().dof()`: a programming error, not a data error.
+    pub fn world_from_last_link(&self, q: &[f64]) -> Isometry3<f64> {
+        let n = self.model.dof();
+        assert_eq!(q.len(), n, "joint vector length must equal the number of joints");
+        let mut frame = self.model.world_from_base;
+        for (k, (joint, &qk)) in self.model.joints.iter().zip(q).enumerate() {
+            let link = frame * joint_motion(joint.kind, qk);
+            if k + 1 == n {
+                return link;
+            }
+            frame = link * self.link_from_next_frame[k];
+        }
+        frame
     }
 
     /// [`PhiModel::world_from_tool`], bit for bit.
@@ -243,6 +284,32 @@ mod tests {
             prop_assert_eq!(frames.poses(q), m.poses(q));
             prop_assert_eq!(frames.world_from_tool(q), m.world_from_tool(q));
             prop_assert_eq!(frames.world_from_tool(q), m.poses(q).world_from_tool);
+            prop_assert_eq!(frames.world_from_last_link(q), m.poses(q).world_from_link[kinds.len() - 1]);
+        }
+
+        /// Frames taken from another model's where a joint and its row are the same are the
+        /// model's own, bit for bit, whichever rows and angles differ.
+        #[test]
+        fn frames_near_another_models_are_the_models_own(
+            kinds in prop::collection::vec(prop::bool::ANY, 1..8),
+            x in prop::collection::vec(-3.0f64..3.0, 7..60),
+            moved in prop::collection::vec(prop::bool::ANY, 8),
+            q in prop::collection::vec(-3.0f64..3.0, 8),
+        ) {
+            let kinds: Vec<JointKind> =
+                kinds.iter().map(|&r| if r { JointKind::Revolute } else { JointKind::Prismatic }).collect();
+            let near = model(&kinds, &x).fixed_frames();
+            let mut m = model(&kinds, &x);
+            for (k, row) in m.rows.iter_mut().enumerate() {
+                if moved[k] {
+                    row.b_m += 1e-6;
+                    m.joints[k].phi_rad -= 1e-6;
+                }
+            }
+            let q = &q[..kinds.len()];
+            let frames = FixedFrames::new_near(m.clone(), &near);
+            prop_assert_eq!(&frames, &FixedFrames::new(m.clone()));
+            prop_assert_eq!(frames.poses(q), m.poses(q));
         }
     }
 }

@@ -447,6 +447,7 @@ where
         max_steps: options.max_steps,
         truncate_below: NULL_DIRECTION_TOLERANCE,
         small_step: Some(&negligible),
+        fit_at_end: true,
     };
     if rank == 0 {
         return Err(RefineError::NothingIdentified);

@@ -66,17 +66,23 @@ pub(super) fn second_effect(
     let b_first = candidate_block(prep, base, &[], x_first);
     let (chi2_first, null_first) = after_base.heldout_chi2(&b_first, sigma2);
     let after_first = after_base.after(&b_first);
-    let mut trials: Vec<Trial> = prep
+    let (others, rows): (Vec<Candidate>, Vec<_>) = prep
         .x_candidates
         .iter()
         .filter(|(c, _)| !c.same_kind(&first.candidate))
-        .map(|(c, x_c)| {
-            let block = candidate_block(prep, base, &[&b_first], x_c);
-            let (chi2, chi2_null) = after_first.heldout_chi2(&block, sigma2);
+        .map(|(c, x_c)| (*c, prep.rows(x_c)))
+        .unzip();
+    let blocks = base.blocks(&[&b_first], &rows);
+    let chi2s = after_first.heldout_chi2_all(&blocks.iter().collect::<Vec<_>>(), sigma2);
+    let mut trials: Vec<Trial> = others
+        .into_iter()
+        .zip(blocks)
+        .zip(chi2s)
+        .map(|((c, block), (chi2, chi2_null))| {
             let t_null: Vec<f64> = null_first.iter().zip(&chi2_null).map(|(a, b)| a - b).collect();
             let (mu, sd) = (mean(&t_null), std_dev(&t_null).max(1e-12));
             Trial {
-                candidate: *c,
+                candidate: c,
                 block,
                 chi2,
                 chi2_null,

@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, Vector3};
 /// Step \[rad\] of the joint offsets in [`Predictor::joint_sensitivity`]: moves the targets by
 /// about 1e-6 m, where the central difference's rounding (about `eps x 1 m / 1e-6 m`, 2e-10
 /// relative) and its truncation (`(1e-6)^2 / 6` of the next derivative) are both negligible.
-const JOINT_STEP_RAD: f64 = 1e-6;
+pub(super) const JOINT_STEP_RAD: f64 = 1e-6;
 
 /// The calibrated couplings at the active displacements `active`, for
 /// [`coupled_static_deflection`]: the slope of every `coupling_in`; the fractional (eq. 15)
@@ -130,11 +130,13 @@ impl Predictor {
     /// The sensitivity `d prediction / d q` of the residual rows of `poses` (as
     /// [`Predictor::residuals`] at `params`) to a joint offset common to every pose: the rows
     /// of one pose depend on its own joint values only, so they are that pose's Jacobian. By
-    /// central differences ([`crate::calibration::refine::sensitivity`], the one tool).
+    /// central differences ([`crate::calibration::refine::sensitivity`], the one tool), the
+    /// joint values before the offset computed once.
     pub fn joint_sensitivity(&self, params: &[f64], poses: &[&Pose]) -> Option<DMatrix<f64>> {
         let n = self.dof();
+        let memo = self.joint_memo(params, poses);
         crate::calibration::refine::sensitivity(
-            |offset| self.residuals_offset(params, poses, offset),
+            |offset| self.residuals_offset(params, poses, offset, memo.as_ref()),
             &vec![0.0; n],
             &vec![JOINT_STEP_RAD; n],
         )

@@ -29,7 +29,7 @@ use crate::physics::{
 };
 use crate::robot::{Controller, CouplingFunction, RobotDescription, RobotModel};
 use effect_set::EffectSet;
-use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Gravity in the instrument frame \[m/s^2\] assumed by the compliance candidates.
@@ -99,6 +99,16 @@ pub struct Predictor {
     pub candidates: Vec<Candidate>,
     /// What the baseline refits besides the geometry.
     pub scope: RefitScope,
+}
+
+/// The work of an evaluation that the evaluations near it can reuse: per pose the actuator
+/// commands (fig. 3 decoupling) and the active displacements (the transmissions' inversions,
+/// eq. 8), with the transducer offset and transmission of every joint they were computed
+/// with, and the model's constant frames (eq. A1).
+struct JointMemo {
+    transmissions: Vec<(f64, crate::robot::Transmission)>,
+    poses: Vec<(Vec<f64>, Vec<f64>)>,
+    frames: FixedFrames,
 }
 
 /// Workspace features of a validation pose ([`Predictor::pose_features`]).
@@ -306,7 +316,18 @@ impl Predictor {
     /// couplings); `None` when the command cannot be executed.
     fn joint_values(&self, robot: &RobotModel, effects: &EffectSet, pose: &Pose) -> Option<(Vec<f64>, Vec<f64>)> {
         let u = self.controller.decouple(&pose.cmd).ok()?;
-        let mut active = robot.active_displacements(&u).ok()?;
+        let active = robot.active_displacements(&u).ok()?;
+        self.joint_values_from(robot, effects, pose, active)
+    }
+
+    /// [`Predictor::joint_values`] from the transmissions' active displacements `active`.
+    fn joint_values_from(
+        &self,
+        robot: &RobotModel,
+        effects: &EffectSet,
+        pose: &Pose,
+        mut active: Vec<f64>,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
         add_joint_period_errors(&effects.harmonics, &mut active);
         for &(k, source, half_band_rad) in &effects.backlash {
             let approach = match source {
@@ -358,18 +379,109 @@ impl Predictor {
     /// when a command cannot be executed by the model (a transmission that does not invert,
     /// a compliance under which the arm buckles).
     pub fn residuals(&self, params: &[f64], poses: &[&Pose]) -> Option<Vec<f64>> {
-        self.residuals_offset(params, poses, &[])
+        self.residuals_offset(params, poses, &[], None)
+    }
+
+    /// The transmissions' work for `poses` at `params`, for the evaluations near `params`
+    /// ([`JointMemo`]); `None` when a command cannot be executed.
+    fn joint_memo(&self, params: &[f64], poses: &[&Pose]) -> Option<JointMemo> {
+        let (robot, _) = self.robot_and_effects(params);
+        let poses = poses
+            .iter()
+            .map(|pose| {
+                let u = self.controller.decouple(&pose.cmd).ok()?;
+                let active = robot.active_displacements(&u).ok()?;
+                Some((u, active))
+            })
+            .collect::<Option<_>>()?;
+        Some(JointMemo {
+            frames: FixedFrames::new(self.model(&robot, params)),
+            transmissions: robot
+                .joints
+                .iter()
+                .map(|j| (j.transducer_offset, j.transmission.clone()))
+                .collect(),
+            poses,
+        })
+    }
+
+    /// The active displacements of pose `i` of `memo` on `robot`: the memo's, with those of
+    /// the joints whose transducer offset or transmission differs from the memo's
+    /// (`changed`) inverted again as [`RobotModel::active_displacements`] does.
+    fn active_from_memo(&self, robot: &RobotModel, memo: &JointMemo, changed: &[usize], i: usize) -> Option<Vec<f64>> {
+        let (u, active) = &memo.poses[i];
+        let mut active = active.clone();
+        for &k in changed {
+            let j = &robot.joints[k];
+            active[k] = j.transmission.actual_from_command(u[k] - j.transducer_offset)?;
+        }
+        Some(active)
+    }
+
+    /// The sensitivity `X = d prediction / d p` of the residual rows of `poses` to the
+    /// parameters `columns` at `params`: the central differences of [`Predictor::residuals`]
+    /// by the project's one tool ([`crate::calibration::refine::sensitivity`]) with the steps
+    /// `steps[columns]`, bit for bit, but with the transmission inversions (most of an
+    /// evaluation) done once at `params` (kept in a private memo): a column redoes only the joint its
+    /// parameter moves (a zero offset, a transmission harmonic), none for the rest (rows,
+    /// couplings, tool targets, frames, the backlash, tilt, thermal, scale and compliance
+    /// candidates'); likewise the model's constant frames, of which a row's column redoes
+    /// one. `None` when a command cannot be executed.
+    pub fn sensitivity(
+        &self,
+        params: &[f64],
+        columns: std::ops::Range<usize>,
+        poses: &[&Pose],
+        steps: &[f64],
+    ) -> Option<DMatrix<f64>> {
+        let memo = self.joint_memo(params, poses);
+        crate::calibration::refine::sensitivity(
+            |e| {
+                let mut p = params.to_vec();
+                p[columns.clone()].copy_from_slice(e);
+                self.residuals_offset(&p, poses, &[], memo.as_ref())
+            },
+            &params[columns.clone()],
+            &steps[columns.clone()],
+        )
     }
 
     /// [`Predictor::residuals`] with the joint values of every pose offset by `offset_rad`
-    /// (after the sag; empty: none): the function [`Predictor::joint_sensitivity`] differences.
-    fn residuals_offset(&self, params: &[f64], poses: &[&Pose], offset_rad: &[f64]) -> Option<Vec<f64>> {
+    /// (after the sag; empty: none): the function [`Predictor::joint_sensitivity`]
+    /// differences. With a `memo` of the same poses, the active displacements of the joints
+    /// whose transmission is the memo's and the frames of the rows that are its come from it
+    /// (the same values bit for bit).
+    fn residuals_offset(
+        &self,
+        params: &[f64],
+        poses: &[&Pose],
+        offset_rad: &[f64],
+        memo: Option<&JointMemo>,
+    ) -> Option<Vec<f64>> {
         let (robot, effects) = self.robot_and_effects(params);
-        let frames = FixedFrames::new(self.model(&robot, params));
+        let memo = memo.filter(|m| m.poses.len() == poses.len());
+        let frames = match memo {
+            Some(m) => FixedFrames::new_near(self.model(&robot, params), &m.frames),
+            None => FixedFrames::new(self.model(&robot, params)),
+        };
         let targets = self.targets(params);
+        let changed: Vec<usize> = memo.map_or_else(Vec::new, |m| {
+            (robot.joints.iter().zip(&m.transmissions).enumerate())
+                .filter(|(_, (j, (offset, t)))| {
+                    j.transducer_offset.to_bits() != offset.to_bits() || j.transmission != *t
+                })
+                .map(|(k, _)| k)
+                .collect()
+        });
         let mut out = Vec::with_capacity(poses.len() * 9);
-        for pose in poses {
-            let (mut q, active) = self.joint_values(&robot, &effects, pose)?;
+        for (i, pose) in poses.iter().enumerate() {
+            let (mut q, active) = match memo {
+                Some(m) => {
+                    let active = self.active_from_memo(&robot, m, &changed, i)?;
+                    self.joint_values_from(&robot, &effects, pose, active)?
+                }
+                None => self.joint_values(&robot, &effects, pose)?,
+            };
             // A thermal candidate changes the rows with the pose's temperature; else the
             // model's constant frames serve every pose.
             let frames_t = match effects.expanded_at(frames.model(), pose.temperature_c) {
@@ -384,9 +496,15 @@ impl Predictor {
             for (qk, d) in q.iter_mut().zip(offset_rad) {
                 *qk += d;
             }
-            let mut links = frames_t.poses(&q).world_from_link;
-            apply_axis_tilts(&effects.tilts, model_t, &q, &mut links);
-            let tool = links[links.len() - 1] * model_t.last_link_from_tool;
+            // Without a tilt only the last link's frame is needed (the same numbers).
+            let last_link = if effects.tilts.is_empty() {
+                frames_t.world_from_last_link(&q)
+            } else {
+                let mut links = frames_t.poses(&q).world_from_link;
+                apply_axis_tilts(&effects.tilts, model_t, &q, &mut links);
+                links[links.len() - 1]
+            };
+            let tool = last_link * model_t.last_link_from_tool;
             for (id, measured) in &pose.targets {
                 let t = targets.get(*id)?;
                 let p = (tool * t).coords * effects.scale;

@@ -293,3 +293,90 @@ fn compliance_sensitivities_match_central_differences() {
         }
     }
 }
+
+/// The predictor's sensitivity ([`Predictor::sensitivity`], the joint values kept across the
+/// columns that do not move them) is the project's one finite-difference tool applied to
+/// [`Predictor::residuals`] bit for bit, at a point away from zero (every parameter moved),
+/// for every parameter of the refit and of candidates of every family (harmonics in both
+/// periods and a backlash move the joints, the rest act after them), and for a sub-range of
+/// the columns; so is the joint sensitivity at that point against the offset's differences
+/// without the kept values (here: the same function with the joint values recomputed).
+#[test]
+fn the_predictors_sensitivity_is_the_central_differences_bit_for_bit() {
+    let (desc, truth) = truth();
+    let mut poses = simulated_poses(&Effects::default());
+    for (k, p) in poses.iter_mut().enumerate() {
+        p.payload_kg = [0.0, 5.0, 12.0][k % 3];
+        p.temperature_c = 18.0 + k as f64 * 0.7;
+    }
+    let every: Vec<&Pose> = poses.iter().collect();
+    let candidates = [
+        Candidate::GearHarmonic {
+            joint: 5,
+            order: 2,
+            period: HarmonicPeriod::Joint,
+        },
+        Candidate::GearHarmonic {
+            joint: 2,
+            order: 3,
+            period: HarmonicPeriod::Transmission,
+        },
+        Candidate::Backlash {
+            joint: 3,
+            direction: ApproachSource::Actuator,
+        },
+        Candidate::AxisWobble {
+            joint: 4,
+            order: 1,
+            shape: TiltShape::General,
+        },
+        Candidate::ThermalExpansion {
+            links: ThermalLinks::PerLink,
+        },
+        Candidate::InstrumentScale,
+        Candidate::JointCompliance {
+            joint: 2,
+            spring: SpringSite::Actuator,
+            masses: MassModel::Lumped,
+        },
+    ];
+    let pred = Predictor::new(
+        &truth,
+        &desc,
+        PoseConditions::default().temperature_c,
+        RefitScope::Identified,
+    )
+    .with_candidates(&candidates);
+    let n = pred.geometric_count() + pred.effect_count();
+    let steps = pred.steps();
+    // Small enough that every command still executes, different in every parameter.
+    let params: Vec<f64> = (0..n).map(|i| steps[i] * (((i * 7919) % 13) as f64 - 6.0)).collect();
+    let plain = |columns: std::ops::Range<usize>| {
+        crate::calibration::refine::sensitivity(
+            |e| {
+                let mut p = params.clone();
+                p[columns.clone()].copy_from_slice(e);
+                pred.residuals(&p, &every)
+            },
+            &params[columns.clone()],
+            &steps[columns.clone()],
+        )
+        .expect("predicts")
+    };
+    let bits = |m: &DMatrix<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for columns in [0..n, pred.geometric_count()..n, 3..17] {
+        let kept = pred
+            .sensitivity(&params, columns.clone(), &every, &steps)
+            .expect("predicts");
+        assert_eq!(kept.ncols(), columns.len());
+        assert_eq!(bits(&kept), bits(&plain(columns.clone())), "columns {columns:?}");
+    }
+    let joint = pred.joint_sensitivity(&params, &every).expect("predicts");
+    let fresh = crate::calibration::refine::sensitivity(
+        |offset| pred.residuals_offset(&params, &every, offset, None),
+        &vec![0.0; pred.dof()],
+        &vec![super::compliance::JOINT_STEP_RAD; pred.dof()],
+    )
+    .expect("predicts");
+    assert_eq!(bits(&joint), bits(&fresh));
+}
