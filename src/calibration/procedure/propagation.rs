@@ -373,13 +373,15 @@ impl Propagation {
     /// Adds `J C J^T` for inputs with covariance `c`: column `k` of `J` the one-sided
     /// difference `(eval(k, h_k) - base) / h_k`, `base` the derived vector at the unmoved
     /// inputs computed by the same arithmetic as `eval` (the caller's: one evaluation for all
-    /// columns instead of one per column), `h_k = 1e-4 sqrt(c_kk)`: the parameters move by a
-    /// ten-thousandth of their sigma, so the truncation error, `h_k f'' / 2` against `f'`,
-    /// is a ten-thousandth of the relative change of the slope over one sigma, which makes a
-    /// variance `1e-4 sigma |f''/f'|` relative (the couplings' and tool frame's sigmas move by
-    /// <= 6e-6 against central differences at 1e-3 sigma on the paper arm, `docs/validation.md`,
-    /// "seventh pass"); rounding at the metre and radian scale of the derived quantities,
-    /// ~1e-16 over steps >= 1e-10 (any sigma >= 1 um), is below it.
+    /// columns instead of one per column), `h_k = 1e-3 sqrt(c_kk)`: the parameters move by a
+    /// thousandth of their sigma, so the truncation error, `h_k f'' / 2` against `f'`, is a
+    /// thousandth of the relative change of the slope over one sigma, which makes a variance
+    /// `1e-3 sigma |f''/f'|` relative (the sigmas move by <= 6.2e-5 against central
+    /// differences on the paper arm, `docs/validation.md`, "seventh pass"). Not smaller:
+    /// rounding at the metre and radian scale of the derived quantities, ~1e-16 over the
+    /// step, gives a parameter fixed by convention (`b1 = 0`) a 1-sigma of ~1e-16 sigma / h
+    /// per column, ~4e-13 here, which must stay below the 1e-12 that marks a parameter as
+    /// estimated (`harness::studies::efficiency`); at 1e-4 sigma it reached 4e-12.
     pub(super) fn add<E>(
         &mut self,
         c: &DMatrix<f64>,
@@ -405,7 +407,7 @@ impl Propagation {
             if c[(k, k)] <= 0.0 || !moves(k) {
                 continue;
             }
-            let h = 1e-4 * c[(k, k)].sqrt();
+            let h = 1e-3 * c[(k, k)].sqrt();
             for (r, v) in eval(k, h)?.difference(&origin, h).into_iter().enumerate().take(n) {
                 jac[(r, k)] = v;
             }
@@ -470,7 +472,7 @@ mod tests {
     /// The one-sided differences of `add` against the analytic `J C J^T` (J = [[1, 2], [x1,
     /// x0]]): agreement to rounding of the steps (the first row is linear, the second
     /// linear in each input alone: one-sided differences are exact up to rounding, ~1e-16 /
-    /// 1e-4 relative).
+    /// 1e-3 relative).
     #[test]
     fn propagation_matches_the_analytic_jacobian() {
         let x = [0.3, -1.7];
@@ -492,13 +494,13 @@ mod tests {
 
     /// A curved derived vector, `[exp(x0), sin(x0 + x1)]` with 1-sigma of 1e-2 and 3e-2
     /// (curvature on the unit scale, larger sigmas than any fit's): the one-sided columns
-    /// differ from the analytic Jacobian by the truncation `h f'' / 2`, `h = 1e-4 sigma`, so
-    /// a variance by `1e-4 sigma |f''/f'|` relative (twice the column's): 1e-6 for the
-    /// exponential, 2.8e-6 for the sine (`tan(x0 + x1) = 1`, its variance mostly from `x1`);
-    /// checked at 5e-6. With a step ten times larger it fails (the truncation is what is
+    /// differ from the analytic Jacobian by the truncation `h f'' / 2`, `h = 1e-3 sigma`, so
+    /// a variance by `1e-3 sigma |f''/f'|` relative (twice the column's): 1e-5 for the
+    /// exponential, 2.8e-5 for the sine (`tan(x0 + x1) = 1`, its variance mostly from `x1`);
+    /// checked at 5e-5. With a step ten times larger it fails (the truncation is what is
     /// checked).
     #[test]
-    fn one_sided_truncation_is_a_ten_thousandth_of_the_curvature_over_one_sigma() {
+    fn one_sided_truncation_is_a_thousandth_of_the_curvature_over_one_sigma() {
         let x = [0.2, std::f64::consts::FRAC_PI_4 - 0.2];
         let curved = |y: [f64; 2]| Derived {
             values: vec![y[0].exp(), (y[0] + y[1]).sin()],
@@ -526,8 +528,8 @@ mod tests {
                 .map(|i| (p.covariance[(i, i)] / expected[(i, i)] - 1.0).abs())
                 .fold(0.0, f64::max)
         };
-        assert!(relative(1.0) <= 5e-6, "{}", relative(1.0));
-        assert!(relative(10.0) > 5e-6, "{}", relative(10.0));
+        assert!(relative(1.0) <= 5e-5, "{}", relative(1.0));
+        assert!(relative(10.0) > 5e-5, "{}", relative(10.0));
     }
 
     /// An arc fit with a first-order harmonic transmission and local covariance `c`.
@@ -588,10 +590,10 @@ mod tests {
     /// by column (a second path: central differences of the rebuilt axis), for a derived
     /// vector that depends on the line only (the foot of the perpendicular from a fixed
     /// point, the direction) and on the transmission's coefficients: the two covariances
-    /// agree to the one-sided differences' truncation, `1e-4 sigma |f''/f'|` relative
+    /// agree to the one-sided differences' truncation, `1e-3 sigma |f''/f'|` relative
     /// ([`Propagation::add`]), here with sigmas up to ~1e-2 and curvature on the unit scale
-    /// (the foot of the perpendicular from a point ~1 m away): ~1e-6, checked at 5e-6 of the
-    /// largest entry (steps of 1e-3 sigma: 1.1e-5, fails).
+    /// (the foot of the perpendicular from a point ~1 m away): ~1e-5, checked at 5e-5 of the
+    /// largest entry (measured 1.1e-5; at steps of 1e-4 sigma 1.1e-6).
     #[test]
     fn line_coordinates_propagate_as_the_local_parameters() {
         let n = 2 + crate::calibration::arc_model::N_GEOMETRY;
@@ -631,7 +633,7 @@ mod tests {
             .unwrap();
         let scale = direct.covariance.abs().max();
         let diff = (&chained.covariance - &direct.covariance).abs().max();
-        assert!(diff <= 5e-6 * scale, "{diff} of {scale}");
+        assert!(diff <= 5e-5 * scale, "{diff} of {scale}");
         assert!(chained.covariance[(0, 0)] > 0.0 && chained.covariance[(6, 6)] > 0.0);
     }
 
