@@ -696,9 +696,7 @@ impl<'a> Context<'a> {
         let (base, world_from_link) = self.derived((axes, &transmissions), target1, tool, recording)?;
         let record = record.into_inner();
         let mut responses: Vec<Option<CouplingResponse>> = vec![None; self.desc.dof()];
-        for c in &record {
-            responses[c.k] = Some(c.response.clone());
-        }
+        record.iter().for_each(|c| responses[c.k] = Some(c.response.clone()));
         let starts = RefCell::new(Vec::new());
         let warm = Refit {
             warm: Some(&responses),
