@@ -148,20 +148,44 @@ fn relative(a: &Isometry3<f64>, b: &Isometry3<f64>) -> Vector6<f64> {
 /// `(p(a) - p(b)) / step` for two models of the same structure, the placements relative to
 /// `b`'s.
 pub fn model_difference(a: &RobotModel, b: &RobotModel, step: f64) -> Vec<f64> {
-    let mut out: Vec<f64> = relative(&a.placement.to_isometry(), &b.placement.to_isometry())
-        .iter()
-        .copied()
-        .collect();
-    let mut values_b = Vec::new();
-    visit_scalars(&mut b.clone(), &mut |_, v, stored| values_b.push(in_vector(*v, stored)));
-    let mut i = 0;
-    visit_scalars(&mut a.clone(), &mut |_, v, stored| {
-        out.push(in_vector(*v, stored) - values_b[i]);
-        i += 1;
-    });
-    out.extend(relative(&a.tool_frame.to_isometry(), &b.tool_frame.to_isometry()).iter());
-    out.iter_mut().for_each(|x| *x /= step);
-    out
+    ModelOrigin::new(b).difference(&mut a.clone(), step)
+}
+
+/// A model `b` as the origin of [`model_difference`]s, its parameters read once for many
+/// differences.
+#[derive(Clone, Debug)]
+pub struct ModelOrigin {
+    placement: Isometry3<f64>,
+    tool: Isometry3<f64>,
+    values: Vec<f64>,
+}
+
+impl ModelOrigin {
+    /// The origin at `b`.
+    pub fn new(b: &RobotModel) -> Self {
+        let mut values = Vec::new();
+        visit_scalars(&mut b.clone(), &mut |_, v, stored| values.push(in_vector(*v, stored)));
+        ModelOrigin {
+            placement: b.placement.to_isometry(),
+            tool: b.tool_frame.to_isometry(),
+            values,
+        }
+    }
+
+    /// [`model_difference`]`(a, b, step)`; `a` is read, not changed (the visitor of its
+    /// scalars is the one [`model_moved`] writes through).
+    pub fn difference(&self, a: &mut RobotModel, step: f64) -> Vec<f64> {
+        let mut out: Vec<f64> = Vec::with_capacity(self.values.len() + 12);
+        out.extend(relative(&a.placement.to_isometry(), &self.placement).iter());
+        let mut i = 0;
+        visit_scalars(a, &mut |_, v, stored| {
+            out.push(in_vector(*v, stored) - self.values[i]);
+            i += 1;
+        });
+        out.extend(relative(&a.tool_frame.to_isometry(), &self.tool).iter());
+        out.iter_mut().for_each(|x| *x /= step);
+        out
+    }
 }
 
 fn in_vector(v: f64, stored: Stored) -> f64 {

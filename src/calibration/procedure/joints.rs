@@ -7,13 +7,13 @@ use super::axis_fit::actuator_commands;
 use super::{AxisExperiment, CouplingReport, ProcedureError};
 use crate::calibration::CalibrationError;
 use crate::calibration::coupling_fit::{
-    CouplingForm, CouplingResponse, fit_coupling, fixed_coupling, passive_displacements,
+    CouplingFit, CouplingForm, CouplingResponse, fit_coupling, fixed_coupling, passive_displacements,
 };
 use crate::kinematics::AxisLine;
-use crate::kinematics::{FixedFrames, PhiModel};
+use crate::kinematics::{ChainPoses, FixedFrames, PhiModel};
 use crate::robot::{Controller, CouplingFitForm, CouplingFunction, JointModel, RobotDescription, Transmission};
 use nalgebra::{DMatrix, Isometry3, Point3};
-use std::cell::RefCell;
+use std::cell::{OnceCell, RefCell};
 
 /// The fitted axes of a campaign and the reference pose the joint models are assembled from.
 pub(super) struct Assembly<'a> {
@@ -37,6 +37,8 @@ pub(super) struct Assembly<'a> {
     /// How the couplings are fitted (from scratch, refitted, fixed) and whether their inputs
     /// are recorded.
     pub(super) refit: Refit<'a>,
+    /// The chain's poses at `q_ref`, once computed ([`Assembly::poses_at_reference`]).
+    pub(super) reference_poses: OnceCell<ChainPoses>,
 }
 
 /// How [`Assembly::joint_models`] fits the couplings: by default from scratch.
@@ -61,6 +63,20 @@ pub(super) struct Refit<'a> {
     /// The phi-model of the axes when it is already known (the axes are those it was built
     /// from): not built again.
     pub(super) geometry: Option<&'a (PhiModel, super::BaseRule)>,
+    /// The couplings as an assembly of the same axes, transmissions and second targets
+    /// fitted them (the calibration's): taken, not fitted again.
+    pub(super) fitted: Option<&'a [CouplingReport]>,
+    /// The gear couplings' start weights by raw driving angles ([`GearStart`]): a warm
+    /// refit's start is their product with its data, the decomposition done once per
+    /// driving transmission.
+    pub(super) starts: Option<&'a RefCell<Vec<GearStart>>>,
+}
+
+/// The weights of a gear coupling's start at one set of raw driving angles
+/// ([`Assembly::warm_start`]).
+pub(super) struct GearStart {
+    raw: Vec<f64>,
+    weights: Vec<f64>,
 }
 
 /// What a coupling fit depends on besides the fixed data (experiments, second targets,
@@ -151,6 +167,11 @@ fn passive_start(form: &CouplingForm, slope: f64, active: &[f64], passive: &[f64
 }
 
 impl Assembly<'_> {
+    /// The chain's poses at the reference joint values `q_ref`, computed once.
+    pub(super) fn poses_at_reference(&self) -> &ChainPoses {
+        self.reference_poses.get_or_init(|| self.geometry.poses(self.q_ref))
+    }
+
     /// The joint models with the fitted couplings' reports. Ascending: joint k's zero needs the
     /// coupling into k, which needs joint k-1's zero.
     pub(super) fn joint_models(&self) -> Result<(Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
@@ -363,13 +384,24 @@ impl Assembly<'_> {
         let mut q0 = q_ref.to_vec();
         q0[k - 1] += active[0] - theta_ref_from;
         let frame_next = geometry.poses(&q0).world_from_frame[k];
-        let axis_from = geometry.poses(q_ref).axis(k - 1);
+        let axis_from = self.poses_at_reference().axis(k - 1);
         let t_from_start: Vec<f64> = active.iter().map(|a| a - active[0]).collect();
         let passive = passive_displacements(&frame_next, &axis_from, &t_from_start, second).map_err(fit_err)?;
-        let start = passive_start(&cform, slope, &active, &passive);
-        let fit = match self.refit.warm.and_then(|w| w[k].as_ref()) {
-            Some(response) => response.refit(&active, &passive, start),
-            None => fit_coupling(&cform, &active, &passive, start),
+        let warm = self.refit.warm.and_then(|w| w[k].as_ref());
+        let start = match warm {
+            Some(_) => self.warm_start(&cform, slope, (&raw, &active), &passive),
+            None => passive_start(&cform, slope, &active, &passive),
+        };
+        let known = self.refit.fitted.and_then(|f| f.iter().find(|c| c.from == from));
+        let fit = match (warm, known) {
+            (Some(response), _) => response.refit(&active, &passive, start),
+            (None, Some(c)) => Ok(CouplingFit {
+                function: c.function.clone(),
+                parameters: c.parameters.clone(),
+                sigma: c.fit_only_sigma.clone(),
+                residual_rms_rad: c.residual_rms_rad,
+            }),
+            (None, None) => fit_coupling(&cform, &active, &passive, start),
         }
         .map_err(fit_err)?;
         if let Some(record) = self.refit.record {
@@ -388,6 +420,33 @@ impl Assembly<'_> {
         }
         let report = CouplingReport::new(from, e, &fit, &cform);
         Ok((fit.function, report))
+    }
+
+    /// The start of a warm refit ([`passive_start`]): a gear's from its weights,
+    /// `w . (y - N t)` ([`gear_passive_start_weights`], the same least squares as
+    /// [`gear_passive_start`]'s solve). The weights are those of the raw angles `raw` (the
+    /// driving transmission's inversions, before the zero shift that makes them the active
+    /// angles `t`): a constant shift of the angles turns each harmonic's sine and cosine
+    /// columns into combinations of each other, so the design's column space and the
+    /// constant's weights do not change. Taken from [`Refit::starts`] when known there for
+    /// these raw angles (a column that does not move the driving transmission), else computed
+    /// and kept.
+    fn warm_start(&self, form: &CouplingForm, slope: f64, (raw, active): (&[f64], &[f64]), passive: &[f64]) -> f64 {
+        let (CouplingForm::Gear { order, .. }, Some(cache)) = (form, self.refit.starts) else {
+            return passive_start(form, slope, active, passive);
+        };
+        let mut cache = cache.borrow_mut();
+        let at = match cache.iter().position(|s| s.raw == raw) {
+            Some(at) => at,
+            None => {
+                cache.push(GearStart {
+                    raw: raw.to_vec(),
+                    weights: gear_passive_start_weights(slope, *order, raw),
+                });
+                cache.len() - 1
+            }
+        };
+        weighted_gear_start(&cache[at].weights, slope, active, passive)
     }
 
     /// The driving joint `k-1`'s (0-based) transmission inverted (rad, before its zero shift)
@@ -478,6 +537,18 @@ fn gear_passive_start(ratio: f64, order: usize, active: &[f64], passive_from_sta
     }
 }
 
+/// [`gear_passive_start`] from its weights `w` ([`gear_passive_start_weights`]):
+/// `w . (y - N t)`, or the nominal `N t_0` without weights (as there when the SVD fails).
+fn weighted_gear_start(w: &[f64], ratio: f64, active: &[f64], passive_from_start: &[f64]) -> f64 {
+    if w.is_empty() {
+        return ratio * active[0];
+    }
+    w.iter()
+        .zip(active.iter().zip(passive_from_start))
+        .map(|(w, (t, y))| w * (y - ratio * t))
+        .sum()
+}
+
 /// The design `[sin kNt, cos kNt, -1]` of the gear form's start ([`gear_passive_start`]).
 fn gear_start_design(ratio: f64, order: usize, active: &[f64]) -> DMatrix<f64> {
     let mut a = DMatrix::zeros(active.len(), 2 * order + 1);
@@ -511,6 +582,35 @@ mod tests {
     use super::*;
     use crate::kinematics::AxisLine;
     use nalgebra::{Unit, Vector3};
+
+    /// The gear start from its weights at the angles before their zero shift (the warm
+    /// refits') against the least-squares solve of the fits at the shifted angles (a second
+    /// path: nalgebra's SVD solve instead of the pseudo-inverse's row): the same number to
+    /// rounding (the start is ~1 rad; 1e-12 leaves the solve's rounding,
+    /// ~1e-15, a thousandfold margin), for the first- and second-order gear on noisy data;
+    /// with the weights of the wrong order it fails.
+    #[test]
+    fn weighted_gear_start_is_the_least_squares_start() {
+        let active: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
+        for order in [1, 2] {
+            let ratio = -1.6;
+            let passive: Vec<f64> = active
+                .iter()
+                .enumerate()
+                .map(|(j, t)| ratio * t + 0.3 + 2e-3 * (2.1 * ratio * t).sin() + 1e-4 * ((j * 5 % 7) as f64 - 3.0))
+                .map(|y| y - (ratio * active[0] + 0.3 + 2e-3 * (2.1 * ratio * active[0]).sin()))
+                .collect();
+            let solved = gear_passive_start(ratio, order, &active, &passive);
+            // The weights of the angles before a zero shift of 0.37 rad (the warm refits').
+            let raw: Vec<f64> = active.iter().map(|t| t - 0.37).collect();
+            let w = gear_passive_start_weights(ratio, order, &raw);
+            let weighted = weighted_gear_start(&w, ratio, &active, &passive);
+            assert!((solved - weighted).abs() <= 1e-12, "order {order}: {solved} {weighted}");
+            let wrong = gear_passive_start_weights(ratio, 3 - order, &active);
+            let off = (weighted_gear_start(&wrong, ratio, &active, &passive) - solved).abs();
+            assert!(off > 1e-6, "order {order}: {off:e}");
+        }
+    }
 
     /// `passive_sensitivity` against central differences (the project's finite-difference
     /// tool, [`crate::calibration::refine::sensitivity`]) of the Newton refit with the start

@@ -423,6 +423,10 @@ fn calibrate_at<T>(
     Ok((finish(&ctx, state, reference_cmd, passes)?, estimate))
 }
 
+/// The phi-model of fitted axes, its base rule, the joint models and fitted couplings on it
+/// and the last link at the reference pose ([`Context::joints_from`]).
+type AssembledJoints = (PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>, Isometry3<f64>);
+
 /// What every pass of the procedure shares.
 struct Context<'a> {
     desc: &'a RobotDescription,
@@ -501,7 +505,7 @@ impl<'a> Context<'a> {
             .iter()
             .map(|f| f.as_ref().map(|f| f.transmission.clone()))
             .collect();
-        let (geometry, base_rule, joints, couplings) =
+        let (geometry, base_rule, joints, couplings, _) =
             self.joints_from(&axes, &transmissions, target1, Refit::default())?;
         let robot = calibrated_robot(self.desc, joints, &geometry);
         Ok(Assembled {
@@ -527,7 +531,7 @@ impl<'a> Context<'a> {
     ) -> Result<(FittedModel, Option<ToolReport>), ProcedureError> {
         let row_sigma = match self.detail {
             Detail::Model => None,
-            _ => Some(calibrated_row_sigmas(self.desc, &state.axes, self.q_ref, &state.fits)?),
+            _ => Some(calibrated_row_sigmas(self.nominal, &state.axes, &state.fits)?),
         };
         let mut robot = state.robot.clone();
         let mut tool = tool_frame(set, self.desc, &robot, reference_cmd, self.controller);
@@ -565,14 +569,17 @@ impl<'a> Context<'a> {
     /// fitted couplings on it, from the fitted `transmissions` and the second targets
     /// `target1`. With `warm` (the couplings' responses at a previous assembly's optimum, by driven
     /// joint) the couplings are refitted by one Newton step from those
-    /// ([`crate::calibration::coupling_fit::CouplingResponse::refit`]).
+    /// ([`crate::calibration::coupling_fit::CouplingResponse::refit`]). With the last link
+    /// at the reference pose: the calibrated joint values there are `q_ref` by construction
+    /// (`docs/method.md`), so it is the chain's at `q_ref` (the couplings' fits use the same
+    /// poses).
     fn joints_from(
         &self,
         axes: &[Option<AxisLine>],
         transmissions: &[Option<Transmission>],
         target1: &[Vec<Point3<f64>>],
         refit: Refit,
-    ) -> Result<(PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>), ProcedureError> {
+    ) -> Result<AssembledJoints, ProcedureError> {
         let (geometry, base_rule) = match refit.geometry {
             Some((geometry, rule)) => (geometry.clone(), rule.clone()),
             None => self.nominal.model_from_axes(axes)?,
@@ -588,9 +595,17 @@ impl<'a> Context<'a> {
             q_ref: self.q_ref,
             u_ref: self.u_ref,
             refit,
+            reference_poses: std::cell::OnceCell::new(),
         };
         let (joints, couplings) = assembly.joint_models()?;
-        Ok((geometry.into_model(), base_rule, joints, couplings))
+        let world_from_last_link = assembly.poses_at_reference().world_from_link[self.desc.dof() - 1];
+        Ok((
+            geometry.into_model(),
+            base_rule,
+            joints,
+            couplings,
+            world_from_last_link,
+        ))
     }
 
     /// The derived quantities (couplings' parameters, zero offsets, tool frame) the fitted
@@ -603,22 +618,19 @@ impl<'a> Context<'a> {
         (axes, transmissions): (&[Option<AxisLine>], &[Option<Transmission>]),
         target1: &[Vec<Point3<f64>>],
         tool: Option<&Isometry3<f64>>,
-        reference_cmd: &[f64],
         refit: Refit,
     ) -> Result<(Derived, Option<Isometry3<f64>>), ProcedureError> {
-        let (geometry, _, joints, couplings) = self.joints_from(axes, transmissions, target1, refit)?;
+        let (geometry, _, joints, couplings, last_link) = self.joints_from(axes, transmissions, target1, refit)?;
         let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
         values.extend(joints.iter().map(|j| j.transducer_offset));
-        let robot = calibrated_robot(self.desc, joints, &geometry);
-        let world_from_link =
-            tool.and_then(|_| world_from_last_link(self.desc, &robot, reference_cmd, self.controller));
+        let world_from_link = tool.map(|_| last_link);
         let derived = Derived {
             values,
             coupling_sizes: couplings.iter().map(|c| c.parameters.len()).collect(),
             tool: None,
             robot: None,
         };
-        let robot = (self.detail == Detail::Report).then_some(robot);
+        let robot = (self.detail == Detail::Report).then(|| calibrated_robot(self.desc, joints, &geometry));
         Ok((
             self.with_tool(derived, robot, world_from_link.as_ref(), tool),
             world_from_link,
@@ -678,28 +690,35 @@ impl<'a> Context<'a> {
             record: Some(&record),
             memo: Some(&memo),
             angles: Some(&angles),
+            fitted: Some(&state.couplings),
             ..Refit::default()
         };
-        let (base, world_from_link) = self.derived((axes, &transmissions), target1, tool, reference_cmd, recording)?;
+        let (base, world_from_link) = self.derived((axes, &transmissions), target1, tool, recording)?;
         let record = record.into_inner();
         let mut responses: Vec<Option<CouplingResponse>> = vec![None; self.desc.dof()];
-        for c in &record {
-            responses[c.k] = Some(c.response.clone());
-        }
+        record.iter().for_each(|c| responses[c.k] = Some(c.response.clone()));
+        let starts = RefCell::new(Vec::new());
         let warm = Refit {
             warm: Some(&responses),
             memo: Some(&memo),
             angles: Some(&angles),
+            starts: Some(&starts),
             ..Refit::default()
         };
         let geometry = self.nominal.model_from_axes(axes)?;
+        // The axis fits' columns differ from the unmoved assembly refitted the same way.
+        let unmoved = Refit {
+            geometry: Some(&geometry),
+            ..warm
+        };
+        let warm_base = self.derived((axes, &transmissions), target1, tool, unmoved)?.0;
         let mut prop = Propagation::new(base.len());
         for (k, local) in state.fits.iter().enumerate() {
             let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {
                 continue;
             };
             let axis = axes[k].expect("a fitted joint has its axis");
-            add_axis_fit(&mut prop, local, &axis, |axis, transmission| {
+            add_axis_fit(&mut prop, local, &axis, &warm_base, |axis, transmission| {
                 let (mut a, mut t) = (axes.clone(), transmissions.clone());
                 if transmission.is_some() {
                     t[k] = transmission;
@@ -714,30 +733,31 @@ impl<'a> Context<'a> {
                         ..warm
                     },
                 };
-                Ok::<_, ProcedureError>(self.derived((&a, &t), target1, tool, reference_cmd, refit)?.0)
+                Ok::<_, ProcedureError>(self.derived((&a, &t), target1, tool, refit)?.0)
             })?;
         }
         for coupling in record {
             let c = self.second_target_sigma(&coupling, axes, target1)?;
-            prop.add(&c, |i, h| {
+            let set_to = |i: usize, h: f64| {
                 let mut x = coupling.parameters.clone();
-                x[i] += h;
+                if let Some(xi) = x.get_mut(i) {
+                    *xi += h;
+                }
                 let fixed = Refit {
                     fixed: Some((coupling.k, &x)),
                     geometry: Some(&geometry),
                     ..warm
                 };
-                Ok::<_, ProcedureError>(
-                    self.derived((axes, &transmissions), target1, tool, reference_cmd, fixed)?
-                        .0,
-                )
-            })?;
+                Ok::<_, ProcedureError>(self.derived((axes, &transmissions), target1, tool, fixed)?.0)
+            };
+            let at_fit = set_to(usize::MAX, 0.0)?;
+            prop.add(&c, &at_fit, set_to)?;
         }
         if let Some(points) = &tool_points {
             let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
             let lists = vec![points.clone()];
             let at: Vec<(usize, usize)> = (0..points.len()).map(|j| (0, j)).collect();
-            prop.add_independent(3 * points.len(), sigma, |k, h| {
+            prop.add_independent(3 * points.len(), sigma, &base, |k, h| {
                 let moved = moved_point(&lists, &at, k, h);
                 let moved_tool = tool_fit(&moved[0]);
                 let mut moved = base.clone();
@@ -899,16 +919,15 @@ fn zero_offset_sigmas(desc: &RobotDescription, derived: Option<&DerivedSigma>) -
 /// The standard deviations of the rows (mm, deg) from the axes' covariances as fitted
 /// (before the held joints' bias is added).
 fn calibrated_row_sigmas(
-    desc: &RobotDescription,
+    nominal: &NominalGeometry,
     axes: &[Option<AxisLine>],
-    q_ref: &[f64],
     fits: &[Option<AxisFitOutcome>],
 ) -> Result<Vec<RowSigma>, ProcedureError> {
     let covariances: Vec<Option<AxisCovariance>> = fits
         .iter()
         .map(|f| f.as_ref().and_then(|f| f.report.covariance.clone()))
         .collect();
-    Ok(row_sigmas(&desc.nominal_model(), axes, q_ref, &covariances)?
+    Ok(uncertainty::row_sigmas_on(nominal, axes, &covariances)?
         .into_iter()
         .map(|[a, b, alpha, beta]| RowSigma {
             a_mm: a * 1e3,
