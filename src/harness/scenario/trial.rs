@@ -216,14 +216,18 @@ impl CampaignTrial {
     /// `occluded` targets.
     fn metrics(&self, rows: &[Measurement], occluded: usize, predicted: &[(&Measurement, Isometry3<f64>)]) -> Metrics {
         let targets = self.desc.tool_targets_m();
-        let e = validation_errors(rows, &targets, |cmd| {
+        let e = validation_errors(rows, &targets, |row| {
             // Nominally the robot reaches exactly the commanded joint values (`docs/formats.md#controller-semantics`).
-            self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
+            self.nominal
+                .world_from_tool(&commands_to_internal(&self.desc, &row.cmd))
         });
-        let c = validation_errors(rows, &targets, |cmd| {
+        // The prediction made from this very row, else from one with the same commands (the
+        // same number: a function of the commands).
+        let c = validation_errors(rows, &targets, |row| {
             predicted
                 .iter()
-                .find(|(row, _)| row.cmd == cmd)
+                .find(|(r, _)| std::ptr::eq(*r, row))
+                .or_else(|| predicted.iter().find(|(r, _)| r.cmd == row.cmd))
                 .map_or(Isometry3::translation(f64::NAN, f64::NAN, f64::NAN), |p| p.1)
         });
         let mut m = Metrics::new();

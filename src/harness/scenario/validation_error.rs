@@ -27,7 +27,8 @@ pub struct ValidationErrors {
 
 /// Compares measured validation rows (`moved_joint == 0`) with a model.
 ///
-/// `world_from_tool(cmd)` predicts the tool frame from the file-unit commands of a row;
+/// `world_from_tool(row)` predicts the tool frame of a pose from its first row (its file-unit
+/// commands `row.cmd`);
 /// `tool_targets_m` are the targets in the tool frame. The position error of a target is
 /// `|predicted - measured|`. The orientation error of a pose is the angle of the rotation of
 /// the least-squares rigid fit (Kabsch: Arun, Huang & Blostein 1987, SVD of the centred
@@ -40,7 +41,7 @@ pub fn validation_errors<F>(
     world_from_tool: F,
 ) -> ValidationErrors
 where
-    F: Fn(&[f64]) -> Isometry3<f64>,
+    F: Fn(&Measurement) -> Isometry3<f64>,
 {
     // One group per pose: (experiment, step). The `tool` observation at the reference pose
     // trains the calibrator's tool frame, so it is not a validation pose.
@@ -54,7 +55,7 @@ where
     let (mut sum_pos_m2, mut max_pos_m, mut targets) = (0.0, 0.0f64, 0usize);
     let (mut sum_ang2, mut max_ang, mut poses) = (0.0, 0.0f64, 0usize);
     for group in by_step.values() {
-        let pose = world_from_tool(&group[0].cmd);
+        let pose = world_from_tool(group[0]);
         let mut pairs = Vec::with_capacity(group.len());
         for m in group {
             let Some(t) = tool_targets_m.get(m.target) else {
@@ -125,12 +126,12 @@ mod tests {
                 targets.iter().enumerate().map(move |(i, t)| row(s, i, real * t))
             })
             .collect();
-        let e = validation_errors(&rows, &targets, model);
+        let e = validation_errors(&rows, &targets, |m| model(&m.cmd));
         assert_eq!((e.targets, e.poses), (12, 4));
         assert_relative_eq!(e.orient_rms_rad, 0.01, max_relative = 1e-9);
         assert_relative_eq!(e.orient_max_rad, 0.01, max_relative = 1e-9);
         assert!(e.pos_max_mm >= 1.0 && e.pos_rms_mm <= e.pos_max_mm);
-        let exact = validation_errors(&rows, &targets, |c| model(c) * err);
+        let exact = validation_errors(&rows, &targets, |m| model(&m.cmd) * err);
         assert!(exact.pos_max_mm < 1e-9 && exact.orient_max_rad < 1e-9);
     }
 
