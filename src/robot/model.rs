@@ -212,17 +212,20 @@ impl RobotModel {
                 found: u.len(),
             });
         }
-        self.joints
-            .iter()
-            .zip(u)
+        u.iter()
             .enumerate()
-            .map(|(k, (j, &uk))| {
-                let command = uk - j.transducer_offset;
-                j.transmission
-                    .actual_from_command(command)
-                    .ok_or(ModelError::NotInvertible { joint: k + 1, command })
-            })
+            .map(|(k, &uk)| self.active_displacement(k, uk))
             .collect()
+    }
+
+    /// The actual active displacement of joint `k + 1` (0-based `k < dof`) for its actuator
+    /// command `u_k`: one term of [`Self::active_displacements`].
+    pub fn active_displacement(&self, k: usize, u_k: f64) -> Result<f64, ModelError> {
+        let j = &self.joints[k];
+        let command = u_k - j.transducer_offset;
+        j.transmission
+            .actual_from_command(command)
+            .ok_or(ModelError::NotInvertible { joint: k + 1, command })
     }
 
     /// The joint values the robot reaches for joint commands `cmd` sent to `controller`

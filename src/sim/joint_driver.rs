@@ -35,6 +35,10 @@ pub struct JointDriver {
     joint_harmonics: Vec<GearHarmonic>,
     /// Actuator commands of the last execution and the standard-normal jitter draws they got.
     last_actuator: Option<(Vec<f64>, Vec<f64>)>,
+    /// The last actuator commands and the truth's transmissions' inverse at them: an
+    /// actuator whose command is the same number again (a held joint of an axis experiment)
+    /// reuses it instead of inverting again (the same function of the same input).
+    last_inversion: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// What [`JointDriver::drive`] produced.
@@ -62,6 +66,7 @@ impl JointDriver {
             actuator_approach: ApproachTracker::new(n, UNMOVED_ACTUATOR_RAD),
             joint_harmonics: effects.gear_harmonics.clone(),
             last_actuator: None,
+            last_inversion: None,
         }
     }
 
@@ -74,7 +79,7 @@ impl JointDriver {
     /// uses it for the actuators whose command changed (see the type's docs).
     pub fn drive<R: Rng + ?Sized>(&mut self, cmd: &[f64], rng: &mut R) -> Result<DrivenJoints, ModelError> {
         let u = self.controller.decouple(cmd)?;
-        let mut active = self.truth.active_displacements(&u)?;
+        let mut active = self.inverted(&u)?;
         add_joint_period_errors(&self.joint_harmonics, &mut active);
         let by_command = self.command_approach.step(cmd);
         let by_actuator = self.actuator_approach.step(&u);
@@ -106,5 +111,33 @@ impl JointDriver {
         }
         self.last_actuator = Some((u, draws));
         Ok(DrivenJoints { active, q })
+    }
+
+    /// [`RobotModel::active_displacements`] of the truth at `u`, reusing the last inversion
+    /// for every actuator whose command has the same bits as then.
+    fn inverted(&mut self, u: &[f64]) -> Result<Vec<f64>, ModelError> {
+        let active = match &self.last_inversion {
+            Some((last_u, last_active)) if last_u.len() == u.len() && u.len() == self.truth.dof() => u
+                .iter()
+                .zip(last_u.iter().zip(last_active))
+                .enumerate()
+                .map(|(k, (now, (before, a)))| {
+                    if now.to_bits() == before.to_bits() {
+                        Ok(*a)
+                    } else {
+                        self.truth.active_displacement(k, *now)
+                    }
+                })
+                .collect::<Result<Vec<f64>, ModelError>>()?,
+            _ => self.truth.active_displacements(u)?,
+        };
+        match &mut self.last_inversion {
+            Some((last_u, last_active)) if last_u.len() == u.len() => {
+                last_u.copy_from_slice(u);
+                last_active.copy_from_slice(&active);
+            }
+            last => *last = Some((u.to_vec(), active.clone())),
+        }
+        Ok(active)
     }
 }
