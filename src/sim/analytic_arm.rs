@@ -54,6 +54,20 @@ impl AnalyticArm {
         }
     }
 
+    /// The same arm looking its truth's transmission inverses up in `table` first (built for
+    /// this arm's driver: [`AnalyticArm::driver`]; call after [`AnalyticArm::with_effects`]).
+    pub fn with_inversions(self, table: std::sync::Arc<super::joint_driver::InversionTable>) -> Self {
+        AnalyticArm {
+            driver: self.driver.with_table(table),
+            ..self
+        }
+    }
+
+    /// The driver of its joints.
+    pub fn driver(&self) -> &JointDriver {
+        &self.driver
+    }
+
     /// The truth model.
     pub fn truth(&self) -> &RobotModel {
         &self.truth

@@ -16,7 +16,7 @@ use crate::plan::{PoseConditions, TOOL_EXPERIMENT, VALIDATION_EXPERIMENT, Valida
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::perturb;
-use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, simulate_campaign_with};
+use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, InversionTable, simulate_campaign_with};
 use crate::sim::{RapierArm, RapierArmOptions};
 use nalgebra::{Isometry3, Vector3};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
@@ -77,6 +77,9 @@ pub struct CampaignTrial {
     /// The predictions at the measured poses that every trial of a case shares, per distinct
     /// reference pose of the cases.
     fixed: Vec<PosePredictions>,
+    /// A fixed truth's transmission inverses at the cases' planned commands, shared by the
+    /// analytic arms of every trial ([`InversionTable`]).
+    inversions: Option<std::sync::Arc<InversionTable>>,
 }
 
 /// What a trial predicts at the measured poses of a case that does not depend on the trial:
@@ -167,6 +170,7 @@ impl CampaignTrial {
             },
             occlusion: scenario.occlusion,
             fixed: Vec::new(),
+            inversions: None,
         };
         for case in &scenario.cases {
             let reference = &case.plan.reference;
@@ -175,7 +179,32 @@ impl CampaignTrial {
                 trial.fixed.push(fixed);
             }
         }
+        trial.inversions = trial.inversion_table(scenario).map(std::sync::Arc::new);
         Ok(trial)
+    }
+
+    /// The analytic arm of `truth` with the trial's controller and effects.
+    fn analytic_arm(&self, truth: RobotModel) -> AnalyticArm {
+        AnalyticArm::new(truth, self.controller.clone()).with_effects(self.effects.clone(), &self.desc)
+    }
+
+    /// For a fixed truth on the analytic arm: its transmission inverses at every planned
+    /// command of the scenario's cases (axis sweeps, tool and validation poses).
+    fn inversion_table(&self, scenario: &ResolvedScenario) -> Option<InversionTable> {
+        let (SimMode::Analytic, ResolvedTruth::Fixed { robot }) = (self.sim, &self.truth) else {
+            return None;
+        };
+        let mut commands: Vec<Vec<f64>> = Vec::new();
+        for case in scenario.cases.iter().filter(|c| c.plan.validate(&self.desc).is_ok()) {
+            let plan = &case.plan;
+            for sweep in &plan.sweeps {
+                commands.extend((0..sweep.poses()).map(|step| plan.commands(&self.desc, sweep, step)));
+            }
+        }
+        commands.extend(self.fixed.iter().flat_map(|f| f.commands.iter().cloned()));
+        let internal: Vec<Vec<f64>> = commands.iter().map(|c| commands_to_internal(&self.desc, c)).collect();
+        let arm = self.analytic_arm(robot.clone());
+        Some(InversionTable::new(arm.driver(), internal.iter().map(Vec::as_slice)))
     }
 
     /// The trial-independent predictions of the cases with this reference pose.
@@ -384,8 +413,10 @@ impl Trial for CampaignTrial {
         let kinematic_truth = truth.clone();
         match self.sim {
             SimMode::Analytic => {
-                let arm =
-                    AnalyticArm::new(truth, self.controller.clone()).with_effects(self.effects.clone(), &self.desc);
+                let arm = match &self.inversions {
+                    Some(table) => self.analytic_arm(truth).with_inversions(table.clone()),
+                    None => self.analytic_arm(truth),
+                };
                 self.run_on(arm, case, &mut rng, &kinematic_truth)
             }
             SimMode::Rapier => {
