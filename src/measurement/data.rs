@@ -415,13 +415,8 @@ mod tests {
         assert_eq!((e.row, e.problem.column().as_str()), (2, "experiment,step,target"));
         let e = MeasurementSet::new(2, vec![row("a", 1, 0, 0), bad, row("a", 1, 0, 0)]).unwrap_err();
         assert_eq!((e.row, e.problem.column().as_str()), (1, "y_mm"));
-        let three = vec![
-            row("a", 1, 0, 1),
-            row("a", 1, 0, 0),
-            row("a", 1, 0, 1),
-            row("a", 1, 0, 1),
-        ];
-        let e = MeasurementSet::new(2, three).unwrap_err();
+        let three = [1, 0, 1, 1].map(|target| row("a", 1, 0, target));
+        let e = MeasurementSet::new(2, three.to_vec()).unwrap_err();
         assert_eq!(e.row, 2);
         assert!(matches!(
             e.problem,

@@ -245,14 +245,18 @@ impl RobotModel {
     /// The joint values for actuator commands `u` (after the controller's decoupling):
     /// `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`.
     pub fn joint_values_from_actuators(&self, u: &[f64]) -> Result<Vec<f64>, ModelError> {
-        let theta = self.active_displacements(u)?;
-        let mut q = theta.clone();
+        // q starts as theta and takes the couplings joint by joint upwards; `theta_below` keeps
+        // the active displacement of the joint below (its q entry has its coupling already).
+        let mut q = self.active_displacements(u)?;
+        let mut theta_below = q.first().copied().unwrap_or(0.0);
         for k in 1..q.len() {
+            let theta_k = q[k];
             if let Some(g) = &self.joints[k].coupling_in {
                 q[k] += g
-                    .try_passive(theta[k - 1])
+                    .try_passive(theta_below)
                     .map_err(|source| ModelError::Coupling { joint: k + 1, source })?;
             }
+            theta_below = theta_k;
         }
         Ok(q)
     }

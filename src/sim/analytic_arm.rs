@@ -113,7 +113,7 @@ impl ArmExecutor for AnalyticArm {
                 *qk += d;
             }
         }
-        let mut links = frames.poses(&q).world_from_link;
+        let mut links = frames.world_from_links(&q);
         self.effects.apply_wobble(model, &q, &mut links);
         Ok(links)
     }

@@ -153,13 +153,18 @@ mod tests {
         }
     }
 
-    #[test]
-    fn recovers_a_known_rotation_and_offset() {
-        let targets = [
+    /// Three targets on a tool, not collinear \[m\].
+    fn tool_targets() -> [Point3<f64>; 3] {
+        [
             Point3::new(0.1, 0.0, 0.0),
             Point3::new(-0.05, 0.08, 0.0),
             Point3::new(0.0, -0.06, 0.03),
-        ];
+        ]
+    }
+
+    #[test]
+    fn recovers_a_known_rotation_and_offset() {
+        let targets = tool_targets();
         let model = |cmd: &[f64]| Isometry3::translation(cmd[0], 1.0, 0.5);
         // The "real" tool is turned by 0.01 rad about z and shifted 1 mm along x.
         let err = Isometry3::from_parts(
@@ -183,11 +188,7 @@ mod tests {
 
     #[test]
     fn poses_out_of_order_give_the_same_numbers_as_in_order() {
-        let targets = [
-            Point3::new(0.1, 0.0, 0.0),
-            Point3::new(-0.05, 0.08, 0.0),
-            Point3::new(0.0, -0.06, 0.03),
-        ];
+        let targets = tool_targets();
         let model = |m: &Measurement| Isometry3::translation(m.cmd[0], 1.0, 0.5);
         let measured = |s: usize, i: usize| {
             let wobble = Isometry3::rotation(Vector3::new(0.01 * s as f64, -0.003 * i as f64, 0.002));
