@@ -249,10 +249,10 @@ impl RobotModel {
         // the active displacement of the joint below (its q entry has its coupling already).
         let mut q = self.active_displacements(u)?;
         let mut theta_below = q.first().copied().unwrap_or(0.0);
-        for k in 1..q.len() {
-            let theta_k = q[k];
-            if let Some(g) = &self.joints[k].coupling_in {
-                q[k] += g
+        for (k, (qk, joint)) in q.iter_mut().zip(&self.joints).enumerate().skip(1) {
+            let theta_k = *qk;
+            if let Some(g) = &joint.coupling_in {
+                *qk += g
                     .try_passive(theta_below)
                     .map_err(|source| ModelError::Coupling { joint: k + 1, source })?;
             }
