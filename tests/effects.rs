@@ -372,3 +372,50 @@ fn repeatability_jitter_is_redrawn_only_for_actuators_that_move() {
         "{a:?} {b:?}"
     );
 }
+
+/// A driver that looks its transmission inverses up in a table (`InversionTable`, what the
+/// trials of a fixed truth share) drives every command to the same numbers, bit for bit, as
+/// one that inverts them all: commands in the table and out of it (the table holds every
+/// second pose of the plan), with a transmission-period gear harmonic (its transmission is
+/// the driver's, not the truth model's) and backlash, and repeatability jitter on.
+#[test]
+fn a_driver_with_an_inversion_table_drives_to_the_same_numbers() {
+    use axiscal::physics::GearHarmonic;
+    use axiscal::sim::InversionTable;
+    let desc = RobotDescription::asea_irb6l();
+    let truth = axiscal::sim::paper_robot();
+    let controller = Controller::from_description(&desc);
+    let mut bands = vec![0.0; 6];
+    bands[1] = 1e-3;
+    let effects = Effects {
+        gear_harmonics: vec![GearHarmonic {
+            joint: 3,
+            order: 2,
+            sin_rad: 1e-3,
+            cos_rad: -4e-4,
+            period: axiscal::physics::HarmonicPeriod::Transmission,
+        }],
+        backlash: Some(BacklashEffect {
+            band_rad: bands,
+            direction: Default::default(),
+        }),
+        ..Effects::default()
+    };
+    let plan = CalibrationPlan::table1(6);
+    let commands: Vec<Vec<f64>> = plan
+        .sweeps
+        .iter()
+        .flat_map(|s| (0..s.poses()).map(|step| commands_to_internal(&desc, &plan.commands(&desc, s, step))))
+        .chain((0..5).map(|i| CMD.iter().map(|c| c * (1.0 - 0.3 * i as f64)).collect()))
+        .collect();
+    let mut plain = JointDriver::new(&truth, controller.clone(), &effects);
+    let table = InversionTable::new(&plain, commands.iter().step_by(2).map(Vec::as_slice));
+    let mut with_table = JointDriver::new(&truth, controller, &effects).with_table(std::sync::Arc::new(table));
+    let (mut rng_a, mut rng_b) = (ChaCha12Rng::seed_from_u64(5), ChaCha12Rng::seed_from_u64(5));
+    for cmd in &commands {
+        assert_eq!(
+            plain.drive(cmd, &mut rng_a).unwrap(),
+            with_table.drive(cmd, &mut rng_b).unwrap()
+        );
+    }
+}

@@ -311,12 +311,15 @@ impl ArcModel {
         self.per_step(p, |s, c, u, v| p.centre + p.radius * (c * u + s * v))
     }
 
-    /// Fills the 3 Jacobian rows (unweighted) of step `row` from its motion `dj` and
-    /// coefficient derivatives `dg`, and returns its predicted point; `(u, v, n)` are `p`'s.
+    /// Fills the 3 Jacobian rows of step `row` from its motion `dj` and coefficient
+    /// derivatives `dg`, each entry times `scale` (1: unweighted; an isotropic whitener: the
+    /// product [`Self::whiten_rows`] would form afterwards, bit for bit), and returns its
+    /// predicted point; `(u, v, n)` are `p`'s.
     fn fill_row(
         p: &ArcParams,
         (u, v, n): (&Vector3<f64>, &Vector3<f64>, &Vector3<f64>),
         (row, dj, dg): (usize, f64, &[f64]),
+        scale: f64,
         jac: &mut DMatrix<f64>,
     ) -> Point3<f64> {
         let (s, c) = (p.phase_rad + dj).sin_cos();
@@ -324,15 +327,16 @@ impl ArcModel {
         let tangent = p.radius * (-s * u + c * v);
         let r0 = 3 * row;
         for k in 0..3 {
-            jac[(r0 + k, k)] = 1.0;
+            jac[(r0 + k, k)] = 1.0 * scale;
         }
-        jac.fixed_view_mut::<3, 1>(r0, 3).copy_from(&(p.radius * s * n));
-        jac.fixed_view_mut::<3, 1>(r0, 4).copy_from(&(-p.radius * c * n));
-        jac.fixed_view_mut::<3, 1>(r0, 5).copy_from(&radial);
-        jac.fixed_view_mut::<3, 1>(r0, 6).copy_from(&tangent);
+        jac.fixed_view_mut::<3, 1>(r0, 3).copy_from(&(p.radius * s * n * scale));
+        jac.fixed_view_mut::<3, 1>(r0, 4)
+            .copy_from(&(-p.radius * c * n * scale));
+        jac.fixed_view_mut::<3, 1>(r0, 5).copy_from(&(radial * scale));
+        jac.fixed_view_mut::<3, 1>(r0, 6).copy_from(&(tangent * scale));
         for (k, g) in dg.iter().enumerate() {
             jac.fixed_view_mut::<3, 1>(r0, N_GEOMETRY + k)
-                .copy_from(&(tangent * *g));
+                .copy_from(&(tangent * *g * scale));
         }
         p.centre + p.radius * radial
     }
@@ -371,7 +375,7 @@ impl ArcModel {
         let mut j = DMatrix::zeros(3 * self.commands_rad.len(), self.n_params());
         let (u, v, n) = Self::basis_of(p);
         self.for_each_motion(&p.coefficients, |row, dj, dg| {
-            Self::fill_row(p, (&u, &v, &n), (row, dj, dg), &mut j);
+            Self::fill_row(p, (&u, &v, &n), (row, dj, dg), 1.0, &mut j);
         })?;
         Ok(j)
     }
@@ -429,12 +433,16 @@ impl ArcModel {
         let mut j = DMatrix::zeros(3 * n, self.n_params());
         let mut r = nalgebra::DVector::zeros(3 * n);
         let (u, v, normal) = Self::basis_of(p);
+        // An isotropic whitener is applied as the rows are filled; per-point ones after.
+        let scale = self.isotropic_whitener.unwrap_or(1.0);
         self.for_each_motion(&p.coefficients, |row, dj, dg| {
-            let q = Self::fill_row(p, (&u, &v, &normal), (row, dj, dg), &mut j);
+            let q = Self::fill_row(p, (&u, &v, &normal), (row, dj, dg), scale, &mut j);
             r.fixed_rows_mut::<3>(3 * row)
                 .copy_from(&(self.whiteners[row] * (q - observed[row])));
         })?;
-        self.whiten_rows(&mut j);
+        if self.isotropic_whitener.is_none() {
+            self.whiten_rows(&mut j);
+        }
         Ok((r, j))
     }
 

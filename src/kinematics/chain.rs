@@ -103,29 +103,43 @@ impl PhiModel {
 
     /// [`PhiModel::poses`] with `link_from_next(k)` for [`PhiModel::link_from_next_frame`].
     fn poses_by(&self, q: &[f64], link_from_next: impl Fn(usize) -> Isometry3<f64>) -> ChainPoses {
+        let mut world_from_frame = Vec::with_capacity(self.dof());
+        let world_from_link = self.links_by(q, link_from_next, Some(&mut world_from_frame));
+        let world_from_tool = world_from_link[self.dof() - 1] * self.last_link_from_tool;
+        ChainPoses {
+            world_from_frame,
+            world_from_link,
+            world_from_tool,
+        }
+    }
+
+    /// `world_from_link` of [`Self::poses_by`], with each joint's fixed frame pushed onto
+    /// `world_from_frame` if given.
+    fn links_by(
+        &self,
+        q: &[f64],
+        link_from_next: impl Fn(usize) -> Isometry3<f64>,
+        mut world_from_frame: Option<&mut Vec<Isometry3<f64>>>,
+    ) -> Vec<Isometry3<f64>> {
         assert_eq!(
             q.len(),
             self.dof(),
             "joint vector length must equal the number of joints"
         );
         let n = self.dof();
-        let mut world_from_frame = Vec::with_capacity(n);
         let mut world_from_link = Vec::with_capacity(n);
         let mut frame = self.world_from_base;
         for (k, (joint, &qk)) in self.joints.iter().zip(q).enumerate() {
-            world_from_frame.push(frame);
+            if let Some(frames) = world_from_frame.as_deref_mut() {
+                frames.push(frame);
+            }
             let link = frame * joint_motion(joint.kind, qk);
             world_from_link.push(link);
             if k + 1 < n {
                 frame = link * link_from_next(k);
             }
         }
-        let world_from_tool = world_from_link[n - 1] * self.last_link_from_tool;
-        ChainPoses {
-            world_from_frame,
-            world_from_link,
-            world_from_tool,
-        }
+        world_from_link
     }
 
     /// [`PhiModel::world_from_tool`] with `link_from_next(k)` for
@@ -226,6 +240,12 @@ impl FixedFrames {
             frame = link * self.link_from_next_frame[k];
         }
         frame
+    }
+
+    /// The `world_from_link` of [`Self::poses`] alone (what a simulated arm reports), bit for
+    /// bit, without the joints' fixed frames and the tool frame.
+    pub fn world_from_links(&self, q: &[f64]) -> Vec<Isometry3<f64>> {
+        self.model.links_by(q, |k| self.link_from_next_frame[k], None)
     }
 
     /// [`PhiModel::world_from_tool`], bit for bit.

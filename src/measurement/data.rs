@@ -250,49 +250,17 @@ fn first_not_finite(m: &Measurement) -> Option<(String, f64)> {
     Some((column, value))
 }
 
-/// Checks the [`MeasurementSet`] invariants; the error carries the 0-based row index.
+/// Checks the [`MeasurementSet`] invariants; the error carries the 0-based row index: the
+/// first row, in order, that breaks one (a row's own fields are checked before its key).
 fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementSetError> {
     // Experiment name -> (index, moved joint); consecutive rows of one experiment reuse the
-    // last lookup, and the duplicate check keys on the index (no string hashing per row).
+    // last lookup. The keys (experiment index, step, target, row) of the rows before the first
+    // row with a problem of its own are sorted once for the duplicate check: no hashing per row.
     let mut moved: HashMap<&str, (usize, usize)> = HashMap::new();
     let mut last: Option<(&str, (usize, usize))> = None;
-    let mut keys: HashMap<(usize, usize, usize), usize> = HashMap::new();
+    let mut keys: Vec<(usize, usize, usize, usize)> = Vec::with_capacity(rows.len());
+    let mut problem = None;
     for (row, m) in rows.iter().enumerate() {
-        let fail = |problem| Err(MeasurementSetError { row, problem });
-        if m.experiment.is_empty() || m.experiment.trim() != m.experiment {
-            return fail(RowProblem::BadExperimentName {
-                experiment: m.experiment.clone(),
-            });
-        }
-        if m.cmd.len() != joint_count {
-            return fail(RowProblem::JointCount {
-                found: m.cmd.len(),
-                expected: joint_count,
-            });
-        }
-        if let Some((column, value)) = first_not_finite(m) {
-            return fail(RowProblem::NotFinite { column, value });
-        }
-        if m.payload_kg < 0.0 {
-            return fail(RowProblem::OutOfRange {
-                column: "payload_kg".into(),
-                value: m.payload_kg,
-                expected: "0 kg and above (a payload has no negative mass)",
-            });
-        }
-        if m.temperature_c <= -273.15 {
-            return fail(RowProblem::OutOfRange {
-                column: "temperature_c".into(),
-                value: m.temperature_c,
-                expected: "temperatures above absolute zero (-273.15 deg C)",
-            });
-        }
-        if m.moved_joint > joint_count {
-            return fail(RowProblem::MovedJointOutOfRange {
-                value: m.moved_joint,
-                joint_count,
-            });
-        }
         let (index, first) = match last {
             Some((name, entry)) if name == m.experiment => entry,
             _ => {
@@ -302,25 +270,76 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 entry
             }
         };
-        if first != m.moved_joint {
-            let experiment = m.experiment.clone();
-            return fail(RowProblem::InconsistentMovedJoint {
-                experiment,
-                first,
-                found: m.moved_joint,
-            });
+        if let Some(p) = row_problem(joint_count, m, first) {
+            problem = Some(MeasurementSetError { row, problem: p });
+            break;
         }
-        if let Some(&first_row) = keys.get(&(index, m.step, m.target)) {
-            return fail(RowProblem::DuplicateKey {
-                experiment: m.experiment.clone(),
-                step: m.step,
-                target: m.target,
-                first_at: first_row as u64,
-            });
-        }
-        keys.insert((index, m.step, m.target), row);
+        keys.push((index, m.step, m.target, row));
     }
-    Ok(())
+    keys.sort_unstable();
+    // A key seen before: the error is at the earliest such row, naming the key's first row
+    // (for three rows with one key, the window of the first two).
+    let duplicate = keys
+        .windows(2)
+        .filter(|w| w[0].0 == w[1].0 && w[0].1 == w[1].1 && w[0].2 == w[1].2)
+        .min_by_key(|w| w[1].3)
+        .map(|w| MeasurementSetError {
+            row: w[1].3,
+            problem: RowProblem::DuplicateKey {
+                experiment: rows[w[1].3].experiment.clone(),
+                step: w[1].1,
+                target: w[1].2,
+                first_at: w[0].3 as u64,
+            },
+        });
+    match duplicate.or(problem) {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// What is wrong with row `m` on its own (not its key), `first` being the joint its
+/// experiment's first row moves.
+fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowProblem> {
+    if m.experiment.is_empty() || m.experiment.trim() != m.experiment {
+        return Some(RowProblem::BadExperimentName {
+            experiment: m.experiment.clone(),
+        });
+    }
+    if m.cmd.len() != joint_count {
+        return Some(RowProblem::JointCount {
+            found: m.cmd.len(),
+            expected: joint_count,
+        });
+    }
+    if let Some((column, value)) = first_not_finite(m) {
+        return Some(RowProblem::NotFinite { column, value });
+    }
+    if m.payload_kg < 0.0 {
+        return Some(RowProblem::OutOfRange {
+            column: "payload_kg".into(),
+            value: m.payload_kg,
+            expected: "0 kg and above (a payload has no negative mass)",
+        });
+    }
+    if m.temperature_c <= -273.15 {
+        return Some(RowProblem::OutOfRange {
+            column: "temperature_c".into(),
+            value: m.temperature_c,
+            expected: "temperatures above absolute zero (-273.15 deg C)",
+        });
+    }
+    if m.moved_joint > joint_count {
+        return Some(RowProblem::MovedJointOutOfRange {
+            value: m.moved_joint,
+            joint_count,
+        });
+    }
+    (first != m.moved_joint).then(|| RowProblem::InconsistentMovedJoint {
+        experiment: m.experiment.clone(),
+        first,
+        found: m.moved_joint,
+    })
 }
 
 #[cfg(test)]
@@ -385,7 +404,27 @@ mod tests {
         ));
         let mut bad = row("a", 1, 0, 0);
         bad.position_mm[1] = f64::NAN;
-        let e = MeasurementSet::new(2, vec![bad]).unwrap_err();
+        let e = MeasurementSet::new(2, vec![bad.clone()]).unwrap_err();
         assert_eq!(e.problem.column(), "y_mm");
+        // The first row with a problem, in row order, whichever kind it is.
+        let e = MeasurementSet::new(
+            2,
+            vec![row("a", 1, 0, 0), row("b", 1, 0, 0), row("a", 1, 0, 0), bad.clone()],
+        )
+        .unwrap_err();
+        assert_eq!((e.row, e.problem.column().as_str()), (2, "experiment,step,target"));
+        let e = MeasurementSet::new(2, vec![row("a", 1, 0, 0), bad, row("a", 1, 0, 0)]).unwrap_err();
+        assert_eq!((e.row, e.problem.column().as_str()), (1, "y_mm"));
+        let three = [1, 0, 1, 1].map(|target| row("a", 1, 0, target));
+        let e = MeasurementSet::new(2, three.to_vec()).unwrap_err();
+        assert_eq!(e.row, 2);
+        assert!(matches!(
+            e.problem,
+            RowProblem::DuplicateKey {
+                first_at: 0,
+                target: 1,
+                ..
+            }
+        ));
     }
 }

@@ -77,7 +77,10 @@ impl ApproachTracker {
                 }
             }
         }
-        self.last = Some(x.to_vec());
+        match &mut self.last {
+            Some(last) if last.len() == x.len() => last.copy_from_slice(x),
+            last => *last = Some(x.to_vec()),
+        }
         &self.approach
     }
 }

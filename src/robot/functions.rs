@@ -282,6 +282,25 @@ impl CouplingFunction {
 /// `(sum_k s_k sin(k x) + c_k cos(k x), d/dx of it)`, the sine terms summed before the cosine
 /// terms; one `sin_cos` per harmonic (the first eight kept for the cosine terms).
 fn harmonics(x: f64, sin: &[f64], cos: &[f64]) -> (f64, f64) {
+    // Order 0 and 1 (the paper's forms, evaluated in every transmission inversion): the same
+    // operations in the same order as the loops below, without their table.
+    match (sin, cos) {
+        ([], []) => return (0.0, 0.0),
+        ([_] | [], [_] | []) => {
+            let (sk, ck) = x.sin_cos();
+            let (mut v, mut dv) = (0.0, 0.0);
+            if let Some(s) = sin.first() {
+                v += s * sk;
+                dv += s * 1.0 * ck;
+            }
+            if let Some(c) = cos.first() {
+                v += c * ck;
+                dv -= c * 1.0 * sk;
+            }
+            return (v, dv);
+        }
+        _ => {}
+    }
     let mut kept = [(0.0, 0.0); 8];
     let n_kept = sin.len().max(cos.len()).min(kept.len());
     for (k, sc) in kept.iter_mut().enumerate().take(n_kept) {

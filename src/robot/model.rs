@@ -212,17 +212,20 @@ impl RobotModel {
                 found: u.len(),
             });
         }
-        self.joints
-            .iter()
-            .zip(u)
+        u.iter()
             .enumerate()
-            .map(|(k, (j, &uk))| {
-                let command = uk - j.transducer_offset;
-                j.transmission
-                    .actual_from_command(command)
-                    .ok_or(ModelError::NotInvertible { joint: k + 1, command })
-            })
+            .map(|(k, &uk)| self.active_displacement(k, uk))
             .collect()
+    }
+
+    /// The actual active displacement of joint `k + 1` (0-based `k < dof`) for its actuator
+    /// command `u_k`: one term of [`Self::active_displacements`].
+    pub fn active_displacement(&self, k: usize, u_k: f64) -> Result<f64, ModelError> {
+        let j = &self.joints[k];
+        let command = u_k - j.transducer_offset;
+        j.transmission
+            .actual_from_command(command)
+            .ok_or(ModelError::NotInvertible { joint: k + 1, command })
     }
 
     /// The joint values the robot reaches for joint commands `cmd` sent to `controller`
@@ -242,14 +245,18 @@ impl RobotModel {
     /// The joint values for actuator commands `u` (after the controller's decoupling):
     /// `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`.
     pub fn joint_values_from_actuators(&self, u: &[f64]) -> Result<Vec<f64>, ModelError> {
-        let theta = self.active_displacements(u)?;
-        let mut q = theta.clone();
-        for k in 1..q.len() {
-            if let Some(g) = &self.joints[k].coupling_in {
-                q[k] += g
-                    .try_passive(theta[k - 1])
+        // q starts as theta and takes the couplings joint by joint upwards; `theta_below` keeps
+        // the active displacement of the joint below (its q entry has its coupling already).
+        let mut q = self.active_displacements(u)?;
+        let mut theta_below = q.first().copied().unwrap_or(0.0);
+        for (k, (qk, joint)) in q.iter_mut().zip(&self.joints).enumerate().skip(1) {
+            let theta_k = *qk;
+            if let Some(g) = &joint.coupling_in {
+                *qk += g
+                    .try_passive(theta_below)
                     .map_err(|source| ModelError::Coupling { joint: k + 1, source })?;
             }
+            theta_below = theta_k;
         }
         Ok(q)
     }

@@ -54,6 +54,20 @@ impl AnalyticArm {
         }
     }
 
+    /// The same arm looking its truth's transmission inverses up in `table` first (built for
+    /// this arm's driver: [`AnalyticArm::driver`]; call after [`AnalyticArm::with_effects`]).
+    pub fn with_inversions(self, table: std::sync::Arc<super::joint_driver::InversionTable>) -> Self {
+        AnalyticArm {
+            driver: self.driver.with_table(table),
+            ..self
+        }
+    }
+
+    /// The driver of its joints.
+    pub fn driver(&self) -> &JointDriver {
+        &self.driver
+    }
+
     /// The truth model.
     pub fn truth(&self) -> &RobotModel {
         &self.truth
@@ -99,7 +113,7 @@ impl ArmExecutor for AnalyticArm {
                 *qk += d;
             }
         }
-        let mut links = frames.poses(&q).world_from_link;
+        let mut links = frames.world_from_links(&q);
         self.effects.apply_wobble(model, &q, &mut links);
         Ok(links)
     }

@@ -140,7 +140,17 @@ pub fn simulate_campaign_with<A: ArmExecutor, R: Rng + ?Sized>(
     rng: &mut R,
 ) -> Result<CampaignOutput, CampaignError> {
     plan.validate(desc)?;
+    let validation_commands = validation.commands(desc, &plan.reference);
+    let tool_targets = desc.tool_targets_m().len();
     let mut out = CampaignOutput::default();
+    // Every target of every pose, the occluded ones included: the rows' room, reserved once.
+    let sweep_rows: usize = plan
+        .sweeps
+        .iter()
+        .map(|s| s.poses() * (1 + usize::from(s.second_target)))
+        .sum();
+    out.rows
+        .reserve(sweep_rows + tool_targets * (1 + validation_commands.len()));
     let conditions = options.conditions;
     let instrument = Instrument {
         model: instrument,
@@ -190,7 +200,7 @@ pub fn simulate_campaign_with<A: ArmExecutor, R: Rng + ?Sized>(
         &plan.reference,
         conditions,
     )?;
-    for (step, cmd) in validation.commands(desc, &plan.reference).into_iter().enumerate() {
+    for (step, cmd) in validation_commands.into_iter().enumerate() {
         observe_tool(
             &mut out,
             desc,

@@ -28,7 +28,7 @@ pub use campaign::{
     simulate_campaign_with,
 };
 pub use effects::{Effects, EffectsError, LinkMassEntry};
-pub use joint_driver::{DrivenJoints, JointDriver, UNMOVED_ACTUATOR_RAD};
+pub use joint_driver::{DrivenJoints, InversionTable, JointDriver, UNMOVED_ACTUATOR_RAD};
 pub use paper::{PAPER_ROBOT_FILE, paper_robot};
 pub use perturb::{
     CouplingHarmonicSpread, FourBarSpread, PerturbationSpec, PlacementSpread, RowSpread, Spread, TransmissionSpread,

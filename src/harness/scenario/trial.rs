@@ -12,13 +12,13 @@ use super::validation_error::validation_errors;
 use crate::calibration::procedure::{CalibrationOptions, Detail, calibrate_model};
 use crate::kinematics::FixedFrames;
 use crate::measurement::{Measurement, MeasurementSet};
-use crate::plan::{PoseConditions, ValidationPlan};
+use crate::plan::{PoseConditions, TOOL_EXPERIMENT, VALIDATION_EXPERIMENT, ValidationPlan};
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::perturb;
-use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, simulate_campaign_with};
+use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, InversionTable, simulate_campaign_with};
 use crate::sim::{RapierArm, RapierArmOptions};
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector3};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
 
 /// One Monte-Carlo trial: a pure function of the case and the seed (thread-safe, no I/O).
@@ -74,12 +74,86 @@ pub struct CampaignTrial {
     effects: Effects,
     options: CampaignOptions,
     occlusion: bool,
+    /// The predictions at the measured poses that every trial of a case shares, per distinct
+    /// reference pose of the cases.
+    fixed: Vec<PosePredictions>,
+    /// A fixed truth's transmission inverses at the cases' planned commands, shared by the
+    /// analytic arms of every trial ([`InversionTable`]).
+    inversions: Option<std::sync::Arc<InversionTable>>,
+}
+
+/// What a trial predicts at the measured poses of a case that does not depend on the trial:
+/// the nominal model's tool frame at each pose's commands and, for a fixed truth robot, the
+/// truth's tool point (kinematics only), computed once instead of in every trial: the same
+/// functions of the same commands, so the same numbers. A row is served from here only when
+/// its commands are the ones computed for its pose (held-joint wander or a plan change falls
+/// back to the computation).
+#[derive(Clone, Debug)]
+struct PosePredictions {
+    /// The plan's reference commands (file units): which cases these are for.
+    reference: Vec<f64>,
+    /// Commands (file units) of the tool observation (index 0) and of validation step `s`
+    /// (index `1 + s`).
+    commands: Vec<Vec<f64>>,
+    /// The nominal model's `world_from_tool` at each.
+    nominal: Vec<Isometry3<f64>>,
+    /// The fixed truth's tool point \[m\] at each, or why its transmissions cannot reach it;
+    /// `None` when the truth is drawn per trial.
+    truth_tool_m: Option<Vec<Result<Vector3<f64>, String>>>,
+}
+
+impl PosePredictions {
+    /// The predictions of the poses at `reference` (file units).
+    fn new(trial: &CampaignTrial, reference: &[f64]) -> Self {
+        let commands: Vec<Vec<f64>> = std::iter::once(reference.to_vec())
+            .chain(trial.validation.commands(&trial.desc, reference))
+            .collect();
+        let nominal = commands.iter().map(|cmd| trial.nominal_tool(cmd)).collect();
+        let truth_tool_m = match &trial.truth {
+            ResolvedTruth::Fixed { robot } => {
+                let model = FixedFrames::new(robot.phi_model());
+                Some(
+                    commands
+                        .iter()
+                        .map(|cmd| trial.truth_tool_m(robot, &model, cmd).map_err(|e| e.to_string()))
+                        .collect(),
+                )
+            }
+            ResolvedTruth::Perturbed { .. } => None,
+        };
+        PosePredictions {
+            reference: reference.to_vec(),
+            commands,
+            nominal,
+            truth_tool_m,
+        }
+    }
+
+    /// The index of `row`'s pose, if it is one of these with these commands.
+    fn index(&self, row: &Measurement) -> Option<usize> {
+        let i = match row.experiment.as_str() {
+            TOOL_EXPERIMENT if row.step == 0 => 0,
+            VALIDATION_EXPERIMENT => 1 + row.step,
+            _ => return None,
+        };
+        (self.commands.get(i)? == &row.cmd).then_some(i)
+    }
+
+    /// The nominal tool frame of `row`'s pose, if known.
+    fn nominal(&self, row: &Measurement) -> Option<Isometry3<f64>> {
+        self.index(row).map(|i| self.nominal[i])
+    }
+
+    /// The fixed truth's tool point of `row`'s pose (or why there is none), if known.
+    fn truth_tool_m(&self, row: &Measurement) -> Option<&Result<Vector3<f64>, String>> {
+        Some(&self.truth_tool_m.as_ref()?[self.index(row)?])
+    }
 }
 
 impl CampaignTrial {
     /// The trial of `scenario` (analytic or rapier arm, as its `sim` key says).
     pub fn new(scenario: &ResolvedScenario) -> Result<Self, String> {
-        Ok(CampaignTrial {
+        let mut trial = CampaignTrial {
             desc: scenario.robot.clone(),
             nominal: FixedFrames::new(scenario.robot.nominal_model()),
             controller: Controller::from_description(&scenario.robot),
@@ -95,7 +169,65 @@ impl CampaignTrial {
                 instrument_scale: scenario.effects.instrument_scale,
             },
             occlusion: scenario.occlusion,
-        })
+            fixed: Vec::new(),
+            inversions: None,
+        };
+        for case in &scenario.cases {
+            let reference = &case.plan.reference;
+            if reference.len() == trial.desc.dof() && trial.fixed_for(reference).is_none() {
+                let fixed = PosePredictions::new(&trial, reference);
+                trial.fixed.push(fixed);
+            }
+        }
+        trial.inversions = trial.inversion_table(scenario).map(std::sync::Arc::new);
+        Ok(trial)
+    }
+
+    /// The analytic arm of `truth` with the trial's controller and effects.
+    fn analytic_arm(&self, truth: RobotModel) -> AnalyticArm {
+        AnalyticArm::new(truth, self.controller.clone()).with_effects(self.effects.clone(), &self.desc)
+    }
+
+    /// For a fixed truth on the analytic arm: its transmission inverses at every planned
+    /// command of the scenario's cases (axis sweeps, tool and validation poses).
+    fn inversion_table(&self, scenario: &ResolvedScenario) -> Option<InversionTable> {
+        let (SimMode::Analytic, ResolvedTruth::Fixed { robot }) = (self.sim, &self.truth) else {
+            return None;
+        };
+        let mut commands: Vec<Vec<f64>> = Vec::new();
+        for case in scenario.cases.iter().filter(|c| c.plan.validate(&self.desc).is_ok()) {
+            let plan = &case.plan;
+            for sweep in &plan.sweeps {
+                commands.extend((0..sweep.poses()).map(|step| plan.commands(&self.desc, sweep, step)));
+            }
+        }
+        commands.extend(self.fixed.iter().flat_map(|f| f.commands.iter().cloned()));
+        let internal: Vec<Vec<f64>> = commands.iter().map(|c| commands_to_internal(&self.desc, c)).collect();
+        let arm = self.analytic_arm(robot.clone());
+        Some(InversionTable::new(arm.driver(), internal.iter().map(Vec::as_slice)))
+    }
+
+    /// The trial-independent predictions of the cases with this reference pose.
+    fn fixed_for(&self, reference: &[f64]) -> Option<&PosePredictions> {
+        self.fixed.iter().find(|f| f.reference == reference)
+    }
+
+    /// The nominal model's tool frame at file-unit commands `cmd`: nominally the robot
+    /// reaches exactly the commanded joint values (`docs/formats.md#controller-semantics`).
+    fn nominal_tool(&self, cmd: &[f64]) -> Isometry3<f64> {
+        self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
+    }
+
+    /// The tool point \[m\] of `truth` (its constant frames: `model`) at file-unit commands
+    /// `cmd` through the controller (kinematics only).
+    fn truth_tool_m(
+        &self,
+        truth: &RobotModel,
+        model: &FixedFrames,
+        cmd: &[f64],
+    ) -> Result<Vector3<f64>, crate::robot::ModelError> {
+        let q = truth.joint_values(&self.controller, &commands_to_internal(&self.desc, cmd))?;
+        Ok(model.world_from_tool(&q).translation.vector)
     }
 
     /// Whether the trial runs the rapier arm in dynamic mode (it then reports
@@ -151,8 +283,9 @@ impl CampaignTrial {
         let cal =
             calibrate_model(&set, &self.desc, &options, Detail::Model).map_err(|e| format!("calibrating: {e}"))?;
         let predicted = self.predicted_tool(set.rows(), &cal.robot)?;
-        let mut m = self.metrics(set.rows(), occluded, &predicted);
-        m.push(CAMPAIGN_METRICS[10], self.tool_error_rms_mm(&predicted, truth)?);
+        let fixed = self.fixed_for(&case.plan.reference);
+        let mut m = self.metrics(set.rows(), occluded, &predicted, fixed);
+        m.push(CAMPAIGN_METRICS[10], self.tool_error_rms_mm(&predicted, truth, fixed)?);
         if let Some(t) = settles {
             m.push(SETTLE_METRICS[0], t.mean_steps());
             m.push(SETTLE_METRICS[1], t.max_steps as f64);
@@ -187,20 +320,25 @@ impl CampaignTrial {
 
     /// RMS over the measured poses of the distance between the calibrated model's tool
     /// points (`predicted`, [`CampaignTrial::predicted_tool`]) and the truth model's at the
-    /// same commands \[mm\] (kinematics only).
+    /// same commands \[mm\] (kinematics only); a fixed truth's points from `fixed`.
     fn tool_error_rms_mm(
         &self,
         predicted: &[(&Measurement, Isometry3<f64>)],
         truth: &RobotModel,
+        fixed: Option<&PosePredictions>,
     ) -> Result<f64, String> {
-        let truth_model = FixedFrames::new(truth.phi_model());
+        let mut truth_model = None;
         let mut sum_m2 = 0.0;
         for (row, world_from_tool) in predicted {
-            let cmd = commands_to_internal(&self.desc, &row.cmd);
-            let q_truth = truth
-                .joint_values(&self.controller, &cmd)
-                .map_err(|e| format!("{} step {}: {e}", row.experiment, row.step))?;
-            let d = world_from_tool.translation.vector - truth_model.world_from_tool(&q_truth).translation.vector;
+            let at = |e: &dyn std::fmt::Display| format!("{} step {}: {e}", row.experiment, row.step);
+            let truth_m = match fixed.and_then(|f| f.truth_tool_m(row)) {
+                Some(known) => known.clone().map_err(|e| at(&e))?,
+                None => {
+                    let model = truth_model.get_or_insert_with(|| FixedFrames::new(truth.phi_model()));
+                    self.truth_tool_m(truth, model, &row.cmd).map_err(|e| at(&e))?
+                }
+            };
+            let d = world_from_tool.translation.vector - truth_m;
             sum_m2 += d.norm_squared();
         }
         // No pose measured (all occluded): no number, as `validation_errors` gives.
@@ -213,17 +351,27 @@ impl CampaignTrial {
 
     /// The validation errors of the nominal model and of the calibrated one (its tool frame
     /// at each measured pose: `predicted`) over the campaign's `rows`, with the number of
-    /// `occluded` targets.
-    fn metrics(&self, rows: &[Measurement], occluded: usize, predicted: &[(&Measurement, Isometry3<f64>)]) -> Metrics {
+    /// `occluded` targets (the nominal tool frames from `fixed` where it has them).
+    fn metrics(
+        &self,
+        rows: &[Measurement],
+        occluded: usize,
+        predicted: &[(&Measurement, Isometry3<f64>)],
+        fixed: Option<&PosePredictions>,
+    ) -> Metrics {
         let targets = self.desc.tool_targets_m();
-        let e = validation_errors(rows, &targets, |cmd| {
-            // Nominally the robot reaches exactly the commanded joint values (`docs/formats.md#controller-semantics`).
-            self.nominal.world_from_tool(&commands_to_internal(&self.desc, cmd))
+        let e = validation_errors(rows, &targets, |row| {
+            fixed
+                .and_then(|f| f.nominal(row))
+                .unwrap_or_else(|| self.nominal_tool(&row.cmd))
         });
-        let c = validation_errors(rows, &targets, |cmd| {
+        // The prediction made from this very row, else from one with the same commands (the
+        // same number: a function of the commands).
+        let c = validation_errors(rows, &targets, |row| {
             predicted
                 .iter()
-                .find(|(row, _)| row.cmd == cmd)
+                .find(|(r, _)| std::ptr::eq(*r, row))
+                .or_else(|| predicted.iter().find(|(r, _)| r.cmd == row.cmd))
                 .map_or(Isometry3::translation(f64::NAN, f64::NAN, f64::NAN), |p| p.1)
         });
         let mut m = Metrics::new();
@@ -265,8 +413,10 @@ impl Trial for CampaignTrial {
         let kinematic_truth = truth.clone();
         match self.sim {
             SimMode::Analytic => {
-                let arm =
-                    AnalyticArm::new(truth, self.controller.clone()).with_effects(self.effects.clone(), &self.desc);
+                let arm = match &self.inversions {
+                    Some(table) => self.analytic_arm(truth).with_inversions(table.clone()),
+                    None => self.analytic_arm(truth),
+                };
                 self.run_on(arm, case, &mut rng, &kinematic_truth)
             }
             SimMode::Rapier => {

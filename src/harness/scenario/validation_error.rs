@@ -27,7 +27,8 @@ pub struct ValidationErrors {
 
 /// Compares measured validation rows (`moved_joint == 0`) with a model.
 ///
-/// `world_from_tool(cmd)` predicts the tool frame from the file-unit commands of a row;
+/// `world_from_tool(row)` predicts the tool frame of a pose from its first row (its file-unit
+/// commands `row.cmd`);
 /// `tool_targets_m` are the targets in the tool frame. The position error of a target is
 /// `|predicted - measured|`. The orientation error of a pose is the angle of the rotation of
 /// the least-squares rigid fit (Kabsch: Arun, Huang & Blostein 1987, SVD of the centred
@@ -40,42 +41,43 @@ pub fn validation_errors<F>(
     world_from_tool: F,
 ) -> ValidationErrors
 where
-    F: Fn(&[f64]) -> Isometry3<f64>,
+    F: Fn(&Measurement) -> Isometry3<f64>,
 {
-    // One group per pose: (experiment, step). The `tool` observation at the reference pose
-    // trains the calibrator's tool frame, so it is not a validation pose.
-    let mut by_step: BTreeMap<(&str, usize), Vec<&Measurement>> = BTreeMap::new();
-    for m in rows
+    // One group per pose: (experiment, step), in key order. The `tool` observation at the
+    // reference pose trains the calibrator's tool frame, so it is not a validation pose.
+    let poses: Vec<&Measurement> = rows
         .iter()
         .filter(|m| m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT)
-    {
-        by_step.entry((m.experiment.as_str(), m.step)).or_default().push(m);
+        .collect();
+    fn key(m: &Measurement) -> (&str, usize) {
+        (m.experiment.as_str(), m.step)
     }
-    let (mut sum_pos_m2, mut max_pos_m, mut targets) = (0.0, 0.0f64, 0usize);
-    let (mut sum_ang2, mut max_ang, mut poses) = (0.0, 0.0f64, 0usize);
-    for group in by_step.values() {
-        let pose = world_from_tool(&group[0].cmd);
-        let mut pairs = Vec::with_capacity(group.len());
-        for m in group {
-            let Some(t) = tool_targets_m.get(m.target) else {
-                continue;
-            };
-            let predicted = pose * t;
-            let measured = m.position_m();
-            let e = (measured - predicted).norm();
-            sum_pos_m2 += e * e;
-            max_pos_m = max_pos_m.max(e);
-            targets += 1;
-            pairs.push((predicted, measured));
+    let runs: Vec<&[&Measurement]> = poses.chunk_by(|a, b| key(a) == key(b)).collect();
+    let mut sums = Sums::default();
+    if runs.windows(2).all(|w| key(w[0][0]) < key(w[1][0])) {
+        // A campaign's file: each pose's rows follow each other, the poses in key order, so
+        // the runs are the groups in order (what the map below gives, without it).
+        for group in runs {
+            sums.add_pose(group, tool_targets_m, &world_from_tool);
         }
-        let (predicted, measured): (Vec<Point3<f64>>, Vec<Point3<f64>>) = pairs.iter().copied().unzip();
-        if let Some((fit, _)) = rigid_fit(&predicted, &measured) {
-            let angle = fit.rotation.angle();
-            sum_ang2 += angle * angle;
-            max_ang = max_ang.max(angle);
-            poses += 1;
+    } else {
+        let mut by_step: BTreeMap<(&str, usize), Vec<&Measurement>> = BTreeMap::new();
+        for m in poses {
+            by_step.entry(key(m)).or_default().push(m);
+        }
+        for group in by_step.values() {
+            sums.add_pose(group, tool_targets_m, &world_from_tool);
         }
     }
+    let Sums {
+        sum_pos_m2,
+        max_pos_m,
+        targets,
+        sum_ang2,
+        max_ang,
+        poses,
+        ..
+    } = sums;
     let rms = |sum: f64, n: usize| if n == 0 { f64::NAN } else { (sum / n as f64).sqrt() };
     ValidationErrors {
         pos_rms_mm: rms(sum_pos_m2, targets) * 1e3,
@@ -84,6 +86,51 @@ where
         orient_max_rad: if poses == 0 { f64::NAN } else { max_ang },
         targets,
         poses,
+    }
+}
+
+/// The running sums of [`validation_errors`], with the point buffers of a pose.
+#[derive(Default)]
+struct Sums {
+    sum_pos_m2: f64,
+    max_pos_m: f64,
+    targets: usize,
+    sum_ang2: f64,
+    max_ang: f64,
+    poses: usize,
+    predicted: Vec<Point3<f64>>,
+    measured: Vec<Point3<f64>>,
+}
+
+impl Sums {
+    /// Adds the targets of one pose (its rows: `group`) and, with three or more, its
+    /// orientation error.
+    fn add_pose<F>(&mut self, group: &[&Measurement], tool_targets_m: &[Point3<f64>], world_from_tool: &F)
+    where
+        F: Fn(&Measurement) -> Isometry3<f64>,
+    {
+        let pose = world_from_tool(group[0]);
+        self.predicted.clear();
+        self.measured.clear();
+        for m in group {
+            let Some(t) = tool_targets_m.get(m.target) else {
+                continue;
+            };
+            let predicted = pose * t;
+            let measured = m.position_m();
+            let e = (measured - predicted).norm();
+            self.sum_pos_m2 += e * e;
+            self.max_pos_m = self.max_pos_m.max(e);
+            self.targets += 1;
+            self.predicted.push(predicted);
+            self.measured.push(measured);
+        }
+        if let Some((fit, _)) = rigid_fit(&self.predicted, &self.measured) {
+            let angle = fit.rotation.angle();
+            self.sum_ang2 += angle * angle;
+            self.max_ang = self.max_ang.max(angle);
+            self.poses += 1;
+        }
     }
 }
 
@@ -106,13 +153,18 @@ mod tests {
         }
     }
 
-    #[test]
-    fn recovers_a_known_rotation_and_offset() {
-        let targets = [
+    /// Three targets on a tool, not collinear \[m\].
+    fn tool_targets() -> [Point3<f64>; 3] {
+        [
             Point3::new(0.1, 0.0, 0.0),
             Point3::new(-0.05, 0.08, 0.0),
             Point3::new(0.0, -0.06, 0.03),
-        ];
+        ]
+    }
+
+    #[test]
+    fn recovers_a_known_rotation_and_offset() {
+        let targets = tool_targets();
         let model = |cmd: &[f64]| Isometry3::translation(cmd[0], 1.0, 0.5);
         // The "real" tool is turned by 0.01 rad about z and shifted 1 mm along x.
         let err = Isometry3::from_parts(
@@ -125,13 +177,30 @@ mod tests {
                 targets.iter().enumerate().map(move |(i, t)| row(s, i, real * t))
             })
             .collect();
-        let e = validation_errors(&rows, &targets, model);
+        let e = validation_errors(&rows, &targets, |m| model(&m.cmd));
         assert_eq!((e.targets, e.poses), (12, 4));
         assert_relative_eq!(e.orient_rms_rad, 0.01, max_relative = 1e-9);
         assert_relative_eq!(e.orient_max_rad, 0.01, max_relative = 1e-9);
         assert!(e.pos_max_mm >= 1.0 && e.pos_rms_mm <= e.pos_max_mm);
-        let exact = validation_errors(&rows, &targets, |c| model(c) * err);
+        let exact = validation_errors(&rows, &targets, |m| model(&m.cmd) * err);
         assert!(exact.pos_max_mm < 1e-9 && exact.orient_max_rad < 1e-9);
+    }
+
+    #[test]
+    fn poses_out_of_order_give_the_same_numbers_as_in_order() {
+        let targets = tool_targets();
+        let model = |m: &Measurement| Isometry3::translation(m.cmd[0], 1.0, 0.5);
+        let measured = |s: usize, i: usize| {
+            let wobble = Isometry3::rotation(Vector3::new(0.01 * s as f64, -0.003 * i as f64, 0.002));
+            row(s, i, wobble * Isometry3::translation(s as f64, 1.0, 0.5) * targets[i])
+        };
+        let in_order: Vec<Measurement> = (0..5).flat_map(|s| (0..3).map(move |i| measured(s, i))).collect();
+        // The same poses, last first, each pose's rows in their order: the groups by key.
+        let reversed: Vec<Measurement> = (0..5).rev().flat_map(|s| (0..3).map(move |i| measured(s, i))).collect();
+        let a = validation_errors(&in_order, &targets, model);
+        assert_eq!(a, validation_errors(&reversed, &targets, model));
+        assert_eq!((a.targets, a.poses), (15, 5));
+        assert!(a.orient_max_rad > 0.03);
     }
 
     #[test]
