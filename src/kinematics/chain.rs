@@ -305,6 +305,7 @@ mod tests {
             prop_assert_eq!(frames.world_from_tool(q), m.world_from_tool(q));
             prop_assert_eq!(frames.world_from_tool(q), m.poses(q).world_from_tool);
             prop_assert_eq!(frames.world_from_last_link(q), m.poses(q).world_from_link[kinds.len() - 1]);
+            prop_assert_eq!(frames.world_from_links(q), m.poses(q).world_from_link);
         }
 
         /// Frames taken from another model's where a joint and its row are the same are the
