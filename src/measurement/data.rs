@@ -160,15 +160,22 @@ impl<'a> Experiment<'a> {
 
     /// Rows grouped by step (ascending), each group sorted by target.
     pub fn by_step(&self) -> BTreeMap<usize, Vec<&'a Measurement>> {
-        // (step, target) is unique in a set (`MeasurementSet::new` refuses duplicates), so a
-        // sort orders the rows as `by_step_target` would.
-        let mut rows = self.rows.clone();
-        rows.sort_unstable_by_key(|m| (m.step, m.target));
+        let rows = self.rows_by_step();
         let mut steps: BTreeMap<usize, Vec<&'a Measurement>> = BTreeMap::new();
         for group in rows.chunk_by(|a, b| a.step == b.step) {
             steps.insert(group[0].step, group.to_vec());
         }
         steps
+    }
+
+    /// The rows ordered by (step, target): [`Self::by_step`]'s groups one after the other
+    /// (`chunk_by` on the step gives them), without a map or a vector per step.
+    pub fn rows_by_step(&self) -> Vec<&'a Measurement> {
+        // (step, target) is unique in a set (`MeasurementSet::new` refuses duplicates), so a
+        // sort orders the rows as `by_step_target` would.
+        let mut rows = self.rows.clone();
+        rows.sort_unstable_by_key(|m| (m.step, m.target));
+        rows
     }
 
     /// The row for (step, target), if that target was observed.

@@ -66,8 +66,9 @@ pub fn axis_experiments_with(
 ) -> Result<(Vec<AxisExperiment>, Vec<f64>), ProcedureError> {
     let mut out: Vec<AxisExperiment> = Vec::new();
     for e in set.experiments().into_iter().filter(|e| e.moved_joint > 0) {
-        let by_step = e.by_step();
-        let n = by_step.len();
+        let rows_by_step = e.rows_by_step();
+        let by_step = rows_by_step.chunk_by(|a, b| a.step == b.step);
+        let n = by_step.clone().count();
         let mut x = AxisExperiment {
             name: e.name.to_string(),
             joint: e.moved_joint,
@@ -79,8 +80,8 @@ pub fn axis_experiments_with(
             target1_steps: Vec::with_capacity(n),
             holds_next_still: false,
         };
-        for (step, rows) in &by_step {
-            let first = rows[0];
+        for rows in by_step {
+            let (first, step) = (rows[0], &rows[0].step);
             if let Some(r) = rows.iter().find(|r| {
                 r.cmd
                     .iter()
