@@ -205,13 +205,27 @@ impl TheodolitePair {
         Ok(j * Matrix3x4::from_fn(|r, c| j[(r, c)] * variances[c]).transpose())
     }
 
+    /// The angle between the lines (not rays: antiparallel sight lines are as degenerate) of
+    /// unit directions `u1`, `u2` (`b = u1 . u2`), `atan2(|u1 x u2|, |b|)`, when it is below
+    /// the minimum; `None` when it is not. Where `|u1 x u2| > 2 min |b|` (every measurement
+    /// of a usable pair) the angle exceeds `atan(2 min) >= min` (`tan x <= 2x` for
+    /// `0 <= x <= 1`), a margin far beyond rounding, and the `atan2` is skipped: the answer is
+    /// that of the comparison in every case.
+    fn narrow_angle(&self, u1: &Vector3<f64>, u2: &Vector3<f64>, b: f64) -> Option<f64> {
+        let sine = u1.cross(u2).norm();
+        let min = self.min_intersection_angle_rad;
+        if min <= 1.0 && sine > 2.0 * min * b.abs() {
+            return None;
+        }
+        let angle = sine.atan2(b.abs());
+        (angle < min).then_some(angle)
+    }
+
     fn rays(&self, left: StationAngles, right: StationAngles) -> Result<Rays, TriangulationError> {
         let (p1, p2) = (self.left_station_m, self.right_station_m);
         let (u1, u2) = (left.direction(), right.direction());
         let b = u1.dot(&u2);
-        // Angle between the lines (not rays): antiparallel sight lines are as degenerate.
-        let intersection_angle_rad = u1.cross(&u2).norm().atan2(b.abs());
-        if intersection_angle_rad < self.min_intersection_angle_rad {
+        if let Some(intersection_angle_rad) = self.narrow_angle(&u1, &u2, b) {
             return Err(TriangulationError::NearParallel {
                 intersection_angle_rad,
                 min_intersection_angle_rad: self.min_intersection_angle_rad,
@@ -292,6 +306,31 @@ mod tests {
                 // Central-difference truncation error ~ h^2 |d3p/da3| ~ 1e-12 * (5 m)*10,
                 // plus rounding 1e-16 * 5 m / 1e-6.
                 assert_relative_eq!(analytic.column(k).into_owned(), numeric, epsilon = 1e-8);
+            }
+        }
+    }
+
+    /// The skipped `atan2` never changes the answer: lines at angles from half to twice the
+    /// minimum (and antiparallel ones), for minima up to and beyond the 1-rad bound, give the
+    /// comparison's answer and angle.
+    #[test]
+    fn narrow_angle_is_the_comparison_of_the_angle() {
+        for min in [0.0, 0.01, 0.3, 1.0, 1.2, -0.1] {
+            let pair = TheodolitePair {
+                min_intersection_angle_rad: min,
+                ..pair()
+            };
+            let u1 = Vector3::new(0.3, -0.5, 0.8).normalize();
+            let across = u1.cross(&Vector3::z()).normalize();
+            for k in 0..=200 {
+                let angle = (0.5 + 1.5 * k as f64 / 200.0) * min.abs().max(1e-3);
+                for sign in [1.0, -1.0] {
+                    let u2 = (u1 * angle.cos() + across * angle.sin()) * sign;
+                    let b = u1.dot(&u2);
+                    let reference = u1.cross(&u2).norm().atan2(b.abs());
+                    let expected = (reference < min).then_some(reference);
+                    assert_eq!(pair.narrow_angle(&u1, &u2, b), expected, "min {min}, angle {angle}");
+                }
             }
         }
     }
