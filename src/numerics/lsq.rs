@@ -54,7 +54,7 @@ fn column_scales(j: &DMatrix<f64>) -> DVector<f64> {
 
 /// `J^T J` for a tall, thin `J`: dot products of its (contiguous) columns for the upper
 /// triangle only, mirrored; no transposed copy. Each entry is nalgebra's `dot` of the two
-/// columns bit for bit ([`column_dot`]).
+/// columns bit for bit (summed on slices in its order).
 pub fn gram(j: &DMatrix<f64>) -> DMatrix<f64> {
     let m = j.ncols();
     let mut jtj = DMatrix::zeros(m, m);
