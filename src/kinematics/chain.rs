@@ -281,8 +281,8 @@ impl FixedFrames {
             0 => self.model.world_from_base,
             k => near_links[k - 1] * self.link_from_next_frame[k - 1],
         };
-        for k in kept..n {
-            let link = frame * joint_motion(self.model.joints[k].kind, q[k]);
+        for (k, &qk) in q.iter().enumerate().take(n).skip(kept) {
+            let link = frame * joint_motion(self.model.joints[k].kind, qk);
             if k + 1 == n {
                 return link;
             }

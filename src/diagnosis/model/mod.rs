@@ -112,8 +112,11 @@ struct JointMemo {
     /// Per pose, its joint values and links (`frames.world_from_links`) at the memo's
     /// parameters, where its frames are `frames` (`None` under a thermal candidate's rows or
     /// a tilt).
-    links: Vec<Option<(Vec<f64>, Vec<Isometry3<f64>>)>>,
+    links: Vec<Option<PoseLinks>>,
 }
+
+/// A pose's joint values and the links' frames at them (`FixedFrames::world_from_links`).
+type PoseLinks = (Vec<f64>, Vec<Isometry3<f64>>);
 
 /// Workspace features of a validation pose ([`Predictor::pose_features`]).
 #[derive(Clone, Debug, PartialEq)]
