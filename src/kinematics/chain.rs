@@ -242,6 +242,55 @@ impl FixedFrames {
         frame
     }
 
+    /// [`Self::world_from_last_link`] at `q`, bit for bit, starting from the links `near_links`
+    /// (`near.world_from_links(near_q)`) of frames `near` as far up the chain as the base,
+    /// the joint values and the fixed frames below are the same to the bit (a link's frame is
+    /// a product of those alone): the forward kinematics of a central difference's column that
+    /// moves one row, the tool frame or nothing of the chain, from the point it is taken
+    /// around.
+    ///
+    /// # Panics
+    /// If `q`, `near_q` or `near_links` is shorter than `self.model().dof()`: a programming
+    /// error, not a data error.
+    pub fn world_from_last_link_near(
+        &self,
+        q: &[f64],
+        near: &FixedFrames,
+        near_q: &[f64],
+        near_links: &[Isometry3<f64>],
+    ) -> Isometry3<f64> {
+        let n = self.model.dof();
+        let mut kept = 0;
+        if same_bits(&self.model.world_from_base, &near.model.world_from_base) {
+            while kept < n
+                && q[kept].to_bits() == near_q[kept].to_bits()
+                && near.model.joints.get(kept).map(|j| j.kind) == Some(self.model.joints[kept].kind)
+                && (kept == 0
+                    || same_bits(
+                        &self.link_from_next_frame[kept - 1],
+                        &near.link_from_next_frame[kept - 1],
+                    ))
+            {
+                kept += 1;
+            }
+        }
+        if kept == n && n > 0 {
+            return near_links[n - 1];
+        }
+        let mut frame = match kept {
+            0 => self.model.world_from_base,
+            k => near_links[k - 1] * self.link_from_next_frame[k - 1],
+        };
+        for (k, &qk) in q.iter().enumerate().take(n).skip(kept) {
+            let link = frame * joint_motion(self.model.joints[k].kind, qk);
+            if k + 1 == n {
+                return link;
+            }
+            frame = link * self.link_from_next_frame[k];
+        }
+        frame
+    }
+
     /// The `world_from_link` of [`Self::poses`] alone (what a simulated arm reports), bit for
     /// bit, without the joints' fixed frames and the tool frame.
     pub fn world_from_links(&self, q: &[f64]) -> Vec<Isometry3<f64>> {
@@ -252,6 +301,15 @@ impl FixedFrames {
     pub fn world_from_tool(&self, q: &[f64]) -> Isometry3<f64> {
         self.model.world_from_tool_by(q, |k| self.link_from_next_frame[k])
     }
+}
+
+/// Whether two frames are the same to the bit (their rotation's quaternion and translation).
+fn same_bits(a: &Isometry3<f64>, b: &Isometry3<f64>) -> bool {
+    let bits = |f: &Isometry3<f64>| {
+        let (r, t) = (f.rotation.coords, f.translation.vector);
+        [r[0], r[1], r[2], r[3], t[0], t[1], t[2]].map(f64::to_bits)
+    };
+    bits(a) == bits(b)
 }
 
 #[cfg(test)]
@@ -331,6 +389,38 @@ mod tests {
             let frames = FixedFrames::new_near(m.clone(), &near);
             prop_assert_eq!(&frames, &FixedFrames::new(m.clone()));
             prop_assert_eq!(frames.poses(q), m.poses(q));
+        }
+
+        /// The last link's frame continued from another model's links is the model's own, bit
+        /// for bit, whichever rows, joint values and base differ (none, some, all).
+        #[test]
+        fn the_last_link_near_another_models_is_the_models_own(
+            kinds in prop::collection::vec(prop::bool::ANY, 1..8),
+            x in prop::collection::vec(-3.0f64..3.0, 7..60),
+            moved in prop::collection::vec(0u8..4, 8),
+            q in prop::collection::vec(-3.0f64..3.0, 8),
+            base_moved in prop::bool::ANY,
+        ) {
+            let kinds: Vec<JointKind> =
+                kinds.iter().map(|&r| if r { JointKind::Revolute } else { JointKind::Prismatic }).collect();
+            let near = model(&kinds, &x).fixed_frames();
+            let near_q = &q[..kinds.len()];
+            let mut m = model(&kinds, &x);
+            let mut q_m = near_q.to_vec();
+            for (k, row) in m.rows.iter_mut().enumerate() {
+                match moved[k] {
+                    1 => row.b_m += 1e-6,
+                    2 => q_m[k] += 1e-6,
+                    _ => {}
+                }
+            }
+            if base_moved {
+                m.world_from_base.translation.vector.x += 1e-6;
+            }
+            let frames = FixedFrames::new_near(m.clone(), &near);
+            let own = m.poses(&q_m).world_from_link[kinds.len() - 1];
+            let links = near.world_from_links(near_q);
+            prop_assert_eq!(frames.world_from_last_link_near(&q_m, &near, near_q, &links), own);
         }
     }
 }

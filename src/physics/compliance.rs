@@ -3,8 +3,8 @@
 //! first order and as the exact static equilibrium. The simulated robot and the diagnosis's
 //! compliance candidate use the same physics.
 
-use super::gravity::{LinkMass, STANDARD_GRAVITY_M_S2, gravity_torques_nm};
-use crate::kinematics::PhiModel;
+use super::gravity::{LinkMass, STANDARD_GRAVITY_M_S2, gravity_torques_at_nm};
+use crate::kinematics::{ChainPoses, PhiModel};
 use crate::robot::{CouplingFunction, RobotModel};
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
@@ -34,7 +34,7 @@ pub struct PayloadEffect {
 }
 
 /// First-order static deflection of compliant joints under gravity: `dq = K^-1 Q(q)`, `Q` the
-/// gravity generalised force ([`gravity_torques_nm`]). The error is second order in the
+/// gravity generalised force ([`gravity_torques_nm`](super::gravity_torques_nm)). The error is second order in the
 /// deflection.
 pub fn first_order_deflection(
     model: &PhiModel,
@@ -43,7 +43,19 @@ pub fn first_order_deflection(
     payload: Option<(f64, Point3<f64>)>,
     compliance: &ComplianceEffect,
 ) -> Vec<f64> {
-    gravity_torques_nm(model, q, masses, payload, compliance.gravity_m_s2)
+    first_order_deflection_at(model, &model.poses(q), masses, payload, compliance)
+}
+
+/// [`first_order_deflection`] with `model`'s frames at the joint values already computed
+/// (`poses = model.poses(q)`): the same numbers bit for bit.
+fn first_order_deflection_at(
+    model: &PhiModel,
+    poses: &ChainPoses,
+    masses: &[LinkMass],
+    payload: Option<(f64, Point3<f64>)>,
+    compliance: &ComplianceEffect,
+) -> Vec<f64> {
+    gravity_torques_at_nm(model, poses, masses, payload, compliance.gravity_m_s2)
         .iter()
         .zip(&compliance.stiffness_nm_per_rad)
         .map(|(tau, k)| tau / k)
@@ -111,17 +123,32 @@ pub fn coupled_first_order_deflection(
     compliance: &ComplianceEffect,
     couplings: &[PassiveSlope],
 ) -> Vec<f64> {
+    coupled_first_order_deflection_at(model, &model.poses(q), masses, payload, compliance, couplings)
+}
+
+/// [`coupled_first_order_deflection`] with `model`'s frames at the joint values already
+/// computed (`poses = model.poses(q)`), for several loads of one pose (the diagnosis's
+/// compliance sensitivities): the same numbers bit for bit.
+pub fn coupled_first_order_deflection_at(
+    model: &PhiModel,
+    poses: &ChainPoses,
+    masses: &[LinkMass],
+    payload: Option<(f64, Point3<f64>)>,
+    compliance: &ComplianceEffect,
+    couplings: &[PassiveSlope],
+) -> Vec<f64> {
+    let n = model.dof();
     let unit = ComplianceEffect {
-        stiffness_nm_per_rad: vec![1.0; q.len()],
+        stiffness_nm_per_rad: vec![1.0; n],
         gravity_m_s2: compliance.gravity_m_s2,
     };
-    let load = first_order_deflection(model, q, masses, payload, &unit);
+    let load = first_order_deflection_at(model, poses, masses, payload, &unit);
     let coupling = |k: usize| couplings.get(k).copied().unwrap_or_default();
-    let mut dq = vec![0.0; q.len()];
+    let mut dq = vec![0.0; n];
     let mut da_below = 0.0;
-    for k in 0..q.len() {
+    for k in 0..n {
         let mut tau = load[k];
-        if k + 1 < q.len() && coupling(k + 1).reflects_load {
+        if k + 1 < n && coupling(k + 1).reflects_load {
             tau += coupling(k + 1).slope * load[k + 1];
         }
         let da = tau / compliance.stiffness_nm_per_rad[k];

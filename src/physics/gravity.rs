@@ -1,7 +1,7 @@
 //! Gravity loads of a serial arm: link masses and the gravity generalised force about each
 //! joint, the load that joint compliance turns into sag.
 
-use crate::kinematics::{JointKind, PhiModel};
+use crate::kinematics::{ChainPoses, JointKind, PhiModel};
 use crate::robot::RobotDescription;
 use nalgebra::{Point3, Vector3};
 
@@ -50,7 +50,18 @@ pub fn gravity_torques_nm(
     payload: Option<(f64, Point3<f64>)>,
     gravity_m_s2: [f64; 3],
 ) -> Vec<f64> {
-    let poses = model.poses(q);
+    gravity_torques_at_nm(model, &model.poses(q), masses, payload, gravity_m_s2)
+}
+
+/// [`gravity_torques_nm`] with `model`'s frames at the joint values already computed
+/// (`poses = model.poses(q)`), for several loads of one pose: the same numbers bit for bit.
+pub fn gravity_torques_at_nm(
+    model: &PhiModel,
+    poses: &ChainPoses,
+    masses: &[LinkMass],
+    payload: Option<(f64, Point3<f64>)>,
+    gravity_m_s2: [f64; 3],
+) -> Vec<f64> {
     let g = Vector3::from(gravity_m_s2);
     let n = model.dof();
     // Per link: its mass and its first moment in the world frame about the link's origin.

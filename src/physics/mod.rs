@@ -17,12 +17,13 @@ mod wobble;
 pub use backlash::{ApproachSource, ApproachTracker, BacklashEffect, UNMOVED_ACTUATOR_RAD};
 pub use compliance::{
     ComplianceEffect, CompliantLoad, DeflectionError, PassiveSlope, PayloadEffect, STATIC_DEFLECTION_MAX_STEPS,
-    STATIC_DEFLECTION_ROUNDING_RAD, coupled_first_order_deflection, coupled_static_deflection, first_order_deflection,
+    STATIC_DEFLECTION_ROUNDING_RAD, coupled_first_order_deflection, coupled_first_order_deflection_at,
+    coupled_static_deflection, first_order_deflection,
 };
 pub use gear_harmonic::{
     GearHarmonic, HarmonicPeriod, add_joint_period_errors, joint_period_error_rad, with_gear_harmonics,
 };
-pub use gravity::{LinkMass, STANDARD_GRAVITY_M_S2, gravity_torques_nm};
+pub use gravity::{LinkMass, STANDARD_GRAVITY_M_S2, gravity_torques_at_nm, gravity_torques_nm};
 pub use instrument_scale::InstrumentScale;
 pub use thermal::ThermalEffect;
 pub use wobble::{AxisTiltSeries, AxisWobble, apply_axis_tilts, apply_wobble};

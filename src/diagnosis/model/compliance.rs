@@ -8,7 +8,8 @@ use super::{GRAVITY_M_S2, Predictor};
 use crate::diagnosis::poses::Pose;
 use crate::kinematics::PhiModel;
 use crate::physics::{
-    ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_first_order_deflection, coupled_static_deflection,
+    ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_first_order_deflection_at,
+    coupled_static_deflection,
 };
 use crate::robot::{CouplingFunction, RobotModel};
 use nalgebra::{DMatrix, Vector3};
@@ -149,7 +150,7 @@ impl Predictor {
     /// map `C` is linear in the loads and the loads linear in `e`
     /// (`compliance_masses`); at `e = 0` the sag is zero, so `d sag / d e_i` is
     /// the first-order map of the unit load `e_i` at the undeflected pose,
-    /// [`coupled_first_order_deflection`], exactly. `None` for another candidate or a command
+    /// [`coupled_first_order_deflection`](crate::physics::coupled_first_order_deflection), exactly. `None` for another candidate or a command
     /// the model cannot execute.
     pub fn compliance_sensitivity(
         &self,
@@ -184,12 +185,14 @@ impl Predictor {
             }
             let rows = 3 * pose.targets.len();
             let j_q = joint_x.rows(row, rows);
+            // Every unit load of the pose sees the same frames: computed once.
+            let frames = model_t.poses(&q);
             let mut unit = vec![0.0; count];
             for i in 0..count {
                 unit[i] = 1.0;
                 let loads = self.compliance_masses(&model_t, masses, joint, &unit, pose.payload_kg);
                 unit[i] = 0.0;
-                let dq = coupled_first_order_deflection(&model_t, &q, &loads, None, &compliance, &couplings);
+                let dq = coupled_first_order_deflection_at(&model_t, &frames, &loads, None, &compliance, &couplings);
                 x.view_mut((row, i), (rows, 1))
                     .copy_from(&(j_q * nalgebra::DVector::from_vec(dq)));
             }

@@ -109,7 +109,14 @@ struct JointMemo {
     transmissions: Vec<(f64, crate::robot::Transmission)>,
     poses: Vec<(Vec<f64>, Vec<f64>)>,
     frames: FixedFrames,
+    /// Per pose, its joint values and links (`frames.world_from_links`) at the memo's
+    /// parameters, where its frames are `frames` (`None` under a thermal candidate's rows or
+    /// a tilt).
+    links: Vec<Option<PoseLinks>>,
 }
+
+/// A pose's joint values and the links' frames at them (`FixedFrames::world_from_links`).
+type PoseLinks = (Vec<f64>, Vec<Isometry3<f64>>);
 
 /// Workspace features of a validation pose ([`Predictor::pose_features`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -385,8 +392,8 @@ impl Predictor {
     /// The transmissions' work for `poses` at `params`, for the evaluations near `params`
     /// ([`JointMemo`]); `None` when a command cannot be executed.
     fn joint_memo(&self, params: &[f64], poses: &[&Pose]) -> Option<JointMemo> {
-        let (robot, _) = self.robot_and_effects(params);
-        let poses = poses
+        let (robot, effects) = self.robot_and_effects(params);
+        let memo_poses: Vec<(Vec<f64>, Vec<f64>)> = poses
             .iter()
             .map(|pose| {
                 let u = self.controller.decouple(&pose.cmd).ok()?;
@@ -394,14 +401,32 @@ impl Predictor {
                 Some((u, active))
             })
             .collect::<Option<_>>()?;
+        let frames = FixedFrames::new(self.model(&robot, params));
+        // The links of every pose whose frames are the model's (no thermal candidate's rows of
+        // its temperature, no tilt): what the columns that leave the chain below alone reuse.
+        let links = poses
+            .iter()
+            .zip(&memo_poses)
+            .map(|(pose, (_, active))| {
+                if !effects.tilts.is_empty() {
+                    return None;
+                }
+                let (q, expanded) = self.pose_joints(&robot, &effects, &frames, pose, Some(active.clone()), &[])?;
+                expanded.is_none().then(|| {
+                    let links = frames.world_from_links(&q);
+                    (q, links)
+                })
+            })
+            .collect();
         Some(JointMemo {
-            frames: FixedFrames::new(self.model(&robot, params)),
+            frames,
+            links,
             transmissions: robot
                 .joints
                 .iter()
                 .map(|j| (j.transducer_offset, j.transmission.clone()))
                 .collect(),
-            poses,
+            poses: memo_poses,
         })
     }
 
@@ -475,29 +500,19 @@ impl Predictor {
         });
         let mut out = Vec::with_capacity(poses.len() * 9);
         for (i, pose) in poses.iter().enumerate() {
-            let (mut q, active) = match memo {
-                Some(m) => {
-                    let active = self.active_from_memo(&robot, m, &changed, i)?;
-                    self.joint_values_from(&robot, &effects, pose, active)?
-                }
-                None => self.joint_values(&robot, &effects, pose)?,
+            let active = match memo {
+                Some(m) => Some(self.active_from_memo(&robot, m, &changed, i)?),
+                None => None,
             };
-            // A thermal candidate changes the rows with the pose's temperature; else the
-            // model's constant frames serve every pose.
-            let frames_t = match effects.expanded_at(frames.model(), pose.temperature_c) {
-                Some(model_t) => &FixedFrames::new(model_t),
-                None => &frames,
-            };
+            let (q, expanded) = self.pose_joints(&robot, &effects, &frames, pose, active, offset_rad)?;
+            let frames_t = expanded.as_ref().unwrap_or(&frames);
             let model_t = frames_t.model();
-            let sag = self.sag(&robot, model_t, &effects, &q, &active, pose.payload_kg)?;
-            for (qk, d) in q.iter_mut().zip(sag) {
-                *qk += d;
-            }
-            for (qk, d) in q.iter_mut().zip(offset_rad) {
-                *qk += d;
-            }
-            // Without a tilt only the last link's frame is needed (the same numbers).
-            let last_link = if effects.tilts.is_empty() {
+            // Without a tilt only the last link's frame is needed (the same numbers), from the
+            // memo's links where the chain below is the memo's.
+            let near = memo.and_then(|m| Some((m, m.links.get(i)?.as_ref()?)));
+            let last_link = if let (true, Some((m, (near_q, links)))) = (effects.tilts.is_empty(), near) {
+                frames_t.world_from_last_link_near(&q, &m.frames, near_q, links)
+            } else if effects.tilts.is_empty() {
                 frames_t.world_from_last_link(&q)
             } else {
                 let mut links = frames_t.poses(&q).world_from_link;
@@ -512,6 +527,37 @@ impl Predictor {
             }
         }
         Some(out)
+    }
+
+    /// The joint values of `pose` on `robot` with `effects` (from the active displacements
+    /// `active` when given), the sag and `offset_rad` added, and the pose's frames when a
+    /// thermal candidate changes the rows with its temperature (else `frames` serve every
+    /// pose); `None` when the command cannot be executed.
+    fn pose_joints(
+        &self,
+        robot: &RobotModel,
+        effects: &EffectSet,
+        frames: &FixedFrames,
+        pose: &Pose,
+        active: Option<Vec<f64>>,
+        offset_rad: &[f64],
+    ) -> Option<(Vec<f64>, Option<FixedFrames>)> {
+        let (mut q, active) = match active {
+            Some(active) => self.joint_values_from(robot, effects, pose, active)?,
+            None => self.joint_values(robot, effects, pose)?,
+        };
+        let expanded = effects
+            .expanded_at(frames.model(), pose.temperature_c)
+            .map(FixedFrames::new);
+        let model_t = expanded.as_ref().unwrap_or(frames).model();
+        let sag = self.sag(robot, model_t, effects, &q, &active, pose.payload_kg)?;
+        for (qk, d) in q.iter_mut().zip(sag) {
+            *qk += d;
+        }
+        for (qk, d) in q.iter_mut().zip(offset_rad) {
+            *qk += d;
+        }
+        Some((q, expanded))
     }
 
     /// The largest sag of a compliance candidate's own joint over `poses` \[rad\], at effect

@@ -340,13 +340,35 @@ fn the_predictors_sensitivity_is_the_central_differences_bit_for_bit() {
             masses: MassModel::Lumped,
         },
     ];
+    // All candidates at once (every pose's frames its own: the thermal rows, the tilt), and
+    // all but the thermal and the wobble ones (the columns that leave the chain below alone
+    // continue from the memo's links).
+    let chain_kept: Vec<Candidate> = candidates
+        .iter()
+        .copied()
+        .filter(|c| !matches!(c, Candidate::ThermalExpansion { .. } | Candidate::AxisWobble { .. }))
+        .collect();
+    for set in [&candidates[..], &chain_kept] {
+        sensitivity_is_the_central_differences(&desc, &truth, set, &every);
+    }
+}
+
+/// [`Predictor::sensitivity`] and [`Predictor::joint_sensitivity`] with `candidates` against
+/// the plain differences, bit for bit (the test above).
+fn sensitivity_is_the_central_differences(
+    desc: &RobotDescription,
+    truth: &RobotModel,
+    candidates: &[Candidate],
+    every: &[&Pose],
+) {
+    let every = every.to_vec();
     let pred = Predictor::new(
-        &truth,
-        &desc,
+        truth,
+        desc,
         PoseConditions::default().temperature_c,
         RefitScope::Identified,
     )
-    .with_candidates(&candidates);
+    .with_candidates(candidates);
     let n = pred.geometric_count() + pred.effect_count();
     let steps = pred.steps();
     // Small enough that every command still executes, different in every parameter.
