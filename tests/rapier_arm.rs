@@ -394,12 +394,14 @@ mod dynamic {
     /// stepping at 1 ms of 16 substeps to 20 quiet steps), from the analytic static
     /// equilibrium (warm), from there with the long-step approach first (main's previous
     /// default), and the default (the same with the decay rule ending both the approach and
-    /// the settle proper, 8 substeps a step).
+    /// the settle proper, 8 substeps a step), the same without the approach's leaps (main's
+    /// default before them).
     #[derive(Clone, Copy, Debug)]
     enum Start {
         Cold,
         Warm,
         Approach,
+        NoLeap,
         Fast,
     }
 
@@ -444,6 +446,9 @@ mod dynamic {
             options.settle.approach_max_steps = 0;
         }
         if !matches!(start, Start::Fast) {
+            options.settle.approach_leaps = 0;
+        }
+        if !matches!(start, Start::Fast | Start::NoLeap) {
             options.settle.decay_steps = 0;
             options.settle.solver_iterations = OLD_SOLVER_ITERATIONS;
         }
@@ -478,7 +483,7 @@ mod dynamic {
             [1.0, -0.5, 0.6, 1.5, -1.2, 2.0],
         ];
         let options = RapierArmOptions::new(6).settle;
-        let (mut fast_substeps, mut previous_substeps) = (0, 0);
+        let (mut fast_substeps, mut previous_substeps, mut no_leap_substeps) = (0, 0, 0);
         for (s, stiffness) in STIFFNESS_SETS.iter().enumerate() {
             for (p, cmd) in poses.iter().enumerate() {
                 let (payload_kg, com_in_tool_mm) = payload(s + p);
@@ -496,25 +501,29 @@ mod dynamic {
                     let (cold, cold_report) = settle(Start::Cold);
                     let (warm, warm_report) = settle(Start::Warm);
                     let (previous, previous_report) = settle(Start::Approach);
+                    let (no_leap, no_leap_report) = settle(Start::NoLeap);
                     let (fast, fast_report) = settle(Start::Fast);
                     let bound_m = options.speed_tolerance_m_s * options.dt_s * cold_report.steps as f64;
-                    let d = [cold, warm, previous].map(|other| (fast - other).norm());
+                    let d = [cold, warm, previous, no_leap].map(|other| (fast - other).norm());
                     eprintln!(
                         "K {stiffness:?} payload {payload_kg} kg four-bar bodies {four_bar_bodies} cmd {}: steps cold {} \
-                         warm {} approach {} + {} fast {} + {} (residual {:.2e} m/s, left {:.1e} m); tool from cold \
-                         {:.2e} m, warm {:.2e} m, approach {:.2e} m, bound {bound_m:.2e} m",
+                         warm {} approach {} + {} no leap {} + {} fast {} + {} (residual {:.2e} m/s, left {:.1e} m); \
+                         tool from cold {:.2e} m, warm {:.2e} m, approach {:.2e} m, no leap {:.2e} m, bound {bound_m:.2e} m",
                         cmd[0],
                         cold_report.steps,
                         warm_report.steps,
                         previous_report.approach_steps,
                         previous_report.steps,
+                        no_leap_report.approach_steps,
+                        no_leap_report.steps,
                         fast_report.approach_steps,
                         fast_report.steps,
                         fast_report.max_speed_m_s,
                         fast_report.distance_left_m.unwrap_or(f64::NAN),
                         d[0],
                         d[1],
-                        d[2]
+                        d[2],
+                        d[3]
                     );
                     assert!(d.iter().all(|&d| d < bound_m), "{d:?} against {bound_m}");
                     // It really settled at rapier's 1 ms steps: the decaying steps were
@@ -530,11 +539,16 @@ mod dynamic {
                     assert!(warm_report.steps < cold_report.steps);
                     fast_substeps += fast_report.total_steps() * options.solver_iterations;
                     previous_substeps += previous_report.total_steps() * OLD_SOLVER_ITERATIONS;
+                    no_leap_substeps += no_leap_report.total_steps() * options.solver_iterations;
                 }
             }
         }
-        eprintln!("substeps of all poses: fast {fast_substeps}, approach with 20 quiet steps {previous_substeps}");
-        assert!(fast_substeps < previous_substeps);
+        eprintln!(
+            "substeps of all poses: fast {fast_substeps}, without leaps {no_leap_substeps}, approach with 20 quiet \
+             steps {previous_substeps}"
+        );
+        assert!(fast_substeps < no_leap_substeps);
+        assert!(no_leap_substeps < previous_substeps);
     }
 
     /// The dynamic mode (four-bar, coupled targets, paper truth) is deterministic: two fresh

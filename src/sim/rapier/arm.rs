@@ -10,7 +10,9 @@
 //! which is eq. (A1)'s `frame_k * joint_motion(q)`.
 
 use super::SimError;
-use super::convert::{point_from_glam, point_to_glam, pose_from_glam, pose_to_glam, rotation_to_glam};
+use super::convert::{
+    point_from_glam, point_to_glam, pose_from_glam, pose_to_glam, rotation_to_glam, vector_from_glam,
+};
 use crate::kinematics::{JointKind, PhiModel};
 use crate::robot::{LinkTarget, RobotDescription};
 use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
@@ -381,6 +383,31 @@ impl SimArm {
     pub fn point_in_world(&self, point: &LinkPoint) -> Point3<f64> {
         let pose = self.world.bodies[self.links[point.link]].position();
         point_from_glam(pose.transform_point(point_to_glam(&point.position_in_link_m)))
+    }
+
+    /// The velocity of a point fixed on a link, in the world frame, as of the last step \[m/s\].
+    pub(super) fn point_velocity(&self, point: &LinkPoint) -> Vector3<f64> {
+        let body = &self.world.bodies[self.links[point.link]];
+        let at = body
+            .position()
+            .transform_point(point_to_glam(&point.position_in_link_m));
+        vector_from_glam(body.velocity_at_point(at))
+    }
+
+    /// Moves every degree of freedom of the multibody (the joints and any four-bar's crank
+    /// and rod) by its generalised velocity times `duration_s`, then scales the velocity by
+    /// `keep`: a straight-line move along the current motion, which keeps a closed loop closed
+    /// to first order (the velocities satisfy its constraint).
+    pub(super) fn coast(&mut self, duration_s: f64, keep: f64) -> Result<(), SimError> {
+        let Some((mb, _)) = self.world.multibody_joints.get_mut(self.joints[0]) else {
+            return Err(SimError::JointRejected { joint: 0 });
+        };
+        let disp: Vec<f64> = mb.generalized_velocity().iter().map(|v| v * duration_s).collect();
+        mb.apply_displacements(&disp);
+        mb.generalized_velocity_mut().scale_mut(keep);
+        mb.forward_kinematics(&self.world.bodies, false);
+        mb.update_rigid_bodies(&mut self.world.bodies, false);
+        Ok(())
     }
 
     /// Every shape with its pose in the world frame at the current configuration.
