@@ -9,6 +9,9 @@ use axiscal::robot::RobotDescription;
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
+#[path = "common/allocator.rs"]
+mod allocator;
+
 const Q: [f64; 6] = [0.3, 0.2, -0.3, 0.5, 0.7, -1.0];
 
 fn bench(c: &mut Criterion) {

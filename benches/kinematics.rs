@@ -12,6 +12,9 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Isometry3, Point3, Vector3};
 use std::hint::black_box;
 
+#[path = "common/allocator.rs"]
+mod allocator;
+
 const Q: [f64; 6] = [0.3, 0.2, -0.4, 0.5, 0.7, -1.0];
 
 fn model() -> PhiModel {

@@ -21,6 +21,9 @@ use rand::rngs::ChaCha12Rng;
 use std::hint::black_box;
 use std::time::Instant;
 
+#[path = "common/allocator.rs"]
+mod allocator;
+
 const Q: [f64; 6] = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
 
 fn arm() -> (SimArm, RobotDescription) {

@@ -11,6 +11,8 @@ use axiscal::harness::scenario::{CampaignTrial, Overrides, ResolvedScenario, Tri
 use std::hint::black_box;
 use std::path::Path;
 
+#[path = "../benches/common/allocator.rs"]
+mod allocator;
 #[path = "../benches/table1/mod.rs"]
 mod table1;
 use table1::{campaign, target0_sweeps};

@@ -2,6 +2,8 @@
 
 use std::time::Instant;
 
+mod allocator;
+
 /// Whether this is `cargo bench` (criterion's `--bench` flag) rather than `cargo test
 /// --all-targets` (`make test`), which runs every benchmark once in a debug build as a smoke
 /// test.
