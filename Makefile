@@ -82,7 +82,7 @@ budget:
 	$(CARGO) run --release -- budget --seeds 30 --force --out results/budget
 
 ## blind: blind check of `axiscal diagnose` on 162 shape-varying cases on the rapier arm (hidden
-## keys; about 1.5 min on 2 cores), confusion matrix and per-member table under results/blind/summary.md
+## keys; about 1 min on 2 cores), confusion matrix and per-member table under results/blind/summary.md
 blind:
 	$(CARGO) run --release -- blind --cases 162 --seed 2 --sim rapier --out results/blind --force
 
