@@ -250,8 +250,15 @@ mod tests {
             g.lever_m += d[2];
             g.crank_m += d[3];
             g.lever_angle_rad += da;
-            let s = g.solve(t).unwrap();
             let h = 1e-6;
+            // At least 0.1 rad from the ends of the linkage's range: a short crank with these
+            // errors may not reach at the ends of `t`'s (the loop does not close: a clear
+            // error, tested below), and next to such an end the passive angle goes as the
+            // square root of the distance, whose third derivative (the central difference's
+            // truncation) is unbounded.
+            let closes = |x: f64| !matches!(g.solve(x), Err(FourBarError::CannotClose { .. }));
+            proptest::prop_assume!((-4..=4).all(|k| closes(t + 0.025 * f64::from(k))));
+            let s = g.solve(t).unwrap();
             let fd = (g.passive(t + h).unwrap() - g.passive(t - h).unwrap()) / (2.0 * h);
             // Truncation h^2 |g'''| / 6 plus rounding 1e-16 / h, both below 1e-8 here.
             proptest::prop_assert!((s.slope - fd).abs() < 1e-8, "{} vs {}", s.slope, fd);
