@@ -9,7 +9,7 @@
 //!   targets lies 150 mm behind them and would add the fit's rotation noise times 150 mm
 //!   (about 0.3 mm more).
 //! - **orientation error** \[rad\]: the angle of `R_required^T R_fit`, with `R_fit` the rigid
-//!   fit (Kabsch) of the three measured targets to their tool-frame positions.
+//!   fit ([`rigid_fit`]: Horn's quaternion) of the three measured targets to their tool-frame positions.
 //! - The same two errors **without measurement noise and jitter** (`model_*`): what the
 //!   robot's kinematic model error alone leaves, the quantity the calibration controls.
 

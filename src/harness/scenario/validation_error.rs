@@ -31,8 +31,8 @@ pub struct ValidationErrors {
 /// commands `row.cmd`);
 /// `tool_targets_m` are the targets in the tool frame. The position error of a target is
 /// `|predicted - measured|`. The orientation error of a pose is the angle of the rotation of
-/// the least-squares rigid fit (Kabsch: Arun, Huang & Blostein 1987, SVD of the centred
-/// cross-covariance with the reflection fix) that maps the predicted targets onto the
+/// the least-squares rigid fit ([`rigid_fit`]: Horn's unit quaternion, the rotation of
+/// Kabsch's reflection-corrected SVD) that maps the predicted targets onto the
 /// measured ones; poses with fewer than three measured targets give no orientation error.
 /// With no row at all every field is NaN.
 pub fn validation_errors<F>(
