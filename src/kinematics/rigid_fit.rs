@@ -114,9 +114,15 @@ fn horn_rotation(s: &Matrix3<f64>, upper: f64) -> Option<UnitQuaternion<f64>> {
 /// `None` where that column is zero or not finite.
 fn eigenvector(n: &Matrix4<f64>, lambda: f64) -> Option<Vector4<f64>> {
     let a = n - Matrix4::from_diagonal_element(lambda);
-    let diagonal = [0, 1, 2, 3].map(|k| cofactor(&a, k, k).abs());
-    let k = (1..4).fold(0, |best, k| if diagonal[k] > diagonal[best] { k } else { best });
-    let q = Vector4::from([0, 1, 2, 3].map(|j| cofactor(&a, j, k)));
+    let diagonal = [0, 1, 2, 3].map(|k| cofactor(&a, k, k));
+    let k = (1..4).fold(0, |best, k| {
+        if diagonal[k].abs() > diagonal[best].abs() {
+            k
+        } else {
+            best
+        }
+    });
+    let q = Vector4::from([0, 1, 2, 3].map(|j| if j == k { diagonal[k] } else { cofactor(&a, j, k) }));
     let norm = q.norm();
     (norm > 0.0 && norm.is_finite()).then(|| q / norm)
 }
