@@ -216,3 +216,86 @@ fn repeatability_option_is_recorded_and_checked() {
         );
     }
 }
+
+/// A file of free poses only (the simulated campaign's validation poses, no axis experiment):
+/// `calibrate` takes the free-pose path, writes the same files, and its held-out RMS lies at
+/// the simulated noise (the isotropic instrument's 0.19 mm 3-D RMS, inflated by the fitted
+/// parameters' error) within 4 standard errors of an RMS over the held-out points; `--refine` is refused on such a file.
+#[test]
+fn calibrate_free_poses_only_with_holdout() {
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = dir.path().join("campaign.csv");
+    axiscal()
+        .args([
+            "simulate",
+            "--robot",
+            "arm6-dh",
+            "--truth",
+            "arm6-dh-truth",
+            "--plan",
+            "arm6-jitter-plan",
+        ])
+        .args([
+            "--sim",
+            "analytic",
+            "--instrument",
+            "isotropic",
+            "--validation-poses",
+            "200",
+            "--seed",
+            "4",
+        ])
+        .arg("--out")
+        .arg(&campaign)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&campaign).unwrap();
+    let free: String = text
+        .lines()
+        .enumerate()
+        .filter(|(i, l)| *i == 0 || l.starts_with('#') || l.starts_with("validation,") || l.starts_with("experiment,"))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    let data = dir.path().join("free.csv");
+    std::fs::write(&data, free).unwrap();
+    let out = dir.path().join("cal");
+    let run = axiscal()
+        .args(["calibrate", "--robot", "arm6-dh", "--holdout"])
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    assert!(common::stdout(&run).contains("free poses") || common::stderr(&run).contains("free poses"));
+    let cal: Calibration = axiscal::json_file::from_str(
+        axiscal::json_file::Schema::CALIBRATION,
+        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
+    )
+    .unwrap();
+    let summary = cal.free_poses.expect("free-pose summary");
+    assert!(cal.axes.is_empty());
+    let h = summary.holdout.expect("holdout");
+    let points = 3.0 * h.heldout_poses as f64;
+    let noise = 0.19;
+    // The fitted parameters' own error adds about p / (3 n) of the noise variance (n training
+    // points) to a held-out point's.
+    let inflation = (1.0 + summary.parameters.len() as f64 / (3.0 * summary.points as f64)).sqrt();
+    let bound = noise * inflation * (1.0 + 4.0 / (2.0 * points).sqrt());
+    assert!(
+        h.calibrated_rms_mm < bound && h.calibrated_rms_mm < h.nominal_rms_mm / 2.0,
+        "held out {:.4} mm against noise {noise} (bound {bound:.4}), nominal {:.4}",
+        h.calibrated_rms_mm,
+        h.nominal_rms_mm
+    );
+    for name in ["report.md", "calibrated.urdf", "joint_map.csv"] {
+        assert!(out.join(name).exists(), "{name}");
+    }
+    let refused = axiscal()
+        .args(["calibrate", "--robot", "arm6-dh", "--refine", "--force"])
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(2);
+    assert!(common::stderr(&refused).contains("--refine"));
+}

@@ -11,6 +11,8 @@
 //! - [`line_ml`]: the maximum-likelihood sliding-axis fit (eqs. 9-13 in one model).
 //! - [`noise`]: the instrument noise estimated from the pooled fit residuals.
 //! - [`crb`]: Cramer-Rao bound and Monte-Carlo efficiency.
+//! - [`free_pose`]: calibration from free poses (no axis experiments): registration, the
+//!   identifiable parameters, the fit, outliers, sigmas and a held-out check.
 //! - [`refine`]: the calibrated model refined on free poses (`calibrate --refine`, the
 //!   diagnosis's baseline refit).
 
@@ -23,6 +25,7 @@ pub mod axis_circle;
 pub mod axis_paper;
 pub mod coupling_fit;
 pub mod crb;
+pub mod free_pose;
 pub mod line_ml;
 pub mod noise;
 pub mod procedure;

@@ -7,6 +7,7 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::Result;
+use axiscal::calibration::free_pose;
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, findings,
@@ -101,6 +102,13 @@ pub struct Args {
     /// Folds of `--refine`'s held-out check.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(2..))]
     refine_folds: u64,
+    /// Free-pose files only: fit on the even configurations (in order of first appearance)
+    /// and report the odd ones as held out, like `validate`.
+    #[arg(long)]
+    holdout: bool,
+    /// Free-pose files only: flag the poses the outlier test rejects but keep them in the fit.
+    #[arg(long)]
+    keep_outliers: bool,
     #[command(flatten)]
     checks: checks::Overrides,
 }
@@ -154,7 +162,7 @@ fn output_texts(
     let map = joint_map(cal, desc, args.joint_map_step);
     let mut files = vec![
         (OUTPUTS[0], json_file::to_string(Schema::CALIBRATION, cal)?),
-        (OUTPUTS[1], markdown(cal, desc, source) + &deviation.markdown()),
+        (OUTPUTS[1], report_markdown(cal, desc, source) + &deviation.markdown()),
         (
             OUTPUTS[2],
             json_file::list_to_string(Schema::REPORT, "findings", &report_findings)?,
@@ -181,6 +189,19 @@ fn output_texts(
     })
 }
 
+/// `report.md`: the free-pose report or the independent-axis one.
+fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> String {
+    match &cal.free_poses {
+        Some(summary) => free_pose::markdown(
+            summary,
+            cal.noise.as_ref().and_then(|n| n.estimate.as_ref()),
+            &desc.name,
+            source,
+        ),
+        None => markdown(cal, desc, source),
+    }
+}
+
 /// Runs `axiscal calibrate`.
 pub fn run(args: Args) -> Result<()> {
     let outputs = Outputs::new(args.force)
@@ -193,27 +214,14 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
-    let options = CalibrationOptions {
-        estimator: args.estimator,
-        noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),
-        estimate_noise: args.noise_mm.is_none(),
-        held_tolerance: args.held_tolerance,
-        repeatability_sigma_rad: args.repeatability_rad.clone(),
-        ..CalibrationOptions::default()
-    };
-    options
-        .joint_repeatability_rad(&desc)
-        .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
-    // The procedure's message already contains its cause: one line, not the cause twice.
-    let mut cal =
-        calibrate(&set, &desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
-    let map = predict_tool_accuracy(&mut cal, &desc, &set, args.held_tolerance)?;
-    // The prediction describes the axis experiments' model and its propagated covariance;
-    // `--refine` reports its own covariance and held-out check beside it.
-    let cal = if args.refine {
-        refine(&args, &set, &desc, cal)?
+    let free_poses_only = !set.experiments().iter().any(|e| e.moved_joint > 0);
+    let (cal, map) = if free_poses_only {
+        (
+            super::calibrate_free::calibrate(&args_view(&args), &set, &desc)?,
+            vec![],
+        )
     } else {
-        cal
+        calibrate_axes(&args, &set, &desc)?
     };
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
@@ -232,31 +240,9 @@ pub fn run(args: Args) -> Result<()> {
             std::fs::remove_file(&path).map_err(|e| anyhow::anyhow!("removing the stale {}: {e}", path.display()))?;
         }
     }
-    say!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
-    print_scope(&cal);
-    say!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
-    for a in &cal.axes {
-        let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
-        say!(
-            "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
-            a.joint,
-            a.points,
-            a.span_deg,
-            unit,
-            a.residual_rms_mm,
-            a.direction_sigma.major_rad * 1e3
-        );
-    }
-    if let Some(a) = &cal.tool_accuracy {
-        say!(
-            "  predicted tool 1-sigma: inside the spans RMS {:.3} mm / {:.3} mrad (max {:.3} mm), workspace RMS {:.3} mm / {:.3} mrad (max {:.3} mm)",
-            a.spans.position_rms_mm,
-            a.spans.orientation_rms_mrad,
-            a.spans.position_max_mm,
-            a.workspace.position_rms_mm,
-            a.workspace.orientation_rms_mrad,
-            a.workspace.position_max_mm
-        );
+    match &cal.free_poses {
+        Some(summary) => super::calibrate_free::print(summary, &desc, &source),
+        None => print_axes(&cal, &desc, &source),
     }
     say!("{}", texts.deviation_line);
     if !texts.missing_speed_limits.is_empty() {
@@ -281,6 +267,79 @@ pub fn run(args: Args) -> Result<()> {
         super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
     }
     Ok(())
+}
+
+/// The options of the free-pose path.
+fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
+    super::calibrate_free::FreeArgs {
+        data: &args.data,
+        holdout: args.holdout,
+        keep_outliers: args.keep_outliers,
+        refine: args.refine,
+    }
+}
+
+/// The independent-axis calibration of `set` (`--refine` applied) and the tool-accuracy map.
+fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(Calibration, Vec<MapPoint>)> {
+    if args.holdout || args.keep_outliers {
+        anyhow::bail!(
+            "--holdout and --keep-outliers apply to free-pose files (no axis experiment); {} has axis experiments",
+            args.data.display()
+        );
+    }
+    let options = CalibrationOptions {
+        estimator: args.estimator,
+        noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),
+        estimate_noise: args.noise_mm.is_none(),
+        held_tolerance: args.held_tolerance,
+        repeatability_sigma_rad: args.repeatability_rad.clone(),
+        ..CalibrationOptions::default()
+    };
+    options
+        .joint_repeatability_rad(desc)
+        .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
+    // The procedure's message already contains its cause: one line, not the cause twice.
+    let mut cal =
+        calibrate(set, desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
+    let map = predict_tool_accuracy(&mut cal, desc, set, args.held_tolerance)?;
+    // The prediction describes the axis experiments' model and its propagated covariance;
+    // `--refine` reports its own covariance and held-out check beside it.
+    let cal = if args.refine {
+        refine(args, set, desc, cal)?
+    } else {
+        cal
+    };
+    Ok((cal, map))
+}
+
+/// The console summary of an independent-axis calibration.
+fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str) {
+    say!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
+    print_scope(cal);
+    say!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
+    for a in &cal.axes {
+        let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
+        say!(
+            "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
+            a.joint,
+            a.points,
+            a.span_deg,
+            unit,
+            a.residual_rms_mm,
+            a.direction_sigma.major_rad * 1e3
+        );
+    }
+    if let Some(a) = &cal.tool_accuracy {
+        say!(
+            "  predicted tool 1-sigma: inside the spans RMS {:.3} mm / {:.3} mrad (max {:.3} mm), workspace RMS {:.3} mm / {:.3} mrad (max {:.3} mm)",
+            a.spans.position_rms_mm,
+            a.spans.orientation_rms_mrad,
+            a.spans.position_max_mm,
+            a.workspace.position_rms_mm,
+            a.workspace.orientation_rms_mrad,
+            a.workspace.position_max_mm
+        );
+    }
 }
 
 /// Fills `cal.tool_accuracy` (inside the spans of `set`'s sweeps and over the joint limits)

@@ -17,6 +17,7 @@ macro_rules! say {
 mod blind;
 mod budget;
 mod calibrate;
+mod calibrate_free;
 mod checks;
 mod compensate;
 mod describe;

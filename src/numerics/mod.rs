@@ -4,4 +4,5 @@
 
 pub mod lsq;
 pub mod stats;
+pub mod subset;
 pub mod svd;

@@ -864,6 +864,7 @@ impl<'a> Context<'a> {
             noise: Some(noise),
             held_passes: passes,
             refinement: None,
+            free_poses: None,
             residuals,
             description: Some(self.desc.identity()),
             model_covariance,

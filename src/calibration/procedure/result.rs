@@ -572,6 +572,11 @@ pub struct Calibration {
     /// experiments' (unrefined) estimates; `robot` is the refined model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub refinement: Option<crate::calibration::refine::Refinement>,
+    /// Present when the model was calibrated from free poses alone (no axis experiments,
+    /// [`crate::calibration::free_pose`]): the fitted parameters with their sigmas, what the
+    /// poses do not identify, the outliers and the held-out check. `axes` is then empty.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub free_poses: Option<crate::calibration::free_pose::FreePoseSummary>,
     /// Per-point residuals of the axis fits (written as `residuals.csv`, not in the JSON).
     #[serde(skip)]
     pub residuals: Vec<PointResidual>,

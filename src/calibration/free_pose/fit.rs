@@ -1,0 +1,149 @@
+//! The least-squares fit of the free-pose model and its outlier test.
+
+use super::FreePoseError;
+use super::model::FreePoseModel;
+use super::poses::FreePoses;
+use crate::calibration::refine::RefitParameter;
+use crate::numerics::lsq::{LmOptions, LsqError, inverse_normal, levenberg_marquardt};
+use crate::numerics::stats::{QuantileMethod, chi_square_quantile, quantile};
+use crate::robot::Controller;
+use nalgebra::{DMatrix, DVector};
+
+/// Levenberg-Marquardt steps at most.
+const MAX_ITERATIONS: usize = 200;
+
+/// The run ends where the remaining Gauss-Newton step would lower the cost by at most this
+/// fraction of the starting cost per measured coordinate (module docs of
+/// [`crate::numerics::lsq::LmOptions::negligible_decrease`]; with the noise at most the start's
+/// RMS, a step below 1e-5 of a standard deviation).
+const NEGLIGIBLE_DECREASE: f64 = 1e-10;
+
+/// `1.4826 * median |r|` estimates a normal distribution's standard deviation (the median
+/// absolute deviation's consistency factor, Hampel 1974).
+const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
+
+/// What every fit of one calibration shares.
+pub(super) struct Problem<'a> {
+    /// The controller (nominal couplings).
+    pub controller: &'a Controller,
+    /// The measured poses.
+    pub poses: &'a FreePoses,
+    /// The parameter layout.
+    pub layout: &'a [RefitParameter],
+    /// The description's tool targets (by id) in the nominal tool frame \[m\].
+    pub description_targets_m: Vec<nalgebra::Point3<f64>>,
+}
+
+/// A converged fit.
+#[derive(Clone, Debug)]
+pub(super) struct Fitted {
+    /// The fitted model.
+    pub model: FreePoseModel,
+    /// Residual `measured - predicted` at the fit \[m\], 3 rows a point of the fitted poses.
+    pub residual: DVector<f64>,
+    /// `d residual / d parameter` of the fitted columns at the fit.
+    pub jacobian: DMatrix<f64>,
+    /// Levenberg-Marquardt steps taken.
+    pub iterations: usize,
+}
+
+impl Fitted {
+    /// RMS 3-D distance of the points \[m\].
+    pub fn rms_m(&self) -> f64 {
+        (self.residual.norm_squared() / (self.residual.len() / 3).max(1) as f64).sqrt()
+    }
+
+    /// Degrees of freedom `3 points - parameters`.
+    pub fn dof(&self) -> usize {
+        self.residual.len().saturating_sub(self.jacobian.ncols())
+    }
+
+    /// Per-coordinate variance from the residuals, `rss / dof` \[m^2\] (`None` without dof).
+    pub fn variance(&self) -> Option<f64> {
+        (self.dof() > 0).then(|| self.residual.norm_squared() / self.dof() as f64)
+    }
+
+    /// The parameters' covariance `s^2 (J^T J)^-1` with `s^2` the per-coordinate variance.
+    pub fn covariance(&self, variance: f64) -> Result<DMatrix<f64>, FreePoseError> {
+        Ok(inverse_normal(&self.jacobian, "free-pose calibration")? * variance)
+    }
+}
+
+/// Fits the parameters `columns` of `start` to the poses `which` by Levenberg-Marquardt
+/// (the program's one least-squares loop) with the analytic Jacobian.
+pub(super) fn fit(
+    problem: &Problem<'_>,
+    start: &FreePoseModel,
+    which: &[usize],
+    columns: &[usize],
+) -> Result<Fitted, FreePoseError> {
+    let eval = |m: &FreePoseModel| -> Result<(DVector<f64>, DMatrix<f64>), FreePoseError> {
+        m.residuals_and_jacobian(problem.controller, problem.poses, which, problem.layout, columns)
+            .map_err(|u| FreePoseError::Unexecutable {
+                pose: problem.poses.poses[u.pose].label(),
+            })
+    };
+    let first = eval(start)?;
+    let per_coordinate = first.0.norm_squared() / first.0.len().max(1) as f64;
+    let options = LmOptions {
+        negligible_decrease: Some(NEGLIGIBLE_DECREASE * per_coordinate),
+        ..LmOptions::marquardt("free-pose calibration", MAX_ITERATIONS)
+    };
+    let apply = |m: &FreePoseModel, d: &DVector<f64>| Ok::<_, FreePoseError>(m.moved(problem.layout, columns, d));
+    let out = levenberg_marquardt(start.clone(), &options, eval, apply)?.converged("free-pose calibration", None)?;
+    Ok(Fitted {
+        model: out.state,
+        residual: out.residual,
+        jacobian: out.jacobian,
+        iterations: out.iterations,
+    })
+}
+
+/// A pose whose points the fit does not explain.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct Flag {
+    /// The pose.
+    pub pose: usize,
+    /// Its normalised residual `sum r^2 / s^2` over its coordinates.
+    pub statistic: f64,
+    /// The chi-square threshold it exceeds.
+    pub threshold: f64,
+    /// RMS 3-D distance of its points \[m\].
+    pub rms_m: f64,
+}
+
+/// The poses of `which` whose normalised residual exceeds the chi-square quantile at the
+/// family-wise level `level` (Bonferroni over the poses), `s` from the residuals' median
+/// absolute value (robust: the outliers do not mask themselves).
+pub(super) fn flag_outliers(fitted: &Fitted, poses: &FreePoses, which: &[usize], level: f64) -> Vec<Flag> {
+    let abs: Vec<f64> = fitted.residual.iter().map(|r| r.abs()).collect();
+    let sigma = MAD_TO_SIGMA * quantile(&abs, 0.5, QuantileMethod::Linear);
+    if sigma <= 0.0 || which.is_empty() {
+        return Vec::new();
+    }
+    let per_pose = level / which.len() as f64;
+    let mut row = 0;
+    let mut flags = Vec::new();
+    for &i in which {
+        let coordinates = 3 * poses.poses[i].points_m.len();
+        let r = fitted.residual.rows(row, coordinates);
+        row += coordinates;
+        let statistic = r.norm_squared() / (sigma * sigma);
+        let threshold = chi_square_quantile(1.0 - per_pose, coordinates as f64);
+        if statistic > threshold {
+            flags.push(Flag {
+                pose: i,
+                statistic,
+                threshold,
+                rms_m: (r.norm_squared() / (coordinates / 3) as f64).sqrt(),
+            });
+        }
+    }
+    flags
+}
+
+impl From<LsqError> for FreePoseError {
+    fn from(e: LsqError) -> Self {
+        FreePoseError::Fit(e)
+    }
+}

@@ -1,0 +1,395 @@
+//! Calibration from free poses: a robot measured at configurations anywhere in its workspace,
+//! one or more targets on its last link, the joints read back (the "aggregate" family the paper
+//! sets the independent-axis method against; `docs/method.md`, "Calibration from free poses").
+//!
+//! A pipeline of stages, each a typed, immutable value:
+//! 1. [`FreePoses`]: the file's `moved_joint = 0` poses (commands, points by target);
+//! 2. [`register`]: the instrument frame and the targets on the last link in closed form from
+//!    the nominal kinematics;
+//! 3. the nominal model registered: base and targets refined by least squares (the baseline
+//!    every geometric calibration is compared with);
+//! 4. [`identify`]: which parameters of [`model::layout`] the poses identify, the others named
+//!    with the combination they are made of;
+//! 5. the fit of the identified parameters ([`fit`]), refitted without the poses the outlier
+//!    test flags;
+//! 6. the covariance, the noise estimate and, with a held-out split, the check on poses the fit
+//!    did not see.
+//!
+//! Pure maths: no files, no CLI, no simulator.
+
+mod fit;
+pub mod identify;
+pub mod model;
+pub mod poses;
+pub mod register;
+mod report;
+mod summary;
+#[cfg(test)]
+mod tests;
+
+pub use identify::{Identification, Unidentified};
+pub use model::{FreePoseModel, layout};
+pub use poses::{FreePose, FreePoses};
+pub use report::markdown;
+pub use summary::{FreePoseSummary, Holdout, OutlierPose, ParameterEstimate, TargetEstimate};
+
+use crate::calibration::noise::{NoiseEstimate, ResidualMoments, estimate_noise};
+use crate::calibration::procedure::{Calibration, CalibrationOptions, NoiseReport, ZeroOffsetSigma};
+use crate::calibration::refine::RefitParameter;
+use crate::kinematics::JointKind;
+use crate::measurement::MeasurementSet;
+use crate::numerics::lsq::LsqError;
+use crate::robot::{Controller, RobotDescription, RobotModel};
+use fit::{Fitted, Problem};
+use nalgebra::Isometry3;
+
+/// Family-wise level of the outlier test: the chance that a clean file loses a pose.
+pub const OUTLIER_LEVEL: f64 = 0.01;
+
+/// Outlier rounds at most (each refits without the poses flagged so far).
+const OUTLIER_ROUNDS: usize = 10;
+
+/// At most this fraction of the poses may be dropped as outliers: beyond it the model, not the
+/// poses, is wrong.
+const OUTLIER_SHARE_MAX: f64 = 0.2;
+
+/// Options of [`calibrate_free_poses`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FreePoseOptions {
+    /// Flag outliers but keep them in the fit.
+    pub keep_outliers: bool,
+    /// Fit on the even configurations only and report the odd ones as held out.
+    pub holdout: bool,
+    /// Transmission harmonics tried up to this order (each order kept only when it lowers the
+    /// residuals significantly, [`HARMONIC_LEVEL`]).
+    pub max_harmonic_order: usize,
+}
+
+impl Default for FreePoseOptions {
+    fn default() -> Self {
+        FreePoseOptions {
+            keep_outliers: false,
+            holdout: false,
+            max_harmonic_order: 2,
+        }
+    }
+}
+
+/// Significance at which a harmonic order's drop of the residuals keeps it (chi-square test of
+/// the nested fits).
+pub const HARMONIC_LEVEL: f64 = 0.01;
+
+/// Why a free-pose calibration failed.
+#[derive(Debug, thiserror::Error)]
+pub enum FreePoseError {
+    /// Too few poses for the parameters.
+    #[error(
+        "{poses} free poses with {points} points: fitting {parameters} parameters needs at least {needed} points (3 coordinates each)"
+    )]
+    TooFewPoints {
+        /// Poses.
+        poses: usize,
+        /// Points.
+        points: usize,
+        /// Parameters of the registration.
+        parameters: usize,
+        /// Points needed.
+        needed: usize,
+    },
+    /// One pose's rows carry different commands.
+    #[error("{pose}, column cmd_{joint}: {other} differs from {first} on another row of the same pose")]
+    CommandsDiffer {
+        /// The pose.
+        pose: String,
+        /// Joint (1-based).
+        joint: usize,
+        /// The first row's value.
+        first: f64,
+        /// This row's value.
+        other: f64,
+    },
+    /// The model cannot execute a pose's commands.
+    #[error("{pose}: the model cannot execute its commands (a transmission is not invertible there)")]
+    Unexecutable {
+        /// The pose.
+        pose: String,
+    },
+    /// The closed-form registration failed.
+    #[error("the points do not fix the instrument frame (fewer than three non-collinear tool positions)")]
+    Registration,
+    /// The least-squares fit failed.
+    #[error("{0}")]
+    Fit(LsqError),
+    /// Too many outliers.
+    #[error(
+        "{flagged} of {poses} poses fail the outlier test: the nominal description, not single poses, misses these data (check the robot, the units and the joint directions)"
+    )]
+    TooManyOutliers {
+        /// Poses flagged.
+        flagged: usize,
+        /// Poses fitted.
+        poses: usize,
+    },
+}
+
+/// A free-pose calibration: the fitted model and its summary.
+#[derive(Clone, Debug)]
+pub struct FreePoseCalibration {
+    /// The calibrated robot (rows, zero offsets, base placement; transmissions and couplings
+    /// nominal).
+    pub robot: RobotModel,
+    /// The fitted model (with the targets).
+    pub model: FreePoseModel,
+    /// The summary (`calibration.json`'s `free_poses`).
+    pub summary: FreePoseSummary,
+    /// The noise estimated from the residuals.
+    pub noise: Option<NoiseEstimate>,
+}
+
+/// Calibrates the robot of `desc` from the free poses of `set` (module docs).
+pub fn calibrate_free_poses(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &FreePoseOptions,
+) -> Result<FreePoseCalibration, FreePoseError> {
+    let poses = FreePoses::from_set(set, desc)?;
+    let controller = Controller::from_description(desc);
+    let nominal = RobotModel {
+        name: format!("{} (calibrated from free poses)", desc.name),
+        ..RobotModel::ideal(desc)
+    };
+    let layout = layout(&nominal, &poses.target_ids, options.max_harmonic_order);
+    let problem = Problem {
+        controller: &controller,
+        poses: &poses,
+        layout: &layout,
+        description_targets_m: desc.tool_targets_m(),
+    };
+    let (train, test) = split(&poses, options.holdout);
+    let start = registered_start(&problem, &nominal, &train)?;
+    let frame_columns: Vec<usize> = (0..layout.len()).filter(|&c| frame_parameter(&layout[c])).collect();
+    let registered = fit::fit(&problem, &start, &train, &frame_columns)?;
+    let all: Vec<usize> = (0..layout.len()).collect();
+    let (_, design) = registered
+        .model
+        .residuals_and_jacobian(&controller, &poses, &train, &layout, &all)
+        .map_err(|u| FreePoseError::Unexecutable {
+            pose: poses.poses[u.pose].label(),
+        })?;
+    let mut identification = identify::identify(&design, &layout, &registered.model.phi);
+    let (fitted, kept, flags) = fit_without_outliers(&problem, &registered.model, &train, &identification, options)?;
+    let (fitted, dropped) = select_harmonics(&problem, &registered.model, fitted, &kept, &identification)?;
+    identification.drop_insignificant(&dropped, &layout);
+    summary::summarise(summary::Stages {
+        problem: &problem,
+        start: &start,
+        registered: &registered,
+        identification: &identification,
+        fitted,
+        kept: &kept,
+        flags: &flags,
+        test: &test,
+    })
+}
+
+/// The poses fitted and the poses held out: every pose, or the even and odd configurations.
+fn split(poses: &FreePoses, holdout: bool) -> (Vec<usize>, Vec<usize>) {
+    let configurations = poses.configurations();
+    (0..poses.poses.len()).partition(|&i| !holdout || configurations[i].is_multiple_of(2))
+}
+
+/// The base and the targets: the ones a registration of the nominal model fits.
+fn frame_parameter(p: &RefitParameter) -> bool {
+    matches!(p, RefitParameter::Base(_) | RefitParameter::Target { .. })
+}
+
+/// The nominal model placed by the closed-form registration of the poses `which`.
+fn registered_start(
+    problem: &Problem<'_>,
+    nominal: &RobotModel,
+    which: &[usize],
+) -> Result<FreePoseModel, FreePoseError> {
+    let poses = problem.poses;
+    let slots = poses.target_ids.len();
+    let points: usize = which.iter().map(|&i| poses.poses[i].points_m.len()).sum();
+    let parameters = 6 + 3 * slots;
+    if 3 * points < parameters + 1 || which.len() < 3 {
+        return Err(FreePoseError::TooFewPoints {
+            poses: which.len(),
+            points,
+            parameters,
+            needed: parameters.div_ceil(3) + 1,
+        });
+    }
+    let unplaced = FreePoseModel::new(nominal, Isometry3::identity(), poses.target_ids.clone(), vec![]);
+    let q = unplaced
+        .joint_values(problem.controller, poses)
+        .map_err(|u| FreePoseError::Unexecutable {
+            pose: poses.poses[u.pose].label(),
+        })?;
+    let fixed = unplaced.phi.fixed_frames();
+    let base_from_tool: Vec<Isometry3<f64>> = which.iter().map(|&i| fixed.world_from_tool(&q[i])).collect();
+    let observations: Vec<register::Observation> = which
+        .iter()
+        .enumerate()
+        .flat_map(|(k, &i)| {
+            poses.poses[i]
+                .points_m
+                .iter()
+                .map(move |&(slot, measured_m)| register::Observation {
+                    pose: k,
+                    slot,
+                    measured_m,
+                })
+        })
+        .collect();
+    let reg = register::register(&base_from_tool, &observations, slots).ok_or(FreePoseError::Registration)?;
+    Ok(FreePoseModel::new(
+        nominal,
+        reg.world_from_base,
+        poses.target_ids.clone(),
+        reg.targets_in_tool_m,
+    ))
+}
+
+/// The fit of the identified parameters, refitted without the poses the outlier test flags
+/// (unless `keep_outliers`): the fit, the poses it kept, every flag raised.
+fn fit_without_outliers(
+    problem: &Problem<'_>,
+    start: &FreePoseModel,
+    train: &[usize],
+    identification: &Identification,
+    options: &FreePoseOptions,
+) -> Result<(Fitted, Vec<usize>, Vec<fit::Flag>), FreePoseError> {
+    let mut kept = train.to_vec();
+    let mut flags: Vec<fit::Flag> = Vec::new();
+    let mut fitted = fit::fit(problem, start, &kept, &identification.fitted)?;
+    for _ in 0..OUTLIER_ROUNDS {
+        let new = fit::flag_outliers(&fitted, problem.poses, &kept, OUTLIER_LEVEL);
+        if new.is_empty() || options.keep_outliers {
+            flags.extend(new);
+            break;
+        }
+        kept.retain(|i| !new.iter().any(|f| f.pose == *i));
+        flags.extend(new);
+        if flags.len() as f64 > OUTLIER_SHARE_MAX * train.len() as f64 {
+            return Err(FreePoseError::TooManyOutliers {
+                flagged: flags.len(),
+                poses: train.len(),
+            });
+        }
+        fitted = fit::fit(problem, &fitted.model, &kept, &identification.fitted)?;
+    }
+    Ok((fitted, kept, flags))
+}
+
+/// The harmonic order the data resolve: from the geometry alone, each order added while the
+/// drop of the residuals it brings is significant at [`HARMONIC_LEVEL`] (the nested fits'
+/// chi-square test, the larger fit's variance). Returns the fit and the harmonic columns left
+/// out.
+fn select_harmonics(
+    problem: &Problem<'_>,
+    start: &FreePoseModel,
+    full: Fitted,
+    kept: &[usize],
+    identification: &Identification,
+) -> Result<(Fitted, Vec<usize>), FreePoseError> {
+    let order_of = |c: usize| match problem.layout[c] {
+        RefitParameter::Harmonic { order, .. } => order,
+        _ => 0,
+    };
+    let max = identification.fitted.iter().map(|&c| order_of(c)).max().unwrap_or(0);
+    let columns = |o: usize| -> Vec<usize> {
+        identification
+            .fitted
+            .iter()
+            .copied()
+            .filter(|&c| order_of(c) <= o)
+            .collect()
+    };
+    if max == 0 {
+        return Ok((full, vec![]));
+    }
+    let mut current = fit::fit(problem, start, kept, &columns(0))?;
+    let mut order = 0;
+    while order < max {
+        let next = if order + 1 == max {
+            full.clone()
+        } else {
+            fit::fit(problem, &current.model, kept, &columns(order + 1))?
+        };
+        let Some(variance) = next.variance() else { break };
+        let added = next.jacobian.ncols() - current.jacobian.ncols();
+        let drop = (current.residual.norm_squared() - next.residual.norm_squared()) / variance;
+        let p_value = 1.0 - crate::numerics::stats::chi_square_cdf(drop, added as f64);
+        if added > 0 && p_value >= HARMONIC_LEVEL {
+            break;
+        }
+        (current, order) = (next, order + 1);
+    }
+    let all = columns(max);
+    let left_out = all.into_iter().filter(|&c| order_of(c) > order).collect();
+    Ok((current, left_out))
+}
+
+/// The noise estimate of a fit (isotropic, no jitter).
+fn noise_of(fitted: &Fitted) -> Option<NoiseEstimate> {
+    estimate_noise(&[ResidualMoments {
+        rss_m2: fitted.residual.norm_squared(),
+        dof: fitted.dof(),
+        ..ResidualMoments::default()
+    }])
+}
+
+impl FreePoseCalibration {
+    /// The calibration in the shape every command reads (`calibration.json`): the calibrated
+    /// robot, the zero offsets' sigmas, the noise, and the summary as `free_poses`; no axis
+    /// reports.
+    pub fn into_calibration(self, desc: &RobotDescription) -> Calibration {
+        let sigma = |name: String| {
+            self.summary
+                .parameters
+                .iter()
+                .find(|p| p.name == name)
+                .map(|p| p.sigma / p.unit.per_si())
+        };
+        let zero_offset_sigma = (1..=desc.dof())
+            .filter_map(|joint| {
+                let sliding = desc.joints[joint - 1].kind == JointKind::Prismatic;
+                let s = sigma(RefitParameter::ZeroOffset { joint, sliding }.name())?;
+                Some(ZeroOffsetSigma {
+                    joint,
+                    sigma_rad: (!sliding).then_some(s),
+                    sigma_mm: sliding.then_some(s * 1e3),
+                })
+            })
+            .collect();
+        let used_rms_3d_mm = self.noise.as_ref().map_or(0.0, |n| n.rms_3d_mm);
+        Calibration {
+            robot: self.robot,
+            reference_cmd: vec![0.0; desc.dof()],
+            axes: vec![],
+            row_sigma: vec![],
+            couplings: vec![],
+            zero_offset_sigma,
+            tool: None,
+            options: CalibrationOptions::default(),
+            description: Some(desc.identity()),
+            base_rule: None,
+            not_calibrated: vec![],
+            noise: Some(NoiseReport {
+                estimate: self.noise,
+                used_rms_3d_mm,
+                source: "estimated".into(),
+                given_p_value: None,
+                given_contradicted: false,
+            }),
+            held_passes: 1,
+            model_covariance: None,
+            tool_accuracy: None,
+            refinement: None,
+            free_poses: Some(self.summary),
+            residuals: vec![],
+        }
+    }
+}

@@ -1,0 +1,371 @@
+//! The model a free-pose calibration fits: the nominal robot's phi-model (Table-2 rows `a, b,
+//! alpha, beta`, paper eq. A3), the joints' zero offsets, the base placement in the instrument
+//! frame and the targets' positions in the tool frame; its prediction of every measured point
+//! and the analytic Jacobian of that prediction (each parameter a screw motion of the frame it
+//! sits in: Murray, Li & Sastry, *A Mathematical Introduction to Robotic Manipulation*, 1994,
+//! sec. 3.2, the product of exponentials differentiated factor by factor).
+
+use super::poses::FreePoses;
+use crate::calibration::refine::RefitParameter;
+use crate::kinematics::{ChainPoses, JointKind, PhiModel, link_from_phi};
+use crate::robot::{Controller, RobotModel, Transmission};
+use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+
+/// Step of the central difference of the joint values by the actuator commands \[rad or m\]
+/// (the transmissions and couplings are smooth; their second derivatives are O(1)).
+const JOINT_MAP_STEP: f64 = 1e-6;
+
+/// The free-pose model's parameters, in the fit's layout and in the order exactly redundant
+/// ones are preferred ([`crate::numerics::subset`]): the base (6) and each target's `x, y, z`
+/// in the tool frame (what the registration places, so that a parameter left out keeps the
+/// description's value, never the registration's), each joint's zero offset, per Table-2 row
+/// `a, b, alpha, beta`,
+/// then each revolute joint's transmission harmonics (eq. 8) up to `harmonic_order` (sine and
+/// cosine of each order).
+pub fn layout(robot: &RobotModel, target_ids: &[usize], harmonic_order: usize) -> Vec<RefitParameter> {
+    let mut p: Vec<RefitParameter> = (0..6).map(RefitParameter::Base).collect();
+    for &target in target_ids {
+        p.extend((0..3).map(|axis| RefitParameter::Target { target, axis }));
+    }
+    for (k, j) in robot.joints.iter().enumerate() {
+        p.push(RefitParameter::ZeroOffset {
+            joint: k + 1,
+            sliding: j.kind == JointKind::Prismatic,
+        });
+    }
+    for r in 1..robot.dof() {
+        p.extend([
+            RefitParameter::RowA(r),
+            RefitParameter::RowB(r),
+            RefitParameter::RowAlpha(r),
+            RefitParameter::RowBeta(r),
+        ]);
+    }
+    for (k, j) in robot.joints.iter().enumerate() {
+        if j.kind == JointKind::Revolute {
+            for order in 1..=harmonic_order {
+                for cosine in [false, true] {
+                    p.push(RefitParameter::Harmonic {
+                        joint: k + 1,
+                        order,
+                        cosine,
+                    });
+                }
+            }
+        }
+    }
+    p
+}
+
+/// Adds `d` to the harmonic coefficient of `order` (sine or cosine) of a harmonic
+/// transmission, growing its coefficient lists as needed.
+fn add_harmonic(t: &mut Transmission, order: usize, cosine: bool, d: f64) {
+    if let Transmission::Harmonic { sin, cos } = t {
+        let list = if cosine { cos } else { sin };
+        if list.len() < order {
+            list.resize(order, 0.0);
+        }
+        list[order - 1] += d;
+    }
+}
+
+/// One state of the fitted model (an immutable value: [`FreePoseModel::moved`] makes the next).
+#[derive(Clone, Debug)]
+pub struct FreePoseModel {
+    /// The robot: its joints' zero offsets (`transducer_offset`), transmissions and couplings
+    /// turn commands into joint values; its rows and placement are mirrored by `phi`.
+    pub robot: RobotModel,
+    /// The geometry in internal units (rows, base placement, tool frame).
+    pub phi: PhiModel,
+    /// The targets' ids, ascending ([`FreePoses::target_ids`]).
+    pub target_ids: Vec<usize>,
+    /// Each target's position in the tool frame \[m\], in the order of `target_ids`.
+    pub targets_in_tool_m: Vec<Point3<f64>>,
+}
+
+/// A command the model cannot execute (a transmission not invertible there).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Unexecutable {
+    /// The pose (index into [`FreePoses::poses`]).
+    pub pose: usize,
+}
+
+impl FreePoseModel {
+    /// The model of `robot` with its placement replaced by `world_from_base` and the targets
+    /// `target_ids` at `targets_in_tool_m`.
+    pub fn new(
+        robot: &RobotModel,
+        world_from_base: Isometry3<f64>,
+        target_ids: Vec<usize>,
+        targets_in_tool_m: Vec<Point3<f64>>,
+    ) -> Self {
+        let mut phi = robot.phi_model();
+        phi.world_from_base = world_from_base;
+        let mut robot = robot.clone();
+        robot.placement = crate::robot::Placement::from_isometry(&world_from_base);
+        FreePoseModel {
+            robot,
+            phi,
+            target_ids,
+            targets_in_tool_m,
+        }
+    }
+
+    /// The robot model with the fitted geometry written back (file units).
+    pub fn to_robot(&self) -> RobotModel {
+        let mut robot = self.robot.clone();
+        robot.placement = crate::robot::Placement::from_isometry(&self.phi.world_from_base);
+        for (entry, row) in robot.rows.iter_mut().zip(&self.phi.rows) {
+            *entry = crate::robot::RowEntry::from_row(row);
+        }
+        robot
+    }
+
+    /// The model moved by `delta` along the parameters `which` (layout of [`layout`]): rows,
+    /// offsets, harmonics and targets additively, the base by a rotation about its own origin
+    /// and axes (`rz` turns about axis 1, as joint 1's zero offset does) and a translation
+    /// along the instrument's axes.
+    pub fn moved(&self, layout: &[RefitParameter], which: &[usize], delta: &DVector<f64>) -> Self {
+        let mut next = self.clone();
+        let (mut shift, mut turn) = (Vector3::zeros(), Vector3::zeros());
+        for (&c, &d) in which.iter().zip(delta.iter()) {
+            match &layout[c] {
+                RefitParameter::Base(a) if *a < 3 => shift[*a] += d,
+                RefitParameter::Base(a) => turn[*a - 3] += d,
+                RefitParameter::RowA(r) => next.phi.rows[r - 1].a_m += d,
+                RefitParameter::RowB(r) => next.phi.rows[r - 1].b_m += d,
+                RefitParameter::RowAlpha(r) => next.phi.rows[r - 1].alpha_rad += d,
+                RefitParameter::RowBeta(r) => next.phi.rows[r - 1].beta_rad += d,
+                RefitParameter::ZeroOffset { joint, .. } => next.robot.joints[joint - 1].transducer_offset += d,
+                RefitParameter::Harmonic { joint, order, cosine } => {
+                    add_harmonic(&mut next.robot.joints[joint - 1].transmission, *order, *cosine, d)
+                }
+                RefitParameter::Target { target, axis } => {
+                    let slot = self.slot(*target);
+                    next.targets_in_tool_m[slot][*axis] += d
+                }
+                other => unreachable!("{} is not in the free-pose layout", other.name()),
+            }
+        }
+        let base = self.phi.world_from_base;
+        let rotation = base.rotation * UnitQuaternion::from_scaled_axis(turn);
+        next.phi.world_from_base = Isometry3::from_parts(Translation3::from(base.translation.vector + shift), rotation);
+        next
+    }
+
+    /// The slot of target `id` in `targets_in_tool_m`.
+    fn slot(&self, id: usize) -> usize {
+        self.target_ids
+            .binary_search(&id)
+            .unwrap_or_else(|_| unreachable!("target {id} is in the layout, not in the model"))
+    }
+
+    /// The joint values of every pose, or the first pose the model cannot execute.
+    pub fn joint_values(&self, controller: &Controller, poses: &FreePoses) -> Result<Vec<Vec<f64>>, Unexecutable> {
+        poses
+            .poses
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                controller
+                    .decouple(&p.cmd)
+                    .and_then(|u| self.robot.joint_values_from_actuators(&u))
+                    .map_err(|_| Unexecutable { pose: i })
+            })
+            .collect()
+    }
+
+    /// The residual `measured - predicted` \[m\] of every point of the poses `which` (3 rows a
+    /// point, in the order of the poses and their points).
+    pub fn residuals(
+        &self,
+        controller: &Controller,
+        poses: &FreePoses,
+        which: &[usize],
+    ) -> Result<DVector<f64>, Unexecutable> {
+        let fixed = self.phi.fixed_frames();
+        let mut r = Vec::with_capacity(3 * which.len() * poses.targets_per_pose_max());
+        for &i in which {
+            let pose = &poses.poses[i];
+            let q = self.pose_joint_values(controller, poses, i)?;
+            let world_from_tool = fixed.world_from_tool(&q);
+            for (slot, measured) in &pose.points_m {
+                let e = measured - world_from_tool * self.targets_in_tool_m[*slot];
+                r.extend_from_slice(e.as_slice());
+            }
+        }
+        Ok(DVector::from_vec(r))
+    }
+
+    /// The residual of [`Self::residuals`] and its Jacobian by the parameters `columns` of
+    /// `layout` (`d residual / d parameter`, the analytic screw columns of the module docs).
+    pub fn residuals_and_jacobian(
+        &self,
+        controller: &Controller,
+        poses: &FreePoses,
+        which: &[usize],
+        layout: &[RefitParameter],
+        columns: &[usize],
+    ) -> Result<(DVector<f64>, DMatrix<f64>), Unexecutable> {
+        let rows: usize = which.iter().map(|&i| 3 * poses.poses[i].points_m.len()).sum();
+        let mut r = DVector::zeros(rows);
+        let mut jac = DMatrix::zeros(rows, columns.len());
+        let fixed = self.phi.fixed_frames();
+        let mut row = 0;
+        for &i in which {
+            let q = self.pose_joint_values(controller, poses, i)?;
+            let (dq_du, theta_a) = self.joint_sensitivity(controller, poses, i, &q)?;
+            let frames = fixed.poses(&q);
+            for (slot, measured) in &poses.poses[i].points_m {
+                let p = frames.world_from_tool * self.targets_in_tool_m[*slot];
+                r.fixed_rows_mut::<3>(row).copy_from(&(measured - p));
+                let point = PointContext {
+                    p,
+                    slot: *slot,
+                    frames: &frames,
+                    dq_du: &dq_du,
+                    theta_a: &theta_a,
+                };
+                for (c, &param) in columns.iter().enumerate() {
+                    let dp = self.point_derivative(&point, &layout[param]);
+                    jac.fixed_view_mut::<3, 1>(row, c).copy_from(&(-dp));
+                }
+                row += 3;
+            }
+        }
+        Ok((r, jac))
+    }
+
+    /// Joint values of pose `i`.
+    fn pose_joint_values(
+        &self,
+        controller: &Controller,
+        poses: &FreePoses,
+        i: usize,
+    ) -> Result<Vec<f64>, Unexecutable> {
+        controller
+            .decouple(&poses.poses[i].cmd)
+            .and_then(|u| self.robot.joint_values_from_actuators(&u))
+            .map_err(|_| Unexecutable { pose: i })
+    }
+
+    /// `dq_j / du_k` at pose `i` (row `j`, column `k`) by central differences of the joint
+    /// values in the actuator commands (a zero offset enters as `u_k - offset_k`), and the
+    /// active displacements `theta_a` (eq. 8 inverted).
+    fn joint_sensitivity(
+        &self,
+        controller: &Controller,
+        poses: &FreePoses,
+        i: usize,
+        q: &[f64],
+    ) -> Result<(DMatrix<f64>, Vec<f64>), Unexecutable> {
+        let u = controller
+            .decouple(&poses.poses[i].cmd)
+            .map_err(|_| Unexecutable { pose: i })?;
+        let theta_a = self
+            .robot
+            .active_displacements(&u)
+            .map_err(|_| Unexecutable { pose: i })?;
+        let n = q.len();
+        let mut d = DMatrix::zeros(n, n);
+        let mut shifted = u.clone();
+        for k in 0..n {
+            shifted[k] = u[k] + JOINT_MAP_STEP;
+            let plus = self.robot.joint_values_from_actuators(&shifted);
+            shifted[k] = u[k] - JOINT_MAP_STEP;
+            let minus = self.robot.joint_values_from_actuators(&shifted);
+            shifted[k] = u[k];
+            let (Ok(plus), Ok(minus)) = (plus, minus) else {
+                return Err(Unexecutable { pose: i });
+            };
+            for j in 0..n {
+                d[(j, k)] = (plus[j] - minus[j]) / (2.0 * JOINT_MAP_STEP);
+            }
+        }
+        Ok((d, theta_a))
+    }
+
+    /// `d p / d parameter` of a point on the last link \[m per parameter unit\].
+    fn point_derivative(&self, point: &PointContext<'_>, param: &RefitParameter) -> Vector3<f64> {
+        let p = point.p;
+        match param {
+            RefitParameter::Base(a) if *a < 3 => Vector3::ith(*a, 1.0),
+            RefitParameter::Base(a) => {
+                let base = &self.phi.world_from_base;
+                (base.rotation * Vector3::ith(*a - 3, 1.0)).cross(&(p.coords - base.translation.vector))
+            }
+            RefitParameter::RowA(r)
+            | RefitParameter::RowB(r)
+            | RefitParameter::RowAlpha(r)
+            | RefitParameter::RowBeta(r) => self.row_derivative(point, *r - 1, param),
+            // q = q(u - offset): dp/d offset_k = -sum_j dp/dq_j dq_j/du_k.
+            RefitParameter::ZeroOffset { joint, .. } => -self.actuator_derivative(point, joint - 1),
+            // f(theta_a) + c h(theta_a) = u moves theta_a by -h(theta_a) dc / f'(theta_a): as
+            // the command moved by -h(theta_a) dc.
+            RefitParameter::Harmonic { joint, order, cosine } => {
+                let angle = *order as f64 * point.theta_a[joint - 1];
+                let h = if *cosine { angle.cos() } else { angle.sin() };
+                -h * self.actuator_derivative(point, joint - 1)
+            }
+            RefitParameter::Target { target, axis } if *target == self.target_ids[point.slot] => {
+                point.frames.world_from_tool.rotation * Vector3::ith(*axis, 1.0)
+            }
+            RefitParameter::Target { .. } => Vector3::zeros(),
+            other => unreachable!("{} is not in the free-pose layout", other.name()),
+        }
+    }
+
+    /// `d p / d u_k`: the point's motion per unit actuator command of joint `k` (0-based).
+    fn actuator_derivative(&self, point: &PointContext<'_>, k: usize) -> Vector3<f64> {
+        let mut dp = Vector3::zeros();
+        for j in 0..self.phi.dof() {
+            let w = point.dq_du[(j, k)];
+            if w != 0.0 {
+                dp += w * joint_column(self.phi.joints[j].kind, point.frames, j, &point.p);
+            }
+        }
+        dp
+    }
+
+    /// The derivative by one parameter of Table-2 row `k` (0-based), eq. (A3)
+    /// `Trans(0,0,a) Rot(z,beta) Trans(b,0,0) Rot(x,alpha)` in the `phi_k` frame of link `k`.
+    fn row_derivative(&self, point: &PointContext<'_>, k: usize, param: &RefitParameter) -> Vector3<f64> {
+        let row = &self.phi.rows[k];
+        let world_from_phi = point.frames.world_from_link[k] * link_from_phi(self.phi.joints[k].phi_rad);
+        let z = world_from_phi.rotation * Vector3::z();
+        let o1 = world_from_phi.translation.vector + row.a_m * z;
+        let x = world_from_phi.rotation
+            * (UnitQuaternion::from_axis_angle(&Vector3::z_axis(), row.beta_rad) * Vector3::x());
+        let o2 = o1 + row.b_m * x;
+        let p = point.p.coords;
+        match param {
+            RefitParameter::RowA(_) => z,
+            RefitParameter::RowBeta(_) => z.cross(&(p - o1)),
+            RefitParameter::RowB(_) => x,
+            _ => x.cross(&(p - o2)),
+        }
+    }
+}
+
+/// What the derivatives of one measured point need.
+struct PointContext<'a> {
+    /// The predicted point \[m\].
+    p: Point3<f64>,
+    /// Its target's slot.
+    slot: usize,
+    /// The chain's frames at the pose.
+    frames: &'a ChainPoses,
+    /// `dq / du` at the pose.
+    dq_du: &'a DMatrix<f64>,
+    /// The active displacements at the pose \[rad or m\].
+    theta_a: &'a [f64],
+}
+
+/// `d p / d q_j` of a point `p` beyond joint `j` (0-based): `z x (p - o)` (revolute) or `z`.
+fn joint_column(kind: JointKind, frames: &ChainPoses, j: usize, p: &Point3<f64>) -> Vector3<f64> {
+    let axis = frames.axis(j);
+    match kind {
+        JointKind::Revolute => axis.direction.cross(&(p - axis.origin_m)),
+        JointKind::Prismatic => axis.direction.into_inner(),
+    }
+}

@@ -1,0 +1,106 @@
+//! The measured free poses of a measurement set: each pose's commands and its targets' points.
+
+use super::FreePoseError;
+use crate::measurement::MeasurementSet;
+use crate::robot::{RobotDescription, commands_to_internal};
+use nalgebra::Point3;
+use std::collections::HashMap;
+
+/// Commands of one pose's rows may differ by this much \[deg or mm\] (rounding of a writer).
+const SAME_COMMAND: f64 = 1e-6;
+
+/// One free pose: the robot stood still at `cmd` while the instrument measured its targets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FreePose {
+    /// Its experiment.
+    pub experiment: String,
+    /// Its step in the experiment.
+    pub step: usize,
+    /// The commands as recorded (file units: deg or mm).
+    pub cmd_file: Vec<f64>,
+    /// The commands in internal units (rad or m).
+    pub cmd: Vec<f64>,
+    /// The measured points: (target slot in [`FreePoses::target_ids`], position \[m\]), by target.
+    pub points_m: Vec<(usize, Point3<f64>)>,
+}
+
+impl FreePose {
+    /// `experiment step S` for messages.
+    pub fn label(&self) -> String {
+        format!("{} step {}", self.experiment, self.step)
+    }
+}
+
+/// The free poses of a file, in file order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FreePoses {
+    /// The poses, in the order of their first row.
+    pub poses: Vec<FreePose>,
+    /// The target ids seen, ascending.
+    pub target_ids: Vec<usize>,
+}
+
+impl FreePoses {
+    /// Every pose of the `moved_joint = 0` experiments of `set`.
+    pub fn from_set(set: &MeasurementSet, desc: &RobotDescription) -> Result<Self, FreePoseError> {
+        let rows: Vec<_> = set.rows().iter().filter(|r| r.moved_joint == 0).collect();
+        let mut target_ids: Vec<usize> = rows.iter().map(|r| r.target).collect();
+        target_ids.sort_unstable();
+        target_ids.dedup();
+        let mut index: HashMap<(&str, usize), usize> = HashMap::new();
+        let mut poses: Vec<FreePose> = Vec::new();
+        for r in rows {
+            let slot = target_ids.binary_search(&r.target).unwrap_or_default();
+            let point = (slot, r.position_m());
+            let i = *index.entry((r.experiment.as_str(), r.step)).or_insert_with(|| {
+                poses.push(FreePose {
+                    experiment: r.experiment.clone(),
+                    step: r.step,
+                    cmd_file: r.cmd.clone(),
+                    cmd: commands_to_internal(desc, &r.cmd),
+                    points_m: Vec::new(),
+                });
+                poses.len() - 1
+            });
+            let pose = &mut poses[i];
+            if let Some(k) = (0..r.cmd.len()).find(|&k| (r.cmd[k] - pose.cmd_file[k]).abs() > SAME_COMMAND) {
+                return Err(FreePoseError::CommandsDiffer {
+                    pose: pose.label(),
+                    joint: k + 1,
+                    first: pose.cmd_file[k],
+                    other: r.cmd[k],
+                });
+            }
+            pose.points_m.push(point);
+        }
+        for p in &mut poses {
+            p.points_m.sort_by_key(|(slot, _)| *slot);
+        }
+        Ok(FreePoses { poses, target_ids })
+    }
+
+    /// The most targets measured at one pose.
+    pub fn targets_per_pose_max(&self) -> usize {
+        self.poses.iter().map(|p| p.points_m.len()).max().unwrap_or(0)
+    }
+
+    /// Measured points in all.
+    pub fn points(&self) -> usize {
+        self.poses.iter().map(|p| p.points_m.len()).sum()
+    }
+
+    /// Each pose's configuration: the index of its commands among the distinct commands of the
+    /// file (equal as recorded), in the order they first appear: repeated visits of one
+    /// configuration share it.
+    pub fn configurations(&self) -> Vec<usize> {
+        let mut seen: HashMap<Vec<u64>, usize> = HashMap::new();
+        self.poses
+            .iter()
+            .map(|p| {
+                let key: Vec<u64> = p.cmd_file.iter().map(|c| (c + 0.0).to_bits()).collect();
+                let next = seen.len();
+                *seen.entry(key).or_insert(next)
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,321 @@
+//! The free-pose calibration's summary: parameters with their sigmas, what was not identified,
+//! the outliers, the residuals before and after, and the held-out check.
+
+use super::fit::{Fitted, Flag, Problem};
+use super::identify::{Identification, Unidentified};
+use super::model::FreePoseModel;
+use super::{FreePoseCalibration, FreePoseError, noise_of};
+use crate::calibration::refine::{ParameterUnit, RefitParameter};
+use crate::kinematics::rigid_fit;
+use crate::robot::Placement;
+use nalgebra::{DMatrix, Point3};
+use serde::{Deserialize, Serialize};
+
+/// One fitted parameter.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct ParameterEstimate {
+    /// Name (`row2.a`, `joint3.zero_offset`, `base.rz`, `target1.x`).
+    pub name: String,
+    /// Unit of `value`, `change` and `sigma`.
+    pub unit: ParameterUnit,
+    /// The fitted value \[unit\]; null for the base's components (its placement is
+    /// `robot.placement`).
+    pub value: Option<f64>,
+    /// Fitted minus the registered nominal value \[unit\] (the base: the translation from the
+    /// registered base along the instrument's axes, the rotation about the base's own axes).
+    pub change: f64,
+    /// Standard uncertainty (1-sigma) \[unit\].
+    pub sigma: f64,
+}
+
+/// A target's fitted position on the last link.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct TargetEstimate {
+    /// Target id.
+    pub id: usize,
+    /// Position in the tool frame of the nominal description \[mm\].
+    pub position_mm: [f64; 3],
+    /// 1-sigma of each coordinate \[mm\] (null where a coordinate was not identified).
+    pub sigma_mm: [Option<f64>; 3],
+}
+
+/// A pose the outlier test flagged.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct OutlierPose {
+    /// Its experiment.
+    pub experiment: String,
+    /// Its step.
+    pub step: usize,
+    /// RMS distance of its points from the fit that flagged it \[mm\].
+    pub rms_mm: f64,
+    /// Its normalised residual `sum r^2 / s^2` (robust `s`).
+    pub statistic: f64,
+    /// The chi-square quantile it exceeds (family-wise level 0.01 over the poses).
+    pub threshold: f64,
+    /// Whether the fit was redone without it (`false` with `--keep-outliers`).
+    pub dropped: bool,
+}
+
+/// The check on held-out poses.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct Holdout {
+    /// How the poses were split.
+    pub split: String,
+    /// Poses fitted.
+    pub training_poses: usize,
+    /// Poses held out.
+    pub heldout_poses: usize,
+    /// RMS distance of the held-out points from the nominal model registered on the training
+    /// poses \[mm\].
+    pub nominal_rms_mm: f64,
+    /// The same from the calibrated model \[mm\].
+    pub calibrated_rms_mm: f64,
+    /// Largest distance of a held-out point from the calibrated model \[mm\].
+    pub calibrated_max_mm: f64,
+}
+
+/// The summary (`calibration.json`'s `free_poses`, `docs/formats.md#calibration-json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct FreePoseSummary {
+    /// Poses fitted (after the outliers).
+    pub poses: usize,
+    /// Points fitted.
+    pub points: usize,
+    /// RMS distance of the points from the nominal model placed by the closed-form
+    /// registration \[mm\].
+    pub closed_form_rms_mm: f64,
+    /// The same after the base and the targets were refined by least squares: the nominal
+    /// model at its best \[mm\].
+    pub nominal_rms_mm: f64,
+    /// RMS distance from the calibrated model \[mm\].
+    pub calibrated_rms_mm: f64,
+    /// Levenberg-Marquardt steps of the final fit.
+    pub iterations: usize,
+    /// Condition number of the fitted parameters' column-scaled design.
+    pub condition_number: f64,
+    /// Fitted parameters.
+    pub parameters: Vec<ParameterEstimate>,
+    /// Parameters the poses do not identify (kept nominal).
+    pub unidentified: Vec<Unidentified>,
+    /// The targets on the last link.
+    pub targets: Vec<TargetEstimate>,
+    /// The tool frame fitted to the description's `tool.targets_mm` (RMS of that rigid fit
+    /// \[mm\]); null when the description gives no tool targets matching the data's ids 0-2
+    /// (the tool frame then stays nominal).
+    pub tool_fit_rms_mm: Option<f64>,
+    /// Poses flagged by the outlier test.
+    pub outliers: Vec<OutlierPose>,
+    /// The parameters' correlation matrix, in the order of `parameters`.
+    pub correlation: Vec<Vec<f64>>,
+    /// The held-out check (`--holdout`).
+    pub holdout: Option<Holdout>,
+}
+
+/// The stages a summary is made of.
+pub(super) struct Stages<'a> {
+    pub problem: &'a Problem<'a>,
+    pub start: &'a FreePoseModel,
+    pub registered: &'a Fitted,
+    pub identification: &'a Identification,
+    pub fitted: Fitted,
+    pub kept: &'a [usize],
+    pub flags: &'a [Flag],
+    pub test: &'a [usize],
+}
+
+/// The calibration of the stages.
+pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseError> {
+    let variance = s.fitted.variance().unwrap_or(0.0);
+    let covariance = s.fitted.covariance(variance)?;
+    let layout = s.problem.layout;
+    let fitted_columns = &s.identification.fitted;
+    let parameters: Vec<ParameterEstimate> = fitted_columns
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| {
+            estimate(
+                &layout[c],
+                &s.registered.model,
+                &s.fitted.model,
+                covariance[(k, k)].sqrt(),
+            )
+        })
+        .collect();
+    let (robot, tool_fit_rms_mm) = with_tool_frame(&s.fitted.model, s.problem);
+    let summary = FreePoseSummary {
+        poses: s.kept.len(),
+        points: s.fitted.residual.len() / 3,
+        closed_form_rms_mm: rms_of(s.start, s.problem, s.kept)? * 1e3,
+        nominal_rms_mm: rms_of(&s.registered.model, s.problem, s.kept)? * 1e3,
+        calibrated_rms_mm: s.fitted.rms_m() * 1e3,
+        iterations: s.fitted.iterations,
+        condition_number: crate::numerics::lsq::scaled_condition_number(&s.fitted.jacobian),
+        targets: targets(&s.fitted.model, &parameters),
+        parameters,
+        unidentified: s.identification.unidentified.clone(),
+        tool_fit_rms_mm,
+        outliers: outliers(s.flags, s.problem, s.kept),
+        correlation: correlation(&covariance),
+        holdout: holdout(&s)?,
+    };
+    Ok(FreePoseCalibration {
+        robot,
+        noise: noise_of(&s.fitted),
+        model: s.fitted.model,
+        summary,
+    })
+}
+
+/// RMS distance of the points of the poses `which` from `model` \[m\].
+fn rms_of(model: &FreePoseModel, problem: &Problem<'_>, which: &[usize]) -> Result<f64, FreePoseError> {
+    let r = model
+        .residuals(problem.controller, problem.poses, which)
+        .map_err(|u| FreePoseError::Unexecutable {
+            pose: problem.poses.poses[u.pose].label(),
+        })?;
+    Ok((r.norm_squared() / (r.len() / 3).max(1) as f64).sqrt())
+}
+
+/// One parameter's estimate.
+fn estimate(p: &RefitParameter, registered: &FreePoseModel, fitted: &FreePoseModel, sigma: f64) -> ParameterEstimate {
+    let unit = p.unit();
+    let scale = unit.per_si();
+    let value = value_of(p, fitted);
+    let change = match (value, value_of(p, registered)) {
+        (Some(after), Some(before)) => after - before,
+        _ => base_change(p, registered, fitted),
+    };
+    ParameterEstimate {
+        name: p.name(),
+        unit,
+        value: value.map(|v| v * scale),
+        change: change * scale,
+        sigma: sigma * scale,
+    }
+}
+
+/// A parameter's value in internal units (none for the base's components).
+pub(super) fn value_of(p: &RefitParameter, m: &FreePoseModel) -> Option<f64> {
+    match p {
+        RefitParameter::RowA(r) => Some(m.phi.rows[r - 1].a_m),
+        RefitParameter::RowB(r) => Some(m.phi.rows[r - 1].b_m),
+        RefitParameter::RowAlpha(r) => Some(m.phi.rows[r - 1].alpha_rad),
+        RefitParameter::RowBeta(r) => Some(m.phi.rows[r - 1].beta_rad),
+        RefitParameter::ZeroOffset { joint, .. } => Some(m.robot.joints[joint - 1].transducer_offset),
+        RefitParameter::Harmonic { joint, order, cosine } => match &m.robot.joints[joint - 1].transmission {
+            crate::robot::Transmission::Harmonic { sin, cos } => {
+                Some(if *cosine { cos } else { sin }.get(order - 1).copied().unwrap_or(0.0))
+            }
+            _ => None,
+        },
+        RefitParameter::Target { target, axis } => {
+            let slot = m.target_ids.binary_search(target).ok()?;
+            Some(m.targets_in_tool_m[slot][*axis])
+        }
+        _ => None,
+    }
+}
+
+/// The base's change from `before` to `after` along base parameter `p`: translation, or the
+/// rotation vector of `R_before^T R_after` (the fit's local parameterisation, base axes).
+fn base_change(p: &RefitParameter, before: &FreePoseModel, after: &FreePoseModel) -> f64 {
+    let (b, a) = (before.phi.world_from_base, after.phi.world_from_base);
+    match p {
+        RefitParameter::Base(i) if *i < 3 => a.translation.vector[*i] - b.translation.vector[*i],
+        RefitParameter::Base(i) => (b.rotation.inverse() * a.rotation).scaled_axis()[*i - 3],
+        _ => 0.0,
+    }
+}
+
+/// The targets' positions with the sigmas of their fitted coordinates.
+fn targets(m: &FreePoseModel, parameters: &[ParameterEstimate]) -> Vec<TargetEstimate> {
+    m.target_ids
+        .iter()
+        .zip(&m.targets_in_tool_m)
+        .map(|(&id, p)| {
+            let sigma = |axis: usize| {
+                let name = RefitParameter::Target { target: id, axis }.name();
+                parameters.iter().find(|e| e.name == name).map(|e| e.sigma)
+            };
+            TargetEstimate {
+                id,
+                position_mm: [p.x * 1e3, p.y * 1e3, p.z * 1e3],
+                sigma_mm: [sigma(0), sigma(1), sigma(2)],
+            }
+        })
+        .collect()
+}
+
+/// The fitted robot with its tool frame moved onto the description's tool targets (ids 0, 1,
+/// 2 and beyond, where the data have them): the rigid fit of the described positions onto the
+/// fitted ones, and its RMS \[mm\]. Without three such targets the tool frame stays nominal.
+fn with_tool_frame(m: &FreePoseModel, problem: &Problem<'_>) -> (crate::robot::RobotModel, Option<f64>) {
+    let mut robot = m.to_robot();
+    let described = &problem.description_targets_m;
+    let pairs: Vec<(Point3<f64>, Point3<f64>)> = m
+        .target_ids
+        .iter()
+        .zip(&m.targets_in_tool_m)
+        .filter_map(|(&id, fitted)| described.get(id).map(|d| (*d, *fitted)))
+        .collect();
+    let (src, dst): (Vec<_>, Vec<_>) = pairs.into_iter().unzip();
+    match rigid_fit(&src, &dst) {
+        Some((nominal_tool_from_tool, rms)) => {
+            let tool = m.phi.last_link_from_tool * nominal_tool_from_tool;
+            robot.tool_frame = Placement::from_isometry(&tool);
+            (robot, Some(rms * 1e3))
+        }
+        None => (robot, None),
+    }
+}
+
+/// The flagged poses in the summary's terms.
+fn outliers(flags: &[Flag], problem: &Problem<'_>, kept: &[usize]) -> Vec<OutlierPose> {
+    flags
+        .iter()
+        .map(|f| {
+            let pose = &problem.poses.poses[f.pose];
+            OutlierPose {
+                experiment: pose.experiment.clone(),
+                step: pose.step,
+                rms_mm: f.rms_m * 1e3,
+                statistic: f.statistic,
+                threshold: f.threshold,
+                dropped: !kept.contains(&f.pose),
+            }
+        })
+        .collect()
+}
+
+/// The correlation matrix of a covariance.
+fn correlation(c: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    let d: Vec<f64> = (0..c.nrows()).map(|i| c[(i, i)].sqrt()).collect();
+    (0..c.nrows())
+        .map(|i| (0..c.ncols()).map(|j| c[(i, j)] / (d[i] * d[j])).collect())
+        .collect()
+}
+
+/// The held-out check, when poses were held out.
+fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
+    if s.test.is_empty() {
+        return Ok(None);
+    }
+    let r = s
+        .fitted
+        .model
+        .residuals(s.problem.controller, s.problem.poses, s.test)
+        .map_err(|u| FreePoseError::Unexecutable {
+            pose: s.problem.poses.poses[u.pose].label(),
+        })?;
+    let max = (0..r.len() / 3)
+        .map(|k| r.fixed_rows::<3>(3 * k).norm())
+        .fold(0.0, f64::max);
+    Ok(Some(Holdout {
+        split: "configurations in order of first appearance: even ones fitted, odd ones held out (repeated visits of one configuration stay together)".into(),
+        training_poses: s.kept.len(),
+        heldout_poses: s.test.len(),
+        nominal_rms_mm: rms_of(&s.registered.model, s.problem, s.test)? * 1e3,
+        calibrated_rms_mm: (r.norm_squared() / (r.len() / 3).max(1) as f64).sqrt() * 1e3,
+        calibrated_max_mm: max * 1e3,
+    }))
+}

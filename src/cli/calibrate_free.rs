@@ -1,0 +1,83 @@
+//! `axiscal calibrate` on a file of free poses only: the free-pose calibration
+//! ([`axiscal::calibration::free_pose`]) and its console summary.
+
+use anyhow::Result;
+use axiscal::calibration::free_pose::{FreePoseOptions, FreePoseSummary, calibrate_free_poses};
+use axiscal::calibration::procedure::Calibration;
+use axiscal::measurement::MeasurementSet;
+use axiscal::robot::RobotDescription;
+use std::path::Path;
+
+/// The options of `calibrate` the free-pose path reads.
+pub struct FreeArgs<'a> {
+    /// The data file (messages).
+    pub data: &'a Path,
+    /// `--holdout`.
+    pub holdout: bool,
+    /// `--keep-outliers`.
+    pub keep_outliers: bool,
+    /// `--refine` (refused: the free poses are the calibration's own data).
+    pub refine: bool,
+}
+
+/// The free-pose calibration of `set`.
+pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescription) -> Result<Calibration> {
+    if args.refine {
+        anyhow::bail!(
+            "--refine refines an independent-axis calibration on free poses; {} has free poses only, which calibrate directly (drop --refine)",
+            args.data.display()
+        );
+    }
+    let options = FreePoseOptions {
+        keep_outliers: args.keep_outliers,
+        holdout: args.holdout,
+        ..FreePoseOptions::default()
+    };
+    let cal = calibrate_free_poses(set, desc, &options)
+        .map_err(|e| anyhow::anyhow!("calibrating {} from its free poses: {e}", args.data.display()))?;
+    Ok(cal.into_calibration(desc))
+}
+
+/// The console summary of a free-pose calibration.
+pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
+    say!(
+        "calibrated {} from {} ({} free poses, {} points; no axis experiment): {} parameters fitted, {} not identified (kept nominal, see report.md)",
+        desc.name,
+        source,
+        s.poses,
+        s.points,
+        s.parameters.len(),
+        s.unidentified.len()
+    );
+    say!(
+        "  RMS: nominal {:.4} mm (closed-form registration {:.4} mm) -> calibrated {:.4} mm in {} steps; condition number {:.2e}",
+        s.nominal_rms_mm,
+        s.closed_form_rms_mm,
+        s.calibrated_rms_mm,
+        s.iterations,
+        s.condition_number
+    );
+    if let Some(h) = &s.holdout {
+        say!(
+            "  held out ({} poses, odd configurations): nominal {:.4} mm -> calibrated {:.4} mm RMS (max {:.4} mm)",
+            h.heldout_poses,
+            h.nominal_rms_mm,
+            h.calibrated_rms_mm,
+            h.calibrated_max_mm
+        );
+    }
+    for o in &s.outliers {
+        let what = if o.dropped {
+            "dropped from the fit"
+        } else {
+            "kept (--keep-outliers)"
+        };
+        eprintln!(
+            "warning: outlier pose {} step {}: RMS {:.4} mm, normalised residual {:.1} > {:.1}: {what}",
+            o.experiment, o.step, o.rms_mm, o.statistic, o.threshold
+        );
+    }
+    if s.tool_fit_rms_mm.is_none() {
+        say!("  tool frame: nominal (the description's tool.targets_mm do not match the data's target ids)");
+    }
+}
