@@ -109,6 +109,10 @@ pub struct Args {
     /// Free-pose files only: flag the poses the outlier test rejects but keep them in the fit.
     #[arg(long)]
     keep_outliers: bool,
+    /// Free-pose files only: the highest transmission-harmonic order tried (0: geometry only);
+    /// each order is kept only where the data resolve it (`docs/method.md`).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=8))]
+    harmonics: u64,
     #[command(flatten)]
     checks: checks::Overrides,
 }
@@ -275,6 +279,7 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
         data: &args.data,
         holdout: args.holdout,
         keep_outliers: args.keep_outliers,
+        harmonics: args.harmonics as usize,
         refine: args.refine,
     }
 }

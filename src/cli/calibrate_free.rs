@@ -16,6 +16,8 @@ pub struct FreeArgs<'a> {
     pub holdout: bool,
     /// `--keep-outliers`.
     pub keep_outliers: bool,
+    /// `--harmonics`.
+    pub harmonics: usize,
     /// `--refine` (refused: the free poses are the calibration's own data).
     pub refine: bool,
 }
@@ -31,7 +33,7 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
     let options = FreePoseOptions {
         keep_outliers: args.keep_outliers,
         holdout: args.holdout,
-        ..FreePoseOptions::default()
+        max_harmonic_order: args.harmonics,
     };
     let cal = calibrate_free_poses(set, desc, &options)
         .map_err(|e| anyhow::anyhow!("calibrating {} from its free poses: {e}", args.data.display()))?;
@@ -73,8 +75,8 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
             "kept (--keep-outliers)"
         };
         eprintln!(
-            "warning: outlier pose {} step {}: RMS {:.4} mm, normalised residual {:.1} > {:.1}: {what}",
-            o.experiment, o.step, o.rms_mm, o.statistic, o.threshold
+            "warning: outlier pose {} step {}: RMS {:.4} mm beyond the fence {:.4} mm (Q3 + 3 IQR of the poses' RMS): {what}",
+            o.experiment, o.step, o.rms_mm, o.fence_mm
         );
     }
     if s.tool_fit_rms_mm.is_none() {

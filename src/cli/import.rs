@@ -3,7 +3,9 @@
 
 use super::output::Outputs;
 use anyhow::{Context, Result};
+use axiscal::measurement::import::arrays::{ArrayImport, free_poses};
 use axiscal::measurement::import::boby_klimchik;
+use axiscal::measurement::import::mat_v5;
 use axiscal::measurement::import::points::{LengthUnit, PlanSheet, join_points};
 use axiscal::measurement::import::table::Table;
 use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide};
@@ -33,6 +35,9 @@ enum Format {
     /// scripts write it; axis experiments recovered from the joint values
     /// (`docs/formats.md#wide-format`).
     Wide(WideArgs),
+    /// A MATLAB v5 file (`.mat`, `save -v7` or older) of free poses: a joint array (one row per
+    /// pose, one column per joint) and one point array per target (one row per pose, x y z).
+    Mat(MatArgs),
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -103,6 +108,37 @@ struct WideArgs {
     force: bool,
 }
 
+/// `import mat FILE --robot R --joints q --targets mA,mB --angles rad --units m --out DATA`.
+#[derive(Debug, clap::Args)]
+struct MatArgs {
+    /// The MAT file.
+    file: PathBuf,
+    /// The robot description (joint count and kinds), or a shipped one's name.
+    #[arg(long, value_parser = super::options::robot_file)]
+    robot: PathBuf,
+    /// The joint array's variable name.
+    #[arg(long)]
+    joints: String,
+    /// The point arrays' variable names, one per target (ids 0, 1, ... in this order).
+    #[arg(long, value_delimiter = ',', required = true)]
+    targets: Vec<String>,
+    /// Unit of the revolute joint values.
+    #[arg(long, value_enum)]
+    angles: Angle,
+    /// Unit of the points and of the prismatic joint values.
+    #[arg(long, value_enum)]
+    units: Unit,
+    /// The experiment id of the poses.
+    #[arg(long, default_value = "poses")]
+    experiment: String,
+    /// Output measurement CSV.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
+}
+
 /// A data-set folder and the output file.
 #[derive(Debug, clap::Args)]
 struct DirArgs {
@@ -146,6 +182,7 @@ pub fn run(args: Args) -> Result<()> {
     match args.format {
         Format::Points(a) => import_points(&a),
         Format::Wide(a) => import_wide(&a),
+        Format::Mat(a) => import_mat(&a),
         Format::BobyKlimchik(a) => {
             let source = a.dir.join(boby_klimchik::DATA_FILE);
             Outputs::new(a.force).input("DIR", &source).check(&a.out)?;
@@ -254,6 +291,49 @@ fn import_wide(a: &WideArgs) -> Result<()> {
     );
     for e in set.experiments() {
         println!("  {:<10} moved_joint {}  {} rows", e.name, e.moved_joint, e.rows.len());
+    }
+    Ok(())
+}
+
+fn import_mat(a: &MatArgs) -> Result<()> {
+    let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
+    outputs.check(&a.out)?;
+    let desc = RobotDescription::from_file(&a.robot)?;
+    let bytes = std::fs::read(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
+    let file = mat_v5::read(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
+    let how = ArrayImport {
+        joints: a.joints.clone(),
+        targets: a.targets.clone(),
+        radians: matches!(a.angles, Angle::Rad),
+        metres_per_unit: match a.units {
+            Unit::Mm => 1e-3,
+            Unit::M => 1.0,
+        },
+        experiment: a.experiment.clone(),
+    };
+    let set = free_poses(&file, &a.file, &desc, &how)?;
+    let comment = format!(
+        "{}# imported by `axiscal import mat` from {}: joints `{}`, targets {}\n",
+        super::checks::identity_comment(&desc),
+        a.file.display(),
+        a.joints,
+        a.targets
+            .iter()
+            .enumerate()
+            .map(|(i, t)| format!("{i} = `{t}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    write_csv_from(&a.out, outputs, &comment, &set)?;
+    println!(
+        "imported {} free poses x {} targets from {} to {}",
+        set.rows().len() / a.targets.len(),
+        a.targets.len(),
+        a.file.display(),
+        a.out.display()
+    );
+    for (name, why) in &file.skipped {
+        println!("  skipped variable `{name}`: {why}");
     }
     Ok(())
 }

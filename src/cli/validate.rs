@@ -55,6 +55,8 @@ pub fn run(args: Args) -> Result<()> {
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
+    // A free-pose calibration fitted the targets the description may not give.
+    let desc = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
     let options = match (args.noise_mm, &cal.noise) {
         (Some(mm), _) => noise_options(mm, "given", args.false_alarm),
         (None, Some(n)) => noise_options(n.used_rms_3d_mm, "calibration", args.false_alarm),

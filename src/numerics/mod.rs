@@ -1,6 +1,7 @@
 //! Numerical tools shared by the maths: dense least squares (one Levenberg-Marquardt /
-//! Gauss-Newton loop, covariances, condition numbers), the thin SVD of tall designs, and
-//! sample statistics with named quantile definitions.
+//! Gauss-Newton loop, covariances, condition numbers), the thin SVD of tall designs, sample
+//! statistics with named quantile definitions, and the selection of a design's identifiable
+//! columns.
 
 pub mod lsq;
 pub mod stats;

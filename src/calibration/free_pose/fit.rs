@@ -5,7 +5,7 @@ use super::model::FreePoseModel;
 use super::poses::FreePoses;
 use crate::calibration::refine::RefitParameter;
 use crate::numerics::lsq::{LmOptions, LsqError, inverse_normal, levenberg_marquardt};
-use crate::numerics::stats::{QuantileMethod, chi_square_quantile, quantile};
+use crate::numerics::stats::{QuantileMethod, quantile};
 use crate::robot::Controller;
 use nalgebra::{DMatrix, DVector};
 
@@ -17,10 +17,6 @@ const MAX_ITERATIONS: usize = 200;
 /// [`crate::numerics::lsq::LmOptions::negligible_decrease`]; with the noise at most the start's
 /// RMS, a step below 1e-5 of a standard deviation).
 const NEGLIGIBLE_DECREASE: f64 = 1e-10;
-
-/// `1.4826 * median |r|` estimates a normal distribution's standard deviation (the median
-/// absolute deviation's consistency factor, Hampel 1974).
-const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 
 /// What every fit of one calibration shares.
 pub(super) struct Problem<'a> {
@@ -104,42 +100,50 @@ pub(super) fn fit(
 pub(super) struct Flag {
     /// The pose.
     pub pose: usize,
-    /// Its normalised residual `sum r^2 / s^2` over its coordinates.
-    pub statistic: f64,
-    /// The chi-square threshold it exceeds.
-    pub threshold: f64,
     /// RMS 3-D distance of its points \[m\].
     pub rms_m: f64,
+    /// The fence it exceeds \[m\].
+    pub fence_m: f64,
 }
 
-/// The poses of `which` whose normalised residual exceeds the chi-square quantile at the
-/// family-wise level `level` (Bonferroni over the poses), `s` from the residuals' median
-/// absolute value (robust: the outliers do not mask themselves).
-pub(super) fn flag_outliers(fitted: &Fitted, poses: &FreePoses, which: &[usize], level: f64) -> Vec<Flag> {
-    let abs: Vec<f64> = fitted.residual.iter().map(|r| r.abs()).collect();
-    let sigma = MAD_TO_SIGMA * quantile(&abs, 0.5, QuantileMethod::Linear);
-    if sigma <= 0.0 || which.is_empty() {
-        return Vec::new();
-    }
-    let per_pose = level / which.len() as f64;
+/// Tukey's "far out" fence factor (*Exploratory Data Analysis*, 1977, ch. 2): a value beyond
+/// the upper quartile by 3 interquartile ranges.
+const FAR_OUT: f64 = 3.0;
+
+/// The fence of the poses' RMS residuals: `Q3 + 3 (Q3 - Q1)` of the per-pose RMS of the fit's
+/// residual `residual` over the poses `which` \[m\]. A gross error (a corrupted cell, swapped
+/// target ids, a pose in other units) lies far beyond it; the heavy tail that what a geometric
+/// model misses (compliance, backlash) gives clean data does not, as it would beyond a
+/// Gaussian quantile.
+pub(super) fn outlier_fence(residual: &DVector<f64>, poses: &FreePoses, which: &[usize]) -> f64 {
+    let rms = pose_rms(residual, poses, which);
+    let q1 = quantile(&rms, 0.25, QuantileMethod::Linear);
+    let q3 = quantile(&rms, 0.75, QuantileMethod::Linear);
+    q3 + FAR_OUT * (q3 - q1)
+}
+
+/// The RMS 3-D distance of each pose's points \[m\].
+fn pose_rms(residual: &DVector<f64>, poses: &FreePoses, which: &[usize]) -> Vec<f64> {
     let mut row = 0;
-    let mut flags = Vec::new();
-    for &i in which {
-        let coordinates = 3 * poses.poses[i].points_m.len();
-        let r = fitted.residual.rows(row, coordinates);
-        row += coordinates;
-        let statistic = r.norm_squared() / (sigma * sigma);
-        let threshold = chi_square_quantile(1.0 - per_pose, coordinates as f64);
-        if statistic > threshold {
-            flags.push(Flag {
-                pose: i,
-                statistic,
-                threshold,
-                rms_m: (r.norm_squared() / (coordinates / 3) as f64).sqrt(),
-            });
-        }
-    }
-    flags
+    which
+        .iter()
+        .map(|&i| {
+            let coordinates = 3 * poses.poses[i].points_m.len();
+            let r = residual.rows(row, coordinates);
+            row += coordinates;
+            (r.norm_squared() / (coordinates / 3) as f64).sqrt()
+        })
+        .collect()
+}
+
+/// The poses of `which` (whose points' residuals `residual` holds in order) beyond `fence_m`.
+pub(super) fn flag_outliers(residual: &DVector<f64>, poses: &FreePoses, which: &[usize], fence_m: f64) -> Vec<Flag> {
+    pose_rms(residual, poses, which)
+        .into_iter()
+        .zip(which)
+        .filter(|(rms, _)| *rms > fence_m)
+        .map(|(rms_m, &pose)| Flag { pose, rms_m, fence_m })
+        .collect()
 }
 
 impl From<LsqError> for FreePoseError {

@@ -52,7 +52,7 @@ impl Identification {
         self.fitted.retain(|c| !columns.contains(c));
         self.unidentified.extend(columns.iter().map(|&c| Unidentified {
             name: layout[c].name(),
-            reason: "its harmonic order does not lower the residuals significantly (chi-square test at 0.01)".into(),
+            reason: "its harmonic order does not predict held-out configurations better (cross-validation)".into(),
             same_as: vec![],
         }));
     }

@@ -43,9 +43,6 @@ use crate::robot::{Controller, RobotDescription, RobotModel};
 use fit::{Fitted, Problem};
 use nalgebra::Isometry3;
 
-/// Family-wise level of the outlier test: the chance that a clean file loses a pose.
-pub const OUTLIER_LEVEL: f64 = 0.01;
-
 /// Outlier rounds at most (each refits without the poses flagged so far).
 const OUTLIER_ROUNDS: usize = 10;
 
@@ -60,8 +57,8 @@ pub struct FreePoseOptions {
     pub keep_outliers: bool,
     /// Fit on the even configurations only and report the odd ones as held out.
     pub holdout: bool,
-    /// Transmission harmonics tried up to this order (each order kept only when it lowers the
-    /// residuals significantly, [`HARMONIC_LEVEL`]).
+    /// Transmission harmonics tried up to this order (the order kept is the one that predicts
+    /// held-out configurations best, [`CV_FOLDS`]-fold cross-validation).
     pub max_harmonic_order: usize,
 }
 
@@ -74,10 +71,6 @@ impl Default for FreePoseOptions {
         }
     }
 }
-
-/// Significance at which a harmonic order's drop of the residuals keeps it (chi-square test of
-/// the nested fits).
-pub const HARMONIC_LEVEL: f64 = 0.01;
 
 /// Why a free-pose calibration failed.
 #[derive(Debug, thiserror::Error)]
@@ -158,14 +151,19 @@ pub fn calibrate_free_poses(
         name: format!("{} (calibrated from free poses)", desc.name),
         ..RobotModel::ideal(desc)
     };
-    let layout = layout(&nominal, &poses.target_ids, options.max_harmonic_order);
+    let (train, test) = split(&poses, options.holdout);
+    let layout = layout(
+        &nominal,
+        &poses.target_ids,
+        options.max_harmonic_order,
+        &poses.spans(&train),
+    );
     let problem = Problem {
         controller: &controller,
         poses: &poses,
         layout: &layout,
         description_targets_m: desc.tool_targets_m(),
     };
-    let (train, test) = split(&poses, options.holdout);
     let start = registered_start(&problem, &nominal, &train)?;
     let frame_columns: Vec<usize> = (0..layout.len()).filter(|&c| frame_parameter(&layout[c])).collect();
     let registered = fit::fit(&problem, &start, &train, &frame_columns)?;
@@ -261,32 +259,63 @@ fn fit_without_outliers(
     identification: &Identification,
     options: &FreePoseOptions,
 ) -> Result<(Fitted, Vec<usize>, Vec<fit::Flag>), FreePoseError> {
-    let mut kept = train.to_vec();
-    let mut flags: Vec<fit::Flag> = Vec::new();
-    let mut fitted = fit::fit(problem, start, &kept, &identification.fitted)?;
+    let columns = &identification.fitted;
+    let first = fit::fit(problem, start, train, columns)?;
+    // The fence is the first fit's and stays: re-computed on the poses left it would shrink
+    // round by round and peel off the tail of clean data.
+    let fence = fit::outlier_fence(&first.residual, problem.poses, train);
+    let mut flags = fit::flag_outliers(&first.residual, problem.poses, train, fence);
+    let mut fitted = first;
     for _ in 0..OUTLIER_ROUNDS {
-        let new = fit::flag_outliers(&fitted, problem.poses, &kept, OUTLIER_LEVEL);
-        if new.is_empty() || options.keep_outliers {
-            flags.extend(new);
+        if flags.is_empty() || options.keep_outliers {
             break;
         }
-        kept.retain(|i| !new.iter().any(|f| f.pose == *i));
-        flags.extend(new);
         if flags.len() as f64 > OUTLIER_SHARE_MAX * train.len() as f64 {
             return Err(FreePoseError::TooManyOutliers {
                 flagged: flags.len(),
                 poses: train.len(),
             });
         }
-        fitted = fit::fit(problem, &fitted.model, &kept, &identification.fitted)?;
+        let kept: Vec<usize> = train
+            .iter()
+            .copied()
+            .filter(|i| !flags.iter().any(|f| f.pose == *i))
+            .collect();
+        fitted = fit::fit(problem, &fitted.model, &kept, columns)?;
+        let all = fitted
+            .model
+            .residuals(problem.controller, problem.poses, train)
+            .map_err(|u| FreePoseError::Unexecutable {
+                pose: problem.poses.poses[u.pose].label(),
+            })?;
+        let again = fit::flag_outliers(&all, problem.poses, train, fence);
+        let settled = again.iter().map(|f| f.pose).eq(flags.iter().map(|f| f.pose));
+        flags = again;
+        if settled {
+            break;
+        }
+    }
+    let kept: Vec<usize> = if options.keep_outliers {
+        train.to_vec()
+    } else {
+        train
+            .iter()
+            .copied()
+            .filter(|i| !flags.iter().any(|f| f.pose == *i))
+            .collect()
+    };
+    if kept.len() != fitted.residual.len() / 3 && !options.keep_outliers {
+        fitted = fit::fit(problem, &fitted.model, &kept, columns)?;
     }
     Ok((fitted, kept, flags))
 }
 
-/// The harmonic order the data resolve: from the geometry alone, each order added while the
-/// drop of the residuals it brings is significant at [`HARMONIC_LEVEL`] (the nested fits'
-/// chi-square test, the larger fit's variance). Returns the fit and the harmonic columns left
-/// out.
+/// The harmonic order the data resolve: the order (0 to the highest identified) whose fits
+/// predict held-out configurations best, by cross-validation over [`CV_FOLDS`] folds of the
+/// configurations (configuration `c` in fold `c mod folds`; repeated visits of one
+/// configuration carry no new information about the model, so they are never split), ties to
+/// the lower order. Returns the fit of that order on every kept pose and the harmonic columns
+/// left out.
 fn select_harmonics(
     problem: &Problem<'_>,
     start: &FreePoseModel,
@@ -310,26 +339,52 @@ fn select_harmonics(
     if max == 0 {
         return Ok((full, vec![]));
     }
-    let mut current = fit::fit(problem, start, kept, &columns(0))?;
-    let mut order = 0;
-    while order < max {
-        let next = if order + 1 == max {
-            full.clone()
-        } else {
-            fit::fit(problem, &current.model, kept, &columns(order + 1))?
-        };
-        let Some(variance) = next.variance() else { break };
-        let added = next.jacobian.ncols() - current.jacobian.ncols();
-        let drop = (current.residual.norm_squared() - next.residual.norm_squared()) / variance;
-        let p_value = 1.0 - crate::numerics::stats::chi_square_cdf(drop, added as f64);
-        if added > 0 && p_value >= HARMONIC_LEVEL {
-            break;
+    let configurations = problem.poses.configurations();
+    let mut best = (f64::INFINITY, 0);
+    for order in 0..=max {
+        let sse = cross_validated_sse(problem, start, kept, &configurations, &columns(order))?;
+        if sse < best.0 {
+            best = (sse, order);
         }
-        (current, order) = (next, order + 1);
     }
-    let all = columns(max);
-    let left_out = all.into_iter().filter(|&c| order_of(c) > order).collect();
-    Ok((current, left_out))
+    let order = best.1;
+    let fitted = if order == max {
+        full
+    } else {
+        fit::fit(problem, start, kept, &columns(order))?
+    };
+    let left_out = columns(max).into_iter().filter(|&c| order_of(c) > order).collect();
+    Ok((fitted, left_out))
+}
+
+/// Folds of the harmonic order's cross-validation.
+pub const CV_FOLDS: usize = 5;
+
+/// The sum of squared held-out residuals of the parameters `columns` over the folds of the
+/// configurations of the poses `kept` (each fold fitted on the others).
+fn cross_validated_sse(
+    problem: &Problem<'_>,
+    start: &FreePoseModel,
+    kept: &[usize],
+    configurations: &[usize],
+    columns: &[usize],
+) -> Result<f64, FreePoseError> {
+    let mut sse = 0.0;
+    for fold in 0..CV_FOLDS {
+        let (held, train): (Vec<usize>, Vec<usize>) = kept.iter().partition(|&&i| configurations[i] % CV_FOLDS == fold);
+        if held.is_empty() || train.is_empty() {
+            continue;
+        }
+        let fitted = fit::fit(problem, start, &train, columns)?;
+        let r = fitted
+            .model
+            .residuals(problem.controller, problem.poses, &held)
+            .map_err(|u| FreePoseError::Unexecutable {
+                pose: problem.poses.poses[u.pose].label(),
+            })?;
+        sse += r.norm_squared();
+    }
+    Ok(sse)
 }
 
 /// The noise estimate of a fit (isotropic, no jitter).
@@ -392,4 +447,20 @@ impl FreePoseCalibration {
             residuals: vec![],
         }
     }
+}
+
+/// `desc` with the tool targets a free-pose calibration fitted, where the description gives
+/// none and the calibration fitted targets 0, 1 and 2 (in the description's tool frame): what
+/// `validate` needs to predict the points of such a calibration's targets. Otherwise `desc`.
+pub fn with_fitted_targets(desc: &RobotDescription, cal: &Calibration) -> RobotDescription {
+    let Some(summary) = &cal.free_poses else {
+        return desc.clone();
+    };
+    let ids: Vec<usize> = summary.targets.iter().map(|t| t.id).collect();
+    if !desc.tool.targets_mm.is_empty() || ids != [0, 1, 2] {
+        return desc.clone();
+    }
+    let mut with = desc.clone();
+    with.tool.targets_mm = summary.targets.iter().map(|t| t.position_mm).collect();
+    with
 }

@@ -22,7 +22,17 @@ const JOINT_MAP_STEP: f64 = 1e-6;
 /// `a, b, alpha, beta`,
 /// then each revolute joint's transmission harmonics (eq. 8) up to `harmonic_order` (sine and
 /// cosine of each order).
-pub fn layout(robot: &RobotModel, target_ids: &[usize], harmonic_order: usize) -> Vec<RefitParameter> {
+///
+/// A harmonic of order `n` of joint `k` enters only when the joint's values span at least half
+/// its period, `180 / n` deg (`spans_rad[k]`, the range the data cover): over less, its sine
+/// and cosine are nearly a zero offset and a scale error, fit those and extrapolate wildly
+/// beyond the data.
+pub fn layout(
+    robot: &RobotModel,
+    target_ids: &[usize],
+    harmonic_order: usize,
+    spans_rad: &[f64],
+) -> Vec<RefitParameter> {
     let mut p: Vec<RefitParameter> = (0..6).map(RefitParameter::Base).collect();
     for &target in target_ids {
         p.extend((0..3).map(|axis| RefitParameter::Target { target, axis }));
@@ -43,7 +53,9 @@ pub fn layout(robot: &RobotModel, target_ids: &[usize], harmonic_order: usize) -
     }
     for (k, j) in robot.joints.iter().enumerate() {
         if j.kind == JointKind::Revolute {
-            for order in 1..=harmonic_order {
+            let resolved =
+                |order: usize| order as f64 * spans_rad.get(k).copied().unwrap_or(0.0) >= std::f64::consts::PI;
+            for order in (1..=harmonic_order).filter(|&o| resolved(o)) {
                 for cosine in [false, true] {
                     p.push(RefitParameter::Harmonic {
                         joint: k + 1,

@@ -79,6 +79,18 @@ impl FreePoses {
         Ok(FreePoses { poses, target_ids })
     }
 
+    /// The range each joint's command covers over the poses `which` (internal units).
+    pub fn spans(&self, which: &[usize]) -> Vec<f64> {
+        let n = self.poses.first().map_or(0, |p| p.cmd.len());
+        (0..n)
+            .map(|k| {
+                let values = which.iter().map(|&i| self.poses[i].cmd[k]);
+                let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+                (hi - lo).max(0.0)
+            })
+            .collect()
+    }
+
     /// The most targets measured at one pose.
     pub fn targets_per_pose_max(&self) -> usize {
         self.poses.iter().map(|p| p.points_m.len()).max().unwrap_or(0)

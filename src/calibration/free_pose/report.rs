@@ -133,19 +133,22 @@ fn targets(md: &mut String, s: &FreePoseSummary) {
 
 fn outliers(md: &mut String, s: &FreePoseSummary) {
     if s.outliers.is_empty() {
-        let _ = writeln!(md, "No pose fails the outlier test (family-wise level 0.01).");
+        let _ = writeln!(
+            md,
+            "No pose beyond the outlier fence (Tukey's far-out fence of the poses' RMS)."
+        );
         return;
     }
     let _ = writeln!(
         md,
-        "## Outlier poses ({})\n\n| experiment | step | RMS (mm) | statistic | threshold | dropped |\n|---|---|---|---|---|---|",
+        "## Outlier poses ({})\n\n| experiment | step | RMS (mm) | fence (mm) | dropped |\n|---|---|---|---|---|",
         s.outliers.len()
     );
     for o in &s.outliers {
         let _ = writeln!(
             md,
-            "| {} | {} | {:.4} | {:.1} | {:.1} | {} |",
-            o.experiment, o.step, o.rms_mm, o.statistic, o.threshold, o.dropped
+            "| {} | {} | {:.4} | {:.4} | {} |",
+            o.experiment, o.step, o.rms_mm, o.fence_mm, o.dropped
         );
     }
 }

@@ -46,12 +46,11 @@ pub struct OutlierPose {
     pub experiment: String,
     /// Its step.
     pub step: usize,
-    /// RMS distance of its points from the fit that flagged it \[mm\].
+    /// RMS distance of its points from the last fit \[mm\].
     pub rms_mm: f64,
-    /// Its normalised residual `sum r^2 / s^2` (robust `s`).
-    pub statistic: f64,
-    /// The chi-square quantile it exceeds (family-wise level 0.01 over the poses).
-    pub threshold: f64,
+    /// The fence it exceeds: Tukey's far-out fence `Q3 + 3 IQR` of the poses' RMS in the first
+    /// fit \[mm\].
+    pub fence_mm: f64,
     /// Whether the fit was redone without it (`false` with `--keep-outliers`).
     pub dropped: bool,
 }
@@ -279,8 +278,7 @@ fn outliers(flags: &[Flag], problem: &Problem<'_>, kept: &[usize]) -> Vec<Outlie
                 experiment: pose.experiment.clone(),
                 step: pose.step,
                 rms_mm: f.rms_m * 1e3,
-                statistic: f.statistic,
-                threshold: f.threshold,
+                fence_mm: f.fence_m * 1e3,
                 dropped: !kept.contains(&f.pose),
             }
         })

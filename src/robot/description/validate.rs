@@ -117,13 +117,17 @@ impl RobotDescription {
         Ok(())
     }
 
-    /// Exactly three tool targets, not collinear.
+    /// No tool targets (a robot whose targets a free-pose calibration fits), or exactly three,
+    /// not collinear.
     fn check_tool(&self) -> Result<(), Invalid> {
+        if self.tool.targets_mm.is_empty() {
+            return Ok(());
+        }
         if self.tool.targets_mm.len() != 3 {
             return Err((
                 "tool.targets_mm".into(),
                 format!(
-                    "exactly 3 tool targets are required, found {}",
+                    "3 tool targets (or none) are required, found {}",
                     self.tool.targets_mm.len()
                 ),
             ));

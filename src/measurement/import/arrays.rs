@@ -1,0 +1,159 @@
+//! Free poses from arrays (a MAT file's variables, [`super::mat_v5`]): a joint array of one row
+//! per pose and `N` columns, and one array of one row per pose and 3 columns per target.
+
+use super::mat_v5::{MatArray, MatFile};
+use crate::measurement::{Measurement, MeasurementSet};
+use crate::robot::{RobotDescription, commands_to_file};
+use std::path::{Path, PathBuf};
+
+/// Why arrays do not make free poses.
+#[derive(Debug, thiserror::Error)]
+pub enum ArraysError {
+    /// A named variable is absent.
+    #[error("{path}: no variable `{name}` (the file has: {available})")]
+    Missing {
+        /// The file.
+        path: PathBuf,
+        /// The variable asked for.
+        name: String,
+        /// The numeric variables it has.
+        available: String,
+    },
+    /// A variable has the wrong shape.
+    #[error("{path}: variable `{name}` is {rows}x{cols}, expected {expected}")]
+    Shape {
+        /// The file.
+        path: PathBuf,
+        /// The variable.
+        name: String,
+        /// Its rows.
+        rows: usize,
+        /// Its columns.
+        cols: usize,
+        /// What was expected.
+        expected: String,
+    },
+    /// A value is not finite.
+    #[error("{path}: variable `{name}`, row {row}, column {col}: {value} is not finite")]
+    NotFinite {
+        /// The file.
+        path: PathBuf,
+        /// The variable.
+        name: String,
+        /// 1-based row.
+        row: usize,
+        /// 1-based column.
+        col: usize,
+        /// The value.
+        value: f64,
+    },
+}
+
+/// How the arrays' numbers are read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArrayImport {
+    /// The joint array's name.
+    pub joints: String,
+    /// One point array per target (target ids 0, 1, ... in this order).
+    pub targets: Vec<String>,
+    /// Revolute joint values are in radians (else degrees).
+    pub radians: bool,
+    /// Metres per unit of the points and of prismatic joint values.
+    pub metres_per_unit: f64,
+    /// The experiment id of the poses.
+    pub experiment: String,
+}
+
+/// The free poses of `file` (read from `path`) for the robot `desc`: pose `i` is row `i` of
+/// every array, step `i` of one experiment.
+pub fn free_poses(
+    file: &MatFile,
+    path: &Path,
+    desc: &RobotDescription,
+    how: &ArrayImport,
+) -> Result<MeasurementSet, ArraysError> {
+    let joints = array(file, path, &how.joints, None, desc.dof())?;
+    let poses = joints.rows;
+    let points: Vec<&MatArray> = how
+        .targets
+        .iter()
+        .map(|name| array(file, path, name, Some(poses), 3))
+        .collect::<Result<_, _>>()?;
+    let mut rows = Vec::with_capacity(poses * points.len());
+    for i in 0..poses {
+        let internal: Vec<f64> = (0..desc.dof())
+            .map(|k| joint_internal(desc, k, joints.get(i, k), how))
+            .collect();
+        let cmd = commands_to_file(desc, &internal);
+        for (target, p) in points.iter().enumerate() {
+            let mm = |c: usize| p.get(i, c) * how.metres_per_unit * 1e3;
+            rows.push(Measurement {
+                experiment: how.experiment.clone(),
+                moved_joint: 0,
+                step: i,
+                target,
+                position_mm: [mm(0), mm(1), mm(2)],
+                cmd: cmd.clone(),
+                payload_kg: Measurement::DEFAULT_PAYLOAD_KG,
+                temperature_c: Measurement::DEFAULT_TEMPERATURE_C,
+            });
+        }
+    }
+    Ok(MeasurementSet::new(desc.dof(), rows).unwrap_or_else(|e| unreachable!("rows built valid: {e}")))
+}
+
+/// Joint `k`'s value in internal units (rad or m).
+fn joint_internal(desc: &RobotDescription, k: usize, v: f64, how: &ArrayImport) -> f64 {
+    match desc.joints[k].kind {
+        crate::kinematics::JointKind::Revolute if how.radians => v,
+        crate::kinematics::JointKind::Revolute => v.to_radians(),
+        crate::kinematics::JointKind::Prismatic => v * how.metres_per_unit,
+    }
+}
+
+/// The variable `name`, checked: `rows` rows (any when `None`), `cols` columns, finite.
+fn array<'a>(
+    file: &'a MatFile,
+    path: &Path,
+    name: &str,
+    rows: Option<usize>,
+    cols: usize,
+) -> Result<&'a MatArray, ArraysError> {
+    let a = file.array(name).ok_or_else(|| ArraysError::Missing {
+        path: path.to_owned(),
+        name: name.into(),
+        available: file
+            .arrays
+            .iter()
+            .map(|a| a.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+    })?;
+    if a.cols != cols || rows.is_some_and(|r| r != a.rows) || a.rows == 0 {
+        return Err(ArraysError::Shape {
+            path: path.to_owned(),
+            name: name.into(),
+            rows: a.rows,
+            cols: a.cols,
+            expected: match rows {
+                Some(r) => format!("{r}x{cols} (one row per pose)"),
+                None => format!("one row per pose and {cols} columns"),
+            },
+        });
+    }
+    for row in 0..a.rows {
+        for col in 0..a.cols {
+            let value = a.get(row, col);
+            if !value.is_finite() {
+                return Err(ArraysError::NotFinite {
+                    path: path.to_owned(),
+                    name: name.into(),
+                    row: row + 1,
+                    col: col + 1,
+                    value,
+                });
+            }
+        }
+    }
+    Ok(a)
+}
