@@ -109,6 +109,11 @@ pub struct Args {
     /// Free-pose files only: flag the poses the outlier test rejects but keep them in the fit.
     #[arg(long)]
     keep_outliers: bool,
+    /// Calibrate every row as a free pose (the free-pose method, `docs/method.md`), the axis
+    /// experiments' rows too: for data whose every target sits on the last link, e.g. sweeps
+    /// the independent-axis procedure cannot use.
+    #[arg(long)]
+    free_poses: bool,
     /// Free-pose files only: the highest transmission-harmonic order tried (0: geometry only);
     /// each order is kept only where the data resolve it (`docs/method.md`).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=8))]
@@ -218,7 +223,7 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
-    let free_poses_only = !set.experiments().iter().any(|e| e.moved_joint > 0);
+    let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
     let (cal, map) = if free_poses_only {
         (
             super::calibrate_free::calibrate(&args_view(&args), &set, &desc)?,
@@ -280,6 +285,7 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
         holdout: args.holdout,
         keep_outliers: args.keep_outliers,
         harmonics: args.harmonics as usize,
+        all_rows: args.free_poses,
         refine: args.refine,
     }
 }

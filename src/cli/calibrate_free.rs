@@ -18,6 +18,8 @@ pub struct FreeArgs<'a> {
     pub keep_outliers: bool,
     /// `--harmonics`.
     pub harmonics: usize,
+    /// `--free-poses`: every row a free pose.
+    pub all_rows: bool,
     /// `--refine` (refused: the free poses are the calibration's own data).
     pub refine: bool,
 }
@@ -34,6 +36,7 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
         keep_outliers: args.keep_outliers,
         holdout: args.holdout,
         max_harmonic_order: args.harmonics,
+        all_rows: args.all_rows,
     };
     let cal = calibrate_free_poses(set, desc, &options)
         .map_err(|e| anyhow::anyhow!("calibrating {} from its free poses: {e}", args.data.display()))?;
@@ -52,11 +55,10 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
         s.unidentified.len()
     );
     say!(
-        "  RMS: nominal {:.4} mm (closed-form registration {:.4} mm) -> calibrated {:.4} mm in {} steps; condition number {:.2e}",
+        "  RMS: nominal {:.4} mm (closed-form registration {:.4} mm) -> calibrated {:.4} mm; condition number {:.2e}",
         s.nominal_rms_mm,
         s.closed_form_rms_mm,
         s.calibrated_rms_mm,
-        s.iterations,
         s.condition_number
     );
     if let Some(h) = &s.holdout {
@@ -66,6 +68,12 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
             h.nominal_rms_mm,
             h.calibrated_rms_mm,
             h.calibrated_max_mm
+        );
+    }
+    if let Some(h) = s.holdout.as_ref().filter(|h| h.unexecutable_poses > 0) {
+        eprintln!(
+            "warning: the calibrated model cannot execute {} held-out poses (a fitted transmission harmonic extrapolates beyond the fitted range; try --harmonics 0)",
+            h.unexecutable_poses
         );
     }
     for o in &s.outliers {

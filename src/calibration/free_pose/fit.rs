@@ -16,7 +16,7 @@ const MAX_ITERATIONS: usize = 200;
 /// fraction of the starting cost per measured coordinate (module docs of
 /// [`crate::numerics::lsq::LmOptions::negligible_decrease`]; with the noise at most the start's
 /// RMS, a step below 1e-5 of a standard deviation).
-const NEGLIGIBLE_DECREASE: f64 = 1e-10;
+const NEGLIGIBLE_DECREASE: f64 = 1e-8;
 
 /// What every fit of one calibration shares.
 pub(super) struct Problem<'a> {

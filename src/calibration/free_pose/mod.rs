@@ -57,6 +57,9 @@ pub struct FreePoseOptions {
     pub keep_outliers: bool,
     /// Fit on the even configurations only and report the odd ones as held out.
     pub holdout: bool,
+    /// Take every row as a free pose, the axis experiments' too: for data whose every target
+    /// sits on the last link (a sweep is then a set of poses like any other).
+    pub all_rows: bool,
     /// Transmission harmonics tried up to this order (the order kept is the one that predicts
     /// held-out configurations best, [`CV_FOLDS`]-fold cross-validation).
     pub max_harmonic_order: usize,
@@ -67,6 +70,7 @@ impl Default for FreePoseOptions {
         FreePoseOptions {
             keep_outliers: false,
             holdout: false,
+            all_rows: false,
             max_harmonic_order: 2,
         }
     }
@@ -145,7 +149,7 @@ pub fn calibrate_free_poses(
     desc: &RobotDescription,
     options: &FreePoseOptions,
 ) -> Result<FreePoseCalibration, FreePoseError> {
-    let poses = FreePoses::from_set(set, desc)?;
+    let poses = FreePoses::from_set(set, desc, options.all_rows)?;
     let controller = Controller::from_description(desc);
     let nominal = RobotModel {
         name: format!("{} (calibrated from free poses)", desc.name),
@@ -175,9 +179,18 @@ pub fn calibrate_free_poses(
             pose: poses.poses[u.pose].label(),
         })?;
     let mut identification = identify::identify(&design, &layout, &registered.model.phi);
-    let (fitted, kept, flags) = fit_without_outliers(&problem, &registered.model, &train, &identification, options)?;
-    let (fitted, dropped) = select_harmonics(&problem, &registered.model, fitted, &kept, &identification)?;
+    let geometry: Vec<usize> = identification
+        .fitted
+        .iter()
+        .copied()
+        .filter(|&c| !matches!(layout[c], RefitParameter::Harmonic { .. }))
+        .collect();
+    // The outliers of the geometry pick the poses the harmonics are chosen on; the chosen
+    // model's own test on every pose then decides which poses the calibration drops.
+    let (fitted, kept, _) = fit_without_outliers(&problem, &registered.model, &train, &geometry, options)?;
+    let (fitted, dropped) = select_harmonics(&problem, fitted, &kept, &identification)?;
     identification.drop_insignificant(&dropped, &layout);
+    let (fitted, kept, flags) = fit_without_outliers(&problem, &fitted.model, &train, &identification.fitted, options)?;
     summary::summarise(summary::Stages {
         problem: &problem,
         start: &start,
@@ -250,16 +263,15 @@ fn registered_start(
     ))
 }
 
-/// The fit of the identified parameters, refitted without the poses the outlier test flags
-/// (unless `keep_outliers`): the fit, the poses it kept, every flag raised.
+/// The fit of the parameters `columns` (the geometry), refitted without the poses the outlier
+/// test flags (unless `keep_outliers`): the fit, the poses it kept, every flag raised.
 fn fit_without_outliers(
     problem: &Problem<'_>,
     start: &FreePoseModel,
     train: &[usize],
-    identification: &Identification,
+    columns: &[usize],
     options: &FreePoseOptions,
 ) -> Result<(Fitted, Vec<usize>, Vec<fit::Flag>), FreePoseError> {
-    let columns = &identification.fitted;
     let first = fit::fit(problem, start, train, columns)?;
     // The fence is the first fit's and stays: re-computed on the poses left it would shrink
     // round by round and peel off the tail of clean data.
@@ -318,8 +330,7 @@ fn fit_without_outliers(
 /// left out.
 fn select_harmonics(
     problem: &Problem<'_>,
-    start: &FreePoseModel,
-    full: Fitted,
+    geometry: Fitted,
     kept: &[usize],
     identification: &Identification,
 ) -> Result<(Fitted, Vec<usize>), FreePoseError> {
@@ -336,23 +347,33 @@ fn select_harmonics(
             .filter(|&c| order_of(c) <= o)
             .collect()
     };
-    if max == 0 {
-        return Ok((full, vec![]));
-    }
     let configurations = problem.poses.configurations();
-    let mut best = (f64::INFINITY, 0);
+    let mut best: Option<(f64, usize, Fitted)> = None;
+    let mut previous = geometry;
     for order in 0..=max {
-        let sse = cross_validated_sse(problem, start, kept, &configurations, &columns(order))?;
-        if sse < best.0 {
-            best = (sse, order);
+        // Each order starts from the one below (its new harmonics at 0), and its folds from
+        // its fit on every pose. An order whose fit does not converge is more than the data
+        // resolve: the orders above it are not tried.
+        let fitted = if order == 0 {
+            previous.clone()
+        } else {
+            match fit::fit(problem, &previous.model, kept, &columns(order)) {
+                Ok(f) => f,
+                Err(FreePoseError::Fit(LsqError::NotConverged { .. }) | FreePoseError::Unexecutable { .. }) => break,
+                Err(e) => return Err(e),
+            }
+        };
+        let sse = match cross_validated_sse(problem, &fitted.model, kept, &configurations, &columns(order)) {
+            Ok(sse) => sse,
+            Err(FreePoseError::Fit(LsqError::NotConverged { .. }) | FreePoseError::Unexecutable { .. }) => break,
+            Err(e) => return Err(e),
+        };
+        previous = fitted.clone();
+        if best.as_ref().is_none_or(|b| sse < b.0) {
+            best = Some((sse, order, fitted));
         }
     }
-    let order = best.1;
-    let fitted = if order == max {
-        full
-    } else {
-        fit::fit(problem, start, kept, &columns(order))?
-    };
+    let (_, order, fitted) = best.unwrap_or_else(|| unreachable!("order 0 is always tried"));
     let left_out = columns(max).into_iter().filter(|&c| order_of(c) > order).collect();
     Ok((fitted, left_out))
 }
@@ -376,13 +397,12 @@ fn cross_validated_sse(
             continue;
         }
         let fitted = fit::fit(problem, start, &train, columns)?;
-        let r = fitted
-            .model
-            .residuals(problem.controller, problem.poses, &held)
-            .map_err(|u| FreePoseError::Unexecutable {
-                pose: problem.poses.poses[u.pose].label(),
-            })?;
-        sse += r.norm_squared();
+        // A model that cannot execute a held-out configuration (its harmonics make a
+        // transmission non-monotonic there) does not generalise: infinitely bad.
+        match fitted.model.residuals(problem.controller, problem.poses, &held) {
+            Ok(r) => sse += r.norm_squared(),
+            Err(_) => return Ok(f64::INFINITY),
+        }
     }
     Ok(sse)
 }

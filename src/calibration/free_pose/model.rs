@@ -11,10 +11,6 @@ use crate::kinematics::{ChainPoses, JointKind, PhiModel, link_from_phi};
 use crate::robot::{Controller, RobotModel, Transmission};
 use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-/// Step of the central difference of the joint values by the actuator commands \[rad or m\]
-/// (the transmissions and couplings are smooth; their second derivatives are O(1)).
-const JOINT_MAP_STEP: f64 = 1e-6;
-
 /// The free-pose model's parameters, in the fit's layout and in the order exactly redundant
 /// ones are preferred ([`crate::numerics::subset`]): the base (6) and each target's `x, y, z`
 /// in the tool frame (what the registration places, so that a parameter left out keeps the
@@ -23,10 +19,11 @@ const JOINT_MAP_STEP: f64 = 1e-6;
 /// then each revolute joint's transmission harmonics (eq. 8) up to `harmonic_order` (sine and
 /// cosine of each order).
 ///
-/// A harmonic of order `n` of joint `k` enters only when the joint's values span at least half
-/// its period, `180 / n` deg (`spans_rad[k]`, the range the data cover): over less, its sine
-/// and cosine are nearly a zero offset and a scale error, fit those and extrapolate wildly
-/// beyond the data.
+/// A harmonic of order `n` of joint `k` enters only when the joint's values span at least an
+/// eighth of its period, `45 / n` deg (`spans_rad[k]`, the range the data cover): over less,
+/// its sine and cosine depart from a straight line by under 8 % of their amplitude (`1 -
+/// cos 22.5 deg` over the half span), so they are nearly a zero offset and a scale error, fit
+/// those and extrapolate wildly beyond the data.
 pub fn layout(
     robot: &RobotModel,
     target_ids: &[usize],
@@ -54,7 +51,7 @@ pub fn layout(
     for (k, j) in robot.joints.iter().enumerate() {
         if j.kind == JointKind::Revolute {
             let resolved =
-                |order: usize| order as f64 * spans_rad.get(k).copied().unwrap_or(0.0) >= std::f64::consts::PI;
+                |order: usize| order as f64 * spans_rad.get(k).copied().unwrap_or(0.0) >= std::f64::consts::FRAC_PI_4;
             for order in (1..=harmonic_order).filter(|&o| resolved(o)) {
                 for cosine in [false, true] {
                     p.push(RefitParameter::Harmonic {
@@ -261,9 +258,10 @@ impl FreePoseModel {
             .map_err(|_| Unexecutable { pose: i })
     }
 
-    /// `dq_j / du_k` at pose `i` (row `j`, column `k`) by central differences of the joint
-    /// values in the actuator commands (a zero offset enters as `u_k - offset_k`), and the
-    /// active displacements `theta_a` (eq. 8 inverted).
+    /// `dq_j / du_k` at pose `i` (row `j`, column `k`; a zero offset enters as
+    /// `u_k - offset_k`) and the active displacements `theta_a` (eq. 8 inverted). With
+    /// `q_k = theta_k + g_k(theta_(k-1))` and `f_k(theta_k) = u_k`: `dq_k / du_k = 1 / f_k'` and
+    /// `dq_(k+1) / du_k = g_(k+1)' / f_k'`, every other entry 0.
     fn joint_sensitivity(
         &self,
         controller: &Controller,
@@ -271,27 +269,17 @@ impl FreePoseModel {
         i: usize,
         q: &[f64],
     ) -> Result<(DMatrix<f64>, Vec<f64>), Unexecutable> {
-        let u = controller
-            .decouple(&poses.poses[i].cmd)
-            .map_err(|_| Unexecutable { pose: i })?;
-        let theta_a = self
-            .robot
-            .active_displacements(&u)
-            .map_err(|_| Unexecutable { pose: i })?;
+        let unexecutable = |_| Unexecutable { pose: i };
+        let u = controller.decouple(&poses.poses[i].cmd).map_err(unexecutable)?;
+        let theta_a = self.robot.active_displacements(&u).map_err(unexecutable)?;
         let n = q.len();
         let mut d = DMatrix::zeros(n, n);
-        let mut shifted = u.clone();
-        for k in 0..n {
-            shifted[k] = u[k] + JOINT_MAP_STEP;
-            let plus = self.robot.joint_values_from_actuators(&shifted);
-            shifted[k] = u[k] - JOINT_MAP_STEP;
-            let minus = self.robot.joint_values_from_actuators(&shifted);
-            shifted[k] = u[k];
-            let (Ok(plus), Ok(minus)) = (plus, minus) else {
-                return Err(Unexecutable { pose: i });
-            };
-            for j in 0..n {
-                d[(j, k)] = (plus[j] - minus[j]) / (2.0 * JOINT_MAP_STEP);
+        for (k, joint) in self.robot.joints.iter().enumerate() {
+            let du_dtheta = joint.transmission.slope(theta_a[k]);
+            d[(k, k)] = 1.0 / du_dtheta;
+            if let Some(g) = self.robot.joints.get(k + 1).and_then(|next| next.coupling_in.as_ref()) {
+                let slope = g.try_slope(theta_a[k]).map_err(|_| Unexecutable { pose: i })?;
+                d[(k + 1, k)] = slope / du_dtheta;
             }
         }
         Ok((d, theta_a))

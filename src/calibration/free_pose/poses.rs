@@ -41,9 +41,10 @@ pub struct FreePoses {
 }
 
 impl FreePoses {
-    /// Every pose of the `moved_joint = 0` experiments of `set`.
-    pub fn from_set(set: &MeasurementSet, desc: &RobotDescription) -> Result<Self, FreePoseError> {
-        let rows: Vec<_> = set.rows().iter().filter(|r| r.moved_joint == 0).collect();
+    /// Every pose of the `moved_joint = 0` experiments of `set`, or of every experiment with
+    /// `all_rows` (sweeps too, their targets on the last link).
+    pub fn from_set(set: &MeasurementSet, desc: &RobotDescription, all_rows: bool) -> Result<Self, FreePoseError> {
+        let rows: Vec<_> = set.rows().iter().filter(|r| all_rows || r.moved_joint == 0).collect();
         let mut target_ids: Vec<usize> = rows.iter().map(|r| r.target).collect();
         target_ids.sort_unstable();
         target_ids.dedup();

@@ -71,6 +71,10 @@ pub struct Holdout {
     pub calibrated_rms_mm: f64,
     /// Largest distance of a held-out point from the calibrated model \[mm\].
     pub calibrated_max_mm: f64,
+    /// Held-out poses the calibrated model cannot execute (a fitted transmission not
+    /// invertible there: its harmonics extrapolated beyond the fitted poses' range); left out
+    /// of the RMS above.
+    pub unexecutable_poses: usize,
 }
 
 /// The summary (`calibration.json`'s `free_poses`, `docs/formats.md#calibration-json`).
@@ -298,10 +302,16 @@ fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
     if s.test.is_empty() {
         return Ok(None);
     }
+    let (executable, unexecutable): (Vec<usize>, Vec<usize>) = s.test.iter().partition(|&&i| {
+        s.fitted
+            .model
+            .residuals(s.problem.controller, s.problem.poses, &[i])
+            .is_ok()
+    });
     let r = s
         .fitted
         .model
-        .residuals(s.problem.controller, s.problem.poses, s.test)
+        .residuals(s.problem.controller, s.problem.poses, &executable)
         .map_err(|u| FreePoseError::Unexecutable {
             pose: s.problem.poses.poses[u.pose].label(),
         })?;
@@ -311,9 +321,10 @@ fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
     Ok(Some(Holdout {
         split: "configurations in order of first appearance: even ones fitted, odd ones held out (repeated visits of one configuration stay together)".into(),
         training_poses: s.kept.len(),
-        heldout_poses: s.test.len(),
-        nominal_rms_mm: rms_of(&s.registered.model, s.problem, s.test)? * 1e3,
+        heldout_poses: executable.len(),
+        nominal_rms_mm: rms_of(&s.registered.model, s.problem, &executable)? * 1e3,
         calibrated_rms_mm: (r.norm_squared() / (r.len() / 3).max(1) as f64).sqrt() * 1e3,
         calibrated_max_mm: max * 1e3,
+        unexecutable_poses: unexecutable.len(),
     }))
 }

@@ -243,7 +243,7 @@ fn prediction_check(
             };
             let cal = calibrate_free_poses(&set, desc, &options).expect("calibration");
             let fresh = measure_exact(desc, &truth, &commands(desc, 50, &mut rng));
-            let poses = FreePoses::from_set(&fresh, desc).expect("poses");
+            let poses = FreePoses::from_set(&fresh, desc, false).expect("poses");
             let layout = layout(&cal.model.robot, &cal.model.target_ids, 0, &[]);
             let columns: Vec<usize> = cal
                 .summary
@@ -361,7 +361,7 @@ fn jacobian_matches_central_differences() {
     }
     let model = FreePoseModel::new(&robot, robot.phi_model().world_from_base, vec![0, 4], targets(2));
     let set = measure(&desc, &model, &commands(&desc, 6, &mut rng), &mut rng);
-    let poses = FreePoses::from_set(&set, &desc).expect("poses");
+    let poses = FreePoses::from_set(&set, &desc, false).expect("poses");
     let controller = Controller::from_description(&desc);
     let layout = layout(&robot, &model.target_ids, 2, &vec![std::f64::consts::TAU; desc.dof()]);
     let all: Vec<usize> = (0..layout.len()).collect();
