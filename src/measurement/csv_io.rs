@@ -150,6 +150,22 @@ pub enum MeasurementFileError {
         /// The text found.
         value: String,
     },
+    /// Target ids mix integers and names.
+    #[error(
+        "{path}:{line}: column `target`: {value:?} is {found}, but earlier rows' target ids are {earlier}: ids are either all integers or all names"
+    )]
+    MixedTargetIds {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The text found.
+        value: String,
+        /// What it is (`an integer`, `a name`).
+        found: &'static str,
+        /// What the earlier ones are.
+        earlier: &'static str,
+    },
     /// An integer column holds a negative value.
     #[error("{path}:{line}: column `{column}`: {value:?} is negative")]
     Negative {
@@ -238,6 +254,7 @@ pub fn read_measurements_from<R: io::Read>(
     let mut rows = Vec::new();
     let mut lines = Vec::new();
     let mut record = csv::StringRecord::new();
+    let mut targets = TargetIds::default();
     while csv.read_record(&mut record).map_err(csv_error)? {
         // A blank line (csv-core also returns a trailing comment split over two reads so).
         if record.len() == 1 && record[0].trim().is_empty() {
@@ -250,7 +267,8 @@ pub fn read_measurements_from<R: io::Read>(
             path,
             line,
         };
-        rows.push(parse_row(&cells, &columns)?);
+        let target = targets.id(&cells, columns.target)?;
+        rows.push(parse_row(&cells, &columns, target)?);
         lines.push(line);
     }
     if rows.is_empty() {
@@ -259,7 +277,7 @@ pub fn read_measurements_from<R: io::Read>(
             line: header_line,
         });
     }
-    MeasurementSet::new(columns.cmd.len(), rows).map_err(|e| {
+    let set = MeasurementSet::new(columns.cmd.len(), rows).map_err(|e| {
         let column = e.problem.column();
         let problem = match e.problem {
             RowProblem::DuplicateKey {
@@ -281,7 +299,8 @@ pub fn read_measurements_from<R: io::Read>(
             column,
             problem,
         }
-    })
+    })?;
+    Ok(set.with_target_names(targets.names))
 }
 
 /// One data record with what is needed to name its cells in errors.
@@ -370,13 +389,59 @@ impl Cells<'_> {
     }
 }
 
-fn parse_row(cells: &Cells<'_>, columns: &Columns) -> Result<Measurement, MeasurementFileError> {
+/// The target ids of a file: integers as written, or names (`T1`, `SMR2`, `A`) numbered 0, 1,
+/// ... in the order they first appear; one file uses one kind.
+#[derive(Default)]
+struct TargetIds {
+    /// The names in id order, when the file names its targets.
+    names: Vec<String>,
+    /// Whether the rows so far gave integers.
+    integers: bool,
+}
+
+impl TargetIds {
+    /// The id of the `target` cell of `cells`.
+    fn id(&mut self, cells: &Cells<'_>, column: usize) -> Result<usize, MeasurementFileError> {
+        let text = cells.text(column)?;
+        let integer = text.parse::<usize>().ok();
+        let mixed = |found, earlier| MeasurementFileError::MixedTargetIds {
+            path: cells.path.into(),
+            line: cells.line,
+            value: text.to_string(),
+            found,
+            earlier,
+        };
+        match integer {
+            Some(_) if !self.names.is_empty() => Err(mixed("an integer", "names")),
+            Some(v) => {
+                self.integers = true;
+                Ok(v)
+            }
+            // A negative or fractional number is a malformed integer, not a name.
+            None if self.integers || text.is_empty() || text.parse::<f64>().is_ok() => {
+                if self.integers && text.parse::<f64>().is_err() && !text.is_empty() {
+                    return Err(mixed("a name", "integers"));
+                }
+                cells.integer(column)
+            }
+            None => Ok(match self.names.iter().position(|n| n == text) {
+                Some(i) => i,
+                None => {
+                    self.names.push(text.to_string());
+                    self.names.len() - 1
+                }
+            }),
+        }
+    }
+}
+
+fn parse_row(cells: &Cells<'_>, columns: &Columns, target: usize) -> Result<Measurement, MeasurementFileError> {
     let [x, y, z] = columns.position;
     Ok(Measurement {
         experiment: cells.text(columns.experiment)?.to_string(),
         moved_joint: cells.integer(columns.moved_joint)?,
         step: cells.integer(columns.step)?,
-        target: cells.integer(columns.target)?,
+        target,
         position_mm: [cells.number(x)?, cells.number(y)?, cells.number(z)?],
         cmd: columns.cmd.iter().map(|&i| cells.number(i)).collect::<Result<_, _>>()?,
         payload_kg: cells.optional_number(columns.payload_kg, Measurement::DEFAULT_PAYLOAD_KG)?,
@@ -432,7 +497,7 @@ pub fn write_measurements_to<W: io::Write>(writer: W, set: &MeasurementSet) -> i
             m.experiment.clone(),
             m.moved_joint.to_string(),
             m.step.to_string(),
-            m.target.to_string(),
+            set.target_name(m.target),
         ];
         record.extend(m.position_mm.iter().chain(&m.cmd).map(|&v| format_f64(v)));
         record.extend([format_f64(m.payload_kg), format_f64(m.temperature_c)]);

@@ -139,6 +139,8 @@ pub struct MeasurementSetError {
 pub struct MeasurementSet {
     joint_count: usize,
     rows: Vec<Measurement>,
+    /// The targets' names by id, when the file named them (`T1`, `SMR2`); empty for integer ids.
+    target_names: Vec<String>,
 }
 
 /// The rows of one experiment, in file order.
@@ -188,7 +190,24 @@ impl MeasurementSet {
     /// Checks the invariants and builds the set.
     pub fn new(joint_count: usize, rows: Vec<Measurement>) -> Result<Self, MeasurementSetError> {
         validate(joint_count, &rows)?;
-        Ok(Self { joint_count, rows })
+        Ok(Self {
+            joint_count,
+            rows,
+            target_names: Vec::new(),
+        })
+    }
+
+    /// The set with its targets named: `names[id]` is target `id`'s name (as a file wrote it).
+    pub fn with_target_names(self, names: Vec<String>) -> Self {
+        Self {
+            target_names: names,
+            ..self
+        }
+    }
+
+    /// Target `id` as the file wrote it: its name, or the integer.
+    pub fn target_name(&self, id: usize) -> String {
+        self.target_names.get(id).cloned().unwrap_or_else(|| id.to_string())
     }
 
     /// N, the robot's number of joints (= number of `cmd_k` columns).

@@ -56,25 +56,38 @@ pub fn select_columns(x: &DMatrix<f64>, tolerance: f64) -> ColumnSubset {
             chosen.push(c);
         }
     }
-    let rejected = (0..x.ncols())
-        .filter(|c| !chosen.contains(c))
+    let rejected: Vec<usize> = (0..x.ncols()).filter(|c| !chosen.contains(c)).collect();
+    // One factorisation of the kept columns serves every rejected one.
+    let kept = (!rejected.is_empty() && !chosen.is_empty()).then(|| {
+        DMatrix::from_columns(&chosen.iter().map(|&k| x.column(k) / norms[k]).collect::<Vec<_>>()).svd(true, true)
+    });
+    let rejected = rejected
+        .into_iter()
         .map(|c| Rejected {
             column: c,
             residual: parts[c],
-            combination: combination(x, &norms, &chosen, c),
+            combination: kept
+                .as_ref()
+                .map_or_else(Vec::new, |svd| combination(x, &norms, &chosen, svd, c)),
         })
         .collect();
     ColumnSubset { chosen, rejected }
 }
 
-/// Column `c` of `x` as a least-squares combination of the `chosen` columns.
-fn combination(x: &DMatrix<f64>, norms: &[f64], chosen: &[usize], c: usize) -> Vec<(usize, f64)> {
-    if norms[c] == 0.0 || chosen.is_empty() {
+/// Column `c` of `x` as a least-squares combination of the `chosen` columns (`kept`: the SVD
+/// of the chosen columns scaled to unit length).
+fn combination(
+    x: &DMatrix<f64>,
+    norms: &[f64],
+    chosen: &[usize],
+    kept: &nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    c: usize,
+) -> Vec<(usize, f64)> {
+    if norms[c] == 0.0 {
         return Vec::new();
     }
-    let scaled = DMatrix::from_columns(&chosen.iter().map(|&k| x.column(k) / norms[k]).collect::<Vec<_>>());
     let target = x.column(c) / norms[c];
-    let Ok(beta) = scaled.svd(true, true).solve(&target, 1e-14) else {
+    let Ok(beta) = kept.solve(&target, 1e-14) else {
         return Vec::new();
     };
     // In scaled units beta_k is the weight of column k's unit vector in column c's unit vector.

@@ -225,6 +225,7 @@ impl FreePoseModel {
             let q = self.pose_joint_values(controller, poses, i)?;
             let (dq_du, theta_a) = self.joint_sensitivity(controller, poses, i, &q)?;
             let frames = fixed.poses(&q);
+            let row_axes: Vec<RowAxes> = (0..self.phi.rows.len()).map(|k| self.row_axes(&frames, k)).collect();
             for (slot, measured) in &poses.poses[i].points_m {
                 let p = frames.world_from_tool * self.targets_in_tool_m[*slot];
                 r.fixed_rows_mut::<3>(row).copy_from(&(measured - p));
@@ -232,6 +233,7 @@ impl FreePoseModel {
                     p,
                     slot: *slot,
                     frames: &frames,
+                    row_axes: &row_axes,
                     dq_du: &dq_du,
                     theta_a: &theta_a,
                 };
@@ -327,16 +329,27 @@ impl FreePoseModel {
         dp
     }
 
-    /// The derivative by one parameter of Table-2 row `k` (0-based), eq. (A3)
+    /// The screw axes of Table-2 row `k` (0-based) at a pose, eq. (A3)
     /// `Trans(0,0,a) Rot(z,beta) Trans(b,0,0) Rot(x,alpha)` in the `phi_k` frame of link `k`.
-    fn row_derivative(&self, point: &PointContext<'_>, k: usize, param: &RefitParameter) -> Vector3<f64> {
+    fn row_axes(&self, frames: &ChainPoses, k: usize) -> RowAxes {
         let row = &self.phi.rows[k];
-        let world_from_phi = point.frames.world_from_link[k] * link_from_phi(self.phi.joints[k].phi_rad);
+        let world_from_phi = frames.world_from_link[k] * link_from_phi(self.phi.joints[k].phi_rad);
         let z = world_from_phi.rotation * Vector3::z();
         let o1 = world_from_phi.translation.vector + row.a_m * z;
         let x = world_from_phi.rotation
             * (UnitQuaternion::from_axis_angle(&Vector3::z_axis(), row.beta_rad) * Vector3::x());
-        let o2 = o1 + row.b_m * x;
+        RowAxes {
+            z,
+            o1,
+            x,
+            o2: o1 + row.b_m * x,
+        }
+    }
+
+    /// The derivative by one parameter of Table-2 row `k` (0-based): a translation along or a
+    /// rotation about one of its screw axes ([`Self::row_axes`]).
+    fn row_derivative(&self, point: &PointContext<'_>, k: usize, param: &RefitParameter) -> Vector3<f64> {
+        let RowAxes { z, o1, x, o2 } = point.row_axes[k];
         let p = point.p.coords;
         match param {
             RefitParameter::RowA(_) => z,
@@ -347,6 +360,16 @@ impl FreePoseModel {
     }
 }
 
+/// A Table-2 row's screw axes in the world at one pose: `a` translates along `z`, `beta` turns
+/// about `z` through `o1`, `b` translates along `x`, `alpha` turns about `x` through `o2`.
+#[derive(Clone, Copy)]
+struct RowAxes {
+    z: Vector3<f64>,
+    o1: Vector3<f64>,
+    x: Vector3<f64>,
+    o2: Vector3<f64>,
+}
+
 /// What the derivatives of one measured point need.
 struct PointContext<'a> {
     /// The predicted point \[m\].
@@ -355,6 +378,8 @@ struct PointContext<'a> {
     slot: usize,
     /// The chain's frames at the pose.
     frames: &'a ChainPoses,
+    /// Each Table-2 row's screw axes at the pose.
+    row_axes: &'a [RowAxes],
     /// `dq / du` at the pose.
     dq_du: &'a DMatrix<f64>,
     /// The active displacements at the pose \[rad or m\].

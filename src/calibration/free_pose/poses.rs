@@ -38,6 +38,9 @@ pub struct FreePoses {
     pub poses: Vec<FreePose>,
     /// The target ids seen, ascending.
     pub target_ids: Vec<usize>,
+    /// Each target as the file wrote it (its name, or the integer id), in the order of
+    /// `target_ids`.
+    pub target_names: Vec<String>,
 }
 
 impl FreePoses {
@@ -77,7 +80,12 @@ impl FreePoses {
         for p in &mut poses {
             p.points_m.sort_by_key(|(slot, _)| *slot);
         }
-        Ok(FreePoses { poses, target_ids })
+        let target_names = target_ids.iter().map(|&id| set.target_name(id)).collect();
+        Ok(FreePoses {
+            poses,
+            target_ids,
+            target_names,
+        })
     }
 
     /// The range each joint's command covers over the poses `which` (internal units).

@@ -106,14 +106,22 @@ fn unidentified(md: &mut String, s: &FreePoseSummary) {
 fn targets(md: &mut String, s: &FreePoseSummary) {
     let _ = writeln!(
         md,
-        "## Targets on the last link (nominal tool frame, mm)\n\n| target | x | y | z |\n|---|---|---|---|"
+        "## Targets on the last link (nominal tool frame, mm)\n\n| target | in the file | x | y | z |\n|---|---|---|---|---|"
     );
     for t in &s.targets {
         let cell = |i: usize| match t.sigma_mm[i] {
             Some(sd) => format!("{:.3} +- {:.3}", t.position_mm[i], sd),
             None => format!("{:.3} (not identified)", t.position_mm[i]),
         };
-        let _ = writeln!(md, "| {} | {} | {} | {} |", t.id, cell(0), cell(1), cell(2));
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} |",
+            t.id,
+            t.name,
+            cell(0),
+            cell(1),
+            cell(2)
+        );
     }
     match s.tool_fit_rms_mm {
         Some(rms) => {

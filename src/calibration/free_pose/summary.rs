@@ -33,6 +33,8 @@ pub struct ParameterEstimate {
 pub struct TargetEstimate {
     /// Target id.
     pub id: usize,
+    /// The target as the data file wrote it: its name (`T1`, `SMR2`) or the integer id.
+    pub name: String,
     /// Position in the tool frame of the nominal description \[mm\].
     pub position_mm: [f64; 3],
     /// 1-sigma of each coordinate \[mm\] (null where a coordinate was not identified).
@@ -153,7 +155,7 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
         calibrated_rms_mm: s.fitted.rms_m() * 1e3,
         iterations: s.fitted.iterations,
         condition_number: crate::numerics::lsq::scaled_condition_number(&s.fitted.jacobian),
-        targets: targets(&s.fitted.model, &parameters),
+        targets: targets(&s.fitted.model, &parameters, &s.problem.poses.target_names),
         parameters,
         unidentified: s.identification.unidentified.clone(),
         tool_fit_rms_mm,
@@ -231,17 +233,19 @@ fn base_change(p: &RefitParameter, before: &FreePoseModel, after: &FreePoseModel
 }
 
 /// The targets' positions with the sigmas of their fitted coordinates.
-fn targets(m: &FreePoseModel, parameters: &[ParameterEstimate]) -> Vec<TargetEstimate> {
+fn targets(m: &FreePoseModel, parameters: &[ParameterEstimate], names: &[String]) -> Vec<TargetEstimate> {
     m.target_ids
         .iter()
         .zip(&m.targets_in_tool_m)
-        .map(|(&id, p)| {
+        .zip(names)
+        .map(|((&id, p), name)| {
             let sigma = |axis: usize| {
                 let name = RefitParameter::Target { target: id, axis }.name();
                 parameters.iter().find(|e| e.name == name).map(|e| e.sigma)
             };
             TargetEstimate {
                 id,
+                name: name.clone(),
                 position_mm: [p.x * 1e3, p.y * 1e3, p.z * 1e3],
                 sigma_mm: [sigma(0), sigma(1), sigma(2)],
             }

@@ -201,3 +201,27 @@ fn byte_order_mark_is_ignored() {
     let (_file, result) = read_text(&format!("\u{feff}{HEADER}\naxis1,1,0,0,1,2,3,0,0\n"), Some(2));
     assert_eq!(result.unwrap().rows()[0].experiment, "axis1");
 }
+
+/// Target ids as trackers write them (`SMR2`, `T1`, `A`) are numbered 0, 1, ... in the order
+/// they first appear and written back as names; a file mixing names and integers, or a
+/// negative or fractional id among integers, is refused naming the line and the column.
+#[test]
+fn named_targets_are_numbered_in_order_and_round_trip() {
+    let text = format!("{HEADER}\nposes,0,0,SMR2,1,2,3,0,0\nposes,0,0,T1,4,5,6,0,0\nposes,0,1,SMR2,7,8,9,10,20\n");
+    let (_file, result) = read_text(&text, Some(2));
+    let set = result.expect("named targets are read");
+    let ids: Vec<usize> = set.rows().iter().map(|m| m.target).collect();
+    assert_eq!(ids, [0, 1, 0]);
+    assert_eq!((set.target_name(0), set.target_name(1)), ("SMR2".to_string(), "T1".to_string()));
+    let mut written = Vec::new();
+    write_measurements_to(&mut written, &set).unwrap();
+    let (_again, reread) = read_text(std::str::from_utf8(&written).unwrap(), Some(2));
+    assert_eq!(reread.unwrap(), set);
+    let mixed = format!("{HEADER}\nposes,0,0,SMR2,1,2,3,0,0\nposes,0,0,1,4,5,6,0,0\n");
+    let error = expect_error(&mixed, Some(2), 3, "target");
+    assert!(error.to_string().contains("all integers or all names"), "{error}");
+    let mixed = format!("{HEADER}\nposes,0,0,0,1,2,3,0,0\nposes,0,0,A,4,5,6,0,0\n");
+    expect_error(&mixed, Some(2), 3, "target");
+    let negative = format!("{HEADER}\nposes,0,0,0,1,2,3,0,0\nposes,0,0,-1,4,5,6,0,0\n");
+    assert!(expect_error(&negative, Some(2), 3, "target").to_string().contains("negative"));
+}
