@@ -117,6 +117,18 @@ pub enum FreePoseError {
     /// The least-squares fit failed.
     #[error("{0}")]
     Fit(LsqError),
+    /// The calibrated model misses the points by a good part of their own spread.
+    #[error(
+        "the calibrated model misses the points by {rms_mm:.3} mm RMS, {percent:.1} % of their spread about their centroid ({spread_mm:.1} mm): the description does not describe this robot or these data (check the robot file, the joint order and directions, the units of the commands and coordinates, and that each target id is one physical target)"
+    )]
+    Absurd {
+        /// Calibrated RMS \[mm\].
+        rms_mm: f64,
+        /// The points' RMS distance from their centroid \[mm\].
+        spread_mm: f64,
+        /// The ratio in percent.
+        percent: f64,
+    },
     /// Too many outliers.
     #[error(
         "{flagged} of {poses} poses fail the outlier test: the nominal description, not single poses, misses these data (check the robot, the units and the joint directions)"
@@ -191,6 +203,7 @@ pub fn calibrate_free_poses(
     let (fitted, dropped) = select_harmonics(&problem, fitted, &kept, &identification)?;
     identification.drop_insignificant(&dropped, &layout);
     let (fitted, kept, flags) = fit_without_outliers(&problem, &fitted.model, &train, &identification.fitted, options)?;
+    check_plausible(&fitted, &poses, &kept)?;
     summary::summarise(summary::Stages {
         problem: &problem,
         start: &start,
@@ -405,6 +418,32 @@ fn cross_validated_sse(
         }
     }
     Ok(sse)
+}
+
+/// A calibrated RMS beyond this fraction of the points' spread about their centroid is no
+/// calibration: the model leaves a quarter of a percent of the points' variance (`0.05^2`)
+/// unexplained, where a robot the description fits leaves parts per million (0.2 mm of misfit
+/// over a spread of half a metre).
+const ABSURD_SHARE: f64 = 0.05;
+
+/// Refuses a fit whose RMS is a good part of the points' own spread ([`ABSURD_SHARE`]).
+fn check_plausible(fitted: &Fitted, poses: &FreePoses, kept: &[usize]) -> Result<(), FreePoseError> {
+    let points: Vec<nalgebra::Point3<f64>> = kept
+        .iter()
+        .flat_map(|&i| poses.poses[i].points_m.iter().map(|(_, p)| *p))
+        .collect();
+    let n = points.len().max(1) as f64;
+    let centroid = points.iter().fold(nalgebra::Vector3::zeros(), |a, p| a + p.coords) / n;
+    let spread = (points.iter().map(|p| (p.coords - centroid).norm_squared()).sum::<f64>() / n).sqrt();
+    let rms = fitted.rms_m();
+    if rms > ABSURD_SHARE * spread {
+        return Err(FreePoseError::Absurd {
+            rms_mm: rms * 1e3,
+            spread_mm: spread * 1e3,
+            percent: 100.0 * rms / spread,
+        });
+    }
+    Ok(())
 }
 
 /// The noise estimate of a fit (isotropic, no jitter).

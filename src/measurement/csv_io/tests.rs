@@ -212,7 +212,10 @@ fn named_targets_are_numbered_in_order_and_round_trip() {
     let set = result.expect("named targets are read");
     let ids: Vec<usize> = set.rows().iter().map(|m| m.target).collect();
     assert_eq!(ids, [0, 1, 0]);
-    assert_eq!((set.target_name(0), set.target_name(1)), ("SMR2".to_string(), "T1".to_string()));
+    assert_eq!(
+        (set.target_name(0), set.target_name(1)),
+        ("SMR2".to_string(), "T1".to_string())
+    );
     let mut written = Vec::new();
     write_measurements_to(&mut written, &set).unwrap();
     let (_again, reread) = read_text(std::str::from_utf8(&written).unwrap(), Some(2));
@@ -223,5 +226,9 @@ fn named_targets_are_numbered_in_order_and_round_trip() {
     let mixed = format!("{HEADER}\nposes,0,0,0,1,2,3,0,0\nposes,0,0,A,4,5,6,0,0\n");
     expect_error(&mixed, Some(2), 3, "target");
     let negative = format!("{HEADER}\nposes,0,0,0,1,2,3,0,0\nposes,0,0,-1,4,5,6,0,0\n");
-    assert!(expect_error(&negative, Some(2), 3, "target").to_string().contains("negative"));
+    assert!(
+        expect_error(&negative, Some(2), 3, "target")
+            .to_string()
+            .contains("negative")
+    );
 }
