@@ -61,6 +61,14 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
         s.calibrated_rms_mm,
         s.condition_number
     );
+    if s.setups.len() > 1 {
+        let labels: Vec<&str> = s.setups.iter().map(|p| p.setup.as_str()).collect();
+        say!(
+            "  {} setups ({}): the base placed in each instrument frame (calibration.json: free_poses.setups)",
+            s.setups.len(),
+            labels.join(", ")
+        );
+    }
     if let Some(h) = &s.holdout {
         say!(
             "  held out ({} poses, odd configurations): nominal {:.4} mm -> calibrated {:.4} mm RMS (max {:.4} mm)",

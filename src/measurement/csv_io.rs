@@ -202,6 +202,7 @@ struct Columns {
     cmd: Vec<usize>,
     payload_kg: Option<usize>,
     temperature_c: Option<usize>,
+    setup: Option<usize>,
 }
 
 const POSITION_COLUMNS: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
@@ -255,6 +256,8 @@ pub fn read_measurements_from<R: io::Read>(
     let mut lines = Vec::new();
     let mut record = csv::StringRecord::new();
     let mut targets = TargetIds::default();
+    let mut setups = Labels::default();
+    let mut row_setups = Vec::new();
     while csv.read_record(&mut record).map_err(csv_error)? {
         // A blank line (csv-core also returns a trailing comment split over two reads so).
         if record.len() == 1 && record[0].trim().is_empty() {
@@ -268,6 +271,9 @@ pub fn read_measurements_from<R: io::Read>(
             line,
         };
         let target = targets.id(&cells, columns.target)?;
+        if let Some(c) = columns.setup {
+            row_setups.push(setups.id(cells.text(c)?));
+        }
         rows.push(parse_row(&cells, &columns, target)?);
         lines.push(line);
     }
@@ -300,7 +306,24 @@ pub fn read_measurements_from<R: io::Read>(
             problem,
         }
     })?;
-    Ok(set.with_target_names(targets.names))
+    Ok(set
+        .with_target_names(targets.names)
+        .with_setups(row_setups, setups.names))
+}
+
+/// Labels numbered 0, 1, ... in the order they first appear.
+#[derive(Default)]
+struct Labels {
+    names: Vec<String>,
+}
+
+impl Labels {
+    fn id(&mut self, text: &str) -> usize {
+        self.names.iter().position(|n| n == text).unwrap_or_else(|| {
+            self.names.push(text.to_string());
+            self.names.len() - 1
+        })
+    }
 }
 
 /// One data record with what is needed to name its cells in errors.
@@ -491,8 +514,13 @@ pub fn write_measurements_to<W: io::Write>(writer: W, set: &MeasurementSet) -> i
     header.extend(POSITION_COLUMNS.map(String::from));
     header.extend((1..=set.joint_count()).map(|k| format!("cmd_{k}")));
     header.extend(["payload_kg".to_string(), "temperature_c".to_string()]);
+    // Only files with several setups carry the column: every other file is written as before.
+    let setups = set.setup_names().len() > 1;
+    if setups {
+        header.push("setup".into());
+    }
     csv.write_record(&header)?;
-    for m in set.rows() {
+    for (row, m) in set.rows().iter().enumerate() {
         let mut record = vec![
             m.experiment.clone(),
             m.moved_joint.to_string(),
@@ -501,6 +529,9 @@ pub fn write_measurements_to<W: io::Write>(writer: W, set: &MeasurementSet) -> i
         ];
         record.extend(m.position_mm.iter().chain(&m.cmd).map(|&v| format_f64(v)));
         record.extend([format_f64(m.payload_kg), format_f64(m.temperature_c)]);
+        if setups {
+            record.push(set.setup_names()[set.setup_of(row)].clone());
+        }
         csv.write_record(&record)?;
     }
     csv.flush()

@@ -141,6 +141,11 @@ pub struct MeasurementSet {
     rows: Vec<Measurement>,
     /// The targets' names by id, when the file named them (`T1`, `SMR2`); empty for integer ids.
     target_names: Vec<String>,
+    /// Each row's setup (the instrument's placement it was measured from), when the file has a
+    /// `setup` column; empty: every row setup 0.
+    row_setups: Vec<usize>,
+    /// The setups' labels by id.
+    setup_names: Vec<String>,
 }
 
 /// The rows of one experiment, in file order.
@@ -194,7 +199,32 @@ impl MeasurementSet {
             joint_count,
             rows,
             target_names: Vec::new(),
+            row_setups: Vec::new(),
+            setup_names: Vec::new(),
         })
+    }
+
+    /// The set with each row's setup (`row_setups`, one per row, ids into `names`): rows
+    /// measured with the instrument placed elsewhere. Ignored unless there is one per row.
+    pub fn with_setups(self, row_setups: Vec<usize>, names: Vec<String>) -> Self {
+        if row_setups.len() != self.rows.len() {
+            return self;
+        }
+        Self {
+            row_setups,
+            setup_names: names,
+            ..self
+        }
+    }
+
+    /// The setup of row `row` (0 without a `setup` column).
+    pub fn setup_of(&self, row: usize) -> usize {
+        self.row_setups.get(row).copied().unwrap_or(0)
+    }
+
+    /// The setups' labels by id (empty without a `setup` column).
+    pub fn setup_names(&self) -> &[String] {
+        &self.setup_names
     }
 
     /// The set with its targets named: `names[id]` is target `id`'s name (as a file wrote it).

@@ -31,7 +31,7 @@ pub use identify::{Identification, Unidentified};
 pub use model::{FreePoseModel, layout};
 pub use poses::{FreePose, FreePoses};
 pub use report::markdown;
-pub use summary::{FreePoseSummary, Holdout, OutlierPose, ParameterEstimate, TargetEstimate};
+pub use summary::{FreePoseSummary, Holdout, OutlierPose, ParameterEstimate, SetupPlacement, TargetEstimate};
 
 use crate::calibration::noise::{NoiseEstimate, ResidualMoments, estimate_noise};
 use crate::calibration::procedure::{Calibration, CalibrationOptions, NoiseReport, ZeroOffsetSigma};
@@ -105,6 +105,18 @@ pub enum FreePoseError {
         /// This row's value.
         other: f64,
     },
+    /// One pose's rows name different setups.
+    #[error("{pose}: its rows name different setups (one pose is measured from one instrument placement)")]
+    SetupsDiffer {
+        /// The pose.
+        pose: String,
+    },
+    /// A setup's poses do not place the instrument.
+    #[error("setup {setup}: its points do not place the instrument (fewer than three non-collinear tool positions)")]
+    SetupUnplaced {
+        /// The setup's label.
+        setup: String,
+    },
     /// The model cannot execute a pose's commands.
     #[error("{pose}: the model cannot execute its commands (a transmission is not invertible there)")]
     Unexecutable {
@@ -173,6 +185,7 @@ pub fn calibrate_free_poses(
         &poses.target_ids,
         options.max_harmonic_order,
         &poses.spans(&train),
+        poses.setup_names.len(),
     );
     let problem = Problem {
         controller: &controller,
@@ -252,28 +265,50 @@ fn registered_start(
             pose: poses.poses[u.pose].label(),
         })?;
     let fixed = unplaced.phi.fixed_frames();
-    let base_from_tool: Vec<Isometry3<f64>> = which.iter().map(|&i| fixed.world_from_tool(&q[i])).collect();
-    let observations: Vec<register::Observation> = which
-        .iter()
-        .enumerate()
-        .flat_map(|(k, &i)| {
-            poses.poses[i]
-                .points_m
-                .iter()
-                .map(move |&(slot, measured_m)| register::Observation {
-                    pose: k,
-                    slot,
-                    measured_m,
-                })
-        })
-        .collect();
+    // The poses of one setup: their nominal tool frames in the base frame and their points.
+    let of_setup = |setup: usize| {
+        let mine: Vec<usize> = which
+            .iter()
+            .copied()
+            .filter(|&i| poses.poses[i].setup == setup)
+            .collect();
+        let base_from_tool: Vec<Isometry3<f64>> = mine.iter().map(|&i| fixed.world_from_tool(&q[i])).collect();
+        let observations: Vec<register::Observation> = mine
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &i)| {
+                poses.poses[i]
+                    .points_m
+                    .iter()
+                    .map(move |&(slot, measured_m)| register::Observation {
+                        pose: k,
+                        slot,
+                        measured_m,
+                    })
+            })
+            .collect();
+        (base_from_tool, observations)
+    };
+    let (base_from_tool, observations) = of_setup(0);
     let reg = register::register(&base_from_tool, &observations, slots).ok_or(FreePoseError::Registration)?;
-    Ok(FreePoseModel::new(
+    let mut model = FreePoseModel::new(
         nominal,
         reg.world_from_base,
         poses.target_ids.clone(),
         reg.targets_in_tool_m,
-    ))
+    );
+    // Every other setup: its base by the rigid fit of the registered targets onto its points.
+    model.other_bases = (1..poses.setup_names.len())
+        .map(|setup| {
+            let (base_from_tool, observations) = of_setup(setup);
+            register::fit_base(&base_from_tool, &observations, &model.targets_in_tool_m).ok_or_else(|| {
+                FreePoseError::SetupUnplaced {
+                    setup: poses.setup_names[setup].clone(),
+                }
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(model)
 }
 
 /// The fit of the parameters `columns` (the geometry), refitted without the poses the outlier

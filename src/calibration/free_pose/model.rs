@@ -11,7 +11,8 @@ use crate::kinematics::{ChainPoses, JointKind, PhiModel, link_from_phi};
 use crate::robot::{Controller, RobotModel, Transmission};
 use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-/// The free-pose model's parameters, in the fit's layout and in the order exactly redundant
+/// The free-pose model's parameters (the base once per setup of the instrument), in the fit's
+/// layout and in the order exactly redundant
 /// ones are preferred ([`crate::numerics::subset`]): the base (6) and each target's `x, y, z`
 /// in the tool frame (what the registration places, so that a parameter left out keeps the
 /// description's value, never the registration's), each joint's zero offset, per Table-2 row
@@ -29,8 +30,12 @@ pub fn layout(
     target_ids: &[usize],
     harmonic_order: usize,
     spans_rad: &[f64],
+    setups: usize,
 ) -> Vec<RefitParameter> {
     let mut p: Vec<RefitParameter> = (0..6).map(RefitParameter::Base).collect();
+    for setup in 1..setups {
+        p.extend((0..6).map(|axis| RefitParameter::SetupBase { setup, axis }));
+    }
     for &target in target_ids {
         p.extend((0..3).map(|axis| RefitParameter::Target { target, axis }));
     }
@@ -90,6 +95,9 @@ pub struct FreePoseModel {
     pub target_ids: Vec<usize>,
     /// Each target's position in the tool frame \[m\], in the order of `target_ids`.
     pub targets_in_tool_m: Vec<Point3<f64>>,
+    /// The base in the instrument frame of setups 1, 2, ... (setup 0's is
+    /// `phi.world_from_base`).
+    pub other_bases: Vec<Isometry3<f64>>,
 }
 
 /// A command the model cannot execute (a transmission not invertible there).
@@ -117,7 +125,22 @@ impl FreePoseModel {
             phi,
             target_ids,
             targets_in_tool_m,
+            other_bases: Vec::new(),
         }
+    }
+
+    /// The base in the instrument frame of `setup`.
+    pub fn world_from_base(&self, setup: usize) -> Isometry3<f64> {
+        match setup {
+            0 => self.phi.world_from_base,
+            s => self.other_bases[s - 1],
+        }
+    }
+
+    /// `world_of_setup_from_world_of_setup_0`: maps a point predicted in setup 0's instrument
+    /// frame into `setup`'s.
+    fn setup_from_first(&self, setup: usize) -> Option<Isometry3<f64>> {
+        (setup > 0).then(|| self.other_bases[setup - 1] * self.phi.world_from_base.inverse())
     }
 
     /// The robot model with the fitted geometry written back (file units).
@@ -137,10 +160,13 @@ impl FreePoseModel {
     pub fn moved(&self, layout: &[RefitParameter], which: &[usize], delta: &DVector<f64>) -> Self {
         let mut next = self.clone();
         let (mut shift, mut turn) = (Vector3::zeros(), Vector3::zeros());
+        let mut setup_moves = vec![(Vector3::zeros(), Vector3::zeros()); self.other_bases.len()];
         for (&c, &d) in which.iter().zip(delta.iter()) {
             match &layout[c] {
                 RefitParameter::Base(a) if *a < 3 => shift[*a] += d,
                 RefitParameter::Base(a) => turn[*a - 3] += d,
+                RefitParameter::SetupBase { setup, axis } if *axis < 3 => setup_moves[setup - 1].0[*axis] += d,
+                RefitParameter::SetupBase { setup, axis } => setup_moves[setup - 1].1[*axis - 3] += d,
                 RefitParameter::RowA(r) => next.phi.rows[r - 1].a_m += d,
                 RefitParameter::RowB(r) => next.phi.rows[r - 1].b_m += d,
                 RefitParameter::RowAlpha(r) => next.phi.rows[r - 1].alpha_rad += d,
@@ -156,9 +182,10 @@ impl FreePoseModel {
                 other => unreachable!("{} is not in the free-pose layout", other.name()),
             }
         }
-        let base = self.phi.world_from_base;
-        let rotation = base.rotation * UnitQuaternion::from_scaled_axis(turn);
-        next.phi.world_from_base = Isometry3::from_parts(Translation3::from(base.translation.vector + shift), rotation);
+        next.phi.world_from_base = moved_base(&self.phi.world_from_base, shift, turn);
+        for (base, (shift, turn)) in next.other_bases.iter_mut().zip(setup_moves) {
+            *base = moved_base(base, shift, turn);
+        }
         next
     }
 
@@ -197,7 +224,10 @@ impl FreePoseModel {
         for &i in which {
             let pose = &poses.poses[i];
             let q = self.pose_joint_values(controller, poses, i)?;
-            let world_from_tool = fixed.world_from_tool(&q);
+            let world_from_tool = match self.setup_from_first(pose.setup) {
+                Some(m) => m * fixed.world_from_tool(&q),
+                None => fixed.world_from_tool(&q),
+            };
             for (slot, measured) in &pose.points_m {
                 let e = measured - world_from_tool * self.targets_in_tool_m[*slot];
                 r.extend_from_slice(e.as_slice());
@@ -226,9 +256,14 @@ impl FreePoseModel {
             let (dq_du, theta_a) = self.joint_sensitivity(controller, poses, i, &q)?;
             let frames = fixed.poses(&q);
             let row_axes: Vec<RowAxes> = (0..self.phi.rows.len()).map(|k| self.row_axes(&frames, k)).collect();
+            let setup = poses.poses[i].setup;
+            let to_setup = self.setup_from_first(setup);
             for (slot, measured) in &poses.poses[i].points_m {
+                // Everything is derived in setup 0's instrument frame, then carried into the
+                // pose's own (a rigid map: points and their derivatives alike).
                 let p = frames.world_from_tool * self.targets_in_tool_m[*slot];
-                r.fixed_rows_mut::<3>(row).copy_from(&(measured - p));
+                let p_here = to_setup.map_or(p, |m| m * p);
+                r.fixed_rows_mut::<3>(row).copy_from(&(measured - p_here));
                 let point = PointContext {
                     p,
                     slot: *slot,
@@ -238,7 +273,13 @@ impl FreePoseModel {
                     theta_a: &theta_a,
                 };
                 for (c, &param) in columns.iter().enumerate() {
-                    let dp = self.point_derivative(&point, &layout[param]);
+                    let dp = match self.base_derivative(&layout[param], setup, &p_here) {
+                        Some(dp) => dp,
+                        None => {
+                            let dp = self.point_derivative(&point, &layout[param]);
+                            to_setup.map_or(dp, |m| m.rotation * dp)
+                        }
+                    };
                     jac.fixed_view_mut::<3, 1>(row, c).copy_from(&(-dp));
                 }
                 row += 3;
@@ -285,6 +326,26 @@ impl FreePoseModel {
             }
         }
         Ok((d, theta_a))
+    }
+
+    /// `d p / d parameter` of a base parameter (of any setup) for a point `p` measured from
+    /// `setup` (in its instrument frame): a translation along the instrument's axes or a
+    /// rotation about the base's own axes through its origin; 0 for another setup's base.
+    /// `None` for every other parameter.
+    fn base_derivative(&self, param: &RefitParameter, setup: usize, p: &Point3<f64>) -> Option<Vector3<f64>> {
+        let (of, axis) = match param {
+            RefitParameter::Base(a) => (0, *a),
+            RefitParameter::SetupBase { setup, axis } => (*setup, *axis),
+            _ => return None,
+        };
+        if of != setup {
+            return Some(Vector3::zeros());
+        }
+        let base = self.world_from_base(setup);
+        Some(match axis {
+            a if a < 3 => Vector3::ith(a, 1.0),
+            a => (base.rotation * Vector3::ith(a - 3, 1.0)).cross(&(p.coords - base.translation.vector)),
+        })
     }
 
     /// `d p / d parameter` of a point on the last link \[m per parameter unit\].
@@ -393,4 +454,11 @@ fn joint_column(kind: JointKind, frames: &ChainPoses, j: usize, p: &Point3<f64>)
         JointKind::Revolute => axis.direction.cross(&(p - axis.origin_m)),
         JointKind::Prismatic => axis.direction.into_inner(),
     }
+}
+
+/// `base` turned by `turn` about its own origin and axes, then shifted by `shift` along the
+/// instrument's axes.
+fn moved_base(base: &Isometry3<f64>, shift: Vector3<f64>, turn: Vector3<f64>) -> Isometry3<f64> {
+    let rotation = base.rotation * UnitQuaternion::from_scaled_axis(turn);
+    Isometry3::from_parts(Translation3::from(base.translation.vector + shift), rotation)
 }

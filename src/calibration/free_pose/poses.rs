@@ -22,6 +22,8 @@ pub struct FreePose {
     pub cmd: Vec<f64>,
     /// The measured points: (target slot in [`FreePoses::target_ids`], position \[m\]), by target.
     pub points_m: Vec<(usize, Point3<f64>)>,
+    /// The setup it was measured from (the instrument's placement; 0 without a `setup` column).
+    pub setup: usize,
 }
 
 impl FreePose {
@@ -41,19 +43,27 @@ pub struct FreePoses {
     /// Each target as the file wrote it (its name, or the integer id), in the order of
     /// `target_ids`.
     pub target_names: Vec<String>,
+    /// The setups' labels, by setup id (one, `0`, without a `setup` column).
+    pub setup_names: Vec<String>,
 }
 
 impl FreePoses {
     /// Every pose of the `moved_joint = 0` experiments of `set`, or of every experiment with
     /// `all_rows` (sweeps too, their targets on the last link).
     pub fn from_set(set: &MeasurementSet, desc: &RobotDescription, all_rows: bool) -> Result<Self, FreePoseError> {
-        let rows: Vec<_> = set.rows().iter().filter(|r| all_rows || r.moved_joint == 0).collect();
-        let mut target_ids: Vec<usize> = rows.iter().map(|r| r.target).collect();
+        let rows: Vec<(usize, &crate::measurement::Measurement)> = set
+            .rows()
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| all_rows || r.moved_joint == 0)
+            .collect();
+        let mut target_ids: Vec<usize> = rows.iter().map(|(_, r)| r.target).collect();
         target_ids.sort_unstable();
         target_ids.dedup();
         let mut index: HashMap<(&str, usize), usize> = HashMap::new();
         let mut poses: Vec<FreePose> = Vec::new();
-        for r in rows {
+        for (row, r) in rows {
+            let setup = set.setup_of(row);
             let slot = target_ids.binary_search(&r.target).unwrap_or_default();
             let point = (slot, r.position_m());
             let i = *index.entry((r.experiment.as_str(), r.step)).or_insert_with(|| {
@@ -63,6 +73,7 @@ impl FreePoses {
                     cmd_file: r.cmd.clone(),
                     cmd: commands_to_internal(desc, &r.cmd),
                     points_m: Vec::new(),
+                    setup,
                 });
                 poses.len() - 1
             });
@@ -75,16 +86,24 @@ impl FreePoses {
                     other: r.cmd[k],
                 });
             }
+            if pose.setup != setup {
+                return Err(FreePoseError::SetupsDiffer { pose: pose.label() });
+            }
             pose.points_m.push(point);
         }
         for p in &mut poses {
             p.points_m.sort_by_key(|(slot, _)| *slot);
         }
         let target_names = target_ids.iter().map(|&id| set.target_name(id)).collect();
+        let setup_names = match set.setup_names() {
+            [] => vec!["0".to_string()],
+            names => names.to_vec(),
+        };
         Ok(FreePoses {
             poses,
             target_ids,
             target_names,
+            setup_names,
         })
     }
 

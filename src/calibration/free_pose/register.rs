@@ -168,7 +168,7 @@ fn nearest_rotation(m: &Matrix3<f64>) -> Option<Rotation3<f64>> {
 
 /// The base frame given the targets: Horn's rigid fit of the predicted points in the base frame
 /// onto the measured ones.
-fn fit_base(
+pub(super) fn fit_base(
     base_from_tool: &[Isometry3<f64>],
     observations: &[Observation],
     targets: &[Point3<f64>],

@@ -114,6 +114,18 @@ pub struct FreePoseSummary {
     pub correlation: Vec<Vec<f64>>,
     /// The held-out check (`--holdout`).
     pub holdout: Option<Holdout>,
+    /// The robot's base in the instrument frame of each setup (the `setup` column's labels;
+    /// one, `0`, without it): setup 0's is `robot.placement`.
+    pub setups: Vec<SetupPlacement>,
+}
+
+/// Where the instrument saw the robot's base from one setup.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct SetupPlacement {
+    /// The setup's label.
+    pub setup: String,
+    /// The base in that setup's instrument frame.
+    pub placement: Placement,
 }
 
 /// The stages a summary is made of.
@@ -162,6 +174,17 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
         outliers: outliers(s.flags, s.problem, s.kept),
         correlation: correlation(&covariance),
         holdout: holdout(&s)?,
+        setups: s
+            .problem
+            .poses
+            .setup_names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| SetupPlacement {
+                setup: name.clone(),
+                placement: Placement::from_isometry(&s.fitted.model.world_from_base(k)),
+            })
+            .collect(),
     };
     Ok(FreePoseCalibration {
         robot,
@@ -224,11 +247,15 @@ pub(super) fn value_of(p: &RefitParameter, m: &FreePoseModel) -> Option<f64> {
 /// The base's change from `before` to `after` along base parameter `p`: translation, or the
 /// rotation vector of `R_before^T R_after` (the fit's local parameterisation, base axes).
 fn base_change(p: &RefitParameter, before: &FreePoseModel, after: &FreePoseModel) -> f64 {
-    let (b, a) = (before.phi.world_from_base, after.phi.world_from_base);
-    match p {
-        RefitParameter::Base(i) if *i < 3 => a.translation.vector[*i] - b.translation.vector[*i],
-        RefitParameter::Base(i) => (b.rotation.inverse() * a.rotation).scaled_axis()[*i - 3],
-        _ => 0.0,
+    let (setup, axis) = match p {
+        RefitParameter::Base(i) => (0, *i),
+        RefitParameter::SetupBase { setup, axis } => (*setup, *axis),
+        _ => return 0.0,
+    };
+    let (b, a) = (before.world_from_base(setup), after.world_from_base(setup));
+    match axis {
+        i if i < 3 => a.translation.vector[i] - b.translation.vector[i],
+        i => (b.rotation.inverse() * a.rotation).scaled_axis()[i - 3],
     }
 }
 

@@ -122,7 +122,7 @@ fn measure(desc: &RobotDescription, truth: &FreePoseModel, cmds: &[Vec<f64>], rn
 fn truth(desc: &RobotDescription, target_count: usize, which: &[String], rng: &mut ChaCha12Rng) -> FreePoseModel {
     let nominal = RobotModel::ideal(desc);
     let ids: Vec<usize> = (0..target_count).collect();
-    let layout = layout(&nominal, &ids, 1, &vec![std::f64::consts::TAU; desc.dof()]);
+    let layout = layout(&nominal, &ids, 1, &vec![std::f64::consts::TAU; desc.dof()], 1);
     let start = FreePoseModel::new(
         &nominal,
         nominal.phi_model().world_from_base,
@@ -174,6 +174,7 @@ fn z_scores(
             &cal.model.target_ids,
             1,
             &vec![std::f64::consts::TAU; desc.dof()],
+            1,
         );
         for p in cal.summary.parameters.iter().filter(|p| !p.name.starts_with("base")) {
             let param = layout.iter().find(|l| l.name() == p.name).expect("in layout");
@@ -248,7 +249,7 @@ fn prediction_check(
             let cal = calibrate_free_poses(&set, desc, &options).expect("calibration");
             let fresh = measure_exact(desc, &truth, &commands(desc, 50, &mut rng));
             let poses = FreePoses::from_set(&fresh, desc, false).expect("poses");
-            let layout = layout(&cal.model.robot, &cal.model.target_ids, 0, &[]);
+            let layout = layout(&cal.model.robot, &cal.model.target_ids, 0, &[], 1);
             let columns: Vec<usize> = cal
                 .summary
                 .parameters
@@ -376,7 +377,13 @@ fn jacobian_matches_central_differences() {
     let set = measure(&desc, &model, &commands(&desc, 6, &mut rng), &mut rng);
     let poses = FreePoses::from_set(&set, &desc, false).expect("poses");
     let controller = Controller::from_description(&desc);
-    let layout = layout(&robot, &model.target_ids, 2, &vec![std::f64::consts::TAU; desc.dof()]);
+    let layout = layout(
+        &robot,
+        &model.target_ids,
+        2,
+        &vec![std::f64::consts::TAU; desc.dof()],
+        1,
+    );
     let all: Vec<usize> = (0..layout.len()).collect();
     let which: Vec<usize> = (0..poses.poses.len()).collect();
     let (r0, jac) = model
@@ -428,7 +435,7 @@ fn a_corrupted_pose_is_flagged_and_dropped() {
     let cal = calibrate_free_poses(&set, &desc, &options).expect("calibration");
     let flagged: Vec<(usize, bool)> = cal.summary.outliers.iter().map(|o| (o.step, o.dropped)).collect();
     assert_eq!(flagged, vec![(17, true)]);
-    let layout = layout(&cal.model.robot, &cal.model.target_ids, 0, &[]);
+    let layout = layout(&cal.model.robot, &cal.model.target_ids, 0, &[], 1);
     for p in cal.summary.parameters.iter().filter(|p| !p.name.starts_with("base")) {
         let param = layout.iter().find(|l| l.name() == p.name).expect("in layout");
         let z =
@@ -441,4 +448,78 @@ fn a_corrupted_pose_is_flagged_and_dropped() {
     };
     let cal = calibrate_free_poses(&set, &desc, &kept).expect("calibration");
     assert!(cal.summary.outliers.iter().any(|o| o.step == 17 && !o.dropped));
+}
+
+/// Two setups (the instrument moved by metres and turned between the halves of the campaign,
+/// the file's `setup` column): one calibration places the base in both instrument frames and
+/// recovers the robot's parameters within their sigmas, and setup `B`'s base within its own.
+#[test]
+fn two_setups_calibrate_together() {
+    let desc = shipped("arm6-dh");
+    let names = identified(&desc, 2, 40);
+    let (mut z, mut base_z) = (Vec::new(), Vec::new());
+    for seed in 1..4 {
+        let mut rng = ChaCha12Rng::seed_from_u64(seed);
+        let mut truth = truth(&desc, 2, &names, &mut rng);
+        let second = nalgebra::Isometry3::new(Vector3::new(-2.0, 1.5, 0.3), Vector3::new(0.1, -0.2, 2.5))
+            * truth.phi.world_from_base;
+        truth.other_bases = vec![second];
+        let cmds = commands(&desc, 80, &mut rng);
+        let first = measure(&desc, &truth, &cmds[..40], &mut rng);
+        let mut moved = truth.clone();
+        moved.phi.world_from_base = second;
+        let other = measure(&desc, &moved, &cmds[40..], &mut rng);
+        let rows: Vec<Measurement> = first
+            .rows()
+            .iter()
+            .cloned()
+            .chain(other.rows().iter().map(|r| Measurement {
+                step: r.step + 40,
+                ..r.clone()
+            }))
+            .collect();
+        let setups: Vec<usize> = rows.iter().map(|r| usize::from(r.step >= 40)).collect();
+        let set = MeasurementSet::new(desc.dof(), rows)
+            .expect("set")
+            .with_setups(setups, vec!["A".into(), "B".into()]);
+        let options = FreePoseOptions {
+            max_harmonic_order: 0,
+            ..FreePoseOptions::default()
+        };
+        let cal = calibrate_free_poses(&set, &desc, &options).expect("calibration");
+        let layout = layout(&cal.model.robot, &cal.model.target_ids, 0, &[], 2);
+        for p in cal.summary.parameters.iter().filter(|p| !p.name.contains("base")) {
+            let param = layout.iter().find(|l| l.name() == p.name).expect("in layout");
+            let true_value = summary::value_of(param, &truth).expect("value") * p.unit.per_si();
+            z.push((p.value.expect("value") - true_value) / p.sigma);
+        }
+        let fitted = cal.model.world_from_base(1).translation.vector;
+        for (axis, sigma) in ["x", "y", "z"]
+            .iter()
+            .map(|a| {
+                let name = format!("setup1.base.{a}");
+                cal.summary
+                    .parameters
+                    .iter()
+                    .find(|p| p.name == name)
+                    .map(|p| p.sigma * 1e-3)
+            })
+            .enumerate()
+        {
+            if let Some(sigma) = sigma {
+                base_z.push((fitted[axis] - second.translation.vector[axis]) / sigma);
+            }
+        }
+    }
+    let bound = 4.0 / (2.0 * z.len() as f64).sqrt();
+    assert!(
+        (rms(&z) - 1.0).abs() < bound,
+        "z RMS {:.3} over {} (bound {bound:.3})",
+        rms(&z),
+        z.len()
+    );
+    assert!(
+        base_z.len() == 9 && base_z.iter().all(|v| v.abs() < 5.0),
+        "setup B's base: {base_z:.2?}"
+    );
 }

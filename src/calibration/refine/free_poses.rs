@@ -65,6 +65,14 @@ pub enum RefitParameter {
     Base(usize),
     /// The tool frame's correction (in the tool frame), as [`RefitParameter::Base`].
     Tool(usize),
+    /// The base placement in the instrument frame of setup `setup` (1-based beyond the first:
+    /// the instrument moved), as [`RefitParameter::Base`].
+    SetupBase {
+        /// The setup (>= 1; setup 0's base is [`RefitParameter::Base`]).
+        setup: usize,
+        /// 0-2 translation, 3-5 rotation.
+        axis: usize,
+    },
 }
 
 const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
@@ -89,6 +97,7 @@ impl RefitParameter {
             }
             RefitParameter::Target { target, axis } => format!("target{target}.{}", AXES[*axis]),
             RefitParameter::Base(a) => format!("base.{}", AXES[*a]),
+            RefitParameter::SetupBase { setup, axis } => format!("setup{setup}.base.{}", AXES[*axis]),
             RefitParameter::Tool(a) => format!("tool.{}", AXES[*a]),
         }
     }
@@ -99,6 +108,7 @@ impl RefitParameter {
             RefitParameter::RowA(_) | RefitParameter::RowB(_) | RefitParameter::Target { .. } => ParameterUnit::Mm,
             RefitParameter::ZeroOffset { sliding: true, .. } => ParameterUnit::Mm,
             RefitParameter::Base(a) | RefitParameter::Tool(a) if *a < 3 => ParameterUnit::Mm,
+            RefitParameter::SetupBase { axis, .. } if *axis < 3 => ParameterUnit::Mm,
             RefitParameter::Coupling { .. } => ParameterUnit::Coefficient,
             _ => ParameterUnit::Mrad,
         }

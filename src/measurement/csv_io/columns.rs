@@ -35,6 +35,7 @@ fn index_columns<'h>(
                 "target",
                 "payload_kg",
                 "temperature_c",
+                "setup",
             ]
             .contains(&name)
             || POSITION_COLUMNS.contains(&name);
@@ -132,5 +133,6 @@ pub(super) fn find_columns(
         cmd: (1..=n).map(|k| cmd[&k]).collect(),
         payload_kg: index.get("payload_kg").copied(),
         temperature_c: index.get("temperature_c").copied(),
+        setup: index.get("setup").copied(),
     })
 }

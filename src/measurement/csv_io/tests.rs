@@ -232,3 +232,25 @@ fn named_targets_are_numbered_in_order_and_round_trip() {
             .contains("negative")
     );
 }
+
+/// A `setup` column: labels numbered in the order they first appear, written back (only a
+/// file with two or more setups carries the column).
+#[test]
+fn setups_are_read_and_round_trip() {
+    let text = format!(
+        "{HEADER},setup\nposes,0,0,0,1,2,3,0,0,left\nposes,0,1,0,4,5,6,0,0,right\nposes,0,2,0,7,8,9,0,0,left\n"
+    );
+    let (_file, result) = read_text(&text, Some(2));
+    let set = result.expect("setups are read");
+    assert_eq!((0..3).map(|r| set.setup_of(r)).collect::<Vec<_>>(), [0, 1, 0]);
+    assert_eq!(set.setup_names(), ["left", "right"]);
+    let mut written = Vec::new();
+    write_measurements_to(&mut written, &set).unwrap();
+    let (_again, reread) = read_text(std::str::from_utf8(&written).unwrap(), Some(2));
+    assert_eq!(reread.unwrap(), set);
+    let one = format!("{HEADER},setup\nposes,0,0,0,1,2,3,0,0,only\n");
+    let (_f, one) = read_text(&one, Some(2));
+    let mut written = Vec::new();
+    write_measurements_to(&mut written, &one.unwrap()).unwrap();
+    assert!(!std::str::from_utf8(&written).unwrap().contains("setup"));
+}
