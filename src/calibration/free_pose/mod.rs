@@ -10,10 +10,12 @@
 //!    every geometric calibration is compared with);
 //! 4. [`identify`]: which parameters of [`model::layout`] the poses identify, the others named
 //!    with the combination they are made of;
-//! 5. the fit of the identified parameters ([`fit`]), refitted without the poses the outlier
-//!    test flags;
-//! 6. the covariance, the noise estimate and, with a held-out split, the check on poses the fit
-//!    did not see.
+//! 5. the fit of the identified parameters (Levenberg-Marquardt, analytic Jacobian), refitted
+//!    without the poses the outlier test flags, the harmonic order chosen by cross-validation;
+//! 6. the plausibility check, the covariance, the noise estimate and, with a held-out split,
+//!    the check on poses the fit did not see.
+//!
+//! Several setups (the instrument moved) share everything but the base.
 //!
 //! Pure maths: no files, no CLI, no simulator.
 
