@@ -75,9 +75,7 @@ pub(super) fn fit(
 ) -> Result<Fitted, FreePoseError> {
     let eval = |m: &FreePoseModel| -> Result<(DVector<f64>, DMatrix<f64>), FreePoseError> {
         m.residuals_and_jacobian(problem.controller, problem.poses, which, problem.layout, columns)
-            .map_err(|u| FreePoseError::Unexecutable {
-                pose: problem.poses.poses[u.pose].label(),
-            })
+            .map_err(|u| u.error(problem.poses))
     };
     let first = eval(start)?;
     let per_coordinate = first.0.norm_squared() / first.0.len().max(1) as f64;

@@ -202,9 +202,7 @@ pub fn calibrate_free_poses(
     let (_, design) = registered
         .model
         .residuals_and_jacobian(&controller, &poses, &train, &layout, &all)
-        .map_err(|u| FreePoseError::Unexecutable {
-            pose: poses.poses[u.pose].label(),
-        })?;
+        .map_err(|u| u.error(&poses))?;
     let mut identification = identify::identify(&design, &layout, &registered.model.phi);
     let geometry: Vec<usize> = identification
         .fitted
@@ -237,9 +235,13 @@ fn split(poses: &FreePoses, holdout: bool) -> (Vec<usize>, Vec<usize>) {
     (0..poses.poses.len()).partition(|&i| !holdout || configurations[i].is_multiple_of(2))
 }
 
-/// The base and the targets: the ones a registration of the nominal model fits.
+/// The bases (of every setup) and the targets: the ones a registration of the nominal model
+/// fits.
 fn frame_parameter(p: &RefitParameter) -> bool {
-    matches!(p, RefitParameter::Base(_) | RefitParameter::Target { .. })
+    matches!(
+        p,
+        RefitParameter::Base(_) | RefitParameter::SetupBase { .. } | RefitParameter::Target { .. }
+    )
 }
 
 /// The nominal model placed by the closed-form registration of the poses `which`.
@@ -263,9 +265,7 @@ fn registered_start(
     let unplaced = FreePoseModel::new(nominal, Isometry3::identity(), poses.target_ids.clone(), vec![]);
     let q = unplaced
         .joint_values(problem.controller, poses)
-        .map_err(|u| FreePoseError::Unexecutable {
-            pose: poses.poses[u.pose].label(),
-        })?;
+        .map_err(|u| u.error(poses))?;
     let fixed = unplaced.phi.fixed_frames();
     // The poses of one setup: their nominal tool frames in the base frame and their points.
     let of_setup = |setup: usize| {
@@ -347,9 +347,7 @@ fn fit_without_outliers(
         let all = fitted
             .model
             .residuals(problem.controller, problem.poses, train)
-            .map_err(|u| FreePoseError::Unexecutable {
-                pose: problem.poses.poses[u.pose].label(),
-            })?;
+            .map_err(|u| u.error(problem.poses))?;
         let again = fit::flag_outliers(&all, problem.poses, train, fence);
         let settled = again.iter().map(|f| f.pose).eq(flags.iter().map(|f| f.pose));
         flags = again;

@@ -107,6 +107,15 @@ pub struct Unexecutable {
     pub pose: usize,
 }
 
+impl Unexecutable {
+    /// The calibration's error for it, naming the pose of `poses`.
+    pub fn error(self, poses: &FreePoses) -> super::FreePoseError {
+        super::FreePoseError::Unexecutable {
+            pose: poses.poses[self.pose].label(),
+        }
+    }
+}
+
 impl FreePoseModel {
     /// The model of `robot` with its placement replaced by `world_from_base` and the targets
     /// `target_ids` at `targets_in_tool_m`.

@@ -198,9 +198,7 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
 fn rms_of(model: &FreePoseModel, problem: &Problem<'_>, which: &[usize]) -> Result<f64, FreePoseError> {
     let r = model
         .residuals(problem.controller, problem.poses, which)
-        .map_err(|u| FreePoseError::Unexecutable {
-            pose: problem.poses.poses[u.pose].label(),
-        })?;
+        .map_err(|u| u.error(problem.poses))?;
     Ok((r.norm_squared() / (r.len() / 3).max(1) as f64).sqrt())
 }
 
@@ -343,9 +341,7 @@ fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
         .fitted
         .model
         .residuals(s.problem.controller, s.problem.poses, &executable)
-        .map_err(|u| FreePoseError::Unexecutable {
-            pose: s.problem.poses.poses[u.pose].label(),
-        })?;
+        .map_err(|u| u.error(s.problem.poses))?;
     let max = (0..r.len() / 3)
         .map(|k| r.fixed_rows::<3>(3 * k).norm())
         .fold(0.0, f64::max);
