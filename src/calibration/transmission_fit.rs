@@ -60,6 +60,25 @@ impl TransmissionForm {
         }
     }
 
+    /// The highest harmonic order (a polynomial: its highest power).
+    pub fn order(&self) -> usize {
+        match *self {
+            TransmissionForm::Harmonic { order }
+            | TransmissionForm::Gear { order, .. }
+            | TransmissionForm::Polynomial { order } => order,
+        }
+    }
+
+    /// The same form one order lower; `None` at order 0.
+    pub fn one_order_lower(&self) -> Option<Self> {
+        let order = self.order().checked_sub(1)?;
+        Some(match *self {
+            TransmissionForm::Harmonic { .. } => TransmissionForm::Harmonic { order },
+            TransmissionForm::Gear { ratio, .. } => TransmissionForm::Gear { ratio, order },
+            TransmissionForm::Polynomial { .. } => TransmissionForm::Polynomial { order },
+        })
+    }
+
     /// Names of the coefficients, e.g. `sin1`, `cos1` (`scale`, `c2`, .. for a polynomial).
     pub fn coefficient_names(&self) -> Vec<String> {
         if let TransmissionForm::Polynomial { order } = self {

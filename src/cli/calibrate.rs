@@ -10,8 +10,9 @@ use anyhow::Result;
 use axiscal::calibration::free_pose;
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
-    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, findings,
-    joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, ros_name, urdf,
+    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, ProcedureError, UrdfOptions, UrdfRoot,
+    calibrate, findings, joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv,
+    ros_name, urdf,
 };
 use axiscal::calibration::refine::RefineOptions;
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
@@ -310,8 +311,13 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         .joint_repeatability_rad(desc)
         .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
     // The procedure's message already contains its cause: one line, not the cause twice.
-    let mut cal =
-        calibrate(set, desc, &options).map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
+    let mut cal = match calibrate(set, desc, &options) {
+        Ok(cal) => cal,
+        Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) if !args.refine => {
+            return Ok((sweeps_as_free_poses(args, set, desc, &e)?, vec![]));
+        }
+        Err(e) => anyhow::bail!("calibrating {}: {e}", args.data.display()),
+    };
     let map = predict_tool_accuracy(&mut cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
@@ -321,6 +327,36 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         cal
     };
     Ok((cal, map))
+}
+
+/// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far
+/// from one configuration that the independent-axis correction for them does not settle
+/// (`failure`); an error when the sweeps' targets cannot be free poses.
+fn sweeps_as_free_poses(
+    args: &Args,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    failure: &ProcedureError,
+) -> Result<Calibration> {
+    if let Some(why_not) = free_pose::poses::why_sweeps_are_not_poses(set, desc) {
+        anyhow::bail!(
+            "calibrating {}: {failure}; the sweeps cannot be fitted as free poses either: {why_not}",
+            args.data.display()
+        );
+    }
+    let why =
+        format!("the sweeps stand at configurations too far apart for the independent-axis procedure ({failure})");
+    eprintln!(
+        "warning: {}: {why}; every point is fitted as a free pose instead (docs/method.md, \"Calibration from free poses\")",
+        args.data.display()
+    );
+    let mut view = args_view(args);
+    view.all_rows = true;
+    let mut cal = super::calibrate_free::calibrate(&view, set, desc)?;
+    if let Some(summary) = cal.free_poses.as_mut() {
+        summary.axis_rows_as_poses = Some(why);
+    }
+    Ok(cal)
 }
 
 /// The console summary of an independent-axis calibration.

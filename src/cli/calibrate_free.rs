@@ -38,15 +38,22 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
         max_harmonic_order: args.harmonics,
         all_rows: args.all_rows,
     };
-    let cal = calibrate_free_poses(set, desc, &options)
+    let mut cal = calibrate_free_poses(set, desc, &options)
         .map_err(|e| anyhow::anyhow!("calibrating {} from its free poses: {e}", args.data.display()))?;
+    if args.all_rows && set.experiments().iter().any(|e| e.moved_joint > 0) {
+        cal.summary.axis_rows_as_poses = Some("`--free-poses` asked for it".into());
+    }
     Ok(cal.into_calibration(desc))
 }
 
 /// The console summary of a free-pose calibration.
 pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
+    let what = match s.axis_rows_as_poses {
+        Some(_) => "every row a free pose",
+        None => "no axis experiment",
+    };
     say!(
-        "calibrated {} from {} ({} free poses, {} points; no axis experiment): {} parameters fitted, {} not identified (kept nominal, see report.md)",
+        "calibrated {} from {} ({} free poses, {} points; {what}): {} parameters fitted, {} not identified (kept nominal, see report.md)",
         desc.name,
         source,
         s.poses,

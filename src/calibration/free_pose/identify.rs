@@ -58,6 +58,45 @@ impl Identification {
     }
 }
 
+impl Identification {
+    /// Moves the fitted parameter the design `jacobian` determines worst to the unidentified
+    /// ones: the one whose column (scaled to unit length) has the smallest part outside the
+    /// span of every other fitted column, `1 / sqrt((X^T X)^-1_cc)` of the scaled fitted
+    /// columns `X`. For a fit that does not converge: along such a direction the cost's
+    /// curvature is the data's information (that part squared) plus the residuals' own
+    /// curvature, which the Gauss-Newton model leaves out; where the second rivals the first
+    /// the steps crawl. Returns the parameter's name, or `None` when nothing is fitted.
+    pub fn drop_weakest(&mut self, jacobian: &DMatrix<f64>, layout: &[RefitParameter]) -> Option<String> {
+        let columns: Vec<_> = self
+            .fitted
+            .iter()
+            .map(|&c| {
+                let col = jacobian.column(c);
+                let norm = col.norm();
+                if norm > 0.0 { col / norm } else { col.into_owned() }
+            })
+            .collect();
+        if columns.is_empty() {
+            return None;
+        }
+        let x = DMatrix::from_columns(&columns);
+        let inverse = crate::numerics::lsq::inverse_normal(&x, "identification").ok()?;
+        let (slot, part) = (0..self.fitted.len())
+            .map(|i| (i, 1.0 / inverse[(i, i)].max(f64::MIN_POSITIVE).sqrt()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        let column = self.fitted.remove(slot);
+        let name = layout[column].name();
+        self.unidentified.push(Unidentified {
+            name: name.clone(),
+            reason: format!(
+                "the data determine it too weakly for the fit to converge with it (part {part:.1e} of its effect independent of the other parameters)"
+            ),
+            same_as: vec![],
+        });
+        Some(name)
+    }
+}
+
 /// The identification of the layout's parameters from the design `jacobian` (every column of
 /// the layout) at the registered nominal `phi`.
 /// (in the layout's order of preference: the geometry before the transmission harmonics).

@@ -204,18 +204,22 @@ pub fn calibrate_free_poses(
         .residuals_and_jacobian(&controller, &poses, &train, &layout, &all)
         .map_err(|u| u.error(&poses))?;
     let mut identification = identify::identify(&design, &layout, &registered.model.phi);
-    let geometry: Vec<usize> = identification
-        .fitted
-        .iter()
-        .copied()
-        .filter(|&c| !matches!(layout[c], RefitParameter::Harmonic { .. }))
-        .collect();
     // The outliers of the geometry pick the poses the harmonics are chosen on; the chosen
     // model's own test on every pose then decides which poses the calibration drops.
-    let (fitted, kept, _) = fit_without_outliers(&problem, &registered.model, &train, &geometry, options)?;
+    let (fitted, kept, _) = converging(&mut identification, &design, &layout, |id| {
+        let geometry: Vec<usize> = id
+            .fitted
+            .iter()
+            .copied()
+            .filter(|&c| !matches!(layout[c], RefitParameter::Harmonic { .. }))
+            .collect();
+        fit_without_outliers(&problem, &registered.model, &train, &geometry, options)
+    })?;
     let (fitted, dropped) = select_harmonics(&problem, fitted, &kept, &identification)?;
     identification.drop_insignificant(&dropped, &layout);
-    let (fitted, kept, flags) = fit_without_outliers(&problem, &fitted.model, &train, &identification.fitted, options)?;
+    let (fitted, kept, flags) = converging(&mut identification, &design, &layout, |id| {
+        fit_without_outliers(&problem, &fitted.model, &train, &id.fitted, options)
+    })?;
     check_plausible(&fitted, &poses, &kept)?;
     summary::summarise(summary::Stages {
         problem: &problem,
@@ -227,6 +231,26 @@ pub fn calibrate_free_poses(
         flags: &flags,
         test: &test,
     })
+}
+
+/// `attempt` with the parameters of `identification`; while its fit does not converge, again
+/// without the parameter the design determines worst ([`Identification::drop_weakest`]).
+fn converging<T>(
+    identification: &mut Identification,
+    design: &nalgebra::DMatrix<f64>,
+    layout: &[RefitParameter],
+    attempt: impl Fn(&Identification) -> Result<T, FreePoseError>,
+) -> Result<T, FreePoseError> {
+    loop {
+        match attempt(identification) {
+            Err(e @ FreePoseError::Fit(LsqError::NotConverged { .. })) => {
+                if identification.drop_weakest(design, layout).is_none() {
+                    return Err(e);
+                }
+            }
+            other => return other,
+        }
+    }
 }
 
 /// The poses fitted and the poses held out: every pose, or the even and odd configurations.
@@ -396,7 +420,8 @@ fn select_harmonics(
             .collect()
     };
     let configurations = problem.poses.configurations();
-    let mut best: Option<(f64, usize, Fitted)> = None;
+    // Order 0 stands even when its own folds do not converge (then no order is tried above it).
+    let mut best = (f64::INFINITY, 0, geometry.clone());
     let mut previous = geometry;
     for order in 0..=max {
         // Each order starts from the one below (its new harmonics at 0), and its folds from
@@ -417,11 +442,11 @@ fn select_harmonics(
             Err(e) => return Err(e),
         };
         previous = fitted.clone();
-        if best.as_ref().is_none_or(|b| sse < b.0) {
-            best = Some((sse, order, fitted));
+        if order == 0 || sse < best.0 {
+            best = (sse, order, fitted);
         }
     }
-    let (_, order, fitted) = best.unwrap_or_else(|| unreachable!("order 0 is always tried"));
+    let (_, order, fitted) = best;
     let left_out = columns(max).into_iter().filter(|&c| order_of(c) > order).collect();
     Ok((fitted, left_out))
 }

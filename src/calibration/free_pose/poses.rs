@@ -47,6 +47,53 @@ pub struct FreePoses {
     pub setup_names: Vec<String>,
 }
 
+/// Why the axis experiments' rows of `set` cannot be fitted as free poses, if so: a swept
+/// joint's target on a link before the last, or one target id on two different points of the
+/// description's `axis_targets` (a free pose's target is one point on the last link).
+pub fn why_sweeps_are_not_poses(set: &MeasurementSet, desc: &RobotDescription) -> Option<String> {
+    let last = desc.dof();
+    let mut seen: Vec<(usize, usize, [f64; 3])> = Vec::new();
+    for e in set.experiments().iter().filter(|e| e.moved_joint > 0) {
+        let Some(t) = desc.axis_targets_of(e.moved_joint) else {
+            continue;
+        };
+        let targets = [Some(t.target0), t.target1];
+        for (id, target) in targets.iter().enumerate() {
+            let Some(target) = target else { continue };
+            if target.link != last {
+                return Some(format!(
+                    "joint {}'s target {id} sits on link {}, not on the last link {last} (the description's axis_targets)",
+                    e.moved_joint, target.link
+                ));
+            }
+            if let Some((joint, _, _)) = seen
+                .iter()
+                .find(|(_, i, p)| *i == id && (0..3).any(|c| (p[c] - target.position_mm[c]).abs() > 1e-9))
+            {
+                return Some(format!(
+                    "target {id} of the sweeps of joints {joint} and {} are two different points (the description's axis_targets)",
+                    e.moved_joint
+                ));
+            }
+            seen.push((e.moved_joint, id, target.position_mm));
+        }
+    }
+    let has_free_poses = set.experiments().iter().any(|e| e.moved_joint == 0);
+    let tool = desc.tool.frame.to_isometry();
+    for (joint, id, p_mm) in seen.iter().filter(|_| has_free_poses) {
+        let Some(t) = desc.tool.targets_mm.get(*id) else {
+            continue;
+        };
+        let on_link_mm = tool * Point3::from(*t);
+        if (on_link_mm.coords - nalgebra::Vector3::from(*p_mm)).norm() > 1e-6 {
+            return Some(format!(
+                "target {id} of the sweep of joint {joint} (axis_targets) is not the free poses' target {id} (tool.targets_mm)"
+            ));
+        }
+    }
+    None
+}
+
 impl FreePoses {
     /// Every pose of the `moved_joint = 0` experiments of `set`, or of every experiment with
     /// `all_rows` (sweeps too, their targets on the last link).

@@ -14,6 +14,9 @@ pub fn markdown(s: &FreePoseSummary, noise: Option<&NoiseEstimate>, robot: &str,
         "Data: `{source}`: {} poses, {} points fitted. Method: `docs/method.md`, \"Calibration from free poses\".\n",
         s.poses, s.points
     );
+    if let Some(why) = &s.axis_rows_as_poses {
+        let _ = writeln!(md, "The axis experiments' rows are fitted as free poses: {why}.\n");
+    }
     residual_table(&mut md, s, noise);
     parameter_table(&mut md, s);
     unidentified(&mut md, s);

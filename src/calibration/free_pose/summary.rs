@@ -117,6 +117,11 @@ pub struct FreePoseSummary {
     /// The robot's base in the instrument frame of each setup (the `setup` column's labels;
     /// one, `0`, without it): setup 0's is `robot.placement`.
     pub setups: Vec<SetupPlacement>,
+    /// Why the axis experiments' rows were fitted as free poses (`--free-poses`, or sweeps
+    /// the independent-axis procedure could not use); absent when the file has free poses
+    /// only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis_rows_as_poses: Option<String>,
 }
 
 /// Where the instrument saw the robot's base from one setup.
@@ -185,6 +190,7 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
                 placement: Placement::from_isometry(&s.fitted.model.world_from_base(k)),
             })
             .collect(),
+        axis_rows_as_poses: None,
     };
     Ok(FreePoseCalibration {
         robot,

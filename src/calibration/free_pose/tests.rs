@@ -87,6 +87,53 @@ fn commands(desc: &RobotDescription, poses: usize, rng: &mut ChaCha12Rng) -> Vec
         .collect()
 }
 
+/// The configurations of a simulated campaign.
+#[derive(Clone, Copy, Debug)]
+enum Shape<'a> {
+    /// Random configurations within 80 % of each joint's limits; the fit takes them all, the
+    /// z-score campaigns twice as many with every other one held out.
+    Free(usize),
+    /// One sweep per entry `(joint, span_deg, points)` in this order, each at its own random
+    /// configuration of the other joints (within 80 % of their limits), ascending; every
+    /// other point held out.
+    Sweeps(&'a [Sweep]),
+}
+
+/// One sweep of a simulated campaign: `(joint, span_deg, points)`.
+type Sweep = (usize, f64, usize);
+
+impl Shape<'_> {
+    /// Whether every z-score is expected below 5 (Gaussian: once in 1.7 million). Not for
+    /// partial sweeps (joints never swept, one configuration per swept joint): there the
+    /// weakest combinations scatter beyond their linearised sigma (seeds 1000-1049: largest
+    /// |z| 7.6 on the 6R arm, 5.8 on the IRB/L6, the mean square still within its bound).
+    fn tail_bounded(&self, joints: usize) -> bool {
+        match self {
+            Shape::Free(_) => true,
+            Shape::Sweeps(sweeps) => (1..=joints).all(|k| sweeps.iter().any(|s| s.0 == k)),
+        }
+    }
+}
+
+/// One sweep per entry of `sweeps`, each at its own random configuration (file units).
+fn sweep_commands(desc: &RobotDescription, sweeps: &[Sweep], rng: &mut ChaCha12Rng) -> Vec<Vec<f64>> {
+    let mut out = Vec::new();
+    for &(joint, span_deg, points) in sweeps {
+        let held = commands(desc, 1, rng).remove(0);
+        let k = joint - 1;
+        let [lo, hi] = desc.limits_internal(k);
+        let span = span_deg.to_radians().min(hi - lo);
+        let internal = crate::robot::commands_to_internal(desc, &held);
+        let centre = internal[k].clamp(lo + span / 2.0, hi - span / 2.0);
+        for i in 0..points {
+            let mut q = internal.clone();
+            q[k] = centre - span / 2.0 + span * i as f64 / (points - 1) as f64;
+            out.push(commands_to_file(desc, &q));
+        }
+    }
+    out
+}
+
 /// The measurement set of `truth` at `cmds` with isotropic noise `NOISE_M`: the points made by
 /// the robot model's own forward kinematics (`RobotModel::joint_values`, `PhiModel`).
 fn measure(desc: &RobotDescription, truth: &FreePoseModel, cmds: &[Vec<f64>], rng: &mut ChaCha12Rng) -> MeasurementSet {
@@ -136,39 +183,92 @@ fn truth(desc: &RobotDescription, target_count: usize, which: &[String], rng: &m
     start.moved(&layout, &columns, &delta)
 }
 
-/// The names of the parameters a noise-free campaign of the nominal robot identifies.
+/// The configurations of `shape`: the fit's (`twice`: the z-score campaigns', half of them
+/// held out).
+fn configurations(desc: &RobotDescription, shape: Shape<'_>, twice: bool, rng: &mut ChaCha12Rng) -> Vec<Vec<f64>> {
+    match shape {
+        Shape::Free(poses) => commands(desc, if twice { 2 * poses } else { poses }, rng),
+        Shape::Sweeps(sweeps) => sweep_commands(desc, sweeps, rng),
+    }
+}
+
+/// The options of a z-score fit: every other configuration held out, harmonics of order 1.
+fn fit_options(holdout: bool) -> FreePoseOptions {
+    FreePoseOptions {
+        holdout,
+        max_harmonic_order: 1,
+        ..FreePoseOptions::default()
+    }
+}
+
+/// The names of the parameters a campaign of the nominal robot identifies.
 fn identified(desc: &RobotDescription, target_count: usize, poses: usize) -> Vec<String> {
     let mut rng = ChaCha12Rng::seed_from_u64(0);
     let nominal = truth(desc, target_count, &[], &mut rng);
-    let set = measure(desc, &nominal, &commands(desc, poses, &mut rng), &mut rng);
-    let options = FreePoseOptions {
-        max_harmonic_order: 1,
-        ..FreePoseOptions::default()
-    };
-    let cal = calibrate_free_poses(&set, desc, &options).expect("calibration");
+    let cmds = commands(desc, poses, &mut rng);
+    identified_at(desc, &nominal, &cmds, false, &mut rng)
+}
+
+/// The names of the parameters a campaign of `nominal` at the configurations `cmds`
+/// identifies (with every other configuration held out: `holdout`).
+fn identified_at(
+    desc: &RobotDescription,
+    nominal: &FreePoseModel,
+    cmds: &[Vec<f64>],
+    holdout: bool,
+    rng: &mut ChaCha12Rng,
+) -> Vec<String> {
+    let set = measure(desc, nominal, cmds, rng);
+    let cal = calibrate_free_poses(&set, desc, &fit_options(holdout)).expect("calibration");
     cal.summary.parameters.iter().map(|p| p.name.clone()).collect()
 }
 
+/// A campaign's truth and configurations: a truth moved along the parameters a free-pose
+/// campaign of the shape identifies (`names`), or, for sweeps at random configurations,
+/// along those this campaign's own configurations identify (which joints' parameters the
+/// few configurations resolve depends on them).
+fn campaign(
+    desc: &RobotDescription,
+    target_count: usize,
+    shape: Shape<'_>,
+    names: &[String],
+    rng: &mut ChaCha12Rng,
+) -> (FreePoseModel, Vec<Vec<f64>>) {
+    match shape {
+        Shape::Free(_) => {
+            let truth = truth(desc, target_count, names, rng);
+            (truth, configurations(desc, shape, true, rng))
+        }
+        Shape::Sweeps(_) => {
+            let cmds = configurations(desc, shape, true, rng);
+            let nominal = truth(desc, target_count, &[], &mut ChaCha12Rng::seed_from_u64(0));
+            let own = identified_at(desc, &nominal, &cmds, true, &mut ChaCha12Rng::seed_from_u64(0));
+            (truth(desc, target_count, &own, rng), cmds)
+        }
+    }
+}
+
 /// The z-scores `(estimate - truth) / sigma` of every fitted parameter but the base's over
-/// `seeds` campaigns, and the held-out RMS over the noise's 3-D RMS of each.
+/// `seeds` campaigns, the held-out RMS over the noise's 3-D RMS of each, and the sum over the
+/// campaigns of `tr(R^2)`, `R` the correlation matrix of the scored parameters: the variance
+/// of the sum of the squared z-scores is twice it (the z-scores of one campaign are
+/// correlated Gaussians).
 fn z_scores(
     desc: &RobotDescription,
     target_count: usize,
-    poses: usize,
+    shape: Shape<'_>,
     seeds: std::ops::Range<u64>,
-) -> (Vec<f64>, Vec<f64>) {
-    let names = identified(desc, target_count, poses);
-    let (mut z, mut ratio) = (Vec::new(), Vec::new());
+) -> (Vec<f64>, Vec<f64>, f64) {
+    let names = match shape {
+        Shape::Free(poses) => identified(desc, target_count, poses),
+        Shape::Sweeps(_) => vec![],
+    };
+    let (mut z, mut ratio, mut trace_r2) = (Vec::new(), Vec::new(), 0.0);
     for seed in seeds {
         let mut rng = ChaCha12Rng::seed_from_u64(seed);
-        let truth = truth(desc, target_count, &names, &mut rng);
-        let set = measure(desc, &truth, &commands(desc, 2 * poses, &mut rng), &mut rng);
-        let options = FreePoseOptions {
-            holdout: true,
-            max_harmonic_order: 1,
-            ..FreePoseOptions::default()
-        };
-        let cal = calibrate_free_poses(&set, desc, &options).expect("calibration");
+        let (truth, cmds) = campaign(desc, target_count, shape, &names, &mut rng);
+        let set = measure(desc, &truth, &cmds, &mut rng);
+        let cal = calibrate_free_poses(&set, desc, &fit_options(true)).expect("calibration");
         let layout = layout(
             &cal.model.robot,
             &cal.model.target_ids,
@@ -181,31 +281,44 @@ fn z_scores(
             let true_value = summary::value_of(param, &truth).expect("value") * p.unit.per_si();
             z.push((p.value.expect("value") - true_value) / p.sigma);
         }
+        let scored: Vec<usize> = (0..cal.summary.parameters.len())
+            .filter(|&i| !cal.summary.parameters[i].name.starts_with("base"))
+            .collect();
+        let r = &cal.summary.correlation;
+        trace_r2 += scored
+            .iter()
+            .flat_map(|&i| scored.iter().map(move |&j| r[i][j] * r[i][j]))
+            .sum::<f64>();
         let h = cal.summary.holdout.expect("holdout");
         ratio.push(h.calibrated_rms_mm / (NOISE_M * 3f64.sqrt() * 1e3));
     }
-    (z, ratio)
+    (z, ratio, trace_r2)
 }
 
 fn rms(v: &[f64]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
 }
 
-/// Every robot shape: the fitted parameters agree with the truth within their sigmas (RMS of
-/// the z-scores within 4 standard errors of 1, `1 / sqrt(2 n)`), and the held-out RMS is at
-/// the noise floor (within 4 standard errors of the ratio's own spread, 30 % here).
-fn check_robot(desc: &RobotDescription, target_count: usize, poses: usize, seeds: std::ops::Range<u64>) {
-    let (z, ratio) = z_scores(desc, target_count, poses, seeds);
+/// Every robot shape: the fitted parameters agree with the truth within their sigmas (the
+/// mean squared z-score within 4 standard errors of 1; its standard error `sqrt(2 sum tr(R^2))
+/// / n`, `sqrt(2 / n)` for independent scores, printed as the bound on the RMS, half of it),
+/// and the held-out RMS is at the noise floor (within 4 standard errors of the ratio's own
+/// spread, 30 % here).
+fn check_robot(desc: &RobotDescription, target_count: usize, shape: Shape<'_>, seeds: std::ops::Range<u64>) {
+    let (z, ratio, trace_r2) = z_scores(desc, target_count, shape, seeds);
     let n = z.len() as f64;
-    let bound = 4.0 / (2.0 * n).sqrt();
+    let bound_sq = 4.0 * (2.0 * trace_r2).sqrt() / n;
+    let bound = bound_sq / 2.0;
     let z_rms = rms(&z);
     assert!(
-        (z_rms - 1.0).abs() < bound,
+        (z_rms * z_rms - 1.0).abs() < bound_sq,
         "{}: z RMS {z_rms:.3} over {n} scores (bound {bound:.3})",
         desc.name
     );
     let worst = z.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    assert!(worst < 5.0, "{}: a z-score of {worst:.2}", desc.name);
+    if shape.tail_bounded(desc.dof()) {
+        assert!(worst < 5.0, "{}: a z-score of {worst:.2}", desc.name);
+    }
     let mean_ratio = ratio.iter().sum::<f64>() / ratio.len() as f64;
     eprintln!(
         "{}: z RMS {z_rms:.3} over {n} scores (bound {bound:.3}), largest |z| {worst:.2}, held-out RMS / noise {mean_ratio:.3}",
@@ -220,7 +333,7 @@ fn check_robot(desc: &RobotDescription, target_count: usize, poses: usize, seeds
 
 #[test]
 fn six_axis_arm_with_parallel_axes_three_targets() {
-    check_robot(&shipped("arm6-dh"), 3, 60, 1..4);
+    check_robot(&shipped("arm6-dh"), 3, Shape::Free(60), 1..4);
 }
 
 /// The calibrated model's predictions at new configurations against the truth's, each point's
@@ -338,21 +451,69 @@ fn check_predictions(seeds: std::ops::Range<u64>) {
 
 #[test]
 fn seven_axis_arm_two_targets() {
-    check_robot(&seven_axis(), 2, 80, 1..4);
+    check_robot(&seven_axis(), 2, Shape::Free(80), 1..4);
+}
+
+/// Sweeps at per-sweep configurations, as real campaigns take them: a 6R arm with joints 1,
+/// 2, 5 and 6 swept once each (3 and 4 never, spans 95-270 deg, 20-55 points, one target); a
+/// 6R arm with every joint swept twice at two configurations; a 7R arm with every joint swept
+/// once, two targets; the coupled IRB/L6 with joints 2, 3 and 5 swept, three targets.
+fn sweep_campaigns() -> [(RobotDescription, usize, &'static [Sweep]); 4] {
+    const ARM6_PARTIAL: &[Sweep] = &[(1, 120.0, 24), (2, 95.0, 20), (5, 200.0, 40), (6, 270.0, 55)];
+    const ARM6_TWICE: &[Sweep] = &[
+        (1, 90.0, 15),
+        (2, 80.0, 15),
+        (3, 80.0, 15),
+        (4, 120.0, 15),
+        (5, 120.0, 15),
+        (6, 180.0, 15),
+        (1, 90.0, 15),
+        (2, 80.0, 15),
+        (3, 80.0, 15),
+        (4, 120.0, 15),
+        (5, 120.0, 15),
+        (6, 180.0, 15),
+    ];
+    const SEVEN: &[Sweep] = &[
+        (1, 120.0, 20),
+        (2, 100.0, 20),
+        (3, 120.0, 20),
+        (4, 100.0, 20),
+        (5, 120.0, 20),
+        (6, 100.0, 20),
+        (7, 180.0, 20),
+    ];
+    const IRB_PARTIAL: &[Sweep] = &[(2, 60.0, 25), (3, 50.0, 25), (5, 150.0, 25)];
+    [
+        (shipped("arm6-dh"), 1, ARM6_PARTIAL),
+        (shipped("arm6-dh"), 3, ARM6_TWICE),
+        (seven_axis(), 2, SEVEN),
+        (shipped("asea-irb6l"), 3, IRB_PARTIAL),
+    ]
+}
+
+#[test]
+fn sweeps_at_their_own_configurations() {
+    for (desc, targets, sweeps) in sweep_campaigns() {
+        check_robot(&desc, targets, Shape::Sweeps(sweeps), 1..4);
+    }
 }
 
 #[test]
 fn coupled_arm_one_target() {
-    check_robot(&shipped("asea-irb6l"), 1, 80, 1..4);
+    check_robot(&shipped("asea-irb6l"), 1, Shape::Free(80), 1..4);
 }
 
 /// The 50-seed check (release build: `cargo test --release --lib free_pose -- --ignored`).
 #[test]
 #[ignore]
 fn fifty_seeds_per_robot() {
-    check_robot(&shipped("arm6-dh"), 3, 100, 100..150);
-    check_robot(&seven_axis(), 2, 100, 100..150);
-    check_robot(&shipped("asea-irb6l"), 1, 100, 100..150);
+    check_robot(&shipped("arm6-dh"), 3, Shape::Free(100), 100..150);
+    check_robot(&seven_axis(), 2, Shape::Free(100), 100..150);
+    check_robot(&shipped("asea-irb6l"), 1, Shape::Free(100), 100..150);
+    for (desc, targets, sweeps) in sweep_campaigns() {
+        check_robot(&desc, targets, Shape::Sweeps(sweeps), 1000..1050);
+    }
     check_predictions(100..150);
 }
 

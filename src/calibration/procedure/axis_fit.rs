@@ -28,6 +28,9 @@ use nalgebra::{Isometry3, Point3, Unit, Vector3};
 pub(super) struct AxisFitOutcome {
     /// The fitted axis (instrument frame).
     pub(super) axis: AxisLine,
+    /// The transmission form fitted (the description's, or lower where the sweeps do not
+    /// resolve it).
+    pub(super) form: TransmissionForm,
     /// The fitted transmission, in the fit's own zero.
     pub(super) transmission: Transmission,
     /// The axis's report.
@@ -120,8 +123,45 @@ pub(super) fn fit_joint(
     detail: Detail,
 ) -> Result<AxisFitOutcome, ProcedureError> {
     let joint = data.joint();
+    let requested = TransmissionForm::from(desc.joints[joint - 1].transmission_fit_form());
+    let mut form = requested;
+    let mut out = loop {
+        match fit_joint_as(data, form, desc, controller, options, noise_mm, repeatability, detail) {
+            Err(ProcedureError::Fit {
+                source: CalibrationError::NotInvertible { .. },
+                ..
+            }) if form.order() > 0 => form = form.one_order_lower().unwrap_or(form),
+            fitted => break fitted?,
+        }
+    };
+    if form != requested {
+        out.report.identifiability.push(format!(
+            "transmission: the sweeps do not resolve order {} (its fitted harmonics make the transmission non-monotonic over the sweep): fitted to order {}",
+            requested.order(),
+            form.order()
+        ));
+    }
+    if detail == Detail::Report {
+        out.report.sweeps = sweep_reports(data, &out, desc, controller, options, noise_mm * 1e-3 / 3f64.sqrt());
+    }
+    Ok(out)
+}
+
+/// Fits one joint's axis with the transmission `form`: the highest order the sweeps resolve
+/// is picked by [`fit_joint`] (eq. 8: the transmission must be invertible over the sweep).
+#[allow(clippy::too_many_arguments)]
+fn fit_joint_as(
+    data: &JointData<'_>,
+    form: TransmissionForm,
+    desc: &RobotDescription,
+    controller: &Controller,
+    options: &CalibrationOptions,
+    noise_mm: f64,
+    repeatability: f64,
+    detail: Detail,
+) -> Result<AxisFitOutcome, ProcedureError> {
+    let joint = data.joint();
     let (points, u) = data.flat(controller, desc);
-    let form = TransmissionForm::from(desc.joints[joint - 1].transmission_fit_form());
     let err = |source| ProcedureError::Fit {
         experiment: data.name(),
         joint,
@@ -140,20 +180,16 @@ pub(super) fn fit_joint(
         });
     }
     let sigma = noise_mm * 1e-3 / 3f64.sqrt();
-    let mut out = match (kind, paper) {
+    match (kind, paper) {
         (JointKind::Revolute, false) => {
-            fit_arc_ml(data, &points, &u, form, options, sigma, repeatability, detail).map_err(err)?
+            fit_arc_ml(data, &points, &u, form, options, sigma, repeatability, detail).map_err(err)
         }
-        (JointKind::Revolute, true) => fit_arc_paper(data, &points, &u, form, options).map_err(err)?,
+        (JointKind::Revolute, true) => fit_arc_paper(data, &points, &u, form, options).map_err(err),
         (JointKind::Prismatic, false) => {
-            fit_line_ml(data, &points, &u, form, options, sigma, repeatability, detail).map_err(err)?
+            fit_line_ml(data, &points, &u, form, options, sigma, repeatability, detail).map_err(err)
         }
-        (JointKind::Prismatic, true) => fit_line_paper(data, &points, &u, form, options).map_err(err)?,
-    };
-    if detail == Detail::Report {
-        out.report.sweeps = sweep_reports(data, &out, desc, controller, options, sigma);
+        (JointKind::Prismatic, true) => fit_line_paper(data, &points, &u, form, options).map_err(err),
     }
-    Ok(out)
 }
 
 /// The ML arc fit of one joint; the identifiability study, the covariance and the residuals
@@ -201,6 +237,7 @@ fn fit_arc_ml(
     });
     if detail != Detail::Report {
         return Ok(AxisFitOutcome {
+            form,
             axis: fit.axis,
             transmission: fit.transmission,
             report,
@@ -225,6 +262,7 @@ fn fit_arc_ml(
         })
         .collect();
     Ok(AxisFitOutcome {
+        form,
         axis: fit.axis,
         transmission: fit.transmission.clone(),
         report,
@@ -266,6 +304,7 @@ fn fit_line_ml(
         })
         .collect();
     Ok(AxisFitOutcome {
+        form,
         axis: AxisLine {
             origin_m: fit.params.start,
             direction: fit.direction,
@@ -310,6 +349,7 @@ fn fit_arc_paper(
     let t = fit_transmission(&form, &increments, u)?;
     let report = AxisReport::from_paper(data.sweeps[0], &fit, &t, &form, span(u));
     Ok(AxisFitOutcome {
+        form,
         axis,
         transmission: t.transmission,
         report,
@@ -357,6 +397,7 @@ fn fit_line_paper(
         sweeps: vec![],
     };
     Ok(AxisFitOutcome {
+        form,
         axis: AxisLine {
             origin_m: points[0],
             direction: fit.direction,
@@ -395,7 +436,7 @@ fn sweep_reports(
                 .sqrt();
             let (offsets, wander) = held_offsets(e, desc, &out.report);
             let own = (data.sweeps.len() > 1)
-                .then(|| own_axis(e, pts, k, desc, controller, options, sigma, &out.axis))
+                .then(|| own_axis(e, pts, k, desc, controller, options, sigma, &out.axis, out.form))
                 .flatten();
             SweepReport {
                 experiment: e.name.clone(),
@@ -436,13 +477,14 @@ fn own_axis(
     options: &CalibrationOptions,
     sigma: f64,
     joint_axis: &AxisLine,
+    joint_form: TransmissionForm,
 ) -> Option<(f64, Option<f64>)> {
     let u: Vec<f64> = e
         .target0_steps
         .iter()
         .map(|&i| actuator_commands(controller, desc, &e.commands[i])[k])
         .collect();
-    let form = TransmissionForm::from(desc.joints[k].transmission_fit_form());
+    let form = joint_form;
     let dir_angle = |d: &Vector3<f64>| d.angle(&joint_axis.direction) * 1e3;
     match desc.joints[k].kind {
         JointKind::Revolute => {

@@ -171,6 +171,15 @@ pub enum ProcedureError {
         /// Largest change of a corrected point in the last pass \[mm\].
         change_mm: f64,
     },
+    /// A fit-and-correct pass for the held joints' recorded values failed: the correction
+    /// moved the points away from any arc (it diverges).
+    #[error("the correction for the held joints' recorded values diverged in pass {pass}: {source}")]
+    HeldDiverged {
+        /// The pass that failed (the first correction is pass 2).
+        pass: usize,
+        /// Its error.
+        source: Box<ProcedureError>,
+    },
     /// The recorded values could not be evaluated on the calibrated model.
     #[error("modelling the held joints' recorded values: {0}")]
     Held(#[from] crate::robot::ModelError),
@@ -400,7 +409,12 @@ fn calibrate_at<T>(
                 .iter()
                 .map(|e| corrector.corrected(e, 1))
                 .collect::<Result<_, _>>()?;
-            let next = ctx.assemble(|k| ctx.all_sweeps(k, &t0), &t1)?;
+            let next =
+                ctx.assemble(|k| ctx.all_sweeps(k, &t0), &t1)
+                    .map_err(|source| ProcedureError::HeldDiverged {
+                        pass: passes + 1,
+                        source: Box::new(source),
+                    })?;
             change = if next.points.len() == state.points.len() && passes > 1 {
                 next.points
                     .iter()
