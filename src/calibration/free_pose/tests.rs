@@ -460,13 +460,7 @@ fn seven_axis_arm_two_targets() {
 /// once, two targets; the coupled IRB/L6 with joints 2, 3 and 5 swept, three targets.
 fn sweep_campaigns() -> [(RobotDescription, usize, &'static [Sweep]); 4] {
     const ARM6_PARTIAL: &[Sweep] = &[(1, 120.0, 24), (2, 95.0, 20), (5, 200.0, 40), (6, 270.0, 55)];
-    const ARM6_TWICE: &[Sweep] = &[
-        (1, 90.0, 15),
-        (2, 80.0, 15),
-        (3, 80.0, 15),
-        (4, 120.0, 15),
-        (5, 120.0, 15),
-        (6, 180.0, 15),
+    const ARM6_ONCE: [Sweep; 6] = [
         (1, 90.0, 15),
         (2, 80.0, 15),
         (3, 80.0, 15),
@@ -474,6 +468,15 @@ fn sweep_campaigns() -> [(RobotDescription, usize, &'static [Sweep]); 4] {
         (5, 120.0, 15),
         (6, 180.0, 15),
     ];
+    const ARM6_TWICE: &[Sweep] = &{
+        let mut out = [(0, 0.0, 0); 12];
+        let mut i = 0;
+        while i < 12 {
+            out[i] = ARM6_ONCE[i % 6];
+            i += 1;
+        }
+        out
+    };
     const SEVEN: &[Sweep] = &[
         (1, 120.0, 20),
         (2, 100.0, 20),

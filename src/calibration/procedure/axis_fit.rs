@@ -125,8 +125,16 @@ pub(super) fn fit_joint(
     let joint = data.joint();
     let requested = TransmissionForm::from(desc.joints[joint - 1].transmission_fit_form());
     let mut form = requested;
+    let setting = FitSetting {
+        desc,
+        controller,
+        options,
+        noise_mm,
+        repeatability,
+        detail,
+    };
     let mut out = loop {
-        match fit_joint_as(data, form, desc, controller, options, noise_mm, repeatability, detail) {
+        match fit_joint_as(data, form, &setting) {
             Err(ProcedureError::Fit {
                 source: CalibrationError::NotInvertible { .. },
                 ..
@@ -147,21 +155,26 @@ pub(super) fn fit_joint(
     Ok(out)
 }
 
-/// Fits one joint's axis with the transmission `form`: the highest order the sweeps resolve
-/// is picked by [`fit_joint`] (eq. 8: the transmission must be invertible over the sweep).
-#[allow(clippy::too_many_arguments)]
-fn fit_joint_as(
-    data: &JointData<'_>,
-    form: TransmissionForm,
-    desc: &RobotDescription,
-    controller: &Controller,
-    options: &CalibrationOptions,
+/// What every transmission order tried for one joint shares ([`fit_joint`]'s arguments).
+struct FitSetting<'a> {
+    desc: &'a RobotDescription,
+    controller: &'a Controller,
+    options: &'a CalibrationOptions,
     noise_mm: f64,
     repeatability: f64,
     detail: Detail,
+}
+
+/// Fits one joint's axis with the transmission `form`: the highest order the sweeps resolve
+/// is picked by [`fit_joint`] (eq. 8: the transmission must be invertible over the sweep).
+fn fit_joint_as(
+    data: &JointData<'_>,
+    form: TransmissionForm,
+    setting: &FitSetting<'_>,
 ) -> Result<AxisFitOutcome, ProcedureError> {
+    let (desc, options, detail) = (setting.desc, setting.options, setting.detail);
     let joint = data.joint();
-    let (points, u) = data.flat(controller, desc);
+    let (points, u) = data.flat(setting.controller, desc);
     let err = |source| ProcedureError::Fit {
         experiment: data.name(),
         joint,
@@ -179,14 +192,14 @@ fn fit_joint_as(
             ),
         });
     }
-    let sigma = noise_mm * 1e-3 / 3f64.sqrt();
+    let sigma = setting.noise_mm * 1e-3 / 3f64.sqrt();
     match (kind, paper) {
         (JointKind::Revolute, false) => {
-            fit_arc_ml(data, &points, &u, form, options, sigma, repeatability, detail).map_err(err)
+            fit_arc_ml(data, &points, &u, form, options, sigma, setting.repeatability, detail).map_err(err)
         }
         (JointKind::Revolute, true) => fit_arc_paper(data, &points, &u, form, options).map_err(err),
         (JointKind::Prismatic, false) => {
-            fit_line_ml(data, &points, &u, form, options, sigma, repeatability, detail).map_err(err)
+            fit_line_ml(data, &points, &u, form, options, sigma, setting.repeatability, detail).map_err(err)
         }
         (JointKind::Prismatic, true) => fit_line_paper(data, &points, &u, form, options).map_err(err),
     }
