@@ -35,7 +35,7 @@ test:
 ## test-real: the tests on public real data sets, which need ../shared/data/real/ beside the
 ## repository (or AXISCAL_SHARED_DIR naming the shared folder)
 test-real:
-	$(CARGO) test --test real_boby_klimchik --test real_fanuc -- --ignored
+	$(CARGO) test --test real_boby_klimchik --test real_fanuc --test real_sscanss2 --test real_rct -- --ignored
 
 ## test-robots: the four issue-15 test robots (P-R-P-P table, two-axis positioner, SCARA,
 ## six-axis arm with a repeated sweep and wandering held joints), 50 seeds of noise each:

@@ -7,6 +7,8 @@ use axiscal::measurement::import::arrays::{ArrayImport, free_poses};
 use axiscal::measurement::import::boby_klimchik;
 use axiscal::measurement::import::mat_v5;
 use axiscal::measurement::import::points::{LengthUnit, PlanSheet, join_points};
+use axiscal::measurement::import::rct;
+use axiscal::measurement::import::sscanss2;
 use axiscal::measurement::import::table::Table;
 use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide};
 use axiscal::measurement::write_measurements_to;
@@ -35,6 +37,13 @@ enum Format {
     /// scripts write it; axis experiments recovered from the joint values
     /// (`docs/formats.md#wide-format`).
     Wide(WideArgs),
+    /// SScanSS-2's calibration file (7 columns a point: joint, x, y, z, joint value, type,
+    /// home; no header), one joint moved at a time (`docs/formats.md#sscanss-2-calibration-file`).
+    Sscanss2(Sscanss2Args),
+    /// robot_cal_tools' kinematic measurements (YAML: per observation a fixed camera's `pose`
+    /// of a target on the robot and the robot's `target_joints`); experiments recovered from the
+    /// joint values as for `wide` (`docs/formats.md#robot_cal_tools-measurements`).
+    Rct(RctArgs),
     /// A MATLAB v5 file (`.mat`, `save -v7` or older) of free poses: a joint array (one row per
     /// pose, one column per joint) and one point array per target (one row per pose, x y z).
     Mat(MatArgs),
@@ -139,6 +148,49 @@ struct MatArgs {
     force: bool,
 }
 
+/// `import sscanss2 FILE --robot R --out DATA`.
+#[derive(Debug, clap::Args)]
+struct Sscanss2Args {
+    /// The calibration file.
+    file: PathBuf,
+    /// The robot description (joint count and kinds, checked against the file's types), or a
+    /// shipped one's name.
+    #[arg(long, value_parser = super::options::robot_file)]
+    robot: PathBuf,
+    /// Unit of the points (SScanSS-2 works in mm).
+    #[arg(long, value_enum, default_value = "mm")]
+    units: Unit,
+    /// Output measurement CSV.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
+}
+
+/// `import rct FILE --robot R --out DATA`.
+#[derive(Debug, clap::Args)]
+struct RctArgs {
+    /// The measurement file (YAML).
+    file: PathBuf,
+    /// The robot description (joint count and kinds), or a shipped one's name.
+    #[arg(long, value_parser = super::options::robot_file)]
+    robot: PathBuf,
+    /// Also targets 1 and 2, this far along the measured frame's x and y axes \[mm\]: the
+    /// camera's orientation as two more points (their noise is the orientation's times this).
+    #[arg(long)]
+    frame_points: Option<f64>,
+    /// Joint values within this of each other hold the joint still (deg or mm).
+    #[arg(long, default_value_t = 1e-6)]
+    still_tolerance: f64,
+    /// Output measurement CSV.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
+}
+
 /// A data-set folder and the output file.
 #[derive(Debug, clap::Args)]
 struct DirArgs {
@@ -183,6 +235,8 @@ pub fn run(args: Args) -> Result<()> {
         Format::Points(a) => import_points(&a),
         Format::Wide(a) => import_wide(&a),
         Format::Mat(a) => import_mat(&a),
+        Format::Sscanss2(a) => import_sscanss2(&a),
+        Format::Rct(a) => import_rct(&a),
         Format::BobyKlimchik(a) => {
             let source = a.dir.join(boby_klimchik::DATA_FILE);
             Outputs::new(a.force).input("DIR", &source).check(&a.out)?;
@@ -266,6 +320,60 @@ fn import_points(a: &PointsArgs) -> Result<()> {
     Ok(())
 }
 
+fn import_sscanss2(a: &Sscanss2Args) -> Result<()> {
+    let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
+    outputs.check(&a.out)?;
+    let desc = RobotDescription::from_file(&a.robot)?;
+    let text = axiscal::presets::read_text(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
+    let kinds: Vec<_> = desc.joints.iter().map(|j| j.kind).collect();
+    let set = sscanss2::parse(&text, &a.file, &kinds, a.units.into())?;
+    let comment = format!(
+        "{}{}",
+        super::checks::identity_comment(&desc),
+        sscanss2::provenance_comment(&a.file)
+    );
+    write_csv_from(&a.out, outputs, &comment, &set)?;
+    report_experiments(&set, &a.file, &a.out);
+    Ok(())
+}
+
+fn import_rct(a: &RctArgs) -> Result<()> {
+    let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
+    outputs.check(&a.out)?;
+    if a.frame_points.is_some_and(|l| !(l.is_finite() && l > 0.0)) {
+        anyhow::bail!("--frame-points must be a positive length in mm");
+    }
+    let desc = RobotDescription::from_file(&a.robot)?;
+    let text = axiscal::presets::read_text(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
+    let options = rct::RctOptions {
+        kinds: desc.joints.iter().map(|j| j.kind).collect(),
+        frame_points_mm: a.frame_points,
+        still_tolerance: a.still_tolerance,
+    };
+    let set = rct::parse(&text, &a.file, &options)?;
+    let comment = format!(
+        "{}{}",
+        super::checks::identity_comment(&desc),
+        rct::provenance_comment(&a.file, &options)
+    );
+    write_csv_from(&a.out, outputs, &comment, &set)?;
+    report_experiments(&set, &a.file, &a.out);
+    Ok(())
+}
+
+/// What an import wrote: its rows and experiments.
+fn report_experiments(set: &axiscal::measurement::MeasurementSet, source: &Path, out: &Path) {
+    println!(
+        "imported {} rows from {} to {}",
+        set.rows().len(),
+        source.display(),
+        out.display()
+    );
+    for e in set.experiments() {
+        println!("  {:<10} moved_joint {}  {} rows", e.name, e.moved_joint, e.rows.len());
+    }
+}
+
 fn import_wide(a: &WideArgs) -> Result<()> {
     let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
     outputs.check(&a.out)?;
@@ -283,15 +391,7 @@ fn import_wide(a: &WideArgs) -> Result<()> {
         a.file.display()
     );
     write_csv_from(&a.out, outputs, &comment, &set)?;
-    println!(
-        "imported {} rows from {} to {}",
-        set.rows().len(),
-        a.file.display(),
-        a.out.display()
-    );
-    for e in set.experiments() {
-        println!("  {:<10} moved_joint {}  {} rows", e.name, e.moved_joint, e.rows.len());
-    }
+    report_experiments(&set, &a.file, &a.out);
     Ok(())
 }
 

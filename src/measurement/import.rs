@@ -5,5 +5,7 @@ pub mod arrays;
 pub mod boby_klimchik;
 pub mod mat_v5;
 pub mod points;
+pub mod rct;
+pub mod sscanss2;
 pub mod table;
 pub mod wide;

@@ -480,23 +480,15 @@ fn cross_validated_sse(
     Ok(sse)
 }
 
-/// A calibrated RMS beyond this fraction of the points' spread about their centroid is no
-/// calibration: the model leaves a quarter of a percent of the points' variance (`0.05^2`)
-/// unexplained, where a robot the description fits leaves parts per million (0.2 mm of misfit
-/// over a spread of half a metre).
-const ABSURD_SHARE: f64 = 0.05;
-
-/// Refuses a fit whose RMS is a good part of the points' own spread ([`ABSURD_SHARE`]).
+/// Refuses a fit whose RMS is a good part of the points' own spread ([`crate::numerics::stats::ABSURD_SHARE`]).
 fn check_plausible(fitted: &Fitted, poses: &FreePoses, kept: &[usize]) -> Result<(), FreePoseError> {
     let points: Vec<nalgebra::Point3<f64>> = kept
         .iter()
         .flat_map(|&i| poses.poses[i].points_m.iter().map(|(_, p)| *p))
         .collect();
-    let n = points.len().max(1) as f64;
-    let centroid = points.iter().fold(nalgebra::Vector3::zeros(), |a, p| a + p.coords) / n;
-    let spread = (points.iter().map(|p| (p.coords - centroid).norm_squared()).sum::<f64>() / n).sqrt();
+    let spread = crate::numerics::stats::rms_spread(&points);
     let rms = fitted.rms_m();
-    if rms > ABSURD_SHARE * spread {
+    if rms > crate::numerics::stats::ABSURD_SHARE * spread {
         return Err(FreePoseError::Absurd {
             rms_mm: rms * 1e3,
             spread_mm: spread * 1e3,

@@ -142,6 +142,16 @@ pub(super) fn fit_joint(
             fitted => break fitted?,
         }
     };
+    let spread_mm = crate::numerics::stats::rms_spread(&data.flat(controller, desc).0) * 1e3;
+    if out.report.residual_rms_mm > crate::numerics::stats::ABSURD_SHARE * spread_mm {
+        return Err(ProcedureError::Absurd {
+            experiment: data.name(),
+            joint,
+            rms_mm: out.report.residual_rms_mm,
+            spread_mm,
+            share: 100.0 * out.report.residual_rms_mm / spread_mm,
+        });
+    }
     if form != requested {
         out.report.identifiability.push(format!(
             "transmission: the sweeps do not resolve order {} (its fitted harmonics make the transmission non-monotonic over the sweep): fitted to order {}",

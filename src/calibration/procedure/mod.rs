@@ -171,6 +171,22 @@ pub enum ProcedureError {
         /// Largest change of a corrected point in the last pass \[mm\].
         change_mm: f64,
     },
+    /// An axis fit misses its points by a good part of their own spread: no calibration.
+    #[error(
+        "experiment {experiment} (joint {joint}): the fitted axis misses its points by {rms_mm:.3} mm RMS, {share:.1} % of their spread about their centroid ({spread_mm:.1} mm): the points are not on one arc or line of this joint (check the joint order and kinds of the robot file, the target ids, the units)"
+    )]
+    Absurd {
+        /// The experiments of the joint.
+        experiment: String,
+        /// The joint.
+        joint: usize,
+        /// The fit's RMS \[mm\].
+        rms_mm: f64,
+        /// The points' RMS spread \[mm\].
+        spread_mm: f64,
+        /// `100 rms / spread`.
+        share: f64,
+    },
     /// A fit-and-correct pass for the held joints' recorded values failed: the correction
     /// moved the points away from any arc (it diverges).
     #[error("the correction for the held joints' recorded values diverged in pass {pass}: {source}")]

@@ -40,7 +40,7 @@ pub fn joint_column_names(k: usize) -> [String; 6] {
 }
 
 /// The poses of a wide table: per row its line, commands (file units) and markers.
-type Pose = (usize, Vec<f64>, Vec<Option<[f64; 3]>>);
+pub(super) type Pose = (usize, Vec<f64>, Vec<Option<[f64; 3]>>);
 
 /// Reads the table into measurement rows (`docs/formats.md#wide-format`).
 pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, PointsError> {
@@ -82,7 +82,18 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
             .collect::<Result<Vec<_>, _>>()?;
         poses.push((*line, cmd, seen));
     }
-    let experiments = segment(&poses, options.still_tolerance);
+    rows_of(&poses, options.kinds.len(), options.still_tolerance, &t.path)
+}
+
+/// The measurement rows of `poses` in experiments recovered from their joint values
+/// ([`segment`]); `path` labels errors.
+pub(super) fn rows_of(
+    poses: &[Pose],
+    joints: usize,
+    still_tolerance: f64,
+    path: &std::path::Path,
+) -> Result<MeasurementSet, PointsError> {
+    let experiments = segment(poses, still_tolerance);
     let mut rows = Vec::new();
     for (pose, (name, moved_joint, step)) in poses.iter().zip(experiments) {
         for (target, p) in pose.2.iter().enumerate() {
@@ -100,8 +111,8 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
             }
         }
     }
-    MeasurementSet::new(options.kinds.len(), rows).map_err(|source| PointsError::Set {
-        path: t.path.clone(),
+    MeasurementSet::new(joints, rows).map_err(|source| PointsError::Set {
+        path: path.to_owned(),
         source,
     })
 }
@@ -147,7 +158,7 @@ fn swept_joint(a: &[f64], b: &[f64], tolerance: f64) -> Option<usize> {
 }
 
 /// Per pose: experiment id, moved joint (1-based, 0 for free poses) and step.
-fn segment(poses: &[Pose], tolerance: f64) -> Vec<(String, usize, usize)> {
+pub(super) fn segment(poses: &[Pose], tolerance: f64) -> Vec<(String, usize, usize)> {
     let n = poses.len();
     let mut out: Vec<Option<(usize, usize, usize)>> = vec![None; n];
     let mut runs_of_joint = vec![0usize; poses.first().map_or(0, |p| p.1.len())];

@@ -1,0 +1,283 @@
+//! SScanSS-2's calibration file (`docs/formats.md#sscanss-2-calibration-file`): the file its
+//! "Generate Robot Model" tool reads. No header; per measured point 7 comma- or
+//! white-space-delimited columns: the joint moved (1-based), the point's `x, y, z` (instrument
+//! frame), the joint's value at it (deg revolute, mm prismatic), the joint's type
+//! (`revolute` / `prismatic`) and the joint's home value. One joint moves at a time, every
+//! other at its home value.
+//!
+//! Each run of consecutive rows of one joint is an axis experiment `joint<k>` (a later run of
+//! the same joint `joint<k>-2`, ...) of target 0; a held joint's command is its home value.
+
+use super::points::{LengthUnit, PointsError};
+use crate::kinematics::JointKind;
+use crate::measurement::{Measurement, MeasurementSet};
+use std::path::{Path, PathBuf};
+
+/// Columns of a row, in order (the names messages use).
+const COLUMNS: [&str; 7] = ["joint", "x", "y", "z", "value", "type", "home"];
+
+/// One parsed row.
+#[derive(Clone, Debug)]
+struct Row {
+    line: usize,
+    joint: usize,
+    point: [f64; 3],
+    value: f64,
+    kind: JointKind,
+    home: f64,
+}
+
+/// Reads SScanSS-2's calibration file `text` (`path` labels messages) for a robot whose joints
+/// are `kinds`; coordinates in `unit`. Every joint type and home value is checked against the
+/// others of its joint and the type against `kinds`.
+pub fn parse(text: &str, path: &Path, kinds: &[JointKind], unit: LengthUnit) -> Result<MeasurementSet, PointsError> {
+    let rows = rows(text, path, kinds.len(), unit)?;
+    let homes = homes(&rows, path, kinds)?;
+    let mut out = Vec::with_capacity(rows.len());
+    let mut runs = vec![0usize; kinds.len()];
+    let mut step = 0;
+    for (i, r) in rows.iter().enumerate() {
+        if i == 0 || rows[i - 1].joint != r.joint {
+            runs[r.joint - 1] += 1;
+            step = 0;
+        }
+        let run = runs[r.joint - 1];
+        let mut cmd = homes.clone();
+        cmd[r.joint - 1] = r.value;
+        out.push(Measurement {
+            experiment: if run == 1 {
+                format!("joint{}", r.joint)
+            } else {
+                format!("joint{}-{run}", r.joint)
+            },
+            moved_joint: r.joint,
+            step,
+            target: 0,
+            position_mm: r.point,
+            cmd,
+            payload_kg: Measurement::DEFAULT_PAYLOAD_KG,
+            temperature_c: Measurement::DEFAULT_TEMPERATURE_C,
+        });
+        step += 1;
+    }
+    MeasurementSet::new(kinds.len(), out).map_err(|source| PointsError::Set {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// The data rows (blank and `#` lines skipped).
+fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit) -> Result<Vec<Row>, PointsError> {
+    let mut rows = Vec::new();
+    for (i, line) in text.trim_start_matches('\u{feff}').lines().enumerate() {
+        let trimmed = line.trim();
+        if trimmed.is_empty() || trimmed.starts_with('#') {
+            continue;
+        }
+        rows.push(row(trimmed, i + 1, path, joints, unit)?);
+    }
+    if rows.is_empty() {
+        return Err(PointsError::File {
+            path: path.to_owned(),
+            message: "no data row (SScanSS-2's calibration file: 7 columns per measured point)".into(),
+        });
+    }
+    Ok(rows)
+}
+
+/// One row: `joint, x, y, z, value, type, home`.
+fn row(line_text: &str, line: usize, path: &Path, joints: usize, unit: LengthUnit) -> Result<Row, PointsError> {
+    let cells: Vec<&str> = line_text
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|c| !c.is_empty())
+        .collect();
+    let error = |column: usize, message: String| PointsError::Row {
+        path: path.to_owned(),
+        line,
+        field: COLUMNS[column].to_owned(),
+        message,
+    };
+    if cells.len() != COLUMNS.len() {
+        return Err(PointsError::File {
+            path: path.to_owned(),
+            message: format!(
+                "line {line}: {} columns, expected 7 ({})",
+                cells.len(),
+                COLUMNS.join(", ")
+            ),
+        });
+    }
+    let number = |column: usize| -> Result<f64, PointsError> {
+        cells[column]
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| error(column, format!("`{}` is not a finite number", cells[column])))
+    };
+    let joint = cells[0]
+        .parse::<usize>()
+        .ok()
+        .filter(|j| (1..=joints).contains(j))
+        .ok_or_else(|| error(0, format!("`{}` is not a joint of the robot (1..{joints})", cells[0])))?;
+    let kind = match cells[5].to_ascii_lowercase().as_str() {
+        "revolute" => JointKind::Revolute,
+        "prismatic" => JointKind::Prismatic,
+        other => return Err(error(5, format!("`{other}` is neither `revolute` nor `prismatic`"))),
+    };
+    let mm = unit.to_mm();
+    Ok(Row {
+        line,
+        joint,
+        point: [number(1)? * mm, number(2)? * mm, number(3)? * mm],
+        value: number(4)?,
+        kind,
+        home: number(6)?,
+    })
+}
+
+/// Each joint's home value (file units); its type checked against `kinds` and every row of
+/// the joint giving the same home.
+fn homes(rows: &[Row], path: &Path, kinds: &[JointKind]) -> Result<Vec<f64>, PointsError> {
+    let mut homes: Vec<Option<(f64, usize)>> = vec![None; kinds.len()];
+    for r in rows {
+        let k = r.joint - 1;
+        if r.kind != kinds[k] {
+            return Err(row_error(
+                path,
+                r.line,
+                5,
+                format!(
+                    "joint {} is {} in the robot description, the file says {}",
+                    r.joint,
+                    kind_name(kinds[k]),
+                    kind_name(r.kind)
+                ),
+            ));
+        }
+        match homes[k] {
+            None => homes[k] = Some((r.home, r.line)),
+            Some((home, first)) if home.to_bits() != r.home.to_bits() => {
+                return Err(row_error(
+                    path,
+                    r.line,
+                    6,
+                    format!(
+                        "joint {}'s home {} differs from {home} on line {first}",
+                        r.joint, r.home
+                    ),
+                ));
+            }
+            Some(_) => {}
+        }
+    }
+    let missing: Vec<String> = (0..kinds.len())
+        .filter(|&k| homes[k].is_none())
+        .map(|k| (k + 1).to_string())
+        .collect();
+    if !missing.is_empty() {
+        return Err(PointsError::File {
+            path: path.to_owned(),
+            message: format!(
+                "no row of joint(s) {}: their home values are unknown (every joint of the robot must be measured)",
+                missing.join(", ")
+            ),
+        });
+    }
+    Ok(homes.into_iter().map(|h| h.map_or(0.0, |(v, _)| v)).collect())
+}
+
+fn row_error(path: &Path, line: usize, column: usize, message: String) -> PointsError {
+    PointsError::Row {
+        path: PathBuf::from(path),
+        line,
+        field: COLUMNS[column].to_owned(),
+        message,
+    }
+}
+
+fn kind_name(kind: JointKind) -> &'static str {
+    match kind {
+        JointKind::Revolute => "revolute",
+        JointKind::Prismatic => "prismatic",
+    }
+}
+
+/// The comment line written at the top of an imported file.
+pub fn provenance_comment(source: &Path) -> String {
+    format!(
+        "# imported by `axiscal import sscanss2` from {} (SScanSS-2 calibration file)\n",
+        source.display()
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const KINDS: [JointKind; 2] = [JointKind::Revolute, JointKind::Prismatic];
+
+    fn parse_text(text: &str) -> Result<MeasurementSet, PointsError> {
+        parse(text, Path::new("cal.txt"), &KINDS, LengthUnit::Mm)
+    }
+
+    #[test]
+    fn runs_become_experiments_with_held_joints_at_home() {
+        let set = parse_text(
+            "1,1,0,0,-10,revolute,5\n1 2 0 0 0 revolute 5\n\n2\t0\t1\t0\t20\tprismatic\t-3\n1,3,0,0,10,revolute,5\n",
+        )
+        .unwrap();
+        let rows = set.rows();
+        assert_eq!(rows.len(), 4);
+        assert_eq!(rows[0].experiment, "joint1");
+        assert_eq!(rows[0].cmd, vec![-10.0, -3.0]);
+        assert_eq!(rows[2].experiment, "joint2");
+        assert_eq!(rows[2].cmd, vec![5.0, 20.0]);
+        assert_eq!((rows[3].experiment.as_str(), rows[3].step), ("joint1-2", 0));
+    }
+
+    #[test]
+    fn bad_rows_name_line_and_column() {
+        let cases = [
+            (
+                "1,1,0,0,-10,revolute\n2,0,1,0,20,prismatic,0\n",
+                "line 1: 6 columns",
+                "expected 7",
+            ),
+            (
+                "1,1,0,0,-10,revolute,0\n3,0,1,0,20,prismatic,0\n",
+                "line 2, column joint",
+                "1..2",
+            ),
+            (
+                "1,1,0,x,-10,revolute,0\n2,0,1,0,20,prismatic,0\n",
+                "line 1, column z",
+                "`x`",
+            ),
+            (
+                "1,1,0,0,-10,prismatic,0\n2,0,1,0,20,prismatic,0\n",
+                "line 1, column type",
+                "revolute in the robot",
+            ),
+            (
+                "1,1,0,0,-10,revolute,0\n1,1,0,0,-5,revolute,1\n2,0,1,0,20,prismatic,0\n",
+                "line 2, column home",
+                "differs",
+            ),
+            ("1,1,0,0,-10,revolute,0\n", "cal.txt", "no row of joint(s) 2"),
+            (
+                "1,1,0,0,-10,hinge,0\n2,0,1,0,20,prismatic,0\n",
+                "column type",
+                "`hinge`",
+            ),
+            (
+                "1,1,0,0,inf,revolute,0\n2,0,1,0,20,prismatic,0\n",
+                "column value",
+                "finite",
+            ),
+        ];
+        for (text, place, what) in cases {
+            let message = parse_text(text).unwrap_err().to_string();
+            assert!(message.contains(place) && message.contains(what), "{text:?}: {message}");
+        }
+    }
+}

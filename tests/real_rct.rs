@@ -1,0 +1,174 @@
+//! robot_cal_tools' two-axis positioner measurements (`../shared/data/real/rct-two-axis-positioner/`,
+//! a fixed camera's poses of a target on the table): `axiscal import rct`, then `calibrate`,
+//! which finds the joint-2 turns at their own joint-1 values unusable by the independent-axis
+//! procedure and fits every observation as a free pose; held out, the model is checked against
+//! a second estimate of the data's floor that uses no robot model (a circle fitted to each
+//! turn).
+
+mod common;
+
+use axiscal::calibration::procedure::Calibration;
+use common::{axiscal, stderr};
+use nalgebra::{DMatrix, DVector, Matrix3, Point3, Vector3};
+use std::path::{Path, PathBuf};
+
+/// The data file: `../shared/` beside the repository (as in CI), or the folder named by
+/// `AXISCAL_SHARED_DIR`.
+fn data_file() -> PathBuf {
+    let shared = std::env::var_os("AXISCAL_SHARED_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    let file = shared.join("data/real/rct-two-axis-positioner/positioner_kinematic_measurements.yaml");
+    assert!(
+        file.is_file(),
+        "the real data set is missing: expected {} (set AXISCAL_SHARED_DIR to use another shared folder)",
+        file.display()
+    );
+    file
+}
+
+/// A generic two-axis positioner (tilt axis, rotary table): the nominal the calibration starts
+/// from; the real positioner's dimensions are not published with the data.
+fn robot() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/positioner-2axis.toml")
+}
+
+/// A measured point \[mm\] and the joint-2 reading \[rad\] at it.
+type Reading = (Point3<f64>, f64);
+
+/// Per experiment, its rows' points \[mm\] and joint-2 readings \[rad\] (the measurement CSV's
+/// x, y, z and cmd_2).
+fn turns_of(csv: &Path) -> Vec<Vec<Reading>> {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut out: Vec<(String, Vec<Reading>)> = Vec::new();
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("experiment,"))
+    {
+        let cells: Vec<&str> = line.split(',').collect();
+        let number = |k: usize| cells[k].parse::<f64>().unwrap();
+        let row = (Point3::new(number(4), number(5), number(6)), number(8).to_radians());
+        match out.iter_mut().find(|(name, _)| name == cells[0]) {
+            Some((_, rows)) => rows.push(row),
+            None => out.push((cells[0].to_owned(), vec![row])),
+        }
+    }
+    out.into_iter().map(|(_, rows)| rows).collect()
+}
+
+/// One turn on its own: the points on a circle in their principal plane at the angles the
+/// joint-2 readings give plus a phase, `s = c_s + A cos q - B sin q`, `t = c_t + A sin q + B
+/// cos q` (linear in `c_s, c_t, A, B`; either sense of rotation, the better kept). Returns the
+/// sum of squared 3-D distances (in-plane and out of it) and the degrees of freedom `3 n - 7`
+/// (plane 3, centre 2, radius and phase 2).
+fn turn_misfit(rows: &[Reading]) -> (f64, usize) {
+    let n = rows.len() as f64;
+    let centroid = Point3::from(rows.iter().map(|r| r.0.coords).sum::<Vector3<f64>>() / n);
+    let scatter: Matrix3<f64> = rows
+        .iter()
+        .map(|r| (r.0 - centroid) * (r.0 - centroid).transpose())
+        .sum();
+    let eigen = scatter.symmetric_eigen();
+    let mut order = [0, 1, 2];
+    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
+    let [u, v, w] = order.map(|k| eigen.eigenvectors.column(k).into_owned());
+    let out_of_plane: f64 = rows.iter().map(|r| (r.0 - centroid).dot(&w).powi(2)).sum();
+    let in_plane = |sense: f64| {
+        let m = rows.len();
+        let a = DMatrix::from_fn(2 * m, 4, |i, c| {
+            let (s, co) = (sense * rows[i / 2].1).sin_cos();
+            match (i % 2, c) {
+                (0, 0) | (1, 1) => 1.0,
+                (0, 2) | (1, 3) => co,
+                (0, 3) => -s,
+                (1, 2) => s,
+                _ => 0.0,
+            }
+        });
+        let b = DVector::from_fn(2 * m, |i, _| {
+            let d = rows[i / 2].0 - centroid;
+            if i % 2 == 0 { d.dot(&u) } else { d.dot(&v) }
+        });
+        let x = a.clone().svd(true, true).solve(&b, 1e-12).unwrap();
+        (a * x - b).norm_squared()
+    };
+    (out_of_plane + in_plane(1.0).min(in_plane(-1.0)), 3 * rows.len() - 7)
+}
+
+#[test]
+#[ignore = "needs ../shared/data/real/rct-two-axis-positioner (run by `make test-real`)"]
+fn imports_and_calibrates_the_positioner_to_the_turns_floor() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("rct.csv");
+    let imported = axiscal()
+        .args(["import", "rct"])
+        .arg(data_file())
+        .arg("--robot")
+        .arg(robot())
+        .args(["--still-tolerance", "0.1", "--out"])
+        .arg(&data)
+        .assert()
+        .success();
+    let listing = common::stdout(&imported);
+    assert!(listing.contains("imported 205 rows"), "{listing}");
+    let turns = turns_of(&data);
+    assert_eq!(turns.len(), 13, "one joint-2 turn per joint-1 value: {listing}");
+
+    // The default path: the turns stand at their own joint-1 values, so the independent-axis
+    // procedure hands over to the free-pose fit and says so.
+    let out = dir.path().join("cal");
+    let run = axiscal()
+        .arg("calibrate")
+        .arg(&data)
+        .arg("--robot")
+        .arg(robot())
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    assert!(stderr(&run).contains("every point is fitted as a free pose instead"));
+
+    // Held out: even configurations fitted, odd ones predicted.
+    let held = dir.path().join("held");
+    axiscal()
+        .arg("calibrate")
+        .arg(&data)
+        .arg("--robot")
+        .arg(robot())
+        .args(["--free-poses", "--holdout", "--out"])
+        .arg(&held)
+        .assert()
+        .success();
+    let cal: Calibration = axiscal::json_file::from_str(
+        axiscal::json_file::Schema::CALIBRATION,
+        &std::fs::read_to_string(held.join("calibration.json")).unwrap(),
+    )
+    .unwrap();
+    let summary = cal.free_poses.expect("a free-pose calibration");
+    let h = summary.holdout.expect("the held-out check");
+
+    // The floor without a robot model: each turn on its own circle at its readings' angles,
+    // the misfit pooled over the turns' degrees of freedom, as a 3-D RMS.
+    let (sse, dof) = turns
+        .iter()
+        .map(|t| turn_misfit(t))
+        .fold((0.0, 0), |(s, d), (s1, d1)| (s + s1, d + d1));
+    let floor_mm = (3.0 * sse / dof as f64).sqrt();
+    // The held-out RMS of a model at the floor exceeds it by its own parameters' error,
+    // `sqrt(1 + p / n)` (p fitted parameters over n fitted coordinates), and by the sampling
+    // spread of the two estimates (relative standard error `1 / sqrt(2 dof)` each, 4 of them).
+    let p = summary.parameters.len() as f64;
+    let n = 3.0 * summary.points as f64;
+    let spread = 4.0 * ((1.0 / (2.0 * dof as f64)) + 1.0 / (2.0 * 3.0 * h.heldout_poses as f64)).sqrt();
+    let bound_mm = floor_mm * (1.0 + p / n).sqrt() * (1.0 + spread);
+    eprintln!(
+        "nominal {:.4} mm, held out {:.4} mm; turns' floor {floor_mm:.4} mm, bound {bound_mm:.4} mm",
+        h.nominal_rms_mm, h.calibrated_rms_mm
+    );
+    assert!(
+        h.calibrated_rms_mm <= bound_mm,
+        "held-out RMS {:.4} mm above the turns' floor {floor_mm:.4} mm (bound {bound_mm:.4})",
+        h.calibrated_rms_mm
+    );
+    assert!(h.calibrated_rms_mm < h.nominal_rms_mm / 5.0);
+}
