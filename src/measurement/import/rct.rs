@@ -8,7 +8,7 @@
 //! The target's position is target 0; with `frame_points_mm = L`, targets 1 and 2 are the points
 //! `L` along the measured frame's x and y axes (the orientation as two more points). The
 //! experiments are recovered from the joint values as for a wide table
-//! ([`super::wide::segment`]): runs in which one joint moves are axis experiments, every
+//! (`docs/formats.md#wide-format`): runs in which one joint moves are axis experiments, every
 //! other pose is free.
 
 use super::points::PointsError;
