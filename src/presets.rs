@@ -52,6 +52,7 @@ pub const PRESETS: &[Preset] = &[
     shipped!(Robot, "arm6-dh", "scenarios/robots/arm6-dh.toml"),
     shipped!(Robot, "arm6-jitter-plan", "scenarios/robots/arm6-jitter-plan.toml"),
     shipped!(Robot, "arm6-joint1-plan", "scenarios/robots/arm6-joint1-plan.toml"),
+    shipped!(Robot, "arm7-dh", "scenarios/robots/arm7-dh.toml"),
     shipped!(
         Robot,
         "asea-irb6l-paper-truth",
@@ -69,6 +70,11 @@ pub const PRESETS: &[Preset] = &[
         "scenarios/robots/asea-irb6l-table1-plan.toml"
     ),
     shipped!(Robot, "boby-klimchik-arm", "scenarios/robots/boby-klimchik-arm.toml"),
+    shipped!(
+        Robot,
+        "default-perturbation",
+        "scenarios/robots/default-perturbation.toml"
+    ),
     shipped!(
         Robot,
         "positioner-2axis-truth",

@@ -13,6 +13,32 @@ use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::io::Write;
 use std::path::PathBuf;
 
+/// The truth without `--truth`: the paper's robot for the ASEA IRB/L6's description, else the
+/// description perturbed by the shipped `default-perturbation.toml`, drawn from its own stream of `seed`
+/// (the noise's stream is untouched).
+fn default_truth(desc: &RobotDescription, seed: u64) -> Result<RobotModel> {
+    let irb6l = RobotDescription::from_file(&super::options::robot_file("asea-irb6l").map_err(anyhow::Error::msg)?)?;
+    if desc.geometry_hash() == irb6l.geometry_hash() {
+        return Ok(axiscal::sim::paper_robot());
+    }
+    let spec_path = super::options::robot_file("default-perturbation").map_err(anyhow::Error::msg)?;
+    let spec = axiscal::sim::PerturbationSpec::from_toml_str(
+        &axiscal::presets::read_text(&spec_path)?,
+        "default-perturbation.toml",
+    )?;
+    let mut rng = ChaCha12Rng::seed_from_u64(seed);
+    rng.set_stream(TRUTH_STREAM);
+    let truth = axiscal::sim::perturb(desc, &spec, &mut rng)?;
+    say!(
+        "truth: {} perturbed by the default manufacturing errors (scenarios/robots/default-perturbation.toml, seed {seed}); --truth names another",
+        desc.name
+    );
+    Ok(truth)
+}
+
+/// The stream of the default truth's draws (the noise uses stream 0 of the same seed).
+const TRUTH_STREAM: u64 = 1;
+
 /// Arguments of `axiscal simulate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -20,7 +46,8 @@ pub struct Args {
     #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// Truth model of the simulated robot (TOML); default: the paper robot (Table 2 actual
-    /// rows and the section-4 functions).
+    /// rows and the section-4 functions) for the IRB/L6, else the description perturbed by the
+    /// shipped default manufacturing errors (`default-perturbation`, drawn with --seed).
     #[arg(long, value_parser = super::options::robot_file)]
     truth: Option<PathBuf>,
     /// Measurement noise: two theodolites calibrated to 0.19 mm net radial error, or
@@ -97,8 +124,20 @@ pub fn run(args: Args) -> Result<()> {
     super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
     let truth = match &args.truth {
         Some(path) => RobotModel::from_file(path)?,
-        None => axiscal::sim::paper_robot(),
+        None => default_truth(&desc, args.seed)?,
     };
+    if truth.joints.len() != desc.dof() {
+        anyhow::bail!(
+            "--truth {} has {} joints, the description {} has {}: the truth must be this robot's",
+            args.truth
+                .as_deref()
+                .unwrap_or(std::path::Path::new("(default)"))
+                .display(),
+            truth.joints.len(),
+            args.robot.display(),
+            desc.dof()
+        );
+    }
     let instrument = instrument_model(args.instrument)?;
     let plan = super::plan::campaign_plan(&desc, args.plan.as_deref())?;
     let validation = ValidationPlan {

@@ -9,54 +9,13 @@ use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 use rand_distr::{Distribution, Normal};
 use std::path::Path;
 
-/// A seven-joint arm (the classic DH table of a 7-DOF lightweight arm, every pair of
-/// successive axes intersecting).
-const SEVEN_AXIS: &str = r#"
-name = "Seven-axis arm (DH)"
-dh_convention = "classic"
-[[joints]]
-kind = "revolute"
-limits = [-170.0, 170.0]
-dh = { d_mm = 340.0, theta_deg = 0.0, a_mm = 0.0, alpha_deg = -90.0 }
-[[joints]]
-kind = "revolute"
-limits = [-120.0, 120.0]
-dh = { d_mm = 0.0, theta_deg = 0.0, a_mm = 0.0, alpha_deg = 90.0 }
-[[joints]]
-kind = "revolute"
-limits = [-170.0, 170.0]
-dh = { d_mm = 400.0, theta_deg = 0.0, a_mm = 0.0, alpha_deg = 90.0 }
-[[joints]]
-kind = "revolute"
-limits = [-120.0, 120.0]
-dh = { d_mm = 0.0, theta_deg = 0.0, a_mm = 0.0, alpha_deg = -90.0 }
-[[joints]]
-kind = "revolute"
-limits = [-170.0, 170.0]
-dh = { d_mm = 400.0, theta_deg = 0.0, a_mm = 0.0, alpha_deg = -90.0 }
-[[joints]]
-kind = "revolute"
-limits = [-120.0, 120.0]
-dh = { d_mm = 0.0, theta_deg = 0.0, a_mm = 0.0, alpha_deg = 90.0 }
-[[joints]]
-kind = "revolute"
-limits = [-175.0, 175.0]
-dh = { d_mm = 126.0, theta_deg = 0.0, a_mm = 0.0, alpha_deg = 0.0 }
-[placement]
-translation_mm = [1500.0, 200.0, -300.0]
-rpy_deg = [0.0, 0.0, 40.0]
-[tool]
-frame = { translation_mm = [0.0, 0.0, 60.0], rpy_deg = [0.0, 0.0, 0.0] }
-targets_mm = [[0.0, 0.0, 0.0], [80.0, 0.0, 0.0], [0.0, 80.0, 0.0]]
-"#;
-
 fn shipped(name: &str) -> RobotDescription {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/robots/{name}.toml"));
     RobotDescription::from_file(&path).expect("shipped description")
 }
 
 fn seven_axis() -> RobotDescription {
-    RobotDescription::from_toml_str(SEVEN_AXIS, Path::new("seven-axis.toml")).expect("7R description")
+    shipped("arm7-dh")
 }
 
 /// Per-coordinate noise of the simulated instrument \[m\].
