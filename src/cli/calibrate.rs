@@ -226,10 +226,9 @@ pub fn run(args: Args) -> Result<()> {
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
     let (cal, map) = if free_poses_only {
-        (
-            super::calibrate_free::calibrate(&args_view(&args), &set, &desc)?,
-            vec![],
-        )
+        let mut cal = super::calibrate_free::calibrate(&args_view(&args), &set, &desc)?;
+        let map = predict_free_pose_accuracy(&mut cal, &desc, &set)?;
+        (cal, map)
     } else {
         calibrate_axes(&args, &set, &desc)?
     };
@@ -251,7 +250,10 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     match &cal.free_poses {
-        Some(summary) => super::calibrate_free::print(summary, &desc, &source),
+        Some(summary) => {
+            super::calibrate_free::print(summary, &desc, &source);
+            print_tool_accuracy(&cal);
+        }
         None => print_axes(&cal, &desc, &source),
     }
     say!("{}", texts.deviation_line);
@@ -314,7 +316,9 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
     let mut cal = match calibrate(set, desc, &options) {
         Ok(cal) => cal,
         Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) if !args.refine => {
-            return Ok((sweeps_as_free_poses(args, set, desc, &e)?, vec![]));
+            let mut cal = sweeps_as_free_poses(args, set, desc, &e)?;
+            let map = predict_free_pose_accuracy(&mut cal, desc, set)?;
+            return Ok((cal, map));
         }
         Err(e) => anyhow::bail!("calibrating {}: {e}", args.data.display()),
     };
@@ -376,6 +380,11 @@ fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str) {
             a.direction_sigma.major_rad * 1e3
         );
     }
+    print_tool_accuracy(cal);
+}
+
+/// The predicted tool 1-sigma line, when there is one.
+pub(super) fn print_tool_accuracy(cal: &Calibration) {
     if let Some(a) = &cal.tool_accuracy {
         say!(
             "  predicted tool 1-sigma: inside the spans RMS {:.3} mm / {:.3} mrad (max {:.3} mm), workspace RMS {:.3} mm / {:.3} mrad (max {:.3} mm)",
@@ -399,6 +408,30 @@ fn predict_tool_accuracy(
 ) -> Result<Vec<MapPoint>> {
     let (experiments, _) = axis_experiments_with(set, desc, held_tolerance)?;
     let spans = swept_ranges(&experiments, &cal.reference_cmd);
+    fill_tool_accuracy(cal, desc, spans)
+}
+
+/// Fills `cal.tool_accuracy` of a free-pose calibration: "inside the spans" is within the
+/// range of every joint's values over the rows of `set`.
+fn predict_free_pose_accuracy(
+    cal: &mut Calibration,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+) -> Result<Vec<MapPoint>> {
+    let spans = (0..desc.dof())
+        .map(|k| {
+            set.rows()
+                .iter()
+                .map(|r| r.cmd[k])
+                .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| [lo.min(v), hi.max(v)])
+        })
+        .collect();
+    fill_tool_accuracy(cal, desc, spans)
+}
+
+/// The tool accuracy of `cal` predicted over `spans` and the workspace, stored in `cal`; the
+/// workspace poses for the map (none without a model covariance).
+fn fill_tool_accuracy(cal: &mut Calibration, desc: &RobotDescription, spans: Vec<[f64; 2]>) -> Result<Vec<MapPoint>> {
     let prediction = predict(cal, desc, spans, PredictionOptions::default())
         .map_err(|e| anyhow::anyhow!("predicting the tool accuracy: {e}"))?;
     Ok(match prediction {

@@ -38,6 +38,7 @@ pub use summary::{FreePoseSummary, Holdout, OutlierPose, ParameterEstimate, Setu
 use crate::calibration::noise::{NoiseEstimate, ResidualMoments, estimate_noise};
 use crate::calibration::procedure::{Calibration, CalibrationOptions, NoiseReport, ZeroOffsetSigma};
 use crate::calibration::refine::RefitParameter;
+use crate::calibration::tool_accuracy::ModelCovariance;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::numerics::lsq::LsqError;
@@ -167,6 +168,11 @@ pub struct FreePoseCalibration {
     pub summary: FreePoseSummary,
     /// The noise estimated from the residuals.
     pub noise: Option<NoiseEstimate>,
+    /// The covariance of `robot`'s parameters (base, every scalar, tool frame;
+    /// [`crate::calibration::tool_accuracy::model_parameter_names`]) propagated from the fitted
+    /// parameters': what the predicted tool accuracy reads. `None` when a parameter's step
+    /// changes the model's structure.
+    pub model_covariance: Option<ModelCovariance>,
 }
 
 /// Calibrates the robot of `desc` from the free poses of `set` (module docs).
@@ -551,7 +557,7 @@ impl FreePoseCalibration {
                 given_contradicted: false,
             }),
             held_passes: 1,
-            model_covariance: None,
+            model_covariance: self.model_covariance,
             tool_accuracy: None,
             refinement: None,
             free_poses: Some(self.summary),

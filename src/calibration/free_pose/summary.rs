@@ -6,9 +6,10 @@ use super::identify::{Identification, Unidentified};
 use super::model::FreePoseModel;
 use super::{FreePoseCalibration, FreePoseError, noise_of};
 use crate::calibration::refine::{ParameterUnit, RefitParameter};
+use crate::calibration::tool_accuracy::{ModelCovariance, model_difference, model_parameter_names};
 use crate::kinematics::rigid_fit;
-use crate::robot::Placement;
-use nalgebra::{DMatrix, Point3};
+use crate::robot::{Placement, RobotModel};
+use nalgebra::{DMatrix, DVector, Point3};
 use serde::{Deserialize, Serialize};
 
 /// One fitted parameter.
@@ -192,8 +193,10 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
             .collect(),
         axis_rows_as_poses: None,
     };
+    let model_covariance = model_covariance(&s, &covariance, &robot);
     Ok(FreePoseCalibration {
         robot,
+        model_covariance,
         noise: noise_of(&s.fitted),
         model: s.fitted.model,
         summary,
@@ -305,6 +308,33 @@ fn with_tool_frame(m: &FreePoseModel, problem: &Problem<'_>) -> (crate::robot::R
         }
         None => (robot, None),
     }
+}
+
+/// The covariance of the calibrated robot's parameters, `G C G^T`: `C` the fitted
+/// parameters' covariance, `G` the central differences of the robot's parameter vector
+/// ([`model_difference`]) over each fitted parameter's own update ([`FreePoseModel::moved`],
+/// a step of 1e-3 of its sigma: the model is linear over it to ~1e-6 of the sigma). `None`
+/// when a step changes the model's structure.
+fn model_covariance(s: &Stages<'_>, covariance: &DMatrix<f64>, robot: &RobotModel) -> Option<ModelCovariance> {
+    let names = model_parameter_names(robot);
+    let columns = &s.identification.fitted;
+    let mut g = DMatrix::zeros(names.len(), columns.len());
+    for (i, &c) in columns.iter().enumerate() {
+        let h = 1e-3 * covariance[(i, i)].sqrt().max(f64::MIN_POSITIVE);
+        let at = |step: f64| {
+            let moved = s
+                .fitted
+                .model
+                .moved(s.problem.layout, &[c], &DVector::from_element(1, step));
+            with_tool_frame(&moved, s.problem).0
+        };
+        let (plus, minus) = (at(h), at(-h));
+        if model_parameter_names(&plus) != names || model_parameter_names(&minus) != names {
+            return None;
+        }
+        g.set_column(i, &DVector::from_vec(model_difference(&plus, &minus, 2.0 * h)));
+    }
+    Some(ModelCovariance::new(names, &(&g * covariance * g.transpose())))
 }
 
 /// The flagged poses in the summary's terms.

@@ -4,7 +4,7 @@
 use super::*;
 use crate::measurement::Measurement;
 use crate::robot::{RobotDescription, Transmission, commands_to_file};
-use nalgebra::{DVector, Point3, Vector3};
+use nalgebra::{DMatrix, DVector, Point3, Vector3};
 use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 use rand_distr::{Distribution, Normal};
 use std::path::Path;
@@ -339,8 +339,7 @@ fn prediction_check(
                 .iter()
                 .map(|p| p.sigma / p.unit.per_si())
                 .collect();
-            let c =
-                nalgebra::DMatrix::from_fn(sd.len(), sd.len(), |a, b| cal.summary.correlation[a][b] * sd[a] * sd[b]);
+            let c = DMatrix::from_fn(sd.len(), sd.len(), |a, b| cal.summary.correlation[a][b] * sd[a] * sd[b]);
             let points = r.len() / 3;
             let d2: f64 = (0..points)
                 .map(|k| {
@@ -645,4 +644,64 @@ fn two_setups_calibrate_together() {
         base_z.len() == 9 && base_z.iter().all(|v| v.abs() < 5.0),
         "setup B's base: {base_z:.2?}"
     );
+}
+
+/// The predicted tool 1-sigma of a free-pose calibration (its `model_covariance`, propagated
+/// through the robot's parameter vector by central differences and then through
+/// `ToolSensitivity`'s own differences) equals the direct propagation through the free-pose
+/// model's analytic Jacobian of a target at the tool frame's origin, `J C J^T` with `C` from
+/// the reported sigmas and correlations, to the differences' truncation (1e-3 relative).
+#[test]
+fn the_predicted_tool_sigma_matches_the_direct_propagation() {
+    let desc = shipped("arm6-dh");
+    let mut rng = ChaCha12Rng::seed_from_u64(21);
+    let names = identified(&desc, 1, 60);
+    let truth = truth(&desc, 1, &names, &mut rng);
+    let set = measure(&desc, &truth, &commands(&desc, 60, &mut rng), &mut rng);
+    let fp = calibrate_free_poses(&set, &desc, &fit_options(false)).expect("calibration");
+    let controller = Controller::from_description(&desc);
+    let cov = fp.model_covariance.clone().expect("model covariance").matrix();
+    let sensitivity = crate::calibration::tool_accuracy::ToolSensitivity::new(&fp.robot, &controller, &cov);
+    // The direct path: the fitted model with its one target moved to the tool origin.
+    let mut at_tool = fp.model.clone();
+    at_tool.targets_in_tool_m = vec![Point3::origin()];
+    let cmds = commands(&desc, 5, &mut rng);
+    let fresh = measure_exact(&desc, &at_tool, &cmds);
+    let poses = FreePoses::from_set(&fresh, &desc, false).expect("poses");
+    let layout = layout(
+        &fp.model.robot,
+        &fp.model.target_ids,
+        1,
+        &vec![std::f64::consts::TAU; desc.dof()],
+        1,
+    );
+    let fitted: Vec<(usize, &ParameterEstimate)> = fp
+        .summary
+        .parameters
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| !p.name.starts_with("target"))
+        .collect();
+    let columns: Vec<usize> = fitted
+        .iter()
+        .map(|(_, p)| layout.iter().position(|l| l.name() == p.name).expect("in layout"))
+        .collect();
+    let sd: Vec<f64> = fitted.iter().map(|(_, p)| p.sigma / p.unit.per_si()).collect();
+    let c = DMatrix::from_fn(sd.len(), sd.len(), |a, b| {
+        fp.summary.correlation[fitted[a].0][fitted[b].0] * sd[a] * sd[b]
+    });
+    let which: Vec<usize> = (0..poses.poses.len()).collect();
+    let (_, j) = at_tool
+        .residuals_and_jacobian(&controller, &poses, &which, &layout, &columns)
+        .expect("jacobian");
+    for (k, cmd) in cmds.iter().enumerate() {
+        let jk = j.rows(3 * k, 3);
+        let direct_mm = (jk * &c * jk.transpose()).trace().sqrt() * 1e3;
+        let internal = crate::robot::commands_to_internal(&desc, cmd);
+        let predicted_mm = sensitivity.sigma_at(&internal).expect("sigma").position_norm_mm;
+        assert!(
+            (predicted_mm - direct_mm).abs() <= 1e-3 * direct_mm,
+            "pose {k}: predicted {predicted_mm:.6} mm, direct {direct_mm:.6} mm"
+        );
+    }
 }
