@@ -155,6 +155,58 @@ fn plan_export_import_calibrate_matches_the_direct_csv() {
     }
 }
 
+/// The same measurements as SpatialAnalyzer exports them (`// ` header lines, then
+/// `Collection Group Target x y z` space-separated in mm, targets named `P<id>`, shuffled), read
+/// by `import points` (its format detected) into the rows the CSV export gives, to the CSV's
+/// metres round trip (relative 1e-12).
+#[test]
+fn a_spatial_analyzer_export_imports_as_the_csv_export_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    simulate_and_plan(d);
+    let csv = tracker_export(&d.join("plan.csv"), &d.join("direct.csv"), 4);
+    let sa: Vec<String> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            let mm = |k: usize| c[k].parse::<f64>().unwrap() * 1000.0;
+            format!("Tracker Robot P{:04} {} {} {}", c[0], mm(1), mm(2), mm(3))
+        })
+        .collect();
+    std::fs::write(d.join("tracker.csv"), &csv).unwrap();
+    std::fs::write(
+        d.join("tracker-sa.txt"),
+        format!(
+            "// SpatialAnalyzer ASCII export\n// Working frame: Tracker\n{}\n",
+            sa.join("\n")
+        ),
+    )
+    .unwrap();
+    for (export, out) in [("tracker.csv", "via-csv.csv"), ("tracker-sa.txt", "via-sa.csv")] {
+        axiscal()
+            .args(["import", "points"])
+            .arg(d.join("plan.csv"))
+            .arg(d.join(export))
+            .arg("--out")
+            .arg(d.join(out))
+            .assert()
+            .success();
+    }
+    let (h1, r1) = read_plain_csv(&d.join("via-csv.csv"));
+    let (h2, r2) = read_plain_csv(&d.join("via-sa.csv"));
+    assert_eq!(h1, h2);
+    assert_eq!(r1.len(), r2.len());
+    for (a, b) in r1.iter().zip(&r2) {
+        for (x, y) in a.iter().zip(b) {
+            match (x.parse::<f64>(), y.parse::<f64>()) {
+                (Ok(x), Ok(y)) => assert!((x - y).abs() <= 1e-12 * x.abs().max(1.0), "{a:?} vs {b:?}"),
+                _ => assert_eq!(x, y),
+            }
+        }
+    }
+}
+
 fn import_error(dir: &Path, export: &str, extra: &[&str]) -> String {
     std::fs::write(dir.join("bad.csv"), export).unwrap();
     let a = axiscal()

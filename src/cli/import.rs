@@ -8,6 +8,7 @@ use axiscal::measurement::import::boby_klimchik;
 use axiscal::measurement::import::mat_v5;
 use axiscal::measurement::import::points::{LengthUnit, PlanSheet, join_points};
 use axiscal::measurement::import::rct;
+use axiscal::measurement::import::spatial_analyzer;
 use axiscal::measurement::import::sscanss2;
 use axiscal::measurement::import::table::Table;
 use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide};
@@ -64,6 +65,13 @@ impl From<Unit> for LengthUnit {
     }
 }
 
+#[derive(Debug, Clone, Copy, PartialEq, clap::ValueEnum)]
+enum ExportFormat {
+    Csv,
+    #[value(name = "spatialanalyzer", alias = "sa")]
+    SpatialAnalyzer,
+}
+
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 enum Angle {
     Rad,
@@ -84,6 +92,15 @@ struct PointsArgs {
     /// Accept planned points the export lacks although the plan expects them visible.
     #[arg(long)]
     allow_missing: bool,
+    /// The export's format: a CSV with a header, or SpatialAnalyzer's ASCII export (name
+    /// fields, x y z; `docs/formats.md#spatialanalyzer-ascii-export`). Default: SpatialAnalyzer
+    /// when the file opens with a `//` comment, else CSV.
+    #[arg(long, value_enum)]
+    format: Option<ExportFormat>,
+    /// SpatialAnalyzer only: the name fields before x y z (3: collection group target, 2: group
+    /// target, 1: target, 0: none); default: all but the last 3 fields of every line.
+    #[arg(long)]
+    sa_names: Option<usize>,
     /// Output measurement CSV.
     #[arg(long)]
     out: PathBuf,
@@ -265,12 +282,20 @@ fn import_points(a: &PointsArgs) -> Result<()> {
     let outputs = Outputs::new(a.force).input("PLAN", &a.plan).input("EXPORT", &a.export);
     outputs.check(&a.out)?;
     let plan = PlanSheet::from_table(&Table::read(&a.plan)?)?;
-    let joined = join_points(
-        &plan,
-        &Table::read(&a.export)?,
-        a.units.map(Into::into),
-        a.allow_missing,
-    )?;
+    let text = axiscal::presets::read_text(&a.export).with_context(|| format!("reading {}", a.export.display()))?;
+    let sa = match a.format {
+        Some(f) => f == ExportFormat::SpatialAnalyzer,
+        None => spatial_analyzer::looks_like(&text),
+    };
+    if a.sa_names.is_some() && !sa {
+        anyhow::bail!("--sa-names applies to a SpatialAnalyzer export (--format spatialanalyzer)");
+    }
+    let export = if sa {
+        spatial_analyzer::to_table(&text, &a.export, a.sa_names)?
+    } else {
+        Table::parse(&text, &a.export)?
+    };
+    let joined = join_points(&plan, &export, a.units.map(Into::into), a.allow_missing)?;
     let recorded: String = plan
         .comments
         .iter()

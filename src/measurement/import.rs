@@ -6,6 +6,7 @@ pub mod boby_klimchik;
 pub mod mat_v5;
 pub mod points;
 pub mod rct;
+pub mod spatial_analyzer;
 pub mod sscanss2;
 pub mod table;
 pub mod wide;
