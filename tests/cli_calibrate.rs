@@ -21,11 +21,7 @@ fn calibrate_writes_loadable_results_and_protects_them() {
         .arg(&out)
         .assert()
         .success();
-    let cal: Calibration = axiscal::json_file::from_str(
-        axiscal::json_file::Schema::CALIBRATION,
-        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
-    )
-    .unwrap();
+    let cal: Calibration = common::read_calibration(&out);
     assert_eq!(cal.axes.len(), 6);
     assert_eq!(cal.couplings.len(), 2);
     assert!(
@@ -194,11 +190,7 @@ fn repeatability_option_is_recorded_and_checked() {
         .arg(&out)
         .assert()
         .success();
-    let cal: Calibration = axiscal::json_file::from_str(
-        axiscal::json_file::Schema::CALIBRATION,
-        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
-    )
-    .unwrap();
+    let cal: Calibration = common::read_calibration(&out);
     assert_eq!(cal.options.repeatability_sigma_rad, Some(vec![0.0]));
     for bad in ["1e-4,2e-4", "-1e-4"] {
         let a = axiscal()
@@ -267,11 +259,7 @@ fn calibrate_free_poses_only_with_holdout() {
         .assert()
         .success();
     assert!(common::stdout(&run).contains("free poses") || common::stderr(&run).contains("free poses"));
-    let cal: Calibration = axiscal::json_file::from_str(
-        axiscal::json_file::Schema::CALIBRATION,
-        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
-    )
-    .unwrap();
+    let cal: Calibration = common::read_calibration(&out);
     let summary = cal.free_poses.expect("free-pose summary");
     assert!(cal.axes.is_empty());
     let h = summary.holdout.expect("holdout");
@@ -348,11 +336,7 @@ fn sweeps_at_their_own_configurations_calibrate_as_free_poses() {
         .assert()
         .success();
     assert!(common::stderr(&run).contains("every point is fitted as a free pose instead"));
-    let cal: Calibration = axiscal::json_file::from_str(
-        axiscal::json_file::Schema::CALIBRATION,
-        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
-    )
-    .unwrap();
+    let cal: Calibration = common::read_calibration(&out);
     let summary = cal.free_poses.expect("a free-pose calibration");
     assert!(
         summary

@@ -12,20 +12,12 @@ use std::path::{Path, PathBuf};
 /// Laser-tracker noise assumed by the worked example: 3-D RMS of a point \[mm\].
 const TRACKER_NOISE_MM: f64 = 0.05;
 
-/// The data set: `../shared/` beside the repository (as in CI), or the folder named by
-/// `AXISCAL_SHARED_DIR` (a checkout elsewhere, e.g. a git worktree).
+/// The data set's folder.
 fn data_dir() -> PathBuf {
-    let shared = std::env::var_os("AXISCAL_SHARED_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"));
-    let dir = shared.join("data/real/boby-klimchik-tracker");
-    assert!(
-        dir.join("N1N2N3Jval.csv").is_file(),
-        "the real data set is missing: expected {}/N1N2N3Jval.csv (the shared folder sits beside the \
-         repository; set AXISCAL_SHARED_DIR to use another one)",
-        dir.display()
-    );
-    dir
+    common::real_data("boby-klimchik-tracker/N1N2N3Jval.csv")
+        .parent()
+        .expect("the data file's folder")
+        .to_owned()
 }
 
 fn robot() -> PathBuf {

@@ -8,19 +8,9 @@ use axiscal::calibration::procedure::Calibration;
 use common::axiscal;
 use std::path::{Path, PathBuf};
 
-/// The data set: `../shared/` beside the repository (as in CI), or the folder named by
-/// `AXISCAL_SHARED_DIR`.
+/// The data set.
 fn data_file() -> PathBuf {
-    let shared = std::env::var_os("AXISCAL_SHARED_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"));
-    let file = shared.join("data/real/fanuc-r2000ic-tracker/calibration_dataset.mat");
-    assert!(
-        file.is_file(),
-        "the real data set is missing: expected {} (set AXISCAL_SHARED_DIR to use another shared folder)",
-        file.display()
-    );
-    file
+    common::real_data("fanuc-r2000ic-tracker/calibration_dataset.mat")
 }
 
 fn robot() -> PathBuf {

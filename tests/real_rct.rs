@@ -7,24 +7,13 @@
 
 mod common;
 
-use axiscal::calibration::procedure::Calibration;
 use common::{axiscal, stderr};
-use nalgebra::{DMatrix, DVector, Matrix3, Point3, Vector3};
+use nalgebra::{DMatrix, DVector, Point3};
 use std::path::{Path, PathBuf};
 
-/// The data file: `../shared/` beside the repository (as in CI), or the folder named by
-/// `AXISCAL_SHARED_DIR`.
+/// The data file.
 fn data_file() -> PathBuf {
-    let shared = std::env::var_os("AXISCAL_SHARED_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"));
-    let file = shared.join("data/real/rct-two-axis-positioner/positioner_kinematic_measurements.yaml");
-    assert!(
-        file.is_file(),
-        "the real data set is missing: expected {} (set AXISCAL_SHARED_DIR to use another shared folder)",
-        file.display()
-    );
-    file
+    common::real_data("rct-two-axis-positioner/positioner_kinematic_measurements.yaml")
 }
 
 /// A generic two-axis positioner (tilt axis, rotary table): the nominal the calibration starts
@@ -62,16 +51,8 @@ fn turns_of(csv: &Path) -> Vec<Vec<Reading>> {
 /// sum of squared 3-D distances (in-plane and out of it) and the degrees of freedom `3 n - 7`
 /// (plane 3, centre 2, radius and phase 2).
 fn turn_misfit(rows: &[Reading]) -> (f64, usize) {
-    let n = rows.len() as f64;
-    let centroid = Point3::from(rows.iter().map(|r| r.0.coords).sum::<Vector3<f64>>() / n);
-    let scatter: Matrix3<f64> = rows
-        .iter()
-        .map(|r| (r.0 - centroid) * (r.0 - centroid).transpose())
-        .sum();
-    let eigen = scatter.symmetric_eigen();
-    let mut order = [0, 1, 2];
-    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
-    let [u, v, w] = order.map(|k| eigen.eigenvectors.column(k).into_owned());
+    let points: Vec<Point3<f64>> = rows.iter().map(|r| r.0).collect();
+    let (centroid, [u, v, w]) = common::principal_axes(&points);
     let out_of_plane: f64 = rows.iter().map(|r| (r.0 - centroid).dot(&w).powi(2)).sum();
     let in_plane = |sense: f64| {
         let m = rows.len();
@@ -139,11 +120,7 @@ fn imports_and_calibrates_the_positioner_to_the_turns_floor() {
         .arg(&held)
         .assert()
         .success();
-    let cal: Calibration = axiscal::json_file::from_str(
-        axiscal::json_file::Schema::CALIBRATION,
-        &std::fs::read_to_string(held.join("calibration.json")).unwrap(),
-    )
-    .unwrap();
+    let cal = common::read_calibration(&held);
     let summary = cal.free_poses.expect("a free-pose calibration");
     let h = summary.holdout.expect("the held-out check");
 

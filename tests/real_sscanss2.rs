@@ -7,22 +7,12 @@ mod common;
 
 use axiscal::calibration::procedure::{AxisReport, Calibration};
 use common::axiscal;
-use nalgebra::{DMatrix, DVector, Matrix3, Point3, Vector3};
+use nalgebra::{DMatrix, DVector, Point3, Vector3};
 use std::path::{Path, PathBuf};
 
-/// The data set's folder: `../shared/` beside the repository (as in CI), or the folder named by
-/// `AXISCAL_SHARED_DIR`.
+/// The data set's folder.
 fn data_dir() -> PathBuf {
-    let shared = std::env::var_os("AXISCAL_SHARED_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"));
-    let dir = shared.join("data/real/sscanss2-cpa");
-    assert!(
-        dir.is_dir(),
-        "the real data set is missing: expected {} (set AXISCAL_SHARED_DIR to use another shared folder)",
-        dir.display()
-    );
-    dir
+    common::real_data("sscanss2-cpa")
 }
 
 /// Imports `file` with the shipped description `robot` and calibrates it: the calibration and
@@ -50,11 +40,7 @@ fn import_and_calibrate(file: &str, robot: &str) -> (Calibration, Vec<Vec<Point3
         .arg(&out)
         .assert()
         .success();
-    let cal: Calibration = axiscal::json_file::from_str(
-        axiscal::json_file::Schema::CALIBRATION,
-        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
-    )
-    .unwrap();
+    let cal = common::read_calibration(&out);
     let text = std::fs::read_to_string(data_dir().join(file)).unwrap();
     let mut points: Vec<Vec<Point3<f64>>> = vec![Vec::new(); cal.axes.len()];
     for line in text.lines().filter(|l| !l.trim().is_empty()) {
@@ -69,20 +55,9 @@ fn import_and_calibrate(file: &str, robot: &str) -> (Calibration, Vec<Vec<Point3
     (cal, points)
 }
 
-/// The points' centroid and the eigenvectors of their scatter matrix, largest eigenvalue first.
-fn principal_axes(points: &[Point3<f64>]) -> (Point3<f64>, [Vector3<f64>; 3]) {
-    let n = points.len() as f64;
-    let centroid = Point3::from(points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n);
-    let scatter: Matrix3<f64> = points.iter().map(|p| (p - centroid) * (p - centroid).transpose()).sum();
-    let eigen = scatter.symmetric_eigen();
-    let mut order = [0, 1, 2];
-    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
-    (centroid, order.map(|k| eigen.eigenvectors.column(k).into_owned()))
-}
-
 /// Kasa's algebraic circle fit in the points' plane: the centre (mm) and the plane's normal.
 fn circle(points: &[Point3<f64>]) -> (Point3<f64>, Vector3<f64>) {
-    let (centroid, [u, v, normal]) = principal_axes(points);
+    let (centroid, [u, v, normal]) = common::principal_axes(points);
     let local: Vec<(f64, f64)> = points
         .iter()
         .map(|p| ((p - centroid).dot(&u), (p - centroid).dot(&v)))
@@ -104,7 +79,7 @@ fn check_axes(cal: &Calibration, points: &[Vec<Point3<f64>>]) {
         let direction = Vector3::from(axis.direction);
         let sigma = axis.direction_sigma.major_rad;
         let (second_direction, centre) = match axis.kind.as_str() {
-            "prismatic" => (principal_axes(pts).1[0], None),
+            "prismatic" => (common::principal_axes(pts).1[0], None),
             _ => {
                 let (centre, normal) = circle(pts);
                 (normal, Some(centre))

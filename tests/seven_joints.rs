@@ -43,11 +43,7 @@ fn a_seven_joint_arm_plans_simulates_calibrates_validates_and_diagnoses() {
         .arg(path("cal"))
         .assert()
         .success();
-    let cal: Calibration = axiscal::json_file::from_str(
-        axiscal::json_file::Schema::CALIBRATION,
-        &std::fs::read_to_string(path("cal").join("calibration.json")).unwrap(),
-    )
-    .unwrap();
+    let cal: Calibration = common::read_calibration(&path("cal"));
     assert_eq!(cal.axes.len(), 7);
     assert_eq!(cal.robot.joints.len(), 7);
     let urdf = std::fs::read_to_string(path("cal").join("calibrated.urdf")).unwrap();

@@ -139,3 +139,37 @@ pub fn pose_line(id: &str, p: &Isometry3<f64>) -> String {
         y.to_degrees()
     )
 }
+
+/// A path under the shared folder's `data/real/`: `../shared/` beside the repository (as in
+/// CI), or the folder named by `AXISCAL_SHARED_DIR`; a clear failure when it is missing.
+pub fn real_data(relative: &str) -> std::path::PathBuf {
+    let shared = std::env::var_os("AXISCAL_SHARED_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    let path = shared.join("data/real").join(relative);
+    assert!(
+        path.exists(),
+        "the real data set is missing: expected {} (set AXISCAL_SHARED_DIR to use another shared folder)",
+        path.display()
+    );
+    path
+}
+
+/// The `calibration.json` in the folder `out`, read through its schema.
+pub fn read_calibration(out: &std::path::Path) -> axiscal::calibration::procedure::Calibration {
+    let path = out.join("calibration.json");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    axiscal::json_file::from_str(axiscal::json_file::Schema::CALIBRATION, &text).expect("a calibration")
+}
+
+/// The points' centroid and the eigenvectors of their scatter matrix, the largest eigenvalue's
+/// first (a second, model-free estimate of a line's direction or a circle's plane).
+pub fn principal_axes(points: &[nalgebra::Point3<f64>]) -> (nalgebra::Point3<f64>, [nalgebra::Vector3<f64>; 3]) {
+    let n = points.len() as f64;
+    let centroid = nalgebra::Point3::from(points.iter().map(|p| p.coords).sum::<nalgebra::Vector3<f64>>() / n);
+    let scatter: nalgebra::Matrix3<f64> = points.iter().map(|p| (p - centroid) * (p - centroid).transpose()).sum();
+    let eigen = scatter.symmetric_eigen();
+    let mut order = [0, 1, 2];
+    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
+    (centroid, order.map(|k| eigen.eigenvectors.column(k).into_owned()))
+}
