@@ -56,9 +56,7 @@ impl Identification {
             same_as: vec![],
         }));
     }
-}
 
-impl Identification {
     /// Moves the fitted parameter the design `jacobian` determines worst to the unidentified
     /// ones: the one whose column (scaled to unit length) has the smallest part outside the
     /// span of every other fitted column, `1 / sqrt((X^T X)^-1_cc)` of the scaled fitted

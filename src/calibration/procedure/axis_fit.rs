@@ -142,7 +142,8 @@ pub(super) fn fit_joint(
             fitted => break fitted?,
         }
     };
-    let spread_mm = crate::numerics::stats::rms_spread(&data.flat(controller, desc).0) * 1e3;
+    let points: Vec<Point3<f64>> = data.points.iter().flatten().copied().collect();
+    let spread_mm = crate::numerics::stats::rms_spread(&points) * 1e3;
     if out.report.residual_rms_mm > crate::numerics::stats::ABSURD_SHARE * spread_mm {
         return Err(ProcedureError::Absurd {
             experiment: data.name(),
@@ -500,14 +501,13 @@ fn own_axis(
     options: &CalibrationOptions,
     sigma: f64,
     joint_axis: &AxisLine,
-    joint_form: TransmissionForm,
+    form: TransmissionForm,
 ) -> Option<(f64, Option<f64>)> {
     let u: Vec<f64> = e
         .target0_steps
         .iter()
         .map(|&i| actuator_commands(controller, desc, &e.commands[i])[k])
         .collect();
-    let form = joint_form;
     let dir_angle = |d: &Vector3<f64>| d.angle(&joint_axis.direction) * 1e3;
     match desc.joints[k].kind {
         JointKind::Revolute => {
