@@ -350,3 +350,131 @@ fn sweeps_at_their_own_configurations_calibrate_as_free_poses() {
             .contains("The axis experiments' rows are fitted as free poses")
     );
 }
+
+/// The folder of the free-pose files an independent generator wrote
+/// (`tests/data/independent-freepose/README.md`: its own DH code, its own gravity, load paths,
+/// balancer and backlash, seed 23, not tuned on).
+fn independent(file: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/independent-freepose")
+        .join(file)
+}
+
+/// The held-out RMS a model at the noise floor stays under \[mm\]: the calibration's own noise
+/// estimate, inflated by the fitted parameters' error (`p / (3 n)` of the variance, `n`
+/// training points) and by 4 standard errors of an RMS over the held-out points.
+fn noise_floor_bound(cal: &Calibration) -> f64 {
+    let summary = cal.free_poses.as_ref().expect("free poses");
+    let h = summary.holdout.as_ref().expect("holdout");
+    let noise = cal
+        .noise
+        .as_ref()
+        .and_then(|n| n.estimate.as_ref())
+        .expect("noise estimate")
+        .rms_3d_mm;
+    let inflation = (1.0 + summary.parameters.len() as f64 / (3.0 * summary.points as f64)).sqrt();
+    noise * inflation * (1.0 + 4.0 / (2.0 * 3.0 * h.heldout_poses as f64).sqrt())
+}
+
+/// Each effect shape of the independent generator (none; joint-2/3 sag carried serially;
+/// backlash of joints 1-3; a parallelogram's load path with a 70 % balancer plus backlash) is
+/// named by the effects the calibration keeps, and the calibrated model then predicts the
+/// held-out configurations at the noise floor; the geometry alone fails the same bound, so the
+/// check can fail.
+#[test]
+fn free_pose_effects_close_the_gap_on_an_independent_generator() {
+    let robot = independent("kr-arm.toml");
+    let cases = [
+        ("clean.csv", "none"),
+        ("serial.csv", "sag"),
+        ("backlash.csv", "backlash"),
+        ("parallelogram-balancer-backlash.csv", "sag+backlash"),
+    ];
+    for (file, expected) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let run = |effects: &str| {
+            let out = dir.path().join(effects);
+            axiscal()
+                .args(["calibrate", "--holdout", "--quiet", "--effects", effects, "--robot"])
+                .arg(&robot)
+                .arg(independent(file))
+                .arg("--out")
+                .arg(&out)
+                .assert()
+                .success();
+            common::read_calibration(&out)
+        };
+        let cal = run("auto");
+        // `validate` predicts with the model's effects: every pose of the file (the held-out
+        // ones too) at the noise floor.
+        let validation = dir.path().join("validation");
+        axiscal()
+            .args(["validate", "--quiet", "--calibration"])
+            .arg(dir.path().join("auto/calibration.json"))
+            .arg("--robot")
+            .arg(&robot)
+            .arg(independent(file))
+            .arg("--out")
+            .arg(&validation)
+            .assert()
+            .success();
+        let validated: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(validation.join("summary.json")).unwrap()).unwrap();
+        let validated_rms = validated["validation"]["rms_mm"].as_f64().unwrap();
+        let summary = cal.free_poses.as_ref().unwrap();
+        let chosen: Vec<&str> = summary
+            .effects_tried
+            .iter()
+            .filter(|t| t.chosen)
+            .map(|t| t.effects.as_str())
+            .collect();
+        assert_eq!(chosen, [expected], "{file}: {:?}", summary.effects_tried);
+        assert_eq!(cal.robot.effects.sag.is_empty(), !expected.contains("sag"), "{file}");
+        assert_eq!(
+            cal.robot.effects.backlash.is_empty(),
+            !expected.contains("backlash"),
+            "{file}"
+        );
+        let held = summary.holdout.as_ref().unwrap().calibrated_rms_mm;
+        let bound = noise_floor_bound(&cal);
+        assert!(
+            held < bound,
+            "{file}: held out {held:.4} mm, noise floor bound {bound:.4} mm"
+        );
+        assert!(
+            validated_rms < bound,
+            "{file}: validate {validated_rms:.4} mm, bound {bound:.4} mm"
+        );
+        if expected.contains("backlash") {
+            // The generator's half bands (its `--backlash` default): joints 1-3 0.15, 0.10,
+            // 0.05 mrad, none on the wrist; each within 4 of its sigma.
+            for e in summary.effect_joints.iter().filter(|e| e.effect == "backlash") {
+                let truth = [0.15, 0.10, 0.05, 0.0, 0.0, 0.0][e.joint - 1];
+                let sigma = e.sigma.expect("a backlash's sigma");
+                assert!(
+                    (e.rms - truth).abs() < 4.0 * sigma,
+                    "{file}: joint {} half band {:.4} +- {sigma:.4} mrad, truth {truth}",
+                    e.joint,
+                    e.rms
+                );
+            }
+        }
+        let geometric = run("none");
+        let held_geometric = geometric
+            .free_poses
+            .as_ref()
+            .unwrap()
+            .holdout
+            .as_ref()
+            .unwrap()
+            .calibrated_rms_mm;
+        if expected == "none" {
+            assert_eq!(held_geometric, held, "{file}: no effect kept, the same model");
+        } else {
+            assert!(
+                held_geometric > bound,
+                "{file}: geometry alone held out {held_geometric:.4} mm, effects {held:.4} mm"
+            );
+        }
+    }
+}

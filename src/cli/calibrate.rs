@@ -119,6 +119,12 @@ pub struct Args {
     /// each order is kept only where the data resolve it (`docs/method.md`).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=8))]
     harmonics: u64,
+    /// Free-pose files only: the non-geometric effects tried in the model: `auto` tries the
+    /// joints' sag under gravity and their backlash and keeps what predicts held-out
+    /// configurations best (into `robot.effects`, used by every command that reads the
+    /// calibration); `none` fits the geometry only (`docs/method.md`, "Effects in the model").
+    #[arg(long, default_value = "auto", value_parser = ["auto", "none"])]
+    effects: String,
     #[command(flatten)]
     checks: checks::Overrides,
 }
@@ -288,6 +294,7 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
         holdout: args.holdout,
         keep_outliers: args.keep_outliers,
         harmonics: args.harmonics as usize,
+        effects: args.effects == "auto",
         all_rows: args.free_poses,
         refine: args.refine,
     }

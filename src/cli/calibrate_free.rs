@@ -18,6 +18,8 @@ pub struct FreeArgs<'a> {
     pub keep_outliers: bool,
     /// `--harmonics`.
     pub harmonics: usize,
+    /// `--effects auto`.
+    pub effects: bool,
     /// `--free-poses`: every row a free pose.
     pub all_rows: bool,
     /// `--refine` (refused: the free poses are the calibration's own data).
@@ -37,6 +39,7 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
         holdout: args.holdout,
         max_harmonic_order: args.harmonics,
         all_rows: args.all_rows,
+        effects: args.effects,
     };
     let mut cal = calibrate_free_poses(set, desc, &options)
         .map_err(|e| anyhow::anyhow!("calibrating {} from its free poses: {e}", args.data.display()))?;
@@ -68,6 +71,36 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
         s.calibrated_rms_mm,
         s.condition_number
     );
+    if let Some(kept) = s.effects_tried.iter().find(|t| t.chosen) {
+        let tried: Vec<String> = s
+            .effects_tried
+            .iter()
+            .map(|t| format!("{} {:.4}", t.effects, t.cross_validated_rms_mm))
+            .collect();
+        say!(
+            "  effects in the model: {} ({} parameters), cross-validated RMS mm: {}",
+            kept.effects,
+            kept.parameters,
+            tried.join(", ")
+        );
+        let parts: Vec<String> = s
+            .effect_joints
+            .iter()
+            .map(|e| match e.sigma {
+                Some(sigma) => format!("joint {} {} {:.4} +- {:.4}", e.joint, e.effect, e.rms, sigma),
+                None => format!("joint {} {} {:.4} RMS (max {:.4})", e.joint, e.effect, e.rms, e.max),
+            })
+            .collect();
+        if !parts.is_empty() {
+            say!("  by joint (mrad; backlash: half band): {}", parts.join("; "));
+        }
+        if kept.effects != "none" {
+            eprintln!(
+                "warning: the model carries {} (calibration.json robot.effects, used by validate and compensate); calibrated.urdf and joint_map.csv hold the geometry only",
+                kept.effects
+            );
+        }
+    }
     if s.setups.len() > 1 {
         let labels: Vec<&str> = s.setups.iter().map(|p| p.setup.as_str()).collect();
         say!(

@@ -43,6 +43,10 @@ pub struct Args {
     /// Replace `--out` if it exists (never one of this command's inputs).
     #[arg(long)]
     force: bool,
+    /// The payload the robot carries \[kg\]: what the calibrated model's sag under a payload
+    /// (`robot.effects`, payload terms) is evaluated with.
+    #[arg(long, default_value_t = 0.0, value_parser = super::options::non_negative_f64)]
+    payload_kg: f64,
     #[command(flatten)]
     checks: checks::Overrides,
 }
@@ -169,15 +173,16 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
-    let comp = Compensator::new(&cal.robot, &desc)?;
+    let comp = Compensator::new(&cal.robot, &desc)?.with_payload_kg(args.payload_kg);
     let poses = read_poses(&args.poses)?;
     let n = desc.dof();
     let mut w = csv::Writer::from_writer(outputs.create(&args.out)?);
     w.write_record(csv_header(&desc))?;
     let mut failed = 0;
-    for p in &poses {
+    let required: Vec<_> = poses.iter().map(|p| p.world_from_tool).collect();
+    for (p, compensated) in poses.iter().zip(comp.compensate_sequence(&required)) {
         let mut row = vec![p.id.clone()];
-        match comp.compensate(&p.world_from_tool) {
+        match compensated {
             Ok(c) => compensated_columns(&mut row, &c, &desc),
             Err(e) => {
                 failed += 1;

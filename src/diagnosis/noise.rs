@@ -104,8 +104,9 @@ impl CleanCampaign {
         let controller = Controller::from_description(desc);
         let model = robot.phi_model();
         let mut joint_values = Vec::with_capacity(set.rows().len());
+        let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
         for m in set.rows() {
-            let q = calibrated_joint_values(robot, &controller, desc, m)?;
+            let q = calibrated_joint_values(robot, &controller, &model, desc, m, &approach)?;
             let u = controller
                 .decouple(&commands_to_internal(desc, &m.cmd))
                 .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))?;
@@ -258,15 +259,22 @@ pub fn clean_positions(
 }
 
 /// The joint values of `m`'s commands on `robot` (the controller, then its transmissions
-/// and couplings).
+/// and couplings, and the model's effects under the row's payload and `approach`, its pose's
+/// actuator approach directions; `phi` is `robot`'s geometry).
 pub(super) fn calibrated_joint_values(
     robot: &RobotModel,
     controller: &Controller,
+    phi: &crate::kinematics::PhiModel,
     desc: &RobotDescription,
     m: &Measurement,
+    approach: &HashMap<(String, usize), Vec<f64>>,
 ) -> Result<Vec<f64>, DiagnosisError> {
+    let load = crate::robot::PoseLoad {
+        approach: approach.get(&(m.experiment.clone(), m.step)).map_or(&[], Vec::as_slice),
+        payload_kg: m.payload_kg,
+    };
     robot
-        .joint_values(controller, &commands_to_internal(desc, &m.cmd))
+        .loaded_joint_values(controller, phi, &commands_to_internal(desc, &m.cmd), &load)
         .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))
 }
 
@@ -342,7 +350,14 @@ impl ValidationRows {
         let mut out = Vec::with_capacity(poses.len());
         for (i, pose) in poses.iter().enumerate() {
             let fail = |e: crate::robot::ModelError| model_error(format!("validation step {}: {e}", pose.step));
-            let q = cal.robot.joint_values(&controller, &pose.cmd).map_err(fail)?;
+            let load = crate::robot::PoseLoad {
+                approach: &pose.actuator_approach,
+                payload_kg: pose.payload_kg,
+            };
+            let q = cal
+                .robot
+                .loaded_joint_values(&controller, &model, &pose.cmd, &load)
+                .map_err(fail)?;
             let u = controller.decouple(&pose.cmd).map_err(fail)?;
             let link = model.poses(&q).world_from_link[n - 1];
             let mut targets = Vec::with_capacity(pose.targets.len());

@@ -2,10 +2,10 @@
 //! command history, conditions and measured tool targets (`docs/formats.md#measurement-csv`).
 
 use crate::measurement::Measurement;
-use crate::physics::{ApproachTracker, UNMOVED_ACTUATOR_RAD};
+use crate::physics::pose_approaches;
 use crate::plan::TOOL_EXPERIMENT;
+use crate::robot::RobotDescription;
 use crate::robot::commands_to_internal;
-use crate::robot::{Controller, RobotDescription};
 use nalgebra::Point3;
 use std::collections::HashMap;
 
@@ -38,29 +38,24 @@ pub struct Pose {
 /// order, with their approach directions (command and actuator) taken over every pose of the
 /// file.
 pub fn validation_poses(rows: &[Measurement], desc: &RobotDescription) -> Vec<Pose> {
-    let n = desc.dof();
-    let controller = Controller::from_description(desc);
     let mut index: HashMap<(&str, usize), usize> = HashMap::new();
     let mut poses: Vec<Pose> = Vec::new();
     let mut keep: Vec<bool> = Vec::new();
-    let mut by_command = ApproachTracker::new(n, 0.0);
-    let mut by_actuator = ApproachTracker::new(n, UNMOVED_ACTUATOR_RAD);
+    let mut approaches = pose_approaches(rows, desc).into_iter();
     for m in rows {
         let key = (m.experiment.as_str(), m.step);
         let i = match index.get(&key) {
             Some(&i) => i,
             None => {
-                let cmd = commands_to_internal(desc, &m.cmd);
-                let approach = by_command.step(&cmd).to_vec();
-                // The file's command count was checked against the description on reading.
-                let u = controller.decouple(&cmd).unwrap_or_else(|_| cmd.clone());
-                let actuator_approach = by_actuator.step(&u).to_vec();
+                let a = approaches
+                    .next()
+                    .unwrap_or_else(|| unreachable!("one approach per distinct (experiment, step)"));
                 poses.push(Pose {
                     experiment: m.experiment.clone(),
                     step: m.step,
-                    cmd,
-                    approach,
-                    actuator_approach,
+                    cmd: commands_to_internal(desc, &m.cmd),
+                    approach: a.command,
+                    actuator_approach: a.actuator,
                     temperature_c: m.temperature_c,
                     payload_kg: m.payload_kg,
                     targets: Vec::new(),

@@ -320,6 +320,7 @@ fn orientation_summary(
     let model = cal.robot.phi_model();
     let variance_coord_m2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
     let (mut angles_mrad, mut chi2, mut predicted_sq) = (Vec::new(), 0.0, 0.0);
+    let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
     for (m, measured) in poses.values() {
         let Some((measured_frame, normal)) = measured_tool_frame(&tool_targets, measured) else {
             continue;
@@ -327,7 +328,7 @@ fn orientation_summary(
         let Some(normal_inv) = normal.try_inverse() else {
             continue;
         };
-        let q = calibrated_joint_values(&cal.robot, &controller, desc, m)?;
+        let q = calibrated_joint_values(&cal.robot, &controller, &model, desc, m, &approach)?;
         let predicted = model.world_from_tool(&q);
         let w = (predicted.rotation.inverse() * measured_frame.rotation).scaled_axis();
         angles_mrad.push(w.norm() * 1e3);

@@ -42,7 +42,7 @@ pub const MAX_CONDITION: f64 = 1e12;
 const CHOLESKY_MAX_CONDITION: f64 = 1e8;
 
 /// Scale of each column (its 2-norm, or 1 for a zero column).
-fn column_scales(j: &DMatrix<f64>) -> DVector<f64> {
+pub fn column_scales(j: &DMatrix<f64>) -> DVector<f64> {
     DVector::from_iterator(
         j.ncols(),
         j.column_iter().map(|c| {

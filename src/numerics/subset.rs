@@ -11,6 +11,11 @@
 
 use nalgebra::{DMatrix, DVector};
 
+/// A column whose length is at most this fraction of the longest column's is zero: 1e4 times
+/// the rounding of a column computed from unit-sized terms, 1e-6 of the smallest physical
+/// column a calibration meets (a 1e-4 m lever against 100 m of summed lever arms).
+pub const ZERO_COLUMN: f64 = 1e-12;
+
 /// A column left out: it lies (to the tolerance) in the span of the chosen ones.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Rejected {
@@ -35,7 +40,21 @@ pub struct ColumnSubset {
 /// The columns of `x` kept in order (module docs): a column is rejected when its part outside
 /// the span of the columns kept before it is below `tolerance` of its length.
 pub fn select_columns(x: &DMatrix<f64>, tolerance: f64) -> ColumnSubset {
+    select_columns_with(x, |_| tolerance)
+}
+
+/// [`select_columns`] with a tolerance per column: column `c` is kept when its part outside
+/// the span of the columns kept before it reaches `tolerance(c)`.
+pub fn select_columns_with(x: &DMatrix<f64>, tolerance: impl Fn(usize) -> f64) -> ColumnSubset {
     let norms: Vec<f64> = x.column_iter().map(|c| c.norm()).collect();
+    // A column at rounding level (a regressor that vanishes by symmetry, e.g. a moment about
+    // an axis parallel to the joint's, computed as 1e-16) is zero: scaled to unit length its
+    // rounding would look independent of everything.
+    let largest = norms.iter().copied().fold(0.0, f64::max);
+    let norms: Vec<f64> = norms
+        .into_iter()
+        .map(|n| if n <= ZERO_COLUMN * largest { 0.0 } else { n })
+        .collect();
     let mut basis: Vec<DVector<f64>> = Vec::new();
     let mut chosen = Vec::new();
     let mut parts = vec![0.0; x.ncols()];
@@ -51,7 +70,7 @@ pub fn select_columns(x: &DMatrix<f64>, tolerance: f64) -> ColumnSubset {
             }
         }
         parts[c] = w.norm();
-        if parts[c] >= tolerance {
+        if parts[c] >= tolerance(c) {
             basis.push(w / parts[c]);
             chosen.push(c);
         }

@@ -14,7 +14,10 @@ mod instrument_scale;
 mod thermal;
 mod wobble;
 
-pub use backlash::{ApproachSource, ApproachTracker, BacklashEffect, UNMOVED_ACTUATOR_RAD};
+pub use backlash::{
+    ApproachSource, ApproachTracker, BacklashEffect, PoseApproach, UNMOVED_ACTUATOR_RAD, actuator_approach_by_pose,
+    pose_approaches,
+};
 pub use compliance::{
     ComplianceEffect, CompliantLoad, DeflectionError, PassiveSlope, PayloadEffect, STATIC_DEFLECTION_MAX_STEPS,
     STATIC_DEFLECTION_ROUNDING_RAD, coupled_first_order_deflection, coupled_first_order_deflection_at,

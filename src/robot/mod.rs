@@ -5,6 +5,7 @@
 
 mod controller;
 mod description;
+mod effects;
 mod four_bar;
 mod four_bar_fit;
 mod functions;
@@ -17,6 +18,7 @@ pub use description::{
     LinkTarget, NominalCoupling, Placement, RobotDescription, RowEntry, ToolEntry, TransmissionFitForm, UrdfEntry,
     commands_to_file, commands_to_internal, file_unit,
 };
+pub use effects::{BacklashTerm, LoadTerm, ModelEffects, PoseLoad, SagTerm, gravity_direction, sag_regressor};
 pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};
 pub use four_bar_fit::{FourBarFit, fit_four_bar};
 pub use functions::{CouplingFunction, Transmission};

@@ -14,6 +14,7 @@
 
 use super::controller::Controller;
 use super::description::{Placement, RobotDescription, RowEntry};
+use super::effects::{ModelEffects, PoseLoad};
 use super::four_bar::FourBarGeometry;
 use super::functions::{CouplingFunction, Transmission};
 use super::model_error::ModelError;
@@ -81,6 +82,9 @@ pub struct RobotModel {
     /// Physical four-bar linkages (for the rigid-body simulator).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub four_bars: Vec<FourBarLinkage>,
+    /// Non-geometric effects the calibration carries ([`ModelEffects`]); none by default.
+    #[serde(default, skip_serializing_if = "ModelEffects::is_empty")]
+    pub effects: ModelEffects,
 }
 
 impl RobotModel {
@@ -107,6 +111,7 @@ impl RobotModel {
             placement: desc.placement,
             tool_frame: desc.tool.frame,
             four_bars: vec![],
+            effects: ModelEffects::default(),
         }
     }
 
@@ -116,9 +121,19 @@ impl RobotModel {
     }
 
     /// Parses and validates robot model text; `path` labels errors only.
+    /// A model file is a simulated truth: its effects are the effects file's, never `effects`
+    /// (the form a calibration carries its fitted ones in, which the simulators do not read).
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, ModelError> {
         let t: Self = crate::toml_file::parse(text, path)?;
-        t.validate().map_err(|e| match e {
+        let checked = if t.effects.is_empty() {
+            t.validate()
+        } else {
+            Err(ModelError::Invalid {
+                field: "effects".into(),
+                message: "a robot model file is a simulated truth: give its effects in an effects file (`simulate --effects`, docs/formats.md#effects-file); `effects` is where a calibration carries the sag and backlash it fitted".into(),
+            })
+        };
+        checked.map_err(|e| match e {
             ModelError::Invalid { field, message } => ModelError::InvalidIn {
                 path: path.to_owned(),
                 field,
@@ -172,7 +187,7 @@ impl RobotModel {
                 .validate()
                 .map_err(|e| bad(format!("four_bars[{k}].geometry"), e.to_string()))?;
         }
-        Ok(())
+        self.effects.validate(n).map_err(|(field, message)| bad(field, message))
     }
 
     /// Number of joints.
@@ -240,6 +255,53 @@ impl RobotModel {
             });
         }
         self.joint_values_from_actuators(&controller.decouple(cmd)?)
+    }
+
+    /// The joint values the robot reaches for `cmd` under the pose's `load`, with the model's
+    /// effects ([`ModelEffects`]): the backlash shifts the actuator commands, the sag (at the
+    /// chain `phi`, this model's geometry) the joint values. Equal to [`Self::joint_values`]
+    /// without effects.
+    pub fn loaded_joint_values(
+        &self,
+        controller: &Controller,
+        phi: &PhiModel,
+        cmd: &[f64],
+        load: &PoseLoad<'_>,
+    ) -> Result<Vec<f64>, ModelError> {
+        if self.effects.is_empty() {
+            return self.joint_values(controller, cmd);
+        }
+        self.loaded_joint_values_from_actuators(phi, controller.decouple(cmd)?, load)
+    }
+
+    /// [`Self::loaded_joint_values`] from the actuator commands `u` (after the controller's
+    /// decoupling, before the backlash).
+    pub fn loaded_joint_values_from_actuators(
+        &self,
+        phi: &PhiModel,
+        u: Vec<f64>,
+        load: &PoseLoad<'_>,
+    ) -> Result<Vec<f64>, ModelError> {
+        Ok(self.joint_values_before_and_after_sag(phi, u, load)?.1)
+    }
+
+    /// The joint values before the sag (the backlash applied) and after it, from the actuator
+    /// commands `u` ([`Self::loaded_joint_values_from_actuators`]): the sag's regressors are
+    /// evaluated at the first.
+    pub fn joint_values_before_and_after_sag(
+        &self,
+        phi: &PhiModel,
+        mut u: Vec<f64>,
+        load: &PoseLoad<'_>,
+    ) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+        self.effects.shift_actuators(&mut u, load);
+        let before = self.joint_values_from_actuators(&u)?;
+        let mut after = before.clone();
+        if !self.effects.sag.is_empty() {
+            let frames = phi.poses(&before);
+            self.effects.add_sag(phi, &frames, &mut after, load);
+        }
+        Ok((before, after))
     }
 
     /// The joint values for actuator commands `u` (after the controller's decoupling):

@@ -4,7 +4,7 @@
 
 use crate::calibration::refine::{DirectionWeight, RefitParameter};
 use crate::kinematics::{JointKind, PhiModel};
-use crate::numerics::subset::{ColumnSubset, select_columns};
+use crate::numerics::subset::{ColumnSubset, select_columns_with};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
@@ -16,6 +16,18 @@ use serde::{Deserialize, Serialize};
 /// 1e-9 (the joint map's central difference), 1e4 times below; the weakest genuinely
 /// identified parameters of real campaigns sit near 1e-3.
 pub const IDENTIFIABLE_PART: f64 = 1e-5;
+
+/// An effect's parameter is kept when this part of its column (scaled to unit length) is
+/// independent of the parameters before it: its sigma is then at most 100 times what its column
+/// alone gives. A sag's basis terms are products of masses and compliance whose regressors
+/// overlap heavily on any workspace; a term less independent than this adds under 1 % of new
+/// shape at 1e4 times its own variance.
+pub const EFFECT_IDENTIFIABLE_PART: f64 = 1e-2;
+
+/// Whether `p` is an effect's parameter (sag or backlash).
+pub fn is_effect(p: &RefitParameter) -> bool {
+    matches!(p, RefitParameter::Sag { .. } | RefitParameter::Backlash { .. })
+}
 
 /// Terms of a combination reported at most.
 const LEADING_TERMS: usize = 4;
@@ -98,11 +110,24 @@ impl Identification {
 /// The identification of the layout's parameters from the design `jacobian` (every column of
 /// the layout) at the registered nominal `phi`.
 /// (in the layout's order of preference: the geometry before the transmission harmonics).
+///
+/// An effect's parameters (sag and backlash, [`is_effect`]) are a basis for a shape, not
+/// physical quantities each: they are kept only when [`EFFECT_IDENTIFIABLE_PART`] of them is
+/// independent of everything before them, and the others are dropped unreported (the summary
+/// counts the kept ones).
 pub fn identify(jacobian: &DMatrix<f64>, layout: &[RefitParameter], phi: &PhiModel) -> Identification {
-    let ColumnSubset { chosen, rejected } = select_columns(jacobian, IDENTIFIABLE_PART);
+    let tolerance = |c: usize| {
+        if is_effect(&layout[c]) {
+            EFFECT_IDENTIFIABLE_PART
+        } else {
+            IDENTIFIABLE_PART
+        }
+    };
+    let ColumnSubset { chosen, rejected } = select_columns_with(jacobian, tolerance);
     let parallel = parallel_pairs(phi);
     let unidentified = rejected
         .into_iter()
+        .filter(|r| !is_effect(&layout[r.column]))
         .map(|r| {
             let same_as: Vec<DirectionWeight> = r
                 .combination

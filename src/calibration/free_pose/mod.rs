@@ -19,6 +19,7 @@
 //!
 //! Pure maths: no files, no CLI, no simulator.
 
+mod effects;
 mod fit;
 pub mod identify;
 pub mod model;
@@ -33,7 +34,9 @@ pub use identify::{Identification, Unidentified};
 pub use model::{FreePoseModel, layout};
 pub use poses::{FreePose, FreePoses};
 pub use report::markdown;
-pub use summary::{FreePoseSummary, Holdout, OutlierPose, ParameterEstimate, SetupPlacement, TargetEstimate};
+pub use summary::{
+    EffectJoint, EffectTrial, FreePoseSummary, Holdout, OutlierPose, ParameterEstimate, SetupPlacement, TargetEstimate,
+};
 
 use crate::calibration::noise::{NoiseEstimate, ResidualMoments, estimate_noise};
 use crate::calibration::procedure::{Calibration, CalibrationOptions, NoiseReport, ZeroOffsetSigma};
@@ -44,7 +47,7 @@ use crate::measurement::MeasurementSet;
 use crate::numerics::lsq::LsqError;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use fit::{Fitted, Problem};
-use nalgebra::Isometry3;
+use nalgebra::{DMatrix, Isometry3};
 
 /// Outlier rounds at most (each refits without the poses flagged so far).
 const OUTLIER_ROUNDS: usize = 10;
@@ -66,6 +69,9 @@ pub struct FreePoseOptions {
     /// Transmission harmonics tried up to this order (the order kept is the one that predicts
     /// held-out configurations best, [`CV_FOLDS`]-fold cross-validation).
     pub max_harmonic_order: usize,
+    /// Try the non-geometric effects in the model (sag under gravity, backlash) and keep the
+    /// set that predicts held-out configurations best ([`EffectTrial`]).
+    pub effects: bool,
 }
 
 impl Default for FreePoseOptions {
@@ -75,6 +81,7 @@ impl Default for FreePoseOptions {
             holdout: false,
             all_rows: false,
             max_harmonic_order: 2,
+            effects: true,
         }
     }
 }
@@ -188,13 +195,16 @@ pub fn calibrate_free_poses(
         ..RobotModel::ideal(desc)
     };
     let (train, test) = split(&poses, options.holdout);
-    let layout = layout(
+    let mut layout = layout(
         &nominal,
         &poses.target_ids,
         options.max_harmonic_order,
         &poses.spans(&train),
         poses.setup_names.len(),
     );
+    if options.effects {
+        layout.extend(effects::effect_layout(&nominal, &poses, &train));
+    }
     let problem = Problem {
         controller: &controller,
         poses: &poses,
@@ -217,12 +227,18 @@ pub fn calibrate_free_poses(
             .fitted
             .iter()
             .copied()
-            .filter(|&c| !matches!(layout[c], RefitParameter::Harmonic { .. }))
+            .filter(|&c| !matches!(layout[c], RefitParameter::Harmonic { .. }) && !identify::is_effect(&layout[c]))
             .collect();
         fit_without_outliers(&problem, &registered.model, &train, &geometry, options)
     })?;
-    let (fitted, dropped) = select_harmonics(&problem, fitted, &kept, &identification)?;
-    identification.drop_insignificant(&dropped, &layout);
+    let Selected {
+        fitted,
+        harmonics_left_out,
+        effects_left_out,
+        effects_tried,
+    } = select_harmonics_and_effects(&problem, fitted, &kept, &identification)?;
+    identification.drop_insignificant(&harmonics_left_out, &layout);
+    identification.fitted.retain(|c| !effects_left_out.contains(c));
     let (fitted, kept, flags) = converging(&mut identification, &design, &layout, |id| {
         fit_without_outliers(&problem, &fitted.model, &train, &id.fitted, options)
     })?;
@@ -236,6 +252,7 @@ pub fn calibrate_free_poses(
         kept: &kept,
         flags: &flags,
         test: &test,
+        effects_tried,
     })
 }
 
@@ -400,17 +417,114 @@ fn fit_without_outliers(
     Ok((fitted, kept, flags))
 }
 
+/// The model selection's outcome: the fit of the chosen harmonic order and effects on the kept
+/// poses, the columns left out, every set of effects tried.
+struct Selected {
+    fitted: Fitted,
+    harmonics_left_out: Vec<usize>,
+    effects_left_out: Vec<usize>,
+    effects_tried: Vec<EffectTrial>,
+}
+
+/// The harmonic order, then the effects ([`effects::select_effects`]) at that order; when
+/// effects are kept, the order again with them in every order's fit, and if it changes, the
+/// effects again at the new order. The first order is judged without effects: an effect's
+/// scatter (a backlash) can hide a harmonic the data resolve, and a sag then takes the
+/// harmonic's place. A second round that does not converge leaves the first.
+fn select_harmonics_and_effects(
+    problem: &Problem<'_>,
+    geometry: Fitted,
+    kept: &[usize],
+    identification: &Identification,
+) -> Result<Selected, FreePoseError> {
+    let without = |left_out: &[usize]| Identification {
+        fitted: identification
+            .fitted
+            .iter()
+            .copied()
+            .filter(|c| !left_out.contains(c))
+            .collect(),
+        unidentified: vec![],
+    };
+    let (harmonic_fit, harmonics_left_out) = select_harmonics(problem, geometry.clone(), kept, identification, &[])?;
+    let (fitted, effects_left_out, effects_tried) =
+        effects::select_effects(problem, harmonic_fit, kept, &without(&harmonics_left_out))?;
+    let first = Selected {
+        fitted,
+        harmonics_left_out,
+        effects_left_out,
+        effects_tried,
+    };
+    let kept_effects: Vec<usize> = identification
+        .fitted
+        .iter()
+        .copied()
+        .filter(|&c| identify::is_effect(&problem.layout[c]) && !first.effects_left_out.contains(&c))
+        .collect();
+    if kept_effects.is_empty() {
+        return Ok(first);
+    }
+    let second = || -> Result<Option<Selected>, FreePoseError> {
+        let geometry_columns: Vec<usize> = identification
+            .fitted
+            .iter()
+            .copied()
+            .filter(|&c| {
+                let p = &problem.layout[c];
+                !matches!(p, RefitParameter::Harmonic { .. }) && !identify::is_effect(p)
+            })
+            .collect();
+        let with_effects = fit::fit(
+            problem,
+            &geometry.model,
+            kept,
+            &[geometry_columns, kept_effects.clone()].concat(),
+        )?;
+        let (_, harmonics_left_out) = select_harmonics(problem, with_effects, kept, identification, &kept_effects)?;
+        if harmonics_left_out == first.harmonics_left_out {
+            return Ok(None);
+        }
+        let at_order = without(&harmonics_left_out);
+        let columns: Vec<usize> = at_order
+            .fitted
+            .iter()
+            .copied()
+            .filter(|&c| !identify::is_effect(&problem.layout[c]))
+            .collect();
+        let harmonic_fit = fit::fit(problem, &geometry.model, kept, &columns)?;
+        let (fitted, effects_left_out, effects_tried) =
+            effects::select_effects(problem, harmonic_fit, kept, &at_order)?;
+        Ok(Some(Selected {
+            fitted,
+            harmonics_left_out,
+            effects_left_out,
+            effects_tried,
+        }))
+    };
+    match second() {
+        Ok(Some(s)) => Ok(s),
+        Ok(None) | Err(FreePoseError::Fit(LsqError::NotConverged { .. }) | FreePoseError::Unexecutable { .. }) => {
+            Ok(first)
+        }
+        Err(e) => Err(e),
+    }
+}
+
 /// The harmonic order the data resolve: the order (0 to the highest identified) whose fits
 /// predict held-out configurations best, by cross-validation over [`CV_FOLDS`] folds of the
 /// configurations (configuration `c` in fold `c mod folds`; repeated visits of one
-/// configuration carry no new information about the model, so they are never split), ties to
-/// the lower order. Returns the fit of that order on every kept pose and the harmonic columns
-/// left out.
+/// configuration carry no new information about the model, so they are never split; each
+/// fold's fit the Gauss-Newton step from the order's fit on every pose,
+/// [`linearised_cv_errors`], refitted in full where a fold leaves a parameter undetermined);
+/// an order replaces the one kept below it only when [`significantly_better`]. The effect
+/// columns `effects` are in every order's fit (`geometry` is their fit at order 0). Returns
+/// the fit of that order on every kept pose and the harmonic columns left out.
 fn select_harmonics(
     problem: &Problem<'_>,
     geometry: Fitted,
     kept: &[usize],
     identification: &Identification,
+    effects: &[usize],
 ) -> Result<(Fitted, Vec<usize>), FreePoseError> {
     let order_of = |c: usize| match problem.layout[c] {
         RefitParameter::Harmonic { order, .. } => order,
@@ -422,12 +536,12 @@ fn select_harmonics(
             .fitted
             .iter()
             .copied()
-            .filter(|&c| order_of(c) <= o)
+            .filter(|&c| order_of(c) <= o && (!identify::is_effect(&problem.layout[c]) || effects.contains(&c)))
             .collect()
     };
     let configurations = problem.poses.configurations();
     // Order 0 stands even when its own folds do not converge (then no order is tried above it).
-    let mut best = (f64::INFINITY, 0, geometry.clone());
+    let mut best: (Option<Vec<f64>>, usize, Fitted) = (None, 0, geometry.clone());
     let mut previous = geometry;
     for order in 0..=max {
         // Each order starts from the one below (its new harmonics at 0), and its folds from
@@ -442,14 +556,17 @@ fn select_harmonics(
                 Err(e) => return Err(e),
             }
         };
-        let sse = match cross_validated_sse(problem, &fitted.model, kept, &configurations, &columns(order)) {
-            Ok(sse) => sse,
+        let errors = match linearised_cv_errors(problem, &fitted, kept, &configurations).map_or_else(
+            || cross_validated_errors(problem, &fitted.model, kept, &configurations, &columns(order)),
+            Ok,
+        ) {
+            Ok(errors) => errors,
             Err(FreePoseError::Fit(LsqError::NotConverged { .. }) | FreePoseError::Unexecutable { .. }) => break,
             Err(e) => return Err(e),
         };
         previous = fitted.clone();
-        if order == 0 || sse < best.0 {
-            best = (sse, order, fitted);
+        if best.0.as_ref().is_none_or(|b| significantly_better(&errors, b)) {
+            best = (Some(errors), order, fitted);
         }
     }
     let (_, order, fitted) = best;
@@ -460,30 +577,113 @@ fn select_harmonics(
 /// Folds of the harmonic order's cross-validation.
 pub const CV_FOLDS: usize = 5;
 
-/// The sum of squared held-out residuals of the parameters `columns` over the folds of the
-/// configurations of the poses `kept` (each fold fitted on the others).
-fn cross_validated_sse(
+/// Standard errors by which a larger model (a harmonic order, a set of effects) must lower the
+/// cross-validated sum of squares of the model it would replace: a one-sided 2.3 % chance that
+/// a model which does not predict better is taken for one that does (the paired differences'
+/// sum is near normal over the tens to thousands of poses of a campaign).
+const SIGNIFICANT_SE: f64 = 2.0;
+
+/// Whether the per-pose held-out errors `errors` beat `best`'s: their paired differences
+/// `d_i = best_i - errors_i` sum to more than [`SIGNIFICANT_SE`] standard errors of that sum,
+/// `sqrt(n) sd(d)`. A larger model costs parameters; a gain within the folds' own scatter is
+/// no evidence for it.
+fn significantly_better(errors: &[f64], best: &[f64]) -> bool {
+    let d: Vec<f64> = best.iter().zip(errors).map(|(b, e)| b - e).collect();
+    let n = d.len() as f64;
+    let sum: f64 = d.iter().sum();
+    if !sum.is_finite() || d.len() < 2 {
+        return sum > 0.0;
+    }
+    let mean = sum / n;
+    let variance = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    sum > SIGNIFICANT_SE * (n * variance).sqrt()
+}
+
+/// Each pose's sum of squared held-out residuals \[m^2\] in the order of `kept`, over
+/// [`CV_FOLDS`] folds of the configurations of the poses `kept` (each fold fitted on the
+/// others); every entry infinite when a fold's model cannot execute one of its held-out
+/// configurations.
+fn cross_validated_errors(
     problem: &Problem<'_>,
     start: &FreePoseModel,
     kept: &[usize],
     configurations: &[usize],
     columns: &[usize],
-) -> Result<f64, FreePoseError> {
-    let mut sse = 0.0;
+) -> Result<Vec<f64>, FreePoseError> {
+    let mut errors = vec![0.0; kept.len()];
     for fold in 0..CV_FOLDS {
-        let (held, train): (Vec<usize>, Vec<usize>) = kept.iter().partition(|&&i| configurations[i] % CV_FOLDS == fold);
+        let in_fold = |i: usize| configurations[i] % CV_FOLDS == fold;
+        let (held, train): (Vec<usize>, Vec<usize>) = kept.iter().partition(|&&i| in_fold(i));
         if held.is_empty() || train.is_empty() {
             continue;
         }
         let fitted = fit::fit(problem, start, &train, columns)?;
         // A model that cannot execute a held-out configuration (its harmonics make a
         // transmission non-monotonic there) does not generalise: infinitely bad.
-        match fitted.model.residuals(problem.controller, problem.poses, &held) {
-            Ok(r) => sse += r.norm_squared(),
-            Err(_) => return Ok(f64::INFINITY),
+        let Ok(r) = fitted.model.residuals(problem.controller, problem.poses, &held) else {
+            return Ok(vec![f64::INFINITY; kept.len()]);
+        };
+        let mut row = 0;
+        for (slot, &i) in kept.iter().enumerate().filter(|(_, i)| in_fold(**i)) {
+            let coordinates = 3 * problem.poses.poses[i].points_m.len();
+            errors[slot] = r.rows(row, coordinates).norm_squared();
+            row += coordinates;
         }
     }
-    Ok(sse)
+    Ok(errors)
+}
+
+/// Each pose's sum of squared held-out residuals \[m^2\] in the order of `kept` over the folds
+/// of [`cross_validated_errors`], each fold's fit taken as one Gauss-Newton step from `fitted`
+/// (the fit on every pose of `kept`, its residual and Jacobian in that order): with `A = J^T J`
+/// and `J_k`, `r_k` the fold's rows, the fold's step `d = -(A - J_k^T J_k)^-1 (J^T r - J_k^T r_k)`
+/// and its held-out residual `r_k + J_k d` (block deletion; exact for a linear model, Cook &
+/// Weisberg, *Residuals and Influence in Regression*, 1982, sec. 3.6; here first order in the
+/// fold's step, whose second-order part is the curvature of the residuals over a step within a
+/// few sigmas). `None` when a fold's training rows leave a parameter undetermined.
+fn linearised_cv_errors(
+    problem: &Problem<'_>,
+    fitted: &Fitted,
+    kept: &[usize],
+    configurations: &[usize],
+) -> Option<Vec<f64>> {
+    let (j, r) = (&fitted.jacobian, &fitted.residual);
+    let scale = crate::numerics::lsq::column_scales(j);
+    let scaled = DMatrix::from_fn(j.nrows(), j.ncols(), |row, c| j[(row, c)] / scale[c]);
+    let normal = crate::numerics::lsq::gram(&scaled);
+    let gradient = scaled.tr_mul(r);
+    let mut first_row = Vec::with_capacity(kept.len());
+    let mut row = 0;
+    for &i in kept {
+        first_row.push(row);
+        row += 3 * problem.poses.poses[i].points_m.len();
+    }
+    let mut errors = vec![0.0; kept.len()];
+    for fold in 0..CV_FOLDS {
+        let held: Vec<usize> = (0..kept.len())
+            .filter(|&s| configurations[kept[s]] % CV_FOLDS == fold)
+            .collect();
+        if held.is_empty() || held.len() == kept.len() {
+            continue;
+        }
+        let rows: Vec<usize> = held
+            .iter()
+            .flat_map(|&s| first_row[s]..first_row[s] + 3 * problem.poses.poses[kept[s]].points_m.len())
+            .collect();
+        let j_k = scaled.select_rows(&rows);
+        let r_k = r.select_rows(&rows);
+        let train_normal = &normal - crate::numerics::lsq::gram(&j_k);
+        let train_gradient = &gradient - j_k.tr_mul(&r_k);
+        let step = -train_normal.cholesky()?.solve(&train_gradient);
+        let held_residual = &r_k + &j_k * step;
+        let mut at = 0;
+        for &s in &held {
+            let coordinates = 3 * problem.poses.poses[kept[s]].points_m.len();
+            errors[s] = held_residual.rows(at, coordinates).norm_squared();
+            at += coordinates;
+        }
+    }
+    Some(errors)
 }
 
 /// Refuses a fit whose RMS is a good part of the points' own spread ([`crate::numerics::stats::ABSURD_SHARE`]).

@@ -8,7 +8,9 @@
 use super::poses::FreePoses;
 use crate::calibration::refine::RefitParameter;
 use crate::kinematics::{ChainPoses, JointKind, PhiModel, link_from_phi};
-use crate::robot::{Controller, RobotModel, Transmission};
+use crate::robot::{
+    BacklashTerm, Controller, LoadTerm, ModelEffects, RobotModel, SagTerm, Transmission, sag_regressor,
+};
 use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 /// The free-pose model's parameters (the base once per setup of the instrument), in the fit's
@@ -80,6 +82,32 @@ fn add_harmonic(t: &mut Transmission, order: usize, cosine: bool, d: f64) {
             list.resize(order, 0.0);
         }
         list[order - 1] += d;
+    }
+}
+
+/// Adds `d` to the sag coefficient of `joint`, `link`, `load`, inserting it in the order of
+/// joint, link and load term.
+fn add_sag(effects: &mut ModelEffects, joint: usize, link: usize, load: LoadTerm, d: f64) {
+    let key = |t: &SagTerm| (t.joint, t.link, t.load);
+    match effects.sag.binary_search_by_key(&(joint, link, load), key) {
+        Ok(k) => effects.sag[k].coefficient += d,
+        Err(k) => effects.sag.insert(
+            k,
+            SagTerm {
+                joint,
+                link,
+                load,
+                coefficient: d,
+            },
+        ),
+    }
+}
+
+/// Adds `d` to `joint`'s backlash half band, inserting it in joint order.
+fn add_backlash(effects: &mut ModelEffects, joint: usize, d: f64) {
+    match effects.backlash.binary_search_by_key(&joint, |b| b.joint) {
+        Ok(k) => effects.backlash[k].half_band += d,
+        Err(k) => effects.backlash.insert(k, BacklashTerm { joint, half_band: d }),
     }
 }
 
@@ -188,6 +216,8 @@ impl FreePoseModel {
                     let slot = self.slot(*target);
                     next.targets_in_tool_m[slot][*axis] += d
                 }
+                RefitParameter::Sag { joint, link, load } => add_sag(&mut next.robot.effects, *joint, *link, *load, d),
+                RefitParameter::Backlash { joint, .. } => add_backlash(&mut next.robot.effects, *joint, d),
                 other => unreachable!("{} is not in the free-pose layout", other.name()),
             }
         }
@@ -261,9 +291,10 @@ impl FreePoseModel {
         let fixed = self.phi.fixed_frames();
         let mut row = 0;
         for &i in which {
-            let q = self.pose_joint_values(controller, poses, i)?;
+            let (before_sag, q) = self.pose_joint_values_before_and_after_sag(controller, poses, i)?;
             let (dq_du, theta_a) = self.joint_sensitivity(controller, poses, i, &q)?;
             let frames = fixed.poses(&q);
+            let sag_frames = (!self.robot.effects.sag.is_empty()).then(|| fixed.poses(&before_sag));
             let row_axes: Vec<RowAxes> = (0..self.phi.rows.len()).map(|k| self.row_axes(&frames, k)).collect();
             let setup = poses.poses[i].setup;
             let to_setup = self.setup_from_first(setup);
@@ -280,6 +311,9 @@ impl FreePoseModel {
                     row_axes: &row_axes,
                     dq_du: &dq_du,
                     theta_a: &theta_a,
+                    sag_frames: sag_frames.as_ref().unwrap_or(&frames),
+                    approach: &poses.poses[i].approach,
+                    payload_kg: poses.poses[i].payload_kg,
                 };
                 for (c, &param) in columns.iter().enumerate() {
                     let dp = match self.base_derivative(&layout[param], setup, &p_here) {
@@ -304,9 +338,26 @@ impl FreePoseModel {
         poses: &FreePoses,
         i: usize,
     ) -> Result<Vec<f64>, Unexecutable> {
+        Ok(self.pose_joint_values_before_and_after_sag(controller, poses, i)?.1)
+    }
+
+    /// Each joint's sag at pose `i` \[rad or m\] (0 for a joint without one).
+    pub fn sag_at(&self, controller: &Controller, poses: &FreePoses, i: usize) -> Result<Vec<f64>, Unexecutable> {
+        let (before, after) = self.pose_joint_values_before_and_after_sag(controller, poses, i)?;
+        Ok(after.iter().zip(&before).map(|(a, b)| a - b).collect())
+    }
+
+    /// Joint values of pose `i` before the sag and after it.
+    fn pose_joint_values_before_and_after_sag(
+        &self,
+        controller: &Controller,
+        poses: &FreePoses,
+        i: usize,
+    ) -> Result<(Vec<f64>, Vec<f64>), Unexecutable> {
+        let pose = &poses.poses[i];
         controller
-            .decouple(&poses.poses[i].cmd)
-            .and_then(|u| self.robot.joint_values_from_actuators(&u))
+            .decouple(&pose.cmd)
+            .and_then(|u| self.robot.joint_values_before_and_after_sag(&self.phi, u, &pose.load()))
             .map_err(|_| Unexecutable { pose: i })
     }
 
@@ -322,7 +373,8 @@ impl FreePoseModel {
         q: &[f64],
     ) -> Result<(DMatrix<f64>, Vec<f64>), Unexecutable> {
         let unexecutable = |_| Unexecutable { pose: i };
-        let u = controller.decouple(&poses.poses[i].cmd).map_err(unexecutable)?;
+        let mut u = controller.decouple(&poses.poses[i].cmd).map_err(unexecutable)?;
+        self.robot.effects.shift_actuators(&mut u, &poses.poses[i].load());
         let theta_a = self.robot.active_displacements(&u).map_err(unexecutable)?;
         let n = q.len();
         let mut d = DMatrix::zeros(n, n);
@@ -383,6 +435,16 @@ impl FreePoseModel {
                 point.frames.world_from_tool.rotation * Vector3::ith(*axis, 1.0)
             }
             RefitParameter::Target { .. } => Vector3::zeros(),
+            // dq_j = c r(q): the point moves as joint j does, by r per unit c (the regressor at
+            // the pose's frames, module docs of `crate::robot::ModelEffects` for its order).
+            RefitParameter::Sag { joint, link, load } => {
+                let r = sag_regressor(&self.phi, point.sag_frames, *joint, *link, *load, point.payload_kg);
+                r * joint_column(self.phi.joints[joint - 1].kind, point.frames, joint - 1, &p)
+            }
+            // u_k acts as u_k - s_k h_k: as the zero offset, times s_k.
+            RefitParameter::Backlash { joint, .. } => {
+                -point.approach[joint - 1] * self.actuator_derivative(point, joint - 1)
+            }
             other => unreachable!("{} is not in the free-pose layout", other.name()),
         }
     }
@@ -454,6 +516,12 @@ struct PointContext<'a> {
     dq_du: &'a DMatrix<f64>,
     /// The active displacements at the pose \[rad or m\].
     theta_a: &'a [f64],
+    /// The chain's frames before the sag, where its regressors are evaluated.
+    sag_frames: &'a ChainPoses,
+    /// The pose's approach directions.
+    approach: &'a [f64],
+    /// The pose's payload \[kg\].
+    payload_kg: f64,
 }
 
 /// `d p / d q_j` of a point `p` beyond joint `j` (0-based): `z x (p - o)` (revolute) or `z`.

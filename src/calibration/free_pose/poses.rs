@@ -24,9 +24,23 @@ pub struct FreePose {
     pub points_m: Vec<(usize, Point3<f64>)>,
     /// The setup it was measured from (the instrument's placement; 0 without a `setup` column).
     pub setup: usize,
+    /// The payload \[kg\] (`payload_kg` of its first row).
+    pub payload_kg: f64,
+    /// The direction of each joint's actuator command's last move into it, over every pose of
+    /// the file in file order ([`crate::physics::PoseApproach::actuator`]): what signs a
+    /// backlash.
+    pub approach: Vec<f64>,
 }
 
 impl FreePose {
+    /// What its effects depend on besides the joint values.
+    pub fn load(&self) -> crate::robot::PoseLoad<'_> {
+        crate::robot::PoseLoad {
+            approach: &self.approach,
+            payload_kg: self.payload_kg,
+        }
+    }
+
     /// `experiment step S` for messages.
     pub fn label(&self) -> String {
         format!("{} step {}", self.experiment, self.step)
@@ -107,6 +121,7 @@ impl FreePoses {
         let mut target_ids: Vec<usize> = rows.iter().map(|(_, r)| r.target).collect();
         target_ids.sort_unstable();
         target_ids.dedup();
+        let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
         let mut index: HashMap<(&str, usize), usize> = HashMap::new();
         let mut poses: Vec<FreePose> = Vec::new();
         for (row, r) in rows {
@@ -121,6 +136,11 @@ impl FreePoses {
                     cmd: commands_to_internal(desc, &r.cmd),
                     points_m: Vec::new(),
                     setup,
+                    payload_kg: r.payload_kg,
+                    approach: approach
+                        .get(&(r.experiment.clone(), r.step))
+                        .cloned()
+                        .unwrap_or_else(|| vec![0.0; r.cmd.len()]),
                 });
                 poses.len() - 1
             });

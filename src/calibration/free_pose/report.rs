@@ -18,6 +18,7 @@ pub fn markdown(s: &FreePoseSummary, noise: Option<&NoiseEstimate>, robot: &str,
         let _ = writeln!(md, "The axis experiments' rows are fitted as free poses: {why}.\n");
     }
     residual_table(&mut md, s, noise);
+    effects(&mut md, s);
     parameter_table(&mut md, s);
     unidentified(&mut md, s);
     targets(&mut md, s);
@@ -61,7 +62,46 @@ fn unit_name(u: ParameterUnit) -> &'static str {
         ParameterUnit::Mm => "mm",
         ParameterUnit::Mrad => "mrad",
         ParameterUnit::Coefficient => "",
+        ParameterUnit::MradPerLoad => "mrad per load unit",
     }
+}
+
+/// The effects tried and the ones kept, joint by joint.
+fn effects(md: &mut String, s: &FreePoseSummary) {
+    if s.effects_tried.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "## Effects in the model
+
+Each set fitted and scored by 5-fold cross-validation (`docs/method.md`, \"Effects in the model\"); the kept one is in `robot.effects`.\n\n| effects | parameters | cross-validated RMS (mm) | kept |\n|---|---|---|---|"
+    );
+    for t in &s.effects_tried {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.4} | {} |",
+            t.effects,
+            t.parameters,
+            t.cross_validated_rms_mm,
+            if t.chosen { "yes" } else { "" }
+        );
+    }
+    if !s.effect_joints.is_empty() {
+        let _ = writeln!(
+            md,
+            "\n| joint | effect | RMS (mrad) | largest (mrad) | 1-sigma (mrad) |\n|---|---|---|---|---|"
+        );
+        for e in &s.effect_joints {
+            let sigma = e.sigma.map_or(String::new(), |v| format!("{v:.4}"));
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.4} | {:.4} | {sigma} |",
+                e.joint, e.effect, e.rms, e.max
+            );
+        }
+    }
+    let _ = writeln!(md);
 }
 
 fn parameter_table(md: &mut String, s: &FreePoseSummary) {

@@ -123,6 +123,44 @@ pub struct FreePoseSummary {
     /// only.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axis_rows_as_poses: Option<String>,
+    /// The effects tried in the model (`--effects auto`), each with its cross-validated RMS:
+    /// the one chosen is in `robot.effects`; empty with `--effects none`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub effects_tried: Vec<EffectTrial>,
+    /// The kept effects joint by joint (sag first, then backlash, joints ascending).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub effect_joints: Vec<EffectJoint>,
+}
+
+/// One joint's part of the effects the model keeps.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct EffectJoint {
+    /// The joint (1-based).
+    pub joint: usize,
+    /// `sag` or `backlash`.
+    pub effect: String,
+    /// Sag: the RMS of the joint's sag over the fitted poses; backlash: the half band
+    /// \[mrad, or mm for a sliding joint's backlash\].
+    pub rms: f64,
+    /// Sag: the largest sag over the fitted poses; backlash: the half band.
+    pub max: f64,
+    /// Backlash: the half band's 1-sigma; sag: null (its terms' sigmas are in `parameters`).
+    pub sigma: Option<f64>,
+}
+
+/// One set of effects tried in the free-pose model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct EffectTrial {
+    /// `none`, `backlash`, `sag` or `sag+backlash`.
+    pub effects: String,
+    /// Its effect parameters the data identify (`docs/method.md`, "Effects in the model").
+    pub parameters: usize,
+    /// RMS distance of the held-out points over the cross-validation's folds \[mm\].
+    pub cross_validated_rms_mm: f64,
+    /// Whether the calibration keeps it: tried in this list's order, a set replaces the one
+    /// kept before it only when its cross-validated sum of squares is lower by more than two
+    /// standard errors of the paired per-pose differences.
+    pub chosen: bool,
 }
 
 /// Where the instrument saw the robot's base from one setup.
@@ -144,6 +182,7 @@ pub(super) struct Stages<'a> {
     pub kept: &'a [usize],
     pub flags: &'a [Flag],
     pub test: &'a [usize],
+    pub effects_tried: Vec<EffectTrial>,
 }
 
 /// The calibration of the stages.
@@ -165,6 +204,7 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
         })
         .collect();
     let (robot, tool_fit_rms_mm) = with_tool_frame(&s.fitted.model, s.problem);
+    let effect_joints = effect_joints(&s.fitted.model, s.problem, s.kept, &parameters)?;
     let summary = FreePoseSummary {
         poses: s.kept.len(),
         points: s.fitted.residual.len() / 3,
@@ -192,6 +232,8 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
             })
             .collect(),
         axis_rows_as_poses: None,
+        effects_tried: s.effects_tried.clone(),
+        effect_joints,
     };
     let model_covariance = model_covariance(&s, &covariance, &robot);
     Ok(FreePoseCalibration {
@@ -201,6 +243,57 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
         model: s.fitted.model,
         summary,
     })
+}
+
+/// The kept effects joint by joint: each sagging joint's RMS and largest sag over the poses
+/// `kept`, each backlash's half band with its sigma (from `parameters`).
+fn effect_joints(
+    m: &FreePoseModel,
+    problem: &Problem<'_>,
+    kept: &[usize],
+    parameters: &[ParameterEstimate],
+) -> Result<Vec<EffectJoint>, FreePoseError> {
+    let effects = &m.robot.effects;
+    let mut joints: Vec<usize> = effects.sag.iter().map(|t| t.joint).collect();
+    joints.dedup();
+    let mut sags = vec![Vec::with_capacity(kept.len()); joints.len()];
+    if !joints.is_empty() {
+        for &i in kept {
+            let sag = m
+                .sag_at(problem.controller, problem.poses, i)
+                .map_err(|u| u.error(problem.poses))?;
+            for (list, &j) in sags.iter_mut().zip(&joints) {
+                list.push(sag[j - 1]);
+            }
+        }
+    }
+    let mut out: Vec<EffectJoint> = joints
+        .iter()
+        .zip(&sags)
+        .map(|(&joint, values)| EffectJoint {
+            joint,
+            effect: "sag".into(),
+            rms: (values.iter().map(|v| v * v).sum::<f64>() / values.len().max(1) as f64).sqrt() * 1e3,
+            max: values.iter().fold(0.0, |a: f64, v| a.max(v.abs())) * 1e3,
+            sigma: None,
+        })
+        .collect();
+    for b in &effects.backlash {
+        let sliding = m.phi.joints[b.joint - 1].kind == crate::kinematics::JointKind::Prismatic;
+        let name = RefitParameter::Backlash {
+            joint: b.joint,
+            sliding,
+        }
+        .name();
+        out.push(EffectJoint {
+            joint: b.joint,
+            effect: "backlash".into(),
+            rms: b.half_band.abs() * 1e3,
+            max: b.half_band.abs() * 1e3,
+            sigma: parameters.iter().find(|p| p.name == name).map(|p| p.sigma),
+        });
+    }
+    Ok(out)
 }
 
 /// RMS distance of the points of the poses `which` from `model` \[m\].
@@ -247,6 +340,22 @@ pub(super) fn value_of(p: &RefitParameter, m: &FreePoseModel) -> Option<f64> {
             let slot = m.target_ids.binary_search(target).ok()?;
             Some(m.targets_in_tool_m[slot][*axis])
         }
+        RefitParameter::Sag { joint, link, load } => Some(
+            m.robot
+                .effects
+                .sag
+                .iter()
+                .find(|t| (t.joint, t.link, t.load) == (*joint, *link, *load))
+                .map_or(0.0, |t| t.coefficient),
+        ),
+        RefitParameter::Backlash { joint, .. } => Some(
+            m.robot
+                .effects
+                .backlash
+                .iter()
+                .find(|b| b.joint == *joint)
+                .map_or(0.0, |b| b.half_band),
+        ),
         _ => None,
     }
 }

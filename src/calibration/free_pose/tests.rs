@@ -498,7 +498,6 @@ fn jacobian_matches_central_differences() {
     let model = FreePoseModel::new(&robot, robot.phi_model().world_from_base, vec![0, 4], targets(2));
     let set = measure(&desc, &model, &commands(&desc, 6, &mut rng), &mut rng);
     let poses = FreePoses::from_set(&set, &desc, false).expect("poses");
-    let controller = Controller::from_description(&desc);
     let layout = layout(
         &robot,
         &model.target_ids,
@@ -507,19 +506,33 @@ fn jacobian_matches_central_differences() {
         1,
     );
     let all: Vec<usize> = (0..layout.len()).collect();
+    check_against_central_differences(&desc, &model, &poses, &layout, &all);
+}
+
+/// The analytic columns `columns` of `layout` at `model` against central differences of the
+/// residual (step 1e-6: truncation `h^2 / 6` of a third derivative of order 10 m, rounding
+/// `eps 10 m / h`, ten times both).
+fn check_against_central_differences(
+    desc: &RobotDescription,
+    model: &FreePoseModel,
+    poses: &FreePoses,
+    layout: &[RefitParameter],
+    columns: &[usize],
+) {
+    let controller = Controller::from_description(desc);
     let which: Vec<usize> = (0..poses.poses.len()).collect();
     let (r0, jac) = model
-        .residuals_and_jacobian(&controller, &poses, &which, &layout, &all)
+        .residuals_and_jacobian(&controller, poses, &which, layout, columns)
         .expect("jacobian");
     let h = 1e-6;
     let tolerance = 10.0 * (h * h / 6.0 * 10.0 + f64::EPSILON * 10.0 / h);
-    for c in 0..layout.len() {
+    for (k, &c) in columns.iter().enumerate() {
         let step = |s: f64| {
-            let moved = model.moved(&layout, &[c], &DVector::from_element(1, s));
-            moved.residuals(&controller, &poses, &which).expect("residuals")
+            let moved = model.moved(layout, &[c], &DVector::from_element(1, s));
+            moved.residuals(&controller, poses, &which).expect("residuals")
         };
         let fd = (step(h) - step(-h)) / (2.0 * h);
-        let err = (fd - jac.column(c)).amax();
+        let err = (fd - jac.column(k)).amax();
         assert!(
             err < tolerance,
             "{}: analytic vs central difference {err:.3e}",
@@ -527,6 +540,69 @@ fn jacobian_matches_central_differences() {
         );
     }
     assert_eq!(r0.len(), 3 * poses.points());
+}
+
+/// The effects' columns (`robot.effects`) against central differences, on a robot with
+/// transmission harmonics, poses arriving from both sides and payloads varying. With a
+/// backlash and no sag every column is exact; with a sag, the sag's own columns are (the
+/// geometry's leave out the sag's regressors' change with the geometry, a first-order term of
+/// the sag's size: `crate::robot::ModelEffects`).
+#[test]
+fn effect_columns_match_central_differences() {
+    let desc = shipped("arm6-dh");
+    let mut rng = ChaCha12Rng::seed_from_u64(8);
+    let mut robot = RobotModel::ideal(&desc);
+    for j in &mut robot.joints {
+        j.transmission = Transmission::Harmonic {
+            sin: vec![1e-3],
+            cos: vec![-5e-4],
+        };
+    }
+    let mut model = FreePoseModel::new(&robot, robot.phi_model().world_from_base, vec![0, 1], targets(2));
+    let mut set = measure(&desc, &model, &commands(&desc, 12, &mut rng), &mut rng);
+    let rows: Vec<Measurement> = set
+        .rows()
+        .iter()
+        .map(|m| Measurement {
+            payload_kg: (m.step % 3) as f64 * 2.5,
+            ..m.clone()
+        })
+        .collect();
+    set = MeasurementSet::new(desc.dof(), rows).expect("valid set");
+    let poses = FreePoses::from_set(&set, &desc, false).expect("poses");
+    let train: Vec<usize> = (0..poses.poses.len()).collect();
+    let mut layout = layout(
+        &robot,
+        &model.target_ids,
+        1,
+        &vec![std::f64::consts::TAU; desc.dof()],
+        1,
+    );
+    let geometry = layout.len();
+    layout.extend(effects::effect_layout(&robot, &poses, &train));
+    let backlash: Vec<usize> = (geometry..layout.len())
+        .filter(|&c| matches!(layout[c], RefitParameter::Backlash { .. }))
+        .collect();
+    let sag: Vec<usize> = (geometry..layout.len())
+        .filter(|&c| matches!(layout[c], RefitParameter::Sag { .. }))
+        .collect();
+    assert!(backlash.len() >= 3 && sag.len() > 40, "{backlash:?} {}", sag.len());
+    let half_bands = DVector::from_fn(backlash.len(), |k, _| 2e-4 * (1.0 + k as f64));
+    model = model.moved(&layout, &backlash, &half_bands);
+    let all: Vec<usize> = (0..layout.len()).collect();
+    check_against_central_differences(&desc, &model, &poses, &layout, &all);
+    let coefficients = DVector::from_fn(sag.len(), |k, _| 1e-5 * ((k % 7) as f64 - 3.0));
+    let sagging = model.moved(&layout, &sag, &coefficients);
+    assert!(
+        (0..poses.poses.len()).any(|i| sagging
+            .residuals(&Controller::from_description(&desc), &poses, &[i])
+            .unwrap()
+            != model
+                .residuals(&Controller::from_description(&desc), &poses, &[i])
+                .unwrap()),
+        "the sag moves the points"
+    );
+    check_against_central_differences(&desc, &sagging, &poses, &layout, &sag);
 }
 
 /// One corrupted cell (a pose's joint-6 reading 50 deg off, as a hand edit or a swapped column

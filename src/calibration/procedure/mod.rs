@@ -979,6 +979,7 @@ fn calibrated_robot(desc: &RobotDescription, joints: Vec<JointModel>, geometry: 
         placement: Placement::from_isometry(&geometry.world_from_base),
         tool_frame: desc.tool.frame,
         four_bars: vec![],
+        effects: Default::default(),
     }
 }
 

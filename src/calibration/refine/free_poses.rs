@@ -73,6 +73,23 @@ pub enum RefitParameter {
         /// 0-2 translation, 3-5 rotation.
         axis: usize,
     },
+    /// A coefficient of `joint`'s sag under the gravity load term `load` of `link`
+    /// ([`crate::robot::SagTerm`]).
+    Sag {
+        /// The joint that bends (1-based).
+        joint: usize,
+        /// The link whose load it carries (1-based).
+        link: usize,
+        /// The load term.
+        load: crate::robot::LoadTerm,
+    },
+    /// `joint`'s backlash half band ([`crate::robot::BacklashTerm`]) \[rad or m\].
+    Backlash {
+        /// The joint (1-based).
+        joint: usize,
+        /// Whether it slides.
+        sliding: bool,
+    },
 }
 
 const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
@@ -99,6 +116,8 @@ impl RefitParameter {
             RefitParameter::Base(a) => format!("base.{}", AXES[*a]),
             RefitParameter::SetupBase { setup, axis } => format!("setup{setup}.base.{}", AXES[*axis]),
             RefitParameter::Tool(a) => format!("tool.{}", AXES[*a]),
+            RefitParameter::Sag { joint, link, load } => format!("joint{joint}.sag.link{link}.{}", load.name()),
+            RefitParameter::Backlash { joint, .. } => format!("joint{joint}.backlash"),
         }
     }
 
@@ -110,6 +129,8 @@ impl RefitParameter {
             RefitParameter::Base(a) | RefitParameter::Tool(a) if *a < 3 => ParameterUnit::Mm,
             RefitParameter::SetupBase { axis, .. } if *axis < 3 => ParameterUnit::Mm,
             RefitParameter::Coupling { .. } => ParameterUnit::Coefficient,
+            RefitParameter::Backlash { sliding: true, .. } => ParameterUnit::Mm,
+            RefitParameter::Sag { .. } => ParameterUnit::MradPerLoad,
             _ => ParameterUnit::Mrad,
         }
     }
@@ -130,13 +151,16 @@ pub enum ParameterUnit {
     Mrad,
     /// A dimensionless coefficient (a coupling's ratio or fractional coefficient).
     Coefficient,
+    /// A sag coefficient: milliradians per unit of its load term's regressor (m for a mass, 1
+    /// for a first moment, times kg for a payload's; [`crate::robot::LoadTerm`]).
+    MradPerLoad,
 }
 
 impl ParameterUnit {
     /// Report units per internal unit.
     pub fn per_si(self) -> f64 {
         match self {
-            ParameterUnit::Mm | ParameterUnit::Mrad => 1e3,
+            ParameterUnit::Mm | ParameterUnit::Mrad | ParameterUnit::MradPerLoad => 1e3,
             ParameterUnit::Coefficient => 1.0,
         }
     }

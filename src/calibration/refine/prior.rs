@@ -31,7 +31,11 @@ pub fn unrefined_sigma(cal: &Calibration, p: &RefitParameter) -> Option<f64> {
                 a.coefficient_sigma.get(i).copied()
             })
         }
-        RefitParameter::Target { .. } | RefitParameter::Base(_) | RefitParameter::SetupBase { .. } => None,
+        RefitParameter::Target { .. }
+        | RefitParameter::Base(_)
+        | RefitParameter::SetupBase { .. }
+        | RefitParameter::Sag { .. }
+        | RefitParameter::Backlash { .. } => None,
         RefitParameter::Tool(axis) => cal
             .tool
             .as_ref()

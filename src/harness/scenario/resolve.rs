@@ -35,7 +35,7 @@ pub enum ResolvedTruth {
     /// The same robot in every trial.
     Fixed {
         /// The truth model.
-        robot: RobotModel,
+        robot: Box<RobotModel>,
     },
     /// A robot drawn per trial around the nominal description.
     Perturbed {
@@ -254,10 +254,10 @@ fn resolve_truth(
 ) -> Result<ResolvedTruth, (&'static str, String)> {
     Ok(match truth {
         TruthSection::Paper => ResolvedTruth::Fixed {
-            robot: crate::sim::paper_robot(),
+            robot: Box::new(crate::sim::paper_robot()),
         },
         TruthSection::File { path } => ResolvedTruth::Fixed {
-            robot: RobotModel::from_file(&dir.join(path)).map_err(|e| ("truth.path", e.to_string()))?,
+            robot: Box::new(RobotModel::from_file(&dir.join(path)).map_err(|e| ("truth.path", e.to_string()))?),
         },
         TruthSection::Perturbed { perturbation } => {
             // One throw-away draw checks the spec against the robot before any trial runs.

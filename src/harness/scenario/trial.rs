@@ -203,7 +203,7 @@ impl CampaignTrial {
         }
         commands.extend(self.fixed.iter().flat_map(|f| f.commands.iter().cloned()));
         let internal: Vec<Vec<f64>> = commands.iter().map(|c| commands_to_internal(&self.desc, c)).collect();
-        let arm = self.analytic_arm(robot.clone());
+        let arm = self.analytic_arm(robot.as_ref().clone());
         Some(InversionTable::new(arm.driver(), internal.iter().map(Vec::as_slice)))
     }
 
@@ -238,7 +238,7 @@ impl CampaignTrial {
 
     fn draw_truth(&self, rng: &mut ChaCha12Rng) -> Result<RobotModel, String> {
         match &self.truth {
-            ResolvedTruth::Fixed { robot } => Ok(robot.clone()),
+            ResolvedTruth::Fixed { robot } => Ok(robot.as_ref().clone()),
             ResolvedTruth::Perturbed { perturbation } => {
                 perturb(&self.desc, perturbation, rng).map_err(|e| format!("drawing the robot: {e}"))
             }
