@@ -1,6 +1,7 @@
 //! Reading TOML input files (robot descriptions, truth models, effects, scenarios): one error
 //! type naming the file, with the parser's line, column and key in the message.
 
+use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
 
@@ -36,11 +37,55 @@ pub fn read(path: &Path) -> Result<String, TomlFileError> {
 
 /// Parses TOML text; `path` labels errors only. The message is one line: the 1-based line and
 /// column, the parser's message and the offending line's text.
-pub fn parse<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, TomlFileError> {
-    toml::from_str(text).map_err(|e| TomlFileError::Parse {
+///
+/// A fixed-length list written longer (`limits = [-40, 0, 40]` for two numbers) is an error
+/// naming its key: the parser reads the first values and drops the rest, so the value read
+/// back is compared with the text, list by list, where both have a list at one key.
+pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result<T, TomlFileError> {
+    let parse_error = |e: toml::de::Error| TomlFileError::Parse {
         path: path.to_owned(),
         message: one_line_message(&e, text),
+    };
+    let value: T = toml::from_str(text).map_err(parse_error)?;
+    let written: toml::Table = toml::from_str(text).map_err(parse_error)?;
+    if let Ok(toml::Value::Table(read)) = toml::Value::try_from(&value)
+        && let Some((key, written_len, read_len)) = longer_list(&written, &read, "")
+    {
+        return Err(TomlFileError::Parse {
+            path: path.to_owned(),
+            message: format!("key `{key}`: {written_len} values, but it holds {read_len}"),
+        });
+    }
+    Ok(value)
+}
+
+/// The first list of `written` longer than the list at the same key of `read` (the value as
+/// deserialised and written back): its dotted key and both lengths.
+fn longer_list(written: &toml::Table, read: &toml::Table, prefix: &str) -> Option<(String, usize, usize)> {
+    written.iter().find_map(|(k, w)| {
+        let key = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        longer_value(w, read.get(k)?, &key)
     })
+}
+
+/// [`longer_list`] for one value.
+fn longer_value(written: &toml::Value, read: &toml::Value, key: &str) -> Option<(String, usize, usize)> {
+    match (written, read) {
+        (toml::Value::Array(w), toml::Value::Array(r)) if w.len() > r.len() => {
+            Some((key.to_string(), w.len(), r.len()))
+        }
+        (toml::Value::Array(w), toml::Value::Array(r)) => w
+            .iter()
+            .zip(r)
+            .enumerate()
+            .find_map(|(i, (w, r))| longer_value(w, r, &format!("{key}[{i}]"))),
+        (toml::Value::Table(w), toml::Value::Table(r)) => longer_list(w, r, key),
+        _ => None,
+    }
 }
 
 /// `line L, column C: message (at `text of the line`)`, or the message alone without a span.
@@ -66,9 +111,8 @@ fn one_line_message(e: &toml::de::Error, text: &str) -> String {
 mod tests {
     use super::*;
 
-    #[derive(Debug, serde::Deserialize)]
+    #[derive(Debug, serde::Deserialize, serde::Serialize)]
     #[serde(deny_unknown_fields)]
-    #[allow(dead_code)]
     struct Small {
         mass_kg: f64,
     }
@@ -85,5 +129,24 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown field `mass_kgs`") && e.contains("line 1"), "{e}");
+    }
+
+    #[derive(Debug, serde::Deserialize, serde::Serialize)]
+    #[serde(deny_unknown_fields)]
+    struct Pair {
+        limits: [f64; 2],
+        nested: Vec<Small>,
+    }
+
+    /// A list longer than its key holds is an error naming the key, nested lists too; the
+    /// right lengths parse.
+    #[test]
+    fn a_list_longer_than_its_key_is_an_error() {
+        let ok = "limits = [1.0, 2.0]\nnested = [{ mass_kg = 1.0 }]\n";
+        assert!(parse::<Pair>(ok, Path::new("p.toml")).is_ok());
+        let e = parse::<Pair>("limits = [1.0, 2.0, 3.0]\nnested = []\n", Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("key `limits`: 3 values, but it holds 2"), "{e}");
     }
 }

@@ -637,3 +637,172 @@ fn messages_are_one_clear_line() {
     );
     assert!(e.contains("line ") && e.contains("r.toml"), "{e}");
 }
+
+/// Issue 33's hostile descriptions: each is one error naming the key, exit 2, where they
+/// panicked, hung or were read silently wrong (a list longer than its key, a coupling of slope 0
+/// or twice into one joint, a NaN placement, limits of 1e300).
+#[test]
+fn hostile_descriptions_name_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let shipped =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/asea-irb6l.toml"))
+            .unwrap();
+    let cases: [(&str, &str, &str, &str); 5] = [
+        (
+            "limits = [-170.0, 170.0]",
+            "limits = [-170.0, 0.0, 170.0]",
+            "limits",
+            "3 values",
+        ),
+        (
+            "slope = 1.0     # identity",
+            "slope = 0.0",
+            "couplings[1].slope",
+            "not 0",
+        ),
+        (
+            "slope = 1.0     # identity",
+            "slope = 1.0\n\n[[couplings]]\nfrom = 3\nto = 4\nslope = 2.0",
+            "couplings[2]",
+            "a second coupling into joint 4",
+        ),
+        (
+            "translation_mm = [-3142.3, 4439.4, -526.1]",
+            "translation_mm = [nan, 4439.4, -526.1]",
+            "placement",
+            "finite",
+        ),
+        (
+            "limits = [-170.0, 170.0]",
+            "limits = [-1e300, 1e300]",
+            "limits",
+            "not a joint's",
+        ),
+    ];
+    for (k, (from, to, key, why)) in cases.iter().enumerate() {
+        assert!(shipped.contains(from), "{from}");
+        let path = dir.path().join(format!("robot{k}.toml"));
+        std::fs::write(&path, shipped.replacen(from, to, 1)).unwrap();
+        let a = axiscal().arg("describe").arg(&path).assert().code(2);
+        let e = error_of(&a);
+        assert!(e.contains(key) && e.contains(why), "{to}: {e}");
+    }
+}
+
+/// A robot of one joint calibrates (it panicked looking for axis 2's base convention), and a
+/// failed write to stdout is exit 2 with one line, not a panic's 101.
+#[test]
+fn one_joint_robots_and_closed_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = dir.path().join("one.toml");
+    std::fs::write(
+        &robot,
+        "name = \"one joint\"\ndh_convention = \"classic\"\n\n[[joints]]\nkind = \"revolute\"\nlimits = [-165.0, 165.0]\n\
+         dh = { d_mm = 290.0, theta_deg = 0.0, a_mm = 100.0, alpha_deg = 0.0 }\n\n[tool]\n\
+         frame = { translation_mm = [0.0, 0.0, 100.0], rpy_deg = [0.0, 0.0, 0.0] }\n\
+         targets_mm = [[0.0, 0.0, 0.0], [80.0, 0.0, 0.0], [0.0, 80.0, 0.0]]\n\n[[axis_targets]]\njoint = 1\n\
+         target0 = { link = 1, position_mm = [60.0, 40.0, 150.0] }\n",
+    )
+    .unwrap();
+    let data = dir.path().join("one.csv");
+    axiscal()
+        .args(["simulate", "--sim", "analytic", "--robot"])
+        .arg(&robot)
+        .arg("--out")
+        .arg(&data)
+        .assert()
+        .success();
+    axiscal()
+        .args(["calibrate", "--quiet", "--robot"])
+        .arg(&robot)
+        .arg(&data)
+        .arg("--out")
+        .arg(dir.path().join("cal"))
+        .assert()
+        .success();
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let out = std::process::Command::new(assert_cmd::cargo::cargo_bin("axiscal"))
+        .args(["describe", "asea-irb6l"])
+        .stdout(full)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).starts_with("error: failed printing to stdout"));
+}
+
+/// `compensate` marks commands outside the joint limits (`status outside_limits`, exit 2, the
+/// joint named) instead of `ok`; `joints` refuses such readings and a calibration of another
+/// robot (issue 33: both were accepted).
+#[test]
+fn commands_outside_the_limits_are_not_ok() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = campaign(dir.path(), 3);
+    let cal = dir.path().join("cal");
+    axiscal()
+        .args(["calibrate", "--quiet"])
+        .arg(&data)
+        .arg("--out")
+        .arg(&cal)
+        .assert()
+        .success();
+    // The same robot with joint 1 limited to +-10 deg: a pose at joint 1 = 30 deg (or its
+    // other branch near -150 deg) is outside.
+    let shipped =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/asea-irb6l.toml"))
+            .unwrap();
+    let narrow = dir.path().join("narrow.toml");
+    std::fs::write(
+        &narrow,
+        shipped.replacen("limits = [-170.0, 170.0]", "limits = [-10.0, 10.0]", 1),
+    )
+    .unwrap();
+    let desc = axiscal::robot::RobotDescription::asea_irb6l();
+    let pose = desc
+        .nominal_model()
+        .world_from_tool(&[30f64.to_radians(), 0.1, -0.2, 0.3, 0.5, 0.2]);
+    let poses = dir.path().join("poses.csv");
+    std::fs::write(
+        &poses,
+        format!(
+            "id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\n{}",
+            common::pose_line("p1", &pose)
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("cmd.csv");
+    let a = axiscal()
+        .args(["compensate", "--allow-other-robot", "--calibration"])
+        .arg(cal.join("calibration.json"))
+        .arg("--robot")
+        .arg(&narrow)
+        .arg("--poses")
+        .arg(&poses)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(2);
+    assert!(
+        stderr(&a).contains("cmd_1") && stderr(&a).contains("outside the joint's limits"),
+        "{}",
+        stderr(&a)
+    );
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        written.lines().nth(1).unwrap().starts_with("p1,outside_limits,"),
+        "{written}"
+    );
+    let a = axiscal()
+        .args(["joints", "--calibration"])
+        .arg(cal.join("calibration.json"))
+        .args(["--", "1e300", "0", "0", "0", "0", "0"])
+        .assert()
+        .code(2);
+    assert!(error_of(&a).contains("cmd_1 = 1e300 is outside"), "{}", stderr(&a));
+    let a = axiscal()
+        .args(["joints", "--robot", "arm6-dh", "--calibration"])
+        .arg(cal.join("calibration.json"))
+        .args(["--", "0", "0", "0", "0", "0", "0"])
+        .assert()
+        .code(2);
+    assert!(error_of(&a).contains("--allow-other-robot"), "{}", stderr(&a));
+}

@@ -85,8 +85,9 @@ pub struct Args {
     /// The URDF's robot name (default: the description's name as a ROS name).
     #[arg(long)]
     urdf_name: Option<String>,
-    /// Step of the tabulated joint map (`joint_map.csv`) \[deg or mm\].
-    #[arg(long, default_value_t = 0.1)]
+    /// Step of the tabulated joint map (`joint_map.csv`) \[deg or mm\] (finer than 0.001 writes
+    /// millions of rows per joint).
+    #[arg(long, default_value_t = 0.1, value_parser = InRange::closed(0.001, 90.0, "deg or mm"))]
     joint_map_step: f64,
     /// Also write a rerun recording: the measured targets per experiment with their fitted
     /// arcs, axes and residual vectors, the nominal and the calibrated robot side by side at

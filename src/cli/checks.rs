@@ -152,3 +152,22 @@ pub fn read_data(data: &Path, desc: &RobotDescription, robot: &Path, overrides: 
     data_units(&set, desc, data, overrides.skip_unit_check)?;
     Ok(set)
 }
+
+/// The first joint whose command `cmd_file` (file units: deg or mm) lies outside the
+/// description's limits: `(joint, command, [lower, upper])`.
+pub fn outside_limits(desc: &RobotDescription, cmd_file: &[f64]) -> Option<(usize, f64, [f64; 2])> {
+    desc.joints.iter().zip(cmd_file).enumerate().find_map(|(k, (j, &c))| {
+        let [lo, hi] = j.limits;
+        (!(lo..=hi).contains(&c)).then_some((k + 1, c, [lo, hi]))
+    })
+}
+
+/// A number for a message: as written for everyday magnitudes, in exponent form beyond 1e6
+/// (a placeholder `1e300` is not echoed as 301 digits).
+pub fn short_number(v: f64) -> String {
+    if v.abs() >= 1e6 {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}

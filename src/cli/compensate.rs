@@ -45,7 +45,7 @@ pub struct Args {
     force: bool,
     /// The payload the robot carries \[kg\]: what the calibrated model's sag under a payload
     /// (`robot.effects`, payload terms) is evaluated with.
-    #[arg(long, default_value_t = 0.0, value_parser = super::options::non_negative_f64)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::options::InRange::closed(0.0, 1e5, "kg"))]
     payload_kg: f64,
     #[command(flatten)]
     checks: checks::Overrides,
@@ -128,9 +128,9 @@ fn csv_header(desc: &RobotDescription) -> Vec<String> {
     header
 }
 
-/// The columns after `id` of a compensated pose `c`.
-fn compensated_columns(row: &mut Vec<String>, c: &CompensatedPose, desc: &RobotDescription) {
-    row.push("ok".into());
+/// The columns after `id` of a compensated pose `c` whose status is `status`.
+fn compensated_columns(row: &mut Vec<String>, c: &CompensatedPose, desc: &RobotDescription, status: &str) {
+    row.push(status.into());
     row.extend(commands_to_file(desc, &c.cmd).iter().map(|v| format!("{v:.9}")));
     row.push("true".into());
     row.push(c.ik.iterations.to_string());
@@ -183,7 +183,17 @@ pub fn run(args: Args) -> Result<()> {
     for (p, compensated) in poses.iter().zip(comp.compensate_sequence(&required)) {
         let mut row = vec![p.id.clone()];
         match compensated {
-            Ok(c) => compensated_columns(&mut row, &c, &desc),
+            Ok(c) => match checks::outside_limits(&desc, &commands_to_file(&desc, &c.cmd)) {
+                None => compensated_columns(&mut row, &c, &desc, "ok"),
+                Some((joint, value, [lo, hi])) => {
+                    failed += 1;
+                    eprintln!(
+                        "pose {}: cmd_{joint} = {value:.4} is outside the joint's limits [{lo}, {hi}] (deg or mm): not to be sent",
+                        p.id
+                    );
+                    compensated_columns(&mut row, &c, &desc, "outside_limits");
+                }
+            },
             Err(e) => {
                 failed += 1;
                 eprintln!("pose {}: {e}", p.id);

@@ -239,6 +239,12 @@ fn write_csv_from(
     comment: &str,
     set: &axiscal::measurement::MeasurementSet,
 ) -> Result<()> {
+    if set.rows().is_empty() {
+        anyhow::bail!(
+            "nothing to import: no measured point (a file with a header and no data rows?); {} not written",
+            out.display()
+        );
+    }
     let mut file = outputs.create(out)?;
     file.write_all(comment.as_bytes())
         .and_then(|_| write_measurements_to(&mut file, set))

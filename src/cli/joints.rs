@@ -29,21 +29,28 @@ pub struct Args {
     /// `q_1 .. q_N` appended. Written to stdout.
     #[arg(long, conflicts_with = "commands")]
     csv: Option<PathBuf>,
+    /// Go on even when the calibration records another robot description than `--robot` (a
+    /// different geometry hash).
+    #[arg(long)]
+    allow_other_robot: bool,
+}
+
+/// Refuses commands (file units) outside the description's limits: a reading no pose of the
+/// robot gives (a unit slip, a placeholder), where the calibrated model would extrapolate.
+fn within_limits(desc: &RobotDescription, cmd_file: &[f64], what: &str) -> Result<()> {
+    match super::checks::outside_limits(desc, cmd_file) {
+        Some((joint, value, [lo, hi])) => bail!(
+            "{what}: cmd_{joint} = {} is outside the joint's limits [{lo}, {hi}] (deg or mm; the description's `limits`)",
+            super::checks::short_number(value)
+        ),
+        None => Ok(()),
+    }
 }
 
 /// Runs `axiscal joints`.
 pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
-    let cal = super::checks::read_calibration_file(&args.calibration)?;
-    if cal.robot.dof() != desc.dof() {
-        bail!(
-            "{} has {} joints but {} describes {}",
-            args.calibration.display(),
-            cal.robot.dof(),
-            args.robot.display(),
-            desc.dof()
-        );
-    }
+    let cal = super::checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
     match &args.csv {
         Some(path) => convert_csv(&cal, &desc, path),
         None => {
@@ -55,6 +62,7 @@ pub fn run(args: Args) -> Result<()> {
                     args.commands.len()
                 );
             }
+            within_limits(&desc, &args.commands, "the commands")?;
             let q = commands_to_file(&desc, &calibrated_joint_values(&cal, &desc, &args.commands)?);
             println!("{}", q.iter().map(|v| format_f64(*v)).collect::<Vec<_>>().join(" "));
             Ok(())
@@ -102,6 +110,7 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Re
                 })
             })
             .collect::<Result<_>>()?;
+        within_limits(desc, &cmd, &format!("{}:{line}", path.display()))?;
         let q = calibrated_joint_values(cal, desc, &cmd).with_context(|| {
             format!(
                 "{}:{line}: the calibrated robot cannot execute these commands",

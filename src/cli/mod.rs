@@ -233,8 +233,30 @@ impl Interrupted {
     }
 }
 
+/// A failed write to stdout or stderr (`| head -1`, `> /dev/full`) ends the run with exit 2
+/// and one line on stderr where it can still be written, instead of a panic's 101: the reader
+/// went away or the device is full, which is the user's to fix, not a crash.
+fn exit_2_when_output_fails() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let message = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if message.starts_with("failed printing to std") {
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "error: {message}");
+            std::process::exit(2);
+        }
+        default(info);
+    }));
+}
+
 /// Parses the command line, runs the subcommand and maps its outcome to an exit code.
 pub fn main() -> ExitCode {
+    exit_2_when_output_fails();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {

@@ -161,16 +161,6 @@ pub fn duration_words(seconds: f64) -> String {
     }
 }
 
-/// A clap parser for a finite number `>= 0` (a mass, a length).
-pub fn non_negative_f64(s: &str) -> Result<f64, String> {
-    let v: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
-    if v.is_finite() && v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("`{s}` must be a finite number >= 0"))
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

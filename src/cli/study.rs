@@ -12,8 +12,8 @@ use std::path::PathBuf;
 /// Arguments of `axiscal study`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Number of simulated campaigns.
-    #[arg(long, default_value_t = 200, value_parser = InRange::closed(1usize, 100_000_000, ""))]
+    /// Number of simulated campaigns (at least 2: a standard error needs two).
+    #[arg(long, default_value_t = 200, value_parser = InRange::closed(2usize, 100_000_000, ""))]
     trials: usize,
     /// Study seed.
     #[arg(long, default_value_t = 1)]

@@ -58,7 +58,31 @@ fn polynomial(s: f64, c: &[f64]) -> (f64, f64, f64) {
     (v, dv, ddv)
 }
 
+/// Why a list of numbers of a function is unusable: `None` when every value is finite.
+fn non_finite(values: &[f64]) -> Option<String> {
+    values
+        .iter()
+        .any(|v| !v.is_finite())
+        .then(|| "every coefficient must be finite".to_string())
+}
+
+/// Why a gear ratio is unusable: `None` when it is finite and not 0.
+fn bad_ratio(ratio: f64) -> Option<String> {
+    (!ratio.is_finite() || ratio == 0.0).then(|| format!("the gear ratio must be finite and not 0, found {ratio}"))
+}
+
 impl Transmission {
+    /// Why the transmission cannot be evaluated (a ratio of 0, a coefficient not finite), if so.
+    pub fn problem(&self) -> Option<String> {
+        match self {
+            Transmission::Harmonic { sin, cos } => non_finite(sin).or_else(|| non_finite(cos)),
+            Transmission::Gear { ratio, sin, cos } => bad_ratio(*ratio)
+                .or_else(|| non_finite(sin))
+                .or_else(|| non_finite(cos)),
+            Transmission::Polynomial { c0, c } => non_finite(&[*c0]).or_else(|| non_finite(c)),
+        }
+    }
+
     /// The ideal transmission `theta_c = theta_a`.
     pub fn identity() -> Self {
         Transmission::Harmonic {
@@ -213,6 +237,18 @@ pub enum CouplingFunction {
 }
 
 impl CouplingFunction {
+    /// Why the coupling cannot be evaluated (a ratio of 0, a coefficient not finite), if so;
+    /// a four-bar's geometry is checked by [`FourBarGeometry::validate`].
+    pub fn problem(&self) -> Option<String> {
+        match self {
+            CouplingFunction::Gear { ratio, sin, cos } => bad_ratio(*ratio)
+                .or_else(|| non_finite(sin))
+                .or_else(|| non_finite(cos)),
+            CouplingFunction::Fractional { num, den } => non_finite(num).or_else(|| non_finite(den)),
+            CouplingFunction::FourBar(_) => None,
+        }
+    }
+
     /// A linear coupling `g = slope * t` (the controller's nominal model).
     pub fn linear(slope: f64) -> Self {
         CouplingFunction::Gear {

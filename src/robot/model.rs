@@ -174,6 +174,12 @@ impl RobotModel {
                     "the first joint has no joint below it".into(),
                 ));
             }
+            if let Some(problem) = j.transmission.problem() {
+                return Err(bad(format!("joints[{k}].transmission"), problem));
+            }
+            if let Some(problem) = j.coupling_in.as_ref().and_then(CouplingFunction::problem) {
+                return Err(bad(format!("joints[{k}].coupling_in"), problem));
+            }
             if let Some(CouplingFunction::FourBar(g)) = &j.coupling_in {
                 g.validate()
                     .map_err(|e| bad(format!("joints[{k}].coupling_in"), e.to_string()))?;

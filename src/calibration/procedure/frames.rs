@@ -300,8 +300,11 @@ impl BaseMotion<'_> {
 
 /// The base convention of a nominal model, carried over to the calibrated one: the direction
 /// of `z1 x z2` as an angle in link 1's XY plane, and the signed distance along axis 1 from
-/// the common-normal foot to frame 1's origin (both 0 for the IRB/L6).
+/// the common-normal foot to frame 1's origin (both 0 for the IRB/L6); `None` with one joint.
 fn base_convention(nominal: &PhiModel) -> Option<(f64, f64)> {
+    if nominal.dof() < 2 {
+        return None;
+    }
     let poses = nominal.poses(&vec![0.0; nominal.dof()]);
     let (a1, a2) = (poses.axis(0), poses.axis(1));
     let link1 = poses.world_from_link[0];

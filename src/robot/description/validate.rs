@@ -8,6 +8,13 @@ use std::path::Path;
 /// An invalid field of a description and what is wrong with it.
 type Invalid = (String, String);
 
+/// A revolute joint's limits lie within this \[deg\]: ten turns, beyond any cable-limited
+/// joint; larger values are slips (radians read as degrees times 1e3, a placeholder 1e300).
+const MAX_REVOLUTE_LIMIT_DEG: f64 = 3600.0;
+
+/// A sliding joint's limits lie within this \[mm\]: a 100 m gantry.
+const MAX_PRISMATIC_LIMIT_MM: f64 = 1e5;
+
 impl RobotDescription {
     /// Checks the description's values; the first field found invalid is reported with `path`.
     pub(super) fn validate(&self, path: &Path) -> Result<(), DescriptionError> {
@@ -15,6 +22,7 @@ impl RobotDescription {
             .and_then(|()| self.check_joints())
             .and_then(|()| self.check_rows())
             .and_then(|()| self.check_couplings())
+            .and_then(|()| self.check_frames())
             .and_then(|()| self.check_tool())
             .and_then(|()| self.check_axis_targets())
             .map_err(|(field, message)| DescriptionError::Invalid {
@@ -54,6 +62,19 @@ impl RobotDescription {
             if all.iter().any(|v| !v.is_finite()) {
                 return Err((format!("joints[{k}]"), "values must be finite".into()));
             }
+            let widest = match j.kind {
+                crate::kinematics::JointKind::Revolute => MAX_REVOLUTE_LIMIT_DEG,
+                crate::kinematics::JointKind::Prismatic => MAX_PRISMATIC_LIMIT_MM,
+            };
+            if j.limits.iter().any(|l| l.abs() > widest) {
+                return Err((
+                    format!("joints[{k}].limits"),
+                    format!(
+                        "limits beyond +-{widest} (deg or mm) are not a joint's: found [{:e}, {:e}]",
+                        j.limits[0], j.limits[1]
+                    ),
+                ));
+            }
             if j.limits[0] >= j.limits[1] {
                 return Err((
                     format!("joints[{k}].limits"),
@@ -83,6 +104,20 @@ impl RobotDescription {
         Ok(())
     }
 
+    /// The placement, the tool frame and the tool targets are finite.
+    fn check_frames(&self) -> Result<(), Invalid> {
+        let frames = [("placement", &self.placement), ("tool.frame", &self.tool.frame)];
+        for (key, p) in frames {
+            if p.translation_mm.iter().chain(&p.rpy_deg).any(|v| !v.is_finite()) {
+                return Err((key.into(), "values must be finite".into()));
+            }
+        }
+        if self.tool.targets_mm.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(("tool.targets_mm".into(), "values must be finite".into()));
+        }
+        Ok(())
+    }
+
     /// Each row's values are finite.
     fn check_rows(&self) -> Result<(), Invalid> {
         for (k, r) in self.rows.iter().enumerate() {
@@ -97,7 +132,7 @@ impl RobotDescription {
     }
 
     /// Each coupling drives joint `from + 1` from joint `from` within the robot, with a finite
-    /// slope.
+    /// slope other than 0, and no joint is driven twice.
     fn check_couplings(&self) -> Result<(), Invalid> {
         let n = self.joints.len();
         for (k, c) in self.couplings.iter().enumerate() {
@@ -110,8 +145,23 @@ impl RobotDescription {
                     ),
                 ));
             }
-            if !c.slope.is_finite() {
-                return Err((format!("couplings[{k}].slope"), "must be finite".into()));
+            if !c.slope.is_finite() || c.slope == 0.0 {
+                return Err((
+                    format!("couplings[{k}].slope"),
+                    format!(
+                        "must be finite and not 0 (a slope of 0 is no coupling: remove the entry), found {}",
+                        c.slope
+                    ),
+                ));
+            }
+            if self.couplings[..k].iter().any(|d| d.to == c.to) {
+                return Err((
+                    format!("couplings[{k}]"),
+                    format!(
+                        "a second coupling into joint {}: one passive coupling drives a joint",
+                        c.to
+                    ),
+                ));
             }
         }
         Ok(())
