@@ -178,7 +178,22 @@ pub fn read_text(path: &Path) -> std::io::Result<String> {
             .map(str::to_owned)
             .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "no such shipped file"));
     }
+    regular_file(path)?;
     std::fs::read_to_string(path)
+}
+
+/// Refuses an input that is not a regular file (after links): a device never ends
+/// (`/dev/zero`), a pipe is read once and may block, a folder has no text. Checked before
+/// the file is opened, so a pipe with no writer does not hang the check.
+pub fn regular_file(path: &Path) -> std::io::Result<()> {
+    if std::fs::metadata(path)?.is_file() {
+        Ok(())
+    } else {
+        Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a device, a pipe or a folder): save the data to a file and name that",
+        ))
+    }
 }
 
 #[cfg(test)]

@@ -806,3 +806,29 @@ fn commands_outside_the_limits_are_not_ok() {
         .code(2);
     assert!(error_of(&a).contains("--allow-other-robot"), "{}", stderr(&a));
 }
+
+/// A device or a pipe as input is one clear error at once (issue 33: `/dev/zero` aborted on
+/// allocation, a pipe was opened twice and hung).
+#[test]
+fn devices_and_pipes_are_refused_as_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo.csv");
+    assert!(
+        std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
+    for input in [Path::new("/dev/zero"), fifo.as_path()] {
+        let a = axiscal()
+            .arg("calibrate")
+            .arg(input)
+            .arg("--out")
+            .arg(dir.path().join("cal"))
+            .timeout(std::time::Duration::from_secs(60))
+            .assert()
+            .code(2);
+        assert!(error_of(&a).contains("not a regular file"), "{}", stderr(&a));
+    }
+}

@@ -60,6 +60,7 @@ pub fn data_units(set: &MeasurementSet, desc: &RobotDescription, data: &Path, sk
 
 /// The identity a measurement CSV written by axiscal records (its leading `#` lines), if any.
 pub fn data_identity(path: &Path) -> Option<DescriptionIdentity> {
+    axiscal::presets::regular_file(path).ok()?;
     let file = std::fs::File::open(path).ok()?;
     std::io::BufReader::new(file)
         .lines()
@@ -110,7 +111,7 @@ pub fn same_robot(
 /// shape and values ([`axiscal::robot::RobotModel::validate`]): a damaged file is one error
 /// naming the file and the field, never a panic later.
 pub fn read_calibration_file(path: &Path) -> Result<Calibration> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let text = axiscal::presets::read_text(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
         .with_context(|| format!("{}: not a calibration JSON", path.display()))?;
     cal.robot

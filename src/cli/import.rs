@@ -430,7 +430,9 @@ fn import_mat(a: &MatArgs) -> Result<()> {
     let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
     outputs.check(&a.out)?;
     let desc = RobotDescription::from_file(&a.robot)?;
-    let bytes = std::fs::read(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
+    let bytes = axiscal::presets::regular_file(&a.file)
+        .and_then(|()| std::fs::read(&a.file))
+        .with_context(|| format!("reading {}", a.file.display()))?;
     let file = mat_v5::read(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
     let how = ArrayImport {
         joints: a.joints.clone(),

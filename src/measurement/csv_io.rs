@@ -210,10 +210,12 @@ const POSITION_COLUMNS: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
 /// Reads a measurement file. `joint_count`: N from the robot description; when `None`, N is
 /// the number of `cmd_k` columns, which must be `cmd_1..cmd_N`.
 pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<MeasurementSet, MeasurementFileError> {
-    let file = std::fs::File::open(path).map_err(|source| MeasurementFileError::Io {
-        path: path.into(),
-        source,
-    })?;
+    let file = crate::presets::regular_file(path)
+        .and_then(|()| std::fs::File::open(path))
+        .map_err(|source| MeasurementFileError::Io {
+            path: path.into(),
+            source,
+        })?;
     read_measurements_from(io::BufReader::new(file), path, joint_count)
 }
 

@@ -184,7 +184,7 @@ pub fn parse(text: &str, path: &Path) -> Result<MeasurementSet, ImportError> {
 /// Reads `DIR/N1N2N3Jval.csv` of the data set's folder `dir`.
 pub fn import_dir(dir: &Path) -> Result<MeasurementSet, ImportError> {
     let path = dir.join(DATA_FILE);
-    let text = std::fs::read_to_string(&path).map_err(|source| ImportError::Io {
+    let text = crate::presets::read_text(&path).map_err(|source| ImportError::Io {
         path: path.clone(),
         source,
     })?;
