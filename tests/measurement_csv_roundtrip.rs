@@ -10,6 +10,12 @@ fn finite() -> impl Strategy<Value = f64> {
     POSITIVE | NEGATIVE | NORMAL | SUBNORMAL | ZERO
 }
 
+/// Any finite f64 within `+-max` (the reader's range for coordinates and commands), by the
+/// remainder, which keeps every bit pattern's variety: subnormals, signed zeros, long mantissas.
+fn finite_within(max: f64) -> impl Strategy<Value = f64> {
+    finite().prop_map(move |v| v % max)
+}
+
 /// Experiment ids that need quoting (commas, quotes, new lines, a leading `#`).
 fn experiment_name() -> impl Strategy<Value = String> {
     "[#a-z\",][a-zA-Z0-9_#,\" \n-]{0,8}[a-z#]"
@@ -23,8 +29,9 @@ fn measurement_set() -> impl Strategy<Value = MeasurementSet> {
             0usize..4,
             0usize..6,
             0usize..3,
-            [finite(), finite(), finite()],
-            prop::collection::vec(finite(), n),
+            // Coordinates within +-1e7 mm, commands within +-1e6 (both checked).
+            [finite_within(1e7), finite_within(1e7), finite_within(1e7)],
+            prop::collection::vec(finite_within(1e6), n),
             // Payloads are not negative, temperatures above absolute zero (both checked).
             finite().prop_map(f64::abs),
             finite().prop_filter("above absolute zero", |t| *t > -273.15),

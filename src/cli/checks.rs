@@ -162,13 +162,3 @@ pub fn outside_limits(desc: &RobotDescription, cmd_file: &[f64]) -> Option<(usiz
         (!(lo..=hi).contains(&c)).then_some((k + 1, c, [lo, hi]))
     })
 }
-
-/// A number for a message: as written for everyday magnitudes, in exponent form beyond 1e6
-/// (a placeholder `1e300` is not echoed as 301 digits).
-pub fn short_number(v: f64) -> String {
-    if v.abs() >= 1e6 {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
-}

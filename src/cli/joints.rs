@@ -41,7 +41,7 @@ fn within_limits(desc: &RobotDescription, cmd_file: &[f64], what: &str) -> Resul
     match super::checks::outside_limits(desc, cmd_file) {
         Some((joint, value, [lo, hi])) => bail!(
             "{what}: cmd_{joint} = {} is outside the joint's limits [{lo}, {hi}] (deg or mm; the description's `limits`)",
-            super::checks::short_number(value)
+            format_f64(value)
         ),
         None => Ok(()),
     }

@@ -109,6 +109,15 @@ impl Outputs {
     /// Checks that `path` may be written: not an input, and absent unless `--force`.
     pub fn check(&self, path: &Path) -> Result<()> {
         self.check_not_input(path)?;
+        if let Ok(meta) = path.symlink_metadata()
+            && !meta.is_file()
+            && !meta.is_symlink()
+        {
+            bail!(
+                "{} exists and is not a regular file (a device, a folder); refusing to replace it, even with --force",
+                path.display()
+            );
+        }
         if !self.force && path.symlink_metadata().is_ok() {
             bail!("{} exists; pass --force to replace it", path.display());
         }
@@ -162,16 +171,20 @@ impl Outputs {
         let name = path
             .file_name()
             .with_context(|| format!("{}: not a file name", path.display()))?;
+        // The process id and a count of this process's outputs: two writers never share one.
+        static OPENED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         let temporary = path.with_file_name(format!(
-            ".{}.axiscal-{}.tmp",
+            ".{}.axiscal-{}-{}.tmp",
             name.to_string_lossy(),
-            std::process::id()
+            std::process::id(),
+            OPENED.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
         ));
         let file = std::fs::File::create(&temporary).with_context(|| format!("creating {}", temporary.display()))?;
         Ok(OutputFile {
             writer: Some(std::io::BufWriter::new(file)),
             temporary,
             target: path.to_owned(),
+            replace: self.force,
         })
     }
 }
@@ -191,6 +204,8 @@ pub struct OutputFile {
     writer: Option<std::io::BufWriter<std::fs::File>>,
     temporary: PathBuf,
     target: PathBuf,
+    /// `--force`: the target may be replaced; otherwise it is put in place only if still absent.
+    replace: bool,
 }
 
 impl OutputFile {
@@ -204,7 +219,18 @@ impl OutputFile {
                 .with_context(|| format!("writing {target}"))?;
             file.sync_all().with_context(|| format!("writing {target}"))?;
         }
-        std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"))
+        if self.replace {
+            return std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"));
+        }
+        // Without --force the target must still be absent: a hard link is created only where
+        // no file is (atomically, unlike a check then a rename), so a second run writing the
+        // same output at the same time fails instead of replacing the first one's file.
+        let linked = std::fs::hard_link(&self.temporary, &self.target);
+        let _ = std::fs::remove_file(&self.temporary);
+        linked.with_context(|| match self.target.symlink_metadata() {
+            Ok(_) => format!("{target} appeared while this command ran (another run writing it?); not replaced; pass --force to replace it"),
+            Err(_) => format!("writing {target}"),
+        })
     }
 }
 
@@ -272,5 +298,28 @@ mod tests {
         assert_eq!(std::fs::read_dir(out.parent().unwrap()).unwrap().count(), 1);
         Outputs::new(true).write(&out, "two").unwrap();
         assert_eq!(std::fs::read_to_string(&out).unwrap(), "two");
+    }
+
+    /// Two writers of one absent output at once (two runs without `--force`): the first to
+    /// commit wins, the second fails naming the target and leaves the first's file and no
+    /// temporary; a device is never replaced, even with `--force`.
+    #[test]
+    fn a_second_writer_never_replaces_the_first() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.txt");
+        let mut first = Outputs::new(false).create(&out).unwrap();
+        let mut second = Outputs::new(false).create(&out).unwrap();
+        first.write_all(b"first").unwrap();
+        second.write_all(b"second").unwrap();
+        first.commit().unwrap();
+        let e = format!("{:#}", second.commit().unwrap_err());
+        assert!(e.contains("appeared while this command ran"), "{e}");
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "first");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        let e = Outputs::new(true)
+            .check(Path::new("/dev/null"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a regular file"), "{e}");
     }
 }

@@ -101,7 +101,12 @@ impl ChiSquare {
         if dof == 0 {
             return None;
         }
-        let cdf = chi_square_cdf(value, dof as f64);
+        // An infinite or undefined statistic (a residual that overflowed) exceeds any noise.
+        let cdf = if value.is_finite() {
+            chi_square_cdf(value, dof as f64)
+        } else {
+            1.0
+        };
         let verdict = if 1.0 - cdf < 0.5 * false_alarm {
             "exceeds_noise"
         } else if cdf < 0.5 * false_alarm {
@@ -408,4 +413,23 @@ pub fn validation_residuals_csv(v: &Validation) -> String {
         ));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ChiSquare;
+
+    /// The verdicts at their edges: a statistic at its expectation is consistent, far above it
+    /// exceeds, far below it is below the noise, and an overflowed one (infinite, or NaN from
+    /// `inf - inf`) exceeds: never "consistent".
+    #[test]
+    fn verdicts_and_an_overflowed_statistic() {
+        let verdict = |v: f64| ChiSquare::new(v, 100, 0.01).unwrap().verdict;
+        assert_eq!(verdict(100.0), "consistent");
+        assert_eq!(verdict(300.0), "exceeds_noise");
+        assert_eq!(verdict(30.0), "below_noise");
+        assert_eq!(verdict(f64::INFINITY), "exceeds_noise");
+        assert_eq!(verdict(f64::NAN), "exceeds_noise");
+        assert!(ChiSquare::new(1.0, 0, 0.01).is_none());
+    }
 }

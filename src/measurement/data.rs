@@ -64,8 +64,8 @@ pub enum RowProblem {
         value: f64,
     },
     /// A value outside its physical range (a negative payload, a temperature below absolute
-    /// zero).
-    #[error("{value} is outside {expected}")]
+    /// zero, a coordinate beyond 10 km, a command beyond 1e6).
+    #[error("{} is outside {expected}", crate::measurement::format_f64(*value))]
     OutOfRange {
         /// The column.
         column: String,
@@ -354,6 +354,12 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
     }
 }
 
+/// A measured coordinate beyond this \[mm\] (10 km) is no instrument's.
+const MAX_COORDINATE_MM: f64 = 1e7;
+
+/// A command beyond this \[deg or mm\] is no joint's (2,800 turns, 1 km).
+const MAX_COMMAND: f64 = 1e6;
+
 /// What is wrong with row `m` on its own (not its key), `first` being the joint its
 /// experiment's first row moves.
 fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowProblem> {
@@ -370,6 +376,25 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
     }
     if let Some((column, value)) = first_not_finite(m) {
         return Some(RowProblem::NotFinite { column, value });
+    }
+    let axes = ["x_mm", "y_mm", "z_mm"];
+    if let Some((axis, &value)) = axes
+        .iter()
+        .zip(&m.position_mm)
+        .find(|(_, v)| v.abs() > MAX_COORDINATE_MM)
+    {
+        return Some(RowProblem::OutOfRange {
+            column: (*axis).into(),
+            value,
+            expected: "+-1e7 mm (10 km: farther than any instrument measures; coordinates in micrometres?)",
+        });
+    }
+    if let Some((k, &value)) = m.cmd.iter().enumerate().find(|(_, v)| v.abs() > MAX_COMMAND) {
+        return Some(RowProblem::OutOfRange {
+            column: format!("cmd_{}", k + 1),
+            value,
+            expected: "+-1e6 (deg or mm: no joint turns or slides that far; a placeholder value?)",
+        });
     }
     if m.payload_kg < 0.0 {
         return Some(RowProblem::OutOfRange {
