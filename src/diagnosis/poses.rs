@@ -23,7 +23,7 @@ pub struct Pose {
     /// change, 0 before any motion.
     pub approach: Vec<f64>,
     /// The same for every joint's actuator command (after the fig. 3 decoupling with the
-    /// description's nominal couplings; a change of at most [`UNMOVED_ACTUATOR_RAD`] is no
+    /// description's nominal couplings; a change of at most [`crate::physics::UNMOVED_ACTUATOR_RAD`] is no
     /// motion): where a backlash in the actuator sits.
     pub actuator_approach: Vec<f64>,
     /// Ambient temperature \[deg C\].
