@@ -36,7 +36,7 @@ pub struct Args {
 }
 
 /// Refuses commands (file units) outside the description's limits: a reading no pose of the
-/// robot gives (a unit slip, a placeholder), where the calibrated model would extrapolate.
+/// robot gives (a unit slip, a dummy value), where the calibrated model would extrapolate.
 fn within_limits(desc: &RobotDescription, cmd_file: &[f64], what: &str) -> Result<()> {
     match super::checks::outside_limits(desc, cmd_file) {
         Some((joint, value, [lo, hi])) => bail!(

@@ -393,7 +393,7 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
         return Some(RowProblem::OutOfRange {
             column: format!("cmd_{}", k + 1),
             value,
-            expected: "+-1e6 (deg or mm: no joint turns or slides that far; a placeholder value?)",
+            expected: "+-1e6 (deg or mm: no joint turns or slides that far; a dummy value?)",
         });
     }
     if m.payload_kg < 0.0 {

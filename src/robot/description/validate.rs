@@ -9,7 +9,7 @@ use std::path::Path;
 type Invalid = (String, String);
 
 /// A revolute joint's limits lie within this \[deg\]: ten turns, beyond any cable-limited
-/// joint; larger values are slips (radians read as degrees times 1e3, a placeholder 1e300).
+/// joint; larger values are slips (radians read as degrees times 1e3, a dummy 1e300).
 const MAX_REVOLUTE_LIMIT_DEG: f64 = 3600.0;
 
 /// A sliding joint's limits lie within this \[mm\]: a 100 m gantry.
