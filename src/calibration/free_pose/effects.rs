@@ -6,7 +6,7 @@ use super::fit::{self, Fitted, Problem};
 use super::identify::{Identification, is_effect};
 use super::poses::FreePoses;
 use super::summary::EffectTrial;
-use super::{FreePoseError, cross_validated_errors, linearised_cv_errors, significantly_better};
+use super::{FreePoseError, cv_errors, significantly_better};
 use crate::calibration::refine::RefitParameter;
 use crate::kinematics::JointKind;
 use crate::numerics::lsq::LsqError;
@@ -118,10 +118,7 @@ pub(super) fn select_effects(
             } else {
                 fit::fit(problem, &geometry.model, kept, &columns)?
             };
-            let errors = match linearised_cv_errors(problem, &fitted, kept, &configurations) {
-                Some(errors) => errors,
-                None => cross_validated_errors(problem, &fitted.model, kept, &configurations, &columns)?,
-            };
+            let errors = cv_errors(problem, &fitted, kept, &configurations, &columns)?;
             Ok((fitted, errors))
         };
         let (fitted, errors) = match attempt() {

@@ -556,10 +556,7 @@ fn select_harmonics(
                 Err(e) => return Err(e),
             }
         };
-        let errors = match linearised_cv_errors(problem, &fitted, kept, &configurations).map_or_else(
-            || cross_validated_errors(problem, &fitted.model, kept, &configurations, &columns(order)),
-            Ok,
-        ) {
+        let errors = match cv_errors(problem, &fitted, kept, &configurations, &columns(order)) {
             Ok(errors) => errors,
             Err(FreePoseError::Fit(LsqError::NotConverged { .. }) | FreePoseError::Unexecutable { .. }) => break,
             Err(e) => return Err(e),
@@ -631,6 +628,22 @@ fn cross_validated_errors(
         }
     }
     Ok(errors)
+}
+
+/// Each pose's held-out squared residual over the folds, for the fit `fitted` of the
+/// parameters `columns` on the poses `kept`: [`linearised_cv_errors`], or where a fold leaves a
+/// parameter undetermined, [`cross_validated_errors`] (every fold refitted).
+fn cv_errors(
+    problem: &Problem<'_>,
+    fitted: &Fitted,
+    kept: &[usize],
+    configurations: &[usize],
+    columns: &[usize],
+) -> Result<Vec<f64>, FreePoseError> {
+    match linearised_cv_errors(problem, fitted, kept, configurations) {
+        Some(errors) => Ok(errors),
+        None => cross_validated_errors(problem, &fitted.model, kept, configurations, columns),
+    }
 }
 
 /// Each pose's sum of squared held-out residuals \[m^2\] in the order of `kept` over the folds
