@@ -832,3 +832,45 @@ fn devices_and_pipes_are_refused_as_inputs() {
         assert!(error_of(&a).contains("not a regular file"), "{}", stderr(&a));
     }
 }
+
+/// One sweep in metres inside a file in millimetres is named (issue 33: the median of the
+/// arcs' sizes missed it, and a 10,000 mrad direction sigma was reported as a result).
+#[test]
+fn one_sweep_in_other_units_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = campaign(dir.path(), 3);
+    let bad = dir.path().join("bad.csv");
+    let text = std::fs::read_to_string(&good).unwrap();
+    let header: Vec<&str> = text
+        .lines()
+        .find(|l| l.starts_with("experiment,"))
+        .unwrap()
+        .split(',')
+        .collect();
+    let rewritten: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if !l.starts_with("axis6,") {
+                return l.to_owned();
+            }
+            l.split(',')
+                .zip(&header)
+                .map(|(v, h)| match *h {
+                    "x_mm" | "y_mm" | "z_mm" => (v.parse::<f64>().unwrap() * 1e-3).to_string(),
+                    _ => v.to_owned(),
+                })
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect();
+    std::fs::write(&bad, rewritten.join("\n") + "\n").unwrap();
+    let a = axiscal()
+        .arg("calibrate")
+        .arg(&bad)
+        .arg("--out")
+        .arg(dir.path().join("cal"))
+        .assert()
+        .code(2);
+    let e = error_of(&a);
+    assert!(e.contains("axis6") && e.contains("metres"), "{e}");
+}

@@ -173,6 +173,19 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
             ),
         });
     }
+    // One experiment in other units among consistent ones: the median above misses it.
+    if !slipped(ratio) {
+        for (r, example) in scale.iter().filter(|s| slipped(s.0)) {
+            slips.push(UnitSlip {
+                field: "x_mm,y_mm,z_mm".into(),
+                message: format!(
+                    "{example}, {r:.4} times, where the file's other arcs match the description: this \
+                     experiment's coordinates look like {} rather than millimetres",
+                    likely(*r)
+                ),
+            });
+        }
+    }
     let bad: Vec<&(f64, usize, String)> = angle.iter().filter(|a| slipped(a.0)).collect();
     if let (Some(lo), Some(hi)) = (
         bad.iter().map(|a| a.0).min_by(f64::total_cmp),
