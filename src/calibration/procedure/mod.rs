@@ -79,6 +79,16 @@ pub enum AxisEstimator {
     Paper,
 }
 
+impl AxisEstimator {
+    /// Its name as `--estimator` spells it (`ml`, `paper`).
+    pub fn name(self) -> &'static str {
+        match self {
+            AxisEstimator::Ml => "ml",
+            AxisEstimator::Paper => "paper",
+        }
+    }
+}
+
 /// Options of the procedure.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]

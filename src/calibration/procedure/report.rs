@@ -248,7 +248,11 @@ fn coupling_findings(cal: &Calibration, out: &mut Vec<Finding>) {
 pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration of {}\n", desc.name);
-    let _ = writeln!(s, "Data: `{source}`. Estimator: `{:?}`.\n", cal.options.estimator);
+    let _ = writeln!(
+        s,
+        "Data: `{source}`. Estimator: `{}` (`--estimator`).\n",
+        cal.options.estimator.name()
+    );
     write_noise(&mut s, cal);
     write_scope(&mut s, cal);
     write_axes_table(&mut s, cal);

@@ -18,8 +18,9 @@ use std::path::Path;
 /// `--record` was given to a build without the `viz` feature.
 #[derive(Debug, thiserror::Error)]
 #[error(
-    "--record {0} needs the rerun recorder, which this build does not include: rebuild with \
-     `cargo build --release --features viz` (`make run` does)"
+    "--record {0} needs the rerun recorder, which this build does not include: install it with \
+     `cargo install --locked --path . --features viz` from the clone (another full build; `make run` \
+     builds it as target/quick-release/axiscal)"
 )]
 pub struct RecordUnavailable(String);
 
