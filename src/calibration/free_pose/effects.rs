@@ -68,7 +68,7 @@ const TRIALS: [(&str, bool, bool); 4] = [
 
 /// The set of effects that predicts held-out configurations best ([`super::CV_FOLDS`]-fold
 /// cross-validation over the folds of the harmonic order's, each fold's fit the Gauss-Newton
-/// step from the fit on every pose, [`linearised_cv_errors`]; refitted in full where a fold
+/// step from the fit on every pose, refitted in full where a fold ([`cv_errors`])
 /// leaves a parameter undetermined), taken in the order of [`TRIALS`] and
 /// replacing the set before only when [`significantly_better`]: its fit on the poses `kept`,
 /// the effect columns left out, and every trial. A set whose fit does not converge is more
