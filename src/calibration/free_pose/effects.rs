@@ -68,8 +68,8 @@ const TRIALS: [(&str, bool, bool); 4] = [
 
 /// The set of effects that predicts held-out configurations best ([`super::CV_FOLDS`]-fold
 /// cross-validation over the folds of the harmonic order's, each fold's fit the Gauss-Newton
-/// step from the fit on every pose, refitted in full where a fold ([`cv_errors`])
-/// leaves a parameter undetermined), taken in the order of [`TRIALS`] and
+/// step from the fit on every pose, refitted in full where a fold leaves a parameter
+/// undetermined: [`cv_errors`]), taken in the order of [`TRIALS`] and
 /// replacing the set before only when [`significantly_better`]: its fit on the poses `kept`,
 /// the effect columns left out, and every trial. A set whose fit does not converge is more
 /// than the data resolve and is not chosen.
