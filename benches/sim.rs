@@ -75,10 +75,10 @@ fn rapier_arms() -> (RapierArm, RapierArm) {
     };
     let kinematic = RapierArm::new(axiscal::sim::paper_robot(), &d, Effects::default(), options.clone());
     let compliance = Effects {
-        compliance: Some(ComplianceEffect {
-            stiffness_nm_per_rad: vec![5e5, 3e5, 3e5, 5e4, 5e4, 2e4],
-            gravity_m_s2: [0.0, 0.0, -9.81],
-        }),
+        compliance: Some(ComplianceEffect::new(
+            vec![5e5, 3e5, 3e5, 5e4, 5e4, 2e4],
+            [0.0, 0.0, -9.81],
+        )),
         ..Effects::default()
     };
     (

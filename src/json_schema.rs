@@ -17,7 +17,8 @@ use serde_json::{Value, json};
 /// `diagnosis.json` holds either mode's result.
 #[derive(schemars::JsonSchema)]
 #[serde(untagged)]
-#[allow(dead_code)]
+// Never built: it only describes the file's schema.
+#[allow(dead_code, clippy::large_enum_variant)]
 enum DiagnosisFile {
     /// With validation poses.
     Full(Diagnosis),

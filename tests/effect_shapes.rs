@@ -123,10 +123,7 @@ fn the_real_link_masses_replace_the_descriptions_in_the_sag() {
     let cmd = [0.3, -0.2, 0.25, 0.4, -0.6, 0.8];
     let mut stiffness = vec![1e8; 6];
     stiffness[1] = 2e5;
-    let compliance = ComplianceEffect {
-        stiffness_nm_per_rad: stiffness,
-        gravity_m_s2: [0.0, 0.0, -9.81],
-    };
+    let compliance = ComplianceEffect::new(stiffness, [0.0, 0.0, -9.81]);
     let doubled: Vec<LinkMassEntry> = desc
         .joints
         .iter()

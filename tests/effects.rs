@@ -135,10 +135,7 @@ fn compliance_sag_matches_gravity_torque_over_stiffness() {
     let mut k = vec![1e8; 6];
     k[1] = 2e5;
     let effects = Effects {
-        compliance: Some(ComplianceEffect {
-            stiffness_nm_per_rad: k,
-            gravity_m_s2: [0.0, 0.0, -9.81],
-        }),
+        compliance: Some(ComplianceEffect::new(k, [0.0, 0.0, -9.81])),
         payload: Some(PayloadEffect {
             com_in_tool_mm: [0.0, 0.0, 100.0],
         }),
@@ -179,10 +176,7 @@ fn compliance_sag_matches_gravity_torque_over_stiffness() {
 fn large_compliance_sag_is_the_static_equilibrium_not_the_first_order_one() {
     let mut k = vec![1e12; 6];
     k[1] = 2e3;
-    let compliance = ComplianceEffect {
-        stiffness_nm_per_rad: k,
-        gravity_m_s2: [0.0, 0.0, -9.81],
-    };
+    let compliance = ComplianceEffect::new(k, [0.0, 0.0, -9.81]);
     let effects = Effects {
         compliance: Some(compliance.clone()),
         ..Effects::default()
@@ -196,13 +190,14 @@ fn large_compliance_sag_is_the_static_equilibrium_not_the_first_order_one() {
     let rapier = arm.sim_arm().expect("built").joint_positions()[1] - driven.q[1];
     let masses = LinkMass::from_description(&desc);
     let couplings = PassiveSlope::of_linkages(&t, &driven.active);
-    let first = coupled_first_order_deflection(&t.phi_model(), &driven.q, &masses, None, &compliance, &couplings);
     let load = CompliantLoad {
         masses: &masses,
         payload: None,
         compliance: &compliance,
         couplings: &couplings,
+        reflected_masses: None,
     };
+    let first = coupled_first_order_deflection(&t.phi_model(), &driven.q, &load);
     let exact = coupled_static_deflection(&t.phi_model(), &driven.q, &load).expect("converges");
     let relative = |dq: f64| (dq - rapier).abs() / rapier.abs();
     eprintln!(
@@ -216,6 +211,68 @@ fn large_compliance_sag_is_the_static_equilibrium_not_the_first_order_one() {
     assert!(relative(exact[1]) < 0.02, "static {exact:?}, rapier {rapier}");
 }
 
+/// The potential energy \[J\] of `masses` (description frames) at joint values `q`:
+/// `-sum m g . c`, each centre of mass placed in the world by the model's link frames.
+fn potential_j(t: &RobotModel, desc: &RobotDescription, q: &[f64], links: std::ops::Range<usize>) -> f64 {
+    let poses = t.phi_model().poses(q);
+    let g = nalgebra::Vector3::new(0.0, 0.0, -9.81);
+    links
+        .map(|k| {
+            let c = poses.world_from_link[k] * (Point3::from(desc.joints[k].com_mm) * 1e-3);
+            -desc.joints[k].mass_kg * g.dot(&c.coords)
+        })
+        .sum()
+}
+
+/// The load paths and the balancer against virtual work, an independent formula: the load on
+/// actuator 2 is `-dV/du` along the motion the actuator makes, by central differences of the
+/// potential energy. Rigid four-bar: joint 2 turns and joint 3 by the coupling's slope `s`
+/// (`-dV/dq2 - s dV/dq3`); serial: joint 2 alone (`-dV/dq2`); a four-bar carrying a fraction
+/// `f`: `-dV/dq2 - f s dV/dq3`; a balancer taking `b` of link 2's own torque subtracts
+/// `b (-dV_2/dq2)`. At unit stiffness the first-order sag of actuator 2 is that load, and
+/// joint 3 follows it by `s`. Tolerance: the central difference's truncation at a 1e-5 rad
+/// step, `h^2 / 6` of the third derivative (about the torque, 100 N m), 2e-9 N m, and its
+/// rounding, `eps V / h` with V about 1e3 J, 2e-8 N m.
+#[test]
+fn load_paths_and_balancers_are_the_virtual_work_of_their_motion() {
+    let (desc, t) = truth();
+    let q = [0.3, -0.25, 0.35, 0.4, -0.6, 0.8];
+    let masses = LinkMass::from_description(&desc);
+    let couplings = PassiveSlope::of_linkages(&t, &q);
+    let s = couplings[2].slope;
+    assert!(couplings[2].reflects_load && s.abs() > 0.5, "{couplings:?}");
+    let h = 1e-5;
+    let dv = |dir: &[f64], links: std::ops::Range<usize>| {
+        let at = |e: f64| -> Vec<f64> { q.iter().zip(dir).map(|(a, d)| a + e * d).collect() };
+        (potential_j(&t, &desc, &at(h), links.clone()) - potential_j(&t, &desc, &at(-h), links)) / (2.0 * h)
+    };
+    let e2 = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
+    let e3 = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0];
+    let serial = -dv(&e2, 0..6);
+    let driven = -dv(&e3, 0..6);
+    let own = -dv(&e2, 1..2);
+    let mut k = vec![f64::INFINITY; 6];
+    k[1] = 1.0;
+    for (fraction, balancer) in [(1.0, 0.0), (0.0, 0.0), (0.35, 0.0), (0.0, 0.7), (1.0, 0.6)] {
+        let compliance = ComplianceEffect {
+            reflected_fraction: fraction,
+            balancer_fraction: vec![0.0, balancer, 0.0, 0.0, 0.0, 0.0],
+            ..ComplianceEffect::new(k.clone(), [0.0, 0.0, -9.81])
+        };
+        let dq = axiscal::physics::with_simulated_load(&masses, None, &compliance, &couplings, |load| {
+            coupled_first_order_deflection(&t.phi_model(), &q, load)
+        });
+        let expected = serial + fraction * s * driven - balancer * own;
+        assert!(
+            (dq[1] - expected).abs() < 3e-8,
+            "fraction {fraction}, balancer {balancer}: {} N m against virtual work {expected}",
+            dq[1]
+        );
+        assert!((dq[2] - s * dq[1]).abs() < 1e-12, "joint 3 follows the actuator");
+    }
+    assert!((serial - (serial + s * driven)).abs() > 1.0, "the paths differ here");
+}
+
 /// A joint softer than the gravity stiffness has no stable equilibrium (the arm buckles):
 /// the static deflection reports it instead of returning a sag.
 #[test]
@@ -223,10 +280,7 @@ fn a_joint_softer_than_gravity_stiffness_buckles() {
     let (desc, t) = truth();
     let mut k = vec![1e12; 6];
     k[1] = 20.0;
-    let compliance = ComplianceEffect {
-        stiffness_nm_per_rad: k,
-        gravity_m_s2: [0.0, 0.0, -9.81],
-    };
+    let compliance = ComplianceEffect::new(k, [0.0, 0.0, -9.81]);
     let q = [0.3, 0.5, 0.1, 0.0, 0.0, 0.0];
     let masses = LinkMass::from_description(&desc);
     let couplings = PassiveSlope::of_linkages(&t, &q);
@@ -235,6 +289,7 @@ fn a_joint_softer_than_gravity_stiffness_buckles() {
         payload: None,
         compliance: &compliance,
         couplings: &couplings,
+        reflected_masses: None,
     };
     let result = coupled_static_deflection(&t.phi_model(), &q, &load);
     assert!(

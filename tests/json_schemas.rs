@@ -253,11 +253,12 @@ fn errors_of(file: &Path) -> (String, Vec<String>) {
 
 /// Keys whose value is a list of numbers that is not positional: a vector in a stated frame
 /// (`x, y, z`), a quaternion, a per-joint or per-coefficient list, a matrix.
-const NUMBER_LISTS: [&str; 27] = [
+const NUMBER_LISTS: [&str; 28] = [
     "nominal_mm",
     "refined_mm",
     "gravity_m_s2",
     "stiffness_nm_per_rad",
+    "balancer_fraction",
     "translation_mm",
     "rpy_deg",
     "rotation_xyzw",

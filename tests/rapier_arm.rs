@@ -186,10 +186,7 @@ mod dynamic {
     }
 
     fn compliance(stiffness: [f64; 6]) -> ComplianceEffect {
-        ComplianceEffect {
-            stiffness_nm_per_rad: stiffness.to_vec(),
-            gravity_m_s2: [0.0, 0.0, -9.81],
-        }
+        ComplianceEffect::new(stiffness.to_vec(), [0.0, 0.0, -9.81])
     }
 
     /// Executes `CMD` on the rapier arm and returns it with the driver's joint values.
@@ -376,14 +373,16 @@ mod dynamic {
         let q = arm.sim_arm().expect("built").joint_positions();
         let mut without = truth.clone();
         without.four_bars.clear();
-        let dq_analytic = axiscal::physics::coupled_first_order_deflection(
-            &without.phi_model(),
-            &driven.q,
-            &LinkMass::from_description(&desc),
-            None,
-            &compliance(stiffness),
-            &axiscal::physics::PassiveSlope::of_linkages(&without, &driven.active),
-        );
+        let masses = LinkMass::from_description(&desc);
+        let couplings = axiscal::physics::PassiveSlope::of_linkages(&without, &driven.active);
+        let load = axiscal::physics::CompliantLoad {
+            masses: &masses,
+            payload: None,
+            compliance: &compliance(stiffness),
+            couplings: &couplings,
+            reflected_masses: None,
+        };
+        let dq_analytic = axiscal::physics::coupled_first_order_deflection(&without.phi_model(), &driven.q, &load);
         let dq3 = q[2] - driven.q[2];
         eprintln!("open loop: dq3 {dq3:.4e} rad, analytic {:.4e}", dq_analytic[2]);
         assert!(arm.four_bars()[0].closure_error_m(arm.sim_arm().expect("built")) > 0.01);

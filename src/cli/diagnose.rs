@@ -8,7 +8,7 @@ use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
-    diagnose_with, estimated_noise, markdown, validation_poses, write_axes_plots, write_plots,
+    diagnose_with, estimated_noise, free_poses_only, markdown, validation_poses, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -18,7 +18,8 @@ use std::path::{Path, PathBuf};
 /// Arguments of `axiscal diagnose`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Measurement CSV (`docs/formats.md#measurement-csv`): axis experiments plus validation poses.
+    /// Measurement CSV (`docs/formats.md#measurement-csv`): axis experiments plus validation
+    /// poses, or free poses only (calibrated from the even poses, diagnosed on the odd ones).
     data: PathBuf,
     /// Nominal robot description (TOML).
     #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
@@ -27,7 +28,7 @@ pub struct Args {
     #[arg(long)]
     out: PathBuf,
     /// Measurement noise of a point, 3-D RMS \[mm\] (default: estimated from the axis
-    /// experiments' residuals, as `calibrate` does without it).
+    /// experiments' residuals, as `calibrate` does without it; required for free poses only).
     #[arg(long, value_parser = NOISE_MM)]
     noise_mm: Option<f64>,
     /// Noise-only replicas of the campaign (each recalibrated).
@@ -123,9 +124,10 @@ pub fn run(args: Args) -> Result<()> {
     };
     let written = report.write(|dir| write_plots(&d, dir))?;
     let headline = format!(
-        "{}{} (confidence {:.2}): gap {:.3} -> {:.3} mm",
+        "{}{}{} (confidence {:.2}): gap {:.3} -> {:.3} mm",
         d.outcome.effect,
         d.outcome.joint.map_or(String::new(), |j| format!(" joint {j}")),
+        d.member.as_ref().map_or(String::new(), |m| format!(", {m}")),
         d.outcome.confidence,
         d.outcome.gap_before_mm,
         d.outcome.gap_after_mm
@@ -206,6 +208,12 @@ fn run_axes(
 fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(f64, &'static str, Option<f64>)> {
     if let Some(n) = args.noise_mm {
         return Ok((n, "given", None));
+    }
+    if free_poses_only(set) {
+        anyhow::bail!(
+            "{} has free poses only (no axis experiment): their residuals cannot tell the instrument's noise from the model error the diagnosis looks for; give --noise-mm (the instrument's figure, 3-D RMS of a point)",
+            args.data.display()
+        );
     }
     let e = estimated_noise(set, desc)
         .with_context(|| format!("estimating the noise of {}", args.data.display()))?

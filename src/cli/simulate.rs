@@ -36,6 +36,24 @@ fn default_truth(desc: &RobotDescription, seed: u64) -> Result<RobotModel> {
     Ok(truth)
 }
 
+/// The truth `--truth` names: a robot model file, or a robot description, whose nominal model
+/// (no manufacturing error) is then the truth (said on the console).
+fn truth_file(path: &std::path::Path) -> Result<RobotModel> {
+    match RobotModel::from_file(path) {
+        Ok(model) => Ok(model),
+        Err(model_error) => match RobotDescription::from_file(path) {
+            Ok(desc) => {
+                say!(
+                    "truth: {}'s nominal model (a robot description: no manufacturing errors; without --truth the description is perturbed by the default errors)",
+                    path.display()
+                );
+                Ok(RobotModel::ideal(&desc))
+            }
+            Err(_) => Err(model_error.into()),
+        },
+    }
+}
+
 /// The stream of the default truth's draws (the noise uses stream 0 of the same seed).
 const TRUTH_STREAM: u64 = 1;
 
@@ -123,7 +141,7 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
     let truth = match &args.truth {
-        Some(path) => RobotModel::from_file(path)?,
+        Some(path) => truth_file(path)?,
         None => default_truth(&desc, args.seed)?,
     };
     if truth.joints.len() != desc.dof() {

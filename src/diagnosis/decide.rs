@@ -20,6 +20,9 @@ struct Scored {
     chi2: f64,
     chi2_null: Vec<f64>,
     z_null: Vec<f64>,
+    /// The summed weight of the nameable members of its family on its joint: the confidence
+    /// in its effect when it is named.
+    kind_weight: f64,
 }
 
 /// A fit's parameters with its `(X^T X)^+` and the directions it kept: the candidate's
@@ -68,7 +71,9 @@ fn fitted_parameters(c: Candidate, fit: FitParams, ssr_train: f64, prep: &Prepar
             sigma: (normal_inverse[(g + i, g + i)] * var).max(0.0).sqrt(),
         })
         .collect();
+    // The stiffness of a member with one compliance (the description's masses).
     if let (Candidate::JointCompliance { .. }, Some(c)) = (c, out.first().cloned())
+        && c.name == "compliance_rad_per_nm"
         && c.value > 0.0
     {
         out.push(Parameter {
@@ -174,6 +179,7 @@ fn score_candidates(
             candidate: *c,
             score: CandidateScore {
                 effect: c.effect_name().into(),
+                member: c.member_name(),
                 joint: c.joint(),
                 heldout_rms_mm: rms,
                 gap_after_mm: (rms * rms - noise * noise).max(0.0).sqrt(),
@@ -188,6 +194,7 @@ fn score_candidates(
             chi2,
             chi2_null,
             z_null: t_null.iter().map(|t| (t - mu) / sd).collect(),
+            kind_weight: 0.0,
         });
     }
     out
@@ -364,22 +371,66 @@ fn nameable(s: &Scored) -> bool {
     s.score.significant && s.score.implausible.is_none()
 }
 
-/// Sorts the candidates by held-out chi-square and gives the significant ones their weights
-/// `exp(-(chi2 - chi2_min) / 2)`, normalised over the significant candidates.
-fn rank_and_weigh(scored: &mut [Scored]) {
+/// Sorts the candidates by held-out chi-square.
+fn rank(scored: &mut [Scored]) {
     scored.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
+}
+
+/// Moves ahead of the best nameable candidate the simplest nameable member of its family and
+/// joint (fewer parameters) that it does not beat by more than two standard deviations of a
+/// chi-square of the parameter difference, `2 sqrt(2 dk)` (a member nested in it, e.g. a
+/// mechanism load path in the mixed one, leaves on held-out poses a chi-square larger by
+/// about `dk` when the extra parameters are noise): the data must resolve the extra freedom
+/// (a load path, a mass model) before it is named.
+fn prefer_simpler_member(prep: &Prepared, scored: &mut [Scored]) {
+    let Some(b) = scored.iter().position(nameable) else {
+        return;
+    };
+    let count = |s: &Scored| s.candidate.parameter_names(prep.predictor.shape()).len();
+    let (kb, chi2b) = (count(&scored[b]), scored[b].chi2);
+    let simpler = scored
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| nameable(s) && s.candidate.same_kind(&scored[b].candidate))
+        .filter(|(_, s)| {
+            let k = count(s);
+            k < kb && s.chi2 - chi2b < 2.0 * (2.0 * (kb - k) as f64).sqrt()
+        })
+        .min_by(|(_, x), (_, y)| count(x).cmp(&count(y)).then(x.chi2.total_cmp(&y.chi2)))
+        .map(|(i, _)| i);
+    if let Some(i) = simpler {
+        scored[b..=i].rotate_right(1);
+    }
+}
+
+/// Gives the nameable candidates (significant, plausible) their weights
+/// `exp(-(chi2 - chi2_min) / 2)`, normalised over them, and each the sum over the nameable
+/// members of its family on its joint.
+fn weigh(scored: &mut [Scored]) {
     let chi2_min = scored
         .iter()
-        .filter(|s| s.score.significant)
+        .filter(|s| nameable(s))
         .map(|s| s.chi2)
         .fold(f64::INFINITY, f64::min);
     let z_sum: f64 = scored
         .iter()
-        .filter(|s| s.score.significant)
+        .filter(|s| nameable(s))
         .map(|s| (-(s.chi2 - chi2_min) / 2.0).exp())
         .sum();
-    for s in scored.iter_mut().filter(|s| s.score.significant) {
+    for s in scored.iter_mut().filter(|s| nameable(s)) {
         s.score.weight = (-(s.chi2 - chi2_min) / 2.0).exp() / z_sum;
+    }
+    let kinds: Vec<(Candidate, f64)> = scored
+        .iter()
+        .filter(|s| nameable(s))
+        .map(|s| (s.candidate, s.score.weight))
+        .collect();
+    for s in scored.iter_mut() {
+        s.kind_weight = kinds
+            .iter()
+            .filter(|(c, _)| c.same_kind(&s.candidate))
+            .map(|(_, w)| w)
+            .sum();
     }
 }
 
@@ -440,6 +491,7 @@ fn two_effects(
         chi2: pair.chi2,
         chi2_null: pair.chi2_null,
         z_null: Vec::new(),
+        kind_weight: b.kind_weight,
     };
     if evidence.gap_before_mm > 0.0 {
         evidence.fraction_closed = 1.0 - (gap_after / evidence.gap_before_mm).powi(2);
@@ -485,8 +537,10 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
     let mut scored = score_candidates(prep, (base, &after_base), (gap.g_obs, &gap.g_null), sigma2);
     let samples = gap.g_null.len();
     let z_threshold = mark_significant(&mut scored, samples, alpha);
-    rank_and_weigh(&mut scored);
+    rank(&mut scored);
     check_plausibility(prep, &mut scored);
+    prefer_simpler_member(prep, &mut scored);
+    weigh(&mut scored);
     let g_fit = refit_named(prep, &mut scored, gap.g_obs, sigma2);
     let rms_before = chi2_to_rms_mm(g_fit, sigma2, prep);
     let noise_before = chi2_to_rms_mm(gap.g_mean, sigma2, prep);
@@ -523,6 +577,10 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         );
     }
     let base_params = prep.x_geometric.ncols();
+    let member = scored
+        .iter()
+        .find(|s| nameable(s) && s.score.effect == v.effect && s.score.joint == v.joint)
+        .map(|s| s.score.member.clone());
     let (where_, features) = where_entries(prep, (null, &after_base), rms_before, noise_before, alpha);
     Diagnosis {
         outcome: Outcome {
@@ -536,13 +594,17 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
         features,
         effects,
         candidates: scored.into_iter().map(|s| s.score).collect(),
+        member,
         parameters: v.parameters,
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         noise_source: "given".into(),
         tool_targets: None,
-        poses: super::result::PoseSplit {
-            training: prep.poses.len().div_ceil(2),
-            held_out: prep.poses.len() / 2,
+        poses: {
+            let training = super::training_mask(&prep.poses).iter().filter(|t| **t).count();
+            super::result::PoseSplit {
+                training,
+                held_out: prep.poses.len() - training,
+            }
         },
         heldout_rms_before_mm: rms_before,
         noise_only_rms_mm: noise_before,
@@ -568,6 +630,7 @@ mod tests {
             candidate,
             score: CandidateScore {
                 effect: candidate.effect_name().into(),
+                member: candidate.member_name(),
                 joint: candidate.joint(),
                 heldout_rms_mm: 0.3,
                 gap_after_mm: 0.0,
@@ -582,6 +645,7 @@ mod tests {
             chi2: 0.0,
             chi2_null: Vec::new(),
             z_null,
+            kind_weight: 0.0,
         }
     }
 

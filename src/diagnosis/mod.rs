@@ -4,8 +4,9 @@
 //! on training poses, scored on held-out ones), and HOW FAR the gap shrinks.
 //!
 //! Method:
-//! 1. calibrate with the standard procedure; validation poses split into training (even) and
-//!    held-out (odd) halves;
+//! 1. calibrate with the standard procedure (for free poses only, the free-pose calibration
+//!    of the training poses); validation poses split into training (even) and held-out (odd)
+//!    halves, a repeated configuration in one half ([`training_mask`]);
 //! 2. the baseline is the calibrated model refined on the training poses by a geometric refit
 //!    (rows `a`, `b`, `alpha`, `beta`, joint zero offsets, base and tool frames; linearised,
 //!    redundant directions dropped by an SVD, [`LinearFit`]); transmission and coupling shapes
@@ -42,14 +43,14 @@ pub use crate::calibration::refine::{Block, LinearFit, NULL_DIRECTION_TOLERANCE,
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnose_axes_with};
 pub use model::{
-    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
+    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, LoadPath, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
     MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,
     Predictor, RefitScope, SIGN_K_SIGMA, SpringSite, ThermalLinks, TiltShape, implausible, is_geared,
     unmodelled_harmonic_order,
 };
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
-pub use poses::{Pose, split, target_count, validation_poses};
+pub use poses::{Pose, split, target_count, training_mask, validation_poses};
 pub use refine::refine_calibration;
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
@@ -59,6 +60,7 @@ pub use validate::{
     validate, validation_residuals_csv,
 };
 
+use crate::calibration::free_pose::{FreePoseOptions, calibrate_free_poses, with_fitted_targets};
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear_with};
 use crate::measurement::MeasurementSet;
@@ -74,6 +76,17 @@ pub enum DiagnosisError {
     /// The standard calibration failed.
     #[error("calibrating: {0}")]
     Calibration(#[from] ProcedureError),
+    /// The free-pose calibration of a file without axis experiments failed.
+    #[error("calibrating from the free poses: {0}")]
+    FreePoses(#[from] crate::calibration::free_pose::FreePoseError),
+    /// Free poses of several setups (instrument placements): the diagnosis predicts one base.
+    #[error(
+        "the free poses are measured from {setups} setups; the diagnosis of free poses takes one setup (one instrument placement): diagnose each setup's rows on their own"
+    )]
+    SeveralSetups {
+        /// Setups in the file.
+        setups: usize,
+    },
     /// Too few validation poses to split.
     #[error("{found} validation poses (moved_joint = 0, not `tool`); at least {needed} needed")]
     TooFewPoses {
@@ -182,30 +195,55 @@ fn ordered(poses: &[Pose]) -> Vec<&Pose> {
     train.into_iter().chain(held).collect()
 }
 
+/// Whether `set` holds free poses only (no axis experiment): step 1 of the module docs then
+/// calibrates from the training poses themselves.
+pub fn free_poses_only(set: &MeasurementSet) -> bool {
+    !set.rows().iter().any(|m| m.moved_joint > 0)
+}
+
+/// Step 1 of the module docs: the standard calibration of `set`'s axis experiments; for free
+/// poses only ([`free_poses_only`]) the free-pose calibration of the training poses (the even
+/// ones, [`split`]: the held-out poses stay unseen), geometry and harmonics only (an effect in
+/// the model would hide what the diagnosis looks for), every pose kept.
 fn calibrate_for(
     set: &MeasurementSet,
     desc: &RobotDescription,
     noise_rms_3d_mm: f64,
 ) -> Result<Calibration, DiagnosisError> {
-    Ok(calibrate(
-        set,
-        desc,
-        &CalibrationOptions {
-            noise_rms_3d_mm,
-            ..CalibrationOptions::default()
-        },
-    )?)
+    if !free_poses_only(set) {
+        return Ok(calibrate(
+            set,
+            desc,
+            &CalibrationOptions {
+                noise_rms_3d_mm,
+                ..CalibrationOptions::default()
+            },
+        )?);
+    }
+    let options = FreePoseOptions {
+        keep_outliers: true,
+        holdout: true,
+        effects: false,
+        ..FreePoseOptions::default()
+    };
+    let cal = calibrate_free_poses(set, desc, &options)?;
+    match cal.summary.setups.len() {
+        0 | 1 => Ok(cal.into_calibration(desc)),
+        setups => Err(DiagnosisError::SeveralSetups { setups }),
+    }
 }
 
-/// The temperature the calibration holds at: the axis experiments' mean (20 deg C without).
+/// The temperature the calibration holds at: the mean of the rows it is fitted to (the axis
+/// experiments', or every row's for free poses; 20 deg C without rows).
 fn reference_temperature(set: &MeasurementSet) -> f64 {
-    let axis: Vec<f64> = set
+    let free = free_poses_only(set);
+    let rows: Vec<f64> = set
         .rows()
         .iter()
-        .filter(|m| m.moved_joint > 0)
+        .filter(|m| free || m.moved_joint > 0)
         .map(|m| m.temperature_c)
         .collect();
-    if axis.is_empty() { 20.0 } else { mean(&axis) }
+    if rows.is_empty() { 20.0 } else { mean(&rows) }
 }
 
 /// The calibration, the validation poses, the observed residuals and the refit's sensitivity;
@@ -503,12 +541,15 @@ fn validation_rows(
     tool_targets_m: &[nalgebra::Point3<f64>],
     poses: &[Pose],
 ) -> Result<ValidationRows, DiagnosisError> {
-    // Training poses are the even file positions, held-out the odd ones (`split`).
+    // Training poses first, then the held-out ones, each in file order (`split`).
+    let mask = training_mask(poses);
     let mut first_row = vec![0; poses.len()];
     let mut row = 0;
-    for i in (0..poses.len()).step_by(2).chain((1..poses.len()).step_by(2)) {
-        first_row[i] = row;
-        row += 3 * poses[i].targets.len();
+    for training in [true, false] {
+        for i in (0..poses.len()).filter(|&i| mask[i] == training) {
+            first_row[i] = row;
+            row += 3 * poses[i].targets.len();
+        }
     }
     ValidationRows::new(cal, desc, tool_targets_m, poses, |i, k| first_row[i] + 3 * k)
 }
@@ -562,6 +603,15 @@ pub fn diagnose_with(
     options: &DiagnosisOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<Diagnosis, DiagnosisError> {
+    // Free poses: the description's tool targets may be the calibration's fitted ones.
+    let fitted = match free_poses_only(set) {
+        true => Some(with_fitted_targets(
+            desc,
+            &calibrate_for(set, desc, options.noise_rms_3d_mm)?,
+        )),
+        false => None,
+    };
+    let desc = fitted.as_ref().unwrap_or(desc);
     let nominal = prepare(set, desc, options.noise_rms_3d_mm, options.refit, false)?;
     let tool_targets = refined_tool_targets(&nominal, options.noise_rms_3d_mm);
     drop(nominal);

@@ -75,12 +75,35 @@ pub fn validation_poses(rows: &[Measurement], desc: &RobotDescription) -> Vec<Po
         .collect()
 }
 
-/// Deterministic split into training (even positions in file order) and held-out (odd)
-/// poses.
+/// Whether each pose is a training pose: the configurations (bit-identical commands) in the
+/// order they first appear, the even ones training and the odd ones held out, so that a
+/// configuration measured again never straddles the halves (the free-pose calibration's
+/// `--holdout` split); with distinct commands, the even and odd file positions.
+pub fn training_mask(poses: &[Pose]) -> Vec<bool> {
+    let mut seen: std::collections::HashMap<Vec<u64>, usize> = std::collections::HashMap::new();
+    poses
+        .iter()
+        .map(|p| {
+            let key: Vec<u64> = p.cmd.iter().map(|c| (c + 0.0).to_bits()).collect();
+            let next = seen.len();
+            seen.entry(key).or_insert(next).is_multiple_of(2)
+        })
+        .collect()
+}
+
+/// Deterministic split into training and held-out poses ([`training_mask`]), file order
+/// within each.
 pub fn split(poses: &[Pose]) -> (Vec<&Pose>, Vec<&Pose>) {
-    let train = poses.iter().step_by(2).collect();
-    let held = poses.iter().skip(1).step_by(2).collect();
-    (train, held)
+    let mask = training_mask(poses);
+    let half = |training: bool| {
+        poses
+            .iter()
+            .zip(&mask)
+            .filter(|(_, t)| **t == training)
+            .map(|(p, _)| p)
+            .collect()
+    };
+    (half(true), half(false))
 }
 
 /// Number of measured targets over `poses`.

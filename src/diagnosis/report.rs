@@ -7,7 +7,12 @@ use std::fmt::Write;
 pub fn markdown(d: &Diagnosis, source: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Sim-to-real gap diagnosis of `{source}`\n");
-    let joint = d.outcome.joint.map_or(String::new(), |j| format!(" (joint {j})"));
+    let joint = match (d.outcome.joint, &d.member) {
+        (Some(j), Some(m)) => format!(" (joint {j}, `{m}`)"),
+        (Some(j), None) => format!(" (joint {j})"),
+        (None, Some(m)) => format!(" (`{m}`)"),
+        (None, None) => String::new(),
+    };
     let _ = writeln!(
         s,
         "**{}**{joint}, confidence {:.2}: {}.\n",

@@ -55,6 +55,9 @@ pub struct Parameter {
 pub struct CandidateScore {
     /// Effect name.
     pub effect: String,
+    /// The member of the effect's family (`docs/diagnosis.md`, "Candidate families"), e.g.
+    /// `actuator_spring_serial_load_lumped_moments`: for a compliance it names the load path.
+    pub member: String,
     /// Joint, or `None`.
     pub joint: Option<usize>,
     /// Held-out position RMS with the effect \[mm\].
@@ -71,8 +74,8 @@ pub struct CandidateScore {
     /// Fraction of the candidate's signature (norm over the training poses) the baseline
     /// refit cannot absorb: 0 means the effect leaves no trace after the refit.
     pub outside_refit_fraction: f64,
-    /// Akaike-type weight `exp(-SSR_c / 2 sigma^2)` over the significant candidates (0 for the
-    /// others).
+    /// Akaike-type weight `exp(-SSR_c / 2 sigma^2)` over the nameable candidates (significant
+    /// and plausible; 0 for the others).
     pub weight: f64,
     /// Fitted effect parameters.
     pub parameters: Vec<Parameter>,
@@ -90,8 +93,8 @@ pub struct Outcome {
     pub effect: String,
     /// The effect's joint, or `None`.
     pub joint: Option<usize>,
-    /// Confidence in `effect` (0..1): for a named effect its weight among the significant
-    /// candidates; for `none` the gap test's p-value (how often noise alone leaves at least
+    /// Confidence in `effect` (0..1): for a named effect the summed weight of its family's
+    /// members on its joint among the nameable candidates; for `none` the gap test's p-value (how often noise alone leaves at least
     /// this held-out residual); for `unexplained` one minus the p-value of the gap left by the
     /// best candidate. (Axis-experiments-only mode: `1 - p` of the most excessive axis.)
     pub confidence: f64,
@@ -136,6 +139,10 @@ pub struct Diagnosis {
     pub effects: Vec<NamedEffect>,
     /// Candidates, best (lowest held-out RMS) first.
     pub candidates: Vec<CandidateScore>,
+    /// The named effect's family member (the best-scored nameable candidate of its effect
+    /// and joint); `None` for `none` and `unexplained`.
+    #[serde(default)]
+    pub member: Option<String>,
     /// The named effect's parameters.
     pub parameters: Vec<Parameter>,
     /// Noise assumed, 3-D RMS \[mm\].

@@ -13,6 +13,15 @@ fn default_gravity() -> [f64; 3] {
     STANDARD_GRAVITY_M_S2
 }
 
+fn one() -> f64 {
+    1.0
+}
+
+/// The default exactly (a file's `1.0` is written back as absent).
+fn is_one(x: &f64) -> bool {
+    x.to_bits() == 1f64.to_bits()
+}
+
 /// Joint compliance: each joint's servo/drive stiffness.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -22,6 +31,30 @@ pub struct ComplianceEffect {
     /// Gravity in the instrument (world) frame \[m/s^2\]; default `(0, 0, -9.81)`.
     #[serde(default = "default_gravity")]
     pub gravity_m_s2: [f64; 3],
+    /// The load path of a mechanism coupling (a four-bar): the fraction in 0-1 of the driven
+    /// joint's gravity torque the mechanism carries back to the actuator below (virtual work,
+    /// [`coupled_first_order_deflection`]); default 1, the rigid-body four-bar. At 0 the
+    /// actuator carries the serial chain's gravity torque about its own joint (the links
+    /// beyond, their own moments included) and the driven joint's load goes elsewhere.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub reflected_fraction: f64,
+    /// Per joint (empty: none), the fraction in 0-1 of its own link's gravity torque about it
+    /// that a spring balancer takes off the actuator: the load is `Q_k - f_k Q_k(link k)`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub balancer_fraction: Vec<f64>,
+}
+
+impl ComplianceEffect {
+    /// Stiffnesses `stiffness_nm_per_rad` under `gravity_m_s2`, the four-bars carrying their
+    /// whole load, no balancer.
+    pub fn new(stiffness_nm_per_rad: Vec<f64>, gravity_m_s2: [f64; 3]) -> Self {
+        ComplianceEffect {
+            stiffness_nm_per_rad,
+            gravity_m_s2,
+            reflected_fraction: 1.0,
+            balancer_fraction: Vec::new(),
+        }
+    }
 }
 
 /// Payload: the pose's `payload_kg` ([`PoseConditions`](crate::plan::PoseConditions)) as a point mass in the tool frame.
@@ -109,53 +142,111 @@ impl PassiveSlope {
 /// `da_k = tau_k / K_k` and the sag drives the passive coupling into joint `k + 1` like any
 /// active rotation, `dq_k = da_k + g'_{k-1,k} da_{k-1}` (eq. 15 linearised; `g'` =
 /// `couplings[k].slope`). The actuator's load is the joint's gravity torque `Q_k`
-/// ([`first_order_deflection`] with unit stiffness), plus, where joint `k` drives joint
-/// `k + 1` through a mechanism (`couplings[k + 1].reflects_load`: a four-bar transmits torque
-/// both ways), the reflected `g'_{k,k+1} Q_{k+1}` (virtual work). The other couplings are
+/// ([`first_order_deflection`] with unit stiffness) less what a balancer takes
+/// (`balancer_fraction[k]` of link `k`'s own torque `Q_k(link k)`), plus, where joint `k`
+/// drives joint `k + 1` through a mechanism (`couplings[k + 1].reflects_load`: a four-bar
+/// transmits torque both ways), the reflected `g'_{k,k+1} Q'_{k+1}` (virtual work), `Q'` the
+/// torque of `load.reflected_masses` (default: the same load). The other couplings are
 /// kinematic only, as their rapier emulation (see `sim::CoupledTargets` for the size of the
 /// missing gear reaction). Second order in the deflection, like [`first_order_deflection`].
 /// Needs only coupling slopes, so a model built from the nominal description can use it.
-pub fn coupled_first_order_deflection(
-    model: &PhiModel,
-    q: &[f64],
-    masses: &[LinkMass],
-    payload: Option<(f64, Point3<f64>)>,
-    compliance: &ComplianceEffect,
-    couplings: &[PassiveSlope],
-) -> Vec<f64> {
-    coupled_first_order_deflection_at(model, &model.poses(q), masses, payload, compliance, couplings)
+pub fn coupled_first_order_deflection(model: &PhiModel, q: &[f64], load: &CompliantLoad) -> Vec<f64> {
+    coupled_first_order_deflection_at(model, &model.poses(q), load)
 }
 
 /// [`coupled_first_order_deflection`] with `model`'s frames at the joint values already
 /// computed (`poses = model.poses(q)`), for several loads of one pose (the diagnosis's
 /// compliance sensitivities): the same numbers bit for bit.
-pub fn coupled_first_order_deflection_at(
-    model: &PhiModel,
-    poses: &ChainPoses,
-    masses: &[LinkMass],
-    payload: Option<(f64, Point3<f64>)>,
-    compliance: &ComplianceEffect,
-    couplings: &[PassiveSlope],
-) -> Vec<f64> {
+pub fn coupled_first_order_deflection_at(model: &PhiModel, poses: &ChainPoses, load: &CompliantLoad) -> Vec<f64> {
+    let CompliantLoad {
+        masses,
+        payload,
+        compliance,
+        couplings,
+        reflected_masses,
+    } = *load;
     let n = model.dof();
-    let unit = ComplianceEffect {
-        stiffness_nm_per_rad: vec![1.0; n],
-        gravity_m_s2: compliance.gravity_m_s2,
-    };
-    let load = first_order_deflection_at(model, poses, masses, payload, &unit);
+    let torques = |m: &[LinkMass], p| gravity_torques_at_nm(model, poses, m, p, compliance.gravity_m_s2);
+    let gravity = torques(masses, payload);
+    let reflected = reflected_masses.map(|m| torques(m, None));
+    let reflected = reflected.as_ref().unwrap_or(&gravity);
     let coupling = |k: usize| couplings.get(k).copied().unwrap_or_default();
     let mut dq = vec![0.0; n];
     let mut da_below = 0.0;
     for k in 0..n {
-        let mut tau = load[k];
+        let mut tau = gravity[k] - balancer_torque_nm(model, poses, masses, compliance, k);
         if k + 1 < n && coupling(k + 1).reflects_load {
-            tau += coupling(k + 1).slope * load[k + 1];
+            tau += coupling(k + 1).slope * reflected[k + 1];
         }
         let da = tau / compliance.stiffness_nm_per_rad[k];
         dq[k] = da + coupling(k).slope * da_below;
         da_below = da;
     }
     dq
+}
+
+/// The masses whose load the mechanisms reflect under `compliance`'s `reflected_fraction`
+/// (for [`CompliantLoad::reflected_masses`]): `masses` with the payload `(mass, position in
+/// the last link's frame)` folded into the last link, all scaled by the fraction; `None` at
+/// the default fraction 1 (the load itself).
+pub fn reflected_masses(
+    compliance: &ComplianceEffect,
+    masses: &[LinkMass],
+    payload: Option<(f64, Point3<f64>)>,
+) -> Option<Vec<LinkMass>> {
+    let f = compliance.reflected_fraction;
+    if is_one(&f) {
+        return None;
+    }
+    let mut out: Vec<LinkMass> = masses.to_vec();
+    if let (Some((mass_kg, at)), Some(last)) = (payload, out.last_mut()) {
+        last.mass_kg += mass_kg;
+        last.first_moment_kg_m += at.coords * mass_kg;
+    }
+    for m in &mut out {
+        m.mass_kg *= f;
+        m.first_moment_kg_m *= f;
+    }
+    Some(out)
+}
+
+/// Calls `f` with the load the simulators put on compliant joints: `masses` and `payload`
+/// under `compliance` through `couplings`, the mechanisms reflecting the
+/// `reflected_fraction` of it ([`reflected_masses`]).
+pub fn with_simulated_load<R>(
+    masses: &[LinkMass],
+    payload: Option<(f64, Point3<f64>)>,
+    compliance: &ComplianceEffect,
+    couplings: &[PassiveSlope],
+    f: impl FnOnce(&CompliantLoad) -> R,
+) -> R {
+    let reflected = reflected_masses(compliance, masses, payload);
+    f(&CompliantLoad {
+        masses,
+        payload,
+        compliance,
+        couplings,
+        reflected_masses: reflected.as_deref(),
+    })
+}
+
+/// What joint `k`'s (0-based) balancer takes off its actuator: `balancer_fraction[k]` of the
+/// gravity torque of link `k`'s own mass about the joint \[N m\]; 0 without one.
+fn balancer_torque_nm(
+    model: &PhiModel,
+    poses: &ChainPoses,
+    masses: &[LinkMass],
+    compliance: &ComplianceEffect,
+    k: usize,
+) -> f64 {
+    let fraction = compliance.balancer_fraction.get(k).copied().unwrap_or(0.0);
+    if fraction == 0.0 || k >= masses.len() {
+        return 0.0;
+    }
+    let own: Vec<LinkMass> = (0..masses.len())
+        .map(|i| if i == k { masses[i] } else { LinkMass::default() })
+        .collect();
+    fraction * gravity_torques_at_nm(model, poses, &own, None, compliance.gravity_m_s2)[k]
 }
 
 /// The fixed-point iteration of [`coupled_static_deflection`] runs to machine precision: it
@@ -203,6 +294,9 @@ pub struct CompliantLoad<'a> {
     pub compliance: &'a ComplianceEffect,
     /// How each joint is driven by the one below.
     pub couplings: &'a [PassiveSlope],
+    /// The masses whose load a mechanism coupling reflects to the actuator below (`None`:
+    /// `masses`): a load path other than the rigid mechanism's.
+    pub reflected_masses: Option<&'a [LinkMass]>,
 }
 
 /// Exact static equilibrium of the compliance model of [`coupled_first_order_deflection`]:
@@ -228,18 +322,12 @@ pub fn coupled_static_deflection(
     q: &[f64],
     load: &CompliantLoad,
 ) -> Result<Vec<f64>, DeflectionError> {
-    let CompliantLoad {
-        masses,
-        payload,
-        compliance,
-        couplings,
-    } = *load;
     let mut dq = vec![0.0; q.len()];
     let mut last_step = f64::INFINITY;
     let mut contraction = 0.0;
     for step in 1..=STATIC_DEFLECTION_MAX_STEPS {
         let deflected: Vec<f64> = q.iter().zip(&dq).map(|(a, d)| a + d).collect();
-        let next = coupled_first_order_deflection(model, &deflected, masses, payload, compliance, couplings);
+        let next = coupled_first_order_deflection(model, &deflected, load);
         let size = next.iter().zip(&dq).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         dq = next;
         contraction = size / last_step;

@@ -12,7 +12,7 @@ pub const STANDARD_GRAVITY_M_S2: [f64; 3] = [0.0, 0.0, -9.81];
 /// times centre of mass, in that frame): all gravity needs to know of a link. Keeping the
 /// moment rather than the centre of mass lets a fit treat both as free linear parameters
 /// (the diagnosis's lumped compliance), zero mass included.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LinkMass {
     /// \[kg\]
     pub mass_kg: f64,

@@ -21,7 +21,7 @@ pub use backlash::{
 pub use compliance::{
     ComplianceEffect, CompliantLoad, DeflectionError, PassiveSlope, PayloadEffect, STATIC_DEFLECTION_MAX_STEPS,
     STATIC_DEFLECTION_ROUNDING_RAD, coupled_first_order_deflection, coupled_first_order_deflection_at,
-    coupled_static_deflection, first_order_deflection,
+    coupled_static_deflection, first_order_deflection, reflected_masses, with_simulated_load,
 };
 pub use gear_harmonic::{
     GearHarmonic, HarmonicPeriod, add_joint_period_errors, joint_period_error_rad, with_gear_harmonics,

@@ -166,16 +166,23 @@ impl CalibrationPlan {
         }
     }
 
-    /// The plan used where none is given: paper Table 1 for a six-joint revolute arm,
-    /// [`CalibrationPlan::for_robot`] for any other joint mix.
+    /// The plan used where none is given: paper Table 1 for a six-joint revolute arm whose
+    /// description measures the couplings Table 1 measures (a fitted coupling and a second
+    /// target for each of its two-target sweeps), [`CalibrationPlan::for_robot`] for any other
+    /// robot (a six-axis arm without couplings, say).
     pub fn default_for(desc: &RobotDescription) -> Self {
         let six_revolute = desc.dof() == 6
             && desc
                 .joints
                 .iter()
                 .all(|j| j.kind == crate::kinematics::JointKind::Revolute);
-        if six_revolute {
-            Self::table1(6)
+        let table1 = Self::table1(6);
+        let measures_its_couplings = table1.sweeps.iter().filter(|s| s.second_target).all(|s| {
+            desc.couplings.iter().any(|c| c.from == s.joint && c.fit.is_some())
+                && desc.axis_targets_of(s.joint).is_some_and(|t| t.target1.is_some())
+        });
+        if six_revolute && measures_its_couplings {
+            table1
         } else {
             Self::for_robot(desc)
         }

@@ -349,9 +349,20 @@ pub struct RobotDescription {
 }
 
 impl RobotDescription {
-    /// Reads and validates a description file.
+    /// Reads and validates a description file. A file that is a robot model instead (a
+    /// simulated truth, `docs/formats.md#robot-model`) is an error that says so.
     pub fn from_file(path: &Path) -> Result<Self, DescriptionError> {
-        Self::from_toml_str(&crate::toml_file::read(path)?, path)
+        let text = crate::toml_file::read(path)?;
+        Self::from_toml_str(&text, path).map_err(|e| match e {
+            DescriptionError::File(_) if crate::robot::RobotModel::from_toml_str(&text, path).is_ok() => {
+                DescriptionError::Invalid {
+                    path: path.to_owned(),
+                    field: "name".into(),
+                    message: "this is a robot model (a simulated truth: give it with `--truth`), not a robot description (docs/formats.md#robot-description)".into(),
+                }
+            }
+            other => other,
+        })
     }
 
     /// Parses and validates description text; `path` names the file in messages and locates

@@ -6,7 +6,7 @@ use super::campaign::{ArmExecutor, ExecuteError};
 use super::effects::Effects;
 use super::joint_driver::JointDriver;
 use crate::kinematics::FixedFrames;
-use crate::physics::{LinkMass, PassiveSlope, coupled_first_order_deflection};
+use crate::physics::{LinkMass, PassiveSlope, coupled_first_order_deflection, with_simulated_load};
 use crate::plan::PoseConditions;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use nalgebra::Isometry3;
@@ -108,7 +108,9 @@ impl ArmExecutor for AnalyticArm {
                 .effects
                 .payload_in_last_link(&model.last_link_from_tool, conditions);
             let couplings = PassiveSlope::of_linkages(&self.truth, &driven.active);
-            let dq = coupled_first_order_deflection(model, &q, &self.masses, payload, compliance, &couplings);
+            let dq = with_simulated_load(&self.masses, payload, compliance, &couplings, |load| {
+                coupled_first_order_deflection(model, &q, load)
+            });
             for (qk, d) in q.iter_mut().zip(dq) {
                 *qk += d;
             }

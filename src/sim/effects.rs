@@ -4,7 +4,7 @@
 //!
 //! | table | effect | applied to |
 //! |---|---|---|
-//! | `compliance` | actuator stiffness `K_k` \[N m/rad\] under gravity: `K da = Q_gravity(q)`, the sag `da` driving the passive couplings | joint values (rapier: static equilibrium, four-bar as bodies; analytic: first order, [`coupled_first_order_deflection`]; exact equilibrium of the same model: [`coupled_static_deflection`]) |
+//! | `compliance` | actuator stiffness `K_k` \[N m/rad\] under gravity: `K da = Q_gravity(q)`, the sag `da` driving the passive couplings; the part of a four-bar's load it reflects and any spring balancers | joint values (rapier: static equilibrium, four-bar as bodies; analytic: first order, [`coupled_first_order_deflection`]; exact equilibrium of the same model: [`coupled_static_deflection`]) |
 //! | `payload` | the pose's `payload_kg` (from [`PoseConditions`]) at a point of the tool frame | the gravity load of `compliance` (no effect without it) |
 //! | `backlash` | dead band `b_k` \[rad\]: the joint lags `b_k / 2` behind its approach direction | active displacements |
 //! | `thermal` | link growth: rows' `a`, `b` scaled by `1 + alpha (T - T_ref)` | the phi-model |
@@ -118,6 +118,40 @@ fn per_joint_minus_one(field: &str, v: &[f64], dof: usize) -> Result<(), Effects
     }
 }
 
+/// Checks a per-joint list: `dof` values, each `ok`.
+fn per_joint(field: &str, v: &[f64], dof: usize, ok: fn(f64) -> bool) -> Result<(), EffectsError> {
+    if v.len() != dof {
+        return Err(invalid(field, format!("needs {dof} values, found {}", v.len())));
+    }
+    match v.iter().position(|x| !ok(*x)) {
+        Some(k) => Err(invalid(format!("{field}[{k}]"), format!("bad value {}", v[k]))),
+        None => Ok(()),
+    }
+}
+
+/// Checks the `[compliance]` table against a robot of `dof` joints.
+fn check_compliance(c: &ComplianceEffect, dof: usize) -> Result<(), EffectsError> {
+    per_joint("compliance.stiffness_nm_per_rad", &c.stiffness_nm_per_rad, dof, |x| {
+        x.is_finite() && x > 0.0
+    })?;
+    if !c.gravity_m_s2.iter().all(|g| g.is_finite()) {
+        return Err(invalid("compliance.gravity_m_s2", "must be finite"));
+    }
+    if !(0.0..=1.0).contains(&c.reflected_fraction) {
+        return Err(invalid(
+            "compliance.reflected_fraction",
+            format!("bad value {}; must be in 0-1", c.reflected_fraction),
+        ));
+    }
+    if c.balancer_fraction.is_empty() {
+        return Ok(());
+    }
+    per_joint("compliance.balancer_fraction", &c.balancer_fraction, dof, |x| {
+        (0.0..=1.0).contains(&x)
+    })
+    .map_err(|e| with_range(e, "in 0-1"))
+}
+
 /// `e` with the accepted range appended to its message.
 fn with_range(e: EffectsError, range: &str) -> EffectsError {
     match e {
@@ -155,22 +189,9 @@ impl Effects {
 
     /// Checks lengths, ranges and joint numbers against a robot of `dof` joints.
     pub fn validate(&self, dof: usize) -> Result<(), EffectsError> {
-        let per_joint = |field: &str, v: &[f64], ok: fn(f64) -> bool| {
-            if v.len() != dof {
-                return Err(invalid(field, format!("needs {dof} values, found {}", v.len())));
-            }
-            match v.iter().position(|x| !ok(*x)) {
-                Some(k) => Err(invalid(format!("{field}[{k}]"), format!("bad value {}", v[k]))),
-                None => Ok(()),
-            }
-        };
+        let per_joint = |field: &str, v: &[f64], ok: fn(f64) -> bool| per_joint(field, v, dof, ok);
         if let Some(c) = &self.compliance {
-            per_joint("compliance.stiffness_nm_per_rad", &c.stiffness_nm_per_rad, |x| {
-                x.is_finite() && x > 0.0
-            })?;
-            if !c.gravity_m_s2.iter().all(|g| g.is_finite()) {
-                return Err(invalid("compliance.gravity_m_s2", "must be finite"));
-            }
+            check_compliance(c, dof)?;
         }
         if let Some(p) = &self.payload
             && !p.com_in_tool_mm.iter().all(|x| x.is_finite())

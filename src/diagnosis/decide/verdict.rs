@@ -71,7 +71,7 @@ impl Evidence<'_> {
             Verdict {
                 effect: b.score.effect.clone(),
                 joint: b.candidate.joint(),
-                confidence: b.score.weight,
+                confidence: b.kind_weight,
                 gap_after_mm: b.score.gap_after_mm,
                 parameters: b.score.parameters.clone(),
                 verdict: format!(

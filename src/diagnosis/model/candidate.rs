@@ -7,7 +7,7 @@
 use super::super::poses::Pose;
 use crate::kinematics::JointKind;
 use crate::physics::{ApproachSource, HarmonicPeriod};
-use crate::robot::{RobotDescription, TransmissionFitForm};
+use crate::robot::{CouplingFitForm, RobotDescription, TransmissionFitForm};
 use serde::{Deserialize, Serialize};
 
 /// Where a compliant joint's spring sits.
@@ -22,6 +22,25 @@ pub enum SpringSite {
     /// it and nothing else follows. Differs from `Actuator` only on a joint that drives a
     /// coupling.
     Joint,
+}
+
+/// How the gravity load of the links beyond a compliant actuator reaches it where its joint
+/// drives a mechanism coupling (a four-bar, fitted in the fractional form) into the next
+/// joint. A real arm's load path depends on its mechanism (where the forearm's weight is
+/// carried, counterweights, a second actuator's bearing), so the family does not assume one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LoadPath {
+    /// Serially: the actuator carries the gravity torque about its own joint of every link
+    /// beyond it, their own moments included; nothing is reflected. The only path of a joint
+    /// that drives no mechanism, and of a spring in the joint itself.
+    Serial,
+    /// Through the mechanism (virtual work of a rigid four-bar): the joint's gravity torque
+    /// plus the coupling's slope times the driven joint's.
+    Mechanism,
+    /// Both with independent loads: the serial torque of one set of masses plus the slope
+    /// times the driven joint's torque of another (the mechanism carries part of the load).
+    Mixed,
 }
 
 /// What the gravity load of a compliance candidate is made of.
@@ -69,7 +88,7 @@ pub enum TiltShape {
 pub const MIN_THERMAL_ROW_M: f64 = 0.05;
 
 /// Default highest harmonic order of the gear-harmonic family.
-pub const DEFAULT_MAX_HARMONIC_ORDER: usize = 4;
+pub const DEFAULT_MAX_HARMONIC_ORDER: usize = 8;
 
 /// A candidate unmodelled effect: a member of a family (`docs/formats.md#diagnosis-json`
 /// names the families).
@@ -86,6 +105,8 @@ pub enum Candidate {
         spring: SpringSite,
         /// What loads it.
         masses: MassModel,
+        /// How the load of the links beyond reaches the spring.
+        load: LoadPath,
     },
     /// The active displacement of `joint` lags by `h` against its approach direction (half
     /// band `h` \[rad\]), the direction of the command or of the actuator command.
@@ -181,23 +202,46 @@ pub fn is_geared(desc: &RobotDescription, joint: usize) -> bool {
     )
 }
 
-/// The parameters of the lumped compliance member of `joint`: per link `joint..=dof` its mass
-/// and first moment, then the payload's compliance and offset, each times the compliance.
-fn lumped_names(joint: usize, dof: usize) -> Vec<String> {
+/// Whether `joint` (1-based) drives a mechanism coupling (fitted in the fractional form) into
+/// the next joint: the only joints with a [`LoadPath`] to choose.
+pub fn drives_mechanism(desc: &RobotDescription, joint: usize) -> bool {
+    desc.couplings
+        .iter()
+        .any(|c| c.from == joint && c.fit == Some(CouplingFitForm::Fractional))
+}
+
+/// The parameter names of one load of a compliance member, `prefix` after `compliance_`
+/// (`""` for the serial load, `"reflected_"` for a mixed path's reflected one): with the
+/// description's masses one compliance (and the payload offset's products); lumped, per link
+/// `first_link..=dof` its mass and first moment, then the payload's compliance and offset,
+/// each times the compliance.
+fn load_names(masses: MassModel, prefix: &str, first_link: usize, dof: usize) -> Vec<String> {
+    let offset = || ["x", "y", "z"].map(|a| format!("compliance_{prefix}payload_offset_{a}_m_rad_per_nm"));
     let mut out = Vec::new();
-    for link in joint..=dof {
-        out.push(format!("compliance_mass_link{link}_kg_rad_per_nm"));
-        for axis in ["x", "y", "z"] {
-            out.push(format!("compliance_moment_link{link}_{axis}_kg_m_rad_per_nm"));
+    match masses {
+        MassModel::Description => out.push(format!("compliance_{prefix}rad_per_nm")),
+        MassModel::PayloadOffset => {
+            out.push(format!("compliance_{prefix}rad_per_nm"));
+            out.extend(offset());
+        }
+        MassModel::Lumped => {
+            for link in first_link..=dof {
+                out.push(format!("compliance_{prefix}mass_link{link}_kg_rad_per_nm"));
+                for axis in ["x", "y", "z"] {
+                    out.push(format!("compliance_{prefix}moment_link{link}_{axis}_kg_m_rad_per_nm"));
+                }
+            }
+            out.push(format!("compliance_{prefix}payload_rad_per_nm"));
+            out.extend(offset());
         }
     }
-    out.push("compliance_payload_rad_per_nm".into());
-    out.extend(payload_offset_names());
     out
 }
 
-fn payload_offset_names() -> [String; 3] {
-    ["x", "y", "z"].map(|a| format!("compliance_payload_offset_{a}_m_rad_per_nm"))
+/// Number of parameters of a compliance member's serial load ([`load_names`] without a
+/// prefix): the reflected load's, for a mixed path, follow them.
+pub fn serial_load_count(masses: MassModel, joint: usize, dof: usize) -> usize {
+    load_names(masses, "", joint, dof).len()
 }
 
 impl Candidate {
@@ -217,8 +261,15 @@ impl Candidate {
     /// `order_3_transmission_period`.
     pub fn member_name(&self) -> String {
         match *self {
-            Candidate::JointCompliance { spring, masses, .. } => {
-                format!("{}_spring_{}", spring_name(spring), masses_name(masses))
+            Candidate::JointCompliance {
+                spring, masses, load, ..
+            } => {
+                format!(
+                    "{}_spring_{}_load_{}",
+                    spring_name(spring),
+                    load_name(load),
+                    masses_name(masses)
+                )
             }
             Candidate::Backlash { direction, .. } => format!("{}_direction", direction_name(direction)),
             Candidate::ThermalExpansion {
@@ -259,15 +310,15 @@ impl Candidate {
     pub fn parameter_names(&self, shape: &ModelShape) -> Vec<String> {
         let owned = |v: &[&str]| v.iter().map(|s| (*s).to_owned()).collect();
         match self {
-            Candidate::JointCompliance { masses, joint, .. } => match masses {
-                MassModel::Description => owned(&["compliance_rad_per_nm"]),
-                MassModel::PayloadOffset => {
-                    let mut v = vec!["compliance_rad_per_nm".to_owned()];
-                    v.extend(payload_offset_names());
-                    v
+            Candidate::JointCompliance {
+                masses, joint, load, ..
+            } => {
+                let mut v = load_names(*masses, "", *joint, shape.dof);
+                if *load == LoadPath::Mixed {
+                    v.extend(load_names(*masses, "reflected_", joint + 1, shape.dof));
                 }
-                MassModel::Lumped => lumped_names(*joint, shape.dof),
-            },
+                v
+            }
             Candidate::Backlash { .. } => owned(&["half_band_rad"]),
             Candidate::ThermalExpansion {
                 links: ThermalLinks::Uniform,
@@ -359,18 +410,39 @@ impl Candidate {
     }
 }
 
+/// The compliance members of `joint`: per mass model (the payload offset only when payloads
+/// vary) the spring in the actuator, along each load path where the joint drives a mechanism
+/// ([`drives_mechanism`]; the mixed path with the description's masses or lumped, not with
+/// the payload offset), and on a joint that drives a coupling the spring in the joint.
 fn compliance_members(desc: &RobotDescription, joint: usize, payload_varies: bool) -> Vec<Candidate> {
     let drives_coupling = desc.nominal_coupling_from(joint).is_some();
+    let paths: &[LoadPath] = if drives_mechanism(desc, joint) {
+        &[LoadPath::Mechanism, LoadPath::Serial, LoadPath::Mixed]
+    } else {
+        &[LoadPath::Serial]
+    };
     let mut out = Vec::new();
     for masses in [MassModel::Description, MassModel::PayloadOffset, MassModel::Lumped] {
         if masses == MassModel::PayloadOffset && !payload_varies {
             continue;
         }
-        for spring in [SpringSite::Actuator, SpringSite::Joint] {
-            if spring == SpringSite::Joint && !drives_coupling {
-                continue;
+        for &load in paths {
+            if !(load == LoadPath::Mixed && masses == MassModel::PayloadOffset) {
+                out.push(Candidate::JointCompliance {
+                    joint,
+                    spring: SpringSite::Actuator,
+                    masses,
+                    load,
+                });
             }
-            out.push(Candidate::JointCompliance { joint, spring, masses });
+        }
+        if drives_coupling {
+            out.push(Candidate::JointCompliance {
+                joint,
+                spring: SpringSite::Joint,
+                masses,
+                load: LoadPath::Serial,
+            });
         }
     }
     out
@@ -421,6 +493,14 @@ fn spring_name(s: SpringSite) -> &'static str {
     match s {
         SpringSite::Actuator => "actuator",
         SpringSite::Joint => "joint",
+    }
+}
+
+fn load_name(l: LoadPath) -> &'static str {
+    match l {
+        LoadPath::Serial => "serial",
+        LoadPath::Mechanism => "mechanism",
+        LoadPath::Mixed => "mixed",
     }
 }
 

@@ -2,7 +2,7 @@
 //! (compliance times mass and first moment) and the static equilibrium under it at unit
 //! stiffness ([`coupled_static_deflection`]).
 
-use super::candidate::{Candidate, MassModel, SpringSite};
+use super::candidate::{Candidate, LoadPath, MassModel, SpringSite, serial_load_count};
 use super::effect_set::EffectSet;
 use super::{GRAVITY_M_S2, Predictor};
 use crate::diagnosis::poses::Pose;
@@ -29,16 +29,63 @@ fn passive_slopes(robot: &RobotModel, active: &[f64]) -> Vec<PassiveSlope> {
     })
 }
 
+/// `couplings` for compliance member `c` (whose `joint` is 1-based): a spring in the joint
+/// drives nothing and has nothing reflected to it; the serial load path reflects nothing.
+fn member_couplings(c: Candidate, mut couplings: Vec<PassiveSlope>) -> Vec<PassiveSlope> {
+    let Candidate::JointCompliance {
+        joint, spring, load, ..
+    } = c
+    else {
+        return couplings;
+    };
+    if let Some(out) = couplings.get_mut(joint) {
+        match (spring, load) {
+            (SpringSite::Joint, _) => *out = PassiveSlope::default(),
+            (SpringSite::Actuator, LoadPath::Serial) => out.reflects_load = false,
+            (SpringSite::Actuator, LoadPath::Mechanism | LoadPath::Mixed) => {}
+        }
+    }
+    couplings
+}
+
+/// Unit stiffness at `joint` (1-based), the others rigid.
+fn unit_compliance(n: usize, joint: usize) -> ComplianceEffect {
+    let mut stiffness_nm_per_rad = vec![f64::INFINITY; n];
+    stiffness_nm_per_rad[joint - 1] = 1.0;
+    ComplianceEffect::new(stiffness_nm_per_rad, GRAVITY_M_S2)
+}
+
+/// The loads of a compliance member: what its spring carries, and for a mixed load path what
+/// the mechanism reflects to it (`None`: the same).
+type MemberLoads = (Vec<LinkMass>, Option<Vec<LinkMass>>);
+
+/// The load of a member's `loads` (the payload folded into them) at unit `compliance`
+/// through `couplings`.
+fn member_load<'a>(
+    loads: &'a MemberLoads,
+    compliance: &'a ComplianceEffect,
+    couplings: &'a [PassiveSlope],
+) -> CompliantLoad<'a> {
+    CompliantLoad {
+        masses: &loads.0,
+        payload: None,
+        compliance,
+        couplings,
+        reflected_masses: loads.1.as_deref(),
+    }
+}
+
 impl Predictor {
-    /// The gravity load of compliance member `masses` of `joint` (1-based) with parameters
-    /// `e`, as link masses times the compliance (unit stiffness then gives the sag), the
-    /// pose's `payload_kg` folded into the last link: at the tool frame's origin, offset by the
-    /// fitted offset (tool frame) where the member fits one.
-    fn compliance_masses(
+    /// One gravity load of a compliance member as link masses times the compliance (unit
+    /// stiffness then gives the sag), `e` its parameters ([`super::candidate`]'s
+    /// `load_names`): the description's masses scaled, with the pose's `payload_kg` at the
+    /// tool frame's origin offset by the fitted offset (tool frame) where the member fits one;
+    /// or lumped from link `first_link` (1-based) on, the payload folded into the last link.
+    fn load_masses(
         &self,
         model: &PhiModel,
         masses: MassModel,
-        joint: usize,
+        first_link: usize,
         e: &[f64],
         payload_kg: f64,
     ) -> Vec<LinkMass> {
@@ -56,20 +103,14 @@ impl Predictor {
             MassModel::Description => (scaled(e[0]), e[0], Vector3::zeros()),
             MassModel::PayloadOffset => (scaled(e[0]), e[0], Vector3::new(e[1], e[2], e[3])),
             MassModel::Lumped => {
-                let mut v = vec![
-                    LinkMass {
-                        mass_kg: 0.0,
-                        first_moment_kg_m: Vector3::zeros()
-                    };
-                    n
-                ];
-                for (o, link) in (joint - 1..n).enumerate() {
+                let mut v = vec![LinkMass::default(); n];
+                for (o, link) in (first_link - 1..n).enumerate() {
                     v[link] = LinkMass {
                         mass_kg: e[4 * o],
                         first_moment_kg_m: Vector3::new(e[4 * o + 1], e[4 * o + 2], e[4 * o + 3]),
                     };
                 }
-                let p = 4 * (n + 1 - joint);
+                let p = 4 * (n + 1 - first_link);
                 (v, e[p], Vector3::new(e[p + 1], e[p + 2], e[p + 3]))
             }
         };
@@ -78,6 +119,21 @@ impl Predictor {
         last.mass_kg += c_payload * payload_kg;
         last.first_moment_kg_m += (tool.translation.vector * c_payload + tool.rotation * c_offset) * payload_kg;
         loads
+    }
+
+    /// The loads of compliance member `c` with parameters `e` at a pose of `payload_kg`.
+    fn member_loads(&self, model: &PhiModel, c: Candidate, e: &[f64], payload_kg: f64) -> MemberLoads {
+        let Candidate::JointCompliance {
+            joint, masses, load, ..
+        } = c
+        else {
+            return (Vec::new(), None);
+        };
+        let serial = serial_load_count(masses, joint, self.dof());
+        let carried = self.load_masses(model, masses, joint, &e[..serial], payload_kg);
+        let reflected =
+            (load == LoadPath::Mixed).then(|| self.load_masses(model, masses, joint + 1, &e[serial..], payload_kg));
+        (carried, reflected)
     }
 
     /// The sum of the compliance candidates' sags at joint values `q` (each the static
@@ -95,32 +151,16 @@ impl Predictor {
         let n = q.len();
         let mut total = vec![0.0; n];
         for (c, e) in &effects.compliance {
-            let Candidate::JointCompliance { joint, spring, masses } = *c else {
+            let Candidate::JointCompliance { joint, .. } = *c else {
                 continue;
             };
             if e.iter().all(|x| *x == 0.0) {
                 continue;
             }
-            let loads = self.compliance_masses(model, masses, joint, e, payload_kg);
-            let mut stiffness_nm_per_rad = vec![f64::INFINITY; n];
-            stiffness_nm_per_rad[joint - 1] = 1.0;
-            let compliance = ComplianceEffect {
-                stiffness_nm_per_rad,
-                gravity_m_s2: GRAVITY_M_S2,
-            };
-            let mut couplings = passive_slopes(robot, active);
-            if spring == SpringSite::Joint
-                && let Some(out) = couplings.get_mut(joint)
-            {
-                *out = PassiveSlope::default();
-            }
-            let load = CompliantLoad {
-                masses: &loads,
-                payload: None,
-                compliance: &compliance,
-                couplings: &couplings,
-            };
-            let dq = coupled_static_deflection(model, q, &load).ok()?;
+            let loads = self.member_loads(model, *c, e, payload_kg);
+            let compliance = unit_compliance(n, joint);
+            let couplings = member_couplings(*c, passive_slopes(robot, active));
+            let dq = coupled_static_deflection(model, q, &member_load(&loads, &compliance, &couplings)).ok()?;
             for (t, d) in total.iter_mut().zip(dq) {
                 *t += d;
             }
@@ -158,31 +198,20 @@ impl Predictor {
         joint_x: &DMatrix<f64>,
         poses: &[&Pose],
     ) -> Option<DMatrix<f64>> {
-        let Candidate::JointCompliance { joint, spring, masses } = candidate else {
+        let Candidate::JointCompliance { joint, .. } = candidate else {
             return None;
         };
         let count = candidate.parameter_names(&self.shape).len();
         let zeros = vec![0.0; self.geometric_count() + self.effect_count()];
         let (robot, effects) = self.robot_and_effects(&zeros);
         let model = self.model(&robot, &zeros);
-        let n = self.dof();
-        let mut stiffness_nm_per_rad = vec![f64::INFINITY; n];
-        stiffness_nm_per_rad[joint - 1] = 1.0;
-        let compliance = ComplianceEffect {
-            stiffness_nm_per_rad,
-            gravity_m_s2: GRAVITY_M_S2,
-        };
+        let compliance = unit_compliance(self.dof(), joint);
         let mut x = DMatrix::zeros(joint_x.nrows(), count);
         let mut row = 0;
         for pose in poses {
             let (q, active) = self.joint_values(&robot, &effects, pose)?;
             let model_t = effects.model_at(&model, pose.temperature_c);
-            let mut couplings = passive_slopes(&robot, &active);
-            if spring == SpringSite::Joint
-                && let Some(out) = couplings.get_mut(joint)
-            {
-                *out = PassiveSlope::default();
-            }
+            let couplings = member_couplings(candidate, passive_slopes(&robot, &active));
             let rows = 3 * pose.targets.len();
             let j_q = joint_x.rows(row, rows);
             // Every unit load of the pose sees the same frames: computed once.
@@ -190,9 +219,10 @@ impl Predictor {
             let mut unit = vec![0.0; count];
             for i in 0..count {
                 unit[i] = 1.0;
-                let loads = self.compliance_masses(&model_t, masses, joint, &unit, pose.payload_kg);
+                let loads = self.member_loads(&model_t, candidate, &unit, pose.payload_kg);
                 unit[i] = 0.0;
-                let dq = coupled_first_order_deflection_at(&model_t, &frames, &loads, None, &compliance, &couplings);
+                let load = member_load(&loads, &compliance, &couplings);
+                let dq = coupled_first_order_deflection_at(&model_t, &frames, &load);
                 x.view_mut((row, i), (rows, 1))
                     .copy_from(&(j_q * nalgebra::DVector::from_vec(dq)));
             }

@@ -13,8 +13,8 @@ mod plausible;
 mod tests;
 
 pub use candidate::{
-    Candidate, DEFAULT_MAX_HARMONIC_ORDER, MIN_THERMAL_ROW_M, MassModel, ModelShape, SpringSite, ThermalLinks,
-    TiltShape, is_geared, unmodelled_harmonic_order,
+    Candidate, DEFAULT_MAX_HARMONIC_ORDER, LoadPath, MIN_THERMAL_ROW_M, MassModel, ModelShape, SpringSite,
+    ThermalLinks, TiltShape, is_geared, unmodelled_harmonic_order,
 };
 pub use plausible::{
     MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K,
@@ -370,10 +370,7 @@ impl Predictor {
         let base = model.world_from_base;
         let tool_in_base = base.inverse() * Point3::from(tool.translation.vector);
         let payload = payload_at_tool(&model, pose.payload_kg);
-        let unit = ComplianceEffect {
-            stiffness_nm_per_rad: vec![1.0; n],
-            gravity_m_s2: GRAVITY_M_S2,
-        };
+        let unit = ComplianceEffect::new(vec![1.0; n], GRAVITY_M_S2);
         let gravity_torque_nm = first_order_deflection(&model, &q, &self.masses, payload, &unit);
         Some(PoseFeatures {
             q,

@@ -100,13 +100,22 @@ pub fn implausible(candidate: Candidate, params: &[Parameter], largest_sag_rad: 
 }
 
 fn compliance(params: &[Parameter], largest_sag_rad: Option<f64>) -> Option<String> {
-    let sign = not_negative(params, "compliance_rad_per_nm", "compliance [rad/(N m)]").or_else(|| {
-        not_negative(
-            params,
-            "compliance_payload_rad_per_nm",
-            "payload compliance [rad/(N m)]",
-        )
-    });
+    // A spring does not lift a load, and a mechanism carries a part of its load, not a
+    // negative one.
+    let sign = [
+        ("compliance_rad_per_nm", "compliance [rad/(N m)]"),
+        ("compliance_payload_rad_per_nm", "payload compliance [rad/(N m)]"),
+        (
+            "compliance_reflected_rad_per_nm",
+            "reflected load's compliance [rad/(N m)]",
+        ),
+        (
+            "compliance_reflected_payload_rad_per_nm",
+            "reflected payload's compliance [rad/(N m)]",
+        ),
+    ]
+    .iter()
+    .find_map(|(name, what)| not_negative(params, name, what));
     if sign.is_some() {
         return sign;
     }
@@ -171,6 +180,7 @@ mod tests {
             joint: 2,
             spring: crate::diagnosis::SpringSite::Actuator,
             masses: crate::diagnosis::MassModel::Description,
+            load: crate::diagnosis::LoadPath::Mechanism,
         };
         assert!(implausible(c, &[p("compliance_rad_per_nm", -1e-5, 1e-6)], Some(0.01)).is_some());
         assert!(implausible(c, &[p("compliance_rad_per_nm", 1e-4, 1e-6)], Some(0.3)).is_some());

@@ -5,9 +5,7 @@
 use super::*;
 use crate::diagnosis::poses::validation_poses;
 use crate::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
-use crate::physics::{
-    AxisWobble, BacklashEffect, CompliantLoad, HarmonicPeriod, PassiveSlope, coupled_static_deflection,
-};
+use crate::physics::{AxisWobble, BacklashEffect, HarmonicPeriod, PassiveSlope, coupled_static_deflection};
 use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
 use crate::sim::{AnalyticArm, Effects, JointDriver, simulate_campaign};
@@ -143,30 +141,27 @@ fn tilt_harmonic_and_backlash_members_reproduce_the_simulators_shapes() {
 /// rounding; the lumped member at the description's products (compliance times each link's
 /// mass and first moment, the payload's compliance) and the payload-offset member at a zero
 /// offset give the same residuals.
-#[test]
-fn compliance_members_reproduce_the_coupled_sag() {
+/// Validation poses of the truth with joint 2 compliant at `stiffness_nm_per_rad`, the
+/// four-bar reflecting `reflected_fraction` of joint 3's load (the exact static equilibrium,
+/// [`coupled_static_deflection`]), the description's masses, no payload.
+fn sagged_poses(stiffness_nm_per_rad: f64, reflected_fraction: f64) -> Vec<Pose> {
     let (desc, truth) = truth();
-    let joint = 2;
-    let stiffness_nm_per_rad = 2.0e4;
     let mut stiffness = vec![f64::INFINITY; desc.dof()];
-    stiffness[joint - 1] = stiffness_nm_per_rad;
+    stiffness[1] = stiffness_nm_per_rad;
     let compliance = ComplianceEffect {
-        stiffness_nm_per_rad: stiffness,
-        gravity_m_s2: GRAVITY_M_S2,
+        reflected_fraction,
+        ..ComplianceEffect::new(stiffness, GRAVITY_M_S2)
     };
     let masses = LinkMass::from_description(&desc);
     let mut driver = JointDriver::new(&truth, Controller::from_description(&desc), &Effects::default());
     let model = truth.phi_model();
-    let sagged = |driver: &mut JointDriver, cmd: &[f64]| {
+    let mut sagged = |cmd: &[f64]| {
         let d = driver.drive(cmd, &mut ChaCha12Rng::seed_from_u64(1)).unwrap();
         let couplings = PassiveSlope::of_linkages(&truth, &d.active);
-        let load = CompliantLoad {
-            masses: &masses,
-            payload: None,
-            compliance: &compliance,
-            couplings: &couplings,
-        };
-        let dq = coupled_static_deflection(&model, &d.q, &load).unwrap();
+        let dq = crate::physics::with_simulated_load(&masses, None, &compliance, &couplings, |load| {
+            coupled_static_deflection(&model, &d.q, load)
+        })
+        .unwrap();
         let q: Vec<f64> = d.q.iter().zip(&dq).map(|(a, b)| a + b).collect();
         model.poses(&q).world_from_link[desc.dof() - 1] * model.last_link_from_tool
     };
@@ -175,13 +170,12 @@ fn compliance_members_reproduce_the_coupled_sag() {
         ..ValidationPlan::workspace_default(desc.dof())
     };
     let reference = CalibrationPlan::table1(desc.dof()).reference;
-    let poses: Vec<Pose> = plan
-        .commands(&desc, &reference)
+    plan.commands(&desc, &reference)
         .into_iter()
         .enumerate()
         .map(|(step, c)| {
             let cmd = commands_to_internal(&desc, &c);
-            let tool = sagged(&mut driver, &cmd);
+            let tool = sagged(&cmd);
             Pose {
                 experiment: "validation".into(),
                 step,
@@ -193,35 +187,76 @@ fn compliance_members_reproduce_the_coupled_sag() {
                 targets: desc.tool_targets_m().iter().map(|t| tool * t).enumerate().collect(),
             }
         })
-        .collect();
-    let c = 1.0 / stiffness_nm_per_rad;
-    let description = Candidate::JointCompliance {
-        joint,
-        spring: SpringSite::Actuator,
-        masses: MassModel::Description,
-    };
-    let (with, without) = rms_with_and_without(description, &[c], &poses);
-    assert!(without > 1e-4, "the sag is visible: {without} m");
-    // Rounding of the equilibrium (1e-13 rad) times the reach.
-    assert!(with < 1e-11, "candidate leaves {with} m of {without} m");
-    let offset = Candidate::JointCompliance {
-        joint,
-        spring: SpringSite::Actuator,
-        masses: MassModel::PayloadOffset,
-    };
-    assert!(rms_with_and_without(offset, &[c, 0.0, 0.0, 0.0], &poses).0 < 1e-11);
-    let mut lumped_params = Vec::new();
-    for m in &masses[joint - 1..] {
-        lumped_params.push(c * m.mass_kg);
-        lumped_params.extend((m.first_moment_kg_m * c).iter());
+        .collect()
+}
+
+/// The lumped parameters of `masses` from link `first_link` (1-based) on at compliance `c`,
+/// then the payload's `c` and zero offset.
+fn lumped(masses: &[LinkMass], first_link: usize, c: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    for m in &masses[first_link - 1..] {
+        out.push(c * m.mass_kg);
+        out.extend((m.first_moment_kg_m * c).iter());
     }
-    lumped_params.extend([c, 0.0, 0.0, 0.0]);
-    let lumped = Candidate::JointCompliance {
-        joint,
+    out.extend([c, 0.0, 0.0, 0.0]);
+    out
+}
+
+/// Each load path's members reproduce the sag of the physics they stand for, to the
+/// equilibrium's rounding (1e-13 rad times the reach): the rigid four-bar's (mechanism), the
+/// serial chain's (nothing reflected) and a four-bar that carries 40 % of joint 3's load
+/// (mixed: the reflected load is 0.4 times the carried one); a member on another path misses it.
+#[test]
+fn compliance_members_reproduce_the_coupled_sag() {
+    let (desc, _) = truth();
+    let masses = LinkMass::from_description(&desc);
+    let stiffness_nm_per_rad = 2.0e4;
+    let c = 1.0 / stiffness_nm_per_rad;
+    let member = |load, masses| Candidate::JointCompliance {
+        joint: 2,
         spring: SpringSite::Actuator,
-        masses: MassModel::Lumped,
+        masses,
+        load,
     };
-    assert!(rms_with_and_without(lumped, &lumped_params, &poses).0 < 1e-11);
+    let lumped_mixed = |f: f64| {
+        let mut v = lumped(&masses, 2, c);
+        v.extend(lumped(&masses, 3, f * c));
+        v
+    };
+    for (fraction, load) in [
+        (1.0, LoadPath::Mechanism),
+        (0.0, LoadPath::Serial),
+        (0.4, LoadPath::Mixed),
+    ] {
+        let poses = sagged_poses(stiffness_nm_per_rad, fraction);
+        let (description, lumped_params) = match load {
+            LoadPath::Mixed => (vec![c, fraction * c], lumped_mixed(fraction)),
+            _ => (vec![c], lumped(&masses, 2, c)),
+        };
+        let (with, without) = rms_with_and_without(member(load, MassModel::Description), &description, &poses);
+        assert!(without > 1e-4, "{load:?}: the sag is visible: {without} m");
+        assert!(with < 1e-11, "{load:?}: candidate leaves {with} m of {without} m");
+        if load != LoadPath::Mixed {
+            let offset = member(load, MassModel::PayloadOffset);
+            assert!(rms_with_and_without(offset, &[c, 0.0, 0.0, 0.0], &poses).0 < 1e-11);
+        }
+        let with = rms_with_and_without(member(load, MassModel::Lumped), &lumped_params, &poses).0;
+        assert!(with < 1e-11, "{load:?} lumped leaves {with} m");
+        // The mixed member at the other paths' fractions is each of them.
+        let (mixed, _) = rms_with_and_without(
+            member(LoadPath::Mixed, MassModel::Description),
+            &[c, fraction * c],
+            &poses,
+        );
+        assert!(mixed < 1e-11, "{load:?}: mixed at fraction {fraction} leaves {mixed} m");
+    }
+    // Another path's member at the true compliance misses the serial sag by far more.
+    let serial = sagged_poses(stiffness_nm_per_rad, 0.0);
+    let (wrong, without) = rms_with_and_without(member(LoadPath::Mechanism, MassModel::Description), &[c], &serial);
+    assert!(
+        wrong > 0.1 * without,
+        "the mechanism path leaves {wrong} m of {without} m"
+    );
 }
 
 /// Every compliance member's analytic sensitivity (the chain rule through its sag,
@@ -338,6 +373,7 @@ fn the_predictors_sensitivity_is_the_central_differences_bit_for_bit() {
             joint: 2,
             spring: SpringSite::Actuator,
             masses: MassModel::Lumped,
+            load: LoadPath::Mixed,
         },
     ];
     // All candidates at once (every pose's frames its own: the thermal rows, the tilt), and

@@ -88,11 +88,30 @@ pub(super) fn draw_compliance<R: Rng + ?Sized>(
     };
     let mut stiffness = vec![1e12; dof];
     stiffness[joint - 1] = k;
-    e.compliance = Some(ComplianceEffect {
-        stiffness_nm_per_rad: stiffness,
-        gravity_m_s2: crate::diagnosis::GRAVITY_M_S2,
-    });
+    let mut compliance = ComplianceEffect::new(stiffness, crate::diagnosis::GRAVITY_M_S2);
+    draw_load_path(rng, joint, &mut compliance);
+    e.compliance = Some(compliance);
     (Some(joint), k, "N m/rad")
+}
+
+/// How the load reaches a compliant joint 2 (it drives the paper arm's four-bar), into
+/// `compliance`: through the four-bar (a third of the cases), serially (the actuator carries
+/// the forearm's own moment, a third) or mixed (the four-bar carries 20-80 %); and in half
+/// the cases a spring balancer taking 50-90 % of the upper arm's own torque.
+fn draw_load_path<R: Rng + ?Sized>(rng: &mut R, joint: usize, compliance: &mut ComplianceEffect) {
+    if joint != 2 {
+        return;
+    }
+    compliance.reflected_fraction = match rng.random_range(0..3) {
+        0 => 1.0,
+        1 => 0.0,
+        _ => rng.random_range(0.2..=0.8),
+    };
+    if rng.random_bool(0.5) {
+        let mut f = vec![0.0; compliance.stiffness_nm_per_rad.len()];
+        f[joint - 1] = rng.random_range(0.5..=0.9);
+        compliance.balancer_fraction = f;
+    }
 }
 
 /// A backlash band of a random joint, into `e`; `strong` (the two-effect cases): only bands
@@ -134,7 +153,6 @@ pub(super) fn draw_gear_harmonic<R: Rng + ?Sized>(
 ) -> DrawnMagnitude {
     let dof = desc.dof();
     let joint = rng.random_range(1..=dof);
-    let a = log_uniform(rng, 3.0e-4, 1.0e-2);
     // An order the calibrator does not fit, up to the diagnoser's default maximum, in the
     // transmission's angle; on a geared joint half the cases in the joint's own period.
     let first = crate::diagnosis::unmodelled_harmonic_order(desc, joint);
@@ -144,6 +162,10 @@ pub(super) fn draw_gear_harmonic<R: Rng + ?Sized>(
     } else {
         (rng.random_range(first..=top), HarmonicPeriod::Transmission)
     };
+    // A gear's error spectrum falls with the order: up to 10 mrad at orders 1-2, then
+    // `20 mrad / order` (at 5-9 mrad an order-5 or -6 harmonic is a 3-7 mm error that breaks
+    // the axis fits themselves, not an unmodelled effect left after them).
+    let a = log_uniform(rng, 3.0e-4, 1.0e-2 * (2.0 / order as f64).min(1.0));
     e.gear_harmonics.push(GearHarmonic {
         joint,
         order,

@@ -282,7 +282,23 @@ fn shape_of(e: &Effects) -> String {
             crate::physics::ApproachSource::Actuator => "actuator_direction".into(),
         });
     }
-    if e.compliance.is_some() {
+    if let Some(c) = &e.compliance {
+        let stiff = c.stiffness_nm_per_rad.iter().position(|k| *k < 1e12);
+        if stiff == Some(1) {
+            // The drawn fractions are exactly 1, exactly 0, or in 0.2-0.8.
+            let f = c.reflected_fraction;
+            let path = if f >= 1.0 {
+                "mechanism_load"
+            } else if f <= 0.0 {
+                "serial_load"
+            } else {
+                "mixed_load"
+            };
+            parts.push(path.into());
+        }
+        if c.balancer_fraction.iter().any(|f| *f > 0.0) {
+            parts.push("balancer".into());
+        }
         parts.push("other_masses".into());
     }
     if parts.is_empty() { "-".into() } else { parts.join("+") }
@@ -339,8 +355,9 @@ fn simulate_on<A: ArmExecutor>(
         conditions: PoseConditions::default(),
         instrument_scale: key.effects.instrument_scale,
     };
-    let mut out =
-        simulate_campaign_with(desc, &plan, &none, arm, &instrument, &campaign, &mut rng).map_err(|e| e.to_string())?;
+    let mut rows = simulate_campaign_with(desc, &plan, &none, arm, &instrument, &campaign, &mut rng)
+        .map_err(|e| e.to_string())?
+        .rows;
     let validation = ValidationPlan {
         poses: options.validation_poses,
         seed: key.seed ^ 0x7a11,
@@ -362,7 +379,7 @@ fn simulate_on<A: ArmExecutor>(
         let tool = links[desc.dof() - 1] * arm.last_link_from_tool();
         for (id, t) in desc.tool_targets_m().iter().enumerate() {
             let p = instrument.measure(&(tool * t), &mut rng).map_err(|e| e.to_string())?;
-            out.rows.push(Measurement {
+            rows.push(Measurement {
                 experiment: "validation".into(),
                 moved_joint: 0,
                 step,
@@ -375,11 +392,11 @@ fn simulate_on<A: ArmExecutor>(
         }
     }
     if let Some(sag) = &key.sag {
-        for m in &mut out.rows {
+        for m in &mut rows {
             sag.apply_mm(&mut m.position_mm);
         }
     }
-    MeasurementSet::new(desc.dof(), out.rows).map_err(|e| e.to_string())
+    MeasurementSet::new(desc.dof(), rows).map_err(|e| e.to_string())
 }
 
 /// An effect whose noise-free trace after the baseline refit is below this fraction of the

@@ -106,10 +106,10 @@ impl BudgetEffect {
         let mut temperature_c = PoseConditions::default().temperature_c;
         match self {
             BudgetEffect::Compliance => {
-                effects.compliance = Some(ComplianceEffect {
-                    stiffness_nm_per_rad: every(1.0 / magnitude.max(f64::MIN_POSITIVE)),
-                    gravity_m_s2: [0.0, 0.0, -9.81],
-                })
+                effects.compliance = Some(ComplianceEffect::new(
+                    every(1.0 / magnitude.max(f64::MIN_POSITIVE)),
+                    [0.0, 0.0, -9.81],
+                ))
             }
             BudgetEffect::Backlash => {
                 effects.backlash = Some(BacklashEffect {

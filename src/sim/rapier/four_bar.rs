@@ -375,10 +375,7 @@ mod tests {
             let q = &report.joint_positions;
             let c = bodies.crank_angle(&arm);
             let slope = g.solve(q[1] - c).unwrap().slope;
-            let unit_stiffness = ComplianceEffect {
-                stiffness_nm_per_rad: vec![1.0; 6],
-                gravity_m_s2: [0.0, 0.0, -9.81],
-            };
+            let unit_stiffness = ComplianceEffect::new(vec![1.0; 6], [0.0, 0.0, -9.81]);
             let q3_torque =
                 first_order_deflection(arm.model(), q, &LinkMass::from_description(&d), None, &unit_stiffness)[2];
             let predicted = slope * slope * q3_torque / crank_k;

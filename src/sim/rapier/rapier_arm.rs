@@ -32,7 +32,7 @@ use super::gear::CoupledTargets;
 use super::servo::{ServoGains, SettleOptions, SettleReport, SettleTally};
 use super::visibility::is_visible_from_all;
 use crate::kinematics::PhiModel;
-use crate::physics::{ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_static_deflection};
+use crate::physics::{ComplianceEffect, LinkMass, PassiveSlope, coupled_static_deflection, with_simulated_load};
 use crate::plan::PoseConditions;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::{ArmExecutor, DrivenJoints, Effects, ExecuteError, JointDriver};
@@ -283,15 +283,13 @@ impl Prediction<'_> {
         let couplings = PassiveSlope::of_robot(self.truth, &driven.active, |k, _| {
             self.four_bar_bodies && self.truth.four_bars.iter().any(|l| l.from == k)
         });
-        let load = CompliantLoad {
-            masses: &masses,
-            payload: self
-                .effects
-                .payload_in_last_link(&model.last_link_from_tool, conditions),
-            compliance,
-            couplings: &couplings,
-        };
-        let dq = coupled_static_deflection(model, &driven.q, &load).ok()?;
+        let payload = self
+            .effects
+            .payload_in_last_link(&model.last_link_from_tool, conditions);
+        let dq = with_simulated_load(&masses, payload, compliance, &couplings, |load| {
+            coupled_static_deflection(model, &driven.q, load)
+        })
+        .ok()?;
         Some(driven.q.iter().zip(dq).map(|(q, d)| q + d).collect())
     }
 }
