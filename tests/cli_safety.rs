@@ -874,3 +874,41 @@ fn one_sweep_in_other_units_is_named() {
     let e = error_of(&a);
     assert!(e.contains("axis6") && e.contains("metres"), "{e}");
 }
+
+/// A plan file with a hundred million intervals per sweep (the `--intervals` option is
+/// capped, the file was not: `plan` stalled) is exit 2 naming the plan file, the sweep and the
+/// bound, for `plan` and `simulate` alike.
+#[test]
+fn a_plan_file_beyond_the_interval_bound_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let shipped = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/asea-irb6l-table1-plan.toml"),
+    )
+    .unwrap();
+    let huge: String = shipped
+        .lines()
+        .map(|l| match l.trim_start().starts_with("intervals") {
+            true => "intervals = 100000000".to_owned(),
+            false => l.to_owned(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(huge.contains("intervals = 100000000"));
+    let plan = dir.path().join("huge-plan.toml");
+    std::fs::write(&plan, huge).unwrap();
+    for command in ["plan", "simulate"] {
+        let refused = axiscal()
+            .args([command, "--plan"])
+            .arg(&plan)
+            .arg("--out")
+            .arg(dir.path().join(format!("{command}.csv")))
+            .timeout(std::time::Duration::from_secs(60))
+            .assert()
+            .code(2);
+        let message = common::stderr(&refused);
+        assert!(
+            message.contains("intervals in 2..=100000") && message.contains("huge-plan.toml"),
+            "{command}: {message}"
+        );
+    }
+}

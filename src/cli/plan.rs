@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(long, value_name = "J=SPAN", value_parser = joint_value)]
     span: Vec<(usize, f64)>,
     /// Intervals of every sweep (each sweep measures `intervals + 1` poses).
-    #[arg(long, value_parser = InRange::closed(2usize, 100_000, ""))]
+    #[arg(long, value_parser = InRange::closed(2usize, axiscal::plan::MAX_INTERVALS, ""))]
     intervals: Option<usize>,
     /// The order the joints are swept in, e.g. `6,5,4,3,2,1` (every swept joint once).
     #[arg(long, value_delimiter = ',')]
@@ -122,7 +122,10 @@ pub fn campaign_plan(desc: &RobotDescription, path: Option<&Path>) -> Result<Cal
     Ok(match path {
         Some(path) => {
             let text = axiscal::toml_file::read(path)?;
-            axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?
+            let plan = axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?;
+            plan.validate(desc)
+                .with_context(|| format!("{} for {}", path.display(), desc.name))?;
+            plan
         }
         None => CalibrationPlan::default_for(desc),
     })
@@ -206,8 +209,14 @@ pub fn run(args: Args) -> Result<()> {
         outputs.write(&plan_out, format!("{}{text}", optimize::toml_comment(&args, &desc)))?;
         println!("wrote {}", plan_out.display());
     }
-    let points = planned_points(&desc, &plan, &validation, &sight)
-        .with_context(|| format!("planning the campaign of {}", args.robot.display()))?;
+    let points = planned_points(&desc, &plan, &validation, &sight).with_context(|| match &args.plan {
+        Some(file) => format!(
+            "planning the campaign of {} with {}",
+            args.robot.display(),
+            file.display()
+        ),
+        None => format!("planning the campaign of {}", args.robot.display()),
+    })?;
     let comment = header_comment(&desc, &stations_mm, args.link_radius_mm);
     let mut file = outputs.create(&args.out)?;
     write_plan_csv(&mut file, &comment, &points).with_context(|| format!("writing {}", args.out.display()))?;

@@ -42,6 +42,11 @@ impl AxisSweep {
     }
 }
 
+/// Most intervals a sweep may have (`plan --intervals`, a plan file's `intervals`): 100,001
+/// poses of one joint, far beyond any campaign; a larger count is a slip that would only stall
+/// the plan.
+pub const MAX_INTERVALS: usize = 100_000;
+
 /// A problem with a plan.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum PlanError {
@@ -55,9 +60,9 @@ pub enum PlanError {
         /// Number of joints.
         dof: usize,
     },
-    /// A sweep has a zero or negative span or no interval.
+    /// A sweep has a zero, negative or infinite span, or too few or too many intervals.
     #[error(
-        "sweep {index} (joint {joint}): span must be > 0 and intervals >= 2 (got span {span}, intervals {intervals})"
+        "sweep {index} (joint {joint}): span must be finite and > 0 and intervals in 2..={MAX_INTERVALS} (got span {span}, intervals {intervals})"
     )]
     Degenerate {
         /// Index of the sweep.
@@ -266,7 +271,7 @@ impl CalibrationPlan {
             if joint == 0 || joint > dof {
                 return Err(PlanError::NoSuchJoint { index, joint, dof });
             }
-            if s.span.is_nan() || s.span <= 0.0 || s.intervals < 2 {
+            if !(s.span.is_finite() && s.span > 0.0 && (2..=MAX_INTERVALS).contains(&s.intervals)) {
                 return Err(PlanError::Degenerate {
                     index,
                     joint,

@@ -11,7 +11,7 @@ mod sheet;
 pub mod sight;
 mod validation;
 
-pub use axis::{AxisSweep, CalibrationPlan, PlanError};
+pub use axis::{AxisSweep, CalibrationPlan, MAX_INTERVALS, PlanError};
 pub use optimize::{OptimizeOptions, Optimized, optimize, with_point_budget};
 pub use predict::{PlanObjective, PlanPrediction, PredictError};
 pub use sheet::{PlannedPoint, SightOptions, VALIDATION_EXPERIMENT, planned_points, write_plan_csv};
