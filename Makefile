@@ -7,7 +7,7 @@ RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' C
 
 FUZZ_SECONDS ?= 600
 
-.PHONY: run test test-real test-robots noise-check tool-accuracy bench fuzz study blind blind-analytic budget lint doc clean-results setup-viewer view
+.PHONY: run test test-real test-robots noise-check tool-accuracy bench fuzz study blind blind-free-poses blind-analytic budget lint doc clean-results setup-viewer view
 
 ## run: the paper scenario end to end; results under results/ (with a rerun recording:
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
@@ -85,6 +85,11 @@ budget:
 ## keys; about 1 min on 2 cores), confusion matrix and per-member table under results/blind/summary.md
 blind:
 	$(CARGO) run --release -- blind --cases 162 --seed 2 --sim rapier --out results/blind --force
+
+## blind-free-poses: the blind check with free poses only (the six-axis arm6-dh, 300 poses a
+## case, no axis experiment; about 5 min on 2 cores), results/blind-free-poses/summary.md
+blind-free-poses:
+	$(CARGO) run --release -- blind --cases 162 --seed 2 --campaign free-poses --out results/blind-free-poses --force
 
 ## blind-analytic: the same 162 cases on the analytic arm (first-order compliance, 7 CPU-min),
 ## results/blind-analytic/summary.md

@@ -9,7 +9,8 @@ mod common;
 
 use axiscal::diagnosis::{Diagnosis, DiagnosisOptions, diagnose};
 use axiscal::harness::blind::{
-    BlindOptions, CASE_EFFECTS, CaseKey, CaseResult, Simulator, detectable_size, draw_effect, score, simulate_case,
+    BlindCampaign, BlindOptions, CASE_EFFECTS, CaseKey, CaseResult, Simulator, detectable_size, draw_effect, score,
+    simulate_case,
 };
 use axiscal::measurement::{MeasurementSet, read_measurements, write_measurements};
 use axiscal::robot::RobotDescription;
@@ -58,7 +59,7 @@ fn run_case_with_data(
     seed: u64,
     set_magnitude: impl Fn(&mut CaseKey),
 ) -> (CaseResult, MeasurementSet) {
-    let desc = RobotDescription::asea_irb6l();
+    let desc = options.campaign.description();
     let mut key = draw_effect(effect, 0, seed, &desc, &mut ChaCha12Rng::seed_from_u64(seed));
     set_magnitude(&mut key);
     let set = simulate_case(&key, &desc, options).unwrap();
@@ -309,6 +310,43 @@ fn joint_2_compliance_is_found_on_the_rapier_arm_with_its_stiffness() {
     );
 }
 
+/// The free-pose campaign (`axiscal blind --campaign free-poses`): the six-axis arm without a
+/// mechanism measured at poses alone, calibrated by the diagnoser from its training poses. A
+/// joint-2 sag whose actuator carries the serial chain's load, a balancer taking 70 % of the
+/// upper arm's own torque, is named on joint 2 along the serial path and its gap closed; a
+/// backlash of joint 4 is named on joint 4; the same arm without an effect reads `none`.
+#[test]
+fn free_pose_cases_name_a_balanced_serial_sag_and_a_backlash() {
+    let options = BlindOptions {
+        campaign: BlindCampaign::FreePoses,
+        validation_poses: 120,
+        ..BlindOptions::default()
+    };
+    let stiffness_nm_per_rad = 1.0e4;
+    let r = run_case_on(&options, "joint_compliance", 3, |k| {
+        let c = k.effects.compliance.as_mut().unwrap();
+        c.stiffness_nm_per_rad = vec![1e12; c.stiffness_nm_per_rad.len()];
+        c.stiffness_nm_per_rad[1] = stiffness_nm_per_rad;
+        c.balancer_fraction = vec![0.0, 0.7, 0.0, 0.0, 0.0, 0.0];
+        (k.magnitude, k.joint) = (stiffness_nm_per_rad, Some(2));
+    });
+    assert_found(&r);
+    let member = r.diagnosis.member.clone().unwrap_or_default();
+    assert!(
+        member.contains("serial_load"),
+        "member {member}: {}",
+        r.diagnosis.verdict
+    );
+    let r = run_case_on(&options, "backlash", 3, |k| {
+        let b = k.effects.backlash.as_mut().unwrap();
+        b.band_rad = vec![0.0, 0.0, 0.0, 4.0e-3, 0.0, 0.0];
+        (k.magnitude, k.joint) = (4.0e-3, Some(4));
+    });
+    assert_found(&r);
+    let r = run_case_on(&options, "none", 3, |_| {});
+    assert_eq!(r.diagnosis.outcome.effect, "none", "{}", r.diagnosis.verdict);
+}
+
 /// Without a given noise the diagnosis takes the calibration's estimate from the axis
 /// experiments' residuals: on a clean case (repeatability jitter on, which the estimate
 /// subtracts) measured with 0.3 mm of 3-D noise instead of the default 0.19 mm, the estimate
@@ -519,4 +557,159 @@ fn free_poses_alone_are_diagnosed_on_held_out_poses() {
         .assert()
         .code(2);
     assert!(common::stderr(&refused).contains("--noise-mm"));
+}
+
+/// Two campaigns of the paper robot with a joint-2 compliance (1.5e4 N m/rad) whose actuator
+/// carries the serial chain's load, each its own validation poses, payloads, temperatures,
+/// noise and jitter.
+fn two_compliant_campaigns() -> (RobotDescription, MeasurementSet, MeasurementSet) {
+    let options = BlindOptions {
+        validation_poses: 60,
+        ..BlindOptions::default()
+    };
+    let desc = RobotDescription::asea_irb6l();
+    let mut key = draw_effect("joint_compliance", 0, 4, &desc, &mut ChaCha12Rng::seed_from_u64(4));
+    let c = key.effects.compliance.as_mut().unwrap();
+    c.stiffness_nm_per_rad = vec![1e12; desc.dof()];
+    c.stiffness_nm_per_rad[1] = 1.5e4;
+    c.reflected_fraction = 0.0;
+    c.balancer_fraction = Vec::new();
+    let a = simulate_case(&key, &desc, &options).unwrap();
+    key.seed += 1000;
+    let b = simulate_case(&key, &desc, &options).unwrap();
+    (desc, a, b)
+}
+
+/// Effects carried into the model (`calibrate --refine --carry`): on the paper campaign with a
+/// joint-2 compliance whose actuator carries the serial chain's load, the diagnosis names it,
+/// the refinement fits it with the geometry and folds it into the model, and on a second
+/// campaign of the same robot (new validation poses, payloads, temperatures, noise and
+/// repeatability jitter) the carried model's validation RMS is within `K_SIGMA` standard errors
+/// (`rms / sqrt(2 m)` over `m` coordinates) of what noise and jitter alone leave after a refit
+/// (the diagnosis's noise-only held-out RMS), while the refinement without it is beyond them.
+#[test]
+fn a_named_compliance_carried_into_the_model_closes_the_gap_on_new_poses() {
+    use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
+    use axiscal::calibration::refine::RefineOptions;
+    use axiscal::diagnosis::{ValidationOptions, carried_candidates, refine_calibration, refine_carrying, validate};
+    let (desc, a, b) = two_compliant_campaigns();
+    let d = diagnose(&a, &desc, &diagnosis_options()).unwrap();
+    assert_eq!(
+        (d.outcome.effect.as_str(), d.outcome.joint),
+        ("joint_compliance", Some(2)),
+        "{}",
+        d.verdict
+    );
+    let cal = calibrate(&a, &desc, &CalibrationOptions::default()).unwrap();
+    let noise_mm = cal.noise.as_ref().unwrap().used_rms_3d_mm;
+    let refine = RefineOptions {
+        noise_rms_3d_mm: noise_mm,
+        ..RefineOptions::default()
+    };
+    let carried = carried_candidates(&d, &desc, &a).unwrap();
+    let refined = refine_calibration(&a, &desc, &cal, &refine).unwrap();
+    let with_effect = refine_carrying(&a, &desc, &cal, &refine, &carried).unwrap();
+    assert!(!with_effect.robot.effects.compliance.is_empty());
+    let check = ValidationOptions {
+        noise_rms_3d_mm: noise_mm,
+        noise_source: "calibration".into(),
+        false_alarm: 0.01,
+    };
+    let on_b = |cal| validate(&b, cal, &desc, &check).unwrap().validation.unwrap();
+    let (without, with) = (on_b(&refined), on_b(&with_effect));
+    let bound = d.noise_only_rms_mm * (1.0 + K_SIGMA / (2.0 * 3.0 * with.points as f64).sqrt());
+    assert!(
+        with.rms_mm < bound && without.rms_mm > bound,
+        "validation RMS on new poses: {} mm with the carried effect, {} mm without, against {bound} mm",
+        with.rms_mm,
+        without.rms_mm
+    );
+}
+
+/// `--carry` through the command line: `diagnose` names the compliance of
+/// [`two_compliant_campaigns`]' first file, `calibrate --refine --carry` writes it into
+/// `calibration.json`'s `robot.effects.compliance`, and `validate` of the second file with it
+/// leaves less than without it (`--refine` alone). `--carry` needs `--refine`; a diagnosis that
+/// names nothing is refused with the file named; both exit 2.
+#[test]
+fn carry_writes_the_named_effect_into_calibration_json() {
+    let (_, a, b) = two_compliant_campaigns();
+    let dir = tempfile::tempdir().unwrap();
+    let (csv_a, csv_b) = (dir.path().join("a.csv"), dir.path().join("b.csv"));
+    write_measurements(&csv_a, &a, true).unwrap();
+    write_measurements(&csv_b, &b, true).unwrap();
+    let run = |args: &[&str]| common::axiscal().arg("--quiet").args(args).assert();
+    let path = |p: &std::path::Path| p.to_str().unwrap().to_owned();
+    let (dg, with, without) = (
+        dir.path().join("dg"),
+        dir.path().join("with"),
+        dir.path().join("without"),
+    );
+    run(&["diagnose", &path(&csv_a), "--out", &path(&dg)]).success();
+    let diagnosis = dg.join("diagnosis.json");
+    run(&[
+        "calibrate",
+        &path(&csv_a),
+        "--refine",
+        "--carry",
+        &path(&diagnosis),
+        "--out",
+        &path(&with),
+    ])
+    .success();
+    run(&["calibrate", &path(&csv_a), "--refine", "--out", &path(&without)]).success();
+    let json = |p: std::path::PathBuf| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let cal = json(with.join("calibration.json"));
+    assert_eq!(cal["robot"]["effects"]["compliance"][0]["joint"], 2);
+    let rms = |cal_dir: &std::path::Path| {
+        let out = cal_dir.join("validation");
+        let calibration = path(&cal_dir.join("calibration.json"));
+        run(&[
+            "validate",
+            "--calibration",
+            &calibration,
+            &path(&csv_b),
+            "--out",
+            &path(&out),
+        ])
+        .success();
+        json(out.join("summary.json"))["validation"]["rms_mm"].as_f64().unwrap()
+    };
+    let (rms_with, rms_without) = (rms(&with), rms(&without));
+    assert!(
+        rms_with < rms_without,
+        "validation RMS {rms_with} mm with the carried effect, {rms_without} mm without"
+    );
+    let refused = run(&[
+        "calibrate",
+        &path(&csv_a),
+        "--carry",
+        &path(&diagnosis),
+        "--out",
+        &path(&with),
+        "--force",
+    ]);
+    refused.code(2);
+    let mut none = json(diagnosis.clone());
+    none["effect"] = "none".into();
+    none["member"] = serde_json::Value::Null;
+    let none_file = dir.path().join("none.json");
+    std::fs::write(&none_file, serde_json::to_string(&none).unwrap()).unwrap();
+    let refused = run(&[
+        "calibrate",
+        &path(&csv_a),
+        "--refine",
+        "--carry",
+        &path(&none_file),
+        "--out",
+        &path(&with),
+        "--force",
+    ]);
+    let message = common::stderr(&refused.code(2));
+    assert!(
+        message.contains("none.json") && message.contains("names no effect"),
+        "{message}"
+    );
 }

@@ -8,11 +8,11 @@ use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::harness::blind::{
-    BlindOptions, CASE_EFFECTS, CaseResult, Simulator, case_table, detectable_size, draw_case, score, simulate_case,
+    BlindCampaign, BlindOptions, CASE_EFFECTS, CaseResult, Simulator, case_table, detectable_size, draw_case, score,
+    simulate_case,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{read_measurements, write_measurements_to};
-use axiscal::robot::RobotDescription;
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -25,9 +25,13 @@ pub struct Args {
     /// Suite seed.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Validation poses per case.
-    #[arg(long, default_value_t = 100, value_parser = InRange::closed(4usize, 1_000_000, ""))]
-    poses: usize,
+    /// Validation poses per case (default: 100 after the sweeps, 300 free poses).
+    #[arg(long, value_parser = InRange::closed(4usize, 1_000_000, ""))]
+    poses: Option<usize>,
+    /// What each case measures: `sweeps` (the paper robot's Table-1 axis experiments, then
+    /// validation poses) or `free-poses` (the six-axis `arm6-dh`, poses only).
+    #[arg(long, default_value = "sweeps")]
+    campaign: String,
     /// Baseline refit scope of the diagnoser (`identified` or `geometry`).
     #[arg(long, default_value = "identified")]
     refit: String,
@@ -56,12 +60,21 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let outputs = Outputs::new(args.force);
     outputs.check_empty_dir(&args.out)?;
-    let desc = RobotDescription::asea_irb6l();
+    let campaign = match args.campaign.as_str() {
+        "sweeps" => BlindCampaign::Sweeps,
+        "free-poses" => BlindCampaign::FreePoses,
+        other => bail!("--campaign {other}: expected `sweeps` or `free-poses`"),
+    };
+    let desc = campaign.description();
     if let Some(j) = args.joint.filter(|j| *j == 0 || *j > desc.dof()) {
         bail!("--joint {j}: must be in 1..={} (a joint of {})", desc.dof(), desc.name);
     }
     let options = BlindOptions {
-        validation_poses: args.poses,
+        validation_poses: args.poses.unwrap_or(match campaign {
+            BlindCampaign::Sweeps => 100,
+            BlindCampaign::FreePoses => 300,
+        }),
+        campaign,
         simulator: match args.sim.as_str() {
             "analytic" => Simulator::Analytic,
             "rapier" => Simulator::Rapier,

@@ -6,6 +6,7 @@ use super::OneOf;
 use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
+use anyhow::Context;
 use anyhow::Result;
 use axiscal::calibration::free_pose;
 use axiscal::calibration::procedure::axis_experiments_with;
@@ -14,15 +15,15 @@ use axiscal::calibration::procedure::{
     calibrate, findings, joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv,
     ros_name, urdf,
 };
-use axiscal::calibration::refine::RefineOptions;
+use axiscal::calibration::refine::{RefineOptions, Refinement};
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
-use axiscal::diagnosis::refine_calibration;
+use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates, refine_carrying};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The estimators by their command-line names.
 const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("paper", AxisEstimator::Paper)];
@@ -101,6 +102,12 @@ pub struct Args {
     /// and a k-fold held-out check (`docs/method.md`, "Refinement on free poses").
     #[arg(long)]
     refine: bool,
+    /// With `--refine`: also fit the effects a diagnosis of this file names (`axiscal diagnose`'s
+    /// `diagnosis.json`) and carry them in the model (`robot.effects` and the transmissions,
+    /// used by `validate` and `compensate`; `docs/method.md`, "Effects carried from a
+    /// diagnosis"): a joint compliance, a backlash, a gear harmonic in the transmission's period.
+    #[arg(long, value_name = "DIAGNOSIS.json", requires = "refine")]
+    carry: Option<PathBuf>,
     /// Folds of `--refine`'s held-out check.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(2..))]
     refine_folds: u64,
@@ -124,6 +131,7 @@ pub struct Args {
     /// joints' sag under gravity and their backlash and keeps what predicts held-out
     /// configurations best (into `robot.effects`, used by every command that reads the
     /// calibration); `none` fits the geometry only (`docs/method.md`, "Effects in the model").
+    /// On a file with axis experiments, `--refine --carry` carries a diagnosis's effects.
     #[arg(long, default_value = "auto", value_parser = ["auto", "none"])]
     effects: String,
     #[command(flatten)]
@@ -221,9 +229,12 @@ fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> 
 
 /// Runs `axiscal calibrate`.
 pub fn run(args: Args) -> Result<()> {
-    let outputs = Outputs::new(args.force)
+    let mut outputs = Outputs::new(args.force)
         .input("DATA", &args.data)
         .input("--robot", &args.robot);
+    if let Some(carry) = &args.carry {
+        outputs = outputs.input("--carry", carry);
+    }
     super::set_json(args.json);
     outputs.check_in(&args.out, &OUTPUTS)?;
     outputs.check_in(&args.out, &TOOL_MAP_FILES)?;
@@ -465,7 +476,11 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
         folds: args.refine_folds as usize,
         ..RefineOptions::default()
     };
-    let refined = refine_calibration(set, desc, &cal, &options)
+    let carried = match &args.carry {
+        Some(path) => carried_effects(path, desc, set)?,
+        None => Vec::new(),
+    };
+    let refined = refine_carrying(set, desc, &cal, &options, &carried)
         .map_err(|e| anyhow::anyhow!("--refine on {}: {e}", args.data.display()))?;
     if let Some(r) = &refined.refinement {
         say!(
@@ -484,8 +499,48 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
         if !r.converged {
             eprintln!("warning: --refine: the Gauss-Newton steps reached their limit without converging");
         }
+        print_carried(&carried, r);
     }
     Ok(refined)
+}
+
+/// The effects the diagnosis in `path` names, as candidates a model carries (`--carry`).
+fn carried_effects(path: &Path, desc: &RobotDescription, set: &MeasurementSet) -> Result<Vec<Candidate>> {
+    let text = axiscal::presets::read_text(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let d: Diagnosis = json_file::from_str(Schema::DIAGNOSIS, &text).with_context(|| {
+        format!(
+            "{}: not a diagnosis JSON (`axiscal diagnose` writes one)",
+            path.display()
+        )
+    })?;
+    carried_candidates(&d, desc, set).map_err(|e| anyhow::anyhow!("--carry {}: {e}", path.display()))
+}
+
+/// The console lines of the effects `--carry` fitted: each parameter with its sigma, and the
+/// warning that only `calibration.json` carries them.
+fn print_carried(carried: &[Candidate], r: &Refinement) {
+    if carried.is_empty() {
+        return;
+    }
+    let names: Vec<String> = carried
+        .iter()
+        .map(|c| match c.joint() {
+            Some(j) => format!("{} on joint {j} ({})", c.effect_name(), c.member_name()),
+            None => format!("{} ({})", c.effect_name(), c.member_name()),
+        })
+        .collect();
+    say!("  carried: {}", names.join("; "));
+    for p in r
+        .changes
+        .iter()
+        .filter(|p| carried.iter().any(|c| p.name.contains(c.effect_name())))
+    {
+        say!("    {} = {:.4e} +- {:.2e}", p.name, p.change, p.refined_sigma);
+    }
+    eprintln!(
+        "warning: the model carries {} (calibration.json robot.effects and transmissions, used by validate and compensate); calibrated.urdf and joint_map.csv hold the geometry only",
+        names.join("; ")
+    );
 }
 
 /// The noise (estimated, used, contradicted), joints not calibrated, the base-frame rule.

@@ -235,17 +235,11 @@ impl Compensator {
             }
             .into());
         }
-        let q = self.without_sag(q);
-        let mut theta = Vec::with_capacity(n);
-        for (k, j) in self.calibrated.joints.iter().enumerate() {
-            let passive = match (&j.coupling_in, k) {
-                (Some(g), k) if k > 0 => g
-                    .try_passive(theta[k - 1])
-                    .map_err(|source| CompensationError::Coupling { joint: k + 1, source })?,
-                _ => 0.0,
-            };
-            theta.push(q[k] - passive);
-        }
+        let q = self.without_sag(q)?;
+        let theta = self.calibrated.active_from_joint_values(&q).map_err(|e| match e {
+            crate::robot::ModelError::Coupling { joint, source } => CompensationError::Coupling { joint, source },
+            other => other.into(),
+        })?;
         let u: Vec<f64> = self
             .calibrated
             .joints
@@ -275,20 +269,21 @@ impl Compensator {
 
     /// The joint values before the calibrated model's sag that sag to `q` (module docs);
     /// `q` itself without a sag.
-    fn without_sag(&self, q: &[f64]) -> Vec<f64> {
-        let effects = &self.calibrated.effects;
+    fn without_sag(&self, q: &[f64]) -> Result<Vec<f64>, CompensationError> {
         let mut q0 = q.to_vec();
-        if effects.sag.is_empty() {
-            return q0;
+        if !self.calibrated.effects.sags() {
+            return Ok(q0);
         }
         let load = crate::robot::PoseLoad {
             approach: &[],
             payload_kg: self.payload_kg,
         };
         for _ in 0..SAG_STEPS {
-            let mut sagged = q0.clone();
-            let frames = self.calibrated_model.poses(&q0);
-            effects.add_sag(&self.calibrated_model, &frames, &mut sagged, &load);
+            let active = match self.calibrated.effects.compliance.is_empty() {
+                true => Vec::new(),
+                false => self.calibrated.active_from_joint_values(&q0)?,
+            };
+            let sagged = self.calibrated.sagged(&self.calibrated_model, &q0, &active, &load)?;
             let next: Vec<f64> = q
                 .iter()
                 .zip(sagged.iter().zip(&q0))
@@ -300,7 +295,7 @@ impl Compensator {
                 break;
             }
         }
-        q0
+        Ok(q0)
     }
 }
 
@@ -347,8 +342,8 @@ mod tests {
     /// [`crate::physics::ApproachTracker`]), reach every pose to the IK's tolerance; without
     /// the effects' steps they miss by the sag and the backlash.
     #[test]
-    fn a_model_with_sag_and_backlash_is_compensated_in_sequence() {
-        use crate::robot::{BacklashTerm, LoadTerm, PoseLoad, SagTerm};
+    fn a_model_with_sag_compliance_and_backlash_is_compensated_in_sequence() {
+        use crate::robot::{BacklashTerm, ComplianceTerm, LoadProduct, LoadTerm, PoseLoad, SagTerm, SpringLoad};
         let desc = RobotDescription::asea_irb6l();
         let mut robot = crate::sim::paper_robot();
         for (joint, link, load, coefficient) in [
@@ -370,6 +365,28 @@ mod tests {
                 half_band: 2e-4 * joint as f64,
             })
             .collect();
+        // Joint 2's actuator compliance along the four-bar's load path (a diagnosis's member).
+        let c = 2e-5;
+        let scaled = |m: &crate::physics::LinkMass| crate::physics::LinkMass {
+            mass_kg: m.mass_kg * c,
+            first_moment_kg_m: m.first_moment_kg_m * c,
+        };
+        robot.effects.compliance.push(ComplianceTerm {
+            joint: 2,
+            spring: crate::robot::SpringSite::Actuator,
+            reflects_load: true,
+            carried: SpringLoad {
+                links: crate::physics::LinkMass::from_description(&desc)
+                    .iter()
+                    .map(|m| LoadProduct::of(&scaled(m)))
+                    .collect(),
+                payload: LoadProduct {
+                    mass_kg_rad_per_nm: c,
+                    first_moment_kg_m_rad_per_nm: (robot.tool_frame.to_isometry().translation.vector * c).into(),
+                },
+            },
+            reflected: None,
+        });
         let payload_kg = 5.0;
         let comp = Compensator::new(&robot, &desc).unwrap().with_payload_kg(payload_kg);
         let geometric = Compensator::new(

@@ -45,13 +45,13 @@ pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnos
 pub use model::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, LoadPath, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
     MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,
-    Predictor, RefitScope, SIGN_K_SIGMA, SpringSite, ThermalLinks, TiltShape, implausible, is_geared,
+    Predictor, RefitScope, SIGN_K_SIGMA, SpringSite, ThermalLinks, TiltShape, drives_mechanism, implausible, is_geared,
     unmodelled_harmonic_order,
 };
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, training_mask, validation_poses};
-pub use refine::refine_calibration;
+pub use refine::{CARRIABLE, CarryError, carriable, carried_candidates, refine_calibration, refine_carrying};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
 pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};

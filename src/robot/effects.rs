@@ -30,6 +30,7 @@
 //! Both are first order: the sag's regressors are evaluated at the joint values before it
 //! (their change under a sag of 1 mrad is 1e-3 of the sag).
 
+use super::compliance::ComplianceTerm;
 use crate::kinematics::{ChainPoses, JointKind, PhiModel};
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -134,6 +135,10 @@ pub struct ModelEffects {
     /// The joints' backlash.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub backlash: Vec<BacklashTerm>,
+    /// Named joint compliances ([`ComplianceTerm`], a diagnosis's member carried by
+    /// `calibrate --carry`), each sagging on top of the sag above.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub compliance: Vec<ComplianceTerm>,
 }
 
 /// What a pose's effects depend on besides its joint values.
@@ -148,7 +153,12 @@ pub struct PoseLoad<'a> {
 impl ModelEffects {
     /// Whether the model has no effect.
     pub fn is_empty(&self) -> bool {
-        self.sag.is_empty() && self.backlash.is_empty()
+        self.sag.is_empty() && self.backlash.is_empty() && self.compliance.is_empty()
+    }
+
+    /// Whether the joint values move under gravity (a sag term or a compliance).
+    pub fn sags(&self) -> bool {
+        !self.sag.is_empty() || !self.compliance.is_empty()
     }
 
     /// Checks the joints and links against a model of `n` joints and the values' finiteness:
@@ -180,6 +190,9 @@ impl ModelEffects {
             if !b.half_band.is_finite() {
                 return Err((format!("effects.backlash[{k}].half_band"), "must be finite".into()));
             }
+        }
+        for (k, c) in self.compliance.iter().enumerate() {
+            c.validate(n, &format!("effects.compliance[{k}]"))?;
         }
         Ok(())
     }

@@ -3,6 +3,7 @@
 //! robot (the simulated truth and the calibrated robot alike), its transmission and coupling
 //! functions, four-bar geometry, and the fig. 3 controller.
 
+mod compliance;
 mod controller;
 mod description;
 mod effects;
@@ -12,6 +13,7 @@ mod functions;
 mod model;
 mod model_error;
 
+pub use compliance::{ComplianceTerm, LoadProduct, SpringLoad, SpringSite};
 pub use controller::Controller;
 pub use description::{
     AxisTargets, CouplingFitForm, DescriptionError, DescriptionIdentity, DhConventionEntry, DhEntry, JointEntry,

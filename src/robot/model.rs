@@ -302,12 +302,58 @@ impl RobotModel {
     ) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
         self.effects.shift_actuators(&mut u, load);
         let before = self.joint_values_from_actuators(&u)?;
-        let mut after = before.clone();
+        if !self.effects.sags() {
+            return Ok((before.clone(), before));
+        }
+        // The compliances' coupling slopes need the active displacements; the sag terms do not.
+        let active = match self.effects.compliance.is_empty() {
+            true => Vec::new(),
+            false => self.active_displacements(&u)?,
+        };
+        let after = self.sagged(phi, &before, &active, load)?;
+        Ok((before, after))
+    }
+
+    /// The joint values `q` (before the sag; `active` their active displacements, which only
+    /// the compliances read) with the model's sag terms and compliances added, each evaluated
+    /// at `q` on the chain `phi`.
+    pub fn sagged(
+        &self,
+        phi: &PhiModel,
+        q: &[f64],
+        active: &[f64],
+        load: &PoseLoad<'_>,
+    ) -> Result<Vec<f64>, ModelError> {
+        let mut after = q.to_vec();
         if !self.effects.sag.is_empty() {
-            let frames = phi.poses(&before);
+            let frames = phi.poses(q);
             self.effects.add_sag(phi, &frames, &mut after, load);
         }
-        Ok((before, after))
+        for c in &self.effects.compliance {
+            let dq = c
+                .deflection(self, phi, q, active, load.payload_kg)
+                .ok_or(ModelError::Buckles { joint: c.joint })?;
+            for (a, d) in after.iter_mut().zip(dq) {
+                *a += d;
+            }
+        }
+        Ok(after)
+    }
+
+    /// The active displacements of joint values `q`, the couplings undone from joint 1 up
+    /// (eq. 15 inverted): `theta_1 = q_1`, `theta_k = q_k - g_{k-1,k}(theta_{k-1})`.
+    pub fn active_from_joint_values(&self, q: &[f64]) -> Result<Vec<f64>, ModelError> {
+        let mut theta: Vec<f64> = Vec::with_capacity(q.len());
+        for (k, j) in self.joints.iter().enumerate() {
+            let passive = match (&j.coupling_in, k.checked_sub(1)) {
+                (Some(g), Some(below)) => g
+                    .try_passive(theta[below])
+                    .map_err(|source| ModelError::Coupling { joint: k + 1, source })?,
+                _ => 0.0,
+            };
+            theta.push(q[k] - passive);
+        }
+        Ok(theta)
     }
 
     /// The joint values for actuator commands `u` (after the controller's decoupling):

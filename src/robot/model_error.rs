@@ -39,6 +39,12 @@ pub enum ModelError {
         /// The linkage problem.
         source: FourBarError,
     },
+    /// A compliance carried in the model finds no static equilibrium at a pose.
+    #[error("the compliance of joint {joint} in the model finds no equilibrium at this pose (the arm would buckle)")]
+    Buckles {
+        /// 1-based joint.
+        joint: usize,
+    },
     /// The file could not be read or parsed.
     #[error(transparent)]
     File(#[from] crate::toml_file::TomlFileError),

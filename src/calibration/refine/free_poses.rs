@@ -90,6 +90,12 @@ pub enum RefitParameter {
         /// Whether it slides.
         sliding: bool,
     },
+    /// A parameter of a named effect carried into the model (`calibrate --carry`), in the
+    /// diagnosis's units (its name says them, e.g. `joint2.joint_compliance.compliance_rad_per_nm`).
+    Effect {
+        /// `joint<J>.<effect>.<parameter>`, or `<effect>.<parameter>` without a joint.
+        name: String,
+    },
 }
 
 const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
@@ -118,6 +124,7 @@ impl RefitParameter {
             RefitParameter::Tool(a) => format!("tool.{}", AXES[*a]),
             RefitParameter::Sag { joint, link, load } => format!("joint{joint}.sag.link{link}.{}", load.name()),
             RefitParameter::Backlash { joint, .. } => format!("joint{joint}.backlash"),
+            RefitParameter::Effect { name } => name.clone(),
         }
     }
 
@@ -128,7 +135,7 @@ impl RefitParameter {
             RefitParameter::ZeroOffset { sliding: true, .. } => ParameterUnit::Mm,
             RefitParameter::Base(a) | RefitParameter::Tool(a) if *a < 3 => ParameterUnit::Mm,
             RefitParameter::SetupBase { axis, .. } if *axis < 3 => ParameterUnit::Mm,
-            RefitParameter::Coupling { .. } => ParameterUnit::Coefficient,
+            RefitParameter::Coupling { .. } | RefitParameter::Effect { .. } => ParameterUnit::Coefficient,
             RefitParameter::Backlash { sliding: true, .. } => ParameterUnit::Mm,
             RefitParameter::Sag { .. } => ParameterUnit::MradPerLoad,
             _ => ParameterUnit::Mrad,

@@ -35,7 +35,8 @@ pub fn unrefined_sigma(cal: &Calibration, p: &RefitParameter) -> Option<f64> {
         | RefitParameter::Base(_)
         | RefitParameter::SetupBase { .. }
         | RefitParameter::Sag { .. }
-        | RefitParameter::Backlash { .. } => None,
+        | RefitParameter::Backlash { .. }
+        | RefitParameter::Effect { .. } => None,
         RefitParameter::Tool(axis) => cal
             .tool
             .as_ref()

@@ -10,19 +10,7 @@ use crate::physics::{ApproachSource, HarmonicPeriod};
 use crate::robot::{CouplingFitForm, RobotDescription, TransmissionFitForm};
 use serde::{Deserialize, Serialize};
 
-/// Where a compliant joint's spring sits.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum SpringSite {
-    /// In the actuator (motor and gear): its sag drives the passive coupling into the next
-    /// joint like any active motion, and a mechanism coupling (four-bar) carries the next
-    /// joint's load back to it (the rapier arm's physics).
-    Actuator,
-    /// In the joint itself (the output side): the joint bends under the gravity torque about
-    /// it and nothing else follows. Differs from `Actuator` only on a joint that drives a
-    /// coupling.
-    Joint,
-}
+pub use crate::robot::SpringSite;
 
 /// How the gravity load of the links beyond a compliant actuator reaches it where its joint
 /// drives a mechanism coupling (a four-bar, fitted in the fractional form) into the next

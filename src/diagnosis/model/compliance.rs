@@ -1,17 +1,14 @@
 //! The compliance candidates' sag: the gravity load of each mass model in product units
-//! (compliance times mass and first moment) and the static equilibrium under it at unit
-//! stiffness ([`coupled_static_deflection`]).
+//! (compliance times mass and first moment) as a [`ComplianceTerm`], whose static equilibrium
+//! at unit stiffness is the sag (the same term a model carries, `calibrate --carry`).
 
-use super::candidate::{Candidate, LoadPath, MassModel, SpringSite, serial_load_count};
+use super::Predictor;
+use super::candidate::{Candidate, LoadPath, MassModel, serial_load_count};
 use super::effect_set::EffectSet;
-use super::{GRAVITY_M_S2, Predictor};
 use crate::diagnosis::poses::Pose;
 use crate::kinematics::PhiModel;
-use crate::physics::{
-    ComplianceEffect, CompliantLoad, LinkMass, PassiveSlope, coupled_first_order_deflection_at,
-    coupled_static_deflection,
-};
-use crate::robot::{CouplingFunction, RobotModel};
+use crate::physics::{CompliantLoad, LinkMass, coupled_first_order_deflection_at};
+use crate::robot::{ComplianceTerm, LoadProduct, RobotModel, SpringLoad};
 use nalgebra::{DMatrix, Vector3};
 
 /// Step \[rad\] of the joint offsets in [`Predictor::joint_sensitivity`]: moves the targets by
@@ -19,76 +16,13 @@ use nalgebra::{DMatrix, Vector3};
 /// relative) and its truncation (`(1e-6)^2 / 6` of the next derivative) are both negligible.
 pub(super) const JOINT_STEP_RAD: f64 = 1e-6;
 
-/// The calibrated couplings at the active displacements `active`, for
-/// [`coupled_static_deflection`]: the slope of every `coupling_in`; the fractional (eq. 15)
-/// and four-bar forms are mechanisms that also carry the driven joint's load back to the
-/// actuator below, a gear is kinematic only.
-fn passive_slopes(robot: &RobotModel, active: &[f64]) -> Vec<PassiveSlope> {
-    PassiveSlope::of_robot(robot, active, |_, g| {
-        matches!(g, CouplingFunction::Fractional { .. } | CouplingFunction::FourBar(_))
-    })
-}
-
-/// `couplings` for compliance member `c` (whose `joint` is 1-based): a spring in the joint
-/// drives nothing and has nothing reflected to it; the serial load path reflects nothing.
-fn member_couplings(c: Candidate, mut couplings: Vec<PassiveSlope>) -> Vec<PassiveSlope> {
-    let Candidate::JointCompliance {
-        joint, spring, load, ..
-    } = c
-    else {
-        return couplings;
-    };
-    if let Some(out) = couplings.get_mut(joint) {
-        match (spring, load) {
-            (SpringSite::Joint, _) => *out = PassiveSlope::default(),
-            (SpringSite::Actuator, LoadPath::Serial) => out.reflects_load = false,
-            (SpringSite::Actuator, LoadPath::Mechanism | LoadPath::Mixed) => {}
-        }
-    }
-    couplings
-}
-
-/// Unit stiffness at `joint` (1-based), the others rigid.
-fn unit_compliance(n: usize, joint: usize) -> ComplianceEffect {
-    let mut stiffness_nm_per_rad = vec![f64::INFINITY; n];
-    stiffness_nm_per_rad[joint - 1] = 1.0;
-    ComplianceEffect::new(stiffness_nm_per_rad, GRAVITY_M_S2)
-}
-
-/// The loads of a compliance member: what its spring carries, and for a mixed load path what
-/// the mechanism reflects to it (`None`: the same).
-type MemberLoads = (Vec<LinkMass>, Option<Vec<LinkMass>>);
-
-/// The load of a member's `loads` (the payload folded into them) at unit `compliance`
-/// through `couplings`.
-fn member_load<'a>(
-    loads: &'a MemberLoads,
-    compliance: &'a ComplianceEffect,
-    couplings: &'a [PassiveSlope],
-) -> CompliantLoad<'a> {
-    CompliantLoad {
-        masses: &loads.0,
-        payload: None,
-        compliance,
-        couplings,
-        reflected_masses: loads.1.as_deref(),
-    }
-}
-
 impl Predictor {
     /// One gravity load of a compliance member as link masses times the compliance (unit
     /// stiffness then gives the sag), `e` its parameters ([`super::candidate`]'s
-    /// `load_names`): the description's masses scaled, with the pose's `payload_kg` at the
-    /// tool frame's origin offset by the fitted offset (tool frame) where the member fits one;
-    /// or lumped from link `first_link` (1-based) on, the payload folded into the last link.
-    fn load_masses(
-        &self,
-        model: &PhiModel,
-        masses: MassModel,
-        first_link: usize,
-        e: &[f64],
-        payload_kg: f64,
-    ) -> Vec<LinkMass> {
+    /// `load_names`): the description's masses scaled, with a payload at the tool frame's
+    /// origin offset by the fitted offset (tool frame) where the member fits one; or lumped
+    /// from link `first_link` (1-based) on; the payload's per kg.
+    fn spring_load(&self, model: &PhiModel, masses: MassModel, first_link: usize, e: &[f64]) -> SpringLoad {
         let n = self.dof();
         let scaled = |c: f64| -> Vec<LinkMass> {
             self.masses
@@ -115,25 +49,37 @@ impl Predictor {
             }
         };
         let tool = &model.last_link_from_tool;
-        let last = &mut loads[n - 1];
-        last.mass_kg += c_payload * payload_kg;
-        last.first_moment_kg_m += (tool.translation.vector * c_payload + tool.rotation * c_offset) * payload_kg;
-        loads
+        let payload = LinkMass {
+            mass_kg: c_payload,
+            first_moment_kg_m: tool.translation.vector * c_payload + tool.rotation * c_offset,
+        };
+        loads.truncate(n);
+        SpringLoad {
+            links: loads.iter().map(LoadProduct::of).collect(),
+            payload: LoadProduct::of(&payload),
+        }
     }
 
-    /// The loads of compliance member `c` with parameters `e` at a pose of `payload_kg`.
-    fn member_loads(&self, model: &PhiModel, c: Candidate, e: &[f64], payload_kg: f64) -> MemberLoads {
+    /// Compliance member `c` with parameters `e` as the term a model carries; `None` for
+    /// another candidate.
+    pub fn compliance_term(&self, model: &PhiModel, c: Candidate, e: &[f64]) -> Option<ComplianceTerm> {
         let Candidate::JointCompliance {
-            joint, masses, load, ..
+            joint,
+            spring,
+            masses,
+            load,
         } = c
         else {
-            return (Vec::new(), None);
+            return None;
         };
         let serial = serial_load_count(masses, joint, self.dof());
-        let carried = self.load_masses(model, masses, joint, &e[..serial], payload_kg);
-        let reflected =
-            (load == LoadPath::Mixed).then(|| self.load_masses(model, masses, joint + 1, &e[serial..], payload_kg));
-        (carried, reflected)
+        Some(ComplianceTerm {
+            joint,
+            spring,
+            reflects_load: load != LoadPath::Serial,
+            carried: self.spring_load(model, masses, joint, &e[..serial]),
+            reflected: (load == LoadPath::Mixed).then(|| self.spring_load(model, masses, joint + 1, &e[serial..])),
+        })
     }
 
     /// The sum of the compliance candidates' sags at joint values `q` (each the static
@@ -151,16 +97,13 @@ impl Predictor {
         let n = q.len();
         let mut total = vec![0.0; n];
         for (c, e) in &effects.compliance {
-            let Candidate::JointCompliance { joint, .. } = *c else {
-                continue;
-            };
             if e.iter().all(|x| *x == 0.0) {
                 continue;
             }
-            let loads = self.member_loads(model, *c, e, payload_kg);
-            let compliance = unit_compliance(n, joint);
-            let couplings = member_couplings(*c, passive_slopes(robot, active));
-            let dq = coupled_static_deflection(model, q, &member_load(&loads, &compliance, &couplings)).ok()?;
+            let Some(term) = self.compliance_term(model, *c, e) else {
+                continue;
+            };
+            let dq = term.deflection(robot, model, q, active, payload_kg)?;
             for (t, d) in total.iter_mut().zip(dq) {
                 *t += d;
             }
@@ -198,20 +141,18 @@ impl Predictor {
         joint_x: &DMatrix<f64>,
         poses: &[&Pose],
     ) -> Option<DMatrix<f64>> {
-        let Candidate::JointCompliance { joint, .. } = candidate else {
-            return None;
-        };
         let count = candidate.parameter_names(&self.shape).len();
         let zeros = vec![0.0; self.geometric_count() + self.effect_count()];
         let (robot, effects) = self.robot_and_effects(&zeros);
         let model = self.model(&robot, &zeros);
-        let compliance = unit_compliance(self.dof(), joint);
+        let shape = self.compliance_term(&model, candidate, &vec![0.0; count])?;
+        let compliance = shape.unit_compliance(self.dof());
         let mut x = DMatrix::zeros(joint_x.nrows(), count);
         let mut row = 0;
         for pose in poses {
             let (q, active) = self.joint_values(&robot, &effects, pose)?;
             let model_t = effects.model_at(&model, pose.temperature_c);
-            let couplings = member_couplings(candidate, passive_slopes(&robot, &active));
+            let couplings = shape.couplings(&robot, &active);
             let rows = 3 * pose.targets.len();
             let j_q = joint_x.rows(row, rows);
             // Every unit load of the pose sees the same frames: computed once.
@@ -219,9 +160,17 @@ impl Predictor {
             let mut unit = vec![0.0; count];
             for i in 0..count {
                 unit[i] = 1.0;
-                let loads = self.member_loads(&model_t, candidate, &unit, pose.payload_kg);
+                let term = self.compliance_term(&model_t, candidate, &unit)?;
                 unit[i] = 0.0;
-                let load = member_load(&loads, &compliance, &couplings);
+                let carried = term.carried.at(pose.payload_kg);
+                let reflected = term.reflected.as_ref().map(|r| r.at(pose.payload_kg));
+                let load = CompliantLoad {
+                    masses: &carried,
+                    payload: None,
+                    compliance: &compliance,
+                    couplings: &couplings,
+                    reflected_masses: reflected.as_deref(),
+                };
                 let dq = coupled_first_order_deflection_at(&model_t, &frames, &load);
                 x.view_mut((row, i), (rows, 1))
                     .copy_from(&(j_q * nalgebra::DVector::from_vec(dq)));

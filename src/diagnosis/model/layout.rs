@@ -1,10 +1,10 @@
 //! The refit's parameters named ([`RefitParameter`]) and applied to a robot model: what
 //! `calibrate --refine` refines and writes back into `calibration.json`.
 
-use super::{Predictor, RefitScope, coupling_parameters};
+use super::{Candidate, Predictor, RefitScope, coupling_parameters};
 use crate::calibration::refine::RefitParameter;
 use crate::kinematics::JointKind;
-use crate::robot::{CouplingFunction, Placement, RobotModel};
+use crate::robot::{BacklashTerm, CouplingFunction, Placement, RobotModel};
 
 /// The names of a coupling's refit coefficients, in [`coupling_parameters`] order.
 fn coupling_names(g: Option<&CouplingFunction>) -> Vec<String> {
@@ -63,6 +63,52 @@ impl Predictor {
         out.extend((0..6).map(RefitParameter::Base));
         out.extend((0..6).map(RefitParameter::Tool));
         out
+    }
+
+    /// The candidates' parameters in their order after the refit's, named
+    /// `joint<J>.<effect>.<parameter>` (`<effect>.<parameter>` without a joint).
+    pub fn effect_layout(&self) -> Vec<RefitParameter> {
+        self.candidates
+            .iter()
+            .flat_map(|c| {
+                let prefix = match c.joint() {
+                    Some(j) => format!("joint{j}.{}", c.effect_name()),
+                    None => c.effect_name().to_owned(),
+                };
+                c.parameter_names(&self.shape)
+                    .into_iter()
+                    .map(move |p| RefitParameter::Effect {
+                        name: format!("{prefix}.{p}"),
+                    })
+            })
+            .collect()
+    }
+
+    /// [`Predictor::refit_robot`] with the candidates (each [`crate::diagnosis::carriable`])
+    /// at `params` carried: a transmission-period harmonic in its transmission, a compliance
+    /// as `effects.compliance`, a backlash as `effects.backlash` (the model's backlash lags the
+    /// actuator command, the candidate's the active displacement: they differ by the half band
+    /// times the transmission's slope error, 1e-3 of it at most).
+    pub fn carried_robot(&self, params: &[f64]) -> RobotModel {
+        let (mut robot, _) = self.robot_and_effects(params);
+        let model = self.model(&robot, params);
+        robot.placement = Placement::from_isometry(&model.world_from_base);
+        robot.tool_frame = Placement::from_isometry(&model.last_link_from_tool);
+        let phi = robot.phi_model();
+        let mut at = self.geometric_count();
+        for c in &self.candidates {
+            let count = c.parameter_names(&self.shape).len();
+            let e = &params[at..at + count];
+            at += count;
+            match *c {
+                Candidate::JointCompliance { .. } => robot.effects.compliance.extend(self.compliance_term(&phi, *c, e)),
+                Candidate::Backlash { joint, .. } => {
+                    robot.effects.backlash.push(BacklashTerm { joint, half_band: e[0] })
+                }
+                _ => {}
+            }
+        }
+        robot
     }
 
     /// The calibrated robot with the refit corrections `params` applied (rows, zero offsets,

@@ -14,7 +14,7 @@ mod tests;
 
 pub use candidate::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, LoadPath, MIN_THERMAL_ROW_M, MassModel, ModelShape, SpringSite,
-    ThermalLinks, TiltShape, is_geared, unmodelled_harmonic_order,
+    ThermalLinks, TiltShape, drives_mechanism, is_geared, unmodelled_harmonic_order,
 };
 pub use plausible::{
     MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K,

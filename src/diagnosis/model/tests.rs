@@ -438,3 +438,78 @@ fn sensitivity_is_the_central_differences(
     .expect("predicts");
     assert_eq!(bits(&joint), bits(&fresh));
 }
+
+/// A model carrying the candidates (`Predictor::carried_robot`) predicts through its own path
+/// (`RobotModel::loaded_joint_values`, the backlash on the actuator command, the compliance
+/// term at the joint values before it) what the predictor predicts at the same parameters: a
+/// joint-2 compliance on the mixed load path with payloads and both loads lumped, a backlash of
+/// joint 3 signed by its actuator (driven through the 2->3 coupling), an order-3 transmission
+/// harmonic of joint 1, and a refit moved off zero. The truth's transmissions are the identity
+/// there, so that the two backlash sites (the actuator command, the active displacement) are
+/// one; the bound is rounding (1e-12 m over a 1 m reach).
+#[test]
+fn a_carried_model_predicts_what_the_predictor_predicts() {
+    let (desc, mut truth) = truth();
+    for j in &mut truth.joints {
+        j.transmission = crate::robot::Transmission::identity();
+    }
+    let mut poses = sagged_poses(3.0e4, 1.0);
+    for (i, p) in poses.iter_mut().enumerate() {
+        p.payload_kg = 1.5 * (i % 4) as f64;
+        p.actuator_approach = (0..desc.dof())
+            .map(|k| if (i + k) % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+    }
+    let compliance = Candidate::JointCompliance {
+        joint: 2,
+        spring: SpringSite::Actuator,
+        masses: MassModel::Lumped,
+        load: LoadPath::Mixed,
+    };
+    let backlash = Candidate::Backlash {
+        joint: 3,
+        direction: ApproachSource::Actuator,
+    };
+    let harmonic = Candidate::GearHarmonic {
+        joint: 1,
+        order: 3,
+        period: HarmonicPeriod::Transmission,
+    };
+    let p =
+        Predictor::new(&truth, &desc, 20.0, RefitScope::Identified).with_candidates(&[compliance, backlash, harmonic]);
+    let masses = LinkMass::from_description(&desc);
+    let mut params = vec![0.0; p.geometric_count()];
+    params[0] = 2e-4; // row 1 a
+    params[4 * desc.rows.len()] = 1e-3; // joint 1 zero offset
+    let g = params.len();
+    params[g - 9] = 3e-4; // base translation z
+    params.extend(lumped(&masses, 2, 3e-5));
+    params.extend(lumped(&masses, 3, 1e-5));
+    params.extend([1.5e-3, 4e-4, -2e-4]);
+    assert_eq!(params.len(), g + p.effect_count());
+    let every: Vec<&Pose> = poses.iter().collect();
+    let residuals = p.residuals(&params, &every).expect("predicts");
+    let robot = p.carried_robot(&params);
+    assert_eq!((robot.effects.compliance.len(), robot.effects.backlash.len()), (1, 1));
+    let phi = robot.phi_model();
+    let controller = Controller::from_description(&desc);
+    let mut worst: f64 = 0.0;
+    let mut row = 0;
+    for pose in &poses {
+        let load = crate::robot::PoseLoad {
+            approach: &pose.actuator_approach,
+            payload_kg: pose.payload_kg,
+        };
+        let q = robot
+            .loaded_joint_values(&controller, &phi, &pose.cmd, &load)
+            .expect("executes");
+        let tool = phi.poses(&q).world_from_link[desc.dof() - 1] * phi.last_link_from_tool;
+        for (id, measured) in &pose.targets {
+            let predicted = tool * desc.tool_targets_m()[*id];
+            let by_predictor = measured - Vector3::from_column_slice(&residuals[row..row + 3]);
+            worst = worst.max((predicted - by_predictor).norm());
+            row += 3;
+        }
+    }
+    assert!(worst < 1e-12, "carried model and predictor differ by {worst} m");
+}

@@ -70,10 +70,11 @@ pub(super) type DrawnMagnitude = (Option<usize>, f64, &'static str);
 /// detectable stiffness down.
 pub(super) fn draw_compliance<R: Rng + ?Sized>(
     rng: &mut R,
-    dof: usize,
+    desc: &RobotDescription,
     strong: bool,
     e: &mut Effects,
 ) -> DrawnMagnitude {
+    let dof = desc.dof();
     // Joints 2 and 3 carry the gravity load of the arm.
     let joint = rng.random_range(2..=3);
     // The refit absorbs the part of a sag that follows the joint angles alone; the
@@ -89,23 +90,33 @@ pub(super) fn draw_compliance<R: Rng + ?Sized>(
     let mut stiffness = vec![1e12; dof];
     stiffness[joint - 1] = k;
     let mut compliance = ComplianceEffect::new(stiffness, crate::diagnosis::GRAVITY_M_S2);
-    draw_load_path(rng, joint, &mut compliance);
+    draw_load_path(rng, desc, joint, &mut compliance);
     e.compliance = Some(compliance);
     (Some(joint), k, "N m/rad")
 }
 
-/// How the load reaches a compliant joint 2 (it drives the paper arm's four-bar), into
-/// `compliance`: through the four-bar (a third of the cases), serially (the actuator carries
-/// the forearm's own moment, a third) or mixed (the four-bar carries 20-80 %); and in half
-/// the cases a spring balancer taking 50-90 % of the upper arm's own torque.
-fn draw_load_path<R: Rng + ?Sized>(rng: &mut R, joint: usize, compliance: &mut ComplianceEffect) {
+/// How the load reaches a compliant joint 2, into `compliance`: where it drives a mechanism
+/// (the paper arm's four-bar, [`crate::diagnosis::drives_mechanism`]) through it (a third of
+/// the cases), serially (the actuator carries the forearm's own moment, a third) or mixed
+/// (the mechanism carries 20-80 %), else serially (no load reflected); and in half the cases
+/// a spring balancer taking 50-90 % of the upper arm's own torque.
+fn draw_load_path<R: Rng + ?Sized>(
+    rng: &mut R,
+    desc: &RobotDescription,
+    joint: usize,
+    compliance: &mut ComplianceEffect,
+) {
     if joint != 2 {
         return;
     }
-    compliance.reflected_fraction = match rng.random_range(0..3) {
-        0 => 1.0,
-        1 => 0.0,
-        _ => rng.random_range(0.2..=0.8),
+    compliance.reflected_fraction = if crate::diagnosis::drives_mechanism(desc, joint) {
+        match rng.random_range(0..3) {
+            0 => 1.0,
+            1 => 0.0,
+            _ => rng.random_range(0.2..=0.8),
+        }
+    } else {
+        0.0
     };
     if rng.random_bool(0.5) {
         let mut f = vec![0.0; compliance.stiffness_nm_per_rad.len()];

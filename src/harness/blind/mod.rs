@@ -17,7 +17,7 @@ use draw::{
 use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
 use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
-use crate::robot::{Controller, RobotDescription};
+use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, simulate_campaign_with};
 use rand::{Rng, RngExt, SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
@@ -143,6 +143,55 @@ pub struct BlindOptions {
     /// `repeatability_sigma`, which the description gives the diagnoser and `calibrate`
     /// models). Off only for the noise-free trace of [`detectable_size`].
     pub repeatability: bool,
+    /// The robot and what is measured.
+    pub campaign: BlindCampaign,
+}
+
+/// The campaign of a blind suite: which robot, measured how.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BlindCampaign {
+    /// The paper robot (description `asea-irb6l`, truth `asea-irb6l-paper-truth`): the Table-1
+    /// axis experiments and the tool observation at 20 deg C without payload, then the
+    /// validation poses.
+    #[default]
+    Sweeps,
+    /// The six-axis DH arm (description `arm6-dh`, truth `arm6-dh-truth`, no passive
+    /// coupling): the validation poses alone, which the diagnoser splits into training poses
+    /// (its free-pose calibration) and held-out ones. Needs [`Simulator::Analytic`].
+    FreePoses,
+}
+
+impl BlindCampaign {
+    /// The shipped description the diagnoser is given.
+    pub fn description(self) -> RobotDescription {
+        let (text, path) = shipped(self.names().0);
+        RobotDescription::from_toml_str(text, std::path::Path::new(path))
+            .expect("the shipped blind-suite descriptions are valid (checked by tests)")
+    }
+
+    /// The shipped truth the simulator runs.
+    pub fn truth(self) -> RobotModel {
+        let (text, path) = shipped(self.names().1);
+        RobotModel::from_toml_str(text, std::path::Path::new(path))
+            .expect("the shipped blind-suite truths are valid (checked by tests)")
+    }
+
+    /// The names of its shipped description and truth.
+    pub fn names(self) -> (&'static str, &'static str) {
+        match self {
+            BlindCampaign::Sweeps => ("asea-irb6l", "asea-irb6l-paper-truth"),
+            BlindCampaign::FreePoses => ("arm6-dh", "arm6-dh-truth"),
+        }
+    }
+}
+
+/// The text and source path of the shipped file `name`.
+fn shipped(name: &str) -> (&'static str, &'static str) {
+    let p = crate::presets::PRESETS
+        .iter()
+        .find(|p| p.name == name)
+        .expect("the blind suites' robots are shipped");
+    (p.text, p.source_path)
 }
 
 /// The simulated robot of a blind suite.
@@ -166,6 +215,7 @@ impl Default for BlindOptions {
             payload_max_kg: PAYLOAD_MAX_KG,
             simulator: Simulator::Analytic,
             repeatability: true,
+            campaign: BlindCampaign::Sweeps,
         }
     }
 }
@@ -199,10 +249,10 @@ pub fn draw_effect<R: Rng + ?Sized>(
     // compliant joint).
     draw_masses(rng, desc, &mut e);
     let (joint, magnitude, unit) = match effect {
-        "joint_compliance" => draw_compliance(rng, dof, false, &mut e),
+        "joint_compliance" => draw_compliance(rng, desc, false, &mut e),
         "backlash" => draw_backlash(rng, dof, false, &mut e),
         TWO_EFFECTS => {
-            let first = draw_compliance(rng, dof, true, &mut e);
+            let first = draw_compliance(rng, desc, true, &mut e);
             let (joint, magnitude, unit) = draw_backlash(rng, dof, true, &mut e);
             second = Some(SecondEffect {
                 effect: "backlash".into(),
@@ -311,7 +361,7 @@ fn shape_of(e: &Effects) -> String {
 /// [`JointZeroDrift`] offsets the executed command), measured with isotropic noise (and the
 /// instrument scale error or sag, if any).
 pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOptions) -> Result<MeasurementSet, String> {
-    let mut truth = crate::sim::paper_robot();
+    let mut truth = options.campaign.truth();
     if !options.repeatability {
         for j in &mut truth.joints {
             j.repeatability_sigma = 0.0;
@@ -345,19 +395,27 @@ fn simulate_on<A: ArmExecutor>(
     let instrument = MeasurementModel::Isotropic(crate::measurement::IsotropicNoise {
         net_radial_rms_mm: options.noise_rms_3d_mm,
     });
-    let plan = CalibrationPlan::table1(desc.dof());
+    let plan = match options.campaign {
+        BlindCampaign::Sweeps => CalibrationPlan::table1(desc.dof()),
+        BlindCampaign::FreePoses => CalibrationPlan::default_for(desc),
+    };
     let mut rng = ChaCha12Rng::seed_from_u64(key.seed);
-    let none = ValidationPlan {
-        poses: 0,
-        ..ValidationPlan::workspace_default(desc.dof())
+    let mut rows = match options.campaign {
+        BlindCampaign::Sweeps => {
+            let none = ValidationPlan {
+                poses: 0,
+                ..ValidationPlan::workspace_default(desc.dof())
+            };
+            let campaign = CampaignOptions {
+                conditions: PoseConditions::default(),
+                instrument_scale: key.effects.instrument_scale,
+            };
+            simulate_campaign_with(desc, &plan, &none, arm, &instrument, &campaign, &mut rng)
+                .map_err(|e| e.to_string())?
+                .rows
+        }
+        BlindCampaign::FreePoses => Vec::new(),
     };
-    let campaign = CampaignOptions {
-        conditions: PoseConditions::default(),
-        instrument_scale: key.effects.instrument_scale,
-    };
-    let mut rows = simulate_campaign_with(desc, &plan, &none, arm, &instrument, &campaign, &mut rng)
-        .map_err(|e| e.to_string())?
-        .rows;
     let validation = ValidationPlan {
         poses: options.validation_poses,
         seed: key.seed ^ 0x7a11,
