@@ -3,7 +3,7 @@
 //! which finds the joint-2 turns at their own joint-1 values unusable by the independent-axis
 //! procedure and fits every observation as a free pose; held out, the model is checked against
 //! a second estimate of the data's floor that uses no robot model (a circle fitted to each
-//! turn).
+//! turn). `diagnose` takes the turns as free poses too.
 
 mod common;
 
@@ -148,4 +148,26 @@ fn imports_and_calibrates_the_positioner_to_the_turns_floor() {
         h.calibrated_rms_mm
     );
     assert!(h.calibrated_rms_mm < h.nominal_rms_mm / 5.0);
+
+    // `diagnose` takes the turns as free poses too (it refused them before), with the turns'
+    // floor as the noise: the held-out RMS of its own refit stays within the same bound.
+    let diagnosis = dir.path().join("diagnosis");
+    let run = axiscal()
+        .arg("diagnose")
+        .arg(&data)
+        .arg("--robot")
+        .arg(robot())
+        .args(["--noise-mm", &format!("{floor_mm}"), "--out"])
+        .arg(&diagnosis)
+        .assert()
+        .success();
+    assert!(stderr(&run).contains("every row is diagnosed as a free pose instead"));
+    let d: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(diagnosis.join("diagnosis.json")).unwrap()).unwrap();
+    let heldout_mm = d["heldout_rms_before_mm"].as_f64().unwrap();
+    eprintln!("diagnose: {} ({heldout_mm:.4} mm held out)", d["verdict"]);
+    assert!(
+        heldout_mm <= bound_mm,
+        "diagnosis's held-out RMS {heldout_mm:.4} mm above {bound_mm:.4} mm"
+    );
 }

@@ -59,16 +59,16 @@ pub struct Args {
     /// Rotary-axis estimator.
     #[arg(long, value_parser = OneOf(ESTIMATORS), default_value = "ml")]
     estimator: AxisEstimator,
-    /// Measurement noise of a point, 3-D RMS \[mm\] (weights the fits and scales the reported
+    /// Measurement noise of a point, 3-D RMS (mm) (weights the fits and scales the reported
     /// uncertainties). Default: estimated from the fits' residuals (reported with its
     /// interval); a given value the residuals contradict is flagged in the report.
     #[arg(long, value_parser = NOISE_MM)]
     noise_mm: Option<f64>,
-    /// How far a held joint may wander within one axis experiment \[deg or mm\]: recorded
+    /// How far a held joint may wander within one axis experiment (deg or mm): recorded
     /// encoder values within it are modelled, beyond it the experiment moves two joints.
     #[arg(long, default_value_t = DEFAULT_HELD_TOLERANCE, value_parser = InRange::closed(0.0, 360.0, "deg or mm"))]
     held_tolerance: f64,
-    /// The robot's repeatability \[rad\]: standard deviation of a joint value's error per
+    /// The robot's repeatability (rad): standard deviation of a joint value's error per
     /// re-positioning, one value for every joint or one per joint (comma-separated); 0 = model
     /// measurement noise only. Default: the robot description's `repeatability_sigma`.
     #[arg(long, value_delimiter = ',')]
@@ -86,7 +86,7 @@ pub struct Args {
     /// The URDF's robot name (default: the description's name as a ROS name).
     #[arg(long)]
     urdf_name: Option<String>,
-    /// Step of the tabulated joint map (`joint_map.csv`) \[deg or mm\] (finer than 0.001 writes
+    /// Step of the tabulated joint map (`joint_map.csv`) (deg or mm) (finer than 0.001 writes
     /// millions of rows per joint).
     #[arg(long, default_value_t = 0.1, value_parser = InRange::closed(0.001, 90.0, "deg or mm"))]
     joint_map_step: f64,

@@ -43,7 +43,7 @@ pub struct Args {
     /// Replace `--out` if it exists (never one of this command's inputs).
     #[arg(long)]
     force: bool,
-    /// The payload the robot carries \[kg\]: what the calibrated model's sag under a payload
+    /// The payload the robot carries (kg): what the calibrated model's sag under a payload
     /// (`robot.effects`, payload terms) is evaluated with.
     #[arg(long, default_value_t = 0.0, value_parser = super::options::InRange::closed(0.0, 1e5, "kg"))]
     payload_kg: f64,

@@ -21,7 +21,7 @@ pub struct Args {
     seed: u64,
 }
 
-/// The converted model must reproduce the source to this \[m, rad\]: both are products of a
+/// The converted model must reproduce the source to this (m, rad): both are products of a
 /// dozen unit-size rigid transforms, whose rounding is ~1e-15 per product; 1e-9 leaves six
 /// orders for arms of a few metres.
 const FK_TOLERANCE: f64 = 1e-9;

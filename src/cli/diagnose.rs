@@ -6,6 +6,7 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
+use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
     diagnose_with, estimated_noise, free_poses_only, markdown, validation_poses, write_axes_plots, write_plots,
@@ -27,7 +28,7 @@ pub struct Args {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
-    /// Measurement noise of a point, 3-D RMS \[mm\] (default: estimated from the axis
+    /// Measurement noise of a point, 3-D RMS (mm) (default: estimated from the axis
     /// experiments' residuals, as `calibrate` does without it; required for free poses only).
     #[arg(long, value_parser = NOISE_MM)]
     noise_mm: Option<f64>,
@@ -86,7 +87,11 @@ pub fn run(args: Args) -> Result<()> {
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
-    let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
+    let set = usable(
+        checks::read_data(&args.data, &desc, &args.robot, args.checks)?,
+        &desc,
+        &args.data,
+    );
     let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: noise_mm,
@@ -202,7 +207,26 @@ fn run_axes(
     )
 }
 
-/// The noise of the diagnosis \[mm\], its source and, when estimated, the estimate's degrees of
+/// `set`, or, when the independent-axis procedure cannot use its sweeps (the correction for
+/// their held joints does not settle: sweeps at their own configurations), every row as a free
+/// pose, as `calibrate` fits them, said on stderr.
+fn usable(set: MeasurementSet, desc: &RobotDescription, data: &Path) -> MeasurementSet {
+    if free_poses_only(&set) {
+        return set;
+    }
+    match calibrate(&set, desc, &CalibrationOptions::default()) {
+        Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) => {
+            eprintln!(
+                "note: {}: {e}; every row is diagnosed as a free pose instead (as `calibrate` fits them)",
+                data.display()
+            );
+            set.every_row_a_free_pose()
+        }
+        _ => set,
+    }
+}
+
+/// The noise of the diagnosis (mm), its source and, when estimated, the estimate's degrees of
 /// freedom: `--noise-mm`, or the estimate from the axis experiments' residuals (said on stderr;
 /// an error when the data cannot give one).
 fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(f64, &'static str, Option<f64>)> {
@@ -211,7 +235,7 @@ fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(
     }
     if free_poses_only(set) {
         anyhow::bail!(
-            "{} has free poses only (no axis experiment): their residuals cannot tell the instrument's noise from the model error the diagnosis looks for; give --noise-mm (the instrument's figure, 3-D RMS of a point)",
+            "{} is diagnosed from free poses only (no usable axis experiment): their residuals cannot tell the instrument's noise from the model error the diagnosis looks for; give --noise-mm (the instrument's figure, 3-D RMS of a point)",
             args.data.display()
         );
     }

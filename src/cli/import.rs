@@ -193,7 +193,7 @@ struct RctArgs {
     /// The robot description (joint count and kinds), or a shipped one's name.
     #[arg(long, value_parser = super::options::robot_file)]
     robot: PathBuf,
-    /// Also targets 1 and 2, this far along the measured frame's x and y axes \[mm\]: the
+    /// Also targets 1 and 2, this far along the measured frame's x and y axes (mm): the
     /// camera's orientation as two more points (their noise is the orientation's times this).
     #[arg(long)]
     frame_points: Option<f64>,

@@ -103,7 +103,7 @@ where
     }
 }
 
-/// A measurement noise level, 3-D RMS \[mm\].
+/// A measurement noise level, 3-D RMS (mm).
 pub const NOISE_MM: InRange<f64> = InRange::above(0.0, 100.0, "mm");
 
 /// Worker threads: 1 to this many.

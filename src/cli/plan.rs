@@ -41,14 +41,14 @@ pub struct Args {
     /// Seed of the validation poses' draw.
     #[arg(long)]
     validation_seed: Option<u64>,
-    /// An instrument station `X,Y,Z` in the instrument frame \[mm\]; repeatable. Default: the
+    /// An instrument station `X,Y,Z` in the instrument frame (mm); repeatable. Default: the
     /// paper's two theodolites (origin and `-6284.6,0,0`).
     #[arg(long, value_name = "X,Y,Z", value_parser = station_mm)]
     station: Vec<[f64; 3]>,
     /// Leave out the line-of-sight columns.
     #[arg(long)]
     no_sight: bool,
-    /// Radius of the links' capsules for the line of sight \[mm\].
+    /// Radius of the links' capsules for the line of sight (mm).
     #[arg(long, default_value_t = 50.0, value_parser = InRange::above(0.0, 10_000.0, "mm"))]
     link_radius_mm: f64,
     /// Choose the spans and the points per sweep that minimise the predicted tool error over
@@ -69,10 +69,10 @@ pub struct Args {
     /// `--validation-seed`).
     #[arg(long, default_value_t = 200, value_parser = InRange::closed(1usize, 100_000, ""))]
     workspace_poses: usize,
-    /// With `--optimize`: the instrument's noise, 3-D RMS of a point \[mm\] (the paper's 0.19).
+    /// With `--optimize`: the instrument's noise, 3-D RMS of a point (mm) (the paper's 0.19).
     #[arg(long, default_value_t = axiscal::measurement::PAPER_NET_RADIAL_RMS_MM, value_parser = NOISE_MM)]
     noise_mm: f64,
-    /// With `--optimize`: the robot's repeatability \[rad\] the calibration models, one value or
+    /// With `--optimize`: the robot's repeatability (rad) the calibration models, one value or
     /// one per joint. Default: the description's `repeatability_sigma`.
     #[arg(long, value_delimiter = ',')]
     repeatability_rad: Option<Vec<f64>>,

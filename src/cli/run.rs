@@ -234,7 +234,7 @@ struct EtaWarning {
 }
 
 impl EtaWarning {
-    /// Estimated time beyond which the run warns \[s\].
+    /// Estimated time beyond which the run warns (s).
     const LONG_S: f64 = 3600.0;
 
     fn new(total: usize, threads: usize) -> Self {

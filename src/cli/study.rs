@@ -18,7 +18,7 @@ pub struct Args {
     /// Study seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Measurement noise, 3-D RMS \[mm\].
+    /// Measurement noise, 3-D RMS (mm).
     #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
     noise_mm: f64,
     /// Keep the truth robot's repeatability jitter (the bound then includes it as angle noise).

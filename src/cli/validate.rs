@@ -30,7 +30,7 @@ pub struct Args {
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
-    /// Measurement noise of a point, 3-D RMS \[mm\], of DATA's instrument. Default: the noise
+    /// Measurement noise of a point, 3-D RMS (mm), of DATA's instrument. Default: the noise
     /// the calibration was weighted with (its estimate from the residuals, or its `--noise-mm`).
     #[arg(long, value_parser = NOISE_MM)]
     noise_mm: Option<f64>,

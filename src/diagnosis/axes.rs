@@ -29,7 +29,8 @@ pub struct FlaggedAxis {
     /// Fraction of noise-only replicas with a ratio at least as large on this axis.
     pub p_value: f64,
     /// Candidate effects (`diagnosis.json` names) that change along one arc: compliance of this joint
-    /// or one below it, an unfitted gear harmonic or a wobble of this joint. Backlash (one approach direction per sweep),
+    /// or one below it, an unfitted gear harmonic or a wobble of this joint (along a sliding
+    /// joint's line: compliance of a joint below it). Backlash (one approach direction per sweep),
     /// thermal growth (one temperature) and an instrument scale (a scaled circle is a circle)
     /// leave an arc an arc.
     pub consistent_with: Vec<String>,
@@ -68,9 +69,17 @@ pub struct AxesDiagnosis {
 /// Candidate effects an arc of `joint` can show: the sag of it or of a joint below it (their
 /// gravity torques change as it turns), except for a vertical first axis (nothing below it,
 /// and turning about gravity changes no torque above it); an unfitted gear harmonic and a
-/// wobble of the joint. `direction_z` is the axis's instrument-frame z component.
-fn arc_candidates(joint: usize, direction_z: f64) -> Vec<String> {
+/// wobble of the joint. `direction_z` is the axis's instrument-frame z component. The line of
+/// a sliding joint (`kind` `prismatic`) shows only the sag of a joint below it (the load moves
+/// along it); a crooked guide is no candidate of any family.
+fn arc_candidates(joint: usize, kind: &str, direction_z: f64) -> Vec<String> {
     let mut out = Vec::new();
+    if kind == "prismatic" {
+        if joint > 1 {
+            out.push(format!("joint_compliance (a joint below joint {joint})"));
+        }
+        return out;
+    }
     // Within a degree of vertical.
     if joint > 1 || direction_z.abs() < 1f64.to_radians().cos() {
         out.push(format!("joint_compliance (joint {joint} or one below it)"));
@@ -153,7 +162,7 @@ fn compare_axes(cal: &Calibration, null: &[Vec<f64>], means: &[f64], threshold: 
                 joint: a.joint,
                 excess_ratio: ratio,
                 p_value: upper_tail(&v.iter().map(|x| x / m).collect::<Vec<_>>(), ratio),
-                consistent_with: arc_candidates(a.joint, a.direction[2]),
+                consistent_with: arc_candidates(a.joint, &a.kind, a.direction[2]),
             });
         }
     }

@@ -74,12 +74,15 @@ fn model_error(message: String) -> DiagnosisError {
 
 /// The link (0-based) carrying the target of axis-experiment row `m`: a target the
 /// description does not place (e.g. a third reflector) turns rigidly with target 0, since only
-/// the experiment's joint moves.
-fn axis_target_link(desc: &RobotDescription, m: &Measurement) -> Option<usize> {
-    let t = desc.axis_targets_of(m.moved_joint)?;
+/// the experiment's joint moves; without `axis_targets` for the joint, the last link (as the
+/// calibrator takes it: the held joints do not move within a sweep).
+fn axis_target_link(desc: &RobotDescription, m: &Measurement) -> usize {
+    let Some(t) = desc.axis_targets_of(m.moved_joint) else {
+        return desc.dof() - 1;
+    };
     match (m.target, t.target1) {
-        (1, Some(t1)) => Some(t1.link - 1),
-        _ => Some(t.target0.link - 1),
+        (1, Some(t1)) => t1.link - 1,
+        _ => t.target0.link - 1,
     }
 }
 
@@ -115,9 +118,8 @@ impl CleanCampaign {
         // Mean link-frame position of each axis target.
         let mut sums: HashMap<(&str, usize), (Vector3<f64>, usize, usize)> = HashMap::new();
         for (m, (q, _)) in set.rows().iter().zip(&joint_values) {
-            if m.moved_joint > 0
-                && let Some(l) = axis_target_link(desc, m)
-            {
+            if m.moved_joint > 0 {
+                let l = axis_target_link(desc, m);
                 let p = model.poses(q).world_from_link[l].inverse() * m.position_m();
                 let group = sums.len();
                 let e = sums
@@ -134,12 +136,7 @@ impl CleanCampaign {
             .zip(joint_values)
             .map(|(m, (q, u))| {
                 let (link, point_in_link_m, target) = if m.moved_joint > 0 {
-                    let l = axis_target_link(desc, m).ok_or_else(|| {
-                        model_error(format!(
-                            "experiment {}: target {} of joint {} is not in the description",
-                            m.experiment, m.target, m.moved_joint
-                        ))
-                    })?;
+                    let l = axis_target_link(desc, m);
                     let (s, n, group) = sums[&(m.experiment.as_str(), m.target)];
                     (l, Point3::from(s / n as f64), RowTarget::Axis(group))
                 } else {

@@ -217,6 +217,17 @@ impl MeasurementSet {
         }
     }
 
+    /// The set with every row a free pose (`moved_joint = 0`), its experiments, steps, setups
+    /// and target names kept: sweeps the independent-axis procedure cannot use, taken as
+    /// poses like any other (their targets on the last link).
+    pub fn every_row_a_free_pose(&self) -> Self {
+        let mut out = self.clone();
+        for m in &mut out.rows {
+            m.moved_joint = 0;
+        }
+        out
+    }
+
     /// The setup of row `row` (0 without a `setup` column).
     pub fn setup_of(&self, row: usize) -> usize {
         self.row_setups.get(row).copied().unwrap_or(0)

@@ -15,7 +15,7 @@ pub const ERROR_EXAGGERATION: f64 = 100.0;
 /// the axis experiment `name` of joint `joint` and logs it with its axis, its residual vectors
 /// (measured minus fitted, [`ERROR_EXAGGERATION`] times longer, at
 /// `world/residuals/{name}/target{t}`) and its residual RMS. `covariance_m2` is a point's
-/// measurement covariance \[m^2\]. A target whose fit fails is reported on stderr and skipped:
+/// measurement covariance (m^2). A target whose fit fails is reported on stderr and skipped:
 /// the recording is a view, not a calibration.
 pub fn log_arc_fits(
     rec: &Recorder,

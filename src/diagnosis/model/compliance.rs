@@ -129,7 +129,7 @@ impl Predictor {
     /// The sensitivity `X = d prediction / d e` of compliance candidate `candidate` at `e = 0`
     /// (the refit at zero) on the residual rows of `poses`, from the joints' sensitivity
     /// `joint_x` ([`Predictor::joint_sensitivity`] at zero): chain rule `X = J_q (d sag / d e)`.
-    /// The sag is the fixed point `dq = C(q + dq; e)` of [`coupled_static_deflection`], whose
+    /// The sag is the fixed point `dq = C(q + dq; e)` of [`coupled_static_deflection`](crate::physics::coupled_static_deflection), whose
     /// map `C` is linear in the loads and the loads linear in `e`
     /// (`compliance_masses`); at `e = 0` the sag is zero, so `d sag / d e_i` is
     /// the first-order map of the unit load `e_i` at the undeflected pose,
