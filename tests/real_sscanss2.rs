@@ -15,11 +15,10 @@ fn data_dir() -> PathBuf {
     common::real_data("sscanss2-cpa")
 }
 
-/// Imports `file` with the shipped description `robot` and calibrates it: the calibration and
-/// each joint's points (instrument frame, mm) as the file gives them.
-fn import_and_calibrate(file: &str, robot: &str) -> (Calibration, Vec<Vec<Point3<f64>>>) {
-    let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("data.csv");
+/// Imports `file` with the shipped description `robot` into `dir`: the measurement CSV and the
+/// description's path.
+fn import(file: &str, robot: &str, dir: &Path) -> (PathBuf, PathBuf) {
+    let data = dir.join("data.csv");
     let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/robots/real/{robot}.toml"));
     axiscal()
         .args(["import", "sscanss2"])
@@ -30,6 +29,14 @@ fn import_and_calibrate(file: &str, robot: &str) -> (Calibration, Vec<Vec<Point3
         .arg(&data)
         .assert()
         .success();
+    (data, robot)
+}
+
+/// Imports `file` with the shipped description `robot` and calibrates it: the calibration and
+/// each joint's points (instrument frame, mm) as the file gives them.
+fn import_and_calibrate(file: &str, robot: &str) -> (Calibration, Vec<Vec<Point3<f64>>>) {
+    let dir = tempfile::tempdir().unwrap();
+    let (data, robot) = import(file, robot, dir.path());
     let out = dir.path().join("cal");
     axiscal()
         .arg("calibrate")
@@ -151,17 +158,7 @@ fn the_positioning_table_calibrates_and_each_axis_matches_a_second_estimate() {
 #[ignore = "needs ../shared/data/real/sscanss2-cpa (run by `make test-real`)"]
 fn the_positioning_table_is_diagnosed_from_its_arcs() {
     let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("data.csv");
-    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/real/sscanss2-table.toml");
-    axiscal()
-        .args(["import", "sscanss2"])
-        .arg(data_dir().join("table.txt"))
-        .arg("--robot")
-        .arg(&robot)
-        .arg("--out")
-        .arg(&data)
-        .assert()
-        .success();
+    let (data, robot) = import("table.txt", "sscanss2-table", dir.path());
     let out = dir.path().join("diagnosis");
     axiscal()
         .arg("diagnose")

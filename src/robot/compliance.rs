@@ -139,18 +139,31 @@ impl ComplianceTerm {
         active: &[f64],
         payload_kg: f64,
     ) -> Option<Vec<f64>> {
-        let carried = self.carried.at(payload_kg);
-        let reflected = self.reflected.as_ref().map(|r| r.at(payload_kg));
         let compliance = self.unit_compliance(q.len());
         let couplings = self.couplings(robot, active);
-        let load = CompliantLoad {
+        self.with_load(payload_kg, &compliance, &couplings, |load| {
+            coupled_static_deflection(phi, q, load).ok()
+        })
+    }
+
+    /// Calls `f` with its load at a pose carrying `payload_kg` under `compliance` through
+    /// `couplings` ([`Self::unit_compliance`], [`Self::couplings`]).
+    pub fn with_load<R>(
+        &self,
+        payload_kg: f64,
+        compliance: &ComplianceEffect,
+        couplings: &[PassiveSlope],
+        f: impl FnOnce(&CompliantLoad) -> R,
+    ) -> R {
+        let carried = self.carried.at(payload_kg);
+        let reflected = self.reflected.as_ref().map(|r| r.at(payload_kg));
+        f(&CompliantLoad {
             masses: &carried,
             payload: None,
-            compliance: &compliance,
-            couplings: &couplings,
+            compliance,
+            couplings,
             reflected_masses: reflected.as_deref(),
-        };
-        coupled_static_deflection(phi, q, &load).ok()
+        })
     }
 
     /// Checks the joint and the load lists against a model of `n` joints and the values'

@@ -7,7 +7,7 @@ use super::candidate::{Candidate, LoadPath, MassModel, serial_load_count};
 use super::effect_set::EffectSet;
 use crate::diagnosis::poses::Pose;
 use crate::kinematics::PhiModel;
-use crate::physics::{CompliantLoad, LinkMass, coupled_first_order_deflection_at};
+use crate::physics::{LinkMass, coupled_first_order_deflection_at};
 use crate::robot::{ComplianceTerm, LoadProduct, RobotModel, SpringLoad};
 use nalgebra::{DMatrix, Vector3};
 
@@ -162,16 +162,9 @@ impl Predictor {
                 unit[i] = 1.0;
                 let term = self.compliance_term(&model_t, candidate, &unit)?;
                 unit[i] = 0.0;
-                let carried = term.carried.at(pose.payload_kg);
-                let reflected = term.reflected.as_ref().map(|r| r.at(pose.payload_kg));
-                let load = CompliantLoad {
-                    masses: &carried,
-                    payload: None,
-                    compliance: &compliance,
-                    couplings: &couplings,
-                    reflected_masses: reflected.as_deref(),
-                };
-                let dq = coupled_first_order_deflection_at(&model_t, &frames, &load);
+                let dq = term.with_load(pose.payload_kg, &compliance, &couplings, |load| {
+                    coupled_first_order_deflection_at(&model_t, &frames, load)
+                });
                 x.view_mut((row, i), (rows, 1))
                     .copy_from(&(j_q * nalgebra::DVector::from_vec(dq)));
             }
