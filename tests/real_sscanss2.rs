@@ -32,21 +32,26 @@ fn import(file: &str, robot: &str, dir: &Path) -> (PathBuf, PathBuf) {
     (data, robot)
 }
 
+/// `axiscal COMMAND DATA --robot ROBOT --out OUT`, which must succeed.
+fn run(command: &str, data: &Path, robot: &Path, out: &Path) {
+    axiscal()
+        .arg(command)
+        .arg(data)
+        .arg("--robot")
+        .arg(robot)
+        .arg("--out")
+        .arg(out)
+        .assert()
+        .success();
+}
+
 /// Imports `file` with the shipped description `robot` and calibrates it: the calibration and
 /// each joint's points (instrument frame, mm) as the file gives them.
 fn import_and_calibrate(file: &str, robot: &str) -> (Calibration, Vec<Vec<Point3<f64>>>) {
     let dir = tempfile::tempdir().unwrap();
     let (data, robot) = import(file, robot, dir.path());
     let out = dir.path().join("cal");
-    axiscal()
-        .arg("calibrate")
-        .arg(&data)
-        .arg("--robot")
-        .arg(&robot)
-        .arg("--out")
-        .arg(&out)
-        .assert()
-        .success();
+    run("calibrate", &data, &robot, &out);
     let cal = common::read_calibration(&out);
     let text = std::fs::read_to_string(data_dir().join(file)).unwrap();
     let mut points: Vec<Vec<Point3<f64>>> = vec![Vec::new(); cal.axes.len()];
@@ -160,15 +165,7 @@ fn the_positioning_table_is_diagnosed_from_its_arcs() {
     let dir = tempfile::tempdir().unwrap();
     let (data, robot) = import("table.txt", "sscanss2-table", dir.path());
     let out = dir.path().join("diagnosis");
-    axiscal()
-        .arg("diagnose")
-        .arg(&data)
-        .arg("--robot")
-        .arg(&robot)
-        .arg("--out")
-        .arg(&out)
-        .assert()
-        .success();
+    run("diagnose", &data, &robot, &out);
     let d: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("diagnosis.json")).unwrap()).unwrap();
     eprintln!("{}", d["verdict"]);
