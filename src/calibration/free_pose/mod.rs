@@ -91,7 +91,7 @@ impl Default for FreePoseOptions {
 pub enum FreePoseError {
     /// Too few poses for the parameters.
     #[error(
-        "{poses} free poses with {points} points: fitting {parameters} parameters needs at least {needed} points (3 coordinates each)"
+        "{poses} free poses with {points} points: fitting {parameters} parameters needs at least {needed} points (3 coordinates each) on at least 3 poses"
     )]
     TooFewPoints {
         /// Poses.
