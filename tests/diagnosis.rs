@@ -630,7 +630,7 @@ fn a_named_compliance_carried_into_the_model_closes_the_gap_on_new_poses() {
 /// [`two_compliant_campaigns`]' first file, `calibrate --refine --carry` writes it into
 /// `calibration.json`'s `robot.effects.compliance`, and `validate` of the second file with it
 /// leaves less than without it (`--refine` alone). `--carry` needs `--refine`; a diagnosis that
-/// names nothing is refused with the file named; both exit 2.
+/// names nothing, or an axes-only one, is refused with the file named; all exit 2.
 #[test]
 fn carry_writes_the_named_effect_into_calibration_json() {
     let (_, a, b) = two_compliant_campaigns();
@@ -712,4 +712,19 @@ fn carry_writes_the_named_effect_into_calibration_json() {
         message.contains("none.json") && message.contains("names no effect"),
         "{message}"
     );
+    let axes_only = dir.path().join("axes.json");
+    std::fs::write(&axes_only, r#"{"schema": "axiscal.diagnosis/1", "mode": "axes_only"}"#).unwrap();
+    let carry_axes = path(&axes_only);
+    let refused = run(&[
+        "calibrate",
+        &path(&csv_a),
+        "--refine",
+        "--carry",
+        &carry_axes,
+        "--out",
+        &path(&with),
+        "--force",
+    ]);
+    let message = common::stderr(&refused.code(2));
+    assert!(message.contains("axes-only diagnosis"), "{message}");
 }

@@ -507,6 +507,13 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
 /// The effects the diagnosis in `path` names, as candidates a model carries (`--carry`).
 fn carried_effects(path: &Path, desc: &RobotDescription, set: &MeasurementSet) -> Result<Vec<Candidate>> {
     let text = axiscal::presets::read_text(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let mode: Option<serde_json::Value> = serde_json::from_str(&text).ok();
+    if mode.as_ref().and_then(|v| v.get("mode")).and_then(|m| m.as_str()) == Some("axes_only") {
+        anyhow::bail!(
+            "--carry {}: an axes-only diagnosis (no validation poses) names no effect: nothing to carry",
+            path.display()
+        );
+    }
     let d: Diagnosis = json_file::from_str(Schema::DIAGNOSIS, &text).with_context(|| {
         format!(
             "{}: not a diagnosis JSON (`axiscal diagnose` writes one)",
