@@ -35,23 +35,23 @@ test:
 ## test-real: the tests on public real data sets, which need ../shared/data/real/ beside the
 ## repository (or AXISCAL_SHARED_DIR naming the shared folder)
 test-real:
-	$(CARGO) test --test real_boby_klimchik --test real_fanuc --test real_sscanss2 --test real_rct -- --ignored
+	$(CARGO) test --test it -- --ignored real_boby_klimchik:: real_fanuc:: real_sscanss2:: real_rct::
 
 ## test-robots: the four issue-15 test robots (P-R-P-P table, two-axis positioner, SCARA,
 ## six-axis arm with a repeated sweep and wandering held joints), 50 seeds of noise each:
 ## normalised RMS error of every identified parameter and the count beyond 3 sigma
 test-robots:
-	$(CARGO) test --release --test test_robots -- --ignored --nocapture
+	$(CARGO) test --release --test it -- --ignored test_robots:: --nocapture
 
 ## noise-check: the noise estimated from the residuals on 200 Table-1 campaigns (within 10 %,
 ## interval coverage >= 90 %)
 noise-check:
-	$(CARGO) test --release --test noise_and_held -- --ignored --nocapture
+	$(CARGO) test --release --test it -- --ignored noise_and_held:: --nocapture
 
 ## tool-accuracy: the predicted tool 1-sigma against a Monte-Carlo of 2000 calibrations of the
 ## paper robot, inside the calibrated spans and over the workspace (within 10 %)
 tool-accuracy:
-	$(CARGO) test --release --test tool_accuracy -- --ignored --nocapture
+	$(CARGO) test --release --test it -- --ignored tool_accuracy:: --nocapture
 
 ## study: the calibrator's efficiency against the Cramer-Rao bound (ML and the paper's
 ## estimator) and the calibration of its reported sigmas, 20000 simulated campaigns
@@ -62,7 +62,7 @@ study:
 ## effects, calibration.json) for FUZZ_SECONDS seconds (default 600); a failure is written to
 ## target/fuzz-failures/
 fuzz:
-	FUZZ_SECONDS=$(FUZZ_SECONDS) $(CARGO) test --release --test fuzz_readers -- --ignored --nocapture
+	FUZZ_SECONDS=$(FUZZ_SECONDS) $(CARGO) test --release --test it -- --ignored fuzz_readers:: --nocapture
 
 ## bench: criterion benchmarks (ratios against an in-run baseline)
 bench:

@@ -15,7 +15,7 @@ mod common;
 
 fn bench(c: &mut Criterion) {
     // `cargo test --all-targets` (`make test`) runs benchmarks once in a debug build, where a
-    // diagnosis takes ~30 s; `tests/diagnosis.rs` covers it there. Only `cargo bench` runs it.
+    // diagnosis takes ~30 s; `tests/it/diagnosis.rs` covers it there. Only `cargo bench` runs it.
     if !common::is_cargo_bench() {
         println!("diagnosis bench: skipped outside `cargo bench`");
         return;

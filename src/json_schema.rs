@@ -1,6 +1,6 @@
 //! The JSON Schema of every JSON file axiscal writes (`docs/schemas/<name>.json`), generated
 //! by schemars from the types the files are serialised from, for what the writer produces
-//! (the serialisation contract). `tests/json_schemas.rs` checks that the committed files equal
+//! (the serialisation contract). `tests/it/json_schemas.rs` checks that the committed files equal
 //! these and that real outputs of each command validate against them.
 
 use crate::calibration::procedure::{Calibration, Finding};

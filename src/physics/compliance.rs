@@ -312,7 +312,7 @@ pub struct CompliantLoad<'a> {
 /// coupling slopes stay those at the undeflected active displacements (their change with the
 /// sag is second order in it, times `g''`). Stiffnesses may be infinite (a rigid joint).
 ///
-/// Measured against the rapier arm (`tests/effects.rs`, joint 2 at 2e3 N m/rad): 0.8 % off
+/// Measured against the rapier arm (`tests/it/effects.rs`, joint 2 at 2e3 N m/rad): 0.8 % off
 /// rapier's joint-2 sag where the first order is 11.5 % off (the rest is a near-constant 2 %
 /// more load in rapier: the four-bar bodies' own weight). The diagnoser's compliance candidate
 /// uses it; the analytic arm (`sim::AnalyticArm`) keeps the first order (the two agree to about

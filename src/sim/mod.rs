@@ -10,7 +10,7 @@
 //! line of sight), and [`simulate_campaign`], which measures a plan on either.
 //!
 //! The boundary: `calibration`, `compensation` and `diagnosis` never import this module (a
-//! test in `tests/architecture.rs` fails if they do); only the harnesses (`crate::harness`),
+//! test in `tests/it/architecture.rs` fails if they do); only the harnesses (`crate::harness`),
 //! the viewer and the command line may, so no result can leak from the answer key.
 
 mod analytic_arm;

@@ -8,7 +8,7 @@
 //!
 //! Truth in the calibrator's own terms: the same campaign without noise, fitted the same way
 //! (the paper robot is in the fitted family, so this is exact; see
-//! `tests/calibration_procedure.rs`).
+//! `tests/it/calibration_procedure.rs`).
 
 mod campaign_bound;
 mod trial;

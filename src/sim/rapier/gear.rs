@@ -23,7 +23,7 @@
 //! analytic arm's first-order compliance (`campaign::coupled_first_order_deflection`) uses
 //! the same kinematic coupling, so the two agree.
 //!
-//! Measured (`tests/rapier_arm.rs`, joint 4 at 2e4 N m/rad under a 10 kg payload 80 mm off
+//! Measured (`tests/it/rapier_arm.rs`, joint 4 at 2e4 N m/rad under a 10 kg payload 80 mm off
 //! axis 4, joint 5 at 1e8): joint 4 sags 1.89e-3 rad, joint 5 sits 2.7e-9 rad from the gear
 //! law above (the error function's nonlinearity alone is 1.6e-7 rad there); the missing
 //! reaction (`Q_5` = 4.2 N m) would have turned joint 4 by a further 3.4e-4 rad. A reaction

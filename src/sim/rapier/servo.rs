@@ -131,7 +131,7 @@ impl Default for SettleOptions {
     /// The solver iterations are rapier's substeps (each rebuilds the multibody's mass
     /// matrix, most of a step's cost). 8 instead of the former 16 halve a step: the rest they
     /// find lies as close to that of pure 1 ms stepping with 16 from the undeflected command as
-    /// the rest with 16 does (`tests/rapier_arm.rs`, 36 settles of three stiffness sets,
+    /// the rest with 16 does (`tests/it/rapier_arm.rs`, 36 settles of three stiffness sets,
     /// payloads, poses, four-bar bodies and emulated: largest tool difference 3.5e-8 m with 8,
     /// 3.8e-8 m with 16); with 4 it was 8.4e-8 m, a shift of the four-bar's rest (the loop
     /// closure's constraint stabilisation depends on the substep length).

@@ -1,0 +1,160 @@
+//! `axiscal run` and `axiscal merge` end to end: exit codes 0/1/2, results files, shards
+//! merged equal a single run bit for bit, no silent overwrite.
+
+use crate::common::{axiscal, stderr};
+use std::path::Path;
+
+/// `ci-smoke.toml` with `from` replaced by `to` and `extra` appended, written into `dir`.
+fn smoke_variant(dir: &Path, name: &str, (from, to): (&str, &str), extra: &str) -> std::path::PathBuf {
+    let text = std::fs::read_to_string("scenarios/ci-smoke.toml").unwrap();
+    assert!(text.contains(from));
+    let path = dir.join(name);
+    std::fs::write(&path, format!("{}\n{extra}", text.replacen(from, to, 1))).unwrap();
+    path
+}
+
+#[test]
+fn ci_smoke_passes_and_writes_every_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("smoke");
+    axiscal()
+        .args(["run", "scenarios/ci-smoke.toml", "--out"])
+        .arg(&out)
+        .assert()
+        .code(0);
+    for f in [
+        "scenario.resolved.toml",
+        "trials.csv",
+        "summary.json",
+        "summary.md",
+        "hist-uncal_pos_rms_mm.svg",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(out.join("trials.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 4);
+    assert!(csv.starts_with("case,trial,seed,uncal_pos_rms_mm,"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["schema"], "axiscal.summary/1");
+    assert_eq!(summary["all_hold"], true);
+    assert!(summary["cases"][0]["metrics"][0]["p95"].is_f64());
+
+    // A second run into the same folder is refused without --force, accepted with it.
+    let a = axiscal()
+        .args(["run", "scenarios/ci-smoke.toml", "--out"])
+        .arg(&out)
+        .assert()
+        .code(2);
+    assert!(stderr(&a).contains("--force"));
+    axiscal()
+        .args(["run", "scenarios/ci-smoke.toml", "--force", "--out"])
+        .arg(&out)
+        .assert()
+        .code(0);
+}
+
+#[test]
+fn an_impossible_threshold_exits_1_and_says_by_how_much() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = smoke_variant(
+        dir.path(),
+        "impossible.toml",
+        ("", ""),
+        "[[thresholds]]\nmetric = \"uncal_pos_rms_mm\"\nstat = \"max\"\nop = \"<=\"\nvalue = 0.001\n",
+    );
+    let a = axiscal()
+        .arg("run")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .assert()
+        .code(1);
+    let err = stderr(&a);
+    assert!(err.contains("max(uncal_pos_rms_mm) <= 0.001"), "{err}");
+    assert!(err.contains("over the bound by"), "{err}");
+    assert!(err.contains("1 threshold(s) failed"), "{err}");
+}
+
+#[test]
+fn bad_scenarios_exit_2_naming_file_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let threshold = |metric: &str, op: &str| {
+        format!("[[thresholds]]\nmetric = \"{metric}\"\nstat = \"p95\"\nop = \"{op}\"\nvalue = 1\n")
+    };
+    let cases = [
+        (
+            "typo.toml",
+            ("trials = 4", "trails = 4"),
+            String::new(),
+            "unknown field `trails`",
+        ),
+        ("zero.toml", ("trials = 4", "trials = 0"), String::new(), "key `trials`"),
+        (
+            "noise.toml",
+            ("net_radial_rms_mm = 0.19", "net_radial_rms_mm = -1"),
+            String::new(),
+            "key `measurement.net_radial_rms_mm`",
+        ),
+        (
+            "metric.toml",
+            ("", ""),
+            threshold("no_such_mm", "<="),
+            "key `thresholds[2].metric`",
+        ),
+        ("op.toml", ("", ""), threshold("occluded", "<"), "unknown variant `<`"),
+    ];
+    for (name, replace, extra, key) in cases {
+        let path = smoke_variant(dir.path(), name, replace, &extra);
+        let a = axiscal()
+            .arg("run")
+            .arg(&path)
+            .arg("--out")
+            .arg(dir.path().join(format!("out-{name}")))
+            .assert()
+            .code(2);
+        let err = stderr(&a);
+        assert!(err.contains(name) && err.contains(key), "{name}: {err}");
+    }
+}
+
+#[test]
+fn four_shards_merged_equal_one_run_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    axiscal()
+        .args(["run", "scenarios/ci-smoke.toml", "--trials", "7", "--out"])
+        .arg(d.join("single"))
+        .assert()
+        .code(0);
+    let mut merge = axiscal();
+    merge.arg("merge");
+    for k in 1..=4 {
+        let shard = d.join(format!("shard{k}"));
+        axiscal()
+            .args(["run", "scenarios/ci-smoke.toml", "--trials", "7", "--threads", "1"])
+            .arg("--shard")
+            .arg(format!("{k}/4"))
+            .arg("--out")
+            .arg(&shard)
+            .assert()
+            .code(0);
+        merge.arg(&shard);
+    }
+    merge.arg("--out").arg(d.join("merged")).assert().code(0);
+    for f in ["trials.csv", "summary.json", "summary.md", "scenario.resolved.toml"] {
+        let single = std::fs::read(d.join("single").join(f)).unwrap();
+        let merged = std::fs::read(d.join("merged").join(f)).unwrap();
+        assert!(single == merged, "{f} differs between one run and four merged shards");
+    }
+    // Missing shards are refused.
+    let a = axiscal()
+        .arg("merge")
+        .arg(d.join("shard1"))
+        .arg(d.join("shard3"))
+        .arg("--out")
+        .arg(d.join("partial"))
+        .assert()
+        .code(2);
+    assert!(stderr(&a).contains("missing"));
+}
