@@ -50,6 +50,7 @@ macro_rules! shipped {
 pub const PRESETS: &[Preset] = &[
     shipped!(Robot, "arm6-dh-truth", "scenarios/robots/arm6-dh-truth.toml"),
     shipped!(Robot, "arm6-dh", "scenarios/robots/arm6-dh.toml"),
+    shipped!(Robot, "ur5e-dh", "scenarios/robots/ur5e-dh.toml"),
     shipped!(Robot, "arm6-jitter-plan", "scenarios/robots/arm6-jitter-plan.toml"),
     shipped!(Robot, "arm6-joint1-plan", "scenarios/robots/arm6-joint1-plan.toml"),
     shipped!(Robot, "arm7-dh", "scenarios/robots/arm7-dh.toml"),

@@ -13,6 +13,8 @@
 //! - [`crb`]: Cramer-Rao bound and Monte-Carlo efficiency.
 //! - [`free_pose`]: calibration from free poses (no axis experiments): registration, the
 //!   identifiable parameters, the fit, outliers, sigmas and a held-out check.
+//! - [`export`]: the calibrated kinematics in the files a robot's software loads (UR
+//!   `kinematics.yaml`, per-joint URDF origins), each read back and checked.
 //! - [`refine`]: the calibrated model refined on free poses (`calibrate --refine`, the
 //!   diagnosis's baseline refit).
 
@@ -25,6 +27,7 @@ pub mod axis_circle;
 pub mod axis_paper;
 pub mod coupling_fit;
 pub mod crb;
+pub mod export;
 pub mod free_pose;
 pub mod line_ml;
 pub mod noise;

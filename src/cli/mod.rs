@@ -23,6 +23,7 @@ mod compensate;
 mod describe;
 mod diagnose;
 mod evaluate;
+mod export;
 mod import;
 mod joints;
 mod merge;
@@ -188,6 +189,9 @@ enum Command {
     /// The calibrated joint values of controller commands: what a URDF or a ROS
     /// `joint_states` publisher must be fed instead of the raw readings.
     Joints(joints::Args),
+    /// A calibration in the files a robot's software loads (UR `kinematics.yaml`, per-joint URDF
+    /// origins for a xacro), each read back and checked against the calibrated model.
+    Export(export::Args),
     /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
     Evaluate(evaluate::Args),
     /// The paper's gap budget: per unmodelled effect, the magnitude that raises the simulated
@@ -282,6 +286,7 @@ pub fn main() -> ExitCode {
         Command::Merge(args) => merge::run(args),
         Command::Compensate(args) => compensate::run(args),
         Command::Joints(args) => joints::run(args),
+        Command::Export(args) => export::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Budget(args) => budget::run(args),
         Command::Diagnose(args) => diagnose::run(args),

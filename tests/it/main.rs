@@ -20,6 +20,7 @@ mod compensation;
 mod diagnosis;
 mod effect_shapes;
 mod effects;
+mod export;
 mod fuzz_readers;
 mod gap_budget;
 mod joint_map;
