@@ -48,6 +48,8 @@ impl Schema {
     pub const STUDY: Schema = Schema::new("study", 2, 2);
     /// `summary.json` of `validate`.
     pub const VALIDATION: Schema = Schema::v1("validation");
+    /// `iso9283.json` of `iso9283 evaluate`.
+    pub const ISO9283: Schema = Schema::v1("iso9283");
 
     const fn v1(name: &'static str) -> Schema {
         Schema::new(name, 1, 1)

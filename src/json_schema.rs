@@ -114,6 +114,7 @@ pub fn schemas() -> Vec<(Schema, Value)> {
         (Schema::BUDGET, schema_of::<BudgetReport>()),
         (Schema::STUDY, schema_of::<StudyReport>()),
         (Schema::VALIDATION, schema_of::<Validation>()),
+        (Schema::ISO9283, schema_of::<crate::iso9283::IsoFigures>()),
     ]
     .into_iter()
     .map(|(schema, body)| (schema, versioned(schema, body)))

@@ -19,6 +19,7 @@
 //! | [`calibration`] | axis fits (eqs. 1-13), couplings (eqs. 14-15), the procedure and its report |
 //! | [`compensation`] | fig. 5: commands for required tool poses |
 //! | [`diagnosis`] | the sim-to-real gap diagnosis: where, which effect, how far it shrinks |
+//! | [`iso9283`] | ISO 9283 pose and distance characteristics of measured cycles |
 //! | [`physics`] | gravity, compliance and the unmodelled-effect forms (neutral ground) |
 //! | [`numerics`] | the one least-squares loop and the statistics |
 //! | [`sim`] | the simulated real robot (analytic and rapier arms): the answer key |
@@ -28,7 +29,7 @@
 //! | `viz` | rerun recordings (cargo feature `viz`) |
 //!
 //! `calibration`, `compensation` and `diagnosis` see only measurements and the nominal
-//! description, never [`sim`] or [`harness`] (`tests/architecture.rs` enforces it).
+//! description, never [`sim`] or [`harness`] (`tests/it/architecture.rs` enforces it).
 //!
 //! # Examples
 //!
@@ -112,6 +113,7 @@ pub mod compensation;
 pub mod csv_lines;
 pub mod diagnosis;
 pub mod harness;
+pub mod iso9283;
 pub mod json_file;
 pub mod json_schema;
 pub mod kinematics;

@@ -25,6 +25,7 @@ mod diagnose;
 mod evaluate;
 mod export;
 mod import;
+mod iso9283;
 mod joints;
 mod merge;
 mod options;
@@ -192,6 +193,10 @@ enum Command {
     /// A calibration in the files a robot's software loads (UR `kinematics.yaml`, per-joint URDF
     /// origins for a xacro), each read back and checked against the calibrated model.
     Export(export::Args),
+    /// ISO 9283 performance figures (pose accuracy and repeatability, multi-directional
+    /// variation, distance accuracy and repeatability) of measured cycles.
+    #[command(name = "iso9283")]
+    Iso9283(iso9283::Args),
     /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
     Evaluate(evaluate::Args),
     /// The paper's gap budget: per unmodelled effect, the magnitude that raises the simulated
@@ -287,6 +292,7 @@ pub fn main() -> ExitCode {
         Command::Compensate(args) => compensate::run(args),
         Command::Joints(args) => joints::run(args),
         Command::Export(args) => export::run(args),
+        Command::Iso9283(args) => iso9283::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Budget(args) => budget::run(args),
         Command::Diagnose(args) => diagnose::run(args),

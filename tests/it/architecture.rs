@@ -18,6 +18,7 @@ const BOUNDARY: &[(&str, &[&str])] = &[
     ("kinematics", &["crate::sim", "crate::harness", "crate::viz"]),
     ("measurement", &["crate::sim", "crate::harness", "crate::viz"]),
     ("numerics", &["crate::sim", "crate::harness", "crate::viz"]),
+    ("iso9283", &["crate::sim", "crate::harness", "crate::viz"]),
     ("physics", &["crate::sim", "crate::harness", "crate::viz"]),
     ("plan", &["crate::sim", "crate::harness", "crate::viz"]),
     ("robot", &["crate::sim", "crate::harness", "crate::viz"]),
@@ -204,4 +205,224 @@ fn the_length_check_measures_what_it_should() {
     let found = function_lengths(&lines);
     assert_eq!(found, vec![(3, "short".into(), 1), (4, "long".into(), 5)]);
     assert_eq!(code_of("let p = \"crate::sim\"; // crate::sim"), "let p = ; ");
+}
+
+/// The lines of the ```` ```text ```` block that follows the `## Layout` heading of
+/// ARCHITECTURE.md.
+fn layout_block() -> Vec<String> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("ARCHITECTURE.md");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
+    let mut lines = text
+        .lines()
+        .skip_while(|l| !(l.starts_with('#') && l.to_lowercase().contains("layout")))
+        .skip_while(|l| !l.starts_with("```text"))
+        .skip(1);
+    let block: Vec<String> = lines
+        .by_ref()
+        .take_while(|l| !l.starts_with("```"))
+        .map(String::from)
+        .collect();
+    assert!(
+        !block.is_empty(),
+        "no ```text block under a layout heading in ARCHITECTURE.md"
+    );
+    block
+}
+
+/// One top-level entry of the layout's `src/` part: the names in its first column (`cli/` and
+/// `main.rs` for `  cli/ + main.rs   ...`), the rest of its text (`described`, continuation
+/// lines included) and the two together (`text`).
+struct LayoutEntry {
+    heads: Vec<String>,
+    described: String,
+    text: String,
+}
+
+/// The entries of the `src/` part of the layout block: from the line `src/` to the next line
+/// that is not indented; an entry starts at a line indented by exactly two spaces and runs
+/// until the next such line. Its first column ends at the first run of two spaces.
+fn layout_entries(block: &[String]) -> Vec<LayoutEntry> {
+    let mut entries: Vec<LayoutEntry> = Vec::new();
+    let src_part = block
+        .iter()
+        .skip_while(|l| l.trim_end() != "src/")
+        .skip(1)
+        .take_while(|l| l.starts_with(' ') || l.trim().is_empty());
+    for line in src_part {
+        let body = line.strip_prefix("  ").unwrap_or(line);
+        if body.starts_with(' ') || body.trim().is_empty() {
+            if let Some(last) = entries.last_mut() {
+                for s in [&mut last.described, &mut last.text] {
+                    s.push('\n');
+                    s.push_str(line);
+                }
+            }
+            continue;
+        }
+        let (head, described) = body.split_once("  ").unwrap_or((body, ""));
+        let heads = head
+            .split_whitespace()
+            .filter(|w| *w != "+")
+            .map(String::from)
+            .collect();
+        entries.push(LayoutEntry {
+            heads,
+            described: described.to_string(),
+            text: body.to_string(),
+        });
+    }
+    entries
+}
+
+/// Words of `text`: runs of letters, digits and `_` (so `chain.rs` and `chain/` give `chain`).
+fn words(text: &str) -> Vec<&str> {
+    text.split(|c: char| !(c.is_alphanumeric() || c == '_'))
+        .filter(|w| !w.is_empty())
+        .collect()
+}
+
+/// The module a file of `src/` defines, if the layout must list it: `a/b/mod.rs` defines the
+/// folder `a/b`; test modules (`tests.rs`) and the crate roots (`main.rs`, `lib.rs`) are left
+/// out.
+fn listed_module(file: &Path) -> Option<&Path> {
+    let name = file.file_name()?.to_str()?;
+    if name == "tests.rs" || file == Path::new("main.rs") || file == Path::new("lib.rs") {
+        return None;
+    }
+    Some(if name == "mod.rs" { file.parent()? } else { file })
+}
+
+/// What is wrong between the layout `block` and the source `files` (paths relative to `src/`):
+/// the modules it leaves out and the names it gives that do not exist. See
+/// [`every_module_is_in_the_architecture_map`] for the rule.
+fn layout_problems(block: &[String], files: &[PathBuf]) -> Vec<String> {
+    let entries = layout_entries(block);
+    let mut problems = Vec::new();
+    for file in files {
+        let Some(module) = listed_module(file) else { continue };
+        let first = module.iter().next().and_then(|p| p.to_str()).unwrap_or_default();
+        let top = if module == file.as_path() && module.iter().count() == 1 {
+            first.to_string()
+        } else {
+            format!("{first}/")
+        };
+        let stem = module.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+        match entries.iter().find(|e| e.heads.contains(&top)) {
+            None => problems.push(format!("src/{}: no layout entry `{top}`", file.display())),
+            Some(e) if !words(&e.text).contains(&stem) => problems.push(format!(
+                "src/{}: `{stem}` is not in the layout entry `{top}`",
+                file.display()
+            )),
+            Some(_) => {}
+        }
+    }
+    for e in &entries {
+        for head in &e.heads {
+            let exists = match head.strip_suffix('/') {
+                Some(dir) => files.iter().any(|f| f.starts_with(dir) && f != Path::new(dir)),
+                None => files.iter().any(|f| f == Path::new(head)),
+            };
+            if !exists {
+                problems.push(format!("layout entry `{head}`: src/{head} does not exist"));
+            }
+        }
+        let folder = e.heads.first().filter(|h| h.ends_with('/')).map_or("", |h| h.as_str());
+        let under = |f: &&PathBuf| f.starts_with(folder);
+        for token in e
+            .described
+            .split(|c: char| !(c.is_alphanumeric() || matches!(c, '_' | '.' | '/')))
+        {
+            let token = token.trim_end_matches('.');
+            let file = token.rsplit('/').next().filter(|n| n.ends_with(".rs"));
+            let dir = token.strip_suffix('/').filter(|d| !d.contains('/'));
+            let exists = match (file, dir) {
+                (Some(n), _) => files
+                    .iter()
+                    .filter(under)
+                    .any(|f| f.file_name().is_some_and(|x| x == n)),
+                (None, Some(d)) => files
+                    .iter()
+                    .filter(under)
+                    .any(|f| f.parent().is_some_and(|p| p.iter().any(|c| c == d))),
+                (None, None) => true,
+            };
+            if !exists {
+                problems.push(format!(
+                    "layout entry `{}`: `{token}` is not under src/{folder}",
+                    e.heads.join(" + ")
+                ));
+            }
+        }
+    }
+    problems
+}
+
+/// ARCHITECTURE.md's layout lists every module of `src/`, and names no file that is not there.
+///
+/// The rule, kept simple: a module is a `*.rs` file or a folder with a `mod.rs`, except
+/// `main.rs`, `lib.rs` and test modules (`tests.rs`). Its *entry* is the layout's line for its
+/// top-level folder `a/` (the file itself for a file directly in `src/`) plus that line's
+/// continuation lines, up to the next line indented by two spaces. A module `src/a/b/c.rs`
+/// (or `src/a/b/c/mod.rs`) is listed when `c` appears in the entry for `a/` as a word, alone
+/// or as `c.rs` or `c/`. Every `name.rs` and `name/` the layout gives must exist as a file or
+/// folder of that name somewhere under the entry's folder (under `src/` for a file's entry),
+/// and every first-column name (`kinematics/`, `json_file.rs`) must exist in `src/`. Bare words
+/// (`procedure/ (experiments, frames)`) count for the first rule only: they are not checked
+/// against the files, so a module named in prose passes.
+#[test]
+fn every_module_is_in_the_architecture_map() {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let files: Vec<PathBuf> = files
+        .iter()
+        .map(|f| f.strip_prefix(src()).expect("under src/").to_path_buf())
+        .collect();
+    let problems = layout_problems(&layout_block(), &files);
+    assert!(
+        problems.is_empty(),
+        "ARCHITECTURE.md's layout and src/ disagree (add each module with a few words):\n{}",
+        problems.join("\n")
+    );
+}
+
+#[test]
+fn the_layout_check_sees_a_missing_module_and_a_missing_file() {
+    let block: Vec<String> = [
+        "src/",
+        "  a/   one.rs, two/ (x.rs)",
+        "       three, y/",
+        "  b.rs   the b",
+        "tests/   four.rs",
+    ]
+    .map(String::from)
+    .to_vec();
+    let files: Vec<PathBuf> = [
+        "a/mod.rs",
+        "a/one.rs",
+        "a/two/mod.rs",
+        "a/three.rs",
+        "a/three/tests.rs",
+        "b.rs",
+        "lib.rs",
+    ]
+    .map(PathBuf::from)
+    .to_vec();
+    assert_eq!(
+        layout_problems(&block, &files),
+        vec![
+            "layout entry `a/`: `x.rs` is not under src/a/".to_string(),
+            "layout entry `a/`: `y/` is not under src/a/".to_string(),
+        ]
+    );
+    let files: Vec<PathBuf> = ["a/one.rs", "a/four.rs", "c.rs", "b.rs", "a/x.rs", "a/y/mod.rs"]
+        .map(PathBuf::from)
+        .to_vec();
+    assert_eq!(
+        layout_problems(&block, &files),
+        vec![
+            "src/a/four.rs: `four` is not in the layout entry `a/`".to_string(),
+            "src/c.rs: no layout entry `c.rs`".to_string(),
+            "layout entry `a/`: `two/` is not under src/a/".to_string(),
+        ]
+    );
 }

@@ -324,6 +324,23 @@ fn outputs(d: &Path) -> Vec<PathBuf> {
             "val",
         ],
     );
+    // Every validation pose as a cycle of one ISO pose (the schema, not the figures).
+    let iso = std::fs::read_to_string(d.join("data.csv"))
+        .unwrap()
+        .replace("validation,", "iso-P1,");
+    std::fs::write(d.join("iso.csv"), iso).unwrap();
+    run(
+        d,
+        &[
+            "iso9283",
+            "evaluate",
+            "iso.csv",
+            "--calibration",
+            "cal/calibration.json",
+            "--out",
+            "iso",
+        ],
+    );
     run(d, &["diagnose", "data.csv", "--out", "diag"]);
     run(d, &["diagnose", "axes.csv", "--out", "diag-axes"]);
     run(

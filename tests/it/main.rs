@@ -23,6 +23,7 @@ mod effects;
 mod export;
 mod fuzz_readers;
 mod gap_budget;
+mod iso9283;
 mod joint_map;
 mod json_schemas;
 mod kinematics_props;

@@ -1,0 +1,128 @@
+//! `axiscal iso9283 evaluate DATA.csv --out DIR`: the ISO 9283 pose and distance
+//! characteristics of measured cycles (`docs/formats.md#iso9283-evaluate`), written as
+//! `iso9283.json` and `iso9283.md`.
+
+use super::checks;
+use super::output::Outputs;
+use anyhow::{Context, Result};
+use axiscal::iso9283::{IsoFigures, evaluate};
+use axiscal::json_file::{self, Schema};
+use axiscal::robot::{RobotDescription, RobotModel};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// The files `iso9283 evaluate` writes into its output folder.
+const OUTPUTS: [&str; 2] = ["iso9283.json", "iso9283.md"];
+
+/// Arguments of `axiscal iso9283`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    what: What,
+}
+
+#[derive(Debug, clap::Subcommand)]
+enum What {
+    /// Pose accuracy and repeatability (AP, RP), multi-directional variation (vAP) and
+    /// distance accuracy and repeatability (AD, RD) of the cycles in a measurement CSV
+    /// (experiments `iso-P<k>` or `iso-P<k>-d<h>`, the step the cycle).
+    Evaluate(EvaluateArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct EvaluateArgs {
+    /// Measurement CSV with the cycles (`docs/formats.md#iso9283-evaluate`).
+    data: PathBuf,
+    /// Nominal robot description (TOML), or a shipped robot's name: the tool targets and the
+    /// controller.
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    robot: PathBuf,
+    /// The calibration whose model commands the poses (after calibration). Without it the
+    /// nominal model commands them, its base frame registered to the data (before calibration).
+    #[arg(long)]
+    calibration: Option<PathBuf>,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace existing output files.
+    #[arg(long)]
+    force: bool,
+    #[command(flatten)]
+    checks: checks::Overrides,
+}
+
+/// Runs `axiscal iso9283`.
+pub fn run(args: Args) -> Result<()> {
+    match args.what {
+        What::Evaluate(a) => evaluate_cycles(a),
+    }
+}
+
+fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {
+    let mut outputs = Outputs::new(args.force)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot);
+    if let Some(c) = &args.calibration {
+        outputs = outputs.input("--calibration", c);
+    }
+    outputs.check_in(&args.out, &OUTPUTS)?;
+    let desc = RobotDescription::from_file(&args.robot)?;
+    checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
+    let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
+    let (model, commanded_by) = match &args.calibration {
+        Some(path) => (
+            checks::read_calibration(path, &desc, &args.robot, args.checks.allow_other_robot)?.robot,
+            format!("the calibrated model of {}", path.display()),
+        ),
+        None => (
+            RobotModel::ideal(&desc),
+            "the nominal model, its base frame registered to the data".to_string(),
+        ),
+    };
+    let figures = evaluate(&set, &model, &desc, args.calibration.is_none())
+        .with_context(|| format!("ISO 9283 figures of {}", args.data.display()))?;
+    let text = markdown(&figures, &commanded_by, &args.data.display().to_string());
+    outputs.write_in(&args.out, OUTPUTS[0], json_file::to_string(Schema::ISO9283, &figures)?)?;
+    outputs.write_in(&args.out, OUTPUTS[1], &text)?;
+    say!("{}", text.trim_end());
+    say!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
+    Ok(())
+}
+
+/// `iso9283.md`: the figures per pose, the distance figures, how the poses were commanded.
+fn markdown(f: &IsoFigures, commanded_by: &str, data: &str) -> String {
+    let mut s = format!(
+        "# ISO 9283 pose characteristics of {data}\n\nCommanded poses: {commanded_by}; positions in the robot base frame.\n"
+    );
+    if let Some(rms) = f.registration_rms_mm {
+        let _ = writeln!(s, "Base frame registration: {rms:.3} mm RMS over all cycles.");
+    }
+    let _ = writeln!(
+        s,
+        "\n| pose | cycles | AP_P (mm) | AP_a, AP_b, AP_c (mrad) | RP_l (mm) | RP_a, RP_b, RP_c (mrad) | vAP_P (mm) |\n|---|---|---|---|---|---|---|"
+    );
+    for p in &f.poses {
+        let a = &p.accuracy;
+        let rp = p.repeatability.map_or("-".into(), |r| format!("{:.4}", r.rp_l_mm));
+        let rpa = p.repeatability.map_or("-".into(), |r| {
+            format!("{:.4}, {:.4}, {:.4}", r.rp_a_mrad, r.rp_b_mrad, r.rp_c_mrad)
+        });
+        let vap = p.directional.map_or("-".into(), |v| format!("{:.4}", v.vap_p_mm));
+        let _ = writeln!(
+            s,
+            "| P{} | {} | {:.4} | {:.4}, {:.4}, {:.4} | {rp} | {rpa} | {vap} |",
+            p.pose, p.cycles, a.ap_p_mm, a.ap_a_mrad, a.ap_b_mrad, a.ap_c_mrad
+        );
+    }
+    match &f.distance_p2_p4 {
+        Some(d) => {
+            let _ = writeln!(
+                s,
+                "\nDistance P2-P4 (commanded {:.3} mm): AD_P {:.4} mm, RD_P +-{:.4} mm.",
+                d.commanded_mm, d.ad_p_mm, d.rd_p_mm
+            );
+        }
+        None => s.push_str("\nDistance P2-P4: not measured in two or more common cycles.\n"),
+    }
+    s
+}

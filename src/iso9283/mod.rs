@@ -1,0 +1,18 @@
+//! Robot performance criteria of ISO 9283:1998 (*Manipulating industrial robots: performance
+//! criteria and related test methods*), section 7, computed from attained poses: what a
+//! calibration engineer reports to a customer beside the calibration itself. Pure maths on
+//! poses: no files, no instrument, no robot model.
+//!
+//! - [`evaluate`]: the figures of a measured campaign (experiments `iso-P<k>`), attained poses
+//!   fitted to the tool targets, commanded ones from a robot model.
+//! - [`figures`]: pose accuracy and repeatability (7.2.1, 7.2.2), multi-directional pose
+//!   accuracy variation (7.2.3), distance accuracy and repeatability (7.3).
+
+pub mod evaluate;
+pub mod figures;
+
+pub use evaluate::{IsoError, IsoFigures, PoseFigures, evaluate, pose_label};
+pub use figures::{
+    DirectionalVariation, DistanceFigures, PoseAccuracy, PoseRepeatability, abc, directional_variation,
+    distance_figures, pose_accuracy, pose_repeatability,
+};

@@ -1,0 +1,184 @@
+//! `axiscal iso9283 evaluate`: cycles made here with known deviations from the calibrated
+//! model's commanded poses (the hand example of the unit tests: x = 1, 2, 3, 6 mm), measured as
+//! the description's three tool targets; the figures read from `iso9283.json`.
+
+use crate::common::{axiscal, read_calibration, stderr, stdout};
+use axiscal::measurement::{Measurement, MeasurementSet, write_measurements};
+use axiscal::robot::{Controller, RobotDescription, commands_to_internal};
+use nalgebra::{Isometry3, Translation3, Vector3};
+use std::path::Path;
+
+/// The commands of P1 .. P5 (deg).
+const POSES: [[f64; 6]; 5] = [
+    [10.0, -60.0, 70.0, -90.0, -80.0, 20.0],
+    [25.0, -45.0, 60.0, -100.0, -85.0, 5.0],
+    [-5.0, -70.0, 90.0, -95.0, -90.0, 30.0],
+    [30.0, -80.0, 100.0, -110.0, -70.0, -10.0],
+    [0.0, -50.0, 50.0, -80.0, -95.0, 15.0],
+];
+
+/// Cycle `j`'s deviation along the base X axis \[mm\].
+const X_MM: [f64; 4] = [1.0, 2.0, 3.0, 6.0];
+
+/// A measurement CSV of the cycles: pose `k`, cycle `j` attained at the commanded pose moved
+/// by `X_MM[j]` (P4 along Y instead), its three tool targets measured exactly.
+fn cycles_csv(
+    dir: &Path,
+    desc: &RobotDescription,
+    cal: &axiscal::calibration::procedure::Calibration,
+) -> std::path::PathBuf {
+    let model = cal.robot.phi_model();
+    let controller = Controller::from_description(desc);
+    let mut rows = Vec::new();
+    for (k, cmd) in POSES.iter().enumerate() {
+        let q = cal
+            .robot
+            .joint_values(&controller, &commands_to_internal(desc, cmd))
+            .unwrap();
+        let world_from_tool = model.world_from_tool(&q);
+        for (j, &x) in X_MM.iter().enumerate() {
+            let axis: Vector3<f64> = if k == 3 { Vector3::y() } else { Vector3::x() };
+            let shift = Isometry3::from_parts(
+                Translation3::from(axis * x * 1e-3),
+                nalgebra::UnitQuaternion::identity(),
+            );
+            let attained = model.world_from_base * shift * model.world_from_base.inverse() * world_from_tool;
+            for (t, target) in desc.tool_targets_m().iter().enumerate() {
+                let p = attained * target;
+                rows.push(Measurement {
+                    experiment: format!("iso-P{}", k + 1),
+                    moved_joint: 0,
+                    step: j,
+                    target: t,
+                    position_mm: [p.x * 1e3, p.y * 1e3, p.z * 1e3],
+                    cmd: cmd.to_vec(),
+                    payload_kg: 0.0,
+                    temperature_c: 20.0,
+                });
+            }
+        }
+    }
+    let path = dir.join("iso.csv");
+    write_measurements(&path, &MeasurementSet::new(6, rows).unwrap(), false).unwrap();
+    path
+}
+
+fn calibrated_ur5e(dir: &Path) -> std::path::PathBuf {
+    let csv = dir.join("campaign.csv");
+    let sim = [
+        "simulate",
+        "--robot",
+        "ur5e-dh",
+        "--sim",
+        "analytic",
+        "--instrument",
+        "isotropic",
+    ];
+    axiscal()
+        .args(sim)
+        .args(["--seed", "41", "--out"])
+        .arg(&csv)
+        .assert()
+        .success();
+    let out = dir.join("cal");
+    axiscal()
+        .args(["calibrate", "--robot", "ur5e-dh"])
+        .arg(&csv)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    out
+}
+
+#[test]
+fn known_deviations_come_back_as_iso_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let cal_dir = calibrated_ur5e(dir.path());
+    let desc = RobotDescription::from_file(
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
+    )
+    .unwrap();
+    let cal = read_calibration(&cal_dir);
+    let data = cycles_csv(dir.path(), &desc, &cal);
+    let out = dir.path().join("iso");
+    let a = axiscal()
+        .args(["iso9283", "evaluate", "--robot", "ur5e-dh", "--calibration"])
+        .arg(cal_dir.join("calibration.json"))
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    assert!(stdout(&a).contains("| P5 | 4 |"), "{}", stdout(&a));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("iso9283.json")).unwrap()).unwrap();
+    let close = |x: &serde_json::Value, want: f64| (x.as_f64().unwrap() - want).abs() < 1e-9 * (1.0 + want.abs());
+    // x_bar = 3 mm, l = 2, 1, 0, 3 mm: RP_l = 1.5 + 3 sqrt(5/3) (by hand).
+    for p in v["poses"].as_array().unwrap() {
+        assert!(close(&p["accuracy"]["ap_p_mm"], 3.0), "{p}");
+        assert!(
+            close(&p["accuracy"]["ap_a_mrad"], 0.0) && close(&p["accuracy"]["ap_c_mrad"], 0.0),
+            "{p}"
+        );
+        assert!(close(&p["repeatability"]["rp_l_mm"], 5.372983346207417), "{p}");
+        assert!(p["directional"].is_null());
+    }
+    // P2 moved along X, P4 along Y by the same x_j: D_j = |d_c + x_j (e_x - e_y)| per cycle.
+    let commanded = |k: usize| -> Vector3<f64> {
+        let t = &v["poses"][k]["commanded"]["translation_mm"];
+        Vector3::new(t[0].as_f64().unwrap(), t[1].as_f64().unwrap(), t[2].as_f64().unwrap())
+    };
+    let dc = commanded(1) - commanded(3);
+    let d: Vec<f64> = X_MM.iter().map(|x| (dc + Vector3::new(*x, -*x, 0.0)).norm()).collect();
+    let mean = d.iter().sum::<f64>() / 4.0;
+    let sd = (d.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 3.0).sqrt();
+    let dist = &v["distance_p2_p4"];
+    assert!(
+        close(&dist["commanded_mm"], dc.norm()) && close(&dist["ad_p_mm"], mean - dc.norm()),
+        "{dist}"
+    );
+    assert!(close(&dist["rd_p_mm"], 3.0 * sd), "{dist}");
+    assert!(close(&dist["ad_x_mm"], 3.0) && close(&dist["ad_y_mm"], -3.0), "{dist}");
+}
+
+#[test]
+fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let cal_dir = calibrated_ur5e(dir.path());
+    let desc = RobotDescription::from_file(
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
+    )
+    .unwrap();
+    let data = cycles_csv(dir.path(), &desc, &read_calibration(&cal_dir));
+    let a = axiscal()
+        .args(["iso9283", "evaluate", "--robot", "ur5e-dh", "--out"])
+        .arg(dir.path().join("before"))
+        .arg(&data)
+        .assert()
+        .success();
+    assert!(stdout(&a).contains("Base frame registration:"), "{}", stdout(&a));
+    // A file without ISO cycles, and a cycle with two targets.
+    let a = axiscal()
+        .args(["iso9283", "evaluate", "--robot", "ur5e-dh", "--out"])
+        .arg(dir.path().join("none"))
+        .arg(dir.path().join("campaign.csv"))
+        .assert()
+        .code(2);
+    assert!(stderr(&a).contains("iso-P<k>"), "{}", stderr(&a));
+    let text = std::fs::read_to_string(&data).unwrap();
+    let cut: String = text
+        .lines()
+        .filter(|l| !(l.starts_with("iso-P3,0,2,2,")))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let broken = dir.path().join("broken.csv");
+    std::fs::write(&broken, cut).unwrap();
+    let a = axiscal()
+        .args(["iso9283", "evaluate", "--robot", "ur5e-dh", "--out"])
+        .arg(dir.path().join("broken"))
+        .arg(&broken)
+        .assert()
+        .code(2);
+    assert!(stderr(&a).contains("`iso-P3`, cycle (step) 2"), "{}", stderr(&a));
+}
