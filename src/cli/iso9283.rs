@@ -1,12 +1,15 @@
-//! `axiscal iso9283 evaluate DATA.csv --out DIR`: the ISO 9283 pose and distance
-//! characteristics of measured cycles (`docs/formats.md#iso9283-evaluate`), written as
-//! `iso9283.json` and `iso9283.md`.
+//! `axiscal iso9283 plan|evaluate`: the measurement plan of an ISO 9283 test
+//! (`docs/formats.md#iso9283-plan`), and the pose and distance characteristics of measured
+//! cycles (`docs/formats.md#iso9283-evaluate`), written as `iso9283.json` and `iso9283.md`.
 
 use super::checks;
+use super::options::InRange;
 use super::output::Outputs;
-use anyhow::{Context, Result};
-use axiscal::iso9283::{IsoFigures, evaluate};
+use anyhow::{Context, Result, bail};
+use axiscal::compensation::Compensator;
+use axiscal::iso9283::{IsoFigures, evaluate, largest_cube, plan_cube};
 use axiscal::json_file::{self, Schema};
+use axiscal::plan::{CalibrationPlan, PlanPose, SightOptions, points_of_poses, tool_targets, write_plan_csv};
 use axiscal::robot::{RobotDescription, RobotModel};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -27,6 +30,41 @@ enum What {
     /// distance accuracy and repeatability (AD, RD) of the cycles in a measurement CSV
     /// (experiments `iso-P<k>` or `iso-P<k>-d<h>`, the step the cycle).
     Evaluate(EvaluateArgs),
+    /// The measurement plan of an ISO 9283 test: the cube's five points `P1` .. `P5` (ISO
+    /// 9283 6.2, 6.8), each cycle visiting `P1, P5, P4, P3, P2`, the tool targets measured at
+    /// each (`docs/formats.md#iso9283-plan`).
+    Plan(PlanArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct PlanArgs {
+    /// Nominal robot description (TOML), or a shipped robot's name.
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    robot: PathBuf,
+    /// The calibration whose model commands the points (after calibration, fig. 5). Without
+    /// it the nominal model does (before calibration).
+    #[arg(long)]
+    calibration: Option<PathBuf>,
+    /// The commands of the cube's centre, `cmd_1,..,cmd_N` (deg or mm): its tool position is
+    /// `P1`, its tool orientation every point's. Default: the calibration plan's reference pose.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    centre_cmd: Option<Vec<f64>>,
+    /// The cube's edge (mm). Default: the largest, to 10 mm and at most 500 mm, whose five
+    /// points are inside the joint limits.
+    #[arg(long, value_parser = InRange::above(0.0, 1e5, ""))]
+    edge_mm: Option<f64>,
+    /// Cycles (ISO 9283: 30).
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    cycles: u32,
+    /// The plan CSV to write.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace `--out` if it exists.
+    #[arg(long)]
+    force: bool,
+    /// Go on even when the calibration records another robot description than `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -55,7 +93,81 @@ struct EvaluateArgs {
 pub fn run(args: Args) -> Result<()> {
     match args.what {
         What::Evaluate(a) => evaluate_cycles(a),
+        What::Plan(a) => plan(a),
     }
+}
+
+/// The order of the points in a cycle (ISO 9283 7.2.1: P1, then P5 down to P2).
+const CYCLE_ORDER: [usize; 5] = [1, 5, 4, 3, 2];
+
+fn plan(args: PlanArgs) -> Result<()> {
+    let mut outputs = Outputs::new(args.force).input("--robot", &args.robot);
+    if let Some(c) = &args.calibration {
+        outputs = outputs.input("--calibration", c);
+    }
+    outputs.check(&args.out)?;
+    let desc = RobotDescription::from_file(&args.robot)?;
+    let model = match &args.calibration {
+        Some(path) => checks::read_calibration(path, &desc, &args.robot, args.allow_other_robot)?.robot,
+        None => RobotModel::ideal(&desc),
+    };
+    let compensator = Compensator::new(&model, &desc)?;
+    let centre = args
+        .centre_cmd
+        .clone()
+        .unwrap_or_else(|| CalibrationPlan::for_robot(&desc).reference);
+    if centre.len() != desc.dof() {
+        bail!(
+            "--centre-cmd gives {} values; the robot has {} joints",
+            centre.len(),
+            desc.dof()
+        );
+    }
+    let cube = match args.edge_mm {
+        Some(mm) => plan_cube(&compensator, &desc, &centre, mm * 1e-3),
+        None => largest_cube(&compensator, &desc, &centre, 0.5),
+    }
+    .with_context(|| format!("the ISO cube around the centre commands {centre:?} (--centre-cmd)"))?;
+    let targets = tool_targets(&desc);
+    let poses: Vec<PlanPose> = (0..args.cycles as usize)
+        .flat_map(|cycle| CYCLE_ORDER.map(|k| (cycle, k)))
+        .map(|(cycle, k)| PlanPose {
+            experiment: format!("iso-P{k}"),
+            moved_joint: 0,
+            step: cycle,
+            cmd: cube.commands[k - 1].clone(),
+            targets: targets.clone(),
+        })
+        .collect();
+    let no_sight = SightOptions {
+        stations_m: Vec::new(),
+        link_radius_m: 0.0,
+        stop_short_m: 0.0,
+    };
+    let points = points_of_poses(&desc, poses, &no_sight)?;
+    let comment = format!(
+        "# ISO 9283 test of {}: cube edge {:.0} mm, {} cycles of P1, P5, P4, P3, P2; commanded through {}\n",
+        desc.name,
+        cube.edge_m * 1e3,
+        args.cycles,
+        if args.calibration.is_some() {
+            "the calibrated model (fig. 5)"
+        } else {
+            "the nominal model"
+        }
+    );
+    let mut text = Vec::new();
+    write_plan_csv(&mut text, &comment, &points)?;
+    outputs.write(&args.out, text)?;
+    say!(
+        "wrote {}: ISO 9283 cube of edge {:.0} mm, {} cycles x 5 points x {} targets = {} points",
+        args.out.display(),
+        cube.edge_m * 1e3,
+        args.cycles,
+        targets.len(),
+        points.len()
+    );
+    Ok(())
 }
 
 fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {

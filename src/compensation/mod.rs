@@ -185,6 +185,11 @@ impl Compensator {
         &self.calibrated_model
     }
 
+    /// The calibrated model's joint values for controller commands `cmd` \[rad or m\].
+    pub fn calibrated_joint_values(&self, cmd: &[f64]) -> Result<Vec<f64>, crate::robot::ModelError> {
+        self.calibrated.joint_values(&self.controller, cmd)
+    }
+
     /// Fig. 5 for `world_from_tool` (instrument frame, metres), the IK seeded by the nominal
     /// closed-form branches (inside the limits first, nearest the zero pose first).
     pub fn compensate(&self, world_from_tool: &Isometry3<f64>) -> Result<CompensatedPose, CompensationError> {

@@ -3,14 +3,18 @@
 //! calibration engineer reports to a customer beside the calibration itself. Pure maths on
 //! poses: no files, no instrument, no robot model.
 //!
+//! - [`cube`]: the test cube (6.2, 6.8), its points `P1` .. `P5` and the commands that reach
+//!   them.
 //! - [`evaluate`]: the figures of a measured campaign (experiments `iso-P<k>`), attained poses
 //!   fitted to the tool targets, commanded ones from a robot model.
 //! - [`figures`]: pose accuracy and repeatability (7.2.1, 7.2.2), multi-directional pose
 //!   accuracy variation (7.2.3), distance accuracy and repeatability (7.3).
 
+pub mod cube;
 pub mod evaluate;
 pub mod figures;
 
+pub use cube::{Cube, CubeError, cube_points, largest_cube, plan_cube};
 pub use evaluate::{IsoError, IsoFigures, PoseFigures, evaluate, pose_label};
 pub use figures::{
     DirectionalVariation, DistanceFigures, PoseAccuracy, PoseRepeatability, abc, directional_variation,

@@ -14,7 +14,10 @@ mod validation;
 pub use axis::{AxisSweep, CalibrationPlan, MAX_INTERVALS, PlanError};
 pub use optimize::{OptimizeOptions, Optimized, optimize, with_point_budget};
 pub use predict::{PlanObjective, PlanPrediction, PredictError};
-pub use sheet::{PlannedPoint, SightOptions, VALIDATION_EXPERIMENT, planned_points, write_plan_csv};
+pub use sheet::{
+    PlanPose, PlannedPoint, SightOptions, VALIDATION_EXPERIMENT, planned_points, points_of_poses, tool_targets,
+    write_plan_csv,
+};
 pub use validation::ValidationPlan;
 
 /// Experiment id of the three tool targets observed at the reference pose (trains the

@@ -51,14 +51,28 @@ pub struct SightOptions {
     pub stop_short_m: f64,
 }
 
-/// One robot pose of the plan and the targets measured there (id, position in the carrying
-/// link's frame \[m\], the 1-based link).
-struct Pose {
-    experiment: String,
-    moved_joint: usize,
-    step: usize,
-    cmd: Vec<f64>,
-    targets: Vec<(usize, Point3<f64>, usize)>,
+/// One robot pose of a plan and the targets measured there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanPose {
+    /// Experiment id.
+    pub experiment: String,
+    /// The joint the experiment moves (0: free poses).
+    pub moved_joint: usize,
+    /// 0-based step within the experiment.
+    pub step: usize,
+    /// Commands, file units (deg or mm).
+    pub cmd: Vec<f64>,
+    /// The targets: id, position in the carrying link's frame \[m\], the 1-based link.
+    pub targets: Vec<(usize, Point3<f64>, usize)>,
+}
+
+/// The description's tool targets as [`PlanPose::targets`] (on the last link).
+pub fn tool_targets(desc: &RobotDescription) -> Vec<(usize, Point3<f64>, usize)> {
+    desc.tool_targets_m()
+        .into_iter()
+        .enumerate()
+        .map(|(id, p)| (id, desc.tool.frame.to_isometry() * p, desc.dof()))
+        .collect()
 }
 
 /// The points of `plan` (axis experiments, in order), the tool observation at the reference,
@@ -70,7 +84,7 @@ pub fn planned_points(
     sight: &SightOptions,
 ) -> Result<Vec<PlannedPoint>, PlanError> {
     plan.validate(desc)?;
-    let mut poses: Vec<Pose> = Vec::new();
+    let mut poses: Vec<PlanPose> = Vec::new();
     for (sweep, experiment) in plan.sweeps.iter().zip(plan.experiment_names()) {
         let targets = desc.axis_targets_of(sweep.joint).ok_or(PlanError::Invalid {
             message: format!("joint {} has no axis targets", sweep.joint),
@@ -80,7 +94,7 @@ pub fn planned_points(
             observed.push((1, t1.position_m(), t1.link));
         }
         for step in 0..sweep.poses() {
-            poses.push(Pose {
+            poses.push(PlanPose {
                 experiment: experiment.clone(),
                 moved_joint: sweep.joint,
                 step,
@@ -89,13 +103,8 @@ pub fn planned_points(
             });
         }
     }
-    let tool: Vec<_> = desc
-        .tool_targets_m()
-        .into_iter()
-        .enumerate()
-        .map(|(id, p)| (id, desc.tool.frame.to_isometry() * p, desc.dof()))
-        .collect();
-    poses.push(Pose {
+    let tool = tool_targets(desc);
+    poses.push(PlanPose {
         experiment: TOOL_EXPERIMENT.to_owned(),
         moved_joint: 0,
         step: 0,
@@ -103,7 +112,7 @@ pub fn planned_points(
         targets: tool.clone(),
     });
     for (step, cmd) in validation.commands(desc, &plan.reference).into_iter().enumerate() {
-        poses.push(Pose {
+        poses.push(PlanPose {
             experiment: VALIDATION_EXPERIMENT.to_owned(),
             moved_joint: 0,
             step,
@@ -111,13 +120,23 @@ pub fn planned_points(
             targets: tool.clone(),
         });
     }
+    points_of_poses(desc, poses, sight)
+}
+
+/// The points of `poses`, in order: each target's nominal position and whether each station
+/// should see it.
+pub fn points_of_poses(
+    desc: &RobotDescription,
+    poses: Vec<PlanPose>,
+    sight: &SightOptions,
+) -> Result<Vec<PlannedPoint>, PlanError> {
     let nominal = RobotModel::ideal(desc);
     let controller = Controller::from_description(desc);
     let model = desc.nominal_model();
     let mut points = Vec::new();
     for (
         pose,
-        Pose {
+        PlanPose {
             experiment,
             moved_joint,
             step,

@@ -182,3 +182,106 @@ fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
         .code(2);
     assert!(stderr(&a).contains("`iso-P3`, cycle (step) 2"), "{}", stderr(&a));
 }
+
+/// `iso9283 plan` -> the robot (the calibrated model, each cycle's poses moved by `X_MM` along
+/// the base X axis) measured as an instrument writes points (`id,x,y,z` in metres, shuffled) ->
+/// `import points` -> `iso9283 evaluate`: the plan's cycles come back as the known figures.
+#[test]
+fn a_planned_iso_test_measured_and_imported_evaluates_to_its_known_deviations() {
+    let dir = tempfile::tempdir().unwrap();
+    let cal_dir = calibrated_ur5e(dir.path());
+    let cal_json = cal_dir.join("calibration.json");
+    let plan = dir.path().join("plan.csv");
+    let a = axiscal()
+        .args([
+            "iso9283",
+            "plan",
+            "--robot",
+            "ur5e-dh",
+            "--cycles",
+            "4",
+            "--centre-cmd=10,-60,70,-90,-80,20",
+        ])
+        .arg("--calibration")
+        .arg(&cal_json)
+        .arg("--out")
+        .arg(&plan)
+        .assert()
+        .success();
+    assert!(
+        stdout(&a).contains("4 cycles x 5 points x 3 targets = 60 points"),
+        "{}",
+        stdout(&a)
+    );
+    let desc = RobotDescription::from_file(
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
+    )
+    .unwrap();
+    let cal = read_calibration(&cal_dir);
+    let (model, controller) = (cal.robot.phi_model(), Controller::from_description(&desc));
+    let text = std::fs::read_to_string(&plan).unwrap();
+    let mut lines: Vec<String> = Vec::new();
+    for row in text.lines().filter(|l| !l.starts_with('#') && !l.starts_with("point,")) {
+        let f: Vec<&str> = row.split(',').collect();
+        let (step, target): (usize, usize) = (f[4].parse().unwrap(), f[5].parse().unwrap());
+        let cmd: Vec<f64> = f[6..12].iter().map(|v| v.parse().unwrap()).collect();
+        let q = cal
+            .robot
+            .joint_values(&controller, &commands_to_internal(&desc, &cmd))
+            .unwrap();
+        let shift = Isometry3::translation(X_MM[step] * 1e-3, 0.0, 0.0);
+        let tool = model.world_from_base * shift * model.world_from_base.inverse() * model.world_from_tool(&q);
+        let p = tool * desc.tool_targets_m()[target];
+        lines.push(format!("{},{},{},{}", f[0], p.x, p.y, p.z));
+    }
+    lines.reverse();
+    let export = dir.path().join("tracker.csv");
+    std::fs::write(&export, format!("id,x,y,z\n{}\n", lines.join("\n"))).unwrap();
+    let data = dir.path().join("iso.csv");
+    axiscal()
+        .args(["import", "points", "--units", "m"])
+        .arg(&plan)
+        .arg(&export)
+        .arg("--out")
+        .arg(&data)
+        .assert()
+        .success();
+    let out = dir.path().join("iso");
+    axiscal()
+        .args(["iso9283", "evaluate", "--robot", "ur5e-dh", "--calibration"])
+        .arg(&cal_json)
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("iso9283.json")).unwrap()).unwrap();
+    let poses = v["poses"].as_array().unwrap();
+    assert_eq!(poses.len(), 5);
+    for p in poses {
+        // The point export's 17 significant digits of metres: ~1e-13 m.
+        let ap = p["accuracy"]["ap_p_mm"].as_f64().unwrap();
+        let rp = p["repeatability"]["rp_l_mm"].as_f64().unwrap();
+        assert!((ap - 3.0).abs() < 1e-9 && (rp - 5.372983346207417).abs() < 1e-9, "{p}");
+        assert_eq!(p["cycles"], 4);
+    }
+    // The cube: P2 and P4 are opposite corners' points, 0.8 of the cube's diagonal apart.
+    let edge_mm: f64 = text
+        .lines()
+        .next()
+        .unwrap()
+        .split("cube edge ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let d = v["distance_p2_p4"]["commanded_mm"].as_f64().unwrap();
+    assert!(
+        (d - 0.8 * 3f64.sqrt() * edge_mm).abs() < 1e-6 * edge_mm,
+        "{d} vs edge {edge_mm}"
+    );
+}

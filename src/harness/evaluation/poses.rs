@@ -9,7 +9,7 @@ use crate::kinematics::{PhiModel, nominal_closed_form};
 use crate::plan::CalibrationPlan;
 use crate::robot::RobotDescription;
 use crate::robot::commands_to_internal;
-use nalgebra::{Isometry3, Point3, Translation3, Vector3};
+use nalgebra::Isometry3;
 use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 
@@ -129,20 +129,9 @@ pub fn iso9283_poses(
     region: Region,
 ) -> Option<Vec<TestPose>> {
     let centre = model.world_from_tool(q_centre);
-    let base = model.world_from_base;
-    let h = 0.5 * edge_m;
-    // Corners C1, C2, C7, C8 of the diagonal plane, in base-frame axes.
-    let corners = [
-        Vector3::new(-h, -h, -h),
-        Vector3::new(h, -h, -h),
-        Vector3::new(h, h, h),
-        Vector3::new(-h, h, h),
-    ];
-    let offsets = std::iter::once(Vector3::zeros()).chain(corners.iter().map(|c| 0.8 * c));
+    let points = crate::iso9283::cube_points(&centre, &model.world_from_base, edge_m);
     let mut out = Vec::new();
-    for (i, d) in offsets.enumerate() {
-        let p: Point3<f64> = Point3::from(centre.translation.vector) + base.rotation * d;
-        let target = Isometry3::from_parts(Translation3::from(p.coords), centre.rotation);
+    for (i, target) in points.into_iter().enumerate() {
         let branches = nominal_closed_form(model, &target).ok()?;
         let distance = |q: &[f64]| q.iter().zip(q_centre).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
         let q = branches
