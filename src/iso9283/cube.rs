@@ -26,6 +26,18 @@ pub fn cube_points(centre: &Isometry3<f64>, world_from_base: &Isometry3<f64>, ed
     })
 }
 
+/// The joints (1-based) whose commands `cmd` (internal units) are outside the description's
+/// limits.
+fn outside_limits(desc: &RobotDescription, cmd: &[f64]) -> Vec<usize> {
+    (0..desc.dof())
+        .filter(|&k| {
+            let [lo, hi] = desc.limits_internal(k);
+            cmd[k] < lo || cmd[k] > hi
+        })
+        .map(|k| k + 1)
+        .collect()
+}
+
 /// Why a cube cannot be planned.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum CubeError {
@@ -70,6 +82,13 @@ pub fn plan_cube(
     edge_m: f64,
 ) -> Result<Cube, CubeError> {
     let centre_internal = commands_to_internal(desc, centre_cmd);
+    if let Some(k) = outside_limits(desc, &centre_internal).first() {
+        return Err(CubeError::Centre(format!(
+            "cmd_{k} = {} is outside the joint's limits {:?}",
+            centre_cmd[k - 1],
+            desc.joints[k - 1].limits
+        )));
+    }
     let centre_q = compensator
         .calibrated_joint_values(&centre_internal)
         .map_err(|e| CubeError::Centre(e.to_string()))?;
@@ -90,13 +109,7 @@ pub fn plan_cube(
         let c = compensator
             .compensate_from(p, &centre_q)
             .map_err(|e| unreachable(e.to_string()))?;
-        let outside: Vec<usize> = (0..desc.dof())
-            .filter(|&k| {
-                let [lo, hi] = desc.limits_internal(k);
-                c.cmd[k] < lo || c.cmd[k] > hi
-            })
-            .map(|k| k + 1)
-            .collect();
+        let outside = outside_limits(desc, &c.cmd);
         if !outside.is_empty() {
             return Err(unreachable(format!("joint(s) {outside:?} outside their limits")));
         }

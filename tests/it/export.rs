@@ -336,6 +336,29 @@ fn a_ur_export_refuses_what_the_file_cannot_hold_and_a_robot_that_is_not_a_ur() 
     assert!(stated > 0.0);
     // Existing output without --force, a bad hash.
     assert!(stderr(&base(&["--approximate"]).assert().code(2)).contains("--force"));
+    let no_hash = dir.path().join("no-hash.yaml");
+    let like = std::fs::read_to_string(UR5E_DEFAULT).unwrap();
+    std::fs::write(&no_hash, like.replace("  hash: calib_12788084448423163542\n", "")).unwrap();
+    let a = export_cmd(
+        &[
+            "ur-kinematics",
+            "--robot",
+            "ur5e-dh",
+            "--approximate",
+            "--like",
+            no_hash.to_str().unwrap(),
+        ],
+        &cal,
+        &dir.path().join("k2.yaml"),
+        &[],
+    )
+    .assert()
+    .code(2);
+    assert!(
+        stderr(&a).contains("`kinematics.hash`: missing: give --hash"),
+        "{}",
+        stderr(&a)
+    );
     let a = base(&["--approximate", "--force", "--hash", "calib 1"])
         .assert()
         .code(2);

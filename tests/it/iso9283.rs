@@ -181,6 +181,20 @@ fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
         .assert()
         .code(2);
     assert!(stderr(&a).contains("`iso-P3`, cycle (step) 2"), "{}", stderr(&a));
+    // A plan whose centre is outside the limits, and one at the stretched (singular) zero pose.
+    let plan = |centre: &str| {
+        axiscal()
+            .args(["iso9283", "plan", "--robot", "ur5e-dh", "--out"])
+            .arg(dir.path().join("plan.csv"))
+            .arg(format!("--centre-cmd={centre}"))
+            .assert()
+            .code(2)
+    };
+    assert!(
+        stderr(&plan("10,-60,200,-90,-80,20")).contains("cmd_3 = 200 is outside the joint's limits [-180.0, 180.0]")
+    );
+    assert!(stderr(&plan("0,0,0,0,0,0")).contains("choose another centre"));
+    assert!(!dir.path().join("plan.csv").exists());
 }
 
 /// `iso9283 plan` -> the robot (the calibrated model, each cycle's poses moved by `X_MM` along

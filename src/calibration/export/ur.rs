@@ -247,7 +247,17 @@ pub fn export(
             kinds.join(", ")
         )));
     }
-    let hash = checked_hash(hash.unwrap_or(&reference.hash))?;
+    let hash = match hash {
+        Some(h) => checked_hash(h)?,
+        None if reference.hash.is_empty() => {
+            return Err(key_error(
+                "the reference",
+                "kinematics.hash".into(),
+                "missing: give --hash",
+            ));
+        }
+        None => checked_hash(&reference.hash)?,
+    };
     let (chain, left_out) = reading_chain(cal, desc);
     let nominal = OriginChain::of_phi_model(&desc.nominal_model());
     let frames = link_frames(&nominal, &reference.chain())?;
