@@ -5,7 +5,7 @@
 //!
 //! - [`cube`]: the test cube (6.2, 6.8), its points `P1` .. `P5` and the commands that reach
 //!   them.
-//! - [`evaluate`]: the figures of a measured campaign (experiments `iso-P<k>`), attained poses
+//! - [`mod@evaluate`]: the figures of a measured campaign (experiments `iso-P<k>`), attained poses
 //!   fitted to the tool targets, commanded ones from a robot model.
 //! - [`figures`]: pose accuracy and repeatability (7.2.1, 7.2.2), multi-directional pose
 //!   accuracy variation (7.2.3), distance accuracy and repeatability (7.3).
