@@ -3,7 +3,7 @@
 //! the YAML), not by the exporter's own, and compared with the calibrated model at random
 //! readings; and the nominal UR5e exported against UR's published `kinematics.yaml`.
 
-use crate::common::{axiscal, read_calibration, stderr, stdout};
+use crate::common::{axiscal, number_after, read_calibration, stderr, stdout};
 use axiscal::calibration::export::ur;
 use axiscal::robot::{Controller, RobotDescription, RobotModel, commands_to_internal};
 use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
@@ -325,14 +325,7 @@ fn a_ur_export_refuses_what_the_file_cannot_hold_and_a_robot_that_is_not_a_ur() 
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.contains("# APPROXIMATE: this file does not hold") && text.contains("joint 6's transmission"));
     // The header states the error it leaves.
-    let stated: f64 = text
-        .lines()
-        .find(|l| l.contains("the tool is off the calibrated model by up to"))
-        .and_then(|l| l.split("up to ").nth(1))
-        .and_then(|t| t.split(' ').next())
-        .unwrap()
-        .parse()
-        .unwrap();
+    let stated = number_after(&text, "the tool is off the calibrated model by up to ");
     assert!(stated > 0.0);
     // Existing output without --force, a bad hash.
     assert!(stderr(&base(&["--approximate"]).assert().code(2)).contains("--force"));
@@ -471,15 +464,7 @@ fn the_paper_robots_couplings_are_refused_and_their_approximation_stated_as_read
         assert!(stderr(&a).contains(named), "{named}: {}", stderr(&a));
     }
     let a = export(&["--approximate"]).assert().success();
-    let stated: f64 = stdout(&a)
-        .split("up to ")
-        .nth(1)
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let stated = number_after(&stdout(&a), "up to ");
     let map = yaml_lines(&std::fs::read_to_string(&out).unwrap());
     let worst = origins_worst(&map, &RobotDescription::asea_irb6l(), &dir.path().join("cal"));
     println!(

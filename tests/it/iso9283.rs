@@ -2,7 +2,7 @@
 //! model's commanded poses (the hand example of the unit tests: x = 1, 2, 3, 6 mm), measured as
 //! the description's three tool targets; the figures read from `iso9283.json`.
 
-use crate::common::{axiscal, read_calibration, stderr, stdout};
+use crate::common::{axiscal, number_after, read_calibration, stderr, stdout};
 use axiscal::measurement::{Measurement, MeasurementSet, write_measurements};
 use axiscal::robot::{Controller, RobotDescription, commands_to_internal};
 use nalgebra::{Isometry3, Translation3, Vector3};
@@ -281,18 +281,7 @@ fn a_planned_iso_test_measured_and_imported_evaluates_to_its_known_deviations() 
         assert_eq!(p["cycles"], 4);
     }
     // The cube: P2 and P4 are opposite corners' points, 0.8 of the cube's diagonal apart.
-    let edge_mm: f64 = text
-        .lines()
-        .next()
-        .unwrap()
-        .split("cube edge ")
-        .nth(1)
-        .unwrap()
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let edge_mm = number_after(&text, "cube edge ");
     let d = v["distance_p2_p4"]["commanded_mm"].as_f64().unwrap();
     assert!(
         (d - 0.8 * 3f64.sqrt() * edge_mm).abs() < 1e-6 * edge_mm,

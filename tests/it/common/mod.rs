@@ -171,3 +171,14 @@ pub fn principal_axes(points: &[nalgebra::Point3<f64>]) -> (nalgebra::Point3<f64
     order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
     (centroid, order.map(|k| eigen.eigenvectors.column(k).into_owned()))
 }
+
+/// The number written right after the first `label` in `text` (up to the next space).
+pub fn number_after(text: &str, label: &str) -> f64 {
+    let rest = text
+        .split(label)
+        .nth(1)
+        .unwrap_or_else(|| panic!("`{label}` not in: {text}"));
+    let word = rest.split(' ').next().unwrap();
+    word.parse()
+        .unwrap_or_else(|_| panic!("`{word}` after `{label}` is not a number"))
+}
