@@ -8,7 +8,7 @@ use super::figures::{
     DirectionalVariation, DistanceFigures, PoseAccuracy, PoseRepeatability, abc, directional_variation,
     distance_figures, pose_accuracy, pose_repeatability,
 };
-use crate::kinematics::rigid_fit;
+use crate::kinematics::{PhiModel, rigid_fit};
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::robot::{Controller, Placement, RobotDescription, RobotModel, commands_to_internal};
 use nalgebra::{Isometry3, Point3};
@@ -97,6 +97,7 @@ fn cycle(
     rows: &[&Measurement],
     targets_m: &[Point3<f64>],
     model: &RobotModel,
+    phi: &PhiModel,
     controller: &Controller,
     desc: &RobotDescription,
 ) -> Result<(Isometry3<f64>, Isometry3<f64>), String> {
@@ -121,7 +122,6 @@ fn cycle(
     let q = model
         .joint_values(controller, &commands_to_internal(desc, cmd))
         .map_err(|e| e.to_string())?;
-    let phi = model.phi_model();
     let base_from_world = phi.world_from_base.inverse();
     Ok((
         base_from_world * phi.world_from_tool(&q),
@@ -140,6 +140,7 @@ fn cycles(
         return Err(IsoError::TooFewToolTargets(targets_m.len()));
     }
     let controller = Controller::from_description(desc);
+    let phi = model.phi_model();
     let mut out: BTreeMap<usize, Vec<Cycle>> = BTreeMap::new();
     for experiment in set.experiments() {
         let Some((pose, direction)) = pose_label(experiment.name) else {
@@ -147,7 +148,7 @@ fn cycles(
         };
         for (step, rows) in experiment.by_step() {
             let (commanded, attained) =
-                cycle(&rows, &targets_m, model, &controller, desc).map_err(|problem| IsoError::Cycle {
+                cycle(&rows, &targets_m, model, &phi, &controller, desc).map_err(|problem| IsoError::Cycle {
                     experiment: experiment.name.to_string(),
                     step,
                     problem,

@@ -1,9 +1,9 @@
 //! The calibrated model as a chain of URDF joint origins, the form every kinematics export
 //! writes: joint `k`'s origin in its parent link, then the joint's motion along +Z (a rotation
-//! by the joint variable, or a translation). Two joint variables:
-//! - [`JointVariable::Calibrated`]: the phi-model joint values `q` (as `calibrated.urdf`); the
+//! by the joint variable, or a translation). A chain's joint variables are either:
+//! - the phi-model joint values `q` ([`OriginChain::of_phi_model`], as `calibrated.urdf`); the
 //!   controller's readings go through the joint map first;
-//! - [`JointVariable::Reading`]: the controller's readings, each joint's zero offset turned into
+//! - or the controller's readings ([`reading_chain`]), each joint's zero offset turned into
 //!   its origin (`origin_k Rz(q_k) = origin_k Rz(offset_k) Rz(u_k)` when `q_k = u_k + offset_k`);
 //!   exact only where the reading maps to the joint value by a constant shift
 //!   ([`Unrepresented`] lists the rest).
@@ -12,15 +12,6 @@ use crate::calibration::procedure::Calibration;
 use crate::kinematics::{JointKind, PhiModel, joint_motion};
 use crate::robot::{RobotDescription, RobotModel, Transmission};
 use nalgebra::Isometry3;
-
-/// What a chain's joint variables are.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum JointVariable {
-    /// The calibrated phi-model joint values `q`.
-    Calibrated,
-    /// The controller's readings, zero offsets in the origins.
-    Reading,
-}
 
 /// One joint of an [`OriginChain`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,8 +31,6 @@ pub struct OriginChain {
     pub last_link_from_tool: Isometry3<f64>,
     /// The root link in the instrument frame.
     pub world_from_root: Isometry3<f64>,
-    /// What the joint variables are.
-    pub variable: JointVariable,
 }
 
 impl OriginChain {
@@ -62,7 +51,6 @@ impl OriginChain {
             joints,
             last_link_from_tool: model.last_link_from_tool,
             world_from_root: model.world_from_base,
-            variable: JointVariable::Calibrated,
         }
     }
 
@@ -228,7 +216,6 @@ pub fn reading_chain(cal: &Calibration, desc: &RobotDescription) -> (OriginChain
         }
         joint.parent_from_joint *= joint_motion(joint.kind, map.offset);
     }
-    chain.variable = JointVariable::Reading;
     (chain, left_out)
 }
 

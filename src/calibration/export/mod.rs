@@ -11,7 +11,7 @@ pub mod origins_yaml;
 pub mod ur;
 
 pub use anchor::{AnchorError, LinkFrames, anchored, link_frames};
-pub use chain::{ChainJoint, JointVariable, LinearReading, OriginChain, Unrepresented, linear_readings, reading_chain};
+pub use chain::{ChainJoint, LinearReading, OriginChain, Unrepresented, linear_readings, reading_chain};
 
 use crate::calibration::procedure::Calibration;
 use crate::robot::{Controller, RobotDescription};

@@ -11,7 +11,7 @@
 //! reading / reduction + offset; [`OffsetsIn::Transmission`]), which also holds a sliding
 //! joint's scale error.
 
-use super::chain::{JointVariable, LinearReading, OriginChain, Unrepresented, linear_readings, reading_chain};
+use super::chain::{LinearReading, OriginChain, Unrepresented, linear_readings, reading_chain};
 use super::{ChainDeviation, deviation, from_xyz_rpy, xyz_rpy, yaml_float};
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::JointKind;
@@ -146,7 +146,6 @@ fn read_back(text: &str, kinds: &[JointKind]) -> Result<(OriginChain, Option<Vec
         joints,
         last_link_from_tool: read_origin(&root["flange-tool0"], "flange-tool0")?,
         world_from_root: read_origin(&root["instrument-base_link"], "instrument-base_link")?,
-        variable: JointVariable::Reading,
     };
     Ok((chain, (!maps.is_empty()).then_some(maps)))
 }
@@ -162,8 +161,7 @@ pub fn export(cal: &Calibration, desc: &RobotDescription, offsets: OffsetsIn) ->
         }
         OffsetsIn::Transmission => {
             let (maps, left_out) = linear_readings(cal, desc);
-            let mut chain = OriginChain::of_phi_model(&cal.robot.phi_model());
-            chain.variable = JointVariable::Calibrated;
+            let chain = OriginChain::of_phi_model(&cal.robot.phi_model());
             (to_yaml(&chain, Some(&maps)), left_out)
         }
     };

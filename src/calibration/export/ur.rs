@@ -12,7 +12,7 @@
 //! `wrist_3_link` (its two fixed turns, via `flange`, cancel). The file has no tool: the
 //! calibrated tool frame is reported as a TCP in `tool0`.
 
-use super::chain::{ChainJoint, JointVariable, OriginChain, Unrepresented, reading_chain};
+use super::chain::{ChainJoint, OriginChain, Unrepresented, reading_chain};
 use super::{ChainDeviation, LinkFrames, anchored, deviation, from_xyz_rpy, link_frames, xyz_rpy, yaml_float};
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::JointKind;
@@ -171,7 +171,6 @@ impl UrKinematics {
             joints,
             last_link_from_tool: Isometry3::identity(),
             world_from_root: Isometry3::identity(),
-            variable: JointVariable::Reading,
         }
     }
 
