@@ -7,7 +7,7 @@ RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' C
 
 FUZZ_SECONDS ?= 600
 
-.PHONY: run test test-real test-robots noise-check tool-accuracy bench fuzz study blind blind-free-poses blind-analytic budget lint doc clean-results setup-viewer view
+.PHONY: run test test-real test-robots noise-check iso9283-check certificate tool-accuracy bench fuzz study blind blind-free-poses blind-analytic budget lint doc clean-results setup-viewer view
 
 ## run: the paper scenario end to end; results under results/ (with a rerun recording:
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
@@ -42,6 +42,22 @@ test-real:
 ## normalised RMS error of every identified parameter and the count beyond 3 sigma
 test-robots:
 	$(CARGO) test --release --test it -- --ignored test_robots:: --nocapture
+
+## iso9283-check: ISO 9283 tests after calibration, 200 simulated (paper robot, theodolites),
+## measured against their Monte-Carlo prediction: mean measured / predicted AP and RP within 10 %
+iso9283-check:
+	$(CARGO) run --profile quick-release -- run scenarios/iso9283.toml --force --out results/iso9283
+
+## certificate: the calibration certificate of the simulated paper campaign (seed 1), as
+## results/certificate/certificate.html and .json, rendered to certificate.png by headless
+## Chromium (Debian's package, installed when missing)
+certificate:
+	$(CARGO) run --profile quick-release -- simulate --seed 1 --out results/certificate/campaign.csv --force
+	$(CARGO) run --profile quick-release -- calibrate results/certificate/campaign.csv --out results/certificate/cal --force
+	$(CARGO) run --profile quick-release -- report --calibration results/certificate/cal/calibration.json \
+		--data results/certificate/campaign.csv --held-out results/certificate/campaign.csv \
+		--instrument "two theodolites (simulated), 0.19 mm net radial error" --out results/certificate --force
+	scripts/render-html.sh results/certificate/certificate.html results/certificate/certificate.png
 
 ## noise-check: the noise estimated from the residuals on 200 Table-1 campaigns (within 10 %,
 ## interval coverage >= 90 %)

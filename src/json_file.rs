@@ -50,6 +50,10 @@ impl Schema {
     pub const VALIDATION: Schema = Schema::v1("validation");
     /// `iso9283.json` of `iso9283 evaluate`.
     pub const ISO9283: Schema = Schema::v1("iso9283");
+    /// `iso9283-prediction.json` of `iso9283 predict`.
+    pub const ISO9283_PREDICTION: Schema = Schema::v1("iso9283_prediction");
+    /// `certificate.json` of `report`.
+    pub const CERTIFICATE: Schema = Schema::v1("certificate");
 
     const fn v1(name: &'static str) -> Schema {
         Schema::new(name, 1, 1)

@@ -115,6 +115,8 @@ pub fn schemas() -> Vec<(Schema, Value)> {
         (Schema::STUDY, schema_of::<StudyReport>()),
         (Schema::VALIDATION, schema_of::<Validation>()),
         (Schema::ISO9283, schema_of::<crate::iso9283::IsoFigures>()),
+        (Schema::ISO9283_PREDICTION, schema_of::<crate::iso9283::IsoPrediction>()),
+        (Schema::CERTIFICATE, schema_of::<crate::certificate::Certificate>()),
     ]
     .into_iter()
     .map(|(schema, body)| (schema, versioned(schema, body)))

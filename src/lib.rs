@@ -17,9 +17,10 @@
 //! | [`plan`] | the campaign plan: Table-1 axis experiments, hold-still commands, validation poses |
 //! | [`measurement`] | the instruments (theodolite pair, isotropic noise) and the measurement CSV |
 //! | [`calibration`] | axis fits (eqs. 1-13), couplings (eqs. 14-15), the procedure and its report |
+//! | [`certificate`] | the calibration certificate: parameters with GUM uncertainties, correlations, residuals, held-out poses (HTML and JSON) |
 //! | [`compensation`] | fig. 5: commands for required tool poses |
 //! | [`diagnosis`] | the sim-to-real gap diagnosis: where, which effect, how far it shrinks |
-//! | [`iso9283`] | ISO 9283 pose and distance characteristics of measured cycles |
+//! | [`iso9283`] | ISO 9283 pose and distance characteristics of measured cycles, and their prediction |
 //! | [`physics`] | gravity, compliance and the unmodelled-effect forms (neutral ground) |
 //! | [`numerics`] | the one least-squares loop and the statistics |
 //! | [`sim`] | the simulated real robot (analytic and rapier arms): the answer key |
@@ -109,6 +110,7 @@
 #![deny(clippy::float_cmp)]
 
 pub mod calibration;
+pub mod certificate;
 pub mod compensation;
 pub mod csv_lines;
 pub mod diagnosis;

@@ -138,6 +138,16 @@ pub fn model_parameter_names(robot: &RobotModel) -> Vec<String> {
     names
 }
 
+/// The values of `robot`'s parameter vector ([`model_parameter_names`] order, the vector's
+/// units): 0 for the base and tool placements (the vector holds them relative to the model's
+/// own), the scalars as they are.
+pub fn model_parameter_values(robot: &RobotModel) -> Vec<f64> {
+    let mut values = vec![0.0; 6];
+    values.extend(ModelOrigin::new(robot).values);
+    values.extend([0.0; 6]);
+    values
+}
+
 /// `b^-1 a` as translation and rotation vector.
 fn relative(a: &Isometry3<f64>, b: &Isometry3<f64>) -> Vector6<f64> {
     let rel = b.inverse() * a;
@@ -225,6 +235,32 @@ pub fn model_moved(robot: &RobotModel, k: usize, h: f64) -> RobotModel {
     if k >= i {
         out.tool_frame = moved_placement(&robot.tool_frame.to_isometry(), k - i, h);
     }
+    out
+}
+
+/// `robot` with its whole parameter vector moved by `delta` (in the vector's units, length
+/// [`model_parameter_names`]`(robot).len()`): the base and tool placements by `exp(d)` on the
+/// right (as [`ModelOrigin::difference`] measures them), every scalar by its component. The
+/// robot a calibration with parameter error `delta` was made on.
+pub fn model_displaced(robot: &RobotModel, delta: &[f64]) -> RobotModel {
+    let displaced = |iso: &Isometry3<f64>, d: &[f64]| {
+        let rel = Isometry3::from_parts(
+            Translation3::new(d[0], d[1], d[2]),
+            UnitQuaternion::from_scaled_axis(Vector3::new(d[3], d[4], d[5])),
+        );
+        crate::robot::Placement::from_isometry(&(iso * rel))
+    };
+    let mut out = robot.clone();
+    out.placement = displaced(&robot.placement.to_isometry(), &delta[..6]);
+    let mut i = 6;
+    visit_scalars(&mut out, &mut |_, v, stored| {
+        *v += match stored {
+            Stored::Si => delta[i],
+            Stored::Deg => delta[i].to_degrees(),
+        };
+        i += 1;
+    });
+    out.tool_frame = displaced(&robot.tool_frame.to_isometry(), &delta[i..i + 6]);
     out
 }
 

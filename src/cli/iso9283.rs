@@ -7,8 +7,11 @@ use super::options::InRange;
 use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::compensation::Compensator;
-use axiscal::iso9283::{IsoFigures, evaluate, largest_cube, plan_cube};
+use axiscal::iso9283::{
+    CYCLE_ORDER, Cube, IsoFigures, IsoPrediction, PredictionInputs, evaluate, largest_cube, plan_cube, predict,
+};
 use axiscal::json_file::{self, Schema};
+use axiscal::measurement::{IsotropicNoise, MeasurementModel};
 use axiscal::plan::{CalibrationPlan, PlanPose, SightOptions, points_of_poses, tool_targets, write_plan_csv};
 use axiscal::robot::{RobotDescription, RobotModel};
 use std::fmt::Write as _;
@@ -34,17 +37,18 @@ enum What {
     /// 9283 6.2, 6.8), each cycle visiting `P1, P5, P4, P3, P2`, the tool targets measured at
     /// each (`docs/formats.md#iso9283-plan`).
     Plan(PlanArgs),
+    /// The figures an ISO 9283 test after calibration is predicted to give, before it is
+    /// measured: a Monte-Carlo over the calibration's covariance, the robot's repeatability
+    /// and the instrument's noise (`docs/formats.md#iso9283-predict`).
+    Predict(PredictArgs),
 }
 
+/// Where the cube goes: what `plan` and `predict` share.
 #[derive(Debug, clap::Args)]
-struct PlanArgs {
+struct CubeArgs {
     /// Nominal robot description (TOML), or a shipped robot's name.
     #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
-    /// The calibration whose model commands the points (after calibration, fig. 5). Without
-    /// it the nominal model does (before calibration).
-    #[arg(long)]
-    calibration: Option<PathBuf>,
     /// The commands of the cube's centre, `cmd_1,..,cmd_N` (deg or mm): its tool position is
     /// `P1`, its tool orientation every point's. Default: the calibration plan's reference pose.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
@@ -56,15 +60,51 @@ struct PlanArgs {
     /// Cycles (ISO 9283: 30).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=1000))]
     cycles: u32,
+    /// Go on even when the calibration records another robot description than `--robot`.
+    #[arg(long)]
+    allow_other_robot: bool,
+}
+
+#[derive(Debug, clap::Args)]
+struct PredictArgs {
+    /// The calibration (`calibration.json` with its `model_covariance`): its model commands the
+    /// points, its covariance is the calibration's error.
+    #[arg(long)]
+    calibration: PathBuf,
+    #[command(flatten)]
+    cube: CubeArgs,
+    /// The instrument's 3-D RMS noise (mm), isotropic. Default: the noise the calibration's
+    /// fits were weighted with (`noise.used_rms_3d_mm`).
+    #[arg(long, value_parser = InRange::above(0.0, 100.0, ""))]
+    noise_mm: Option<f64>,
+    /// Simulated tests.
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    trials: u32,
+    /// Seed of the simulated tests.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace existing output files.
+    #[arg(long)]
+    force: bool,
+}
+
+#[derive(Debug, clap::Args)]
+struct PlanArgs {
+    /// The calibration whose model commands the points (after calibration, fig. 5). Without
+    /// it the nominal model does (before calibration).
+    #[arg(long)]
+    calibration: Option<PathBuf>,
+    #[command(flatten)]
+    cube: CubeArgs,
     /// The plan CSV to write.
     #[arg(long)]
     out: PathBuf,
     /// Replace `--out` if it exists.
     #[arg(long)]
     force: bool,
-    /// Go on even when the calibration records another robot description than `--robot`.
-    #[arg(long)]
-    allow_other_robot: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -94,28 +134,17 @@ pub fn run(args: Args) -> Result<()> {
     match args.what {
         What::Evaluate(a) => evaluate_cycles(a),
         What::Plan(a) => plan(a),
+        What::Predict(a) => predict_figures(a),
     }
 }
 
-/// The order of the points in a cycle (ISO 9283 7.2.1: P1, then P5 down to P2).
-const CYCLE_ORDER: [usize; 5] = [1, 5, 4, 3, 2];
-
-fn plan(args: PlanArgs) -> Result<()> {
-    let mut outputs = Outputs::new(args.force).input("--robot", &args.robot);
-    if let Some(c) = &args.calibration {
-        outputs = outputs.input("--calibration", c);
-    }
-    outputs.check(&args.out)?;
-    let desc = RobotDescription::from_file(&args.robot)?;
-    let model = match &args.calibration {
-        Some(path) => checks::read_calibration(path, &desc, &args.robot, args.allow_other_robot)?.robot,
-        None => RobotModel::ideal(&desc),
-    };
-    let compensator = Compensator::new(&model, &desc)?;
+/// The cube of `args` commanded through `model` (file units).
+fn cube_of(args: &CubeArgs, desc: &RobotDescription, model: &RobotModel) -> Result<Cube> {
+    let compensator = Compensator::new(model, desc)?;
     let centre = args
         .centre_cmd
         .clone()
-        .unwrap_or_else(|| CalibrationPlan::for_robot(&desc).reference);
+        .unwrap_or_else(|| CalibrationPlan::for_robot(desc).reference);
     if centre.len() != desc.dof() {
         bail!(
             "--centre-cmd gives {} values; the robot has {} joints",
@@ -123,13 +152,28 @@ fn plan(args: PlanArgs) -> Result<()> {
             desc.dof()
         );
     }
-    let cube = match args.edge_mm {
-        Some(mm) => plan_cube(&compensator, &desc, &centre, mm * 1e-3),
-        None => largest_cube(&compensator, &desc, &centre, 0.5),
+    match args.edge_mm {
+        Some(mm) => plan_cube(&compensator, desc, &centre, mm * 1e-3),
+        None => largest_cube(&compensator, desc, &centre, 0.5),
     }
-    .with_context(|| format!("the ISO cube around the centre commands {centre:?} (--centre-cmd)"))?;
+    .with_context(|| format!("the ISO cube around the centre commands {centre:?} (--centre-cmd)"))
+}
+
+fn plan(args: PlanArgs) -> Result<()> {
+    let robot = &args.cube.robot;
+    let mut outputs = Outputs::new(args.force).input("--robot", robot);
+    if let Some(c) = &args.calibration {
+        outputs = outputs.input("--calibration", c);
+    }
+    outputs.check(&args.out)?;
+    let desc = RobotDescription::from_file(robot)?;
+    let model = match &args.calibration {
+        Some(path) => checks::read_calibration(path, &desc, robot, args.cube.allow_other_robot)?.robot,
+        None => RobotModel::ideal(&desc),
+    };
+    let cube = cube_of(&args.cube, &desc, &model)?;
     let targets = tool_targets(&desc);
-    let poses: Vec<PlanPose> = (0..args.cycles as usize)
+    let poses: Vec<PlanPose> = (0..args.cube.cycles as usize)
         .flat_map(|cycle| CYCLE_ORDER.map(|k| (cycle, k)))
         .map(|(cycle, k)| PlanPose {
             experiment: format!("iso-P{k}"),
@@ -149,7 +193,7 @@ fn plan(args: PlanArgs) -> Result<()> {
         "# ISO 9283 test of {}: cube edge {:.0} mm, {} cycles of P1, P5, P4, P3, P2; commanded through {}\n",
         desc.name,
         cube.edge_m * 1e3,
-        args.cycles,
+        args.cube.cycles,
         if args.calibration.is_some() {
             "the calibrated model (fig. 5)"
         } else {
@@ -163,7 +207,7 @@ fn plan(args: PlanArgs) -> Result<()> {
         "wrote {}: ISO 9283 cube of edge {:.0} mm, {} cycles x 5 points x {} targets = {} points",
         args.out.display(),
         cube.edge_m * 1e3,
-        args.cycles,
+        args.cube.cycles,
         targets.len(),
         points.len()
     );
@@ -235,6 +279,103 @@ fn markdown(f: &IsoFigures, commanded_by: &str, data: &str) -> String {
             );
         }
         None => s.push_str("\nDistance P2-P4: not measured in two or more common cycles.\n"),
+    }
+    s
+}
+
+/// The files `iso9283 predict` writes into its output folder.
+const PREDICTION_OUTPUTS: [&str; 2] = ["iso9283-prediction.json", "iso9283-prediction.md"];
+
+fn predict_figures(args: PredictArgs) -> Result<()> {
+    let robot = &args.cube.robot;
+    let outputs = Outputs::new(args.force)
+        .input("--robot", robot)
+        .input("--calibration", &args.calibration);
+    outputs.check_in(&args.out, &PREDICTION_OUTPUTS)?;
+    let desc = RobotDescription::from_file(robot)?;
+    let cal = checks::read_calibration(&args.calibration, &desc, robot, args.cube.allow_other_robot)?;
+    let Some(covariance) = &cal.model_covariance else {
+        bail!(
+            "{} has no `model_covariance` (a calibration from free poses, or an older file): the calibration's error cannot be drawn; recalibrate with `axiscal calibrate`",
+            args.calibration.display()
+        );
+    };
+    let noise_mm = match (args.noise_mm, &cal.noise) {
+        (Some(mm), _) => mm,
+        (None, Some(n)) => n.used_rms_3d_mm,
+        (None, None) => bail!(
+            "{} records no measurement noise: give the instrument's with --noise-mm",
+            args.calibration.display()
+        ),
+    };
+    let repeatability = cal.options.joint_repeatability_rad(&desc)?;
+    let cube = cube_of(&args.cube, &desc, &cal.robot)?;
+    let instrument = MeasurementModel::Isotropic(IsotropicNoise {
+        net_radial_rms_mm: noise_mm,
+    });
+    let inputs = PredictionInputs {
+        model: &cal.robot,
+        covariance: &covariance.matrix(),
+        desc: &desc,
+        repeatability_rad_or_m: &repeatability,
+        instrument: &instrument,
+    };
+    let prediction = predict(
+        &inputs,
+        &cube.commands,
+        args.cube.cycles as usize,
+        args.trials as usize,
+        args.seed,
+    )
+    .with_context(|| format!("predicting the ISO test of {}", args.calibration.display()))?;
+    let text = prediction_markdown(&prediction, &cube, noise_mm, &args.calibration.display().to_string());
+    outputs.write_in(
+        &args.out,
+        PREDICTION_OUTPUTS[0],
+        json_file::to_string(Schema::ISO9283_PREDICTION, &prediction)?,
+    )?;
+    outputs.write_in(&args.out, PREDICTION_OUTPUTS[1], &text)?;
+    say!("{}", text.trim_end());
+    say!("wrote {}/{{{}}}", args.out.display(), PREDICTION_OUTPUTS.join(","));
+    Ok(())
+}
+
+/// `iso9283-prediction.md`: per pose the predicted `AP_P` and `RP_l` (mean and 95 % quantile
+/// over the simulated tests), the distance figures, what was drawn.
+fn prediction_markdown(p: &IsoPrediction, cube: &Cube, noise_mm: f64, calibration: &str) -> String {
+    let mut s = format!(
+        "# Predicted ISO 9283 figures after the calibration {calibration}\n\nCube edge {:.0} mm; {} simulated tests (seed {}) of the calibration's error (its model covariance), the robot's repeatability and isotropic instrument noise of {noise_mm:.4} mm 3-D RMS.\n\n| pose | AP_P mean (mm) | AP_P p95 (mm) | RP_l mean (mm) | RP_l p95 (mm) |\n|---|---|---|---|---|\n",
+        cube.edge_m * 1e3,
+        p.trials,
+        p.seed
+    );
+    let or_dash = |x: Option<f64>| x.map_or("-".into(), |v| format!("{v:.4}"));
+    for q in &p.poses {
+        let _ = writeln!(
+            s,
+            "| P{} | {:.4} | {:.4} | {} | {} |",
+            q.pose,
+            q.ap_p_mm.mean,
+            q.ap_p_mm.p95,
+            or_dash(q.rp_l_mm.map(|r| r.mean)),
+            or_dash(q.rp_l_mm.map(|r| r.p95))
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nMean over the poses: AP_P {:.4} mm (p95 {:.4}), RP_l {} mm; worst AP_P {:.4} mm (p95 {:.4}).",
+        p.mean_ap_p_mm.mean,
+        p.mean_ap_p_mm.p95,
+        or_dash(p.mean_rp_l_mm.map(|r| r.mean)),
+        p.worst_ap_p_mm.mean,
+        p.worst_ap_p_mm.p95
+    );
+    if let (Some(ad), Some(rd)) = (p.ad_p_mm, p.rd_p_mm) {
+        let _ = writeln!(
+            s,
+            "Distance P2-P4: AD_P {:.4} mm (RMS over the tests {:.4}), RD_P {:.4} mm.",
+            ad.mean, ad.rms, rd.mean
+        );
     }
     s
 }

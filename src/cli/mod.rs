@@ -33,6 +33,7 @@ mod output;
 mod plan;
 mod progress;
 mod record;
+mod report;
 mod run;
 mod signals;
 mod simulate;
@@ -197,6 +198,10 @@ enum Command {
     /// variation, distance accuracy and repeatability) of measured cycles.
     #[command(name = "iso9283")]
     Iso9283(iso9283::Args),
+    /// The calibration certificate: every parameter with its GUM uncertainty (u, U with
+    /// k = 2), correlations, residual plots, held-out poses, ISO 9283 figures, as one HTML page
+    /// and its JSON (`docs/formats.md#certificate`).
+    Report(report::Args),
     /// The paper scenario end to end: simulate, calibrate, compensate, evaluate (figs. 9-10).
     Evaluate(evaluate::Args),
     /// The paper's gap budget: per unmodelled effect, the magnitude that raises the simulated
@@ -293,6 +298,7 @@ pub fn main() -> ExitCode {
         Command::Joints(args) => joints::run(args),
         Command::Export(args) => export::run(args),
         Command::Iso9283(args) => iso9283::run(args),
+        Command::Report(args) => report::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Budget(args) => budget::run(args),
         Command::Diagnose(args) => diagnose::run(args),

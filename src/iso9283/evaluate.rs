@@ -51,7 +51,7 @@ pub fn pose_label(experiment: &str) -> Option<(usize, usize)> {
 }
 
 /// One ISO pose's figures.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct PoseFigures {
     /// `k` of `P<k>`.
     pub pose: usize,
@@ -68,7 +68,7 @@ pub struct PoseFigures {
 }
 
 /// The figures of a campaign.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct IsoFigures {
     /// Per pose, `P1` first.
     pub poses: Vec<PoseFigures>,
@@ -82,6 +82,19 @@ pub struct IsoFigures {
     pub worst_ap_p_mm: f64,
     /// Largest `RP_l` over the poses \[mm\].
     pub worst_rp_l_mm: f64,
+}
+
+impl IsoFigures {
+    /// The mean of `AP_P` over the poses \[mm\].
+    pub fn mean_ap_p_mm(&self) -> f64 {
+        self.poses.iter().map(|p| p.accuracy.ap_p_mm).sum::<f64>() / self.poses.len() as f64
+    }
+
+    /// The mean of `RP_l` over the poses \[mm\]; `None` when a pose has a single cycle.
+    pub fn mean_rp_l_mm(&self) -> Option<f64> {
+        let r: Option<Vec<f64>> = self.poses.iter().map(|p| p.repeatability.map(|r| r.rp_l_mm)).collect();
+        r.map(|r| r.iter().sum::<f64>() / r.len() as f64)
+    }
 }
 
 /// A measured cycle: its commanded and attained tool poses in the base frame.

@@ -41,7 +41,7 @@ fn angle_differences(poses: &[Isometry3<f64>], reference: [f64; 3]) -> [Vec<f64>
 }
 
 /// Pose accuracy, ISO 9283 7.2.1: the mean attained pose against the commanded one.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct PoseAccuracy {
     /// `AP_P = sqrt((x_bar - x_c)^2 + (y_bar - y_c)^2 + (z_bar - z_c)^2)` \[mm\].
     pub ap_p_mm: f64,
@@ -79,7 +79,7 @@ pub fn pose_accuracy(commanded: &Isometry3<f64>, attained: &[Isometry3<f64>]) ->
 }
 
 /// Pose repeatability, ISO 9283 7.2.2: the spread of the attained poses about their mean.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct PoseRepeatability {
     /// `RP_l = l_bar + 3 S_l` \[mm\].
     pub rp_l_mm: f64,
@@ -120,7 +120,7 @@ pub fn pose_repeatability(attained: &[Isometry3<f64>]) -> Option<PoseRepeatabili
 
 /// Multi-directional pose accuracy variation, ISO 9283 7.2.3: the largest distance between the
 /// mean attained poses of the approach directions.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct DirectionalVariation {
     /// `vAP_P = max sqrt((x_bar_h - x_bar_k)^2 + ...)` over pairs of directions \[mm\].
     pub vap_p_mm: f64,
@@ -164,7 +164,7 @@ pub fn directional_variation(per_direction: &[Vec<Isometry3<f64>>]) -> Option<Di
 }
 
 /// Distance accuracy and repeatability, ISO 9283 7.3.1 and 7.3.2, between two poses.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, schemars::JsonSchema)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 pub struct DistanceFigures {
     /// `D_c`, the commanded distance \[mm\].
     pub commanded_mm: f64,

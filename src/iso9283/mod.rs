@@ -9,10 +9,13 @@
 //!   fitted to the tool targets, commanded ones from a robot model.
 //! - [`figures`]: pose accuracy and repeatability (7.2.1, 7.2.2), multi-directional pose
 //!   accuracy variation (7.2.3), distance accuracy and repeatability (7.3).
+//! - [`predict`](mod@predict): the figures predicted before a test, by Monte-Carlo over the
+//!   calibration's covariance, the robot's repeatability and the instrument's noise.
 
 pub mod cube;
 pub mod evaluate;
 pub mod figures;
+pub mod predict;
 
 pub use cube::{Cube, CubeError, cube_points, largest_cube, plan_cube};
 pub use evaluate::{IsoError, IsoFigures, PoseFigures, evaluate, pose_label};
@@ -20,3 +23,4 @@ pub use figures::{
     DirectionalVariation, DistanceFigures, PoseAccuracy, PoseRepeatability, abc, directional_variation,
     distance_figures, pose_accuracy, pose_repeatability,
 };
+pub use predict::{CYCLE_ORDER, IsoPrediction, PredictedPose, PredictionError, PredictionInputs, cycle_rows, predict};

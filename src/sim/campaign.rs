@@ -216,6 +216,50 @@ pub fn simulate_campaign_with<A: ArmExecutor, R: Rng + ?Sized>(
     Ok(out)
 }
 
+/// A pose to execute and measure at: its experiment, step and commands (file units).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PosePlan {
+    /// Experiment name of its rows (`moved_joint` 0).
+    pub experiment: String,
+    /// Step of its rows.
+    pub step: usize,
+    /// Commands \[deg or mm\].
+    pub cmd: Vec<f64>,
+}
+
+/// Executes each of `poses` in order on `arm` and measures the description's tool targets at
+/// each (as the validation poses of [`simulate_campaign_with`]): e.g. the cycles of an ISO 9283
+/// test after a calibration.
+pub fn simulate_poses<A: ArmExecutor, R: Rng + ?Sized>(
+    desc: &RobotDescription,
+    poses: &[PosePlan],
+    arm: &mut A,
+    instrument: &MeasurementModel,
+    options: &CampaignOptions,
+    rng: &mut R,
+) -> Result<CampaignOutput, CampaignError> {
+    let mut out = CampaignOutput::default();
+    out.rows.reserve(poses.len() * desc.tool_targets_m().len());
+    let instrument = Instrument {
+        model: instrument,
+        scale: options.instrument_scale,
+    };
+    for p in poses {
+        observe_tool(
+            &mut out,
+            desc,
+            arm,
+            &instrument,
+            rng,
+            &p.experiment,
+            p.step,
+            &p.cmd,
+            options.conditions,
+        )?;
+    }
+    Ok(out)
+}
+
 /// The held joints' recorded values (every joint but `joint`) moved by a uniform `|x|` in
 /// `[min, max]` with a random sign each (file units): the robot stands where its encoders say.
 fn wander_held<R: Rng + ?Sized>(cmd: &mut [f64], joint: usize, [min, max]: [f64; 2], rng: &mut R) {

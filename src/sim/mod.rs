@@ -24,8 +24,8 @@ mod repeatability;
 
 pub use analytic_arm::AnalyticArm;
 pub use campaign::{
-    ArmExecutor, CampaignError, CampaignOptions, CampaignOutput, ExecuteError, simulate_campaign,
-    simulate_campaign_with,
+    ArmExecutor, CampaignError, CampaignOptions, CampaignOutput, ExecuteError, PosePlan, simulate_campaign,
+    simulate_campaign_with, simulate_poses,
 };
 pub use effects::{Effects, EffectsError, LinkMassEntry};
 pub use joint_driver::{DrivenJoints, InversionTable, JointDriver, UNMOVED_ACTUATOR_RAD};

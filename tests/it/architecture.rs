@@ -19,6 +19,7 @@ const BOUNDARY: &[(&str, &[&str])] = &[
     ("measurement", &["crate::sim", "crate::harness", "crate::viz"]),
     ("numerics", &["crate::sim", "crate::harness", "crate::viz"]),
     ("iso9283", &["crate::sim", "crate::harness", "crate::viz"]),
+    ("certificate", &["crate::sim", "crate::harness", "crate::viz"]),
     ("physics", &["crate::sim", "crate::harness", "crate::viz"]),
     ("plan", &["crate::sim", "crate::harness", "crate::viz"]),
     ("robot", &["crate::sim", "crate::harness", "crate::viz"]),

@@ -253,8 +253,9 @@ fn errors_of(file: &Path) -> (String, Vec<String>) {
 
 /// Keys whose value is a list of numbers that is not positional: a vector in a stated frame
 /// (`x, y, z`), a quaternion, a per-joint or per-coefficient list, a matrix.
-const NUMBER_LISTS: [&str; 28] = [
+const NUMBER_LISTS: [&str; 29] = [
     "nominal_mm",
+    "correlation",
     "refined_mm",
     "gravity_m_s2",
     "stiffness_nm_per_rad",
@@ -339,6 +340,35 @@ fn outputs(d: &Path) -> Vec<PathBuf> {
             "cal/calibration.json",
             "--out",
             "iso",
+        ],
+    );
+    run(
+        d,
+        &[
+            "iso9283",
+            "predict",
+            "--calibration",
+            "cal/calibration.json",
+            "--trials",
+            "3",
+            "--edge-mm",
+            "200",
+            "--out",
+            "iso",
+        ],
+    );
+    run(
+        d,
+        &[
+            "report",
+            "--calibration",
+            "cal/calibration.json",
+            "--held-out",
+            "data.csv",
+            "--iso9283",
+            "iso/iso9283.json",
+            "--out",
+            "cert",
         ],
     );
     run(d, &["diagnose", "data.csv", "--out", "diag"]);

@@ -57,6 +57,13 @@ fn assert_lean_equals_full(what: &str, set: &MeasurementSet, desc: &RobotDescrip
         format!("{:?}", Some(&full.row_sigma)),
         "{what}: row sigmas"
     );
+    assert_eq!(with_cov.model_covariance, None, "{what}");
+    let with_model_cov = calibrate_model(set, desc, options, Detail::ModelCovariance).unwrap();
+    assert_eq!(
+        format!("{:?}", with_model_cov.model_covariance),
+        format!("{:?}", full.model_covariance),
+        "{what}: model covariance"
+    );
 }
 
 #[test]

@@ -9,6 +9,7 @@ mod architecture;
 mod calibration_procedure;
 mod calibration_study;
 mod campaign_plan;
+mod certificate;
 mod cli_calibrate;
 mod cli_evaluate;
 mod cli_record;

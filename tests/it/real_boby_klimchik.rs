@@ -160,6 +160,22 @@ fn calibrates_six_axes_and_finds_axes_2_and_3_parallel() {
         sigma_angle_rad * 1e3
     );
     assert!(sigmas < 3.0, "axes 2 and 3 are {sigmas:.2} sigma from parallel");
+
+    // The certificate of this real calibration: every expanded uncertainty twice the sigma
+    // calibration.json reports.
+    let cert = tmp.path().join("cert");
+    axiscal()
+        .args(["report", "--calibration"])
+        .arg(out.join("calibration.json"))
+        .arg("--robot")
+        .arg(robot())
+        .arg("--data")
+        .arg(&data)
+        .args(["--instrument", "laser tracker (Boby & Klimchik's data set)", "--out"])
+        .arg(&cert)
+        .assert()
+        .success();
+    crate::certificate::check_certificate(&cert, &out.join("calibration.json"));
 }
 
 /// `axiscal diagnose` without validation poses: the axis-experiments-only mode puts axis 2's

@@ -2,7 +2,7 @@
 //! resolve, the resolved dump round-trips.
 
 use axiscal::harness::scenario::export::csv::write_trials;
-use axiscal::harness::scenario::{CampaignTrial, Overrides, ResolvedScenario, SimMode, Trial, run_units};
+use axiscal::harness::scenario::{CampaignTrial, ISO_METRICS, Overrides, ResolvedScenario, SimMode, Trial, run_units};
 use std::path::Path;
 
 fn smoke(trials: usize) -> ResolvedScenario {
@@ -44,6 +44,7 @@ fn shipped_scenarios_resolve_and_their_dump_round_trips() {
         "span-study",
         "compliance",
         "plan-optimize",
+        "iso9283",
     ] {
         let path = format!("scenarios/{name}.toml");
         let s = ResolvedScenario::from_file(Path::new(&path), Overrides::default())
@@ -105,4 +106,38 @@ fn sweep_and_plan_errors_name_their_key() {
         "trials = 1\n[[thresholds]]\nmetric = \"occluded\"\nstat = \"max\"\nop = \"<=\"\nvalue = 0\ncase = \"nope\"\n",
     );
     assert!(case.contains("key `thresholds[0].case`"), "{case}");
+}
+
+/// A scenario with `[iso9283]` (the table robot, isotropic noise, 2 trials, a 100 mm cube)
+/// adds the ISO metrics after the campaign's, bit-identical on one and two threads; each ratio
+/// is the measured figure over the predicted one; a section out of range names its key.
+#[test]
+fn an_iso_section_adds_measured_and_predicted_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("iso.toml");
+    let robot = std::fs::canonicalize("scenarios/robots/table-prpp.toml").unwrap();
+    let text = format!(
+        "trials = 2\nseed = 4\nrobot = {:?}\n[truth]\nkind = \"perturbed\"\n[truth.perturbation]\ntransducer_offset_deg = {{ normal = {{ sigma = 0.1 }} }}\n[measurement]\ninstrument = \"isotropic\"\nnet_radial_rms_mm = 0.1\n[iso9283]\ncycles = 5\nedge_mm = 100.0\nprediction_trials = 4\n",
+        robot.display().to_string()
+    );
+    std::fs::write(&path, &text).unwrap();
+    let s = ResolvedScenario::from_file(&path, Overrides::default()).unwrap();
+    let trial = CampaignTrial::new(&s).unwrap();
+    let names = trial.metric_names();
+    assert_eq!(names[names.len() - ISO_METRICS.len()..], ISO_METRICS.map(String::from));
+    let one = trials_csv_with_threads(&s, 1);
+    assert_eq!(one, trials_csv_with_threads(&s, 2));
+    let records = run_units(&s, &trial, 0..s.units(), &|_| {});
+    let at = |name: &str| names.iter().position(|n| n == name).unwrap();
+    for r in &records {
+        assert_eq!(r.values[at("iso_edge_mm")], 100.0);
+        let (ap, predicted) = (r.values[at("iso_ap_p_mm")], r.values[at("iso_ap_p_predicted_mm")]);
+        assert!(ap > 0.0 && predicted > 0.0, "{r:?}");
+        assert_eq!(r.values[at("iso_ap_p_ratio")], ap / predicted);
+    }
+    std::fs::write(&path, text.replace("cycles = 5", "cycles = 1")).unwrap();
+    let err = ResolvedScenario::from_file(&path, Overrides::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("iso9283.cycles"), "{err}");
 }

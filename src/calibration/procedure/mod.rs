@@ -42,7 +42,7 @@ pub use joint_map::{
     JointMap, MapRow, MapTable, ZeroOffsetFit, calibrated_joint_values, controller_zero_offsets, joint_map,
 };
 pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
-pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, residuals_csv};
+pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, read_residuals_csv, residuals_csv};
 pub use result::{
     AxisReport, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport, PointResidual,
     PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
@@ -272,6 +272,9 @@ pub enum Detail {
     Model,
     /// The model and the 1-sigma of its rows ([`FittedModel::row_sigma`]).
     ModelAndCovariance,
+    /// [`Detail::ModelAndCovariance`] and the covariance of the model's whole parameter vector
+    /// ([`FittedModel::model_covariance`]): what a Monte-Carlo of the tool's error needs.
+    ModelCovariance,
     /// Everything [`Calibration`] holds: per-axis reports with their covariances and
     /// identifiability studies, per-sweep reports, residuals, the noise report ([`calibrate`]).
     Report,
@@ -295,7 +298,8 @@ pub struct FittedModel {
     /// [`Detail::ModelAndCovariance`] only.
     pub derived_sigma: Option<DerivedSigma>,
     /// The covariance of the calibrated model's parameters
-    /// ([`crate::calibration::tool_accuracy`]); `Some` from [`calibrate`] only.
+    /// ([`crate::calibration::tool_accuracy`]); `Some` with [`Detail::ModelCovariance`]
+    /// only.
     pub model_covariance: Option<ModelCovariance>,
 }
 
@@ -321,18 +325,18 @@ pub fn calibrate(
 /// The lean path for Monte-Carlo trials: the same procedure as [`calibrate`] (the same code,
 /// the same model bit for bit), without what only a report needs: no identifiability span
 /// studies, per-sweep reports, residual lists or noise report, and the axes' covariances
-/// only when `detail` is [`Detail::ModelAndCovariance`] (then `row_sigma` is filled).
-/// [`Detail::Report`] is taken as [`Detail::ModelAndCovariance`].
+/// only when `detail` is [`Detail::ModelAndCovariance`] (then `row_sigma` is filled) or
+/// [`Detail::ModelCovariance`] (then `model_covariance` too). [`Detail::Report`] is taken as
+/// [`Detail::ModelAndCovariance`].
 pub fn calibrate_model(
     set: &MeasurementSet,
     desc: &RobotDescription,
     options: &CalibrationOptions,
     detail: Detail,
 ) -> Result<FittedModel, ProcedureError> {
-    let detail = if detail == Detail::Model {
-        Detail::Model
-    } else {
-        Detail::ModelAndCovariance
+    let detail = match detail {
+        Detail::Model | Detail::ModelCovariance => detail,
+        Detail::ModelAndCovariance | Detail::Report => Detail::ModelAndCovariance,
     };
     calibrate_as(set, desc, options, detail, &|ctx, state, reference_cmd, passes| {
         Ok(ctx.finish_model(set, &state, &reference_cmd, passes)?.0)
@@ -670,7 +674,8 @@ impl<'a> Context<'a> {
             tool: None,
             robot: None,
         };
-        let robot = (self.detail == Detail::Report).then(|| calibrated_robot(self.desc, joints, &geometry));
+        let robot = matches!(self.detail, Detail::Report | Detail::ModelCovariance)
+            .then(|| calibrated_robot(self.desc, joints, &geometry));
         Ok((
             self.with_tool(derived, robot, world_from_link.as_ref(), tool),
             world_from_link,

@@ -1,7 +1,7 @@
 //! The diagnostic report, like the paper's section-4 bullets: what the identified parameters
 //! mean physically, each with its uncertainty and whether the data resolve it (> 3 sigma).
 
-use super::result::Calibration;
+use super::result::{Calibration, PointResidual};
 use crate::kinematics::JointKind;
 use crate::robot::{RobotDescription, Transmission};
 use serde::{Deserialize, Serialize};
@@ -445,6 +445,73 @@ pub fn residuals_csv(cal: &Calibration) -> String {
     s
 }
 
+/// Reads `residuals.csv` as [`residuals_csv`] writes it; an error names the 1-based line and
+/// the column.
+pub fn read_residuals_csv(text: &str) -> Result<Vec<PointResidual>, String> {
+    let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
+    let header = reader.headers().map_err(|e| format!("line 1: {e}"))?.clone();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .ok_or_else(|| format!("line 1: no column `{name}`"))
+    };
+    let names = [
+        "experiment",
+        "moved_joint",
+        "step",
+        "target",
+        "kind",
+        "radial_mm",
+        "tangential_mm",
+        "axial_mm",
+        "across_u_mm",
+        "across_v_mm",
+        "along_mm",
+    ];
+    let at: Vec<usize> = names.iter().map(|n| column(n)).collect::<Result<_, _>>()?;
+    let mut out = Vec::new();
+    for (i, record) in reader.records().enumerate() {
+        let line = i + 2;
+        let record = record.map_err(|e| format!("line {line}: {e}"))?;
+        let cell = |k: usize| record.get(at[k]).unwrap_or("");
+        let parse = |k: usize| -> Result<f64, String> {
+            let v: f64 = cell(k)
+                .parse()
+                .map_err(|_| format!("line {line}: column `{}`: {:?} is not a number", names[k], cell(k)))?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(format!("line {line}: column `{}`: not finite", names[k]))
+            }
+        };
+        let integer = |k: usize| -> Result<usize, String> {
+            cell(k)
+                .parse()
+                .map_err(|_| format!("line {line}: column `{}`: {:?} is not a count", names[k], cell(k)))
+        };
+        let sliding = match cell(4) {
+            "rotary" => false,
+            "sliding" => true,
+            other => {
+                return Err(format!(
+                    "line {line}: column `kind`: {other:?} is neither `rotary` nor `sliding`"
+                ));
+            }
+        };
+        let first = if sliding { 8 } else { 5 };
+        out.push(PointResidual {
+            experiment: cell(0).to_string(),
+            joint: integer(1)?,
+            step: integer(2)?,
+            target: integer(3)?,
+            components_mm: [parse(first)?, parse(first + 1)?, parse(first + 2)?],
+            sliding,
+        });
+    }
+    Ok(out)
+}
+
 /// The table of the fitted axes (instrument frame).
 fn write_axes_table(s: &mut String, cal: &Calibration) {
     let _ = writeln!(s, "## Axes (instrument frame)\n");
@@ -575,5 +642,39 @@ mod tests {
         assert!(!f(1e6, f64::NAN));
         assert!(!f(1e6, 0.0));
         assert!(!f(1e6, f64::INFINITY));
+    }
+
+    /// What the writer writes the reader reads (to the written 6 decimals), a quoted
+    /// experiment name included; a bad cell is named by line and column.
+    #[test]
+    fn residuals_csv_reads_back() {
+        let residuals = vec![
+            PointResidual {
+                experiment: "axis,1".into(),
+                joint: 1,
+                step: 3,
+                target: 0,
+                components_mm: [0.123456, -0.5, 1e-3],
+                sliding: false,
+            },
+            PointResidual {
+                experiment: "slide".into(),
+                joint: 3,
+                step: 0,
+                target: 1,
+                components_mm: [-0.25, 0.0, 2.5],
+                sliding: true,
+            },
+        ];
+        let mut text = String::from(
+            "experiment,moved_joint,step,target,kind,radial_mm,tangential_mm,axial_mm,across_u_mm,across_v_mm,along_mm\n",
+        );
+        text.push_str("\"axis,1\",1,3,0,rotary,0.123456,-0.500000,0.001000,,,\nslide,3,0,1,sliding,,,,-0.250000,0.000000,2.500000\n");
+        assert_eq!(read_residuals_csv(&text).unwrap(), residuals);
+        let bad = text.replace("-0.500000", "x");
+        assert_eq!(
+            read_residuals_csv(&bad).unwrap_err(),
+            "line 2: column `tangential_mm`: \"x\" is not a number"
+        );
     }
 }

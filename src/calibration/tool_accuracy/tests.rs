@@ -176,3 +176,28 @@ fn poses_are_drawn_in_their_ranges() {
     );
     assert_eq!(swept_ranges(&[], &[1.0, 2.0]), vec![[1.0, 1.0], [2.0, 2.0]]);
 }
+
+/// `model_displaced` by a unit step of one parameter is `model_moved` (to rounding), and by a
+/// small vector `d` it is measured back by `model_difference` as `d` to second order: the
+/// residual is below `|d|^2` times the largest lever (2 m).
+#[test]
+fn displaced_is_moved_along_a_whole_vector() {
+    let (_, r) = robot();
+    let n = model_parameter_names(&r).len();
+    let h = 1e-6;
+    for k in 0..n {
+        let mut d = vec![0.0; n];
+        d[k] = h;
+        let a = model_difference(&model_displaced(&r, &d), &r, h);
+        let b = model_difference(&model_moved(&r, k, h), &r, h);
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() < 1e-6, "parameter {k}: {x} vs {y}");
+        }
+    }
+    let d: Vec<f64> = (0..n).map(|k| 1e-5 * ((k * 7919 % 13) as f64 - 6.0) / 6.0).collect();
+    let back = model_difference(&model_displaced(&r, &d), &r, 1.0);
+    let norm2: f64 = d.iter().map(|x| x * x).sum();
+    for (k, (x, y)) in back.iter().zip(&d).enumerate() {
+        assert!((x - y).abs() <= 2.0 * norm2 + 1e-12, "parameter {k}: {x} vs {y}");
+    }
+}

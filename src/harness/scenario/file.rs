@@ -55,6 +55,9 @@ pub struct ScenarioFile {
     pub occlusion: bool,
     /// At most one swept parameter; each value is one case.
     pub sweep: Option<SweepSection>,
+    /// An ISO 9283 test after each trial's calibration: the `iso_*` metrics, measured and
+    /// predicted.
+    pub iso9283: Option<IsoSection>,
     /// The metric plotted as a histogram per case; default `uncal_pos_rms_mm`.
     pub main_metric: Option<String>,
     /// Pass/fail criteria (exit code 1 when one fails).
@@ -207,4 +210,32 @@ pub struct SweepSection {
     /// Whole plan files (`docs/formats.md#plan-file`, relative to the scenario file), each
     /// replacing the plan; the case is named `plan=<file stem>`.
     pub plans: Option<Vec<PathBuf>>,
+}
+
+/// The ISO 9283 test a trial runs after its calibration (`docs/formats.md#scenario-file`): the
+/// cube planned through the calibrated model (fig. 5), its cycles executed on the simulated
+/// robot and measured, the figures evaluated, and predicted from the calibration's covariance
+/// ([`crate::iso9283::predict`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct IsoSection {
+    /// Cycles (ISO 9283: 30), 2 to 1000.
+    #[serde(default = "iso_cycles")]
+    pub cycles: usize,
+    /// The cube's edge \[mm\]; default the largest to 10 mm, at most 500 mm, whose points are
+    /// inside the joint limits.
+    pub edge_mm: Option<f64>,
+    /// The commands of the cube's centre \[deg or mm\]; default the plan's reference pose.
+    pub centre_cmd: Option<Vec<f64>>,
+    /// Simulated tests of the prediction, 1 to 10000.
+    #[serde(default = "iso_prediction_trials")]
+    pub prediction_trials: usize,
+}
+
+fn iso_cycles() -> usize {
+    30
+}
+
+fn iso_prediction_trials() -> usize {
+    100
 }

@@ -6,7 +6,8 @@
 //!   key names); [`resolve`]: CLI overrides + file -> [`ResolvedScenario`] (self-contained,
 //!   dumped to the results folder, read back by `axiscal merge`).
 //! - [`seed`]: trial seed = SplitMix64 mix of the scenario seed and the trial index.
-//! - [`trial`]: the pluggable [`Trial`]; [`CampaignTrial`] simulates the campaign.
+//! - [`trial`]: the pluggable [`Trial`]; [`CampaignTrial`] simulates the campaign; [`iso`]: the
+//!   ISO 9283 test a trial runs after its calibration.
 //! - [`runner`]: rayon over trial units, [`Shard`]s, completeness of merged shards.
 //! - [`stats`], [`threshold`], [`summary`]: pure statistics and verdicts.
 //! - [`export`]: `trials.csv`, `summary.json`, `summary.md`, SVG histogram.
@@ -14,6 +15,7 @@
 pub mod error;
 pub mod export;
 pub mod file;
+pub mod iso;
 pub mod metrics;
 pub mod resolve;
 pub mod runner;
@@ -25,7 +27,8 @@ pub mod trial;
 pub mod validation_error;
 
 pub use error::ScenarioError;
-pub use file::{ConditionsSection, Instrument, ScenarioFile, SimMode};
+pub use file::{ConditionsSection, Instrument, IsoSection, ScenarioFile, SimMode};
+pub use iso::ISO_METRICS;
 pub use metrics::{Metrics, TrialRecord};
 pub use resolve::{Case, Overrides, ResolvedScenario, ResolvedTruth};
 pub use runner::{CoverageError, Shard, complete_run, run_units, run_units_until};

@@ -6,7 +6,8 @@
 
 use super::error::ScenarioError;
 use super::file::{
-    ConditionsSection, Instrument, MeasurementSection, PlanSection, ScenarioFile, SimMode, SweepSection, TruthSection,
+    ConditionsSection, Instrument, IsoSection, MeasurementSection, PlanSection, ScenarioFile, SimMode, SweepSection,
+    TruthSection,
 };
 use super::threshold::Threshold;
 use crate::measurement::{IsotropicNoise, MeasurementModel, PAPER_RIGHT_STATION_MM, ReferenceVolume, TheodolitePair};
@@ -91,6 +92,9 @@ pub struct ResolvedScenario {
     pub validation: ValidationPlan,
     /// The cases, in sweep order.
     pub cases: Vec<Case>,
+    /// The ISO 9283 test after each calibration, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iso9283: Option<IsoSection>,
 }
 
 /// Metric plotted when the file names none.
@@ -160,6 +164,9 @@ impl ResolvedScenario {
                 ));
             }
         }
+        if let Some(iso) = &file.iso9283 {
+            check_iso(iso, robot.dof()).map_err(|(k, m)| invalid(k, m))?;
+        }
         let name = file.name.clone().unwrap_or_else(|| {
             path.file_stem()
                 .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().into_owned())
@@ -183,6 +190,7 @@ impl ResolvedScenario {
             truth,
             validation,
             cases,
+            iso9283: file.iso9283.clone(),
         })
     }
 
@@ -460,4 +468,37 @@ fn measurement_model(m: &MeasurementSection, robot: &RobotDescription) -> Result
 /// Where a scenario's results go by default: `results/<name>`.
 pub fn default_results_dir(name: &str) -> PathBuf {
     Path::new("results").join(name)
+}
+
+/// The `[iso9283]` section's values in their ranges: the key and the problem otherwise.
+fn check_iso(iso: &IsoSection, dof: usize) -> Result<(), (&'static str, String)> {
+    if !(2..=1000).contains(&iso.cycles) {
+        return Err(("iso9283.cycles", format!("must be 2 to 1000, got {}", iso.cycles)));
+    }
+    if !(1..=10_000).contains(&iso.prediction_trials) {
+        return Err((
+            "iso9283.prediction_trials",
+            format!("must be 1 to 10000, got {}", iso.prediction_trials),
+        ));
+    }
+    if let Some(e) = iso.edge_mm
+        && !(e.is_finite() && e > 0.0 && e <= 1e5)
+    {
+        return Err((
+            "iso9283.edge_mm",
+            format!("must be above 0 and at most 100000 mm, got {e}"),
+        ));
+    }
+    if let Some(c) = &iso.centre_cmd {
+        if c.len() != dof {
+            return Err((
+                "iso9283.centre_cmd",
+                format!("gives {} values; the robot has {dof} joints", c.len()),
+            ));
+        }
+        if c.iter().any(|v| !v.is_finite()) {
+            return Err(("iso9283.centre_cmd", "values must be finite".into()));
+        }
+    }
+    Ok(())
 }

@@ -6,6 +6,7 @@
 //! measurements.
 
 use super::file::SimMode;
+use super::iso::{ISO_METRICS, IsoTrial};
 use super::metrics::Metrics;
 use super::resolve::{Case, ResolvedScenario, ResolvedTruth};
 use super::validation_error::validation_errors;
@@ -74,6 +75,8 @@ pub struct CampaignTrial {
     effects: Effects,
     options: CampaignOptions,
     occlusion: bool,
+    /// The ISO 9283 test after each calibration, if any.
+    iso: Option<super::file::IsoSection>,
     /// The predictions at the measured poses that every trial of a case shares, per distinct
     /// reference pose of the cases.
     fixed: Vec<PosePredictions>,
@@ -169,6 +172,7 @@ impl CampaignTrial {
                 instrument_scale: scenario.effects.instrument_scale,
             },
             occlusion: scenario.occlusion,
+            iso: scenario.iso9283.clone(),
             fixed: Vec::new(),
             inversions: None,
         };
@@ -279,9 +283,14 @@ impl CampaignTrial {
             noise_rms_3d_mm: noise_mm,
             ..CalibrationOptions::default()
         };
-        // The lean path: a trial needs the model, not the report.
-        let cal =
-            calibrate_model(&set, &self.desc, &options, Detail::Model).map_err(|e| format!("calibrating: {e}"))?;
+        // The lean path: a trial needs the model, not the report (and its covariance for an
+        // ISO prediction).
+        let detail = if self.iso.is_some() {
+            Detail::ModelCovariance
+        } else {
+            Detail::Model
+        };
+        let cal = calibrate_model(&set, &self.desc, &options, detail).map_err(|e| format!("calibrating: {e}"))?;
         let predicted = self.predicted_tool(set.rows(), &cal.robot)?;
         let fixed = self.fixed_for(&case.plan.reference);
         let mut m = self.metrics(set.rows(), occluded, &predicted, fixed);
@@ -290,6 +299,16 @@ impl CampaignTrial {
             m.push(SETTLE_METRICS[0], t.mean_steps());
             m.push(SETTLE_METRICS[1], t.max_steps as f64);
             m.push(SETTLE_METRICS[2], t.max_speed_m_s * 1e6);
+        }
+        if let Some(section) = &self.iso {
+            let iso = IsoTrial {
+                section,
+                desc: &self.desc,
+                instrument: &case.measurement,
+                options: &self.options,
+                reference: &case.plan.reference,
+            };
+            m.extend(iso.run(&mut arm, &cal, rng)?);
         }
         Ok(m)
     }
@@ -404,7 +423,13 @@ fn measured_poses(rows: &[Measurement]) -> impl Iterator<Item = &Measurement> {
 impl Trial for CampaignTrial {
     fn metric_names(&self) -> Vec<String> {
         let settle: &[&str] = if self.settles() { &SETTLE_METRICS } else { &[] };
-        CAMPAIGN_METRICS.iter().chain(settle).map(|s| (*s).to_owned()).collect()
+        let iso: &[&str] = if self.iso.is_some() { &ISO_METRICS } else { &[] };
+        CAMPAIGN_METRICS
+            .iter()
+            .chain(settle)
+            .chain(iso)
+            .map(|s| (*s).to_owned())
+            .collect()
     }
 
     fn run(&self, case: &Case, seed: u64) -> Result<Metrics, String> {

@@ -1,0 +1,118 @@
+//! Before and after calibration on held-out poses: the validation poses of a measurement file
+//! (rows with `moved_joint = 0` other than the tool observation), which the calibration does
+//! not use. After: the calibrated model's prediction of every target ([`validate`], with its
+//! chi-square verdict against the noise). Before: the nominal model's, its base frame
+//! registered to the same points (the rigid transform that best maps its predictions onto the
+//! measurements, [`rigid_fit`]), so that where the robot stands in the instrument frame, which
+//! nobody knows before a calibration, is not counted as its error.
+
+use crate::calibration::procedure::Calibration;
+use crate::diagnosis::{CleanCampaign, ValidationOptions, is_validation, validate};
+use crate::kinematics::rigid_fit;
+use crate::measurement::MeasurementSet;
+use crate::robot::{RobotDescription, RobotModel};
+use nalgebra::Point3;
+use serde::Serialize;
+
+/// The two models on held-out poses.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct HeldOut {
+    /// The file.
+    pub file: String,
+    /// Held-out points (targets measured at validation poses).
+    pub points: usize,
+    /// The nominal model, base registered.
+    pub before: ErrorLine,
+    /// The calibrated model.
+    pub after: ErrorLine,
+    /// The RMS the noise alone predicts for the calibrated model \[mm\].
+    pub noise_predicted_rms_mm: f64,
+    /// The calibration's own predicted tool position error, RMS over poses inside its spans
+    /// \[mm\] (its covariance propagated, `tool_accuracy`), when it has one.
+    pub predicted_tool_spans_rms_mm: Option<f64>,
+    /// The same over the workspace (every joint within its limits) \[mm\].
+    pub predicted_tool_workspace_rms_mm: Option<f64>,
+    /// `validate`'s verdict on the calibrated model, in words.
+    pub verdict: String,
+}
+
+/// Position errors of one model.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct ErrorLine {
+    /// RMS \[mm\].
+    pub rms_mm: f64,
+    /// Largest \[mm\].
+    pub max_mm: f64,
+}
+
+/// Why held-out poses could not be compared.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum HeldOutError {
+    /// The file has no validation pose.
+    #[error("no held-out poses: the file has no rows with moved_joint = 0 other than the tool observation")]
+    NoPoses,
+    /// A model could not predict the data.
+    #[error("{0}")]
+    Model(String),
+}
+
+/// The errors of predicted against measured points \[mm\].
+fn errors(predicted: &[Point3<f64>], measured: &[Point3<f64>]) -> ErrorLine {
+    let d: Vec<f64> = predicted
+        .iter()
+        .zip(measured)
+        .map(|(p, m)| (p - m).norm() * 1e3)
+        .collect();
+    ErrorLine {
+        rms_mm: (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt(),
+        max_mm: d.iter().copied().fold(0.0, f64::max),
+    }
+}
+
+/// The nominal and calibrated models on the held-out poses of `set` (`file` its name), the
+/// calibrated model tested against `noise_rms_3d_mm`.
+pub fn held_out(
+    file: &str,
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    noise_rms_3d_mm: f64,
+) -> Result<HeldOut, HeldOutError> {
+    let rows: Vec<usize> = (0..set.rows().len())
+        .filter(|&i| is_validation(&set.rows()[i]))
+        .collect();
+    if rows.is_empty() {
+        return Err(HeldOutError::NoPoses);
+    }
+    let model = |e: crate::diagnosis::DiagnosisError| HeldOutError::Model(e.to_string());
+    let targets = desc.tool_targets_m();
+    let measured: Vec<Point3<f64>> = rows.iter().map(|&i| set.rows()[i].position_m()).collect();
+    let pick = |all: Vec<Point3<f64>>| -> Vec<Point3<f64>> { rows.iter().map(|&i| all[i]).collect() };
+    let nominal = pick(
+        CleanCampaign::on_robot(set, &RobotModel::ideal(desc), desc, &targets)
+            .map_err(model)?
+            .positions(),
+    );
+    let calibrated = pick(CleanCampaign::new(set, cal, desc, &targets).map_err(model)?.positions());
+    let (registration, _) = rigid_fit(&nominal, &measured).ok_or_else(|| {
+        HeldOutError::Model("the held-out points are fewer than three or in a line: no base to register".into())
+    })?;
+    let registered: Vec<Point3<f64>> = nominal.iter().map(|p| registration * p).collect();
+    let options = ValidationOptions {
+        noise_rms_3d_mm,
+        noise_source: "calibration".into(),
+        false_alarm: 0.01,
+    };
+    let v = validate(set, cal, desc, &options).map_err(model)?;
+    let summary = v.validation.as_ref().ok_or(HeldOutError::NoPoses)?;
+    Ok(HeldOut {
+        file: file.to_string(),
+        points: rows.len(),
+        before: errors(&registered, &measured),
+        after: errors(&calibrated, &measured),
+        noise_predicted_rms_mm: summary.predicted_rms_mm,
+        predicted_tool_spans_rms_mm: cal.tool_accuracy.as_ref().map(|t| t.spans.position_rms_mm),
+        predicted_tool_workspace_rms_mm: cal.tool_accuracy.as_ref().map(|t| t.workspace.position_rms_mm),
+        verdict: v.verdict.clone(),
+    })
+}

@@ -1,0 +1,153 @@
+//! `axiscal report --calibration CAL.json --out DIR`: the calibration certificate
+//! (`docs/formats.md#certificate`), `certificate.html` (one self-contained page) and
+//! `certificate.json`.
+
+use super::checks;
+use super::output::Outputs;
+use anyhow::{Context, Result};
+use axiscal::calibration::procedure::{PointResidual, read_residuals_csv};
+use axiscal::certificate::{CertificateInputs, certificate, held_out, html};
+use axiscal::iso9283::IsoFigures;
+use axiscal::json_file::{self, Schema};
+use axiscal::robot::RobotDescription;
+use std::path::{Path, PathBuf};
+
+/// The files `report` writes into its output folder.
+const OUTPUTS: [&str; 2] = ["certificate.html", "certificate.json"];
+
+/// Arguments of `axiscal report`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The calibration (`calibration.json` of `axiscal calibrate`); its `residuals.csv`, when
+    /// beside it, gives the residual plots.
+    #[arg(long)]
+    calibration: PathBuf,
+    /// Nominal robot description (TOML) the calibration was made with, or a shipped robot's
+    /// name: the nominal values.
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    robot: PathBuf,
+    /// The measurement CSV the calibration was made from: its experiments are summarised.
+    #[arg(long)]
+    data: Option<PathBuf>,
+    /// A measurement CSV with held-out poses (`moved_joint = 0`, not `tool`): the nominal and
+    /// the calibrated model compared on them. It may be `--data` itself, whose validation poses
+    /// the calibration does not use.
+    #[arg(long)]
+    held_out: Option<PathBuf>,
+    /// `iso9283.json` of `axiscal iso9283 evaluate`: the ISO 9283 figures.
+    #[arg(long)]
+    iso9283: Option<PathBuf>,
+    /// The instrument, in words (make, model, serial number, its own calibration).
+    #[arg(long)]
+    instrument: Option<String>,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace existing output files.
+    #[arg(long)]
+    force: bool,
+    #[command(flatten)]
+    checks: checks::Overrides,
+}
+
+/// The residuals beside `calibration` (`residuals.csv`), if there.
+fn residuals_beside(calibration: &Path) -> Result<Option<Vec<PointResidual>>> {
+    let path = calibration.with_file_name("residuals.csv");
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = axiscal::presets::read_text(&path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let residuals = read_residuals_csv(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(Some(residuals))
+}
+
+/// Runs `axiscal report`.
+pub fn run(args: Args) -> Result<()> {
+    let mut outputs = Outputs::new(args.force)
+        .input("--calibration", &args.calibration)
+        .input("--robot", &args.robot);
+    for (name, path) in [
+        ("--data", &args.data),
+        ("--held-out", &args.held_out),
+        ("--iso9283", &args.iso9283),
+    ] {
+        if let Some(p) = path {
+            outputs = outputs.input(name, p);
+        }
+    }
+    outputs.check_in(&args.out, &OUTPUTS)?;
+    let desc = RobotDescription::from_file(&args.robot)?;
+    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
+    let desc = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
+    let data = match &args.data {
+        Some(p) => Some((
+            p.display().to_string(),
+            checks::read_data(p, &desc, &args.robot, args.checks)?,
+        )),
+        None => None,
+    };
+    let held_out = match &args.held_out {
+        Some(p) => {
+            let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
+            let noise_mm = cal
+                .noise
+                .as_ref()
+                .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
+            Some(
+                held_out(&p.display().to_string(), &set, &cal, &desc, noise_mm)
+                    .with_context(|| format!("held-out poses of {}", p.display()))?,
+            )
+        }
+        None => None,
+    };
+    let iso9283: Option<IsoFigures> = match &args.iso9283 {
+        Some(p) => {
+            let text = axiscal::presets::read_text(p).with_context(|| format!("{}: cannot read", p.display()))?;
+            Some(
+                json_file::from_str(Schema::ISO9283, &text)
+                    .with_context(|| format!("{}: not an iso9283.json", p.display()))?,
+            )
+        }
+        None => None,
+    };
+    let residuals = residuals_beside(&args.calibration)?;
+    if residuals.is_none() {
+        say!(
+            "no residuals.csv beside {}: the certificate has no residual plots",
+            args.calibration.display()
+        );
+    }
+    let inputs = CertificateInputs {
+        calibration: &cal,
+        calibration_file: args.calibration.display().to_string(),
+        desc: &desc,
+        instrument: args.instrument.clone(),
+        data: data.as_ref().map(|(f, s)| (f.clone(), s)),
+        residuals: residuals.as_deref().unwrap_or(&[]),
+        held_out,
+        iso9283,
+    };
+    let c = certificate(&inputs).with_context(|| format!("the certificate of {}", args.calibration.display()))?;
+    outputs.write_in(&args.out, OUTPUTS[0], html::render(&c))?;
+    outputs.write_in(&args.out, OUTPUTS[1], json_file::to_string(Schema::CERTIFICATE, &c)?)?;
+    for w in &c.warnings {
+        eprintln!("warning: {w}");
+    }
+    say!(
+        "certificate of {}: {} parameters ({} with an uncertainty), U = {} u",
+        c.robot.name,
+        c.parameters.len(),
+        c.correlation.names.len(),
+        c.coverage_factor
+    );
+    if let Some(h) = &c.held_out {
+        say!(
+            "held-out poses: {:.4} mm RMS before calibration, {:.4} mm after ({} points)",
+            h.before.rms_mm,
+            h.after.rms_mm,
+            h.points
+        );
+    }
+    say!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
+    Ok(())
+}
