@@ -8,7 +8,7 @@
 //! value drawn anew whenever its actuator moves), measures every target with the instrument's
 //! noise ([`MeasurementModel::measure`]: a tracker's isotropic noise, or theodolites' elongated
 //! along the lines of sight), and evaluates the figures as a measured test is
-//! evaluated ([`super::evaluate`]): attained poses fitted to the tool targets, commanded ones
+//! evaluated ([`super::evaluate()`]): attained poses fitted to the tool targets, commanded ones
 //! from the calibrated model. Accuracy `AP` comes mostly from `d`, repeatability `RP` from the
 //! jitter and the noise.
 

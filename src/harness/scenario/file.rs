@@ -215,7 +215,7 @@ pub struct SweepSection {
 /// The ISO 9283 test a trial runs after its calibration (`docs/formats.md#scenario-file`): the
 /// cube planned through the calibrated model (fig. 5), its cycles executed on the simulated
 /// robot and measured, the figures evaluated, and predicted from the calibration's covariance
-/// ([`crate::iso9283::predict`]).
+/// ([`crate::iso9283::predict()`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct IsoSection {

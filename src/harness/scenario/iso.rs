@@ -1,9 +1,9 @@
 //! The ISO 9283 test a trial runs after its calibration (`[iso9283]` of a scenario): the cube
 //! planned through the calibrated model (fig. 5) around the centre commands, its cycles
 //! executed on the simulated robot and measured by the trial's instrument, the figures
-//! evaluated ([`crate::iso9283::evaluate`]) and predicted from the calibration's covariance,
+//! evaluated ([`crate::iso9283::evaluate()`]) and predicted from the calibration's covariance,
 //! the robot's repeatability (the description's) and the trial's instrument
-//! ([`crate::iso9283::predict`]). The
+//! ([`crate::iso9283::predict()`]). The
 //! ratios of measured to predicted figures are what the prediction's honesty is judged by:
 //! their mean over trials is 1 when the prediction is right.
 
