@@ -8,11 +8,12 @@ use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::compensation::Compensator;
 use axiscal::iso9283::{
-    CYCLE_ORDER, Cube, IsoFigures, IsoPrediction, PredictionInputs, evaluate, largest_cube, plan_cube, predict,
+    CYCLE_ORDER, Cube, IsoFigures, IsoPrediction, PredictionInputs, approach_commands, evaluate, largest_cube,
+    plan_cube, predict,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{IsotropicNoise, MeasurementModel};
-use axiscal::plan::{CalibrationPlan, PlanPose, SightOptions, points_of_poses, tool_targets, write_plan_csv};
+use axiscal::plan::{CalibrationPlan, PlanPose, points_of_poses, tool_targets, write_plan_csv};
 use axiscal::robot::{RobotDescription, RobotModel};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -99,6 +100,17 @@ struct PlanArgs {
     calibration: Option<PathBuf>,
     #[command(flatten)]
     cube: CubeArgs,
+    /// Approach directions (ISO 9283 7.2.3): 1, or 2 or 3 for the multi-directional test, each
+    /// pose approached from `--approach-mm` along the base's x, then y, then z axis (its
+    /// negative side); the poses are then `iso-P<k>-d<h>`, the approach poses
+    /// `iso-approach-P<k>-d<h>` (measured or not: `import points --allow-missing`).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=3))]
+    directions: u32,
+    /// How far each pose is approached from, with `--directions` 2 or 3 (mm).
+    #[arg(long, default_value_t = 50.0, value_parser = InRange::above(0.0, 1e4, ""))]
+    approach_mm: f64,
+    #[command(flatten)]
+    sight: super::plan::SightArgs,
     /// The plan CSV to write.
     #[arg(long)]
     out: PathBuf,
@@ -172,28 +184,16 @@ fn plan(args: PlanArgs) -> Result<()> {
         None => RobotModel::ideal(&desc),
     };
     let cube = cube_of(&args.cube, &desc, &model)?;
-    let targets = tool_targets(&desc);
-    let poses: Vec<PlanPose> = (0..args.cube.cycles as usize)
-        .flat_map(|cycle| CYCLE_ORDER.map(|k| (cycle, k)))
-        .map(|(cycle, k)| PlanPose {
-            experiment: format!("iso-P{k}"),
-            moved_joint: 0,
-            step: cycle,
-            cmd: cube.commands[k - 1].clone(),
-            targets: targets.clone(),
-        })
-        .collect();
-    let no_sight = SightOptions {
-        stations_m: Vec::new(),
-        link_radius_m: 0.0,
-        stop_short_m: 0.0,
-    };
-    let points = points_of_poses(&desc, poses, &no_sight)?;
+    let poses = plan_poses(&args, &desc, &model, &cube)?;
+    let sight = args.sight.options();
+    let points = points_of_poses(&desc, poses, &sight)?;
     let comment = format!(
-        "# ISO 9283 test of {}: cube edge {:.0} mm, {} cycles of P1, P5, P4, P3, P2; commanded through {}\n",
+        "{}# ISO 9283 test of {}: cube edge {:.0} mm, {} cycles of P1, P5, P4, P3, P2, {} approach direction(s); commanded through {}\n",
+        args.sight.header_comment(&desc),
         desc.name,
         cube.edge_m * 1e3,
         args.cube.cycles,
+        args.directions,
         if args.calibration.is_some() {
             "the calibrated model (fig. 5)"
         } else {
@@ -204,14 +204,45 @@ fn plan(args: PlanArgs) -> Result<()> {
     write_plan_csv(&mut text, &comment, &points)?;
     outputs.write(&args.out, text)?;
     say!(
-        "wrote {}: ISO 9283 cube of edge {:.0} mm, {} cycles x 5 points x {} targets = {} points",
-        args.out.display(),
+        "ISO 9283 cube of edge {:.0} mm, {} cycles x 5 points x {} direction(s)",
         cube.edge_m * 1e3,
         args.cube.cycles,
-        targets.len(),
-        points.len()
+        args.directions
     );
+    super::plan::summarise(&args.out, &points, sight.stations_m.len());
     Ok(())
+}
+
+/// The poses of the plan: per direction, per cycle, per point in `CYCLE_ORDER` (with more
+/// than one direction, its approach pose first).
+fn plan_poses(args: &PlanArgs, desc: &RobotDescription, model: &RobotModel, cube: &Cube) -> Result<Vec<PlanPose>> {
+    let targets = tool_targets(desc);
+    let pose = |experiment: String, step: usize, cmd: &[f64]| PlanPose {
+        experiment,
+        moved_joint: 0,
+        step,
+        cmd: cmd.to_vec(),
+        targets: targets.clone(),
+    };
+    if args.directions == 1 {
+        return Ok((0..args.cube.cycles as usize)
+            .flat_map(|cycle| CYCLE_ORDER.map(|k| (cycle, k)))
+            .map(|(cycle, k)| pose(format!("iso-P{k}"), cycle, &cube.commands[k - 1]))
+            .collect());
+    }
+    let compensator = Compensator::new(model, desc)?;
+    let mut poses = Vec::new();
+    for h in 1..=args.directions as usize {
+        let approach = approach_commands(&compensator, desc, cube, h - 1, args.approach_mm * 1e-3)
+            .with_context(|| format!("approach direction {h} (--approach-mm {})", args.approach_mm))?;
+        for cycle in 0..args.cube.cycles as usize {
+            for k in CYCLE_ORDER {
+                poses.push(pose(format!("iso-approach-P{k}-d{h}"), cycle, &approach[k - 1]));
+                poses.push(pose(format!("iso-P{k}-d{h}"), cycle, &cube.commands[k - 1]));
+            }
+        }
+    }
+    Ok(poses)
 }
 
 fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {

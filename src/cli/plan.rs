@@ -41,16 +41,8 @@ pub struct Args {
     /// Seed of the validation poses' draw.
     #[arg(long)]
     validation_seed: Option<u64>,
-    /// An instrument station `X,Y,Z` in the instrument frame (mm); repeatable. Default: the
-    /// paper's two theodolites (origin and `-6284.6,0,0`).
-    #[arg(long, value_name = "X,Y,Z", value_parser = station_mm)]
-    station: Vec<[f64; 3]>,
-    /// Leave out the line-of-sight columns.
-    #[arg(long)]
-    no_sight: bool,
-    /// Radius of the links' capsules for the line of sight (mm).
-    #[arg(long, default_value_t = 50.0, value_parser = InRange::above(0.0, 10_000.0, "mm"))]
-    link_radius_mm: f64,
+    #[command(flatten)]
+    sight: SightArgs,
     /// Choose the spans and the points per sweep that minimise the predicted tool error over
     /// the workspace (`docs/method.md#plans-that-buy-accuracy`), seeded by `--plan` (default
     /// Table 1) at the same number of points; also writes the plan TOML (`--plan-out`).
@@ -105,6 +97,48 @@ fn joint_value(text: &str) -> Result<(usize, f64), String> {
         return Err(format!("span {value} must be above 0"));
     }
     Ok((joint, value))
+}
+
+/// The line of sight of a measurement plan: what `plan` and `iso9283 plan` share.
+#[derive(Debug, clap::Args)]
+pub struct SightArgs {
+    /// An instrument station `X,Y,Z` in the instrument frame (mm); repeatable. Default: the
+    /// paper's two theodolites (origin and `-6284.6,0,0`).
+    #[arg(long, value_name = "X,Y,Z", value_parser = station_mm)]
+    station: Vec<[f64; 3]>,
+    /// Leave out the line-of-sight columns.
+    #[arg(long)]
+    no_sight: bool,
+    /// Radius of the links' capsules for the line of sight (mm).
+    #[arg(long, default_value_t = 50.0, value_parser = InRange::above(0.0, 10_000.0, "mm"))]
+    link_radius_mm: f64,
+}
+
+impl SightArgs {
+    /// The stations (mm): none with `--no-sight`, the paper's two theodolites by default.
+    pub fn stations_mm(&self) -> Vec<[f64; 3]> {
+        if self.no_sight {
+            vec![]
+        } else if self.station.is_empty() {
+            vec![[0.0; 3], PAPER_RIGHT_STATION_MM]
+        } else {
+            self.station.clone()
+        }
+    }
+
+    /// The options of the line-of-sight columns.
+    pub fn options(&self) -> SightOptions {
+        SightOptions {
+            stations_m: self.stations_mm().iter().map(|s| Point3::from(*s) * 1e-3).collect(),
+            link_radius_m: self.link_radius_mm * 1e-3,
+            stop_short_m: 2e-3,
+        }
+    }
+
+    /// The plan's first comment lines: the robot's identity, what the file is, the stations.
+    pub fn header_comment(&self, desc: &RobotDescription) -> String {
+        header_comment(desc, &self.stations_mm(), self.link_radius_mm)
+    }
 }
 
 fn station_mm(text: &str) -> Result<[f64; 3], String> {
@@ -191,18 +225,7 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.validation_seed.unwrap_or(default_validation.seed),
         ..default_validation
     };
-    let stations_mm = if args.no_sight {
-        vec![]
-    } else if args.station.is_empty() {
-        vec![[0.0; 3], PAPER_RIGHT_STATION_MM]
-    } else {
-        args.station.clone()
-    };
-    let sight = SightOptions {
-        stations_m: stations_mm.iter().map(|s| Point3::from(*s) * 1e-3).collect(),
-        link_radius_m: args.link_radius_mm * 1e-3,
-        stop_short_m: 2e-3,
-    };
+    let sight = args.sight.options();
     if args.optimize {
         plan = optimize::run(&args, &desc, &plan, &validation, &sight)?;
         let text = toml::to_string(&plan).context("writing the optimised plan as TOML")?;
@@ -217,11 +240,11 @@ pub fn run(args: Args) -> Result<()> {
         ),
         None => format!("planning the campaign of {}", args.robot.display()),
     })?;
-    let comment = header_comment(&desc, &stations_mm, args.link_radius_mm);
+    let comment = args.sight.header_comment(&desc);
     let mut file = outputs.create(&args.out)?;
     write_plan_csv(&mut file, &comment, &points).with_context(|| format!("writing {}", args.out.display()))?;
     file.commit()?;
-    summarise(&args.out, &points, stations_mm.len());
+    summarise(&args.out, &points, sight.stations_m.len());
     Ok(())
 }
 
@@ -245,7 +268,8 @@ fn header_comment(desc: &RobotDescription, stations_mm: &[[f64; 3]], radius_mm: 
     text
 }
 
-fn summarise(out: &Path, points: &[axiscal::plan::PlannedPoint], stations: usize) {
+/// Prints what was written: points, poses, and how many are hidden from a station.
+pub fn summarise(out: &Path, points: &[axiscal::plan::PlannedPoint], stations: usize) {
     let poses = points.last().map_or(0, |p| p.pose);
     let hidden = points.iter().filter(|p| p.visible.iter().any(|v| !v)).count();
     println!("wrote {} ({} points at {} poses)", out.display(), points.len(), poses);

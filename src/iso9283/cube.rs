@@ -140,3 +140,41 @@ pub fn largest_cube(
     }
     Err(CubeError::NoCube)
 }
+
+/// The commands that approach each of `cube`'s points from `distance_m` along base axis
+/// `axis` (0, 1, 2: x, y, z), on its negative side (ISO 9283 7.2.3: the multi-directional
+/// test approaches each pose from three directions parallel to the base axes), through
+/// `compensator` seeded from the centre; each inside the limits.
+pub fn approach_commands(
+    compensator: &Compensator,
+    desc: &RobotDescription,
+    cube: &Cube,
+    axis: usize,
+    distance_m: f64,
+) -> Result<Vec<Vec<f64>>, CubeError> {
+    let model = compensator.calibrated_model();
+    let centre_q = compensator
+        .calibrated_joint_values(&commands_to_internal(desc, &cube.commands[0]))
+        .map_err(|e| CubeError::Centre(e.to_string()))?;
+    let offset = model.world_from_base.rotation * Vector3::ith(axis, -distance_m);
+    cube.points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let unreachable = |problem: String| CubeError::Unreachable {
+                point: i + 1,
+                edge_mm: cube.edge_m * 1e3,
+                problem: format!("its approach along base {}: {problem}", ["x", "y", "z"][axis]),
+            };
+            let target = Isometry3::from_parts(Translation3::from(p.translation.vector + offset), p.rotation);
+            let c = compensator
+                .compensate_from(&target, &centre_q)
+                .map_err(|e| unreachable(e.to_string()))?;
+            let outside = outside_limits(desc, &c.cmd);
+            if !outside.is_empty() {
+                return Err(unreachable(format!("joint(s) {outside:?} outside their limits")));
+            }
+            Ok(commands_to_file(desc, &c.cmd))
+        })
+        .collect()
+}

@@ -17,7 +17,7 @@ pub mod evaluate;
 pub mod figures;
 pub mod predict;
 
-pub use cube::{Cube, CubeError, cube_points, largest_cube, plan_cube};
+pub use cube::{Cube, CubeError, approach_commands, cube_points, largest_cube, plan_cube};
 pub use evaluate::{IsoError, IsoFigures, PoseFigures, evaluate, pose_label};
 pub use figures::{
     DirectionalVariation, DistanceFigures, PoseAccuracy, PoseRepeatability, abc, directional_variation,

@@ -222,11 +222,7 @@ fn a_planned_iso_test_measured_and_imported_evaluates_to_its_known_deviations() 
         .arg(&plan)
         .assert()
         .success();
-    assert!(
-        stdout(&a).contains("4 cycles x 5 points x 3 targets = 60 points"),
-        "{}",
-        stdout(&a)
-    );
+    assert!(stdout(&a).contains("(60 points at 20 poses)"), "{}", stdout(&a));
     let desc = RobotDescription::from_file(
         &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
     )
@@ -347,4 +343,82 @@ fn predict_is_reproducible_follows_the_noise_and_needs_the_covariance() {
         .code(2);
     let err = stderr(&out);
     assert!(err.contains("no-cov.json") && err.contains("model_covariance"), "{err}");
+}
+
+/// `iso9283 plan --directions 3`: each pose is preceded by its approach pose, 50 mm away along
+/// the base's x, y, then z axis: the approach offsets (the calibrated model's tool positions at
+/// the planned commands) are 50 mm long and mutually orthogonal, the
+/// same for every point, and each measured pose is labelled with its direction.
+#[test]
+fn a_multi_directional_plan_approaches_each_pose_along_three_base_axes() {
+    let dir = tempfile::tempdir().unwrap();
+    let cal_dir = calibrated_ur5e(dir.path());
+    let plan = dir.path().join("plan.csv");
+    axiscal()
+        .args([
+            "iso9283",
+            "plan",
+            "--robot",
+            "ur5e-dh",
+            "--cycles",
+            "1",
+            "--directions",
+            "3",
+        ])
+        .args([
+            "--centre-cmd=10,-60,70,-90,-80,20",
+            "--edge-mm",
+            "200",
+            "--no-sight",
+            "--calibration",
+        ])
+        .arg(cal_dir.join("calibration.json"))
+        .arg("--out")
+        .arg(&plan)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&plan).unwrap();
+    let rows: Vec<Vec<String>> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("point,"))
+        .map(|l| l.split(',').map(String::from).collect())
+        .filter(|f: &Vec<String>| f[5] == "0")
+        .collect();
+    assert_eq!(rows.len(), 3 * 5 * 2, "3 directions x 5 points x (approach, pose)");
+    // Where the calibrated model puts the tool at each row's commands \[mm\] (the plan's
+    // nominal columns are the nominal model's).
+    let desc = RobotDescription::from_file(
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
+    )
+    .unwrap();
+    let cal = read_calibration(&cal_dir);
+    let (model, controller) = (cal.robot.phi_model(), Controller::from_description(&desc));
+    let nominal = |f: &[String]| -> Vector3<f64> {
+        let cmd: Vec<f64> = f[6..12].iter().map(|v| v.parse().unwrap()).collect();
+        let q = cal
+            .robot
+            .joint_values(&controller, &commands_to_internal(&desc, &cmd))
+            .unwrap();
+        model.world_from_tool(&q).translation.vector * 1e3
+    };
+    let mut offsets: Vec<Vector3<f64>> = Vec::new();
+    for pair in rows.chunks(2) {
+        let (approach, pose) = (&pair[0], &pair[1]);
+        let h = &pose[2][pose[2].len() - 1..];
+        assert_eq!(approach[2], format!("iso-approach-{}", &pose[2][4..]), "{approach:?}");
+        assert!(pose[2].starts_with("iso-P") && pose[2].ends_with(&format!("-d{h}")));
+        let d = nominal(approach) - nominal(pose);
+        assert!((d.norm() - 50.0).abs() < 1e-6, "{}: {} mm", pose[2], d.norm());
+        offsets.push(d);
+    }
+    for (i, d) in offsets.iter().enumerate() {
+        let first = offsets[i / 5 * 5];
+        assert!(
+            (d - first).norm() < 1e-6,
+            "the same direction for every point of a direction"
+        );
+    }
+    for (a, b) in [(0, 5), (0, 10), (5, 10)] {
+        assert!(offsets[a].dot(&offsets[b]).abs() < 1e-6, "directions orthogonal");
+    }
 }
