@@ -14,7 +14,7 @@ mod svg;
 
 pub use held_out::{HeldOut, HeldOutError, held_out};
 
-use crate::calibration::procedure::{Calibration, PointResidual};
+use crate::calibration::procedure::{Calibration, FrameSigma, PointResidual};
 use crate::calibration::tool_accuracy::{model_parameter_names, model_parameter_values};
 use crate::iso9283::IsoFigures;
 use crate::kinematics::JointKind;
@@ -218,22 +218,9 @@ pub struct FrameLine {
     pub expanded_uncertainty: FrameUncertainty,
 }
 
-/// The uncertainty of a frame along and about its own axes.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, schemars::JsonSchema)]
-pub struct FrameUncertainty {
-    /// Along x \[mm\].
-    pub x_mm: f64,
-    /// Along y \[mm\].
-    pub y_mm: f64,
-    /// Along z \[mm\].
-    pub z_mm: f64,
-    /// About x \[mrad\].
-    pub rx_mrad: f64,
-    /// About y \[mrad\].
-    pub ry_mrad: f64,
-    /// About z \[mrad\].
-    pub rz_mrad: f64,
-}
+/// The uncertainty of a frame along and about its own axes (mm, mrad): the calibration's
+/// [`FrameSigma`].
+pub type FrameUncertainty = FrameSigma;
 
 /// Correlations of the parameters with an uncertainty.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
