@@ -89,6 +89,7 @@ pub const PRESETS: &[Preset] = &[
     shipped!(Robot, "table-prpp", "scenarios/robots/table-prpp.toml"),
     shipped!(Scenario, "ci-smoke", "scenarios/ci-smoke.toml"),
     shipped!(Scenario, "compliance", "scenarios/compliance.toml"),
+    shipped!(Scenario, "iso9283", "scenarios/iso9283.toml"),
     shipped!(Scenario, "noise-sweep", "scenarios/noise-sweep.toml"),
     shipped!(Scenario, "paper", "scenarios/paper.toml"),
     shipped!(Scenario, "perturbed-fleet", "scenarios/perturbed-fleet.toml"),
