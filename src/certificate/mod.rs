@@ -33,7 +33,7 @@ pub const STRONG_CORRELATION: f64 = 0.95;
 pub enum CertificateError {
     /// The calibration has no covariance of its parameters.
     #[error(
-        "the calibration has no `model_covariance` (a calibration from free poses, or a file older than it): its parameters' uncertainties are not known; recalibrate with `axiscal calibrate`"
+        "the calibration has no `model_covariance` (a file written before it was recorded): its parameters' uncertainties are not known; recalibrate with `axiscal calibrate`"
     )]
     NoCovariance,
     /// The covariance does not match the model.

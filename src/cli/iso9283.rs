@@ -327,7 +327,7 @@ fn predict_figures(args: PredictArgs) -> Result<()> {
     let cal = checks::read_calibration(&args.calibration, &desc, robot, args.cube.allow_other_robot)?;
     let Some(covariance) = &cal.model_covariance else {
         bail!(
-            "{} has no `model_covariance` (a calibration from free poses, or an older file): the calibration's error cannot be drawn; recalibrate with `axiscal calibrate`",
+            "{} has no `model_covariance` (a file written before it was recorded): the calibration's error cannot be drawn; recalibrate with `axiscal calibrate`",
             args.calibration.display()
         );
     };
