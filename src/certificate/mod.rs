@@ -325,7 +325,7 @@ pub fn certificate(inputs: &CertificateInputs<'_>) -> Result<Certificate, Certif
         held_out: inputs.held_out.clone(),
         iso9283: inputs.iso9283.clone(),
         not_calibrated: not_calibrated(cal, &u, &names),
-        warnings: warnings(cal),
+        warnings: warnings(cal, inputs.held_out.is_some()),
     })
 }
 
@@ -574,9 +574,15 @@ fn not_calibrated(cal: &Calibration, u: &[f64], names: &[String]) -> Vec<String>
     out
 }
 
-/// What a reader must know before trusting the uncertainties.
-fn warnings(cal: &Calibration) -> Vec<String> {
+/// What a reader must know before trusting the uncertainties and the held-out comparison.
+fn warnings(cal: &Calibration, held_out: bool) -> Vec<String> {
     let mut out = Vec::new();
+    if held_out && cal.free_poses.is_some() {
+        out.push(
+            "the calibration was fitted to free poses: the held-out poses are held out only if their file is not the one the calibration was made from"
+                .into(),
+        );
+    }
     if let Some(n) = &cal.noise
         && n.given_contradicted
     {

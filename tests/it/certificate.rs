@@ -104,7 +104,7 @@ pub(crate) fn check_certificate(dir: &Path, cal: &Path) {
             "{what}: {a} against {b}"
         );
     };
-    for (k, r) in json["row_sigma"].as_array().unwrap().iter().enumerate() {
+    for (k, r) in json["row_sigma"].as_array().into_iter().flatten().enumerate() {
         close(
             &format!("row {} a", k + 1),
             shown[&format!("row {} a", k + 1)],
@@ -116,7 +116,7 @@ pub(crate) fn check_certificate(dir: &Path, cal: &Path) {
             r["b_mm"].as_f64().unwrap(),
         );
     }
-    for z in json["zero_offset_sigma"].as_array().unwrap() {
+    for z in json["zero_offset_sigma"].as_array().into_iter().flatten() {
         let joint = z["joint"].as_u64().unwrap();
         let sigma = z["sigma_rad"]
             .as_f64()
@@ -127,7 +127,7 @@ pub(crate) fn check_certificate(dir: &Path, cal: &Path) {
             sigma,
         );
     }
-    for coupling in json["couplings"].as_array().unwrap() {
+    for coupling in json["couplings"].as_array().into_iter().flatten() {
         let (from, to) = (coupling["from"].as_u64().unwrap(), coupling["to"].as_u64().unwrap());
         for (name, sigma) in coupling["parameter_names"]
             .as_array()
@@ -241,4 +241,34 @@ fn the_certificate_of_a_simulated_campaign_states_every_uncertainty_as_calibrati
         .code(2);
     let err = stderr(&out);
     assert!(err.contains("no-cov.json") && err.contains("model_covariance"), "{err}");
+}
+
+/// A calibration from free poses (the independent generator's arm, `tests/data/independent-freepose`):
+/// its certificate states every uncertainty as its `model_covariance` does, and warns that the
+/// held-out poses given are its own.
+#[test]
+fn the_certificate_of_a_free_pose_calibration_warns_about_its_own_poses() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/independent-freepose");
+    axiscal()
+        .current_dir(d)
+        .arg("calibrate")
+        .arg(data.join("clean.csv"))
+        .arg("--robot")
+        .arg(data.join("kr-arm.toml"))
+        .args(["--out", "cal"])
+        .assert()
+        .success();
+    let out = axiscal()
+        .current_dir(d)
+        .args(["report", "--calibration", "cal/calibration.json", "--robot"])
+        .arg(data.join("kr-arm.toml"))
+        .arg("--held-out")
+        .arg(data.join("clean.csv"))
+        .args(["--out", "cert"])
+        .assert()
+        .success();
+    assert!(stderr(&out).contains("fitted to free poses"), "{}", stderr(&out));
+    check_certificate(&d.join("cert"), &d.join("cal/calibration.json"));
 }
