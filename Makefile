@@ -6,6 +6,8 @@ VENV  ?= .venv
 RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' Cargo.toml)
 
 FUZZ_SECONDS ?= 600
+# The binary `cargo test` builds for the integration tests.
+TEST_BIN ?= $${CARGO_TARGET_DIR:-target}/debug/axiscal
 
 .PHONY: run test test-real test-robots noise-check iso9283-check certificate tool-accuracy bench fuzz study blind blind-free-poses blind-analytic budget lint doc clean-results setup-viewer view
 
@@ -26,11 +28,13 @@ setup-viewer:
 view:
 	$(CARGO) run --profile quick-release --features viz -- view $(OUT)/campaign.rrd
 
-## test: the whole test suite (unit, integration, doc tests); reads nothing outside the repository
+## test: the whole test suite (unit, integration, doc tests; the benchmarks are `make bench`'s);
+## reads nothing outside the repository. The smoke scenario runs on the binary the integration
+## tests built (`cargo run` would build it again, with other dependency features).
 test:
-	$(CARGO) test --all-targets
+	$(CARGO) test --lib --bins --tests --examples
 	$(CARGO) test --doc
-	$(CARGO) run --quiet -- run scenarios/ci-smoke.toml --force --out results/ci-smoke
+	$(TEST_BIN) run scenarios/ci-smoke.toml --force --out results/ci-smoke
 
 ## test-real: the tests on public real data sets, which need ../shared/data/real/ beside the
 ## repository (or AXISCAL_SHARED_DIR naming the shared folder)

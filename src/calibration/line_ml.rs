@@ -109,6 +109,19 @@ fn displacements(
         .collect())
 }
 
+/// The points the line `p` predicts at `commands` (the first command at `p.start`).
+pub(crate) fn predict_line(
+    form: &TransmissionForm,
+    p: &LineParams,
+    commands: &[f64],
+) -> Result<Vec<Point3<f64>>, CalibrationError> {
+    let n = p.axis(2);
+    Ok(displacements(form, &p.coefficients, commands)?
+        .into_iter()
+        .map(|(d, _)| p.start + n * d)
+        .collect())
+}
+
 /// Residuals, their Jacobian and the per-point residual vectors of [`residual_and_jacobian`].
 type Linearised = (DVector<f64>, DMatrix<f64>, Vec<Vector3<f64>>);
 

@@ -11,9 +11,9 @@ use anyhow::Result;
 use axiscal::calibration::free_pose;
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
-    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, ProcedureError, UrdfOptions, UrdfRoot,
-    calibrate, findings, joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv,
-    ros_name, urdf,
+    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Implausible, OutlierPoint, ProcedureError,
+    UrdfOptions, UrdfRoot, calibrate, findings, implausible, joint_map, joints_without_speed_limits, markdown,
+    raw_reading_deviation, residuals_csv, ros_name, screen_sweeps, urdf,
 };
 use axiscal::calibration::refine::{RefineOptions, Refinement};
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
@@ -115,7 +115,7 @@ pub struct Args {
     /// and report the odd ones as held out, like `validate`.
     #[arg(long)]
     holdout: bool,
-    /// Free-pose files only: flag the poses the outlier test rejects but keep them in the fit.
+    /// Flag the sweep points (or free poses) the outlier test rejects but keep them in the fit.
     #[arg(long)]
     keep_outliers: bool,
     /// Calibrate every row as a free pose (the free-pose method, `docs/method.md`), the axis
@@ -148,6 +148,8 @@ struct OutputTexts {
     deviation_line: String,
     /// Joints whose URDF speed and effort limits are unknown.
     missing_speed_limits: Vec<usize>,
+    /// What the checks against the description found.
+    implausible: Vec<Implausible>,
 }
 
 /// Renders every output of `calibrate` (see [`OUTPUTS`]).
@@ -177,6 +179,10 @@ fn output_texts(
         };
         poses = plan.commands(desc, &cal.reference_cmd);
     }
+    let implausible = match cal.free_poses {
+        None => implausible(cal, desc),
+        Some(_) => vec![],
+    };
     let deviation = raw_reading_deviation(cal, desc, &poses);
     let mut report_findings = findings(cal, desc);
     report_findings.extend(deviation.findings());
@@ -187,7 +193,10 @@ fn output_texts(
     let map = joint_map(cal, desc, args.joint_map_step);
     let mut files = vec![
         (OUTPUTS[0], json_file::to_string(Schema::CALIBRATION, cal)?),
-        (OUTPUTS[1], report_markdown(cal, desc, source) + &deviation.markdown()),
+        (
+            OUTPUTS[1],
+            report_markdown(cal, desc, source, &implausible) + &deviation.markdown(),
+        ),
         (
             OUTPUTS[2],
             json_file::list_to_string(Schema::REPORT, "findings", &report_findings)?,
@@ -211,11 +220,12 @@ fn output_texts(
             deviation.max_position_mm, deviation.max_orientation_mrad, deviation.poses
         ),
         missing_speed_limits: joints_without_speed_limits(desc),
+        implausible,
     })
 }
 
 /// `report.md`: the free-pose report or the independent-axis one.
-fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> String {
+fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str, warnings: &[Implausible]) -> String {
     match &cal.free_poses {
         Some(summary) => free_pose::markdown(
             summary,
@@ -223,7 +233,7 @@ fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> 
             &desc.name,
             source,
         ),
-        None => markdown(cal, desc, source),
+        None => markdown(cal, desc, source, warnings),
     }
 }
 
@@ -272,7 +282,12 @@ pub fn run(args: Args) -> Result<()> {
             super::calibrate_free::print(summary, &desc, &source);
             print_tool_accuracy(&cal);
         }
-        None => print_axes(&cal, &desc, &source),
+        None => {
+            print_axes(&cal, &desc, &source);
+            for found in &texts.implausible {
+                eprintln!("warning: {found}");
+            }
+        }
     }
     say!("{}", texts.deviation_line);
     if !texts.missing_speed_limits.is_empty() {
@@ -314,9 +329,9 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
 
 /// The independent-axis calibration of `set` (`--refine` applied) and the tool-accuracy map.
 fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(Calibration, Vec<MapPoint>)> {
-    if args.holdout || args.keep_outliers {
+    if args.holdout {
         anyhow::bail!(
-            "--holdout and --keep-outliers apply to free-pose files (no axis experiment); {} has axis experiments",
+            "--holdout applies to free-pose files (no axis experiment); {} has axis experiments",
             args.data.display()
         );
     }
@@ -331,16 +346,28 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
     options
         .joint_repeatability_rad(desc)
         .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
+    let screening = screen_sweeps(set, desc, &options, args.keep_outliers)
+        .map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
+    let screened = screening.set.as_ref().unwrap_or(set);
     // The procedure's message already contains its cause: one line, not the cause twice.
-    let mut cal = match calibrate(set, desc, &options) {
-        Ok(cal) => cal,
+    let mut cal = match calibrate(screened, desc, &options) {
+        Ok(cal) => {
+            print_outliers(&screening.outliers, &args.data);
+            cal
+        }
+        // Every row a free pose: that fit tests its poses for outliers itself, on every row.
         Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) if !args.refine => {
             let mut cal = sweeps_as_free_poses(args, set, desc, &e)?;
             let map = predict_free_pose_accuracy(&mut cal, desc, set)?;
             return Ok((cal, map));
         }
-        Err(e) => anyhow::bail!("calibrating {}: {e}", args.data.display()),
+        Err(e) => {
+            print_outliers(&screening.outliers, &args.data);
+            anyhow::bail!("calibrating {}: {e}", args.data.display())
+        }
     };
+    let set = screened;
+    cal.outliers = screening.outliers;
     let map = predict_tool_accuracy(&mut cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
@@ -350,6 +377,24 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         cal
     };
     Ok((cal, map))
+}
+
+/// One warning line per sweep point the outlier test flagged in `data`.
+fn print_outliers(outliers: &[OutlierPoint], data: &Path) {
+    for o in outliers {
+        let place = o
+            .line
+            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+        let what = if o.dropped {
+            "calibrated without it (--keep-outliers keeps it)"
+        } else {
+            "kept (--keep-outliers)"
+        };
+        eprintln!(
+            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from the fit of its sweep's other points, {:.1} times the sweep's noise, beyond the fence {:.1} (Q3 + 3 IQR of every sweep point's): {what}; check this row's coordinates and commands",
+            o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
+        );
+    }
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far

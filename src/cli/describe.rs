@@ -13,8 +13,9 @@ pub struct Args {
     /// Robot description (TOML; phi rows, `dh` rows or a `urdf` file), or a shipped one's name.
     #[arg(value_parser = super::options::robot_file)]
     robot: PathBuf,
-    /// Random poses (uniform within the joint limits) for the forward-kinematics check.
-    #[arg(long, default_value_t = 1000)]
+    /// Random poses (uniform within the joint limits) for the forward-kinematics check (at most
+    /// a million: a few seconds).
+    #[arg(long, default_value_t = 1000, value_parser = super::options::InRange::closed(1usize, 1_000_000, ""))]
     poses: usize,
     /// Seed of the random poses.
     #[arg(long, default_value_t = 1)]

@@ -310,7 +310,8 @@ pub fn read_measurements_from<R: io::Read>(
     })?;
     Ok(set
         .with_target_names(targets.names)
-        .with_setups(row_setups, setups.names))
+        .with_setups(row_setups, setups.names)
+        .with_lines(lines))
 }
 
 /// Labels numbered 0, 1, ... in the order they first appear.

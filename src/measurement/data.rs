@@ -146,6 +146,19 @@ pub struct MeasurementSet {
     row_setups: Vec<usize>,
     /// The setups' labels by id.
     setup_names: Vec<String>,
+    /// The file line each row was read from, when a file was read.
+    lines: SourceLines,
+}
+
+/// The file line of each row: where the rows came from, not what they are, so two sets with
+/// the same rows are equal whatever their lines.
+#[derive(Clone, Debug, Default)]
+struct SourceLines(Vec<u64>);
+
+impl PartialEq for SourceLines {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// The rows of one experiment, in file order.
@@ -201,7 +214,42 @@ impl MeasurementSet {
             target_names: Vec::new(),
             row_setups: Vec::new(),
             setup_names: Vec::new(),
+            lines: SourceLines::default(),
         })
+    }
+
+    /// The set with each row's file line (`lines`, one per row). Ignored unless there is one
+    /// per row.
+    pub fn with_lines(self, lines: Vec<u64>) -> Self {
+        if lines.len() != self.rows.len() {
+            return self;
+        }
+        Self {
+            lines: SourceLines(lines),
+            ..self
+        }
+    }
+
+    /// The file line of row `row`, when the set was read from a file.
+    pub fn line_of(&self, row: usize) -> Option<u64> {
+        self.lines.0.get(row).copied()
+    }
+
+    /// The set without the rows `rows` (indices), its setups, target names and lines kept.
+    pub fn without_rows(&self, rows: &[usize]) -> Self {
+        let keep = |i: &usize| !rows.contains(i);
+        let pick = |v: &[usize]| -> Vec<usize> { (0..v.len()).filter(keep).map(|i| v[i]).collect() };
+        Self {
+            joint_count: self.joint_count,
+            rows: (0..self.rows.len())
+                .filter(keep)
+                .map(|i| self.rows[i].clone())
+                .collect(),
+            target_names: self.target_names.clone(),
+            row_setups: pick(&self.row_setups),
+            setup_names: self.setup_names.clone(),
+            lines: SourceLines((0..self.lines.0.len()).filter(keep).map(|i| self.lines.0[i]).collect()),
+        }
     }
 
     /// The set with each row's setup (`row_setups`, one per row, ids into `names`): rows

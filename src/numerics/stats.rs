@@ -22,6 +22,26 @@ pub fn rms_spread(points: &[nalgebra::Point3<f64>]) -> f64 {
 /// million (0.2 mm of misfit over a spread of half a metre; 0.03 mm over an arc of 50 mm).
 pub const ABSURD_SHARE: f64 = 0.05;
 
+/// Tukey's "far out" fence factor (*Exploratory Data Analysis*, 1977, ch. 2): a value beyond
+/// the upper quartile by 3 interquartile ranges.
+pub const FAR_OUT: f64 = 3.0;
+
+/// Tukey's far-out fence of `v`: `Q3 + 3 (Q3 - Q1)` (linear quartiles). The outlier tests'
+/// fence: a gross error lies far beyond it, while a heavy tail of clean data (what a model
+/// misses) lifts it with the quartiles, as it would not a Gaussian quantile.
+pub fn far_out_fence(v: &[f64]) -> f64 {
+    let q1 = quantile(v, 0.25, QuantileMethod::Linear);
+    let q3 = quantile(v, 0.75, QuantileMethod::Linear);
+    q3 + FAR_OUT * (q3 - q1)
+}
+
+/// The far-out fence of the 3-D norms of isotropic Gaussian errors over their median:
+/// `(Q3 + 3 IQR) / Q2` of the chi distribution with 3 degrees of freedom (3.12).
+pub fn chi3_far_out_over_median() -> f64 {
+    let q = |p: f64| chi_square_quantile(p, 3.0).sqrt();
+    (q(0.75) + FAR_OUT * (q(0.75) - q(0.25))) / q(0.5)
+}
+
 /// Mean (NaN when empty).
 pub fn mean(v: &[f64]) -> f64 {
     if v.is_empty() {

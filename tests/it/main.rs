@@ -32,6 +32,7 @@ mod lean_calibration;
 mod measurement_csv_roundtrip;
 mod noise_and_held;
 mod nominal_frames;
+mod outliers;
 mod paper_scenario;
 mod plan_import;
 mod plan_optimize;

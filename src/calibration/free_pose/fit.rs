@@ -5,7 +5,6 @@ use super::model::FreePoseModel;
 use super::poses::FreePoses;
 use crate::calibration::refine::RefitParameter;
 use crate::numerics::lsq::{LmOptions, LsqError, inverse_normal, levenberg_marquardt};
-use crate::numerics::stats::{QuantileMethod, quantile};
 use crate::robot::Controller;
 use nalgebra::{DMatrix, DVector};
 
@@ -104,20 +103,12 @@ pub(super) struct Flag {
     pub fence_m: f64,
 }
 
-/// Tukey's "far out" fence factor (*Exploratory Data Analysis*, 1977, ch. 2): a value beyond
-/// the upper quartile by 3 interquartile ranges.
-const FAR_OUT: f64 = 3.0;
-
-/// The fence of the poses' RMS residuals: `Q3 + 3 (Q3 - Q1)` of the per-pose RMS of the fit's
-/// residual `residual` over the poses `which` \[m\]. A gross error (a corrupted cell, swapped
-/// target ids, a pose in other units) lies far beyond it; the heavy tail that what a geometric
-/// model misses (compliance, backlash) gives clean data does not, as it would beyond a
-/// Gaussian quantile.
+/// The fence of the poses' RMS residuals: Tukey's far-out fence
+/// ([`crate::numerics::stats::far_out_fence`]) of the per-pose RMS of the fit's residual
+/// `residual` over the poses `which` \[m\]. A gross error (a corrupted cell, swapped target
+/// ids, a pose in other units) lies far beyond it.
 pub(super) fn outlier_fence(residual: &DVector<f64>, poses: &FreePoses, which: &[usize]) -> f64 {
-    let rms = pose_rms(residual, poses, which);
-    let q1 = quantile(&rms, 0.25, QuantileMethod::Linear);
-    let q3 = quantile(&rms, 0.75, QuantileMethod::Linear);
-    q3 + FAR_OUT * (q3 - q1)
+    crate::numerics::stats::far_out_fence(&pose_rms(residual, poses, which))
 }
 
 /// The RMS 3-D distance of each pose's points \[m\].

@@ -773,6 +773,7 @@ impl FreePoseCalibration {
             model_covariance: self.model_covariance,
             tool_accuracy: None,
             refinement: None,
+            outliers: vec![],
             free_poses: Some(self.summary),
             residuals: vec![],
         }

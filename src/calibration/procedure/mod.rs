@@ -31,6 +31,8 @@ mod joints;
 mod propagation;
 mod report;
 mod result;
+mod sanity;
+mod screen;
 mod uncertainty;
 mod urdf;
 
@@ -47,6 +49,8 @@ pub use result::{
     AxisReport, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport, PointResidual,
     PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
 };
+pub use sanity::{Implausible, MISFIT_RATIO, SIZE_TOLERANCE, implausible};
+pub use screen::{OUTLIER_SHARE_MAX, OutlierPoint, Screening, screen_sweeps};
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
@@ -168,6 +172,20 @@ impl CalibrationOptions {
 /// Why a campaign could not be calibrated.
 #[derive(Debug, thiserror::Error)]
 pub enum ProcedureError {
+    /// Too many of one sweep's points fail the outlier test ([`screen_sweeps`]).
+    #[error(
+        "experiment {experiment}: {flagged} of its {points} points lie beyond the outlier fence ({fence:.2} times the sweep's noise): the sweep, not single points, is wrong (check its joint, its target ids, its units)"
+    )]
+    TooManyOutliers {
+        /// The experiment.
+        experiment: String,
+        /// Points beyond the fence.
+        flagged: usize,
+        /// Its points.
+        points: usize,
+        /// The fence (normalised residual).
+        fence: f64,
+    },
     /// The set has no axis experiment at all.
     #[error("no axis experiment (no row with moved_joint > 0): nothing to calibrate")]
     NoAxisExperiment,
@@ -910,6 +928,7 @@ impl<'a> Context<'a> {
             held_passes: passes,
             refinement: None,
             free_poses: None,
+            outliers: vec![],
             residuals,
             description: Some(self.desc.identity()),
             model_covariance,

@@ -245,7 +245,7 @@ fn coupling_findings(cal: &Calibration, out: &mut Vec<Finding>) {
 }
 
 /// The report as Markdown.
-pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> String {
+pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str, warnings: &[super::Implausible]) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration of {}\n", desc.name);
     let _ = writeln!(
@@ -253,7 +253,9 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
         "Data: `{source}`. Estimator: `{}` (`--estimator`).\n",
         cal.options.estimator.name()
     );
+    write_implausible(&mut s, warnings);
     write_noise(&mut s, cal);
+    write_outliers(&mut s, cal);
     write_scope(&mut s, cal);
     write_axes_table(&mut s, cal);
     write_sweeps(&mut s, cal, desc);
@@ -266,6 +268,40 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str) -> Str
         s += &crate::calibration::refine::markdown(r);
     }
     s
+}
+
+/// What the calibration's checks against its description found
+/// ([`super::implausible`]), when anything.
+fn write_implausible(s: &mut String, found: &[super::Implausible]) {
+    if found.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "## Warnings\n");
+    for f in found {
+        let _ = writeln!(s, "- **{f}**");
+    }
+    s.push('\n');
+}
+
+/// The sweep points the outlier test flagged (`docs/method.md`, "Outliers"), when any was.
+fn write_outliers(s: &mut String, cal: &Calibration) {
+    if cal.outliers.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "## Outliers ({})\n\nSweep points beyond the outlier fence (`docs/method.md`, \"Outliers\": Tukey's far-out fence of every sweep point's residual over its sweep's noise); \"dropped\": the calibration was made without them and the other targets of their poses (`--keep-outliers` keeps them). Check each row's coordinates and commands.\n\n| file line | experiment | step | target | residual (mm) | over the noise | fence | dropped |\n|---|---|---|---|---:|---:|---:|---|",
+        cal.outliers.len()
+    );
+    for o in &cal.outliers {
+        let line = o.line.map_or_else(|| "-".to_string(), |l| l.to_string());
+        let _ = writeln!(
+            s,
+            "| {line} | {} | {} | {} | {:.3} | {:.1} | {:.1} | {} |",
+            o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence, o.dropped
+        );
+    }
+    s.push('\n');
 }
 
 /// The predicted tool 1-sigma inside the spans and over the workspace, when predicted.

@@ -577,6 +577,10 @@ pub struct Calibration {
     /// poses do not identify, the outliers and the held-out check. `axes` is then empty.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub free_poses: Option<crate::calibration::free_pose::FreePoseSummary>,
+    /// The sweep points the outlier test flagged ([`super::screen_sweeps`]), each with whether
+    /// the calibration was made without it (absent when none was flagged).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outliers: Vec<super::OutlierPoint>,
     /// Per-point residuals of the axis fits (written as `residuals.csv`, not in the JSON).
     #[serde(skip)]
     pub residuals: Vec<PointResidual>,

@@ -1,0 +1,338 @@
+//! Gross errors among the sweeps' points, found before the procedure fits them: each sweep
+//! whose held joints hold still is fitted alone (the ML arc through the transmission for a rotary joint, eqs. 1-8 and 14; the
+//! ML line for a sliding one, eqs. 9-13), each point's 3-D residual is tested against a fence,
+//! and the worst point beyond it is set aside and its sweep refitted until none is left.
+//!
+//! Each sweep has its own noise: the RMS per axis `sigma` of its residuals once the points
+//! beyond `(Q3 + 3 IQR) / Q2` of Gaussian 3-D errors (3.12,
+//! [`crate::numerics::stats::chi3_far_out_over_median`]) times the median distance are set
+//! aside. The sweeps' noise differs: the swept joint's repeatability turns into more error the
+//! farther its target is. A point's normalised residual is `|r| / sigma`; the fence is Tukey's
+//! far-out fence `Q3 + 3 IQR` (the rule the free-pose fit uses for its poses,
+//! [`crate::numerics::stats::far_out_fence`]) of every sweep's points kept. A corrupted
+//! reading, a swapped point id or a point in other units lies far beyond it; on clean
+//! simulated campaigns of the paper robot about one point in 3,000 passes it, by less than half
+//! the fence (`docs/validation.md`, "Outliers").
+
+use super::axis_fit::actuator_commands;
+use super::{AxisExperiment, COMMAND_TOLERANCE, CalibrationOptions, ProcedureError, axis_experiments_with};
+use crate::calibration::arc_model::{ArcModel, MeasurementNoise};
+use crate::calibration::line_ml::{fit_line, predict_line};
+use crate::calibration::transmission_fit::TransmissionForm;
+use crate::calibration::{ArcFitOptions, CalibrationError, Studies, fit_arc_with_angle_noise_studies};
+use crate::kinematics::JointKind;
+use crate::measurement::MeasurementSet;
+use crate::numerics::stats::{QuantileMethod, chi3_far_out_over_median, far_out_fence, quantile};
+use crate::robot::{Controller, RobotDescription};
+use nalgebra::{Point3, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// At most this share of a sweep's points may be set aside: beyond it the sweep, not single
+/// points, is wrong.
+pub const OUTLIER_SHARE_MAX: f64 = 0.2;
+
+/// A sweep point the outlier test flagged.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct OutlierPoint {
+    /// The experiment.
+    pub experiment: String,
+    /// Its swept joint.
+    pub joint: usize,
+    /// The point's step.
+    pub step: usize,
+    /// The target (0: the sweep's first target).
+    pub target: usize,
+    /// The line of the data file it was read from, when known.
+    pub line: Option<u64>,
+    /// Its 3-D distance from the fit of its sweep's points kept \[mm\].
+    pub residual_mm: f64,
+    /// That residual over its sweep's noise per axis (about `sqrt(3)` for a point of the
+    /// noise).
+    pub normalised_residual: f64,
+    /// The fence it exceeds (Tukey's far-out fence of every sweep point's normalised
+    /// residual).
+    pub fence: f64,
+    /// Whether the calibration was made without it and the other targets of its pose
+    /// (`false` with `--keep-outliers`).
+    pub dropped: bool,
+}
+
+/// The outcome of the test: the points flagged and, when some were set aside, the set
+/// without their poses (every target of a flagged point's step).
+#[derive(Clone, Debug)]
+pub struct Screening {
+    /// The points beyond the fence, in experiment and step order.
+    pub outliers: Vec<OutlierPoint>,
+    /// The set without the dropped points; `None` when none was dropped.
+    pub set: Option<MeasurementSet>,
+}
+
+/// One sweep's target-0 points and its joint's actuator command at each.
+struct Sweep<'a> {
+    experiment: &'a AxisExperiment,
+    kind: JointKind,
+    form: TransmissionForm,
+    points: Vec<Point3<f64>>,
+    u: Vec<f64>,
+}
+
+/// Tests the target-0 points of every sweep of `set` (module doc). With `keep` the points are
+/// flagged as they would be dropped, but none is. A sweep whose fit fails is left to the procedure, which says
+/// why; a sweep with more than [`OUTLIER_SHARE_MAX`] of its points beyond the fence is an
+/// error naming it.
+pub fn screen_sweeps(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    keep: bool,
+) -> Result<Screening, ProcedureError> {
+    let (experiments, _) = axis_experiments_with(set, desc, options.held_tolerance)?;
+    let controller = Controller::from_description(desc);
+    let sweeps: Vec<Sweep<'_>> = experiments.iter().map(|e| Sweep::new(e, desc, &controller)).collect();
+    let sigma = options.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
+    let max_iterations = options.max_iterations;
+    let first: Vec<Option<Vec<Vector3<f64>>>> = sweeps
+        .iter()
+        .map(|s| {
+            s.holds_still()
+                .then(|| s.residuals(&all(s), sigma, max_iterations).ok())
+                .flatten()
+        })
+        .collect();
+    let scales: Vec<Option<Scale>> = sweeps
+        .iter()
+        .zip(&first)
+        .map(|(s, r)| Scale::of(s, r.as_ref()?, sigma, max_iterations))
+        .collect();
+    let pooled: Vec<f64> = scales.iter().flatten().flat_map(|s| s.kept_z.iter().copied()).collect();
+    if pooled.len() < 8 {
+        return Ok(Screening {
+            outliers: vec![],
+            set: None,
+        });
+    }
+    let fence = far_out_fence(&pooled);
+    let mut outliers = Vec::new();
+    for ((s, r), scale) in sweeps.iter().zip(&first).zip(&scales) {
+        let (Some(r), Some(scale)) = (r, scale) else { continue };
+        let z = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().map(|r| scale.z(r)).collect() };
+        let (kept, last) = s.peel(r, &z, &|_| fence, sigma, max_iterations);
+        let flagged: Vec<usize> = (0..s.points.len()).filter(|i| !kept.contains(i)).collect();
+        if flagged.len() as f64 > OUTLIER_SHARE_MAX * s.points.len() as f64 {
+            return Err(ProcedureError::TooManyOutliers {
+                experiment: s.experiment.name.clone(),
+                flagged: flagged.len(),
+                points: s.points.len(),
+                fence,
+            });
+        }
+        outliers.extend(
+            flagged
+                .into_iter()
+                .map(|i| s.outlier(i, &last[i], scale.z(&last[i]), fence, !keep, set)),
+        );
+    }
+    // A flagged point's whole pose goes: a wrong reading is wrong for each of its targets.
+    let dropped: Vec<usize> = (0..set.rows().len())
+        .filter(|&i| {
+            let m = &set.rows()[i];
+            outliers
+                .iter()
+                .any(|o| o.dropped && o.experiment == m.experiment && o.step == m.step)
+        })
+        .collect();
+    let set = (!dropped.is_empty()).then(|| set.without_rows(&dropped));
+    Ok(Screening { outliers, set })
+}
+
+/// Every point of `s`.
+fn all(s: &Sweep<'_>) -> Vec<usize> {
+    (0..s.points.len()).collect()
+}
+
+/// A sweep's noise: the RMS per axis of its residuals once its gross errors are set aside,
+/// and the normalised residuals of the points it kept.
+struct Scale {
+    /// The RMS per axis \[m\].
+    sigma_m: f64,
+    /// The normalised residuals of the points kept.
+    kept_z: Vec<f64>,
+}
+
+impl Scale {
+    /// The scale of sweep `s` from its residuals `first` (every point fitted): the points
+    /// beyond [`chi3_far_out_over_median`] times the median distance are set aside, worst
+    /// first, and the RMS is that of the last fit's residuals of the points kept.
+    fn of(s: &Sweep<'_>, first: &[Vector3<f64>], sigma: f64, max_iterations: usize) -> Option<Scale> {
+        let ratio = chi3_far_out_over_median();
+        let norms = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().map(|r| r.norm()).collect() };
+        let (kept, last) = s.peel(first, &norms, &|kept| ratio * median(kept), sigma, max_iterations);
+        let sum: f64 = kept.iter().map(|&i| last[i].norm_squared()).sum();
+        let sigma_m = (sum / (3 * kept.len()).max(1) as f64).sqrt();
+        let kept_z = kept.iter().map(|&i| last[i].norm() / sigma_m).collect();
+        (sigma_m > 0.0).then_some(Scale { sigma_m, kept_z })
+    }
+
+    /// The normalised residual `|r| / sigma`: about `sqrt(3)` for a point of the sweep's noise.
+    fn z(&self, r: &Vector3<f64>) -> f64 {
+        r.norm() / self.sigma_m
+    }
+}
+
+/// The set's row of a flagged point.
+fn row_of(set: &MeasurementSet, o: &OutlierPoint) -> Option<usize> {
+    set.rows()
+        .iter()
+        .position(|m| m.experiment == o.experiment && m.step == o.step && m.target == o.target)
+}
+
+impl<'a> Sweep<'a> {
+    fn new(e: &'a AxisExperiment, desc: &RobotDescription, controller: &Controller) -> Self {
+        let k = e.joint - 1;
+        Sweep {
+            experiment: e,
+            kind: desc.joints[k].kind,
+            form: TransmissionForm::from(desc.joints[k].transmission_fit_form()),
+            points: e.target0_m.clone(),
+            u: e.target0_steps
+                .iter()
+                .map(|&i| actuator_commands(controller, desc, &e.commands[i])[k])
+                .collect(),
+        }
+    }
+
+    /// Whether every held joint's reading stays within [`COMMAND_TOLERANCE`] through the sweep:
+    /// else its points are not on one arc or line as measured (the procedure corrects them for
+    /// the wander with the model it fits), and the sweep is not tested.
+    fn holds_still(&self) -> bool {
+        let e = self.experiment;
+        let first = &e.commands[0];
+        (0..first.len())
+            .filter(|&j| e.holds_constant(j))
+            .all(|j| e.commands.iter().all(|c| (c[j] - first[j]).abs() <= COMMAND_TOLERANCE))
+    }
+
+    /// The residual \[m\] of every point of the sweep against its fit on the points `kept`,
+    /// with the transmission lowered as [`super::axis_fit`] lowers it when the description's
+    /// order is not invertible over the sweep.
+    fn residuals(
+        &self,
+        kept: &[usize],
+        sigma: f64,
+        max_iterations: usize,
+    ) -> Result<Vec<Vector3<f64>>, CalibrationError> {
+        let mut form = self.form;
+        loop {
+            match self.residuals_as(form, kept, sigma, max_iterations) {
+                Err(CalibrationError::NotInvertible { .. }) if form.order() > 0 => {
+                    form = form.one_order_lower().unwrap_or(form);
+                }
+                other => return other,
+            }
+        }
+    }
+
+    fn residuals_as(
+        &self,
+        form: TransmissionForm,
+        kept: &[usize],
+        sigma: f64,
+        max_iterations: usize,
+    ) -> Result<Vec<Vector3<f64>>, CalibrationError> {
+        let points: Vec<Point3<f64>> = kept.iter().map(|&i| self.points[i]).collect();
+        let u: Vec<f64> = kept.iter().map(|&i| self.u[i]).collect();
+        if u.is_empty() {
+            return Err(CalibrationError::TooFewPoints {
+                fit: "outlier test",
+                got: 0,
+                needed: 1,
+            });
+        }
+        // Every point's command after the first kept one: the fits measure motion from it.
+        let mut commands = vec![u[0]];
+        commands.extend_from_slice(&self.u);
+        let predicted = match self.kind {
+            JointKind::Revolute => {
+                let noise = MeasurementNoise::Isotropic { sigma_per_axis: sigma };
+                let options = ArcFitOptions {
+                    form,
+                    noise: noise.clone(),
+                    reference_point: centroid(&points),
+                    max_iterations,
+                };
+                let fit = fit_arc_with_angle_noise_studies(&points, &u, &options, 0.0, Studies::Skip)?;
+                ArcModel::new(form, &commands, &noise)?.predict(&fit.params)?
+            }
+            JointKind::Prismatic => {
+                let fit = fit_line(&points, &u, &form, sigma, 0.0, max_iterations)?;
+                predict_line(&form, &fit.params, &commands)?
+            }
+        };
+        Ok(self.points.iter().zip(&predicted[1..]).map(|(p, q)| p - q).collect())
+    }
+
+    /// Sets aside, worst first by `measure`, the points whose measure exceeds `fence(measures
+    /// of the points kept)` and refits: the points kept and the residuals of the last fit
+    /// (`first`: those of the fit with every point).
+    fn peel(
+        &self,
+        first: &[Vector3<f64>],
+        measure: &dyn Fn(&[Vector3<f64>]) -> Vec<f64>,
+        fence: &dyn Fn(&[f64]) -> f64,
+        sigma: f64,
+        max_iterations: usize,
+    ) -> (Vec<usize>, Vec<Vector3<f64>>) {
+        let mut kept = all(self);
+        let mut residuals = first.to_vec();
+        let most = (OUTLIER_SHARE_MAX * self.points.len() as f64).floor() as usize + 1;
+        for _ in 0..most {
+            let m = measure(&residuals);
+            let Some(&worst) = kept.iter().max_by(|&&a, &&b| m[a].total_cmp(&m[b])) else {
+                break;
+            };
+            let kept_m: Vec<f64> = kept.iter().map(|&i| m[i]).collect();
+            if m[worst] <= fence(&kept_m) {
+                break;
+            }
+            kept.retain(|&i| i != worst);
+            match self.residuals(&kept, sigma, max_iterations) {
+                Ok(r) => residuals = r,
+                Err(_) => break,
+            }
+        }
+        (kept, residuals)
+    }
+
+    fn outlier(
+        &self,
+        i: usize,
+        residual_m: &Vector3<f64>,
+        z: f64,
+        fence: f64,
+        dropped: bool,
+        set: &MeasurementSet,
+    ) -> OutlierPoint {
+        let e = self.experiment;
+        let mut o = OutlierPoint {
+            experiment: e.name.clone(),
+            joint: e.joint,
+            step: e.steps[e.target0_steps[i]],
+            target: 0,
+            line: None,
+            residual_mm: residual_m.norm() * 1e3,
+            normalised_residual: z,
+            fence,
+            dropped,
+        };
+        o.line = row_of(set, &o).and_then(|row| set.line_of(row));
+        o
+    }
+}
+
+fn median(v: &[f64]) -> f64 {
+    quantile(v, 0.5, QuantileMethod::Linear)
+}
+
+fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
+    Point3::from(points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / points.len().max(1) as f64)
+}
