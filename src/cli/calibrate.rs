@@ -363,7 +363,12 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         }
         Err(e) => {
             print_outliers(&screening.outliers, &args.data);
-            anyhow::bail!("calibrating {}: {e}", args.data.display())
+            let hint = args.noise_mm.map_or(String::new(), |n| {
+                format!(
+                    " (with --noise-mm {n:e}: a noise far below the data's makes the fits trust each point more than the joints' repeatability allows; without --noise-mm it is estimated from the residuals)"
+                )
+            });
+            anyhow::bail!("calibrating {}: {e}{hint}", args.data.display())
         }
     };
     let set = screened;

@@ -912,3 +912,25 @@ fn a_plan_file_beyond_the_interval_bound_is_refused() {
         );
     }
 }
+
+/// A given noise the data contradict by orders of magnitude makes the fits fail: the error says
+/// what the option did and how to do without it.
+#[test]
+fn a_given_noise_far_below_the_data_is_named_in_the_error() {
+    let (dir, data) = crate::common::simulated_campaign_csv(2);
+    for noise in ["1e-9", "1e-5"] {
+        let a = crate::common::axiscal()
+            .arg("calibrate")
+            .arg(&data)
+            .args(["--noise-mm", noise, "--out"])
+            .arg(dir.path().join(format!("cal{noise}")))
+            .assert()
+            .code(2);
+        let err = crate::common::stderr(&a);
+        assert!(
+            err.contains(&format!("with --noise-mm {noise}")) && err.contains("without --noise-mm it is estimated"),
+            "{err}"
+        );
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+}
