@@ -50,7 +50,7 @@ pub use result::{
     PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
 };
 pub use sanity::{Implausible, MISFIT_RATIO, SIZE_TOLERANCE, implausible};
-pub use screen::{OUTLIER_SHARE_MAX, OutlierPoint, Screening, screen_sweeps};
+pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, screen_sweeps};
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,

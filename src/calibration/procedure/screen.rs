@@ -67,6 +67,11 @@ pub struct Screening {
     pub set: Option<MeasurementSet>,
 }
 
+/// At most this many points of one sweep are set aside, one refit each: more gross errors in
+/// one sweep make it wrong, not its points (and a million-point sweep is not refitted a
+/// hundred thousand times).
+pub const OUTLIER_ROUNDS_MAX: usize = 25;
+
 /// One sweep's target-0 points and its joint's actuator command at each.
 struct Sweep<'a> {
     experiment: &'a AxisExperiment,
@@ -77,9 +82,9 @@ struct Sweep<'a> {
 }
 
 /// Tests the target-0 points of every sweep of `set` (module doc). With `keep` the points are
-/// flagged as they would be dropped, but none is. A sweep whose fit fails is left to the procedure, which says
-/// why; a sweep with more than [`OUTLIER_SHARE_MAX`] of its points beyond the fence is an
-/// error naming it.
+/// flagged as they would be dropped, but none is. A sweep whose fit fails is left to the
+/// procedure, which says why; a sweep with more than [`OUTLIER_SHARE_MAX`] of its points, or
+/// more than [`OUTLIER_ROUNDS_MAX`], beyond the fence is an error naming it.
 pub fn screen_sweeps(
     set: &MeasurementSet,
     desc: &RobotDescription,
@@ -117,11 +122,15 @@ pub fn screen_sweeps(
         let (Some(r), Some(scale)) = (r, scale) else { continue };
         let z = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().map(|r| scale.z(r)).collect() };
         let (kept, last) = s.peel(r, &z, &|_| fence, sigma, max_iterations);
-        let flagged: Vec<usize> = (0..s.points.len()).filter(|i| !kept.contains(i)).collect();
-        if flagged.len() as f64 > OUTLIER_SHARE_MAX * s.points.len() as f64 {
+        let mut is_kept = vec![false; s.points.len()];
+        kept.iter().for_each(|&i| is_kept[i] = true);
+        let flagged: Vec<usize> = (0..s.points.len()).filter(|&i| !is_kept[i]).collect();
+        // Points still beyond the fence once the rounds are spent: as many more outliers.
+        let beyond = kept.iter().filter(|&&i| scale.z(&last[i]) > fence).count();
+        if beyond > 0 || flagged.len() as f64 > OUTLIER_SHARE_MAX * s.points.len() as f64 {
             return Err(ProcedureError::TooManyOutliers {
                 experiment: s.experiment.name.clone(),
-                flagged: flagged.len(),
+                flagged: flagged.len() + beyond,
                 points: s.points.len(),
                 fence,
             });
@@ -133,13 +142,13 @@ pub fn screen_sweeps(
         );
     }
     // A flagged point's whole pose goes: a wrong reading is wrong for each of its targets.
+    let poses: std::collections::HashSet<(&str, usize)> = outliers
+        .iter()
+        .filter(|o| o.dropped)
+        .map(|o| (o.experiment.as_str(), o.step))
+        .collect();
     let dropped: Vec<usize> = (0..set.rows().len())
-        .filter(|&i| {
-            let m = &set.rows()[i];
-            outliers
-                .iter()
-                .any(|o| o.dropped && o.experiment == m.experiment && o.step == m.step)
-        })
+        .filter(|&i| poses.contains(&(set.rows()[i].experiment.as_str(), set.rows()[i].step)))
         .collect();
     let set = (!dropped.is_empty()).then(|| set.without_rows(&dropped));
     Ok(Screening { outliers, set })
@@ -284,7 +293,7 @@ impl<'a> Sweep<'a> {
     ) -> (Vec<usize>, Vec<Vector3<f64>>) {
         let mut kept = all(self);
         let mut residuals = first.to_vec();
-        let most = (OUTLIER_SHARE_MAX * self.points.len() as f64).floor() as usize + 1;
+        let most = ((OUTLIER_SHARE_MAX * self.points.len() as f64).floor() as usize + 1).min(OUTLIER_ROUNDS_MAX);
         for _ in 0..most {
             let m = measure(&residuals);
             let Some(&worst) = kept.iter().max_by(|&&a, &&b| m[a].total_cmp(&m[b])) else {
