@@ -46,8 +46,9 @@ impl Schema {
     pub const BUDGET: Schema = Schema::v1("budget");
     /// `efficiency.json` of `study`. 2: units in the names of the sigmas.
     pub const STUDY: Schema = Schema::new("study", 2, 2);
-    /// `summary.json` of `validate`.
-    pub const VALIDATION: Schema = Schema::v1("validation");
+    /// `summary.json` of `validate`. 2: the free poses tested against the noise and the
+    /// calibration's predicted error, verdicts `consistent` / `exceeds` / `below`.
+    pub const VALIDATION: Schema = Schema::new("validation", 2, 2);
     /// `iso9283.json` of `iso9283 evaluate`.
     pub const ISO9283: Schema = Schema::v1("iso9283");
     /// `iso9283-prediction.json` of `iso9283 predict`.

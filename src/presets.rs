@@ -13,13 +13,43 @@ use std::path::{Component, Path, PathBuf};
 /// The root of the virtual paths of the shipped files (not a folder on disk).
 pub const SHIPPED_ROOT: &str = "<shipped>";
 
-/// What a shipped file is, for the list shown when a name is not found.
+/// What a shipped file is: which option takes it, and the list shown when a name is not found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
-    /// A robot description, truth model or campaign plan (`scenarios/robots/`).
-    Robot,
+    /// A nominal robot description (`--robot`; `scenarios/robots/`).
+    Description,
+    /// A simulated robot's truth model (`simulate --truth`; `scenarios/robots/*-truth`).
+    Truth,
+    /// An axis-experiment plan (`--plan`; `scenarios/robots/*-plan`).
+    Plan,
+    /// The manufacturing errors a truth is drawn with (`scenarios/robots/default-perturbation`).
+    Perturbation,
     /// A Monte-Carlo scenario (`scenarios/`).
     Scenario,
+}
+
+impl Kind {
+    /// In words, for messages.
+    pub fn words(self) -> &'static str {
+        match self {
+            Kind::Description => "robot description",
+            Kind::Truth => "truth model",
+            Kind::Plan => "campaign plan",
+            Kind::Perturbation => "perturbation",
+            Kind::Scenario => "scenario",
+        }
+    }
+
+    /// Where the command line takes it.
+    fn taken_by(self) -> &'static str {
+        match self {
+            Kind::Description => "`--robot` (and `simulate --truth`)",
+            Kind::Truth => "`simulate --truth`",
+            Kind::Plan => "`--plan` of `simulate` and `plan`",
+            Kind::Perturbation => "a scenario's `[truth] perturbation`",
+            Kind::Scenario => "`axiscal run`",
+        }
+    }
 }
 
 /// One shipped file.
@@ -48,45 +78,53 @@ macro_rules! shipped {
 
 /// Every shipped file (a test checks the list against the folders).
 pub const PRESETS: &[Preset] = &[
-    shipped!(Robot, "arm6-dh-truth", "scenarios/robots/arm6-dh-truth.toml"),
-    shipped!(Robot, "arm6-dh", "scenarios/robots/arm6-dh.toml"),
-    shipped!(Robot, "ur5e-dh", "scenarios/robots/ur5e-dh.toml"),
-    shipped!(Robot, "arm6-jitter-plan", "scenarios/robots/arm6-jitter-plan.toml"),
-    shipped!(Robot, "arm6-joint1-plan", "scenarios/robots/arm6-joint1-plan.toml"),
-    shipped!(Robot, "arm7-dh", "scenarios/robots/arm7-dh.toml"),
+    shipped!(Truth, "arm6-dh-truth", "scenarios/robots/arm6-dh-truth.toml"),
+    shipped!(Description, "arm6-dh", "scenarios/robots/arm6-dh.toml"),
+    shipped!(Description, "ur5e-dh", "scenarios/robots/ur5e-dh.toml"),
+    shipped!(Plan, "arm6-jitter-plan", "scenarios/robots/arm6-jitter-plan.toml"),
+    shipped!(Plan, "arm6-joint1-plan", "scenarios/robots/arm6-joint1-plan.toml"),
+    shipped!(Description, "arm7-dh", "scenarios/robots/arm7-dh.toml"),
     shipped!(
-        Robot,
+        Truth,
         "asea-irb6l-paper-truth",
         "scenarios/robots/asea-irb6l-paper-truth.toml"
     ),
-    shipped!(Robot, "asea-irb6l", "scenarios/robots/asea-irb6l.toml"),
+    shipped!(Description, "asea-irb6l", "scenarios/robots/asea-irb6l.toml"),
     shipped!(
-        Robot,
+        Plan,
         "asea-irb6l-optimized-plan",
         "scenarios/robots/asea-irb6l-optimized-plan.toml"
     ),
     shipped!(
-        Robot,
+        Plan,
         "asea-irb6l-table1-plan",
         "scenarios/robots/asea-irb6l-table1-plan.toml"
     ),
-    shipped!(Robot, "boby-klimchik-arm", "scenarios/robots/boby-klimchik-arm.toml"),
     shipped!(
-        Robot,
+        Description,
+        "boby-klimchik-arm",
+        "scenarios/robots/boby-klimchik-arm.toml"
+    ),
+    shipped!(
+        Perturbation,
         "default-perturbation",
         "scenarios/robots/default-perturbation.toml"
     ),
     shipped!(
-        Robot,
+        Truth,
         "positioner-2axis-truth",
         "scenarios/robots/positioner-2axis-truth.toml"
     ),
-    shipped!(Robot, "positioner-2axis", "scenarios/robots/positioner-2axis.toml"),
-    shipped!(Robot, "scara-rrpr-truth", "scenarios/robots/scara-rrpr-truth.toml"),
-    shipped!(Robot, "scara-rrpr", "scenarios/robots/scara-rrpr.toml"),
-    shipped!(Robot, "table-prpp-plan", "scenarios/robots/table-prpp-plan.toml"),
-    shipped!(Robot, "table-prpp-truth", "scenarios/robots/table-prpp-truth.toml"),
-    shipped!(Robot, "table-prpp", "scenarios/robots/table-prpp.toml"),
+    shipped!(
+        Description,
+        "positioner-2axis",
+        "scenarios/robots/positioner-2axis.toml"
+    ),
+    shipped!(Truth, "scara-rrpr-truth", "scenarios/robots/scara-rrpr-truth.toml"),
+    shipped!(Description, "scara-rrpr", "scenarios/robots/scara-rrpr.toml"),
+    shipped!(Plan, "table-prpp-plan", "scenarios/robots/table-prpp-plan.toml"),
+    shipped!(Truth, "table-prpp-truth", "scenarios/robots/table-prpp-truth.toml"),
+    shipped!(Description, "table-prpp", "scenarios/robots/table-prpp.toml"),
     shipped!(Scenario, "ci-smoke", "scenarios/ci-smoke.toml"),
     shipped!(Scenario, "compliance", "scenarios/compliance.toml"),
     shipped!(Scenario, "iso9283", "scenarios/iso9283.toml"),
@@ -99,15 +137,18 @@ pub const PRESETS: &[Preset] = &[
     shipped!(Scenario, "table-prpp", "scenarios/table-prpp.toml"),
 ];
 
-/// A name that is neither an existing file nor a shipped file.
+/// A name that is neither an existing file nor a shipped file of the kinds an option takes.
 #[derive(Debug, thiserror::Error)]
-#[error("{given}: no such file, and not a shipped {what} (shipped: {names})")]
+#[error("{given}: {problem} (shipped {what}: {names})")]
 pub struct UnknownPreset {
     /// What the user gave.
     pub given: String,
-    /// `robot file` or `scenario`.
-    pub what: &'static str,
-    /// The shipped names of that kind, comma-separated.
+    /// `no such file, and not a shipped robot description`, or where a shipped file of that
+    /// name but another kind goes (`a shipped truth model, for ...`).
+    pub problem: String,
+    /// The kinds taken, in words (`truth models and robot descriptions`).
+    pub what: String,
+    /// The shipped names of those kinds, comma-separated.
     pub names: String,
 }
 
@@ -125,25 +166,37 @@ pub fn names(kind: Kind) -> Vec<&'static str> {
 
 /// The path to read for `given` on the command line: `given` itself when it is an existing
 /// file (a user's file always wins), else the virtual path of the shipped file of that name
-/// (`asea-irb6l`, also with `.toml`), else an error listing the shipped names of `kind`.
-pub fn resolve(given: &Path, kind: Kind) -> Result<PathBuf, UnknownPreset> {
+/// (`asea-irb6l`, also with `.toml`) and one of the `accepted` kinds, else an error listing the
+/// shipped names of those kinds (and where a shipped file of that name and another kind goes).
+pub fn resolve(given: &Path, accepted: &[Kind]) -> Result<PathBuf, UnknownPreset> {
     if given.is_file() || given.starts_with(SHIPPED_ROOT) {
         return Ok(given.to_owned());
     }
     let text = given.to_string_lossy();
     let stem = text.strip_suffix(".toml").unwrap_or(&text);
     // The old default spelled the path in the checkout: accept it anywhere.
-    let by_path = PRESETS.iter().find(|p| given.ends_with(p.source_path));
-    match PRESETS.iter().find(|p| p.name == stem).or(by_path) {
-        Some(p) => Ok(p.virtual_path()),
-        None => Err(UnknownPreset {
-            given: text.into_owned(),
-            what: match kind {
-                Kind::Robot => "robot file",
-                Kind::Scenario => "scenario",
-            },
-            names: names(kind).join(", "),
-        }),
+    let found = PRESETS
+        .iter()
+        .find(|p| p.name == stem)
+        .or_else(|| PRESETS.iter().find(|p| given.ends_with(p.source_path)));
+    match found {
+        Some(p) if accepted.contains(&p.kind) => Ok(p.virtual_path()),
+        _ => {
+            let what = accepted.iter().map(|k| k.words()).collect::<Vec<_>>().join(" or ");
+            Err(UnknownPreset {
+                given: text.into_owned(),
+                problem: match found {
+                    Some(p) => format!("a shipped {}, for {}, not a {what}", p.kind.words(), p.kind.taken_by()),
+                    None => format!("no such file, and not a shipped {what}"),
+                },
+                what: accepted
+                    .iter()
+                    .map(|k| format!("{}s", k.words()))
+                    .collect::<Vec<_>>()
+                    .join(" and "),
+                names: accepted.iter().flat_map(|&k| names(k)).collect::<Vec<_>>().join(", "),
+            })
+        }
     }
 }
 
@@ -228,22 +281,37 @@ mod tests {
 
     #[test]
     fn names_resolve_to_shipped_text_and_references_resolve_against_the_naming_file() {
-        let robot = resolve(Path::new("asea-irb6l"), Kind::Robot).unwrap();
+        let robot = resolve(Path::new("asea-irb6l"), &[Kind::Description]).unwrap();
         assert_eq!(
             read_text(&robot).unwrap(),
             include_str!("../scenarios/robots/asea-irb6l.toml")
         );
         // A scenario's `robot = "robots/x.toml"`, joined to the scenario's folder.
-        let scenario = resolve(Path::new("paper.toml"), Kind::Scenario).unwrap();
+        let scenario = resolve(Path::new("paper.toml"), &[Kind::Scenario]).unwrap();
         let named = scenario.parent().unwrap().join("robots/../robots/scara-rrpr.toml");
         assert_eq!(
             read_text(&named).unwrap(),
             include_str!("../scenarios/robots/scara-rrpr.toml")
         );
-        let e = resolve(Path::new("no-such-robot"), Kind::Robot)
+        let e = resolve(Path::new("no-such-robot"), &[Kind::Description])
             .unwrap_err()
             .to_string();
         assert!(e.contains("asea-irb6l") && !e.contains("ci-smoke"), "{e}");
+        // Descriptions are listed apart from truth models and plans, and a truth model
+        // named where a description is expected says where it goes.
+        assert!(
+            !e.contains("-truth") && !e.contains("-plan") && !e.contains("perturbation"),
+            "{e}"
+        );
+        let e = resolve(Path::new("scara-rrpr-truth"), &[Kind::Description])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("scara-rrpr-truth: a shipped truth model, for `simulate --truth`, not a robot description"),
+            "{e}"
+        );
+        assert!(resolve(Path::new("scara-rrpr-truth"), &[Kind::Truth, Kind::Description]).is_ok());
+        assert!(resolve(Path::new("scara-rrpr"), &[Kind::Truth, Kind::Description]).is_ok());
         assert!(read_text(&Path::new(SHIPPED_ROOT).join("x.toml")).is_err());
     }
 }

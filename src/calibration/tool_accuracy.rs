@@ -326,6 +326,19 @@ impl<'a> ToolSensitivity<'a> {
         }
     }
 
+    /// Per parameter with a variance (the columns of [`Self::jacobian`], in order): the
+    /// models moved by `+h` and `-h`, and `2 h`.
+    pub fn moved_models(&self) -> impl Iterator<Item = (&RobotModel, &RobotModel, f64)> {
+        self.moved
+            .iter()
+            .map(|(plus, minus, step)| (&plus.robot, &minus.robot, *step))
+    }
+
+    /// The covariance of the parameters with a variance (the columns of [`Self::jacobian`]).
+    pub fn covariance(&self) -> &DMatrix<f64> {
+        &self.covariance
+    }
+
     /// The Jacobian of the tool pose (position \[m\], rotation vector \[rad\], instrument
     /// frame) at internal commands `cmd` w.r.t. the parameters with a variance.
     pub fn jacobian(&self, cmd: &[f64]) -> Result<DMatrix<f64>, ModelError> {

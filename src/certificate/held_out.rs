@@ -70,13 +70,13 @@ fn errors(predicted: &[Point3<f64>], measured: &[Point3<f64>]) -> ErrorLine {
 }
 
 /// The nominal and calibrated models on the held-out poses of `set` (`file` its name), the
-/// calibrated model tested against `noise_rms_3d_mm`.
+/// calibrated model tested against the noise it was weighted with, the robot's repeatability
+/// and its own predicted error ([`validate`]).
 pub fn held_out(
     file: &str,
     set: &MeasurementSet,
     cal: &Calibration,
     desc: &RobotDescription,
-    noise_rms_3d_mm: f64,
 ) -> Result<HeldOut, HeldOutError> {
     let rows: Vec<usize> = (0..set.rows().len())
         .filter(|&i| is_validation(&set.rows()[i]))
@@ -98,19 +98,14 @@ pub fn held_out(
         HeldOutError::Model("the held-out points are fewer than three or in a line: no base to register".into())
     })?;
     let registered: Vec<Point3<f64>> = nominal.iter().map(|p| registration * p).collect();
-    let options = ValidationOptions {
-        noise_rms_3d_mm,
-        noise_source: "calibration".into(),
-        false_alarm: 0.01,
-    };
-    let v = validate(set, cal, desc, &options).map_err(model)?;
+    let v = validate(set, cal, desc, &ValidationOptions::of_calibration(cal, 0.01)).map_err(model)?;
     let summary = v.validation.as_ref().ok_or(HeldOutError::NoPoses)?;
     Ok(HeldOut {
         file: file.to_string(),
         points: rows.len(),
         before: errors(&registered, &measured),
         after: errors(&calibrated, &measured),
-        noise_predicted_rms_mm: summary.predicted_rms_mm,
+        noise_predicted_rms_mm: summary.predicted_mm.noise,
         predicted_tool_spans_rms_mm: cal.tool_accuracy.as_ref().map(|t| t.spans.position_rms_mm),
         predicted_tool_workspace_rms_mm: cal.tool_accuracy.as_ref().map(|t| t.workspace.position_rms_mm),
         verdict: v.verdict.clone(),

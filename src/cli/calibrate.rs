@@ -290,9 +290,10 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     say!("{}", texts.deviation_line);
-    if !texts.missing_speed_limits.is_empty() {
+    // The URDF says so beside each such `<limit>`; a note, not a warning on every run.
+    if !texts.missing_speed_limits.is_empty() && super::verbose() {
         eprintln!(
-            "warning: the description gives no max_velocity/max_effort for joint(s) {:?}: their URDF <limit> says velocity=0 effort=0",
+            "note: the description gives no max_velocity/max_effort for joint(s) {:?}: their URDF <limit> says velocity=0 effort=0",
             texts.missing_speed_limits
         );
     }

@@ -132,15 +132,35 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
         .context("building the thread pool")
 }
 
-/// A robot description, truth model or plan on the command line: an existing file, or the
-/// name of a shipped one (`asea-irb6l`; `axiscal::presets`). The error lists the shipped names.
+/// A file on the command line: an existing file, or the name of a shipped one of the
+/// `accepted` kinds (`axiscal::presets`). The error lists those kinds' shipped names.
+fn shipped_or_file(text: &str, accepted: &[Kind]) -> Result<PathBuf, String> {
+    axiscal::presets::resolve(Path::new(text), accepted).map_err(|e| e.to_string())
+}
+
+/// A robot description on the command line (`asea-irb6l`).
 pub fn robot_file(text: &str) -> Result<PathBuf, String> {
-    axiscal::presets::resolve(Path::new(text), Kind::Robot).map_err(|e| e.to_string())
+    shipped_or_file(text, &[Kind::Description])
+}
+
+/// A simulated robot's truth: a truth model, or a description (its nominal model).
+pub fn truth_file(text: &str) -> Result<PathBuf, String> {
+    shipped_or_file(text, &[Kind::Truth, Kind::Description])
+}
+
+/// An axis-experiment plan (`asea-irb6l-table1-plan`).
+pub fn plan_file(text: &str) -> Result<PathBuf, String> {
+    shipped_or_file(text, &[Kind::Plan])
+}
+
+/// The shipped manufacturing errors a default truth is drawn with.
+pub fn perturbation_file(text: &str) -> Result<PathBuf, String> {
+    shipped_or_file(text, &[Kind::Perturbation])
 }
 
 /// A scenario on the command line: an existing file or a shipped scenario's name (`paper`).
 pub fn scenario_file(text: &str) -> Result<PathBuf, String> {
-    axiscal::presets::resolve(Path::new(text), Kind::Scenario).map_err(|e| e.to_string())
+    shipped_or_file(text, &[Kind::Scenario])
 }
 
 /// Human-readable duration of `seconds` (`45 s`, `3.2 h`, `12 years`).

@@ -24,7 +24,7 @@ pub struct Args {
     /// The axis experiments (TOML: `reference`, `[[sweeps]]`; `docs/formats.md#plan-file`), or
     /// a shipped plan's name. Default: paper Table 1 for a six-joint revolute arm, its
     /// generalisation for any other robot (as `simulate`).
-    #[arg(long, value_parser = super::options::robot_file)]
+    #[arg(long, value_parser = super::options::plan_file)]
     plan: Option<PathBuf>,
     /// The span of joint J's sweeps, `J=SPAN` (deg or mm); repeatable.
     #[arg(long, value_name = "J=SPAN", value_parser = joint_value)]

@@ -89,12 +89,8 @@ pub fn run(args: Args) -> Result<()> {
     let held_out = match &args.held_out {
         Some(p) => {
             let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
-            let noise_mm = cal
-                .noise
-                .as_ref()
-                .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
             Some(
-                held_out(&p.display().to_string(), &set, &cal, &desc, noise_mm)
+                held_out(&p.display().to_string(), &set, &cal, &desc)
                     .with_context(|| format!("held-out poses of {}", p.display()))?,
             )
         }

@@ -21,7 +21,7 @@ fn default_truth(desc: &RobotDescription, seed: u64) -> Result<RobotModel> {
     if desc.geometry_hash() == irb6l.geometry_hash() {
         return Ok(axiscal::sim::paper_robot());
     }
-    let spec_path = super::options::robot_file("default-perturbation").map_err(anyhow::Error::msg)?;
+    let spec_path = super::options::perturbation_file("default-perturbation").map_err(anyhow::Error::msg)?;
     let spec = axiscal::sim::PerturbationSpec::from_toml_str(
         &axiscal::presets::read_text(&spec_path)?,
         "default-perturbation.toml",
@@ -66,7 +66,7 @@ pub struct Args {
     /// Truth model of the simulated robot (TOML); default: the paper robot (Table 2 actual
     /// rows and the section-4 functions) for the IRB/L6, else the description perturbed by the
     /// shipped default manufacturing errors (`default-perturbation`, drawn with --seed).
-    #[arg(long, value_parser = super::options::robot_file)]
+    #[arg(long, value_parser = super::options::truth_file)]
     truth: Option<PathBuf>,
     /// Measurement noise: two theodolites calibrated to 0.19 mm net radial error, or
     /// isotropic Gaussian noise of the same 3-D RMS.
@@ -75,7 +75,7 @@ pub struct Args {
     /// The campaign plan (TOML: `reference`, `[[sweeps]]`, `held_jitter`;
     /// `docs/formats.md#plan-file`). Default: paper Table 1 for a six-joint revolute arm, its
     /// generalisation (`CalibrationPlan::for_robot`) for any other robot.
-    #[arg(long, value_parser = super::options::robot_file)]
+    #[arg(long, value_parser = super::options::plan_file)]
     plan: Option<PathBuf>,
     /// Number of validation poses (three tool targets each).
     #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, 1_000_000, ""))]

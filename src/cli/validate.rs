@@ -6,7 +6,9 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::diagnosis::{PositionSummary, Validation, ValidationOptions, validate, validation_residuals_csv};
+use axiscal::diagnosis::{
+    ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, validate, validation_residuals_csv,
+};
 use axiscal::json_file::{self, Schema};
 use axiscal::robot::RobotDescription;
 use std::path::PathBuf;
@@ -57,10 +59,9 @@ pub fn run(args: Args) -> Result<()> {
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     // A free-pose calibration fitted the targets the description may not give.
     let desc = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
-    let options = match (args.noise_mm, &cal.noise) {
-        (Some(mm), _) => noise_options(mm, "given", args.false_alarm),
-        (None, Some(n)) => noise_options(n.used_rms_3d_mm, "calibration", args.false_alarm),
-        (None, None) => noise_options(cal.options.noise_rms_3d_mm, "calibration", args.false_alarm),
+    let options = match args.noise_mm {
+        Some(mm) => ValidationOptions::given(mm, args.false_alarm),
+        None => ValidationOptions::of_calibration(&cal, args.false_alarm),
     };
     let v = validate(&set, &cal, &desc, &options).with_context(|| format!("validating on {}", args.data.display()))?;
     outputs.write_in(&args.out, OUTPUTS[0], validation_residuals_csv(&v))?;
@@ -70,35 +71,51 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The options with the noise `mm` from `source`.
-fn noise_options(mm: f64, source: &str, false_alarm: f64) -> ValidationOptions {
-    ValidationOptions {
-        noise_rms_3d_mm: mm,
-        noise_source: source.into(),
-        false_alarm,
-    }
+/// `  chi2/dof 1.020 (369 dof, p 0.380) consistent`, or `-` without a test.
+fn chi_square_text(c: &Option<ChiSquare>) -> String {
+    c.as_ref().map_or("-".into(), |c| {
+        format!(
+            "chi2/dof {:.3} ({} dof, p {:.3}) {}",
+            c.per_dof, c.dof, c.p_value, c.verdict
+        )
+    })
+}
+
+/// `noise 0.2038 + repeatability 0.2101 + calibration 1.1412 mm`: the prediction's parts.
+fn parts_text(p: &Prediction, unit: &str) -> String {
+    let mut parts = vec![format!("noise {:.4}", p.noise)];
+    parts.extend(p.repeatability.map(|r| format!("repeatability {r:.4}")));
+    parts.extend(p.calibration.map(|c| format!("calibration {c:.4}")));
+    format!("{} {unit}", parts.join(" + "))
 }
 
 /// The summaries on stdout.
 fn print_summary(v: &Validation) {
     println!("{}", v.verdict);
     println!(
-        "  noise {:.4} mm 3-D RMS ({}); chi-square verdicts at false-alarm rate {}",
-        v.noise_rms_3d_mm, v.noise_source, v.false_alarm
+        "  noise {:.4} mm 3-D RMS ({}{}); verdicts at false-alarm rate {}; {}",
+        v.noise_rms_3d_mm,
+        v.noise_source,
+        v.noise_dof.map_or(String::new(), |d| format!(
+            ", estimated from {d:.0} degrees of freedom: F tests"
+        )),
+        v.false_alarm,
+        if v.calibration_uncertainty {
+            "free poses tested against the noise, the robot's repeatability and the calibration's predicted error"
+        } else {
+            "free poses tested against the noise and the robot's repeatability (the calibration has no `model_covariance`)"
+        }
     );
     let line = |name: &str, s: &Option<PositionSummary>| {
         if let Some(s) = s {
             println!(
-                "  {name:<10} {:>5} points  RMS {:.4} mm  mean {:.4} mm  max {:.4} mm  noise alone {:.4} mm  {}",
+                "  {name:<11} {:>5} points  RMS {:.4} mm  max {:.4} mm  predicted {:.4} mm ({})  {}",
                 s.points,
                 s.rms_mm,
-                s.mean_mm,
                 s.max_mm,
-                s.predicted_rms_mm,
-                s.chi_square.as_ref().map_or("-".into(), |c| format!(
-                    "chi2/dof {:.3} ({} dof, p {:.3}) {}",
-                    c.per_dof, c.dof, c.p_value, c.verdict
-                ))
+                s.predicted_mm.total,
+                parts_text(&s.predicted_mm, "mm"),
+                chi_square_text(&s.chi_square)
             );
         }
     };
@@ -107,17 +124,14 @@ fn print_summary(v: &Validation) {
     line("axis", &v.axis);
     if let Some(o) = &v.orientation {
         println!(
-            "  {:<10} {:>5} poses   RMS {:.4} mrad  mean {:.4} mrad  max {:.4} mrad  noise alone {:.4} mrad  {}",
+            "  {:<11} {:>5} poses   RMS {:.4} mrad  max {:.4} mrad  predicted {:.4} mrad ({})  {}",
             "orientation",
             o.poses,
             o.rms_mrad,
-            o.mean_mrad,
             o.max_mrad,
-            o.predicted_rms_mrad,
-            o.chi_square.as_ref().map_or("-".into(), |c| format!(
-                "chi2/dof {:.3} ({} dof) {}",
-                c.per_dof, c.dof, c.verdict
-            ))
+            o.predicted_mrad.total,
+            parts_text(&o.predicted_mrad, "mrad"),
+            chi_square_text(&o.chi_square)
         );
     }
 }

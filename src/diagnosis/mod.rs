@@ -33,6 +33,7 @@ mod model;
 mod noise;
 mod plots;
 mod poses;
+mod predicted_error;
 mod refine;
 mod report;
 mod result;
@@ -56,8 +57,8 @@ pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
 pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
 pub use validate::{
-    ChiSquare, OrientationSummary, PointKind, PositionSummary, Validation, ValidationOptions, ValidationResidual,
-    validate, validation_residuals_csv,
+    ChiSquare, Dominant, OrientationSummary, PointKind, PositionSummary, Prediction, Validation, ValidationOptions,
+    ValidationResidual, Verdict, validate, validation_residuals_csv,
 };
 
 use crate::calibration::free_pose::{FreePoseOptions, calibrate_free_poses, with_fitted_targets};

@@ -206,6 +206,19 @@ impl CleanCampaign {
         self.rows.iter().map(|r| self.position(r, None)).collect()
     }
 
+    /// How row `i`'s target moves with joint `joint`'s (0-based) value \[m per rad or m\]:
+    /// central differences of the target's position with a step of 1e-6 (rad or m), far below
+    /// the chain's curvature scale.
+    pub fn joint_sensitivity(&self, i: usize, joint: usize) -> Vector3<f64> {
+        let r = &self.rows[i];
+        let h = 1e-6;
+        let mut dq = vec![0.0; r.q.len()];
+        dq[joint] = h;
+        let plus = self.position(r, Some(&dq));
+        dq[joint] = -h;
+        (plus - self.position(r, Some(&dq))) / (2.0 * h)
+    }
+
     /// Where row `r`'s target is with the joint values moved by `dq`.
     fn position(&self, r: &CleanRow, dq: Option<&[f64]>) -> Point3<f64> {
         let q: Vec<f64> = match dq {

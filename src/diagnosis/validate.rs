@@ -18,19 +18,24 @@
 //! (`d_i` a tool target relative to their centroid: the normal matrix of the linearised fit),
 //! so `w^T M w / (s^2 / 3)` is chi-square with 3 degrees of freedom per pose.
 //!
-//! The predicted uncertainty is the measurement noise only: the calibrated parameters'
-//! covariance is not propagated to the prediction, so a calibration from few points reads
-//! slightly worse than it is (the excess is reported as `excess_rms_mm`).
+//! The prediction's own error: a calibration with a `model_covariance` predicts the free poses
+//! (validation and tool) with an error of its own, one parameter error shared by every pose
+//! ([`super::predicted_error`]). Their residuals are tested against the noise plus that error,
+//! `r^T (N + G G^T)^-1 r` with `3 n` degrees of freedom ([`SharedErrorChiSquare`]), and against
+//! the noise alone; the verdict is the first. Axis experiments are tested against the noise
+//! alone: their target positions are estimated from the same points, which absorbs most of
+//! the model's error there.
 
 use super::DiagnosisError;
-use super::noise::{calibrated_joint_values, clean_positions};
+use super::noise::{CleanCampaign, calibrated_joint_values};
+use super::predicted_error::{BlockFactors, PredictionError};
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::rigid_fit;
 use crate::measurement::{Measurement, MeasurementSet};
-use crate::numerics::stats::chi_square_cdf;
+use crate::numerics::stats::{SharedErrorChiSquare, chi_square_cdf, f_cdf};
 use crate::plan::TOOL_EXPERIMENT;
-use crate::robot::{Controller, RobotDescription};
-use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
+use crate::robot::{Controller, RobotDescription, commands_to_internal};
+use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -43,6 +48,42 @@ pub struct ValidationOptions {
     pub noise_source: String,
     /// Two-sided false-alarm rate of the chi-square verdicts.
     pub false_alarm: f64,
+    /// The degrees of freedom of the noise when it was estimated from data (the
+    /// calibration's effective ones); the verdicts are then F tests. `None`: a known noise.
+    pub noise_dof: Option<f64>,
+}
+
+impl ValidationOptions {
+    /// A known noise `noise_rms_3d_mm` (`--noise-mm`): chi-square tests.
+    pub fn given(noise_rms_3d_mm: f64, false_alarm: f64) -> Self {
+        ValidationOptions {
+            noise_rms_3d_mm,
+            noise_source: "given".into(),
+            false_alarm,
+            noise_dof: None,
+        }
+    }
+
+    /// The noise `cal` was weighted with; when it was estimated from the calibration's
+    /// residuals, with the estimate's effective degrees of freedom (F tests).
+    pub fn of_calibration(cal: &Calibration, false_alarm: f64) -> Self {
+        let (noise_rms_3d_mm, noise_dof) = match &cal.noise {
+            Some(n) => (
+                n.used_rms_3d_mm,
+                n.estimate
+                    .as_ref()
+                    .filter(|_| n.source == "estimated")
+                    .map(|e| e.effective_dof),
+            ),
+            None => (cal.options.noise_rms_3d_mm, None),
+        };
+        ValidationOptions {
+            noise_rms_3d_mm,
+            noise_source: "calibration".into(),
+            false_alarm,
+            noise_dof,
+        }
+    }
 }
 
 /// Which kind of measured point a residual belongs to.
@@ -78,6 +119,28 @@ pub struct ValidationResidual {
     pub error_mm: f64,
 }
 
+/// What a chi-square statistic says of the residuals against their predicted uncertainty.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Neither tail below half the false-alarm rate.
+    Consistent,
+    /// Upper tail below half the false-alarm rate: the model misses these data.
+    Exceeds,
+    /// Lower tail below half the false-alarm rate: the predicted uncertainty is too large.
+    Below,
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Verdict::Consistent => "consistent",
+            Verdict::Exceeds => "exceeds",
+            Verdict::Below => "below",
+        })
+    }
+}
+
 /// A chi-square verdict of residuals against their predicted uncertainty.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ChiSquare {
@@ -87,40 +150,124 @@ pub struct ChiSquare {
     pub dof: usize,
     /// `value / dof` (1 expected).
     pub per_dof: f64,
-    /// Upper-tail probability `P(chi2 >= value)`.
+    /// Upper-tail probability `P(chi2 >= value)`, or of `chi2 / dof` under the F
+    /// distribution with `noise_dof`.
     pub p_value: f64,
-    /// `consistent`, `exceeds_noise` (upper tail below half the false-alarm rate) or
-    /// `below_noise` (lower tail below it: the stated noise is too large).
-    pub verdict: String,
+    /// The degrees of freedom of the estimated noise the statistic was computed with (null:
+    /// a known noise, a chi-square test).
+    pub noise_dof: Option<f64>,
+    /// The verdict at the two-sided false-alarm rate.
+    pub verdict: Verdict,
 }
 
 impl ChiSquare {
-    /// The verdict of `value` with `dof` degrees of freedom at two-sided rate `false_alarm`;
+    /// The verdict of `value` with `dof` degrees of freedom at two-sided rate `false_alarm`,
+    /// computed with a noise estimated from `noise_dof` degrees of freedom (an F test: the
+    /// estimate's own scatter widens the acceptance) or known (`None`: a chi-square test);
     /// `None` without degrees of freedom.
-    pub fn new(value: f64, dof: usize, false_alarm: f64) -> Option<Self> {
+    pub fn new(value: f64, dof: usize, false_alarm: f64, noise_dof: Option<f64>) -> Option<Self> {
         if dof == 0 {
             return None;
         }
         // An infinite or undefined statistic (a residual that overflowed) exceeds any noise.
-        let cdf = if value.is_finite() {
-            chi_square_cdf(value, dof as f64)
-        } else {
-            1.0
+        let cdf = match (value.is_finite(), noise_dof) {
+            (false, _) => 1.0,
+            (true, None) => chi_square_cdf(value, dof as f64),
+            (true, Some(d2)) => f_cdf(value / dof as f64, dof as f64, d2),
         };
         let verdict = if 1.0 - cdf < 0.5 * false_alarm {
-            "exceeds_noise"
+            Verdict::Exceeds
         } else if cdf < 0.5 * false_alarm {
-            "below_noise"
+            Verdict::Below
         } else {
-            "consistent"
+            Verdict::Consistent
         };
         Some(ChiSquare {
             value,
             dof,
             per_dof: value / dof as f64,
             p_value: 1.0 - cdf,
-            verdict: verdict.into(),
+            noise_dof,
+            verdict,
         })
+    }
+}
+
+/// The largest part of a predicted uncertainty.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Dominant {
+    /// The measurement noise.
+    Noise,
+    /// The robot's repeatability.
+    Repeatability,
+    /// The calibration's own error.
+    Calibration,
+}
+
+impl Dominant {
+    /// In words, for the verdict.
+    fn words(self) -> &'static str {
+        match self {
+            Dominant::Noise => "the instrument's noise",
+            Dominant::Repeatability => "the robot's repeatability",
+            Dominant::Calibration => "the calibration's uncertainty",
+        }
+    }
+}
+
+/// The parts of a predicted RMS \[mm or mrad\]: `sqrt` of the sum of their squares and the
+/// largest.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct Prediction {
+    /// The instrument's noise.
+    pub noise: f64,
+    /// The robot's repeatability (absent where it is not modelled: axis experiments).
+    pub repeatability: Option<f64>,
+    /// The calibration's own error (absent without a model covariance and for axis
+    /// experiments).
+    pub calibration: Option<f64>,
+    /// `sqrt(noise^2 + repeatability^2 + calibration^2)`.
+    pub total: f64,
+    /// The largest part.
+    pub dominant: Dominant,
+}
+
+impl Prediction {
+    fn new(noise: f64, repeatability: Option<f64>, calibration: Option<f64>) -> Self {
+        let parts = [
+            (Dominant::Noise, noise),
+            (Dominant::Repeatability, repeatability.unwrap_or(0.0)),
+            (Dominant::Calibration, calibration.unwrap_or(0.0)),
+        ];
+        let dominant = parts
+            .iter()
+            .fold(parts[0], |best, p| if p.1 > best.1 { *p } else { best })
+            .0;
+        Prediction {
+            noise,
+            repeatability,
+            calibration,
+            total: parts.iter().map(|p| p.1 * p.1).sum::<f64>().sqrt(),
+            dominant,
+        }
+    }
+
+    /// `noise 0.2038, repeatability 0.2100, calibration 1.1000 mm: the calibration's
+    /// uncertainty dominates`.
+    fn describe(&self, unit: &str) -> String {
+        let mut parts = vec![format!("noise {:.4}", self.noise)];
+        if let Some(r) = self.repeatability {
+            parts.push(format!("repeatability {r:.4}"));
+        }
+        match self.calibration {
+            Some(c) => parts.push(format!("calibration {c:.4}")),
+            None if self.repeatability.is_some() => {
+                parts.push("calibration not included: no model covariance".into());
+            }
+            None => {}
+        }
+        format!("{} {unit}: {} dominates", parts.join(", "), self.dominant.words())
     }
 }
 
@@ -135,15 +282,18 @@ pub struct PositionSummary {
     pub mean_mm: f64,
     /// Largest \[mm\].
     pub max_mm: f64,
-    /// The RMS the noise alone predicts \[mm\]: `s sqrt(dof / (3 n))`.
-    pub predicted_rms_mm: f64,
-    /// `sqrt(max(0, rms^2 - predicted^2))`: the model error beyond the noise \[mm\].
+    /// The RMS predicted \[mm\], by part: the noise `s sqrt(dof / (3 n))`, the repeatability
+    /// and the calibration's error `sqrt(trace(cov) / n)`.
+    pub predicted_mm: Prediction,
+    /// `sqrt(max(0, rms^2 - predicted^2))`: the model error beyond the prediction \[mm\].
     pub excess_rms_mm: f64,
     /// Target positions estimated from these data (axis experiments: one per experiment and
     /// target).
     pub estimated_targets: usize,
-    /// The chi-square test (absent without degrees of freedom).
+    /// The test against the whole prediction (absent without degrees of freedom).
     pub chi_square: Option<ChiSquare>,
+    /// The test without the calibration's error.
+    pub chi_square_without_calibration: Option<ChiSquare>,
 }
 
 /// Orientation errors of the poses with three tool targets.
@@ -157,10 +307,13 @@ pub struct OrientationSummary {
     pub mean_mrad: f64,
     /// Largest \[mrad\].
     pub max_mrad: f64,
-    /// The RMS the noise alone predicts \[mrad\]: `(s / sqrt 3) sqrt(trace M^-1)`.
-    pub predicted_rms_mrad: f64,
-    /// The chi-square test, 3 degrees of freedom per pose.
+    /// The RMS angle predicted \[mrad\], by part: the noise `(s / sqrt 3) sqrt(mean trace
+    /// M^-1)`, the repeatability, the calibration's error.
+    pub predicted_mrad: Prediction,
+    /// The test against the whole prediction, 3 degrees of freedom per pose.
     pub chi_square: Option<ChiSquare>,
+    /// The test without the calibration's error.
+    pub chi_square_without_calibration: Option<ChiSquare>,
 }
 
 /// The result of [`validate`].
@@ -172,6 +325,15 @@ pub struct Validation {
     pub noise_source: String,
     /// Two-sided false-alarm rate of the verdicts.
     pub false_alarm: f64,
+    /// The degrees of freedom of an estimated noise (the verdicts are F tests); null for a
+    /// known one.
+    pub noise_dof: Option<f64>,
+    /// The repeatability of each joint the free poses are tested with (the calibration's)
+    /// \[rad or m\].
+    pub repeatability_rad_or_m: Vec<f64>,
+    /// Whether the free poses' prediction includes the calibration's own error (the
+    /// calibration has a `model_covariance`).
+    pub calibration_uncertainty: bool,
     /// Validation poses.
     pub validation: Option<PositionSummary>,
     /// The tool observation.
@@ -186,9 +348,6 @@ pub struct Validation {
     #[serde(skip)]
     pub residuals: Vec<ValidationResidual>,
 }
-
-/// A pose's measured targets by target id \[m\].
-type MeasuredTargets = BTreeMap<usize, Point3<f64>>;
 
 /// The kind of `m`.
 fn kind_of(m: &Measurement) -> PointKind {
@@ -208,7 +367,8 @@ pub fn validate(
     desc: &RobotDescription,
     options: &ValidationOptions,
 ) -> Result<Validation, DiagnosisError> {
-    let predicted = clean_positions(set, cal, desc)?;
+    let clean = CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?;
+    let predicted = clean.positions();
     let residuals: Vec<ValidationResidual> = set
         .rows()
         .iter()
@@ -227,31 +387,87 @@ pub fn validate(
             }
         })
         .collect();
-    let summary = |kind| position_summary(&residuals, kind, options);
+    let controller = Controller::from_description(desc);
+    let error = PredictionError::new(cal, &controller, desc)?;
+    let free = free_poses(set, cal, desc, &residuals, &error, options)?;
+    let axis_steps = axis_statistic(set, desc, &clean, &residuals, &error, options)?;
+    let summary = |kind, statistic| position_summary(&residuals, kind, statistic, options);
     let (validation, tool, axis) = (
-        summary(PointKind::Validation),
-        summary(PointKind::Tool),
-        summary(PointKind::Axis),
+        summary(PointKind::Validation, &free.validation),
+        summary(PointKind::Tool, &free.tool),
+        summary(PointKind::Axis, &axis_steps),
     );
-    let orientation = orientation_summary(set, cal, desc, options)?;
-    let verdict = verdict(validation.as_ref().or(axis.as_ref()), orientation.as_ref());
+    let verdict = verdict(validation.as_ref().or(axis.as_ref()), free.orientation.as_ref());
     Ok(Validation {
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         noise_source: options.noise_source.clone(),
         false_alarm: options.false_alarm,
+        noise_dof: options.noise_dof,
+        repeatability_rad_or_m: cal.options.joint_repeatability_rad(desc)?,
+        calibration_uncertainty: error.has_calibration(),
         validation,
         tool,
         axis,
-        orientation,
+        orientation: free.orientation,
         verdict,
         residuals,
     })
 }
 
-/// The summary of the residuals of `kind`; `None` without such points.
+/// The residuals of free points (or rotations) against noise, repeatability and the
+/// calibration's error: the statistic and the repeatability's summed variance.
+struct FreeStatistic {
+    chi: SharedErrorChiSquare,
+    repeatability_variance: f64,
+    with_calibration: bool,
+}
+
+impl FreeStatistic {
+    /// With the calibration's error of `error` (if it has one).
+    fn new(error: &PredictionError) -> Self {
+        FreeStatistic {
+            chi: SharedErrorChiSquare::new(error.rank()),
+            repeatability_variance: 0.0,
+            with_calibration: error.has_calibration(),
+        }
+    }
+
+    /// Adds residual block `r` with noise covariance `noise` and `factors`.
+    fn add(&mut self, r: &DVector<f64>, noise: DMatrix<f64>, factors: &BlockFactors) {
+        let jitter = &factors.repeatability;
+        let covariance = noise + jitter * jitter.transpose();
+        let weight = covariance
+            .cholesky()
+            .map_or_else(|| DMatrix::from_element(r.len(), r.len(), f64::NAN), |ch| ch.inverse());
+        self.chi.add(r, &weight, &factors.calibration);
+        self.repeatability_variance += jitter.norm_squared();
+    }
+
+    /// The prediction per point (or rotation) of `n` with the noise part `noise`.
+    fn prediction(&self, noise: f64, n: usize, scale: f64) -> Prediction {
+        let rms = |variance: f64| (variance / n as f64).sqrt() * scale;
+        Prediction::new(
+            noise,
+            Some(rms(self.repeatability_variance)),
+            self.with_calibration.then(|| rms(self.chi.shared_variance())),
+        )
+    }
+
+    /// The tests with and without the calibration's error, `estimated` target positions
+    /// (3 dof each) fitted to the same residuals.
+    fn tests(&self, options: &ValidationOptions, estimated: usize) -> (Option<ChiSquare>, Option<ChiSquare>) {
+        let dof = self.chi.dof().saturating_sub(3 * estimated);
+        let test = |value| ChiSquare::new(value, dof, options.false_alarm, options.noise_dof);
+        (test(self.chi.value()), test(self.chi.noise_alone()))
+    }
+}
+
+/// The summary of the residuals of `kind`, `statistic` their test against noise,
+/// repeatability and (free poses) calibration; `None` without such points.
 fn position_summary(
     residuals: &[ValidationResidual],
     kind: PointKind,
+    statistic: &FreeStatistic,
     options: &ValidationOptions,
 ) -> Option<PositionSummary> {
     let of_kind: Vec<&ValidationResidual> = residuals.iter().filter(|r| r.kind == kind).collect();
@@ -273,17 +489,88 @@ fn position_summary(
     let dof = (3 * n).saturating_sub(3 * estimated_targets);
     let s = options.noise_rms_3d_mm;
     let rms_mm = (sum_squares / n as f64).sqrt();
-    let predicted_rms_mm = s * (dof as f64 / (3 * n) as f64).sqrt();
+    let noise_mm = s * (dof as f64 / (3 * n) as f64).sqrt();
+    let predicted_mm = statistic.prediction(noise_mm, n, 1.0);
+    let (chi_square, chi_square_without_calibration) = statistic.tests(options, estimated_targets);
     Some(PositionSummary {
         points: n,
         rms_mm,
         mean_mm: errors.iter().sum::<f64>() / n as f64,
         max_mm: errors.iter().copied().fold(0.0, f64::max),
-        predicted_rms_mm,
-        excess_rms_mm: (rms_mm.powi(2) - predicted_rms_mm.powi(2)).max(0.0).sqrt(),
+        excess_rms_mm: (rms_mm.powi(2) - predicted_mm.total.powi(2)).max(0.0).sqrt(),
+        predicted_mm,
         estimated_targets,
-        chi_square: ChiSquare::new(sum_squares / (s * s / 3.0), dof, options.false_alarm),
+        chi_square,
+        chi_square_without_calibration,
     })
+}
+
+/// The axis experiments' statistic: each experiment's points against the noise and the
+/// robot's repeatability as the replicas draw it (`super::noise`): the swept joint re-positions
+/// at every step (a draw per step), the held joints keep one draw through the sweep (a draw per
+/// experiment, shared by its steps). A held joint that keeps its draw from one experiment to
+/// the next is taken as independent in each. With a model covariance, also the calibration's
+/// error at each point ([`PredictionError::points`]: a target on a link beyond the swept one,
+/// e.g. a coupling's, is not absorbed by its estimated position).
+fn axis_statistic(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    clean: &CleanCampaign,
+    residuals: &[ValidationResidual],
+    error: &PredictionError,
+    options: &ValidationOptions,
+) -> Result<FreeStatistic, DiagnosisError> {
+    let repeatability = error.repeatability();
+    let tool_targets = desc.tool_targets_m();
+    let mut experiments: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for (i, m) in set.rows().iter().enumerate().filter(|(_, m)| m.moved_joint > 0) {
+        experiments.entry(m.experiment.as_str()).or_default().push(i);
+    }
+    let variance_coord_mm2 = options.noise_rms_3d_mm.powi(2) / 3.0;
+    let dof = repeatability.len();
+    let mut statistic = FreeStatistic::new(error);
+    for rows in experiments.values() {
+        let mut steps: BTreeMap<usize, usize> = BTreeMap::new();
+        for &i in rows {
+            let next = steps.len();
+            steps.entry(set.rows()[i].step).or_insert(next);
+        }
+        // Columns: one per joint (held: shared by every step), then one per step (the swept
+        // joint's draw of that step).
+        let mut jitter = DMatrix::zeros(3 * rows.len(), dof + steps.len());
+        for (k, &i) in rows.iter().enumerate() {
+            let m = &set.rows()[i];
+            for (joint, sigma) in repeatability.iter().enumerate() {
+                let column = if joint + 1 == m.moved_joint {
+                    dof + steps[&m.step]
+                } else {
+                    joint
+                };
+                let moved_mm = clean.joint_sensitivity(i, joint) * (sigma * 1e3);
+                jitter.view_mut((3 * k, column), (3, 1)).copy_from(&moved_mm);
+            }
+        }
+        let subset = MeasurementSet::new(dof, rows.iter().map(|&i| set.rows()[i].clone()).collect())
+            .map_err(|e| DiagnosisError::Model { message: e.to_string() })?;
+        let factors = BlockFactors {
+            calibration: error.points(&subset, desc, &tool_targets)?,
+            repeatability: jitter,
+        };
+        let noise = DMatrix::identity(3 * rows.len(), 3 * rows.len()) * variance_coord_mm2;
+        statistic.add(&stacked_residuals(residuals, rows), noise, &factors);
+    }
+    Ok(statistic)
+}
+
+/// The residuals (measured minus predicted) of `rows`, stacked \[mm\].
+fn stacked_residuals(residuals: &[ValidationResidual], rows: &[usize]) -> DVector<f64> {
+    DVector::from_iterator(
+        3 * rows.len(),
+        rows.iter().flat_map(|&i| {
+            let r = &residuals[i];
+            (0..3).map(move |c| r.measured_mm[c] - r.predicted_mm[c])
+        }),
+    )
 }
 
 /// The measured tool frame of a pose from its three (or more) tool targets: the rigid fit of
@@ -306,52 +593,114 @@ fn measured_tool_frame(
     Some((world_from_tool, normal))
 }
 
-/// The orientation errors of the free poses with at least three measured tool targets.
-fn orientation_summary(
+/// What [`free_poses`] finds: the statistics of the validation and tool points and of the
+/// orientations.
+struct FreePoses {
+    validation: FreeStatistic,
+    tool: FreeStatistic,
+    orientation: Option<OrientationSummary>,
+}
+
+/// A free pose: its first row, every row's index and its measured targets by id \[m\].
+struct FreePose<'a> {
+    first: &'a Measurement,
+    rows: Vec<usize>,
+    measured: BTreeMap<usize, Point3<f64>>,
+}
+
+/// The free poses of `set` (validation and tool), in (experiment, step) order.
+fn group_free_poses(set: &MeasurementSet) -> BTreeMap<(&str, usize), FreePose<'_>> {
+    let mut poses: BTreeMap<(&str, usize), FreePose> = BTreeMap::new();
+    for (i, m) in set.rows().iter().enumerate().filter(|(_, m)| m.moved_joint == 0) {
+        let e = poses.entry((m.experiment.as_str(), m.step)).or_insert(FreePose {
+            first: m,
+            rows: Vec::new(),
+            measured: BTreeMap::new(),
+        });
+        e.rows.push(i);
+        e.measured.insert(m.target, m.position_m());
+    }
+    poses
+}
+
+/// The free poses' tests: every pose's points, and the orientation of those with at least
+/// three measured tool targets.
+fn free_poses(
     set: &MeasurementSet,
     cal: &Calibration,
     desc: &RobotDescription,
+    residuals: &[ValidationResidual],
+    error: &PredictionError,
     options: &ValidationOptions,
-) -> Result<Option<OrientationSummary>, DiagnosisError> {
+) -> Result<FreePoses, DiagnosisError> {
     let tool_targets = desc.tool_targets_m();
-    let mut poses: BTreeMap<(&str, usize), (&Measurement, MeasuredTargets)> = BTreeMap::new();
-    for m in set.rows().iter().filter(|m| m.moved_joint == 0) {
-        let e = poses
-            .entry((m.experiment.as_str(), m.step))
-            .or_insert((m, BTreeMap::new()));
-        e.1.insert(m.target, m.position_m());
-    }
     let controller = Controller::from_description(desc);
     let model = cal.robot.phi_model();
-    let variance_coord_m2 = (options.noise_rms_3d_mm * 1e-3).powi(2) / 3.0;
-    let (mut angles_mrad, mut chi2, mut predicted_sq) = (Vec::new(), 0.0, 0.0);
+    let variance_coord_mm2 = options.noise_rms_3d_mm.powi(2) / 3.0;
+    let variance_coord_m2 = variance_coord_mm2 * 1e-6;
+    let (mut validation, mut tool, mut rotation) = (
+        FreeStatistic::new(error),
+        FreeStatistic::new(error),
+        FreeStatistic::new(error),
+    );
+    let (mut angles_mrad, mut noise_sq) = (Vec::new(), 0.0);
     let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
-    for (m, measured) in poses.values() {
-        let Some((measured_frame, normal)) = measured_tool_frame(&tool_targets, measured) else {
+    for pose in group_free_poses(set).values() {
+        let m = pose.first;
+        let q = calibrated_joint_values(&cal.robot, &controller, &model, desc, m, &approach)?;
+        let pose_error = error.at(&model, &commands_to_internal(desc, &m.cmd), &q)?;
+        let targets: Vec<Point3<f64>> = pose.rows.iter().map(|&i| tool_targets[set.rows()[i].target]).collect();
+        let r = stacked_residuals(residuals, &pose.rows);
+        let statistic = if kind_of(m) == PointKind::Tool {
+            &mut tool
+        } else {
+            &mut validation
+        };
+        let noise = DMatrix::identity(r.len(), r.len()) * variance_coord_mm2;
+        statistic.add(&r, noise, &pose_error.targets(&targets));
+        let Some((measured_frame, normal)) = measured_tool_frame(&tool_targets, &pose.measured) else {
             continue;
         };
         let Some(normal_inv) = normal.try_inverse() else {
             continue;
         };
-        let q = calibrated_joint_values(&cal.robot, &controller, &model, desc, m, &approach)?;
         let predicted = model.world_from_tool(&q);
         let w = (predicted.rotation.inverse() * measured_frame.rotation).scaled_axis();
         angles_mrad.push(w.norm() * 1e3);
-        chi2 += (w.transpose() * normal * w)[0] / variance_coord_m2;
-        predicted_sq += variance_coord_m2 * normal_inv.trace();
+        noise_sq += variance_coord_m2 * normal_inv.trace();
+        let noise = DMatrix::from_column_slice(3, 3, (normal_inv * variance_coord_m2).as_slice());
+        rotation.add(&DVector::from_column_slice(w.as_slice()), noise, &pose_error.rotation());
     }
+    let orientation = orientation_summary(&angles_mrad, noise_sq, &rotation, options);
+    Ok(FreePoses {
+        validation,
+        tool,
+        orientation,
+    })
+}
+
+/// The orientation summary of the poses' angles, their summed noise variance `noise_sq`
+/// \[rad^2\] and their statistic.
+fn orientation_summary(
+    angles_mrad: &[f64],
+    noise_sq: f64,
+    statistic: &FreeStatistic,
+    options: &ValidationOptions,
+) -> Option<OrientationSummary> {
     if angles_mrad.is_empty() {
-        return Ok(None);
+        return None;
     }
     let n = angles_mrad.len();
-    Ok(Some(OrientationSummary {
+    let (chi_square, chi_square_without_calibration) = statistic.tests(options, 0);
+    Some(OrientationSummary {
         poses: n,
         rms_mrad: (angles_mrad.iter().map(|a| a * a).sum::<f64>() / n as f64).sqrt(),
         mean_mrad: angles_mrad.iter().sum::<f64>() / n as f64,
         max_mrad: angles_mrad.iter().copied().fold(0.0, f64::max),
-        predicted_rms_mrad: (predicted_sq / n as f64).sqrt() * 1e3,
-        chi_square: ChiSquare::new(chi2, 3 * n, options.false_alarm),
-    }))
+        predicted_mrad: statistic.prediction((noise_sq / n as f64).sqrt() * 1e3, n, 1e3),
+        chi_square,
+        chi_square_without_calibration,
+    })
 }
 
 /// The one-line verdict from the main position summary and the orientation.
@@ -359,20 +708,21 @@ fn verdict(position: Option<&PositionSummary>, orientation: Option<&OrientationS
     let Some(p) = position else {
         return "no validation poses and no axis experiments: nothing to validate".into();
     };
-    let mut text = match p.chi_square.as_ref().map(|c| c.verdict.as_str()) {
-        Some("exceeds_noise") => format!(
-            "the calibrated model misses these data: position RMS {:.4} mm against {:.4} mm from the noise alone \
-             (model error beyond noise {:.4} mm RMS)",
-            p.rms_mm, p.predicted_rms_mm, p.excess_rms_mm
+    let parts = p.predicted_mm.describe("mm");
+    let mut text = match p.chi_square.as_ref().map(|c| c.verdict) {
+        Some(Verdict::Exceeds) => format!(
+            "the calibrated model misses these data: position RMS {:.4} mm against {:.4} mm predicted ({parts}; \
+             model error beyond the prediction {:.4} mm RMS)",
+            p.rms_mm, p.predicted_mm.total, p.excess_rms_mm
         ),
-        Some("below_noise") => format!(
-            "residuals below the stated noise: position RMS {:.4} mm against {:.4} mm predicted; the noise is \
-             overstated",
-            p.rms_mm, p.predicted_rms_mm
+        Some(Verdict::Below) => format!(
+            "residuals below the prediction: position RMS {:.4} mm against {:.4} mm predicted ({parts}); the \
+             stated noise, repeatability or calibration uncertainty is overstated",
+            p.rms_mm, p.predicted_mm.total
         ),
-        Some(_) => format!(
-            "consistent with the measurement noise: position RMS {:.4} mm against {:.4} mm predicted",
-            p.rms_mm, p.predicted_rms_mm
+        Some(Verdict::Consistent) => format!(
+            "consistent with the prediction: position RMS {:.4} mm against {:.4} mm predicted ({parts})",
+            p.rms_mm, p.predicted_mm.total
         ),
         None => format!("position RMS {:.4} mm (no degrees of freedom for a test)", p.rms_mm),
     };
@@ -380,8 +730,10 @@ fn verdict(position: Option<&PositionSummary>, orientation: Option<&OrientationS
         text.push_str(&format!(
             "; orientation RMS {:.4} mrad against {:.4} mrad predicted ({})",
             o.rms_mrad,
-            o.predicted_rms_mrad,
-            o.chi_square.as_ref().map_or("no test", |c| c.verdict.as_str())
+            o.predicted_mrad.total,
+            o.chi_square
+                .as_ref()
+                .map_or("no test".into(), |c| c.verdict.to_string())
         ));
     }
     text
@@ -417,19 +769,29 @@ pub fn validation_residuals_csv(v: &Validation) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::ChiSquare;
+    use super::{ChiSquare, Verdict};
 
     /// The verdicts at their edges: a statistic at its expectation is consistent, far above it
     /// exceeds, far below it is below the noise, and an overflowed one (infinite, or NaN from
     /// `inf - inf`) exceeds: never "consistent".
     #[test]
     fn verdicts_and_an_overflowed_statistic() {
-        let verdict = |v: f64| ChiSquare::new(v, 100, 0.01).unwrap().verdict;
-        assert_eq!(verdict(100.0), "consistent");
-        assert_eq!(verdict(300.0), "exceeds_noise");
-        assert_eq!(verdict(30.0), "below_noise");
-        assert_eq!(verdict(f64::INFINITY), "exceeds_noise");
-        assert_eq!(verdict(f64::NAN), "exceeds_noise");
-        assert!(ChiSquare::new(1.0, 0, 0.01).is_none());
+        let verdict = |v: f64| ChiSquare::new(v, 100, 0.01, None).unwrap().verdict;
+        assert_eq!(verdict(100.0), Verdict::Consistent);
+        assert_eq!(verdict(300.0), Verdict::Exceeds);
+        assert_eq!(verdict(30.0), Verdict::Below);
+        assert_eq!(verdict(f64::INFINITY), Verdict::Exceeds);
+        assert_eq!(verdict(f64::NAN), Verdict::Exceeds);
+        assert!(ChiSquare::new(1.0, 0, 0.01, None).is_none());
+        // With an estimated noise the acceptance widens: 1.5 per degree of freedom exceeds a
+        // known noise of 100 degrees of freedom, not one estimated from 30.
+        assert_eq!(
+            ChiSquare::new(150.0, 100, 0.01, None).unwrap().verdict,
+            Verdict::Exceeds
+        );
+        assert_eq!(
+            ChiSquare::new(150.0, 100, 0.01, Some(30.0)).unwrap().verdict,
+            Verdict::Consistent
+        );
     }
 }

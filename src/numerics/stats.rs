@@ -1,12 +1,18 @@
 //! Sample statistics, the one implementation of each: moments, standard errors, the two
 //! quantile definitions the program uses (named, never mixed up), tail fractions, and the
-//! summary of a sample that reports and thresholds read ([`Stats`]), and the chi-square
-//! distribution (the calibration's noise estimate).
+//! summary of a sample that reports and thresholds read ([`Stats`]), the chi-square
+//! distribution (the calibration's noise estimate), the F distribution (a statistic with an
+//! estimated noise) and the chi-square statistic of residuals that share one error
+//! ([`SharedErrorChiSquare`]).
 
 mod chi_square;
+mod f_ratio;
+mod shared_error;
 
 pub use chi_square::{chi_square_cdf, chi_square_quantile, ln_gamma, regularized_lower_gamma};
+pub use f_ratio::{f_cdf, regularized_incomplete_beta};
 use serde::{Deserialize, Serialize};
+pub use shared_error::SharedErrorChiSquare;
 
 /// RMS distance of `points` from their centroid (0 for none): the spread a fit's RMS is
 /// judged against.
@@ -207,6 +213,11 @@ impl CorrelatedNormal {
         CorrelatedNormal {
             factor: eig.eigenvectors * nalgebra::DMatrix::from_diagonal(&roots),
         }
+    }
+
+    /// `V sqrt(L)`: the factor `F` with `F F^T = C`.
+    pub fn factor(&self) -> &nalgebra::DMatrix<f64> {
+        &self.factor
     }
 
     /// One draw.

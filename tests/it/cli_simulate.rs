@@ -160,7 +160,7 @@ fn descriptions_and_truths_are_told_apart() {
         .code(2);
     let message = common::stderr(&refused);
     assert!(
-        message.contains("robot model") && message.contains("--truth"),
+        message.contains("truth model") && message.contains("--truth"),
         "{message}"
     );
 }

@@ -610,11 +610,7 @@ fn a_named_compliance_carried_into_the_model_closes_the_gap_on_new_poses() {
     let refined = refine_calibration(&a, &desc, &cal, &refine).unwrap();
     let with_effect = refine_carrying(&a, &desc, &cal, &refine, &carried).unwrap();
     assert!(!with_effect.robot.effects.compliance.is_empty());
-    let check = ValidationOptions {
-        noise_rms_3d_mm: noise_mm,
-        noise_source: "calibration".into(),
-        false_alarm: 0.01,
-    };
+    let check = ValidationOptions::given(noise_mm, 0.01);
     let on_b = |cal| validate(&b, cal, &desc, &check).unwrap().validation.unwrap();
     let (without, with) = (on_b(&refined), on_b(&with_effect));
     let bound = d.noise_only_rms_mm * (1.0 + K_SIGMA / (2.0 * 3.0 * with.points as f64).sqrt());

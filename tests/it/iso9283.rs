@@ -96,7 +96,7 @@ fn known_deviations_come_back_as_iso_figures() {
     let dir = tempfile::tempdir().unwrap();
     let cal_dir = calibrated_ur5e(dir.path());
     let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
     )
     .unwrap();
     let cal = read_calibration(&cal_dir);
@@ -147,7 +147,7 @@ fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
     let dir = tempfile::tempdir().unwrap();
     let cal_dir = calibrated_ur5e(dir.path());
     let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
     )
     .unwrap();
     let data = cycles_csv(dir.path(), &desc, &read_calibration(&cal_dir));
@@ -224,7 +224,7 @@ fn a_planned_iso_test_measured_and_imported_evaluates_to_its_known_deviations() 
         .success();
     assert!(stdout(&a).contains("(60 points at 20 poses)"), "{}", stdout(&a));
     let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
     )
     .unwrap();
     let cal = read_calibration(&cal_dir);
@@ -388,7 +388,7 @@ fn a_multi_directional_plan_approaches_each_pose_along_three_base_axes() {
     // Where the calibrated model puts the tool at each row's commands \[mm\] (the plan's
     // nominal columns are the nominal model's).
     let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), axiscal::presets::Kind::Robot).unwrap(),
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
     )
     .unwrap();
     let cal = read_calibration(&cal_dir);

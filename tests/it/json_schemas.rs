@@ -253,8 +253,9 @@ fn errors_of(file: &Path) -> (String, Vec<String>) {
 
 /// Keys whose value is a list of numbers that is not positional: a vector in a stated frame
 /// (`x, y, z`), a quaternion, a per-joint or per-coefficient list, a matrix.
-const NUMBER_LISTS: [&str; 29] = [
+const NUMBER_LISTS: [&str; 30] = [
     "nominal_mm",
+    "repeatability_rad_or_m",
     "correlation",
     "refined_mm",
     "gravity_m_s2",

@@ -39,6 +39,7 @@ mod plan_optimize;
 mod plan_sight;
 mod progress_counts;
 mod rapier_arm;
+mod readme;
 mod real_boby_klimchik;
 mod real_fanuc;
 mod real_rct;

@@ -37,11 +37,7 @@ fn calibrated(set: &MeasurementSet, desc: &RobotDescription) -> Calibration {
 }
 
 fn validation_options() -> ValidationOptions {
-    ValidationOptions {
-        noise_rms_3d_mm: NOISE_MM,
-        noise_source: "given".into(),
-        false_alarm: 0.01,
-    }
+    ValidationOptions::given(NOISE_MM, 0.01)
 }
 
 /// Refined on 30 training poses, the model predicts 30 test poses within 1.3 times what the
@@ -78,13 +74,13 @@ fn the_refined_model_predicts_held_out_poses_to_the_noise() {
     let (b, a) = (before.validation.unwrap(), after.validation.unwrap());
     eprintln!(
         "test RMS: unrefined {:.4} mm, refined {:.4} mm, noise alone {:.4} mm; k-fold {:.4} -> {:.4} mm",
-        b.rms_mm, a.rms_mm, a.predicted_rms_mm, r.heldout_rms_before_mm, r.heldout_rms_after_mm
+        b.rms_mm, a.rms_mm, a.predicted_mm.noise, r.heldout_rms_before_mm, r.heldout_rms_after_mm
     );
     assert!(
-        a.rms_mm <= 1.3 * a.predicted_rms_mm,
+        a.rms_mm <= 1.3 * a.predicted_mm.noise,
         "{} vs {}",
         a.rms_mm,
-        a.predicted_rms_mm
+        a.predicted_mm.noise
     );
     assert!(
         b.rms_mm > 3.0 * a.rms_mm,
@@ -95,7 +91,7 @@ fn the_refined_model_predicts_held_out_poses_to_the_noise() {
     // The k-fold estimate of the held-out RMS, a second path to the same number (other poses,
     // linearised): within the criterion too.
     assert!(
-        r.heldout_rms_after_mm <= 1.3 * a.predicted_rms_mm,
+        r.heldout_rms_after_mm <= 1.3 * a.predicted_mm.noise,
         "{}",
         r.heldout_rms_after_mm
     );

@@ -357,6 +357,15 @@ impl Tally {
     }
 }
 
+/// `v` with `places` decimals, or `-` where it is undefined (a rate over no case).
+fn decimals(v: f64, places: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.places$}")
+    } else {
+        "-".into()
+    }
+}
+
 /// Scores diagnoses against their keys.
 pub fn score(results: &[CaseResult]) -> BlindScore {
     let confusion = confusion_matrix(results);
@@ -372,39 +381,41 @@ impl BlindScore {
     /// Markdown summary.
     pub fn markdown(&self) -> String {
         let mut s = String::new();
+        let f = |v: f64| decimals(v, 2);
         let _ = writeln!(
             s,
-            "{} cases: in-set effects above their detectable size named right {:.2} ({} cases), right joint {:.2}; \
-             below it read `none` or right {:.2} ({} cases); no-effect cases `none` {:.2}; out-of-set effects above their \
-             detectable size `unexplained` {:.2} ({} cases), below it `none` or `unexplained` {:.2} ({} cases); \
-             named precision {:.2}; gap shrunk >= 70 % in {:.2} of the found cases ({:.2} of the {} where the noise resolves it; \
-             shrunk or left below the detectable gap {:.2}; median after/before {:.2}, mean {:.3} -> {:.3} mm); \
-             all cases right {:.2}\n",
+            "{} cases: in-set effects above their detectable size named right {} ({} cases), right joint {}; \
+             below it read `none` or right {} ({} cases); no-effect cases `none` {}; out-of-set effects above their \
+             detectable size `unexplained` {} ({} cases), below it `none` or `unexplained` {} ({} cases); \
+             named precision {}; gap shrunk >= 70 % in {} of the found cases ({} of the {} where the noise resolves it; \
+             shrunk or left below the detectable gap {}; median after/before {}, mean {} -> {} mm); \
+             all cases right {}\n",
             self.cases,
-            self.detectable_in_set_accuracy,
+            f(self.detectable_in_set_accuracy),
             self.detectable_in_set,
-            self.joint_accuracy,
-            self.undetectable_honest,
+            f(self.joint_accuracy),
+            f(self.undetectable_honest),
             self.undetectable_in_set,
-            self.none_accuracy,
-            self.out_of_set_unexplained,
+            f(self.none_accuracy),
+            f(self.out_of_set_unexplained),
             self.detectable_out_of_set,
-            self.undetectable_out_of_set_honest,
+            f(self.undetectable_out_of_set_honest),
             self.undetectable_out_of_set,
-            self.named_precision,
-            self.shrunk_70,
-            self.shrunk_70_resolvable,
+            f(self.named_precision),
+            f(self.shrunk_70),
+            f(self.shrunk_70_resolvable),
             self.resolvable,
-            self.shrunk_70_or_at_noise,
-            self.median_gap_ratio,
-            self.mean_gap.before_mm,
-            self.mean_gap.after_mm,
-            self.effect_accuracy,
+            f(self.shrunk_70_or_at_noise),
+            f(self.median_gap_ratio),
+            decimals(self.mean_gap.before_mm, 3),
+            decimals(self.mean_gap.after_mm, 3),
+            f(self.effect_accuracy),
         );
         let _ = writeln!(
             s,
-            "two-effect cases (compliance and backlash): {} , both named on their joints {:.2}\n",
-            self.two_effect_cases, self.two_effects_both_named
+            "two-effect cases (compliance and backlash): {}, both named on their joints {}\n",
+            self.two_effect_cases,
+            f(self.two_effects_both_named)
         );
         let _ = writeln!(
             s,

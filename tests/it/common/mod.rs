@@ -4,7 +4,7 @@ use assert_cmd::Command;
 use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
-use axiscal::sim::{AnalyticArm, simulate_campaign};
+use axiscal::sim::{AnalyticArm, Effects, simulate_campaign};
 use nalgebra::Isometry3;
 use rand::{RngExt, SeedableRng, rngs::ChaCha12Rng};
 
@@ -41,8 +41,20 @@ pub fn analytic_campaign(
     instrument: &MeasurementModel,
     seed: u64,
 ) -> MeasurementSet {
+    analytic_campaign_with_effects(truth, Effects::default(), plan, validation, instrument, seed)
+}
+
+/// [`analytic_campaign`] on a truth with unmodelled `effects`.
+pub fn analytic_campaign_with_effects(
+    truth: &RobotModel,
+    effects: Effects,
+    plan: &CalibrationPlan,
+    validation: &ValidationPlan,
+    instrument: &MeasurementModel,
+    seed: u64,
+) -> MeasurementSet {
     let desc = RobotDescription::asea_irb6l();
-    let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(&desc));
+    let mut arm = AnalyticArm::new(truth.clone(), Controller::from_description(&desc)).with_effects(effects, &desc);
     let mut rng = ChaCha12Rng::seed_from_u64(seed);
     let out = simulate_campaign(&desc, plan, validation, &mut arm, instrument, &mut rng).expect("the campaign runs");
     MeasurementSet::new(desc.dof(), out.rows).expect("a simulated campaign is a valid measurement set")

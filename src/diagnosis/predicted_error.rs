@@ -1,0 +1,187 @@
+//! What a free pose's prediction may miss by, beside the instrument's noise: the robot's
+//! repeatability and the calibration's own error. `validate` tests residuals against both.
+//!
+//! Repeatability (as `calibrate` models it: `CalibrationOptions::repeatability_sigma_rad`,
+//! default the description's `repeatability_sigma`): each joint value of an execution is off
+//! by `dq ~ N(0, diag(sigma^2))`, drawn anew per pose, which moves the tool frame by `J_q dq`
+//! (`J_q` the geometric Jacobian, [`geometric_jacobian`]): the pose's targets share it.
+//!
+//! The calibration's error: its parameters' error `d ~ N(0, C_p)` (`model_covariance`,
+//! [`crate::calibration::tool_accuracy`]) moves the tool frame by `J_p d`
+//! ([`ToolSensitivity::jacobian`]). With `C_p = L L^T` ([`CorrelatedNormal::factor`]),
+//! `d = L e`, `e ~ N(0, I)`: one `e` for every pose, so the poses' errors are correlated
+//! ([`crate::numerics::stats::SharedErrorChiSquare`]).
+//!
+//! Both move the tool frame by a velocity `v` (origin, instrument frame) and a rotation `w`
+//! (instrument frame); a tool target at `t` (tool frame) then moves by `v + w x R t =
+//! v - [R t]_x w` (`R` the tool frame's rotation), and the rotation measured in the tool
+//! frame is `R^T w`. Both Jacobians are taken at the pose's calibrated joint values; the
+//! calibration's without the model's carried effects (a sag or backlash moves the joints by
+//! far less than the Jacobian's curvature scale).
+
+use super::DiagnosisError;
+use super::noise::CleanCampaign;
+use crate::calibration::procedure::Calibration;
+use crate::calibration::tool_accuracy::{ToolSensitivity, model_parameter_names};
+use crate::kinematics::{PhiModel, geometric_jacobian};
+use crate::measurement::MeasurementSet;
+use crate::numerics::stats::CorrelatedNormal;
+use crate::robot::{Controller, RobotDescription};
+use nalgebra::{DMatrix, Isometry3, Point3};
+
+/// The calibration's parameter error and the robot's repeatability as factors of the tool
+/// pose's error at any pose.
+pub(super) struct PredictionError<'a> {
+    /// The sensitivity of the tool pose to the parameters with a variance, and `L` over them;
+    /// absent when the calibration has no `model_covariance`.
+    calibration: Option<(ToolSensitivity<'a>, DMatrix<f64>)>,
+    /// The repeatability of each joint \[rad or m\].
+    repeatability: Vec<f64>,
+}
+
+/// The error factors of the tool pose at one pose.
+pub(super) struct PoseError {
+    /// The calibrated tool frame (instrument frame, m).
+    world_from_tool: Isometry3<f64>,
+    /// `J_p L`: rows 0-2 the origin \[mm\], rows 3-5 the rotation \[rad\].
+    calibration: DMatrix<f64>,
+    /// `J_q diag(sigma)`, the same rows.
+    repeatability: DMatrix<f64>,
+}
+
+/// A block of residuals' covariance factors: the noise-free parts of what they may miss by.
+pub(super) struct BlockFactors {
+    /// Of the calibration's error (rows x rank).
+    pub calibration: DMatrix<f64>,
+    /// Of the repeatability (rows x joints).
+    pub repeatability: DMatrix<f64>,
+}
+
+impl<'a> PredictionError<'a> {
+    /// From `cal`'s `model_covariance` (none: the calibration's error is left out, for a file
+    /// written before it was recorded) and the repeatability `cal` was made with. A
+    /// covariance of another size than the model's parameter vector is an error.
+    pub(super) fn new(
+        cal: &'a Calibration,
+        controller: &'a Controller,
+        desc: &RobotDescription,
+    ) -> Result<Self, DiagnosisError> {
+        let repeatability = cal.options.joint_repeatability_rad(desc)?;
+        let Some(covariance) = &cal.model_covariance else {
+            return Ok(PredictionError {
+                calibration: None,
+                repeatability,
+            });
+        };
+        let expected = model_parameter_names(&cal.robot).len();
+        if covariance.names.len() != expected || covariance.covariance.iter().any(|row| row.len() != expected) {
+            return Err(DiagnosisError::Model {
+                message: format!(
+                    "the calibration's `model_covariance` names {} parameters; its model has {expected}",
+                    covariance.names.len()
+                ),
+            });
+        }
+        let sensitivity = ToolSensitivity::new(&cal.robot, controller, &covariance.matrix());
+        let factor = CorrelatedNormal::new(sensitivity.covariance()).factor().clone();
+        Ok(PredictionError {
+            calibration: Some((sensitivity, factor)),
+            repeatability,
+        })
+    }
+
+    /// The repeatability of each joint \[rad or m\].
+    pub(super) fn repeatability(&self) -> &[f64] {
+        &self.repeatability
+    }
+
+    /// Whether the calibration's error is included.
+    pub(super) fn has_calibration(&self) -> bool {
+        self.calibration.is_some()
+    }
+
+    /// Components of the calibration's shared error `e` (0 without it).
+    pub(super) fn rank(&self) -> usize {
+        self.calibration.as_ref().map_or(0, |(_, l)| l.ncols())
+    }
+
+    /// The calibration's error factor (rows x rank, mm) of the points of `subset`, predicted
+    /// as [`CleanCampaign`] predicts them (axis targets at their mean position in their link,
+    /// estimated again on each moved model): central differences over the parameters; zero
+    /// columns without a model covariance.
+    pub(super) fn points(
+        &self,
+        subset: &MeasurementSet,
+        desc: &RobotDescription,
+        tool_targets_m: &[Point3<f64>],
+    ) -> Result<DMatrix<f64>, DiagnosisError> {
+        let n = subset.rows().len();
+        let Some((sensitivity, l)) = &self.calibration else {
+            return Ok(DMatrix::zeros(3 * n, 0));
+        };
+        let mut j = DMatrix::zeros(3 * n, l.nrows());
+        for (column, (plus, minus, step)) in sensitivity.moved_models().enumerate() {
+            let at = |robot| CleanCampaign::on_robot(subset, robot, desc, tool_targets_m).map(|c| c.positions());
+            for (i, (a, b)) in at(plus)?.iter().zip(at(minus)?).enumerate() {
+                let d_mm = (a - b) / step * 1e3;
+                j.view_mut((3 * i, column), (3, 1)).copy_from(&d_mm);
+            }
+        }
+        Ok(j * l)
+    }
+
+    /// The error factors of the tool pose at internal commands `cmd`, whose calibrated joint
+    /// values on `phi` are `q`.
+    pub(super) fn at(&self, phi: &PhiModel, cmd: &[f64], q: &[f64]) -> Result<PoseError, DiagnosisError> {
+        let in_mm = |mut m: DMatrix<f64>| {
+            m.rows_mut(0, 3).scale_mut(1e3);
+            m
+        };
+        let calibration = match &self.calibration {
+            Some((sensitivity, l)) => {
+                let j = sensitivity
+                    .jacobian(cmd)
+                    .map_err(|e| DiagnosisError::Model { message: e.to_string() })?;
+                in_mm(j * l)
+            }
+            None => DMatrix::zeros(6, 0),
+        };
+        let jq = geometric_jacobian(phi, q);
+        let repeatability = in_mm(DMatrix::from_fn(6, q.len(), |r, c| jq[(r, c)] * self.repeatability[c]));
+        Ok(PoseError {
+            world_from_tool: phi.world_from_tool(q),
+            calibration,
+            repeatability,
+        })
+    }
+}
+
+impl PoseError {
+    /// The factors of the positions of the tool targets at `targets_m` (tool frame), stacked
+    /// three rows a target \[mm\].
+    pub(super) fn targets(&self, targets_m: &[Point3<f64>]) -> BlockFactors {
+        let stacked = |f: &DMatrix<f64>| {
+            let mut out = DMatrix::zeros(3 * targets_m.len(), f.ncols());
+            for (i, t) in targets_m.iter().enumerate() {
+                let lever_mm = (self.world_from_tool.rotation * t.coords) * 1e3;
+                let moved = f.rows(0, 3) - lever_mm.cross_matrix() * f.rows(3, 3);
+                out.rows_mut(3 * i, 3).copy_from(&moved);
+            }
+            out
+        };
+        BlockFactors {
+            calibration: stacked(&self.calibration),
+            repeatability: stacked(&self.repeatability),
+        }
+    }
+
+    /// The factors of the tool frame's rotation, in the tool frame \[rad\].
+    pub(super) fn rotation(&self) -> BlockFactors {
+        let to_tool = self.world_from_tool.rotation.inverse().to_rotation_matrix();
+        let to_tool = DMatrix::from_column_slice(3, 3, to_tool.matrix().as_slice());
+        BlockFactors {
+            calibration: &to_tool * self.calibration.rows(3, 3),
+            repeatability: &to_tool * self.repeatability.rows(3, 3),
+        }
+    }
+}
