@@ -20,6 +20,37 @@ pub struct Args {
     /// Seed of the random poses.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Print, instead, the description's nominal model as a truth model (TOML,
+    /// `docs/formats.md#robot-model`): edit its rows, transmissions, couplings and offsets into
+    /// the robot to simulate, then `simulate --robot ROBOT --truth FILE`.
+    #[arg(long)]
+    truth_template: bool,
+}
+
+/// The nominal model of `desc` as a truth model file, read back before it is printed.
+fn print_truth_template(desc: &RobotDescription, path: &std::path::Path) -> Result<()> {
+    let model = axiscal::robot::RobotModel::ideal(desc);
+    let text = toml::to_string(&model).context("writing the truth model as TOML")?;
+    let back: axiscal::robot::RobotModel = toml::from_str(&text).context("reading the template back")?;
+    if back != model {
+        bail!("the truth template of {} does not read back as written", path.display());
+    }
+    // A shipped description by its name, a file by its path.
+    let named = match path.strip_prefix(axiscal::presets::SHIPPED_ROOT) {
+        Ok(_) => path
+            .file_stem()
+            .map_or(path.display().to_string(), |s| s.to_string_lossy().into_owned()),
+        Err(_) => path.display().to_string(),
+    };
+    println!(
+        "# The nominal model of {} as a truth model (docs/formats.md#robot-model): no manufacturing\n\
+         # error. Edit rows, transmissions, couplings, transducer offsets, placement and tool frame\n\
+         # into the robot to simulate, then: axiscal simulate --robot {} --truth THIS_FILE\n\
+         # (angles in rad, lengths in m unless a key says otherwise).",
+        desc.name, named
+    );
+    print!("{text}");
+    Ok(())
 }
 
 /// The converted model must reproduce the source to this (m, rad): both are products of a
@@ -31,6 +62,9 @@ const FK_TOLERANCE: f64 = 1e-9;
 pub fn run(args: Args) -> Result<()> {
     let text = axiscal::presets::read_text(&args.robot).with_context(|| format!("reading {}", args.robot.display()))?;
     let (desc, source) = RobotDescription::with_source(&text, &args.robot)?;
+    if args.truth_template {
+        return print_truth_template(&desc, &args.robot);
+    }
     let model = desc.nominal_model();
     println!(
         "# {} ({} joints): phi-model rows (paper Table 2 form), file units",

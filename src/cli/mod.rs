@@ -219,7 +219,8 @@ enum Command {
         shell: clap_complete::Shell,
     },
     /// Validate a calibration on measured data: every point predicted, `residuals.csv` and
-    /// `summary.json` (RMS, mean, max against the noise, chi-square verdicts).
+    /// `summary.json` (RMS against the instrument's noise, the robot's repeatability and the
+    /// calibration's own predicted error; chi-square or F verdicts).
     Validate(validate::Args),
     /// Open a rerun recording (`.rrd`) in the matching rerun viewer, or print how to install it.
     View(view::Args),

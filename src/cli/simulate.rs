@@ -74,7 +74,7 @@ pub struct Args {
     instrument: Instrument,
     /// The campaign plan (TOML: `reference`, `[[sweeps]]`, `held_jitter`;
     /// `docs/formats.md#plan-file`). Default: paper Table 1 for a six-joint revolute arm, its
-    /// generalisation (`CalibrationPlan::for_robot`) for any other robot.
+    /// generalisation for any other robot (each joint swept within its limits).
     #[arg(long, value_parser = super::options::plan_file)]
     plan: Option<PathBuf>,
     /// Number of validation poses (three tool targets each).
@@ -87,7 +87,8 @@ pub struct Args {
     /// analytic truth model.
     #[arg(long, value_enum, default_value_t = Sim::Rapier)]
     sim: Sim,
-    /// Unmodelled effects (TOML, see `campaign::Effects`).
+    /// Unmodelled effects of the simulated robot and instrument (TOML:
+    /// `docs/formats.md#effects-file`).
     #[arg(long)]
     effects: Option<PathBuf>,
     /// Print the largest visible span of each axis experiment's targets (rapier arm, the

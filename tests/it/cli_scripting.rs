@@ -73,3 +73,28 @@ fn completions_for_each_shell() {
     }
     axiscal().args(["completions", "tcsh"]).assert().code(2);
 }
+
+/// Every command's help is written for users: no Rust paths (`module::Type`) and no markdown
+/// escapes (`\[mm\]`) from the doc comments it is made of.
+#[test]
+fn help_texts_name_no_rust_items() {
+    let top = stdout(&axiscal().arg("--help").assert().success());
+    let commands: Vec<String> = top
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next().map(str::to_owned))
+        .filter(|c| c != "help")
+        .collect();
+    assert!(commands.len() >= 15, "{commands:?}");
+    for c in &commands {
+        let help = stdout(&axiscal().args([c.as_str(), "--help"]).assert().success());
+        for line in help.lines() {
+            let rust_path = line
+                .split(|ch: char| !(ch.is_alphanumeric() || ch == '_' || ch == ':'))
+                .any(|w| w.contains("::") && !w.starts_with("::") && !w.ends_with("::"));
+            assert!(!rust_path && !line.contains("\\["), "`axiscal {c} --help`: {line}");
+        }
+    }
+}

@@ -164,3 +164,34 @@ fn descriptions_and_truths_are_told_apart() {
         "{message}"
     );
 }
+
+/// `describe --truth-template` writes a description's nominal model as a truth model file that
+/// `simulate --truth` reads: the campaign simulated on it is the one simulated with the
+/// description itself as the truth, byte for byte (a SCARA and a DH arm).
+#[test]
+fn a_truth_template_simulates_as_the_description_does() {
+    let dir = tempfile::tempdir().unwrap();
+    for robot in ["scara-rrpr", "arm6-dh"] {
+        let template = axiscal()
+            .args(["describe", robot, "--truth-template"])
+            .assert()
+            .success();
+        let truth = dir.path().join(format!("{robot}-truth.toml"));
+        std::fs::write(&truth, &template.get_output().stdout).unwrap();
+        let simulate = |truth: &std::ffi::OsStr, out: &str| {
+            axiscal()
+                .args([
+                    "simulate", "--robot", robot, "--sim", "analytic", "--seed", "4", "--truth",
+                ])
+                .arg(truth)
+                .arg("--out")
+                .arg(dir.path().join(out))
+                .assert()
+                .success();
+            std::fs::read(dir.path().join(out)).unwrap()
+        };
+        let from_template = simulate(truth.as_os_str(), &format!("{robot}-a.csv"));
+        let from_description = simulate(std::ffi::OsStr::new(robot), &format!("{robot}-b.csv"));
+        assert!(from_template == from_description, "{robot}: the two campaigns differ");
+    }
+}

@@ -19,6 +19,7 @@ mod cli_scripting;
 mod cli_simulate;
 mod compensation;
 mod diagnosis;
+mod documented_keys;
 mod effect_shapes;
 mod effects;
 mod export;
