@@ -74,14 +74,24 @@ pub(crate) struct Reference {
     pub color: RGBColor,
 }
 
+/// What a bar colour means, for the legend.
+pub(crate) struct Category {
+    /// Legend text.
+    pub label: String,
+    /// The bars' fill.
+    pub color: RGBColor,
+}
+
 /// Horizontal bars, the first at the top, from `from` (the value axis' start) to their values,
-/// with vertical reference lines.
+/// with vertical reference lines; the legend (bar colours, then the lines) sits in room kept
+/// free right of the longest bar.
 pub(crate) fn bar_chart<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
     x_desc: &str,
     from: f64,
     bars: &[Bar],
+    categories: &[Category],
     references: &[Reference],
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
@@ -92,8 +102,18 @@ pub(crate) fn bar_chart<DB: DrawingBackend>(
         .chain(references.iter().map(|r| r.value))
         .filter(|v| v.is_finite())
         .fold(from, f64::max);
-    let hi = hi + 0.08 * (hi - from).max(1e-9);
     let label_width = bars.iter().map(|b| b.label.len()).max().unwrap_or(4) as u32 * 7 + 16;
+    // The legend's width (about 7 px a character of its longest entry, its swatch and frame)
+    // as a share of the plotting area's: the value axis reaches that far beyond the longest
+    // bar or line, so the legend in the lower right covers none of them.
+    let legend_chars = categories
+        .iter()
+        .map(|c| c.label.len())
+        .chain(references.iter().map(|r| r.label.len()))
+        .max();
+    let plot_px = f64::from(root.dim_in_pixel().0.saturating_sub(label_width.min(360) + 24).max(100));
+    let legend_share = legend_chars.map_or(0.0, |c| ((c * 7 + 50) as f64 / plot_px).min(0.7));
+    let hi = from + (hi - from).max(1e-9) / (1.0 - legend_share) * 1.04;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))
         .margin(12)
@@ -129,6 +149,14 @@ pub(crate) fn bar_chart<DB: DrawingBackend>(
         root.draw_text(&b.label, &style, (area_x.start - 6, py))
             .map_err(|e| e.to_string())?;
     }
+    for c in categories {
+        let color = c.color;
+        chart
+            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
+            .map_err(|e| e.to_string())?
+            .label(c.label.clone())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 18, y + 5)], color.mix(0.75).filled()));
+    }
     for r in references {
         let color = r.color;
         chart
@@ -140,7 +168,7 @@ pub(crate) fn bar_chart<DB: DrawingBackend>(
             .label(r.label.clone())
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2)));
     }
-    if !references.is_empty() {
+    if !references.is_empty() || !categories.is_empty() {
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::LowerRight)

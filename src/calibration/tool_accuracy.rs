@@ -506,6 +506,9 @@ pub struct MapPoint {
     pub height_m: f64,
     /// Its predicted 1-sigma.
     pub sigma: PoseSigma,
+    /// Whether the pose is one of those drawn inside the calibrated spans (else over the
+    /// joint limits).
+    pub inside_spans: bool,
 }
 
 /// `count` command vectors (file units) drawn uniformly (seeded) in `ranges` per joint.
@@ -563,14 +566,18 @@ pub fn predict(
     let in_spans = sigmas(&span_ranges, options.span_poses, options.seed)?;
     let workspace = sigmas(&limits, options.workspace_poses, options.seed.wrapping_add(1))?;
     let base_from_world = cal.robot.placement.to_isometry().inverse();
-    let map = workspace
+    let spans_flagged = workspace
         .iter()
-        .map(|(cmd, sigma)| {
+        .map(|p| (p, false))
+        .chain(in_spans.iter().map(|p| (p, true)));
+    let map = spans_flagged
+        .map(|((cmd, sigma), inside_spans)| {
             let p = base_from_world * sensitivity.tool_point(cmd)?;
             Ok(MapPoint {
                 reach_m: p.x.hypot(p.y),
                 height_m: p.z,
                 sigma: *sigma,
+                inside_spans,
             })
         })
         .collect::<Result<_, ModelError>>()?;

@@ -1,7 +1,9 @@
 //! The map of the predicted tool 1-sigma over reach and height (PNG and SVG, plotters, the
 //! shipped font): the workspace poses of [`super::tool_accuracy::predict`] binned by where
 //! their tool point is (distance from the base's z axis, height above its xy plane), each
-//! cell coloured by the RMS position 1-sigma norm of its poses; empty cells stay white.
+//! cell coloured by the RMS position 1-sigma norm of its poses on the viridis scale
+//! (perceptually uniform, readable in grey and by colour-blind readers); cells no pose reaches
+//! stay white, and the tool points of the poses inside the calibrated spans are marked.
 
 use super::tool_accuracy::MapPoint;
 use crate::plotting::{DrawFn, PlotError, write_png_and_svg};
@@ -21,11 +23,11 @@ const SIZE: (u32, u32) = (900, 640);
 type Cell = ([f64; 2], [f64; 2], f64);
 
 /// The occupied cells and the plotted extent `[reach lo, hi, height lo, hi]` \[m\].
-fn cells(points: &[MapPoint]) -> (Vec<Cell>, [f64; 4]) {
+fn cells(points: &[&MapPoint]) -> (Vec<Cell>, [f64; 4]) {
     let lim = |f: &dyn Fn(&MapPoint) -> f64| {
         points
             .iter()
-            .map(f)
+            .map(|p| f(p))
             .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], v| [a.min(v), b.max(v)])
     };
     let ([r0, r1], [h0, h1]) = (lim(&|p| p.reach_m), lim(&|p| p.height_m));
@@ -57,22 +59,43 @@ fn cells(points: &[MapPoint]) -> (Vec<Cell>, [f64; 4]) {
     (out, [r0, r1 + dr * 1e-6, h0, h1 + dh * 1e-6])
 }
 
-/// Blue (low) through green to red (high).
-fn colour(t: f64) -> HSLColor {
-    HSLColor(0.66 * (1.0 - t.clamp(0.0, 1.0)), 0.85, 0.5)
+/// Viridis (matplotlib's, van der Walt and Smith 2015) at ten even stops, `t = 0` dark purple
+/// (low) to `t = 1` yellow (high), linear between them.
+fn colour(t: f64) -> RGBColor {
+    const VIRIDIS: [(u8, u8, u8); 10] = [
+        (0x44, 0x01, 0x54),
+        (0x48, 0x28, 0x78),
+        (0x3e, 0x49, 0x89),
+        (0x31, 0x68, 0x8e),
+        (0x26, 0x82, 0x8e),
+        (0x1f, 0x9e, 0x89),
+        (0x35, 0xb7, 0x79),
+        (0x6e, 0xce, 0x58),
+        (0xb5, 0xde, 0x2b),
+        (0xfd, 0xe7, 0x25),
+    ];
+    let x = t.clamp(0.0, 1.0) * (VIRIDIS.len() - 1) as f64;
+    let (i, f) = (
+        (x as usize).min(VIRIDIS.len() - 2),
+        x - (x as usize).min(VIRIDIS.len() - 2) as f64,
+    );
+    let mix = |a: u8, b: u8| (f64::from(a) + f * (f64::from(b) - f64::from(a))).round() as u8;
+    let ((r0, g0, b0), (r1, g1, b1)) = (VIRIDIS[i], VIRIDIS[i + 1]);
+    RGBColor(mix(r0, r1), mix(g0, g1), mix(b0, b1))
 }
 
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -> Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(e)?;
-    let (cells, [r0, r1, h0, h1]) = cells(points);
+    let workspace: Vec<&MapPoint> = points.iter().filter(|p| !p.inside_spans).collect();
+    let (cells, [r0, r1, h0, h1]) = cells(&workspace);
     let (lo, hi) = cells
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), c| (a.min(c.2), b.max(c.2)));
     let (main, bar) = root.split_horizontally(SIZE.0 - 110);
     let mut chart = ChartBuilder::on(&main)
         .caption(
-            "Predicted tool position 1-sigma over the workspace [mm]",
+            "Predicted tool position 1-sigma over the workspace [mm] (white: no pose)",
             ("sans-serif", 20),
         )
         .margin(12)
@@ -91,6 +114,29 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -
         .draw_series(cells.iter().map(|([a, b], [c, d], v)| {
             Rectangle::new([(a * 1e3, c * 1e3), (b * 1e3, d * 1e3)], colour(t(*v)).filled())
         }))
+        .map_err(e)?;
+    let inside: Vec<&MapPoint> = points.iter().filter(|p| p.inside_spans).collect();
+    let inside_rms_mm =
+        (inside.iter().map(|p| p.sigma.position_norm_mm.powi(2)).sum::<f64>() / inside.len().max(1) as f64).sqrt();
+    let in_view = |p: &&&MapPoint| (r0..=r1).contains(&p.reach_m) && (h0..=h1).contains(&p.height_m);
+    chart
+        .draw_series(
+            inside
+                .iter()
+                .filter(in_view)
+                .map(|p| Circle::new((p.reach_m * 1e3, p.height_m * 1e3), 2, RED.filled())),
+        )
+        .map_err(e)?
+        .label(format!(
+            "tool point of a pose inside the calibrated spans (1-sigma RMS {inside_rms_mm:.3} mm)"
+        ))
+        .legend(|(x, y)| Circle::new((x + 8, y), 3, RED.filled()));
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
         .map_err(e)?;
     let steps: i32 = 50;
     for k in 0..steps {

@@ -3,7 +3,7 @@
 //! (`candidates`).
 
 use super::{AxesDiagnosis, Diagnosis, WhereEntry};
-use crate::plotting::{Bar, DrawFn, PlotError, Reference, bar_chart, write_png_and_svg};
+use crate::plotting::{Bar, Category, DrawFn, PlotError, Reference, bar_chart, write_png_and_svg};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -25,6 +25,7 @@ struct Chart<'a> {
     /// Start of the value axis.
     from: f64,
     bars: &'a [Bar],
+    categories: &'a [Category],
     references: &'a [Reference],
 }
 
@@ -32,12 +33,18 @@ struct Chart<'a> {
 fn draw(path: &Path, png: bool, c: &Chart) -> Result<(), String> {
     if png {
         let root = BitMapBackend::new(path, SIZE).into_drawing_area();
-        bar_chart(root, c.title, c.x_desc, c.from, c.bars, c.references)
+        bar_chart(root, c.title, c.x_desc, c.from, c.bars, c.categories, c.references)
     } else {
         let root = SVGBackend::new(path, SIZE).into_drawing_area();
-        bar_chart(root, c.title, c.x_desc, c.from, c.bars, c.references)
+        bar_chart(root, c.title, c.x_desc, c.from, c.bars, c.categories, c.references)
     }
 }
+
+/// The colours of the `where` bars: a workspace feature's bin, the validation poses, an axis
+/// experiment.
+const FEATURE: RGBColor = RGBColor(0, 140, 70);
+const VALIDATION: RGBColor = RGBColor(200, 110, 0);
+const AXIS: RGBColor = BLUE;
 
 fn where_bars(entries: &[WhereEntry]) -> Vec<Bar> {
     entries
@@ -50,14 +57,30 @@ fn where_bars(entries: &[WhereEntry]) -> Vec<Bar> {
             },
             value: w.excess_ratio,
             color: if w.experiment.starts_with("feature:") {
-                RGBColor(0, 140, 70)
+                FEATURE
             } else if w.experiment.starts_with("validation") {
-                RGBColor(200, 110, 0)
+                VALIDATION
             } else {
-                BLUE
+                AXIS
             },
         })
         .collect()
+}
+
+/// The legend of the `where` bars' colours present in `bars`.
+fn where_categories(bars: &[Bar]) -> Vec<Category> {
+    [
+        (FEATURE, "held-out poses of one workspace-feature bin"),
+        (VALIDATION, "validation poses"),
+        (AXIS, "an axis experiment"),
+    ]
+    .into_iter()
+    .filter(|(c, _)| bars.iter().any(|b| b.color == *c))
+    .map(|(color, label)| Category {
+        label: label.into(),
+        color,
+    })
+    .collect()
 }
 
 fn noise_line() -> Reference {
@@ -79,8 +102,9 @@ pub fn write_plots(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, PlotError>
         .take(MAX_BARS)
         .map(|c| Bar {
             label: format!(
-                "{}{}{}",
+                "{} ({}){}{}",
                 c.effect,
+                c.member,
                 c.joint.map_or(String::new(), |j| format!(" joint {j}")),
                 if c.significant { " *" } else { "" }
             ),
@@ -107,20 +131,39 @@ pub fn write_plots(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, PlotError>
     );
     // The candidates differ by a fraction of the noise: the axis starts below the smallest.
     let from = 0.9 * candidates.iter().map(|b| b.value).fold(d.noise_only_rms_mm, f64::min);
-    let noise = [noise_line()];
+    // The gap test flags a held-out RMS of sqrt(noise^2 + detectable gap^2): that ratio, for
+    // all held-out poses pooled (a bin of fewer poses scatters more).
+    let flagged = d.noise_only_rms_mm.hypot(d.detectable_gap_mm) / d.noise_only_rms_mm;
+    let where_refs = [
+        noise_line(),
+        Reference {
+            label: format!(
+                "the gap test flags above {flagged:.2} (all held-out poses, false alarm {})",
+                d.false_alarm
+            ),
+            value: flagged,
+            color: RED,
+        },
+    ];
+    let where_legend = where_categories(&where_);
     let charts = [
         Chart {
-            title: "Where: residual RMS over its noise-only RMS",
-            x_desc: "excess ratio",
+            title: &format!(
+                "Where: residual RMS over its noise-only RMS (verdict {})",
+                d.outcome.effect
+            ),
+            x_desc: "excess ratio (residual RMS / noise-only RMS)",
             from: 0.0,
             bars: &where_,
-            references: &noise,
+            categories: &where_legend,
+            references: &where_refs,
         },
         Chart {
             title: &verdict,
             x_desc: "held-out position RMS [mm] (axis starts at 90 % of the smallest)",
             from,
             bars: &candidates,
+            categories: &[],
             references: &rms_refs,
         },
     ];
@@ -146,11 +189,13 @@ pub fn write_axes_plots(d: &AxesDiagnosis, dir: &Path) -> Result<Vec<PathBuf>, P
             color: RED,
         },
     ];
+    let legend = where_categories(&bars);
     let chart = Chart {
         title: "Where: arc residual RMS over its noise-only RMS",
-        x_desc: "excess ratio",
+        x_desc: "excess ratio (residual RMS / noise-only RMS)",
         from: 0.0,
         bars: &bars,
+        categories: &legend,
         references: &refs,
     };
     let jobs: [(&str, &DrawFn); 1] = [("where", &|p: &Path, png: bool| draw(p, png, &chart))];

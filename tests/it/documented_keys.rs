@@ -15,13 +15,11 @@ use std::path::Path;
 fn keys(v: &Value, root: &Value, seen: &mut BTreeSet<String>, out: &mut BTreeSet<String>) {
     match v {
         Value::Object(o) => {
-            if let Some(Value::String(r)) = o.get("$ref") {
-                if seen.insert(r.clone()) {
-                    let name = r.rsplit('/').next().unwrap();
-                    if let Some(def) = root.get("$defs").and_then(|d| d.get(name)) {
-                        keys(def, root, seen, out);
-                    }
-                }
+            if let Some(Value::String(r)) = o.get("$ref")
+                && seen.insert(r.clone())
+                && let Some(def) = root.get("$defs").and_then(|d| d.get(r.rsplit('/').next().unwrap()))
+            {
+                keys(def, root, seen, out);
             }
             if let Some(Value::Object(p)) = o.get("properties") {
                 for (k, sub) in p {
@@ -76,12 +74,16 @@ fn documents(text: &str, key: &str) -> bool {
     })
 }
 
+/// A file's name, the keys its reader accepts and its sections of `docs/formats.md` (from
+/// anchor, to anchor).
+type InputFile<'a> = (&'a str, BTreeSet<String>, &'a [(&'a str, &'a str)]);
+
 #[test]
 fn every_input_key_is_in_the_formats_doc() {
     let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/formats.md")).unwrap();
     // Each file's sections: (from anchor, to anchor). A scenario holds an effects file's
     // tables and may hold a plan's sweeps.
-    let files: [(&str, BTreeSet<String>, &[(&str, &str)]); 6] = [
+    let files: [InputFile; 6] = [
         (
             "robot description",
             accepted::<RobotDescription>(),

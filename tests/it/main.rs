@@ -38,6 +38,7 @@ mod paper_scenario;
 mod plan_import;
 mod plan_optimize;
 mod plan_sight;
+mod plots;
 mod progress_counts;
 mod rapier_arm;
 mod readme;

@@ -1,0 +1,75 @@
+//! The plots are for readers (checked on their SVG text): every chart has its axis titles and a
+//! legend naming each colour and line, and no two bars share a label.
+
+use crate::common::{axiscal, simulate_analytic};
+use std::path::Path;
+
+/// The text elements of an SVG file, unescaped enough to compare (`&amp;` etc. kept).
+fn texts(svg: &Path) -> Vec<String> {
+    let body = std::fs::read_to_string(svg).unwrap_or_else(|e| panic!("{}: {e}", svg.display()));
+    body.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            t.split_once('>')
+                .and_then(|(_, rest)| rest.split_once("</text>"))
+                .map(|(s, _)| s.to_owned())
+        })
+        .collect()
+}
+
+fn has(texts: &[String], needle: &str, svg: &str) {
+    assert!(
+        texts.iter().any(|t| t.contains(needle)),
+        "{svg}: no text with {needle:?} in {texts:?}"
+    );
+}
+
+#[test]
+fn every_plot_has_axis_titles_a_legend_and_unique_labels() {
+    let dir = tempfile::tempdir().unwrap();
+    simulate_analytic(dir.path(), 30, 12, "data.csv");
+    for args in [
+        &["calibrate", "data.csv", "--out", "cal"][..],
+        &["diagnose", "data.csv", "--out", "diag"][..],
+    ] {
+        axiscal().current_dir(dir.path()).args(args).assert().success();
+    }
+    let map = texts(&dir.path().join("cal/tool_sigma_map.svg"));
+    for needle in [
+        "reach from the base z axis [mm]",
+        "height above the base [mm]",
+        "white: no pose",
+        "inside the calibrated spans (1-sigma RMS",
+        "mm",
+    ] {
+        has(&map, needle, "tool_sigma_map.svg");
+    }
+    let where_ = texts(&dir.path().join("diag/where.svg"));
+    for needle in [
+        "excess ratio",
+        "noise only (ratio 1)",
+        "the gap test flags above",
+        "an axis experiment",
+    ] {
+        has(&where_, needle, "where.svg");
+    }
+    let candidates = texts(&dir.path().join("diag/candidates.svg"));
+    for needle in [
+        "held-out position RMS [mm]",
+        "baseline (refit), held out",
+        "noise only:",
+    ] {
+        has(&candidates, needle, "candidates.svg");
+    }
+    let diagnosis: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("diag/diagnosis.json")).unwrap()).unwrap();
+    let mut labels: Vec<&String> = candidates.iter().filter(|t| t.contains(" (")).collect();
+    let shown = labels.len();
+    labels.sort();
+    labels.dedup();
+    assert_eq!(labels.len(), shown, "repeated candidate labels: {labels:?}");
+    assert!(
+        shown >= diagnosis["candidates"].as_array().unwrap().len().min(20) - 2,
+        "{shown} labels"
+    );
+}
