@@ -73,3 +73,28 @@ fn every_plot_has_axis_titles_a_legend_and_unique_labels() {
         "{shown} labels"
     );
 }
+
+/// The Monte-Carlo histogram: a panel per case, each with the thresholds on its metric drawn
+/// and named in its legend.
+#[test]
+fn the_monte_carlo_histogram_draws_its_thresholds() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("grades.toml");
+    std::fs::write(
+        &scenario,
+        "trials = 3\nseed = 3\nmain_metric = \"cal_pos_rms_mm\"\n\n[sweep]\nnet_radial_rms_mm = [0.05, 0.5]\n\n\
+         [[thresholds]]\nmetric = \"cal_pos_rms_mm\"\nstat = \"p95\"\nop = \"<=\"\nvalue = 5.0\n",
+    )
+    .unwrap();
+    let ran = axiscal()
+        .current_dir(dir.path())
+        .args(["run", "grades.toml", "--out", "run"])
+        .output()
+        .unwrap();
+    // 0, or 1 when the threshold fails: the run completed either way.
+    assert!(matches!(ran.status.code(), Some(0 | 1)), "{ran:?}");
+    let hist = texts(&dir.path().join("run/hist-cal_pos_rms_mm.svg"));
+    let count = |needle: &str| hist.iter().filter(|t| t.contains(needle)).count();
+    assert_eq!(count("threshold p95(cal_pos_rms_mm) &lt;= 5"), 2, "{hist:?}");
+    assert_eq!(count("trials (3)"), 2, "{hist:?}");
+}
