@@ -22,17 +22,25 @@ pub struct Args {
     file: PathBuf,
 }
 
-/// The viewer binary: `.venv/bin/rerun` (what `make setup-viewer` installs) if present, else
-/// `rerun` on `PATH`.
-fn find_viewer() -> Option<PathBuf> {
-    let venv = Path::new(".venv").join("bin").join("rerun");
-    if venv.is_file() {
-        return Some(venv);
+/// Where the viewer is looked for: the file `AXISCAL_RERUN` names, if set (alone); else, in
+/// order, `.venv/bin/rerun` of the current folder, the one `make setup-viewer` installs in the
+/// clone this binary was built from (so `axiscal view` finds it from any folder, also after
+/// `cargo install --path .`), then `rerun` on `PATH`.
+fn viewer_candidates() -> Vec<PathBuf> {
+    if let Some(viewer) = std::env::var_os("AXISCAL_RERUN") {
+        return vec![PathBuf::from(viewer)];
     }
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path)
-        .map(|dir| dir.join("rerun"))
-        .find(|candidate| candidate.is_file())
+    let venv = |root: &Path| root.join(".venv").join("bin").join("rerun");
+    let mut out = vec![venv(Path::new(".")), venv(Path::new(env!("CARGO_MANIFEST_DIR")))];
+    if let Some(path) = std::env::var_os("PATH") {
+        out.extend(std::env::split_paths(&path).map(|dir| dir.join("rerun")));
+    }
+    out
+}
+
+/// The first viewer of [`viewer_candidates`] that exists.
+fn find_viewer() -> Option<PathBuf> {
+    viewer_candidates().into_iter().find(|candidate| candidate.is_file())
 }
 
 /// Runs `axiscal view`. A missing or failing viewer is not an error (exit 0): the recording is
@@ -43,9 +51,16 @@ pub fn run(args: Args) -> Result<()> {
     }
     let Some(viewer) = find_viewer() else {
         println!(
-            "The rerun viewer was not found (looked in .venv/bin/ and on PATH). Install the viewer \
-             matching this recording with\n\n    {}\n\n(`make setup-viewer` installs it into .venv), \
-             then run `axiscal view {}` again.",
+            "The rerun viewer was not found ({}). Install the viewer matching this recording \
+             with\n\n    {}\n\n(`make setup-viewer` in the clone installs it into its .venv, where \
+             `axiscal view` finds it from any folder), then run `axiscal view {}` again.",
+            match std::env::var_os("AXISCAL_RERUN") {
+                Some(v) => format!("AXISCAL_RERUN names {}, which is not a file", Path::new(&v).display()),
+                None => format!(
+                    "looked in ./.venv/bin/, {}/.venv/bin/ and on PATH",
+                    env!("CARGO_MANIFEST_DIR")
+                ),
+            },
             install_command(),
             args.file.display()
         );
@@ -95,5 +110,18 @@ mod tests {
             "Cargo.lock pins rerun {RERUN_VERSION}"
         );
         assert_eq!(install_command(), "pip install rerun-sdk==0.36.3");
+    }
+
+    /// From any folder, the clone's `.venv` (where `make setup-viewer` installs) is looked in,
+    /// after the current folder's and before `PATH`.
+    #[test]
+    fn the_clones_viewer_is_found_from_any_folder() {
+        if std::env::var_os("AXISCAL_RERUN").is_some() {
+            return;
+        }
+        let candidates = viewer_candidates();
+        let clone = Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/rerun");
+        assert_eq!(candidates[0], Path::new("./.venv/bin/rerun"));
+        assert_eq!(candidates[1], clone);
     }
 }

@@ -126,6 +126,7 @@ fn view_without_a_viewer_prints_the_matching_install_command() {
     let out = axiscal()
         .current_dir(dir.path())
         .env("PATH", "")
+        .env("AXISCAL_RERUN", dir.path().join("no-viewer-here"))
         .args(["view", "x.rrd"])
         .assert()
         .success()
