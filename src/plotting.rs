@@ -54,6 +54,21 @@ pub(crate) fn write_png_and_svg(dir: &Path, jobs: &[(&str, &DrawFn)]) -> Result<
     Ok(written)
 }
 
+/// Draws `chart`'s legend (its labelled series) at `position`, in the program's one legend
+/// style: a white, slightly translucent box with a black frame.
+pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
 /// One bar of a [`bar_chart`].
 pub(crate) struct Bar {
     /// Text beside the bar.
@@ -169,13 +184,7 @@ pub(crate) fn bar_chart<DB: DrawingBackend>(
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2)));
     }
     if !references.is_empty() || !categories.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
     }
     root.present().map_err(|e| e.to_string())
 }

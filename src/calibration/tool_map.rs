@@ -131,13 +131,7 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -
             "tool point of a pose inside the calibrated spans (1-sigma RMS {inside_rms_mm:.3} mm)"
         ))
         .legend(|(x, y)| Circle::new((x + 8, y), 3, RED.filled()));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e)?;
+    crate::plotting::draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     let steps: i32 = 50;
     for k in 0..steps {
         let y0 = 60 + (steps - 1 - k) * 8;

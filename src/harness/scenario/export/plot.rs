@@ -93,13 +93,7 @@ pub fn histogram_svg(
                 .label(format!("threshold {}", t.describe()))
                 .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RED.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| err(e.to_string()))?;
+        crate::plotting::draw_legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(err)?;
     }
     root.present().map_err(|e| err(e.to_string()))
 }
