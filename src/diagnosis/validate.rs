@@ -389,7 +389,7 @@ pub fn validate(
         .collect();
     let controller = Controller::from_description(desc);
     let error = PredictionError::new(cal, &controller, desc)?;
-    let free = free_poses(set, cal, desc, &residuals, &error, options)?;
+    let free = free_poses(set, cal, desc, &controller, &residuals, &error, options)?;
     let axis_steps = axis_statistic(set, desc, &clean, &residuals, &error, options)?;
     let summary = |kind, statistic| position_summary(&residuals, kind, statistic, options);
     let (validation, tool, axis) = (
@@ -629,12 +629,12 @@ fn free_poses(
     set: &MeasurementSet,
     cal: &Calibration,
     desc: &RobotDescription,
+    controller: &Controller,
     residuals: &[ValidationResidual],
     error: &PredictionError,
     options: &ValidationOptions,
 ) -> Result<FreePoses, DiagnosisError> {
     let tool_targets = desc.tool_targets_m();
-    let controller = Controller::from_description(desc);
     let model = cal.robot.phi_model();
     let variance_coord_mm2 = options.noise_rms_3d_mm.powi(2) / 3.0;
     let variance_coord_m2 = variance_coord_mm2 * 1e-6;
@@ -647,7 +647,7 @@ fn free_poses(
     let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
     for pose in group_free_poses(set).values() {
         let m = pose.first;
-        let q = calibrated_joint_values(&cal.robot, &controller, &model, desc, m, &approach)?;
+        let q = calibrated_joint_values(&cal.robot, controller, &model, desc, m, &approach)?;
         let pose_error = error.at(&model, &commands_to_internal(desc, &m.cmd), &q)?;
         let targets: Vec<Point3<f64>> = pose.rows.iter().map(|&i| tool_targets[set.rows()[i].target]).collect();
         let r = stacked_residuals(residuals, &pose.rows);
