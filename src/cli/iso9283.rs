@@ -185,11 +185,11 @@ fn plan(args: PlanArgs) -> Result<()> {
     };
     let cube = cube_of(&args.cube, &desc, &model)?;
     let poses = plan_poses(&args, &desc, &model, &cube)?;
-    let sight = args.sight.options();
+    let sight = args.sight.options(&desc)?;
     let points = points_of_poses(&desc, poses, &sight)?;
     let comment = format!(
         "{}# ISO 9283 test of {}: cube edge {:.0} mm, {} cycles of P1, P5, P4, P3, P2, {} approach direction(s); commanded through {}\n",
-        args.sight.header_comment(&desc),
+        args.sight.header_comment(&desc)?,
         desc.name,
         cube.edge_m * 1e3,
         args.cube.cycles,

@@ -9,8 +9,9 @@ mod optimize;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result, bail};
-use axiscal::measurement::PAPER_RIGHT_STATION_MM;
-use axiscal::plan::{CalibrationPlan, SightOptions, ValidationPlan, planned_points, write_plan_csv};
+use axiscal::plan::{
+    CalibrationPlan, SightOptions, ValidationPlan, instrument_stations_m, planned_points, write_plan_csv,
+};
 use axiscal::robot::RobotDescription;
 use nalgebra::Point3;
 use std::path::{Path, PathBuf};
@@ -103,8 +104,9 @@ fn joint_value(text: &str) -> Result<(usize, f64), String> {
 #[derive(Debug, clap::Args)]
 pub struct SightArgs {
     /// An instrument station `X,Y,Z` in the instrument frame (mm); repeatable. Default: the
-    /// paper's two theodolites (origin and `-6284.6,0,0`).
-    #[arg(long, value_name = "X,Y,Z", value_parser = station_mm)]
+    /// description's `[instrument] stations_mm`, else two chosen for the robot, as `simulate`
+    /// places them (`docs/formats.md#robot-description`).
+    #[arg(long, value_name = "X,Y,Z", value_parser = station_mm, allow_hyphen_values = true)]
     station: Vec<[f64; 3]>,
     /// Leave out the line-of-sight columns.
     #[arg(long)]
@@ -115,33 +117,42 @@ pub struct SightArgs {
 }
 
 impl SightArgs {
-    /// The stations (mm): none with `--no-sight`, the paper's two theodolites by default.
-    pub fn stations_mm(&self) -> Vec<[f64; 3]> {
-        if self.no_sight {
+    /// The stations (mm): none with `--no-sight`, `--station`s as given, by default the
+    /// description's (`plan::instrument_stations_m`, those `simulate` measures from).
+    pub fn stations_mm(&self, desc: &RobotDescription) -> Result<Vec<[f64; 3]>> {
+        Ok(if self.no_sight {
             vec![]
         } else if self.station.is_empty() {
-            vec![[0.0; 3], PAPER_RIGHT_STATION_MM]
+            instrument_stations_m(desc)
+                .context("placing the instrument's stations")?
+                .iter()
+                .map(|s_m| (s_m.coords * 1e3).map(|c| (c * 10.0).round() / 10.0 + 0.0).into())
+                .collect()
         } else {
             self.station.clone()
-        }
+        })
     }
 
-    /// The options of the line-of-sight columns.
-    pub fn options(&self) -> SightOptions {
-        SightOptions {
-            stations_m: self.stations_mm().iter().map(|s| Point3::from(*s) * 1e-3).collect(),
+    /// The options of the line-of-sight columns for `desc`.
+    pub fn options(&self, desc: &RobotDescription) -> Result<SightOptions> {
+        Ok(SightOptions {
+            stations_m: self
+                .stations_mm(desc)?
+                .iter()
+                .map(|s| Point3::from(*s) * 1e-3)
+                .collect(),
             link_radius_m: self.link_radius_mm * 1e-3,
             stop_short_m: 2e-3,
-        }
+        })
     }
 
     /// The plan's first comment lines: the robot's identity, what the file is, the stations.
-    pub fn header_comment(&self, desc: &RobotDescription) -> String {
-        header_comment(desc, &self.stations_mm(), self.link_radius_mm)
+    pub fn header_comment(&self, desc: &RobotDescription) -> Result<String> {
+        Ok(header_comment(desc, &self.stations_mm(desc)?, self.link_radius_mm))
     }
 }
 
-fn station_mm(text: &str) -> Result<[f64; 3], String> {
+pub(super) fn station_mm(text: &str) -> Result<[f64; 3], String> {
     let v: Vec<f64> = text
         .split(',')
         .map(|c| c.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
@@ -225,7 +236,7 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.validation_seed.unwrap_or(default_validation.seed),
         ..default_validation
     };
-    let sight = args.sight.options();
+    let sight = args.sight.options(&desc)?;
     if args.optimize {
         plan = optimize::run(&args, &desc, &plan, &validation, &sight)?;
         let text = toml::to_string(&plan).context("writing the optimised plan as TOML")?;
@@ -240,7 +251,7 @@ pub fn run(args: Args) -> Result<()> {
         ),
         None => format!("planning the campaign of {}", args.robot.display()),
     })?;
-    let comment = args.sight.header_comment(&desc);
+    let comment = args.sight.header_comment(&desc)?;
     let mut file = outputs.create(&args.out)?;
     write_plan_csv(&mut file, &comment, &points).with_context(|| format!("writing {}", args.out.display()))?;
     file.commit()?;

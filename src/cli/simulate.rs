@@ -3,12 +3,13 @@
 
 use super::options::InRange;
 use super::output::Outputs;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements_to};
 use axiscal::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::sim::{AnalyticArm, ArmExecutor, CampaignOptions, CampaignOutput, Effects, simulate_campaign_with};
 use axiscal::sim::{RapierArm, RapierArmOptions, SpanSearch, visible_sweep_span};
+use nalgebra::Point3;
 use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::io::Write;
 use std::path::PathBuf;
@@ -68,10 +69,16 @@ pub struct Args {
     /// shipped default manufacturing errors (`default-perturbation`, drawn with --seed).
     #[arg(long, value_parser = super::options::truth_file)]
     truth: Option<PathBuf>,
-    /// Measurement noise: two theodolites calibrated to 0.19 mm net radial error, or
-    /// isotropic Gaussian noise of the same 3-D RMS.
+    /// Measurement noise: two theodolites calibrated to 0.19 mm net radial error at the
+    /// description's stations (`plan` counts line of sight from the same), or isotropic
+    /// Gaussian noise of the same 3-D RMS.
     #[arg(long, value_enum, default_value_t = Instrument::Theodolite)]
     instrument: Instrument,
+    /// A theodolite station `X,Y,Z` in the instrument frame (mm): give both, left then right.
+    /// Default: the description's `[instrument] stations_mm`, else two chosen for the robot
+    /// (`docs/formats.md#robot-description`); `plan` prints them.
+    #[arg(long, value_name = "X,Y,Z", value_parser = super::plan::station_mm, allow_hyphen_values = true)]
+    station: Vec<[f64; 3]>,
     /// The campaign plan (TOML: `reference`, `[[sweeps]]`, `held_jitter`;
     /// `docs/formats.md#plan-file`). Default: paper Table 1 for a six-joint revolute arm, its
     /// generalisation for any other robot (each joint swept within its limits).
@@ -157,7 +164,7 @@ pub fn run(args: Args) -> Result<()> {
             desc.dof()
         );
     }
-    let instrument = instrument_model(args.instrument)?;
+    let instrument = instrument_model(args.instrument, &args.station, &desc)?;
     let plan = super::plan::campaign_plan(&desc, args.plan.as_deref())?;
     let validation = ValidationPlan {
         poses: args.validation_poses,
@@ -220,18 +227,33 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The measurement model of `kind` (the theodolites' calibration printed to stderr with
-/// `--verbose`).
-fn instrument_model(kind: Instrument) -> Result<MeasurementModel> {
-    Ok(match kind {
-        Instrument::Theodolite => {
-            let (model, calibration) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
+/// The measurement model of `kind` for `desc`: two theodolites at `stations_mm` (none given:
+/// the description's, `plan::instrument_stations_m`) calibrated around its base (their
+/// calibration printed to stderr with `--verbose`), or isotropic noise.
+fn instrument_model(kind: Instrument, stations_mm: &[[f64; 3]], desc: &RobotDescription) -> Result<MeasurementModel> {
+    let stations_m: Vec<Point3<f64>> = match stations_mm {
+        [] => axiscal::plan::instrument_stations_m(desc).context("placing the theodolites")?,
+        given => given.iter().map(|s| Point3::from(*s) * 1e-3).collect(),
+    };
+    Ok(match (kind, stations_m.as_slice()) {
+        (Instrument::Theodolite, &[left_m, right_m]) => {
+            let (model, calibration) =
+                MeasurementModel::theodolites_around([left_m, right_m], &desc.placement.origin_m())
+                    .context("calibrating the theodolites")?;
             if super::verbose() {
                 eprintln!("{calibration}");
             }
             model
         }
-        Instrument::Isotropic => MeasurementModel::paper_isotropic(),
+        (Instrument::Theodolite, other) => bail!(
+            "the theodolites need two stations, {} has {} (`[instrument] stations_mm`): give two with --station X,Y,Z --station X,Y,Z, or --instrument isotropic",
+            desc.name,
+            other.len()
+        ),
+        (Instrument::Isotropic, _) if !stations_mm.is_empty() => {
+            bail!("--station: isotropic noise has no stations (every target is seen)")
+        }
+        (Instrument::Isotropic, _) => MeasurementModel::paper_isotropic(),
     })
 }
 

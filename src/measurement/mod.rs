@@ -17,6 +17,7 @@ pub use csv_io::{
 pub use data::{Experiment, Measurement, MeasurementSet, MeasurementSetError, RowProblem};
 pub use model::{IsotropicNoise, MeasurementModel};
 pub use noise_calibration::{
-    Anisotropy, NoiseCalibration, PAPER_NET_RADIAL_RMS_MM, PAPER_RIGHT_STATION_MM, PAPER_ROBOT_BASE_MM, ReferenceVolume,
+    Anisotropy, NoiseCalibration, PAPER_NET_RADIAL_RMS_MM, PAPER_RIGHT_STATION_MM, PAPER_ROBOT_BASE_MM,
+    ReferenceVolume, paper_stations_around_m,
 };
 pub use theodolite::{StationAngles, TheodolitePair, TriangulationError};

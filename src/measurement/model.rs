@@ -44,6 +44,18 @@ impl MeasurementModel {
         Ok((Self::Theodolite(pair), calibration))
     }
 
+    /// Two theodolites at `stations_m` (`[left, right]`, instrument frame \[m\]) calibrated to
+    /// the paper's 0.19 mm net radial error around a robot base at `base_m`
+    /// ([`TheodolitePair::around_robot_base`]), with the calibration report.
+    pub fn theodolites_around(
+        stations_m: [Point3<f64>; 2],
+        base_m: &Point3<f64>,
+    ) -> Result<(Self, NoiseCalibration), TriangulationError> {
+        let (pair, calibration) =
+            TheodolitePair::around_robot_base(stations_m, base_m, PAPER_NET_RADIAL_RMS_MM * 1e-3)?;
+        Ok((Self::Theodolite(pair), calibration))
+    }
+
     /// Isotropic noise with the paper's 0.19 mm net radial error.
     pub fn paper_isotropic() -> Self {
         Self::Isotropic(IsotropicNoise {

@@ -193,20 +193,72 @@ impl TheodolitePair {
     /// [`PAPER_RIGHT_STATION_MM`], equal azimuth and elevation noise, 0.19 mm net radial
     /// error over [`ReferenceVolume::paper`].
     pub fn paper() -> Result<(Self, NoiseCalibration), TriangulationError> {
-        Self::calibrated(
-            Point3::origin(),
-            Point3::from(Vector3::from(PAPER_RIGHT_STATION_MM)) * 1e-3,
-            1.0,
+        let right_m = Point3::from(Vector3::from(PAPER_RIGHT_STATION_MM)) * 1e-3;
+        Self::around_robot_base(
+            [Point3::origin(), right_m],
+            &paper_robot_base_m(),
             PAPER_NET_RADIAL_RMS_MM * 1e-3,
-            &ReferenceVolume::paper(),
         )
     }
+
+    /// Stations `[left, right]` (instrument frame \[m\]) with equal azimuth and elevation noise
+    /// scaled to `net_radial_rms_m` over the 2 m cube around a robot base at `base_m`
+    /// ([`ReferenceVolume::around_robot_base`]).
+    pub fn around_robot_base(
+        stations_m: [Point3<f64>; 2],
+        base_m: &Point3<f64>,
+        net_radial_rms_m: f64,
+    ) -> Result<(Self, NoiseCalibration), TriangulationError> {
+        let [left_m, right_m] = stations_m;
+        Self::calibrated(
+            left_m,
+            right_m,
+            1.0,
+            net_radial_rms_m,
+            &ReferenceVolume::around_robot_base(base_m),
+        )
+    }
+}
+
+/// [`PAPER_ROBOT_BASE_MM`] in metres.
+fn paper_robot_base_m() -> Point3<f64> {
+    Point3::from(Vector3::from(PAPER_ROBOT_BASE_MM)) * 1e-3
+}
+
+/// The paper's two theodolite stations as seen from a robot base at `base_m` (instrument frame
+/// \[m\]) turned by `yaw_rad` about the vertical: each station keeps the offset from the base it
+/// had from the paper's IRB/L6 (the origin and [`PAPER_RIGHT_STATION_MM`] against
+/// [`PAPER_ROBOT_BASE_MM`], yaw 0), turned by `yaw_rad`. At the paper's base and yaw 0 these are
+/// the paper's stations exactly.
+pub fn paper_stations_around_m(base_m: &Point3<f64>, yaw_rad: f64) -> [Point3<f64>; 2] {
+    let paper_base_m = paper_robot_base_m();
+    let turn = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), yaw_rad);
+    [
+        Point3::origin(),
+        Point3::from(Vector3::from(PAPER_RIGHT_STATION_MM)) * 1e-3,
+    ]
+    .map(|station_m| base_m + turn * (station_m - paper_base_m))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn the_paper_stations_are_the_paper_set_up_exactly_and_move_with_the_base() {
+        let paper_base_m = paper_robot_base_m();
+        let right_m = Point3::from(Vector3::from(PAPER_RIGHT_STATION_MM)) * 1e-3;
+        assert_eq!(paper_stations_around_m(&paper_base_m, 0.0), [Point3::origin(), right_m]);
+        // Another base, turned a quarter turn: each station's offset from the base is the
+        // paper's, turned by 90 deg about z ((x, y, z) -> (-y, x, z)), written out here.
+        let base_m = Point3::new(1.6, 0.5, -0.7);
+        let turned = paper_stations_around_m(&base_m, std::f64::consts::FRAC_PI_2);
+        for (station_m, paper_m) in turned.iter().zip([Point3::origin(), right_m]) {
+            let d = paper_m - paper_base_m;
+            assert_relative_eq!(station_m - base_m, Vector3::new(-d.y, d.x, d.z), epsilon = 1e-12);
+        }
+    }
 
     #[test]
     fn paper_calibration_reproduces_the_radial_error() {

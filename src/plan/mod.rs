@@ -9,6 +9,7 @@ pub mod optimize;
 pub mod predict;
 mod sheet;
 pub mod sight;
+mod stations;
 mod validation;
 
 pub use axis::{AxisSweep, CalibrationPlan, MAX_INTERVALS, PlanError};
@@ -18,6 +19,7 @@ pub use sheet::{
     PlanPose, PlannedPoint, SightOptions, VALIDATION_EXPERIMENT, planned_points, points_of_poses, tool_targets,
     write_plan_csv,
 };
+pub use stations::{LINK_RADIUS_M, STATION_HEADINGS, instrument_stations_m};
 pub use validation::ValidationPlan;
 
 /// Experiment id of the three tool targets observed at the reference pose (trains the

@@ -8,8 +8,10 @@ mod identity;
 mod validate;
 
 mod convert;
+mod instrument;
 
 pub use identity::DescriptionIdentity;
+pub use instrument::InstrumentEntry;
 
 use crate::kinematics::{JointKind, PhiJoint, PhiModel, PhiRow, SourceChain};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -257,6 +259,16 @@ impl Placement {
         }
     }
 
+    /// The origin of the placed frame \[m\] (e.g. a robot base in the instrument frame).
+    pub fn origin_m(&self) -> Point3<f64> {
+        Point3::from(Vector3::from(self.translation_mm) * 1e-3)
+    }
+
+    /// The yaw about the outer frame's `z` \[rad\] (the last of `rpy_deg`).
+    pub fn yaw_rad(&self) -> f64 {
+        self.rpy_deg[2].to_radians()
+    }
+
     /// The placement as an isometry in metres.
     pub fn to_isometry(&self) -> Isometry3<f64> {
         let t = Vector3::from(self.translation_mm) * 1e-3;
@@ -346,6 +358,10 @@ pub struct RobotDescription {
     /// Targets for the axis experiments, one entry per joint (simulation and diagnosis).
     #[serde(default)]
     pub axis_targets: Vec<AxisTargets>,
+    /// The instrument's stations in the instrument frame (default: chosen for the robot by
+    /// `plan::instrument_stations_m`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instrument: Option<InstrumentEntry>,
 }
 
 impl RobotDescription {

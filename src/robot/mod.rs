@@ -16,9 +16,9 @@ mod model_error;
 pub use compliance::{ComplianceTerm, LoadProduct, SpringLoad, SpringSite};
 pub use controller::Controller;
 pub use description::{
-    AxisTargets, CouplingFitForm, DescriptionError, DescriptionIdentity, DhConventionEntry, DhEntry, JointEntry,
-    LinkTarget, NominalCoupling, Placement, RobotDescription, RowEntry, ToolEntry, TransmissionFitForm, UrdfEntry,
-    commands_to_file, commands_to_internal, file_unit,
+    AxisTargets, CouplingFitForm, DescriptionError, DescriptionIdentity, DhConventionEntry, DhEntry, InstrumentEntry,
+    JointEntry, LinkTarget, NominalCoupling, Placement, RobotDescription, RowEntry, ToolEntry, TransmissionFitForm,
+    UrdfEntry, commands_to_file, commands_to_internal, file_unit,
 };
 pub use effects::{BacklashTerm, LoadTerm, ModelEffects, PoseLoad, SagTerm, gravity_direction, sag_regressor};
 pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};

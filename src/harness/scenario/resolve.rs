@@ -10,12 +10,12 @@ use super::file::{
     TruthSection,
 };
 use super::threshold::Threshold;
-use crate::measurement::{IsotropicNoise, MeasurementModel, PAPER_RIGHT_STATION_MM, ReferenceVolume, TheodolitePair};
+use crate::measurement::{IsotropicNoise, MeasurementModel, TheodolitePair};
 use crate::plan::{CalibrationPlan, ValidationPlan};
 use crate::robot::{RobotDescription, RobotModel};
 use crate::sim::Effects;
 use crate::sim::{PerturbationSpec, perturb};
-use nalgebra::{Point3, Vector3};
+use nalgebra::Point3;
 use rand::{SeedableRng, rngs::ChaCha12Rng};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -439,8 +439,8 @@ fn scaled(plan: &CalibrationPlan, scale: f64) -> Result<CalibrationPlan, String>
     Ok(plan)
 }
 
-/// The instrument of a measurement section: theodolites at the paper's stations calibrated
-/// over the 2 m cube around the robot's placement, or isotropic noise.
+/// The instrument of a measurement section: theodolites at the description's stations
+/// calibrated over the 2 m cube around the robot's placement, or isotropic noise.
 fn measurement_model(m: &MeasurementSection, robot: &RobotDescription) -> Result<MeasurementModel, String> {
     let rms_mm = m.net_radial_rms_mm;
     if !(rms_mm.is_finite() && rms_mm > 0.0) {
@@ -451,15 +451,18 @@ fn measurement_model(m: &MeasurementSection, robot: &RobotDescription) -> Result
             net_radial_rms_mm: rms_mm,
         }),
         Instrument::Theodolite => {
-            let base_m = Point3::from(Vector3::from(robot.placement.translation_mm)) * 1e-3;
-            let (pair, _) = TheodolitePair::calibrated(
-                Point3::origin(),
-                Point3::from(Vector3::from(PAPER_RIGHT_STATION_MM)) * 1e-3,
-                1.0,
-                rms_mm * 1e-3,
-                &ReferenceVolume::around_robot_base(&base_m),
-            )
-            .map_err(|e| format!("calibrating the theodolites: {e}"))?;
+            let stations_m =
+                crate::plan::instrument_stations_m(robot).map_err(|e| format!("placing the theodolites: {e}"))?;
+            let [left_m, right_m] = <[Point3<f64>; 2]>::try_from(stations_m).map_err(|s| {
+                format!(
+                    "the theodolites need two stations, {} has {} (`[instrument] stations_mm`)",
+                    robot.name,
+                    s.len()
+                )
+            })?;
+            let (pair, _) =
+                TheodolitePair::around_robot_base([left_m, right_m], &robot.placement.origin_m(), rms_mm * 1e-3)
+                    .map_err(|e| format!("calibrating the theodolites: {e}"))?;
             MeasurementModel::Theodolite(pair)
         }
     })

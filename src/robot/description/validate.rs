@@ -25,6 +25,7 @@ impl RobotDescription {
             .and_then(|()| self.check_frames())
             .and_then(|()| self.check_tool())
             .and_then(|()| self.check_axis_targets())
+            .and_then(|()| self.check_instrument())
             .map_err(|(field, message)| DescriptionError::Invalid {
                 path: path.to_owned(),
                 field,
@@ -185,6 +186,28 @@ impl RobotDescription {
         let t: Vec<Point3<f64>> = self.tool.targets_mm.iter().map(|p| Point3::from(*p)).collect();
         if (t[1] - t[0]).cross(&(t[2] - t[0])).norm() < 1.0 {
             return Err(("tool.targets_mm".into(), "the three tool targets are collinear".into()));
+        }
+        Ok(())
+    }
+
+    /// Given stations: at least one, each finite and within 1 km.
+    fn check_instrument(&self) -> Result<(), Invalid> {
+        let Some(entry) = &self.instrument else {
+            return Ok(());
+        };
+        if entry.stations_mm.is_empty() {
+            return Err((
+                "instrument.stations_mm".into(),
+                "at least one station is required (or leave out `[instrument]`)".into(),
+            ));
+        }
+        for (k, s) in entry.stations_mm.iter().enumerate() {
+            if !s.iter().all(|c| c.is_finite() && c.abs() <= 1e6) {
+                return Err((
+                    format!("instrument.stations_mm[{k}]"),
+                    format!("{s:?}: each coordinate must be a finite number of mm within 1 km"),
+                ));
+            }
         }
         Ok(())
     }
