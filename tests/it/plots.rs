@@ -98,3 +98,49 @@ fn the_monte_carlo_histogram_draws_its_thresholds() {
     assert_eq!(count("threshold p95(cal_pos_rms_mm) &lt;= 5"), 2, "{hist:?}");
     assert_eq!(count("trials (3)"), 2, "{hist:?}");
 }
+
+/// Figs. 9 and 10 separate the poses inside the calibrated spans from the workspace poses: each
+/// region is named with its pose count, and each series' legend gives its RMS per region, equal
+/// (to the printed digits) to the report's region summaries, a separately computed path.
+#[test]
+fn figs_9_and_10_name_the_regions_and_their_rms() {
+    let dir = tempfile::tempdir().unwrap();
+    axiscal()
+        .current_dir(dir.path())
+        .args(["evaluate", "--seed", "2", "--random-poses", "5", "--out", "ev"])
+        .assert()
+        .success();
+    let report: axiscal::harness::evaluation::PaperReport =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("ev/evaluation.json")).unwrap()).unwrap();
+    let fig9 = texts(&dir.path().join("ev/fig9_position.svg"));
+    let fig10 = texts(&dir.path().join("ev/fig10_orientation.svg"));
+    for (texts, name, y) in [
+        (&fig9, "fig9", "position error [mm]"),
+        (&fig10, "fig10", "orientation error [mrad]"),
+    ] {
+        has(texts, y, name);
+        has(texts, "test pose", name);
+    }
+    for r in &report.regions {
+        let label = match r.region {
+            axiscal::harness::evaluation::Region::InsideSpans => "inside the calibrated spans",
+            axiscal::harness::evaluation::Region::Workspace => "workspace",
+        };
+        let count = report.poses.iter().filter(|p| p.region == r.region).count();
+        has(&fig9, &format!("{label} ({count} poses)"), "fig9");
+        for (series, stats) in [
+            ("nominal commands", r.position_mm.uncalibrated),
+            ("noise floor", r.position_mm.floor),
+            ("calibrated + compensated", r.position_mm.calibrated),
+        ] {
+            let legend = fig9.iter().find(|t| t.trim().starts_with(series)).expect(series);
+            assert!(
+                legend.contains(&format!("{:.3} {label}", stats.rms)),
+                "{legend} vs {stats:?}"
+            );
+        }
+        let legend = fig10.iter().find(|t| t.trim().starts_with("calibrated")).unwrap();
+        let mrad = r.orientation_rad.calibrated.rms * 1e3;
+        assert!(legend.contains(&format!("{mrad:.3} {label}")), "{legend} vs {mrad}");
+    }
+}

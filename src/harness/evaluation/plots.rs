@@ -6,6 +6,7 @@
 //! `sans-serif` family and is rendered by the viewer.
 
 use super::paper::PaperReport;
+use super::poses::Region;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -13,18 +14,71 @@ use std::path::{Path, PathBuf};
 use crate::plotting::DrawFn;
 pub use crate::plotting::PlotError;
 
+/// How a series' points are drawn.
+#[derive(Clone, Copy)]
+enum Marker {
+    /// A filled dot.
+    Dot,
+    /// A cross, which leaves a dot drawn at the same place visible.
+    Cross,
+}
+
 /// One series of per-pose values.
 struct Series<'a> {
     label: &'a str,
     color: RGBColor,
+    marker: Marker,
     values: Vec<f64>,
 }
 
+/// A run of consecutive poses of one region (the poses come grouped by region).
+struct RegionBand {
+    label: &'static str,
+    poses: std::ops::Range<usize>,
+}
+
+/// The regions of `report`'s poses, in order: inside the calibrated spans, then the workspace.
+fn region_bands(report: &PaperReport) -> Vec<RegionBand> {
+    let mut bands: Vec<RegionBand> = Vec::new();
+    for (i, p) in report.poses.iter().enumerate() {
+        let label = match p.region {
+            Region::InsideSpans => "inside the calibrated spans",
+            Region::Workspace => "workspace",
+        };
+        match bands.last_mut() {
+            Some(b) if b.label == label => b.poses.end = i + 1,
+            _ => bands.push(RegionBand { label, poses: i..i + 1 }),
+        }
+    }
+    bands
+}
+
+/// `series`' legend text: its label and its RMS over each band, e.g. `calibrated + compensated:
+/// RMS 0.21 inside the calibrated spans, 1.03 workspace [mm]`.
+fn legend_text(s: &Series, bands: &[RegionBand], unit: &str, precision: usize) -> String {
+    let parts: Vec<String> = bands
+        .iter()
+        .map(|b| {
+            let v: Vec<f64> = s.values[b.poses.clone()]
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .collect();
+            let rms = (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
+            format!("{rms:.precision$} {}", b.label)
+        })
+        .collect();
+    format!("{}: RMS {} [{unit}]", s.label, parts.join(", "))
+}
+
+/// Figs. 9 and 10: one column per test pose, the region bands shaded and named, the calibrated
+/// dots drawn last so neither other series hides them.
 fn per_pose_chart<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
-    y_desc: &str,
+    (y_desc, unit, precision): (&str, &str, usize),
     series: &[Series],
+    bands: &[RegionBand],
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let n = series.iter().map(|s| s.values.len()).max().unwrap_or(0);
@@ -34,7 +88,7 @@ fn per_pose_chart<DB: DrawingBackend>(
         .filter(|v| *v > 0.0);
     let (lo, hi) = all.fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     let (lo, hi) = if lo.is_finite() {
-        (lo / 2.0, hi * 2.0)
+        (lo / 2.0, hi * 8.0)
     } else {
         (1e-3, 1.0)
     };
@@ -43,28 +97,42 @@ fn per_pose_chart<DB: DrawingBackend>(
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
-        .build_cartesian_2d(0..n.max(1), (lo..hi).log_scale())
+        .build_cartesian_2d(-0.5..(n.max(1) as f64 - 0.5), (lo..hi).log_scale())
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .x_desc("test pose")
         .y_desc(y_desc)
+        .x_label_formatter(&|x| format!("{x:.0}"))
         .draw()
         .map_err(|e| e.to_string())?;
-    for s in series {
-        let color = s.color;
+    for (k, b) in bands.iter().enumerate() {
+        let (x0, x1) = (b.poses.start as f64 - 0.5, b.poses.end as f64 - 0.5);
+        let shade = if k % 2 == 0 { RGBColor(235, 235, 235) } else { WHITE };
         chart
-            .draw_series(PointSeries::of_element(
-                s.values.iter().enumerate().map(|(i, v)| (i, *v)),
-                3,
-                color.filled(),
-                &|c, size, style| EmptyElement::at(c) + Circle::new((0, 0), size, style),
-            ))
-            .map_err(|e| e.to_string())?
-            .label(s.label)
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+            .draw_series([Rectangle::new([(x0, lo), (x1, hi)], shade.filled())])
+            .map_err(|e| e.to_string())?;
+        let text = format!("{} ({} poses)", b.label, b.poses.len());
+        chart
+            .draw_series([Text::new(text, (x0 + 0.3, hi / 1.25), ("sans-serif", 15))])
+            .map_err(|e| e.to_string())?;
     }
-    crate::plotting::draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    for s in series {
+        let (color, marker) = (s.color, s.marker);
+        let points = s.values.iter().enumerate().map(|(i, v)| (i as f64, *v));
+        let drawn = match marker {
+            Marker::Dot => chart.draw_series(points.map(|c| Circle::new(c, 3, color.filled()))),
+            Marker::Cross => chart.draw_series(points.map(|c| Cross::new(c, 4, color.stroke_width(2)))),
+        }
+        .map_err(|e| e.to_string())?;
+        drawn
+            .label(legend_text(s, bands, unit, precision))
+            .legend(move |(x, y)| match marker {
+                Marker::Dot => Circle::new((x + 10, y), 4, color.filled()).into_dyn(),
+                Marker::Cross => Cross::new((x + 10, y), 4, color.stroke_width(2)).into_dyn(),
+            });
+    }
+    crate::plotting::draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
     root.present().map_err(|e| e.to_string())
 }
 
@@ -129,6 +197,9 @@ fn histogram<DB: DrawingBackend>(
     root.present().map_err(|e| e.to_string())
 }
 
+/// The size of figs. 9 and 10 \[px\].
+const SIZE: (u32, u32) = (1100, 600);
+
 /// The files [`write_plots`] writes into its directory.
 pub const PLOT_FILES: [&str; 6] = [
     "fig9_position.png",
@@ -161,49 +232,54 @@ pub fn write_plots(report: &PaperReport, dir: &Path) -> Result<Vec<PathBuf>, Plo
             Series {
                 label: "nominal commands",
                 color: RED,
+                marker: Marker::Dot,
                 values: pick(f, 0),
-            },
-            Series {
-                label: "calibrated + compensated",
-                color: BLUE,
-                values: pick(f, 1),
             },
             Series {
                 label: "noise floor",
                 color: RGBColor(0, 150, 0),
+                marker: Marker::Cross,
                 values: pick(f, 2),
+            },
+            Series {
+                label: "calibrated + compensated",
+                color: BLUE,
+                marker: Marker::Dot,
+                values: pick(f, 1),
             },
         ]
     };
+    let bands = region_bands(report);
     let position = series(|e| e.position_mm);
-    let orientation = series(|e| e.orientation_rad);
+    let orientation = series(|e| e.orientation_rad * 1e3);
     let jobs: [(&str, &DrawFn); 3] = [
         ("fig9_position", &|p: &Path, png: bool| {
             let t = "Fig. 9: tool position error per test pose";
-            let y = "position error [mm]";
+            let y = ("position error [mm]", "mm", 3);
             if png {
-                per_pose_chart(BitMapBackend::new(p, (1000, 560)).into_drawing_area(), t, y, &position)
+                per_pose_chart(BitMapBackend::new(p, SIZE).into_drawing_area(), t, y, &position, &bands)
             } else {
-                per_pose_chart(SVGBackend::new(p, (1000, 560)).into_drawing_area(), t, y, &position)
+                per_pose_chart(SVGBackend::new(p, SIZE).into_drawing_area(), t, y, &position, &bands)
             }
         }),
         ("fig10_orientation", &|p: &Path, png: bool| {
             let t = "Fig. 10: tool orientation error per test pose";
-            let y = "orientation error [rad]";
+            let y = ("orientation error [mrad]", "mrad", 3);
             if png {
                 per_pose_chart(
-                    BitMapBackend::new(p, (1000, 560)).into_drawing_area(),
+                    BitMapBackend::new(p, SIZE).into_drawing_area(),
                     t,
                     y,
                     &orientation,
+                    &bands,
                 )
             } else {
-                per_pose_chart(SVGBackend::new(p, (1000, 560)).into_drawing_area(), t, y, &orientation)
+                per_pose_chart(SVGBackend::new(p, SIZE).into_drawing_area(), t, y, &orientation, &bands)
             }
         }),
         ("histogram_position", &|p: &Path, png: bool| {
             let keep = |v: &[f64]| v.iter().copied().filter(|x| x.is_finite()).collect::<Vec<_>>();
-            let (c, f) = (keep(&position[1].values), keep(&position[2].values));
+            let (c, f) = (keep(&position[2].values), keep(&position[1].values));
             if png {
                 histogram(BitMapBackend::new(p, (900, 520)).into_drawing_area(), &c, &f)
             } else {
