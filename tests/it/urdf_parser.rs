@@ -146,3 +146,87 @@ fn base_link_rooted_urdf_reproduces_the_tool_pose_in_the_base_frame() {
     assert!(mm <= WORST_MM, "{mm} mm");
     assert!(rad <= WORST_RAD, "{rad} rad");
 }
+
+/// A URDF arm with `<inertial>`s, turned joint origins and a fixed flange.
+const INERTIAL_ARM: &str = r#"<?xml version="1.0"?>
+<robot name="arm3i">
+  <link name="base"/>
+  <link name="l1"><inertial><mass value="8.0"/><origin xyz="0.01 0.02 0.1" rpy="0.3 0 0"/>
+    <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="l2"><inertial><mass value="5.0"/><origin xyz="0.2 0.01 -0.03"/>
+    <inertia ixx="0.05" iyy="0.05" izz="0.05" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="l3"><inertial><mass value="3.0"/><origin xyz="0.15 0 0.02"/>
+    <inertia ixx="0.02" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="flange"><inertial><mass value="0.5"/><origin xyz="0 0.03 0.04"/>
+    <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.3" rpy="0 0 0.2"/><axis xyz="0 0 1"/><limit lower="-2.9" upper="2.9" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.05 0 0.2" rpy="1.5707963 0 0"/><axis xyz="0 0 1"/><limit lower="-1.5" upper="1.5" effort="1" velocity="1"/></joint>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0.4 0 0" rpy="0 0 -0.4"/><axis xyz="0 0 1"/><limit lower="-2.0" upper="2.0" effort="1" velocity="1"/></joint>
+  <joint name="flange_joint" type="fixed"><parent link="l3"/><child link="flange"/>
+    <origin xyz="0.35 0 0" rpy="0 1.5707963 0"/></joint>
+</robot>
+"#;
+
+/// The URDF's `<inertial>`s become each joint's `mass_kg` and `com_mm` in the phi-model frames:
+/// at random joint values the centre of mass placed by axiscal's nominal model equals the one
+/// placed by this file's own URDF kinematics (the flange, fixed to link 3, merged into it by
+/// mass), and the masses add up.
+#[test]
+fn urdf_inertials_become_the_joints_masses_in_the_phi_frames() {
+    use rand::{RngExt, SeedableRng};
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("arm3i.urdf"), INERTIAL_ARM).unwrap();
+    let description = dir.path().join("arm3i.toml");
+    std::fs::write(
+        &description,
+        "name = \"arm3i\"\n[urdf]\nfile = \"arm3i.urdf\"\n[placement]\ntranslation_mm = [1500.0, -200.0, -300.0]\n\
+         rpy_deg = [0.0, 0.0, 35.0]\n[tool]\n",
+    )
+    .unwrap();
+    let desc = axiscal::robot::RobotDescription::from_file(&description).unwrap();
+    let robot = urdf_rs::read_from_string(INERTIAL_ARM).unwrap();
+    let placement = desc_placement_as_written();
+    let model = desc.nominal_model();
+    let masses: Vec<f64> = desc.joints.iter().map(|j| j.mass_kg).collect();
+    assert_eq!(masses, [8.0, 5.0, 3.5]);
+    let mut rng = rand::rngs::ChaCha12Rng::seed_from_u64(5);
+    for _ in 0..5 {
+        let q: Vec<f64> = (0..3).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let links = model.poses(&q).world_from_link;
+        for (k, link) in ["l1", "l2", "l3"].iter().enumerate() {
+            let com_of = |name: &str| {
+                let joints = chain(&robot, name);
+                let moving = joints
+                    .iter()
+                    .filter(|j| j.joint_type != urdf_rs::JointType::Fixed)
+                    .count();
+                let l = robot.links.iter().find(|l| l.name == name).unwrap();
+                let [x, y, z] = *l.inertial.origin.xyz;
+                (placement * forward(&joints, &q[..moving])) * nalgebra::Point3::new(x, y, z)
+            };
+            let expected = if *link == "l3" {
+                ((com_of("l3").coords * 3.0 + com_of("flange").coords * 0.5) / 3.5).into()
+            } else {
+                com_of(link)
+            };
+            let com_mm = desc.joints[k].com_mm;
+            let placed = links[k] * (nalgebra::Point3::from(com_mm) * 1e-3);
+            assert!(
+                (placed - expected).norm() < 1e-9,
+                "link {link} at {q:?}: {placed} vs {expected}"
+            );
+        }
+    }
+}
+
+/// The description's placement as written in the test above (the URDF base in the instrument
+/// frame), built here from its numbers.
+fn desc_placement_as_written() -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(1.5, -0.2, -0.3),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 35f64.to_radians()),
+    )
+}

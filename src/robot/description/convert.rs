@@ -5,8 +5,8 @@
 //! `dh` or `urdf` key (a resolved scenario inlines the converted form).
 
 use super::{DescriptionError, DhConventionEntry, JointEntry, Placement, RobotDescription, RowEntry, UrdfEntry};
-use crate::kinematics::{DhConvention, DhParams, JointKind, SourceChain, UrdfJoint, phi_model_of};
-use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use crate::kinematics::{DhConvention, DhParams, JointKind, PhiModel, SourceChain, UrdfJoint, phi_model_of};
+use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::path::Path;
 
 fn invalid(path: &Path, field: impl Into<String>, message: impl Into<String>) -> DescriptionError {
@@ -34,9 +34,10 @@ impl RobotDescription {
                     "give either `dh` rows or a `urdf` file, not both",
                 ));
             }
-            (true, None) => self.dh_source(path)?,
+            (true, None) => (self.dh_source(path)?, None),
             (false, Some(u)) => self.urdf_source(&u, path)?,
         };
+        let (source, urdf_inertials) = source;
         if !self.rows.is_empty() {
             return Err(invalid(
                 path,
@@ -57,6 +58,9 @@ impl RobotDescription {
         for (j, p) in self.joints.iter_mut().zip(&model.joints) {
             j.phi_deg = p.phi_rad.to_degrees();
             j.dh = None;
+        }
+        if let (Some(inertials), SourceChain::Urdf { joints, .. }) = (urdf_inertials, &source) {
+            self.take_urdf_inertials(joints, &inertials, &written, &model);
         }
         self.rows = model.rows.iter().map(RowEntry::from_row).collect();
         self.placement = Placement::from_isometry(&model.world_from_base);
@@ -101,17 +105,45 @@ impl RobotDescription {
         })
     }
 
-    /// The URDF chain from `u.base_link` to `u.tip_link`; fills `joints` from it when empty.
-    fn urdf_source(&mut self, u: &UrdfEntry, path: &Path) -> Result<SourceChain, DescriptionError> {
+    /// Each joint's `mass_kg` and `com_mm` from the URDF's inertials (`inertials[k]`: mass
+    /// \[kg\] and centre of mass in joint `k`'s child link \[m\]), the centre carried into the
+    /// phi-model's moving frame of link `k` through both chains' frames at joint values 0.
+    fn take_urdf_inertials(
+        &mut self,
+        joints: &[UrdfJoint],
+        inertials: &[LinkInertial],
+        world_from_urdf_base: &Isometry3<f64>,
+        model: &PhiModel,
+    ) {
+        let world_from_phi_link = model.poses(&vec![0.0; model.dof()]).world_from_link;
+        let mut base_from_child = Isometry3::identity();
+        for (k, ((entry, joint), inertial)) in self.joints.iter_mut().zip(joints).zip(inertials).enumerate() {
+            base_from_child *= joint.parent_from_joint;
+            let com_world_m = world_from_urdf_base * base_from_child * inertial.com_m;
+            let com_phi_m = world_from_phi_link[k].inverse() * com_world_m;
+            entry.mass_kg = inertial.mass_kg;
+            entry.com_mm = (com_phi_m.coords * 1e3).into();
+        }
+    }
+
+    /// The URDF chain from `u.base_link` to `u.tip_link`; fills `joints` from it when empty,
+    /// and then returns the links' inertials for [`Self::take_urdf_inertials`].
+    fn urdf_source(
+        &mut self,
+        u: &UrdfEntry,
+        path: &Path,
+    ) -> Result<(SourceChain, Option<Vec<LinkInertial>>), DescriptionError> {
         let file = path.parent().unwrap_or(Path::new(".")).join(&u.file);
         let text = crate::presets::read_text(&file)
             .map_err(|e| invalid(path, "urdf.file", format!("reading {}: {e}", file.display())))?;
         let robot = urdf_rs::read_from_string(&text)
             .map_err(|e| invalid(path, "urdf.file", format!("{}: {e}", file.display())))?;
         let chain = urdf_chain(&robot, u).map_err(|m| invalid(path, "urdf", format!("{}: {m}", file.display())))?;
-        let (joints, tail, entries) = chain;
+        let (joints, tail, entries, inertials) = chain;
+        let mut taken = None;
         if self.joints.is_empty() {
             self.joints = entries;
+            taken = Some(inertials);
         } else if self.joints.len() != joints.len() || self.joints.iter().zip(&joints).any(|(a, b)| a.kind != b.kind) {
             return Err(invalid(
                 path,
@@ -127,10 +159,50 @@ impl RobotDescription {
                 ),
             ));
         }
-        Ok(SourceChain::Urdf {
+        let source = SourceChain::Urdf {
             joints,
             last_link_from_tool: tail * self.tool.frame.to_isometry(),
-        })
+        };
+        Ok((source, taken))
+    }
+}
+
+/// The mass a movable URDF joint moves on the chain: its child link's and those fixed below it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LinkInertial {
+    /// \[kg\]
+    mass_kg: f64,
+    /// Centre of mass in the joint's child link \[m\] (the origin when the mass is 0).
+    com_m: Point3<f64>,
+}
+
+impl LinkInertial {
+    /// `link`'s `<inertial>` placed by `child_from_link`.
+    fn of(link: Option<&urdf_rs::Link>, child_from_link: &Isometry3<f64>) -> Self {
+        let Some(inertial) = link.map(|l| &l.inertial) else {
+            return Self {
+                mass_kg: 0.0,
+                com_m: Point3::origin(),
+            };
+        };
+        let c = inertial.origin.xyz;
+        Self {
+            mass_kg: inertial.mass.value,
+            com_m: child_from_link * Point3::new(c[0], c[1], c[2]),
+        }
+    }
+
+    /// `self` and `other` as one body.
+    fn merged(self, other: Self) -> Self {
+        let mass_kg = self.mass_kg + other.mass_kg;
+        if mass_kg <= 0.0 {
+            return self;
+        }
+        let com = (self.com_m.coords * self.mass_kg + other.com_m.coords * other.mass_kg) / mass_kg;
+        Self {
+            mass_kg,
+            com_m: com.into(),
+        }
     }
 }
 
@@ -143,8 +215,8 @@ fn pose(p: &urdf_rs::Pose) -> Isometry3<f64> {
 }
 
 /// What [`urdf_chain`] finds: the movable joints, the last joint's child to the tip, the joint
-/// entries.
-type UrdfChain = (Vec<UrdfJoint>, Isometry3<f64>, Vec<JointEntry>);
+/// entries, and each movable joint's moved mass on the chain.
+type UrdfChain = (Vec<UrdfJoint>, Isometry3<f64>, Vec<JointEntry>, Vec<LinkInertial>);
 
 /// The movable joints from the base link to the tip link (fixed joints merged into the next
 /// joint's origin), the fixed transform from the last movable joint's child to the tip, and
@@ -181,13 +253,18 @@ fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String
         path.push(pick);
         link = pick.child.link.clone();
     }
+    let link_named = |name: &str| robot.links.iter().find(|l| l.name == name);
     let mut joints = Vec::new();
     let mut entries = Vec::new();
+    let mut inertials: Vec<LinkInertial> = Vec::new();
     let mut pending = Isometry3::identity();
     for j in path {
         let kind = match j.joint_type {
             urdf_rs::JointType::Fixed => {
                 pending *= pose(&j.origin);
+                if let Some(moved) = inertials.last_mut() {
+                    *moved = moved.merged(LinkInertial::of(link_named(&j.child.link), &pending));
+                }
                 continue;
             }
             urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointKind::Revolute,
@@ -210,11 +287,12 @@ fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String
         });
         pending = Isometry3::identity();
         entries.push(joint_entry(j, kind));
+        inertials.push(LinkInertial::of(link_named(&j.child.link), &Isometry3::identity()));
     }
     if joints.is_empty() {
         return Err(format!("no movable joint between `{base}` and the tip"));
     }
-    Ok((joints, pending, entries))
+    Ok((joints, pending, entries, inertials))
 }
 
 /// Whether `target` is `link` or below it.

@@ -78,7 +78,7 @@ impl RobotDescription {
     ///
     /// Hashed: the description as its JSON value (every default filled in, so omitted and
     /// explicit defaults agree) without `name`, `axis_targets` (where the calibration targets
-    /// sit is not the robot's geometry), each joint's `mass_kg`, `com_mm`, `limits`,
+    /// sit is not the robot's geometry), `instrument` (nor where the instrument stands), each joint's `mass_kg`, `com_mm`, `limits`,
     /// `repeatability_sigma` and `transmission_fit`, and each coupling's `fit`. The value is
     /// walked depth-first: an object as `o`, its key count (u64 LE) and its keys in byte order,
     /// each key as a string followed by its value; an array as `a`, its length and its items; a
@@ -89,6 +89,7 @@ impl RobotDescription {
         if let Some(top) = value.as_object_mut() {
             top.remove("name");
             top.remove("axis_targets");
+            top.remove("instrument");
             for joint in top
                 .get_mut("joints")
                 .and_then(|j| j.as_array_mut())
