@@ -436,7 +436,7 @@ fn sweeps_as_free_poses(
 /// The console summary of an independent-axis calibration.
 fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str) {
     say!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
-    print_scope(cal);
+    print_scope(cal, desc);
     say!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
     for a in &cal.axes {
         let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
@@ -602,7 +602,7 @@ fn print_carried(carried: &[Candidate], r: &Refinement) {
 }
 
 /// The noise (estimated, used, contradicted), joints not calibrated, the base-frame rule.
-fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
+fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotDescription) {
     if let Some(n) = &cal.noise {
         if let Some(e) = &n.estimate {
             say!(
@@ -632,5 +632,10 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration) {
     }
     if let Some(b) = &cal.base_rule {
         say!("  base frame: {}", b.text);
+    }
+    if cal.tool.is_none() && !desc.tool.targets_mm.is_empty() {
+        say!(
+            "  tool frame: nominal (no pose at the reference commands sees all three tool targets): its error is in no predicted uncertainty; `axiscal validate` tests it"
+        );
     }
 }

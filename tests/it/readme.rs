@@ -1,8 +1,9 @@
-//! The README's tour, run as written: every `$ ...` command of its `text` blocks, in order, in
-//! one fresh folder (with `axiscal` the binary under test), its output compared with the lines
-//! the README shows. Declared elisions: a line `...` stands for any number of lines; a line
-//! ending in `...` for any line starting with what precedes it. A `toml` block after "Save as
-//! `NAME`" is written to NAME first. Blocks with `--record` need the recorder (feature `viz`):
+//! The README's tour and the own-robot guide (`docs/own-robot.md`), run as written: every
+//! `$ ...` command of their `text` blocks, in order, in one fresh folder per document (with
+//! `axiscal` the binary under test), its output compared with the lines the document shows.
+//! Declared elisions: a line `...` stands for any number of lines; a line ending in `...` for
+//! any line starting with what precedes it. A block after "Save as `NAME`" (any language but
+//! `text`) is written to NAME first. Blocks with `--record` need the recorder (feature `viz`):
 //! CI records and checks them in its own step.
 
 use std::path::Path;
@@ -13,7 +14,7 @@ struct Step {
     shown: Vec<String>,
 }
 
-/// The blocks of `readme` in order: a file to write (`Save as` + `toml`) or commands to run.
+/// The blocks of `readme` in order: a file to write (`Save as` + a block) or commands to run.
 enum Block {
     Save { name: String, text: String },
     Run(Vec<Step>),
@@ -84,7 +85,9 @@ fn blocks(readme: &str) -> Vec<Block> {
     let mut out = Vec::new();
     for (lang, body, before) in fenced(readme) {
         match lang.as_str() {
-            "toml" => {
+            "text" if body.iter().any(|l| l.starts_with("$ ")) => out.push(Block::Run(steps(&body))),
+            "text" => {}
+            _ => {
                 if let Some(name) = before
                     .rsplit("Save as `")
                     .next()
@@ -96,8 +99,6 @@ fn blocks(readme: &str) -> Vec<Block> {
                     });
                 }
             }
-            "text" if body.iter().any(|l| l.starts_with("$ ")) => out.push(Block::Run(steps(&body))),
-            _ => {}
         }
     }
     out
@@ -119,15 +120,15 @@ fn matches(shown: &[String], actual: &[&str]) -> Result<(), String> {
             match actual.get(a) {
                 Some(line) if fits(line) => break,
                 Some(_) if skipping => a += 1,
-                Some(line) => return Err(format!("README: {s}\nactual: {line}")),
-                None => return Err(format!("README: {s}\nactual: (no more output)")),
+                Some(line) => return Err(format!("shown: {s}\nactual: {line}")),
+                None => return Err(format!("shown: {s}\nactual: (no more output)")),
             }
         }
         a += 1;
         skipping = false;
     }
     match actual.get(a) {
-        Some(line) if !skipping => Err(format!("README: (no more output)\nactual: {line}")),
+        Some(line) if !skipping => Err(format!("shown: (no more output)\nactual: {line}")),
         _ => Ok(()),
     }
 }
@@ -156,9 +157,9 @@ fn run(dir: &Path, steps: &[Step]) -> Vec<String> {
         .collect()
 }
 
-#[test]
-fn the_tour_prints_what_the_readme_shows() {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+/// Runs the document `name` (relative to the clone) as the module docs say; the commands run.
+fn run_document(name: &str) -> usize {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(name)).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let mut failures = Vec::new();
     let mut commands = 0;
@@ -173,14 +174,39 @@ fn the_tour_prints_what_the_readme_shows() {
                     commands += 1;
                     let actual: Vec<&str> = output.lines().collect();
                     if let Err(e) = matches(&step.shown, &actual) {
-                        failures.push(format!("$ {}\n{e}\n--- whole output:\n{output}", step.command));
+                        failures.push(format!("{name}: $ {}\n{e}\n--- whole output:\n{output}", step.command));
                     }
                 }
             }
         }
     }
-    assert!(commands >= 10, "only {commands} commands found in the README's tour");
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+    commands
+}
+
+#[test]
+fn the_tour_prints_what_the_readme_shows() {
+    let commands = run_document("README.md");
+    assert!(commands >= 10, "only {commands} commands found in the README's tour");
+}
+
+/// A three-joint DH arm, a URDF arm and a SCARA, each from its description through simulate,
+/// calibrate, validate, diagnose and plan, by the guide's text alone.
+#[test]
+fn the_own_robot_guide_runs_as_written() {
+    let commands = run_document("docs/own-robot.md");
+    assert!(commands >= 15, "only {commands} commands found in docs/own-robot.md");
+    for (robot, steps) in [("rrr3", 6), ("arm4", 6), ("scara", 5)] {
+        let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/own-robot.md")).unwrap();
+        let shown = text
+            .lines()
+            .filter(|l| l.starts_with("$ axiscal") && l.contains(&format!("{robot}.")))
+            .count();
+        assert_eq!(
+            shown, steps,
+            "{robot}: the guide runs describe/simulate/calibrate/validate/diagnose/plan"
+        );
+    }
 }
 
 /// The matcher's elisions, on made-up outputs.
