@@ -272,6 +272,7 @@ fn exit_2_when_output_fails() {
 /// Parses the command line, runs the subcommand and maps its outcome to an exit code.
 pub fn main() -> ExitCode {
     exit_2_when_output_fails();
+    signals::install_cleanup();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {

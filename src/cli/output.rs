@@ -179,12 +179,21 @@ impl Outputs {
             std::process::id(),
             OPENED.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
         ));
-        let file = std::fs::File::create(&temporary).with_context(|| format!("creating {}", temporary.display()))?;
+        let tracked = super::signals::track_temporary(&temporary);
+        let file = std::fs::File::create(&temporary).with_context(|| format!("creating {}", temporary.display()));
+        let file = match file {
+            Ok(file) => file,
+            Err(e) => {
+                tracked.map(super::signals::untrack_temporary);
+                return Err(e);
+            }
+        };
         Ok(OutputFile {
             writer: Some(std::io::BufWriter::new(file)),
             temporary,
             target: path.to_owned(),
             replace: self.force,
+            tracked,
         })
     }
 }
@@ -206,6 +215,8 @@ pub struct OutputFile {
     target: PathBuf,
     /// `--force`: the target may be replaced; otherwise it is put in place only if still absent.
     replace: bool,
+    /// The temporary file's slot among those a signal removes.
+    tracked: Option<usize>,
 }
 
 impl OutputFile {
@@ -220,13 +231,18 @@ impl OutputFile {
             file.sync_all().with_context(|| format!("writing {target}"))?;
         }
         if self.replace {
-            return std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"));
+            let renamed = std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"));
+            if renamed.is_ok() {
+                self.tracked.take().map(super::signals::untrack_temporary);
+            }
+            return renamed;
         }
         // Without --force the target must still be absent: a hard link is created only where
         // no file is (atomically, unlike a check then a rename), so a second run writing the
         // same output at the same time fails instead of replacing the first one's file.
         let linked = std::fs::hard_link(&self.temporary, &self.target);
         let _ = std::fs::remove_file(&self.temporary);
+        self.tracked.take().map(super::signals::untrack_temporary);
         linked.with_context(|| match self.target.symlink_metadata() {
             Ok(_) => format!("{target} appeared while this command ran (another run writing it?); not replaced; pass --force to replace it"),
             Err(_) => format!("writing {target}"),
@@ -249,9 +265,10 @@ impl Write for OutputFile {
 
 impl Drop for OutputFile {
     fn drop(&mut self) {
-        if self.writer.take().is_some() {
+        if self.writer.take().is_some() || self.tracked.is_some() {
             let _ = std::fs::remove_file(&self.temporary);
         }
+        self.tracked.take().map(super::signals::untrack_temporary);
     }
 }
 

@@ -1,8 +1,75 @@
-//! SIGINT and SIGTERM for long runs: the first one asks the run to stop (the trials in flight
-//! finish, what was done is saved, the exit code is 128 + the signal), a second one ends the
-//! process at once (every finished trial is already in `trials.csv`, so `--resume` still works).
+//! Signals. Every command: SIGINT, SIGTERM or SIGHUP removes the temporary files of the outputs
+//! being written, then ends the process as the signal would ([`install_cleanup`]). Long runs
+//! ([`install`]): the first SIGINT or SIGTERM asks the run to stop (the trials in flight finish,
+//! what was done is saved, the exit code is 128 + the signal), a second one removes the
+//! temporary files and ends the process at once (every finished trial is already in
+//! `trials.csv`, so `--resume` still works).
 
-use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+use std::ffi::{CString, c_char};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicPtr, Ordering};
+
+/// Temporary files a signal removes: at most this many open at once (more are not tracked).
+const TEMPORARY_SLOTS: usize = 256;
+
+/// The tracked temporary files' paths, as C strings a handler may read at any moment: a slot is
+/// cleared when its file is committed or dropped, and its string is never freed (a handler may
+/// still hold it), a few bytes per output written.
+static TEMPORARIES: [AtomicPtr<c_char>; TEMPORARY_SLOTS] =
+    [const { AtomicPtr::new(std::ptr::null_mut()) }; TEMPORARY_SLOTS];
+
+/// Tracks `path` for removal by a signal; the slot to pass to [`untrack_temporary`] (`None`:
+/// every slot in use, or a path with a NUL byte; the file is then not removed by a signal).
+pub fn track_temporary(path: &Path) -> Option<usize> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = CString::new(path.as_os_str().as_bytes()).ok()?.into_raw();
+    let slot = TEMPORARIES.iter().position(|s| {
+        s.compare_exchange(std::ptr::null_mut(), c, Ordering::SeqCst, Ordering::SeqCst)
+            .is_ok()
+    });
+    if slot.is_none() {
+        // SAFETY: `c` came from `into_raw` above and was never shared.
+        drop(unsafe { CString::from_raw(c) });
+    }
+    slot
+}
+
+/// Stops tracking the file of `slot` (committed, or removed by its owner).
+pub fn untrack_temporary(slot: usize) {
+    TEMPORARIES[slot].store(std::ptr::null_mut(), Ordering::SeqCst);
+}
+
+/// Removes every tracked temporary file (async-signal-safe: atomics and `unlink`).
+fn remove_temporaries() {
+    for slot in &TEMPORARIES {
+        let path = slot.load(Ordering::SeqCst);
+        if !path.is_null() {
+            // SAFETY: a tracked pointer is a NUL-terminated string that is never freed.
+            unsafe { libc::unlink(path) };
+        }
+    }
+}
+
+#[cfg(unix)]
+extern "C" fn on_cleanup_signal(signal: libc::c_int) {
+    remove_temporaries();
+    // SAFETY: signal and raise are async-signal-safe; the default action then ends the process
+    // as the signal would have.
+    unsafe {
+        libc::signal(signal, libc::SIG_DFL);
+        libc::raise(signal);
+    }
+}
+
+/// Installs the cleanup handlers for SIGINT, SIGTERM and SIGHUP (module docs).
+pub fn install_cleanup() {
+    #[cfg(unix)]
+    for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+        let handler = on_cleanup_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
+        // SAFETY: the handler only touches atomics and calls unlink, signal and raise.
+        unsafe { libc::signal(signal, handler) };
+    }
+}
 
 /// The first signal received (0: none).
 static RECEIVED: AtomicI32 = AtomicI32::new(0);
@@ -13,6 +80,7 @@ pub static STOP: AtomicBool = AtomicBool::new(false);
 extern "C" fn on_signal(signal: libc::c_int) {
     // Only async-signal-safe work here: atomics and _exit.
     if RECEIVED.swap(signal, Ordering::SeqCst) != 0 {
+        remove_temporaries();
         // SAFETY: _exit is async-signal-safe and ends the process without unwinding.
         unsafe { libc::_exit(128 + signal) };
     }

@@ -934,3 +934,54 @@ fn a_given_noise_far_below_the_data_is_named_in_the_error() {
         assert_eq!(err.lines().count(), 1, "{err}");
     }
 }
+
+/// A command ended by SIGINT, SIGTERM or SIGHUP while it writes its output leaves no temporary
+/// file behind and no output, and dies by that signal (as a shell expects).
+#[test]
+fn a_signal_while_writing_leaves_no_temporary_file() {
+    use std::os::unix::process::ExitStatusExt;
+    for signal in ["INT", "TERM", "HUP"] {
+        let dir = tempfile::tempdir().unwrap();
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_axiscal"))
+            .args([
+                "simulate",
+                "--sim",
+                "analytic",
+                "--validation-poses",
+                "100000",
+                "--out",
+                "big.csv",
+            ])
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let entries = || -> Vec<String> {
+            std::fs::read_dir(dir.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        };
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+        while !entries().iter().any(|e| e.contains(".axiscal-")) {
+            assert!(
+                std::time::Instant::now() < deadline,
+                "the temporary file never appeared"
+            );
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "finished before the signal: {:?}",
+                entries()
+            );
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        std::process::Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        let status = child.wait().unwrap();
+        assert!(status.signal().is_some(), "SIG{signal}: {status:?}");
+        assert_eq!(entries(), Vec::<String>::new(), "SIG{signal}");
+    }
+}

@@ -320,8 +320,9 @@ pub fn join_points(
     let pairs = match_points(plan, export_table, &points)?;
     let mut missing_hidden = Vec::new();
     let mut missing_visible = Vec::new();
+    let matched: std::collections::BTreeSet<usize> = pairs.iter().map(|(p, _)| p.point).collect();
     for r in &plan.rows {
-        if !pairs.iter().any(|(p, _)| p.point == r.point) {
+        if !matched.contains(&r.point) {
             if r.visible {
                 missing_visible.push(r.point);
             } else {
