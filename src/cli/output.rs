@@ -184,7 +184,9 @@ impl Outputs {
         let file = match file {
             Ok(file) => file,
             Err(e) => {
-                tracked.map(super::signals::untrack_temporary);
+                if let Some(slot) = tracked {
+                    super::signals::untrack_temporary(slot);
+                }
                 return Err(e);
             }
         };
@@ -220,6 +222,13 @@ pub struct OutputFile {
 }
 
 impl OutputFile {
+    /// Stops the signal handlers' tracking of the temporary file (gone, or renamed into place).
+    fn untrack(&mut self) {
+        if let Some(slot) = self.tracked.take() {
+            super::signals::untrack_temporary(slot);
+        }
+    }
+
     /// Flushes the file and puts it in place of the target.
     pub fn commit(mut self) -> Result<()> {
         let target = self.target.display().to_string();
@@ -233,7 +242,7 @@ impl OutputFile {
         if self.replace {
             let renamed = std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"));
             if renamed.is_ok() {
-                self.tracked.take().map(super::signals::untrack_temporary);
+                self.untrack();
             }
             return renamed;
         }
@@ -242,7 +251,7 @@ impl OutputFile {
         // same output at the same time fails instead of replacing the first one's file.
         let linked = std::fs::hard_link(&self.temporary, &self.target);
         let _ = std::fs::remove_file(&self.temporary);
-        self.tracked.take().map(super::signals::untrack_temporary);
+        self.untrack();
         linked.with_context(|| match self.target.symlink_metadata() {
             Ok(_) => format!("{target} appeared while this command ran (another run writing it?); not replaced; pass --force to replace it"),
             Err(_) => format!("writing {target}"),
@@ -268,7 +277,7 @@ impl Drop for OutputFile {
         if self.writer.take().is_some() || self.tracked.is_some() {
             let _ = std::fs::remove_file(&self.temporary);
         }
-        self.tracked.take().map(super::signals::untrack_temporary);
+        self.untrack();
     }
 }
 
