@@ -262,21 +262,18 @@ pub fn run(args: Args) -> Result<()> {
     };
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
+    // Every file is written before any is put in place; an output left out must not leave an
+    // earlier run's file beside the new calibration.
+    let mut staged = outputs.staged_in(&args.out)?;
     for (name, text) in &texts.files {
-        outputs.write_in(&args.out, name, text)?;
+        staged.write(name, text)?;
     }
     let mut written: Vec<&str> = texts.files.iter().map(|(name, _)| *name).collect();
     if !map.is_empty() {
-        write_tool_map(&map, &args.out)?;
+        staged.draw(&TOOL_MAP_FILES, |dir| write_tool_map(&map, dir))?;
         written.extend(TOOL_MAP_FILES);
     }
-    // An output left out must not leave an earlier run's file beside the new calibration.
-    for stale in OUTPUTS.iter().filter(|n| !texts.files.iter().any(|(w, _)| w == *n)) {
-        let path = args.out.join(stale);
-        if path.exists() {
-            std::fs::remove_file(&path).map_err(|e| anyhow::anyhow!("removing the stale {}: {e}", path.display()))?;
-        }
-    }
+    staged.commit(&[&OUTPUTS[..], &TOOL_MAP_FILES[..]].concat())?;
     match &cal.free_poses {
         Some(summary) => {
             super::calibrate_free::print(summary, &desc, &source);

@@ -297,16 +297,19 @@ struct Report<'a> {
 }
 
 impl Report<'_> {
-    /// Writes `diagnosis.json`, `diagnosis.md` and, by `plot`, the plots into `out`, refusing to
-    /// replace any of them without `force`; returns `out/{files}` for the user.
+    /// Writes `diagnosis.json`, `diagnosis.md` and, by `plot`, the plots into `out` as one set
+    /// (none put in place before all are written), refusing to replace any of them without
+    /// `force`; returns `out/{files}` for the user.
     fn write(self, plot: impl FnOnce(&Path) -> Result<Vec<PathBuf>, PlotError>) -> Result<String> {
         let names = ["diagnosis.json", "diagnosis.md"];
         std::fs::create_dir_all(self.out).with_context(|| format!("creating {}", self.out.display()))?;
         let all: Vec<&str> = names.iter().chain(self.plot_files).copied().collect();
         self.outputs.check_in(self.out, &all)?;
-        self.outputs.write_in(self.out, names[0], &self.json)?;
-        self.outputs.write_in(self.out, names[1], &self.markdown)?;
-        plot(self.out)?;
+        let mut staged = self.outputs.staged_in(self.out)?;
+        staged.write(names[0], &self.json)?;
+        staged.write(names[1], &self.markdown)?;
+        staged.draw(self.plot_files, plot)?;
+        staged.commit(&[])?;
         Ok(format!("{}/{{{}}}", self.out.display(), all.join(",")))
     }
 }

@@ -222,40 +222,71 @@ pub struct OutputFile {
 }
 
 impl OutputFile {
-    /// Stops the signal handlers' tracking of the temporary file (gone, or renamed into place).
-    fn untrack(&mut self) {
-        if let Some(slot) = self.tracked.take() {
-            super::signals::untrack_temporary(slot);
-        }
+    /// Flushes the file and puts it in place of the target.
+    pub fn commit(self) -> Result<()> {
+        self.finish()?.place()
     }
 
-    /// Flushes the file and puts it in place of the target.
-    pub fn commit(mut self) -> Result<()> {
-        let target = self.target.display().to_string();
+    /// Flushes and syncs the file, still under its temporary name: ready to be put in place.
+    fn finish(mut self) -> Result<Staged> {
         if let Some(w) = self.writer.take() {
+            let target = self.target.display().to_string();
             let file = w
                 .into_inner()
                 .map_err(|e| e.into_error())
                 .with_context(|| format!("writing {target}"))?;
             file.sync_all().with_context(|| format!("writing {target}"))?;
         }
-        if self.replace {
-            let renamed = std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"));
-            if renamed.is_ok() {
-                self.untrack();
-            }
-            return renamed;
-        }
-        // Without --force the target must still be absent: a hard link is created only where
-        // no file is (atomically, unlike a check then a rename), so a second run writing the
-        // same output at the same time fails instead of replacing the first one's file.
-        let linked = std::fs::hard_link(&self.temporary, &self.target);
-        let _ = std::fs::remove_file(&self.temporary);
-        self.untrack();
-        linked.with_context(|| match self.target.symlink_metadata() {
-            Ok(_) => format!("{target} appeared while this command ran (another run writing it?); not replaced; pass --force to replace it"),
-            Err(_) => format!("writing {target}"),
+        Ok(Staged {
+            temporary: std::mem::take(&mut self.temporary),
+            target: std::mem::take(&mut self.target),
+            replace: self.replace,
+            tracked: self.tracked.take(),
         })
+    }
+}
+
+/// A file written and synced under a temporary name, to be put in place of its target.
+struct Staged {
+    temporary: PathBuf,
+    target: PathBuf,
+    /// `--force`: the target may be replaced; otherwise it is put in place only if still absent.
+    replace: bool,
+    /// The temporary file's slot among those a signal removes.
+    tracked: Option<usize>,
+}
+
+impl Staged {
+    /// Puts the file in place of its target: renamed over it with `--force`; otherwise linked
+    /// where no file is (atomically, unlike a check then a rename, so a second run writing the
+    /// same output at the same time fails instead of replacing the first one's file).
+    fn place(mut self) -> Result<()> {
+        let target = self.target.display().to_string();
+        let placed = if self.replace {
+            std::fs::rename(&self.temporary, &self.target).with_context(|| format!("writing {target}"))
+        } else {
+            let linked = std::fs::hard_link(&self.temporary, &self.target);
+            let _ = std::fs::remove_file(&self.temporary);
+            linked.with_context(|| match self.target.symlink_metadata() {
+                Ok(_) => format!("{target} appeared while this command ran (another run writing it?); not replaced; pass --force to replace it"),
+                Err(_) => format!("writing {target}"),
+            })
+        };
+        if placed.is_ok()
+            && let Some(slot) = self.tracked.take()
+        {
+            super::signals::untrack_temporary(slot);
+        }
+        placed
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(slot) = self.tracked.take() {
+            let _ = std::fs::remove_file(&self.temporary);
+            super::signals::untrack_temporary(slot);
+        }
     }
 }
 
@@ -277,7 +308,105 @@ impl Drop for OutputFile {
         if self.writer.take().is_some() || self.tracked.is_some() {
             let _ = std::fs::remove_file(&self.temporary);
         }
-        self.untrack();
+        if let Some(slot) = self.tracked.take() {
+            super::signals::untrack_temporary(slot);
+        }
+    }
+}
+
+/// The files of one command written into one folder as a set ([`Outputs::staged_in`]): each is
+/// written and synced under a temporary name beside its target, and none is put in place until
+/// every one is written, so a failure on the way (a full disk, an error, a signal) leaves the
+/// folder as it was. Placing them is then renames only.
+pub struct StagedSet<'a> {
+    outputs: &'a Outputs,
+    dir: PathBuf,
+    staged: Vec<Staged>,
+    /// A hidden folder inside `dir` that plots are drawn into (removed when the set ends), and
+    /// its slot among the temporaries a signal removes.
+    plots_dir: Option<(PathBuf, Option<usize>)>,
+}
+
+impl Outputs {
+    /// A set of files to write into `dir` (created if missing), each checked as
+    /// [`Outputs::check`] would.
+    pub fn staged_in(&self, dir: &Path) -> Result<StagedSet<'_>> {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        Ok(StagedSet {
+            outputs: self,
+            dir: dir.to_owned(),
+            staged: Vec::new(),
+            plots_dir: None,
+        })
+    }
+}
+
+impl StagedSet<'_> {
+    /// Writes `dir/name` under its temporary name.
+    pub fn write(&mut self, name: &str, contents: impl AsRef<[u8]>) -> Result<()> {
+        let target = self.dir.join(name);
+        let mut file = self.outputs.create(&target)?;
+        file.write_all(contents.as_ref())
+            .with_context(|| format!("writing {}", target.display()))?;
+        self.staged.push(file.finish()?);
+        Ok(())
+    }
+
+    /// Draws the files `names` with `draw` (given the folder to draw into) under temporary
+    /// names: a hidden folder inside `dir`, its files placed with the others.
+    pub fn draw<E: std::fmt::Display>(
+        &mut self,
+        names: &[&str],
+        draw: impl FnOnce(&Path) -> std::result::Result<Vec<PathBuf>, E>,
+    ) -> Result<()> {
+        for name in names {
+            self.outputs.check(&self.dir.join(name))?;
+        }
+        let plots_dir = self.dir.join(format!(".axiscal-{}-plots.tmp", std::process::id()));
+        std::fs::create_dir_all(&plots_dir).with_context(|| format!("creating {}", plots_dir.display()))?;
+        self.plots_dir = Some((plots_dir.clone(), super::signals::track_temporary(&plots_dir)));
+        let tracked: Vec<Option<usize>> = names
+            .iter()
+            .map(|n| super::signals::track_temporary(&plots_dir.join(n)))
+            .collect();
+        draw(&plots_dir).map_err(|e| anyhow::anyhow!("{e}"))?;
+        for (name, tracked) in names.iter().zip(tracked) {
+            self.staged.push(Staged {
+                temporary: plots_dir.join(name),
+                target: self.dir.join(name),
+                replace: self.outputs.force,
+                tracked,
+            });
+        }
+        Ok(())
+    }
+
+    /// Puts every file in place, then removes the files of `stale` this set did not write (an
+    /// earlier run's outputs that would no longer belong beside the new ones).
+    pub fn commit(mut self, stale: &[&str]) -> Result<()> {
+        let placed: Vec<PathBuf> = self.staged.iter().map(|f| f.target.clone()).collect();
+        for file in std::mem::take(&mut self.staged) {
+            file.place()?;
+        }
+        for name in stale {
+            let path = self.dir.join(name);
+            if !placed.contains(&path) && path.exists() {
+                std::fs::remove_file(&path).with_context(|| format!("removing the stale {}", path.display()))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for StagedSet<'_> {
+    fn drop(&mut self) {
+        self.staged.clear();
+        if let Some((dir, tracked)) = self.plots_dir.take() {
+            let _ = std::fs::remove_dir_all(&dir);
+            if let Some(slot) = tracked {
+                super::signals::untrack_temporary(slot);
+            }
+        }
     }
 }
 

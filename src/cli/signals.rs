@@ -18,7 +18,8 @@ const TEMPORARY_SLOTS: usize = 256;
 static TEMPORARIES: [AtomicPtr<c_char>; TEMPORARY_SLOTS] =
     [const { AtomicPtr::new(std::ptr::null_mut()) }; TEMPORARY_SLOTS];
 
-/// Tracks `path` for removal by a signal; the slot to pass to [`untrack_temporary`] (`None`:
+/// Tracks `path` (a file, or a folder removed once its tracked files are) for removal by a
+/// signal; the slot to pass to [`untrack_temporary`] (`None`:
 /// every slot in use, or a path with a NUL byte; the file is then not removed by a signal).
 pub fn track_temporary(path: &Path) -> Option<usize> {
     use std::os::unix::ffi::OsStrExt;
@@ -39,13 +40,19 @@ pub fn untrack_temporary(slot: usize) {
     TEMPORARIES[slot].store(std::ptr::null_mut(), Ordering::SeqCst);
 }
 
-/// Removes every tracked temporary file (async-signal-safe: atomics and `unlink`).
+/// Removes every tracked temporary file, then every tracked temporary folder left empty
+/// (async-signal-safe: atomics, `unlink` and `rmdir`; each fails harmlessly on the other kind).
 fn remove_temporaries() {
-    for slot in &TEMPORARIES {
-        let path = slot.load(Ordering::SeqCst);
-        if !path.is_null() {
-            // SAFETY: a tracked pointer is a NUL-terminated string that is never freed.
-            unsafe { libc::unlink(path) };
+    for remove in [
+        libc::unlink as unsafe extern "C" fn(*const c_char) -> libc::c_int,
+        libc::rmdir,
+    ] {
+        for slot in &TEMPORARIES {
+            let path = slot.load(Ordering::SeqCst);
+            if !path.is_null() {
+                // SAFETY: a tracked pointer is a NUL-terminated string that is never freed.
+                unsafe { remove(path) };
+            }
         }
     }
 }
@@ -61,7 +68,9 @@ extern "C" fn on_cleanup_signal(signal: libc::c_int) {
     }
 }
 
-/// Installs the cleanup handlers for SIGINT, SIGTERM and SIGHUP (module docs).
+/// Installs the cleanup handlers for SIGINT, SIGTERM and SIGHUP (module docs), and ignores
+/// SIGXFSZ: a write beyond the file-size limit (`ulimit -f`) then fails as an error the command
+/// reports (exit 2, its temporary files removed) instead of ending the process.
 pub fn install_cleanup() {
     #[cfg(unix)]
     for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
@@ -69,6 +78,11 @@ pub fn install_cleanup() {
         // SAFETY: the handler only touches atomics and calls unlink, signal and raise.
         unsafe { libc::signal(signal, handler) };
     }
+    #[cfg(unix)]
+    // SAFETY: ignoring a signal installs no code.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN)
+    };
 }
 
 /// The first signal received (0: none).

@@ -64,8 +64,10 @@ pub fn run(args: Args) -> Result<()> {
         None => ValidationOptions::of_calibration(&cal, args.false_alarm),
     };
     let v = validate(&set, &cal, &desc, &options).with_context(|| format!("validating on {}", args.data.display()))?;
-    outputs.write_in(&args.out, OUTPUTS[0], validation_residuals_csv(&v))?;
-    outputs.write_in(&args.out, OUTPUTS[1], json_file::to_string(Schema::VALIDATION, &v)?)?;
+    let mut staged = outputs.staged_in(&args.out)?;
+    staged.write(OUTPUTS[0], validation_residuals_csv(&v))?;
+    staged.write(OUTPUTS[1], json_file::to_string(Schema::VALIDATION, &v)?)?;
+    staged.commit(&[])?;
     print_summary(&v);
     println!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
     Ok(())

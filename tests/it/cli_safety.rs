@@ -985,3 +985,62 @@ fn a_signal_while_writing_leaves_no_temporary_file() {
         assert_eq!(entries(), Vec::<String>::new(), "SIG{signal}");
     }
 }
+
+/// `calibrate --force` into a folder of an earlier calibration writes every file before it puts
+/// any in place: a write that fails half-way (here the file-size limit, as a full disk would)
+/// is one error with exit 2 and leaves the folder byte for byte as it was, with no temporary
+/// file or folder.
+#[test]
+fn a_failed_write_leaves_the_output_folder_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (seed, name) in [("1", "a.csv"), ("3", "b.csv")] {
+        axiscal()
+            .current_dir(d)
+            .args(["simulate", "--sim", "analytic", "--seed", seed, "--out", name])
+            .assert()
+            .success();
+    }
+    axiscal()
+        .current_dir(d)
+        .args(["calibrate", "a.csv", "--out", "cal"])
+        .assert()
+        .success();
+    let snapshot = || -> Vec<(String, Vec<u8>)> {
+        let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(d.join("cal"))
+            .unwrap()
+            .map(|e| e.unwrap())
+            .map(|e| {
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    std::fs::read(e.path()).unwrap_or_default(),
+                )
+            })
+            .collect();
+        files.sort();
+        files
+    };
+    let before = snapshot();
+    let largest = before.iter().map(|(_, b)| b.len()).max().unwrap();
+    let second = before
+        .iter()
+        .map(|(_, b)| b.len())
+        .filter(|&n| n < largest)
+        .max()
+        .unwrap();
+    // A limit between the second-largest output and the largest: some files are written, one fails.
+    let limit_kib = (second + largest) / 2 / 1024;
+    let failed = std::process::Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -f {limit_kib}; exec \"$0\" calibrate b.csv --out cal --force"
+        ))
+        .arg(env!("CARGO_BIN_EXE_axiscal"))
+        .current_dir(d)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    assert_eq!(failed.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("File too large"), "{stderr}");
+    assert_eq!(snapshot(), before, "the folder changed: {stderr}");
+}

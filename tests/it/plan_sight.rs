@@ -40,22 +40,7 @@ fn plan_sight_predicts_occlusions_of(robot: &str) {
         .arg(d.join("plan.csv"))
         .assert()
         .success();
-    axiscal()
-        .args([
-            "simulate",
-            "--robot",
-            robot,
-            "--sim",
-            "rapier",
-            "--validation-poses",
-            "60",
-            "--seed",
-            "2",
-            "--out",
-        ])
-        .arg(d.join("sim.csv"))
-        .assert()
-        .success();
+    simulate_rapier(robot, "60", &["--seed", "2"], &d.join("sim.csv"));
     let (sh, srows) = data_rows(&d.join("sim.csv"));
     let seen: HashSet<_> = srows.iter().map(|r| key(&sh, r)).collect();
     let (ph, prows) = data_rows(&d.join("plan.csv"));
@@ -89,21 +74,7 @@ fn the_chosen_stations_see_every_axis_experiment() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let run = |robot: &str, stations: &[&str], out: &str| {
-        axiscal()
-            .args([
-                "simulate",
-                "--robot",
-                robot,
-                "--sim",
-                "rapier",
-                "--validation-poses",
-                "0",
-            ])
-            .args(stations)
-            .arg("--out")
-            .arg(d.join(out))
-            .assert()
-            .success();
+        simulate_rapier(robot, "0", stations, &d.join(out));
         let (h, rows) = data_rows(&d.join(out));
         let experiment = h.iter().position(|c| c == "experiment").unwrap();
         rows.into_iter()
@@ -128,6 +99,26 @@ fn the_chosen_stations_see_every_axis_experiment() {
             );
         }
     }
+}
+
+/// `axiscal simulate` of `robot` on the rapier arm with `validation_poses` and `extra`, into
+/// `out`; it must succeed.
+fn simulate_rapier(robot: &str, validation_poses: &str, extra: &[&str], out: &Path) {
+    axiscal()
+        .args([
+            "simulate",
+            "--robot",
+            robot,
+            "--sim",
+            "rapier",
+            "--validation-poses",
+            validation_poses,
+        ])
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .assert()
+        .success();
 }
 
 fn description_dof(robot: &str) -> usize {

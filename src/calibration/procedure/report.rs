@@ -636,20 +636,28 @@ fn write_tool(s: &mut String, cal: &Calibration) {
 /// The findings, resolved by the data or not.
 fn write_findings(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
     let all = findings(cal, desc);
-    let _ = writeln!(
-        s,
-        "\n## Findings (resolved by the data: > {SIGNIFICANT_SIGMAS} sigma)\n"
-    );
-    for f in all.iter().filter(|f| f.significant) {
-        let _ = writeln!(s, "- {}", f.text);
-    }
-    let _ = writeln!(s, "\n## Not resolved by the data (< {SIGNIFICANT_SIGMAS} sigma)\n");
-    for f in all.iter().filter(|f| !f.significant && has_sigma(f.sigma)) {
-        let _ = writeln!(s, "- {}", f.text);
-    }
-    let _ = writeln!(s, "\n## No uncertainty reported (not tested against the data)\n");
-    for f in all.iter().filter(|f| !has_sigma(f.sigma)) {
-        let _ = writeln!(s, "- {}", f.text);
+    let sections: [(String, Vec<&Finding>); 3] = [
+        (
+            format!("Findings (resolved by the data: > {SIGNIFICANT_SIGMAS} sigma)"),
+            all.iter().filter(|f| f.significant).collect(),
+        ),
+        (
+            format!("Not resolved by the data (< {SIGNIFICANT_SIGMAS} sigma)"),
+            all.iter().filter(|f| !f.significant && has_sigma(f.sigma)).collect(),
+        ),
+        (
+            "No uncertainty reported (not tested against the data)".to_owned(),
+            all.iter().filter(|f| !has_sigma(f.sigma)).collect(),
+        ),
+    ];
+    for (title, items) in sections {
+        let _ = writeln!(s, "\n## {title}\n");
+        if items.is_empty() {
+            let _ = writeln!(s, "None.");
+        }
+        for f in items {
+            let _ = writeln!(s, "- {}", f.text);
+        }
     }
 }
 
