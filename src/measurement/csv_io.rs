@@ -104,6 +104,14 @@ pub enum MeasurementFileError {
         /// N.
         expected: usize,
     },
+    /// The lines end in a lone carriage return (classic Mac OS), which the reader does not split.
+    #[error(
+        "{path}: its lines end in a lone carriage return (CR, classic Mac OS line endings), not LF or CRLF: convert them, e.g. `tr '\\r' '\\n' < FILE > NEW.csv`"
+    )]
+    CarriageReturnsOnly {
+        /// The file.
+        path: PathBuf,
+    },
     /// A row ends before this column.
     #[error("{path}:{line}: column `{column}`: missing value (row shorter than the header)")]
     MissingField {
@@ -210,13 +218,19 @@ const POSITION_COLUMNS: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
 /// Reads a measurement file. `joint_count`: N from the robot description; when `None`, N is
 /// the number of `cmd_k` columns, which must be `cmd_1..cmd_N`.
 pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<MeasurementSet, MeasurementFileError> {
+    let io_error = |source| MeasurementFileError::Io {
+        path: path.into(),
+        source,
+    };
     let file = crate::presets::regular_file(path)
         .and_then(|()| std::fs::File::open(path))
-        .map_err(|source| MeasurementFileError::Io {
-            path: path.into(),
-            source,
-        })?;
-    read_measurements_from(io::BufReader::new(file), path, joint_count)
+        .map_err(io_error)?;
+    let mut reader = io::BufReader::with_capacity(1 << 16, file);
+    let start = io::BufRead::fill_buf(&mut reader).map_err(io_error)?;
+    if start.contains(&b'\r') && !start.contains(&b'\n') {
+        return Err(MeasurementFileError::CarriageReturnsOnly { path: path.into() });
+    }
+    read_measurements_from(reader, path, joint_count)
 }
 
 /// [`read_measurements`] from any reader; `path` only labels errors. One streaming pass:

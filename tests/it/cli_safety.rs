@@ -1044,3 +1044,53 @@ fn a_failed_write_leaves_the_output_folder_as_it_was() {
     assert!(stderr.contains("File too large"), "{stderr}");
     assert_eq!(snapshot(), before, "the folder changed: {stderr}");
 }
+
+/// Line endings and header case as other tools write them: CR-only lines are one error naming
+/// them and the fix; an upper-case header reads as the lower-case one (the same calibration,
+/// byte for byte).
+#[test]
+fn old_mac_line_endings_are_named_and_upper_case_headers_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let clean = campaign(d, 5);
+    let text = std::fs::read_to_string(&clean).unwrap();
+    std::fs::write(d.join("cr.csv"), text.replace('\n', "\r")).unwrap();
+    let failed = axiscal()
+        .current_dir(d)
+        .args(["calibrate", "cr.csv", "--out", "cr"])
+        .assert()
+        .code(2);
+    let message = error_of(&failed);
+    assert!(
+        message.contains("cr.csv") && message.contains("carriage return") && message.contains("tr "),
+        "{message}"
+    );
+    let upper: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("experiment,") {
+                l.to_uppercase()
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(d.join("upper.csv"), upper + "\n").unwrap();
+    for (data, out) in [
+        (clean.as_path(), "lower-cal"),
+        (d.join("upper.csv").as_path(), "upper-cal"),
+    ] {
+        axiscal()
+            .current_dir(d)
+            .arg("calibrate")
+            .arg(data)
+            .args(["--out", out])
+            .assert()
+            .success();
+    }
+    assert_eq!(
+        std::fs::read(d.join("lower-cal/calibration.json")).unwrap(),
+        std::fs::read(d.join("upper-cal/calibration.json")).unwrap()
+    );
+}

@@ -7,22 +7,20 @@ use std::path::Path;
 
 /// The header's known columns by name, and the `cmd_k` columns by joint `k` (1-based); a
 /// known column given twice is an error.
-type HeaderColumns<'h> = (HashMap<&'h str, usize>, HashMap<usize, usize>);
+type HeaderColumns = (HashMap<String, usize>, HashMap<usize, usize>);
 
-/// Indexes the columns of `header` (at `line` of `path`), see [`HeaderColumns`].
-fn index_columns<'h>(
-    header: &'h csv::StringRecord,
-    path: &Path,
-    line: u64,
-) -> Result<HeaderColumns<'h>, MeasurementFileError> {
-    let mut index: HashMap<&str, usize> = HashMap::new();
+/// Indexes the columns of `header` (at `line` of `path`), see [`HeaderColumns`]. Names are
+/// matched without regard to ASCII case (`X_MM` is `x_mm`).
+fn index_columns(header: &csv::StringRecord, path: &Path, line: u64) -> Result<HeaderColumns, MeasurementFileError> {
+    let mut index: HashMap<String, usize> = HashMap::new();
     let mut cmd: HashMap<usize, usize> = HashMap::new();
     // A byte-order mark (spreadsheet exports) is not part of the first column's name.
     for (i, name) in header
         .iter()
-        .map(|n| n.trim_start_matches('\u{feff}').trim())
+        .map(|n| n.trim_start_matches('\u{feff}').trim().to_ascii_lowercase())
         .enumerate()
     {
+        let name = name.as_str();
         let k = name
             .strip_prefix("cmd_")
             .and_then(|k| k.parse::<usize>().ok())
@@ -39,7 +37,7 @@ fn index_columns<'h>(
             ]
             .contains(&name)
             || POSITION_COLUMNS.contains(&name);
-        if known && index.insert(name, i).is_some() {
+        if known && index.insert(name.to_owned(), i).is_some() {
             return Err(MeasurementFileError::DuplicateColumn {
                 path: path.into(),
                 line,
