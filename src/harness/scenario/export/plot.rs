@@ -9,11 +9,21 @@ use crate::harness::scenario::threshold::Threshold;
 use plotters::prelude::*;
 use std::path::Path;
 
-/// Number of bins over the common value axis of `panels` cases of `n` trials each: Sturges'
-/// rule `ceil(log2 n) + 1` per panel's share of the axis, at least 5, at most 60.
-fn bins(n: usize, panels: usize) -> usize {
-    (((n.max(1) as f64).log2().ceil() as usize + 1) * panels.max(1)).clamp(5, 60)
+/// The bin width for trials spread over `[min, max]`, `n` per case: Sturges' rule
+/// `ceil(log2 n) + 1` bins (at least 5) over the trials' own spread, so an axis stretched out
+/// to reach a threshold does not coarsen them; `axis_width` over as many when the trials do not
+/// spread.
+fn bin_width((min, max): (f64, f64), n: usize, axis_width: f64) -> f64 {
+    let bins = ((n.max(1) as f64).log2().ceil() as usize + 1).max(5) as f64;
+    if max > min {
+        (max - min) / bins
+    } else {
+        axis_width / bins
+    }
 }
+
+/// The colours thresholds are drawn in, one per threshold on the metric (cycled).
+const THRESHOLD_COLORS: [RGBColor; 4] = [RED, RGBColor(230, 120, 0), MAGENTA, BLACK];
 
 /// Writes `path`: for each case, the histogram of metric `metric` (column `index`).
 pub fn histogram_svg(
@@ -48,6 +58,10 @@ pub fn histogram_svg(
         .collect();
     let lo = everything.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = everything.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let trials: Vec<f64> = (0..scenario.cases.len()).flat_map(values_of).collect();
+    let spread = trials
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     let (lo, hi) = if everything.is_empty() {
         (0.0, 1.0)
     } else if hi > lo {
@@ -55,10 +69,13 @@ pub fn histogram_svg(
     } else {
         (lo - 0.5, hi + 0.5)
     };
+    let most = (0..scenario.cases.len()).map(|c| values_of(c).len()).max().unwrap_or(0);
+    let width = bin_width(spread, most, hi - lo);
+    // At most 1000 bins, whatever a threshold far from the trials stretches the axis to.
+    let nb = (((hi - lo) / width).ceil() as usize).clamp(1, 1000);
+    let width = (hi - lo) / nb as f64;
     for (c, (case, area)) in scenario.cases.iter().zip(&areas).enumerate() {
         let values = values_of(c);
-        let nb = bins(values.len(), panels);
-        let width = (hi - lo) / nb as f64;
         let mut counts = vec![0usize; nb];
         for v in &values {
             counts[(((v - lo) / width) as usize).min(nb - 1)] += 1;
@@ -86,12 +103,16 @@ pub fn histogram_svg(
             .label(format!("trials ({})", values.len()))
             .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 18, y + 5)], BLUE.mix(0.6).filled()));
         let applies = |t: &&&Threshold| t.case.as_ref().is_none_or(|n| *n == case.name);
-        for t in thresholds.iter().filter(applies) {
+        for (k, t) in thresholds.iter().enumerate().filter(|(_, t)| applies(t)) {
+            let color = THRESHOLD_COLORS[k % THRESHOLD_COLORS.len()];
             chart
-                .draw_series(LineSeries::new([(t.value, 0), (t.value, top + 1)], RED.stroke_width(2)))
+                .draw_series(LineSeries::new(
+                    [(t.value, 0), (t.value, top + 1)],
+                    color.stroke_width(2),
+                ))
                 .map_err(|e| err(e.to_string()))?
                 .label(format!("threshold {}", t.describe()))
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RED.stroke_width(2)));
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2)));
         }
         crate::plotting::draw_legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(err)?;
     }
