@@ -13,6 +13,19 @@ use std::collections::VecDeque;
 use std::io::Read;
 use std::rc::Rc;
 
+/// A cell as an error message shows it: as written up to 60 characters, else its first 40 and
+/// its length (`aaaa…[5000000 characters]`), so a 5 MB field does not become a 5 MB message.
+pub fn shown_cell(text: &str) -> String {
+    const WHOLE: usize = 60;
+    const SHOWN: usize = 40;
+    let count = text.chars().count();
+    if count <= WHOLE {
+        return text.to_owned();
+    }
+    let start: String = text.chars().take(SHOWN).collect();
+    format!("{start}…[{count} characters]")
+}
+
 /// What a line starts with, as far as record positions care.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum LineKind {
@@ -163,6 +176,14 @@ mod tests {
             .filter(|l| !l.trim_end_matches('\r').is_empty() && !l.starts_with('#'))
             .filter_map(|l| l.split(',').next()?.trim().parse().ok())
             .collect()
+    }
+
+    #[test]
+    fn a_long_cell_is_shown_by_its_start_and_length() {
+        assert_eq!(shown_cell("12.5x"), "12.5x");
+        let long = "a".repeat(5_000_000);
+        assert_eq!(shown_cell(&long), format!("{}…[5000000 characters]", "a".repeat(40)));
+        assert_eq!(shown_cell(&"é".repeat(61)).chars().filter(|&c| c == 'é').count(), 40);
     }
 
     #[test]

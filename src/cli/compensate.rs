@@ -87,8 +87,9 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
             let text = field(k + 1);
             *slot = text.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| {
                 format!(
-                    "{file}:{line}: column `{}`: `{text}` is not a finite number",
-                    COLUMNS[k + 1]
+                    "{file}:{line}: column `{}`: `{}` is not a finite number",
+                    COLUMNS[k + 1],
+                    axiscal::csv_lines::shown_cell(text)
                 )
             })?;
         }

@@ -104,8 +104,9 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Re
                 let field = record.get(c).unwrap_or("");
                 field.parse::<f64>().ok().filter(|v| v.is_finite()).with_context(|| {
                     format!(
-                        "{}:{line}: column `cmd_{k}`: `{field}` is not a finite number",
-                        path.display()
+                        "{}:{line}: column `cmd_{k}`: `{}` is not a finite number",
+                        path.display(),
+                        axiscal::csv_lines::shown_cell(field)
                     )
                 })
             })

@@ -7,7 +7,7 @@
 mod columns;
 
 use super::data::{Measurement, MeasurementSet, RowProblem};
-use crate::csv_lines::LineTracking;
+use crate::csv_lines::{LineTracking, shown_cell};
 use columns::find_columns;
 use std::fs::OpenOptions;
 use std::io;
@@ -375,7 +375,7 @@ impl Cells<'_> {
     fn number(&self, i: usize) -> Result<f64, MeasurementFileError> {
         let text = self.text(i)?;
         // The error's strings are built only on the error path: this runs for every cell.
-        let parts = || (self.path.into(), self.line, self.column(i), text.to_string());
+        let parts = || (self.path.into(), self.line, self.column(i), shown_cell(text));
         match text.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
             Ok(_) => {
@@ -411,7 +411,7 @@ impl Cells<'_> {
         if let Ok(v) = text.parse::<usize>() {
             return Ok(v);
         }
-        let (path, line, column, value) = (self.path.into(), self.line, self.column(i), text.to_string());
+        let (path, line, column, value) = (self.path.into(), self.line, self.column(i), shown_cell(text));
         match text.parse::<i128>() {
             Ok(v) if v < 0 => Err(MeasurementFileError::Negative {
                 path,
@@ -447,7 +447,7 @@ impl TargetIds {
         let mixed = |found, earlier| MeasurementFileError::MixedTargetIds {
             path: cells.path.into(),
             line: cells.line,
-            value: text.to_string(),
+            value: shown_cell(text),
             found,
             earlier,
         };

@@ -1094,3 +1094,37 @@ fn old_mac_line_endings_are_named_and_upper_case_headers_read() {
         std::fs::read(d.join("upper-cal/calibration.json")).unwrap()
     );
 }
+
+/// A 5 MB cell in the data is named by its start and length, not echoed: the error stays one
+/// short line naming the file, row and column.
+#[test]
+fn a_huge_cell_is_not_echoed() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let clean = campaign(d, 6);
+    let done = std::cell::Cell::new(false);
+    rewrite(&clean, &d.join("huge.csv"), |column, value| {
+        if column == "x_mm" && !done.replace(true) {
+            "a".repeat(5_000_000)
+        } else {
+            value.to_owned()
+        }
+    });
+    assert!(std::fs::metadata(d.join("huge.csv")).unwrap().len() < 6_000_000);
+    let failed = axiscal()
+        .current_dir(d)
+        .args(["calibrate", "huge.csv", "--out", "h"])
+        .assert()
+        .code(2);
+    let message = error_of(&failed);
+    assert!(
+        message.len() < 300,
+        "{} bytes: {}",
+        message.len(),
+        &message[..300.min(message.len())]
+    );
+    assert!(
+        message.contains("huge.csv:") && message.contains("`x_mm`") && message.contains("[5000000 characters]"),
+        "{message}"
+    );
+}

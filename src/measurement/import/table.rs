@@ -3,6 +3,7 @@
 //! ignored), every cell kept with its 1-based physical line for messages.
 
 use super::points::PointsError;
+use crate::csv_lines::shown_cell;
 use std::path::{Path, PathBuf};
 
 /// A read table.
@@ -101,14 +102,19 @@ impl Table {
         text.parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
-            .ok_or_else(|| self.row_error(line, column, format!("{text:?} is not a finite number")))
+            .ok_or_else(|| self.row_error(line, column, format!("{:?} is not a finite number", shown_cell(text))))
     }
 
     /// A non-negative integer at `column`.
     pub fn integer(&self, line: usize, cells: &[String], column: usize) -> Result<usize, PointsError> {
         let text = self.cell(line, cells, column)?;
-        text.parse::<usize>()
-            .map_err(|_| self.row_error(line, column, format!("{text:?} is not a non-negative integer")))
+        text.parse::<usize>().map_err(|_| {
+            self.row_error(
+                line,
+                column,
+                format!("{:?} is not a non-negative integer", shown_cell(text)),
+            )
+        })
     }
 
     /// An error at `line`, `column`.
