@@ -369,8 +369,15 @@ impl StagedSet<'_> {
             .iter()
             .map(|n| super::signals::track_temporary(&plots_dir.join(n)))
             .collect();
-        draw(&plots_dir).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let drawn = draw(&plots_dir);
         for (name, tracked) in names.iter().zip(tracked) {
+            if drawn.is_err() || !plots_dir.join(name).is_file() {
+                // Not drawn: nothing of it to place (the folder goes with the set).
+                if let Some(slot) = tracked {
+                    super::signals::untrack_temporary(slot);
+                }
+                continue;
+            }
             self.staged.push(Staged {
                 temporary: plots_dir.join(name),
                 target: self.dir.join(name),
@@ -378,7 +385,7 @@ impl StagedSet<'_> {
                 tracked,
             });
         }
-        Ok(())
+        drawn.map(|_| ()).map_err(|e| anyhow::anyhow!("{e}"))
     }
 
     /// Puts every file in place, then removes the files of `stale` this set did not write (an
