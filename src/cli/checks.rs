@@ -88,9 +88,11 @@ pub fn same_robot(
     match recorded {
         Some(r) if r.geometry_hash != current.geometry_hash && !allow => bail!(
             "{} was made with the robot description {r}, but --robot {} is {current}: results would be wrong for \
-             this robot; pass --allow-other-robot if the change is intended",
+             this robot; give --robot the description file of \"{}\" (without --robot it is the shipped IRB/L6), \
+             or pass --allow-other-robot if the change is intended",
             source.display(),
-            robot.display()
+            robot.display(),
+            r.name
         ),
         Some(r) if r.geometry_hash != current.geometry_hash => eprintln!(
             "warning: {} was made with {r}, --robot {} is {current} (--allow-other-robot)",
