@@ -112,7 +112,7 @@ pub struct SightArgs {
     #[arg(long)]
     no_sight: bool,
     /// Radius of the links' capsules for the line of sight (mm).
-    #[arg(long, default_value_t = 50.0, value_parser = InRange::above(0.0, 10_000.0, "mm"))]
+    #[arg(long, default_value_t = axiscal::plan::LINK_RADIUS_M * 1e3, value_parser = InRange::above(0.0, 10_000.0, "mm"))]
     link_radius_mm: f64,
 }
 
@@ -142,7 +142,7 @@ impl SightArgs {
                 .map(|s| Point3::from(*s) * 1e-3)
                 .collect(),
             link_radius_m: self.link_radius_mm * 1e-3,
-            stop_short_m: 2e-3,
+            stop_short_m: axiscal::plan::sight::STOP_SHORT_M,
         })
     }
 

@@ -8,6 +8,10 @@
 use crate::kinematics::PhiModel;
 use nalgebra::{Point3, Vector3};
 
+/// How far short of its target a sight line stops \[m\] (a target on a link's surface is not
+/// hidden by that surface).
+pub const STOP_SHORT_M: f64 = 2e-3;
+
 /// The nominal arm's link capsules at joint values `q`, in the instrument frame \[m\].
 pub fn link_segments(model: &PhiModel, q: &[f64]) -> Vec<(Point3<f64>, Point3<f64>)> {
     let poses = model.poses(q);

@@ -2,6 +2,7 @@
 //! counts line of sight from, the same for both.
 
 use super::sheet::{SightOptions, planned_points};
+use super::sight::STOP_SHORT_M;
 use super::{CalibrationPlan, PlanError, ValidationPlan};
 use crate::robot::RobotDescription;
 use nalgebra::Point3;
@@ -30,7 +31,7 @@ pub fn instrument_stations_m(desc: &RobotDescription) -> Result<Vec<Point3<f64>>
     let sight = SightOptions {
         stations_m: pairs.iter().flatten().copied().collect(),
         link_radius_m: LINK_RADIUS_M,
-        stop_short_m: 2e-3,
+        stop_short_m: STOP_SHORT_M,
     };
     let no_validation = ValidationPlan {
         poses: 0,
