@@ -192,6 +192,11 @@ where
         .collect())
 }
 
+/// `skip_serializing_if` for a count that is absent from a file when zero.
+pub fn is_zero_count(n: &usize) -> bool {
+    *n == 0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

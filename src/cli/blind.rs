@@ -136,21 +136,14 @@ pub fn run(args: Args) -> Result<()> {
     })?;
     drop(progress);
     let s = score(&results);
-    outputs.write_in(
-        &args.out,
-        "summary.json",
-        json_file::to_string(Schema::BLIND_SUMMARY, &s)?,
-    )?;
-    outputs.write_in(
-        &args.out,
-        "summary.md",
-        format!("{}\n{}", s.markdown(), case_table(&results)),
-    )?;
-    outputs.write_in(
-        &args.out,
+    let mut staged = outputs.staged_in(&args.out)?;
+    staged.write("summary.json", json_file::to_string(Schema::BLIND_SUMMARY, &s)?)?;
+    staged.write("summary.md", format!("{}\n{}", s.markdown(), case_table(&results)))?;
+    staged.write(
         "cases.json",
         json_file::list_to_string(Schema::BLIND_CASES, "cases", &results)?,
     )?;
+    staged.commit(&[])?;
     print!("{}", s.markdown());
     Ok(())
 }

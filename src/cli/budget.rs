@@ -109,8 +109,9 @@ pub fn run(args: Args) -> Result<()> {
     drop(progress);
     let md = markdown(&settings, &lines);
     print!("{md}");
-    outputs.write_in(
-        &args.out,
+    // Both files or neither (a failure half-way leaves the folder as it was).
+    let mut staged = outputs.staged_in(&args.out)?;
+    staged.write(
         names[0],
         json_file::to_string(
             Schema::BUDGET,
@@ -120,7 +121,8 @@ pub fn run(args: Args) -> Result<()> {
             },
         )?,
     )?;
-    outputs.write_in(&args.out, names[1], &md)?;
+    staged.write(names[1], &md)?;
+    staged.commit(&[])?;
     println!("wrote {}", args.out.display());
     Ok(())
 }

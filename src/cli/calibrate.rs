@@ -11,8 +11,8 @@ use anyhow::Result;
 use axiscal::calibration::free_pose;
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
-    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Implausible, OutlierPoint, ProcedureError,
-    UrdfOptions, UrdfRoot, calibrate, findings, implausible, joint_map, joints_without_speed_limits, markdown,
+    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Implausible, ProcedureError, UrdfOptions,
+    UrdfRoot, calibrate, findings, implausible, joint_map, joints_without_speed_limits, markdown,
     raw_reading_deviation, residuals_csv, ros_name, screen_sweeps, urdf,
 };
 use axiscal::calibration::refine::{RefineOptions, Refinement};
@@ -108,6 +108,10 @@ pub struct Args {
     /// diagnosis"): a joint compliance, a backlash, a gear harmonic in the transmission's period.
     #[arg(long, value_name = "DIAGNOSIS.json", requires = "refine")]
     carry: Option<PathBuf>,
+    /// Free poses `--refine` and the free-pose calibration fit at most, evenly spaced through
+    /// the file: memory grows with them.
+    #[arg(long, default_value_t = axiscal::measurement::bounded::FIT_MAX_POSES, value_parser = super::options::InRange::closed(3usize, 1_000_000, ""))]
+    max_poses: usize,
     /// Folds of `--refine`'s held-out check.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(2..))]
     refine_folds: u64,
@@ -322,6 +326,7 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
         effects: args.effects == "auto",
         all_rows: args.free_poses,
         refine: args.refine,
+        max_poses: args.max_poses,
     }
 }
 
@@ -350,7 +355,7 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
     // The procedure's message already contains its cause: one line, not the cause twice.
     let mut cal = match calibrate(screened, desc, &options) {
         Ok(cal) => {
-            print_outliers(&screening.outliers, &args.data);
+            super::checks::print_sweep_outliers(&screening.outliers, &args.data, "calibrated");
             cal
         }
         // Every row a free pose: that fit tests its poses for outliers itself, on every row.
@@ -360,7 +365,7 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
             return Ok((cal, map));
         }
         Err(e) => {
-            print_outliers(&screening.outliers, &args.data);
+            super::checks::print_sweep_outliers(&screening.outliers, &args.data, "calibrated");
             let hint = args.noise_mm.map_or(String::new(), |n| {
                 format!(
                     " (with --noise-mm {n:e}: a noise far below the data's makes the fits trust each point more than the joints' repeatability allows; without --noise-mm it is estimated from the residuals)"
@@ -380,24 +385,6 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         cal
     };
     Ok((cal, map))
-}
-
-/// One warning line per sweep point the outlier test flagged in `data`.
-fn print_outliers(outliers: &[OutlierPoint], data: &Path) {
-    for o in outliers {
-        let place = o
-            .line
-            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
-        let what = if o.dropped {
-            "calibrated without it (--keep-outliers keeps it)"
-        } else {
-            "kept (--keep-outliers)"
-        };
-        eprintln!(
-            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from the fit of its sweep's other points, {:.1} times the sweep's noise, beyond the fence {:.1} (Q3 + 3 IQR of every sweep point's): {what}; check this row's coordinates and commands",
-            o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
-        );
-    }
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far
@@ -522,6 +509,7 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
             .as_ref()
             .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm),
         folds: args.refine_folds as usize,
+        max_poses: args.max_poses,
         ..RefineOptions::default()
     };
     let carried = match &args.carry {
@@ -544,6 +532,13 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
             r.heldout_rms_before_mm,
             r.heldout_rms_after_mm
         );
+        if r.poses_left_out > 0 {
+            say!(
+                "  refined on {} of the file's {} free poses, evenly spaced through it (`--max-poses`; memory grows with them)",
+                r.poses,
+                r.poses + r.poses_left_out
+            );
+        }
         if !r.converged {
             eprintln!("warning: --refine: the Gauss-Newton steps reached their limit without converging");
         }

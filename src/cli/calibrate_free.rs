@@ -24,6 +24,8 @@ pub struct FreeArgs<'a> {
     pub all_rows: bool,
     /// `--refine` (refused: the free poses are the calibration's own data).
     pub refine: bool,
+    /// `--max-poses`.
+    pub max_poses: usize,
 }
 
 /// The free-pose calibration of `set`.
@@ -40,6 +42,7 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
         max_harmonic_order: args.harmonics,
         all_rows: args.all_rows,
         effects: args.effects,
+        max_poses: args.max_poses,
     };
     let mut cal = calibrate_free_poses(set, desc, &options)
         .map_err(|e| anyhow::anyhow!("calibrating {} from its free poses: {e}", args.data.display()))?;
@@ -64,6 +67,13 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
         s.parameters.len(),
         s.unidentified.len()
     );
+    if s.poses_left_out > 0 {
+        say!(
+            "  fitted {} of the file's {} free poses, evenly spaced through it (`--max-poses`; memory grows with them)",
+            s.poses,
+            s.poses + s.poses_left_out
+        );
+    }
     say!(
         "  RMS: nominal {:.4} mm (closed-form registration {:.4} mm) -> calibrated {:.4} mm; condition number {:.2e}",
         s.nominal_rms_mm,

@@ -164,3 +164,22 @@ pub fn outside_limits(desc: &RobotDescription, cmd_file: &[f64]) -> Option<(usiz
         (!(lo..=hi).contains(&c)).then_some((k + 1, c, [lo, hi]))
     })
 }
+
+/// One warning line per sweep point the outlier test flagged in `data`; `done` is what the
+/// command did without it (`calibrated`, `diagnosed`).
+pub fn print_sweep_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
+    for o in outliers {
+        let place = o
+            .line
+            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+        let what = if o.dropped {
+            format!("{done} without it (--keep-outliers keeps it)")
+        } else {
+            "kept (--keep-outliers)".to_string()
+        };
+        eprintln!(
+            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from the fit of its sweep's other points, {:.1} times the sweep's noise, beyond the fence {:.1} (Q3 + 3 IQR of every sweep point's): {what}; check this row's coordinates and commands",
+            o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
+        );
+    }
+}

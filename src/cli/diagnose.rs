@@ -6,10 +6,11 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate};
+use axiscal::calibration::procedure::{CalibrationOptions, OutlierPoint, ProcedureError, calibrate, screen_sweeps};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
-    diagnose_with, estimated_noise, free_poses_only, markdown, validation_poses, write_axes_plots, write_plots,
+    diagnose_with, estimated_noise, free_poses_only, markdown, validation_outliers, validation_poses, without_outliers,
+    write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -52,9 +53,17 @@ pub struct Args {
     /// validation poses (the refinement and its warning still run).
     #[arg(long)]
     nominal_tool_targets: bool,
+    /// Flag the sweep points and validation points the outlier tests reject but keep them
+    /// (`docs/diagnosis.md`, "Outliers").
+    #[arg(long)]
+    keep_outliers: bool,
     /// Seed of the replicas' noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Validation poses diagnosed at most, evenly spaced through the file: memory grows with
+    /// them (about 0.4 MB each at the default replicas and draws).
+    #[arg(long, default_value_t = DiagnosisOptions::default().max_poses, value_parser = InRange::closed(4usize, 1_000_000, ""))]
+    max_poses: usize,
     /// Print `diagnosis.json` on stdout (the human-readable lines go to stderr, or nowhere with `--quiet`).
     #[arg(long)]
     json: bool,
@@ -92,6 +101,7 @@ pub fn run(args: Args) -> Result<()> {
         &desc,
         &args.data,
     );
+    let set = without_sweep_outliers(&args, set, &desc)?;
     let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: noise_mm,
@@ -106,6 +116,7 @@ pub fn run(args: Args) -> Result<()> {
         axis_replicas: args.axis_replicas,
         refine_tool_targets: !args.nominal_tool_targets,
         noise_dof,
+        max_poses: args.max_poses,
         ..DiagnosisOptions::default()
     };
     let source = args.data.display().to_string();
@@ -113,9 +124,23 @@ pub fn run(args: Args) -> Result<()> {
     if validation_poses(set.rows(), &desc).len() < 4 {
         return run_axes(&args, &desc, &set, &options, &outputs, noise_source);
     }
+    let outliers = validation_outliers(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
+    let outliers: Vec<OutlierPoint> = outliers
+        .into_iter()
+        .map(|o| OutlierPoint {
+            dropped: !args.keep_outliers,
+            ..o
+        })
+        .collect();
+    print_validation_outliers(&outliers, &args.data);
+    let set = match args.keep_outliers || outliers.is_empty() {
+        true => set,
+        false => without_outliers(&set, &outliers),
+    };
     let progress = super::progress::Progress::stage("diagnosing");
     let mut d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
     d.noise_source = noise_source.into();
+    d.outliers = outliers;
     drop(progress);
     if let Some(warning) = d.tool_targets.as_ref().and_then(|t| t.warning()) {
         eprintln!("warning: {warning}");
@@ -138,13 +163,24 @@ pub fn run(args: Args) -> Result<()> {
         d.outcome.gap_after_mm
     );
     say!("{headline}");
+    let diagnosed = d.poses.training + d.poses.held_out;
+    if d.poses.left_out > 0 {
+        say!(
+            "  diagnosed {diagnosed} of the file's {} validation poses, evenly spaced through it (`--max-poses`; memory grows with them)",
+            diagnosed + d.poses.left_out
+        );
+    }
     if d.outcome.effect == "none" {
         say!(
-            "  with {} validation poses ({} held out) the smallest gap this test flags is {:.3} mm; a smaller effect \
-             reads `none`: measure more validation poses to resolve it",
-            d.poses.training + d.poses.held_out,
+            "  with {diagnosed} validation poses ({} held out) the smallest gap this test flags is {:.3} mm; a smaller effect \
+             reads `none`: {} to resolve it",
             d.poses.held_out,
-            d.detectable_gap_mm
+            d.detectable_gap_mm,
+            if d.poses.left_out > 0 {
+                "diagnose more of them (`--max-poses`)"
+            } else {
+                "measure more validation poses"
+            }
         );
     }
     say!("wrote {written}");
@@ -205,6 +241,40 @@ fn run_axes(
         options.noise_rms_3d_mm,
         &format!("{}: {}", d.outcome.effect, d.verdict),
     )
+}
+
+/// `set` without the sweep points the outlier test flags ([`screen_sweeps`], as `calibrate`
+/// tests them; kept with `--keep-outliers`), each said on stderr.
+fn without_sweep_outliers(args: &Args, set: MeasurementSet, desc: &RobotDescription) -> Result<MeasurementSet> {
+    if free_poses_only(&set) {
+        return Ok(set);
+    }
+    let options = CalibrationOptions {
+        noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),
+        ..CalibrationOptions::default()
+    };
+    let screening = screen_sweeps(&set, desc, &options, args.keep_outliers)
+        .map_err(|e| anyhow::anyhow!("diagnosing {}: {e}", args.data.display()))?;
+    super::checks::print_sweep_outliers(&screening.outliers, &args.data, "diagnosed");
+    Ok(screening.set.unwrap_or(set))
+}
+
+/// Each validation outlier as a warning naming its file line.
+fn print_validation_outliers(outliers: &[OutlierPoint], data: &Path) {
+    for o in outliers {
+        let place = o
+            .line
+            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+        let what = if o.dropped {
+            "diagnosed without it (--keep-outliers keeps it)"
+        } else {
+            "kept (--keep-outliers)"
+        };
+        eprintln!(
+            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from the calibrated model, {:.1} times the noise, beyond the fence {:.1} (Q3 + 3 IQR of every validation point's), and far from its pose's other targets (an effect moves them alike): {what}; check this row's coordinates and target id",
+            o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
+        );
+    }
 }
 
 /// `set`, or, when the independent-axis procedure cannot use its sweeps (the correction for

@@ -4,16 +4,15 @@
 //! `evaluation.json`, `poses.csv`, `calibration.json`, `floor_calibration.json` and the plots.
 
 use super::options::{InRange, THREADS, thread_pool};
-use super::output::{Outputs, commit_csv};
-use super::progress::Progress;
+use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{
-    PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperReport, PaperScenario,
-    Region, RepeatabilitySummary, floor_check_with, run_paper_scenario_with, write_plots,
+    FloorCheck, PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperReport,
+    PaperScenario, Region, RepeatabilitySummary, floor_check_with, run_paper_scenario_with, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementModel;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The largest calibrated/floor RMS ratio accepted inside the spans (the issue's 1.1x).
 const FLOOR_RATIO_LIMIT: f64 = 1.1;
@@ -49,10 +48,6 @@ pub struct Args {
     force: bool,
 }
 
-fn write_json<T: serde::Serialize>(outputs: &Outputs, path: &Path, schema: Schema, value: &T) -> Result<()> {
-    outputs.write(path, json_file::to_string(schema, value)?)
-}
-
 /// Runs `axiscal evaluate`.
 pub fn run(args: Args) -> Result<()> {
     super::set_json(args.json);
@@ -80,23 +75,35 @@ fn evaluate(args: &Args) -> Result<()> {
     let progress = super::progress::Progress::stage("paper scenario");
     let out = run_paper_scenario_with(&scenario, &progress)?;
     drop(progress);
-    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let check = match args.floor_seeds > 1 {
+        true => {
+            let progress = super::progress::Progress::stage("floor check");
+            Some(floor_check_with(&scenario, args.floor_seeds, &progress)?)
+        }
+        false => None,
+    };
     let r = &out.report;
-    write_json(&guard, &args.out.join("evaluation.json"), Schema::EVALUATION, r)?;
-    write_json(
-        &guard,
-        &args.out.join("calibration.json"),
-        Schema::CALIBRATION,
-        &out.calibration,
+    // Every file, plots included, or none (a failure half-way leaves the folder as it was); a
+    // floor check of an earlier run goes when this one has none.
+    let mut staged = guard.staged_in(&args.out)?;
+    staged.write("evaluation.json", json_file::to_string(Schema::EVALUATION, r)?)?;
+    staged.write(
+        "calibration.json",
+        json_file::to_string(Schema::CALIBRATION, &out.calibration)?,
     )?;
-    write_json(
-        &guard,
-        &args.out.join("floor_calibration.json"),
-        Schema::CALIBRATION,
-        &out.floor_calibration,
+    staged.write(
+        "floor_calibration.json",
+        json_file::to_string(Schema::CALIBRATION, &out.floor_calibration)?,
     )?;
-    write_poses_csv(&guard, &args.out.join("poses.csv"), r)?;
-    let plots = write_plots(r, &args.out)?;
+    staged.write("poses.csv", poses_csv(r)?)?;
+    if let Some(check) = &check {
+        staged.write("floor_check.json", json_file::to_string(Schema::FLOOR_CHECK, check)?)?;
+    }
+    let mut plots = 0;
+    staged.draw(&PLOT_FILES, |dir| {
+        write_plots(r, dir).inspect(|drawn| plots = drawn.len())
+    })?;
+    staged.commit(&["floor_check.json"])?;
 
     say!(
         "paper scenario: seed {}, evaluation seed {}",
@@ -118,18 +125,17 @@ fn evaluate(args: &Args) -> Result<()> {
             "ABOVE"
         }
     );
-    if args.floor_seeds > 1 {
-        let progress = super::progress::Progress::stage("floor check");
-        pooled_floor_check(&guard, &scenario, args, &progress)?;
+    if let Some(check) = &check {
+        print_floor_check(check);
     }
-    say!("wrote {} and {} plots", args.out.display(), plots.len());
+    say!("wrote {} and {plots} plots", args.out.display());
     super::emit_json(&args.out.join("evaluation.json"))?;
     Ok(())
 }
 
-/// Writes every test pose's errors to `csv_path` (`poses.csv`).
-fn write_poses_csv(guard: &Outputs, csv_path: &Path, r: &PaperReport) -> Result<()> {
-    let mut w = csv::Writer::from_writer(guard.create(csv_path)?);
+/// Every test pose's errors (`poses.csv`).
+fn poses_csv(r: &PaperReport) -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "id",
         "region",
@@ -161,7 +167,7 @@ fn write_poses_csv(guard: &Outputs, csv_path: &Path, r: &PaperReport) -> Result<
             p.failure.clone().unwrap_or_default(),
         ])?;
     }
-    commit_csv(w)
+    w.into_inner().map_err(|e| anyhow::anyhow!("poses.csv: {}", e.error()))
 }
 
 /// Prints each region's accuracy next to the paper's and the floor; returns the calibrated/floor
@@ -234,11 +240,8 @@ fn print_repeatability(rep: &RepeatabilitySummary) {
     );
 }
 
-/// The floor check pooled over `args.floor_seeds` campaign seeds: written to
-/// `floor_check.json` and printed.
-fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args, progress: &Progress) -> Result<()> {
-    let check = floor_check_with(scenario, args.floor_seeds, progress)?;
-    write_json(guard, &args.out.join("floor_check.json"), Schema::FLOOR_CHECK, &check)?;
+/// Prints the floor check pooled over the campaign seeds (`floor_check.json`).
+fn print_floor_check(check: &FloorCheck) {
     say!(
         "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
              orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
@@ -254,5 +257,4 @@ fn pooled_floor_check(guard: &Outputs, scenario: &PaperScenario, args: &Args, pr
             "ABOVE"
         }
     );
-    Ok(())
 }

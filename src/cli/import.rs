@@ -229,19 +229,22 @@ fn write_csv(
     comment: &str,
     set: &axiscal::measurement::MeasurementSet,
 ) -> Result<()> {
-    write_csv_from(out, Outputs::new(force).input("DIR", source), comment, set)
+    write_csv_from(out, Outputs::new(force).input("DIR", source), source, comment, set)
 }
 
-/// Writes `comment` and `set` to `out` through `outputs` (which names the inputs).
+/// Writes `comment` and `set` (imported from `source`) to `out` through `outputs` (which names
+/// the inputs).
 fn write_csv_from(
     out: &Path,
     outputs: Outputs,
+    source: &Path,
     comment: &str,
     set: &axiscal::measurement::MeasurementSet,
 ) -> Result<()> {
     if set.rows().is_empty() {
         anyhow::bail!(
-            "nothing to import: no measured point (a file with a header and no data rows?); {} not written",
+            "{}: nothing to import: no measured point (a file with a header and no data rows?); {} not written",
+            source.display(),
             out.display()
         );
     }
@@ -314,7 +317,7 @@ fn import_points(a: &PointsArgs) -> Result<()> {
         joined.unit.name(),
         a.plan.display()
     );
-    write_csv_from(&a.out, outputs, &comment, &joined.set)?;
+    write_csv_from(&a.out, outputs, &a.export, &comment, &joined.set)?;
     let how = if joined.detected { "detected" } else { "stated" };
     println!(
         "imported {} of {} planned points from {} to {}",
@@ -363,7 +366,7 @@ fn import_sscanss2(a: &Sscanss2Args) -> Result<()> {
         super::checks::identity_comment(&desc),
         sscanss2::provenance_comment(&a.file)
     );
-    write_csv_from(&a.out, outputs, &comment, &set)?;
+    write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     report_experiments(&set, &a.file, &a.out);
     Ok(())
 }
@@ -387,7 +390,7 @@ fn import_rct(a: &RctArgs) -> Result<()> {
         super::checks::identity_comment(&desc),
         rct::provenance_comment(&a.file, &options)
     );
-    write_csv_from(&a.out, outputs, &comment, &set)?;
+    write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     report_experiments(&set, &a.file, &a.out);
     Ok(())
 }
@@ -421,7 +424,7 @@ fn import_wide(a: &WideArgs) -> Result<()> {
         super::checks::identity_comment(&desc),
         a.file.display()
     );
-    write_csv_from(&a.out, outputs, &comment, &set)?;
+    write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     report_experiments(&set, &a.file, &a.out);
     Ok(())
 }
@@ -457,7 +460,7 @@ fn import_mat(a: &MatArgs) -> Result<()> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    write_csv_from(&a.out, outputs, &comment, &set)?;
+    write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     println!(
         "imported {} free poses x {} targets from {} to {}",
         set.rows().len() / a.targets.len(),

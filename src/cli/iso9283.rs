@@ -269,8 +269,10 @@ fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {
     let figures = evaluate(&set, &model, &desc, args.calibration.is_none())
         .with_context(|| format!("ISO 9283 figures of {}", args.data.display()))?;
     let text = markdown(&figures, &commanded_by, &args.data.display().to_string());
-    outputs.write_in(&args.out, OUTPUTS[0], json_file::to_string(Schema::ISO9283, &figures)?)?;
-    outputs.write_in(&args.out, OUTPUTS[1], &text)?;
+    let mut staged = outputs.staged_in(&args.out)?;
+    staged.write(OUTPUTS[0], json_file::to_string(Schema::ISO9283, &figures)?)?;
+    staged.write(OUTPUTS[1], &text)?;
+    staged.commit(&[])?;
     say!("{}", text.trim_end());
     say!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
     Ok(())
@@ -360,12 +362,13 @@ fn predict_figures(args: PredictArgs) -> Result<()> {
     )
     .with_context(|| format!("predicting the ISO test of {}", args.calibration.display()))?;
     let text = prediction_markdown(&prediction, &cube, noise_mm, &args.calibration.display().to_string());
-    outputs.write_in(
-        &args.out,
+    let mut staged = outputs.staged_in(&args.out)?;
+    staged.write(
         PREDICTION_OUTPUTS[0],
         json_file::to_string(Schema::ISO9283_PREDICTION, &prediction)?,
     )?;
-    outputs.write_in(&args.out, PREDICTION_OUTPUTS[1], &text)?;
+    staged.write(PREDICTION_OUTPUTS[1], &text)?;
+    staged.commit(&[])?;
     say!("{}", text.trim_end());
     say!("wrote {}/{{{}}}", args.out.display(), PREDICTION_OUTPUTS.join(","));
     Ok(())

@@ -142,13 +142,17 @@ pub fn one_line(e: &anyhow::Error) -> String {
     fold_lines(&message)
 }
 
-/// `text` on one line: lines trimmed, the empty ones dropped, the rest joined by `; `.
+/// `text` on one line: lines trimmed, the empty ones dropped, the rest joined by `; ` (by a
+/// space after a line that ends with `:`, which introduces what follows).
 fn fold_lines(text: &str) -> String {
-    text.lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty())
-        .collect::<Vec<_>>()
-        .join("; ")
+    let mut out = String::new();
+    for line in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        if !out.is_empty() {
+            out.push_str(if out.ends_with(':') { " " } else { "; " });
+        }
+        out.push_str(line);
+    }
+    out
 }
 
 /// A command-line error of clap as one line (its usage and "for more information" lines are

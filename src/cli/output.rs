@@ -158,11 +158,6 @@ impl Outputs {
         file.commit()
     }
 
-    /// [`Outputs::write`] of `dir/name`.
-    pub fn write_in(&self, dir: &Path, name: &str, contents: impl AsRef<[u8]>) -> Result<()> {
-        self.write(&dir.join(name), contents)
-    }
-
     /// Opens `path` for writing after [`Outputs::check`]: the bytes go to a temporary file
     /// that [`OutputFile::commit`] renames over `path` (dropped uncommitted, it is removed).
     pub fn create(&self, path: &Path) -> Result<OutputFile> {

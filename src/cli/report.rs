@@ -124,8 +124,10 @@ pub fn run(args: Args) -> Result<()> {
         iso9283,
     };
     let c = certificate(&inputs).with_context(|| format!("the certificate of {}", args.calibration.display()))?;
-    outputs.write_in(&args.out, OUTPUTS[0], html::render(&c))?;
-    outputs.write_in(&args.out, OUTPUTS[1], json_file::to_string(Schema::CERTIFICATE, &c)?)?;
+    let mut staged = outputs.staged_in(&args.out)?;
+    staged.write(OUTPUTS[0], html::render(&c))?;
+    staged.write(OUTPUTS[1], json_file::to_string(Schema::CERTIFICATE, &c)?)?;
+    staged.commit(&[])?;
     for w in &c.warnings {
         eprintln!("warning: {w}");
     }

@@ -55,8 +55,10 @@ pub fn run(args: Args) -> Result<()> {
     let report = super::options::thread_pool(args.threads)?.install(|| study.run_with(&progress))?;
     drop(progress);
     let md = report.markdown();
-    outputs.write_in(&args.out, names[0], json_file::to_string(Schema::STUDY, &report)?)?;
-    outputs.write_in(&args.out, names[1], &md)?;
+    let mut staged = outputs.staged_in(&args.out)?;
+    staged.write(names[0], json_file::to_string(Schema::STUDY, &report)?)?;
+    staged.write(names[1], &md)?;
+    staged.commit(&[])?;
     print!("{md}");
     Ok(())
 }

@@ -106,7 +106,7 @@ fn noise_only_residuals_mm(
     let mut null: Vec<Vec<f64>> = vec![Vec::with_capacity(replicas); cal.axes.len()];
     for _ in 0..replicas {
         let r = replica(set, &clean, &noise, true, &mut rng)?;
-        let c = calibrate_for(&r, desc, options.noise_rms_3d_mm)?;
+        let c = calibrate_for(&r, desc, options.noise_rms_3d_mm, options.max_poses)?;
         for (acc, a) in null.iter_mut().zip(&c.axes) {
             acc.push(a.residual_rms_mm);
         }
@@ -223,7 +223,7 @@ pub fn diagnose_axes_with(
     options: &DiagnosisOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<AxesDiagnosis, DiagnosisError> {
-    let cal = calibrate_for(set, desc, options.noise_rms_3d_mm)?;
+    let cal = calibrate_for(set, desc, options.noise_rms_3d_mm, options.max_poses)?;
     let replicas = options.axis_replicas.max(2);
     let null = noise_only_residuals_mm(set, desc, &cal, options, replicas, progress)?;
     let means: Vec<f64> = null.iter().map(|v| mean(v)).collect();

@@ -604,8 +604,10 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
             super::result::PoseSplit {
                 training,
                 held_out: prep.poses.len() - training,
+                left_out: prep.poses_left_out,
             }
         },
+        outliers: Vec::new(),
         heldout_rms_before_mm: rms_before,
         noise_only_rms_mm: noise_before,
         gap_sigmas: gap.gap_sigmas,

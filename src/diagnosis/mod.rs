@@ -31,6 +31,7 @@ mod decide;
 mod features;
 mod model;
 mod noise;
+mod outliers;
 mod plots;
 mod poses;
 mod predicted_error;
@@ -50,8 +51,9 @@ pub use model::{
     unmodelled_harmonic_order,
 };
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
+pub use outliers::{validation_outliers, without_outliers};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
-pub use poses::{Pose, split, target_count, training_mask, validation_poses};
+pub use poses::{Pose, split, target_count, training_mask, validation_poses, validation_poses_at_most};
 pub use refine::{CARRIABLE, CarryError, carriable, carried_candidates, refine_calibration, refine_carrying};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
@@ -65,6 +67,7 @@ use crate::calibration::free_pose::{FreePoseOptions, calibrate_free_poses, with_
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear_with};
 use crate::measurement::MeasurementSet;
+use crate::measurement::bounded::DIAGNOSIS_MAX_POSES;
 use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector};
@@ -137,6 +140,15 @@ pub struct DiagnosisOptions {
     /// the noise-only spread instead of passing for a gap.
     #[serde(default)]
     pub noise_dof: Option<f64>,
+    /// The validation poses the diagnosis fits at most, evenly spaced through the file (its
+    /// memory grows with their number times `noise_trials x noise_draws`): beyond it the
+    /// others are left out, and [`Diagnosis::poses`] counts them.
+    #[serde(default = "default_max_poses")]
+    pub max_poses: usize,
+}
+
+fn default_max_poses() -> usize {
+    DIAGNOSIS_MAX_POSES
 }
 
 fn default_refine_tool_targets() -> bool {
@@ -160,6 +172,7 @@ impl Default for DiagnosisOptions {
             axis_replicas: default_axis_replicas(),
             noise_dof: None,
             refine_tool_targets: true,
+            max_poses: DIAGNOSIS_MAX_POSES,
         }
     }
 }
@@ -169,6 +182,8 @@ struct Prepared {
     cal: Calibration,
     predictor: Predictor,
     poses: Vec<Pose>,
+    /// Validation poses of the file beyond `poses` (`DiagnosisOptions::max_poses`).
+    poses_left_out: usize,
     /// Residual rows of the training poses (the first rows; the held-out ones follow).
     train_rows: usize,
     /// Held-out targets.
@@ -196,6 +211,13 @@ fn ordered(poses: &[Pose]) -> Vec<&Pose> {
     train.into_iter().chain(held).collect()
 }
 
+/// The validation poses the diagnosis fits: at most `max_poses` of `set`'s, evenly spaced
+/// through the file (the null data's memory grows with them), each with its approach
+/// directions from the whole file; and how many it left out.
+fn diagnosed_poses(set: &MeasurementSet, desc: &RobotDescription, max_poses: usize) -> (Vec<Pose>, usize) {
+    validation_poses_at_most(set.rows(), desc, max_poses)
+}
+
 /// Whether `set` holds free poses only (no axis experiment): step 1 of the module docs then
 /// calibrates from the training poses themselves.
 pub fn free_poses_only(set: &MeasurementSet) -> bool {
@@ -205,11 +227,13 @@ pub fn free_poses_only(set: &MeasurementSet) -> bool {
 /// Step 1 of the module docs: the standard calibration of `set`'s axis experiments; for free
 /// poses only ([`free_poses_only`]) the free-pose calibration of the training poses (the even
 /// ones, [`split`]: the held-out poses stay unseen), geometry and harmonics only (an effect in
-/// the model would hide what the diagnosis looks for), every pose kept.
+/// the model would hide what the diagnosis looks for), every pose kept (of the at most
+/// `max_poses` the diagnosis takes, the same selection: [`evenly_spaced`](crate::measurement::bounded::evenly_spaced)).
 fn calibrate_for(
     set: &MeasurementSet,
     desc: &RobotDescription,
     noise_rms_3d_mm: f64,
+    max_poses: usize,
 ) -> Result<Calibration, DiagnosisError> {
     if !free_poses_only(set) {
         return Ok(calibrate(
@@ -225,6 +249,7 @@ fn calibrate_for(
         keep_outliers: true,
         holdout: true,
         effects: false,
+        max_poses,
         ..FreePoseOptions::default()
     };
     let cal = calibrate_free_poses(set, desc, &options)?;
@@ -252,12 +277,12 @@ fn reference_temperature(set: &MeasurementSet) -> f64 {
 fn prepare(
     set: &MeasurementSet,
     desc: &RobotDescription,
-    noise_rms_3d_mm: f64,
-    scope: RefitScope,
+    options: &DiagnosisOptions,
     with_candidates: bool,
 ) -> Result<Prepared, DiagnosisError> {
-    let cal = calibrate_for(set, desc, noise_rms_3d_mm)?;
-    let poses = validation_poses(set.rows(), desc);
+    let (noise_rms_3d_mm, scope) = (options.noise_rms_3d_mm, options.refit);
+    let cal = calibrate_for(set, desc, noise_rms_3d_mm, options.max_poses)?;
+    let (poses, poses_left_out) = diagnosed_poses(set, desc, options.max_poses);
     if poses.len() < 4 {
         return Err(DiagnosisError::TooFewPoses {
             found: poses.len(),
@@ -308,6 +333,7 @@ fn prepare(
         cal,
         predictor,
         poses,
+        poses_left_out,
         train_rows,
         held_targets,
         residuals,
@@ -480,11 +506,11 @@ fn null_data(
             ..noise.clone()
         };
         let r = replica(set, &clean, &noise_trial, false, &mut rng)?;
-        let cal = calibrate_for(&r, desc, options.noise_rms_3d_mm * level)?;
+        let cal = calibrate_for(&r, desc, options.noise_rms_3d_mm * level, options.max_poses)?;
         for (acc, a) in axis_rms2.iter_mut().zip(&cal.axes) {
             acc.push(a.residual_rms_mm.powi(2));
         }
-        let poses = validation_poses(r.rows(), desc);
+        let (poses, _) = diagnosed_poses(&r, desc, options.max_poses);
         let pred = Predictor::new(&cal.robot, desc, reference_c, options.refit);
         let systematic = pred
             .residuals(&vec![0.0; pred.geometric_count()], &ordered(&poses))
@@ -563,7 +589,7 @@ pub fn baseline_heldout_rms_mm(
     desc: &RobotDescription,
     options: &DiagnosisOptions,
 ) -> Result<f64, DiagnosisError> {
-    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit, false)?;
+    let prep = prepare(set, desc, options, false)?;
     let fit = prep.baseline_fit();
     let ssr = prep.heldout_ssr(
         fit,
@@ -604,16 +630,9 @@ pub fn diagnose_with(
     options: &DiagnosisOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<Diagnosis, DiagnosisError> {
-    // Free poses: the description's tool targets may be the calibration's fitted ones.
-    let fitted = match free_poses_only(set) {
-        true => Some(with_fitted_targets(
-            desc,
-            &calibrate_for(set, desc, options.noise_rms_3d_mm)?,
-        )),
-        false => None,
-    };
+    let fitted = with_free_pose_targets(set, desc, options)?;
     let desc = fitted.as_ref().unwrap_or(desc);
-    let nominal = prepare(set, desc, options.noise_rms_3d_mm, options.refit, false)?;
+    let nominal = prepare(set, desc, options, false)?;
     let tool_targets = refined_tool_targets(&nominal, options.noise_rms_3d_mm);
     drop(nominal);
     let refined = tool_targets
@@ -621,11 +640,27 @@ pub fn diagnose_with(
         .filter(|_| options.refine_tool_targets)
         .map(|t| t.description(desc));
     let desc = refined.as_ref().unwrap_or(desc);
-    let prep = prepare(set, desc, options.noise_rms_3d_mm, options.refit, true)?;
+    let prep = prepare(set, desc, options, true)?;
     let null = null_data(set, desc, &prep, options, progress)?;
     let mut d = decide::decide(&prep, &null, options);
     d.tool_targets = tool_targets;
     Ok(d)
+}
+
+/// For free poses only ([`free_poses_only`]), `desc` with the tool targets the free-pose
+/// calibration fitted (the description may give none); `None` otherwise.
+fn with_free_pose_targets(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &DiagnosisOptions,
+) -> Result<Option<RobotDescription>, DiagnosisError> {
+    Ok(match free_poses_only(set) {
+        true => Some(with_fitted_targets(
+            desc,
+            &calibrate_for(set, desc, options.noise_rms_3d_mm, options.max_poses)?,
+        )),
+        false => None,
+    })
 }
 
 /// The tool targets refined from the training poses and compared with the description's

@@ -2,6 +2,7 @@
 //! command history, conditions and measured tool targets (`docs/formats.md#measurement-csv`).
 
 use crate::measurement::Measurement;
+use crate::measurement::bounded::evenly_spaced;
 use crate::physics::pose_approaches;
 use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::RobotDescription;
@@ -38,18 +39,42 @@ pub struct Pose {
 /// order, with their approach directions (command and actuator) taken over every pose of the
 /// file.
 pub fn validation_poses(rows: &[Measurement], desc: &RobotDescription) -> Vec<Pose> {
-    let mut index: HashMap<(&str, usize), usize> = HashMap::new();
-    let mut poses: Vec<Pose> = Vec::new();
-    let mut keep: Vec<bool> = Vec::new();
-    let mut approaches = pose_approaches(rows, desc).into_iter();
+    validation_poses_at_most(rows, desc, usize::MAX).0
+}
+
+/// [`validation_poses`], at most `max` of them, evenly spaced through the file
+/// ([`evenly_spaced`] over their order), and how many were left out. Only the kept poses are
+/// built; the approach directions still follow every pose of the file.
+pub fn validation_poses_at_most(rows: &[Measurement], desc: &RobotDescription, max: usize) -> (Vec<Pose>, usize) {
+    // Every pose's ordinal (the order of its first row) and whether it is a validation pose.
+    let mut ordinal: HashMap<(&str, usize), usize> = HashMap::new();
+    let mut validation: Vec<usize> = Vec::new();
     for m in rows {
-        let key = (m.experiment.as_str(), m.step);
-        let i = match index.get(&key) {
-            Some(&i) => i,
-            None => {
-                let a = approaches
-                    .next()
-                    .unwrap_or_else(|| unreachable!("one approach per distinct (experiment, step)"));
+        let next = ordinal.len();
+        if *ordinal.entry((m.experiment.as_str(), m.step)).or_insert(next) == next
+            && m.moved_joint == 0
+            && m.experiment != TOOL_EXPERIMENT
+        {
+            validation.push(next);
+        }
+    }
+    let count = validation.len();
+    let mut slot: Vec<Option<usize>> = vec![None; ordinal.len()];
+    for (k, o) in evenly_spaced(validation, max).into_iter().enumerate() {
+        slot[o] = Some(k);
+    }
+    let mut poses: Vec<Pose> = Vec::new();
+    let mut approaches = pose_approaches(rows, desc);
+    let mut built = 0;
+    for m in rows {
+        let o = ordinal[&(m.experiment.as_str(), m.step)];
+        if o == built {
+            // The pose's first row: its approach is the next one (one per pose, in this order).
+            let a = approaches
+                .next()
+                .unwrap_or_else(|| unreachable!("one approach per distinct (experiment, step)"));
+            built += 1;
+            if slot[o].is_some() {
                 poses.push(Pose {
                     experiment: m.experiment.clone(),
                     step: m.step,
@@ -60,19 +85,14 @@ pub fn validation_poses(rows: &[Measurement], desc: &RobotDescription) -> Vec<Po
                     payload_kg: m.payload_kg,
                     targets: Vec::new(),
                 });
-                keep.push(m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT);
-                index.insert(key, poses.len() - 1);
-                poses.len() - 1
             }
-        };
-        poses[i].targets.push((m.target, m.position_m()));
+        }
+        if let Some(k) = slot[o] {
+            poses[k].targets.push((m.target, m.position_m()));
+        }
     }
-    poses
-        .into_iter()
-        .zip(keep)
-        .filter(|(p, k)| *k && !p.targets.is_empty())
-        .map(|(p, _)| p)
-        .collect()
+    let left_out = count - poses.len();
+    (poses, left_out)
 }
 
 /// Whether each pose is a training pose: the configurations (bit-identical commands) in the

@@ -5,9 +5,12 @@
 //! the tool targets fixed. With `--carry`, a diagnosis's named effects are fitted with it and
 //! folded into the model ([`carried_candidates`], [`Predictor::carried_robot`]).
 
-use super::{Candidate, Diagnosis, Pose, Predictor, RefitScope, reference_temperature, validation_poses};
+use super::{
+    Candidate, Diagnosis, Pose, Predictor, RefitScope, reference_temperature, validation_poses,
+    validation_poses_at_most,
+};
 use crate::calibration::procedure::Calibration;
-use crate::calibration::refine::{RefineError, RefineOptions, refine_free_poses, unrefined_sigma};
+use crate::calibration::refine::{RefineError, RefineOptions, Refinement, refine_free_poses, unrefined_sigma};
 use crate::measurement::MeasurementSet;
 use crate::physics::{ApproachSource, HarmonicPeriod};
 use crate::robot::RobotDescription;
@@ -33,7 +36,7 @@ pub fn refine_carrying(
     options: &RefineOptions,
     carried: &[Candidate],
 ) -> Result<Calibration, RefineError> {
-    let poses = validation_poses(set.rows(), desc);
+    let (poses, left_out) = validation_poses_at_most(set.rows(), desc, options.max_poses);
     let predictor =
         Predictor::new(&cal.robot, desc, reference_temperature(set), RefitScope::Identified).with_candidates(carried);
     let mut layout = predictor.refit_layout();
@@ -47,7 +50,10 @@ pub fn refine_carrying(
     let out = refine_free_poses(residuals, &targets, &layout, &sigma, &predictor.steps(), options)?;
     let mut refined = cal.clone();
     refined.robot = predictor.carried_robot(&out.params);
-    refined.refinement = Some(out.summary);
+    refined.refinement = Some(Refinement {
+        poses_left_out: left_out,
+        ..out.summary
+    });
     Ok(refined)
 }
 

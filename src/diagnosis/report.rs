@@ -34,6 +34,17 @@ pub fn markdown(d: &Diagnosis, source: &str) -> String {
         d.refit_rank.parameters,
         d.null_samples
     );
+    if d.poses.left_out > 0 {
+        let _ = writeln!(
+            s,
+            "{} more validation poses of the file were left out: the diagnosis fits at most {} of them, evenly spaced through the file (`--max-poses`).\n",
+            d.poses.left_out,
+            d.poses.training + d.poses.held_out
+        );
+    }
+    if !d.outliers.is_empty() {
+        outliers_section(&mut s, &d.outliers);
+    }
     if !d.parameters.is_empty() {
         let _ = writeln!(s, "| parameter | value | 1-sigma |\n|---|---|---|");
         for p in &d.parameters {
@@ -128,6 +139,29 @@ fn tool_targets_section(s: &mut String, t: &super::ToolTargets) {
             s,
             "| {}-{} | {:.3} | {:.3} | {:.3} | {:.1} |",
             d.first_target, d.second_target, d.nominal_mm, d.refined_mm, d.sigma_mm, d.sigmas_off
+        );
+    }
+    s.push('\n');
+}
+
+/// The validation points the outlier test flagged.
+fn outliers_section(s: &mut String, outliers: &[crate::calibration::procedure::OutlierPoint]) {
+    let _ = writeln!(
+        s,
+        "Outliers (beyond the far-out fence and far from their pose's other targets; `docs/diagnosis.md`, \"Outliers\"):\n\n| line | experiment | step | target | residual [mm] | over the noise | fence | left out |\n|---|---|---|---|---|---|---|---|"
+    );
+    for o in outliers {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {:.3} | {:.1} | {:.1} | {} |",
+            o.line.map_or_else(|| "-".to_string(), |l| l.to_string()),
+            o.experiment,
+            o.step,
+            o.target,
+            o.residual_mm,
+            o.normalised_residual,
+            o.fence,
+            if o.dropped { "yes" } else { "no (--keep-outliers)" }
         );
     }
     s.push('\n');

@@ -158,6 +158,10 @@ pub struct Diagnosis {
     pub tool_targets: Option<super::ToolTargets>,
     /// Training and held-out pose counts.
     pub poses: PoseSplit,
+    /// The validation points the outlier test flagged (`docs/diagnosis.md`, "Outliers"), each
+    /// with whether the diagnosis was made without it; absent when none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outliers: Vec<crate::calibration::procedure::OutlierPoint>,
     /// Baseline held-out RMS \[mm\].
     pub heldout_rms_before_mm: f64,
     /// Noise-only held-out RMS of the baseline \[mm\].
@@ -187,6 +191,10 @@ pub struct PoseSplit {
     pub training: usize,
     /// Poses held out, where the gaps are measured.
     pub held_out: usize,
+    /// Validation poses of the file left out of the diagnosis (beyond `--max-poses`, evenly
+    /// spaced through the file; absent when every pose is diagnosed).
+    #[serde(default, skip_serializing_if = "crate::json_file::is_zero_count")]
+    pub left_out: usize,
 }
 
 /// The baseline refit's identifiable directions.

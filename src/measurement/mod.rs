@@ -2,6 +2,7 @@
 //! calibrated to the paper's 0.19 mm net radial error) and the measurement data files
 //! (`docs/formats.md#measurement-csv`).
 
+pub mod bounded;
 mod csv_io;
 mod data;
 pub mod import;

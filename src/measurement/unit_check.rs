@@ -119,6 +119,23 @@ fn arc_of(rows: &[&Measurement], k: usize) -> Option<(f64, f64)> {
     Some((median(radii), median(ratios)))
 }
 
+/// An arc whose sagitta, as the description and the commands give it, and whose points' RMS
+/// spread are both below this \[mm\] is not judged: a circle through three of its points
+/// measures the instrument's noise (0.2 mm for the paper's theodolites, 0.02-0.05 mm for a
+/// laser tracker) more than its radius.
+const MIN_JUDGED_SAGITTA_MM: f64 = 1.0;
+
+/// The sagitta \[mm\] of the arc a target at `radius_mm` from the axis draws over the commanded
+/// span of joint `k` (0-based) in `rows` (read in degrees; at most half a turn).
+fn expected_sagitta_mm(radius_mm: f64, rows: &[&Measurement], k: usize) -> f64 {
+    let (lo, hi) = rows
+        .iter()
+        .map(|r| r.cmd[k])
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
+    let half = ((hi - lo).abs().min(360.0) / 2.0).to_radians();
+    radius_mm * (1.0 - half.cos())
+}
+
 /// The radius \[mm\] the description gives the target of `rows` (target 0 of joint `joint`,
 /// 1-based) about its axis at the first row's commands.
 fn nominal_radius_mm(desc: &RobotDescription, joint: usize, first: &Measurement) -> Option<f64> {
@@ -143,10 +160,21 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
         }
         let by_step = e.by_step_target();
         let rows: Vec<&Measurement> = by_step.iter().filter(|((_, t), _)| *t == 0).map(|(_, m)| *m).collect();
+        let nominal = nominal_radius_mm(desc, joint, rows[0]).filter(|r| *r > 1.0);
+        let points: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.position_mm)).collect();
+        if let Some(r) = nominal
+            && expected_sagitta_mm(r, &rows, joint - 1) < MIN_JUDGED_SAGITTA_MM
+            && crate::numerics::stats::rms_spread(&points) < MIN_JUDGED_SAGITTA_MM
+        {
+            // Too short an arc to judge, by its commands and by its points (commands in radians
+            // draw a wide arc of points; coordinates in metres come with commands of a wide
+            // one): its radius and angle would be the noise's.
+            continue;
+        }
         let Some((radius, turn_ratio)) = arc_of(&rows, joint - 1) else {
             continue;
         };
-        if let Some(nominal) = nominal_radius_mm(desc, joint, rows[0]).filter(|r| *r > 1.0) {
+        if let Some(nominal) = nominal {
             scale.push((
                 radius / nominal,
                 format!(

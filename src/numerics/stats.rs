@@ -28,6 +28,13 @@ pub fn rms_spread(points: &[nalgebra::Point3<f64>]) -> f64 {
 /// million (0.2 mm of misfit over a spread of half a metre; 0.03 mm over an arc of 50 mm).
 pub const ABSURD_SHARE: f64 = 0.05;
 
+/// Points whose RMS spread about their centroid ([`rms_spread`]) is within this many times the
+/// noise of a point (3-D RMS) show no motion the instrument resolves (a fit of them that fails
+/// or misses them says so): noise alone spreads `n`
+/// points by `noise sqrt((n - 1) / n)` (a chi distribution with `3 (n - 1)` degrees of freedom,
+/// whose chance of twice its scale is below 1e-7 from five points up).
+pub const UNRESOLVED_SPREAD_OVER_NOISE: f64 = 2.0;
+
 /// Tukey's "far out" fence factor (*Exploratory Data Analysis*, 1977, ch. 2): a value beyond
 /// the upper quartile by 3 interquartile ranges.
 pub const FAR_OUT: f64 = 3.0;

@@ -102,34 +102,32 @@ pub struct PoseApproach {
 
 /// The approach directions of every pose of `rows` (`docs/formats.md#row-order-and-approach-direction`):
 /// a pose is a distinct `(experiment, step)`, in the order of its first row, across
-/// experiments; one entry per pose, in that order.
-pub fn pose_approaches(
-    rows: &[crate::measurement::Measurement],
-    desc: &crate::robot::RobotDescription,
-) -> Vec<PoseApproach> {
+/// experiments; one item per pose, in that order, computed as the poses are taken.
+pub fn pose_approaches<'a>(
+    rows: &'a [crate::measurement::Measurement],
+    desc: &'a crate::robot::RobotDescription,
+) -> impl Iterator<Item = PoseApproach> + 'a {
     let n = desc.dof();
     let controller = crate::robot::Controller::from_description(desc);
     let mut seen: std::collections::HashSet<(&str, usize)> = std::collections::HashSet::new();
     let mut by_command = ApproachTracker::new(n, 0.0);
     let mut by_actuator = ApproachTracker::new(n, UNMOVED_ACTUATOR_RAD);
-    let mut out = Vec::new();
-    for m in rows {
+    rows.iter().filter_map(move |m| {
         if !seen.insert((m.experiment.as_str(), m.step)) {
-            continue;
+            return None;
         }
         let cmd = crate::robot::commands_to_internal(desc, &m.cmd);
         let command = by_command.step(&cmd).to_vec();
         // The file's command count was checked against the description on reading.
         let u = controller.decouple(&cmd).unwrap_or_else(|_| cmd.clone());
         let actuator = by_actuator.step(&u).to_vec();
-        out.push(PoseApproach {
+        Some(PoseApproach {
             experiment: m.experiment.clone(),
             step: m.step,
             command,
             actuator,
-        });
-    }
-    out
+        })
+    })
 }
 
 /// [`pose_approaches`] by `(experiment, step)`: each pose's actuator approach directions, what
@@ -139,7 +137,6 @@ pub fn actuator_approach_by_pose(
     desc: &crate::robot::RobotDescription,
 ) -> std::collections::HashMap<(String, usize), Vec<f64>> {
     pose_approaches(rows, desc)
-        .into_iter()
         .map(|a| ((a.experiment, a.step), a.actuator))
         .collect()
 }

@@ -1001,13 +1001,17 @@ fn a_failed_write_leaves_the_output_folder_as_it_was() {
             .assert()
             .success();
     }
-    axiscal()
-        .current_dir(d)
-        .args(["calibrate", "a.csv", "--out", "cal"])
-        .assert()
-        .success();
+    let calibrate = |data: &str, out: &str| format!("calibrate {data} --out {out} --force");
+    failed_write_keeps(d, "cal", &calibrate("a.csv", "cal"), &calibrate("b.csv", "cal"));
+}
+
+/// Runs `first` (arguments of `axiscal`, split on spaces) in `d`, which writes the folder
+/// `out`; then `second` under a file-size limit between its two largest files: one error with
+/// exit 2, and `out` byte for byte as `first` left it.
+fn failed_write_keeps(d: &Path, out: &str, first: &str, second: &str) {
+    axiscal().current_dir(d).args(first.split(' ')).assert().success();
     let snapshot = || -> Vec<(String, Vec<u8>)> {
-        let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(d.join("cal"))
+        let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(d.join(out))
             .unwrap()
             .map(|e| e.unwrap())
             .map(|e| {
@@ -1022,27 +1026,29 @@ fn a_failed_write_leaves_the_output_folder_as_it_was() {
     };
     let before = snapshot();
     let largest = before.iter().map(|(_, b)| b.len()).max().unwrap();
-    let second = before
+    let second_largest = before
         .iter()
         .map(|(_, b)| b.len())
         .filter(|&n| n < largest)
         .max()
         .unwrap();
     // A limit between the second-largest output and the largest: some files are written, one fails.
-    let limit_kib = (second + largest) / 2 / 1024;
+    let limit_kib = (second_largest + largest) / 2 / 1024;
+    assert!(
+        limit_kib * 1024 > second_largest,
+        "{out}: the files are too close in size for the check"
+    );
     let failed = std::process::Command::new("bash")
         .arg("-c")
-        .arg(format!(
-            "ulimit -f {limit_kib}; exec \"$0\" calibrate b.csv --out cal --force"
-        ))
+        .arg(format!("ulimit -f {limit_kib}; exec \"$0\" {second}"))
         .arg(env!("CARGO_BIN_EXE_axiscal"))
         .current_dir(d)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&failed.stderr);
-    assert_eq!(failed.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("File too large"), "{stderr}");
-    assert_eq!(snapshot(), before, "the folder changed: {stderr}");
+    assert_eq!(failed.status.code(), Some(2), "{second}: {stderr}");
+    assert!(stderr.contains("File too large"), "{second}: {stderr}");
+    assert_eq!(snapshot(), before, "{second}: the folder changed: {stderr}");
 }
 
 /// Line endings and header case as other tools write them: CR-only lines are one error naming
@@ -1127,4 +1133,107 @@ fn a_huge_cell_is_not_echoed() {
         message.contains("huge.csv:") && message.contains("`x_mm`") && message.contains("[5000000 characters]"),
         "{message}"
     );
+}
+
+/// Hostile wide pose tables (`import wide`): each one error naming the file, the line and
+/// the column where the file has them, exit 2; a header with marker 1's y missing panicked,
+/// a row with one cell too many was read shifted, a coordinate of 1e300 was named by the
+/// output row's `x_mm`, a header-only file did not name the file.
+#[test]
+fn hostile_wide_tables_name_the_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = "q1,q2,q3,q4,q5,q6,m1_x,m1_y,m1_z";
+    let cases: [(&str, String, &[&str]); 7] = [
+        (
+            "no-y.csv",
+            "q1,q2,q3,q4,q5,q6,m1_x,m1_z\n0,0,0,0,0,0,1,2\n".into(),
+            &["no-y.csv", "no column m1_y"],
+        ),
+        (
+            "nan.csv",
+            format!("{header}\n0,0,0,0,0,0,1,2,3\n0,nan,0,0,0,0,1,2,3\n"),
+            &["nan.csv", "line 3", "q2"],
+        ),
+        (
+            "header.csv",
+            format!("{header}\n"),
+            &["header.csv", "nothing to import"],
+        ),
+        (
+            "text.csv",
+            format!("{header}\n0,0,0,0,0,0,1,abc,3\n"),
+            &["text.csv", "line 2", "m1_y"],
+        ),
+        (
+            "part.csv",
+            format!("{header}\n0,0,0,0,0,0,1,,3\n"),
+            &["part.csv", "line 2", "m1_y", "empty"],
+        ),
+        (
+            "far.csv",
+            format!("{header}\n0,0,0,0,0,0,1,2,3\n0,0,0,0,0,0,1e300,2,3\n"),
+            &["far.csv", "line 3", "m1_x", "1e7 mm"],
+        ),
+        (
+            "long.csv",
+            format!("{header}\n0,0,0,0,0,0,1,2,3,4\n"),
+            &["long.csv", "line 2", "10 cells", "9 columns"],
+        ),
+    ];
+    for (name, text, expected) in cases {
+        std::fs::write(dir.path().join(name), text).unwrap();
+        let a = axiscal()
+            .current_dir(dir.path())
+            .args([
+                "import", "wide", name, "--angles", "rad", "--units", "mm", "--out", "out.csv",
+            ])
+            .assert()
+            .code(2);
+        let e = stderr(&a);
+        assert_eq!(e.lines().count(), 1, "{name}: {e}");
+        for x in expected {
+            assert!(e.contains(x), "{name}: no {x:?} in {e}");
+        }
+        assert!(!dir.path().join("out.csv").exists(), "{name}: nothing written");
+    }
+}
+
+/// A sweep of 0.001 degree moves its target 1.4 micrometres: `calibrate` and `diagnose` say
+/// the sweep is too short for the instrument, naming it, where they said the coordinates
+/// looked like metres and the commands like micrometres (the unit check judged an arc of
+/// noise), or that the arc fit did not converge.
+#[test]
+fn a_sweep_shorter_than_the_noise_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("tiny.toml"),
+        "reference = [0, 0, 0, 0, 0, 0]\n[[sweeps]]\njoint = 6\nspan = 0.001\nintervals = 15\n",
+    )
+    .unwrap();
+    axiscal()
+        .current_dir(d)
+        .args([
+            "simulate",
+            "--sim",
+            "analytic",
+            "--plan",
+            "tiny.toml",
+            "--out",
+            "tiny.csv",
+        ])
+        .assert()
+        .success();
+    for command in ["calibrate", "diagnose"] {
+        let a = axiscal()
+            .current_dir(d)
+            .args([command, "tiny.csv", "--out", "out"])
+            .assert()
+            .code(2);
+        let e = error_of(&a);
+        assert!(
+            e.contains("tiny.csv") && e.contains("axis6") && e.contains("too short") && !e.contains("look like"),
+            "{command}: {e}"
+        );
+    }
 }

@@ -1,6 +1,7 @@
 //! Fuzzing of every reader of user files (stable Rust: proptest mutations of valid seed files
 //! instead of `cargo fuzz`, which needs nightly): the measurement CSV, robot descriptions,
-//! scenarios, effects files and `calibration.json`. Each mutated file must give a value or one
+//! scenarios, effects files, `calibration.json` and the importers' tables (a tracker's point
+//! export, SpatialAnalyzer's ASCII export, a wide pose table). Each mutated file must give a value or one
 //! error naming the file, never a panic; a value read is then used (calibrated, compensated,
 //! hashed) and must not panic either.
 //!
@@ -14,6 +15,11 @@ use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate
 use axiscal::compensation::Compensator;
 use axiscal::harness::scenario::{Overrides, ResolvedScenario, ScenarioFile};
 use axiscal::json_file::{self, Schema};
+use axiscal::kinematics::JointKind;
+use axiscal::measurement::import::points::{LengthUnit, read_export};
+use axiscal::measurement::import::spatial_analyzer;
+use axiscal::measurement::import::table::Table;
+use axiscal::measurement::import::wide::{WideOptions, import_wide};
 use axiscal::measurement::{read_measurements_from, unit_check, write_measurements_to};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -31,15 +37,31 @@ enum Reader {
     Scenario,
     Effects,
     CalibrationJson,
+    PointExport,
+    SpatialAnalyzer,
+    WideTable,
 }
 
-const READERS: [Reader; 5] = [
+const READERS: [Reader; 8] = [
     Reader::MeasurementCsv,
     Reader::Description,
     Reader::Scenario,
     Reader::Effects,
     Reader::CalibrationJson,
+    Reader::PointExport,
+    Reader::SpatialAnalyzer,
+    Reader::WideTable,
 ];
+
+const POINT_EXPORT: &str = "id,x_mm,y_mm,z_mm,sigma_mm\n1,100.5,-20.25,300.125,0.02\n2,101.5,-19.75,\"300,5\",0.02\n\
+P003,1e3,2.5e-1,-0.0,0.03\n";
+
+const SPATIAL_ANALYZER: &str = "// SpatialAnalyzer 2023.1\n// Working frame: World, mm\nA Grp SMR_1 100.5 -20.25 300.125 0.01\n\
+A Grp SMR_2 101.5 -19.75 300.5 0.01\nA Grp SMR_17 1000 0.25 -0.0 0.02\n";
+
+const WIDE_TABLE: &str = "q1,q2,m1_x,m1_y,m1_z,m2_x,m2_y,m2_z\n0,0,1000,0,500,1100,0,500\n\
+0.1,0,995,99.8,500,1094.5,109.8,500\n0.2,0,980.1,198.7,500,1078.1,218.5,500\n\
+0.3,0,955.3,295.5,500,1050.9,325.1,nan\n0.3,0.2,950,290,520,,,\n";
 
 /// A small valid campaign (fewer poses than Table 1, so a calibration of a mutant is quick).
 fn campaign_csv() -> Vec<u8> {
@@ -80,6 +102,9 @@ fn seeds(reader: Reader) -> Vec<Vec<u8>> {
             file("scenarios/noise-sweep.toml"),
         ],
         Reader::Effects => vec![EFFECTS.as_bytes().to_vec()],
+        Reader::PointExport => vec![POINT_EXPORT.as_bytes().to_vec()],
+        Reader::SpatialAnalyzer => vec![SPATIAL_ANALYZER.as_bytes().to_vec()],
+        Reader::WideTable => vec![WIDE_TABLE.as_bytes().to_vec()],
         Reader::CalibrationJson => {
             let desc = RobotDescription::asea_irb6l();
             let set = read_measurements_from(campaign_csv().as_slice(), Path::new("seed.csv"), Some(6)).unwrap();
@@ -214,6 +239,30 @@ fn exercise(reader: Reader, bytes: &[u8]) -> Result<(), TestCaseError> {
             Ok(_) => {}
             Err(e) => check_error("fuzz.toml", &e.to_string())?,
         },
+        Reader::PointExport => match Table::parse(&text, Path::new("fuzz.csv")).and_then(|t| read_export(&t)) {
+            Ok(_) => {}
+            Err(e) => check_error("fuzz.csv", &e.to_string())?,
+        },
+        Reader::SpatialAnalyzer => {
+            match spatial_analyzer::to_table(&text, Path::new("fuzz.txt"), None).and_then(|t| read_export(&t)) {
+                Ok(_) => {}
+                Err(e) => check_error("fuzz.txt", &e.to_string())?,
+            }
+        }
+        Reader::WideTable => {
+            let options = WideOptions {
+                kinds: vec![JointKind::Revolute, JointKind::Revolute],
+                radians: true,
+                lengths: LengthUnit::Mm,
+                still_tolerance: 1e-6,
+            };
+            match Table::parse(&text, Path::new("fuzz.csv")).and_then(|t| import_wide(&t, &options)) {
+                Ok(set) => {
+                    let _ = set.experiments();
+                }
+                Err(e) => check_error("fuzz.csv", &e.to_string())?,
+            }
+        }
         Reader::CalibrationJson => {
             if let Ok(cal) = json_file::from_str::<Calibration>(Schema::CALIBRATION, &text)
                 && let Ok(comp) = Compensator::new(&cal.robot, &desc)

@@ -6,6 +6,7 @@ mod common;
 
 mod anywhere;
 mod architecture;
+mod bounded_fits;
 mod calibration_procedure;
 mod calibration_study;
 mod campaign_plan;

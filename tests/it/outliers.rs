@@ -335,3 +335,127 @@ fn false_alarms_on_clean_campaigns_are_rare_and_small() {
     let bound = 6.0 + 3.0 * 6f64.sqrt();
     assert!(flagged_points as f64 <= bound, "{flagged_points} > {bound:.1}");
 }
+
+/// The diagnosis's validation points (`diagnosis::validation_outliers`), through `diagnose`:
+/// a target 50 mm off and two swapped target ids are named by file line on stderr, listed in
+/// `diagnosis.json` and left out, and the diagnosis is then, byte for byte, that of the file
+/// with those rows deleted by hand (a second path: the rows removed by the test, not by the
+/// program); `--keep-outliers` lists them without dropping them. An effect that moves whole
+/// poses (a 1 mrad backlash of joint 3 beside a joint-2 compliance: residuals of several mm on
+/// some poses) loses no point.
+#[test]
+fn diagnose_leaves_out_validation_outliers_and_not_an_effect() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    common::simulate_analytic(d, 40, 21, "clean.csv");
+    let text = std::fs::read_to_string(d.join("clean.csv")).unwrap();
+    let key = |l: &str| -> (String, usize, usize) {
+        let c: Vec<&str> = l.split(',').collect();
+        (c[0].to_string(), c[2].parse().unwrap(), c[3].parse().unwrap())
+    };
+    let is = |l: &str, step: usize, target: usize| {
+        !l.starts_with('#') && !l.starts_with("experiment,") && key(l) == ("validation".into(), step, target)
+    };
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut bad_lines = Vec::new();
+    for (i, l) in lines.iter_mut().enumerate() {
+        if is(l, 7, 1) {
+            let mut c: Vec<String> = l.split(',').map(String::from).collect();
+            c[4] = (c[4].parse::<f64>().unwrap() + 50.0).to_string();
+            *l = c.join(",");
+            bad_lines.push(i + 1);
+        }
+    }
+    // Targets 0 and 2 of step 12 swapped (their ids exchanged).
+    for (i, l) in lines.iter_mut().enumerate() {
+        for (from, to) in [(0, 2), (2, 0)] {
+            if is(l, 12, from) {
+                let mut c: Vec<String> = l.split(',').map(String::from).collect();
+                c[3] = to.to_string();
+                *l = c.join(",");
+                bad_lines.push(i + 1);
+                break;
+            }
+        }
+    }
+    std::fs::write(d.join("bad.csv"), lines.join("\n") + "\n").unwrap();
+    let by_hand: Vec<&str> = text
+        .lines()
+        .filter(|l| !is(l, 7, 1) && !is(l, 12, 0) && !is(l, 12, 2))
+        .collect();
+    std::fs::write(d.join("by-hand.csv"), by_hand.join("\n") + "\n").unwrap();
+    let diagnose = |file: &str, out: &str, keep: bool| {
+        let mut c = axiscal();
+        c.current_dir(d).args([
+            "diagnose",
+            file,
+            "--noise-trials",
+            "4",
+            "--noise-draws",
+            "4",
+            "--out",
+            out,
+        ]);
+        if keep {
+            c.arg("--keep-outliers");
+        }
+        let a = c.assert().success();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join(out).join("diagnosis.json")).unwrap()).unwrap();
+        (stderr(&a), json)
+    };
+    let (err, mut bad) = diagnose("bad.csv", "bad", false);
+    bad_lines.sort();
+    for line in &bad_lines {
+        assert!(err.contains(&format!("bad.csv:{line}: outlier")), "line {line}: {err}");
+    }
+    let listed: Vec<u64> = bad["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["line"].as_u64().unwrap())
+        .collect();
+    assert_eq!(listed, bad_lines.iter().map(|&l| l as u64).collect::<Vec<_>>());
+    assert!(bad["outliers"].as_array().unwrap().iter().all(|o| o["dropped"] == true));
+    let (err, hand) = diagnose("by-hand.csv", "hand", false);
+    assert!(!err.contains("outlier"), "{err}");
+    bad.as_object_mut().unwrap().remove("outliers");
+    assert_eq!(
+        bad, hand,
+        "the diagnosis without the outliers is that of the file without their rows"
+    );
+    let (_, kept) = diagnose("bad.csv", "kept", true);
+    assert_eq!(kept["outliers"].as_array().unwrap().len(), 3);
+    assert!(
+        kept["outliers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|o| o["dropped"] == false)
+    );
+    assert_ne!(kept["poses"], serde_json::Value::Null);
+
+    std::fs::write(
+        d.join("effects.toml"),
+        "[compliance]\nstiffness_nm_per_rad = [1e9, 3e3, 1e9, 1e9, 1e9, 1e9]\n[backlash]\nband_rad = [0.0, 0.0, 1e-3, 0.0, 0.0, 0.0]\n",
+    )
+    .unwrap();
+    axiscal()
+        .current_dir(d)
+        .args([
+            "simulate",
+            "--sim",
+            "analytic",
+            "--seed",
+            "12",
+            "--validation-poses",
+            "100",
+        ])
+        .args(["--effects", "effects.toml", "--out", "effect.csv"])
+        .assert()
+        .success();
+    let (err, effect) = diagnose("effect.csv", "effect", false);
+    assert!(!err.contains("outlier"), "{err}");
+    assert!(effect.get("outliers").is_none());
+    assert_ne!(effect["effect"], "none", "the effect is seen");
+}

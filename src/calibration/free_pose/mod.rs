@@ -72,6 +72,9 @@ pub struct FreePoseOptions {
     /// Try the non-geometric effects in the model (sag under gravity, backlash) and keep the
     /// set that predicts held-out configurations best ([`EffectTrial`]).
     pub effects: bool,
+    /// Free poses fitted at most, evenly spaced through the file (the design's memory grows
+    /// with them); [`FreePoseSummary::poses_left_out`] counts the others.
+    pub max_poses: usize,
 }
 
 impl Default for FreePoseOptions {
@@ -82,6 +85,7 @@ impl Default for FreePoseOptions {
             all_rows: false,
             max_harmonic_order: 2,
             effects: true,
+            max_poses: crate::measurement::bounded::FIT_MAX_POSES,
         }
     }
 }
@@ -188,7 +192,7 @@ pub fn calibrate_free_poses(
     desc: &RobotDescription,
     options: &FreePoseOptions,
 ) -> Result<FreePoseCalibration, FreePoseError> {
-    let poses = FreePoses::from_set(set, desc, options.all_rows)?;
+    let poses = FreePoses::from_set_at_most(set, desc, options.all_rows, options.max_poses)?;
     let controller = Controller::from_description(desc);
     let nominal = RobotModel {
         name: format!("{} (calibrated from free poses)", desc.name),

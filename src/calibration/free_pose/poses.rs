@@ -2,6 +2,7 @@
 
 use super::FreePoseError;
 use crate::measurement::MeasurementSet;
+use crate::measurement::bounded::evenly_spaced;
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::Point3;
 use std::collections::HashMap;
@@ -59,6 +60,8 @@ pub struct FreePoses {
     pub target_names: Vec<String>,
     /// The setups' labels, by setup id (one, `0`, without a `setup` column).
     pub setup_names: Vec<String>,
+    /// Free poses of the file left out ([`FreePoses::from_set_at_most`]).
+    pub left_out: usize,
 }
 
 /// Why the axis experiments' rows of `set` cannot be fitted as free poses, if so: a swept
@@ -112,55 +115,87 @@ impl FreePoses {
     /// Every pose of the `moved_joint = 0` experiments of `set`, or of every experiment with
     /// `all_rows` (sweeps too, their targets on the last link).
     pub fn from_set(set: &MeasurementSet, desc: &RobotDescription, all_rows: bool) -> Result<Self, FreePoseError> {
-        let rows: Vec<(usize, &crate::measurement::Measurement)> = set
-            .rows()
-            .iter()
-            .enumerate()
-            .filter(|(_, r)| all_rows || r.moved_joint == 0)
-            .collect();
-        let mut target_ids: Vec<usize> = rows.iter().map(|(_, r)| r.target).collect();
+        Self::from_set_at_most(set, desc, all_rows, usize::MAX)
+    }
+
+    /// [`FreePoses::from_set`], at most `max` poses, evenly spaced through the file
+    /// ([`evenly_spaced`]; each pose's approach still from every pose of the file).
+    pub fn from_set_at_most(
+        set: &MeasurementSet,
+        desc: &RobotDescription,
+        all_rows: bool,
+        max: usize,
+    ) -> Result<Self, FreePoseError> {
+        let free = |r: &crate::measurement::Measurement| all_rows || r.moved_joint == 0;
+        let mut target_ids: Vec<usize> = set.rows().iter().filter(|r| free(r)).map(|r| r.target).collect();
         target_ids.sort_unstable();
         target_ids.dedup();
-        let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
-        let mut index: HashMap<(&str, usize), usize> = HashMap::new();
+        // Every pose's ordinal (the order of its first row, all experiments: the approaches
+        // follow every pose) and its first row; the free ones in order.
+        let mut ordinal: HashMap<(&str, usize), usize> = HashMap::new();
+        let mut first_row: Vec<usize> = Vec::new();
+        let mut free_ordinals: Vec<usize> = Vec::new();
+        for (row, r) in set.rows().iter().enumerate() {
+            let next = ordinal.len();
+            if *ordinal.entry((r.experiment.as_str(), r.step)).or_insert(next) == next {
+                first_row.push(row);
+                if free(r) {
+                    free_ordinals.push(next);
+                }
+            }
+        }
+        let count = free_ordinals.len();
+        let mut slot: Vec<Option<usize>> = vec![None; first_row.len()];
+        for (k, o) in evenly_spaced(free_ordinals, max).into_iter().enumerate() {
+            slot[o] = Some(k);
+        }
+        let mut approaches = crate::physics::pose_approaches(set.rows(), desc);
         let mut poses: Vec<FreePose> = Vec::new();
-        for (row, r) in rows {
-            let setup = set.setup_of(row);
-            let slot = target_ids.binary_search(&r.target).unwrap_or_default();
-            let point = (slot, r.position_m());
-            let i = *index.entry((r.experiment.as_str(), r.step)).or_insert_with(|| {
-                poses.push(FreePose {
-                    experiment: r.experiment.clone(),
-                    step: r.step,
-                    cmd_file: r.cmd.clone(),
-                    cmd: commands_to_internal(desc, &r.cmd),
-                    points_m: Vec::new(),
-                    setup,
-                    payload_kg: r.payload_kg,
-                    approach: approach
-                        .get(&(r.experiment.clone(), r.step))
-                        .cloned()
-                        .unwrap_or_else(|| vec![0.0; r.cmd.len()]),
-                });
-                poses.len() - 1
-            });
-            let pose = &mut poses[i];
-            if let Some(k) = (0..r.cmd.len()).find(|&k| (r.cmd[k] - pose.cmd_file[k]).abs() > SAME_COMMAND) {
+        for (row, r) in set.rows().iter().enumerate() {
+            let o = ordinal[&(r.experiment.as_str(), r.step)];
+            let first = &set.rows()[first_row[o]];
+            if row == first_row[o] {
+                // One approach per pose, in ordinal order: this pose's is the next.
+                let approach = approaches.next().map(|a| a.actuator);
+                if let Some(k) = slot[o] {
+                    debug_assert_eq!(k, poses.len());
+                    poses.push(FreePose {
+                        experiment: r.experiment.clone(),
+                        step: r.step,
+                        cmd_file: r.cmd.clone(),
+                        cmd: commands_to_internal(desc, &r.cmd),
+                        points_m: Vec::new(),
+                        setup: set.setup_of(row),
+                        payload_kg: r.payload_kg,
+                        approach: approach.unwrap_or_else(|| vec![0.0; r.cmd.len()]),
+                    });
+                }
+            }
+            if !free(r) {
+                continue;
+            }
+            // Every pose's rows are checked, the left-out ones' too.
+            let label = || format!("{} step {}", first.experiment, first.step);
+            if let Some(k) = (0..r.cmd.len()).find(|&k| (r.cmd[k] - first.cmd[k]).abs() > SAME_COMMAND) {
                 return Err(FreePoseError::CommandsDiffer {
-                    pose: pose.label(),
+                    pose: label(),
                     joint: k + 1,
-                    first: pose.cmd_file[k],
+                    first: first.cmd[k],
                     other: r.cmd[k],
                 });
             }
-            if pose.setup != setup {
-                return Err(FreePoseError::SetupsDiffer { pose: pose.label() });
+            if set.setup_of(first_row[o]) != set.setup_of(row) {
+                return Err(FreePoseError::SetupsDiffer { pose: label() });
             }
-            pose.points_m.push(point);
+            if let Some(k) = slot[o] {
+                let target = target_ids.binary_search(&r.target).unwrap_or_default();
+                poses[k].points_m.push((target, r.position_m()));
+            }
         }
         for p in &mut poses {
             p.points_m.sort_by_key(|(slot, _)| *slot);
         }
+        let left_out = count - poses.len();
         let target_names = target_ids.iter().map(|&id| set.target_name(id)).collect();
         let setup_names = match set.setup_names() {
             [] => vec!["0".to_string()],
@@ -171,6 +206,7 @@ impl FreePoses {
             target_ids,
             target_names,
             setup_names,
+            left_out,
         })
     }
 

@@ -85,6 +85,10 @@ pub struct Holdout {
 pub struct FreePoseSummary {
     /// Poses fitted (after the outliers).
     pub poses: usize,
+    /// Free poses of the file left out (beyond `calibrate --max-poses`, evenly spaced through
+    /// the file; absent when every pose is used).
+    #[serde(default, skip_serializing_if = "crate::json_file::is_zero_count")]
+    pub poses_left_out: usize,
     /// Points fitted.
     pub points: usize,
     /// RMS distance of the points from the nominal model placed by the closed-form
@@ -207,6 +211,7 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
     let effect_joints = effect_joints(&s.fitted.model, s.problem, s.kept, &parameters)?;
     let summary = FreePoseSummary {
         poses: s.kept.len(),
+        poses_left_out: s.problem.poses.left_out,
         points: s.fitted.residual.len() / 3,
         closed_form_rms_mm: rms_of(s.start, s.problem, s.kept)? * 1e3,
         nominal_rms_mm: rms_of(&s.registered.model, s.problem, s.kept)? * 1e3,

@@ -123,6 +123,19 @@ pub(super) fn fit_joint(
     detail: Detail,
 ) -> Result<AxisFitOutcome, ProcedureError> {
     let joint = data.joint();
+    let points: Vec<Point3<f64>> = data.points.iter().flatten().copied().collect();
+    let spread_mm = crate::numerics::stats::rms_spread(&points) * 1e3;
+    // Points within the noise of their centroid (by the noise assumed: an estimated one may be
+    // far smaller) explain a fit that fails or misses them: said instead.
+    let factor = crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE;
+    let unresolved = || ProcedureError::Unresolved {
+        experiment: data.name(),
+        joint,
+        spread_mm,
+        noise_mm,
+        factor,
+    };
+    let within_noise = spread_mm < factor * noise_mm;
     let requested = TransmissionForm::from(desc.joints[joint - 1].transmission_fit_form());
     let mut form = requested;
     let setting = FitSetting {
@@ -139,12 +152,14 @@ pub(super) fn fit_joint(
                 source: CalibrationError::NotInvertible { .. },
                 ..
             }) if form.order() > 0 => form = form.one_order_lower().unwrap_or(form),
+            Err(_) if within_noise => return Err(unresolved()),
             fitted => break fitted?,
         }
     };
-    let points: Vec<Point3<f64>> = data.points.iter().flatten().copied().collect();
-    let spread_mm = crate::numerics::stats::rms_spread(&points) * 1e3;
     if out.report.residual_rms_mm > crate::numerics::stats::ABSURD_SHARE * spread_mm {
+        if within_noise {
+            return Err(unresolved());
+        }
         return Err(ProcedureError::Absurd {
             experiment: data.name(),
             joint,

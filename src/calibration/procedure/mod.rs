@@ -215,6 +215,22 @@ pub enum ProcedureError {
         /// `100 rms / spread`.
         share: f64,
     },
+    /// A joint's sweeps move their target less than the noise: no axis can be fitted.
+    #[error(
+        "experiment {experiment} (joint {joint}): its points spread {spread_mm:.4} mm RMS about their centroid, within {factor} times the noise of a point ({noise_mm:.3} mm): the sweep is too short for the instrument to locate the axis; widen its span (or check that the joint moved and the commands' units)"
+    )]
+    Unresolved {
+        /// The experiments of the joint.
+        experiment: String,
+        /// The joint.
+        joint: usize,
+        /// The points' RMS spread \[mm\].
+        spread_mm: f64,
+        /// The noise of a point, 3-D RMS \[mm\].
+        noise_mm: f64,
+        /// [`crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`].
+        factor: f64,
+    },
     /// A fit-and-correct pass for the held joints' recorded values failed: the correction
     /// moved the points away from any arc (it diverges).
     #[error("the correction for the held joints' recorded values diverged in pass {pass}: {source}")]

@@ -31,12 +31,13 @@ use serde::{Deserialize, Serialize};
 /// points, is wrong.
 pub const OUTLIER_SHARE_MAX: f64 = 0.2;
 
-/// A sweep point the outlier test flagged.
+/// A measured point an outlier test flagged: a sweep's point (this module's test) or a
+/// validation point of the diagnosis (`diagnosis::validation_outliers`, `joint` 0).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct OutlierPoint {
     /// The experiment.
     pub experiment: String,
-    /// Its swept joint.
+    /// Its swept joint (0: a validation point).
     pub joint: usize,
     /// The point's step.
     pub step: usize,
@@ -44,16 +45,17 @@ pub struct OutlierPoint {
     pub target: usize,
     /// The line of the data file it was read from, when known.
     pub line: Option<u64>,
-    /// Its 3-D distance from the fit of its sweep's points kept \[mm\].
+    /// Its 3-D distance from the fit of its sweep's points kept (a validation point: from the
+    /// calibrated model after the diagnosis's baseline refit) \[mm\].
     pub residual_mm: f64,
-    /// That residual over its sweep's noise per axis (about `sqrt(3)` for a point of the
-    /// noise).
+    /// That residual over the noise per axis (its sweep's; a validation point: the
+    /// diagnosis's), about `sqrt(3)` for a point of the noise.
     pub normalised_residual: f64,
-    /// The fence it exceeds (Tukey's far-out fence of every sweep point's normalised
-    /// residual).
+    /// The fence it exceeds (Tukey's far-out fence of every sweep point's, or every
+    /// validation point's, normalised residual).
     pub fence: f64,
-    /// Whether the calibration was made without it and the other targets of its pose
-    /// (`false` with `--keep-outliers`).
+    /// Whether the calibration (the diagnosis) was made without it, and for a sweep point
+    /// without the other targets of its pose (`false` with `--keep-outliers`).
     pub dropped: bool,
 }
 

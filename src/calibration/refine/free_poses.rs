@@ -187,6 +187,9 @@ pub struct RefineOptions {
     pub folds: usize,
     /// Gauss-Newton steps at most after the linearised solution.
     pub max_steps: usize,
+    /// Free poses refined on at most, evenly spaced through the file (the design's memory
+    /// grows with them); the others are left out and [`Refinement::poses_left_out`] counts them.
+    pub max_poses: usize,
 }
 
 impl Default for RefineOptions {
@@ -195,6 +198,7 @@ impl Default for RefineOptions {
             noise_rms_3d_mm: 0.19,
             folds: 5,
             max_steps: 10,
+            max_poses: crate::measurement::bounded::FIT_MAX_POSES,
         }
     }
 }
@@ -285,6 +289,10 @@ pub struct FoldCheck {
 pub struct Refinement {
     /// Free poses refined on.
     pub poses: usize,
+    /// Free poses of the file left out (beyond [`RefineOptions::max_poses`], evenly spaced
+    /// through the file; absent when every pose is used).
+    #[serde(default, skip_serializing_if = "crate::json_file::is_zero_count")]
+    pub poses_left_out: usize,
     /// Measured points on them.
     pub points: usize,
     /// The noise the rank rule and the covariance use, 3-D RMS of a point \[mm\].
@@ -520,6 +528,7 @@ where
         params: problem.embed(&u),
         summary: Refinement {
             poses: targets_per_pose.len(),
+            poses_left_out: 0,
             points,
             noise_rms_3d_mm: options.noise_rms_3d_mm,
             parameters: problem.free.len(),
@@ -652,6 +661,7 @@ fn summarise<F>(
         .collect();
     Refinement {
         poses: 0,
+        poses_left_out: 0,
         points: 0,
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         parameters: n,

@@ -49,7 +49,20 @@ impl Table {
                 message,
             })?;
             match &header {
-                None => header = Some(cells.iter().map(|c| c.to_lowercase()).collect()),
+                None => header = Some(cells.iter().map(|c| c.to_lowercase()).collect::<Vec<String>>()),
+                // More cells than columns: a shifted row would be read into the wrong columns.
+                Some(h) if cells.len() > h.len() => {
+                    return Err(PointsError::Row {
+                        path: path.to_owned(),
+                        line: i + 1,
+                        field: format!("{} (after the last)", cells.len()),
+                        message: format!(
+                            "{} cells, the header names {} columns: a separator inside a value, or a missing header name?",
+                            cells.len(),
+                            h.len()
+                        ),
+                    });
+                }
                 Some(_) => rows.push((i + 1, cells)),
             }
         }

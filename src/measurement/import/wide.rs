@@ -60,7 +60,10 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
         })
         .collect();
     if markers.is_empty() {
-        return Err(t.required(&["m1_x"]).unwrap_err());
+        // Marker 1 is incomplete: the first of its columns missing.
+        for axis in ["m1_x", "m1_y", "m1_z"] {
+            t.required(&[axis])?;
+        }
     }
     let mut poses: Vec<Pose> = Vec::with_capacity(t.rows.len());
     for (line, cells) in &t.rows {
@@ -95,9 +98,12 @@ pub(super) fn rows_of(
 ) -> Result<MeasurementSet, PointsError> {
     let experiments = segment(poses, still_tolerance);
     let mut rows = Vec::new();
+    // Each row's pose line and target, for an error in the file's terms.
+    let mut sources = Vec::new();
     for (pose, (name, moved_joint, step)) in poses.iter().zip(experiments) {
         for (target, p) in pose.2.iter().enumerate() {
             if let Some(p) = p {
+                sources.push((pose.0, target));
                 rows.push(Measurement {
                     experiment: name.clone(),
                     moved_joint,
@@ -111,10 +117,30 @@ pub(super) fn rows_of(
             }
         }
     }
-    MeasurementSet::new(joints, rows).map_err(|source| PointsError::Set {
-        path: path.to_owned(),
-        source,
+    MeasurementSet::new(joints, rows).map_err(|e| match sources.get(e.row) {
+        Some(&(line, target)) => PointsError::Row {
+            path: path.to_owned(),
+            line,
+            field: source_column(&e.problem.column(), target),
+            message: e.problem.to_string(),
+        },
+        None => PointsError::Set {
+            path: path.to_owned(),
+            source: e,
+        },
     })
+}
+
+/// The file's column of a measurement row's `column` (`x_mm`: marker `target + 1`'s x;
+/// `cmd_k`: joint `k`).
+fn source_column(column: &str, target: usize) -> String {
+    match column.strip_suffix("_mm") {
+        Some(axis @ ("x" | "y" | "z")) => format!("m{}_{axis}", target + 1),
+        _ => match column.strip_prefix("cmd_") {
+            Some(k) => format!("of joint {k}"),
+            None => column.to_owned(),
+        },
+    }
 }
 
 /// One marker's position \[mm\], `None` when its three cells are empty or `nan`; a partly

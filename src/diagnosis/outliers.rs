@@ -1,0 +1,118 @@
+//! Gross errors among the validation points, found before the diagnosis: each point's 3-D
+//! residual after the baseline refit (the training points fitted, the held-out ones predicted)
+//! over the noise per axis, `z`, against Tukey's far-out fence of every point's (the rule of the
+//! sweeps' screening, [`crate::calibration::procedure::screen_sweeps`], and of the free-pose
+//! fit, [`far_out_fence`]).
+//!
+//! An effect moves the tool, so every target of a pose nearly alike (their residuals differ by
+//! the tool's rotation error times the targets' spacing); a corrupted reading, two swapped
+//! target ids or a point in other units moves one or two. So a point is an outlier when both
+//! its `z` and its distance from the nearest residual of another target of its pose (over the
+//! noise of a difference, `sigma sqrt 2`) are beyond their far-out fences: an effect's pose, its
+//! targets far off alike, stays for the diagnosis to explain. A pose with one target is not
+//! tested.
+
+use super::{DiagnosisError, DiagnosisOptions, ordered, prepare, with_free_pose_targets};
+use crate::calibration::procedure::OutlierPoint;
+use crate::measurement::MeasurementSet;
+use crate::numerics::stats::far_out_fence;
+use crate::robot::RobotDescription;
+use nalgebra::{DMatrix, Vector3};
+use std::collections::HashMap;
+
+/// Fewer points than this are not tested (their quartiles are no fence).
+const MIN_POINTS: usize = 8;
+
+/// The validation points of `set` beyond both fences (module docs), in file order; `dropped`
+/// true.
+pub fn validation_outliers(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &DiagnosisOptions,
+) -> Result<Vec<OutlierPoint>, DiagnosisError> {
+    let fitted = with_free_pose_targets(set, desc, options)?;
+    let prep = prepare(set, fitted.as_ref().unwrap_or(desc), options, false)?;
+    let observed = DMatrix::from_column_slice(prep.residuals.len(), 1, prep.residuals.as_slice());
+    let (train, held) = prep.rows(&observed);
+    let (train, held) = prep.baseline_fit().residualise(&train, &held);
+    let r: Vec<f64> = train.iter().chain(held.iter()).copied().collect();
+    let sigma_m = options.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
+    // Per pose (training then held-out, as the rows), per target: (target, r [m]).
+    let mut row = 0;
+    let mut poses = Vec::new();
+    for p in ordered(&prep.poses) {
+        let points: Vec<(usize, Vector3<f64>)> = p
+            .targets
+            .iter()
+            .map(|&(target, _)| {
+                row += 3;
+                (target, Vector3::new(r[row - 3], r[row - 2], r[row - 1]))
+            })
+            .collect();
+        poses.push((p, points));
+    }
+    // Per point of a pose with two targets or more: (pose, target, |r|, z, d).
+    let mut tested = Vec::new();
+    for (p, points) in &poses {
+        for (k, (target, rk)) in points.iter().enumerate() {
+            let nearest = points
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, (_, rj))| (rk - rj).norm())
+                .fold(f64::INFINITY, f64::min);
+            if nearest.is_finite() {
+                let d = nearest / (sigma_m * 2f64.sqrt());
+                tested.push((*p, *target, rk.norm(), rk.norm() / sigma_m, d));
+            }
+        }
+    }
+    if tested.len() < MIN_POINTS {
+        return Ok(Vec::new());
+    }
+    let fence = far_out_fence(&tested.iter().map(|t| t.3).collect::<Vec<_>>());
+    let fence_apart = far_out_fence(&tested.iter().map(|t| t.4).collect::<Vec<_>>());
+    let mut flagged: Vec<OutlierPoint> = tested
+        .iter()
+        .filter(|t| t.3 > fence && t.4 > fence_apart)
+        .map(|&(p, target, norm, z, _)| OutlierPoint {
+            experiment: p.experiment.clone(),
+            joint: 0,
+            step: p.step,
+            target,
+            line: None,
+            residual_mm: norm * 1e3,
+            normalised_residual: z,
+            fence,
+            dropped: true,
+        })
+        .collect();
+    let rows: HashMap<(&str, usize, usize), usize> = set
+        .rows()
+        .iter()
+        .enumerate()
+        .map(|(i, m)| ((m.experiment.as_str(), m.step, m.target), i))
+        .collect();
+    for o in &mut flagged {
+        o.line = rows
+            .get(&(o.experiment.as_str(), o.step, o.target))
+            .and_then(|&i| set.line_of(i));
+    }
+    flagged.sort_by_key(|o| (o.line, o.step, o.target));
+    Ok(flagged)
+}
+
+/// `set` without the points `outliers`.
+pub fn without_outliers(set: &MeasurementSet, outliers: &[OutlierPoint]) -> MeasurementSet {
+    let drop: std::collections::HashSet<(&str, usize, usize)> = outliers
+        .iter()
+        .map(|o| (o.experiment.as_str(), o.step, o.target))
+        .collect();
+    let rows: Vec<usize> = (0..set.rows().len())
+        .filter(|&i| {
+            let m = &set.rows()[i];
+            drop.contains(&(m.experiment.as_str(), m.step, m.target))
+        })
+        .collect();
+    set.without_rows(&rows)
+}
