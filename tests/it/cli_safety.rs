@@ -1196,6 +1196,24 @@ fn hostile_wide_tables_name_the_file_line_and_column() {
         }
         assert!(!dir.path().join("out.csv").exists(), "{name}: nothing written");
     }
+    // Empty cells past the last column (a writer's trailing separators) are no shifted row.
+    let trailing = format!("{header}\n0,0,0,0,0,0,1,2,3,,\n0,0,0,0,0,1,1,2,3,\n0,0,0,0,0,2,1,2,3\n");
+    std::fs::write(dir.path().join("trailing.csv"), trailing).unwrap();
+    axiscal()
+        .current_dir(dir.path())
+        .args([
+            "import",
+            "wide",
+            "trailing.csv",
+            "--angles",
+            "rad",
+            "--units",
+            "mm",
+            "--out",
+            "out.csv",
+        ])
+        .assert()
+        .success();
 }
 
 /// A sweep of 0.001 degree moves its target 1.4 micrometres: `calibrate` and `diagnose` say

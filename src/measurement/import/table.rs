@@ -50,8 +50,9 @@ impl Table {
             })?;
             match &header {
                 None => header = Some(cells.iter().map(|c| c.to_lowercase()).collect::<Vec<String>>()),
-                // More cells than columns: a shifted row would be read into the wrong columns.
-                Some(h) if cells.len() > h.len() => {
+                // More cells than columns: a shifted row would be read into the wrong columns
+                // (empty cells past the last column, a writer's trailing separators, are not).
+                Some(h) if cells[h.len().min(cells.len())..].iter().any(|c| !c.trim().is_empty()) => {
                     return Err(PointsError::Row {
                         path: path.to_owned(),
                         line: i + 1,
