@@ -355,7 +355,7 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
     // The procedure's message already contains its cause: one line, not the cause twice.
     let mut cal = match calibrate(screened, desc, &options) {
         Ok(cal) => {
-            super::checks::print_sweep_outliers(&screening.outliers, &args.data, "calibrated");
+            super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
             cal
         }
         // Every row a free pose: that fit tests its poses for outliers itself, on every row.
@@ -365,7 +365,7 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
             return Ok((cal, map));
         }
         Err(e) => {
-            super::checks::print_sweep_outliers(&screening.outliers, &args.data, "calibrated");
+            super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
             let hint = args.noise_mm.map_or(String::new(), |n| {
                 format!(
                     " (with --noise-mm {n:e}: a noise far below the data's makes the fits trust each point more than the joints' repeatability allows; without --noise-mm it is estimated from the residuals)"

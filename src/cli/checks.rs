@@ -165,9 +165,9 @@ pub fn outside_limits(desc: &RobotDescription, cmd_file: &[f64]) -> Option<(usiz
     })
 }
 
-/// One warning line per sweep point the outlier test flagged in `data`; `done` is what the
-/// command did without it (`calibrated`, `diagnosed`).
-pub fn print_sweep_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
+/// One warning line per point an outlier test flagged in `data` (a sweep's, or a validation
+/// point, `joint` 0); `done` is what the command did without it (`calibrated`, `diagnosed`).
+pub fn print_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
     for o in outliers {
         let place = o
             .line
@@ -177,8 +177,22 @@ pub fn print_sweep_outliers(outliers: &[axiscal::calibration::procedure::Outlier
         } else {
             "kept (--keep-outliers)".to_string()
         };
+        let (from, noise, fence_of, check) = match o.joint {
+            0 => (
+                "the calibrated model",
+                "the noise",
+                "every validation point's), and far from its pose's other targets (an effect moves them alike",
+                "coordinates and target id",
+            ),
+            _ => (
+                "the fit of its sweep's other points",
+                "the sweep's noise",
+                "every sweep point's",
+                "coordinates and commands",
+            ),
+        };
         eprintln!(
-            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from the fit of its sweep's other points, {:.1} times the sweep's noise, beyond the fence {:.1} (Q3 + 3 IQR of every sweep point's): {what}; check this row's coordinates and commands",
+            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from {from}, {:.1} times {noise}, beyond the fence {:.1} (Q3 + 3 IQR of {fence_of}): {what}; check this row's {check}",
             o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
         );
     }

@@ -6,7 +6,7 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::calibration::procedure::{CalibrationOptions, OutlierPoint, ProcedureError, calibrate, screen_sweeps};
+use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate, screen_sweeps};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
     diagnose_with, estimated_noise, free_poses_only, markdown, validation_outliers, validation_poses, without_outliers,
@@ -124,15 +124,9 @@ pub fn run(args: Args) -> Result<()> {
     if validation_poses(set.rows(), &desc).len() < 4 {
         return run_axes(&args, &desc, &set, &options, &outputs, noise_source);
     }
-    let outliers = validation_outliers(&set, &desc, &options).with_context(|| format!("diagnosing {source}"))?;
-    let outliers: Vec<OutlierPoint> = outliers
-        .into_iter()
-        .map(|o| OutlierPoint {
-            dropped: !args.keep_outliers,
-            ..o
-        })
-        .collect();
-    print_validation_outliers(&outliers, &args.data);
+    let outliers = validation_outliers(&set, &desc, &options, args.keep_outliers)
+        .with_context(|| format!("diagnosing {source}"))?;
+    checks::print_outliers(&outliers, &args.data, "diagnosed");
     let set = match args.keep_outliers || outliers.is_empty() {
         true => set,
         false => without_outliers(&set, &outliers),
@@ -255,26 +249,8 @@ fn without_sweep_outliers(args: &Args, set: MeasurementSet, desc: &RobotDescript
     };
     let screening = screen_sweeps(&set, desc, &options, args.keep_outliers)
         .map_err(|e| anyhow::anyhow!("diagnosing {}: {e}", args.data.display()))?;
-    super::checks::print_sweep_outliers(&screening.outliers, &args.data, "diagnosed");
+    super::checks::print_outliers(&screening.outliers, &args.data, "diagnosed");
     Ok(screening.set.unwrap_or(set))
-}
-
-/// Each validation outlier as a warning naming its file line.
-fn print_validation_outliers(outliers: &[OutlierPoint], data: &Path) {
-    for o in outliers {
-        let place = o
-            .line
-            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
-        let what = if o.dropped {
-            "diagnosed without it (--keep-outliers keeps it)"
-        } else {
-            "kept (--keep-outliers)"
-        };
-        eprintln!(
-            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from the calibrated model, {:.1} times the noise, beyond the fence {:.1} (Q3 + 3 IQR of every validation point's), and far from its pose's other targets (an effect moves them alike): {what}; check this row's coordinates and target id",
-            o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
-        );
-    }
 }
 
 /// `set`, or, when the independent-axis procedure cannot use its sweeps (the correction for

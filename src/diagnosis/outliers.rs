@@ -23,12 +23,14 @@ use std::collections::HashMap;
 /// Fewer points than this are not tested (their quartiles are no fence).
 const MIN_POINTS: usize = 8;
 
-/// The validation points of `set` beyond both fences (module docs), in file order; `dropped`
-/// true.
+/// The validation points of `set` beyond both fences (module docs), in file order; with `keep`
+/// they are flagged as they would be dropped (`dropped` false), as
+/// [`screen_sweeps`](crate::calibration::procedure::screen_sweeps) does.
 pub fn validation_outliers(
     set: &MeasurementSet,
     desc: &RobotDescription,
     options: &DiagnosisOptions,
+    keep: bool,
 ) -> Result<Vec<OutlierPoint>, DiagnosisError> {
     let fitted = with_free_pose_targets(set, desc, options)?;
     let prep = prepare(set, fitted.as_ref().unwrap_or(desc), options, false)?;
@@ -84,7 +86,7 @@ pub fn validation_outliers(
             residual_mm: norm * 1e3,
             normalised_residual: z,
             fence,
-            dropped: true,
+            dropped: !keep,
         })
         .collect();
     let rows: HashMap<(&str, usize, usize), usize> = set
