@@ -302,7 +302,7 @@ fn import_points(a: &PointsArgs) -> Result<()> {
     let export = if sa {
         spatial_analyzer::to_table(&text, &a.export, a.sa_names)?
     } else {
-        Table::parse(&text, &a.export)?
+        Table::parse(text, &a.export)?
     };
     let joined = join_points(&plan, &export, a.units.map(Into::into), a.allow_missing)?;
     let recorded: String = plan

@@ -7,7 +7,7 @@
 //! Unit detection and slips use distances to the median point, which no change of frame
 //! alters: the instrument's frame need not be the description's `placement`.
 
-use super::table::Table;
+use super::table::{Row, Table};
 use crate::measurement::{Measurement, MeasurementSet, MeasurementSetError};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -117,6 +117,9 @@ impl PlanSheet {
             return Err(t.required(&["cmd_1"]).unwrap_err());
         }
         let c = PlanColumns {
+            cmd: (1..=joint_count)
+                .map(|k| t.required(&[&format!("cmd_{k}")]))
+                .collect::<Result<_, _>>()?,
             point: t.required(&["point"])?,
             experiment: t.required(&["experiment"])?,
             moved_joint: t.required(&["moved_joint"])?,
@@ -131,9 +134,9 @@ impl PlanSheet {
         let sight: Vec<usize> = (0..t.header.len())
             .filter(|&k| t.header[k].starts_with("visible_"))
             .collect();
-        let mut rows = Vec::with_capacity(t.rows.len());
-        for (line, cells) in &t.rows {
-            rows.push(plan_row(t, *line, cells, &c, joint_count, &sight)?);
+        let mut rows = Vec::with_capacity(t.row_count());
+        for row in t.rows() {
+            rows.push(plan_row(t, &row, &c, &sight)?);
         }
         check_unique(t, &rows)?;
         Ok(PlanSheet {
@@ -152,44 +155,36 @@ struct PlanColumns {
     step: usize,
     target: usize,
     nominal: [usize; 3],
+    cmd: Vec<usize>,
 }
 
-fn plan_row(
-    t: &Table,
-    line: usize,
-    cells: &[String],
-    c: &PlanColumns,
-    joint_count: usize,
-    sight: &[usize],
-) -> Result<PlanRow, PointsError> {
-    let cmd = (1..=joint_count)
-        .map(|k| t.number(line, cells, t.column(&[&format!("cmd_{k}")]).unwrap_or(0)))
-        .collect::<Result<Vec<_>, _>>()?;
+fn plan_row(t: &Table, row: &Row<'_>, c: &PlanColumns, sight: &[usize]) -> Result<PlanRow, PointsError> {
+    let cmd = c.cmd.iter().map(|&k| t.number(row, k)).collect::<Result<Vec<_>, _>>()?;
     let mut visible = true;
     for &k in sight {
-        match t.cell(line, cells, k)? {
+        match t.cell(row, k)? {
             "yes" => {}
             "no" => visible = false,
-            other => return Err(t.row_error(line, k, format!("{other:?}: expected yes or no"))),
+            other => return Err(t.row_error(row.line, k, format!("{other:?}: expected yes or no"))),
         }
     }
     Ok(PlanRow {
-        line,
-        point: t.integer(line, cells, c.point)?,
+        line: row.line,
+        point: t.integer(row, c.point)?,
         row: Measurement {
-            experiment: t.cell(line, cells, c.experiment)?.to_owned(),
-            moved_joint: t.integer(line, cells, c.moved_joint)?,
-            step: t.integer(line, cells, c.step)?,
-            target: t.integer(line, cells, c.target)?,
+            experiment: t.cell(row, c.experiment)?.to_owned(),
+            moved_joint: t.integer(row, c.moved_joint)?,
+            step: t.integer(row, c.step)?,
+            target: t.integer(row, c.target)?,
             position_mm: [f64::NAN; 3],
             cmd,
             payload_kg: Measurement::DEFAULT_PAYLOAD_KG,
             temperature_c: Measurement::DEFAULT_TEMPERATURE_C,
         },
         nominal_mm: [
-            t.number(line, cells, c.nominal[0])?,
-            t.number(line, cells, c.nominal[1])?,
-            t.number(line, cells, c.nominal[2])?,
+            t.number(row, c.nominal[0])?,
+            t.number(row, c.nominal[1])?,
+            t.number(row, c.nominal[2])?,
         ],
         visible,
     })
@@ -248,26 +243,26 @@ pub fn read_export(t: &Table) -> Result<(Vec<ExportPoint>, Option<LengthUnit>), 
         .flat_map(|s| [s.to_string(), format!("{s}_mm"), format!("{s}_m")])
         .collect();
     let sigma = t.column(&sigma_names.iter().map(String::as_str).collect::<Vec<_>>());
-    let mut points = Vec::with_capacity(t.rows.len());
-    for (line, cells) in &t.rows {
+    let mut points = Vec::with_capacity(t.row_count());
+    for row in t.rows() {
         let position = [
-            t.number(*line, cells, xyz[0])?,
-            t.number(*line, cells, xyz[1])?,
-            t.number(*line, cells, xyz[2])?,
+            t.number(&row, xyz[0])?,
+            t.number(&row, xyz[1])?,
+            t.number(&row, xyz[2])?,
         ];
         let sigma = match sigma {
             Some(k) => {
-                let s = t.number(*line, cells, k)?;
+                let s = t.number(&row, k)?;
                 if s < 0.0 {
-                    return Err(t.row_error(*line, k, format!("{s}: an uncertainty cannot be negative")));
+                    return Err(t.row_error(row.line, k, format!("{s}: an uncertainty cannot be negative")));
                 }
                 Some(s)
             }
             None => None,
         };
         points.push(ExportPoint {
-            line: *line,
-            id: id.map(|k| t.integer(*line, cells, k)).transpose()?,
+            line: row.line,
+            id: id.map(|k| t.integer(&row, k)).transpose()?,
             position,
             sigma,
         });

@@ -11,6 +11,7 @@
 
 use super::points::PointsError;
 use super::table::Table;
+use crate::csv_lines::shown_cell;
 use std::path::Path;
 
 /// The name fields, in SpatialAnalyzer's order, their last one the target.
@@ -29,7 +30,7 @@ pub fn looks_like(text: &str) -> bool {
 /// Reads the export `text` (`path` labels messages) with `names` name fields before `x y z`
 /// (`None`: every line has 3 to 6 fields and the name fields are all but the last 3).
 pub fn to_table(text: &str, path: &Path, names: Option<usize>) -> Result<Table, PointsError> {
-    let mut rows: Vec<(usize, Vec<String>)> = Vec::new();
+    let mut rows: Vec<(usize, Vec<&str>)> = Vec::new();
     let mut comments = Vec::new();
     for (i, line) in text.trim_start_matches('\u{feff}').lines().enumerate() {
         let trimmed = line.trim();
@@ -40,10 +41,10 @@ pub fn to_table(text: &str, path: &Path, names: Option<usize>) -> Result<Table, 
             comments.push(comment.trim().to_owned());
             continue;
         }
-        let cells: Vec<String> = if trimmed.contains(',') {
-            trimmed.split(',').map(|c| c.trim().to_owned()).collect()
+        let cells: Vec<&str> = if trimmed.contains(',') {
+            trimmed.split(',').map(str::trim).collect()
         } else {
-            trimmed.split_whitespace().map(str::to_owned).collect()
+            trimmed.split_whitespace().collect()
         };
         rows.push((i + 1, cells));
     }
@@ -88,34 +89,38 @@ pub fn to_table(text: &str, path: &Path, names: Option<usize>) -> Result<Table, 
     let mut header: Vec<String> = NAME_FIELDS[3 - names..].iter().map(|s| s.to_string()).collect();
     header.extend(["x", "y", "z"].map(String::from));
     header.extend((1..=width - names - 3).map(|k| format!("extra{k}")));
-    for (line, cells) in rows.iter_mut().filter(|_| names > 0) {
-        let target = &mut cells[names - 1];
-        let digits: String = target
-            .chars()
-            .rev()
-            .take_while(char::is_ascii_digit)
-            .collect::<Vec<_>>()
-            .into_iter()
-            .rev()
-            .collect();
-        if digits.is_empty() {
-            return Err(PointsError::Row {
-                path: path.to_owned(),
-                line: *line,
-                field: "id".into(),
-                message: format!(
-                    "target name `{target}` ends in no digits: the plan's point id is its trailing number"
-                ),
-            });
+    let mut csv = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
+    let mut ranges = Vec::with_capacity(rows.len());
+    for (line, mut cells) in rows {
+        if names > 0 {
+            cells[names - 1] = trailing_number(cells[names - 1], path, line)?;
         }
-        *target = digits;
+        let start = csv.get_ref().len();
+        let written = csv.write_record(&cells).and_then(|()| Ok(csv.flush()?));
+        written.map_err(|e| file_error(format!("line {line}: {e}")))?;
+        ranges.push((line, start..csv.get_ref().len() - 1));
     }
-    Ok(Table {
-        path: path.to_owned(),
-        header,
-        rows,
-        comments,
-    })
+    let text = csv.into_inner().map_err(|e| file_error(e.to_string()))?;
+    let text = String::from_utf8(text).map_err(|e| file_error(e.to_string()))?;
+    Ok(Table::from_text(path, header, comments, text, ranges))
+}
+
+/// The trailing digits of a target name (`P012` -> `012`), the plan's point id.
+fn trailing_number<'a>(target: &'a str, path: &Path, line: usize) -> Result<&'a str, PointsError> {
+    let digits = target.trim_end_matches(|c: char| c.is_ascii_digit());
+    let id = &target[digits.len()..];
+    if id.is_empty() {
+        return Err(PointsError::Row {
+            path: path.to_owned(),
+            line,
+            field: "id".into(),
+            message: format!(
+                "target name `{}` ends in no digits: the plan's point id is its trailing number",
+                shown_cell(target)
+            ),
+        });
+    }
+    Ok(id)
 }
 
 #[cfg(test)]

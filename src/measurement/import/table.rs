@@ -1,40 +1,117 @@
-//! A small CSV table as instruments and lab scripts export it: a header row (the first line
-//! that is not a `#` comment or blank), columns found by name (case and surrounding white space
+//! A CSV table as instruments and lab scripts export it: a header row (the first line that is
+//! not a `#` comment or blank), columns found by name (case and surrounding white space
 //! ignored), every cell kept with its 1-based physical line for messages.
 
 use super::points::PointsError;
 use crate::csv_lines::shown_cell;
+use std::borrow::Cow;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-/// A read table.
+/// A read table: the file's text and where each data row lies in it; a row's cells are split
+/// when it is visited, so a table of a million rows takes about its file's size.
 #[derive(Debug)]
 pub struct Table {
     /// The file.
     pub path: PathBuf,
     /// The column names, trimmed, lower case.
     pub header: Vec<String>,
-    /// The data rows: 1-based line and cells.
-    pub rows: Vec<(usize, Vec<String>)>,
     /// The comment lines before the header (without their `#`).
     pub comments: Vec<String>,
+    /// The text the rows are in (the file's, or a normalised one).
+    text: String,
+    /// Per data row: its 1-based physical line and its byte range in `text`.
+    rows: Vec<(usize, Range<usize>)>,
+}
+
+/// One data row of a [`Table`]: its 1-based physical line and its cells, trimmed.
+#[derive(Clone, Debug)]
+pub struct Row<'a> {
+    /// The 1-based physical line.
+    pub line: usize,
+    cells: Vec<Cow<'a, str>>,
+}
+
+impl<'a> Row<'a> {
+    /// The cell at `column`, if the row has it.
+    pub fn get(&self, column: usize) -> Option<&str> {
+        self.cells.get(column).map(AsRef::as_ref)
+    }
+
+    /// The number of cells.
+    pub fn len(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// Whether the row has no cell.
+    pub fn is_empty(&self) -> bool {
+        self.cells.is_empty()
+    }
+
+    /// The cells in order.
+    pub fn cells(&self) -> impl Iterator<Item = &str> + '_ {
+        self.cells.iter().map(AsRef::as_ref)
+    }
 }
 
 impl Table {
+    /// A table of CSV `text` whose data rows are at `rows` (1-based line, byte range, each a
+    /// line that splits, as [`Table::parse`] and a `csv::Writer` make them); the header is
+    /// trimmed and lower-cased.
+    pub fn from_text(
+        path: &Path,
+        header: Vec<String>,
+        comments: Vec<String>,
+        text: String,
+        rows: Vec<(usize, Range<usize>)>,
+    ) -> Self {
+        Table {
+            path: path.to_owned(),
+            header: header.iter().map(|h| h.trim().to_lowercase()).collect(),
+            comments,
+            text,
+            rows,
+        }
+    }
+
+    /// The data rows in order.
+    pub fn rows(&self) -> impl ExactSizeIterator<Item = Row<'_>> + '_ {
+        self.rows.iter().map(|(line, range)| {
+            let mut cells = Vec::with_capacity(self.header.len());
+            // Every row was split when the table was made.
+            let _ = split(&self.text[range.clone()], &mut cells);
+            Row { line: *line, cells }
+        })
+    }
+
+    /// The number of data rows.
+    pub fn row_count(&self) -> usize {
+        self.rows.len()
+    }
+
     /// Reads `path` (a shipped file's virtual path too).
     pub fn read(path: &Path) -> Result<Self, PointsError> {
         let text = crate::presets::read_text(path).map_err(|source| PointsError::Io {
             path: path.to_owned(),
             source,
         })?;
-        Self::parse(&text, path)
+        Self::parse(text, path)
     }
 
     /// Parses `text`; `path` labels messages.
-    pub fn parse(text: &str, path: &Path) -> Result<Self, PointsError> {
+    pub fn parse(text: impl Into<String>, path: &Path) -> Result<Self, PointsError> {
+        let text = text.into();
         let mut header: Option<Vec<String>> = None;
-        let mut rows = Vec::new();
         let mut comments = Vec::new();
-        for (i, line) in text.trim_start_matches('\u{feff}').lines().enumerate() {
+        let mut rows = Vec::new();
+        let mut cells = Vec::new();
+        let body = text.trim_start_matches('\u{feff}');
+        let bom = text.len() - body.len();
+        let mut start = bom;
+        for (i, line) in body.split_inclusive('\n').enumerate() {
+            let range = start..start + line.trim_end_matches(['\n', '\r']).len();
+            start += line.len();
+            let line = &text[range.clone()];
             let trimmed = line.trim();
             if trimmed.is_empty() || trimmed.starts_with('#') {
                 if header.is_none() && trimmed.starts_with('#') {
@@ -42,49 +119,41 @@ impl Table {
                 }
                 continue;
             }
-            let cells = split(line).map_err(|message| PointsError::Row {
+            split(line, &mut cells).map_err(|message| PointsError::Row {
                 path: path.to_owned(),
                 line: i + 1,
                 field: String::new(),
                 message,
             })?;
             match &header {
-                None => header = Some(cells.iter().map(|c| c.to_lowercase()).collect::<Vec<String>>()),
-                // More cells than columns: a shifted row would be read into the wrong columns
-                // (empty cells past the last column, a writer's trailing separators, are not).
-                Some(h) if cells[h.len().min(cells.len())..].iter().any(|c| !c.trim().is_empty()) => {
-                    return Err(PointsError::Row {
-                        path: path.to_owned(),
-                        line: i + 1,
-                        field: format!("{} (after the last)", cells.len()),
-                        message: format!(
-                            "{} cells, the header names {} columns: a separator inside a value, or a missing header name?",
-                            cells.len(),
-                            h.len()
-                        ),
-                    });
+                None => header = Some(cells.iter().map(|c| c.to_string()).collect()),
+                Some(h) => {
+                    check_width(path, h.len(), i + 1, &cells)?;
+                    rows.push((i + 1, range));
                 }
-                Some(_) => rows.push((i + 1, cells)),
             }
         }
+        drop(cells);
         let header = header.ok_or_else(|| PointsError::File {
             path: path.to_owned(),
             message: "no header row".into(),
         })?;
-        for (k, name) in header.iter().enumerate() {
-            if header[..k].contains(name) {
+        let table = Table::from_text(path, header, comments, text, rows);
+        table.check_header()?;
+        Ok(table)
+    }
+
+    /// No column name twice.
+    fn check_header(&self) -> Result<(), PointsError> {
+        for (k, name) in self.header.iter().enumerate() {
+            if self.header[..k].contains(name) {
                 return Err(PointsError::File {
-                    path: path.to_owned(),
+                    path: self.path.clone(),
                     message: format!("column {name:?} appears twice"),
                 });
             }
         }
-        Ok(Table {
-            path: path.to_owned(),
-            header,
-            rows,
-            comments,
-        })
+        Ok(())
     }
 
     /// The index of the first column named one of `names`.
@@ -100,31 +169,34 @@ impl Table {
         })
     }
 
-    /// The cell at `column` of the row at `line`, or an error naming file, line and column.
-    pub fn cell<'a>(&'a self, line: usize, cells: &'a [String], column: usize) -> Result<&'a str, PointsError> {
-        cells.get(column).map(String::as_str).ok_or_else(|| PointsError::Row {
+    /// The cell of `row` at `column`, or an error naming file, line and column.
+    pub fn cell<'r>(&self, row: &'r Row<'_>, column: usize) -> Result<&'r str, PointsError> {
+        row.get(column).ok_or_else(|| PointsError::Row {
             path: self.path.clone(),
-            line,
+            line: row.line,
             field: self.header[column].clone(),
             message: "missing (the row is shorter than the header)".into(),
         })
     }
 
     /// A finite number at `column`.
-    pub fn number(&self, line: usize, cells: &[String], column: usize) -> Result<f64, PointsError> {
-        let text = self.cell(line, cells, column)?;
-        text.parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| self.row_error(line, column, format!("{:?} is not a finite number", shown_cell(text))))
+    pub fn number(&self, row: &Row<'_>, column: usize) -> Result<f64, PointsError> {
+        let text = self.cell(row, column)?;
+        text.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+            self.row_error(
+                row.line,
+                column,
+                format!("{:?} is not a finite number", shown_cell(text)),
+            )
+        })
     }
 
     /// A non-negative integer at `column`.
-    pub fn integer(&self, line: usize, cells: &[String], column: usize) -> Result<usize, PointsError> {
-        let text = self.cell(line, cells, column)?;
+    pub fn integer(&self, row: &Row<'_>, column: usize) -> Result<usize, PointsError> {
+        let text = self.cell(row, column)?;
         text.parse::<usize>().map_err(|_| {
             self.row_error(
-                line,
+                row.line,
                 column,
                 format!("{:?} is not a non-negative integer", shown_cell(text)),
             )
@@ -142,11 +214,31 @@ impl Table {
     }
 }
 
-/// One CSV line's cells (RFC 4180 quoting within the line), trimmed. A line without a quote is
-/// split at its commas directly (what the CSV reader would do, without building one per line).
-fn split(line: &str) -> Result<Vec<String>, String> {
+/// More cells than `columns`: a shifted row would be read into the wrong columns (empty cells
+/// past the last column, a writer's trailing separators, are not).
+fn check_width(path: &Path, columns: usize, line: usize, cells: &[Cow<'_, str>]) -> Result<(), PointsError> {
+    if cells[columns.min(cells.len())..].iter().all(|c| c.trim().is_empty()) {
+        return Ok(());
+    }
+    Err(PointsError::Row {
+        path: path.to_owned(),
+        line,
+        field: format!("{} (after the last)", cells.len()),
+        message: format!(
+            "{} cells, the header names {columns} columns: a separator inside a value, or a missing header name?",
+            cells.len()
+        ),
+    })
+}
+
+/// One CSV line's cells (RFC 4180 quoting within the line), trimmed, into `cells`. A line
+/// without a quote is split at its commas directly (what the CSV reader would do, without
+/// building one per line).
+fn split<'l>(line: &'l str, cells: &mut Vec<Cow<'l, str>>) -> Result<(), String> {
+    cells.clear();
     if !line.contains('"') {
-        return Ok(line.split(',').map(|c| c.trim().to_owned()).collect());
+        cells.extend(line.split(',').map(|c| Cow::Borrowed(c.trim())));
+        return Ok(());
     }
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
@@ -154,7 +246,8 @@ fn split(line: &str) -> Result<Vec<String>, String> {
         .from_reader(line.as_bytes());
     let mut record = csv::StringRecord::new();
     reader.read_record(&mut record).map_err(|e| e.to_string())?;
-    Ok(record.iter().map(|c| c.trim().to_owned()).collect())
+    cells.extend(record.iter().map(|c| Cow::Owned(c.trim().to_owned())));
+    Ok(())
 }
 
 #[cfg(test)]
@@ -179,12 +272,46 @@ mod tests {
         #[test]
         fn an_unquoted_line_splits_as_the_reader_reads_it(line in "[a-z0-9 .,;\t-]{1,40}") {
             prop_assume!(!line.trim().is_empty());
-            prop_assert_eq!(split(&line).unwrap(), by_reader(&line));
+            prop_assert_eq!(cells_of(&line), by_reader(&line));
         }
     }
 
     #[test]
     fn a_quoted_cell_keeps_its_comma() {
-        assert_eq!(split("1,\"a, b\",3").unwrap(), ["1", "a, b", "3"]);
+        assert_eq!(cells_of("1,\"a, b\",3"), ["1", "a, b", "3"]);
+    }
+
+    /// `split`'s cells of one line.
+    fn cells_of(line: &str) -> Vec<String> {
+        let mut cells = Vec::new();
+        split(line, &mut cells).unwrap();
+        cells.into_iter().map(|c| c.into_owned()).collect()
+    }
+
+    #[test]
+    fn rows_keep_their_lines_and_cells() {
+        let t = Table::parse(
+            "# c
+A, B
+1, 2
+
+3,
+",
+            Path::new("t.csv"),
+        )
+        .unwrap();
+        assert_eq!(t.header, ["a", "b"]);
+        assert_eq!(t.comments, ["c"]);
+        let rows: Vec<(usize, Vec<String>)> = t
+            .rows()
+            .map(|r| (r.line, r.cells().map(String::from).collect()))
+            .collect();
+        assert_eq!(
+            rows,
+            [(3, vec!["1".into(), "2".into()]), (5, vec!["3".into(), String::new()])]
+        );
+        let last = t.rows().last().unwrap();
+        assert_eq!(last.get(2), None);
+        assert!(t.number(&last, 1).is_err());
     }
 }

@@ -9,7 +9,7 @@
 //! target `i - 1`; an empty or `nan` marker cell is a marker not seen at that pose (no row).
 
 use super::points::{LengthUnit, PointsError};
-use super::table::Table;
+use super::table::{Row, Table};
 use crate::kinematics::JointKind;
 use crate::measurement::{Measurement, MeasurementSet};
 
@@ -65,13 +65,13 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
             t.required(&[axis])?;
         }
     }
-    let mut poses: Vec<Pose> = Vec::with_capacity(t.rows.len());
-    for (line, cells) in &t.rows {
+    let mut poses: Vec<Pose> = Vec::with_capacity(t.row_count());
+    for row in t.rows() {
         let cmd = joints
             .iter()
             .zip(&options.kinds)
             .map(|(&c, kind)| {
-                let v = t.number(*line, cells, c)?;
+                let v = t.number(&row, c)?;
                 Ok(match kind {
                     JointKind::Revolute if options.radians => v.to_degrees(),
                     JointKind::Revolute => v,
@@ -81,9 +81,9 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
             .collect::<Result<Vec<_>, PointsError>>()?;
         let seen = markers
             .iter()
-            .map(|m| marker(t, *line, cells, m, options.lengths))
+            .map(|m| marker(t, &row, m, options.lengths))
             .collect::<Result<Vec<_>, _>>()?;
-        poses.push((*line, cmd, seen));
+        poses.push((row.line, cmd, seen));
     }
     rows_of(&poses, options.kinds.len(), options.still_tolerance, &t.path)
 }
@@ -145,29 +145,23 @@ fn source_column(column: &str, target: usize) -> String {
 
 /// One marker's position \[mm\], `None` when its three cells are empty or `nan`; a partly
 /// given marker is an error.
-fn marker(
-    t: &Table,
-    line: usize,
-    cells: &[String],
-    columns: &[usize; 3],
-    unit: LengthUnit,
-) -> Result<Option<[f64; 3]>, PointsError> {
-    let absent = |c: usize| {
-        cells
-            .get(c)
-            .is_none_or(|s| s.is_empty() || s.eq_ignore_ascii_case("nan"))
-    };
+fn marker(t: &Table, row: &Row<'_>, columns: &[usize; 3], unit: LengthUnit) -> Result<Option<[f64; 3]>, PointsError> {
+    let absent = |c: usize| row.get(c).is_none_or(|s| s.is_empty() || s.eq_ignore_ascii_case("nan"));
     let missing = columns.iter().filter(|&&c| absent(c)).count();
     match missing {
         3 => Ok(None),
         0 => Ok(Some([
-            t.number(line, cells, columns[0])? * unit.to_mm(),
-            t.number(line, cells, columns[1])? * unit.to_mm(),
-            t.number(line, cells, columns[2])? * unit.to_mm(),
+            t.number(row, columns[0])? * unit.to_mm(),
+            t.number(row, columns[1])? * unit.to_mm(),
+            t.number(row, columns[2])? * unit.to_mm(),
         ])),
         _ => {
             let c = columns.iter().copied().find(|&c| absent(c)).unwrap_or(columns[0]);
-            Err(t.row_error(line, c, "empty while the marker's other coordinates are given".into()))
+            Err(t.row_error(
+                row.line,
+                c,
+                "empty while the marker's other coordinates are given".into(),
+            ))
         }
     }
 }
