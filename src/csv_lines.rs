@@ -13,6 +13,15 @@ use std::collections::VecDeque;
 use std::io::Read;
 use std::rc::Rc;
 
+/// The separator, in words, a one-column CSV header `name` holds instead of commas (`;`, a
+/// tab, `|`): the file was exported with another separator (often with decimal commas).
+pub fn foreign_separator(name: &str) -> Option<&'static str> {
+    [(';', "`;`"), ('\t', "a tab"), ('|', "`|`")]
+        .into_iter()
+        .find(|(c, _)| name.contains(*c))
+        .map(|(_, words)| words)
+}
+
 /// A cell as an error message shows it: as written up to 60 characters, else its first 40 and
 /// its length (`aaaa…[5000000 characters]`), so a 5 MB field does not become a 5 MB message.
 pub fn shown_cell(text: &str) -> String {

@@ -131,3 +131,4 @@ pub mod sim;
 pub mod toml_file;
 #[cfg(feature = "viz")]
 pub mod viz;
+pub mod yaml_file;

@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::Calibration;
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
-use axiscal::measurement::unit_check::{UnitSlip, description_slips, measurement_slips};
+use axiscal::measurement::unit_check::{UnitSlip, description_slips, measurement_slips, pose_slips};
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
 use std::io::BufRead;
 use std::path::Path;
@@ -48,6 +48,19 @@ pub fn description_units(desc: &RobotDescription, path: &Path, skip: bool) -> Re
         return Ok(());
     }
     refuse_slips(path, &description_slips(desc))
+}
+
+/// Required tool positions (a `--poses` file) against the robot's size, unless `skip`.
+pub fn pose_units(
+    positions_m: &[nalgebra::Point3<f64>],
+    desc: &RobotDescription,
+    file: &Path,
+    skip: bool,
+) -> Result<()> {
+    if skip || positions_m.is_empty() {
+        return Ok(());
+    }
+    refuse_slips(file, &Vec::from_iter(pose_slips(positions_m, desc)))
 }
 
 /// The data's coordinates and commands against the description, unless `skip`.

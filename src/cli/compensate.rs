@@ -18,9 +18,10 @@
 
 use super::checks;
 use super::output::{Outputs, commit_csv};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use axiscal::compensation::{CompensatedPose, CompensationError, Compensator};
 use axiscal::kinematics::IkError;
+use axiscal::measurement::import::table::Table;
 use axiscal::robot::{Placement, RobotDescription, commands_to_file, file_unit};
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
@@ -60,50 +61,26 @@ struct PoseRow {
 const COLUMNS: [&str; 7] = ["id", "x_mm", "y_mm", "z_mm", "roll_deg", "pitch_deg", "yaw_deg"];
 
 fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
-    let file = path.display();
-    let mut reader = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .with_context(|| format!("{file}: cannot open"))?;
-    let header = reader
-        .headers()
-        .with_context(|| format!("{file}:1: malformed CSV header"))?
-        .clone();
-    let mut index = [0usize; 7];
-    for (i, name) in COLUMNS.iter().enumerate() {
-        index[i] = header
-            .iter()
-            .position(|h| h == *name)
-            .with_context(|| format!("{file}:1: column `{name}`: missing from the header"))?;
-    }
-    let mut out = Vec::new();
-    for record in reader.records() {
-        let record = record.with_context(|| format!("{file}: malformed CSV"))?;
-        let line = record.position().map_or(0, |p| p.line());
-        let field = |i: usize| record.get(index[i]).unwrap_or("");
+    let table = Table::read(path)?;
+    let index = COLUMNS.map(|name| table.required(&[name]));
+    let index = index.into_iter().collect::<Result<Vec<usize>, _>>()?;
+    let mut out = Vec::with_capacity(table.row_count());
+    for row in table.rows() {
         let mut v = [0.0; 6];
-        for (k, slot) in v.iter_mut().enumerate() {
-            let text = field(k + 1);
-            *slot = text.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| {
-                format!(
-                    "{file}:{line}: column `{}`: `{}` is not a finite number",
-                    COLUMNS[k + 1],
-                    axiscal::csv_lines::shown_cell(text)
-                )
-            })?;
+        for (slot, &column) in v.iter_mut().zip(&index[1..]) {
+            *slot = table.number(&row, column)?;
         }
         let placement = Placement {
             translation_mm: [v[0], v[1], v[2]],
             rpy_deg: [v[3], v[4], v[5]],
         };
         out.push(PoseRow {
-            id: field(0).to_owned(),
+            id: table.cell(&row, index[0])?.to_owned(),
             world_from_tool: placement.to_isometry(),
         });
     }
     if out.is_empty() {
-        bail!("{file}: no pose rows after the header");
+        bail!("{}: no pose rows after the header", path.display());
     }
     Ok(out)
 }
@@ -176,6 +153,11 @@ pub fn run(args: Args) -> Result<()> {
     let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
     let comp = Compensator::new(&cal.robot, &desc)?.with_payload_kg(args.payload_kg);
     let poses = read_poses(&args.poses)?;
+    let positions: Vec<_> = poses
+        .iter()
+        .map(|p| p.world_from_tool.translation.vector.into())
+        .collect();
+    checks::pose_units(&positions, &desc, &args.poses, args.checks.skip_unit_check)?;
     let n = desc.dof();
     let mut w = csv::Writer::from_writer(outputs.create(&args.out)?);
     w.write_record(csv_header(&desc))?;

@@ -350,12 +350,15 @@ impl Report<'_> {
         let names = ["diagnosis.json", "diagnosis.md"];
         std::fs::create_dir_all(self.out).with_context(|| format!("creating {}", self.out.display()))?;
         let all: Vec<&str> = names.iter().chain(self.plot_files).copied().collect();
-        self.outputs.check_in(self.out, &all)?;
+        // Every file a diagnosis may write: an earlier run's plots this one does not draw
+        // (an axes-only diagnosis has no candidates) are removed with the set, not left beside it.
+        let any: Vec<&str> = names.iter().chain(&PLOT_FILES).copied().collect();
+        self.outputs.check_in(self.out, &any)?;
         let mut staged = self.outputs.staged_in(self.out)?;
         staged.write(names[0], &self.json)?;
         staged.write(names[1], &self.markdown)?;
         staged.draw(self.plot_files, plot)?;
-        staged.commit(&[])?;
+        staged.commit(&any)?;
         Ok(format!("{}/{{{}}}", self.out.display(), all.join(",")))
     }
 }

@@ -8,6 +8,7 @@ use axiscal::calibration::procedure::{
     Calibration, JointMap, MapTable, calibrated_joint_values, controller_zero_offsets,
 };
 use axiscal::measurement::format_f64;
+use axiscal::measurement::import::table::Table;
 use axiscal::robot::{RobotDescription, commands_to_file};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -72,55 +73,34 @@ pub fn run(args: Args) -> Result<()> {
 
 /// Appends `q_1 .. q_N` to every row of the CSV at `path`, to stdout.
 fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Result<()> {
-    let mut reader = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
-    let header = reader
-        .headers()
-        .with_context(|| format!("{}: no header", path.display()))?
-        .clone();
+    let table = Table::read(path)?;
     let columns: Vec<usize> = (1..=desc.dof())
-        .map(|k| {
-            let name = format!("cmd_{k}");
-            header
-                .iter()
-                .position(|h| h == name)
-                .with_context(|| format!("{}: no column `{name}`", path.display()))
-        })
-        .collect::<Result<_>>()?;
+        .map(|k| table.required(&[&format!("cmd_{k}")]))
+        .collect::<Result<_, _>>()?;
+    let added: Vec<String> = (1..=desc.dof()).map(|k| format!("q_{k}")).collect();
+    if let Some(q) = added.iter().find(|q| table.column(&[q]).is_some()) {
+        bail!(
+            "{}: column `{q}`: the file already has the calibrated joint values' columns; remove them (the output appends `q_1 .. q_{}`)",
+            path.display(),
+            desc.dof()
+        );
+    }
     let mut out = csv::Writer::from_writer(std::io::stdout().lock());
-    let mut head: Vec<String> = header.iter().map(str::to_owned).collect();
-    head.extend((1..=desc.dof()).map(|k| format!("q_{k}")));
-    out.write_record(&head)?;
-    for (i, record) in reader.records().enumerate() {
-        let record = record.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-        let line = record.position().map_or(i as u64 + 2, |p| p.line());
+    out.write_record(table.header_as_written.iter().chain(&added))?;
+    for row in table.rows() {
         let cmd: Vec<f64> = columns
             .iter()
-            .zip(1..)
-            .map(|(&c, k)| {
-                let field = record.get(c).unwrap_or("");
-                field.parse::<f64>().ok().filter(|v| v.is_finite()).with_context(|| {
-                    format!(
-                        "{}:{line}: column `cmd_{k}`: `{}` is not a finite number",
-                        path.display(),
-                        axiscal::csv_lines::shown_cell(field)
-                    )
-                })
-            })
-            .collect::<Result<_>>()?;
-        within_limits(desc, &cmd, &format!("{}:{line}", path.display()))?;
-        let q = calibrated_joint_values(cal, desc, &cmd).with_context(|| {
-            format!(
-                "{}:{line}: the calibrated robot cannot execute these commands",
-                path.display()
-            )
-        })?;
-        let mut row: Vec<String> = record.iter().map(str::to_owned).collect();
-        row.extend(commands_to_file(desc, &q).iter().map(|v| format_f64(*v)));
-        out.write_record(&row)?;
+            .map(|&c| table.number(&row, c))
+            .collect::<Result<_, _>>()?;
+        let place = format!("{}:{}", path.display(), row.line);
+        within_limits(desc, &cmd, &place)?;
+        let q = calibrated_joint_values(cal, desc, &cmd)
+            .with_context(|| format!("{place}: the calibrated robot cannot execute these commands"))?;
+        let values = commands_to_file(desc, &q);
+        let mut cells: Vec<String> = row.cells().map(str::to_owned).collect();
+        cells.resize(table.header.len(), String::new());
+        cells.extend(values.iter().map(|v| format_f64(*v)));
+        out.write_record(&cells)?;
     }
     out.flush()?;
     Ok(())

@@ -19,18 +19,22 @@ pub struct Args {
     /// Replace the results in `--out` if it already holds some.
     #[arg(long)]
     force: bool,
+    /// Print the merged `summary.json` on stdout (the human-readable lines go to stderr).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `axiscal merge`.
 pub fn run(args: Args) -> Result<()> {
+    super::set_json(args.json);
     let first = args.dirs[0].join(RESOLVED_FILE);
-    let resolved_text = std::fs::read_to_string(&first).with_context(|| format!("reading {}", first.display()))?;
+    let resolved_text = axiscal::presets::read_text(&first).with_context(|| format!("reading {}", first.display()))?;
     let scenario = ResolvedScenario::from_resolved_file(&first)?;
     let mut names: Option<Vec<String>> = None;
     let mut records = Vec::new();
     for dir in &args.dirs {
         let path = dir.join(RESOLVED_FILE);
-        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        let text = axiscal::presets::read_text(&path).with_context(|| format!("reading {}", path.display()))?;
         if text != resolved_text {
             bail!(
                 "{} differs from {}: shards of different scenarios (or trials/seed overrides) cannot be merged",
@@ -59,5 +63,6 @@ pub fn run(args: Args) -> Result<()> {
     export::prepare_dir(&args.out, args.force)?;
     export::write_resolved(&args.out, &resolved_text)?;
     let summary = export::write_final(&args.out, &scenario, &names, &records)?;
+    super::emit_json(&args.out.join(export::SUMMARY_JSON))?;
     super::run::report(&summary, &args.out)
 }

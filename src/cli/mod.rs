@@ -273,6 +273,21 @@ fn exit_2_when_output_fails() {
     }));
 }
 
+/// `axiscal completions SHELL`: the script, written to stdout as a whole (a failed write is an
+/// error, not clap_complete's panic).
+fn completions(shell: clap_complete::Shell) -> anyhow::Result<()> {
+    use anyhow::Context;
+    use clap::CommandFactory;
+    use std::io::Write;
+    let mut script = Vec::new();
+    clap_complete::generate(shell, &mut Cli::command(), "axiscal", &mut script);
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(&script)
+        .and_then(|()| stdout.flush())
+        .context("writing the completion script to stdout")
+}
+
 /// Parses the command line, runs the subcommand and maps its outcome to an exit code.
 pub fn main() -> ExitCode {
     exit_2_when_output_fails();
@@ -280,9 +295,14 @@ pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {
-            // --help, --version: printed to stdout, exit 0.
-            let _ = e.print();
-            return ExitCode::SUCCESS;
+            // --help, --version: printed to stdout, exit 0 (2 when stdout fails).
+            return match e.print().and_then(|()| std::io::Write::flush(&mut std::io::stdout())) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(error) => {
+                    eprintln!("error: writing to stdout: {error}");
+                    ExitCode::from(2)
+                }
+            };
         }
         Err(e) => {
             eprintln!("error: {} (see `axiscal help`)", clap_one_line(&e));
@@ -311,11 +331,7 @@ pub fn main() -> ExitCode {
         Command::Blind(args) => blind::run(args),
         Command::Validate(args) => validate::run(args),
         Command::View(args) => view::run(args),
-        Command::Completions { shell } => {
-            use clap::CommandFactory;
-            clap_complete::generate(shell, &mut Cli::command(), "axiscal", &mut std::io::stdout());
-            Ok(())
-        }
+        Command::Completions { shell } => completions(shell),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

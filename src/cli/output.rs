@@ -163,6 +163,11 @@ impl Outputs {
     pub fn create(&self, path: &Path) -> Result<OutputFile> {
         self.check(path)?;
         Self::create_parent(path)?;
+        remove_orphaned_temporaries(
+            path.parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .unwrap_or(Path::new(".")),
+        );
         let name = path
             .file_name()
             .with_context(|| format!("{}: not a file name", path.display()))?;
@@ -192,6 +197,42 @@ impl Outputs {
             replace: self.force,
             tracked,
         })
+    }
+}
+
+/// The process id in the name of one of axiscal's temporaries (`.NAME.axiscal-PID-N.tmp`, a
+/// file; `.axiscal-PID-plots.tmp`, a folder of plots), if `name` is one.
+fn temporary_owner(name: &str) -> Option<i32> {
+    let rest = name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (_, tail) = rest.rsplit_once("axiscal-")?;
+    let pid = match tail.strip_suffix("-plots") {
+        Some(pid) => pid,
+        None => tail.split_once('-')?.0,
+    };
+    pid.parse().ok()
+}
+
+/// Removes from `dir` the temporaries of axiscal runs that no longer exist (killed by a
+/// signal no process can catch: SIGKILL, the out-of-memory killer), so they do not pile up.
+/// A temporary of a running process (another axiscal writing here) is left alone.
+fn remove_orphaned_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(temporary_owner) else {
+            continue;
+        };
+        // SAFETY: signal 0 only asks whether the process exists; nothing is sent.
+        let gone =
+            unsafe { libc::kill(pid, 0) } == -1 && std::io::Error::last_os_error().raw_os_error() == Some(libc::ESRCH);
+        if gone {
+            let path = entry.path();
+            let _ = if path.is_dir() {
+                std::fs::remove_dir_all(&path)
+            } else {
+                std::fs::remove_file(&path)
+            };
+        }
     }
 }
 
@@ -327,6 +368,7 @@ impl Outputs {
     /// [`Outputs::check`] would.
     pub fn staged_in(&self, dir: &Path) -> Result<StagedSet<'_>> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        remove_orphaned_temporaries(dir);
         Ok(StagedSet {
             outputs: self,
             dir: dir.to_owned(),
@@ -415,6 +457,38 @@ impl Drop for StagedSet<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn temporaries_are_recognised_by_their_names_only() {
+        assert_eq!(temporary_owner(".calibration.json.axiscal-123-4.tmp"), Some(123));
+        assert_eq!(temporary_owner(".axiscal-77-plots.tmp"), Some(77));
+        assert_eq!(temporary_owner(".my.axiscal-notes.tmp"), None);
+        assert_eq!(temporary_owner("calibration.json"), None);
+        assert_eq!(temporary_owner(".x.axiscal-12.tmp"), None);
+    }
+
+    #[test]
+    fn a_dead_runs_temporaries_are_removed_and_a_live_ones_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        // A process that has exited: its id is free (reused only after a wrap-around).
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let live = std::process::id();
+        let names = [
+            format!(".a.csv.axiscal-{dead}-0.tmp"),
+            format!(".axiscal-{dead}-plots.tmp"),
+            format!(".a.csv.axiscal-{live}-0.tmp"),
+            "user.tmp".to_string(),
+        ];
+        std::fs::write(dir.path().join(&names[0]), "x").unwrap();
+        std::fs::create_dir(dir.path().join(&names[1])).unwrap();
+        std::fs::write(dir.path().join(&names[2]), "x").unwrap();
+        std::fs::write(dir.path().join(&names[3]), "x").unwrap();
+        remove_orphaned_temporaries(dir.path());
+        let kept: Vec<bool> = names.iter().map(|n| dir.path().join(n).exists()).collect();
+        assert_eq!(kept, [false, false, true, true]);
+    }
 
     #[test]
     fn an_input_is_refused_by_any_spelling_and_even_with_force() {

@@ -37,7 +37,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     order: Vec<usize>,
     /// Validation poses (three tool targets each) after the axis experiments.
-    #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, 1_000_000, ""))]
+    #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, axiscal::plan::MAX_VALIDATION_POSES, ""))]
     validation_poses: usize,
     /// Seed of the validation poses' draw.
     #[arg(long)]

@@ -27,8 +27,9 @@ pub struct Args {
     /// Scenario file (TOML), e.g. `scenarios/paper.toml`, or a shipped scenario's name (`paper`).
     #[arg(value_parser = super::options::scenario_file)]
     scenario: PathBuf,
-    /// Print `summary.json` on stdout (the human-readable lines go to stderr).
-    #[arg(long)]
+    /// Print `summary.json` on stdout (the human-readable lines go to stderr). Not with
+    /// `--shard`: a shard has no summary until `axiscal merge` (which takes `--json`) combines them.
+    #[arg(long, conflicts_with = "shard")]
     json: bool,
     /// Worker threads (default: one per core; 1..=1024).
     #[arg(long, value_parser = THREADS)]

@@ -85,7 +85,7 @@ pub struct Args {
     #[arg(long, value_parser = super::options::plan_file)]
     plan: Option<PathBuf>,
     /// Number of validation poses (three tool targets each).
-    #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, 1_000_000, ""))]
+    #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, axiscal::plan::MAX_VALIDATION_POSES, ""))]
     validation_poses: usize,
     /// Seed of the measurement and repeatability noise.
     #[arg(long, default_value_t = 1)]

@@ -67,7 +67,7 @@ pub enum MeasurementFileError {
     },
     /// The header is one column holding another separator (`;`, tab): not comma-separated.
     #[error(
-        "{path}:{line}: the header is a single column containing {separator}: the file looks {separator}-separated, \
+        "{path}:{line}: the header is a single column containing {separator}: the file looks separated by {separator}, \
          but the measurement CSV is comma-separated with decimal points (re-export it as CSV)"
     )]
     WrongSeparator {

@@ -239,6 +239,34 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
     slips
 }
 
+/// Required tool positions \[m, instrument frame\] whose distances from the robot's first
+/// axis origin do not fit the robot: their median against half the chain's length (the sum of
+/// its links' and the tool's offsets, the farthest any pose reaches) is a unit slip
+/// ([`SLIP_FACTOR`]) — poses in metres read as millimetres sit inside the base.
+pub fn pose_slips(positions_m: &[Point3<f64>], desc: &RobotDescription) -> Option<UnitSlip> {
+    let model = desc.nominal_model();
+    let q = vec![0.0; model.dof()];
+    let base = model.poses(&q).axis(0).origin_m;
+    let length_m: f64 = (0..model.dof() - 1)
+        .map(|k| model.link_from_next_frame(k).translation.vector.norm())
+        .sum::<f64>()
+        + model.last_link_from_tool.translation.vector.norm();
+    let distances: Vec<f64> = positions_m.iter().map(|p| (p - base).norm()).collect();
+    let ratio = median(distances) / (0.5 * length_m);
+    let what = if ratio > 2.0 {
+        "beyond any pose's reach: another unit (poses in metres read as millimetres sit at the instrument's origin) or another frame than the instrument's?".to_string()
+    } else {
+        format!("they look like {}", likely(ratio))
+    };
+    slipped(ratio).then(|| UnitSlip {
+        field: "x_mm,y_mm,z_mm".into(),
+        message: format!(
+            "the poses lie a median {ratio:.3} times half the robot's length ({:.0} mm: its links and tool) from its base, {what}",
+            0.5 * length_m * 1e3,
+        ),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -20,7 +20,7 @@ pub use sheet::{
     write_plan_csv,
 };
 pub use stations::{LINK_RADIUS_M, STATION_HEADINGS, instrument_stations_m};
-pub use validation::ValidationPlan;
+pub use validation::{MAX_POSES as MAX_VALIDATION_POSES, ValidationPlan};
 
 /// Experiment id of the three tool targets observed at the reference pose (trains the
 /// calibrator's tool frame; not a validation pose).

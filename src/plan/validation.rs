@@ -19,7 +19,39 @@ pub struct ValidationPlan {
     pub seed: u64,
 }
 
+/// The most validation poses a campaign draws (`simulate --validation-poses`, a scenario's
+/// `[validation] poses`): three million rows, beyond which a file is no longer a campaign.
+pub const MAX_POSES: usize = 1_000_000;
+
 impl ValidationPlan {
+    /// Checks the plan for a robot of `dof` joints: 1 to [`MAX_POSES`] poses, one finite,
+    /// non-negative half-range per joint. The error names the key.
+    pub fn check(&self, dof: usize) -> Result<(), (&'static str, String)> {
+        if !(1..=MAX_POSES).contains(&self.poses) {
+            return Err((
+                "validation.poses",
+                format!("{} poses: must be 1 to {MAX_POSES}", self.poses),
+            ));
+        }
+        if self.half_range.len() != dof {
+            return Err((
+                "validation.half_range",
+                format!("{} values for {dof} joints: one per joint", self.half_range.len()),
+            ));
+        }
+        match self.half_range.iter().position(|h| !(h.is_finite() && *h >= 0.0)) {
+            Some(k) => Err((
+                "validation.half_range",
+                format!(
+                    "joint {}: {} must be finite and >= 0 (deg or mm)",
+                    k + 1,
+                    self.half_range[k]
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// The default workspace set for the IRB/L6: 60 poses, joints 1-3 within +-40/30/35 deg
     /// (the arm in front of the theodolites), wrist joints 4-6 within +-60/90/90 deg.
     pub fn workspace_default(dof: usize) -> Self {

@@ -18,7 +18,7 @@ use crate::kinematics::JointKind;
 use crate::robot::RobotDescription;
 use nalgebra::Isometry3;
 use std::fmt::Write as _;
-use yaml_rust2::{Yaml, YamlLoader};
+use yaml_rust2::Yaml;
 
 /// Where the joints' zero offsets go.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -124,7 +124,7 @@ fn read_origin(node: &Yaml, name: &str) -> Result<Isometry3<f64>, OriginsError> 
 /// The chain and the per-joint maps (when written) of an origins file's text, for the
 /// description's joint kinds.
 fn read_back(text: &str, kinds: &[JointKind]) -> Result<(OriginChain, Option<Vec<LinearReading>>), OriginsError> {
-    let docs = YamlLoader::load_from_str(text).map_err(|e| OriginsError::Read(e.to_string()))?;
+    let docs = crate::yaml_file::load(text).map_err(|e| OriginsError::Read(e.to_string()))?;
     let root = docs.first().unwrap_or(&Yaml::BadValue);
     let mut joints = Vec::with_capacity(kinds.len());
     let mut maps = Vec::new();

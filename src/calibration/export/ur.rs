@@ -19,7 +19,7 @@ use crate::kinematics::JointKind;
 use crate::robot::RobotDescription;
 use nalgebra::{Isometry3, Vector3};
 use std::fmt::Write as _;
-use yaml_rust2::{Yaml, YamlLoader};
+use yaml_rust2::Yaml;
 
 /// The segment names, base first.
 pub const SEGMENTS: [&str; 6] = ["shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3"];
@@ -117,7 +117,7 @@ fn checked_hash(hash: &str) -> Result<String, UrError> {
 impl UrKinematics {
     /// Reads the text of a `kinematics.yaml`; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Self, UrError> {
-        let docs = YamlLoader::load_from_str(text).map_err(|e| UrError::Yaml {
+        let docs = crate::yaml_file::load(text).map_err(|e| UrError::Yaml {
             file: file.into(),
             message: e.to_string(),
         })?;

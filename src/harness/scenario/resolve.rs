@@ -142,12 +142,7 @@ impl ResolvedScenario {
             .validation
             .clone()
             .unwrap_or_else(|| ValidationPlan::workspace_default(robot.dof()));
-        if validation.poses == 0 || validation.half_range.len() != robot.dof() {
-            return Err(invalid(
-                "validation",
-                format!("needs poses >= 1 and {} half_range values", robot.dof()),
-            ));
-        }
+        validation.check(robot.dof()).map_err(|(k, m)| invalid(k, m))?;
         let cases = resolve_cases(&file, &robot, dir).map_err(|(k, m)| invalid(&k, m))?;
         check_size(&file, trials, cases.len()).map_err(|(k, m)| invalid(k, m))?;
         for (i, t) in file.thresholds.iter().enumerate() {

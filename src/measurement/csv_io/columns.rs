@@ -98,11 +98,7 @@ pub(super) fn find_columns(
     joint_count: Option<usize>,
 ) -> Result<Columns, MeasurementFileError> {
     if header.len() == 1 {
-        let name = header.get(0).unwrap_or_default();
-        let separator = [(';', "`;`"), ('\t', "a tab"), ('|', "`|`")]
-            .into_iter()
-            .find(|(c, _)| name.contains(*c));
-        if let Some((_, separator)) = separator {
+        if let Some(separator) = crate::csv_lines::foreign_separator(header.get(0).unwrap_or_default()) {
             return Err(MeasurementFileError::WrongSeparator {
                 path: path.into(),
                 line,

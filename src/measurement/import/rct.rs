@@ -17,7 +17,7 @@ use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use std::path::Path;
-use yaml_rust2::{Yaml, YamlLoader};
+use yaml_rust2::Yaml;
 
 /// How the file is read.
 #[derive(Clone, Debug, PartialEq)]
@@ -41,12 +41,7 @@ pub fn parse(text: &str, path: &Path, options: &RctOptions) -> Result<Measuremen
         path: path.to_owned(),
         message,
     };
-    let docs = YamlLoader::load_from_str(text).map_err(|e| PointsError::Row {
-        path: path.to_owned(),
-        line: e.marker().line(),
-        field: String::new(),
-        message: format!("not YAML: {}", e.info()),
-    })?;
+    let docs = crate::yaml_file::load(text).map_err(|e| file_error(e.to_string()))?;
     let Some(Yaml::Hash(entries)) = docs.first() else {
         return Err(file_error(
             "expected a map of observations (robot_cal_tools' kinematic measurements: each with pose, target_joints, camera_joints)".into(),

@@ -3,7 +3,7 @@
 //! ignored), every cell kept with its 1-based physical line for messages.
 
 use super::points::PointsError;
-use crate::csv_lines::shown_cell;
+use crate::csv_lines::{foreign_separator, shown_cell};
 use std::borrow::Cow;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -14,8 +14,10 @@ use std::path::{Path, PathBuf};
 pub struct Table {
     /// The file.
     pub path: PathBuf,
-    /// The column names, trimmed, lower case.
+    /// The column names, trimmed, lower case (what columns are found by).
     pub header: Vec<String>,
+    /// The column names as written, trimmed (what a copy of the table writes).
+    pub header_as_written: Vec<String>,
     /// The comment lines before the header (without their `#`).
     pub comments: Vec<String>,
     /// The text the rows are in (the file's, or a normalised one).
@@ -68,6 +70,7 @@ impl Table {
         Table {
             path: path.to_owned(),
             header: header.iter().map(|h| h.trim().to_lowercase()).collect(),
+            header_as_written: header.iter().map(|h| h.trim().to_owned()).collect(),
             comments,
             text,
             rows,
@@ -126,7 +129,21 @@ impl Table {
                 message,
             })?;
             match &header {
-                None => header = Some(cells.iter().map(|c| c.to_string()).collect()),
+                None => {
+                    if let [only] = &cells[..]
+                        && let Some(separator) = foreign_separator(only)
+                    {
+                        return Err(PointsError::Row {
+                            path: path.to_owned(),
+                            line: i + 1,
+                            field: "header".into(),
+                            message: format!(
+                                "a single column containing {separator}: the file looks separated by {separator}; this table is comma-separated with decimal points (re-export it as CSV)"
+                            ),
+                        });
+                    }
+                    header = Some(cells.iter().map(|c| c.to_string()).collect());
+                }
                 Some(h) => {
                     check_width(path, h.len(), i + 1, &cells)?;
                     rows.push((i + 1, range));
