@@ -262,6 +262,7 @@ pub fn run(args: Args) -> Result<()> {
         let map = predict_free_pose_accuracy(&mut cal, &desc, &set)?;
         (cal, map)
     } else {
+        checks::one_setup(&set, &args.data, "the axis-experiment calibration")?;
         calibrate_axes(&args, &set, &desc)?
     };
     let source = args.data.display().to_string();
@@ -617,8 +618,8 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotD
         }
     }
     if !cal.not_calibrated.is_empty() {
-        say!(
-            "  not calibrated (no axis experiment, kept nominal): joints {:?}",
+        eprintln!(
+            "warning: joints {:?} not calibrated (no axis experiment: kept nominal): their errors are in no predicted uncertainty; sweep them, or `axiscal validate` tests the model",
             cal.not_calibrated
         );
     }

@@ -6,7 +6,9 @@ use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::Calibration;
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
-use axiscal::measurement::unit_check::{UnitSlip, description_slips, measurement_slips, pose_slips};
+use axiscal::measurement::unit_check::{
+    UnitSlip, description_slips, measurement_slips, pose_slips, validation_spread_slip,
+};
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
 use std::io::BufRead;
 use std::path::Path;
@@ -63,12 +65,46 @@ pub fn pose_units(
     refuse_slips(file, &Vec::from_iter(pose_slips(positions_m, desc)))
 }
 
-/// The data's coordinates and commands against the description, unless `skip`.
+/// The data's coordinates and commands against the description, unless `skip`: the axis
+/// experiments' arcs and the validation points' spread (a spread beyond
+/// [`axiscal::measurement::unit_check::SPREAD_WARNING`] but not a slip is a warning).
 pub fn data_units(set: &MeasurementSet, desc: &RobotDescription, data: &Path, skip: bool) -> Result<()> {
     if skip {
         return Ok(());
     }
-    refuse_slips(data, &measurement_slips(set, desc))
+    let mut slips = measurement_slips(set, desc);
+    match validation_spread_slip(set, desc) {
+        Some((slip, true)) => slips.push(slip),
+        Some((slip, false)) => eprintln!(
+            "warning: {}: `{}`: {} (--skip-unit-check silences this)",
+            data.display(),
+            slip.field,
+            slip.message
+        ),
+        None => {}
+    }
+    refuse_slips(data, &slips)
+}
+
+/// Refuses a set measured from several setups (instrument placements, the `setup` column) for
+/// `what`, which takes one instrument frame: its rows would be compared across frames.
+pub fn one_setup(set: &MeasurementSet, data: &Path, what: &str) -> Result<()> {
+    let names = set.setup_names();
+    if names.len() < 2 {
+        return Ok(());
+    }
+    let first_other = (0..set.rows().len()).find(|&r| set.setup_of(r) > 0);
+    let at = first_other.and_then(|r| set.line_of(r)).map_or_else(
+        || data.display().to_string(),
+        |line| format!("{}:{line}", data.display()),
+    );
+    bail!(
+        "{at}: column `setup`: the rows come from {} setups ({}), each an instrument placement of its own; {what} \
+         takes one instrument frame: split the file by setup (only the free-pose calibration, `calibrate` of a \
+         file of free poses, places the robot in several)",
+        names.len(),
+        names.join(", ")
+    )
 }
 
 /// The identity a measurement CSV written by axiscal records (its leading `#` lines), if any.

@@ -96,11 +96,9 @@ pub fn run(args: Args) -> Result<()> {
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
-    let set = usable(
-        checks::read_data(&args.data, &desc, &args.robot, args.checks)?,
-        &desc,
-        &args.data,
-    );
+    let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
+    checks::one_setup(&set, &args.data, "diagnose")?;
+    let set = usable(set, &desc, &args.data);
     let set = without_sweep_outliers(&args, set, &desc)?;
     let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc)?;
     let options = DiagnosisOptions {

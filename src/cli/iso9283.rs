@@ -256,6 +256,7 @@ fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
+    checks::one_setup(&set, &args.data, "iso9283 evaluate")?;
     let (model, commanded_by) = match &args.calibration {
         Some(path) => (
             checks::read_calibration(path, &desc, &args.robot, args.checks.allow_other_robot)?.robot,

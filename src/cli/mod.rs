@@ -164,7 +164,14 @@ fn clap_one_line(e: &clap::Error) -> String {
         .map(str::trim)
         .filter(|l| !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information"))
         .collect();
-    let joined = lines.join("; ");
+    // A line ending in `:` introduces the next ("not provided:" then the arguments).
+    let mut joined = String::new();
+    for line in lines {
+        if !joined.is_empty() {
+            joined.push_str(if joined.ends_with(':') { " " } else { "; " });
+        }
+        joined.push_str(line);
+    }
     joined.strip_prefix("error: ").unwrap_or(&joined).to_owned()
 }
 

@@ -89,6 +89,7 @@ pub fn run(args: Args) -> Result<()> {
     let held_out = match &args.held_out {
         Some(p) => {
             let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
+            checks::one_setup(&set, p, "the held-out poses' prediction")?;
             Some(
                 held_out(&p.display().to_string(), &set, &cal, &desc)
                     .with_context(|| format!("held-out poses of {}", p.display()))?,

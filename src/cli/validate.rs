@@ -57,6 +57,7 @@ pub fn run(args: Args) -> Result<()> {
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
+    checks::one_setup(&set, &args.data, "validate")?;
     // A free-pose calibration fitted the targets the description may not give.
     let desc = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
     let options = match args.noise_mm {

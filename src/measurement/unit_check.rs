@@ -149,6 +149,94 @@ fn nominal_radius_mm(desc: &RobotDescription, joint: usize, first: &Measurement)
     Some((d - axis.direction.into_inner() * d.dot(&axis.direction)).norm() * 1e3)
 }
 
+/// The validation points may spread this much more or less (a ratio) than the description
+/// predicts from their commands before a warning: a robot within its drawing's tolerances and
+/// an instrument within its scale's spread within a few per cent; a quarter more or less is a
+/// scaled export or another robot.
+pub const SPREAD_WARNING: f64 = 1.25;
+
+/// Distances of `points` to their component-wise median point.
+pub fn radii(points: &[Vector3<f64>]) -> Vec<f64> {
+    let centre = Vector3::from_fn(|k, _| median(points.iter().map(|p| p[k]).collect()));
+    points.iter().map(|p| (p - centre).norm()).collect()
+}
+
+/// The median distance of `measured` points to their median point over that of `nominal`
+/// points (the same points as a model predicts them): the measured data's scale, whatever the
+/// instrument's frame. `None` with fewer than 3 points or nominal points that do not spread.
+pub fn spread_ratio(measured: &[Vector3<f64>], nominal: &[Vector3<f64>]) -> Option<f64> {
+    if measured.len() < 3 || measured.len() != nominal.len() {
+        return None;
+    }
+    let n = median(radii(nominal));
+    (n > 0.0).then(|| median(radii(measured)) / n)
+}
+
+/// The validation points' (`moved_joint` 0) spread against the description's prediction from
+/// their commands ([`spread_ratio`]), with the number of points: coordinates in another unit
+/// and commands in another unit both change it. `None` with fewer than 3 such points of a
+/// described tool target.
+pub fn validation_spread(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64, usize)> {
+    let targets = desc.tool_targets_m();
+    let model = crate::robot::RobotModel::ideal(desc);
+    let controller = crate::robot::Controller::from_description(desc);
+    let phi = model.phi_model();
+    let (mut measured, mut nominal) = (Vec::new(), Vec::new());
+    for m in set.rows().iter().filter(|m| m.moved_joint == 0) {
+        let Some(target) = targets.get(m.target) else { continue };
+        let internal = commands_to_internal(desc, &m.cmd);
+        let Ok(q) = model.joint_values(&controller, &internal) else {
+            continue;
+        };
+        nominal.push((phi.world_from_tool(&q) * target).coords * 1e3);
+        measured.push(Vector3::from(m.position_mm));
+    }
+    spread_ratio(&measured, &nominal).map(|r| (r, measured.len()))
+}
+
+/// The length unit nearest (within a factor 1.5, in log scale) to a coordinate scale `ratio`
+/// (coordinates in that unit read as millimetres).
+fn length_unit(ratio: f64) -> Option<&'static str> {
+    [
+        (1e-3, "metres"),
+        (1e3, "micrometres"),
+        (1.0 / 25.4, "inches"),
+        (1e-1, "centimetres"),
+        (25.4, "mm scaled by 25.4 (inches converted twice)"),
+    ]
+    .into_iter()
+    .find(|(factor, _)| (ratio / factor).ln().abs() < 1.5f64.ln())
+    .map(|(_, unit)| unit)
+}
+
+/// The validation points' spread as a slip ([`SLIP_FACTOR`]) or, beyond [`SPREAD_WARNING`], a
+/// warning; `None` when it matches the description.
+pub fn validation_spread_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<(UnitSlip, bool)> {
+    let (ratio, points) = validation_spread(set, desc)?;
+    let fatal = slipped(ratio);
+    if !fatal && (1.0 / SPREAD_WARNING..=SPREAD_WARNING).contains(&ratio) {
+        return None;
+    }
+    // Commands in radians read as degrees keep the predicted points near one pose, so only
+    // a wider measured spread can come from the commands.
+    let commands = if ratio > 1.0 { ", or commands in radians" } else { "" };
+    let cause = match length_unit(ratio) {
+        Some(unit) if fatal => format!("coordinates in {unit}{commands}?"),
+        _ if fatal => format!("coordinates in another unit{commands}?"),
+        _ => format!("coordinates scaled on export{commands}, or another robot than the description?"),
+    };
+    let message = format!(
+        "the {points} validation points spread {ratio:.3} times as far as the description predicts from their commands: {cause}"
+    );
+    Some((
+        UnitSlip {
+            field: "x_mm,y_mm,z_mm,cmd_k".into(),
+            message,
+        },
+        fatal,
+    ))
+}
+
 /// Coordinates and commands whose units look wrong (module docs), judged over the revolute axis
 /// experiments' target 0.
 pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {

@@ -582,7 +582,7 @@ fn messages_are_one_clear_line() {
             .assert()
             .code(2),
     );
-    assert!(e.contains("`;`-separated"), "{e}");
+    assert!(e.contains("separated by `;`"), "{e}");
     // A missing file: its cause once.
     let a = axiscal()
         .args(["calibrate", "missing.csv", "--out"])

@@ -134,5 +134,5 @@ fn cli_bad_pose_file_names_file_line_and_column() {
         .assert()
         .code(2);
     let stderr = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
-    assert!(stderr.contains("poses.csv:3: column `y_mm`"), "{stderr}");
+    assert!(stderr.contains("poses.csv: line 3, column y_mm"), "{stderr}");
 }

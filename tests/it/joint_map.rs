@@ -192,7 +192,7 @@ fn joints_prints_the_exact_calibrated_joint_values() {
         .assert()
         .code(2);
     assert!(
-        common::stderr(&a).contains(":2: column `cmd_3`"),
+        common::stderr(&a).contains(": line 2, column cmd_3"),
         "{}",
         common::stderr(&a)
     );

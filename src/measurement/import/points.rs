@@ -8,7 +8,7 @@
 //! alters: the instrument's frame need not be the description's `placement`.
 
 use super::table::{Row, Table};
-use crate::measurement::{Measurement, MeasurementSet, MeasurementSetError};
+use crate::measurement::{Measurement, MeasurementSet, MeasurementSetError, unit_check};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -437,31 +437,12 @@ fn match_points<'a>(
     Ok(pairs)
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-fn median_point(points: &[Vector3<f64>]) -> Vector3<f64> {
-    Vector3::from_fn(|k, _| median(points.iter().map(|p| p[k]).collect()))
-}
-
-/// Distances to the component-wise median point.
-fn radii(points: &[Vector3<f64>]) -> Vec<f64> {
-    let c = median_point(points);
-    points.iter().map(|p| (p - c).norm()).collect()
-}
-
-/// Median distance of the measured points to their median point over the nominal points'
-/// (file unit per mm); `None` when the nominal points do not spread.
+/// The measured points' spread over the nominal points' (file unit per mm,
+/// [`unit_check::spread_ratio`]).
 fn spread_ratio(pairs: &[(&PlanRow, &ExportPoint)]) -> Option<f64> {
     let measured: Vec<Vector3<f64>> = pairs.iter().map(|(_, p)| Vector3::from(p.position)).collect();
     let nominal: Vec<Vector3<f64>> = pairs.iter().map(|(r, _)| Vector3::from(r.nominal_mm)).collect();
-    if pairs.len() < 3 {
-        return None;
-    }
-    let n = median(radii(&nominal));
-    (n > 0.0).then(|| median(radii(&measured)) / n)
+    unit_check::spread_ratio(&measured, &nominal)
 }
 
 /// The unit a spread ratio points to: mm within a factor 3 of 1, m within a factor 3 of 1e-3.
@@ -485,7 +466,7 @@ fn check_slips(t: &Table, pairs: &[(&PlanRow, &ExportPoint)], unit: LengthUnit) 
         .map(|(_, p)| Vector3::from(p.position) * unit.to_mm())
         .collect();
     let nominal: Vec<Vector3<f64>> = pairs.iter().map(|(r, _)| Vector3::from(r.nominal_mm)).collect();
-    let (rm, rn) = (radii(&measured), radii(&nominal));
+    let (rm, rn) = (unit_check::radii(&measured), unit_check::radii(&nominal));
     for (k, (plan_row, point)) in pairs.iter().enumerate() {
         if (rm[k] - rn[k]).abs() > 50.0 + 0.2 * rn[k] {
             let x = t.column(&["x", "x_mm", "x_m"]).unwrap_or(0);

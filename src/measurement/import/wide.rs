@@ -53,6 +53,17 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
             t.required(&names.iter().map(String::as_str).collect::<Vec<_>>())
         })
         .collect::<Result<Vec<_>, _>>()?;
+    let beyond = joint_column_names(joints.len() + 1);
+    if let Some(extra) = t.column(&beyond.iter().map(String::as_str).collect::<Vec<_>>()) {
+        return Err(PointsError::File {
+            path: t.path.clone(),
+            message: format!(
+                "column `{}`: the table has more joints than the description's {}: give the description of this robot (--robot)",
+                t.header[extra],
+                joints.len()
+            ),
+        });
+    }
     let markers: Vec<[usize; 3]> = (1..)
         .map_while(|i| {
             let c = |a: &str| t.column(&[&format!("m{i}_{a}")]);
