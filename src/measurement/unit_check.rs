@@ -173,25 +173,35 @@ pub fn spread_ratio(measured: &[Vector3<f64>], nominal: &[Vector3<f64>]) -> Opti
 }
 
 /// The validation points' (`moved_joint` 0) spread against the description's prediction from
-/// their commands ([`spread_ratio`]), with the number of points: coordinates in another unit
-/// and commands in another unit both change it. `None` with fewer than 3 such points of a
-/// described tool target.
+/// their commands ([`spread_ratio`], each setup's points about their own median point: every
+/// setup is an instrument placement of its own), with the number of points: coordinates in
+/// another unit and commands in another unit both change it. `None` with fewer than 3 such
+/// points of a described tool target.
 pub fn validation_spread(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64, usize)> {
     let targets = desc.tool_targets_m();
     let model = crate::robot::RobotModel::ideal(desc);
     let controller = crate::robot::Controller::from_description(desc);
     let phi = model.phi_model();
-    let (mut measured, mut nominal) = (Vec::new(), Vec::new());
-    for m in set.rows().iter().filter(|m| m.moved_joint == 0) {
+    let mut by_setup: std::collections::BTreeMap<usize, (Vec<Vector3<f64>>, Vec<Vector3<f64>>)> =
+        std::collections::BTreeMap::new();
+    for (row, m) in set.rows().iter().enumerate().filter(|(_, m)| m.moved_joint == 0) {
         let Some(target) = targets.get(m.target) else { continue };
         let internal = commands_to_internal(desc, &m.cmd);
         let Ok(q) = model.joint_values(&controller, &internal) else {
             continue;
         };
+        let (measured, nominal) = by_setup.entry(set.setup_of(row)).or_default();
         nominal.push((phi.world_from_tool(&q) * target).coords * 1e3);
         measured.push(Vector3::from(m.position_mm));
     }
-    spread_ratio(&measured, &nominal).map(|r| (r, measured.len()))
+    let (mut measured, mut nominal) = (Vec::new(), Vec::new());
+    for (m, n) in by_setup.values().filter(|(m, _)| m.len() >= 3) {
+        measured.extend(radii(m));
+        nominal.extend(radii(n));
+    }
+    let n = median(nominal);
+    let points = measured.len();
+    (points >= 3 && n > 0.0).then(|| (median(measured) / n, points))
 }
 
 /// The length unit nearest (within a factor 1.5, in log scale) to a coordinate scale `ratio`
