@@ -6,6 +6,9 @@
 //! - Commands in radians in the `cmd_k` columns (degrees expected for a revolute joint): the
 //!   angle the target turns through against the commanded span.
 //! - Description row lengths in millimetres where metres are expected (`a_m = -690`).
+//! - Free poses (`moved_joint = 0`: validation poses, ISO cycles) with either slip: how far
+//!   their measured tool positions spread against how far the nominal model moves the tool at
+//!   their commands ([`free_pose_slips`]).
 //!
 //! Each estimate is a median over many point triples of a circle through three points (a
 //! second, differently written path from the calibrator's fits), and a slip is reported only
@@ -150,7 +153,7 @@ fn nominal_radius_mm(desc: &RobotDescription, joint: usize, first: &Measurement)
 }
 
 /// Coordinates and commands whose units look wrong (module docs), judged over the revolute axis
-/// experiments' target 0.
+/// experiments' target 0 and the free poses ([`free_pose_slips`]).
 pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
     let (mut scale, mut angle) = (Vec::new(), Vec::new());
     for e in set.experiments().iter().filter(|e| e.moved_joint > 0) {
@@ -236,7 +239,133 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
             ),
         });
     }
+    // The free poses, unless the sweeps already said the same slip of the same columns.
+    for slip in free_pose_slips(set, desc) {
+        let coordinates = |s: &UnitSlip| s.field.starts_with('x');
+        if !slips.iter().any(|s| coordinates(s) == coordinates(&slip)) {
+            slips.push(slip);
+        }
+    }
     slips
+}
+
+/// Free poses whose tool positions spread less than this \[mm\], measured and nominal alike,
+/// are not judged: their spread is the instrument's noise more than the robot's motion (as
+/// [`MIN_JUDGED_SAGITTA_MM`] for an arc).
+const MIN_JUDGED_SPREAD_MM: f64 = 1.0;
+
+/// Fewer free poses than this are not judged: two poses make one distance, which a robot far
+/// from its description could stretch.
+const MIN_FREE_POSES: usize = 3;
+
+/// One free pose: the centroid of its measured tool targets \[file length units\] and of the
+/// same targets on the nominal model at its commands (read in degrees) \[mm\].
+struct FreePose {
+    setup: usize,
+    measured: Vector3<f64>,
+    nominal: Vector3<f64>,
+    targets: usize,
+}
+
+/// The free poses of `set` (rows with `moved_joint = 0` whose target is one of the
+/// description's tool targets), in order of first appearance.
+fn free_poses(set: &MeasurementSet, desc: &RobotDescription) -> Vec<FreePose> {
+    let tool_targets = desc.tool_targets_m();
+    let model = desc.nominal_model();
+    let mut index: std::collections::HashMap<(&str, usize), usize> = std::collections::HashMap::new();
+    let mut poses: Vec<(FreePose, nalgebra::Isometry3<f64>)> = Vec::new();
+    for (i, m) in set.rows().iter().enumerate() {
+        let Some(target) = tool_targets.get(m.target).filter(|_| m.moved_joint == 0) else {
+            continue;
+        };
+        let k = *index.entry((m.experiment.as_str(), m.step)).or_insert_with(|| {
+            let world_from_tool = model.world_from_tool(&commands_to_internal(desc, &m.cmd));
+            let pose = FreePose {
+                setup: set.setup_of(i),
+                measured: Vector3::zeros(),
+                nominal: Vector3::zeros(),
+                targets: 0,
+            };
+            poses.push((pose, world_from_tool));
+            poses.len() - 1
+        });
+        let (pose, world_from_tool) = &mut poses[k];
+        pose.measured += Vector3::from(m.position_mm);
+        pose.nominal += (*world_from_tool * target).coords * 1e3;
+        pose.targets += 1;
+    }
+    poses
+        .into_iter()
+        .map(|(mut p, _)| {
+            p.measured /= p.targets as f64;
+            p.nominal /= p.targets as f64;
+            p
+        })
+        .collect()
+}
+
+/// The RMS distance of `points` from their setup's centroid (each setup its own instrument
+/// placement).
+fn spread(points: &[(usize, Vector3<f64>)]) -> f64 {
+    let mut centroids: std::collections::BTreeMap<usize, (Vector3<f64>, usize)> = std::collections::BTreeMap::new();
+    for (setup, p) in points {
+        let c = centroids.entry(*setup).or_insert((Vector3::zeros(), 0));
+        c.0 += p;
+        c.1 += 1;
+    }
+    let sum: f64 = points
+        .iter()
+        .map(|(setup, p)| {
+            let (sum, n) = centroids[setup];
+            (p - sum / n as f64).norm_squared()
+        })
+        .sum();
+    (sum / points.len() as f64).sqrt()
+}
+
+/// Coordinates or commands of the free poses whose units look wrong: the RMS spread of the
+/// poses' measured tool positions over the spread of the nominal model's at their commands (the
+/// same targets, each setup about its own centroid, so where the robot stands does not count).
+/// A robot differs from its description by per cent; coordinates in metres give 0.001,
+/// commands in radians (read as degrees) about 57.
+pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
+    let poses = free_poses(set, desc);
+    if poses.len() < MIN_FREE_POSES {
+        return Vec::new();
+    }
+    let measured = spread(&poses.iter().map(|p| (p.setup, p.measured)).collect::<Vec<_>>());
+    let nominal = spread(&poses.iter().map(|p| (p.setup, p.nominal)).collect::<Vec<_>>());
+    if measured.max(nominal) < MIN_JUDGED_SPREAD_MM {
+        return Vec::new();
+    }
+    let ratio = measured / nominal;
+    if !slipped(ratio) {
+        return Vec::new();
+    }
+    let unit = likely(ratio);
+    let what = format!(
+        "the {} free poses' (moved_joint = 0) measured tool positions spread {measured:.4} (RMS about their centroid) where the nominal model at their commands spreads them {nominal:.1} mm, {ratio:.4} times",
+        poses.len()
+    );
+    let revolute: Vec<String> = desc
+        .joints
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.kind == JointKind::Revolute)
+        .map(|(k, _)| format!("cmd_{}", k + 1))
+        .collect();
+    let slip = if unit == "radians" && !revolute.is_empty() {
+        UnitSlip {
+            field: revolute.join(","),
+            message: format!("{what}: the commands look like radians rather than degrees"),
+        }
+    } else {
+        UnitSlip {
+            field: "x_mm,y_mm,z_mm".into(),
+            message: format!("{what}: the coordinates look like {unit} rather than millimetres"),
+        }
+    };
+    vec![slip]
 }
 
 #[cfg(test)]
@@ -249,6 +378,54 @@ mod tests {
         let (r, a) = circle_through(&on(0.1), &on(0.5), &on(1.2)).unwrap();
         assert!((r - 2.0).abs() < 1e-12 && (a - 1.1).abs() < 1e-12, "{r} {a}");
         assert!(circle_through(&on(0.1), &on(0.1), &on(0.2)).is_none());
+    }
+
+    /// The validation poses of the IRB/L6's workspace plan, measured exactly on its nominal
+    /// model (the instrument at its base): `coordinates` times the millimetres, the commands
+    /// written `commands` times the degrees.
+    fn free_poses_set(coordinates: f64, commands: f64) -> MeasurementSet {
+        let desc = RobotDescription::asea_irb6l();
+        let plan = crate::plan::ValidationPlan::workspace_default(6);
+        let reference = crate::plan::CalibrationPlan::for_robot(&desc).reference;
+        let model = desc.nominal_model();
+        let mut rows = Vec::new();
+        for (step, cmd) in plan.commands(&desc, &reference).into_iter().enumerate() {
+            let tool = model.world_from_tool(&commands_to_internal(&desc, &cmd));
+            for (target, t) in desc.tool_targets_m().iter().enumerate() {
+                let p = (tool * t).coords * 1e3 * coordinates;
+                rows.push(Measurement {
+                    experiment: "validation".into(),
+                    moved_joint: 0,
+                    step,
+                    target,
+                    position_mm: [p.x, p.y, p.z],
+                    cmd: cmd.iter().map(|c| c * commands).collect(),
+                    payload_kg: 0.0,
+                    temperature_c: 20.0,
+                });
+            }
+        }
+        MeasurementSet::new(6, rows).unwrap()
+    }
+
+    #[test]
+    fn free_poses_in_metres_or_radians_are_slips_and_in_millimetres_and_degrees_are_not() {
+        let desc = RobotDescription::asea_irb6l();
+        assert_eq!(free_pose_slips(&free_poses_set(1.0, 1.0), &desc), vec![]);
+        // A robot a tenth larger than its description is no slip.
+        assert_eq!(free_pose_slips(&free_poses_set(1.1, 1.0), &desc), vec![]);
+        let metres = free_pose_slips(&free_poses_set(1e-3, 1.0), &desc);
+        assert_eq!(metres.len(), 1);
+        assert_eq!(metres[0].field, "x_mm,y_mm,z_mm");
+        assert!(metres[0].message.contains("look like metres"), "{}", metres[0].message);
+        let radians = free_pose_slips(&free_poses_set(1.0, 1f64.to_radians()), &desc);
+        assert_eq!(radians.len(), 1);
+        assert_eq!(radians[0].field, "cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6");
+        assert!(
+            radians[0].message.contains("look like radians"),
+            "{}",
+            radians[0].message
+        );
     }
 
     #[test]
