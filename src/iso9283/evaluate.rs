@@ -87,7 +87,10 @@ enum Label {
 
 /// The [`Label`] of an experiment named `name`.
 fn label(name: &str) -> Label {
-    let looks_iso = name.len() > 5 && name[..5].eq_ignore_ascii_case("iso-p") && name.as_bytes()[5].is_ascii_digit();
+    // Bytes, not a `str` slice: a name may have a multi-byte character anywhere.
+    let bytes = name.as_bytes();
+    let looks_iso = bytes.get(..5).is_some_and(|b| b.eq_ignore_ascii_case(b"iso-p"))
+        && bytes.get(5).is_some_and(u8::is_ascii_digit);
     if !looks_iso {
         return Label::Other;
     }
@@ -430,7 +433,16 @@ mod tests {
     fn iso_names_parse_and_near_misses_say_why() {
         assert_eq!(label("iso-P3"), Label::Pose(3, 1));
         assert_eq!(label("iso-P2-d3"), Label::Pose(2, 3));
-        for other in ["axis1", "tool", "iso-approach-P2-d1", "iso-position", "validation"] {
+        for other in [
+            "axis1",
+            "tool",
+            "iso-approach-P2-d1",
+            "iso-position",
+            "validation",
+            "isö-P1",
+            "iso-ö1",
+            "iso-",
+        ] {
             assert_eq!(label(other), Label::Other, "{other}");
         }
         let why = |name: &str| match label(name) {
