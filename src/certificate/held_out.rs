@@ -4,10 +4,12 @@
 //! chi-square verdict against the noise). Before: the nominal model's, its base frame
 //! registered to the same points (the rigid transform that best maps its predictions onto the
 //! measurements, [`rigid_fit`]), so that where the robot stands in the instrument frame, which
-//! nobody knows before a calibration, is not counted as its error.
+//! nobody knows before a calibration, is not counted as its error. Points the calibrated model
+//! misses beyond its prediction are a warning ([`HeldOut::warning`]): data in other units or of
+//! another setup look like a calibration that failed.
 
 use crate::calibration::procedure::Calibration;
-use crate::diagnosis::{CleanCampaign, ValidationOptions, is_validation, validate};
+use crate::diagnosis::{CleanCampaign, ValidationOptions, Verdict, is_validation, validate};
 use crate::kinematics::rigid_fit;
 use crate::measurement::MeasurementSet;
 use crate::robot::{RobotDescription, RobotModel};
@@ -32,8 +34,37 @@ pub struct HeldOut {
     pub predicted_tool_spans_rms_mm: Option<f64>,
     /// The same over the workspace (every joint within its limits) \[mm\].
     pub predicted_tool_workspace_rms_mm: Option<f64>,
+    /// The RMS error of the calibrated model the noise, the robot's repeatability and the
+    /// calibration's own error together predict on these points \[mm\] (`validate`'s
+    /// `validation.predicted_mm.total`).
+    pub predicted_rms_mm: f64,
+    /// Whether the calibrated model misses these points beyond that prediction (`validate`'s
+    /// position test of the validation points: `exceeds`).
+    pub beyond_prediction: bool,
     /// `validate`'s verdict on the calibrated model, in words.
     pub verdict: String,
+}
+
+impl HeldOut {
+    /// What to check when the calibrated model misses the held-out points beyond its
+    /// prediction; `None` when it does not.
+    pub fn warning(&self) -> Option<String> {
+        if !self.beyond_prediction {
+            return None;
+        }
+        let worse = if self.after.rms_mm > self.before.rms_mm {
+            format!(
+                ", worse than the nominal model's {:.4} mm (base registered)",
+                self.before.rms_mm
+            )
+        } else {
+            String::new()
+        };
+        Some(format!(
+            "held-out poses of {}: the calibrated model misses them by {:.4} mm RMS (max {:.4} mm) where the noise, the robot's repeatability and the calibration's own error predict {:.4} mm{worse}: check the held-out file's units (coordinates in mm, commands in degrees), its target ids, and that it was measured on this robot in this setup; until then the calibration's accuracy on it is not shown",
+            self.file, self.after.rms_mm, self.after.max_mm, self.predicted_rms_mm
+        ))
+    }
 }
 
 /// Position errors of one model.
@@ -108,6 +139,11 @@ pub fn held_out(
         noise_predicted_rms_mm: summary.predicted_mm.noise,
         predicted_tool_spans_rms_mm: cal.tool_accuracy.as_ref().map(|t| t.spans.position_rms_mm),
         predicted_tool_workspace_rms_mm: cal.tool_accuracy.as_ref().map(|t| t.workspace.position_rms_mm),
+        predicted_rms_mm: summary.predicted_mm.total,
+        beyond_prediction: summary
+            .chi_square
+            .as_ref()
+            .is_some_and(|c| c.verdict == Verdict::Exceeds),
         verdict: v.verdict.clone(),
     })
 }

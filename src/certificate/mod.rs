@@ -8,10 +8,12 @@
 //! [`crate::calibration::tool_accuracy`]'s `model_covariance`); the expanded uncertainty is
 //! `U = k u` with coverage factor `k = 2` (6.2, about 95 % for a normal distribution).
 
+pub mod data;
 pub mod held_out;
 pub mod html;
 mod svg;
 
+pub use data::{DataSection, ExperimentLine, data_mismatches};
 pub use held_out::{HeldOut, HeldOutError, held_out};
 
 use crate::calibration::procedure::{Calibration, FrameSigma, PointResidual};
@@ -159,30 +161,6 @@ pub struct NoiseLine {
     pub dof: usize,
 }
 
-/// The data the calibration was made from.
-#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
-pub struct DataSection {
-    /// The file.
-    pub file: String,
-    /// Rows (measured points).
-    pub rows: usize,
-    /// Per experiment.
-    pub experiments: Vec<ExperimentLine>,
-}
-
-/// One experiment of the data.
-#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
-pub struct ExperimentLine {
-    /// Its name.
-    pub name: String,
-    /// The joint it moves (0: none).
-    pub moved_joint: usize,
-    /// Poses (steps).
-    pub poses: usize,
-    /// Rows.
-    pub rows: usize,
-}
-
 /// One scalar parameter.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ParameterLine {
@@ -314,7 +292,7 @@ pub fn certificate(inputs: &CertificateInputs<'_>) -> Result<Certificate, Certif
         },
         calibration: calibration_section(inputs),
         instrument: instrument_section(inputs),
-        data: inputs.data.as_ref().map(|(file, set)| data_section(file, set)),
+        data: inputs.data.as_ref().map(|(file, set)| data::data_section(file, set)),
         uncertainty_statement: UNCERTAINTY_STATEMENT.into(),
         coverage_factor: COVERAGE_FACTOR,
         parameters: parameter_lines(&cal.robot, &nominal, &names, &u),
@@ -325,7 +303,7 @@ pub fn certificate(inputs: &CertificateInputs<'_>) -> Result<Certificate, Certif
         held_out: inputs.held_out.clone(),
         iso9283: inputs.iso9283.clone(),
         not_calibrated: not_calibrated(cal, &u, &names),
-        warnings: warnings(cal, inputs.held_out.is_some()),
+        warnings: warnings(inputs),
     })
 }
 
@@ -370,23 +348,6 @@ fn instrument_section(inputs: &CertificateInputs<'_>) -> InstrumentSection {
         }),
         given_p_value: noise.and_then(|n| n.given_p_value),
         given_contradicted: noise.is_some_and(|n| n.given_contradicted),
-    }
-}
-
-fn data_section(file: &str, set: &MeasurementSet) -> DataSection {
-    DataSection {
-        file: file.to_string(),
-        rows: set.rows().len(),
-        experiments: set
-            .experiments()
-            .into_iter()
-            .map(|e| ExperimentLine {
-                name: e.name.to_string(),
-                moved_joint: e.moved_joint,
-                poses: e.by_step().len(),
-                rows: e.rows.len(),
-            })
-            .collect(),
     }
 }
 
@@ -575,9 +536,19 @@ fn not_calibrated(cal: &Calibration, u: &[f64], names: &[String]) -> Vec<String>
 }
 
 /// What a reader must know before trusting the uncertainties and the held-out comparison.
-fn warnings(cal: &Calibration, held_out: bool) -> Vec<String> {
-    let mut out = Vec::new();
-    if held_out && cal.free_poses.is_some() {
+fn warnings(inputs: &CertificateInputs<'_>) -> Vec<String> {
+    let (cal, held_out) = (inputs.calibration, inputs.held_out.as_ref());
+    let mut out: Vec<String> = held_out.and_then(HeldOut::warning).into_iter().collect();
+    if let Some((file, set)) = &inputs.data {
+        let mismatches = data_mismatches(cal, set);
+        if !mismatches.is_empty() {
+            out.push(format!(
+                "the data summarised ({file}) are not the ones the calibration records: {}",
+                mismatches.join("; ")
+            ));
+        }
+    }
+    if held_out.is_some() && cal.free_poses.is_some() {
         out.push(
             "the calibration was fitted to free poses: the held-out poses are held out only if their file is not the one the calibration was made from"
                 .into(),

@@ -7,7 +7,7 @@ use axiscal::calibration::procedure::Calibration;
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::unit_check::{
-    UnitSlip, description_slips, measurement_slips, pose_slips, validation_spread_slip,
+    UnitSlip, description_slips, free_pose_scale_warning, measurement_slips, pose_slips,
 };
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
 use std::io::BufRead;
@@ -66,22 +66,22 @@ pub fn pose_units(
 }
 
 /// The data's coordinates and commands against the description, unless `skip`: the axis
-/// experiments' arcs and the validation points' spread (a spread beyond
+/// experiments' arcs and the free poses' spread (a spread beyond
 /// [`axiscal::measurement::unit_check::SPREAD_WARNING`] but not a slip is a warning).
 pub fn data_units(set: &MeasurementSet, desc: &RobotDescription, data: &Path, skip: bool) -> Result<()> {
     if skip {
         return Ok(());
     }
-    let mut slips = measurement_slips(set, desc);
-    match validation_spread_slip(set, desc) {
-        Some((slip, true)) => slips.push(slip),
-        Some((slip, false)) => eprintln!(
+    let slips = measurement_slips(set, desc);
+    if slips.is_empty()
+        && let Some(scale) = free_pose_scale_warning(set, desc)
+    {
+        eprintln!(
             "warning: {}: `{}`: {} (--skip-unit-check silences this)",
             data.display(),
-            slip.field,
-            slip.message
-        ),
-        None => {}
+            scale.field,
+            scale.message
+        );
     }
     refuse_slips(data, &slips)
 }

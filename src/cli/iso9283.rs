@@ -8,8 +8,8 @@ use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::compensation::Compensator;
 use axiscal::iso9283::{
-    CYCLE_ORDER, Cube, IsoFigures, IsoPrediction, PredictionInputs, approach_commands, evaluate, largest_cube,
-    plan_cube, predict,
+    CYCLE_ORDER, Cube, EvaluateOptions, IsoFigures, IsoPrediction, PredictionInputs, approach_commands, evaluate,
+    largest_cube, plan_cube, predict,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{IsotropicNoise, MeasurementModel};
@@ -137,6 +137,10 @@ struct EvaluateArgs {
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
+    /// Flag the cycles the outlier screen rejects (a cycle far from its pose's others) but
+    /// keep them in the figures.
+    #[arg(long)]
+    keep_outliers: bool,
     #[command(flatten)]
     checks: checks::Overrides,
 }
@@ -267,8 +271,15 @@ fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {
             "the nominal model, its base frame registered to the data".to_string(),
         ),
     };
-    let figures = evaluate(&set, &model, &desc, args.calibration.is_none())
+    let options = EvaluateOptions {
+        register_base: args.calibration.is_none(),
+        keep_outliers: args.keep_outliers,
+    };
+    let figures = evaluate(&set, &model, &desc, options)
         .with_context(|| format!("ISO 9283 figures of {}", args.data.display()))?;
+    for w in &figures.warnings {
+        eprintln!("warning: {}: {w}", args.data.display());
+    }
     let text = markdown(&figures, &commanded_by, &args.data.display().to_string());
     let mut staged = outputs.staged_in(&args.out)?;
     staged.write(OUTPUTS[0], json_file::to_string(Schema::ISO9283, &figures)?)?;
@@ -313,6 +324,12 @@ fn markdown(f: &IsoFigures, commanded_by: &str, data: &str) -> String {
             );
         }
         None => s.push_str("\nDistance P2-P4: not measured in two or more common cycles.\n"),
+    }
+    if !f.warnings.is_empty() {
+        s.push_str("\n## Warnings\n\n");
+        for w in &f.warnings {
+            let _ = writeln!(s, "- {w}");
+        }
     }
     s
 }

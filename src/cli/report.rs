@@ -4,11 +4,13 @@
 
 use super::checks;
 use super::output::Outputs;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
+use axiscal::calibration::procedure::Calibration;
 use axiscal::calibration::procedure::{PointResidual, read_residuals_csv};
-use axiscal::certificate::{CertificateInputs, certificate, held_out, html};
+use axiscal::certificate::{CertificateInputs, certificate, data_mismatches, held_out, html};
 use axiscal::iso9283::IsoFigures;
 use axiscal::json_file::{self, Schema};
+use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
 
@@ -26,9 +28,14 @@ pub struct Args {
     /// name: the nominal values.
     #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
-    /// The measurement CSV the calibration was made from: its experiments are summarised.
+    /// The measurement CSV the calibration was made from: its experiments are summarised. It
+    /// must hold the sweeps the calibration records, with their poses.
     #[arg(long)]
     data: Option<PathBuf>,
+    /// Summarise `--data` even when it is not the data the calibration records (other or
+    /// missing sweeps, other pose counts); the certificate then says so in its warnings.
+    #[arg(long)]
+    allow_other_data: bool,
     /// A measurement CSV with held-out poses (`moved_joint = 0`, not `tool`): the nominal and
     /// the calibrated model compared on them. It may be `--data` itself, whose validation poses
     /// the calibration does not use.
@@ -61,6 +68,21 @@ fn residuals_beside(calibration: &Path) -> Result<Option<Vec<PointResidual>>> {
     Ok(Some(residuals))
 }
 
+/// Refuses `set` (read from `data`) as the calibration's data when it is not what the
+/// calibration records ([`data_mismatches`]), unless `--allow-other-data`.
+fn same_data(set: &MeasurementSet, cal: &Calibration, data: &Path, args: &Args) -> Result<()> {
+    let mismatches = data_mismatches(cal, set);
+    if mismatches.is_empty() || args.allow_other_data {
+        return Ok(());
+    }
+    bail!(
+        "{}: not the data {} was made from: {}; give --data the measurement file the calibration was made from, or pass --allow-other-data to summarise this one anyway",
+        data.display(),
+        args.calibration.display(),
+        mismatches.join("; ")
+    )
+}
+
 /// Runs `axiscal report`.
 pub fn run(args: Args) -> Result<()> {
     let mut outputs = Outputs::new(args.force)
@@ -80,10 +102,11 @@ pub fn run(args: Args) -> Result<()> {
     let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
     let desc = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
     let data = match &args.data {
-        Some(p) => Some((
-            p.display().to_string(),
-            checks::read_data(p, &desc, &args.robot, args.checks)?,
-        )),
+        Some(p) => {
+            let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
+            same_data(&set, &cal, p, &args)?;
+            Some((p.display().to_string(), set))
+        }
         None => None,
     };
     let held_out = match &args.held_out {

@@ -397,7 +397,7 @@ pub fn validate(
         summary(PointKind::Tool, &free.tool),
         summary(PointKind::Axis, &axis_steps),
     );
-    let verdict = verdict(validation.as_ref().or(axis.as_ref()), free.orientation.as_ref());
+    let verdict = verdict(&validation, &tool, &axis, free.orientation.as_ref());
     Ok(Validation {
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         noise_source: options.noise_source.clone(),
@@ -704,10 +704,54 @@ fn orientation_summary(
 }
 
 /// The one-line verdict from the main position summary and the orientation.
-fn verdict(position: Option<&PositionSummary>, orientation: Option<&OrientationSummary>) -> String {
-    let Some(p) = position else {
-        return "no validation poses and no axis experiments: nothing to validate".into();
+/// The headline: the validation poses' position test (the axis experiments' without them) with
+/// the orientations', led by every other part beyond its prediction, so that it never calls
+/// data consistent whose summary line says they exceed.
+fn verdict(
+    validation: &Option<PositionSummary>,
+    tool: &Option<PositionSummary>,
+    axis: &Option<PositionSummary>,
+    orientation: Option<&OrientationSummary>,
+) -> String {
+    let exceeds = |c: &Option<ChiSquare>| c.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds);
+    let (p, name, others) = match (validation, axis) {
+        (Some(v), _) => (
+            v,
+            "validation poses",
+            [("tool observation's", tool), ("axis experiments'", axis)],
+        ),
+        (None, Some(a)) => (a, "axis experiments", [("tool observation's", tool), ("", &None)]),
+        (None, None) => return "no validation poses and no axis experiments: nothing to validate".into(),
     };
+    let mut missed: Vec<String> = others
+        .iter()
+        .filter_map(|(name, s)| s.as_ref().map(|s| (name, s)))
+        .filter(|(_, s)| exceeds(&s.chi_square))
+        .map(|(name, s)| {
+            format!(
+                "the {name} points, RMS {:.4} mm (max {:.4} mm) against {:.4} mm predicted",
+                s.rms_mm, s.max_mm, s.predicted_mm.total
+            )
+        })
+        .collect();
+    if let Some(o) = orientation.filter(|o| exceeds(&o.chi_square)) {
+        missed.push(format!(
+            "the tool orientations, RMS {:.4} mrad (max {:.4} mrad) against {:.4} mrad predicted",
+            o.rms_mrad, o.max_mrad, o.predicted_mrad.total
+        ));
+    }
+    let text = position_verdict(p, orientation);
+    if missed.is_empty() || exceeds(&p.chi_square) {
+        return text;
+    }
+    format!(
+        "the calibrated model misses part of these data: {}; the {name}: {text}",
+        missed.join("; ")
+    )
+}
+
+/// The position test of `p` in words, with the orientations' verdict.
+fn position_verdict(p: &PositionSummary, orientation: Option<&OrientationSummary>) -> String {
     let parts = p.predicted_mm.describe("mm");
     let mut text = match p.chi_square.as_ref().map(|c| c.verdict) {
         Some(Verdict::Exceeds) => format!(

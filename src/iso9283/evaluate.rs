@@ -3,16 +3,24 @@
 //! targets measured at each), each attained pose fitted to the description's tool targets
 //! (absolute orientation, [`crate::kinematics::rigid_fit`]), each commanded pose the model's
 //! forward kinematics of the cycle's commands, both in the model's robot base frame.
+//!
+//! Before the figures: an experiment named like an ISO pose that is not one is refused
+//! ([`IsoError::NotAPose`]), cycles far from their pose's others are set aside
+//! ([`super::outliers`]), and the instrument frame is checked against the description
+//! ([`super::frame`]); what is found is said in [`IsoFigures::warnings`].
 
 use super::figures::{
     DirectionalVariation, DistanceFigures, PoseAccuracy, PoseRepeatability, abc, directional_variation,
     distance_figures, pose_accuracy, pose_repeatability,
 };
+use super::frame::frame_warnings;
+use super::outliers::{OutlierCycle, screen_cycles};
+use super::predict::CYCLE_ORDER;
 use crate::kinematics::{PhiModel, rigid_fit};
-use crate::measurement::{Measurement, MeasurementSet};
+use crate::measurement::{Experiment, Measurement, MeasurementSet};
 use crate::robot::{Controller, Placement, RobotDescription, RobotModel, commands_to_internal};
 use nalgebra::{Isometry3, Point3};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 /// What stops an evaluation.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -28,6 +36,32 @@ pub enum IsoError {
     /// The poses are too few or in a line to register a base frame to.
     #[error("the commanded positions are fewer than three or in a line: no base frame can be registered to them")]
     Registration,
+    /// An experiment named like an ISO pose (`iso-P` and a digit) whose name does not parse:
+    /// its cycles would be left out without a word.
+    #[error(
+        "experiment `{experiment}`{}: {problem}; an ISO pose is named `iso-P<k>` (k = 1 .. 5) or `iso-P<k>-d<h>` (approach direction h = 1, 2, ...): rename it",
+        line.map_or(String::new(), |l| format!(" (line {l})"))
+    )]
+    NotAPose {
+        /// The experiment.
+        experiment: String,
+        /// The line of its first row, when known.
+        line: Option<u64>,
+        /// What does not parse.
+        problem: String,
+    },
+    /// So many cycles of a pose are outliers that the pose, not single cycles, is wrong.
+    #[error(
+        "experiment `{experiment}`: {flagged} of its {cycles} cycles lie beyond the far-out fences (Q1 - 3 IQR, Q3 + 3 IQR of its cycles' coordinates): the pose, not single cycles, is wrong; check its rows (commands, coordinates and their units, target ids)"
+    )]
+    TooManyOutliers {
+        /// The experiment.
+        experiment: String,
+        /// Cycles beyond the fences.
+        flagged: usize,
+        /// Its cycles.
+        cycles: usize,
+    },
     /// A cycle's pose could not be fitted.
     #[error("experiment `{experiment}`, cycle (step) {step}: {problem}")]
     Cycle {
@@ -40,14 +74,48 @@ pub enum IsoError {
     },
 }
 
+/// What an experiment's name says.
+#[derive(Debug, PartialEq)]
+enum Label {
+    /// Pose `k`, approach direction `h`.
+    Pose(usize, usize),
+    /// Not an ISO pose (an approach pose `iso-approach-...`, an axis experiment, ...).
+    Other,
+    /// Named like an ISO pose (`iso-P` and a digit, in any case) but not one: why.
+    Malformed(String),
+}
+
+/// The [`Label`] of an experiment named `name`.
+fn label(name: &str) -> Label {
+    // Bytes, not a `str` slice: a name may have a multi-byte character anywhere.
+    let bytes = name.as_bytes();
+    let looks_iso = bytes.get(..5).is_some_and(|b| b.eq_ignore_ascii_case(b"iso-p"))
+        && bytes.get(5).is_some_and(u8::is_ascii_digit);
+    if !looks_iso {
+        return Label::Other;
+    }
+    let Some(rest) = name.strip_prefix("iso-P") else {
+        return Label::Malformed("names are case-sensitive".into());
+    };
+    let (pose, direction) = rest.split_once("-d").unwrap_or((rest, "1"));
+    let poses = CYCLE_ORDER.len();
+    match (pose.parse::<usize>(), direction.parse::<usize>()) {
+        (Err(_), _) => Label::Malformed(format!("`{pose}` is not a pose number")),
+        (Ok(k), _) if !(1..=poses).contains(&k) => Label::Malformed(format!(
+            "P{k} is not one of the cube's points P1 .. P{poses} (ISO 9283 6.2)"
+        )),
+        (_, Err(_)) => Label::Malformed(format!("`d{direction}` is not an approach direction")),
+        (_, Ok(0)) => Label::Malformed("approach directions count from 1 (`-d1`)".into()),
+        (Ok(k), Ok(h)) => Label::Pose(k, h),
+    }
+}
+
 /// Pose `k` and approach direction `h` of an experiment named `iso-P<k>` or `iso-P<k>-d<h>`.
 pub fn pose_label(experiment: &str) -> Option<(usize, usize)> {
-    let rest = experiment.strip_prefix("iso-P")?;
-    let (pose, direction) = match rest.split_once("-d") {
-        Some((p, d)) => (p.parse().ok()?, d.parse().ok()?),
-        None => (rest.parse().ok()?, 1),
-    };
-    (pose >= 1 && direction >= 1).then_some((pose, direction))
+    match label(experiment) {
+        Label::Pose(k, h) => Some((k, h)),
+        _ => None,
+    }
 }
 
 /// One ISO pose's figures.
@@ -82,6 +150,14 @@ pub struct IsoFigures {
     pub worst_ap_p_mm: f64,
     /// Largest `RP_l` over the poses \[mm\].
     pub worst_rp_l_mm: f64,
+    /// The cycles the outlier screen flagged ([`super::outliers`]), each with whether the
+    /// figures were computed without it; empty when none was.
+    #[serde(default)]
+    pub outliers: Vec<OutlierCycle>,
+    /// What to check before trusting the figures (an outlier cycle, a scale or handedness of
+    /// the instrument frame the description contradicts), in words; empty when nothing.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 impl IsoFigures {
@@ -97,12 +173,25 @@ impl IsoFigures {
     }
 }
 
-/// A measured cycle: its commanded and attained tool poses in the base frame.
-struct Cycle {
-    direction: usize,
-    step: usize,
+/// A measured cycle: its commanded and attained tool poses in the base frame, and its targets.
+pub(super) struct Cycle {
+    pub(super) experiment: String,
+    pub(super) direction: usize,
+    pub(super) step: usize,
+    /// The data file's line of its first row, when known.
+    pub(super) line: Option<u64>,
+    pub(super) commanded: Isometry3<f64>,
+    pub(super) attained: Isometry3<f64>,
+    /// Per measured target: its position on the tool (the description's) and where it was
+    /// measured (instrument frame) \[m\].
+    pub(super) targets: Vec<(Point3<f64>, Point3<f64>)>,
+}
+
+/// The commanded and attained poses and the targets of one step's rows.
+struct Fitted {
     commanded: Isometry3<f64>,
     attained: Isometry3<f64>,
+    targets: Vec<(Point3<f64>, Point3<f64>)>,
 }
 
 /// The attained and commanded poses of one step's rows.
@@ -113,8 +202,8 @@ fn cycle(
     phi: &PhiModel,
     controller: &Controller,
     desc: &RobotDescription,
-) -> Result<(Isometry3<f64>, Isometry3<f64>), String> {
-    let (mut src, mut dst) = (Vec::new(), Vec::new());
+) -> Result<Fitted, String> {
+    let mut targets = Vec::new();
     for r in rows {
         let t = targets_m.get(r.target).ok_or_else(|| {
             format!(
@@ -123,9 +212,9 @@ fn cycle(
                 targets_m.len()
             )
         })?;
-        src.push(*t);
-        dst.push(r.position_m());
+        targets.push((*t, r.position_m()));
     }
+    let (src, dst): (Vec<_>, Vec<_>) = targets.iter().copied().unzip();
     let (world_from_tool, _) = rigid_fit(&src, &dst)
         .ok_or("fewer than three targets measured, or they are in a line: no attained orientation")?;
     let cmd = &rows[0].cmd;
@@ -136,10 +225,36 @@ fn cycle(
         .joint_values(controller, &commands_to_internal(desc, cmd))
         .map_err(|e| e.to_string())?;
     let base_from_world = phi.world_from_base.inverse();
-    Ok((
-        base_from_world * phi.world_from_tool(&q),
-        base_from_world * world_from_tool,
-    ))
+    Ok(Fitted {
+        commanded: base_from_world * phi.world_from_tool(&q),
+        attained: base_from_world * world_from_tool,
+        targets,
+    })
+}
+
+/// The ISO poses of `set` by label, every experiment named like one checked
+/// ([`IsoError::NotAPose`]).
+fn iso_experiments<'a>(set: &'a MeasurementSet) -> Result<Vec<(Experiment<'a>, usize, usize)>, IsoError> {
+    let mut out = Vec::new();
+    for experiment in set.experiments() {
+        match label(experiment.name) {
+            Label::Pose(k, h) => out.push((experiment, k, h)),
+            Label::Other => {}
+            Label::Malformed(problem) => {
+                let line = set
+                    .rows()
+                    .iter()
+                    .position(|m| m.experiment == experiment.name)
+                    .and_then(|i| set.line_of(i));
+                return Err(IsoError::NotAPose {
+                    experiment: experiment.name.to_string(),
+                    line,
+                    problem,
+                });
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The cycles of every ISO pose of `set`, by pose.
@@ -148,29 +263,37 @@ fn cycles(
     model: &RobotModel,
     desc: &RobotDescription,
 ) -> Result<BTreeMap<usize, Vec<Cycle>>, IsoError> {
+    let experiments = iso_experiments(set)?;
     let targets_m = desc.tool_targets_m();
-    if targets_m.len() < 3 {
+    if targets_m.len() < 3 && !experiments.is_empty() {
         return Err(IsoError::TooFewToolTargets(targets_m.len()));
     }
     let controller = Controller::from_description(desc);
     let phi = model.phi_model();
+    // The line of each (experiment, step)'s first row.
+    let mut lines: HashMap<(&str, usize), u64> = HashMap::new();
+    for (i, m) in set.rows().iter().enumerate() {
+        if let Some(line) = set.line_of(i) {
+            lines.entry((m.experiment.as_str(), m.step)).or_insert(line);
+        }
+    }
     let mut out: BTreeMap<usize, Vec<Cycle>> = BTreeMap::new();
-    for experiment in set.experiments() {
-        let Some((pose, direction)) = pose_label(experiment.name) else {
-            continue;
-        };
+    for (experiment, pose, direction) in experiments {
         for (step, rows) in experiment.by_step() {
-            let (commanded, attained) =
+            let fitted =
                 cycle(&rows, &targets_m, model, &phi, &controller, desc).map_err(|problem| IsoError::Cycle {
                     experiment: experiment.name.to_string(),
                     step,
                     problem,
                 })?;
             out.entry(pose).or_default().push(Cycle {
+                experiment: experiment.name.to_string(),
                 direction,
                 step,
-                commanded,
-                attained,
+                line: lines.get(&(experiment.name, step)).copied(),
+                commanded: fitted.commanded,
+                attained: fitted.attained,
+                targets: fitted.targets,
             });
         }
     }
@@ -226,22 +349,65 @@ fn register(cycles: &mut BTreeMap<usize, Vec<Cycle>>) -> Result<f64, IsoError> {
     Ok(rms_m * 1e3)
 }
 
+/// How [`evaluate`] treats its data.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EvaluateOptions {
+    /// The model was not measured (a nominal one): its base frame is fitted to the data first
+    /// ([`IsoFigures::registration_rms_mm`]).
+    pub register_base: bool,
+    /// Flag the outlier cycles ([`super::outliers`]) but keep them in the figures.
+    pub keep_outliers: bool,
+}
+
 /// The ISO 9283 figures of the `iso-P<k>` experiments of `set`, commanded poses from `model`
 /// driven as `desc`'s controller drives it: a calibrated robot as it is, a nominal one with
-/// `register_base` (its base frame fitted to the data first, [`IsoFigures::registration_rms_mm`]).
+/// `options.register_base`. Outlier cycles are left out unless `options.keep_outliers`.
 pub fn evaluate(
     set: &MeasurementSet,
     model: &RobotModel,
     desc: &RobotDescription,
-    register_base: bool,
+    options: EvaluateOptions,
 ) -> Result<IsoFigures, IsoError> {
     let mut cycles = cycles(set, model, desc)?;
-    let registration_rms_mm = if register_base {
+    let outliers = screen_cycles(&cycles, options.keep_outliers)?;
+    if !options.keep_outliers {
+        for c in cycles.values_mut() {
+            c.retain(|c| {
+                !outliers
+                    .iter()
+                    .any(|o| o.experiment == c.experiment && o.step == c.step)
+            });
+        }
+    }
+    let registration_rms_mm = if options.register_base {
         Some(register(&mut cycles)?)
     } else {
         None
     };
-    let poses: Vec<PoseFigures> = cycles.iter().map(|(&k, c)| pose_figures(k, c)).collect();
+    let mut warnings: Vec<String> = outliers.iter().map(OutlierCycle::describe).collect();
+    warnings.extend(frame_warnings(&cycles));
+    let poses: Vec<PoseFigures> = cycles
+        .iter()
+        .filter(|(_, c)| !c.is_empty())
+        .map(|(&k, c)| pose_figures(k, c))
+        .collect();
+    let distance_p2_p4 = distance(&cycles);
+    Ok(IsoFigures {
+        registration_rms_mm,
+        worst_ap_p_mm: poses.iter().map(|p| p.accuracy.ap_p_mm).fold(0.0, f64::max),
+        worst_rp_l_mm: poses
+            .iter()
+            .filter_map(|p| p.repeatability.map(|r| r.rp_l_mm))
+            .fold(0.0, f64::max),
+        poses,
+        distance_p2_p4,
+        outliers,
+        warnings,
+    })
+}
+
+/// Distance accuracy and repeatability between `P2` and `P4`, direction 1, cycle by cycle.
+fn distance(cycles: &BTreeMap<usize, Vec<Cycle>>) -> Option<DistanceFigures> {
     let steps = |k: usize| -> BTreeMap<usize, &Cycle> {
         cycles
             .get(&k)
@@ -253,18 +419,40 @@ pub fn evaluate(
         .iter()
         .filter_map(|(s, a)| p4.get(s).map(|b| (a.attained, b.attained)))
         .collect();
-    let distance_p2_p4 = match (p2.values().next(), p4.values().next()) {
+    match (p2.values().next(), p4.values().next()) {
         (Some(a), Some(b)) => distance_figures((&a.commanded, &b.commanded), &pairs),
         _ => None,
-    };
-    Ok(IsoFigures {
-        registration_rms_mm,
-        worst_ap_p_mm: poses.iter().map(|p| p.accuracy.ap_p_mm).fold(0.0, f64::max),
-        worst_rp_l_mm: poses
-            .iter()
-            .filter_map(|p| p.repeatability.map(|r| r.rp_l_mm))
-            .fold(0.0, f64::max),
-        poses,
-        distance_p2_p4,
-    })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn iso_names_parse_and_near_misses_say_why() {
+        assert_eq!(label("iso-P3"), Label::Pose(3, 1));
+        assert_eq!(label("iso-P2-d3"), Label::Pose(2, 3));
+        for other in [
+            "axis1",
+            "tool",
+            "iso-approach-P2-d1",
+            "iso-position",
+            "validation",
+            "isö-P1",
+            "iso-ö1",
+            "iso-",
+        ] {
+            assert_eq!(label(other), Label::Other, "{other}");
+        }
+        let why = |name: &str| match label(name) {
+            Label::Malformed(w) => w,
+            l => panic!("{name}: {l:?}"),
+        };
+        assert!(why("iso-P2-d0").contains("count from 1"));
+        assert!(why("iso-P6").contains("P1 .. P5"));
+        assert!(why("ISO-P1").contains("case-sensitive"));
+        assert!(why("iso-P2-dx").contains("`dx`"));
+        assert!(why("iso-P2x").contains("`2x`"));
+    }
 }

@@ -7,6 +7,8 @@
 //!   them.
 //! - [`mod@evaluate`]: the figures of a measured campaign (experiments `iso-P<k>`), attained poses
 //!   fitted to the tool targets, commanded ones from a robot model.
+//! - [`outliers`]: cycles far from their pose's others, set aside before the figures.
+//! - [`frame`]: the instrument frame's scale and handedness against the description.
 //! - [`figures`]: pose accuracy and repeatability (7.2.1, 7.2.2), multi-directional pose
 //!   accuracy variation (7.2.3), distance accuracy and repeatability (7.3).
 //! - [`predict`](mod@predict): the figures predicted before a test, by Monte-Carlo over the
@@ -15,12 +17,15 @@
 pub mod cube;
 pub mod evaluate;
 pub mod figures;
+pub mod frame;
+pub mod outliers;
 pub mod predict;
 
 pub use cube::{Cube, CubeError, approach_commands, cube_points, largest_cube, plan_cube};
-pub use evaluate::{IsoError, IsoFigures, PoseFigures, evaluate, pose_label};
+pub use evaluate::{EvaluateOptions, IsoError, IsoFigures, PoseFigures, evaluate, pose_label};
 pub use figures::{
     DirectionalVariation, DistanceFigures, PoseAccuracy, PoseRepeatability, abc, directional_variation,
     distance_figures, pose_accuracy, pose_repeatability,
 };
+pub use outliers::OutlierCycle;
 pub use predict::{CYCLE_ORDER, IsoPrediction, PredictedPose, PredictionError, PredictionInputs, cycle_rows, predict};

@@ -12,7 +12,7 @@
 //! from the calibrated model. Accuracy `AP` comes mostly from `d`, repeatability `RP` from the
 //! jitter and the noise.
 
-use super::evaluate::{IsoError, IsoFigures, evaluate};
+use super::evaluate::{EvaluateOptions, IsoError, IsoFigures, evaluate};
 use crate::calibration::tool_accuracy::{model_displaced, model_parameter_names};
 use crate::diagnosis::{CleanCampaign, NoiseModel, replica};
 use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
@@ -174,7 +174,12 @@ pub fn predict(
             .map_err(|e| failed(format!("the drawn robot: {e}")))?;
         let jittered = replica(&template, &clean, &jitter, true, &mut rng).map_err(|e| failed(e.to_string()))?;
         let measured = measured(jittered, inputs.instrument, &mut rng).map_err(failed)?;
-        let f = evaluate(&measured, inputs.model, inputs.desc, false).map_err(|e: IsoError| failed(e.to_string()))?;
+        // Every simulated cycle counts: the draws make no gross errors to screen.
+        let options = EvaluateOptions {
+            register_base: false,
+            keep_outliers: true,
+        };
+        let f = evaluate(&measured, inputs.model, inputs.desc, options).map_err(|e: IsoError| failed(e.to_string()))?;
         figures.push(f);
     }
     Ok(summarise(&figures, inputs.repeatability_rad_or_m, seed))

@@ -58,6 +58,17 @@ pub fn rigid_fit(src: &[Point3<f64>], dst: &[Point3<f64>]) -> Option<(Isometry3<
     Some((iso, rms))
 }
 
+/// The RMS residual \[input units\] of the best improper map (a rotation composed with a
+/// reflection) of `src` onto `dst`: [`rigid_fit`] of `src`'s mirror image (`x` negated), since
+/// every reflection is that mirror followed by a rotation. Beside [`rigid_fit`]'s RMS it says
+/// the handedness of `dst`'s frame: points measured in a left-handed frame fit a mirror image
+/// of their description far better than any rotation of it (where the points span three
+/// dimensions). `None` as for [`rigid_fit`].
+pub fn mirror_fit_rms(src: &[Point3<f64>], dst: &[Point3<f64>]) -> Option<f64> {
+    let mirrored: Vec<Point3<f64>> = src.iter().map(|p| Point3::new(-p.x, p.y, p.z)).collect();
+    rigid_fit(&mirrored, dst).map(|(_, rms)| rms)
+}
+
 /// The Frobenius norm of the 2x2 minors of `s` (its cofactor matrix): `sigma_0 sigma_1` to
 /// within a factor of `sqrt 3`.
 fn minors_norm(s: &Matrix3<f64>) -> f64 {
@@ -187,6 +198,24 @@ mod tests {
         let mut bad = dst.clone();
         bad[1].y = f64::NAN;
         assert!(rigid_fit(&src, &bad).is_none());
+    }
+
+    #[test]
+    fn a_mirror_image_fits_the_mirror_and_not_a_rotation() {
+        let src = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(0.3, 0.0, 0.1),
+            Point3::new(0.0, 0.2, 0.0),
+            Point3::new(0.1, 0.1, 0.25),
+        ];
+        let t = Isometry3::new(Vector3::new(1.0, -2.0, 0.5), Vector3::new(0.4, 0.1, -0.9));
+        let dst: Vec<_> = src.iter().map(|p| t * p).collect();
+        let (_, rms) = rigid_fit(&src, &dst).unwrap();
+        assert!(rms < 1e-12 && mirror_fit_rms(&src, &dst).unwrap() > 0.01);
+        // Another coordinate flipped is the same mirror up to a rotation.
+        let flipped: Vec<_> = dst.iter().map(|p| Point3::new(p.x, p.y, -p.z)).collect();
+        assert!(mirror_fit_rms(&src, &flipped).unwrap() < 1e-12);
+        assert!(rigid_fit(&src, &flipped).unwrap().1 > 0.01);
     }
 
     /// The centred cross-covariance `S` of the pairs, written apart from [`rigid_fit`]'s.

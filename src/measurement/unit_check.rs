@@ -6,6 +6,9 @@
 //! - Commands in radians in the `cmd_k` columns (degrees expected for a revolute joint): the
 //!   angle the target turns through against the commanded span.
 //! - Description row lengths in millimetres where metres are expected (`a_m = -690`).
+//! - Free poses (`moved_joint = 0`: validation poses, ISO cycles) with either slip: how far
+//!   their measured tool positions spread against how far the nominal model moves the tool at
+//!   their commands ([`free_pose_slips`]).
 //!
 //! Each estimate is a median over many point triples of a circle through three points (a
 //! second, differently written path from the calibrator's fits), and a slip is reported only
@@ -149,8 +152,8 @@ fn nominal_radius_mm(desc: &RobotDescription, joint: usize, first: &Measurement)
     Some((d - axis.direction.into_inner() * d.dot(&axis.direction)).norm() * 1e3)
 }
 
-/// The validation points may spread this much more or less (a ratio) than the description
-/// predicts from their commands before a warning: a robot within its drawing's tolerances and
+/// The free poses may spread this much more or less (a ratio) than the nominal model at their
+/// commands before a warning: a robot within its drawing's tolerances and
 /// an instrument within its scale's spread within a few per cent; a quarter more or less is a
 /// scaled export or another robot.
 pub const SPREAD_WARNING: f64 = 1.25;
@@ -172,83 +175,8 @@ pub fn spread_ratio(measured: &[Vector3<f64>], nominal: &[Vector3<f64>]) -> Opti
     (n > 0.0).then(|| median(radii(measured)) / n)
 }
 
-/// The validation points' (`moved_joint` 0) spread against the description's prediction from
-/// their commands ([`spread_ratio`], each setup's points about their own median point: every
-/// setup is an instrument placement of its own), with the number of points: coordinates in
-/// another unit and commands in another unit both change it. `None` with fewer than 3 such
-/// points of a described tool target.
-pub fn validation_spread(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64, usize)> {
-    let targets = desc.tool_targets_m();
-    let model = crate::robot::RobotModel::ideal(desc);
-    let controller = crate::robot::Controller::from_description(desc);
-    let phi = model.phi_model();
-    let mut by_setup: std::collections::BTreeMap<usize, (Vec<Vector3<f64>>, Vec<Vector3<f64>>)> =
-        std::collections::BTreeMap::new();
-    for (row, m) in set.rows().iter().enumerate().filter(|(_, m)| m.moved_joint == 0) {
-        let Some(target) = targets.get(m.target) else { continue };
-        let internal = commands_to_internal(desc, &m.cmd);
-        let Ok(q) = model.joint_values(&controller, &internal) else {
-            continue;
-        };
-        let (measured, nominal) = by_setup.entry(set.setup_of(row)).or_default();
-        nominal.push((phi.world_from_tool(&q) * target).coords * 1e3);
-        measured.push(Vector3::from(m.position_mm));
-    }
-    let (mut measured, mut nominal) = (Vec::new(), Vec::new());
-    for (m, n) in by_setup.values().filter(|(m, _)| m.len() >= 3) {
-        measured.extend(radii(m));
-        nominal.extend(radii(n));
-    }
-    let n = median(nominal);
-    let points = measured.len();
-    (points >= 3 && n > 0.0).then(|| (median(measured) / n, points))
-}
-
-/// The length unit nearest (within a factor 1.5, in log scale) to a coordinate scale `ratio`
-/// (coordinates in that unit read as millimetres).
-fn length_unit(ratio: f64) -> Option<&'static str> {
-    [
-        (1e-3, "metres"),
-        (1e3, "micrometres"),
-        (1.0 / 25.4, "inches"),
-        (1e-1, "centimetres"),
-        (25.4, "mm scaled by 25.4 (inches converted twice)"),
-    ]
-    .into_iter()
-    .find(|(factor, _)| (ratio / factor).ln().abs() < 1.5f64.ln())
-    .map(|(_, unit)| unit)
-}
-
-/// The validation points' spread as a slip ([`SLIP_FACTOR`]) or, beyond [`SPREAD_WARNING`], a
-/// warning; `None` when it matches the description.
-pub fn validation_spread_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<(UnitSlip, bool)> {
-    let (ratio, points) = validation_spread(set, desc)?;
-    let fatal = slipped(ratio);
-    if !fatal && (1.0 / SPREAD_WARNING..=SPREAD_WARNING).contains(&ratio) {
-        return None;
-    }
-    // Commands in radians read as degrees keep the predicted points near one pose, so only
-    // a wider measured spread can come from the commands.
-    let commands = if ratio > 1.0 { ", or commands in radians" } else { "" };
-    let cause = match length_unit(ratio) {
-        Some(unit) if fatal => format!("coordinates in {unit}{commands}?"),
-        _ if fatal => format!("coordinates in another unit{commands}?"),
-        _ => format!("coordinates scaled on export{commands}, or another robot than the description?"),
-    };
-    let message = format!(
-        "the {points} validation points spread {ratio:.3} times as far as the description predicts from their commands: {cause}"
-    );
-    Some((
-        UnitSlip {
-            field: "x_mm,y_mm,z_mm,cmd_k".into(),
-            message,
-        },
-        fatal,
-    ))
-}
-
 /// Coordinates and commands whose units look wrong (module docs), judged over the revolute axis
-/// experiments' target 0.
+/// experiments' target 0 and the free poses ([`free_pose_slips`]).
 pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
     let (mut scale, mut angle) = (Vec::new(), Vec::new());
     for e in set.experiments().iter().filter(|e| e.moved_joint > 0) {
@@ -334,7 +262,176 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
             ),
         });
     }
+    // The free poses, unless the sweeps already said the same slip of the same columns.
+    for slip in free_pose_slips(set, desc) {
+        let coordinates = |s: &UnitSlip| s.field.starts_with('x');
+        if !slips.iter().any(|s| coordinates(s) == coordinates(&slip)) {
+            slips.push(slip);
+        }
+    }
     slips
+}
+
+/// Free poses whose tool positions spread less than this \[mm\], measured and nominal alike,
+/// are not judged: their spread is the instrument's noise more than the robot's motion (as
+/// [`MIN_JUDGED_SAGITTA_MM`] for an arc).
+const MIN_JUDGED_SPREAD_MM: f64 = 1.0;
+
+/// Fewer free poses than this are not judged: two poses make one distance, which a robot far
+/// from its description could stretch.
+const MIN_FREE_POSES: usize = 3;
+
+/// One free pose: the centroid of its measured tool targets \[file length units\] and of the
+/// same targets on the nominal model at its commands (read in degrees) \[mm\].
+struct FreePose {
+    setup: usize,
+    measured: Vector3<f64>,
+    nominal: Vector3<f64>,
+    targets: usize,
+}
+
+/// The free poses of `set` (rows with `moved_joint = 0` whose target is one of the
+/// description's tool targets), in order of first appearance.
+fn free_poses(set: &MeasurementSet, desc: &RobotDescription) -> Vec<FreePose> {
+    let tool_targets = desc.tool_targets_m();
+    let ideal = crate::robot::RobotModel::ideal(desc);
+    let controller = crate::robot::Controller::from_description(desc);
+    let model = ideal.phi_model();
+    // The joint values the nominal robot reaches for the commands (the controller's couplings
+    // applied); the commands read as joint values where they cannot be decoupled.
+    let joint_values = |cmd: &[f64]| {
+        let internal = commands_to_internal(desc, cmd);
+        ideal.joint_values(&controller, &internal).unwrap_or(internal)
+    };
+    let mut index: std::collections::HashMap<(&str, usize), usize> = std::collections::HashMap::new();
+    let mut poses: Vec<(FreePose, nalgebra::Isometry3<f64>)> = Vec::new();
+    for (i, m) in set.rows().iter().enumerate() {
+        let Some(target) = tool_targets.get(m.target).filter(|_| m.moved_joint == 0) else {
+            continue;
+        };
+        let k = *index.entry((m.experiment.as_str(), m.step)).or_insert_with(|| {
+            let world_from_tool = model.world_from_tool(&joint_values(&m.cmd));
+            let pose = FreePose {
+                setup: set.setup_of(i),
+                measured: Vector3::zeros(),
+                nominal: Vector3::zeros(),
+                targets: 0,
+            };
+            poses.push((pose, world_from_tool));
+            poses.len() - 1
+        });
+        let (pose, world_from_tool) = &mut poses[k];
+        pose.measured += Vector3::from(m.position_mm);
+        pose.nominal += (*world_from_tool * target).coords * 1e3;
+        pose.targets += 1;
+    }
+    poses
+        .into_iter()
+        .map(|(mut p, _)| {
+            p.measured /= p.targets as f64;
+            p.nominal /= p.targets as f64;
+            p
+        })
+        .collect()
+}
+
+/// The RMS distance of `points` from their setup's centroid (each setup its own instrument
+/// placement).
+fn spread(points: &[(usize, Vector3<f64>)]) -> f64 {
+    let mut centroids: std::collections::BTreeMap<usize, (Vector3<f64>, usize)> = std::collections::BTreeMap::new();
+    for (setup, p) in points {
+        let c = centroids.entry(*setup).or_insert((Vector3::zeros(), 0));
+        c.0 += p;
+        c.1 += 1;
+    }
+    let sum: f64 = points
+        .iter()
+        .map(|(setup, p)| {
+            let (sum, n) = centroids[setup];
+            (p - sum / n as f64).norm_squared()
+        })
+        .sum();
+    (sum / points.len() as f64).sqrt()
+}
+
+/// How far the free poses' measured tool positions spread against the nominal model's at
+/// their commands ([`free_pose_slips`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FreePoseSpread {
+    /// Free poses judged.
+    pub poses: usize,
+    /// RMS distance of the measured positions from their setup's centroid \[file length units\].
+    pub measured_mm: f64,
+    /// The same of the nominal model's positions \[mm\].
+    pub nominal_mm: f64,
+    /// `measured_mm / nominal_mm`.
+    pub ratio: f64,
+}
+
+/// The free poses' spread, or `None` when too few poses or too little motion to judge.
+pub fn free_pose_spread(set: &MeasurementSet, desc: &RobotDescription) -> Option<FreePoseSpread> {
+    let poses = free_poses(set, desc);
+    if poses.len() < MIN_FREE_POSES {
+        return None;
+    }
+    let measured = spread(&poses.iter().map(|p| (p.setup, p.measured)).collect::<Vec<_>>());
+    let nominal = spread(&poses.iter().map(|p| (p.setup, p.nominal)).collect::<Vec<_>>());
+    (measured.max(nominal) >= MIN_JUDGED_SPREAD_MM).then_some(FreePoseSpread {
+        poses: poses.len(),
+        measured_mm: measured,
+        nominal_mm: nominal,
+        ratio: measured / nominal,
+    })
+}
+
+/// A warning when the free poses spread beyond [`SPREAD_WARNING`] of the nominal model's but
+/// not as far as a slip ([`free_pose_slips`]): coordinates scaled on export, or another robot.
+pub fn free_pose_scale_warning(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
+    let s = free_pose_spread(set, desc)?;
+    let plausible = (1.0 / SPREAD_WARNING..=SPREAD_WARNING).contains(&s.ratio);
+    (!plausible && !slipped(s.ratio)).then(|| UnitSlip {
+        field: "x_mm,y_mm,z_mm".into(),
+        message: format!(
+            "the {} free poses' measured tool positions spread {:.3} times as far as the nominal model at their commands: coordinates scaled on export, or another robot than the description?",
+            s.poses, s.ratio
+        ),
+    })
+}
+
+/// Coordinates or commands of the free poses whose units look wrong: the RMS spread of the
+/// poses' measured tool positions over the spread of the nominal model's at their commands (the
+/// same targets, each setup about its own centroid, so where the robot stands does not count).
+/// A robot differs from its description by per cent; coordinates in metres give 0.001,
+/// commands in radians (read as degrees) about 57.
+pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
+    let Some(spread) = free_pose_spread(set, desc).filter(|s| slipped(s.ratio)) else {
+        return Vec::new();
+    };
+    let (ratio, measured, nominal) = (spread.ratio, spread.measured_mm, spread.nominal_mm);
+    let unit = likely(ratio);
+    let what = format!(
+        "the {} free poses' (moved_joint = 0) measured tool positions spread {measured:.4} (RMS about their centroid) where the nominal model at their commands spreads them {nominal:.1} mm, {ratio:.4} times",
+        spread.poses
+    );
+    let revolute: Vec<String> = desc
+        .joints
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.kind == JointKind::Revolute)
+        .map(|(k, _)| format!("cmd_{}", k + 1))
+        .collect();
+    let slip = if unit == "radians" && !revolute.is_empty() {
+        UnitSlip {
+            field: revolute.join(","),
+            message: format!("{what}: the commands look like radians rather than degrees"),
+        }
+    } else {
+        UnitSlip {
+            field: "x_mm,y_mm,z_mm".into(),
+            message: format!("{what}: the coordinates look like {unit} rather than millimetres"),
+        }
+    };
+    vec![slip]
 }
 
 /// Required tool positions \[m, instrument frame\] whose distances from the robot's first
@@ -375,6 +472,54 @@ mod tests {
         let (r, a) = circle_through(&on(0.1), &on(0.5), &on(1.2)).unwrap();
         assert!((r - 2.0).abs() < 1e-12 && (a - 1.1).abs() < 1e-12, "{r} {a}");
         assert!(circle_through(&on(0.1), &on(0.1), &on(0.2)).is_none());
+    }
+
+    /// The validation poses of the IRB/L6's workspace plan, measured exactly on its nominal
+    /// model (the instrument at its base): `coordinates` times the millimetres, the commands
+    /// written `commands` times the degrees.
+    fn free_poses_set(coordinates: f64, commands: f64) -> MeasurementSet {
+        let desc = RobotDescription::asea_irb6l();
+        let plan = crate::plan::ValidationPlan::workspace_default(6);
+        let reference = crate::plan::CalibrationPlan::for_robot(&desc).reference;
+        let model = desc.nominal_model();
+        let mut rows = Vec::new();
+        for (step, cmd) in plan.commands(&desc, &reference).into_iter().enumerate() {
+            let tool = model.world_from_tool(&commands_to_internal(&desc, &cmd));
+            for (target, t) in desc.tool_targets_m().iter().enumerate() {
+                let p = (tool * t).coords * 1e3 * coordinates;
+                rows.push(Measurement {
+                    experiment: "validation".into(),
+                    moved_joint: 0,
+                    step,
+                    target,
+                    position_mm: [p.x, p.y, p.z],
+                    cmd: cmd.iter().map(|c| c * commands).collect(),
+                    payload_kg: 0.0,
+                    temperature_c: 20.0,
+                });
+            }
+        }
+        MeasurementSet::new(6, rows).unwrap()
+    }
+
+    #[test]
+    fn free_poses_in_metres_or_radians_are_slips_and_in_millimetres_and_degrees_are_not() {
+        let desc = RobotDescription::asea_irb6l();
+        assert_eq!(free_pose_slips(&free_poses_set(1.0, 1.0), &desc), vec![]);
+        // A robot a tenth larger than its description is no slip.
+        assert_eq!(free_pose_slips(&free_poses_set(1.1, 1.0), &desc), vec![]);
+        let metres = free_pose_slips(&free_poses_set(1e-3, 1.0), &desc);
+        assert_eq!(metres.len(), 1);
+        assert_eq!(metres[0].field, "x_mm,y_mm,z_mm");
+        assert!(metres[0].message.contains("look like metres"), "{}", metres[0].message);
+        let radians = free_pose_slips(&free_poses_set(1.0, 1f64.to_radians()), &desc);
+        assert_eq!(radians.len(), 1);
+        assert_eq!(radians[0].field, "cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6");
+        assert!(
+            radians[0].message.contains("look like radians"),
+            "{}",
+            radians[0].message
+        );
     }
 
     #[test]

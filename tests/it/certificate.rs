@@ -4,7 +4,7 @@
 //! per-section sigmas (`row_sigma`, `zero_offset_sigma`, `couplings[].sigma`, `tool.sigma`),
 //! which the procedure propagates separately.
 
-use crate::common::{axiscal, stderr};
+use crate::common::{altered_csv, axiscal, scale_fields, stderr};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -271,4 +271,92 @@ fn the_certificate_of_a_free_pose_calibration_warns_about_its_own_poses() {
         .success();
     assert!(stderr(&out).contains("fitted to free poses"), "{}", stderr(&out));
     check_certificate(&d.join("cert"), &d.join("cal/calibration.json"));
+}
+
+/// The certificate of a simulated campaign's calibration: with its own data and held-out
+/// poses it has no warning; held-out points in twice the scale are missed far beyond the
+/// calibration's prediction and said (stderr and `warnings`); held-out commands in radians
+/// are refused as a unit slip naming the file; `--data` without the axis-3 sweep is refused
+/// naming the experiment (`--allow-other-data` summarises it, with a warning).
+#[test]
+fn held_out_data_in_other_units_and_data_that_are_not_the_calibrations_are_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    crate::common::simulate_analytic(d, 20, 12, "c.csv");
+    axiscal()
+        .current_dir(d)
+        .args(["calibrate", "c.csv", "--out", "cal"])
+        .assert()
+        .success();
+    let report = |data: &str, held_out: &str, out: &str, extra: &[&str]| {
+        axiscal()
+            .current_dir(d)
+            .args(["report", "--calibration", "cal/calibration.json", "--data", data])
+            .args(["--held-out", held_out, "--out", out])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let json = |out: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join(out).join("certificate.json")).unwrap()).unwrap()
+    };
+    let clean = report("c.csv", "c.csv", "clean", &[]);
+    assert!(clean.status.success() && !String::from_utf8_lossy(&clean.stderr).contains("warning"));
+    assert_eq!(json("clean")["warnings"], serde_json::json!([]));
+    assert_eq!(json("clean")["held_out"]["beyond_prediction"], false);
+
+    let csv = d.join("c.csv");
+    altered_csv(&csv, "x2.csv", |_| true, |f| scale_fields(f, 4..7, 2.0));
+    let out = report("c.csv", "x2.csv", "x2", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning: held-out poses of x2.csv: the calibrated model misses them by"),
+        "{err}"
+    );
+    let cert = json("x2");
+    assert_eq!(cert["held_out"]["beyond_prediction"], true);
+    assert!(
+        cert["warnings"][0]
+            .as_str()
+            .unwrap()
+            .contains("check the held-out file's units"),
+        "{cert}"
+    );
+
+    altered_csv(
+        &csv,
+        "rad.csv",
+        |_| true,
+        |f| {
+            if f[1] == "0" && f[0] != "tool" {
+                scale_fields(f, 7..13, 1f64.to_radians());
+            }
+        },
+    );
+    let out = report("c.csv", "rad.csv", "rad", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("rad.csv") && err.contains("cmd_1,") && err.contains("radians"),
+        "{err}"
+    );
+
+    altered_csv(&csv, "noaxis3.csv", |f| f[0] != "axis3", |_| {});
+    let out = report("noaxis3.csv", "c.csv", "noaxis3", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("noaxis3.csv: not the data cal/calibration.json was made from")
+            && err.contains("joint 3 to experiment `axis3`")
+            && err.contains("--allow-other-data"),
+        "{err}"
+    );
+    let out = report("noaxis3.csv", "c.csv", "other", &["--allow-other-data"]);
+    assert!(out.status.success());
+    assert!(
+        json("other")["warnings"]
+            .to_string()
+            .contains("not the ones the calibration records")
+    );
 }

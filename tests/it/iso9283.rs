@@ -2,7 +2,7 @@
 //! model's commanded poses (the hand example of the unit tests: x = 1, 2, 3, 6 mm), measured as
 //! the description's three tool targets; the figures read from `iso9283.json`.
 
-use crate::common::{axiscal, number_after, read_calibration, stderr, stdout};
+use crate::common::{altered_csv, axiscal, number_after, read_calibration, scale_fields, stderr, stdout};
 use axiscal::measurement::{Measurement, MeasurementSet, write_measurements};
 use axiscal::robot::{Controller, RobotDescription, commands_to_internal};
 use nalgebra::{Isometry3, Translation3, Vector3};
@@ -420,5 +420,237 @@ fn a_multi_directional_plan_approaches_each_pose_along_three_base_axes() {
     }
     for (a, b) in [(0, 5), (0, 10), (5, 10)] {
         assert!(offsets[a].dot(&offsets[b]).abs() < 1e-6, "directions orthogonal");
+    }
+}
+
+/// An ISO test of the paper robot (its repeatability jitter, the paper's theodolite noise as
+/// isotropic noise) around the plan's reference pose: `cycles` cycles of the largest cube,
+/// commanded through the nominal model, written to `DIR/iso.csv` (one row per line after the
+/// header, in the order measured).
+fn simulated_iso_csv(dir: &Path, cycles: usize, seed: u64) -> std::path::PathBuf {
+    use axiscal::sim::{AnalyticArm, CampaignOptions, PosePlan, simulate_poses};
+    use rand::SeedableRng;
+    let desc = RobotDescription::asea_irb6l();
+    let nominal = axiscal::robot::RobotModel::ideal(&desc);
+    let compensator = axiscal::compensation::Compensator::new(&nominal, &desc).unwrap();
+    let centre = axiscal::plan::CalibrationPlan::for_robot(&desc).reference;
+    let cube = axiscal::iso9283::largest_cube(&compensator, &desc, &centre, 0.5).unwrap();
+    let poses: Vec<PosePlan> = (0..cycles)
+        .flat_map(|step| {
+            axiscal::iso9283::CYCLE_ORDER.map(|k| PosePlan {
+                experiment: format!("iso-P{k}"),
+                step,
+                cmd: cube.commands[k - 1].clone(),
+            })
+        })
+        .collect();
+    let mut arm = AnalyticArm::new(axiscal::sim::paper_robot(), Controller::from_description(&desc));
+    let mut rng = rand::rngs::ChaCha12Rng::seed_from_u64(seed);
+    let instrument = axiscal::measurement::MeasurementModel::paper_isotropic();
+    let out = simulate_poses(
+        &desc,
+        &poses,
+        &mut arm,
+        &instrument,
+        &CampaignOptions::default(),
+        &mut rng,
+    )
+    .unwrap();
+    let path = dir.join("iso.csv");
+    write_measurements(&path, &MeasurementSet::new(6, out.rows).unwrap(), false).unwrap();
+    path
+}
+
+/// `iso9283 evaluate` of `data` (nominal model, base registered) into `DIR/out`, with `extra`
+/// arguments: the command's output and, on success, `iso9283.json`.
+fn evaluate_iso(data: &Path, out: &str, extra: &[&str]) -> (std::process::Output, Option<serde_json::Value>) {
+    let dir = data.parent().unwrap().join(out);
+    let output = axiscal()
+        .args(["iso9283", "evaluate"])
+        .arg(data)
+        .arg("--out")
+        .arg(&dir)
+        .args(extra)
+        .output()
+        .unwrap();
+    let json = std::fs::read_to_string(dir.join("iso9283.json"))
+        .ok()
+        .map(|t| serde_json::from_str(&t).unwrap());
+    (output, json)
+}
+
+/// The line number of the first data row of `experiment` at `step` in `file`.
+fn line_of(file: &Path, experiment: &str, step: usize) -> usize {
+    let prefix = format!("{experiment},0,{step},");
+    std::fs::read_to_string(file)
+        .unwrap()
+        .lines()
+        .position(|l| l.starts_with(&prefix))
+        .unwrap()
+        + 1
+}
+
+/// A simulated ISO test, clean, then with its coordinates in metres, doubled, mirrored, or its
+/// commands in radians: the clean one evaluates without a word; metres and radians are refused
+/// as unit slips naming the file and the columns (`--skip-unit-check` goes on); the doubled
+/// scale and the mirrored frame are warned about, on stderr and in `iso9283.json`.
+#[test]
+fn iso_data_in_other_units_or_a_mirrored_frame_are_refused_or_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = simulated_iso_csv(dir.path(), 30, 5);
+    let (out, json) = evaluate_iso(&clean, "clean", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success() && !err.contains("warning"), "{err}");
+    let json = json.unwrap();
+    assert_eq!(json["warnings"], serde_json::json!([]), "{json}");
+    assert!(json["worst_ap_p_mm"].as_f64().unwrap() < 1.0, "{json}");
+
+    let metres = altered_csv(&clean, "metres.csv", |_| true, |f| scale_fields(f, 4..7, 1e-3));
+    let (out, _) = evaluate_iso(&metres, "m", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("metres.csv") && err.contains("`x_mm,y_mm,z_mm`") && err.contains("metres"),
+        "{err}"
+    );
+    let (out, json) = evaluate_iso(&metres, "m-skip", &["--skip-unit-check"]);
+    assert!(out.status.success());
+    assert!(
+        json.unwrap()["warnings"][0]
+            .as_str()
+            .unwrap()
+            .contains("0.0010 times as far apart")
+    );
+
+    let radians = altered_csv(
+        &clean,
+        "radians.csv",
+        |_| true,
+        |f| scale_fields(f, 7..13, 1f64.to_radians()),
+    );
+    let (out, _) = evaluate_iso(&radians, "rad", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("radians.csv") && err.contains("`cmd_1,") && err.contains("radians"),
+        "{err}"
+    );
+
+    let doubled = altered_csv(&clean, "doubled.csv", |_| true, |f| scale_fields(f, 4..7, 2.0));
+    let (out, json) = evaluate_iso(&doubled, "x2", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning: ") && err.contains("doubled.csv: the tool targets are measured 2.0"),
+        "{err}"
+    );
+    let warnings = json.unwrap()["warnings"].to_string();
+    assert!(warnings.contains("times as far apart"), "{warnings}");
+
+    let mirrored = altered_csv(&clean, "mirrored.csv", |_| true, |f| scale_fields(f, 4..5, -1.0));
+    let (out, json) = evaluate_iso(&mirrored, "mirror", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("mirrored.csv: the measured targets fit a mirror image"),
+        "{err}"
+    );
+    assert!(json.unwrap()["warnings"].to_string().contains("left-handed"));
+}
+
+/// One cycle of a simulated ISO test in metres, or with two target ids swapped: the cycle is
+/// named (file, line, experiment, cycle) and left out, the pose's figures those of the other
+/// cycles; `--keep-outliers` keeps it. The clean test flags no cycle.
+#[test]
+fn an_outlier_cycle_is_named_and_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = simulated_iso_csv(dir.path(), 30, 6);
+    let (_, json) = evaluate_iso(&clean, "clean", &[]);
+    let clean_json = json.unwrap();
+    assert_eq!(clean_json["outliers"], serde_json::json!([]));
+    let rp = |j: &serde_json::Value, k: usize| j["poses"][k - 1]["repeatability"]["rp_l_mm"].as_f64().unwrap();
+
+    let one_in_metres = altered_csv(
+        &clean,
+        "onem.csv",
+        |_| true,
+        |f| {
+            if f[0] == "iso-P3" && f[2] == "7" {
+                scale_fields(f, 4..7, 1e-3);
+            }
+        },
+    );
+    let line = line_of(&one_in_metres, "iso-P3", 7);
+    let (out, json) = evaluate_iso(&one_in_metres, "onem", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains(&format!(
+            "warning: {}: line {line}: outlier cycle: experiment iso-P3 cycle (step) 7",
+            one_in_metres.display()
+        )) && err.contains("computed without it"),
+        "{err}"
+    );
+    let json = json.unwrap();
+    assert_eq!(json["outliers"].as_array().unwrap().len(), 1, "{json}");
+    assert_eq!(json["outliers"][0]["line"], line);
+    assert_eq!(json["poses"][2]["cycles"], 29);
+    assert!(rp(&json, 3) < 2.0 * rp(&clean_json, 3), "{json}");
+    let (out, json) = evaluate_iso(&one_in_metres, "kept", &["--keep-outliers"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("kept (--keep-outliers)"));
+    assert!(rp(&json.unwrap(), 3) > 100.0);
+
+    let swapped = altered_csv(
+        &clean,
+        "swap.csv",
+        |_| true,
+        |f| {
+            if f[0] == "iso-P2" && f[2] == "11" && f[3] != "2" {
+                f[3] = if f[3] == "0" { "1".into() } else { "0".into() };
+            }
+        },
+    );
+    let (out, json) = evaluate_iso(&swapped, "swap", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(
+        err.contains("outlier cycle: experiment iso-P2 cycle (step) 11"),
+        "{err}"
+    );
+    let json = json.unwrap();
+    assert!(
+        json["poses"][1]["repeatability"]["rp_a_mrad"].as_f64().unwrap() < 10.0,
+        "{json}"
+    );
+}
+
+/// An experiment named like an ISO pose that is not one (direction 0, pose 6, upper case) is
+/// refused, naming it and its line, instead of its cycles going missing from the table.
+#[test]
+fn an_iso_experiment_name_that_does_not_parse_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = simulated_iso_csv(dir.path(), 2, 7);
+    for (name, from, to, why) in [
+        ("dir0.csv", "iso-P2", "iso-P2-d0", "approach directions count from 1"),
+        ("p6.csv", "iso-P5", "iso-P6", "P6 is not one of the cube's points"),
+        ("upper.csv", "iso-P1", "ISO-P1", "names are case-sensitive"),
+    ] {
+        let data = altered_csv(
+            &clean,
+            name,
+            |_| true,
+            |f| {
+                if f[0] == from {
+                    f[0] = to.into();
+                }
+            },
+        );
+        let (out, _) = evaluate_iso(&data, name, &[]);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        let line = line_of(&data, to, 0);
+        assert!(
+            err.contains(name) && err.contains(&format!("experiment `{to}` (line {line}): {why}")),
+            "{err}"
+        );
     }
 }

@@ -358,3 +358,52 @@ fn validate_and_diagnose_agree() {
         assert_eq!(flags(&theodolite_campaign(backlash, seed)), (true, true), "seed {seed}");
     }
 }
+
+/// `validate` on a simulated campaign with target ids 0 and 1 swapped at one step of an axis
+/// experiment: the validation poses are consistent, the axis line exceeds, and the headline
+/// says the calibrated model misses part of the data, naming the axis experiments; the clean
+/// file's headline is consistent.
+#[test]
+fn the_validate_headline_never_contradicts_a_part_that_exceeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    common::simulate_analytic(d, 20, 13, "c.csv");
+    axiscal()
+        .current_dir(d)
+        .args(["calibrate", "c.csv", "--out", "cal"])
+        .assert()
+        .success();
+    let validate = |data: &str, out: &str| {
+        let o = axiscal()
+            .current_dir(d)
+            .args(["validate", "--calibration", "cal/calibration.json", data, "--out", out])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let clean = validate("c.csv", "clean");
+    assert!(clean.starts_with("consistent with the prediction"), "{clean}");
+    common::altered_csv(
+        &d.join("c.csv"),
+        "swap.csv",
+        |_| true,
+        |f| {
+            if f[0] == "axis2" && f[2] == "5" && f[3] != "2" {
+                f[3] = if f[3] == "0" { "1".into() } else { "0".into() };
+            }
+        },
+    );
+    let text = validate("swap.csv", "swap");
+    let headline = text.lines().next().unwrap();
+    assert!(
+        headline.starts_with("the calibrated model misses part of these data: the axis experiments' points")
+            && headline.contains("the validation poses: consistent with the prediction"),
+        "{text}"
+    );
+    assert!(
+        text.lines()
+            .any(|l| l.trim_start().starts_with("axis") && l.ends_with("exceeds")),
+        "{text}"
+    );
+}

@@ -11,7 +11,7 @@ use super::file::IsoSection;
 use super::metrics::Metrics;
 use crate::calibration::procedure::FittedModel;
 use crate::compensation::Compensator;
-use crate::iso9283::{CYCLE_ORDER, PredictionInputs, evaluate, largest_cube, plan_cube, predict};
+use crate::iso9283::{CYCLE_ORDER, EvaluateOptions, PredictionInputs, evaluate, largest_cube, plan_cube, predict};
 use crate::measurement::{MeasurementModel, MeasurementSet};
 use crate::robot::RobotDescription;
 use crate::sim::{ArmExecutor, CampaignOptions, PosePlan, simulate_poses};
@@ -74,7 +74,13 @@ impl IsoTrial<'_> {
         let out = simulate_poses(self.desc, &poses, arm, self.instrument, self.options, rng)
             .map_err(|e| format!("ISO cycles: {e}"))?;
         let set = MeasurementSet::new(self.desc.dof(), out.rows).map_err(|e| format!("ISO cycles: {e}"))?;
-        let measured = evaluate(&set, &fit.robot, self.desc, false).map_err(|e| format!("ISO figures: {e}"))?;
+        // Every simulated cycle counts, as in the prediction's: no screen for gross errors the
+        // simulation does not make.
+        let options = EvaluateOptions {
+            register_base: false,
+            keep_outliers: true,
+        };
+        let measured = evaluate(&set, &fit.robot, self.desc, options).map_err(|e| format!("ISO figures: {e}"))?;
         let covariance = fit
             .model_covariance
             .as_ref()

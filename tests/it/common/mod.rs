@@ -194,3 +194,39 @@ pub fn number_after(text: &str, label: &str) -> f64 {
     word.parse()
         .unwrap_or_else(|_| panic!("`{word}` after `{label}` is not a number"))
 }
+
+/// The measurement CSV `file` with `change` applied to the fields of every data row
+/// (`experiment, moved_joint, step, target, x_mm, y_mm, z_mm, cmd_1, ..`) and the rows `keep`
+/// refuses left out, written as `name` beside it: a campaign made wrong in a known way.
+pub fn altered_csv(
+    file: &std::path::Path,
+    name: &str,
+    keep: impl Fn(&[String]) -> bool,
+    change: impl Fn(&mut Vec<String>),
+) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+    let mut out = String::new();
+    for line in text.lines() {
+        if line.starts_with('#') || line.starts_with("experiment,") {
+            out.push_str(line);
+        } else {
+            let mut f: Vec<String> = line.split(',').map(String::from).collect();
+            if !keep(&f) {
+                continue;
+            }
+            change(&mut f);
+            out.push_str(&f.join(","));
+        }
+        out.push('\n');
+    }
+    let path = file.with_file_name(name);
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+/// Multiplies the fields `range` of a row of [`altered_csv`] by `factor`.
+pub fn scale_fields(f: &mut [String], range: std::ops::Range<usize>, factor: f64) {
+    for v in &mut f[range] {
+        *v = (v.parse::<f64>().expect("a number") * factor).to_string();
+    }
+}
