@@ -202,7 +202,7 @@ fn cases() -> Vec<Case> {
             "coordinates doubled",
             "validate --calibration cal/calibration.json x2.csv --out out",
             0,
-            &["warning: x2.csv", "validation points spread"],
+            &["warning: x2.csv", "free poses' measured tool positions spread"],
         ),
         case(
             "two setups given to validate",
@@ -260,7 +260,7 @@ fn every_hostile_input_is_one_clear_error_and_writes_nothing() {
         }
         if c.what == "coordinates doubled" {
             // The simulated robot differs from its description by millimetres over metres.
-            let ratio = crate::common::number_after(&e, "points spread ");
+            let ratio = crate::common::number_after(&e, "positions spread ");
             assert!((ratio / 2.0 - 1.0).abs() < 0.02, "{}: {ratio} in {e}", c.what);
         }
         if c.code == 2 {
