@@ -239,7 +239,7 @@ fn exercise(reader: Reader, bytes: &[u8]) -> Result<(), TestCaseError> {
             Ok(_) => {}
             Err(e) => check_error("fuzz.toml", &e.to_string())?,
         },
-        Reader::PointExport => match Table::parse(&text, Path::new("fuzz.csv")).and_then(|t| read_export(&t)) {
+        Reader::PointExport => match Table::parse(&*text, Path::new("fuzz.csv")).and_then(|t| read_export(&t)) {
             Ok(_) => {}
             Err(e) => check_error("fuzz.csv", &e.to_string())?,
         },
@@ -256,7 +256,7 @@ fn exercise(reader: Reader, bytes: &[u8]) -> Result<(), TestCaseError> {
                 lengths: LengthUnit::Mm,
                 still_tolerance: 1e-6,
             };
-            match Table::parse(&text, Path::new("fuzz.csv")).and_then(|t| import_wide(&t, &options)) {
+            match Table::parse(&*text, Path::new("fuzz.csv")).and_then(|t| import_wide(&t, &options)) {
                 Ok(set) => {
                     let _ = set.experiments();
                 }
