@@ -10,7 +10,7 @@ use axiscal::calibration::procedure::{
 use axiscal::measurement::format_f64;
 use axiscal::robot::{RobotDescription, commands_to_file};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal joints`.
 #[derive(Debug, clap::Args)]
@@ -52,7 +52,7 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     let cal = super::checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
     match &args.csv {
-        Some(path) => convert_csv(&cal, &desc, path),
+        Some(path) => convert_csv(&cal, &desc, path, &args.calibration),
         None => {
             if args.commands.len() != desc.dof() {
                 bail!(
@@ -63,15 +63,22 @@ pub fn run(args: Args) -> Result<()> {
                 );
             }
             within_limits(&desc, &args.commands, "the commands")?;
-            let q = commands_to_file(&desc, &calibrated_joint_values(&cal, &desc, &args.commands)?);
+            let q = calibrated_joint_values(&cal, &desc, &args.commands).with_context(|| {
+                format!(
+                    "the calibrated robot of {} cannot execute these commands",
+                    args.calibration.display()
+                )
+            })?;
+            let q = commands_to_file(&desc, &q);
             println!("{}", q.iter().map(|v| format_f64(*v)).collect::<Vec<_>>().join(" "));
             Ok(())
         }
     }
 }
 
-/// Appends `q_1 .. q_N` to every row of the CSV at `path`, to stdout.
-fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Result<()> {
+/// Appends `q_1 .. q_N` to every row of the CSV at `path`, to stdout; `cal` was read from
+/// `cal_path`.
+fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf, cal_path: &Path) -> Result<()> {
     let mut reader = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
@@ -114,8 +121,9 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Re
         within_limits(desc, &cmd, &format!("{}:{line}", path.display()))?;
         let q = calibrated_joint_values(cal, desc, &cmd).with_context(|| {
             format!(
-                "{}:{line}: the calibrated robot cannot execute these commands",
-                path.display()
+                "{}:{line}: the calibrated robot of {} cannot execute these commands",
+                path.display(),
+                cal_path.display()
             )
         })?;
         let mut row: Vec<String> = record.iter().map(str::to_owned).collect();
