@@ -26,6 +26,7 @@ mod effects;
 mod export;
 mod fuzz_readers;
 mod gap_budget;
+mod hostile_files;
 mod iso9283;
 mod joint_map;
 mod json_schemas;

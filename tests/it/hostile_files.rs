@@ -1,0 +1,210 @@
+//! Damaged and hostile input files (a calibration, a robot description, a URDF, a plan): each
+//! is one error, exit 2, naming the file and the key (the URDF's joint or link), where they
+//! panicked, were accepted with absurd results, or named a key the user never wrote. Each
+//! file is a shipped one or one the test makes, with one value changed.
+
+use crate::common::{self, axiscal, stderr};
+use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
+use axiscal::json_file::{self, Schema};
+use axiscal::measurement::MeasurementModel;
+use axiscal::plan::{CalibrationPlan, ValidationPlan};
+use axiscal::robot::RobotDescription;
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// The single `error:` line of a command that must exit 2.
+fn error_of(a: &assert_cmd::assert::Assert) -> String {
+    let err = stderr(a);
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(lines.len(), 1, "one error line expected: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    lines[0].to_owned()
+}
+
+/// A calibration of the paper robot with its model covariance and noise, as JSON.
+fn calibration_json() -> Value {
+    let no_validation = ValidationPlan {
+        poses: 0,
+        ..ValidationPlan::workspace_default(6)
+    };
+    let set = common::analytic_campaign(
+        &common::paper_robot_without_jitter(),
+        &CalibrationPlan::table1(6),
+        &no_validation,
+        &MeasurementModel::paper_isotropic(),
+        1,
+    );
+    let cal = calibrate(&set, &RobotDescription::asea_irb6l(), &CalibrationOptions::default()).unwrap();
+    assert!(cal.model_covariance.is_some() && cal.noise.is_some());
+    serde_json::from_str(&json_file::to_string(Schema::CALIBRATION, &cal).unwrap()).unwrap()
+}
+
+/// The value at the JSON pointer `at` (which must be there).
+fn at<'a>(json: &'a mut Value, pointer: &str) -> &'a mut Value {
+    json.pointer_mut(pointer)
+        .unwrap_or_else(|| panic!("no `{pointer}` in the calibration"))
+}
+
+/// `axiscal joints --calibration FILE -- 0 0 0 0 0 0`.
+fn joints(file: &Path) -> assert_cmd::assert::Assert {
+    axiscal()
+        .args(["joints", "--calibration"])
+        .arg(file)
+        .args(["--", "0", "0", "0", "0", "0", "0"])
+        .assert()
+}
+
+/// One change of a calibration file, and the key its error must name.
+type CalibrationCase = (&'static str, Box<dyn Fn(&mut Value)>, &'static str);
+
+fn calibration_cases() -> Vec<CalibrationCase> {
+    let set = |pointer: &'static str, value: Value| -> Box<dyn Fn(&mut Value)> {
+        Box::new(move |j| *at(j, pointer) = value.clone())
+    };
+    vec![
+        (
+            "a negative variance (it panicked)",
+            set("/model_covariance/covariance/0/0", json!(-0.03)),
+            "field `model_covariance.covariance[0][0]`",
+        ),
+        (
+            "an asymmetric covariance",
+            set("/model_covariance/covariance/0/1", json!(0.9999)),
+            "field `model_covariance.covariance[1][0]`",
+        ),
+        (
+            "a symmetric covariance with a negative eigenvalue",
+            Box::new(|j| {
+                let (a, b) = (
+                    at(j, "/model_covariance/covariance/0/0").as_f64(),
+                    at(j, "/model_covariance/covariance/1/1").as_f64(),
+                );
+                let c = 2.0 * (a.unwrap() * b.unwrap()).sqrt();
+                *at(j, "/model_covariance/covariance/0/1") = json!(c);
+                *at(j, "/model_covariance/covariance/1/0") = json!(c);
+            }),
+            "positive semi-definite",
+        ),
+        (
+            "a variance of 1e300",
+            set("/model_covariance/covariance/0/0", json!(1e300)),
+            "field `model_covariance.covariance[0][0]`",
+        ),
+        (
+            "a ragged covariance",
+            Box::new(|j| {
+                at(j, "/model_covariance/covariance/3").as_array_mut().unwrap().pop();
+            }),
+            "field `model_covariance.covariance[3]`",
+        ),
+        (
+            "a null variance",
+            set("/model_covariance/covariance/0/0", Value::Null),
+            "key `model_covariance.covariance[0][0]`",
+        ),
+        (
+            "a null row length",
+            set("/robot/rows/1/a_m", Value::Null),
+            "key `robot.rows[1].a_m`",
+        ),
+        (
+            "a negative noise",
+            set("/noise/used_rms_3d_mm", json!(-0.2)),
+            "field `noise.used_rms_3d_mm`",
+        ),
+        (
+            "a zero noise",
+            set("/options/noise_rms_3d_mm", json!(0.0)),
+            "field `options.noise_rms_3d_mm`",
+        ),
+        (
+            "a noise of 1e300",
+            set("/noise/used_rms_3d_mm", json!(1e300)),
+            "field `noise.used_rms_3d_mm`",
+        ),
+        (
+            "three reference commands",
+            set("/reference_cmd", json!([0, 0, 0])),
+            "field `reference_cmd`",
+        ),
+        (
+            "sin and cos of different lengths",
+            set("/robot/joints/0/transmission/sin", json!([0.001, 0.001])),
+            "field `robot.joints[0].transmission`",
+        ),
+        (
+            "a transmission that turns back",
+            set("/robot/joints/0/transmission/sin", json!([2.0])),
+            "field `robot.joints[0].transmission`",
+        ),
+    ]
+}
+
+/// Each damaged calibration is one error naming the file and the key (exit 2); the intact
+/// file, with a byte-order mark, reads.
+#[test]
+fn a_damaged_calibration_names_its_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = calibration_json();
+    for (k, (what, change, key)) in calibration_cases().iter().enumerate() {
+        let mut json = good.clone();
+        change(&mut json);
+        let file = dir.path().join(format!("cal{k}.json"));
+        std::fs::write(&file, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+        let e = error_of(&joints(&file).code(2));
+        assert!(e.contains(&format!("cal{k}.json")) && e.contains(key), "{what}: {e}");
+    }
+    let bom = dir.path().join("bom.json");
+    std::fs::write(
+        &bom,
+        format!("\u{feff}{}", serde_json::to_string_pretty(&good).unwrap()),
+    )
+    .unwrap();
+    joints(&bom).success();
+}
+
+/// A covariance that is no covariance is refused by every command that reads it: `validate`
+/// panicked, `report` and `iso9283 predict` printed U = 0 or absurd predictions.
+#[test]
+fn every_command_refuses_a_covariance_that_is_none() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut json = calibration_json();
+    *at(&mut json, "/model_covariance/covariance/2/2") = json!(-1.0);
+    let file = dir.path().join("negative.json");
+    std::fs::write(&file, serde_json::to_string(&json).unwrap()).unwrap();
+    let data = dir.path().join("data.csv");
+    std::fs::write(&data, "experiment\n").unwrap();
+    let out = |name: &str| dir.path().join(name);
+    let runs: [Vec<std::ffi::OsString>; 3] = [
+        vec![
+            "validate".into(),
+            "--calibration".into(),
+            file.clone().into(),
+            data.clone().into(),
+            "--out".into(),
+            out("v").into(),
+        ],
+        vec![
+            "report".into(),
+            "--calibration".into(),
+            file.clone().into(),
+            "--out".into(),
+            out("r").into(),
+        ],
+        vec![
+            "iso9283".into(),
+            "predict".into(),
+            "--calibration".into(),
+            file.clone().into(),
+            "--out".into(),
+            out("i").into(),
+        ],
+    ];
+    for args in runs {
+        let e = error_of(&axiscal().args(&args).assert().code(2));
+        assert!(
+            e.contains("negative.json") && e.contains("`model_covariance.covariance[2][2]`"),
+            "{args:?}: {e}"
+        );
+    }
+}
