@@ -10,7 +10,7 @@ use axiscal::measurement::MeasurementModel;
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::RobotDescription;
 use serde_json::{Value, json};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The single `error:` line of a command that must exit 2.
 fn error_of(a: &assert_cmd::assert::Assert) -> String {
@@ -19,6 +19,17 @@ fn error_of(a: &assert_cmd::assert::Assert) -> String {
     assert_eq!(lines.len(), 1, "one error line expected: {err}");
     assert!(!err.contains("panicked"), "{err}");
     lines[0].to_owned()
+}
+
+/// A shipped file's text.
+fn shipped(relative: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)).unwrap()
+}
+
+/// `text` with its first `from` replaced by `to` (which must be there).
+fn changed(text: &str, from: &str, to: &str) -> String {
+    assert!(text.contains(from), "`{from}` is not in the file");
+    text.replacen(from, to, 1)
 }
 
 /// A calibration of the paper robot with its model covariance and noise, as JSON.
@@ -206,5 +217,127 @@ fn every_command_refuses_a_covariance_that_is_none() {
             e.contains("negative.json") && e.contains("`model_covariance.covariance[2][2]`"),
             "{args:?}: {e}"
         );
+    }
+}
+
+/// One change of the shipped IRB/L6 description, and the key its error must name.
+const DESCRIPTION_CASES: [(&str, &str, &str); 10] = [
+    (
+        "ratio = 1.6842105263157894",
+        "ratio = 0.0",
+        "joints[4].transmission_fit.ratio",
+    ),
+    (
+        "ratio = 1.6842105263157894",
+        "ratio = nan",
+        "joints[4].transmission_fit.ratio",
+    ),
+    (
+        "ratio = 1.6842105263157894",
+        "ratio = 1e300",
+        "joints[4].transmission_fit.ratio",
+    ),
+    (
+        "repeatability_sigma = 1.1806e-4   #",
+        "repeatability_sigma = 1e10   #",
+        "joints[0].repeatability_sigma",
+    ),
+    (
+        "position_mm = [80.0, 0.0, 150.0]",
+        "position_mm = [nan, 0.0, 150.0]",
+        "axis_targets[0].target0.position_mm[0]",
+    ),
+    ("mass_kg = 45.0", "mass_kg = nan", "joints[0].mass_kg"),
+    (
+        "com_mm = [0.0, 0.0, -150.0]",
+        "com_mm = [0.0, inf, -150.0]",
+        "joints[0].com_mm[1]",
+    ),
+    ("name = \"ASEA IRB/L6\"", "name = \"ASEA\\npoint,pose\"", "`name`"),
+    ("[-6284.6, 0.0, 0.0]", "[0.0, 0.0, 0.0]", "instrument.stations_mm[1]"),
+    (
+        "[-6284.6, 0.0, 0.0]",
+        "[-6.2846, 0.0, 0.0]",
+        "instrument.stations_mm[1]",
+    ),
+];
+
+/// Each hostile description is one error naming its key, for `describe` and `plan` alike (a
+/// gear ratio of 0 or NaN panicked in `calibrate`, a NaN target was planned, a newline in the
+/// name broke the outputs' comment lines).
+#[test]
+fn hostile_descriptions_name_their_key_in_describe_and_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = shipped("scenarios/robots/asea-irb6l.toml");
+    for (k, (from, to, key)) in DESCRIPTION_CASES.iter().enumerate() {
+        let robot = dir.path().join(format!("robot{k}.toml"));
+        std::fs::write(&robot, changed(&text, from, to)).unwrap();
+        let describe = axiscal().arg("describe").arg(&robot).assert().code(2);
+        let plan = axiscal()
+            .args(["plan", "--robot"])
+            .arg(&robot)
+            .arg("--out")
+            .arg(dir.path().join("plan.csv"))
+            .assert()
+            .code(2);
+        for e in [error_of(&describe), error_of(&plan)] {
+            assert!(e.contains(&format!("robot{k}.toml")) && e.contains(key), "{to}: {e}");
+        }
+    }
+    assert!(!dir.path().join("plan.csv").exists());
+}
+
+/// The shipped FANUC URDF description with `from` replaced by `to` in its URDF (`urdf`) or
+/// its TOML (`toml`), in `dir`: the description's path.
+fn fanuc(dir: &Path, k: usize, urdf: (&str, &str), toml: (&str, &str)) -> PathBuf {
+    let urdf_text = changed(&shipped("scenarios/robots/real/fanuc-r2000ic.urdf"), urdf.0, urdf.1);
+    std::fs::write(dir.join(format!("arm{k}.urdf")), urdf_text).unwrap();
+    let toml_text =
+        shipped("scenarios/robots/real/fanuc-r2000ic.toml").replace("fanuc-r2000ic.urdf", &format!("arm{k}.urdf"));
+    let path = dir.join(format!("arm{k}.toml"));
+    std::fs::write(&path, changed(&toml_text, toml.0, toml.1)).unwrap();
+    path
+}
+
+/// A hostile URDF is one error naming the URDF's joint or link and its attribute (reversed
+/// limits became +-360 deg silently; mm origins and negative masses named TOML keys the user
+/// never wrote); a base link that is not there lists the links.
+#[test]
+fn hostile_urdfs_name_the_urdf_joint_or_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let none = ("[urdf]", "[urdf]");
+    let cases = [
+        (
+            ("lower=\"-1.05\" upper=\"1.31\"", "lower=\"1.31\" upper=\"-1.05\""),
+            none,
+            "joint `joint_2`: `<limit",
+        ),
+        (
+            ("xyz=\"1.075 0 0\"", "xyz=\"1075 0 0\""),
+            none,
+            "joint `joint_3`: `<origin",
+        ),
+        (
+            (
+                "<link name=\"link_2\"/>",
+                "<link name=\"link_2\"><inertial><mass value=\"-1\"/><inertia ixx=\"0\" iyy=\"0\" izz=\"0\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link>",
+            ),
+            none,
+            "link `link_2`: `<inertial><mass",
+        ),
+        (
+            ("<robot", "<robot"),
+            ("[urdf]", "[urdf]\nbase_link = \"nope\""),
+            "no link named `nope`; the URDF's links are base_link, link_1",
+        ),
+    ];
+    for (k, (urdf, toml, expected)) in cases.into_iter().enumerate() {
+        let robot = fanuc(dir.path(), k, urdf, toml);
+        let e = error_of(&axiscal().arg("describe").arg(&robot).assert().code(2));
+        assert!(
+            e.contains(&format!("arm{k}.toml")) && e.contains(&format!("arm{k}.urdf")) && e.contains(expected),
+            "{e}"
+        );
+        assert!(!e.contains("rows[") && !e.contains("joints["), "{e}");
     }
 }
