@@ -287,6 +287,86 @@ fn hostile_descriptions_name_their_key_in_describe_and_plan() {
     assert!(!dir.path().join("plan.csv").exists());
 }
 
+/// `plan` and `describe` run the unit check `simulate` and `calibrate` run (rows in mm, a
+/// tool 1e12 mm long), and `--skip-unit-check` overrides it as there.
+#[test]
+fn plan_and_describe_check_the_descriptions_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = shipped("scenarios/robots/asea-irb6l.toml");
+    let cases = [
+        ("a_m = -0.690", "a_m = -690.0", "rows[1].a_m"),
+        (
+            "[tool]\n",
+            "[tool]\nframe = { translation_mm = [0.0, 0.0, 1e12] }\n",
+            "tool.frame.translation_mm",
+        ),
+    ];
+    for (k, (from, to, key)) in cases.iter().enumerate() {
+        let robot = dir.path().join(format!("units{k}.toml"));
+        std::fs::write(&robot, changed(&text, from, to)).unwrap();
+        let plan = |extra: &[&str]| {
+            axiscal()
+                .args(["plan", "--no-sight", "--validation-poses", "0", "--robot"])
+                .arg(&robot)
+                .arg("--out")
+                .arg(dir.path().join(format!("plan{k}.csv")))
+                .args(extra)
+                .assert()
+        };
+        let describe = axiscal().arg("describe").arg(&robot).assert().code(2);
+        for e in [error_of(&describe), error_of(&plan(&[]).code(2))] {
+            assert!(e.contains(key) && e.contains("--skip-unit-check"), "{to}: {e}");
+        }
+        axiscal()
+            .arg("describe")
+            .arg(&robot)
+            .arg("--skip-unit-check")
+            .assert()
+            .success();
+    }
+}
+
+/// A three-joint DH robot (a 290 mm column, a 270 mm upper arm, a 70 mm elbow) with its
+/// lengths times `scale` and `a_mm` of the elbow `elbow_mm`, its tool targets 60 to 150 mm
+/// from the flange.
+fn dh_robot(scale: f64, elbow_mm: f64) -> String {
+    let joint = |limit: f64, d_mm: f64, a_mm: f64, alpha_deg: f64| {
+        format!(
+            "[[joints]]\nkind = \"revolute\"\nlimits = [-{limit:?}, {limit:?}]\n\
+             dh = {{ d_mm = {d_mm:?}, a_mm = {a_mm:?}, alpha_deg = {alpha_deg:?} }}\n\n"
+        )
+    };
+    format!(
+        "name = \"three joints\"\ndh_convention = \"classic\"\naxis_targets = []\n\n{}{}{}\
+         [tool]\ntargets_mm = [[60.0, 0.0, 60.0], [60.0, 80.0, 60.0], [60.0, 0.0, 140.0]]\n",
+        joint(165.0, 290.0 * scale, 0.0, -90.0),
+        joint(110.0, 0.0, 270.0 * scale, 0.0),
+        joint(110.0, 0.0, elbow_mm, -90.0),
+    )
+}
+
+/// A DH table in metres (its lengths read as mm, the targets 500 times beyond the arm) is the
+/// unit slip `simulate` refuses, in `describe` too, and `--skip-unit-check` overrides it; a
+/// length of kilometres is one error naming the DH key; the same table in mm reads.
+#[test]
+fn a_dh_table_in_other_units_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let describe = |name: &str, text: String, extra: &[&str]| {
+        let robot = dir.path().join(name);
+        std::fs::write(&robot, text).unwrap();
+        axiscal().arg("describe").arg(&robot).args(extra).assert()
+    };
+    describe("mm.toml", dh_robot(1.0, 70.0), &[]).success();
+    let e = error_of(&describe("m.toml", dh_robot(1e-3, 0.07), &[]).code(2));
+    assert!(
+        e.contains("m.toml") && e.contains("`rows`") && e.contains("metres"),
+        "{e}"
+    );
+    describe("m.toml", dh_robot(1e-3, 0.07), &["--skip-unit-check"]).success();
+    let e = error_of(&describe("km.toml", dh_robot(1.0, 7e7), &[]).code(2));
+    assert!(e.contains("`joints[2].dh.a_mm`"), "{e}");
+}
+
 /// The shipped FANUC URDF description with `from` replaced by `to` in its URDF (`urdf`) or
 /// its TOML (`toml`), in `dir`: the description's path.
 fn fanuc(dir: &Path, k: usize, urdf: (&str, &str), toml: (&str, &str)) -> PathBuf {
