@@ -421,3 +421,48 @@ fn hostile_urdfs_name_the_urdf_joint_or_link() {
         assert!(!e.contains("rows[") && !e.contains("joints["), "{e}");
     }
 }
+
+/// A plan file's `held_at` of another length than the joints (it was padded with zeros) and a
+/// `held_jitter` reversed, NaN or of 1e9 (accepted) are one error naming the file and the key.
+#[test]
+fn hostile_plan_files_name_their_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = shipped("scenarios/robots/asea-irb6l-table1-plan.toml");
+    let sweep = "span = 50.0\nintervals = 16\n";
+    let top = "reference = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]\n";
+    let cases = [
+        (
+            sweep,
+            "span = 50.0\nintervals = 16\nheld_at = [1.0, 2.0]\n",
+            "`sweeps[0].held_at`",
+        ),
+        (
+            top,
+            "reference = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]\nheld_jitter = [0.1, -0.1]\n",
+            "`held_jitter`",
+        ),
+        (
+            top,
+            "reference = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]\nheld_jitter = [0.0, 1e9]\n",
+            "`held_jitter`",
+        ),
+        (
+            top,
+            "reference = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]\nheld_jitter = [nan, 0.1]\n",
+            "`held_jitter[0]`",
+        ),
+    ];
+    for (k, (from, to, key)) in cases.iter().enumerate() {
+        let plan = dir.path().join(format!("plan{k}.toml"));
+        std::fs::write(&plan, changed(&text, from, to)).unwrap();
+        let a = axiscal()
+            .args(["plan", "--no-sight", "--plan"])
+            .arg(&plan)
+            .arg("--out")
+            .arg(dir.path().join("out.csv"))
+            .assert()
+            .code(2);
+        let e = error_of(&a);
+        assert!(e.contains(&format!("plan{k}.toml")) && e.contains(key), "{to}: {e}");
+    }
+}
