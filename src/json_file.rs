@@ -89,9 +89,21 @@ impl Schema {
 /// A JSON file of the wrong kind or of a layout this axiscal does not know.
 #[derive(Debug, thiserror::Error)]
 pub enum JsonFileError {
-    /// Not JSON, or not the layout's fields.
-    #[error(transparent)]
-    Parse(#[from] serde_json::Error),
+    /// Not JSON, or not the layout's fields: where, and what the parser said.
+    #[error("line {line}, column {column}{}: {message}", key_of(key))]
+    Parse {
+        /// 1-based line of the text.
+        line: usize,
+        /// 1-based column (bytes) of the text.
+        column: usize,
+        /// The path of the key read there, e.g. `robot.rows[1].a_m` (empty at the top).
+        key: String,
+        /// The parser's message, with a hint for a `null` where a number belongs.
+        message: String,
+    },
+    /// Not the layout's fields, where the text cannot say which.
+    #[error("{0}")]
+    Layout(String),
     /// The file says it holds something else, or an incompatible version of it.
     #[error(
         "the file's schema is `{found}`, expected `{expected}` (a different major version is an incompatible layout)"
@@ -132,8 +144,12 @@ pub fn list_to_string<T: Serialize>(schema: Schema, key: &str, items: &[T]) -> s
 /// version from `schema.oldest_read` to `schema.major` (a file without one predates versioning
 /// and is read as major version 1; older layouts read through serde aliases); `schema` and
 /// `axiscal_version` are removed before the rest is parsed as `T`.
+///
+/// A leading byte-order mark is skipped (as the CSV readers do). An error names the line, the
+/// column and the key's path there (`robot.rows[1].a_m`).
 pub fn from_str<T: DeserializeOwned>(schema: Schema, text: &str) -> Result<T, JsonFileError> {
-    let mut value: serde_json::Value = serde_json::from_str(text)?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut value: serde_json::Value = serde_json::from_str(text).map_err(|e| located(text, &e))?;
     if let Some(object) = value.as_object_mut() {
         let found = object.remove("schema");
         object.remove("axiscal_version");
@@ -148,7 +164,135 @@ pub fn from_str<T: DeserializeOwned>(schema: Schema, text: &str) -> Result<T, Js
             }
         }
     }
-    Ok(serde_json::from_value(value)?)
+    serde_json::from_value(value).map_err(|e| placed::<T>(text, &e))
+}
+
+/// `e`, an error of reading the parsed value (which has no positions), placed in `text`: the
+/// text is read again as `T` only to find where (the first error in the text's order: a
+/// parsed object's keys are sorted); when that stops at a field the reader removed
+/// (`schema`, `axiscal_version`), the message alone.
+fn placed<T: DeserializeOwned>(text: &str, e: &serde_json::Error) -> JsonFileError {
+    let removed = |m: &str| {
+        ["schema", "axiscal_version"]
+            .iter()
+            .any(|f| m.starts_with(&format!("unknown field `{f}`")))
+    };
+    match serde_json::from_str::<T>(text) {
+        Err(again) if !removed(&message_of(&again)) => located(text, &again),
+        _ => JsonFileError::Layout(with_hint(message_of(e))),
+    }
+}
+
+/// The parser's message without its " at line L column C".
+fn message_of(e: &serde_json::Error) -> String {
+    let text = e.to_string();
+    let suffix = format!(" at line {} column {}", e.line(), e.column());
+    text.strip_suffix(&suffix).unwrap_or(&text).to_owned()
+}
+
+/// A `null` where a number belongs is how axiscal writes NaN: say what to write instead.
+fn with_hint(message: String) -> String {
+    if message.starts_with("invalid type: null") {
+        format!("{message}: write a number (null stands for NaN, which has no meaning here)")
+    } else {
+        message
+    }
+}
+
+/// `e` of reading `text` as [`JsonFileError::Parse`], with the key's path at its position.
+fn located(text: &str, e: &serde_json::Error) -> JsonFileError {
+    let (line, column) = (e.line(), e.column());
+    let line_start: usize = text
+        .split_inclusive('\n')
+        .take(line.saturating_sub(1))
+        .map(str::len)
+        .sum();
+    JsonFileError::Parse {
+        line,
+        column: column.max(1),
+        key: key_at(text, line_start + column),
+        message: with_hint(message_of(e)),
+    }
+}
+
+/// `, key `PATH`` for a path, nothing at the top.
+fn key_of(key: &str) -> String {
+    if key.is_empty() {
+        String::new()
+    } else {
+        format!(", key `{key}`")
+    }
+}
+
+/// An object or array open at a point of a JSON text.
+enum Open {
+    /// An object, with the key whose value is being read (none between a comma and a key).
+    Object(Option<String>),
+    /// An array, with the index of the item being read.
+    Array(usize),
+}
+
+/// The path (`robot.rows[1].a_m`) of the value being read at byte `offset` of the JSON
+/// `text`: the keys and indices of the objects and arrays open there.
+fn key_at(text: &str, offset: usize) -> String {
+    let bytes = &text.as_bytes()[..offset.min(text.len())];
+    let mut open: Vec<Open> = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'"' => {
+                let end = string_end(bytes, i);
+                if let Some(Open::Object(key @ None)) = open.last_mut() {
+                    *key = Some(String::from_utf8_lossy(&bytes[i + 1..end.saturating_sub(1).max(i + 1)]).into());
+                }
+                i = end;
+                continue;
+            }
+            b'{' => open.push(Open::Object(None)),
+            b'[' => open.push(Open::Array(0)),
+            b'}' | b']' => {
+                open.pop();
+            }
+            b',' => match open.last_mut() {
+                Some(Open::Array(n)) => *n += 1,
+                Some(Open::Object(key)) => *key = None,
+                None => {}
+            },
+            _ => {}
+        }
+        i += 1;
+    }
+    path_of(&open)
+}
+
+/// The index just past the string starting at the quote `bytes[start]` (or the end).
+fn string_end(bytes: &[u8], start: usize) -> usize {
+    let mut i = start + 1;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'\\' => i += 2,
+            b'"' => return i + 1,
+            _ => i += 1,
+        }
+    }
+    bytes.len()
+}
+
+/// `a.b[2].c` of the open containers.
+fn path_of(open: &[Open]) -> String {
+    let mut path = String::new();
+    for o in open {
+        match o {
+            Open::Object(Some(key)) if path.is_empty() => path.push_str(key),
+            Open::Object(Some(key)) => {
+                path.push('.');
+                path.push_str(key);
+            }
+            Open::Object(None) => {}
+            Open::Array(n) => path.push_str(&format!("[{n}]")),
+        }
+    }
+    path
 }
 
 /// One value as it may appear in a file: the current layout (`T`, named fields) or the one
@@ -252,6 +396,40 @@ mod tests {
         assert!(from_str::<Body>(Schema::CALIBRATION, &v1).is_ok());
         let e1 = text.replace("axiscal.report/1", "axiscal.evaluation/1");
         assert!(from_str::<Body>(Schema::EVALUATION, &e1).is_err());
+    }
+
+    /// A value of the wrong type is named by its key's path, line and column, a `null` for a
+    /// number with what to write; a byte-order mark is skipped.
+    #[test]
+    fn an_error_names_the_keys_path_and_a_bom_is_skipped() {
+        let text = "{\n  \"zeta_mm\": 1.5,\n  \"alpha\": [1, null]\n}";
+        let e = from_str::<Body>(Schema::CALIBRATION, text).unwrap_err().to_string();
+        assert!(
+            e.starts_with("line 3, column 19, key `alpha[1]`: invalid type: null"),
+            "{e}"
+        );
+        // The first in the text's order, not in the parsed object's (sorted) order.
+        let e = from_str::<Body>(Schema::CALIBRATION, &text.replace("1.5", "null")).unwrap_err();
+        assert!(
+            e.to_string().contains("key `zeta_mm`") && e.to_string().contains("write a number"),
+            "{e}"
+        );
+        // With `schema` (which the reader removes) and a type error after it.
+        let versioned = text.replacen('{', "{\"schema\": \"axiscal.calibration/2\",", 1);
+        let e = from_str::<Body>(Schema::CALIBRATION, &versioned)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("invalid type: null, expected u32"), "{e}");
+        let bom = format!("\u{feff}{}", text.replace("null", "2"));
+        assert_eq!(from_str::<Body>(Schema::CALIBRATION, &bom).unwrap().alpha, [1, 2]);
+    }
+
+    #[test]
+    fn the_path_at_a_point_counts_keys_and_items() {
+        let text = r#"{"a": {"b": [1, {"c, ]": "x", "d": [0, 0, 9"#;
+        assert_eq!(key_at(text, text.len()), "a.b[1].d[2]");
+        assert_eq!(key_at(text, 5), "a");
+        assert_eq!(key_at("", 0), "");
     }
 
     #[test]

@@ -38,6 +38,8 @@ pub fn read(path: &Path) -> Result<String, TomlFileError> {
 /// Parses TOML text; `path` labels errors only. The message is one line: the 1-based line and
 /// column, the parser's message and the offending line's text.
 ///
+/// A `nan` or `inf` is an error naming its key: no key of axiscal's TOML files takes one.
+///
 /// A fixed-length list written longer (`limits = [-40, 0, 40]` for two numbers) is an error
 /// naming its key: the parser reads the first values and drops the rest, so the value read
 /// back is compared with the text, list by list, where both have a list at one key.
@@ -48,6 +50,12 @@ pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result
     };
     let value: T = toml::from_str(text).map_err(parse_error)?;
     let written: toml::Table = toml::from_str(text).map_err(parse_error)?;
+    if let Some((key, v)) = non_finite_in(&written, "") {
+        return Err(TomlFileError::Parse {
+            path: path.to_owned(),
+            message: format!("key `{key}`: {v} is not a number any key of this file takes: write a finite number"),
+        });
+    }
     if let Ok(toml::Value::Table(read)) = toml::Value::try_from(&value)
         && let Some((key, written_len, read_len)) = longer_list(&written, &read, "")
     {
@@ -57,6 +65,32 @@ pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result
         });
     }
     Ok(value)
+}
+
+/// The first `nan` or `inf` of `table` (TOML allows them; no key of axiscal's files does):
+/// its dotted key and value.
+fn non_finite_in(table: &toml::Table, prefix: &str) -> Option<(String, f64)> {
+    table.iter().find_map(|(k, v)| {
+        let key = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        non_finite_value(v, &key)
+    })
+}
+
+/// [`non_finite_in`] for one value.
+fn non_finite_value(value: &toml::Value, key: &str) -> Option<(String, f64)> {
+    match value {
+        toml::Value::Float(f) if !f.is_finite() => Some((key.to_string(), *f)),
+        toml::Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .find_map(|(i, v)| non_finite_value(v, &format!("{key}[{i}]"))),
+        toml::Value::Table(t) => non_finite_in(t, key),
+        _ => None,
+    }
 }
 
 /// The first list of `written` longer than the list at the same key of `read` (the value as
@@ -136,6 +170,19 @@ mod tests {
     struct Pair {
         limits: [f64; 2],
         nested: Vec<Small>,
+    }
+
+    /// A `nan` or `inf` anywhere is an error naming its key, in a list or a table of a list.
+    #[test]
+    fn a_non_finite_number_is_an_error_naming_its_key() {
+        let e = parse::<Pair>("limits = [1.0, inf]\nnested = []\n", Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("key `limits[1]`: inf"), "{e}");
+        let e = parse::<Pair>("limits = [1.0, 2.0]\n[[nested]]\nmass_kg = nan\n", Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("p.toml: key `nested[0].mass_kg`: NaN"), "{e}");
     }
 
     /// A list longer than its key holds is an error naming the key, nested lists too; the

@@ -16,7 +16,7 @@ mod svg;
 pub use data::{DataSection, ExperimentLine, data_mismatches};
 pub use held_out::{HeldOut, HeldOutError, held_out};
 
-use crate::calibration::procedure::{Calibration, FrameSigma, PointResidual};
+use crate::calibration::procedure::{Calibration, FrameSigma, InvalidCalibration, PointResidual};
 use crate::calibration::tool_accuracy::{model_parameter_names, model_parameter_values};
 use crate::iso9283::IsoFigures;
 use crate::kinematics::JointKind;
@@ -38,14 +38,9 @@ pub enum CertificateError {
         "the calibration has no `model_covariance` (a file written before it was recorded): its parameters' uncertainties are not known; recalibrate with `axiscal calibrate`"
     )]
     NoCovariance,
-    /// The covariance does not match the model.
-    #[error("`model_covariance` names {found} parameters; the calibrated model has {expected}")]
-    CovarianceSize {
-        /// Names in the file.
-        found: usize,
-        /// Parameters of the model.
-        expected: usize,
-    },
+    /// The covariance is not one of the model's parameters ([`crate::calibration::tool_accuracy::ModelCovariance::validate`]).
+    #[error("the calibration's {0}")]
+    Covariance(#[from] InvalidCalibration),
 }
 
 /// Everything the certificate is made from.
@@ -274,13 +269,8 @@ pub struct ResidualPoint {
 pub fn certificate(inputs: &CertificateInputs<'_>) -> Result<Certificate, CertificateError> {
     let cal = inputs.calibration;
     let covariance = cal.model_covariance.as_ref().ok_or(CertificateError::NoCovariance)?;
+    covariance.validate(&cal.robot)?;
     let names = model_parameter_names(&cal.robot);
-    if covariance.names.len() != names.len() || covariance.covariance.len() != names.len() {
-        return Err(CertificateError::CovarianceSize {
-            found: covariance.names.len(),
-            expected: names.len(),
-        });
-    }
     let c = covariance.matrix();
     let nominal = RobotModel::ideal(inputs.desc);
     let u: Vec<f64> = (0..names.len()).map(|i| c[(i, i)].max(0.0).sqrt()).collect();

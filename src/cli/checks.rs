@@ -158,16 +158,14 @@ pub fn same_robot(
     Ok(())
 }
 
-/// Reads a `calibration.json` (`docs/formats.md#calibration-json`) and checks its robot model's
-/// shape and values ([`axiscal::robot::RobotModel::validate`]): a damaged file is one error
-/// naming the file and the field, never a panic later.
+/// Reads a `calibration.json` (`docs/formats.md#calibration-json`) and checks its values
+/// ([`Calibration::validate`]): a damaged file is one error naming the file and the field,
+/// never a panic or a silently wrong result later.
 pub fn read_calibration_file(path: &Path) -> Result<Calibration> {
     let text = axiscal::presets::read_text(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
         .with_context(|| format!("{}: not a calibration JSON", path.display()))?;
-    cal.robot
-        .validate()
-        .with_context(|| format!("{}: `robot`", path.display()))?;
+    cal.validate().with_context(|| path.display().to_string())?;
     Ok(cal)
 }
 

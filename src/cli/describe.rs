@@ -25,6 +25,10 @@ pub struct Args {
     /// the robot to simulate, then `simulate --robot ROBOT --truth FILE`.
     #[arg(long)]
     truth_template: bool,
+    /// Skip the unit sanity check of the description's lengths (as `simulate` and `calibrate`
+    /// run it).
+    #[arg(long)]
+    skip_unit_check: bool,
 }
 
 /// The nominal model of `desc` as a truth model file, read back before it is printed.
@@ -62,6 +66,7 @@ const FK_TOLERANCE: f64 = 1e-9;
 pub fn run(args: Args) -> Result<()> {
     let text = axiscal::presets::read_text(&args.robot).with_context(|| format!("reading {}", args.robot.display()))?;
     let (desc, source) = RobotDescription::with_source(&text, &args.robot)?;
+    super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
     if args.truth_template {
         return print_truth_template(&desc, &args.robot);
     }

@@ -11,7 +11,7 @@ use axiscal::measurement::format_f64;
 use axiscal::measurement::import::table::Table;
 use axiscal::robot::{RobotDescription, commands_to_file};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal joints`.
 #[derive(Debug, clap::Args)]
@@ -53,7 +53,7 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     let cal = super::checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
     match &args.csv {
-        Some(path) => convert_csv(&cal, &desc, path),
+        Some(path) => convert_csv(&cal, &desc, path, &args.calibration),
         None => {
             if args.commands.len() != desc.dof() {
                 bail!(
@@ -64,7 +64,13 @@ pub fn run(args: Args) -> Result<()> {
                 );
             }
             within_limits(&desc, &args.commands, "the commands")?;
-            let q = commands_to_file(&desc, &calibrated_joint_values(&cal, &desc, &args.commands)?);
+            let q = calibrated_joint_values(&cal, &desc, &args.commands).with_context(|| {
+                format!(
+                    "the calibrated robot of {} cannot execute these commands",
+                    args.calibration.display()
+                )
+            })?;
+            let q = commands_to_file(&desc, &q);
             println!("{}", q.iter().map(|v| format_f64(*v)).collect::<Vec<_>>().join(" "));
             Ok(())
         }
@@ -72,7 +78,8 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 /// Appends `q_1 .. q_N` to every row of the CSV at `path`, to stdout.
-fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Result<()> {
+/// `cal` was read from `cal_path`.
+fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path: &Path) -> Result<()> {
     let table = Table::read(path)?;
     let columns: Vec<usize> = (1..=desc.dof())
         .map(|k| table.required(&[&format!("cmd_{k}")]))
@@ -94,8 +101,12 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &PathBuf) -> Re
             .collect::<Result<_, _>>()?;
         let place = format!("{}:{}", path.display(), row.line);
         within_limits(desc, &cmd, &place)?;
-        let q = calibrated_joint_values(cal, desc, &cmd)
-            .with_context(|| format!("{place}: the calibrated robot cannot execute these commands"))?;
+        let q = calibrated_joint_values(cal, desc, &cmd).with_context(|| {
+            format!(
+                "{place}: the calibrated robot of {} cannot execute these commands",
+                cal_path.display()
+            )
+        })?;
         let values = commands_to_file(desc, &q);
         let mut cells: Vec<String> = row.cells().map(str::to_owned).collect();
         cells.resize(table.header.len(), String::new());

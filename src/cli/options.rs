@@ -104,7 +104,7 @@ where
 }
 
 /// A measurement noise level, 3-D RMS (mm).
-pub const NOISE_MM: InRange<f64> = InRange::above(0.0, 100.0, "mm");
+pub const NOISE_MM: InRange<f64> = InRange::above(0.0, axiscal::calibration::procedure::MAX_NOISE_RMS_3D_MM, "mm");
 
 /// Worker threads: 1 to this many.
 pub const MAX_THREADS: usize = 1024;

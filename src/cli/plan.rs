@@ -86,6 +86,10 @@ pub struct Args {
     /// Replace `--out` if it exists.
     #[arg(long)]
     force: bool,
+    /// Skip the unit sanity check of the description's lengths (as `simulate` and `calibrate`
+    /// run it).
+    #[arg(long)]
+    skip_unit_check: bool,
 }
 
 fn joint_value(text: &str) -> Result<(usize, f64), String> {
@@ -229,6 +233,7 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--points, --plan-out and --workspace-half-range need --optimize");
     }
     let desc = RobotDescription::from_file(&args.robot)?;
+    super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
     let mut plan = adjusted(campaign_plan(&desc, args.plan.as_deref())?, &args)?;
     let default_validation = ValidationPlan::workspace_default(desc.dof());
     let validation = ValidationPlan {

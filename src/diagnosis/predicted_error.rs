@@ -22,7 +22,7 @@
 use super::DiagnosisError;
 use super::noise::CleanCampaign;
 use crate::calibration::procedure::Calibration;
-use crate::calibration::tool_accuracy::{ToolSensitivity, model_parameter_names};
+use crate::calibration::tool_accuracy::ToolSensitivity;
 use crate::kinematics::{PhiModel, geometric_jacobian};
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::CorrelatedNormal;
@@ -60,7 +60,8 @@ pub(super) struct BlockFactors {
 impl<'a> PredictionError<'a> {
     /// From `cal`'s `model_covariance` (none: the calibration's error is left out, for a file
     /// written before it was recorded) and the repeatability `cal` was made with. A
-    /// covariance of another size than the model's parameter vector is an error.
+    /// covariance that is not one of the model's parameters
+    /// ([`crate::calibration::tool_accuracy::ModelCovariance::validate`]) is an error.
     pub(super) fn new(
         cal: &'a Calibration,
         controller: &'a Controller,
@@ -73,15 +74,9 @@ impl<'a> PredictionError<'a> {
                 repeatability,
             });
         };
-        let expected = model_parameter_names(&cal.robot).len();
-        if covariance.names.len() != expected || covariance.covariance.iter().any(|row| row.len() != expected) {
-            return Err(DiagnosisError::Model {
-                message: format!(
-                    "the calibration's `model_covariance` names {} parameters; its model has {expected}",
-                    covariance.names.len()
-                ),
-            });
-        }
+        covariance.validate(&cal.robot).map_err(|e| DiagnosisError::Model {
+            message: format!("the calibration's {e}"),
+        })?;
         let sensitivity = ToolSensitivity::new(&cal.robot, controller, &covariance.matrix());
         let factor = CorrelatedNormal::new(sensitivity.covariance()).factor().clone();
         Ok(PredictionError {

@@ -19,6 +19,25 @@ pub enum JointKind {
     Prismatic,
 }
 
+impl JointKind {
+    /// A joint value in internal units (rad or m) in file units (deg or mm), as users write
+    /// and read them (`docs/formats.md#units`).
+    pub fn to_file_units(self, value: f64) -> f64 {
+        match self {
+            JointKind::Revolute => value.to_degrees(),
+            JointKind::Prismatic => value * 1e3,
+        }
+    }
+
+    /// The unit of file values: `deg` (revolute) or `mm` (prismatic).
+    pub fn file_unit(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "deg",
+            JointKind::Prismatic => "mm",
+        }
+    }
+}
+
 /// One row of Table 2: the parameters of eq. (A3) relating frame `i+1` to the `phi_i` frame.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PhiRow {

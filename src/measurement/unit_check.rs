@@ -5,7 +5,8 @@
 //!   its target.
 //! - Commands in radians in the `cmd_k` columns (degrees expected for a revolute joint): the
 //!   angle the target turns through against the commanded span.
-//! - Description row lengths in millimetres where metres are expected (`a_m = -690`).
+//! - Description row lengths in millimetres where metres are expected (`a_m = -690`), and a
+//!   tool frame or target further from its link than any link is long.
 //! - Free poses (`moved_joint = 0`: validation poses, ISO cycles) with either slip: how far
 //!   their measured tool positions spread against how far the nominal model moves the tool at
 //!   their commands ([`free_pose_slips`]).
@@ -16,7 +17,7 @@
 //! 1000, while a real robot differs from its nominal description by percent.
 
 use crate::kinematics::JointKind;
-use crate::measurement::{Measurement, MeasurementSet};
+use crate::measurement::{Measurement, MeasurementSet, format_f64};
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::{Point3, Vector3};
 
@@ -56,24 +57,82 @@ fn slipped(ratio: f64) -> bool {
     ratio.is_finite() && ratio > 0.0 && !(1.0 / SLIP_FACTOR..=SLIP_FACTOR).contains(&ratio)
 }
 
-/// Row lengths that look like millimetres in a description whose rows are in metres.
+/// Lengths of a description beyond a robot's: row lengths that look like millimetres (the
+/// rows are in metres), and a tool frame or targets further from their link than any link is
+/// long (their millimetres are micrometres, or a slip).
 pub fn description_slips(desc: &RobotDescription) -> Vec<UnitSlip> {
     let mut slips = Vec::new();
     for (i, r) in desc.rows.iter().enumerate() {
         for (key, v) in [("a_m", r.a_m), ("b_m", r.b_m), ("h_m", r.h_m)] {
             if v.abs() > MAX_ROW_LENGTH_M {
+                let likely = if v.abs() * 1e-3 <= MAX_ROW_LENGTH_M {
+                    format!("it looks like millimetres ({} m?)", format_f64(v / 1e3))
+                } else {
+                    "no unit makes it a robot's".to_owned()
+                };
                 slips.push(UnitSlip {
                     field: format!("rows[{i}].{key}"),
                     message: format!(
-                        "{v} m is longer than any robot link ({MAX_ROW_LENGTH_M} m): the rows are in metres; it looks \
-                         like millimetres ({:.4} m?)",
-                        v * 1e-3
+                        "{} m is longer than any robot link ({MAX_ROW_LENGTH_M} m): the rows are in metres; {likely}",
+                        format_f64(v)
                     ),
                 });
             }
         }
     }
+    let targets = desc.tool.targets_mm.iter().enumerate();
+    let mut points: Vec<(String, [f64; 3])> =
+        vec![("tool.frame.translation_mm".into(), desc.tool.frame.translation_mm)];
+    points.extend(targets.map(|(k, t)| (format!("tool.targets_mm[{k}]"), *t)));
+    for (k, a) in desc.axis_targets.iter().enumerate() {
+        points.push((format!("axis_targets[{k}].target0.position_mm"), a.target0.position_mm));
+        if let Some(t1) = a.target1 {
+            points.push((format!("axis_targets[{k}].target1.position_mm"), t1.position_mm));
+        }
+    }
+    let (far, near): (Vec<_>, Vec<_>) = points
+        .into_iter()
+        .map(|(field, p)| (field, Vector3::from(p).norm()))
+        .partition(|(_, mm)| *mm > MAX_ROW_LENGTH_M * 1e3);
+    for (field, mm) in far {
+        slips.push(UnitSlip {
+            field,
+            message: format!(
+                "{} mm from its link, further than any robot link is long ({MAX_ROW_LENGTH_M} m): the value is in mm",
+                format_f64(mm)
+            ),
+        });
+    }
+    slips.extend(targets_beyond_the_arm(desc, &near));
     slips
+}
+
+/// Targets this many times further from their links than the longest row is long are on
+/// another robot's scale: one of the two is in the wrong unit (a factor of 1000 in practice).
+pub const TARGET_OVER_ROW_FACTOR: f64 = 100.0;
+
+/// Row lengths below this \[m\] are rounding (a converted chain's zero lengths), not a size.
+const ZERO_LENGTH_M: f64 = 1e-6;
+
+/// The rows and the targets (each with its distance from its link \[mm\]) on two scales
+/// ([`TARGET_OVER_ROW_FACTOR`]): rows converted from a `dh` table or a URDF in metres where
+/// mm (or m) are expected.
+fn targets_beyond_the_arm(desc: &RobotDescription, points: &[(String, f64)]) -> Option<UnitSlip> {
+    let longest_row_m = desc
+        .rows
+        .iter()
+        .flat_map(|r| [r.a_m, r.b_m, r.h_m])
+        .fold(0.0_f64, |m, v| m.max(v.abs()));
+    let (field, farthest_mm) = points.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (longest_row_m > ZERO_LENGTH_M && farthest_mm * 1e-3 > TARGET_OVER_ROW_FACTOR * longest_row_m).then(|| UnitSlip {
+        field: "rows".into(),
+        message: format!(
+            "the longest row is {:.3} mm, but `{field}` sits {farthest_mm:.3} mm from its link: the arm's lengths (the \
+             rows, or the `dh` table's `d_mm`, `a_mm` or the URDF they come from) look like metres where millimetres \
+             are expected, or the targets like micrometres",
+            longest_row_m * 1e3
+        ),
+    })
 }
 
 /// Centre, radius and the angle from `a` over `b` to `c` of the circle through three points,

@@ -124,7 +124,36 @@ pub enum PlanError {
         /// Joints.
         dof: usize,
     },
+    /// A sweep's `held_at` has another length than the robot's joint count.
+    #[error(
+        "`sweeps[{index}].held_at`: {found} values, the robot has {dof} joints: one offset per joint (deg or mm; \
+         the swept joint's is ignored)"
+    )]
+    HeldAtLength {
+        /// Index of the sweep.
+        index: usize,
+        /// Values found.
+        found: usize,
+        /// Joints.
+        dof: usize,
+    },
+    /// `held_jitter` is not a range `[min, max]` of plausible wander.
+    #[error(
+        "`held_jitter`: [{min}, {max}]: the range [min, max] of a held joint's wander (deg or mm) needs 0 <= min <= \
+         max <= {MAX_HELD_JITTER}"
+    )]
+    HeldJitter {
+        /// The lower end.
+        min: f64,
+        /// The upper end.
+        max: f64,
+    },
 }
+
+/// The largest wander `held_jitter` may give a held joint's recorded value (deg or mm): far
+/// beyond an encoder's, and beyond it the joint is no longer held
+/// ([`crate::calibration::procedure::DEFAULT_HELD_TOLERANCE`] is 0.5).
+pub const MAX_HELD_JITTER: f64 = 10.0;
 
 /// The axis experiments in the order they are run, around a common reference pose.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -256,8 +285,9 @@ impl CalibrationPlan {
             .collect()
     }
 
-    /// Checks the plan against a robot: joints exist, spans are real, targets are given,
-    /// second targets only where a nominal coupling leaves the swept joint, limits respected.
+    /// Checks the plan against a robot: joints exist, spans are real, `held_at` has one value
+    /// per joint, `held_jitter` is a plausible range, targets are given, second targets only
+    /// where a nominal coupling leaves the swept joint, limits respected.
     pub fn validate(&self, desc: &RobotDescription) -> Result<(), PlanError> {
         let dof = desc.dof();
         if self.reference.len() != dof {
@@ -266,10 +296,24 @@ impl CalibrationPlan {
                 dof,
             });
         }
+        if let Some([min, max]) = self.held_jitter
+            && !(0.0 <= min && min <= max && max <= MAX_HELD_JITTER)
+        {
+            return Err(PlanError::HeldJitter { min, max });
+        }
         for (index, s) in self.sweeps.iter().enumerate() {
             let joint = s.joint;
             if joint == 0 || joint > dof {
                 return Err(PlanError::NoSuchJoint { index, joint, dof });
+            }
+            if let Some(at) = &s.held_at
+                && at.len() != dof
+            {
+                return Err(PlanError::HeldAtLength {
+                    index,
+                    found: at.len(),
+                    dof,
+                });
             }
             if !(s.span.is_finite() && s.span > 0.0 && (2..=MAX_INTERVALS).contains(&s.intervals)) {
                 return Err(PlanError::Degenerate {

@@ -12,7 +12,7 @@ pub mod sight;
 mod stations;
 mod validation;
 
-pub use axis::{AxisSweep, CalibrationPlan, MAX_INTERVALS, PlanError};
+pub use axis::{AxisSweep, CalibrationPlan, MAX_HELD_JITTER, MAX_INTERVALS, PlanError};
 pub use optimize::{OptimizeOptions, Optimized, optimize, with_point_budget};
 pub use predict::{PlanObjective, PlanPrediction, PredictError};
 pub use sheet::{

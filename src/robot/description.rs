@@ -474,17 +474,11 @@ pub fn commands_to_file(desc: &RobotDescription, cmd_internal: &[f64]) -> Vec<f6
     cmd_internal
         .iter()
         .zip(&desc.joints)
-        .map(|(c, j)| match j.kind {
-            JointKind::Revolute => c.to_degrees(),
-            JointKind::Prismatic => c * 1e3,
-        })
+        .map(|(c, j)| j.kind.to_file_units(*c))
         .collect()
 }
 
 /// The unit suffix of joint `k`'s file values: `deg` (revolute) or `mm` (prismatic).
 pub fn file_unit(desc: &RobotDescription, k: usize) -> &'static str {
-    match desc.joints[k].kind {
-        JointKind::Revolute => "deg",
-        JointKind::Prismatic => "mm",
-    }
+    desc.joints[k].kind.file_unit()
 }

@@ -66,6 +66,24 @@ fn non_finite(values: &[f64]) -> Option<String> {
         .then(|| "every coefficient must be finite".to_string())
 }
 
+/// Why harmonics could make a transmission turn backwards: its slope is `1 + sum_k k (s_k
+/// cos kx - c_k sin kx)` (in the gear angle for a gear), which stays above 0 wherever
+/// `sum_k k sqrt(s_k^2 + c_k^2) < 1` (exactly so for one harmonic). A transmission that turns
+/// back gives one command two joint values and cannot be inverted (fig. 3).
+fn turns_back(sin: &[f64], cos: &[f64]) -> Option<String> {
+    let coefficient = |list: &[f64], k: usize| list.get(k).copied().unwrap_or(0.0);
+    let slopes: f64 = (0..sin.len().max(cos.len()))
+        .map(|k| (k + 1) as f64 * coefficient(sin, k).hypot(coefficient(cos, k)))
+        .sum();
+    (slopes >= 1.0).then(|| {
+        format!(
+            "the harmonics' slopes add up to {slopes} (the sum of k sqrt(sin_k^2 + cos_k^2) must stay below 1): the \
+             transmission would turn backwards, so a command would have no single joint value; a real \
+             transmission's coefficients are a few mrad"
+        )
+    })
+}
+
 /// Why a gear ratio is unusable: `None` when it is finite and not 0.
 fn bad_ratio(ratio: f64) -> Option<String> {
     (!ratio.is_finite() || ratio == 0.0).then(|| format!("the gear ratio must be finite and not 0, found {ratio}"))
@@ -75,10 +93,13 @@ impl Transmission {
     /// Why the transmission cannot be evaluated (a ratio of 0, a coefficient not finite), if so.
     pub fn problem(&self) -> Option<String> {
         match self {
-            Transmission::Harmonic { sin, cos } => non_finite(sin).or_else(|| non_finite(cos)),
+            Transmission::Harmonic { sin, cos } => non_finite(sin)
+                .or_else(|| non_finite(cos))
+                .or_else(|| turns_back(sin, cos)),
             Transmission::Gear { ratio, sin, cos } => bad_ratio(*ratio)
                 .or_else(|| non_finite(sin))
-                .or_else(|| non_finite(cos)),
+                .or_else(|| non_finite(cos))
+                .or_else(|| turns_back(sin, cos)),
             Transmission::Polynomial { c0, c } => non_finite(&[*c0]).or_else(|| non_finite(c)),
         }
     }
@@ -420,6 +441,28 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Harmonics whose slopes add up to 1 or more are refused (the transmission could turn
+    /// back), for a gear too; just below, they are not.
+    #[test]
+    fn harmonics_that_could_turn_back_are_a_problem() {
+        let harmonic = |sin: Vec<f64>, cos: Vec<f64>| Transmission::Harmonic { sin, cos };
+        assert!(harmonic(vec![0.6], vec![0.79]).problem().is_none());
+        assert!(
+            harmonic(vec![0.6], vec![0.8])
+                .problem()
+                .unwrap()
+                .contains("add up to 1")
+        );
+        assert!(harmonic(vec![0.0, 0.3], vec![0.0, 0.2]).problem().is_none());
+        assert!(harmonic(vec![0.0, 0.4], vec![0.0, 0.3]).problem().is_some());
+        let gear = Transmission::Gear {
+            ratio: 32.0 / 19.0,
+            sin: vec![2.0],
+            cos: vec![],
+        };
+        assert!(gear.problem().is_some());
     }
 
     #[test]

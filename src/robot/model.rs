@@ -159,8 +159,13 @@ impl RobotModel {
             ));
         }
         for (k, j) in self.joints.iter().enumerate() {
-            if !(j.phi_deg.is_finite() && j.transducer_offset.is_finite()) {
-                return Err(bad(format!("joints[{k}]"), "values must be finite".into()));
+            for (key, v) in [
+                ("phi_deg", j.phi_deg),
+                ("transducer_offset_rad_or_m", j.transducer_offset),
+            ] {
+                if !v.is_finite() {
+                    return Err(bad(format!("joints[{k}].{key}"), "must be finite".into()));
+                }
             }
             if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
                 return Err(bad(
@@ -246,7 +251,11 @@ impl RobotModel {
         let command = u_k - j.transducer_offset;
         j.transmission
             .actual_from_command(command)
-            .ok_or(ModelError::NotInvertible { joint: k + 1, command })
+            .ok_or_else(|| ModelError::NotInvertible {
+                joint: k + 1,
+                command_file: j.kind.to_file_units(command),
+                unit: j.kind.file_unit(),
+            })
     }
 
     /// The joint values the robot reaches for joint commands `cmd` sent to `controller`
@@ -373,5 +382,25 @@ impl RobotModel {
             theta_below = theta_k;
         }
         Ok(q)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A command a transmission cannot invert is named in the user's units: mm for a
+    /// prismatic joint (its internal value is m).
+    #[test]
+    fn a_command_that_cannot_be_inverted_is_named_in_file_units() {
+        let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/robots/table-prpp.toml"));
+        let mut model = RobotModel::ideal(&RobotDescription::from_file(path).unwrap());
+        // s + 10 s^2 never reaches -1 m.
+        model.joints[0].transmission = Transmission::Polynomial {
+            c0: 0.0,
+            c: vec![0.0, 10.0],
+        };
+        let e = model.active_displacement(0, -1.0).unwrap_err().to_string();
+        assert!(e.contains("command -1000 mm"), "{e}");
     }
 }

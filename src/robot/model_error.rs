@@ -24,12 +24,17 @@ pub enum ModelError {
         dof: usize,
     },
     /// A transmission function is not monotonic near the requested command.
-    #[error("joint {joint}: transmission cannot be inverted at command {command} (not monotonic)")]
+    #[error(
+        "joint {joint}: the transmission cannot be inverted at the actuator command {command_file} {unit} (after \
+         its zero offset): the function is not monotonic there"
+    )]
     NotInvertible {
         /// 1-based joint.
         joint: usize,
-        /// The actuator command after offset removal \[rad or m\].
-        command: f64,
+        /// The actuator command after offset removal, in file units (deg or mm).
+        command_file: f64,
+        /// `deg` or `mm`.
+        unit: &'static str,
     },
     /// A four-bar coupling cannot be assembled.
     #[error("coupling into joint {joint}: {source}")]

@@ -35,6 +35,7 @@ mod sanity;
 mod screen;
 mod uncertainty;
 mod urdf;
+mod validate;
 
 pub use experiments::{
     AxisExperiment, COMMAND_TOLERANCE, DEFAULT_HELD_TOLERANCE, axis_experiments, axis_experiments_with,
@@ -55,6 +56,7 @@ pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
 };
+pub use validate::{InvalidCalibration, MAX_NOISE_RMS_3D_MM, MAX_PARAMETER_VARIANCE};
 
 use super::CalibrationError;
 use super::coupling_fit::{CouplingResponse, passive_angle_gradients};

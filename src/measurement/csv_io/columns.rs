@@ -97,14 +97,14 @@ pub(super) fn find_columns(
     line: u64,
     joint_count: Option<usize>,
 ) -> Result<Columns, MeasurementFileError> {
-    if header.len() == 1 {
-        if let Some(separator) = crate::csv_lines::foreign_separator(header.get(0).unwrap_or_default()) {
-            return Err(MeasurementFileError::WrongSeparator {
-                path: path.into(),
-                line,
-                separator: separator.into(),
-            });
-        }
+    if header.len() == 1
+        && let Some(separator) = crate::csv_lines::foreign_separator(header.get(0).unwrap_or_default())
+    {
+        return Err(MeasurementFileError::WrongSeparator {
+            path: path.into(),
+            line,
+            separator: separator.into(),
+        });
     }
     let (index, cmd) = index_columns(header, path, line)?;
     let required = |column: &str| {

@@ -6,6 +6,7 @@
 
 use super::{DescriptionError, DhConventionEntry, JointEntry, Placement, RobotDescription, RowEntry, UrdfEntry};
 use crate::kinematics::{DhConvention, DhParams, JointKind, PhiModel, SourceChain, UrdfJoint, phi_model_of};
+use crate::measurement::format_f64;
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::path::Path;
 
@@ -97,6 +98,7 @@ impl RobotDescription {
                 alpha_rad: d.alpha_deg.to_radians(),
             });
         }
+        check_dh_lengths(&self.joints).map_err(|(field, message)| invalid(path, field, message))?;
         Ok(SourceChain::Dh {
             convention,
             kinds: self.joints.iter().map(|j| j.kind).collect(),
@@ -167,6 +169,32 @@ impl RobotDescription {
     }
 }
 
+/// No DH length is longer than a robot link
+/// ([`crate::measurement::unit_check::MAX_ROW_LENGTH_M`]): the lengths are millimetres of an
+/// arm (a table in metres is a unit slip of the description,
+/// [`crate::measurement::unit_check::description_slips`]).
+fn check_dh_lengths(joints: &[JointEntry]) -> Result<(), (String, String)> {
+    let longest_mm = crate::measurement::unit_check::MAX_ROW_LENGTH_M * 1e3;
+    let lengths = joints
+        .iter()
+        .enumerate()
+        .filter_map(|(k, j)| j.dh.map(|d| (k, d)))
+        .flat_map(|(k, d)| [(k, "d_mm", d.d_mm), (k, "a_mm", d.a_mm)]);
+    for (k, key, v) in lengths {
+        if v.abs() > longest_mm {
+            return Err((
+                format!("joints[{k}].dh.{key}"),
+                format!(
+                    "{} mm is longer than any robot link ({longest_mm} mm): DH lengths are in mm; this looks like \
+                     micrometres or a slip",
+                    format_f64(v)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The mass a movable URDF joint moves on the chain: its child link's and those fixed below it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct LinkInertial {
@@ -223,6 +251,11 @@ type UrdfChain = (Vec<UrdfJoint>, Isometry3<f64>, Vec<JointEntry>, Vec<LinkInert
 /// joint entries (kind, limits in deg or mm) for a description without `joints`.
 fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String> {
     let children: std::collections::HashSet<&str> = robot.joints.iter().map(|j| j.child.link.as_str()).collect();
+    for (key, name) in [("base_link", &u.base_link), ("tip_link", &u.tip_link)] {
+        if let Some(name) = name {
+            link_exists(robot, key, name)?;
+        }
+    }
     let base = match &u.base_link {
         Some(b) => b.clone(),
         None => robot
@@ -259,6 +292,8 @@ fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String
     let mut inertials: Vec<LinkInertial> = Vec::new();
     let mut pending = Isometry3::identity();
     for j in path {
+        check_joint_origin(j)?;
+        link_named(&j.child.link).map(check_inertial).transpose()?;
         let kind = match j.joint_type {
             urdf_rs::JointType::Fixed => {
                 pending *= pose(&j.origin);
@@ -286,13 +321,76 @@ fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String
             axis: Unit::new_normalize(axis),
         });
         pending = Isometry3::identity();
-        entries.push(joint_entry(j, kind));
+        entries.push(joint_entry(j, kind)?);
         inertials.push(LinkInertial::of(link_named(&j.child.link), &Isometry3::identity()));
     }
     if joints.is_empty() {
         return Err(format!("no movable joint between `{base}` and the tip"));
     }
     Ok((joints, pending, entries, inertials))
+}
+
+/// `name` (the description's `urdf.KEY`) is a link of the URDF.
+fn link_exists(robot: &urdf_rs::Robot, key: &str, name: &str) -> Result<(), String> {
+    if robot.links.iter().any(|l| l.name == name) {
+        return Ok(());
+    }
+    let links: Vec<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
+    Err(format!(
+        "`{key}`: no link named `{name}`; the URDF's links are {}",
+        links.join(", ")
+    ))
+}
+
+/// A joint's `<origin>` is finite and no longer than a robot link
+/// ([`crate::measurement::unit_check::MAX_ROW_LENGTH_M`]): a URDF is in metres, and lengths of
+/// hundreds of metres are millimetres.
+fn check_joint_origin(j: &urdf_rs::Joint) -> Result<(), String> {
+    let (xyz, rpy) = (*j.origin.xyz, *j.origin.rpy);
+    if !xyz.iter().chain(&rpy).all(|v| v.is_finite()) {
+        return Err(format!(
+            "joint `{}`: `<origin xyz=\"{}\" rpy=\"{}\">`: every value must be a finite number",
+            j.name,
+            triple(&xyz),
+            triple(&rpy)
+        ));
+    }
+    let length_m = Vector3::from(xyz).norm();
+    let longest = crate::measurement::unit_check::MAX_ROW_LENGTH_M;
+    if length_m > longest {
+        return Err(format!(
+            "joint `{}`: `<origin xyz=\"{}\">` is {} m from its parent, longer than any robot link \
+             ({longest} m): a URDF's lengths are in metres; these look like millimetres",
+            j.name,
+            triple(&xyz),
+            format_f64(length_m)
+        ));
+    }
+    Ok(())
+}
+
+/// Three numbers as a URDF attribute writes them (`0.1 0 2`).
+fn triple(v: &[f64; 3]) -> String {
+    v.map(format_f64).join(" ")
+}
+
+/// A link's `<inertial>`: a finite mass >= 0 \[kg\] at a finite centre.
+fn check_inertial(link: &urdf_rs::Link) -> Result<(), String> {
+    let (mass, c) = (link.inertial.mass.value, *link.inertial.origin.xyz);
+    if !(mass.is_finite() && mass >= 0.0) {
+        return Err(format!(
+            "link `{}`: `<inertial><mass value=\"{mass}\">`: a mass is a finite number >= 0 (kg)",
+            link.name
+        ));
+    }
+    if !c.iter().all(|v| v.is_finite()) {
+        return Err(format!(
+            "link `{}`: `<inertial><origin xyz=\"{}\">`: every value must be a finite number",
+            link.name,
+            triple(&c)
+        ));
+    }
+    Ok(())
 }
 
 /// Whether `target` is `link` or below it.
@@ -306,15 +404,29 @@ fn reaches(robot: &urdf_rs::Robot, link: &str, target: &str) -> bool {
 }
 
 /// A joint entry from a URDF joint: its kind and limits (deg or mm; a continuous joint or one
-/// without limits gets +-360 deg or +-1000 mm), its speed (deg/s or mm/s) and effort limits
-/// where the URDF gives them (a 0 there means "not given").
-fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> JointEntry {
-    let scale = match kind {
-        JointKind::Revolute => 180.0 / std::f64::consts::PI,
-        JointKind::Prismatic => 1e3,
-    };
-    let (lo, hi) = (j.limit.lower * scale, j.limit.upper * scale);
-    let limits = if j.joint_type != urdf_rs::JointType::Continuous && lo.is_finite() && hi.is_finite() && lo < hi {
+/// without limits, `lower` = `upper` as a missing `<limit>` reads, gets +-360 deg or +-1000
+/// mm), its speed (deg/s or mm/s) and effort limits where the URDF gives them (a 0 there
+/// means "not given"). Limits that are not finite numbers or are reversed are an error naming
+/// the joint.
+fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> Result<JointEntry, String> {
+    let l = &j.limit;
+    let continuous = j.joint_type == urdf_rs::JointType::Continuous;
+    // A continuous joint's `lower` and `upper` are not read.
+    let bounds = if continuous { [0.0; 2] } else { [l.lower, l.upper] };
+    if !bounds.iter().chain(&[l.velocity, l.effort]).all(|v| v.is_finite()) {
+        return Err(format!(
+            "joint `{}`: `<limit lower=\"{}\" upper=\"{}\" velocity=\"{}\" effort=\"{}\">`: every value must be a finite number",
+            j.name, l.lower, l.upper, l.velocity, l.effort
+        ));
+    }
+    if !continuous && l.lower > l.upper {
+        return Err(format!(
+            "joint `{}`: `<limit lower=\"{}\" upper=\"{}\">`: the lower limit is above the upper one; swap them",
+            j.name, l.lower, l.upper
+        ));
+    }
+    let (lo, hi) = (kind.to_file_units(l.lower), kind.to_file_units(l.upper));
+    let limits = if !continuous && lo < hi {
         [lo, hi]
     } else {
         match kind {
@@ -322,7 +434,8 @@ fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> JointEntry {
             JointKind::Prismatic => [-1000.0, 1000.0],
         }
     };
-    JointEntry {
+    let scale = kind.to_file_units(1.0);
+    Ok(JointEntry {
         kind,
         phi_deg: 0.0,
         limits,
@@ -331,7 +444,7 @@ fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> JointEntry {
         transmission_fit: None,
         dh: None,
         repeatability_sigma: 0.0,
-        max_velocity: (j.limit.velocity > 0.0).then_some(j.limit.velocity * scale),
-        max_effort: (j.limit.effort > 0.0).then_some(j.limit.effort),
-    }
+        max_velocity: (l.velocity > 0.0).then_some(l.velocity * scale),
+        max_effort: (l.effort > 0.0).then_some(l.effort),
+    })
 }

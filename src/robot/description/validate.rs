@@ -2,6 +2,7 @@
 //! invalid field is reported with the file's path.
 
 use super::{DescriptionError, RobotDescription};
+use crate::measurement::format_f64;
 use nalgebra::Point3;
 use std::path::Path;
 
@@ -15,11 +16,26 @@ const MAX_REVOLUTE_LIMIT_DEG: f64 = 3600.0;
 /// A sliding joint's limits lie within this \[mm\]: a 100 m gantry.
 const MAX_PRISMATIC_LIMIT_MM: f64 = 1e5;
 
+/// A joint's repeatability (1-sigma, rad or m) is at most this: 3 deg or 50 mm, a hundred
+/// times the worst arm's; larger values are slips (degrees or micro-units read as rad or m).
+pub const MAX_REPEATABILITY_SIGMA: f64 = 0.05;
+
+/// A fitted gear's ratio (joint turns per gear turn) lies within `1/x..=x` of this: beyond,
+/// the gear's harmonics turn too fast (or too slowly) for any sweep to resolve.
+pub const MAX_GEAR_RATIO: f64 = 1e3;
+
+/// Two stations of an instrument stand at least this far apart \[mm\]: closer, two
+/// instruments would overlap (stations in metres read as mm), and their lines of sight meet
+/// at angles too small to intersect.
+pub const MIN_STATION_DISTANCE_MM: f64 = 100.0;
+
 impl RobotDescription {
     /// Checks the description's values; the first field found invalid is reported with `path`.
     pub(super) fn validate(&self, path: &Path) -> Result<(), DescriptionError> {
-        self.check_counts()
+        self.check_name()
+            .and_then(|()| self.check_counts())
             .and_then(|()| self.check_joints())
+            .and_then(|()| self.check_transmission_fits())
             .and_then(|()| self.check_rows())
             .and_then(|()| self.check_couplings())
             .and_then(|()| self.check_frames())
@@ -48,20 +64,33 @@ impl RobotDescription {
         Ok(())
     }
 
+    /// The name is written into the `#` comment lines of outputs: one line, no control
+    /// characters.
+    fn check_name(&self) -> Result<(), Invalid> {
+        match self.name.chars().find(|c| c.is_control()) {
+            Some(c) => Err((
+                "name".into(),
+                format!(
+                    "{:?} holds the control character {c:?}: a name is one line of text (it heads the outputs' comment \
+                     lines)",
+                    self.name
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// Each joint's values are finite, its limits ordered, its mass and repeatability >= 0.
     fn check_joints(&self) -> Result<(), Invalid> {
         for (k, j) in self.joints.iter().enumerate() {
-            let all = [
-                j.phi_deg,
-                j.limits[0],
-                j.limits[1],
-                j.mass_kg,
-                j.com_mm[0],
-                j.com_mm[1],
-                j.com_mm[2],
+            let values: [(&str, &[f64]); 4] = [
+                ("phi_deg", &[j.phi_deg]),
+                ("limits", &j.limits),
+                ("mass_kg", &[j.mass_kg]),
+                ("com_mm", &j.com_mm),
             ];
-            if all.iter().any(|v| !v.is_finite()) {
-                return Err((format!("joints[{k}]"), "values must be finite".into()));
+            if let Some((key, _)) = values.iter().find(|(_, v)| v.iter().any(|x| !x.is_finite())) {
+                return Err((format!("joints[{k}].{key}"), "values must be finite".into()));
             }
             let widest = match j.kind {
                 crate::kinematics::JointKind::Revolute => MAX_REVOLUTE_LIMIT_DEG,
@@ -85,10 +114,14 @@ impl RobotDescription {
             if j.mass_kg < 0.0 {
                 return Err((format!("joints[{k}].mass_kg"), "mass must be >= 0".into()));
             }
-            if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
+            if !(0.0..=MAX_REPEATABILITY_SIGMA).contains(&j.repeatability_sigma) {
                 return Err((
                     format!("joints[{k}].repeatability_sigma"),
-                    format!("must be a finite number >= 0 (rad or m), got {}", j.repeatability_sigma),
+                    format!(
+                        "{} is not a joint's repeatability: a 1-sigma in rad (revolute) or m (prismatic) from 0 to \
+                         {MAX_REPEATABILITY_SIGMA} (arms repeat to 1e-5..1e-3)",
+                        format_f64(j.repeatability_sigma)
+                    ),
                 ));
             }
             for (key, value) in [("max_velocity", j.max_velocity), ("max_effort", j.max_effort)] {
@@ -100,6 +133,27 @@ impl RobotDescription {
                         format!("must be a positive number, got {v}"),
                     ));
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// Each joint's `transmission_fit` gear ratio is finite and within [`MAX_GEAR_RATIO`] of
+    /// 1 either way (the fit divides the joint angle by it).
+    fn check_transmission_fits(&self) -> Result<(), Invalid> {
+        for (k, j) in self.joints.iter().enumerate() {
+            if let Some(super::TransmissionFitForm::Gear { ratio, .. }) = j.transmission_fit
+                && !(1.0 / MAX_GEAR_RATIO..=MAX_GEAR_RATIO).contains(&ratio.abs())
+            {
+                return Err((
+                    format!("joints[{k}].transmission_fit.ratio"),
+                    format!(
+                        "{} is not a gear's ratio: joint turns per gear turn, finite and from {} to {MAX_GEAR_RATIO} \
+                         in size (negative for a reversing gear)",
+                        format_f64(ratio),
+                        1.0 / MAX_GEAR_RATIO
+                    ),
+                ));
             }
         }
         Ok(())
@@ -122,11 +176,16 @@ impl RobotDescription {
     /// Each row's values are finite.
     fn check_rows(&self) -> Result<(), Invalid> {
         for (k, r) in self.rows.iter().enumerate() {
-            if [r.a_m, r.b_m, r.alpha_deg, r.beta_deg, r.gamma_deg, r.h_m]
-                .iter()
-                .any(|v| !v.is_finite())
-            {
-                return Err((format!("rows[{k}]"), "values must be finite".into()));
+            let values = [
+                ("a_m", r.a_m),
+                ("b_m", r.b_m),
+                ("alpha_deg", r.alpha_deg),
+                ("beta_deg", r.beta_deg),
+                ("gamma_deg", r.gamma_deg),
+                ("h_m", r.h_m),
+            ];
+            if let Some((key, _)) = values.iter().find(|(_, v)| !v.is_finite()) {
+                return Err((format!("rows[{k}].{key}"), "must be finite".into()));
             }
         }
         Ok(())
@@ -206,6 +265,19 @@ impl RobotDescription {
                 return Err((
                     format!("instrument.stations_mm[{k}]"),
                     format!("{s:?}: each coordinate must be a finite number of mm within 1 km"),
+                ));
+            }
+            let near = entry.stations_mm[..k]
+                .iter()
+                .position(|t| (Point3::from(*t) - Point3::from(*s)).norm() < MIN_STATION_DISTANCE_MM);
+            if let Some(i) = near {
+                return Err((
+                    format!("instrument.stations_mm[{k}]"),
+                    format!(
+                        "{s:?} is {:.1} mm from station {i}: two stations stand at least {MIN_STATION_DISTANCE_MM} mm \
+                         apart (the coordinates are in mm, not m)",
+                        (Point3::from(entry.stations_mm[i]) - Point3::from(*s)).norm()
+                    ),
                 ));
             }
         }

@@ -1,0 +1,289 @@
+//! The checks of a calibration read back from a file (`docs/formats.md#calibration-json`):
+//! every value the commands use is checked once, when the file is read, so a damaged or
+//! hand-edited file is one error naming its field instead of a panic or a silently wrong
+//! prediction later.
+
+use super::Calibration;
+use crate::calibration::tool_accuracy::{ModelCovariance, model_parameter_names};
+use crate::measurement::format_f64;
+use crate::robot::{CouplingFunction, ModelError, RobotModel, Transmission};
+use nalgebra::DMatrix;
+
+/// The largest noise level a calibration may record, 3-D RMS \[mm\]: beyond any instrument
+/// that measures a robot (the range of `--noise-mm`).
+pub const MAX_NOISE_RMS_3D_MM: f64 = 100.0;
+
+/// The largest variance of one model parameter, in its name's unit squared: a 1-sigma of 1 m,
+/// 1 rad or 1 (a dimensionless coefficient) is no calibration, and far larger values move the
+/// propagation's models by more than they can hold (its steps are 1e-3 sigma).
+pub const MAX_PARAMETER_VARIANCE: f64 = 1.0;
+
+/// A value of a calibration file out of range or inconsistent with the rest.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("field `{field}`: {message}")]
+pub struct InvalidCalibration {
+    /// The key's path in the file, e.g. `model_covariance.covariance[3]`.
+    pub field: String,
+    /// What is wrong and what to write instead.
+    pub message: String,
+}
+
+fn invalid(field: impl Into<String>, message: impl Into<String>) -> InvalidCalibration {
+    InvalidCalibration {
+        field: field.into(),
+        message: message.into(),
+    }
+}
+
+impl Calibration {
+    /// Checks the values a command uses: the robot model ([`RobotModel::validate`]), the
+    /// fitted transmissions' and couplings' harmonics, one value per joint where a list is per
+    /// joint, the noise levels and the model covariance ([`ModelCovariance::validate`]).
+    pub fn validate(&self) -> Result<(), InvalidCalibration> {
+        self.robot.validate().map_err(in_robot)?;
+        check_fitted_harmonics(&self.robot)?;
+        self.check_joint_lists()?;
+        self.check_noise()?;
+        match &self.model_covariance {
+            Some(c) => c.validate(&self.robot),
+            None => Ok(()),
+        }
+    }
+
+    /// `reference_cmd` has a finite value per joint; `row_sigma` one per row (or none, a
+    /// free-pose calibration); joint numbers name joints of the robot.
+    fn check_joint_lists(&self) -> Result<(), InvalidCalibration> {
+        let n = self.robot.dof();
+        if self.reference_cmd.len() != n || self.reference_cmd.iter().any(|c| !c.is_finite()) {
+            return Err(invalid(
+                "reference_cmd",
+                format!(
+                    "{:?}: the robot has {n} joints: one finite command per joint (deg or mm)",
+                    self.reference_cmd
+                ),
+            ));
+        }
+        if !self.row_sigma.is_empty() && self.row_sigma.len() + 1 != n {
+            return Err(invalid(
+                "row_sigma",
+                format!(
+                    "{} entries: the robot has {} rows: one per row",
+                    self.row_sigma.len(),
+                    n - 1
+                ),
+            ));
+        }
+        let lists: [(&str, &str, Vec<usize>); 3] = [
+            ("axes", "joint", self.axes.iter().map(|a| a.joint).collect()),
+            (
+                "zero_offset_sigma",
+                "joint",
+                self.zero_offset_sigma.iter().map(|z| z.joint).collect(),
+            ),
+            ("couplings", "to", self.couplings.iter().map(|c| c.to).collect()),
+        ];
+        for (list, key, joints) in lists {
+            if let Some(i) = joints.iter().position(|&j| j == 0 || j > n) {
+                return Err(invalid(
+                    format!("{list}[{i}].{key}"),
+                    format!("joint {}: the robot has joints 1..={n}", joints[i]),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Every noise level recorded is a finite number above 0 and at most
+    /// [`MAX_NOISE_RMS_3D_MM`]: the fits were weighted with it, and `validate`, `report` and
+    /// `iso9283 predict` divide by it.
+    fn check_noise(&self) -> Result<(), InvalidCalibration> {
+        let mut levels = vec![("options.noise_rms_3d_mm", self.options.noise_rms_3d_mm)];
+        if let Some(noise) = &self.noise {
+            levels.push(("noise.used_rms_3d_mm", noise.used_rms_3d_mm));
+        }
+        match levels
+            .into_iter()
+            .find(|(_, v)| !(v.is_finite() && *v > 0.0 && *v <= MAX_NOISE_RMS_3D_MM))
+        {
+            Some((field, v)) => Err(invalid(
+                field,
+                format!(
+                    "{} mm: a noise level is a 3-D RMS above 0 and at most {MAX_NOISE_RMS_3D_MM} mm; recalibrate \
+                     (or restore the value `axiscal calibrate` wrote)",
+                    format_f64(v)
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A [`RobotModel::validate`] error as a field of the file's `robot`.
+fn in_robot(e: ModelError) -> InvalidCalibration {
+    match e {
+        ModelError::Invalid { field, message } => invalid(format!("robot.{field}"), message),
+        other => invalid("robot", other.to_string()),
+    }
+}
+
+/// A fitted harmonic series has as many sine as cosine coefficients (one pair per order): a
+/// file with another count was edited, and its covariance no longer names its parameters.
+fn check_fitted_harmonics(robot: &RobotModel) -> Result<(), InvalidCalibration> {
+    for (k, j) in robot.joints.iter().enumerate() {
+        let transmission = match &j.transmission {
+            Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => Some((sin, cos)),
+            Transmission::Polynomial { .. } => None,
+        };
+        let coupling = match &j.coupling_in {
+            Some(CouplingFunction::Gear { sin, cos, .. }) => Some((sin, cos)),
+            _ => None,
+        };
+        for (key, pair) in [("transmission", transmission), ("coupling_in", coupling)] {
+            if let Some((sin, cos)) = pair
+                && sin.len() != cos.len()
+            {
+                return Err(invalid(
+                    format!("robot.joints[{k}].{key}"),
+                    format!(
+                        "`sin` has {} coefficients and `cos` {}: a fitted harmonic series has one of each per order",
+                        sin.len(),
+                        cos.len()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+impl ModelCovariance {
+    /// Checks that this is a covariance of `robot`'s parameters: its names are
+    /// [`model_parameter_names`]`(robot)`, the matrix is square of that size, finite, each
+    /// variance at most [`MAX_PARAMETER_VARIANCE`], symmetric to rounding and positive
+    /// semi-definite to rounding (eigenvalues above `-100 n eps` times the largest).
+    pub fn validate(&self, robot: &RobotModel) -> Result<(), InvalidCalibration> {
+        self.check_names(&model_parameter_names(robot))?;
+        self.check_shape()?;
+        self.check_variances()?;
+        let c = self.matrix();
+        check_symmetric(&c)?;
+        self.check_semi_definite(c)
+    }
+
+    /// The names are the model's parameters, in order.
+    fn check_names(&self, expected: &[String]) -> Result<(), InvalidCalibration> {
+        if self.names.len() != expected.len() {
+            return Err(invalid(
+                "model_covariance.names",
+                format!(
+                    "{} names, but `robot` has {} parameters: the covariance belongs to another model (recalibrate, or \
+                     restore `robot` as `axiscal calibrate` wrote it)",
+                    self.names.len(),
+                    expected.len()
+                ),
+            ));
+        }
+        match self.names.iter().zip(expected).position(|(a, b)| a != b) {
+            Some(i) => Err(invalid(
+                format!("model_covariance.names[{i}]"),
+                format!(
+                    "`{}`, but parameter {i} of `robot` is `{}`: the covariance belongs to another model",
+                    self.names[i], expected[i]
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// One row per name, each with one value per name, all finite.
+    fn check_shape(&self) -> Result<(), InvalidCalibration> {
+        let n = self.names.len();
+        if self.covariance.len() != n {
+            return Err(invalid(
+                "model_covariance.covariance",
+                format!("{} rows for {n} names: one row per name", self.covariance.len()),
+            ));
+        }
+        for (r, row) in self.covariance.iter().enumerate() {
+            if row.len() != n {
+                return Err(invalid(
+                    format!("model_covariance.covariance[{r}]"),
+                    format!("{} values for {n} names: one value per name", row.len()),
+                ));
+            }
+            if let Some(c) = row.iter().position(|v| !v.is_finite()) {
+                return Err(invalid(
+                    format!("model_covariance.covariance[{r}][{c}]"),
+                    "not a finite number",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Each variance is at least 0 and at most [`MAX_PARAMETER_VARIANCE`].
+    fn check_variances(&self) -> Result<(), InvalidCalibration> {
+        for (k, name) in self.names.iter().enumerate() {
+            let v = self.covariance[k][k];
+            if !(0.0..=MAX_PARAMETER_VARIANCE).contains(&v) {
+                return Err(invalid(
+                    format!("model_covariance.covariance[{k}][{k}]"),
+                    format!(
+                        "the variance of `{name}` is {}: a variance is at least 0 and at most \
+                         {MAX_PARAMETER_VARIANCE} (a 1-sigma of 1 in the name's unit); the file was damaged or edited, \
+                         recalibrate",
+                        format_f64(v)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// No eigenvalue below `-100 n eps` times the largest: a covariance with a negative
+    /// variance along some direction gives no uncertainty (or a draw that panics).
+    fn check_semi_definite(&self, c: DMatrix<f64>) -> Result<(), InvalidCalibration> {
+        let n = c.nrows();
+        let eigen = c.symmetric_eigen();
+        let largest = eigen.eigenvalues.amax();
+        let (k, lowest) = eigen.eigenvalues.argmin();
+        if lowest >= -100.0 * n as f64 * f64::EPSILON * largest {
+            return Ok(());
+        }
+        let along = eigen.eigenvectors.column(k).iamax();
+        Err(invalid(
+            "model_covariance.covariance",
+            format!(
+                "not positive semi-definite: an eigenvalue of {} (the largest is {}), mostly along `{}`: no \
+                 covariance has a negative variance in any direction; the file was damaged or edited, recalibrate",
+                format_f64(lowest),
+                format_f64(largest),
+                self.names[along]
+            ),
+        ))
+    }
+}
+
+/// `c[r][c]` equals `c[c][r]` to rounding: within `1e-9` of `sqrt(c_rr c_cc)` and `n eps`
+/// of the largest variance.
+fn check_symmetric(c: &DMatrix<f64>) -> Result<(), InvalidCalibration> {
+    let n = c.nrows();
+    let floor = n as f64 * f64::EPSILON * c.diagonal().amax();
+    for r in 0..n {
+        for k in 0..r {
+            let tolerance = 1e-9 * (c[(r, r)] * c[(k, k)]).sqrt() + floor;
+            if (c[(r, k)] - c[(k, r)]).abs() > tolerance {
+                return Err(invalid(
+                    format!("model_covariance.covariance[{r}][{k}]"),
+                    format!(
+                        "{}, but `covariance[{k}][{r}]` is {}: a covariance is symmetric; the file was damaged or \
+                         edited, recalibrate",
+                        format_f64(c[(r, k)]),
+                        format_f64(c[(k, r)])
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
