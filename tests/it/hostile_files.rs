@@ -7,7 +7,6 @@ use crate::common::{self, axiscal, stderr};
 use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementModel;
-use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::RobotDescription;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -34,14 +33,8 @@ fn changed(text: &str, from: &str, to: &str) -> String {
 
 /// A calibration of the paper robot with its model covariance and noise, as JSON.
 fn calibration_json() -> Value {
-    let no_validation = ValidationPlan {
-        poses: 0,
-        ..ValidationPlan::workspace_default(6)
-    };
-    let set = common::analytic_campaign(
+    let set = common::axes_only_campaign_of(
         &common::paper_robot_without_jitter(),
-        &CalibrationPlan::table1(6),
-        &no_validation,
         &MeasurementModel::paper_isotropic(),
         1,
     );

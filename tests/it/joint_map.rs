@@ -10,21 +10,15 @@ use axiscal::calibration::procedure::{
     joint_map,
 };
 use axiscal::measurement::{IsotropicNoise, MeasurementModel};
-use axiscal::plan::{CalibrationPlan, ValidationPlan};
+use axiscal::plan::ValidationPlan;
 use axiscal::robot::RobotDescription;
 use rand::rngs::ChaCha12Rng;
 use rand::{RngExt, SeedableRng};
 
 /// A noise-free calibration of the paper robot (nontrivial transmissions and couplings).
 fn paper_calibration(desc: &RobotDescription) -> Calibration {
-    let no_validation = ValidationPlan {
-        poses: 0,
-        ..ValidationPlan::workspace_default(6)
-    };
-    let set = common::analytic_campaign(
+    let set = common::axes_only_campaign_of(
         &common::paper_robot_without_jitter(),
-        &CalibrationPlan::table1(6),
-        &no_validation,
         &MeasurementModel::Isotropic(IsotropicNoise { net_radial_rms_mm: 0.0 }),
         1,
     );

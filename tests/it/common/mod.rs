@@ -80,14 +80,20 @@ pub fn jitter_free_campaign(noise_mm: f64, poses: usize, seed: u64) -> Measureme
 /// The Table-1 axis experiments alone (no validation poses) of the paper robot, with its
 /// jitter, through the paper's isotropic instrument, random stream from `seed`.
 pub fn axes_only_campaign(seed: u64) -> MeasurementSet {
+    axes_only_campaign_of(&axiscal::sim::paper_robot(), &MeasurementModel::paper_isotropic(), seed)
+}
+
+/// The Table-1 axis experiments alone (no validation poses) of `robot` through `instrument`,
+/// random stream from `seed`.
+pub fn axes_only_campaign_of(robot: &RobotModel, instrument: &MeasurementModel, seed: u64) -> MeasurementSet {
     analytic_campaign(
-        &axiscal::sim::paper_robot(),
+        robot,
         &CalibrationPlan::table1(6),
         &ValidationPlan {
             poses: 0,
             ..ValidationPlan::workspace_default(6)
         },
-        &MeasurementModel::paper_isotropic(),
+        instrument,
         seed,
     )
 }
