@@ -209,7 +209,10 @@ fn temporary_owner(name: &str) -> Option<i32> {
         Some(pid) => pid,
         None => tail.split_once('-')?.0,
     };
-    pid.parse().ok()
+    pid.parse::<u32>()
+        .ok()
+        .and_then(|p| i32::try_from(p).ok())
+        .filter(|&p| p > 0)
 }
 
 /// Removes from `dir` the temporaries of axiscal runs that no longer exist (killed by a
@@ -465,6 +468,11 @@ mod tests {
         assert_eq!(temporary_owner(".my.axiscal-notes.tmp"), None);
         assert_eq!(temporary_owner("calibration.json"), None);
         assert_eq!(temporary_owner(".x.axiscal-12.tmp"), None);
+        assert_eq!(
+            temporary_owner(".x.axiscal-0-1.tmp"),
+            None,
+            "process 0 is a group, not a run"
+        );
     }
 
     #[test]
