@@ -4,7 +4,7 @@
 //! stdout) with the exit code it must give and what its message must name. A bad input is one
 //! error line naming the file and the field, exit 2; nothing is written.
 
-use crate::common::{axiscal, simulate_analytic};
+use crate::common::{altered_csv, axiscal, scale_fields, simulate_analytic};
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
 use std::time::Duration;
@@ -34,43 +34,6 @@ fn shipped(relative: &str) -> String {
         .to_string()
 }
 
-/// The measurement CSV at `from` with `edit` applied to every data row's cells (header and
-/// `#` lines kept), written to `to`; `header` edits the header's cells.
-fn edited(from: &Path, to: &Path, header: impl Fn(&mut Vec<String>), edit: impl Fn(usize, &mut Vec<String>) -> bool) {
-    let text = std::fs::read_to_string(from).unwrap();
-    let mut out = String::new();
-    let mut seen_header = false;
-    let mut row = 0;
-    for line in text.lines() {
-        if line.starts_with('#') {
-            out.push_str(line);
-            out.push('\n');
-            continue;
-        }
-        let mut cells: Vec<String> = line.split(',').map(str::to_owned).collect();
-        if !seen_header {
-            seen_header = true;
-            header(&mut cells);
-        } else {
-            if !edit(row, &mut cells) {
-                row += 1;
-                continue;
-            }
-            row += 1;
-        }
-        out.push_str(&cells.join(","));
-        out.push('\n');
-    }
-    std::fs::write(to, out).unwrap();
-}
-
-/// Coordinates (columns 4-6 of the measurement CSV) times `factor`.
-fn scale_xyz(cells: &mut [String], factor: f64) {
-    for c in &mut cells[4..7] {
-        *c = (c.parse::<f64>().unwrap() * factor).to_string();
-    }
-}
-
 /// `levels` levels of ten YAML aliases each to the level below (10^levels leaves).
 fn alias_nest(levels: usize) -> String {
     let mut text = String::from("a0: &a0 [lol]\n");
@@ -92,34 +55,22 @@ fn write_inputs(dir: &Path) {
         .assert()
         .success();
     let campaign = dir.join("campaign.csv");
-    let validation_only = |_: usize, c: &mut Vec<String>| c[0] == "validation";
-    edited(
+    let validation = |f: &[String]| f[0] == "validation";
+    altered_csv(&campaign, "free-m.csv", validation, |f| scale_fields(f, 4..7, 1e-3));
+    altered_csv(&campaign, "x2.csv", |_| true, |f| scale_fields(f, 4..7, 2.0));
+    // The axis experiments from setup A, the validation poses from setup B.
+    let setups = altered_csv(
         &campaign,
-        &dir.join("free-m.csv"),
-        |_| {},
-        |r, c| {
-            scale_xyz(c, 1e-3);
-            validation_only(r, c)
+        "setups.csv",
+        |_| true,
+        |f| {
+            let setup = if f[0] == "validation" { "B" } else { "A" };
+            f.push(setup.into());
         },
     );
-    edited(
-        &campaign,
-        &dir.join("x2.csv"),
-        |_| {},
-        |_, c| {
-            scale_xyz(c, 2.0);
-            true
-        },
-    );
-    edited(
-        &campaign,
-        &dir.join("setups.csv"),
-        |h| h.push("setup".into()),
-        |r, c| {
-            c.push(if r < 60 { "A".into() } else { "B".into() });
-            true
-        },
-    );
+    let text = std::fs::read_to_string(&setups).unwrap();
+    let header = text.lines().find(|l| l.starts_with("experiment,")).unwrap();
+    std::fs::write(&setups, text.replacen(header, &format!("{header},setup"), 1)).unwrap();
     let files: [(&str, String); 6] = [
         (
             "poses-semicolon.csv",
@@ -297,12 +248,7 @@ fn a_diagnosis_replaces_an_earlier_ones_plots_as_a_set() {
     let dir = tempfile::tempdir().unwrap();
     simulate_analytic(dir.path(), 40, 3, "campaign.csv");
     let campaign = dir.path().join("campaign.csv");
-    edited(
-        &campaign,
-        &dir.path().join("axes.csv"),
-        |_| {},
-        |_, c| c[0] != "validation",
-    );
+    altered_csv(&campaign, "axes.csv", |f| f[0] != "validation", |_| {});
     let diagnose = |data: &str, force: bool| {
         let mut cmd = axiscal();
         cmd.current_dir(dir.path()).args(["diagnose", data, "--out", "d"]);
