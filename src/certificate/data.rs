@@ -2,8 +2,12 @@
 //! from. A calibration does not record its file, but it records each axis fit's sweeps with
 //! the poses of target 0 each used and the points the outlier screen set aside: the data must
 //! hold the same axis experiments, moving the same joints, with as many poses
-//! ([`data_mismatches`]). A certificate listing other data would misstate what was measured.
+//! ([`data_mismatches`]). A calibration from free poses records how many poses it fitted, set
+//! aside as outliers (by experiment and step), held out and left out: the data must hold as
+//! many free poses, and the outliers among them. A certificate listing other data would
+//! misstate what was measured.
 
+use crate::calibration::free_pose::FreePoseSummary;
 use crate::calibration::procedure::Calibration;
 use crate::measurement::MeasurementSet;
 use serde::Serialize;
@@ -52,8 +56,11 @@ pub(super) fn data_section(file: &str, set: &MeasurementSet) -> DataSection {
 }
 
 /// How `set` differs from the data `cal` records (module doc), one sentence each; empty when it
-/// matches, and for a calibration from free poses (which records no sweeps).
+/// matches.
 pub fn data_mismatches(cal: &Calibration, set: &MeasurementSet) -> Vec<String> {
+    if let Some(fp) = &cal.free_poses {
+        return free_pose_mismatches(fp, set);
+    }
     if cal.axes.is_empty() {
         return Vec::new();
     }
@@ -110,6 +117,43 @@ pub fn data_mismatches(cal: &Calibration, set: &MeasurementSet) -> Vec<String> {
                 "the data's experiment `{name}` (joint {joint}) is not one the calibration fitted"
             ));
         }
+    }
+    out
+}
+
+/// How `set` differs from the free poses the summary `fp` records (module doc).
+fn free_pose_mismatches(fp: &FreePoseSummary, set: &MeasurementSet) -> Vec<String> {
+    let all_rows = fp.axis_rows_as_poses.is_some();
+    let poses: BTreeSet<(&str, usize)> = set
+        .rows()
+        .iter()
+        .filter(|m| all_rows || m.moved_joint == 0)
+        .map(|m| (m.experiment.as_str(), m.step))
+        .collect();
+    let dropped = fp.outliers.iter().filter(|o| o.dropped).count();
+    let held = fp
+        .holdout
+        .as_ref()
+        .map_or(0, |h| h.heldout_poses + h.unexecutable_poses);
+    let recorded = fp.poses + dropped + held + fp.poses_left_out;
+    let mut out = Vec::new();
+    if poses.len() != recorded {
+        out.push(format!(
+            "the data hold {} free poses, the calibration {recorded} ({} fitted, {dropped} set aside as outliers, {held} held out, {} left out)",
+            poses.len(),
+            fp.poses,
+            fp.poses_left_out
+        ));
+    }
+    for o in fp
+        .outliers
+        .iter()
+        .filter(|o| !poses.contains(&(o.experiment.as_str(), o.step)))
+    {
+        out.push(format!(
+            "the calibration's outlier pose `{}` step {} is not in the data",
+            o.experiment, o.step
+        ));
     }
     out
 }

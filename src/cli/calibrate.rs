@@ -281,7 +281,7 @@ pub fn run(args: Args) -> Result<()> {
     staged.commit(&[&OUTPUTS[..], &TOOL_MAP_FILES[..]].concat())?;
     match &cal.free_poses {
         Some(summary) => {
-            super::calibrate_free::print(summary, &desc, &source);
+            super::calibrate_free::print(summary, &desc, &set, &args.data);
             print_tool_accuracy(&cal);
         }
         None => {
@@ -511,6 +511,7 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
             .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm),
         folds: args.refine_folds as usize,
         max_poses: args.max_poses,
+        keep_outliers: args.keep_outliers,
         ..RefineOptions::default()
     };
     let carried = match &args.carry {
@@ -542,6 +543,13 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
         }
         if !r.converged {
             eprintln!("warning: --refine: the Gauss-Newton steps reached their limit without converging");
+        }
+        checks::print_pose_outliers(&r.outliers, set, &args.data, "refined");
+        if let Some(why) = r.implausible() {
+            anyhow::bail!(
+                "--refine on {}: {why}; nothing written (without --refine the axis calibration stands)",
+                args.data.display()
+            );
         }
         print_carried(&carried, r);
     }

@@ -53,7 +53,8 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
 }
 
 /// The console summary of a free-pose calibration.
-pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
+pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet, data: &Path) {
+    let source = data.display();
     let what = match s.axis_rows_as_poses {
         Some(_) => "every row a free pose",
         None => "no axis experiment",
@@ -134,17 +135,7 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, source: &str) {
             h.unexecutable_poses
         );
     }
-    for o in &s.outliers {
-        let what = if o.dropped {
-            "dropped from the fit"
-        } else {
-            "kept (--keep-outliers)"
-        };
-        eprintln!(
-            "warning: outlier pose {} step {}: RMS {:.4} mm beyond the fence {:.4} mm (Q3 + 3 IQR of the poses' RMS): {what}",
-            o.experiment, o.step, o.rms_mm, o.fence_mm
-        );
-    }
+    super::checks::print_pose_outliers(&s.outliers, set, data, "calibrated");
     if s.tool_fit_rms_mm.is_none() {
         say!("  tool frame: nominal (the description's tool.targets_mm do not match the data's target ids)");
     }

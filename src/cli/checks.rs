@@ -67,23 +67,61 @@ pub fn pose_units(
 
 /// The data's coordinates and commands against the description, unless `skip`: the axis
 /// experiments' arcs and the free poses' spread (a spread beyond
-/// [`axiscal::measurement::unit_check::SPREAD_WARNING`] but not a slip is a warning).
-pub fn data_units(set: &MeasurementSet, desc: &RobotDescription, data: &Path, skip: bool) -> Result<()> {
+/// [`axiscal::measurement::unit_check::SPREAD_WARNING`] but not a slip is a warning, as a
+/// command outside the joint limits is); the warnings returned, not printed.
+pub fn data_unit_warnings(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    data: &Path,
+    skip: bool,
+) -> Result<Vec<String>> {
     if skip {
-        return Ok(());
+        return Ok(Vec::new());
     }
     let slips = measurement_slips(set, desc);
-    if slips.is_empty()
-        && let Some(scale) = free_pose_scale_warning(set, desc)
-    {
-        eprintln!(
-            "warning: {}: `{}`: {} (--skip-unit-check silences this)",
+    refuse_slips(data, &slips)?;
+    let mut warnings: Vec<String> = commands_outside_limits(set, desc, data).into_iter().collect();
+    if let Some(scale) = free_pose_scale_warning(set, desc) {
+        warnings.push(format!(
+            "{}: `{}`: {} (--skip-unit-check silences this)",
             data.display(),
             scale.field,
             scale.message
-        );
+        ));
     }
-    refuse_slips(data, &slips)
+    Ok(warnings)
+}
+
+/// Prints each of `warnings` as a `warning:` line on stderr.
+pub fn print_warnings(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
+/// A warning naming the first row of `set` (read from `data`) whose command lies outside the
+/// description's joint limits, and how many do: a pose the robot cannot reach is a command in
+/// other units, a typo, or limits the description gets wrong.
+fn commands_outside_limits(set: &MeasurementSet, desc: &RobotDescription, data: &Path) -> Option<String> {
+    let mut outside = set
+        .rows()
+        .iter()
+        .enumerate()
+        .filter_map(|(r, m)| Some((r, outside_limits(desc, &m.cmd)?)));
+    let (row, (joint, cmd, [lo, hi])) = outside.next()?;
+    let others = outside.count();
+    let place = set
+        .line_of(row)
+        .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+    let unit = axiscal::robot::file_unit(desc, joint - 1);
+    Some(format!(
+        "{place}: cmd_{joint} = {cmd} {unit} is outside joint {joint}'s limits [{lo}, {hi}] {unit}{}: the robot cannot reach it; check the commands' units and the description's limits",
+        if others > 0 {
+            format!(" ({} rows outside a limit in all)", others + 1)
+        } else {
+            String::new()
+        }
+    ))
 }
 
 /// Refuses a set measured from several setups (instrument placements, the `setup` column) for
@@ -125,16 +163,17 @@ pub fn identity_comment(desc: &RobotDescription) -> String {
 }
 
 /// Refuses `source` (made with `recorded`) with the description `desc` read from `robot`
-/// when their geometries differ, unless `allow`. Without a record it warns (older files).
+/// when their geometries differ, unless `allow` (then a warning). Without a record it warns
+/// (older files). The warning returned, not printed.
 pub fn same_robot(
     recorded: Option<&DescriptionIdentity>,
     source: &Path,
     desc: &RobotDescription,
     robot: &Path,
     allow: bool,
-) -> Result<()> {
+) -> Result<Option<String>> {
     let current = desc.identity();
-    match recorded {
+    Ok(match recorded {
         Some(r) if r.geometry_hash != current.geometry_hash && !allow => bail!(
             "{} was made with the robot description {r}, but --robot {} is {current}: results would be wrong for \
              this robot; give --robot the description file of \"{}\" (without --robot it is the shipped IRB/L6), \
@@ -143,19 +182,18 @@ pub fn same_robot(
             robot.display(),
             r.name
         ),
-        Some(r) if r.geometry_hash != current.geometry_hash => eprintln!(
-            "warning: {} was made with {r}, --robot {} is {current} (--allow-other-robot)",
+        Some(r) if r.geometry_hash != current.geometry_hash => Some(format!(
+            "{} was made with {r}, --robot {} is {current} (--allow-other-robot)",
             source.display(),
             robot.display()
-        ),
-        None if source.extension().is_some_and(|e| e == "json") => eprintln!(
-            "warning: {} records no robot description (written by an older axiscal): cannot check it matches --robot {}",
+        )),
+        None if source.extension().is_some_and(|e| e == "json") => Some(format!(
+            "{} records no robot description (written by an older axiscal): cannot check it matches --robot {}",
             source.display(),
             robot.display()
-        ),
-        _ => {}
-    }
-    Ok(())
+        )),
+        _ => None,
+    })
 }
 
 /// Reads a `calibration.json` (`docs/formats.md#calibration-json`) and checks its values
@@ -173,8 +211,20 @@ pub fn read_calibration_file(path: &Path) -> Result<Calibration> {
 /// against the description `desc` read from `robot`: the same joint count, and the same
 /// geometry unless `allow` ([`same_robot`]).
 pub fn read_calibration(path: &Path, desc: &RobotDescription, robot: &Path, allow: bool) -> Result<Calibration> {
+    let (cal, warning) = read_calibration_warned(path, desc, robot, allow)?;
+    print_warnings(&Vec::from_iter(warning));
+    Ok(cal)
+}
+
+/// [`read_calibration`] with its warning returned, not printed.
+pub fn read_calibration_warned(
+    path: &Path,
+    desc: &RobotDescription,
+    robot: &Path,
+    allow: bool,
+) -> Result<(Calibration, Option<String>)> {
     let cal = read_calibration_file(path)?;
-    same_robot(cal.description.as_ref(), path, desc, robot, allow)?;
+    let warning = same_robot(cal.description.as_ref(), path, desc, robot, allow)?;
     if cal.robot.dof() != desc.dof() {
         bail!(
             "{} has {} joints but {} describes {}",
@@ -184,14 +234,26 @@ pub fn read_calibration(path: &Path, desc: &RobotDescription, robot: &Path, allo
             desc.dof()
         );
     }
-    Ok(cal)
+    Ok((cal, warning))
 }
 
 /// The measurement CSV `data` for the description `desc` read from `robot`: the robot it
 /// records must be `desc` unless `overrides.allow_other_robot` ([`same_robot`]), its units are
-/// checked unless `overrides.skip_unit_check` ([`data_units`]).
+/// checked unless `overrides.skip_unit_check` ([`data_unit_warnings`]); the warnings printed.
 pub fn read_data(data: &Path, desc: &RobotDescription, robot: &Path, overrides: Overrides) -> Result<MeasurementSet> {
-    same_robot(
+    let (set, warnings) = read_data_warned(data, desc, robot, overrides)?;
+    print_warnings(&warnings);
+    Ok(set)
+}
+
+/// [`read_data`] with its warnings returned, not printed.
+pub fn read_data_warned(
+    data: &Path,
+    desc: &RobotDescription,
+    robot: &Path,
+    overrides: Overrides,
+) -> Result<(MeasurementSet, Vec<String>)> {
+    let identity = same_robot(
         data_identity(data).as_ref(),
         data,
         desc,
@@ -199,8 +261,9 @@ pub fn read_data(data: &Path, desc: &RobotDescription, robot: &Path, overrides: 
         overrides.allow_other_robot,
     )?;
     let set = axiscal::measurement::read_measurements(data, Some(desc.dof()))?;
-    data_units(&set, desc, data, overrides.skip_unit_check)?;
-    Ok(set)
+    let mut warnings: Vec<String> = identity.into_iter().collect();
+    warnings.extend(data_unit_warnings(&set, desc, data, overrides.skip_unit_check)?);
+    Ok((set, warnings))
 }
 
 /// The first joint whose command `cmd_file` (file units: deg or mm) lies outside the
@@ -210,6 +273,35 @@ pub fn outside_limits(desc: &RobotDescription, cmd_file: &[f64]) -> Option<(usiz
         let [lo, hi] = j.limits;
         (!(lo..=hi).contains(&c)).then_some((k + 1, c, [lo, hi]))
     })
+}
+
+/// One warning line per free pose an outlier test flagged in `set` (read from `data`), with
+/// the line of its first row; `done` is what the command did without it (`calibrated`,
+/// `refined`).
+pub fn print_pose_outliers(
+    outliers: &[axiscal::calibration::free_pose::OutlierPose],
+    set: &MeasurementSet,
+    data: &Path,
+    done: &str,
+) {
+    for o in outliers {
+        let row = set
+            .rows()
+            .iter()
+            .position(|m| m.experiment == o.experiment && m.step == o.step);
+        let place = row
+            .and_then(|r| set.line_of(r))
+            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+        let what = if o.dropped {
+            format!("{done} without it (--keep-outliers keeps it)")
+        } else {
+            "kept (--keep-outliers)".to_string()
+        };
+        eprintln!(
+            "warning: {place}: outlier pose: experiment {} step {}: RMS {:.4} mm beyond the fence {:.4} mm (Q3 + 3 IQR of the poses' RMS): {what}; check its rows' target ids, coordinates, commands and units",
+            o.experiment, o.step, o.rms_mm, o.fence_mm
+        );
+    }
 }
 
 /// One warning line per point an outlier test flagged in `data` (a sweep's, or a validation

@@ -100,7 +100,9 @@ pub fn run(args: Args) -> Result<()> {
     outputs.check_in(&args.out, &OUTPUTS)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
-    let desc = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
+    // A free-pose calibration fitted the targets the description may not give; the data
+    // record the description as given.
+    let fitted = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
     let data = match &args.data {
         Some(p) => {
             let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
@@ -114,7 +116,7 @@ pub fn run(args: Args) -> Result<()> {
             let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
             checks::one_setup(&set, p, "the held-out poses' prediction")?;
             Some(
-                held_out(&p.display().to_string(), &set, &cal, &desc)
+                held_out(&p.display().to_string(), &set, &cal, &fitted)
                     .with_context(|| format!("held-out poses of {}", p.display()))?,
             )
         }
@@ -140,7 +142,7 @@ pub fn run(args: Args) -> Result<()> {
     let inputs = CertificateInputs {
         calibration: &cal,
         calibration_file: args.calibration.display().to_string(),
-        desc: &desc,
+        desc: &fitted,
         instrument: args.instrument.clone(),
         data: data.as_ref().map(|(f, s)| (f.clone(), s)),
         residuals: residuals.as_deref().unwrap_or(&[]),

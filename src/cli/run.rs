@@ -338,6 +338,21 @@ pub fn report(summary: &Summary, out: &Path) -> Result<()> {
     say!("results in {}", out.display());
     for c in &summary.cases {
         say!("case {} ({} trials, {} failed)", c.case, c.trials, c.failed);
+        if let Some(f) = &c.first_error {
+            eprintln!(
+                "warning: case {}: trial {} failed: {} ({} of the {} failed trials alike; every error is in {}/trials.csv)",
+                c.case,
+                f.trial,
+                f.error,
+                f.same,
+                c.failed,
+                out.display()
+            );
+        }
+        if c.trials > 0 && c.failed == c.trials {
+            say!("  no trial succeeded: no statistics");
+            continue;
+        }
         for m in &c.metrics {
             say!(
                 "  {:<22} mean {:>12.6}  median {:>12.6}  p95 {:>12.6}  max {:>12.6}",
@@ -358,14 +373,15 @@ pub fn report(summary: &Summary, out: &Path) -> Result<()> {
     }
     let lines: Vec<String> = failed
         .iter()
-        .map(|v| {
-            format!(
+        .map(|v| match v.observed.is_nan() {
+            true => format!("[{}] {} no value", v.case, v.threshold.describe()),
+            false => format!(
                 "[{}] {} observed {} (over the bound by {})",
                 v.case,
                 v.threshold.describe(),
                 v.observed,
                 v.excess
-            )
+            ),
         })
         .collect();
     bail!(ThresholdsFailed(format!(

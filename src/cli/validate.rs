@@ -55,8 +55,11 @@ pub fn run(args: Args) -> Result<()> {
     outputs.check_in(&args.out, &OUTPUTS)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
-    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
-    let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
+    let (cal, identity) =
+        checks::read_calibration_warned(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
+    let (set, mut warnings) = checks::read_data_warned(&args.data, &desc, &args.robot, args.checks)?;
+    warnings.splice(0..0, identity);
+    checks::print_warnings(&warnings);
     checks::one_setup(&set, &args.data, "validate")?;
     // A free-pose calibration fitted the targets the description may not give.
     let desc = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
@@ -65,6 +68,7 @@ pub fn run(args: Args) -> Result<()> {
         None => ValidationOptions::of_calibration(&cal, args.false_alarm),
     };
     let v = validate(&set, &cal, &desc, &options).with_context(|| format!("validating on {}", args.data.display()))?;
+    let v = Validation { warnings, ..v };
     let mut staged = outputs.staged_in(&args.out)?;
     staged.write(OUTPUTS[0], validation_residuals_csv(&v))?;
     staged.write(OUTPUTS[1], json_file::to_string(Schema::VALIDATION, &v)?)?;

@@ -205,6 +205,27 @@ fn model_error(what: &str) -> DiagnosisError {
     }
 }
 
+/// [`model_error`] naming the first of `poses` (of `set`) `predictor` cannot execute at
+/// `params`.
+fn pose_error(
+    what: &str,
+    predictor: &Predictor,
+    params: &[f64],
+    poses: &[&Pose],
+    set: &MeasurementSet,
+) -> DiagnosisError {
+    let failing = poses.iter().find(|p| predictor.residuals(params, &[**p]).is_none());
+    DiagnosisError::Model {
+        message: match failing {
+            Some(p) => format!(
+                "the calibrated model cannot execute the command of validation pose {} ({what}): a command beyond the range its transmissions were fitted on, or in other units; check that pose's cmd_k",
+                refine::pose_label(set, p)
+            ),
+            None => format!("the calibrated model cannot execute the validation commands ({what})"),
+        },
+    }
+}
+
 /// Training poses then held-out poses.
 fn ordered(poses: &[Pose]) -> Vec<&Pose> {
     let (train, held) = split(poses);
@@ -298,7 +319,7 @@ fn prepare(
     let residuals = DVector::from_vec(
         predictor
             .residuals(&zeros, &order)
-            .ok_or_else(|| model_error("residuals"))?,
+            .ok_or_else(|| pose_error("residuals", &predictor, &zeros, &order, set))?,
     );
     let x_geometric = predictor
         .sensitivity(&zeros, 0..zeros.len(), &order, &predictor.steps())
@@ -512,10 +533,11 @@ fn null_data(
         }
         let (poses, _) = diagnosed_poses(&r, desc, options.max_poses);
         let pred = Predictor::new(&cal.robot, desc, reference_c, options.refit);
+        let zeros = vec![0.0; pred.geometric_count()];
         let systematic = pred
-            .residuals(&vec![0.0; pred.geometric_count()], &ordered(&poses))
+            .residuals(&zeros, &ordered(&poses))
             .filter(|s| s.len() == n)
-            .ok_or_else(|| model_error("noise replica"))?;
+            .ok_or_else(|| pose_error("noise replica", &pred, &zeros, &ordered(&poses), &r))?;
         for d in 0..draws {
             let mut col: Vec<f64> = systematic.clone();
             let draw = NoiseModel {

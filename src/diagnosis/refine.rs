@@ -9,6 +9,7 @@ use super::{
     Candidate, Diagnosis, Pose, Predictor, RefitScope, reference_temperature, validation_poses,
     validation_poses_at_most,
 };
+use crate::calibration::free_pose::OutlierPose;
 use crate::calibration::procedure::Calibration;
 use crate::calibration::refine::{RefineError, RefineOptions, Refinement, refine_free_poses, unrefined_sigma};
 use crate::measurement::MeasurementSet;
@@ -47,14 +48,47 @@ pub fn refine_carrying(
         let selected: Vec<&Pose> = which.iter().map(|&i| &poses[i]).collect();
         predictor.residuals(p, &selected)
     };
-    let out = refine_free_poses(residuals, &targets, &layout, &sigma, &predictor.steps(), options)?;
+    let labels: Vec<String> = poses.iter().map(|p| pose_label(set, p)).collect();
+    let out = refine_free_poses(
+        residuals,
+        &targets,
+        &labels,
+        &layout,
+        &sigma,
+        &predictor.steps(),
+        options,
+    )?;
+    let outliers = out
+        .outliers
+        .iter()
+        .map(|f| OutlierPose {
+            experiment: poses[f.group].experiment.clone(),
+            step: poses[f.group].step,
+            rms_mm: f.rms,
+            fence_mm: f.fence,
+            dropped: !options.keep_outliers,
+        })
+        .collect();
     let mut refined = cal.clone();
     refined.robot = predictor.carried_robot(&out.params);
     refined.refinement = Some(Refinement {
         poses_left_out: left_out,
+        outliers,
         ..out.summary
     });
     Ok(refined)
+}
+
+/// `validation step 5 (line 150)`: pose `p` of `set` in messages.
+pub(crate) fn pose_label(set: &MeasurementSet, p: &Pose) -> String {
+    let row = set
+        .rows()
+        .iter()
+        .position(|m| m.experiment == p.experiment && m.step == p.step);
+    match row.and_then(|r| set.line_of(r)) {
+        Some(line) => format!("{} step {} (line {line})", p.experiment, p.step),
+        None => format!("{} step {}", p.experiment, p.step),
+    }
 }
 
 /// Whether a model can carry candidate `c` of a robot of `desc` ([`Predictor::carried_robot`]):

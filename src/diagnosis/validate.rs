@@ -344,6 +344,10 @@ pub struct Validation {
     pub orientation: Option<OrientationSummary>,
     /// One line: how the calibration does on these data.
     pub verdict: String,
+    /// What the reader must know about the inputs (the `warning:` lines `axiscal validate`
+    /// printed: a unit scale, commands outside the joint limits, another robot's files).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Per point (written as `residuals.csv`, not in the JSON).
     #[serde(skip)]
     pub residuals: Vec<ValidationResidual>,
@@ -410,6 +414,7 @@ pub fn validate(
         axis,
         orientation: free.orientation,
         verdict,
+        warnings: Vec::new(),
         residuals,
     })
 }

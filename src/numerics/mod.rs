@@ -4,6 +4,7 @@
 //! columns.
 
 pub mod lsq;
+pub mod outlier_rounds;
 pub mod stats;
 pub mod subset;
 pub mod svd;

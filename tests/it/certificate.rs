@@ -271,6 +271,32 @@ fn the_certificate_of_a_free_pose_calibration_warns_about_its_own_poses() {
         .success();
     assert!(stderr(&out).contains("fitted to free poses"), "{}", stderr(&out));
     check_certificate(&d.join("cert"), &d.join("cal/calibration.json"));
+    // `--data` must be the free poses the calibration was made from: its own file is, the
+    // same file without its last ten poses is not (the count names both).
+    let report_data = |file: &Path, out: &str| {
+        axiscal()
+            .current_dir(d)
+            .args(["report", "--calibration", "cal/calibration.json", "--robot"])
+            .arg(data.join("kr-arm.toml"))
+            .arg("--data")
+            .arg(file)
+            .args(["--out", out])
+            .assert()
+    };
+    report_data(&data.join("clean.csv"), "own").success();
+    std::fs::copy(data.join("clean.csv"), d.join("clean.csv")).unwrap();
+    let fewer = crate::common::altered_csv(
+        &d.join("clean.csv"),
+        "fewer.csv",
+        |f| f[2].parse::<usize>().is_ok_and(|step| step < 290),
+        |_| {},
+    );
+    let e = stderr(&report_data(&fewer, "other").code(2));
+    assert!(
+        e.contains("fewer.csv: not the data") && e.contains("the data hold 290 free poses"),
+        "{e}"
+    );
+    assert!(!d.join("other").exists());
 }
 
 /// The certificate of a simulated campaign's calibration: with its own data and held-out

@@ -76,6 +76,46 @@ fn an_impossible_threshold_exits_1_and_says_by_how_much() {
     assert!(err.contains("1 threshold(s) failed"), "{err}");
 }
 
+/// Every trial fails (an instrument of 30 m noise puts sight lines behind a station): the
+/// console says why (the first trial's error and how many failed alike), `summary.json`
+/// records it, and the verdicts say there is no value rather than `NaN`.
+#[test]
+fn a_case_whose_trials_all_fail_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = smoke_variant(
+        dir.path(),
+        "noisy.toml",
+        ("net_radial_rms_mm = 0.19", "net_radial_rms_mm = 30000"),
+        "",
+    );
+    let out = dir.path().join("out");
+    let a = axiscal()
+        .arg("run")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(1);
+    let (err, text) = (stderr(&a), crate::common::stdout(&a));
+    assert!(
+        err.contains("warning: case base: trial 0 failed: simulating the campaign"),
+        "{err}"
+    );
+    assert!(
+        !text.contains("NaN") && text.contains("no value (no trial of the case succeeded)"),
+        "{text}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let case = &summary["cases"][0];
+    assert_eq!(case["failed"], 4);
+    let first = &case["first_error"];
+    assert_eq!(first["trial"], 0);
+    assert!(first["error"].as_str().unwrap().starts_with("simulating the campaign"));
+    let same = first["same"].as_u64().unwrap();
+    assert!((1..=4).contains(&same), "{first}");
+}
+
 #[test]
 fn bad_scenarios_exit_2_naming_file_and_key() {
     let dir = tempfile::tempdir().unwrap();

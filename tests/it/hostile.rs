@@ -213,6 +213,13 @@ fn every_hostile_input_is_one_clear_error_and_writes_nothing() {
             // The simulated robot differs from its description by millimetres over metres.
             let ratio = crate::common::number_after(&e, "positions spread ");
             assert!((ratio / 2.0 - 1.0).abs() < 0.02, "{}: {ratio} in {e}", c.what);
+            // The warning is in the summary a script reads, too.
+            let summary = std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap();
+            let json: serde_json::Value = serde_json::from_str(&summary).unwrap();
+            let warnings = json["warnings"].as_array().expect("a warnings list");
+            let printed = e.lines().find(|l| l.contains("positions spread")).unwrap();
+            assert_eq!(warnings.len(), 1, "{summary}");
+            assert_eq!(Some(printed.trim_start_matches("warning: ")), warnings[0].as_str());
         }
         if c.code == 2 {
             assert_eq!(e.lines().count(), 1, "{}: one line: {e}", c.what);

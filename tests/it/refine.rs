@@ -174,3 +174,79 @@ fn refine_end_to_end() {
         .assert()
         .success();
 }
+
+/// `c.csv` with target ids 1 and 2 exchanged in the validation poses of `steps` (all: `None`).
+fn swapped_targets(dir: &std::path::Path, name: &str, steps: Option<&[&str]>) -> std::path::PathBuf {
+    common::altered_csv(
+        &dir.join("c.csv"),
+        name,
+        |_| true,
+        |f| {
+            let chosen = steps.is_none_or(|s| s.contains(&f[2].as_str()));
+            if f[0] == "validation" && chosen {
+                f[3] = match f[3].as_str() {
+                    "1" => "2".into(),
+                    "2" => "1".into(),
+                    other => other.into(),
+                };
+            }
+        },
+    )
+}
+
+/// Target ids swapped in two free poses: the two poses are named by line and left out (kept
+/// with `--keep-outliers`, they make the refinement an error); swapped in every pose: the refinement misses them by far more than
+/// the noise, an error, nothing written.
+#[test]
+fn swapped_target_ids_are_outlier_poses_or_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    common::simulate_analytic(dir.path(), 30, 23, "c.csv");
+    swapped_targets(dir.path(), "two.csv", Some(&["3", "11"]));
+    swapped_targets(dir.path(), "all.csv", None);
+    let refine = |data: &str, out: &str, keep: bool| {
+        let mut cmd = axiscal();
+        cmd.current_dir(dir.path())
+            .args(["calibrate", data, "--refine", "--out", out]);
+        if keep {
+            cmd.arg("--keep-outliers");
+        }
+        cmd.assert()
+    };
+    let a = refine("two.csv", "two", false).success();
+    let e = stderr(&a);
+    let lines: Vec<&str> = e.lines().filter(|l| l.contains("outlier pose")).collect();
+    assert_eq!(lines.len(), 2, "{e}");
+    assert!(
+        lines
+            .iter()
+            .all(|l| l.starts_with("warning: two.csv:") && l.contains("refined without it")),
+        "{e}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("two/calibration.json")).unwrap()).unwrap();
+    let r = &json["refinement"];
+    let steps: Vec<u64> = r["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["step"].as_u64().unwrap())
+        .collect();
+    assert_eq!(steps, vec![3, 11]);
+    assert_eq!(r["poses"], 28);
+    let fence = r["outliers"][0]["fence_mm"].as_f64().unwrap();
+    assert!(r["rms_after_mm"].as_f64().unwrap() < fence, "{r}");
+    // Kept, they pull the refinement far beyond the noise: an error.
+    let kept = stderr(&refine("two.csv", "kept", true).code(2));
+    assert!(
+        kept.contains("kept (--keep-outliers)") && kept.contains("times the"),
+        "{kept}"
+    );
+    assert!(!dir.path().join("kept").exists());
+    let all = refine("all.csv", "all", false).code(2);
+    let e = stderr(&all);
+    assert!(
+        e.contains("all.csv") && e.contains("times the") && e.contains("target ids"),
+        "{e}"
+    );
+    assert!(!dir.path().join("all").exists());
+}

@@ -14,6 +14,7 @@
 use super::linear::{LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 use super::{GaussNewtonSteps, refine_from_linear};
 use crate::numerics::lsq::Stop;
+use crate::numerics::outlier_rounds::{GroupFlag, TooManyOutliers, fit_without_outliers};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -190,6 +191,9 @@ pub struct RefineOptions {
     /// Free poses refined on at most, evenly spaced through the file (the design's memory
     /// grows with them); the others are left out and [`Refinement::poses_left_out`] counts them.
     pub max_poses: usize,
+    /// Keep the poses beyond the outlier fence ([`crate::numerics::outlier_rounds`]) in the
+    /// refinement (they are still named).
+    pub keep_outliers: bool,
 }
 
 impl Default for RefineOptions {
@@ -199,6 +203,7 @@ impl Default for RefineOptions {
             folds: 5,
             max_steps: 10,
             max_poses: crate::measurement::bounded::FIT_MAX_POSES,
+            keep_outliers: false,
         }
     }
 }
@@ -215,10 +220,14 @@ pub enum RefineError {
         needed: usize,
     },
     /// The model could not execute a command.
-    #[error("the calibrated model cannot execute a free pose's command ({what})")]
+    #[error(
+        "the calibrated model cannot execute the command of free pose {pose} ({what}): a command beyond the range its transmissions were fitted on, or in other units; check that pose's cmd_k"
+    )]
     Unexecutable {
         /// At which stage.
         what: &'static str,
+        /// The pose (its label).
+        pose: String,
     },
     /// No direction of the parameters passes the rank rule.
     #[error(
@@ -228,6 +237,15 @@ pub enum RefineError {
     /// The noise is not positive.
     #[error("the measurement noise must be positive to refine (got {0} mm)")]
     Noise(f64),
+    /// Too many poses fail the outlier test.
+    #[error("the free poses: {0}: check their target ids, their units and the robot description")]
+    TooManyOutliers(TooManyOutliers),
+}
+
+impl From<TooManyOutliers> for RefineError {
+    fn from(e: TooManyOutliers) -> Self {
+        RefineError::TooManyOutliers(e)
+    }
 }
 
 /// A direction of the parameters the free poses do not identify.
@@ -327,6 +345,31 @@ pub struct Refinement {
     pub heldout_rms_before_mm: f64,
     /// Held-out RMS over every fold after it \[mm\].
     pub heldout_rms_after_mm: f64,
+    /// Free poses beyond the outlier fence (Q3 + 3 IQR of the poses' RMS after the
+    /// refinement), left out of it unless `calibrate --keep-outliers`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outliers: Vec<crate::calibration::free_pose::OutlierPose>,
+}
+
+/// A refined RMS beyond this many times what noise alone leaves ([`Refinement::implausible`])
+/// is no calibration of these poses. An effect the model lacks leaves a few times it: the
+/// IRB/L6 simulated with a backlash of 2-3 mrad on every joint and thermal expansion
+/// (`simulate --sim analytic --effects`, seed 11), 5.8 times; target ids swapped in every pose,
+/// 240 times (`tests/it/refine.rs`).
+pub const IMPLAUSIBLE_RMS_OVER_NOISE: f64 = 10.0;
+
+impl Refinement {
+    /// Why the refined model is no calibration of these poses (its RMS beyond
+    /// [`IMPLAUSIBLE_RMS_OVER_NOISE`] times what noise alone leaves), if it is not.
+    pub fn implausible(&self) -> Option<String> {
+        let ratio = self.rms_after_mm / self.expected_rms_after_mm;
+        (!(ratio <= IMPLAUSIBLE_RMS_OVER_NOISE)).then(|| {
+            format!(
+                "the refined model misses the free poses by {:.4} mm RMS, {ratio:.0} times the {:.4} mm noise alone leaves (more than {IMPLAUSIBLE_RMS_OVER_NOISE}): the free poses do not fit the robot's model; check their target ids, their units and that they are this robot's (`axiscal validate` shows each pose's error)",
+                self.rms_after_mm, self.expected_rms_after_mm
+            )
+        })
+    }
 }
 
 /// A refinement: the refined parameters (the caller's layout) and the summary.
@@ -334,6 +377,9 @@ pub struct Refinement {
 pub struct RefinementResult {
     /// Corrections to the calibrated model, in the caller's layout (fixed ones 0).
     pub params: Vec<f64>,
+    /// The poses beyond the outlier fence (indices of the caller's poses; RMS in mm), left out
+    /// of the refinement unless [`RefineOptions::keep_outliers`].
+    pub outliers: Vec<GroupFlag>,
     /// The summary.
     pub summary: Refinement,
 }
@@ -425,6 +471,21 @@ impl<F: Fn(&[f64], &[usize]) -> Option<Vec<f64>> + Sync> Scaled<'_, F> {
     fn at(&self, u: &[f64], poses: &[usize]) -> Option<Vec<f64>> {
         (self.residuals)(&self.embed(u), poses)
     }
+
+    /// The error of a stage `what` that failed at `u`: the first of `poses` the model cannot
+    /// execute there, by its label.
+    fn unexecutable(&self, what: &'static str, u: &[f64], poses: &[usize], labels: &[String]) -> RefineError {
+        let u = if u.len() == self.free.len() {
+            u.to_vec()
+        } else {
+            vec![0.0; self.free.len()]
+        };
+        let pose = poses.iter().find(|&&i| self.at(&u, &[i]).is_none()).map_or_else(
+            || "(none alone: the poses together)".to_string(),
+            |&i| labels[i].clone(),
+        );
+        RefineError::Unexecutable { what, pose }
+    }
 }
 
 /// 3-D RMS per point \[mm\] of residual rows `r` \[m\] (three per point).
@@ -449,12 +510,14 @@ fn check_inputs(poses: usize, options: &RefineOptions) -> Result<(), RefineError
 ///
 /// `residuals(p, poses)` gives `measured - predicted` \[m\] (three rows per measured target) of
 /// the free poses `poses` (indices, in this order) at corrections `p` (layout `layout`, steps
-/// of its central differences `steps`); `targets_per_pose` counts each pose's targets;
+/// of its central differences `steps`); `targets_per_pose` counts each pose's targets and
+/// `labels` names each pose in messages;
 /// `unrefined_sigma` is each parameter's 1-sigma before (internal units; `None` where the
 /// calibration reports none).
 pub fn refine_free_poses<F>(
     residuals: F,
     targets_per_pose: &[usize],
+    labels: &[String],
     layout: &[RefitParameter],
     unrefined_sigma: &[Option<f64>],
     steps: &[f64],
@@ -479,44 +542,52 @@ where
     let sigma_c = options.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
     let all: Vec<usize> = (0..targets_per_pose.len()).collect();
     let zeros = vec![0.0; problem.free.len()];
-    let unexecutable = |what| RefineError::Unexecutable { what };
-    let r0 = DVector::from_vec(problem.at(&zeros, &all).ok_or(unexecutable("residuals"))?);
-    let x_u = sensitivity(|u| problem.at(u, &all), &zeros, &steps_u).ok_or(unexecutable("sensitivity"))?;
-    let dirs = Directions::new(&x_u, sigma_c);
-    let rank = dirs.kept.ncols();
-    let x_z = &x_u * &dirs.kept;
-    let linear = LinearFit::new(&x_z, &DMatrix::zeros(0, rank));
-    let kept = &dirs.kept;
-    let u_of = |z: &[f64]| (kept * DVector::from_column_slice(z)).as_slice().to_vec();
-    // Converged when a step would move the predicted points by less than 1 % of one noise
-    // sigma in all (a fraction of the refined parameters' own sigma): not worth a Jacobian.
-    let negligible = |delta: &DVector<f64>| (&x_z * delta).norm() < 1e-2 * sigma_c;
-    let how = GaussNewtonSteps {
-        fit: "refinement on free poses",
+    let unexecutable = |what, u: &[f64]| problem.unexecutable(what, u, &all, labels);
+    let r0 = DVector::from_vec(
+        problem
+            .at(&zeros, &all)
+            .ok_or_else(|| unexecutable("residuals", &zeros))?,
+    );
+    let x_u =
+        sensitivity(|u| problem.at(u, &all), &zeros, &steps_u).ok_or_else(|| unexecutable("sensitivity", &zeros))?;
+    let rows = PoseRows::new(targets_per_pose);
+    let linearised = Linearised {
+        problem: &problem,
+        r0: &r0,
+        x_u: &x_u,
+        rows: &rows,
+        sigma_c,
         max_steps: options.max_steps,
-        truncate_below: NULL_DIRECTION_TOLERANCE,
-        small_step: Some(&negligible),
-        fit_at_end: true,
+        labels,
     };
-    if rank == 0 {
-        return Err(RefineError::NothingIdentified);
-    }
-    // A z-step of 1e-2 unrefined sigmas: far above rounding, far below curvature.
-    let refined = refine_from_linear(
-        |z| problem.at(&u_of(z), &all),
-        &vec![1e-2; rank],
-        &linear,
-        &r0,
-        r0.len(),
-        how,
-    )
-    .ok_or(unexecutable("refinement"))?;
-    let u = u_of(refined.params.as_slice());
+    let first = linearised.first_fit(&all, options.keep_outliers)?;
+    let peeled = fit_without_outliers(
+        &all,
+        options.keep_outliers,
+        first,
+        |_, kept| linearised.refine_on(kept),
+        |fit| {
+            let r = problem
+                .at(&fit.u, &all)
+                .ok_or_else(|| unexecutable("outlier test", &fit.u))?;
+            Ok(rows.pose_rms_mm(&r))
+        },
+    )?;
+    let OnPoses {
+        which,
+        r0,
+        x_u,
+        dirs,
+        refined,
+        u,
+    } = peeled.fitted;
+    let targets: Vec<usize> = which.iter().map(|&i| targets_per_pose[i]).collect();
+    let rank = dirs.kept.ncols();
     let cov_u = &dirs.dropped * dirs.dropped.transpose()
-        + kept * (refined.fit.normal_inverse.clone() * sigma_c.powi(2)) * kept.transpose();
-    let folds = k_fold(&r0, &x_u, targets_per_pose, options.folds, sigma_c);
+        + &dirs.kept * (refined.fit.normal_inverse.clone() * sigma_c.powi(2)) * dirs.kept.transpose();
+    let folds = k_fold(&r0, &x_u, &targets, options.folds, sigma_c);
     let summary = summarise(&problem, &u, &cov_u, unrefined_sigma, &dirs, options);
-    let points: usize = targets_per_pose.iter().sum();
+    let points: usize = targets.iter().sum();
     let pooled = |f: &dyn Fn(&FoldCheck) -> f64| {
         let ssr: f64 = folds
             .iter()
@@ -526,8 +597,9 @@ where
     };
     Ok(RefinementResult {
         params: problem.embed(&u),
+        outliers: peeled.flags,
         summary: Refinement {
-            poses: targets_per_pose.len(),
+            poses: which.len(),
             poses_left_out: 0,
             points,
             noise_rms_3d_mm: options.noise_rms_3d_mm,
@@ -546,6 +618,150 @@ where
             ..summary
         },
     })
+}
+
+/// Where each pose's residual rows lie (three per target, poses in order).
+struct PoseRows {
+    /// First row of each pose.
+    starts: Vec<usize>,
+    /// Rows of each pose.
+    counts: Vec<usize>,
+}
+
+impl PoseRows {
+    fn new(targets_per_pose: &[usize]) -> Self {
+        let counts: Vec<usize> = targets_per_pose.iter().map(|t| 3 * t).collect();
+        let starts = counts
+            .iter()
+            .scan(0, |at, c| {
+                let start = *at;
+                *at += c;
+                Some(start)
+            })
+            .collect();
+        PoseRows { starts, counts }
+    }
+
+    /// The rows of the poses `which`, in their order.
+    fn of(&self, which: &[usize]) -> Vec<usize> {
+        which
+            .iter()
+            .flat_map(|&i| self.starts[i]..self.starts[i] + self.counts[i])
+            .collect()
+    }
+
+    /// Each pose's 3-D RMS per point \[mm\] of residual rows `r` of every pose \[m\].
+    fn pose_rms_mm(&self, r: &[f64]) -> Vec<f64> {
+        self.starts
+            .iter()
+            .zip(&self.counts)
+            .map(|(&s, &c)| rms_mm(&r[s..s + c]))
+            .collect()
+    }
+}
+
+/// The problem linearised at the unrefined model on every pose: what a refinement on some of
+/// them starts from.
+struct Linearised<'a, F> {
+    problem: &'a Scaled<'a, F>,
+    /// Residuals at the unrefined model, every pose's rows \[m\].
+    r0: &'a DVector<f64>,
+    /// Their sensitivity to the parameters in unrefined sigmas.
+    x_u: &'a DMatrix<f64>,
+    rows: &'a PoseRows,
+    /// Per-coordinate noise \[m\].
+    sigma_c: f64,
+    max_steps: usize,
+    /// Each pose's label.
+    labels: &'a [String],
+}
+
+/// The refinement on some poses.
+struct OnPoses {
+    /// The poses.
+    which: Vec<usize>,
+    /// Their residual rows at the unrefined model.
+    r0: DVector<f64>,
+    /// Their sensitivity.
+    x_u: DMatrix<f64>,
+    /// The directions kept and dropped on them.
+    dirs: Directions,
+    /// The refined fit.
+    refined: super::Refined,
+    /// The refined parameters in unrefined sigmas.
+    u: Vec<f64>,
+}
+
+impl<F: Fn(&[f64], &[usize]) -> Option<Vec<f64>> + Sync> Linearised<'_, F> {
+    /// The refinement on every pose of `all`; when the model cannot execute a pose on the
+    /// way (a gross error pulls the parameters far: a command in other units), on the poses
+    /// within the outlier fence of the unrefined model's residuals (unless `keep_outliers`).
+    fn first_fit(&self, all: &[usize], keep_outliers: bool) -> Result<(OnPoses, Vec<usize>), RefineError> {
+        match self.refine_on(all) {
+            Ok(fit) => Ok((fit, all.to_vec())),
+            Err(e @ RefineError::Unexecutable { .. }) if !keep_outliers => {
+                let rms = self.rows.pose_rms_mm(self.r0.as_slice());
+                let fence = crate::numerics::stats::far_out_fence(&rms);
+                let within: Vec<usize> = all.iter().copied().filter(|&i| rms[i] <= fence).collect();
+                if within.len() == all.len() {
+                    return Err(e);
+                }
+                Ok((self.refine_on(&within)?, within))
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// The rank rule on the poses `which`, the linearised solution and its Gauss-Newton steps.
+    fn refine_on(&self, which: &[usize]) -> Result<OnPoses, RefineError> {
+        let rows = self.rows.of(which);
+        let (r0, x_u) = (self.r0.select_rows(&rows), self.x_u.select_rows(&rows));
+        let dirs = Directions::new(&x_u, self.sigma_c);
+        let rank = dirs.kept.ncols();
+        if rank == 0 {
+            return Err(RefineError::NothingIdentified);
+        }
+        let x_z = &x_u * &dirs.kept;
+        let linear = LinearFit::new(&x_z, &DMatrix::zeros(0, rank));
+        let kept = &dirs.kept;
+        let u_of = |z: &[f64]| (kept * DVector::from_column_slice(z)).as_slice().to_vec();
+        // Converged when a step would move the predicted points by less than 1 % of one noise
+        // sigma in all (a fraction of the refined parameters' own sigma): not worth a Jacobian.
+        let negligible = |delta: &DVector<f64>| (&x_z * delta).norm() < 1e-2 * self.sigma_c;
+        let how = GaussNewtonSteps {
+            fit: "refinement on free poses",
+            max_steps: self.max_steps,
+            truncate_below: NULL_DIRECTION_TOLERANCE,
+            small_step: Some(&negligible),
+            fit_at_end: true,
+        };
+        // Where the model could not execute a pose (the first such parameters).
+        let failed_at = std::sync::Mutex::new(None);
+        let at = |z: &[f64]| {
+            let u = u_of(z);
+            let r = self.problem.at(&u, which);
+            if r.is_none() {
+                if let Ok(mut f) = failed_at.lock() {
+                    f.get_or_insert(u);
+                }
+            }
+            r
+        };
+        // A z-step of 1e-2 unrefined sigmas: far above rounding, far below curvature.
+        let refined = refine_from_linear(at, &vec![1e-2; rank], &linear, &r0, r0.len(), how).ok_or_else(|| {
+            let u = failed_at.lock().ok().and_then(|mut f| f.take()).unwrap_or_default();
+            self.problem.unexecutable("refinement", &u, which, self.labels)
+        })?;
+        let u = u_of(refined.params.as_slice());
+        Ok(OnPoses {
+            which: which.to_vec(),
+            r0,
+            x_u,
+            dirs,
+            refined,
+            u,
+        })
+    }
 }
 
 /// The rank rule as the summary states it.
@@ -679,6 +895,7 @@ fn summarise<F>(
         folds: Vec::new(),
         heldout_rms_before_mm: 0.0,
         heldout_rms_after_mm: 0.0,
+        outliers: Vec::new(),
     }
 }
 
@@ -690,6 +907,10 @@ mod tests {
     use rand_distr::{Distribution, StandardNormal};
 
     const SIGMA_C_M: f64 = 1e-4;
+
+    fn labels(n: usize) -> Vec<String> {
+        (0..n).map(|i| format!("pose {i}")).collect()
+    }
 
     /// Three rows per pose at `t`: `s + p2 t`, `p2 t^2 + p2^2 / 2`, `1e-9 p3 t` with `s = p0 +
     /// p1` (p0, p1 redundant; p3 seen far below the noise).
@@ -734,7 +955,16 @@ mod tests {
             noise_rms_3d_mm: SIGMA_C_M * 3f64.sqrt() * 1e3,
             ..RefineOptions::default()
         };
-        let out = refine_free_poses(residuals, &[1; 40], &layout, &[Some(1e-3); 4], &[1e-6; 4], &options).unwrap();
+        let out = refine_free_poses(
+            residuals,
+            &[1; 40],
+            &labels(40),
+            &layout,
+            &[Some(1e-3); 4],
+            &[1e-6; 4],
+            &options,
+        )
+        .unwrap();
         let r = &out.summary;
         assert_eq!(r.rank, 2);
         assert_eq!(r.dropped.len(), 2);
@@ -781,13 +1011,21 @@ mod tests {
     fn too_few_poses_and_no_noise_are_errors() {
         let layout = [RefitParameter::RowA(1)];
         let f = |_: &[f64], w: &[usize]| Some(vec![0.0; 3 * w.len()]);
-        let e = refine_free_poses(f, &[1; 3], &layout, &[None], &[1e-6], &RefineOptions::default());
+        let e = refine_free_poses(
+            f,
+            &[1; 3],
+            &labels(3),
+            &layout,
+            &[None],
+            &[1e-6],
+            &RefineOptions::default(),
+        );
         assert!(matches!(e, Err(RefineError::TooFewPoses { found: 3, needed: 5 })));
         let zero = RefineOptions {
             noise_rms_3d_mm: 0.0,
             ..RefineOptions::default()
         };
-        let e = refine_free_poses(f, &[1; 8], &layout, &[None], &[1e-6], &zero);
+        let e = refine_free_poses(f, &[1; 8], &labels(8), &layout, &[None], &[1e-6], &zero);
         assert!(matches!(e, Err(RefineError::Noise(_))));
     }
 }

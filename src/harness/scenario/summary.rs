@@ -34,8 +34,23 @@ pub struct CaseSummary {
     /// `failed / trials` (0 without trials).
     #[serde(default)]
     pub failure_rate: f64,
+    /// The first failed trial's (lowest trial index) error and how many failed trials share
+    /// it; absent when none failed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_error: Option<FirstError>,
     /// One entry per metric, in column order.
     pub metrics: Vec<MetricSummary>,
+}
+
+/// A case's first failed trial and how many failed alike.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct FirstError {
+    /// The trial (0-based).
+    pub trial: usize,
+    /// Its error.
+    pub error: String,
+    /// Failed trials with this very error (it included).
+    pub same: usize,
 }
 
 /// What `summary.json` holds.
@@ -121,6 +136,15 @@ fn case_summary(
     let finished: Vec<&TrialRecord> = records.iter().filter(|r| r.case == c).collect();
     let ok: Vec<&TrialRecord> = finished.iter().copied().filter(|r| r.succeeded()).collect();
     let failed = finished.len() - ok.len();
+    let first_error = finished
+        .iter()
+        .filter_map(|r| Some((r.trial, r.error.as_ref()?)))
+        .min_by_key(|(trial, _)| *trial)
+        .map(|(trial, error)| FirstError {
+            trial,
+            error: error.clone(),
+            same: finished.iter().filter(|r| r.error.as_ref() == Some(error)).count(),
+        });
     CaseSummary {
         case: scenario.cases[c].name.clone(),
         trials: finished.len(),
@@ -130,6 +154,7 @@ fn case_summary(
         } else {
             failed as f64 / finished.len() as f64
         },
+        first_error,
         metrics: metric_names
             .iter()
             .enumerate()

@@ -94,13 +94,14 @@ pub struct Verdict {
 impl std::fmt::Display for Verdict {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let word = if self.holds { "ok  " } else { "FAIL" };
-        write!(
-            f,
-            "{word} [{}] {}: observed {:.6}",
-            self.case,
-            self.threshold.describe(),
-            self.observed
-        )?;
+        let (case, threshold) = (&self.case, self.threshold.describe());
+        if self.observed.is_nan() {
+            return write!(
+                f,
+                "{word} [{case}] {threshold}: no value (no trial of the case succeeded)"
+            );
+        }
+        write!(f, "{word} [{case}] {threshold}: observed {:.6}", self.observed)?;
         if !self.holds {
             write!(f, " (exceeds the bound by {:.6})", self.excess)?;
         }
