@@ -363,7 +363,7 @@ impl Refinement {
     /// [`IMPLAUSIBLE_RMS_OVER_NOISE`] times what noise alone leaves), if it is not.
     pub fn implausible(&self) -> Option<String> {
         let ratio = self.rms_after_mm / self.expected_rms_after_mm;
-        (!(ratio <= IMPLAUSIBLE_RMS_OVER_NOISE)).then(|| {
+        (ratio.is_nan() || ratio > IMPLAUSIBLE_RMS_OVER_NOISE).then(|| {
             format!(
                 "the refined model misses the free poses by {:.4} mm RMS, {ratio:.0} times the {:.4} mm noise alone leaves (more than {IMPLAUSIBLE_RMS_OVER_NOISE}): the free poses do not fit the robot's model; check their target ids, their units and that they are this robot's (`axiscal validate` shows each pose's error)",
                 self.rms_after_mm, self.expected_rms_after_mm
@@ -740,10 +740,10 @@ impl<F: Fn(&[f64], &[usize]) -> Option<Vec<f64>> + Sync> Linearised<'_, F> {
         let at = |z: &[f64]| {
             let u = u_of(z);
             let r = self.problem.at(&u, which);
-            if r.is_none() {
-                if let Ok(mut f) = failed_at.lock() {
-                    f.get_or_insert(u);
-                }
+            if r.is_none()
+                && let Ok(mut f) = failed_at.lock()
+            {
+                f.get_or_insert(u);
             }
             r
         };
