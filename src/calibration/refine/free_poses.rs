@@ -573,6 +573,30 @@ where
             Ok(rows.pose_rms_mm(&r))
         },
     )?;
+    let summary = summary_of(
+        &problem,
+        &peeled.fitted,
+        targets_per_pose,
+        unrefined_sigma,
+        sigma_c,
+        options,
+    );
+    Ok(RefinementResult {
+        params: problem.embed(&peeled.fitted.u),
+        outliers: peeled.flags,
+        summary,
+    })
+}
+
+/// The summary of the refinement `fit` (module docs): its sigmas, its held-out check.
+fn summary_of<F: Fn(&[f64], &[usize]) -> Option<Vec<f64>> + Sync>(
+    problem: &Scaled<'_, F>,
+    fit: &OnPoses,
+    targets_per_pose: &[usize],
+    unrefined_sigma: &[Option<f64>],
+    sigma_c: f64,
+    options: &RefineOptions,
+) -> Refinement {
     let OnPoses {
         which,
         r0,
@@ -580,13 +604,13 @@ where
         dirs,
         refined,
         u,
-    } = peeled.fitted;
+    } = fit;
     let targets: Vec<usize> = which.iter().map(|&i| targets_per_pose[i]).collect();
     let rank = dirs.kept.ncols();
     let cov_u = &dirs.dropped * dirs.dropped.transpose()
         + &dirs.kept * (refined.fit.normal_inverse.clone() * sigma_c.powi(2)) * dirs.kept.transpose();
-    let folds = k_fold(&r0, &x_u, &targets, options.folds, sigma_c);
-    let summary = summarise(&problem, &u, &cov_u, unrefined_sigma, &dirs, options);
+    let folds = k_fold(r0, x_u, &targets, options.folds, sigma_c);
+    let summary = summarise(problem, u, &cov_u, unrefined_sigma, dirs, options);
     let points: usize = targets.iter().sum();
     let pooled = |f: &dyn Fn(&FoldCheck) -> f64| {
         let ssr: f64 = folds
@@ -595,29 +619,30 @@ where
             .sum();
         (ssr / points as f64).sqrt()
     };
-    Ok(RefinementResult {
-        params: problem.embed(&u),
-        outliers: peeled.flags,
-        summary: Refinement {
-            poses: which.len(),
-            poses_left_out: 0,
-            points,
-            noise_rms_3d_mm: options.noise_rms_3d_mm,
-            parameters: problem.free.len(),
-            fixed: layout.iter().filter(|p| p.fixed()).map(RefitParameter::name).collect(),
-            rank,
-            rank_rule: RANK_RULE.into(),
-            iterations: refined.iterations,
-            converged: refined.stop != Stop::MaxIterations,
-            rms_before_mm: rms_mm(r0.as_slice()),
-            rms_after_mm: rms_mm(refined.residual.as_slice()),
-            expected_rms_after_mm: options.noise_rms_3d_mm * (1.0 - rank as f64 / (3 * points) as f64).max(0.0).sqrt(),
-            heldout_rms_before_mm: pooled(&|c| c.heldout_rms_before_mm),
-            heldout_rms_after_mm: pooled(&|c| c.heldout_rms_after_mm),
-            folds: folds.into_iter().map(|c| c.check).collect(),
-            ..summary
-        },
-    })
+    Refinement {
+        poses: which.len(),
+        poses_left_out: 0,
+        points,
+        noise_rms_3d_mm: options.noise_rms_3d_mm,
+        parameters: problem.free.len(),
+        fixed: problem
+            .layout
+            .iter()
+            .filter(|p| p.fixed())
+            .map(RefitParameter::name)
+            .collect(),
+        rank,
+        rank_rule: RANK_RULE.into(),
+        iterations: refined.iterations,
+        converged: refined.stop != Stop::MaxIterations,
+        rms_before_mm: rms_mm(r0.as_slice()),
+        rms_after_mm: rms_mm(refined.residual.as_slice()),
+        expected_rms_after_mm: options.noise_rms_3d_mm * (1.0 - rank as f64 / (3 * points) as f64).max(0.0).sqrt(),
+        heldout_rms_before_mm: pooled(&|c| c.heldout_rms_before_mm),
+        heldout_rms_after_mm: pooled(&|c| c.heldout_rms_after_mm),
+        folds: folds.into_iter().map(|c| c.check).collect(),
+        ..summary
+    }
 }
 
 /// Where each pose's residual rows lie (three per target, poses in order).
