@@ -227,6 +227,7 @@ pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<Meas
         .map_err(io_error)?;
     let mut reader = io::BufReader::with_capacity(1 << 16, file);
     let start = io::BufRead::fill_buf(&mut reader).map_err(io_error)?;
+    crate::presets::check_encoding(start).map_err(io_error)?;
     if start.contains(&b'\r') && !start.contains(&b'\n') {
         return Err(MeasurementFileError::CarriageReturnsOnly { path: path.into() });
     }
