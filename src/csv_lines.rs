@@ -35,6 +35,25 @@ pub fn shown_cell(text: &str) -> String {
     format!("{start}…[{count} characters]")
 }
 
+/// A parser's message as an error shows it: each number longer than 20 characters written
+/// short (serde writes a float in full: `1e308` as 309 digits) and each word longer than
+/// [`shown_cell`] keeps whole by its start and length.
+pub fn shown_message(message: &str) -> String {
+    message.split(' ').map(shown_word).collect::<Vec<_>>().join(" ")
+}
+
+/// One word of [`shown_message`].
+fn shown_word(word: &str) -> String {
+    const LONG_NUMBER: usize = 20;
+    let number = word.trim_matches(|c: char| !(c.is_ascii_digit() || c == '-' || c == '.'));
+    if number.len() > LONG_NUMBER
+        && let Ok(v) = number.parse::<f64>()
+    {
+        return word.replacen(number, &crate::measurement::format_f64(v), 1);
+    }
+    shown_cell(word)
+}
+
 /// What a line starts with, as far as record positions care.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum LineKind {
@@ -193,6 +212,22 @@ mod tests {
         let long = "a".repeat(5_000_000);
         assert_eq!(shown_cell(&long), format!("{}…[5000000 characters]", "a".repeat(40)));
         assert_eq!(shown_cell(&"é".repeat(61)).chars().filter(|&c| c == 'é').count(), 40);
+    }
+
+    #[test]
+    fn a_message_shows_long_numbers_short_and_long_words_by_their_start() {
+        let digits = format!("1{}", "0".repeat(308));
+        let message = format!("invalid type: floating point `{digits}`, expected usize");
+        assert_eq!(
+            shown_message(&message),
+            "invalid type: floating point `1e308`, expected usize"
+        );
+        assert_eq!(shown_message("value 12.5 and -3"), "value 12.5 and -3");
+        let long = "b".repeat(100);
+        assert_eq!(
+            shown_message(&format!("unknown `{long}`")),
+            format!("unknown {}", shown_cell(&format!("`{long}`")))
+        );
     }
 
     #[test]

@@ -6,7 +6,7 @@
 
 mod columns;
 
-use super::data::{Measurement, MeasurementSet, RowProblem};
+use super::data::{MAX_LABEL_CHARS, Measurement, MeasurementSet, RowProblem, too_long};
 use crate::csv_lines::{LineTracking, shown_cell};
 use columns::find_columns;
 use std::fs::OpenOptions;
@@ -158,6 +158,21 @@ pub enum MeasurementFileError {
         /// The text found.
         value: String,
     },
+    /// A target's name or a setup's label is longer than [`MAX_LABEL_CHARS`].
+    #[error(
+        "{path}:{line}: column `{column}`: {value:?} is longer than {MAX_LABEL_CHARS} characters: a label names a \
+         target or a setup (`T1`, `A`); shorten it"
+    )]
+    LongLabel {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+        /// The text found, shortened ([`shown_cell`]).
+        value: String,
+    },
     /// Target ids mix integers and names.
     #[error(
         "{path}:{line}: column `target`: {value:?} is {found}, but earlier rows' target ids are {earlier}: ids are either all integers or all names"
@@ -289,7 +304,7 @@ pub fn read_measurements_from<R: io::Read>(
         };
         let target = targets.id(&cells, columns.target)?;
         if let Some(c) = columns.setup {
-            row_setups.push(setups.id(cells.text(c)?));
+            row_setups.push(setups.id(cells.label(c)?));
         }
         rows.push(parse_row(&cells, &columns, target)?);
         lines.push(line);
@@ -373,6 +388,20 @@ impl Cells<'_> {
             })
     }
 
+    /// A label (a target's name, a setup's): at most [`MAX_LABEL_CHARS`] characters.
+    fn label(&self, i: usize) -> Result<&str, MeasurementFileError> {
+        let text = self.text(i)?;
+        if too_long(text) {
+            return Err(MeasurementFileError::LongLabel {
+                path: self.path.into(),
+                line: self.line,
+                column: self.column(i),
+                value: shown_cell(text),
+            });
+        }
+        Ok(text)
+    }
+
     fn number(&self, i: usize) -> Result<f64, MeasurementFileError> {
         let text = self.text(i)?;
         // The error's strings are built only on the error path: this runs for every cell.
@@ -443,7 +472,7 @@ struct TargetIds {
 impl TargetIds {
     /// The id of the `target` cell of `cells`.
     fn id(&mut self, cells: &Cells<'_>, column: usize) -> Result<usize, MeasurementFileError> {
-        let text = cells.text(column)?;
+        let text = cells.label(column)?;
         let integer = text.parse::<usize>().ok();
         let mixed = |found, earlier| MeasurementFileError::MixedTargetIds {
             path: cells.path.into(),

@@ -18,6 +18,7 @@
 //! harmonics) and backlash -> passive couplings -> repeatability jitter.
 
 use crate::kinematics::PhiModel;
+use crate::measurement::format_f64;
 use crate::physics::{
     AxisWobble, BacklashEffect, ComplianceEffect, GearHarmonic, InstrumentScale, LinkMass, PayloadEffect,
     ThermalEffect, apply_wobble, with_gear_harmonics,
@@ -113,7 +114,10 @@ fn per_joint_minus_one(field: &str, v: &[f64], dof: usize) -> Result<(), Effects
         ));
     }
     match v.iter().position(|x| !x.is_finite()) {
-        Some(k) => Err(invalid(format!("{field}[{k}]"), format!("bad value {}", v[k]))),
+        Some(k) => Err(invalid(
+            format!("{field}[{k}]"),
+            format!("bad value {}", format_f64(v[k])),
+        )),
         None => Ok(()),
     }
 }
@@ -124,7 +128,10 @@ fn per_joint(field: &str, v: &[f64], dof: usize, ok: fn(f64) -> bool) -> Result<
         return Err(invalid(field, format!("needs {dof} values, found {}", v.len())));
     }
     match v.iter().position(|x| !ok(*x)) {
-        Some(k) => Err(invalid(format!("{field}[{k}]"), format!("bad value {}", v[k]))),
+        Some(k) => Err(invalid(
+            format!("{field}[{k}]"),
+            format!("bad value {}", format_f64(v[k])),
+        )),
         None => Ok(()),
     }
 }
@@ -140,7 +147,7 @@ fn check_compliance(c: &ComplianceEffect, dof: usize) -> Result<(), EffectsError
     if !(0.0..=1.0).contains(&c.reflected_fraction) {
         return Err(invalid(
             "compliance.reflected_fraction",
-            format!("bad value {}; must be in 0-1", c.reflected_fraction),
+            format!("bad value {}; must be in 0-1", format_f64(c.reflected_fraction)),
         ));
     }
     if c.balancer_fraction.is_empty() {
@@ -210,7 +217,7 @@ impl Effects {
                     "thermal.alpha_per_k",
                     format!(
                         "{} must be finite and within +-{MAX_ALPHA_PER_K} 1/K (steel: 1.2e-5)",
-                        t.alpha_per_k
+                        format_f64(t.alpha_per_k)
                     ),
                 ));
             }
@@ -262,7 +269,7 @@ impl Effects {
         {
             return Err(invalid(
                 "instrument_scale.ppm",
-                format!("{} must be within +-{MAX_SCALE_PPM} ppm (1 %)", s.ppm),
+                format!("{} must be within +-{MAX_SCALE_PPM} ppm (1 %)", format_f64(s.ppm)),
             ));
         }
         Ok(())
@@ -283,7 +290,7 @@ impl Effects {
             if !(m.mass_kg.is_finite() && m.mass_kg > 0.0) {
                 return Err(invalid(
                     format!("link_masses[{k}].mass_kg"),
-                    format!("bad value {}", m.mass_kg),
+                    format!("bad value {}", format_f64(m.mass_kg)),
                 ));
             }
             if !m.com_mm.iter().all(|x| x.is_finite()) {

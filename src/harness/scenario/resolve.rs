@@ -10,7 +10,7 @@ use super::file::{
     TruthSection,
 };
 use super::threshold::Threshold;
-use crate::measurement::{IsotropicNoise, MeasurementModel, TheodolitePair};
+use crate::measurement::{IsotropicNoise, MeasurementModel, TheodolitePair, format_f64};
 use crate::plan::{CalibrationPlan, ValidationPlan};
 use crate::robot::{RobotDescription, RobotModel};
 use crate::sim::Effects;
@@ -100,6 +100,9 @@ pub struct ResolvedScenario {
 /// Metric plotted when the file names none.
 pub const DEFAULT_MAIN_METRIC: &str = "uncal_pos_rms_mm";
 
+/// A threshold beyond this, in any metric's unit, is a slip: no metric reaches it.
+const MAX_THRESHOLD: f64 = 1e9;
+
 impl ResolvedScenario {
     /// Reads `path` and resolves it with `overrides`.
     pub fn from_file(path: &Path, overrides: Overrides) -> Result<Self, ScenarioError> {
@@ -146,8 +149,14 @@ impl ResolvedScenario {
         let cases = resolve_cases(&file, &robot, dir).map_err(|(k, m)| invalid(&k, m))?;
         check_size(&file, trials, cases.len()).map_err(|(k, m)| invalid(k, m))?;
         for (i, t) in file.thresholds.iter().enumerate() {
-            if !t.value.is_finite() {
-                return Err(invalid(&format!("thresholds[{i}].value"), "must be finite".into()));
+            if !(t.value.is_finite() && t.value.abs() <= MAX_THRESHOLD) {
+                return Err(invalid(
+                    &format!("thresholds[{i}].value"),
+                    format!(
+                        "{} must be finite and within +-{MAX_THRESHOLD:e} (no metric reaches it)",
+                        format_f64(t.value)
+                    ),
+                ));
             }
             if let Some(c) = &t.case
                 && !cases.iter().any(|k| &k.name == c)
@@ -235,7 +244,7 @@ fn check_size(file: &ScenarioFile, trials: usize, cases: usize) -> Result<(), (&
     if !(0.0..=1.0).contains(&rate) {
         return Err((
             "max_failure_rate",
-            format!("must be in 0..=1 (a fraction of the trials), got {rate}"),
+            format!("must be in 0..=1 (a fraction of the trials), got {}", format_f64(rate)),
         ));
     }
     if trials.saturating_mul(cases) > MAX_UNITS {
@@ -424,7 +433,7 @@ fn base_plan(section: &PlanSection, robot: &RobotDescription) -> Result<Calibrat
 
 fn scaled(plan: &CalibrationPlan, scale: f64) -> Result<CalibrationPlan, String> {
     if !(scale.is_finite() && scale > 0.0) {
-        return Err(format!("span scale {scale} must be finite and > 0"));
+        return Err(format!("span scale {} must be finite and > 0", format_f64(scale)));
     }
     let mut plan = plan.clone();
     for s in &mut plan.sweeps {
@@ -484,7 +493,7 @@ fn check_iso(iso: &IsoSection, dof: usize) -> Result<(), (&'static str, String)>
     {
         return Err((
             "iso9283.edge_mm",
-            format!("must be above 0 and at most 100000 mm, got {e}"),
+            format!("must be above 0 and at most 100000 mm, got {}", format_f64(e)),
         ));
     }
     if let Some(c) = &iso.centre_cmd {

@@ -13,6 +13,7 @@
 
 use super::points::PointsError;
 use super::wide::{Pose, rows_of};
+use crate::csv_lines::shown_cell;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -49,7 +50,7 @@ pub fn parse(text: &str, path: &Path, options: &RctOptions) -> Result<Measuremen
     };
     let mut poses: Vec<Pose> = Vec::with_capacity(entries.len());
     for (i, (key, entry)) in entries.iter().enumerate() {
-        let name = key_name(key);
+        let name = shown_cell(&key_name(key));
         let error = |field: &str, message: String| file_error(format!("entry `{name}`, field `{field}`: {message}"));
         let (cmd, markers) = observation(entry, options, &error)?;
         poses.push((i + 1, cmd, markers));

@@ -166,7 +166,7 @@ impl Table {
             if self.header[..k].contains(name) {
                 return Err(PointsError::File {
                     path: self.path.clone(),
-                    message: format!("column {name:?} appears twice"),
+                    message: format!("column {:?} appears twice", shown_cell(name)),
                 });
             }
         }
@@ -182,7 +182,11 @@ impl Table {
     pub fn required(&self, names: &[&str]) -> Result<usize, PointsError> {
         self.column(names).ok_or_else(|| PointsError::File {
             path: self.path.clone(),
-            message: format!("no column {} (columns: {})", names.join(" or "), self.header.join(",")),
+            message: format!(
+                "no column {} (columns: {})",
+                names.join(" or "),
+                self.header.iter().map(|h| shown_cell(h)).collect::<Vec<_>>().join(",")
+            ),
         })
     }
 
@@ -191,7 +195,7 @@ impl Table {
         row.get(column).ok_or_else(|| PointsError::Row {
             path: self.path.clone(),
             line: row.line,
-            field: self.header[column].clone(),
+            field: shown_cell(&self.header[column]),
             message: "missing (the row is shorter than the header)".into(),
         })
     }
@@ -225,7 +229,7 @@ impl Table {
         PointsError::Row {
             path: self.path.clone(),
             line,
-            field: self.header.get(column).cloned().unwrap_or_default(),
+            field: shown_cell(self.header.get(column).map_or("", String::as_str)),
             message,
         }
     }
