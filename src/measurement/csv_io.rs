@@ -7,7 +7,7 @@
 mod columns;
 
 use super::data::{MAX_LABEL_CHARS, Measurement, MeasurementSet, RowProblem, too_long};
-use crate::csv_lines::{LineTracking, shown_cell};
+use crate::csv_lines::{LineIndex, LineTracking, commented_row, shown_cell};
 use columns::find_columns;
 use std::fs::OpenOptions;
 use std::io;
@@ -103,6 +103,17 @@ pub enum MeasurementFileError {
         found: usize,
         /// N.
         expected: usize,
+    },
+    /// A `#` line among the rows has as many fields as the row above it: a data row whose
+    /// experiment id starts with `#`, which the reader would skip as a comment.
+    #[error("{path}:{line}: {}", commented_row(*fields))]
+    CommentedRow {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// Its comma-separated fields.
+        fields: usize,
     },
     /// The lines end in a lone carriage return (classic Mac OS), which the reader does not split.
     #[error(
@@ -296,6 +307,7 @@ pub fn read_measurements_from<R: io::Read>(
             continue;
         }
         let line = line_at(record.position());
+        commented_row_before(&index, line, path)?;
         let cells = Cells {
             record: &record,
             header: &header,
@@ -309,6 +321,7 @@ pub fn read_measurements_from<R: io::Read>(
         rows.push(parse_row(&cells, &columns, target)?);
         lines.push(line);
     }
+    commented_row_before(&index, u64::MAX, path)?;
     if rows.is_empty() {
         return Err(MeasurementFileError::NoRows {
             path: path.into(),
@@ -342,6 +355,18 @@ pub fn read_measurements_from<R: io::Read>(
         .with_target_names(targets.names)
         .with_setups(row_setups, setups.names)
         .with_lines(lines))
+}
+
+/// Refuses a `#` line before `line` that looks like a data row ([`LineIndex::commented_row`]).
+fn commented_row_before(index: &LineIndex, line: u64, path: &Path) -> Result<(), MeasurementFileError> {
+    match index.commented_row() {
+        Some((at, fields)) if at < line => Err(MeasurementFileError::CommentedRow {
+            path: path.into(),
+            line: at,
+            fields,
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// Labels numbered 0, 1, ... in the order they first appear.
