@@ -454,6 +454,19 @@ const MAX_COORDINATE_MM: f64 = 1e7;
 /// A command beyond this \[deg or mm\] is no joint's (2,800 turns, 1 km).
 const MAX_COMMAND: f64 = 1e6;
 
+/// The range a measured coordinate `value_mm` is outside, in words; `None` within
+/// [`MAX_COORDINATE_MM`].
+pub(crate) fn coordinate_beyond(value_mm: f64) -> Option<&'static str> {
+    (value_mm.abs() > MAX_COORDINATE_MM)
+        .then_some("+-1e7 mm (10 km: farther than any instrument measures; coordinates in micrometres?)")
+}
+
+/// The range a command `value` (deg or mm) is outside, in words; `None` within
+/// [`MAX_COMMAND`].
+pub(crate) fn command_beyond(value: f64) -> Option<&'static str> {
+    (value.abs() > MAX_COMMAND).then_some("+-1e6 (deg or mm: no joint turns or slides that far; a dummy value?)")
+}
+
 /// What is wrong with row `m` on its own (not its key), `first` being the joint its
 /// experiment's first row moves.
 fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowProblem> {
@@ -477,22 +490,27 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
         return Some(RowProblem::NotFinite { column, value });
     }
     let axes = ["x_mm", "y_mm", "z_mm"];
-    if let Some((axis, &value)) = axes
+    if let Some((axis, &value, expected)) = axes
         .iter()
         .zip(&m.position_mm)
-        .find(|(_, v)| v.abs() > MAX_COORDINATE_MM)
+        .find_map(|(axis, v)| Some((axis, v, coordinate_beyond(*v)?)))
     {
         return Some(RowProblem::OutOfRange {
             column: (*axis).into(),
             value,
-            expected: "+-1e7 mm (10 km: farther than any instrument measures; coordinates in micrometres?)",
+            expected,
         });
     }
-    if let Some((k, &value)) = m.cmd.iter().enumerate().find(|(_, v)| v.abs() > MAX_COMMAND) {
+    if let Some((k, &value, expected)) = m
+        .cmd
+        .iter()
+        .enumerate()
+        .find_map(|(k, v)| Some((k, v, command_beyond(*v)?)))
+    {
         return Some(RowProblem::OutOfRange {
             column: format!("cmd_{}", k + 1),
             value,
-            expected: "+-1e6 (deg or mm: no joint turns or slides that far; a dummy value?)",
+            expected,
         });
     }
     if m.payload_kg < 0.0 {
