@@ -7,6 +7,9 @@
 //! 1-based line of its first content line. Offsets are asked in increasing order (records
 //! come in file order), so the index forgets every line start behind the last offset asked:
 //! time is linear in the file and memory bounded by the reader's look-ahead.
+//!
+//! The same pass counts each line's commas, to find a `#` line that is a data row (an
+//! experiment id starting with `#`): [`LineIndex::commented_row`].
 
 use std::cell::RefCell;
 use std::collections::VecDeque;
@@ -35,6 +38,25 @@ pub fn shown_cell(text: &str) -> String {
     format!("{start}…[{count} characters]")
 }
 
+/// A parser's message as an error shows it: each number longer than 20 characters written
+/// short (serde writes a float in full: `1e308` as 309 digits) and each word longer than
+/// [`shown_cell`] keeps whole by its start and length.
+pub fn shown_message(message: &str) -> String {
+    message.split(' ').map(shown_word).collect::<Vec<_>>().join(" ")
+}
+
+/// One word of [`shown_message`].
+fn shown_word(word: &str) -> String {
+    const LONG_NUMBER: usize = 20;
+    let number = word.trim_matches(|c: char| !(c.is_ascii_digit() || c == '-' || c == '.'));
+    if number.len() > LONG_NUMBER
+        && let Ok(v) = number.parse::<f64>()
+    {
+        return word.replacen(number, &crate::measurement::format_f64(v), 1);
+    }
+    shown_cell(word)
+}
+
 /// What a line starts with, as far as record positions care.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum LineKind {
@@ -42,8 +64,10 @@ enum LineKind {
     Unknown,
     /// Starts with `\r`: blank if `\n` follows.
     CarriageReturn,
-    /// A `#` comment or an empty line: the csv reader skips it before a record.
+    /// An empty line: the csv reader skips it before a record.
     Skipped,
+    /// A `#` comment line: skipped too.
+    Comment,
     /// Anything else.
     Content,
 }
@@ -56,6 +80,17 @@ struct Index {
     starts: VecDeque<(u64, LineKind)>,
     /// Line starts already dropped from the front of `starts`.
     dropped: u64,
+    /// Commas on the line being read so far.
+    commas: usize,
+    /// Fields of the line being read so far that are numbers (as far as their bytes show).
+    numbers: usize,
+    /// Bytes of the field being read other than white space, and whether all could be a number's.
+    field: (usize, bool),
+    /// Fields (commas + 1) of the last content line ended.
+    content_fields: Option<usize>,
+    /// The first comment line with as many fields as the content line before it: its line and
+    /// fields ([`looks_like_row`]).
+    commented_row: Option<(u64, usize)>,
 }
 
 impl Index {
@@ -66,7 +101,8 @@ impl Index {
                 match last.1 {
                     LineKind::Unknown => {
                         last.1 = match b {
-                            b'#' | b'\n' => LineKind::Skipped,
+                            b'#' => LineKind::Comment,
+                            b'\n' => LineKind::Skipped,
                             b'\r' => LineKind::CarriageReturn,
                             _ => LineKind::Content,
                         }
@@ -81,11 +117,53 @@ impl Index {
                     _ => {}
                 }
             }
+            self.note_field_byte(b);
             if b == b'\n' {
+                self.end_line();
                 self.starts.push_back((at + 1, LineKind::Unknown));
             }
         }
         self.passed += bytes.len() as u64;
+    }
+
+    /// Counts the commas and number fields of the line being read.
+    fn note_field_byte(&mut self, b: u8) {
+        match b {
+            b',' | b'\n' => {
+                if self.field.0 > 0 && self.field.1 {
+                    self.numbers += 1;
+                }
+                self.commas += usize::from(b == b',');
+                self.field = (0, true);
+            }
+            b' ' | b'\t' | b'\r' => {}
+            _ => {
+                self.field.0 += 1;
+                self.field.1 &= b.is_ascii_digit() || matches!(b, b'+' | b'-' | b'.' | b'e' | b'E');
+            }
+        }
+    }
+
+    /// Notes the fields of the line being read (the last one started), which just ended.
+    fn end_line(&mut self) {
+        if let Some(found) = self.wide_comment() {
+            self.commented_row.get_or_insert(found);
+        }
+        if self.starts.back().is_some_and(|l| l.1 == LineKind::Content) {
+            self.content_fields = Some(self.commas + 1);
+        }
+        self.commas = 0;
+        self.numbers = 0;
+    }
+
+    /// The line being read, when it is a comment that looks like a row after the content line
+    /// before it ([`looks_like_row`]): its 1-based line and fields.
+    fn wide_comment(&self) -> Option<(u64, usize)> {
+        let kind = self.starts.back()?.1;
+        let fields = self.commas + 1;
+        let numbers = self.numbers + usize::from(self.field.0 > 0 && self.field.1);
+        (kind == LineKind::Comment && self.content_fields.is_some_and(|c| looks_like_row(fields, numbers, c)))
+            .then(|| (self.dropped + self.starts.len() as u64, fields))
     }
 }
 
@@ -102,7 +180,8 @@ impl LineIndex {
         // Drop every line that starts before `offset`, then every skipped line that has a
         // successor (a trailing comment without a newline is where the record would start).
         while let Some(&(start, kind)) = index.starts.front() {
-            let skip_blank = start >= offset && kind == LineKind::Skipped && index.starts.len() > 1;
+            let skipped = matches!(kind, LineKind::Skipped | LineKind::Comment);
+            let skip_blank = start >= offset && skipped && index.starts.len() > 1;
             // The csv reader ends a CRLF record at `\r`: the next record's read starts at the
             // `\n`, one byte before its line (a line of that single byte would be blank).
             let before = index.starts.get(1).is_some_and(|next| next.0 <= offset + 1);
@@ -115,6 +194,31 @@ impl LineIndex {
         }
         index.dropped + 1
     }
+
+    /// The first `#` line with as many comma-separated fields as the line before it that is
+    /// not a comment or blank (the header or a data row), most of them numbers
+    /// ([`looks_like_row`]), among the bytes read so far: its 1-based line and fields. The csv
+    /// reader skips it as a comment, but it looks like a data row whose first cell starts with
+    /// `#` (an experiment `#axis1`), which would be dropped.
+    pub fn commented_row(&self) -> Option<(u64, usize)> {
+        let index = self.0.borrow();
+        index.commented_row.or_else(|| index.wide_comment())
+    }
+}
+
+/// Whether a `#` line of `fields` comma-separated fields, `numbers` of them numbers, is a data
+/// row of a table whose rows have `columns` fields: as many fields, most of them numbers (a
+/// remark in words, even with commas, is not).
+pub fn looks_like_row(fields: usize, numbers: usize, columns: usize) -> bool {
+    fields == columns && 2 * numbers > fields
+}
+
+/// Why a `#` line of `fields` fields among a table's rows is refused ([`LineIndex::commented_row`]).
+pub fn commented_row(fields: usize) -> String {
+    format!(
+        "the line starts with `#` but has {fields} fields, most of them numbers: a comment line must not look like \
+         a data row (read as a comment, it would be dropped); rename the experiment, or quote the cell (`\"#axis1\"`)"
+    )
 }
 
 /// A reader that notes line starts in a [`LineIndex`] as bytes pass through.
@@ -193,6 +297,22 @@ mod tests {
         let long = "a".repeat(5_000_000);
         assert_eq!(shown_cell(&long), format!("{}…[5000000 characters]", "a".repeat(40)));
         assert_eq!(shown_cell(&"é".repeat(61)).chars().filter(|&c| c == 'é').count(), 40);
+    }
+
+    #[test]
+    fn a_message_shows_long_numbers_short_and_long_words_by_their_start() {
+        let digits = format!("1{}", "0".repeat(308));
+        let message = format!("invalid type: floating point `{digits}`, expected usize");
+        assert_eq!(
+            shown_message(&message),
+            "invalid type: floating point `1e308`, expected usize"
+        );
+        assert_eq!(shown_message("value 12.5 and -3"), "value 12.5 and -3");
+        let long = "b".repeat(100);
+        assert_eq!(
+            shown_message(&format!("unknown `{long}`")),
+            format!("unknown {}", shown_cell(&format!("`{long}`")))
+        );
     }
 
     #[test]

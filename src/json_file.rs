@@ -187,7 +187,7 @@ fn placed<T: DeserializeOwned>(text: &str, e: &serde_json::Error) -> JsonFileErr
 fn message_of(e: &serde_json::Error) -> String {
     let text = e.to_string();
     let suffix = format!(" at line {} column {}", e.line(), e.column());
-    text.strip_suffix(&suffix).unwrap_or(&text).to_owned()
+    crate::csv_lines::shown_message(text.strip_suffix(&suffix).unwrap_or(&text))
 }
 
 /// A `null` where a number belongs is how axiscal writes NaN: say what to write instead.

@@ -187,7 +187,10 @@ pub fn resolve(given: &Path, accepted: &[Kind]) -> Result<PathBuf, UnknownPreset
                 given: text.into_owned(),
                 problem: match found {
                     Some(p) => format!("a shipped {}, for {}, not a {what}", p.kind.words(), p.kind.taken_by()),
-                    None => format!("no such file, and not a shipped {what}"),
+                    None => match std::fs::metadata(given) {
+                        Ok(meta) => not_regular(&meta).to_owned(),
+                        Err(_) => format!("no such file, and not a shipped {what}"),
+                    },
                 },
                 what: accepted
                     .iter()
@@ -226,7 +229,8 @@ pub fn shipped_text(path: &Path) -> Option<&'static str> {
 }
 
 /// Reads a text file, or serves a shipped file's text for its virtual path (a virtual path
-/// that names no shipped file is "not found").
+/// that names no shipped file is "not found"). A file in another encoding is refused with
+/// what to do ([`check_encoding`]).
 pub fn read_text(path: &Path) -> std::io::Result<String> {
     if path.starts_with(SHIPPED_ROOT) {
         return shipped_text(path)
@@ -234,26 +238,109 @@ pub fn read_text(path: &Path) -> std::io::Result<String> {
             .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "no such shipped file"));
     }
     regular_file(path)?;
-    std::fs::read_to_string(path)
+    let bytes = std::fs::read(path)?;
+    check_encoding(&bytes)?;
+    String::from_utf8(bytes).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text (byte {} is not UTF-8): save it as UTF-8",
+                e.utf8_error().valid_up_to() + 1
+            ),
+        )
+    })
 }
 
 /// Refuses an input that is not a regular file (after links): a device never ends
 /// (`/dev/zero`), a pipe is read once and may block, a folder has no text. Checked before
 /// the file is opened, so a pipe with no writer does not hang the check.
 pub fn regular_file(path: &Path) -> std::io::Result<()> {
-    if std::fs::metadata(path)?.is_file() {
+    let meta = std::fs::metadata(path)?;
+    if meta.is_file() {
         Ok(())
     } else {
         Err(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
-            "not a regular file (a device, a pipe or a folder): save the data to a file and name that",
+            not_regular(&meta),
         ))
     }
+}
+
+/// What an existing path that is not a regular file is, and what to do, in words.
+fn not_regular(meta: &std::fs::Metadata) -> &'static str {
+    if meta.is_dir() {
+        "a folder, not a regular file: name a file in it"
+    } else {
+        "not a regular file (a device or a pipe): save the data to a file and name that"
+    }
+}
+
+/// The bytes a text file starts with, refused when they are UTF-16 or UTF-32 (every text
+/// reader reads UTF-8): a byte-order mark says so, and so do NUL bytes in a quarter or more of
+/// the first KiB (UTF-16 of Latin text has one in every other byte, UTF-32 three in four; no
+/// UTF-8 text has them). A UTF-8 byte-order mark is fine (the readers skip it).
+pub fn check_encoding(start: &[u8]) -> std::io::Result<()> {
+    const MARKS: [(&[u8], &str); 4] = [
+        (&[0xFF, 0xFE, 0, 0], "UTF-32 (byte-order mark FF FE 00 00)"),
+        (&[0, 0, 0xFE, 0xFF], "UTF-32 (byte-order mark 00 00 FE FF)"),
+        (&[0xFF, 0xFE], "UTF-16 (byte-order mark FF FE)"),
+        (&[0xFE, 0xFF], "UTF-16 (byte-order mark FE FF)"),
+    ];
+    let head = &start[..start.len().min(1024)];
+    let nuls = head.iter().filter(|&&b| b == 0).count();
+    let encoding = match MARKS.iter().find(|(mark, _)| start.starts_with(mark)) {
+        Some((_, words)) => (*words).to_owned(),
+        None if 4 * nuls < head.len().max(1) => return Ok(()),
+        None => format!(
+            "{} ({nuls} of its first {} bytes are NUL; or it is not text)",
+            if 8 * nuls > 5 * head.len() { "UTF-32" } else { "UTF-16" },
+            head.len()
+        ),
+    };
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        format!("the file is {encoding}; save it as UTF-8"),
+    ))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// UTF-16 and UTF-32, with a byte-order mark or without (NUL bytes), are named; UTF-8, with
+    /// its byte-order mark too, passes.
+    #[test]
+    fn utf16_and_utf32_are_named() {
+        let text = "experiment,step\naxis1,0\n";
+        let utf16_le: Vec<u8> = text.encode_utf16().flat_map(u16::to_le_bytes).collect();
+        let utf16_be: Vec<u8> = text.encode_utf16().flat_map(u16::to_be_bytes).collect();
+        let utf32_le: Vec<u8> = text.chars().flat_map(|c| u32::from(c).to_le_bytes()).collect();
+        let cases: [(Vec<u8>, &str); 5] = [
+            (
+                [&[0xFF, 0xFE][..], &utf16_le].concat(),
+                "UTF-16 (byte-order mark FF FE)",
+            ),
+            (
+                [&[0xFE, 0xFF][..], &utf16_be].concat(),
+                "UTF-16 (byte-order mark FE FF)",
+            ),
+            (
+                [&[0xFF, 0xFE, 0, 0][..], &utf32_le].concat(),
+                "UTF-32 (byte-order mark FF FE 00 00)",
+            ),
+            (utf16_be, "UTF-16 (24 of its first 48 bytes are NUL"),
+            (utf32_le, "UTF-32 (72 of its first 96 bytes are NUL"),
+        ];
+        for (bytes, words) in cases {
+            let e = check_encoding(&bytes).unwrap_err().to_string();
+            assert!(
+                e.starts_with(&format!("the file is {words}")) && e.ends_with("save it as UTF-8"),
+                "{e}"
+            );
+        }
+        assert!(check_encoding(format!("\u{feff}{text}").as_bytes()).is_ok());
+        assert!(check_encoding(b"").is_ok());
+    }
 
     #[test]
     fn the_list_holds_every_shipped_toml_file_once() {

@@ -1,6 +1,7 @@
 //! Reading TOML input files (robot descriptions, truth models, effects, scenarios): one error
 //! type naming the file, with the parser's line, column and key in the message.
 
+use crate::csv_lines::{shown_cell, shown_message};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
@@ -131,13 +132,14 @@ fn one_line_message(e: &toml::de::Error, text: &str) -> String {
         .filter(|l| !l.is_empty())
         .collect::<Vec<_>>()
         .join("; ");
+    let message = shown_message(&message);
     let Some(span) = e.span() else { return message };
     let start = span.start.min(text.len());
     let before = &text[..text.floor_char_boundary(start)];
     let line = before.matches('\n').count() + 1;
     let line_start = before.rfind('\n').map_or(0, |i| i + 1);
     let column = before[line_start..].chars().count() + 1;
-    let source = text[line_start..].lines().next().unwrap_or("").trim();
+    let source = shown_cell(text[line_start..].lines().next().unwrap_or("").trim());
     format!("line {line}, column {column}: {message} (at `{source}`)")
 }
 

@@ -115,7 +115,7 @@ fn compensated_columns(row: &mut Vec<String>, c: &CompensatedPose, desc: &RobotD
     row.push(format!("{:.3e}", c.ik.position_error_m * 1e3));
     row.push(format!("{:.3e}", c.ik.orientation_error_rad));
     let t = c.nominal_pose_to_send.translation.vector * 1e3;
-    let (r, pi, y) = c.nominal_pose_to_send.rotation.euler_angles();
+    let [r, pi, y] = axiscal::kinematics::roll_pitch_yaw(&c.nominal_pose_to_send.rotation);
     row.extend([t.x, t.y, t.z].iter().map(|v| format!("{v:.6}")));
     row.extend([r, pi, y].iter().map(|v| format!("{:.9}", v.to_degrees())));
 }

@@ -154,7 +154,7 @@ fn header(common: &Common, left_out: &[Unrepresented], dev: &ChainDeviation) -> 
 
 fn ur_kinematics(a: UrArgs) -> Result<()> {
     let (desc, cal, outputs) = inputs(&a.common, &[("--like", &a.like)])?;
-    let text = std::fs::read_to_string(&a.like).with_context(|| format!("{}: cannot read", a.like.display()))?;
+    let text = axiscal::presets::read_text(&a.like).with_context(|| format!("{}: cannot read", a.like.display()))?;
     let reference = ur::UrKinematics::parse(&text, &a.like.display().to_string())?;
     let out = ur::export(&cal, &desc, &reference, a.hash.as_deref())?;
     refuse_inexact(

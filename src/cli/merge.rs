@@ -56,6 +56,7 @@ pub fn run(args: Args) -> Result<()> {
     let records = complete_run(&scenario, records).context("merging the shards")?;
     scenario.check_metrics(&names, &first)?;
     let outputs = Outputs::new(args.force).inputs_in("a shard", &args.dirs, &[RESOLVED_FILE, TRIALS_FILE]);
+    Outputs::check_folder(&args.out)?;
     for name in RUN_FILES {
         outputs.check_not_input(&args.out.join(name))?;
     }

@@ -124,9 +124,22 @@ impl Outputs {
         Ok(())
     }
 
+    /// Refuses a folder output `dir` (`--out`) that exists and is not a folder: the command
+    /// writes several files into it.
+    pub fn check_folder(dir: &Path) -> Result<()> {
+        if dir.metadata().is_ok_and(|meta| !meta.is_dir()) {
+            bail!(
+                "--out `{}` is a file; --out names a folder (the command writes its files into it): choose another name",
+                dir.display()
+            );
+        }
+        Ok(())
+    }
+
     /// Refuses a folder output `dir` that exists and is not empty, unless `--force` (then its
     /// files are replaced one by one as they are written).
     pub fn check_empty_dir(&self, dir: &Path) -> Result<()> {
+        Self::check_folder(dir)?;
         let not_empty = std::fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_some());
         if not_empty && !self.force {
             bail!("{} is not empty; pass --force to replace its files", dir.display());
@@ -136,6 +149,7 @@ impl Outputs {
 
     /// [`Outputs::check`] for each of `names` in `dir`, before any of them is written.
     pub fn check_in(&self, dir: &Path, names: &[&str]) -> Result<()> {
+        Self::check_folder(dir)?;
         names.iter().try_for_each(|n| self.check(&dir.join(n)))
     }
 
@@ -370,6 +384,7 @@ impl Outputs {
     /// A set of files to write into `dir` (created if missing), each checked as
     /// [`Outputs::check`] would.
     pub fn staged_in(&self, dir: &Path) -> Result<StagedSet<'_>> {
+        Self::check_folder(dir)?;
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         remove_orphaned_temporaries(dir);
         Ok(StagedSet {

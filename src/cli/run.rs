@@ -76,6 +76,7 @@ pub fn run(args: Args) -> Result<()> {
     let plan = resolve(&args)?;
     super::checks::description_units(&plan.scenario.robot, &args.scenario, args.skip_unit_check)?;
     let outputs = Outputs::new(args.force).input("SCENARIO", &args.scenario);
+    Outputs::check_folder(&plan.out)?;
     for name in RUN_FILES {
         outputs.check_not_input(&plan.out.join(name))?;
     }

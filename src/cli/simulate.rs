@@ -12,7 +12,7 @@ use axiscal::sim::{RapierArm, RapierArmOptions, SpanSearch, visible_sweep_span};
 use nalgebra::Point3;
 use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The truth without `--truth`: the paper's robot for the ASEA IRB/L6's description, else the
 /// description perturbed by the shipped `default-perturbation.toml`, drawn from its own stream of `seed`
@@ -164,7 +164,7 @@ pub fn run(args: Args) -> Result<()> {
             desc.dof()
         );
     }
-    let instrument = instrument_model(args.instrument, &args.station, &desc)?;
+    let instrument = instrument_model(args.instrument, &args.station, &desc, &args.robot)?;
     let plan = super::plan::campaign_plan(&desc, args.plan.as_deref())?;
     let validation = ValidationPlan {
         poses: args.validation_poses,
@@ -230,7 +230,12 @@ pub fn run(args: Args) -> Result<()> {
 /// The measurement model of `kind` for `desc`: two theodolites at `stations_mm` (none given:
 /// the description's, `plan::instrument_stations_m`) calibrated around its base (their
 /// calibration printed to stderr with `--verbose`), or isotropic noise.
-fn instrument_model(kind: Instrument, stations_mm: &[[f64; 3]], desc: &RobotDescription) -> Result<MeasurementModel> {
+fn instrument_model(
+    kind: Instrument,
+    stations_mm: &[[f64; 3]],
+    desc: &RobotDescription,
+    robot: &Path,
+) -> Result<MeasurementModel> {
     let stations_m: Vec<Point3<f64>> = match stations_mm {
         [] => axiscal::plan::instrument_stations_m(desc).context("placing the theodolites")?,
         given => given.iter().map(|s| Point3::from(*s) * 1e-3).collect(),
@@ -238,8 +243,16 @@ fn instrument_model(kind: Instrument, stations_mm: &[[f64; 3]], desc: &RobotDesc
     Ok(match (kind, stations_m.as_slice()) {
         (Instrument::Theodolite, &[left_m, right_m]) => {
             let (model, calibration) =
-                MeasurementModel::theodolites_around([left_m, right_m], &desc.placement.origin_m())
-                    .context("calibrating the theodolites")?;
+                MeasurementModel::theodolites_around([left_m, right_m], &desc.placement.origin_m()).map_err(|e| {
+                    let origin = match stations_mm {
+                        [] => axiscal::plan::stations_origin(desc, robot),
+                        _ => "--station".to_owned(),
+                    };
+                    anyhow::anyhow!(
+                        "{origin}: {}",
+                        axiscal::plan::theodolite_stations_problem(&[left_m, right_m], &e)
+                    )
+                })?;
             if super::verbose() {
                 eprintln!("{calibration}");
             }

@@ -11,8 +11,7 @@ use nalgebra::{Isometry3, Vector3};
 
 /// `(a, b, c)` of a pose's orientation, `R = Rz(c) Ry(b) Rx(a)` \[rad\].
 pub fn abc(pose: &Isometry3<f64>) -> [f64; 3] {
-    let (a, b, c) = pose.rotation.euler_angles();
-    [a, b, c]
+    crate::kinematics::roll_pitch_yaw(&pose.rotation)
 }
 
 /// `angle` wrapped to (-pi, pi].

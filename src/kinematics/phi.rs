@@ -153,6 +153,25 @@ pub fn link_from_phi(phi_rad: f64) -> Isometry3<f64> {
     frame_from_phi(phi_rad, 0.0, 0.0)
 }
 
+/// Roll, pitch and yaw \[rad\] of `rotation = Rz(yaw) Ry(pitch) Rx(roll)` (nalgebra's
+/// `from_euler_angles`, URDF's `rpy`), to round-off at every pitch.
+///
+/// nalgebra's `euler_angles` takes the pitch as `asin(-R20)`, which near +-90 deg loses half
+/// the digits (an error of `sqrt(2 eps)`, 2e-8 rad: 0.04 um over a 2 m arm). The pitch is
+/// taken here from `atan2` of its sine and cosine, the yaw from the first column, and the roll
+/// from what is left once they are taken out: near +-90 deg the yaw is ill-determined, but any
+/// error in it is a turn about the same axis as the roll there, which the roll takes up, so
+/// the three angles rebuild `rotation` to round-off.
+pub fn roll_pitch_yaw(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
+    let r = rotation.to_rotation_matrix();
+    let (r00, r10, r20) = (r[(0, 0)], r[(1, 0)], r[(2, 0)]);
+    let pitch = (-r20).atan2(r00.hypot(r10));
+    let yaw = r10.atan2(r00);
+    let rest = (UnitQuaternion::from_euler_angles(0.0, pitch, yaw).inverse() * rotation).to_rotation_matrix();
+    let roll = rest[(2, 1)].atan2(rest[(2, 2)]);
+    [roll, pitch, yaw]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -232,5 +251,35 @@ mod tests {
         );
         let p = joint_motion(JointKind::Prismatic, 0.2) * link_from_phi(0.3);
         assert_relative_eq!(p * Point3::origin(), Point3::new(0.0, 0.0, 0.2), epsilon = 1e-15);
+    }
+
+    /// Roll, pitch and yaw rebuild the rotation to round-off at every pitch, also at and within
+    /// 1e-7 of +-90 deg, where nalgebra's `euler_angles` is off by up to 2e-8 rad (the FANUC
+    /// tool frame of `describe` was).
+    #[test]
+    fn roll_pitch_yaw_rebuild_the_rotation_near_the_lock_too() {
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        let pitches = [
+            0.3,
+            -1.2,
+            half_pi,
+            -half_pi,
+            half_pi - 1e-9,
+            -half_pi + 3e-8,
+            half_pi + 1e-7,
+        ];
+        let mut nalgebra_worst: f64 = 0.0;
+        for pitch in pitches {
+            for (roll, yaw) in [(0.0, 0.0), (2.356, 0.785), (-3.0, 1.0), (0.4, -2.9), (0.1, 0.2)] {
+                let r = UnitQuaternion::from_euler_angles(roll, pitch, yaw);
+                let [a, b, c] = roll_pitch_yaw(&r);
+                let back = UnitQuaternion::from_euler_angles(a, b, c);
+                assert!(back.angle_to(&r) < 1e-15, "pitch {pitch}: {}", back.angle_to(&r));
+                assert!(b.abs() <= half_pi, "{b}");
+                let (a, b, c) = r.euler_angles();
+                nalgebra_worst = nalgebra_worst.max(UnitQuaternion::from_euler_angles(a, b, c).angle_to(&r));
+            }
+        }
+        assert!(nalgebra_worst > 1e-9, "the grid misses the lock: {nalgebra_worst}");
     }
 }

@@ -6,8 +6,8 @@
 
 mod columns;
 
-use super::data::{Measurement, MeasurementSet, RowProblem};
-use crate::csv_lines::{LineTracking, shown_cell};
+use super::data::{MAX_LABEL_CHARS, Measurement, MeasurementSet, RowProblem, too_long};
+use crate::csv_lines::{LineIndex, LineTracking, commented_row, shown_cell};
 use columns::find_columns;
 use std::fs::OpenOptions;
 use std::io;
@@ -104,6 +104,17 @@ pub enum MeasurementFileError {
         /// N.
         expected: usize,
     },
+    /// A `#` line among the rows has as many fields as the row above it: a data row whose
+    /// experiment id starts with `#`, which the reader would skip as a comment.
+    #[error("{path}:{line}: {}", commented_row(*fields))]
+    CommentedRow {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// Its comma-separated fields.
+        fields: usize,
+    },
     /// The lines end in a lone carriage return (classic Mac OS), which the reader does not split.
     #[error(
         "{path}: its lines end in a lone carriage return (CR, classic Mac OS line endings), not LF or CRLF: convert them, e.g. `tr '\\r' '\\n' < FILE > NEW.csv`"
@@ -156,6 +167,21 @@ pub enum MeasurementFileError {
         /// The column.
         column: String,
         /// The text found.
+        value: String,
+    },
+    /// A target's name or a setup's label is longer than [`MAX_LABEL_CHARS`].
+    #[error(
+        "{path}:{line}: column `{column}`: {value:?} is longer than {MAX_LABEL_CHARS} characters: a label names a \
+         target or a setup (`T1`, `A`); shorten it"
+    )]
+    LongLabel {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+        /// The text found, shortened ([`shown_cell`]).
         value: String,
     },
     /// Target ids mix integers and names.
@@ -227,6 +253,7 @@ pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<Meas
         .map_err(io_error)?;
     let mut reader = io::BufReader::with_capacity(1 << 16, file);
     let start = io::BufRead::fill_buf(&mut reader).map_err(io_error)?;
+    crate::presets::check_encoding(start).map_err(io_error)?;
     if start.contains(&b'\r') && !start.contains(&b'\n') {
         return Err(MeasurementFileError::CarriageReturnsOnly { path: path.into() });
     }
@@ -280,6 +307,7 @@ pub fn read_measurements_from<R: io::Read>(
             continue;
         }
         let line = line_at(record.position());
+        commented_row_before(&index, line, path)?;
         let cells = Cells {
             record: &record,
             header: &header,
@@ -288,11 +316,12 @@ pub fn read_measurements_from<R: io::Read>(
         };
         let target = targets.id(&cells, columns.target)?;
         if let Some(c) = columns.setup {
-            row_setups.push(setups.id(cells.text(c)?));
+            row_setups.push(setups.id(cells.label(c)?));
         }
         rows.push(parse_row(&cells, &columns, target)?);
         lines.push(line);
     }
+    commented_row_before(&index, u64::MAX, path)?;
     if rows.is_empty() {
         return Err(MeasurementFileError::NoRows {
             path: path.into(),
@@ -326,6 +355,18 @@ pub fn read_measurements_from<R: io::Read>(
         .with_target_names(targets.names)
         .with_setups(row_setups, setups.names)
         .with_lines(lines))
+}
+
+/// Refuses a `#` line before `line` that looks like a data row ([`LineIndex::commented_row`]).
+fn commented_row_before(index: &LineIndex, line: u64, path: &Path) -> Result<(), MeasurementFileError> {
+    match index.commented_row() {
+        Some((at, fields)) if at < line => Err(MeasurementFileError::CommentedRow {
+            path: path.into(),
+            line: at,
+            fields,
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// Labels numbered 0, 1, ... in the order they first appear.
@@ -370,6 +411,20 @@ impl Cells<'_> {
                 line: self.line,
                 column: self.column(i),
             })
+    }
+
+    /// A label (a target's name, a setup's): at most [`MAX_LABEL_CHARS`] characters.
+    fn label(&self, i: usize) -> Result<&str, MeasurementFileError> {
+        let text = self.text(i)?;
+        if too_long(text) {
+            return Err(MeasurementFileError::LongLabel {
+                path: self.path.into(),
+                line: self.line,
+                column: self.column(i),
+                value: shown_cell(text),
+            });
+        }
+        Ok(text)
     }
 
     fn number(&self, i: usize) -> Result<f64, MeasurementFileError> {
@@ -442,7 +497,7 @@ struct TargetIds {
 impl TargetIds {
     /// The id of the `target` cell of `cells`.
     fn id(&mut self, cells: &Cells<'_>, column: usize) -> Result<usize, MeasurementFileError> {
-        let text = cells.text(column)?;
+        let text = cells.label(column)?;
         let integer = text.parse::<usize>().ok();
         let mixed = |found, earlier| MeasurementFileError::MixedTargetIds {
             path: cells.path.into(),

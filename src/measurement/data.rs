@@ -1,8 +1,14 @@
 //! Measured target positions as read from (or written to) the measurement CSV of
 //! `docs/formats.md#measurement-csv`, grouped by experiment and pose.
 
+use crate::csv_lines::shown_cell;
 use nalgebra::Point3;
 use std::collections::{BTreeMap, HashMap};
+
+/// An experiment id, a target's name or a setup's label longer than this \[characters\] is no
+/// name (a cell holding a pasted file?): refused when read, so that no message or output
+/// repeats it.
+pub const MAX_LABEL_CHARS: usize = 200;
 
 /// One observed target in one robot pose: one row of the measurement CSV.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,8 +48,18 @@ impl Measurement {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum RowProblem {
     /// The experiment id is empty or has leading/trailing white space.
-    #[error("experiment id {experiment:?} is empty or has surrounding white space")]
+    #[error("experiment id {:?} is empty or has surrounding white space", shown_cell(experiment))]
     BadExperimentName {
+        /// The id.
+        experiment: String,
+    },
+    /// The experiment id is longer than [`MAX_LABEL_CHARS`].
+    #[error(
+        "experiment id {:?} is longer than {MAX_LABEL_CHARS} characters: an id names an experiment (`axis1`, \
+         `validation`); shorten it",
+        shown_cell(experiment)
+    )]
+    LongExperimentName {
         /// The id.
         experiment: String,
     },
@@ -83,7 +99,10 @@ pub enum RowProblem {
         joint_count: usize,
     },
     /// The experiment's rows disagree on which joint it moves.
-    #[error("experiment {experiment:?} moves joint {found} here but joint {first} earlier")]
+    #[error(
+        "experiment {:?} moves joint {found} here but joint {first} earlier",
+        shown_cell(experiment)
+    )]
     InconsistentMovedJoint {
         /// The experiment.
         experiment: String,
@@ -93,7 +112,10 @@ pub enum RowProblem {
         found: usize,
     },
     /// Two rows share (experiment, step, target).
-    #[error("duplicate (experiment, step, target) = ({experiment:?}, {step}, {target}), first seen at {first_at}")]
+    #[error(
+        "duplicate (experiment, step, target) = ({:?}, {step}, {target}), first seen at {first_at}",
+        shown_cell(experiment)
+    )]
     DuplicateKey {
         /// The experiment.
         experiment: String,
@@ -111,7 +133,9 @@ impl RowProblem {
     /// The column the problem is in (for `DuplicateKey`, the key columns).
     pub fn column(&self) -> String {
         match self {
-            Self::BadExperimentName { .. } | Self::InconsistentMovedJoint { .. } => "experiment".into(),
+            Self::BadExperimentName { .. } | Self::LongExperimentName { .. } | Self::InconsistentMovedJoint { .. } => {
+                "experiment".into()
+            }
             Self::JointCount { .. } => "cmd_*".into(),
             Self::NotFinite { column, .. } | Self::OutOfRange { column, .. } => column.clone(),
             Self::MovedJointOutOfRange { .. } => "moved_joint".into(),
@@ -419,17 +443,40 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
     }
 }
 
+/// Whether `label` is longer than [`MAX_LABEL_CHARS`] characters.
+pub(crate) fn too_long(label: &str) -> bool {
+    label.len() > MAX_LABEL_CHARS && label.chars().count() > MAX_LABEL_CHARS
+}
+
 /// A measured coordinate beyond this \[mm\] (10 km) is no instrument's.
 const MAX_COORDINATE_MM: f64 = 1e7;
 
 /// A command beyond this \[deg or mm\] is no joint's (2,800 turns, 1 km).
 const MAX_COMMAND: f64 = 1e6;
 
+/// The range a measured coordinate `value_mm` is outside, in words; `None` within
+/// [`MAX_COORDINATE_MM`].
+pub(crate) fn coordinate_beyond(value_mm: f64) -> Option<&'static str> {
+    (value_mm.abs() > MAX_COORDINATE_MM)
+        .then_some("+-1e7 mm (10 km: farther than any instrument measures; coordinates in micrometres?)")
+}
+
+/// The range a command `value` (deg or mm) is outside, in words; `None` within
+/// [`MAX_COMMAND`].
+pub(crate) fn command_beyond(value: f64) -> Option<&'static str> {
+    (value.abs() > MAX_COMMAND).then_some("+-1e6 (deg or mm: no joint turns or slides that far; a dummy value?)")
+}
+
 /// What is wrong with row `m` on its own (not its key), `first` being the joint its
 /// experiment's first row moves.
 fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowProblem> {
     if m.experiment.is_empty() || m.experiment.trim() != m.experiment {
         return Some(RowProblem::BadExperimentName {
+            experiment: m.experiment.clone(),
+        });
+    }
+    if too_long(&m.experiment) {
+        return Some(RowProblem::LongExperimentName {
             experiment: m.experiment.clone(),
         });
     }
@@ -443,22 +490,27 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
         return Some(RowProblem::NotFinite { column, value });
     }
     let axes = ["x_mm", "y_mm", "z_mm"];
-    if let Some((axis, &value)) = axes
+    if let Some((axis, &value, expected)) = axes
         .iter()
         .zip(&m.position_mm)
-        .find(|(_, v)| v.abs() > MAX_COORDINATE_MM)
+        .find_map(|(axis, v)| Some((axis, v, coordinate_beyond(*v)?)))
     {
         return Some(RowProblem::OutOfRange {
             column: (*axis).into(),
             value,
-            expected: "+-1e7 mm (10 km: farther than any instrument measures; coordinates in micrometres?)",
+            expected,
         });
     }
-    if let Some((k, &value)) = m.cmd.iter().enumerate().find(|(_, v)| v.abs() > MAX_COMMAND) {
+    if let Some((k, &value, expected)) = m
+        .cmd
+        .iter()
+        .enumerate()
+        .find_map(|(k, v)| Some((k, v, command_beyond(*v)?)))
+    {
         return Some(RowProblem::OutOfRange {
             column: format!("cmd_{}", k + 1),
             value,
-            expected: "+-1e6 (deg or mm: no joint turns or slides that far; a dummy value?)",
+            expected,
         });
     }
     if m.payload_kg < 0.0 {

@@ -94,7 +94,9 @@ pub enum PlanError {
     },
     /// The sweep leaves the joint limits.
     #[error(
-        "sweep {index} (joint {joint}): commands {low:.3}..{high:.3} leave the joint limits {limit_low:.3}..{limit_high:.3}"
+        "sweep {index} (joint {joint}): commands {}..{} leave the joint limits {limit_low:.3}..{limit_high:.3}",
+        crate::measurement::format_f64(*low),
+        crate::measurement::format_f64(*high)
     )]
     OutOfLimits {
         /// Index of the sweep.

@@ -19,7 +19,9 @@ pub use sheet::{
     PlanPose, PlannedPoint, SightOptions, VALIDATION_EXPERIMENT, planned_points, points_of_poses, tool_targets,
     write_plan_csv,
 };
-pub use stations::{LINK_RADIUS_M, STATION_HEADINGS, instrument_stations_m};
+pub use stations::{
+    LINK_RADIUS_M, STATION_HEADINGS, instrument_stations_m, stations_origin, theodolite_stations_problem,
+};
 pub use validation::{MAX_POSES as MAX_VALIDATION_POSES, ValidationPlan};
 
 /// Experiment id of the three tool targets observed at the reference pose (trains the

@@ -4,9 +4,11 @@
 use super::sheet::{SightOptions, planned_points};
 use super::sight::STOP_SHORT_M;
 use super::{CalibrationPlan, PlanError, ValidationPlan};
+use crate::measurement::{TriangulationError, format_f64};
 use crate::robot::RobotDescription;
 use nalgebra::Point3;
 use std::cmp::Reverse;
+use std::path::Path;
 
 /// Headings tried around the robot for its theodolites (every 15 deg).
 pub const STATION_HEADINGS: usize = 24;
@@ -14,6 +16,45 @@ pub const STATION_HEADINGS: usize = 24;
 /// Radius of the links' capsules the default stations are chosen against \[m\] (the rapier
 /// arm's and `plan`'s default).
 pub const LINK_RADIUS_M: f64 = 0.05;
+
+/// Where the theodolites of `desc`, read from `file`, stand, naming the key for a message:
+/// `[instrument] stations_mm` when the description gives them, else the pair chosen for the
+/// robot ([`instrument_stations_m`]).
+pub fn stations_origin(desc: &RobotDescription, file: &Path) -> String {
+    match desc.instrument {
+        Some(_) => format!("{}: field `instrument.stations_mm`", file.display()),
+        None => format!(
+            "{}: the theodolites chosen for the robot (no `[instrument]`; give `stations_mm` to place them)",
+            file.display()
+        ),
+    }
+}
+
+/// Why two theodolites at `stations_m` (left, right \[m\]) could not be calibrated over the
+/// robot's work volume (`e`), in words, with the stations in mm as `[instrument] stations_mm`
+/// writes them and what to do: lines of sight that meet nearly parallel want the stations
+/// further apart, on either side of the robot.
+pub fn theodolite_stations_problem(stations_m: &[Point3<f64>; 2], e: &TriangulationError) -> String {
+    // To 0.1 um, so that a station written in mm reads back as written.
+    let mm = |p: &Point3<f64>| {
+        let c: Vec<String> = p.iter().map(|x| format_f64((x * 1e7).round() / 1e4 + 0.0)).collect();
+        format!("[{}]", c.join(", "))
+    };
+    let stations = format!("the stations {} and {} mm", mm(&stations_m[0]), mm(&stations_m[1]));
+    match e {
+        TriangulationError::NearParallel {
+            intersection_angle_rad,
+            min_intersection_angle_rad,
+        } => format!(
+            "{stations} see the robot's work volume (the 2 m cube about its base) along lines of sight meeting at \
+             {:.2} deg, below the {:.2} deg two theodolites need (nearly parallel): place the stations further apart, \
+             on either side of the robot (the paper's stood 6.3 m apart, 5.4 m from its base)",
+            intersection_angle_rad.to_degrees(),
+            min_intersection_angle_rad.to_degrees()
+        ),
+        other => format!("{stations} cannot measure the robot's work volume (the 2 m cube about its base): {other}"),
+    }
+}
 
 /// The instrument's stations for `desc` \[m\]: `[instrument] stations_mm` when the description
 /// gives them; else the pair of [`RobotDescription::stations_at_heading_m`] whose lines of

@@ -251,11 +251,10 @@ pub struct Placement {
 impl Placement {
     /// The placement of an isometry (metres) in file units.
     pub fn from_isometry(iso: &Isometry3<f64>) -> Self {
-        let (r, p, y) = iso.rotation.euler_angles();
         let t = iso.translation.vector * 1e3;
         Placement {
             translation_mm: [t.x, t.y, t.z],
-            rpy_deg: [r.to_degrees(), p.to_degrees(), y.to_degrees()],
+            rpy_deg: crate::kinematics::roll_pitch_yaw(&iso.rotation).map(f64::to_degrees),
         }
     }
 

@@ -77,16 +77,22 @@ fn turns_back(sin: &[f64], cos: &[f64]) -> Option<String> {
         .sum();
     (slopes >= 1.0).then(|| {
         format!(
-            "the harmonics' slopes add up to {slopes} (the sum of k sqrt(sin_k^2 + cos_k^2) must stay below 1): the \
+            "the harmonics' slopes add up to {} (the sum of k sqrt(sin_k^2 + cos_k^2) must stay below 1): the \
              transmission would turn backwards, so a command would have no single joint value; a real \
-             transmission's coefficients are a few mrad"
+             transmission's coefficients are a few mrad",
+            crate::measurement::format_f64(slopes)
         )
     })
 }
 
 /// Why a gear ratio is unusable: `None` when it is finite and not 0.
 fn bad_ratio(ratio: f64) -> Option<String> {
-    (!ratio.is_finite() || ratio == 0.0).then(|| format!("the gear ratio must be finite and not 0, found {ratio}"))
+    (!ratio.is_finite() || ratio == 0.0).then(|| {
+        format!(
+            "the gear ratio must be finite and not 0, found {}",
+            crate::measurement::format_f64(ratio)
+        )
+    })
 }
 
 impl Transmission {

@@ -18,6 +18,7 @@
 //! harmonics) and backlash -> passive couplings -> repeatability jitter.
 
 use crate::kinematics::PhiModel;
+use crate::measurement::format_f64;
 use crate::physics::{
     AxisWobble, BacklashEffect, ComplianceEffect, GearHarmonic, InstrumentScale, LinkMass, PayloadEffect,
     ThermalEffect, apply_wobble, with_gear_harmonics,
@@ -61,6 +62,10 @@ pub const MAX_SMALL_ANGLE_RAD: f64 = 0.1;
 pub const MAX_ALPHA_PER_K: f64 = 1e-3;
 /// Largest instrument scale error accepted \[ppm\] (1 %).
 pub const MAX_SCALE_PPM: f64 = 1e4;
+/// Largest order of a gear harmonic or a wobble (turns per turn of its angle): a gear's
+/// tooth-mesh error repeats a few hundred times a turn at most. A harmonic's order also sizes
+/// its transmission's coefficient lists (one entry per order).
+pub const MAX_EFFECT_ORDER: usize = 1000;
 
 /// The unmodelled effects (module docs); every table is optional and off when absent.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -113,7 +118,10 @@ fn per_joint_minus_one(field: &str, v: &[f64], dof: usize) -> Result<(), Effects
         ));
     }
     match v.iter().position(|x| !x.is_finite()) {
-        Some(k) => Err(invalid(format!("{field}[{k}]"), format!("bad value {}", v[k]))),
+        Some(k) => Err(invalid(
+            format!("{field}[{k}]"),
+            format!("bad value {}", format_f64(v[k])),
+        )),
         None => Ok(()),
     }
 }
@@ -124,9 +132,88 @@ fn per_joint(field: &str, v: &[f64], dof: usize, ok: fn(f64) -> bool) -> Result<
         return Err(invalid(field, format!("needs {dof} values, found {}", v.len())));
     }
     match v.iter().position(|x| !ok(*x)) {
-        Some(k) => Err(invalid(format!("{field}[{k}]"), format!("bad value {}", v[k]))),
+        Some(k) => Err(invalid(
+            format!("{field}[{k}]"),
+            format!("bad value {}", format_f64(v[k])),
+        )),
         None => Ok(()),
     }
+}
+
+/// Joint `joint` of the entry at `field` is one of the robot's `1..=dof`.
+fn joint_in(field: String, joint: usize, dof: usize) -> Result<(), EffectsError> {
+    if joint == 0 || joint > dof {
+        Err(invalid(field, format!("joint {joint} is not in 1..={dof}")))
+    } else {
+        Ok(())
+    }
+}
+
+/// Checks `[[gear_harmonics]]` entry `i`: its joint, its order within [`MAX_EFFECT_ORDER`],
+/// its coefficients within [`MAX_SMALL_ANGLE_RAD`], and its slope (order times amplitude)
+/// below 1, so that the angle it is added to still turns one way.
+fn check_gear_harmonic(h: &GearHarmonic, i: usize, dof: usize) -> Result<(), EffectsError> {
+    let field = |key: &str| format!("gear_harmonics[{i}].{key}");
+    joint_in(field("joint"), h.joint, dof)?;
+    if !(1..=MAX_EFFECT_ORDER).contains(&h.order) {
+        return Err(invalid(
+            field("order"),
+            format!(
+                "{} must be in 1..={MAX_EFFECT_ORDER} (a gear's error repeats at most a few hundred times a turn)",
+                h.order
+            ),
+        ));
+    }
+    for (key, v) in [("sin_rad", h.sin_rad), ("cos_rad", h.cos_rad)] {
+        if !(v.is_finite() && v.abs() <= MAX_SMALL_ANGLE_RAD) {
+            return Err(invalid(
+                field(key),
+                format!("{} must be within +-{MAX_SMALL_ANGLE_RAD} rad", format_f64(v)),
+            ));
+        }
+    }
+    let slope = h.order as f64 * h.sin_rad.hypot(h.cos_rad);
+    if slope >= 1.0 {
+        return Err(invalid(
+            format!("gear_harmonics[{i}]"),
+            format!(
+                "order {} times the amplitude {} rad is a slope of {}: the angle would turn back (it must stay below 1); \
+                 lower the order or the coefficients",
+                h.order,
+                format_f64(h.sin_rad.hypot(h.cos_rad)),
+                format_f64(slope)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks `[[wobble]]` entry `i`: its joint, its order within +-[`MAX_EFFECT_ORDER`], a small
+/// amplitude and a finite phase.
+fn check_wobble(w: &AxisWobble, i: usize, dof: usize) -> Result<(), EffectsError> {
+    joint_in(format!("wobble[{i}].joint"), w.joint, dof)?;
+    if w.order.unsigned_abs() as usize > MAX_EFFECT_ORDER {
+        return Err(invalid(
+            format!("wobble[{i}].order"),
+            format!(
+                "{} must be within +-{MAX_EFFECT_ORDER} (a bearing's runout turns a few times a turn at most)",
+                w.order
+            ),
+        ));
+    }
+    if !(w.amplitude_rad.is_finite() && w.amplitude_rad.abs() <= MAX_SMALL_ANGLE_RAD) {
+        return Err(invalid(
+            format!("wobble[{i}].amplitude_rad"),
+            format!(
+                "{} must be within +-{MAX_SMALL_ANGLE_RAD} rad (a bearing runout is a small tilt)",
+                format_f64(w.amplitude_rad)
+            ),
+        ));
+    }
+    if !w.phase_rad.is_finite() {
+        return Err(invalid(format!("wobble[{i}].phase_rad"), "must be finite"));
+    }
+    Ok(())
 }
 
 /// Checks the `[compliance]` table against a robot of `dof` joints.
@@ -140,7 +227,7 @@ fn check_compliance(c: &ComplianceEffect, dof: usize) -> Result<(), EffectsError
     if !(0.0..=1.0).contains(&c.reflected_fraction) {
         return Err(invalid(
             "compliance.reflected_fraction",
-            format!("bad value {}; must be in 0-1", c.reflected_fraction),
+            format!("bad value {}; must be in 0-1", format_f64(c.reflected_fraction)),
         ));
     }
     if c.balancer_fraction.is_empty() {
@@ -210,7 +297,7 @@ impl Effects {
                     "thermal.alpha_per_k",
                     format!(
                         "{} must be finite and within +-{MAX_ALPHA_PER_K} 1/K (steel: 1.2e-5)",
-                        t.alpha_per_k
+                        format_f64(t.alpha_per_k)
                     ),
                 ));
             }
@@ -225,44 +312,18 @@ impl Effects {
             }
         }
         self.validate_link_masses(dof)?;
-        let joint_ok = |field: String, joint: usize| {
-            if joint == 0 || joint > dof {
-                Err(invalid(field, format!("joint {joint} is not in 1..={dof}")))
-            } else {
-                Ok(())
-            }
-        };
         for (i, h) in self.gear_harmonics.iter().enumerate() {
-            joint_ok(format!("gear_harmonics[{i}].joint"), h.joint)?;
-            let small = |x: f64| x.is_finite() && x.abs() <= MAX_SMALL_ANGLE_RAD;
-            if h.order == 0 || !(small(h.sin_rad) && small(h.cos_rad)) {
-                return Err(invalid(
-                    format!("gear_harmonics[{i}]"),
-                    format!("order must be >= 1, sin_rad and cos_rad within +-{MAX_SMALL_ANGLE_RAD} rad"),
-                ));
-            }
+            check_gear_harmonic(h, i, dof)?;
         }
         for (i, w) in self.wobble.iter().enumerate() {
-            joint_ok(format!("wobble[{i}].joint"), w.joint)?;
-            if !(w.amplitude_rad.is_finite() && w.amplitude_rad.abs() <= MAX_SMALL_ANGLE_RAD) {
-                return Err(invalid(
-                    format!("wobble[{i}].amplitude_rad"),
-                    format!(
-                        "{} must be within +-{MAX_SMALL_ANGLE_RAD} rad (a bearing runout is a small tilt)",
-                        w.amplitude_rad
-                    ),
-                ));
-            }
-            if !w.phase_rad.is_finite() {
-                return Err(invalid(format!("wobble[{i}].phase_rad"), "must be finite"));
-            }
+            check_wobble(w, i, dof)?;
         }
         if let Some(s) = &self.instrument_scale
             && !(s.ppm.is_finite() && s.ppm.abs() <= MAX_SCALE_PPM)
         {
             return Err(invalid(
                 "instrument_scale.ppm",
-                format!("{} must be within +-{MAX_SCALE_PPM} ppm (1 %)", s.ppm),
+                format!("{} must be within +-{MAX_SCALE_PPM} ppm (1 %)", format_f64(s.ppm)),
             ));
         }
         Ok(())
@@ -283,7 +344,7 @@ impl Effects {
             if !(m.mass_kg.is_finite() && m.mass_kg > 0.0) {
                 return Err(invalid(
                     format!("link_masses[{k}].mass_kg"),
-                    format!("bad value {}", m.mass_kg),
+                    format!("bad value {}", format_f64(m.mass_kg)),
                 ));
             }
             if !m.com_mm.iter().all(|x| x.is_finite()) {

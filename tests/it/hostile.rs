@@ -1,8 +1,11 @@
 //! Hostile inputs across the commands, as a table: each case is a command line on files a
 //! careless or hostile user writes (another separator, another unit, a device, a pipe, a nest
 //! of YAML aliases, columns that would be written twice, several instrument setups, a failed
-//! stdout) with the exit code it must give and what its message must name. A bad input is one
-//! error line naming the file and the field, exit 2; nothing is written.
+//! stdout, a folder or a pipe where a file belongs, UTF-16 text, a 5 MB cell, a number of 309
+//! digits, a data row commented out by its `#` experiment id) with the exit code it must give
+//! and what its message must name. A bad input is one error line naming the file and the
+//! field, exit 2, no longer than a screenful (a long value is shown by its start and length);
+//! nothing is written.
 
 use crate::common::{altered_csv, axiscal, scale_fields, simulate_analytic};
 use std::path::{Path, PathBuf};
@@ -44,6 +47,131 @@ fn alias_nest(levels: usize) -> String {
         ));
     }
     text
+}
+
+/// `text` as UTF-16 (little-endian, with its byte-order mark), as Windows tools save "Unicode".
+fn utf16(text: &str) -> Vec<u8> {
+    [0xFF, 0xFE]
+        .into_iter()
+        .chain(text.encode_utf16().flat_map(u16::to_le_bytes))
+        .collect()
+}
+
+/// A MATLAB v5 file (little-endian) holding the joint array `q` of dimensions `q_dims` and
+/// the point array `mA` (5 x 3), its last value `last`.
+fn mat_file(q_dims: &[i32], last: f64) -> Vec<u8> {
+    fn element(ty: u32, data: &[u8]) -> Vec<u8> {
+        let mut e = [ty.to_le_bytes(), (data.len() as u32).to_le_bytes()].concat();
+        e.extend(data);
+        e.resize(e.len().next_multiple_of(8), 0);
+        e
+    }
+    let matrix = |name: &str, dims: &[i32], last: f64| {
+        let count = dims.iter().product::<i32>();
+        let values: Vec<u8> = (0..count)
+            .map(|i| if i + 1 == count { last } else { f64::from(i) * 0.01 })
+            .flat_map(f64::to_le_bytes)
+            .collect();
+        let dims: Vec<u8> = dims.iter().flat_map(|d| d.to_le_bytes()).collect();
+        let double_class = [6u32.to_le_bytes(), 0u32.to_le_bytes()].concat();
+        let body = [
+            element(6, &double_class),
+            element(5, &dims),
+            element(1, name.as_bytes()),
+            element(9, &values),
+        ];
+        element(14, &body.concat())
+    };
+    let mut header = format!("{:<116}", "MATLAB 5.0 MAT-file, axiscal hostile test").into_bytes();
+    header.extend([0; 8]);
+    header.extend([0x00, 0x01, b'I', b'M']);
+    [header, matrix("q", q_dims, 0.0), matrix("mA", &[5, 3], last)].concat()
+}
+
+/// robot_cal_tools measurements of the two-axis positioner turning joint 1, with a marker
+/// coordinate of 1e300 m in entry `t1`.
+fn rct_with_huge_coordinate() -> String {
+    (0..4)
+        .map(|i| {
+            let x = if i == 1 {
+                "1e300".to_owned()
+            } else {
+                format!("{}", 1.0 + 0.01 * f64::from(i))
+            };
+            format!(
+                "'t{i}':\n  camera_joints: []\n  pose:\n    qw: 1.0\n    qx: 0.0\n    qy: 0.0\n    qz: 0.0\n    \
+                 x: {x}\n    y: 0.1\n    z: 0.5\n  target_joints:\n  - {}\n  - 0.0\n",
+                0.1 * f64::from(i)
+            )
+        })
+        .collect()
+}
+
+/// The inputs of the readers' cases: a folder and a pipe where files belong, UTF-16 text of
+/// each reader, a 5 MB experiment id, an experiment id starting with `#`, numbers of 1e308,
+/// a theodolite pair in line with the robot, a 3-D MAT array.
+fn write_reader_inputs(dir: &Path) {
+    std::fs::create_dir(dir.join("folder")).unwrap();
+    let made = std::process::Command::new("mkfifo").arg(dir.join("fifo.toml")).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    let campaign = dir.join("campaign.csv");
+    let first = std::cell::Cell::new(true);
+    let huge_id = "x".repeat(5_000_000);
+    altered_csv(
+        &campaign,
+        "huge-id.csv",
+        |_| true,
+        |f| {
+            if first.replace(false) {
+                f[0] = huge_id.clone();
+            }
+        },
+    );
+    let first = std::cell::Cell::new(true);
+    altered_csv(
+        &campaign,
+        "hash-id.csv",
+        |_| true,
+        |f| {
+            if first.replace(false) {
+                f[0] = format!("#{}", f[0]);
+            }
+        },
+    );
+    let irb6l = std::fs::read_to_string(shipped("scenarios/robots/asea-irb6l.toml")).unwrap();
+    let arm6 = std::fs::read_to_string(shipped("scenarios/robots/arm6-dh.toml")).unwrap();
+    let text = |name: &str| std::fs::read_to_string(dir.join(name)).unwrap();
+    let files: [(&str, Vec<u8>); 12] = [
+        ("u16.csv", utf16(&text("campaign.csv"))),
+        ("u16.toml", utf16(&irb6l)),
+        ("u16.json", utf16(&text("cal/calibration.json"))),
+        ("u16.yaml", utf16(&rct_with_huge_coordinate())),
+        ("xbig.yaml", rct_with_huge_coordinate().into_bytes()),
+        ("q3.mat", mat_file(&[5, 6, 2], 0.1)),
+        ("huge.mat", mat_file(&[5, 6], 1e300)),
+        (
+            "theta.toml",
+            arm6.replacen("theta_deg = 0.0", "theta_deg = 1e308", 1).into_bytes(),
+        ),
+        (
+            "order.toml",
+            b"[[gear_harmonics]]\njoint = 2\norder = 100000000\nsin_rad = 0.001\n".to_vec(),
+        ),
+        (
+            "float-order.toml",
+            b"[[gear_harmonics]]\njoint = 2\norder = 1e308\n".to_vec(),
+        ),
+        (
+            "in-line.toml",
+            irb6l
+                .replacen("[-6284.6, 0.0, 0.0]]", "[-1571.0, 2219.0, 0.0]]", 1)
+                .into_bytes(),
+        ),
+        ("data.csv", text("campaign.csv").into_bytes()),
+    ];
+    for (name, bytes) in files {
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
 }
 
 /// Writes every input of the table into `dir`.
@@ -101,12 +229,154 @@ fn write_inputs(dir: &Path) {
     }
     let made = std::process::Command::new("mkfifo").arg(dir.join("fifo.csv")).status();
     assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    write_reader_inputs(dir);
+}
+
+/// The cases of the readers: each input in [`write_reader_inputs`].
+fn reader_cases() -> Vec<Case> {
+    let positioner = shipped("scenarios/robots/positioner-2axis.toml");
+    let fanuc = shipped("scenarios/robots/real/fanuc-r2000ic.toml");
+    let joints = "-- 0 0 0 0 0 0";
+    vec![
+        case(
+            "a folder as the robot",
+            "simulate --robot folder --out out.csv",
+            2,
+            &["folder", "a folder, not a regular file"],
+        ),
+        case(
+            "a pipe as the scenario",
+            "run fifo.toml --out out",
+            2,
+            &["fifo.toml", "not a regular file"],
+        ),
+        case(
+            "a DH angle of 1e308",
+            "simulate --robot theta.toml --out out.csv",
+            2,
+            &["theta.toml", "`joints[0].dh.theta_deg`", "1e308 deg"],
+        ),
+        case(
+            "an integer key given 1e308",
+            "simulate --effects float-order.toml --out out.csv",
+            2,
+            &["float-order.toml", "line 3", "floating point `1e308`"],
+        ),
+        case(
+            "a 5 MB experiment id",
+            "calibrate huge-id.csv --out out",
+            2,
+            &[
+                "huge-id.csv:3: column `experiment`",
+                "[5000000 characters]",
+                "longer than 200",
+            ],
+        ),
+        case(
+            "a UTF-16 measurement CSV",
+            "calibrate u16.csv --out out",
+            2,
+            &["u16.csv", "UTF-16", "save it as UTF-8"],
+        ),
+        case(
+            "a UTF-16 description",
+            "describe u16.toml",
+            2,
+            &["u16.toml", "UTF-16", "save it as UTF-8"],
+        ),
+        case(
+            "a UTF-16 calibration",
+            &format!("joints --calibration u16.json {joints}"),
+            2,
+            &["u16.json", "UTF-16", "save it as UTF-8"],
+        ),
+        case(
+            "UTF-16 YAML",
+            &format!("import rct u16.yaml --robot {positioner} --out out.csv"),
+            2,
+            &["u16.yaml", "UTF-16", "save it as UTF-8"],
+        ),
+        case(
+            "an experiment id starting with #",
+            "calibrate hash-id.csv --out out",
+            2,
+            &[
+                "hash-id.csv:3:",
+                "starts with `#` but has 15 fields",
+                "rename the experiment",
+            ],
+        ),
+        case(
+            "--out naming the data file",
+            "calibrate data.csv --out data.csv",
+            2,
+            &["--out `data.csv` is a file", "--out names a folder"],
+        ),
+        case(
+            "--out of a run naming a file",
+            "run ci-smoke --out data.csv",
+            2,
+            &["--out `data.csv` is a file", "--out names a folder"],
+        ),
+        case(
+            "a YAML coordinate of 1e300 m",
+            &format!("import rct xbig.yaml --robot {positioner} --out out.csv"),
+            2,
+            &["xbig.yaml", "entry `t1`, field `pose.x`", "1e300 m is outside"],
+        ),
+        case(
+            "a 3-D joint array",
+            "import mat q3.mat --robot asea-irb6l --joints q --targets mA --angles rad --units m --out out.csv",
+            2,
+            &["q3.mat", "variable `q`", "3 dimensions (5 x 6 x 2)", "6 columns"],
+        ),
+        case(
+            "a point of 1e300 m in a MAT file (it panicked)",
+            "import mat huge.mat --robot asea-irb6l --joints q --targets mA --angles rad --units m --out out.csv",
+            2,
+            &[
+                "huge.mat",
+                "variable `mA`, row 5, column 3: 1e300 as written",
+                "outside +-1e7 mm",
+            ],
+        ),
+        case(
+            "an empty experiment id for a MAT file (it panicked)",
+            "import mat huge.mat --robot asea-irb6l --joints q --targets mA --angles rad --units m --experiment= --out out.csv",
+            2,
+            &["--experiment: experiment id \"\" is empty"],
+        ),
+        case(
+            "theodolites in line with the robot",
+            "simulate --robot in-line.toml --out out.csv",
+            2,
+            &[
+                "in-line.toml",
+                "field `instrument.stations_mm`",
+                "nearly parallel",
+                "further apart",
+            ],
+        ),
+        case(
+            "a gear harmonic of order 1e8",
+            "simulate --effects order.toml --out out.csv",
+            2,
+            &["order.toml", "`gear_harmonics[0].order`", "100000000"],
+        ),
+        case(
+            "the FANUC's own forward kinematics",
+            &format!("describe {fanuc}"),
+            0,
+            &[],
+        ),
+    ]
 }
 
 fn cases() -> Vec<Case> {
     let cal = "--calibration cal/calibration.json";
     let positioner = shipped("scenarios/robots/positioner-2axis.toml");
-    vec![
+    let mut cases = reader_cases();
+    cases.extend([
         case(
             "a device as poses",
             &format!("compensate {cal} --poses /dev/zero --out out.csv"),
@@ -191,7 +461,8 @@ fn cases() -> Vec<Case> {
             2,
             &["--json", "--shard"],
         ),
-    ]
+    ]);
+    cases
 }
 
 #[test]
@@ -223,6 +494,7 @@ fn every_hostile_input_is_one_clear_error_and_writes_nothing() {
         }
         if c.code == 2 {
             assert_eq!(e.lines().count(), 1, "{}: one line: {e}", c.what);
+            assert!(e.len() < 1000, "{}: a long value echoed: {} bytes", c.what, e.len());
             let written: Vec<PathBuf> = ["out", "out.csv"].iter().map(|n| dir.path().join(n)).collect();
             assert!(written.iter().all(|p| !p.exists()), "{}: nothing written", c.what);
         }

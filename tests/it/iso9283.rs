@@ -644,7 +644,8 @@ fn an_iso_experiment_name_that_does_not_parse_is_refused() {
                 }
             },
         );
-        let (out, _) = evaluate_iso(&data, name, &[]);
+        // `--out` is a folder beside the data (naming the data file is refused before it is read).
+        let (out, _) = evaluate_iso(&data, &name.replace(".csv", "-out"), &[]);
         let err = String::from_utf8_lossy(&out.stderr).into_owned();
         assert_eq!(out.status.code(), Some(2), "{err}");
         let line = line_of(&data, to, 0);

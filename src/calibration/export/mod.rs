@@ -110,7 +110,7 @@ pub fn yaml_float(v: f64) -> String {
 /// The six numbers of a URDF `<origin>`: `xyz` \[m\] and `rpy` \[rad\], `R = Rz(yaw) Ry(pitch)
 /// Rx(roll)`.
 pub fn xyz_rpy(t: &Isometry3<f64>) -> [f64; 6] {
-    let (r, p, y) = t.rotation.euler_angles();
+    let [r, p, y] = crate::kinematics::roll_pitch_yaw(&t.rotation);
     let v = t.translation.vector;
     [v.x, v.y, v.z, r, p, y]
 }

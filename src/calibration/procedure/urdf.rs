@@ -57,7 +57,7 @@ pub fn ros_name(text: &str) -> String {
 /// An `<origin>` with every number written exactly (shortest text that reads back to the same
 /// 64-bit float), so the file reproduces the model to rounding.
 fn origin(t: &Isometry3<f64>) -> String {
-    let (r, p, y) = t.rotation.euler_angles();
+    let [r, p, y] = crate::kinematics::roll_pitch_yaw(&t.rotation);
     let v = t.translation.vector;
     // `+ 0.0` writes a negative zero as 0.
     let n = |x: f64| format_f64(x + 0.0);

@@ -10,7 +10,7 @@ use super::file::{
     TruthSection,
 };
 use super::threshold::Threshold;
-use crate::measurement::{IsotropicNoise, MeasurementModel, TheodolitePair};
+use crate::measurement::{IsotropicNoise, MeasurementModel, TheodolitePair, format_f64};
 use crate::plan::{CalibrationPlan, ValidationPlan};
 use crate::robot::{RobotDescription, RobotModel};
 use crate::sim::Effects;
@@ -100,6 +100,9 @@ pub struct ResolvedScenario {
 /// Metric plotted when the file names none.
 pub const DEFAULT_MAIN_METRIC: &str = "uncal_pos_rms_mm";
 
+/// A threshold beyond this, in any metric's unit, is a slip: no metric reaches it.
+const MAX_THRESHOLD: f64 = 1e9;
+
 impl ResolvedScenario {
     /// Reads `path` and resolves it with `overrides`.
     pub fn from_file(path: &Path, overrides: Overrides) -> Result<Self, ScenarioError> {
@@ -146,8 +149,14 @@ impl ResolvedScenario {
         let cases = resolve_cases(&file, &robot, dir).map_err(|(k, m)| invalid(&k, m))?;
         check_size(&file, trials, cases.len()).map_err(|(k, m)| invalid(k, m))?;
         for (i, t) in file.thresholds.iter().enumerate() {
-            if !t.value.is_finite() {
-                return Err(invalid(&format!("thresholds[{i}].value"), "must be finite".into()));
+            if !(t.value.is_finite() && t.value.abs() <= MAX_THRESHOLD) {
+                return Err(invalid(
+                    &format!("thresholds[{i}].value"),
+                    format!(
+                        "{} must be finite and within +-{MAX_THRESHOLD:e} (no metric reaches it)",
+                        format_f64(t.value)
+                    ),
+                ));
             }
             if let Some(c) = &t.case
                 && !cases.iter().any(|k| &k.name == c)
@@ -235,7 +244,7 @@ fn check_size(file: &ScenarioFile, trials: usize, cases: usize) -> Result<(), (&
     if !(0.0..=1.0).contains(&rate) {
         return Err((
             "max_failure_rate",
-            format!("must be in 0..=1 (a fraction of the trials), got {rate}"),
+            format!("must be in 0..=1 (a fraction of the trials), got {}", format_f64(rate)),
         ));
     }
     if trials.saturating_mul(cases) > MAX_UNITS {
@@ -277,6 +286,7 @@ type KeyError = (String, String);
 
 fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> Result<Vec<Case>, KeyError> {
     let base_plan = base_plan(&file.plan, robot)?;
+    let robot_file = file.robot.as_ref().map(|p| dir.join(p));
     let drafts = match &file.sweep {
         Some(sweep) => swept_cases(sweep, file.measurement, &base_plan, dir)?,
         None => vec![Draft {
@@ -294,7 +304,8 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> R
                 .map_err(|e| (d.keys.0.to_owned(), e.to_string()))?;
             Ok(Case {
                 name: d.name,
-                measurement: measurement_model(&d.measurement, robot).map_err(|e| (d.keys.1.to_owned(), e))?,
+                measurement: measurement_model(&d.measurement, robot, robot_file.as_deref())
+                    .map_err(|(key, e)| (key.unwrap_or(d.keys.1).to_owned(), e))?,
                 plan: d.plan,
             })
         })
@@ -424,7 +435,7 @@ fn base_plan(section: &PlanSection, robot: &RobotDescription) -> Result<Calibrat
 
 fn scaled(plan: &CalibrationPlan, scale: f64) -> Result<CalibrationPlan, String> {
     if !(scale.is_finite() && scale > 0.0) {
-        return Err(format!("span scale {scale} must be finite and > 0"));
+        return Err(format!("span scale {} must be finite and > 0", format_f64(scale)));
     }
     let mut plan = plan.clone();
     for s in &mut plan.sweeps {
@@ -435,29 +446,45 @@ fn scaled(plan: &CalibrationPlan, scale: f64) -> Result<CalibrationPlan, String>
 }
 
 /// The instrument of a measurement section: theodolites at the description's stations
-/// calibrated over the 2 m cube around the robot's placement, or isotropic noise.
-fn measurement_model(m: &MeasurementSection, robot: &RobotDescription) -> Result<MeasurementModel, String> {
+/// calibrated over the 2 m cube around the robot's placement, or isotropic noise. An error
+/// blames `robot` (the description `robot_file`, or the default robot's) when its stations are
+/// at fault, else (`None`) the case's instrument key.
+fn measurement_model(
+    m: &MeasurementSection,
+    robot: &RobotDescription,
+    robot_file: Option<&Path>,
+) -> Result<MeasurementModel, (Option<&'static str>, String)> {
     let rms_mm = m.net_radial_rms_mm;
     if !(rms_mm.is_finite() && rms_mm > 0.0) {
-        return Err(format!("net radial error {rms_mm} mm must be finite and > 0"));
+        return Err((
+            None,
+            format!("net radial error {} mm must be finite and > 0", format_f64(rms_mm)),
+        ));
     }
+    let stations_fault = |message: String| {
+        let origin = robot_file.map_or_else(
+            || "the default robot".to_owned(),
+            |f| crate::plan::stations_origin(robot, f),
+        );
+        (Some("robot"), format!("{origin}: {message}"))
+    };
     Ok(match m.instrument {
         Instrument::Isotropic => MeasurementModel::Isotropic(IsotropicNoise {
             net_radial_rms_mm: rms_mm,
         }),
         Instrument::Theodolite => {
-            let stations_m =
-                crate::plan::instrument_stations_m(robot).map_err(|e| format!("placing the theodolites: {e}"))?;
+            let stations_m = crate::plan::instrument_stations_m(robot)
+                .map_err(|e| stations_fault(format!("placing the theodolites: {e}")))?;
             let [left_m, right_m] = <[Point3<f64>; 2]>::try_from(stations_m).map_err(|s| {
-                format!(
-                    "the theodolites need two stations, {} has {} (`[instrument] stations_mm`)",
+                stations_fault(format!(
+                    "the theodolites need two stations, {} has {}",
                     robot.name,
                     s.len()
-                )
+                ))
             })?;
             let (pair, _) =
                 TheodolitePair::around_robot_base([left_m, right_m], &robot.placement.origin_m(), rms_mm * 1e-3)
-                    .map_err(|e| format!("calibrating the theodolites: {e}"))?;
+                    .map_err(|e| stations_fault(crate::plan::theodolite_stations_problem(&[left_m, right_m], &e)))?;
             MeasurementModel::Theodolite(pair)
         }
     })
@@ -484,7 +511,7 @@ fn check_iso(iso: &IsoSection, dof: usize) -> Result<(), (&'static str, String)>
     {
         return Err((
             "iso9283.edge_mm",
-            format!("must be above 0 and at most 100000 mm, got {e}"),
+            format!("must be above 0 and at most 100000 mm, got {}", format_f64(e)),
         ));
     }
     if let Some(c) = &iso.centre_cmd {

@@ -1,6 +1,7 @@
 //! Pass/fail thresholds on statistics of metrics (pure, no I/O).
 
 use super::stats::{Stat, Stats, stat_of};
+use crate::measurement::format_f64;
 use serde::{Deserialize, Serialize};
 
 /// The comparison of a threshold.
@@ -46,14 +47,14 @@ impl Threshold {
     /// `p95(metric) <= value`.
     pub fn describe(&self) -> String {
         if self.metric == super::summary::FAILURE_RATE {
-            return format!("{} {} {}", self.metric, self.op.symbol(), self.value);
+            return format!("{} {} {}", self.metric, self.op.symbol(), format_f64(self.value));
         }
         format!(
             "{}({}) {} {}",
             self.stat.name(),
             self.metric,
             self.op.symbol(),
-            self.value
+            format_f64(self.value)
         )
     }
 

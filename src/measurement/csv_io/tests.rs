@@ -79,6 +79,47 @@ fn line_numbers_count_comment_lines() {
     assert!(matches!(e, MeasurementFileError::NotANumber { .. }));
 }
 
+/// A data row whose experiment id starts with `#` is refused naming its line, before or after
+/// other rows, at the end of the file without a line end too; remarks with commas are not.
+#[test]
+fn a_commented_data_row_is_refused_and_remarks_are_not() {
+    let row = "axis1,1,0,0,1,2,3,0,0";
+    for (text, line) in [
+        (format!("{HEADER}\n#{row}\n{row}\n"), 2),
+        (
+            format!(
+                "# pre, 1, 2, 3, 4, 5, 6, 7, 8\n{HEADER}\n{row}\n# a, remark, of, nine, fields, in, words, it, is\n#x,1,1,0,1,2,3,0,0"
+            ),
+            5,
+        ),
+    ] {
+        let (file, result) = read_text(&text, Some(2));
+        let e = result.expect_err("a commented data row").to_string();
+        assert!(e.starts_with(&format!("{}:{line}: ", file.path().display())), "{e}");
+        assert!(e.contains("starts with `#` but has 9 fields"), "{e}");
+    }
+    let (_file, result) = read_text(
+        &format!("{HEADER}\n{row}\n# measured 2024-01-05, by J. Smith, room 3\n"),
+        Some(2),
+    );
+    assert_eq!(result.unwrap().rows().len(), 1);
+    let (_file, result) = read_text(&format!("{HEADER}\n\"#axis1\",1,0,0,1,2,3,0,0\n"), Some(2));
+    assert_eq!(result.unwrap().rows()[0].experiment, "#axis1");
+}
+
+/// A target's name or a setup's label beyond 200 characters is refused, shown by its start.
+#[test]
+fn a_label_of_a_megabyte_is_refused_by_its_start() {
+    let name = "T".repeat(1_000_000);
+    let text = format!("{HEADER}\naxis1,1,0,{name},1,2,3,0,0\n");
+    let e = expect_error(&text, Some(2), 2, "target").to_string();
+    assert!(
+        e.contains("[1000000 characters]") && e.len() < 400,
+        "{}",
+        &e[..400.min(e.len())]
+    );
+}
+
 #[test]
 fn non_number() {
     let text = format!("{HEADER}\naxis1,1,0,0,1,2,3,0,zero\n");

@@ -2,7 +2,7 @@
 //! per pose and `N` columns, and one array of one row per pose and 3 columns per target.
 
 use super::mat_v5::{MatArray, MatFile};
-use crate::measurement::{Measurement, MeasurementSet};
+use crate::measurement::{Measurement, MeasurementSet, MeasurementSetError, RowProblem, format_f64};
 use crate::robot::{RobotDescription, commands_to_file};
 use std::path::{Path, PathBuf};
 
@@ -19,6 +19,19 @@ pub enum ArraysError {
         /// The numeric variables it has.
         available: String,
     },
+    /// A variable of that name is there but is no real 2-D matrix (more dimensions, text, a
+    /// cell array, ...).
+    #[error("{path}: variable `{name}` is not a 2-D real matrix: {why}; expected {expected}")]
+    NotAMatrix {
+        /// The file.
+        path: PathBuf,
+        /// The variable.
+        name: String,
+        /// What it is instead ([`MatFile::skipped`]).
+        why: String,
+        /// What was expected.
+        expected: String,
+    },
     /// A variable has the wrong shape.
     #[error("{path}: variable `{name}` is {rows}x{cols}, expected {expected}")]
     Shape {
@@ -32,6 +45,29 @@ pub enum ArraysError {
         cols: usize,
         /// What was expected.
         expected: String,
+    },
+    /// A value makes a row no measurement takes (a coordinate beyond 10 km, a command beyond
+    /// 1e6 deg or mm).
+    #[error("{path}: variable `{name}`, row {row}, column {col}: {} as written: {problem}", format_f64(*written))]
+    Value {
+        /// The file.
+        path: PathBuf,
+        /// The variable.
+        name: String,
+        /// 1-based row.
+        row: usize,
+        /// 1-based column.
+        col: usize,
+        /// The value in the file.
+        written: f64,
+        /// What is wrong with it in the measurement CSV's units.
+        problem: Box<RowProblem>,
+    },
+    /// `--experiment` is no experiment id.
+    #[error("--experiment: {problem}")]
+    Experiment {
+        /// What is wrong with it.
+        problem: Box<RowProblem>,
     },
     /// A value is not finite.
     #[error("{path}: variable `{name}`, row {row}, column {col}: {value} is not finite")]
@@ -99,7 +135,41 @@ pub fn free_poses(
             });
         }
     }
-    Ok(MeasurementSet::new(desc.dof(), rows).unwrap_or_else(|e| unreachable!("rows built valid: {e}")))
+    MeasurementSet::new(desc.dof(), rows).map_err(|e| in_file_terms(e, path, how, joints, &points))
+}
+
+/// `e`, a row built from the arrays that breaks a rule of the measurement CSV (a value out of
+/// range, an experiment id that is none), in the file's terms: the variable, its row and
+/// column and the value as written; `--experiment` for the id. Row `r` is pose
+/// `r / targets`, target `r % targets`.
+fn in_file_terms(
+    e: MeasurementSetError,
+    path: &Path,
+    how: &ArrayImport,
+    joints: &MatArray,
+    points: &[&MatArray],
+) -> ArraysError {
+    let (pose, target) = (e.row / points.len(), e.row % points.len());
+    let column = e.problem.column();
+    let (name, array, col) = match column.strip_prefix("cmd_").and_then(|k| k.parse::<usize>().ok()) {
+        Some(k) => (&how.joints, joints, k - 1),
+        None => match ["x_mm", "y_mm", "z_mm"].iter().position(|a| *a == column) {
+            Some(c) => (&how.targets[target], points[target], c),
+            None => {
+                return ArraysError::Experiment {
+                    problem: Box::new(e.problem),
+                };
+            }
+        },
+    };
+    ArraysError::Value {
+        path: path.to_owned(),
+        name: name.clone(),
+        row: pose + 1,
+        col: col + 1,
+        written: array.get(pose, col),
+        problem: Box::new(e.problem),
+    }
 }
 
 /// Joint `k`'s value in internal units (rad or m).
@@ -119,26 +189,37 @@ fn array<'a>(
     rows: Option<usize>,
     cols: usize,
 ) -> Result<&'a MatArray, ArraysError> {
-    let a = file.array(name).ok_or_else(|| ArraysError::Missing {
-        path: path.to_owned(),
-        name: name.into(),
-        available: file
-            .arrays
-            .iter()
-            .map(|a| a.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", "),
-    })?;
+    let expected = || match rows {
+        Some(r) => format!("{r}x{cols} (one row per pose)"),
+        None => format!("one row per pose and {cols} columns"),
+    };
+    let a = file
+        .array(name)
+        .ok_or_else(|| match file.skipped.iter().find(|(n, _)| n == name) {
+            Some((_, why)) => ArraysError::NotAMatrix {
+                path: path.to_owned(),
+                name: name.into(),
+                why: why.clone(),
+                expected: expected(),
+            },
+            None => ArraysError::Missing {
+                path: path.to_owned(),
+                name: name.into(),
+                available: file
+                    .arrays
+                    .iter()
+                    .map(|a| a.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            },
+        })?;
     if a.cols != cols || rows.is_some_and(|r| r != a.rows) || a.rows == 0 {
         return Err(ArraysError::Shape {
             path: path.to_owned(),
             name: name.into(),
             rows: a.rows,
             cols: a.cols,
-            expected: match rows {
-                Some(r) => format!("{r}x{cols} (one row per pose)"),
-                None => format!("one row per pose and {cols} columns"),
-            },
+            expected: expected(),
         });
     }
     for row in 0..a.rows {

@@ -81,7 +81,7 @@ pub struct MatFile {
     /// Every top-level real 2-D numeric or logical array, in file order.
     pub arrays: Vec<MatArray>,
     /// Top-level variables not decoded: (name, why).
-    pub skipped: Vec<(String, &'static str)>,
+    pub skipped: Vec<(String, String)>,
 }
 
 impl MatFile {
@@ -202,7 +202,7 @@ impl MatFile {
     fn add(&mut self, var: Var) {
         match var {
             Var::Array(a) => self.arrays.push(a),
-            Var::Skipped(name, why) => self.skipped.push((name, why)),
+            Var::Skipped(name, why) => self.skipped.push((name, why.into_owned())),
         }
     }
 }
@@ -465,13 +465,13 @@ fn inflate(el: &Element, budget: &mut Budget) -> Result<Vec<u8>, MatError> {
 /// A top-level variable: decoded, or skipped with the reason.
 enum Var {
     Array(MatArray),
-    Skipped(String, &'static str),
+    Skipped(String, std::borrow::Cow<'static, str>),
 }
 
 /// Decodes one `miMATRIX` element whose data lies in `outer`'s buffer.
 fn parse_matrix(outer: &Elements, el: &Element) -> Result<Var, MatError> {
     if el.data.is_empty() {
-        return Ok(Var::Skipped(String::new(), "empty miMATRIX element"));
+        return Ok(Var::Skipped(String::new(), "empty miMATRIX element".into()));
     }
     let mut sub = outer.inside(el);
     let flags_el = sub.expect(el.at, &[MI_UINT32], "array flags")?;
@@ -543,21 +543,23 @@ fn class_skip_reason(class: u32, complex: bool) -> Option<&'static str> {
     })
 }
 
-/// Rows and columns of a decodable array, or why it is skipped.
-fn shape(flags: u32, dims: &[usize], name: &str) -> Result<(usize, usize), &'static str> {
+/// Rows and columns of a decodable array, or why it is skipped (an array of more dimensions:
+/// how many, and their sizes).
+fn shape(flags: u32, dims: &[usize], name: &str) -> Result<(usize, usize), std::borrow::Cow<'static, str>> {
     if let Some(why) = class_skip_reason(flags & 0xff, flags & FLAG_COMPLEX != 0) {
-        return Err(why);
+        return Err(why.into());
     }
     // MATLAB drops trailing singleton dimensions; other writers may keep them.
     if dims.iter().skip(2).any(|&d| d != 1) {
-        return Err("more than 2 dimensions");
+        let sizes: Vec<String> = dims.iter().map(ToString::to_string).collect();
+        return Err(format!("{} dimensions ({})", dims.len(), sizes.join(" x ")).into());
     }
     if name.is_empty() {
-        return Err("unnamed array (subsystem data)");
+        return Err("unnamed array (subsystem data)".into());
     }
     match dims {
         [rows, cols, ..] => Ok((*rows, *cols)),
-        _ => Err("fewer than 2 dimensions"),
+        _ => Err("fewer than 2 dimensions".into()),
     }
 }
 
@@ -808,7 +810,7 @@ mod tests {
         let f = read(&bytes).unwrap();
         assert_eq!(f.array("plain").unwrap().values, [1.0, 2.0, 3.0, 4.0, 5.5, -6.25]);
         assert_eq!(f.array("zipped").unwrap().values, [-7.0, 0.0, 300.0]);
-        assert_eq!(f.skipped, [("txt".to_string(), "char array")]);
+        assert_eq!(f.skipped, [("txt".to_string(), "char array".to_string())]);
         assert_eq!(read(&sample(LE).0).unwrap(), f);
     }
 
@@ -888,10 +890,10 @@ mod tests {
             ("st", "struct"),
             ("c", "cell array"),
             ("z", "complex"),
-            ("cube", "more than 2 dimensions"),
+            ("cube", "3 dimensions (2 x 1 x 2)"),
             ("sp", "sparse matrix"),
         ];
-        assert_eq!(f.skipped, expect.map(|(n, w)| (n.to_string(), w)));
+        assert_eq!(f.skipped, expect.map(|(n, w)| (n.to_string(), w.to_string())));
         assert_eq!(f.arrays.len(), 1);
         assert_eq!(f.array("after").unwrap().values, [42.0]);
     }
@@ -911,7 +913,7 @@ mod tests {
             (0, 0, 0)
         );
         assert_eq!(
-            f.skipped.iter().map(|s| s.1).collect::<Vec<_>>(),
+            f.skipped.iter().map(|s| s.1.as_str()).collect::<Vec<_>>(),
             ["unnamed array (subsystem data)", "empty miMATRIX element"]
         );
         assert!(read(&LE.file(&[])).unwrap().arrays.is_empty());

@@ -8,6 +8,7 @@
 //! alters: the instrument's frame need not be the description's `placement`.
 
 use super::table::{Row, Table};
+use crate::csv_lines::shown_cell;
 use crate::measurement::{Measurement, MeasurementSet, MeasurementSetError, unit_check};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -165,7 +166,7 @@ fn plan_row(t: &Table, row: &Row<'_>, c: &PlanColumns, sight: &[usize]) -> Resul
         match t.cell(row, k)? {
             "yes" => {}
             "no" => visible = false,
-            other => return Err(t.row_error(row.line, k, format!("{other:?}: expected yes or no"))),
+            other => return Err(t.row_error(row.line, k, format!("{:?}: expected yes or no", shown_cell(other)))),
         }
     }
     Ok(PlanRow {

@@ -13,8 +13,10 @@
 
 use super::points::PointsError;
 use super::wide::{Pose, rows_of};
+use crate::csv_lines::shown_cell;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
+use crate::measurement::data::{command_beyond, coordinate_beyond};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use std::path::Path;
 use yaml_rust2::Yaml;
@@ -49,7 +51,7 @@ pub fn parse(text: &str, path: &Path, options: &RctOptions) -> Result<Measuremen
     };
     let mut poses: Vec<Pose> = Vec::with_capacity(entries.len());
     for (i, (key, entry)) in entries.iter().enumerate() {
-        let name = key_name(key);
+        let name = shown_cell(&key_name(key));
         let error = |field: &str, message: String| file_error(format!("entry `{name}`, field `{field}`: {message}"));
         let (cmd, markers) = observation(entry, options, &error)?;
         poses.push((i + 1, cmd, markers));
@@ -86,19 +88,37 @@ fn observation(
         .iter()
         .zip(&options.kinds)
         .enumerate()
-        .map(|(k, (v, kind))| {
-            let v = number(v).ok_or_else(|| error(&format!("target_joints[{k}]"), "not a finite number".into()))?;
-            Ok(match kind {
-                JointKind::Revolute => v.to_degrees(),
-                JointKind::Prismatic => v * 1e3,
-            })
+        .map(|(k, (written, kind))| {
+            let field = format!("target_joints[{k}]");
+            let v = number(written).ok_or_else(|| error(&field, "not a finite number".into()))?;
+            let (cmd, unit) = match kind {
+                JointKind::Revolute => (v.to_degrees(), "rad"),
+                JointKind::Prismatic => (v * 1e3, "m"),
+            };
+            match command_beyond(cmd) {
+                Some(range) => Err(error(
+                    &field,
+                    format!("{} {unit} is outside {range}", as_written(written)),
+                )),
+                None => Ok(cmd),
+            }
         })
         .collect::<Result<Vec<f64>, PointsError>>()?;
     let pose = &entry["pose"];
     let field = |name: &str| {
         number(&pose[name]).ok_or_else(|| error(&format!("pose.{name}"), "missing or not a finite number".into()))
     };
-    let position_mm = Vector3::new(field("x")?, field("y")?, field("z")?) * 1e3;
+    let coordinate_mm = |name: &str| {
+        let mm = field(name)? * 1e3;
+        match coordinate_beyond(mm) {
+            Some(range) => Err(error(
+                &format!("pose.{name}"),
+                format!("{} m is outside {range}", as_written(&pose[name])),
+            )),
+            None => Ok(mm),
+        }
+    };
+    let position_mm = Vector3::new(coordinate_mm("x")?, coordinate_mm("y")?, coordinate_mm("z")?);
     let mut markers = vec![Some(position_mm.into())];
     if let Some(length) = options.frame_points_mm {
         let q = Quaternion::new(field("qw")?, field("qx")?, field("qy")?, field("qz")?);
@@ -121,6 +141,15 @@ fn number(v: &Yaml) -> Option<f64> {
     v.as_f64()
         .or_else(|| v.as_i64().map(|i| i as f64))
         .filter(|x| x.is_finite())
+}
+
+/// A number as the file writes it (shortened when long).
+fn as_written(v: &Yaml) -> String {
+    match v {
+        Yaml::Real(s) => shown_cell(s),
+        Yaml::Integer(i) => i.to_string(),
+        other => format!("{other:?}"),
+    }
 }
 
 /// An entry's key as written.

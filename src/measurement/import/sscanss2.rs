@@ -9,6 +9,7 @@
 //! the same joint `joint<k>-2`, ...) of target 0; a held joint's command is its home value.
 
 use super::points::{LengthUnit, PointsError};
+use crate::csv_lines::shown_cell;
 use crate::kinematics::JointKind;
 use crate::measurement::{Measurement, MeasurementSet};
 use std::path::{Path, PathBuf};
@@ -112,17 +113,32 @@ fn row(line_text: &str, line: usize, path: &Path, joints: usize, unit: LengthUni
             .parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
-            .ok_or_else(|| error(column, format!("`{}` is not a finite number", cells[column])))
+            .ok_or_else(|| {
+                error(
+                    column,
+                    format!("`{}` is not a finite number", shown_cell(cells[column])),
+                )
+            })
     };
     let joint = cells[0]
         .parse::<usize>()
         .ok()
         .filter(|j| (1..=joints).contains(j))
-        .ok_or_else(|| error(0, format!("`{}` is not a joint of the robot (1..{joints})", cells[0])))?;
+        .ok_or_else(|| {
+            error(
+                0,
+                format!("`{}` is not a joint of the robot (1..{joints})", shown_cell(cells[0])),
+            )
+        })?;
     let kind = match cells[5].to_ascii_lowercase().as_str() {
         "revolute" => JointKind::Revolute,
         "prismatic" => JointKind::Prismatic,
-        other => return Err(error(5, format!("`{other}` is neither `revolute` nor `prismatic`"))),
+        other => {
+            return Err(error(
+                5,
+                format!("`{}` is neither `revolute` nor `prismatic`", shown_cell(other)),
+            ));
+        }
     };
     let mm = unit.to_mm();
     Ok(Row {

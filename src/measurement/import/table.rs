@@ -3,7 +3,7 @@
 //! ignored), every cell kept with its 1-based physical line for messages.
 
 use super::points::PointsError;
-use crate::csv_lines::{foreign_separator, shown_cell};
+use crate::csv_lines::{commented_row, foreign_separator, looks_like_row, shown_cell};
 use std::borrow::Cow;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -117,8 +117,12 @@ impl Table {
             let line = &text[range.clone()];
             let trimmed = line.trim();
             if trimmed.is_empty() || trimmed.starts_with('#') {
-                if header.is_none() && trimmed.starts_with('#') {
-                    comments.push(trimmed.trim_start_matches('#').trim().to_owned());
+                match &header {
+                    None if trimmed.starts_with('#') => {
+                        comments.push(trimmed.trim_start_matches('#').trim().to_owned())
+                    }
+                    Some(h) => check_comment(path, i + 1, line, h.len())?,
+                    None => {}
                 }
                 continue;
             }
@@ -166,7 +170,7 @@ impl Table {
             if self.header[..k].contains(name) {
                 return Err(PointsError::File {
                     path: self.path.clone(),
-                    message: format!("column {name:?} appears twice"),
+                    message: format!("column {:?} appears twice", shown_cell(name)),
                 });
             }
         }
@@ -182,7 +186,11 @@ impl Table {
     pub fn required(&self, names: &[&str]) -> Result<usize, PointsError> {
         self.column(names).ok_or_else(|| PointsError::File {
             path: self.path.clone(),
-            message: format!("no column {} (columns: {})", names.join(" or "), self.header.join(",")),
+            message: format!(
+                "no column {} (columns: {})",
+                names.join(" or "),
+                self.header.iter().map(|h| shown_cell(h)).collect::<Vec<_>>().join(",")
+            ),
         })
     }
 
@@ -191,7 +199,7 @@ impl Table {
         row.get(column).ok_or_else(|| PointsError::Row {
             path: self.path.clone(),
             line: row.line,
-            field: self.header[column].clone(),
+            field: shown_cell(&self.header[column]),
             message: "missing (the row is shorter than the header)".into(),
         })
     }
@@ -225,10 +233,24 @@ impl Table {
         PointsError::Row {
             path: self.path.clone(),
             line,
-            field: self.header.get(column).cloned().unwrap_or_default(),
+            field: shown_cell(self.header.get(column).map_or("", String::as_str)),
             message,
         }
     }
+}
+
+/// A `#` line among the rows with as many cells as the header, most of them numbers, is a data
+/// row whose first cell starts with `#`, not a comment: refused ([`looks_like_row`]).
+fn check_comment(path: &Path, line: usize, text: &str, columns: usize) -> Result<(), PointsError> {
+    let fields = text.split(',').count();
+    let numbers = text.split(',').filter(|c| c.trim().parse::<f64>().is_ok()).count();
+    if !looks_like_row(fields, numbers, columns) {
+        return Ok(());
+    }
+    Err(PointsError::File {
+        path: path.to_owned(),
+        message: format!("line {line}: {}", commented_row(fields)),
+    })
 }
 
 /// More cells than `columns`: a shifted row would be read into the wrong columns (empty cells
@@ -303,6 +325,24 @@ mod tests {
         let mut cells = Vec::new();
         split(line, &mut cells).unwrap();
         cells.into_iter().map(|c| c.into_owned()).collect()
+    }
+
+    /// A `#` line after the header with as many cells, most of them numbers, is a commented-out
+    /// row: refused naming its line; a remark with commas, or one before the header, is not.
+    #[test]
+    fn a_commented_out_row_is_refused() {
+        let e = Table::parse("# 1,2,3,4\nid,x,y,z\np1,1,2,3\n#p2,4,5,6\n", Path::new("t.csv"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.csv: line 4: the line starts with `#` but has 4 fields"),
+            "{e}"
+        );
+        let t = Table::parse(
+            "id,x,y,z\np1,1,2,3\n# by J. Smith, room 3, 2024, day 5\n",
+            Path::new("t.csv"),
+        );
+        assert_eq!(t.unwrap().row_count(), 1);
     }
 
     #[test]

@@ -130,7 +130,7 @@ impl RobotDescription {
                 {
                     return Err((
                         format!("joints[{k}].{key}"),
-                        format!("must be a positive number, got {v}"),
+                        format!("must be a positive number, got {}", format_f64(v)),
                     ));
                 }
             }
