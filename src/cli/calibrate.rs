@@ -71,7 +71,7 @@ pub struct Args {
     /// The robot's repeatability (rad): standard deviation of a joint value's error per
     /// re-positioning, one value for every joint or one per joint (comma-separated); 0 = model
     /// measurement noise only. Default: the robot description's `repeatability_sigma`.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = super::options::REPEATABILITY_RAD)]
     repeatability_rad: Option<Vec<f64>>,
     /// Print `report.json` on stdout (the human-readable lines go to stderr, or nowhere with `--quiet`).
     #[arg(long)]
@@ -83,8 +83,8 @@ pub struct Args {
     /// `instrument` (the measuring instrument's frame, the base placed in it).
     #[arg(long, value_parser = OneOf(URDF_ROOTS), default_value = "base_link")]
     urdf_root: UrdfRoot,
-    /// The URDF's robot name (default: the description's name as a ROS name).
-    #[arg(long)]
+    /// The URDF's robot name, a ROS name (default: the description's name as one).
+    #[arg(long, value_parser = super::options::ros_robot_name)]
     urdf_name: Option<String>,
     /// Step of the tabulated joint map (`joint_map.csv`) (deg or mm) (finer than 0.001 writes
     /// millions of rows per joint).

@@ -124,7 +124,7 @@ struct WideArgs {
     #[arg(long, value_enum)]
     units: Unit,
     /// Joint values within this of each other hold the joint still (deg or mm).
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, value_parser = super::options::STILL_TOLERANCE)]
     still_tolerance: f64,
     /// Output measurement CSV.
     #[arg(long)]
@@ -198,7 +198,7 @@ struct RctArgs {
     #[arg(long)]
     frame_points: Option<f64>,
     /// Joint values within this of each other hold the joint still (deg or mm).
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, value_parser = super::options::STILL_TOLERANCE)]
     still_tolerance: f64,
     /// Output measurement CSV.
     #[arg(long)]

@@ -56,7 +56,7 @@ struct CubeArgs {
     centre_cmd: Option<Vec<f64>>,
     /// The cube's edge (mm). Default: the largest, to 10 mm and at most 500 mm, whose five
     /// points are inside the joint limits.
-    #[arg(long, value_parser = InRange::above(0.0, 1e5, ""))]
+    #[arg(long, value_parser = InRange::closed(1.0, 1e5, "mm"))]
     edge_mm: Option<f64>,
     /// Cycles (ISO 9283: 30).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=1000))]

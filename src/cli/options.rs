@@ -78,7 +78,8 @@ where
         };
         // NaN fails both comparisons.
         if !(low_ok && value <= self.max) {
-            return Err(format!("{value} is out of range; must be {}", self.describe()));
+            let written = axiscal::csv_lines::shown_cell(text.trim());
+            return Err(format!("{written} is out of range; must be {}", self.describe()));
         }
         Ok(value)
     }
@@ -105,6 +106,12 @@ where
 
 /// A measurement noise level, 3-D RMS (mm).
 pub const NOISE_MM: InRange<f64> = InRange::above(0.0, axiscal::calibration::procedure::MAX_NOISE_RMS_3D_MM, "mm");
+
+/// A joint's repeatability, 1-sigma (rad), as the description's `repeatability_sigma`.
+pub const REPEATABILITY_RAD: InRange<f64> = InRange::closed(0.0, axiscal::robot::MAX_REPEATABILITY_SIGMA, "rad");
+
+/// Joint values within this of each other hold a joint still (deg or mm).
+pub const STILL_TOLERANCE: InRange<f64> = InRange::closed(0.0, 10.0, "deg or mm");
 
 /// Worker threads: 1 to this many.
 pub const MAX_THREADS: usize = 1024;
@@ -136,6 +143,20 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 /// `accepted` kinds (`axiscal::presets`). The error lists those kinds' shipped names.
 fn shipped_or_file(text: &str, accepted: &[Kind]) -> Result<PathBuf, String> {
     axiscal::presets::resolve(Path::new(text), accepted).map_err(|e| e.to_string())
+}
+
+/// A URDF robot name as ROS takes it: a letter or `_`, then letters, digits, `_` and `/` (at
+/// most 100): written into XML attributes unescaped, so nothing that would break them.
+pub fn ros_robot_name(text: &str) -> Result<String, String> {
+    let mut chars = text.chars();
+    let first_ok = chars.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_');
+    if first_ok && text.len() <= 100 && chars.all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '/') {
+        return Ok(text.to_string());
+    }
+    Err(format!(
+        "`{}` is not a ROS name: a letter or `_`, then letters, digits, `_` and `/` (at most 100), e.g. `my_robot`",
+        axiscal::csv_lines::shown_cell(text)
+    ))
 }
 
 /// A robot description on the command line (`asea-irb6l`).

@@ -67,7 +67,7 @@ pub struct Args {
     noise_mm: f64,
     /// With `--optimize`: the robot's repeatability (rad) the calibration models, one value or
     /// one per joint. Default: the description's `repeatability_sigma`.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = super::options::REPEATABILITY_RAD)]
     repeatability_rad: Option<Vec<f64>>,
     /// With `--optimize`: the fewest intervals a sweep keeps (its fits need points).
     #[arg(long, default_value_t = axiscal::plan::OptimizeOptions::default().min_intervals, value_parser = InRange::closed(2usize, 100_000, ""))]
@@ -133,6 +133,9 @@ impl SightArgs {
                 .map(|s_m| (s_m.coords * 1e3).map(|c| (c * 10.0).round() / 10.0 + 0.0).into())
                 .collect()
         } else {
+            if let Some((k, why)) = axiscal::robot::station_problem(&self.station) {
+                anyhow::bail!("--station: station {k} (counting from 0) at {why}");
+            }
             self.station.clone()
         })
     }

@@ -6,6 +6,7 @@
 
 mod identity;
 mod validate;
+pub use validate::{MAX_REPEATABILITY_SIGMA, station_problem};
 
 mod convert;
 mod instrument;

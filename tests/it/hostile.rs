@@ -230,6 +230,58 @@ fn write_inputs(dir: &Path) {
     let made = std::process::Command::new("mkfifo").arg(dir.join("fifo.csv")).status();
     assert!(made.is_ok_and(|s| s.success()), "mkfifo");
     write_reader_inputs(dir);
+    // A DH robot without a joint: the positioner without its joints and axis targets.
+    let positioner = std::fs::read_to_string(shipped("scenarios/robots/positioner-2axis.toml")).unwrap();
+    let head = positioner.split("[[joints]]").next().unwrap();
+    std::fs::write(dir.join("no-joints.toml"), head).unwrap();
+}
+
+/// The cases of the options and descriptions the second hostile run of this round found.
+fn option_cases() -> Vec<Case> {
+    vec![
+        case(
+            "a DH robot without a joint (it panicked)",
+            "describe no-joints.toml",
+            2,
+            &["no-joints.toml", "field `joints`", "at least one joint"],
+        ),
+        case(
+            "a URDF name that breaks the XML",
+            "calibrate campaign.csv --urdf-name </robot><x> --out out",
+            2,
+            &["--urdf-name", "not a ROS name", "my_robot"],
+        ),
+        case(
+            "two plan stations in one place",
+            "plan --station 0,0,0 --station 0,0,0 --out out.csv",
+            2,
+            &["--station", "0.0 mm from station 0", "at least 100 mm apart"],
+        ),
+        case(
+            "an option of 1e308 (its 309 digits echoed)",
+            "calibrate campaign.csv --held-tolerance 1e308 --out out",
+            2,
+            &["--held-tolerance: 1e308 is out of range", "0..=360"],
+        ),
+        case(
+            "a repeatability of 10 rad",
+            "calibrate campaign.csv --repeatability-rad 10 --out out",
+            2,
+            &["--repeatability-rad: 10 is out of range", "0..=0.05 rad"],
+        ),
+        case(
+            "an ISO cube's edge in metres",
+            "iso9283 plan --edge-mm 0.25 --out out.csv",
+            2,
+            &["--edge-mm: 0.25 is out of range", "1..=100000 mm"],
+        ),
+        case(
+            "a negative still tolerance",
+            "import wide wide7.csv --angles deg --units mm --still-tolerance=-1 --out out.csv",
+            2,
+            &["--still-tolerance: -1 is out of range", "0..=10"],
+        ),
+    ]
 }
 
 /// The cases of the readers: each input in [`write_reader_inputs`].
@@ -376,6 +428,7 @@ fn cases() -> Vec<Case> {
     let cal = "--calibration cal/calibration.json";
     let positioner = shipped("scenarios/robots/positioner-2axis.toml");
     let mut cases = reader_cases();
+    cases.extend(option_cases());
     cases.extend([
         case(
             "a device as poses",

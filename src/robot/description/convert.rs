@@ -26,6 +26,9 @@ impl RobotDescription {
         path: &Path,
     ) -> Result<Option<(SourceChain, Isometry3<f64>)>, DescriptionError> {
         let has_dh = self.dh_convention.is_some() || self.joints.iter().any(|j| j.dh.is_some());
+        if has_dh && self.joints.is_empty() {
+            return Err(invalid(path, "joints", "at least one joint is required"));
+        }
         let source = match (has_dh, self.urdf.clone()) {
             (false, None) => return Ok(None),
             (true, Some(_)) => {

@@ -260,26 +260,8 @@ impl RobotDescription {
                 "at least one station is required (or leave out `[instrument]`)".into(),
             ));
         }
-        for (k, s) in entry.stations_mm.iter().enumerate() {
-            if !s.iter().all(|c| c.is_finite() && c.abs() <= 1e6) {
-                return Err((
-                    format!("instrument.stations_mm[{k}]"),
-                    format!("{s:?}: each coordinate must be a finite number of mm within 1 km"),
-                ));
-            }
-            let near = entry.stations_mm[..k]
-                .iter()
-                .position(|t| (Point3::from(*t) - Point3::from(*s)).norm() < MIN_STATION_DISTANCE_MM);
-            if let Some(i) = near {
-                return Err((
-                    format!("instrument.stations_mm[{k}]"),
-                    format!(
-                        "{s:?} is {:.1} mm from station {i}: two stations stand at least {MIN_STATION_DISTANCE_MM} mm \
-                         apart (the coordinates are in mm, not m)",
-                        (Point3::from(entry.stations_mm[i]) - Point3::from(*s)).norm()
-                    ),
-                ));
-            }
+        if let Some((k, why)) = station_problem(&entry.stations_mm) {
+            return Err((format!("instrument.stations_mm[{k}]"), why));
         }
         Ok(())
     }
@@ -327,4 +309,28 @@ impl RobotDescription {
         }
         Ok(())
     }
+}
+
+/// The first of `stations_mm` that is not a finite point within 1 km, or stands closer than
+/// [`MIN_STATION_DISTANCE_MM`] to an earlier one: its index and why.
+pub fn station_problem(stations_mm: &[[f64; 3]]) -> Option<(usize, String)> {
+    stations_mm.iter().enumerate().find_map(|(k, s)| {
+        if !s.iter().all(|c| c.is_finite() && c.abs() <= 1e6) {
+            return Some((
+                k,
+                format!("{s:?}: each coordinate must be a finite number of mm within 1 km"),
+            ));
+        }
+        let near = stations_mm[..k]
+            .iter()
+            .position(|t| (Point3::from(*t) - Point3::from(*s)).norm() < MIN_STATION_DISTANCE_MM)?;
+        Some((
+            k,
+            format!(
+                "{s:?} is {:.1} mm from station {near}: two stations stand at least {MIN_STATION_DISTANCE_MM} mm \
+                 apart (the coordinates are in mm, not m)",
+                (Point3::from(stations_mm[near]) - Point3::from(*s)).norm()
+            ),
+        ))
+    })
 }
