@@ -153,6 +153,9 @@ pub fn link_from_phi(phi_rad: f64) -> Isometry3<f64> {
     frame_from_phi(phi_rad, 0.0, 0.0)
 }
 
+/// Within this of +-90 deg pitch \[rad\], [`roll_pitch_yaw`] takes the angles its own way.
+pub const NEAR_LOCK_RAD: f64 = 1e-3;
+
 /// Roll, pitch and yaw \[rad\] of `rotation = Rz(yaw) Ry(pitch) Rx(roll)` (nalgebra's
 /// `from_euler_angles`, URDF's `rpy`), to round-off at every pitch.
 ///
@@ -161,8 +164,15 @@ pub fn link_from_phi(phi_rad: f64) -> Isometry3<f64> {
 /// taken here from `atan2` of its sine and cosine, the yaw from the first column, and the roll
 /// from what is left once they are taken out: near +-90 deg the yaw is ill-determined, but any
 /// error in it is a turn about the same axis as the roll there, which the roll takes up, so
-/// the three angles rebuild `rotation` to round-off.
+/// the three angles rebuild `rotation` to round-off. Farther than [`NEAR_LOCK_RAD`] from the
+/// lock, where `asin` keeps every digit but a few (its error, `eps / cos(pitch)`, stays below
+/// 3e-13 rad), the angles are `euler_angles`' bit for bit: what axiscal wrote, and hashed into
+/// a description's identity, before.
 pub fn roll_pitch_yaw(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
+    let (roll, pitch, yaw) = rotation.euler_angles();
+    if std::f64::consts::FRAC_PI_2 - pitch.abs() > NEAR_LOCK_RAD {
+        return [roll, pitch, yaw];
+    }
     let r = rotation.to_rotation_matrix();
     let (r00, r10, r20) = (r[(0, 0)], r[(1, 0)], r[(2, 0)]);
     let pitch = (-r20).atan2(r00.hypot(r10));
