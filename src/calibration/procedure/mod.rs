@@ -246,12 +246,16 @@ pub enum ProcedureError {
     #[error("modelling the held joints' recorded values: {0}")]
     Held(#[from] crate::robot::ModelError),
     /// The swept joint's command does not move.
-    #[error("experiment {experiment}: the command of joint {joint} has zero span")]
+    #[error("experiment {experiment}{}: the command of joint {joint} has zero span{cause}", lines_text(*lines))]
     ZeroSpan {
         /// Experiment.
         experiment: String,
         /// Joint.
         joint: usize,
+        /// The file lines of the experiment's first and last row, when known.
+        lines: Option<(u64, u64)>,
+        /// Why, in words (starting with `; `).
+        cause: String,
     },
     /// Commands contradict the experiment design (`docs/formats.md#controller-semantics`).
     #[error("experiment {experiment}, step {step}, column cmd_{joint}: {reason}")]
@@ -299,6 +303,15 @@ pub enum ProcedureError {
         /// What is wrong.
         message: String,
     },
+}
+
+/// ` (lines A-B)` of an experiment read from a file, or nothing.
+fn lines_text(lines: Option<(u64, u64)>) -> String {
+    match lines {
+        Some((a, b)) if a == b => format!(" (line {a})"),
+        Some((a, b)) => format!(" (lines {a}-{b})"),
+        None => String::new(),
+    }
 }
 
 /// How much a calibration computes besides the fitted model.
