@@ -219,7 +219,9 @@ pub enum ProcedureError {
     },
     /// A joint's sweeps move their target less than the noise: no axis can be fitted.
     #[error(
-        "experiment {experiment} (joint {joint}): its points spread {spread_mm:.4} mm RMS about their centroid, within {factor} times the noise of a point ({noise_mm:.3} mm): the sweep is too short for the instrument to locate the axis; widen its span (or check that the joint moved and the commands' units)"
+        "experiment {experiment} (joint {joint}): its points spread {spread_mm:.4} mm RMS about their centroid, within {factor} times the noise of a point ({noise_mm:.3} mm): the sweep ({} as written) is too short for the instrument to locate the axis; widen its span{} (or check that the joint moved and the commands' units)",
+        span.written(),
+        span.needed()
     )]
     Unresolved {
         /// The experiments of the joint.
@@ -232,6 +234,29 @@ pub enum ProcedureError {
         noise_mm: f64,
         /// [`crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`].
         factor: f64,
+        /// Its span as written and the least the fit needs.
+        span: ShortSpan,
+    },
+    /// A rotary joint's arc bows from its chord by too little for its fit: the sweep is short.
+    #[error(
+        "experiment {experiment} (joint {joint}): the sweep spans {} as written, too short to locate the axis: its arc bows {sagitta_mm:.4} mm from its chord (radius {radius_mm:.1} mm), within {} times the noise of a point ({noise_mm:.3} mm); widen its span{} (or check the commands' units)",
+        span.written(),
+        crate::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE,
+        span.needed()
+    )]
+    ShortArc {
+        /// The experiments of the joint.
+        experiment: String,
+        /// The joint.
+        joint: usize,
+        /// The arc's sagitta \[mm\].
+        sagitta_mm: f64,
+        /// Its radius, from its chord and its span \[mm\].
+        radius_mm: f64,
+        /// The noise of a point, 3-D RMS \[mm\].
+        noise_mm: f64,
+        /// Its span as written and the least the fit needs.
+        span: ShortSpan,
     },
     /// A fit-and-correct pass for the held joints' recorded values failed: the correction
     /// moved the points away from any arc (it diverges).
@@ -303,6 +328,53 @@ pub enum ProcedureError {
         /// What is wrong.
         message: String,
     },
+}
+
+impl ProcedureError {
+    /// The joint the error is about, when it names one (an axis fit's, a sweep's).
+    pub fn joint(&self) -> Option<usize> {
+        match self {
+            Self::Absurd { joint, .. }
+            | Self::Unresolved { joint, .. }
+            | Self::ShortArc { joint, .. }
+            | Self::ZeroSpan { joint, .. }
+            | Self::InconsistentCommands { joint, .. }
+            | Self::SecondTargetMissing { joint, .. }
+            | Self::Fit { joint, .. } => Some(*joint),
+            Self::HeldDiverged { source, .. } => source.joint(),
+            _ => None,
+        }
+    }
+}
+
+/// A sweep's span as written (file units) and the least its fit needs, when known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShortSpan {
+    /// The widest sweep's span of the joint's command (deg or mm).
+    pub written: f64,
+    /// The span whose points the fit would resolve (same unit), when it can be said.
+    pub needed: Option<f64>,
+    /// The joint's kind: the unit (deg or mm).
+    pub kind: JointKind,
+}
+
+impl ShortSpan {
+    fn unit(&self) -> &'static str {
+        match self.kind {
+            JointKind::Revolute => "deg",
+            JointKind::Prismatic => "mm",
+        }
+    }
+
+    fn written(&self) -> String {
+        format!("{:.4} {}", self.written, self.unit())
+    }
+
+    fn needed(&self) -> String {
+        self.needed.map_or(String::new(), |n| {
+            format!(" to at least {n:.3} {} at this noise", self.unit())
+        })
+    }
 }
 
 /// ` (lines A-B)` of an experiment read from a file, or nothing.
