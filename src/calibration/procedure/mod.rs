@@ -48,10 +48,10 @@ pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, read_residuals_csv, residuals_csv};
 pub use result::{
     AxisReport, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport, PointResidual,
-    PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
+    PositionSigma, RowSigma, SecondTargetData, SweepReport, ToolPose, ToolReport, harmonics,
 };
 pub use sanity::{Implausible, MISFIT_RATIO, SIZE_TOLERANCE, implausible};
-pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, screen_sweeps};
+pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, WorstSecondTarget, screen_sweeps};
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
@@ -317,6 +317,20 @@ pub enum ProcedureError {
         /// The fit's error.
         source: CalibrationError,
     },
+    /// A coupling fit (eqs. 14-15) failed; with its second target's reading farthest from the
+    /// curve of its neighbours (a reading swapped or off, the likely cause).
+    #[error("experiment {experiment} (joint {joint}): {source}{}", data.worst().map_or(String::new(), |w| w.to_string()))]
+    CouplingFit {
+        /// Experiment.
+        experiment: String,
+        /// The driving joint.
+        joint: usize,
+        /// The fit's error.
+        source: CalibrationError,
+        /// What the fit was fitted to (the outlier test reads it; the message names its point
+        /// farthest from its neighbours' curve, [`SecondTargetData::worst`]).
+        data: Box<SecondTargetData>,
+    },
     /// The axes do not make a phi-model.
     #[error(transparent)]
     Frames(#[from] FramesError),
@@ -340,7 +354,8 @@ impl ProcedureError {
             | Self::ZeroSpan { joint, .. }
             | Self::InconsistentCommands { joint, .. }
             | Self::SecondTargetMissing { joint, .. }
-            | Self::Fit { joint, .. } => Some(*joint),
+            | Self::Fit { joint, .. }
+            | Self::CouplingFit { joint, .. } => Some(*joint),
             Self::HeldDiverged { source, .. } => source.joint(),
             _ => None,
         }
