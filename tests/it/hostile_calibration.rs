@@ -79,6 +79,30 @@ fn an_experiment_named_for_a_joint_the_robot_lacks_is_refused_on_its_first_line(
     assert!(err.contains("`axis6`"), "{err}");
 }
 
+/// A sweep whose rows all name target 1 (the ids shifted by one) is one error naming target 0
+/// and the target ids, not a panic of the unit check nor a sweep "too short".
+#[test]
+fn a_sweep_without_its_first_target_names_the_target_ids() {
+    let (_dir, data) = campaign();
+    let shifted = altered_csv(
+        &data,
+        "shifted.csv",
+        |_| true,
+        |f| {
+            if f[0] == "axis5" {
+                f[3] = "1".into();
+            }
+        },
+    );
+    let err = calibrate_fails(&shifted, &[]);
+    assert!(
+        err.contains(
+            "experiment axis5 (joint 5): target 0 (the target on the swept link; check the rows' target ids): 0 points given"
+        ),
+        "{err}"
+    );
+}
+
 /// Item: a block of rows under another joint's label (the experiments' labels and
 /// `moved_joint` of two sweeps exchanged, as reordered blocks of an instrument's export give)
 /// names the experiment, its lines and the joint whose command moves instead of "zero span".

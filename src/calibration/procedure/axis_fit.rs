@@ -103,6 +103,24 @@ impl JointData<'_> {
         (pts, u)
     }
 
+    /// Every sweep's target-0 points; an error when there is none (every row names another
+    /// target: the ids, not the span, are wrong), for a joint of `kind`.
+    fn target0_points(&self, kind: JointKind) -> Result<Vec<Point3<f64>>, ProcedureError> {
+        let points: Vec<Point3<f64>> = self.points.iter().flatten().copied().collect();
+        if points.is_empty() {
+            return Err(ProcedureError::Fit {
+                experiment: self.name(),
+                joint: self.joint(),
+                source: CalibrationError::TooFewPoints {
+                    fit: "target 0 (the target on the swept link; check the rows' target ids)",
+                    got: 0,
+                    needed: if kind == JointKind::Revolute { 3 } else { 2 },
+                },
+            });
+        }
+        Ok(points)
+    }
+
     /// The span of the joint's command (file units) over its widest sweep, and the span its
     /// points would need (`needed`, same unit, when known).
     fn short_span(&self, kind: JointKind, needed: Option<f64>) -> ShortSpan {
@@ -176,12 +194,12 @@ pub(super) fn fit_joint(
     detail: Detail,
 ) -> Result<AxisFitOutcome, ProcedureError> {
     let joint = data.joint();
-    let points: Vec<Point3<f64>> = data.points.iter().flatten().copied().collect();
+    let kind = desc.joints[joint - 1].kind;
+    let points = data.target0_points(kind)?;
     let spread_mm = crate::numerics::stats::rms_spread(&points) * 1e3;
     // Points within the noise of their centroid (by the noise assumed: an estimated one may be
     // far smaller) explain a fit that fails or misses them: said instead.
     let factor = crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE;
-    let kind = desc.joints[joint - 1].kind;
     let unresolved = || ProcedureError::Unresolved {
         experiment: data.name(),
         joint,
