@@ -45,13 +45,10 @@ pub fn passive_displacements(
             needed: 2,
         });
     }
-    let o = axis_i.origin_m.coords;
     let mut out = Vec::with_capacity(n);
     let mut last = 0.0;
     for (t, p) in active_from_start_rad.iter().zip(second_target) {
-        let turn =
-            Translation3::from(o) * UnitQuaternion::from_axis_angle(&axis_i.direction, *t) * Translation3::from(-o);
-        let local = (turn * base_from_next_axis_start).inverse() * p;
+        let local = in_next_frame(base_from_next_axis_start, axis_i, *t, p);
         if local.x == 0.0 && local.y == 0.0 {
             return Err(CalibrationError::InvalidInput {
                 fit: FIT,
@@ -65,6 +62,37 @@ pub fn passive_displacements(
     }
     let a0 = out[0];
     Ok(out.into_iter().map(|a| a - a0).collect())
+}
+
+/// The second target `p` (base frame) in frame `i+1` turned about axis `i` by the active motion
+/// `t` since step 0 ([`passive_displacements`]).
+fn in_next_frame(
+    base_from_next_axis_start: &Isometry3<f64>,
+    axis_i: &AxisLine,
+    t: f64,
+    p: &Point3<f64>,
+) -> Point3<f64> {
+    let o = axis_i.origin_m.coords;
+    let turn = Translation3::from(o) * UnitQuaternion::from_axis_angle(&axis_i.direction, t) * Translation3::from(-o);
+    (turn * base_from_next_axis_start).inverse() * p
+}
+
+/// Each second target's distance \[m\] from axis `i+1` (the arguments of
+/// [`passive_displacements`]): what turns an error of its passive angle into a distance.
+pub fn second_target_lever_arms_m(
+    base_from_next_axis_start: &Isometry3<f64>,
+    axis_i: &AxisLine,
+    active_from_start_rad: &[f64],
+    second_target: &[Point3<f64>],
+) -> Vec<f64> {
+    active_from_start_rad
+        .iter()
+        .zip(second_target)
+        .map(|(t, p)| {
+            let local = in_next_frame(base_from_next_axis_start, axis_i, *t, p);
+            local.x.hypot(local.y)
+        })
+        .collect()
 }
 
 /// The coupling form to fit.

@@ -367,6 +367,12 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         }
         Err(e) => {
             super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
+            if let Some(too_small) = args
+                .noise_mm
+                .and_then(|n| noise_far_below(screened, desc, &options, n, &e))
+            {
+                anyhow::bail!("calibrating {}: {too_small}", args.data.display())
+            }
             let hint = args.noise_mm.map_or(String::new(), |n| {
                 format!(
                     " (with --noise-mm {n:e}: a noise far below the data's makes the fits trust each point more than the joints' repeatability allows; without --noise-mm it is estimated from the residuals)"
@@ -386,6 +392,52 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         cal
     };
     Ok((cal, map))
+}
+
+/// Why the calibration with `--noise-mm given_mm` failed (`failed`) when the data scatter far
+/// more than that: the calibration weighted with the noise its residuals estimate succeeds, and
+/// `given_mm` lies below that estimate's 95 % interval. Names the failed joint (else the one
+/// whose residuals are the largest) and its residual RMS against `given_mm`.
+fn noise_far_below(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    given_mm: f64,
+    failed: &ProcedureError,
+) -> Option<String> {
+    // As without --noise-mm: a first pass at the default noise, then the estimate's.
+    let estimating = CalibrationOptions {
+        estimate_noise: true,
+        noise_rms_3d_mm: CalibrationOptions::default().noise_rms_3d_mm,
+        ..options.clone()
+    };
+    let cal = calibrate(set, desc, &estimating).ok()?;
+    let estimate = cal.noise.as_ref()?.estimate.as_ref()?;
+    if given_mm >= estimate.interval.low_mm {
+        return None;
+    }
+    let largest = || {
+        cal.axes
+            .iter()
+            .max_by(|a, b| a.residual_rms_mm.total_cmp(&b.residual_rms_mm))
+    };
+    let axis = failed
+        .joint()
+        .and_then(|j| cal.axes.iter().find(|a| a.joint == j))
+        .or_else(largest)?;
+    Some(format!(
+        "experiment {} (joint {}): the residuals ({:.4} mm RMS) are {:.0} times --noise-mm {}; --noise-mm is too \
+         small or the data are bad: the fits weighted with it fail, while the residuals estimate a noise of {:.4} mm \
+         (95 % interval {:.4}-{:.4} mm; without --noise-mm the fits are weighted with it)",
+        axis.experiment,
+        axis.joint,
+        axis.residual_rms_mm,
+        axis.residual_rms_mm / given_mm,
+        axiscal::measurement::format_f64(given_mm),
+        estimate.rms_3d_mm,
+        estimate.interval.low_mm,
+        estimate.interval.high_mm
+    ))
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far

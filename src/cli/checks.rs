@@ -316,12 +316,19 @@ pub fn print_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint]
         } else {
             "kept (--keep-outliers)".to_string()
         };
-        let (from, noise, fence_of, check) = match o.joint {
-            0 => (
+        let (from, noise, fence_of, check) = match (o.joint, o.target) {
+            (0, _) => (
                 "the calibrated model",
                 "the noise",
                 "every validation point's), and far from its pose's other targets (an effect moves them alike",
                 "coordinates and target id",
+            ),
+            // A sweep's second target, judged by its passive angle (eqs. 14-15).
+            (_, 1) => (
+                "the curve of its neighbours' passive angles",
+                "their scatter",
+                "every sweep point's",
+                "coordinates and target id (a reading swapped with another step's)",
             ),
             _ => (
                 "the fit of its sweep's other points",

@@ -3,6 +3,7 @@
 
 use super::output::Outputs;
 use anyhow::{Context, Result};
+use axiscal::kinematics::JointKind;
 use axiscal::measurement::import::arrays::{ArrayImport, free_poses};
 use axiscal::measurement::import::boby_klimchik;
 use axiscal::measurement::import::mat_v5;
@@ -11,8 +12,8 @@ use axiscal::measurement::import::rct;
 use axiscal::measurement::import::spatial_analyzer;
 use axiscal::measurement::import::sscanss2;
 use axiscal::measurement::import::table::Table;
-use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide};
-use axiscal::measurement::write_measurements_to;
+use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide, still_tolerance_hint};
+use axiscal::measurement::{MeasurementSet, write_measurements_to};
 use axiscal::robot::RobotDescription;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -392,6 +393,7 @@ fn import_rct(a: &RctArgs) -> Result<()> {
     );
     write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     report_experiments(&set, &a.file, &a.out);
+    warn_still_tolerance(&set, &desc, &a.file, a.still_tolerance);
     Ok(())
 }
 
@@ -426,7 +428,35 @@ fn import_wide(a: &WideArgs) -> Result<()> {
     );
     write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     report_experiments(&set, &a.file, &a.out);
+    warn_still_tolerance(&set, &desc, &a.file, a.still_tolerance);
     Ok(())
+}
+
+/// A warning when nearly every pose of an imported table became a free pose while a larger
+/// `--still-tolerance` recovers its axis experiments ([`still_tolerance_hint`]).
+fn warn_still_tolerance(set: &MeasurementSet, desc: &RobotDescription, source: &Path, tolerance: f64) {
+    let Some(hint) = still_tolerance_hint(set, tolerance) else {
+        return;
+    };
+    let kinds: Vec<JointKind> = desc.joints.iter().map(|j| j.kind).collect();
+    let unit = if kinds.iter().all(|k| *k == JointKind::Revolute) {
+        "deg"
+    } else if kinds.iter().all(|k| *k == JointKind::Prismatic) {
+        "mm"
+    } else {
+        "deg or mm"
+    };
+    eprintln!(
+        "warning: {}: {} of its {} poses (table rows) became free poses (experiment `poses`): between consecutive \
+         poses their held joints vary by up to {} {unit}, more than --still-tolerance {tolerance}; pass \
+         --still-tolerance {} (it makes {} of them axis-experiment poses)",
+        source.display(),
+        hint.free_poses,
+        hint.poses,
+        hint.tolerance,
+        hint.tolerance,
+        hint.recovered
+    );
 }
 
 fn import_mat(a: &MatArgs) -> Result<()> {

@@ -111,6 +111,22 @@ pub enum RowProblem {
         /// `moved_joint` of this row.
         found: usize,
     },
+    /// The experiment's id names a joint the robot does not have (`axis66` for a six-joint
+    /// robot: a typo of `axis6`).
+    #[error(
+        "experiment {experiment:?} names joint {named}, but the robot has {joint_count} joints: a typo in the experiment id?{}",
+        rename_hint(*moved_joint)
+    )]
+    NoSuchJoint {
+        /// The experiment.
+        experiment: String,
+        /// The joint its id names.
+        named: usize,
+        /// N.
+        joint_count: usize,
+        /// The row's `moved_joint`.
+        moved_joint: usize,
+    },
     /// Two rows share (experiment, step, target).
     #[error(
         "duplicate (experiment, step, target) = ({:?}, {step}, {target}), first seen at {first_at}",
@@ -133,15 +149,37 @@ impl RowProblem {
     /// The column the problem is in (for `DuplicateKey`, the key columns).
     pub fn column(&self) -> String {
         match self {
-            Self::BadExperimentName { .. } | Self::LongExperimentName { .. } | Self::InconsistentMovedJoint { .. } => {
-                "experiment".into()
-            }
+            Self::BadExperimentName { .. }
+            | Self::LongExperimentName { .. }
+            | Self::InconsistentMovedJoint { .. }
+            | Self::NoSuchJoint { .. } => "experiment".into(),
             Self::JointCount { .. } => "cmd_*".into(),
             Self::NotFinite { column, .. } | Self::OutOfRange { column, .. } => column.clone(),
             Self::MovedJointOutOfRange { .. } => "moved_joint".into(),
             Self::DuplicateKey { .. } => "experiment,step,target".into(),
         }
     }
+}
+
+/// The rename [`RowProblem::NoSuchJoint`] suggests: the joint the rows move.
+fn rename_hint(moved_joint: usize) -> String {
+    match moved_joint {
+        0 => String::new(),
+        k => format!(" (its rows move joint {k}: `axis{k}`)"),
+    }
+}
+
+/// The joint an experiment id of the form `axis<k>` (case ignored) names, as `simulate` and the
+/// importers write them; `usize::MAX` for digits beyond any number.
+pub fn joint_named_by(experiment: &str) -> Option<usize> {
+    let digits = experiment
+        .get(..4)?
+        .eq_ignore_ascii_case("axis")
+        .then(|| &experiment[4..])?;
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    Some(digits.parse().unwrap_or(usize::MAX))
 }
 
 /// A row of a [`MeasurementSet`] is invalid.
@@ -194,6 +232,8 @@ pub struct Experiment<'a> {
     pub moved_joint: usize,
     /// Its rows in file order.
     pub rows: Vec<&'a Measurement>,
+    /// The file lines of its first and last row, when the set was read from a file.
+    pub lines: Option<(u64, u64)>,
 }
 
 impl<'a> Experiment<'a> {
@@ -348,23 +388,26 @@ impl MeasurementSet {
     pub fn experiments(&self) -> Vec<Experiment<'_>> {
         let mut index: HashMap<&str, usize> = HashMap::new();
         let mut experiments: Vec<Experiment<'_>> = Vec::new();
-        for m in &self.rows {
+        for (row, m) in self.rows.iter().enumerate() {
+            let line = self.line_of(row);
             // An experiment's rows usually follow each other: no lookup for those.
-            if let Some(last) = experiments.last_mut()
-                && last.name == m.experiment
-            {
-                last.rows.push(m);
-                continue;
+            let i = match experiments.last() {
+                Some(last) if last.name == m.experiment => experiments.len() - 1,
+                _ => *index.entry(&m.experiment).or_insert_with(|| {
+                    experiments.push(Experiment {
+                        name: &m.experiment,
+                        moved_joint: m.moved_joint,
+                        rows: Vec::new(),
+                        lines: line.map(|l| (l, l)),
+                    });
+                    experiments.len() - 1
+                }),
+            };
+            let e = &mut experiments[i];
+            e.rows.push(m);
+            if let (Some(l), Some((_, last))) = (line, e.lines.as_mut()) {
+                *last = l;
             }
-            let i = *index.entry(&m.experiment).or_insert_with(|| {
-                experiments.push(Experiment {
-                    name: &m.experiment,
-                    moved_joint: m.moved_joint,
-                    rows: Vec::new(),
-                });
-                experiments.len() - 1
-            });
-            experiments[i].rows.push(m);
         }
         experiments
     }
@@ -533,6 +576,14 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
             joint_count,
         });
     }
+    if let Some(named) = joint_named_by(&m.experiment).filter(|&k| !(1..=joint_count).contains(&k)) {
+        return Some(RowProblem::NoSuchJoint {
+            experiment: m.experiment.clone(),
+            named,
+            joint_count,
+            moved_joint: m.moved_joint,
+        });
+    }
     (first != m.moved_joint).then(|| RowProblem::InconsistentMovedJoint {
         experiment: m.experiment.clone(),
         first,
@@ -580,6 +631,33 @@ mod tests {
         assert_eq!(b.by_step()[&0].iter().map(|m| m.target).collect::<Vec<_>>(), [0, 1]);
         assert_eq!(b.get(1, 0).map(|m| m.step), Some(1));
         assert!(b.get(1, 1).is_none());
+    }
+
+    #[test]
+    fn an_axis_id_names_its_joint_which_the_robot_must_have() {
+        assert_eq!(joint_named_by("axis6"), Some(6));
+        assert_eq!(joint_named_by("AXIS12"), Some(12));
+        assert_eq!(joint_named_by("axis99999999999999999999999"), Some(usize::MAX));
+        for other in ["axis", "axis6-2", "axis 6", "poses", "ax", "axis6b"] {
+            assert_eq!(joint_named_by(other), None, "{other}");
+        }
+        let e = MeasurementSet::new(2, vec![row("a", 1, 0, 0), row("axis3", 2, 0, 0)]).unwrap_err();
+        assert_eq!(e.row, 1);
+        assert_eq!(
+            e.problem,
+            RowProblem::NoSuchJoint {
+                experiment: "axis3".into(),
+                named: 3,
+                joint_count: 2,
+                moved_joint: 2
+            }
+        );
+        assert!(
+            e.problem.to_string().ends_with("(its rows move joint 2: `axis2`)"),
+            "{}",
+            e.problem
+        );
+        assert!(MeasurementSet::new(2, vec![row("axis2", 2, 0, 0), row("axis0x", 1, 0, 0)]).is_ok());
     }
 
     #[test]

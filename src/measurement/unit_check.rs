@@ -181,21 +181,50 @@ fn arc_of(rows: &[&Measurement], k: usize) -> Option<(f64, f64)> {
     Some((median(radii), median(ratios)))
 }
 
-/// An arc whose sagitta, as the description and the commands give it, and whose points' RMS
-/// spread are both below this \[mm\] is not judged: a circle through three of its points
+/// An arc whose sagitta, as the description and the commands give it, is below this \[mm\]
+/// is not judged ([`too_short_to_judge`]): a circle through three of its points
 /// measures the instrument's noise (0.2 mm for the paper's theodolites, 0.02-0.05 mm for a
 /// laser tracker) more than its radius.
 const MIN_JUDGED_SAGITTA_MM: f64 = 1.0;
 
-/// The sagitta \[mm\] of the arc a target at `radius_mm` from the axis draws over the commanded
-/// span of joint `k` (0-based) in `rows` (read in degrees; at most half a turn).
-fn expected_sagitta_mm(radius_mm: f64, rows: &[&Measurement], k: usize) -> f64 {
+/// The commanded span of joint `k` (0-based) over `rows` (read in degrees, at most a turn).
+fn commanded_span_deg(rows: &[&Measurement], k: usize) -> f64 {
     let (lo, hi) = rows
         .iter()
         .map(|r| r.cmd[k])
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
-    let half = ((hi - lo).abs().min(360.0) / 2.0).to_radians();
-    radius_mm * (1.0 - half.cos())
+    (hi - lo).abs().min(360.0)
+}
+
+/// The sagitta and the chord \[mm\] of the arc a target at `radius_mm` from its axis draws
+/// over `span_deg`.
+fn arc_extent_mm(radius_mm: f64, span_deg: f64) -> (f64, f64) {
+    let half = (span_deg / 2.0).to_radians();
+    (radius_mm * (1.0 - half.cos()), 2.0 * radius_mm * half.sin())
+}
+
+/// The distance \[file length units\] between the points of `rows` at the lowest and the
+/// highest command of joint `k` (0-based): the measured arc's chord.
+fn measured_chord(rows: &[&Measurement], k: usize) -> f64 {
+    let by_command = |a: &&&Measurement, b: &&&Measurement| a.cmd[k].total_cmp(&b.cmd[k]);
+    match (rows.iter().min_by(by_command), rows.iter().max_by(by_command)) {
+        (Some(lo), Some(hi)) => (Vector3::from(hi.position_mm) - Vector3::from(lo.position_mm)).norm(),
+        _ => 0.0,
+    }
+}
+
+/// Whether the arc of `rows` (target 0 of joint `k`, 0-based, `radius_mm` from its axis by the
+/// description) is too short to judge: its sagitta by the description and the commands is below
+/// [`MIN_JUDGED_SAGITTA_MM`], and its points spread either that little too or as far as the
+/// commands move them (the chord the description and the commands give, within
+/// [`SLIP_FACTOR`]): a short sweep, not a slip. Commands in radians draw a chord 57 times the
+/// commanded one; coordinates in metres a thousandth of it.
+fn too_short_to_judge(rows: &[&Measurement], k: usize, radius_mm: f64) -> bool {
+    let (sagitta, chord) = arc_extent_mm(radius_mm, commanded_span_deg(rows, k));
+    let points: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.position_mm)).collect();
+    sagitta < MIN_JUDGED_SAGITTA_MM
+        && (crate::numerics::stats::rms_spread(&points) < MIN_JUDGED_SAGITTA_MM
+            || !slipped(measured_chord(rows, k) / chord))
 }
 
 /// The radius \[mm\] the description gives the target of `rows` (target 0 of joint `joint`,
@@ -245,15 +274,13 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
         }
         let by_step = e.by_step_target();
         let rows: Vec<&Measurement> = by_step.iter().filter(|((_, t), _)| *t == 0).map(|(_, m)| *m).collect();
-        let nominal = nominal_radius_mm(desc, joint, rows[0]).filter(|r| *r > 1.0);
-        let points: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.position_mm)).collect();
-        if let Some(r) = nominal
-            && expected_sagitta_mm(r, &rows, joint - 1) < MIN_JUDGED_SAGITTA_MM
-            && crate::numerics::stats::rms_spread(&points) < MIN_JUDGED_SAGITTA_MM
-        {
-            // Too short an arc to judge, by its commands and by its points (commands in radians
-            // draw a wide arc of points; coordinates in metres come with commands of a wide
-            // one): its radius and angle would be the noise's.
+        let Some(first) = rows.first() else {
+            continue;
+        };
+        let nominal = nominal_radius_mm(desc, joint, first).filter(|r| *r > 1.0);
+        if nominal.is_some_and(|r| too_short_to_judge(&rows, joint - 1, r)) {
+            // Its radius and angle would be the noise's; the calibration says when the sweep is
+            // too short to locate its axis.
             continue;
         }
         let Some((radius, turn_ratio)) = arc_of(&rows, joint - 1) else {

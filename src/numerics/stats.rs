@@ -35,6 +35,12 @@ pub const ABSURD_SHARE: f64 = 0.05;
 /// whose chance of twice its scale is below 1e-7 from five points up).
 pub const UNRESOLVED_SPREAD_OVER_NOISE: f64 = 2.0;
 
+/// A rotary sweep whose arc bows from its chord by less than this many times the noise of a
+/// point (3-D RMS) is too short to locate its axis when its fit fails or misses it: the radius
+/// of an arc of sagitta `s` measured with noise `sigma` is uncertain by about `sigma / s` of
+/// itself, more than a fifth below this, where the fit's iterations wander.
+pub const SHORT_ARC_SAGITTA_OVER_NOISE: f64 = 5.0;
+
 /// Tukey's "far out" fence factor (*Exploratory Data Analysis*, 1977, ch. 2): a value beyond
 /// the upper quartile by 3 interquartile ranges.
 pub const FAR_OUT: f64 = 3.0;

@@ -914,7 +914,7 @@ fn a_plan_file_beyond_the_interval_bound_is_refused() {
 }
 
 /// A given noise the data contradict by orders of magnitude makes the fits fail: the error says
-/// what the option did and how to do without it.
+/// how many times the residuals exceed it and how to do without it.
 #[test]
 fn a_given_noise_far_below_the_data_is_named_in_the_error() {
     let (dir, data) = crate::common::simulated_campaign_csv(2);
@@ -928,7 +928,10 @@ fn a_given_noise_far_below_the_data_is_named_in_the_error() {
             .code(2);
         let err = crate::common::stderr(&a);
         assert!(
-            err.contains(&format!("with --noise-mm {noise}")) && err.contains("without --noise-mm it is estimated"),
+            err.contains(&format!(
+                "times --noise-mm {}; --noise-mm is too small or the data are bad",
+                axiscal::measurement::format_f64(noise.parse().unwrap())
+            )) && err.contains("without --noise-mm the fits are weighted with it"),
             "{err}"
         );
         assert_eq!(err.lines().count(), 1, "{err}");

@@ -27,6 +27,7 @@ mod export;
 mod fuzz_readers;
 mod gap_budget;
 mod hostile;
+mod hostile_calibration;
 mod hostile_files;
 mod iso9283;
 mod joint_map;

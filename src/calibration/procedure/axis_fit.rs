@@ -6,7 +6,7 @@
 use super::propagation::LocalFit;
 use super::{
     AxisCovariance, AxisEstimator, AxisExperiment, AxisReport, CalibrationOptions, Detail, PointResidual,
-    ProcedureError, SweepReport,
+    ProcedureError, ShortSpan, SweepReport,
 };
 use crate::calibration::arc_model::{ArcModel, MeasurementNoise, axis_quantities_gradient};
 use crate::calibration::line_ml::fit_line;
@@ -103,6 +103,77 @@ impl JointData<'_> {
         (pts, u)
     }
 
+    /// Every sweep's target-0 points; an error when there is none (every row names another
+    /// target: the ids, not the span, are wrong), for a joint of `kind`.
+    fn target0_points(&self, kind: JointKind) -> Result<Vec<Point3<f64>>, ProcedureError> {
+        let points: Vec<Point3<f64>> = self.points.iter().flatten().copied().collect();
+        if points.is_empty() {
+            return Err(ProcedureError::Fit {
+                experiment: self.name(),
+                joint: self.joint(),
+                source: CalibrationError::TooFewPoints {
+                    fit: "target 0 (the target on the swept link; check the rows' target ids)",
+                    got: 0,
+                    needed: if kind == JointKind::Revolute { 3 } else { 2 },
+                },
+            });
+        }
+        Ok(points)
+    }
+
+    /// The span of the joint's command (file units) over its widest sweep, and the span its
+    /// points would need (`needed`, same unit, when known).
+    fn short_span(&self, kind: JointKind, needed: Option<f64>) -> ShortSpan {
+        let k = self.joint() - 1;
+        let written = self
+            .sweeps
+            .iter()
+            .map(|e| {
+                let column = || e.target0_steps.iter().map(|&i| e.commands[i][k]);
+                column().fold(f64::NEG_INFINITY, f64::max) - column().fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max);
+        ShortSpan { written, needed, kind }
+    }
+
+    /// The error of a rotary joint whose widest sweep's arc bows from its chord by less than
+    /// [`crate::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE`] times the noise `noise_mm`
+    /// (its radius from the chord and the span as written), with the span whose arc would bow
+    /// that much; `None` for a longer arc or a sweep of half a turn or more.
+    fn short_arc(&self, noise_mm: f64) -> Option<ProcedureError> {
+        let k = self.joint() - 1;
+        let factor = crate::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE;
+        let (sagitta_mm, radius_mm) = self
+            .sweeps
+            .iter()
+            .zip(&self.points)
+            .filter_map(|(e, points)| {
+                let by_command = |a: &&usize, b: &&usize| {
+                    e.commands[e.target0_steps[**a]][k].total_cmp(&e.commands[e.target0_steps[**b]][k])
+                };
+                let all: Vec<usize> = (0..points.len()).collect();
+                let (lo, hi) = (*all.iter().min_by(by_command)?, *all.iter().max_by(by_command)?);
+                let span = e.commands[e.target0_steps[hi]][k] - e.commands[e.target0_steps[lo]][k];
+                let half = (span / 2.0).to_radians();
+                let radius_mm = (points[hi] - points[lo]).norm() * 1e3 / (2.0 * half.sin());
+                (half < std::f64::consts::FRAC_PI_2).then_some((radius_mm * (1.0 - half.cos()), radius_mm))
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0))?;
+        if sagitta_mm.partial_cmp(&(factor * noise_mm)) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
+        let bow = factor * noise_mm / radius_mm;
+        let needed = (bow < 2.0).then(|| 2.0 * (1.0 - bow).acos().to_degrees());
+        Some(ProcedureError::ShortArc {
+            experiment: self.name(),
+            joint: self.joint(),
+            sagitta_mm,
+            radius_mm,
+            noise_mm,
+            span: self.short_span(JointKind::Revolute, needed),
+        })
+    }
+
     /// `(experiment, step)` of each flat point.
     fn labels(&self) -> Vec<(String, usize)> {
         self.sweeps
@@ -123,7 +194,8 @@ pub(super) fn fit_joint(
     detail: Detail,
 ) -> Result<AxisFitOutcome, ProcedureError> {
     let joint = data.joint();
-    let points: Vec<Point3<f64>> = data.points.iter().flatten().copied().collect();
+    let kind = desc.joints[joint - 1].kind;
+    let points = data.target0_points(kind)?;
     let spread_mm = crate::numerics::stats::rms_spread(&points) * 1e3;
     // Points within the noise of their centroid (by the noise assumed: an estimated one may be
     // far smaller) explain a fit that fails or misses them: said instead.
@@ -134,8 +206,18 @@ pub(super) fn fit_joint(
         spread_mm,
         noise_mm,
         factor,
+        // Points evenly along a segment of length `L` spread `L / sqrt(12)` about their
+        // centroid: the travel whose spread is `factor` times the noise.
+        span: data.short_span(
+            kind,
+            (kind == JointKind::Prismatic).then(|| 12f64.sqrt() * factor * noise_mm),
+        ),
     };
     let within_noise = spread_mm < factor * noise_mm;
+    // A rotary sweep whose arc bows within the noise: the reason its fit fails or misses.
+    let short = (kind == JointKind::Revolute)
+        .then(|| data.short_arc(noise_mm))
+        .flatten();
     let requested = TransmissionForm::from(desc.joints[joint - 1].transmission_fit_form());
     let mut form = requested;
     let setting = FitSetting {
@@ -152,13 +234,24 @@ pub(super) fn fit_joint(
                 source: CalibrationError::NotInvertible { .. },
                 ..
             }) if form.order() > 0 => form = form.one_order_lower().unwrap_or(form),
+            // Too few points is its own cause, whatever their spread.
+            Err(
+                e @ ProcedureError::Fit {
+                    source: CalibrationError::TooFewPoints { .. },
+                    ..
+                },
+            ) => return Err(e),
             Err(_) if within_noise => return Err(unresolved()),
+            Err(_) if short.is_some() => return Err(short.unwrap_or_else(unresolved)),
             fitted => break fitted?,
         }
     };
     if out.report.residual_rms_mm > crate::numerics::stats::ABSURD_SHARE * spread_mm {
         if within_noise {
             return Err(unresolved());
+        }
+        if let Some(short) = short {
+            return Err(short);
         }
         return Err(ProcedureError::Absurd {
             experiment: data.name(),

@@ -46,6 +46,8 @@ pub struct AxisExperiment {
     /// Whether the commands hold actuator `joint + 1` still (the joint-`joint+1` command
     /// follows the nominal coupling slope).
     pub holds_next_still: bool,
+    /// The file lines of its first and last row, when the set was read from a file.
+    pub lines: Option<(u64, u64)>,
 }
 
 impl AxisExperiment {
@@ -79,6 +81,7 @@ pub fn axis_experiments_with(
             target1_m: Vec::with_capacity(n),
             target1_steps: Vec::with_capacity(n),
             holds_next_still: false,
+            lines: e.lines,
         };
         for rows in by_step {
             let (first, step) = (rows[0], &rows[0].step);
@@ -162,6 +165,8 @@ fn check_sweep_commands(e: &AxisExperiment, desc: &RobotDescription, tolerance: 
         return Err(ProcedureError::ZeroSpan {
             experiment: e.name.clone(),
             joint: e.joint,
+            lines: e.lines,
+            cause: zero_span_cause(e, desc, tolerance),
         });
     }
     let too_far = |j: usize, i: usize, d: f64, what: &str| ProcedureError::InconsistentCommands {
@@ -205,6 +210,42 @@ fn check_sweep_commands(e: &AxisExperiment, desc: &RobotDescription, tolerance: 
         }
     }
     Ok(follows)
+}
+
+/// Why the swept joint's command of `e` does not move, in words: a single step (one row's id
+/// mistyped), the joints that move instead (the rows of another joint's sweep: a label or
+/// `moved_joint` swapped, blocks of rows out of order), or none (one pose repeated).
+fn zero_span_cause(e: &AxisExperiment, desc: &RobotDescription, tolerance: f64) -> String {
+    let steps = e.commands.len();
+    if steps < 2 {
+        return "; the experiment has a single step, a sweep needs several poses (one row's experiment id mistyped?)"
+            .into();
+    }
+    let moving: Vec<(usize, f64)> = (0..desc.dof())
+        .map(|j| {
+            let (lo, hi) = e
+                .commands
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                    (lo.min(c[j]), hi.max(c[j]))
+                });
+            (j, hi - lo)
+        })
+        .filter(|&(_, span)| span > tolerance)
+        .collect();
+    match moving.first() {
+        None => format!("; no joint's command moves over its {steps} steps (one pose repeated)"),
+        Some(&(j, _)) => format!(
+            "; {} over its {steps} steps: these are the rows of joint {}'s sweep, not joint {}'s (check the experiment id and `moved_joint`: labels swapped, or rows of another sweep)",
+            moving
+                .iter()
+                .map(|&(k, span)| format!("cmd_{} moves by {span:.4} {}", k + 1, unit(desc, k)))
+                .collect::<Vec<_>>()
+                .join(", "),
+            j + 1,
+            e.joint
+        ),
+    }
 }
 
 /// Per joint, the median of its held values over every step of the experiments that hold it;

@@ -4,10 +4,11 @@
 //! sweeps keeps its nominal model (identity transmission, nominal coupling, zero offset).
 
 use super::axis_fit::actuator_commands;
-use super::{AxisExperiment, CouplingReport, ProcedureError};
+use super::{AxisExperiment, CouplingReport, ProcedureError, SecondTargetData};
 use crate::calibration::CalibrationError;
 use crate::calibration::coupling_fit::{
     CouplingFit, CouplingForm, CouplingResponse, fit_coupling, fixed_coupling, passive_displacements,
+    second_target_lever_arms_m,
 };
 use crate::kinematics::AxisLine;
 use crate::kinematics::{ChainPoses, FixedFrames, PhiModel};
@@ -393,6 +394,12 @@ impl Assembly<'_> {
             None => passive_start(&cform, slope, &active, &passive),
         };
         let known = self.refit.fitted.and_then(|f| f.iter().find(|c| c.from == from));
+        let data = SecondTargetData {
+            steps: e.target1_steps.iter().map(|&i| e.steps[i]).collect(),
+            active_rad: active.clone(),
+            passive_rad: passive.clone(),
+            lever_arms_m: second_target_lever_arms_m(&frame_next, &axis_from, &t_from_start, second),
+        };
         let fit = match (warm, known) {
             (Some(response), _) => response.refit(&active, &passive, start),
             (None, Some(c)) => Ok(CouplingFit {
@@ -403,7 +410,12 @@ impl Assembly<'_> {
             }),
             (None, None) => fit_coupling(&cform, &active, &passive, start),
         }
-        .map_err(fit_err)?;
+        .map_err(|source| ProcedureError::CouplingFit {
+            experiment: e.name.clone(),
+            joint: from,
+            source,
+            data: Box::new(data.clone()),
+        })?;
         if let Some(record) = self.refit.record {
             let response = CouplingResponse::at(&cform, &active, &passive, start, &fit.parameters).map_err(fit_err)?;
             record.borrow_mut().push(RecordedCoupling {
@@ -418,7 +430,8 @@ impl Assembly<'_> {
                 parameters: fit.parameters.clone(),
             });
         }
-        let report = CouplingReport::new(from, e, &fit, &cform);
+        let mut report = CouplingReport::new(from, e, &fit, &cform);
+        report.second_target = data;
         Ok((fit.function, report))
     }
 

@@ -48,10 +48,10 @@ pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, read_residuals_csv, residuals_csv};
 pub use result::{
     AxisReport, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport, PointResidual,
-    PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
+    PositionSigma, RowSigma, SecondTargetData, SweepReport, ToolPose, ToolReport, harmonics,
 };
 pub use sanity::{Implausible, MISFIT_RATIO, SIZE_TOLERANCE, implausible};
-pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, screen_sweeps};
+pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, WorstSecondTarget, screen_sweeps};
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
@@ -219,7 +219,9 @@ pub enum ProcedureError {
     },
     /// A joint's sweeps move their target less than the noise: no axis can be fitted.
     #[error(
-        "experiment {experiment} (joint {joint}): its points spread {spread_mm:.4} mm RMS about their centroid, within {factor} times the noise of a point ({noise_mm:.3} mm): the sweep is too short for the instrument to locate the axis; widen its span (or check that the joint moved and the commands' units)"
+        "experiment {experiment} (joint {joint}): its points spread {spread_mm:.4} mm RMS about their centroid, within {factor} times the noise of a point ({noise_mm:.3} mm): the sweep ({} as written) is too short for the instrument to locate the axis; widen its span{} (or check that the joint moved and the commands' units)",
+        span.written(),
+        span.needed()
     )]
     Unresolved {
         /// The experiments of the joint.
@@ -232,6 +234,29 @@ pub enum ProcedureError {
         noise_mm: f64,
         /// [`crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`].
         factor: f64,
+        /// Its span as written and the least the fit needs.
+        span: ShortSpan,
+    },
+    /// A rotary joint's arc bows from its chord by too little for its fit: the sweep is short.
+    #[error(
+        "experiment {experiment} (joint {joint}): the sweep spans {} as written, too short to locate the axis: its arc bows {sagitta_mm:.4} mm from its chord (radius {radius_mm:.1} mm), within {} times the noise of a point ({noise_mm:.3} mm); widen its span{} (or check the commands' units)",
+        span.written(),
+        crate::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE,
+        span.needed()
+    )]
+    ShortArc {
+        /// The experiments of the joint.
+        experiment: String,
+        /// The joint.
+        joint: usize,
+        /// The arc's sagitta \[mm\].
+        sagitta_mm: f64,
+        /// Its radius, from its chord and its span \[mm\].
+        radius_mm: f64,
+        /// The noise of a point, 3-D RMS \[mm\].
+        noise_mm: f64,
+        /// Its span as written and the least the fit needs.
+        span: ShortSpan,
     },
     /// A fit-and-correct pass for the held joints' recorded values failed: the correction
     /// moved the points away from any arc (it diverges).
@@ -246,12 +271,16 @@ pub enum ProcedureError {
     #[error("modelling the held joints' recorded values: {0}")]
     Held(#[from] crate::robot::ModelError),
     /// The swept joint's command does not move.
-    #[error("experiment {experiment}: the command of joint {joint} has zero span")]
+    #[error("experiment {experiment}{}: the command of joint {joint} has zero span{cause}", lines_text(*lines))]
     ZeroSpan {
         /// Experiment.
         experiment: String,
         /// Joint.
         joint: usize,
+        /// The file lines of the experiment's first and last row, when known.
+        lines: Option<(u64, u64)>,
+        /// Why, in words (starting with `; `).
+        cause: String,
     },
     /// Commands contradict the experiment design (`docs/formats.md#controller-semantics`).
     #[error("experiment {experiment}, step {step}, column cmd_{joint}: {reason}")]
@@ -288,6 +317,20 @@ pub enum ProcedureError {
         /// The fit's error.
         source: CalibrationError,
     },
+    /// A coupling fit (eqs. 14-15) failed; with its second target's reading farthest from the
+    /// curve of its neighbours (a reading swapped or off, the likely cause).
+    #[error("experiment {experiment} (joint {joint}): {source}{}", data.worst().map_or(String::new(), |w| w.to_string()))]
+    CouplingFit {
+        /// Experiment.
+        experiment: String,
+        /// The driving joint.
+        joint: usize,
+        /// The fit's error.
+        source: CalibrationError,
+        /// What the fit was fitted to (the outlier test reads it; the message names its point
+        /// farthest from its neighbours' curve, [`SecondTargetData::worst`]).
+        data: Box<SecondTargetData>,
+    },
     /// The axes do not make a phi-model.
     #[error(transparent)]
     Frames(#[from] FramesError),
@@ -299,6 +342,63 @@ pub enum ProcedureError {
         /// What is wrong.
         message: String,
     },
+}
+
+impl ProcedureError {
+    /// The joint the error is about, when it names one (an axis fit's, a sweep's).
+    pub fn joint(&self) -> Option<usize> {
+        match self {
+            Self::Absurd { joint, .. }
+            | Self::Unresolved { joint, .. }
+            | Self::ShortArc { joint, .. }
+            | Self::ZeroSpan { joint, .. }
+            | Self::InconsistentCommands { joint, .. }
+            | Self::SecondTargetMissing { joint, .. }
+            | Self::Fit { joint, .. }
+            | Self::CouplingFit { joint, .. } => Some(*joint),
+            Self::HeldDiverged { source, .. } => source.joint(),
+            _ => None,
+        }
+    }
+}
+
+/// A sweep's span as written (file units) and the least its fit needs, when known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShortSpan {
+    /// The widest sweep's span of the joint's command (deg or mm).
+    pub written: f64,
+    /// The span whose points the fit would resolve (same unit), when it can be said.
+    pub needed: Option<f64>,
+    /// The joint's kind: the unit (deg or mm).
+    pub kind: JointKind,
+}
+
+impl ShortSpan {
+    fn unit(&self) -> &'static str {
+        match self.kind {
+            JointKind::Revolute => "deg",
+            JointKind::Prismatic => "mm",
+        }
+    }
+
+    fn written(&self) -> String {
+        format!("{:.4} {}", self.written, self.unit())
+    }
+
+    fn needed(&self) -> String {
+        self.needed.map_or(String::new(), |n| {
+            format!(" to at least {n:.3} {} at this noise", self.unit())
+        })
+    }
+}
+
+/// ` (lines A-B)` of an experiment read from a file, or nothing.
+fn lines_text(lines: Option<(u64, u64)>) -> String {
+    match lines {
+        Some((a, b)) if a == b => format!(" (line {a})"),
+        Some((a, b)) => format!(" (lines {a}-{b})"),
+        None => String::new(),
+    }
 }
 
 /// How much a calibration computes besides the fitted model.

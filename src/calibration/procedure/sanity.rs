@@ -15,11 +15,19 @@
 //!   median of every joint's residual RMS: its points are not on one arc or line of the joint (a
 //!   block of rows shifted, a sweep partly in other units, a target moved on its link). The
 //!   noise estimate and every sigma of the calibration are inflated with it.
+//! - **Directions.** Each fitted axis against the description's at the reference pose, in the
+//!   instrument frame as the description places the robot. An axis beyond
+//!   [`SIGNIFICANT_SIGMAS`] of its direction sigma and beyond [`PLAUSIBLE_AXIS_TILT_RAD`] from its
+//!   nominal direction while every other axis is within them is no robot's deviation: opposite
+//!   to its nominal, its readings count the other way (a sign convention); two such axes each
+//!   along the other's nominal line, their experiments are labelled the other's. A description
+//!   placed otherwise than the robot stands turns every axis, which says neither.
 
-use super::Calibration;
+use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
 use crate::kinematics::JointKind;
 use crate::numerics::stats::{QuantileMethod, quantile};
-use crate::robot::{RobotDescription, RobotModel};
+use crate::robot::{RobotDescription, RobotModel, commands_to_internal};
+use nalgebra::Vector3;
 
 /// Lengths shorter than this share of the description's longest are left out of the size
 /// factor: a nominal zero or a few millimetres of offset says nothing of the scale.
@@ -33,6 +41,13 @@ pub const SIZE_TOLERANCE: f64 = 0.2;
 /// variance, more than the swept joints' repeatability at different radii gives (1.7 times on
 /// the paper robot).
 pub const MISFIT_RATIO: f64 = 3.0;
+
+/// A fitted axis may lie this far \[rad\] (10 deg) from its nominal direction in the instrument
+/// frame: a robot's axes are within a degree or two of its drawing, and a description's
+/// placement (its `[placement]` measured or taken from the setup) within a few degrees of the
+/// robot; a sign convention (180 deg) or two axes' labels exchanged (the angle between them,
+/// 90 deg on most arms) are far beyond both.
+pub const PLAUSIBLE_AXIS_TILT_RAD: f64 = std::f64::consts::PI / 18.0;
 
 /// What the checks found.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,6 +65,26 @@ pub enum Implausible {
         factor: f64,
         /// The lengths it was taken over.
         lengths: usize,
+    },
+    /// A fitted axis points opposite to its nominal direction, every other axis along its own.
+    FlippedAxis {
+        /// The joint.
+        joint: usize,
+        /// Its experiments.
+        experiment: String,
+        /// Whether it slides (else it turns).
+        sliding: bool,
+        /// The angle between the fitted and the nominal direction \[deg\].
+        angle_deg: f64,
+    },
+    /// Two fitted axes each lie along the other's nominal line, every other axis along its own.
+    SwappedAxes {
+        /// The first joint.
+        joint: usize,
+        /// The other.
+        other: usize,
+        /// The angle between joint `joint`'s fitted axis and its nominal \[deg\].
+        angle_deg: f64,
     },
     /// A joint's fit misses its points by far more than the others'.
     Misfit {
@@ -75,6 +110,30 @@ impl std::fmt::Display for Implausible {
                 f,
                 "the calibrated robot is {factor:.3} times its description's size (over its {lengths} lengths): check the unit and scale of x_mm, y_mm, z_mm (an instrument exporting other units), or whether the description is of this robot"
             ),
+            Implausible::FlippedAxis {
+                joint,
+                experiment,
+                sliding,
+                angle_deg,
+            } => {
+                let (moves, way) = if *sliding {
+                    ("slides", "along")
+                } else {
+                    ("turns", "about")
+                };
+                write!(
+                    f,
+                    "joint {joint} ({experiment}): the fitted axis points opposite to its nominal direction ({angle_deg:.1} deg from it, every other axis along its own): the joint {moves} the other way {way} it as its readings grow; check the sign convention of cmd_{joint} (the controller's readings negated, or the description's axis reversed)"
+                )
+            }
+            Implausible::SwappedAxes {
+                joint,
+                other,
+                angle_deg,
+            } => write!(
+                f,
+                "the axis fitted for joint {joint} lies along joint {other}'s nominal axis and the one fitted for joint {other} along joint {joint}'s ({angle_deg:.1} deg from its own, every other axis along its own): are the experiment labels of joints {joint} and {other} swapped? (check the experiment ids, `moved_joint` and the cmd_{joint}, cmd_{other} columns; or the description's [placement] turns the robot)"
+            ),
             Implausible::Misfit {
                 joint,
                 experiment,
@@ -91,9 +150,81 @@ impl std::fmt::Display for Implausible {
 
 /// The checks of the module doc on `cal`, calibrated with the description `desc`.
 pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausible> {
-    let mut found: Vec<Implausible> = size(cal, desc).into_iter().collect();
+    let directions = directions(cal, desc);
+    // A flipped axis flips the lengths along it too: it, not a mirrored frame, explains them.
+    let mirrored_by_an_axis = |s: &Implausible| matches!(s, Implausible::Mirrored { .. }) && !directions.is_empty();
+    let mut found: Vec<Implausible> = size(cal, desc)
+        .into_iter()
+        .filter(|s| !mirrored_by_an_axis(s))
+        .collect();
+    found.extend(directions);
     found.extend(misfits(cal));
     found
+}
+
+/// Each fitted axis's direction, the nominal one at the reference pose (instrument frame, the
+/// description's placement) and how far from it the fit may lie ([`PLAUSIBLE_AXIS_TILT_RAD`],
+/// or [`SIGNIFICANT_SIGMAS`] of its direction sigma when larger).
+fn fitted_and_nominal<'a>(
+    cal: &'a Calibration,
+    desc: &RobotDescription,
+) -> Vec<(&'a AxisReport, Vector3<f64>, Vector3<f64>, f64)> {
+    if cal.reference_cmd.len() != desc.dof() {
+        return vec![];
+    }
+    let poses = desc
+        .nominal_model()
+        .poses(&commands_to_internal(desc, &cal.reference_cmd));
+    cal.axes
+        .iter()
+        .filter(|a| (1..=desc.dof()).contains(&a.joint))
+        .map(|a| {
+            let tolerance = PLAUSIBLE_AXIS_TILT_RAD.max(SIGNIFICANT_SIGMAS * a.direction_sigma.major_rad);
+            (
+                a,
+                Vector3::from(a.direction),
+                poses.axis(a.joint - 1).direction.into_inner(),
+                tolerance,
+            )
+        })
+        .collect()
+}
+
+/// The directions check of the module doc: a flipped axis or two swapped ones.
+fn directions(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausible> {
+    let axes = fitted_and_nominal(cal, desc);
+    let off: Vec<usize> = (0..axes.len())
+        .filter(|&i| axes[i].1.angle(&axes[i].2) > axes[i].3)
+        .collect();
+    match *off.as_slice() {
+        [i] => {
+            let (a, d, n, tolerance) = &axes[i];
+            (d.angle(&-n) <= *tolerance)
+                .then(|| Implausible::FlippedAxis {
+                    joint: a.joint,
+                    experiment: a.experiment.clone(),
+                    sliding: a.kind == "prismatic",
+                    angle_deg: d.angle(n).to_degrees(),
+                })
+                .into_iter()
+                .collect()
+        }
+        [i, j] => {
+            let along = |x: usize, y: usize| {
+                let (d, n) = (axes[x].1, axes[y].2);
+                d.angle(&n).min(d.angle(&-n)) <= axes[x].3
+            };
+            (along(i, j) && along(j, i))
+                .then(|| Implausible::SwappedAxes {
+                    joint: axes[i].0.joint,
+                    other: axes[j].0.joint,
+                    angle_deg: axes[i].1.angle(&axes[i].2).to_degrees(),
+                })
+                .into_iter()
+                .collect()
+        }
+        _ => vec![],
+    }
 }
 
 /// The significant lengths' `(nominal, calibrated)` pairs.

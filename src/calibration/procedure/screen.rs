@@ -13,6 +13,12 @@
 //! reading, a swapped point id or a point in other units lies far beyond it; on clean
 //! simulated campaigns of the paper robot about one point in 3,000 passes it, by less than half
 //! the fence (`docs/validation.md`, "Outliers").
+//!
+//! Then the second targets of the sweeps that measure a coupling ([`second_target`]).
+
+mod second_target;
+
+pub use second_target::WorstSecondTarget;
 
 use super::axis_fit::actuator_commands;
 use super::{AxisExperiment, COMMAND_TOLERANCE, CalibrationOptions, ProcedureError, axis_experiments_with};
@@ -143,7 +149,16 @@ pub fn screen_sweeps(
                 .map(|i| s.outlier(i, &last[i], scale.z(&last[i]), fence, !keep, set)),
         );
     }
-    // A flagged point's whole pose goes: a wrong reading is wrong for each of its targets.
+    let first_pass = without_poses(set, &outliers);
+    let second = second_target::outliers(first_pass.as_ref().unwrap_or(set), set, desc, options, (fence, keep))?;
+    outliers.extend(second);
+    let set = without_poses(set, &outliers);
+    Ok(Screening { outliers, set })
+}
+
+/// `set` without the poses of the `outliers` dropped (every target of a flagged point's step:
+/// a wrong reading is wrong for each of its targets); `None` when none was dropped.
+fn without_poses(set: &MeasurementSet, outliers: &[OutlierPoint]) -> Option<MeasurementSet> {
     let poses: std::collections::HashSet<(&str, usize)> = outliers
         .iter()
         .filter(|o| o.dropped)
@@ -152,8 +167,7 @@ pub fn screen_sweeps(
     let dropped: Vec<usize> = (0..set.rows().len())
         .filter(|&i| poses.contains(&(set.rows()[i].experiment.as_str(), set.rows()[i].step)))
         .collect();
-    let set = (!dropped.is_empty()).then(|| set.without_rows(&dropped));
-    Ok(Screening { outliers, set })
+    (!dropped.is_empty()).then(|| set.without_rows(&dropped))
 }
 
 /// Every point of `s`.

@@ -5,10 +5,11 @@
 //! Source format: no header; one pose per line, 21 white-space separated numbers: x, y, z of
 //! three tracker targets (SMRs) on the end-effector \[mm, tracker frame\], six zeros, and the
 //! controller's joint readings J1..J6 \[deg\]. Six blocks of six lines, one block per joint
-//! moved alone, in the order J1..J6.
+//! moved alone (the published file's order is J1..J6; a copy with its blocks reordered reads
+//! the same, each block named by the joint that moves in it).
 //!
-//! Conversion (`docs/formats.md#measurement-csv`): block `k` becomes experiment `axis{k}` with
-//! `moved_joint = k`, steps in file order, targets 0, 1, 2 = SMRs 2, 3, 1 ([`SMR_OF_TARGET`]):
+//! Conversion (`docs/formats.md#measurement-csv`): the block moving joint `k` becomes experiment
+//! `axis{k}` with `moved_joint = k`, steps in file order, targets 0, 1, 2 = SMRs 2, 3, 1 ([`SMR_OF_TARGET`]):
 //! the procedure fits each axis to target 0, and SMR 1 sits within about 2 mm of axes 4 and 6
 //! (its J4 and J6 arcs have a radius near 1.5 mm and would fix those axes' directions only to
 //! tens of milliradians), while SMR 2 turns on radii of 0.2 m or more about every axis.
@@ -89,6 +90,18 @@ pub enum ImportError {
         /// Data lines found.
         found: usize,
     },
+    /// A block of poses does not move one joint of its own.
+    #[error("{path}: lines {}-{} (block {block}): {message}", lines.0, lines.1)]
+    Block {
+        /// The file.
+        path: PathBuf,
+        /// The block (1-based).
+        block: usize,
+        /// Its first and last line.
+        lines: (usize, usize),
+        /// What is wrong.
+        message: String,
+    },
     /// The converted rows break a measurement-set invariant.
     #[error("{path}: {source}")]
     Set {
@@ -116,10 +129,40 @@ pub fn commands_from_readings(j_deg: &[f64; JOINTS]) -> [f64; JOINTS] {
     cmd
 }
 
-/// Parses the text of `N1N2N3Jval.csv` (`path` only names it in errors).
+/// Parses the text of `N1N2N3Jval.csv` (`path` only names it in errors). Each block's joint
+/// is the one whose command moves in it, so blocks in another order import as what they are.
 pub fn parse(text: &str, path: &Path) -> Result<MeasurementSet, ImportError> {
+    let poses = read_poses(text, path)?;
+    let joints = block_joints(&poses, path)?;
     let mut rows = Vec::with_capacity(LINES * TARGETS);
-    let mut pose = 0;
+    for (pose, (_, values)) in poses.iter().enumerate() {
+        let joint = joints[pose / POSES_PER_BLOCK];
+        for (t, smr) in SMR_OF_TARGET.iter().enumerate() {
+            let f = 3 * (smr - 1);
+            rows.push(Measurement {
+                experiment: format!("axis{joint}"),
+                moved_joint: joint,
+                step: pose % POSES_PER_BLOCK,
+                target: t,
+                position_mm: [values[f], values[f + 1], values[f + 2]],
+                cmd: commands(values).to_vec(),
+                payload_kg: Measurement::DEFAULT_PAYLOAD_KG,
+                temperature_c: Measurement::DEFAULT_TEMPERATURE_C,
+            });
+        }
+    }
+    MeasurementSet::new(JOINTS, rows).map_err(|source| ImportError::Set {
+        path: path.into(),
+        source,
+    })
+}
+
+/// One pose of the file: its 1-based line and its numbers.
+type Pose = (usize, [f64; FIELDS_PER_LINE]);
+
+/// The file's poses, each line checked; exactly [`LINES`] of them.
+fn read_poses(text: &str, path: &Path) -> Result<Vec<Pose>, ImportError> {
+    let mut poses = Vec::with_capacity(LINES);
     for (i, line) in text.lines().enumerate() {
         let fields: Vec<&str> = line.split_whitespace().collect();
         if fields.is_empty() {
@@ -132,53 +175,88 @@ pub fn parse(text: &str, path: &Path) -> Result<MeasurementSet, ImportError> {
                 found: fields.len(),
             });
         }
-        let values: Vec<f64> = fields
-            .iter()
-            .enumerate()
-            .map(|(f, t)| {
-                t.parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| ImportError::NotANumber {
-                        path: path.into(),
-                        line: i + 1,
-                        field: f + 1,
-                        meaning: meaning(f + 1),
-                        text: (*t).to_owned(),
-                    })
-            })
-            .collect::<Result<_, _>>()?;
-        let joint = pose / POSES_PER_BLOCK + 1;
-        let mut j_deg = [0.0; JOINTS];
-        j_deg.copy_from_slice(&values[FIRST_JOINT_FIELD..]);
-        let cmd = commands_from_readings(&j_deg).to_vec();
-        for (t, smr) in SMR_OF_TARGET.iter().enumerate() {
-            rows.push(Measurement {
-                experiment: format!("axis{joint}"),
-                moved_joint: joint,
-                step: pose % POSES_PER_BLOCK,
-                target: t,
-                position_mm: {
-                    let f = 3 * (smr - 1);
-                    [values[f], values[f + 1], values[f + 2]]
-                },
-                cmd: cmd.clone(),
-                payload_kg: Measurement::DEFAULT_PAYLOAD_KG,
-                temperature_c: Measurement::DEFAULT_TEMPERATURE_C,
-            });
+        let mut values = [0.0; FIELDS_PER_LINE];
+        for (f, (t, v)) in fields.iter().zip(&mut values).enumerate() {
+            *v = t
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| ImportError::NotANumber {
+                    path: path.into(),
+                    line: i + 1,
+                    field: f + 1,
+                    meaning: meaning(f + 1),
+                    text: (*t).to_owned(),
+                })?;
         }
-        pose += 1;
+        poses.push((i + 1, values));
     }
-    if pose != LINES {
+    if poses.len() != LINES {
         return Err(ImportError::LineCount {
             path: path.into(),
-            found: pose,
+            found: poses.len(),
         });
     }
-    MeasurementSet::new(JOINTS, rows).map_err(|source| ImportError::Set {
-        path: path.into(),
-        source,
-    })
+    Ok(poses)
+}
+
+/// The phi-model commands of a pose's numbers ([`commands_from_readings`]).
+fn commands(values: &[f64; FIELDS_PER_LINE]) -> [f64; JOINTS] {
+    let mut j_deg = [0.0; JOINTS];
+    j_deg.copy_from_slice(&values[FIRST_JOINT_FIELD..]);
+    commands_from_readings(&j_deg)
+}
+
+/// A joint whose commands within one block differ by no more than this \[deg\] holds still:
+/// the file writes its readings with 18 significant digits, so a held joint reads one number.
+const STILL_DEG: f64 = 1e-9;
+
+/// The joint (1-based) each block of [`POSES_PER_BLOCK`] poses moves: the one whose command
+/// moves in it. A block moving no joint or several, or two blocks moving one joint, is an error
+/// naming their lines.
+fn block_joints(poses: &[Pose], path: &Path) -> Result<Vec<usize>, ImportError> {
+    let mut joints: Vec<usize> = Vec::with_capacity(JOINTS);
+    for (b, block) in poses.chunks(POSES_PER_BLOCK).enumerate() {
+        let lines = (block[0].0, block[block.len() - 1].0);
+        let cmd: Vec<[f64; JOINTS]> = block.iter().map(|(_, v)| commands(v)).collect();
+        let spans: Vec<(usize, f64)> = (0..JOINTS)
+            .map(|k| {
+                let (lo, hi) = cmd.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                    (lo.min(c[k]), hi.max(c[k]))
+                });
+                (k + 1, hi - lo)
+            })
+            .filter(|&(_, span)| span > STILL_DEG)
+            .collect();
+        let problem = match spans.as_slice() {
+            [] => Some("no joint moves in this block (each block of six poses moves one joint alone)".to_owned()),
+            [(joint, _)] => joints.iter().position(|j| j == joint).map(|earlier| {
+                let first = poses[earlier * POSES_PER_BLOCK].0;
+                format!(
+                    "this block moves J{joint}, as the block of lines {first}-{} did: each joint has one block",
+                    first + POSES_PER_BLOCK - 1
+                )
+            }),
+            several => Some(format!(
+                "{} move in one block (each block of six poses moves one joint alone; J3 is compared as J3 + J2)",
+                several
+                    .iter()
+                    .map(|(j, span)| format!("J{j} by {span:.3} deg"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+        };
+        if let Some(message) = problem {
+            return Err(ImportError::Block {
+                path: path.into(),
+                block: b + 1,
+                lines,
+                message,
+            });
+        }
+        joints.push(spans[0].0);
+    }
+    Ok(joints)
 }
 
 /// Reads `DIR/N1N2N3Jval.csv` of the data set's folder `dir`.

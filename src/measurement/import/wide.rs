@@ -235,3 +235,130 @@ pub(super) fn segment(poses: &[Pose], tolerance: f64) -> Vec<(String, usize, usi
         })
         .collect()
 }
+
+/// A `--still-tolerance` that recovers the axis experiments of a table whose rows nearly all
+/// became free poses: the held joints jitter (a read-back controller, encoder noise) by more
+/// than the tolerance given, so no run of poses moves one joint alone.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StillHint {
+    /// Poses that became free poses with the tolerance given.
+    pub free_poses: usize,
+    /// Poses of the table.
+    pub poses: usize,
+    /// The tolerance to pass (file units: deg or mm), rounded up to two digits as written.
+    pub tolerance: String,
+    /// Poses that become axis-experiment poses with it.
+    pub recovered: usize,
+}
+
+/// Candidate tolerances tried at most (quantiles of the consecutive poses' held jitter): each
+/// is one segmentation of the table.
+const HINT_CANDIDATES: usize = 32;
+
+/// The [`StillHint`] for `set` (as [`import_wide`] writes it: rows pose by pose), imported with
+/// `tolerance`: when more than half its poses are free, the smallest tolerance among the
+/// consecutive poses' held jitters (the largest change of a joint other than the one that
+/// changes most and the one after it, its hold-still partner) that makes the most poses axis
+/// experiments, if that is more than half of them.
+pub fn still_tolerance_hint(set: &MeasurementSet, tolerance: f64) -> Option<StillHint> {
+    let poses = poses_of(set);
+    let axis_poses = |t: f64| segment(&poses, t).iter().filter(|s| s.1 > 0).count();
+    let n = poses.len();
+    let free_poses = n - axis_poses(tolerance);
+    if 2 * free_poses <= n {
+        return None;
+    }
+    let mut jitters: Vec<f64> = poses.windows(2).filter_map(|w| held_jitter(&w[0].1, &w[1].1)).collect();
+    jitters.retain(|&j| j > tolerance);
+    jitters.sort_by(f64::total_cmp);
+    jitters.dedup();
+    // Two rounds of at most HINT_CANDIDATES: over all jitters, then over those between the
+    // best and the next candidate above it.
+    let (coarse, next) = best_tolerance(&jitters, &axis_poses);
+    let finer: Vec<f64> = jitters.iter().copied().filter(|&j| j > coarse.0 && j < next).collect();
+    let (fine, _) = best_tolerance(&finer, &axis_poses);
+    let (best, recovered) = if fine.1 > coarse.1 { fine } else { coarse };
+    (2 * recovered > n).then(|| StillHint {
+        free_poses,
+        poses: n,
+        tolerance: rounded_up(best),
+        recovered,
+    })
+}
+
+/// Of at most [`HINT_CANDIDATES`] of the sorted `candidates` (evenly among them, the last
+/// included), the smallest that makes the most poses axis experiments (`axis_poses`), with
+/// that count, and the candidate tried after it (infinite for the last).
+fn best_tolerance(candidates: &[f64], axis_poses: &dyn Fn(f64) -> usize) -> ((f64, usize), f64) {
+    let step = candidates.len().div_ceil(HINT_CANDIDATES).max(1);
+    let mut tried: Vec<f64> = candidates.iter().copied().skip(step - 1).step_by(step).collect();
+    if let Some(&last) = candidates.last()
+        && tried.last() != Some(&last)
+    {
+        tried.push(last);
+    }
+    let counts: Vec<usize> = tried.iter().map(|&t| axis_poses(t)).collect();
+    let Some(best) = (0..tried.len()).fold(None, |best: Option<usize>, i| match best {
+        Some(b) if counts[b] >= counts[i] => Some(b),
+        _ => Some(i),
+    }) else {
+        return ((f64::NAN, 0), f64::INFINITY);
+    };
+    (
+        (tried[best], counts[best]),
+        tried.get(best + 1).copied().unwrap_or(f64::INFINITY),
+    )
+}
+
+/// The poses of `set` in row order (a pose: consecutive rows of one experiment and step).
+fn poses_of(set: &MeasurementSet) -> Vec<Pose> {
+    let rows = set.rows();
+    rows.chunk_by(|a, b| a.experiment == b.experiment && a.step == b.step)
+        .map(|pose| (0, pose[0].cmd.clone(), Vec::new()))
+        .collect()
+}
+
+/// Between two poses: the largest change of a joint other than the one that changes most and
+/// the next one (a hold-still command moves it with the swept joint); `None` with fewer than
+/// three joints.
+fn held_jitter(a: &[f64], b: &[f64]) -> Option<f64> {
+    let change: Vec<f64> = a.iter().zip(b).map(|(x, y)| (x - y).abs()).collect();
+    let swept = (0..change.len()).max_by(|&i, &j| change[i].total_cmp(&change[j]))?;
+    (0..change.len())
+        .filter(|&j| j != swept && j != swept + 1)
+        .map(|j| change[j])
+        .max_by(f64::total_cmp)
+}
+
+/// `x` rounded up to two significant digits, as text that reads back to at least `x`.
+fn rounded_up(x: f64) -> String {
+    let decimals = (1 - x.log10().floor() as i32).max(0) as usize;
+    let scale = 10f64.powi(decimals as i32);
+    let mut up = (x * scale).ceil();
+    let mut text = format!("{:.decimals$}", up / scale);
+    if text.parse::<f64>().is_ok_and(|v| v < x) {
+        up += 1.0;
+        text = format!("{:.decimals$}", up / scale);
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tolerance_is_rounded_up_to_two_digits_that_read_back_above_it() {
+        for (x, text) in [
+            (0.0918, "0.092"),
+            (0.05, "0.050"),
+            (1.23e-4, "0.00013"),
+            (3.0, "3.0"),
+            (47.2, "48"),
+        ] {
+            let got = rounded_up(x);
+            assert_eq!(got, text, "{x}");
+            assert!(got.parse::<f64>().unwrap() >= x);
+        }
+    }
+}

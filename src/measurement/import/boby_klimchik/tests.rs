@@ -81,3 +81,57 @@ fn field_meanings() {
     assert_eq!(meaning(12), "zero");
     assert_eq!(meaning(21), "J6 deg");
 }
+
+/// `good_text` with its blocks in the order `order` (0-based block indices).
+fn reordered(order: [usize; JOINTS]) -> String {
+    let text = good_text();
+    let lines: Vec<&str> = text.lines().collect();
+    order
+        .iter()
+        .flat_map(|&b| lines[b * POSES_PER_BLOCK..(b + 1) * POSES_PER_BLOCK].to_vec())
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn reordered_blocks_are_named_by_the_joint_that_moves() {
+    let set = parse(&reordered([2, 0, 1, 3, 5, 4]), Path::new("x.csv")).unwrap();
+    let names: Vec<(&str, usize)> = set.experiments().iter().map(|e| (e.name, e.moved_joint)).collect();
+    assert_eq!(
+        names,
+        [
+            ("axis3", 3),
+            ("axis1", 1),
+            ("axis2", 2),
+            ("axis4", 4),
+            ("axis6", 6),
+            ("axis5", 5)
+        ]
+    );
+    let in_order = parse(&good_text(), Path::new("x.csv")).unwrap();
+    for e in in_order.experiments() {
+        assert_eq!(set.experiment(e.name).unwrap().rows, e.rows, "{}", e.name);
+    }
+}
+
+#[test]
+fn a_block_of_no_joint_or_of_a_joint_twice_names_its_lines() {
+    let twice = reordered([0, 0, 2, 3, 4, 5]);
+    let e = parse(&twice, Path::new("f.csv")).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "f.csv: lines 7-12 (block 2): this block moves J1, as the block of lines 1-6 did: each joint has one block"
+    );
+    let mut lines: Vec<String> = good_text().lines().map(String::from).collect();
+    for line in &mut lines[18..24] {
+        let mut f: Vec<String> = line.split_whitespace().map(String::from).collect();
+        f[FIRST_JOINT_FIELD + 3] = "0".into();
+        *line = f.join(" ");
+    }
+    let e = parse(&lines.join("\n"), Path::new("f.csv")).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("f.csv: lines 19-24 (block 4): no joint moves"),
+        "{e}"
+    );
+}
