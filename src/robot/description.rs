@@ -6,7 +6,7 @@
 
 mod identity;
 mod validate;
-pub use validate::{MAX_REPEATABILITY_SIGMA, station_problem};
+pub use validate::{MAX_REPEATABILITY_SIGMA, MIN_STATION_DISTANCE_MM, station_problem};
 
 mod convert;
 mod instrument;

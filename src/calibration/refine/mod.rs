@@ -20,8 +20,8 @@ mod prior;
 mod report;
 
 pub use free_poses::{
-    DirectionWeight, DroppedDirection, FoldCheck, ParameterChange, ParameterUnit, RefineError, RefineOptions,
-    Refinement, RefinementResult, RefitParameter, refine_free_poses,
+    DirectionWeight, DroppedDirection, FoldCheck, IMPLAUSIBLE_RMS_OVER_NOISE, ParameterChange, ParameterUnit,
+    RefineError, RefineOptions, Refinement, RefinementResult, RefitParameter, refine_free_poses,
 };
 pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use prior::unrefined_sigma;
