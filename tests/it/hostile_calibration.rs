@@ -436,20 +436,7 @@ fn negated(file: &Path, name: &str, joint: usize) -> PathBuf {
 #[test]
 fn a_joint_counted_the_other_way_is_said_with_its_sign_convention() {
     let dir = tempfile::tempdir().unwrap();
-    axiscal()
-        .current_dir(dir.path())
-        .args([
-            "simulate",
-            "--sim",
-            "analytic",
-            "--robot",
-            "table-prpp",
-            "--plan",
-            "table-prpp-plan",
-        ])
-        .args(["--validation-poses", "10", "--out", "table.csv"])
-        .assert()
-        .success();
+    table_campaign(dir.path());
     let table = dir.path().join("table.csv");
     let clean = calibrate_warns(&table, &["--robot", "table-prpp"]);
     assert!(!clean.contains("warning"), "{clean}");
@@ -504,20 +491,7 @@ fn labels_swapped(file: &Path, name: &str, (a, b): (usize, usize)) -> PathBuf {
 #[test]
 fn two_joints_labels_swapped_are_said() {
     let dir = tempfile::tempdir().unwrap();
-    axiscal()
-        .current_dir(dir.path())
-        .args([
-            "simulate",
-            "--sim",
-            "analytic",
-            "--robot",
-            "table-prpp",
-            "--plan",
-            "table-prpp-plan",
-        ])
-        .args(["--validation-poses", "10", "--out", "table.csv"])
-        .assert()
-        .success();
+    table_campaign(dir.path());
     let swapped = labels_swapped(&dir.path().join("table.csv"), "swapped.csv", (3, 4));
     let err = calibrate_warns(&swapped, &["--robot", "table-prpp"]);
     assert!(
@@ -570,4 +544,23 @@ fn sscanss2_table_with_two_joint_labels_swapped_is_said() {
         err.contains("the axis fitted for joint 3 lies along joint 4's nominal axis"),
         "{err}"
     );
+}
+
+/// The P-R-P-P table's campaign (analytic, its plan, 10 validation poses) as `table.csv` in
+/// `dir`.
+fn table_campaign(dir: &std::path::Path) {
+    axiscal()
+        .current_dir(dir)
+        .args([
+            "simulate",
+            "--sim",
+            "analytic",
+            "--robot",
+            "table-prpp",
+            "--plan",
+            "table-prpp-plan",
+        ])
+        .args(["--validation-poses", "10", "--out", "table.csv"])
+        .assert()
+        .success();
 }
