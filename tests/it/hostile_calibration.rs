@@ -528,17 +528,7 @@ fn sscanss2_table_with_two_joint_labels_swapped_is_said() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("table.txt");
     std::fs::write(&file, swapped.join("\n")).unwrap();
-    let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/real/sscanss2-table.toml");
-    let data = dir.path().join("data.csv");
-    axiscal()
-        .args(["import", "sscanss2"])
-        .arg(&file)
-        .arg("--robot")
-        .arg(&robot)
-        .arg("--out")
-        .arg(&data)
-        .assert()
-        .success();
+    let (data, robot) = crate::real_sscanss2::import_path(&file, "sscanss2-table", dir.path());
     let err = calibrate_warns(&data, &["--robot", robot.to_str().unwrap()]);
     assert!(
         err.contains("the axis fitted for joint 3 lies along joint 4's nominal axis"),

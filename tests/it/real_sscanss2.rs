@@ -15,14 +15,19 @@ fn data_dir() -> PathBuf {
     common::real_data("sscanss2-cpa")
 }
 
-/// Imports `file` with the shipped description `robot` into `dir`: the measurement CSV and the
-/// description's path.
+/// Imports `file` of the data set with the shipped description `robot` into `dir`: the
+/// measurement CSV and the description's path.
 fn import(file: &str, robot: &str, dir: &Path) -> (PathBuf, PathBuf) {
+    import_path(&data_dir().join(file), robot, dir)
+}
+
+/// [`import`] of the file at `path` (a copy of the data set's, say).
+pub(crate) fn import_path(path: &Path, robot: &str, dir: &Path) -> (PathBuf, PathBuf) {
     let data = dir.join("data.csv");
     let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/robots/real/{robot}.toml"));
     axiscal()
         .args(["import", "sscanss2"])
-        .arg(data_dir().join(file))
+        .arg(path)
         .arg("--robot")
         .arg(&robot)
         .arg("--out")
