@@ -265,6 +265,7 @@ pub fn run(args: Args) -> Result<()> {
         checks::one_setup(&set, &args.data, "the axis-experiment calibration")?;
         calibrate_axes(&args, &set, &desc)?
     };
+    readable(&cal, &args.data)?;
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
     // Every file is written before any is put in place; an output left out must not leave an
@@ -315,6 +316,27 @@ pub fn run(args: Args) -> Result<()> {
         super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
     }
     Ok(())
+}
+
+/// `cal` passes the checks every command makes when it reads `calibration.json`: a parameter
+/// the data leave free is said here, before anything is written, not by the next command.
+fn readable(cal: &Calibration, data: &Path) -> Result<()> {
+    if let Some((_, name, variance)) = cal.model_covariance.as_ref().and_then(|c| c.undetermined()) {
+        anyhow::bail!(
+            "calibrating {}: the data do not determine `{name}` (1-sigma {:.3e}, beyond 1 in its unit): nothing written; \
+             the fitted axes leave it free (two axes parallel or on one line where the description's rows make them meet, \
+             or a joint swept too little to fix it): check the description's rows against the robot (`axiscal describe`) \
+             and the sweeps' spans",
+            data.display(),
+            variance.sqrt()
+        );
+    }
+    cal.validate().map_err(|e| {
+        anyhow::anyhow!(
+            "calibrating {}: the result fails the check of calibration.json ({e}): nothing written",
+            data.display()
+        )
+    })
 }
 
 /// The options of the free-pose path.

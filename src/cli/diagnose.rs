@@ -6,7 +6,7 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate, screen_sweeps};
+use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate, implausible, screen_sweeps};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
     diagnose_with, estimated_noise, free_poses_only, markdown, validation_outliers, validation_poses, without_outliers,
@@ -253,12 +253,20 @@ fn without_sweep_outliers(args: &Args, set: MeasurementSet, desc: &RobotDescript
 
 /// `set`, or, when the independent-axis procedure cannot use its sweeps (the correction for
 /// their held joints does not settle: sweeps at their own configurations), every row as a free
-/// pose, as `calibrate` fits them, said on stderr.
+/// pose, as `calibrate` fits them, said on stderr; the calibration's implausible results (as
+/// `calibrate` warns of them) are said too.
 fn usable(set: MeasurementSet, desc: &RobotDescription, data: &Path) -> MeasurementSet {
     if free_poses_only(&set) {
         return set;
     }
     match calibrate(&set, desc, &CalibrationOptions::default()) {
+        // What `calibrate` warns of (a mirrored frame, a flipped axis) the diagnosis cannot see.
+        Ok(cal) => {
+            for found in implausible(&cal, desc) {
+                eprintln!("warning: {}: {found}", data.display());
+            }
+            set
+        }
         Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) => {
             eprintln!(
                 "note: {}: {e}; every row is diagnosed as a free pose instead (as `calibrate` fits them)",

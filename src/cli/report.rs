@@ -158,10 +158,11 @@ pub fn run(args: Args) -> Result<()> {
         eprintln!("warning: {w}");
     }
     say!(
-        "certificate of {}: {} parameters ({} with an uncertainty), U = {} u",
+        "certificate of {}: {} parameters ({} measured, the rest fixed by the method) and {} frames, U = {} u",
         c.robot.name,
         c.parameters.len(),
-        c.correlation.names.len(),
+        c.parameters.iter().filter(|p| p.standard_uncertainty > 0.0).count(),
+        c.frames.len(),
         c.coverage_factor
     );
     if let Some(h) = &c.held_out {

@@ -421,23 +421,15 @@ fn free_poses(set: &MeasurementSet, desc: &RobotDescription) -> Vec<FreePose> {
         .collect()
 }
 
-/// The RMS distance of `points` from their setup's centroid (each setup its own instrument
-/// placement).
+/// The median distance of `points` from their setup's component-wise median point (each
+/// setup its own instrument placement): a few poses in other units than the rest (a tool row
+/// in mm beside validation rows in metres) move neither median, so the ratio is the bulk's.
 fn spread(points: &[(usize, Vector3<f64>)]) -> f64 {
-    let mut centroids: std::collections::BTreeMap<usize, (Vector3<f64>, usize)> = std::collections::BTreeMap::new();
+    let mut setups: std::collections::BTreeMap<usize, Vec<Vector3<f64>>> = std::collections::BTreeMap::new();
     for (setup, p) in points {
-        let c = centroids.entry(*setup).or_insert((Vector3::zeros(), 0));
-        c.0 += p;
-        c.1 += 1;
+        setups.entry(*setup).or_default().push(*p);
     }
-    let sum: f64 = points
-        .iter()
-        .map(|(setup, p)| {
-            let (sum, n) = centroids[setup];
-            (p - sum / n as f64).norm_squared()
-        })
-        .sum();
-    (sum / points.len() as f64).sqrt()
+    median(setups.values().flat_map(|p| radii(p)).collect())
 }
 
 /// How far the free poses' measured tool positions spread against the nominal model's at
@@ -446,7 +438,8 @@ fn spread(points: &[(usize, Vector3<f64>)]) -> f64 {
 pub struct FreePoseSpread {
     /// Free poses judged.
     pub poses: usize,
-    /// RMS distance of the measured positions from their setup's centroid \[file length units\].
+    /// Median distance of the measured positions from their setup's median point \[file
+    /// length units\].
     pub measured_mm: f64,
     /// The same of the nominal model's positions \[mm\].
     pub nominal_mm: f64,
@@ -496,7 +489,7 @@ pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Uni
     let (ratio, measured, nominal) = (spread.ratio, spread.measured_mm, spread.nominal_mm);
     let unit = likely(ratio);
     let what = format!(
-        "the {} free poses' (moved_joint = 0) measured tool positions spread {measured:.4} (RMS about their centroid) where the nominal model at their commands spreads them {nominal:.1} mm, {ratio:.4} times",
+        "the {} free poses' (moved_joint = 0) measured tool positions spread {measured:.4} (median distance from their median point) where the nominal model at their commands spreads them {nominal:.1} mm, {ratio:.4} times",
         spread.poses
     );
     let revolute: Vec<String> = desc

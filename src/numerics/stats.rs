@@ -22,6 +22,23 @@ pub fn rms_spread(points: &[nalgebra::Point3<f64>]) -> f64 {
     (points.iter().map(|p| (p.coords - centroid).norm_squared()).sum::<f64>() / n).sqrt()
 }
 
+/// RMS distance of `points` from their best-fitting straight line (0 for fewer than 3): the
+/// root of the two smaller eigenvalues of their scatter about the centroid, over the count.
+pub fn rms_off_line(points: &[nalgebra::Point3<f64>]) -> f64 {
+    if points.len() < 3 {
+        return 0.0;
+    }
+    let n = points.len() as f64;
+    let centroid = points.iter().fold(nalgebra::Vector3::zeros(), |a, p| a + p.coords) / n;
+    let scatter: nalgebra::Matrix3<f64> = points
+        .iter()
+        .map(|p| (p.coords - centroid) * (p.coords - centroid).transpose())
+        .sum();
+    let eigenvalues = scatter.symmetric_eigenvalues();
+    let off_line = eigenvalues.sum() - eigenvalues.max();
+    (off_line.max(0.0) / n).sqrt()
+}
+
 /// A fit whose RMS exceeds this fraction of its points' spread about their centroid
 /// ([`rms_spread`]) is no calibration: the model leaves a quarter of a percent of the points'
 /// variance (`0.05^2`) unexplained, where a robot its description fits leaves parts per
@@ -244,6 +261,26 @@ impl CorrelatedNormal {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Points at known distances from a known line, by a second path: each point's distance
+    /// is its offset across the line, chosen, so the RMS is known; rigidly moved, it stays.
+    #[test]
+    fn the_rms_off_a_line_is_the_points_distance_from_it() {
+        use nalgebra::{Point3, Rotation3, Vector3};
+        // Pairs along x, one point `d` to each side in y: the best line is the x axis.
+        let (d, n) = (0.3, 10);
+        let turn = Rotation3::from_euler_angles(0.4, -1.1, 2.0);
+        let points: Vec<Point3<f64>> = (0..2 * n)
+            .map(|i| {
+                let across = if i % 2 == 0 { d } else { -d };
+                Point3::from(turn * Vector3::new((i / 2) as f64, across, 0.0) + Vector3::new(5.0, -2.0, 7.0))
+            })
+            .collect();
+        assert!((rms_off_line(&points) - d).abs() < 1e-12, "{}", rms_off_line(&points));
+        let on_line: Vec<Point3<f64>> = (0..n).map(|i| Point3::new(i as f64, 2.0 * i as f64, 3.0)).collect();
+        assert!(rms_off_line(&on_line) < 1e-12);
+        assert_eq!(rms_off_line(&points[..2]), 0.0);
+    }
 
     /// The sample covariance of many draws recovers the covariance: each entry within 5
     /// standard errors (`sqrt((C_ii C_jj + C_ij^2) / n)`), a singular direction drawn as 0.

@@ -136,6 +136,23 @@ impl JointData<'_> {
         ShortSpan { written, needed, kind }
     }
 
+    /// The error of a rotary joint whose points lie within
+    /// [`crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`] times the noise `noise_mm` of a
+    /// straight line (RMS, [`crate::numerics::stats::rms_off_line`]): a turning target moves on
+    /// an arc; `None` when they bow beyond it.
+    fn straight(&self, points: &[Point3<f64>], noise_mm: f64) -> Option<ProcedureError> {
+        let off_line_mm = crate::numerics::stats::rms_off_line(points) * 1e3;
+        (off_line_mm < crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE * noise_mm).then(|| {
+            ProcedureError::Straight {
+                experiment: self.name(),
+                joint: self.joint(),
+                off_line_mm,
+                noise_mm,
+                span: self.short_span(JointKind::Revolute, None),
+            }
+        })
+    }
+
     /// The error of a rotary joint whose widest sweep's arc bows from its chord by less than
     /// [`crate::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE`] times the noise `noise_mm`
     /// (its radius from the chord and the span as written), with the span whose arc would bow
@@ -214,10 +231,16 @@ pub(super) fn fit_joint(
         ),
     };
     let within_noise = spread_mm < factor * noise_mm;
-    // A rotary sweep whose arc bows within the noise: the reason its fit fails or misses.
-    let short = (kind == JointKind::Revolute)
-        .then(|| data.short_arc(noise_mm))
-        .flatten();
+    // Why a fit failed or missed its points, when the points say it: no motion, an arc too
+    // short to bow beyond the noise, or a turning joint's points on a straight line.
+    let explained = || {
+        if within_noise {
+            return Some(unresolved());
+        }
+        (kind == JointKind::Revolute)
+            .then(|| data.short_arc(noise_mm).or_else(|| data.straight(&points, noise_mm)))
+            .flatten()
+    };
     let requested = TransmissionForm::from(desc.joints[joint - 1].transmission_fit_form());
     let mut form = requested;
     let setting = FitSetting {
@@ -241,17 +264,13 @@ pub(super) fn fit_joint(
                     ..
                 },
             ) => return Err(e),
-            Err(_) if within_noise => return Err(unresolved()),
-            Err(_) if short.is_some() => return Err(short.unwrap_or_else(unresolved)),
-            fitted => break fitted?,
+            Err(e) => return Err(explained().unwrap_or(e)),
+            Ok(fitted) => break fitted,
         }
     };
     if out.report.residual_rms_mm > crate::numerics::stats::ABSURD_SHARE * spread_mm {
-        if within_noise {
-            return Err(unresolved());
-        }
-        if let Some(short) = short {
-            return Err(short);
+        if let Some(cause) = explained() {
+            return Err(cause);
         }
         return Err(ProcedureError::Absurd {
             experiment: data.name(),

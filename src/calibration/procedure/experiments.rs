@@ -121,8 +121,34 @@ pub fn axis_experiments_with(
     if out.is_empty() {
         return Err(ProcedureError::NoAxisExperiment);
     }
+    check_no_copies(&out)?;
     let reference = reference_pose(&out, desc.dof());
     Ok((out, reference))
+}
+
+/// No two experiments of one joint hold the same target-0 points bit for bit: measured
+/// points repeat to the last digit only when rows were copied.
+fn check_no_copies(experiments: &[AxisExperiment]) -> Result<(), ProcedureError> {
+    let lines = |e: &AxisExperiment| match e.lines {
+        Some((a, b)) => format!("lines {a}-{b}"),
+        None => "no file lines".to_owned(),
+    };
+    for (i, a) in experiments.iter().enumerate() {
+        let copy = experiments[i + 1..]
+            .iter()
+            .find(|b| b.joint == a.joint && !a.target0_m.is_empty() && b.target0_m == a.target0_m);
+        if let Some(b) = copy {
+            return Err(ProcedureError::DuplicateExperiment {
+                first: a.name.clone(),
+                first_lines: lines(a),
+                second: b.name.clone(),
+                second_lines: lines(b),
+                joint: a.joint,
+                points: a.target0_m.len(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// [`axis_experiments_with`] at the default held tolerance.

@@ -191,6 +191,24 @@ pub enum ProcedureError {
     /// The set has no axis experiment at all.
     #[error("no axis experiment (no row with moved_joint > 0): nothing to calibrate")]
     NoAxisExperiment,
+    /// Two experiments hold the same measured points: one is a copy of the other.
+    #[error(
+        "experiments {first} ({first_lines}) and {second} ({second_lines}) both sweep joint {joint} with the same {points} measured points, to the last digit: one is a copy of the other (fitted twice, its points would count double and every sigma shrink by 1.4); delete one"
+    )]
+    DuplicateExperiment {
+        /// The first experiment.
+        first: String,
+        /// Its file lines, as `lines A-B` (or `no file lines`).
+        first_lines: String,
+        /// The copy.
+        second: String,
+        /// Its file lines.
+        second_lines: String,
+        /// The joint both sweep.
+        joint: usize,
+        /// Their target-0 points.
+        points: usize,
+    },
     /// The fit-and-correct passes for the held joints' recorded values did not settle.
     #[error(
         "the correction for the held joints' recorded values did not converge in {passes} passes (last change {change_mm:.3e} mm)"
@@ -235,6 +253,24 @@ pub enum ProcedureError {
         /// [`crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`].
         factor: f64,
         /// Its span as written and the least the fit needs.
+        span: ShortSpan,
+    },
+    /// A rotary joint's points lie on a straight line: no arc to fit.
+    #[error(
+        "experiment {experiment} (joint {joint}): its points lie on a straight line ({off_line_mm:.4} mm RMS from it, within {} times the noise of a point, {noise_mm:.3} mm) though the joint turns {} as written: a turning joint moves its target on an arc; check that the sweep's target 0 sits on the swept link, that the coordinates are the target's, and the joint's kind in the description",
+        crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE,
+        span.written()
+    )]
+    Straight {
+        /// The experiments of the joint.
+        experiment: String,
+        /// The joint.
+        joint: usize,
+        /// The points' RMS distance from their line \[mm\].
+        off_line_mm: f64,
+        /// The noise of a point, 3-D RMS \[mm\].
+        noise_mm: f64,
+        /// Its span as written.
         span: ShortSpan,
     },
     /// A rotary joint's arc bows from its chord by too little for its fit: the sweep is short.

@@ -2,10 +2,11 @@
 //! instrument and robot of this description can give are said loudly, with what to check.
 //!
 //! - **Handedness.** The lengths of the calibrated rows (`a`, `b`, `h` of Table 2) against
-//!   the description's, on the lengths of at least [`SIGNIFICANT_LENGTH`] of the longest. In a
-//!   left-handed instrument frame (one coordinate's sign flipped on export) the lengths along a
-//!   rotary axis or its common normals flip sign and keep their size (the axis is oriented by
-//!   its motion: a pseudovector); no robot of the description gives that.
+//!   the description's, on the lengths of at least [`SIGNIFICANT_LENGTH`] of the longest and
+//!   [`MIN_SIGNIFICANT_LENGTH_M`]. In a left-handed instrument frame (one coordinate's sign
+//!   flipped on export) the lengths along a rotary axis or its common normals flip sign and keep
+//!   their size (the axis is oriented by its motion: a pseudovector); no robot of the
+//!   description gives that.
 //! - **Size.** The least-squares factor `s = sum(|c| |n|) / sum(n^2)` of the same lengths'
 //!   sizes, calibrated `c` over described `n`, each sliding joint's travel per command (its
 //!   transmission's slope, described over calibrated) counted as a length of the longest's
@@ -32,6 +33,12 @@ use nalgebra::Vector3;
 /// Lengths shorter than this share of the description's longest are left out of the size
 /// factor: a nominal zero or a few millimetres of offset says nothing of the scale.
 pub const SIGNIFICANT_LENGTH: f64 = 0.05;
+
+/// Lengths shorter than this \[m\] are left out of the size factor whatever the longest: a
+/// calibration moves a length by a fraction of a millimetre, which on a nominal length below
+/// 20 mm is more than [`SIZE_TOLERANCE`] of it (and on a nominal zero, as coaxial axes have,
+/// any factor at all).
+pub const MIN_SIGNIFICANT_LENGTH_M: f64 = 0.02;
 
 /// The size factor may differ from 1 by this much before it is said: a description of the
 /// robot measured is within a few per cent of it.
@@ -235,7 +242,7 @@ fn lengths(cal: &Calibration, desc: &RobotDescription) -> Vec<(f64, f64)> {
     let longest = n.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     n.into_iter()
         .zip(c)
-        .filter(|(n, _)| longest > 0.0 && n.abs() >= SIGNIFICANT_LENGTH * longest)
+        .filter(|(n, _)| n.abs() >= (SIGNIFICANT_LENGTH * longest).max(MIN_SIGNIFICANT_LENGTH_M))
         .collect()
 }
 

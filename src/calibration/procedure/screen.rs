@@ -80,6 +80,11 @@ pub struct Screening {
 /// hundred thousand times).
 pub const OUTLIER_ROUNDS_MAX: usize = 25;
 
+/// A sweep's points lie within about twice their median distance from their median point
+/// when evenly spread (a line's end at half its length against a quarter); a point beyond this
+/// many times it is a gross error, left out of the first fit when the fit on every point fails.
+pub const GROSS_DISTANCE_OVER_MEDIAN: f64 = 10.0;
+
 /// One sweep's target-0 points and its joint's actuator command at each.
 struct Sweep<'a> {
     experiment: &'a AxisExperiment,
@@ -108,7 +113,7 @@ pub fn screen_sweeps(
         .iter()
         .map(|s| {
             s.holds_still()
-                .then(|| s.residuals(&all(s), sigma, max_iterations).ok())
+                .then(|| s.first_residuals(sigma, max_iterations))
                 .flatten()
         })
         .collect();
@@ -294,6 +299,22 @@ impl<'a> Sweep<'a> {
             }
         };
         Ok(self.points.iter().zip(&predicted[1..]).map(|(p, q)| p - q).collect())
+    }
+
+    /// The residuals of every point against the fit on all of them or, when that fit fails
+    /// (a point kilometres off breaks it), on the points within [`GROSS_DISTANCE_OVER_MEDIAN`]
+    /// times the median distance from the sweep's median point.
+    fn first_residuals(&self, sigma: f64, max_iterations: usize) -> Option<Vec<Vector3<f64>>> {
+        self.residuals(&all(self), sigma, max_iterations).ok().or_else(|| {
+            let coordinate = |c: usize| median(&self.points.iter().map(|p| p[c]).collect::<Vec<_>>());
+            let middle = Point3::new(coordinate(0), coordinate(1), coordinate(2));
+            let distance: Vec<f64> = self.points.iter().map(|p| (p - middle).norm()).collect();
+            let limit = GROSS_DISTANCE_OVER_MEDIAN * median(&distance);
+            let near: Vec<usize> = (0..self.points.len()).filter(|&i| distance[i] <= limit).collect();
+            (near.len() < self.points.len())
+                .then(|| self.residuals(&near, sigma, max_iterations).ok())
+                .flatten()
+        })
     }
 
     /// Sets aside, worst first by `measure`, the points whose measure exceeds `fence(measures

@@ -221,6 +221,20 @@ impl ModelCovariance {
         Ok(())
     }
 
+    /// The first parameter `(index, name, variance)` whose variance is beyond
+    /// [`MAX_PARAMETER_VARIANCE`] (or not finite): the data do not determine it.
+    pub fn undetermined(&self) -> Option<(usize, &str, f64)> {
+        (0..self.names.len().min(self.covariance.len()))
+            .map(|k| {
+                (
+                    k,
+                    self.names[k].as_str(),
+                    self.covariance[k].get(k).copied().unwrap_or(f64::NAN),
+                )
+            })
+            .find(|(_, _, v)| !(*v <= MAX_PARAMETER_VARIANCE))
+    }
+
     /// Each variance is at least 0 and at most [`MAX_PARAMETER_VARIANCE`].
     fn check_variances(&self) -> Result<(), InvalidCalibration> {
         for (k, name) in self.names.iter().enumerate() {
@@ -286,4 +300,32 @@ fn check_symmetric(c: &DMatrix<f64>) -> Result<(), InvalidCalibration> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn covariance(variances: &[f64]) -> ModelCovariance {
+        let n = variances.len();
+        ModelCovariance {
+            names: (0..n).map(|k| format!("p{k}")).collect(),
+            covariance: (0..n)
+                .map(|r| (0..n).map(|c| if r == c { variances[r] } else { 0.0 }).collect())
+                .collect(),
+        }
+    }
+
+    /// The first variance beyond the largest a file may hold is named, as the file check
+    /// refuses it; one at the bound is not.
+    #[test]
+    fn an_undetermined_parameter_is_the_one_the_file_check_refuses() {
+        let at_bound = covariance(&[1e-6, MAX_PARAMETER_VARIANCE, 0.0]);
+        assert_eq!(at_bound.undetermined(), None);
+        assert!(at_bound.check_variances().is_ok());
+        let beyond = covariance(&[1e-6, 34339.2, 2.0]);
+        assert_eq!(beyond.undetermined(), Some((1, "p1", 34339.2)));
+        assert!(beyond.check_variances().unwrap_err().field.ends_with("[1][1]"));
+        assert_eq!(covariance(&[f64::NAN]).undetermined().map(|u| u.0), Some(0));
+    }
 }

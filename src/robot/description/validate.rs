@@ -29,6 +29,13 @@ pub const MAX_GEAR_RATIO: f64 = 1e3;
 /// at angles too small to intersect.
 pub const MIN_STATION_DISTANCE_MM: f64 = 100.0;
 
+/// A row's `alpha` (the angle from `Z_phi_i` to axis `i+1`, eq. A3) stays this far \[deg\]
+/// from 0 and 180: nearer, the next axis runs almost along `Z_phi_i`, and the row's `a` (where
+/// the common normal leaves `Z_phi_i`) moves by the axis's length over `sin^2 alpha` times each
+/// radian the fitted axis tilts: 33 times at 10 deg, kilometres as alpha goes to 0. The phi rule
+/// of a DH table or URDF (`Z_phi` perpendicular to both axes) gives 90.
+pub const MIN_ROW_ALPHA_DEG: f64 = 10.0;
+
 impl RobotDescription {
     /// Checks the description's values; the first field found invalid is reported with `path`.
     pub(super) fn validate(&self, path: &Path) -> Result<(), DescriptionError> {
@@ -173,7 +180,8 @@ impl RobotDescription {
         Ok(())
     }
 
-    /// Each row's values are finite.
+    /// Each row's values are finite, and its `alpha` at least [`MIN_ROW_ALPHA_DEG`] from 0 and
+    /// 180 deg.
     fn check_rows(&self) -> Result<(), Invalid> {
         for (k, r) in self.rows.iter().enumerate() {
             let values = [
@@ -186,6 +194,20 @@ impl RobotDescription {
             ];
             if let Some((key, _)) = values.iter().find(|(_, v)| !v.is_finite()) {
                 return Err((format!("rows[{k}].{key}"), "must be finite".into()));
+            }
+            if r.alpha_deg.to_radians().sin().abs() < MIN_ROW_ALPHA_DEG.to_radians().sin() {
+                return Err((
+                    format!("rows[{k}].alpha_deg"),
+                    format!(
+                        "{}: within {MIN_ROW_ALPHA_DEG} deg of 0 or 180 the row is singular (axis {} along Z_phi_{}, eq. A3: \
+                         its `a` is not determined by any measurement); a phi-model row's alpha is the angle from Z_phi to \
+                         the next axis, not the DH twist between the axes: put Z_phi perpendicular to both axes (alpha_deg = \
+                         90 or -90, the axes' angle in beta_deg), or give the geometry as a `dh` table (its conversion does so)",
+                        format_f64(r.alpha_deg),
+                        k + 2,
+                        k + 1
+                    ),
+                ));
             }
         }
         Ok(())
