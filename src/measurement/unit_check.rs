@@ -421,15 +421,64 @@ fn free_poses(set: &MeasurementSet, desc: &RobotDescription) -> Vec<FreePose> {
         .collect()
 }
 
-/// The median distance of `points` from their setup's component-wise median point (each
-/// setup its own instrument placement): a few poses in other units than the rest (a tool row
-/// in mm beside validation rows in metres) move neither median, so the ratio is the bulk's.
+/// The RMS distance of `points` from their setup's centroid (each setup its own instrument
+/// placement).
 fn spread(points: &[(usize, Vector3<f64>)]) -> f64 {
-    let mut setups: std::collections::BTreeMap<usize, Vec<Vector3<f64>>> = std::collections::BTreeMap::new();
+    let mut centroids: std::collections::BTreeMap<usize, (Vector3<f64>, usize)> = std::collections::BTreeMap::new();
     for (setup, p) in points {
-        setups.entry(*setup).or_default().push(*p);
+        let c = centroids.entry(*setup).or_insert((Vector3::zeros(), 0));
+        c.0 += p;
+        c.1 += 1;
     }
-    median(setups.values().flat_map(|p| radii(p)).collect())
+    let sum: f64 = points
+        .iter()
+        .map(|(setup, p)| {
+            let (sum, n) = centroids[setup];
+            (p - sum / n as f64).norm_squared()
+        })
+        .sum();
+    (sum / points.len() as f64).sqrt()
+}
+
+/// A pose whose measured distance from the median point over its nominal one is beyond this
+/// factor of the poses' median ratio is in other units than most ([`bulk`]): a robot within its
+/// description keeps every ratio within per cent of the median away from the median point
+/// (near it both distances are small and their ratio noisy: such poses count little in a
+/// spread), and the slips are 25.4 (inches), 57 (radians) or 1000 (metres).
+const BULK_RATIO_FACTOR: f64 = 3.0;
+
+/// Each point's distance from its setup's component-wise median point, in the order given.
+fn radii_by_setup(points: &[(usize, Vector3<f64>)]) -> Vec<f64> {
+    let mut setups: std::collections::BTreeMap<usize, Vec<usize>> = std::collections::BTreeMap::new();
+    for (i, (setup, _)) in points.iter().enumerate() {
+        setups.entry(*setup).or_default().push(i);
+    }
+    let mut out = vec![0.0; points.len()];
+    for members in setups.values() {
+        let r = radii(&members.iter().map(|&i| points[i].1).collect::<Vec<_>>());
+        members.iter().zip(r).for_each(|(&i, r)| out[i] = r);
+    }
+    out
+}
+
+/// The poses whose own ratio of measured to nominal distance from the median point lies within
+/// [`BULK_RATIO_FACTOR`] of the median ratio of those distances: a few poses in other units
+/// than the rest (a tool row in mm beside validation rows in metres) move neither median and
+/// are left out of the spreads, so the ratio is the bulk's. All of them when no median ratio
+/// can be taken.
+fn bulk(measured: &[(usize, Vector3<f64>)], nominal: &[(usize, Vector3<f64>)]) -> Vec<usize> {
+    let (m, n) = (radii_by_setup(measured), radii_by_setup(nominal));
+    let typical = median(m.clone()) / median(n.clone());
+    let all: Vec<usize> = (0..measured.len()).collect();
+    if !(typical.is_finite() && typical > 0.0) {
+        return all;
+    }
+    let near = |i: &usize| {
+        let r = m[*i] / n[*i] / typical;
+        r.is_finite() && (1.0 / BULK_RATIO_FACTOR..=BULK_RATIO_FACTOR).contains(&r)
+    };
+    let kept: Vec<usize> = all.iter().copied().filter(near).collect();
+    if kept.len() < MIN_FREE_POSES { all } else { kept }
 }
 
 /// How far the free poses' measured tool positions spread against the nominal model's at
@@ -438,8 +487,8 @@ fn spread(points: &[(usize, Vector3<f64>)]) -> f64 {
 pub struct FreePoseSpread {
     /// Free poses judged.
     pub poses: usize,
-    /// Median distance of the measured positions from their setup's median point \[file
-    /// length units\].
+    /// RMS distance of the measured positions from their setup's centroid, over the poses in
+    /// the units of most \[file length units\].
     pub measured_mm: f64,
     /// The same of the nominal model's positions \[mm\].
     pub nominal_mm: f64,
@@ -453,8 +502,11 @@ pub fn free_pose_spread(set: &MeasurementSet, desc: &RobotDescription) -> Option
     if poses.len() < MIN_FREE_POSES {
         return None;
     }
-    let measured = spread(&poses.iter().map(|p| (p.setup, p.measured)).collect::<Vec<_>>());
-    let nominal = spread(&poses.iter().map(|p| (p.setup, p.nominal)).collect::<Vec<_>>());
+    let measured: Vec<(usize, Vector3<f64>)> = poses.iter().map(|p| (p.setup, p.measured)).collect();
+    let nominal: Vec<(usize, Vector3<f64>)> = poses.iter().map(|p| (p.setup, p.nominal)).collect();
+    let kept = bulk(&measured, &nominal);
+    let of = |points: &[(usize, Vector3<f64>)]| spread(&kept.iter().map(|&i| points[i]).collect::<Vec<_>>());
+    let (measured, nominal) = (of(&measured), of(&nominal));
     (measured.max(nominal) >= MIN_JUDGED_SPREAD_MM).then_some(FreePoseSpread {
         poses: poses.len(),
         measured_mm: measured,
@@ -489,7 +541,7 @@ pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Uni
     let (ratio, measured, nominal) = (spread.ratio, spread.measured_mm, spread.nominal_mm);
     let unit = likely(ratio);
     let what = format!(
-        "the {} free poses' (moved_joint = 0) measured tool positions spread {measured:.4} (median distance from their median point) where the nominal model at their commands spreads them {nominal:.1} mm, {ratio:.4} times",
+        "the {} free poses' (moved_joint = 0) measured tool positions spread {measured:.4} (RMS about their centroid) where the nominal model at their commands spreads them {nominal:.1} mm, {ratio:.4} times",
         spread.poses
     );
     let revolute: Vec<String> = desc

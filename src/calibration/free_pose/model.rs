@@ -74,13 +74,16 @@ pub fn layout(
 }
 
 /// Adds `d` to the harmonic coefficient of `order` (sine or cosine) of a harmonic
-/// transmission, growing its coefficient lists as needed.
+/// transmission, growing both coefficient lists as needed: a series has one sine and one
+/// cosine per order (a coefficient the fit leaves out stays 0), as `calibration.json` holds it.
 fn add_harmonic(t: &mut Transmission, order: usize, cosine: bool, d: f64) {
     if let Transmission::Harmonic { sin, cos } = t {
-        let list = if cosine { cos } else { sin };
-        if list.len() < order {
-            list.resize(order, 0.0);
+        for list in [&mut *sin, &mut *cos] {
+            if list.len() < order {
+                list.resize(order, 0.0);
+            }
         }
+        let list = if cosine { cos } else { sin };
         list[order - 1] += d;
     }
 }

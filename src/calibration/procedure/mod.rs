@@ -257,7 +257,7 @@ pub enum ProcedureError {
     },
     /// A rotary joint's points lie on a straight line: no arc to fit.
     #[error(
-        "experiment {experiment} (joint {joint}): its points lie on a straight line ({off_line_mm:.4} mm RMS from it, within {} times the noise of a point, {noise_mm:.3} mm) though the joint turns {} as written: a turning joint moves its target on an arc; check that the sweep's target 0 sits on the swept link, that the coordinates are the target's, and the joint's kind in the description",
+        "experiment {experiment} (joint {joint}): its points are collinear: they lie on a straight line ({off_line_mm:.4} mm RMS from it, within {} times the noise of a point, {noise_mm:.3} mm) though the joint turns {} as written: a turning joint moves its target on an arc; check that the sweep's target 0 sits on the swept link, that the coordinates are the target's, and the joint's kind in the description",
         crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE,
         span.written()
     )]
