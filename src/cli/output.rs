@@ -446,6 +446,9 @@ impl StagedSet<'_> {
     /// Puts every file in place, then removes the files of `stale` this set did not write (an
     /// earlier run's outputs that would no longer belong beside the new ones).
     pub fn commit(mut self, stale: &[&str]) -> Result<()> {
+        // Two commands placing their sets into one folder at once (`--force` both) would
+        // interleave their files: the folder's own lock makes each set's placing whole.
+        let _placing = lock_folder(&self.dir)?;
         let placed: Vec<PathBuf> = self.staged.iter().map(|f| f.target.clone()).collect();
         for file in std::mem::take(&mut self.staged) {
             file.place()?;
@@ -458,6 +461,14 @@ impl StagedSet<'_> {
         }
         Ok(())
     }
+}
+
+/// An exclusive lock on the folder itself (`flock` on its handle, released when dropped; no
+/// lock file left in the user's folder), waited for while another command holds it.
+fn lock_folder(dir: &Path) -> Result<std::fs::File> {
+    let folder = std::fs::File::open(dir).with_context(|| format!("opening {}", dir.display()))?;
+    folder.lock().with_context(|| format!("locking {}", dir.display()))?;
+    Ok(folder)
 }
 
 impl Drop for StagedSet<'_> {
@@ -552,6 +563,36 @@ mod tests {
         assert_eq!(std::fs::read_dir(out.parent().unwrap()).unwrap().count(), 1);
         Outputs::new(true).write(&out, "two").unwrap();
         assert_eq!(std::fs::read_to_string(&out).unwrap(), "two");
+    }
+
+    /// Two commands placing a set of files into one folder at once, both with `--force`: the
+    /// folder always ends with one command's whole set, never a mix (each round of many files,
+    /// so that placings without the folder's lock interleave).
+    #[test]
+    fn two_sets_placed_at_once_leave_one_whole_set() {
+        let dir = tempfile::tempdir().unwrap();
+        let names: Vec<String> = (0..40).map(|k| format!("f{k}.txt")).collect();
+        let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        for round in 0..20 {
+            std::thread::scope(|scope| {
+                for writer in ["a", "b"] {
+                    let (dir, refs) = (dir.path(), &refs);
+                    scope.spawn(move || {
+                        let outputs = Outputs::new(true);
+                        let mut set = outputs.staged_in(dir).unwrap();
+                        for name in refs {
+                            set.write(name, writer).unwrap();
+                        }
+                        set.commit(&[]).unwrap();
+                    });
+                }
+            });
+            let contents: std::collections::BTreeSet<String> = refs
+                .iter()
+                .map(|n| std::fs::read_to_string(dir.path().join(n)).unwrap())
+                .collect();
+            assert_eq!(contents.len(), 1, "round {round}: a mixed folder {contents:?}");
+        }
     }
 
     /// Two writers of one absent output at once (two runs without `--force`): the first to
