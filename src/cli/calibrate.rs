@@ -691,6 +691,19 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotD
                 n.source
             );
         }
+        if n.source == "default" && n.estimate.is_some() {
+            let (joint, sigma) = desc
+                .joints
+                .iter()
+                .enumerate()
+                .map(|(k, j)| (k + 1, j.repeatability_sigma))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((0, 0.0));
+            eprintln!(
+                "warning: the residuals give no noise estimate above 0: the joints' repeatability (the description's repeatability_sigma, joint {joint}: {sigma} rad or m) explains all of their scatter; the fits keep the default {:.4} mm and every sigma follows the repeatability: check repeatability_sigma (radians for a turning joint, metres for a sliding one) or give --repeatability-rad",
+                n.used_rms_3d_mm
+            );
+        }
         if n.given_contradicted {
             say!(
                 "  WARNING: the residuals contradict --noise-mm {:.4} (chi-square p = {:.2e}); see report.md",

@@ -281,3 +281,119 @@ fn validation_rows_in_metres_beside_a_tool_row_in_millimetres_are_a_unit_slip() 
         assert!(e.contains("look like metres rather than millimetres"), "{command}: {e}");
     }
 }
+
+#[test]
+fn tool_target_ids_swapped_turn_the_tool_frame_over_and_are_said() {
+    let dir = tempfile::tempdir().unwrap();
+    simulate_analytic(dir.path(), 0, 26, "good.csv");
+    // The paper robot's tool targets form an isosceles right triangle at target 0: ids 1 and 2
+    // swapped fit their mirror image exactly, turned over about the triangle's diagonal.
+    let swapped = altered_csv(
+        &dir.path().join("good.csv"),
+        "swapped.csv",
+        |_| true,
+        |f| {
+            if f[0] == "tool" && (f[3] == "1" || f[3] == "2") {
+                f[3] = if f[3] == "1" { "2" } else { "1" }.into();
+            }
+        },
+    );
+    let a = axiscal()
+        .current_dir(dir.path())
+        .arg("calibrate")
+        .arg(&swapped)
+        .args(["--out", "out"])
+        .assert()
+        .success();
+    let e = stderr(&a);
+    let angle = crate::common::number_after(&e, "the tool frame fitted from the tool observation is turned ");
+    // 180 deg less the fitted tool frame's few mrad of uncertainty.
+    assert!(angle > 170.0, "{e}");
+    assert!(e.contains("target ids swapped"), "{e}");
+    let clean = axiscal()
+        .current_dir(dir.path())
+        .args(["calibrate", "good.csv", "--out", "clean"])
+        .assert()
+        .success();
+    assert!(!stderr(&clean).contains("tool frame fitted"), "{}", stderr(&clean));
+}
+
+#[test]
+fn a_repeatability_that_explains_all_the_scatter_is_said_and_the_noise_not_called_estimated() {
+    let dir = tempfile::tempdir().unwrap();
+    // 0.02 rad (1.1 deg) on the SCARA's shoulder: far more scatter than its sweeps show.
+    edited_robot(
+        dir.path(),
+        "scara-rrpr",
+        &[(
+            "[[joints]]   # 1: shoulder, 400 mm column, 350 mm arm\n",
+            "[[joints]]   # 1: shoulder, 400 mm column, 350 mm arm\nrepeatability_sigma = 0.02\n",
+        )],
+        "scara.toml",
+    );
+    let run = |args: &[&str]| stderr(&axiscal().current_dir(dir.path()).args(args).assert().success());
+    run(&[
+        "simulate",
+        "--robot",
+        "scara.toml",
+        "--sim",
+        "analytic",
+        "--seed",
+        "5",
+        "--out",
+        "s.csv",
+    ]);
+    let e = run(&["calibrate", "s.csv", "--robot", "scara.toml", "--out", "cal"]);
+    assert!(
+        e.contains("explains all of their scatter") && e.contains("joint 1: 0.02"),
+        "{e}"
+    );
+    let cal = crate::common::read_calibration(&dir.path().join("cal"));
+    let noise = cal.noise.expect("a noise report");
+    assert_eq!(noise.source, "default");
+    assert_eq!(noise.estimate.map(|e| e.rms_3d_mm), Some(0.0));
+}
+
+#[test]
+fn a_one_joint_rail_is_referenced_at_its_tool_observation_and_validates() {
+    let dir = tempfile::tempdir().unwrap();
+    let rail = "name = \"Rail\"\ndh_convention = \"classic\"\n[placement]\ntranslation_mm = [2000.0, 300.0, -300.0]\n\
+                [[joints]]\nkind = \"prismatic\"\nlimits = [-500.0, 500.0]\n\
+                dh = { d_mm = 100.0, theta_deg = 0.0, a_mm = 0.0, alpha_deg = 0.0 }\n\
+                [tool]\ntargets_mm = [[200.0, 0.0, 0.0], [0.0, 200.0, 0.0], [-150.0, -150.0, 20.0]]\n\
+                [[axis_targets]]\njoint = 1\ntarget0 = { link = 1, position_mm = [150.0, 150.0, 0.0] }\n";
+    std::fs::write(dir.path().join("rail.toml"), rail).unwrap();
+    let run = |args: &[&str]| stderr(&axiscal().current_dir(dir.path()).args(args).assert().success());
+    run(&[
+        "simulate",
+        "--robot",
+        "rail.toml",
+        "--sim",
+        "analytic",
+        "--validation-poses",
+        "10",
+        "--seed",
+        "3",
+        "--out",
+        "r.csv",
+    ]);
+    run(&["calibrate", "r.csv", "--robot", "rail.toml", "--out", "cal"]);
+    let cal = crate::common::read_calibration(&dir.path().join("cal"));
+    // The tool observation is written at command 0: the tool frame is fitted there.
+    assert_eq!(cal.reference_cmd, vec![0.0]);
+    assert!(cal.tool.is_some(), "the tool frame fitted");
+    run(&[
+        "validate",
+        "--calibration",
+        "cal/calibration.json",
+        "r.csv",
+        "--robot",
+        "rail.toml",
+        "--out",
+        "v",
+    ]);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("v/summary.json")).unwrap()).unwrap();
+    let verdict = summary["verdict"].as_str().unwrap();
+    assert!(verdict.starts_with("consistent"), "{verdict}");
+}

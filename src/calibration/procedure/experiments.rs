@@ -59,8 +59,8 @@ impl AxisExperiment {
 
 /// Collects the axis experiments and checks their commands (held tolerance `tolerance`, file
 /// units), and finds the reference pose: per joint, the median of its held values over every
-/// step of every experiment that holds it (the first sweep's step 0 for a joint no experiment
-/// holds).
+/// step of every experiment that holds it (for a joint no experiment holds, its command in the
+/// tool observation, else the first sweep's step 0).
 pub fn axis_experiments_with(
     set: &MeasurementSet,
     desc: &RobotDescription,
@@ -123,7 +123,44 @@ pub fn axis_experiments_with(
     }
     check_no_copies(&out)?;
     let reference = reference_pose(&out, desc.dof());
+    let reference = at_the_tool_observation(set, desc, &out, reference);
     Ok((out, reference))
+}
+
+/// `reference` with each joint no experiment holds (every experiment sweeps it: a one-joint
+/// robot, or sweeps of one joint only) set to its command in the first free pose that sees
+/// every tool target with the held joints at `reference`: the tool observation, where the
+/// tool frame is fitted. Unchanged when there is none.
+fn at_the_tool_observation(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    experiments: &[AxisExperiment],
+    mut reference: Vec<f64>,
+) -> Vec<f64> {
+    let unheld: Vec<usize> = (0..desc.dof())
+        .filter(|&j| !experiments.iter().any(|e| e.holds_constant(j)))
+        .collect();
+    let targets = desc.tool_targets_m().len();
+    if unheld.is_empty() || targets < 3 {
+        return reference;
+    }
+    let free = set.experiments();
+    let observation = free.iter().filter(|e| e.moved_joint == 0).find_map(|e| {
+        e.by_step().into_values().find(|rows| {
+            let held_at_reference = rows.iter().all(|r| {
+                (0..desc.dof())
+                    .filter(|j| !unheld.contains(j))
+                    .all(|j| (r.cmd[j] - reference[j]).abs() <= COMMAND_TOLERANCE)
+            });
+            held_at_reference && (0..targets).all(|t| rows.iter().any(|r| r.target == t))
+        })
+    });
+    if let Some(rows) = observation {
+        for &j in &unheld {
+            reference[j] = rows[0].cmd[j];
+        }
+    }
+    reference
 }
 
 /// No two experiments of one joint hold the same target-0 points bit for bit: measured

@@ -1101,7 +1101,15 @@ impl<'a> Context<'a> {
             .map(|e| e.p_value(self.options.noise_rms_3d_mm));
         NoiseReport {
             used_rms_3d_mm: self.noise_mm,
-            source: if given { "given" } else { "estimated" }.into(),
+            // The estimate replaces the assumed noise only when it is above 0 ([`calibrate_as`]).
+            source: if given {
+                "given"
+            } else if estimate.as_ref().is_some_and(|e| e.rms_3d_mm > 0.0) {
+                "estimated"
+            } else {
+                "default"
+            }
+            .into(),
             given_p_value: p,
             given_contradicted: estimate
                 .as_ref()

@@ -620,7 +620,8 @@ pub struct NoiseReport {
     pub estimate: Option<NoiseEstimate>,
     /// The 3-D RMS noise the fits were weighted with \[mm\].
     pub used_rms_3d_mm: f64,
-    /// `given` (`--noise-mm`) or `estimated`.
+    /// `given` (`--noise-mm`), `estimated`, or `default` (the estimate is 0 or none: the
+    /// default noise kept).
     pub source: String,
     /// For a given noise: the two-sided chi-square p-value of it against the residuals.
     pub given_p_value: Option<f64>,

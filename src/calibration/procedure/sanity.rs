@@ -23,6 +23,10 @@
 //!   to its nominal, its readings count the other way (a sign convention); two such axes each
 //!   along the other's nominal line, their experiments are labelled the other's. A description
 //!   placed otherwise than the robot stands turns every axis, which says neither.
+//! - **Tool.** The tool frame fitted from the tool observation against the description's, in
+//!   the last link: beyond [`PLAUSIBLE_AXIS_TILT_RAD`] it is no tool's deviation from its
+//!   drawing. Three targets in a plane fit their mirror image (two ids swapped) exactly, turned
+//!   over by up to 180 deg.
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
 use crate::kinematics::JointKind;
@@ -93,6 +97,11 @@ pub enum Implausible {
         /// The angle between joint `joint`'s fitted axis and its nominal \[deg\].
         angle_deg: f64,
     },
+    /// The tool frame fitted from the tool observation is turned far from the description's.
+    ToolTurned {
+        /// The angle between the fitted and the described tool frame (in the last link) \[deg\].
+        angle_deg: f64,
+    },
     /// A joint's fit misses its points by far more than the others'.
     Misfit {
         /// The joint.
@@ -141,6 +150,10 @@ impl std::fmt::Display for Implausible {
                 f,
                 "the axis fitted for joint {joint} lies along joint {other}'s nominal axis and the one fitted for joint {other} along joint {joint}'s ({angle_deg:.1} deg from its own, every other axis along its own): are the experiment labels of joints {joint} and {other} swapped? (check the experiment ids, `moved_joint` and the cmd_{joint}, cmd_{other} columns; or the description's [placement] turns the robot)"
             ),
+            Implausible::ToolTurned { angle_deg } => write!(
+                f,
+                "the tool frame fitted from the tool observation is turned {angle_deg:.1} deg from the description's `[tool] frame`: the tool rows' target ids swapped (three targets fit their mirror image turned over), or the description's tool frame or targets are not this tool's; check the `tool` rows' target ids against `[tool] targets_mm`"
+            ),
             Implausible::Misfit {
                 joint,
                 experiment,
@@ -165,8 +178,19 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
         .filter(|s| !mirrored_by_an_axis(s))
         .collect();
     found.extend(directions);
+    found.extend(tool_turned(cal, desc));
     found.extend(misfits(cal));
     found
+}
+
+/// The tool check of the module doc: the fitted tool frame against the described one, both in
+/// the last link, beyond [`PLAUSIBLE_AXIS_TILT_RAD`].
+fn tool_turned(cal: &Calibration, desc: &RobotDescription) -> Option<Implausible> {
+    let described = RobotModel::ideal(desc).tool_frame.to_isometry().rotation;
+    let angle = described.angle_to(&cal.robot.tool_frame.to_isometry().rotation);
+    (angle > PLAUSIBLE_AXIS_TILT_RAD).then(|| Implausible::ToolTurned {
+        angle_deg: angle.to_degrees(),
+    })
 }
 
 /// Each fitted axis's direction, the nominal one at the reference pose (instrument frame, the
