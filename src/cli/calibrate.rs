@@ -265,7 +265,7 @@ pub fn run(args: Args) -> Result<()> {
         checks::one_setup(&set, &args.data, "the axis-experiment calibration")?;
         calibrate_axes(&args, &set, &desc)?
     };
-    readable(&cal, &args.data)?;
+    readable(&cal, &args)?;
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
     // Every file is written before any is put in place; an output left out must not leave an
@@ -320,15 +320,22 @@ pub fn run(args: Args) -> Result<()> {
 
 /// `cal` passes the checks every command makes when it reads `calibration.json`: a parameter
 /// the data leave free is said here, before anything is written, not by the next command.
-fn readable(cal: &Calibration, data: &Path) -> Result<()> {
+fn readable(cal: &Calibration, args: &Args) -> Result<()> {
+    let data = &args.data;
     if let Some((_, name, variance)) = cal.model_covariance.as_ref().and_then(|c| c.undetermined()) {
         anyhow::bail!(
-            "calibrating {}: the data do not determine `{name}` (1-sigma {:.3e}, beyond 1 in its unit): nothing written; \
-             the fitted axes leave it free (two axes parallel or on one line where the description's rows make them meet, \
-             or a joint swept too little to fix it): check the description's rows against the robot (`axiscal describe`) \
-             and the sweeps' spans",
+            "calibrating {}: the data do not determine `{name}` (1-sigma {:.3e}, beyond 1 in its unit): nothing written; {}",
             data.display(),
-            variance.sqrt()
+            variance.sqrt(),
+            match weighting_options(args, cal) {
+                Some(options) => format!(
+                    "every sigma grows with the noise the fits assume: {options}; without them the noise is estimated from the residuals and the repeatability is the description's"
+                ),
+                None => "the fitted axes leave it free (two axes parallel or on one line where the description's rows make \
+                         them meet, or a joint swept too little to fix it): check the description's rows against the robot \
+                         (`axiscal describe`) and the sweeps' spans"
+                    .to_owned(),
+            }
         );
     }
     cal.validate().map_err(|e| {
@@ -337,6 +344,31 @@ fn readable(cal: &Calibration, data: &Path) -> Result<()> {
             data.display()
         )
     })
+}
+
+/// The options that set the noise the fits assume (`--noise-mm`, `--repeatability-rad`), as
+/// given, with the residuals' own noise estimate beside `--noise-mm`; `None` when neither is.
+fn weighting_options(args: &Args, cal: &Calibration) -> Option<String> {
+    let estimate = cal
+        .noise
+        .as_ref()
+        .and_then(|n| n.estimate.as_ref())
+        .map(|e| e.rms_3d_mm);
+    let noise = args.noise_mm.map(|n| match estimate {
+        Some(e) if e > 0.0 => format!(
+            "--noise-mm {n} ({:.1} times the {e:.4} mm the residuals estimate)",
+            n / e
+        ),
+        _ => format!("--noise-mm {n}"),
+    });
+    let repeatability = args.repeatability_rad.as_ref().map(|r| {
+        format!(
+            "--repeatability-rad {}",
+            r.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
+        )
+    });
+    let given: Vec<String> = noise.into_iter().chain(repeatability).collect();
+    (!given.is_empty()).then(|| given.join(" and "))
 }
 
 /// The options of the free-pose path.
@@ -395,11 +427,16 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
             {
                 anyhow::bail!("calibrating {}: {too_small}", args.data.display())
             }
-            let hint = args.noise_mm.map_or(String::new(), |n| {
-                format!(
+            let hint = match (args.noise_mm, &args.repeatability_rad) {
+                (Some(n), _) => format!(
                     " (with --noise-mm {n:e}: a noise far below the data's makes the fits trust each point more than the joints' repeatability allows; without --noise-mm it is estimated from the residuals)"
-                )
-            });
+                ),
+                (None, Some(r)) => format!(
+                    " (with --repeatability-rad {}: a repeatability far above the joints' own weights the fits away from their points; without it the description's repeatability_sigma is used)",
+                    r.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
+                ),
+                (None, None) => String::new(),
+            };
             anyhow::bail!("calibrating {}: {e}{hint}", args.data.display())
         }
     };

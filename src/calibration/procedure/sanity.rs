@@ -26,7 +26,8 @@
 //! - **Tool.** The tool frame fitted from the tool observation against the description's, in
 //!   the last link: beyond [`PLAUSIBLE_AXIS_TILT_RAD`] it is no tool's deviation from its
 //!   drawing. Three targets in a plane fit their mirror image (two ids swapped) exactly, turned
-//!   over by up to 180 deg.
+//!   over by up to 180 deg. A mirrored frame or a flipped or swapped axis turns the tool over
+//!   too: it is then left unsaid.
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
 use crate::kinematics::JointKind;
@@ -178,7 +179,10 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
         .filter(|s| !mirrored_by_an_axis(s))
         .collect();
     found.extend(directions);
-    found.extend(tool_turned(cal, desc));
+    // A mirrored frame or a flipped axis turns the tool over too: they, not its ids, explain it.
+    if !found.iter().any(|s| !matches!(s, Implausible::Size { .. })) {
+        found.extend(tool_turned(cal, desc));
+    }
     found.extend(misfits(cal));
     found
 }
