@@ -70,6 +70,14 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
         for (slot, &column) in v.iter_mut().zip(&index[1..]) {
             *slot = table.number(&row, column)?;
         }
+        // The orientation columns (roll, pitch, yaw) are angles in degrees.
+        if let Some((column, why)) = index[4..]
+            .iter()
+            .zip(&v[3..])
+            .find_map(|(&column, &deg)| Some((column, axiscal::robot::angle_deg_problem(deg)?)))
+        {
+            return Err(table.row_error(row.line, column, why).into());
+        }
         let placement = Placement {
             translation_mm: [v[0], v[1], v[2]],
             rpy_deg: [v[3], v[4], v[5]],

@@ -39,6 +39,19 @@ pub struct Args {
 /// Refuses commands (file units) outside the description's limits: a reading no pose of the
 /// robot gives (a unit slip, a dummy value), where the calibrated model would extrapolate.
 fn within_limits(desc: &RobotDescription, cmd_file: &[f64], what: &str) -> Result<()> {
+    if let Some(k) = cmd_file.iter().position(|c| !c.is_finite()) {
+        let what_it_is = if cmd_file[k].is_nan() {
+            "not a number"
+        } else {
+            "not a finite number"
+        };
+        bail!(
+            "{what}: cmd_{} = {} is {what_it_is}: give each command as a finite number (deg or mm), as the controller \
+             reads it",
+            k + 1,
+            cmd_file[k]
+        );
+    }
     match super::checks::outside_limits(desc, cmd_file) {
         Some((joint, value, [lo, hi])) => bail!(
             "{what}: cmd_{joint} = {} is outside the joint's limits [{lo}, {hi}] (deg or mm; the description's `limits`)",

@@ -106,6 +106,30 @@ impl Outputs {
         Ok(())
     }
 
+    /// Refuses a folder output `dir` (`--out`) that is the folder of the input named `what`
+    /// (e.g. the calibration's folder): that folder holds another command's set of files, of
+    /// which this command's outputs would replace some by files of another layout.
+    pub fn check_not_folder_of(&self, dir: &Path, what: &str) -> Result<()> {
+        let Some(out) = canonical(dir) else { return Ok(()) };
+        let input = self
+            .inputs
+            .iter()
+            .find(|i| i.what == what && i.canonical.parent().is_some_and(|folder| folder == out.as_path()));
+        if let Some(i) = input {
+            let name = dir
+                .file_name()
+                .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+            bail!(
+                "--out `{}` is the folder of {what} {}: it holds that run's own set of files, some of which this \
+                 command would replace by files of another layout (a `residuals.csv`); choose another folder, e.g. \
+                 --out {name}-validation",
+                dir.display(),
+                i.path.display()
+            );
+        }
+        Ok(())
+    }
+
     /// Checks that `path` may be written: not an input, and absent unless `--force`.
     pub fn check(&self, path: &Path) -> Result<()> {
         self.check_not_input(path)?;

@@ -4,7 +4,10 @@
 //! poses (`--plan`, `--span`, `--intervals`, `--order`, `--validation-poses`) is made here;
 //! the writer (`axiscal::plan::write_plan_csv`) takes any list of points.
 
+mod inputs;
 mod optimize;
+
+pub use inputs::{axis_targets_for, validation_poses};
 
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
@@ -36,9 +39,10 @@ pub struct Args {
     /// The order the joints are swept in, e.g. `6,5,4,3,2,1` (every swept joint once).
     #[arg(long, value_delimiter = ',')]
     order: Vec<usize>,
-    /// Validation poses (three tool targets each) after the axis experiments.
-    #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, axiscal::plan::MAX_VALIDATION_POSES, ""))]
-    validation_poses: usize,
+    /// Validation poses (three tool targets each) after the axis experiments. Default: 60, none
+    /// for a robot without tool targets.
+    #[arg(long, value_parser = InRange::closed(0usize, axiscal::plan::MAX_VALIDATION_POSES, ""))]
+    validation_poses: Option<usize>,
     /// Seed of the validation poses' draw.
     #[arg(long)]
     validation_seed: Option<u64>,
@@ -62,7 +66,8 @@ pub struct Args {
     /// `--validation-seed`).
     #[arg(long, default_value_t = 200, value_parser = InRange::closed(1usize, 100_000, ""))]
     workspace_poses: usize,
-    /// With `--optimize`: the instrument's noise, 3-D RMS of a point (mm) (the paper's 0.19).
+    /// The instrument's noise, 3-D RMS of a point (mm) (the paper's 0.19): what `--optimize`
+    /// predicts with, and what a `--span` too short for `calibrate` is warned against.
     #[arg(long, default_value_t = axiscal::measurement::PAPER_NET_RADIAL_RMS_MM, value_parser = NOISE_MM)]
     noise_mm: f64,
     /// With `--optimize`: the robot's repeatability (rad) the calibration models, one value or
@@ -170,17 +175,18 @@ pub(super) fn station_mm(text: &str) -> Result<[f64; 3], String> {
 
 /// The plan `simulate` and `plan` use without `--plan`: paper Table 1 for a six-joint revolute
 /// arm, [`CalibrationPlan::for_robot`] for any other robot; or the plan file at `path`.
-pub fn campaign_plan(desc: &RobotDescription, path: Option<&Path>) -> Result<CalibrationPlan> {
-    Ok(match path {
-        Some(path) => {
-            let text = axiscal::toml_file::read(path)?;
-            let plan = axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?;
-            plan.validate(desc)
-                .with_context(|| format!("{} for {}", path.display(), desc.name))?;
-            plan
-        }
+/// The description `robot` must give axis targets for every joint the plan sweeps.
+pub fn campaign_plan(desc: &RobotDescription, robot: &Path, path: Option<&Path>) -> Result<CalibrationPlan> {
+    let plan = match path {
+        Some(path) => inputs::read_plan_file(path, "--plan")?,
         None => CalibrationPlan::default_for(desc),
-    })
+    };
+    axis_targets_for(desc, robot, &plan, path)?;
+    if let Some(path) = path {
+        plan.validate(desc)
+            .with_context(|| format!("{} for {}", path.display(), desc.name))?;
+    }
+    Ok(plan)
 }
 
 /// `plan` with the command line's `--span`, `--intervals` and `--order` applied.
@@ -237,10 +243,10 @@ pub fn run(args: Args) -> Result<()> {
     }
     let desc = RobotDescription::from_file(&args.robot)?;
     super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let mut plan = adjusted(campaign_plan(&desc, args.plan.as_deref())?, &args)?;
+    let mut plan = adjusted(campaign_plan(&desc, &args.robot, args.plan.as_deref())?, &args)?;
     let default_validation = ValidationPlan::workspace_default(desc.dof());
     let validation = ValidationPlan {
-        poses: args.validation_poses,
+        poses: validation_poses(args.validation_poses, &desc, &args.robot)?,
         seed: args.validation_seed.unwrap_or(default_validation.seed),
         ..default_validation
     };
@@ -259,6 +265,8 @@ pub fn run(args: Args) -> Result<()> {
         ),
         None => format!("planning the campaign of {}", args.robot.display()),
     })?;
+    let warnings = inputs::short_span_warnings(&desc, &args.span, &points, args.noise_mm);
+    super::checks::print_warnings(&warnings);
     let comment = args.sight.header_comment(&desc)?;
     let mut file = outputs.create(&args.out)?;
     write_plan_csv(&mut file, &comment, &points).with_context(|| format!("writing {}", args.out.display()))?;

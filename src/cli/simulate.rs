@@ -84,9 +84,10 @@ pub struct Args {
     /// generalisation for any other robot (each joint swept within its limits).
     #[arg(long, value_parser = super::options::plan_file)]
     plan: Option<PathBuf>,
-    /// Number of validation poses (three tool targets each).
-    #[arg(long, default_value_t = 60, value_parser = InRange::closed(0usize, axiscal::plan::MAX_VALIDATION_POSES, ""))]
-    validation_poses: usize,
+    /// Number of validation poses (three tool targets each). Default: 60, none for a robot
+    /// without tool targets.
+    #[arg(long, value_parser = InRange::closed(0usize, axiscal::plan::MAX_VALIDATION_POSES, ""))]
+    validation_poses: Option<usize>,
     /// Seed of the measurement and repeatability noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -148,6 +149,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     let desc = RobotDescription::from_file(&args.robot)?;
     super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
+    let poses = super::plan::validation_poses(args.validation_poses, &desc, &args.robot)?;
+    let plan = super::plan::campaign_plan(&desc, &args.robot, args.plan.as_deref())?;
     let truth = match &args.truth {
         Some(path) => truth_file(path)?,
         None => default_truth(&desc, args.seed)?,
@@ -165,9 +168,8 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     let instrument = instrument_model(args.instrument, &args.station, &desc, &args.robot)?;
-    let plan = super::plan::campaign_plan(&desc, args.plan.as_deref())?;
     let validation = ValidationPlan {
-        poses: args.validation_poses,
+        poses,
         ..ValidationPlan::workspace_default(desc.dof())
     };
     let effects = match &args.effects {
@@ -244,14 +246,21 @@ fn instrument_model(
         (Instrument::Theodolite, &[left_m, right_m]) => {
             let (model, calibration) =
                 MeasurementModel::theodolites_around([left_m, right_m], &desc.placement.origin_m()).map_err(|e| {
-                    let origin = match stations_mm {
-                        [] => axiscal::plan::stations_origin(desc, robot),
-                        _ => "--station".to_owned(),
-                    };
-                    anyhow::anyhow!(
-                        "{origin}: {}",
-                        axiscal::plan::theodolite_stations_problem(&[left_m, right_m], &e)
-                    )
+                    let placement = axiscal::plan::placement_among_stations(desc, &[left_m, right_m]);
+                    match (stations_mm, placement) {
+                        ([], Some(why)) if desc.instrument.is_some() => {
+                            anyhow::anyhow!("{}: field `placement.translation_mm`: {why}", robot.display())
+                        }
+                        ([], _) => anyhow::anyhow!(
+                            "{}: {}",
+                            axiscal::plan::stations_origin(desc, robot),
+                            axiscal::plan::theodolite_stations_problem(&[left_m, right_m], &e)
+                        ),
+                        _ => anyhow::anyhow!(
+                            "--station: {}",
+                            axiscal::plan::theodolite_stations_problem(&[left_m, right_m], &e)
+                        ),
+                    }
                 })?;
             if super::verbose() {
                 eprintln!("{calibration}");

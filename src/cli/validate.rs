@@ -52,6 +52,7 @@ pub fn run(args: Args) -> Result<()> {
         .input("--calibration", &args.calibration)
         .input("DATA", &args.data)
         .input("--robot", &args.robot);
+    outputs.check_not_folder_of(&args.out, "--calibration")?;
     outputs.check_in(&args.out, &OUTPUTS)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;

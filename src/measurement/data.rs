@@ -497,6 +497,15 @@ const MAX_COORDINATE_MM: f64 = 1e7;
 /// A command beyond this \[deg or mm\] is no joint's (2,800 turns, 1 km).
 const MAX_COMMAND: f64 = 1e6;
 
+/// A payload beyond this \[kg\] is no robot's: 10 t, over four times the heaviest industrial
+/// arm's rated payload (2.3 t); larger values are slips (grams written as kg, a dummy).
+pub const MAX_PAYLOAD_KG: f64 = 1e4;
+
+/// The ambient temperatures a robot and its instrument are measured in \[deg C\]: -100 to 200,
+/// beyond any workshop or climatic chamber (arms are rated for 0 to 45 deg C); outside, a value
+/// is a slip (kelvin written as deg C reads 273 and more, a dummy).
+pub const TEMPERATURE_RANGE_C: [f64; 2] = [-100.0, 200.0];
+
 /// The range a measured coordinate `value_mm` is outside, in words; `None` within
 /// [`MAX_COORDINATE_MM`].
 pub(crate) fn coordinate_beyond(value_mm: f64) -> Option<&'static str> {
@@ -556,19 +565,8 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
             expected,
         });
     }
-    if m.payload_kg < 0.0 {
-        return Some(RowProblem::OutOfRange {
-            column: "payload_kg".into(),
-            value: m.payload_kg,
-            expected: "0 kg and above (a payload has no negative mass)",
-        });
-    }
-    if m.temperature_c <= -273.15 {
-        return Some(RowProblem::OutOfRange {
-            column: "temperature_c".into(),
-            value: m.temperature_c,
-            expected: "temperatures above absolute zero (-273.15 deg C)",
-        });
+    if let Some(p) = conditions_problem(m) {
+        return Some(p);
     }
     if m.moved_joint > joint_count {
         return Some(RowProblem::MovedJointOutOfRange {
@@ -589,6 +587,34 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
         first,
         found: m.moved_joint,
     })
+}
+
+/// A payload or a temperature of `m` outside its physical range ([`MAX_PAYLOAD_KG`],
+/// [`TEMPERATURE_RANGE_C`]).
+fn conditions_problem(m: &Measurement) -> Option<RowProblem> {
+    if m.payload_kg < 0.0 {
+        return Some(RowProblem::OutOfRange {
+            column: "payload_kg".into(),
+            value: m.payload_kg,
+            expected: "0 kg and above (a payload has no negative mass)",
+        });
+    }
+    if m.payload_kg > MAX_PAYLOAD_KG {
+        return Some(RowProblem::OutOfRange {
+            column: "payload_kg".into(),
+            value: m.payload_kg,
+            expected: "0..=10000 kg (no robot carries more than 10 t; grams written as kg?)",
+        });
+    }
+    let [coldest, hottest] = TEMPERATURE_RANGE_C;
+    if !(coldest..=hottest).contains(&m.temperature_c) {
+        return Some(RowProblem::OutOfRange {
+            column: "temperature_c".into(),
+            value: m.temperature_c,
+            expected: "-100..=200 deg C (the ambient a robot is measured in; kelvin written as deg C?)",
+        });
+    }
+    None
 }
 
 #[cfg(test)]

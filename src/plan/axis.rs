@@ -85,7 +85,10 @@ pub enum PlanError {
         reason: String,
     },
     /// The robot description gives no targets for a swept joint.
-    #[error("sweep {index}: the robot description has no axis_targets entry for joint {joint}")]
+    #[error(
+        "sweep {index} moves joint {joint}, but the robot description has no `axis_targets` entry for joint {joint}: \
+         add one (docs/formats.md#robot-description), or leave the joint out of the plan"
+    )]
     NoTargets {
         /// Index of the sweep.
         index: usize,

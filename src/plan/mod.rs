@@ -20,7 +20,8 @@ pub use sheet::{
     write_plan_csv,
 };
 pub use stations::{
-    LINK_RADIUS_M, STATION_HEADINGS, instrument_stations_m, stations_origin, theodolite_stations_problem,
+    LINK_RADIUS_M, STATION_HEADINGS, instrument_stations_m, placement_among_stations, stations_origin,
+    theodolite_stations_problem,
 };
 pub use validation::{MAX_POSES as MAX_VALIDATION_POSES, ValidationPlan};
 

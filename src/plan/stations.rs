@@ -4,7 +4,7 @@
 use super::sheet::{SightOptions, planned_points};
 use super::sight::STOP_SHORT_M;
 use super::{CalibrationPlan, PlanError, ValidationPlan};
-use crate::measurement::{TriangulationError, format_f64};
+use crate::measurement::{ReferenceVolume, TriangulationError, format_f64};
 use crate::robot::RobotDescription;
 use nalgebra::Point3;
 use std::cmp::Reverse;
@@ -54,6 +54,31 @@ pub fn theodolite_stations_problem(stations_m: &[Point3<f64>; 2], e: &Triangulat
         ),
         other => format!("{stations} cannot measure the robot's work volume (the 2 m cube about its base): {other}"),
     }
+}
+
+/// Why `desc`'s placement, not its stations, is at fault when theodolites at `stations_m`
+/// cannot measure the robot's work volume (the 2 m cube about its base,
+/// [`ReferenceVolume::around_robot_base`]): a station stands inside that volume, as a
+/// placement written in metres puts the base beside the instrument's origin. `None` otherwise.
+pub fn placement_among_stations(desc: &RobotDescription, stations_m: &[Point3<f64>]) -> Option<String> {
+    let base_m = desc.placement.origin_m();
+    let volume = ReferenceVolume::around_robot_base(&base_m);
+    let (k, station_m) = stations_m
+        .iter()
+        .enumerate()
+        .find(|(_, s)| (*s - volume.centre_m).amax() <= volume.side_m / 2.0)?;
+    let mm = |p: &Point3<f64>| {
+        let c: Vec<String> = p.iter().map(|x| format_f64((x * 1e7).round() / 1e4 + 0.0)).collect();
+        format!("[{}]", c.join(", "))
+    };
+    Some(format!(
+        "the robot's base {} mm stands {:.1} mm from station {k} {} mm, inside the robot's work volume (the 2 m cube \
+         about its base the theodolites are calibrated over): is the placement in metres? (`translation_mm` is in mm; \
+         the paper's base stood 5.4 m from its stations)",
+        mm(&base_m),
+        (station_m - base_m).norm() * 1e3,
+        mm(station_m)
+    ))
 }
 
 /// The instrument's stations for `desc` \[m\]: `[instrument] stations_mm` when the description

@@ -52,6 +52,41 @@ impl ValidationPlan {
         }
     }
 
+    /// Checks a written `half_range` against `desc`'s joints: none wider than its joint's
+    /// whole range (upper minus lower limit), which reaches beyond both limits from any
+    /// reference and is clipped to them; a wider one is a slip (mm for deg, a dummy value).
+    pub fn check_limits(&self, desc: &RobotDescription) -> Result<(), (&'static str, String)> {
+        let too_wide = self
+            .half_range
+            .iter()
+            .zip(&desc.joints)
+            .enumerate()
+            .find(|(_, (h, j))| {
+                let [lo, hi] = j.limits;
+                **h > hi - lo
+            });
+        match too_wide {
+            Some((k, (h, j))) => {
+                let [lo, hi] = j.limits;
+                let unit = j.kind.file_unit();
+                Err((
+                    "validation.half_range",
+                    format!(
+                        "joint {}: {} {unit} is wider than the joint's whole range, its limits [{}, {}] {unit} ({} \
+                         {unit}): the poses are clipped to the limits, so give at most that (deg or mm, as the \
+                         description's `limits`)",
+                        k + 1,
+                        crate::measurement::format_f64(*h),
+                        crate::measurement::format_f64(lo),
+                        crate::measurement::format_f64(hi),
+                        crate::measurement::format_f64(hi - lo)
+                    ),
+                ))
+            }
+            None => Ok(()),
+        }
+    }
+
     /// The default workspace set for the IRB/L6: 60 poses, joints 1-3 within +-40/30/35 deg
     /// (the arm in front of the theodolites), wrist joints 4-6 within +-60/90/90 deg.
     pub fn workspace_default(dof: usize) -> Self {

@@ -6,7 +6,10 @@
 
 mod identity;
 mod validate;
-pub use validate::{MAX_REPEATABILITY_SIGMA, MIN_STATION_DISTANCE_MM, station_problem};
+pub use validate::{
+    MAX_ANGLE_DEG, MAX_HARMONIC_ORDER, MAX_INSTRUMENT_FRAME_MM, MAX_REPEATABILITY_SIGMA, MIN_STATION_DISTANCE_MM,
+    angle_deg_problem, station_problem,
+};
 
 mod convert;
 mod instrument;

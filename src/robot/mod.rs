@@ -17,9 +17,9 @@ pub use compliance::{ComplianceTerm, LoadProduct, SpringLoad, SpringSite};
 pub use controller::Controller;
 pub use description::{
     AxisTargets, CouplingFitForm, DescriptionError, DescriptionIdentity, DhConventionEntry, DhEntry, InstrumentEntry,
-    JointEntry, LinkTarget, MAX_REPEATABILITY_SIGMA, MIN_STATION_DISTANCE_MM, NominalCoupling, Placement,
-    RobotDescription, RowEntry, ToolEntry, TransmissionFitForm, UrdfEntry, commands_to_file, commands_to_internal,
-    file_unit, station_problem,
+    JointEntry, LinkTarget, MAX_ANGLE_DEG, MAX_HARMONIC_ORDER, MAX_INSTRUMENT_FRAME_MM, MAX_REPEATABILITY_SIGMA,
+    MIN_STATION_DISTANCE_MM, NominalCoupling, Placement, RobotDescription, RowEntry, ToolEntry, TransmissionFitForm,
+    UrdfEntry, angle_deg_problem, commands_to_file, commands_to_internal, file_unit, station_problem,
 };
 pub use effects::{BacklashTerm, LoadTerm, ModelEffects, PoseLoad, SagTerm, gravity_direction, sag_regressor};
 pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};

@@ -22,6 +22,37 @@ use crate::kinematics::{JointKind, PhiJoint, PhiModel};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// A sliding joint's transducer zero offset lies within this \[m\]: the longest stroke a
+/// description's limits allow (a 100 m gantry).
+pub const MAX_PRISMATIC_OFFSET_M: f64 = 100.0;
+
+/// Why joint `j`'s transducer zero offset (the reading at the joint's zero) is implausible:
+/// beyond a turn (revolute: `2 pi` rad, a value in degrees or a damaged file) or beyond
+/// [`MAX_PRISMATIC_OFFSET_M`] (prismatic: millimetres read as metres); `None` within.
+fn transducer_offset_problem(j: &JointModel) -> Option<String> {
+    let (limit, unit, bound, slip) = match j.kind {
+        JointKind::Revolute => (
+            std::f64::consts::TAU,
+            "rad",
+            "a turn (+-6.283 rad)",
+            "degrees written as radians?",
+        ),
+        JointKind::Prismatic => (
+            MAX_PRISMATIC_OFFSET_M,
+            "m",
+            "the longest stroke (+-100 m)",
+            "millimetres written as metres?",
+        ),
+    };
+    (j.transducer_offset.abs() > limit).then(|| {
+        format!(
+            "{} {unit} is beyond {bound}: a transducer's zero offset is the reading at the joint's zero, a fraction of \
+             its travel ({slip})",
+            crate::measurement::format_f64(j.transducer_offset)
+        )
+    })
+}
+
 fn identity_transmission() -> Transmission {
     Transmission::identity()
 }
@@ -166,6 +197,9 @@ impl RobotModel {
                 if !v.is_finite() {
                     return Err(bad(format!("joints[{k}].{key}"), "must be finite".into()));
                 }
+            }
+            if let Some(why) = transducer_offset_problem(j) {
+                return Err(bad(format!("joints[{k}].transducer_offset_rad_or_m"), why));
             }
             if !(j.repeatability_sigma.is_finite() && j.repeatability_sigma >= 0.0) {
                 return Err(bad(

@@ -63,9 +63,10 @@ pub const MAX_ALPHA_PER_K: f64 = 1e-3;
 /// Largest instrument scale error accepted \[ppm\] (1 %).
 pub const MAX_SCALE_PPM: f64 = 1e4;
 /// Largest order of a gear harmonic or a wobble (turns per turn of its angle): a gear's
-/// tooth-mesh error repeats a few hundred times a turn at most. A harmonic's order also sizes
-/// its transmission's coefficient lists (one entry per order).
-pub const MAX_EFFECT_ORDER: usize = 1000;
+/// tooth-mesh error repeats a few hundred times a turn at most
+/// ([`crate::robot::MAX_HARMONIC_ORDER`], the bound of a description's fitted orders too). A
+/// harmonic's order also sizes its transmission's coefficient lists (one entry per order).
+pub const MAX_EFFECT_ORDER: usize = crate::robot::MAX_HARMONIC_ORDER;
 
 /// The unmodelled effects (module docs); every table is optional and off when absent.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]

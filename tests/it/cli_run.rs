@@ -76,16 +76,22 @@ fn an_impossible_threshold_exits_1_and_says_by_how_much() {
     assert!(err.contains("1 threshold(s) failed"), "{err}");
 }
 
-/// Every trial fails (an instrument of 30 m noise puts sight lines behind a station): the
-/// console says why (the first trial's error and how many failed alike), `summary.json`
-/// records it, and the verdicts say there is no value rather than `NaN`.
+/// Every trial fails (the simulated robot stands 900 m from the theodolites, whose lines of
+/// sight meet there nearly parallel): the console says why (the first trial's error and how
+/// many failed alike), `summary.json` records it, and the verdicts say there is no value
+/// rather than `NaN`.
 #[test]
 fn a_case_whose_trials_all_fail_says_why() {
     let dir = tempfile::tempdir().unwrap();
+    let truth = std::fs::read_to_string("scenarios/robots/asea-irb6l-paper-truth.toml").unwrap();
+    let base = "translation_mm = [-3142.3, 4439.4, -526.123]";
+    assert!(truth.contains(base));
+    let far = truth.replacen(base, "translation_mm = [-3142.3, 900000.0, -526.123]", 1);
+    std::fs::write(dir.path().join("far-truth.toml"), far).unwrap();
     let scenario = smoke_variant(
         dir.path(),
-        "noisy.toml",
-        ("net_radial_rms_mm = 0.19", "net_radial_rms_mm = 30000"),
+        "far.toml",
+        ("kind = \"paper\"", "kind = \"file\"\npath = \"far-truth.toml\""),
         "",
     );
     let out = dir.path().join("out");

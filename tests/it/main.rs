@@ -29,6 +29,7 @@ mod gap_budget;
 mod hostile;
 mod hostile_calibration;
 mod hostile_files;
+mod hostile_inputs;
 mod hostile_results;
 mod iso9283;
 mod joint_map;

@@ -32,9 +32,12 @@ fn measurement_set() -> impl Strategy<Value = MeasurementSet> {
             // Coordinates within +-1e7 mm, commands within +-1e6 (both checked).
             [finite_within(1e7), finite_within(1e7), finite_within(1e7)],
             prop::collection::vec(finite_within(1e6), n),
-            // Payloads are not negative, temperatures above absolute zero (both checked).
-            finite().prop_map(f64::abs),
-            finite().prop_filter("above absolute zero", |t| *t > -273.15),
+            // Payloads and temperatures within their physical ranges (both checked).
+            finite_within(axiscal::measurement::MAX_PAYLOAD_KG).prop_map(f64::abs),
+            {
+                let [coldest, hottest] = axiscal::measurement::TEMPERATURE_RANGE_C;
+                finite_within((hottest - coldest) / 2.0).prop_map(move |t| t + (hottest + coldest) / 2.0)
+            },
         );
         (
             Just(n),

@@ -45,6 +45,8 @@ fn shipped_scenarios_resolve_and_their_dump_round_trips() {
         "compliance",
         "plan-optimize",
         "iso9283",
+        "scara-rrpr",
+        "table-prpp",
     ] {
         let path = format!("scenarios/{name}.toml");
         let s = ResolvedScenario::from_file(Path::new(&path), Overrides::default())

@@ -263,7 +263,7 @@ pub(super) fn fit_joint(
                     source: CalibrationError::TooFewPoints { .. },
                     ..
                 },
-            ) => return Err(e),
+            ) => return Err(naming_the_order(e, desc, form)),
             Err(e) => return Err(explained().unwrap_or(e)),
             Ok(fitted) => break fitted,
         }
@@ -291,6 +291,24 @@ pub(super) fn fit_joint(
         out.report.sweeps = sweep_reports(data, &out, desc, controller, options, noise_mm * 1e-3 / 3f64.sqrt());
     }
     Ok(out)
+}
+
+/// A fit error `e` of too few points as the description's transmission order's fault, when
+/// its `transmission_fit` asks for an order above the default 1 (`form`, the order tried).
+fn naming_the_order(e: ProcedureError, desc: &RobotDescription, form: TransmissionForm) -> ProcedureError {
+    match e {
+        ProcedureError::Fit {
+            experiment,
+            joint,
+            source,
+        } if desc.joints[joint - 1].transmission_fit.is_some() && form.order() > 1 => ProcedureError::FitOrder {
+            experiment,
+            joint,
+            order: form.order(),
+            source: Box::new(source),
+        },
+        other => other,
+    }
 }
 
 /// What every transmission order tried for one joint shares ([`fit_joint`]'s arguments).

@@ -353,6 +353,24 @@ pub enum ProcedureError {
         /// The fit's error.
         source: CalibrationError,
     },
+    /// A joint's sweeps have too few points for the transmission order its description's
+    /// `transmission_fit` asks for.
+    #[error(
+        "experiment {experiment} (joint {joint}): {source}: the description's `joints[{}].transmission_fit.order` = \
+         {order} asks for more coefficients than the sweeps' points resolve; lower the order (the paper fits 1) or \
+         sweep the joint over more points",
+        joint - 1
+    )]
+    FitOrder {
+        /// Experiment.
+        experiment: String,
+        /// Joint.
+        joint: usize,
+        /// The order the description asks for.
+        order: usize,
+        /// The fit's error.
+        source: Box<CalibrationError>,
+    },
     /// A coupling fit (eqs. 14-15) failed; with its second target's reading farthest from the
     /// curve of its neighbours (a reading swapped or off, the likely cause).
     #[error("experiment {experiment} (joint {joint}): {source}{}", data.worst().map_or(String::new(), |w| w.to_string()))]
@@ -391,6 +409,7 @@ impl ProcedureError {
             | Self::InconsistentCommands { joint, .. }
             | Self::SecondTargetMissing { joint, .. }
             | Self::Fit { joint, .. }
+            | Self::FitOrder { joint, .. }
             | Self::CouplingFit { joint, .. } => Some(*joint),
             Self::HeldDiverged { source, .. } => source.joint(),
             _ => None,

@@ -487,10 +487,18 @@ pub fn read_residuals_csv(text: &str) -> Result<Vec<PointResidual>, String> {
     let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
     let header = reader.headers().map_err(|e| format!("line 1: {e}"))?.clone();
     let column = |name: &str| {
-        header
-            .iter()
-            .position(|h| h == name)
-            .ok_or_else(|| format!("line 1: no column `{name}`"))
+        header.iter().position(|h| h == name).ok_or_else(|| {
+            // `axiscal validate` writes a residuals.csv of its own layout (predicted points).
+            let foreign = header.iter().any(|h| h == "predicted_x_mm");
+            let whose = if foreign {
+                ": this residuals.csv has the layout `axiscal validate` writes (its predicted points), not the \
+                     axis fits' residuals `axiscal calibrate` writes beside calibration.json; calibrate again into \
+                     this folder to restore it (and give validate another --out)"
+            } else {
+                ": not the axis fits' residuals `axiscal calibrate` writes beside calibration.json"
+            };
+            format!("line 1: no column `{name}`{whose}")
+        })
     };
     let names = [
         "experiment",

@@ -10,7 +10,9 @@ use super::file::{
     TruthSection,
 };
 use super::threshold::Threshold;
-use crate::measurement::{IsotropicNoise, MeasurementModel, TheodolitePair, format_f64};
+use crate::measurement::{
+    IsotropicNoise, MAX_PAYLOAD_KG, MeasurementModel, TEMPERATURE_RANGE_C, TheodolitePair, format_f64,
+};
 use crate::plan::{CalibrationPlan, ValidationPlan};
 use crate::robot::{RobotDescription, RobotModel};
 use crate::sim::Effects;
@@ -129,16 +131,7 @@ impl ResolvedScenario {
         file.effects
             .validate(robot.dof())
             .map_err(|e| invalid("effects", e.to_string()))?;
-        let c = file.conditions;
-        if !(c.payload_kg.is_finite() && c.payload_kg >= 0.0) {
-            return Err(invalid("conditions.payload_kg", "must be finite and >= 0".into()));
-        }
-        if !(c.temperature_c.is_finite() && c.temperature_c > -273.15) {
-            return Err(invalid(
-                "conditions.temperature_c",
-                "must be a finite temperature above absolute zero".into(),
-            ));
-        }
+        check_conditions(&file.conditions).map_err(|(k, m)| invalid(k, m))?;
 
         let truth = resolve_truth(&file.truth, &robot, dir).map_err(|(k, m)| invalid(k, m))?;
         let validation = file
@@ -146,6 +139,9 @@ impl ResolvedScenario {
             .clone()
             .unwrap_or_else(|| ValidationPlan::workspace_default(robot.dof()));
         validation.check(robot.dof()).map_err(|(k, m)| invalid(k, m))?;
+        if file.validation.is_some() {
+            validation.check_limits(&robot).map_err(|(k, m)| invalid(k, m))?;
+        }
         let cases = resolve_cases(&file, &robot, dir).map_err(|(k, m)| invalid(&k, m))?;
         check_size(&file, trials, cases.len()).map_err(|(k, m)| invalid(k, m))?;
         for (i, t) in file.thresholds.iter().enumerate() {
@@ -455,10 +451,15 @@ fn measurement_model(
     robot_file: Option<&Path>,
 ) -> Result<MeasurementModel, (Option<&'static str>, String)> {
     let rms_mm = m.net_radial_rms_mm;
-    if !(rms_mm.is_finite() && rms_mm > 0.0) {
+    let most = crate::calibration::procedure::MAX_NOISE_RMS_3D_MM;
+    if !(rms_mm.is_finite() && rms_mm > 0.0 && rms_mm <= most) {
         return Err((
             None,
-            format!("net radial error {} mm must be finite and > 0", format_f64(rms_mm)),
+            format!(
+                "net radial error {} mm must be above 0 and at most {most} mm (a 3-D RMS, as --noise-mm: no \
+                 instrument that measures a robot is noisier)",
+                format_f64(rms_mm)
+            ),
         ));
     }
     let stations_fault = |message: String| {
@@ -484,7 +485,21 @@ fn measurement_model(
             })?;
             let (pair, _) =
                 TheodolitePair::around_robot_base([left_m, right_m], &robot.placement.origin_m(), rms_mm * 1e-3)
-                    .map_err(|e| stations_fault(crate::plan::theodolite_stations_problem(&[left_m, right_m], &e)))?;
+                    .map_err(|e| {
+                        match crate::plan::placement_among_stations(robot, &[left_m, right_m])
+                            .filter(|_| robot.instrument.is_some())
+                        {
+                            Some(why) => (
+                                Some("robot"),
+                                format!(
+                                    "{}: field `placement.translation_mm`: {why}",
+                                    robot_file
+                                        .map_or_else(|| "the default robot".to_owned(), |f| f.display().to_string())
+                                ),
+                            ),
+                            None => stations_fault(crate::plan::theodolite_stations_problem(&[left_m, right_m], &e)),
+                        }
+                    })?;
             MeasurementModel::Theodolite(pair)
         }
     })
@@ -493,6 +508,31 @@ fn measurement_model(
 /// Where a scenario's results go by default: `results/<name>`.
 pub fn default_results_dir(name: &str) -> PathBuf {
     Path::new("results").join(name)
+}
+
+/// The `[conditions]` within the physical ranges a measurement file's rows are held to
+/// ([`MAX_PAYLOAD_KG`], [`TEMPERATURE_RANGE_C`]).
+fn check_conditions(c: &ConditionsSection) -> Result<(), (&'static str, String)> {
+    if !(0.0..=MAX_PAYLOAD_KG).contains(&c.payload_kg) {
+        return Err((
+            "conditions.payload_kg",
+            format!(
+                "{} kg must be in 0..={MAX_PAYLOAD_KG} kg (no robot carries more than 10 t)",
+                format_f64(c.payload_kg)
+            ),
+        ));
+    }
+    let [coldest, hottest] = TEMPERATURE_RANGE_C;
+    if !(coldest..=hottest).contains(&c.temperature_c) {
+        return Err((
+            "conditions.temperature_c",
+            format!(
+                "{} deg C must be in {coldest}..={hottest} deg C (the ambient a robot is measured in)",
+                format_f64(c.temperature_c)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The `[iso9283]` section's values in their ranges: the key and the problem otherwise.

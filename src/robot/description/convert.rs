@@ -94,14 +94,9 @@ impl RobotDescription {
             if ![d.d_mm, d.theta_deg, d.a_mm, d.alpha_deg].iter().all(|v| v.is_finite()) {
                 return Err(invalid(path, format!("joints[{k}].dh"), "values must be finite"));
             }
-            // Beyond a turn an angle is a slip (its sine and cosine would be round-off).
             for (key, deg) in [("theta_deg", d.theta_deg), ("alpha_deg", d.alpha_deg)] {
-                if deg.abs() > 360.0 {
-                    return Err(invalid(
-                        path,
-                        format!("joints[{k}].dh.{key}"),
-                        format!("{} deg must be within +-360 (a DH angle in degrees)", format_f64(deg)),
-                    ));
+                if let Some(why) = super::validate::angle_deg_problem(deg) {
+                    return Err(invalid(path, format!("joints[{k}].dh.{key}"), why));
                 }
             }
             rows.push(DhParams {

@@ -36,6 +36,32 @@ pub const MIN_STATION_DISTANCE_MM: f64 = 100.0;
 /// of a DH table or URDF (`Z_phi` perpendicular to both axes) gives 90.
 pub const MIN_ROW_ALPHA_DEG: f64 = 10.0;
 
+/// An angle written in degrees (a placement's roll, pitch or yaw, a row's or a DH table's
+/// angle, a phi angle, a pose's orientation) lies within a turn either way \[deg\]: beyond, it
+/// is a slip (radians read as degrees, a dummy 1e9), and its sine and cosine would be round-off.
+pub const MAX_ANGLE_DEG: f64 = 360.0;
+
+/// A point of the instrument frame (a station, the robot's base) lies within this of its
+/// origin \[mm\]: 1 km, beyond any instrument's reach (values in micrometres or a dummy).
+pub const MAX_INSTRUMENT_FRAME_MM: f64 = 1e6;
+
+/// The largest order of a harmonic series (a fitted transmission's or coupling's, a simulated
+/// gear error's): turns of the term per turn of its angle; a gear's tooth-mesh error repeats a
+/// few hundred times a turn at most. The order also sizes coefficient lists (one pair per order).
+pub const MAX_HARMONIC_ORDER: usize = 1000;
+
+/// Why `deg` is no angle of a file (beyond [`MAX_ANGLE_DEG`] or not finite), in words; `None`
+/// for an angle within a turn.
+pub fn angle_deg_problem(deg: f64) -> Option<String> {
+    (deg.is_nan() || deg.abs() > MAX_ANGLE_DEG).then(|| {
+        format!(
+            "{} deg must be within +-{MAX_ANGLE_DEG} (an angle in degrees: beyond a turn it is a slip, radians or a dummy \
+             value)",
+            format_f64(deg)
+        )
+    })
+}
+
 impl RobotDescription {
     /// Checks the description's values; the first field found invalid is reported with `path`.
     pub(super) fn validate(&self, path: &Path) -> Result<(), DescriptionError> {
@@ -99,6 +125,9 @@ impl RobotDescription {
             if let Some((key, _)) = values.iter().find(|(_, v)| v.iter().any(|x| !x.is_finite())) {
                 return Err((format!("joints[{k}].{key}"), "values must be finite".into()));
             }
+            if let Some(why) = angle_deg_problem(j.phi_deg) {
+                return Err((format!("joints[{k}].phi_deg"), why));
+            }
             let widest = match j.kind {
                 crate::kinematics::JointKind::Revolute => MAX_REVOLUTE_LIMIT_DEG,
                 crate::kinematics::JointKind::Prismatic => MAX_PRISMATIC_LIMIT_MM,
@@ -146,8 +175,31 @@ impl RobotDescription {
     }
 
     /// Each joint's `transmission_fit` gear ratio is finite and within [`MAX_GEAR_RATIO`] of
-    /// 1 either way (the fit divides the joint angle by it).
+    /// 1 either way (the fit divides the joint angle by it); every fitted order, a joint's and
+    /// a coupling's, at most [`MAX_HARMONIC_ORDER`].
     fn check_transmission_fits(&self) -> Result<(), Invalid> {
+        let transmissions = self.joints.iter().enumerate().filter_map(|(k, j)| {
+            let order = match j.transmission_fit? {
+                super::TransmissionFitForm::Harmonic { order }
+                | super::TransmissionFitForm::Gear { order, .. }
+                | super::TransmissionFitForm::Polynomial { order } => order,
+            };
+            Some((format!("joints[{k}].transmission_fit.order"), order))
+        });
+        let couplings = self.couplings.iter().enumerate().filter_map(|(k, c)| match c.fit? {
+            super::CouplingFitForm::Gear { order, .. } => Some((format!("couplings[{k}].fit.order"), order)),
+            super::CouplingFitForm::Fractional => None,
+        });
+        if let Some((key, order)) = transmissions.chain(couplings).find(|(_, o)| *o > MAX_HARMONIC_ORDER) {
+            return Err((
+                key,
+                format!(
+                    "{order} is beyond the largest order {MAX_HARMONIC_ORDER} (a gear's error repeats at most a few \
+                     hundred times a turn); the paper fits order 1, and each order adds two coefficients that every \
+                     sweep of the joint must resolve"
+                ),
+            ));
+        }
         for (k, j) in self.joints.iter().enumerate() {
             if let Some(super::TransmissionFitForm::Gear { ratio, .. }) = j.transmission_fit
                 && !(1.0 / MAX_GEAR_RATIO..=MAX_GEAR_RATIO).contains(&ratio.abs())
@@ -166,13 +218,34 @@ impl RobotDescription {
         Ok(())
     }
 
-    /// The placement, the tool frame and the tool targets are finite.
+    /// The placement, the tool frame and the tool targets are finite; the frames' angles
+    /// within [`MAX_ANGLE_DEG`]; the robot's base within [`MAX_INSTRUMENT_FRAME_MM`] of the
+    /// instrument's origin.
     fn check_frames(&self) -> Result<(), Invalid> {
         let frames = [("placement", &self.placement), ("tool.frame", &self.tool.frame)];
         for (key, p) in frames {
             if p.translation_mm.iter().chain(&p.rpy_deg).any(|v| !v.is_finite()) {
                 return Err((key.into(), "values must be finite".into()));
             }
+            if let Some((i, why)) = p
+                .rpy_deg
+                .iter()
+                .enumerate()
+                .find_map(|(i, v)| Some((i, angle_deg_problem(*v)?)))
+            {
+                return Err((format!("{key}.rpy_deg[{i}]"), why));
+            }
+        }
+        let base = self.placement.translation_mm;
+        if base.iter().any(|c| c.abs() > MAX_INSTRUMENT_FRAME_MM) {
+            return Err((
+                "placement.translation_mm".into(),
+                format!(
+                    "{}: the robot's base (mm, in the instrument frame) must lie within 1 km of the instrument's origin \
+                     (each coordinate within +-{MAX_INSTRUMENT_FRAME_MM:e} mm)",
+                    shown_point(&base)
+                ),
+            ));
         }
         if self.tool.targets_mm.iter().flatten().any(|v| !v.is_finite()) {
             return Err(("tool.targets_mm".into(), "values must be finite".into()));
@@ -194,6 +267,13 @@ impl RobotDescription {
             ];
             if let Some((key, _)) = values.iter().find(|(_, v)| !v.is_finite()) {
                 return Err((format!("rows[{k}].{key}"), "must be finite".into()));
+            }
+            if let Some((key, why)) = values
+                .iter()
+                .filter(|(key, _)| key.ends_with("_deg"))
+                .find_map(|(key, v)| Some((key, angle_deg_problem(*v)?)))
+            {
+                return Err((format!("rows[{k}].{key}"), why));
             }
             if r.alpha_deg.to_radians().sin().abs() < MIN_ROW_ALPHA_DEG.to_radians().sin() {
                 return Err((
@@ -233,6 +313,19 @@ impl RobotDescription {
                     format!(
                         "must be finite and not 0 (a slope of 0 is no coupling: remove the entry), found {}",
                         c.slope
+                    ),
+                ));
+            }
+            if c.slope.abs() > MAX_GEAR_RATIO {
+                return Err((
+                    format!("couplings[{k}].slope"),
+                    format!(
+                        "{} is not a coupling's slope: the passive motion of joint {} per unit motion of joint {}, a \
+                         gear between neighbouring joints, at most {MAX_GEAR_RATIO} in size (the IRB/L6's bevel gear: \
+                         1.684)",
+                        format_f64(c.slope),
+                        c.to,
+                        c.from
                     ),
                 ));
             }
@@ -337,7 +430,7 @@ impl RobotDescription {
 /// [`MIN_STATION_DISTANCE_MM`] to an earlier one: its index and why.
 pub fn station_problem(stations_mm: &[[f64; 3]]) -> Option<(usize, String)> {
     stations_mm.iter().enumerate().find_map(|(k, s)| {
-        if !s.iter().all(|c| c.is_finite() && c.abs() <= 1e6) {
+        if !s.iter().all(|c| c.is_finite() && c.abs() <= MAX_INSTRUMENT_FRAME_MM) {
             return Some((
                 k,
                 format!("{s:?}: each coordinate must be a finite number of mm within 1 km"),
@@ -355,4 +448,10 @@ pub fn station_problem(stations_mm: &[[f64; 3]]) -> Option<(usize, String)> {
             ),
         ))
     })
+}
+
+/// A point \[mm\] as a file writes it, `[x, y, z]` (shortest round-trip numbers).
+fn shown_point(p: &[f64; 3]) -> String {
+    let c: Vec<String> = p.iter().map(|v| format_f64(*v)).collect();
+    format!("[{}]", c.join(", "))
 }

@@ -1,0 +1,154 @@
+//! The inputs of a campaign checked against the robot description before `simulate` or `plan`
+//! runs it: a plan file that is TOML (not a plan sheet CSV), axis targets for every swept
+//! joint, tool targets for validation poses, and sweeps long enough for `calibrate`.
+
+use anyhow::{Result, bail};
+use axiscal::kinematics::JointKind;
+use axiscal::measurement::format_f64;
+use axiscal::plan::{CalibrationPlan, PlannedPoint};
+use axiscal::robot::RobotDescription;
+use std::path::Path;
+
+/// Validation poses by default when the robot has tool targets (`--validation-poses`).
+pub const DEFAULT_VALIDATION_POSES: usize = 60;
+
+/// Whether `text` is a CSV table rather than TOML: its first line that is neither blank nor a
+/// `#` comment has a comma and neither a `=` nor a `[` at its start (a TOML key or table).
+fn looks_like_csv(text: &str) -> bool {
+    text.lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .is_some_and(|l| l.contains(',') && !l.contains('=') && !l.starts_with('['))
+}
+
+/// Reads the plan file `path` given to `option` (TOML, `docs/formats.md#plan-file`); a CSV is
+/// refused with what it is (a plan sheet is `plan`'s output and `import points`' input).
+pub fn read_plan_file(path: &Path, option: &str) -> Result<CalibrationPlan> {
+    let text = axiscal::toml_file::read(path)?;
+    let is_csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) || looks_like_csv(&text);
+    if is_csv {
+        bail!(
+            "{}: {option} takes a TOML plan file (`reference`, `[[sweeps]]`: docs/formats.md#plan-file), but this is a \
+             CSV table: a plan sheet of points (what `axiscal plan --out` and `iso9283 plan` write) goes to the \
+             controller and to `axiscal import points`; give the TOML plan (`plan --optimize` writes one with \
+             --plan-out) or leave {option} out for the default plan",
+            path.display()
+        );
+    }
+    Ok(axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?)
+}
+
+/// Refuses a plan (`plan_file`, or the default plan) that sweeps a joint for which the
+/// description `robot` gives no `[[axis_targets]]`: its experiment has nothing to measure.
+pub fn axis_targets_for(
+    desc: &RobotDescription,
+    robot: &Path,
+    plan: &CalibrationPlan,
+    plan_file: Option<&Path>,
+) -> Result<()> {
+    let Some(joint) = plan
+        .sweeps
+        .iter()
+        .map(|s| s.joint)
+        .find(|&j| j >= 1 && j <= desc.dof() && desc.axis_targets_of(j).is_none())
+    else {
+        return Ok(());
+    };
+    let plan_name = plan_file.map_or_else(|| "the default plan".to_owned(), |p| p.display().to_string());
+    bail!(
+        "{}: field `axis_targets`: no entry for joint {joint}, which {plan_name} sweeps: its axis experiment measures \
+         the targets the joint moves; add `[[axis_targets]]` with `joint = {joint}` and `target0 = {{ link = \
+         {joint}, position_mm = [x, y, z] }}` (docs/formats.md#robot-description)",
+        robot.display()
+    )
+}
+
+/// The validation poses to simulate or plan: `given` (`--validation-poses`); by default
+/// [`DEFAULT_VALIDATION_POSES`], none for a robot without tool targets. Poses asked of a
+/// robot without tool targets are refused: a validation pose measures them.
+pub fn validation_poses(given: Option<usize>, desc: &RobotDescription, robot: &Path) -> Result<usize> {
+    let has_targets = !desc.tool.targets_mm.is_empty();
+    match given {
+        Some(n) if n > 0 && !has_targets => bail!(
+            "--validation-poses {n}: {} has no tool targets (`tool.targets_mm` is empty), and a validation pose \
+             measures the three tool targets: give `[tool] targets_mm` (three points in the tool frame, mm) or \
+             --validation-poses 0",
+            robot.display()
+        ),
+        Some(n) => Ok(n),
+        None if has_targets => Ok(DEFAULT_VALIDATION_POSES),
+        None => Ok(0),
+    }
+}
+
+/// One warning per rotary sweep of a joint in `spans` (`--span J=SPAN`) whose target 0, on
+/// the nominal arm (`points`), bows from its chord by less than
+/// [`axiscal::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE`] times the noise `noise_mm`: the
+/// rule by which `calibrate` refuses a sweep as too short to locate its axis.
+pub fn short_span_warnings(
+    desc: &RobotDescription,
+    spans: &[(usize, f64)],
+    points: &[PlannedPoint],
+    noise_mm: f64,
+) -> Vec<String> {
+    let factor = axiscal::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE;
+    let mut warnings = Vec::new();
+    for &(joint, span) in spans {
+        if desc.joints.get(joint - 1).is_none_or(|j| j.kind != JointKind::Revolute) {
+            continue;
+        }
+        let sweep: Vec<&PlannedPoint> = points
+            .iter()
+            .filter(|p| p.moved_joint == joint && p.target == 0)
+            .collect();
+        let (Some(first), Some(last)) = (sweep.iter().min_by_key(|p| p.step), sweep.iter().max_by_key(|p| p.step))
+        else {
+            continue;
+        };
+        let half_rad = (span / 2.0).to_radians();
+        if half_rad >= std::f64::consts::FRAC_PI_2 {
+            continue;
+        }
+        let radius_mm = (last.nominal_m - first.nominal_m).norm() * 1e3 / (2.0 * half_rad.sin());
+        let sagitta_mm = radius_mm * (1.0 - half_rad.cos());
+        if sagitta_mm >= factor * noise_mm {
+            continue;
+        }
+        let bow = factor * noise_mm / radius_mm;
+        let needed = if bow < 2.0 {
+            format!(" to at least {:.3} deg", 2.0 * (1.0 - bow).acos().to_degrees())
+        } else {
+            String::new()
+        };
+        let radians = if span <= std::f64::consts::TAU {
+            format!(
+                " (--span is in degrees: {} rad would be {:.1} deg)",
+                format_f64(span),
+                span.to_degrees()
+            )
+        } else {
+            String::new()
+        };
+        warnings.push(format!(
+            "--span {joint}={}: joint {joint}'s sweep of {} deg bows its target's arc (radius {radius_mm:.1} mm) \
+             {sagitta_mm:.4} mm from its chord, within {factor} times the noise of a point ({noise_mm} mm, \
+             --noise-mm): `calibrate` refuses it as too short to locate the axis; widen it{needed}{radians}",
+            format_f64(span),
+            format_f64(span)
+        ));
+    }
+    warnings
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plan_sheet_is_a_csv_and_a_plan_file_is_not() {
+        assert!(looks_like_csv("# axiscal plan\npoint,pose,experiment\n1,1,axis6\n"));
+        assert!(!looks_like_csv("# a plan\nreference = [0, 0]\n[[sweeps]]\njoint = 1\n"));
+        assert!(!looks_like_csv("[[sweeps]]\njoint = 1\nspan = 40.0\n"));
+        assert!(!looks_like_csv(""));
+    }
+}
