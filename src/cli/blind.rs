@@ -8,8 +8,8 @@ use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::harness::blind::{
-    BlindCampaign, BlindOptions, CASE_EFFECTS, CaseResult, Simulator, case_table, detectable_size, draw_case, score,
-    simulate_case,
+    BlindCampaign, BlindOptions, CASE_EFFECTS, CaseResult, MIN_FREE_POSES, Simulator, case_table, detectable_size,
+    draw_case, score, simulate_case,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{read_measurements, write_measurements_to};
@@ -68,6 +68,15 @@ pub fn run(args: Args) -> Result<()> {
     let desc = campaign.description();
     if let Some(j) = args.joint.filter(|j| *j == 0 || *j > desc.dof()) {
         bail!("--joint {j}: must be in 1..={} (a joint of {})", desc.dof(), desc.name);
+    }
+    if let Some(n) = args
+        .poses
+        .filter(|&n| campaign == BlindCampaign::FreePoses && n < MIN_FREE_POSES)
+    {
+        bail!(
+            "--poses {n} is too few for --campaign free-poses: at least {MIN_FREE_POSES} (the diagnoser calibrates from every other pose, and a free-pose calibration needs {} poses)",
+            axiscal::calibration::free_pose::MIN_POSES
+        );
     }
     let options = BlindOptions {
         validation_poses: args.poses.unwrap_or(match campaign {

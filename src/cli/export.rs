@@ -156,7 +156,10 @@ fn ur_kinematics(a: UrArgs) -> Result<()> {
     let (desc, cal, outputs) = inputs(&a.common, &[("--like", &a.like)])?;
     let text = axiscal::presets::read_text(&a.like).with_context(|| format!("{}: cannot read", a.like.display()))?;
     let reference = ur::UrKinematics::parse(&text, &a.like.display().to_string())?;
-    let out = ur::export(&cal, &desc, &reference, a.hash.as_deref())?;
+    let out = ur::export(&cal, &desc, &reference, a.hash.as_deref()).map_err(|e| match e {
+        ur::UrError::Anchor(_) => anyhow::anyhow!("--like {}: {e}", a.like.display()),
+        e => e.into(),
+    })?;
     refuse_inexact(
         &out.left_out,
         &out.deviation,

@@ -297,6 +297,15 @@ fn import_points(a: &PointsArgs) -> Result<()> {
         Some(f) => f == ExportFormat::SpatialAnalyzer,
         None => spatial_analyzer::looks_like(&text),
     };
+    if a.format.is_none()
+        && !sa
+        && let Some(line) = spatial_analyzer::headerless_point_line(&text)
+    {
+        anyhow::bail!(
+            "{}: line {line} is a SpatialAnalyzer point line (name fields, then x y z), not a CSV header: the export has no `//` header line; pass --format spatialanalyzer",
+            a.export.display()
+        );
+    }
     if a.sa_names.is_some() && !sa {
         anyhow::bail!("--sa-names applies to a SpatialAnalyzer export (--format spatialanalyzer)");
     }

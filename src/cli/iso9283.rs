@@ -156,6 +156,7 @@ pub fn run(args: Args) -> Result<()> {
 
 /// The cube of `args` commanded through `model` (file units).
 fn cube_of(args: &CubeArgs, desc: &RobotDescription, model: &RobotModel) -> Result<Cube> {
+    axiscal::iso9283::check_cube_robot(desc).with_context(|| args.robot.display().to_string())?;
     let compensator = Compensator::new(model, desc)?;
     let centre = args
         .centre_cmd

@@ -3,8 +3,8 @@
 
 use super::output::Outputs;
 use anyhow::{Context, Result, bail};
-use axiscal::harness::scenario::export::{self, RESOLVED_FILE, RUN_FILES, RunLock, TRIALS_FILE};
-use axiscal::harness::scenario::{ResolvedScenario, complete_run};
+use axiscal::harness::scenario::export::{self, RESOLVED_FILE, RUN_FILES, RunLock, SHARD_FILE, TRIALS_FILE};
+use axiscal::harness::scenario::{ResolvedScenario, Shard, complete_run};
 use std::path::PathBuf;
 
 /// Arguments of `axiscal merge`.
@@ -24,12 +24,48 @@ pub struct Args {
     json: bool,
 }
 
+/// Refuses shards of different splits (`--shard K/N` with another `N`: their trial ranges
+/// overlap) and one shard given twice, by the first line of each folder's `shard.txt` (a folder
+/// without one, or with another first line, is left to the trial count check).
+fn check_splits(dirs: &[PathBuf]) -> Result<()> {
+    let mut seen: Vec<(&PathBuf, Shard)> = Vec::new();
+    for dir in dirs {
+        let Ok(text) = std::fs::read_to_string(dir.join(SHARD_FILE)) else {
+            continue;
+        };
+        let Some(shard) = text.lines().next().and_then(|l| l.trim().parse::<Shard>().ok()) else {
+            continue;
+        };
+        if let Some((other, s)) = seen.iter().find(|(_, s)| s.count != shard.count) {
+            bail!(
+                "{} is shard {} of {}, {} is shard {} of {}: shards of different splits (`run --shard K/N` with another N) overlap; merge the N shards of one split",
+                other.display(),
+                s.index,
+                s.count,
+                dir.display(),
+                shard.index,
+                shard.count
+            );
+        }
+        if let Some((other, _)) = seen.iter().find(|(_, s)| *s == shard) {
+            bail!(
+                "{} and {} are both shard {shard}: give each shard of the split once",
+                other.display(),
+                dir.display()
+            );
+        }
+        seen.push((dir, shard));
+    }
+    Ok(())
+}
+
 /// Runs `axiscal merge`.
 pub fn run(args: Args) -> Result<()> {
     super::set_json(args.json);
     let first = args.dirs[0].join(RESOLVED_FILE);
     let resolved_text = axiscal::presets::read_text(&first).with_context(|| format!("reading {}", first.display()))?;
     let scenario = ResolvedScenario::from_resolved_file(&first)?;
+    check_splits(&args.dirs)?;
     let mut names: Option<Vec<String>> = None;
     let mut records = Vec::new();
     for dir in &args.dirs {

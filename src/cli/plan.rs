@@ -191,7 +191,12 @@ pub fn campaign_plan(desc: &RobotDescription, robot: &Path, path: Option<&Path>)
 
 /// `plan` with the command line's `--span`, `--intervals` and `--order` applied.
 fn adjusted(mut plan: CalibrationPlan, args: &Args) -> Result<CalibrationPlan> {
-    for &(joint, span) in &args.span {
+    for (k, &(joint, span)) in args.span.iter().enumerate() {
+        if let Some(&(_, earlier)) = args.span[..k].iter().find(|(j, _)| *j == joint) {
+            bail!(
+                "--span {joint}={span}: joint {joint} given twice (also --span {joint}={earlier}); give each joint once"
+            );
+        }
         let mut found = false;
         for s in plan.sweeps.iter_mut().filter(|s| s.joint == joint) {
             s.span = span;

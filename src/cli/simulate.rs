@@ -267,6 +267,10 @@ fn instrument_model(
             }
             model
         }
+        (Instrument::Theodolite, other) if !stations_mm.is_empty() => bail!(
+            "--station given {} times: the theodolites need two stations; give exactly two (--station X,Y,Z --station X,Y,Z), or --instrument isotropic",
+            other.len()
+        ),
         (Instrument::Theodolite, other) => bail!(
             "the theodolites need two stations, {} has {} (`[instrument] stations_mm`): give two with --station X,Y,Z --station X,Y,Z, or --instrument isotropic",
             desc.name,

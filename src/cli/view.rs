@@ -43,12 +43,35 @@ fn find_viewer() -> Option<PathBuf> {
     viewer_candidates().into_iter().find(|candidate| candidate.is_file())
 }
 
+/// The first bytes of every rerun recording: `RRF` and the framing version (`RRF2` for rerun
+/// 0.36, `RRF0`/`RRF1` for older files the viewer still reads).
+const RRD_MAGIC: &[u8] = b"RRF";
+
+/// Refuses a file that is not a rerun recording (a measurement CSV, a calibration) before any
+/// word about the viewer, which could not open it either.
+fn check_recording(file: &Path) -> Result<()> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(RRD_MAGIC.len());
+    std::fs::File::open(file)
+        .and_then(|f| f.take(RRD_MAGIC.len() as u64).read_to_end(&mut head))
+        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    if head != RRD_MAGIC {
+        bail!(
+            "{}: not a rerun recording (.rrd: it does not start with `RRF`); write one with `--record FILE.rrd` \
+             (simulate, calibrate or diagnose) and view that",
+            file.display()
+        );
+    }
+    Ok(())
+}
+
 /// Runs `axiscal view`. A missing or failing viewer is not an error (exit 0): the recording is
 /// still valid, and this prints what to do.
 pub fn run(args: Args) -> Result<()> {
     if !args.file.is_file() {
         bail!("no recording at {}", args.file.display());
     }
+    check_recording(&args.file)?;
     let Some(viewer) = find_viewer() else {
         println!(
             "The rerun viewer was not found ({}). Install the viewer matching this recording \

@@ -54,11 +54,37 @@ pub enum CubeError {
         /// Why.
         problem: String,
     },
+    /// The robot's tool does not reach 3-D positions: no centre has a cube.
+    #[error(
+        "an ISO 9283 cube needs a robot whose tool reaches positions in three dimensions (P1 .. P5 span the cube's tilted diagonal plane), at least {MIN_CUBE_JOINTS} joints; {robot} has {joints}: the ISO 9283 test does not apply to it"
+    )]
+    TooFewJoints {
+        /// The robot's name.
+        robot: String,
+        /// Its joints.
+        joints: usize,
+    },
     /// Not even the smallest cube fits.
     #[error(
         "no cube of 10 mm or more around the centre has all five points inside the joint limits (a centre at a singular configuration, such as a stretched arm, has none): choose another centre"
     )]
     NoCube,
+}
+
+/// The fewest joints that move a tool through three dimensions of position: each joint adds
+/// at most one, and `P1` .. `P5` span three (their plane is tilted against every base axis).
+pub const MIN_CUBE_JOINTS: usize = 3;
+
+/// Refuses a robot with fewer than [`MIN_CUBE_JOINTS`] joints, whatever its centre
+/// ([`CubeError::TooFewJoints`]).
+pub fn check_cube_robot(desc: &RobotDescription) -> Result<(), CubeError> {
+    if desc.dof() < MIN_CUBE_JOINTS {
+        return Err(CubeError::TooFewJoints {
+            robot: desc.name.clone(),
+            joints: desc.dof(),
+        });
+    }
+    Ok(())
 }
 
 /// A planned cube: its edge, its points and the commands that reach them.
@@ -81,6 +107,7 @@ pub fn plan_cube(
     centre_cmd: &[f64],
     edge_m: f64,
 ) -> Result<Cube, CubeError> {
+    check_cube_robot(desc)?;
     let centre_internal = commands_to_internal(desc, centre_cmd);
     if let Some(k) = outside_limits(desc, &centre_internal).first() {
         return Err(CubeError::Centre(format!(
@@ -130,6 +157,7 @@ pub fn largest_cube(
     centre_cmd: &[f64],
     max_edge_m: f64,
 ) -> Result<Cube, CubeError> {
+    check_cube_robot(desc)?;
     let mut edge_cm = (max_edge_m * 1e2).floor() as usize;
     while edge_cm >= 1 {
         match plan_cube(compensator, desc, centre_cmd, edge_cm as f64 * 1e-2) {

@@ -50,6 +50,20 @@ pub enum IsoError {
         /// What does not parse.
         problem: String,
     },
+    /// An ISO pose's rows marked as an axis experiment: its cycles are free poses, all at one
+    /// command.
+    #[error(
+        "experiment `{experiment}`{}: moved_joint {moved_joint}, but an ISO pose's cycles are free poses at one command (moved_joint 0): set moved_joint to 0 on its rows, or rename the experiment if it is an axis experiment",
+        line.map_or(String::new(), |l| format!(" (line {l})"))
+    )]
+    MovedJoint {
+        /// The experiment.
+        experiment: String,
+        /// The line of its first row, when known.
+        line: Option<u64>,
+        /// Its `moved_joint`.
+        moved_joint: usize,
+    },
     /// So many cycles of a pose are outliers that the pose, not single cycles, is wrong.
     #[error(
         "experiment `{experiment}`: {flagged} of its {cycles} cycles lie beyond the far-out fences (Q1 - 3 IQR, Q3 + 3 IQR of its cycles' coordinates): the pose, not single cycles, is wrong; check its rows (commands, coordinates and their units, target ids)"
@@ -238,6 +252,13 @@ fn iso_experiments<'a>(set: &'a MeasurementSet) -> Result<Vec<(Experiment<'a>, u
     let mut out = Vec::new();
     for experiment in set.experiments() {
         match label(experiment.name) {
+            Label::Pose(_, _) if experiment.moved_joint != 0 => {
+                return Err(IsoError::MovedJoint {
+                    experiment: experiment.name.to_string(),
+                    line: experiment.lines.map(|(first, _)| first),
+                    moved_joint: experiment.moved_joint,
+                });
+            }
             Label::Pose(k, h) => out.push((experiment, k, h)),
             Label::Other => {}
             Label::Malformed(problem) => {

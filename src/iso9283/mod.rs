@@ -21,7 +21,9 @@ pub mod frame;
 pub mod outliers;
 pub mod predict;
 
-pub use cube::{Cube, CubeError, approach_commands, cube_points, largest_cube, plan_cube};
+pub use cube::{
+    Cube, CubeError, MIN_CUBE_JOINTS, approach_commands, check_cube_robot, cube_points, largest_cube, plan_cube,
+};
 pub use evaluate::{EvaluateOptions, IsoError, IsoFigures, PoseFigures, evaluate, pose_label};
 pub use figures::{
     DirectionalVariation, DistanceFigures, PoseAccuracy, PoseRepeatability, abc, directional_variation,

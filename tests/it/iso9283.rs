@@ -427,7 +427,7 @@ fn a_multi_directional_plan_approaches_each_pose_along_three_base_axes() {
 /// isotropic noise) around the plan's reference pose: `cycles` cycles of the largest cube,
 /// commanded through the nominal model, written to `DIR/iso.csv` (one row per line after the
 /// header, in the order measured).
-fn simulated_iso_csv(dir: &Path, cycles: usize, seed: u64) -> std::path::PathBuf {
+pub(crate) fn simulated_iso_csv(dir: &Path, cycles: usize, seed: u64) -> std::path::PathBuf {
     use axiscal::sim::{AnalyticArm, CampaignOptions, PosePlan, simulate_poses};
     use rand::SeedableRng;
     let desc = RobotDescription::asea_irb6l();

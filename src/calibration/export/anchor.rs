@@ -47,7 +47,34 @@ pub enum AnchorError {
         /// The angle between the two axes \[deg\].
         tilt_deg: f64,
     },
+    /// The reference's axes lie farther from the description's than a factory calibration
+    /// moves them: another robot's file.
+    #[error(
+        "its axes lie up to {offset_mm:.1} mm and {tilt_mrad:.1} mrad from the robot description's at all joints 0 (a factory calibration moves them by less than {max_mm} mm and {max_mrad:.0} mrad): it is another robot's kinematics; give that robot's own file"
+    )]
+    OtherRobot {
+        /// The largest distance of a reference's axis from the description's \[mm\].
+        offset_mm: f64,
+        /// The largest angle between them \[mrad\].
+        tilt_mrad: f64,
+        /// [`FACTORY_AXIS_OFFSET_M`] in mm.
+        max_mm: f64,
+        /// [`FACTORY_AXIS_TILT_RAD`] in mrad.
+        max_mrad: f64,
+    },
 }
+
+/// The farthest \[m\] a reference's axis may lie from the description's for the two to be one
+/// robot model: a robot's axes are built within tenths of a millimetre to a few millimetres of
+/// its drawing, and that is what a factory calibration corrects; two models of one family
+/// differ by centimetres to metres (UR5e and UR10e by 188 mm in the upper arm alone).
+pub const FACTORY_AXIS_OFFSET_M: f64 = 0.01;
+
+/// The largest angle \[rad\] between a reference's axis and the description's for the two to
+/// be one robot model: the calibration's own bound on an axis against its drawing
+/// ([`PLAUSIBLE_AXIS_TILT_RAD`](crate::calibration::procedure::PLAUSIBLE_AXIS_TILT_RAD),
+/// a degree or two of build error and room for the description's rounding).
+pub const FACTORY_AXIS_TILT_RAD: f64 = crate::calibration::procedure::PLAUSIBLE_AXIS_TILT_RAD;
 
 /// The link frames of a reference, relative to the phi-model's.
 #[derive(Clone, Debug, PartialEq)]
@@ -128,6 +155,23 @@ pub fn link_frames(nominal: &OriginChain, reference: &OriginChain) -> Result<Lin
         frames.link_from_reference_link.push(kept);
     }
     Ok(frames)
+}
+
+impl LinkFrames {
+    /// Refuses a reference whose axes lie farther from the description's than a factory
+    /// calibration moves them ([`FACTORY_AXIS_OFFSET_M`], [`FACTORY_AXIS_TILT_RAD`]): keeping
+    /// its link frames would hang another robot's meshes on this one.
+    pub fn check_same_robot(&self) -> Result<(), AnchorError> {
+        if self.largest_offset_m > FACTORY_AXIS_OFFSET_M || self.largest_tilt_rad > FACTORY_AXIS_TILT_RAD {
+            return Err(AnchorError::OtherRobot {
+                offset_mm: self.largest_offset_m * 1e3,
+                tilt_mrad: self.largest_tilt_rad * 1e3,
+                max_mm: FACTORY_AXIS_OFFSET_M * 1e3,
+                max_mrad: FACTORY_AXIS_TILT_RAD * 1e3,
+            });
+        }
+        Ok(())
+    }
 }
 
 /// `chain` with its link frames moved to `frames` (module docs): the same tool pose at every

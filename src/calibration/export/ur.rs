@@ -260,6 +260,7 @@ pub fn export(
     let (chain, left_out) = reading_chain(cal, desc);
     let nominal = OriginChain::of_phi_model(&desc.nominal_model());
     let frames = link_frames(&nominal, &reference.chain())?;
+    frames.check_same_robot()?;
     let written = anchored(&chain, &frames);
     let kinematics = UrKinematics::of_chain(&written, hash);
     let mut read_back = UrKinematics::parse(&kinematics.to_yaml(&[]), "the written file")?.chain();

@@ -90,12 +90,16 @@ impl Default for FreePoseOptions {
     }
 }
 
+/// The fewest poses a free-pose calibration registers the robot's base to: two poses leave a
+/// turn about the line through their tool points undetermined.
+pub const MIN_POSES: usize = 3;
+
 /// Why a free-pose calibration failed.
 #[derive(Debug, thiserror::Error)]
 pub enum FreePoseError {
     /// Too few poses for the parameters.
     #[error(
-        "{poses} free poses with {points} points: fitting {parameters} parameters needs at least {needed} points (3 coordinates each) on at least 3 poses"
+        "{poses} free poses with {points} points: fitting {parameters} parameters needs at least {needed} points (3 coordinates each) on at least {MIN_POSES} poses"
     )]
     TooFewPoints {
         /// Poses.
@@ -305,7 +309,7 @@ fn registered_start(
     let slots = poses.target_ids.len();
     let points: usize = which.iter().map(|&i| poses.poses[i].points_m.len()).sum();
     let parameters = 6 + 3 * slots;
-    if 3 * points < parameters + 1 || which.len() < 3 {
+    if 3 * points < parameters + 1 || which.len() < MIN_POSES {
         return Err(FreePoseError::TooFewPoints {
             poses: which.len(),
             points,

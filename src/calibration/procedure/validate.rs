@@ -232,7 +232,7 @@ impl ModelCovariance {
                     self.covariance[k].get(k).copied().unwrap_or(f64::NAN),
                 )
             })
-            .find(|(_, _, v)| !(*v <= MAX_PARAMETER_VARIANCE))
+            .find(|(_, _, v)| v.is_nan() || *v > MAX_PARAMETER_VARIANCE)
     }
 
     /// Each variance is at least 0 and at most [`MAX_PARAMETER_VARIANCE`].

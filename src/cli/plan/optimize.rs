@@ -3,11 +3,12 @@
 
 use super::Args;
 use anyhow::{Context, Result, bail};
-use axiscal::calibration::procedure::CalibrationOptions;
+use axiscal::calibration::CalibrationError;
+use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError};
 use axiscal::plan::optimize::axis_points;
 use axiscal::plan::{
-    CalibrationPlan, OptimizeOptions, PlanObjective, PlanPrediction, SightOptions, ValidationPlan, optimize,
-    with_point_budget,
+    CalibrationPlan, OptimizeOptions, PlanObjective, PlanPrediction, PredictError, SightOptions, ValidationPlan,
+    optimize, with_point_budget,
 };
 use axiscal::robot::RobotDescription;
 
@@ -52,7 +53,7 @@ pub(super) fn run(
     options
         .joint_repeatability_rad(desc)
         .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
-    let objective = PlanObjective::new(desc, &seed, &workspace, sight, &options).context("predicting the seed plan")?;
+    let objective = seed_objective(desc, seed_plan, (&seed, points), &workspace, sight, &options)?;
     let found = optimize(
         &objective,
         desc,
@@ -97,6 +98,60 @@ pub(super) fn run(
         );
     }
     Ok(found.plan)
+}
+
+/// A fit the seed plan at `--points` leaves too few points: the joint, the fit, the points it
+/// has and needs.
+fn starved_fit(e: &PredictError) -> Option<(usize, &'static str, usize, usize)> {
+    let PredictError::Calibration(
+        ProcedureError::Fit { joint, source, .. } | ProcedureError::CouplingFit { joint, source, .. },
+    ) = e
+    else {
+        return None;
+    };
+    match source {
+        CalibrationError::TooFewPoints { fit, got, needed } => Some((*joint, *fit, *got, *needed)),
+        _ => None,
+    }
+}
+
+/// Calibrations tried at most to find the `--points` a starved fit needs.
+const POINT_TRIES: usize = 20;
+
+/// The objective of `seed` (`seed_plan` at `points`). When a sweep is left too few points for
+/// its fits, the error names `--points` and the smallest value that calibrates (the sweep's
+/// poses grown by at least what the fit lacks, each candidate calibrated), if one is found
+/// within [`POINT_TRIES`] calibrations.
+fn seed_objective(
+    desc: &RobotDescription,
+    seed_plan: &CalibrationPlan,
+    (seed, points): (&CalibrationPlan, usize),
+    workspace: &ValidationPlan,
+    sight: &SightOptions,
+    options: &CalibrationOptions,
+) -> Result<PlanObjective> {
+    let e = match PlanObjective::new(desc, seed, workspace, sight, options) {
+        Ok(objective) => return Ok(objective),
+        Err(e) => e,
+    };
+    let Some((joint, fit, got, needed)) = starved_fit(&e) else {
+        return Err(anyhow::Error::new(e).context("predicting the seed plan"));
+    };
+    let poses =
+        |plan: &CalibrationPlan| -> usize { plan.sweeps.iter().filter(|s| s.joint == joint).map(|s| s.poses()).sum() };
+    let wanted = poses(seed) + needed.saturating_sub(got);
+    let enough = (points + 1..=points.saturating_mul(4))
+        .filter_map(|p| Some((p, with_point_budget(seed_plan, p)?)))
+        .filter(|(_, plan)| poses(plan) >= wanted)
+        .take(POINT_TRIES)
+        .find(|(_, plan)| PlanObjective::new(desc, plan, workspace, sight, options).is_ok());
+    let raise = match enough {
+        Some((p, _)) => format!("raise --points to {p} or more"),
+        None => "raise --points".to_owned(),
+    };
+    bail!(
+        "--points {points} is too few: the sweep of joint {joint} gets {got} points for its {fit}, which needs at least {needed}; {raise}"
+    )
 }
 
 fn join(values: &[f64]) -> String {

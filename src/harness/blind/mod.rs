@@ -161,6 +161,11 @@ pub enum BlindCampaign {
     FreePoses,
 }
 
+/// The fewest validation poses of a [`BlindCampaign::FreePoses`] case: the diagnoser calibrates
+/// from its training half (every other pose, `diagnosis::split`), which needs
+/// [`MIN_POSES`](crate::calibration::free_pose::MIN_POSES) poses.
+pub const MIN_FREE_POSES: usize = 2 * crate::calibration::free_pose::MIN_POSES - 1;
+
 impl BlindCampaign {
     /// The shipped description the diagnoser is given.
     pub fn description(self) -> RobotDescription {

@@ -66,8 +66,8 @@ pub enum ToolAccuracyError {
     Procedure {
         /// Trial (`None`: the predicting calibration).
         trial: String,
-        /// The procedure's error.
-        source: ProcedureError,
+        /// The procedure's error (boxed: it is large, and rare).
+        source: Box<ProcedureError>,
     },
     /// A pose could not be evaluated.
     #[error(transparent)]
@@ -89,7 +89,12 @@ impl ToolAccuracyStudy {
             repeatability_sigma_rad: Some(vec![0.0]),
             ..CalibrationOptions::default()
         };
-        let failed = |trial: String| move |source| ToolAccuracyError::Procedure { trial, source };
+        let failed = |trial: String| {
+            move |source| ToolAccuracyError::Procedure {
+                trial,
+                source: Box::new(source),
+            }
+        };
         let set = campaign(&truth, &desc, self.noise_rms_3d_mm, trial_seed(self.seed, u64::MAX));
         let cal = calibrate(&set, &desc, &options).map_err(failed("prediction".into()))?;
         let (experiments, reference) = axis_experiments(&set, &desc).map_err(failed("prediction".into()))?;

@@ -53,6 +53,11 @@ pub fn parse(text: &str, path: &Path, options: &RctOptions) -> Result<Measuremen
     for (i, (key, entry)) in entries.iter().enumerate() {
         let name = shown_cell(&key_name(key));
         let error = |field: &str, message: String| file_error(format!("entry `{name}`, field `{field}`: {message}"));
+        if let Some(what) = not_an_observation(entry) {
+            return Err(file_error(format!(
+                "entry `{name}` is {what}, not an observation (a map with pose, target_joints, camera_joints): the file is a map of observations keyed by name (a time stamp), each at the top level, not a list under `{name}:`"
+            )));
+        }
         let (cmd, markers) = observation(entry, options, &error)?;
         poses.push((i + 1, cmd, markers));
     }
@@ -134,6 +139,20 @@ fn observation(
         }
     }
     Ok((cmd, markers))
+}
+
+/// What an entry is when it is not a map (an observation): `an empty list`, `a list of 3`, `a
+/// number`, ...
+fn not_an_observation(entry: &Yaml) -> Option<String> {
+    Some(match entry {
+        Yaml::Hash(_) => return None,
+        Yaml::Array(items) if items.is_empty() => "an empty list".into(),
+        Yaml::Array(items) => format!("a list of {}", items.len()),
+        Yaml::String(_) => "text".into(),
+        Yaml::Real(_) | Yaml::Integer(_) => "a number".into(),
+        Yaml::Boolean(_) => "a boolean".into(),
+        _ => "empty".into(),
+    })
 }
 
 /// A finite number (YAML real or integer).

@@ -27,6 +27,36 @@ pub fn looks_like(text: &str) -> bool {
         .is_some_and(|l| l.starts_with("//"))
 }
 
+/// The line of `text`'s first non-blank line when it is a SpatialAnalyzer point line rather than
+/// a CSV header: no comma, at least three white-space-separated fields, the last three numbers
+/// (`G 1 -3108.48 5269.52 13.80`): an export saved without its `//` header line.
+pub fn headerless_point_line(text: &str) -> Option<usize> {
+    let (i, line) = text
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .enumerate()
+        .find(|(_, l)| !l.trim().is_empty())?;
+    let cells: Vec<&str> = line.split_whitespace().collect();
+    let numbers = cells.len() >= 3 && cells[cells.len() - 3..].iter().all(|c| c.parse::<f64>().is_ok());
+    (!line.contains(',') && numbers).then_some(i + 1)
+}
+
+/// The first of `cells` (white-space-separated) written with a decimal comma (`-3108,48`:
+/// digits, one comma, digits), when the last three (`x y z`) all are.
+fn decimal_comma<'a>(cells: &[&'a str]) -> Option<&'a str> {
+    let comma = |c: &str| {
+        c.split_once(',').is_some_and(|(whole, fraction)| {
+            let whole = whole.strip_prefix(['-', '+']).unwrap_or(whole);
+            !whole.is_empty()
+                && !fraction.is_empty()
+                && whole.bytes().all(|b| b.is_ascii_digit())
+                && fraction.bytes().all(|b| b.is_ascii_digit())
+        })
+    };
+    let xyz = cells.get(cells.len().checked_sub(3)?..)?;
+    xyz.iter().all(|c| comma(c)).then_some(xyz[0])
+}
+
 /// Reads the export `text` (`path` labels messages) with `names` name fields before `x y z`
 /// (`None`: every line has 3 to 6 fields and the name fields are all but the last 3).
 pub fn to_table(text: &str, path: &Path, names: Option<usize>) -> Result<Table, PointsError> {
@@ -40,6 +70,16 @@ pub fn to_table(text: &str, path: &Path, names: Option<usize>) -> Result<Table, 
         if let Some(comment) = trimmed.strip_prefix("//") {
             comments.push(comment.trim().to_owned());
             continue;
+        }
+        if let Some(cell) = decimal_comma(&trimmed.split_whitespace().collect::<Vec<_>>()) {
+            return Err(PointsError::File {
+                path: path.to_owned(),
+                message: format!(
+                    "line {}: decimal commas (`{}`): the export was written with a comma as the decimal separator; export it again with a decimal point, or replace each comma by a point",
+                    i + 1,
+                    shown_cell(cell)
+                ),
+            });
         }
         let cells: Vec<&str> = if trimmed.contains(',') {
             trimmed.split(',').map(str::trim).collect()
@@ -133,6 +173,9 @@ mod tests {
     #[test]
     fn names_become_ids_and_positions_read_as_a_point_export() {
         assert!(looks_like(EXPORT));
+        assert_eq!(headerless_point_line(EXPORT), None);
+        assert_eq!(headerless_point_line("\nA Robot P001 1000.5 -20.25 300\n"), Some(2));
+        assert_eq!(headerless_point_line("id,x,y,z\n1,2,3,4\n"), None);
         let table = to_table(EXPORT, Path::new("sa.txt"), None).unwrap();
         assert_eq!(table.header, ["collection", "group", "id", "x", "y", "z"]);
         let (points, unit) = read_export(&table).unwrap();
@@ -157,6 +200,11 @@ mod tests {
             ("1 2\n", Some(0), "fewer than 0 name field(s)"),
             ("// only comments\n", None, "no point line"),
             ("A 1 2 3\n", Some(4), "0 to 3 name fields"),
+            (
+                "// SA\nG 1 -3108,48 5269,5 13,8\n",
+                None,
+                "line 2: decimal commas (`-3108,48`)",
+            ),
         ];
         for (text, names, what) in cases {
             let message = to_table(text, Path::new("sa.txt"), names).unwrap_err().to_string();

@@ -34,6 +34,7 @@ struct Row {
 pub fn parse(text: &str, path: &Path, kinds: &[JointKind], unit: LengthUnit) -> Result<MeasurementSet, PointsError> {
     let rows = rows(text, path, kinds.len(), unit)?;
     let homes = homes(&rows, path, kinds)?;
+    check_runs(&rows, path)?;
     let mut out = Vec::with_capacity(rows.len());
     let mut runs = vec![0usize; kinds.len()];
     let mut step = 0;
@@ -67,6 +68,41 @@ pub fn parse(text: &str, path: &Path, kinds: &[JointKind], unit: LengthUnit) -> 
     })
 }
 
+/// Refuses a run of one row: a sweep needs points, and single rows between other joints' are
+/// a file sorted otherwise than by joint (by step, say), which would import as one experiment
+/// per row.
+fn check_runs(rows: &[Row], path: &Path) -> Result<(), PointsError> {
+    let starts: Vec<usize> = (0..rows.len())
+        .filter(|&i| i == 0 || rows[i - 1].joint != rows[i].joint)
+        .collect();
+    let lone: Vec<usize> = (0..starts.len())
+        .filter(|&k| starts.get(k + 1).unwrap_or(&rows.len()) - starts[k] == 1)
+        .map(|k| starts[k])
+        .collect();
+    let Some(&first) = lone.first() else {
+        return Ok(());
+    };
+    let r = &rows[first];
+    let neighbours: Vec<String> = [first.checked_sub(1), Some(first + 1)]
+        .into_iter()
+        .flatten()
+        .filter_map(|i| rows.get(i))
+        .map(|n| format!("line {} is joint {}", n.line, n.joint))
+        .collect();
+    Err(row_error(
+        path,
+        r.line,
+        0,
+        format!(
+            "the row of joint {} stands alone ({}; {} of the file's {} runs of one joint have a single row): SScanSS-2 files list each joint's points together; sort the rows by joint, keeping each joint's order",
+            r.joint,
+            neighbours.join(", "),
+            lone.len(),
+            starts.len()
+        ),
+    ))
+}
+
 /// The data rows (blank and `#` lines skipped).
 fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit) -> Result<Vec<Row>, PointsError> {
     let mut rows = Vec::new();
@@ -74,6 +110,16 @@ fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit) -> Result<Vec<
         let trimmed = line.trim();
         if trimmed.is_empty() || trimmed.starts_with('#') {
             continue;
+        }
+        if rows.is_empty() && is_header(trimmed) {
+            return Err(PointsError::File {
+                path: path.to_owned(),
+                message: format!(
+                    "line {} is a header (`{}`): SScanSS-2 calibration files have none and start with data; remove the line",
+                    i + 1,
+                    shown_cell(trimmed)
+                ),
+            });
         }
         rows.push(row(trimmed, i + 1, path, joints, unit)?);
     }
@@ -84,6 +130,15 @@ fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit) -> Result<Vec<
         });
     }
     Ok(rows)
+}
+
+/// Whether a line is a header: none of its first two cells (the joint and `x`) is a number.
+fn is_header(line_text: &str) -> bool {
+    line_text
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|c| !c.is_empty())
+        .take(2)
+        .all(|c| c.parse::<f64>().is_err())
 }
 
 /// One row: `joint, x, y, z, value, type, home`.
@@ -239,16 +294,17 @@ mod tests {
     #[test]
     fn runs_become_experiments_with_held_joints_at_home() {
         let set = parse_text(
-            "1,1,0,0,-10,revolute,5\n1 2 0 0 0 revolute 5\n\n2\t0\t1\t0\t20\tprismatic\t-3\n1,3,0,0,10,revolute,5\n",
+            "1,1,0,0,-10,revolute,5\n1 2 0 0 0 revolute 5\n\n2\t0\t1\t0\t20\tprismatic\t-3\n2,0,2,0,30,prismatic,-3\n\
+             1,3,0,0,10,revolute,5\n1,4,0,0,20,revolute,5\n",
         )
         .unwrap();
         let rows = set.rows();
-        assert_eq!(rows.len(), 4);
+        assert_eq!(rows.len(), 6);
         assert_eq!(rows[0].experiment, "joint1");
         assert_eq!(rows[0].cmd, vec![-10.0, -3.0]);
         assert_eq!(rows[2].experiment, "joint2");
         assert_eq!(rows[2].cmd, vec![5.0, 20.0]);
-        assert_eq!((rows[3].experiment.as_str(), rows[3].step), ("joint1-2", 0));
+        assert_eq!((rows[4].experiment.as_str(), rows[4].step), ("joint1-2", 0));
     }
 
     #[test]
@@ -280,6 +336,16 @@ mod tests {
                 "differs",
             ),
             ("1,1,0,0,-10,revolute,0\n", "cal.txt", "no row of joint(s) 2"),
+            (
+                "joint,x,y,z,value,type,home\n1,1,0,0,-10,revolute,0\n2,0,1,0,20,prismatic,0\n",
+                "line 1 is a header",
+                "remove the line",
+            ),
+            (
+                "1,1,0,0,-10,revolute,0\n1,1,0,0,-5,revolute,0\n2,0,1,0,20,prismatic,0\n1,1,0,0,0,revolute,0\n",
+                "line 3, column joint",
+                "stands alone (line 2 is joint 1, line 4 is joint 1; 2 of the file's 3 runs",
+            ),
             (
                 "1,1,0,0,-10,hinge,0\n2,0,1,0,20,prismatic,0\n",
                 "column type",

@@ -96,7 +96,112 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
             .collect::<Result<Vec<_>, _>>()?;
         poses.push((row.line, cmd, seen));
     }
+    if let Some(broken) = broken_sweep(&poses, options.still_tolerance) {
+        let column = broken.columns.first().map_or(joints[broken.joint], |&j| joints[j]);
+        return Err(t.row_error(broken.line, column, broken.message(&poses, t, &joints)));
+    }
     rows_of(&poses, options.kinds.len(), options.still_tolerance, &t.path)
+}
+
+/// A pose that splits a sweep: its neighbours differ in joint `joint` alone by about two
+/// steps of the sweep on either side of them (the same step, the same direction), while the
+/// pose is off the line between them. One row in other units (radians among degrees) does
+/// this, and would import as two short experiments.
+#[derive(Clone, Debug, PartialEq)]
+struct BrokenSweep {
+    /// The pose's index.
+    pose: usize,
+    /// Its line.
+    line: usize,
+    /// The swept joint (0-based).
+    joint: usize,
+    /// The joints (0-based) whose value is off the sweep.
+    columns: Vec<usize>,
+    /// The unit slip that puts the row on the sweep, if one does: what it is and the factor,
+    /// as said.
+    unit: Option<(&'static str, &'static str)>,
+}
+
+/// Unit slips a row of joint values can carry, in file units: the factor that puts it back,
+/// what the slip is, and the factor as said.
+const UNIT_SLIPS: [(f64, &str, &str); 4] = [
+    (
+        180.0 / std::f64::consts::PI,
+        "radians where degrees are expected",
+        "times 57.296",
+    ),
+    (
+        std::f64::consts::PI / 180.0,
+        "degrees where radians are expected",
+        "divided by 57.296",
+    ),
+    (1e3, "metres where millimetres are expected", "times 1000"),
+    (1e-3, "millimetres where metres are expected", "divided by 1000"),
+];
+
+/// The first pose of `poses` that splits a sweep ([`BrokenSweep`]).
+fn broken_sweep(poses: &[Pose], tolerance: f64) -> Option<BrokenSweep> {
+    let q = |i: usize| poses[i].1.as_slice();
+    (2..poses.len().saturating_sub(2)).find_map(|i| {
+        let k = swept_joint(q(i - 1), q(i + 1), tolerance)?;
+        let sweep_step = |a: usize| (swept_joint(q(a), q(a + 1), tolerance) == Some(k)).then(|| q(a + 1)[k] - q(a)[k]);
+        let (left, right) = (sweep_step(i - 2)?, sweep_step(i + 1)?);
+        let gap = q(i + 1)[k] - q(i - 1)[k];
+        let one_sweep = left * right > 0.0
+            && gap * left > 0.0
+            && (0.5..=2.0).contains(&(left / right))
+            && (1.5..=2.5).contains(&(gap / (0.5 * (left + right))));
+        if !one_sweep {
+            return None;
+        }
+        let expected: Vec<f64> = q(i - 1).iter().zip(q(i + 1)).map(|(a, b)| 0.5 * (a + b)).collect();
+        let off = |f: f64| -> Vec<usize> {
+            (0..expected.len())
+                .filter(|&j| {
+                    let allowed = if j == k {
+                        0.25 * gap.abs()
+                    } else {
+                        tolerance.max(0.01 * expected[j].abs())
+                    };
+                    (q(i)[j] * f - expected[j]).abs() > allowed
+                })
+                .collect()
+        };
+        let columns = off(1.0);
+        (!columns.is_empty()).then(|| BrokenSweep {
+            pose: i,
+            line: poses[i].0,
+            joint: k,
+            columns,
+            unit: UNIT_SLIPS
+                .iter()
+                .find(|(f, ..)| off(*f).is_empty())
+                .map(|&(_, what, factor)| (what, factor)),
+        })
+    })
+}
+
+impl BrokenSweep {
+    /// The message, naming the lines around the pose and the likely unit slip.
+    fn message(&self, poses: &[Pose], t: &Table, joints: &[usize]) -> String {
+        let name = |j: usize| format!("`{}`", t.header_as_written.get(joints[j]).map_or("", String::as_str));
+        let why = match self.unit {
+            Some((what, factor)) => format!(
+                "its joint values look like {what} ({factor} they fall on the sweep); write the row in the table's unit"
+            ),
+            None => format!(
+                "its {} jump off the sweep; correct the row or remove it",
+                self.columns.iter().map(|&j| name(j)).collect::<Vec<_>>().join(", ")
+            ),
+        };
+        format!(
+            "the row splits the sweep of joint {} (lines {} and {} around it step {} alone, in the sweep's direction): {why}",
+            self.joint + 1,
+            poses[self.pose - 1].0,
+            poses[self.pose + 1].0,
+            name(self.joint)
+        )
+    }
 }
 
 /// The measurement rows of `poses` in experiments recovered from their joint values
