@@ -15,7 +15,9 @@ pub use csv_io::{
     MeasurementFileError, format_f64, read_measurements, read_measurements_from, write_measurements,
     write_measurements_to,
 };
-pub use data::{Experiment, MAX_LABEL_CHARS, Measurement, MeasurementSet, MeasurementSetError, RowProblem};
+pub use data::{
+    Experiment, MAX_LABEL_CHARS, Measurement, MeasurementSet, MeasurementSetError, POSE_COMMAND_TOLERANCE, RowProblem,
+};
 pub use model::{IsotropicNoise, MeasurementModel};
 pub use noise_calibration::{
     Anisotropy, NoiseCalibration, PAPER_NET_RADIAL_RMS_MM, PAPER_RIGHT_STATION_MM, PAPER_ROBOT_BASE_MM,

@@ -15,6 +15,7 @@ mod model_error;
 
 pub use compliance::{ComplianceTerm, LoadProduct, SpringLoad, SpringSite};
 pub use controller::Controller;
+pub(crate) use description::Fnv;
 pub use description::{
     AxisTargets, CouplingFitForm, DescriptionError, DescriptionIdentity, DhConventionEntry, DhEntry, InstrumentEntry,
     JointEntry, LinkTarget, MAX_REPEATABILITY_SIGMA, MIN_STATION_DISTANCE_MM, NominalCoupling, Placement,

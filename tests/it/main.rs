@@ -30,6 +30,7 @@ mod hostile;
 mod hostile_calibration;
 mod hostile_files;
 mod hostile_results;
+mod hostile_round3a;
 mod iso9283;
 mod joint_map;
 mod json_schemas;
