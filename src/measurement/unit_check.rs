@@ -283,10 +283,19 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
 
 /// The coordinate column (`x_mm`, `y_mm` or `z_mm`) in another length unit (of [`KNOWN`])
 /// while the other two are millimetres: the one column whose conversion to millimetres leaves
-/// no slip at all. A single column's slip distorts every arc and the free poses' spread, and
+/// no slip at all, when converting every column by one factor does not. A single column's slip distorts every arc and the free poses' spread, and
 /// would be said as the whole file's coordinates or commands in another unit.
 fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
     let lengths = &KNOWN[..4];
+    // Every column in one other unit: the free poses' spread may pass with one column converted
+    // alone (it is mostly that column's), but the whole file's slip is the one to say.
+    let all_scaled = |factor: f64| (0..3).fold(set.clone(), |s, c| s.with_coordinate_scaled(c, factor));
+    if lengths
+        .iter()
+        .any(|(ratio, _)| slips_as_read(&all_scaled(1.0 / ratio), desc).is_empty())
+    {
+        return None;
+    }
     let (column, (ratio, unit)) = (0..3)
         .flat_map(|c| lengths.iter().map(move |k| (c, *k)))
         .find(|&(c, (ratio, _))| slips_as_read(&set.with_coordinate_scaled(c, 1.0 / ratio), desc).is_empty())?;
