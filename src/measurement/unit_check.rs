@@ -272,7 +272,7 @@ pub fn spread_ratio(measured: &[Vector3<f64>], nominal: &[Vector3<f64>]) -> Opti
 
 /// Coordinates and commands whose units look wrong (module docs), judged over the revolute axis
 /// experiments' target 0 and the free poses ([`free_pose_slips`]). When one coordinate column
-/// alone is in another unit ([`one_column_slip`]), that column is the one slip said.
+/// alone is in another unit, that column is the one slip said.
 pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
     let slips = slips_as_read(set, desc);
     if slips.is_empty() {
