@@ -1,5 +1,8 @@
 //! The data a certificate summarises, and whether they are the data the calibration was made
-//! from. A calibration does not record its file, but it records each axis fit's sweeps with
+//! from. A calibration written by `axiscal calibrate` records the digest of its data's rows
+//! ([`MeasurementSet::digest`]): the data must have it (the same rows, measured points and
+//! commands). A calibration does not record its file, and one written before the digest was
+//! recorded is checked by what it does record: each axis fit's sweeps with
 //! the poses of target 0 each used and the points the outlier screen set aside: the data must
 //! hold the same axis experiments, moving the same joints, with as many poses
 //! ([`data_mismatches`]). A calibration from free poses records how many poses it fitted, set
@@ -58,6 +61,19 @@ pub(super) fn data_section(file: &str, set: &MeasurementSet) -> DataSection {
 /// How `set` differs from the data `cal` records (module doc), one sentence each; empty when it
 /// matches.
 pub fn data_mismatches(cal: &Calibration, set: &MeasurementSet) -> Vec<String> {
+    let mismatches = structure_mismatches(cal, set);
+    let digest = set.digest();
+    match &cal.data_digest {
+        Some(recorded) if mismatches.is_empty() && *recorded != digest => vec![format!(
+            "its rows (measured points and commands) differ from those the calibration was made from (`data_digest` \
+             {recorded}, the data's {digest})"
+        )],
+        _ => mismatches,
+    }
+}
+
+/// How the experiments and poses of `set` differ from those `cal` records.
+fn structure_mismatches(cal: &Calibration, set: &MeasurementSet) -> Vec<String> {
     if let Some(fp) = &cal.free_poses {
         return free_pose_mismatches(fp, set);
     }

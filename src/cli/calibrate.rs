@@ -257,7 +257,7 @@ pub fn run(args: Args) -> Result<()> {
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
-    let (cal, map) = if free_poses_only {
+    let (mut cal, map) = if free_poses_only {
         let mut cal = super::calibrate_free::calibrate(&args_view(&args), &set, &desc)?;
         let map = predict_free_pose_accuracy(&mut cal, &desc, &set)?;
         (cal, map)
@@ -265,6 +265,7 @@ pub fn run(args: Args) -> Result<()> {
         checks::one_setup(&set, &args.data, "the axis-experiment calibration")?;
         calibrate_axes(&args, &set, &desc)?
     };
+    cal.data_digest = Some(set.digest());
     readable(&cal, &args)?;
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
@@ -423,7 +424,7 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
             super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
             if let Some(too_small) = args
                 .noise_mm
-                .and_then(|n| noise_far_below(screened, desc, &options, n, &e))
+                .and_then(|n| checks::noise_far_below(screened, desc, &options, n, e.joint(), ["the fits", "it"]))
             {
                 anyhow::bail!("calibrating {}: {too_small}", args.data.display())
             }
@@ -451,52 +452,6 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         cal
     };
     Ok((cal, map))
-}
-
-/// Why the calibration with `--noise-mm given_mm` failed (`failed`) when the data scatter far
-/// more than that: the calibration weighted with the noise its residuals estimate succeeds, and
-/// `given_mm` lies below that estimate's 95 % interval. Names the failed joint (else the one
-/// whose residuals are the largest) and its residual RMS against `given_mm`.
-fn noise_far_below(
-    set: &MeasurementSet,
-    desc: &RobotDescription,
-    options: &CalibrationOptions,
-    given_mm: f64,
-    failed: &ProcedureError,
-) -> Option<String> {
-    // As without --noise-mm: a first pass at the default noise, then the estimate's.
-    let estimating = CalibrationOptions {
-        estimate_noise: true,
-        noise_rms_3d_mm: CalibrationOptions::default().noise_rms_3d_mm,
-        ..options.clone()
-    };
-    let cal = calibrate(set, desc, &estimating).ok()?;
-    let estimate = cal.noise.as_ref()?.estimate.as_ref()?;
-    if given_mm >= estimate.interval.low_mm {
-        return None;
-    }
-    let largest = || {
-        cal.axes
-            .iter()
-            .max_by(|a, b| a.residual_rms_mm.total_cmp(&b.residual_rms_mm))
-    };
-    let axis = failed
-        .joint()
-        .and_then(|j| cal.axes.iter().find(|a| a.joint == j))
-        .or_else(largest)?;
-    Some(format!(
-        "experiment {} (joint {}): the residuals ({:.4} mm RMS) are {:.0} times --noise-mm {}; --noise-mm is too \
-         small or the data are bad: the fits weighted with it fail, while the residuals estimate a noise of {:.4} mm \
-         (95 % interval {:.4}-{:.4} mm; without --noise-mm the fits are weighted with it)",
-        axis.experiment,
-        axis.joint,
-        axis.residual_rms_mm,
-        axis.residual_rms_mm / given_mm,
-        axiscal::measurement::format_f64(given_mm),
-        estimate.rms_3d_mm,
-        estimate.interval.low_mm,
-        estimate.interval.high_mm
-    ))
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far

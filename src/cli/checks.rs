@@ -3,7 +3,7 @@
 //! (`--allow-other-robot`).
 
 use anyhow::{Context, Result, bail};
-use axiscal::calibration::procedure::Calibration;
+use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::unit_check::{
@@ -307,6 +307,16 @@ pub fn print_pose_outliers(
 /// One warning line per point an outlier test flagged in `data` (a sweep's, or a validation
 /// point, `joint` 0); `done` is what the command did without it (`calibrated`, `diagnosed`).
 pub fn print_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
+    print_warnings(&outlier_warnings(outliers, data, done));
+}
+
+/// [`print_outliers`]'s lines, without `warning: `.
+pub fn outlier_warnings(
+    outliers: &[axiscal::calibration::procedure::OutlierPoint],
+    data: &Path,
+    done: &str,
+) -> Vec<String> {
+    let mut lines = Vec::new();
     for o in outliers {
         let place = o
             .line
@@ -337,9 +347,60 @@ pub fn print_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint]
                 "coordinates and commands",
             ),
         };
-        eprintln!(
-            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from {from}, {:.1} times {noise}, beyond the fence {:.1} (Q3 + 3 IQR of {fence_of}): {what}; check this row's {check}",
+        lines.push(format!(
+            "{place}: outlier: experiment {} step {} target {}: {:.3} mm from {from}, {:.1} times {noise}, beyond the fence {:.1} (Q3 + 3 IQR of {fence_of}): {what}; check this row's {check}",
             o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
-        );
+        ));
     }
+    lines
+}
+
+/// Why a calibration (or a validation, a diagnosis) with `--noise-mm given_mm` failed when the
+/// data scatter far more than that: the calibration of `set`'s axis experiments weighted with
+/// the noise their residuals estimate succeeds, and `given_mm` lies below that estimate's 95 %
+/// interval. Names the failed joint `failed_joint` (else the one whose residuals are the
+/// largest) and its residual RMS against `given_mm`; `None` when `given_mm` is within the
+/// estimate or `set` has no axis experiment to estimate it from. `failing` names what failed
+/// (`the fits`), `without` what they are weighted with when `--noise-mm` is not given (`it`:
+/// the estimate).
+pub fn noise_far_below(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    given_mm: f64,
+    failed_joint: Option<usize>,
+    [failing, without]: [&str; 2],
+) -> Option<String> {
+    // As without --noise-mm: a first pass at the default noise, then the estimate's.
+    let estimating = CalibrationOptions {
+        estimate_noise: true,
+        noise_rms_3d_mm: CalibrationOptions::default().noise_rms_3d_mm,
+        ..options.clone()
+    };
+    let cal = calibrate(set, desc, &estimating).ok()?;
+    let estimate = cal.noise.as_ref()?.estimate.as_ref()?;
+    if given_mm >= estimate.interval.low_mm {
+        return None;
+    }
+    let largest = || {
+        cal.axes
+            .iter()
+            .max_by(|a, b| a.residual_rms_mm.total_cmp(&b.residual_rms_mm))
+    };
+    let axis = failed_joint
+        .and_then(|j| cal.axes.iter().find(|a| a.joint == j))
+        .or_else(largest)?;
+    Some(format!(
+        "experiment {} (joint {}): the residuals ({:.4} mm RMS) are {:.0} times --noise-mm {}; --noise-mm is too \
+         small or the data are bad: {failing} weighted with it fail, while the residuals estimate a noise of {:.4} mm \
+         (95 % interval {:.4}-{:.4} mm; without --noise-mm {failing} are weighted with {without})",
+        axis.experiment,
+        axis.joint,
+        axis.residual_rms_mm,
+        axis.residual_rms_mm / given_mm,
+        axiscal::measurement::format_f64(given_mm),
+        estimate.rms_3d_mm,
+        estimate.interval.low_mm,
+        estimate.interval.high_mm
+    ))
 }

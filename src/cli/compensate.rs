@@ -65,7 +65,26 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
     let index = COLUMNS.map(|name| table.required(&[name]));
     let index = index.into_iter().collect::<Result<Vec<usize>, _>>()?;
     let mut out = Vec::with_capacity(table.row_count());
+    let mut lines: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     for row in table.rows() {
+        let id = table.cell(&row, index[0])?;
+        if id.is_empty() {
+            bail!(table.row_error(
+                row.line,
+                index[0],
+                "empty: give each pose an id (the output's rows are told apart by it)".into()
+            ));
+        }
+        if let Some(first) = lines.insert(id.to_owned(), row.line) {
+            bail!(table.row_error(
+                row.line,
+                index[0],
+                format!(
+                    "{:?} is the id of line {first} too: give each pose its own id (the output's rows are told apart by it)",
+                    axiscal::csv_lines::shown_cell(id)
+                )
+            ));
+        }
         let mut v = [0.0; 6];
         for (slot, &column) in v.iter_mut().zip(&index[1..]) {
             *slot = table.number(&row, column)?;
@@ -83,7 +102,7 @@ fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
             rpy_deg: [v[3], v[4], v[5]],
         };
         out.push(PoseRow {
-            id: table.cell(&row, index[0])?.to_owned(),
+            id: id.to_owned(),
             world_from_tool: placement.to_isometry(),
         });
     }
@@ -159,6 +178,14 @@ pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
+    if args.payload_kg > 0.0 && !cal.robot.effects.payload_sags() {
+        eprintln!(
+            "warning: --payload-kg {} has no effect: {} models no sag under a payload (no payload term in \
+             `robot.effects`: a free-pose calibration fits one from poses measured at several `payload_kg`)",
+            axiscal::measurement::format_f64(args.payload_kg),
+            args.calibration.display()
+        );
+    }
     let comp = Compensator::new(&cal.robot, &desc)?.with_payload_kg(args.payload_kg);
     let poses = read_poses(&args.poses)?;
     let positions: Vec<_> = poses

@@ -8,9 +8,9 @@ use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate, implausible, screen_sweeps};
 use axiscal::diagnosis::{
-    AXES_PLOT_FILES, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown, diagnose_axes_with,
-    diagnose_with, estimated_noise, free_poses_only, markdown, validation_outliers, validation_poses, without_outliers,
-    write_axes_plots, write_plots,
+    AXES_PLOT_FILES, DiagnosisError, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown,
+    diagnose_axes_with, diagnose_with, estimated_noise, free_poses_only, markdown, validation_outliers,
+    validation_poses, without_outliers, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -122,15 +122,15 @@ pub fn run(args: Args) -> Result<()> {
     if validation_poses(set.rows(), &desc).len() < 4 {
         return run_axes(&args, &desc, &set, &options, &outputs, noise_source);
     }
-    let outliers = validation_outliers(&set, &desc, &options, args.keep_outliers)
-        .with_context(|| format!("diagnosing {source}"))?;
+    let outliers =
+        validation_outliers(&set, &desc, &options, args.keep_outliers).map_err(|e| failed(&args, &set, &desc, e))?;
     checks::print_outliers(&outliers, &args.data, "diagnosed");
     let set = match args.keep_outliers || outliers.is_empty() {
         true => set,
         false => without_outliers(&set, &outliers),
     };
     let progress = super::progress::Progress::stage("diagnosing");
-    let mut d = diagnose_with(&set, &desc, &options, &progress).with_context(|| format!("diagnosing {source}"))?;
+    let mut d = diagnose_with(&set, &desc, &options, &progress).map_err(|e| failed(&args, &set, &desc, e))?;
     d.noise_source = noise_source.into();
     d.outliers = outliers;
     drop(progress);
@@ -191,7 +191,7 @@ fn run_axes(
 ) -> Result<()> {
     let source = args.data.display().to_string();
     let progress = super::progress::Progress::stage("diagnosing the axes");
-    let d = diagnose_axes_with(set, desc, options, &progress).with_context(|| format!("diagnosing {source}"))?;
+    let d = diagnose_axes_with(set, desc, options, &progress).map_err(|e| failed(args, set, desc, e))?;
     drop(progress);
     let report = Report {
         out: &args.out,
@@ -235,6 +235,26 @@ fn run_axes(
     )
 }
 
+/// The diagnosis of `set` failed with `e`: when its calibration failed with a `--noise-mm` far
+/// below the noise of the data's axis experiments, what `calibrate` says of that value
+/// ([`checks::noise_far_below`]), else `e`, each naming DATA.
+fn failed(args: &Args, set: &MeasurementSet, desc: &RobotDescription, e: DiagnosisError) -> anyhow::Error {
+    let too_small = match (&e, args.noise_mm) {
+        (DiagnosisError::Calibration(failure), Some(given_mm)) => {
+            let options = CalibrationOptions {
+                noise_rms_3d_mm: given_mm,
+                ..CalibrationOptions::default()
+            };
+            checks::noise_far_below(set, desc, &options, given_mm, failure.joint(), ["the fits", "it"])
+        }
+        _ => None,
+    };
+    match too_small {
+        Some(message) => anyhow::anyhow!("diagnosing {}: {message}", args.data.display()),
+        None => anyhow::Error::new(e).context(format!("diagnosing {}", args.data.display())),
+    }
+}
+
 /// `set` without the sweep points the outlier test flags ([`screen_sweeps`], as `calibrate`
 /// tests them; kept with `--keep-outliers`), each said on stderr.
 fn without_sweep_outliers(args: &Args, set: MeasurementSet, desc: &RobotDescription) -> Result<MeasurementSet> {
@@ -246,7 +266,7 @@ fn without_sweep_outliers(args: &Args, set: MeasurementSet, desc: &RobotDescript
         ..CalibrationOptions::default()
     };
     let screening = screen_sweeps(&set, desc, &options, args.keep_outliers)
-        .map_err(|e| anyhow::anyhow!("diagnosing {}: {e}", args.data.display()))?;
+        .map_err(|e| failed(args, &set, desc, DiagnosisError::Calibration(e)))?;
     super::checks::print_outliers(&screening.outliers, &args.data, "diagnosed");
     Ok(screening.set.unwrap_or(set))
 }

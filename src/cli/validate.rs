@@ -6,11 +6,16 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
+use axiscal::calibration::procedure::CalibrationOptions;
+use axiscal::calibration::procedure::OutlierPoint;
 use axiscal::diagnosis::{
-    ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, validate, validation_residuals_csv,
+    ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate, validation_residuals_csv,
 };
+use axiscal::diagnosis::{PoseResiduals, pose_point_outliers, without_outliers};
 use axiscal::json_file::{self, Schema};
+use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
+use nalgebra::Vector3;
 use std::path::PathBuf;
 
 /// The files `validate` writes into its output folder.
@@ -39,6 +44,10 @@ pub struct Args {
     /// Two-sided false-alarm rate of the chi-square verdicts.
     #[arg(long, default_value_t = 0.01, value_parser = InRange::above(0.0, 0.5, ""))]
     false_alarm: f64,
+    /// Keep the free-pose points the outlier test flags in the tests (each is said on stderr
+    /// either way).
+    #[arg(long)]
+    keep_outliers: bool,
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
@@ -63,12 +72,26 @@ pub fn run(args: Args) -> Result<()> {
     checks::print_warnings(&warnings);
     checks::one_setup(&set, &args.data, "validate")?;
     // A free-pose calibration fitted the targets the description may not give.
-    let desc = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
+    let fitted = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
     let options = match args.noise_mm {
         Some(mm) => ValidationOptions::given(mm, args.false_alarm),
         None => ValidationOptions::of_calibration(&cal, args.false_alarm),
     };
-    let v = validate(&set, &cal, &desc, &options).with_context(|| format!("validating on {}", args.data.display()))?;
+    let validating = || format!("validating on {}", args.data.display());
+    let v = validate(&set, &cal, &fitted, &options).with_context(validating)?;
+    let outliers = free_pose_outliers(&v, &set, args.keep_outliers);
+    let flagged = checks::outlier_warnings(&outliers, &args.data, "validated");
+    checks::print_warnings(&flagged);
+    warnings.extend(flagged);
+    let (set, v) = match args.keep_outliers || outliers.is_empty() {
+        true => (set, v),
+        false => {
+            let set = without_outliers(&set, &outliers);
+            let v = validate(&set, &cal, &fitted, &options).with_context(validating)?;
+            (set, v)
+        }
+    };
+    noise_not_far_below(&args, &set, &desc, &v)?;
     let v = Validation { warnings, ..v };
     let mut staged = outputs.staged_in(&args.out)?;
     staged.write(OUTPUTS[0], validation_residuals_csv(&v))?;
@@ -77,6 +100,46 @@ pub fn run(args: Args) -> Result<()> {
     print_summary(&v);
     println!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
     Ok(())
+}
+
+/// The free-pose points (`moved_joint` 0: validation and tool poses) of `set` whose residuals
+/// in `v` are gross errors, as `diagnose` finds them ([`pose_point_outliers`]: beyond the
+/// far-out fences of every point's residual and of its distance from its pose's other targets'
+/// residuals; an error of the model moves a pose's targets alike), dropped unless `keep`.
+fn free_pose_outliers(v: &Validation, set: &MeasurementSet, keep: bool) -> Vec<OutlierPoint> {
+    let mut poses: Vec<PoseResiduals<'_>> = Vec::new();
+    for (m, r) in set.rows().iter().zip(&v.residuals).filter(|(m, _)| m.moved_joint == 0) {
+        let residual = (Vector3::from(r.measured_mm) - Vector3::from(r.predicted_mm)) * 1e-3;
+        let key = (m.experiment.as_str(), m.step);
+        match poses.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, points)) => points.push((m.target, residual)),
+            None => poses.push((key, vec![(m.target, residual)])),
+        }
+    }
+    pose_point_outliers(set, &poses, v.noise_rms_3d_mm * 1e-3 / 3f64.sqrt(), keep)
+}
+
+/// A verdict that the model misses DATA with `--noise-mm` far below the noise DATA's axis
+/// experiments show is refused, as `calibrate` refuses that value ([`checks::noise_far_below`]):
+/// the verdict would blame the model for the instrument's noise.
+fn noise_not_far_below(args: &Args, set: &MeasurementSet, desc: &RobotDescription, v: &Validation) -> Result<()> {
+    let exceeds = |c: &Option<ChiSquare>| c.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds);
+    let positions = [&v.validation, &v.tool, &v.axis].into_iter().flatten();
+    let missed = positions.clone().any(|s| exceeds(&s.chi_square))
+        || v.orientation.as_ref().is_some_and(|o| exceeds(&o.chi_square));
+    let Some(given_mm) = args.noise_mm.filter(|_| missed) else {
+        return Ok(());
+    };
+    let options = CalibrationOptions {
+        noise_rms_3d_mm: given_mm,
+        estimate_noise: false,
+        ..CalibrationOptions::default()
+    };
+    let failing = ["the tests", "the calibration's noise"];
+    match checks::noise_far_below(set, desc, &options, given_mm, None, failing) {
+        Some(too_small) => anyhow::bail!("validating on {}: {too_small}", args.data.display()),
+        None => Ok(()),
+    }
 }
 
 /// `  chi2/dof 1.020 (369 dof, p 0.380) consistent`, or `-` without a test.

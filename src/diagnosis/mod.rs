@@ -51,7 +51,7 @@ pub use model::{
     unmodelled_harmonic_order,
 };
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
-pub use outliers::{validation_outliers, without_outliers};
+pub use outliers::{PoseResiduals, pose_point_outliers, validation_outliers, without_outliers};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
 pub use poses::{Pose, split, target_count, training_mask, validation_poses, validation_poses_at_most};
 pub use refine::{CARRIABLE, CarryError, carriable, carried_candidates, refine_calibration, refine_carrying};

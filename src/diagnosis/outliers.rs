@@ -51,11 +51,27 @@ pub fn validation_outliers(
                 (target, Vector3::new(r[row - 3], r[row - 2], r[row - 1]))
             })
             .collect();
-        poses.push((p, points));
+        poses.push(((p.experiment.as_str(), p.step), points));
     }
+    Ok(pose_point_outliers(set, &poses, sigma_m, keep))
+}
+
+/// The residual vectors \[m\] of the targets of one free pose, keyed by its experiment and step.
+pub type PoseResiduals<'a> = ((&'a str, usize), Vec<(usize, Vector3<f64>)>);
+
+/// The points of `poses` (each pose's targets' residuals) beyond both fences (module docs),
+/// `sigma_m` the noise per axis, in the file order of `set`; with `keep` flagged as they would
+/// be dropped (`dropped` false). What [`validation_outliers`] finds after the baseline refit,
+/// and `validate` in a given calibration's residuals.
+pub fn pose_point_outliers(
+    set: &MeasurementSet,
+    poses: &[PoseResiduals<'_>],
+    sigma_m: f64,
+    keep: bool,
+) -> Vec<OutlierPoint> {
     // Per point of a pose with two targets or more: (pose, target, |r|, z, d).
     let mut tested = Vec::new();
-    for (p, points) in &poses {
+    for (p, points) in poses {
         for (k, (target, rk)) in points.iter().enumerate() {
             let nearest = points
                 .iter()
@@ -70,17 +86,17 @@ pub fn validation_outliers(
         }
     }
     if tested.len() < MIN_POINTS {
-        return Ok(Vec::new());
+        return Vec::new();
     }
     let fence = far_out_fence(&tested.iter().map(|t| t.3).collect::<Vec<_>>());
     let fence_apart = far_out_fence(&tested.iter().map(|t| t.4).collect::<Vec<_>>());
     let mut flagged: Vec<OutlierPoint> = tested
         .iter()
         .filter(|t| t.3 > fence && t.4 > fence_apart)
-        .map(|&(p, target, norm, z, _)| OutlierPoint {
-            experiment: p.experiment.clone(),
+        .map(|&((experiment, step), target, norm, z, _)| OutlierPoint {
+            experiment: experiment.to_owned(),
             joint: 0,
-            step: p.step,
+            step,
             target,
             line: None,
             residual_mm: norm * 1e3,
@@ -101,7 +117,7 @@ pub fn validation_outliers(
             .and_then(|&i| set.line_of(i));
     }
     flagged.sort_by_key(|o| (o.line, o.step, o.target));
-    Ok(flagged)
+    flagged
 }
 
 /// `set` without the points `outliers`.

@@ -221,7 +221,8 @@ pub enum MeasurementFileError {
         line: u64,
         /// The column.
         column: String,
-        /// What is wrong (a `DuplicateKey`'s `first_at` is a line number).
+        /// What is wrong (a `DuplicateKey`'s `first_at` and a `PoseCommandsDiffer`'s `reading_at`
+        /// are line numbers).
         problem: RowProblem,
     },
 }
@@ -330,20 +331,7 @@ pub fn read_measurements_from<R: io::Read>(
     }
     let set = MeasurementSet::new(columns.cmd.len(), rows).map_err(|e| {
         let column = e.problem.column();
-        let problem = match e.problem {
-            RowProblem::DuplicateKey {
-                experiment,
-                step,
-                target,
-                first_at,
-            } => RowProblem::DuplicateKey {
-                experiment,
-                step,
-                target,
-                first_at: lines[first_at as usize],
-            },
-            other => other,
-        };
+        let problem = with_lines(e.problem, &lines);
         MeasurementFileError::InvalidRow {
             path: path.into(),
             line: lines[e.row],
@@ -355,6 +343,39 @@ pub fn read_measurements_from<R: io::Read>(
         .with_target_names(targets.names)
         .with_setups(row_setups, setups.names)
         .with_lines(lines))
+}
+
+/// `problem` of a set read from a file with the rows' `lines`: its row indices as lines.
+fn with_lines(problem: RowProblem, lines: &[u64]) -> RowProblem {
+    match problem {
+        RowProblem::DuplicateKey {
+            experiment,
+            step,
+            target,
+            first_at,
+        } => RowProblem::DuplicateKey {
+            experiment,
+            step,
+            target,
+            first_at: lines[first_at as usize],
+        },
+        RowProblem::PoseCommandsDiffer {
+            experiment,
+            step,
+            joint,
+            value,
+            reading,
+            reading_at,
+        } => RowProblem::PoseCommandsDiffer {
+            experiment,
+            step,
+            joint,
+            value,
+            reading,
+            reading_at: lines[reading_at as usize],
+        },
+        other => other,
+    }
 }
 
 /// Refuses a `#` line before `line` that looks like a data row ([`LineIndex::commented_row`]).

@@ -143,6 +143,58 @@ pub enum RowProblem {
         /// line in a file.
         first_at: u64,
     },
+    /// Two rows of one pose (experiment and step) carry different commands: one pose has one
+    /// reading of its commands, whichever targets were measured at it.
+    #[error(
+        "experiment {:?} step {step}: {} here but {} at {reading_at}, a row of the same pose: the targets of one pose \
+         share its commands (within {POSE_COMMAND_TOLERANCE:e} deg or mm){}",
+        shown_cell(experiment),
+        crate::measurement::format_f64(*value),
+        crate::measurement::format_f64(*reading),
+        other_reading_hint(*value, *reading)
+    )]
+    PoseCommandsDiffer {
+        /// The experiment.
+        experiment: String,
+        /// The step.
+        step: usize,
+        /// The joint whose command differs (1-based).
+        joint: usize,
+        /// This row's command.
+        value: f64,
+        /// The command most of the pose's rows carry.
+        reading: f64,
+        /// Where that reading is: 0-based row index in a [`MeasurementSet`], 1-based line in a
+        /// file.
+        reading_at: u64,
+    },
+    /// An experiment whose id names a joint (`axis3`) holds free poses (`moved_joint = 0`).
+    #[error(
+        "experiment {:?} names joint {named}, but its moved_joint is 0 (free poses): set moved_joint to {named} if \
+         its rows sweep joint {named}, or rename the experiment (`validation`, `poses`)",
+        shown_cell(experiment)
+    )]
+    AxisIdOfFreePoses {
+        /// The experiment.
+        experiment: String,
+        /// The joint its id names.
+        named: usize,
+    },
+}
+
+/// The commands of the rows of one pose must agree within this \[deg or mm\]: files written by
+/// other programs round the commands they print, but one pose has one reading.
+pub const POSE_COMMAND_TOLERANCE: f64 = 1e-6;
+
+/// What a row's command `value` that differs from its pose's `reading` may be: the pose's
+/// command in radians (degrees times pi/180, to the rounding of a printed value), or a row of
+/// another pose.
+fn other_reading_hint(value: f64, reading: f64) -> &'static str {
+    let radians = reading.abs() > 1e-3 && ((value.to_degrees() - reading) / reading).abs() < 1e-3;
+    match radians {
+        true => ": this row's commands look like radians; write them in degrees as its pose's other rows",
+        false => ": correct this row (a row of another pose?)",
+    }
 }
 
 impl RowProblem {
@@ -153,6 +205,8 @@ impl RowProblem {
             | Self::LongExperimentName { .. }
             | Self::InconsistentMovedJoint { .. }
             | Self::NoSuchJoint { .. } => "experiment".into(),
+            Self::AxisIdOfFreePoses { .. } => "moved_joint".into(),
+            Self::PoseCommandsDiffer { joint, .. } => format!("cmd_{joint}"),
             Self::JointCount { .. } => "cmd_*".into(),
             Self::NotFinite { column, .. } | Self::OutOfRange { column, .. } => column.clone(),
             Self::MovedJointOutOfRange { .. } => "moved_joint".into(),
@@ -346,6 +400,39 @@ impl MeasurementSet {
         out
     }
 
+    /// A digest of the measured rows, `fnv1a64:` and 16 hex digits: FNV-1a 64 over every row in
+    /// order, its experiment id (byte length as u64 LE, then its UTF-8 bytes), `moved_joint`,
+    /// `step` and `target` (u64 LE), then `x_mm`, `y_mm`, `z_mm`, `cmd_1..cmd_N`, `payload_kg`
+    /// and `temperature_c` (IEEE-754 f64 bits, LE). Two files with the same rows in the same
+    /// order have the same digest, whatever their formatting; another campaign has another.
+    pub fn digest(&self) -> String {
+        let mut hash = crate::robot::Fnv::new();
+        for m in &self.rows {
+            hash.bytes(&(m.experiment.len() as u64).to_le_bytes());
+            hash.bytes(m.experiment.as_bytes());
+            for v in [m.moved_joint, m.step, m.target] {
+                hash.bytes(&(v as u64).to_le_bytes());
+            }
+            let numbers = m
+                .position_mm
+                .iter()
+                .chain(&m.cmd)
+                .chain([&m.payload_kg, &m.temperature_c]);
+            numbers.for_each(|v| hash.bytes(&v.to_bits().to_le_bytes()));
+        }
+        hash.text()
+    }
+
+    /// The set with coordinate `column` (0: `x_mm`, 1: `y_mm`, 2: `z_mm`) of every row
+    /// multiplied by `factor`: the rows as they would read in another unit of that column.
+    pub fn with_coordinate_scaled(&self, column: usize, factor: f64) -> Self {
+        let mut out = self.clone();
+        for m in &mut out.rows {
+            m.position_mm[column] *= factor;
+        }
+        out
+    }
+
     /// The setup of row `row` (0 without a `setup` column).
     pub fn setup_of(&self, row: usize) -> usize {
         self.row_setups.get(row).copied().unwrap_or(0)
@@ -480,10 +567,46 @@ fn validate(joint_count: usize, rows: &[Measurement]) -> Result<(), MeasurementS
                 first_at: w[0].3 as u64,
             },
         });
-    match duplicate.or(problem) {
+    let differ = pose_commands_differ(rows, &keys);
+    let earliest = [duplicate, differ].into_iter().flatten().min_by_key(|e| e.row);
+    match earliest.or(problem) {
         Some(e) => Err(e),
         None => Ok(()),
     }
+}
+
+/// Row keys `(experiment index, step, target, row)` as [`validate`] sorts them.
+type RowKey = (usize, usize, usize, usize);
+
+/// The first row, in row order, whose commands differ from its pose's reading by more than
+/// [`POSE_COMMAND_TOLERANCE`]; `keys` sorted, a pose's rows next to each other. A pose's reading
+/// is the one most of its rows carry (the earliest row's on a tie), so the odd row is named.
+fn pose_commands_differ(rows: &[Measurement], keys: &[RowKey]) -> Option<MeasurementSetError> {
+    let differs = |a: usize, b: usize| {
+        let (a, b) = (&rows[a].cmd, &rows[b].cmd);
+        a.iter()
+            .zip(b)
+            .position(|(x, y)| (x - y).abs() > POSE_COMMAND_TOLERANCE)
+    };
+    keys.chunk_by(|a, b| a.0 == b.0 && a.1 == b.1)
+        .filter(|pose| pose.len() > 1)
+        .filter_map(|pose| {
+            let agreeing = |r: usize| pose.iter().filter(|k| differs(r, k.3).is_none()).count();
+            let reading = pose.iter().max_by_key(|k| (agreeing(k.3), std::cmp::Reverse(k.3)))?.3;
+            let (row, k) = pose.iter().filter_map(|p| Some((p.3, differs(p.3, reading)?))).min()?;
+            Some(MeasurementSetError {
+                row,
+                problem: RowProblem::PoseCommandsDiffer {
+                    experiment: rows[row].experiment.clone(),
+                    step: rows[row].step,
+                    joint: k + 1,
+                    value: rows[row].cmd[k],
+                    reading: rows[reading].cmd[k],
+                    reading_at: reading as u64,
+                },
+            })
+        })
+        .min_by_key(|e| e.row)
 }
 
 /// Whether `label` is longer than [`MAX_LABEL_CHARS`] characters.
@@ -580,6 +703,12 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
             named,
             joint_count,
             moved_joint: m.moved_joint,
+        });
+    }
+    if let Some(named) = joint_named_by(&m.experiment).filter(|_| m.moved_joint == 0 && first == 0) {
+        return Some(RowProblem::AxisIdOfFreePoses {
+            experiment: m.experiment.clone(),
+            named,
         });
     }
     (first != m.moved_joint).then(|| RowProblem::InconsistentMovedJoint {

@@ -16,8 +16,8 @@ pub use csv_io::{
     write_measurements_to,
 };
 pub use data::{
-    Experiment, MAX_LABEL_CHARS, MAX_PAYLOAD_KG, Measurement, MeasurementSet, MeasurementSetError, RowProblem,
-    TEMPERATURE_RANGE_C,
+    Experiment, MAX_LABEL_CHARS, MAX_PAYLOAD_KG, Measurement, MeasurementSet, MeasurementSetError,
+    POSE_COMMAND_TOLERANCE, RowProblem, TEMPERATURE_RANGE_C,
 };
 pub use model::{IsotropicNoise, MeasurementModel};
 pub use noise_calibration::{

@@ -18,7 +18,7 @@
 
 use crate::kinematics::JointKind;
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
-use crate::robot::{RobotDescription, commands_to_internal};
+use crate::robot::{RobotDescription, RowEntry, commands_to_internal};
 use nalgebra::{Point3, Vector3};
 
 /// A ratio this far from 1 (either way) is a unit slip, not a robot's deviation.
@@ -57,12 +57,11 @@ fn slipped(ratio: f64) -> bool {
     ratio.is_finite() && ratio > 0.0 && !(1.0 / SLIP_FACTOR..=SLIP_FACTOR).contains(&ratio)
 }
 
-/// Lengths of a description beyond a robot's: row lengths that look like millimetres (the
-/// rows are in metres), and a tool frame or targets further from their link than any link is
-/// long (their millimetres are micrometres, or a slip).
-pub fn description_slips(desc: &RobotDescription) -> Vec<UnitSlip> {
+/// Phi-model row lengths (`a_m`, `b_m`, `h_m` of `rows`, fields `rows[i].key`) longer than
+/// [`MAX_ROW_LENGTH_M`]: millimetres where metres belong, or no robot's.
+pub fn row_length_slips(rows: &[RowEntry]) -> Vec<UnitSlip> {
     let mut slips = Vec::new();
-    for (i, r) in desc.rows.iter().enumerate() {
+    for (i, r) in rows.iter().enumerate() {
         for (key, v) in [("a_m", r.a_m), ("b_m", r.b_m), ("h_m", r.h_m)] {
             if v.abs() > MAX_ROW_LENGTH_M {
                 let likely = if v.abs() * 1e-3 <= MAX_ROW_LENGTH_M {
@@ -80,6 +79,14 @@ pub fn description_slips(desc: &RobotDescription) -> Vec<UnitSlip> {
             }
         }
     }
+    slips
+}
+
+/// Lengths of a description beyond a robot's: row lengths that look like millimetres (the
+/// rows are in metres), and a tool frame or targets further from their link than any link is
+/// long (their millimetres are micrometres, or a slip).
+pub fn description_slips(desc: &RobotDescription) -> Vec<UnitSlip> {
+    let mut slips = row_length_slips(&desc.rows);
     let targets = desc.tool.targets_mm.iter().enumerate();
     let mut points: Vec<(String, [f64; 3])> =
         vec![("tool.frame.translation_mm".into(), desc.tool.frame.translation_mm)];
@@ -264,8 +271,47 @@ pub fn spread_ratio(measured: &[Vector3<f64>], nominal: &[Vector3<f64>]) -> Opti
 }
 
 /// Coordinates and commands whose units look wrong (module docs), judged over the revolute axis
-/// experiments' target 0 and the free poses ([`free_pose_slips`]).
+/// experiments' target 0 and the free poses ([`free_pose_slips`]). When one coordinate column
+/// alone is in another unit, that column is the one slip said.
 pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
+    let slips = slips_as_read(set, desc);
+    if slips.is_empty() {
+        return slips;
+    }
+    one_column_slip(set, desc).map_or(slips, |one| vec![one])
+}
+
+/// The coordinate column (`x_mm`, `y_mm` or `z_mm`) in another length unit (of [`KNOWN`])
+/// while the other two are millimetres: the one column whose conversion to millimetres leaves
+/// no slip at all, when converting every column by one factor does not. A single column's slip distorts every arc and the free poses' spread, and
+/// would be said as the whole file's coordinates or commands in another unit.
+fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
+    let lengths = &KNOWN[..4];
+    // Every column in one other unit: the free poses' spread may pass with one column converted
+    // alone (it is mostly that column's), but the whole file's slip is the one to say.
+    let all_scaled = |factor: f64| (0..3).fold(set.clone(), |s, c| s.with_coordinate_scaled(c, factor));
+    if lengths
+        .iter()
+        .any(|(ratio, _)| slips_as_read(&all_scaled(1.0 / ratio), desc).is_empty())
+    {
+        return None;
+    }
+    let (column, (ratio, unit)) = (0..3)
+        .flat_map(|c| lengths.iter().map(move |k| (c, *k)))
+        .find(|&(c, (ratio, _))| slips_as_read(&set.with_coordinate_scaled(c, 1.0 / ratio), desc).is_empty())?;
+    let name = ["x_mm", "y_mm", "z_mm"][column];
+    Some(UnitSlip {
+        field: name.into(),
+        message: format!(
+            "the arcs and the free poses match the description once this column alone is multiplied by {}: its \
+             values look like {unit} rather than millimetres, while the other coordinate columns are millimetres",
+            format_f64(1.0 / ratio)
+        ),
+    })
+}
+
+/// [`measurement_slips`] of the file's columns as they are.
+fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
     let (mut scale, mut angle) = (Vec::new(), Vec::new());
     for e in set.experiments().iter().filter(|e| e.moved_joint > 0) {
         let joint = e.moved_joint;

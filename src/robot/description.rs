@@ -15,6 +15,7 @@ mod convert;
 mod instrument;
 
 pub use identity::DescriptionIdentity;
+pub(crate) use identity::Fnv;
 pub use instrument::InstrumentEntry;
 
 use crate::kinematics::{JointKind, PhiJoint, PhiModel, PhiRow, SourceChain};

@@ -161,6 +161,19 @@ impl ModelEffects {
         !self.sag.is_empty() || !self.compliance.is_empty()
     }
 
+    /// Whether the payload changes the joint values: a payload sag term or a compliance
+    /// carrying a payload load, with a non-zero coefficient.
+    pub fn payload_sags(&self) -> bool {
+        let loads = |l: &super::SpringLoad| {
+            l.payload.mass_kg_rad_per_nm != 0.0 || l.payload.first_moment_kg_m_rad_per_nm.iter().any(|v| *v != 0.0)
+        };
+        self.sag.iter().any(|t| t.load.is_payload() && t.coefficient != 0.0)
+            || self
+                .compliance
+                .iter()
+                .any(|c| loads(&c.carried) || c.reflected.as_ref().is_some_and(loads))
+    }
+
     /// Checks the joints and links against a model of `n` joints and the values' finiteness:
     /// the offending field (`effects.sag[2].link`) and why.
     pub fn validate(&self, n: usize) -> Result<(), (String, String)> {

@@ -15,6 +15,7 @@ mod model_error;
 
 pub use compliance::{ComplianceTerm, LoadProduct, SpringLoad, SpringSite};
 pub use controller::Controller;
+pub(crate) use description::Fnv;
 pub use description::{
     AxisTargets, CouplingFitForm, DescriptionError, DescriptionIdentity, DhConventionEntry, DhEntry, InstrumentEntry,
     JointEntry, LinkTarget, MAX_ANGLE_DEG, MAX_HARMONIC_ORDER, MAX_INSTRUMENT_FRAME_MM, MAX_REPEATABILITY_SIGMA,

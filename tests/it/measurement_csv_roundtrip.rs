@@ -2,7 +2,7 @@
 
 use axiscal::measurement::{Measurement, MeasurementSet, read_measurements, write_measurements};
 use proptest::prelude::*;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 /// Any finite f64, including subnormals and signed zeros.
 fn finite() -> impl Strategy<Value = f64> {
@@ -48,9 +48,15 @@ fn measurement_set() -> impl Strategy<Value = MeasurementSet> {
             .prop_map(
                 |(n, names, moved, seeds): (usize, Vec<String>, Vec<usize>, Vec<RowSeed>)| {
                     let mut seen = HashSet::new();
+                    // One pose's rows share its commands (the first row's).
+                    let mut pose_cmd: HashMap<(String, usize), Vec<f64>> = HashMap::new();
                     let rows = seeds
                         .into_iter()
                         .filter(|(e, step, target, ..)| seen.insert((names[*e].clone(), *step, *target)))
+                        .map(|(e, step, target, position_mm, cmd, payload_kg, temperature_c)| {
+                            let cmd = pose_cmd.entry((names[e].clone(), step)).or_insert(cmd).clone();
+                            (e, step, target, position_mm, cmd, payload_kg, temperature_c)
+                        })
                         .map(
                             |(e, step, target, position_mm, cmd, payload_kg, temperature_c)| Measurement {
                                 experiment: names[e].clone(),

@@ -111,18 +111,6 @@ pub enum FreePoseError {
         /// Points needed.
         needed: usize,
     },
-    /// One pose's rows carry different commands.
-    #[error("{pose}, column cmd_{joint}: {other} differs from {first} on another row of the same pose")]
-    CommandsDiffer {
-        /// The pose.
-        pose: String,
-        /// Joint (1-based).
-        joint: usize,
-        /// The first row's value.
-        first: f64,
-        /// This row's value.
-        other: f64,
-    },
     /// One pose's rows name different setups.
     #[error("{pose}: its rows name different setups (one pose is measured from one instrument placement)")]
     SetupsDiffer {
@@ -768,6 +756,7 @@ impl FreePoseCalibration {
             tool: None,
             options: CalibrationOptions::default(),
             description: Some(desc.identity()),
+            data_digest: None,
             base_rule: None,
             not_calibrated: vec![],
             noise: Some(NoiseReport {

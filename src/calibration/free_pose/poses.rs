@@ -7,9 +7,6 @@ use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::Point3;
 use std::collections::HashMap;
 
-/// Commands of one pose's rows may differ by this much \[deg or mm\] (rounding of a writer).
-const SAME_COMMAND: f64 = 1e-6;
-
 /// One free pose: the robot stood still at `cmd` while the instrument measured its targets.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FreePose {
@@ -174,16 +171,9 @@ impl FreePoses {
             if !free(r) {
                 continue;
             }
-            // Every pose's rows are checked, the left-out ones' too.
+            // Every pose's rows are checked, the left-out ones' too (their commands agree: a
+            // `MeasurementSet` invariant).
             let label = || format!("{} step {}", first.experiment, first.step);
-            if let Some(k) = (0..r.cmd.len()).find(|&k| (r.cmd[k] - first.cmd[k]).abs() > SAME_COMMAND) {
-                return Err(FreePoseError::CommandsDiffer {
-                    pose: label(),
-                    joint: k + 1,
-                    first: first.cmd[k],
-                    other: r.cmd[k],
-                });
-            }
             if set.setup_of(first_row[o]) != set.setup_of(row) {
                 return Err(FreePoseError::SetupsDiffer { pose: label() });
             }

@@ -16,9 +16,10 @@ use crate::numerics::stats::{QuantileMethod, quantile};
 use crate::robot::RobotDescription;
 use nalgebra::Point3;
 
-/// The commands of the targets of one pose must agree within this \[deg or mm\]: CSV files
-/// written by other programs round the commands they print, but one pose has one reading.
-pub const COMMAND_TOLERANCE: f64 = 1e-6;
+/// Commands that differ by no more than this \[deg or mm\] are one reading: the tolerance of
+/// the targets of one pose ([`crate::measurement::POSE_COMMAND_TOLERANCE`]), of a held joint
+/// standing still and of a sweep that does not move.
+pub const COMMAND_TOLERANCE: f64 = crate::measurement::POSE_COMMAND_TOLERANCE;
 
 /// How far a held joint may move within one axis experiment (file units: deg for a revolute,
 /// mm for a prismatic joint); the default of `CalibrationOptions::held_tolerance`.
@@ -84,25 +85,8 @@ pub fn axis_experiments_with(
             lines: e.lines,
         };
         for rows in by_step {
+            // One pose's rows carry one reading of the commands (a `MeasurementSet` invariant).
             let (first, step) = (rows[0], &rows[0].step);
-            if let Some(r) = rows.iter().find(|r| {
-                r.cmd
-                    .iter()
-                    .zip(&first.cmd)
-                    .any(|(a, b)| (a - b).abs() > COMMAND_TOLERANCE)
-            }) {
-                let k = r
-                    .cmd
-                    .iter()
-                    .zip(&first.cmd)
-                    .position(|(a, b)| (a - b).abs() > COMMAND_TOLERANCE);
-                return Err(ProcedureError::InconsistentCommands {
-                    experiment: e.name.to_string(),
-                    step: *step,
-                    joint: k.unwrap_or(0) + 1,
-                    reason: "two targets of one pose carry different commands".into(),
-                });
-            }
             let index = x.commands.len();
             x.commands.push(first.cmd.clone());
             x.steps.push(*step);

@@ -1104,6 +1104,7 @@ impl<'a> Context<'a> {
             outliers: vec![],
             residuals,
             description: Some(self.desc.identity()),
+            data_digest: None,
             model_covariance,
             tool_accuracy: None,
         })

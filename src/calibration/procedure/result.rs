@@ -572,6 +572,11 @@ pub struct Calibration {
     /// absent in files written before it was recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<DescriptionIdentity>,
+    /// [`crate::measurement::MeasurementSet::digest`] of the data file the calibration was made
+    /// from, as read (before any outlier was set aside): filled by `axiscal calibrate`, not by
+    /// [`super::calibrate`]; absent in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data_digest: Option<String>,
     /// How the base frame was placed (`docs/method.md`, "Base frame").
     #[serde(default)]
     pub base_rule: Option<BaseRule>,

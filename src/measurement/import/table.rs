@@ -126,10 +126,13 @@ impl Table {
                 }
                 continue;
             }
-            split(line, &mut cells).map_err(|message| PointsError::Row {
+            split(line, &mut cells).map_err(|(cell, message)| PointsError::Row {
                 path: path.to_owned(),
                 line: i + 1,
-                field: String::new(),
+                field: header
+                    .as_ref()
+                    .and_then(|h| h.get(cell))
+                    .map_or_else(|| (cell + 1).to_string(), |name| shown_cell(name)),
                 message,
             })?;
             match &header {
@@ -273,20 +276,54 @@ fn check_width(path: &Path, columns: usize, line: usize, cells: &[Cow<'_, str>])
 /// One CSV line's cells (RFC 4180 quoting within the line), trimmed, into `cells`. A line
 /// without a quote is split at its commas directly (what the CSV reader would do, without
 /// building one per line).
-fn split<'l>(line: &'l str, cells: &mut Vec<Cow<'l, str>>) -> Result<(), String> {
+/// The error names the 0-based cell it is in: a quoted cell left open at the end of the line
+/// (a line break inside quotes, which a table of one row per line cannot hold) is refused.
+fn split<'l>(line: &'l str, cells: &mut Vec<Cow<'l, str>>) -> Result<(), (usize, String)> {
     cells.clear();
     if !line.contains('"') {
         cells.extend(line.split(',').map(|c| Cow::Borrowed(c.trim())));
         return Ok(());
+    }
+    if let Some(cell) = open_quote(line) {
+        return Err((
+            cell,
+            "a quoted cell runs past the end of its line (a line break inside quotes): this table has one row \
+             per line; remove the line break from the cell"
+                .into(),
+        ));
     }
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
         .from_reader(line.as_bytes());
     let mut record = csv::StringRecord::new();
-    reader.read_record(&mut record).map_err(|e| e.to_string())?;
+    reader.read_record(&mut record).map_err(|e| (0, e.to_string()))?;
     cells.extend(record.iter().map(|c| Cow::Owned(c.trim().to_owned())));
     Ok(())
+}
+
+/// The 0-based cell of `line` whose quotes (RFC 4180: a cell starting with `"`, `""` a quote
+/// inside it) are still open at the end of the line.
+fn open_quote(line: &str) -> Option<usize> {
+    let (mut cell, mut quoted, mut at_start) = (0, false, true);
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                chars.next();
+            }
+            (true, '"') => quoted = false,
+            (false, '"') if at_start => quoted = true,
+            (false, ',') => {
+                cell += 1;
+                at_start = true;
+                continue;
+            }
+            _ => {}
+        }
+        at_start = false;
+    }
+    quoted.then_some(cell)
 }
 
 #[cfg(test)]
@@ -318,6 +355,19 @@ mod tests {
     #[test]
     fn a_quoted_cell_keeps_its_comma() {
         assert_eq!(cells_of("1,\"a, b\",3"), ["1", "a, b", "3"]);
+    }
+
+    #[test]
+    fn a_quote_left_open_at_the_end_of_a_line_is_refused_naming_its_column() {
+        assert_eq!(open_quote("1,\"a \"\"b\"\" c\",3"), None);
+        assert_eq!(open_quote("1,x\"y,3"), None);
+        assert_eq!(open_quote("1,\"a\",\"b"), Some(2));
+        let e = Table::parse("id,x_mm\n\"p\n1\",2\n", Path::new("p.csv")).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("p.csv: line 2, column id: a quoted cell runs past"),
+            "{e}"
+        );
     }
 
     /// `split`'s cells of one line.

@@ -25,10 +25,21 @@ impl std::fmt::Display for DescriptionIdentity {
 const NOT_GEOMETRY_JOINT_KEYS: [&str; 5] = ["mass_kg", "com_mm", "limits", "repeatability_sigma", "transmission_fit"];
 
 /// FNV-1a, 64 bits.
-struct Fnv(u64);
+pub(crate) struct Fnv(u64);
 
 impl Fnv {
-    fn bytes(&mut self, bytes: &[u8]) {
+    /// The hash of no bytes (the FNV offset basis).
+    pub(crate) fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+
+    /// `fnv1a64:` and the hash as 16 lower-case hex digits.
+    pub(crate) fn text(&self) -> String {
+        format!("fnv1a64:{:016x}", self.0)
+    }
+
+    /// Hashes `bytes` in.
+    pub(crate) fn bytes(&mut self, bytes: &[u8]) {
         for b in bytes {
             self.0 ^= u64::from(*b);
             self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
@@ -113,9 +124,9 @@ impl RobotDescription {
                 }
             }
         }
-        let mut hash = Fnv(0xcbf2_9ce4_8422_2325);
+        let mut hash = Fnv::new();
         hash.value(&value);
-        format!("fnv1a64:{:016x}", hash.0)
+        hash.text()
     }
 
     /// The description's name and geometry hash.
