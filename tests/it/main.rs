@@ -31,6 +31,7 @@ mod hostile_calibration;
 mod hostile_files;
 mod hostile_inputs;
 mod hostile_results;
+mod hostile_round3c;
 mod iso9283;
 mod joint_map;
 mod json_schemas;
