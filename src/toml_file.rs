@@ -44,12 +44,26 @@ pub fn read(path: &Path) -> Result<String, TomlFileError> {
 /// A fixed-length list written longer (`limits = [-40, 0, 40]` for two numbers) is an error
 /// naming its key: the parser reads the first values and drops the rest, so the value read
 /// back is compared with the text, list by list, where both have a list at one key.
+///
+/// Text that does not parse and is a CSV table ([`looks_like_csv`]) is an error saying so, not
+/// the parser's message about its first line.
 pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result<T, TomlFileError> {
     let parse_error = |e: toml::de::Error| TomlFileError::Parse {
         path: path.to_owned(),
         message: one_line_message(&e, text),
     };
-    let value: T = toml::from_str(text).map_err(parse_error)?;
+    let value: T = toml::from_str(text).map_err(|e| match csv_first_line(text, path) {
+        Some((line, first)) => TomlFileError::Parse {
+            path: path.to_owned(),
+            message: format!(
+                "line {line}: this is a CSV table (`{}`), not a TOML file: give the TOML file of `key = value` lines \
+                 (docs/formats.md) that this option or command reads; a measurement CSV is the DATA of `calibrate`, \
+                 `diagnose` or `validate`",
+                shown_cell(first)
+            ),
+        },
+        None => parse_error(e),
+    })?;
     let written: toml::Table = toml::from_str(text).map_err(parse_error)?;
     if let Some((key, v)) = non_finite_in(&written, "") {
         return Err(TomlFileError::Parse {
@@ -66,6 +80,29 @@ pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result
         });
     }
     Ok(value)
+}
+
+/// Whether `text` is a CSV table rather than TOML: its first line that is neither blank nor a
+/// `#` comment has a comma and neither a `=` nor a `[` at its start (a TOML key or table).
+pub fn looks_like_csv(text: &str) -> bool {
+    first_content_line(text).is_some_and(|(_, l)| l.contains(',') && !l.contains('=') && !l.starts_with('['))
+}
+
+/// The first line of `text` that is neither blank nor a `#` comment: its 1-based number and
+/// its trimmed text.
+fn first_content_line(text: &str) -> Option<(usize, &str)> {
+    text.lines()
+        .map(str::trim)
+        .enumerate()
+        .find(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+        .map(|(i, l)| (i + 1, l))
+}
+
+/// The first content line of `text` read from `path` when it is a CSV table (by its text, or
+/// by a `.csv` name).
+fn csv_first_line<'a>(text: &'a str, path: &Path) -> Option<(usize, &'a str)> {
+    let named_csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    (named_csv || looks_like_csv(text)).then(|| first_content_line(text).unwrap_or((1, "")))
 }
 
 /// The first `nan` or `inf` of `table` (TOML allows them; no key of axiscal's files does):
@@ -165,6 +202,29 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown field `mass_kgs`") && e.contains("line 1"), "{e}");
+    }
+
+    #[test]
+    fn a_plan_sheet_is_a_csv_and_a_plan_file_is_not() {
+        assert!(looks_like_csv("# axiscal plan\npoint,pose,experiment\n1,1,axis6\n"));
+        assert!(!looks_like_csv("# a plan\nreference = [0, 0]\n[[sweeps]]\njoint = 1\n"));
+        assert!(!looks_like_csv("[[sweeps]]\njoint = 1\nspan = 40.0\n"));
+        assert!(!looks_like_csv(""));
+    }
+
+    /// A CSV given for TOML is said to be one, with its first line, not the parser's message.
+    #[test]
+    fn a_csv_is_refused_as_a_csv() {
+        let e = parse::<Small>(
+            "# axiscal\nexperiment,moved_joint,step\naxis1,1,0\n",
+            Path::new("g.txt"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("g.txt: line 2: this is a CSV table (`experiment,moved_joint,step`)"),
+            "{e}"
+        );
     }
 
     #[derive(Debug, serde::Deserialize, serde::Serialize)]

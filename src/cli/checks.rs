@@ -52,6 +52,25 @@ pub fn description_units(desc: &RobotDescription, path: &Path, skip: bool) -> Re
     refuse_slips(path, &description_slips(desc))
 }
 
+/// A scenario's likely unit slips (its noise in m, its validation half-ranges in rad, its truth
+/// model's rows in mm: [`axiscal::harness::scenario::units`]) read from `path`, unless `skip`.
+pub fn scenario_units(slips: &[UnitSlip], path: &Path, skip: bool) -> Result<()> {
+    if skip {
+        return Ok(());
+    }
+    refuse_slips(path, slips)
+}
+
+/// A truth model's rows (`rows[].a_m` in mm) read from `path` (`simulate --truth`, a
+/// scenario's `[truth] path`), unless `skip`: the description's row check
+/// ([`axiscal::measurement::unit_check::row_slips`]).
+pub fn truth_units(truth: &axiscal::robot::RobotModel, path: &Path, skip: bool) -> Result<()> {
+    if skip {
+        return Ok(());
+    }
+    refuse_slips(path, &axiscal::measurement::unit_check::row_slips(&truth.rows))
+}
+
 /// Required tool positions (a `--poses` file) against the robot's size, unless `skip`.
 pub fn pose_units(
     positions_m: &[nalgebra::Point3<f64>],
@@ -145,15 +164,38 @@ pub fn one_setup(set: &MeasurementSet, data: &Path, what: &str) -> Result<()> {
     )
 }
 
-/// The identity a measurement CSV written by axiscal records (its leading `#` lines), if any.
-pub fn data_identity(path: &Path) -> Option<DescriptionIdentity> {
-    axiscal::presets::regular_file(path).ok()?;
-    let file = std::fs::File::open(path).ok()?;
-    std::io::BufReader::new(file)
-        .lines()
-        .map_while(Result::ok)
-        .take_while(|l| l.starts_with('#'))
-        .find_map(|l| serde_json::from_str(l.strip_prefix(IDENTITY_COMMENT)?).ok())
+/// The identity a measurement CSV written by axiscal records (its leading `#` lines), if any;
+/// a recorded line that is not the identity's JSON (cut short, edited) is an error naming the
+/// line: read as absent, it would skip the check against `--robot` without a word.
+pub fn data_identity(path: &Path) -> Result<Option<DescriptionIdentity>> {
+    if axiscal::presets::regular_file(path).is_err() {
+        return Ok(None);
+    }
+    let Ok(file) = std::fs::File::open(path) else {
+        return Ok(None);
+    };
+    let lines = std::io::BufReader::new(file).lines().map_while(Result::ok);
+    let marker = IDENTITY_COMMENT.trim_end();
+    for (i, line) in lines.enumerate().take_while(|(_, l)| l.starts_with('#')) {
+        let Some(json) = line.strip_prefix(marker) else {
+            continue;
+        };
+        return serde_json::from_str::<DescriptionIdentity>(json).map(Some).map_err(|e| {
+            let why = if e.is_eof() {
+                "it ends mid-record, cut short".to_owned()
+            } else {
+                format!("invalid JSON at column {}", marker.len() + e.column())
+            };
+            anyhow::anyhow!(
+                "{}:{}: the `{marker}` line is not the description's record ({why}): it names the robot description \
+                 the data were made with, checked against --robot; restore the line as axiscal wrote it, or delete \
+                 it to read the file unchecked",
+                path.display(),
+                i + 1
+            )
+        });
+    }
+    Ok(None)
 }
 
 /// The comment line recording `desc` in a measurement CSV (with its line end).
@@ -254,7 +296,7 @@ pub fn read_data_warned(
     overrides: Overrides,
 ) -> Result<(MeasurementSet, Vec<String>)> {
     let identity = same_robot(
-        data_identity(data).as_ref(),
+        data_identity(data)?.as_ref(),
         data,
         desc,
         robot,

@@ -275,6 +275,7 @@ fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {
     let options = EvaluateOptions {
         register_base: args.calibration.is_none(),
         keep_outliers: args.keep_outliers,
+        screen: true,
     };
     let figures = evaluate(&set, &model, &desc, options)
         .with_context(|| format!("ISO 9283 figures of {}", args.data.display()))?;

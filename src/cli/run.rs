@@ -55,7 +55,8 @@ pub struct Args {
     /// Override the scenario's seed.
     #[arg(long)]
     seed: Option<u64>,
-    /// Skip the unit sanity check of the scenario's robot description.
+    /// Skip the unit sanity checks of the scenario (its noise in m, its validation half-ranges
+    /// in rad, its truth model's rows in mm) and of its robot description.
     #[arg(long)]
     skip_unit_check: bool,
 }
@@ -103,7 +104,8 @@ fn resolve(args: &Args) -> Result<Plan> {
         trials: args.trials,
         seed: args.seed,
     };
-    let scenario = ResolvedScenario::from_file(&args.scenario, overrides)?;
+    let (scenario, slips) = ResolvedScenario::from_file_with_slips(&args.scenario, overrides)?;
+    super::checks::scenario_units(&slips, &args.scenario, args.skip_unit_check)?;
     let trial = CampaignTrial::new(&scenario).map_err(|m| anyhow::anyhow!("{}: {m}", args.scenario.display()))?;
     let names = trial.metric_names();
     scenario.check_metrics(&names, &args.scenario)?;

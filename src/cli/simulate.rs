@@ -114,7 +114,8 @@ pub struct Args {
     /// `axiscal view FILE.rrd`. Needs a build with `--features viz`.
     #[arg(long, value_name = "FILE.rrd")]
     record: Option<PathBuf>,
-    /// Skip the unit sanity check of the description's lengths.
+    /// Skip the unit sanity check of the description's lengths and limits and of the
+    /// --truth model's rows.
     #[arg(long)]
     skip_unit_check: bool,
 }
@@ -152,7 +153,11 @@ pub fn run(args: Args) -> Result<()> {
     let poses = super::plan::validation_poses(args.validation_poses, &desc, &args.robot)?;
     let plan = super::plan::campaign_plan(&desc, &args.robot, args.plan.as_deref())?;
     let truth = match &args.truth {
-        Some(path) => truth_file(path)?,
+        Some(path) => {
+            let truth = truth_file(path)?;
+            super::checks::truth_units(&truth, path, args.skip_unit_check)?;
+            truth
+        }
         None => default_truth(&desc, args.seed)?,
     };
     if truth.joints.len() != desc.dof() {

@@ -378,6 +378,11 @@ pub struct EvaluateOptions {
     pub register_base: bool,
     /// Flag the outlier cycles ([`super::outliers`]) but keep them in the figures.
     pub keep_outliers: bool,
+    /// Screen the cycles for gross errors ([`super::outliers`]): a measured file's. Simulated
+    /// cycles (a scenario's test, the prediction's draws) have none to find, and their
+    /// scatter need not be Gaussian (a joint's backlash or settling puts a pose's cycles in
+    /// two clusters): screened, a share of them would be refused as a wrong pose.
+    pub screen: bool,
 }
 
 /// The ISO 9283 figures of the `iso-P<k>` experiments of `set`, commanded poses from `model`
@@ -390,7 +395,11 @@ pub fn evaluate(
     options: EvaluateOptions,
 ) -> Result<IsoFigures, IsoError> {
     let mut cycles = cycles(set, model, desc)?;
-    let outliers = screen_cycles(&cycles, options.keep_outliers)?;
+    let outliers = if options.screen {
+        screen_cycles(&cycles, options.keep_outliers)?
+    } else {
+        Vec::new()
+    };
     if !options.keep_outliers {
         for c in cycles.values_mut() {
             c.retain(|c| {

@@ -178,6 +178,7 @@ pub fn predict(
         let options = EvaluateOptions {
             register_base: false,
             keep_outliers: true,
+            screen: false,
         };
         let f = evaluate(&measured, inputs.model, inputs.desc, options).map_err(|e: IsoError| failed(e.to_string()))?;
         figures.push(f);

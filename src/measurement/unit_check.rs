@@ -57,9 +57,89 @@ fn slipped(ratio: f64) -> bool {
     ratio.is_finite() && ratio > 0.0 && !(1.0 / SLIP_FACTOR..=SLIP_FACTOR).contains(&ratio)
 }
 
-/// Phi-model row lengths (`a_m`, `b_m`, `h_m` of `rows`, fields `rows[i].key`) longer than
-/// [`MAX_ROW_LENGTH_M`]: millimetres where metres belong, or no robot's.
-pub fn row_length_slips(rows: &[RowEntry]) -> Vec<UnitSlip> {
+/// A revolute joint's range (upper minus lower limit) below this \[deg\] is no robot joint's
+/// (a wrist or a positioner turns tens of degrees, and an axis fit needs an arc of several
+/// degrees to locate the axis against the noise): it is radians read as degrees, which puts
+/// any range up to 1.6 turns (10 rad) below it.
+pub const MIN_REVOLUTE_RANGE_DEG: f64 = 10.0;
+
+/// A sliding joint's travel (upper minus lower limit) below this \[mm\] is no sliding
+/// joint's (a sweep that short moves its target by a few times the noise of a point, 0.2 mm
+/// for the paper's theodolites): it is metres read as millimetres.
+pub const MIN_PRISMATIC_TRAVEL_MM: f64 = 1.0;
+
+/// Lengths of a description beyond a robot's: row lengths that look like millimetres (the
+/// rows are in metres), a tool frame, targets or centres of mass further from their link than
+/// any link is long (their millimetres are micrometres, or a slip), and joint limits narrower
+/// than any joint's ([`MIN_REVOLUTE_RANGE_DEG`], [`MIN_PRISMATIC_TRAVEL_MM`]).
+pub fn description_slips(desc: &RobotDescription) -> Vec<UnitSlip> {
+    let mut slips = row_slips(&desc.rows);
+    slips.extend(narrow_limits(desc));
+    let targets = desc.tool.targets_mm.iter().enumerate();
+    let mut points: Vec<(String, [f64; 3])> =
+        vec![("tool.frame.translation_mm".into(), desc.tool.frame.translation_mm)];
+    points.extend(targets.map(|(k, t)| (format!("tool.targets_mm[{k}]"), *t)));
+    for (k, a) in desc.axis_targets.iter().enumerate() {
+        points.push((format!("axis_targets[{k}].target0.position_mm"), a.target0.position_mm));
+        if let Some(t1) = a.target1 {
+            points.push((format!("axis_targets[{k}].target1.position_mm"), t1.position_mm));
+        }
+    }
+    points.extend(
+        desc.joints
+            .iter()
+            .enumerate()
+            .map(|(k, j)| (format!("joints[{k}].com_mm"), j.com_mm)),
+    );
+    let (far, near): (Vec<_>, Vec<_>) = points
+        .into_iter()
+        .map(|(field, p)| (field, Vector3::from(p).norm()))
+        .partition(|(_, mm)| *mm > MAX_ROW_LENGTH_M * 1e3);
+    for (field, mm) in far {
+        slips.push(UnitSlip {
+            field,
+            message: format!(
+                "{} mm from its link, further than any robot link is long ({MAX_ROW_LENGTH_M} m): the value is in mm",
+                format_f64(mm)
+            ),
+        });
+    }
+    slips.extend(targets_beyond_the_arm(desc, &near));
+    slips
+}
+
+/// The joints whose limits span less than a joint moves ([`MIN_REVOLUTE_RANGE_DEG`],
+/// [`MIN_PRISMATIC_TRAVEL_MM`]): limits in radians or metres where the file's degrees or
+/// millimetres are expected.
+fn narrow_limits(desc: &RobotDescription) -> Vec<UnitSlip> {
+    let shown = |[lo, hi]: [f64; 2]| format!("[{}, {}]", format_f64(lo), format_f64(hi));
+    desc.joints
+        .iter()
+        .enumerate()
+        .filter_map(|(k, j)| {
+            let [lo, hi] = j.limits;
+            let (least, what, likely, factor) = match j.kind {
+                JointKind::Revolute => (MIN_REVOLUTE_RANGE_DEG, "range", "radians", 180.0 / std::f64::consts::PI),
+                JointKind::Prismatic => (MIN_PRISMATIC_TRAVEL_MM, "travel", "metres", 1e3),
+            };
+            let unit = j.kind.file_unit();
+            (hi - lo < least).then(|| UnitSlip {
+                field: format!("joints[{k}].limits"),
+                message: format!(
+                    "{} {unit} is a {what} of {} {unit}, less than any robot joint's ({least} {unit}): the limits are \
+                     in {unit}; they look like {likely} ({} {unit}?)",
+                    shown(j.limits),
+                    format_f64(hi - lo),
+                    shown([lo * factor, hi * factor].map(|v| (v * 100.0).round() / 100.0))
+                ),
+            })
+        })
+        .collect()
+}
+
+/// Row lengths (`a_m`, `b_m`, `h_m` of a description or a robot model file) beyond
+/// [`MAX_ROW_LENGTH_M`]: millimetres where metres are expected, or no unit's.
+pub fn row_slips(rows: &[RowEntry]) -> Vec<UnitSlip> {
     let mut slips = Vec::new();
     for (i, r) in rows.iter().enumerate() {
         for (key, v) in [("a_m", r.a_m), ("b_m", r.b_m), ("h_m", r.h_m)] {
@@ -79,38 +159,6 @@ pub fn row_length_slips(rows: &[RowEntry]) -> Vec<UnitSlip> {
             }
         }
     }
-    slips
-}
-
-/// Lengths of a description beyond a robot's: row lengths that look like millimetres (the
-/// rows are in metres), and a tool frame or targets further from their link than any link is
-/// long (their millimetres are micrometres, or a slip).
-pub fn description_slips(desc: &RobotDescription) -> Vec<UnitSlip> {
-    let mut slips = row_length_slips(&desc.rows);
-    let targets = desc.tool.targets_mm.iter().enumerate();
-    let mut points: Vec<(String, [f64; 3])> =
-        vec![("tool.frame.translation_mm".into(), desc.tool.frame.translation_mm)];
-    points.extend(targets.map(|(k, t)| (format!("tool.targets_mm[{k}]"), *t)));
-    for (k, a) in desc.axis_targets.iter().enumerate() {
-        points.push((format!("axis_targets[{k}].target0.position_mm"), a.target0.position_mm));
-        if let Some(t1) = a.target1 {
-            points.push((format!("axis_targets[{k}].target1.position_mm"), t1.position_mm));
-        }
-    }
-    let (far, near): (Vec<_>, Vec<_>) = points
-        .into_iter()
-        .map(|(field, p)| (field, Vector3::from(p).norm()))
-        .partition(|(_, mm)| *mm > MAX_ROW_LENGTH_M * 1e3);
-    for (field, mm) in far {
-        slips.push(UnitSlip {
-            field,
-            message: format!(
-                "{} mm from its link, further than any robot link is long ({MAX_ROW_LENGTH_M} m): the value is in mm",
-                format_f64(mm)
-            ),
-        });
-    }
-    slips.extend(targets_beyond_the_arm(desc, &near));
     slips
 }
 

@@ -272,6 +272,21 @@ impl CalibrationPlan {
         }
     }
 
+    /// The first sweep (its index and joint) of a joint whose coupling into the next joint the
+    /// description fits (`couplings[].fit`) when no sweep of that joint has `second_target`:
+    /// `calibrate` fits the coupling from target 1 of such a sweep (eq. 14) and refuses data
+    /// without one.
+    pub fn unmeasured_coupling(&self, desc: &RobotDescription) -> Option<(usize, usize)> {
+        self.sweeps
+            .iter()
+            .enumerate()
+            .find(|(_, s)| {
+                desc.couplings.iter().any(|c| c.from == s.joint && c.fit.is_some())
+                    && !self.sweeps.iter().any(|t| t.joint == s.joint && t.second_target)
+            })
+            .map(|(i, s)| (i, s.joint))
+    }
+
     /// The experiment id of each sweep: `axis<k>`, and `axis<k>-2`, `axis<k>-3`, .. for a
     /// joint swept again.
     pub fn experiment_names(&self) -> Vec<String> {

@@ -6,7 +6,7 @@
 use super::Calibration;
 use crate::calibration::tool_accuracy::{ModelCovariance, model_parameter_names};
 use crate::measurement::format_f64;
-use crate::measurement::unit_check::row_length_slips;
+use crate::measurement::unit_check::row_slips;
 use crate::robot::{CouplingFunction, ModelError, RobotModel, Transmission};
 use nalgebra::DMatrix;
 
@@ -38,12 +38,12 @@ fn invalid(field: impl Into<String>, message: impl Into<String>) -> InvalidCalib
 
 impl Calibration {
     /// Checks the values a command uses: the robot model ([`RobotModel::validate`]) and its
-    /// rows' lengths ([`row_length_slips`]: no robot link is 20 m long), the
+    /// rows' lengths ([`row_slips`]: no robot link is 20 m long), the
     /// fitted transmissions' and couplings' harmonics, one value per joint where a list is per
     /// joint, the noise levels and the model covariance ([`ModelCovariance::validate`]).
     pub fn validate(&self) -> Result<(), InvalidCalibration> {
         self.robot.validate().map_err(in_robot)?;
-        if let Some(slip) = row_length_slips(&self.robot.rows).into_iter().next() {
+        if let Some(slip) = row_slips(&self.robot.rows).into_iter().next() {
             return Err(invalid(
                 format!("robot.{}", slip.field),
                 format!(

@@ -12,20 +12,12 @@ use std::path::Path;
 /// Validation poses by default when the robot has tool targets (`--validation-poses`).
 pub const DEFAULT_VALIDATION_POSES: usize = 60;
 
-/// Whether `text` is a CSV table rather than TOML: its first line that is neither blank nor a
-/// `#` comment has a comma and neither a `=` nor a `[` at its start (a TOML key or table).
-fn looks_like_csv(text: &str) -> bool {
-    text.lines()
-        .map(str::trim)
-        .find(|l| !l.is_empty() && !l.starts_with('#'))
-        .is_some_and(|l| l.contains(',') && !l.contains('=') && !l.starts_with('['))
-}
-
 /// Reads the plan file `path` given to `option` (TOML, `docs/formats.md#plan-file`); a CSV is
 /// refused with what it is (a plan sheet is `plan`'s output and `import points`' input).
 pub fn read_plan_file(path: &Path, option: &str) -> Result<CalibrationPlan> {
     let text = axiscal::toml_file::read(path)?;
-    let is_csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) || looks_like_csv(&text);
+    let is_csv =
+        path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) || axiscal::toml_file::looks_like_csv(&text);
     if is_csv {
         bail!(
             "{}: {option} takes a TOML plan file (`reference`, `[[sweeps]]`: docs/formats.md#plan-file), but this is a \
@@ -138,17 +130,4 @@ pub fn short_span_warnings(
         ));
     }
     warnings
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_plan_sheet_is_a_csv_and_a_plan_file_is_not() {
-        assert!(looks_like_csv("# axiscal plan\npoint,pose,experiment\n1,1,axis6\n"));
-        assert!(!looks_like_csv("# a plan\nreference = [0, 0]\n[[sweeps]]\njoint = 1\n"));
-        assert!(!looks_like_csv("[[sweeps]]\njoint = 1\nspan = 40.0\n"));
-        assert!(!looks_like_csv(""));
-    }
 }

@@ -79,6 +79,7 @@ impl IsoTrial<'_> {
         let options = EvaluateOptions {
             register_base: false,
             keep_outliers: true,
+            screen: false,
         };
         let measured = evaluate(&set, &fit.robot, self.desc, options).map_err(|e| format!("ISO figures: {e}"))?;
         let covariance = fit

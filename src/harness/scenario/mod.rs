@@ -10,6 +10,7 @@
 //!   ISO 9283 test a trial runs after its calibration.
 //! - [`runner`]: rayon over trial units, [`Shard`]s, completeness of merged shards.
 //! - [`stats`], [`threshold`], [`summary`]: pure statistics and verdicts.
+//! - [`units`]: the scenario's unit check (noise in metres, half-ranges in radians).
 //! - [`export`]: `trials.csv`, `summary.json`, `summary.md`, SVG histogram.
 
 pub mod error;
@@ -24,6 +25,7 @@ pub mod stats;
 pub mod summary;
 pub mod threshold;
 pub mod trial;
+pub mod units;
 pub mod validation_error;
 
 pub use error::ScenarioError;

@@ -108,8 +108,19 @@ const MAX_THRESHOLD: f64 = 1e9;
 impl ResolvedScenario {
     /// Reads `path` and resolves it with `overrides`.
     pub fn from_file(path: &Path, overrides: Overrides) -> Result<Self, ScenarioError> {
+        Self::from_file_with_slips(path, overrides).map(|(scenario, _)| scenario)
+    }
+
+    /// [`Self::from_file`] with the file's likely unit slips
+    /// ([`super::units::scenario_slips`]), for the caller to refuse or to skip.
+    pub fn from_file_with_slips(
+        path: &Path,
+        overrides: Overrides,
+    ) -> Result<(Self, Vec<crate::measurement::unit_check::UnitSlip>), ScenarioError> {
         let file: ScenarioFile = crate::toml_file::parse(&crate::toml_file::read(path)?, path)?;
-        Self::resolve(file, path, overrides)
+        let scenario = Self::resolve(file.clone(), path, overrides)?;
+        let slips = super::units::scenario_slips(&file, &scenario);
+        Ok((scenario, slips))
     }
 
     /// Resolves a parsed file; `path` locates relative paths and labels errors.
@@ -284,7 +295,7 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> R
     let base_plan = base_plan(&file.plan, robot)?;
     let robot_file = file.robot.as_ref().map(|p| dir.join(p));
     let drafts = match &file.sweep {
-        Some(sweep) => swept_cases(sweep, file.measurement, &base_plan, dir)?,
+        Some(sweep) => distinct(swept_cases(sweep, file.measurement, &base_plan, dir)?)?,
         None => vec![Draft {
             name: "base".into(),
             measurement: file.measurement,
@@ -298,6 +309,7 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> R
             d.plan
                 .validate(robot)
                 .map_err(|e| (d.keys.0.to_owned(), e.to_string()))?;
+            coupling_measured(&d, file.plan.sweeps.is_some(), robot)?;
             Ok(Case {
                 name: d.name,
                 measurement: measurement_model(&d.measurement, robot, robot_file.as_deref())
@@ -306,6 +318,59 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> R
             })
         })
         .collect()
+}
+
+/// Refuses two cases of a sweep with one label (a value given twice, two plan files of one
+/// name): the summary's rows and a threshold's `case` could not tell them apart.
+fn distinct(drafts: Vec<Draft>) -> Result<Vec<Draft>, KeyError> {
+    for (i, d) in drafts.iter().enumerate() {
+        if let Some(first) = drafts[..i].iter().position(|e| e.name == d.name) {
+            let (parameter, value) = d.name.split_once('=').unwrap_or((d.name.as_str(), ""));
+            let key = if parameter == "plan" { "plans" } else { parameter };
+            return Err((
+                format!("sweep.{key}"),
+                format!(
+                    "{value} is given twice (values {first} and {i}): each value is one case, labelled by it \
+                     (`{}`); give each value once (more trials of a case: raise `trials`)",
+                    d.name
+                ),
+            ));
+        }
+    }
+    Ok(drafts)
+}
+
+/// Refuses a case whose plan sweeps a joint whose coupling the description fits without a
+/// sweep of it that measures the second target ([`CalibrationPlan::unmeasured_coupling`]):
+/// every trial's calibration would fail. `written` says whether the file gives
+/// `[[plan.sweeps]]` (else the default plan is at fault, or the case's plan file).
+fn coupling_measured(d: &Draft, written: bool, robot: &RobotDescription) -> Result<(), KeyError> {
+    let Some((i, joint)) = d.plan.unmeasured_coupling(robot) else {
+        return Ok(());
+    };
+    let key = match d.keys.0 {
+        "sweep.plans" => "sweep.plans".to_owned(),
+        _ if written => format!("plan.sweeps[{i}].second_target"),
+        _ => "plan.sweeps".to_owned(),
+    };
+    let fix = if robot.axis_targets_of(joint).is_some_and(|t| t.target1.is_some()) {
+        format!("set `second_target = true` on a sweep of joint {joint}")
+    } else {
+        format!(
+            "give the robot's `[[axis_targets]]` of joint {joint} a `target1`, or leave the coupling's `fit` out of \
+             the description"
+        )
+    };
+    Err((
+        key,
+        format!(
+            "case `{}`: joint {joint} drives a coupling into joint {} that the description fits (`couplings[].fit`), \
+             and calibrate measures it from target 1 in a sweep of joint {joint} with `second_target = true`; no sweep \
+             of joint {joint} has it, so every trial would fail: {fix}",
+            d.name,
+            joint + 1
+        ),
+    ))
 }
 
 /// The key blamed for a bad instrument when the case keeps the file's.

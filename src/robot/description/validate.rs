@@ -41,6 +41,11 @@ pub const MIN_ROW_ALPHA_DEG: f64 = 10.0;
 /// is a slip (radians read as degrees, a dummy 1e9), and its sine and cosine would be round-off.
 pub const MAX_ANGLE_DEG: f64 = 360.0;
 
+/// The three tool targets spread at least this far \[mm\] (their largest distance): closer,
+/// a theodolite pair (0.2 mm per point) or a laser tracker (0.02-0.05 mm) measures its noise,
+/// not the tool's orientation; targets in metres read as mm (0.06 for 60 mm) lie within it.
+pub const MIN_TOOL_TARGET_SPREAD_MM: f64 = 1.0;
+
 /// A point of the instrument frame (a station, the robot's base) lies within this of its
 /// origin \[mm\]: 1 km, beyond any instrument's reach (values in micrometres or a dummy).
 pub const MAX_INSTRUMENT_FRAME_MM: f64 = 1e6;
@@ -97,9 +102,19 @@ impl RobotDescription {
         Ok(())
     }
 
-    /// The name is written into the `#` comment lines of outputs: one line, no control
-    /// characters.
+    /// The name is written into the `#` comment lines of outputs and their headings: some text
+    /// on one line, no control characters.
     fn check_name(&self) -> Result<(), Invalid> {
+        if self.name.trim().is_empty() {
+            return Err((
+                "name".into(),
+                format!(
+                    "{:?} is empty: the name heads the outputs (\"calibrated <name> from ...\") and their comment \
+                     lines; write the robot's name, e.g. name = \"ASEA IRB/L6\"",
+                    self.name
+                ),
+            ));
+        }
         match self.name.chars().find(|c| c.is_control()) {
             Some(c) => Err((
                 "name".into(),
@@ -343,7 +358,7 @@ impl RobotDescription {
     }
 
     /// No tool targets (a robot whose targets a free-pose calibration fits), or exactly three,
-    /// not collinear.
+    /// spread at least [`MIN_TOOL_TARGET_SPREAD_MM`], not collinear.
     fn check_tool(&self) -> Result<(), Invalid> {
         if self.tool.targets_mm.is_empty() {
             return Ok(());
@@ -358,6 +373,20 @@ impl RobotDescription {
             ));
         }
         let t: Vec<Point3<f64>> = self.tool.targets_mm.iter().map(|p| Point3::from(*p)).collect();
+        let spread_mm = [(0, 1), (0, 2), (1, 2)]
+            .iter()
+            .map(|&(a, b)| (t[a] - t[b]).norm())
+            .fold(0.0_f64, f64::max);
+        if spread_mm < MIN_TOOL_TARGET_SPREAD_MM {
+            return Err((
+                "tool.targets_mm".into(),
+                format!(
+                    "the three tool targets lie within {spread_mm:.3} mm of each other, closer than any instrument \
+                     tells targets apart ({MIN_TOOL_TARGET_SPREAD_MM} mm): the values are in mm (metres where mm are \
+                     expected? multiply by 1000)"
+                ),
+            ));
+        }
         if (t[1] - t[0]).cross(&(t[2] - t[0])).norm() < 1.0 {
             return Err(("tool.targets_mm".into(), "the three tool targets are collinear".into()));
         }
