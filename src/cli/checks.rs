@@ -295,14 +295,15 @@ pub fn read_data_warned(
     robot: &Path,
     overrides: Overrides,
 ) -> Result<(MeasurementSet, Vec<String>)> {
-    let identity = same_robot(
-        data_identity(data)?.as_ref(),
-        data,
-        desc,
-        robot,
-        overrides.allow_other_robot,
-    )?;
+    let recorded = data_identity(data);
+    let identity = match &recorded {
+        Ok(r) => same_robot(r.as_ref(), data, desc, robot, overrides.allow_other_robot)?,
+        Err(_) => None,
+    };
     let set = axiscal::measurement::read_measurements(data, Some(desc.dof()))?;
+    // A record made unreadable by the file's own syntax (another separator, old Mac line
+    // ends) is that syntax's error, said by the reader first.
+    recorded?;
     let mut warnings: Vec<String> = identity.into_iter().collect();
     warnings.extend(data_unit_warnings(&set, desc, data, overrides.skip_unit_check)?);
     Ok((set, warnings))

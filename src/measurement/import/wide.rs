@@ -105,8 +105,8 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
 
 /// A pose that splits a sweep: its neighbours differ in joint `joint` alone by about two
 /// steps of the sweep on either side of them (the same step, the same direction), while the
-/// pose is off the line between them. One row in other units (radians among degrees) does
-/// this, and would import as two short experiments.
+/// pose is off the line between them, and back on it in another unit. One row in other units
+/// (radians among degrees) does this, and would import as two short experiments.
 #[derive(Clone, Debug, PartialEq)]
 struct BrokenSweep {
     /// The pose's index.
@@ -117,9 +117,8 @@ struct BrokenSweep {
     joint: usize,
     /// The joints (0-based) whose value is off the sweep.
     columns: Vec<usize>,
-    /// The unit slip that puts the row on the sweep, if one does: what it is and the factor,
-    /// as said.
-    unit: Option<(&'static str, &'static str)>,
+    /// The unit slip that puts the row on the sweep: what it is and the factor, as said.
+    unit: (&'static str, &'static str),
 }
 
 /// Unit slips a row of joint values can carry, in file units: the factor that puts it back,
@@ -168,15 +167,15 @@ fn broken_sweep(poses: &[Pose], tolerance: f64) -> Option<BrokenSweep> {
                 .collect()
         };
         let columns = off(1.0);
-        (!columns.is_empty()).then(|| BrokenSweep {
+        // Off the sweep for no unit's reason (a held joint's jitter beyond the still
+        // tolerance): the sweep splits, and the import's jitter warning names the tolerance.
+        let &(_, what, factor) = UNIT_SLIPS.iter().find(|(f, ..)| off(*f).is_empty())?;
+        (!columns.is_empty()).then_some(BrokenSweep {
             pose: i,
             line: poses[i].0,
             joint: k,
             columns,
-            unit: UNIT_SLIPS
-                .iter()
-                .find(|(f, ..)| off(*f).is_empty())
-                .map(|&(_, what, factor)| (what, factor)),
+            unit: (what, factor),
         })
     })
 }
@@ -185,15 +184,10 @@ impl BrokenSweep {
     /// The message, naming the lines around the pose and the likely unit slip.
     fn message(&self, poses: &[Pose], t: &Table, joints: &[usize]) -> String {
         let name = |j: usize| format!("`{}`", t.header_as_written.get(joints[j]).map_or("", String::as_str));
-        let why = match self.unit {
-            Some((what, factor)) => format!(
-                "its joint values look like {what} ({factor} they fall on the sweep); write the row in the table's unit"
-            ),
-            None => format!(
-                "its {} jump off the sweep; correct the row or remove it",
-                self.columns.iter().map(|&j| name(j)).collect::<Vec<_>>().join(", ")
-            ),
-        };
+        let (what, factor) = self.unit;
+        let why = format!(
+            "its joint values look like {what} ({factor} they fall on the sweep); write the row in the table's unit"
+        );
         format!(
             "the row splits the sweep of joint {} (lines {} and {} around it step {} alone, in the sweep's direction): {why}",
             self.joint + 1,
