@@ -329,7 +329,7 @@ pub fn read_measurements_from<R: io::Read>(
             line: header_line,
         });
     }
-    let set = MeasurementSet::new(columns.cmd.len(), rows).map_err(|e| {
+    let invalid = |e: super::MeasurementSetError| {
         let column = e.problem.column();
         let problem = with_lines(e.problem, &lines);
         MeasurementFileError::InvalidRow {
@@ -338,7 +338,11 @@ pub fn read_measurements_from<R: io::Read>(
             column,
             problem,
         }
-    })?;
+    };
+    let set = MeasurementSet::new(columns.cmd.len(), rows).map_err(invalid)?;
+    if let Some((row, problem)) = super::data::axis_id_of_free_poses(set.rows()) {
+        return Err(invalid(super::MeasurementSetError { row, problem }));
+    }
     Ok(set
         .with_target_names(targets.names)
         .with_setups(row_setups, setups.names)

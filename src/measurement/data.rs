@@ -642,6 +642,23 @@ pub(crate) fn command_beyond(value: f64) -> Option<&'static str> {
     (value.abs() > MAX_COMMAND).then_some("+-1e6 (deg or mm: no joint turns or slides that far; a dummy value?)")
 }
 
+/// The first row of `rows` (a file's, as read) whose experiment id names a joint (`axis3`)
+/// while its rows are free poses (`moved_joint = 0`), with the problem: a file's label and
+/// its `moved_joint` disagree. Not a check of every set: a set made free poses on purpose
+/// ([`MeasurementSet::every_row_a_free_pose`]) keeps its sweeps' names.
+pub(crate) fn axis_id_of_free_poses(rows: &[Measurement]) -> Option<(usize, RowProblem)> {
+    rows.iter().enumerate().find_map(|(row, m)| {
+        let named = joint_named_by(&m.experiment).filter(|_| m.moved_joint == 0)?;
+        Some((
+            row,
+            RowProblem::AxisIdOfFreePoses {
+                experiment: m.experiment.clone(),
+                named,
+            },
+        ))
+    })
+}
+
 /// What is wrong with row `m` on its own (not its key), `first` being the joint its
 /// experiment's first row moves.
 fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowProblem> {
@@ -703,12 +720,6 @@ fn row_problem(joint_count: usize, m: &Measurement, first: usize) -> Option<RowP
             named,
             joint_count,
             moved_joint: m.moved_joint,
-        });
-    }
-    if let Some(named) = joint_named_by(&m.experiment).filter(|_| m.moved_joint == 0 && first == 0) {
-        return Some(RowProblem::AxisIdOfFreePoses {
-            experiment: m.experiment.clone(),
-            named,
         });
     }
     (first != m.moved_joint).then(|| RowProblem::InconsistentMovedJoint {
