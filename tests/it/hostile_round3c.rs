@@ -5,27 +5,10 @@
 //! given twice or a coupling no sweep measures. A bad input is one error line naming the file
 //! and the key, exit 2, nothing written; a simulated ISO test is not screened as user data.
 
+use crate::common::hostile::{Case, case, clear_outputs, run_case};
 use crate::common::{axiscal, simulate_analytic, stdout};
 use std::path::Path;
 use std::time::Duration;
-
-/// One hostile try: the arguments (run in the case folder), the exit code, and what stderr
-/// must hold.
-struct Case {
-    what: &'static str,
-    args: Vec<String>,
-    code: i32,
-    names: &'static [&'static str],
-}
-
-fn case(what: &'static str, args: &str, code: i32, names: &'static [&'static str]) -> Case {
-    Case {
-        what,
-        args: args.split_whitespace().map(str::to_owned).collect(),
-        code,
-        names,
-    }
-}
 
 fn shipped(relative: &str) -> String {
     std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)).unwrap()
@@ -265,23 +248,8 @@ fn every_hostile_value_of_round_three_is_one_clear_error_and_writes_nothing() {
     let mut cases = file_cases();
     cases.extend(scenario_cases());
     for c in cases {
-        let a = axiscal()
-            .current_dir(dir.path())
-            .args(&c.args)
-            .timeout(Duration::from_secs(120))
-            .assert()
-            .code(c.code);
-        let e = crate::common::stderr(&a);
-        for name in c.names {
-            assert!(e.contains(name), "{}: no {name:?} in {e}", c.what);
-        }
-        if c.code == 2 {
-            assert_eq!(e.lines().count(), 1, "{}: one line: {e}", c.what);
-            let written = ["out", "out.csv"].map(|n| dir.path().join(n));
-            assert!(written.iter().all(|p| !p.exists()), "{}: nothing written", c.what);
-        }
-        let _ = std::fs::remove_dir_all(dir.path().join("out"));
-        let _ = std::fs::remove_file(dir.path().join("out.csv"));
+        run_case(dir.path(), &c);
+        clear_outputs(dir.path());
     }
 }
 

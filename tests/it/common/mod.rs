@@ -1,5 +1,7 @@
 //! Helpers shared by the integration tests (`crate::common` in a test module).
 
+pub mod hostile;
+
 use assert_cmd::Command;
 use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};

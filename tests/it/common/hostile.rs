@@ -1,0 +1,57 @@
+//! The table of the hostile-input tests: a case is a command line run in a folder of inputs,
+//! the exit code it must give and what its stderr must name.
+
+use std::path::Path;
+use std::time::Duration;
+
+/// One hostile try: the arguments (run in the case folder), the exit code, and what stderr
+/// must hold.
+pub struct Case {
+    /// What the case tries, in words (the failure's label).
+    pub what: &'static str,
+    /// The command line, split at white space.
+    pub args: Vec<String>,
+    /// The exit code.
+    pub code: i32,
+    /// What stderr must contain.
+    pub names: Vec<String>,
+}
+
+/// A [`Case`] of the command line `args` (split at white space).
+pub fn case(what: &'static str, args: &str, code: i32, names: &[&str]) -> Case {
+    Case {
+        what,
+        args: args.split_whitespace().map(str::to_owned).collect(),
+        code,
+        names: names.iter().map(|n| n.to_string()).collect(),
+    }
+}
+
+/// Runs `c` in `dir` and returns its stderr: the exit code and the names checked, and a bad
+/// input (exit 2) said in one line of less than a screenful, with nothing written as `out` or
+/// `out.csv` ([`clear_outputs`] removes what a case did write, before the next).
+pub fn run_case(dir: &Path, c: &Case) -> String {
+    let a = crate::common::axiscal()
+        .current_dir(dir)
+        .args(&c.args)
+        .timeout(Duration::from_secs(120))
+        .assert()
+        .code(c.code);
+    let e = crate::common::stderr(&a);
+    for name in &c.names {
+        assert!(e.contains(name.as_str()), "{}: no {name:?} in {e}", c.what);
+    }
+    if c.code == 2 {
+        assert_eq!(e.lines().count(), 1, "{}: one line: {e}", c.what);
+        assert!(e.len() < 1000, "{}: a long value echoed: {} bytes", c.what, e.len());
+        let written = ["out", "out.csv"].map(|n| dir.join(n));
+        assert!(written.iter().all(|p| !p.exists()), "{}: nothing written", c.what);
+    }
+    e
+}
+
+/// Removes what a case wrote as `out` or `out.csv` in `dir`.
+pub fn clear_outputs(dir: &Path) {
+    let _ = std::fs::remove_dir_all(dir.join("out"));
+    let _ = std::fs::remove_file(dir.join("out.csv"));
+}
