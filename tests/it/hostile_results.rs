@@ -397,3 +397,45 @@ fn a_one_joint_rail_is_referenced_at_its_tool_observation_and_validates() {
     let verdict = summary["verdict"].as_str().unwrap();
     assert!(verdict.starts_with("consistent"), "{verdict}");
 }
+
+#[test]
+fn pose_orientations_in_radians_are_said() {
+    let dir = tempfile::tempdir().unwrap();
+    simulate_analytic(dir.path(), 0, 27, "good.csv");
+    axiscal()
+        .current_dir(dir.path())
+        .args(["calibrate", "good.csv", "--out", "cal"])
+        .assert()
+        .success();
+    // The README's poses (reachable by the IRB/L6), their orientations as written and in radians.
+    let poses_deg = [
+        ("ref", [-3151.5, 5345.8, 167.8], [179.56, 0.23, -89.01]),
+        ("low", [-2992.7, 5292.7, -544.2], [-152.04, -25.32, -70.69]),
+    ];
+    let file = |radians: bool| {
+        let mut text = String::from("id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\n");
+        for (id, p, rpy) in poses_deg {
+            let a = rpy.map(|d: f64| if radians { d.to_radians() } else { d });
+            text += &format!("{id},{},{},{},{},{},{}\n", p[0], p[1], p[2], a[0], a[1], a[2]);
+        }
+        text
+    };
+    for (radians, name) in [(false, "deg.csv"), (true, "rad.csv")] {
+        std::fs::write(dir.path().join(name), file(radians)).unwrap();
+        let out = axiscal()
+            .current_dir(dir.path())
+            .args([
+                "compensate",
+                "--calibration",
+                "cal/calibration.json",
+                "--poses",
+                name,
+                "--out",
+            ])
+            .arg(format!("{name}.out.csv"))
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(e.contains("radians?"), radians, "{name}: {e}");
+    }
+}
