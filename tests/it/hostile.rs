@@ -158,12 +158,7 @@ fn write_reader_inputs(dir: &Path) {
 
 /// Writes every input of the table into `dir`.
 fn write_inputs(dir: &Path) {
-    simulate_analytic(dir, 40, 7, "campaign.csv");
-    axiscal()
-        .current_dir(dir)
-        .args(["calibrate", "campaign.csv", "--out", "cal"])
-        .assert()
-        .success();
+    crate::common::hostile::calibrated_campaign(dir, 7);
     let campaign = dir.join("campaign.csv");
     let validation = |f: &[String]| f[0] == "validation";
     altered_csv(&campaign, "free-m.csv", validation, |f| scale_fields(f, 4..7, 1e-3));

@@ -5,8 +5,8 @@
 //! another run's. A bad input is one error line naming the file and the key or column, exit 2,
 //! nothing written; a plausible but suspicious one a `warning:` line.
 
+use crate::common::altered_csv;
 use crate::common::hostile::{Case, case, clear_outputs, run_case};
-use crate::common::{altered_csv, axiscal, simulate_analytic};
 use std::path::Path;
 
 fn shipped(relative: &str) -> String {
@@ -79,12 +79,7 @@ fn write_edited_files(dir: &Path) {
 /// Writes every input of the table into `dir`: one simulated campaign and its calibration,
 /// and files made from them or from shipped files with one value changed.
 fn write_inputs(dir: &Path) {
-    simulate_analytic(dir, 40, 5, "campaign.csv");
-    axiscal()
-        .current_dir(dir)
-        .args(["calibrate", "campaign.csv", "--out", "cal"])
-        .assert()
-        .success();
+    crate::common::hostile::calibrated_campaign(dir, 5);
     let campaign = dir.join("campaign.csv");
     // Row fields: experiment, moved_joint, step, target, x, y, z, cmd_1..cmd_6, payload, temperature.
     for (name, field, value) in [("payload.csv", 13, "1e9"), ("hot.csv", 14, "2000")] {

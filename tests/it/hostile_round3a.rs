@@ -7,7 +7,7 @@
 //! naming the file and the field, exit 2, nothing written; a suspicious one a `warning:`.
 
 use crate::common::hostile::{Case, case, clear_outputs, run_case};
-use crate::common::{altered_csv, axiscal, scale_fields, simulate_analytic};
+use crate::common::{altered_csv, scale_fields, simulate_analytic};
 use std::cell::RefCell;
 use std::path::Path;
 
@@ -18,13 +18,8 @@ const POSE_HEADER: &str = "id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\n";
 /// Writes the campaign, its calibration and every altered input into `dir`; returns the step
 /// of the validation pose one of whose rows has its commands in radians.
 fn write_inputs(dir: &Path) -> String {
-    simulate_analytic(dir, 40, 5, "campaign.csv");
+    crate::common::hostile::calibrated_campaign(dir, 5);
     simulate_analytic(dir, 40, 6, "other.csv");
-    axiscal()
-        .current_dir(dir)
-        .args(["calibrate", "campaign.csv", "--out", "cal"])
-        .assert()
-        .success();
     let campaign = dir.join("campaign.csv");
     let all = |_: &[String]| true;
     // The third target's row of one validation pose, its commands in radians.

@@ -55,3 +55,14 @@ pub fn clear_outputs(dir: &Path) {
     let _ = std::fs::remove_dir_all(dir.join("out"));
     let _ = std::fs::remove_file(dir.join("out.csv"));
 }
+
+/// `campaign.csv` (`simulate --sim analytic --validation-poses 40 --seed SEED`) and its
+/// calibration `cal/` in `dir`: the inputs most cases alter.
+pub fn calibrated_campaign(dir: &Path, seed: u64) {
+    crate::common::simulate_analytic(dir, 40, seed, "campaign.csv");
+    crate::common::axiscal()
+        .current_dir(dir)
+        .args(["calibrate", "campaign.csv", "--out", "cal"])
+        .assert()
+        .success();
+}
