@@ -217,7 +217,8 @@ pub fn looks_like_row(fields: usize, numbers: usize, columns: usize) -> bool {
 pub fn commented_row(fields: usize) -> String {
     format!(
         "the line starts with `#` but has {fields} fields, most of them numbers: a comment line must not look like \
-         a data row (read as a comment, it would be dropped); rename the experiment, or quote the cell (`\"#axis1\"`)"
+         a data row (read as a comment, it would be dropped silently): to leave the row out, delete it; a first \
+         cell that starts with `#` (an experiment or id `#axis1`) must be quoted (`\"#axis1\"`)"
     )
 }
 

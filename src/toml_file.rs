@@ -52,15 +52,10 @@ pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result
         path: path.to_owned(),
         message: one_line_message(&e, text),
     };
-    let value: T = toml::from_str(text).map_err(|e| match csv_first_line(text, path) {
-        Some((line, first)) => TomlFileError::Parse {
+    let value: T = toml::from_str(text).map_err(|e| match foreign_format(text, path) {
+        Some(message) => TomlFileError::Parse {
             path: path.to_owned(),
-            message: format!(
-                "line {line}: this is a CSV table (`{}`), not a TOML file: give the TOML file of `key = value` lines \
-                 (docs/formats.md) that this option or command reads; a measurement CSV is the DATA of `calibrate`, \
-                 `diagnose` or `validate`",
-                shown_cell(first)
-            ),
+            message,
         },
         None => parse_error(e),
     })?;
@@ -80,6 +75,40 @@ pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result
         });
     }
     Ok(value)
+}
+
+/// What `text`, which does not parse as TOML, is instead, when its first content line tells: a
+/// CSV table, a URDF or other XML, a JSON object; `None` for text that is meant as TOML.
+fn foreign_format(text: &str, path: &Path) -> Option<String> {
+    const GIVE_TOML: &str =
+        "give the TOML file of `key = value` lines (docs/formats.md) that this option or command reads";
+    if let Some((line, first)) = csv_first_line(text, path) {
+        return Some(format!(
+            "line {line}: this is a CSV table (`{}`), not a TOML file: {GIVE_TOML}; a measurement CSV is the DATA of \
+             `calibrate`, `diagnose` or `validate`",
+            shown_cell(first)
+        ));
+    }
+    let (line, first) = first_content_line(text)?;
+    if first.starts_with('<') {
+        let urdf = text.contains("<robot");
+        return Some(if urdf {
+            format!(
+                "line {line}: this is a URDF (XML), not a TOML file: a robot description TOML points at it with \
+                 `[urdf]` `file = \"{}\"` (docs/formats.md, robot description); {GIVE_TOML}",
+                shown_cell(
+                    &path
+                        .file_name()
+                        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+                )
+            )
+        } else {
+            format!("line {line}: this is XML, not a TOML file: {GIVE_TOML}")
+        });
+    }
+    first
+        .starts_with('{')
+        .then(|| format!("line {line}: this is JSON, not a TOML file: {GIVE_TOML}"))
 }
 
 /// Whether `text` is a CSV table rather than TOML: its first line that is neither blank nor a

@@ -23,7 +23,7 @@ pub struct Args {
     #[arg(long, default_value_t = 16, value_parser = InRange::closed(1usize, 1_000_000, ""))]
     cases: usize,
     /// Suite seed.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 0)]
     seed: u64,
     /// Validation poses per case (default: 100 after the sweeps, 300 free poses).
     #[arg(long, value_parser = InRange::closed(4usize, 1_000_000, ""))]

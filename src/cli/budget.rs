@@ -26,13 +26,13 @@ const EFFECTS: &[(&str, BudgetEffect)] = &[
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// First campaign seed; seeds `seed .. seed + seeds` are pooled per magnitude.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 1)]
     seed: u64,
     /// Campaigns pooled per magnitude.
     #[arg(long, default_value_t = 8, value_parser = InRange::closed(1u64, 100_000, ""))]
     seeds: u64,
     /// Seed of the test poses and of the evaluation's jitter and noise.
-    #[arg(long, default_value_t = 9283)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 9283)]
     evaluation_seed: u64,
     /// Random test poses inside the spans per campaign.
     #[arg(long, default_value_t = 30, value_parser = InRange::closed(1usize, 1_000_000, ""))]

@@ -109,11 +109,11 @@ pub struct Args {
     #[arg(long, value_name = "DIAGNOSIS.json", requires = "refine")]
     carry: Option<PathBuf>,
     /// Free poses `--refine` and the free-pose calibration fit at most, evenly spaced through
-    /// the file: memory grows with them.
-    #[arg(long, default_value_t = axiscal::measurement::bounded::FIT_MAX_POSES, value_parser = super::options::InRange::closed(3usize, 1_000_000, ""))]
-    max_poses: usize,
+    /// the file: memory grows with them (default 1000).
+    #[arg(long, value_parser = super::options::InRange::closed(3usize, 1_000_000, ""))]
+    max_poses: Option<usize>,
     /// Folds of `--refine`'s held-out check.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(2..))]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(2..), requires = "refine")]
     refine_folds: u64,
     /// Free-pose files only: fit on the even configurations (in order of first appearance)
     /// and report the odd ones as held out, like `validate`.
@@ -127,17 +127,18 @@ pub struct Args {
     /// the independent-axis procedure cannot use.
     #[arg(long)]
     free_poses: bool,
-    /// Free-pose files only: the highest transmission-harmonic order tried (0: geometry only);
-    /// each order is kept only where the data resolve it (`docs/method.md`).
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=8))]
-    harmonics: u64,
+    /// Free-pose files only: the highest transmission-harmonic order tried (0: geometry only,
+    /// default 2); each order is kept only where the data resolve it (`docs/method.md`).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=8))]
+    harmonics: Option<u64>,
     /// Free-pose files only: the non-geometric effects tried in the model: `auto` tries the
     /// joints' sag under gravity and their backlash and keeps what predicts held-out
     /// configurations best (into `robot.effects`, used by every command that reads the
     /// calibration); `none` fits the geometry only (`docs/method.md`, "Effects in the model").
     /// On a file with axis experiments, `--refine --carry` carries a diagnosis's effects.
-    #[arg(long, default_value = "auto", value_parser = ["auto", "none"])]
-    effects: String,
+    /// Default `auto`.
+    #[arg(long, value_parser = ["auto", "none"])]
+    effects: Option<String>,
     #[command(flatten)]
     checks: checks::Overrides,
 }
@@ -372,17 +373,46 @@ fn weighting_options(args: &Args, cal: &Calibration) -> Option<String> {
     (!given.is_empty()).then(|| given.join(" and "))
 }
 
+/// `--max-poses`, or its default.
+fn max_poses(args: &Args) -> usize {
+    args.max_poses.unwrap_or(axiscal::measurement::bounded::FIT_MAX_POSES)
+}
+
+/// The options given that the axis-experiment calibration does not use, as one warning each:
+/// free-pose options (`--harmonics`, `--effects`), and `--max-poses` without `--refine`.
+fn unused_on_axes(args: &Args) -> Vec<String> {
+    let data = args.data.display();
+    let free_pose_only = [
+        ("--harmonics", args.harmonics.is_some()),
+        ("--effects", args.effects.is_some()),
+        ("--max-poses", args.max_poses.is_some() && !args.refine),
+    ];
+    free_pose_only
+        .iter()
+        .filter(|(_, given)| *given)
+        .map(|(option, _)| {
+            format!(
+                "{option} has no effect here: it applies to free-pose calibrations (a file without axis experiments, or --free-poses){}, and {data} has axis experiments",
+                if *option == "--max-poses" { " and to --refine" } else { "" }
+            )
+        })
+        .collect()
+}
+
 /// The options of the free-pose path.
 fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
     super::calibrate_free::FreeArgs {
         data: &args.data,
         holdout: args.holdout,
         keep_outliers: args.keep_outliers,
-        harmonics: args.harmonics as usize,
-        effects: args.effects == "auto",
+        harmonics: args.harmonics.map_or(
+            axiscal::calibration::free_pose::FreePoseOptions::default().max_harmonic_order,
+            |h| h as usize,
+        ),
+        effects: args.effects.as_deref() != Some("none"),
         all_rows: args.free_poses,
         refine: args.refine,
-        max_poses: args.max_poses,
+        max_poses: max_poses(args),
     }
 }
 
@@ -393,6 +423,9 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
             "--holdout applies to free-pose files (no axis experiment); {} has axis experiments",
             args.data.display()
         );
+    }
+    for warning in unused_on_axes(args) {
+        eprintln!("warning: {warning}");
     }
     let options = CalibrationOptions {
         estimator: args.estimator,
@@ -576,7 +609,7 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
             .as_ref()
             .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm),
         folds: args.refine_folds as usize,
-        max_poses: args.max_poses,
+        max_poses: max_poses(args),
         keep_outliers: args.keep_outliers,
         ..RefineOptions::default()
     };

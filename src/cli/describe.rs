@@ -18,7 +18,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1000, value_parser = super::options::InRange::closed(1usize, 1_000_000, ""))]
     poses: usize,
     /// Seed of the random poses.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 1)]
     seed: u64,
     /// Print, instead, the description's nominal model as a truth model (TOML,
     /// `docs/formats.md#robot-model`): edit its rows, transmissions, couplings and offsets into

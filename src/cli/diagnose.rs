@@ -58,7 +58,7 @@ pub struct Args {
     #[arg(long)]
     keep_outliers: bool,
     /// Seed of the replicas' noise.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 0)]
     seed: u64,
     /// Validation poses diagnosed at most, evenly spaced through the file: memory grows with
     /// them (about 0.4 MB each at the default replicas and draws).

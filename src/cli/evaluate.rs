@@ -21,10 +21,10 @@ const FLOOR_RATIO_LIMIT: f64 = 1.1;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Seed of the campaign's noise.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 1)]
     seed: u64,
     /// Seed of the test poses and of the evaluation's jitter and noise.
-    #[arg(long, default_value_t = 9283)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 9283)]
     evaluation_seed: u64,
     /// Random test poses per region (inside the spans, workspace).
     #[arg(long, default_value_t = 30, value_parser = InRange::closed(1usize, 1_000_000, ""))]

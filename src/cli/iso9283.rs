@@ -82,7 +82,7 @@ struct PredictArgs {
     #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     trials: u32,
     /// Seed of the simulated tests.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 1)]
     seed: u64,
     /// Output folder.
     #[arg(long)]

@@ -23,8 +23,8 @@ pub struct Args {
     #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
     robot: PathBuf,
     /// One pose's commands as the controller reads them, `cmd_1 .. cmd_N` (deg or mm), e.g.
-    /// `-- 10 -20.5 30 0 45 90` (`--` lets the first value be negative).
-    #[arg(allow_negative_numbers = true)]
+    /// `10 -20.5 30 0 45 90`.
+    #[arg(allow_negative_numbers = true, value_parser = command_value)]
     commands: Vec<f64>,
     /// A CSV with columns `cmd_1 .. cmd_N` (any other columns are copied): every row gets
     /// `q_1 .. q_N` appended. Written to stdout.
@@ -34,6 +34,21 @@ pub struct Args {
     /// different geometry hash).
     #[arg(long)]
     allow_other_robot: bool,
+}
+
+/// One command given on the command line; a list in one argument (`10,10,10`) is told to be
+/// given as separate arguments.
+fn command_value(text: &str) -> Result<f64, String> {
+    let shown = axiscal::csv_lines::shown_cell(text.trim());
+    if text.contains([',', ';']) || text.trim().contains(char::is_whitespace) {
+        return Err(format!(
+            "`{shown}` holds several values; give each command as its own argument (`10 -20.5 30 ...`, cmd_1 .. cmd_N)"
+        ));
+    }
+    // A NaN or infinity parses: the limits check names its joint.
+    text.trim()
+        .parse::<f64>()
+        .map_err(|_| format!("`{shown}` is not a number (a command in deg or mm)"))
 }
 
 /// Refuses commands (file units) outside the description's limits: a reading no pose of the

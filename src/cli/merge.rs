@@ -59,9 +59,36 @@ fn check_splits(dirs: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a shard that is not a folder of `run`'s results (a file, a missing folder, a folder
+/// without `scenario.resolved.toml`), naming it.
+fn check_shard_folders(dirs: &[PathBuf]) -> Result<()> {
+    for dir in dirs {
+        if dir.is_file() {
+            bail!(
+                "{} is a file; merge takes the results folders of `run --shard K/N` (each with {RESOLVED_FILE} and {TRIALS_FILE})",
+                dir.display()
+            );
+        }
+        if !dir.is_dir() {
+            bail!(
+                "{}: no such folder (a results folder of `run --shard K/N`)",
+                dir.display()
+            );
+        }
+        if !dir.join(RESOLVED_FILE).is_file() {
+            bail!(
+                "{} holds no {RESOLVED_FILE}: not a results folder of `run` (merge takes the folders of `run --shard K/N`)",
+                dir.display()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Runs `axiscal merge`.
 pub fn run(args: Args) -> Result<()> {
     super::set_json(args.json);
+    check_shard_folders(&args.dirs)?;
     let first = args.dirs[0].join(RESOLVED_FILE);
     let resolved_text = axiscal::presets::read_text(&first).with_context(|| format!("reading {}", first.display()))?;
     let scenario = ResolvedScenario::from_resolved_file(&first)?;

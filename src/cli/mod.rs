@@ -295,11 +295,32 @@ fn completions(shell: clap_complete::Shell) -> anyhow::Result<()> {
         .context("writing the completion script to stdout")
 }
 
+/// The command line read with every option value allowed to be a negative number, so that
+/// `--payload-kg -5` meets the option's own range check instead of clap's "unexpected argument".
+fn parse_command_line() -> Result<Cli, clap::Error> {
+    use clap::{CommandFactory, FromArgMatches};
+    let matches = negative_values_allowed(Cli::command()).try_get_matches()?;
+    Cli::from_arg_matches(&matches)
+}
+
+/// `cmd` and its subcommands, recursively, with `allow_negative_numbers` on every argument that
+/// takes a value.
+fn negative_values_allowed(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|arg| {
+        if arg.get_action().takes_values() {
+            arg.allow_negative_numbers(true)
+        } else {
+            arg
+        }
+    })
+    .mut_subcommands(negative_values_allowed)
+}
+
 /// Parses the command line, runs the subcommand and maps its outcome to an exit code.
 pub fn main() -> ExitCode {
     exit_2_when_output_fails();
     signals::install_cleanup();
-    let cli = match Cli::try_parse() {
+    let cli = match parse_command_line() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => {
             // --help, --version: printed to stdout, exit 0 (2 when stdout fails).

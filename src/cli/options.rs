@@ -65,12 +65,21 @@ impl<T> InRange<T>
 where
     T: FromStr + PartialOrd + Display + Copy,
 {
+    /// Why `text` does not parse as a `T`: a number of another kind (negative or fractional for a
+    /// count) is out of range or not whole; anything else is not a number.
+    fn not_parsed(&self, text: &str) -> String {
+        let written = axiscal::csv_lines::shown_cell(text.trim());
+        let why = match text.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() && v.fract() == 0.0 => "is out of range",
+            Ok(v) if v.is_finite() => "is not a whole number",
+            _ => "is not a number",
+        };
+        format!("`{written}` {why}; must be {}", self.describe())
+    }
+
     /// Parses `text` and checks the range; the error states the range.
     pub fn check(&self, text: &str) -> Result<T, String> {
-        let value: T = text
-            .trim()
-            .parse()
-            .map_err(|_| format!("`{text}` is not a number; must be {}", self.describe()))?;
+        let value: T = text.trim().parse().map_err(|_| self.not_parsed(text))?;
         let low_ok = if self.min_open {
             value > self.min
         } else {
@@ -103,6 +112,9 @@ where
         })
     }
 }
+
+/// A random seed: any whole number from 0 to 2^64 - 1.
+pub const SEED: InRange<u64> = InRange::closed(0, u64::MAX, "");
 
 /// A measurement noise level, 3-D RMS (mm).
 pub const NOISE_MM: InRange<f64> = InRange::above(0.0, axiscal::calibration::procedure::MAX_NOISE_RMS_3D_MM, "mm");

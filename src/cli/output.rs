@@ -26,6 +26,18 @@ pub struct Outputs {
     inputs: Vec<Input>,
 }
 
+/// Refuses the output `-`: the outputs are files written whole through a temporary (a file
+/// named `-` is what a user who meant stdout would not look for).
+fn refuse_dash(path: &Path) -> Result<()> {
+    if path.as_os_str() == "-" {
+        bail!(
+            "--out `-`: axiscal writes its outputs to files, not to stdout; name a file or folder (e.g. --out out.csv), \
+             or ./- for a file named `-`"
+        );
+    }
+    Ok(())
+}
+
 /// `path` with its folder resolved (symbolic links, `..`), also when the file does not exist
 /// yet; `None` when the folder does not exist either (then it cannot be an input).
 fn canonical(path: &Path) -> Option<PathBuf> {
@@ -130,8 +142,9 @@ impl Outputs {
         Ok(())
     }
 
-    /// Checks that `path` may be written: not an input, and absent unless `--force`.
+    /// Checks that `path` may be written: not `-`, not an input, and absent unless `--force`.
     pub fn check(&self, path: &Path) -> Result<()> {
+        refuse_dash(path)?;
         self.check_not_input(path)?;
         if let Ok(meta) = path.symlink_metadata()
             && !meta.is_file()
@@ -151,6 +164,7 @@ impl Outputs {
     /// Refuses a folder output `dir` (`--out`) that exists and is not a folder: the command
     /// writes several files into it.
     pub fn check_folder(dir: &Path) -> Result<()> {
+        refuse_dash(dir)?;
         if dir.metadata().is_ok_and(|meta| !meta.is_dir()) {
             bail!(
                 "--out `{}` is a file; --out names a folder (the command writes its files into it): choose another name",

@@ -44,7 +44,7 @@ pub struct Args {
     #[arg(long, value_parser = InRange::closed(0usize, axiscal::plan::MAX_VALIDATION_POSES, ""))]
     validation_poses: Option<usize>,
     /// Seed of the validation poses' draw.
-    #[arg(long)]
+    #[arg(long, value_parser = super::options::SEED)]
     validation_seed: Option<u64>,
     #[command(flatten)]
     sight: SightArgs,

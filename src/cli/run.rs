@@ -53,7 +53,7 @@ pub struct Args {
     #[arg(long, value_parser = InRange::closed(1usize, MAX_UNITS, ""))]
     trials: Option<usize>,
     /// Override the scenario's seed.
-    #[arg(long)]
+    #[arg(long, value_parser = super::options::SEED)]
     seed: Option<u64>,
     /// Skip the unit sanity checks of the scenario (its noise in m, its validation half-ranges
     /// in rad, its truth model's rows in mm) and of its robot description.
@@ -93,7 +93,14 @@ pub fn run(args: Args) -> Result<()> {
     signals::install();
     let records = run_missing(&plan, done, args.resume, &pool)?;
     if let Some(signal) = signals::received() {
-        return Err(interrupted(&plan, &args, records, signal));
+        // A signal after the last trial finished stops nothing: the run is whole.
+        if records.len() < plan.shard.units(plan.scenario.units()).len() {
+            return Err(interrupted(&plan, &args, records, signal));
+        }
+        eprintln!(
+            "note: {} arrived after the last trial finished: the run is complete",
+            signals::name(signal)
+        );
     }
     finish(&plan, records)
 }

@@ -89,7 +89,7 @@ pub struct Args {
     #[arg(long, value_parser = InRange::closed(0usize, axiscal::plan::MAX_VALIDATION_POSES, ""))]
     validation_poses: Option<usize>,
     /// Seed of the measurement and repeatability noise.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 1)]
     seed: u64,
     /// The simulated robot: the rapier rigid-body arm (line of sight, compliance) or the
     /// analytic truth model.

@@ -16,7 +16,7 @@ pub struct Args {
     #[arg(long, default_value_t = 200, value_parser = InRange::closed(2usize, 100_000_000, ""))]
     trials: usize,
     /// Study seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_parser = super::options::SEED, default_value_t = 1)]
     seed: u64,
     /// Measurement noise, 3-D RMS (mm).
     #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]

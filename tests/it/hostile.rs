@@ -329,11 +329,7 @@ fn reader_cases() -> Vec<Case> {
             "an experiment id starting with #",
             "calibrate hash-id.csv --out out",
             2,
-            &[
-                "hash-id.csv:3:",
-                "starts with `#` but has 15 fields",
-                "rename the experiment",
-            ],
+            &["hash-id.csv:3:", "starts with `#` but has 15 fields", "must be quoted"],
         ),
         case(
             "--out naming the data file",

@@ -122,6 +122,20 @@ impl UrKinematics {
             message: e.to_string(),
         })?;
         let root = docs.first().unwrap_or(&Yaml::BadValue);
+        if root.as_hash().is_none() {
+            let what = if crate::toml_file::looks_like_csv(text) {
+                "a CSV table"
+            } else {
+                "not a YAML mapping of keys"
+            };
+            return Err(key_error(
+                file,
+                "kinematics".into(),
+                format!(
+                    "missing: the file is {what}, not the UR driver's calibration YAML (a `kinematics:` mapping of six segments, as ur_calibration writes)"
+                ),
+            ));
+        }
         let kin = &root["kinematics"];
         if kin.as_hash().is_none() {
             return Err(key_error(

@@ -212,7 +212,9 @@ impl Default for RefineOptions {
 #[derive(Debug, thiserror::Error)]
 pub enum RefineError {
     /// Too few free poses.
-    #[error("{found} free poses (experiments named `validation`, moved_joint = 0); --refine needs at least {needed}")]
+    #[error(
+        "{found} free poses (experiments named `validation`, moved_joint = 0); --refine needs at least {needed}: one per held-out fold (`--refine-folds`), at least 2"
+    )]
     TooFewPoses {
         /// Found.
         found: usize,

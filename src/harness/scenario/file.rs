@@ -86,12 +86,12 @@ pub enum SimMode {
 }
 
 /// Where the simulated real robot comes from.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum TruthSection {
-    /// The paper's robot: Table 2 actual rows and the section-4 functions.
-    #[default]
-    Paper,
+    /// The paper's robot: Table 2 actual rows and the section-4 functions. A struct variant
+    /// without fields, so that a key beside `kind = "paper"` (a `path`) is refused.
+    Paper {},
     /// A truth-model file (relative to the scenario file).
     File {
         /// Path of the [`RobotModel`](crate::robot::RobotModel) TOML.
@@ -102,6 +102,13 @@ pub enum TruthSection {
         /// Distributions (`normal`, `uniform`, `truncated_normal`) per kind of quantity.
         perturbation: Box<PerturbationSpec>,
     },
+}
+
+impl Default for TruthSection {
+    /// The paper's robot.
+    fn default() -> Self {
+        TruthSection::Paper {}
+    }
 }
 
 /// Which instrument and how noisy.

@@ -272,7 +272,7 @@ fn resolve_truth(
     dir: &Path,
 ) -> Result<ResolvedTruth, (&'static str, String)> {
     Ok(match truth {
-        TruthSection::Paper => ResolvedTruth::Fixed {
+        TruthSection::Paper {} => ResolvedTruth::Fixed {
             robot: Box::new(crate::sim::paper_robot()),
         },
         TruthSection::File { path } => ResolvedTruth::Fixed {

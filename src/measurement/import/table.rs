@@ -186,14 +186,22 @@ impl Table {
     }
 
     /// The index of a column named one of `names`, or an error naming the file and the names.
+    /// A header whose cells are mostly numbers is a first line of data: the file has no header.
     pub fn required(&self, names: &[&str]) -> Result<usize, PointsError> {
+        let columns = self.header.iter().map(|h| shown_cell(h)).collect::<Vec<_>>().join(",");
+        let numbers = self.header.iter().filter(|h| h.trim().parse::<f64>().is_ok()).count();
+        let message = if 2 * numbers > self.header.len() {
+            format!(
+                "the first line (`{}`) is data, not a header: add a first line naming the columns, with {} among them",
+                shown_cell(&columns),
+                names.join(" or ")
+            )
+        } else {
+            format!("no column {} (columns: {columns})", names.join(" or "))
+        };
         self.column(names).ok_or_else(|| PointsError::File {
             path: self.path.clone(),
-            message: format!(
-                "no column {} (columns: {})",
-                names.join(" or "),
-                self.header.iter().map(|h| shown_cell(h)).collect::<Vec<_>>().join(",")
-            ),
+            message,
         })
     }
 
