@@ -215,7 +215,7 @@ pub fn run(args: Args) -> Result<()> {
         .collect();
     checks::pose_units(&positions, &desc, &args.poses, args.checks.skip_unit_check)?;
     let n = desc.dof();
-    let mut w = csv::Writer::from_writer(outputs.create(&args.out)?);
+    let mut w = axiscal::csv_lines::writer(outputs.create(&args.out)?);
     w.write_record(csv_header(&desc))?;
     let mut failed = 0;
     let required: Vec<_> = poses.iter().map(|p| p.world_from_tool).collect();

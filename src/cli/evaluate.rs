@@ -135,7 +135,7 @@ fn evaluate(args: &Args) -> Result<()> {
 
 /// Every test pose's errors (`poses.csv`).
 fn poses_csv(r: &PaperReport) -> Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut w = axiscal::csv_lines::writer(Vec::new());
     w.write_record([
         "id",
         "region",

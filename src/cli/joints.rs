@@ -120,7 +120,7 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path
             desc.dof()
         );
     }
-    let mut out = csv::Writer::from_writer(std::io::stdout().lock());
+    let mut out = axiscal::csv_lines::writer(std::io::stdout().lock());
     out.write_record(table.header_as_written.iter().chain(&added))?;
     for row in table.rows() {
         let cmd: Vec<f64> = columns

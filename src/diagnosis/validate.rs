@@ -790,30 +790,47 @@ fn position_verdict(p: &PositionSummary, orientation: Option<&OrientationSummary
 
 /// `residuals.csv` of `axiscal validate` (`docs/formats.md#validation-residuals-csv`).
 pub fn validation_residuals_csv(v: &Validation) -> String {
-    let mut out = String::from(
-        "experiment,kind,moved_joint,step,target,x_mm,y_mm,z_mm,predicted_x_mm,predicted_y_mm,predicted_z_mm,dx_mm,dy_mm,dz_mm,error_mm\n",
-    );
-    for r in &v.residuals {
+    let header = [
+        "experiment",
+        "kind",
+        "moved_joint",
+        "step",
+        "target",
+        "x_mm",
+        "y_mm",
+        "z_mm",
+        "predicted_x_mm",
+        "predicted_y_mm",
+        "predicted_z_mm",
+        "dx_mm",
+        "dy_mm",
+        "dz_mm",
+        "error_mm",
+    ];
+    let rows = v.residuals.iter().map(|r| {
         let kind = match r.kind {
             PointKind::Validation => "validation",
             PointKind::Tool => "tool",
             PointKind::Axis => "axis",
         };
-        let [x, y, z] = r.measured_mm;
-        let [px, py, pz] = r.predicted_mm;
-        out.push_str(&format!(
-            "{},{kind},{},{},{},{x:.4},{y:.4},{z:.4},{px:.4},{py:.4},{pz:.4},{:.4},{:.4},{:.4},{:.4}\n",
-            r.experiment,
-            r.moved_joint,
-            r.step,
-            r.target,
-            x - px,
-            y - py,
-            z - pz,
-            r.error_mm
-        ));
-    }
-    out
+        let (measured, predicted) = (r.measured_mm, r.predicted_mm);
+        let difference = [0, 1, 2].map(|i| measured[i] - predicted[i]);
+        let mut row = vec![
+            r.experiment.clone(),
+            kind.into(),
+            r.moved_joint.to_string(),
+            r.step.to_string(),
+            r.target.to_string(),
+        ];
+        let numbers = measured
+            .iter()
+            .chain(&predicted)
+            .chain(&difference)
+            .chain([&r.error_mm]);
+        row.extend(numbers.map(|x| format!("{x:.4}")));
+        row
+    });
+    crate::csv_lines::table_text(&header, rows)
 }
 
 #[cfg(test)]

@@ -603,8 +603,7 @@ pub fn write_measurements(path: &Path, set: &MeasurementSet, overwrite: bool) ->
 
 /// [`write_measurements`] to any writer.
 pub fn write_measurements_to<W: io::Write>(writer: W, set: &MeasurementSet) -> io::Result<()> {
-    // `comment` makes the writer quote an experiment id that starts with `#`.
-    let mut csv = csv::WriterBuilder::new().comment(Some(b'#')).from_writer(writer);
+    let mut csv = crate::csv_lines::writer(writer);
     let mut header: Vec<String> = ["experiment", "moved_joint", "step", "target"]
         .map(String::from)
         .to_vec();

@@ -191,23 +191,15 @@ pub fn write_plan_csv<W: Write>(mut w: W, header_comment: &str, points: &[Planne
     header.extend((1..=dof).map(|k| format!("cmd_{k}")));
     header.extend(["nominal_x_mm".into(), "nominal_y_mm".into(), "nominal_z_mm".into()]);
     header.extend((1..=stations).map(|k| format!("visible_{k}")));
-    writeln!(w, "{}", header.join(","))?;
+    let mut csv = crate::csv_lines::writer(&mut w);
+    csv.write_record(&header)?;
     for p in points {
-        let mut row = vec![p.point.to_string(), p.pose.to_string(), quoted(&p.experiment)];
+        let mut row = vec![p.point.to_string(), p.pose.to_string(), p.experiment.clone()];
         row.extend([p.moved_joint.to_string(), p.step.to_string(), p.target.to_string()]);
         row.extend(p.cmd.iter().map(|c| format_f64(*c)));
         row.extend(p.nominal_m.iter().map(|c| format!("{:.3}", c * 1e3)));
         row.extend(p.visible.iter().map(|v| if *v { "yes" } else { "no" }.to_owned()));
-        writeln!(w, "{}", row.join(","))?;
+        csv.write_record(&row)?;
     }
-    Ok(())
-}
-
-/// An experiment id as a CSV field (quoted when it holds a separator, a quote or starts with `#`).
-fn quoted(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) || text.starts_with('#') {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_owned()
-    }
+    csv.flush()
 }

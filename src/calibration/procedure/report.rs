@@ -461,24 +461,35 @@ fn write_sweeps(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
 
 /// `residuals.csv`: one row per observed point of the axis fits (`docs/formats.md#residuals-csv`).
 pub fn residuals_csv(cal: &Calibration) -> String {
-    let mut s = String::from(
-        "experiment,moved_joint,step,target,kind,radial_mm,tangential_mm,axial_mm,across_u_mm,across_v_mm,along_mm\n",
-    );
-    for r in &cal.residuals {
-        let [a, b, c] = r.components_mm;
-        let quoted = if r.experiment.contains([',', '"']) || r.experiment.starts_with('#') {
-            format!("\"{}\"", r.experiment.replace('"', "\"\""))
+    let header = [
+        "experiment",
+        "moved_joint",
+        "step",
+        "target",
+        "kind",
+        "radial_mm",
+        "tangential_mm",
+        "axial_mm",
+        "across_u_mm",
+        "across_v_mm",
+        "along_mm",
+    ];
+    let rows = cal.residuals.iter().map(|r| {
+        let [a, b, c] = r.components_mm.map(|v| format!("{v:.6}"));
+        let mut row = vec![
+            r.experiment.clone(),
+            r.joint.to_string(),
+            r.step.to_string(),
+            r.target.to_string(),
+        ];
+        if r.sliding {
+            row.extend(["sliding".into(), String::new(), String::new(), String::new(), a, b, c]);
         } else {
-            r.experiment.clone()
-        };
-        let cells = if r.sliding {
-            format!("sliding,,,,{a:.6},{b:.6},{c:.6}")
-        } else {
-            format!("rotary,{a:.6},{b:.6},{c:.6},,,")
-        };
-        let _ = writeln!(s, "{quoted},{},{},{},{cells}", r.joint, r.step, r.target);
-    }
-    s
+            row.extend(["rotary".into(), a, b, c, String::new(), String::new(), String::new()]);
+        }
+        row
+    });
+    crate::csv_lines::table_text(&header, rows)
 }
 
 /// Reads `residuals.csv` as [`residuals_csv`] writes it; an error names the 1-based line and
