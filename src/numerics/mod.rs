@@ -1,10 +1,11 @@
 //! Numerical tools shared by the maths: dense least squares (one Levenberg-Marquardt /
 //! Gauss-Newton loop, covariances, condition numbers), the thin SVD of tall designs, sample
-//! statistics with named quantile definitions, and the selection of a design's identifiable
-//! columns.
+//! statistics with named quantile definitions, bisection, and the selection of a design's
+//! identifiable columns.
 
 pub mod lsq;
 pub mod outlier_rounds;
+pub mod roots;
 pub mod stats;
 pub mod subset;
 pub mod svd;

@@ -191,18 +191,11 @@ impl Search<'_> {
             JointKind::Prismatic => range,
         };
         let feasible = |span: f64| self.feasible(&self.placed(i, span, centre_follower));
-        let (mut lo, mut hi) = (0.0, cap);
-        if feasible(hi) {
-            return hi;
+        if feasible(cap) {
+            return cap;
         }
-        while hi - lo > 0.1 {
-            let mid = 0.5 * (lo + hi);
-            if feasible(mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
+        let stop = crate::numerics::roots::Bisection::to_width(0.1);
+        let [lo, _] = crate::numerics::roots::bisect_infallible(0.0, cap, stop, feasible);
         (lo * 10.0).floor() / 10.0
     }
 

@@ -162,10 +162,8 @@ fn solve_increasing(f: impl Fn(f64) -> f64, target: f64, scale: f64) -> Option<f
             return None;
         }
     }
-    while hi - lo > 1e-12 * hi {
-        let mid = 0.5 * (lo + hi);
-        if f(mid) < target { lo = mid } else { hi = mid }
-    }
+    let stop = crate::numerics::roots::Bisection::to_relative_width(1e-12);
+    let [lo, hi] = crate::numerics::roots::bisect_infallible(lo, hi, stop, |mid| f(mid) < target);
     Some(0.5 * (lo + hi))
 }
 

@@ -249,15 +249,15 @@ pub fn budget_line(settings: &BudgetSettings, effect: BudgetEffect) -> Result<Bu
         hi = (hi * 2.0).min(cap);
         at_hi = mean_at(hi)?;
     }
-    for _ in 0..settings.bisection_steps {
-        let mid = 0.5 * (lo + hi);
+    let stop = crate::numerics::roots::Bisection::steps(settings.bisection_steps);
+    // `at_hi` follows `hi`: the mean where the bracket's upper end last moved.
+    [_, hi] = crate::numerics::roots::bisect(lo, hi, stop, |mid| {
         let at_mid = mean_at(mid)?;
-        if at_mid < target {
-            lo = mid;
-        } else {
-            (hi, at_hi) = (mid, at_mid);
+        if at_mid >= target {
+            at_hi = at_mid;
         }
-    }
+        Ok::<_, ScenarioError>(at_mid < target)
+    })?;
     Ok(line(Some(hi), hi, at_hi))
 }
 

@@ -98,17 +98,10 @@ pub fn chi_square_quantile(p: f64, dof: f64) -> f64 {
         lo = hi;
         hi *= 2.0;
     }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
-        }
-        if chi_square_cdf(mid, dof) < p {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
+    let [lo, hi] =
+        crate::numerics::roots::bisect_infallible(lo, hi, crate::numerics::roots::Bisection::steps(200), |mid| {
+            chi_square_cdf(mid, dof) < p
+        });
     0.5 * (lo + hi)
 }
 

@@ -162,15 +162,9 @@ fn largest_visible_span_deg<E>(
             break;
         }
     }
-    if let Some(mut bad) = bad_deg {
-        for _ in 0..search.refinements {
-            let mid = 0.5 * (ok_deg + bad);
-            if visible_at(mid)? {
-                ok_deg = mid;
-            } else {
-                bad = mid;
-            }
-        }
+    if let Some(bad) = bad_deg {
+        let stop = crate::numerics::roots::Bisection::steps(search.refinements);
+        [ok_deg, _] = crate::numerics::roots::bisect(ok_deg, bad, stop, &mut visible_at)?;
     }
     Ok(2.0 * ok_deg)
 }
