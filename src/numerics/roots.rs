@@ -97,7 +97,7 @@ mod tests {
         let [lo, hi] = bisect_infallible(0.0, 2.0, Bisection::to_relative_width(1e-9), below);
         assert!(lo < root && root < hi && hi - lo <= 1e-9 * hi);
         let [lo, hi] = bisect_infallible(0.0, 2.0, Bisection::steps(10), below);
-        assert_eq!(hi - lo, 2.0 / 1024.0);
+        assert_eq!((hi - lo).to_bits(), (2.0f64 / 1024.0).to_bits(), "ten exact halvings");
         assert!(lo < root && root < hi);
     }
 
