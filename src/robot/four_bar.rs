@@ -46,6 +46,9 @@ pub enum FourBarError {
         /// `r_r + r_l` \[m\].
         max_m: f64,
     },
+    /// The least-squares fit of the dimensions failed ([`crate::robot::fit_four_bar`]).
+    #[error("fitting the four-bar's dimensions: {0}")]
+    Fit(crate::numerics::lsq::LsqError),
 }
 
 /// Dimensions of the 2->3 four-bar (module docs give the planar construction).

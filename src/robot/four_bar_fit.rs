@@ -1,7 +1,7 @@
 //! Offline fit of four-bar dimensions to a given passive curve, used to find a physically
 //! consistent mechanism behind the paper's fitted fractional 2->3 function (section 4).
 //!
-//! Levenberg-Marquardt on four free dimensions (rod, lever, crank angle, lever angle) with the
+//! Least squares on four free dimensions (rod, lever, crank angle, lever angle) with the
 //! arm and crank lengths fixed: only ratios matter to an angle, so the arm (the measured
 //! axis-2-to-axis-3 distance) fixes the scale, and the crank length is a design choice the
 //! caller makes (left free, the fit degenerates to a vanishing crank and lever, a mechanism no
@@ -9,6 +9,7 @@
 //! solution is smooth away from the dead-centre positions.
 
 use super::four_bar::{FourBarError, FourBarGeometry};
+use crate::numerics::lsq::{LmOptions, LsqError, levenberg_marquardt};
 use nalgebra::{DMatrix, DVector};
 
 /// The result of [`fit_four_bar`].
@@ -43,8 +44,10 @@ fn residuals(g: &FourBarGeometry, ts: &[f64], target: &dyn Fn(f64) -> f64) -> Re
 
 /// Least-squares fit of a four-bar whose passive angle matches `target` at `samples` evenly
 /// spaced inputs over `[-span_rad, span_rad]`, starting from `start` (whose `arm_m` and
-/// `crank_m` are kept). Errors if the start cannot be assembled over the span; steps that
-/// would break the assembly are rejected.
+/// `crank_m` are kept), by the program's Levenberg-Marquardt loop
+/// ([`crate::numerics::lsq::levenberg_marquardt`], Marquardt damping). Errors if the start
+/// cannot be assembled over the span; a step that would break the assembly costs infinity, so
+/// the loop rejects it and damps more.
 pub fn fit_four_bar(
     target: &dyn Fn(f64) -> f64,
     span_rad: f64,
@@ -55,68 +58,63 @@ pub fn fit_four_bar(
     let ts: Vec<f64> = (0..n)
         .map(|i| -span_rad + 2.0 * span_rad * i as f64 / (n - 1) as f64)
         .collect();
-    let mut p = vec![start.rod_m, start.lever_m, start.crank_angle_rad, start.lever_angle_rad];
-    let mut r = residuals(&start, &ts, target)?;
-    let mut cost = r.norm_squared();
-    let mut lambda = 1e-3;
-    for _ in 0..200 {
-        let g = with_params(&start, &p);
-        let mut jac = DMatrix::zeros(n, NP);
-        for j in 0..NP {
-            let h = 1e-7 * (1.0 + p[j].abs());
-            let (mut pp, mut pm) = (p.clone(), p.clone());
-            pp[j] += h;
-            pm[j] -= h;
-            let (Ok(rp), Ok(rm)) = (
-                residuals(&with_params(&g, &pp), &ts, target),
-                residuals(&with_params(&g, &pm), &ts, target),
-            ) else {
-                // At the edge of assembly: keep the best point found.
-                return Ok(finish(&g, &r, cost, n));
-            };
-            jac.set_column(j, &((rp - rm) / (2.0 * h)));
-        }
-        let jtj = jac.transpose() * &jac;
-        let jtr = jac.transpose() * &r;
-        let mut improved = false;
-        while lambda < 1e12 {
-            let mut a = jtj.clone();
-            for k in 0..NP {
-                a[(k, k)] += lambda * jtj[(k, k)].max(1e-12);
-            }
-            let Some(step) = a.lu().solve(&-&jtr) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let trial: Vec<f64> = p.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
-            match residuals(&with_params(&g, &trial), &ts, target) {
-                Ok(rt) if rt.norm_squared() < cost => {
-                    let rel = (cost - rt.norm_squared()) / cost.max(1e-300);
-                    p = trial;
-                    r = rt;
-                    cost = r.norm_squared();
-                    lambda = (lambda / 10.0).max(1e-12);
-                    improved = rel > 1e-14;
-                    break;
-                }
-                _ => lambda *= 10.0,
-            }
-        }
-        if !improved {
-            break;
+    residuals(&start, &ts, target)?;
+    let p0 = DVector::from_vec(vec![
+        start.rod_m,
+        start.lever_m,
+        start.crank_angle_rad,
+        start.lever_angle_rad,
+    ]);
+    let eval = |p: &DVector<f64>| -> Result<(DVector<f64>, DMatrix<f64>), LsqError> {
+        Ok(residual_and_jacobian(&start, p, &ts, target))
+    };
+    let apply = |p: &DVector<f64>, delta: &DVector<f64>| -> Result<DVector<f64>, LsqError> { Ok(p + delta) };
+    let options = LmOptions::marquardt("four-bar dimensions", MAX_ITERATIONS);
+    let outcome = levenberg_marquardt(p0, &options, eval, apply).map_err(FourBarError::Fit)?;
+    Ok(finish(
+        &with_params(&start, outcome.state.as_slice()),
+        &outcome.residual,
+        n,
+    ))
+}
+
+/// Steps of [`fit_four_bar`] at most (the fit converges in a few dozen).
+const MAX_ITERATIONS: usize = 200;
+
+/// The residual at parameters `p` and its Jacobian by central differences (step `1e-7 (1 +
+/// |p_j|)`); where the mechanism cannot be assembled, an infinite residual (a step there is
+/// rejected), and a zero column where a difference would leave the assembly.
+fn residual_and_jacobian(
+    base: &FourBarGeometry,
+    p: &DVector<f64>,
+    ts: &[f64],
+    target: &dyn Fn(f64) -> f64,
+) -> (DVector<f64>, DMatrix<f64>) {
+    let at = |q: &DVector<f64>| residuals(&with_params(base, q.as_slice()), ts, target);
+    let mut jacobian = DMatrix::zeros(ts.len(), NP);
+    let Ok(r) = at(p) else {
+        return (DVector::from_element(ts.len(), f64::INFINITY), jacobian);
+    };
+    for j in 0..NP {
+        let h = 1e-7 * (1.0 + p[j].abs());
+        let (mut plus, mut minus) = (p.clone(), p.clone());
+        plus[j] += h;
+        minus[j] -= h;
+        if let (Ok(rp), Ok(rm)) = (at(&plus), at(&minus)) {
+            jacobian.set_column(j, &((rp - rm) / (2.0 * h)));
         }
     }
-    Ok(finish(&with_params(&start, &p), &r, cost, n))
+    (r, jacobian)
 }
 
 /// Number of fitted dimensions.
 const NP: usize = 4;
 
-fn finish(geometry: &FourBarGeometry, r: &DVector<f64>, cost: f64, n: usize) -> FourBarFit {
+fn finish(geometry: &FourBarGeometry, r: &DVector<f64>, n: usize) -> FourBarFit {
     FourBarFit {
         geometry: *geometry,
         max_abs_error_rad: r.amax(),
-        rms_error_rad: (cost / n as f64).sqrt(),
+        rms_error_rad: (r.norm_squared() / n as f64).sqrt(),
     }
 }
 
