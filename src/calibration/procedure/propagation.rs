@@ -377,7 +377,7 @@ impl Propagation {
     /// thousandth of their sigma, so the truncation error, `h_k f'' / 2` against `f'`, is a
     /// thousandth of the relative change of the slope over one sigma, which makes a variance
     /// `1e-3 sigma |f''/f'|` relative (the sigmas move by <= 6.2e-5 against central
-    /// differences on the paper arm, `docs/validation.md`, "seventh pass"). Not smaller:
+    /// differences on the paper arm, `docs/validation.md`, "One-sided differences"). Not smaller:
     /// rounding at the metre and radian scale of the derived quantities, ~1e-16 over the
     /// step, gives a parameter fixed by convention (`b1 = 0`) a 1-sigma of ~1e-16 sigma / h
     /// per column, ~4e-13 here, which must stay below the 1e-12 that marks a parameter as
