@@ -99,8 +99,26 @@ fn revolute(desc: &RobotDescription) -> usize {
     desc.joints.iter().filter(|j| j.kind == JointKind::Revolute).count()
 }
 
-/// Every row length zero while two or more joints turn: every revolute axis through one point,
-/// as a gimbal's and no arm's or positioner's. When the `dh` table has lengths, its convention
+/// Whether every revolute axis of `desc` at its zero pose is parallel to the first (a stack of
+/// coaxial turntables: every row length 0 is then its geometry, not lengths left out).
+fn revolute_axes_parallel(desc: &RobotDescription) -> bool {
+    let model = desc.nominal_model();
+    let poses = model.poses(&vec![0.0; model.dof()]);
+    let mut directions = (0..model.dof())
+        .filter(|&k| desc.joints[k].kind == JointKind::Revolute)
+        .map(|k| poses.axis(k).direction.into_inner());
+    let Some(first) = directions.next() else {
+        return true;
+    };
+    directions.all(|d| d.cross(&first).norm() < PARALLEL_SINE)
+}
+
+/// Two axes whose directions' cross product is below this (the sine of the angle between
+/// them) are parallel: a converted chain's rounding is 1e-15, a drawn twist a degree or more.
+const PARALLEL_SINE: f64 = 1e-9;
+
+/// Every row length zero while two or more joints turn, not all about one line: every revolute
+/// axis through one point, as a gimbal's and no arm's or positioner's. When the `dh` table has lengths, its convention
 /// is what put them there (a classic table read as modified moves each offset to the joint
 /// before, where it may fall along an axis).
 fn zero_lengths(w: &Written<'_>) -> Option<UnitSlip> {
@@ -110,7 +128,7 @@ fn zero_lengths(w: &Written<'_>) -> Option<UnitSlip> {
         .iter()
         .flat_map(|r| [r.a_m, r.b_m, r.h_m])
         .all(|v| v.abs() < ZERO_LENGTH_M);
-    if !(zero && !desc.rows.is_empty() && revolute(desc) >= 2) {
+    if !(zero && !desc.rows.is_empty() && revolute(desc) >= 2 && !revolute_axes_parallel(desc)) {
         return None;
     }
     let through_one_point = format!(
