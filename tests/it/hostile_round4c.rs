@@ -152,7 +152,10 @@ fn a_slip_against_a_description_in_cm_names_the_description() {
             "SCARA with no lengths",
             "calibrate bare.csv --robot scara-rrpr-zero.toml --out out",
             2,
-            &["is not this robot's", "its lengths, alpha_deg or dh_convention may be wrong"],
+            &[
+                "is not this robot's",
+                "its lengths, alpha_deg or dh_convention may be wrong",
+            ],
         ),
     ];
     for c in &cases {
