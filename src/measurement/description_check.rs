@@ -128,7 +128,7 @@ fn zero_lengths(w: &Written<'_>) -> Option<UnitSlip> {
         .iter()
         .flat_map(|r| [r.a_m, r.b_m, r.h_m])
         .all(|v| v.abs() < ZERO_LENGTH_M);
-    if !(zero && !desc.rows.is_empty() && revolute(desc) >= 2 && !revolute_axes_parallel(desc)) {
+    if !zero || desc.rows.is_empty() || revolute(desc) < 2 || revolute_axes_parallel(desc) {
         return None;
     }
     let through_one_point = format!(
