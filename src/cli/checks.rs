@@ -453,7 +453,11 @@ pub fn description_suspect(
         return None;
     }
     let why = warnings_of(desc, robot).first().map_or_else(
-        || "its lengths, alpha_deg or dh_convention may be wrong, which moves every arc too".to_owned(),
+        || {
+            "its lengths, alpha_deg or dh_convention may be wrong (or its joint kinds, axis_targets), which moves \
+             every arc too"
+                .to_owned()
+        },
         |w| format!("`{}`: {}", w.field, w.message),
     );
     let record = match recorded {
