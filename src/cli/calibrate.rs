@@ -289,9 +289,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => {
             print_axes(&cal, &desc, &source);
-            for found in &texts.implausible {
-                eprintln!("warning: {found}");
-            }
+            print_implausible(&texts.implausible, &desc, &args);
         }
     }
     say!("{}", texts.deviation_line);
@@ -515,6 +513,25 @@ fn sweeps_as_free_poses(
         summary.axis_rows_as_poses = Some(why);
     }
     Ok(cal)
+}
+
+/// The sanity checks' findings ([`implausible`]) as warnings; a size off by a factor says
+/// that the description, not only the coordinates, may be at fault when the data do not record
+/// this very description ([`checks::description_suspect`]).
+fn print_implausible(found: &[Implausible], desc: &RobotDescription, args: &Args) {
+    for f in found {
+        let suspect = match f {
+            Implausible::Size { .. } => {
+                let recorded = checks::data_identity(&args.data).ok().flatten();
+                checks::description_suspect(desc, &args.robot, recorded.as_ref())
+            }
+            _ => None,
+        };
+        match suspect {
+            Some(s) => eprintln!("warning: {f}; {s}"),
+            None => eprintln!("warning: {f}"),
+        }
+    }
 }
 
 /// The console summary of an independent-axis calibration.

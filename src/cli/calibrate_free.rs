@@ -36,6 +36,17 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
             args.data.display()
         );
     }
+    if args.all_rows
+        && set.experiments().iter().any(|e| e.moved_joint > 0)
+        && let Some(why_not) = axiscal::calibration::free_pose::poses::why_sweeps_are_not_poses(set, desc)
+    {
+        anyhow::bail!(
+            "{}: --free-poses fits every row as a free pose, whose targets are tool targets on the last link \
+             (`[tool] targets_mm`); the file's sweeps measure other points: {why_not}; drop --free-poses to \
+             calibrate its axis experiments",
+            args.data.display()
+        );
+    }
     let options = FreePoseOptions {
         keep_outliers: args.keep_outliers,
         holdout: args.holdout,

@@ -6,8 +6,10 @@ use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
+use axiscal::measurement::description_check::description_warnings;
+use axiscal::measurement::import::points::LengthUnit;
 use axiscal::measurement::unit_check::{
-    UnitSlip, description_slips, free_pose_scale_warning, measurement_slips, pose_slips,
+    UnitSlip, description_slips, free_pose_scale_warning, measurement_slips, payload_over_robot_mass, pose_slips,
 };
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
 use std::io::BufRead;
@@ -44,12 +46,42 @@ fn refuse_slips(file: &Path, slips: &[UnitSlip]) -> Result<()> {
     )
 }
 
-/// The description's own lengths (`rows[].a_m` in mm), unless `skip`.
+/// The description's own lengths (`rows[].a_m` in mm), unless `skip`; its warnings
+/// ([`description_warnings`]: twists in radians, lengths zero, in cm or inches) printed.
 pub fn description_units(desc: &RobotDescription, path: &Path, skip: bool) -> Result<()> {
     if skip {
         return Ok(());
     }
-    refuse_slips(path, &description_slips(desc))
+    refuse_slips(path, &description_slips(desc))?;
+    print_warnings(&description_warning_lines(desc, path));
+    Ok(())
+}
+
+/// [`description_warnings`] of `desc` read from `path`, with the chain its geometry was
+/// converted from as the file writes it (read again: the description keeps only the converted
+/// rows); a description inlined in a scenario is judged on its rows.
+fn warnings_of(desc: &RobotDescription, path: &Path) -> Vec<UnitSlip> {
+    let source = axiscal::presets::read_text(path)
+        .ok()
+        .and_then(|text| RobotDescription::with_source(&text, path).ok())
+        .and_then(|(_, source)| source);
+    description_warnings(desc, source.map(|(chain, _)| chain).as_ref())
+}
+
+/// One line per warning on the description `desc` read from `path`
+/// ([`description_warnings`]), without `warning: `.
+pub fn description_warning_lines(desc: &RobotDescription, path: &Path) -> Vec<String> {
+    warnings_of(desc, path)
+        .iter()
+        .map(|w| {
+            format!(
+                "{}: `{}`: {} (--skip-unit-check silences this)",
+                path.display(),
+                w.field,
+                w.message
+            )
+        })
+        .collect()
 }
 
 /// A scenario's likely unit slips (its noise in m, its validation half-ranges in rad, its truth
@@ -93,22 +125,94 @@ pub fn data_unit_warnings(
     desc: &RobotDescription,
     data: &Path,
     skip: bool,
+    suspect: Option<&str>,
 ) -> Result<Vec<String>> {
     if skip {
         return Ok(Vec::new());
     }
-    let slips = measurement_slips(set, desc);
+    let mut slips = measurement_slips(set, desc);
+    if let (Some(last), Some(suspect)) = (slips.last_mut(), suspect) {
+        last.message = format!("{}; {suspect}", last.message);
+    }
     refuse_slips(data, &slips)?;
     let mut warnings: Vec<String> = commands_outside_limits(set, desc, data).into_iter().collect();
+    warnings.extend(payload_over_robot(set, desc, data));
     if let Some(scale) = free_pose_scale_warning(set, desc) {
+        let suspect = suspect.map_or(String::new(), |s| format!("; {s}"));
         warnings.push(format!(
-            "{}: `{}`: {} (--skip-unit-check silences this)",
+            "{}: `{}`: {}{suspect} (--skip-unit-check silences this)",
             data.display(),
             scale.field,
             scale.message
         ));
     }
     Ok(warnings)
+}
+
+/// The options of `import wide` a table's units are read with: revolute joint values in
+/// radians (`--angles rad`), and the length unit (`--units`).
+pub type WideUnits = (bool, LengthUnit);
+
+/// `--angles` and `--units` of `import wide` against the description: the imported `set`'s unit
+/// slips ([`measurement_slips`], as `calibrate` checks them). When the table read with other
+/// values of the options (`read_as`) has none, an error naming each option and the value that
+/// fits; slips no option explains are a warning (another robot, or a table's own slip).
+pub fn wide_import_units(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    file: &Path,
+    stated: WideUnits,
+    read_as: impl Fn(bool, LengthUnit) -> Option<MeasurementSet>,
+) -> Result<()> {
+    let slips = measurement_slips(set, desc);
+    if slips.is_empty() {
+        return Ok(());
+    }
+    let said: Vec<String> = slips.iter().map(|s| format!("`{}`: {}", s.field, s.message)).collect();
+    let angles = |radians: bool| if radians { "rad" } else { "deg" };
+    let fits = [
+        (!stated.0, stated.1),
+        (stated.0, other_length(stated.1)),
+        (!stated.0, other_length(stated.1)),
+    ]
+    .into_iter()
+    .find(|(r, l)| read_as(*r, *l).is_some_and(|other| measurement_slips(&other, desc).is_empty()));
+    let Some((radians, lengths)) = fits else {
+        print_warnings(&[format!(
+            "{}: read with --angles {} --units {}: {} (no other --angles or --units explains it: another robot than --robot?; --skip-unit-check silences this)",
+            file.display(),
+            angles(stated.0),
+            stated.1.name(),
+            said.join("; ")
+        )]);
+        return Ok(());
+    };
+    let mut changed = Vec::new();
+    if radians != stated.0 {
+        changed.push(format!("--angles {}", angles(radians)));
+    }
+    if lengths != stated.1 {
+        changed.push(format!("--units {}", lengths.name()));
+    }
+    bail!(
+        "{}: read with --angles {} --units {} the table does not fit the description ({}); read with --angles {} \
+         --units {} it does: pass {}; if the units are right after all, pass --skip-unit-check",
+        file.display(),
+        angles(stated.0),
+        stated.1.name(),
+        said.join("; "),
+        angles(radians),
+        lengths.name(),
+        changed.join(" ")
+    )
+}
+
+/// The other length unit of `import wide` (`--units mm` or `m`).
+fn other_length(unit: LengthUnit) -> LengthUnit {
+    match unit {
+        LengthUnit::Mm => LengthUnit::M,
+        LengthUnit::M => LengthUnit::Mm,
+    }
 }
 
 /// Prints each of `warnings` as a `warning:` line on stderr.
@@ -140,6 +244,26 @@ fn commands_outside_limits(set: &MeasurementSet, desc: &RobotDescription, data: 
         } else {
             String::new()
         }
+    ))
+}
+
+/// A warning naming the first row of `set` (read from `data`) whose payload outweighs the
+/// robot's links ([`payload_over_robot_mass`]), and how many rows do.
+fn payload_over_robot(set: &MeasurementSet, desc: &RobotDescription, data: &Path) -> Option<String> {
+    let (row, payload, robot_kg, rows) = payload_over_robot_mass(set, desc)?;
+    let place = set
+        .line_of(row)
+        .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+    let all = if rows > 1 {
+        format!(" ({rows} rows over it in all)")
+    } else {
+        String::new()
+    };
+    Some(format!(
+        "{place}: payload_kg = {} kg is more than the robot's own moving mass ({} kg, the description's mass_kg){all}: \
+         no arm carries its own weight; grams written as kg, or another robot? (--skip-unit-check silences this)",
+        axiscal::measurement::format_f64(payload),
+        axiscal::measurement::format_f64(robot_kg)
     ))
 }
 
@@ -303,10 +427,47 @@ pub fn read_data_warned(
     let set = axiscal::measurement::read_measurements(data, Some(desc.dof()))?;
     // A record made unreadable by the file's own syntax (another separator, old Mac line
     // ends) is that syntax's error, said by the reader first.
-    recorded?;
     let mut warnings: Vec<String> = identity.into_iter().collect();
-    warnings.extend(data_unit_warnings(&set, desc, data, overrides.skip_unit_check)?);
+    let suspect = description_suspect(desc, robot, recorded?.as_ref());
+    warnings.extend(data_unit_warnings(
+        &set,
+        desc,
+        data,
+        overrides.skip_unit_check,
+        suspect.as_deref(),
+    )?);
     Ok((set, warnings))
+}
+
+/// What a unit slip of data against the description `desc` (read from `robot`) may be besides
+/// the data's: the description itself, unless the data record this very description (their
+/// `# axiscal.description` line, made with it). Its own warnings ([`description_warnings`]) say
+/// how; without them its lengths, twists or convention may still be another robot's, which
+/// gives every arc another radius just as other units of the coordinates do.
+pub fn description_suspect(
+    desc: &RobotDescription,
+    robot: &Path,
+    recorded: Option<&DescriptionIdentity>,
+) -> Option<String> {
+    if recorded.is_some_and(|r| r.geometry_hash == desc.identity().geometry_hash) {
+        return None;
+    }
+    let why = warnings_of(desc, robot).first().map_or_else(
+        || {
+            "its lengths, alpha_deg or dh_convention may be wrong (or its joint kinds, axis_targets), which moves \
+             every arc too"
+                .to_owned()
+        },
+        |w| format!("`{}`: {}", w.field, w.message),
+    );
+    let record = match recorded {
+        Some(r) => format!("the data record another, {r}"),
+        None => "the data record none to tell".to_owned(),
+    };
+    Some(format!(
+        "or the description {} is not this robot's ({record}): {why}",
+        robot.display()
+    ))
 }
 
 /// The first joint whose command `cmd_file` (file units: deg or mm) lies outside the

@@ -127,6 +127,10 @@ struct WideArgs {
     /// Joint values within this of each other hold the joint still (deg or mm).
     #[arg(long, default_value_t = 1e-6, value_parser = super::options::STILL_TOLERANCE)]
     still_tolerance: f64,
+    /// Skip the check of --angles and --units against the description (the sweeps' arcs and
+    /// turns, `docs/formats.md#wide-table`) when the units are right after all.
+    #[arg(long)]
+    skip_unit_check: bool,
     /// Output measurement CSV.
     #[arg(long)]
     out: PathBuf,
@@ -423,13 +427,24 @@ fn import_wide(a: &WideArgs) -> Result<()> {
     let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
     outputs.check(&a.out)?;
     let desc = RobotDescription::from_file(&a.robot)?;
-    let options = WideOptions {
-        kinds: desc.joints.iter().map(|j| j.kind).collect(),
-        radians: matches!(a.angles, Angle::Rad),
-        lengths: a.units.into(),
-        still_tolerance: a.still_tolerance,
+    if !a.skip_unit_check {
+        super::checks::print_warnings(&super::checks::description_warning_lines(&desc, &a.robot));
+    }
+    let table = Table::read(&a.file)?;
+    let read_as = |radians: bool, lengths: LengthUnit| {
+        let options = WideOptions {
+            kinds: desc.joints.iter().map(|j| j.kind).collect(),
+            radians,
+            lengths,
+            still_tolerance: a.still_tolerance,
+        };
+        read_wide(&table, &options)
     };
-    let set = read_wide(&Table::read(&a.file)?, &options)?;
+    let set = read_as(matches!(a.angles, Angle::Rad), a.units.into())?;
+    if !a.skip_unit_check && still_tolerance_hint(&set, a.still_tolerance).is_none() {
+        let stated = (matches!(a.angles, Angle::Rad), a.units.into());
+        super::checks::wide_import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
+    }
     let comment = format!(
         "{}# imported by `axiscal import wide` from {}\n",
         super::checks::identity_comment(&desc),

@@ -5,6 +5,7 @@
 pub mod bounded;
 mod csv_io;
 mod data;
+pub mod description_check;
 pub mod import;
 mod model;
 mod noise_calibration;

@@ -167,7 +167,7 @@ pub fn row_slips(rows: &[RowEntry]) -> Vec<UnitSlip> {
 pub const TARGET_OVER_ROW_FACTOR: f64 = 100.0;
 
 /// Row lengths below this \[m\] are rounding (a converted chain's zero lengths), not a size.
-const ZERO_LENGTH_M: f64 = 1e-6;
+pub(crate) const ZERO_LENGTH_M: f64 = 1e-6;
 
 /// The rows and the targets (each with its distance from its link \[mm\]) on two scales
 /// ([`TARGET_OVER_ROW_FACTOR`]): rows converted from a `dh` table or a URDF in metres where
@@ -657,6 +657,33 @@ pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Uni
         }
     };
     vec![slip]
+}
+
+/// A payload may weigh this many times the robot's moving links (the sum of the description's
+/// `mass_kg`) before a warning: an arm carries a fraction of its own mass (the paper's IRB/L6 6 kg
+/// on about 90 kg of links, a UR5e 5 kg on about 18 kg, the lightest cobots up to about half), so
+/// a payload heavier than the arm itself is grams written as kg, a typo or another robot.
+pub const MAX_PAYLOAD_OVER_ROBOT_MASS: f64 = 1.0;
+
+/// The first row of `set` whose `payload_kg` exceeds [`MAX_PAYLOAD_OVER_ROBOT_MASS`] times the
+/// robot's moving mass (the sum of the description's `mass_kg`): `(row, its payload, robot
+/// mass, rows over it)`. `None` when the description gives no masses (a description rates no payload:
+/// the reader's bound of 10 t, [`crate::measurement::MAX_PAYLOAD_KG`], is then the only one).
+pub fn payload_over_robot_mass(set: &MeasurementSet, desc: &RobotDescription) -> Option<(usize, f64, f64, usize)> {
+    let robot_kg: f64 = desc.joints.iter().map(|j| j.mass_kg).sum();
+    if !(robot_kg.is_finite() && robot_kg > 0.0) {
+        return None;
+    }
+    let bound = MAX_PAYLOAD_OVER_ROBOT_MASS * robot_kg;
+    let over: Vec<(usize, f64)> = set
+        .rows()
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.payload_kg > bound)
+        .map(|(i, m)| (i, m.payload_kg))
+        .collect();
+    let (row, payload) = *over.first()?;
+    Some((row, payload, robot_kg, over.len()))
 }
 
 /// Required tool positions \[m, instrument frame\] whose distances from the robot's first
