@@ -111,8 +111,8 @@ pub fn run(args: Args) -> Result<()> {
 /// calibration's other options), unless `--keep-outliers`; with the warning lines naming each
 /// one's file line. A gross error in one sweep row would otherwise be a "model miss" of the axis
 /// experiments and inflate their predicted repeatability (its target's mean position moves
-/// off the link). Files without sweeps, and sweeps the procedure could not fit, are left as
-/// they are; a sweep with more points beyond the fence than
+/// off the link); with `--keep-outliers` the same points are flagged and kept. Files without
+/// sweeps, and sweeps the procedure could not fit, are left as they are; a sweep with more points beyond the fence than
 /// [`axiscal::calibration::procedure::OUTLIER_SHARE_MAX`], or whose held joints leave the
 /// calibration's held tolerance (a step's command shifted), is refused, as `calibrate` refuses
 /// it.
@@ -130,8 +130,14 @@ fn without_sweep_outliers(
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         ..cal.options.clone()
     };
-    match screen_sweeps(&set, desc, &screening_options, args.keep_outliers) {
-        Ok(screening) => {
+    // Screened as if dropped, so that `--keep-outliers` flags the same points (kept in a sweep's
+    // refits they would hide its other outliers, nothing is refitted here) and keeps them.
+    match screen_sweeps(&set, desc, &screening_options, false) {
+        Ok(mut screening) => {
+            if args.keep_outliers {
+                screening.outliers.iter_mut().for_each(|o| o.dropped = false);
+                screening.set = None;
+            }
             let flagged = checks::outlier_warnings(&screening.outliers, &args.data, "validated");
             Ok((screening.set.unwrap_or(set), flagged))
         }
