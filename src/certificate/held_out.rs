@@ -16,6 +16,9 @@ use crate::robot::{RobotDescription, RobotModel};
 use nalgebra::Point3;
 use serde::Serialize;
 
+/// The two-sided false-alarm rate of the held-out poses' test (`validate`'s default).
+pub const HELD_OUT_FALSE_ALARM: f64 = 0.01;
+
 /// The two models on held-out poses.
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct HeldOut {
@@ -129,7 +132,13 @@ pub fn held_out(
         HeldOutError::Model("the held-out points are fewer than three or in a line: no base to register".into())
     })?;
     let registered: Vec<Point3<f64>> = nominal.iter().map(|p| registration * p).collect();
-    let v = validate(set, cal, desc, &ValidationOptions::of_calibration(cal, 0.01)).map_err(model)?;
+    let v = validate(
+        set,
+        cal,
+        desc,
+        &ValidationOptions::of_calibration(cal, HELD_OUT_FALSE_ALARM),
+    )
+    .map_err(model)?;
     let summary = v.validation.as_ref().ok_or(HeldOutError::NoPoses)?;
     Ok(HeldOut {
         file: file.to_string(),

@@ -14,7 +14,7 @@ pub mod html;
 mod svg;
 
 pub use data::{DataSection, ExperimentLine, data_mismatches};
-pub use held_out::{HeldOut, HeldOutError, held_out};
+pub use held_out::{HELD_OUT_FALSE_ALARM, HeldOut, HeldOutError, held_out};
 
 use crate::calibration::procedure::{Calibration, FrameSigma, InvalidCalibration, PointResidual};
 use crate::calibration::tool_accuracy::{model_parameter_names, model_parameter_values};

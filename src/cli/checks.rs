@@ -608,3 +608,25 @@ pub fn noise_far_below(
         estimate.interval.high_mm
     ))
 }
+
+/// The free-pose misses a slip in `data` explains ([`axiscal::diagnosis::explained_misses`]) as
+/// one error naming the file, the first row's line and the column, unless `skip`
+/// (`--skip-unit-check`): the model is not blamed for a column in other units.
+pub fn refuse_explained_misses(misses: &[axiscal::diagnosis::ExplainedMiss], data: &Path, skip: bool) -> Result<()> {
+    if skip || misses.is_empty() {
+        return Ok(());
+    }
+    let all: Vec<String> = misses
+        .iter()
+        .map(|m| {
+            let place = m
+                .line
+                .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+            format!("{place}: `{}`: {}", m.field, m.message)
+        })
+        .collect();
+    bail!(
+        "{}; if the units are right after all, pass --skip-unit-check",
+        all.join("; ")
+    )
+}

@@ -6,11 +6,13 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError, calibrate, implausible, screen_sweeps};
+use axiscal::calibration::procedure::{
+    Calibration, CalibrationOptions, ProcedureError, calibrate, implausible, screen_sweeps,
+};
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisError, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown,
-    diagnose_axes_with, diagnose_with, estimated_noise, free_poses_only, markdown, validation_outliers,
-    validation_poses, without_outliers, write_axes_plots, write_plots,
+    diagnose_axes_with, diagnose_with, estimated_noise, free_pose_misses, free_poses_only, markdown,
+    validation_outliers, validation_poses, without_outliers, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -98,7 +100,12 @@ pub fn run(args: Args) -> Result<()> {
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     checks::one_setup(&set, &args.data, "diagnose")?;
-    let set = usable(set, &desc, &args.data);
+    let (set, cal) = usable(set, &desc, &args.data, args.noise_mm);
+    if let Some(cal) = cal.as_ref().filter(|_| !args.checks.skip_unit_check) {
+        let misses = free_pose_misses(&set, cal, &desc, args.false_alarm)
+            .map_err(|e| anyhow::anyhow!("{}: the validation poses: {e}", args.data.display()))?;
+        checks::refuse_explained_misses(&misses, &args.data, false)?;
+    }
     let set = without_sweep_outliers(&args, set, &desc)?;
     let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc)?;
     let options = DiagnosisOptions {
@@ -274,27 +281,40 @@ fn without_sweep_outliers(args: &Args, set: MeasurementSet, desc: &RobotDescript
 /// `set`, or, when the independent-axis procedure cannot use its sweeps (the correction for
 /// their held joints does not settle: sweeps at their own configurations), every row as a free
 /// pose, as `calibrate` fits them, said on stderr; the calibration's implausible results (as
-/// `calibrate` warns of them) are said too.
-fn usable(set: MeasurementSet, desc: &RobotDescription, data: &Path) -> MeasurementSet {
+/// `calibrate` warns of them) are said too. With the calibration of `set`'s sweeps, when
+/// they could be used, weighted as `calibrate` weights them (`noise_mm` when given, else the
+/// noise their residuals estimate): the validation poses' slip search is made against it, and a
+/// noise below the data's would make the search's test fail every rewrite.
+fn usable(
+    set: MeasurementSet,
+    desc: &RobotDescription,
+    data: &Path,
+    noise_mm: Option<f64>,
+) -> (MeasurementSet, Option<Calibration>) {
     if free_poses_only(&set) {
-        return set;
+        return (set, None);
     }
-    match calibrate(&set, desc, &CalibrationOptions::default()) {
+    let options = CalibrationOptions {
+        noise_rms_3d_mm: noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),
+        estimate_noise: noise_mm.is_none(),
+        ..CalibrationOptions::default()
+    };
+    match calibrate(&set, desc, &options) {
         // What `calibrate` warns of (a mirrored frame, a flipped axis) the diagnosis cannot see.
         Ok(cal) => {
             for found in implausible(&cal, desc) {
                 eprintln!("warning: {}: {found}", data.display());
             }
-            set
+            (set, Some(cal))
         }
         Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) => {
             eprintln!(
                 "note: {}: {e}; every row is diagnosed as a free pose instead (as `calibrate` fits them)",
                 data.display()
             );
-            set.every_row_a_free_pose()
+            (set.every_row_a_free_pose(), None)
         }
-        _ => set,
+        _ => (set, None),
     }
 }
 

@@ -7,7 +7,8 @@ use super::output::Outputs;
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::Calibration;
 use axiscal::calibration::procedure::{PointResidual, read_residuals_csv};
-use axiscal::certificate::{CertificateInputs, certificate, data_mismatches, held_out, html};
+use axiscal::certificate::{CertificateInputs, HELD_OUT_FALSE_ALARM, certificate, data_mismatches, held_out, html};
+use axiscal::diagnosis::free_pose_misses;
 use axiscal::iso9283::IsoFigures;
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -115,6 +116,11 @@ pub fn run(args: Args) -> Result<()> {
         Some(p) => {
             let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
             checks::one_setup(&set, p, "the held-out poses' prediction")?;
+            if !args.checks.skip_unit_check {
+                let misses = free_pose_misses(&set, &cal, &fitted, HELD_OUT_FALSE_ALARM)
+                    .with_context(|| format!("held-out poses of {}", p.display()))?;
+                checks::refuse_explained_misses(&misses, p, false)?;
+            }
             Some(
                 held_out(&p.display().to_string(), &set, &cal, &fitted)
                     .with_context(|| format!("held-out poses of {}", p.display()))?,

@@ -6,12 +6,11 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::calibration::procedure::CalibrationOptions;
-use axiscal::calibration::procedure::OutlierPoint;
+use axiscal::calibration::procedure::{Calibration, CalibrationOptions, OutlierPoint, ProcedureError, screen_sweeps};
 use axiscal::diagnosis::{
     ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate, validation_residuals_csv,
 };
-use axiscal::diagnosis::{PoseResiduals, pose_point_outliers, without_outliers};
+use axiscal::diagnosis::{PoseResiduals, explained_misses, free_poses_only, pose_point_outliers, without_outliers};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
@@ -44,8 +43,8 @@ pub struct Args {
     /// Two-sided false-alarm rate of the chi-square verdicts.
     #[arg(long, default_value_t = 0.01, value_parser = InRange::above(0.0, 0.5, ""))]
     false_alarm: f64,
-    /// Keep the free-pose points the outlier test flags in the tests (each is said on stderr
-    /// either way).
+    /// Keep the points the outlier tests flag in the tests: the axis experiments' points (tested
+    /// as `calibrate` tests them) and the free-pose points (each is said on stderr either way).
     #[arg(long)]
     keep_outliers: bool,
     /// Replace existing output files.
@@ -78,7 +77,12 @@ pub fn run(args: Args) -> Result<()> {
         None => ValidationOptions::of_calibration(&cal, args.false_alarm),
     };
     let validating = || format!("validating on {}", args.data.display());
+    let (set, flagged) = without_sweep_outliers(&args, set, &desc, &cal, &options)?;
+    checks::print_warnings(&flagged);
+    warnings.extend(flagged);
     let v = validate(&set, &cal, &fitted, &options).with_context(validating)?;
+    let misses = explained_misses(&set, &cal, &fitted, &v);
+    checks::refuse_explained_misses(&misses, &args.data, args.checks.skip_unit_check)?;
     let outliers = free_pose_outliers(&v, &set, args.keep_outliers);
     let flagged = checks::outlier_warnings(&outliers, &args.data, "validated");
     checks::print_warnings(&flagged);
@@ -100,6 +104,48 @@ pub fn run(args: Args) -> Result<()> {
     print_summary(&v);
     println!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
     Ok(())
+}
+
+/// `set` without the axis experiments' points the outlier test flags, as `calibrate` and
+/// `diagnose` test them ([`screen_sweeps`], weighted with the noise of `options`, with the
+/// calibration's other options), unless `--keep-outliers`; with the warning lines naming each
+/// one's file line. A gross error in one sweep row would otherwise be a "model miss" of the axis
+/// experiments and inflate their predicted repeatability (its target's mean position moves
+/// off the link); with `--keep-outliers` the same points are flagged and kept. Files without
+/// sweeps, and sweeps the procedure could not fit, are left as they are; a sweep with more points beyond the fence than
+/// [`axiscal::calibration::procedure::OUTLIER_SHARE_MAX`], or whose held joints leave the
+/// calibration's held tolerance (a step's command shifted), is refused, as `calibrate` refuses
+/// it.
+fn without_sweep_outliers(
+    args: &Args,
+    set: MeasurementSet,
+    desc: &RobotDescription,
+    cal: &Calibration,
+    options: &ValidationOptions,
+) -> Result<(MeasurementSet, Vec<String>)> {
+    if free_poses_only(&set) {
+        return Ok((set, Vec::new()));
+    }
+    let screening_options = CalibrationOptions {
+        noise_rms_3d_mm: options.noise_rms_3d_mm,
+        ..cal.options.clone()
+    };
+    // Screened as if dropped, so that `--keep-outliers` flags the same points (kept in a sweep's
+    // refits they would hide its other outliers, nothing is refitted here) and keeps them.
+    match screen_sweeps(&set, desc, &screening_options, false) {
+        Ok(mut screening) => {
+            if args.keep_outliers {
+                screening.outliers.iter_mut().for_each(|o| o.dropped = false);
+                screening.set = None;
+            }
+            let flagged = checks::outlier_warnings(&screening.outliers, &args.data, "validated");
+            Ok((screening.set.unwrap_or(set), flagged))
+        }
+        Err(e @ (ProcedureError::TooManyOutliers { .. } | ProcedureError::InconsistentCommands { .. })) => {
+            Err(anyhow::Error::new(e).context(format!("validating on {}", args.data.display())))
+        }
+        Err(_) => Ok((set, Vec::new())),
+    }
 }
 
 /// The free-pose points (`moved_joint` 0: validation and tool poses) of `set` whose residuals

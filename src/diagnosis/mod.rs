@@ -38,6 +38,7 @@ mod predicted_error;
 mod refine;
 mod report;
 mod result;
+mod slips;
 mod targets;
 mod validate;
 
@@ -57,6 +58,7 @@ pub use poses::{Pose, split, target_count, training_mask, validation_poses, vali
 pub use refine::{CARRIABLE, CarryError, carriable, carried_candidates, refine_calibration, refine_carrying};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
+pub use slips::{ExplainedMiss, MAX_FITTED_OFFSET, acceptance, explained_misses, free_pose_misses};
 pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
 pub use validate::{
     ChiSquare, Dominant, OrientationSummary, PointKind, PositionSummary, Prediction, Validation, ValidationOptions,

@@ -45,6 +45,11 @@ const KNOWN: [(f64, &str); 6] = [
     (std::f64::consts::PI / 180.0, "another unit"),
 ];
 
+/// The length units a coordinate column slips into, by the factor they make its values (the
+/// first four of the known slips: metres, micrometres, inches, centimetres): the free poses'
+/// slip search (`crate::diagnosis::explained_misses`) tries each on each column.
+pub const LENGTH_SLIPS: &[(f64, &str)] = KNOWN.split_at(4).0;
+
 /// The known unit nearest (in log scale) to `ratio`.
 fn likely(ratio: f64) -> &'static str {
     KNOWN

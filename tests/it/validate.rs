@@ -360,9 +360,10 @@ fn validate_and_diagnose_agree() {
 }
 
 /// `validate` on a simulated campaign with target ids 0 and 1 swapped at one step of an axis
-/// experiment: the validation poses are consistent, the axis line exceeds, and the headline
-/// says the calibrated model misses part of the data, naming the axis experiments; the clean
-/// file's headline is consistent.
+/// experiment: the swapped point is flagged by its line as an outlier of its sweep (as
+/// `calibrate` flags it) and left out; kept (`--keep-outliers`), the validation poses are
+/// consistent, the axis line exceeds, and the headline says the calibrated model misses part of
+/// the data, naming the axis experiments; the clean file's headline is consistent.
 #[test]
 fn the_validate_headline_never_contradicts_a_part_that_exceeds() {
     let dir = tempfile::tempdir().unwrap();
@@ -373,16 +374,18 @@ fn the_validate_headline_never_contradicts_a_part_that_exceeds() {
         .args(["calibrate", "c.csv", "--out", "cal"])
         .assert()
         .success();
-    let validate = |data: &str, out: &str| {
+    let validate = |data: &str, out: &str, extra: &[&str]| {
         let o = axiscal()
             .current_dir(d)
             .args(["validate", "--calibration", "cal/calibration.json", data, "--out", out])
+            .args(extra)
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        String::from_utf8_lossy(&o.stdout).into_owned()
+        let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+        (text(&o.stdout), text(&o.stderr))
     };
-    let clean = validate("c.csv", "clean");
+    let (clean, _) = validate("c.csv", "clean", &[]);
     assert!(clean.starts_with("consistent with the prediction"), "{clean}");
     common::altered_csv(
         &d.join("c.csv"),
@@ -394,7 +397,10 @@ fn the_validate_headline_never_contradicts_a_part_that_exceeds() {
             }
         },
     );
-    let text = validate("swap.csv", "swap");
+    let (text, err) = validate("swap.csv", "dropped", &[]);
+    assert!(err.contains("outlier: experiment axis2 step 5 target 0"), "{err}");
+    assert!(text.starts_with("consistent with the prediction"), "{text}");
+    let (text, _) = validate("swap.csv", "swap", &["--keep-outliers"]);
     let headline = text.lines().next().unwrap();
     assert!(
         headline.starts_with("the calibrated model misses part of these data: the axis experiments' points")

@@ -6,8 +6,10 @@
 use super::Calibration;
 use crate::calibration::tool_accuracy::{ModelCovariance, model_parameter_names};
 use crate::measurement::format_f64;
-use crate::measurement::unit_check::row_slips;
-use crate::robot::{CouplingFunction, ModelError, RobotModel, Transmission};
+use crate::measurement::unit_check::{MAX_ROW_LENGTH_M, row_slips};
+use crate::robot::{
+    CouplingFunction, MAX_INSTRUMENT_FRAME_MM, ModelError, Placement, RobotModel, Transmission, angle_deg_problem,
+};
 use nalgebra::DMatrix;
 
 /// The largest noise level a calibration may record, 3-D RMS \[mm\]: beyond any instrument
@@ -37,12 +39,17 @@ fn invalid(field: impl Into<String>, message: impl Into<String>) -> InvalidCalib
 }
 
 impl Calibration {
-    /// Checks the values a command uses: the robot model ([`RobotModel::validate`]) and its
-    /// rows' lengths ([`row_slips`]: no robot link is 20 m long), the
+    /// Checks the values a command uses: one joint count across the fields that list the
+    /// joints (`robot.joints`, `robot.rows`, `reference_cmd`), the robot model
+    /// ([`RobotModel::validate`]) and its lengths and angles by the descriptions' rules
+    /// ([`row_slips`]; no robot link is 20 m long, an angle lies within a turn), the
     /// fitted transmissions' and couplings' harmonics, one value per joint where a list is per
-    /// joint, the noise levels and the model covariance ([`ModelCovariance::validate`]).
+    /// joint (each joint's axis once), the noise levels and the model covariance
+    /// ([`ModelCovariance::validate`]).
     pub fn validate(&self) -> Result<(), InvalidCalibration> {
+        self.check_joint_count()?;
         self.robot.validate().map_err(in_robot)?;
+        check_model_ranges(&self.robot)?;
         if let Some(slip) = row_slips(&self.robot.rows).into_iter().next() {
             return Err(invalid(
                 format!("robot.{}", slip.field),
@@ -59,6 +66,31 @@ impl Calibration {
             Some(c) => c.validate(&self.robot),
             None => Ok(()),
         }
+    }
+
+    /// `robot.joints`, `robot.rows` (one fewer) and `reference_cmd` count the same joints: when
+    /// two of them agree, the third is the field that was cut or extended (a deleted joint is
+    /// said as `robot.joints`, not as the rows it no longer matches).
+    fn check_joint_count(&self) -> Result<(), InvalidCalibration> {
+        let (joints, by_rows, by_commands) = (
+            self.robot.joints.len(),
+            self.robot.rows.len() + 1,
+            self.reference_cmd.len(),
+        );
+        if joints == by_rows || by_rows != by_commands {
+            // Consistent, or no two fields agree against `robot.joints`: `RobotModel::validate`
+            // and the joint lists say which field is off.
+            return Ok(());
+        }
+        Err(invalid(
+            "robot.joints",
+            format!(
+                "{joints} entries, where `robot.rows` ({} rows) and `reference_cmd` ({by_commands} values) say the \
+                 robot has {by_rows} joints: a joint's entry was deleted or repeated; restore the file \
+                 `axiscal calibrate` wrote (or recalibrate)",
+                self.robot.rows.len()
+            ),
+        ))
     }
 
     /// `reference_cmd` has a finite value per joint; `row_sigma` one per row (or none, a
@@ -101,6 +133,20 @@ impl Calibration {
                 ));
             }
         }
+        // One axis per joint: a repeated entry would be counted twice by the reports and the
+        // certificate (and may differ from the first).
+        for (i, a) in self.axes.iter().enumerate() {
+            if let Some(first) = self.axes[..i].iter().position(|b| b.joint == a.joint) {
+                return Err(invalid(
+                    format!("axes[{i}].joint"),
+                    format!(
+                        "joint {} again (`axes[{first}]` is joint {} too): one entry per calibrated joint; the file was \
+                         edited, restore the file `axiscal calibrate` wrote (or recalibrate)",
+                        a.joint, a.joint
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -126,6 +172,71 @@ impl Calibration {
             )),
             None => Ok(()),
         }
+    }
+}
+
+/// The calibrated model's lengths and angles by the rules a description's obey
+/// (`docs/formats.md#robot-description`): the tool frame within [`MAX_ROW_LENGTH_M`] of its
+/// link (as a description's tool and targets, no robot link is longer), the base within
+/// [`MAX_INSTRUMENT_FRAME_MM`] of the instrument's origin, and every angle (phi, the rows',
+/// the frames' roll, pitch and yaw) within a turn ([`angle_deg_problem`]). A calibration
+/// fits values a few per cent from the description's; beyond these limits a value was edited
+/// or damaged, and every prediction with it would be silently wrong.
+fn check_model_ranges(robot: &RobotModel) -> Result<(), InvalidCalibration> {
+    let restore = "; the file was damaged or edited: restore the value `axiscal calibrate` wrote (or recalibrate)";
+    let tool_mm = nalgebra::Vector3::from(robot.tool_frame.translation_mm).norm();
+    if !(tool_mm.is_finite() && tool_mm <= MAX_ROW_LENGTH_M * 1e3) {
+        return Err(invalid(
+            "robot.tool_frame.translation_mm",
+            format!(
+                "{} mm from the last link is beyond {MAX_ROW_LENGTH_M} m, further than any robot link is long (the \
+                 values are in mm){restore}",
+                format_f64(tool_mm)
+            ),
+        ));
+    }
+    if let Some(c) = robot
+        .placement
+        .translation_mm
+        .iter()
+        .find(|c| !(c.is_finite() && c.abs() <= MAX_INSTRUMENT_FRAME_MM))
+    {
+        return Err(invalid(
+            "robot.placement.translation_mm",
+            format!(
+                "{} mm: the robot's base lies within 1 km of the instrument's origin (each coordinate within \
+                 +-{MAX_INSTRUMENT_FRAME_MM:e} mm){restore}",
+                format_f64(*c)
+            ),
+        ));
+    }
+    let frame_angles = |key: &'static str, p: &Placement| {
+        p.rpy_deg
+            .iter()
+            .enumerate()
+            .map(move |(i, v)| (format!("robot.{key}.rpy_deg[{i}]"), *v))
+            .collect::<Vec<_>>()
+    };
+    let mut angles = frame_angles("tool_frame", &robot.tool_frame);
+    angles.extend(frame_angles("placement", &robot.placement));
+    for (k, j) in robot.joints.iter().enumerate() {
+        angles.push((format!("robot.joints[{k}].phi_deg"), j.phi_deg));
+    }
+    for (k, r) in robot.rows.iter().enumerate() {
+        for (key, v) in [
+            ("alpha_deg", r.alpha_deg),
+            ("beta_deg", r.beta_deg),
+            ("gamma_deg", r.gamma_deg),
+        ] {
+            angles.push((format!("robot.rows[{k}].{key}"), v));
+        }
+    }
+    match angles
+        .into_iter()
+        .find_map(|(field, v)| Some((field, angle_deg_problem(v)?)))
+    {
+        Some((field, why)) => Err(invalid(field, format!("{why}{restore}"))),
+        None => Ok(()),
     }
 }
 

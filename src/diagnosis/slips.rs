@@ -1,0 +1,557 @@
+//! Free-pose misses a slip in the data explains (`validate`, `report --held-out`, `diagnose`):
+//! when the calibrated model misses a free-pose experiment's points (validation poses, the
+//! tool observation) by more than [`GROSS_MISS_FACTOR`] times its test's acceptance, the usual
+//! slips of a measurement file are tried on that experiment's rows, one at a time: a command
+//! column in radians (metres for a sliding joint), negated, halved or doubled; two command
+//! columns swapped; a coordinate column in metres, micrometres, inches or centimetres
+//! ([`crate::measurement::unit_check::LENGTH_SLIPS`], the factors the sweeps' unit checks know)
+//! or negated; two coordinate columns swapped; the tool target ids in another order. The one
+//! that brings the rows within the test's acceptance ([`acceptance`]: the RMS the noise, the
+//! robot's repeatability and the calibration's own error predict, times the chi-square
+//! quantile of the validation's own test) with the least RMS is the slip said, with its column.
+//! When none does, a constant offset of one command column is fitted (a zero that moved, or a
+//! column shifted, [`MIN_FITTED_OFFSET`] to [`MAX_FITTED_OFFSET`]). A miss no slip explains
+//! stays the model's.
+//!
+//! The search is finite and cheap: about 60 rewrites of the experiment's rows, each predicted
+//! once, and one offset fit. It runs only on experiments the model misses grossly, so valid data
+//! never pay it.
+
+use super::DiagnosisError;
+use super::noise::CleanCampaign;
+use super::validate::{PointKind, PositionSummary, Validation, ValidationOptions, Verdict, validate};
+use crate::calibration::procedure::Calibration;
+use crate::kinematics::JointKind;
+use crate::measurement::unit_check::LENGTH_SLIPS;
+use crate::measurement::{Measurement, MeasurementSet, format_f64};
+use crate::numerics::stats::chi_square_quantile;
+use crate::plan::TOOL_EXPERIMENT;
+use crate::robot::RobotDescription;
+use std::collections::BTreeMap;
+
+/// A fitted command offset beyond this \[deg or mm\] is not said: half a turn is no zero
+/// shift a robot keeps, and the fit's start (no offset) is too far from it to trust.
+pub const MAX_FITTED_OFFSET: f64 = 180.0;
+
+/// A fitted command offset below this \[deg or mm\] is not said either: a smaller shift is a
+/// zero error of the joint (what a calibration fits, or an effect the diagnosis looks for),
+/// not a column shifted by hand; a degree moves a target 1 m from its axis by 17 mm, far beyond
+/// any calibration's predicted error.
+pub const MIN_FITTED_OFFSET: f64 = 1.0;
+
+/// The search runs only on misses beyond this many times the test's acceptance
+/// ([`acceptance`]): a slip moves the points by millimetres to metres where a calibration
+/// predicts tenths; a nearer miss is the model's (an effect `diagnose` looks for), and a
+/// rewrite that changes the predictions a little could pass the acceptance by chance.
+pub const GROSS_MISS_FACTOR: f64 = 3.0;
+
+/// Experiments with fewer poses than this are not searched: one or two poses (the tool
+/// observation) give too few points for about 60 rewrites and a fitted offset not to explain
+/// some of them by chance.
+pub const MIN_SEARCHED_POSES: usize = 3;
+
+/// The offset the least squares find is refined within this \[deg or mm\] either way on the
+/// validation's own statistic (golden-section search, [`refined_offset`]): the calibration's
+/// error, shared by every pose, moves the least-squares offset by tenths of a degree from the
+/// one its test accepts.
+const OFFSET_REFINE_HALF_WIDTH: f64 = 1.0;
+
+/// Gauss-Newton steps of the offset fit: the residuals are smooth in the offset (sines and
+/// cosines of the joint angles), and a step below [`OFFSET_STEP_DONE`] ends the fit earlier.
+const OFFSET_ITERATIONS: usize = 20;
+
+/// An offset step below this \[deg or mm\] ends its fit: a thousandth of a degree moves a
+/// point 3 m from its axis by 0.05 mm, below any instrument's noise.
+const OFFSET_STEP_DONE: f64 = 1e-3;
+
+/// One rewrite of an experiment's rows, in words.
+struct Hypothesis {
+    /// The column (or columns) it names: `cmd_2`, `x_mm,y_mm`, `target`.
+    field: String,
+    /// What the data then are: "`cmd_2` looks like radians rather than degrees".
+    claim: String,
+    /// How the rows are read under it: "with `cmd_2` read as radians".
+    reading: String,
+    /// The rewrite of one row.
+    apply: Box<dyn Fn(&mut Measurement)>,
+}
+
+fn hypothesis(field: String, [claim, reading]: [String; 2], apply: impl Fn(&mut Measurement) + 'static) -> Hypothesis {
+    Hypothesis {
+        field,
+        claim,
+        reading,
+        apply: Box::new(apply),
+    }
+}
+
+/// The command columns' slips: in radians (a revolute joint) or metres (a sliding one), negated,
+/// twice or half the file's unit; every pair of columns swapped.
+fn command_hypotheses(desc: &RobotDescription) -> Vec<Hypothesis> {
+    let mut out = Vec::new();
+    for (k, j) in desc.joints.iter().enumerate() {
+        let c = format!("`cmd_{}`", k + 1);
+        let (unit, factor, other) = match j.kind {
+            JointKind::Revolute => ("degrees", 180.0 / std::f64::consts::PI, "radians"),
+            JointKind::Prismatic => ("millimetres", 1e3, "metres"),
+        };
+        let scaled = [
+            (
+                factor,
+                [
+                    format!("{c} looks like {other} rather than {unit}"),
+                    format!("with {c} read as {other}"),
+                ],
+            ),
+            (
+                -1.0,
+                [
+                    format!("{c} is negated (its joint's positive direction reversed)"),
+                    format!("with {c} negated"),
+                ],
+            ),
+            (0.5, [format!("{c} holds twice the {unit}"), format!("with {c} halved")]),
+            (2.0, [format!("{c} holds half the {unit}"), format!("with {c} doubled")]),
+        ];
+        for (f, words) in scaled {
+            out.push(hypothesis(format!("cmd_{}", k + 1), words, move |m| m.cmd[k] *= f));
+        }
+        for b in k + 1..desc.dof() {
+            out.push(hypothesis(
+                format!("cmd_{},cmd_{}", k + 1, b + 1),
+                [
+                    format!("{c} and `cmd_{}` are swapped", b + 1),
+                    format!("with {c} and `cmd_{}` swapped back", b + 1),
+                ],
+                move |m| m.cmd.swap(k, b),
+            ));
+        }
+    }
+    out
+}
+
+/// The coordinate columns' slips: each in another length unit ([`LENGTH_SLIPS`]) or negated;
+/// every pair swapped.
+fn coordinate_hypotheses() -> Vec<Hypothesis> {
+    const NAMES: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
+    let mut out = Vec::new();
+    for (c, name) in NAMES.iter().enumerate() {
+        for &(ratio, unit) in LENGTH_SLIPS {
+            let words = [
+                format!("`{name}` looks like {unit} rather than millimetres"),
+                format!("with `{name}` read as {unit}"),
+            ];
+            out.push(hypothesis((*name).into(), words, move |m| m.position_mm[c] /= ratio));
+        }
+        let words = [format!("`{name}` is negated"), format!("with `{name}` negated")];
+        out.push(hypothesis((*name).into(), words, move |m| {
+            m.position_mm[c] = -m.position_mm[c]
+        }));
+        for (d, other) in NAMES.iter().enumerate().skip(c + 1) {
+            out.push(hypothesis(
+                format!("{name},{other}"),
+                [
+                    format!("`{name}` and `{other}` are swapped"),
+                    format!("with `{name}` and `{other}` swapped back"),
+                ],
+                move |m| m.position_mm.swap(c, d),
+            ));
+        }
+    }
+    out
+}
+
+/// Every other order of the tool targets' ids (`targets` of them, at most 3: 5 orders).
+fn target_hypotheses(targets: usize) -> Vec<Hypothesis> {
+    let orders: Vec<Vec<usize>> = match targets {
+        2 => vec![vec![1, 0]],
+        3 => vec![
+            vec![1, 0, 2],
+            vec![2, 1, 0],
+            vec![0, 2, 1],
+            vec![1, 2, 0],
+            vec![2, 0, 1],
+        ],
+        _ => Vec::new(),
+    };
+    orders
+        .into_iter()
+        .map(|order| {
+            let moved: Vec<String> = order
+                .iter()
+                .enumerate()
+                .filter(|(a, b)| a != *b)
+                .map(|(a, b)| format!("{a} is {b}"))
+                .collect();
+            let words = [
+                format!("the target ids are mixed up ({})", moved.join(", ")),
+                format!("with the target ids renumbered ({})", moved.join(", ")),
+            ];
+            hypothesis("target".into(), words, move |m| {
+                if let Some(&t) = order.get(m.target) {
+                    m.target = t;
+                }
+            })
+        })
+        .collect()
+}
+
+/// The RMS \[mm\] by which `cal` misses `rows` (each rewritten by `apply`), or `None` when
+/// the rewritten rows cannot be predicted (a command beyond a coupling's range).
+fn rms_with(
+    rows: &[Measurement],
+    apply: &dyn Fn(&mut Measurement),
+    cal: &Calibration,
+    desc: &RobotDescription,
+) -> Option<f64> {
+    let residuals = residuals_with(rows, apply, cal, desc)?;
+    Some((residuals.iter().map(|r| r * r).sum::<f64>() / rows.len() as f64).sqrt())
+}
+
+/// The residual coordinates \[mm\] of `rows` rewritten by `apply` against `cal`'s prediction.
+fn residuals_with(
+    rows: &[Measurement],
+    apply: &dyn Fn(&mut Measurement),
+    cal: &Calibration,
+    desc: &RobotDescription,
+) -> Option<Vec<f64>> {
+    let rewritten: Vec<Measurement> = rows
+        .iter()
+        .map(|m| {
+            let mut m = m.clone();
+            apply(&mut m);
+            m
+        })
+        .collect();
+    let set = MeasurementSet::new(desc.dof(), rewritten).ok()?;
+    let predicted = CleanCampaign::new(&set, cal, desc, &desc.tool_targets_m())
+        .ok()?
+        .positions();
+    let out: Vec<f64> = set
+        .rows()
+        .iter()
+        .zip(&predicted)
+        .flat_map(|(m, p)| (0..3).map(move |c| m.position_mm[c] - p[c] * 1e3))
+        .collect();
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+/// One Gauss-Newton step from the offset `d` of command column `k` (0-based) of `rows` against
+/// `cal`'s prediction (central differences of 1e-3 deg or mm); `None` when the rows cannot be
+/// predicted or do not move with the column.
+fn offset_step(rows: &[Measurement], k: usize, d: f64, cal: &Calibration, desc: &RobotDescription) -> Option<f64> {
+    let at = |d: f64| residuals_with(rows, &move |m: &mut Measurement| m.cmd[k] += d, cal, desc);
+    let h = 1e-3;
+    let (r, plus, minus) = (at(d)?, at(d + h)?, at(d - h)?);
+    let jacobian: Vec<f64> = plus.iter().zip(&minus).map(|(p, m)| (p - m) / (2.0 * h)).collect();
+    let jj: f64 = jacobian.iter().map(|j| j * j).sum();
+    (jj > 0.0).then(|| -jacobian.iter().zip(&r).map(|(j, r)| j * r).sum::<f64>() / jj)
+}
+
+/// The offset of command column `k` (0-based) that brings `rows` nearest `cal`'s prediction,
+/// fitted by Gauss-Newton from no offset ([`offset_step`]); `None` when the fit leaves
+/// [`MAX_FITTED_OFFSET`] or the rows cannot be predicted.
+fn fitted_offset(rows: &[Measurement], k: usize, cal: &Calibration, desc: &RobotDescription) -> Option<f64> {
+    let mut d = 0.0;
+    for _ in 0..OFFSET_ITERATIONS {
+        let step = offset_step(rows, k, d, cal, desc)?;
+        d += step;
+        if !(d.is_finite() && d.abs() <= MAX_FITTED_OFFSET) {
+            return None;
+        }
+        if step.abs() < OFFSET_STEP_DONE {
+            break;
+        }
+    }
+    Some(d)
+}
+
+/// The largest RMS \[mm\] of `points` points that still passes a test with prediction
+/// `predicted_mm`: `predicted * sqrt(q / (3 n))`, `q` the chi-square quantile at the upper
+/// `false_alarm / 2` with `3 n` degrees of freedom (the validation's own two-sided test).
+pub fn acceptance(predicted_mm: f64, points: usize, false_alarm: f64) -> f64 {
+    let dof = 3.0 * points as f64;
+    predicted_mm * (chi_square_quantile(1.0 - 0.5 * false_alarm, dof) / dof).sqrt()
+}
+
+/// The summary of `kind` in `v`, when its test says the model misses its points.
+fn missed(v: &Validation, kind: PointKind) -> Option<&PositionSummary> {
+    let s = match kind {
+        PointKind::Validation => v.validation.as_ref(),
+        PointKind::Tool => v.tool.as_ref(),
+        PointKind::Axis => None,
+    }?;
+    s.chi_square
+        .as_ref()
+        .is_some_and(|c| c.verdict == Verdict::Exceeds)
+        .then_some(s)
+}
+
+/// A free-pose experiment the calibrated model misses, and the slip of its rows that explains
+/// the miss ([`explained_misses`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExplainedMiss {
+    /// The experiment (`validation`, `tool`).
+    pub experiment: String,
+    /// The file line of its first row, when known.
+    pub line: Option<u64>,
+    /// The column (or columns) the slip names: `cmd_2`, `x_mm,y_mm`, `target`.
+    pub field: String,
+    /// The miss, the RMS with the slip undone and what the column looks like.
+    pub message: String,
+}
+
+/// The slips that explain `v`'s misses of `set`'s free-pose experiments (module docs), one per
+/// experiment explained. `desc` is the description `v` was made with.
+pub fn explained_misses(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    v: &Validation,
+) -> Vec<ExplainedMiss> {
+    let mut experiments: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for (i, m) in set.rows().iter().enumerate().filter(|(_, m)| m.moved_joint == 0) {
+        experiments.entry(m.experiment.as_str()).or_default().push(i);
+    }
+    let options = ValidationOptions {
+        noise_rms_3d_mm: v.noise_rms_3d_mm,
+        noise_source: v.noise_source.clone(),
+        false_alarm: v.false_alarm,
+        noise_dof: v.noise_dof,
+    };
+    let mut out = Vec::new();
+    for (name, indices) in experiments {
+        let kind = if name == TOOL_EXPERIMENT {
+            PointKind::Tool
+        } else {
+            PointKind::Validation
+        };
+        let Some(summary) = missed(v, kind) else {
+            continue;
+        };
+        let rows: Vec<Measurement> = indices.iter().map(|&i| set.rows()[i].clone()).collect();
+        if rows
+            .iter()
+            .map(|m| m.step)
+            .collect::<std::collections::BTreeSet<_>>()
+            .len()
+            < MIN_SEARCHED_POSES
+        {
+            continue;
+        }
+        let bound = acceptance(summary.predicted_mm.total, rows.len(), v.false_alarm);
+        let rms = (indices.iter().map(|&i| v.residuals[i].error_mm.powi(2)).sum::<f64>() / rows.len() as f64).sqrt();
+        if !(rms.is_finite() && rms > GROSS_MISS_FACTOR * bound) {
+            continue;
+        }
+        if let Some(e) = best_explanation(&rows, (cal, desc), &options, bound) {
+            out.push(ExplainedMiss {
+                experiment: name.to_string(),
+                line: set.line_of(indices[0]),
+                field: e.hypothesis.field,
+                message: format!(
+                    "the calibrated model misses experiment {name}'s {} points by {:.4} mm RMS where {:.4} mm is \
+                     predicted, and by {:.4} mm (chi2/dof {:.3}: within the prediction) {}: in these rows {}",
+                    rows.len(),
+                    rms,
+                    summary.predicted_mm.total,
+                    e.rms_mm,
+                    e.per_dof,
+                    e.hypothesis.reading,
+                    e.hypothesis.claim
+                ),
+            });
+        }
+    }
+    out
+}
+
+/// At most this many rewrites, those with the least RMS, are tested with the validation's own
+/// test ([`confirmed`]): the ones behind them miss by more, and each test costs a validation of
+/// the rows.
+const TESTED_REWRITES: usize = 3;
+
+/// A rewrite that explains the rows: the hypothesis, its RMS \[mm\] and its test's chi-square
+/// per degree of freedom.
+struct Explanation {
+    hypothesis: Hypothesis,
+    rms_mm: f64,
+    per_dof: f64,
+}
+
+/// The rows the model no longer misses grossly under each of `hypotheses` (their RMS at most
+/// [`GROSS_MISS_FACTOR`] times `bound_mm`), least RMS first, the first of them the
+/// validation's own test accepts ([`confirmed`]) with its RMS and statistic.
+fn first_confirmed(
+    hypotheses: Vec<Hypothesis>,
+    rows: &[Measurement],
+    (cal, desc): (&Calibration, &RobotDescription),
+    options: &ValidationOptions,
+    bound_mm: f64,
+) -> Option<Explanation> {
+    let mut near: Vec<(Hypothesis, f64)> = hypotheses
+        .into_iter()
+        .filter_map(|h| {
+            let rms = rms_with(rows, &h.apply, cal, desc)?;
+            (rms <= GROSS_MISS_FACTOR * bound_mm).then_some((h, rms))
+        })
+        .collect();
+    near.sort_by(|a, b| a.1.total_cmp(&b.1));
+    near.into_iter().take(TESTED_REWRITES).find_map(|(hypothesis, rms_mm)| {
+        let per_dof = confirmed(rows, &hypothesis.apply, cal, desc, options)?;
+        Some(Explanation {
+            hypothesis,
+            rms_mm,
+            per_dof,
+        })
+    })
+}
+
+/// The chi-square per degree of freedom of `rows` rewritten by `apply` when the validation's
+/// own test ([`validate`] with `options`) accepts them (not `exceeds`); `None` when it does not
+/// or they cannot be predicted.
+fn confirmed(
+    rows: &[Measurement],
+    apply: &dyn Fn(&mut Measurement),
+    cal: &Calibration,
+    desc: &RobotDescription,
+    options: &ValidationOptions,
+) -> Option<f64> {
+    let rewritten: Vec<Measurement> = rows
+        .iter()
+        .map(|m| {
+            let mut m = m.clone();
+            apply(&mut m);
+            m
+        })
+        .collect();
+    let set = MeasurementSet::new(desc.dof(), rewritten).ok()?;
+    let v = validate(&set, cal, desc, options).ok()?;
+    let test = v.validation.as_ref().or(v.tool.as_ref())?.chi_square.as_ref()?;
+    (test.verdict != Verdict::Exceeds).then_some(test.per_dof)
+}
+
+/// The hypothesis (module docs) under which the validation's own test accepts `rows`, with the
+/// least RMS, if any: the finite set first, then one command column's fitted offset.
+fn best_explanation(
+    rows: &[Measurement],
+    (cal, desc): (&Calibration, &RobotDescription),
+    options: &ValidationOptions,
+    bound_mm: f64,
+) -> Option<Explanation> {
+    let targets = rows.iter().map(|m| m.target + 1).max().unwrap_or(0);
+    let mut all = command_hypotheses(desc);
+    all.extend(coordinate_hypotheses());
+    all.extend(target_hypotheses(targets.min(desc.tool_targets_m().len())));
+    first_confirmed(all, rows, (cal, desc), options, bound_mm).or_else(|| {
+        let offset = offset_hypothesis(rows, (cal, desc), options)?;
+        first_confirmed(vec![offset], rows, (cal, desc), options, bound_mm)
+    })
+}
+
+/// The statistic of the validation's own test ([`validate`] with `options`) of `rows` rewritten
+/// by `apply` (infinite when they cannot be predicted).
+fn statistic_with(
+    rows: &[Measurement],
+    apply: &dyn Fn(&mut Measurement),
+    (cal, desc): (&Calibration, &RobotDescription),
+    options: &ValidationOptions,
+) -> f64 {
+    let rewritten: Vec<Measurement> = rows
+        .iter()
+        .map(|m| {
+            let mut m = m.clone();
+            apply(&mut m);
+            m
+        })
+        .collect();
+    let value = MeasurementSet::new(desc.dof(), rewritten)
+        .ok()
+        .and_then(|set| validate(&set, cal, desc, options).ok())
+        .and_then(|v| Some(v.validation.or(v.tool)?.chi_square?.value));
+    value.filter(|v| v.is_finite()).unwrap_or(f64::INFINITY)
+}
+
+/// The offset of command column `k` (0-based) within [`OFFSET_REFINE_HALF_WIDTH`] of `d` that
+/// minimises the validation's own statistic ([`statistic_with`]): golden-section search to
+/// [`OFFSET_STEP_DONE`].
+fn refined_offset(
+    rows: &[Measurement],
+    k: usize,
+    d: f64,
+    model: (&Calibration, &RobotDescription),
+    options: &ValidationOptions,
+) -> f64 {
+    let at = |d: f64| statistic_with(rows, &move |m: &mut Measurement| m.cmd[k] += d, model, options);
+    let ratio = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut lo, mut hi) = (d - OFFSET_REFINE_HALF_WIDTH, d + OFFSET_REFINE_HALF_WIDTH);
+    let (mut a, mut b) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
+    let (mut fa, mut fb) = (at(a), at(b));
+    while hi - lo > OFFSET_STEP_DONE {
+        if fa <= fb {
+            (hi, b, fb) = (b, a, fa);
+            a = hi - ratio * (hi - lo);
+            fa = at(a);
+        } else {
+            (lo, a, fa) = (a, b, fb);
+            b = lo + ratio * (hi - lo);
+            fb = at(b);
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The fitted offset of the command column ([`fitted_offset`]) that leaves the least RMS,
+/// refined on the validation's statistic ([`refined_offset`]), as a hypothesis, when it is at
+/// least [`MIN_FITTED_OFFSET`].
+fn offset_hypothesis(
+    rows: &[Measurement],
+    (cal, desc): (&Calibration, &RobotDescription),
+    options: &ValidationOptions,
+) -> Option<Hypothesis> {
+    let (k, d, _) = (0..desc.dof())
+        .filter_map(|k| {
+            let d = fitted_offset(rows, k, cal, desc)?;
+            Some((
+                k,
+                d,
+                rms_with(rows, &move |m: &mut Measurement| m.cmd[k] += d, cal, desc)?,
+            ))
+        })
+        .min_by(|a, b| a.2.total_cmp(&b.2))
+        .filter(|(_, d, _)| d.abs() >= MIN_FITTED_OFFSET)?;
+    let d = refined_offset(rows, k, d, (cal, desc), options);
+    let unit = desc.joints[k].kind.file_unit();
+    let shown = |v: f64| format_f64((v * 1e3).round() / 1e3);
+    let words = [
+        format!(
+            "`cmd_{}` is offset by {} {unit} from the calibration: the joint's zero moved since the calibration \
+             (re-mastered?), the column was shifted, or the calibration's zero of the joint was edited",
+            k + 1,
+            shown(-d)
+        ),
+        format!("with {} {unit} added to `cmd_{}`", shown(d), k + 1),
+    ];
+    Some(hypothesis(format!("cmd_{}", k + 1), words, move |m| m.cmd[k] += d))
+}
+
+/// [`explained_misses`] of the free poses of `set` (validation and tool poses, the axis
+/// experiments left out), validated with the noise `cal` was weighted with at two-sided
+/// false-alarm rate `false_alarm`: for the commands that do not validate the whole file
+/// (`report --held-out`, `diagnose`). Empty without free poses.
+pub fn free_pose_misses(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    false_alarm: f64,
+) -> Result<Vec<ExplainedMiss>, DiagnosisError> {
+    let others: Vec<usize> = (0..set.rows().len())
+        .filter(|&i| set.rows()[i].moved_joint > 0)
+        .collect();
+    if others.len() == set.rows().len() {
+        return Ok(Vec::new());
+    }
+    let subset = set.without_rows(&others);
+    let v = validate(&subset, cal, desc, &ValidationOptions::of_calibration(cal, false_alarm))?;
+    Ok(explained_misses(&subset, cal, desc, &v))
+}
