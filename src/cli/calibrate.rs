@@ -289,7 +289,7 @@ pub fn run(args: Args) -> Result<()> {
         None => {
             print_axes(&cal, &desc, &source);
             for found in &texts.implausible {
-                eprintln!("warning: {found}");
+                eprintln!("warning: {found}{}", tool_rows(found, &set, &args.data));
             }
         }
     }
@@ -317,6 +317,25 @@ pub fn run(args: Args) -> Result<()> {
         super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
     }
     Ok(())
+}
+
+/// The file lines of the tool rows a [`Implausible::ToolMisfit`] is about (` (FILE lines
+/// 3, 4, 5)`), empty for any other finding.
+fn tool_rows(found: &Implausible, set: &MeasurementSet, data: &Path) -> String {
+    let Implausible::ToolMisfit { experiment, step, .. } = found else {
+        return String::new();
+    };
+    let lines: Vec<String> = set
+        .rows()
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.experiment == *experiment && m.step == *step)
+        .filter_map(|(i, _)| set.line_of(i).map(|l| l.to_string()))
+        .collect();
+    if lines.is_empty() {
+        return String::new();
+    }
+    format!(" ({} lines {})", data.display(), lines.join(", "))
 }
 
 /// `cal` passes the checks every command makes when it reads `calibration.json`: a parameter

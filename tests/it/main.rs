@@ -34,6 +34,7 @@ mod hostile_results;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
+mod hostile_round4a;
 mod iso9283;
 mod joint_map;
 mod json_schemas;
