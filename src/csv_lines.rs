@@ -42,7 +42,8 @@ fn is_binary_byte(b: u8) -> bool {
 
 /// What a file whose first bytes are `start` is instead of a text CSV: JSON (its first
 /// non-blank character opens an object or an array, which no CSV header does) or binary (a
-/// control byte, [`is_binary_byte`]); `None` when it may be a CSV.
+/// control byte: C0 controls but tab, line feed, form feed and carriage return; DEL); `None`
+/// when it may be a CSV.
 pub fn not_text_csv(start: &[u8]) -> Option<String> {
     let head = &start[..start.len().min(4096)];
     if let Some(at) = head.iter().position(|&b| is_binary_byte(b)) {
