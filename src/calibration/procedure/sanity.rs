@@ -125,11 +125,11 @@ pub enum Implausible {
         rms_mm: f64,
         /// The noise's 3-D RMS \[mm\].
         noise_mm: f64,
-        /// The fit's chi-square and its degrees of freedom.
+        /// The fit's chi-square.
         chi_square: f64,
         /// Degrees of freedom.
         dof: usize,
-        /// The chi-square's [`TOOL_FIT_FALSE_ALARM`] upper quantile.
+        /// The chi-square's upper quantile at `1 - TOOL_FIT_FALSE_ALARM`.
         limit: f64,
     },
     /// A joint's fit misses its points by far more than the others'.
