@@ -45,6 +45,43 @@ pub fn foreign_separator(name: &str) -> Option<&'static str> {
         .map(|(_, words)| words)
 }
 
+/// A row with `fields` cells under a header of `columns` names, in words: a shifted row (a
+/// decimal comma, a separator inside a value) would put its values in the wrong columns.
+pub fn wider_than_header(fields: usize, columns: usize) -> String {
+    format!(
+        "the row has {fields} fields, the header {columns}: a decimal comma or a separator in a value, or a missing \
+         header name?"
+    )
+}
+
+/// Control bytes a text CSV never holds (C0 controls but tab, line feed, form feed and
+/// carriage return; DEL): one of them in a file's start marks it as binary.
+fn is_binary_byte(b: u8) -> bool {
+    (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0c)) || b == 0x7f
+}
+
+/// What a file whose first bytes are `start` is instead of a text CSV: JSON (its first
+/// non-blank character opens an object or an array, which no CSV header does) or binary (a
+/// control byte: C0 controls but tab, line feed, form feed and carriage return; DEL); `None`
+/// when it may be a CSV.
+pub fn not_text_csv(start: &[u8]) -> Option<String> {
+    let head = &start[..start.len().min(4096)];
+    if let Some(at) = head.iter().position(|&b| is_binary_byte(b)) {
+        return Some(format!(
+            "not a text file (binary): byte 0x{:02x} at offset {at}, a control character no CSV holds",
+            head[at]
+        ));
+    }
+    match head.iter().find(|b| !b.is_ascii_whitespace()) {
+        Some(b'{' | b'[') => Some(
+            "it looks like JSON (it starts with `{` or `[`), not a CSV whose first line names the columns \
+             (experiment,moved_joint,step,target,x_mm,y_mm,z_mm,cmd_1,..)"
+                .into(),
+        ),
+        _ => None,
+    }
+}
+
 /// A cell as an error message shows it: as written up to 60 characters, else its first 40 and
 /// its length (`aaaa…[5000000 characters]`), so a 5 MB field does not become a 5 MB message.
 pub fn shown_cell(text: &str) -> String {

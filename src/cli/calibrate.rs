@@ -289,7 +289,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => {
             print_axes(&cal, &desc, &source);
-            print_implausible(&texts.implausible, &desc, &args);
+            print_implausible(&texts.implausible, &desc, &set, &args);
         }
     }
     say!("{}", texts.deviation_line);
@@ -316,6 +316,25 @@ pub fn run(args: Args) -> Result<()> {
         super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
     }
     Ok(())
+}
+
+/// The file lines of the tool rows a [`Implausible::ToolMisfit`] is about (` (FILE lines
+/// 3, 4, 5)`), empty for any other finding.
+fn tool_rows(found: &Implausible, set: &MeasurementSet, data: &Path) -> String {
+    let Implausible::ToolMisfit { experiment, step, .. } = found else {
+        return String::new();
+    };
+    let lines: Vec<String> = set
+        .rows()
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.experiment == *experiment && m.step == *step)
+        .filter_map(|(i, _)| set.line_of(i).map(|l| l.to_string()))
+        .collect();
+    if lines.is_empty() {
+        return String::new();
+    }
+    format!(" ({} lines {})", data.display(), lines.join(", "))
 }
 
 /// `cal` passes the checks every command makes when it reads `calibration.json`: a parameter
@@ -518,8 +537,9 @@ fn sweeps_as_free_poses(
 /// The sanity checks' findings ([`implausible`]) as warnings; a size off by a factor says
 /// that the description, not only the coordinates, may be at fault when the data do not record
 /// this very description ([`checks::description_suspect`]).
-fn print_implausible(found: &[Implausible], desc: &RobotDescription, args: &Args) {
+fn print_implausible(found: &[Implausible], desc: &RobotDescription, set: &MeasurementSet, args: &Args) {
     for f in found {
+        let rows = tool_rows(f, set, &args.data);
         let suspect = match f {
             Implausible::Size { .. } => {
                 let recorded = checks::data_identity(&args.data).ok().flatten();
@@ -528,8 +548,8 @@ fn print_implausible(found: &[Implausible], desc: &RobotDescription, args: &Args
             _ => None,
         };
         match suspect {
-            Some(s) => eprintln!("warning: {f}; {s}"),
-            None => eprintln!("warning: {f}"),
+            Some(s) => eprintln!("warning: {f}{rows}; {s}"),
+            None => eprintln!("warning: {f}{rows}"),
         }
     }
 }

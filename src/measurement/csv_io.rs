@@ -41,8 +41,8 @@ pub enum MeasurementFileError {
         /// What the CSV parser said.
         message: String,
     },
-    /// The file has no header row.
-    #[error("{path}: empty file: no header row")]
+    /// The file has no header row (nothing, or white space only).
+    #[error("{path}: empty file (nothing but white space): no header row")]
     Empty {
         /// The file.
         path: PathBuf,
@@ -122,6 +122,26 @@ pub enum MeasurementFileError {
     CarriageReturnsOnly {
         /// The file.
         path: PathBuf,
+    },
+    /// A row has more non-empty fields than the header names columns: a shifted row.
+    #[error("{path}:{line}: {}", crate::csv_lines::wider_than_header(*fields, *columns))]
+    LongRow {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// Its fields (up to the last non-empty one).
+        fields: usize,
+        /// The header's columns.
+        columns: usize,
+    },
+    /// The file is not a text CSV (JSON, binary): no column could be named in it.
+    #[error("{path}: not a measurement CSV: {what}")]
+    NotCsv {
+        /// The file.
+        path: PathBuf,
+        /// What it looks like instead.
+        what: String,
     },
     /// A row ends before this column.
     #[error("{path}:{line}: column `{column}`: missing value (row shorter than the header)")]
@@ -258,6 +278,16 @@ pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<Meas
     if start.contains(&b'\r') && !start.contains(&b'\n') {
         return Err(MeasurementFileError::CarriageReturnsOnly { path: path.into() });
     }
+    let whole = std::fs::metadata(path).is_ok_and(|m| m.len() == start.len() as u64);
+    if whole && start.iter().all(u8::is_ascii_whitespace) {
+        return Err(MeasurementFileError::Empty { path: path.into() });
+    }
+    if let Some(what) = crate::csv_lines::not_text_csv(start) {
+        return Err(MeasurementFileError::NotCsv {
+            path: path.into(),
+            what,
+        });
+    }
     read_measurements_from(reader, path, joint_count)
 }
 
@@ -309,6 +339,20 @@ pub fn read_measurements_from<R: io::Read>(
         }
         let line = line_at(record.position());
         commented_row_before(&index, line, path)?;
+        // Checked before any value: a decimal comma shifts every later cell into the wrong
+        // column, where it would be read as some other, wrong, number.
+        let fields = (0..record.len())
+            .rev()
+            .find(|&i| !record[i].trim().is_empty())
+            .map_or(0, |i| i + 1);
+        if fields > header.len() {
+            return Err(MeasurementFileError::LongRow {
+                path: path.into(),
+                line,
+                fields,
+                columns: header.len(),
+            });
+        }
         let cells = Cells {
             record: &record,
             header: &header,

@@ -21,6 +21,9 @@ use crate::measurement::{Measurement, MeasurementSet, format_f64};
 use crate::robot::{RobotDescription, RowEntry, commands_to_internal};
 use nalgebra::{Point3, Vector3};
 
+mod commands;
+mod experiments;
+
 /// A ratio this far from 1 (either way) is a unit slip, not a robot's deviation.
 pub const SLIP_FACTOR: f64 = 5.0;
 /// The longest plausible row length \[m\] of a robot arm.
@@ -35,27 +38,63 @@ pub struct UnitSlip {
     pub message: String,
 }
 
-/// Known slips by their factor: (factor, what data in those units look like).
-const KNOWN: [(f64, &str); 6] = [
+/// Length units the coordinate columns may be in instead of millimetres, by the factor (the
+/// file's value over the millimetres) they give.
+const LENGTH_UNITS: [(f64, &str); 4] = [
     (1e-3, "metres"),
     (1e3, "micrometres"),
     (1.0 / 25.4, "inches"),
     (1e-1, "centimetres"),
-    (180.0 / std::f64::consts::PI, "radians"),
-    (std::f64::consts::PI / 180.0, "another unit"),
 ];
 
-/// The length units a coordinate column slips into, by the factor they make its values (the
-/// first four of the known slips: metres, micrometres, inches, centimetres): the free poses'
-/// slip search (`crate::diagnosis::explained_misses`) tries each on each column.
-pub const LENGTH_SLIPS: &[(f64, &str)] = KNOWN.split_at(4).0;
+/// The length units a coordinate column slips into, by the factor they make its values: the
+/// free poses' slip search (`crate::diagnosis::explained_misses`) tries each on each column.
+pub const LENGTH_SLIPS: &[(f64, &str)] = &LENGTH_UNITS;
 
-/// The known unit nearest (in log scale) to `ratio`.
-fn likely(ratio: f64) -> &'static str {
-    KNOWN
+/// Units a revolute joint's commands may be in instead of degrees, by the ratio they give of
+/// the angle a target turns to the commanded span read as degrees.
+const ANGLE_UNITS: [(f64, &str); 4] = [
+    (180.0 / std::f64::consts::PI, "radians"),
+    (180.0 / std::f64::consts::PI / 1e3, "milliradians"),
+    (360.0 / 400.0, "gradians"),
+    (1e-3, "millidegrees"),
+];
+
+/// A ratio is said to be a unit's when within this factor of the unit's (either way): the
+/// data of a robot within its description's tolerances and an instrument within its scale's
+/// give a unit's factor within per cent; [`SPREAD_WARNING`] (a quarter) is beyond both.
+fn unit_of(units: &[(f64, &'static str)], ratio: f64) -> Option<&'static str> {
+    units
         .iter()
-        .min_by(|a, b| (a.0.ln() - ratio.ln()).abs().total_cmp(&(b.0.ln() - ratio.ln()).abs()))
-        .map_or("another unit", |k| k.1)
+        .map(|(f, unit)| ((f.ln() - ratio.ln()).abs(), *unit))
+        .filter(|(d, _)| *d < SPREAD_WARNING.ln())
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, unit)| unit)
+}
+
+/// What coordinates `ratio` times the millimetres expected look like, in words: a length
+/// unit ([`LENGTH_UNITS`]), or the factor when no unit gives it (never an angle's unit).
+fn coordinates_look(ratio: f64) -> String {
+    match unit_of(&LENGTH_UNITS, ratio) {
+        Some(unit) => format!("look like {unit} rather than millimetres"),
+        None => format!(
+            "look scaled by {} against millimetres (no length unit's factor)",
+            format_f64((ratio * 1e4).round() / 1e4)
+        ),
+    }
+}
+
+/// What revolute commands whose targets turn `ratio` times the commanded span read as
+/// degrees look like, in words: an angle unit ([`ANGLE_UNITS`]), or the factor the commands
+/// are of the degrees (never a length's unit).
+fn commands_look(ratio: f64) -> String {
+    match unit_of(&ANGLE_UNITS, ratio) {
+        Some(unit) => format!("look like {unit} rather than degrees"),
+        None => format!(
+            "look scaled by {} against degrees (no angle unit's factor)",
+            format_f64((1e4 / ratio).round() / 1e4)
+        ),
+    }
 }
 
 fn slipped(ratio: f64) -> bool {
@@ -197,7 +236,7 @@ fn targets_beyond_the_arm(desc: &RobotDescription, points: &[(String, f64)]) -> 
 
 /// Centre, radius and the angle from `a` over `b` to `c` of the circle through three points,
 /// or `None` when they are (nearly) collinear.
-fn circle_through(a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> Option<(f64, f64)> {
+fn circle_through(a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> Option<(Point3<f64>, f64, f64)> {
     let (u, v) = (b - a, c - a);
     let w = u.cross(&v);
     let w2 = w.norm_squared();
@@ -207,7 +246,7 @@ fn circle_through(a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> Option<(
     // Circumcentre of a triangle in 3-D.
     let centre = a + (v.cross(&w) * u.norm_squared() + w.cross(&u) * v.norm_squared()) / (2.0 * w2);
     let angle = |p: &Point3<f64>, q: &Point3<f64>| (p - centre).angle(&(q - centre));
-    Some(((a - centre).norm(), angle(a, b) + angle(b, c)))
+    Some((centre, (a - centre).norm(), angle(a, b) + angle(b, c)))
 }
 
 /// Median of `values` (NaN when empty).
@@ -219,26 +258,42 @@ fn median(mut values: Vec<f64>) -> f64 {
     values[values.len() / 2]
 }
 
-/// One axis experiment's target-0 arc: median radius \[file length units\] and the ratio of
-/// the turned angle to the commanded span (both read in degrees).
-fn arc_of(rows: &[&Measurement], k: usize) -> Option<(f64, f64)> {
+/// One axis experiment's target-0 arc ([`arc_of`]).
+struct Arc {
+    /// Median radius \[file length units\].
+    radius: f64,
+    /// Component-wise median centre \[file length units\].
+    centre: Point3<f64>,
+    /// Median ratio of the turned angle to the commanded span (both read in degrees).
+    turn_ratio: f64,
+}
+
+/// One axis experiment's target-0 arc from the circles through its point triples.
+fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
     let m = rows.len() / 3;
     if m == 0 {
         return None;
     }
-    let (mut radii, mut ratios) = (Vec::new(), Vec::new());
+    let (mut radii, mut ratios, mut centres) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..m {
         let (a, b, c) = (rows[i], rows[i + m], rows[i + 2 * m]);
         let p = |r: &Measurement| Point3::from(Vector3::from(r.position_mm));
         let commanded = (c.cmd[k] - a.cmd[k]).abs();
-        if let Some((radius, angle)) = circle_through(&p(a), &p(b), &p(c))
+        if let Some((centre, radius, angle)) = circle_through(&p(a), &p(b), &p(c))
             && commanded > 0.0
         {
+            centres.push(centre);
             radii.push(radius);
             ratios.push(angle.to_degrees() / commanded);
         }
     }
-    Some((median(radii), median(ratios)))
+    let turn_ratio = median(ratios);
+    let centre = Point3::from(Vector3::from_fn(|k, _| median(centres.iter().map(|c| c[k]).collect())));
+    Some(Arc {
+        centre,
+        radius: median(radii),
+        turn_ratio,
+    })
 }
 
 /// An arc whose sagitta, as the description and the commands give it, is below this \[mm\]
@@ -287,17 +342,32 @@ fn too_short_to_judge(rows: &[&Measurement], k: usize, radius_mm: f64) -> bool {
             || !slipped(measured_chord(rows, k) / chord))
 }
 
-/// The radius \[mm\] the description gives the target of `rows` (target 0 of joint `joint`,
-/// 1-based) about its axis at the first row's commands.
-fn nominal_radius_mm(desc: &RobotDescription, joint: usize, first: &Measurement) -> Option<f64> {
+/// The radius \[mm\] target 0 of joint `joint` (1-based) turns on about its axis on `model`
+/// (the description's nominal) at joint values `q`.
+fn nominal_radius_with(
+    model: &crate::kinematics::PhiModel,
+    desc: &RobotDescription,
+    joint: usize,
+    q: &[f64],
+) -> Option<f64> {
+    nominal_circle(model, desc, joint, q).map(|(_, r)| r)
+}
+
+/// The centre \[mm, the nominal base frame\] and radius \[mm\] of the circle target 0 of joint
+/// `joint` (1-based) turns on about its axis on `model` at joint values `q`.
+fn nominal_circle(
+    model: &crate::kinematics::PhiModel,
+    desc: &RobotDescription,
+    joint: usize,
+    q: &[f64],
+) -> Option<(Point3<f64>, f64)> {
     let target = desc.axis_targets_of(joint)?.target0;
-    let model = desc.nominal_model();
-    let q = commands_to_internal(desc, &first.cmd);
-    let poses = model.poses(&q);
+    let poses = model.poses(q);
     let axis = poses.axis(joint - 1);
     let p = poses.world_from_link.get(target.link - 1)? * target.position_m();
     let d = p - axis.origin_m;
-    Some((d - axis.direction.into_inner() * d.dot(&axis.direction)).norm() * 1e3)
+    let along = axis.direction.into_inner() * d.dot(&axis.direction);
+    Some(((axis.origin_m + along) * 1e3, (d - along).norm() * 1e3))
 }
 
 /// The free poses may spread this much more or less (a ratio) than the nominal model at their
@@ -334,12 +404,12 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
     one_column_slip(set, desc).map_or(slips, |one| vec![one])
 }
 
-/// The coordinate column (`x_mm`, `y_mm` or `z_mm`) in another length unit (of [`KNOWN`])
+/// The coordinate column (`x_mm`, `y_mm` or `z_mm`) in another length unit (of [`LENGTH_UNITS`])
 /// while the other two are millimetres: the one column whose conversion to millimetres leaves
 /// no slip at all, when converting every column by one factor does not. A single column's slip distorts every arc and the free poses' spread, and
 /// would be said as the whole file's coordinates or commands in another unit.
 fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
-    let lengths = &KNOWN[..4];
+    let lengths = &LENGTH_UNITS;
     // Every column in one other unit: the free poses' spread may pass with one column converted
     // alone (it is mostly that column's), but the whole file's slip is the one to say.
     let all_scaled = |factor: f64| (0..3).fold(set.clone(), |s, c| s.with_coordinate_scaled(c, factor));
@@ -363,9 +433,35 @@ fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<Unit
     })
 }
 
-/// [`measurement_slips`] of the file's columns as they are.
-fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
-    let (mut scale, mut angle) = (Vec::new(), Vec::new());
+/// One revolute axis experiment's target-0 arc, with what the description says of it.
+struct ExperimentArc {
+    /// The moved joint (1-based).
+    joint: usize,
+    /// The experiment's id.
+    name: String,
+    /// The commands of its first target-0 row, as read.
+    first_cmd: Vec<f64>,
+    /// The arc measured.
+    arc: Arc,
+    /// The radius the description gives it at `first_cmd` \[mm\], when above 1 mm.
+    nominal_mm: Option<f64>,
+    /// The centre the description gives it at `first_cmd` \[mm, the nominal base frame\].
+    nominal_centre_mm: Option<Point3<f64>>,
+    /// Its target-0 rows, by step.
+    rows: Vec<Measurement>,
+    /// Degrees target 0 turns per degree of the command and its sigma ([`commands::turn_slope`]).
+    turn: Option<(f64, f64)>,
+    /// The same of the description's nominal robot at the same commands.
+    nominal_turn: Option<f64>,
+}
+
+/// The judged arcs of the revolute axis experiments' target 0 (a sweep too short to judge is
+/// left out: the calibration says when it is too short to locate its axis).
+fn experiment_arcs(set: &MeasurementSet, desc: &RobotDescription) -> Vec<ExperimentArc> {
+    let mut arcs = Vec::new();
+    let model = desc.nominal_model();
+    let ideal = crate::robot::RobotModel::ideal(desc);
+    let controller = crate::robot::Controller::from_description(desc);
     for e in set.experiments().iter().filter(|e| e.moved_joint > 0) {
         let joint = e.moved_joint;
         if desc.joints.get(joint - 1).is_none_or(|j| j.kind != JointKind::Revolute) {
@@ -376,27 +472,61 @@ fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip>
         let Some(first) = rows.first() else {
             continue;
         };
-        let nominal = nominal_radius_mm(desc, joint, first).filter(|r| *r > 1.0);
-        if nominal.is_some_and(|r| too_short_to_judge(&rows, joint - 1, r)) {
-            // Its radius and angle would be the noise's; the calibration says when the sweep is
-            // too short to locate its axis.
+        let nominal = nominal_circle(&model, desc, joint, &commands_to_internal(desc, &first.cmd));
+        let nominal_mm = nominal.map(|c| c.1).filter(|r| *r > 1.0);
+        if nominal_mm.is_some_and(|r| too_short_to_judge(&rows, joint - 1, r)) {
             continue;
         }
-        let Some((radius, turn_ratio)) = arc_of(&rows, joint - 1) else {
-            continue;
-        };
-        if let Some(nominal) = nominal {
-            scale.push((
-                radius / nominal,
-                format!(
-                    "{}: target 0 turns on a radius of {radius:.4} where the description gives {nominal:.1} mm",
-                    e.name
-                ),
-            ));
+        if let Some(arc) = arc_of(&rows, joint - 1) {
+            let owned: Vec<Measurement> = rows.iter().map(|m| (*m).clone()).collect();
+            arcs.push(ExperimentArc {
+                joint,
+                name: e.name.to_string(),
+                first_cmd: first.cmd.clone(),
+                arc,
+                nominal_mm,
+                nominal_centre_mm: nominal.map(|c| c.0),
+                turn: commands::turn_slope(&owned, joint - 1),
+                nominal_turn: commands::nominal_turn_slope(desc, &ideal, &controller, &owned, joint),
+                rows: owned,
+            });
         }
-        angle.push((turn_ratio, joint, e.name.to_string()));
     }
-    let mut slips = Vec::new();
+    arcs
+}
+
+/// [`measurement_slips`] of the file's columns as they are.
+fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
+    let all = experiment_arcs(set, desc);
+    if let Some(offset) = commands::offset_command(desc, &all) {
+        return vec![offset];
+    }
+    let ratios: Vec<f64> = all.iter().filter_map(|a| Some(a.arc.radius / a.nominal_mm?)).collect();
+    let in_scale = ratios.is_empty() || median(ratios).ln().abs() <= SPREAD_WARNING.ln();
+    let (mut slips, said) = experiments::misplaced(&all, in_scale);
+    let arcs: Vec<&ExperimentArc> = all
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !said.contains(i))
+        .map(|(_, a)| a)
+        .collect();
+    let scale: Vec<(f64, String)> = arcs
+        .iter()
+        .filter_map(|a| {
+            let nominal = a.nominal_mm?;
+            Some((
+                a.arc.radius / nominal,
+                format!(
+                    "{}: target 0 turns on a radius of {:.4} where the description gives {nominal:.1} mm",
+                    a.name, a.arc.radius
+                ),
+            ))
+        })
+        .collect();
+    let angle: Vec<(f64, usize, String)> = arcs
+        .iter()
+        .map(|a| (a.arc.turn_ratio, a.joint, a.name.clone()))
+        .collect();
     let ratio = median(scale.iter().map(|s| s.0).collect());
     if slipped(ratio)
         && let Some((_, example)) = scale
@@ -407,8 +537,8 @@ fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip>
             field: "x_mm,y_mm,z_mm".into(),
             message: format!(
                 "the measured arcs are {ratio:.4} times the size the description gives them ({example}): the \
-                 coordinates look like {} rather than millimetres",
-                likely(ratio)
+                 coordinates {}",
+                coordinates_look(ratio)
             ),
         });
     }
@@ -419,12 +549,13 @@ fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip>
                 field: "x_mm,y_mm,z_mm".into(),
                 message: format!(
                     "{example}, {r:.4} times, where the file's other arcs match the description: this \
-                     experiment's coordinates look like {} rather than millimetres",
-                    likely(*r)
+                     experiment's coordinates {}",
+                    coordinates_look(*r)
                 ),
             });
         }
     }
+    slips.extend(commands::scaled_commands(&arcs));
     let bad: Vec<&(f64, usize, String)> = angle.iter().filter(|a| slipped(a.0)).collect();
     if let (Some(lo), Some(hi)) = (
         bad.iter().map(|a| a.0).min_by(f64::total_cmp),
@@ -440,10 +571,9 @@ fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip>
         slips.push(UnitSlip {
             field: columns.join(","),
             message: format!(
-                "the targets turn {times} times the commanded span read as degrees ({}): the commands look like {} \
-                 rather than degrees",
+                "the targets turn {times} times the commanded span read as degrees ({}): the commands {}",
                 experiments.join(", "),
-                likely(median(bad.iter().map(|a| a.0).collect()))
+                commands_look(median(bad.iter().map(|a| a.0).collect()))
             ),
         });
     }
@@ -638,7 +768,7 @@ pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Uni
         return Vec::new();
     };
     let (ratio, measured, nominal) = (spread.ratio, spread.measured_mm, spread.nominal_mm);
-    let unit = likely(ratio);
+    let radians = unit_of(&ANGLE_UNITS[..1], ratio).is_some();
     let what = format!(
         "the {} free poses' (moved_joint = 0) measured tool positions spread {measured:.4} (RMS about their centroid) where the nominal model at their commands spreads them {nominal:.1} mm, {ratio:.4} times",
         spread.poses
@@ -650,7 +780,7 @@ pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Uni
         .filter(|(_, j)| j.kind == JointKind::Revolute)
         .map(|(k, _)| format!("cmd_{}", k + 1))
         .collect();
-    let slip = if unit == "radians" && !revolute.is_empty() {
+    let slip = if radians && !revolute.is_empty() {
         UnitSlip {
             field: revolute.join(","),
             message: format!("{what}: the commands look like radians rather than degrees"),
@@ -658,7 +788,7 @@ pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Uni
     } else {
         UnitSlip {
             field: "x_mm,y_mm,z_mm".into(),
-            message: format!("{what}: the coordinates look like {unit} rather than millimetres"),
+            message: format!("{what}: the coordinates {}", coordinates_look(ratio)),
         }
     };
     vec![slip]
@@ -708,7 +838,7 @@ pub fn pose_slips(positions_m: &[Point3<f64>], desc: &RobotDescription) -> Optio
     let what = if ratio > 2.0 {
         "beyond any pose's reach: another unit (poses in metres read as millimetres sit at the instrument's origin) or another frame than the instrument's?".to_string()
     } else {
-        format!("they look like {}", likely(ratio))
+        format!("they {}", coordinates_look(ratio))
     };
     slipped(ratio).then(|| UnitSlip {
         field: "x_mm,y_mm,z_mm".into(),
@@ -726,7 +856,7 @@ mod tests {
     #[test]
     fn a_circle_through_three_points_has_its_radius_and_angle() {
         let on = |t: f64| Point3::new(1.0 + 2.0 * t.cos(), -3.0, 0.5 + 2.0 * t.sin());
-        let (r, a) = circle_through(&on(0.1), &on(0.5), &on(1.2)).unwrap();
+        let (_, r, a) = circle_through(&on(0.1), &on(0.5), &on(1.2)).unwrap();
         assert!((r - 2.0).abs() < 1e-12 && (a - 1.1).abs() < 1e-12, "{r} {a}");
         assert!(circle_through(&on(0.1), &on(0.1), &on(0.2)).is_none());
     }
@@ -780,10 +910,14 @@ mod tests {
     }
 
     #[test]
-    fn the_likely_unit_is_the_nearest_known_factor() {
-        assert_eq!(likely(0.0011), "metres");
-        assert_eq!(likely(57.0), "radians");
-        assert_eq!(likely(0.04), "inches");
+    fn the_likely_unit_is_the_nearest_of_the_columns_kind() {
+        assert_eq!(unit_of(&LENGTH_UNITS, 0.0011), Some("metres"));
+        assert_eq!(unit_of(&LENGTH_UNITS, 0.04), Some("inches"));
+        assert_eq!(unit_of(&LENGTH_UNITS, 57.0), None);
+        assert!(coordinates_look(57.3).contains("scaled by 57.3"));
+        assert_eq!(unit_of(&ANGLE_UNITS, 57.0), Some("radians"));
+        assert_eq!(unit_of(&ANGLE_UNITS, 0.057), Some("milliradians"));
+        assert!(commands_look(0.04).contains("scaled by 25"));
         assert!(!slipped(1.3) && !slipped(0.8) && slipped(1e-3) && slipped(57.3) && !slipped(f64::NAN));
     }
 }

@@ -34,6 +34,7 @@ mod hostile_results;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
+mod hostile_round4a;
 mod hostile_round4b;
 mod hostile_round4c;
 mod hostile_round4d;

@@ -28,6 +28,13 @@
 //!   drawing. Three targets in a plane fit their mirror image (two ids swapped) exactly, turned
 //!   over by up to 180 deg. A mirrored frame or a flipped or swapped axis turns the tool over
 //!   too: it is then left unsaid.
+//! - **Tool fit.** The three-point fit of the tool frame leaves `3 n - 6` degrees of freedom
+//!   (3 for three targets) to the instrument's noise alone (one pose: no joint moves between its
+//!   points). Its residual sum of squares over the noise's per-coordinate variance (the
+//!   calibration's 3-D RMS over root 3) is chi-square; beyond its [`TOOL_FIT_FALSE_ALARM`]
+//!   upper quantile a tool row's point is off (a target id or a coordinate mistyped, the target
+//!   moved on the tool), or the description's `[tool] targets_mm` are not this tool's. Not said
+//!   beside a size finding, which explains it.
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
 use crate::kinematics::JointKind;
@@ -60,6 +67,11 @@ pub const MISFIT_RATIO: f64 = 3.0;
 /// robot; a sign convention (180 deg) or two axes' labels exchanged (the angle between them,
 /// 90 deg on most arms) are far beyond both.
 pub const PLAUSIBLE_AXIS_TILT_RAD: f64 = std::f64::consts::PI / 18.0;
+
+/// The chance that a clean tool observation's fit is said to miss ([`Implausible::ToolMisfit`]):
+/// one in a million calibrations, the chi-square quantile 30.7 on 3 dof (3.2 times the RMS the
+/// noise gives).
+pub const TOOL_FIT_FALSE_ALARM: f64 = 1e-6;
 
 /// What the checks found.
 #[derive(Clone, Debug, PartialEq)]
@@ -102,6 +114,23 @@ pub enum Implausible {
     ToolTurned {
         /// The angle between the fitted and the described tool frame (in the last link) \[deg\].
         angle_deg: f64,
+    },
+    /// The tool frame's fit misses its targets beyond the noise (module docs).
+    ToolMisfit {
+        /// The experiment observed.
+        experiment: String,
+        /// Its step.
+        step: usize,
+        /// The fit's RMS \[mm\].
+        rms_mm: f64,
+        /// The noise's 3-D RMS \[mm\].
+        noise_mm: f64,
+        /// The fit's chi-square.
+        chi_square: f64,
+        /// Degrees of freedom.
+        dof: usize,
+        /// The chi-square's upper quantile at `1 - TOOL_FIT_FALSE_ALARM`.
+        limit: f64,
     },
     /// A joint's fit misses its points by far more than the others'.
     Misfit {
@@ -155,6 +184,18 @@ impl std::fmt::Display for Implausible {
                 f,
                 "the tool frame fitted from the tool observation is turned {angle_deg:.1} deg from the description's `[tool] frame`: the tool rows' target ids swapped (three targets fit their mirror image turned over), or the description's tool frame or targets are not this tool's; check the `tool` rows' target ids against `[tool] targets_mm`"
             ),
+            Implausible::ToolMisfit {
+                experiment,
+                step,
+                rms_mm,
+                noise_mm,
+                chi_square,
+                dof,
+                limit,
+            } => write!(
+                f,
+                "the tool frame's fit to the tool targets of `{experiment}` step {step} misses them by {rms_mm:.3} mm RMS where the noise is {noise_mm:.4} mm 3-D RMS (chi-square {chi_square:.1} on {dof} dof, beyond its 1 - {TOOL_FIT_FALSE_ALARM:e} quantile {limit:.1}): a tool row's point is off (a target id or coordinate mistyped, a target moved on the tool), or the description's [tool] targets_mm are not this tool's; the tool frame and every tool prediction carry it"
+            ),
             Implausible::Misfit {
                 joint,
                 experiment,
@@ -184,7 +225,32 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
         found.extend(tool_turned(cal, desc));
     }
     found.extend(misfits(cal));
+    // A robot of another size misses the described tool targets too: the size explains it.
+    if !found.iter().any(|s| matches!(s, Implausible::Size { .. })) {
+        found.extend(tool_misfit(cal, desc));
+    }
     found
+}
+
+/// The tool-fit check of the module doc.
+fn tool_misfit(cal: &Calibration, desc: &RobotDescription) -> Option<Implausible> {
+    let tool = cal.tool.as_ref()?;
+    let noise_mm = cal.noise.as_ref()?.used_rms_3d_mm;
+    let n = desc.tool.targets_mm.len();
+    let dof = (3 * n).checked_sub(6).filter(|d| *d > 0)?;
+    // The fit's RMS is over its n points' 3-D residuals; a coordinate's variance is a third
+    // of the 3-D one.
+    let chi_square = n as f64 * tool.fit_rms_mm.powi(2) / (noise_mm.powi(2) / 3.0);
+    let limit = crate::numerics::stats::chi_square_quantile(1.0 - TOOL_FIT_FALSE_ALARM, dof as f64);
+    (noise_mm > 0.0 && chi_square > limit).then(|| Implausible::ToolMisfit {
+        experiment: tool.experiment.clone(),
+        step: tool.step,
+        rms_mm: tool.fit_rms_mm,
+        noise_mm,
+        chi_square,
+        dof,
+        limit,
+    })
 }
 
 /// The tool check of the module doc: the fitted tool frame against the described one, both in

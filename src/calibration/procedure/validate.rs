@@ -378,15 +378,26 @@ impl ModelCovariance {
 
     /// No eigenvalue below `-100 n eps` times the largest: a covariance with a negative
     /// variance along some direction gives no uncertainty (or a draw that panics).
+    /// The parameters whose row is all zeros (kept nominal: joints without an experiment) are
+    /// left out, exactly (each adds an eigenvalue 0), and the rest scaled to a largest entry of
+    /// 1: the eigen-solver does not converge on a large block of exact zeros (it gave an
+    /// eigenvalue of 1e-171 as the largest of a calibration of one joint).
     fn check_semi_definite(&self, c: DMatrix<f64>) -> Result<(), InvalidCalibration> {
-        let n = c.nrows();
-        let eigen = c.symmetric_eigen();
-        let largest = eigen.eigenvalues.amax();
-        let (k, lowest) = eigen.eigenvalues.argmin();
+        let kept: Vec<usize> = (0..c.nrows()).filter(|&r| c.row(r).iter().any(|v| *v != 0.0)).collect();
+        let n = kept.len();
+        let scale = c.amax();
+        if n == 0 || scale == 0.0 {
+            return Ok(());
+        }
+        let block = DMatrix::from_fn(n, n, |r, k| c[(kept[r], kept[k])] / scale);
+        let eigen = block.symmetric_eigen();
+        let eigenvalues = &eigen.eigenvalues * scale;
+        let largest = eigenvalues.amax();
+        let (k, lowest) = eigenvalues.argmin();
         if lowest >= -100.0 * n as f64 * f64::EPSILON * largest {
             return Ok(());
         }
-        let along = eigen.eigenvectors.column(k).iamax();
+        let along = kept[eigen.eigenvectors.column(k).iamax()];
         Err(invalid(
             "model_covariance.covariance",
             format!(

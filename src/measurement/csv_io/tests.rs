@@ -295,3 +295,34 @@ fn setups_are_read_and_round_trip() {
     write_measurements_to(&mut written, &one.unwrap()).unwrap();
     assert!(!std::str::from_utf8(&written).unwrap().contains("setup"));
 }
+
+#[test]
+fn a_row_longer_than_the_header_is_refused_and_trailing_empty_cells_are_not() {
+    let (_file, result) = read_text(&format!("{HEADER}\naxis1,1,0,0,1,2,3,0,0,,\n"), Some(2));
+    assert!(result.is_ok(), "{result:?}");
+    let (file, result) = read_text(
+        &format!("{HEADER}\naxis1,1,0,0,1,2,3,0,0\naxis1,1,1,0,1,2,3,0,0,5\n"),
+        Some(2),
+    );
+    let message = result.unwrap_err().to_string();
+    let place = format!("{}:3:", file.path().display());
+    assert!(
+        message.contains(&place) && message.contains("10 fields, the header 9"),
+        "{message}"
+    );
+}
+
+#[test]
+fn json_binary_and_blank_files_are_named() {
+    for (text, said) in [
+        (&b"{\"schema\": 1}"[..], "looks like JSON"),
+        (&[1u8, 2, 3, b'a', b',', b'b'][..], "binary"),
+        (&b"  \n\n \n"[..], "empty file"),
+    ] {
+        let mut file = tempfile::NamedTempFile::new().unwrap();
+        file.write_all(text).unwrap();
+        file.flush().unwrap();
+        let message = read_measurements(file.path(), Some(2)).unwrap_err().to_string();
+        assert!(message.contains(said), "{message}");
+    }
+}

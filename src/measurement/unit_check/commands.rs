@@ -1,0 +1,216 @@
+//! A command column of one axis experiment scaled (doubled, halved), and a command
+//! column offset by a constant (another zero reference): slips a joint's transmission or the
+//! arm's configuration would absorb into a wrong model without a word.
+//!
+//! - **Scaled.** A revolute transmission turns its joint by its command within per cent (its
+//!   harmonics are a few mrad, [`MAX_TRANSMISSION_SLOPE_DEVIATION`]). The angle target 0 turns
+//!   per commanded degree ([`turn_slope`]: its angle about the arc's centre against the command,
+//!   by least squares) over the same slope of the description's nominal robot at the same
+//!   commands (its couplings and the held joints' compensation turn the target too): a ratio
+//!   near 0.5 or 2, beyond that deviation and the noise ([`SIGMAS`] times its sigma), is that
+//!   experiment's `cmd_k` doubled or halved. Gradians (a ratio of 0.9) are not told from a
+//!   transmission's harmonics over a sweep of tens of degrees.
+//! - **Offset.** The radius each experiment's target turns on depends on the joints after the
+//!   moved one; an offset `d` of one command column changes every such radius. When the
+//!   measured radii miss the description's at the commands as read (beyond
+//!   [`super::SPREAD_WARNING`]) and one column shifted by a quarter or half turn
+//!   ([`OFFSETS_DEG`]) makes every radius match, that column is offset, not the coordinates
+//!   scaled.
+
+use super::{ExperimentArc, SPREAD_WARNING, UnitSlip};
+use crate::kinematics::{JointKind, PhiModel};
+use crate::measurement::{Measurement, format_f64};
+use crate::robot::{Controller, RobotDescription, RobotModel, commands_to_internal};
+use nalgebra::{Point3, Vector3};
+
+/// The most a revolute transmission's mean slope over a sweep differs from 1 before a factor
+/// of [`COMMAND_FACTORS`] is said: its slope is `1 + sum_k k (s_k cos kx - c_k sin kx)`, whose
+/// mean over a sweep of tens of degrees keeps much of its harmonics' size (the simulated paper
+/// robot's joint 6 turns its target up to 11 % less than described over its 50 deg sweep);
+/// a quarter leaves room for that. A doubled or halved column is 100 % or 50 % off; the gradian
+/// slip (11 %) is within what harmonics give and is not said.
+pub const MAX_TRANSMISSION_SLOPE_DEVIATION: f64 = 0.25;
+
+/// A turn ratio this many of its sigmas from 1 is beyond the noise: a normal deviate beyond 5
+/// has a chance of 6e-7, none in the thousands of experiments a study checks.
+pub const SIGMAS: f64 = 5.0;
+
+/// Factors a command column of one experiment may be scaled by, as the ratio of the turned
+/// angle to the commanded span read as degrees they give, and in words.
+const COMMAND_FACTORS: [(f64, &str); 2] = [
+    (0.5, "doubled (2 times the degrees)"),
+    (2.0, "halved (0.5 times the degrees)"),
+];
+
+/// The angle \[deg\] the points of `rows` (one target, in step order) turn about their arc's
+/// centre per degree of command `k` (0-based), and its 1-sigma from the fit's residuals: the
+/// least-squares slope of the unwrapped angles against the commands. `None` with fewer than 4
+/// points or no arc.
+pub(super) fn turn_slope(rows: &[Measurement], k: usize) -> Option<(f64, f64)> {
+    let refs: Vec<&Measurement> = rows.iter().collect();
+    let centre = super::arc_of(&refs, k)?.centre;
+    let points: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.position_mm)).collect();
+    if points.len() < 4 {
+        return None;
+    }
+    // The plane's normal from the widest triple, which the points then turn about.
+    let (a, b, c) = (points[0], points[points.len() / 2], points[points.len() - 1]);
+    let normal = (b - a).cross(&(c - a)).try_normalize(0.0)?;
+    let e1: Vector3<f64> = {
+        let d = a - centre;
+        (d - normal * d.dot(&normal)).try_normalize(0.0)?
+    };
+    let e2 = normal.cross(&e1);
+    let mut angles: Vec<f64> = Vec::with_capacity(points.len());
+    for p in &points {
+        let d = p - centre;
+        let mut angle = d.dot(&e2).atan2(d.dot(&e1)).to_degrees();
+        if let Some(last) = angles.last() {
+            angle += 360.0 * ((last - angle) / 360.0).round();
+        }
+        angles.push(angle);
+    }
+    let commands: Vec<f64> = rows.iter().map(|r| r.cmd[k]).collect();
+    let n = commands.len() as f64;
+    let (mx, my) = (commands.iter().sum::<f64>() / n, angles.iter().sum::<f64>() / n);
+    let sxx: f64 = commands.iter().map(|x| (x - mx).powi(2)).sum();
+    let sxy: f64 = commands.iter().zip(&angles).map(|(x, y)| (x - mx) * (y - my)).sum();
+    if sxx <= 0.0 {
+        return None;
+    }
+    let slope = sxy / sxx;
+    let residual: f64 = commands
+        .iter()
+        .zip(&angles)
+        .map(|(x, y)| (y - my - slope * (x - mx)).powi(2))
+        .sum();
+    Some((slope.abs(), (residual / (n - 2.0) / sxx).sqrt()))
+}
+
+/// [`turn_slope`] of `rows` as the description's nominal robot (`ideal`, its controller
+/// applying the couplings) puts target 0 of joint `joint` (1-based) at their commands.
+pub(super) fn nominal_turn_slope(
+    desc: &RobotDescription,
+    ideal: &RobotModel,
+    controller: &Controller,
+    rows: &[Measurement],
+    joint: usize,
+) -> Option<f64> {
+    let target = desc.axis_targets_of(joint)?.target0;
+    let model = ideal.phi_model();
+    let nominal: Option<Vec<Measurement>> = rows
+        .iter()
+        .map(|m| {
+            let internal = commands_to_internal(desc, &m.cmd);
+            let q = ideal.joint_values(controller, &internal).unwrap_or(internal);
+            let p = model.poses(&q).world_from_link.get(target.link - 1)? * target.position_m();
+            let mut m = m.clone();
+            m.position_mm = (p.coords * 1e3).into();
+            Some(m)
+        })
+        .collect();
+    turn_slope(&nominal?, joint - 1).map(|(slope, _)| slope)
+}
+
+/// The experiments whose revolute commands look scaled by one of [`COMMAND_FACTORS`] (module
+/// docs). A ratio beyond [`super::SLIP_FACTOR`] is a unit slip said elsewhere.
+pub(super) fn scaled_commands(arcs: &[&ExperimentArc]) -> Vec<UnitSlip> {
+    let mut slips = Vec::new();
+    for a in arcs {
+        let (Some((measured, sigma)), Some(nominal)) = (a.turn, a.nominal_turn) else {
+            continue;
+        };
+        let (ratio, sigma) = (measured / nominal, sigma / nominal);
+        let allowed = (1.0 + MAX_TRANSMISSION_SLOPE_DEVIATION).ln() + SIGMAS * sigma / ratio;
+        if super::slipped(ratio) || !ratio.is_finite() || ratio.ln().abs() <= allowed {
+            continue;
+        }
+        let Some((_, words)) = COMMAND_FACTORS
+            .iter()
+            .map(|(f, words)| ((f.ln() - ratio.ln()).abs(), *words))
+            .filter(|(d, _)| *d <= allowed)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+        else {
+            continue;
+        };
+        let joint = a.joint;
+        slips.push(UnitSlip {
+            field: format!("cmd_{joint}"),
+            message: format!(
+                "experiment {}: its target turns {ratio:.4} (+-{sigma:.4}) times as far per degree of cmd_{joint} as the \
+                 description's robot turns it at the same commands, where a transmission turns its joint within {} % \
+                 of its command: this experiment's cmd_{joint} looks {words}; the fit would take the factor for joint \
+                 {joint}'s transmission",
+                a.name,
+                MAX_TRANSMISSION_SLOPE_DEVIATION * 100.0
+            ),
+        });
+    }
+    slips
+}
+
+/// Offsets \[deg\] tried on each revolute command column: a zero reference of another
+/// convention is a quarter or a half turn away (a DH table's zero against the maker's); any
+/// other offset is a joint's own, which the calibration fits as its zero offset.
+const OFFSETS_DEG: [f64; 3] = [90.0, -90.0, 180.0];
+
+/// The largest `|ln(measured / nominal)|` radius ratio over `arcs`, with the commands of
+/// column `column` (0-based) shifted by `offset_deg` before the nominal radius is taken.
+fn worst_mismatch(model: &PhiModel, desc: &RobotDescription, arcs: &[ExperimentArc], shift: (usize, f64)) -> f64 {
+    arcs.iter()
+        .filter(|a| a.nominal_mm.is_some())
+        .map(|a| {
+            let mut cmd = a.first_cmd.clone();
+            cmd[shift.0] += shift.1;
+            let nominal = super::nominal_radius_with(model, desc, a.joint, &commands_to_internal(desc, &cmd));
+            nominal.map_or(f64::INFINITY, |n| (a.arc.radius / n).ln().abs())
+        })
+        .fold(0.0, f64::max)
+}
+
+/// A revolute command column offset by a constant (module docs), when the measured radii miss
+/// the description's at the commands as read and one column's whole-degree offset makes every
+/// one match; `None` otherwise.
+pub(super) fn offset_command(desc: &RobotDescription, arcs: &[ExperimentArc]) -> Option<UnitSlip> {
+    let tolerance = SPREAD_WARNING.ln();
+    let model = desc.nominal_model();
+    let as_read = worst_mismatch(&model, desc, arcs, (0, 0.0));
+    if as_read <= tolerance || arcs.iter().filter(|a| a.nominal_mm.is_some()).count() < 2 {
+        return None;
+    }
+    let revolute = desc
+        .joints
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.kind == JointKind::Revolute);
+    // A quarter turn one way and the other can both match (a half turn of a joint whose axis
+    // meets the previous one mirrors the arm): the one that leaves fewer commands outside the
+    // joint's limits is the robot's.
+    let outside = |c: usize, d: f64| {
+        let [lo, hi] = desc.joints[c].limits;
+        arcs.iter()
+            .flat_map(|a| a.rows.iter())
+            .filter(|m| !(lo..=hi).contains(&(m.cmd[c] + d)))
+            .count()
+    };
+    let (column, offset, _) = revolute
+        .flat_map(|(c, _)| OFFSETS_DEG.map(move |d| (c, d)))
+        .map(|(c, d)| (c, d, worst_mismatch(&model, desc, arcs, (c, d))))
+        .filter(|(_, _, worst)| *worst <= tolerance)
+        .min_by(|a, b| outside(a.0, a.1).cmp(&outside(b.0, b.1)).then(a.2.total_cmp(&b.2)))?;
+    Some(UnitSlip {
+        field: format!("cmd_{}", column + 1),
+        message: format!(
+            "the experiments' targets turn on radii up to {:.3} times off the description's at the commands as \
+             read, and all within {:.0} % of them with cmd_{} {} {} deg: cmd_{} looks offset by {} deg (another \
+             zero reference), not the coordinates scaled",
+            as_read.exp(),
+            (SPREAD_WARNING - 1.0) * 100.0,
+            column + 1,
+            if offset > 0.0 { "plus" } else { "minus" },
+            format_f64(offset.abs()),
+            column + 1,
+            format_f64(-offset),
+        ),
+    })
+}
