@@ -172,6 +172,12 @@ fn clap_one_line(e: &clap::Error) -> String {
         }
         joined.push_str(line);
     }
+    // clap's tip to pass a value after `--` makes it the command's file argument here: wrong
+    // advice for an option the command does not have.
+    let joined = match joined.find("; tip: to pass '") {
+        Some(at) if joined[at..].contains("as a value, use '-- ") => joined[..at].to_owned(),
+        _ => joined,
+    };
     joined.strip_prefix("error: ").unwrap_or(&joined).to_owned()
 }
 

@@ -46,7 +46,7 @@ pub struct Args {
     #[arg(long)]
     iso9283: Option<PathBuf>,
     /// The instrument, in words (make, model, serial number, its own calibration).
-    #[arg(long)]
+    #[arg(long, value_parser = instrument_words)]
     instrument: Option<String>,
     /// Output folder.
     #[arg(long)]
@@ -56,6 +56,17 @@ pub struct Args {
     force: bool,
     #[command(flatten)]
     checks: checks::Overrides,
+}
+
+/// `--instrument`: one line of text for the certificate, without control characters (an
+/// escape or bell byte would be written into the HTML and the report as it is).
+fn instrument_words(text: &str) -> Result<String, String> {
+    match text.chars().find(|c| c.is_control()) {
+        Some(c) => Err(format!(
+            "holds the control character {c:?}: the instrument is one line of words (make, model, serial number)"
+        )),
+        None => Ok(text.to_owned()),
+    }
 }
 
 /// The residuals beside `calibration` (`residuals.csv`), if there.

@@ -154,13 +154,16 @@ fn without_sweep_outliers(
 /// residuals; an error of the model moves a pose's targets alike), dropped unless `keep`.
 fn free_pose_outliers(v: &Validation, set: &MeasurementSet, keep: bool) -> Vec<OutlierPoint> {
     let mut poses: Vec<PoseResiduals<'_>> = Vec::new();
+    // Each pose's place in `poses`, in order of first appearance: linear in the rows.
+    let mut index: std::collections::HashMap<(&str, usize), usize> = std::collections::HashMap::new();
     for (m, r) in set.rows().iter().zip(&v.residuals).filter(|(m, _)| m.moved_joint == 0) {
         let residual = (Vector3::from(r.measured_mm) - Vector3::from(r.predicted_mm)) * 1e-3;
         let key = (m.experiment.as_str(), m.step);
-        match poses.iter_mut().find(|(k, _)| *k == key) {
-            Some((_, points)) => points.push((m.target, residual)),
-            None => poses.push((key, vec![(m.target, residual)])),
-        }
+        let at = *index.entry(key).or_insert_with(|| {
+            poses.push((key, Vec::new()));
+            poses.len() - 1
+        });
+        poses[at].1.push((m.target, residual));
     }
     pose_point_outliers(set, &poses, v.noise_rms_3d_mm * 1e-3 / 3f64.sqrt(), keep)
 }

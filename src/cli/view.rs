@@ -68,6 +68,18 @@ fn check_recording(file: &Path) -> Result<()> {
 /// Runs `axiscal view`. A missing or failing viewer is not an error (exit 0): the recording is
 /// still valid, and this prints what to do.
 pub fn run(args: Args) -> Result<()> {
+    if args.file.is_dir() {
+        bail!(
+            "{} is a folder; give the recording file (`.rrd`) in it",
+            args.file.display()
+        );
+    }
+    if args.file.exists() && !args.file.is_file() {
+        bail!(
+            "{} is not a regular file (a device or a pipe); give a recording file (`.rrd`)",
+            args.file.display()
+        );
+    }
     if !args.file.is_file() {
         bail!("no recording at {}", args.file.display());
     }

@@ -138,6 +138,25 @@ fn values_an_option_refuses_and_files_given_to_the_wrong_option_are_named() {
             &["no-header.csv", "is data, not a header", "x or x_mm or x_m"],
         ),
         case(
+            "an option the command does not have",
+            "validate --json campaign.csv --calibration cal/calibration.json --out out",
+            2,
+            &["unexpected argument '--json'"],
+        ),
+        case(
+            "a device as a recording",
+            "view /dev/null",
+            2,
+            &["/dev/null is not a regular file"],
+        ),
+        case("a folder as a recording", "view cal", 2, &["cal is a folder"]),
+        case(
+            "a control character in the instrument's words",
+            "report --calibration cal/calibration.json --instrument a\u{7}b --out out",
+            2,
+            &["--instrument", "control character"],
+        ),
+        case(
             "a commented-out pose",
             "compensate --calibration cal/calibration.json --poses commented.csv --out out.csv",
             2,
@@ -145,7 +164,12 @@ fn values_an_option_refuses_and_files_given_to_the_wrong_option_are_named() {
         ),
     ];
     for c in &cases {
-        run_case(dir.path(), c);
+        let e = run_case(dir.path(), c);
+        assert!(
+            !e.contains("use '-- "),
+            "{}: clap's tip to pass a value after `--`: {e}",
+            c.what
+        );
         clear_outputs(dir.path());
     }
     assert!(!dir.path().join("-").exists(), "no file named `-`");
