@@ -208,14 +208,13 @@ fn rms_with(
     Some((residuals.iter().map(|r| r * r).sum::<f64>() / rows.len() as f64).sqrt())
 }
 
-/// The residual coordinates \[mm\] of `rows` rewritten by `apply` against `cal`'s prediction.
-fn residuals_with(
+/// `rows` rewritten by `apply`, as a measurement set (`None` when the rewrite is not one).
+fn rewritten(
     rows: &[Measurement],
     apply: &dyn Fn(&mut Measurement),
-    cal: &Calibration,
     desc: &RobotDescription,
-) -> Option<Vec<f64>> {
-    let rewritten: Vec<Measurement> = rows
+) -> Option<MeasurementSet> {
+    let rows: Vec<Measurement> = rows
         .iter()
         .map(|m| {
             let mut m = m.clone();
@@ -223,7 +222,17 @@ fn residuals_with(
             m
         })
         .collect();
-    let set = MeasurementSet::new(desc.dof(), rewritten).ok()?;
+    MeasurementSet::new(desc.dof(), rows).ok()
+}
+
+/// The residual coordinates \[mm\] of `rows` rewritten by `apply` against `cal`'s prediction.
+fn residuals_with(
+    rows: &[Measurement],
+    apply: &dyn Fn(&mut Measurement),
+    cal: &Calibration,
+    desc: &RobotDescription,
+) -> Option<Vec<f64>> {
+    let set = rewritten(rows, apply, desc)?;
     let predicted = CleanCampaign::new(&set, cal, desc, &desc.tool_targets_m())
         .ok()?
         .positions();
@@ -417,15 +426,7 @@ fn confirmed(
     desc: &RobotDescription,
     options: &ValidationOptions,
 ) -> Option<f64> {
-    let rewritten: Vec<Measurement> = rows
-        .iter()
-        .map(|m| {
-            let mut m = m.clone();
-            apply(&mut m);
-            m
-        })
-        .collect();
-    let set = MeasurementSet::new(desc.dof(), rewritten).ok()?;
+    let set = rewritten(rows, apply, desc)?;
     let v = validate(&set, cal, desc, options).ok()?;
     let test = v.validation.as_ref().or(v.tool.as_ref())?.chi_square.as_ref()?;
     (test.verdict != Verdict::Exceeds).then_some(test.per_dof)

@@ -461,19 +461,6 @@ fn write_sweeps(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
 
 /// `residuals.csv`: one row per observed point of the axis fits (`docs/formats.md#residuals-csv`).
 pub fn residuals_csv(cal: &Calibration) -> String {
-    let header = [
-        "experiment",
-        "moved_joint",
-        "step",
-        "target",
-        "kind",
-        "radial_mm",
-        "tangential_mm",
-        "axial_mm",
-        "across_u_mm",
-        "across_v_mm",
-        "along_mm",
-    ];
     let rows = cal.residuals.iter().map(|r| {
         let [a, b, c] = r.components_mm.map(|v| format!("{v:.6}"));
         let mut row = vec![
@@ -489,8 +476,23 @@ pub fn residuals_csv(cal: &Calibration) -> String {
         }
         row
     });
-    crate::csv_lines::table_text(&header, rows)
+    crate::csv_lines::table_text(&RESIDUALS_COLUMNS, rows)
 }
+
+/// The columns of `residuals.csv`, in order.
+const RESIDUALS_COLUMNS: [&str; 11] = [
+    "experiment",
+    "moved_joint",
+    "step",
+    "target",
+    "kind",
+    "radial_mm",
+    "tangential_mm",
+    "axial_mm",
+    "across_u_mm",
+    "across_v_mm",
+    "along_mm",
+];
 
 /// Reads `residuals.csv` as [`residuals_csv`] writes it; an error names the 1-based line and
 /// the column.
@@ -511,39 +513,34 @@ pub fn read_residuals_csv(text: &str) -> Result<Vec<PointResidual>, String> {
             format!("line 1: no column `{name}`{whose}")
         })
     };
-    let names = [
-        "experiment",
-        "moved_joint",
-        "step",
-        "target",
-        "kind",
-        "radial_mm",
-        "tangential_mm",
-        "axial_mm",
-        "across_u_mm",
-        "across_v_mm",
-        "along_mm",
-    ];
-    let at: Vec<usize> = names.iter().map(|n| column(n)).collect::<Result<_, _>>()?;
+    let at: Vec<usize> = RESIDUALS_COLUMNS.iter().map(|n| column(n)).collect::<Result<_, _>>()?;
     let mut out = Vec::new();
     for (i, record) in reader.records().enumerate() {
         let line = i + 2;
         let record = record.map_err(|e| format!("line {line}: {e}"))?;
         let cell = |k: usize| record.get(at[k]).unwrap_or("");
         let parse = |k: usize| -> Result<f64, String> {
-            let v: f64 = cell(k)
-                .parse()
-                .map_err(|_| format!("line {line}: column `{}`: {:?} is not a number", names[k], cell(k)))?;
+            let v: f64 = cell(k).parse().map_err(|_| {
+                format!(
+                    "line {line}: column `{}`: {:?} is not a number",
+                    RESIDUALS_COLUMNS[k],
+                    cell(k)
+                )
+            })?;
             if v.is_finite() {
                 Ok(v)
             } else {
-                Err(format!("line {line}: column `{}`: not finite", names[k]))
+                Err(format!("line {line}: column `{}`: not finite", RESIDUALS_COLUMNS[k]))
             }
         };
         let integer = |k: usize| -> Result<usize, String> {
-            cell(k)
-                .parse()
-                .map_err(|_| format!("line {line}: column `{}`: {:?} is not a count", names[k], cell(k)))
+            cell(k).parse().map_err(|_| {
+                format!(
+                    "line {line}: column `{}`: {:?} is not a count",
+                    RESIDUALS_COLUMNS[k],
+                    cell(k)
+                )
+            })
         };
         let sliding = match cell(4) {
             "rotary" => false,
