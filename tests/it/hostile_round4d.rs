@@ -201,3 +201,41 @@ fn options_without_effect_on_axis_experiments_are_named() {
     let json = |d: &str| std::fs::read(dir.path().join(d).join("calibration.json")).unwrap();
     assert_eq!(json("out"), json("plain"), "the ignored options change nothing");
 }
+
+/// One axis experiment's commands in gradians (a factor 400/360 the transmission's fit takes
+/// up, within what a real transmission's slope may be) leave a model that misses the file's
+/// own validation poses: `calibrate` warns with the miss and the prediction. The same campaign
+/// unaltered draws no such warning.
+#[test]
+fn a_model_that_misses_the_files_own_validation_poses_is_said() {
+    let dir = tempfile::tempdir().unwrap();
+    crate::common::simulate_analytic(dir.path(), 40, 8, "campaign.csv");
+    let gradians = crate::common::altered_csv(
+        &dir.path().join("campaign.csv"),
+        "gradians.csv",
+        |_| true,
+        |f| {
+            if f[0] == "axis3" {
+                crate::common::scale_fields(f, 9..10, 400.0 / 360.0);
+            }
+        },
+    );
+    let own = "misses this file's own 40 validation poses";
+    let calibrate = |data: &Path| {
+        let a = crate::common::axiscal()
+            .current_dir(dir.path())
+            .arg("calibrate")
+            .arg(data)
+            .args(["--out", "out", "--force"])
+            .assert()
+            .success();
+        crate::common::stderr(&a)
+    };
+    let e = calibrate(&gradians);
+    assert!(e.contains(own) && e.contains("mm predicted"), "{e}");
+    let miss = crate::common::number_after(&e, "(not fitted) by ");
+    let predicted = crate::common::number_after(&e, "mm RMS against ");
+    assert!(miss > 3.0 * predicted, "{miss} against {predicted}");
+    let clean = calibrate(&dir.path().join("campaign.csv"));
+    assert!(!clean.contains(own), "{clean}");
+}
