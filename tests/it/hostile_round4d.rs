@@ -16,7 +16,8 @@ fn shipped(relative: &str) -> String {
 
 /// The folder's inputs beside `campaign.csv` and `cal/`: a poses file with a commented-out
 /// pose, a point export without a header, a scenario whose `[truth]` has a key `kind = "paper"`
-/// does not take, and the plan the export is joined to.
+/// does not take, a description whose first link weighs 1e30 kg, and the plan the export is
+/// joined to.
 fn write_inputs(dir: &Path) {
     let poses = "id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\np1,1200,100,900,0,0,0\n\
                  # p2,1100,200,800,0,0,0\np3,1150,150,850,0,0,0\n";
@@ -27,6 +28,11 @@ fn write_inputs(dir: &Path) {
     let with_path = smoke.replace("kind = \"paper\"", "kind = \"paper\"\npath = \"nonexistent.toml\"");
     assert_ne!(with_path, smoke, "ci-smoke.toml names the paper truth");
     std::fs::write(dir.join("truth-path.toml"), with_path).unwrap();
+    let irb = std::fs::read_to_string(shipped("scenarios/robots/asea-irb6l.toml")).unwrap();
+    let at = irb.find("mass_kg = ").expect("the IRB/L6 gives its links' masses");
+    let end = at + irb[at..].find('\n').unwrap();
+    let heavy = format!("{}mass_kg = 1e30{}", &irb[..at], &irb[end..]);
+    std::fs::write(dir.join("heavy.toml"), heavy).unwrap();
     crate::common::axiscal()
         .current_dir(dir)
         .args(["plan", "--out", "plan.csv"])
@@ -155,6 +161,12 @@ fn values_an_option_refuses_and_files_given_to_the_wrong_option_are_named() {
             "report --calibration cal/calibration.json --instrument a\u{7}b --out out",
             2,
             &["--instrument", "control character"],
+        ),
+        case(
+            "a link of 1e30 kg",
+            "describe heavy.toml",
+            2,
+            &["heavy.toml", "joints[0].mass_kg", "1e30 kg is not a link's mass"],
         ),
         case(
             "a commented-out pose",

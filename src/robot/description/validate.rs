@@ -16,6 +16,11 @@ const MAX_REVOLUTE_LIMIT_DEG: f64 = 3600.0;
 /// A sliding joint's limits lie within this \[mm\]: a 100 m gantry.
 const MAX_PRISMATIC_LIMIT_MM: f64 = 1e5;
 
+/// The heaviest link a description may give \[kg\]: 100 t, beyond a gantry's beam (the largest
+/// arms' links weigh a few tonnes); more is a slip or a dummy (`1e30`) that makes every gravity
+/// load absurd.
+pub const MAX_LINK_MASS_KG: f64 = 1e5;
+
 /// A joint's repeatability (1-sigma, rad or m) is at most this: 3 deg or 50 mm, a hundred
 /// times the worst arm's; larger values are slips (degrees or micro-units read as rad or m).
 pub const MAX_REPEATABILITY_SIGMA: f64 = 0.05;
@@ -162,8 +167,15 @@ impl RobotDescription {
                     "lower limit must be below upper limit".into(),
                 ));
             }
-            if j.mass_kg < 0.0 {
-                return Err((format!("joints[{k}].mass_kg"), "mass must be >= 0".into()));
+            if !(0.0..=MAX_LINK_MASS_KG).contains(&j.mass_kg) {
+                return Err((
+                    format!("joints[{k}].mass_kg"),
+                    format!(
+                        "{} kg is not a link's mass: from 0 to {MAX_LINK_MASS_KG} kg (the heaviest arms' links weigh tonnes; \
+                         grams written as kg, or a dummy value?)",
+                        format_f64(j.mass_kg)
+                    ),
+                ));
             }
             if !(0.0..=MAX_REPEATABILITY_SIGMA).contains(&j.repeatability_sigma) {
                 return Err((
