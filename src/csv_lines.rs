@@ -60,10 +60,11 @@ fn is_binary_byte(b: u8) -> bool {
     (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0c)) || b == 0x7f
 }
 
-/// What a file whose first bytes are `start` is instead of a text CSV: JSON (its first
-/// non-blank character opens an object or an array, which no CSV header does) or binary (a
-/// control byte: C0 controls but tab, line feed, form feed and carriage return; DEL); `None`
-/// when it may be a CSV.
+/// What a file whose first bytes are `start` is instead of a text CSV, by its first line that is
+/// neither blank nor a `#` comment: binary (a control byte: C0 controls but tab, line feed, form
+/// feed and carriage return; DEL), XML (a URDF: `<`), JSON (an object `{`, or an array `[` whose
+/// line holds a quote or a comma or nothing more) or TOML (a `[table]` line, or a `key = value`
+/// line: a bare or quoted key before the `=`); `None` when it may be a CSV.
 pub fn not_text_csv(start: &[u8]) -> Option<String> {
     let head = &start[..start.len().min(4096)];
     if let Some(at) = head.iter().position(|&b| is_binary_byte(b)) {
@@ -72,14 +73,36 @@ pub fn not_text_csv(start: &[u8]) -> Option<String> {
             head[at]
         ));
     }
-    match head.iter().find(|b| !b.is_ascii_whitespace()) {
-        Some(b'{' | b'[') => Some(
-            "it looks like JSON (it starts with `{` or `[`), not a CSV whose first line names the columns \
-             (experiment,moved_joint,step,target,x_mm,y_mm,z_mm,cmd_1,..)"
-                .into(),
-        ),
-        _ => None,
+    const CSV: &str =
+        "a CSV whose first line names the columns (experiment,moved_joint,step,target,x_mm,y_mm,z_mm,cmd_1,..)";
+    let text = String::from_utf8_lossy(head);
+    let first = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))?;
+    let json_array = first.starts_with('[') && (first == "[" || first.contains(['"', ',']));
+    if first.starts_with('{') || json_array {
+        return Some(format!("it looks like JSON (it starts with `{{` or `[`), not {CSV}"));
     }
+    if first.starts_with('<') {
+        let what = if text.contains("<robot") {
+            "a URDF (XML): a robot description TOML points at it with `[urdf]` `file = ...`, given as --robot"
+        } else {
+            "XML"
+        };
+        return Some(format!("it looks like {what}, not {CSV}"));
+    }
+    let table = first.starts_with('[') && first.ends_with(']');
+    let key = first.split_once('=').is_some_and(|(key, _)| {
+        let key = key.trim();
+        !key.is_empty() && key.chars().all(|c| c.is_ascii_alphanumeric() || "_-.\"".contains(c))
+    });
+    (table || key).then(|| {
+        format!(
+            "it looks like a TOML file (`key = value` lines, `[tables]`: a robot description, a scenario, a plan), not {CSV}; \
+             a description is given as --robot"
+        )
+    })
 }
 
 /// A cell as an error message shows it: as written up to 60 characters, else its first 40 and

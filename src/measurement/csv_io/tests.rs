@@ -313,11 +313,19 @@ fn a_row_longer_than_the_header_is_refused_and_trailing_empty_cells_are_not() {
 }
 
 #[test]
-fn json_binary_and_blank_files_are_named() {
+fn json_xml_toml_binary_and_blank_files_are_named() {
     for (text, said) in [
         (&b"{\"schema\": 1}"[..], "looks like JSON"),
         (&[1u8, 2, 3, b'a', b',', b'b'][..], "binary"),
         (&b"  \n\n \n"[..], "empty file"),
+        (
+            &b"<?xml version=\"1.0\"?>\n<robot name=\"r\">\n"[..],
+            "looks like a URDF",
+        ),
+        (&b"# a robot\nname = \"r\"\n[[joints]]\n"[..], "looks like a TOML file"),
+        (&b"[placement]\nx = 1\n"[..], "looks like a TOML file"),
+        (&b"description = \"a, b\"\n"[..], "looks like a TOML file"),
+        (&b"[\n  {\"a\": 1}\n]\n"[..], "looks like JSON"),
     ] {
         let mut file = tempfile::NamedTempFile::new().unwrap();
         file.write_all(text).unwrap();
