@@ -458,16 +458,7 @@ fn statistic_with(
     (cal, desc): (&Calibration, &RobotDescription),
     options: &ValidationOptions,
 ) -> f64 {
-    let rewritten: Vec<Measurement> = rows
-        .iter()
-        .map(|m| {
-            let mut m = m.clone();
-            apply(&mut m);
-            m
-        })
-        .collect();
-    let value = MeasurementSet::new(desc.dof(), rewritten)
-        .ok()
+    let value = rewritten(rows, apply, desc)
         .and_then(|set| validate(&set, cal, desc, options).ok())
         .and_then(|v| Some(v.validation.or(v.tool)?.chi_square?.value));
     value.filter(|v| v.is_finite()).unwrap_or(f64::INFINITY)
