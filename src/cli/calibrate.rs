@@ -267,6 +267,7 @@ pub fn run(args: Args) -> Result<()> {
         calibrate_axes(&args, &set, &desc)?
     };
     cal.data_digest = Some(set.digest());
+    cal.model_digest = Some(cal.robot.digest());
     readable(&cal, &args)?;
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;

@@ -5,6 +5,7 @@
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
 use axiscal::json_file::{self, Schema};
+use axiscal::kinematics::JointKind;
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::description_check::description_warnings;
 use axiscal::measurement::import::points::LengthUnit;
@@ -377,20 +378,21 @@ pub fn read_calibration_file(path: &Path) -> Result<Calibration> {
 /// against the description `desc` read from `robot`: the same joint count, and the same
 /// geometry unless `allow` ([`same_robot`]).
 pub fn read_calibration(path: &Path, desc: &RobotDescription, robot: &Path, allow: bool) -> Result<Calibration> {
-    let (cal, warning) = read_calibration_warned(path, desc, robot, allow)?;
-    print_warnings(&Vec::from_iter(warning));
+    let (cal, warnings) = read_calibration_warned(path, desc, robot, allow)?;
+    print_warnings(&warnings);
     Ok(cal)
 }
 
-/// [`read_calibration`] with its warning returned, not printed.
+/// [`read_calibration`] with its warnings returned, not printed.
 pub fn read_calibration_warned(
     path: &Path,
     desc: &RobotDescription,
     robot: &Path,
     allow: bool,
-) -> Result<(Calibration, Option<String>)> {
+) -> Result<(Calibration, Vec<String>)> {
     let cal = read_calibration_file(path)?;
-    let warning = same_robot(cal.description.as_ref(), path, desc, robot, allow)?;
+    let mut warnings = Vec::from_iter(same_robot(cal.description.as_ref(), path, desc, robot, allow)?);
+    warnings.extend(edited_model(&cal, path));
     if cal.robot.dof() != desc.dof() {
         bail!(
             "{} has {} joints but {} describes {}",
@@ -400,7 +402,34 @@ pub fn read_calibration_warned(
             desc.dof()
         );
     }
-    Ok((cal, warning))
+    if let Some(k) = (0..desc.dof()).find(|&k| cal.robot.joints[k].kind != desc.joints[k].kind) {
+        let kind = |k: JointKind| format!("{k:?}").to_lowercase();
+        bail!(
+            "{}: field `robot.joints[{k}].kind`: {}, but joint {} of {} is {}: the file was edited or belongs to \
+             another robot; restore the file `axiscal calibrate` wrote (or recalibrate)",
+            path.display(),
+            kind(cal.robot.joints[k].kind),
+            k + 1,
+            robot.display(),
+            kind(desc.joints[k].kind)
+        );
+    }
+    Ok((cal, warnings))
+}
+
+/// A warning when the calibration's `robot` is not the model `axiscal calibrate` wrote (its
+/// `model_digest` differs): every result made with it uses the edited values.
+fn edited_model(cal: &Calibration, path: &Path) -> Option<String> {
+    let recorded = cal.model_digest.as_deref()?;
+    let current = cal.robot.digest();
+    (recorded != current).then(|| {
+        format!(
+            "{}: `robot` was edited after `axiscal calibrate` wrote it (`model_digest` {recorded}, the values read \
+             {current}): every result below uses the edited values; restore the file calibrate wrote (or \
+             recalibrate) unless the edit is intended",
+            path.display()
+        )
+    })
 }
 
 /// The measurement CSV `data` for the description `desc` read from `robot`: the robot it

@@ -143,6 +143,37 @@ pub enum MeasurementFileError {
         /// What it looks like instead.
         what: String,
     },
+    /// A line repeats the header: files joined end to end, or a header pasted twice.
+    #[error(
+        "{path}:{line}: the line repeats the header (line {header_line}): two files joined end to end, or a header \
+         pasted twice; delete the line (and the rows repeated after it, if the same rows come twice)"
+    )]
+    RepeatedHeader {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The header's line.
+        header_line: u64,
+    },
+    /// A field holds an ASCII control byte, which no value or label contains.
+    #[error(
+        "{path}:{line}: column `{column}`: holds the control byte 0x{byte:02x}{}: not text a value or label \
+         contains (a DOS end-of-file mark, padding, or a damaged copy); delete it",
+        if *only { ", and nothing else" } else { "" }
+    )]
+    ControlByte {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column (its header name, or `field N` beyond the header).
+        column: String,
+        /// The first control byte.
+        byte: u8,
+        /// Whether the line holds nothing else but white space.
+        only: bool,
+    },
     /// A row ends before this column.
     #[error("{path}:{line}: column `{column}`: missing value (row shorter than the header)")]
     MissingField {
@@ -339,6 +370,7 @@ pub fn read_measurements_from<R: io::Read>(
         }
         let line = line_at(record.position());
         commented_row_before(&index, line, path)?;
+        stray_line(&record, &header, path, (line, header_line))?;
         // Checked before any value: a decimal comma shifts every later cell into the wrong
         // column, where it would be read as some other, wrong, number.
         let fields = (0..record.len())
@@ -391,6 +423,42 @@ pub fn read_measurements_from<R: io::Read>(
         .with_target_names(targets.names)
         .with_setups(row_setups, setups.names)
         .with_lines(lines))
+}
+
+/// A row that is no data row: a repeat of the header, or a field with an ASCII control byte
+/// (tab aside), each an error naming the line (`lines`: the row's and the header's).
+fn stray_line(
+    record: &csv::StringRecord,
+    header: &csv::StringRecord,
+    path: &Path,
+    (line, header_line): (u64, u64),
+) -> Result<(), MeasurementFileError> {
+    if record.len() == header.len() && record.iter().zip(header).all(|(a, b)| a.trim() == b.trim()) {
+        return Err(MeasurementFileError::RepeatedHeader {
+            path: path.into(),
+            line,
+            header_line,
+        });
+    }
+    let control = |b: &u8| b.is_ascii_control() && !matches!(b, b'\t' | b'\r' | b'\n');
+    let Some((i, byte)) = record
+        .iter()
+        .enumerate()
+        .find_map(|(i, field)| Some((i, *field.as_bytes().iter().find(|b| control(b))?)))
+    else {
+        return Ok(());
+    };
+    let only = record
+        .iter()
+        .flat_map(|f| f.bytes())
+        .all(|b| control(&b) || b.is_ascii_whitespace());
+    Err(MeasurementFileError::ControlByte {
+        path: path.into(),
+        line,
+        column: header.get(i).map_or_else(|| format!("field {}", i + 1), str::to_owned),
+        byte,
+        only,
+    })
 }
 
 /// `problem` of a set read from a file with the rows' `lines`: its row indices as lines.

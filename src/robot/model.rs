@@ -119,6 +119,16 @@ pub struct RobotModel {
 }
 
 impl RobotModel {
+    /// A stable hash of every value of the model, as `fnv1a64:` and 16 lower-case hex digits:
+    /// the model as its JSON value, walked as [`RobotDescription::geometry_hash`] walks a
+    /// description's. A calibration records it (`model_digest`) so that a value edited in the
+    /// file afterwards is said when the file is read.
+    pub fn digest(&self) -> String {
+        let mut hash = super::description::Fnv::new();
+        hash.value(&serde_json::to_value(self).unwrap_or(serde_json::Value::Null));
+        hash.text()
+    }
+
     /// A robot with no errors: the nominal geometry, identity transmissions, the nominal
     /// (linear) couplings, no offsets, no jitter. It reaches exactly the commanded joint values.
     pub fn ideal(desc: &RobotDescription) -> Self {

@@ -757,6 +757,7 @@ impl FreePoseCalibration {
             options: CalibrationOptions::default(),
             description: Some(desc.identity()),
             data_digest: None,
+            model_digest: None,
             base_rule: None,
             not_calibrated: vec![],
             noise: Some(NoiseReport {

@@ -1105,6 +1105,7 @@ impl<'a> Context<'a> {
             residuals,
             description: Some(self.desc.identity()),
             data_digest: None,
+            model_digest: None,
             model_covariance,
             tool_accuracy: None,
         })

@@ -577,6 +577,10 @@ pub struct Calibration {
     /// [`super::calibrate`]; absent in files written before it was recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub data_digest: Option<String>,
+    /// [`RobotModel::digest`] of `robot` as `axiscal calibrate` wrote it: a file whose `robot`
+    /// no longer has it was edited since; absent in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_digest: Option<String>,
     /// How the base frame was placed (`docs/method.md`, "Base frame").
     #[serde(default)]
     pub base_rule: Option<BaseRule>,

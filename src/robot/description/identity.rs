@@ -47,7 +47,7 @@ impl Fnv {
     }
 
     /// A tag byte, then the value's bytes (see [`RobotDescription::geometry_hash`]).
-    fn value(&mut self, v: &serde_json::Value) {
+    pub(crate) fn value(&mut self, v: &serde_json::Value) {
         use serde_json::Value;
         match v {
             Value::Null => self.bytes(b"z"),
