@@ -23,6 +23,7 @@ use nalgebra::{Point3, Vector3};
 
 mod commands;
 mod experiments;
+mod sweeps;
 
 /// A ratio this far from 1 (either way) is a unit slip, not a robot's deviation.
 pub const SLIP_FACTOR: f64 = 5.0;
@@ -397,6 +398,10 @@ pub fn spread_ratio(measured: &[Vector3<f64>], nominal: &[Vector3<f64>]) -> Opti
 /// experiments' target 0 and the free poses ([`free_pose_slips`]). When one coordinate column
 /// alone is in another unit, that column is the one slip said.
 pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
+    let mislabelled = sweeps::not_sweeps(set, desc);
+    if !mislabelled.is_empty() {
+        return mislabelled;
+    }
     let slips = slips_as_read(set, desc);
     if slips.is_empty() {
         return slips;
