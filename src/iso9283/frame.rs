@@ -16,15 +16,10 @@
 
 use super::evaluate::Cycle;
 use crate::calibration::procedure::SIZE_TOLERANCE;
-use crate::kinematics::{mirror_fit_rms, rigid_fit};
+use crate::kinematics::{MIRROR_RATIO, mirror_fit_rms, rigid_fit};
 use crate::numerics::stats::{QuantileMethod, quantile};
 use nalgebra::Point3;
 use std::collections::BTreeMap;
-
-/// The best rotation's RMS over the best mirror image's beyond which the frame is
-/// left-handed: 9 times the variance, as the calibration's misfit check (`MISFIT_RATIO`);
-/// a right-handed frame gives at most 1.
-pub const MIRROR_RATIO: f64 = 3.0;
 
 /// Tool targets closer than this on the description \[m\] give no distance to compare.
 const MIN_TARGET_DISTANCE_M: f64 = 1e-3;

@@ -58,6 +58,11 @@ pub fn rigid_fit(src: &[Point3<f64>], dst: &[Point3<f64>]) -> Option<(Isometry3<
     Some((iso, rms))
 }
 
+/// The best rotation's RMS over the best mirror image's ([`mirror_fit_rms`]) beyond which
+/// the points' frame is left-handed: 9 times the variance, as the calibration's misfit check
+/// (`MISFIT_RATIO`); a right-handed frame gives at most 1.
+pub const MIRROR_RATIO: f64 = 3.0;
+
 /// The RMS residual \[input units\] of the best improper map (a rotation composed with a
 /// reflection) of `src` onto `dst`: [`rigid_fit`] of `src`'s mirror image (`x` negated), since
 /// every reflection is that mirror followed by a rotation. Beside [`rigid_fit`]'s RMS it says

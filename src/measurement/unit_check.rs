@@ -23,6 +23,7 @@ use nalgebra::{Point3, Vector3};
 
 mod commands;
 mod experiments;
+mod handedness;
 mod sweeps;
 
 /// A ratio this far from 1 (either way) is a unit slip, not a robot's deviation.
@@ -267,6 +268,19 @@ struct Arc {
     centre: Point3<f64>,
     /// Median ratio of the turned angle to the commanded span (both read in degrees).
     turn_ratio: f64,
+    /// The median radius's relative 1-sigma from the triples' scatter: `1.2533 x 1.4826 MAD /
+    /// median / sqrt(triples)` (the median's efficiency on normal scatter).
+    radius_sigma_rel: f64,
+}
+
+impl Arc {
+    /// Whether the triples' circles scatter too much for the radius to tell a unit's factor
+    /// ([`commands::SIGMAS`] of its sigma exceed the quarter of [`SPREAD_WARNING`]): points
+    /// far off one arc (noise much above the instrument's, outliers) are the calibration's
+    /// screens' to name, not a unit slip.
+    fn too_scattered(&self) -> bool {
+        commands::SIGMAS * self.radius_sigma_rel > SPREAD_WARNING.ln()
+    }
 }
 
 /// One axis experiment's target-0 arc from the circles through its point triples.
@@ -290,10 +304,13 @@ fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
     }
     let turn_ratio = median(ratios);
     let centre = Point3::from(Vector3::from_fn(|k, _| median(centres.iter().map(|c| c[k]).collect())));
+    let radius = median(radii.clone());
+    let mad = median(radii.iter().map(|r| (r - radius).abs()).collect());
     Some(Arc {
         centre,
-        radius: median(radii),
+        radius,
         turn_ratio,
+        radius_sigma_rel: 1.2533 * 1.4826 * mad / radius / (radii.len() as f64).sqrt(),
     })
 }
 
@@ -402,11 +419,48 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
     if !mislabelled.is_empty() {
         return mislabelled;
     }
+    if let Some(rounded) = rounded_coordinates(set) {
+        return vec![rounded];
+    }
+    if let Some(mirrored) = handedness::mirrored(set, desc) {
+        return vec![mirrored];
+    }
     let slips = slips_as_read(set, desc);
     if slips.is_empty() {
         return slips;
     }
     one_column_slip(set, desc).map_or(slips, |one| vec![one])
+}
+
+/// Steps \[mm\] coordinates may be rounded to, coarsest first: a multiple of 1 mm adds
+/// `1 / sqrt(12)` = 0.29 mm of noise to each coordinate, above the 0.2 mm of the paper's
+/// theodolites that [`MIN_JUDGED_SAGITTA_MM`] assumes and far above a laser tracker's.
+const ROUNDING_STEPS_MM: [f64; 6] = [100.0, 50.0, 10.0, 5.0, 2.0, 1.0];
+
+/// Fewer rows than this are not judged rounded: a few round values happen.
+const MIN_ROUNDED_ROWS: usize = 20;
+
+/// Coordinates written rounded (every value a multiple of a step of [`ROUNDING_STEPS_MM`],
+/// the points not all one): the rounding is noise the arcs' checks cannot tell from a slip.
+fn rounded_coordinates(set: &MeasurementSet) -> Option<UnitSlip> {
+    let rows = set.rows();
+    let values = || rows.iter().flat_map(|m| m.position_mm);
+    if rows.len() < MIN_ROUNDED_ROWS || values().all(|v| v == rows[0].position_mm[0]) {
+        return None;
+    }
+    let step = ROUNDING_STEPS_MM
+        .into_iter()
+        .find(|q| values().all(|v| ((v / q).round() * q - v).abs() <= 1e-9 * v.abs().max(1.0)))?;
+    Some(UnitSlip {
+        field: "x_mm,y_mm,z_mm".into(),
+        message: format!(
+            "every coordinate is a multiple of {} mm: the points were written rounded, which adds {:.2} mm of noise to \
+             each coordinate, more than the instruments a calibration takes (0.2 mm theodolites, 0.02-0.05 mm trackers); write them with the instrument's resolution (a laser tracker \
+             gives 0.001 mm)",
+            format_f64(step),
+            step / 12f64.sqrt()
+        ),
+    })
 }
 
 /// The coordinate column (`x_mm`, `y_mm` or `z_mm`) in another length unit (of [`LENGTH_UNITS`])
@@ -482,7 +536,7 @@ fn experiment_arcs(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Experim
         if nominal_mm.is_some_and(|r| too_short_to_judge(&rows, joint - 1, r)) {
             continue;
         }
-        if let Some(arc) = arc_of(&rows, joint - 1) {
+        if let Some(arc) = arc_of(&rows, joint - 1).filter(|a| !a.too_scattered()) {
             let owned: Vec<Measurement> = rows.iter().map(|m| (*m).clone()).collect();
             arcs.push(ExperimentArc {
                 joint,

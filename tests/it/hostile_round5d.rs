@@ -111,3 +111,143 @@ fn a_calibration_edited_by_hand_is_refused_or_warned() {
     );
     assert!(!quiet.contains("was edited"), "{quiet}");
 }
+
+/// `campaign.csv` with `edit` applied to the fields of each data row, written as `name`.
+fn edited_rows(dir: &Path, name: &str, edit: impl Fn(&mut Vec<String>)) {
+    let text = std::fs::read_to_string(dir.join("campaign.csv")).unwrap();
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        if line.starts_with('#') || line.starts_with("experiment,") {
+            out.push_str(line);
+        } else {
+            let mut fields: Vec<String> = line.split(',').map(str::to_owned).collect();
+            edit(&mut fields);
+            out.push_str(&fields.join(","));
+        }
+        assert!(i < 100_000);
+        out.push('\n');
+    }
+    std::fs::write(dir.join(name), out).unwrap();
+}
+
+#[test]
+fn free_poses_labelled_a_sweep_and_rounded_points_are_said_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    calibrated_campaign(dir.path(), 25);
+    edited_rows(dir.path(), "labelled.csv", |f| {
+        if f[0] == "validation" {
+            f[1] = "1".into();
+        }
+    });
+    edited_rows(dir.path(), "rounded.csv", |f| {
+        for v in &mut f[4..7] {
+            *v = format!("{}", (v.parse::<f64>().unwrap() / 10.0).round() * 10.0);
+        }
+    });
+    // Before: "`cmd_1`: the targets turn 13.438 times the commanded span read as degrees".
+    let labelled = [
+        "`moved_joint`: experiment validation (lines",
+        "is labelled moved_joint 1, but its steps also move joint",
+    ];
+    // Before: "`cmd_5`: ... this experiment's cmd_5 looks doubled".
+    let rounded = ["every coordinate is a multiple of 10 mm: the points were written rounded"];
+    for c in [
+        case(
+            "validation rows labelled 1",
+            "calibrate labelled.csv --out out",
+            2,
+            &labelled,
+        ),
+        case(
+            "labelled, validated",
+            "validate labelled.csv --calibration cal/calibration.json --out out",
+            2,
+            &labelled,
+        ),
+        case(
+            "coordinates rounded to 1 cm",
+            "calibrate rounded.csv --out out",
+            2,
+            &rounded,
+        ),
+    ] {
+        let e = run_case(dir.path(), &c);
+        assert!(
+            !e.contains("looks doubled") && !e.contains("scaled by"),
+            "{}: {e}",
+            c.what
+        );
+        clear_outputs(dir.path());
+    }
+}
+
+/// A few rows with `y_mm` negated (hand-edited sign) are outliers named by line, not a
+/// command column "halved" (its turn ratio is known less well than the transmissions' band).
+#[test]
+fn a_few_rows_with_a_flipped_sign_are_outliers_not_a_command_factor() {
+    let dir = tempfile::tempdir().unwrap();
+    calibrated_campaign(dir.path(), 26);
+    let flipped = std::cell::RefCell::new(Vec::new());
+    edited_rows(dir.path(), "flipped.csv", |f| {
+        if f[0] == "axis5" && ["4", "11"].contains(&f[2].as_str()) && f[3] == "0" {
+            f[5] = format!("{}", -f[5].parse::<f64>().unwrap());
+            flipped.borrow_mut().push(f[2].clone());
+        }
+    });
+    assert_eq!(flipped.borrow().len(), 2, "two axis5 rows flipped");
+    let e = run_case(
+        dir.path(),
+        &case(
+            "y negated in two rows",
+            "calibrate flipped.csv --out out",
+            0,
+            &[
+                "outlier: experiment axis5 step 4 target 0",
+                "outlier: experiment axis5 step 11 target 0",
+            ],
+        ),
+    );
+    assert!(!e.contains("looks halved") && !e.contains("looks doubled"), "{e}");
+}
+
+/// A left-handed instrument frame (two coordinate columns swapped in every row) on robots whose
+/// calibrated rows cannot show it (a SCARA, a positioning table, a 2-axis positioner): the
+/// points fit a mirror image of the nominal robot far better than any rotation of it.
+#[test]
+fn a_mirrored_frame_is_named_on_every_robot_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    for (robot, seed) in [("scara-rrpr", 27), ("table-prpp", 28), ("positioner-2axis", 29)] {
+        let description = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/robots/{robot}.toml"));
+        let description = description.display().to_string();
+        crate::common::axiscal()
+            .current_dir(dir.path())
+            .args([
+                "simulate",
+                "--sim",
+                "analytic",
+                "--robot",
+                &description,
+                "--validation-poses",
+                "20",
+            ])
+            .args(["--seed", &seed.to_string(), "--out", "campaign.csv"])
+            .assert()
+            .success();
+        edited_rows(dir.path(), "swapped.csv", |f| f.swap(4, 5));
+        let clean = format!("calibrate campaign.csv --robot {description} --out out");
+        let e = run_case(dir.path(), &case("unswapped", &clean, 0, &[]));
+        assert!(!e.contains("mirror image"), "{robot}: a false alarm: {e}");
+        clear_outputs(dir.path());
+        let swapped = format!("calibrate swapped.csv --robot {description} --out out");
+        run_case(
+            dir.path(),
+            &case(
+                "x and y swapped",
+                &swapped,
+                2,
+                &["fit a mirror image of the description's robot", "left-handed"],
+            ),
+        );
+        std::fs::remove_file(dir.path().join("campaign.csv")).unwrap();
+    }
+}

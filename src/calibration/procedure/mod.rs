@@ -221,7 +221,7 @@ pub enum ProcedureError {
     },
     /// An axis fit misses its points by a good part of their own spread: no calibration.
     #[error(
-        "experiment {experiment} (joint {joint}): the fitted axis misses its points by {rms_mm:.3} mm RMS, {share:.1} % of their spread about their centroid ({spread_mm:.1} mm): the points are not on one arc or line of this joint (check the joint order and kinds of the robot file, the target ids, the units)"
+        "experiment {experiment} (joint {joint}): the fitted axis misses its points by {rms_mm:.3} mm RMS, {share:.1} % of their spread about their centroid ({spread_mm:.1} mm): the points are not on one arc or line of this joint (check the joint order and kinds of the robot file, the target ids, the units, and whether the noise is far above the instrument's: {rms_mm:.3} mm)"
     )]
     Absurd {
         /// The experiments of the joint.

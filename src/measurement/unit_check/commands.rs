@@ -121,8 +121,11 @@ pub(super) fn scaled_commands(arcs: &[&ExperimentArc]) -> Vec<UnitSlip> {
             continue;
         };
         let (ratio, sigma) = (measured / nominal, sigma / nominal);
-        let allowed = (1.0 + MAX_TRANSMISSION_SLOPE_DEVIATION).ln() + SIGMAS * sigma / ratio;
-        if super::slipped(ratio) || !ratio.is_finite() || ratio.ln().abs() <= allowed {
+        let band = (1.0 + MAX_TRANSMISSION_SLOPE_DEVIATION).ln();
+        let allowed = band + SIGMAS * sigma / ratio;
+        // A ratio known less well than the band cannot tell one factor from a transmission's
+        // deviation (points off their arc: outliers, noise the calibration's screens name).
+        if super::slipped(ratio) || !ratio.is_finite() || ratio.ln().abs() <= allowed || SIGMAS * sigma / ratio > band {
             continue;
         }
         let Some((_, words)) = COMMAND_FACTORS
