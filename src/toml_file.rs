@@ -104,7 +104,14 @@ impl OwnToml {
             .get("joints")
             .and_then(|j| j.as_array()?.first()?.as_table().cloned())
             .is_some_and(|j| j.contains_key("transmission") || j.contains_key("transducer_offset"));
-        let description_only = ["tool", "axis_targets", "dh_convention", "urdf", "couplings", "instrument"];
+        let description_only = [
+            "tool",
+            "axis_targets",
+            "dh_convention",
+            "urdf",
+            "couplings",
+            "instrument",
+        ];
         if any(&["measurement", "truth", "thresholds", "trials"]) {
             Some(Self::Scenario)
         } else if !any(&description_only) && (any(&["tool_frame", "four_bars", "effects"]) || model_joints) {
@@ -121,7 +128,11 @@ impl OwnToml {
     /// The kind in words, where it is given, and its section of docs/formats.md.
     fn said(self) -> (&'static str, &'static str, &'static str) {
         match self {
-            Self::Description => ("a robot description", "with --robot or to `describe`", "robot-description"),
+            Self::Description => (
+                "a robot description",
+                "with --robot or to `describe`",
+                "robot-description",
+            ),
             Self::Model => ("a robot model (a simulated truth)", "with --truth", "robot-model"),
             Self::Scenario => ("a scenario file", "to `axiscal run`", "scenario-file"),
             Self::Plan => ("a calibration plan", "with --plan", "plan-file"),

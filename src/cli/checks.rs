@@ -5,12 +5,12 @@
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::measurement::description_check::description_warnings;
 use axiscal::measurement::import::points::LengthUnit;
 use axiscal::measurement::unit_check::{
     UnitSlip, description_slips, free_pose_scale_warning, measurement_slips, payload_over_robot_mass, pose_slips,
 };
+use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
 use std::io::BufRead;
 use std::path::Path;

@@ -12,7 +12,9 @@ use axiscal::measurement::import::rct;
 use axiscal::measurement::import::spatial_analyzer;
 use axiscal::measurement::import::sscanss2;
 use axiscal::measurement::import::table::Table;
-use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide, still_tolerance_hint};
+use axiscal::measurement::import::wide::{
+    WideOptions, import_wide as read_wide, still_tolerance_hint, sweep_order_hint,
+};
 use axiscal::measurement::{MeasurementSet, write_measurements_to};
 use axiscal::robot::RobotDescription;
 use std::io::Write;
@@ -457,7 +459,8 @@ fn import_wide(a: &WideArgs) -> Result<()> {
         read_wide(&table, &options)
     };
     let set = read_as(matches!(a.angles, Angle::Rad), a.units.into())?;
-    if !a.skip_unit_check && still_tolerance_hint(&set, a.still_tolerance).is_none() {
+    let unordered = sweep_order_hint(&set, a.still_tolerance);
+    if !a.skip_unit_check && still_tolerance_hint(&set, a.still_tolerance).is_none() && unordered.is_none() {
         let stated = (matches!(a.angles, Angle::Rad), a.units.into());
         super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
     }
@@ -469,6 +472,17 @@ fn import_wide(a: &WideArgs) -> Result<()> {
     write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     report_experiments(&set, &a.file, &a.out);
     warn_still_tolerance(&set, &desc, &a.file, a.still_tolerance);
+    if let Some(hint) = unordered.filter(|_| still_tolerance_hint(&set, a.still_tolerance).is_none()) {
+        eprintln!(
+            "warning: {}: {} of its {} rows became free poses (experiment `poses`): the rows are not in sweep order \
+             (sorted by their joint values, {} of them form sweeps of one joint); put each sweep's rows together in the \
+             order its joint moved (the units were not checked)",
+            a.file.display(),
+            hint.free_poses,
+            hint.poses,
+            hint.sorted_axis_poses
+        );
+    }
     Ok(())
 }
 

@@ -117,8 +117,11 @@ impl ResolvedScenario {
         path: &Path,
         overrides: Overrides,
     ) -> Result<(Self, Vec<crate::measurement::unit_check::UnitSlip>), ScenarioError> {
-        let file: ScenarioFile =
-            crate::toml_file::parse_own(&crate::toml_file::read(path)?, path, crate::toml_file::OwnToml::Scenario)?;
+        let file: ScenarioFile = crate::toml_file::parse_own(
+            &crate::toml_file::read(path)?,
+            path,
+            crate::toml_file::OwnToml::Scenario,
+        )?;
         let scenario = Self::resolve(file.clone(), path, overrides)?;
         let slips = super::units::scenario_slips(&file, &scenario);
         Ok((scenario, slips))

@@ -54,7 +54,12 @@ pub fn scenario_slips(file: &ScenarioFile, scenario: &ResolvedScenario) -> Vec<U
     }
     let mut slips: Vec<UnitSlip> = noises
         .into_iter()
-        .filter_map(|(field, mm)| Some(UnitSlip { field, message: noise_slip(mm)? }))
+        .filter_map(|(field, mm)| {
+            Some(UnitSlip {
+                field,
+                message: noise_slip(mm)?,
+            })
+        })
         .collect();
     if file.validation.is_some() {
         slips.extend(radians_half_range(scenario));

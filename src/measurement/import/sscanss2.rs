@@ -211,7 +211,13 @@ fn row(
         }
     };
     let mm = unit.to_mm();
-    let deg = |v: f64| if radians && kind == JointKind::Revolute { v.to_degrees() } else { v };
+    let deg = |v: f64| {
+        if radians && kind == JointKind::Revolute {
+            v.to_degrees()
+        } else {
+            v
+        }
+    };
     Ok(Row {
         line,
         joint,
