@@ -77,6 +77,111 @@ pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result
     Ok(value)
 }
 
+/// The kinds of axiscal's own TOML files, told apart by their top-level keys ([`Self::of`]), so
+/// that one given where another is read is named, not met with the parser's first unknown key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OwnToml {
+    /// A robot description (`joints`, `urdf` or `rows`, with its `tool` or `axis_targets`):
+    /// `--robot`, `describe`.
+    Description,
+    /// A robot model, a simulated truth (`tool_frame`, `four_bars`, joints with their
+    /// `transmission`): `--truth`.
+    Model,
+    /// A scenario (`measurement`, `truth`, `thresholds` or `trials`): `axiscal run`.
+    Scenario,
+    /// A calibration plan (`sweeps`, no `joints`): `--plan`.
+    Plan,
+}
+
+impl OwnToml {
+    /// The kind of `text`, when it is TOML with one kind's keys.
+    pub fn of(text: &str) -> Option<Self> {
+        let table: toml::Table = toml::from_str(text).ok()?;
+        let has = |key: &str| table.contains_key(key);
+        let any = |keys: &[&str]| keys.iter().any(|k| has(k));
+        // A model's joints carry their errors; a description's their limits.
+        let model_joints = table
+            .get("joints")
+            .and_then(|j| j.as_array()?.first()?.as_table().cloned())
+            .is_some_and(|j| j.contains_key("transmission") || j.contains_key("transducer_offset"));
+        let description_only = [
+            "tool",
+            "axis_targets",
+            "dh_convention",
+            "urdf",
+            "couplings",
+            "instrument",
+        ];
+        if any(&["measurement", "truth", "thresholds", "trials"]) {
+            Some(Self::Scenario)
+        } else if !any(&description_only) && (any(&["tool_frame", "four_bars", "effects"]) || model_joints) {
+            Some(Self::Model)
+        } else if any(&["joints", "urdf", "rows"]) {
+            Some(Self::Description)
+        } else if has("sweeps") {
+            Some(Self::Plan)
+        } else {
+            None
+        }
+    }
+
+    /// The kind in words, where it is given, and its section of docs/formats.md.
+    fn said(self) -> (&'static str, &'static str, &'static str) {
+        match self {
+            Self::Description => (
+                "a robot description",
+                "with --robot or to `describe`",
+                "robot-description",
+            ),
+            Self::Model => ("a robot model (a simulated truth)", "with --truth", "robot-model"),
+            Self::Scenario => ("a scenario file", "to `axiscal run`", "scenario-file"),
+            Self::Plan => ("a calibration plan", "with --plan", "plan-file"),
+        }
+    }
+}
+
+/// [`parse`] for one of axiscal's own kinds of TOML file: text of another own kind
+/// ([`OwnToml::of`]) that does not parse as `expected` is an error naming both kinds.
+pub fn parse_own<T: DeserializeOwned + Serialize>(
+    text: &str,
+    path: &Path,
+    expected: OwnToml,
+) -> Result<T, TomlFileError> {
+    parse(text, path).map_err(|e| match OwnToml::of(text).filter(|k| *k != expected) {
+        Some(kind) => TomlFileError::Parse {
+            path: path.to_owned(),
+            message: {
+                let ((kind, given, doc), (wanted, _, wanted_doc)) = (kind.said(), expected.said());
+                format!(
+                    "this is {kind}, not {wanted} (docs/formats.md#{wanted_doc}): {kind} is given {given} \
+                     (docs/formats.md#{doc})"
+                )
+            },
+        },
+        None => e,
+    })
+}
+
+/// What `text`, which is not the XML of a URDF, is instead, for a message: a CSV table, one
+/// of axiscal's own TOML files, other TOML or JSON; `None` when it starts as XML (a URDF with a
+/// fault the parser names) or is none of these.
+pub fn not_xml(text: &str, path: &Path) -> Option<String> {
+    let (_, first) = first_content_line(text)?;
+    if first.starts_with('<') {
+        return None;
+    }
+    if csv_first_line(text, path).is_some() {
+        return Some("a CSV table".into());
+    }
+    if let Some(kind) = OwnToml::of(text) {
+        return Some(format!("a TOML file, {}", kind.said().0));
+    }
+    if toml::from_str::<toml::Table>(text).is_ok() {
+        return Some("a TOML file".into());
+    }
+    first.starts_with('{').then(|| "JSON".into())
+}
+
 /// What `text`, which does not parse as TOML, is instead, when its first content line tells: a
 /// CSV table, a URDF or other XML, a JSON object; `None` for text that is meant as TOML.
 fn foreign_format(text: &str, path: &Path) -> Option<String> {

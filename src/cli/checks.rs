@@ -6,12 +6,12 @@ use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
 use axiscal::json_file::{self, Schema};
 use axiscal::kinematics::JointKind;
-use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::description_check::description_warnings;
 use axiscal::measurement::import::points::LengthUnit;
 use axiscal::measurement::unit_check::{
     UnitSlip, description_slips, free_pose_scale_warning, measurement_slips, payload_over_robot_mass, pose_slips,
 };
+use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
 use std::io::BufRead;
 use std::path::Path;
@@ -150,22 +150,28 @@ pub fn data_unit_warnings(
     Ok(warnings)
 }
 
-/// The options of `import wide` a table's units are read with: revolute joint values in
-/// radians (`--angles rad`), and the length unit (`--units`).
-pub type WideUnits = (bool, LengthUnit);
+/// The options an import's units are read with: revolute joint values in radians (`--angles
+/// rad`), and the length unit (`--units`).
+pub type ImportUnits = (bool, LengthUnit);
 
-/// `--angles` and `--units` of `import wide` against the description: the imported `set`'s unit
-/// slips ([`measurement_slips`], as `calibrate` checks them). When the table read with other
-/// values of the options (`read_as`) has none, an error naming each option and the value that
-/// fits; slips no option explains are a warning (another robot, or a table's own slip).
-pub fn wide_import_units(
+/// `--angles` and `--units` of an import (`wide`, `mat`, `sscanss2`) against the description:
+/// the imported `set`'s unit slips ([`measurement_slips`], as `calibrate` checks them). When the
+/// file read with other values of the options (`read_as`) has none, an error naming each option
+/// and the value that fits; slips no option explains are a warning (another robot, or a file's
+/// own slip).
+pub fn import_units(
     set: &MeasurementSet,
     desc: &RobotDescription,
     file: &Path,
-    stated: WideUnits,
+    stated: ImportUnits,
     read_as: impl Fn(bool, LengthUnit) -> Option<MeasurementSet>,
 ) -> Result<()> {
-    let slips = measurement_slips(set, desc);
+    let misfits = |set: &MeasurementSet| {
+        let mut slips = measurement_slips(set, desc);
+        slips.extend(rows_outside_limits(set, desc));
+        slips
+    };
+    let slips = misfits(set);
     if slips.is_empty() {
         return Ok(());
     }
@@ -177,7 +183,7 @@ pub fn wide_import_units(
         (!stated.0, other_length(stated.1)),
     ]
     .into_iter()
-    .find(|(r, l)| read_as(*r, *l).is_some_and(|other| measurement_slips(&other, desc).is_empty()));
+    .find(|(r, l)| read_as(*r, *l).is_some_and(|other| misfits(&other).is_empty()));
     let Some((radians, lengths)) = fits else {
         print_warnings(&[format!(
             "{}: read with --angles {} --units {}: {} (no other --angles or --units explains it: another robot than --robot?; --skip-unit-check silences this)",
@@ -196,7 +202,7 @@ pub fn wide_import_units(
         changed.push(format!("--units {}", lengths.name()));
     }
     bail!(
-        "{}: read with --angles {} --units {} the table does not fit the description ({}); read with --angles {} \
+        "{}: read with --angles {} --units {} the file does not fit the description ({}); read with --angles {} \
          --units {} it does: pass {}; if the units are right after all, pass --skip-unit-check",
         file.display(),
         angles(stated.0),
@@ -208,7 +214,24 @@ pub fn wide_import_units(
     )
 }
 
-/// The other length unit of `import wide` (`--units mm` or `m`).
+/// The rows of `set` whose commands lie outside the description's joint limits, as a slip of
+/// the first one's column: poses the robot cannot reach (`import_units`).
+fn rows_outside_limits(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
+    let mut outside = set.rows().iter().filter_map(|m| outside_limits(desc, &m.cmd));
+    let (joint, cmd, [lo, hi]) = outside.next()?;
+    let unit = axiscal::robot::file_unit(desc, joint - 1);
+    Some(UnitSlip {
+        field: format!("cmd_{joint}"),
+        message: format!(
+            "{} of the {} rows command a joint outside the description's limits (the first: cmd_{joint} = {} {unit}, limits [{lo}, {hi}] {unit})",
+            outside.count() + 1,
+            set.rows().len(),
+            format_f64(cmd)
+        ),
+    })
+}
+
+/// The other length unit of an import (`--units mm` or `m`).
 fn other_length(unit: LengthUnit) -> LengthUnit {
     match unit {
         LengthUnit::Mm => LengthUnit::M,

@@ -12,7 +12,9 @@ use axiscal::measurement::import::rct;
 use axiscal::measurement::import::spatial_analyzer;
 use axiscal::measurement::import::sscanss2;
 use axiscal::measurement::import::table::Table;
-use axiscal::measurement::import::wide::{WideOptions, import_wide as read_wide, still_tolerance_hint};
+use axiscal::measurement::import::wide::{
+    WideOptions, import_wide as read_wide, still_tolerance_hint, sweep_order_hint,
+};
 use axiscal::measurement::{MeasurementSet, write_measurements_to};
 use axiscal::robot::RobotDescription;
 use std::io::Write;
@@ -162,6 +164,10 @@ struct MatArgs {
     /// The experiment id of the poses.
     #[arg(long, default_value = "poses")]
     experiment: String,
+    /// Skip the check of --angles and --units against the description (the free poses' spread,
+    /// `docs/formats.md#unit-checks`) when the units are right after all.
+    #[arg(long)]
+    skip_unit_check: bool,
     /// Output measurement CSV.
     #[arg(long)]
     out: PathBuf,
@@ -182,6 +188,13 @@ struct Sscanss2Args {
     /// Unit of the points (SScanSS-2 works in mm).
     #[arg(long, value_enum, default_value = "mm")]
     units: Unit,
+    /// Unit of the revolute joint values (SScanSS-2 works in degrees).
+    #[arg(long, value_enum, default_value = "deg")]
+    angles: Angle,
+    /// Skip the check of --angles and --units against the description (the sweeps' arcs and
+    /// turns, `docs/formats.md#unit-checks`) when the units are right after all.
+    #[arg(long)]
+    skip_unit_check: bool,
     /// Output measurement CSV.
     #[arg(long)]
     out: PathBuf,
@@ -374,7 +387,12 @@ fn import_sscanss2(a: &Sscanss2Args) -> Result<()> {
     let desc = RobotDescription::from_file(&a.robot)?;
     let text = axiscal::presets::read_text(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
     let kinds: Vec<_> = desc.joints.iter().map(|j| j.kind).collect();
-    let set = sscanss2::parse(&text, &a.file, &kinds, a.units.into())?;
+    let read_as = |radians: bool, lengths: LengthUnit| sscanss2::parse(&text, &a.file, &kinds, lengths, radians);
+    let stated = (matches!(a.angles, Angle::Rad), a.units.into());
+    let set = read_as(stated.0, stated.1)?;
+    if !a.skip_unit_check {
+        super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
+    }
     let comment = format!(
         "{}{}",
         super::checks::identity_comment(&desc),
@@ -441,9 +459,10 @@ fn import_wide(a: &WideArgs) -> Result<()> {
         read_wide(&table, &options)
     };
     let set = read_as(matches!(a.angles, Angle::Rad), a.units.into())?;
-    if !a.skip_unit_check && still_tolerance_hint(&set, a.still_tolerance).is_none() {
+    let unordered = sweep_order_hint(&set, a.still_tolerance);
+    if !a.skip_unit_check && still_tolerance_hint(&set, a.still_tolerance).is_none() && unordered.is_none() {
         let stated = (matches!(a.angles, Angle::Rad), a.units.into());
-        super::checks::wide_import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
+        super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
     }
     let comment = format!(
         "{}# imported by `axiscal import wide` from {}\n",
@@ -453,6 +472,17 @@ fn import_wide(a: &WideArgs) -> Result<()> {
     write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     report_experiments(&set, &a.file, &a.out);
     warn_still_tolerance(&set, &desc, &a.file, a.still_tolerance);
+    if let Some(hint) = unordered.filter(|_| still_tolerance_hint(&set, a.still_tolerance).is_none()) {
+        eprintln!(
+            "warning: {}: {} of its {} rows became free poses (experiment `poses`): the rows are not in sweep order \
+             (sorted by their joint values, {} of them form sweeps of one joint); put each sweep's rows together in the \
+             order its joint moved (the units were not checked)",
+            a.file.display(),
+            hint.free_poses,
+            hint.poses,
+            hint.sorted_axis_poses
+        );
+    }
     Ok(())
 }
 
@@ -491,17 +521,21 @@ fn import_mat(a: &MatArgs) -> Result<()> {
         .and_then(|()| std::fs::read(&a.file))
         .with_context(|| format!("reading {}", a.file.display()))?;
     let file = mat_v5::read(&bytes).map_err(|e| anyhow::anyhow!("{}: {e}", a.file.display()))?;
-    let how = ArrayImport {
-        joints: a.joints.clone(),
-        targets: a.targets.clone(),
-        radians: matches!(a.angles, Angle::Rad),
-        metres_per_unit: match a.units {
-            Unit::Mm => 1e-3,
-            Unit::M => 1.0,
-        },
-        experiment: a.experiment.clone(),
+    let read_as = |radians: bool, lengths: LengthUnit| {
+        let how = ArrayImport {
+            joints: a.joints.clone(),
+            targets: a.targets.clone(),
+            radians,
+            metres_per_unit: lengths.to_mm() * 1e-3,
+            experiment: a.experiment.clone(),
+        };
+        free_poses(&file, &a.file, &desc, &how)
     };
-    let set = free_poses(&file, &a.file, &desc, &how)?;
+    let stated = (matches!(a.angles, Angle::Rad), a.units.into());
+    let set = read_as(stated.0, stated.1)?;
+    if !a.skip_unit_check {
+        super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
+    }
     let comment = format!(
         "{}# imported by `axiscal import mat` from {}: joints `{}`, targets {}\n",
         super::checks::identity_comment(&desc),

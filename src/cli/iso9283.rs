@@ -76,7 +76,7 @@ struct PredictArgs {
     cube: CubeArgs,
     /// The instrument's 3-D RMS noise (mm), isotropic. Default: the noise the calibration's
     /// fits were weighted with (`noise.used_rms_3d_mm`).
-    #[arg(long, value_parser = InRange::above(0.0, 100.0, ""))]
+    #[arg(long, value_parser = super::options::NOISE_MM)]
     noise_mm: Option<f64>,
     /// Simulated tests.
     #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(1..=100_000))]

@@ -116,8 +116,34 @@ where
 /// A random seed: any whole number from 0 to 2^64 - 1.
 pub const SEED: InRange<u64> = InRange::closed(0, u64::MAX, "");
 
-/// A measurement noise level, 3-D RMS (mm).
-pub const NOISE_MM: InRange<f64> = InRange::above(0.0, axiscal::calibration::procedure::MAX_NOISE_RMS_3D_MM, "mm");
+/// A measurement noise level, 3-D RMS (mm): in range, and no finer than an instrument
+/// ([`axiscal::harness::scenario::units::noise_slip`], the scenario file's check: a noise in metres).
+pub const NOISE_MM: NoiseMm = NoiseMm(InRange::above(
+    0.0,
+    axiscal::calibration::procedure::MAX_NOISE_RMS_3D_MM,
+    "mm",
+));
+
+/// The value parser of [`NOISE_MM`].
+#[derive(Clone, Copy, Debug)]
+pub struct NoiseMm(pub InRange<f64>);
+
+impl TypedValueParser for NoiseMm {
+    type Value = f64;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<f64, clap::Error> {
+        let mm = self.0.parse_ref(cmd, arg, value)?;
+        let Some(why) = axiscal::harness::scenario::units::noise_slip(mm) else {
+            return Ok(mm);
+        };
+        let name = arg.map_or_else(|| "value".to_owned(), |a| format!("--{}", a.get_id()));
+        Err(clap::Error::raw(
+            clap::error::ErrorKind::ValueValidation,
+            format!("invalid value for {}: {why}\n", name.replace('_', "-")),
+        )
+        .with_cmd(cmd))
+    }
+}
 
 /// A joint's repeatability, 1-sigma (rad), as the description's `repeatability_sigma`.
 pub const REPEATABILITY_RAD: InRange<f64> = InRange::closed(0.0, axiscal::robot::MAX_REPEATABILITY_SIGMA, "rad");

@@ -74,9 +74,10 @@ pub struct Args {
     /// one per joint. Default: the description's `repeatability_sigma`.
     #[arg(long, value_delimiter = ',', value_parser = super::options::REPEATABILITY_RAD)]
     repeatability_rad: Option<Vec<f64>>,
-    /// With `--optimize`: the fewest intervals a sweep keeps (its fits need points).
-    #[arg(long, default_value_t = axiscal::plan::OptimizeOptions::default().min_intervals, value_parser = InRange::closed(2usize, 100_000, ""))]
-    min_intervals: usize,
+    /// With `--optimize`: the fewest intervals a sweep keeps (its fits need points); at most
+    /// what `--points` gives every sweep at once. Default: 8.
+    #[arg(long, value_parser = InRange::closed(2usize, 100_000, ""))]
+    min_intervals: Option<usize>,
     /// With `--optimize`: the most rounds of the search; 0 predicts the seed plan (`--plan`
     /// at `--points`) without changing it.
     #[arg(long, default_value_t = axiscal::plan::OptimizeOptions::default().max_rounds, value_parser = InRange::closed(0usize, 1000, ""))]

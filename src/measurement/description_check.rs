@@ -118,7 +118,9 @@ fn revolute_axes_parallel(desc: &RobotDescription) -> bool {
 const PARALLEL_SINE: f64 = 1e-9;
 
 /// Every row length zero while two or more joints turn, not all about one line: every revolute
-/// axis through one point, as a gimbal's and no arm's or positioner's. When the `dh` table has lengths, its convention
+/// axis through one point, as a gimbal's and no arm's or positioner's; or all about one line in
+/// a chain with prismatic joints too (a SCARA's columns left out: only a stack of turntables,
+/// every joint revolute, turns coaxially by design). When the `dh` table has lengths, its convention
 /// is what put them there (a classic table read as modified moves each offset to the joint
 /// before, where it may fall along an axis).
 fn zero_lengths(w: &Written<'_>) -> Option<UnitSlip> {
@@ -128,13 +130,24 @@ fn zero_lengths(w: &Written<'_>) -> Option<UnitSlip> {
         .iter()
         .flat_map(|r| [r.a_m, r.b_m, r.h_m])
         .all(|v| v.abs() < ZERO_LENGTH_M);
-    if !zero || desc.rows.is_empty() || revolute(desc) < 2 || revolute_axes_parallel(desc) {
+    if !zero || desc.rows.is_empty() || revolute(desc) < 2 {
         return None;
     }
-    let through_one_point = format!(
-        "the {} revolute axes all pass through one point, as a gimbal's do and no arm's or positioner's",
-        revolute(desc)
-    );
+    let prismatic = desc.dof() - revolute(desc);
+    let through_one_point = if !revolute_axes_parallel(desc) {
+        format!(
+            "the {} revolute axes all pass through one point, as a gimbal's do and no arm's or positioner's",
+            revolute(desc)
+        )
+    } else if prismatic > 0 {
+        format!(
+            "the {} revolute axes are one line, so their turns add up as one joint's (a stack of turntables \
+             alone is built so, not a chain with {prismatic} prismatic joint(s) such as a SCARA)",
+            revolute(desc)
+        )
+    } else {
+        return None;
+    };
     if w.dh.iter().any(|r| r.d_m != 0.0 || r.a_m != 0.0) {
         return Some(UnitSlip {
             field: "dh_convention".into(),

@@ -74,6 +74,13 @@ pub fn axis_points(plan: &CalibrationPlan) -> usize {
     plan.sweeps.iter().map(|s| s.poses() * targets(s)).sum()
 }
 
+/// Points one pose of every sweep of `plan` measures together (one a sweep, two with its
+/// second target): a sweep of `n` intervals measures `n + 1` poses, so every sweep keeps `n`
+/// intervals at once within `(n + 1)` times this many axis points.
+pub fn points_per_round(plan: &CalibrationPlan) -> usize {
+    plan.sweeps.iter().map(targets).sum()
+}
+
 /// `plan` with its intervals scaled so that its axis experiments measure `points` points (each
 /// sweep's share as in `plan`, at least 2 intervals); the remainder from rounding is given to,
 /// or taken from, the one-target sweeps in turn. `None` when `points` cannot be met exactly.

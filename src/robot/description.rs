@@ -395,7 +395,7 @@ impl RobotDescription {
     /// `urdf`) and its base's placement in the instrument frame as written, for checking the
     /// conversion (`axiscal describe`).
     pub fn with_source(text: &str, path: &Path) -> Result<(Self, Option<SourceCheck>), DescriptionError> {
-        let mut d: Self = crate::toml_file::parse(text, path)?;
+        let mut d: Self = crate::toml_file::parse_own(text, path, crate::toml_file::OwnToml::Description)?;
         let source = d.convert_source(path)?;
         d.validate(path)?;
         Ok((d, source))

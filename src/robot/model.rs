@@ -165,7 +165,7 @@ impl RobotModel {
     /// A model file is a simulated truth: its effects are the effects file's, never `effects`
     /// (the form a calibration carries its fitted ones in, which the simulators do not read).
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, ModelError> {
-        let t: Self = crate::toml_file::parse(text, path)?;
+        let t: Self = crate::toml_file::parse_own(text, path, crate::toml_file::OwnToml::Model)?;
         let checked = if t.effects.is_empty() {
             t.validate()
         } else {

@@ -913,8 +913,9 @@ fn a_plan_file_beyond_the_interval_bound_is_refused() {
     }
 }
 
-/// A given noise the data contradict by orders of magnitude makes the fits fail: the error says
-/// how many times the residuals exceed it and how to do without it.
+/// A given noise finer than any instrument (metres written as millimetres) is refused by the
+/// option itself, with the value and the likely unit, in one line (a noise the data contradict
+/// within the option's range makes the fits fail: `hostile_calibration`).
 #[test]
 fn a_given_noise_far_below_the_data_is_named_in_the_error() {
     let (dir, data) = crate::common::simulated_campaign_csv(2);
@@ -929,9 +930,9 @@ fn a_given_noise_far_below_the_data_is_named_in_the_error() {
         let err = crate::common::stderr(&a);
         assert!(
             err.contains(&format!(
-                "times --noise-mm {}; --noise-mm is too small or the data are bad",
+                "invalid value for --noise-mm: {} mm is finer than any instrument",
                 axiscal::measurement::format_f64(noise.parse().unwrap())
-            )) && err.contains("without --noise-mm the fits are weighted with it"),
+            )) && err.contains("it looks like metres"),
             "{err}"
         );
         assert_eq!(err.lines().count(), 1, "{err}");

@@ -123,7 +123,10 @@ fn cases(step: &str) -> Vec<Case> {
             "S12: validate with --noise-mm in metres",
             &format!("validate {cal} campaign.csv --noise-mm 0.0002 --out out"),
             2,
-            &["validating on campaign.csv", "times --noise-mm 0.0002", "too small"],
+            &[
+                "--noise-mm: 0.0002 mm is finer than any instrument",
+                "looks like metres",
+            ],
         ),
         case(
             "S13: a calibration row length in millimetres",
@@ -169,7 +172,10 @@ fn cases(step: &str) -> Vec<Case> {
             "U8: diagnose with --noise-mm in metres",
             "diagnose campaign.csv --noise-mm 0.0002 --out out",
             2,
-            &["diagnosing campaign.csv", "times --noise-mm 0.0002", "too small"],
+            &[
+                "--noise-mm: 0.0002 mm is finer than any instrument",
+                "looks like metres",
+            ],
         ),
         case(
             "U16: a quoted pose id holding a line break",

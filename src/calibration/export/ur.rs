@@ -27,6 +27,15 @@ pub const SEGMENTS: [&str; 6] = ["shoulder", "upper_arm", "forearm", "wrist_1", 
 /// The keys of a segment: `xyz` then `rpy`.
 const KEYS: [&str; 6] = ["x", "y", "z", "roll", "pitch", "yaw"];
 
+/// The longest a segment's offset \[m\] of a UR arm may be: the longest link of the family
+/// (UR20's and UR30's upper arm, 0.86 m; UR5e's 0.425 m) with room for other six-axis arms a
+/// driver file may describe. Offsets in millimetres are hundreds of times longer.
+pub const MAX_SEGMENT_M: f64 = 5.0;
+
+/// The largest magnitude \[rad\] of a segment's `roll`, `pitch` or `yaw`: a turn. The driver
+/// and `ur_calibration` write them within (-pi, pi]; degrees (90, 180) lie beyond.
+pub const MAX_ANGLE_RAD: f64 = std::f64::consts::TAU;
+
 /// What is wrong with a UR kinematics file or export.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum UrError {
@@ -114,6 +123,42 @@ fn checked_hash(hash: &str) -> Result<String, UrError> {
     }
 }
 
+/// Refuses segments in other units than the driver's (m, rad): an offset beyond
+/// [`MAX_SEGMENT_M`] (millimetres) or an angle beyond [`MAX_ANGLE_RAD`] (degrees), naming the
+/// largest.
+fn units(segments: &[[f64; 6]; 6], file: &str) -> Result<(), UrError> {
+    let largest = |keys: std::ops::Range<usize>| {
+        let mut all = segments
+            .iter()
+            .enumerate()
+            .flat_map(|(s, v)| keys.clone().map(move |k| (s, k, v[k])));
+        let first = all.next()?;
+        Some(all.fold(first, |m, c| if c.2.abs() > m.2.abs() { c } else { m }))
+    };
+    let key = |(s, k, _): (usize, usize, f64)| format!("kinematics.{}.{}", SEGMENTS[s], KEYS[k]);
+    if let Some(l) = largest(0..3).filter(|l| l.2.abs() > MAX_SEGMENT_M) {
+        return Err(key_error(
+            file,
+            key(l),
+            format!(
+                "{} m is longer than any arm's link (at most {MAX_SEGMENT_M} m): x, y, z look like mm (the driver's file is in m); divide them by 1000",
+                super::yaml_float(l.2)
+            ),
+        ));
+    }
+    if let Some(a) = largest(3..6).filter(|a| a.2.abs() > MAX_ANGLE_RAD) {
+        return Err(key_error(
+            file,
+            key(a),
+            format!(
+                "{} rad is more than a turn: roll, pitch, yaw look like degrees (the driver's file is in rad); convert them to radians",
+                super::yaml_float(a.2)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 impl UrKinematics {
     /// Reads the text of a `kinematics.yaml`; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Self, UrError> {
@@ -150,6 +195,7 @@ impl UrKinematics {
                 segments[s][i] = number(&kin[*name][*key], file, format!("kinematics.{name}.{key}"))?;
             }
         }
+        units(&segments, file)?;
         let hash = match &kin["hash"] {
             Yaml::String(h) => h.clone(),
             Yaml::Integer(i) => i.to_string(),

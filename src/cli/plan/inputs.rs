@@ -27,7 +27,11 @@ pub fn read_plan_file(path: &Path, option: &str) -> Result<CalibrationPlan> {
             path.display()
         );
     }
-    Ok(axiscal::toml_file::parse::<CalibrationPlan>(&text, path)?)
+    Ok(axiscal::toml_file::parse_own::<CalibrationPlan>(
+        &text,
+        path,
+        axiscal::toml_file::OwnToml::Plan,
+    )?)
 }
 
 /// Refuses a plan (`plan_file`, or the default plan) that sweeps a joint for which the

@@ -5,7 +5,7 @@ use super::Args;
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::CalibrationError;
 use axiscal::calibration::procedure::{CalibrationOptions, ProcedureError};
-use axiscal::plan::optimize::axis_points;
+use axiscal::plan::optimize::{axis_points, points_per_round};
 use axiscal::plan::{
     CalibrationPlan, OptimizeOptions, PlanObjective, PlanPrediction, PredictError, SightOptions, ValidationPlan,
     optimize, with_point_budget,
@@ -33,6 +33,27 @@ fn workspace(args: &Args, desc: &RobotDescription, validation: &ValidationPlan) 
     })
 }
 
+/// `--min-intervals` (default [`OptimizeOptions::default`]'s), refused when given above what
+/// `points` lets every sweep of `seed` keep at once (the search would leave the sweeps below it
+/// as they are).
+fn min_intervals(args: &Args, seed: &CalibrationPlan, points: usize) -> Result<usize> {
+    let Some(wanted) = args.min_intervals else {
+        return Ok(OptimizeOptions::default().min_intervals);
+    };
+    let per_round = points_per_round(seed).max(1);
+    let most = (points / per_round).saturating_sub(1);
+    if wanted > most {
+        bail!(
+            "--min-intervals {wanted}: {points} axis points (--points; default: the plan's) over the plan's {} sweeps let each keep at most \
+             {most} intervals (a sweep of n intervals measures n + 1 poses, two points a pose with a second target); \
+             pass --min-intervals {most} or less, or --points {} or more",
+            seed.sweeps.len(),
+            (wanted + 1) * per_round
+        );
+    }
+    Ok(wanted)
+}
+
 /// Runs the search from `seed_plan` and prints the result; returns the optimised plan.
 pub(super) fn run(
     args: &Args,
@@ -44,6 +65,7 @@ pub(super) fn run(
     let points = args.points.unwrap_or_else(|| axis_points(seed_plan));
     let seed = with_point_budget(seed_plan, points)
         .with_context(|| format!("--points {points}: the plan's sweeps cannot measure exactly {points} points"))?;
+    let min_intervals = min_intervals(args, &seed, points)?;
     let workspace = workspace(args, desc, validation)?;
     let options = CalibrationOptions {
         noise_rms_3d_mm: args.noise_mm,
@@ -59,7 +81,7 @@ pub(super) fn run(
         desc,
         &seed,
         OptimizeOptions {
-            min_intervals: args.min_intervals,
+            min_intervals,
             max_rounds: args.max_rounds,
         },
     )?;

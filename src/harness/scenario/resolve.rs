@@ -117,7 +117,11 @@ impl ResolvedScenario {
         path: &Path,
         overrides: Overrides,
     ) -> Result<(Self, Vec<crate::measurement::unit_check::UnitSlip>), ScenarioError> {
-        let file: ScenarioFile = crate::toml_file::parse(&crate::toml_file::read(path)?, path)?;
+        let file: ScenarioFile = crate::toml_file::parse_own(
+            &crate::toml_file::read(path)?,
+            path,
+            crate::toml_file::OwnToml::Scenario,
+        )?;
         let scenario = Self::resolve(file.clone(), path, overrides)?;
         let slips = super::units::scenario_slips(&file, &scenario);
         Ok((scenario, slips))
@@ -467,7 +471,8 @@ fn swept_cases(
             let path = dir.join(path);
             let key = || "sweep.plans".to_owned();
             let text = crate::toml_file::read(&path).map_err(|e| (key(), e.to_string()))?;
-            let plan: CalibrationPlan = crate::toml_file::parse(&text, &path).map_err(|e| (key(), e.to_string()))?;
+            let plan: CalibrationPlan = crate::toml_file::parse_own(&text, &path, crate::toml_file::OwnToml::Plan)
+                .map_err(|e| (key(), e.to_string()))?;
             let stem = path
                 .file_stem()
                 .map_or_else(String::new, |s| s.to_string_lossy().into_owned());

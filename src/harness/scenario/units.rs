@@ -25,6 +25,19 @@ pub const MIN_NET_RADIAL_RMS_MM: f64 = 1e-3;
 /// degrees of the reference measure the accuracy there, not over the workspace.
 pub const RADIANS_HALF_RANGE_DEG: f64 = std::f64::consts::TAU;
 
+/// Why an instrument's noise of `mm` (3-D RMS) is metres written as millimetres: below
+/// [`MIN_NET_RADIAL_RMS_MM`]. The scenario's noise keys and every `--noise-mm` are checked by it.
+pub fn noise_slip(mm: f64) -> Option<String> {
+    (mm < MIN_NET_RADIAL_RMS_MM).then(|| {
+        format!(
+            "{} mm is finer than any instrument that measures a robot (at least {MIN_NET_RADIAL_RMS_MM} mm; a \
+             laser tracker: about 0.01 mm): the noise is in mm; it looks like metres ({} mm?)",
+            format_f64(mm),
+            format_f64(mm * 1e3)
+        )
+    })
+}
+
 /// The likely unit slips of `file`, resolved as `scenario`.
 pub fn scenario_slips(file: &ScenarioFile, scenario: &ResolvedScenario) -> Vec<UnitSlip> {
     let mut noises = vec![(
@@ -41,15 +54,11 @@ pub fn scenario_slips(file: &ScenarioFile, scenario: &ResolvedScenario) -> Vec<U
     }
     let mut slips: Vec<UnitSlip> = noises
         .into_iter()
-        .filter(|(_, mm)| *mm < MIN_NET_RADIAL_RMS_MM)
-        .map(|(field, mm)| UnitSlip {
-            field,
-            message: format!(
-                "{} mm is finer than any instrument that measures a robot (at least {MIN_NET_RADIAL_RMS_MM} mm; a \
-                 laser tracker: about 0.01 mm): the noise is in mm; it looks like metres ({} mm?)",
-                format_f64(mm),
-                format_f64(mm * 1e3)
-            ),
+        .filter_map(|(field, mm)| {
+            Some(UnitSlip {
+                field,
+                message: noise_slip(mm)?,
+            })
         })
         .collect();
     if file.validation.is_some() {

@@ -63,6 +63,19 @@ pub enum ArraysError {
         /// What is wrong with it in the measurement CSV's units.
         problem: Box<RowProblem>,
     },
+    /// One variable is named for two targets: they would be one point, which no calibration
+    /// separates.
+    #[error(
+        "--targets: variable `{name}` is given twice (targets {first} and {second}): each target is its own point array; name each variable once"
+    )]
+    Duplicate {
+        /// The variable.
+        name: String,
+        /// The first target id it is given for.
+        first: usize,
+        /// The second.
+        second: usize,
+    },
     /// `--experiment` is no experiment id.
     #[error("--experiment: {problem}")]
     Experiment {
@@ -100,6 +113,20 @@ pub struct ArrayImport {
     pub experiment: String,
 }
 
+/// Refuses a variable named for two targets.
+fn duplicate_target(targets: &[String]) -> Result<(), ArraysError> {
+    for (second, name) in targets.iter().enumerate() {
+        if let Some(first) = targets[..second].iter().position(|t| t == name) {
+            return Err(ArraysError::Duplicate {
+                name: name.clone(),
+                first,
+                second,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The free poses of `file` (read from `path`) for the robot `desc`: pose `i` is row `i` of
 /// every array, step `i` of one experiment.
 pub fn free_poses(
@@ -108,6 +135,7 @@ pub fn free_poses(
     desc: &RobotDescription,
     how: &ArrayImport,
 ) -> Result<MeasurementSet, ArraysError> {
+    duplicate_target(&how.targets)?;
     let joints = array(file, path, &how.joints, None, desc.dof())?;
     let poses = joints.rows;
     let points: Vec<&MatArray> = how

@@ -50,6 +50,14 @@ const FIRST_JOINT_FIELD: usize = 15;
 /// Why the file could not be imported. Line and field numbers are 1-based.
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
+    /// The path given as the data set's folder is a file.
+    #[error(
+        "{path} is a file; import boby-klimchik takes the data set's folder (the one holding {DATA_FILE}); pass that folder"
+    )]
+    NotAFolder {
+        /// The path given.
+        path: PathBuf,
+    },
     /// The file could not be read.
     #[error("{path}: {source}")]
     Io {
@@ -261,6 +269,9 @@ fn block_joints(poses: &[Pose], path: &Path) -> Result<Vec<usize>, ImportError> 
 
 /// Reads `DIR/N1N2N3Jval.csv` of the data set's folder `dir`.
 pub fn import_dir(dir: &Path) -> Result<MeasurementSet, ImportError> {
+    if dir.is_file() {
+        return Err(ImportError::NotAFolder { path: dir.to_owned() });
+    }
     let path = dir.join(DATA_FILE);
     let text = crate::presets::read_text(&path).map_err(|source| ImportError::Io {
         path: path.clone(),

@@ -29,10 +29,17 @@ struct Row {
 }
 
 /// Reads SScanSS-2's calibration file `text` (`path` labels messages) for a robot whose joints
-/// are `kinds`; coordinates in `unit`. Every joint type and home value is checked against the
-/// others of its joint and the type against `kinds`.
-pub fn parse(text: &str, path: &Path, kinds: &[JointKind], unit: LengthUnit) -> Result<MeasurementSet, PointsError> {
-    let rows = rows(text, path, kinds.len(), unit)?;
+/// are `kinds`; coordinates in `unit`, revolute joint values in radians when `radians` (the
+/// format's are degrees). Every joint type and home value is checked against the others of its
+/// joint and the type against `kinds`.
+pub fn parse(
+    text: &str,
+    path: &Path,
+    kinds: &[JointKind],
+    unit: LengthUnit,
+    radians: bool,
+) -> Result<MeasurementSet, PointsError> {
+    let rows = rows(text, path, kinds.len(), unit, radians)?;
     let homes = homes(&rows, path, kinds)?;
     check_runs(&rows, path)?;
     let mut out = Vec::with_capacity(rows.len());
@@ -104,7 +111,7 @@ fn check_runs(rows: &[Row], path: &Path) -> Result<(), PointsError> {
 }
 
 /// The data rows (blank and `#` lines skipped).
-fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit) -> Result<Vec<Row>, PointsError> {
+fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit, radians: bool) -> Result<Vec<Row>, PointsError> {
     let mut rows = Vec::new();
     for (i, line) in text.trim_start_matches('\u{feff}').lines().enumerate() {
         let trimmed = line.trim();
@@ -121,7 +128,7 @@ fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit) -> Result<Vec<
                 ),
             });
         }
-        rows.push(row(trimmed, i + 1, path, joints, unit)?);
+        rows.push(row(trimmed, i + 1, path, joints, unit, radians)?);
     }
     if rows.is_empty() {
         return Err(PointsError::File {
@@ -141,8 +148,16 @@ fn is_header(line_text: &str) -> bool {
         .all(|c| c.parse::<f64>().is_err())
 }
 
-/// One row: `joint, x, y, z, value, type, home`.
-fn row(line_text: &str, line: usize, path: &Path, joints: usize, unit: LengthUnit) -> Result<Row, PointsError> {
+/// One row: `joint, x, y, z, value, type, home` (a revolute joint's values in degrees, converted
+/// from radians when `radians`).
+fn row(
+    line_text: &str,
+    line: usize,
+    path: &Path,
+    joints: usize,
+    unit: LengthUnit,
+    radians: bool,
+) -> Result<Row, PointsError> {
     let cells: Vec<&str> = line_text
         .split(|c: char| c == ',' || c.is_whitespace())
         .filter(|c| !c.is_empty())
@@ -196,13 +211,20 @@ fn row(line_text: &str, line: usize, path: &Path, joints: usize, unit: LengthUni
         }
     };
     let mm = unit.to_mm();
+    let deg = |v: f64| {
+        if radians && kind == JointKind::Revolute {
+            v.to_degrees()
+        } else {
+            v
+        }
+    };
     Ok(Row {
         line,
         joint,
         point: [number(1)? * mm, number(2)? * mm, number(3)? * mm],
-        value: number(4)?,
+        value: deg(number(4)?),
         kind,
-        home: number(6)?,
+        home: deg(number(6)?),
     })
 }
 
@@ -288,7 +310,7 @@ mod tests {
     const KINDS: [JointKind; 2] = [JointKind::Revolute, JointKind::Prismatic];
 
     fn parse_text(text: &str) -> Result<MeasurementSet, PointsError> {
-        parse(text, Path::new("cal.txt"), &KINDS, LengthUnit::Mm)
+        parse(text, Path::new("cal.txt"), &KINDS, LengthUnit::Mm, false)
     }
 
     #[test]

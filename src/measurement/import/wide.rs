@@ -385,6 +385,45 @@ pub fn still_tolerance_hint(set: &MeasurementSet, tolerance: f64) -> Option<Stil
     })
 }
 
+/// A table whose rows are sweeps out of order (shuffled, or sorted by another column): more
+/// than half its poses became free poses, while the same poses sorted by their joint values
+/// (the first joint first) make more than half of them axis-experiment poses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OrderHint {
+    /// Poses that became free poses.
+    pub free_poses: usize,
+    /// Poses of the table.
+    pub poses: usize,
+    /// Poses that are axis-experiment poses once sorted.
+    pub sorted_axis_poses: usize,
+}
+
+/// The [`OrderHint`] of `set` (as [`import_wide`] writes it) imported with `tolerance`.
+/// Sorted by their joint values, each sweep's poses (one joint moving, the others at the
+/// reference) lie together on either side of the reference, so the sweeps segment again.
+pub fn sweep_order_hint(set: &MeasurementSet, tolerance: f64) -> Option<OrderHint> {
+    let mut poses = poses_of(set);
+    let axis_poses = |p: &[Pose]| segment(p, tolerance).iter().filter(|s| s.1 > 0).count();
+    let n = poses.len();
+    let free_poses = n - axis_poses(&poses);
+    if 2 * free_poses <= n {
+        return None;
+    }
+    poses.sort_by(|a, b| {
+        a.1.iter()
+            .zip(&b.1)
+            .map(|(x, y)| x.total_cmp(y))
+            .find(|o| o.is_ne())
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    let sorted_axis_poses = axis_poses(&poses);
+    (2 * sorted_axis_poses > n).then_some(OrderHint {
+        free_poses,
+        poses: n,
+        sorted_axis_poses,
+    })
+}
+
 /// Of at most [`HINT_CANDIDATES`] of the sorted `candidates` (evenly among them, the last
 /// included), the smallest that makes the most poses axis experiments (`axis_poses`), with
 /// that count, and the candidate tried after it (infinite for the last).

@@ -146,8 +146,16 @@ impl RobotDescription {
         let file = path.parent().unwrap_or(Path::new(".")).join(&u.file);
         let text = crate::presets::read_text(&file)
             .map_err(|e| invalid(path, "urdf.file", format!("reading {}: {e}", file.display())))?;
-        let robot = urdf_rs::read_from_string(&text)
-            .map_err(|e| invalid(path, "urdf.file", format!("{}: {e}", file.display())))?;
+        let robot = urdf_rs::read_from_string(&text).map_err(|e| {
+            let message = match crate::toml_file::not_xml(&text, &file) {
+                Some(kind) => format!(
+                    "{}: this is {kind}, not a URDF (the robot's XML, `<robot name=...>`): point `urdf.file` at the robot's .urdf file",
+                    file.display()
+                ),
+                None => format!("{}: {e}", file.display()),
+            };
+            invalid(path, "urdf.file", message)
+        })?;
         let chain = urdf_chain(&robot, u).map_err(|m| invalid(path, "urdf", format!("{}: {m}", file.display())))?;
         let (joints, tail, entries, inertials) = chain;
         let mut taken = None;
