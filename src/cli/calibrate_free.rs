@@ -2,9 +2,11 @@
 //! ([`axiscal::calibration::free_pose`]) and its console summary.
 
 use anyhow::Result;
-use axiscal::calibration::free_pose::{FreePoseOptions, FreePoseSummary, calibrate_free_poses};
+use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
+use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
 use axiscal::calibration::procedure::Calibration;
 use axiscal::measurement::MeasurementSet;
+use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::robot::RobotDescription;
 use std::path::Path;
 
@@ -55,8 +57,30 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
         effects: args.effects,
         max_poses: args.max_poses,
     };
-    let mut cal = calibrate_free_poses(set, desc, &options)
-        .map_err(|e| anyhow::anyhow!("calibrating {} from its free poses: {e}", args.data.display()))?;
+    let mut cal = match calibrate_free_poses(set, desc, &options) {
+        Ok(cal) => cal,
+        Err(e @ (FreePoseError::Absurd { .. } | FreePoseError::TooManyOutliers { .. })) => {
+            match explaining_slip(set, desc, &options, None) {
+                Some(s) => anyhow::bail!(
+                    "calibrating {} from its free poses: {}; the fit fails ({})",
+                    args.data.display(),
+                    slip_words(&s),
+                    first_clause(&e.to_string())
+                ),
+                None => match swapped_target_ids(set, &desc.tool.targets_mm).first() {
+                    Some(found) => anyhow::bail!(
+                        "calibrating {} from its free poses{}; the fit fails ({})",
+                        args.data.display(),
+                        target_ids_words(found, None, desc),
+                        first_clause(&e.to_string())
+                    ),
+                    None => anyhow::bail!("calibrating {} from its free poses: {e}", args.data.display()),
+                },
+            }
+        }
+        Err(e) => anyhow::bail!("calibrating {} from its free poses: {e}", args.data.display()),
+    };
+    warn_slips(args, (set, desc), &options, &cal.summary);
     if args.all_rows && set.experiments().iter().any(|e| e.moved_joint > 0) {
         cal.summary.axis_rows_as_poses = Some("`--free-poses` asked for it".into());
     }
@@ -150,4 +174,106 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
     if s.tool_fit_rms_mm.is_none() {
         say!("  tool frame: nominal (the description's tool.targets_mm do not match the data's target ids)");
     }
+}
+
+/// The error's first clause (before its advice): "the calibrated model misses the points by ...".
+fn first_clause(e: &str) -> &str {
+    e.split(": the description").next().unwrap_or(e)
+}
+
+/// A column slip in words: the misfits and the fix.
+fn slip_words(s: &ExplainingSlip) -> String {
+    let fix = match s.field.as_str() {
+        "setup" => "give those rows their own `setup` label (or measure them again)".to_owned(),
+        field => format!("fix `{field}`"),
+    };
+    format!(
+        "{}: the description's nominal model placed on the poses misses them by {:.3} mm RMS as written and by {:.3} mm \
+         with that undone ({fix} and calibrate again)",
+        s.claim, s.written_rms_mm, s.undone_rms_mm
+    )
+}
+
+/// The warnings of a free-pose calibration the fit absorbed (module docs of
+/// [`axiscal::calibration::free_pose::slip`]): a column slip; else tool target ids in another
+/// order, by their distances ([`swapped_target_ids`]) or, for a symmetric set, by the fitted
+/// tool frame's turn ([`mirrored_targets`]).
+fn warn_slips(
+    args: &FreeArgs<'_>,
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+    summary: &FreePoseSummary,
+) {
+    let data = args.data.display();
+    if let Some(s) = explaining_slip(set, desc, options, Some(summary)) {
+        eprintln!(
+            "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
+            slip_words(&s)
+        );
+        return;
+    }
+    let swapped = swapped_target_ids(set, &desc.tool.targets_mm);
+    for found in &swapped {
+        eprintln!("warning: {data}{}", target_ids_words(found, Some(summary), desc));
+    }
+    if swapped.is_empty()
+        && let Some(m) = mirrored_targets(summary, desc)
+    {
+        let moved: Vec<String> = m
+            .ids
+            .iter()
+            .zip(&m.order)
+            .filter(|(a, b)| a != b)
+            .map(|(a, b)| format!("{a} is {b}"))
+            .collect();
+        eprintln!(
+            "warning: {data}: the tool frame fitted to the description's `[tool] targets_mm` turns {:.1} deg from the \
+             description's, and {:.1} deg with the target ids read as {}: the targets' distances are symmetric, and the ids \
+             are the mirror image of the description's (fix the `target` column and calibrate again)",
+            m.written_deg,
+            m.reordered_deg,
+            moved.join(", ")
+        );
+    }
+}
+
+/// A [`SwappedTargetIds`] in words (after the file name): where, which order (the one whose
+/// tool frame fitted in `summary` turns least, when the fit saw these ids in every pose) and
+/// the fix.
+fn target_ids_words(found: &SwappedTargetIds, summary: Option<&FreePoseSummary>, desc: &RobotDescription) -> String {
+    let every = found.poses == found.tested;
+    let orders: Vec<&Vec<usize>> = match summary.filter(|_| every) {
+        Some(summary) => {
+            let turns: Vec<Option<f64>> = found.orders.iter().map(|o| tool_turn_deg(summary, desc, o)).collect();
+            match turns
+                .iter()
+                .enumerate()
+                .filter_map(|(i, t)| Some((i, (*t)?)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+            {
+                Some((i, _)) => vec![&found.orders[i]],
+                None => found.orders.iter().collect(),
+            }
+        }
+        None => found.orders.iter().collect(),
+    };
+    let read: Vec<String> = orders.iter().map(|o| format!("({})", found.moved(o))).collect();
+    let lines: Vec<String> = found.lines.iter().take(10).map(u64::to_string).collect();
+    let where_ = match every {
+        true => format!(": in every one of its {} free poses", found.tested),
+        false => format!(
+            ": lines {}{} ({} of its {} free poses)",
+            lines.join(", "),
+            if found.lines.len() > lines.len() { ", ..." } else { "" },
+            found.poses,
+            found.tested
+        ),
+    };
+    format!(
+        "{where_}: the tool targets' mutual distances miss the description's `[tool] targets_mm` (noise {:.3} mm a distance) \
+         and match them with the target ids read as {}: the `target` column (or the marker columns) is in another order; \
+         the free-pose fit takes each id for one point on the tool (fix the ids and calibrate again)",
+        found.sigma_mm,
+        read.join(" or, mirrored, ")
+    )
 }

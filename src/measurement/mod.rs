@@ -3,12 +3,14 @@
 //! (`docs/formats.md#measurement-csv`).
 
 pub mod bounded;
+pub mod column_slips;
 mod csv_io;
 mod data;
 pub mod description_check;
 pub mod import;
 mod model;
 mod noise_calibration;
+pub mod target_ids;
 mod theodolite;
 pub mod unit_check;
 

@@ -38,6 +38,7 @@ mod hostile_round4a;
 mod hostile_round4b;
 mod hostile_round4c;
 mod hostile_round4d;
+mod hostile_round5a;
 mod hostile_round5c;
 mod hostile_round5d;
 mod iso9283;

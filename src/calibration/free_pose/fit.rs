@@ -112,7 +112,7 @@ pub(super) fn outlier_fence(residual: &DVector<f64>, poses: &FreePoses, which: &
 }
 
 /// The RMS 3-D distance of each pose's points \[m\].
-fn pose_rms(residual: &DVector<f64>, poses: &FreePoses, which: &[usize]) -> Vec<f64> {
+pub(super) fn pose_rms(residual: &DVector<f64>, poses: &FreePoses, which: &[usize]) -> Vec<f64> {
     let mut row = 0;
     which
         .iter()

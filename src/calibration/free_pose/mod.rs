@@ -26,6 +26,7 @@ pub mod model;
 pub mod poses;
 pub mod register;
 mod report;
+pub mod slip;
 mod summary;
 #[cfg(test)]
 mod tests;
