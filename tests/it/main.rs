@@ -38,6 +38,7 @@ mod hostile_round4a;
 mod hostile_round4b;
 mod hostile_round4c;
 mod hostile_round4d;
+mod hostile_round5b;
 mod iso9283;
 mod joint_map;
 mod json_schemas;
