@@ -131,7 +131,8 @@ pub fn data_unit_warnings(
     if skip {
         return Ok(Vec::new());
     }
-    let mut slips = measurement_slips(set, desc);
+    let mut slips: Vec<UnitSlip> = copied_command_column(set).into_iter().collect();
+    slips.extend(measurement_slips(set, desc));
     if let (Some(last), Some(suspect)) = (slips.last_mut(), suspect) {
         last.message = format!("{}; {suspect}", last.message);
     }
@@ -244,6 +245,37 @@ pub fn print_warnings(warnings: &[String]) {
     for w in warnings {
         eprintln!("warning: {w}");
     }
+}
+
+/// A command column that holds a copy of an earlier one: `cmd_b` equal to `cmd_a` (`a < b`) in
+/// every row, though an experiment sweeps joint `b` (its sweep holds joint `a` still while
+/// joint `b` moves, so real data differ in that sweep at least, whatever the couplings: a
+/// hold-still follower is joint `b + 1`, never an earlier one). Exact equality, no tolerance:
+/// only a pasted or filled column repeats another to the last digit.
+fn copied_command_column(set: &MeasurementSet) -> Option<UnitSlip> {
+    let rows = set.rows();
+    let dof = rows.first()?.cmd.len();
+    let swept: std::collections::BTreeSet<usize> = rows.iter().map(|m| m.moved_joint).collect();
+    let (a, b) = (0..dof)
+        .flat_map(|b| (0..b).map(move |a| (a, b)))
+        .find(|&(a, b)| swept.contains(&(b + 1)) && rows.iter().all(|m| m.cmd[a] == m.cmd[b]))?;
+    let sweep = rows.iter().find(|m| m.moved_joint == b + 1)?;
+    Some(UnitSlip {
+        field: format!("cmd_{}", b + 1),
+        message: format!(
+            "holds the same value as `cmd_{}` in every one of the {} rows, though experiment {} sweeps joint {} (its \
+             sweep holds joint {} still while joint {} moves): the column is a copy of `cmd_{}` (pasted or filled \
+             into the wrong column); restore joint {}'s commands",
+            a + 1,
+            rows.len(),
+            sweep.experiment,
+            b + 1,
+            a + 1,
+            b + 1,
+            a + 1,
+            b + 1
+        ),
+    })
 }
 
 /// A warning naming the first row of `set` (read from `data`) whose command lies outside the

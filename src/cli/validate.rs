@@ -10,7 +10,9 @@ use axiscal::calibration::procedure::{Calibration, CalibrationOptions, OutlierPo
 use axiscal::diagnosis::{
     ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate, validation_residuals_csv,
 };
-use axiscal::diagnosis::{PoseResiduals, explained_misses, free_poses_only, pose_point_outliers, without_outliers};
+use axiscal::diagnosis::{
+    PoseResiduals, explained_misses, explained_sweep_misses, free_poses_only, pose_point_outliers, without_outliers,
+};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
@@ -81,7 +83,8 @@ pub fn run(args: Args) -> Result<()> {
     checks::print_warnings(&flagged);
     warnings.extend(flagged);
     let v = validate(&set, &cal, &fitted, &options).with_context(validating)?;
-    let misses = explained_misses(&set, &cal, &fitted, &v);
+    let mut misses = explained_misses(&set, &cal, &fitted, &v);
+    misses.extend(explained_sweep_misses(&set, &cal, &fitted, &v));
     checks::refuse_explained_misses(&misses, &args.data, args.checks.skip_unit_check)?;
     let outliers = free_pose_outliers(&v, &set, args.keep_outliers);
     let flagged = checks::outlier_warnings(&outliers, &args.data, "validated");
@@ -113,9 +116,11 @@ pub fn run(args: Args) -> Result<()> {
 /// experiments and inflate their predicted repeatability (its target's mean position moves
 /// off the link); with `--keep-outliers` the same points are flagged and kept. Files without
 /// sweeps, and sweeps the procedure could not fit, are left as they are; a sweep with more points beyond the fence than
-/// [`axiscal::calibration::procedure::OUTLIER_SHARE_MAX`], or whose held joints leave the
-/// calibration's held tolerance (a step's command shifted), is refused, as `calibrate` refuses
-/// it.
+/// [`axiscal::calibration::procedure::OUTLIER_SHARE_MAX`], whose held joints leave the
+/// calibration's held tolerance (a step's command shifted), whose swept command does not move
+/// (`moved_joint` labels swapped, the tool rows labelled as a sweep) or that repeats another's
+/// points is refused, as `calibrate` refuses it: validated, such rows would be blamed on the
+/// model or pass with no test at all.
 fn without_sweep_outliers(
     args: &Args,
     set: MeasurementSet,
@@ -141,9 +146,12 @@ fn without_sweep_outliers(
             let flagged = checks::outlier_warnings(&screening.outliers, &args.data, "validated");
             Ok((screening.set.unwrap_or(set), flagged))
         }
-        Err(e @ (ProcedureError::TooManyOutliers { .. } | ProcedureError::InconsistentCommands { .. })) => {
-            Err(anyhow::Error::new(e).context(format!("validating on {}", args.data.display())))
-        }
+        Err(
+            e @ (ProcedureError::TooManyOutliers { .. }
+            | ProcedureError::InconsistentCommands { .. }
+            | ProcedureError::ZeroSpan { .. }
+            | ProcedureError::DuplicateExperiment { .. }),
+        ) => Err(anyhow::Error::new(e).context(format!("validating on {}", args.data.display()))),
         Err(_) => Ok((set, Vec::new())),
     }
 }

@@ -201,6 +201,15 @@ impl CleanCampaign {
             .collect()
     }
 
+    /// The frame of every row's target link at its joint values (world from link): where a
+    /// target fixed on the link sits for each row.
+    pub fn link_frames(&self) -> Vec<nalgebra::Isometry3<f64>> {
+        self.rows
+            .iter()
+            .map(|r| self.frames.poses(&r.q).world_from_link[r.link])
+            .collect()
+    }
+
     /// Noise-free positions of every row \[m\].
     pub fn positions(&self) -> Vec<Point3<f64>> {
         self.rows.iter().map(|r| self.position(r, None)).collect()

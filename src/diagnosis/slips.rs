@@ -56,7 +56,7 @@ pub const MIN_SEARCHED_POSES: usize = 3;
 /// one its test accepts.
 const OFFSET_REFINE_HALF_WIDTH: f64 = 1.0;
 
-/// Gauss-Newton steps of the offset fit: the residuals are smooth in the offset (sines and
+/// Gauss-Newton steps of a one-parameter fit (a command's offset or scale): the residuals are smooth in the offset (sines and
 /// cosines of the joint angles), and a step below [`OFFSET_STEP_DONE`] ends the fit earlier.
 const OFFSET_ITERATIONS: usize = 20;
 
@@ -65,18 +65,22 @@ const OFFSET_ITERATIONS: usize = 20;
 const OFFSET_STEP_DONE: f64 = 1e-3;
 
 /// One rewrite of an experiment's rows, in words.
-struct Hypothesis {
+pub(super) struct Hypothesis {
     /// The column (or columns) it names: `cmd_2`, `x_mm,y_mm`, `target`.
-    field: String,
+    pub(super) field: String,
     /// What the data then are: "`cmd_2` looks like radians rather than degrees".
-    claim: String,
+    pub(super) claim: String,
     /// How the rows are read under it: "with `cmd_2` read as radians".
-    reading: String,
+    pub(super) reading: String,
     /// The rewrite of one row.
-    apply: Box<dyn Fn(&mut Measurement)>,
+    pub(super) apply: Box<dyn Fn(&mut Measurement)>,
 }
 
-fn hypothesis(field: String, [claim, reading]: [String; 2], apply: impl Fn(&mut Measurement) + 'static) -> Hypothesis {
+pub(super) fn hypothesis(
+    field: String,
+    [claim, reading]: [String; 2],
+    apply: impl Fn(&mut Measurement) + 'static,
+) -> Hypothesis {
     Hypothesis {
         field,
         claim,
@@ -87,7 +91,7 @@ fn hypothesis(field: String, [claim, reading]: [String; 2], apply: impl Fn(&mut 
 
 /// The command columns' slips: in radians (a revolute joint) or metres (a sliding one), negated,
 /// twice or half the file's unit; every pair of columns swapped.
-fn command_hypotheses(desc: &RobotDescription) -> Vec<Hypothesis> {
+pub(super) fn command_hypotheses(desc: &RobotDescription) -> Vec<Hypothesis> {
     let mut out = Vec::new();
     for (k, j) in desc.joints.iter().enumerate() {
         let c = format!("`cmd_{}`", k + 1);
@@ -132,7 +136,7 @@ fn command_hypotheses(desc: &RobotDescription) -> Vec<Hypothesis> {
 
 /// The coordinate columns' slips: each in another length unit ([`LENGTH_SLIPS`]) or negated;
 /// every pair swapped.
-fn coordinate_hypotheses() -> Vec<Hypothesis> {
+pub(super) fn coordinate_hypotheses() -> Vec<Hypothesis> {
     const NAMES: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
     let mut out = Vec::new();
     for (c, name) in NAMES.iter().enumerate() {
@@ -198,7 +202,7 @@ fn target_hypotheses(targets: usize) -> Vec<Hypothesis> {
 
 /// The RMS \[mm\] by which `cal` misses `rows` (each rewritten by `apply`), or `None` when
 /// the rewritten rows cannot be predicted (a command beyond a coupling's range).
-fn rms_with(
+pub(super) fn rms_with(
     rows: &[Measurement],
     apply: &dyn Fn(&mut Measurement),
     cal: &Calibration,
@@ -209,7 +213,7 @@ fn rms_with(
 }
 
 /// `rows` rewritten by `apply`, as a measurement set (`None` when the rewrite is not one).
-fn rewritten(
+pub(super) fn rewritten(
     rows: &[Measurement],
     apply: &dyn Fn(&mut Measurement),
     desc: &RobotDescription,
@@ -226,7 +230,7 @@ fn rewritten(
 }
 
 /// The residual coordinates \[mm\] of `rows` rewritten by `apply` against `cal`'s prediction.
-fn residuals_with(
+pub(super) fn residuals_with(
     rows: &[Measurement],
     apply: &dyn Fn(&mut Measurement),
     cal: &Calibration,
@@ -245,34 +249,47 @@ fn residuals_with(
     out.iter().all(|v| v.is_finite()).then_some(out)
 }
 
-/// One Gauss-Newton step from the offset `d` of command column `k` (0-based) of `rows` against
-/// `cal`'s prediction (central differences of 1e-3 deg or mm); `None` when the rows cannot be
-/// predicted or do not move with the column.
-fn offset_step(rows: &[Measurement], k: usize, d: f64, cal: &Calibration, desc: &RobotDescription) -> Option<f64> {
-    let at = |d: f64| residuals_with(rows, &move |m: &mut Measurement| m.cmd[k] += d, cal, desc);
-    let h = 1e-3;
+/// One Gauss-Newton step of the parameter `d` of a rewrite whose residual coordinates \[mm\]
+/// `at(d)` gives, central differences of `h`, and the squared norm of the residuals' derivative
+/// (`J^T J`); `None` when the rows cannot be predicted or do not move with the parameter.
+fn parameter_step(at: &dyn Fn(f64) -> Option<Vec<f64>>, d: f64, h: f64) -> Option<(f64, f64)> {
     let (r, plus, minus) = (at(d)?, at(d + h)?, at(d - h)?);
     let jacobian: Vec<f64> = plus.iter().zip(&minus).map(|(p, m)| (p - m) / (2.0 * h)).collect();
     let jj: f64 = jacobian.iter().map(|j| j * j).sum();
-    (jj > 0.0).then(|| -jacobian.iter().zip(&r).map(|(j, r)| j * r).sum::<f64>() / jj)
+    (jj > 0.0).then(|| (-jacobian.iter().zip(&r).map(|(j, r)| j * r).sum::<f64>() / jj, jj))
+}
+
+/// One parameter of a rewrite fitted by Gauss-Newton from `start` ([`parameter_step`],
+/// differences of `h`, done at a step below `done`): the value and its `J^T J` \[mm^2 per unit^2\]
+/// (the parameter's variance is a coordinate's over it); `None` when the fit leaves `within`
+/// or the rows cannot be predicted.
+pub(super) fn fitted_parameter(
+    at: &dyn Fn(f64) -> Option<Vec<f64>>,
+    start: f64,
+    [h, done]: [f64; 2],
+    within: &dyn Fn(f64) -> bool,
+) -> Option<(f64, f64)> {
+    let mut d = start;
+    for _ in 0..OFFSET_ITERATIONS {
+        let (step, jj) = parameter_step(at, d, h)?;
+        d += step;
+        if !(d.is_finite() && within(d)) {
+            return None;
+        }
+        if step.abs() < done {
+            return Some((d, jj));
+        }
+    }
+    Some((d, parameter_step(at, d, h)?.1))
 }
 
 /// The offset of command column `k` (0-based) that brings `rows` nearest `cal`'s prediction,
-/// fitted by Gauss-Newton from no offset ([`offset_step`]); `None` when the fit leaves
-/// [`MAX_FITTED_OFFSET`] or the rows cannot be predicted.
+/// fitted by Gauss-Newton from no offset ([`fitted_parameter`], differences of 1e-3 deg or mm);
+/// `None` when the fit leaves [`MAX_FITTED_OFFSET`] or the rows cannot be predicted.
 fn fitted_offset(rows: &[Measurement], k: usize, cal: &Calibration, desc: &RobotDescription) -> Option<f64> {
-    let mut d = 0.0;
-    for _ in 0..OFFSET_ITERATIONS {
-        let step = offset_step(rows, k, d, cal, desc)?;
-        d += step;
-        if !(d.is_finite() && d.abs() <= MAX_FITTED_OFFSET) {
-            return None;
-        }
-        if step.abs() < OFFSET_STEP_DONE {
-            break;
-        }
-    }
-    Some(d)
+    let at = |d: f64| residuals_with(rows, &move |m: &mut Measurement| m.cmd[k] += d, cal, desc);
+    let within = |d: f64| d.abs() <= MAX_FITTED_OFFSET;
+    fitted_parameter(&at, 0.0, [1e-3, OFFSET_STEP_DONE], &within).map(|(d, _)| d)
 }
 
 /// The largest RMS \[mm\] of `points` points that still passes a test with prediction
@@ -382,16 +399,16 @@ const TESTED_REWRITES: usize = 3;
 
 /// A rewrite that explains the rows: the hypothesis, its RMS \[mm\] and its test's chi-square
 /// per degree of freedom.
-struct Explanation {
-    hypothesis: Hypothesis,
-    rms_mm: f64,
-    per_dof: f64,
+pub(super) struct Explanation {
+    pub(super) hypothesis: Hypothesis,
+    pub(super) rms_mm: f64,
+    pub(super) per_dof: f64,
 }
 
 /// The rows the model no longer misses grossly under each of `hypotheses` (their RMS at most
 /// [`GROSS_MISS_FACTOR`] times `bound_mm`), least RMS first, the first of them the
 /// validation's own test accepts ([`confirmed`]) with its RMS and statistic.
-fn first_confirmed(
+pub(super) fn first_confirmed(
     hypotheses: Vec<Hypothesis>,
     rows: &[Measurement],
     (cal, desc): (&Calibration, &RobotDescription),
@@ -428,7 +445,13 @@ fn confirmed(
 ) -> Option<f64> {
     let set = rewritten(rows, apply, desc)?;
     let v = validate(&set, cal, desc, options).ok()?;
-    let test = v.validation.as_ref().or(v.tool.as_ref())?.chi_square.as_ref()?;
+    let test = v
+        .validation
+        .as_ref()
+        .or(v.tool.as_ref())
+        .or(v.axis.as_ref())?
+        .chi_square
+        .as_ref()?;
     (test.verdict != Verdict::Exceeds).then_some(test.per_dof)
 }
 
@@ -444,10 +467,78 @@ fn best_explanation(
     let mut all = command_hypotheses(desc);
     all.extend(coordinate_hypotheses());
     all.extend(target_hypotheses(targets.min(desc.tool_targets_m().len())));
-    first_confirmed(all, rows, (cal, desc), options, bound_mm).or_else(|| {
-        let offset = offset_hypothesis(rows, (cal, desc), options)?;
-        first_confirmed(vec![offset], rows, (cal, desc), options, bound_mm)
-    })
+    first_confirmed(all, rows, (cal, desc), options, bound_mm)
+        .or_else(|| {
+            let offset = offset_hypothesis(rows, (cal, desc), options)?;
+            first_confirmed(vec![offset], rows, (cal, desc), options, bound_mm)
+        })
+        .or_else(|| {
+            let scales = (0..desc.dof()).filter_map(|k| super::sweep_slips::swept_scale(rows, k, (cal, desc), options));
+            first_confirmed(scales.collect(), rows, (cal, desc), options, bound_mm)
+        })
+        .or_else(|| {
+            let shift = translation_hypothesis(rows, (cal, desc), options, bound_mm)?;
+            first_confirmed(vec![shift], rows, (cal, desc), options, bound_mm)
+        })
+}
+
+/// The constant translation of every point of `rows` that brings them nearest `cal`'s
+/// prediction, as a hypothesis: a constant added to a coordinate column, or the instrument
+/// moved since the calibration. Its columns are those whose mean residual (the least-squares
+/// shift) exceeds `bound_mm` (the rows' acceptance: a smaller part is within the test's reach),
+/// each shifted alone by the value within `bound_mm` of that mean that minimises the
+/// validation's own statistic ([`golden_section`]: the calibration's error, shared by every
+/// pose, moves the mean from the shift its test accepts); `None` when no column's is that large.
+fn translation_hypothesis(
+    rows: &[Measurement],
+    (cal, desc): (&Calibration, &RobotDescription),
+    options: &ValidationOptions,
+    bound_mm: f64,
+) -> Option<Hypothesis> {
+    const NAMES: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
+    let residuals = residuals_with(rows, &|_: &mut Measurement| {}, cal, desc)?;
+    let mut shift: [f64; 3] = [0, 1, 2].map(|c| residuals.iter().skip(c).step_by(3).sum::<f64>() / rows.len() as f64);
+    let named: Vec<usize> = (0..3).filter(|&c| shift[c].abs() > bound_mm).collect();
+    (0..3).filter(|c| !named.contains(c)).for_each(|c| shift[c] = 0.0);
+    for &c in named.iter() {
+        let at = |d: f64| {
+            let mut trial = shift;
+            trial[c] = d;
+            statistic_with(
+                rows,
+                &move |m: &mut Measurement| (0..3).for_each(|i| m.position_mm[i] -= trial[i]),
+                (cal, desc),
+                options,
+            )
+        };
+        shift[c] = golden_section(&at, shift[c], bound_mm);
+    }
+    named.first()?;
+    let shown = |v: f64| format_f64((v * 1e2).round() / 1e2);
+    let columns: Vec<String> = named
+        .iter()
+        .map(|&c| {
+            format!(
+                "`{}` {}{} mm",
+                NAMES[c],
+                if shift[c] >= 0.0 { "+" } else { "" },
+                shown(shift[c])
+            )
+        })
+        .collect();
+    let words = [
+        format!(
+            "every point sits {} from the calibrated model's prediction, the same for all: a constant added to the \
+             column{}, or the instrument (or the robot) moved since the calibration",
+            columns.join(", "),
+            if named.len() > 1 { "s" } else { "" }
+        ),
+        format!("with {} taken off", columns.join(", ")),
+    ];
+    let field = named.iter().map(|&c| NAMES[c]).collect::<Vec<_>>().join(",");
+    Some(hypothesis(field, words, move |m| {
+        (0..3).for_each(|c| m.position_mm[c] -= shift[c])
+    }))
 }
 
 /// The statistic of the validation's own test ([`validate`] with `options`) of `rows` rewritten
@@ -460,13 +551,12 @@ fn statistic_with(
 ) -> f64 {
     let value = rewritten(rows, apply, desc)
         .and_then(|set| validate(&set, cal, desc, options).ok())
-        .and_then(|v| Some(v.validation.or(v.tool)?.chi_square?.value));
+        .and_then(|v| Some(v.validation.or(v.tool).or(v.axis)?.chi_square?.value));
     value.filter(|v| v.is_finite()).unwrap_or(f64::INFINITY)
 }
 
 /// The offset of command column `k` (0-based) within [`OFFSET_REFINE_HALF_WIDTH`] of `d` that
-/// minimises the validation's own statistic ([`statistic_with`]): golden-section search to
-/// [`OFFSET_STEP_DONE`].
+/// minimises the validation's own statistic ([`statistic_with`], [`golden_section`]).
 fn refined_offset(
     rows: &[Measurement],
     k: usize,
@@ -475,8 +565,14 @@ fn refined_offset(
     options: &ValidationOptions,
 ) -> f64 {
     let at = |d: f64| statistic_with(rows, &move |m: &mut Measurement| m.cmd[k] += d, model, options);
+    golden_section(&at, d, OFFSET_REFINE_HALF_WIDTH)
+}
+
+/// The minimum of `at` within `half_width` of `d`: golden-section search to
+/// [`OFFSET_STEP_DONE`].
+fn golden_section(at: &dyn Fn(f64) -> f64, d: f64, half_width: f64) -> f64 {
     let ratio = (5f64.sqrt() - 1.0) / 2.0;
-    let (mut lo, mut hi) = (d - OFFSET_REFINE_HALF_WIDTH, d + OFFSET_REFINE_HALF_WIDTH);
+    let (mut lo, mut hi) = (d - half_width, d + half_width);
     let (mut a, mut b) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
     let (mut fa, mut fb) = (at(a), at(b));
     while hi - lo > OFFSET_STEP_DONE {

@@ -39,6 +39,7 @@ mod hostile_round4b;
 mod hostile_round4c;
 mod hostile_round4d;
 mod hostile_round5a;
+mod hostile_round5b;
 mod hostile_round5c;
 mod hostile_round5d;
 mod iso9283;
