@@ -469,18 +469,21 @@ fn rounded_coordinates(set: &MeasurementSet) -> Option<UnitSlip> {
 /// would be said as the whole file's coordinates or commands in another unit.
 fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
     let lengths = &LENGTH_UNITS;
+    // A conversion explains the slips when it leaves none and every arc judged as read is still
+    // judged: an arc made to scatter past judging says nothing ([`Arc::too_scattered`]).
+    let judged = experiment_arcs(set, desc).len();
+    let explains = |converted: &MeasurementSet| {
+        slips_as_read(converted, desc).is_empty() && experiment_arcs(converted, desc).len() >= judged
+    };
     // Every column in one other unit: the free poses' spread may pass with one column converted
     // alone (it is mostly that column's), but the whole file's slip is the one to say.
     let all_scaled = |factor: f64| (0..3).fold(set.clone(), |s, c| s.with_coordinate_scaled(c, factor));
-    if lengths
-        .iter()
-        .any(|(ratio, _)| slips_as_read(&all_scaled(1.0 / ratio), desc).is_empty())
-    {
+    if lengths.iter().any(|(ratio, _)| explains(&all_scaled(1.0 / ratio))) {
         return None;
     }
     let (column, (ratio, unit)) = (0..3)
         .flat_map(|c| lengths.iter().map(move |k| (c, *k)))
-        .find(|&(c, (ratio, _))| slips_as_read(&set.with_coordinate_scaled(c, 1.0 / ratio), desc).is_empty())?;
+        .find(|&(c, (ratio, _))| explains(&set.with_coordinate_scaled(c, 1.0 / ratio)))?;
     let name = ["x_mm", "y_mm", "z_mm"][column];
     Some(UnitSlip {
         field: name.into(),

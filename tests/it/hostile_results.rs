@@ -125,12 +125,23 @@ fn diagnose_warns_of_a_mirrored_frame_as_calibrate_does() {
     let dir = tempfile::tempdir().unwrap();
     simulate_analytic(dir.path(), 12, 22, "good.csv");
     let mirrored = altered_csv(&dir.path().join("good.csv"), "mirrored.csv", |_| true, |f| f.swap(4, 5));
+    // The data check refuses the left-handed frame before any fit ...
+    let a = axiscal()
+        .current_dir(dir.path())
+        .arg("calibrate")
+        .arg(&mirrored)
+        .args(["--out", "refused"])
+        .assert()
+        .code(2);
+    let e = stderr(&a);
+    assert!(e.contains("the instrument frame is left-handed"), "{e}");
+    // ... and past it (`--skip-unit-check`) the calibrated robot is said to be the mirror image.
     for command in ["calibrate", "diagnose"] {
         let a = axiscal()
             .current_dir(dir.path())
             .arg(command)
             .arg(&mirrored)
-            .args(["--out", command])
+            .args(["--out", command, "--skip-unit-check"])
             .assert()
             .success();
         let e = stderr(&a);

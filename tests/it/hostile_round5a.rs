@@ -75,7 +75,7 @@ fn cases() -> Vec<Case> {
             "x and y swapped (U2: blamed on the description)",
             "calibrate swap-xy.csv --out out",
             2,
-            &["the coordinates are mirrored"],
+            &["fit a mirror image of the description's robot", "left-handed"],
         ),
         case(
             "target ids 0 and 1 swapped (S4: silent, 64 mm wrong)",

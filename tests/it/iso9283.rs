@@ -548,7 +548,11 @@ fn iso_data_in_other_units_or_a_mirrored_frame_are_refused_or_said() {
     assert!(warnings.contains("times as far apart"), "{warnings}");
 
     let mirrored = altered_csv(&clean, "mirrored.csv", |_| true, |f| scale_fields(f, 4..5, -1.0));
-    let (out, json) = evaluate_iso(&mirrored, "mirror", &[]);
+    let (out, _) = evaluate_iso(&mirrored, "mirror-refused", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("the instrument frame is left-handed"), "{err}");
+    let (out, json) = evaluate_iso(&mirrored, "mirror", &["--skip-unit-check"]);
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(out.status.success(), "{err}");
     assert!(
