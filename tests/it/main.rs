@@ -39,6 +39,7 @@ mod hostile_round4b;
 mod hostile_round4c;
 mod hostile_round4d;
 mod hostile_round5d;
+mod hostile_round5e;
 mod iso9283;
 mod joint_map;
 mod json_schemas;
