@@ -102,11 +102,7 @@ pub fn run(args: Args) -> Result<()> {
     {
         bail!("--effect {effect}: expected one of {CASE_EFFECTS:?}");
     }
-    let mut outputs = Outputs::new(args.force);
-    // The case folders are written as the cases finish: the folder is this run's alone until
-    // its summary is placed (a second run into it at the same time is refused).
-    outputs.hold_folder(&args.out)?;
-    outputs.check_empty_dir(&args.out)?;
+    let outputs = held_output(&args)?;
     let keys: Vec<_> = (0..args.cases)
         .map(|i| (i, draw_case(args.seed, i, &desc)))
         .filter(|(_, key)| args.effect.as_ref().is_none_or(|e| *e == key.effect))
@@ -159,6 +155,16 @@ pub fn run(args: Args) -> Result<()> {
     staged.commit(&[])?;
     print!("{}", s.markdown());
     Ok(())
+}
+
+/// The outputs of `blind`, its folder `--out` held for the whole run: the case folders are
+/// written as the cases finish, and the folder is this run's alone until its summary is placed
+/// (a second run into it at the same time is refused, [`Outputs::hold_folder`]).
+fn held_output(args: &Args) -> Result<Outputs> {
+    let mut outputs = Outputs::new(args.force);
+    outputs.hold_folder(&args.out)?;
+    outputs.check_empty_dir(&args.out)?;
+    Ok(outputs)
 }
 
 /// The files a case folder holds.

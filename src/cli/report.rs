@@ -61,26 +61,27 @@ pub struct Args {
 /// `--instrument`: one line of text for the certificate, without control characters (an
 /// escape or bell byte would be written into the HTML and the report as it is), without format
 /// characters (a right-to-left override would show the serial number reordered), and no longer
-/// than a label ([`MAX_LABEL_CHARS`]).
-fn instrument_words(text: &str) -> Result<(), String> {
+/// than a label ([`MAX_LABEL_CHARS`]). Checked when the command runs, not by the argument
+/// parser, which would echo a long value whole.
+fn instrument_words(text: &str) -> Result<()> {
     if let Some(c) = text.chars().find(|c| c.is_control()) {
-        return Err(format!(
-            "holds the control character {c:?}: the instrument is one line of words (make, model, serial number)"
-        ));
+        bail!(
+            "--instrument holds the control character {c:?}: the instrument is one line of words (make, model, serial number)"
+        );
     }
     if let Some(c) = text.chars().find(|&c| is_format_char(c)) {
-        return Err(format!(
-            "holds the invisible format character U+{:04X}: it would change how the certificate shows the words \
+        bail!(
+            "--instrument holds the invisible format character U+{:04X}: it would change how the certificate shows the words \
              around it (a right-to-left override reverses a serial number); write the instrument as plain text",
             c as u32
-        ));
+        );
     }
     let count = text.chars().count();
     if count > MAX_LABEL_CHARS {
-        return Err(format!(
-            "is {count} characters long, more than {MAX_LABEL_CHARS}: the instrument is one line of words (make, \
+        bail!(
+            "--instrument is {count} characters long, more than {MAX_LABEL_CHARS}: the instrument is one line of words (make, \
              model, serial number, its own calibration); shorten it"
-        ));
+        );
     }
     Ok(())
 }
@@ -113,10 +114,7 @@ fn same_data(set: &MeasurementSet, cal: &Calibration, data: &Path, args: &Args) 
 
 /// Runs `axiscal report`.
 pub fn run(args: Args) -> Result<()> {
-    // Checked here, not by the argument parser, which would echo a long value whole.
-    if let Some(text) = &args.instrument {
-        instrument_words(text).map_err(|e| anyhow::anyhow!("--instrument {e}"))?;
-    }
+    args.instrument.as_deref().map(instrument_words).transpose()?;
     let mut outputs = Outputs::new(args.force)
         .input("--calibration", &args.calibration)
         .input("--robot", &args.robot);

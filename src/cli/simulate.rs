@@ -68,6 +68,21 @@ fn truth_file(path: &std::path::Path) -> Result<RobotModel> {
     }
 }
 
+/// Refuses a truth (`--truth`, `path`; `None`: the default one) of another joint count than
+/// the description's, and a `--truth` of another robot ([`truth_is_this_robots`]).
+fn truth_of_this_robot(truth: &RobotModel, path: Option<&Path>, desc: &RobotDescription, robot: &Path) -> Result<()> {
+    if truth.joints.len() != desc.dof() {
+        anyhow::bail!(
+            "--truth {} has {} joints, the description {} has {}: the truth must be this robot's",
+            path.unwrap_or(Path::new("(default)")).display(),
+            truth.joints.len(),
+            robot.display(),
+            desc.dof()
+        );
+    }
+    path.map_or(Ok(()), |path| truth_is_this_robots(truth, path, desc, robot))
+}
+
 /// Refuses a `--truth` (`path`) of the description's joint count that is another robot's: a
 /// joint of another kind, or a row beyond the manufacturing errors a robot has (counted in
 /// those of the paper's measured robot, the shipped `asea-irb6l-paper-truth.toml` against
@@ -217,21 +232,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => default_truth(&desc, args.seed)?,
     };
-    if truth.joints.len() != desc.dof() {
-        anyhow::bail!(
-            "--truth {} has {} joints, the description {} has {}: the truth must be this robot's",
-            args.truth
-                .as_deref()
-                .unwrap_or(std::path::Path::new("(default)"))
-                .display(),
-            truth.joints.len(),
-            args.robot.display(),
-            desc.dof()
-        );
-    }
-    if let Some(path) = &args.truth {
-        truth_is_this_robots(&truth, path, &desc, &args.robot)?;
-    }
+    truth_of_this_robot(&truth, args.truth.as_deref(), &desc, &args.robot)?;
     let instrument = instrument_model(args.instrument, &args.station, &desc, &args.robot)?;
     let validation = ValidationPlan {
         poses,
