@@ -58,8 +58,6 @@ pub struct Args {
 
 /// Runs `axiscal blind`.
 pub fn run(args: Args) -> Result<()> {
-    let outputs = Outputs::new(args.force);
-    outputs.check_empty_dir(&args.out)?;
     let campaign = match args.campaign.as_str() {
         "sweeps" => BlindCampaign::Sweeps,
         "free-poses" => BlindCampaign::FreePoses,
@@ -104,6 +102,7 @@ pub fn run(args: Args) -> Result<()> {
     {
         bail!("--effect {effect}: expected one of {CASE_EFFECTS:?}");
     }
+    let outputs = held_output(&args)?;
     let keys: Vec<_> = (0..args.cases)
         .map(|i| (i, draw_case(args.seed, i, &desc)))
         .filter(|(_, key)| args.effect.as_ref().is_none_or(|e| *e == key.effect))
@@ -144,6 +143,7 @@ pub fn run(args: Args) -> Result<()> {
             .collect::<Result<_>>()
     })?;
     drop(progress);
+    remove_stale_cases(&args.out, &results)?;
     let s = score(&results);
     let mut staged = outputs.staged_in(&args.out)?;
     staged.write("summary.json", json_file::to_string(Schema::BLIND_SUMMARY, &s)?)?;
@@ -154,5 +154,44 @@ pub fn run(args: Args) -> Result<()> {
     )?;
     staged.commit(&[])?;
     print!("{}", s.markdown());
+    Ok(())
+}
+
+/// The outputs of `blind`, its folder `--out` held for the whole run: the case folders are
+/// written as the cases finish, and the folder is this run's alone until its summary is placed
+/// (a second run into it at the same time is refused, [`Outputs::hold_folder`]).
+fn held_output(args: &Args) -> Result<Outputs> {
+    let mut outputs = Outputs::new(args.force);
+    outputs.hold_folder(&args.out)?;
+    outputs.check_empty_dir(&args.out)?;
+    Ok(outputs)
+}
+
+/// The files a case folder holds.
+const CASE_FILES: [&str; 3] = ["data.csv", "key.json", "diagnosis.json"];
+
+/// Removes the case folders of an earlier run (`--force`) that this run did not write: beside
+/// this run's summary they would read as its cases. Only the files a case writes are removed,
+/// and the folder when nothing else is left in it.
+fn remove_stale_cases(out: &std::path::Path, results: &[CaseResult]) -> Result<()> {
+    let written: std::collections::BTreeSet<String> =
+        results.iter().map(|r| format!("case-{:03}", r.key.case)).collect();
+    let entries = std::fs::read_dir(out).with_context(|| format!("reading {}", out.display()))?;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let is_case = name
+            .strip_prefix("case-")
+            .is_some_and(|n| n.len() >= 3 && n.bytes().all(|b| b.is_ascii_digit()));
+        if !is_case || written.contains(&name) || !entry.path().is_dir() {
+            continue;
+        }
+        for file in CASE_FILES {
+            let path = entry.path().join(file);
+            if path.is_file() {
+                std::fs::remove_file(&path).with_context(|| format!("removing the stale {}", path.display()))?;
+            }
+        }
+        let _ = std::fs::remove_dir(entry.path());
+    }
     Ok(())
 }

@@ -20,7 +20,7 @@ use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, 
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates, refine_carrying};
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::MeasurementSet;
+use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
@@ -292,7 +292,7 @@ pub fn run(args: Args) -> Result<()> {
             print_axes(&cal, &desc, &source);
             print_implausible(&texts.implausible, &desc, &set, &args);
             if !args.refine
-                && let Some(miss) = misses_own_validation_poses(&cal, &desc, &set)
+                && let Some(miss) = misses_own_validation_poses(&cal, &desc, &set, args.repeatability_rad.as_deref())
             {
                 eprintln!("warning: {miss}");
             }
@@ -573,7 +573,12 @@ const OWN_POSES_CHECKED: usize = 500;
 /// beyond the prediction is what a slip the unit checks cannot see leaves (one experiment's
 /// commands scaled within a transmission's range, a wrong placement or description), or an
 /// effect the model lacks. `None` without validation poses or when they are consistent.
-fn misses_own_validation_poses(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet) -> Option<String> {
+fn misses_own_validation_poses(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    stated_repeatability: Option<&[f64]>,
+) -> Option<String> {
     use axiscal::diagnosis::{ValidationOptions, Verdict, validate};
     let is_pose = |m: &&axiscal::measurement::Measurement| m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT;
     let mut poses: Vec<(&str, usize)> = set
@@ -599,16 +604,57 @@ fn misses_own_validation_poses(cal: &Calibration, desc: &RobotDescription, set: 
     let part = v.validation?;
     let test = part.chi_square?;
     (test.verdict == Verdict::Exceeds).then(|| {
+        let (rms, predicted) = (part.rms_mm, part.predicted_mm.total);
+        let miss = if rms > predicted {
+            format!(
+                "the calibrated model misses this file's own {} validation poses (not fitted) by {rms:.3} mm RMS against {predicted:.3} mm predicted (chi2/dof {:.2})",
+                kept.len(),
+                test.per_dof
+            )
+        } else {
+            format!(
+                "the calibrated model's misses of this file's own {} validation poses (not fitted) fail the prediction's chi-square test (chi2/dof {:.2}) though their RMS, {rms:.3} mm, is within the {predicted:.3} mm predicted: their pattern, not their size, contradicts it (some poses or directions missed well beyond their own predicted error, where the prediction is tight)",
+                kept.len(),
+                test.per_dof
+            )
+        };
         format!(
-            "the calibrated model misses this file's own {} validation poses (not fitted) by {:.3} mm RMS against {:.3} mm predicted (chi2/dof {:.2}): \
-             check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
+            "{miss}: {}check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
              placement and lengths, or an effect the model lacks (`axiscal validate`, `axiscal diagnose` on this file)",
-            kept.len(),
-            part.rms_mm,
-            part.predicted_mm.total,
-            test.per_dof
+            understated_repeatability(desc, stated_repeatability)
         )
     })
+}
+
+/// The first cause of a miss of the validation poses when `--repeatability-rad` (`stated`) is
+/// 0 or below the description's `repeatability_sigma` for some joint: the prediction then
+/// leaves out the joints' own scatter. Empty otherwise.
+fn understated_repeatability(desc: &RobotDescription, stated: Option<&[f64]>) -> String {
+    let Some(stated) = stated else { return String::new() };
+    let of_joint = |k: usize| if stated.len() == 1 { stated[0] } else { stated[k] };
+    // `--repeatability-rad` holds 1 or one value per joint (checked before calibrating).
+    let joints = if stated.len() == 1 {
+        desc.dof()
+    } else {
+        stated.len().min(desc.dof())
+    };
+    let low = (0..joints).find(|&k| of_joint(k) <= 0.0 || of_joint(k) < desc.joints[k].repeatability_sigma);
+    let Some(k) = low else { return String::new() };
+    let unit = if desc.joints[k].kind == axiscal::kinematics::JointKind::Revolute {
+        "rad"
+    } else {
+        "m"
+    };
+    let values: Vec<String> = stated.iter().map(|v| format_f64(*v)).collect();
+    format!(
+        "the stated repeatability (--repeatability-rad {}: joint {} at {} {unit}, the description's repeatability_sigma \
+         {} {unit}) leaves the joints' own scatter out of the prediction: drop --repeatability-rad or give the \
+         joints' real repeatability; else ",
+        values.join(","),
+        k + 1,
+        format_f64(of_joint(k)),
+        format_f64(desc.joints[k].repeatability_sigma)
+    )
 }
 
 /// The console summary of an independent-axis calibration.

@@ -520,7 +520,32 @@ pub fn read_data_warned(
         overrides.skip_unit_check,
         suspect.as_deref(),
     )?);
+    warnings.extend(lone_target_warnings(&set, data));
     Ok((set, warnings))
+}
+
+/// A warning per target id seen once, where its step lacks one of the targets every other
+/// step of its experiment sees ([`MeasurementSet::lone_targets`]): a mistyped id.
+fn lone_target_warnings(set: &MeasurementSet, data: &Path) -> Vec<String> {
+    let ids = |ids: &[usize]| ids.iter().map(|&t| set.target_name(t)).collect::<Vec<_>>().join(", ");
+    set.lone_targets()
+        .iter()
+        .map(|l| {
+            let at = set
+                .line_of(l.row)
+                .map_or_else(|| data.display().to_string(), |n| format!("{}:{n}", data.display()));
+            format!(
+                "{at}: column `target`: target {} is seen once, in this row only (experiment {}, step {}), where every \
+                 other step of the experiment sees targets {} and this step lacks target {}: a mistyped id? (the row \
+                 is used as a target of its own)",
+                set.target_name(l.target),
+                l.experiment,
+                l.step,
+                ids(&l.others),
+                set.target_name(l.missing)
+            )
+        })
+        .collect()
 }
 
 /// What a unit slip of data against the description `desc` (read from `robot`) may be besides

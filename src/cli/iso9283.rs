@@ -276,6 +276,7 @@ fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {
         register_base: args.calibration.is_none(),
         keep_outliers: args.keep_outliers,
         screen: true,
+        unit_check: !args.checks.skip_unit_check,
     };
     let figures = evaluate(&set, &model, &desc, options)
         .with_context(|| format!("ISO 9283 figures of {}", args.data.display()))?;

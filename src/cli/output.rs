@@ -24,6 +24,9 @@ struct Input {
 pub struct Outputs {
     force: bool,
     inputs: Vec<Input>,
+    /// The folder this command holds locked for its whole run ([`Outputs::hold_folder`]), and
+    /// the handle that holds the lock.
+    held: Option<(PathBuf, std::fs::File)>,
 }
 
 /// Refuses the output `-`: the outputs are files written whole through a temporary (a file
@@ -73,6 +76,7 @@ impl Outputs {
         Outputs {
             force,
             inputs: Vec::new(),
+            held: None,
         }
     }
 
@@ -485,8 +489,13 @@ impl StagedSet<'_> {
     /// earlier run's outputs that would no longer belong beside the new ones).
     pub fn commit(mut self, stale: &[&str]) -> Result<()> {
         // Two commands placing their sets into one folder at once (`--force` both) would
-        // interleave their files: the folder's own lock makes each set's placing whole.
-        let _placing = lock_folder(&self.dir)?;
+        // interleave their files: the folder's own lock makes each set's placing whole (held
+        // already by a command that locked the folder for its whole run).
+        let _placing = if self.outputs.holds(&self.dir) {
+            None
+        } else {
+            Some(lock_folder(&self.dir)?)
+        };
         let placed: Vec<PathBuf> = self.staged.iter().map(|f| f.target.clone()).collect();
         for file in std::mem::take(&mut self.staged) {
             file.place()?;
@@ -498,6 +507,38 @@ impl StagedSet<'_> {
             }
         }
         Ok(())
+    }
+}
+
+impl Outputs {
+    /// Creates the folder `dir` and locks it for the whole command (the lock a set's placing
+    /// takes, [`StagedSet::commit`]), for a command that writes files into it as it goes (e.g.
+    /// `blind`'s case folders): a second command writing into the folder at the same time is
+    /// refused instead of mixing its files with this one's. Released when `self` is dropped.
+    pub fn hold_folder(&mut self, dir: &Path) -> Result<()> {
+        Self::check_folder(dir)?;
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let folder = std::fs::File::open(dir).with_context(|| format!("opening {}", dir.display()))?;
+        match folder.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => bail!(
+                "{}: another axiscal command is writing into this folder (it holds the folder's lock); wait for it \
+                 to finish or choose another --out",
+                dir.display()
+            ),
+            Err(std::fs::TryLockError::Error(e)) => {
+                return Err(e).with_context(|| format!("locking {}", dir.display()));
+            }
+        }
+        self.held = Some((canonical(dir).unwrap_or_else(|| dir.to_owned()), folder));
+        Ok(())
+    }
+
+    /// Whether this command holds `dir` locked ([`Outputs::hold_folder`]).
+    fn holds(&self, dir: &Path) -> bool {
+        self.held
+            .as_ref()
+            .is_some_and(|(held, _)| canonical(dir).is_some_and(|d| d == *held))
     }
 }
 

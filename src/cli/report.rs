@@ -11,7 +11,7 @@ use axiscal::certificate::{CertificateInputs, HELD_OUT_FALSE_ALARM, certificate,
 use axiscal::diagnosis::free_pose_misses;
 use axiscal::iso9283::IsoFigures;
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::MeasurementSet;
+use axiscal::measurement::{MAX_LABEL_CHARS, MeasurementSet, is_format_char};
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
 
@@ -46,7 +46,7 @@ pub struct Args {
     #[arg(long)]
     iso9283: Option<PathBuf>,
     /// The instrument, in words (make, model, serial number, its own calibration).
-    #[arg(long, value_parser = instrument_words)]
+    #[arg(long)]
     instrument: Option<String>,
     /// Output folder.
     #[arg(long)]
@@ -59,14 +59,31 @@ pub struct Args {
 }
 
 /// `--instrument`: one line of text for the certificate, without control characters (an
-/// escape or bell byte would be written into the HTML and the report as it is).
-fn instrument_words(text: &str) -> Result<String, String> {
-    match text.chars().find(|c| c.is_control()) {
-        Some(c) => Err(format!(
-            "holds the control character {c:?}: the instrument is one line of words (make, model, serial number)"
-        )),
-        None => Ok(text.to_owned()),
+/// escape or bell byte would be written into the HTML and the report as it is), without format
+/// characters (a right-to-left override would show the serial number reordered), and no longer
+/// than a label ([`MAX_LABEL_CHARS`]). Checked when the command runs, not by the argument
+/// parser, which would echo a long value whole.
+fn instrument_words(text: &str) -> Result<()> {
+    if let Some(c) = text.chars().find(|c| c.is_control()) {
+        bail!(
+            "--instrument holds the control character {c:?}: the instrument is one line of words (make, model, serial number)"
+        );
     }
+    if let Some(c) = text.chars().find(|&c| is_format_char(c)) {
+        bail!(
+            "--instrument holds the invisible format character U+{:04X}: it would change how the certificate shows the words \
+             around it (a right-to-left override reverses a serial number); write the instrument as plain text",
+            c as u32
+        );
+    }
+    let count = text.chars().count();
+    if count > MAX_LABEL_CHARS {
+        bail!(
+            "--instrument is {count} characters long, more than {MAX_LABEL_CHARS}: the instrument is one line of words (make, \
+             model, serial number, its own calibration); shorten it"
+        );
+    }
+    Ok(())
 }
 
 /// The residuals beside `calibration` (`residuals.csv`), if there.
@@ -97,6 +114,7 @@ fn same_data(set: &MeasurementSet, cal: &Calibration, data: &Path, args: &Args) 
 
 /// Runs `axiscal report`.
 pub fn run(args: Args) -> Result<()> {
+    args.instrument.as_deref().map(instrument_words).transpose()?;
     let mut outputs = Outputs::new(args.force)
         .input("--calibration", &args.calibration)
         .input("--robot", &args.robot);

@@ -4,6 +4,7 @@
 use super::options::InRange;
 use super::output::Outputs;
 use anyhow::{Context, Result, bail};
+use axiscal::kinematics::JointKind;
 use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements_to};
 use axiscal::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
@@ -14,19 +15,31 @@ use rand::{SeedableRng, rngs::ChaCha12Rng};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// The shipped default manufacturing errors (`scenarios/robots/default-perturbation.toml`).
+fn default_perturbation() -> Result<axiscal::sim::PerturbationSpec> {
+    let spec_path = super::options::perturbation_file("default-perturbation").map_err(anyhow::Error::msg)?;
+    Ok(axiscal::sim::PerturbationSpec::from_toml_str(
+        &axiscal::presets::read_text(&spec_path)?,
+        "default-perturbation.toml",
+    )?)
+}
+
+/// The shipped description of the paper's robot (`asea-irb6l.toml`).
+fn paper_description() -> Result<RobotDescription> {
+    Ok(RobotDescription::from_file(
+        &super::options::robot_file("asea-irb6l").map_err(anyhow::Error::msg)?,
+    )?)
+}
+
 /// The truth without `--truth`: the paper's robot for the ASEA IRB/L6's description, else the
 /// description perturbed by the shipped `default-perturbation.toml`, drawn from its own stream of `seed`
 /// (the noise's stream is untouched).
 fn default_truth(desc: &RobotDescription, seed: u64) -> Result<RobotModel> {
-    let irb6l = RobotDescription::from_file(&super::options::robot_file("asea-irb6l").map_err(anyhow::Error::msg)?)?;
+    let irb6l = paper_description()?;
     if desc.geometry_hash() == irb6l.geometry_hash() {
         return Ok(axiscal::sim::paper_robot());
     }
-    let spec_path = super::options::perturbation_file("default-perturbation").map_err(anyhow::Error::msg)?;
-    let spec = axiscal::sim::PerturbationSpec::from_toml_str(
-        &axiscal::presets::read_text(&spec_path)?,
-        "default-perturbation.toml",
-    )?;
+    let spec = default_perturbation()?;
     let mut rng = ChaCha12Rng::seed_from_u64(seed);
     rng.set_stream(TRUTH_STREAM);
     let truth = axiscal::sim::perturb(desc, &spec, &mut rng)?;
@@ -53,6 +66,65 @@ fn truth_file(path: &std::path::Path) -> Result<RobotModel> {
             Err(_) => Err(model_error.into()),
         },
     }
+}
+
+/// Refuses a truth (`--truth`, `path`; `None`: the default one) of another joint count than
+/// the description's, and a `--truth` of another robot ([`truth_is_this_robots`]).
+fn truth_of_this_robot(truth: &RobotModel, path: Option<&Path>, desc: &RobotDescription, robot: &Path) -> Result<()> {
+    if truth.joints.len() != desc.dof() {
+        anyhow::bail!(
+            "--truth {} has {} joints, the description {} has {}: the truth must be this robot's",
+            path.unwrap_or(Path::new("(default)")).display(),
+            truth.joints.len(),
+            robot.display(),
+            desc.dof()
+        );
+    }
+    path.map_or(Ok(()), |path| truth_is_this_robots(truth, path, desc, robot))
+}
+
+/// Refuses a `--truth` (`path`) of the description's joint count that is another robot's: a
+/// joint of another kind, or a row beyond the manufacturing errors a robot has (counted in
+/// those of the paper's measured robot, the shipped `asea-irb6l-paper-truth.toml` against
+/// `asea-irb6l.toml`: [`axiscal::sim::largest_departure`]), which the simulated file would
+/// carry under the description's name.
+fn truth_is_this_robots(truth: &RobotModel, path: &Path, desc: &RobotDescription, robot: &Path) -> Result<()> {
+    let kinds = |k: JointKind| match k {
+        JointKind::Revolute => "revolute",
+        JointKind::Prismatic => "prismatic",
+    };
+    if let Some(k) = (0..desc.dof()).find(|&k| truth.joints[k].kind != desc.joints[k].kind) {
+        anyhow::bail!(
+            "--truth {}: joint {} is {}, in the description {} it is {}: the truth must be this robot's (its joint kinds \
+             are the description's; a truth file of another robot?)",
+            path.display(),
+            k + 1,
+            kinds(truth.joints[k].kind),
+            robot.display(),
+            kinds(desc.joints[k].kind)
+        );
+    }
+    let irb6l = paper_description()?;
+    let spread = axiscal::sim::row_departure_rms(&axiscal::sim::paper_robot(), &RobotModel::ideal(&irb6l));
+    if let Some(d) = axiscal::sim::largest_departure(truth, &RobotModel::ideal(desc), spread) {
+        anyhow::bail!(
+            "--truth {}: its {} departs from the description {}'s nominal model by {:.3} {}, {:.0} times the RMS \
+             manufacturing error of a real robot (the paper's IRB/L6 against its description: {:.2} mm, {:.3} deg; \
+             beyond {:.1} times happens once in {:.0} robots): the truth must be this robot's (a truth file of \
+             another robot?)",
+            path.display(),
+            d.field,
+            robot.display(),
+            d.by,
+            d.unit,
+            d.spreads,
+            spread.0,
+            spread.1,
+            d.bound,
+            1.0 / axiscal::sim::DEPARTURE_FALSE_ALARM
+        );
+    }
+    Ok(())
 }
 
 /// The stream of the default truth's draws (the noise uses stream 0 of the same seed).
@@ -160,18 +232,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => default_truth(&desc, args.seed)?,
     };
-    if truth.joints.len() != desc.dof() {
-        anyhow::bail!(
-            "--truth {} has {} joints, the description {} has {}: the truth must be this robot's",
-            args.truth
-                .as_deref()
-                .unwrap_or(std::path::Path::new("(default)"))
-                .display(),
-            truth.joints.len(),
-            args.robot.display(),
-            desc.dof()
-        );
-    }
+    truth_of_this_robot(&truth, args.truth.as_deref(), &desc, &args.robot)?;
     let instrument = instrument_model(args.instrument, &args.station, &desc, &args.robot)?;
     let validation = ValidationPlan {
         poses,

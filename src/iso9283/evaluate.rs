@@ -194,6 +194,8 @@ pub(super) struct Cycle {
     pub(super) step: usize,
     /// The data file's line of its first row, when known.
     pub(super) line: Option<u64>,
+    /// Its commands (file units: deg or mm).
+    pub(super) cmd: Vec<f64>,
     pub(super) commanded: Isometry3<f64>,
     pub(super) attained: Isometry3<f64>,
     /// Per measured target: its position on the tool (the description's) and where it was
@@ -300,6 +302,7 @@ fn cycles(
     }
     let mut out: BTreeMap<usize, Vec<Cycle>> = BTreeMap::new();
     for (experiment, pose, direction) in experiments {
+        super::commands::one_command(&experiment, desc, &lines)?;
         for (step, rows) in experiment.by_step() {
             let fitted =
                 cycle(&rows, &targets_m, model, &phi, &controller, desc).map_err(|problem| IsoError::Cycle {
@@ -312,6 +315,7 @@ fn cycles(
                 direction,
                 step,
                 line: lines.get(&(experiment.name, step)).copied(),
+                cmd: rows[0].cmd.clone(),
                 commanded: fitted.commanded,
                 attained: fitted.attained,
                 targets: fitted.targets,
@@ -383,6 +387,9 @@ pub struct EvaluateOptions {
     /// scatter need not be Gaussian (a joint's backlash or settling puts a pose's cycles in
     /// two clusters): screened, a share of them would be refused as a wrong pose.
     pub screen: bool,
+    /// Check that no pose's commands are in radians ([`super::commands::radian_pose`]): a
+    /// measured file's (`--skip-unit-check` skips it); simulated cycles are commanded in degrees.
+    pub unit_check: bool,
 }
 
 /// The ISO 9283 figures of the `iso-P<k>` experiments of `set`, commanded poses from `model`
@@ -395,6 +402,9 @@ pub fn evaluate(
     options: EvaluateOptions,
 ) -> Result<IsoFigures, IsoError> {
     let mut cycles = cycles(set, model, desc)?;
+    if options.unit_check {
+        super::commands::radian_pose(&cycles, model, desc, options.register_base)?;
+    }
     let outliers = if options.screen {
         screen_cycles(&cycles, options.keep_outliers)?
     } else {

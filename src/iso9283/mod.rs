@@ -7,6 +7,8 @@
 //!   them.
 //! - [`mod@evaluate`]: the figures of a measured campaign (experiments `iso-P<k>`), attained poses
 //!   fitted to the tool targets, commanded ones from a robot model.
+//! - [`commands`]: every cycle of a pose commands its pose's values, and no pose's commands
+//!   are in radians.
 //! - [`outliers`]: cycles far from their pose's others, set aside before the figures.
 //! - [`frame`]: the instrument frame's scale and handedness against the description.
 //! - [`figures`]: pose accuracy and repeatability (7.2.1, 7.2.2), multi-directional pose
@@ -14,6 +16,7 @@
 //! - [`predict`](mod@predict): the figures predicted before a test, by Monte-Carlo over the
 //!   calibration's covariance, the robot's repeatability and the instrument's noise.
 
+pub mod commands;
 pub mod cube;
 pub mod evaluate;
 pub mod figures;

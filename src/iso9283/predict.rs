@@ -179,6 +179,7 @@ pub fn predict(
             register_base: false,
             keep_outliers: true,
             screen: false,
+            unit_check: false,
         };
         let f = evaluate(&measured, inputs.model, inputs.desc, options).map_err(|e: IsoError| failed(e.to_string()))?;
         figures.push(f);

@@ -609,6 +609,100 @@ fn pose_commands_differ(rows: &[Measurement], keys: &[RowKey]) -> Option<Measure
         .min_by_key(|e| e.row)
 }
 
+/// A target id seen in one row only of an experiment whose other steps (two or more) all see
+/// one same set of targets, while the lone row's step sees that set but one: a mistyped id in
+/// place of the missing one. A target seen at only some steps is normal (an instrument loses
+/// sight of it); one seen once, exactly where another goes missing, is a typo.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoneTarget {
+    /// The row (0-based, in the set).
+    pub row: usize,
+    /// Its experiment and step.
+    pub experiment: String,
+    /// Its step.
+    pub step: usize,
+    /// The lone id.
+    pub target: usize,
+    /// The targets every other step of the experiment sees.
+    pub others: Vec<usize>,
+    /// The one of them the lone row's step lacks.
+    pub missing: usize,
+}
+
+impl MeasurementSet {
+    /// The [`LoneTarget`]s of the set, in row order.
+    pub fn lone_targets(&self) -> Vec<LoneTarget> {
+        let mut by_experiment: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+        for (i, m) in self.rows.iter().enumerate() {
+            by_experiment.entry(m.experiment.as_str()).or_default().push(i);
+        }
+        let mut out: Vec<LoneTarget> = by_experiment
+            .values()
+            .filter_map(|rows| self.lone_target_in(rows))
+            .collect();
+        out.sort_by_key(|l| l.row);
+        out
+    }
+
+    /// The [`LoneTarget`] among `rows` (one experiment's), if any.
+    fn lone_target_in(&self, rows: &[usize]) -> Option<LoneTarget> {
+        let mut steps: BTreeMap<usize, std::collections::BTreeSet<usize>> = BTreeMap::new();
+        let mut seen: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+        for &i in rows {
+            let m = &self.rows[i];
+            steps.entry(m.step).or_default().insert(m.target);
+            seen.entry(m.target).or_default().push(i);
+        }
+        seen.values().filter(|r| r.len() == 1).find_map(|r| {
+            let m = &self.rows[r[0]];
+            let mut others = steps.iter().filter(|(s, _)| **s != m.step).map(|(_, t)| t);
+            let first = others.next()?;
+            let agree = steps.len() >= 3 && others.all(|t| t == first);
+            let here: std::collections::BTreeSet<usize> =
+                steps[&m.step].iter().copied().filter(|t| *t != m.target).collect();
+            let missing: Vec<usize> = first.difference(&here).copied().collect();
+            (agree && here.is_subset(first) && missing.len() == 1).then(|| LoneTarget {
+                row: r[0],
+                experiment: m.experiment.clone(),
+                step: m.step,
+                target: m.target,
+                others: first.iter().copied().collect(),
+                missing: missing[0],
+            })
+        })
+    }
+}
+
+/// Whether `c` is a Unicode format character (general category Cf: the bidirectional
+/// overrides and isolates such as U+202E, zero-width spaces and joiners, the byte-order mark,
+/// the tag characters): invisible, and some reorder how the text around them is displayed, so
+/// a label holding one does not read as it is written.
+pub fn is_format_char(c: char) -> bool {
+    matches!(
+        c as u32,
+        0xAD | 0x600..=0x605
+            | 0x61C
+            | 0x6DD
+            | 0x70F
+            | 0x890..=0x891
+            | 0x8E2
+            | 0x180E
+            | 0x200B..=0x200F
+            | 0x202A..=0x202E
+            | 0x2060..=0x2064
+            | 0x2066..=0x206F
+            | 0xFEFF
+            | 0xFFF9..=0xFFFB
+            | 0x110BD
+            | 0x110CD
+            | 0x13430..=0x1343F
+            | 0x1BCA0..=0x1BCA3
+            | 0x1D173..=0x1D17A
+            | 0xE0001
+            | 0xE0020..=0xE007F
+    )
+}
+
 /// Whether `label` is longer than [`MAX_LABEL_CHARS`] characters.
 pub(crate) fn too_long(label: &str) -> bool {
     label.len() > MAX_LABEL_CHARS && label.chars().count() > MAX_LABEL_CHARS

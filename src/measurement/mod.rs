@@ -19,8 +19,8 @@ pub use csv_io::{
     write_measurements_to,
 };
 pub use data::{
-    Experiment, MAX_LABEL_CHARS, MAX_PAYLOAD_KG, Measurement, MeasurementSet, MeasurementSetError,
-    POSE_COMMAND_TOLERANCE, RowProblem, TEMPERATURE_RANGE_C,
+    Experiment, LoneTarget, MAX_LABEL_CHARS, MAX_PAYLOAD_KG, Measurement, MeasurementSet, MeasurementSetError,
+    POSE_COMMAND_TOLERANCE, RowProblem, TEMPERATURE_RANGE_C, is_format_char,
 };
 pub use model::{IsotropicNoise, MeasurementModel};
 pub use noise_calibration::{

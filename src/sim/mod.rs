@@ -31,8 +31,8 @@ pub use effects::{Effects, EffectsError, LinkMassEntry};
 pub use joint_driver::{DrivenJoints, InversionTable, JointDriver, UNMOVED_ACTUATOR_RAD};
 pub use paper::{PAPER_ROBOT_FILE, paper_robot};
 pub use perturb::{
-    CouplingHarmonicSpread, FourBarSpread, PerturbationSpec, PlacementSpread, RowSpread, Spread, TransmissionSpread,
-    perturb,
+    CouplingHarmonicSpread, DEPARTURE_FALSE_ALARM, Departure, FourBarSpread, PerturbationSpec, PlacementSpread,
+    RowSpread, Spread, TransmissionSpread, largest_departure, perturb, row_departure_rms,
 };
 pub use rapier::{
     ArmBody, ArmOptions, BAR_RADIUS_M, CRANK_MASS_KG, Compliance, CoupledTargets, FourBarBodies, LinkInertia,

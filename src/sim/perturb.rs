@@ -358,3 +358,92 @@ fn axis_distance_m(t: &RobotModel, into: usize) -> f64 {
     let dir = a.direction.into_inner();
     (d - dir * d.dot(&dir)).norm()
 }
+
+/// The chance that a robot's truth departs from its description, in any of its rows' values,
+/// beyond [`largest_departure`]'s bound.
+pub const DEPARTURE_FALSE_ALARM: f64 = 1e-6;
+
+/// The values of a model's rows (`rows[k].a_m`, ...): lengths in mm, angles in deg (flagged).
+fn row_values(model: &RobotModel) -> Vec<(String, f64, bool)> {
+    let mut out = Vec::new();
+    for (k, r) in model.rows.iter().enumerate() {
+        out.push((format!("rows[{k}].a_m"), r.a_m * 1e3, false));
+        out.push((format!("rows[{k}].b_m"), r.b_m * 1e3, false));
+        out.push((format!("rows[{k}].h_m"), r.h_m * 1e3, false));
+        out.push((format!("rows[{k}].alpha_deg"), r.alpha_deg, true));
+        out.push((format!("rows[{k}].beta_deg"), r.beta_deg, true));
+        out.push((format!("rows[{k}].gamma_deg"), r.gamma_deg, true));
+    }
+    out
+}
+
+/// `truth - nominal`, an angle's modulo 360 deg (in -180..180).
+fn departure(truth: f64, nominal: f64, angle: bool) -> f64 {
+    if angle {
+        (truth - nominal + 180.0).rem_euclid(360.0) - 180.0
+    } else {
+        truth - nominal
+    }
+}
+
+/// The RMS departure of `truth`'s rows from `nominal`'s (same row count): lengths \[mm\] and
+/// angles \[deg\], over their nonzero departures. Of a real robot's identified truth against its
+/// description, the size of a real robot's manufacturing errors.
+pub fn row_departure_rms(truth: &RobotModel, nominal: &RobotModel) -> (f64, f64) {
+    let (mut lengths, mut angles) = (Vec::new(), Vec::new());
+    for ((_, t, angle), (_, n, _)) in row_values(truth).into_iter().zip(row_values(nominal)) {
+        let d = departure(t, n, angle);
+        if d != 0.0 {
+            if angle { angles.push(d) } else { lengths.push(d) }
+        }
+    }
+    let rms = |v: &[f64]| (v.iter().map(|d| d * d).sum::<f64>() / v.len().max(1) as f64).sqrt();
+    (rms(&lengths), rms(&angles))
+}
+
+/// A row value of a truth model that departs from the description's nominal model beyond
+/// what a robot's manufacturing errors give ([`largest_departure`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Departure {
+    /// The value, as a truth file names it (`rows[2].a_m`).
+    pub field: String,
+    /// How far it departs (mm or deg).
+    pub by: f64,
+    /// The unit of `by`.
+    pub unit: &'static str,
+    /// `by` over the spread of that kind of value.
+    pub spreads: f64,
+    /// The bound in spreads: the normal deviate that all of the values compared stay within
+    /// but with the chance [`DEPARTURE_FALSE_ALARM`].
+    pub bound: f64,
+}
+
+/// The largest departure of `truth`'s rows from `nominal`'s (the description's nominal model),
+/// counted in `spread` (a robot's manufacturing errors: lengths \[mm\], angles \[deg\], e.g.
+/// [`row_departure_rms`] of a real robot), when beyond the normal deviate that all of the
+/// values stay within but with the chance [`DEPARTURE_FALSE_ALARM`]: the truth is then another
+/// robot's. `None` within the bound, or for models of other row counts.
+pub fn largest_departure(truth: &RobotModel, nominal: &RobotModel, spread: (f64, f64)) -> Option<Departure> {
+    if truth.rows.len() != nominal.rows.len() || !(spread.0 > 0.0 && spread.1 > 0.0) {
+        return None;
+    }
+    let values = row_values(truth);
+    let per_value = DEPARTURE_FALSE_ALARM / values.len().max(1) as f64;
+    let bound = crate::numerics::stats::chi_square_quantile(1.0 - per_value, 1.0).sqrt();
+    values
+        .into_iter()
+        .zip(row_values(nominal))
+        .map(|((field, t, angle), (_, n, _))| {
+            let by = departure(t, n, angle).abs();
+            let (sigma, unit) = if angle { (spread.1, "deg") } else { (spread.0, "mm") };
+            Departure {
+                field,
+                by,
+                unit,
+                spreads: by / sigma,
+                bound,
+            }
+        })
+        .filter(|d| d.spreads > bound)
+        .max_by(|a, b| a.spreads.total_cmp(&b.spreads))
+}

@@ -326,10 +326,22 @@ fn outputs(d: &Path) -> Vec<PathBuf> {
             "val",
         ],
     );
-    // Every validation pose as a cycle of one ISO pose (the schema, not the figures).
-    let iso = std::fs::read_to_string(d.join("data.csv"))
-        .unwrap()
-        .replace("validation,", "iso-P1,");
+    // The first five validation poses as ISO poses P1..P5, each measured twice (the schema,
+    // not the figures; the cycles of one pose command one pose's values).
+    let mut iso = String::new();
+    for line in std::fs::read_to_string(d.join("data.csv")).unwrap().lines() {
+        let f: Vec<&str> = line.splitn(4, ',').collect();
+        match f[..] {
+            ["validation", "0", step, rest] if step.parse::<usize>().is_ok_and(|s| s < 5) => {
+                let pose = step.parse::<usize>().unwrap() + 1;
+                for cycle in 0..2 {
+                    iso.push_str(&format!("iso-P{pose},0,{cycle},{rest}\n"));
+                }
+            }
+            ["validation", ..] => {}
+            _ => iso.push_str(&format!("{line}\n")),
+        }
+    }
     std::fs::write(d.join("iso.csv"), iso).unwrap();
     run(
         d,

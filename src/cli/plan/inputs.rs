@@ -77,61 +77,110 @@ pub fn validation_poses(given: Option<usize>, desc: &RobotDescription, robot: &P
     }
 }
 
-/// One warning per rotary sweep of a joint in `spans` (`--span J=SPAN`) whose target 0, on
-/// the nominal arm (`points`), bows from its chord by less than
-/// [`axiscal::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE`] times the noise `noise_mm`: the
-/// rule by which `calibrate` refuses a sweep as too short to locate its axis.
+/// One warning per sweep of a joint in `spans` (`--span J=SPAN`) too short for `calibrate` to
+/// locate its axis at the noise `noise_mm`, judged on the nominal arm (`points`, target 0): a
+/// rotary sweep by its arc's bow ([`short_arc_warning`]), a sliding one by its points' spread
+/// ([`short_line_warning`]).
 pub fn short_span_warnings(
     desc: &RobotDescription,
     spans: &[(usize, f64)],
     points: &[PlannedPoint],
     noise_mm: f64,
 ) -> Vec<String> {
+    spans
+        .iter()
+        .filter_map(|&(joint, span)| {
+            let sweep: Vec<&PlannedPoint> = points
+                .iter()
+                .filter(|p| p.moved_joint == joint && p.target == 0)
+                .collect();
+            match desc.joints.get(joint - 1)?.kind {
+                JointKind::Revolute => short_arc_warning(joint, span, &sweep, noise_mm),
+                JointKind::Prismatic => short_line_warning(joint, span, &sweep, noise_mm),
+            }
+        })
+        .collect()
+}
+
+/// The warning of a rotary sweep (`sweep`, its target-0 points) of `span` degrees whose arc
+/// bows from its chord by less than
+/// [`axiscal::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE`] times the noise: the rule by
+/// which `calibrate` refuses a sweep as too short to locate its axis.
+fn short_arc_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm: f64) -> Option<String> {
     let factor = axiscal::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE;
-    let mut warnings = Vec::new();
-    for &(joint, span) in spans {
-        if desc.joints.get(joint - 1).is_none_or(|j| j.kind != JointKind::Revolute) {
-            continue;
-        }
-        let sweep: Vec<&PlannedPoint> = points
-            .iter()
-            .filter(|p| p.moved_joint == joint && p.target == 0)
-            .collect();
-        let (Some(first), Some(last)) = (sweep.iter().min_by_key(|p| p.step), sweep.iter().max_by_key(|p| p.step))
-        else {
-            continue;
-        };
-        let half_rad = (span / 2.0).to_radians();
-        if half_rad >= std::f64::consts::FRAC_PI_2 {
-            continue;
-        }
-        let radius_mm = (last.nominal_m - first.nominal_m).norm() * 1e3 / (2.0 * half_rad.sin());
-        let sagitta_mm = radius_mm * (1.0 - half_rad.cos());
-        if sagitta_mm >= factor * noise_mm {
-            continue;
-        }
-        let bow = factor * noise_mm / radius_mm;
-        let needed = if bow < 2.0 {
-            format!(" to at least {:.3} deg", 2.0 * (1.0 - bow).acos().to_degrees())
-        } else {
-            String::new()
-        };
-        let radians = if span <= std::f64::consts::TAU {
-            format!(
-                " (--span is in degrees: {} rad would be {:.1} deg)",
-                format_f64(span),
-                span.to_degrees()
-            )
-        } else {
-            String::new()
-        };
-        warnings.push(format!(
-            "--span {joint}={}: joint {joint}'s sweep of {} deg bows its target's arc (radius {radius_mm:.1} mm) \
-             {sagitta_mm:.4} mm from its chord, within {factor} times the noise of a point ({noise_mm} mm, \
-             --noise-mm): `calibrate` refuses it as too short to locate the axis; widen it{needed}{radians}",
-            format_f64(span),
-            format_f64(span)
-        ));
+    let first = sweep.iter().min_by_key(|p| p.step)?;
+    let last = sweep.iter().max_by_key(|p| p.step)?;
+    let half_rad = (span / 2.0).to_radians();
+    if half_rad >= std::f64::consts::FRAC_PI_2 {
+        return None;
     }
-    warnings
+    let radius_mm = (last.nominal_m - first.nominal_m).norm() * 1e3 / (2.0 * half_rad.sin());
+    let sagitta_mm = radius_mm * (1.0 - half_rad.cos());
+    if sagitta_mm >= factor * noise_mm {
+        return None;
+    }
+    let bow = factor * noise_mm / radius_mm;
+    let needed = if bow < 2.0 {
+        format!(" to at least {:.3} deg", 2.0 * (1.0 - bow).acos().to_degrees())
+    } else {
+        String::new()
+    };
+    let radians = if span <= std::f64::consts::TAU {
+        format!(
+            " (--span is in degrees: {} rad would be {:.1} deg)",
+            format_f64(span),
+            span.to_degrees()
+        )
+    } else {
+        String::new()
+    };
+    Some(format!(
+        "--span {joint}={}: joint {joint}'s sweep of {} deg bows its target's arc (radius {radius_mm:.1} mm) \
+         {sagitta_mm:.4} mm from its chord, within {factor} times the noise of a point ({noise_mm} mm, \
+         --noise-mm): `calibrate` refuses it as too short to locate the axis; widen it{needed}{radians}",
+        format_f64(span),
+        format_f64(span)
+    ))
+}
+
+/// The warning of a sliding sweep (`sweep`, its target-0 points) of `span` mm whose points
+/// spread about their centroid by less than
+/// [`axiscal::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`] times the noise (the widest of
+/// its experiments): the rule by which `calibrate` names a sweep too short for the instrument
+/// to locate the axis. Points evenly along a line of length `L` spread `L / sqrt(12)`.
+fn short_line_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm: f64) -> Option<String> {
+    let factor = axiscal::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE;
+    let mut experiments: Vec<&str> = sweep.iter().map(|p| p.experiment.as_str()).collect();
+    experiments.dedup();
+    let spread_mm = experiments
+        .iter()
+        .map(|e| {
+            let points: Vec<_> = sweep
+                .iter()
+                .filter(|p| p.experiment == *e)
+                .map(|p| p.nominal_m)
+                .collect();
+            axiscal::numerics::stats::rms_spread(&points) * 1e3
+        })
+        .max_by(f64::total_cmp)?;
+    if spread_mm >= factor * noise_mm {
+        return None;
+    }
+    let needed_mm = 12f64.sqrt() * factor * noise_mm;
+    let metres = if span * 1e3 >= needed_mm {
+        format!(
+            " (--span is in mm: {} m would be {} mm)",
+            format_f64(span),
+            format_f64(span * 1e3)
+        )
+    } else {
+        String::new()
+    };
+    Some(format!(
+        "--span {joint}={}: joint {joint}'s sweep of {} mm spreads its target's points {spread_mm:.4} mm RMS about \
+         their centroid, within {factor} times the noise of a point ({noise_mm} mm, --noise-mm): `calibrate` \
+         refuses it as too short for the instrument to locate the axis; widen it to at least {needed_mm:.3} mm{metres}",
+        format_f64(span),
+        format_f64(span)
+    ))
 }

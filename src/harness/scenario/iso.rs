@@ -80,6 +80,7 @@ impl IsoTrial<'_> {
             register_base: false,
             keep_outliers: true,
             screen: false,
+            unit_check: false,
         };
         let measured = evaluate(&set, &fit.robot, self.desc, options).map_err(|e| format!("ISO figures: {e}"))?;
         let covariance = fit

@@ -460,7 +460,8 @@ pub fn detect_unit(ratio: f64) -> Option<LengthUnit> {
 
 /// One point whose distance to the median point differs from its nominal counterpart's by more
 /// than 50 mm plus 20 % of that distance (a real robot's errors are millimetres; a value typed
-/// in the other unit is off by a factor 1000) is an error naming its line.
+/// in the other unit is off by a factor 1000) is an error naming its line; in an export without
+/// ids (rows matched by order) several such points say the rows are not in the plan's order.
 fn check_slips(t: &Table, pairs: &[(&PlanRow, &ExportPoint)], unit: LengthUnit) -> Result<(), PointsError> {
     let measured: Vec<Vector3<f64>> = pairs
         .iter()
@@ -468,19 +469,30 @@ fn check_slips(t: &Table, pairs: &[(&PlanRow, &ExportPoint)], unit: LengthUnit) 
         .collect();
     let nominal: Vec<Vector3<f64>> = pairs.iter().map(|(r, _)| Vector3::from(r.nominal_mm)).collect();
     let (rm, rn) = (unit_check::radii(&measured), unit_check::radii(&nominal));
-    for (k, (plan_row, point)) in pairs.iter().enumerate() {
-        if (rm[k] - rn[k]).abs() > 50.0 + 0.2 * rn[k] {
-            let x = t.column(&["x", "x_mm", "x_m"]).unwrap_or(0);
-            return Err(t.row_error(
-                point.line,
-                x,
-                format!(
-                    "point {} is {:.1} mm from the points' median, the plan puts it {:.1} mm away: a unit slip or a \
-                     wrong id?",
-                    plan_row.point, rm[k], rn[k]
-                ),
-            ));
-        }
-    }
-    Ok(())
+    let slipped: Vec<usize> = (0..pairs.len())
+        .filter(|&k| (rm[k] - rn[k]).abs() > 50.0 + 0.2 * rn[k])
+        .collect();
+    let Some(&k) = slipped.first() else { return Ok(()) };
+    let (plan_row, point) = pairs[k];
+    let cause = match (point.id, slipped.len()) {
+        (Some(_), _) => "a unit slip or a wrong id?".to_owned(),
+        (None, 1) => "a unit slip in this row? (the export has no ids: its rows are matched to the plan's points \
+                      by their order)"
+            .to_owned(),
+        (None, n) => format!(
+            "{n} of the {} rows are so far from their plan points: the export has no id column, so its rows are \
+             matched to the plan's points by their order, and these rows are not in the plan's order (sorted or \
+             shuffled on export?); export the point ids (an `id` column) or the rows in the plan's order",
+            pairs.len()
+        ),
+    };
+    let x = t.column(&["x", "x_mm", "x_m"]).unwrap_or(0);
+    Err(t.row_error(
+        point.line,
+        x,
+        format!(
+            "point {} is {:.1} mm from the points' median, the plan puts it {:.1} mm away: {cause}",
+            plan_row.point, rm[k], rn[k]
+        ),
+    ))
 }
