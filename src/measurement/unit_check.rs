@@ -268,19 +268,6 @@ struct Arc {
     centre: Point3<f64>,
     /// Median ratio of the turned angle to the commanded span (both read in degrees).
     turn_ratio: f64,
-    /// The median radius's relative 1-sigma from the triples' scatter: `1.2533 x 1.4826 MAD /
-    /// median / sqrt(triples)` (the median's efficiency on normal scatter).
-    radius_sigma_rel: f64,
-}
-
-impl Arc {
-    /// Whether the triples' circles scatter too much for the radius to tell a unit's factor
-    /// ([`commands::SIGMAS`] of its sigma exceed the quarter of [`SPREAD_WARNING`]): points
-    /// far off one arc (noise much above the instrument's, outliers) are the calibration's
-    /// screens' to name, not a unit slip.
-    fn too_scattered(&self) -> bool {
-        commands::SIGMAS * self.radius_sigma_rel > SPREAD_WARNING.ln()
-    }
 }
 
 /// One axis experiment's target-0 arc from the circles through its point triples.
@@ -304,13 +291,10 @@ fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
     }
     let turn_ratio = median(ratios);
     let centre = Point3::from(Vector3::from_fn(|k, _| median(centres.iter().map(|c| c[k]).collect())));
-    let radius = median(radii.clone());
-    let mad = median(radii.iter().map(|r| (r - radius).abs()).collect());
     Some(Arc {
         centre,
-        radius,
+        radius: median(radii),
         turn_ratio,
-        radius_sigma_rel: 1.2533 * 1.4826 * mad / radius / (radii.len() as f64).sqrt(),
     })
 }
 
@@ -470,7 +454,7 @@ fn rounded_coordinates(set: &MeasurementSet) -> Option<UnitSlip> {
 fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
     let lengths = &LENGTH_UNITS;
     // A conversion explains the slips when it leaves none and every arc judged as read is still
-    // judged: an arc made to scatter past judging says nothing ([`Arc::too_scattered`]).
+    // judged (a conversion that makes a sweep too short to judge says nothing of it).
     let judged = experiment_arcs(set, desc).len();
     let explains = |converted: &MeasurementSet| {
         slips_as_read(converted, desc).is_empty() && experiment_arcs(converted, desc).len() >= judged
@@ -539,7 +523,7 @@ fn experiment_arcs(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Experim
         if nominal_mm.is_some_and(|r| too_short_to_judge(&rows, joint - 1, r)) {
             continue;
         }
-        if let Some(arc) = arc_of(&rows, joint - 1).filter(|a| !a.too_scattered()) {
+        if let Some(arc) = arc_of(&rows, joint - 1) {
             let owned: Vec<Measurement> = rows.iter().map(|m| (*m).clone()).collect();
             arcs.push(ExperimentArc {
                 joint,
