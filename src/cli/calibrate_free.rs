@@ -205,6 +205,11 @@ fn warn_slips(
     summary: &FreePoseSummary,
 ) {
     let data = args.data.display();
+    if let Some(few) = few_configurations(set, summary.parameters.len()) {
+        // Repeated configurations determine no slip either: the search would name chance ones.
+        eprintln!("warning: {data}: {few}");
+        return;
+    }
     if let Some(s) = explaining_slip(set, desc, options, Some(summary)) {
         eprintln!(
             "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
@@ -235,6 +240,32 @@ fn warn_slips(
             moved.join(", ")
         );
     }
+}
+
+/// Independent values one configuration of the tool gives at most: its pose (a target's
+/// position, 3, when fewer than three targets are seen).
+const POSE_VALUES: usize = 6;
+
+/// The free poses' distinct configurations (commands equal to 1e-6) in words, when they give
+/// fewer independent values ([`POSE_VALUES`] each, 3 per target below three targets) than the
+/// `fitted` parameters: repeated measurements of a few configurations add noise averaging,
+/// no geometry, and the covariance then holds at those configurations only.
+fn few_configurations(set: &MeasurementSet, fitted: usize) -> Option<String> {
+    let key = |cmd: &[f64]| cmd.iter().map(|c| (c * 1e6).round() as i64).collect::<Vec<i64>>();
+    let free = set.rows().iter().filter(|m| m.moved_joint == 0);
+    let configurations: std::collections::HashSet<Vec<i64>> = free.clone().map(|m| key(&m.cmd)).collect();
+    let targets: std::collections::HashSet<usize> = free.clone().map(|m| m.target).collect();
+    let poses: std::collections::HashSet<(&str, usize)> = free.map(|m| (m.experiment.as_str(), m.step)).collect();
+    let values = configurations.len() * POSE_VALUES.min(3 * targets.len());
+    (values < fitted).then(|| {
+        format!(
+            "its {} free poses stand at {} distinct configurations (commands), which give at most {values} independent \
+             values for the {fitted} parameters fitted: repeated poses add no geometry, and the predicted accuracy holds \
+             near those configurations only; measure the robot at more configurations across its workspace",
+            poses.len(),
+            configurations.len()
+        )
+    })
 }
 
 /// A [`SwappedTargetIds`] in words (after the file name): where, which order (the one whose

@@ -251,3 +251,47 @@ fn a_mirrored_frame_is_named_on_every_robot_kind() {
         std::fs::remove_file(dir.path().join("campaign.csv")).unwrap();
     }
 }
+
+/// Free poses that repeat two configurations twenty times each determine fewer values than the
+/// fit's parameters: said, and no slip named from them; every validation pose once is not.
+#[test]
+fn free_poses_repeating_a_few_configurations_are_said() {
+    let dir = tempfile::tempdir().unwrap();
+    calibrated_campaign(dir.path(), 30);
+    let text = std::fs::read_to_string(dir.path().join("campaign.csv")).unwrap();
+    let header = text.lines().find(|l| l.starts_with("experiment,")).unwrap();
+    let validation: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| l.starts_with("validation,"))
+        .map(|l| l.split(',').collect())
+        .collect();
+    let mut once = format!("{header}\n");
+    let mut repeated = format!("{header}\n");
+    for f in &validation {
+        once.push_str(&f.join(","));
+        once.push('\n');
+    }
+    for step in 0..40 {
+        for f in validation.iter().filter(|f| f[2] == (step % 2).to_string()) {
+            let mut row = f.clone();
+            let step = step.to_string();
+            row[2] = &step;
+            repeated.push_str(&row.join(","));
+            repeated.push('\n');
+        }
+    }
+    std::fs::write(dir.path().join("once.csv"), once).unwrap();
+    std::fs::write(dir.path().join("repeated.csv"), repeated).unwrap();
+    let few = "stand at 2 distinct configurations (commands)";
+    let e = run_case(
+        dir.path(),
+        &case("two configurations", "calibrate repeated.csv --out out", 0, &[few]),
+    );
+    assert!(!e.contains("absorbed it"), "{e}");
+    clear_outputs(dir.path());
+    let e = run_case(
+        dir.path(),
+        &case("every pose once", "calibrate once.csv --out out", 0, &[]),
+    );
+    assert!(!e.contains("distinct configurations"), "{e}");
+}
