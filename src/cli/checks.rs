@@ -9,7 +9,8 @@ use axiscal::kinematics::JointKind;
 use axiscal::measurement::description_check::description_warnings;
 use axiscal::measurement::import::points::LengthUnit;
 use axiscal::measurement::unit_check::{
-    UnitSlip, description_slips, free_pose_scale_warning, measurement_slips, payload_over_robot_mass, pose_slips,
+    UnitSlip, data_faults, description_slips, free_pose_scale_warning, measurement_slips, payload_over_robot_mass,
+    pose_slips,
 };
 use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
@@ -177,6 +178,14 @@ pub fn import_units(
         return Ok(());
     }
     let said: Vec<String> = slips.iter().map(|s| format!("`{}`: {}", s.field, s.message)).collect();
+    if !data_faults(set, desc).is_empty() {
+        // No other --angles or --units mends a mirrored frame, rounded points or mislabelled rows.
+        bail!(
+            "{}: {}; if the data are right after all, pass --skip-unit-check",
+            file.display(),
+            said.join("; ")
+        );
+    }
     let angles = |radians: bool| if radians { "rad" } else { "deg" };
     let fits = [
         (!stated.0, stated.1),

@@ -399,21 +399,29 @@ pub fn spread_ratio(measured: &[Vector3<f64>], nominal: &[Vector3<f64>]) -> Opti
 /// experiments' target 0 and the free poses ([`free_pose_slips`]). When one coordinate column
 /// alone is in another unit, that column is the one slip said.
 pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
-    let mislabelled = sweeps::not_sweeps(set, desc);
-    if !mislabelled.is_empty() {
-        return mislabelled;
-    }
-    if let Some(rounded) = rounded_coordinates(set) {
-        return vec![rounded];
-    }
-    if let Some(mirrored) = handedness::mirrored(set, desc) {
-        return vec![mirrored];
+    let faults = data_faults(set, desc);
+    if !faults.is_empty() {
+        return faults;
     }
     let slips = slips_as_read(set, desc);
     if slips.is_empty() {
         return slips;
     }
     one_column_slip(set, desc).map_or(slips, |one| vec![one])
+}
+
+/// What no other unit of a column explains and the unit checks are not judged beside: rows
+/// labelled a sweep that move other joints ([`sweeps`]), coordinates written rounded, a
+/// left-handed instrument frame ([`handedness`]). The first found.
+pub fn data_faults(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
+    let mislabelled = sweeps::not_sweeps(set, desc);
+    if !mislabelled.is_empty() {
+        return mislabelled;
+    }
+    rounded_coordinates(set)
+        .or_else(|| handedness::mirrored(set, desc))
+        .into_iter()
+        .collect()
 }
 
 /// Steps \[mm\] coordinates may be rounded to, coarsest first: a multiple of 1 mm adds
