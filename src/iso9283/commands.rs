@@ -1,6 +1,6 @@
 //! The commands of the ISO poses' cycles, checked before their figures: every cycle of a pose
-//! commands the pose's joint values ([`one_command`]), and no pose's commands are in radians
-//! where the others' are in degrees ([`radian_pose`]). Either moves the commanded pose that
+//! commands the pose's joint values (`one_command`), and no pose's commands are in radians
+//! where the others' are in degrees (`radian_pose`). Either moves the commanded pose that
 //! every figure is measured from, and would corrupt the figures silently.
 
 use super::evaluate::{Cycle, IsoError};
@@ -11,7 +11,7 @@ use crate::robot::{Controller, RobotDescription, RobotModel, commands_to_interna
 use nalgebra::Point3;
 use std::collections::{BTreeMap, HashMap};
 
-/// The chance that the cycles of a clean file are refused by [`one_command`] (over all of a
+/// The chance that the cycles of a clean file are refused by `one_command` (over all of a
 /// pose's commands).
 pub const COMMAND_FALSE_ALARM: f64 = 1e-6;
 

@@ -387,7 +387,7 @@ pub struct EvaluateOptions {
     /// scatter need not be Gaussian (a joint's backlash or settling puts a pose's cycles in
     /// two clusters): screened, a share of them would be refused as a wrong pose.
     pub screen: bool,
-    /// Check that no pose's commands are in radians ([`super::commands::radian_pose`]): a
+    /// Check that no pose's commands are in radians (`super::commands::radian_pose`): a
     /// measured file's (`--skip-unit-check` skips it); simulated cycles are commanded in degrees.
     pub unit_check: bool,
 }

@@ -411,8 +411,8 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
 }
 
 /// What no other unit of a column explains and the unit checks are not judged beside: rows
-/// labelled a sweep that move other joints ([`sweeps`]), coordinates written rounded, a
-/// left-handed instrument frame ([`handedness`]). The first found.
+/// labelled a sweep that move other joints (`sweeps`), coordinates written rounded, a
+/// left-handed instrument frame (`handedness`). The first found.
 pub fn data_faults(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
     let mislabelled = sweeps::not_sweeps(set, desc);
     if !mislabelled.is_empty() {
@@ -437,7 +437,8 @@ const MIN_ROUNDED_ROWS: usize = 20;
 fn rounded_coordinates(set: &MeasurementSet) -> Option<UnitSlip> {
     let rows = set.rows();
     let values = || rows.iter().flat_map(|m| m.position_mm);
-    if rows.len() < MIN_ROUNDED_ROWS || values().all(|v| v == rows[0].position_mm[0]) {
+    let (lo, hi) = values().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    if rows.len() < MIN_ROUNDED_ROWS || hi <= lo {
         return None;
     }
     let step = ROUNDING_STEPS_MM

@@ -8,7 +8,7 @@
 //! geometry the description's, [`nominal_misfits`]) has no such freedom: a slip leaves it
 //! missing the points by far more than the robot's own errors do. Each slip of
 //! [`crate::measurement::column_slips`] is undone on the poses in turn; the one that makes the
-//! nominal model fit significantly better on the poses' paired misfits ([`significantly_better`]
+//! nominal model fit significantly better on the poses' paired misfits (`significantly_better`
 //! at [`SLIP_FALSE_ALARM`] shared by the slips tried) with the least misfit is said. Clean data
 //! make every rewrite fit worse.
 //!
@@ -154,7 +154,7 @@ const RMS_STANDARD_ERRORS: f64 = 3.0;
 /// of the points' spread a calibration accepts ([`ABSURD_SHARE`]: a slip that leaves the nominal
 /// model missing by more explains only part of the miss), confirmed by the free-pose calibration of
 /// the rows with it undone (with `options`): that calibration must succeed, and fit within
-/// [`RMS_STANDARD_ERRORS`] of `written`'s RMS where the rows as written calibrated. A slip that
+/// `RMS_STANDARD_ERRORS` of `written`'s RMS where the rows as written calibrated. A slip that
 /// explains only part of a miss (another slip, or the description, behind it) is not said.
 /// `None` when no slip does, or the poses as written cannot be placed.
 pub fn explaining_slip(
