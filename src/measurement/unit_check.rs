@@ -55,11 +55,17 @@ pub const LENGTH_SLIPS: &[(f64, &str)] = &LENGTH_UNITS;
 
 /// Units a revolute joint's commands may be in instead of degrees, by the ratio they give of
 /// the angle a target turns to the commanded span read as degrees.
-const ANGLE_UNITS: [(f64, &str); 4] = [
+const ANGLE_UNITS: [(f64, &str); 5] = [
     (180.0 / std::f64::consts::PI, "radians"),
     (180.0 / std::f64::consts::PI / 1e3, "milliradians"),
     (360.0 / 400.0, "gradians"),
     (1e-3, "millidegrees"),
+    // Degrees taken for radians by a converter (an importer's `--angles rad`, a file whose
+    // convention is radians): 57.3 times the degrees.
+    (
+        std::f64::consts::PI / 180.0,
+        "degrees converted as if they were radians (57.3 times the degrees)",
+    ),
 ];
 
 /// A ratio is said to be a unit's when within this factor of the unit's (either way): the
@@ -616,7 +622,8 @@ fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip>
         bad.iter().map(|a| a.0).min_by(f64::total_cmp),
         bad.iter().map(|a| a.0).max_by(f64::total_cmp),
     ) {
-        let columns: Vec<String> = bad.iter().map(|a| format!("cmd_{}", a.1)).collect();
+        let joints: std::collections::BTreeSet<usize> = bad.iter().map(|a| a.1).collect();
+        let columns: Vec<String> = joints.iter().map(|j| format!("cmd_{j}")).collect();
         let experiments: Vec<&str> = bad.iter().map(|a| a.2.as_str()).collect();
         let times = if bad.len() == 1 {
             format!("{lo:.3}")
@@ -972,6 +979,10 @@ mod tests {
         assert!(coordinates_look(57.3).contains("scaled by 57.3"));
         assert_eq!(unit_of(&ANGLE_UNITS, 57.0), Some("radians"));
         assert_eq!(unit_of(&ANGLE_UNITS, 0.057), Some("milliradians"));
+        assert_eq!(
+            unit_of(&ANGLE_UNITS, 1.0 / 57.2826),
+            Some("degrees converted as if they were radians (57.3 times the degrees)")
+        );
         assert!(commands_look(0.04).contains("scaled by 25"));
         assert!(!slipped(1.3) && !slipped(0.8) && slipped(1e-3) && slipped(57.3) && !slipped(f64::NAN));
     }
