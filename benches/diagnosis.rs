@@ -1,4 +1,4 @@
-//! Diagnosis of a Table-1 campaign with 100 validation poses (target: < 5 s on 2 cores, issue 17; the
+//! Diagnosis of a Table-1 campaign with 100 validation poses (target: < 5 s on 2 cores; the
 //! default 16 recalibrated noise-only replicas x 32 validation-noise draws), against an
 //! in-run baseline: one standard calibration of the same campaign (the diagnosis runs 17 of
 //! them plus the refits and the candidates).

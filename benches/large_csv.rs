@@ -5,7 +5,7 @@
 //! The file is the reproduction: a simulated Table-1 campaign whose validation rows are
 //! repeated with new step numbers up to 1 000 000 rows (about 200 MB). Outside `cargo bench`
 //! (`cargo test --all-targets`) 20 000 rows, once, as a smoke test. Peak memory is measured
-//! outside the benchmark (`/usr/bin/time -v axiscal calibrate`, docs/validation.md).
+//! outside the benchmark (`/usr/bin/time -v axiscal calibrate`, docs/performance.md).
 
 use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
 use axiscal::measurement::{MeasurementModel, MeasurementSet, read_measurements, write_measurements_to};

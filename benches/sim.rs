@@ -114,8 +114,7 @@ fn dynamic(c: &mut Criterion) {
     group.bench_function("baseline_phi_model_poses", |b| {
         b.iter(|| black_box(model.poses(black_box(&Q))))
     });
-    // The settle's own step: 1 ms of `SettleOptions::solver_iterations` substeps (8; 16
-    // before issue 19's second pass, when this benchmark was `one_step_1ms_16_iterations`).
+    // The settle's own step: 1 ms of `SettleOptions::solver_iterations` substeps (8).
     group.bench_function("one_step_1ms_settle_iterations", |b| {
         arm.static_equilibrium(&Q, &servo, &[], &options).expect("settles");
         b.iter(|| arm.world_mut().step())
@@ -224,8 +223,8 @@ fn summary() {
     });
     line("dynamic: settle one pose", settle_s, Some(steps));
     // At rest under the servos: the cost of one step alone, with the settle's solver
-    // iterations (rapier substeps) and with the 16 of the settle before issue 19's second
-    // pass (the unit of the earlier "settle in steps" figures).
+    // iterations (rapier substeps) and with 16, for
+    // comparison.
     let step_s = seconds_per_call(2_000, || arm.world_mut().step());
     line(
         &format!(

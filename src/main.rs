@@ -3,7 +3,7 @@
 
 mod cli;
 
-/// mimalloc instead of the system allocator: the trials allocate many small rows (`docs/validation.md`,
+/// mimalloc instead of the system allocator: the trials allocate many small rows (`docs/performance.md`,
 /// "The allocator"); it changes no number.
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;

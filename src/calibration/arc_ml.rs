@@ -209,8 +209,8 @@ pub enum Studies {
 /// fit and eq. 8), and fit once with these per-point weights. Any consistent first stage gives
 /// the same first-order distribution (ibid.): the start's error of order `sigma` turns the
 /// tangents by about `sigma / r`, which moves the estimate by a small fraction of its own
-/// standard error. Against the measurement-only fit's optimum as the first stage (this
-/// function until issue 19, one whole fit more) the paper trials' calibrated errors moved by
+/// standard error. Against the measurement-only fit's optimum as the first stage (one
+/// whole fit more) the paper trials' calibrated errors moved by
 /// at most 1.3e-4 of their spread (`docs/validation.md`, "The first stage at the starting
 /// point"). The reported covariance is the weighted fit's `(J^T Sigma^-1 J)^-1`, i.e. it
 /// includes the angle noise. The dependence of `Sigma_j` on the parameters carries

@@ -1,4 +1,4 @@
-//! `axiscal budget`: the paper's gap budget (issue 7, item 7). For each candidate unmodelled
+//! `axiscal budget`: the paper's gap budget. For each candidate unmodelled
 //! effect, the magnitude that raises the simulated calibrated position error of the paper
 //! robot inside the spans to the paper's 1.40 mm; writes `budget.json` and `budget.md`.
 

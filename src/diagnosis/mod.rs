@@ -135,7 +135,7 @@ pub struct DiagnosisOptions {
     #[serde(default = "default_axis_replicas")]
     pub axis_replicas: usize,
     /// Refine the tool targets from the training poses before scoring (`diagnosis::targets`);
-    /// `false` scores with the description's (the behaviour before issue 17, for comparison).
+    /// `false` scores with the description's targets (for comparison).
     #[serde(default = "default_refine_tool_targets")]
     pub refine_tool_targets: bool,
     /// Degrees of freedom of the noise estimate when `noise_rms_3d_mm` was estimated from the

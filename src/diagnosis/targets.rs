@@ -1,4 +1,4 @@
-//! The tool targets refined from the validation poses before scoring (issue 17, item 4).
+//! The tool targets refined from the validation poses before scoring.
 //!
 //! A real campaign's tool targets are a guess (a drawing, a ruler): the description's are
 //! nominal. The calibration's tool frame is the rigid fit of those nominal targets to the

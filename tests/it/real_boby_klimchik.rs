@@ -1,6 +1,6 @@
 //! The real laser-tracker data of Boby & Klimchik (`../shared/data/real/boby-klimchik-tracker/`,
 //! beside the repository): `axiscal import boby-klimchik`, its error handling on broken copies,
-//! and the calibration's structural facts (`docs/validation.md`, "Real-data worked example").
+//! and the calibration's structural facts (`docs/real-data.md`, "Real-data worked example").
 
 use crate::common;
 

@@ -1,4 +1,4 @@
-//! The paper's gap budget (issue 7, item 7): for each candidate unmodelled effect, the
+//! The paper's gap budget: for each candidate unmodelled effect, the
 //! magnitude that raises the simulated calibrated position error of the paper robot inside the
 //! spans from its noise-limited value to the 1.40 mm the paper measured after calibration.
 //!

@@ -25,7 +25,7 @@
 //! phi-model joint values, so the importer writes this kinematic dependency into the command:
 //! `cmd_3 = J3 + J2`. (Keeping `cmd_3 = J3` with a nominal 2->3 coupling of slope -1 would
 //! make the controller hold actuator 3 still, as here, but would also move joint 3 passively
-//! by `-J2`, which the data contradict; see the worked example in `docs/validation.md`.)
+//! by `-J2`, which the data contradict; see the worked example in `docs/real-data.md`.)
 
 use super::super::{Measurement, MeasurementSet, MeasurementSetError};
 use std::path::{Path, PathBuf};

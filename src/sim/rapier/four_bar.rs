@@ -25,7 +25,7 @@
 //! The closure holds in dynamic mode because the servos are implicit joint springs (see
 //! [`SimArm::set_servo`]): measured (test below, dt 1 ms, 8 solver iterations, crank
 //! 1e6 N m/rad, the other joints 1e8 N m/rad) the loop gap is 3e-12 to 2.4e-10 m (2e-12 to
-//! 1.3e-10 m with the 16 iterations used before issue 19's second pass) and joint 3's
+//! 1.3e-10 m with 16 iterations) and joint 3's
 //! sag is the virtual-work prediction `g'^2 Q_3 / K_c` (about 9e-5 rad) within what the crank
 //! and rod's own weight adds (3.2-3.4 % at the three test poses).
 
