@@ -10,12 +10,12 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum TomlFileError {
     /// The file could not be read.
-    #[error("{path}: cannot read: {source}")]
+    #[error("{path}: cannot read: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// Malformed TOML, an unknown or missing key, or a value of the wrong type.
     #[error("{path}: {message}")]
@@ -32,7 +32,7 @@ pub enum TomlFileError {
 pub fn read(path: &Path) -> Result<String, TomlFileError> {
     crate::presets::read_text(path).map_err(|source| TomlFileError::Io {
         path: path.to_owned(),
-        source,
+        cause: source,
     })
 }
 

@@ -40,7 +40,7 @@ pub enum CertificateError {
     NoCovariance,
     /// The covariance is not one of the model's parameters ([`crate::calibration::tool_accuracy::ModelCovariance::validate`]).
     #[error("the calibration's {0}")]
-    Covariance(#[from] InvalidCalibration),
+    Covariance(InvalidCalibration),
 }
 
 /// Everything the certificate is made from.
@@ -564,4 +564,10 @@ fn warnings(inputs: &CertificateInputs<'_>) -> Vec<String> {
         out.push("the calibration records no noise report: the uncertainties rest on the noise it was given".into());
     }
     out
+}
+
+impl From<InvalidCalibration> for CertificateError {
+    fn from(e: InvalidCalibration) -> Self {
+        Self::Covariance(e)
+    }
 }

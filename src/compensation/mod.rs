@@ -37,7 +37,7 @@ use nalgebra::Isometry3;
 pub enum CompensationError {
     /// The calibrated model is not a consistent robot (a damaged or hand-edited file).
     #[error("the calibrated robot: {0}")]
-    Model(#[from] crate::robot::ModelError),
+    Model(crate::robot::ModelError),
     /// The calibrated model and the robot description disagree in their number of joints.
     #[error("the calibrated robot has {calibrated} joints, the description {nominal}")]
     JointCount {
@@ -48,14 +48,14 @@ pub enum CompensationError {
     },
     /// Inverse kinematics on the calibrated model failed (out of reach, singular).
     #[error("inverse kinematics on the calibrated model: {0}")]
-    Ik(#[from] IkError),
+    Ik(IkError),
     /// A calibrated coupling cannot be evaluated at the required active displacement.
-    #[error("coupling into joint {joint}: {source}")]
+    #[error("coupling into joint {joint}: {cause}")]
     Coupling {
         /// 1-based driven joint.
         joint: usize,
         /// The linkage problem.
-        source: FourBarError,
+        cause: FourBarError,
     },
     /// A command is not finite (a coefficient blew up).
     #[error("joint {joint}: the command is not finite")]
@@ -242,7 +242,7 @@ impl Compensator {
         }
         let q = self.without_sag(q)?;
         let theta = self.calibrated.active_from_joint_values(&q).map_err(|e| match e {
-            crate::robot::ModelError::Coupling { joint, source } => CompensationError::Coupling { joint, source },
+            crate::robot::ModelError::Coupling { joint, cause } => CompensationError::Coupling { joint, cause },
             other => other.into(),
         })?;
         let u: Vec<f64> = self
@@ -430,5 +430,17 @@ mod tests {
             let miss_plain = (phi.world_from_tool(&q_plain).translation.vector - target.translation.vector).norm();
             assert!(miss_plain > 1e-5, "the effects matter: {miss_plain:.3e} m");
         }
+    }
+}
+
+impl From<crate::robot::ModelError> for CompensationError {
+    fn from(e: crate::robot::ModelError) -> Self {
+        Self::Model(e)
+    }
+}
+
+impl From<IkError> for CompensationError {
+    fn from(e: IkError) -> Self {
+        Self::Ik(e)
     }
 }

@@ -32,7 +32,7 @@ pub enum PredictError {
     Plan(#[from] PlanError),
     /// The noise-free campaign could not be calibrated (e.g. too few points for a fit).
     #[error("calibrating the plan's noise-free campaign: {0}")]
-    Calibration(#[from] ProcedureError),
+    Calibration(ProcedureError),
     /// A workspace pose could not be evaluated.
     #[error(transparent)]
     Model(#[from] ModelError),
@@ -216,4 +216,10 @@ fn calibrate_plan(
         .model_covariance
         .ok_or_else(|| PredictError::Covariance("no model covariance".into()))?;
     Ok((fit.robot, cov.matrix(), axis_points))
+}
+
+impl From<ProcedureError> for PredictError {
+    fn from(e: ProcedureError) -> Self {
+        Self::Calibration(e)
+    }
 }

@@ -399,9 +399,10 @@ impl RobotModel {
         let mut theta: Vec<f64> = Vec::with_capacity(q.len());
         for (k, j) in self.joints.iter().enumerate() {
             let passive = match (&j.coupling_in, k.checked_sub(1)) {
-                (Some(g), Some(below)) => g
-                    .try_passive(theta[below])
-                    .map_err(|source| ModelError::Coupling { joint: k + 1, source })?,
+                (Some(g), Some(below)) => g.try_passive(theta[below]).map_err(|source| ModelError::Coupling {
+                    joint: k + 1,
+                    cause: source,
+                })?,
                 _ => 0.0,
             };
             theta.push(q[k] - passive);
@@ -419,9 +420,10 @@ impl RobotModel {
         for (k, (qk, joint)) in q.iter_mut().zip(&self.joints).enumerate().skip(1) {
             let theta_k = *qk;
             if let Some(g) = &joint.coupling_in {
-                *qk += g
-                    .try_passive(theta_below)
-                    .map_err(|source| ModelError::Coupling { joint: k + 1, source })?;
+                *qk += g.try_passive(theta_below).map_err(|source| ModelError::Coupling {
+                    joint: k + 1,
+                    cause: source,
+                })?;
             }
             theta_below = theta_k;
         }

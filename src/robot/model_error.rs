@@ -37,12 +37,12 @@ pub enum ModelError {
         unit: &'static str,
     },
     /// A four-bar coupling cannot be assembled.
-    #[error("coupling into joint {joint}: {source}")]
+    #[error("coupling into joint {joint}: {cause}")]
     Coupling {
         /// 1-based driven joint.
         joint: usize,
         /// The linkage problem.
-        source: FourBarError,
+        cause: FourBarError,
     },
     /// A compliance carried in the model finds no static equilibrium at a pose.
     #[error("the compliance of joint {joint} in the model finds no equilibrium at this pose (the arm would buckle)")]

@@ -80,12 +80,12 @@ pub struct CampaignOutput {
 pub enum CampaignError {
     /// The plan does not fit the robot.
     #[error("plan: {0}")]
-    Plan(#[from] PlanError),
+    Plan(PlanError),
     /// The robot could not execute a command.
     #[error(transparent)]
     Execute(#[from] ExecuteError),
     /// The instrument could not measure a target.
-    #[error("measuring {experiment} step {step} target {target}: {source}")]
+    #[error("measuring {experiment} step {step} target {target}: {cause}")]
     Measure {
         /// Experiment id.
         experiment: String,
@@ -94,7 +94,7 @@ pub enum CampaignError {
         /// Target.
         target: usize,
         /// Why.
-        source: TriangulationError,
+        cause: TriangulationError,
     },
 }
 
@@ -339,7 +339,7 @@ fn record<A: ArmExecutor, R: Rng + ?Sized>(
             experiment: experiment.to_owned(),
             step,
             target,
-            source,
+            cause: source,
         })?;
     let m = instrument.scale.map_or(m, |s| s.applied_to(&m)) * 1e3;
     out.rows.push(Measurement {
@@ -353,4 +353,10 @@ fn record<A: ArmExecutor, R: Rng + ?Sized>(
         temperature_c: conditions.temperature_c,
     });
     Ok(())
+}
+
+impl From<PlanError> for CampaignError {
+    fn from(e: PlanError) -> Self {
+        Self::Plan(e)
+    }
 }

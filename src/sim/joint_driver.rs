@@ -149,9 +149,10 @@ impl JointDriver {
         let mut q = active.clone();
         for k in 1..q.len() {
             if let Some(g) = &self.truth.joints[k].coupling_in {
-                q[k] += g
-                    .try_passive(active[k - 1])
-                    .map_err(|source| ModelError::Coupling { joint: k + 1, source })?;
+                q[k] += g.try_passive(active[k - 1]).map_err(|source| ModelError::Coupling {
+                    joint: k + 1,
+                    cause: source,
+                })?;
             }
         }
         let mut draws: Vec<f64> = (0..q.len()).map(|_| StandardNormal.sample(rng)).collect();

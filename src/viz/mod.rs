@@ -47,26 +47,26 @@ pub const TRIAL_TIMELINE: &str = "trial";
 #[derive(Debug, thiserror::Error)]
 pub enum VizError {
     /// The recording stream could not be created.
-    #[error("creating the rerun recording: {source}")]
+    #[error("creating the rerun recording: {cause}")]
     Stream {
         /// Why.
-        source: rerun::RecordingStreamError,
+        cause: rerun::RecordingStreamError,
     },
     /// The `.rrd` file could not be created.
-    #[error("writing the rerun recording {path}: {source}")]
+    #[error("writing the rerun recording {path}: {cause}")]
     File {
         /// The file.
         path: PathBuf,
         /// Why.
-        source: rerun::sink::FileSinkError,
+        cause: rerun::sink::FileSinkError,
     },
     /// Buffered data could not be flushed to the file.
-    #[error("flushing the rerun recording {path}: {source}")]
+    #[error("flushing the rerun recording {path}: {cause}")]
     Flush {
         /// The file.
         path: PathBuf,
         /// Why.
-        source: rerun::sink::SinkFlushError,
+        cause: rerun::sink::SinkFlushError,
     },
     /// Some log calls failed (serialisation); the rest of the recording was written.
     #[error("{count} rerun log call(s) failed, the first: {first}")]
@@ -106,7 +106,7 @@ impl Recorder {
     pub fn new(application_id: &'static str) -> Result<Self, VizError> {
         let stream = rerun::RecordingStreamBuilder::new(application_id)
             .buffered()
-            .map_err(|source| VizError::Stream { source })?;
+            .map_err(|source| VizError::Stream { cause: source })?;
         let rec = Recorder {
             stream,
             failures: Default::default(),
@@ -259,11 +259,11 @@ impl Recorder {
     pub fn save(self, path: &Path) -> Result<(), VizError> {
         self.stream.save(path).map_err(|source| VizError::File {
             path: path.to_owned(),
-            source,
+            cause: source,
         })?;
         self.stream.flush_blocking().map_err(|source| VizError::Flush {
             path: path.to_owned(),
-            source,
+            cause: source,
         })?;
         self.stream.finalize_deferred_sinks();
         match self.failures.take() {

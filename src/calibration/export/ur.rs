@@ -65,7 +65,7 @@ pub enum UrError {
     Hash(String),
     /// The reference's link frames cannot be kept.
     #[error("the reference kinematics: {0}")]
-    Anchor(#[from] super::AnchorError),
+    Anchor(super::AnchorError),
     /// The file read back does not reproduce the calibrated model (a defect of the export).
     #[error(
         "the written kinematics read back misses the calibrated model by {position_m:e} m and {rotation_rad:e} rad (more than 1e-9): not written"
@@ -353,4 +353,10 @@ pub fn ur_pose(t: &Isometry3<f64>) -> String {
         .map(|x| crate::measurement::format_f64(x + 0.0))
         .collect();
     format!("p[{}]", n.join(", "))
+}
+
+impl From<super::AnchorError> for UrError {
+    fn from(e: super::AnchorError) -> Self {
+        Self::Anchor(e)
+    }
 }

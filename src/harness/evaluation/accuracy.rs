@@ -42,10 +42,10 @@ pub struct ToolError {
 pub enum EvaluationError {
     /// The robot cannot execute the command.
     #[error("executing the command: {0}")]
-    Execute(#[from] ExecuteError),
+    Execute(ExecuteError),
     /// The instrument cannot see a target.
     #[error("measuring a tool target: {0}")]
-    Measure(#[from] TriangulationError),
+    Measure(TriangulationError),
     /// The three targets are collinear (a bad tool description).
     #[error("the tool targets do not define a frame")]
     DegenerateTool,
@@ -208,5 +208,17 @@ impl TestBench {
             (actual[0] * t0 - actual[1] * t0).norm() * 1e3,
             angle_between(&actual[0], &actual[1]),
         ])
+    }
+}
+
+impl From<ExecuteError> for EvaluationError {
+    fn from(e: ExecuteError) -> Self {
+        Self::Execute(e)
+    }
+}
+
+impl From<TriangulationError> for EvaluationError {
+    fn from(e: TriangulationError) -> Self {
+        Self::Measure(e)
     }
 }

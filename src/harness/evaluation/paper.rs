@@ -88,23 +88,23 @@ impl PaperScenario {
 pub enum ScenarioError {
     /// Simulating a campaign failed.
     #[error("simulating the campaign: {0}")]
-    Campaign(#[from] CampaignError),
+    Campaign(CampaignError),
     /// The campaign's rows do not form a set.
     #[error("assembling the measurement set: {0}")]
-    Set(#[from] MeasurementSetError),
+    Set(MeasurementSetError),
     /// Calibration failed.
     #[error("calibrating: {0}")]
-    Calibrate(#[from] ProcedureError),
+    Calibrate(ProcedureError),
     /// The compensator cannot be built.
     #[error("compensation: {0}")]
-    Compensation(#[from] CompensationError),
+    Compensation(CompensationError),
     /// The uncalibrated commands of a pose could not be evaluated.
-    #[error("pose {id}: {source}")]
+    #[error("pose {id}: {cause}")]
     Evaluate {
         /// Pose id.
         id: String,
         /// Why.
-        source: EvaluationError,
+        cause: EvaluationError,
     },
     /// No ISO 9283 cube fits inside a region.
     #[error("no ISO 9283 cube fits inside the {0} ranges")]
@@ -475,7 +475,7 @@ pub fn calibrated_position_error_inside_spans(s: &PaperScenario) -> Result<Stats
     {
         let fail = |source| ScenarioError::Evaluate {
             id: p.id.clone(),
-            source,
+            cause: source,
         };
         let cmd = comp.compensate_from(&p.world_from_tool, &p.q_nominal)?.cmd;
         let e = bench
@@ -498,7 +498,7 @@ pub fn evaluate_pose(
 ) -> Result<PoseResult, ScenarioError> {
     let err = |source| ScenarioError::Evaluate {
         id: pose.id.clone(),
-        source,
+        cause: source,
     };
     let uncalibrated = bench
         .tool_error(&pose.world_from_tool, &pose.q_nominal, &mut pose_rng(seed, index))
@@ -576,7 +576,7 @@ fn repeatability_test(bench: &TestBench, poses: &[TestPose], seed: u64) -> Resul
             .repeatability(&p.q_nominal, &mut pose_rng(seed, poses.len() + i))
             .map_err(|source| ScenarioError::Evaluate {
                 id: p.id.clone(),
-                source,
+                cause: source,
             })?;
         for (s, v) in sums.iter_mut().zip(r) {
             *s += v;
@@ -590,4 +590,28 @@ fn repeatability_test(bench: &TestBench, poses: &[TestPose], seed: u64) -> Resul
         robot_radial_mm: sums[2] / n,
         robot_orientation_rad: sums[3] / n,
     })
+}
+
+impl From<CampaignError> for ScenarioError {
+    fn from(e: CampaignError) -> Self {
+        Self::Campaign(e)
+    }
+}
+
+impl From<MeasurementSetError> for ScenarioError {
+    fn from(e: MeasurementSetError) -> Self {
+        Self::Set(e)
+    }
+}
+
+impl From<ProcedureError> for ScenarioError {
+    fn from(e: ProcedureError) -> Self {
+        Self::Calibrate(e)
+    }
+}
+
+impl From<CompensationError> for ScenarioError {
+    fn from(e: CompensationError) -> Self {
+        Self::Compensation(e)
+    }
 }

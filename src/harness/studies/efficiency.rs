@@ -41,20 +41,20 @@ pub fn trial_seed(seed: u64, trial: u64) -> u64 {
 #[derive(Debug, thiserror::Error)]
 pub enum StudyError {
     /// A fit failed on one trial.
-    #[error("trial {trial}: {source}")]
+    #[error("trial {trial}: {cause}")]
     Fit {
         /// Trial index.
         trial: usize,
         /// The fit's error.
-        source: CalibrationError,
+        cause: CalibrationError,
     },
     /// The procedure failed on one trial.
-    #[error("trial {trial}: {source}")]
+    #[error("trial {trial}: {cause}")]
     Procedure {
         /// Trial index.
         trial: usize,
         /// The procedure's error.
-        source: ProcedureError,
+        cause: ProcedureError,
     },
     /// The noise-free reference fit failed.
     #[error("noise-free reference: {0}")]

@@ -62,12 +62,12 @@ impl ToolAccuracyCheck {
 #[derive(Debug, thiserror::Error)]
 pub enum ToolAccuracyError {
     /// A calibration failed.
-    #[error("trial {trial}: {source}")]
+    #[error("trial {trial}: {cause}")]
     Procedure {
         /// Trial (`None`: the predicting calibration).
         trial: String,
         /// The procedure's error (boxed: it is large, and rare).
-        source: Box<ProcedureError>,
+        cause: Box<ProcedureError>,
     },
     /// A pose could not be evaluated.
     #[error(transparent)]
@@ -92,7 +92,7 @@ impl ToolAccuracyStudy {
         let failed = |trial: String| {
             move |source| ToolAccuracyError::Procedure {
                 trial,
-                source: Box::new(source),
+                cause: Box::new(source),
             }
         };
         let set = campaign(&truth, &desc, self.noise_rms_3d_mm, trial_seed(self.seed, u64::MAX));

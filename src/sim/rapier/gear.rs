@@ -104,8 +104,10 @@ impl CoupledTargets {
             };
             let a = self.active[below];
             let passive = |t: f64| {
-                g.try_passive(t)
-                    .map_err(|source| SimError::Coupling { joint: *k, source })
+                g.try_passive(t).map_err(|source| SimError::Coupling {
+                    joint: *k,
+                    cause: source,
+                })
             };
             let target = self.q_cmd[*k] - passive(a)? + passive(a + sag)?;
             arm.set_joint_servo_target(*k, target)?;

@@ -71,12 +71,12 @@ pub enum SimError {
         joint: usize,
     },
     /// A passive coupling cannot be evaluated (a four-bar coupling that cannot close).
-    #[error("coupling into joint {} cannot be evaluated: {source}", joint + 1)]
+    #[error("coupling into joint {} cannot be evaluated: {cause}", joint + 1)]
     Coupling {
         /// The driven joint (0-based).
         joint: usize,
         /// Why.
-        source: crate::robot::FourBarError,
+        cause: crate::robot::FourBarError,
     },
     /// The dynamic simulation did not come to rest within the step cap.
     #[error("the arm did not settle in {steps} steps: fastest watched point still moves at {max_speed_m_s} m/s")]

@@ -41,12 +41,12 @@ pub fn is_run_output(name: &str) -> bool {
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// A file could not be written or read.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
         /// Why.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The results folder already holds results.
     #[error("{path} {state}; pass --force to replace them (or choose another --out)")]
@@ -89,7 +89,7 @@ pub enum ExportError {
 pub(crate) fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ExportError + '_ {
     move |source| ExportError::Io {
         path: path.to_owned(),
-        source,
+        cause: source,
     }
 }
 

@@ -226,8 +226,12 @@ impl Trials<'_> {
         let mut axes = self.fit_axes(i, &experiments)?;
         self.add_held_joint_variances(&mut axes);
         // The lean path with the rows' covariance: the study reads the rows and their sigmas.
-        let cal = calibrate_model(&set, desc, self.options, Detail::ModelAndCovariance)
-            .map_err(|source| StudyError::Procedure { trial: i, source })?;
+        let cal = calibrate_model(&set, desc, self.options, Detail::ModelAndCovariance).map_err(|source| {
+            StudyError::Procedure {
+                trial: i,
+                cause: source,
+            }
+        })?;
         let mut derived = std::mem::take(&mut axes.harmonics);
         derived.extend(derived_quantities(&cal, desc));
         Ok(TrialOutcome {
@@ -254,7 +258,10 @@ impl Trials<'_> {
     fn fit_axes(&self, i: usize, experiments: &[AxisExperiment]) -> Result<TrialAxes, StudyError> {
         let (desc, controller) = (self.desc, self.controller);
         let noise_m = self.noise_rms_3d_mm * 1e-3;
-        let fit_err = |source| StudyError::Fit { trial: i, source };
+        let fit_err = |source| StudyError::Fit {
+            trial: i,
+            cause: source,
+        };
         let (mut ml, mut paper) = (Vec::new(), Vec::new());
         let mut ml_reported: Vec<Vec<f64>> = Vec::new();
         let mut fitted: Vec<(usize, ArcParams, AxisLine)> = Vec::new();
