@@ -54,7 +54,7 @@ fn trial_commands(s: &ResolvedScenario) -> Vec<Vec<f64>> {
 
 fn one_trial(c: &mut Criterion) {
     let s = paper();
-    let trial = CampaignTrial::new(&s).expect("analytic");
+    let trial = CampaignTrial::new(&s);
     let case = &s.cases[0];
     let model = s.robot.nominal_model();
     let commands = trial_commands(&s);
@@ -78,7 +78,7 @@ fn one_trial(c: &mut Criterion) {
         sim: SimMode::Rapier,
         ..s.clone()
     };
-    let rapier_trial = CampaignTrial::new(&rapier).expect("rapier");
+    let rapier_trial = CampaignTrial::new(&rapier);
     group.sample_size(10);
     group.bench_function("paper_trial_rapier", |b| {
         b.iter(|| {
@@ -91,7 +91,7 @@ fn one_trial(c: &mut Criterion) {
 
 fn threads(c: &mut Criterion) {
     let s = paper();
-    let trial = CampaignTrial::new(&s).expect("analytic");
+    let trial = CampaignTrial::new(&s);
     let mut group = c.benchmark_group("analytic_batch");
     group.throughput(Throughput::Elements(BATCH as u64));
     group.sample_size(10);
@@ -113,7 +113,7 @@ const BATCHES: usize = 15;
 /// The summary: ratios to the in-run baselines (module docs).
 fn summary() {
     let s = paper();
-    let trial = CampaignTrial::new(&s).expect("analytic");
+    let trial = CampaignTrial::new(&s);
     let commands = trial_commands(&s);
     let model = s.robot.nominal_model();
     let fk = || {
@@ -176,7 +176,7 @@ fn dynamic_summary() {
     }
     let s = ResolvedScenario::from_file(Path::new("scenarios/compliance.toml"), Overrides::default())
         .expect("the shipped compliance scenario resolves");
-    let trial = CampaignTrial::new(&s).expect("rapier");
+    let trial = CampaignTrial::new(&s);
     let commands = trial_commands(&s);
     let model = s.robot.nominal_model();
     let fk_start = Instant::now();

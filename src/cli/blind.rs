@@ -114,7 +114,7 @@ pub fn run(args: Args) -> Result<()> {
         keys.into_par_iter()
             .map(|(i, key)| -> Result<_> {
                 let dir = args.out.join(format!("case-{i:03}"));
-                let set = simulate_case(&key, &desc, &options).map_err(anyhow::Error::msg)?;
+                let set = simulate_case(&key, &desc, &options)?;
                 let csv = dir.join("data.csv");
                 let mut text = super::checks::identity_comment(&desc).into_bytes();
                 write_measurements_to(&mut text, &set)?;
@@ -129,8 +129,7 @@ pub fn run(args: Args) -> Result<()> {
                     json_file::to_string(Schema::DIAGNOSIS, &d)?,
                 )?;
                 // Generator side (knows the truth): the effect's trace against the detectable gap.
-                let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)
-                    .map_err(anyhow::Error::msg)?;
+                let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)?;
                 let result = CaseResult {
                     key,
                     diagnosis: d,

@@ -113,7 +113,7 @@ fn resolve(args: &Args) -> Result<Plan> {
     };
     let (scenario, slips) = ResolvedScenario::from_file_with_slips(&args.scenario, overrides)?;
     super::checks::scenario_units(&slips, &args.scenario, args.skip_unit_check)?;
-    let trial = CampaignTrial::new(&scenario).map_err(|m| anyhow::anyhow!("{}: {m}", args.scenario.display()))?;
+    let trial = CampaignTrial::new(&scenario);
     let names = trial.metric_names();
     scenario.check_metrics(&names, &args.scenario)?;
     let shard = args.shard.unwrap_or(Shard::ALL);

@@ -17,7 +17,7 @@ fn smoke(trials: usize) -> ResolvedScenario {
 }
 
 fn trials_csv_with_threads(scenario: &ResolvedScenario, threads: usize) -> Vec<u8> {
-    let trial = CampaignTrial::new(scenario).unwrap();
+    let trial = CampaignTrial::new(scenario);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     let records = pool.install(|| run_units(scenario, &trial, 0..scenario.units(), &|_| {}));
     assert!(records.iter().all(|r| r.succeeded()), "{records:?}");
@@ -56,7 +56,7 @@ fn shipped_scenarios_resolve_and_their_dump_round_trips() {
         let back: ResolvedScenario = toml::from_str(&text).unwrap_or_else(|e| panic!("{path} dump: {e}"));
         assert_eq!(back, s, "{path}: resolved dump does not round-trip");
         if s.sim == SimMode::Analytic {
-            let trial = CampaignTrial::new(&s).unwrap();
+            let trial = CampaignTrial::new(&s);
             s.check_metrics(&trial.metric_names(), Path::new(&path)).unwrap();
         }
     }
@@ -75,7 +75,7 @@ fn a_fleet_draws_a_different_robot_per_trial() {
         },
     )
     .unwrap();
-    let trial = CampaignTrial::new(&s).unwrap();
+    let trial = CampaignTrial::new(&s);
     let records = run_units(&s, &trial, 0..3, &|_| {});
     assert_ne!(records[0].values[0].to_bits(), records[1].values[0].to_bits());
     assert_eq!(records.iter().map(|r| r.trial).collect::<Vec<_>>(), [0, 1, 2]);
@@ -124,7 +124,7 @@ fn an_iso_section_adds_measured_and_predicted_figures() {
     );
     std::fs::write(&path, &text).unwrap();
     let s = ResolvedScenario::from_file(&path, Overrides::default()).unwrap();
-    let trial = CampaignTrial::new(&s).unwrap();
+    let trial = CampaignTrial::new(&s);
     let names = trial.metric_names();
     assert_eq!(names[names.len() - ISO_METRICS.len()..], ISO_METRICS.map(String::from));
     let one = trials_csv_with_threads(&s, 1);

@@ -359,13 +359,37 @@ fn shape_of(e: &Effects) -> String {
     if parts.is_empty() { "-".into() } else { parts.join("+") }
 }
 
+/// Why a blind case could not be simulated or sized.
+#[derive(Debug, thiserror::Error)]
+pub enum BlindError {
+    /// The axis experiments' simulation failed.
+    #[error("{0}")]
+    Campaign(crate::sim::CampaignError),
+    /// A validation pose could not be executed.
+    #[error("{0}")]
+    Execute(crate::sim::ExecuteError),
+    /// A target could not be measured.
+    #[error("{0}")]
+    Measure(crate::measurement::TriangulationError),
+    /// The simulated rows do not make a measurement set.
+    #[error("{0}")]
+    Set(crate::measurement::MeasurementSetError),
+    /// The noise-free baseline refit failed.
+    #[error("{0}")]
+    Diagnosis(crate::diagnosis::DiagnosisError),
+}
+
 /// Simulates a case: the Table-1 axis experiments and the tool observation at 20 deg C without
 /// payload, then `validation_poses` workspace poses at random temperatures and payloads
 /// ([`BlindOptions`]), on the paper robot through the options' [`Simulator`] with the case's
 /// effects and its repeatability jitter (unless `options.repeatability` is off; a
 /// [`JointZeroDrift`] offsets the executed command), measured with isotropic noise (and the
 /// instrument scale error or sag, if any).
-pub fn simulate_case(key: &CaseKey, desc: &RobotDescription, options: &BlindOptions) -> Result<MeasurementSet, String> {
+pub fn simulate_case(
+    key: &CaseKey,
+    desc: &RobotDescription,
+    options: &BlindOptions,
+) -> Result<MeasurementSet, BlindError> {
     let mut truth = options.campaign.truth();
     if !options.repeatability {
         for j in &mut truth.joints {
@@ -396,7 +420,7 @@ fn simulate_on<A: ArmExecutor>(
     key: &CaseKey,
     desc: &RobotDescription,
     options: &BlindOptions,
-) -> Result<MeasurementSet, String> {
+) -> Result<MeasurementSet, BlindError> {
     let instrument = MeasurementModel::Isotropic(crate::measurement::IsotropicNoise {
         net_radial_rms_mm: options.noise_rms_3d_mm,
     });
@@ -416,7 +440,7 @@ fn simulate_on<A: ArmExecutor>(
                 instrument_scale: key.effects.instrument_scale,
             };
             simulate_campaign_with(desc, &plan, &none, arm, &instrument, &campaign, &mut rng)
-                .map_err(|e| e.to_string())?
+                .map_err(BlindError::Campaign)?
                 .rows
         }
         BlindCampaign::FreePoses => Vec::new(),
@@ -438,10 +462,10 @@ fn simulate_on<A: ArmExecutor>(
         }
         let links = arm
             .execute(&executed, &conditions, &mut rng)
-            .map_err(|e| e.to_string())?;
+            .map_err(BlindError::Execute)?;
         let tool = links[desc.dof() - 1] * arm.last_link_from_tool();
         for (id, t) in desc.tool_targets_m().iter().enumerate() {
-            let p = instrument.measure(&(tool * t), &mut rng).map_err(|e| e.to_string())?;
+            let p = instrument.measure(&(tool * t), &mut rng).map_err(BlindError::Measure)?;
             rows.push(Measurement {
                 experiment: "validation".into(),
                 moved_joint: 0,
@@ -459,7 +483,7 @@ fn simulate_on<A: ArmExecutor>(
             sag.apply_mm(&mut m.position_mm);
         }
     }
-    MeasurementSet::new(desc.dof(), rows).map_err(|e| e.to_string())
+    MeasurementSet::new(desc.dof(), rows).map_err(BlindError::Set)
 }
 
 /// An effect whose noise-free trace after the baseline refit is below this fraction of the
@@ -488,7 +512,7 @@ pub fn detectable_size(
     options: &BlindOptions,
     diagnosis: &crate::diagnosis::DiagnosisOptions,
     detectable_gap_mm: f64,
-) -> Result<Option<(f64, Option<f64>)>, String> {
+) -> Result<Option<(f64, Option<f64>)>, BlindError> {
     if key.effect == "none" {
         return Ok(None);
     }
@@ -498,7 +522,7 @@ pub fn detectable_size(
         ..options.clone()
     };
     let set = simulate_case(key, desc, &clean)?;
-    let trace_mm = crate::diagnosis::baseline_heldout_rms_mm(&set, desc, diagnosis).map_err(|e| e.to_string())?;
+    let trace_mm = crate::diagnosis::baseline_heldout_rms_mm(&set, desc, diagnosis).map_err(BlindError::Diagnosis)?;
     if trace_mm < ABSORBED_TRACE_FRACTION * detectable_gap_mm {
         return Ok(Some((0.0, None)));
     }

@@ -46,6 +46,38 @@ pub struct IsoTrial<'a> {
     pub reference: &'a [f64],
 }
 
+/// Why an ISO 9283 trial failed (a failed record's `error` cell in `trials.csv`).
+#[derive(Debug, thiserror::Error)]
+pub enum IsoTrialError {
+    /// The calibrated model gives no compensator.
+    #[error("ISO cube: {0}")]
+    Compensator(crate::compensation::CompensationError),
+    /// No cube fits around the centre.
+    #[error("ISO cube: {0}")]
+    Cube(crate::iso9283::CubeError),
+    /// The cycles' simulation failed.
+    #[error("ISO cycles: {0}")]
+    Cycles(crate::sim::CampaignError),
+    /// The cycles' rows do not make a measurement set.
+    #[error("ISO cycles: {0}")]
+    CycleSet(crate::measurement::MeasurementSetError),
+    /// The figures cannot be evaluated.
+    #[error("ISO figures: {0}")]
+    Figures(crate::iso9283::IsoError),
+    /// The prediction needs the calibration's model covariance.
+    #[error("ISO prediction: the calibration has no model covariance")]
+    NoCovariance,
+    /// The prediction failed.
+    #[error("ISO prediction: {0}")]
+    Prediction(crate::iso9283::PredictionError),
+    /// A pose was run once only (`figures` or `prediction`), so it has no repeatability.
+    #[error("ISO {0}: a pose has a single cycle")]
+    SingleCycle(&'static str),
+    /// The cycles give no distance between P2 and P4.
+    #[error("ISO figures: no P2-P4 distance")]
+    NoDistance,
+}
+
 impl IsoTrial<'_> {
     /// Runs the test on `arm` after calibration `fit` (with its model covariance), drawing
     /// from `rng`, and returns [`ISO_METRICS`].
@@ -54,14 +86,14 @@ impl IsoTrial<'_> {
         arm: &mut A,
         fit: &FittedModel,
         rng: &mut R,
-    ) -> Result<Metrics, String> {
-        let compensator = Compensator::new(&fit.robot, self.desc).map_err(|e| format!("ISO cube: {e}"))?;
+    ) -> Result<Metrics, IsoTrialError> {
+        let compensator = Compensator::new(&fit.robot, self.desc).map_err(IsoTrialError::Compensator)?;
         let centre = self.section.centre_cmd.as_deref().unwrap_or(self.reference);
         let cube = match self.section.edge_mm {
             Some(mm) => plan_cube(&compensator, self.desc, centre, mm * 1e-3),
             None => largest_cube(&compensator, self.desc, centre, 0.5),
         }
-        .map_err(|e| format!("ISO cube: {e}"))?;
+        .map_err(IsoTrialError::Cube)?;
         let poses: Vec<PosePlan> = (0..self.section.cycles)
             .flat_map(|cycle| {
                 CYCLE_ORDER.map(|k| PosePlan {
@@ -72,8 +104,8 @@ impl IsoTrial<'_> {
             })
             .collect();
         let out = simulate_poses(self.desc, &poses, arm, self.instrument, self.options, rng)
-            .map_err(|e| format!("ISO cycles: {e}"))?;
-        let set = MeasurementSet::new(self.desc.dof(), out.rows).map_err(|e| format!("ISO cycles: {e}"))?;
+            .map_err(IsoTrialError::Cycles)?;
+        let set = MeasurementSet::new(self.desc.dof(), out.rows).map_err(IsoTrialError::CycleSet)?;
         // Every simulated cycle counts, as in the prediction's: no screen for gross errors the
         // simulation does not make.
         let options = EvaluateOptions {
@@ -82,11 +114,11 @@ impl IsoTrial<'_> {
             screen: false,
             unit_check: false,
         };
-        let measured = evaluate(&set, &fit.robot, self.desc, options).map_err(|e| format!("ISO figures: {e}"))?;
+        let measured = evaluate(&set, &fit.robot, self.desc, options).map_err(IsoTrialError::Figures)?;
         let covariance = fit
             .model_covariance
             .as_ref()
-            .ok_or("ISO prediction: the calibration has no model covariance")?
+            .ok_or(IsoTrialError::NoCovariance)?
             .matrix();
         let repeatability: Vec<f64> = self.desc.joints.iter().map(|j| j.repeatability_sigma).collect();
         let inputs = PredictionInputs {
@@ -104,16 +136,14 @@ impl IsoTrial<'_> {
             self.section.prediction_trials,
             seed,
         )
-        .map_err(|e| format!("ISO prediction: {e}"))?;
+        .map_err(IsoTrialError::Prediction)?;
         let ap = measured.mean_ap_p_mm();
-        let rp = measured
-            .mean_rp_l_mm()
-            .ok_or("ISO figures: a pose has a single cycle")?;
+        let rp = measured.mean_rp_l_mm().ok_or(IsoTrialError::SingleCycle("figures"))?;
         let rp_predicted = predicted
             .mean_rp_l_mm
-            .ok_or("ISO prediction: a pose has a single cycle")?
+            .ok_or(IsoTrialError::SingleCycle("prediction"))?
             .mean;
-        let distance = measured.distance_p2_p4.ok_or("ISO figures: no P2-P4 distance")?;
+        let distance = measured.distance_p2_p4.ok_or(IsoTrialError::NoDistance)?;
         let mut m = Metrics::new();
         m.push(ISO_METRICS[0], cube.edge_m * 1e3);
         m.push(ISO_METRICS[1], ap);

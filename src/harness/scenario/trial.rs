@@ -15,12 +15,71 @@ use crate::kinematics::FixedFrames;
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::plan::{PoseConditions, TOOL_EXPERIMENT, VALIDATION_EXPERIMENT, ValidationPlan};
 use crate::robot::commands_to_internal;
-use crate::robot::{Controller, RobotDescription, RobotModel};
+use crate::robot::{Controller, ModelError, RobotDescription, RobotModel};
 use crate::sim::perturb;
 use crate::sim::{AnalyticArm, ArmExecutor, CampaignOptions, Effects, InversionTable, simulate_campaign_with};
 use crate::sim::{RapierArm, RapierArmOptions};
 use nalgebra::{Isometry3, Vector3};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
+
+/// Why a Monte-Carlo trial failed: its record's `error` cell in `trials.csv`, on one line.
+#[derive(Debug, thiserror::Error)]
+pub enum TrialError {
+    /// The perturbed robot could not be built.
+    #[error("drawing the robot: {0}")]
+    DrawRobot(ModelError),
+    /// The campaign's simulation failed.
+    #[error("simulating the campaign: {0}")]
+    Simulate(crate::sim::CampaignError),
+    /// The simulated rows do not make a measurement set.
+    #[error("measurement set: {0}")]
+    Set(crate::measurement::MeasurementSetError),
+    /// The instrument's noise at the robot's base cannot be computed.
+    #[error("measurement noise at the robot: {0}")]
+    Noise(crate::measurement::TriangulationError),
+    /// The calibration failed.
+    #[error("calibrating: {0}")]
+    Calibrate(crate::calibration::procedure::ProcedureError),
+    /// The calibrated model cannot invert a measured pose's commands.
+    #[error("the calibrated model cannot predict {experiment} step {step}: {cause}")]
+    Predict {
+        /// The pose's experiment.
+        experiment: String,
+        /// The pose's step.
+        step: usize,
+        /// Why.
+        cause: ModelError,
+    },
+    /// The truth model cannot reach a measured pose's commands.
+    #[error("{experiment} step {step}: {cause}")]
+    Truth {
+        /// The pose's experiment.
+        experiment: String,
+        /// The pose's step.
+        step: usize,
+        /// Why.
+        cause: ModelError,
+    },
+    /// The ISO 9283 part of the trial failed.
+    #[error("{0}")]
+    Iso(super::iso::IsoTrialError),
+    /// The trial returned other metrics than it declared.
+    #[error("returned metrics {returned:?}, declared {declared:?}")]
+    MetricNames {
+        /// The metrics' names returned.
+        returned: Vec<String>,
+        /// The names declared.
+        declared: Vec<String>,
+    },
+    /// A metric is not finite.
+    #[error("metric {metric} is {value} (not finite)")]
+    NotFinite {
+        /// The metric's name.
+        metric: String,
+        /// Its value.
+        value: f64,
+    },
+}
 
 /// One Monte-Carlo trial: a pure function of the case and the seed (thread-safe, no I/O).
 pub trait Trial: Sync {
@@ -29,7 +88,7 @@ pub trait Trial: Sync {
 
     /// Runs the trial of `case` seeded with `seed`; the metrics follow
     /// [`Trial::metric_names`].
-    fn run(&self, case: &Case, seed: u64) -> Result<Metrics, String>;
+    fn run(&self, case: &Case, seed: u64) -> Result<Metrics, TrialError>;
 }
 
 /// The metrics of [`CampaignTrial`], in column order. `uncal_*`: the nominal model's
@@ -100,9 +159,9 @@ struct PosePredictions {
     commands: Vec<Vec<f64>>,
     /// The nominal model's `world_from_tool` at each.
     nominal: Vec<Isometry3<f64>>,
-    /// The fixed truth's tool point \[m\] at each, or why its transmissions cannot reach it;
-    /// `None` when the truth is drawn per trial.
-    truth_tool_m: Option<Vec<Result<Vector3<f64>, String>>>,
+    /// The fixed truth's tool point \[m\] at each (`None` where its transmissions cannot reach
+    /// it); `None` when the truth is drawn per trial.
+    truth_tool_m: Option<Vec<Option<Vector3<f64>>>>,
 }
 
 impl PosePredictions {
@@ -118,7 +177,7 @@ impl PosePredictions {
                 Some(
                     commands
                         .iter()
-                        .map(|cmd| trial.truth_tool_m(robot, &model, cmd).map_err(|e| e.to_string()))
+                        .map(|cmd| trial.truth_tool_m(robot, &model, cmd).ok())
                         .collect(),
                 )
             }
@@ -147,15 +206,15 @@ impl PosePredictions {
         self.index(row).map(|i| self.nominal[i])
     }
 
-    /// The fixed truth's tool point of `row`'s pose (or why there is none), if known.
-    fn truth_tool_m(&self, row: &Measurement) -> Option<&Result<Vector3<f64>, String>> {
-        Some(&self.truth_tool_m.as_ref()?[self.index(row)?])
+    /// The fixed truth's tool point of `row`'s pose, if known and reachable.
+    fn truth_tool_m(&self, row: &Measurement) -> Option<Vector3<f64>> {
+        self.truth_tool_m.as_ref()?[self.index(row)?]
     }
 }
 
 impl CampaignTrial {
     /// The trial of `scenario` (analytic or rapier arm, as its `sim` key says).
-    pub fn new(scenario: &ResolvedScenario) -> Result<Self, String> {
+    pub fn new(scenario: &ResolvedScenario) -> Self {
         let mut trial = CampaignTrial {
             desc: scenario.robot.clone(),
             nominal: FixedFrames::new(scenario.robot.nominal_model()),
@@ -184,7 +243,7 @@ impl CampaignTrial {
             }
         }
         trial.inversions = trial.inversion_table(scenario).map(std::sync::Arc::new);
-        Ok(trial)
+        trial
     }
 
     /// The analytic arm of `truth` with the trial's controller and effects.
@@ -224,12 +283,7 @@ impl CampaignTrial {
 
     /// The tool point \[m\] of `truth` (its constant frames: `model`) at file-unit commands
     /// `cmd` through the controller (kinematics only).
-    fn truth_tool_m(
-        &self,
-        truth: &RobotModel,
-        model: &FixedFrames,
-        cmd: &[f64],
-    ) -> Result<Vector3<f64>, crate::robot::ModelError> {
+    fn truth_tool_m(&self, truth: &RobotModel, model: &FixedFrames, cmd: &[f64]) -> Result<Vector3<f64>, ModelError> {
         let q = truth.joint_values(&self.controller, &commands_to_internal(&self.desc, cmd))?;
         Ok(model.world_from_tool(&q).translation.vector)
     }
@@ -240,11 +294,11 @@ impl CampaignTrial {
         self.sim == SimMode::Rapier && self.effects.compliance.is_some()
     }
 
-    fn draw_truth(&self, rng: &mut ChaCha12Rng) -> Result<RobotModel, String> {
+    fn draw_truth(&self, rng: &mut ChaCha12Rng) -> Result<RobotModel, TrialError> {
         match &self.truth {
             ResolvedTruth::Fixed { robot } => Ok(robot.as_ref().clone()),
             ResolvedTruth::Perturbed { perturbation } => {
-                perturb(&self.desc, perturbation, rng).map_err(|e| format!("drawing the robot: {e}"))
+                perturb(&self.desc, perturbation, rng).map_err(TrialError::DrawRobot)
             }
         }
     }
@@ -256,7 +310,7 @@ impl CampaignTrial {
         case: &Case,
         rng: &mut ChaCha12Rng,
         truth: &RobotModel,
-    ) -> Result<Metrics, String> {
+    ) -> Result<Metrics, TrialError> {
         let out = simulate_campaign_with(
             &self.desc,
             &case.plan,
@@ -266,16 +320,16 @@ impl CampaignTrial {
             &self.options,
             rng,
         )
-        .map_err(|e| format!("simulating the campaign: {e}"))?;
+        .map_err(TrialError::Simulate)?;
         let settles = arm.settles();
         let occluded: usize = out.occluded.iter().map(|(_, n)| *n).sum();
-        let set = MeasurementSet::new(self.desc.dof(), out.rows).map_err(|e| format!("measurement set: {e}"))?;
+        let set = MeasurementSet::new(self.desc.dof(), out.rows).map_err(TrialError::Set)?;
         // The calibrator is told the instrument's 3-D RMS noise where the robot stands.
         let base = nalgebra::Point3::from(self.desc.placement.to_isometry().translation.vector);
         let noise_mm = case
             .measurement
             .covariance_m2(&base)
-            .map_err(|e| format!("measurement noise at the robot: {e}"))?
+            .map_err(TrialError::Noise)?
             .trace()
             .sqrt()
             * 1e3;
@@ -290,7 +344,7 @@ impl CampaignTrial {
         } else {
             Detail::Model
         };
-        let cal = calibrate_model(&set, &self.desc, &options, detail).map_err(|e| format!("calibrating: {e}"))?;
+        let cal = calibrate_model(&set, &self.desc, &options, detail).map_err(TrialError::Calibrate)?;
         let predicted = self.predicted_tool(set.rows(), &cal.robot)?;
         let fixed = self.fixed_for(&case.plan.reference);
         let mut m = self.metrics(set.rows(), occluded, &predicted, fixed);
@@ -308,7 +362,7 @@ impl CampaignTrial {
                 options: &self.options,
                 reference: &case.plan.reference,
             };
-            m.extend(iso.run(&mut arm, &cal, rng)?);
+            m.extend(iso.run(&mut arm, &cal, rng).map_err(TrialError::Iso)?);
         }
         Ok(m)
     }
@@ -320,17 +374,16 @@ impl CampaignTrial {
         &self,
         rows: &'r [Measurement],
         calibrated: &RobotModel,
-    ) -> Result<Vec<(&'r Measurement, Isometry3<f64>)>, String> {
+    ) -> Result<Vec<(&'r Measurement, Isometry3<f64>)>, TrialError> {
         let model = FixedFrames::new(calibrated.phi_model());
         measured_poses(rows)
             .map(|row| {
                 let q = calibrated
                     .joint_values(&self.controller, &commands_to_internal(&self.desc, &row.cmd))
-                    .map_err(|e| {
-                        format!(
-                            "the calibrated model cannot predict {} step {}: {e}",
-                            row.experiment, row.step
-                        )
+                    .map_err(|cause| TrialError::Predict {
+                        experiment: row.experiment.clone(),
+                        step: row.step,
+                        cause,
                     })?;
                 Ok((row, model.world_from_tool(&q)))
             })
@@ -345,16 +398,22 @@ impl CampaignTrial {
         predicted: &[(&Measurement, Isometry3<f64>)],
         truth: &RobotModel,
         fixed: Option<&PosePredictions>,
-    ) -> Result<f64, String> {
+    ) -> Result<f64, TrialError> {
         let mut truth_model = None;
         let mut sum_m2 = 0.0;
         for (row, world_from_tool) in predicted {
-            let at = |e: &dyn std::fmt::Display| format!("{} step {}: {e}", row.experiment, row.step);
+            let at = |cause| TrialError::Truth {
+                experiment: row.experiment.clone(),
+                step: row.step,
+                cause,
+            };
             let truth_m = match fixed.and_then(|f| f.truth_tool_m(row)) {
-                Some(known) => known.clone().map_err(|e| at(&e))?,
+                Some(known) => known,
+                // Drawn per trial, or a fixed truth that cannot reach the pose (computed again
+                // for the reason).
                 None => {
                     let model = truth_model.get_or_insert_with(|| FixedFrames::new(truth.phi_model()));
-                    self.truth_tool_m(truth, model, &row.cmd).map_err(|e| at(&e))?
+                    self.truth_tool_m(truth, model, &row.cmd).map_err(at)?
                 }
             };
             let d = world_from_tool.translation.vector - truth_m;
@@ -432,7 +491,7 @@ impl Trial for CampaignTrial {
             .collect()
     }
 
-    fn run(&self, case: &Case, seed: u64) -> Result<Metrics, String> {
+    fn run(&self, case: &Case, seed: u64) -> Result<Metrics, TrialError> {
         let mut rng = ChaCha12Rng::seed_from_u64(seed);
         let truth = self.draw_truth(&mut rng)?;
         let kinematic_truth = truth.clone();
@@ -477,17 +536,23 @@ pub(crate) fn run_unit<T: Trial + ?Sized>(
     let seed = super::seed::trial_seed(scenario.seed, index);
     let outcome = trial.run(&scenario.cases[case], seed).and_then(|metrics| {
         if metrics.names() != names {
-            return Err(format!("returned metrics {:?}, declared {names:?}", metrics.names()));
+            return Err(TrialError::MetricNames {
+                returned: metrics.names(),
+                declared: names.to_vec(),
+            });
         }
         let values = metrics.values();
         match values.iter().position(|v| !v.is_finite()) {
-            Some(i) => Err(format!("metric {} is {} (not finite)", names[i], values[i])),
+            Some(i) => Err(TrialError::NotFinite {
+                metric: names[i].clone(),
+                value: values[i],
+            }),
             None => Ok(values),
         }
     });
     let (values, error) = match outcome {
         Ok(values) => (values, None),
-        Err(message) => (Vec::new(), Some(one_line(&message))),
+        Err(e) => (Vec::new(), Some(one_line(&e.to_string()))),
     };
     super::metrics::TrialRecord {
         case,
