@@ -32,7 +32,7 @@ fn main() {
         },
     )
     .expect("the paper scenario resolves");
-    let trial = CampaignTrial::new(&scenario).expect("analytic");
+    let trial = CampaignTrial::new(&scenario);
     let call = |i: usize| match what {
         "circles" => {
             for s in &sweeps {

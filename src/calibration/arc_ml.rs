@@ -23,10 +23,11 @@ use super::arc_model::{
 };
 use super::axis_circle::fit_circle;
 use super::noise::ResidualMoments;
-use super::transmission_fit::{TransmissionForm, fit_transmission_passes};
+use super::transmission_fit::fit_transmission_passes;
 use crate::kinematics::AxisLine;
 use crate::numerics::lsq;
 use crate::robot::Transmission;
+use crate::robot::TransmissionFitForm;
 use identifiability::identifiability;
 
 const FIT: &str = "arc maximum-likelihood fit";
@@ -41,7 +42,7 @@ const NEGLIGIBLE_DECREASE: f64 = 1e-10;
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArcFitOptions {
     /// Transmission form whose coefficients are fitted with the geometry.
-    pub form: TransmissionForm,
+    pub form: TransmissionFitForm,
     /// Measurement noise (weights the fit; the reported covariance assumes it).
     pub noise: MeasurementNoise,
     /// The reported axis point is the one closest to this point (points' unit).
@@ -142,7 +143,7 @@ const START_PASSES: usize = 1;
 pub fn initial_params(
     points: &[Point3<f64>],
     commands_rad: &[f64],
-    form: &TransmissionForm,
+    form: &TransmissionFitForm,
 ) -> Result<ArcParams, CalibrationError> {
     let circle = fit_circle(points)?;
     let (u, v) = (circle.u.into_inner(), circle.v.into_inner());
@@ -407,7 +408,7 @@ mod tests {
 
     #[test]
     fn recovers_a_noiseless_gear_sweep_with_per_point_covariance() {
-        let form = TransmissionForm::Gear {
+        let form = TransmissionFitForm::Gear {
             ratio: 32.0 / 19.0,
             order: 1,
         };
@@ -451,7 +452,7 @@ mod tests {
 
     #[test]
     fn zero_angle_noise_is_the_measurement_only_fit_bit_for_bit() {
-        let form = TransmissionForm::Harmonic { order: 1 };
+        let form = TransmissionFitForm::Harmonic { order: 1 };
         let commands: Vec<f64> = (0..12).map(|j| -0.3 + 0.06 * j as f64).collect();
         let truth = crate::calibration::arc_model::tests::sample_params();
         let noise = MeasurementNoise::from_rms_3d(1e-4);
@@ -512,9 +513,9 @@ mod tests {
         // a few for the sqrt(p) parameters); tangents that were wrong (e.g. radial) would move
         // them by a large part of a sigma, as the angle noise dominates here.
         let cases = [
-            (TransmissionForm::Harmonic { order: 1 }, 0.7, 16),
+            (TransmissionFitForm::Harmonic { order: 1 }, 0.7, 16),
             (
-                TransmissionForm::Gear {
+                TransmissionFitForm::Gear {
                     ratio: 32.0 / 19.0,
                     order: 1,
                 },
@@ -568,7 +569,7 @@ mod tests {
     #[test]
     fn mismatched_inputs_are_errors() {
         let options = ArcFitOptions {
-            form: TransmissionForm::Harmonic { order: 1 },
+            form: TransmissionFitForm::Harmonic { order: 1 },
             noise: MeasurementNoise::from_rms_3d(1e-4),
             reference_point: Point3::origin(),
             max_iterations: 10,

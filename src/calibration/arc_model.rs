@@ -11,7 +11,8 @@
 use nalgebra::{DMatrix, Matrix3, Point3, Rotation3, Unit, Vector3};
 
 use super::CalibrationError;
-use super::transmission_fit::{TransmissionForm, TransmissionValue};
+use super::transmission_fit::TransmissionValue;
+use crate::robot::TransmissionFitForm;
 
 const FIT: &str = "arc model";
 
@@ -183,7 +184,7 @@ impl ArcParams {
 #[derive(Clone, Debug)]
 pub struct ArcModel {
     /// The transmission form whose coefficients are fitted.
-    pub form: TransmissionForm,
+    pub form: TransmissionFitForm,
     /// Absolute commands `theta_c^j` \[rad\].
     pub commands_rad: Vec<f64>,
     pub(crate) whiteners: Vec<Matrix3<f64>>,
@@ -195,7 +196,7 @@ pub struct ArcModel {
 impl ArcModel {
     /// A model for these commands under this noise.
     pub fn new(
-        form: TransmissionForm,
+        form: TransmissionFitForm,
         commands_rad: &[f64],
         noise: &MeasurementNoise,
     ) -> Result<Self, CalibrationError> {
@@ -506,7 +507,7 @@ pub(crate) mod tests {
     #[test]
     fn jacobian_matches_central_differences() {
         let model = ArcModel::new(
-            TransmissionForm::Harmonic { order: 1 },
+            TransmissionFitForm::Harmonic { order: 1 },
             &(0..6).map(|j| -0.2 + 0.15 * j as f64).collect::<Vec<_>>(),
             &MeasurementNoise::from_rms_3d(1.0),
         )
@@ -534,8 +535,8 @@ pub(crate) mod tests {
         // Point j alone turned by h about the axis: the model with step j's motion D_j + h,
         // i.e. the phase moved by h evaluated at step j only.
         let forms = [
-            TransmissionForm::Harmonic { order: 1 },
-            TransmissionForm::Gear {
+            TransmissionFitForm::Harmonic { order: 1 },
+            TransmissionFitForm::Gear {
                 ratio: 32.0 / 19.0,
                 order: 1,
             },
@@ -564,7 +565,7 @@ pub(crate) mod tests {
     #[test]
     fn angle_derivatives_from_the_whitened_jacobian_are_the_tangents() {
         let commands: Vec<f64> = (0..7).map(|j| -0.6 + 0.2 * j as f64).collect();
-        let form = TransmissionForm::Gear { ratio: 1.7, order: 1 };
+        let form = TransmissionFitForm::Gear { ratio: 1.7, order: 1 };
         let p = sample_params();
         let iso = ArcModel::new(form, &commands, &MeasurementNoise::from_rms_3d(3e-4)).unwrap();
         let observed = iso.predict(&p).unwrap();

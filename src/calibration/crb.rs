@@ -17,8 +17,8 @@ use crate::kinematics::AxisLine;
 
 use super::CalibrationError;
 use super::arc_model::{ArcModel, ArcParams, MeasurementNoise, axis_quantities_gradient};
-use super::transmission_fit::TransmissionForm;
 use crate::numerics::lsq;
+use crate::robot::TransmissionFitForm;
 
 mod campaign;
 pub use campaign::{
@@ -73,7 +73,7 @@ pub fn arc_crb(model: &ArcModel, truth: &ArcParams, reference: &Point3<f64>) -> 
 /// relative order `(sigma / r)^2`, below 1e-6 for the paper's sweeps. `angle_sigma_rad == 0` is
 /// [`arc_crb`] of the measurement noise.
 pub fn arc_crb_with_angle_noise(
-    form: TransmissionForm,
+    form: TransmissionFitForm,
     commands_rad: &[f64],
     noise: &MeasurementNoise,
     angle_sigma_rad: f64,
@@ -132,7 +132,7 @@ pub struct UniformArc<'a> {
     /// The arc (centre, frame, radius, phase, transmission coefficients).
     pub params: &'a ArcParams,
     /// The transmission form of the coefficients.
-    pub form: TransmissionForm,
+    pub form: TransmissionFitForm,
     /// First command \[rad\].
     pub start_command_rad: f64,
     /// Command span from the first to the last point \[rad\].

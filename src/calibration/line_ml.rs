@@ -18,9 +18,9 @@ use nalgebra::{DMatrix, DVector, Matrix2, Point3, Rotation3, Unit, Vector3};
 
 use super::CalibrationError;
 use super::noise::ResidualMoments;
-use super::transmission_fit::TransmissionForm;
 use crate::numerics::lsq;
 use crate::robot::Transmission;
+use crate::robot::TransmissionFitForm;
 
 const FIT: &str = "sliding axis maximum-likelihood fit (eqs. 9-13)";
 
@@ -84,7 +84,7 @@ pub struct LineFit {
 
 /// The displacement from step 0 and its derivative by each coefficient, per point.
 fn displacements(
-    form: &TransmissionForm,
+    form: &TransmissionFitForm,
     coefficients: &[f64],
     commands: &[f64],
 ) -> Result<Vec<(f64, Vec<f64>)>, CalibrationError> {
@@ -111,7 +111,7 @@ fn displacements(
 
 /// The points the line `p` predicts at `commands` (the first command at `p.start`).
 pub(crate) fn predict_line(
-    form: &TransmissionForm,
+    form: &TransmissionFitForm,
     p: &LineParams,
     commands: &[f64],
 ) -> Result<Vec<Point3<f64>>, CalibrationError> {
@@ -127,7 +127,7 @@ type Linearised = (DVector<f64>, DMatrix<f64>, Vec<Vector3<f64>>);
 
 /// Whitened residuals and Jacobian of the model at `p` (module docs).
 fn residual_and_jacobian(
-    form: &TransmissionForm,
+    form: &TransmissionFitForm,
     commands: &[f64],
     points: &[Point3<f64>],
     p: &LineParams,
@@ -198,7 +198,7 @@ fn initial(points: &[Point3<f64>], commands: &[f64], m: usize) -> Result<LinePar
 pub fn fit_line(
     points: &[Point3<f64>],
     commands_m: &[f64],
-    form: &TransmissionForm,
+    form: &TransmissionFitForm,
     sigma_per_axis: f64,
     repeatability: f64,
     max_iterations: usize,
@@ -303,7 +303,7 @@ mod tests {
     #[test]
     fn recovers_a_noiseless_line_with_scale_and_curvature() {
         let (pts, commands, dir, truth) = sample();
-        let form = TransmissionForm::Polynomial { order: 2 };
+        let form = TransmissionFitForm::Polynomial { order: 2 };
         for rep in [0.0, 2e-5] {
             let fit = fit_line(&pts, &commands, &form, 1e-4, rep, 100).unwrap();
             assert_relative_eq!(fit.direction.into_inner(), dir, epsilon = 1e-10);
@@ -317,7 +317,7 @@ mod tests {
     #[test]
     fn jacobian_matches_central_differences() {
         let (pts, commands, _, _) = sample();
-        let form = TransmissionForm::Polynomial { order: 2 };
+        let form = TransmissionFitForm::Polynomial { order: 2 };
         let p = LineParams {
             start: Point3::new(1.1, -0.3, 0.35),
             frame: Rotation3::new(Vector3::new(0.2, 0.4, -0.1)),

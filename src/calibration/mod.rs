@@ -43,4 +43,4 @@ pub use arc_model::{ArcModel, ArcParams, MeasurementNoise};
 pub use axis_circle::{CircleFit, fit_circle};
 pub use axis_paper::{PaperAxisFit, fit_axis_paper};
 pub use error::CalibrationError;
-pub use transmission_fit::{TransmissionFit, TransmissionForm, fit_transmission};
+pub use transmission_fit::{TransmissionFit, fit_transmission};

@@ -12,60 +12,28 @@ use nalgebra::{DMatrix, DVector};
 
 use super::CalibrationError;
 use crate::numerics::lsq;
-use crate::robot::Transmission;
+use crate::robot::{Transmission, TransmissionFitForm};
 
 const FIT: &str = "transmission fit (eq. 8)";
 
-/// The form of a transmission function to fit; its coefficients are ordered
-/// `[sin_1..sin_k, cos_1..cos_k]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum TransmissionForm {
-    /// [`Transmission::Harmonic`] of the given order (the paper's joints 1, 2, 3, 6: order 1).
-    Harmonic {
-        /// Number of harmonics.
-        order: usize,
-    },
-    /// [`Transmission::Gear`] of a known ratio with harmonics in the gear angle.
-    Gear {
-        /// Gear ratio `N` (joint turns per gear turn), not fitted.
-        ratio: f64,
-        /// Number of harmonics.
-        order: usize,
-    },
-    /// [`Transmission::Polynomial`] of a sliding joint (eq. 13): coefficients `[c_1..c_order]`
-    /// of `s_c = s + sum_k c_k s^k` (m), `c_1` the scale error.
-    Polynomial {
-        /// Highest power.
-        order: usize,
-    },
-}
-
-impl From<crate::robot::TransmissionFitForm> for TransmissionForm {
-    fn from(f: crate::robot::TransmissionFitForm) -> Self {
-        use crate::robot::TransmissionFitForm as F;
-        match f {
-            F::Harmonic { order } => TransmissionForm::Harmonic { order },
-            F::Gear { ratio, order } => TransmissionForm::Gear { ratio, order },
-            F::Polynomial { order } => TransmissionForm::Polynomial { order },
-        }
-    }
-}
-
-impl TransmissionForm {
+/// How the fitting maths reads a [`TransmissionFitForm`] (the description's form): its
+/// coefficients are ordered `[sin_1..sin_k, cos_1..cos_k]`, a polynomial's `[c_1..c_order]`
+/// of `s_c = s + sum_k c_k s^k` (m), `c_1` the scale error.
+impl TransmissionFitForm {
     /// Number of coefficients (`2 * order`; `order` for a polynomial).
     pub fn n_coefficients(&self) -> usize {
         match self {
-            TransmissionForm::Harmonic { order } | TransmissionForm::Gear { order, .. } => 2 * order,
-            TransmissionForm::Polynomial { order } => *order,
+            TransmissionFitForm::Harmonic { order } | TransmissionFitForm::Gear { order, .. } => 2 * order,
+            TransmissionFitForm::Polynomial { order } => *order,
         }
     }
 
     /// The highest harmonic order (a polynomial: its highest power).
     pub fn order(&self) -> usize {
         match *self {
-            TransmissionForm::Harmonic { order }
-            | TransmissionForm::Gear { order, .. }
-            | TransmissionForm::Polynomial { order } => order,
+            TransmissionFitForm::Harmonic { order }
+            | TransmissionFitForm::Gear { order, .. }
+            | TransmissionFitForm::Polynomial { order } => order,
         }
     }
 
@@ -73,15 +41,15 @@ impl TransmissionForm {
     pub fn one_order_lower(&self) -> Option<Self> {
         let order = self.order().checked_sub(1)?;
         Some(match *self {
-            TransmissionForm::Harmonic { .. } => TransmissionForm::Harmonic { order },
-            TransmissionForm::Gear { ratio, .. } => TransmissionForm::Gear { ratio, order },
-            TransmissionForm::Polynomial { .. } => TransmissionForm::Polynomial { order },
+            TransmissionFitForm::Harmonic { .. } => TransmissionFitForm::Harmonic { order },
+            TransmissionFitForm::Gear { ratio, .. } => TransmissionFitForm::Gear { ratio, order },
+            TransmissionFitForm::Polynomial { .. } => TransmissionFitForm::Polynomial { order },
         })
     }
 
     /// Names of the coefficients, e.g. `sin1`, `cos1` (`scale`, `c2`, .. for a polynomial).
     pub fn coefficient_names(&self) -> Vec<String> {
-        if let TransmissionForm::Polynomial { order } = self {
+        if let TransmissionFitForm::Polynomial { order } = self {
             return (1..=*order)
                 .map(|k| if k == 1 { "scale".to_string() } else { format!("c{k}") })
                 .collect();
@@ -95,7 +63,7 @@ impl TransmissionForm {
 
     /// The transmission with these coefficients.
     pub fn build(&self, coefficients: &[f64]) -> Transmission {
-        if let TransmissionForm::Polynomial { .. } = self {
+        if let TransmissionFitForm::Polynomial { .. } = self {
             return Transmission::Polynomial {
                 c0: 0.0,
                 c: coefficients.to_vec(),
@@ -105,8 +73,8 @@ impl TransmissionForm {
         let sin = coefficients[..k].to_vec();
         let cos = coefficients[k..2 * k].to_vec();
         match *self {
-            TransmissionForm::Gear { ratio, .. } => Transmission::Gear { ratio, sin, cos },
-            TransmissionForm::Harmonic { .. } | TransmissionForm::Polynomial { .. } => {
+            TransmissionFitForm::Gear { ratio, .. } => Transmission::Gear { ratio, sin, cos },
+            TransmissionFitForm::Harmonic { .. } | TransmissionFitForm::Polynomial { .. } => {
                 Transmission::Harmonic { sin, cos }
             }
         }
@@ -116,9 +84,9 @@ impl TransmissionForm {
     /// gear ratio.
     fn harmonic_argument(&self, theta_a: f64) -> (usize, f64, f64) {
         match *self {
-            TransmissionForm::Harmonic { order } => (order, 1.0, theta_a),
-            TransmissionForm::Gear { ratio, order } => (order, ratio, theta_a / ratio),
-            TransmissionForm::Polynomial { .. } => (0, 1.0, theta_a),
+            TransmissionFitForm::Harmonic { order } => (order, 1.0, theta_a),
+            TransmissionFitForm::Gear { ratio, order } => (order, ratio, theta_a / ratio),
+            TransmissionFitForm::Polynomial { .. } => (0, 1.0, theta_a),
         }
     }
 
@@ -173,7 +141,7 @@ impl TransmissionForm {
     /// `f`, `f'`, `f''` at `theta_a` with `coefficients` (missing ones are 0), and the basis
     /// into `basis`: one `sin_cos` per harmonic for all of them.
     pub(crate) fn evaluate(&self, coefficients: &[f64], theta_a: f64, basis: &mut [f64]) -> TransmissionValue {
-        if let TransmissionForm::Polynomial { order } = *self {
+        if let TransmissionFitForm::Polynomial { order } = *self {
             return Self::evaluate_polynomial(order, coefficients, theta_a, basis);
         }
         let (k, scale, x) = self.harmonic_argument(theta_a);
@@ -285,7 +253,7 @@ pub struct TransmissionFit {
 /// Fit eq. (8): `actual_increments_rad[j]` = observed actual displacement from step 0
 /// (eq. 7 accumulated; element 0 is 0), `commands_rad[j]` = absolute command \[rad\].
 pub fn fit_transmission(
-    form: &TransmissionForm,
+    form: &TransmissionFitForm,
     actual_increments_rad: &[f64],
     commands_rad: &[f64],
 ) -> Result<TransmissionFit, CalibrationError> {
@@ -300,7 +268,7 @@ const MAX_PASSES: usize = 40;
 /// `f^-1` differs from 1 by that much), so a starting point that a maximum-likelihood fit
 /// refines needs only one or two.
 pub(crate) fn fit_transmission_passes(
-    form: &TransmissionForm,
+    form: &TransmissionFitForm,
     actual_increments_rad: &[f64],
     commands_rad: &[f64],
     max_passes: usize,
@@ -380,9 +348,9 @@ mod tests {
     #[test]
     fn recovers_a_paper_like_harmonic_and_a_gear() {
         for (form, coeffs) in [
-            (TransmissionForm::Harmonic { order: 1 }, vec![0.0035, -0.0009]),
+            (TransmissionFitForm::Harmonic { order: 1 }, vec![0.0035, -0.0009]),
             (
-                TransmissionForm::Gear {
+                TransmissionFitForm::Gear {
                     ratio: 32.0 / 19.0,
                     order: 1,
                 },
@@ -404,12 +372,12 @@ mod tests {
     #[test]
     fn form_evaluation_matches_the_built_transmission() {
         for (form, coeffs) in [
-            (TransmissionForm::Harmonic { order: 1 }, vec![0.0035, -0.0009]),
+            (TransmissionFitForm::Harmonic { order: 1 }, vec![0.0035, -0.0009]),
             (
-                TransmissionForm::Gear { ratio: 1.7, order: 2 },
+                TransmissionFitForm::Gear { ratio: 1.7, order: 2 },
                 vec![0.01, -0.02, 0.003, 0.004],
             ),
-            (TransmissionForm::Polynomial { order: 3 }, vec![2e-4, -0.05, 0.3]),
+            (TransmissionFitForm::Polynomial { order: 3 }, vec![2e-4, -0.05, 0.3]),
         ] {
             let f = form.build(&coeffs);
             for k in 0..20 {
@@ -428,7 +396,7 @@ mod tests {
 
     #[test]
     fn basis_is_the_coefficient_derivative() {
-        let form = TransmissionForm::Gear { ratio: 1.7, order: 2 };
+        let form = TransmissionFitForm::Gear { ratio: 1.7, order: 2 };
         let c = [0.01, -0.02, 0.003, 0.004];
         let h = 1e-7;
         for k in 0..4 {

@@ -304,6 +304,18 @@ impl Compensator {
     }
 }
 
+impl From<crate::robot::ModelError> for CompensationError {
+    fn from(e: crate::robot::ModelError) -> Self {
+        Self::Model(e)
+    }
+}
+
+impl From<IkError> for CompensationError {
+    fn from(e: IkError) -> Self {
+        Self::Ik(e)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -430,17 +442,5 @@ mod tests {
             let miss_plain = (phi.world_from_tool(&q_plain).translation.vector - target.translation.vector).norm();
             assert!(miss_plain > 1e-5, "the effects matter: {miss_plain:.3e} m");
         }
-    }
-}
-
-impl From<crate::robot::ModelError> for CompensationError {
-    fn from(e: crate::robot::ModelError) -> Self {
-        Self::Model(e)
-    }
-}
-
-impl From<IkError> for CompensationError {
-    fn from(e: IkError) -> Self {
-        Self::Ik(e)
     }
 }

@@ -83,7 +83,7 @@ impl Recorder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calibration::{ArcFitOptions, MeasurementNoise, TransmissionForm, fit_arc};
+    use crate::calibration::{ArcFitOptions, MeasurementNoise, TransmissionFitForm, fit_arc};
     use approx::assert_relative_eq;
     use nalgebra::Vector3;
 
@@ -97,7 +97,7 @@ mod tests {
             .map(|c| centre + 0.5 * Vector3::new(c.cos(), c.sin(), 0.0))
             .collect();
         let options = ArcFitOptions {
-            form: TransmissionForm::Harmonic { order: 1 },
+            form: TransmissionFitForm::Harmonic { order: 1 },
             noise: MeasurementNoise::Isotropic { sigma_per_axis: 1e-4 },
             reference_point: centre,
             max_iterations: 50,

@@ -24,7 +24,7 @@ pub(super) struct Scenario {
 }
 
 pub(super) fn table1_scenario() -> Scenario {
-    let form = TransmissionForm::Harmonic { order: 1 };
+    let form = TransmissionFitForm::Harmonic { order: 1 };
     let commands: Vec<f64> = (0..16).map(|j| -0.2 + 45f64.to_radians() * j as f64 / 15.0).collect();
     let noise = MeasurementNoise::from_rms_3d(0.19e-3);
     let truth = ArcParams {
@@ -157,9 +157,9 @@ fn direction_sigma_from_the_out_of_plane_block_equals_the_full_bound() {
     let s = table1_scenario();
     let sigma = 0.19e-3 / 3f64.sqrt();
     for (form, coefficients) in [
-        (TransmissionForm::Harmonic { order: 1 }, vec![0.0035, -0.0009]),
+        (TransmissionFitForm::Harmonic { order: 1 }, vec![0.0035, -0.0009]),
         (
-            TransmissionForm::Gear {
+            TransmissionFitForm::Gear {
                 ratio: 32.0 / 19.0,
                 order: 2,
             },
@@ -232,7 +232,7 @@ fn held_joint_covariance_matches_a_finite_rotation_about_the_held_axis() {
 #[test]
 fn angle_noise_bound_is_the_measurement_bound_at_zero_and_grows_with_it() {
     let s = table1_scenario();
-    let form = TransmissionForm::Harmonic { order: 1 };
+    let form = TransmissionFitForm::Harmonic { order: 1 };
     let plain = arc_crb(&s.model, &s.truth, &s.reference).unwrap();
     let zero = arc_crb_with_angle_noise(form, &s.commands, &s.noise, 0.0, &s.truth, &s.reference).unwrap();
     assert_eq!(zero, plain);

@@ -12,12 +12,12 @@ use crate::calibration::arc_model::{ArcModel, MeasurementNoise, axis_quantities_
 use crate::calibration::line_ml::fit_line;
 use crate::calibration::noise::ResidualMoments;
 use crate::calibration::sliding::{fit_sliding_axis, fit_sliding_function};
-use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
     ArcFitOptions, CalibrationError, Studies, angles, fit_arc, fit_arc_with_angle_noise_studies, fit_axis_paper,
     fit_circle, fit_transmission,
 };
 use crate::kinematics::{AxisLine, JointKind};
+use crate::robot::TransmissionFitForm;
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription, Transmission};
 use nalgebra::{Isometry3, Point3, Unit, Vector3};
@@ -30,7 +30,7 @@ pub(super) struct AxisFitOutcome {
     pub(super) axis: AxisLine,
     /// The transmission form fitted (the description's, or lower where the sweeps do not
     /// resolve it).
-    pub(super) form: TransmissionForm,
+    pub(super) form: TransmissionFitForm,
     /// The fitted transmission, in the fit's own zero.
     pub(super) transmission: Transmission,
     /// The axis's report.
@@ -241,7 +241,7 @@ pub(super) fn fit_joint(
             .then(|| data.short_arc(noise_mm).or_else(|| data.straight(&points, noise_mm)))
             .flatten()
     };
-    let requested = TransmissionForm::from(desc.joints[joint - 1].transmission_fit_form());
+    let requested = desc.joints[joint - 1].transmission_fit_form();
     let mut form = requested;
     let setting = FitSetting {
         desc,
@@ -295,7 +295,7 @@ pub(super) fn fit_joint(
 
 /// A fit error `e` of too few points as the description's transmission order's fault, when
 /// its `transmission_fit` asks for an order above the default 1 (`form`, the order tried).
-fn naming_the_order(e: ProcedureError, desc: &RobotDescription, form: TransmissionForm) -> ProcedureError {
+fn naming_the_order(e: ProcedureError, desc: &RobotDescription, form: TransmissionFitForm) -> ProcedureError {
     match e {
         ProcedureError::Fit {
             experiment,
@@ -325,7 +325,7 @@ struct FitSetting<'a> {
 /// is picked by [`fit_joint`] (eq. 8: the transmission must be invertible over the sweep).
 fn fit_joint_as(
     data: &JointData<'_>,
-    form: TransmissionForm,
+    form: TransmissionFitForm,
     setting: &FitSetting<'_>,
 ) -> Result<AxisFitOutcome, ProcedureError> {
     let (desc, options, detail) = (setting.desc, setting.options, setting.detail);
@@ -368,7 +368,7 @@ fn fit_arc_ml(
     data: &JointData<'_>,
     points: &[Point3<f64>],
     u: &[f64],
-    form: TransmissionForm,
+    form: TransmissionFitForm,
     options: &CalibrationOptions,
     sigma: f64,
     repeatability_rad: f64,
@@ -447,7 +447,7 @@ fn fit_line_ml(
     data: &JointData<'_>,
     points: &[Point3<f64>],
     u: &[f64],
-    form: TransmissionForm,
+    form: TransmissionFitForm,
     options: &CalibrationOptions,
     sigma: f64,
     repeatability_m: f64,
@@ -495,7 +495,7 @@ fn fit_arc_paper(
     data: &JointData<'_>,
     points: &[Point3<f64>],
     u: &[f64],
-    form: TransmissionForm,
+    form: TransmissionFitForm,
     options: &CalibrationOptions,
 ) -> Result<AxisFitOutcome, CalibrationError> {
     // Orient the axis so that increasing commands turn positively about it.
@@ -533,7 +533,7 @@ fn fit_line_paper(
     data: &JointData<'_>,
     points: &[Point3<f64>],
     u: &[f64],
-    form: TransmissionForm,
+    form: TransmissionFitForm,
     options: &CalibrationOptions,
 ) -> Result<AxisFitOutcome, CalibrationError> {
     let fit = fit_sliding_axis(points, options.max_iterations)?;
@@ -646,7 +646,7 @@ fn own_axis(
     options: &CalibrationOptions,
     sigma: f64,
     joint_axis: &AxisLine,
-    form: TransmissionForm,
+    form: TransmissionFitForm,
 ) -> Option<(f64, Option<f64>)> {
     let u: Vec<f64> = e
         .target0_steps

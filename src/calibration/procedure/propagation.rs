@@ -31,8 +31,8 @@
 use crate::calibration::arc_model::ArcParams;
 use crate::calibration::line_ml::LineParams;
 use crate::calibration::tool_accuracy::{ModelCovariance, ModelOrigin, model_parameter_names};
-use crate::calibration::transmission_fit::TransmissionForm;
 use crate::kinematics::AxisLine;
+use crate::robot::TransmissionFitForm;
 use crate::robot::{RobotModel, Transmission};
 use nalgebra::{DMatrix, Isometry3, Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
@@ -48,7 +48,7 @@ pub(super) enum LocalFit {
         /// The reference point the axis point is taken nearest to \[m\].
         reference: Point3<f64>,
         /// The transmission form.
-        form: TransmissionForm,
+        form: TransmissionFitForm,
         /// Covariance of the local parameters.
         covariance: DMatrix<f64>,
     },
@@ -57,7 +57,7 @@ pub(super) enum LocalFit {
         /// Parameters at the optimum.
         params: LineParams,
         /// The transmission form.
-        form: TransmissionForm,
+        form: TransmissionFitForm,
         /// Covariance of the local parameters.
         covariance: DMatrix<f64>,
     },
@@ -543,7 +543,7 @@ mod tests {
                 coefficients: vec![1e-3, -2e-3],
             },
             reference: Point3::new(0.5, 0.5, 0.5),
-            form: TransmissionForm::Harmonic { order: 1 },
+            form: TransmissionFitForm::Harmonic { order: 1 },
             covariance,
         }
     }

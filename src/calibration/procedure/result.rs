@@ -12,10 +12,11 @@ use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::line_ml::LineFit;
 use crate::calibration::noise::NoiseEstimate;
 use crate::calibration::tool_accuracy::{ModelCovariance, ToolAccuracy};
-use crate::calibration::transmission_fit::{TransmissionFit, TransmissionForm};
+use crate::calibration::transmission_fit::TransmissionFit;
 use crate::calibration::{ArcFit, PaperAxisFit};
 use crate::json_file;
 use crate::kinematics::AxisLine;
+use crate::robot::TransmissionFitForm;
 use crate::robot::{CouplingFunction, DescriptionIdentity, RobotModel, Transmission};
 use nalgebra::{Isometry3, Matrix2, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
@@ -207,7 +208,7 @@ impl AxisReport {
         experiment: &str,
         points: usize,
         fit: &ArcFit,
-        form: &TransmissionForm,
+        form: &TransmissionFitForm,
         span_rad: f64,
     ) -> Self {
         let mut notes = fit.identifiability.notes.clone();
@@ -247,7 +248,7 @@ impl AxisReport {
         joint: usize,
         experiment: &str,
         fit: &LineFit,
-        form: &TransmissionForm,
+        form: &TransmissionFitForm,
         span_m: f64,
     ) -> Self {
         let mut c = Matrix4::zeros();
@@ -304,7 +305,7 @@ impl AxisReport {
         e: &AxisExperiment,
         fit: &PaperAxisFit,
         t: &TransmissionFit,
-        form: &TransmissionForm,
+        form: &TransmissionFitForm,
         span_rad: f64,
     ) -> Self {
         AxisReport {

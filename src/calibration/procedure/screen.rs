@@ -24,11 +24,11 @@ use super::axis_fit::actuator_commands;
 use super::{AxisExperiment, COMMAND_TOLERANCE, CalibrationOptions, ProcedureError, axis_experiments_with};
 use crate::calibration::arc_model::{ArcModel, MeasurementNoise};
 use crate::calibration::line_ml::{fit_line, predict_line};
-use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{ArcFitOptions, CalibrationError, Studies, fit_arc_with_angle_noise_studies};
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{QuantileMethod, chi3_far_out_over_median, far_out_fence, quantile};
+use crate::robot::TransmissionFitForm;
 use crate::robot::{Controller, RobotDescription};
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -89,7 +89,7 @@ pub const GROSS_DISTANCE_OVER_MEDIAN: f64 = 10.0;
 struct Sweep<'a> {
     experiment: &'a AxisExperiment,
     kind: JointKind,
-    form: TransmissionForm,
+    form: TransmissionFitForm,
     points: Vec<Point3<f64>>,
     u: Vec<f64>,
 }
@@ -222,7 +222,7 @@ impl<'a> Sweep<'a> {
         Sweep {
             experiment: e,
             kind: desc.joints[k].kind,
-            form: TransmissionForm::from(desc.joints[k].transmission_fit_form()),
+            form: desc.joints[k].transmission_fit_form(),
             points: e.target0_m.clone(),
             u: e.target0_steps
                 .iter()
@@ -264,7 +264,7 @@ impl<'a> Sweep<'a> {
 
     fn residuals_as(
         &self,
-        form: TransmissionForm,
+        form: TransmissionFitForm,
         kept: &[usize],
         sigma: f64,
         max_iterations: usize,

@@ -2,7 +2,7 @@
 //! residual vectors.
 
 use anyhow::Result;
-use axiscal::calibration::{ArcFitOptions, ArcModel, MeasurementNoise, TransmissionForm, fit_arc};
+use axiscal::calibration::{ArcFitOptions, ArcModel, MeasurementNoise, TransmissionFitForm, fit_arc};
 use axiscal::measurement::Measurement;
 use axiscal::viz::Recorder;
 use nalgebra::{Matrix3, Point3};
@@ -48,7 +48,7 @@ fn log_arc_fit(
 ) -> Result<()> {
     let covariances: Vec<Matrix3<f64>> = points.iter().map(covariance_m2).collect::<Result<_>>()?;
     let noise = MeasurementNoise::PerPoint(covariances);
-    let form = TransmissionForm::Harmonic { order: 1 };
+    let form = TransmissionFitForm::Harmonic { order: 1 };
     let options = ArcFitOptions {
         form,
         noise: noise.clone(),

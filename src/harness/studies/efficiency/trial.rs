@@ -8,7 +8,6 @@ use crate::calibration::crb::{axis_errors, held_joint_axis_covariance};
 use crate::calibration::procedure::{
     AxisExperiment, CalibrationOptions, Detail, FittedModel, axis_experiments, calibrate_model, harmonics,
 };
-use crate::calibration::transmission_fit::TransmissionForm;
 use crate::calibration::{
     ArcFitOptions, CalibrationError, angles, fit_arc, fit_arc_with_angle_noise, fit_axis_paper, fit_circle,
     fit_transmission,
@@ -16,6 +15,7 @@ use crate::calibration::{
 use crate::kinematics::AxisLine;
 use crate::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use crate::plan::{CalibrationPlan, ValidationPlan};
+use crate::robot::TransmissionFitForm;
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::{AnalyticArm, simulate_campaign};
@@ -29,7 +29,7 @@ pub(super) struct AxisTruth {
     /// The reference point of the fit (the noise-free circle's centre) \[m\].
     pub(super) reference: Point3<f64>,
     /// The joint's transmission form.
-    pub(super) form: TransmissionForm,
+    pub(super) form: TransmissionFitForm,
     /// Actuator commands of the sweep's target-0 points \[rad\].
     pub(super) commands_rad: Vec<f64>,
     /// The simulated repeatability of the swept joint (0 without jitter) \[rad\].
@@ -128,7 +128,7 @@ fn actuator_commands(e: &AxisExperiment, desc: &RobotDescription, controller: &C
 type AxisEstimate = (Unit<nalgebra::Vector3<f64>>, Point3<f64>, Vec<f64>);
 
 /// The paper's estimator on one sweep: eqs. (1)-(5), then (6)-(8).
-fn paper_fit(points: &[Point3<f64>], u: &[f64], form: &TransmissionForm) -> Result<AxisEstimate, CalibrationError> {
+fn paper_fit(points: &[Point3<f64>], u: &[f64], form: &TransmissionFitForm) -> Result<AxisEstimate, CalibrationError> {
     let circle = fit_circle(points)?;
     let fit = fit_axis_paper(points, Some(&circle.normal), 100)?;
     let mut d = fit.axis.direction;
@@ -157,7 +157,7 @@ pub(super) fn reference_truths(
     let mut truths: Vec<AxisTruth> = Vec::new();
     for e in &experiments {
         let u = actuator_commands(e, desc, controller);
-        let form = TransmissionForm::from(desc.joints[e.joint - 1].transmission_fit_form());
+        let form = desc.joints[e.joint - 1].transmission_fit_form();
         let noise = MeasurementNoise::from_rms_3d(noise_m);
         let fit = fit_arc(
             &e.target0_m,
