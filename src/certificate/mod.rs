@@ -467,7 +467,7 @@ fn axis_lines(cal: &Calibration) -> Vec<AxisLine> {
             joint: a.joint,
             experiment: a.experiment.clone(),
             points: a.points,
-            span_deg_or_mm: a.span_deg,
+            span_deg_or_mm: a.span.value(),
             residual_rms_mm: a.residual_rms_mm,
             condition_number: a.condition_number,
             identifiability: a.identifiability.clone(),

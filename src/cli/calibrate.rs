@@ -663,12 +663,12 @@ fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str) {
     print_scope(cal, desc);
     say!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
     for a in &cal.axes {
-        let unit = if a.kind == "prismatic" { "mm" } else { "deg" };
+        let unit = a.span.unit();
         say!(
             "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
             a.joint,
             a.points,
-            a.span_deg,
+            a.span.value(),
             unit,
             a.residual_rms_mm,
             a.direction_sigma.major_rad * 1e3

@@ -72,9 +72,9 @@ pub struct AxesDiagnosis {
 /// wobble of the joint. `direction_z` is the axis's instrument-frame z component. The line of
 /// a sliding joint (`kind` `prismatic`) shows only the sag of a joint below it (the load moves
 /// along it); a crooked guide is no candidate of any family.
-fn arc_candidates(joint: usize, kind: &str, direction_z: f64) -> Vec<String> {
+fn arc_candidates(joint: usize, kind: crate::kinematics::JointKind, direction_z: f64) -> Vec<String> {
     let mut out = Vec::new();
-    if kind == "prismatic" {
+    if kind == crate::kinematics::JointKind::Prismatic {
         if joint > 1 {
             out.push(format!("joint_compliance (a joint below joint {joint})"));
         }
@@ -162,7 +162,7 @@ fn compare_axes(cal: &Calibration, null: &[Vec<f64>], means: &[f64], threshold: 
                 joint: a.joint,
                 excess_ratio: ratio,
                 p_value: upper_tail(&v.iter().map(|x| x / m).collect::<Vec<_>>(), ratio),
-                consistent_with: arc_candidates(a.joint, &a.kind, a.direction[2]),
+                consistent_with: arc_candidates(a.joint, a.kind, a.direction[2]),
             });
         }
     }

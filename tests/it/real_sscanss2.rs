@@ -7,6 +7,7 @@ use crate::common;
 
 use crate::common::axiscal;
 use axiscal::calibration::procedure::{AxisReport, Calibration};
+use axiscal::kinematics::JointKind;
 use nalgebra::{DMatrix, DVector, Point3, Vector3};
 use std::path::{Path, PathBuf};
 
@@ -95,9 +96,9 @@ fn check_axes(cal: &Calibration, points: &[Vec<Point3<f64>>]) {
     for (axis, pts) in cal.axes.iter().zip(points) {
         let direction = Vector3::from(axis.direction);
         let sigma = axis.direction_sigma.major_rad;
-        let (second_direction, centre) = match axis.kind.as_str() {
-            "prismatic" => (common::principal_axes(pts).1[0], None),
-            _ => {
+        let (second_direction, centre) = match axis.kind {
+            JointKind::Prismatic => (common::principal_axes(pts).1[0], None),
+            JointKind::Revolute => {
                 let (centre, normal) = circle(pts);
                 (normal, Some(centre))
             }
@@ -145,13 +146,18 @@ fn the_positioning_table_calibrates_and_each_axis_matches_a_second_estimate() {
     let (cal, points) = import_and_calibrate("table.txt", "sscanss2-table");
     assert_eq!(cal.axes.len(), 4);
     assert_eq!(
-        cal.axes.iter().map(|a| a.kind.as_str()).collect::<Vec<_>>(),
-        ["prismatic", "revolute", "prismatic", "prismatic"]
+        cal.axes.iter().map(|a| a.kind).collect::<Vec<_>>(),
+        [
+            JointKind::Prismatic,
+            JointKind::Revolute,
+            JointKind::Prismatic,
+            JointKind::Prismatic
+        ]
     );
     check_axes(&cal, &points);
     for a in &cal.axes {
         eprintln!(
-            "joint {} ({}): residual RMS {:.4} mm, direction sigma {:.4} mrad",
+            "joint {} ({:?}): residual RMS {:.4} mm, direction sigma {:.4} mrad",
             a.joint,
             a.kind,
             a.residual_rms_mm,

@@ -546,9 +546,9 @@ fn fit_line_paper(
     let report = AxisReport {
         joint: e.joint,
         experiment: e.name.clone(),
-        estimator: "paper".into(),
+        estimator: AxisEstimator::Paper,
         points: points.len(),
-        span_deg: span(u) * 1e3,
+        span: super::result::AxisSpan::Mm(span(u) * 1e3),
         point_mm: (points[0].coords * 1e3).into(),
         direction: fit.direction.into_inner().into(),
         // The paper's estimator reports no covariance of the line.
@@ -561,7 +561,7 @@ fn fit_line_paper(
         condition_number: f64::NAN,
         identifiability: vec![],
         covariance: None,
-        kind: "prismatic".into(),
+        kind: crate::kinematics::JointKind::Prismatic,
         harmonics: vec![],
         sweeps: vec![],
     };

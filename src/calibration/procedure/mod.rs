@@ -47,8 +47,8 @@ pub use joint_map::{
 pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, read_residuals_csv, residuals_csv};
 pub use result::{
-    AxisReport, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport, PointResidual,
-    PositionSigma, RowSigma, SecondTargetData, SweepReport, ToolPose, ToolReport, harmonics,
+    AxisReport, AxisSpan, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport,
+    PointResidual, PositionSigma, RowSigma, SecondTargetData, SweepReport, ToolPose, ToolReport, harmonics,
 };
 pub use sanity::{Implausible, MISFIT_RATIO, PLAUSIBLE_AXIS_TILT_RAD, SIZE_TOLERANCE, implausible};
 pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, WorstSecondTarget, screen_sweeps};

@@ -574,9 +574,10 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
     for a in &cal.axes {
         // A sliding axis has a direction only (eq. 9): no position, so no position sigma.
-        let (unit, position_sigma) = match a.kind.as_str() {
-            "prismatic" => ("mm", "- (sliding)".to_owned()),
-            _ => ("deg", format!("{:.3}", a.position_sigma.major_mm)),
+        let unit = a.span.unit();
+        let position_sigma = match a.kind {
+            JointKind::Prismatic => "- (sliding)".to_owned(),
+            JointKind::Revolute => format!("{:.3}", a.position_sigma.major_mm),
         };
         let _ = writeln!(
             s,
@@ -584,7 +585,7 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
             a.joint,
             a.experiment,
             a.points,
-            a.span_deg,
+            a.span.value(),
             a.point_mm[0],
             a.point_mm[1],
             a.point_mm[2],

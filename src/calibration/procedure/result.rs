@@ -1,11 +1,11 @@
 //! What the procedure returns: the calibrated robot plus, per axis and coupling, the fit and
 //! its uncertainty. Serialisable: `calibration.json` is loaded again by axiscal.
 
-use super::CalibrationOptions;
 use super::experiments::AxisExperiment;
 use super::frames::BaseRule;
 use super::propagation::{FrameSigma, ZeroOffsetSigma};
 use super::uncertainty::AxisCovariance;
+use super::{AxisEstimator, CalibrationOptions};
 use crate::calibration::arc_model::N_GEOMETRY;
 use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::crb::held_joint_axis_covariance;
@@ -15,7 +15,7 @@ use crate::calibration::tool_accuracy::{ModelCovariance, ToolAccuracy};
 use crate::calibration::transmission_fit::TransmissionFit;
 use crate::calibration::{ArcFit, PaperAxisFit};
 use crate::json_file;
-use crate::kinematics::AxisLine;
+use crate::kinematics::{AxisLine, JointKind};
 use crate::robot::TransmissionFitForm;
 use crate::robot::{CouplingFunction, DescriptionIdentity, RobotModel, Transmission};
 use nalgebra::{Isometry3, Matrix2, Matrix4, Vector3};
@@ -28,12 +28,13 @@ pub struct AxisReport {
     pub joint: usize,
     /// The experiment it comes from.
     pub experiment: String,
-    /// `ml` or `paper`.
-    pub estimator: String,
+    /// The estimator that fitted it (`ml` or `paper`).
+    pub estimator: AxisEstimator,
     /// Poses used.
     pub points: usize,
-    /// Commanded span of the actuator \[deg\].
-    pub span_deg: f64,
+    /// Commanded span of the actuator: `span_deg` of a rotary joint, `span_mm` of a sliding one.
+    #[serde(flatten)]
+    pub span: AxisSpan,
     /// A point on the axis, instrument frame \[mm\].
     pub point_mm: [f64; 3],
     /// Unit direction, instrument frame.
@@ -70,7 +71,7 @@ pub struct AxisReport {
     /// `revolute` or `prismatic` (a sliding axis has a direction only: its `point_mm` is the
     /// target's line at the first step and its position sigma is null).
     #[serde(default = "revolute")]
-    pub kind: String,
+    pub kind: JointKind,
     /// Each harmonic of a rotary joint's transmission as amplitude and phase, with their
     /// 1-sigma from the coefficients' covariance (empty for a sliding joint and in older
     /// files).
@@ -131,8 +132,36 @@ impl From<[Option<f64>; 2]> for PositionSigma {
     }
 }
 
-fn revolute() -> String {
-    "revolute".into()
+fn revolute() -> JointKind {
+    JointKind::Revolute
+}
+
+/// A sweep's commanded span, in its joint's file unit.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub enum AxisSpan {
+    /// A rotary joint's span \[deg\].
+    #[serde(rename = "span_deg")]
+    Deg(f64),
+    /// A sliding joint's span \[mm\].
+    #[serde(rename = "span_mm")]
+    Mm(f64),
+}
+
+impl AxisSpan {
+    /// The span in its unit.
+    pub fn value(self) -> f64 {
+        match self {
+            AxisSpan::Deg(v) | AxisSpan::Mm(v) => v,
+        }
+    }
+
+    /// Its unit, `deg` or `mm`.
+    pub fn unit(self) -> &'static str {
+        match self {
+            AxisSpan::Deg(_) => "deg",
+            AxisSpan::Mm(_) => "mm",
+        }
+    }
 }
 
 /// One sweep of a jointly fitted axis.
@@ -222,9 +251,9 @@ impl AxisReport {
         AxisReport {
             joint,
             experiment: experiment.to_string(),
-            estimator: "ml".into(),
+            estimator: AxisEstimator::Ml,
             points,
-            span_deg: span_rad.to_degrees(),
+            span: AxisSpan::Deg(span_rad.to_degrees()),
             point_mm: (fit.axis.origin_m.coords * 1e3).into(),
             direction: fit.axis.direction.into_inner().into(),
             direction_sigma: principal_sigmas(&fit.axis_direction_covariance).into(),
@@ -260,9 +289,9 @@ impl AxisReport {
         AxisReport {
             joint,
             experiment: experiment.to_string(),
-            estimator: "ml".into(),
+            estimator: AxisEstimator::Ml,
             points: fit.residuals.len(),
-            span_deg: span_m * 1e3,
+            span: AxisSpan::Mm(span_m * 1e3),
             point_mm: (fit.params.start.coords * 1e3).into(),
             direction: fit.direction.into_inner().into(),
             direction_sigma: principal_sigmas(&fit.direction_covariance).into(),
@@ -274,7 +303,7 @@ impl AxisReport {
             condition_number: fit.condition_number,
             identifiability: vec!["a sliding axis has a direction only (eq. 9): its position is a convention".into()],
             covariance: Some(AxisCovariance::new(u, v, &c)),
-            kind: "prismatic".into(),
+            kind: JointKind::Prismatic,
             harmonics: vec![],
             sweeps: vec![],
         }
@@ -287,7 +316,7 @@ impl AxisReport {
         let Some(c) = &self.covariance else { return };
         let (u, v) = (Vector3::from(c.u), Vector3::from(c.v));
         let mut total = Matrix4::from_fn(|a, b| c.covariance[a][b]) + held_joint_axis_covariance(axis, &u, &v, held);
-        if self.kind == "prismatic" {
+        if self.kind == JointKind::Prismatic {
             // Only the direction of a sliding axis is used.
             total.fixed_view_mut::<2, 2>(2, 2).fill(0.0);
             total.fixed_view_mut::<2, 2>(0, 2).fill(0.0);
@@ -311,9 +340,9 @@ impl AxisReport {
         AxisReport {
             joint: e.joint,
             experiment: e.name.clone(),
-            estimator: "paper".into(),
+            estimator: AxisEstimator::Paper,
             points: e.target0_m.len(),
-            span_deg: span_rad.to_degrees(),
+            span: AxisSpan::Deg(span_rad.to_degrees()),
             point_mm: (fit.axis.origin_m.coords * 1e3).into(),
             direction: fit.axis.direction.into_inner().into(),
             // The paper's estimator reports no covariance of the line.

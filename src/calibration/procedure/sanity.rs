@@ -304,7 +304,7 @@ fn directions(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausible> {
                 .then(|| Implausible::FlippedAxis {
                     joint: a.joint,
                     experiment: a.experiment.clone(),
-                    sliding: a.kind == "prismatic",
+                    sliding: a.kind == crate::kinematics::JointKind::Prismatic,
                     angle_deg: d.angle(n).to_degrees(),
                 })
                 .into_iter()
