@@ -278,7 +278,12 @@ fn scaled_follower(
     let dc: Vec<f64> = next.iter().map(|c| c - next[0]).collect();
     let uu: f64 = du.iter().map(|d| d * d).sum();
     let ratio = du.iter().zip(&dc).map(|(u, c)| u * c).sum::<f64>() / uu / slope;
-    let (worst, _, _) = spread(&dc.iter().zip(&du).map(|(c, u)| c - ratio * slope * u).collect::<Vec<_>>());
+    let (worst, _, _) = spread(
+        &dc.iter()
+            .zip(&du)
+            .map(|(c, u)| c - ratio * slope * u)
+            .collect::<Vec<_>>(),
+    );
     if !(ratio.is_finite() && ratio > 0.0 && worst <= tolerance) {
         return None;
     }

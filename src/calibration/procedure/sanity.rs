@@ -42,7 +42,7 @@
 
 mod scale;
 
-pub use scale::{LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS};
+pub use scale::{LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, free_pose_scale_slips};
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
 use crate::kinematics::JointKind;

@@ -24,6 +24,7 @@
 use super::super::{AxisReport, Calibration};
 use super::Implausible;
 use crate::kinematics::JointKind;
+use crate::measurement::Measurement;
 use crate::robot::{RobotDescription, RobotModel, Transmission, TransmissionFitForm};
 
 /// The most a revolute joint's mean slope over its sweep departs from its description's (2 %):
@@ -31,7 +32,7 @@ use crate::robot::{RobotDescription, RobotModel, Transmission, TransmissionFitFo
 /// encoder disc over its radius, a few hundredths of a millimetre on tens of millimetres
 /// (0.1 %); the largest on a robot the project ships data of is the paper's joint 6, 1.7 %
 /// (`asea-irb6l-paper-truth.toml`); the real sets' joints are within 0.03 %
-/// (`docs/formats.md#checks`).
+/// (`docs/method.md#checks-of-the-result`).
 pub const PLAUSIBLE_TURN_DEVIATION: f64 = 0.02;
 
 /// The most a sliding joint's travel per command departs from its description's (1 %): a
@@ -101,30 +102,43 @@ fn sweep(cal: &Calibration, desc: &RobotDescription, a: &AxisReport) -> Option<(
     (hi > lo && lo.is_finite() && hi.is_finite()).then_some((lo, hi))
 }
 
-/// The fitted over described mean slope of axis `a` and its sigma (the coefficients' sigmas,
-/// their correlation left out).
+/// The fitted over described mean slope of axis `a` over its sweep, and its sigma.
 fn slope_of(cal: &Calibration, desc: &RobotDescription, ideal: &RobotModel, a: &AxisReport) -> Option<Slope> {
-    let entry = desc.joints.get(a.joint.checked_sub(1)?)?;
-    if matches!(entry.transmission_fit_form(), TransmissionFitForm::Gear { .. }) {
+    let fitted = Fitted {
+        joint: a.joint,
+        experiment: &a.experiment,
+        transmission: &a.transmission,
+        sigmas: &a.coefficient_sigma,
+    };
+    slope(desc, ideal, &fitted, sweep(cal, desc, a)?)
+}
+
+/// The fitted over described mean slope of `fitted` over `range` (internal units) and its
+/// sigma (the coefficients' sigmas, their correlation left out); `None` for a joint whose
+/// description declares a gear form (module doc).
+fn slope(desc: &RobotDescription, ideal: &RobotModel, fitted: &Fitted, range: (f64, f64)) -> Option<Slope> {
+    let joint = fitted.joint;
+    let entry = desc.joints.get(joint.checked_sub(1)?)?;
+    if matches!(entry.transmission_fit_form(), TransmissionFitForm::Gear { .. }) || range.1 <= range.0 {
         return None;
     }
-    let range = sweep(cal, desc, a)?;
-    let nominal = mean_slope(&ideal.joints[a.joint - 1].transmission, range);
-    let fitted = mean_slope(&a.transmission, range);
-    let coefficients = a.transmission.coefficients();
+    let nominal = mean_slope(&ideal.joints.get(joint - 1)?.transmission, range);
+    let t = fitted.transmission;
+    let mean = mean_slope(t, range);
+    let coefficients = t.coefficients();
     let step = 1e-6;
-    let variance: f64 = (0..coefficients.len().min(a.coefficient_sigma.len()))
+    let variance: f64 = (0..coefficients.len().min(fitted.sigmas.len()))
         .map(|i| {
             let mut moved = coefficients.clone();
             moved[i] += step;
-            let gradient = (mean_slope(&with_coefficients(&a.transmission, &moved), range) - fitted) / step;
-            (gradient * a.coefficient_sigma[i]).powi(2)
+            let gradient = (mean_slope(&with_coefficients(t, &moved), range) - mean) / step;
+            (gradient * fitted.sigmas[i]).powi(2)
         })
         .sum();
-    let ratio = fitted / nominal;
+    let ratio = mean / nominal;
     (ratio.is_finite() && ratio > 0.0 && variance.is_finite()).then(|| Slope {
-        joint: a.joint,
-        experiment: a.experiment.clone(),
+        joint,
+        experiment: fitted.experiment.to_owned(),
         sliding: entry.kind == JointKind::Prismatic,
         ratio,
         sigma: variance.sqrt() / nominal.abs(),
@@ -140,9 +154,71 @@ fn beyond(s: &Slope, bound: f64) -> bool {
 pub(super) fn scale_slips(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausible> {
     let ideal = RobotModel::ideal(desc);
     let slopes: Vec<Slope> = cal.axes.iter().filter_map(|a| slope_of(cal, desc, &ideal, a)).collect();
-    let common = common_scale(&slopes);
+    said(&slopes)
+}
+
+/// The transmission check of the module doc on a free-pose calibration `cal` (its rotary
+/// joints' harmonics, each coefficient's sigma from the fit's summary), over the range of each
+/// joint's commands in `rows`.
+pub fn free_pose_scale_slips(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Vec<Implausible> {
+    let Some(summary) = cal.free_poses.as_ref() else {
+        return vec![];
+    };
+    let ideal = RobotModel::ideal(desc);
+    let sigma = |joint: usize, name: String| {
+        let full = format!("joint{joint}.transmission.{name}");
+        summary
+            .parameters
+            .iter()
+            .find(|p| p.name == full)
+            .map(|p| p.sigma / p.unit.per_si())
+    };
+    let internal: Vec<Vec<f64>> = rows
+        .iter()
+        .filter(|m| m.cmd.len() == desc.dof())
+        .map(|m| crate::robot::commands_to_internal(desc, &m.cmd))
+        .collect();
+    let slopes: Vec<Slope> = (1..=desc.dof().min(cal.robot.joints.len()))
+        .filter(|&k| desc.joints[k - 1].kind == JointKind::Revolute)
+        .filter_map(|k| {
+            let transmission = &cal.robot.joints[k - 1].transmission;
+            let (sin, cos) = match transmission {
+                Transmission::Harmonic { sin, cos } => (sin.len(), cos.len()),
+                _ => return None,
+            };
+            let names = (1..=sin)
+                .map(|n| format!("sin{n}"))
+                .chain((1..=cos).map(|n| format!("cos{n}")));
+            let sigmas: Vec<f64> = names.map(|n| sigma(k, n).unwrap_or(0.0)).collect();
+            let (lo, hi) = internal.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                (lo.min(c[k - 1]), hi.max(c[k - 1]))
+            });
+            let fitted = Fitted {
+                joint: k,
+                experiment: "free poses",
+                transmission,
+                sigmas: &sigmas,
+            };
+            slope(desc, &ideal, &fitted, (lo, hi))
+        })
+        .collect();
+    said(&slopes)
+}
+
+/// A fitted transmission and its coefficients' sigmas, of one joint's experiments.
+struct Fitted<'a> {
+    joint: usize,
+    experiment: &'a str,
+    transmission: &'a Transmission,
+    sigmas: &'a [f64],
+}
+
+/// The findings on `slopes`: the common scale of the sliding joints, and each joint beyond its
+/// bound that the common scale does not explain.
+fn said(slopes: &[Slope]) -> Vec<Implausible> {
+    let common = common_scale(slopes);
     let mut found: Vec<Implausible> = common.iter().cloned().collect();
-    for s in &slopes {
+    for s in slopes {
         let bound = if s.sliding {
             PLAUSIBLE_LEAD_DEVIATION
         } else {
@@ -190,26 +266,35 @@ pub(super) fn command_scaled_words(
     (joint, experiment, sliding): (usize, &str, bool),
     (travel, sigma, bound): (f64, f64, f64),
 ) -> std::fmt::Result {
-    let (moves, what, drive) = if sliding {
+    let (moves, what, drive, coordinates) = if sliding {
         (
             "travels",
             "its screw's lead, a rack's or a scale's pitch",
-            format!("the description's lead, or the coordinates of {experiment} alone scaled by {travel:.4}"),
+            "lead",
+            format!(", or the coordinates of {experiment} alone are scaled by {travel:.4}"),
         )
     } else {
         (
             "turns",
             "the eccentricity of a gear or encoder disc over its radius",
-            "the description's gear ratio".to_owned(),
+            "gear ratio",
+            String::new(),
         )
+    };
+    // Gradians read as degrees turn a joint 360/400 as far as commanded, give or take what a
+    // drive departs by.
+    let gradians = if !sliding && (travel * 400.0 / 360.0 - 1.0).abs() <= PLAUSIBLE_TURN_DEVIATION {
+        " (gradians: 400/360)"
+    } else {
+        ""
     };
     write!(
         f,
         "joint {joint} ({experiment}) {moves} {travel:.4} (+-{}) times as far per command as the description's \
-         transmission says, over its sweep, where a drive departs from its description by at most {:.0} % ({what}; \
+         transmission says, over the commands it was measured at, where a drive departs from its description by at most {:.0} % ({what}; \
          a gear ratio is a ratio of tooth counts and an encoder counts exactly): the column `cmd_{joint}` looks scaled \
-         by {:.4} on export (the readings in another unit, or through another ratio), or {drive} for joint {joint} is \
-         wrong; check cmd_{joint} against the controller's reading at two poses. The fit took the factor into joint \
+         by {:.4}{gradians} on export (the readings in another unit, or through another ratio), or the description's {drive} for \
+         joint {joint} is wrong{coordinates}; check cmd_{joint} against the controller's reading at two poses. The fit took the factor into joint \
          {joint}'s transmission, so calibration.json is wrong for it, most outside the sweep",
         two_digits(sigma),
         bound * 100.0,
