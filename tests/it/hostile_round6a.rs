@@ -1,8 +1,9 @@
 //! The sixth hostile run's scale slips that a calibration of axis experiments used to absorb
 //! silently (as [`super::hostile`]): one command column scaled by 5 % in every row (a SCARA's
 //! elbow and wrist, a table's sliding stage), the coordinates scaled by 0.5 % (a table's
-//! sliding joints all travel too far), and the IRB/L6's cmd_2 scaled, which used to be named
-//! as its follower cmd_3; clean files of the same robots get none of these warnings.
+//! sliding joints all travel too far), the IRB/L6's cmd_2 scaled, which used to be named as its
+//! follower cmd_3, and in files of free poses a SCARA's cmd_4 scaled and the IRB/L6's cmd_3 in
+//! gradians (a sag took it); clean files of the same robots get none of these warnings.
 
 use crate::common::hostile::{Case, case, clear_outputs, run_case};
 use crate::common::{altered_csv, axiscal, scale_fields};
@@ -40,6 +41,17 @@ fn write_inputs(dir: &Path) {
     every_row(dir, "table.csv", "table-cmd4.csv", |f| scale_fields(f, cmd(4), 0.95));
     every_row(dir, "table.csv", "table-xyz.csv", |f| scale_fields(f, 4..7, 1.005));
     every_row(dir, "irb.csv", "irb-cmd2.csv", |f| scale_fields(f, cmd(2), 1.05));
+    // Free poses: the validation rows alone.
+    crate::common::simulate_analytic(dir, 40, 5, "irb40.csv");
+    let poses = |f: &[String]| f[0] == "validation";
+    altered_csv(&dir.join("irb40.csv"), "irb-fp.csv", poses, |_| {});
+    altered_csv(&dir.join("irb40.csv"), "irb-fp-grad3.csv", poses, |f| {
+        scale_fields(f, cmd(3), 400.0 / 360.0)
+    });
+    altered_csv(&dir.join("scara.csv"), "scara-fp.csv", poses, |_| {});
+    altered_csv(&dir.join("scara.csv"), "scara-fp-cmd4.csv", poses, |f| {
+        scale_fields(f, cmd(4), 1.05)
+    });
 }
 
 /// The robot description `robot` as an argument.
@@ -92,6 +104,18 @@ fn cases() -> Vec<Case> {
             2,
             &["column cmd_2", "cmd_2 looks scaled by 1.0500", "or cmd_3 by 0.9524"],
         ),
+        case(
+            "IRB/L6 free poses, cmd_3 in gradians (run 5 S1: the sag took it, 34 mm wrong)",
+            "calibrate irb-fp-grad3.csv --out out",
+            0,
+            &["`cmd_3` holds gradians rather than degrees"],
+        ),
+        case(
+            "SCARA free poses, cmd_4 x 1.05 (S1-fp: silent)",
+            &format!("calibrate scara-fp-cmd4.csv {scara} --out out"),
+            0,
+            &["joint 4 (free poses) turns 0.9", "`cmd_4` looks scaled by 1.0"],
+        ),
     ]
 }
 
@@ -116,6 +140,8 @@ fn clean_files_get_no_scale_warning() {
         ("scara.csv", robot("scara-rrpr")),
         ("table.csv", robot("table-prpp")),
         ("irb.csv", String::new()),
+        ("irb-fp.csv", String::new()),
+        ("scara-fp.csv", robot("scara-rrpr")),
     ] {
         let e = run_case(
             dir.path(),
