@@ -158,11 +158,10 @@ fn clean_files_get_no_scale_warning() {
 mod real_sscanss2 {
     use super::*;
 
-    /// The real table's import, and a copy with `change` applied to every row, in `dir`.
-    fn real_table(dir: &Path, name: &str, change: impl Fn(&mut Vec<String>)) -> String {
+    /// The real table's import as `data.csv` in `dir`, and the description as an argument.
+    fn real_table(dir: &Path) -> String {
         let source = crate::common::real_data("sscanss2-cpa").join("table.txt");
-        let (data, _) = crate::real_sscanss2::import_path(&source, "sscanss2-table", dir);
-        altered_csv(&data, name, |_| true, change);
+        crate::real_sscanss2::import_path(&source, "sscanss2-table", dir);
         format!(
             "--robot {}/scenarios/robots/real/sscanss2-table.toml",
             env!("CARGO_MANIFEST_DIR")
@@ -173,8 +172,9 @@ mod real_sscanss2 {
     #[ignore = "needs ../shared/data/real/sscanss2-cpa (run by `make test-real`)"]
     fn the_real_tables_scaled_copies_are_named_and_the_table_is_clean() {
         let dir = tempfile::tempdir().unwrap();
-        let robot = real_table(dir.path(), "xyz.csv", |f| scale_fields(f, 4..7, 1.005));
-        real_table(dir.path(), "cmd1.csv", |f| scale_fields(f, cmd(1), 1.05));
+        let robot = real_table(dir.path());
+        every_row(dir.path(), "data.csv", "xyz.csv", |f| scale_fields(f, 4..7, 1.005));
+        every_row(dir.path(), "data.csv", "cmd1.csv", |f| scale_fields(f, cmd(1), 1.05));
         for c in [
             case(
                 "coordinates x 1.005",

@@ -141,7 +141,7 @@ pub enum Implausible {
         limit: f64,
     },
     /// A joint travels a factor per command no drive of its description gives
-    /// ([`scale`]): its command column scaled, or the description's ratio wrong.
+    /// (see the Scale check of the module doc): its command column scaled, or the description's ratio wrong.
     CommandScaled {
         /// The joint.
         joint: usize,
@@ -157,7 +157,7 @@ pub enum Implausible {
         bound: f64,
     },
     /// Every sliding joint travels the same factor per command off its description: the
-    /// coordinates are scaled ([`scale`]).
+    /// coordinates are scaled (the Scale check of the module doc).
     CoordinatesScaled {
         /// The factor the coordinates look scaled by.
         factor: f64,
