@@ -34,7 +34,7 @@
 //!   calibration's 3-D RMS over root 3) is chi-square; beyond its [`TOOL_FIT_FALSE_ALARM`]
 //!   upper quantile a tool row's point is off (a target id or a coordinate mistyped, the target
 //!   moved on the tool), or the description's `[tool] targets_mm` are not this tool's. Not said
-//!   beside a size finding, which explains it.
+//!   beside a size finding or scaled coordinates, which explain it.
 //! - **Scale.** A joint's fitted transmission against what a drive gives, and the sliding
 //!   joints' common scale ([`scale`]): a command column or the coordinates scaled by a few per
 //!   cent, which the fit absorbs into a transmission or the geometry. Not said beside a size or
@@ -288,8 +288,12 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
             .into_iter()
             .filter(|m| !matches!(m, Implausible::Misfit { joint, .. } if scaled.contains(joint))),
     );
-    // A robot of another size misses the described tool targets too: the size explains it.
-    if !found.iter().any(|s| matches!(s, Implausible::Size { .. })) {
+    // A robot of another size, or scaled coordinates, miss the described tool targets too: the
+    // size explains it.
+    if !found
+        .iter()
+        .any(|s| matches!(s, Implausible::Size { .. } | Implausible::CoordinatesScaled { .. }))
+    {
         found.extend(tool_misfit(cal, desc));
     }
     found
