@@ -4,7 +4,7 @@
 use anyhow::Result;
 use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
-use axiscal::calibration::procedure::Calibration;
+use axiscal::calibration::procedure::{Calibration, free_pose_scale_slips};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::robot::RobotDescription;
@@ -80,11 +80,12 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
         }
         Err(e) => anyhow::bail!("calibrating {} from its free poses: {e}", args.data.display()),
     };
-    warn_slips(args, (set, desc), &options, &cal.summary);
     if args.all_rows && set.experiments().iter().any(|e| e.moved_joint > 0) {
         cal.summary.axis_rows_as_poses = Some("`--free-poses` asked for it".into());
     }
-    Ok(cal.into_calibration(desc))
+    let cal = cal.into_calibration(desc);
+    warn_slips(args, (set, desc), &options, &cal);
+    Ok(cal)
 }
 
 /// The console summary of a free-pose calibration.
@@ -197,13 +198,17 @@ fn slip_words(s: &ExplainingSlip) -> String {
 /// The warnings of a free-pose calibration the fit absorbed (module docs of
 /// [`axiscal::calibration::free_pose::slip`]): a column slip; else tool target ids in another
 /// order, by their distances ([`swapped_target_ids`]) or, for a symmetric set, by the fitted
-/// tool frame's turn ([`mirrored_targets`]).
+/// tool frame's turn ([`mirrored_targets`]); and, without a column slip, a joint's transmission
+/// beyond what a drive gives ([`free_pose_scale_slips`]).
 fn warn_slips(
     args: &FreeArgs<'_>,
     (set, desc): (&MeasurementSet, &RobotDescription),
     options: &FreePoseOptions,
-    summary: &FreePoseSummary,
+    cal: &Calibration,
 ) {
+    let Some(summary) = cal.free_poses.as_ref() else {
+        return;
+    };
     let data = args.data.display();
     if let Some(few) = few_configurations(set, summary.parameters.len()) {
         // Repeated configurations determine no slip either: the search would name chance ones.
@@ -216,6 +221,9 @@ fn warn_slips(
             slip_words(&s)
         );
         return;
+    }
+    for found in free_pose_scale_slips(cal, desc, set.rows()) {
+        eprintln!("warning: {data}: {found}");
     }
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);
     for found in &swapped {

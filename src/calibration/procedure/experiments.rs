@@ -239,6 +239,9 @@ fn check_sweep_commands(e: &AxisExperiment, desc: &RobotDescription, tolerance: 
         match follower {
             Some((d_f, _, _)) if d_f < d_const && d_f <= tolerance => follows = true,
             Some((d_f, i_f, _)) if d_const > tolerance && d_f > tolerance => {
+                if let Some(slip) = scaled_follower(e, desc, (&next, &swept), tolerance) {
+                    return Err(slip);
+                }
                 return Err(too_far(
                     k + 1,
                     i_f,
@@ -257,6 +260,47 @@ fn check_sweep_commands(e: &AxisExperiment, desc: &RobotDescription, tolerance: 
         }
     }
     Ok(follows)
+}
+
+/// A follower column that keeps to the hold-still formula's line, but at another slope: the
+/// two columns' ratio is off by one factor, the swept column scaled on export (a gear ratio or
+/// unit applied to it alone), or the follower's. Named on the swept column, whose sweep the
+/// fit would otherwise take the factor into. `None` when the follower's commands leave every
+/// line through step 0 by more than `tolerance`.
+fn scaled_follower(
+    e: &AxisExperiment,
+    desc: &RobotDescription,
+    (next, swept): (&[f64], &[f64]),
+    tolerance: f64,
+) -> Option<ProcedureError> {
+    let slope = desc.nominal_coupling_from(e.joint)?;
+    let du: Vec<f64> = swept.iter().map(|u| u - swept[0]).collect();
+    let dc: Vec<f64> = next.iter().map(|c| c - next[0]).collect();
+    let uu: f64 = du.iter().map(|d| d * d).sum();
+    let ratio = du.iter().zip(&dc).map(|(u, c)| u * c).sum::<f64>() / uu / slope;
+    let (worst, _, _) = spread(
+        &dc.iter()
+            .zip(&du)
+            .map(|(c, u)| c - ratio * slope * u)
+            .collect::<Vec<_>>(),
+    );
+    if !(ratio.is_finite() && ratio > 0.0 && worst <= tolerance) {
+        return None;
+    }
+    let (k, f) = (e.joint, e.joint + 1);
+    Some(ProcedureError::InconsistentCommands {
+        experiment: e.name.clone(),
+        step: e.steps[0],
+        joint: k,
+        reason: format!(
+            "joint {f} is held while joint {k} is swept, and its command follows cmd_{k} on a straight line as the \
+             hold-still formula cmd_{f}(0) + slope (cmd_{k} - cmd_{k}(0)) says, but at {ratio:.4} times the description's \
+             slope {slope} (every step within {worst:.4} {} of that line): cmd_{k} looks scaled by {:.4} on export (a gear ratio or unit \
+             applied to it alone), or cmd_{f} by {ratio:.4}; check cmd_{k} against the controller's reading at two poses",
+            unit(desc, f - 1),
+            1.0 / ratio,
+        ),
+    })
 }
 
 /// Why the swept joint's command of `e` does not move, in words: a single step (one row's id

@@ -50,7 +50,10 @@ pub use result::{
     AxisReport, AxisSpan, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport,
     PointResidual, PositionSigma, RowSigma, SecondTargetData, SweepReport, ToolPose, ToolReport, harmonics,
 };
-pub use sanity::{Implausible, MISFIT_RATIO, PLAUSIBLE_AXIS_TILT_RAD, SIZE_TOLERANCE, implausible};
+pub use sanity::{
+    Implausible, LEAD_SPREAD, MISFIT_RATIO, PLAUSIBLE_AXIS_TILT_RAD, PLAUSIBLE_LEAD_DEVIATION,
+    PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, SIZE_TOLERANCE, free_pose_scale_slips, implausible,
+};
 pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, WorstSecondTarget, screen_sweeps};
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{

@@ -9,7 +9,10 @@
 //!   commands (its couplings and the held joints' compensation turn the target too): a ratio
 //!   near 0.5 or 2, beyond that deviation and the noise ([`SIGMAS`] times its sigma), is that
 //!   experiment's `cmd_k` doubled or halved. Gradians (a ratio of 0.9) are not told from a
-//!   transmission's harmonics over a sweep of tens of degrees.
+//!   transmission's harmonics over a sweep of tens of degrees here, on the raw points; a factor
+//!   within the band (a whole column scaled by a few per cent, gradians) is judged after the fit,
+//!   on the fitted transmission's slope against what a gear train gives (`calibrate`'s checks of
+//!   the result, `docs/method.md#checks-of-the-result`).
 //! - **Offset.** The radius each experiment's target turns on depends on the joints after the
 //!   moved one; an offset `d` of one command column changes every such radius. When the
 //!   measured radii miss the description's at the commands as read (beyond

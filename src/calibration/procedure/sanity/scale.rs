@@ -1,0 +1,334 @@
+//! A command column or the coordinates scaled within the range a fit absorbs silently: the
+//! calibrated transmissions checked against what a drive can give.
+//!
+//! - **A joint's transmission.** A gear ratio is a ratio of tooth counts and an encoder counts
+//!   exactly, so over a whole turn a joint turns exactly as its description's transmission says;
+//!   within a turn it departs periodically, by the eccentricity of a gear or an encoder disc over
+//!   its radius (the first harmonic of eq. 8). Its slope departs from the described one by at
+//!   most [`PLAUSIBLE_TURN_DEVIATION`]. A sliding joint's travel per command is its screw's lead
+//!   or its rack's or scale's pitch, within [`PLAUSIBLE_LEAD_DEVIATION`]. A fitted mean slope
+//!   over the sweep beyond the bound by [`SCALE_SIGMAS`] of its sigma is no drive's: the
+//!   column `cmd_k` was scaled on export (another unit, another gear ratio applied by the
+//!   controller's export), or the description's ratio is wrong. The fit takes such a factor
+//!   into the joint's transmission harmonic, which extrapolates it wrongly outside the sweep.
+//!   A joint whose description declares a gear form (`transmission_fit = { form = "gear" }`:
+//!   a drive periodic in a gear's angle, as the paper's joint 5, whose bevel gear turns it 4.1 %
+//!   off) is left out: its description expects a large periodic error.
+//! - **The coordinates' scale.** Scaled coordinates (an instrument's scale setting, a unit
+//!   converted with a rounded factor) make every sliding joint travel the same factor too far
+//!   or too short per command. Independent stages' leads differ by [`LEAD_SPREAD`] each; two or
+//!   more sliding joints whose slopes agree within that and whose common factor departs from 1
+//!   by [`SCALE_SIGMAS`] of the common factor's sigma (the stages' spread and the fits' noise)
+//!   are one scale of the coordinates, said once, instead of each joint.
+
+use super::super::{AxisReport, Calibration};
+use super::Implausible;
+use crate::kinematics::JointKind;
+use crate::measurement::Measurement;
+use crate::robot::{RobotDescription, RobotModel, Transmission, TransmissionFitForm};
+
+/// The most a revolute joint's mean slope over its sweep departs from its description's (2 %):
+/// a joint-period harmonic of a gear train or an encoder is the eccentricity of a gear or an
+/// encoder disc over its radius, a few hundredths of a millimetre on tens of millimetres
+/// (0.1 %); the largest on a robot the project ships data of is the paper's joint 6, 1.7 %
+/// (`asea-irb6l-paper-truth.toml`); the real sets' joints are within 0.03 %
+/// (`docs/method.md#checks-of-the-result`).
+pub const PLAUSIBLE_TURN_DEVIATION: f64 = 0.02;
+
+/// The most a sliding joint's travel per command departs from its description's (1 %): a
+/// ball screw's lead is within 0.07 % in its coarsest class (C10: 210 um over 300 mm), a
+/// rack's pitch or a tensioned belt's within a few tenths of a per cent.
+pub const PLAUSIBLE_LEAD_DEVIATION: f64 = 0.01;
+
+/// The spread of independent sliding stages' leads (0.1 %, a C10 ball screw's 0.07 % rounded
+/// up): the common-scale test's per-stage sigma besides the fit's.
+pub const LEAD_SPREAD: f64 = 0.001;
+
+/// A departure this many of its sigmas beyond its bound is said: a normal deviate beyond 5
+/// has a chance of 3e-7.
+pub const SCALE_SIGMAS: f64 = 5.0;
+
+/// Sliding joints whose slopes disagree beyond this chi-square quantile are not one scale.
+const COMMON_SCALE_QUANTILE: f64 = 0.999;
+
+/// One swept joint's fitted mean slope over its sweep against its description's.
+#[derive(Clone, Debug, PartialEq)]
+struct Slope {
+    joint: usize,
+    experiment: String,
+    sliding: bool,
+    /// Fitted over described mean slope (commanded per actual) \[1\].
+    ratio: f64,
+    /// Its 1-sigma.
+    sigma: f64,
+}
+
+/// The transmission with its fitted coefficients (`[sin.., cos..]` or `[c_1..]`) replaced.
+fn with_coefficients(t: &Transmission, coefficients: &[f64]) -> Transmission {
+    match t {
+        Transmission::Harmonic { sin, .. } => Transmission::Harmonic {
+            sin: coefficients[..sin.len()].to_vec(),
+            cos: coefficients[sin.len()..].to_vec(),
+        },
+        Transmission::Gear { ratio, sin, .. } => Transmission::Gear {
+            ratio: *ratio,
+            sin: coefficients[..sin.len()].to_vec(),
+            cos: coefficients[sin.len()..].to_vec(),
+        },
+        Transmission::Polynomial { c0, .. } => Transmission::Polynomial {
+            c0: *c0,
+            c: coefficients.to_vec(),
+        },
+    }
+}
+
+/// `(f(b) - f(a)) / (b - a)`.
+fn mean_slope(t: &Transmission, (a, b): (f64, f64)) -> f64 {
+    (t.value_and_slope(b).0 - t.value_and_slope(a).0) / (b - a)
+}
+
+/// The sweep of axis `a` in internal units (rad or m): its span centred on the reference
+/// command (the plan's sweeps are).
+fn sweep(cal: &Calibration, desc: &RobotDescription, a: &AxisReport) -> Option<(f64, f64)> {
+    let centre = *cal.reference_cmd.get(a.joint - 1)?;
+    let half = a.span_deg / 2.0;
+    let internal = crate::robot::commands_to_internal;
+    let at = |d: f64| {
+        let mut cmd = cal.reference_cmd.clone();
+        cmd[a.joint - 1] = centre + d;
+        internal(desc, &cmd)[a.joint - 1]
+    };
+    let (lo, hi) = (at(-half), at(half));
+    (hi > lo && lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+}
+
+/// The fitted over described mean slope of axis `a` over its sweep, and its sigma.
+fn slope_of(cal: &Calibration, desc: &RobotDescription, ideal: &RobotModel, a: &AxisReport) -> Option<Slope> {
+    let fitted = Fitted {
+        joint: a.joint,
+        experiment: &a.experiment,
+        transmission: &a.transmission,
+        sigmas: &a.coefficient_sigma,
+    };
+    slope(desc, ideal, &fitted, sweep(cal, desc, a)?)
+}
+
+/// The fitted over described mean slope of `fitted` over `range` (internal units) and its
+/// sigma (the coefficients' sigmas, their correlation left out); `None` for a joint whose
+/// description declares a gear form (module doc).
+fn slope(desc: &RobotDescription, ideal: &RobotModel, fitted: &Fitted, range: (f64, f64)) -> Option<Slope> {
+    let joint = fitted.joint;
+    let entry = desc.joints.get(joint.checked_sub(1)?)?;
+    if matches!(entry.transmission_fit_form(), TransmissionFitForm::Gear { .. }) || range.1 <= range.0 {
+        return None;
+    }
+    let nominal = mean_slope(&ideal.joints.get(joint - 1)?.transmission, range);
+    let t = fitted.transmission;
+    let mean = mean_slope(t, range);
+    let coefficients = t.coefficients();
+    let step = 1e-6;
+    let variance: f64 = (0..coefficients.len().min(fitted.sigmas.len()))
+        .map(|i| {
+            let mut moved = coefficients.clone();
+            moved[i] += step;
+            let gradient = (mean_slope(&with_coefficients(t, &moved), range) - mean) / step;
+            (gradient * fitted.sigmas[i]).powi(2)
+        })
+        .sum();
+    let ratio = mean / nominal;
+    (ratio.is_finite() && ratio > 0.0 && variance.is_finite()).then(|| Slope {
+        joint,
+        experiment: fitted.experiment.to_owned(),
+        sliding: entry.kind == JointKind::Prismatic,
+        ratio,
+        sigma: variance.sqrt() / nominal.abs(),
+    })
+}
+
+/// Whether `s` departs from 1 beyond `bound` by [`SCALE_SIGMAS`] of its sigma.
+fn beyond(s: &Slope, bound: f64) -> bool {
+    (s.ratio - 1.0).abs() - bound > SCALE_SIGMAS * s.sigma
+}
+
+/// The findings of the module doc on `cal`, calibrated with the description `desc`.
+pub(super) fn scale_slips(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausible> {
+    let ideal = RobotModel::ideal(desc);
+    let slopes: Vec<Slope> = cal.axes.iter().filter_map(|a| slope_of(cal, desc, &ideal, a)).collect();
+    said(&slopes)
+}
+
+/// The transmission check of the module doc on a free-pose calibration `cal` (its rotary
+/// joints' harmonics, each coefficient's sigma from the fit's summary), over the range of each
+/// joint's commands in `rows`.
+pub fn free_pose_scale_slips(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Vec<Implausible> {
+    let Some(summary) = cal.free_poses.as_ref() else {
+        return vec![];
+    };
+    let ideal = RobotModel::ideal(desc);
+    let sigma = |joint: usize, name: String| {
+        let full = format!("joint{joint}.transmission.{name}");
+        summary
+            .parameters
+            .iter()
+            .find(|p| p.name == full)
+            .map(|p| p.sigma / p.unit.per_si())
+    };
+    let internal: Vec<Vec<f64>> = rows
+        .iter()
+        .filter(|m| m.cmd.len() == desc.dof())
+        .map(|m| crate::robot::commands_to_internal(desc, &m.cmd))
+        .collect();
+    let slopes: Vec<Slope> = (1..=desc.dof().min(cal.robot.joints.len()))
+        .filter(|&k| desc.joints[k - 1].kind == JointKind::Revolute)
+        .filter_map(|k| {
+            let transmission = &cal.robot.joints[k - 1].transmission;
+            let (sin, cos) = match transmission {
+                Transmission::Harmonic { sin, cos } => (sin.len(), cos.len()),
+                _ => return None,
+            };
+            let names = (1..=sin)
+                .map(|n| format!("sin{n}"))
+                .chain((1..=cos).map(|n| format!("cos{n}")));
+            let sigmas: Vec<f64> = names.map(|n| sigma(k, n).unwrap_or(0.0)).collect();
+            let (lo, hi) = internal.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                (lo.min(c[k - 1]), hi.max(c[k - 1]))
+            });
+            let fitted = Fitted {
+                joint: k,
+                experiment: "free poses",
+                transmission,
+                sigmas: &sigmas,
+            };
+            slope(desc, &ideal, &fitted, (lo, hi))
+        })
+        .collect();
+    said(&slopes)
+}
+
+/// A fitted transmission and its coefficients' sigmas, of one joint's experiments.
+struct Fitted<'a> {
+    joint: usize,
+    experiment: &'a str,
+    transmission: &'a Transmission,
+    sigmas: &'a [f64],
+}
+
+/// The findings on `slopes`: the common scale of the sliding joints, and each joint beyond its
+/// bound that the common scale does not explain.
+fn said(slopes: &[Slope]) -> Vec<Implausible> {
+    let common = common_scale(slopes);
+    let mut found: Vec<Implausible> = common.iter().cloned().collect();
+    for s in slopes {
+        let bound = if s.sliding {
+            PLAUSIBLE_LEAD_DEVIATION
+        } else {
+            PLAUSIBLE_TURN_DEVIATION
+        };
+        // A common scale explains every sliding joint's departure.
+        if beyond(s, bound) && !(s.sliding && common.is_some()) {
+            found.push(Implausible::CommandScaled {
+                joint: s.joint,
+                experiment: s.experiment.clone(),
+                sliding: s.sliding,
+                travel: 1.0 / s.ratio,
+                sigma: s.sigma / s.ratio.powi(2),
+                bound,
+            });
+        }
+    }
+    found
+}
+
+/// Two or more sliding joints' slopes that agree within [`LEAD_SPREAD`] and their fits' noise,
+/// with a common factor beyond [`SCALE_SIGMAS`] of its sigma (module doc).
+fn common_scale(slopes: &[Slope]) -> Option<Implausible> {
+    let sliding: Vec<&Slope> = slopes.iter().filter(|s| s.sliding).collect();
+    if sliding.len() < 2 {
+        return None;
+    }
+    let weight = |s: &Slope| 1.0 / (s.sigma.powi(2) + LEAD_SPREAD.powi(2));
+    let total: f64 = sliding.iter().map(|s| weight(s)).sum();
+    let mean = sliding.iter().map(|s| weight(s) * s.ratio).sum::<f64>() / total;
+    let chi_square: f64 = sliding.iter().map(|s| weight(s) * (s.ratio - mean).powi(2)).sum();
+    let dof = (sliding.len() - 1) as f64;
+    let agree = chi_square <= crate::numerics::stats::chi_square_quantile(COMMON_SCALE_QUANTILE, dof);
+    let sigma = total.sqrt().recip();
+    (agree && (mean - 1.0).abs() > SCALE_SIGMAS * sigma).then(|| Implausible::CoordinatesScaled {
+        factor: 1.0 / mean,
+        sigma: sigma / mean.powi(2),
+        joints: sliding.iter().map(|s| s.joint).collect(),
+    })
+}
+
+/// The words of [`Implausible::CommandScaled`].
+pub(super) fn command_scaled_words(
+    f: &mut std::fmt::Formatter<'_>,
+    (joint, experiment, sliding): (usize, &str, bool),
+    (travel, sigma, bound): (f64, f64, f64),
+) -> std::fmt::Result {
+    let (moves, what, drive, coordinates) = if sliding {
+        (
+            "travels",
+            "its screw's lead, a rack's or a scale's pitch",
+            "lead",
+            format!(", or the coordinates of {experiment} alone are scaled by {travel:.4}"),
+        )
+    } else {
+        (
+            "turns",
+            "the eccentricity of a gear or encoder disc over its radius",
+            "gear ratio",
+            String::new(),
+        )
+    };
+    // Gradians read as degrees turn a joint 360/400 as far as commanded, give or take what a
+    // drive departs by.
+    let gradians = if !sliding && (travel * 400.0 / 360.0 - 1.0).abs() <= PLAUSIBLE_TURN_DEVIATION {
+        " (gradians: 400/360)"
+    } else {
+        ""
+    };
+    write!(
+        f,
+        "joint {joint} ({experiment}) {moves} {travel:.4} (+-{}) times as far per command as the description's \
+         transmission says, over the commands it was measured at, where a drive departs from its description by at most {:.0} % ({what}; \
+         a gear ratio is a ratio of tooth counts and an encoder counts exactly): the column `cmd_{joint}` looks scaled \
+         by {:.4}{gradians} on export (the readings in another unit, or through another ratio), or the description's {drive} for \
+         joint {joint} is wrong{coordinates}; check cmd_{joint} against the controller's reading at two poses. The fit took the factor into joint \
+         {joint}'s transmission, so calibration.json is wrong for it, most outside the sweep",
+        two_digits(sigma),
+        bound * 100.0,
+        1.0 / travel,
+    )
+}
+
+/// The words of [`Implausible::CoordinatesScaled`].
+pub(super) fn coordinates_scaled_words(
+    f: &mut std::fmt::Formatter<'_>,
+    factor: f64,
+    sigma: f64,
+    joints: &[usize],
+) -> std::fmt::Result {
+    let names: Vec<String> = joints.iter().map(|j| j.to_string()).collect();
+    write!(
+        f,
+        "the sliding joints {} all travel {factor:.4} (+-{}) times as far per command as described, alike \
+         within what independent stages' leads differ by ({:.1} %): the coordinates look scaled by {factor:.4} (the \
+         instrument's scale or units setting, a unit converted with a rounded factor, a scale applied on export); \
+         check the instrument's scale and how x_mm, y_mm, z_mm were exported. The fit took the factor into every \
+         length and lead, so calibration.json is wrong for the robot",
+        names.join(", "),
+        two_digits(sigma),
+        LEAD_SPREAD * 100.0,
+    )
+}
+
+/// A sigma to two significant digits, at least four decimals (`0.0012`, `0.000052`).
+fn two_digits(sigma: f64) -> String {
+    let decimals = if sigma > 0.0 && sigma.is_finite() {
+        (1 - sigma.log10().floor() as i32).max(4) as usize
+    } else {
+        4
+    };
+    format!("{sigma:.decimals$}")
+}
