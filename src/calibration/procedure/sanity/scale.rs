@@ -91,7 +91,7 @@ fn mean_slope(t: &Transmission, (a, b): (f64, f64)) -> f64 {
 /// command (the plan's sweeps are).
 fn sweep(cal: &Calibration, desc: &RobotDescription, a: &AxisReport) -> Option<(f64, f64)> {
     let centre = *cal.reference_cmd.get(a.joint - 1)?;
-    let half = a.span_deg / 2.0;
+    let half = a.span.value() / 2.0;
     let internal = crate::robot::commands_to_internal;
     let at = |d: f64| {
         let mut cmd = cal.reference_cmd.clone();
