@@ -387,8 +387,8 @@ fn rigid_move(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescriptio
 
 /// The slips of `set`'s axis experiments found against its own free poses (`diagnose`, which
 /// has no other calibration to hold the sweeps against): when `cal`, the calibration of the
-/// file's axis experiments, misses its free poses grossly (by more than [`GROSS_MISS_FACTOR`]
-/// times their test's acceptance at `false_alarm`), the robot is calibrated again from the free
+/// file's axis experiments, misses its free poses grossly (by more than 3 times their test's
+/// acceptance at `false_alarm`, `GROSS_MISS_FACTOR`), the robot is calibrated again from the free
 /// poses alone ([`calibrate_free_poses`], its outlier poses left out) and every sweep is tested
 /// against that model as `validate` tests a file's sweeps against a calibration
 /// ([`explained_sweep_misses`]). A slip in one sweep (a sign, gradians or another scale, two

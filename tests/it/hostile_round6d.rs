@@ -8,7 +8,9 @@
 //! `model_digest` is said unverifiable.
 
 use crate::common::altered_csv;
-use crate::common::hostile::{Case, calibrated_campaign, case, clear_outputs, run_case};
+use crate::common::hostile::{
+    Case, calibrated_campaign, case, clear_outputs, edited_calibration, run_case, stderr_of_case,
+};
 use std::path::Path;
 
 /// `campaign.csv` in `dir` with `factor` applied to command column `k` (1-based) of the rows of
@@ -106,16 +108,7 @@ fn diagnose_names_a_sweep_slip_as_validate_does() {
 /// slip is also warned of by the sweeps' calibration): the exit code, the names in stderr, the
 /// refusal on its last line and nothing written.
 fn refused_after_warnings(dir: &Path, c: &Case) {
-    let a = crate::common::axiscal()
-        .current_dir(dir)
-        .args(&c.args)
-        .timeout(std::time::Duration::from_secs(120))
-        .assert()
-        .code(c.code);
-    let e = crate::common::stderr(&a);
-    for name in &c.names {
-        assert!(e.contains(name.as_str()), "{}: no {name:?} in {e}", c.what);
-    }
+    let e = stderr_of_case(dir, c);
     if c.code == 2 {
         let last = e.lines().last().unwrap_or_default();
         assert!(last.starts_with("error: "), "{}: {e}", c.what);
@@ -126,14 +119,6 @@ fn refused_after_warnings(dir: &Path, c: &Case) {
         );
         assert!(!dir.join("out").exists(), "{}: nothing written", c.what);
     }
-}
-
-/// `cal/calibration.json` of `dir` with `edit` applied, as `name`.
-fn edited_calibration(dir: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Value)) {
-    let text = std::fs::read_to_string(dir.join("cal/calibration.json")).unwrap();
-    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
-    edit(&mut value);
-    std::fs::write(dir.join(name), serde_json::to_string(&value).unwrap()).unwrap();
 }
 
 #[test]

@@ -192,7 +192,9 @@ impl Calibration {
         for (k, j) in self.robot.joints.iter().enumerate().take(desc.dof()) {
             let [lo, hi] = desc.limits_internal(k);
             let within = (0..=LIMIT_SAMPLES).map(|i| lo + (hi - lo) * i as f64 / LIMIT_SAMPLES as f64);
-            let turns_back = within.clone().find(|&t| !(j.transmission.slope(t) > 0.0));
+            let turns_back = within
+                .clone()
+                .find(|&t| j.transmission.slope(t).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
             let uninvertible = within
                 .into_iter()
                 .find(|&t| j.transmission.actual_from_command(t).is_none());
@@ -318,18 +320,8 @@ fn in_robot(e: ModelError) -> InvalidCalibration {
 /// file with another count was edited, and its covariance no longer names its parameters.
 fn check_fitted_harmonics(robot: &RobotModel) -> Result<(), InvalidCalibration> {
     for (k, j) in robot.joints.iter().enumerate() {
-        let transmission = match &j.transmission {
-            Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => Some((sin, cos)),
-            Transmission::Polynomial { .. } => None,
-        };
-        let coupling = match &j.coupling_in {
-            Some(CouplingFunction::Gear { sin, cos, .. }) => Some((sin, cos)),
-            _ => None,
-        };
-        for (key, pair) in [("transmission", transmission), ("coupling_in", coupling)] {
-            if let Some((sin, cos)) = pair
-                && sin.len() != cos.len()
-            {
+        for (key, sin, cos) in harmonic_series(j) {
+            if sin.len() != cos.len() {
                 return Err(invalid(
                     format!("robot.joints[{k}].{key}"),
                     format!(
@@ -344,6 +336,26 @@ fn check_fitted_harmonics(robot: &RobotModel) -> Result<(), InvalidCalibration> 
     Ok(())
 }
 
+/// The harmonic series of joint `j` (its transmission's, a harmonic or a gear; its coupling's,
+/// a gear), each with its key in the file and its `(sin, cos)` coefficients.
+fn harmonic_series(j: &crate::robot::JointModel) -> Vec<Series<'_>> {
+    let transmission = match &j.transmission {
+        Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => Some((sin, cos)),
+        Transmission::Polynomial { .. } => None,
+    };
+    let coupling = match &j.coupling_in {
+        Some(CouplingFunction::Gear { sin, cos, .. }) => Some((sin, cos)),
+        _ => None,
+    };
+    [("transmission", transmission), ("coupling_in", coupling)]
+        .into_iter()
+        .filter_map(|(key, pair)| pair.map(|(sin, cos)| (key, sin.as_slice(), cos.as_slice())))
+        .collect()
+}
+
+/// A harmonic series of a joint: its key in the file, its sine and its cosine coefficients.
+type Series<'a> = (&'static str, &'a [f64], &'a [f64]);
+
 /// Points at which [`Calibration::validate_for`] tests a transmission over a joint's limits: a
 /// sliding joint's polynomial (a scale and a few orders) turns back over a fraction of its
 /// travel, far wider than a thousandth.
@@ -355,18 +367,7 @@ const LIMIT_SAMPLES: usize = 1000;
 /// command would be mapped to a joint value tens of degrees off.
 fn check_harmonic_amplitudes(robot: &RobotModel) -> Result<(), InvalidCalibration> {
     for (k, j) in robot.joints.iter().enumerate() {
-        let transmission = match &j.transmission {
-            Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => Some((sin, cos)),
-            Transmission::Polynomial { .. } => None,
-        };
-        let coupling = match &j.coupling_in {
-            Some(CouplingFunction::Gear { sin, cos, .. }) => Some((sin, cos)),
-            _ => None,
-        };
-        for (key, (sin, cos)) in [("transmission", transmission), ("coupling_in", coupling)]
-            .into_iter()
-            .filter_map(|(key, pair)| Some((key, pair?)))
-        {
+        for (key, sin, cos) in harmonic_series(j) {
             let amplitude = |o: usize| {
                 sin.get(o)
                     .copied()
