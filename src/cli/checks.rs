@@ -478,7 +478,9 @@ pub fn read_calibration_warned(
             kind(desc.joints[k].kind)
         );
     }
-    cal.validate_for(desc).with_context(|| path.display().to_string())?;
+    if cal.model_digest.as_deref() != Some(cal.robot.digest().as_str()) {
+        cal.plausible_for(desc).with_context(|| path.display().to_string())?;
+    }
     Ok((cal, warnings))
 }
 

@@ -4,7 +4,8 @@
 //! against a calibration, instead of ranking physical effects on the miss; on another robot
 //! (the UR5e) too. A calibration file whose transmission was edited beyond what a joint's
 //! transmission can be (a harmonic of 0.9 rad, a sliding joint's scale turning it back), or
-//! whose sigmas were, is refused by every command that reads it; a file without
+//! whose sigmas were, is refused by every command that reads it when its `robot` cannot be
+//! traced to `calibrate` (no `model_digest`, or one that no longer matches); a file without
 //! `model_digest` is said unverifiable.
 
 use crate::common::altered_csv;
@@ -131,7 +132,14 @@ fn an_implausible_calibration_is_refused_whatever_its_age() {
         v["robot"]["joints"][1]["transmission"]["sin"] = serde_json::json!([0.9]);
         v.as_object_mut().unwrap().remove("model_digest");
     });
-    edited_calibration(dir, "sigma-neg.json", |v| v["row_sigma"][2]["beta_deg"] = (-0.5).into());
+    edited_calibration(dir, "sigma-neg.json", |v| {
+        v["row_sigma"][2]["beta_deg"] = (-0.5).into();
+        v.as_object_mut().unwrap().remove("model_digest");
+    });
+    // The same harmonic in a file whose `model_digest` no longer matches: edited, refused too.
+    edited_calibration(dir, "sin-big-digest.json", |v| {
+        v["robot"]["joints"][1]["transmission"]["sin"] = serde_json::json!([0.9]);
+    });
     edited_calibration(dir, "old.json", |v| {
         v.as_object_mut().unwrap().remove("model_digest");
     });
@@ -160,6 +168,15 @@ fn an_implausible_calibration_is_refused_whatever_its_age() {
             "compensate --calibration sin-big.json --poses poses.csv --out out.csv",
             2,
             &harmonic,
+        ),
+        case(
+            "S7 with a model_digest that no longer matches",
+            "joints --calibration sin-big-digest.json 10 -10 5 20 30 40",
+            2,
+            &[
+                "sin-big-digest.json: field `robot.joints[1].transmission`",
+                "amplitude of 0.9 rad",
+            ],
         ),
         case(
             "a negative sigma",

@@ -61,9 +61,7 @@ impl Calibration {
             ));
         }
         check_fitted_harmonics(&self.robot)?;
-        check_harmonic_amplitudes(&self.robot)?;
         self.check_joint_lists()?;
-        self.check_sigmas()?;
         self.check_noise()?;
         match &self.model_covariance {
             Some(c) => c.validate(&self.robot),
@@ -183,12 +181,24 @@ impl Calibration {
         }
     }
 
-    /// Checks the calibration against the description `desc` it is used with (the same joint
-    /// count, checked before): each joint's transmission turns one way (its slope above 0)
-    /// and gives every command within the joint's limits one joint value (fig. 3 inverts it).
-    /// A harmonic transmission is checked for every angle by [`Transmission::problem`]; a
-    /// sliding joint's polynomial can turn back within its travel.
-    pub fn validate_for(&self, desc: &crate::robot::RobotDescription) -> Result<(), InvalidCalibration> {
+    /// Checks that a calibration whose `robot` cannot be traced to `axiscal calibrate` (no
+    /// `model_digest`, or one `robot` no longer matches) is one a calibration could be, for the
+    /// description `desc` it is used with (the same joint count, checked before): each harmonic
+    /// of a transmission or a coupling at most [`MAX_HARMONIC_AMPLITUDE_RAD`], every propagated
+    /// 1-sigma finite and at least 0, and each joint's transmission turning one way (its slope
+    /// above 0) and giving every command within the joint's limits one joint value (fig. 3
+    /// inverts it; a harmonic transmission is checked for every angle by
+    /// [`Transmission::problem`], a sliding joint's polynomial can turn back within its travel).
+    /// A file `calibrate` wrote holds what it fitted, and `calibrate` warns of what it fits to a
+    /// slip; an edited one holds what the editor wrote.
+    pub fn plausible_for(&self, desc: &crate::robot::RobotDescription) -> Result<(), InvalidCalibration> {
+        check_harmonic_amplitudes(&self.robot)?;
+        self.check_sigmas()?;
+        self.transmissions_within_limits(desc)
+    }
+
+    /// The transmissions of [`Calibration::plausible_for`] over the joints' limits.
+    fn transmissions_within_limits(&self, desc: &crate::robot::RobotDescription) -> Result<(), InvalidCalibration> {
         for (k, j) in self.robot.joints.iter().enumerate().take(desc.dof()) {
             let [lo, hi] = desc.limits_internal(k);
             let within = (0..=LIMIT_SAMPLES).map(|i| lo + (hi - lo) * i as f64 / LIMIT_SAMPLES as f64);
@@ -356,7 +366,7 @@ fn harmonic_series(j: &crate::robot::JointModel) -> Vec<Series<'_>> {
 /// A harmonic series of a joint: its key in the file, its sine and its cosine coefficients.
 type Series<'a> = (&'static str, &'a [f64], &'a [f64]);
 
-/// Points at which [`Calibration::validate_for`] tests a transmission over a joint's limits: a
+/// Points at which [`Calibration::plausible_for`] tests a transmission over a joint's limits: a
 /// sliding joint's polynomial (a scale and a few orders) turns back over a fraction of its
 /// travel, far wider than a thousandth.
 const LIMIT_SAMPLES: usize = 1000;
