@@ -478,13 +478,23 @@ pub fn read_calibration_warned(
             kind(desc.joints[k].kind)
         );
     }
+    if cal.model_digest.as_deref() != Some(cal.robot.digest().as_str()) {
+        cal.plausible_for(desc).with_context(|| path.display().to_string())?;
+    }
     Ok((cal, warnings))
 }
 
 /// A warning when the calibration's `robot` is not the model `axiscal calibrate` wrote (its
 /// `model_digest` differs): every result made with it uses the edited values.
 fn edited_model(cal: &Calibration, path: &Path) -> Option<String> {
-    let recorded = cal.model_digest.as_deref()?;
+    let Some(recorded) = cal.model_digest.as_deref() else {
+        return Some(format!(
+            "{}: records no `model_digest` (written by an older axiscal, or removed): an edit of its `robot` cannot \
+             be told from the model `axiscal calibrate` wrote; only its values' ranges were checked; recalibrate \
+             to get a file that can be verified",
+            path.display()
+        ));
+    };
     let current = cal.robot.digest();
     (recorded != current).then(|| {
         format!(

@@ -11,7 +11,7 @@ use axiscal::calibration::procedure::{
 };
 use axiscal::diagnosis::{
     AXES_PLOT_FILES, DiagnosisError, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown,
-    diagnose_axes_with, diagnose_with, estimated_noise, free_pose_misses, free_poses_only, markdown,
+    diagnose_axes_with, diagnose_with, estimated_noise, free_pose_misses, free_poses_only, markdown, own_sweep_misses,
     validation_outliers, validation_poses, without_outliers, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
@@ -102,9 +102,7 @@ pub fn run(args: Args) -> Result<()> {
     checks::one_setup(&set, &args.data, "diagnose")?;
     let (set, cal) = usable(set, &desc, &args.data, args.noise_mm);
     if let Some(cal) = cal.as_ref().filter(|_| !args.checks.skip_unit_check) {
-        let misses = free_pose_misses(&set, cal, &desc, args.false_alarm)
-            .map_err(|e| anyhow::anyhow!("{}: the validation poses: {e}", args.data.display()))?;
-        checks::refuse_explained_misses(&misses, &args.data, false)?;
+        refuse_data_slips(&args, &set, cal, &desc)?;
     }
     let set = without_sweep_outliers(&args, set, &desc)?;
     let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc)?;
@@ -185,6 +183,19 @@ pub fn run(args: Args) -> Result<()> {
     say!("wrote {written}");
     super::emit_json(&args.out.join("diagnosis.json"))?;
     record(&args, &desc, &set, noise_mm, &format!("{headline}. {}", d.verdict))
+}
+
+/// Refuses the data when a slip explains the miss of `cal` (the calibration of `set`'s sweeps):
+/// a slip in one sweep first ([`own_sweep_misses`]: its calibration absorbed it, the free poses
+/// show it), then one in the free poses themselves ([`free_pose_misses`]); either is the data's,
+/// not an effect to rank.
+fn refuse_data_slips(args: &Args, set: &MeasurementSet, cal: &Calibration, desc: &RobotDescription) -> Result<()> {
+    let mut misses = own_sweep_misses(set, cal, desc, args.false_alarm);
+    if misses.is_empty() {
+        misses = free_pose_misses(set, cal, desc, args.false_alarm)
+            .map_err(|e| anyhow::anyhow!("{}: the validation poses: {e}", args.data.display()))?;
+    }
+    checks::refuse_explained_misses(&misses, &args.data, false)
 }
 
 /// `axiscal diagnose` on a campaign without validation poses: the axis experiments only.

@@ -60,7 +60,7 @@ pub use refine::{CARRIABLE, CarryError, carriable, carried_candidates, refine_ca
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
 pub use slips::{ExplainedMiss, MAX_FITTED_OFFSET, acceptance, explained_misses, free_pose_misses};
-pub use sweep_slips::explained_sweep_misses;
+pub use sweep_slips::{explained_sweep_misses, own_sweep_misses};
 pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
 pub use validate::{
     ChiSquare, Dominant, OrientationSummary, PointKind, PositionSummary, Prediction, Validation, ValidationOptions,

@@ -1,11 +1,12 @@
 //! Free-pose misses a slip in the data explains (`validate`, `report --held-out`, `diagnose`):
 //! when the calibrated model misses a free-pose experiment's points (validation poses, the
 //! tool observation) by more than [`GROSS_MISS_FACTOR`] times its test's acceptance, the usual
-//! slips of a measurement file are tried on that experiment's rows, one at a time: a command
-//! column in radians (metres for a sliding joint), negated, halved or doubled; two command
-//! columns swapped; a coordinate column in metres, micrometres, inches or centimetres
-//! ([`crate::measurement::unit_check::LENGTH_SLIPS`], the factors the sweeps' unit checks know)
-//! or negated; two coordinate columns swapped; the tool target ids in another order. The one
+//! slips of a measurement file are tried on that experiment's rows, one at a time: the column
+//! slips the free-pose calibration tries ([`crate::measurement::column_slips`], one list: a
+//! command column in radians (metres for a sliding joint) or gradians, negated, halved or
+//! doubled; two command columns swapped; a coordinate column in metres, micrometres, inches or
+//! centimetres ([`crate::measurement::unit_check::LENGTH_SLIPS`], the factors the sweeps' unit
+//! checks know) or negated; two coordinate columns swapped); the tool target ids in another order. The one
 //! that brings the rows within the test's acceptance ([`acceptance`]: the RMS the noise, the
 //! robot's repeatability and the calibration's own error predict, times the chi-square
 //! quantile of the validation's own test) with the least RMS is the slip said, with its column.
@@ -22,8 +23,10 @@ use super::noise::CleanCampaign;
 use super::validate::{PointKind, PositionSummary, Validation, ValidationOptions, Verdict, validate};
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::JointKind;
-use crate::measurement::unit_check::LENGTH_SLIPS;
+use crate::measurement::column_slips;
+pub(super) use crate::measurement::column_slips::{ColumnSlip as Hypothesis, slip as hypothesis};
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
+use crate::numerics::roots::{Bisection, bisect_infallible};
 use crate::numerics::stats::chi_square_quantile;
 use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::RobotDescription;
@@ -51,7 +54,7 @@ pub const GROSS_MISS_FACTOR: f64 = 3.0;
 pub const MIN_SEARCHED_POSES: usize = 3;
 
 /// The offset the least squares find is refined within this \[deg or mm\] either way on the
-/// validation's own statistic (golden-section search, [`refined_offset`]): the calibration's
+/// validation's own statistic ([`refined_offset`]): the calibration's
 /// error, shared by every pose, moves the least-squares offset by tenths of a degree from the
 /// one its test accepts.
 const OFFSET_REFINE_HALF_WIDTH: f64 = 1.0;
@@ -64,105 +67,12 @@ const OFFSET_ITERATIONS: usize = 20;
 /// point 3 m from its axis by 0.05 mm, below any instrument's noise.
 const OFFSET_STEP_DONE: f64 = 1e-3;
 
-/// One rewrite of an experiment's rows, in words.
-pub(super) struct Hypothesis {
-    /// The column (or columns) it names: `cmd_2`, `x_mm,y_mm`, `target`.
-    pub(super) field: String,
-    /// What the data then are: "`cmd_2` looks like radians rather than degrees".
-    pub(super) claim: String,
-    /// How the rows are read under it: "with `cmd_2` read as radians".
-    pub(super) reading: String,
-    /// The rewrite of one row.
-    pub(super) apply: Box<dyn Fn(&mut Measurement)>,
-}
-
-pub(super) fn hypothesis(
-    field: String,
-    [claim, reading]: [String; 2],
-    apply: impl Fn(&mut Measurement) + 'static,
-) -> Hypothesis {
-    Hypothesis {
-        field,
-        claim,
-        reading,
-        apply: Box::new(apply),
-    }
-}
-
-/// The command columns' slips: in radians (a revolute joint) or metres (a sliding one), negated,
-/// twice or half the file's unit; every pair of columns swapped.
+/// The command columns' slips ([`column_slips::command_slips`]: the one list the free-pose
+/// calibration tries too): in radians (a revolute joint) or metres (a sliding one), in
+/// gradians, negated, twice or half the file's unit; every pair of columns swapped.
 pub(super) fn command_hypotheses(desc: &RobotDescription) -> Vec<Hypothesis> {
-    let mut out = Vec::new();
-    for (k, j) in desc.joints.iter().enumerate() {
-        let c = format!("`cmd_{}`", k + 1);
-        let (unit, factor, other) = match j.kind {
-            JointKind::Revolute => ("degrees", 180.0 / std::f64::consts::PI, "radians"),
-            JointKind::Prismatic => ("millimetres", 1e3, "metres"),
-        };
-        let scaled = [
-            (
-                factor,
-                [
-                    format!("{c} looks like {other} rather than {unit}"),
-                    format!("with {c} read as {other}"),
-                ],
-            ),
-            (
-                -1.0,
-                [
-                    format!("{c} is negated (its joint's positive direction reversed)"),
-                    format!("with {c} negated"),
-                ],
-            ),
-            (0.5, [format!("{c} holds twice the {unit}"), format!("with {c} halved")]),
-            (2.0, [format!("{c} holds half the {unit}"), format!("with {c} doubled")]),
-        ];
-        for (f, words) in scaled {
-            out.push(hypothesis(format!("cmd_{}", k + 1), words, move |m| m.cmd[k] *= f));
-        }
-        for b in k + 1..desc.dof() {
-            out.push(hypothesis(
-                format!("cmd_{},cmd_{}", k + 1, b + 1),
-                [
-                    format!("{c} and `cmd_{}` are swapped", b + 1),
-                    format!("with {c} and `cmd_{}` swapped back", b + 1),
-                ],
-                move |m| m.cmd.swap(k, b),
-            ));
-        }
-    }
-    out
-}
-
-/// The coordinate columns' slips: each in another length unit ([`LENGTH_SLIPS`]) or negated;
-/// every pair swapped.
-pub(super) fn coordinate_hypotheses() -> Vec<Hypothesis> {
-    const NAMES: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
-    let mut out = Vec::new();
-    for (c, name) in NAMES.iter().enumerate() {
-        for &(ratio, unit) in LENGTH_SLIPS {
-            let words = [
-                format!("`{name}` looks like {unit} rather than millimetres"),
-                format!("with `{name}` read as {unit}"),
-            ];
-            out.push(hypothesis((*name).into(), words, move |m| m.position_mm[c] /= ratio));
-        }
-        let words = [format!("`{name}` is negated"), format!("with `{name}` negated")];
-        out.push(hypothesis((*name).into(), words, move |m| {
-            m.position_mm[c] = -m.position_mm[c]
-        }));
-        for (d, other) in NAMES.iter().enumerate().skip(c + 1) {
-            out.push(hypothesis(
-                format!("{name},{other}"),
-                [
-                    format!("`{name}` and `{other}` are swapped"),
-                    format!("with `{name}` and `{other}` swapped back"),
-                ],
-                move |m| m.position_mm.swap(c, d),
-            ));
-        }
-    }
-    out
+    let kinds: Vec<JointKind> = desc.joints.iter().map(|j| j.kind).collect();
+    column_slips::command_slips(&kinds)
 }
 
 /// Every other order of the tool targets' ids (`targets` of them, at most 3: 5 orders).
@@ -418,13 +328,13 @@ pub(super) fn first_confirmed(
     let mut near: Vec<(Hypothesis, f64)> = hypotheses
         .into_iter()
         .filter_map(|h| {
-            let rms = rms_with(rows, &h.apply, cal, desc)?;
+            let rms = rms_with(rows, &h.undo, cal, desc)?;
             (rms <= GROSS_MISS_FACTOR * bound_mm).then_some((h, rms))
         })
         .collect();
     near.sort_by(|a, b| a.1.total_cmp(&b.1));
     near.into_iter().take(TESTED_REWRITES).find_map(|(hypothesis, rms_mm)| {
-        let per_dof = confirmed(rows, &hypothesis.apply, cal, desc, options)?;
+        let per_dof = confirmed(rows, &hypothesis.undo, cal, desc, options)?;
         Some(Explanation {
             hypothesis,
             rms_mm,
@@ -465,7 +375,7 @@ fn best_explanation(
 ) -> Option<Explanation> {
     let targets = rows.iter().map(|m| m.target + 1).max().unwrap_or(0);
     let mut all = command_hypotheses(desc);
-    all.extend(coordinate_hypotheses());
+    all.extend(column_slips::coordinate_slips());
     all.extend(target_hypotheses(targets.min(desc.tool_targets_m().len())));
     first_confirmed(all, rows, (cal, desc), options, bound_mm)
         .or_else(|| {
@@ -487,7 +397,7 @@ fn best_explanation(
 /// moved since the calibration. Its columns are those whose mean residual (the least-squares
 /// shift) exceeds `bound_mm` (the rows' acceptance: a smaller part is within the test's reach),
 /// each shifted alone by the value within `bound_mm` of that mean that minimises the
-/// validation's own statistic ([`golden_section`]: the calibration's error, shared by every
+/// validation's own statistic ([`minimum_near`]: the calibration's error, shared by every
 /// pose, moves the mean from the shift its test accepts); `None` when no column's is that large.
 fn translation_hypothesis(
     rows: &[Measurement],
@@ -511,7 +421,7 @@ fn translation_hypothesis(
                 options,
             )
         };
-        shift[c] = golden_section(&at, shift[c], bound_mm);
+        shift[c] = minimum_near(&at, shift[c], bound_mm);
     }
     named.first()?;
     let shown = |v: f64| format_f64((v * 1e2).round() / 1e2);
@@ -556,7 +466,7 @@ fn statistic_with(
 }
 
 /// The offset of command column `k` (0-based) within [`OFFSET_REFINE_HALF_WIDTH`] of `d` that
-/// minimises the validation's own statistic ([`statistic_with`], [`golden_section`]).
+/// minimises the validation's own statistic ([`statistic_with`], [`minimum_near`]).
 fn refined_offset(
     rows: &[Measurement],
     k: usize,
@@ -565,27 +475,16 @@ fn refined_offset(
     options: &ValidationOptions,
 ) -> f64 {
     let at = |d: f64| statistic_with(rows, &move |m: &mut Measurement| m.cmd[k] += d, model, options);
-    golden_section(&at, d, OFFSET_REFINE_HALF_WIDTH)
+    minimum_near(&at, d, OFFSET_REFINE_HALF_WIDTH)
 }
 
-/// The minimum of `at` within `half_width` of `d`: golden-section search to
-/// [`OFFSET_STEP_DONE`].
-fn golden_section(at: &dyn Fn(f64) -> f64, d: f64, half_width: f64) -> f64 {
-    let ratio = (5f64.sqrt() - 1.0) / 2.0;
-    let (mut lo, mut hi) = (d - half_width, d + half_width);
-    let (mut a, mut b) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
-    let (mut fa, mut fb) = (at(a), at(b));
-    while hi - lo > OFFSET_STEP_DONE {
-        if fa <= fb {
-            (hi, b, fb) = (b, a, fa);
-            a = hi - ratio * (hi - lo);
-            fa = at(a);
-        } else {
-            (lo, a, fa) = (a, b, fb);
-            b = lo + ratio * (hi - lo);
-            fb = at(b);
-        }
-    }
+/// The minimum of `at` within `half_width` of `d`, to [`OFFSET_STEP_DONE`]: the one bisection
+/// ([`bisect_infallible`]) on the sign of its slope (central differences a tenth of that
+/// width apart); the statistic is smooth in the shift and has one minimum that near.
+fn minimum_near(at: &dyn Fn(f64) -> f64, d: f64, half_width: f64) -> f64 {
+    let h = 0.05 * OFFSET_STEP_DONE;
+    let stop = Bisection::to_width(OFFSET_STEP_DONE);
+    let [lo, hi] = bisect_infallible(d - half_width, d + half_width, stop, |x| at(x + h) < at(x - h));
     0.5 * (lo + hi)
 }
 

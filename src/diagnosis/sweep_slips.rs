@@ -1,4 +1,5 @@
-//! Axis-experiment misses a slip in the data explains (`validate`): when the calibrated model
+//! Axis-experiment misses a slip in the data explains (`validate`, and `diagnose` against the
+//! file's own free poses, [`own_sweep_misses`]): when the calibrated model
 //! misses one axis experiment's points by more than [`GROSS_MISS_FACTOR`] times its test's
 //! acceptance ([`acceptance`], with the axis experiments' predicted RMS), the slips `calibrate`
 //! finds in a sweep are tried on that experiment's rows before the model is blamed, in this
@@ -33,6 +34,7 @@ use super::slips::{
     fitted_parameter, hypothesis, residuals_with,
 };
 use super::validate::{Validation, ValidationOptions, Verdict};
+use crate::calibration::free_pose::{FreePoseOptions, calibrate_free_poses, with_fitted_targets};
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::JointKind;
 use crate::measurement::{Measurement, MeasurementSet};
@@ -381,4 +383,90 @@ fn rigid_move(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescriptio
     Some(hypothesis("x_mm,y_mm,z_mm".into(), words, move |m| {
         moved_by(m, &x, &centre)
     }))
+}
+
+/// The slips of `set`'s axis experiments found against its own free poses (`diagnose`, which
+/// has no other calibration to hold the sweeps against): when `cal`, the calibration of the
+/// file's axis experiments, misses its free poses grossly (by more than 3 times their test's
+/// acceptance at `false_alarm`, `GROSS_MISS_FACTOR`), the robot is calibrated again from the free
+/// poses alone ([`calibrate_free_poses`], its outlier poses left out) and every sweep is tested
+/// against that model as `validate` tests a file's sweeps against a calibration
+/// ([`explained_sweep_misses`]). A slip in one sweep (a sign, gradians or another scale, two
+/// columns swapped, its points frozen or out of step order, the block moved) is absorbed by the
+/// sweeps' own calibration (a transmission scaled, an axis reversed), so only the free poses
+/// show it; against their model it stands out in that sweep alone. Empty when the free poses
+/// are met, cannot be calibrated alone, or no one sweep's slip explains the miss.
+pub fn own_sweep_misses(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    false_alarm: f64,
+) -> Vec<ExplainedMiss> {
+    own_sweep_misses_of(set, cal, desc, false_alarm).unwrap_or_default()
+}
+
+fn own_sweep_misses_of(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    false_alarm: f64,
+) -> Option<Vec<ExplainedMiss>> {
+    let sweep_rows: Vec<usize> = (0..set.rows().len())
+        .filter(|&i| set.rows()[i].moved_joint > 0)
+        .collect();
+    if sweep_rows.is_empty() || sweep_rows.len() == set.rows().len() {
+        return None;
+    }
+    let poses = set.without_rows(&sweep_rows);
+    let miss = gross_free_pose_miss(&poses, cal, desc, false_alarm)?;
+    let free = calibrate_free_poses(&poses, desc, &FreePoseOptions::default()).ok()?;
+    let dropped: BTreeSet<(String, usize)> = free
+        .summary
+        .outliers
+        .iter()
+        .filter(|o| o.dropped)
+        .map(|o| (o.experiment.clone(), o.step))
+        .collect();
+    let fitted_poses = free.summary.poses;
+    let reference = free.into_calibration(desc);
+    let fitted = with_fitted_targets(desc, &reference);
+    let outlier_rows: Vec<usize> = (0..set.rows().len())
+        .filter(|&i| dropped.contains(&(set.rows()[i].experiment.clone(), set.rows()[i].step)))
+        .collect();
+    let kept = set.without_rows(&outlier_rows);
+    let options = ValidationOptions::of_calibration(&reference, false_alarm);
+    let v = super::validate::validate(&kept, &reference, &fitted, &options).ok()?;
+    let model = format!(
+        "the model calibrated from this file's own {fitted_poses} free poses (the calibration of its axis experiments \
+         misses them by {miss}) misses"
+    );
+    let found = explained_sweep_misses(&kept, &reference, &fitted, &v)
+        .into_iter()
+        .map(|m| ExplainedMiss {
+            message: m.message.replacen("the calibrated model misses", &model, 1),
+            ..m
+        })
+        .collect();
+    Some(found)
+}
+
+/// `... mm RMS where ... mm is predicted` when `cal` misses the free poses `poses` by more than
+/// [`GROSS_MISS_FACTOR`] times their test's acceptance ([`acceptance`] at `false_alarm`).
+fn gross_free_pose_miss(
+    poses: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    false_alarm: f64,
+) -> Option<String> {
+    let options = ValidationOptions::of_calibration(cal, false_alarm);
+    let v = super::validate::validate(poses, cal, desc, &options).ok()?;
+    let s = v.validation.as_ref()?;
+    let exceeds = s.chi_square.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds);
+    let bound = acceptance(s.predicted_mm.total, s.points, false_alarm);
+    (exceeds && s.rms_mm > GROSS_MISS_FACTOR * bound).then(|| {
+        format!(
+            "{:.4} mm RMS where {:.4} mm is predicted",
+            s.rms_mm, s.predicted_mm.total
+        )
+    })
 }

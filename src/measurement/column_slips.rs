@@ -3,7 +3,9 @@
 //! halved or doubled; two command columns swapped; a coordinate column in another length unit
 //! ([`LENGTH_SLIPS`]) or negated; two coordinate columns swapped. The free-pose calibration
 //! tries each on its poses before it blames the description (`calibrate` on a file of free
-//! poses). No maths beyond the rewrite: whoever tries them judges the fit.
+//! poses), and the validation's slip search tries them on the rows a calibration misses
+//! (`crate::diagnosis`'s `slips`): one list, one naming. No maths beyond the rewrite: whoever
+//! tries them judges the fit.
 
 use super::Measurement;
 use super::unit_check::LENGTH_SLIPS;
@@ -18,6 +20,8 @@ pub struct ColumnSlip {
     pub field: String,
     /// What the data then are: "`cmd_2` is negated (its joint's positive direction reversed)".
     pub claim: String,
+    /// How the rows are read with the slip undone: "with `cmd_2` negated".
+    pub reading: String,
     /// The rewrite of one row that undoes the slip.
     pub undo: Box<dyn Fn(&mut Measurement) + Send + Sync>,
     /// Whether it mirrors the coordinates (a column negated, two swapped): every mirror is
@@ -25,19 +29,25 @@ pub struct ColumnSlip {
     pub mirror: bool,
 }
 
-fn slip(field: String, claim: String, undo: impl Fn(&mut Measurement) + Send + Sync + 'static) -> ColumnSlip {
+/// A slip of `field`, its `claim` and `reading`, undone by `undo`.
+pub fn slip(
+    field: String,
+    [claim, reading]: [String; 2],
+    undo: impl Fn(&mut Measurement) + Send + Sync + 'static,
+) -> ColumnSlip {
     ColumnSlip {
         field,
         claim,
+        reading,
         undo: Box::new(undo),
         mirror: false,
     }
 }
 
-fn mirror(field: String, claim: String, undo: impl Fn(&mut Measurement) + Send + Sync + 'static) -> ColumnSlip {
+fn mirror(field: String, words: [String; 2], undo: impl Fn(&mut Measurement) + Send + Sync + 'static) -> ColumnSlip {
     ColumnSlip {
         mirror: true,
-        ..slip(field, claim, undo)
+        ..slip(field, words, undo)
     }
 }
 
@@ -52,27 +62,42 @@ pub fn command_slips(kinds: &[JointKind]) -> Vec<ColumnSlip> {
             JointKind::Prismatic => ("millimetres", 1e3, "metres"),
         };
         let mut scaled = vec![
-            (factor, format!("{c} holds {other} rather than {unit}")),
+            (
+                factor,
+                [
+                    format!("{c} holds {other} rather than {unit}"),
+                    format!("with {c} read as {other}"),
+                ],
+            ),
             (
                 -1.0,
-                format!("{c} is negated (its joint's positive direction reversed)"),
+                [
+                    format!("{c} is negated (its joint's positive direction reversed)"),
+                    format!("with {c} negated"),
+                ],
             ),
-            (0.5, format!("{c} holds twice the {unit}")),
-            (2.0, format!("{c} holds half the {unit}")),
+            (0.5, [format!("{c} holds twice the {unit}"), format!("with {c} halved")]),
+            (2.0, [format!("{c} holds half the {unit}"), format!("with {c} doubled")]),
         ];
         if *kind == JointKind::Revolute {
             scaled.push((
                 1.0 / GRADIANS_PER_DEGREE,
-                format!("{c} holds gradians rather than degrees"),
+                [
+                    format!("{c} holds gradians rather than degrees"),
+                    format!("with {c} read as gradians"),
+                ],
             ));
         }
-        for (f, claim) in scaled {
-            out.push(slip(field.clone(), claim, move |m| m.cmd[k] *= f));
+        for (f, words) in scaled {
+            out.push(slip(field.clone(), words, move |m| m.cmd[k] *= f));
         }
         for b in k + 1..kinds.len() {
             out.push(slip(
                 format!("cmd_{},cmd_{}", k + 1, b + 1),
-                format!("{c} and `cmd_{}` are swapped", b + 1),
+                [
+                    format!("{c} and `cmd_{}` are swapped", b + 1),
+                    format!("with {c} and `cmd_{}` swapped back", b + 1),
+                ],
                 move |m| m.cmd.swap(k, b),
             ));
         }
@@ -86,19 +111,23 @@ pub fn coordinate_slips() -> Vec<ColumnSlip> {
     let mut out = Vec::new();
     for (c, name) in NAMES.iter().enumerate() {
         for &(ratio, unit) in LENGTH_SLIPS {
-            out.push(slip(
-                (*name).into(),
+            let words = [
                 format!("`{name}` holds {unit} rather than millimetres"),
-                move |m| m.position_mm[c] /= ratio,
-            ));
+                format!("with `{name}` read as {unit}"),
+            ];
+            out.push(slip((*name).into(), words, move |m| m.position_mm[c] /= ratio));
         }
-        out.push(mirror((*name).into(), format!("`{name}` is negated"), move |m| {
+        let words = [format!("`{name}` is negated"), format!("with `{name}` negated")];
+        out.push(mirror((*name).into(), words, move |m| {
             m.position_mm[c] = -m.position_mm[c]
         }));
         for (d, other) in NAMES.iter().enumerate().skip(c + 1) {
             out.push(mirror(
                 format!("{name},{other}"),
-                format!("`{name}` and `{other}` are swapped"),
+                [
+                    format!("`{name}` and `{other}` are swapped"),
+                    format!("with `{name}` and `{other}` swapped back"),
+                ],
                 move |m| m.position_mm.swap(c, d),
             ));
         }
@@ -137,6 +166,7 @@ mod tests {
             let mut m = row.clone();
             (s.undo)(&mut m);
             assert_ne!(m, row, "{} changes nothing", s.claim);
+            assert!(s.reading.starts_with("with "), "{}", s.reading);
             let cmd_changed = m.cmd != row.cmd;
             assert_eq!(cmd_changed, s.field.starts_with("cmd"), "{}", s.claim);
         }

@@ -58,6 +58,13 @@ fn polynomial(s: f64, c: &[f64]) -> (f64, f64, f64) {
     (v, dv, ddv)
 }
 
+/// The largest amplitude of one harmonic of a transmission or a coupling a calibration may
+/// hold \[rad\] (about 6 deg, in the transmission's own angle: the gear's for a gear): a gear's
+/// transmission error is a few mrad, and ripple of this size is a broken joint, not an error to
+/// compensate. The diagnosis's plausible gear-harmonic amplitude
+/// (`crate::diagnosis::MAX_ANGLE_RAD`) is this bound.
+pub const MAX_HARMONIC_AMPLITUDE_RAD: f64 = 0.1;
+
 /// Why a list of numbers of a function is unusable: `None` when every value is finite.
 fn non_finite(values: &[f64]) -> Option<String> {
     values

@@ -25,6 +25,6 @@ pub use description::{
 pub use effects::{BacklashTerm, LoadTerm, ModelEffects, PoseLoad, SagTerm, gravity_direction, sag_regressor};
 pub use four_bar::{FourBarError, FourBarGeometry, FourBarState};
 pub use four_bar_fit::{FourBarFit, fit_four_bar};
-pub use functions::{CouplingFunction, Transmission};
+pub use functions::{CouplingFunction, MAX_HARMONIC_AMPLITUDE_RAD, Transmission};
 pub use model::{FourBarLinkage, JointModel, RobotModel};
 pub use model_error::ModelError;

@@ -19,7 +19,7 @@
 use super::fit::{self, Problem};
 use super::{FreePoseError, FreePoseOptions, FreePoseSummary, FreePoses, frame_parameter, layout, registered_start};
 use crate::kinematics::rigid_fit;
-use crate::measurement::column_slips::{ColumnSlip, column_slips};
+use crate::measurement::column_slips::{ColumnSlip, column_slips, slip};
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::numerics::stats::{ABSURD_SHARE, chi_square_quantile, ln_gamma};
 use crate::robot::{Controller, RobotDescription, RobotModel};
@@ -287,18 +287,14 @@ fn block_shift(
         mm.y,
         mm.z
     );
-    let shift = ColumnSlip {
-        field: "setup".into(),
-        claim,
-        undo: Box::new(move |m: &mut Measurement| {
-            if later.contains(&(m.experiment.clone(), m.step)) {
-                for c in 0..3 {
-                    m.position_mm[c] -= mm[c];
-                }
+    let reading = "with the later poses moved back".to_string();
+    let shift = slip("setup".into(), [claim, reading], move |m: &mut Measurement| {
+        if later.contains(&(m.experiment.clone(), m.step)) {
+            for c in 0..3 {
+                m.position_mm[c] -= mm[c];
             }
-        }),
-        mirror: false,
-    };
+        }
+    });
     Some((shift, n + 1 - 2 * MIN_BLOCK_POSES))
 }
 

@@ -8,7 +8,8 @@ use crate::calibration::tool_accuracy::{ModelCovariance, model_parameter_names};
 use crate::measurement::format_f64;
 use crate::measurement::unit_check::{MAX_ROW_LENGTH_M, row_slips};
 use crate::robot::{
-    CouplingFunction, MAX_INSTRUMENT_FRAME_MM, ModelError, Placement, RobotModel, Transmission, angle_deg_problem,
+    CouplingFunction, MAX_HARMONIC_AMPLITUDE_RAD, MAX_INSTRUMENT_FRAME_MM, ModelError, Placement, RobotModel,
+    Transmission, angle_deg_problem,
 };
 use nalgebra::DMatrix;
 
@@ -150,6 +151,83 @@ impl Calibration {
         Ok(())
     }
 
+    /// Every propagated 1-sigma (`row_sigma`, `zero_offset_sigma`) is a finite number, at least
+    /// 0: the reports, the certificate and the predicted errors read them.
+    fn check_sigmas(&self) -> Result<(), InvalidCalibration> {
+        let rows = self.row_sigma.iter().enumerate().flat_map(|(i, r)| {
+            [
+                ("a_mm", r.a_mm),
+                ("b_mm", r.b_mm),
+                ("alpha_deg", r.alpha_deg),
+                ("beta_deg", r.beta_deg),
+            ]
+            .map(|(key, v)| (format!("row_sigma[{i}].{key}"), v))
+        });
+        let zeros = self.zero_offset_sigma.iter().enumerate().flat_map(|(i, z)| {
+            [("sigma_rad", z.sigma_rad), ("sigma_mm", z.sigma_mm)]
+                .into_iter()
+                .filter_map(move |(key, v)| Some((format!("zero_offset_sigma[{i}].{key}"), v?)))
+        });
+        match rows.chain(zeros).find(|(_, v)| !(v.is_finite() && *v >= 0.0)) {
+            Some((field, v)) => Err(invalid(
+                field,
+                format!(
+                    "{}: a 1-sigma is a finite number, 0 or more; the file was damaged or edited: restore the value \
+                     `axiscal calibrate` wrote (or recalibrate)",
+                    format_f64(v)
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// Checks that a calibration whose `robot` cannot be traced to `axiscal calibrate` (no
+    /// `model_digest`, or one `robot` no longer matches) is one a calibration could be, for the
+    /// description `desc` it is used with (the same joint count, checked before): each harmonic
+    /// of a transmission or a coupling at most [`MAX_HARMONIC_AMPLITUDE_RAD`], every propagated
+    /// 1-sigma finite and at least 0, and each joint's transmission turning one way (its slope
+    /// above 0) and giving every command within the joint's limits one joint value (fig. 3
+    /// inverts it; a harmonic transmission is checked for every angle by
+    /// [`Transmission::problem`], a sliding joint's polynomial can turn back within its travel).
+    /// A file `calibrate` wrote holds what it fitted, and `calibrate` warns of what it fits to a
+    /// slip; an edited one holds what the editor wrote.
+    pub fn plausible_for(&self, desc: &crate::robot::RobotDescription) -> Result<(), InvalidCalibration> {
+        check_harmonic_amplitudes(&self.robot)?;
+        self.check_sigmas()?;
+        self.transmissions_within_limits(desc)
+    }
+
+    /// The transmissions of [`Calibration::plausible_for`] over the joints' limits.
+    fn transmissions_within_limits(&self, desc: &crate::robot::RobotDescription) -> Result<(), InvalidCalibration> {
+        for (k, j) in self.robot.joints.iter().enumerate().take(desc.dof()) {
+            let [lo, hi] = desc.limits_internal(k);
+            let within = (0..=LIMIT_SAMPLES).map(|i| lo + (hi - lo) * i as f64 / LIMIT_SAMPLES as f64);
+            let turns_back = within
+                .clone()
+                .find(|&t| j.transmission.slope(t).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
+            let uninvertible = within
+                .into_iter()
+                .find(|&t| j.transmission.actual_from_command(t).is_none());
+            if let Some(t) = turns_back.or(uninvertible) {
+                let unit = desc.joints[k].kind.file_unit();
+                let shown = desc.joints[k].kind.to_file_units(t);
+                return Err(invalid(
+                    format!("robot.joints[{k}].transmission"),
+                    format!(
+                        "at {} {unit}, within joint {}'s limits [{}, {}] {unit}, the transmission turns back (its slope \
+                         is not above 0): a command there has no single joint value; the file was edited: restore \
+                         the value `axiscal calibrate` wrote (or recalibrate)",
+                        format_f64((shown * 1e3).round() / 1e3),
+                        k + 1,
+                        format_f64(desc.joints[k].limits[0]),
+                        format_f64(desc.joints[k].limits[1])
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Every noise level recorded is a finite number above 0 and at most
     /// [`MAX_NOISE_RMS_3D_MM`]: the fits were weighted with it, and `validate`, `report` and
     /// `iso9283 predict` divide by it.
@@ -252,24 +330,73 @@ fn in_robot(e: ModelError) -> InvalidCalibration {
 /// file with another count was edited, and its covariance no longer names its parameters.
 fn check_fitted_harmonics(robot: &RobotModel) -> Result<(), InvalidCalibration> {
     for (k, j) in robot.joints.iter().enumerate() {
-        let transmission = match &j.transmission {
-            Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => Some((sin, cos)),
-            Transmission::Polynomial { .. } => None,
-        };
-        let coupling = match &j.coupling_in {
-            Some(CouplingFunction::Gear { sin, cos, .. }) => Some((sin, cos)),
-            _ => None,
-        };
-        for (key, pair) in [("transmission", transmission), ("coupling_in", coupling)] {
-            if let Some((sin, cos)) = pair
-                && sin.len() != cos.len()
-            {
+        for (key, sin, cos) in harmonic_series(j) {
+            if sin.len() != cos.len() {
                 return Err(invalid(
                     format!("robot.joints[{k}].{key}"),
                     format!(
                         "`sin` has {} coefficients and `cos` {}: a fitted harmonic series has one of each per order",
                         sin.len(),
                         cos.len()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The harmonic series of joint `j` (its transmission's, a harmonic or a gear; its coupling's,
+/// a gear), each with its key in the file and its `(sin, cos)` coefficients.
+fn harmonic_series(j: &crate::robot::JointModel) -> Vec<Series<'_>> {
+    let transmission = match &j.transmission {
+        Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } => Some((sin, cos)),
+        Transmission::Polynomial { .. } => None,
+    };
+    let coupling = match &j.coupling_in {
+        Some(CouplingFunction::Gear { sin, cos, .. }) => Some((sin, cos)),
+        _ => None,
+    };
+    [("transmission", transmission), ("coupling_in", coupling)]
+        .into_iter()
+        .filter_map(|(key, pair)| pair.map(|(sin, cos)| (key, sin.as_slice(), cos.as_slice())))
+        .collect()
+}
+
+/// A harmonic series of a joint: its key in the file, its sine and its cosine coefficients.
+type Series<'a> = (&'static str, &'a [f64], &'a [f64]);
+
+/// Points at which [`Calibration::plausible_for`] tests a transmission over a joint's limits: a
+/// sliding joint's polynomial (a scale and a few orders) turns back over a fraction of its
+/// travel, far wider than a thousandth.
+const LIMIT_SAMPLES: usize = 1000;
+
+/// Each harmonic of a transmission or a coupling (sine and cosine of one order) has an
+/// amplitude of at most [`MAX_HARMONIC_AMPLITUDE_RAD`]: a larger one is an edited value
+/// (`axiscal calibrate` keeps no such fit: the diagnosis calls it implausible), and every
+/// command would be mapped to a joint value tens of degrees off.
+fn check_harmonic_amplitudes(robot: &RobotModel) -> Result<(), InvalidCalibration> {
+    for (k, j) in robot.joints.iter().enumerate() {
+        for (key, sin, cos) in harmonic_series(j) {
+            let amplitude = |o: usize| {
+                sin.get(o)
+                    .copied()
+                    .unwrap_or(0.0)
+                    .hypot(cos.get(o).copied().unwrap_or(0.0))
+            };
+            if let Some(o) = (0..sin.len().max(cos.len())).find(|&o| amplitude(o) > MAX_HARMONIC_AMPLITUDE_RAD) {
+                return Err(invalid(
+                    format!("robot.joints[{k}].{key}"),
+                    format!(
+                        "its order-{} harmonic (`sin[{o}]` {}, `cos[{o}]` {}) has an amplitude of {} rad ({} deg), \
+                         beyond the {MAX_HARMONIC_AMPLITUDE_RAD} rad a joint's transmission error can be (a real \
+                         gear's are a few mrad): every command would reach a joint value that far off; the file was \
+                         edited: restore the value `axiscal calibrate` wrote (or recalibrate)",
+                        o + 1,
+                        format_f64(sin.get(o).copied().unwrap_or(0.0)),
+                        format_f64(cos.get(o).copied().unwrap_or(0.0)),
+                        format_f64((amplitude(o) * 1e4).round() / 1e4),
+                        format_f64((amplitude(o).to_degrees() * 1e2).round() / 1e2)
                     ),
                 ));
             }

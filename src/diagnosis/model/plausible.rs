@@ -8,8 +8,9 @@ use crate::diagnosis::Parameter;
 /// Largest plausible tilt of a joint axis, gear-harmonic amplitude, or joint sag under
 /// gravity \[rad\] (about 6 deg): the candidates are small-angle forms, and a bearing runout,
 /// transmission ripple or sag of this size is a broken or unloaded-to-buckling joint, not an
-/// effect to compensate.
-pub const MAX_ANGLE_RAD: f64 = 0.1;
+/// effect to compensate. The same bound as a calibration file's harmonics
+/// ([`crate::robot::MAX_HARMONIC_AMPLITUDE_RAD`]).
+pub const MAX_ANGLE_RAD: f64 = crate::robot::MAX_HARMONIC_AMPLITUDE_RAD;
 /// Largest plausible backlash half band \[rad\] (a 40 mrad band; industrial gearboxes have
 /// 0.1-3 mrad).
 pub const MAX_HALF_BAND_RAD: f64 = 0.02;

@@ -31,6 +31,18 @@ pub fn case(what: &'static str, args: &str, code: i32, names: &[&str]) -> Case {
 /// input (exit 2) said in one line of less than a screenful, with nothing written as `out` or
 /// `out.csv` ([`clear_outputs`] removes what a case did write, before the next).
 pub fn run_case(dir: &Path, c: &Case) -> String {
+    let e = stderr_of_case(dir, c);
+    if c.code == 2 {
+        assert_eq!(e.lines().count(), 1, "{}: one line: {e}", c.what);
+        assert!(e.len() < 1000, "{}: a long value echoed: {} bytes", c.what, e.len());
+        let written = ["out", "out.csv"].map(|n| dir.join(n));
+        assert!(written.iter().all(|p| !p.exists()), "{}: nothing written", c.what);
+    }
+    e
+}
+
+/// Runs `c` in `dir` and returns its stderr, with the exit code and the names checked.
+pub fn stderr_of_case(dir: &Path, c: &Case) -> String {
     let a = crate::common::axiscal()
         .current_dir(dir)
         .args(&c.args)
@@ -41,13 +53,15 @@ pub fn run_case(dir: &Path, c: &Case) -> String {
     for name in &c.names {
         assert!(e.contains(name.as_str()), "{}: no {name:?} in {e}", c.what);
     }
-    if c.code == 2 {
-        assert_eq!(e.lines().count(), 1, "{}: one line: {e}", c.what);
-        assert!(e.len() < 1000, "{}: a long value echoed: {} bytes", c.what, e.len());
-        let written = ["out", "out.csv"].map(|n| dir.join(n));
-        assert!(written.iter().all(|p| !p.exists()), "{}: nothing written", c.what);
-    }
     e
+}
+
+/// `cal/calibration.json` of `dir` with `edit` applied to its JSON value, as `name`.
+pub fn edited_calibration(dir: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Value)) {
+    let text = std::fs::read_to_string(dir.join("cal/calibration.json")).unwrap();
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut value);
+    std::fs::write(dir.join(name), serde_json::to_string(&value).unwrap()).unwrap();
 }
 
 /// Removes what a case wrote as `out` or `out.csv` in `dir`.
