@@ -189,6 +189,18 @@ pub fn import_units(
         );
     }
     let angles = |radians: bool| if radians { "rad" } else { "deg" };
+    let read_otherwise = |radians: bool, lengths: LengthUnit| {
+        format!(
+            "{}: read with --angles {} --units {} the file does not fit the description ({}); read with --angles {} \
+             --units {}",
+            file.display(),
+            angles(stated.0),
+            stated.1.name(),
+            said.join("; "),
+            angles(radians),
+            lengths.name()
+        )
+    };
     let judged = judged_checks(set, desc);
     // Read in other units: (the options, the set) where it is judged as fully as read.
     let others: Vec<(ImportUnits, MeasurementSet)> = [
@@ -209,14 +221,14 @@ pub fn import_units(
         .find_map(|(units, other)| Some((*units, data_faults(other, desc).into_iter().next()?)))
         .filter(|_| fits.is_none())
     {
+        // The slips as read are this fault seen in the wrong units: the fault alone is said.
         bail!(
-            "{}: read with --angles {} --units {} the file does not fit the description ({}); read with --angles {} \
-             --units {} the data show what no unit explains, `{}`: {}; if the data are right after all, pass \
-             --skip-unit-check",
+            "{}: --angles {} --units {} do not fit the description (`{}`), and read with --angles {} --units {} the \
+             data show what no unit explains, `{}`: {}; if the data are right after all, pass --skip-unit-check",
             file.display(),
             angles(stated.0),
             stated.1.name(),
-            said.join("; "),
+            slips.iter().map(|s| s.field.as_str()).collect::<Vec<_>>().join("`, `"),
             angles(radians),
             lengths.name(),
             fault.field,
@@ -241,14 +253,8 @@ pub fn import_units(
         changed.push(format!("--units {}", lengths.name()));
     }
     bail!(
-        "{}: read with --angles {} --units {} the file does not fit the description ({}); read with --angles {} \
-         --units {} it does: pass {}; if the units are right after all, pass --skip-unit-check",
-        file.display(),
-        angles(stated.0),
-        stated.1.name(),
-        said.join("; "),
-        angles(radians),
-        lengths.name(),
+        "{} it does: pass {}; if the units are right after all, pass --skip-unit-check",
+        read_otherwise(radians, lengths),
         changed.join(" ")
     )
 }
