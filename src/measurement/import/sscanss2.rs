@@ -382,7 +382,7 @@ fn fit_sweep(rows: &[&Row], kind: JointKind, home_point: &nalgebra::Vector3<f64>
 /// the other joints at their homes, so each sweep passes, at its own joint's home, through the
 /// one point of the home pose (taken where sweeps hold a point at their home value: their
 /// component-wise median). A sweep that reaches that point at another value than the file's
-/// home (beyond [`HOME_FENCE`] times its own scatter) names the joint's first line, its home
+/// home (beyond `HOME_FENCE`, 3, times its own scatter) names the joint's first line, its home
 /// and the value the data give. Nothing is judged unless two or more sweeps, and more than half
 /// of those that hold a point at their home value, hold one point there (within the fence of the
 /// largest scatter): sweeps of different measured points (each joint's own target) have no one
