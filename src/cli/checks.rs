@@ -9,8 +9,8 @@ use axiscal::kinematics::JointKind;
 use axiscal::measurement::description_check::description_warnings;
 use axiscal::measurement::import::points::LengthUnit;
 use axiscal::measurement::unit_check::{
-    UnitSlip, data_faults, description_slips, free_pose_scale_warning, measurement_slips, payload_over_robot_mass,
-    pose_slips,
+    UnitSlip, data_faults, description_slips, free_pose_scale_warning, judged_checks, measurement_slips,
+    payload_over_robot_mass, pose_slips,
 };
 use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::robot::{DescriptionIdentity, RobotDescription};
@@ -156,11 +156,13 @@ pub fn data_unit_warnings(
 /// rad`), and the length unit (`--units`).
 pub type ImportUnits = (bool, LengthUnit);
 
-/// `--angles` and `--units` of an import (`wide`, `mat`, `sscanss2`) against the description:
-/// the imported `set`'s unit slips ([`measurement_slips`], as `calibrate` checks them). When the
-/// file read with other values of the options (`read_as`) has none, an error naming each option
-/// and the value that fits; slips no option explains are a warning (another robot, or a file's
-/// own slip).
+/// `--angles` and `--units` of an import (`wide`, `mat`, `sscanss2`, `rct`) against the
+/// description: the imported `set`'s unit slips ([`measurement_slips`], as `calibrate` checks
+/// them). When the file read with other values of the options (`read_as`) passes every check
+/// (no slip, no scale warning, and judged by as many checks: [`judged_checks`]), an error naming
+/// each option and the value that fits; when such a reading shows a fault no unit explains (a
+/// mirrored frame), an error naming the fault; other slips are a warning (another robot, or a
+/// file's own slip).
 pub fn import_units(
     set: &MeasurementSet,
     desc: &RobotDescription,
@@ -187,13 +189,52 @@ pub fn import_units(
         );
     }
     let angles = |radians: bool| if radians { "rad" } else { "deg" };
-    let fits = [
+    let read_otherwise = |radians: bool, lengths: LengthUnit| {
+        format!(
+            "{}: read with --angles {} --units {} the file does not fit the description ({}); read with --angles {} \
+             --units {}",
+            file.display(),
+            angles(stated.0),
+            stated.1.name(),
+            said.join("; "),
+            angles(radians),
+            lengths.name()
+        )
+    };
+    let judged = judged_checks(set, desc);
+    // Read in other units: (the options, the set) where it is judged as fully as read.
+    let others: Vec<(ImportUnits, MeasurementSet)> = [
         (!stated.0, stated.1),
         (stated.0, other_length(stated.1)),
         (!stated.0, other_length(stated.1)),
     ]
     .into_iter()
-    .find(|(r, l)| read_as(*r, *l).is_some_and(|other| misfits(&other).is_empty()));
+    .filter_map(|units| Some((units, read_as(units.0, units.1)?)))
+    .filter(|(_, other)| judged_checks(other, desc) >= judged)
+    .collect();
+    let fits = others
+        .iter()
+        .find(|(_, other)| misfits(other).is_empty() && free_pose_scale_warning(other, desc).is_none())
+        .map(|(units, _)| *units);
+    if let Some(((radians, lengths), fault)) = others
+        .iter()
+        .find_map(|(units, other)| Some((*units, data_faults(other, desc).into_iter().next()?)))
+        .filter(|_| fits.is_none())
+    {
+        // The slips as read are this fault seen in the wrong units: the fault alone is said.
+        bail!(
+            "{}: --angles {} --units {} do not fit the description (`{}`), and read with --angles {} --units {} the \
+             data show what no unit explains, `{}`: {}; if the data are right after all, pass --skip-unit-check",
+            file.display(),
+            angles(stated.0),
+            stated.1.name(),
+            slips.iter().map(|s| s.field.as_str()).collect::<Vec<_>>().join("`, `"),
+            angles(radians),
+            lengths.name(),
+            fault.field,
+            fault.message
+        );
+    }
     let Some((radians, lengths)) = fits else {
         print_warnings(&[format!(
             "{}: read with --angles {} --units {}: {} (no other --angles or --units explains it: another robot than --robot?; --skip-unit-check silences this)",
@@ -212,14 +253,8 @@ pub fn import_units(
         changed.push(format!("--units {}", lengths.name()));
     }
     bail!(
-        "{}: read with --angles {} --units {} the file does not fit the description ({}); read with --angles {} \
-         --units {} it does: pass {}; if the units are right after all, pass --skip-unit-check",
-        file.display(),
-        angles(stated.0),
-        stated.1.name(),
-        said.join("; "),
-        angles(radians),
-        lengths.name(),
+        "{} it does: pass {}; if the units are right after all, pass --skip-unit-check",
+        read_otherwise(radians, lengths),
         changed.join(" ")
     )
 }

@@ -218,6 +218,16 @@ struct RctArgs {
     /// Joint values within this of each other hold the joint still (deg or mm).
     #[arg(long, default_value_t = 1e-6, value_parser = super::options::STILL_TOLERANCE)]
     still_tolerance: f64,
+    /// Unit of the positions and of the prismatic joint values (robot_cal_tools works in m).
+    #[arg(long, value_enum, default_value = "m")]
+    units: Unit,
+    /// Unit of the revolute joint values (robot_cal_tools works in radians).
+    #[arg(long, value_enum, default_value = "rad")]
+    angles: Angle,
+    /// Skip the check of --angles and --units against the description (the sweeps' arcs and
+    /// turns, `docs/formats.md#unit-checks`) when the units are right after all.
+    #[arg(long)]
+    skip_unit_check: bool,
     /// Output measurement CSV.
     #[arg(long)]
     out: PathBuf,
@@ -392,6 +402,7 @@ fn import_sscanss2(a: &Sscanss2Args) -> Result<()> {
     let set = read_as(stated.0, stated.1)?;
     if !a.skip_unit_check {
         super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
+        sscanss2::check_homes(&text, &a.file, &kinds, stated.1, stated.0)?;
     }
     let comment = format!(
         "{}{}",
@@ -411,12 +422,22 @@ fn import_rct(a: &RctArgs) -> Result<()> {
     }
     let desc = RobotDescription::from_file(&a.robot)?;
     let text = axiscal::presets::read_text(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
-    let options = rct::RctOptions {
-        kinds: desc.joints.iter().map(|j| j.kind).collect(),
-        frame_points_mm: a.frame_points,
-        still_tolerance: a.still_tolerance,
+    let read_as = |radians: bool, lengths: LengthUnit| {
+        let options = rct::RctOptions {
+            kinds: desc.joints.iter().map(|j| j.kind).collect(),
+            frame_points_mm: a.frame_points,
+            still_tolerance: a.still_tolerance,
+            radians,
+            lengths,
+        };
+        (rct::parse(&text, &a.file, &options), options)
     };
-    let set = rct::parse(&text, &a.file, &options)?;
+    let stated = (matches!(a.angles, Angle::Rad), a.units.into());
+    let (set, options) = read_as(stated.0, stated.1);
+    let set = set?;
+    if !a.skip_unit_check && still_tolerance_hint(&set, a.still_tolerance).is_none() {
+        super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).0.ok())?;
+    }
     let comment = format!(
         "{}{}",
         super::checks::identity_comment(&desc),

@@ -25,6 +25,9 @@ mod commands;
 mod experiments;
 mod handedness;
 mod sweeps;
+mod travel;
+
+pub use travel::judged_checks;
 
 /// A ratio this far from 1 (either way) is a unit slip, not a robot's deviation.
 pub const SLIP_FACTOR: f64 = 5.0;
@@ -639,6 +642,8 @@ fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip>
             ),
         });
     }
+    let coordinates_said = slips.iter().any(|s| s.field.starts_with('x'));
+    slips.extend(travel::travel_slips(set, desc, coordinates_said));
     // The free poses, unless the sweeps already said the same slip of the same columns.
     for slip in free_pose_slips(set, desc) {
         let coordinates = |s: &UnitSlip| s.field.starts_with('x');
@@ -668,9 +673,15 @@ struct FreePose {
 }
 
 /// The free poses of `set` (rows with `moved_joint = 0` whose target is one of the
-/// description's tool targets), in order of first appearance.
+/// description's tool targets), in order of first appearance. A description that places no
+/// tool target (a free-pose calibration fits them) has each target taken at the tool frame's
+/// origin, as the handedness check takes it: the targets' unknown offsets, a tool's size, move
+/// both spreads alike by far less than the arm's reach that a slip scales them by.
 fn free_poses(set: &MeasurementSet, desc: &RobotDescription) -> Vec<FreePose> {
-    let tool_targets = desc.tool_targets_m();
+    let mut tool_targets = desc.tool_targets_m();
+    if tool_targets.is_empty() {
+        tool_targets = vec![Point3::origin(); set.rows().iter().map(|m| m.target + 1).max().unwrap_or(0)];
+    }
     let ideal = crate::robot::RobotModel::ideal(desc);
     let controller = crate::robot::Controller::from_description(desc);
     let model = ideal.phi_model();

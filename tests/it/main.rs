@@ -45,6 +45,7 @@ mod hostile_round5d;
 mod hostile_round5e;
 mod hostile_round6a;
 mod hostile_round6d;
+mod hostile_round6b;
 mod iso9283;
 mod joint_map;
 mod json_schemas;

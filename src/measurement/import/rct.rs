@@ -11,7 +11,7 @@
 //! (`docs/formats.md#wide-format`): runs in which one joint moves are axis experiments, every
 //! other pose is free.
 
-use super::points::PointsError;
+use super::points::{LengthUnit, PointsError};
 use super::wide::{Pose, rows_of};
 use crate::csv_lines::shown_cell;
 use crate::kinematics::JointKind;
@@ -31,6 +31,10 @@ pub struct RctOptions {
     pub frame_points_mm: Option<f64>,
     /// Two poses whose joint value differs by at most this (deg or mm) hold the joint still.
     pub still_tolerance: f64,
+    /// Revolute `target_joints` in radians (the format's), else degrees.
+    pub radians: bool,
+    /// Unit of `pose.x, y, z` and of prismatic `target_joints` (the format's: metres).
+    pub lengths: LengthUnit,
 }
 
 /// A quaternion whose norm is further from 1 than this is not a rotation (a unit quaternion
@@ -97,8 +101,9 @@ fn observation(
             let field = format!("target_joints[{k}]");
             let v = number(written).ok_or_else(|| error(&field, "not a finite number".into()))?;
             let (cmd, unit) = match kind {
-                JointKind::Revolute => (v.to_degrees(), "rad"),
-                JointKind::Prismatic => (v * 1e3, "m"),
+                JointKind::Revolute if options.radians => (v.to_degrees(), "rad"),
+                JointKind::Revolute => (v, "deg"),
+                JointKind::Prismatic => (v * options.lengths.to_mm(), options.lengths.name()),
             };
             match command_beyond(cmd) {
                 Some(range) => Err(error(
@@ -114,11 +119,15 @@ fn observation(
         number(&pose[name]).ok_or_else(|| error(&format!("pose.{name}"), "missing or not a finite number".into()))
     };
     let coordinate_mm = |name: &str| {
-        let mm = field(name)? * 1e3;
+        let mm = field(name)? * options.lengths.to_mm();
         match coordinate_beyond(mm) {
             Some(range) => Err(error(
                 &format!("pose.{name}"),
-                format!("{} m is outside {range}", as_written(&pose[name])),
+                format!(
+                    "{} {} is outside {range}",
+                    as_written(&pose[name]),
+                    options.lengths.name()
+                ),
             )),
             None => Ok(mm),
         }
@@ -186,8 +195,18 @@ pub fn provenance_comment(source: &Path, options: &RctOptions) -> String {
         Some(l) => format!("target 0 the measured position, targets 1-2 {l} mm along its frame's x and y"),
         None => "target 0 the measured position".into(),
     };
+    // The format's units are said by nothing; others than its own by the options read with.
+    let units = if options.radians && options.lengths == LengthUnit::M {
+        String::new()
+    } else {
+        format!(
+            "; read with --angles {} --units {}",
+            if options.radians { "rad" } else { "deg" },
+            options.lengths.name()
+        )
+    };
     format!(
-        "# imported by `axiscal import rct` from {} (robot_cal_tools kinematic measurements; {targets})\n",
+        "# imported by `axiscal import rct` from {} (robot_cal_tools kinematic measurements; {targets}{units})\n",
         source.display()
     )
 }
@@ -201,6 +220,8 @@ mod tests {
             kinds: vec![JointKind::Revolute, JointKind::Prismatic],
             frame_points_mm,
             still_tolerance: 1e-6,
+            radians: true,
+            lengths: LengthUnit::M,
         }
     }
 

@@ -9,7 +9,7 @@
 //! the same joint `joint<k>-2`, ...) of target 0; a held joint's command is its home value.
 
 use super::points::{LengthUnit, PointsError};
-use crate::csv_lines::shown_cell;
+use crate::csv_lines::{foreign_separator, shown_cell};
 use crate::kinematics::JointKind;
 use crate::measurement::{Measurement, MeasurementSet};
 use std::path::{Path, PathBuf};
@@ -118,6 +118,18 @@ fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit, radians: bool)
         if trimmed.is_empty() || trimmed.starts_with('#') {
             continue;
         }
+        if let Some(separator) = foreign_separator_of(trimmed) {
+            return Err(PointsError::File {
+                path: path.to_owned(),
+                message: format!(
+                    "line {}: the cells are separated by {separator} (`{}`): SScanSS-2 calibration files separate \
+                     them with commas or white space; export the file with commas (a decimal comma then becomes a \
+                     point) or replace each {separator} with a comma",
+                    i + 1,
+                    shown_cell(trimmed)
+                ),
+            });
+        }
         if rows.is_empty() && is_header(trimmed) {
             return Err(PointsError::File {
                 path: path.to_owned(),
@@ -137,6 +149,13 @@ fn rows(text: &str, path: &Path, joints: usize, unit: LengthUnit, radians: bool)
         });
     }
     Ok(rows)
+}
+
+/// The separator, in words, a line holds instead of the format's commas and white space
+/// ([`foreign_separator`]; a tab is white space here): a file exported with another
+/// separator, whose line would otherwise be taken for a header or a row of one cell.
+fn foreign_separator_of(line_text: &str) -> Option<&'static str> {
+    foreign_separator(line_text).filter(|_| !line_text.contains(',') && !line_text.contains('\t'))
 }
 
 /// Whether a line is a header: none of its first two cells (the joint and `x`) is a number.
@@ -277,6 +296,165 @@ fn homes(rows: &[Row], path: &Path, kinds: &[JointKind]) -> Result<Vec<f64>, Poi
         });
     }
     Ok(homes.into_iter().map(|h| h.map_or(0.0, |(v, _)| v)).collect())
+}
+
+/// A joint's home moves the home pose's point along its sweep by more than this many times
+/// the sweep's own scatter about its ideal arc or line (noise and the stage's own errors) before
+/// it is refused: a 3-sigma fence.
+const HOME_FENCE: f64 = 3.0;
+
+/// The least scatter \[mm\] a sweep is judged with: a laser tracker's resolution (the finest
+/// an instrument writes), so that noise-free data are not judged on rounding.
+const RESOLUTION_MM: f64 = 1e-3;
+
+/// How far apart \[the sweep's length unit\] the points of a sweep at values `a` and `b` lie
+/// per unit of its scale: the chord over the radius of a revolute joint's arc, the travel of a
+/// prismatic joint.
+fn chord_factor(kind: JointKind, a: f64, b: f64) -> f64 {
+    match kind {
+        JointKind::Revolute => 2.0 * ((a - b).to_radians().abs() / 2.0).sin(),
+        JointKind::Prismatic => (a - b).abs(),
+    }
+}
+
+/// One joint's sweep, fitted by its points' mutual distances: its scale (radius or travel per
+/// unit), its scatter about them \[mm\], and the home value that puts `home_point` on it best.
+struct SweepFit {
+    scale: f64,
+    scatter_mm: f64,
+    home: f64,
+}
+
+/// The RMS miss \[mm\] of `home_point`'s distances to `rows` against the sweep's at `home`.
+fn home_miss(rows: &[&Row], kind: JointKind, scale: f64, home_point: &nalgebra::Vector3<f64>, home: f64) -> f64 {
+    let sum: f64 = rows
+        .iter()
+        .map(|r| (nalgebra::Vector3::from(r.point) - home_point).norm() - scale * chord_factor(kind, r.value, home))
+        .map(|d| d * d)
+        .sum();
+    (sum / rows.len() as f64).sqrt()
+}
+
+/// A sweep's scale (an arc's radius, a slide's travel per unit) from its points' mutual
+/// distances, and its scatter about them \[mm, at least [`RESOLUTION_MM`]\].
+fn sweep_scale(rows: &[&Row], kind: JointKind) -> Option<(f64, f64)> {
+    let pairs: Vec<(f64, f64)> = (0..rows.len())
+        .flat_map(|a| (a + 1..rows.len()).map(move |b| (a, b)))
+        .map(|(a, b)| {
+            let chord = (nalgebra::Vector3::from(rows[a].point) - nalgebra::Vector3::from(rows[b].point)).norm();
+            (chord, chord_factor(kind, rows[a].value, rows[b].value))
+        })
+        .collect();
+    let den: f64 = pairs.iter().map(|(_, g)| g * g).sum();
+    if pairs.len() < 2 || den <= 0.0 {
+        return None;
+    }
+    let scale = pairs.iter().map(|(c, g)| c * g).sum::<f64>() / den;
+    let scatter_mm = (pairs.iter().map(|(c, g)| (c - scale * g).powi(2)).sum::<f64>() / pairs.len() as f64).sqrt();
+    Some((scale, scatter_mm.max(RESOLUTION_MM)))
+}
+
+fn fit_sweep(rows: &[&Row], kind: JointKind, home_point: &nalgebra::Vector3<f64>) -> Option<SweepFit> {
+    let (scale, scatter_mm) = sweep_scale(rows, kind)?;
+    let (lo, hi) = rows.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+        (lo.min(r.value), hi.max(r.value))
+    });
+    let miss = |h: f64| home_miss(rows, kind, scale, home_point, h);
+    // A grid over the sweep and half its span beyond, then a grid over the best's two cells:
+    // the home to a millionth of twice the span.
+    const GRID: usize = 2000;
+    let best_on = |start: f64, step: f64| {
+        (0..=GRID)
+            .map(|i| start + step * i as f64)
+            .min_by(|a, b| miss(*a).total_cmp(&miss(*b)))
+    };
+    let step = 2.0 * (hi - lo) / GRID as f64;
+    let coarse = best_on(lo - (hi - lo) / 2.0, step)?;
+    let home = best_on(coarse - step, 2.0 * step / GRID as f64)?;
+    Some(SweepFit {
+        scale,
+        scatter_mm,
+        home,
+    })
+}
+
+/// Refuses a home value (column 7) the data contradict: every joint's sweep is measured with
+/// the other joints at their homes, so each sweep passes, at its own joint's home, through the
+/// one point of the home pose (taken where sweeps hold a point at their home value: their
+/// component-wise median). A sweep that reaches that point at another value than the file's
+/// home (beyond `HOME_FENCE`, 3, times its own scatter) names the joint's first line, its home
+/// and the value the data give. Nothing is judged unless two or more sweeps, and more than half
+/// of those that hold a point at their home value, hold one point there (within the fence of the
+/// largest scatter): sweeps of different measured points (each joint's own target) have no one
+/// home pose point to judge by.
+pub fn check_homes(
+    text: &str,
+    path: &Path,
+    kinds: &[JointKind],
+    unit: LengthUnit,
+    radians: bool,
+) -> Result<(), PointsError> {
+    let rows = rows(text, path, kinds.len(), unit, radians)?;
+    let sweep = |k: usize| -> Vec<&Row> { rows.iter().filter(|r| r.joint == k + 1).collect() };
+    let at_home: Vec<&Row> = (0..kinds.len())
+        .filter_map(|k| sweep(k).into_iter().find(|r| r.value.to_bits() == r.home.to_bits()))
+        .collect();
+    let largest_scatter = (0..kinds.len())
+        .filter_map(|k| sweep_scale(&sweep(k), kinds[k]))
+        .fold(RESOLUTION_MM, |m, (_, s)| m.max(s));
+    let median = |c: usize| {
+        let mut v: Vec<f64> = at_home.iter().map(|r| r.point[c]).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    if at_home.len() < 2 {
+        return Ok(());
+    }
+    let home_point = nalgebra::Vector3::new(median(0), median(1), median(2));
+    let agree = at_home
+        .iter()
+        .filter(|r| (nalgebra::Vector3::from(r.point) - home_point).norm() <= HOME_FENCE * largest_scatter)
+        .count();
+    if agree < 2 || 2 * agree <= at_home.len() {
+        return Ok(());
+    }
+    for (k, &kind) in kinds.iter().enumerate() {
+        let sweep = sweep(k);
+        let (Some(first), Some(fit)) = (sweep.first(), fit_sweep(&sweep, kind, &home_point)) else {
+            continue;
+        };
+        let shift_mm = fit.scale * chord_factor(kind, first.home, fit.home);
+        if shift_mm > HOME_FENCE * fit.scatter_mm {
+            let unit = kind.file_unit();
+            return Err(row_error(
+                path,
+                first.line,
+                6,
+                format!(
+                    "joint {}'s home is {} {unit}, but the other joints' sweeps were measured where joint {}'s own \
+                     sweep stands at {:.3} {unit}: the home pose's point ({:.3}, {:.3}, {:.3}) mm lies {:.3} mm along \
+                     the sweep from where a home of {} {unit} puts it, {:.1} times the sweep's own scatter ({:.3} mm; \
+                     the limit is {HOME_FENCE}); write the value joint {} stood at while the others moved (about {:.3} \
+                     {unit}) in every row of joint {}, or pass --skip-unit-check if the homes are right after all",
+                    k + 1,
+                    first.home,
+                    k + 1,
+                    fit.home,
+                    home_point.x,
+                    home_point.y,
+                    home_point.z,
+                    shift_mm,
+                    first.home,
+                    shift_mm / fit.scatter_mm,
+                    fit.scatter_mm,
+                    k + 1,
+                    fit.home,
+                    k + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn row_error(path: &Path, line: usize, column: usize, message: String) -> PointsError {

@@ -28,7 +28,7 @@ const MIN_POINTS: usize = 12;
 /// sweep's without `axis_targets`, which then sits on the last link) is taken at the tool
 /// frame's origin: its unknown offset adds its size to both fits alike, far below an arm's
 /// reach that a mirror moves the points by.
-fn nominal_point(
+pub(super) fn nominal_point(
     desc: &RobotDescription,
     ideal: &RobotModel,
     controller: &Controller,
@@ -57,6 +57,73 @@ fn nominal_point(
     Some(model.poses(&q).world_from_link.get(target.link - 1)? * target.position_m())
 }
 
+/// Rounds of [`fitted_targets_rms`]: each refits the placement to the targets, then the targets
+/// to the placement, which never raises the RMS; a handful settle a tool's offsets far below the
+/// arm's reach that a mirror moves the points by.
+const TARGET_ROUNDS: usize = 10;
+
+/// The RMS \[m\] of the best rigid map (of the mirror image when `mirror`) of the free poses'
+/// targets, each target's place on the tool fitted with it: the tool frames `tools` of the rows
+/// (the nominal robot at their commands), their target ids `targets` and measured points
+/// `measured`. Starts from every target at the tool frame's origin.
+fn fitted_targets_rms(
+    tools: &[nalgebra::Isometry3<f64>],
+    targets: &[usize],
+    measured: &[Point3<f64>],
+    mirror: bool,
+) -> Option<f64> {
+    let flip = |p: Point3<f64>| if mirror { Point3::new(-p.x, p.y, p.z) } else { p };
+    let ids = targets.iter().max()? + 1;
+    let mut places = vec![Point3::origin(); ids];
+    let mut rms = f64::INFINITY;
+    for _ in 0..TARGET_ROUNDS {
+        let nominal: Vec<Point3<f64>> = tools.iter().zip(targets).map(|(w, &t)| flip(w * places[t])).collect();
+        let (placement, fitted) = rigid_fit(&nominal, measured)?;
+        rms = fitted;
+        let mut sums = vec![(nalgebra::Vector3::zeros(), 0usize); ids];
+        for ((w, &t), m) in tools.iter().zip(targets).zip(measured) {
+            let on_tool = w.inverse() * flip(placement.inverse() * m);
+            sums[t].0 += on_tool.coords;
+            sums[t].1 += 1;
+        }
+        places = sums
+            .iter()
+            .map(|(sum, n)| Point3::from(sum / (*n).max(1) as f64))
+            .collect();
+    }
+    Some(rms)
+}
+
+/// The free poses of a description that places no tool target (a free-pose calibration fits
+/// them): the best rotation's and the best mirror's RMS \[m\], each with the targets' places on
+/// the tool fitted ([`fitted_targets_rms`]); taken at the tool frame's origin, the targets'
+/// offsets (a tool's size) would blur both fits alike and hide a mirror.
+fn free_poses_fits(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64, f64, usize)> {
+    if !desc.tool_targets_m().is_empty() || set.rows().iter().any(|m| m.moved_joint != 0) {
+        return None;
+    }
+    let ideal = RobotModel::ideal(desc);
+    let controller = Controller::from_description(desc);
+    let model = ideal.phi_model();
+    let every = set.rows().len().div_ceil(MAX_ROWS).max(1);
+    let rows: Vec<&Measurement> = set.rows().iter().step_by(every).collect();
+    let tools: Vec<nalgebra::Isometry3<f64>> = rows
+        .iter()
+        .map(|m| {
+            let internal = commands_to_internal(desc, &m.cmd);
+            model.world_from_tool(&ideal.joint_values(&controller, &internal).unwrap_or(internal))
+        })
+        .collect();
+    let targets: Vec<usize> = rows.iter().map(|m| m.target).collect();
+    let measured: Vec<Point3<f64>> = rows.iter().map(|m| m.position_m()).collect();
+    if rows.len() < MIN_POINTS {
+        return None;
+    }
+    let rotation = fitted_targets_rms(&tools, &targets, &measured, false)?;
+    let mirror = fitted_targets_rms(&tools, &targets, &measured, true)?;
+    Some((rotation, mirror, rows.len()))
+}
+
 /// A left-handed instrument frame (module docs), said as a slip of the coordinate columns.
 pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
     let ideal = RobotModel::ideal(desc);
@@ -68,11 +135,15 @@ pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<
         .step_by(every)
         .filter_map(|m| Some((nominal_point(desc, &ideal, &controller, m)?, m.position_m())))
         .unzip();
-    if nominal.len() < MIN_POINTS {
-        return None;
-    }
-    let (_, rotation_m) = rigid_fit(&nominal, &measured)?;
-    let mirror_m = mirror_fit_rms(&nominal, &measured)?;
+    let (rotation_m, mirror_m, points) = match free_poses_fits(set, desc) {
+        Some(fits) => fits,
+        None if nominal.len() < MIN_POINTS => return None,
+        None => (
+            rigid_fit(&nominal, &measured)?.1,
+            mirror_fit_rms(&nominal, &measured)?,
+            nominal.len(),
+        ),
+    };
     (rotation_m > MIRROR_RATIO * mirror_m).then(|| UnitSlip {
         field: "x_mm,y_mm,z_mm".into(),
         message: format!(
@@ -81,7 +152,7 @@ pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<
              (one coordinate's sign flipped, or two coordinate columns swapped, on export); check the x_mm, y_mm, \
              z_mm columns",
             mirror_m * 1e3,
-            nominal.len(),
+            points,
             rotation_m * 1e3
         ),
     })
