@@ -505,7 +505,7 @@ fn two_joints_labels_swapped_are_said() {
 }
 
 /// Item (real data): SScanSS-2's positioning table with its y and x stages' joint indices
-/// exchanged in the file is imported and calibrated with a warning naming the swap.
+/// exchanged in the file is refused at import, the exchange named beside the mirror.
 #[test]
 #[ignore = "needs ../shared/data/real/sscanss2-cpa (run by `make test-real`)"]
 fn sscanss2_table_with_two_joint_labels_swapped_is_said() {
@@ -528,12 +528,21 @@ fn sscanss2_table_with_two_joint_labels_swapped_is_said() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("table.txt");
     std::fs::write(&file, swapped.join("\n")).unwrap();
-    let (data, robot) = crate::real_sscanss2::import_path(&file, "sscanss2-table", dir.path());
-    let err = calibrate_warns(&data, &["--robot", robot.to_str().unwrap()]);
-    assert!(
-        err.contains("the axis fitted for joint 3 lies along joint 4's nominal axis"),
-        "{err}"
-    );
+    // Exchanging two of the table's orthogonal slides mirrors its motions: the import refuses
+    // the file and names the exchange beside the mirror, since these data cannot tell which.
+    let robot = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/real/sscanss2-table.toml");
+    let out = common::axiscal()
+        .args(["import", "sscanss2"])
+        .arg(&file)
+        .arg("--robot")
+        .arg(&robot)
+        .arg("--out")
+        .arg(dir.path().join("data.csv"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("3 and 4 exchanged") || err.contains("or 3 and 4"), "{err}");
 }
 
 /// The P-R-P-P table's campaign (analytic, its plan, 10 validation poses) as `table.csv` in

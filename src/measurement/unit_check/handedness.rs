@@ -124,17 +124,112 @@ fn free_poses_fits(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64
     Some((rotation, mirror, rows.len()))
 }
 
-/// A left-handed instrument frame (module docs), said as a slip of the coordinate columns.
-pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
+/// The nominal and the measured points of the `rows` whose targets the description places
+/// (module docs), every n-th of a large file.
+fn placed_points(desc: &RobotDescription, rows: &[Measurement]) -> (Vec<Point3<f64>>, Vec<Point3<f64>>) {
     let ideal = RobotModel::ideal(desc);
     let controller = Controller::from_description(desc);
-    let every = set.rows().len().div_ceil(MAX_ROWS).max(1);
-    let (nominal, measured): (Vec<Point3<f64>>, Vec<Point3<f64>>) = set
-        .rows()
-        .iter()
+    let every = rows.len().div_ceil(MAX_ROWS).max(1);
+    rows.iter()
         .step_by(every)
         .filter_map(|m| Some((nominal_point(desc, &ideal, &controller, m)?, m.position_m())))
-        .unzip();
+        .unzip()
+}
+
+/// `rows` with joints `j` and `k` (1-based) exchanged: their command columns and their sweeps'
+/// `moved_joint` labels.
+fn with_joints_swapped(rows: &[Measurement], j: usize, k: usize) -> Vec<Measurement> {
+    rows.iter()
+        .map(|m| {
+            let mut m = m.clone();
+            m.cmd.swap(j - 1, k - 1);
+            m.moved_joint = match m.moved_joint {
+                x if x == j => k,
+                x if x == k => j,
+                x => x,
+            };
+            m
+        })
+        .collect()
+}
+
+/// Relative margin within which two fits' RMS are the same fit (rounding and the rigid fits'
+/// stopping rule are far below it; a real difference between a swap and a mirror is a factor).
+const SAME_FIT: f64 = 0.01;
+
+/// Pairs of joints of one kind whose labels (command columns and sweep labels) exchanged make
+/// the points fit a rotation of the description's robot at least as well as the mirror fits them
+/// as read (`mirror_m` \[m\]), best first, with their RMS \[m\]: exchanging two of a robot's
+/// orthogonal axes reflects its motions, so such an exchange can look like a mirror.
+fn swapped_joints(set: &MeasurementSet, desc: &RobotDescription, mirror_m: f64) -> Vec<(usize, usize, f64)> {
+    let n = desc.dof();
+    let pairs = (1..=n).flat_map(|j| (j + 1..=n).map(move |k| (j, k)));
+    let mut found: Vec<(usize, usize, f64)> = pairs
+        .filter(|&(j, k)| desc.joints[j - 1].kind == desc.joints[k - 1].kind)
+        .filter_map(|(j, k)| {
+            let rows = with_joints_swapped(set.rows(), j, k);
+            let (nominal, measured) = placed_points(desc, &rows);
+            (nominal.len() >= MIN_POINTS).then_some(())?;
+            Some((j, k, rigid_fit(&nominal, &measured)?.1))
+        })
+        .filter(|&(_, _, rms)| rms <= mirror_m * (1.0 + SAME_FIT))
+        .collect();
+    found.sort_by(|a, b| a.2.total_cmp(&b.2));
+    found
+}
+
+/// The message of a mirror seen as read (`mirror_m`, `rotation_m` \[m\] over `points`), with the
+/// joint exchanges that fit as well (`swaps`, [`swapped_joints`]).
+fn mirror_slip(mirror_m: f64, rotation_m: f64, points: usize, swaps: &[(usize, usize, f64)]) -> UnitSlip {
+    let fits = format!(
+        "the measured points fit a mirror image of the description's robot at the same commands ({:.3} mm RMS over \
+         {points} points) far better than any rotation of it ({:.3} mm RMS)",
+        mirror_m * 1e3,
+        rotation_m * 1e3
+    );
+    let best = swaps.first().map(|s| s.2);
+    let ties: Vec<&(usize, usize, f64)> = swaps
+        .iter()
+        .filter(|s| Some(s.2) <= best.map(|b| b * (1.0 + SAME_FIT)))
+        .collect();
+    match ties.as_slice() {
+        [] => UnitSlip {
+            field: "x_mm,y_mm,z_mm".into(),
+            message: format!(
+                "{fits}: the instrument frame is left-handed (one coordinate's sign flipped, or two coordinate columns \
+                 swapped, on export); check the x_mm, y_mm, z_mm columns"
+            ),
+        },
+        [(j, k, rms)] if *rms < mirror_m * (1.0 - SAME_FIT) => UnitSlip {
+            field: format!("cmd_{j},cmd_{k}"),
+            message: format!(
+                "joints {j} and {k} look exchanged: {fits}, and with the two joints' command columns and sweep labels \
+                 exchanged they fit the robot itself ({:.3} mm): check which column (and which sweep's label) holds \
+                 joint {j} and which joint {k}",
+                rms * 1e3
+            ),
+        },
+        _ => {
+            let pairs: Vec<String> = ties.iter().map(|(j, k, _)| format!("{j} and {k}")).collect();
+            UnitSlip {
+                field: "x_mm,y_mm,z_mm".into(),
+                message: format!(
+                    "{fits}: the instrument frame is left-handed (one coordinate's sign flipped, or two coordinate \
+                     columns swapped, on export), or two joints' labels are exchanged: with the command columns and \
+                     sweep labels of joints {} exchanged the points fit the robot itself as well (exchanging two \
+                     sliding axes mirrors the motions, so these data cannot tell which); check the x_mm, y_mm, z_mm \
+                     columns, and which column and sweep label holds each joint",
+                    pairs.join(", or ")
+                ),
+            }
+        }
+    }
+}
+
+/// A left-handed instrument frame (module docs), said as a slip of the coordinate columns; or,
+/// where two joints' labels exchanged explain the points as well, said as that swap.
+pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
+    let (nominal, measured) = placed_points(desc, set.rows());
     let (rotation_m, mirror_m, points) = match free_poses_fits(set, desc) {
         Some(fits) => fits,
         None if nominal.len() < MIN_POINTS => return None,
@@ -144,16 +239,13 @@ pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<
             nominal.len(),
         ),
     };
-    (rotation_m > MIRROR_RATIO * mirror_m).then(|| UnitSlip {
-        field: "x_mm,y_mm,z_mm".into(),
-        message: format!(
-            "the measured points fit a mirror image of the description's robot at the same commands ({:.3} mm RMS \
-             over {} points) far better than any rotation of it ({:.3} mm RMS): the instrument frame is left-handed \
-             (one coordinate's sign flipped, or two coordinate columns swapped, on export); check the x_mm, y_mm, \
-             z_mm columns",
-            mirror_m * 1e3,
-            points,
-            rotation_m * 1e3
-        ),
-    })
+    if rotation_m <= MIRROR_RATIO * mirror_m {
+        return None;
+    }
+    Some(mirror_slip(
+        mirror_m,
+        rotation_m,
+        points,
+        &swapped_joints(set, desc, mirror_m),
+    ))
 }
