@@ -533,7 +533,15 @@ fn sweeps_as_free_poses(
     );
     let mut view = args_view(args);
     view.all_rows = true;
-    let mut cal = super::calibrate_free::calibrate(&view, set, desc)?;
+    let mut cal = match (super::calibrate_free::calibrate(&view, set, desc), failure.misfit()) {
+        (Ok(cal), _) => cal,
+        // The rows named are the likelier cause than the configurations' spread.
+        (Err(_), Some(misfit)) => anyhow::bail!(
+            "calibrating {}: {misfit}; fitted as free poses, the sweeps fail too",
+            args.data.display()
+        ),
+        (Err(e), None) => return Err(e),
+    };
     if let Some(summary) = cal.free_poses.as_mut() {
         summary.axis_rows_as_poses = Some(why);
     }
