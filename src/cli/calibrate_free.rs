@@ -260,10 +260,6 @@ fn warn_slips(
 /// position, 3, when fewer than three targets are seen).
 const POSE_VALUES: usize = 6;
 
-/// The free poses' distinct configurations (commands equal to 1e-6) in words, when they give
-/// fewer independent values ([`POSE_VALUES`] each, 3 per target below three targets) than the
-/// `fitted` parameters: repeated measurements of a few configurations add noise averaging,
-/// no geometry, and the covariance then holds at those configurations only.
 /// The fewest parameters a robot's geometry with its base placement has, `4 R + 2 P + 6` for `R`
 /// revolute and `P` prismatic joints (Everett, Driels & Mooring 1987, the minimal complete
 /// model): fewer independent values than these leave the geometry free.
@@ -276,6 +272,17 @@ fn minimal_parameters(desc: &RobotDescription) -> usize {
     4 * revolute + 2 * (desc.joints.len() - revolute) + 6
 }
 
+/// [`few_configurations`] of the free poses of `set` against the geometry's minimal parameter
+/// count ([`minimal_parameters`]).
+pub(super) fn few_configurations_of(set: &MeasurementSet, desc: &RobotDescription) -> Option<String> {
+    few_configurations(set, minimal_parameters(desc), false)
+}
+
+/// The free poses' distinct configurations (commands equal to 1e-6) in words, when they give
+/// fewer independent values ([`POSE_VALUES`] each, 3 per target below three targets) than the
+/// `fitted` parameters: repeated measurements of a few configurations add noise averaging,
+/// no geometry, and the covariance then holds at those configurations only. With `all_rows`, every row
+/// counts as a pose (the sweeps fitted as free poses).
 fn few_configurations(set: &MeasurementSet, fitted: usize, all_rows: bool) -> Option<String> {
     let key = |cmd: &[f64]| cmd.iter().map(|c| (c * 1e6).round() as i64).collect::<Vec<i64>>();
     let free = set.rows().iter().filter(|m| all_rows || m.moved_joint == 0);

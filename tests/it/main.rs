@@ -43,6 +43,7 @@ mod hostile_round5b;
 mod hostile_round5c;
 mod hostile_round5d;
 mod hostile_round5e;
+mod hostile_round6c;
 mod iso9283;
 mod joint_map;
 mod json_schemas;

@@ -177,7 +177,9 @@ fn fit_words(e: &LsqError) -> String {
              description and the joint order"
         ),
         LsqError::NotConverged {
-            iterations, residual_rms, ..
+            iterations,
+            residual_rms,
+            ..
         } => format!(
             "the fit does not settle: after {iterations} steps its parameters still move, with the points {:.3} mm \
              RMS (per coordinate) from the model: the poses leave a combination of parameters free (too few distinct \

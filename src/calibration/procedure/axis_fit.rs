@@ -193,7 +193,12 @@ impl JointData<'_> {
 
     /// The failure `e` of this joint's axis fit with what its points show
     /// ([`super::misfit::sweep_misfit`]), or `e` when they show none of its causes.
-    fn misfit(&self, e: ProcedureError, (controller, desc): (&Controller, &RobotDescription), noise_mm: f64) -> ProcedureError {
+    fn misfit(
+        &self,
+        e: ProcedureError,
+        (controller, desc): (&Controller, &RobotDescription),
+        noise_mm: f64,
+    ) -> ProcedureError {
         let (points, u) = self.flat(controller, desc);
         let mut labels = self.labels().into_iter();
         let kind = desc.joints[self.joint() - 1].kind;

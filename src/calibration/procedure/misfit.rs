@@ -3,10 +3,12 @@
 //! circle (the line) the others draw, a few points on it where the joint stands at other
 //! commands, or every point on it in another order than the commands.
 //!
-//! A circle (a line) is fitted to the points without their commands; the point farthest from
-//! it is set aside while it lies beyond the fence of the others' distances (Tukey's far-out
-//! fence, at least [`crate::numerics::stats::FAR_OUT`] times the noise of a point), at most
-//! half of them. The kept points' places along the circle (the line) are then compared with
+//! A circle (a line) is fitted to the points without their commands, robustly (through the
+//! two or three points the most others lie near, then to the points near it); the points
+//! beyond the fence of the distances (Tukey's far-out fence of noise norms, scaled by their
+//! median so that up to half may be off, and at least [`crate::numerics::stats::FAR_OUT`]
+//! times the noise of a point and [`crate::numerics::stats::ABSURD_SHARE`] of the sweep's
+//! spread) are off it. The kept points' places along the circle (the line) are then compared with
 //! their commands: a joint turns (slides) its target as far as its command, within the
 //! transmission's few per cent, so place minus command is one constant along the sweep; the
 //! points off that constant by more than the fence sit where the joint stood at another
@@ -18,7 +20,7 @@ use super::OutlierPoint;
 use crate::calibration::fit_circle;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
-use crate::numerics::stats::{ABSURD_SHARE, FAR_OUT, QuantileMethod, far_out_fence, quantile, rms_spread};
+use crate::numerics::stats::{ABSURD_SHARE, FAR_OUT, QuantileMethod, chi_square_quantile, quantile, rms_spread};
 use nalgebra::{Point3, Vector3};
 use std::f64::consts::{PI, TAU};
 
@@ -145,10 +147,22 @@ impl SweepPoints<'_> {
     }
 }
 
-/// The fence of `distances` \[mm\]: the far-out fence, at least `floor_mm` ([`floor_mm`]).
-fn fence(distances: &[f64], floor_mm: f64) -> f64 {
-    far_out_fence(distances).max(floor_mm)
+/// The fence of `distances` \[mm\], each the norm of `dof` Gaussian components for a point of
+/// the noise: the far-out fence of such norms over their median (Tukey's, as
+/// [`crate::numerics::stats::chi3_far_out_over_median`] for three) times their median, at
+/// least `floor_mm` ([`floor_mm`]). A median, not the quartiles, scales it: up to half of the
+/// points may be off.
+fn fence(distances: &[f64], dof: f64, floor_mm: f64) -> f64 {
+    let q = |p: f64| chi_square_quantile(p, dof).sqrt();
+    let ratio = (q(0.75) + FAR_OUT * (q(0.75) - q(0.25))) / q(0.5);
+    (ratio * quantile(distances, 0.5, QuantileMethod::Linear)).max(floor_mm)
 }
+
+/// Components of a point's distance from a circle (radial, axial) or a line (two across it).
+const ACROSS: f64 = 2.0;
+
+/// Components of a point's offset along its path.
+const ALONG: f64 = 1.0;
 
 /// The least distance \[mm\] a point named must lie off: [`FAR_OUT`] times the noise of a point,
 /// and [`ABSURD_SHARE`] of the sweep's spread about its centroid: a fit fails, or misses its
@@ -185,9 +199,9 @@ fn place(points: &[Point3<f64>], kept: &[usize], kind: JointKind) -> Option<Plac
         }
         JointKind::Prismatic => {
             let centroid = sub.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / sub.len() as f64;
-            let scatter = sub
-                .iter()
-                .fold(nalgebra::Matrix3::zeros(), |a, p| a + (p.coords - centroid) * (p.coords - centroid).transpose());
+            let scatter = sub.iter().fold(nalgebra::Matrix3::zeros(), |a, p| {
+                a + (p.coords - centroid) * (p.coords - centroid).transpose()
+            });
             let eig = scatter.symmetric_eigen();
             let dir = eig.eigenvectors.column(eig.eigenvalues.imax()).into_owned();
             let (distance_mm, along) = points
@@ -210,7 +224,8 @@ fn place(points: &[Point3<f64>], kept: &[usize], kind: JointKind) -> Option<Plac
 fn off_path(points: &[Point3<f64>], kind: JointKind, noise_mm: f64) -> Option<(Vec<usize>, Placed, f64)> {
     let n = points.len();
     let floor = floor_mm(points, noise_mm);
-    let tuples = (0..n).flat_map(|i| [(1, 2), (n / 3, 2 * n / 3), (n / 2, n / 4)].map(|(a, b)| [i, (i + a) % n, (i + b) % n]));
+    let tuples =
+        (0..n).flat_map(|i| [(1, 2), (n / 3, 2 * n / 3), (n / 2, n / 4)].map(|(a, b)| [i, (i + a) % n, (i + b) % n]));
     let median = |d: &[f64]| quantile(d, 0.5, QuantileMethod::Linear);
     let best = tuples
         .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
@@ -222,14 +237,14 @@ fn off_path(points: &[Point3<f64>], kind: JointKind, noise_mm: f64) -> Option<(V
             place(points, used, kind)
         })
         .min_by(|a, b| median(&a.distance_mm).total_cmp(&median(&b.distance_mm)))?;
-    let first = fence(&best.distance_mm, floor);
+    let first = fence(&best.distance_mm, ACROSS, floor);
     let near: Vec<usize> = (0..n).filter(|&i| best.distance_mm[i] <= first).collect();
     if 2 * near.len() < n || near.len() < MIN_POINTS {
         return None;
     }
     let placed = place(points, &near, kind)?;
     let kept: Vec<f64> = near.iter().map(|&i| placed.distance_mm[i]).collect();
-    let limit = fence(&kept, floor);
+    let limit = fence(&kept, ACROSS, floor);
     let off: Vec<usize> = (0..n).filter(|&i| placed.distance_mm[i] > limit).collect();
     (2 * off.len() < n).then_some((off, placed, limit))
 }
@@ -285,12 +300,20 @@ pub(super) fn merged(findings: Vec<SweepMisfit>) -> Option<SweepMisfit> {
                 }
                 (
                     SweepMisfit::OffPath { points, fence_mm, .. },
-                    Some(SweepMisfit::OffPath { points: to, fence_mm: at, .. }),
+                    Some(SweepMisfit::OffPath {
+                        points: to,
+                        fence_mm: at,
+                        ..
+                    }),
                     true,
                 )
                 | (
                     SweepMisfit::OffCommand { points, fence_mm, .. },
-                    Some(SweepMisfit::OffCommand { points: to, fence_mm: at, .. }),
+                    Some(SweepMisfit::OffCommand {
+                        points: to,
+                        fence_mm: at,
+                        ..
+                    }),
                     false,
                 ) => {
                     to.extend(points.iter().cloned());
@@ -301,14 +324,21 @@ pub(super) fn merged(findings: Vec<SweepMisfit>) -> Option<SweepMisfit> {
         }
         all
     };
-    gather(true)
-        .or_else(|| gather(false))
-        .or_else(|| findings.into_iter().find(|f| matches!(f, SweepMisfit::Reordered { .. })))
+    gather(true).or_else(|| gather(false)).or_else(|| {
+        findings
+            .into_iter()
+            .find(|f| matches!(f, SweepMisfit::Reordered { .. }))
+    })
 }
 
 /// The points whose place along the path is off their command's (module docs), or every point
 /// in another order than the commands.
-fn off_command(s: &SweepPoints<'_>, along: &[f64], kind: JointKind, (scale, noise_mm): (f64, f64)) -> Option<SweepMisfit> {
+fn off_command(
+    s: &SweepPoints<'_>,
+    along: &[f64],
+    kind: JointKind,
+    (scale, noise_mm): (f64, f64),
+) -> Option<SweepMisfit> {
     // The path's orientation is the fit's: a joint moves its target with or against it.
     let best = [1.0, -1.0]
         .into_iter()
@@ -316,7 +346,7 @@ fn off_command(s: &SweepPoints<'_>, along: &[f64], kind: JointKind, (scale, nois
         .min_by(|a, b| spread(a).total_cmp(&spread(b)))?;
     let magnitudes: Vec<f64> = best.iter().map(|d| d.abs()).collect();
     let floor = floor_mm(s.points, noise_mm);
-    let limit = fence(&magnitudes, floor);
+    let limit = fence(&magnitudes, ALONG, floor);
     let moved: Vec<usize> = (0..best.len()).filter(|&i| magnitudes[i] > limit).collect();
     if !moved.is_empty() && 2 * moved.len() < best.len() {
         let points = moved

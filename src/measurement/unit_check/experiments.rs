@@ -87,17 +87,17 @@ fn column_in_other_unit(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> 
     (0..3)
         .flat_map(|c| LENGTH_UNITS.iter().map(move |(f, unit)| (c, *f, *unit)))
         .find(|&(c, f, _)| {
-            converted(i, arcs, |p| p[c] /= f).is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
+            converted(i, arcs, |p| p[c] /= f)
+                .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
         })
 }
 
 /// The two coordinate columns whose exchange in experiment `i`'s rows puts it in place.
 fn columns_swapped(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> Option<(usize, usize)> {
-    [(0, 1), (0, 2), (1, 2)]
-        .into_iter()
-        .find(|&(a, b)| {
-            converted(i, arcs, |p| p.swap(a, b)).is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
-        })
+    [(0, 1), (0, 2), (1, 2)].into_iter().find(|&(a, b)| {
+        converted(i, arcs, |p| p.swap(a, b))
+            .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
+    })
 }
 
 /// What puts experiment `i` (out of place by `what`) in place: its coordinates or one of its
