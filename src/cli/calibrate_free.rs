@@ -219,7 +219,7 @@ fn warn_slips(
     summary: &FreePoseSummary,
 ) {
     let data = args.data.display();
-    if let Some(few) = few_configurations(set, summary.parameters.len(), false) {
+    if let Some(few) = few_configurations(set, Parameters(summary.parameters.len(), "parameters fitted"), false) {
         // Repeated configurations determine no slip either: the search would name chance ones.
         eprintln!("warning: {data}: {few}");
         return;
@@ -260,16 +260,22 @@ fn warn_slips(
 /// position, 3, when fewer than three targets are seen).
 const POSE_VALUES: usize = 6;
 
+/// A count of parameters and what they are, in words.
+struct Parameters(usize, &'static str);
+
 /// The fewest parameters a robot's geometry with its base placement has, `4 R + 2 P + 6` for `R`
 /// revolute and `P` prismatic joints (Everett, Driels & Mooring 1987, the minimal complete
 /// model): fewer independent values than these leave the geometry free.
-fn minimal_parameters(desc: &RobotDescription) -> usize {
+fn minimal_parameters(desc: &RobotDescription) -> Parameters {
     let revolute = desc
         .joints
         .iter()
         .filter(|j| j.kind == axiscal::kinematics::JointKind::Revolute)
         .count();
-    4 * revolute + 2 * (desc.joints.len() - revolute) + 6
+    Parameters(
+        4 * revolute + 2 * (desc.joints.len() - revolute) + 6,
+        "parameters of the robot's geometry and placement (4 per turning joint, 2 per sliding one, 6 for the base)",
+    )
 }
 
 /// [`few_configurations`] of the free poses of `set` against the geometry's minimal parameter
@@ -283,7 +289,7 @@ pub(super) fn few_configurations_of(set: &MeasurementSet, desc: &RobotDescriptio
 /// `fitted` parameters: repeated measurements of a few configurations add noise averaging,
 /// no geometry, and the covariance then holds at those configurations only. With `all_rows`, every row
 /// counts as a pose (the sweeps fitted as free poses).
-fn few_configurations(set: &MeasurementSet, fitted: usize, all_rows: bool) -> Option<String> {
+fn few_configurations(set: &MeasurementSet, Parameters(fitted, what): Parameters, all_rows: bool) -> Option<String> {
     let key = |cmd: &[f64]| cmd.iter().map(|c| (c * 1e6).round() as i64).collect::<Vec<i64>>();
     let free = set.rows().iter().filter(|m| all_rows || m.moved_joint == 0);
     let configurations: std::collections::HashSet<Vec<i64>> = free.clone().map(|m| key(&m.cmd)).collect();
@@ -293,7 +299,7 @@ fn few_configurations(set: &MeasurementSet, fitted: usize, all_rows: bool) -> Op
     (values < fitted).then(|| {
         format!(
             "its {} free poses stand at {} distinct configurations (commands), which give at most {values} independent \
-             values for the {fitted} parameters fitted: repeated poses add no geometry, and the predicted accuracy holds \
+             values for the {fitted} {what}: repeated poses add no geometry, and the predicted accuracy holds \
              near those configurations only; measure the robot at more configurations across its workspace",
             poses.len(),
             configurations.len()

@@ -483,7 +483,7 @@ fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<Unit
     let explains = |converted: &MeasurementSet| {
         slips_as_read(converted, desc).is_empty()
             && experiment_arcs(converted, desc).len() >= judged
-            && !(scatter(converted) > as_read)
+            && scatter(converted).partial_cmp(&as_read) != Some(std::cmp::Ordering::Greater)
     };
     // Every column in one other unit: the free poses' spread may pass with one column converted
     // alone (it is mostly that column's), but the whole file's slip is the one to say.
