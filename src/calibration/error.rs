@@ -61,9 +61,11 @@ pub enum CalibrationError {
     },
     /// A fitted transmission function is not invertible (not monotonic) at some command.
     #[error(
-        "{fit}: transmission not invertible at command {command_rad} rad: the fitted harmonics make it \
-         non-monotonic, which means the sweep is too short or too noisy to resolve them (ill-conditioned): \
-         widen the span or fit fewer harmonics (`transmission_fit`)"
+        "{fit}: the fitted transmission turns back on itself near the command {:.3} deg (or mm): no joint \
+         position gives that command, so the points cannot be placed on the axis; the sweep is too short or its \
+         points too noisy to resolve the transmission's harmonics: widen the span, measure more points or with \
+         less noise, or lower the description's `transmission_fit.order` for this joint",
+        command_rad.to_degrees()
     )]
     NotInvertible {
         /// Which fit failed.

@@ -268,7 +268,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     cal.data_digest = Some(set.digest());
     cal.model_digest = Some(cal.robot.digest());
-    readable(&cal, &args)?;
+    readable(&cal, &args, (&set, &desc))?;
     let source = args.data.display().to_string();
     let texts = output_texts(&args, &desc, &set, &cal, &source)?;
     // Every file is written before any is put in place; an output left out must not leave an
@@ -344,19 +344,25 @@ fn tool_rows(found: &Implausible, set: &MeasurementSet, data: &Path) -> String {
 }
 
 /// `cal` passes the checks every command makes when it reads `calibration.json`: a parameter
-/// the data leave free is said here, before anything is written, not by the next command.
-fn readable(cal: &Calibration, args: &Args) -> Result<()> {
+/// the data leave free is said here, before anything is written, not by the next command (with
+/// free poses at too few configurations as its cause, when they are).
+fn readable(cal: &Calibration, args: &Args, (set, desc): (&MeasurementSet, &RobotDescription)) -> Result<()> {
     let data = &args.data;
     if let Some((_, name, variance)) = cal.model_covariance.as_ref().and_then(|c| c.undetermined()) {
+        let few = cal
+            .free_poses
+            .as_ref()
+            .and_then(|_| super::calibrate_free::few_configurations_of(set, desc));
         anyhow::bail!(
             "calibrating {}: the data do not determine `{name}` (1-sigma {:.3e}, beyond 1 in its unit): nothing written; {}",
             data.display(),
             variance.sqrt(),
-            match weighting_options(args, cal) {
-                Some(options) => format!(
+            match (few, weighting_options(args, cal)) {
+                (Some(few), _) => few,
+                (None, Some(options)) => format!(
                     "every sigma grows with the noise the fits assume: {options}; without them the noise is estimated from the residuals and the repeatability is the description's"
                 ),
-                None => "the fitted axes leave it free (two axes parallel or on one line where the description's rows make \
+                (None, None) => "the fitted axes leave it free (two axes parallel or on one line where the description's rows make \
                          them meet, or a joint swept too little to fix it): check the description's rows against the robot \
                          (`axiscal describe`) and the sweeps' spans"
                     .to_owned(),
@@ -533,7 +539,15 @@ fn sweeps_as_free_poses(
     );
     let mut view = args_view(args);
     view.all_rows = true;
-    let mut cal = super::calibrate_free::calibrate(&view, set, desc)?;
+    let mut cal = match (super::calibrate_free::calibrate(&view, set, desc), failure.misfit()) {
+        (Ok(cal), _) => cal,
+        // The rows named are the likelier cause than the configurations' spread.
+        (Err(_), Some(misfit)) => anyhow::bail!(
+            "calibrating {}: {misfit}; fitted as free poses, the sweeps fail too",
+            args.data.display()
+        ),
+        (Err(e), None) => return Err(e),
+    };
     if let Some(summary) = cal.free_poses.as_mut() {
         summary.axis_rows_as_poses = Some(why);
     }

@@ -57,35 +57,49 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
         effects: args.effects,
         max_poses: args.max_poses,
     };
-    let mut cal = match calibrate_free_poses(set, desc, &options) {
-        Ok(cal) => cal,
-        Err(e @ (FreePoseError::Absurd { .. } | FreePoseError::TooManyOutliers { .. })) => {
-            match explaining_slip(set, desc, &options, None) {
-                Some(s) => anyhow::bail!(
-                    "calibrating {} from its free poses: {}; the fit fails ({})",
-                    args.data.display(),
-                    slip_words(&s),
-                    first_clause(&e.to_string())
-                ),
-                None => match swapped_target_ids(set, &desc.tool.targets_mm).first() {
-                    Some(found) => anyhow::bail!(
-                        "calibrating {} from its free poses{}; the fit fails ({})",
-                        args.data.display(),
-                        target_ids_words(found, None, desc),
-                        first_clause(&e.to_string())
-                    ),
-                    None => anyhow::bail!("calibrating {} from its free poses: {e}", args.data.display()),
-                },
-            }
-        }
-        Err(e) => anyhow::bail!("calibrating {} from its free poses: {e}", args.data.display()),
-    };
+    let mut cal = calibrate_free_poses(set, desc, &options).map_err(|e| failure(e, args, (set, desc), &options))?;
     if args.all_rows && set.experiments().iter().any(|e| e.moved_joint > 0) {
         cal.summary.axis_rows_as_poses = Some("`--free-poses` asked for it".into());
     }
     let cal = cal.into_calibration(desc);
     warn_slips(args, (set, desc), &options, &cal);
     Ok(cal)
+}
+
+/// A failed free-pose calibration in words: its cause in the data when one is found (few
+/// configurations, a column slip, target ids swapped), else the fit's own.
+fn failure(
+    e: FreePoseError,
+    args: &FreeArgs<'_>,
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+) -> anyhow::Error {
+    let data = args.data.display();
+    // Few configurations leave the model free, whatever else the fit's failure suggests.
+    if let Some(few) = few_configurations(set, minimal_parameters(desc), args.all_rows) {
+        return anyhow::anyhow!(
+            "calibrating {data} from its free poses: {few}; the fit fails ({})",
+            first_clause(&e.to_string())
+        );
+    }
+    if !matches!(e, FreePoseError::Absurd { .. } | FreePoseError::TooManyOutliers { .. }) {
+        return anyhow::anyhow!("calibrating {data} from its free poses: {e}");
+    }
+    if let Some(s) = explaining_slip(set, desc, options, None) {
+        return anyhow::anyhow!(
+            "calibrating {data} from its free poses: {}; the fit fails ({})",
+            slip_words(&s),
+            first_clause(&e.to_string())
+        );
+    }
+    match swapped_target_ids(set, &desc.tool.targets_mm).first() {
+        Some(found) => anyhow::anyhow!(
+            "calibrating {data} from its free poses{}; the fit fails ({})",
+            target_ids_words(found, None, desc),
+            first_clause(&e.to_string())
+        ),
+        None => anyhow::anyhow!("calibrating {data} from its free poses: {e}"),
+    }
 }
 
 /// The console summary of a free-pose calibration.
@@ -210,7 +224,7 @@ fn warn_slips(
         return;
     };
     let data = args.data.display();
-    if let Some(few) = few_configurations(set, summary.parameters.len()) {
+    if let Some(few) = few_configurations(set, Parameters(summary.parameters.len(), "parameters fitted"), false) {
         // Repeated configurations determine no slip either: the search would name chance ones.
         eprintln!("warning: {data}: {few}");
         return;
@@ -254,13 +268,38 @@ fn warn_slips(
 /// position, 3, when fewer than three targets are seen).
 const POSE_VALUES: usize = 6;
 
+/// A count of parameters and what they are, in words.
+struct Parameters(usize, &'static str);
+
+/// The fewest parameters a robot's geometry with its base placement has, `4 R + 2 P + 6` for `R`
+/// revolute and `P` prismatic joints (Everett, Driels & Mooring 1987, the minimal complete
+/// model): fewer independent values than these leave the geometry free.
+fn minimal_parameters(desc: &RobotDescription) -> Parameters {
+    let revolute = desc
+        .joints
+        .iter()
+        .filter(|j| j.kind == axiscal::kinematics::JointKind::Revolute)
+        .count();
+    Parameters(
+        4 * revolute + 2 * (desc.joints.len() - revolute) + 6,
+        "parameters of the robot's geometry and placement (4 per turning joint, 2 per sliding one, 6 for the base)",
+    )
+}
+
+/// [`few_configurations`] of the free poses of `set` against the geometry's minimal parameter
+/// count ([`minimal_parameters`]).
+pub(super) fn few_configurations_of(set: &MeasurementSet, desc: &RobotDescription) -> Option<String> {
+    few_configurations(set, minimal_parameters(desc), false)
+}
+
 /// The free poses' distinct configurations (commands equal to 1e-6) in words, when they give
 /// fewer independent values ([`POSE_VALUES`] each, 3 per target below three targets) than the
 /// `fitted` parameters: repeated measurements of a few configurations add noise averaging,
-/// no geometry, and the covariance then holds at those configurations only.
-fn few_configurations(set: &MeasurementSet, fitted: usize) -> Option<String> {
+/// no geometry, and the covariance then holds at those configurations only. With `all_rows`, every row
+/// counts as a pose (the sweeps fitted as free poses).
+fn few_configurations(set: &MeasurementSet, Parameters(fitted, what): Parameters, all_rows: bool) -> Option<String> {
     let key = |cmd: &[f64]| cmd.iter().map(|c| (c * 1e6).round() as i64).collect::<Vec<i64>>();
-    let free = set.rows().iter().filter(|m| m.moved_joint == 0);
+    let free = set.rows().iter().filter(|m| all_rows || m.moved_joint == 0);
     let configurations: std::collections::HashSet<Vec<i64>> = free.clone().map(|m| key(&m.cmd)).collect();
     let targets: std::collections::HashSet<usize> = free.clone().map(|m| m.target).collect();
     let poses: std::collections::HashSet<(&str, usize)> = free.map(|m| (m.experiment.as_str(), m.step)).collect();
@@ -268,7 +307,7 @@ fn few_configurations(set: &MeasurementSet, fitted: usize) -> Option<String> {
     (values < fitted).then(|| {
         format!(
             "its {} free poses stand at {} distinct configurations (commands), which give at most {values} independent \
-             values for the {fitted} parameters fitted: repeated poses add no geometry, and the predicted accuracy holds \
+             values for the {fitted} {what}: repeated poses add no geometry, and the predicted accuracy holds \
              near those configurations only; measure the robot at more configurations across its workspace",
             poses.len(),
             configurations.len()

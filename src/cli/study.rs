@@ -6,6 +6,7 @@ use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::Result;
 use axiscal::harness::studies::EfficiencyStudy;
+use axiscal::harness::studies::StudyError;
 use axiscal::json_file::{self, Schema};
 use std::path::PathBuf;
 
@@ -19,7 +20,7 @@ pub struct Args {
     #[arg(long, value_parser = super::options::SEED, default_value_t = 1)]
     seed: u64,
     /// Measurement noise, 3-D RMS (mm).
-    #[arg(long, default_value_t = 0.19, value_parser = NOISE_MM)]
+    #[arg(long, default_value_t = Args::DEFAULT_NOISE_MM, value_parser = NOISE_MM)]
     noise_mm: f64,
     /// Keep the truth robot's repeatability jitter (the bound then includes it as angle noise).
     #[arg(long)]
@@ -39,6 +40,11 @@ pub struct Args {
     force: bool,
 }
 
+impl Args {
+    /// The default `--noise-mm`: a laser tracker's or the paper's theodolites' noise.
+    const DEFAULT_NOISE_MM: f64 = 0.19;
+}
+
 /// Runs `axiscal study`.
 pub fn run(args: Args) -> Result<()> {
     let study = EfficiencyStudy {
@@ -52,7 +58,9 @@ pub fn run(args: Args) -> Result<()> {
     let outputs = Outputs::new(args.force);
     outputs.check_in(&args.out, &names)?;
     let progress = super::progress::Progress::stage("efficiency study");
-    let report = super::options::thread_pool(args.threads)?.install(|| study.run_with(&progress))?;
+    let report = super::options::thread_pool(args.threads)?
+        .install(|| study.run_with(&progress))
+        .map_err(|e| failed_trial(e, args.noise_mm))?;
     drop(progress);
     let md = report.markdown();
     let mut staged = outputs.staged_in(&args.out)?;
@@ -61,4 +69,19 @@ pub fn run(args: Args) -> Result<()> {
     staged.commit(&[])?;
     print!("{md}");
     Ok(())
+}
+
+/// A study's failure in words: a simulated trial its calibrator cannot fit is the noise's doing
+/// when the noise is above the default's (the campaign resolves its sweeps at that noise).
+fn failed_trial(e: StudyError, noise_mm: f64) -> anyhow::Error {
+    let default = Args::DEFAULT_NOISE_MM;
+    match e {
+        StudyError::Fit { .. } | StudyError::Procedure { .. } if noise_mm > default => anyhow::anyhow!(
+            "{e}: this trial's simulated points scatter with --noise-mm {noise_mm}, {:.0} times the default \
+             {default} mm, beyond what the study campaign's sweeps resolve (its calibrator cannot place their axes); \
+             a study compares the calibrator with its bound at an instrument's noise: pass a smaller --noise-mm",
+            noise_mm / default
+        ),
+        other => other.into(),
+    }
 }

@@ -277,6 +277,9 @@ struct Arc {
     centre: Point3<f64>,
     /// Median ratio of the turned angle to the commanded span (both read in degrees).
     turn_ratio: f64,
+    /// Median absolute deviation of the point triples' radii from their median, over it: how
+    /// far the points lie from one circle.
+    radius_scatter: f64,
 }
 
 /// One axis experiment's target-0 arc from the circles through its point triples.
@@ -300,10 +303,12 @@ fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
     }
     let turn_ratio = median(ratios);
     let centre = Point3::from(Vector3::from_fn(|k, _| median(centres.iter().map(|c| c[k]).collect())));
+    let radius = median(radii.clone());
     Some(Arc {
         centre,
-        radius: median(radii),
+        radius,
         turn_ratio,
+        radius_scatter: median(radii.iter().map(|r| (r - radius).abs()).collect()) / radius,
     })
 }
 
@@ -474,8 +479,14 @@ fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<Unit
     // A conversion explains the slips when it leaves none and every arc judged as read is still
     // judged (a conversion that makes a sweep too short to judge says nothing of it).
     let judged = experiment_arcs(set, desc).len();
+    // And the converted arcs lie on circles no worse than as read: a unit is named only when
+    // reading the column in it makes the data fit (a column in another unit draws ellipses).
+    let scatter = |s: &MeasurementSet| median(experiment_arcs(s, desc).iter().map(|a| a.arc.radius_scatter).collect());
+    let as_read = scatter(set);
     let explains = |converted: &MeasurementSet| {
-        slips_as_read(converted, desc).is_empty() && experiment_arcs(converted, desc).len() >= judged
+        slips_as_read(converted, desc).is_empty()
+            && experiment_arcs(converted, desc).len() >= judged
+            && scatter(converted).partial_cmp(&as_read) != Some(std::cmp::Ordering::Greater)
     };
     // Every column in one other unit: the free poses' spread may pass with one column converted
     // alone (it is mostly that column's), but the whole file's slip is the one to say.

@@ -124,8 +124,14 @@ pub enum FreePoseError {
         /// The setup's label.
         setup: String,
     },
-    /// The model cannot execute a pose's commands.
-    #[error("{pose}: the model cannot execute its commands (a transmission is not invertible there)")]
+    /// The model cannot execute a pose's commands: the fit moved a transmission until it turns
+    /// back on itself at this pose's command.
+    #[error(
+        "{pose}: the fit moved the model so far from the description that no joint angle gives this pose's \
+         commands (a fitted transmission turns back on itself there): the points pull the model where the \
+         description's robot cannot go; check this pose's rows, the units of the commands and coordinates, the \
+         joint order and the target ids against the description"
+    )]
     Unexecutable {
         /// The pose.
         pose: String,
@@ -134,7 +140,7 @@ pub enum FreePoseError {
     #[error("the points do not fix the instrument frame (fewer than three non-collinear tool positions)")]
     Registration,
     /// The least-squares fit failed.
-    #[error("{0}")]
+    #[error("{}", fit_words(.0))]
     Fit(LsqError),
     /// The calibrated model misses the points by a good part of their own spread.
     #[error(
@@ -158,6 +164,31 @@ pub enum FreePoseError {
         /// Poses fitted.
         poses: usize,
     },
+}
+
+/// A failed free-pose fit in words: what it means for the poses and what to do.
+fn fit_words(e: &LsqError) -> String {
+    match e {
+        LsqError::IllConditioned { condition_number, .. } => format!(
+            "the poses do not determine the model: some change of its parameters moves none of the measured points \
+             (the fit's sensitivities to them are dependent, condition number {condition_number:.1e}): too few \
+             distinct configurations, a joint that does not move among the poses, or a description whose joints \
+             are not this robot's; measure the robot at more configurations across its workspace, or check the \
+             description and the joint order"
+        ),
+        LsqError::NotConverged {
+            iterations,
+            residual_rms,
+            ..
+        } => format!(
+            "the fit does not settle: after {iterations} steps its parameters still move, with the points {:.3} mm \
+             RMS (per coordinate) from the model: the poses leave a combination of parameters free (too few distinct \
+             configurations, or joints that barely move among them), or they fit no model near the description's; \
+             measure the robot at more configurations across its workspace, or check the description and the \
+             units",
+            residual_rms * 1e3
+        ),
+    }
 }
 
 /// A free-pose calibration: the fitted model and its summary.

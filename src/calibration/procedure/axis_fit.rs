@@ -111,7 +111,7 @@ impl JointData<'_> {
             return Err(ProcedureError::Fit {
                 experiment: self.name(),
                 joint: self.joint(),
-                source: CalibrationError::TooFewPoints {
+                error: CalibrationError::TooFewPoints {
                     fit: "target 0 (the target on the swept link; check the rows' target ids)",
                     got: 0,
                     needed: if kind == JointKind::Revolute { 3 } else { 2 },
@@ -191,6 +191,44 @@ impl JointData<'_> {
         })
     }
 
+    /// The failure `e` of this joint's axis fit with what its points show
+    /// ([`super::misfit::sweep_misfit`]), or `e` when they show none of its causes.
+    fn misfit(
+        &self,
+        e: ProcedureError,
+        (controller, desc): (&Controller, &RobotDescription),
+        noise_mm: f64,
+    ) -> ProcedureError {
+        let (points, u) = self.flat(controller, desc);
+        let mut labels = self.labels().into_iter();
+        let kind = desc.joints[self.joint() - 1].kind;
+        let mut start = 0;
+        let findings = self
+            .points
+            .iter()
+            .filter_map(|sweep| {
+                let range = start..start + sweep.len();
+                start = range.end;
+                let one = super::misfit::SweepPoints {
+                    points: &points[range.clone()],
+                    u: &u[range.clone()],
+                    labels: labels.by_ref().take(range.len()).collect(),
+                    joint: self.joint(),
+                };
+                super::misfit::sweep_misfit(&one, kind, noise_mm)
+            })
+            .collect();
+        match super::misfit::merged(findings) {
+            Some(finding) => ProcedureError::Misfit {
+                experiment: self.name(),
+                joint: self.joint(),
+                failure: super::failure_words(&e),
+                finding,
+            },
+            None => e,
+        }
+    }
+
     /// `(experiment, step)` of each flat point.
     fn labels(&self) -> Vec<(String, usize)> {
         self.sweeps
@@ -254,17 +292,17 @@ pub(super) fn fit_joint(
     let mut out = loop {
         match fit_joint_as(data, form, &setting) {
             Err(ProcedureError::Fit {
-                source: CalibrationError::NotInvertible { .. },
+                error: CalibrationError::NotInvertible { .. },
                 ..
             }) if form.order() > 0 => form = form.one_order_lower().unwrap_or(form),
             // Too few points is its own cause, whatever their spread.
             Err(
                 e @ ProcedureError::Fit {
-                    source: CalibrationError::TooFewPoints { .. },
+                    error: CalibrationError::TooFewPoints { .. },
                     ..
                 },
             ) => return Err(naming_the_order(e, desc, form)),
-            Err(e) => return Err(explained().unwrap_or(e)),
+            Err(e) => return Err(explained().unwrap_or_else(|| data.misfit(e, (controller, desc), noise_mm))),
             Ok(fitted) => break fitted,
         }
     };
@@ -272,13 +310,14 @@ pub(super) fn fit_joint(
         if let Some(cause) = explained() {
             return Err(cause);
         }
-        return Err(ProcedureError::Absurd {
+        let absurd = ProcedureError::Absurd {
             experiment: data.name(),
             joint,
             rms_mm: out.report.residual_rms_mm,
             spread_mm,
             share: 100.0 * out.report.residual_rms_mm / spread_mm,
-        });
+        };
+        return Err(data.misfit(absurd, (controller, desc), noise_mm));
     }
     if form != requested {
         out.report.identifiability.push(format!(
@@ -300,7 +339,7 @@ fn naming_the_order(e: ProcedureError, desc: &RobotDescription, form: Transmissi
         ProcedureError::Fit {
             experiment,
             joint,
-            source,
+            error: source,
         } if desc.joints[joint - 1].transmission_fit.is_some() && form.order() > 1 => ProcedureError::FitOrder {
             experiment,
             joint,
@@ -331,10 +370,10 @@ fn fit_joint_as(
     let (desc, options, detail) = (setting.desc, setting.options, setting.detail);
     let joint = data.joint();
     let (points, u) = data.flat(setting.controller, desc);
-    let err = |source| ProcedureError::Fit {
+    let err = |error| ProcedureError::Fit {
         experiment: data.name(),
         joint,
-        source,
+        error,
     };
     let kind = desc.joints[joint - 1].kind;
     let paper = options.estimator == AxisEstimator::Paper;

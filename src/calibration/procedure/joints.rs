@@ -239,7 +239,7 @@ impl Assembly<'_> {
                 .map(|e| e.name.clone())
                 .unwrap_or_default(),
             joint: k + 1,
-            source: CalibrationError::NotInvertible {
+            error: CalibrationError::NotInvertible {
                 fit: "calibrated transmission",
                 command_rad: u,
             },
@@ -534,7 +534,7 @@ fn fit_error(e: &AxisExperiment, from: usize, source: CalibrationError) -> Proce
     ProcedureError::Fit {
         experiment: e.name.clone(),
         joint: from,
-        source,
+        error: source,
     }
 }
 

@@ -28,6 +28,7 @@ mod frames;
 mod held;
 mod joint_map;
 mod joints;
+mod misfit;
 mod propagation;
 mod report;
 mod result;
@@ -44,6 +45,7 @@ pub use frames::{BaseRule, FramesError, NominalGeometry, common_normal_feet, mod
 pub use joint_map::{
     JointMap, MapRow, MapTable, ZeroOffsetFit, calibrated_joint_values, controller_zero_offsets, joint_map,
 };
+pub use misfit::SweepMisfit;
 pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, read_residuals_csv, residuals_csv};
 pub use result::{
@@ -347,14 +349,27 @@ pub enum ProcedureError {
         seen: usize,
     },
     /// A fit failed.
-    #[error("experiment {experiment} (joint {joint}): {source}")]
+    #[error("experiment {experiment} (joint {joint}): {}", fit_words(error))]
     Fit {
         /// Experiment.
         experiment: String,
         /// Joint.
         joint: usize,
-        /// The fit's error.
-        source: CalibrationError,
+        /// The fit's error (not a `source`: the message says it in words, once).
+        error: CalibrationError,
+    },
+    /// A joint's sweeps fit no arc or line of it, for a cause their points show
+    /// ([`SweepMisfit`]).
+    #[error("experiment {experiment} (joint {joint}): {failure}: {finding}")]
+    Misfit {
+        /// The experiments of the joint.
+        experiment: String,
+        /// The joint.
+        joint: usize,
+        /// How the fit failed, in words.
+        failure: String,
+        /// What the points show.
+        finding: SweepMisfit,
     },
     /// A joint's sweeps have too few points for the transmission order its description's
     /// `transmission_fit` asks for.
@@ -401,7 +416,71 @@ pub enum ProcedureError {
     },
 }
 
+/// A failed axis fit in words: what it means for the sweep's points and what to check.
+fn fit_words(e: &CalibrationError) -> String {
+    match e {
+        CalibrationError::IllConditioned { fit, .. } => format!(
+            "{fit}: its points leave the joint's axis undetermined (moving the axis some way changes none of the \
+             misfits): the points barely move, lie on a line, or sit where their commands do not put them; check \
+             the sweep's rows (each point against its commands) and its span"
+        ),
+        CalibrationError::NotConverged { fit, .. } => format!(
+            "{fit}: the fit of the joint's axis does not settle: the sweep's points do not lie on one path of the \
+             joint at their commands; check the sweep's rows for a point off the others' path, or a command that \
+             does not match its point"
+        ),
+        other => other.to_string(),
+    }
+}
+
+/// How an axis fit failed, in a few words, before what its points show ([`SweepMisfit`]).
+pub(super) fn failure_words(e: &ProcedureError) -> String {
+    match e {
+        ProcedureError::Fit {
+            error: CalibrationError::IllConditioned { .. },
+            ..
+        } => "its points leave the joint's axis undetermined".into(),
+        ProcedureError::Fit { .. } => "the fit of the joint's axis does not settle".into(),
+        ProcedureError::Absurd { rms_mm, share, .. } => {
+            format!("the fitted axis misses its points by {rms_mm:.3} mm RMS, {share:.1} % of their spread")
+        }
+        other => other.to_string(),
+    }
+}
+
 impl ProcedureError {
+    /// The error with the file lines of the points it names, read from `set`.
+    pub fn with_lines(self, set: &MeasurementSet) -> Self {
+        match self {
+            Self::Misfit {
+                experiment,
+                joint,
+                failure,
+                finding,
+            } => Self::Misfit {
+                experiment,
+                joint,
+                failure,
+                finding: finding.with_lines(set),
+            },
+            Self::HeldDiverged { pass, source } => Self::HeldDiverged {
+                pass,
+                source: Box::new(source.with_lines(set)),
+            },
+            other => other,
+        }
+    }
+
+    /// The sweep misfit this error is, or holds ([`Self::HeldDiverged`]'s): rows of the data named
+    /// as the cause.
+    pub fn misfit(&self) -> Option<&ProcedureError> {
+        match self {
+            Self::Misfit { .. } => Some(self),
+            Self::HeldDiverged { source, .. } => source.misfit(),
+            _ => None,
+        }
+    }
+
     /// The joint the error is about, when it names one (an axis fit's, a sweep's).
     pub fn joint(&self) -> Option<usize> {
         match self {
@@ -412,6 +491,7 @@ impl ProcedureError {
             | Self::InconsistentCommands { joint, .. }
             | Self::SecondTargetMissing { joint, .. }
             | Self::Fit { joint, .. }
+            | Self::Misfit { joint, .. }
             | Self::FitOrder { joint, .. }
             | Self::CouplingFit { joint, .. } => Some(*joint),
             Self::HeldDiverged { source, .. } => source.joint(),
@@ -514,6 +594,7 @@ pub fn calibrate(
         Detail::Report,
         &|ctx, state, reference_cmd, passes| ctx.finish(set, state, reference_cmd, passes),
     )
+    .map_err(|e| e.with_lines(set))
 }
 
 /// The lean path for Monte-Carlo trials: the same procedure as [`calibrate`] (the same code,
@@ -1024,10 +1105,10 @@ impl<'a> Context<'a> {
         target1: &[Vec<Point3<f64>>],
     ) -> Result<DMatrix<f64>, ProcedureError> {
         let experiment = &self.experiments[coupling.index];
-        let fit_err = |source| ProcedureError::Fit {
+        let fit_err = |error| ProcedureError::Fit {
             experiment: experiment.name.clone(),
             joint: coupling.k,
-            source,
+            error,
         };
         let second = &target1[coupling.index];
         let from_start = coupling.active_from_start();

@@ -210,7 +210,7 @@ impl Scale {
 }
 
 /// The set's row of a flagged point.
-fn row_of(set: &MeasurementSet, o: &OutlierPoint) -> Option<usize> {
+pub(super) fn row_of(set: &MeasurementSet, o: &OutlierPoint) -> Option<usize> {
     set.rows()
         .iter()
         .position(|m| m.experiment == o.experiment && m.step == o.step && m.target == o.target)

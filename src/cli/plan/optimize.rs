@@ -126,7 +126,10 @@ pub(super) fn run(
 /// has and needs.
 fn starved_fit(e: &PredictError) -> Option<(usize, &'static str, usize, usize)> {
     let PredictError::Calibration(
-        ProcedureError::Fit { joint, source, .. } | ProcedureError::CouplingFit { joint, source, .. },
+        ProcedureError::Fit {
+            joint, error: source, ..
+        }
+        | ProcedureError::CouplingFit { joint, source, .. },
     ) = e
     else {
         return None;

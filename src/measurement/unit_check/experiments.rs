@@ -55,6 +55,17 @@ fn in_place(arc: &super::Arc, i: usize, arcs: &[ExperimentArc], tolerance_mm: f6
     radius && centre_mismatch_mm(&arc.centre, i, arcs).is_none_or(|d| d <= tolerance_mm)
 }
 
+/// Whether `arc`, experiment `i`'s points converted, fits them as their commands say: a unit
+/// is named only when reading the column in it makes the data fit. The arc turns as far per
+/// degree of the command as the description's robot turns it, within [`SPREAD_WARNING`], and
+/// its point triples agree on one radius no worse than as read (a column in another unit draws
+/// an ellipse, which the conversion makes a circle; noise or another target's readings do not
+/// become a circle by scaling a column).
+fn fits(arc: &super::Arc, i: usize, arcs: &[ExperimentArc]) -> bool {
+    let turn = arcs[i].nominal_turn.map_or(1.0, f64::abs);
+    (arc.turn_ratio / turn).ln().abs() <= SPREAD_WARNING.ln() && arc.radius_scatter <= arcs[i].arc.radius_scatter
+}
+
 /// Experiment `i`'s arc with each row's coordinates changed by `change`.
 fn converted(i: usize, arcs: &[ExperimentArc], change: impl Fn(&mut [f64; 3])) -> Option<super::Arc> {
     let a = &arcs[i];
@@ -75,14 +86,18 @@ fn converted(i: usize, arcs: &[ExperimentArc], change: impl Fn(&mut [f64; 3])) -
 fn column_in_other_unit(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> Option<(usize, f64, &'static str)> {
     (0..3)
         .flat_map(|c| LENGTH_UNITS.iter().map(move |(f, unit)| (c, *f, *unit)))
-        .find(|&(c, f, _)| converted(i, arcs, |p| p[c] /= f).is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm)))
+        .find(|&(c, f, _)| {
+            converted(i, arcs, |p| p[c] /= f)
+                .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
+        })
 }
 
 /// The two coordinate columns whose exchange in experiment `i`'s rows puts it in place.
 fn columns_swapped(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> Option<(usize, usize)> {
-    [(0, 1), (0, 2), (1, 2)]
-        .into_iter()
-        .find(|&(a, b)| converted(i, arcs, |p| p.swap(a, b)).is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm)))
+    [(0, 1), (0, 2), (1, 2)].into_iter().find(|&(a, b)| {
+        converted(i, arcs, |p| p.swap(a, b))
+            .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
+    })
 }
 
 /// What puts experiment `i` (out of place by `what`) in place: its coordinates or one of its
@@ -92,7 +107,7 @@ fn explained(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64, what: &str, ce
     let name = &arcs[i].name;
     let every = LENGTH_UNITS.iter().find(|(f, _)| {
         converted(i, arcs, |p| p.iter_mut().for_each(|v| *v /= f))
-            .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm))
+            .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
     });
     if let Some((f, unit)) = every {
         return Some(UnitSlip {
