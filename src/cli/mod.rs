@@ -124,22 +124,24 @@ pub fn verbose() -> bool {
     VERBOSE.load(std::sync::atomic::Ordering::Relaxed)
 }
 
-/// The error as one line: each cause in the chain once (a cause whose text the message
-/// already holds is left out: many I/O errors are both shown by their wrapper and its
-/// source), line breaks folded into `; `.
+/// The error as one line: its context and causes joined by `: `, line breaks folded into `; `.
+/// Each error is handled once: the library's errors show their cause and do not also chain it,
+/// so no cause is repeated (checked in debug builds, which the tests run).
 pub fn one_line(e: &anyhow::Error) -> String {
-    let mut message = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if message.contains(text.trim()) {
-            continue;
-        }
-        if !message.is_empty() {
-            message.push_str(": ");
-        }
-        message.push_str(text.trim());
-    }
-    fold_lines(&message)
+    debug_assert!(
+        !e.chain().skip(1).any(|cause| {
+            let text = cause.to_string();
+            let shown: Vec<String> = e
+                .chain()
+                .take_while(|c| !std::ptr::addr_eq(*c, cause))
+                .map(|c| c.to_string())
+                .collect();
+            !text.trim().is_empty() && shown.iter().any(|s| s.contains(text.trim()))
+        }),
+        "an error shows a cause it also chains: {e:?}"
+    );
+    let causes: Vec<String> = e.chain().map(|c| c.to_string().trim().to_owned()).collect();
+    fold_lines(&causes.join(": "))
 }
 
 /// `text` on one line: lines trimmed, the empty ones dropped, the rest joined by `; ` (by a

@@ -83,10 +83,10 @@ use serde::{Deserialize, Serialize};
 pub enum DiagnosisError {
     /// The standard calibration failed.
     #[error("calibrating: {0}")]
-    Calibration(#[from] ProcedureError),
+    Calibration(ProcedureError),
     /// The free-pose calibration of a file without axis experiments failed.
     #[error("calibrating from the free poses: {0}")]
-    FreePoses(#[from] crate::calibration::free_pose::FreePoseError),
+    FreePoses(crate::calibration::free_pose::FreePoseError),
     /// Free poses of several setups (instrument placements): the diagnosis predicts one base.
     #[error(
         "the free poses are measured from {setups} setups; the diagnosis of free poses takes one setup (one instrument placement): diagnose each setup's rows on their own"
@@ -707,6 +707,18 @@ fn refined_tool_targets(prep: &Prepared, noise_rms_3d_mm: f64) -> Option<ToolTar
         &refined.fit,
         variance,
     )
+}
+
+impl From<ProcedureError> for DiagnosisError {
+    fn from(e: ProcedureError) -> Self {
+        Self::Calibration(e)
+    }
+}
+
+impl From<crate::calibration::free_pose::FreePoseError> for DiagnosisError {
+    fn from(e: crate::calibration::free_pose::FreePoseError) -> Self {
+        Self::FreePoses(e)
+    }
 }
 
 #[cfg(test)]

@@ -18,12 +18,12 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum MeasurementFileError {
     /// The file could not be opened, read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The cause.
-        source: io::Error,
+        cause: io::Error,
     },
     /// The output file exists and overwriting was not allowed.
     #[error("{path}: file exists; refusing to overwrite it")]
@@ -298,7 +298,7 @@ const POSITION_COLUMNS: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
 pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<MeasurementSet, MeasurementFileError> {
     let io_error = |source| MeasurementFileError::Io {
         path: path.into(),
-        source,
+        cause: source,
     };
     let file = crate::presets::regular_file(path)
         .and_then(|()| std::fs::File::open(path))
@@ -342,7 +342,7 @@ pub fn read_measurements_from<R: io::Read>(
         match e.into_kind() {
             csv::ErrorKind::Io(source) => MeasurementFileError::Io {
                 path: path.into(),
-                source,
+                cause: source,
             },
             _ => MeasurementFileError::Csv {
                 path: path.into(),
@@ -698,7 +698,7 @@ pub fn format_f64(v: f64) -> String {
 pub fn write_measurements(path: &Path, set: &MeasurementSet, overwrite: bool) -> Result<(), MeasurementFileError> {
     let io_error = |source| MeasurementFileError::Io {
         path: path.into(),
-        source,
+        cause: source,
     };
     let file = OpenOptions::new()
         .write(true)

@@ -413,7 +413,7 @@ impl Assembly<'_> {
         .map_err(|source| ProcedureError::CouplingFit {
             experiment: e.name.clone(),
             joint: from,
-            source,
+            cause: source,
             data: Box::new(data.clone()),
         })?;
         if let Some(record) = self.refit.record {

@@ -301,16 +301,16 @@ pub enum ProcedureError {
     },
     /// A fit-and-correct pass for the held joints' recorded values failed: the correction
     /// moved the points away from any arc (it diverges).
-    #[error("the correction for the held joints' recorded values diverged in pass {pass}: {source}")]
+    #[error("the correction for the held joints' recorded values diverged in pass {pass}: {cause}")]
     HeldDiverged {
         /// The pass that failed (the first correction is pass 2).
         pass: usize,
         /// Its error.
-        source: Box<ProcedureError>,
+        cause: Box<ProcedureError>,
     },
     /// The recorded values could not be evaluated on the calibrated model.
     #[error("modelling the held joints' recorded values: {0}")]
-    Held(#[from] crate::robot::ModelError),
+    Held(crate::robot::ModelError),
     /// The swept joint's command does not move.
     #[error("experiment {experiment}{}: the command of joint {joint} has zero span{cause}", lines_text(*lines))]
     ZeroSpan {
@@ -391,14 +391,14 @@ pub enum ProcedureError {
     },
     /// A coupling fit (eqs. 14-15) failed; with its second target's reading farthest from the
     /// curve of its neighbours (a reading swapped or off, the likely cause).
-    #[error("experiment {experiment} (joint {joint}): {source}{}", data.worst().map_or(String::new(), |w| w.to_string()))]
+    #[error("experiment {experiment} (joint {joint}): {cause}{}", data.worst().map_or(String::new(), |w| w.to_string()))]
     CouplingFit {
         /// Experiment.
         experiment: String,
         /// The driving joint.
         joint: usize,
         /// The fit's error.
-        source: CalibrationError,
+        cause: CalibrationError,
         /// What the fit was fitted to (the outlier test reads it; the message names its point
         /// farthest from its neighbours' curve, [`SecondTargetData::worst`]).
         data: Box<SecondTargetData>,
@@ -463,9 +463,9 @@ impl ProcedureError {
                 failure,
                 finding: finding.with_lines(set),
             },
-            Self::HeldDiverged { pass, source } => Self::HeldDiverged {
+            Self::HeldDiverged { pass, cause } => Self::HeldDiverged {
                 pass,
-                source: Box::new(source.with_lines(set)),
+                cause: Box::new(cause.with_lines(set)),
             },
             other => other,
         }
@@ -476,7 +476,7 @@ impl ProcedureError {
     pub fn misfit(&self) -> Option<&ProcedureError> {
         match self {
             Self::Misfit { .. } => Some(self),
-            Self::HeldDiverged { source, .. } => source.misfit(),
+            Self::HeldDiverged { cause, .. } => cause.misfit(),
             _ => None,
         }
     }
@@ -494,7 +494,7 @@ impl ProcedureError {
             | Self::Misfit { joint, .. }
             | Self::FitOrder { joint, .. }
             | Self::CouplingFit { joint, .. } => Some(*joint),
-            Self::HeldDiverged { source, .. } => source.joint(),
+            Self::HeldDiverged { cause, .. } => cause.joint(),
             _ => None,
         }
     }
@@ -718,7 +718,7 @@ fn calibrate_at<T>(
                 ctx.assemble(|k| ctx.all_sweeps(k, &t0), &t1)
                     .map_err(|source| ProcedureError::HeldDiverged {
                         pass: passes + 1,
-                        source: Box::new(source),
+                        cause: Box::new(source),
                     })?;
             change = if next.points.len() == state.points.len() && passes > 1 {
                 next.points
@@ -1386,4 +1386,10 @@ fn tool_frame(
         fit_rms_mm: rms_m * 1e3,
         sigma: None,
     })
+}
+
+impl From<crate::robot::ModelError> for ProcedureError {
+    fn from(e: crate::robot::ModelError) -> Self {
+        Self::Held(e)
+    }
 }

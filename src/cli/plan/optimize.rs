@@ -129,7 +129,9 @@ fn starved_fit(e: &PredictError) -> Option<(usize, &'static str, usize, usize)> 
         ProcedureError::Fit {
             joint, error: source, ..
         }
-        | ProcedureError::CouplingFit { joint, source, .. },
+        | ProcedureError::CouplingFit {
+            joint, cause: source, ..
+        },
     ) = e
     else {
         return None;

@@ -59,12 +59,12 @@ pub enum ImportError {
         path: PathBuf,
     },
     /// The file could not be read.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// A line has the wrong number of fields.
     #[error("{path}:{line}: {found} fields, expected {FIELDS_PER_LINE} (9 target coordinates, 6 zeros, J1..J6)")]
@@ -111,12 +111,12 @@ pub enum ImportError {
         message: String,
     },
     /// The converted rows break a measurement-set invariant.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Set {
         /// The file.
         path: PathBuf,
         /// The invariant broken.
-        source: MeasurementSetError,
+        cause: MeasurementSetError,
     },
 }
 
@@ -161,7 +161,7 @@ pub fn parse(text: &str, path: &Path) -> Result<MeasurementSet, ImportError> {
     }
     MeasurementSet::new(JOINTS, rows).map_err(|source| ImportError::Set {
         path: path.into(),
-        source,
+        cause: source,
     })
 }
 
@@ -275,7 +275,7 @@ pub fn import_dir(dir: &Path) -> Result<MeasurementSet, ImportError> {
     let path = dir.join(DATA_FILE);
     let text = crate::presets::read_text(&path).map_err(|source| ImportError::Io {
         path: path.clone(),
-        source,
+        cause: source,
     })?;
     parse(&text, &path)
 }

@@ -18,12 +18,12 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum PointsError {
     /// A file could not be read.
-    #[error("{path}: cannot read: {source}")]
+    #[error("{path}: cannot read: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// A problem with a whole file (a missing column, a count that does not match).
     #[error("{path}: {message}")]
@@ -46,12 +46,12 @@ pub enum PointsError {
         message: String,
     },
     /// The joined rows do not form a valid measurement set.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Set {
         /// The file the rows came from.
         path: PathBuf,
         /// The cause.
-        source: MeasurementSetError,
+        cause: MeasurementSetError,
     },
 }
 
@@ -361,7 +361,7 @@ pub fn join_points(
         .collect();
     let set = MeasurementSet::new(plan.joint_count, rows).map_err(|source| PointsError::Set {
         path: path.clone(),
-        source,
+        cause: source,
     })?;
     Ok(Joined {
         set,

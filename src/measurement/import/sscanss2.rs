@@ -71,7 +71,7 @@ pub fn parse(
     }
     MeasurementSet::new(kinds.len(), out).map_err(|source| PointsError::Set {
         path: path.to_owned(),
-        source,
+        cause: source,
     })
 }
 

@@ -96,7 +96,7 @@ impl Table {
     pub fn read(path: &Path) -> Result<Self, PointsError> {
         let text = crate::presets::read_text(path).map_err(|source| PointsError::Io {
             path: path.to_owned(),
-            source,
+            cause: source,
         })?;
         Self::parse(text, path)
     }

@@ -236,7 +236,7 @@ pub(super) fn rows_of(
         },
         None => PointsError::Set {
             path: path.to_owned(),
-            source: e,
+            cause: e,
         },
     })
 }
