@@ -140,7 +140,11 @@ pub fn one_line(e: &anyhow::Error) -> String {
         }),
         "an error shows a cause it also chains: {e:?}"
     );
-    let causes: Vec<String> = e.chain().map(|c| c.to_string().trim().to_owned()).collect();
+    let causes: Vec<String> = e
+        .chain()
+        .map(|c| c.to_string().trim().to_owned())
+        .filter(|t| !t.is_empty())
+        .collect();
     fold_lines(&causes.join(": "))
 }
 
