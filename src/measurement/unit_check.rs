@@ -29,6 +29,13 @@ mod travel;
 
 pub use travel::judged_checks;
 
+/// How much more the point triples' radii may scatter once a column is converted than as read:
+/// a column in a finer unit read as coarser carries almost none of the noise (mm read as cm:
+/// a tenth), and its conversion restores it; with one of three coordinates' noise restored
+/// the noise power grows by at most 3/2, and `sqrt(3)` leaves the medians' own scatter room. A
+/// conversion that draws ellipses instead moves the radii by a fraction of the arc's size.
+pub(super) const MAX_SCATTER_GROWTH: f64 = 1.732;
+
 /// A ratio this far from 1 (either way) is a unit slip, not a robot's deviation.
 pub const SLIP_FACTOR: f64 = 5.0;
 /// The longest plausible row length \[m\] of a robot arm.
@@ -479,14 +486,14 @@ fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<Unit
     // A conversion explains the slips when it leaves none and every arc judged as read is still
     // judged (a conversion that makes a sweep too short to judge says nothing of it).
     let judged = experiment_arcs(set, desc).len();
-    // And the converted arcs lie on circles no worse than as read: a unit is named only when
+    // And the converted arcs lie on circles about as well as read: a unit is named only when
     // reading the column in it makes the data fit (a column in another unit draws ellipses).
     let scatter = |s: &MeasurementSet| median(experiment_arcs(s, desc).iter().map(|a| a.arc.radius_scatter).collect());
     let as_read = scatter(set);
     let explains = |converted: &MeasurementSet| {
         slips_as_read(converted, desc).is_empty()
             && experiment_arcs(converted, desc).len() >= judged
-            && scatter(converted).partial_cmp(&as_read) != Some(std::cmp::Ordering::Greater)
+            && scatter(converted) <= MAX_SCATTER_GROWTH * as_read
     };
     // Every column in one other unit: the free poses' spread may pass with one column converted
     // alone (it is mostly that column's), but the whole file's slip is the one to say.

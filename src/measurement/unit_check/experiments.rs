@@ -58,12 +58,13 @@ fn in_place(arc: &super::Arc, i: usize, arcs: &[ExperimentArc], tolerance_mm: f6
 /// Whether `arc`, experiment `i`'s points converted, fits them as their commands say: a unit
 /// is named only when reading the column in it makes the data fit. The arc turns as far per
 /// degree of the command as the description's robot turns it, within [`SPREAD_WARNING`], and
-/// its point triples agree on one radius no worse than as read (a column in another unit draws
-/// an ellipse, which the conversion makes a circle; noise or another target's readings do not
-/// become a circle by scaling a column).
+/// its point triples agree on one radius about as well as read ([`super::MAX_SCATTER_GROWTH`]: a
+/// column in another unit draws an ellipse, which the conversion makes a circle; noise or another
+/// target's readings do not become a circle by scaling a column).
 fn fits(arc: &super::Arc, i: usize, arcs: &[ExperimentArc]) -> bool {
     let turn = arcs[i].nominal_turn.map_or(1.0, f64::abs);
-    (arc.turn_ratio / turn).ln().abs() <= SPREAD_WARNING.ln() && arc.radius_scatter <= arcs[i].arc.radius_scatter
+    (arc.turn_ratio / turn).ln().abs() <= SPREAD_WARNING.ln()
+        && arc.radius_scatter <= super::MAX_SCATTER_GROWTH * arcs[i].arc.radius_scatter
 }
 
 /// Experiment `i`'s arc with each row's coordinates changed by `change`.
