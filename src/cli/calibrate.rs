@@ -352,7 +352,7 @@ fn readable(cal: &Calibration, args: &Args, (set, desc): (&MeasurementSet, &Robo
         let few = cal
             .free_poses
             .as_ref()
-            .and_then(|_| super::calibrate_free::few_configurations_of(set, desc));
+            .and_then(|s| super::calibrate_free::few_configurations_of(set, desc, s.axis_rows_as_poses.is_some()));
         anyhow::bail!(
             "calibrating {}: the data do not determine `{name}` (1-sigma {:.3e}, beyond 1 in its unit): nothing written; {}",
             data.display(),

@@ -224,7 +224,9 @@ fn warn_slips(
         return;
     };
     let data = args.data.display();
-    if let Some(few) = few_configurations(set, Parameters(summary.parameters.len(), "parameters fitted"), false) {
+    // Sweeps fitted as free poses (at their own configurations) count every row as a pose.
+    let all_rows = summary.axis_rows_as_poses.is_some();
+    if let Some(few) = few_configurations(set, Parameters(summary.parameters.len(), "parameters fitted"), all_rows) {
         // Repeated configurations determine no slip either: the search would name chance ones.
         eprintln!("warning: {data}: {few}");
         return;
@@ -288,8 +290,8 @@ fn minimal_parameters(desc: &RobotDescription) -> Parameters {
 
 /// [`few_configurations`] of the free poses of `set` against the geometry's minimal parameter
 /// count ([`minimal_parameters`]).
-pub(super) fn few_configurations_of(set: &MeasurementSet, desc: &RobotDescription) -> Option<String> {
-    few_configurations(set, minimal_parameters(desc), false)
+pub(super) fn few_configurations_of(set: &MeasurementSet, desc: &RobotDescription, all_rows: bool) -> Option<String> {
+    few_configurations(set, minimal_parameters(desc), all_rows)
 }
 
 /// The free poses' distinct configurations (commands equal to 1e-6) in words, when they give
