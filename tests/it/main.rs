@@ -44,6 +44,7 @@ mod hostile_round5c;
 mod hostile_round5d;
 mod hostile_round5e;
 mod hostile_round6a;
+mod hostile_round6e;
 mod iso9283;
 mod joint_map;
 mod json_schemas;
