@@ -371,7 +371,7 @@ pub fn validate(
     desc: &RobotDescription,
     options: &ValidationOptions,
 ) -> Result<Validation, DiagnosisError> {
-    validate_with(set, cal, desc, options, false)
+    Ok(validate_with(set, cal, desc, options, false)?.0)
 }
 
 /// [`validate`] for a calibration whose tool frame was never measured (`cal.tool` absent:
@@ -380,23 +380,43 @@ pub fn validate(
 /// shared error, [`SharedErrorChiSquare::with_free`]; up to 6 fewer degrees of freedom) and
 /// judge what no tool frame explains. The predicted RMS still leaves the tool frame's error
 /// out.
+/// Also returns the tool frame the validation poses give, as a move from the calibration's.
 pub fn validate_free_tool(
     set: &MeasurementSet,
     cal: &Calibration,
     desc: &RobotDescription,
     options: &ValidationOptions,
-) -> Result<Validation, DiagnosisError> {
-    validate_with(set, cal, desc, options, true)
+) -> Result<(Validation, FittedToolMove), DiagnosisError> {
+    let (v, fitted) = validate_with(set, cal, desc, options, true)?;
+    let [t0, t1, t2, w0, w1, w2] = fitted.as_slice().try_into().unwrap_or([0.0; 6]);
+    Ok((
+        v,
+        FittedToolMove {
+            translation_mm: Vector3::new(t0, t1, t2),
+            rotation_rad: Vector3::new(w0, w1, w2),
+        },
+    ))
 }
 
-/// [`validate`], the tool frame estimated from the free poses with `free_tool`.
+/// The move of the tool frame (in the tool frame) that fits the validation poses best
+/// ([`validate_free_tool`]): zero in the directions they do not resolve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FittedToolMove {
+    /// Translation \[mm\].
+    pub translation_mm: Vector3<f64>,
+    /// Rotation vector \[rad\].
+    pub rotation_rad: Vector3<f64>,
+}
+
+/// [`validate`], the tool frame estimated from the free poses with `free_tool`, and that
+/// estimate (the validation poses' free components; empty without).
 fn validate_with(
     set: &MeasurementSet,
     cal: &Calibration,
     desc: &RobotDescription,
     options: &ValidationOptions,
     free_tool: bool,
-) -> Result<Validation, DiagnosisError> {
+) -> Result<(Validation, DVector<f64>), DiagnosisError> {
     let clean = CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?;
     let predicted = clean.positions();
     let residuals: Vec<ValidationResidual> = set
@@ -428,7 +448,8 @@ fn validate_with(
         summary(PointKind::Axis, &axis_steps),
     );
     let verdict = verdict(&validation, &tool, &axis, free.orientation.as_ref());
-    Ok(Validation {
+    let fitted = free.validation.chi.free_estimate();
+    let v = Validation {
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         noise_source: options.noise_source.clone(),
         false_alarm: options.false_alarm,
@@ -442,7 +463,8 @@ fn validate_with(
         verdict,
         warnings: Vec::new(),
         residuals,
-    })
+    };
+    Ok((v, fitted))
 }
 
 /// The residuals of free points (or rotations) against noise, repeatability and the

@@ -87,3 +87,26 @@ fn a_slip_is_still_a_miss_with_the_tool_frame_nominal() {
         clear_outputs(dir.path());
     }
 }
+
+/// A SCARA's description placed 700 mm too high (placement z 0 for -700), with the tool
+/// frame nominal: the sweeps cannot place the base along its vertical axes, and a tool frame
+/// fitted to the poses absorbs the height, so the move it needs (699 mm, beyond 20 % of the
+/// description's longest length) is what says the poses miss.
+#[test]
+fn a_tool_frame_moved_beyond_a_descriptions_error_is_a_miss() {
+    let dir = tempfile::tempdir().unwrap();
+    hidden_tool_target(dir.path(), "scara-rrpr", 102, "clean.csv");
+    let nominal = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/scara-rrpr.toml");
+    let text = std::fs::read_to_string(nominal).unwrap();
+    let placed = "translation_mm = [1600.0, 500.0, -700.0]";
+    assert!(text.contains(placed), "the shipped SCARA's placement changed");
+    let high = text.replace(placed, "translation_mm = [1600.0, 500.0, 0.0]");
+    std::fs::write(dir.path().join("high.toml"), high).unwrap();
+    let line = "calibrate clean.csv --robot high.toml --allow-other-robot --out out";
+    let names = [
+        OWN_MISS,
+        "the tool frame would have to move 69",
+        "beyond a description's error",
+    ];
+    run_case(dir.path(), &case("SCARA 700 mm high, tool hidden", line, 0, &names));
+}

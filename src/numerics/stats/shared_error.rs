@@ -85,6 +85,17 @@ impl SharedErrorChiSquare {
         }
     }
 
+    /// The free components' estimate: the last `free` entries of `(P + A)^+ b`, the values
+    /// that minimise the statistic (module docs); empty without free components.
+    pub fn free_estimate(&self) -> DVector<f64> {
+        if self.free == 0 {
+            return DVector::zeros(0);
+        }
+        let (inverse, _) = self.free_capacitance();
+        let all = inverse * &self.projected;
+        all.rows(all.len() - self.free, self.free).into_owned()
+    }
+
     /// With free components: the pseudo-inverse of `P + A` and the free components it
     /// resolves (its numerical rank beyond the `k` shared ones, module docs).
     fn free_capacitance(&self) -> (DMatrix<f64>, usize) {
@@ -245,6 +256,12 @@ mod tests {
                 chi.value()
             );
             assert_eq!(chi.dof(), n - 2);
+            let d = normal.try_inverse().unwrap() * &b;
+            assert!(
+                (chi.free_estimate() - d).norm() <= 1e-6 * d.norm(),
+                "{} vs {d}",
+                chi.free_estimate()
+            );
             assert!((chi.shared_variance() - g_all.norm_squared()).abs() <= 1e-12 * g_all.norm_squared());
         }
     }
