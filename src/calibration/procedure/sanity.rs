@@ -401,7 +401,7 @@ fn row_lengths(rows: &[crate::kinematics::PhiRow]) -> Vec<f64> {
 }
 
 /// The longest length of the description's rows \[m\]: the robot's size, which
-/// [`SIGNIFICANT_LENGTH`] and [`SIZE_TOLERANCE`] are shares of.
+/// `SIGNIFICANT_LENGTH` and [`SIZE_TOLERANCE`] are shares of.
 pub fn longest_length_m(desc: &RobotDescription) -> f64 {
     row_lengths(&desc.nominal_model().rows)
         .iter()
