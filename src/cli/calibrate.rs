@@ -11,9 +11,10 @@ use anyhow::Result;
 use axiscal::calibration::free_pose;
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
-    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Implausible, ProcedureError, UrdfOptions,
-    UrdfRoot, calibrate, findings, implausible, joint_map, joints_without_speed_limits, markdown,
-    raw_reading_deviation, residuals_csv, ros_name, screen_sweeps, urdf,
+    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Implausible, PLAUSIBLE_AXIS_TILT_RAD,
+    ProcedureError, SIZE_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, findings, implausible, joint_map,
+    joints_without_speed_limits, longest_length_m, markdown, raw_reading_deviation, residuals_csv, ros_name,
+    screen_sweeps, urdf,
 };
 use axiscal::calibration::refine::{RefineOptions, Refinement};
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
@@ -583,7 +584,9 @@ const OWN_POSES_FALSE_ALARM: f64 = 1e-4;
 const OWN_POSES_CHECKED: usize = 500;
 
 /// The axis-experiment calibration tested on the file's own validation poses, which it did not
-/// fit (`validate`'s test, [`axiscal::diagnosis::validate`], at [`OWN_POSES_FALSE_ALARM`]): a miss
+/// fit (`validate`'s test, [`axiscal::diagnosis::validate`], at [`OWN_POSES_FALSE_ALARM`]; with
+/// the tool frame estimated from the poses when it was not measured,
+/// [`axiscal::diagnosis::validate_free_tool`]): a miss
 /// beyond the prediction is what a slip the unit checks cannot see leaves (one experiment's
 /// commands scaled within a transmission's range, a wrong placement or description), or an
 /// effect the model lacks. `None` without validation poses or when they are consistent.
@@ -593,7 +596,7 @@ fn misses_own_validation_poses(
     set: &MeasurementSet,
     stated_repeatability: Option<&[f64]>,
 ) -> Option<String> {
-    use axiscal::diagnosis::{ValidationOptions, Verdict, validate};
+    use axiscal::diagnosis::{ValidationOptions, Verdict, validate, validate_free_tool};
     let is_pose = |m: &&axiscal::measurement::Measurement| m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT;
     let mut poses: Vec<(&str, usize)> = set
         .rows()
@@ -614,28 +617,63 @@ fn misses_own_validation_poses(
         .collect();
     let poses_set = MeasurementSet::new(desc.dof(), rows).ok()?;
     let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
-    let v = validate(&poses_set, cal, desc, &options).ok()?;
+    // A tool frame left nominal is off by an error no covariance holds: estimated from the
+    // poses, so that only what no tool frame explains is judged, and a move beyond what a
+    // description may be off by is said.
+    let (v, tool_move) = if cal.tool.is_none() {
+        let (v, fitted) = validate_free_tool(&poses_set, cal, desc, &options).ok()?;
+        (v, Some(fitted))
+    } else {
+        (validate(&poses_set, cal, desc, &options).ok()?, None)
+    };
     let part = v.validation?;
     let test = part.chi_square?;
-    (test.verdict == Verdict::Exceeds).then(|| {
+    let implausible = tool_move.and_then(|m| implausible_tool_move(&m, desc));
+    let exceeds = test.verdict == Verdict::Exceeds;
+    (exceeds || implausible.is_some()).then(|| {
         let (rms, predicted) = (part.rms_mm, part.predicted_mm.total);
-        let miss = if rms > predicted {
+        let n = kept.len();
+        let tool = if tool_move.is_some() {
+            ", with the tool frame, which no pose measured, fitted to these poses"
+        } else {
+            ""
+        };
+        let miss = if !exceeds || rms > predicted {
             format!(
-                "the calibrated model misses this file's own {} validation poses (not fitted) by {rms:.3} mm RMS against {predicted:.3} mm predicted (chi2/dof {:.2})",
-                kept.len(),
+                "the calibrated model misses this file's own {n} validation poses (not fitted) by {rms:.3} mm RMS against {predicted:.3} mm predicted (chi2/dof {:.2}{tool})",
                 test.per_dof
             )
         } else {
             format!(
-                "the calibrated model's misses of this file's own {} validation poses (not fitted) fail the prediction's chi-square test (chi2/dof {:.2}) though their RMS, {rms:.3} mm, is within the {predicted:.3} mm predicted: their pattern, not their size, contradicts it (some poses or directions missed well beyond their own predicted error, where the prediction is tight)",
-                kept.len(),
+                "the calibrated model's misses of this file's own {n} validation poses (not fitted) fail the prediction's chi-square test (chi2/dof {:.2}{tool}) though their RMS, {rms:.3} mm, is within the {predicted:.3} mm predicted: their pattern, not their size, contradicts it (some poses or directions missed well beyond their own predicted error, where the prediction is tight)",
                 test.per_dof
             )
         };
         format!(
-            "{miss}: {}check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
+            "{miss}{}: {}check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
              placement and lengths, or an effect the model lacks (`axiscal validate`, `axiscal diagnose` on this file)",
+            implausible.unwrap_or_default(),
             understated_repeatability(desc, stated_repeatability)
+        )
+    })
+}
+
+/// What a move `m` of the nominal tool frame that fits the validation poses says when it is
+/// beyond a description's error: more than [`SIZE_TOLERANCE`] of the description's longest
+/// length or a turn beyond [`PLAUSIBLE_AXIS_TILT_RAD`] (the sanity checks' bounds on how far
+/// a description may be off the robot): the poses then miss by more than the unmeasured tool
+/// frame's error, e.g. along an axis the sweeps cannot place (a SCARA's height). `None`
+/// within.
+fn implausible_tool_move(m: &axiscal::diagnosis::FittedToolMove, desc: &RobotDescription) -> Option<String> {
+    let bound_mm = SIZE_TOLERANCE * longest_length_m(desc) * 1e3;
+    let (moved_mm, turned_rad) = (m.translation_mm.norm(), m.rotation_rad.norm());
+    (moved_mm > bound_mm || turned_rad > PLAUSIBLE_AXIS_TILT_RAD).then(|| {
+        format!(
+            "; the tool frame would have to move {moved_mm:.1} mm and turn {:.2} deg from the description's to fit them, beyond a description's error \
+             ({bound_mm:.1} mm, {:.0} % of its longest length; {:.0} deg): the poses are off by more than the unmeasured tool frame explains",
+            turned_rad.to_degrees(),
+            SIZE_TOLERANCE * 100.0,
+            PLAUSIBLE_AXIS_TILT_RAD.to_degrees()
         )
     })
 }

@@ -63,8 +63,8 @@ pub use slips::{ExplainedMiss, MAX_FITTED_OFFSET, acceptance, explained_misses, 
 pub use sweep_slips::{explained_sweep_misses, own_sweep_misses};
 pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
 pub use validate::{
-    ChiSquare, Dominant, OrientationSummary, PointKind, PositionSummary, Prediction, Validation, ValidationOptions,
-    ValidationResidual, Verdict, validate, validation_residuals_csv,
+    ChiSquare, Dominant, FittedToolMove, OrientationSummary, PointKind, PositionSummary, Prediction, Validation,
+    ValidationOptions, ValidationResidual, Verdict, validate, validate_free_tool, validation_residuals_csv,
 };
 
 use crate::calibration::free_pose::{FreePoseOptions, calibrate_free_poses, with_fitted_targets};

@@ -152,6 +152,26 @@ impl<'a> PredictionError<'a> {
 }
 
 impl PoseError {
+    /// Components of a tool frame nobody measured ([`PoseError::with_free_tool`]).
+    pub(super) const FREE_TOOL: usize = 6;
+
+    /// With the tool frame's error as [`Self::FREE_TOOL`] more columns after the
+    /// calibration's: a translation \[mm\] and a rotation \[rad\] in the tool frame, which move
+    /// the tool frame by `R v` and `R w` (`R` its rotation). Free components of the test
+    /// ([`crate::numerics::stats::SharedErrorChiSquare::with_free`]): a tool frame left
+    /// nominal has an error no covariance holds, estimated from the poses instead.
+    pub(super) fn with_free_tool(mut self) -> Self {
+        let k = self.calibration.ncols();
+        let rotation = self.world_from_tool.rotation.to_rotation_matrix();
+        let mut columns = self.calibration.clone().resize_horizontally(k + Self::FREE_TOOL, 0.0);
+        for block in [0, 3] {
+            let mut view = columns.view_mut((block, k + block), (3, 3));
+            view.copy_from(rotation.matrix());
+        }
+        self.calibration = columns;
+        self
+    }
+
     /// The factors of the positions of the tool targets at `targets_m` (tool frame), stacked
     /// three rows a target \[mm\].
     pub(super) fn targets(&self, targets_m: &[Point3<f64>]) -> BlockFactors {

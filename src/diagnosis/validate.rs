@@ -28,7 +28,7 @@
 
 use super::DiagnosisError;
 use super::noise::{CleanCampaign, calibrated_joint_values};
-use super::predicted_error::{BlockFactors, PredictionError};
+use super::predicted_error::{BlockFactors, PoseError, PredictionError};
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::rigid_fit;
 use crate::measurement::{Measurement, MeasurementSet};
@@ -371,6 +371,52 @@ pub fn validate(
     desc: &RobotDescription,
     options: &ValidationOptions,
 ) -> Result<Validation, DiagnosisError> {
+    Ok(validate_with(set, cal, desc, options, false)?.0)
+}
+
+/// [`validate`] for a calibration whose tool frame was never measured (`cal.tool` absent:
+/// the description's, on the calibrated last link): its error is in no covariance, so the
+/// free poses' tests estimate it from their own residuals (6 free components of the
+/// shared error, [`SharedErrorChiSquare::with_free`]; up to 6 fewer degrees of freedom) and
+/// judge what no tool frame explains. The predicted RMS still leaves the tool frame's error
+/// out.
+/// Also returns the tool frame the validation poses give, as a move from the calibration's.
+pub fn validate_free_tool(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    options: &ValidationOptions,
+) -> Result<(Validation, FittedToolMove), DiagnosisError> {
+    let (v, fitted) = validate_with(set, cal, desc, options, true)?;
+    let [t0, t1, t2, w0, w1, w2] = fitted.as_slice().try_into().unwrap_or([0.0; 6]);
+    Ok((
+        v,
+        FittedToolMove {
+            translation_mm: Vector3::new(t0, t1, t2),
+            rotation_rad: Vector3::new(w0, w1, w2),
+        },
+    ))
+}
+
+/// The move of the tool frame (in the tool frame) that fits the validation poses best
+/// ([`validate_free_tool`]): zero in the directions they do not resolve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FittedToolMove {
+    /// Translation \[mm\].
+    pub translation_mm: Vector3<f64>,
+    /// Rotation vector \[rad\].
+    pub rotation_rad: Vector3<f64>,
+}
+
+/// [`validate`], the tool frame estimated from the free poses with `free_tool`, and that
+/// estimate (the validation poses' free components; empty without).
+fn validate_with(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    options: &ValidationOptions,
+    free_tool: bool,
+) -> Result<(Validation, DVector<f64>), DiagnosisError> {
     let clean = CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?;
     let predicted = clean.positions();
     let residuals: Vec<ValidationResidual> = set
@@ -393,7 +439,7 @@ pub fn validate(
         .collect();
     let controller = Controller::from_description(desc);
     let error = PredictionError::new(cal, &controller, desc)?;
-    let free = free_poses(set, cal, desc, &controller, &residuals, &error, options)?;
+    let free = free_poses(set, (cal, desc, &controller), &residuals, &error, (options, free_tool))?;
     let axis_steps = axis_statistic(set, desc, &clean, &residuals, &error, options)?;
     let summary = |kind, statistic| position_summary(&residuals, kind, statistic, options);
     let (validation, tool, axis) = (
@@ -402,7 +448,8 @@ pub fn validate(
         summary(PointKind::Axis, &axis_steps),
     );
     let verdict = verdict(&validation, &tool, &axis, free.orientation.as_ref());
-    Ok(Validation {
+    let fitted = free.validation.chi.free_estimate();
+    let v = Validation {
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         noise_source: options.noise_source.clone(),
         false_alarm: options.false_alarm,
@@ -416,7 +463,8 @@ pub fn validate(
         verdict,
         warnings: Vec::new(),
         residuals,
-    })
+    };
+    Ok((v, fitted))
 }
 
 /// The residuals of free points (or rotations) against noise, repeatability and the
@@ -428,10 +476,11 @@ struct FreeStatistic {
 }
 
 impl FreeStatistic {
-    /// With the calibration's error of `error` (if it has one).
-    fn new(error: &PredictionError) -> Self {
+    /// With the calibration's error of `error` (if it has one) and `free` components without
+    /// a prior after it ([`SharedErrorChiSquare::with_free`]).
+    fn new(error: &PredictionError, free: usize) -> Self {
         FreeStatistic {
-            chi: SharedErrorChiSquare::new(error.rank()),
+            chi: SharedErrorChiSquare::with_free(error.rank(), free),
             repeatability_variance: 0.0,
             with_calibration: error.has_calibration(),
         }
@@ -533,7 +582,7 @@ fn axis_statistic(
     }
     let variance_coord_mm2 = options.noise_rms_3d_mm.powi(2) / 3.0;
     let dof = repeatability.len();
-    let mut statistic = FreeStatistic::new(error);
+    let mut statistic = FreeStatistic::new(error, 0);
     for rows in experiments.values() {
         let mut steps: BTreeMap<usize, usize> = BTreeMap::new();
         for &i in rows {
@@ -630,30 +679,33 @@ fn group_free_poses(set: &MeasurementSet) -> BTreeMap<(&str, usize), FreePose<'_
 
 /// The free poses' tests: every pose's points, and the orientation of those with at least
 /// three measured tool targets.
+/// With `free_tool`, the tool frame's error is estimated from them ([`validate_free_tool`]).
 fn free_poses(
     set: &MeasurementSet,
-    cal: &Calibration,
-    desc: &RobotDescription,
-    controller: &Controller,
+    (cal, desc, controller): (&Calibration, &RobotDescription, &Controller),
     residuals: &[ValidationResidual],
     error: &PredictionError,
-    options: &ValidationOptions,
+    (options, free_tool): (&ValidationOptions, bool),
 ) -> Result<FreePoses, DiagnosisError> {
     let tool_targets = desc.tool_targets_m();
     let model = cal.robot.phi_model();
     let variance_coord_mm2 = options.noise_rms_3d_mm.powi(2) / 3.0;
     let variance_coord_m2 = variance_coord_mm2 * 1e-6;
+    let free = if free_tool { PoseError::FREE_TOOL } else { 0 };
     let (mut validation, mut tool, mut rotation) = (
-        FreeStatistic::new(error),
-        FreeStatistic::new(error),
-        FreeStatistic::new(error),
+        FreeStatistic::new(error, free),
+        FreeStatistic::new(error, free),
+        FreeStatistic::new(error, free),
     );
     let (mut angles_mrad, mut noise_sq) = (Vec::new(), 0.0);
     let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
     for pose in group_free_poses(set).values() {
         let m = pose.first;
         let q = calibrated_joint_values(&cal.robot, controller, &model, desc, m, &approach)?;
-        let pose_error = error.at(&model, &commands_to_internal(desc, &m.cmd), &q)?;
+        let mut pose_error = error.at(&model, &commands_to_internal(desc, &m.cmd), &q)?;
+        if free_tool {
+            pose_error = pose_error.with_free_tool();
+        }
         let targets: Vec<Point3<f64>> = pose.rows.iter().map(|&i| tool_targets[set.rows()[i].target]).collect();
         let r = stacked_residuals(residuals, &pose.rows);
         let statistic = if kind_of(m) == PointKind::Tool {

@@ -395,12 +395,26 @@ fn directions(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausible> {
     }
 }
 
+/// The lengths `a`, `b`, `h` of every row of `rows` \[m\].
+fn row_lengths(rows: &[crate::kinematics::PhiRow]) -> Vec<f64> {
+    rows.iter().flat_map(|r| [r.a_m, r.b_m, r.h_m]).collect()
+}
+
+/// The longest length of the description's rows \[m\]: the robot's size, which
+/// `SIGNIFICANT_LENGTH` and [`SIZE_TOLERANCE`] are shares of.
+pub fn longest_length_m(desc: &RobotDescription) -> f64 {
+    row_lengths(&desc.nominal_model().rows)
+        .iter()
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
 /// The significant lengths' `(nominal, calibrated)` pairs.
 fn lengths(cal: &Calibration, desc: &RobotDescription) -> Vec<(f64, f64)> {
-    let of =
-        |rows: &[crate::kinematics::PhiRow]| -> Vec<f64> { rows.iter().flat_map(|r| [r.a_m, r.b_m, r.h_m]).collect() };
-    let (n, c) = (of(&desc.nominal_model().rows), of(&cal.robot.phi_model().rows));
-    let longest = n.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let (n, c) = (
+        row_lengths(&desc.nominal_model().rows),
+        row_lengths(&cal.robot.phi_model().rows),
+    );
+    let longest = longest_length_m(desc);
     n.into_iter()
         .zip(c)
         .filter(|(n, _)| n.abs() >= (SIGNIFICANT_LENGTH * longest).max(MIN_SIGNIFICANT_LENGTH_M))

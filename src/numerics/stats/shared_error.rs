@@ -10,6 +10,14 @@
 //! `b = sum G_i^T W_i r_i` (Golub & Van Loan, *Matrix Computations*, 4th ed., section 2.1.4).
 //! `I_k + A` is symmetric positive definite for any `G`, so a singular `C_p` needs no care;
 //! the sums are accumulated block by block, in memory `O(k^2)` whatever the number of blocks.
+//!
+//! Free components ([`SharedErrorChiSquare::with_free`]): `f` more columns of `G_i` whose
+//! error has no prior (a quantity the data must give, e.g. a frame nobody measured). Their
+//! prior precision is 0 instead of 1, so the statistic is the minimum of
+//! `(r - T d)^T S^-1 (r - T d)` over their values `d` (generalised least squares), chi-square
+//! with `sum dim r_i - f'` degrees of freedom, `f'` the free components the residuals resolve:
+//! `(P + A)` with `P = diag(I_k, 0_f)` is then inverted by its pseudo-inverse, whose numerical
+//! rank (singular values above `max * dim * epsilon`, the rounding of the sums) counts them.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -27,17 +35,27 @@ pub struct SharedErrorChiSquare {
     shared_variance: f64,
     /// `sum dim r_i`.
     dof: usize,
+    /// The last `free` components have no prior (module docs).
+    free: usize,
 }
 
 impl SharedErrorChiSquare {
     /// No block yet, a shared error of `k` components.
     pub fn new(k: usize) -> Self {
+        Self::with_free(k, 0)
+    }
+
+    /// No block yet, a shared error of `k` components followed by `free` components without
+    /// a prior, estimated from the residuals (module docs): each block's factor has `k + free`
+    /// columns.
+    pub fn with_free(k: usize, free: usize) -> Self {
         SharedErrorChiSquare {
             independent: 0.0,
-            normal: DMatrix::zeros(k, k),
-            projected: DVector::zeros(k),
+            normal: DMatrix::zeros(k + free, k + free),
+            projected: DVector::zeros(k + free),
             shared_variance: 0.0,
             dof: 0,
+            free,
         }
     }
 
@@ -49,18 +67,49 @@ impl SharedErrorChiSquare {
         self.independent += r.dot(&wr);
         self.normal += g.tr_mul(&wg);
         self.projected += g.tr_mul(&wr);
-        self.shared_variance += g.norm_squared();
+        self.shared_variance += g.columns(0, g.ncols() - self.free).norm_squared();
         self.dof += r.len();
     }
 
     /// `r^T S^-1 r`; NaN if a residual or factor was not finite.
     pub fn value(&self) -> f64 {
+        if self.free > 0 {
+            let (inverse, _) = self.free_capacitance();
+            return self.independent - self.projected.dot(&(inverse * &self.projected));
+        }
         let k = self.projected.len();
         let capacitance = DMatrix::identity(k, k) + &self.normal;
         match capacitance.cholesky() {
             Some(ch) => self.independent - self.projected.dot(&ch.solve(&self.projected)),
             None => f64::NAN,
         }
+    }
+
+    /// The free components' estimate: the last `free` entries of `(P + A)^+ b`, the values
+    /// that minimise the statistic (module docs); empty without free components.
+    pub fn free_estimate(&self) -> DVector<f64> {
+        if self.free == 0 {
+            return DVector::zeros(0);
+        }
+        let (inverse, _) = self.free_capacitance();
+        let all = inverse * &self.projected;
+        all.rows(all.len() - self.free, self.free).into_owned()
+    }
+
+    /// With free components: the pseudo-inverse of `P + A` and the free components it
+    /// resolves (its numerical rank beyond the `k` shared ones, module docs).
+    fn free_capacitance(&self) -> (DMatrix<f64>, usize) {
+        let n = self.projected.len();
+        let shared = n - self.free;
+        let prior = DMatrix::from_fn(n, n, |i, j| if i == j && i < shared { 1.0 } else { 0.0 });
+        let svd = (prior + &self.normal).svd(true, true);
+        let largest = svd.singular_values.max();
+        let tolerance = largest * n as f64 * f64::EPSILON;
+        let rank = svd.rank(tolerance);
+        let inverse = svd
+            .pseudo_inverse(tolerance)
+            .unwrap_or_else(|_| DMatrix::from_element(n, n, f64::NAN));
+        (inverse, rank.saturating_sub(shared))
     }
 
     /// `sum r_i^T W_i r_i`: the statistic of the noise alone.
@@ -73,9 +122,12 @@ impl SharedErrorChiSquare {
         self.shared_variance
     }
 
-    /// Degrees of freedom: residual components added.
+    /// Degrees of freedom: residual components added, less the free components they resolve.
     pub fn dof(&self) -> usize {
-        self.dof
+        if self.free == 0 {
+            return self.dof;
+        }
+        self.dof.saturating_sub(self.free_capacitance().1)
     }
 }
 
@@ -161,5 +213,56 @@ mod tests {
         let standard_error = (2.0 * dof as f64 / draws as f64).sqrt();
         assert!((mean - dof as f64).abs() < 4.0 * standard_error, "{mean} vs {dof}");
         assert!(mean_alone > dof as f64 + 10.0 * standard_error, "{mean_alone}");
+    }
+
+    /// Free components against the dense generalised least squares (a second path): the
+    /// minimum over `d` of `(r - T d)^T S^-1 (r - T d)`, `S` the covariance of noise and shared
+    /// error, with `T` two columns of unknown offsets; the degrees of freedom lose 2.
+    #[test]
+    fn free_components_equal_the_dense_generalised_least_squares() {
+        let mut rng = ChaCha12Rng::seed_from_u64(43);
+        for _ in 0..20 {
+            let blocks = problem(&mut rng);
+            let n: usize = blocks.iter().map(|(noise, _)| noise.nrows()).sum();
+            let t_all = DMatrix::from_fn(n, 2, |_, _| StandardNormal.sample(&mut rng));
+            let r_all = DVector::from_fn(n, |_, _| StandardNormal.sample(&mut rng))
+                + &t_all * DVector::from_vec(vec![1e3, -4e2]);
+            let (mut dense, mut g_all) = (DMatrix::zeros(n, n), DMatrix::zeros(n, 4));
+            let mut chi = SharedErrorChiSquare::with_free(4, 2);
+            let mut at = 0;
+            for (noise, g) in &blocks {
+                let m = noise.nrows();
+                dense.view_mut((at, at), (m, m)).copy_from(noise);
+                g_all.view_mut((at, 0), (m, 4)).copy_from(g);
+                let mut factor = DMatrix::zeros(m, 6);
+                factor.columns_mut(0, 4).copy_from(g);
+                factor.columns_mut(4, 2).copy_from(&t_all.rows(at, m));
+                chi.add(
+                    &r_all.rows(at, m).into_owned(),
+                    &noise.clone().try_inverse().unwrap(),
+                    &factor,
+                );
+                at += m;
+            }
+            dense += &g_all * g_all.transpose();
+            let s_inv = dense.try_inverse().unwrap();
+            let (sr, st) = (&s_inv * &r_all, &s_inv * &t_all);
+            let normal = t_all.transpose() * &st;
+            let b = t_all.transpose() * &sr;
+            let d = normal.try_inverse().unwrap() * &b;
+            let expected = r_all.dot(&sr) - b.dot(&d);
+            assert!(
+                (chi.value() - expected).abs() <= 1e-6 * expected,
+                "{} vs {expected}",
+                chi.value()
+            );
+            assert_eq!(chi.dof(), n - 2);
+            assert!(
+                (chi.free_estimate() - &d).norm() <= 1e-6 * d.norm(),
+                "{} vs {d}",
+                chi.free_estimate()
+            );
+            assert!((chi.shared_variance() - g_all.norm_squared()).abs() <= 1e-12 * g_all.norm_squared());
+        }
     }
 }
