@@ -83,7 +83,8 @@ impl Recorder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calibration::{ArcFitOptions, MeasurementNoise, TransmissionFitForm, fit_arc};
+    use crate::calibration::{ArcFitOptions, MeasurementNoise, fit_arc};
+    use crate::robot::TransmissionFitForm;
     use approx::assert_relative_eq;
     use nalgebra::Vector3;
 

@@ -2,8 +2,9 @@
 //! residual vectors.
 
 use anyhow::Result;
-use axiscal::calibration::{ArcFitOptions, ArcModel, MeasurementNoise, TransmissionFitForm, fit_arc};
+use axiscal::calibration::{ArcFitOptions, ArcModel, MeasurementNoise, fit_arc};
 use axiscal::measurement::Measurement;
+use axiscal::robot::TransmissionFitForm;
 use axiscal::viz::Recorder;
 use nalgebra::{Matrix3, Point3};
 use std::collections::{BTreeMap, BTreeSet};

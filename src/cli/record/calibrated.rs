@@ -157,15 +157,16 @@ fn summary(c: &CalibratedCampaign) -> String {
         "Grey: the nominal robot; blue: the calibrated robot, both at the commanded poses. \
          Arrows: residuals of the arc fits and validation errors, {ERROR_EXAGGERATION} times longer.\n"
     );
-    let _ = writeln!(
-        s,
-        "| joint | points | span (deg) | residual RMS (mm) |\n|---|---|---|---|"
-    );
+    let _ = writeln!(s, "| joint | points | span | residual RMS (mm) |\n|---|---|---|---|");
     for a in &c.calibration.axes {
         let _ = writeln!(
             s,
-            "| {} | {} | {:.1} | {:.4} |",
-            a.joint, a.points, a.span_deg, a.residual_rms_mm
+            "| {} | {} | {:.1} {} | {:.4} |",
+            a.joint,
+            a.points,
+            a.span.value(),
+            a.span.unit(),
+            a.residual_rms_mm
         );
     }
     s
