@@ -260,6 +260,12 @@ pub fn run(args: Args) -> Result<()> {
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
     let (mut cal, map) = if free_poses_only {
+        if let Some(noise) = args.noise_mm {
+            eprintln!(
+                "warning: --noise-mm {noise} has no effect here: a free-pose calibration weights its poses alike and \
+                 estimates the noise from their residuals (report.md, \"Noise from the residuals\"); it applies to axis experiments"
+            );
+        }
         let mut cal = super::calibrate_free::calibrate(&args_view(&args), &set, &desc)?;
         let map = predict_free_pose_accuracy(&mut cal, &desc, &set)?;
         (cal, map)

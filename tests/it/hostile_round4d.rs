@@ -214,6 +214,33 @@ fn options_without_effect_on_axis_experiments_are_named() {
     assert_eq!(json("out"), json("plain"), "the ignored options change nothing");
 }
 
+/// `--noise-mm` on a file of free poses only (the run-8 hostile session: the option changed
+/// nothing and nothing said so) is named as without effect, and indeed changes nothing.
+#[test]
+fn noise_mm_on_free_poses_is_named_as_without_effect() {
+    let dir = tempfile::tempdir().unwrap();
+    crate::common::simulate_analytic(dir.path(), 40, 8, "campaign.csv");
+    crate::common::altered_csv(&dir.path().join("campaign.csv"), "free.csv", |f| f[1] == "0", |_| {});
+    let c = case(
+        "--noise-mm on free poses",
+        "calibrate free.csv --noise-mm 1.0 --out out",
+        0,
+        &[
+            "warning: --noise-mm 1 has no effect here",
+            "estimates the noise from their residuals",
+        ],
+    );
+    run_case(dir.path(), &c);
+    let plain = crate::common::axiscal()
+        .current_dir(dir.path())
+        .args(["calibrate", "free.csv", "--out", "plain"])
+        .assert()
+        .success();
+    assert!(!crate::common::stderr(&plain).contains("has no effect"));
+    let json = |d: &str| std::fs::read(dir.path().join(d).join("calibration.json")).unwrap();
+    assert_eq!(json("out"), json("plain"), "the ignored option changes nothing");
+}
+
 /// One axis experiment's commands in gradians (a factor 400/360 the transmission's fit takes
 /// up, within what a real transmission's slope may be) leave a model that misses the file's
 /// own validation poses: `calibrate` warns with the miss and the prediction. The same campaign
