@@ -29,6 +29,7 @@ use crate::numerics::lsq;
 use crate::robot::Transmission;
 use crate::robot::TransmissionFitForm;
 use identifiability::identifiability;
+pub use identifiability::{Identifiability, WeakDirection};
 
 const FIT: &str = "arc maximum-likelihood fit";
 
@@ -49,49 +50,6 @@ pub struct ArcFitOptions {
     pub reference_point: Point3<f64>,
     /// Iteration limit of Levenberg-Marquardt.
     pub max_iterations: usize,
-}
-
-/// A poorly determined combination of parameters: an eigenvector of the correlation matrix
-/// with a large eigenvalue.
-#[derive(Clone, Debug, PartialEq)]
-pub struct WeakDirection {
-    /// Eigenvalue of the parameter correlation matrix (1 = uncorrelated; large = weak).
-    pub correlation_eigenvalue: f64,
-    /// Parameters taking part (components of magnitude >= 0.3), by name.
-    pub components: Vec<(String, f64)>,
-}
-
-/// Which parameters the sweep determines poorly, and what span would help.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Identifiability {
-    /// 2-norm condition number of the whitened Jacobian with unit-scaled columns.
-    pub condition_number: f64,
-    /// The two weakest parameter combinations.
-    pub weak_directions: Vec<WeakDirection>,
-    /// Parameter pairs with correlation `|rho| > 0.95`.
-    pub strong_correlations: Vec<(String, String, f64)>,
-    /// Largest 1-sigma of the axis tilt \[rad\].
-    pub tilt_sigma_rad: f64,
-    /// `(span \[rad\], tilt 1-sigma \[rad\])` predicted by the Cramer-Rao bound for the same
-    /// number of points evenly spread over larger spans from the same start.
-    pub tilt_sigma_by_span: Vec<(f64, f64)>,
-    /// Plain-language findings.
-    pub notes: Vec<String>,
-}
-
-impl Identifiability {
-    /// The value of a fit that skipped the study ([`Studies::Skip`]): no finding, and NaN for
-    /// the numbers (not computed, never a made-up zero).
-    pub fn not_studied() -> Self {
-        Identifiability {
-            condition_number: f64::NAN,
-            weak_directions: vec![],
-            strong_correlations: vec![],
-            tilt_sigma_rad: f64::NAN,
-            tilt_sigma_by_span: vec![],
-            notes: vec![],
-        }
-    }
 }
 
 /// The result of [`fit_arc`].

@@ -582,7 +582,9 @@ fn noise_level_draw<R: rand::Rng + ?Sized>(dof: Option<f64>, rng: &mut R) -> f64
 fn noise_model(desc: &RobotDescription, noise_rms_3d_mm: f64) -> Result<NoiseModel, DiagnosisError> {
     Ok(NoiseModel {
         noise_rms_3d_m: noise_rms_3d_mm * 1e-3,
-        repeatability_rad: CalibrationOptions::default().joint_repeatability_rad(desc)?,
+        repeatability_rad: CalibrationOptions::default()
+            .joint_repeatability_rad(desc)
+            .map_err(ProcedureError::from)?,
     })
 }
 

@@ -67,7 +67,10 @@ impl<'a> PredictionError<'a> {
         controller: &'a Controller,
         desc: &RobotDescription,
     ) -> Result<Self, DiagnosisError> {
-        let repeatability = cal.options.joint_repeatability_rad(desc)?;
+        let repeatability = cal
+            .options
+            .joint_repeatability_rad(desc)
+            .map_err(crate::calibration::procedure::ProcedureError::from)?;
         let Some(covariance) = &cal.model_covariance else {
             return Ok(PredictionError {
                 calibration: None,

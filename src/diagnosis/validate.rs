@@ -454,7 +454,10 @@ fn validate_with(
         noise_source: options.noise_source.clone(),
         false_alarm: options.false_alarm,
         noise_dof: options.noise_dof,
-        repeatability_rad_or_m: cal.options.joint_repeatability_rad(desc)?,
+        repeatability_rad_or_m: cal
+            .options
+            .joint_repeatability_rad(desc)
+            .map_err(crate::calibration::procedure::ProcedureError::from)?,
         calibration_uncertainty: error.has_calibration(),
         validation,
         tool,

@@ -2,11 +2,53 @@
 //! parameter combinations, the strong correlations, the axis tilt's sigma and what larger spans
 //! would give (the Cramer-Rao bound of [`crb::UniformArc`]), in plain-language notes.
 
-use super::{Identifiability, WeakDirection};
 use crate::calibration::arc_model::{ArcModel, ArcParams, MeasurementNoise, N_GEOMETRY};
 use crate::calibration::{CalibrationError, crb};
 use crate::numerics::lsq;
 use nalgebra::DMatrix;
+
+/// A poorly determined combination of parameters: an eigenvector of the correlation matrix
+/// with a large eigenvalue.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WeakDirection {
+    /// Eigenvalue of the parameter correlation matrix (1 = uncorrelated; large = weak).
+    pub correlation_eigenvalue: f64,
+    /// Parameters taking part (components of magnitude >= 0.3), by name.
+    pub components: Vec<(String, f64)>,
+}
+
+/// Which parameters the sweep determines poorly, and what span would help.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Identifiability {
+    /// 2-norm condition number of the whitened Jacobian with unit-scaled columns.
+    pub condition_number: f64,
+    /// The two weakest parameter combinations.
+    pub weak_directions: Vec<WeakDirection>,
+    /// Parameter pairs with correlation `|rho| > 0.95`.
+    pub strong_correlations: Vec<(String, String, f64)>,
+    /// Largest 1-sigma of the axis tilt \[rad\].
+    pub tilt_sigma_rad: f64,
+    /// `(span \[rad\], tilt 1-sigma \[rad\])` predicted by the Cramer-Rao bound for the same
+    /// number of points evenly spread over larger spans from the same start.
+    pub tilt_sigma_by_span: Vec<(f64, f64)>,
+    /// Plain-language findings.
+    pub notes: Vec<String>,
+}
+
+impl Identifiability {
+    /// The value of a fit that skipped the study ([`Studies::Skip`](super::Studies::Skip)): no finding, and NaN for
+    /// the numbers (not computed, never a made-up zero).
+    pub fn not_studied() -> Self {
+        Identifiability {
+            condition_number: f64::NAN,
+            weak_directions: vec![],
+            strong_correlations: vec![],
+            tilt_sigma_rad: f64::NAN,
+            tilt_sigma_by_span: vec![],
+            notes: vec![],
+        }
+    }
+}
 
 /// How well the fit determines its parameters: the weakest combinations, the strong
 /// correlations, the axis tilt's sigma (and what larger spans would give), and notes.

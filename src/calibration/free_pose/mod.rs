@@ -20,6 +20,7 @@
 //! Pure maths: no files, no CLI, no simulator.
 
 mod effects;
+mod error;
 mod fit;
 pub mod identify;
 pub mod model;
@@ -31,19 +32,18 @@ mod summary;
 #[cfg(test)]
 mod tests;
 
+pub use error::{FreePoseError, MIN_POSES};
 pub use identify::{Identification, Unidentified};
 pub use model::{FreePoseModel, layout};
 pub use poses::{FreePose, FreePoses};
 pub use report::markdown;
 pub use summary::{
-    EffectJoint, EffectTrial, FreePoseSummary, Holdout, OutlierPose, ParameterEstimate, SetupPlacement, TargetEstimate,
+    EffectJoint, EffectTrial, FreePoseCalibration, FreePoseSummary, Holdout, OutlierPose, ParameterEstimate,
+    SetupPlacement, TargetEstimate,
 };
 
-use crate::calibration::noise::{NoiseEstimate, ResidualMoments, estimate_noise};
-use crate::calibration::procedure::{Calibration, CalibrationOptions, NoiseReport, ZeroOffsetSigma};
+use crate::calibration::procedure::Calibration;
 use crate::calibration::refine::RefitParameter;
-use crate::calibration::tool_accuracy::ModelCovariance;
-use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::numerics::lsq::LsqError;
 use crate::robot::{Controller, RobotDescription, RobotModel};
@@ -89,125 +89,6 @@ impl Default for FreePoseOptions {
             max_poses: crate::measurement::bounded::FIT_MAX_POSES,
         }
     }
-}
-
-/// The fewest poses a free-pose calibration registers the robot's base to: two poses leave a
-/// turn about the line through their tool points undetermined.
-pub const MIN_POSES: usize = 3;
-
-/// Why a free-pose calibration failed.
-#[derive(Debug, thiserror::Error)]
-pub enum FreePoseError {
-    /// Too few poses for the parameters.
-    #[error(
-        "{poses} free poses with {points} points: fitting {parameters} parameters needs at least {needed} points (3 coordinates each) on at least {MIN_POSES} poses"
-    )]
-    TooFewPoints {
-        /// Poses.
-        poses: usize,
-        /// Points.
-        points: usize,
-        /// Parameters of the registration.
-        parameters: usize,
-        /// Points needed.
-        needed: usize,
-    },
-    /// One pose's rows name different setups.
-    #[error("{pose}: its rows name different setups (one pose is measured from one instrument placement)")]
-    SetupsDiffer {
-        /// The pose.
-        pose: String,
-    },
-    /// A setup's poses do not place the instrument.
-    #[error("setup {setup}: its points do not place the instrument (fewer than three non-collinear tool positions)")]
-    SetupUnplaced {
-        /// The setup's label.
-        setup: String,
-    },
-    /// The model cannot execute a pose's commands: the fit moved a transmission until it turns
-    /// back on itself at this pose's command.
-    #[error(
-        "{pose}: the fit moved the model so far from the description that no joint angle gives this pose's \
-         commands (a fitted transmission turns back on itself there): the points pull the model where the \
-         description's robot cannot go; check this pose's rows, the units of the commands and coordinates, the \
-         joint order and the target ids against the description"
-    )]
-    Unexecutable {
-        /// The pose.
-        pose: String,
-    },
-    /// The closed-form registration failed.
-    #[error("the points do not fix the instrument frame (fewer than three non-collinear tool positions)")]
-    Registration,
-    /// The least-squares fit failed.
-    #[error("{}", fit_words(.0))]
-    Fit(LsqError),
-    /// The calibrated model misses the points by a good part of their own spread.
-    #[error(
-        "the calibrated model misses the points by {rms_mm:.3} mm RMS, {percent:.1} % of their spread about their centroid ({spread_mm:.1} mm): the description does not describe this robot or these data (check the robot file, the joint order and directions, the units of the commands and coordinates, and that each target id is one physical target)"
-    )]
-    Absurd {
-        /// Calibrated RMS \[mm\].
-        rms_mm: f64,
-        /// The points' RMS distance from their centroid \[mm\].
-        spread_mm: f64,
-        /// The ratio in percent.
-        percent: f64,
-    },
-    /// Too many outliers.
-    #[error(
-        "{flagged} of {poses} poses fail the outlier test: the nominal description, not single poses, misses these data (check the robot, the units and the joint directions)"
-    )]
-    TooManyOutliers {
-        /// Poses flagged.
-        flagged: usize,
-        /// Poses fitted.
-        poses: usize,
-    },
-}
-
-/// A failed free-pose fit in words: what it means for the poses and what to do.
-fn fit_words(e: &LsqError) -> String {
-    match e {
-        LsqError::IllConditioned { condition_number, .. } => format!(
-            "the poses do not determine the model: some change of its parameters moves none of the measured points \
-             (the fit's sensitivities to them are dependent, condition number {condition_number:.1e}): too few \
-             distinct configurations, a joint that does not move among the poses, or a description whose joints \
-             are not this robot's; measure the robot at more configurations across its workspace, or check the \
-             description and the joint order"
-        ),
-        LsqError::NotConverged {
-            iterations,
-            residual_rms,
-            ..
-        } => format!(
-            "the fit does not settle: after {iterations} steps its parameters still move, with the points {:.3} mm \
-             RMS (per coordinate) from the model: the poses leave a combination of parameters free (too few distinct \
-             configurations, or joints that barely move among them), or they fit no model near the description's; \
-             measure the robot at more configurations across its workspace, or check the description and the \
-             units",
-            residual_rms * 1e3
-        ),
-    }
-}
-
-/// A free-pose calibration: the fitted model and its summary.
-#[derive(Clone, Debug)]
-pub struct FreePoseCalibration {
-    /// The calibrated robot (rows, zero offsets, base placement; transmissions and couplings
-    /// nominal).
-    pub robot: RobotModel,
-    /// The fitted model (with the targets).
-    pub model: FreePoseModel,
-    /// The summary (`calibration.json`'s `free_poses`).
-    pub summary: FreePoseSummary,
-    /// The noise estimated from the residuals.
-    pub noise: Option<NoiseEstimate>,
-    /// The covariance of `robot`'s parameters (base, every scalar, tool frame;
-    /// [`crate::calibration::tool_accuracy::model_parameter_names`]) propagated from the fitted
-    /// parameters': what the predicted tool accuracy reads. `None` when a parameter's step
-    /// changes the model's structure.
-    pub model_covariance: Option<ModelCovariance>,
 }
 
 /// Calibrates the robot of `desc` from the free poses of `set` (module docs).
@@ -743,71 +624,6 @@ fn check_plausible(fitted: &Fitted, poses: &FreePoses, kept: &[usize]) -> Result
         });
     }
     Ok(())
-}
-
-/// The noise estimate of a fit (isotropic, no jitter).
-fn noise_of(fitted: &Fitted) -> Option<NoiseEstimate> {
-    estimate_noise(&[ResidualMoments {
-        rss_m2: fitted.residual.norm_squared(),
-        dof: fitted.dof(),
-        ..ResidualMoments::default()
-    }])
-}
-
-impl FreePoseCalibration {
-    /// The calibration in the shape every command reads (`calibration.json`): the calibrated
-    /// robot, the zero offsets' sigmas, the noise, and the summary as `free_poses`; no axis
-    /// reports.
-    pub fn into_calibration(self, desc: &RobotDescription) -> Calibration {
-        let sigma = |name: String| {
-            self.summary
-                .parameters
-                .iter()
-                .find(|p| p.name == name)
-                .map(|p| p.sigma / p.unit.per_si())
-        };
-        let zero_offset_sigma = (1..=desc.dof())
-            .filter_map(|joint| {
-                let sliding = desc.joints[joint - 1].kind == JointKind::Prismatic;
-                let s = sigma(RefitParameter::ZeroOffset { joint, sliding }.name())?;
-                Some(ZeroOffsetSigma {
-                    joint,
-                    sigma_rad: (!sliding).then_some(s),
-                    sigma_mm: sliding.then_some(s * 1e3),
-                })
-            })
-            .collect();
-        let used_rms_3d_mm = self.noise.as_ref().map_or(0.0, |n| n.rms_3d_mm);
-        Calibration {
-            robot: self.robot,
-            reference_cmd: vec![0.0; desc.dof()],
-            axes: vec![],
-            row_sigma: vec![],
-            couplings: vec![],
-            zero_offset_sigma,
-            tool: None,
-            options: CalibrationOptions::default(),
-            description: Some(desc.identity()),
-            data_digest: None,
-            model_digest: None,
-            base_rule: None,
-            not_calibrated: vec![],
-            noise: Some(NoiseReport {
-                estimate: self.noise,
-                used_rms_3d_mm,
-                source: "estimated".into(),
-                given_p_value: None,
-                given_contradicted: false,
-            }),
-            held_passes: 1,
-            model_covariance: self.model_covariance,
-            tool_accuracy: None,
-            refinement: None,
-            outliers: vec![],
-            free_poses: Some(self.summary),
-            residuals: vec![],
-        }
-    }
 }
 
 /// `desc` with the tool targets a free-pose calibration fitted, where the description gives

@@ -1,13 +1,17 @@
 //! The free-pose calibration's summary: parameters with their sigmas, what was not identified,
 //! the outliers, the residuals before and after, and the held-out check.
 
+use super::error::FreePoseError;
 use super::fit::{Fitted, Flag, Problem};
 use super::identify::{Identification, Unidentified};
 use super::model::FreePoseModel;
-use super::{FreePoseCalibration, FreePoseError, noise_of};
+use crate::calibration::noise::{NoiseEstimate, ResidualMoments, estimate_noise};
+use crate::calibration::procedure::{Calibration, CalibrationOptions, NoiseReport, ZeroOffsetSigma};
 use crate::calibration::refine::{ParameterUnit, RefitParameter};
 use crate::calibration::tool_accuracy::{ModelCovariance, model_difference, model_parameter_names};
+use crate::kinematics::JointKind;
 use crate::kinematics::rigid_fit;
+use crate::robot::RobotDescription;
 use crate::robot::{Placement, RobotModel};
 use nalgebra::{DMatrix, DVector, Point3};
 use serde::{Deserialize, Serialize};
@@ -504,4 +508,88 @@ fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
         calibrated_max_mm: max * 1e3,
         unexecutable_poses: unexecutable.len(),
     }))
+}
+
+/// A free-pose calibration: the fitted model and its summary.
+#[derive(Clone, Debug)]
+pub struct FreePoseCalibration {
+    /// The calibrated robot (rows, zero offsets, base placement; transmissions and couplings
+    /// nominal).
+    pub robot: RobotModel,
+    /// The fitted model (with the targets).
+    pub model: FreePoseModel,
+    /// The summary (`calibration.json`'s `free_poses`).
+    pub summary: FreePoseSummary,
+    /// The noise estimated from the residuals.
+    pub noise: Option<NoiseEstimate>,
+    /// The covariance of `robot`'s parameters (base, every scalar, tool frame;
+    /// [`crate::calibration::tool_accuracy::model_parameter_names`]) propagated from the fitted
+    /// parameters': what the predicted tool accuracy reads. `None` when a parameter's step
+    /// changes the model's structure.
+    pub model_covariance: Option<ModelCovariance>,
+}
+
+/// The noise estimate of a fit (isotropic, no jitter).
+fn noise_of(fitted: &Fitted) -> Option<NoiseEstimate> {
+    estimate_noise(&[ResidualMoments {
+        rss_m2: fitted.residual.norm_squared(),
+        dof: fitted.dof(),
+        ..ResidualMoments::default()
+    }])
+}
+
+impl FreePoseCalibration {
+    /// The calibration in the shape every command reads (`calibration.json`): the calibrated
+    /// robot, the zero offsets' sigmas, the noise, and the summary as `free_poses`; no axis
+    /// reports.
+    pub fn into_calibration(self, desc: &RobotDescription) -> Calibration {
+        let sigma = |name: String| {
+            self.summary
+                .parameters
+                .iter()
+                .find(|p| p.name == name)
+                .map(|p| p.sigma / p.unit.per_si())
+        };
+        let zero_offset_sigma = (1..=desc.dof())
+            .filter_map(|joint| {
+                let sliding = desc.joints[joint - 1].kind == JointKind::Prismatic;
+                let s = sigma(RefitParameter::ZeroOffset { joint, sliding }.name())?;
+                Some(ZeroOffsetSigma {
+                    joint,
+                    sigma_rad: (!sliding).then_some(s),
+                    sigma_mm: sliding.then_some(s * 1e3),
+                })
+            })
+            .collect();
+        let used_rms_3d_mm = self.noise.as_ref().map_or(0.0, |n| n.rms_3d_mm);
+        Calibration {
+            robot: self.robot,
+            reference_cmd: vec![0.0; desc.dof()],
+            axes: vec![],
+            row_sigma: vec![],
+            couplings: vec![],
+            zero_offset_sigma,
+            tool: None,
+            options: CalibrationOptions::default(),
+            description: Some(desc.identity()),
+            data_digest: None,
+            model_digest: None,
+            base_rule: None,
+            not_calibrated: vec![],
+            noise: Some(NoiseReport {
+                estimate: self.noise,
+                used_rms_3d_mm,
+                source: "estimated".into(),
+                given_p_value: None,
+                given_contradicted: false,
+            }),
+            held_passes: 1,
+            model_covariance: self.model_covariance,
+            tool_accuracy: None,
+            refinement: None,
+            outliers: vec![],
+            free_poses: Some(self.summary),
+            residuals: vec![],
+        }
+    }
 }

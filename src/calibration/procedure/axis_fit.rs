@@ -3,6 +3,8 @@
 //! for a sliding one; several sweeps of one joint jointly as one axis; the held joints'
 //! repeatability added to each axis's covariance; the per-point residuals.
 
+use super::experiments::actuator_commands;
+use super::options::InvalidOption;
 use super::propagation::LocalFit;
 use super::{
     AxisCovariance, AxisEstimator, AxisExperiment, AxisReport, CalibrationOptions, Detail, PointResidual,
@@ -18,7 +20,6 @@ use crate::calibration::{
 };
 use crate::kinematics::{AxisLine, JointKind};
 use crate::robot::TransmissionFitForm;
-use crate::robot::commands_to_internal;
 use crate::robot::{Controller, RobotDescription, Transmission};
 use nalgebra::{Isometry3, Point3, Unit, Vector3};
 
@@ -51,13 +52,6 @@ pub(super) struct JointData<'a> {
     pub(super) sweeps: Vec<&'a AxisExperiment>,
     /// Target-0 points of each sweep (corrected to the design pose or as measured).
     pub(super) points: Vec<Vec<Point3<f64>>>,
-}
-
-/// The actuator commands (rad or m, the controller's decoupled `u`) of the file commands `cmd`.
-pub(super) fn actuator_commands(controller: &Controller, desc: &RobotDescription, cmd: &[f64]) -> Vec<f64> {
-    controller
-        .decouple(&commands_to_internal(desc, cmd))
-        .expect("commands have the description's joint count (checked by MeasurementSet)")
 }
 
 fn span(u: &[f64]) -> f64 {
@@ -222,7 +216,7 @@ impl JointData<'_> {
             Some(finding) => ProcedureError::Misfit {
                 experiment: self.name(),
                 joint: self.joint(),
-                failure: super::failure_words(&e),
+                failure: super::error::failure_words(&e),
                 finding,
             },
             None => e,
@@ -378,14 +372,14 @@ fn fit_joint_as(
     let kind = desc.joints[joint - 1].kind;
     let paper = options.estimator == AxisEstimator::Paper;
     if paper && data.sweeps.len() > 1 {
-        return Err(ProcedureError::InvalidOption {
+        return Err(ProcedureError::InvalidOption(InvalidOption {
             field: "estimator",
             message: format!(
                 "joint {joint} is swept {} times ({}): the paper's estimator fits one sweep per joint; use the ML estimator",
                 data.sweeps.len(),
                 data.name()
             ),
-        });
+        }));
     }
     let sigma = setting.noise_mm * 1e-3 / 3f64.sqrt();
     match (kind, paper) {

@@ -9,21 +9,18 @@
 //! median, else the experiment moves two joints and is an error naming the joint and how far
 //! it moved. Between experiments the held values may differ (sweeps at other poses).
 
-use super::ProcedureError;
+use super::error::ProcedureError;
+use super::options::DEFAULT_HELD_TOLERANCE;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{QuantileMethod, quantile};
-use crate::robot::RobotDescription;
+use crate::robot::{Controller, RobotDescription, commands_to_internal};
 use nalgebra::Point3;
 
 /// Commands that differ by no more than this \[deg or mm\] are one reading: the tolerance of
 /// the targets of one pose ([`crate::measurement::POSE_COMMAND_TOLERANCE`]), of a held joint
 /// standing still and of a sweep that does not move.
 pub const COMMAND_TOLERANCE: f64 = crate::measurement::POSE_COMMAND_TOLERANCE;
-
-/// How far a held joint may move within one axis experiment (file units: deg for a revolute,
-/// mm for a prismatic joint); the default of `CalibrationOptions::held_tolerance`.
-pub const DEFAULT_HELD_TOLERANCE: f64 = 0.5;
 
 /// One axis experiment.
 #[derive(Clone, Debug)]
@@ -360,4 +357,11 @@ fn reference_pose(experiments: &[AxisExperiment], n: usize) -> Vec<f64> {
             }
         })
         .collect()
+}
+
+/// The actuator commands (rad or m, the controller's decoupled `u`) of the file commands `cmd`.
+pub(super) fn actuator_commands(controller: &Controller, desc: &RobotDescription, cmd: &[f64]) -> Vec<f64> {
+    controller
+        .decouple(&commands_to_internal(desc, cmd))
+        .expect("commands have the description's joint count (checked by MeasurementSet)")
 }

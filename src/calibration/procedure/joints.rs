@@ -3,7 +3,7 @@
 //! joint's sweep when observed (eqs. 14-15), else the nominal one. A joint no experiment
 //! sweeps keeps its nominal model (identity transmission, nominal coupling, zero offset).
 
-use super::axis_fit::actuator_commands;
+use super::experiments::actuator_commands;
 use super::{AxisExperiment, CouplingReport, ProcedureError, SecondTargetData};
 use crate::calibration::CalibrationError;
 use crate::calibration::coupling_fit::{

@@ -23,47 +23,50 @@
 //! kept beside it (`CouplingReport::fit_only_sigma`).
 
 mod axis_fit;
+mod error;
 mod experiments;
 mod frames;
 mod held;
 mod joint_map;
 mod joints;
 mod misfit;
+mod options;
 mod propagation;
 mod report;
 mod result;
 mod sanity;
 mod screen;
+mod second_targets;
 mod uncertainty;
 mod urdf;
 mod validate;
 
-pub use experiments::{
-    AxisExperiment, COMMAND_TOLERANCE, DEFAULT_HELD_TOLERANCE, axis_experiments, axis_experiments_with,
-};
+pub use error::{ProcedureError, ShortSpan};
+pub use experiments::{AxisExperiment, COMMAND_TOLERANCE, axis_experiments, axis_experiments_with};
 pub use frames::{BaseRule, FramesError, NominalGeometry, common_normal_feet, model_from_axes};
 pub use joint_map::{
     JointMap, MapRow, MapTable, ZeroOffsetFit, calibrated_joint_values, controller_zero_offsets, joint_map,
 };
 pub use misfit::SweepMisfit;
+pub use options::{AxisEstimator, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Detail};
 pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
 pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, read_residuals_csv, residuals_csv};
 pub use result::{
     AxisReport, AxisSpan, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport,
-    PointResidual, PositionSigma, RowSigma, SecondTargetData, SweepReport, ToolPose, ToolReport, harmonics,
+    PointResidual, PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
 };
 pub use sanity::{
     Implausible, LEAD_SPREAD, MISFIT_RATIO, PLAUSIBLE_AXIS_TILT_RAD, PLAUSIBLE_LEAD_DEVIATION,
     PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, SIZE_TOLERANCE, free_pose_scale_slips, implausible, longest_length_m,
 };
 pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, WorstSecondTarget, screen_sweeps};
+pub use second_targets::SecondTargetData;
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
 };
 pub use validate::{InvalidCalibration, MAX_NOISE_RMS_3D_MM, MAX_PARAMETER_VARIANCE};
 
-use super::CalibrationError;
 use super::coupling_fit::{CouplingResponse, passive_angle_gradients};
 use super::noise::{NoiseEstimate, estimate_noise};
 use super::tool_accuracy::ModelCovariance;
@@ -71,488 +74,13 @@ use crate::kinematics::{AxisLine, FixedFrames, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel, Transmission};
-use axis_fit::{AxisFitOutcome, JointData, actuator_commands, add_held_joint_covariances, fit_joint};
+use axis_fit::{AxisFitOutcome, JointData, add_held_joint_covariances, fit_joint};
+use experiments::actuator_commands;
 use held::{Corrector, design_distance, exactly_as_designed};
 use joints::{Assembly, RecordedCoupling, Refit, swept_commands_at_target1};
 use nalgebra::{DMatrix, Isometry3, Point3};
 use propagation::{Derived, Propagation, add_axis_fit, moved_point};
-use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
-
-/// Which rotary-axis estimator to use.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum AxisEstimator {
-    /// Maximum-likelihood arc fit through the transmission model (default; efficient).
-    #[default]
-    Ml,
-    /// The paper's estimator, eqs. (1)-(5), then eqs. (6)-(8).
-    Paper,
-}
-
-impl AxisEstimator {
-    /// Its name as `--estimator` spells it (`ml`, `paper`).
-    pub fn name(self) -> &'static str {
-        match self {
-            AxisEstimator::Ml => "ml",
-            AxisEstimator::Paper => "paper",
-        }
-    }
-}
-
-/// Options of the procedure.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct CalibrationOptions {
-    /// The axis estimator.
-    pub estimator: AxisEstimator,
-    /// Measurement noise as the 3-D RMS error of a point \[mm\] (the paper: 0.19).
-    pub noise_rms_3d_mm: f64,
-    /// Iteration cap of every nonlinear fit.
-    pub max_iterations: usize,
-    /// The robot's repeatability per joint \[rad\] (standard deviation of the joint-value
-    /// error drawn each time an actuator is re-positioned): one value for every joint or one
-    /// per joint. `None` (default): the description's `repeatability_sigma` of each joint
-    /// (0 unless the file gives it). A joint with a non-zero value has its axis fitted with
-    /// [`super::fit_arc_with_angle_noise`] (ML estimator only), so the weights and the reported
-    /// covariance include the angle noise of the sweep; 0 everywhere is the measurement-only
-    /// fit, bit for bit.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub repeatability_sigma_rad: Option<Vec<f64>>,
-    /// Weight the fits with the noise estimated from the residuals (`noise_rms_3d_mm` is then
-    /// only the first pass's value): what `axiscal calibrate` does without `--noise-mm`.
-    #[serde(default)]
-    pub estimate_noise: bool,
-    /// How far a held joint may wander within one axis experiment (deg for a revolute, mm for
-    /// a prismatic joint; `docs/formats.md#held-joints`).
-    #[serde(
-        default = "default_held_tolerance",
-        rename = "held_tolerance_deg_or_mm",
-        alias = "held_tolerance"
-    )]
-    pub held_tolerance: f64,
-}
-
-fn default_held_tolerance() -> f64 {
-    DEFAULT_HELD_TOLERANCE
-}
-
-impl Default for CalibrationOptions {
-    fn default() -> Self {
-        CalibrationOptions {
-            estimator: AxisEstimator::Ml,
-            noise_rms_3d_mm: 0.19,
-            max_iterations: 100,
-            repeatability_sigma_rad: None,
-            estimate_noise: false,
-            held_tolerance: DEFAULT_HELD_TOLERANCE,
-        }
-    }
-}
-
-impl CalibrationOptions {
-    /// The repeatability \[rad\] the axis fit of each joint of `desc` assumes (see
-    /// [`CalibrationOptions::repeatability_sigma_rad`]).
-    pub fn joint_repeatability_rad(&self, desc: &RobotDescription) -> Result<Vec<f64>, ProcedureError> {
-        let n = desc.dof();
-        let sigmas = match &self.repeatability_sigma_rad {
-            None => desc.joints.iter().map(|j| j.repeatability_sigma).collect(),
-            Some(v) if v.len() == 1 => vec![v[0]; n],
-            Some(v) if v.len() == n => v.clone(),
-            Some(v) => {
-                return Err(ProcedureError::InvalidOption {
-                    field: "repeatability_sigma_rad",
-                    message: format!("needs 1 or {n} values, got {}", v.len()),
-                });
-            }
-        };
-        if let Some(s) = sigmas.iter().find(|s| !(s.is_finite() && **s >= 0.0)) {
-            return Err(ProcedureError::InvalidOption {
-                field: "repeatability_sigma_rad",
-                message: format!("must be finite and >= 0, got {s}"),
-            });
-        }
-        Ok(sigmas)
-    }
-}
-
-/// Why a campaign could not be calibrated.
-#[derive(Debug, thiserror::Error)]
-pub enum ProcedureError {
-    /// Too many of one sweep's points fail the outlier test ([`screen_sweeps`]).
-    #[error(
-        "experiment {experiment}: {flagged} of its {points} points lie beyond the outlier fence ({fence:.2} times the sweep's noise): the sweep, not single points, is wrong (check its joint, its target ids, its units)"
-    )]
-    TooManyOutliers {
-        /// The experiment.
-        experiment: String,
-        /// Points beyond the fence.
-        flagged: usize,
-        /// Its points.
-        points: usize,
-        /// The fence (normalised residual).
-        fence: f64,
-    },
-    /// The set has no axis experiment at all.
-    #[error("no axis experiment (no row with moved_joint > 0): nothing to calibrate")]
-    NoAxisExperiment,
-    /// Two experiments hold the same measured points: one is a copy of the other.
-    #[error(
-        "experiments {first} ({first_lines}) and {second} ({second_lines}) both sweep joint {joint} with the same {points} measured points, to the last digit: one is a copy of the other (fitted twice, its points would count double and every sigma shrink by 1.4); delete one"
-    )]
-    DuplicateExperiment {
-        /// The first experiment.
-        first: String,
-        /// Its file lines, as `lines A-B` (or `no file lines`).
-        first_lines: String,
-        /// The copy.
-        second: String,
-        /// Its file lines.
-        second_lines: String,
-        /// The joint both sweep.
-        joint: usize,
-        /// Their target-0 points.
-        points: usize,
-    },
-    /// The fit-and-correct passes for the held joints' recorded values did not settle.
-    #[error(
-        "the correction for the held joints' recorded values did not converge in {passes} passes (last change {change_mm:.3e} mm)"
-    )]
-    HeldNotConverged {
-        /// Passes made.
-        passes: usize,
-        /// Largest change of a corrected point in the last pass \[mm\].
-        change_mm: f64,
-    },
-    /// An axis fit misses its points by a good part of their own spread: no calibration.
-    #[error(
-        "experiment {experiment} (joint {joint}): the fitted axis misses its points by {rms_mm:.3} mm RMS, {share:.1} % of their spread about their centroid ({spread_mm:.1} mm): the points are not on one arc or line of this joint (check the joint order and kinds of the robot file, the target ids, the units, and whether the noise is far above the instrument's: {rms_mm:.3} mm)"
-    )]
-    Absurd {
-        /// The experiments of the joint.
-        experiment: String,
-        /// The joint.
-        joint: usize,
-        /// The fit's RMS \[mm\].
-        rms_mm: f64,
-        /// The points' RMS spread \[mm\].
-        spread_mm: f64,
-        /// `100 rms / spread`.
-        share: f64,
-    },
-    /// A joint's sweeps move their target less than the noise: no axis can be fitted.
-    #[error(
-        "experiment {experiment} (joint {joint}): its points spread {spread_mm:.4} mm RMS about their centroid, within {factor} times the noise of a point ({noise_mm:.3} mm): the sweep ({} as written) is too short for the instrument to locate the axis; widen its span{} (or check that the joint moved and the commands' units)",
-        span.written(),
-        span.needed()
-    )]
-    Unresolved {
-        /// The experiments of the joint.
-        experiment: String,
-        /// The joint.
-        joint: usize,
-        /// The points' RMS spread \[mm\].
-        spread_mm: f64,
-        /// The noise of a point, 3-D RMS \[mm\].
-        noise_mm: f64,
-        /// [`crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`].
-        factor: f64,
-        /// Its span as written and the least the fit needs.
-        span: ShortSpan,
-    },
-    /// A rotary joint's points lie on a straight line: no arc to fit.
-    #[error(
-        "experiment {experiment} (joint {joint}): its points are collinear: they lie on a straight line ({off_line_mm:.4} mm RMS from it, within {} times the noise of a point, {noise_mm:.3} mm) though the joint turns {} as written: a turning joint moves its target on an arc; check that the sweep's target 0 sits on the swept link, that the coordinates are the target's, and the joint's kind in the description",
-        crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE,
-        span.written()
-    )]
-    Straight {
-        /// The experiments of the joint.
-        experiment: String,
-        /// The joint.
-        joint: usize,
-        /// The points' RMS distance from their line \[mm\].
-        off_line_mm: f64,
-        /// The noise of a point, 3-D RMS \[mm\].
-        noise_mm: f64,
-        /// Its span as written.
-        span: ShortSpan,
-    },
-    /// A rotary joint's arc bows from its chord by too little for its fit: the sweep is short.
-    #[error(
-        "experiment {experiment} (joint {joint}): the sweep spans {} as written, too short to locate the axis: its arc bows {sagitta_mm:.4} mm from its chord (radius {radius_mm:.1} mm), within {} times the noise of a point ({noise_mm:.3} mm); widen its span{} (or check the commands' units)",
-        span.written(),
-        crate::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE,
-        span.needed()
-    )]
-    ShortArc {
-        /// The experiments of the joint.
-        experiment: String,
-        /// The joint.
-        joint: usize,
-        /// The arc's sagitta \[mm\].
-        sagitta_mm: f64,
-        /// Its radius, from its chord and its span \[mm\].
-        radius_mm: f64,
-        /// The noise of a point, 3-D RMS \[mm\].
-        noise_mm: f64,
-        /// Its span as written and the least the fit needs.
-        span: ShortSpan,
-    },
-    /// A fit-and-correct pass for the held joints' recorded values failed: the correction
-    /// moved the points away from any arc (it diverges).
-    #[error("the correction for the held joints' recorded values diverged in pass {pass}: {cause}")]
-    HeldDiverged {
-        /// The pass that failed (the first correction is pass 2).
-        pass: usize,
-        /// Its error.
-        cause: Box<ProcedureError>,
-    },
-    /// The recorded values could not be evaluated on the calibrated model.
-    #[error("modelling the held joints' recorded values: {0}")]
-    Held(crate::robot::ModelError),
-    /// The swept joint's command does not move.
-    #[error("experiment {experiment}{}: the command of joint {joint} has zero span{cause}", lines_text(*lines))]
-    ZeroSpan {
-        /// Experiment.
-        experiment: String,
-        /// Joint.
-        joint: usize,
-        /// The file lines of the experiment's first and last row, when known.
-        lines: Option<(u64, u64)>,
-        /// Why, in words (starting with `; `).
-        cause: String,
-    },
-    /// Commands contradict the experiment design (`docs/formats.md#controller-semantics`).
-    #[error("experiment {experiment}, step {step}, column cmd_{joint}: {reason}")]
-    InconsistentCommands {
-        /// Experiment.
-        experiment: String,
-        /// Step.
-        step: usize,
-        /// Joint.
-        joint: usize,
-        /// What is inconsistent.
-        reason: String,
-    },
-    /// A coupling needs a second target the experiment does not have.
-    #[error(
-        "experiment {experiment}: joint {joint} drives a coupling into joint {} that must be measured, but target 1 is seen at only {seen} step(s) (3 needed)",
-        joint + 1
-    )]
-    SecondTargetMissing {
-        /// Experiment.
-        experiment: String,
-        /// Joint.
-        joint: usize,
-        /// Steps where target 1 was seen.
-        seen: usize,
-    },
-    /// A fit failed.
-    #[error("experiment {experiment} (joint {joint}): {}", fit_words(error))]
-    Fit {
-        /// Experiment.
-        experiment: String,
-        /// Joint.
-        joint: usize,
-        /// The fit's error (not a `source`: the message says it in words, once).
-        error: CalibrationError,
-    },
-    /// A joint's sweeps fit no arc or line of it, for a cause their points show
-    /// ([`SweepMisfit`]).
-    #[error("experiment {experiment} (joint {joint}): {failure}: {finding}")]
-    Misfit {
-        /// The experiments of the joint.
-        experiment: String,
-        /// The joint.
-        joint: usize,
-        /// How the fit failed, in words.
-        failure: String,
-        /// What the points show.
-        finding: SweepMisfit,
-    },
-    /// A joint's sweeps have too few points for the transmission order its description's
-    /// `transmission_fit` asks for.
-    #[error(
-        "experiment {experiment} (joint {joint}): {source}: the description's `joints[{}].transmission_fit.order` = \
-         {order} asks for more coefficients than the sweeps' points resolve; lower the order (the paper fits 1) or \
-         sweep the joint over more points",
-        joint - 1
-    )]
-    FitOrder {
-        /// Experiment.
-        experiment: String,
-        /// Joint.
-        joint: usize,
-        /// The order the description asks for.
-        order: usize,
-        /// The fit's error.
-        source: Box<CalibrationError>,
-    },
-    /// A coupling fit (eqs. 14-15) failed; with its second target's reading farthest from the
-    /// curve of its neighbours (a reading swapped or off, the likely cause).
-    #[error("experiment {experiment} (joint {joint}): {cause}{}", data.worst().map_or(String::new(), |w| w.to_string()))]
-    CouplingFit {
-        /// Experiment.
-        experiment: String,
-        /// The driving joint.
-        joint: usize,
-        /// The fit's error.
-        cause: CalibrationError,
-        /// What the fit was fitted to (the outlier test reads it; the message names its point
-        /// farthest from its neighbours' curve, [`SecondTargetData::worst`]).
-        data: Box<SecondTargetData>,
-    },
-    /// The axes do not make a phi-model.
-    #[error(transparent)]
-    Frames(#[from] FramesError),
-    /// An option out of range.
-    #[error("calibration option `{field}`: {message}")]
-    InvalidOption {
-        /// The option.
-        field: &'static str,
-        /// What is wrong.
-        message: String,
-    },
-}
-
-/// A failed axis fit in words: what it means for the sweep's points and what to check.
-fn fit_words(e: &CalibrationError) -> String {
-    match e {
-        CalibrationError::IllConditioned { fit, .. } => format!(
-            "{fit}: its points leave the joint's axis undetermined (moving the axis some way changes none of the \
-             misfits): the points barely move, lie on a line, or sit where their commands do not put them; check \
-             the sweep's rows (each point against its commands) and its span"
-        ),
-        CalibrationError::NotConverged { fit, .. } => format!(
-            "{fit}: the fit of the joint's axis does not settle: the sweep's points do not lie on one path of the \
-             joint at their commands; check the sweep's rows for a point off the others' path, or a command that \
-             does not match its point"
-        ),
-        other => other.to_string(),
-    }
-}
-
-/// How an axis fit failed, in a few words, before what its points show ([`SweepMisfit`]).
-pub(super) fn failure_words(e: &ProcedureError) -> String {
-    match e {
-        ProcedureError::Fit {
-            error: CalibrationError::IllConditioned { .. },
-            ..
-        } => "its points leave the joint's axis undetermined".into(),
-        ProcedureError::Fit { .. } => "the fit of the joint's axis does not settle".into(),
-        ProcedureError::Absurd { rms_mm, share, .. } => {
-            format!("the fitted axis misses its points by {rms_mm:.3} mm RMS, {share:.1} % of their spread")
-        }
-        other => other.to_string(),
-    }
-}
-
-impl ProcedureError {
-    /// The error with the file lines of the points it names, read from `set`.
-    pub fn with_lines(self, set: &MeasurementSet) -> Self {
-        match self {
-            Self::Misfit {
-                experiment,
-                joint,
-                failure,
-                finding,
-            } => Self::Misfit {
-                experiment,
-                joint,
-                failure,
-                finding: finding.with_lines(set),
-            },
-            Self::HeldDiverged { pass, cause } => Self::HeldDiverged {
-                pass,
-                cause: Box::new(cause.with_lines(set)),
-            },
-            other => other,
-        }
-    }
-
-    /// The sweep misfit this error is, or holds ([`Self::HeldDiverged`]'s): rows of the data named
-    /// as the cause.
-    pub fn misfit(&self) -> Option<&ProcedureError> {
-        match self {
-            Self::Misfit { .. } => Some(self),
-            Self::HeldDiverged { cause, .. } => cause.misfit(),
-            _ => None,
-        }
-    }
-
-    /// The joint the error is about, when it names one (an axis fit's, a sweep's).
-    pub fn joint(&self) -> Option<usize> {
-        match self {
-            Self::Absurd { joint, .. }
-            | Self::Unresolved { joint, .. }
-            | Self::ShortArc { joint, .. }
-            | Self::ZeroSpan { joint, .. }
-            | Self::InconsistentCommands { joint, .. }
-            | Self::SecondTargetMissing { joint, .. }
-            | Self::Fit { joint, .. }
-            | Self::Misfit { joint, .. }
-            | Self::FitOrder { joint, .. }
-            | Self::CouplingFit { joint, .. } => Some(*joint),
-            Self::HeldDiverged { cause, .. } => cause.joint(),
-            _ => None,
-        }
-    }
-}
-
-/// A sweep's span as written (file units) and the least its fit needs, when known.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShortSpan {
-    /// The widest sweep's span of the joint's command (deg or mm).
-    pub written: f64,
-    /// The span whose points the fit would resolve (same unit), when it can be said.
-    pub needed: Option<f64>,
-    /// The joint's kind: the unit (deg or mm).
-    pub kind: JointKind,
-}
-
-impl ShortSpan {
-    fn unit(&self) -> &'static str {
-        match self.kind {
-            JointKind::Revolute => "deg",
-            JointKind::Prismatic => "mm",
-        }
-    }
-
-    fn written(&self) -> String {
-        format!("{:.4} {}", self.written, self.unit())
-    }
-
-    fn needed(&self) -> String {
-        self.needed.map_or(String::new(), |n| {
-            format!(" to at least {n:.3} {} at this noise", self.unit())
-        })
-    }
-}
-
-/// ` (lines A-B)` of an experiment read from a file, or nothing.
-fn lines_text(lines: Option<(u64, u64)>) -> String {
-    match lines {
-        Some((a, b)) if a == b => format!(" (line {a})"),
-        Some((a, b)) => format!(" (lines {a}-{b})"),
-        None => String::new(),
-    }
-}
-
-/// How much a calibration computes besides the fitted model.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Detail {
-    /// The fitted model only: what a Monte-Carlo trial needs ([`calibrate_model`]).
-    Model,
-    /// The model and the 1-sigma of its rows ([`FittedModel::row_sigma`]).
-    ModelAndCovariance,
-    /// [`Detail::ModelAndCovariance`] and the covariance of the model's whole parameter vector
-    /// ([`FittedModel::model_covariance`]): what a Monte-Carlo of the tool's error needs.
-    ModelCovariance,
-    /// Everything [`Calibration`] holds: per-axis reports with their covariances and
-    /// identifiability studies, per-sweep reports, residuals, the noise report ([`calibrate`]).
-    Report,
-}
 
 /// The lean result of [`calibrate_model`]: the fitted model, as [`calibrate`] would fit it
 /// bit for bit, without the report.
@@ -1386,10 +914,4 @@ fn tool_frame(
         fit_rms_mm: rms_m * 1e3,
         sigma: None,
     })
-}
-
-impl From<crate::robot::ModelError> for ProcedureError {
-    fn from(e: crate::robot::ModelError) -> Self {
-        Self::Held(e)
-    }
 }

@@ -20,7 +20,7 @@ mod second_target;
 
 pub use second_target::WorstSecondTarget;
 
-use super::axis_fit::actuator_commands;
+use super::experiments::actuator_commands;
 use super::{AxisExperiment, COMMAND_TOLERANCE, CalibrationOptions, ProcedureError, axis_experiments_with};
 use crate::calibration::arc_model::{ArcModel, MeasurementNoise};
 use crate::calibration::line_ml::{fit_line, predict_line};
