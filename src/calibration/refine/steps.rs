@@ -150,6 +150,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calibration::refine::NULL_DIRECTION_TOLERANCE;
 
     /// The refinement takes the steps of one call of the program's least-squares loop over
     /// every step with a linearisation at every trial point (a second path: the loop as the

@@ -229,7 +229,7 @@ impl Crate {
     fn defining_module(&self, path: &ModulePath, depth: usize) -> Option<ModulePath> {
         let k = (0..=path.len())
             .rev()
-            .find(|&k| self.code.contains_key(&path[..k].to_vec()))?;
+            .find(|&k| self.code.contains_key(&path[..k]))?;
         let module = path[..k].to_vec();
         if k == path.len() || depth > 16 {
             return Some(module);
