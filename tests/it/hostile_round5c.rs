@@ -14,7 +14,7 @@ fn shipped(relative: &str) -> String {
 }
 
 /// The rows of a measurement CSV: its header's columns and each row's cells.
-fn rows(csv: &str) -> (Vec<String>, Vec<Vec<String>>) {
+pub(crate) fn rows(csv: &str) -> (Vec<String>, Vec<Vec<String>>) {
     let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<String> = lines.next().unwrap().split(',').map(str::to_owned).collect();
     let rows = lines.map(|l| l.split(',').map(str::to_owned).collect()).collect();
@@ -22,7 +22,7 @@ fn rows(csv: &str) -> (Vec<String>, Vec<Vec<String>>) {
 }
 
 /// A MAT v5 file of real double matrices (`name`, rows of values).
-fn mat_file(vars: &[(&str, Vec<Vec<f64>>)]) -> Vec<u8> {
+pub(crate) fn mat_file(vars: &[(&str, Vec<Vec<f64>>)]) -> Vec<u8> {
     let element = |kind: u32, payload: &[u8]| {
         let mut e = Vec::new();
         e.extend(kind.to_le_bytes());
