@@ -140,16 +140,21 @@ pub fn data_unit_warnings(
     refuse_slips(data, &slips)?;
     let mut warnings: Vec<String> = commands_outside_limits(set, desc, data).into_iter().collect();
     warnings.extend(payload_over_robot(set, desc, data));
-    if let Some(scale) = free_pose_scale_warning(set, desc) {
-        let suspect = suspect.map_or(String::new(), |s| format!("; {s}"));
-        warnings.push(format!(
-            "{}: `{}`: {}{suspect} (--skip-unit-check silences this)",
-            data.display(),
-            scale.field,
-            scale.message
-        ));
-    }
+    warnings.extend(spread_warning(set, desc, data, suspect));
     Ok(warnings)
+}
+
+/// The free poses' spread beyond [`axiscal::measurement::unit_check::SPREAD_WARNING`] but not a
+/// slip ([`free_pose_scale_warning`]) as a warning line about `data`, with `suspect` added.
+fn spread_warning(set: &MeasurementSet, desc: &RobotDescription, data: &Path, suspect: Option<&str>) -> Option<String> {
+    let scale = free_pose_scale_warning(set, desc)?;
+    let suspect = suspect.map_or(String::new(), |s| format!("; {s}"));
+    Some(format!(
+        "{}: `{}`: {}{suspect} (--skip-unit-check silences this)",
+        data.display(),
+        scale.field,
+        scale.message
+    ))
 }
 
 /// The options an import's units are read with: revolute joint values in radians (`--angles
@@ -178,14 +183,7 @@ pub fn import_units(
     let slips = misfits(set);
     if slips.is_empty() {
         // No unit slip, but a spread no robot of this description gives: another robot's data.
-        if let Some(scale) = free_pose_scale_warning(set, desc) {
-            print_warnings(&[format!(
-                "{}: `{}`: {} (--skip-unit-check silences this)",
-                file.display(),
-                scale.field,
-                scale.message
-            )]);
-        }
+        print_warnings(&spread_warning(set, desc, file, None).into_iter().collect::<Vec<_>>());
         return Ok(());
     }
     let said: Vec<String> = slips.iter().map(|s| format!("`{}`: {}", s.field, s.message)).collect();

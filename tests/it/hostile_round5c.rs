@@ -14,7 +14,7 @@ fn shipped(relative: &str) -> String {
 }
 
 /// The rows of a measurement CSV: its header's columns and each row's cells.
-pub(crate) fn rows(csv: &str) -> (Vec<String>, Vec<Vec<String>>) {
+fn rows(csv: &str) -> (Vec<String>, Vec<Vec<String>>) {
     let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
     let header: Vec<String> = lines.next().unwrap().split(',').map(str::to_owned).collect();
     let rows = lines.map(|l| l.split(',').map(str::to_owned).collect()).collect();
@@ -59,7 +59,7 @@ pub(crate) fn mat_file(vars: &[(&str, Vec<Vec<f64>>)]) -> Vec<u8> {
 /// The validation poses of `campaign.csv` in `dir` as MAT files: `good.mat` (rad, m),
 /// `qdeg.mat` (joints in degrees) and `pts_mm.mat` (points in mm), variables `q`, `mA`, `mB`,
 /// `mC`.
-fn write_mats(dir: &Path) {
+pub(crate) fn write_mats(dir: &Path) {
     let (h, rows) = rows(&std::fs::read_to_string(dir.join("campaign.csv")).unwrap());
     let col = |name: &str| h.iter().position(|c| c == name).unwrap();
     let val: Vec<&Vec<String>> = rows.iter().filter(|r| r[0] == "validation").collect();

@@ -6,7 +6,7 @@
 //! jitter names the tolerance, not the units.
 
 use crate::common::hostile::{case, clear_outputs, run_case};
-use crate::hostile_round5c::{mat_file, rows};
+use crate::hostile_round5c::{mat_file, write_mats};
 use std::path::Path;
 
 /// A shipped robot description's path.
@@ -130,44 +130,6 @@ fn a_revolute_sscanss2_file_in_the_wrong_length_unit_is_refused() {
     run_case(dir.path(), &c);
 }
 
-/// The validation poses of `campaign.csv` in `dir` as a MAT file `file`: joints `q` in rad,
-/// targets `mA`, `mB`, `mC` in metres, but `mC` in millimetres when `mc_mm`.
-fn write_mat(dir: &Path, file: &str, mc_mm: bool) {
-    let (h, rows) = rows(&std::fs::read_to_string(dir.join("campaign.csv")).unwrap());
-    let col = |name: &str| h.iter().position(|c| c == name).unwrap();
-    let of = |t: &str| -> Vec<&Vec<String>> {
-        rows.iter()
-            .filter(|r| r[0] == "validation" && r[col("target")] == t)
-            .collect()
-    };
-    let q: Vec<Vec<f64>> = of("0")
-        .iter()
-        .map(|r| {
-            (1..=6)
-                .map(|k| r[col(&format!("cmd_{k}"))].parse::<f64>().unwrap().to_radians())
-                .collect()
-        })
-        .collect();
-    let points = |t: &str, scale: f64| -> Vec<Vec<f64>> {
-        of(t)
-            .iter()
-            .map(|r| {
-                ["x_mm", "y_mm", "z_mm"]
-                    .map(|c| r[col(c)].parse::<f64>().unwrap() * scale)
-                    .to_vec()
-            })
-            .collect()
-    };
-    let mc = if mc_mm { 1.0 } else { 1e-3 };
-    let vars = [
-        ("q", q),
-        ("mA", points("0", 1e-3)),
-        ("mB", points("1", 1e-3)),
-        ("mC", points("2", mc)),
-    ];
-    std::fs::write(dir.join(file), mat_file(&vars)).unwrap();
-}
-
 /// Run 8 K-S8: one MAT target variable in millimetres, the others in metres: the variable is
 /// named (it used to be "coordinates scaled by 339 ... another robot?"); the file with every
 /// target in metres imports.
@@ -176,8 +138,8 @@ fn a_mat_target_in_another_unit_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     crate::common::simulate_analytic(d, 40, 23, "campaign.csv");
-    write_mat(d, "good.mat", false);
-    write_mat(d, "mc_mm.mat", true);
+    write_mats(d);
+    edited_mat(&d.join("good.mat"), d, "mc_mm.mat", mc_in_mm);
     let mat = "import mat --robot asea-irb6l --joints q --targets mA,mB,mC --angles rad --units m --out out.csv";
     let clean = run_case(d, &case("good", &format!("{mat} good.mat"), 0, &[]));
     assert!(clean.is_empty(), "{clean}");
@@ -196,14 +158,10 @@ fn a_mat_target_in_another_unit_is_named() {
     assert!(!e.contains("another robot"), "{e}");
 }
 
-/// The real FANUC data set's MAT file with `edit` applied to its variables, written as `name`
-/// in `dir` (a hand-edited copy of a real file).
-fn edited_fanuc(dir: &Path, name: &str, edit: impl Fn(&str, &mut Vec<Vec<f64>>)) {
-    let bytes = std::fs::read(crate::common::real_data(
-        "fanuc-r2000ic-tracker/calibration_dataset.mat",
-    ))
-    .unwrap();
-    let file = axiscal::measurement::import::mat_v5::read(&bytes).unwrap();
+/// The MAT file `source` with `edit` applied to its variables `q`, `mA`, `mB`, `mC`, written
+/// as `name` in `dir` (a hand-edited copy).
+fn edited_mat(source: &Path, dir: &Path, name: &str, edit: impl Fn(&str, &mut Vec<Vec<f64>>)) {
+    let file = axiscal::measurement::import::mat_v5::read(&std::fs::read(source).unwrap()).unwrap();
     let vars: Vec<(&str, Vec<Vec<f64>>)> = ["q", "mA", "mB", "mC"]
         .into_iter()
         .map(|n| {
@@ -218,6 +176,13 @@ fn edited_fanuc(dir: &Path, name: &str, edit: impl Fn(&str, &mut Vec<Vec<f64>>))
     std::fs::write(dir.join(name), mat_file(&vars)).unwrap();
 }
 
+/// Target `mC` in millimetres (the file's metres times 1000).
+fn mc_in_mm(name: &str, m: &mut Vec<Vec<f64>>) {
+    if name == "mC" {
+        m.iter_mut().flatten().for_each(|v| *v *= 1e3);
+    }
+}
+
 /// Run 8 N2 on the real FANUC file: joints in radians read as degrees, with `q`'s joint 2 also
 /// scaled by 1.05 (so some rows leave the limits in either unit): "pass --angles rad" and the
 /// rows outside the limits, not "coordinates scaled by 40.9 ... another robot?"; the target
@@ -227,16 +192,13 @@ fn edited_fanuc(dir: &Path, name: &str, edit: impl Fn(&str, &mut Vec<Vec<f64>>))
 fn real_fanuc_mat_with_a_scaled_column_read_in_degrees_says_pass_angles_rad() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    edited_fanuc(d, "q2.mat", |n, m| {
+    let fanuc = crate::common::real_data("fanuc-r2000ic-tracker/calibration_dataset.mat");
+    edited_mat(&fanuc, d, "q2.mat", |n, m| {
         if n == "q" {
             m.iter_mut().for_each(|r| r[1] *= 1.05);
         }
     });
-    edited_fanuc(d, "mc.mat", |n, m| {
-        if n == "mC" {
-            m.iter_mut().flatten().for_each(|v| *v *= 1e3);
-        }
-    });
+    edited_mat(&fanuc, d, "mc.mat", mc_in_mm);
     let mat = format!(
         "import mat --robot {} --joints q --targets mA,mB,mC --units m --out out.csv",
         shipped_robot("real/fanuc-r2000ic")

@@ -408,7 +408,7 @@ pub struct JitterSweeps {
 /// joint's turn, and wrist couplings are of order one (1 on the Boby-Klimchik arm, 1.68 on the
 /// IRB/L6's joint 5): a next joint that turns more than this many times as far as the swept one
 /// is the joint that moves, the other's recorded value jittering.
-const HOLD_STILL_COUPLING_MAX: f64 = 100.0;
+pub const HOLD_STILL_COUPLING_MAX: f64 = 100.0;
 
 /// The [`JitterSweeps`] of `set` (as an import writes it) whose sweeps of one joint move the
 /// next joint over [`HOLD_STILL_COUPLING_MAX`] times as far: the first such joint's.
