@@ -160,7 +160,7 @@ fn a_mat_target_in_another_unit_is_named() {
 
 /// The MAT file `source` with `edit` applied to its variables `q`, `mA`, `mB`, `mC`, written
 /// as `name` in `dir` (a hand-edited copy).
-fn edited_mat(source: &Path, dir: &Path, name: &str, edit: impl Fn(&str, &mut Vec<Vec<f64>>)) {
+fn edited_mat(source: &Path, dir: &Path, name: &str, edit: impl Fn(&str, &mut [Vec<f64>])) {
     let file = axiscal::measurement::import::mat_v5::read(&std::fs::read(source).unwrap()).unwrap();
     let vars: Vec<(&str, Vec<Vec<f64>>)> = ["q", "mA", "mB", "mC"]
         .into_iter()
@@ -177,7 +177,7 @@ fn edited_mat(source: &Path, dir: &Path, name: &str, edit: impl Fn(&str, &mut Ve
 }
 
 /// Target `mC` in millimetres (the file's metres times 1000).
-fn mc_in_mm(name: &str, m: &mut Vec<Vec<f64>>) {
+fn mc_in_mm(name: &str, m: &mut [Vec<f64>]) {
     if name == "mC" {
         m.iter_mut().flatten().for_each(|v| *v *= 1e3);
     }
