@@ -140,16 +140,21 @@ pub fn data_unit_warnings(
     refuse_slips(data, &slips)?;
     let mut warnings: Vec<String> = commands_outside_limits(set, desc, data).into_iter().collect();
     warnings.extend(payload_over_robot(set, desc, data));
-    if let Some(scale) = free_pose_scale_warning(set, desc) {
-        let suspect = suspect.map_or(String::new(), |s| format!("; {s}"));
-        warnings.push(format!(
-            "{}: `{}`: {}{suspect} (--skip-unit-check silences this)",
-            data.display(),
-            scale.field,
-            scale.message
-        ));
-    }
+    warnings.extend(spread_warning(set, desc, data, suspect));
     Ok(warnings)
+}
+
+/// The free poses' spread beyond [`axiscal::measurement::unit_check::SPREAD_WARNING`] but not a
+/// slip ([`free_pose_scale_warning`]) as a warning line about `data`, with `suspect` added.
+fn spread_warning(set: &MeasurementSet, desc: &RobotDescription, data: &Path, suspect: Option<&str>) -> Option<String> {
+    let scale = free_pose_scale_warning(set, desc)?;
+    let suspect = suspect.map_or(String::new(), |s| format!("; {s}"));
+    Some(format!(
+        "{}: `{}`: {}{suspect} (--skip-unit-check silences this)",
+        data.display(),
+        scale.field,
+        scale.message
+    ))
 }
 
 /// The options an import's units are read with: revolute joint values in radians (`--angles
@@ -177,6 +182,8 @@ pub fn import_units(
     };
     let slips = misfits(set);
     if slips.is_empty() {
+        // No unit slip, but a spread no robot of this description gives: another robot's data.
+        print_warnings(&spread_warning(set, desc, file, None).into_iter().collect::<Vec<_>>());
         return Ok(());
     }
     let said: Vec<String> = slips.iter().map(|s| format!("`{}`: {}", s.field, s.message)).collect();
@@ -235,6 +242,16 @@ pub fn import_units(
             fault.message
         );
     }
+    if let Some(((radians, lengths), outside)) = fits.is_none().then(|| units_but_limits(&others, desc)).flatten() {
+        bail!(
+            "{} its units fit, but `{}`: {}: pass {}, and check those rows' commands (a column scaled on export, or \
+             the description's limits); if the units are right after all, pass --skip-unit-check",
+            read_otherwise(radians, lengths),
+            outside.field,
+            outside.message,
+            changed_options(stated, (radians, lengths))
+        );
+    }
     let Some((radians, lengths)) = fits else {
         print_warnings(&[format!(
             "{}: read with --angles {} --units {}: {} (no other --angles or --units explains it: another robot than --robot?; --skip-unit-check silences this)",
@@ -245,18 +262,39 @@ pub fn import_units(
         )]);
         return Ok(());
     };
-    let mut changed = Vec::new();
-    if radians != stated.0 {
-        changed.push(format!("--angles {}", angles(radians)));
-    }
-    if lengths != stated.1 {
-        changed.push(format!("--units {}", lengths.name()));
-    }
     bail!(
         "{} it does: pass {}; if the units are right after all, pass --skip-unit-check",
         read_otherwise(radians, lengths),
-        changed.join(" ")
+        changed_options(stated, (radians, lengths))
     )
+}
+
+/// The options that differ between the `stated` units of an import and `fitting` ones, as
+/// command-line words (`--angles rad --units mm`).
+fn changed_options(stated: ImportUnits, fitting: ImportUnits) -> String {
+    let mut changed = Vec::new();
+    if fitting.0 != stated.0 {
+        changed.push(format!("--angles {}", if fitting.0 { "rad" } else { "deg" }));
+    }
+    if fitting.1 != stated.1 {
+        changed.push(format!("--units {}", fitting.1.name()));
+    }
+    changed.join(" ")
+}
+
+/// Among the `others` readings of an import, the first whose units fit the description (no
+/// unit slip, a plausible free-pose spread) but whose rows command joints outside its limits:
+/// the units, and the limits' slip (a column scaled on export, which no unit mends).
+fn units_but_limits(
+    others: &[(ImportUnits, MeasurementSet)],
+    desc: &RobotDescription,
+) -> Option<(ImportUnits, UnitSlip)> {
+    others.iter().find_map(|(units, other)| {
+        let fits = measurement_slips(other, desc).is_empty() && free_pose_scale_warning(other, desc).is_none();
+        fits.then(|| rows_outside_limits(other, desc))
+            .flatten()
+            .map(|slip| (*units, slip))
+    })
 }
 
 /// The rows of `set` whose commands lie outside the description's joint limits, as a slip of

@@ -4,7 +4,7 @@
 use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::kinematics::JointKind;
-use axiscal::measurement::import::arrays::{ArrayImport, free_poses};
+use axiscal::measurement::import::arrays::{ArrayImport, free_poses, target_unit_slip};
 use axiscal::measurement::import::boby_klimchik;
 use axiscal::measurement::import::mat_v5;
 use axiscal::measurement::import::points::{LengthUnit, PlanSheet, join_points};
@@ -13,7 +13,7 @@ use axiscal::measurement::import::spatial_analyzer;
 use axiscal::measurement::import::sscanss2;
 use axiscal::measurement::import::table::Table;
 use axiscal::measurement::import::wide::{
-    WideOptions, import_wide as read_wide, still_tolerance_hint, sweep_order_hint,
+    WideOptions, import_wide as read_wide, jitter_sweeps_hint, still_tolerance_hint, sweep_order_hint,
 };
 use axiscal::measurement::{MeasurementSet, write_measurements_to};
 use axiscal::robot::RobotDescription;
@@ -435,7 +435,7 @@ fn import_rct(a: &RctArgs) -> Result<()> {
     let stated = (matches!(a.angles, Angle::Rad), a.units.into());
     let (set, options) = read_as(stated.0, stated.1);
     let set = set?;
-    if !a.skip_unit_check && still_tolerance_hint(&set, a.still_tolerance).is_none() {
+    if !a.skip_unit_check && !tolerance_explains(&set, a.still_tolerance) {
         super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).0.ok())?;
     }
     let comment = format!(
@@ -481,7 +481,7 @@ fn import_wide(a: &WideArgs) -> Result<()> {
     };
     let set = read_as(matches!(a.angles, Angle::Rad), a.units.into())?;
     let unordered = sweep_order_hint(&set, a.still_tolerance);
-    if !a.skip_unit_check && still_tolerance_hint(&set, a.still_tolerance).is_none() && unordered.is_none() {
+    if !a.skip_unit_check && !tolerance_explains(&set, a.still_tolerance) && unordered.is_none() {
         let stated = (matches!(a.angles, Angle::Rad), a.units.into());
         super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
     }
@@ -507,10 +507,53 @@ fn import_wide(a: &WideArgs) -> Result<()> {
     Ok(())
 }
 
+/// Whether the still tolerance `tolerance` explains the experiments of `set` going wrong
+/// ([`still_tolerance_hint`], [`jitter_sweeps_hint`]): the unit check is then not run (its
+/// sweeps are not the robot's).
+fn tolerance_explains(set: &MeasurementSet, tolerance: f64) -> bool {
+    still_tolerance_hint(set, tolerance).is_some() || jitter_sweeps_hint(set).is_some()
+}
+
+/// A warning when an imported table's sweeps of one joint are the next joint's, its recorded
+/// value jittering by more than `--still-tolerance` ([`jitter_sweeps_hint`]).
+fn warn_jitter_sweeps(set: &MeasurementSet, desc: &RobotDescription, source: &Path, tolerance: f64) {
+    let Some(hint) = jitter_sweeps_hint(set) else {
+        return;
+    };
+    let (j, e) = (hint.joint, &hint.experiments);
+    let unit = |k: usize| match desc.joints[k - 1].kind {
+        JointKind::Revolute => "deg",
+        JointKind::Prismatic => "mm",
+    };
+    let named = match e.as_slice() {
+        [one] => format!("`{one}`"),
+        [first, .., last] => format!("`{first}` .. `{last}`"),
+        [] => String::new(),
+    };
+    eprintln!(
+        "warning: {}: its {} sweeps of joint {j} ({named}) are joint {}'s: in each joint {} moves {:.3} {} or more \
+         while joint {j} moves {} {} at most, its recorded value jittering by more than --still-tolerance {tolerance}, so the \
+         pair read as joint {j} swept with joint {} held still by its command; pass --still-tolerance {} (above joint \
+         {j}'s largest change while joint {} turns; the units were not checked)",
+        source.display(),
+        e.len(),
+        j + 1,
+        j + 1,
+        hint.next_span,
+        unit(j + 1),
+        hint.joint_span,
+        unit(j),
+        j + 1,
+        hint.tolerance,
+        j + 1
+    );
+}
+
 /// A warning when nearly every pose of an imported table became a free pose while a larger
 /// `--still-tolerance` recovers its axis experiments ([`still_tolerance_hint`]).
 fn warn_still_tolerance(set: &MeasurementSet, desc: &RobotDescription, source: &Path, tolerance: f64) {
     let Some(hint) = still_tolerance_hint(set, tolerance) else {
+        warn_jitter_sweeps(set, desc, source, tolerance);
         return;
     };
     let kinds: Vec<JointKind> = desc.joints.iter().map(|j| j.kind).collect();
@@ -555,6 +598,7 @@ fn import_mat(a: &MatArgs) -> Result<()> {
     let stated = (matches!(a.angles, Angle::Rad), a.units.into());
     let set = read_as(stated.0, stated.1)?;
     if !a.skip_unit_check {
+        target_unit_slip(&set, &a.file, &a.targets)?;
         super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
     }
     let comment = format!(

@@ -143,6 +143,18 @@ pub enum MeasurementFileError {
         /// What it looks like instead.
         what: String,
     },
+    /// The file is another axiscal command's output (residuals, compensate's table, the joint
+    /// map...) or a pose list, not measurements.
+    #[error(
+        "{path}: this is {what}, not a measurement CSV (no `x_mm` or `cmd_1` column): give the measurement file \
+         (the CSV `import` or `simulate` wrote, which `calibrate` read)"
+    )]
+    OtherFile {
+        /// The file.
+        path: PathBuf,
+        /// What it is, in words.
+        what: String,
+    },
     /// A line repeats the header: files joined end to end, or a header pasted twice.
     #[error(
         "{path}:{line}: the line repeats the header (line {header_line}): two files joined end to end, or a header \

@@ -22,7 +22,7 @@ fn rows(csv: &str) -> (Vec<String>, Vec<Vec<String>>) {
 }
 
 /// A MAT v5 file of real double matrices (`name`, rows of values).
-fn mat_file(vars: &[(&str, Vec<Vec<f64>>)]) -> Vec<u8> {
+pub(crate) fn mat_file(vars: &[(&str, Vec<Vec<f64>>)]) -> Vec<u8> {
     let element = |kind: u32, payload: &[u8]| {
         let mut e = Vec::new();
         e.extend(kind.to_le_bytes());
@@ -59,7 +59,7 @@ fn mat_file(vars: &[(&str, Vec<Vec<f64>>)]) -> Vec<u8> {
 /// The validation poses of `campaign.csv` in `dir` as MAT files: `good.mat` (rad, m),
 /// `qdeg.mat` (joints in degrees) and `pts_mm.mat` (points in mm), variables `q`, `mA`, `mB`,
 /// `mC`.
-fn write_mats(dir: &Path) {
+pub(crate) fn write_mats(dir: &Path) {
     let (h, rows) = rows(&std::fs::read_to_string(dir.join("campaign.csv")).unwrap());
     let col = |name: &str| h.iter().position(|c| c == name).unwrap();
     let val: Vec<&Vec<String>> = rows.iter().filter(|r| r[0] == "validation").collect();

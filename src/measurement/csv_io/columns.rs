@@ -90,6 +90,36 @@ fn command_joint_count(
     })
 }
 
+/// Columns only another axiscal output (or input) has, and what that file is: a header with one
+/// of them and without the measurement's `x_mm` or `cmd_1` is that file, given in the wrong place.
+const OTHER_FILES: [(&str, &str); 7] = [
+    (
+        "radial_mm",
+        "the residuals table `calibrate` and `validate` write (residuals.csv)",
+    ),
+    ("send_x_mm", "`compensate`'s table of corrected commands"),
+    (
+        "roll_deg",
+        "a pose list for `compensate --poses` (target poses, no joint commands)",
+    ),
+    ("output_unit", "`calibrate`'s joint map (joint_map.csv)"),
+    ("offset", "`calibrate`'s zero offsets (zero_offsets.csv)"),
+    ("uncal_pos_rms_mm", "a study's table of trials (trials.csv)"),
+    ("cal_position_mm", "`evaluate`'s table of test poses (poses.csv)"),
+];
+
+/// Which other axiscal file (see [`OTHER_FILES`]) a header of known columns `index` and any
+/// column `names` is, if it lacks a measurement's position or first command column.
+fn other_file(names: &[String], index: &HashMap<String, usize>) -> Option<&'static str> {
+    if index.contains_key("x_mm") && index.contains_key("cmd_1") {
+        return None;
+    }
+    OTHER_FILES
+        .iter()
+        .find(|(column, _)| names.iter().any(|n| n == column))
+        .map(|(_, what)| *what)
+}
+
 /// The columns of the file's `header` (at `line` of `path`), checked against `joint_count`.
 pub(super) fn find_columns(
     header: &csv::StringRecord,
@@ -107,6 +137,13 @@ pub(super) fn find_columns(
         });
     }
     let (index, cmd) = index_columns(header, path, line)?;
+    let names: Vec<String> = header.iter().map(|n| n.trim().to_ascii_lowercase()).collect();
+    if let Some(what) = other_file(&names, &index) {
+        return Err(MeasurementFileError::OtherFile {
+            path: path.into(),
+            what: what.into(),
+        });
+    }
     let required = |column: &str| {
         index
             .get(column)

@@ -2,8 +2,10 @@
 //! per pose and `N` columns, and one array of one row per pose and 3 columns per target.
 
 use super::mat_v5::{MatArray, MatFile};
+use crate::measurement::unit_check::{SLIP_FACTOR, spread_ratio};
 use crate::measurement::{Measurement, MeasurementSet, MeasurementSetError, RowProblem, format_f64};
 use crate::robot::{RobotDescription, commands_to_file};
+use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 
 /// Why arrays do not make free poses.
@@ -75,6 +77,25 @@ pub enum ArraysError {
         first: usize,
         /// The second.
         second: usize,
+    },
+    /// One target variable's points spread a unit slip's factor off the other targets' (see
+    /// [`target_unit_slip`]).
+    #[error(
+        "{path}: variable `{name}`: its points spread {} times as far over the poses as the other targets' ({others}), \
+         which ride on the same tool: `{name}` is written in another length unit than they are ({}); write every \
+         target variable in one unit (or pass --skip-unit-check if they are right after all)",
+        format_f64((*ratio * 1e4).round() / 1e4),
+        if *ratio > 1.0 { "a finer one: millimetres among metres?" } else { "a coarser one: metres among millimetres?" }
+    )]
+    TargetUnit {
+        /// The file.
+        path: PathBuf,
+        /// The variable.
+        name: String,
+        /// Its spread over the others' median.
+        ratio: f64,
+        /// The other target variables, as a list.
+        others: String,
     },
     /// `--experiment` is no experiment id.
     #[error("--experiment: {problem}")]
@@ -265,4 +286,47 @@ fn array<'a>(
         }
     }
     Ok(a)
+}
+
+/// The target variable of `set` (imported by [`free_poses`] from `path` with `targets`) whose
+/// points spread more than [`SLIP_FACTOR`] times as far (or as little) over the poses as the
+/// median target's ([`spread_ratio`]): targets on one tool move together, their spreads
+/// differing by the tool's size at most, so such a target's variable is in another unit.
+/// Judged with three targets or more (two cannot tell which one slipped).
+pub fn target_unit_slip(set: &MeasurementSet, path: &Path, targets: &[String]) -> Result<(), ArraysError> {
+    if targets.len() < 3 {
+        return Ok(());
+    }
+    let points = |t: usize| -> Vec<Vector3<f64>> {
+        set.rows()
+            .iter()
+            .filter(|m| m.target == t)
+            .map(|m| Vector3::from(m.position_mm))
+            .collect()
+    };
+    let first = points(0);
+    let ratios: Vec<f64> = (0..targets.len())
+        .map(|t| spread_ratio(&points(t), &first).unwrap_or(1.0))
+        .collect();
+    let mut sorted = ratios.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let Some((t, ratio)) = ratios
+        .iter()
+        .map(|r| r / median)
+        .enumerate()
+        .find(|(_, r)| r.ln().abs() > SLIP_FACTOR.ln())
+    else {
+        return Ok(());
+    };
+    let others: Vec<String> = (0..targets.len())
+        .filter(|&o| o != t)
+        .map(|o| format!("`{}`", targets[o]))
+        .collect();
+    Err(ArraysError::TargetUnit {
+        path: path.to_owned(),
+        name: targets[t].clone(),
+        ratio,
+        others: others.join(", "),
+    })
 }

@@ -67,7 +67,13 @@ pub enum ImportError {
         cause: std::io::Error,
     },
     /// A line has the wrong number of fields.
-    #[error("{path}:{line}: {found} fields, expected {FIELDS_PER_LINE} (9 target coordinates, 6 zeros, J1..J6)")]
+    #[error(
+        "{path}:{line}: {found} fields, expected {FIELDS_PER_LINE} (9 target coordinates, 6 zeros, J1..J6){}",
+        separator.map_or(String::new(), |s| format!(
+            ": the numbers are separated by {s}, where the data set separates them by spaces (write the file back \
+             with spaces between the numbers)"
+        ))
+    )]
     FieldCount {
         /// The file.
         path: PathBuf,
@@ -75,6 +81,8 @@ pub enum ImportError {
         line: usize,
         /// Fields found.
         found: usize,
+        /// Another separator that splits the line into the expected fields (`` `,` ``), in words.
+        separator: Option<&'static str>,
     },
     /// A field is not a finite number.
     #[error("{path}:{line}: field {field} ({meaning}): {text:?} is not a finite number")]
@@ -165,6 +173,15 @@ pub fn parse(text: &str, path: &Path) -> Result<MeasurementSet, ImportError> {
     })
 }
 
+/// The separator other than white space (`,`, `;`, `|`) that splits `line` into exactly
+/// [`FIELDS_PER_LINE`] fields, in words: a file written back with another separator.
+fn other_separator(line: &str) -> Option<&'static str> {
+    [(',', "`,`"), (';', "`;`"), ('|', "`|`")]
+        .into_iter()
+        .find(|(c, _)| line.split(*c).count() == FIELDS_PER_LINE)
+        .map(|(_, words)| words)
+}
+
 /// One pose of the file: its 1-based line and its numbers.
 type Pose = (usize, [f64; FIELDS_PER_LINE]);
 
@@ -181,6 +198,7 @@ fn read_poses(text: &str, path: &Path) -> Result<Vec<Pose>, ImportError> {
                 path: path.into(),
                 line: i + 1,
                 found: fields.len(),
+                separator: other_separator(line),
             });
         }
         let mut values = [0.0; FIELDS_PER_LINE];

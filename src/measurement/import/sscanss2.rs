@@ -424,6 +424,15 @@ pub fn check_homes(
             continue;
         };
         let shift_mm = fit.scale * chord_factor(kind, first.home, fit.home);
+        let off_mm = home_miss(&sweep, kind, fit.scale, &home_point, fit.home);
+        if shift_mm > HOME_FENCE * fit.scatter_mm && off_mm > HOME_FENCE * fit.scatter_mm {
+            return Err(row_error(
+                path,
+                first.line,
+                1,
+                off_sweep(k, &sweep, &home_point, off_mm, fit.scatter_mm),
+            ));
+        }
         if shift_mm > HOME_FENCE * fit.scatter_mm {
             let unit = kind.file_unit();
             return Err(row_error(
@@ -455,6 +464,29 @@ pub fn check_homes(
         }
     }
     Ok(())
+}
+
+/// Joint `k`'s (0-based) `sweep` misses the home pose's point by `off_mm` RMS at its best home
+/// value, beyond [`HOME_FENCE`] times its `scatter_mm`: no home value puts the point on it, so
+/// the joint's coordinates moved (its rows shifted), not its home column; in words.
+fn off_sweep(k: usize, sweep: &[&Row], home_point: &nalgebra::Vector3<f64>, off_mm: f64, scatter_mm: f64) -> String {
+    let lines = (sweep.first().map_or(0, |r| r.line), sweep.last().map_or(0, |r| r.line));
+    format!(
+        "joint {}'s sweep (lines {}-{}) misses the point where the other joints' sweeps meet at their homes ({:.3}, \
+         {:.3}, {:.3}) mm by {off_mm:.3} mm RMS at any value of joint {}, {:.1} times the sweep's own scatter \
+         ({scatter_mm:.3} mm; the limit is {HOME_FENCE}): no home value explains it, so joint {}'s rows' coordinates \
+         are shifted (a block of rows moved, or the instrument moved between sweeps); check x, y, z in those lines, \
+         or pass --skip-unit-check if they are right after all",
+        k + 1,
+        lines.0,
+        lines.1,
+        home_point.x,
+        home_point.y,
+        home_point.z,
+        k + 1,
+        off_mm / scatter_mm,
+        k + 1
+    )
 }
 
 fn row_error(path: &Path, line: usize, column: usize, message: String) -> PointsError {

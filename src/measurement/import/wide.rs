@@ -385,6 +385,70 @@ pub fn still_tolerance_hint(set: &MeasurementSet, tolerance: f64) -> Option<Stil
     })
 }
 
+/// Sweeps of one joint that are the next joint's sweeps: the joint's recorded value jitters
+/// (a read-back controller, encoder noise) by more than the still tolerance while the next
+/// joint turns, and the pair reads as the joint swept with a hold-still command on the next.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JitterSweeps {
+    /// The joint they claim to sweep (1-based).
+    pub joint: usize,
+    /// Their experiment ids.
+    pub experiments: Vec<String>,
+    /// The largest span of `joint` over one of them (file units: deg or mm), rounded up to two
+    /// digits as written.
+    pub joint_span: String,
+    /// The smallest span of the next joint over one of them.
+    pub next_span: f64,
+    /// The tolerance to pass: above `joint`'s largest change between two consecutive poses
+    /// while the next joint turns, rounded up to two digits as written.
+    pub tolerance: String,
+}
+
+/// A hold-still command moves the next joint by the coupling it compensates times the swept
+/// joint's turn, and wrist couplings are of order one (1 on the Boby-Klimchik arm, 1.68 on the
+/// IRB/L6's joint 5): a next joint that turns more than this many times as far as the swept one
+/// is the joint that moves, the other's recorded value jittering.
+pub const HOLD_STILL_COUPLING_MAX: f64 = 100.0;
+
+/// The [`JitterSweeps`] of `set` (as an import writes it) whose sweeps of one joint move the
+/// next joint over [`HOLD_STILL_COUPLING_MAX`] times as far: the first such joint's.
+pub fn jitter_sweeps_hint(set: &MeasurementSet) -> Option<JitterSweeps> {
+    let span = |rows: &[&crate::measurement::Measurement], j: usize| {
+        let values = rows.iter().map(|m| m.cmd[j]);
+        values.clone().fold(f64::MIN, f64::max) - values.fold(f64::MAX, f64::min)
+    };
+    let experiments = set.experiments();
+    let jittered: Vec<_> = experiments
+        .iter()
+        .filter(|e| e.moved_joint >= 1 && e.moved_joint < set.joint_count())
+        .filter(|e| {
+            let moved = span(&e.rows, e.moved_joint - 1);
+            moved > 0.0 && span(&e.rows, e.moved_joint) > HOLD_STILL_COUPLING_MAX * moved
+        })
+        .collect();
+    let joint = jittered.first()?.moved_joint;
+    let of_joint: Vec<_> = jittered.into_iter().filter(|e| e.moved_joint == joint).collect();
+    // The joint's largest jitter: its change between any two consecutive poses where the next
+    // joint turns over HOLD_STILL_COUPLING_MAX times as far.
+    let step = poses_of(set)
+        .windows(2)
+        .map(|w| {
+            (
+                (w[1].1[joint - 1] - w[0].1[joint - 1]).abs(),
+                (w[1].1[joint] - w[0].1[joint]).abs(),
+            )
+        })
+        .filter(|(own, next)| *next > HOLD_STILL_COUPLING_MAX * own)
+        .fold(0.0, |m: f64, (own, _)| m.max(own));
+    Some(JitterSweeps {
+        joint,
+        experiments: of_joint.iter().map(|e| e.name.to_owned()).collect(),
+        joint_span: rounded_up(of_joint.iter().map(|e| span(&e.rows, joint - 1)).fold(0.0, f64::max)),
+        next_span: of_joint.iter().map(|e| span(&e.rows, joint)).fold(f64::MAX, f64::min),
+        tolerance: rounded_up(step),
+    })
+}
+
 /// A table whose rows are sweeps out of order (shuffled, or sorted by another column): more
 /// than half its poses became free poses, while the same poses sorted by their joint values
 /// (the first joint first) make more than half of them axis-experiment poses.

@@ -4,6 +4,11 @@
 //! places, so the ratio is 1 within the stage's scale error (per mille) and the instrument's;
 //! coordinates in metres give 0.001, commands in metres read as millimetres 1000. The revolute
 //! arcs' checks cannot see either on a robot whose sweeps slide (a positioning table of stages).
+//!
+//! A description without `axis_targets` (SScanSS-2's robots: each sweep measures the point at
+//! the tool frame's origin, as [`super::handedness::nominal_point`] takes it) gives the revolute
+//! arcs' checks no target radius to judge: its revolute sweeps are judged here the same way, on
+//! the tool origin's chords ([`tool_arc_slips`]).
 
 use super::{LENGTH_UNITS, UnitSlip, coordinates_look, median, slipped, unit_of};
 use crate::kinematics::JointKind;
@@ -70,20 +75,56 @@ fn travel_of(
     })
 }
 
-/// The judged sweeps of the sliding joints of `set`.
-pub(super) fn travels(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Travel> {
+/// The judged sweeps of the joints of `kind` of `set`.
+fn sweeps_of(set: &MeasurementSet, desc: &RobotDescription, kind: JointKind) -> Vec<Travel> {
     let ideal = RobotModel::ideal(desc);
     let controller = Controller::from_description(desc);
     set.experiments()
         .iter()
         .filter(|e| e.moved_joint > 0)
-        .filter(|e| {
-            desc.joints
-                .get(e.moved_joint - 1)
-                .is_some_and(|j| j.kind == JointKind::Prismatic)
-        })
+        .filter(|e| desc.joints.get(e.moved_joint - 1).is_some_and(|j| j.kind == kind))
         .filter_map(|e| travel_of(e, desc, &ideal, &controller))
         .collect()
+}
+
+/// The judged sweeps of the sliding joints of `set`.
+pub(super) fn travels(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Travel> {
+    sweeps_of(set, desc, JointKind::Prismatic)
+}
+
+/// The judged sweeps of the revolute joints of `set` when `desc` lists no `axis_targets` (module
+/// docs): their tool origin's chords.
+fn tool_arcs(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Travel> {
+    match desc.axis_targets.is_empty() {
+        true => sweeps_of(set, desc, JointKind::Revolute),
+        false => Vec::new(),
+    }
+}
+
+/// The coordinates' slip the revolute sweeps of a description without `axis_targets` show
+/// (module docs), unless `coordinates_said`: their median chord ratio beyond the slip factor.
+fn tool_arc_slips(set: &MeasurementSet, desc: &RobotDescription, coordinates_said: bool) -> Option<UnitSlip> {
+    let arcs = tool_arcs(set, desc);
+    let ratio = median(arcs.iter().map(|t| t.ratio).collect());
+    if coordinates_said || arcs.is_empty() || !slipped(ratio) {
+        return None;
+    }
+    let t = arcs
+        .iter()
+        .min_by(|a, b| (a.ratio - ratio).abs().total_cmp(&(b.ratio - ratio).abs()))?;
+    Some(UnitSlip {
+        field: "x_mm,y_mm,z_mm".into(),
+        message: format!(
+            "the revolute sweeps' arcs are {} times the size the description gives them ({}: its points half a \
+             sweep apart lie {} times as far apart as the description's robot puts them; the description lists no \
+             axis_targets, so each sweep's point is its tool frame's origin): the coordinates {}, or the \
+             description's lengths are not this robot's",
+            format_f64((ratio * 1e4).round() / 1e4),
+            t.name,
+            format_f64((t.ratio * 1e4).round() / 1e4),
+            coordinates_look(ratio)
+        ),
+    })
 }
 
 /// How `t` was measured, in words.
@@ -107,11 +148,21 @@ fn slide_commands_look(ratio: f64) -> String {
     }
 }
 
+/// The sweeps whose travel is a unit slip (module docs): the sliding joints' ([`slide_slips`]),
+/// then, unless they said the coordinates', the revolute tool arcs' ([`tool_arc_slips`]).
+/// `coordinates_said`: the revolute arcs already said the coordinates' slip.
+pub(super) fn travel_slips(set: &MeasurementSet, desc: &RobotDescription, coordinates_said: bool) -> Vec<UnitSlip> {
+    let mut slips = slide_slips(set, desc, coordinates_said);
+    let said = coordinates_said || slips.iter().any(|s| s.field.starts_with('x'));
+    slips.extend(tool_arc_slips(set, desc, said));
+    slips
+}
+
 /// The sliding joints' sweeps whose travel is a unit slip (module docs): every sweep's (the
 /// coordinates, or every sliding joint's commands), else each sweep's own (its joint's
 /// commands, the other sweeps moving as far as commanded). `coordinates_said`: the revolute
 /// arcs already said the coordinates' slip.
-pub(super) fn travel_slips(set: &MeasurementSet, desc: &RobotDescription, coordinates_said: bool) -> Vec<UnitSlip> {
+fn slide_slips(set: &MeasurementSet, desc: &RobotDescription, coordinates_said: bool) -> Vec<UnitSlip> {
     let all = travels(set, desc);
     let ratio = median(all.iter().map(|t| t.ratio).collect());
     if slipped(ratio) {
@@ -153,12 +204,13 @@ pub(super) fn travel_slips(set: &MeasurementSet, desc: &RobotDescription, coordi
         .collect()
 }
 
-/// How many of the unit checks judge `set` (the revolute arcs, the sliding sweeps and the free
-/// poses' spread each count; a sweep too short and free poses too near to judge do not): a
+/// How many of the unit checks judge `set` (the revolute arcs, the sliding sweeps, the tool
+/// arcs of a description without axis targets and the free poses' spread each count; a sweep too short and free poses too near to judge do not): a
 /// reading of a file in other units that passes the checks only because they no longer judge it
 /// (angles read so small that the nominal robot barely moves) has not been shown to fit.
 pub fn judged_checks(set: &MeasurementSet, desc: &RobotDescription) -> usize {
     super::experiment_arcs(set, desc).len()
         + travels(set, desc).len()
+        + tool_arcs(set, desc).len()
         + usize::from(super::free_pose_spread(set, desc).is_some())
 }
