@@ -56,7 +56,10 @@ pub use sanity::{
     Implausible, LEAD_SPREAD, MISFIT_RATIO, PLAUSIBLE_AXIS_TILT_RAD, PLAUSIBLE_LEAD_DEVIATION,
     PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, SIZE_TOLERANCE, free_pose_scale_slips, implausible, longest_length_m,
 };
-pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, WorstSecondTarget, screen_sweeps};
+pub use screen::{
+    OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, SWEEP_POINTS_FALSE_ALARM, Screening, WorstSecondTarget,
+    screen_sweeps,
+};
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
@@ -181,7 +184,7 @@ impl CalibrationOptions {
 pub enum ProcedureError {
     /// Too many of one sweep's points fail the outlier test ([`screen_sweeps`]).
     #[error(
-        "experiment {experiment}: {flagged} of its {points} points lie beyond the outlier fence ({fence:.2} times the sweep's noise): the sweep, not single points, is wrong (check its joint, its target ids, its units)"
+        "experiment {experiment}: {flagged} of its {points} points lie beyond the outlier fence ({fence:.2} times the sweep's noise){which}"
     )]
     TooManyOutliers {
         /// The experiment.
@@ -192,6 +195,8 @@ pub enum ProcedureError {
         points: usize,
         /// The fence (normalised residual).
         fence: f64,
+        /// Which points, and what that says (single rows named by line, or a run of the sweep).
+        which: String,
     },
     /// The set has no axis experiment at all.
     #[error("no axis experiment (no row with moved_joint > 0): nothing to calibrate")]
