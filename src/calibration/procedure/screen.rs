@@ -477,3 +477,31 @@ fn median(v: &[f64]) -> f64 {
 fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
     Point3::from(points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / points.len().max(1) as f64)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::too_many_which;
+
+    /// Points in one run of steps are the sweep's; points apart are single rows, named by line.
+    #[test]
+    fn a_run_is_the_sweep_and_rows_apart_are_named() {
+        let run = too_many_which(&[(4, 5, Some(60)), (5, 6, Some(61)), (6, 7, Some(62)), (7, 8, Some(63))]);
+        assert!(
+            run.contains("one run of consecutive steps") && run.contains("the sweep, not single points"),
+            "{run}"
+        );
+        let apart = too_many_which(&[
+            (1, 1, Some(36)),
+            (10, 11, Some(46)),
+            (13, 14, Some(49)),
+            (14, 15, Some(50)),
+        ]);
+        assert!(apart.contains("lines 36, 46, 49, 50, steps 1, 11, 14, 15"), "{apart}");
+        assert!(
+            apart.contains("single rows") && !apart.contains("not single points"),
+            "{apart}"
+        );
+        let unread = too_many_which(&[(1, 1, None), (9, 9, None)]);
+        assert!(unread.contains("(steps 1, 9)"), "{unread}");
+    }
+}
