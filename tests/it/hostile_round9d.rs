@@ -8,7 +8,7 @@
 use crate::common::altered_csv;
 use crate::common::hostile::{case, clear_outputs, run_case};
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// A shipped robot description.
 fn robot(name: &str) -> PathBuf {
