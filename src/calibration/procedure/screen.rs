@@ -5,16 +5,17 @@
 //!
 //! Each sweep has its own noise: the sweeps' noise differs (the swept joint's repeatability
 //! turns into more error the farther its target is), and so does its shape: a theodolite
-//! pair's depth error puts most of it along one direction. A point's normalised residual is
-//! `|r|` over the noise per axis of the sweep's other points, their residuals' sum of squares
-//! over the degrees of freedom the fit leaves (an externally studentised residual, with the
-//! points beyond [`crate::numerics::stats::chi_far_out_over_median`]`(1)` (5.40) times the
-//! median distance set aside first: gross errors, never a clean point however the noise is
-//! shaped). The fence holds a family-wise false-alarm rate, [`SWEEP_POINTS_FALSE_ALARM`] over
-//! every point the file's sweeps test, for any shape of the noise: the quantile of `sqrt 3`
-//! times Student's t with the degrees of freedom of one direction, the heaviest-tailed case
-//! (`Studentised::fence`). A corrupted reading, a swapped point id or a point in other units
-//! lies far beyond it; the clean rate measured is in `docs/validation.md`, "Outliers".
+//! pair's depth error puts most of it along one direction. The points beyond 3.12 times the
+//! median distance (`(Q3 + 3 IQR) / Q2` of Gaussian 3-D errors) are set aside first, worst
+//! first: gross errors, so that several do not mask each other. A point's normalised residual
+//! is `|r|` over the noise per axis of the sweep's other points kept, their residuals' sum of
+//! squares over the degrees of freedom the fit leaves (an externally studentised residual). The
+//! fence holds a family-wise false-alarm rate, [`SWEEP_POINTS_FALSE_ALARM`] over every point
+//! the file's sweeps test: with the noise spread over `m` directions (1 to 3, from the
+//! residuals' scatter matrix), `z^2 / 3` is about `F(m, m nu / 3)` (Satterthwaite), and the
+//! fence is its `1 - rate / points` quantile. A corrupted reading, a swapped point id or a
+//! point in other units lies far beyond it; the clean rate measured is in
+//! `docs/validation.md`, "Outliers".
 //!
 //! Then the second targets of the sweeps that measure a coupling ([`second_target`]).
 
