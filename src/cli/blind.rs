@@ -12,7 +12,7 @@ use axiscal::harness::blind::{
     draw_case, score, simulate_case,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::{read_measurements, write_measurements_to};
+use axiscal::measurement::{read_measurements_from, write_measurements_to};
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -110,55 +110,87 @@ pub fn run(args: Args) -> Result<()> {
         .collect();
     let progress = super::progress::Progress::counted(keys.len(), "cases");
     let pool = thread_pool(args.threads)?;
-    let results: Vec<_> = pool.install(|| {
+    let cases: Vec<(CaseResult, CaseFiles)> = pool.install(|| {
         keys.into_par_iter()
             .map(|(i, key)| -> Result<_> {
-                let dir = args.out.join(format!("case-{i:03}"));
-                let set = simulate_case(&key, &desc, &options)?;
-                let csv = dir.join("data.csv");
-                let mut text = super::checks::identity_comment(&desc).into_bytes();
-                write_measurements_to(&mut text, &set)?;
-                outputs.write(&csv, text)?;
-                outputs.write(&dir.join("key.json"), json_file::to_string(Schema::BLIND_KEY, &key)?)?;
-                // The diagnoser sees the CSV alone.
-                let blind = read_measurements(&csv, Some(desc.dof()))?;
-                let d = diagnose(&blind, &desc, &diagnosis_options)
-                    .with_context(|| format!("diagnosing {}", csv.display()))?;
-                outputs.write(
-                    &dir.join("diagnosis.json"),
-                    json_file::to_string(Schema::DIAGNOSIS, &d)?,
-                )?;
-                // Generator side (knows the truth): the effect's trace against the detectable gap.
-                let size = detectable_size(&key, &desc, &options, &diagnosis_options, d.detectable_gap_mm)?;
-                let result = CaseResult {
-                    key,
-                    diagnosis: d,
-                    size_ratio: size.map(|s| s.0),
-                    detectable_magnitude: size.and_then(|s| s.1),
-                };
+                let case = run_case(i, key, &desc, (&options, &diagnosis_options), &args.out)?;
                 progress.inc();
-                Ok(result)
+                Ok(case)
             })
             .collect::<Result<_>>()
     })?;
     drop(progress);
-    remove_stale_cases(&args.out, &results)?;
+    let (results, files): (Vec<CaseResult>, Vec<CaseFiles>) = cases.into_iter().unzip();
     let s = score(&results);
+    // Every file of the new set is written under a temporary name first, then all are put in
+    // place at once (a signal meanwhile waits), and the old run's other cases removed: an
+    // interrupted run leaves the old set whole.
     let mut staged = outputs.staged_in(&args.out)?;
+    for (name, text) in files.iter().flatten() {
+        staged.write(name, text)?;
+    }
     staged.write("summary.json", json_file::to_string(Schema::BLIND_SUMMARY, &s)?)?;
     staged.write("summary.md", format!("{}\n{}", s.markdown(), case_table(&results)))?;
     staged.write(
         "cases.json",
         json_file::list_to_string(Schema::BLIND_CASES, "cases", &results)?,
     )?;
-    staged.commit(&[])?;
+    let stale = stale_case_files(&args.out, &results)?;
+    let stale: Vec<&str> = stale.iter().map(String::as_str).collect();
+    super::signals::deferred(|| -> Result<()> {
+        staged.commit(&stale)?;
+        remove_emptied_cases(&args.out, &stale);
+        Ok(())
+    })?;
     print!("{}", s.markdown());
     Ok(())
 }
 
-/// The outputs of `blind`, its folder `--out` held for the whole run: the case folders are
-/// written as the cases finish, and the folder is this run's alone until its summary is placed
-/// (a second run into it at the same time is refused, [`Outputs::hold_folder`]).
+/// The files of one case folder, as names under `--out` and their bytes.
+type CaseFiles = Vec<(String, Vec<u8>)>;
+
+/// Simulates case `i`, diagnoses its CSV alone and scores it: the result and the case folder's
+/// files (`out` only names the CSV in messages; nothing is written here).
+fn run_case(
+    i: usize,
+    key: axiscal::harness::blind::CaseKey,
+    desc: &axiscal::robot::RobotDescription,
+    (options, diagnosis_options): (&BlindOptions, &DiagnosisOptions),
+    out: &std::path::Path,
+) -> Result<(CaseResult, CaseFiles)> {
+    let folder = format!("case-{i:03}");
+    let csv = out.join(&folder).join("data.csv");
+    let set = simulate_case(&key, desc, options)?;
+    let mut text = super::checks::identity_comment(desc).into_bytes();
+    write_measurements_to(&mut text, &set)?;
+    // The diagnoser sees the CSV alone.
+    let blind = read_measurements_from(&text[..], &csv, Some(desc.dof()))?;
+    let d = diagnose(&blind, desc, diagnosis_options).with_context(|| format!("diagnosing {}", csv.display()))?;
+    let files = vec![
+        (format!("{folder}/data.csv"), text),
+        (
+            format!("{folder}/key.json"),
+            json_file::to_string(Schema::BLIND_KEY, &key)?.into_bytes(),
+        ),
+        (
+            format!("{folder}/diagnosis.json"),
+            json_file::to_string(Schema::DIAGNOSIS, &d)?.into_bytes(),
+        ),
+    ];
+    // Generator side (knows the truth): the effect's trace against the detectable gap.
+    let size = detectable_size(&key, desc, options, diagnosis_options, d.detectable_gap_mm)?;
+    let result = CaseResult {
+        key,
+        diagnosis: d,
+        size_ratio: size.map(|s| s.0),
+        detectable_magnitude: size.and_then(|s| s.1),
+    };
+    Ok((result, files))
+}
+
+/// The outputs of `blind`, its folder `--out` held for the whole run, so that a second run
+/// into it at the same time is refused ([`Outputs::hold_folder`]); its files are placed as
+/// one set at the end.
 fn held_output(args: &Args) -> Result<Outputs> {
     let mut outputs = Outputs::new(args.force);
     outputs.hold_folder(&args.out)?;
@@ -169,13 +201,14 @@ fn held_output(args: &Args) -> Result<Outputs> {
 /// The files a case folder holds.
 const CASE_FILES: [&str; 3] = ["data.csv", "key.json", "diagnosis.json"];
 
-/// Removes the case folders of an earlier run (`--force`) that this run did not write: beside
-/// this run's summary they would read as its cases. Only the files a case writes are removed,
-/// and the folder when nothing else is left in it.
-fn remove_stale_cases(out: &std::path::Path, results: &[CaseResult]) -> Result<()> {
+/// The files of an earlier run's (`--force`) case folders that this run does not write, as
+/// names under `out`: beside this run's summary they would read as its cases. Only the files a
+/// case writes are named.
+fn stale_case_files(out: &std::path::Path, results: &[CaseResult]) -> Result<Vec<String>> {
     let written: std::collections::BTreeSet<String> =
         results.iter().map(|r| format!("case-{:03}", r.key.case)).collect();
     let entries = std::fs::read_dir(out).with_context(|| format!("reading {}", out.display()))?;
+    let mut stale = Vec::new();
     for entry in entries.flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
         let is_case = name
@@ -184,13 +217,21 @@ fn remove_stale_cases(out: &std::path::Path, results: &[CaseResult]) -> Result<(
         if !is_case || written.contains(&name) || !entry.path().is_dir() {
             continue;
         }
-        for file in CASE_FILES {
-            let path = entry.path().join(file);
-            if path.is_file() {
-                std::fs::remove_file(&path).with_context(|| format!("removing the stale {}", path.display()))?;
-            }
-        }
-        let _ = std::fs::remove_dir(entry.path());
+        stale.extend(
+            CASE_FILES
+                .iter()
+                .filter(|file| entry.path().join(file).is_file())
+                .map(|file| format!("{name}/{file}")),
+        );
     }
-    Ok(())
+    Ok(stale)
+}
+
+/// Removes the stale case folders emptied by the commit (a folder holding anything else stays).
+fn remove_emptied_cases(out: &std::path::Path, stale: &[&str]) {
+    let folders: std::collections::BTreeSet<&str> =
+        stale.iter().filter_map(|f| f.split_once('/')).map(|f| f.0).collect();
+    for folder in folders {
+        let _ = std::fs::remove_dir(out.join(folder));
+    }
 }

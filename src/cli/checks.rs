@@ -731,29 +731,33 @@ pub fn outlier_warnings(
         } else {
             "kept (--keep-outliers)".to_string()
         };
+        let clean_pass = format!(
+            "a clean file's sweeps pass it with {:.0} % probability",
+            100.0 * (1.0 - axiscal::calibration::procedure::SWEEP_POINTS_FALSE_ALARM)
+        );
         let (from, noise, fence_of, check) = match (o.joint, o.target) {
             (0, _) => (
                 "the calibrated model",
                 "the noise",
-                "every validation point's), and far from its pose's other targets (an effect moves them alike",
+                "Q3 + 3 IQR of every validation point's), and far from its pose's other targets (an effect moves them alike",
                 "coordinates and target id",
             ),
             // A sweep's second target, judged by its passive angle (eqs. 14-15).
             (_, 1) => (
                 "the curve of its neighbours' passive angles",
                 "their scatter",
-                "every sweep point's",
+                "Q3 + 3 IQR of every sweep point's",
                 "coordinates and target id (a reading swapped with another step's)",
             ),
             _ => (
                 "the fit of its sweep's other points",
-                "the sweep's noise",
-                "every sweep point's",
+                "the noise of the sweep's other points",
+                clean_pass.as_str(),
                 "coordinates and commands",
             ),
         };
         lines.push(format!(
-            "{place}: outlier: experiment {} step {} target {}: {:.3} mm from {from}, {:.1} times {noise}, beyond the fence {:.1} (Q3 + 3 IQR of {fence_of}): {what}; check this row's {check}",
+            "{place}: outlier: experiment {} step {} target {}: {:.3} mm from {from}, {:.1} times {noise}, beyond the fence {:.1} ({fence_of}): {what}; check this row's {check}",
             o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
         ));
     }

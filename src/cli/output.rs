@@ -420,6 +420,9 @@ pub struct StagedSet<'a> {
     /// A hidden folder inside `dir` that plots are drawn into (removed when the set ends), and
     /// its slot among the temporaries a signal removes.
     plots_dir: Option<(PathBuf, Option<usize>)>,
+    /// Subfolders of `dir` the set created for its files, each with its slot among the
+    /// temporaries a signal removes (when empty): removed if the set is dropped uncommitted.
+    created: Vec<(PathBuf, Option<usize>)>,
 }
 
 impl Outputs {
@@ -434,14 +437,22 @@ impl Outputs {
             dir: dir.to_owned(),
             staged: Vec::new(),
             plots_dir: None,
+            created: Vec::new(),
         })
     }
 }
 
 impl StagedSet<'_> {
-    /// Writes `dir/name` under its temporary name.
+    /// Writes `dir/name` under its temporary name (`name` may hold a subfolder: created now,
+    /// and removed again, when left empty, if the set is not committed).
     pub fn write(&mut self, name: &str, contents: impl AsRef<[u8]>) -> Result<()> {
         let target = self.dir.join(name);
+        if let Some(sub) = target.parent().filter(|d| !d.exists()) {
+            self.outputs.check_not_input(sub)?;
+            std::fs::create_dir_all(sub).with_context(|| format!("creating {}", sub.display()))?;
+            self.created
+                .push((sub.to_owned(), super::signals::track_temporary(sub)));
+        }
         let mut file = self.outputs.create(&target)?;
         file.write_all(contents.as_ref())
             .with_context(|| format!("writing {}", target.display()))?;
@@ -487,6 +498,7 @@ impl StagedSet<'_> {
 
     /// Puts every file in place, then removes the files of `stale` this set did not write (an
     /// earlier run's outputs that would no longer belong beside the new ones).
+    /// A signal meanwhile waits until every file is placed ([`super::signals::deferred`]).
     pub fn commit(mut self, stale: &[&str]) -> Result<()> {
         // Two commands placing their sets into one folder at once (`--force` both) would
         // interleave their files: the folder's own lock makes each set's placing whole (held
@@ -497,16 +509,24 @@ impl StagedSet<'_> {
             Some(lock_folder(&self.dir)?)
         };
         let placed: Vec<PathBuf> = self.staged.iter().map(|f| f.target.clone()).collect();
-        for file in std::mem::take(&mut self.staged) {
-            file.place()?;
-        }
-        for name in stale {
-            let path = self.dir.join(name);
-            if !placed.contains(&path) && path.exists() {
-                std::fs::remove_file(&path).with_context(|| format!("removing the stale {}", path.display()))?;
+        let staged = std::mem::take(&mut self.staged);
+        for (_, tracked) in std::mem::take(&mut self.created) {
+            if let Some(slot) = tracked {
+                super::signals::untrack_temporary(slot);
             }
         }
-        Ok(())
+        super::signals::deferred(|| {
+            for file in staged {
+                file.place()?;
+            }
+            for name in stale {
+                let path = self.dir.join(name);
+                if !placed.contains(&path) && path.exists() {
+                    std::fs::remove_file(&path).with_context(|| format!("removing the stale {}", path.display()))?;
+                }
+            }
+            Ok(())
+        })
     }
 }
 
@@ -553,6 +573,12 @@ fn lock_folder(dir: &Path) -> Result<std::fs::File> {
 impl Drop for StagedSet<'_> {
     fn drop(&mut self) {
         self.staged.clear();
+        for (dir, tracked) in self.created.drain(..).rev() {
+            let _ = std::fs::remove_dir(&dir);
+            if let Some(slot) = tracked {
+                super::signals::untrack_temporary(slot);
+            }
+        }
         if let Some((dir, tracked)) = self.plots_dir.take() {
             let _ = std::fs::remove_dir_all(&dir);
             if let Some(slot) = tracked {

@@ -257,11 +257,11 @@ pub fn run(args: Args) -> Result<()> {
         ..default_validation
     };
     let sight = args.sight.options(&desc)?;
+    let mut plan_toml = None;
     if args.optimize {
         plan = optimize::run(&args, &desc, &plan, &validation, &sight)?;
         let text = toml::to_string(&plan).context("writing the optimised plan as TOML")?;
-        outputs.write(&plan_out, format!("{}{text}", optimize::toml_comment(&args, &desc)))?;
-        println!("wrote {}", plan_out.display());
+        plan_toml = Some(format!("{}{text}", optimize::toml_comment(&args, &desc)));
     }
     let points = planned_points(&desc, &plan, &validation, &sight).with_context(|| match &args.plan {
         Some(file) => format!(
@@ -276,7 +276,14 @@ pub fn run(args: Args) -> Result<()> {
     let comment = args.sight.header_comment(&desc)?;
     let mut file = outputs.create(&args.out)?;
     write_plan_csv(&mut file, &comment, &points).with_context(|| format!("writing {}", args.out.display()))?;
-    file.commit()?;
+    // The optimised plan and its CSV are placed together: a signal waits for both.
+    super::signals::deferred(|| -> Result<()> {
+        if let Some(text) = &plan_toml {
+            outputs.write(&plan_out, text)?;
+            println!("wrote {}", plan_out.display());
+        }
+        file.commit()
+    })?;
     summarise(&args.out, &points, sight.stations_m.len());
     Ok(())
 }

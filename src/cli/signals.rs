@@ -1,5 +1,6 @@
 //! Signals. Every command: SIGINT, SIGTERM or SIGHUP removes the temporary files of the outputs
-//! being written, then ends the process as the signal would ([`install_cleanup`]). Long runs
+//! being written, then ends the process as the signal would ([`install_cleanup`]); while a set
+//! of finished outputs is being put in place ([`deferred`]) the signal waits for it. Long runs
 //! ([`install`]): the first SIGINT or SIGTERM asks the run to stop (the trials in flight finish,
 //! what was done is saved, the exit code is 128 + the signal), a second one removes the
 //! temporary files and ends the process at once (every finished trial is already in
@@ -10,7 +11,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicPtr, Ordering};
 
 /// Temporary files a signal removes: at most this many open at once (more are not tracked).
-const TEMPORARY_SLOTS: usize = 256;
+const TEMPORARY_SLOTS: usize = 4096;
 
 /// The tracked temporary files' paths, as C strings a handler may read at any moment: a slot is
 /// cleared when its file is committed or dropped, and its string is never freed (a handler may
@@ -57,8 +58,28 @@ fn remove_temporaries() {
     }
 }
 
-#[cfg(unix)]
-extern "C" fn on_cleanup_signal(signal: libc::c_int) {
+/// How many [`deferred`] sections are running: while one is, a cleanup signal is held.
+static PLACING: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+/// The cleanup signal held while outputs were being placed (0: none).
+static HELD: AtomicI32 = AtomicI32::new(0);
+
+/// Runs `place` (renames that put a set of finished outputs in place of the old ones) with
+/// SIGINT, SIGTERM and SIGHUP held: a signal arriving meanwhile ends the process once every
+/// file is placed, so that a folder never holds part of a new set beside part of the old one.
+pub fn deferred<T>(place: impl FnOnce() -> T) -> T {
+    PLACING.fetch_add(1, Ordering::SeqCst);
+    let out = place();
+    if PLACING.fetch_sub(1, Ordering::SeqCst) == 1 {
+        let held = HELD.swap(0, Ordering::SeqCst);
+        if held != 0 {
+            end_by(held);
+        }
+    }
+    out
+}
+
+/// Removes the temporaries and ends the process as `signal` would (async-signal-safe).
+fn end_by(signal: libc::c_int) {
     remove_temporaries();
     // SAFETY: signal and raise are async-signal-safe; the default action then ends the process
     // as the signal would have.
@@ -66,6 +87,15 @@ extern "C" fn on_cleanup_signal(signal: libc::c_int) {
         libc::signal(signal, libc::SIG_DFL);
         libc::raise(signal);
     }
+}
+
+#[cfg(unix)]
+extern "C" fn on_cleanup_signal(signal: libc::c_int) {
+    if PLACING.load(Ordering::SeqCst) > 0 {
+        HELD.store(signal, Ordering::SeqCst);
+        return;
+    }
+    end_by(signal);
 }
 
 /// Installs the cleanup handlers for SIGINT, SIGTERM and SIGHUP (module docs), and ignores

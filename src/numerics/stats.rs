@@ -10,7 +10,7 @@ mod f_ratio;
 mod shared_error;
 
 pub use chi_square::{chi_square_cdf, chi_square_quantile, ln_gamma, regularized_lower_gamma};
-pub use f_ratio::{f_cdf, regularized_incomplete_beta};
+pub use f_ratio::{f_cdf, f_upper_quantile, f_upper_tail, regularized_incomplete_beta};
 use serde::{Deserialize, Serialize};
 pub use shared_error::SharedErrorChiSquare;
 
@@ -74,7 +74,14 @@ pub fn far_out_fence(v: &[f64]) -> f64 {
 /// The far-out fence of the 3-D norms of isotropic Gaussian errors over their median:
 /// `(Q3 + 3 IQR) / Q2` of the chi distribution with 3 degrees of freedom (3.12).
 pub fn chi3_far_out_over_median() -> f64 {
-    let q = |p: f64| chi_square_quantile(p, 3.0).sqrt();
+    chi_far_out_over_median(3.0)
+}
+
+/// `(Q3 + 3 IQR) / Q2` of the chi distribution with `dof` degrees of freedom: for one, the
+/// norms of 3-D Gaussian errors all along one direction (5.40), the heaviest tail a 3-D error
+/// of a given RMS has (a theodolite pair's depth error nearly is one).
+pub fn chi_far_out_over_median(dof: f64) -> f64 {
+    let q = |p: f64| chi_square_quantile(p, dof).sqrt();
     (q(0.75) + FAR_OUT * (q(0.75) - q(0.25))) / q(0.5)
 }
 

@@ -49,6 +49,7 @@ mod hostile_round6c;
 mod hostile_round6d;
 mod hostile_round6e;
 mod hostile_round9c;
+mod hostile_round9d;
 mod iso9283;
 mod joint_map;
 mod json_schemas;

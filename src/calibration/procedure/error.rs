@@ -14,7 +14,7 @@ use crate::measurement::MeasurementSet;
 pub enum ProcedureError {
     /// Too many of one sweep's points fail the outlier test ([`screen_sweeps`](super::screen_sweeps)).
     #[error(
-        "experiment {experiment}: {flagged} of its {points} points lie beyond the outlier fence ({fence:.2} times the sweep's noise): the sweep, not single points, is wrong (check its joint, its target ids, its units)"
+        "experiment {experiment}: {flagged} of its {points} points lie beyond the outlier fence ({fence:.2} times the sweep's noise){which}"
     )]
     TooManyOutliers {
         /// The experiment.
@@ -25,6 +25,8 @@ pub enum ProcedureError {
         points: usize,
         /// The fence (normalised residual).
         fence: f64,
+        /// Which points, and what that says (single rows named by line, or a run of the sweep).
+        which: String,
     },
     /// The set has no axis experiment at all.
     #[error("no axis experiment (no row with moved_joint > 0): nothing to calibrate")]

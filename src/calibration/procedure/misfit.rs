@@ -20,7 +20,7 @@ use super::OutlierPoint;
 use crate::calibration::fit_circle;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
-use crate::numerics::stats::{ABSURD_SHARE, FAR_OUT, QuantileMethod, chi_square_quantile, quantile, rms_spread};
+use crate::numerics::stats::{ABSURD_SHARE, FAR_OUT, QuantileMethod, chi_far_out_over_median, quantile, rms_spread};
 use nalgebra::{Point3, Vector3};
 use std::f64::consts::{PI, TAU};
 
@@ -149,12 +149,11 @@ impl SweepPoints<'_> {
 
 /// The fence of `distances` \[mm\], each the norm of `dof` Gaussian components for a point of
 /// the noise: the far-out fence of such norms over their median (Tukey's, as
-/// [`crate::numerics::stats::chi3_far_out_over_median`] for three) times their median, at
-/// least `floor_mm` ([`floor_mm`]). A median, not the quartiles, scales it: up to half of the
+/// [`crate::numerics::stats::chi_far_out_over_median`]) times their median, at least
+/// `floor_mm` ([`floor_mm`]). A median, not the quartiles, scales it: up to half of the
 /// points may be off.
 fn fence(distances: &[f64], dof: f64, floor_mm: f64) -> f64 {
-    let q = |p: f64| chi_square_quantile(p, dof).sqrt();
-    let ratio = (q(0.75) + FAR_OUT * (q(0.75) - q(0.25))) / q(0.5);
+    let ratio = chi_far_out_over_median(dof);
     (ratio * quantile(distances, 0.5, QuantileMethod::Linear)).max(floor_mm)
 }
 

@@ -59,7 +59,10 @@ pub use sanity::{
     Implausible, LEAD_SPREAD, MISFIT_RATIO, PLAUSIBLE_AXIS_TILT_RAD, PLAUSIBLE_LEAD_DEVIATION,
     PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, SIZE_TOLERANCE, free_pose_scale_slips, implausible, longest_length_m,
 };
-pub use screen::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, Screening, WorstSecondTarget, screen_sweeps};
+pub use screen::{
+    OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, SWEEP_POINTS_FALSE_ALARM, Screening, WorstSecondTarget,
+    screen_sweeps,
+};
 pub use second_targets::SecondTargetData;
 pub use uncertainty::{AxisCovariance, row_sigmas};
 pub use urdf::{

@@ -290,7 +290,7 @@ fn write_outliers(s: &mut String, cal: &Calibration) {
     }
     let _ = writeln!(
         s,
-        "## Outliers ({})\n\nSweep points beyond the outlier fence (`docs/method.md`, \"Outliers\": Tukey's far-out fence of every sweep point's residual over its sweep's noise); \"dropped\": the calibration was made without them and the other targets of their poses (`--keep-outliers` keeps them). Check each row's coordinates and commands.\n\n| file line | experiment | step | target | residual (mm) | over the noise | fence | dropped |\n|---|---|---|---|---:|---:|---:|---|",
+        "## Outliers ({})\n\nSweep points beyond the outlier fence (`docs/method.md`, \"Outliers\": a point's residual over the noise of its sweep's other points, against a fence a clean file passes with 99 % probability); \"dropped\": the calibration was made without them and the other targets of their poses (`--keep-outliers` keeps them). Check each row's coordinates and commands.\n\n| file line | experiment | step | target | residual (mm) | over the noise | fence | dropped |\n|---|---|---|---|---:|---:|---:|---|",
         cal.outliers.len()
     );
     for o in &cal.outliers {

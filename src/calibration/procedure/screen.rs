@@ -3,16 +3,19 @@
 //! ML line for a sliding one, eqs. 9-13), each point's 3-D residual is tested against a fence,
 //! and the worst point beyond it is set aside and its sweep refitted until none is left.
 //!
-//! Each sweep has its own noise: the RMS per axis `sigma` of its residuals once the points
-//! beyond `(Q3 + 3 IQR) / Q2` of Gaussian 3-D errors (3.12,
-//! [`crate::numerics::stats::chi3_far_out_over_median`]) times the median distance are set
-//! aside. The sweeps' noise differs: the swept joint's repeatability turns into more error the
-//! farther its target is. A point's normalised residual is `|r| / sigma`; the fence is Tukey's
-//! far-out fence `Q3 + 3 IQR` (the rule the free-pose fit uses for its poses,
-//! [`crate::numerics::stats::far_out_fence`]) of every sweep's points kept. A corrupted
-//! reading, a swapped point id or a point in other units lies far beyond it; on clean
-//! simulated campaigns of the paper robot about one point in 3,000 passes it, by less than half
-//! the fence (`docs/validation.md`, "Outliers").
+//! Each sweep has its own noise: the sweeps' noise differs (the swept joint's repeatability
+//! turns into more error the farther its target is), and so does its shape: a theodolite
+//! pair's depth error puts most of it along one direction. The points beyond 3.12 times the
+//! median distance (`(Q3 + 3 IQR) / Q2` of Gaussian 3-D errors) are set aside first, worst
+//! first: gross errors, so that several do not mask each other. A point's normalised residual
+//! is `|r|` over the noise per axis of the sweep's other points kept, their residuals' sum of
+//! squares over the degrees of freedom the fit leaves (an externally studentised residual). The
+//! fence holds a family-wise false-alarm rate, [`SWEEP_POINTS_FALSE_ALARM`] over every point
+//! the file's sweeps test: with the noise spread over `m` directions (1 to 3, from the
+//! residuals' scatter matrix), `z^2 / 3` is about `F(m, m nu / 3)` (Satterthwaite), and the
+//! fence is its `1 - rate / points` quantile. A corrupted reading, a swapped point id or a
+//! point in other units lies far beyond it; the clean rate measured is in
+//! `docs/validation.md`, "Outliers".
 //!
 //! Then the second targets of the sweeps that measure a coupling ([`second_target`]).
 
@@ -27,7 +30,7 @@ use crate::calibration::line_ml::{fit_line, predict_line};
 use crate::calibration::{ArcFitOptions, CalibrationError, Studies, fit_arc_with_angle_noise_studies};
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
-use crate::numerics::stats::{QuantileMethod, chi3_far_out_over_median, far_out_fence, quantile};
+use crate::numerics::stats::{QuantileMethod, chi3_far_out_over_median, f_upper_quantile, far_out_fence, quantile};
 use crate::robot::TransmissionFitForm;
 use crate::robot::{Controller, RobotDescription};
 use nalgebra::{Point3, Vector3};
@@ -129,36 +132,76 @@ pub fn screen_sweeps(
             set: None,
         });
     }
-    let fence = far_out_fence(&pooled);
+    // The second targets keep their fence: Tukey's far-out fence of the sweeps' points.
+    let second_fence = far_out_fence(&pooled);
+    let tested: usize = scales.iter().flatten().map(|t| t.points).sum();
     let mut outliers = Vec::new();
     for ((s, r), scale) in sweeps.iter().zip(&first).zip(&scales) {
         let (Some(r), Some(scale)) = (r, scale) else { continue };
-        let z = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().map(|r| scale.z(r)).collect() };
+        let Some(fence) = scale.fence(tested) else { continue };
+        let z = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().enumerate().map(|(i, r)| scale.z(i, r)).collect() };
         let (kept, last) = s.peel(r, &z, &|_| fence, sigma, max_iterations);
         let mut is_kept = vec![false; s.points.len()];
         kept.iter().for_each(|&i| is_kept[i] = true);
         let flagged: Vec<usize> = (0..s.points.len()).filter(|&i| !is_kept[i]).collect();
         // Points still beyond the fence once the rounds are spent: as many more outliers.
-        let beyond = kept.iter().filter(|&&i| scale.z(&last[i]) > fence).count();
+        let beyond = kept.iter().filter(|&&i| scale.z(i, &last[i]) > fence).count();
         if beyond > 0 || flagged.len() as f64 > OUTLIER_SHARE_MAX * s.points.len() as f64 {
+            let mut off: Vec<usize> = kept.iter().copied().filter(|&i| scale.z(i, &last[i]) > fence).collect();
+            off.extend(&flagged);
+            off.sort_unstable();
+            let at = |i: usize| {
+                let o = s.outlier(i, &last[i], scale.z(i, &last[i]), fence, false, set);
+                (i, o.step, o.line)
+            };
             return Err(ProcedureError::TooManyOutliers {
                 experiment: s.experiment.name.clone(),
-                flagged: flagged.len() + beyond,
+                flagged: off.len(),
                 points: s.points.len(),
                 fence,
+                which: too_many_which(&off.into_iter().map(at).collect::<Vec<_>>()),
             });
         }
         outliers.extend(
             flagged
                 .into_iter()
-                .map(|i| s.outlier(i, &last[i], scale.z(&last[i]), fence, !keep, set)),
+                .map(|i| s.outlier(i, &last[i], scale.z(i, &last[i]), fence, !keep, set)),
         );
     }
     let first_pass = without_poses(set, &outliers);
-    let second = second_target::outliers(first_pass.as_ref().unwrap_or(set), set, desc, options, (fence, keep))?;
+    let second = second_target::outliers(
+        first_pass.as_ref().unwrap_or(set),
+        set,
+        desc,
+        options,
+        (second_fence, keep),
+    )?;
     outliers.extend(second);
     let set = without_poses(set, &outliers);
     Ok(Screening { outliers, set })
+}
+
+/// What a sweep with too many points beyond the fence says, from those points (their place
+/// among the sweep's points, step and file line, in sweep order): points in one run of
+/// consecutive steps are a block of the sweep gone wrong; points apart are single rows, named.
+pub(super) fn too_many_which(off: &[(usize, usize, Option<u64>)]) -> String {
+    let run = off.windows(2).all(|w| w[1].0 == w[0].0 + 1);
+    let lines: Option<Vec<String>> = off.iter().map(|o| o.2.map(|l| l.to_string())).collect();
+    let steps: Vec<String> = off.iter().map(|o| o.1.to_string()).collect();
+    let rows = match &lines {
+        Some(lines) => format!("lines {}, steps {}", lines.join(", "), steps.join(", ")),
+        None => format!("steps {}", steps.join(", ")),
+    };
+    if run {
+        format!(
+            " ({rows}, one run of consecutive steps): the sweep, not single points, is wrong (check its joint, its target ids, its units)"
+        )
+    } else {
+        format!(
+            ", more than the {:.0} % the test may set aside; they are single rows apart in the sweep ({rows}): check those rows' commands and coordinates (a typo, another unit, a command scaled in those rows); if they are right, the sweep itself is wrong (its joint, its target ids, its units)",
+            OUTLIER_SHARE_MAX * 100.0
+        )
+    }
 }
 
 /// `set` without the poses of the `outliers` dropped (every target of a flagged point's step:
@@ -180,32 +223,75 @@ fn all(s: &Sweep<'_>) -> Vec<usize> {
     (0..s.points.len()).collect()
 }
 
-/// A sweep's noise: the RMS per axis of its residuals once its gross errors are set aside,
-/// and the normalised residuals of the points it kept.
+/// The family-wise false-alarm rate of the sweep points' test over a whole file: on clean data
+/// about this share of files has a point flagged (`Scale::fence`; measured in
+/// `docs/validation.md`, "Outliers").
+pub const SWEEP_POINTS_FALSE_ALARM: f64 = 0.01;
+
+/// A sweep's noise, from the residuals of its points within [`chi3_far_out_over_median`]
+/// times their median (gross errors set aside, worst first, so that several in one sweep do
+/// not mask each other).
 struct Scale {
-    /// The RMS per axis \[m\].
-    sigma_m: f64,
-    /// The normalised residuals of the points kept.
+    /// Points tested.
+    points: usize,
+    /// The normalised residuals of the points kept, over their RMS per axis (the second
+    /// targets' fence).
     kept_z: Vec<f64>,
+    /// The sum of the kept points' squared residuals \[m^2\].
+    sum_sq: f64,
+    /// Its degrees of freedom: three per point kept, less the fit's parameters.
+    dof: f64,
+    /// Each point's squared residual in that sum (`None`: set aside) \[m^2\].
+    own: Vec<Option<f64>>,
+    /// The directions the noise spreads over (1 to 3): `tr(S)^2 / tr(S^2)` of the kept
+    /// residuals' scatter matrix `S` (Satterthwaite's effective degrees of freedom).
+    spread: f64,
 }
 
 impl Scale {
-    /// The scale of sweep `s` from its residuals `first` (every point fitted): the points
-    /// beyond [`chi3_far_out_over_median`] times the median distance are set aside, worst
-    /// first, and the RMS is that of the last fit's residuals of the points kept.
+    /// The scale of sweep `s` from its residuals `first` (every point fitted).
     fn of(s: &Sweep<'_>, first: &[Vector3<f64>], sigma: f64, max_iterations: usize) -> Option<Scale> {
         let ratio = chi3_far_out_over_median();
         let norms = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().map(|r| r.norm()).collect() };
         let (kept, last) = s.peel(first, &norms, &|kept| ratio * median(kept), sigma, max_iterations);
-        let sum: f64 = kept.iter().map(|&i| last[i].norm_squared()).sum();
-        let sigma_m = (sum / (3 * kept.len()).max(1) as f64).sqrt();
-        let kept_z = kept.iter().map(|&i| last[i].norm() / sigma_m).collect();
-        (sigma_m > 0.0).then_some(Scale { sigma_m, kept_z })
+        let mut own = vec![None; s.points.len()];
+        kept.iter().for_each(|&i| own[i] = Some(last[i].norm_squared()));
+        let sum_sq: f64 = own.iter().flatten().sum();
+        let rms = (sum_sq / (3 * kept.len()).max(1) as f64).sqrt();
+        let scatter: nalgebra::Matrix3<f64> = kept.iter().map(|&i| last[i] * last[i].transpose()).sum();
+        let spread = (scatter.trace().powi(2) / scatter.norm_squared()).clamp(1.0, 3.0);
+        (rms > 0.0).then(|| Scale {
+            points: s.points.len(),
+            kept_z: kept.iter().map(|&i| last[i].norm() / rms).collect(),
+            sum_sq,
+            dof: (3 * kept.len()) as f64 - s.parameters() as f64,
+            own,
+            spread,
+        })
     }
 
-    /// The normalised residual `|r| / sigma`: about `sqrt(3)` for a point of the sweep's noise.
-    fn z(&self, r: &Vector3<f64>) -> f64 {
-        r.norm() / self.sigma_m
+    /// The normalised residual of point `i`: `|r|` over the noise per axis of the sweep's
+    /// other points kept, their sum of squares over its degrees of freedom (an externally
+    /// studentised residual; about `sqrt 3` for a point of the noise).
+    fn z(&self, i: usize, r: &Vector3<f64>) -> f64 {
+        let (sum, dof) = match self.own[i] {
+            Some(own) => (self.sum_sq - own, self.dof - 3.0),
+            None => (self.sum_sq, self.dof),
+        };
+        r.norm() / (sum.max(0.0) / dof).sqrt()
+    }
+
+    /// The fence for a file whose sweeps test `tested` points: a point of the noise passes it
+    /// with probability `1 - SWEEP_POINTS_FALSE_ALARM / tested`. With the noise spread over
+    /// `m` directions (`spread`), `z^2 / 3` is about `F(m, m nu / 3)` for the `nu` degrees of
+    /// freedom of the other points (Satterthwaite): `m = 3` isotropic, `m = 1` all along one
+    /// direction, the heaviest tail. `None`: too few degrees of freedom to test.
+    fn fence(&self, tested: usize) -> Option<f64> {
+        let nu = self.dof - 3.0;
+        (nu >= 1.0).then(|| {
+            let tail = SWEEP_POINTS_FALSE_ALARM / tested.max(1) as f64;
+            (3.0 * f_upper_quantile(tail, self.spread, self.spread * nu / 3.0)).sqrt()
+        })
     }
 }
 
@@ -229,6 +315,16 @@ impl<'a> Sweep<'a> {
                 .map(|&i| actuator_commands(controller, desc, &e.commands[i])[k])
                 .collect(),
         }
+    }
+
+    /// The parameters of its fit: an arc's centre, axis, radius and phase (7), a line's start
+    /// and direction (5), and the transmission's coefficients.
+    fn parameters(&self) -> usize {
+        let path = match self.kind {
+            JointKind::Revolute => 7,
+            JointKind::Prismatic => 5,
+        };
+        path + self.form.n_coefficients()
     }
 
     /// Whether every held joint's reading stays within [`COMMAND_TOLERANCE`] through the sweep:
@@ -381,4 +477,32 @@ fn median(v: &[f64]) -> f64 {
 
 fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
     Point3::from(points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / points.len().max(1) as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::too_many_which;
+
+    /// Points in one run of steps are the sweep's; points apart are single rows, named by line.
+    #[test]
+    fn a_run_is_the_sweep_and_rows_apart_are_named() {
+        let run = too_many_which(&[(4, 5, Some(60)), (5, 6, Some(61)), (6, 7, Some(62)), (7, 8, Some(63))]);
+        assert!(
+            run.contains("one run of consecutive steps") && run.contains("the sweep, not single points"),
+            "{run}"
+        );
+        let apart = too_many_which(&[
+            (1, 1, Some(36)),
+            (10, 11, Some(46)),
+            (13, 14, Some(49)),
+            (14, 15, Some(50)),
+        ]);
+        assert!(apart.contains("lines 36, 46, 49, 50, steps 1, 11, 14, 15"), "{apart}");
+        assert!(
+            apart.contains("single rows") && !apart.contains("not single points"),
+            "{apart}"
+        );
+        let unread = too_many_which(&[(1, 1, None), (9, 9, None)]);
+        assert!(unread.contains("(steps 1, 9)"), "{unread}");
+    }
 }

@@ -56,6 +56,26 @@ pub fn f_cdf(x: f64, d1: f64, d2: f64) -> f64 {
     regularized_incomplete_beta(0.5 * d1, 0.5 * d2, d1 * x / (d1 * x + d2))
 }
 
+/// The upper tail `1 - F(x; d1, d2)` of the F distribution (`d1, d2 > 0`), without the
+/// cancellation of `1 - f_cdf` far out: `I_{d2 / (d1 x + d2)}(d2 / 2, d1 / 2)`.
+pub fn f_upper_tail(x: f64, d1: f64, d2: f64) -> f64 {
+    if x <= 0.0 {
+        return 1.0;
+    }
+    regularized_incomplete_beta(0.5 * d2, 0.5 * d1, d2 / (d1 * x + d2))
+}
+
+/// The `x` whose upper tail [`f_upper_tail`] is `tail` (`0 < tail < 1`), to a relative 1e-12.
+pub fn f_upper_quantile(tail: f64, d1: f64, d2: f64) -> f64 {
+    let mut hi = 1.0;
+    while f_upper_tail(hi, d1, d2) > tail && hi < 1e300 {
+        hi *= 2.0;
+    }
+    let stop = crate::numerics::roots::Bisection::to_relative_width(1e-12);
+    let [_, x] = crate::numerics::roots::bisect_infallible(0.0, hi, stop, |x| f_upper_tail(x, d1, d2) > tail);
+    x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -73,6 +93,30 @@ mod tests {
                 let sum = regularized_incomplete_beta(a, b, x) + regularized_incomplete_beta(b, a, 1.0 - x);
                 assert!((sum - 1.0).abs() < 1e-12, "{a} {b} {x}");
             }
+        }
+    }
+
+    /// The upper tail: with one numerator degree of freedom it is Student's t squared, and one
+    /// denominator degree makes t Cauchy's, `P(|t| > x) = 1 - 2 atan(x) / pi`; with very many
+    /// it is the normal's (1.96^2 for 5 %); it adds to the distribution function to 1; the
+    /// quantile inverts it.
+    #[test]
+    fn upper_tail_and_quantile() {
+        for x in [0.3f64, 1.0, 6.0, 300.0] {
+            let cauchy = 1.0 - 2.0 * x.atan() / std::f64::consts::PI;
+            assert!(
+                (f_upper_tail(x * x, 1.0, 1.0) - cauchy).abs() < 1e-12 * cauchy.max(1e-3),
+                "{x}"
+            );
+            assert!(
+                (f_upper_tail(x, 2.5, 7.0) + f_cdf(x, 2.5, 7.0) - 1.0).abs() < 1e-12,
+                "{x}"
+            );
+        }
+        assert!((f_upper_quantile(0.05, 1.0, 1e8).sqrt() - 1.959_964).abs() < 1e-5);
+        for (tail, d1, d2) in [(0.05, 1.0, 3.0), (1e-4, 1.85, 22.0), (1e-6, 3.0, 40.0)] {
+            let x = f_upper_quantile(tail, d1, d2);
+            assert!((f_upper_tail(x, d1, d2) / tail - 1.0).abs() < 1e-9, "{tail} {d1} {d2}");
         }
     }
 

@@ -55,30 +55,46 @@ pub(super) fn outliers(
             };
         let before = out.len();
         for (experiment, joint, data) in tested {
-            let flagged = data.flagged(floor_mm, fence);
-            if flagged.len() as f64 > OUTLIER_SHARE_MAX * data.steps.len() as f64 {
+            let points: Vec<OutlierPoint> = data
+                .flagged(floor_mm, fence)
+                .into_iter()
+                .map(|w| {
+                    let mut o = OutlierPoint {
+                        experiment: experiment.clone(),
+                        joint,
+                        step: w.step,
+                        target: 1,
+                        line: None,
+                        residual_mm: w.residual_mm,
+                        normalised_residual: w.ratio,
+                        fence,
+                        dropped: !keep,
+                    };
+                    o.line = row_of(original, &o).and_then(|row| original.line_of(row));
+                    o
+                })
+                .collect();
+            if points.len() as f64 > OUTLIER_SHARE_MAX * data.steps.len() as f64 {
+                let mut off: Vec<(usize, usize, Option<u64>)> = points
+                    .iter()
+                    .map(|o| {
+                        (
+                            data.steps.iter().position(|&s| s == o.step).unwrap_or(usize::MAX),
+                            o.step,
+                            o.line,
+                        )
+                    })
+                    .collect();
+                off.sort_unstable();
                 return Err(ProcedureError::TooManyOutliers {
                     experiment,
-                    flagged: flagged.len(),
+                    flagged: points.len(),
                     points: data.steps.len(),
                     fence,
+                    which: super::too_many_which(&off),
                 });
             }
-            out.extend(flagged.into_iter().map(|w| {
-                let mut o = OutlierPoint {
-                    experiment: experiment.clone(),
-                    joint,
-                    step: w.step,
-                    target: 1,
-                    line: None,
-                    residual_mm: w.residual_mm,
-                    normalised_residual: w.ratio,
-                    fence,
-                    dropped: !keep,
-                };
-                o.line = row_of(original, &o).and_then(|row| original.line_of(row));
-                o
-            }));
+            out.extend(points);
         }
         let dropping: Vec<OutlierPoint> = out[before..]
             .iter()
