@@ -313,8 +313,8 @@ pub(super) fn command_scaled_words(
     write!(
         f,
         "joint {joint} ({experiment}) {moves} {travel:.4} (+-{}) times as far per command as the description's \
-         transmission says, over the commands it was measured at, {:.0} sigma from 1 where a drive departs from its description by \
-         about {:.1} % ({what}; a gear ratio is a ratio of tooth counts and an encoder counts exactly): the column `cmd_{joint}` looks scaled \
+         transmission says, over the commands it was measured at: {:.0} sigma from 1, counting what a drive departs from its \
+         description by (about {:.1} %: {what}; a gear ratio is a ratio of tooth counts and an encoder counts exactly): the column `cmd_{joint}` looks scaled \
          by {:.4}{gradians} on export (the readings in another unit, or through another ratio), or the description's {drive} for \
          joint {joint} is wrong{coordinates}; check cmd_{joint} against the controller's reading at two poses. The fit took the factor into joint \
          {joint}'s transmission, so calibration.json is wrong for it, most outside the sweep",
