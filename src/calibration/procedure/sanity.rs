@@ -153,7 +153,7 @@ pub enum Implausible {
         travel: f64,
         /// Its 1-sigma.
         sigma: f64,
-        /// The most a drive departs ([`PLAUSIBLE_TURN_DEVIATION`], [`PLAUSIBLE_LEAD_DEVIATION`]).
+        /// The sigma of what a drive departs by ([`PLAUSIBLE_TURN_DEVIATION`], [`PLAUSIBLE_LEAD_DEVIATION`]).
         bound: f64,
     },
     /// Every sliding joint travels the same factor per command off its description: the

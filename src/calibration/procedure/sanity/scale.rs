@@ -4,13 +4,18 @@
 //! - **A joint's transmission.** A gear ratio is a ratio of tooth counts and an encoder counts
 //!   exactly, so over a whole turn a joint turns exactly as its description's transmission says;
 //!   within a turn it departs periodically, by the eccentricity of a gear or an encoder disc over
-//!   its radius (the first harmonic of eq. 8). Its slope departs from the described one by at
-//!   most [`PLAUSIBLE_TURN_DEVIATION`]. A sliding joint's travel per command is its screw's lead
-//!   or its rack's or scale's pitch, within [`PLAUSIBLE_LEAD_DEVIATION`]. A fitted mean slope
-//!   over the sweep beyond the bound by [`SCALE_SIGMAS`] of its sigma is no drive's: the
-//!   column `cmd_k` was scaled on export (another unit, another gear ratio applied by the
-//!   controller's export), or the description's ratio is wrong. The fit takes such a factor
-//!   into the joint's transmission harmonic, which extrapolates it wrongly outside the sweep.
+//!   its radius (the first harmonic of eq. 8), and its mean slope over a sweep departs from the
+//!   described one by at most that harmonic's amplitude, a few tenths of a per cent
+//!   ([`PLAUSIBLE_TURN_DEVIATION`], as a sigma). A sliding joint's travel per command is its
+//!   screw's lead or its rack's or scale's pitch ([`PLAUSIBLE_LEAD_DEVIATION`]). A fitted mean
+//!   slope over the sweep that departs from the described one by more than [`DRIVE_SIGMAS`] of
+//!   the drive's sigma and the fit's combined is no drive's: the column `cmd_k` was scaled on
+//!   export (another unit, another gear ratio applied by the controller's export), or the
+//!   description's ratio is wrong. The fit takes such a factor into the joint's transmission
+//!   harmonic, which extrapolates it wrongly outside the sweep. Over a sweep of 50 deg a first
+//!   harmonic and a scale have the same slope: no data tell them apart, so the test rests on
+//!   what drives give, and a joint whose drive has a larger joint-period error (the paper's
+//!   joint 6: 1.7 %) is said once its fit resolves it to a fifth of that.
 //!   A joint whose description declares a gear form (`transmission_fit = { form = "gear" }`:
 //!   a drive periodic in a gear's angle, as the paper's joint 5, whose bevel gear turns it 4.1 %
 //!   off) is left out: its description expects a large periodic error.
@@ -27,25 +32,41 @@ use crate::kinematics::JointKind;
 use crate::measurement::Measurement;
 use crate::robot::{RobotDescription, RobotModel, Transmission, TransmissionFitForm};
 
-/// The most a revolute joint's mean slope over its sweep departs from its description's (2 %):
-/// a joint-period harmonic of a gear train or an encoder is the eccentricity of a gear or an
-/// encoder disc over its radius, a few hundredths of a millimetre on tens of millimetres
-/// (0.1 %); the largest on a robot the project ships data of is the paper's joint 6, 1.7 %
-/// (`asea-irb6l-paper-truth.toml`); the real sets' joints are within 0.03 %
-/// (`docs/method.md#checks-of-the-result`).
-pub const PLAUSIBLE_TURN_DEVIATION: f64 = 0.02;
+/// The sigma of a revolute joint's mean slope over its sweep about its description's (0.2 %),
+/// as a model of what a drive gives: a joint-period harmonic of a gear train or an encoder is
+/// the eccentricity of a gear or an encoder disc over its radius, and its mean slope over a
+/// sweep departs from 1 by at most its amplitude. Measured (`docs/method.md#checks-of-the-result`):
+/// the real sets' revolute joints within 0.10 % (the FANUC's joint 2, its gravity load changing
+/// over the free poses); the paper's measured first harmonics 0.08 to 0.36 % (joints 1-3);
+/// the 234 fits of 171 clean simulations (the default manufacturing errors, which draw each
+/// first-harmonic coefficient with 0.2 %; elasticity, backlash, wobble, order-2 gear errors)
+/// that resolve the slope to 0.05 % depart by 0.19 % RMS and 0.52 % at most. A departure is
+/// said beyond `DRIVE_SIGMAS` of this and the fit's sigma combined: beyond 1.2 % where the fit
+/// resolves the slope to 0.1 %. The paper's joint 6 (a 1.75 % first harmonic,
+/// `asea-irb6l-paper-truth.toml`) stays below it on the paper's plans only because its fit
+/// resolves it to 1.2 % (the module doc).
+pub const PLAUSIBLE_TURN_DEVIATION: f64 = 0.002;
 
-/// The most a sliding joint's travel per command departs from its description's (1 %): a
-/// ball screw's lead is within 0.07 % in its coarsest class (C10: 210 um over 300 mm), a
-/// rack's pitch or a tensioned belt's within a few tenths of a per cent.
-pub const PLAUSIBLE_LEAD_DEVIATION: f64 = 0.01;
+/// The sigma of a sliding joint's travel per command about its description's (0.1 %): a ball
+/// screw's lead is within 0.07 % in its coarsest class (C10: 210 um over 300 mm), a rack's
+/// pitch or a tensioned belt's within a few tenths of a per cent over a metre; the real
+/// SScanSS-2 table's stages within 0.056 %, the simulations' (300 ppm) within 0.25 % at 1.4
+/// of their sigma.
+pub const PLAUSIBLE_LEAD_DEVIATION: f64 = 0.001;
+
+/// A joint's slope is said when it departs from its description's by more than this many
+/// sigmas of the drive's ([`PLAUSIBLE_TURN_DEVIATION`], [`PLAUSIBLE_LEAD_DEVIATION`]) and the
+/// fit's combined: 6, not 5, because the fit's sigma (its coefficients' correlation left out)
+/// runs short on a poorly resolved wrist joint: the clean simulations reach 4.5 on the paper
+/// robot's joint 6 (6.3 % +-1.4 % where 1.7 % is true).
+pub const DRIVE_SIGMAS: f64 = 6.0;
 
 /// The spread of independent sliding stages' leads (0.1 %, a C10 ball screw's 0.07 % rounded
 /// up): the common-scale test's per-stage sigma besides the fit's.
 pub const LEAD_SPREAD: f64 = 0.001;
 
-/// A departure this many of its sigmas beyond its bound is said: a normal deviate beyond 5
-/// has a chance of 3e-7.
+/// The sliding joints' common factor is said beyond this many of its sigmas: a normal deviate
+/// beyond 5 has a chance of 3e-7.
 pub const SCALE_SIGMAS: f64 = 5.0;
 
 /// Sliding joints whose slopes disagree beyond this chi-square quantile are not one scale.
@@ -145,9 +166,10 @@ fn slope(desc: &RobotDescription, ideal: &RobotModel, fitted: &Fitted, range: (f
     })
 }
 
-/// Whether `s` departs from 1 beyond `bound` by [`SCALE_SIGMAS`] of its sigma.
-fn beyond(s: &Slope, bound: f64) -> bool {
-    (s.ratio - 1.0).abs() - bound > SCALE_SIGMAS * s.sigma
+/// Whether `s` departs from 1 by more than [`DRIVE_SIGMAS`] of its sigma and a drive's
+/// (`drive`) combined.
+fn beyond(s: &Slope, drive: f64) -> bool {
+    (s.ratio - 1.0).abs() > DRIVE_SIGMAS * s.sigma.hypot(drive)
 }
 
 /// The findings of the module doc on `cal`, calibrated with the description `desc`.
@@ -213,8 +235,8 @@ struct Fitted<'a> {
     sigmas: &'a [f64],
 }
 
-/// The findings on `slopes`: the common scale of the sliding joints, and each joint beyond its
-/// bound that the common scale does not explain.
+/// The findings on `slopes`: the common scale of the sliding joints, and each joint beyond what
+/// its drive gives that the common scale does not explain.
 fn said(slopes: &[Slope]) -> Vec<Implausible> {
     let common = common_scale(slopes);
     let mut found: Vec<Implausible> = common.iter().cloned().collect();
@@ -282,8 +304,8 @@ pub(super) fn command_scaled_words(
         )
     };
     // Gradians read as degrees turn a joint 360/400 as far as commanded, give or take what a
-    // drive departs by.
-    let gradians = if !sliding && (travel * 400.0 / 360.0 - 1.0).abs() <= PLAUSIBLE_TURN_DEVIATION {
+    // drive and the fit depart by.
+    let gradians = if !sliding && (travel * 400.0 / 360.0 - 1.0).abs() <= DRIVE_SIGMAS * sigma.hypot(bound) {
         " (gradians: 400/360)"
     } else {
         ""
@@ -291,12 +313,13 @@ pub(super) fn command_scaled_words(
     write!(
         f,
         "joint {joint} ({experiment}) {moves} {travel:.4} (+-{}) times as far per command as the description's \
-         transmission says, over the commands it was measured at, where a drive departs from its description by at most {:.0} % ({what}; \
-         a gear ratio is a ratio of tooth counts and an encoder counts exactly): the column `cmd_{joint}` looks scaled \
+         transmission says, over the commands it was measured at: {:.0} sigma from 1, counting what a drive departs from its \
+         description by (about {:.1} %: {what}; a gear ratio is a ratio of tooth counts and an encoder counts exactly): the column `cmd_{joint}` looks scaled \
          by {:.4}{gradians} on export (the readings in another unit, or through another ratio), or the description's {drive} for \
          joint {joint} is wrong{coordinates}; check cmd_{joint} against the controller's reading at two poses. The fit took the factor into joint \
          {joint}'s transmission, so calibration.json is wrong for it, most outside the sweep",
         two_digits(sigma),
+        (travel - 1.0).abs() / sigma.hypot(bound),
         bound * 100.0,
         1.0 / travel,
     )
