@@ -295,8 +295,10 @@ struct Arc {
 /// taken along the arc, not across it (which would read as a turn many times the commanded).
 fn in_command_order<'a>(rows: &[&'a Measurement], k: usize) -> Vec<&'a Measurement> {
     let monotonic = |up: bool| {
-        rows.windows(2)
-            .all(|w| (w[1].cmd[k] >= w[0].cmd[k]) == up || w[1].cmd[k] == w[0].cmd[k])
+        rows.windows(2).all(|w| match up {
+            true => w[1].cmd[k] >= w[0].cmd[k],
+            false => w[1].cmd[k] <= w[0].cmd[k],
+        })
     };
     let mut sorted = rows.to_vec();
     if !monotonic(true) && !monotonic(false) {
@@ -918,7 +920,7 @@ fn one_scale(set: &MeasurementSet, desc: &RobotDescription) -> Result<(), String
     let off = |r: f64| (r / mid).ln().abs();
     let alike = mid / q1 <= SPREAD_WARNING && q3 / mid <= SPREAD_WARNING;
     let every = values.iter().all(|r| off(*r) <= SPREAD_WARNING.ln());
-    if values.len() < MIN_FREE_POSES || !(q1 > 0.0) || (alike && (every || !plausible_spread(mid))) {
+    if values.len() < MIN_FREE_POSES || q1.is_nan() || q1 <= 0.0 || (alike && (every || !plausible_spread(mid))) {
         return Ok(());
     }
     let mut worst = ratios.clone();

@@ -187,11 +187,11 @@ pub(super) fn scaled_commands(desc: &RobotDescription, arcs: &[&ExperimentArc]) 
             continue;
         }
         let on_its_circle = a.nominal_mm.is_none_or(|n| agree(a.arc.radius, n));
-        if !on_its_circle || ratio.ln().abs() > allowed {
-            if let Some(swap) = swapped_targets(desc, &ideal, &controller, a) {
-                slips.push(swap);
-                continue;
-            }
+        if (!on_its_circle || ratio.ln().abs() > allowed)
+            && let Some(swap) = swapped_targets(desc, &ideal, &controller, a)
+        {
+            slips.push(swap);
+            continue;
         }
         // A ratio known less well than the band cannot tell one factor from a transmission's
         // deviation (points off their arc: outliers, noise the calibration's screens name).
