@@ -873,7 +873,7 @@ fn plausible_spread(ratio: f64) -> bool {
 
 /// A warning when the free poses spread beyond [`SPREAD_WARNING`] of the nominal model's but
 /// not as far as a slip ([`free_pose_slips`]): coordinates scaled on export, or another robot,
-/// when every pose is scaled alike ([`one_scale`]); else the poses whose commands and
+/// when every pose is scaled alike (`one_scale`); else the poses whose commands and
 /// coordinates disagree, with their lines.
 pub fn free_pose_scale_warning(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
     let s = free_pose_spread(set, desc)?;
