@@ -51,6 +51,7 @@ mod hostile_round6e;
 mod hostile_round9a;
 mod hostile_round9c;
 mod hostile_round9d;
+mod hostile_round9e;
 mod iso9283;
 mod joint_map;
 mod json_schemas;

@@ -23,7 +23,7 @@
 use super::{ExperimentArc, SPREAD_WARNING, UnitSlip};
 use crate::kinematics::{JointKind, PhiModel};
 use crate::measurement::{Measurement, format_f64};
-use crate::robot::{Controller, RobotDescription, RobotModel, commands_to_internal};
+use crate::robot::{Controller, LinkTarget, RobotDescription, RobotModel, commands_to_internal};
 use nalgebra::{Point3, Vector3};
 
 /// The most a revolute transmission's mean slope over a sweep differs from 1 before a factor
@@ -50,8 +50,9 @@ const COMMAND_FACTORS: [(f64, &str); 2] = [
 /// least-squares slope of the unwrapped angles against the commands. `None` with fewer than 4
 /// points or no arc.
 pub(super) fn turn_slope(rows: &[Measurement], k: usize) -> Option<(f64, f64)> {
-    let refs: Vec<&Measurement> = rows.iter().collect();
-    let centre = super::arc_of(&refs, k)?.centre;
+    // In the order of the commands, which the angles are unwrapped along.
+    let rows = super::in_command_order(&rows.iter().collect::<Vec<_>>(), k);
+    let centre = super::arc_of(&rows, k)?.centre;
     let points: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.position_mm)).collect();
     if points.len() < 4 {
         return None;
@@ -90,6 +91,28 @@ pub(super) fn turn_slope(rows: &[Measurement], k: usize) -> Option<(f64, f64)> {
     Some((slope.abs(), (residual / (n - 2.0) / sxx).sqrt()))
 }
 
+/// `rows` with each point where the description's nominal robot (`ideal`, its controller
+/// applying the couplings) puts `target` at the row's commands.
+fn nominal_rows(
+    desc: &RobotDescription,
+    ideal: &RobotModel,
+    controller: &Controller,
+    rows: &[Measurement],
+    target: LinkTarget,
+) -> Option<Vec<Measurement>> {
+    let model = ideal.phi_model();
+    rows.iter()
+        .map(|m| {
+            let internal = commands_to_internal(desc, &m.cmd);
+            let q = ideal.joint_values(controller, &internal).unwrap_or(internal);
+            let p = model.poses(&q).world_from_link.get(target.link - 1)? * target.position_m();
+            let mut m = m.clone();
+            m.position_mm = (p.coords * 1e3).into();
+            Some(m)
+        })
+        .collect()
+}
+
 /// [`turn_slope`] of `rows` as the description's nominal robot (`ideal`, its controller
 /// applying the couplings) puts target 0 of joint `joint` (1-based) at their commands.
 pub(super) fn nominal_turn_slope(
@@ -100,24 +123,58 @@ pub(super) fn nominal_turn_slope(
     joint: usize,
 ) -> Option<f64> {
     let target = desc.axis_targets_of(joint)?.target0;
-    let model = ideal.phi_model();
-    let nominal: Option<Vec<Measurement>> = rows
-        .iter()
-        .map(|m| {
-            let internal = commands_to_internal(desc, &m.cmd);
-            let q = ideal.joint_values(controller, &internal).unwrap_or(internal);
-            let p = model.poses(&q).world_from_link.get(target.link - 1)? * target.position_m();
-            let mut m = m.clone();
-            m.position_mm = (p.coords * 1e3).into();
-            Some(m)
-        })
-        .collect();
-    turn_slope(&nominal?, joint - 1).map(|(slope, _)| slope)
+    turn_slope(&nominal_rows(desc, ideal, controller, rows, target)?, joint - 1).map(|(slope, _)| slope)
+}
+
+/// Whether two radii or two turn slopes agree within [`SPREAD_WARNING`]: a robot within its
+/// drawing's tolerances differs from its description by per cent, a slip by a factor.
+fn agree(a: f64, b: f64) -> bool {
+    (a / b).ln().abs() <= SPREAD_WARNING.ln()
+}
+
+/// The points labelled target 0 of experiment `a`, which miss the description's target 0 (in
+/// radius or in turn), drawing the arc the description's target 1 of the joint (the coupled
+/// link's) draws at the same commands, in radius and in turn: the rows' target ids 0 and 1
+/// exchanged (the `target` column, or a wide table's marker columns in another order).
+fn swapped_targets(
+    desc: &RobotDescription,
+    ideal: &RobotModel,
+    controller: &Controller,
+    a: &ExperimentArc,
+) -> Option<UnitSlip> {
+    let other = desc.axis_targets_of(a.joint)?.target1?;
+    let nominal = nominal_rows(desc, ideal, controller, &a.rows, other)?;
+    let arc = super::arc_of(&nominal.iter().collect::<Vec<_>>(), a.joint - 1)?;
+    let (turn, _) = turn_slope(&nominal, a.joint - 1)?;
+    let (measured, _) = a.turn?;
+    (agree(a.arc.radius, arc.radius) && agree(measured, turn)).then(|| UnitSlip {
+        field: "target".into(),
+        message: format!(
+            "experiment {}: the points labelled target 0 turn on a radius of {:.1} mm, {:.4} times as far per degree \
+             of cmd_{} as the description's target 0 (radius {:.1} mm), as its target 1 does (radius {:.1} mm, on \
+             link {}): the rows' target ids 0 and 1 look exchanged; check the `target` column (or the marker columns \
+             of a wide table), not the units",
+            a.name,
+            a.arc.radius,
+            a.nominal_turn.map_or(f64::NAN, |n| measured / n),
+            a.joint,
+            a.nominal_mm.unwrap_or(f64::NAN),
+            arc.radius,
+            other.link
+        ),
+    })
 }
 
 /// The experiments whose revolute commands look scaled by one of [`COMMAND_FACTORS`] (module
-/// docs). A ratio beyond [`super::SLIP_FACTOR`] is a unit slip said elsewhere.
-pub(super) fn scaled_commands(arcs: &[&ExperimentArc]) -> Vec<UnitSlip> {
+/// docs), or whose target ids 0 and 1 look exchanged ([`swapped_targets`]). A ratio beyond
+/// [`super::SLIP_FACTOR`] is a unit slip said elsewhere. A factor is named only when applying it
+/// makes the points fit the joint's arc: they lie on a circle of the description's radius
+/// (within [`SPREAD_WARNING`]) and travel along it the factor times as far as the commands say;
+/// points on a circle of another radius (noise far above an instrument's pulling the arc's
+/// centre, another target's points) turn another angle per degree whatever the commands hold.
+pub(super) fn scaled_commands(desc: &RobotDescription, arcs: &[&ExperimentArc]) -> Vec<UnitSlip> {
+    let ideal = RobotModel::ideal(desc);
+    let controller = Controller::from_description(desc);
     let mut slips = Vec::new();
     for a in arcs {
         let (Some((measured, sigma)), Some(nominal)) = (a.turn, a.nominal_turn) else {
@@ -126,9 +183,19 @@ pub(super) fn scaled_commands(arcs: &[&ExperimentArc]) -> Vec<UnitSlip> {
         let (ratio, sigma) = (measured / nominal, sigma / nominal);
         let band = (1.0 + MAX_TRANSMISSION_SLOPE_DEVIATION).ln();
         let allowed = band + SIGMAS * sigma / ratio;
+        if super::slipped(ratio) || !ratio.is_finite() {
+            continue;
+        }
+        let on_its_circle = a.nominal_mm.is_none_or(|n| agree(a.arc.radius, n));
+        if (!on_its_circle || ratio.ln().abs() > allowed)
+            && let Some(swap) = swapped_targets(desc, &ideal, &controller, a)
+        {
+            slips.push(swap);
+            continue;
+        }
         // A ratio known less well than the band cannot tell one factor from a transmission's
         // deviation (points off their arc: outliers, noise the calibration's screens name).
-        if super::slipped(ratio) || !ratio.is_finite() || ratio.ln().abs() <= allowed || SIGMAS * sigma / ratio > band {
+        if !on_its_circle || ratio.ln().abs() <= allowed || SIGMAS * sigma / ratio > band {
             continue;
         }
         let Some((_, words)) = COMMAND_FACTORS
@@ -144,15 +211,25 @@ pub(super) fn scaled_commands(arcs: &[&ExperimentArc]) -> Vec<UnitSlip> {
             field: format!("cmd_{joint}"),
             message: format!(
                 "experiment {}: its target turns {ratio:.4} (+-{sigma:.4}) times as far per degree of cmd_{joint} as the \
-                 description's robot turns it at the same commands, where a transmission turns its joint within {} % \
-                 of its command: this experiment's cmd_{joint} looks {words}; the fit would take the factor for joint \
-                 {joint}'s transmission",
+                 description's robot turns it at the same commands, on the circle the description gives it, where a \
+                 transmission turns its joint within {} % of its command: this experiment's cmd_{joint} looks {words}; \
+                 the fit would take the factor for joint {joint}'s transmission",
                 a.name,
                 MAX_TRANSMISSION_SLOPE_DEVIATION * 100.0
             ),
         });
     }
     slips
+}
+
+/// Whether experiment `a`'s points turn in step with its commands: the slope of their angles
+/// against the commands ([`turn_slope`]) known within the transmission band
+/// ([`MAX_TRANSMISSION_SLOPE_DEVIATION`], [`SIGMAS`] sigmas), as commands in any unit give it
+/// (a unit scales the slope, not its scatter). Points in another order than their commands turn
+/// at random against them. True when no slope is taken (too few points).
+pub(super) fn turns_in_step(a: &ExperimentArc) -> bool {
+    let band = (1.0 + MAX_TRANSMISSION_SLOPE_DEVIATION).ln();
+    a.turn.is_none_or(|(slope, sigma)| SIGMAS * sigma / slope <= band)
 }
 
 /// Offsets \[deg\] tried on each revolute command column: a zero reference of another

@@ -13,7 +13,7 @@
 //! metres. Its column is named when one of its coordinate columns multiplied into millimetres
 //! ([`LENGTH_UNITS`]) puts the experiment in place, or two of its columns exchanged do.
 
-use super::{ExperimentArc, LENGTH_UNITS, SPREAD_WARNING, UnitSlip, arc_of};
+use super::{ExperimentArc, LENGTH_UNITS, MAX_SCATTER_GROWTH, SPREAD_WARNING, UnitSlip, arc_of};
 use crate::measurement::{Measurement, format_f64};
 use nalgebra::Point3;
 
@@ -60,11 +60,15 @@ fn in_place(arc: &super::Arc, i: usize, arcs: &[ExperimentArc], tolerance_mm: f6
 /// degree of the command as the description's robot turns it, within [`SPREAD_WARNING`], and
 /// its point triples agree on one radius about as well as read ([`super::MAX_SCATTER_GROWTH`]: a
 /// column in another unit draws an ellipse, which the conversion makes a circle; noise or another
-/// target's readings do not become a circle by scaling a column).
-fn fits(arc: &super::Arc, i: usize, arcs: &[ExperimentArc]) -> bool {
+/// target's readings do not become a circle by scaling a column). `growth`: how much more they
+/// may scatter than as read, [`super::MAX_SCATTER_GROWTH`] for an arc out of place (its
+/// conversion moves it, and may restore noise a coarser unit hid) and 1 for an arc in place but
+/// of another radius, whose conversion must make its ellipse a circle: a noisy arc's radius is
+/// off too, and flattening it by a column's factor fits it no better.
+fn fits(arc: &super::Arc, i: usize, arcs: &[ExperimentArc], growth: f64) -> bool {
     let turn = arcs[i].nominal_turn.map_or(1.0, f64::abs);
     (arc.turn_ratio / turn).ln().abs() <= SPREAD_WARNING.ln()
-        && arc.radius_scatter <= super::MAX_SCATTER_GROWTH * arcs[i].arc.radius_scatter
+        && arc.radius_scatter <= growth * arcs[i].arc.radius_scatter
 }
 
 /// Experiment `i`'s arc with each row's coordinates changed by `change`.
@@ -84,12 +88,17 @@ fn converted(i: usize, arcs: &[ExperimentArc], change: impl Fn(&mut [f64; 3])) -
 
 /// The column and length unit whose conversion of experiment `i`'s rows into millimetres puts
 /// it in place ([`in_place`]).
-fn column_in_other_unit(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> Option<(usize, f64, &'static str)> {
+fn column_in_other_unit(
+    i: usize,
+    arcs: &[ExperimentArc],
+    tolerance_mm: f64,
+    growth: f64,
+) -> Option<(usize, f64, &'static str)> {
     (0..3)
         .flat_map(|c| LENGTH_UNITS.iter().map(move |(f, unit)| (c, *f, *unit)))
         .find(|&(c, f, _)| {
             converted(i, arcs, |p| p[c] /= f)
-                .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
+                .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs, growth))
         })
 }
 
@@ -97,7 +106,7 @@ fn column_in_other_unit(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> 
 fn columns_swapped(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> Option<(usize, usize)> {
     [(0, 1), (0, 2), (1, 2)].into_iter().find(|&(a, b)| {
         converted(i, arcs, |p| p.swap(a, b))
-            .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
+            .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs, MAX_SCATTER_GROWTH))
     })
 }
 
@@ -108,7 +117,7 @@ fn explained(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64, what: &str, ce
     let name = &arcs[i].name;
     let every = LENGTH_UNITS.iter().find(|(f, _)| {
         converted(i, arcs, |p| p.iter_mut().for_each(|v| *v /= f))
-            .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs))
+            .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm) && fits(&arc, i, arcs, MAX_SCATTER_GROWTH))
     });
     if let Some((f, unit)) = every {
         return Some(UnitSlip {
@@ -121,7 +130,8 @@ fn explained(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64, what: &str, ce
             ),
         });
     }
-    if let Some((c, f, unit)) = column_in_other_unit(i, arcs, tolerance_mm) {
+    let growth = if centre_off { MAX_SCATTER_GROWTH } else { 1.0 };
+    if let Some((c, f, unit)) = column_in_other_unit(i, arcs, tolerance_mm, growth) {
         return Some(UnitSlip {
             field: COLUMNS[c].into(),
             message: format!(
@@ -153,6 +163,25 @@ fn explained(i: usize, arcs: &[ExperimentArc], tolerance_mm: f64, what: &str, ce
     })
 }
 
+/// How far \[mm\] an experiment's centre may be off the described distances to the others' (a
+/// quarter of the robot's size, module docs); unbounded with too few experiments to compare.
+fn tolerance_mm(arcs: &[ExperimentArc]) -> f64 {
+    let placed = arcs.iter().filter(|a| a.nominal_centre_mm.is_some()).count();
+    if placed >= MIN_PLACED {
+        (SPREAD_WARNING - 1.0) * size_mm(arcs)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Whether experiment `i`'s coordinates multiplied by `factor` put it in place among the others
+/// and fit its commands ([`in_place`], [`fits`]): a scale is named only when applying it makes
+/// the data fit.
+pub(super) fn in_place_scaled(i: usize, arcs: &[ExperimentArc], factor: f64) -> bool {
+    converted(i, arcs, |p| p.iter_mut().for_each(|v| *v *= factor))
+        .is_some_and(|arc| in_place(&arc, i, arcs, tolerance_mm(arcs)) && fits(&arc, i, arcs, MAX_SCATTER_GROWTH))
+}
+
 /// The experiments out of place (module docs), each said once, and their indices into `arcs`.
 /// `in_scale`: whether the file's radii as a whole match the description's (their median within
 /// [`SPREAD_WARNING`]); else every experiment is off, which the whole file's check says.
@@ -160,12 +189,7 @@ pub(super) fn misplaced(arcs: &[ExperimentArc], in_scale: bool) -> (Vec<UnitSlip
     if !in_scale {
         return (Vec::new(), Vec::new());
     }
-    let placed = arcs.iter().filter(|a| a.nominal_centre_mm.is_some()).count();
-    let tolerance_mm = if placed >= MIN_PLACED {
-        (SPREAD_WARNING - 1.0) * size_mm(arcs)
-    } else {
-        f64::INFINITY
-    };
+    let tolerance_mm = tolerance_mm(arcs);
     let (mut slips, mut said) = (Vec::new(), Vec::new());
     for (i, a) in arcs.iter().enumerate() {
         let radius_off = !in_place(&a.arc, i, arcs, f64::INFINITY);
