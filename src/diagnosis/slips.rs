@@ -307,12 +307,13 @@ pub fn explained_misses(
 /// the rows.
 const TESTED_REWRITES: usize = 3;
 
-/// A rewrite that explains the rows: the hypothesis, its RMS \[mm\] and its test's chi-square
-/// per degree of freedom.
+/// A rewrite that explains the rows: the hypothesis, its RMS \[mm\], its test's chi-square
+/// per degree of freedom and the statistic itself.
 pub(super) struct Explanation {
     pub(super) hypothesis: Hypothesis,
     pub(super) rms_mm: f64,
     pub(super) per_dof: f64,
+    pub(super) statistic: f64,
 }
 
 /// The rows the model no longer misses grossly under each of `hypotheses` (their RMS at most
@@ -334,25 +335,26 @@ pub(super) fn first_confirmed(
         .collect();
     near.sort_by(|a, b| a.1.total_cmp(&b.1));
     near.into_iter().take(TESTED_REWRITES).find_map(|(hypothesis, rms_mm)| {
-        let per_dof = confirmed(rows, &hypothesis.undo, cal, desc, options)?;
+        let (per_dof, statistic) = confirmed(rows, &hypothesis.undo, cal, desc, options)?;
         Some(Explanation {
             hypothesis,
             rms_mm,
             per_dof,
+            statistic,
         })
     })
 }
 
-/// The chi-square per degree of freedom of `rows` rewritten by `apply` when the validation's
-/// own test ([`validate`] with `options`) accepts them (not `exceeds`); `None` when it does not
-/// or they cannot be predicted.
+/// The chi-square per degree of freedom and the statistic of `rows` rewritten by `apply` when
+/// the validation's own test ([`validate`] with `options`) accepts them (not `exceeds`);
+/// `None` when it does not or they cannot be predicted.
 fn confirmed(
     rows: &[Measurement],
     apply: &dyn Fn(&mut Measurement),
     cal: &Calibration,
     desc: &RobotDescription,
     options: &ValidationOptions,
-) -> Option<f64> {
+) -> Option<(f64, f64)> {
     let set = rewritten(rows, apply, desc)?;
     let v = validate(&set, cal, desc, options).ok()?;
     let test = v
@@ -362,7 +364,7 @@ fn confirmed(
         .or(v.axis.as_ref())?
         .chi_square
         .as_ref()?;
-    (test.verdict != Verdict::Exceeds).then_some(test.per_dof)
+    (test.verdict != Verdict::Exceeds).then_some((test.per_dof, test.value))
 }
 
 /// The hypothesis (module docs) under which the validation's own test accepts `rows`, with the
