@@ -19,6 +19,7 @@
 use super::procedure::{AxisExperiment, axis_experiments};
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
+use crate::measurement::column_slips::GROSS_MISS_FACTOR;
 use crate::numerics::roots::{Bisection, bisect_infallible};
 use crate::numerics::stats::chi_square_quantile;
 use crate::robot::{RobotDescription, commands_to_internal};
@@ -62,11 +63,13 @@ pub struct MovedSweep {
     pub offset_mm: [f64; 3],
     /// The offset over its standard deviation.
     pub sigmas: f64,
-    /// The experiments it is compared with.
+    /// The experiments it is compared with (when `ambiguous`: the ones that could be out of
+    /// place instead).
     pub others: Vec<String>,
     /// The description's place of the target: link and position \[mm\].
     pub target: (usize, [f64; 3]),
-    /// Whether the others are one sighting only: either could be the moved one.
+    /// Whether another sighting could as well be the one out of place (two sightings only, or
+    /// several sweeps without each of which the others agree): `others` then names those.
     pub ambiguous: bool,
 }
 
@@ -96,10 +99,11 @@ impl std::fmt::Display for MovedSweep {
              from where {} see it: the block was moved (the instrument or the robot bumped or set up again between \
              the sweeps) or its coordinates shifted or scaled; the calibration absorbs it into the axis, so \
              calibration.json is wrong for the robot: check these rows and measure the sweep again (if the targets \
-             are different ones, give each its own place in `axis_targets`)",
+             are different ones, give each its own place in `axis_targets`; an effect the model lacks moves a sweep \
+             by tenths of a millimetre, not this far)",
             Vector3::new(x, y, z).norm(),
             self.sigmas,
-            if self.ambiguous { "the other" } else { "the others" }
+            "the others"
         )
     }
 }
@@ -201,8 +205,9 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
     })
 }
 
-/// The least squares of `points` on the basis `basis(u)` (3 functions of the command): the
-/// coefficients (one row per function) and the residual sum of squares, or `None` when the
+/// The least squares of `points` on the basis `basis(u)` (3 functions of the command; a line's
+/// unused third, zero at every command, padded with a unit diagonal): the coefficients (one row
+/// per function), the inverse normal matrix and the residual sum of squares, or `None` when the
 /// normal equations are singular.
 fn basis_fit(
     u: &[f64],
@@ -215,6 +220,9 @@ fn basis_fit(
         let f = basis(v);
         normal += f * f.transpose();
         right += f * p.transpose();
+    }
+    if normal[(2, 2)] == 0.0 {
+        normal[(2, 2)] = 1.0;
     }
     let inverse = normal.try_inverse()?;
     let coefficients = inverse * right;
@@ -246,7 +254,7 @@ fn at_reference(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<(
     };
     let (coefficients, inverse, at0, slope) = match kind {
         JointKind::Prismatic => {
-            let (c, i) = line_fit(u, points)?;
+            let (c, i, _) = basis_fit(u, points, &|v| Vector3::new(1.0, v, 0.0))?;
             (c, i, Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0))
         }
         JointKind::Revolute => {
@@ -257,89 +265,4 @@ fn at_reference(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<(
     let point = coefficients.transpose() * at0;
     let leverage = (at0.transpose() * inverse * at0)[0];
     Some((point, leverage, coefficients.transpose() * slope))
-}
-
-/// The line `c + d u` through `points`: its coefficients (rows c, d, 0) and the inverse normal
-/// matrix (padded to 3 x 3 with a unit third row and column).
-fn line_fit(u: &[f64], points: &[Vector3<f64>]) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
-    let pad = |v: f64| Vector3::new(1.0, v, 0.0);
-    let mut normal = Matrix3::zeros();
-    let mut right = Matrix3::zeros();
-    for (&v, p) in u.iter().zip(points) {
-        let f = pad(v);
-        normal += f * f.transpose();
-        right += f * p.transpose();
-    }
-    normal[(2, 2)] = 1.0;
-    let inverse = normal.try_inverse()?;
-    Some((inverse * right, inverse))
-}
-
-/// The weighted consensus of `sightings` (the point whose offsets across each one's motion,
-/// over its variance, are least) and the chi-square of their offsets with its degrees of
-/// freedom; `None` when they do not fix a point.
-fn consensus(sightings: &[&Sighting], sigma2: f64) -> Option<(Vector3<f64>, f64, usize)> {
-    let weight = |s: &Sighting| s.across / (s.leverage * sigma2);
-    let total: Matrix3<f64> = sightings.iter().map(|s| weight(s)).sum();
-    let eigen = total.symmetric_eigenvalues();
-    if eigen.min() <= 1e-9 * eigen.max() {
-        return None;
-    }
-    let right: Vector3<f64> = sightings.iter().map(|s| weight(s) * s.point).sum();
-    let centre = total.try_inverse()? * right;
-    let chi2 = sightings
-        .iter()
-        .map(|s| {
-            let d = s.point - centre;
-            (d.transpose() * weight(s) * d)[0]
-        })
-        .sum();
-    let observed: usize = sightings.iter().map(|s| s.across.trace().round() as usize).sum();
-    Some((centre, chi2, observed.checked_sub(3)?))
-}
-
-/// Whether a chi-square `chi2` with `dof` degrees of freedom exceeds the test's quantile.
-fn exceeds(chi2: f64, dof: usize) -> bool {
-    dof > 0 && chi2 > chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, dof as f64)
-}
-
-/// The sweep among `sightings` of one `target` without which the others agree, when all of
-/// them do not (module docs); with two sightings either may be the moved one.
-fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -> Option<MovedSweep> {
-    let all: Vec<&Sighting> = sightings.iter().collect();
-    let (_, chi2, dof) = consensus(&all, sigma2)?;
-    if !exceeds(chi2, dof) {
-        return None;
-    }
-    let (k, centre) = (0..sightings.len())
-        .filter(|&k| sightings[k].across != Matrix3::identity())
-        .filter_map(|k| {
-            let rest: Vec<&Sighting> = all
-                .iter()
-                .enumerate()
-                .filter(|(j, _)| *j != k)
-                .map(|(_, s)| *s)
-                .collect();
-            let (centre, chi2, dof) = consensus(&rest, sigma2).or_else(|| Some((rest.first()?.point, 0.0, 0)))?;
-            (!exceeds(chi2, dof)).then_some((k, centre, chi2))
-        })
-        .min_by(|a, b| a.2.total_cmp(&b.2))
-        .map(|(k, c, _)| (k, c))?;
-    let s = &sightings[k];
-    let offset = s.across * (s.point - centre);
-    let others: Vec<String> = all
-        .iter()
-        .enumerate()
-        .filter(|(j, _)| *j != k)
-        .map(|(_, o)| o.experiment.clone())
-        .collect();
-    Some(MovedSweep {
-        experiment: s.experiment.clone(),
-        lines: s.lines,
-        offset_mm: [offset.x, offset.y, offset.z],
-        sigmas: offset.norm() / (s.leverage * sigma2).sqrt(),
-        ambiguous: others.len() == 1 && sightings.len() == 2,
-        others,
-        target,
-    })
 }

@@ -42,11 +42,7 @@ pub const MAX_FITTED_OFFSET: f64 = 180.0;
 /// any calibration's predicted error.
 pub const MIN_FITTED_OFFSET: f64 = 1.0;
 
-/// The search runs only on misses beyond this many times the test's acceptance
-/// ([`acceptance`]): a slip moves the points by millimetres to metres where a calibration
-/// predicts tenths; a nearer miss is the model's (an effect `diagnose` looks for), and a
-/// rewrite that changes the predictions a little could pass the acceptance by chance.
-pub const GROSS_MISS_FACTOR: f64 = 3.0;
+pub use crate::measurement::column_slips::GROSS_MISS_FACTOR;
 
 /// Experiments with fewer poses than this are not searched: one or two poses (the tool
 /// observation) give too few points for about 60 rewrites and a fitted offset not to explain

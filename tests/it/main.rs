@@ -48,6 +48,7 @@ mod hostile_round6b;
 mod hostile_round6c;
 mod hostile_round6d;
 mod hostile_round6e;
+mod hostile_round9b;
 mod iso9283;
 mod joint_map;
 mod json_schemas;
