@@ -8,12 +8,15 @@
 //! axis, a longer link): nothing else in the sweeps contradicts it.
 //!
 //! Each sweep's point at the reference pose is interpolated from its own points
-//! ([`at_reference`]: a circle in the command for a turning joint, with its turn per command
+//! (`at_reference`: a circle in the command for a turning joint, with its turn per command
 //! fitted; a line for a sliding one), with the variance its least squares give at the noise of
 //! a point. Only the part across the sweep's motion is compared: a joint's zero, its backlash or
 //! a transmission error move the point along the arc, not off it. The points of one target are
 //! tested against their weighted consensus by a chi-square test at [`SHARED_TARGET_FALSE_ALARM`];
-//! the sweep without which the others agree is named, with its offset. No model of the robot:
+//! the sweep without which the others agree is named, with its offset, when that offset is
+//! beyond [`GROSS_MISS_FACTOR`] times the test's bound for it: an effect the model lacks (a held
+//! joint's backlash taken up differently between the sweeps, sag bending one sweep's arc) moves
+//! a sweep's point by tenths of a millimetre, a moved block by millimetres. No model of the robot:
 //! the data against themselves and the description's word that the targets are one.
 
 use super::procedure::{AxisExperiment, axis_experiments};

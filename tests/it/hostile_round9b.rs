@@ -139,7 +139,7 @@ fn validate_names_a_whole_file_scaled() {
         2,
         &[
             "scaled.csv:3: `x_mm,y_mm,z_mm`",
-            "every coordinate of the file reads 1.003",
+            "every coordinate of the file reads 1.00",
             "the instrument's scale",
         ],
     );
