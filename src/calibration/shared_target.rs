@@ -41,6 +41,12 @@ const TURN_RATE_RANGE: f64 = 2.0;
 /// `docs/formats.md#experiments-and-targets`).
 const AT_REFERENCE: f64 = 1e-6;
 
+/// The sightings of each shared target (by [`key`]): its link and place \[mm\], and the sightings.
+type Groups = BTreeMap<String, ((usize, [f64; 3]), Vec<Sighting>)>;
+
+/// The tool observation's points of each tool target, the experiment and the first line.
+type ToolPoints = BTreeMap<usize, (Vec<Vector3<f64>>, String, Option<u64>)>;
+
 /// One sighting of a shared target at the reference pose.
 struct Sighting {
     /// The experiment (`tool` observation or sweep).
@@ -99,14 +105,13 @@ impl std::fmt::Display for MovedSweep {
             "{who}: at the reference pose (every joint at its held value), which each sweep passes through, its \
              target 0 (the description places it on link {link} at ({px}, {py}, {pz}) mm, as it does the others') \
              sits ({x:.2}, {y:.2}, {z:.2}) mm ({:.2} mm across its motion, {:.0} times the noise of that comparison) \
-             from where {} see it: the block was moved (the instrument or the robot bumped or set up again between \
+             from where the others see it: the block was moved (the instrument or the robot bumped or set up again between \
              the sweeps) or its coordinates shifted or scaled; the calibration absorbs it into the axis, so \
              calibration.json is wrong for the robot: check these rows and measure the sweep again (if the targets \
              are different ones, give each its own place in `axis_targets`; an effect the model lacks moves a sweep \
              by tenths of a millimetre, not this far)",
             Vector3::new(x, y, z).norm(),
             self.sigmas,
-            "the others"
         )
     }
 }
@@ -117,7 +122,7 @@ pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_
     let Ok((experiments, reference)) = axis_experiments(set, desc) else {
         return Vec::new();
     };
-    let mut groups: BTreeMap<String, ((usize, [f64; 3]), Vec<Sighting>)> = BTreeMap::new();
+    let mut groups: Groups = BTreeMap::new();
     for e in &experiments {
         let Some(t) = desc.axis_targets_of(e.joint).map(|a| a.target0) else {
             continue;
@@ -150,7 +155,7 @@ fn key(link: usize, p: [f64; 3]) -> String {
 /// the last link \[mm\].
 fn tool_sightings(set: &MeasurementSet, desc: &RobotDescription, reference: &[f64]) -> Vec<([f64; 3], Sighting)> {
     let frame = desc.tool.frame.to_isometry();
-    let mut seen: BTreeMap<usize, (Vec<Vector3<f64>>, String, Option<u64>)> = BTreeMap::new();
+    let mut seen: ToolPoints = BTreeMap::new();
     for (i, m) in set.rows().iter().enumerate() {
         let at = m.cmd.iter().zip(reference).all(|(a, b)| (a - b).abs() <= AT_REFERENCE);
         if m.moved_joint == 0 && at && m.target < desc.tool.targets_mm.len() {
@@ -268,4 +273,84 @@ fn at_reference(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<(
     let point = coefficients.transpose() * at0;
     let leverage = (at0.transpose() * inverse * at0)[0];
     Some((point, leverage, coefficients.transpose() * slope))
+}
+
+/// The weighted consensus of `sightings` (the point whose offsets across each one's motion,
+/// over its variance, are least) and the chi-square of their offsets with its degrees of
+/// freedom; `None` when they do not fix a point.
+fn consensus(sightings: &[&Sighting], sigma2: f64) -> Option<(Vector3<f64>, f64, usize)> {
+    let weight = |s: &Sighting| s.across / (s.leverage * sigma2);
+    let total: Matrix3<f64> = sightings.iter().map(|s| weight(s)).sum();
+    let eigen = total.symmetric_eigenvalues();
+    if eigen.min() <= 1e-9 * eigen.max() {
+        return None;
+    }
+    let right: Vector3<f64> = sightings.iter().map(|s| weight(s) * s.point).sum();
+    let centre = total.try_inverse()? * right;
+    let chi2 = sightings
+        .iter()
+        .map(|s| {
+            let d = s.point - centre;
+            (d.transpose() * weight(s) * d)[0]
+        })
+        .sum();
+    let observed: usize = sightings.iter().map(|s| s.across.trace().round() as usize).sum();
+    Some((centre, chi2, observed.checked_sub(3)?))
+}
+
+/// Whether a chi-square `chi2` with `dof` degrees of freedom exceeds the test's quantile.
+fn exceeds(chi2: f64, dof: usize) -> bool {
+    dof > 0 && chi2 > chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, dof as f64)
+}
+
+/// The sweep among `sightings` of one `target` without which the others agree, when all of
+/// them do not (module docs); with two sightings either may be the moved one.
+fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -> Option<MovedSweep> {
+    let all: Vec<&Sighting> = sightings.iter().collect();
+    let (_, chi2, dof) = consensus(&all, sigma2)?;
+    if !exceeds(chi2, dof) {
+        return None;
+    }
+    let mut passing: Vec<(usize, Vector3<f64>, f64)> = (0..sightings.len())
+        .filter(|&k| sightings[k].across != Matrix3::identity())
+        .filter_map(|k| {
+            let rest: Vec<&Sighting> = all
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, s)| *s)
+                .collect();
+            let (centre, chi2, dof) = consensus(&rest, sigma2).or_else(|| Some((rest.first()?.point, 0.0, 0)))?;
+            (!exceeds(chi2, dof)).then_some((k, centre, chi2))
+        })
+        .collect();
+    passing.sort_by(|a, b| a.2.total_cmp(&b.2));
+    let &(k, centre, _) = passing.first()?;
+    let s = &sightings[k];
+    let offset = s.across * (s.point - centre);
+    let sigmas = offset.norm() / (s.leverage * sigma2).sqrt();
+    let bound = chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, s.across.trace().round()).sqrt();
+    if sigmas <= GROSS_MISS_FACTOR * bound {
+        return None;
+    }
+    // Several sweeps without each of which the others agree, or two sightings: either may be
+    // the one out of place.
+    let ambiguous = passing.len() > 1 || sightings.len() == 2;
+    let others: Vec<String> = if passing.len() > 1 {
+        passing[1..].iter().map(|p| sightings[p.0].experiment.clone()).collect()
+    } else {
+        (0..sightings.len())
+            .filter(|&j| j != k)
+            .map(|j| sightings[j].experiment.clone())
+            .collect()
+    };
+    Some(MovedSweep {
+        experiment: s.experiment.clone(),
+        lines: s.lines,
+        offset_mm: [offset.x, offset.y, offset.z],
+        sigmas,
+        ambiguous,
+        others,
+        target,
+    })
 }

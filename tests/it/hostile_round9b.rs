@@ -60,6 +60,10 @@ fn moved(fields: &mut [String], f: impl Fn(usize, f64) -> f64) {
     }
 }
 
+/// A robot, the sweep edited, the edit of a coordinate (its index, its value) and the words
+/// naming the sweep.
+type Edit = (&'static str, &'static str, fn(usize, f64) -> f64, &'static str);
+
 /// A sweep-only file: its clean form passes `calibrate` without the shared-target warning; one
 /// sweep's block moved 2 mm in x (arm6) or its coordinates scaled x1.003 (UR5e, a positioner)
 /// is named, with its lines, among the sweeps that see the same target.
@@ -67,7 +71,7 @@ fn moved(fields: &mut [String], f: impl Fn(usize, f64) -> f64) {
 fn calibrate_names_a_sweep_out_of_place_among_its_shared_target() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let edits: [(&str, &str, fn(usize, f64) -> f64, &str); 3] = [
+    let edits: [Edit; 3] = [
         (
             "arm6-dh",
             "axis6",
