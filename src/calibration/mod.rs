@@ -33,6 +33,7 @@ pub mod line_ml;
 pub mod noise;
 pub mod procedure;
 pub mod refine;
+pub mod shared_target;
 pub mod sliding;
 pub mod tool_accuracy;
 pub mod tool_map;

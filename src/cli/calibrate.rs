@@ -298,6 +298,7 @@ pub fn run(args: Args) -> Result<()> {
         None => {
             print_axes(&cal, &desc, &source);
             print_implausible(&texts.implausible, &desc, &set, &args);
+            print_moved_sweeps(&cal, &desc, &set, &args.data);
             if !args.refine
                 && let Some(miss) = misses_own_validation_poses(&cal, &desc, &set, args.repeatability_rad.as_deref())
             {
@@ -578,6 +579,23 @@ fn print_implausible(found: &[Implausible], desc: &RobotDescription, set: &Measu
             Some(s) => eprintln!("warning: {f}{rows}; {s}"),
             None => eprintln!("warning: {f}{rows}"),
         }
+    }
+}
+
+/// The sweeps out of place among the sightings of their shared target at the reference pose
+/// ([`axiscal::calibration::shared_target::moved_sweeps`], at the calibration's noise) as
+/// warnings naming the file and the sweep's first line.
+fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet, data: &Path) {
+    let noise = cal
+        .noise
+        .as_ref()
+        .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
+    for moved in axiscal::calibration::shared_target::moved_sweeps(set, desc, noise) {
+        let place = moved.lines.map_or_else(
+            || data.display().to_string(),
+            |(l, _)| format!("{}:{l}", data.display()),
+        );
+        eprintln!("warning: {place}: {moved}");
     }
 }
 

@@ -29,6 +29,7 @@
 mod axes;
 mod decide;
 mod features;
+mod file_scale;
 mod model;
 mod noise;
 mod outliers;
@@ -46,6 +47,7 @@ mod validate;
 pub use crate::calibration::refine::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnose_axes_with};
+pub use file_scale::explained_file_scale;
 pub use model::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, LoadPath, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
     MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,

@@ -42,11 +42,7 @@ pub const MAX_FITTED_OFFSET: f64 = 180.0;
 /// any calibration's predicted error.
 pub const MIN_FITTED_OFFSET: f64 = 1.0;
 
-/// The search runs only on misses beyond this many times the test's acceptance
-/// ([`acceptance`]): a slip moves the points by millimetres to metres where a calibration
-/// predicts tenths; a nearer miss is the model's (an effect `diagnose` looks for), and a
-/// rewrite that changes the predictions a little could pass the acceptance by chance.
-pub const GROSS_MISS_FACTOR: f64 = 3.0;
+pub use crate::measurement::column_slips::GROSS_MISS_FACTOR;
 
 /// Experiments with fewer poses than this are not searched: one or two poses (the tool
 /// observation) give too few points for about 60 rewrites and a fitted offset not to explain
@@ -307,12 +303,13 @@ pub fn explained_misses(
 /// the rows.
 const TESTED_REWRITES: usize = 3;
 
-/// A rewrite that explains the rows: the hypothesis, its RMS \[mm\] and its test's chi-square
-/// per degree of freedom.
+/// A rewrite that explains the rows: the hypothesis, its RMS \[mm\], its test's chi-square
+/// per degree of freedom and the statistic itself.
 pub(super) struct Explanation {
     pub(super) hypothesis: Hypothesis,
     pub(super) rms_mm: f64,
     pub(super) per_dof: f64,
+    pub(super) statistic: f64,
 }
 
 /// The rows the model no longer misses grossly under each of `hypotheses` (their RMS at most
@@ -334,25 +331,26 @@ pub(super) fn first_confirmed(
         .collect();
     near.sort_by(|a, b| a.1.total_cmp(&b.1));
     near.into_iter().take(TESTED_REWRITES).find_map(|(hypothesis, rms_mm)| {
-        let per_dof = confirmed(rows, &hypothesis.undo, cal, desc, options)?;
+        let (per_dof, statistic) = confirmed(rows, &hypothesis.undo, cal, desc, options)?;
         Some(Explanation {
             hypothesis,
             rms_mm,
             per_dof,
+            statistic,
         })
     })
 }
 
-/// The chi-square per degree of freedom of `rows` rewritten by `apply` when the validation's
-/// own test ([`validate`] with `options`) accepts them (not `exceeds`); `None` when it does not
-/// or they cannot be predicted.
+/// The chi-square per degree of freedom and the statistic of `rows` rewritten by `apply` when
+/// the validation's own test ([`validate`] with `options`) accepts them (not `exceeds`);
+/// `None` when it does not or they cannot be predicted.
 fn confirmed(
     rows: &[Measurement],
     apply: &dyn Fn(&mut Measurement),
     cal: &Calibration,
     desc: &RobotDescription,
     options: &ValidationOptions,
-) -> Option<f64> {
+) -> Option<(f64, f64)> {
     let set = rewritten(rows, apply, desc)?;
     let v = validate(&set, cal, desc, options).ok()?;
     let test = v
@@ -362,7 +360,7 @@ fn confirmed(
         .or(v.axis.as_ref())?
         .chi_square
         .as_ref()?;
-    (test.verdict != Verdict::Exceeds).then_some(test.per_dof)
+    (test.verdict != Verdict::Exceeds).then_some((test.per_dof, test.value))
 }
 
 /// The hypothesis (module docs) under which the validation's own test accepts `rows`, with the

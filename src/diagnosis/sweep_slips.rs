@@ -191,8 +191,10 @@ fn frozen(
     })
 }
 
-/// The first rewrite of the module docs (2 to 5) under which the validation's own test accepts
-/// `rows` (an experiment sweeping joint `joint`, 1-based), with `bound_mm` its acceptance.
+/// The rewrite of the module docs (2 to 5) under which the validation's own test accepts
+/// `rows` (an experiment sweeping joint `joint`, 1-based), with `bound_mm` its acceptance: the
+/// first finite slip (2) that passes, else the fitted rewrites (3 to 5) that pass weighed by
+/// [`simplest_sufficient`].
 fn explanation(
     rows: &[Measurement],
     joint: usize,
@@ -200,16 +202,50 @@ fn explanation(
     options: &ValidationOptions,
     bound_mm: f64,
 ) -> Option<Explanation> {
-    let fitted: [&dyn Fn() -> Option<Hypothesis>; 3] = [
-        &|| step_order(rows, model),
-        &|| swept_scale(rows, joint - 1, model, options),
-        &|| rigid_move(rows, model),
+    let fitted: [(usize, &dyn Fn() -> Option<Hypothesis>); 3] = [
+        (0, &|| step_order(rows, model)),
+        (1, &|| swept_scale(rows, joint - 1, model, options)),
+        (RIGID_PARAMETERS, &|| rigid_move(rows, model)),
     ];
     first_confirmed(command_hypotheses(model.1), rows, model, options, bound_mm).or_else(|| {
-        fitted
+        let passing = fitted
             .iter()
-            .find_map(|h| first_confirmed(vec![h()?], rows, model, options, bound_mm))
+            .filter_map(|(p, h)| Some((*p, first_confirmed(vec![h()?], rows, model, options, bound_mm)?)))
+            .collect();
+        simplest_sufficient(passing, options.false_alarm)
     })
+}
+
+/// The rigid move's parameters: a turn (3) and a shift (3).
+const RIGID_PARAMETERS: usize = 6;
+
+/// Of the explanations `passing` (each with its count of fitted parameters) the one with the
+/// fewest parameters, unless one with more fits significantly better: its statistic lower by
+/// more than the chi-square quantile at `1 - false_alarm` with the extra parameters as degrees
+/// of freedom (the likelihood-ratio test: a free parameter lowers the statistic by about 1 on
+/// clean data). A rewrite with more parameters that fits better but not significantly so ties
+/// with it: both are said, the simpler first.
+fn simplest_sufficient(mut passing: Vec<(usize, Explanation)>, false_alarm: f64) -> Option<Explanation> {
+    passing.sort_by_key(|(p, _)| *p);
+    let mut it = passing.into_iter();
+    let (mut params, mut best) = it.next()?;
+    let mut tied: Vec<Explanation> = Vec::new();
+    for (p, e) in it {
+        let gain = best.statistic - e.statistic;
+        if p > params && gain > chi_square_quantile(1.0 - false_alarm, (p - params) as f64) {
+            (params, best) = (p, e);
+            tied.clear();
+        } else if gain > 0.0 {
+            tied.push(e);
+        }
+    }
+    for t in tied {
+        best.hypothesis.claim = format!(
+            "{}; or, as well within the prediction ({:.4} mm, chi2/dof {:.3}) {}: {}",
+            best.hypothesis.claim, t.rms_mm, t.per_dof, t.hypothesis.reading, t.hypothesis.claim
+        );
+    }
+    Some(best)
 }
 
 /// The points of `rows` reordered among their steps (per target) so that each sits where the

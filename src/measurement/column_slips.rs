@@ -11,6 +11,15 @@ use super::Measurement;
 use super::unit_check::LENGTH_SLIPS;
 use crate::kinematics::JointKind;
 
+/// A slip is searched for, or said, only beyond this many times its test's acceptance (the
+/// bound the noise and the predicted error give at the test's false-alarm rate): a slip moves
+/// the points by millimetres to metres where a calibration predicts tenths; a nearer miss is
+/// the model's (an effect `diagnose` looks for: sag, backlash, a gear's error), and a rewrite
+/// that changes the predictions a little could pass the acceptance by chance. One factor for
+/// `validate`'s slip search (`crate::diagnosis`'s `slips`, `sweep_slips`) and `calibrate`'s
+/// test of the sweeps' shared target ([`crate::calibration::shared_target`]).
+pub const GROSS_MISS_FACTOR: f64 = 3.0;
+
 /// Gradians per degree: a command column written in gradians reads 400/360 of the degrees.
 const GRADIANS_PER_DEGREE: f64 = 400.0 / 360.0;
 

@@ -49,6 +49,7 @@ mod hostile_round6c;
 mod hostile_round6d;
 mod hostile_round6e;
 mod hostile_round9a;
+mod hostile_round9b;
 mod hostile_round9c;
 mod hostile_round9d;
 mod hostile_round9e;

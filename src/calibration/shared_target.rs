@@ -1,0 +1,356 @@
+//! Sweeps that see one target at the reference pose (`calibrate`): every axis experiment holds
+//! the other joints at the common reference pose and passes through it where its own joint is
+//! at its held value, so two sweeps whose target 0 the description places at the same point of
+//! the same link (a target every sweep reads on the last link, as most campaigns place it), and
+//! the tool observation of a tool target at that point, all see one point there. A sweep whose
+//! block was moved (the instrument or the robot bumped, a re-setup) or whose coordinates were
+//! scaled sees it elsewhere, and a calibration of the sweeps absorbs that into its axis (a moved
+//! axis, a longer link): nothing else in the sweeps contradicts it.
+//!
+//! Each sweep's point at the reference pose is interpolated from its own points
+//! (`at_reference`: a circle in the command for a turning joint, with its turn per command
+//! fitted; a line for a sliding one), with the variance its least squares give at the noise of
+//! a point. Only the part across the sweep's motion is compared: a joint's zero, its backlash or
+//! a transmission error move the point along the arc, not off it. The points of one target are
+//! tested against their weighted consensus by a chi-square test at [`SHARED_TARGET_FALSE_ALARM`];
+//! the sweep without which the others agree is named, with its offset, when that offset is
+//! beyond [`GROSS_MISS_FACTOR`] times the test's bound for it: an effect the model lacks (a held
+//! joint's backlash taken up differently between the sweeps, sag bending one sweep's arc) moves
+//! a sweep's point by tenths of a millimetre, a moved block by millimetres. No model of the robot:
+//! the data against themselves and the description's word that the targets are one.
+
+use super::procedure::{AxisExperiment, axis_experiments};
+use crate::kinematics::JointKind;
+use crate::measurement::MeasurementSet;
+use crate::measurement::column_slips::GROSS_MISS_FACTOR;
+use crate::numerics::roots::{Bisection, bisect_infallible};
+use crate::numerics::stats::chi_square_quantile;
+use crate::robot::{RobotDescription, commands_to_internal};
+use nalgebra::{Matrix3, Point3, Vector3};
+use std::collections::BTreeMap;
+
+/// The test's false-alarm rate: a warning on consistent sweeps once in ten thousand files (the
+/// rate of `calibrate`'s test of its own validation poses).
+pub const SHARED_TARGET_FALSE_ALARM: f64 = 1e-4;
+
+/// A turning sweep's fitted turn per command lies within this factor of the description's
+/// either way: a command column halved or doubled is a unit slip the unit checks name.
+const TURN_RATE_RANGE: f64 = 2.0;
+
+/// Commands within this of the reference pose's are at it (file units: the tool frame's rule,
+/// `docs/formats.md#experiments-and-targets`).
+const AT_REFERENCE: f64 = 1e-6;
+
+/// The sightings of each shared target (by [`key`]): its link and place \[mm\], and the sightings.
+type Groups = BTreeMap<String, ((usize, [f64; 3]), Vec<Sighting>)>;
+
+/// The tool observation's points of each tool target, the experiment and the first line.
+type ToolPoints = BTreeMap<usize, (Vec<Vector3<f64>>, String, Option<u64>)>;
+
+/// One sighting of a shared target at the reference pose.
+struct Sighting {
+    /// The experiment (`tool` observation or sweep).
+    experiment: String,
+    /// Its lines in the file.
+    lines: Option<(u64, u64)>,
+    /// The point \[mm\].
+    point: Vector3<f64>,
+    /// Its coordinates' variance over a point's (leverage of the interpolation).
+    leverage: f64,
+    /// The projection across the sweep's motion (identity for a measured point).
+    across: Matrix3<f64>,
+}
+
+/// A sweep whose point at the reference pose contradicts the other sightings of its target.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovedSweep {
+    /// The experiment.
+    pub experiment: String,
+    /// Its first and last lines.
+    pub lines: Option<(u64, u64)>,
+    /// Its offset from the others' consensus, across its motion \[mm\].
+    pub offset_mm: [f64; 3],
+    /// The offset over its standard deviation.
+    pub sigmas: f64,
+    /// The experiments it is compared with (when `ambiguous`: the ones that could be out of
+    /// place instead).
+    pub others: Vec<String>,
+    /// The description's place of the target: link and position \[mm\].
+    pub target: (usize, [f64; 3]),
+    /// Whether another sighting could as well be the one out of place (two sightings only, or
+    /// several sweeps without each of which the others agree): `others` then names those.
+    pub ambiguous: bool,
+}
+
+impl std::fmt::Display for MovedSweep {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [x, y, z] = self.offset_mm;
+        let lines = self.lines.map_or(String::new(), |(a, b)| format!(" (lines {a}-{b})"));
+        let (link, [px, py, pz]) = self.target;
+        let who = if self.ambiguous {
+            format!(
+                "experiment {}{lines} and {} disagree",
+                self.experiment,
+                self.others.join(", ")
+            )
+        } else {
+            format!(
+                "experiment {}{lines} is out of place among {}",
+                self.experiment,
+                self.others.join(", ")
+            )
+        };
+        write!(
+            f,
+            "{who}: at the reference pose (every joint at its held value), which each sweep passes through, its \
+             target 0 (the description places it on link {link} at ({px}, {py}, {pz}) mm, as it does the others') \
+             sits ({x:.2}, {y:.2}, {z:.2}) mm ({:.2} mm across its motion, {:.0} times the noise of that comparison) \
+             from where the others see it: the block was moved (the instrument or the robot bumped or set up again between \
+             the sweeps) or its coordinates shifted or scaled; the calibration absorbs it into the axis, so \
+             calibration.json is wrong for the robot: check these rows and measure the sweep again (if the targets \
+             are different ones, give each its own place in `axis_targets`; an effect the model lacks moves a sweep \
+             by tenths of a millimetre, not this far)",
+            Vector3::new(x, y, z).norm(),
+            self.sigmas,
+        )
+    }
+}
+
+/// The sweeps of `set` out of place among the sightings of their shared target (module docs),
+/// with `noise_rms_3d_mm` the noise of a point; empty when the description shares no target.
+pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Vec<MovedSweep> {
+    let Ok((experiments, reference)) = axis_experiments(set, desc) else {
+        return Vec::new();
+    };
+    let mut groups: Groups = BTreeMap::new();
+    for e in &experiments {
+        let Some(t) = desc.axis_targets_of(e.joint).map(|a| a.target0) else {
+            continue;
+        };
+        if let Some(s) = sweep_sighting(e, desc, &reference) {
+            let entry = groups
+                .entry(key(t.link, t.position_mm))
+                .or_insert(((t.link, t.position_mm), Vec::new()));
+            entry.1.push(s);
+        }
+    }
+    for (target, s) in tool_sightings(set, desc, &reference) {
+        if let Some(entry) = groups.get_mut(&key(desc.dof(), target)) {
+            entry.1.push(s);
+        }
+    }
+    let sigma2 = noise_rms_3d_mm.powi(2) / 3.0;
+    groups
+        .into_values()
+        .filter_map(|(target, sightings)| odd_one_out(&sightings, sigma2, target))
+        .collect()
+}
+
+/// The key of a place on a link (to a micrometre: the description's numbers).
+fn key(link: usize, p: [f64; 3]) -> String {
+    format!("{link}:{:.3},{:.3},{:.3}", p[0], p[1], p[2])
+}
+
+/// The tool observation's points at the reference pose, each with its tool target's place on
+/// the last link \[mm\].
+fn tool_sightings(set: &MeasurementSet, desc: &RobotDescription, reference: &[f64]) -> Vec<([f64; 3], Sighting)> {
+    let frame = desc.tool.frame.to_isometry();
+    let mut seen: ToolPoints = BTreeMap::new();
+    for (i, m) in set.rows().iter().enumerate() {
+        let at = m.cmd.iter().zip(reference).all(|(a, b)| (a - b).abs() <= AT_REFERENCE);
+        if m.moved_joint == 0 && at && m.target < desc.tool.targets_mm.len() {
+            let entry = seen
+                .entry(m.target)
+                .or_insert((Vec::new(), m.experiment.clone(), set.line_of(i)));
+            entry.0.push(Vector3::from(m.position_mm));
+        }
+    }
+    seen.into_iter()
+        .map(|(t, (points, experiment, line))| {
+            let on_link = frame * Point3::from(desc.tool.targets_mm[t]).map(|c| c * 1e-3);
+            let n = points.len() as f64;
+            let sighting = Sighting {
+                experiment,
+                lines: line.map(|l| (l, l)),
+                point: points.iter().sum::<Vector3<f64>>() / n,
+                leverage: 1.0 / n,
+                across: Matrix3::identity(),
+            };
+            ((on_link.coords * 1e3).into(), sighting)
+        })
+        .collect()
+}
+
+/// Sweep `e`'s sighting of its target 0 at the reference pose `reference` (file units), when
+/// the sweep holds the other joints there and its own command spans the reference's.
+fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]) -> Option<Sighting> {
+    let k = e.joint - 1;
+    let held = e.commands.iter().all(|c| {
+        c.iter()
+            .zip(reference)
+            .enumerate()
+            .all(|(j, (a, b))| !e.holds_constant(j) || (a - b).abs() <= AT_REFERENCE)
+    });
+    let u_ref = commands_to_internal(desc, reference)[k];
+    let u: Vec<f64> = e
+        .target0_steps
+        .iter()
+        .map(|&i| commands_to_internal(desc, &e.commands[i])[k] - u_ref)
+        .collect();
+    let spans = u.iter().any(|&v| v <= 0.0) && u.iter().any(|&v| v >= 0.0);
+    if !held || !spans || u.len() < 5 {
+        return None;
+    }
+    let points: Vec<Vector3<f64>> = e.target0_m.iter().map(|p| p.coords * 1e3).collect();
+    let (point, leverage, tangent) = at_reference(&u, &points, desc.joints[k].kind)?;
+    let t = tangent.try_normalize(1e-12)?;
+    Some(Sighting {
+        experiment: e.name.clone(),
+        lines: e.lines,
+        point,
+        leverage,
+        across: Matrix3::identity() - t * t.transpose(),
+    })
+}
+
+/// The least squares of `points` on the basis `basis(u)` (3 functions of the command; a line's
+/// unused third, zero at every command, padded with a unit diagonal): the coefficients (one row
+/// per function), the inverse normal matrix and the residual sum of squares, or `None` when the
+/// normal equations are singular.
+fn basis_fit(
+    u: &[f64],
+    points: &[Vector3<f64>],
+    basis: &dyn Fn(f64) -> Vector3<f64>,
+) -> Option<(Matrix3<f64>, Matrix3<f64>, f64)> {
+    let mut normal = Matrix3::zeros();
+    let mut right = Matrix3::zeros();
+    for (&v, p) in u.iter().zip(points) {
+        let f = basis(v);
+        normal += f * f.transpose();
+        right += f * p.transpose();
+    }
+    if normal[(2, 2)] == 0.0 {
+        normal[(2, 2)] = 1.0;
+    }
+    let inverse = normal.try_inverse()?;
+    let coefficients = inverse * right;
+    let rss: f64 = u
+        .iter()
+        .zip(points)
+        .map(|(&v, p)| (p - coefficients.transpose() * basis(v)).norm_squared())
+        .sum();
+    Some((coefficients, inverse, rss))
+}
+
+/// The point of a sweep at command 0 (the reference, `u` relative to it, internal units) from
+/// its `points` \[mm\], the interpolation's leverage and the direction of motion there: a
+/// circle `c + a cos(b u) + d sin(b u)` for a turning joint (its turn per command `b` the one of
+/// least residuals within [`TURN_RATE_RANGE`] of 1), a line `c + d u` for a sliding one.
+fn at_reference(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<(Vector3<f64>, f64, Vector3<f64>)> {
+    let circle = |b: f64| move |v: f64| Vector3::new(1.0, (b * v).cos(), (b * v).sin());
+    let b = match kind {
+        JointKind::Prismatic => 0.0,
+        JointKind::Revolute => {
+            let rss = |b: f64| basis_fit(u, points, &circle(b)).map_or(f64::INFINITY, |f| f.2);
+            let h = 1e-6;
+            let stop = Bisection::to_width(1e-6);
+            let [lo, hi] = bisect_infallible(1.0 / TURN_RATE_RANGE, TURN_RATE_RANGE, stop, |x| {
+                rss(x + h) < rss(x - h)
+            });
+            0.5 * (lo + hi)
+        }
+    };
+    let (coefficients, inverse, at0, slope) = match kind {
+        JointKind::Prismatic => {
+            let (c, i, _) = basis_fit(u, points, &|v| Vector3::new(1.0, v, 0.0))?;
+            (c, i, Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0))
+        }
+        JointKind::Revolute => {
+            let (c, i, _) = basis_fit(u, points, &circle(b))?;
+            (c, i, Vector3::new(1.0, 1.0, 0.0), Vector3::new(0.0, 0.0, b))
+        }
+    };
+    let point = coefficients.transpose() * at0;
+    let leverage = (at0.transpose() * inverse * at0)[0];
+    Some((point, leverage, coefficients.transpose() * slope))
+}
+
+/// The weighted consensus of `sightings` (the point whose offsets across each one's motion,
+/// over its variance, are least) and the chi-square of their offsets with its degrees of
+/// freedom; `None` when they do not fix a point.
+fn consensus(sightings: &[&Sighting], sigma2: f64) -> Option<(Vector3<f64>, f64, usize)> {
+    let weight = |s: &Sighting| s.across / (s.leverage * sigma2);
+    let total: Matrix3<f64> = sightings.iter().map(|s| weight(s)).sum();
+    let eigen = total.symmetric_eigenvalues();
+    if eigen.min() <= 1e-9 * eigen.max() {
+        return None;
+    }
+    let right: Vector3<f64> = sightings.iter().map(|s| weight(s) * s.point).sum();
+    let centre = total.try_inverse()? * right;
+    let chi2 = sightings
+        .iter()
+        .map(|s| {
+            let d = s.point - centre;
+            (d.transpose() * weight(s) * d)[0]
+        })
+        .sum();
+    let observed: usize = sightings.iter().map(|s| s.across.trace().round() as usize).sum();
+    Some((centre, chi2, observed.checked_sub(3)?))
+}
+
+/// Whether a chi-square `chi2` with `dof` degrees of freedom exceeds the test's quantile.
+fn exceeds(chi2: f64, dof: usize) -> bool {
+    dof > 0 && chi2 > chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, dof as f64)
+}
+
+/// The sweep among `sightings` of one `target` without which the others agree, when all of
+/// them do not (module docs); with two sightings either may be the moved one.
+fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -> Option<MovedSweep> {
+    let all: Vec<&Sighting> = sightings.iter().collect();
+    let (_, chi2, dof) = consensus(&all, sigma2)?;
+    if !exceeds(chi2, dof) {
+        return None;
+    }
+    let mut passing: Vec<(usize, Vector3<f64>, f64)> = (0..sightings.len())
+        .filter(|&k| sightings[k].across != Matrix3::identity())
+        .filter_map(|k| {
+            let rest: Vec<&Sighting> = all
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, s)| *s)
+                .collect();
+            let (centre, chi2, dof) = consensus(&rest, sigma2).or_else(|| Some((rest.first()?.point, 0.0, 0)))?;
+            (!exceeds(chi2, dof)).then_some((k, centre, chi2))
+        })
+        .collect();
+    passing.sort_by(|a, b| a.2.total_cmp(&b.2));
+    let &(k, centre, _) = passing.first()?;
+    let s = &sightings[k];
+    let offset = s.across * (s.point - centre);
+    let sigmas = offset.norm() / (s.leverage * sigma2).sqrt();
+    let bound = chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, s.across.trace().round()).sqrt();
+    if sigmas <= GROSS_MISS_FACTOR * bound {
+        return None;
+    }
+    // Several sweeps without each of which the others agree, or two sightings: either may be
+    // the one out of place.
+    let ambiguous = passing.len() > 1 || sightings.len() == 2;
+    let others: Vec<String> = if passing.len() > 1 {
+        passing[1..].iter().map(|p| sightings[p.0].experiment.clone()).collect()
+    } else {
+        (0..sightings.len())
+            .filter(|&j| j != k)
+            .map(|j| sightings[j].experiment.clone())
+            .collect()
+    };
+    Some(MovedSweep {
+        experiment: s.experiment.clone(),
+        lines: s.lines,
+        offset_mm: [offset.x, offset.y, offset.z],
+        sigmas,
+        ambiguous,
+        others,
+        target,
+    })
+}
