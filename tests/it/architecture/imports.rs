@@ -227,9 +227,7 @@ impl Crate {
 
     /// The module whose file defines what the absolute `path` names, following imports.
     fn defining_module(&self, path: &ModulePath, depth: usize) -> Option<ModulePath> {
-        let k = (0..=path.len())
-            .rev()
-            .find(|&k| self.code.contains_key(&path[..k]))?;
+        let k = (0..=path.len()).rev().find(|&k| self.code.contains_key(&path[..k]))?;
         let module = path[..k].to_vec();
         if k == path.len() || depth > 16 {
             return Some(module);
