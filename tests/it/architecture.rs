@@ -490,16 +490,6 @@ const KNOWN_BACK_ARROWS: &[(&str, &str, &str)] = &[
         "the tool accuracy is predicted from a `Calibration`",
     ),
     (
-        "calibration::procedure::result",
-        "calibration::procedure::screen",
-        "`Calibration::outliers` holds the screen's `OutlierPoint`",
-    ),
-    (
-        "calibration::procedure::misfit",
-        "calibration::procedure::screen",
-        "a misfit names its rows with the screen's `OutlierPoint` and `row_of`",
-    ),
-    (
         "calibration::procedure::screen::second_target",
         "calibration::procedure",
         "the second-target screen refits the whole procedure (`calibrate_model`) without a point",
@@ -508,16 +498,6 @@ const KNOWN_BACK_ARROWS: &[(&str, &str, &str)] = &[
         "calibration::procedure::screen::second_target",
         "calibration::procedure::screen",
         "the second-target screen shares its parent's fences and row helpers",
-    ),
-    (
-        "calibration::procedure::sanity",
-        "calibration::procedure::report",
-        "the sanity checks read the report's `SIGNIFICANT_SIGMAS`",
-    ),
-    (
-        "calibration::procedure::sanity::scale",
-        "calibration::procedure::sanity",
-        "the scale check returns its parent's `Implausible`",
     ),
     (
         "calibration::refine::free_poses",

@@ -65,7 +65,7 @@ impl SweepMisfit {
     pub(super) fn with_lines(mut self, set: &MeasurementSet) -> Self {
         if let Self::OffPath { points, .. } | Self::OffCommand { points, .. } = &mut self {
             for o in points {
-                o.line = super::screen::row_of(set, o).and_then(|row| set.line_of(row));
+                o.line = super::outlier_point::row_of(set, o).and_then(|row| set.line_of(row));
             }
         }
         self

@@ -31,6 +31,7 @@ mod joint_map;
 mod joints;
 mod misfit;
 mod options;
+mod outlier_point;
 mod propagation;
 mod report;
 mod result;
@@ -49,8 +50,9 @@ pub use joint_map::{
 };
 pub use misfit::SweepMisfit;
 pub use options::{AxisEstimator, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Detail};
+pub use outlier_point::OutlierPoint;
 pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
-pub use report::{Finding, SIGNIFICANT_SIGMAS, findings, markdown, read_residuals_csv, residuals_csv};
+pub use report::{Finding, findings, markdown, read_residuals_csv, residuals_csv};
 pub use result::{
     AxisReport, AxisSpan, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport,
     PointResidual, PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
@@ -60,11 +62,10 @@ pub use sanity::{
     PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, SIZE_TOLERANCE, free_pose_scale_slips, implausible, longest_length_m,
 };
 pub use screen::{
-    OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, SWEEP_POINTS_FALSE_ALARM, Screening, WorstSecondTarget,
-    screen_sweeps,
+    OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, SWEEP_POINTS_FALSE_ALARM, Screening, WorstSecondTarget, screen_sweeps,
 };
 pub use second_targets::SecondTargetData;
-pub use uncertainty::{AxisCovariance, row_sigmas};
+pub use uncertainty::{AxisCovariance, SIGNIFICANT_SIGMAS, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,
 };

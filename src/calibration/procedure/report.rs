@@ -2,13 +2,11 @@
 //! mean physically, each with its uncertainty and whether the data resolve it (> 3 sigma).
 
 use super::result::{Calibration, PointResidual};
+use super::uncertainty::SIGNIFICANT_SIGMAS;
 use crate::kinematics::JointKind;
 use crate::robot::{RobotDescription, Transmission};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
-
-/// Significance threshold in sigmas: a deviation below it is "not resolved by the data".
-pub const SIGNIFICANT_SIGMAS: f64 = 3.0;
 
 /// One statement of the report.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]

@@ -42,7 +42,9 @@
 
 mod scale;
 
-pub use scale::{LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, free_pose_scale_slips};
+pub use scale::{
+    LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, ScaleSlip, free_pose_scale_slips,
+};
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
 use crate::kinematics::JointKind;
@@ -140,32 +142,8 @@ pub enum Implausible {
         /// The chi-square's upper quantile at `1 - TOOL_FIT_FALSE_ALARM`.
         limit: f64,
     },
-    /// A joint travels a factor per command no drive of its description gives
-    /// (see the Scale check of the module doc): its command column scaled, or the description's ratio wrong.
-    CommandScaled {
-        /// The joint.
-        joint: usize,
-        /// Its experiments.
-        experiment: String,
-        /// Whether it slides (else it turns).
-        sliding: bool,
-        /// How far it travels per command over its sweep, over the description's \[1\].
-        travel: f64,
-        /// Its 1-sigma.
-        sigma: f64,
-        /// The sigma of what a drive departs by ([`PLAUSIBLE_TURN_DEVIATION`], [`PLAUSIBLE_LEAD_DEVIATION`]).
-        bound: f64,
-    },
-    /// Every sliding joint travels the same factor per command off its description: the
-    /// coordinates are scaled (the Scale check of the module doc).
-    CoordinatesScaled {
-        /// The factor the coordinates look scaled by.
-        factor: f64,
-        /// Its 1-sigma.
-        sigma: f64,
-        /// The sliding joints.
-        joints: Vec<usize>,
-    },
+    /// A transmission or the coordinates scaled beyond what a drive gives (`scale`).
+    Scaled(ScaleSlip),
     /// A joint's fit misses its points by far more than the others'.
     Misfit {
         /// The joint.
@@ -230,17 +208,7 @@ impl std::fmt::Display for Implausible {
                 f,
                 "the tool frame's fit to the tool targets of `{experiment}` step {step} misses them by {rms_mm:.3} mm RMS where the noise is {noise_mm:.4} mm 3-D RMS (chi-square {chi_square:.1} on {dof} dof, beyond its 1 - {TOOL_FIT_FALSE_ALARM:e} quantile {limit:.1}): a tool row's point is off (a target id or coordinate mistyped, a target moved on the tool), or the description's [tool] targets_mm are not this tool's; the tool frame and every tool prediction carry it"
             ),
-            Implausible::CommandScaled {
-                joint,
-                experiment,
-                sliding,
-                travel,
-                sigma,
-                bound,
-            } => scale::command_scaled_words(f, (*joint, experiment, *sliding), (*travel, *sigma, *bound)),
-            Implausible::CoordinatesScaled { factor, sigma, joints } => {
-                scale::coordinates_scaled_words(f, *factor, *sigma, joints)
-            }
+            Implausible::Scaled(slip) => slip.fmt(f),
             Implausible::Misfit {
                 joint,
                 experiment,
@@ -274,12 +242,12 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
         .iter()
         .any(|s| matches!(s, Implausible::Size { .. } | Implausible::Mirrored { .. }))
     {
-        found.extend(scale::scale_slips(cal, desc));
+        found.extend(scale::scale_slips(cal, desc).into_iter().map(Implausible::Scaled));
     }
     let scaled: Vec<usize> = found
         .iter()
         .filter_map(|s| match s {
-            Implausible::CommandScaled { joint, .. } => Some(*joint),
+            Implausible::Scaled(ScaleSlip::Command { joint, .. }) => Some(*joint),
             _ => None,
         })
         .collect();
@@ -290,10 +258,12 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
     );
     // A robot of another size, or scaled coordinates, miss the described tool targets too: the
     // size explains it.
-    if !found
-        .iter()
-        .any(|s| matches!(s, Implausible::Size { .. } | Implausible::CoordinatesScaled { .. }))
-    {
+    if !found.iter().any(|s| {
+        matches!(
+            s,
+            Implausible::Size { .. } | Implausible::Scaled(ScaleSlip::Coordinates { .. })
+        )
+    }) {
         found.extend(tool_misfit(cal, desc));
     }
     found

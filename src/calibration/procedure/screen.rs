@@ -24,6 +24,7 @@ mod second_target;
 pub use second_target::WorstSecondTarget;
 
 use super::experiments::actuator_commands;
+use super::outlier_point::{OutlierPoint, row_of};
 use super::{AxisExperiment, COMMAND_TOLERANCE, CalibrationOptions, ProcedureError, axis_experiments_with};
 use crate::calibration::arc_model::{ArcModel, MeasurementNoise};
 use crate::calibration::line_ml::{fit_line, predict_line};
@@ -34,39 +35,10 @@ use crate::numerics::stats::{QuantileMethod, chi3_far_out_over_median, f_upper_q
 use crate::robot::TransmissionFitForm;
 use crate::robot::{Controller, RobotDescription};
 use nalgebra::{Point3, Vector3};
-use serde::{Deserialize, Serialize};
 
 /// At most this share of a sweep's points may be set aside: beyond it the sweep, not single
 /// points, is wrong.
 pub const OUTLIER_SHARE_MAX: f64 = 0.2;
-
-/// A measured point an outlier test flagged: a sweep's point (this module's test) or a
-/// validation point of the diagnosis (`diagnosis::validation_outliers`, `joint` 0).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-pub struct OutlierPoint {
-    /// The experiment.
-    pub experiment: String,
-    /// Its swept joint (0: a validation point).
-    pub joint: usize,
-    /// The point's step.
-    pub step: usize,
-    /// The target (0: the sweep's first target).
-    pub target: usize,
-    /// The line of the data file it was read from, when known.
-    pub line: Option<u64>,
-    /// Its 3-D distance from the fit of its sweep's points kept (a validation point: from the
-    /// calibrated model after the diagnosis's baseline refit) \[mm\].
-    pub residual_mm: f64,
-    /// That residual over the noise per axis (its sweep's; a validation point: the
-    /// diagnosis's), about `sqrt(3)` for a point of the noise.
-    pub normalised_residual: f64,
-    /// The fence it exceeds (Tukey's far-out fence of every sweep point's, or every
-    /// validation point's, normalised residual).
-    pub fence: f64,
-    /// Whether the calibration (the diagnosis) was made without it, and for a sweep point
-    /// without the other targets of its pose (`false` with `--keep-outliers`).
-    pub dropped: bool,
-}
 
 /// The outcome of the test: the points flagged and, when some were set aside, the set
 /// without their poses (every target of a flagged point's step).
@@ -293,13 +265,6 @@ impl Scale {
             (3.0 * f_upper_quantile(tail, self.spread, self.spread * nu / 3.0)).sqrt()
         })
     }
-}
-
-/// The set's row of a flagged point.
-pub(super) fn row_of(set: &MeasurementSet, o: &OutlierPoint) -> Option<usize> {
-    set.rows()
-        .iter()
-        .position(|m| m.experiment == o.experiment && m.step == o.step && m.target == o.target)
 }
 
 impl<'a> Sweep<'a> {

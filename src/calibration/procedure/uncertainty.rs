@@ -8,6 +8,9 @@ use crate::kinematics::{AxisLine, PhiModel};
 use nalgebra::{DMatrix, Matrix4, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
+/// Significance threshold in sigmas: a deviation below it is "not resolved by the data".
+pub const SIGNIFICANT_SIGMAS: f64 = 3.0;
+
 /// Covariance of one axis line: `[tilt_u, tilt_v, shift_u, shift_v]` in the basis `(u, v)`
 /// perpendicular to it (direction components \[rad\], position \[m\]; a sliding axis has no
 /// position: its shift block is zero).

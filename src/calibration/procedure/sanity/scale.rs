@@ -27,7 +27,6 @@
 //!   are one scale of the coordinates, said once, instead of each joint.
 
 use super::super::{AxisReport, Calibration};
-use super::Implausible;
 use crate::kinematics::JointKind;
 use crate::measurement::Measurement;
 use crate::robot::{RobotDescription, RobotModel, Transmission, TransmissionFitForm};
@@ -82,6 +81,53 @@ struct Slope {
     ratio: f64,
     /// Its 1-sigma.
     sigma: f64,
+}
+
+/// A transmission or the coordinates scaled beyond what a drive gives (module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ScaleSlip {
+    /// A joint travels a factor per command no drive of its description gives: its command
+    /// column scaled, or the description's ratio wrong.
+    Command {
+        /// The joint.
+        joint: usize,
+        /// Its experiments.
+        experiment: String,
+        /// Whether it slides (else it turns).
+        sliding: bool,
+        /// How far it travels per command over its sweep, over the description's \[1\].
+        travel: f64,
+        /// Its 1-sigma.
+        sigma: f64,
+        /// The sigma of what a drive departs by ([`PLAUSIBLE_TURN_DEVIATION`], [`PLAUSIBLE_LEAD_DEVIATION`]).
+        bound: f64,
+    },
+    /// Every sliding joint travels the same factor per command off its description: the
+    /// coordinates are scaled.
+    Coordinates {
+        /// The factor the coordinates look scaled by.
+        factor: f64,
+        /// Its 1-sigma.
+        sigma: f64,
+        /// The sliding joints.
+        joints: Vec<usize>,
+    },
+}
+
+impl std::fmt::Display for ScaleSlip {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ScaleSlip::Command {
+                joint,
+                experiment,
+                sliding,
+                travel,
+                sigma,
+                bound,
+            } => command_scaled_words(f, (*joint, experiment, *sliding), (*travel, *sigma, *bound)),
+            ScaleSlip::Coordinates { factor, sigma, joints } => coordinates_scaled_words(f, *factor, *sigma, joints),
+        }
+    }
 }
 
 /// The transmission with its fitted coefficients (`[sin.., cos..]` or `[c_1..]`) replaced.
@@ -173,7 +219,7 @@ fn beyond(s: &Slope, drive: f64) -> bool {
 }
 
 /// The findings of the module doc on `cal`, calibrated with the description `desc`.
-pub(super) fn scale_slips(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausible> {
+pub(super) fn scale_slips(cal: &Calibration, desc: &RobotDescription) -> Vec<ScaleSlip> {
     let ideal = RobotModel::ideal(desc);
     let slopes: Vec<Slope> = cal.axes.iter().filter_map(|a| slope_of(cal, desc, &ideal, a)).collect();
     said(&slopes)
@@ -182,7 +228,7 @@ pub(super) fn scale_slips(cal: &Calibration, desc: &RobotDescription) -> Vec<Imp
 /// The transmission check of the module doc on a free-pose calibration `cal` (its rotary
 /// joints' harmonics, each coefficient's sigma from the fit's summary), over the range of each
 /// joint's commands in `rows`.
-pub fn free_pose_scale_slips(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Vec<Implausible> {
+pub fn free_pose_scale_slips(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Vec<ScaleSlip> {
     let Some(summary) = cal.free_poses.as_ref() else {
         return vec![];
     };
@@ -237,9 +283,9 @@ struct Fitted<'a> {
 
 /// The findings on `slopes`: the common scale of the sliding joints, and each joint beyond what
 /// its drive gives that the common scale does not explain.
-fn said(slopes: &[Slope]) -> Vec<Implausible> {
+fn said(slopes: &[Slope]) -> Vec<ScaleSlip> {
     let common = common_scale(slopes);
-    let mut found: Vec<Implausible> = common.iter().cloned().collect();
+    let mut found: Vec<ScaleSlip> = common.iter().cloned().collect();
     for s in slopes {
         let bound = if s.sliding {
             PLAUSIBLE_LEAD_DEVIATION
@@ -248,7 +294,7 @@ fn said(slopes: &[Slope]) -> Vec<Implausible> {
         };
         // A common scale explains every sliding joint's departure.
         if beyond(s, bound) && !(s.sliding && common.is_some()) {
-            found.push(Implausible::CommandScaled {
+            found.push(ScaleSlip::Command {
                 joint: s.joint,
                 experiment: s.experiment.clone(),
                 sliding: s.sliding,
@@ -263,7 +309,7 @@ fn said(slopes: &[Slope]) -> Vec<Implausible> {
 
 /// Two or more sliding joints' slopes that agree within [`LEAD_SPREAD`] and their fits' noise,
 /// with a common factor beyond [`SCALE_SIGMAS`] of its sigma (module doc).
-fn common_scale(slopes: &[Slope]) -> Option<Implausible> {
+fn common_scale(slopes: &[Slope]) -> Option<ScaleSlip> {
     let sliding: Vec<&Slope> = slopes.iter().filter(|s| s.sliding).collect();
     if sliding.len() < 2 {
         return None;
@@ -275,15 +321,15 @@ fn common_scale(slopes: &[Slope]) -> Option<Implausible> {
     let dof = (sliding.len() - 1) as f64;
     let agree = chi_square <= crate::numerics::stats::chi_square_quantile(COMMON_SCALE_QUANTILE, dof);
     let sigma = total.sqrt().recip();
-    (agree && (mean - 1.0).abs() > SCALE_SIGMAS * sigma).then(|| Implausible::CoordinatesScaled {
+    (agree && (mean - 1.0).abs() > SCALE_SIGMAS * sigma).then(|| ScaleSlip::Coordinates {
         factor: 1.0 / mean,
         sigma: sigma / mean.powi(2),
         joints: sliding.iter().map(|s| s.joint).collect(),
     })
 }
 
-/// The words of [`Implausible::CommandScaled`].
-pub(super) fn command_scaled_words(
+/// The words of [`ScaleSlip::Command`].
+fn command_scaled_words(
     f: &mut std::fmt::Formatter<'_>,
     (joint, experiment, sliding): (usize, &str, bool),
     (travel, sigma, bound): (f64, f64, f64),
@@ -325,8 +371,8 @@ pub(super) fn command_scaled_words(
     )
 }
 
-/// The words of [`Implausible::CoordinatesScaled`].
-pub(super) fn coordinates_scaled_words(
+/// The words of [`ScaleSlip::Coordinates`].
+fn coordinates_scaled_words(
     f: &mut std::fmt::Formatter<'_>,
     factor: f64,
     sigma: f64,

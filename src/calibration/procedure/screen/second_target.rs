@@ -4,8 +4,9 @@
 //! A reading swapped with another step's, or off, would shift the coupling by tens of its
 //! sigmas, or fail its fit (the fractional form does not converge through it).
 
+use super::super::outlier_point::{OutlierPoint, row_of};
 use super::super::{CalibrationOptions, Detail, ProcedureError, SecondTargetData, calibrate_model};
-use super::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, median, row_of, without_poses};
+use super::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, median, without_poses};
 use crate::measurement::MeasurementSet;
 use crate::numerics::lsq::linear_lsq;
 use crate::numerics::stats::chi_square_quantile;

@@ -1,0 +1,40 @@
+//! A measured point an outlier test flagged ([`OutlierPoint`]): what `calibration.json`'s
+//! `outliers` lists, and the row of the data it came from.
+
+use crate::measurement::MeasurementSet;
+use serde::{Deserialize, Serialize};
+
+/// A measured point an outlier test flagged: a sweep's point (this module's test) or a
+/// validation point of the diagnosis (`diagnosis::validation_outliers`, `joint` 0).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct OutlierPoint {
+    /// The experiment.
+    pub experiment: String,
+    /// Its swept joint (0: a validation point).
+    pub joint: usize,
+    /// The point's step.
+    pub step: usize,
+    /// The target (0: the sweep's first target).
+    pub target: usize,
+    /// The line of the data file it was read from, when known.
+    pub line: Option<u64>,
+    /// Its 3-D distance from the fit of its sweep's points kept (a validation point: from the
+    /// calibrated model after the diagnosis's baseline refit) \[mm\].
+    pub residual_mm: f64,
+    /// That residual over the noise per axis (its sweep's; a validation point: the
+    /// diagnosis's), about `sqrt(3)` for a point of the noise.
+    pub normalised_residual: f64,
+    /// The fence it exceeds (Tukey's far-out fence of every sweep point's, or every
+    /// validation point's, normalised residual).
+    pub fence: f64,
+    /// Whether the calibration (the diagnosis) was made without it, and for a sweep point
+    /// without the other targets of its pose (`false` with `--keep-outliers`).
+    pub dropped: bool,
+}
+
+/// The set's row of a flagged point.
+pub(super) fn row_of(set: &MeasurementSet, o: &OutlierPoint) -> Option<usize> {
+    set.rows()
+        .iter()
+        .position(|m| m.experiment == o.experiment && m.step == o.step && m.target == o.target)
+}
