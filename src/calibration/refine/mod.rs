@@ -10,7 +10,7 @@
 //! 2. solve the linearised problem rank-revealingly ([`LinearFit`], a truncated SVD);
 //! 3. refine from that solution by Gauss-Newton steps re-linearised at the current parameters
 //!    ([`refine_from_linear`]; the program's one least-squares loop,
-//!    [`levenberg_marquardt_from`], monotone, the same truncation).
+//!    [`levenberg_marquardt_from`](crate::numerics::lsq::levenberg_marquardt_from), monotone, the same truncation).
 //!
 //! Pure maths: no files, no CLI, no simulator.
 
