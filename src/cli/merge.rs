@@ -124,9 +124,14 @@ pub fn run(args: Args) -> Result<()> {
         outputs.check_not_input(&args.out.join(name))?;
     }
     let _lock = RunLock::acquire(&args.out)?;
-    export::prepare_dir(&args.out, args.force)?;
-    export::write_resolved(&args.out, &resolved_text)?;
-    let summary = export::write_final(&args.out, &scenario, &names, &records)?;
+    // The old result goes and the new one is written with SIGINT/SIGTERM/SIGHUP held, so an
+    // interrupt leaves the whole new set (SIGKILL still can stop it between files; merge
+    // again).
+    let summary = super::signals::deferred(|| -> Result<_> {
+        export::prepare_dir(&args.out, args.force)?;
+        export::write_resolved(&args.out, &resolved_text)?;
+        Ok(export::write_final(&args.out, &scenario, &names, &records)?)
+    })?;
     super::emit_json(&args.out.join(export::SUMMARY_JSON))?;
     super::run::report(&summary, &args.out)
 }
