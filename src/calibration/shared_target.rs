@@ -127,19 +127,20 @@ pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_
     let Ok((experiments, reference)) = axis_experiments(set, desc) else {
         return Vec::new();
     };
+    let reach = reach_mm(desc);
     let mut groups: Groups = BTreeMap::new();
     for e in &experiments {
         let Some(t) = desc.axis_targets_of(e.joint).map(|a| a.target0) else {
             continue;
         };
-        if let Some(s) = sweep_sighting(e, desc, &reference) {
+        if let Some(s) = sweep_sighting(e, desc, &reference, reach) {
             let entry = groups
                 .entry(key(t.link, t.position_mm))
                 .or_insert(((t.link, t.position_mm), Vec::new()));
             entry.1.push(s);
         }
     }
-    for (target, s) in tool_sightings(set, desc, &reference) {
+    for (target, s) in tool_sightings(set, desc, &reference, reach) {
         if let Some(entry) = groups.get_mut(&key(desc.dof(), target)) {
             entry.1.push(s);
         }
@@ -155,10 +156,24 @@ pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_
 /// description's `repeatability_sigma`): every joint but the swept one (`swept`, 0 for the tool
 /// observation: none) is positioned once for the sighting, and its error moves the point by its
 /// repeatability times its lever arm (a sliding joint's by its repeatability), which is at most
-/// the robot's reach: the description's row lengths and its farthest target. An upper bound,
-/// so that sweeps of a robot with a stated repeatability are not said out of place for it (it
-/// moved the IRB/L6's clean sweeps by up to 1.4 mm, 23 times the measurement noise).
-fn held_variance_mm2(desc: &RobotDescription, swept: usize) -> f64 {
+/// the robot's reach ([`reach_mm`]). An upper bound, so that a sweep of a robot with a stated
+/// repeatability is not said out of place for it (the IRB/L6's moves its clean sweeps' points
+/// by up to 1.4 mm, 23 times the measurement noise).
+fn held_variance_mm2(desc: &RobotDescription, swept: usize, reach_mm: f64) -> f64 {
+    desc.joints
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| k + 1 != swept)
+        .map(|(_, j)| match j.kind {
+            JointKind::Revolute => (j.repeatability_sigma * reach_mm).powi(2),
+            JointKind::Prismatic => (j.repeatability_sigma * 1e3).powi(2),
+        })
+        .sum()
+}
+
+/// The robot's reach \[mm\]: its description's row lengths and its farthest tool target, a
+/// bound on any joint's lever arm to a target.
+fn reach_mm(desc: &RobotDescription) -> f64 {
     let rows_mm: f64 = desc
         .nominal_model()
         .rows
@@ -171,16 +186,7 @@ fn held_variance_mm2(desc: &RobotDescription, swept: usize) -> f64 {
         .iter()
         .map(|t| Vector3::from(*t).norm())
         .fold(0.0f64, f64::max);
-    let reach_mm = rows_mm + targets_mm;
-    desc.joints
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| k + 1 != swept)
-        .map(|(_, j)| match j.kind {
-            JointKind::Revolute => (j.repeatability_sigma * reach_mm).powi(2),
-            JointKind::Prismatic => (j.repeatability_sigma * 1e3).powi(2),
-        })
-        .sum()
+    rows_mm + targets_mm
 }
 
 /// The key of a place on a link (to a micrometre: the description's numbers).
@@ -190,7 +196,12 @@ fn key(link: usize, p: [f64; 3]) -> String {
 
 /// The tool observation's points at the reference pose, each with its tool target's place on
 /// the last link \[mm\].
-fn tool_sightings(set: &MeasurementSet, desc: &RobotDescription, reference: &[f64]) -> Vec<([f64; 3], Sighting)> {
+fn tool_sightings(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    reference: &[f64],
+    reach_mm: f64,
+) -> Vec<([f64; 3], Sighting)> {
     let frame = desc.tool.frame.to_isometry();
     let mut seen: ToolPoints = BTreeMap::new();
     for (i, m) in set.rows().iter().enumerate() {
@@ -211,7 +222,7 @@ fn tool_sightings(set: &MeasurementSet, desc: &RobotDescription, reference: &[f6
                 lines: line.map(|l| (l, l)),
                 point: points.iter().sum::<Vector3<f64>>() / n,
                 leverage: 1.0 / n,
-                held_mm2: held_variance_mm2(desc, 0),
+                held_mm2: held_variance_mm2(desc, 0, reach_mm),
                 across: Matrix3::identity(),
             };
             ((on_link.coords * 1e3).into(), sighting)
@@ -221,7 +232,7 @@ fn tool_sightings(set: &MeasurementSet, desc: &RobotDescription, reference: &[f6
 
 /// Sweep `e`'s sighting of its target 0 at the reference pose `reference` (file units), when
 /// the sweep holds the other joints there and its own command spans the reference's.
-fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]) -> Option<Sighting> {
+fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64], reach_mm: f64) -> Option<Sighting> {
     let k = e.joint - 1;
     let held = e.commands.iter().all(|c| {
         c.iter()
@@ -247,7 +258,7 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
         lines: e.lines,
         point,
         leverage,
-        held_mm2: held_variance_mm2(desc, e.joint),
+        held_mm2: held_variance_mm2(desc, e.joint, reach_mm),
         across: Matrix3::identity() - t * t.transpose(),
     })
 }
