@@ -5,6 +5,7 @@
 
 use super::options::{InRange, THREADS, thread_pool};
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::diagnosis::{DiagnosisOptions, RefitScope, diagnose};
 use axiscal::harness::blind::{
@@ -57,7 +58,7 @@ pub struct Args {
 }
 
 /// Runs `axiscal blind`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, printer: Printer) -> Result<()> {
     let campaign = match args.campaign.as_str() {
         "sweeps" => BlindCampaign::Sweeps,
         "free-poses" => BlindCampaign::FreePoses,
@@ -108,7 +109,7 @@ pub fn run(args: Args) -> Result<()> {
         .filter(|(_, key)| args.effect.as_ref().is_none_or(|e| *e == key.effect))
         .filter(|(_, key)| args.joint.is_none_or(|j| key.joint == Some(j)))
         .collect();
-    let progress = super::progress::Progress::counted(keys.len(), "cases");
+    let progress = super::progress::Progress::counted(keys.len(), "cases", printer);
     let pool = thread_pool(args.threads)?;
     let cases: Vec<(CaseResult, CaseFiles)> = pool.install(|| {
         keys.into_par_iter()

@@ -5,6 +5,7 @@
 use super::OneOf;
 use super::options::{InRange, THREADS, thread_pool};
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{BudgetEffect, BudgetLine, BudgetSettings, PaperScenario, gap_budget_with};
 use axiscal::json_file::{self, Schema};
@@ -91,7 +92,7 @@ fn markdown(settings: &BudgetSettings, lines: &[BudgetLine]) -> String {
 }
 
 /// Runs `axiscal budget`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, printer: Printer) -> Result<()> {
     let names = ["budget.json", "budget.md"];
     let outputs = Outputs::new(args.force);
     outputs.check_in(&args.out, &names)?;
@@ -104,7 +105,7 @@ pub fn run(args: Args) -> Result<()> {
         args.effects
     };
     let pool = thread_pool(args.threads)?;
-    let progress = super::progress::Progress::stage("gap budget");
+    let progress = super::progress::Progress::stage("gap budget", printer);
     let lines = pool.install(|| gap_budget_with(&settings, &effects, &progress))?;
     drop(progress);
     let md = markdown(&settings, &lines);

@@ -6,6 +6,7 @@ use super::OneOf;
 use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::Context;
 use anyhow::Result;
 use axiscal::calibration::free_pose;
@@ -244,14 +245,14 @@ fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str, war
 }
 
 /// Runs `axiscal calibrate`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, printer: Printer) -> Result<()> {
     let mut outputs = Outputs::new(args.force)
         .input("DATA", &args.data)
         .input("--robot", &args.robot);
     if let Some(carry) = &args.carry {
         outputs = outputs.input("--carry", carry);
     }
-    super::set_json(args.json);
+    let printer = printer.with_json(args.json);
     outputs.check_in(&args.out, &OUTPUTS)?;
     outputs.check_in(&args.out, &TOOL_MAP_FILES)?;
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
@@ -271,7 +272,7 @@ pub fn run(args: Args) -> Result<()> {
         (cal, map)
     } else {
         checks::one_setup(&set, &args.data, "the axis-experiment calibration")?;
-        calibrate_axes(&args, &set, &desc)?
+        calibrate_axes(&args, &set, &desc, printer)?
     };
     cal.data_digest = Some(set.digest());
     cal.model_digest = Some(cal.robot.digest());
@@ -292,11 +293,11 @@ pub fn run(args: Args) -> Result<()> {
     staged.commit(&[&OUTPUTS[..], &TOOL_MAP_FILES[..]].concat())?;
     match &cal.free_poses {
         Some(summary) => {
-            super::calibrate_free::print(summary, &desc, &set, &args.data);
-            print_tool_accuracy(&cal);
+            super::calibrate_free::print(summary, &desc, &set, &args.data, printer);
+            print_tool_accuracy(&cal, printer);
         }
         None => {
-            print_axes(&cal, &desc, &source);
+            print_axes(&cal, &desc, &source, printer);
             print_implausible(&texts.implausible, &desc, &set, &args);
             print_moved_sweeps(&cal, &desc, &set, &args.data);
             if !args.refine
@@ -306,9 +307,9 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
-    say!("{}", texts.deviation_line);
+    say!(printer, "{}", texts.deviation_line);
     // The URDF says so beside each such `<limit>`; a note, not a warning on every run.
-    if !texts.missing_speed_limits.is_empty() && super::verbose() {
+    if !texts.missing_speed_limits.is_empty() && printer.verbose {
         eprintln!(
             "note: the description gives no max_velocity/max_effort for joint(s) {:?}: their URDF <limit> says velocity=0 effort=0",
             texts.missing_speed_limits
@@ -317,8 +318,8 @@ pub fn run(args: Args) -> Result<()> {
     for warning in &texts.left_out {
         eprintln!("warning: {warning}");
     }
-    say!("wrote {}/{{{}}}", args.out.display(), written.join(","));
-    super::emit_json(&args.out.join(OUTPUTS[2]))?;
+    say!(printer, "wrote {}/{{{}}}", args.out.display(), written.join(","));
+    printer.emit_json(&args.out.join(OUTPUTS[2]))?;
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
         let campaign = super::record::calibrated::CalibratedCampaign {
@@ -454,7 +455,12 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
 }
 
 /// The independent-axis calibration of `set` (`--refine` applied) and the tool-accuracy map.
-fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(Calibration, Vec<MapPoint>)> {
+fn calibrate_axes(
+    args: &Args,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    printer: Printer,
+) -> Result<(Calibration, Vec<MapPoint>)> {
     if args.holdout {
         anyhow::bail!(
             "--holdout applies to free-pose files (no axis experiment); {} has axis experiments",
@@ -517,7 +523,7 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
     let cal = if args.refine {
-        refine(args, set, desc, cal)?
+        refine(args, set, desc, cal, printer)?
     } else {
         cal
     };
@@ -734,13 +740,23 @@ fn understated_repeatability(desc: &RobotDescription, stated: Option<&[f64]>) ->
 }
 
 /// The console summary of an independent-axis calibration.
-fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str) {
-    say!("calibrated {} from {} ({} axes)", desc.name, source, cal.axes.len());
-    print_scope(cal, desc);
-    say!("  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)");
+fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str, printer: Printer) {
+    say!(
+        printer,
+        "calibrated {} from {} ({} axes)",
+        desc.name,
+        source,
+        cal.axes.len()
+    );
+    print_scope(cal, desc, printer);
+    say!(
+        printer,
+        "  joint  points  span (deg|mm)  residual RMS (mm)  direction 1-sigma (mrad)"
+    );
     for a in &cal.axes {
         let unit = a.span.unit();
         say!(
+            printer,
             "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
             a.joint,
             a.points,
@@ -750,13 +766,14 @@ fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str) {
             a.direction_sigma.major_rad * 1e3
         );
     }
-    print_tool_accuracy(cal);
+    print_tool_accuracy(cal, printer);
 }
 
 /// The predicted tool 1-sigma line, when there is one.
-pub(super) fn print_tool_accuracy(cal: &Calibration) {
+pub(super) fn print_tool_accuracy(cal: &Calibration, printer: Printer) {
     if let Some(a) = &cal.tool_accuracy {
         say!(
+            printer,
             "  predicted tool 1-sigma: inside the spans RMS {:.3} mm / {:.3} mrad (max {:.3} mm), workspace RMS {:.3} mm / {:.3} mrad (max {:.3} mm)",
             a.spans.position_rms_mm,
             a.spans.orientation_rms_mrad,
@@ -818,7 +835,13 @@ fn fill_tool_accuracy(cal: &mut Calibration, desc: &RobotDescription, spans: Vec
 }
 
 /// `cal` refined on the free poses of `set` (`--refine`), its summary printed.
-fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calibration) -> Result<Calibration> {
+fn refine(
+    args: &Args,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    cal: Calibration,
+    printer: Printer,
+) -> Result<Calibration> {
     let options = RefineOptions {
         noise_rms_3d_mm: cal
             .noise
@@ -837,6 +860,7 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
         .map_err(|e| anyhow::anyhow!("--refine on {}: {e}", args.data.display()))?;
     if let Some(r) = &refined.refinement {
         say!(
+            printer,
             "refined on {} free poses: rank {} of {} parameters ({} directions dropped), RMS {:.4} -> {:.4} mm (noise alone {:.4} mm); {}-fold held-out RMS {:.4} -> {:.4} mm",
             r.poses,
             r.rank,
@@ -851,6 +875,7 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
         );
         if r.poses_left_out > 0 {
             say!(
+                printer,
                 "  refined on {} of the file's {} free poses, evenly spaced through it (`--max-poses`; memory grows with them)",
                 r.poses,
                 r.poses + r.poses_left_out
@@ -866,7 +891,7 @@ fn refine(args: &Args, set: &MeasurementSet, desc: &RobotDescription, cal: Calib
                 args.data.display()
             );
         }
-        print_carried(&carried, r);
+        print_carried(&carried, r, printer);
     }
     Ok(refined)
 }
@@ -892,7 +917,7 @@ fn carried_effects(path: &Path, desc: &RobotDescription, set: &MeasurementSet) -
 
 /// The console lines of the effects `--carry` fitted: each parameter with its sigma, and the
 /// warning that only `calibration.json` carries them.
-fn print_carried(carried: &[Candidate], r: &Refinement) {
+fn print_carried(carried: &[Candidate], r: &Refinement, printer: Printer) {
     if carried.is_empty() {
         return;
     }
@@ -903,13 +928,13 @@ fn print_carried(carried: &[Candidate], r: &Refinement) {
             None => format!("{} ({})", c.effect_name(), c.member_name()),
         })
         .collect();
-    say!("  carried: {}", names.join("; "));
+    say!(printer, "  carried: {}", names.join("; "));
     for p in r
         .changes
         .iter()
         .filter(|p| carried.iter().any(|c| p.name.contains(c.effect_name())))
     {
-        say!("    {} = {:.4e} +- {:.2e}", p.name, p.change, p.refined_sigma);
+        say!(printer, "    {} = {:.4e} +- {:.2e}", p.name, p.change, p.refined_sigma);
     }
     eprintln!(
         "warning: the model carries {} (calibration.json robot.effects and transmissions, used by validate and compensate); calibrated.urdf and joint_map.csv hold the geometry only",
@@ -918,10 +943,11 @@ fn print_carried(carried: &[Candidate], r: &Refinement) {
 }
 
 /// The noise (estimated, used, contradicted), joints not calibrated, the base-frame rule.
-fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotDescription) {
+fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotDescription, printer: Printer) {
     if let Some(n) = &cal.noise {
         if let Some(e) = &n.estimate {
             say!(
+                printer,
                 "  noise from the residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, {} dof); fits weighted with {:.4} mm ({})",
                 e.rms_3d_mm,
                 e.confidence * 100.0,
@@ -947,6 +973,7 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotD
         }
         if n.given_contradicted {
             say!(
+                printer,
                 "  WARNING: the residuals contradict --noise-mm {:.4} (chi-square p = {:.2e}); see report.md",
                 n.used_rms_3d_mm,
                 n.given_p_value.unwrap_or(f64::NAN)
@@ -960,10 +987,11 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotD
         );
     }
     if let Some(b) = &cal.base_rule {
-        say!("  base frame: {}", b.text);
+        say!(printer, "  base frame: {}", b.text);
     }
     if cal.tool.is_none() && !desc.tool.targets_mm.is_empty() {
         say!(
+            printer,
             "  tool frame: nominal (no pose at the reference commands sees all three tool targets): its error is in no predicted uncertainty; `axiscal validate` tests it"
         );
     }

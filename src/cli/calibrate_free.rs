@@ -1,6 +1,7 @@
 //! `axiscal calibrate` on a file of free poses only: the free-pose calibration
 //! ([`axiscal::calibration::free_pose`]) and its console summary.
 
+use super::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
@@ -103,13 +104,14 @@ fn failure(
 }
 
 /// The console summary of a free-pose calibration.
-pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet, data: &Path) {
+pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet, data: &Path, printer: Printer) {
     let source = data.display();
     let what = match s.axis_rows_as_poses {
         Some(_) => "every row a free pose",
         None => "no axis experiment",
     };
     say!(
+        printer,
         "calibrated {} from {} ({} free poses, {} points; {what}): {} parameters fitted, {} not identified (kept nominal, see report.md)",
         desc.name,
         source,
@@ -120,12 +122,14 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
     );
     if s.poses_left_out > 0 {
         say!(
+            printer,
             "  fitted {} of the file's {} free poses, evenly spaced through it (`--max-poses`; memory grows with them)",
             s.poses,
             s.poses + s.poses_left_out
         );
     }
     say!(
+        printer,
         "  RMS: nominal {:.4} mm (closed-form registration {:.4} mm) -> calibrated {:.4} mm; condition number {:.2e}",
         s.nominal_rms_mm,
         s.closed_form_rms_mm,
@@ -139,6 +143,7 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
             .map(|t| format!("{} {:.4}", t.effects, t.cross_validated_rms_mm))
             .collect();
         say!(
+            printer,
             "  effects in the model: {} ({} parameters), cross-validated RMS mm: {}",
             kept.effects,
             kept.parameters,
@@ -153,7 +158,7 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
             })
             .collect();
         if !parts.is_empty() {
-            say!("  by joint (mrad; backlash: half band): {}", parts.join("; "));
+            say!(printer, "  by joint (mrad; backlash: half band): {}", parts.join("; "));
         }
         if kept.effects != "none" {
             eprintln!(
@@ -165,6 +170,7 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
     if s.setups.len() > 1 {
         let labels: Vec<&str> = s.setups.iter().map(|p| p.setup.as_str()).collect();
         say!(
+            printer,
             "  {} setups ({}): the base placed in each instrument frame (calibration.json: free_poses.setups)",
             s.setups.len(),
             labels.join(", ")
@@ -172,6 +178,7 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
     }
     if let Some(h) = &s.holdout {
         say!(
+            printer,
             "  held out ({} poses, odd configurations): nominal {:.4} mm -> calibrated {:.4} mm RMS (max {:.4} mm)",
             h.heldout_poses,
             h.nominal_rms_mm,
@@ -187,7 +194,10 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
     }
     super::checks::print_pose_outliers(&s.outliers, set, data, "calibrated");
     if s.tool_fit_rms_mm.is_none() {
-        say!("  tool frame: nominal (the description's tool.targets_mm do not match the data's target ids)");
+        say!(
+            printer,
+            "  tool frame: nominal (the description's tool.targets_mm do not match the data's target ids)"
+        );
     }
 }
 

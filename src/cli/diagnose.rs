@@ -5,6 +5,7 @@
 use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result};
 use axiscal::calibration::procedure::{
     Calibration, CalibrationOptions, ProcedureError, calibrate, implausible, screen_sweeps,
@@ -90,8 +91,8 @@ enum Refit {
 }
 
 /// Runs `axiscal diagnose`.
-pub fn run(args: Args) -> Result<()> {
-    super::set_json(args.json);
+pub fn run(args: Args, printer: Printer) -> Result<()> {
+    let printer = printer.with_json(args.json);
     let outputs = Outputs::new(args.force)
         .input("DATA", &args.data)
         .input("--robot", &args.robot);
@@ -105,7 +106,7 @@ pub fn run(args: Args) -> Result<()> {
         refuse_data_slips(&args, &set, cal, &desc)?;
     }
     let set = without_sweep_outliers(&args, set, &desc)?;
-    let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc)?;
+    let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc, printer)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: noise_mm,
         noise_trials: args.noise_trials,
@@ -125,7 +126,7 @@ pub fn run(args: Args) -> Result<()> {
     let source = args.data.display().to_string();
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
-        return run_axes(&args, &desc, &set, &options, &outputs, noise_source);
+        return run_axes(&args, &desc, &set, &options, &outputs, noise_source, printer);
     }
     let outliers =
         validation_outliers(&set, &desc, &options, args.keep_outliers).map_err(|e| failed(&args, &set, &desc, e))?;
@@ -134,7 +135,7 @@ pub fn run(args: Args) -> Result<()> {
         true => set,
         false => without_outliers(&set, &outliers),
     };
-    let progress = super::progress::Progress::stage("diagnosing");
+    let progress = super::progress::Progress::stage("diagnosing", printer);
     let mut d = diagnose_with(&set, &desc, &options, &progress).map_err(|e| failed(&args, &set, &desc, e))?;
     d.noise_source = noise_source.into();
     d.outliers = outliers;
@@ -159,16 +160,18 @@ pub fn run(args: Args) -> Result<()> {
         d.outcome.gap_before_mm,
         d.outcome.gap_after_mm
     );
-    say!("{headline}");
+    say!(printer, "{headline}");
     let diagnosed = d.poses.training + d.poses.held_out;
     if d.poses.left_out > 0 {
         say!(
+            printer,
             "  diagnosed {diagnosed} of the file's {} validation poses, evenly spaced through it (`--max-poses`; memory grows with them)",
             diagnosed + d.poses.left_out
         );
     }
     if d.outcome.effect == "none" {
         say!(
+            printer,
             "  with {diagnosed} validation poses ({} held out) the smallest gap this test flags is {:.3} mm; a smaller effect \
              reads `none`: {} to resolve it",
             d.poses.held_out,
@@ -180,8 +183,8 @@ pub fn run(args: Args) -> Result<()> {
             }
         );
     }
-    say!("wrote {written}");
-    super::emit_json(&args.out.join("diagnosis.json"))?;
+    say!(printer, "wrote {written}");
+    printer.emit_json(&args.out.join("diagnosis.json"))?;
     record(&args, &desc, &set, noise_mm, &format!("{headline}. {}", d.verdict))
 }
 
@@ -206,9 +209,10 @@ fn run_axes(
     options: &DiagnosisOptions,
     outputs: &Outputs,
     noise_source: &str,
+    printer: Printer,
 ) -> Result<()> {
     let source = args.data.display().to_string();
-    let progress = super::progress::Progress::stage("diagnosing the axes");
+    let progress = super::progress::Progress::stage("diagnosing the axes", printer);
     let d = diagnose_axes_with(set, desc, options, &progress).map_err(|e| failed(args, set, desc, e))?;
     drop(progress);
     let report = Report {
@@ -219,15 +223,20 @@ fn run_axes(
         outputs,
     };
     let written = report.write(|dir| write_axes_plots(&d, dir))?;
-    say!("no validation poses: axis experiments only (`where`; `which` needs validation poses)");
+    say!(
+        printer,
+        "no validation poses: axis experiments only (`where`; `which` needs validation poses)"
+    );
     if noise_source == "estimated" {
         say!(
+            printer,
             "  the noise was estimated from these same arcs: only an axis far worse than the others can be flagged; \
              give --noise-mm for a test against the instrument's noise"
         );
     }
     for w in &d.where_ {
         say!(
+            printer,
             "  {:<10} joint {}  residual {:.4} mm  noise only {:.4} mm  ratio {:.2}{}",
             w.experiment,
             w.joint.map_or("-".into(), |j| j.to_string()),
@@ -241,9 +250,9 @@ fn run_axes(
             }
         );
     }
-    say!("{}: {}", d.outcome.effect, d.verdict);
-    say!("wrote {written}");
-    super::emit_json(&args.out.join("diagnosis.json"))?;
+    say!(printer, "{}: {}", d.outcome.effect, d.verdict);
+    say!(printer, "wrote {written}");
+    printer.emit_json(&args.out.join("diagnosis.json"))?;
     record(
         args,
         desc,
@@ -332,7 +341,12 @@ fn usable(
 /// The noise of the diagnosis (mm), its source and, when estimated, the estimate's degrees of
 /// freedom: `--noise-mm`, or the estimate from the axis experiments' residuals (said on stderr;
 /// an error when the data cannot give one).
-fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(f64, &'static str, Option<f64>)> {
+fn noise(
+    args: &Args,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    printer: Printer,
+) -> Result<(f64, &'static str, Option<f64>)> {
     if let Some(n) = args.noise_mm {
         return Ok((n, "given", None));
     }
@@ -352,6 +366,7 @@ fn noise(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<(
             )
         })?;
     say!(
+        printer,
         "noise estimated from the axis experiments' residuals: {:.4} mm 3-D RMS ({:.0} % interval {:.4}-{:.4} mm, \
          {} dof, repeatability share {:.0} %); give --noise-mm to use the instrument's own figure",
         e.rms_3d_mm,

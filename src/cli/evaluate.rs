@@ -5,6 +5,7 @@
 
 use super::options::{InRange, THREADS, thread_pool};
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result};
 use axiscal::harness::evaluation::{
     FloorCheck, PAPER_ORIENTATION_ERROR_RAD, PAPER_POSITION_ERROR_MM, PAPER_REPEATABILITY, PLOT_FILES, PaperReport,
@@ -49,16 +50,16 @@ pub struct Args {
 }
 
 /// Runs `axiscal evaluate`.
-pub fn run(args: Args) -> Result<()> {
-    super::set_json(args.json);
+pub fn run(args: Args, printer: Printer) -> Result<()> {
+    let printer = printer.with_json(args.json);
     let pool = thread_pool(args.threads)?;
-    pool.install(|| evaluate(&args))
+    pool.install(|| evaluate(&args, printer))
 }
 
 /// `axiscal evaluate` on the current thread pool.
-fn evaluate(args: &Args) -> Result<()> {
+fn evaluate(args: &Args, printer: Printer) -> Result<()> {
     let (instrument, noise) = MeasurementModel::paper_theodolites().context("calibrating the theodolites")?;
-    if super::verbose() {
+    if printer.verbose {
         eprintln!("{noise}");
     }
     let scenario = PaperScenario::paper(args.seed, args.evaluation_seed, args.random_poses, instrument);
@@ -72,12 +73,12 @@ fn evaluate(args: &Args) -> Result<()> {
     outputs.extend(PLOT_FILES);
     let guard = Outputs::new(args.force);
     guard.check_in(&args.out, &outputs)?;
-    let progress = super::progress::Progress::stage("paper scenario");
+    let progress = super::progress::Progress::stage("paper scenario", printer);
     let out = run_paper_scenario_with(&scenario, &progress)?;
     drop(progress);
     let check = match args.floor_seeds > 1 {
         true => {
-            let progress = super::progress::Progress::stage("floor check");
+            let progress = super::progress::Progress::stage("floor check", printer);
             Some(floor_check_with(&scenario, args.floor_seeds, &progress)?)
         }
         false => None,
@@ -106,18 +107,21 @@ fn evaluate(args: &Args) -> Result<()> {
     staged.commit(&["floor_check.json"])?;
 
     say!(
+        printer,
         "paper scenario: seed {}, evaluation seed {}",
         args.seed,
         args.evaluation_seed
     );
     say!(
+        printer,
         "ISO 9283 cube edges: {:.0} mm inside the spans, {:.0} mm in the workspace",
         r.iso_cube_edge.inside_spans_m * 1e3,
         r.iso_cube_edge.workspace_m * 1e3
     );
-    let inside_ratio = print_regions(r);
-    print_repeatability(&r.repeatability);
+    let inside_ratio = print_regions(r, printer);
+    print_repeatability(&r.repeatability, printer);
     say!(
+        printer,
         "floor check inside the spans: calibrated/floor position RMS = {inside_ratio:.2} ({} {FLOOR_RATIO_LIMIT}x; see docs/validation.md)",
         if inside_ratio <= FLOOR_RATIO_LIMIT {
             "within"
@@ -126,10 +130,10 @@ fn evaluate(args: &Args) -> Result<()> {
         }
     );
     if let Some(check) = &check {
-        print_floor_check(check);
+        print_floor_check(check, printer);
     }
-    say!("wrote {} and {plots} plots", args.out.display());
-    super::emit_json(&args.out.join("evaluation.json"))?;
+    say!(printer, "wrote {} and {plots} plots", args.out.display());
+    printer.emit_json(&args.out.join("evaluation.json"))?;
     Ok(())
 }
 
@@ -172,10 +176,11 @@ fn poses_csv(r: &PaperReport) -> Result<Vec<u8>> {
 
 /// Prints each region's accuracy next to the paper's and the floor; returns the calibrated/floor
 /// position RMS ratio inside the spans (NaN when that region is absent).
-fn print_regions(r: &PaperReport) -> f64 {
+fn print_regions(r: &PaperReport, printer: Printer) -> f64 {
     let mut inside_ratio = f64::NAN;
     for s in &r.regions {
         say!(
+            printer,
             "{} ({} poses, {} failed):",
             s.region.name(),
             s.position_mm.uncalibrated.n,
@@ -199,12 +204,14 @@ fn print_regions(r: &PaperReport) -> f64 {
         ];
         for (label, st, paper, ratio, p) in rows {
             say!(
+                printer,
                 "  {label} uncalibrated mean {:7.p$} rms {:7.p$}   (paper {:.2} mean)",
                 st.uncalibrated.mean,
                 st.uncalibrated.rms,
                 paper[0]
             );
             say!(
+                printer,
                 "                    calibrated   mean {:7.p$} rms {:7.p$}   (paper {:.2})  floor rms {:.p$}  ratio {ratio:.2}",
                 st.calibrated.mean,
                 st.calibrated.rms,
@@ -213,6 +220,7 @@ fn print_regions(r: &PaperReport) -> f64 {
             );
         }
         say!(
+            printer,
             "  model only (no jitter, no noise): position rms {:.3} mm (floor {:.3}, ratio {:.2})",
             s.model_position_mm.calibrated.rms,
             s.model_position_mm.floor.rms,
@@ -226,8 +234,9 @@ fn print_regions(r: &PaperReport) -> f64 {
 }
 
 /// Prints the repeatability test next to the paper's.
-fn print_repeatability(rep: &RepeatabilitySummary) {
+fn print_repeatability(rep: &RepeatabilitySummary, printer: Printer) {
     say!(
+        printer,
         "repeatability ({} poses, mean of 2 executions): observed {:.3} mm / {:.4} rad (paper {:.2} mm / {:.4} rad, \
          through theodolites); robot alone {:.3} mm / {:.4} rad",
         rep.poses,
@@ -241,8 +250,9 @@ fn print_repeatability(rep: &RepeatabilitySummary) {
 }
 
 /// Prints the floor check pooled over the campaign seeds (`floor_check.json`).
-fn print_floor_check(check: &FloorCheck) {
+fn print_floor_check(check: &FloorCheck, printer: Printer) {
     say!(
+        printer,
         "floor check pooled over seeds {}..{}: calibrated/floor RMS position {:.3} ({:.3} / {:.3} mm), \
              orientation {:.3} ({} {FLOOR_RATIO_LIMIT}x)",
         check.first_seed,

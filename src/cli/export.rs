@@ -4,6 +4,7 @@
 //! `--approximate`, and is then named in the file and on the console with the error it leaves.
 
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::export::{ChainDeviation, Unrepresented, origins_yaml, ur};
 use axiscal::calibration::procedure::Calibration;
@@ -83,10 +84,10 @@ enum Offsets {
 }
 
 /// Runs `axiscal export`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, printer: Printer) -> Result<()> {
     match args.what {
-        What::UrKinematics(a) => ur_kinematics(a),
-        What::XacroYaml(a) => xacro_yaml(a),
+        What::UrKinematics(a) => ur_kinematics(a, printer),
+        What::XacroYaml(a) => xacro_yaml(a, printer),
     }
 }
 
@@ -152,7 +153,7 @@ fn header(common: &Common, left_out: &[Unrepresented], dev: &ChainDeviation) -> 
     lines
 }
 
-fn ur_kinematics(a: UrArgs) -> Result<()> {
+fn ur_kinematics(a: UrArgs, printer: Printer) -> Result<()> {
     let (desc, cal, outputs) = inputs(&a.common, &[("--like", &a.like)])?;
     let text = axiscal::presets::read_text(&a.like).with_context(|| format!("{}: cannot read", a.like.display()))?;
     let reference = ur::UrKinematics::parse(&text, &a.like.display().to_string())?;
@@ -183,16 +184,21 @@ fn ur_kinematics(a: UrArgs) -> Result<()> {
     ]);
     outputs.write(&a.common.out, out.kinematics.to_yaml(&comments))?;
     say!(
+        printer,
         "wrote {} (UR kinematics, hash {}): {}",
         a.common.out.display(),
         out.kinematics.hash,
         summary(&out.left_out, &out.deviation)
     );
-    say!("  calibrated TCP in tool0: {}", ur::ur_pose(&out.tool0_from_tcp));
+    say!(
+        printer,
+        "  calibrated TCP in tool0: {}",
+        ur::ur_pose(&out.tool0_from_tcp)
+    );
     Ok(())
 }
 
-fn xacro_yaml(a: XacroArgs) -> Result<()> {
+fn xacro_yaml(a: XacroArgs, printer: Printer) -> Result<()> {
     let (desc, cal, outputs) = inputs(&a.common, &[])?;
     let offsets = match a.offsets {
         Offsets::Origins => origins_yaml::OffsetsIn::Origins,
@@ -209,6 +215,7 @@ fn xacro_yaml(a: XacroArgs) -> Result<()> {
     let text: String = comments.iter().map(|c| format!("# {c}\n")).collect::<String>() + &out.yaml;
     outputs.write(&a.common.out, text)?;
     say!(
+        printer,
         "wrote {} (per-joint origins): {}",
         a.common.out.display(),
         summary(&out.left_out, &out.deviation)

@@ -5,6 +5,7 @@
 use super::checks;
 use super::options::InRange;
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::compensation::Compensator;
 use axiscal::iso9283::{
@@ -146,11 +147,11 @@ struct EvaluateArgs {
 }
 
 /// Runs `axiscal iso9283`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, printer: Printer) -> Result<()> {
     match args.what {
-        What::Evaluate(a) => evaluate_cycles(a),
-        What::Plan(a) => plan(a),
-        What::Predict(a) => predict_figures(a),
+        What::Evaluate(a) => evaluate_cycles(a, printer),
+        What::Plan(a) => plan(a, printer),
+        What::Predict(a) => predict_figures(a, printer),
     }
 }
 
@@ -176,7 +177,7 @@ fn cube_of(args: &CubeArgs, desc: &RobotDescription, model: &RobotModel) -> Resu
     .with_context(|| format!("the ISO cube around the centre commands {centre:?} (--centre-cmd)"))
 }
 
-fn plan(args: PlanArgs) -> Result<()> {
+fn plan(args: PlanArgs, printer: Printer) -> Result<()> {
     let robot = &args.cube.robot;
     let mut outputs = Outputs::new(args.force).input("--robot", robot);
     if let Some(c) = &args.calibration {
@@ -209,6 +210,7 @@ fn plan(args: PlanArgs) -> Result<()> {
     write_plan_csv(&mut text, &comment, &points)?;
     outputs.write(&args.out, text)?;
     say!(
+        printer,
         "ISO 9283 cube of edge {:.0} mm, {} cycles x 5 points x {} direction(s)",
         cube.edge_m * 1e3,
         args.cube.cycles,
@@ -250,7 +252,7 @@ fn plan_poses(args: &PlanArgs, desc: &RobotDescription, model: &RobotModel, cube
     Ok(poses)
 }
 
-fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {
+fn evaluate_cycles(args: EvaluateArgs, printer: Printer) -> Result<()> {
     let mut outputs = Outputs::new(args.force)
         .input("DATA", &args.data)
         .input("--robot", &args.robot);
@@ -288,8 +290,8 @@ fn evaluate_cycles(args: EvaluateArgs) -> Result<()> {
     staged.write(OUTPUTS[0], json_file::to_string(Schema::ISO9283, &figures)?)?;
     staged.write(OUTPUTS[1], &text)?;
     staged.commit(&[])?;
-    say!("{}", text.trim_end());
-    say!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
+    say!(printer, "{}", text.trim_end());
+    say!(printer, "wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
     Ok(())
 }
 
@@ -340,7 +342,7 @@ fn markdown(f: &IsoFigures, commanded_by: &str, data: &str) -> String {
 /// The files `iso9283 predict` writes into its output folder.
 const PREDICTION_OUTPUTS: [&str; 2] = ["iso9283-prediction.json", "iso9283-prediction.md"];
 
-fn predict_figures(args: PredictArgs) -> Result<()> {
+fn predict_figures(args: PredictArgs, printer: Printer) -> Result<()> {
     let robot = &args.cube.robot;
     let outputs = Outputs::new(args.force)
         .input("--robot", robot)
@@ -390,8 +392,13 @@ fn predict_figures(args: PredictArgs) -> Result<()> {
     )?;
     staged.write(PREDICTION_OUTPUTS[1], &text)?;
     staged.commit(&[])?;
-    say!("{}", text.trim_end());
-    say!("wrote {}/{{{}}}", args.out.display(), PREDICTION_OUTPUTS.join(","));
+    say!(printer, "{}", text.trim_end());
+    say!(
+        printer,
+        "wrote {}/{{{}}}",
+        args.out.display(),
+        PREDICTION_OUTPUTS.join(",")
+    );
     Ok(())
 }
 

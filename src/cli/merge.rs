@@ -2,6 +2,7 @@
 //! same results a single run gives, bit for bit.
 
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::harness::scenario::export::{self, RESOLVED_FILE, RUN_FILES, RunLock, SHARD_FILE, TRIALS_FILE};
 use axiscal::harness::scenario::{ResolvedScenario, Shard, complete_run};
@@ -86,8 +87,8 @@ fn check_shard_folders(dirs: &[PathBuf]) -> Result<()> {
 }
 
 /// Runs `axiscal merge`.
-pub fn run(args: Args) -> Result<()> {
-    super::set_json(args.json);
+pub fn run(args: Args, printer: Printer) -> Result<()> {
+    let printer = printer.with_json(args.json);
     check_shard_folders(&args.dirs)?;
     let first = args.dirs[0].join(RESOLVED_FILE);
     let resolved_text = axiscal::presets::read_text(&first).with_context(|| format!("reading {}", first.display()))?;
@@ -132,6 +133,6 @@ pub fn run(args: Args) -> Result<()> {
         export::write_resolved(&args.out, &resolved_text)?;
         Ok(export::write_final(&args.out, &scenario, &names, &records)?)
     })?;
-    super::emit_json(&args.out.join(export::SUMMARY_JSON))?;
-    super::run::report(&summary, &args.out)
+    printer.emit_json(&args.out.join(export::SUMMARY_JSON))?;
+    super::run::report(&summary, &args.out, printer)
 }

@@ -1,16 +1,10 @@
 //! Subcommands. Each has `Args` (clap derive) and `run(args) -> anyhow::Result<()>`.
 
-/// A human-readable line of a command that has `--json`: on stdout normally; with `--json`
-/// (stdout holds the JSON document alone) on stderr, or nowhere with `--quiet`.
+/// A human-readable line through the command's [`printer::Printer`]:
+/// `say!(printer, printer, "format", args...)`.
 macro_rules! say {
-    ($($t:tt)*) => {
-        if crate::cli::json_mode() {
-            if !crate::cli::quiet() {
-                eprintln!($($t)*);
-            }
-        } else {
-            println!($($t)*);
-        }
+    ($printer:expr, $($t:tt)*) => {
+        $printer.say(format_args!($($t)*))
     };
 }
 
@@ -31,6 +25,7 @@ mod merge;
 mod options;
 mod output;
 mod plan;
+mod printer;
 mod progress;
 mod record;
 mod report;
@@ -84,44 +79,6 @@ struct Cli {
     quiet: bool,
     #[command(subcommand)]
     command: Command,
-}
-
-/// Whether `--verbose` was given.
-static VERBOSE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// Whether `--quiet` was given.
-static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-/// Whether the running command was given `--json`.
-static JSON: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// Whether `--quiet` was given.
-pub fn quiet() -> bool {
-    QUIET.load(std::sync::atomic::Ordering::Relaxed)
-}
-
-/// Whether the running command prints its summary as JSON on stdout (`--json`).
-pub fn json_mode() -> bool {
-    JSON.load(std::sync::atomic::Ordering::Relaxed)
-}
-
-/// Sets `--json` for the running command (the commands that have it call this first).
-pub fn set_json(on: bool) {
-    JSON.store(on, std::sync::atomic::Ordering::Relaxed);
-}
-
-/// With `--json`, prints the JSON document the command wrote at `path` on stdout.
-pub fn emit_json(path: &std::path::Path) -> anyhow::Result<()> {
-    use anyhow::Context;
-    if json_mode() {
-        let text = std::fs::read_to_string(path).with_context(|| format!("reading back {}", path.display()))?;
-        println!("{}", text.trim_end());
-    }
-    Ok(())
-}
-
-/// Whether `--verbose` was given: details go to stderr only then.
-pub fn verbose() -> bool {
-    VERBOSE.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 /// The error as one line: its context and causes joined by `: `, line breaks folded into `; `.
@@ -349,26 +306,29 @@ pub fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    VERBOSE.store(cli.verbose, std::sync::atomic::Ordering::Relaxed);
-    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
+    let printer = printer::Printer {
+        verbose: cli.verbose,
+        quiet: cli.quiet,
+        json: false,
+    };
     let result = match cli.command {
-        Command::Calibrate(args) => calibrate::run(args),
+        Command::Calibrate(args) => calibrate::run(args, printer),
         Command::Describe(args) => describe::run(args),
         Command::Import(args) => import::run(args),
         Command::Plan(args) => plan::run(args),
-        Command::Simulate(args) => simulate::run(args),
-        Command::Study(args) => study::run(args),
-        Command::Run(args) => run::run(args),
-        Command::Merge(args) => merge::run(args),
+        Command::Simulate(args) => simulate::run(args, printer),
+        Command::Study(args) => study::run(args, printer),
+        Command::Run(args) => run::run(args, printer),
+        Command::Merge(args) => merge::run(args, printer),
         Command::Compensate(args) => compensate::run(args),
         Command::Joints(args) => joints::run(args),
-        Command::Export(args) => export::run(args),
-        Command::Iso9283(args) => iso9283::run(args),
-        Command::Report(args) => report::run(args),
-        Command::Evaluate(args) => evaluate::run(args),
-        Command::Budget(args) => budget::run(args),
-        Command::Diagnose(args) => diagnose::run(args),
-        Command::Blind(args) => blind::run(args),
+        Command::Export(args) => export::run(args, printer),
+        Command::Iso9283(args) => iso9283::run(args, printer),
+        Command::Report(args) => report::run(args, printer),
+        Command::Evaluate(args) => evaluate::run(args, printer),
+        Command::Budget(args) => budget::run(args, printer),
+        Command::Diagnose(args) => diagnose::run(args, printer),
+        Command::Blind(args) => blind::run(args, printer),
         Command::Validate(args) => validate::run(args),
         Command::View(args) => view::run(args),
         Command::Completions { shell } => completions(shell),

@@ -5,24 +5,19 @@
 //! `axiscal::progress::Progress`, a [`Progress::stage`] passed to it); until the library
 //! knows the count, a spinner shows what runs and the elapsed time.
 
+use super::printer::Printer;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal;
 use std::time::Duration;
 
 /// A progress display; cleared when dropped.
 pub struct Progress(ProgressBar);
 
-/// Whether progress is drawn: stderr is a terminal and `--quiet` was not given.
-fn shown() -> bool {
-    !super::quiet() && std::io::stderr().is_terminal()
-}
-
-fn bar(len: Option<u64>) -> ProgressBar {
+fn bar(len: Option<u64>, printer: Printer) -> ProgressBar {
     let bar = match len {
         Some(n) => ProgressBar::new(n),
         None => ProgressBar::new_spinner(),
     };
-    if !shown() {
+    if !printer.shows_progress() {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
     bar
@@ -30,8 +25,8 @@ fn bar(len: Option<u64>) -> ProgressBar {
 
 impl Progress {
     /// `len` units of work (`unit`: `trials`, `cases`, ...), counted with [`Self::inc`].
-    pub fn counted(len: usize, unit: &str) -> Self {
-        let bar = bar(Some(len as u64));
+    pub fn counted(len: usize, unit: &str, printer: Printer) -> Self {
+        let bar = bar(Some(len as u64), printer);
         let template = format!("{{bar:40}} {{pos}}/{{len}} {unit}  {{elapsed}} elapsed, ETA {{eta}}");
         if let Ok(style) = ProgressStyle::with_template(&template) {
             bar.set_style(style);
@@ -40,8 +35,8 @@ impl Progress {
     }
 
     /// Work that cannot be counted from here: a spinner with `what` and the elapsed time.
-    pub fn stage(what: &str) -> Self {
-        let bar = bar(None);
+    pub fn stage(what: &str, printer: Printer) -> Self {
+        let bar = bar(None, printer);
         if let Ok(style) = ProgressStyle::with_template("{spinner} {msg}  {elapsed}") {
             bar.set_style(style);
         }

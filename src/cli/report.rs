@@ -4,6 +4,7 @@
 
 use super::checks;
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::Calibration;
 use axiscal::calibration::procedure::{PointResidual, read_residuals_csv};
@@ -112,8 +113,14 @@ fn same_data(set: &MeasurementSet, cal: &Calibration, data: &Path, args: &Args) 
     )
 }
 
+/// The ISO 9283 figures of `iso9283 predict` (`--iso9283`).
+fn read_iso9283(p: &std::path::Path) -> Result<IsoFigures> {
+    let text = axiscal::presets::read_text(p).with_context(|| format!("{}: cannot read", p.display()))?;
+    json_file::from_str(Schema::ISO9283, &text).with_context(|| format!("{}: not an iso9283.json", p.display()))
+}
+
 /// Runs `axiscal report`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, printer: Printer) -> Result<()> {
     args.instrument.as_deref().map(instrument_words).transpose()?;
     let mut outputs = Outputs::new(args.force)
         .input("--calibration", &args.calibration)
@@ -157,19 +164,11 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
-    let iso9283: Option<IsoFigures> = match &args.iso9283 {
-        Some(p) => {
-            let text = axiscal::presets::read_text(p).with_context(|| format!("{}: cannot read", p.display()))?;
-            Some(
-                json_file::from_str(Schema::ISO9283, &text)
-                    .with_context(|| format!("{}: not an iso9283.json", p.display()))?,
-            )
-        }
-        None => None,
-    };
+    let iso9283 = args.iso9283.as_deref().map(read_iso9283).transpose()?;
     let residuals = residuals_beside(&args.calibration)?;
     if residuals.is_none() {
         say!(
+            printer,
             "no residuals.csv beside {}: the certificate has no residual plots",
             args.calibration.display()
         );
@@ -193,6 +192,7 @@ pub fn run(args: Args) -> Result<()> {
         eprintln!("warning: {w}");
     }
     say!(
+        printer,
         "certificate of {}: {} parameters ({} measured, the rest fixed by the method) and {} frames, U = {} u",
         c.robot.name,
         c.parameters.len(),
@@ -202,12 +202,13 @@ pub fn run(args: Args) -> Result<()> {
     );
     if let Some(h) = &c.held_out {
         say!(
+            printer,
             "held-out poses: {:.4} mm RMS before calibration, {:.4} mm after ({} points)",
             h.before.rms_mm,
             h.after.rms_mm,
             h.points
         );
     }
-    say!("wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
+    say!(printer, "wrote {}/{{{}}}", args.out.display(), OUTPUTS.join(","));
     Ok(())
 }

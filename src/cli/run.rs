@@ -8,6 +8,7 @@
 
 use super::options::{InRange, THREADS, duration_words, thread_pool};
 use super::output::Outputs;
+use super::printer::Printer;
 use super::{Interrupted, ThresholdsFailed, signals};
 use anyhow::{Context, Result, bail};
 use axiscal::harness::scenario::export::{
@@ -72,8 +73,8 @@ struct Plan {
 }
 
 /// Runs `axiscal run`.
-pub fn run(args: Args) -> Result<()> {
-    super::set_json(args.json);
+pub fn run(args: Args, printer: Printer) -> Result<()> {
+    let printer = printer.with_json(args.json);
     let plan = resolve(&args)?;
     super::checks::description_units(&plan.scenario.robot, &args.scenario, args.skip_unit_check)?;
     let outputs = Outputs::new(args.force).input("SCENARIO", &args.scenario);
@@ -91,7 +92,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let pool = thread_pool(args.threads)?;
     signals::install();
-    let records = run_missing(&plan, done, args.resume, &pool)?;
+    let records = run_missing(&plan, done, args.resume, &pool, printer)?;
     if let Some(signal) = signals::received() {
         // A signal after the last trial finished stops nothing: the run is whole.
         if records.len() < plan.shard.units(plan.scenario.units()).len() {
@@ -102,7 +103,7 @@ pub fn run(args: Args) -> Result<()> {
             signals::name(signal)
         );
     }
-    finish(&plan, records)
+    finish(&plan, records, printer)
 }
 
 /// The scenario, its trial and where the results go.
@@ -188,6 +189,7 @@ fn run_missing(
     done: Vec<TrialRecord>,
     resume: bool,
     pool: &rayon::ThreadPool,
+    printer: Printer,
 ) -> Result<Vec<TrialRecord>> {
     let (scenario, n) = (&plan.scenario, plan.scenario.trials);
     let path = plan.out.join(TRIALS_FILE);
@@ -200,6 +202,7 @@ fn run_missing(
     let units = plan.shard.units(scenario.units());
     let todo: Vec<usize> = units.clone().filter(|u| !have.contains(u)).collect();
     say!(
+        printer,
         "{}: {} case(s) x {} trial(s); units {}..{} (shard {}): {} to run{} into {}",
         scenario.name,
         scenario.cases.len(),
@@ -215,7 +218,7 @@ fn run_missing(
         },
         plan.out.display()
     );
-    let bar = super::progress::Progress::counted(todo.len(), "trials");
+    let bar = super::progress::Progress::counted(todo.len(), "trials", printer);
     let write_error = Mutex::new(None);
     let estimate = EtaWarning::new(todo.len(), pool.current_num_threads());
     let on_done = |r: &TrialRecord| {
@@ -320,7 +323,7 @@ fn interrupted(plan: &Plan, args: &Args, records: Vec<TrialRecord>, signal: i32)
 }
 
 /// Writes the results of a finished run (a shard: its trials and `shard.txt`).
-fn finish(plan: &Plan, records: Vec<TrialRecord>) -> Result<()> {
+fn finish(plan: &Plan, records: Vec<TrialRecord>, printer: Printer) -> Result<()> {
     let (scenario, out) = (&plan.scenario, &plan.out);
     if plan.shard != Shard::ALL {
         let units = plan.shard.units(scenario.units());
@@ -330,6 +333,7 @@ fn finish(plan: &Plan, records: Vec<TrialRecord>) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
         let failed = records.iter().filter(|r| !r.succeeded()).count();
         say!(
+            printer,
             "shard {}: {} trial(s) ({failed} failed) written to {}; combine the shards with `axiscal merge`",
             plan.shard,
             records.len(),
@@ -339,15 +343,15 @@ fn finish(plan: &Plan, records: Vec<TrialRecord>) -> Result<()> {
     }
     let records = complete_run(scenario, records)?;
     let summary = export::write_final(out, scenario, &plan.names, &records)?;
-    super::emit_json(&out.join(export::SUMMARY_JSON))?;
-    report(&summary, out)
+    printer.emit_json(&out.join(export::SUMMARY_JSON))?;
+    report(&summary, out, printer)
 }
 
 /// Prints the verdicts; an error naming every failed threshold when one fails.
-pub fn report(summary: &Summary, out: &Path) -> Result<()> {
-    say!("results in {}", out.display());
+pub fn report(summary: &Summary, out: &Path, printer: Printer) -> Result<()> {
+    say!(printer, "results in {}", out.display());
     for c in &summary.cases {
-        say!("case {} ({} trials, {} failed)", c.case, c.trials, c.failed);
+        say!(printer, "case {} ({} trials, {} failed)", c.case, c.trials, c.failed);
         if let Some(f) = &c.first_error {
             eprintln!(
                 "warning: case {}: trial {} failed: {} ({} of the {} failed trials alike; every error is in {}/trials.csv)",
@@ -360,11 +364,12 @@ pub fn report(summary: &Summary, out: &Path) -> Result<()> {
             );
         }
         if c.trials > 0 && c.failed == c.trials {
-            say!("  no trial succeeded: no statistics");
+            say!(printer, "  no trial succeeded: no statistics");
             continue;
         }
         for m in &c.metrics {
             say!(
+                printer,
                 "  {:<22} mean {:>12.6}  median {:>12.6}  p95 {:>12.6}  max {:>12.6}",
                 m.metric,
                 m.stats.mean,
@@ -375,7 +380,7 @@ pub fn report(summary: &Summary, out: &Path) -> Result<()> {
         }
     }
     for v in &summary.verdicts {
-        say!("{v}");
+        say!(printer, "{v}");
     }
     let failed = summary.failures();
     if failed.is_empty() {

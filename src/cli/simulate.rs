@@ -3,6 +3,7 @@
 
 use super::options::InRange;
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::kinematics::JointKind;
 use axiscal::measurement::{MeasurementModel, MeasurementSet, write_measurements_to};
@@ -34,7 +35,7 @@ fn paper_description() -> Result<RobotDescription> {
 /// The truth without `--truth`: the paper's robot for the ASEA IRB/L6's description, else the
 /// description perturbed by the shipped `default-perturbation.toml`, drawn from its own stream of `seed`
 /// (the noise's stream is untouched).
-fn default_truth(desc: &RobotDescription, seed: u64) -> Result<RobotModel> {
+fn default_truth(desc: &RobotDescription, seed: u64, printer: Printer) -> Result<RobotModel> {
     let irb6l = paper_description()?;
     if desc.geometry_hash() == irb6l.geometry_hash() {
         return Ok(axiscal::sim::paper_robot());
@@ -44,6 +45,7 @@ fn default_truth(desc: &RobotDescription, seed: u64) -> Result<RobotModel> {
     rng.set_stream(TRUTH_STREAM);
     let truth = axiscal::sim::perturb(desc, &spec, &mut rng)?;
     say!(
+        printer,
         "truth: {} perturbed by the default manufacturing errors (scenarios/robots/default-perturbation.toml, seed {seed}); --truth names another",
         desc.name
     );
@@ -52,12 +54,13 @@ fn default_truth(desc: &RobotDescription, seed: u64) -> Result<RobotModel> {
 
 /// The truth `--truth` names: a robot model file, or a robot description, whose nominal model
 /// (no manufacturing error) is then the truth (said on the console).
-fn truth_file(path: &std::path::Path) -> Result<RobotModel> {
+fn truth_file(path: &std::path::Path, printer: Printer) -> Result<RobotModel> {
     match RobotModel::from_file(path) {
         Ok(model) => Ok(model),
         Err(model_error) => match RobotDescription::from_file(path) {
             Ok(desc) => {
                 say!(
+                    printer,
                     "truth: {}'s nominal model (a robot description: no manufacturing errors; without --truth the description is perturbed by the default errors)",
                     path.display()
                 );
@@ -205,7 +208,7 @@ enum Instrument {
 }
 
 /// Runs `axiscal simulate`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, printer: Printer) -> Result<()> {
     let outputs = [("--truth", &args.truth), ("--effects", &args.effects)]
         .into_iter()
         .fold(
@@ -226,14 +229,14 @@ pub fn run(args: Args) -> Result<()> {
     let plan = super::plan::campaign_plan(&desc, &args.robot, args.plan.as_deref())?;
     let truth = match &args.truth {
         Some(path) => {
-            let truth = truth_file(path)?;
+            let truth = truth_file(path, printer)?;
             super::checks::truth_units(&truth, path, args.skip_unit_check)?;
             truth
         }
-        None => default_truth(&desc, args.seed)?,
+        None => default_truth(&desc, args.seed, printer)?,
     };
     truth_of_this_robot(&truth, args.truth.as_deref(), &desc, &args.robot)?;
-    let instrument = instrument_model(args.instrument, &args.station, &desc, &args.robot)?;
+    let instrument = instrument_model(args.instrument, &args.station, &desc, &args.robot, printer)?;
     let validation = ValidationPlan {
         poses,
         ..ValidationPlan::workspace_default(desc.dof())
@@ -303,6 +306,7 @@ fn instrument_model(
     stations_mm: &[[f64; 3]],
     desc: &RobotDescription,
     robot: &Path,
+    printer: Printer,
 ) -> Result<MeasurementModel> {
     let stations_m: Vec<Point3<f64>> = match stations_mm {
         [] => axiscal::plan::instrument_stations_m(desc).context("placing the theodolites")?,
@@ -328,7 +332,7 @@ fn instrument_model(
                         ),
                     }
                 })?;
-            if super::verbose() {
+            if printer.verbose {
                 eprintln!("{calibration}");
             }
             model

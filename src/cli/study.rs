@@ -4,6 +4,7 @@
 use super::options::THREADS;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
+use super::printer::Printer;
 use anyhow::Result;
 use axiscal::harness::studies::EfficiencyStudy;
 use axiscal::harness::studies::StudyError;
@@ -46,7 +47,7 @@ impl Args {
 }
 
 /// Runs `axiscal study`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args, printer: Printer) -> Result<()> {
     let study = EfficiencyStudy {
         trials: args.trials,
         seed: args.seed,
@@ -57,7 +58,7 @@ pub fn run(args: Args) -> Result<()> {
     let names = ["efficiency.json", "efficiency.md"];
     let outputs = Outputs::new(args.force);
     outputs.check_in(&args.out, &names)?;
-    let progress = super::progress::Progress::stage("efficiency study");
+    let progress = super::progress::Progress::stage("efficiency study", printer);
     let report = super::options::thread_pool(args.threads)?
         .install(|| study.run_with(&progress))
         .map_err(|e| failed_trial(e, args.noise_mm))?;
