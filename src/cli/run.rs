@@ -11,9 +11,7 @@ use super::output::Outputs;
 use super::printer::Printer;
 use super::{Interrupted, ThresholdsFailed, signals};
 use anyhow::{Context, Result, bail};
-use axiscal::harness::scenario::export::{
-    self, PartialTrials, RESOLVED_FILE, RUN_FILES, RunLock, SHARD_FILE, TRIALS_FILE,
-};
+use axiscal::harness::scenario::export::{self, PartialTrials, RUN_FILES, RunLock, SHARD_FILE, TRIALS_FILE};
 use axiscal::harness::scenario::resolve::{MAX_UNITS, default_results_dir};
 use axiscal::harness::scenario::{
     CampaignTrial, Overrides, ResolvedScenario, Shard, Summary, Trial, TrialRecord, complete_run, run_units_until,
@@ -84,7 +82,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     }
     let _lock = RunLock::acquire(&plan.out)?;
     let done = if args.resume {
-        previous_trials(&plan)?
+        export::resume::previous_trials(&plan.out, &plan.scenario, &plan.resolved_text, &plan.names, plan.shard)?
     } else {
         export::prepare_dir(&plan.out, args.force)?;
         export::write_resolved(&plan.out, &plan.resolved_text)?;
@@ -135,51 +133,6 @@ fn resolve(args: &Args) -> Result<Plan> {
         shard,
         out,
     })
-}
-
-/// The finished trials of the interrupted run in `plan.out`, after checking that it is the
-/// same resolved scenario and that its trials belong to this shard.
-fn previous_trials(plan: &Plan) -> Result<Vec<TrialRecord>> {
-    let resolved = plan.out.join(RESOLVED_FILE);
-    let text = std::fs::read_to_string(&resolved)
-        .with_context(|| format!("--resume: nothing to resume in {}", plan.out.display()))?;
-    if text != plan.resolved_text {
-        bail!(
-            "--resume: {} differs from the scenario resolved now (another scenario, or other --trials/--seed); \
-             start over with --force instead",
-            resolved.display()
-        );
-    }
-    let trials = plan.out.join(TRIALS_FILE);
-    if !trials.exists() {
-        return Ok(Vec::new());
-    }
-    let (names, records) = export::csv::read_partial_trials(&trials, &plan.scenario)?;
-    if names != plan.names {
-        bail!(
-            "--resume: {}: metric columns {names:?} differ from {:?}",
-            trials.display(),
-            plan.names
-        );
-    }
-    let units = plan.shard.units(plan.scenario.units());
-    let n = plan.scenario.trials;
-    if let Some(r) = records.iter().find(|r| !units.contains(&r.unit(n))) {
-        bail!(
-            "--resume: {} holds trial {} of case {}, outside shard {} (units {}..{})",
-            trials.display(),
-            r.trial,
-            plan.scenario.cases[r.case].name,
-            plan.shard,
-            units.start,
-            units.end
-        );
-    }
-    let mut seen = std::collections::BTreeMap::new();
-    for r in records {
-        seen.entry(r.unit(n)).or_insert(r);
-    }
-    Ok(seen.into_values().collect())
 }
 
 /// Runs the units of the shard not in `done` (appending each to `trials.csv` as it finishes)

@@ -9,6 +9,7 @@ pub mod csv;
 pub mod json;
 pub mod markdown;
 pub mod plot;
+pub mod resume;
 
 pub use self::csv::PartialTrials;
 

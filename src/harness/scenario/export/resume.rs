@@ -1,0 +1,173 @@
+//! Continuing an interrupted run (`run --resume`): the finished trials of its folder, once
+//! they are known to belong to the same resolved scenario, metrics and shard.
+
+use super::csv::read_partial_trials;
+use super::{ExportError, RESOLVED_FILE, TRIALS_FILE};
+use crate::harness::scenario::metrics::TrialRecord;
+use crate::harness::scenario::resolve::ResolvedScenario;
+use crate::harness::scenario::runner::Shard;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The folder cannot be resumed.
+#[derive(Debug, thiserror::Error)]
+pub enum ResumeError {
+    /// The folder holds no resolved scenario.
+    #[error("--resume: nothing to resume in {folder}: {cause}")]
+    Nothing {
+        /// The results folder.
+        folder: PathBuf,
+        /// Why its resolved scenario could not be read.
+        cause: std::io::Error,
+    },
+    /// The folder's resolved scenario is not the one resolved now.
+    #[error(
+        "--resume: {path} differs from the scenario resolved now (another scenario, or other --trials/--seed); start over with --force instead"
+    )]
+    OtherScenario {
+        /// The folder's `scenario.resolved.toml`.
+        path: PathBuf,
+    },
+    /// The trials file cannot be read.
+    #[error(transparent)]
+    Trials(#[from] ExportError),
+    /// The trials file has other metric columns.
+    #[error("--resume: {path}: metric columns {found:?} differ from {expected:?}")]
+    OtherMetrics {
+        /// The trials file.
+        path: PathBuf,
+        /// Its metric columns.
+        found: Vec<String>,
+        /// The scenario's.
+        expected: Vec<String>,
+    },
+    /// The trials file holds a trial of another shard.
+    #[error("--resume: {path} holds trial {trial} of case {case}, outside shard {shard} (units {start}..{end})")]
+    OutsideShard {
+        /// The trials file.
+        path: PathBuf,
+        /// The trial's number in its case.
+        trial: usize,
+        /// The case's name.
+        case: String,
+        /// The shard resumed.
+        shard: Shard,
+        /// Its first unit.
+        start: usize,
+        /// One past its last unit.
+        end: usize,
+    },
+}
+
+/// The finished trials of the interrupted run in `folder` (one per unit, sorted by unit),
+/// after checking that the folder's resolved scenario is `resolved_text`, its metric columns
+/// are `names` and its trials belong to `shard`. A folder without a trials file has none.
+pub fn previous_trials(
+    folder: &Path,
+    scenario: &ResolvedScenario,
+    resolved_text: &str,
+    names: &[String],
+    shard: Shard,
+) -> Result<Vec<TrialRecord>, ResumeError> {
+    let resolved = folder.join(RESOLVED_FILE);
+    let text = std::fs::read_to_string(&resolved).map_err(|cause| ResumeError::Nothing {
+        folder: folder.to_owned(),
+        cause,
+    })?;
+    if text != resolved_text {
+        return Err(ResumeError::OtherScenario { path: resolved });
+    }
+    let trials = folder.join(TRIALS_FILE);
+    if !trials.exists() {
+        return Ok(Vec::new());
+    }
+    let (found, records) = read_partial_trials(&trials, scenario)?;
+    if found != names {
+        return Err(ResumeError::OtherMetrics {
+            path: trials,
+            found,
+            expected: names.to_vec(),
+        });
+    }
+    let units = shard.units(scenario.units());
+    let n = scenario.trials;
+    if let Some(r) = records.iter().find(|r| !units.contains(&r.unit(n))) {
+        return Err(ResumeError::OutsideShard {
+            path: trials,
+            trial: r.trial,
+            case: scenario.cases[r.case].name.clone(),
+            shard,
+            start: units.start,
+            end: units.end,
+        });
+    }
+    let mut seen = BTreeMap::new();
+    for r in records {
+        seen.entry(r.unit(n)).or_insert(r);
+    }
+    Ok(seen.into_values().collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::harness::scenario::export::PartialTrials;
+    use crate::harness::scenario::resolve::Overrides;
+
+    fn smoke() -> ResolvedScenario {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/ci-smoke.toml");
+        let overrides = Overrides {
+            trials: Some(4),
+            seed: None,
+        };
+        ResolvedScenario::from_file(&path, overrides).unwrap()
+    }
+
+    /// A folder of a run of `scenario` interrupted after `units` (successful records, value 1).
+    fn interrupted(scenario: &ResolvedScenario, names: &[String], units: &[usize]) -> tempfile::TempDir {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join(RESOLVED_FILE), "resolved").unwrap();
+        let trials = PartialTrials::create(&dir.path().join(TRIALS_FILE), names).unwrap();
+        for &u in units {
+            let record = TrialRecord {
+                case: u / scenario.trials,
+                trial: u % scenario.trials,
+                seed: u as u64,
+                values: vec![1.0; names.len()],
+                error: None,
+            };
+            trials.append(scenario, &record).unwrap();
+        }
+        dir
+    }
+
+    #[test]
+    fn a_folder_of_the_same_run_gives_its_trials_once_each_by_unit() {
+        let scenario = smoke();
+        let names = vec!["a_mm".to_owned(), "b_mm".to_owned()];
+        let dir = interrupted(&scenario, &names, &[2, 0, 2]);
+        let records = previous_trials(dir.path(), &scenario, "resolved", &names, Shard::ALL).unwrap();
+        let units: Vec<usize> = records.iter().map(|r| r.unit(scenario.trials)).collect();
+        assert_eq!(units, [0, 2]);
+    }
+
+    #[test]
+    fn another_scenario_metrics_or_shard_is_refused() {
+        let scenario = smoke();
+        let names = vec!["a_mm".to_owned()];
+        let dir = interrupted(&scenario, &names, &[0, 3]);
+        let empty = tempfile::tempdir().unwrap();
+        let nothing = previous_trials(empty.path(), &scenario, "resolved", &names, Shard::ALL);
+        assert!(matches!(nothing, Err(ResumeError::Nothing { .. })));
+        let other = previous_trials(dir.path(), &scenario, "another", &names, Shard::ALL);
+        assert!(matches!(other, Err(ResumeError::OtherScenario { .. })));
+        let metrics = previous_trials(dir.path(), &scenario, "resolved", &["b_mm".to_owned()], Shard::ALL);
+        assert!(matches!(metrics, Err(ResumeError::OtherMetrics { .. })));
+        let first_half = Shard { index: 1, count: 2 };
+        let shard = previous_trials(dir.path(), &scenario, "resolved", &names, first_half);
+        assert!(
+            matches!(shard, Err(ResumeError::OutsideShard { trial: 3, .. })),
+            "{shard:?}"
+        );
+    }
+}
