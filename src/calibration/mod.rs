@@ -31,6 +31,7 @@ pub mod export;
 pub mod free_pose;
 pub mod line_ml;
 pub mod noise;
+pub mod outputs;
 pub mod procedure;
 pub mod refine;
 pub mod shared_target;

@@ -10,12 +10,12 @@ use super::printer::Printer;
 use anyhow::Context;
 use anyhow::Result;
 use axiscal::calibration::free_pose;
+use axiscal::calibration::outputs::{self, OUTPUT_FILES, OutputOptions};
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Implausible, PLAUSIBLE_AXIS_TILT_RAD,
-    ProcedureError, SIZE_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, findings, implausible, joint_map,
-    joints_without_speed_limits, longest_length_m, markdown, raw_reading_deviation, residuals_csv, ros_name,
-    screen_sweeps, urdf,
+    ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, longest_length_m, ros_name,
+    screen_sweeps,
 };
 use axiscal::calibration::refine::{RefineOptions, Refinement};
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
@@ -35,17 +35,6 @@ const URDF_ROOTS: &[(&str, UrdfRoot)] = &[("base_link", UrdfRoot::BaseLink), ("i
 
 /// The most poses the URDF deviation and the zero-offset fit use.
 const EXPORT_POSES: usize = 500;
-
-/// The files `calibrate` writes into its output folder.
-const OUTPUTS: [&str; 7] = [
-    "calibration.json",
-    "report.md",
-    "report.json",
-    "calibrated.urdf",
-    "joint_map.csv",
-    "residuals.csv",
-    "zero_offsets.csv",
-];
 
 /// Arguments of `axiscal calibrate`.
 #[derive(Debug, clap::Args)]
@@ -145,103 +134,35 @@ pub struct Args {
     checks: checks::Overrides,
 }
 
-/// What `calibrate` writes, rendered before anything is written.
-struct OutputTexts {
-    /// The files of [`OUTPUTS`] that are written, by name, in order.
-    files: Vec<(&'static str, String)>,
-    /// Outputs left out, with the reason (printed as warnings).
-    left_out: Vec<String>,
-    /// The URDF-fed-raw-readings line printed after the axes table.
-    deviation_line: String,
-    /// Joints whose URDF speed and effort limits are unknown.
-    missing_speed_limits: Vec<usize>,
-    /// What the checks against the description found.
-    implausible: Vec<Implausible>,
-}
-
-/// Renders every output of `calibrate` (see [`OUTPUTS`]).
-fn output_texts(
-    args: &Args,
-    desc: &RobotDescription,
-    set: &MeasurementSet,
-    cal: &Calibration,
-    source: &str,
-) -> Result<OutputTexts> {
-    // The deviation over the data's validation poses, else over seeded poses around the
-    // reference.
+/// The commands the outputs' raw-reading deviation and zero offsets are computed over: the
+/// data's validation poses (at most [`EXPORT_POSES`], evenly spaced through the file: a
+/// million-row file must not make these checks the slowest part of the calibration), else
+/// seeded poses around the reference.
+fn export_poses(set: &MeasurementSet, desc: &RobotDescription, cal: &Calibration) -> Vec<Vec<f64>> {
     let all: Vec<Vec<f64>> = set
         .experiments()
         .iter()
         .filter(|e| e.moved_joint == 0 && e.name != TOOL_EXPERIMENT)
         .flat_map(|e| e.by_step().into_values().map(|rows| rows[0].cmd.clone()))
         .collect();
-    // At most EXPORT_POSES of them, evenly spaced through the file: a million-row file must
-    // not make these checks the slowest part of the calibration.
     let stride = all.len().div_ceil(EXPORT_POSES).max(1);
-    let mut poses: Vec<Vec<f64>> = all.into_iter().step_by(stride).collect();
-    if poses.is_empty() {
-        let plan = ValidationPlan {
-            poses: EXPORT_POSES,
-            ..ValidationPlan::workspace_default(desc.dof())
-        };
-        poses = plan.commands(desc, &cal.reference_cmd);
+    let poses: Vec<Vec<f64>> = all.into_iter().step_by(stride).collect();
+    if !poses.is_empty() {
+        return poses;
     }
-    let implausible = match cal.free_poses {
-        None => implausible(cal, desc),
-        Some(_) => vec![],
+    let plan = ValidationPlan {
+        poses: EXPORT_POSES,
+        ..ValidationPlan::workspace_default(desc.dof())
     };
-    let deviation = raw_reading_deviation(cal, desc, &poses);
-    let mut report_findings = findings(cal, desc);
-    report_findings.extend(deviation.findings());
-    let urdf_options = UrdfOptions {
-        robot_name: args.urdf_name.clone().unwrap_or_else(|| ros_name(&desc.name)),
-        root: args.urdf_root,
-    };
-    let map = joint_map(cal, desc, args.joint_map_step);
-    let mut files = vec![
-        (OUTPUTS[0], json_file::to_string(Schema::CALIBRATION, cal)?),
-        (
-            OUTPUTS[1],
-            report_markdown(cal, desc, source, &implausible) + &deviation.markdown(),
-        ),
-        (
-            OUTPUTS[2],
-            json_file::list_to_string(Schema::REPORT, "findings", &report_findings)?,
-        ),
-        (OUTPUTS[3], urdf(&cal.robot.phi_model(), desc, &urdf_options)),
-        (OUTPUTS[4], super::joints::joint_map_csv(&map, &desc.name)),
-        (OUTPUTS[5], residuals_csv(cal)),
-    ];
-    // The zero offsets are a convenience for controllers that take nothing else: when their
-    // fit fails, the calibration stands and the file is left out with the reason.
-    let mut left_out = Vec::new();
-    match super::joints::zero_offsets_csv(cal, desc, &poses) {
-        Ok(text) => files.push((OUTPUTS[6], text)),
-        Err(e) => left_out.push(format!("{} not written: {e:#}", OUTPUTS[6])),
-    }
-    Ok(OutputTexts {
-        files,
-        left_out,
-        deviation_line: format!(
-            "  URDF fed raw controller readings: tool off by up to {:.3} mm, {:.3} mrad over {} poses (use joint_map.csv / `axiscal joints`)",
-            deviation.max_position_mm, deviation.max_orientation_mrad, deviation.poses
-        ),
-        missing_speed_limits: joints_without_speed_limits(desc),
-        implausible,
-    })
+    plan.commands(desc, &cal.reference_cmd)
 }
 
-/// `report.md`: the free-pose report or the independent-axis one.
-fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str, warnings: &[Implausible]) -> String {
-    match &cal.free_poses {
-        Some(summary) => free_pose::markdown(
-            summary,
-            cal.noise.as_ref().and_then(|n| n.estimate.as_ref()),
-            &desc.name,
-            source,
-        ),
-        None => markdown(cal, desc, source, warnings),
-    }
+/// The URDF-fed-raw-readings line printed after the axes table.
+fn deviation_line(d: &RawReadingDeviation) -> String {
+    format!(
+        "  URDF fed raw controller readings: tool off by up to {:.3} mm, {:.3} mrad over {} poses (use joint_map.csv / `axiscal joints`)",
+        d.max_position_mm, d.max_orientation_mrad, d.poses
+    )
 }
 
 /// Runs `axiscal calibrate`.
@@ -253,7 +174,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         outputs = outputs.input("--carry", carry);
     }
     let printer = printer.with_json(args.json);
-    outputs.check_in(&args.out, &OUTPUTS)?;
+    outputs.check_in(&args.out, &OUTPUT_FILES)?;
     outputs.check_in(&args.out, &TOOL_MAP_FILES)?;
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
@@ -278,7 +199,14 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     cal.model_digest = Some(cal.robot.digest());
     readable(&cal, &args, (&set, &desc))?;
     let source = args.data.display().to_string();
-    let texts = output_texts(&args, &desc, &set, &cal, &source)?;
+    let options = OutputOptions {
+        urdf: UrdfOptions {
+            robot_name: args.urdf_name.clone().unwrap_or_else(|| ros_name(&desc.name)),
+            root: args.urdf_root,
+        },
+        joint_map_step: args.joint_map_step,
+    };
+    let texts = outputs::render(&cal, &desc, &source, &export_poses(&set, &desc, &cal), &options)?;
     // Every file is written before any is put in place; an output left out must not leave an
     // earlier run's file beside the new calibration.
     let mut staged = outputs.staged_in(&args.out)?;
@@ -290,7 +218,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         staged.draw(&TOOL_MAP_FILES, |dir| write_tool_map(&map, dir))?;
         written.extend(TOOL_MAP_FILES);
     }
-    staged.commit(&[&OUTPUTS[..], &TOOL_MAP_FILES[..]].concat())?;
+    staged.commit(&[&OUTPUT_FILES[..], &TOOL_MAP_FILES[..]].concat())?;
     match &cal.free_poses {
         Some(summary) => {
             super::calibrate_free::print(summary, &desc, &set, &args.data, printer);
@@ -307,7 +235,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             }
         }
     }
-    say!(printer, "{}", texts.deviation_line);
+    say!(printer, "{}", deviation_line(&texts.deviation));
     // The URDF says so beside each such `<limit>`; a note, not a warning on every run.
     if !texts.missing_speed_limits.is_empty() && printer.verbose {
         eprintln!(
@@ -319,7 +247,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         eprintln!("warning: {warning}");
     }
     say!(printer, "wrote {}/{{{}}}", args.out.display(), written.join(","));
-    printer.emit_json(&args.out.join(OUTPUTS[2]))?;
+    printer.emit_json(&args.out.join(OUTPUT_FILES[2]))?;
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
         let campaign = super::record::calibrated::CalibratedCampaign {

@@ -1,16 +1,12 @@
 //! `axiscal joints --calibration CAL.json CMD...`: the calibrated joint values of controller
 //! commands (what a URDF, a ROS `joint_states` publisher or any kinematic-chain tool must be
-//! fed), for one pose on the command line or every row of a CSV; and the CSV renderings of the
-//! joint map and the controller zero offsets that `calibrate` writes (`docs/formats.md#joint-map`).
+//! fed), for one pose on the command line or every row of a CSV.
 
 use anyhow::{Context, Result, bail};
-use axiscal::calibration::procedure::{
-    Calibration, JointMap, MapTable, calibrated_joint_values, controller_zero_offsets,
-};
+use axiscal::calibration::procedure::{Calibration, calibrated_joint_values};
 use axiscal::measurement::format_f64;
 use axiscal::measurement::import::table::Table;
 use axiscal::robot::{RobotDescription, commands_to_file};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal joints`.
@@ -143,66 +139,4 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path
     }
     out.flush()?;
     Ok(())
-}
-
-/// `joint_map.csv` (`docs/formats.md#joint-map`).
-pub fn joint_map_csv(map: &JointMap, robot_name: &str) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# axiscal joint map of {robot_name}: calibrated joint values from controller commands"
-    );
-    let _ = writeln!(
-        s,
-        "# q_k = active_k(u_k) + passive_k(active_(k-1)); u_1 = cmd_1, u_k = cmd_k - slope_k u_(k-1), slope_k: {}",
-        map.decoupling_slopes
-            .iter()
-            .enumerate()
-            .map(|(k, s)| format!("{}={}", k + 1, format_f64(*s)))
-            .collect::<Vec<_>>()
-            .join(" ")
-    );
-    let _ = writeln!(
-        s,
-        "# linear interpolation in this table is within {:.3e} (deg or mm) of the exact values",
-        map.max_interpolation_error
-    );
-    let _ = writeln!(s, "table,joint,input,output,input_unit,output_unit");
-    for r in &map.rows {
-        let table = match r.table {
-            MapTable::Active => "active",
-            MapTable::Passive => "passive",
-        };
-        let _ = writeln!(
-            s,
-            "{table},{},{},{},{},{}",
-            r.joint,
-            format_f64(r.input),
-            format_f64(r.output),
-            r.input_unit,
-            r.output_unit
-        );
-    }
-    s
-}
-
-/// `zero_offsets.csv` (`docs/formats.md#zero-offsets`): the zero offsets a controller that
-/// takes nothing else can use, fitted over `commands` (file units).
-pub fn zero_offsets_csv(cal: &Calibration, desc: &RobotDescription, commands: &[Vec<f64>]) -> Result<String> {
-    let fit = controller_zero_offsets(cal, desc, commands).context("fitting the controller zero offsets")?;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# zero offsets for a controller that takes nothing else: ADD `offset` to a joint reading (subtract it from a command) and the nominal kinematics reproduce the calibrated robot best"
-    );
-    let _ = writeln!(
-        s,
-        "# tool-target RMS, nominal vs calibrated, over {} poses: {:.3} mm without offsets, {:.3} mm with them (what offsets alone cannot take)",
-        fit.poses, fit.rms_before_mm, fit.rms_after_mm
-    );
-    s.push_str("joint,offset,unit\n");
-    for (k, (offset, unit)) in fit.offsets.iter().zip(&fit.units).enumerate() {
-        let _ = writeln!(s, "{},{},{unit}", k + 1, format_f64(*offset));
-    }
-    Ok(s)
 }

@@ -1,0 +1,192 @@
+//! Everything `calibrate` writes into its output folder, rendered as text before anything is
+//! written (the binary places the files as one set): the calibration, its two reports, the
+//! URDF, the joint map, the residuals and, when their fit converges, the controller zero
+//! offsets (`docs/formats.md`).
+
+use super::free_pose;
+use super::procedure::{
+    Calibration, Implausible, JointMap, MapTable, RawReadingDeviation, UrdfOptions, controller_zero_offsets, findings,
+    implausible, joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, urdf,
+};
+use crate::json_file::{self, Schema};
+use crate::measurement::format_f64;
+use crate::numerics::lsq::LsqError;
+use crate::robot::RobotDescription;
+use std::fmt::Write as _;
+
+/// The files `calibrate` writes into its output folder, in this order.
+pub const OUTPUT_FILES: [&str; 7] = [
+    "calibration.json",
+    "report.md",
+    "report.json",
+    "calibrated.urdf",
+    "joint_map.csv",
+    "residuals.csv",
+    "zero_offsets.csv",
+];
+
+/// How the outputs are written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputOptions {
+    /// The URDF's name and root.
+    pub urdf: UrdfOptions,
+    /// Step of the tabulated joint map (deg or mm).
+    pub joint_map_step: f64,
+}
+
+/// The rendered outputs of a calibration.
+#[derive(Clone, Debug)]
+pub struct CalibrationOutputs {
+    /// The files of [`OUTPUT_FILES`] that are written, by name, in order.
+    pub files: Vec<(&'static str, String)>,
+    /// Outputs left out, with the reason.
+    pub left_out: Vec<String>,
+    /// How far a URDF fed raw controller readings puts the tool.
+    pub deviation: RawReadingDeviation,
+    /// Joints whose URDF speed and effort limits are unknown.
+    pub missing_speed_limits: Vec<usize>,
+    /// What the checks against the description found.
+    pub implausible: Vec<Implausible>,
+}
+
+/// The calibration could not be written as JSON.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {cause}")]
+pub struct OutputError {
+    /// The file being rendered.
+    pub file: &'static str,
+    /// Why.
+    pub cause: serde_json::Error,
+}
+
+/// Renders every output of `cal` (see [`OUTPUT_FILES`]); `poses` (file units) are the commands
+/// the raw-reading deviation and the zero offsets are computed over, `source` names the data.
+pub fn render(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    source: &str,
+    poses: &[Vec<f64>],
+    options: &OutputOptions,
+) -> Result<CalibrationOutputs, OutputError> {
+    let json = |file: &'static str, r: serde_json::Result<String>| r.map_err(|cause| OutputError { file, cause });
+    let implausible = match cal.free_poses {
+        None => implausible(cal, desc),
+        Some(_) => vec![],
+    };
+    let deviation = raw_reading_deviation(cal, desc, poses);
+    let mut report_findings = findings(cal, desc);
+    report_findings.extend(deviation.findings());
+    let map = joint_map(cal, desc, options.joint_map_step);
+    let mut files = vec![
+        (
+            OUTPUT_FILES[0],
+            json(OUTPUT_FILES[0], json_file::to_string(Schema::CALIBRATION, cal))?,
+        ),
+        (
+            OUTPUT_FILES[1],
+            report_markdown(cal, desc, source, &implausible) + &deviation.markdown(),
+        ),
+        (
+            OUTPUT_FILES[2],
+            json(
+                OUTPUT_FILES[2],
+                json_file::list_to_string(Schema::REPORT, "findings", &report_findings),
+            )?,
+        ),
+        (OUTPUT_FILES[3], urdf(&cal.robot.phi_model(), desc, &options.urdf)),
+        (OUTPUT_FILES[4], joint_map_csv(&map, &desc.name)),
+        (OUTPUT_FILES[5], residuals_csv(cal)),
+    ];
+    // The zero offsets are a convenience for controllers that take nothing else: when their
+    // fit fails, the calibration stands and the file is left out with the reason.
+    let mut left_out = Vec::new();
+    match zero_offsets_csv(cal, desc, poses) {
+        Ok(text) => files.push((OUTPUT_FILES[6], text)),
+        Err(e) => left_out.push(format!(
+            "{} not written: fitting the controller zero offsets: {e}",
+            OUTPUT_FILES[6]
+        )),
+    }
+    Ok(CalibrationOutputs {
+        files,
+        left_out,
+        deviation,
+        missing_speed_limits: joints_without_speed_limits(desc),
+        implausible,
+    })
+}
+
+/// `report.md`: the free-pose report or the independent-axis one.
+fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str, warnings: &[Implausible]) -> String {
+    match &cal.free_poses {
+        Some(summary) => free_pose::markdown(
+            summary,
+            cal.noise.as_ref().and_then(|n| n.estimate.as_ref()),
+            &desc.name,
+            source,
+        ),
+        None => markdown(cal, desc, source, warnings),
+    }
+}
+
+/// `joint_map.csv` (`docs/formats.md#joint-map`).
+pub fn joint_map_csv(map: &JointMap, robot_name: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# axiscal joint map of {robot_name}: calibrated joint values from controller commands"
+    );
+    let _ = writeln!(
+        s,
+        "# q_k = active_k(u_k) + passive_k(active_(k-1)); u_1 = cmd_1, u_k = cmd_k - slope_k u_(k-1), slope_k: {}",
+        map.decoupling_slopes
+            .iter()
+            .enumerate()
+            .map(|(k, s)| format!("{}={}", k + 1, format_f64(*s)))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    let _ = writeln!(
+        s,
+        "# linear interpolation in this table is within {:.3e} (deg or mm) of the exact values",
+        map.max_interpolation_error
+    );
+    let _ = writeln!(s, "table,joint,input,output,input_unit,output_unit");
+    for r in &map.rows {
+        let table = match r.table {
+            MapTable::Active => "active",
+            MapTable::Passive => "passive",
+        };
+        let _ = writeln!(
+            s,
+            "{table},{},{},{},{},{}",
+            r.joint,
+            format_f64(r.input),
+            format_f64(r.output),
+            r.input_unit,
+            r.output_unit
+        );
+    }
+    s
+}
+
+/// `zero_offsets.csv` (`docs/formats.md#zero-offsets`): the zero offsets a controller that
+/// takes nothing else can use, fitted over `commands` (file units).
+pub fn zero_offsets_csv(cal: &Calibration, desc: &RobotDescription, commands: &[Vec<f64>]) -> Result<String, LsqError> {
+    let fit = controller_zero_offsets(cal, desc, commands)?;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# zero offsets for a controller that takes nothing else: ADD `offset` to a joint reading (subtract it from a command) and the nominal kinematics reproduce the calibrated robot best"
+    );
+    let _ = writeln!(
+        s,
+        "# tool-target RMS, nominal vs calibrated, over {} poses: {:.3} mm without offsets, {:.3} mm with them (what offsets alone cannot take)",
+        fit.poses, fit.rms_before_mm, fit.rms_after_mm
+    );
+    s.push_str("joint,offset,unit\n");
+    for (k, (offset, unit)) in fit.offsets.iter().zip(&fit.units).enumerate() {
+        let _ = writeln!(s, "{},{},{unit}", k + 1, format_f64(*offset));
+    }
+    Ok(s)
+}
