@@ -602,8 +602,8 @@ fn sag_words(
         f,
         "joint {joint} ({experiment}) turns {travel:.4} (+-{}) times as far per command as the description's \
          transmission says, over the commands it was measured at, as a joint sagging under its load does: with the \
-         description's masses, the gravity torque about joint {joint} changes along the sweep so that a stiffness of \
-         about {stiffness:.1e} N m/rad gives this slope, a sag of up to {:.2} deg; `axiscal diagnose` on this file \
+         description's masses, the gravity torque about joint {joint} changes with its angle over the points \
+         measured so that a stiffness of about {stiffness:.1e} N m/rad gives this slope, a sag of up to {:.2} deg; `axiscal diagnose` on this file \
          models the sag (joint compliance). If joint {joint} is much stiffer than that, the column `cmd_{joint}` is \
          scaled by {:.4} on export instead: check cmd_{joint} against the controller's reading at two poses. The fit \
          took the sag into joint {joint}'s transmission, so calibration.json holds for it only near the \
