@@ -5,7 +5,7 @@ use super::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
-use axiscal::calibration::procedure::{Calibration, free_pose_scale_slips};
+use axiscal::calibration::procedure::{Calibration, free_pose_scale_reach, free_pose_scale_slips};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::robot::RobotDescription;
@@ -223,7 +223,8 @@ fn slip_words(s: &ExplainingSlip) -> String {
 /// [`axiscal::calibration::free_pose::slip`]): a column slip; else tool target ids in another
 /// order, by their distances ([`swapped_target_ids`]) or, for a symmetric set, by the fitted
 /// tool frame's turn ([`mirrored_targets`]); and, without a column slip, a joint's transmission
-/// beyond what a drive gives ([`free_pose_scale_slips`]).
+/// beyond what a drive gives ([`free_pose_scale_slips`]), or else how large a column scale
+/// that test lets pass ([`free_pose_scale_reach`]).
 fn warn_slips(
     args: &FreeArgs<'_>,
     (set, desc): (&MeasurementSet, &RobotDescription),
@@ -248,8 +249,14 @@ fn warn_slips(
         );
         return;
     }
-    for found in free_pose_scale_slips(cal, desc, set.rows()) {
+    let scaled = free_pose_scale_slips(cal, desc, set.rows());
+    for found in &scaled {
         eprintln!("warning: {data}: {found}");
+    }
+    if scaled.is_empty()
+        && let Some(reach) = free_pose_scale_reach(cal, desc, set.rows())
+    {
+        eprintln!("note: {data}: {reach}");
     }
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);
     for found in &swapped {

@@ -43,7 +43,8 @@
 mod scale;
 
 pub use scale::{
-    LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, ScaleSlip, free_pose_scale_slips,
+    LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_REACH_CLAIM, SCALE_SIGMAS, ScaleReach,
+    ScaleSlip, free_pose_scale_reach, free_pose_scale_slips,
 };
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
@@ -247,7 +248,7 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
     let scaled: Vec<usize> = found
         .iter()
         .filter_map(|s| match s {
-            Implausible::Scaled(ScaleSlip::Command { joint, .. }) => Some(*joint),
+            Implausible::Scaled(ScaleSlip::Command { joint, .. } | ScaleSlip::Sag { joint, .. }) => Some(*joint),
             _ => None,
         })
         .collect();
