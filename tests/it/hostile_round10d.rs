@@ -126,11 +126,11 @@ mod real_sscanss2 {
             &case("clean", &format!("calibrate data.csv {table} --out out"), 0, &[]),
         );
         no_moved_sweep("SScanSS-2 table", &e);
-        clear_outputs(d);
-        imported(d, "two_link.csv", "sscanss2-two-link");
+        let other = tempfile::tempdir().unwrap();
+        imported(other.path(), "two_link.csv", "sscanss2-two-link");
         let two_link = robot("real/sscanss2-two-link");
         let e = run_case(
-            d,
+            other.path(),
             &case("clean", &format!("calibrate data.csv {two_link} --out out"), 0, &[]),
         );
         no_moved_sweep("SScanSS-2 two-link", &e);
