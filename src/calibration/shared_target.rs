@@ -18,15 +18,23 @@
 //! the sweep without which the others agree is named, with its offset, when that offset is
 //! beyond [`GROSS_MISS_FACTOR`] times the test's bound for it: an effect the model lacks (a held
 //! joint's backlash taken up differently between the sweeps, sag bending one sweep's arc) moves
-//! a sweep's point by tenths of a millimetre, a moved block by millimetres. No model of the robot:
-//! the data against themselves and the description's word that the targets are one.
+//! a sweep's point by tenths of a millimetre, a moved block by millimetres. Where no sweep's
+//! removal lets the others agree at the noise (a real robot whose effects scatter every sweep's
+//! point: Boby & Klimchik's arm), each sweep is tested against the others' scatter instead
+//! (`scattered_odd_one_out`, an F ratio). A description without `axis_targets` (SScanSS-2's
+//! robots) has every sweep read the tool frame's origin; a noise-free file's points are as exact
+//! as their printed decimals (`printed_step_mm`); where every sweep moves the point along one
+//! direction (a planar robot) that direction is left out (`pseudo_inverse`). No model of the
+//! robot: the data against themselves and the description's word that the targets are one. Not
+//! reached (`docs/formats.md`): a move along a sweep's own motion, a sweep no other meets at the
+//! reference pose, every row moved alike.
 
 use super::procedure::{AxisExperiment, axis_experiments};
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::column_slips::GROSS_MISS_FACTOR;
 use crate::numerics::roots::{Bisection, bisect_infallible};
-use crate::numerics::stats::chi_square_quantile;
+use crate::numerics::stats::{chi_square_quantile, f_upper_quantile};
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::{Matrix3, Point3, Vector3};
 use std::collections::BTreeMap;
@@ -91,7 +99,9 @@ impl std::fmt::Display for MovedSweep {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let [x, y, z] = self.offset_mm;
         let lines = self.lines.map_or(String::new(), |(a, b)| format!(" (lines {a}-{b})"));
-        let (link, [px, py, pz]) = self.target;
+        let (link, place) = self.target;
+        // The description's numbers, without a double's trailing digits.
+        let [px, py, pz] = place.map(|v| (v * 1e3).round() / 1e3 + 0.0);
         let who = if self.ambiguous {
             format!(
                 "experiment {}{lines} and {} disagree",
@@ -130,13 +140,11 @@ pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_
     let reach = reach_mm(desc);
     let mut groups: Groups = BTreeMap::new();
     for e in &experiments {
-        let Some(t) = desc.axis_targets_of(e.joint).map(|a| a.target0) else {
+        let Some((link, place)) = sweep_target(desc, e.joint) else {
             continue;
         };
         if let Some(s) = sweep_sighting(e, desc, &reference, reach) {
-            let entry = groups
-                .entry(key(t.link, t.position_mm))
-                .or_insert(((t.link, t.position_mm), Vec::new()));
+            let entry = groups.entry(key(link, place)).or_insert(((link, place), Vec::new()));
             entry.1.push(s);
         }
     }
@@ -145,7 +153,9 @@ pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_
             entry.1.push(s);
         }
     }
-    let sigma2 = noise_rms_3d_mm.powi(2) / 3.0;
+    // A file without noise (SScanSS-2's two-link example) is still only as exact as its printed
+    // coordinates: their rounding, uniform over one step, is the floor of a point's variance.
+    let sigma2 = (noise_rms_3d_mm.powi(2) / 3.0).max(printed_step_mm(set).powi(2) / 12.0);
     groups
         .into_values()
         .filter_map(|(target, sightings)| odd_one_out(&sightings, sigma2, target))
@@ -187,6 +197,43 @@ fn reach_mm(desc: &RobotDescription) -> f64 {
         .map(|t| Vector3::from(*t).norm())
         .fold(0.0f64, f64::max);
     rows_mm + targets_mm
+}
+
+/// Where the description places sweep `joint`'s target 0: its `axis_targets` entry (link and
+/// position \[mm\]); in a description without any (SScanSS-2's robots, whose sweeps each measure
+/// the tool frame's origin, `docs/formats.md`), the tool frame's origin on the last link.
+fn sweep_target(desc: &RobotDescription, joint: usize) -> Option<(usize, [f64; 3])> {
+    if let Some(a) = desc.axis_targets_of(joint) {
+        return Some((a.target0.link, a.target0.position_mm));
+    }
+    desc.axis_targets
+        .is_empty()
+        .then(|| (desc.dof(), desc.tool.frame.translation_mm))
+}
+
+/// Decimal places a coordinate is printed with at most: beyond them a double's digits are
+/// not the file's.
+const MAX_PRINTED_DECIMALS: i32 = 9;
+
+/// The step \[mm\] of the finest printed coordinate of `set`: `10^-d` for the most decimal
+/// places `d` any coordinate needs (at most [`MAX_PRINTED_DECIMALS`]).
+fn printed_step_mm(set: &MeasurementSet) -> f64 {
+    let decimals = |v: f64| {
+        (0..MAX_PRINTED_DECIMALS)
+            .find(|&d| {
+                let scaled = v * 10f64.powi(d);
+                (scaled - scaled.round()).abs() <= 1e-6
+            })
+            .unwrap_or(MAX_PRINTED_DECIMALS)
+    };
+    let most = set
+        .rows()
+        .iter()
+        .flat_map(|m| m.position_mm)
+        .map(decimals)
+        .max()
+        .unwrap_or(0);
+    10f64.powi(-most)
 }
 
 /// The key of a place on a link (to a micrometre: the description's numbers).
@@ -329,14 +376,11 @@ fn at_reference(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<(
 /// over its variance, are least) and the chi-square of their offsets with its degrees of
 /// freedom; `None` when they do not fix a point.
 fn consensus(sightings: &[&Sighting], sigma2: f64) -> Option<(Vector3<f64>, f64, usize)> {
-    let weight = |s: &Sighting| s.across / (s.leverage * sigma2 + s.held_mm2);
+    let weight = |s: &Sighting| weight(s, sigma2);
     let total: Matrix3<f64> = sightings.iter().map(|s| weight(s)).sum();
-    let eigen = total.symmetric_eigenvalues();
-    if eigen.min() <= 1e-9 * eigen.max() {
-        return None;
-    }
+    let (inverse, rank) = pseudo_inverse(&total)?;
     let right: Vector3<f64> = sightings.iter().map(|s| weight(s) * s.point).sum();
-    let centre = total.try_inverse()? * right;
+    let centre = inverse * right;
     let chi2 = sightings
         .iter()
         .map(|s| {
@@ -345,7 +389,42 @@ fn consensus(sightings: &[&Sighting], sigma2: f64) -> Option<(Vector3<f64>, f64,
         })
         .sum();
     let observed: usize = sightings.iter().map(|s| s.across.trace().round() as usize).sum();
-    Some((centre, chi2, observed.checked_sub(3)?))
+    Some((centre, chi2, observed.checked_sub(rank)?))
+}
+
+/// The inverse of a consensus's total weight `total` and its rank; where the sightings all
+/// move along one direction (a planar robot's sweeps at the reference pose), the inverse on the
+/// directions they observe, the point along the other undetermined and untested. `None` when
+/// they observe fewer than two directions.
+fn pseudo_inverse(total: &Matrix3<f64>) -> Option<(Matrix3<f64>, usize)> {
+    let eigen = total.symmetric_eigen();
+    let largest = eigen.eigenvalues.max();
+    let kept: Vec<usize> = (0..3).filter(|&i| eigen.eigenvalues[i] > 1e-9 * largest).collect();
+    match kept.len() {
+        3 => Some((total.try_inverse()?, 3)),
+        2 => {
+            let inverse = kept
+                .iter()
+                .map(|&i| {
+                    let v = eigen.eigenvectors.column(i);
+                    v * v.transpose() / eigen.eigenvalues[i]
+                })
+                .sum();
+            Some((inverse, 2))
+        }
+        _ => None,
+    }
+}
+
+/// The variance \[mm²\] of a sighting's point at the noise `sigma2` of a coordinate: its
+/// interpolation's and the joints' positioned once for it.
+fn variance(s: &Sighting, sigma2: f64) -> f64 {
+    s.leverage * sigma2 + s.held_mm2
+}
+
+/// A sighting's weight in a consensus: its projection across its motion over its variance.
+fn weight(s: &Sighting, sigma2: f64) -> Matrix3<f64> {
+    s.across / variance(s, sigma2)
 }
 
 /// Whether a chi-square `chi2` with `dof` degrees of freedom exceeds the test's quantile.
@@ -364,43 +443,118 @@ fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -
     let mut passing: Vec<(usize, Vector3<f64>, f64)> = (0..sightings.len())
         .filter(|&k| sightings[k].across != Matrix3::identity())
         .filter_map(|k| {
-            let rest: Vec<&Sighting> = all
-                .iter()
-                .enumerate()
-                .filter(|(j, _)| *j != k)
-                .map(|(_, s)| *s)
-                .collect();
+            let rest = without(sightings, k);
             let (centre, chi2, dof) = consensus(&rest, sigma2).or_else(|| Some((rest.first()?.point, 0.0, 0)))?;
             (!exceeds(chi2, dof)).then_some((k, centre, chi2))
         })
         .collect();
     passing.sort_by(|a, b| a.2.total_cmp(&b.2));
-    let &(k, centre, _) = passing.first()?;
+    let Some(&(k, centre, _)) = passing.first() else {
+        return scattered_odd_one_out(sightings, sigma2, target);
+    };
     let s = &sightings[k];
     let offset = s.across * (s.point - centre);
-    let sigmas = offset.norm() / (s.leverage * sigma2 + s.held_mm2).sqrt();
-    let bound = chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, s.across.trace().round()).sqrt();
-    if sigmas <= GROSS_MISS_FACTOR * bound {
+    let sigmas = offset.norm() / variance(s, sigma2).sqrt();
+    if sigmas <= GROSS_MISS_FACTOR * noise_bound(s) {
         return None;
     }
     // Several sweeps without each of which the others agree, or two sightings: either may be
     // the one out of place.
-    let ambiguous = passing.len() > 1 || sightings.len() == 2;
-    let others: Vec<String> = if passing.len() > 1 {
-        passing[1..].iter().map(|p| sightings[p.0].experiment.clone()).collect()
-    } else {
+    let rivals: Vec<usize> = passing[1..].iter().map(|p| p.0).collect();
+    let ambiguous = sightings.len() == 2;
+    Some(moved_sweep(sightings, (k, &rivals, ambiguous), offset, sigmas, target))
+}
+
+/// Sighting `k` of `sightings` said out of place, with `rivals` the other sightings that could
+/// be (`ambiguous` too when there are any): the others it is compared with when there are none.
+fn moved_sweep(
+    sightings: &[Sighting],
+    (k, rivals, ambiguous): (usize, &[usize], bool),
+    offset: Vector3<f64>,
+    sigmas: f64,
+    target: (usize, [f64; 3]),
+) -> MovedSweep {
+    let s = &sightings[k];
+    let others: Vec<String> = if rivals.is_empty() {
         (0..sightings.len())
             .filter(|&j| j != k)
             .map(|j| sightings[j].experiment.clone())
             .collect()
+    } else {
+        rivals.iter().map(|&j| sightings[j].experiment.clone()).collect()
     };
-    Some(MovedSweep {
+    MovedSweep {
         experiment: s.experiment.clone(),
         lines: s.lines,
         offset_mm: [offset.x, offset.y, offset.z],
         sigmas,
-        ambiguous,
+        ambiguous: ambiguous || !rivals.is_empty(),
         others,
         target,
-    })
+    }
+}
+
+/// Every sighting of `sightings` but the `k`-th.
+fn without(sightings: &[Sighting], k: usize) -> Vec<&Sighting> {
+    sightings
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j != k)
+        .map(|(_, s)| s)
+        .collect()
+}
+
+/// The noise test's bound on a sighting's offset over its standard deviation: the chi-square
+/// quantile at [`SHARED_TARGET_FALSE_ALARM`] with its dimensions across its motion.
+fn noise_bound(s: &Sighting) -> f64 {
+    chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, s.across.trace().round()).sqrt()
+}
+
+/// The sweep out of the others' scatter, when no sighting's removal lets the others agree at
+/// the noise (module docs: a real robot's effects the model lacks scatter every sighting):
+/// each sweep's offset from the others' consensus, over its variance and the consensus's, per
+/// dimension, over the others' chi-square per degree of freedom (their scatter over the noise,
+/// at least 1), is an F ratio; the sweep is named when that ratio is beyond its quantile at
+/// [`SHARED_TARGET_FALSE_ALARM`] shared among the sweeps tested, and its offset beyond
+/// [`GROSS_MISS_FACTOR`] times the noise test's bound ([`odd_one_out`]'s rule).
+fn scattered_odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -> Option<MovedSweep> {
+    let sweeps: Vec<usize> = (0..sightings.len())
+        .filter(|&k| sightings[k].across != Matrix3::identity())
+        .collect();
+    let tests = sweeps.len() as f64;
+    let mut beyond: Vec<(usize, f64, Vector3<f64>, f64)> = sweeps
+        .iter()
+        .filter_map(|&k| {
+            let (ratio, offset, sigmas) = scatter_ratio(sightings, k, sigma2, tests)?;
+            (ratio > 1.0).then_some((k, ratio, offset, sigmas))
+        })
+        .collect();
+    beyond.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let &(k, _, offset, sigmas) = beyond.first()?;
+    let rivals: Vec<usize> = beyond[1..].iter().map(|b| b.0).collect();
+    Some(moved_sweep(sightings, (k, &rivals, false), offset, sigmas, target))
+}
+
+/// Sweep `k`'s F ratio over its quantile among `tests` sweeps ([`scattered_odd_one_out`]; beyond
+/// 1: out of the others' scatter), its offset across its motion from the others' consensus
+/// \[mm\], and that offset over its standard deviation at the others' scatter; `None` when the
+/// others fix no point or have no degree of freedom left, or the offset is within
+/// [`GROSS_MISS_FACTOR`] times the noise test's bound.
+fn scatter_ratio(sightings: &[Sighting], k: usize, sigma2: f64, tests: f64) -> Option<(f64, Vector3<f64>, f64)> {
+    let rest = without(sightings, k);
+    let (centre, chi2, dof) = consensus(&rest, sigma2)?;
+    let s = &sightings[k];
+    let offset = s.across * (s.point - centre);
+    if dof == 0 || offset.norm() / variance(s, sigma2).sqrt() <= GROSS_MISS_FACTOR * noise_bound(s) {
+        return None;
+    }
+    let (consensus_covariance, _) = pseudo_inverse(&rest.iter().map(|r| weight(r, sigma2)).sum())?;
+    // The unit variance along the motion makes the matrix invertible; the offset has no part there.
+    let along = Matrix3::identity() - s.across;
+    let covariance = s.across * (Matrix3::identity() * variance(s, sigma2) + consensus_covariance) * s.across + along;
+    let chi2_k = (offset.transpose() * covariance.try_inverse()? * offset)[0];
+    let scatter = (chi2 / dof as f64).max(1.0);
+    let dim = s.across.trace().round();
+    let quantile = f_upper_quantile(SHARED_TARGET_FALSE_ALARM / tests, dim, dof as f64);
+    Some((chi2_k / dim / scatter / quantile, offset, (chi2_k / scatter).sqrt()))
 }
