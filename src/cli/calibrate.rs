@@ -21,6 +21,7 @@ use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, 
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates, refine_carrying};
 use axiscal::json_file::{self, Schema};
+use axiscal::measurement::unit_check::axis_scale::{AxisScale, COLUMNS, Fit, axis_scale};
 use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -513,6 +514,14 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
     };
     let set = screened;
     cal.outliers = screening.outliers;
+    let fit = |s: &MeasurementSet| {
+        let c = calibrate(s, desc, &options).ok()?;
+        Some(Fit {
+            sum_squares_mm2: c.axes.iter().map(|a| a.points as f64 * a.residual_rms_mm.powi(2)).sum(),
+            dof: c.noise.as_ref()?.estimate.as_ref()?.dof as f64,
+        })
+    };
+    warn_axis_scale(set, &args.data, &fit);
     let map = predict_tool_accuracy(&mut cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
@@ -522,6 +531,55 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         cal
     };
     Ok((cal, map))
+}
+
+/// The scale of one coordinate column the calibration `fit` finds in `set` ([`axis_scale`]),
+/// as a warning naming the column when the data determine it beyond 1; with `--verbose` a
+/// note of the largest one either way.
+pub(super) fn warn_axis_scale(set: &MeasurementSet, data: &Path, fit: &dyn Fn(&MeasurementSet) -> Option<Fit>) {
+    let Some(found) = axis_scale(set, fit) else {
+        return;
+    };
+    let AxisScale {
+        column,
+        factor,
+        sigma,
+        rms_mm: [before, after],
+        ..
+    } = found;
+    let name = COLUMNS[column];
+    let axis = &name[..1];
+    if !found.significant {
+        if super::verbose() {
+            eprintln!(
+                "note: {}: of the coordinate columns `{name}` reads the most unlike the others: {factor:.5} times \
+                 (+- {sigma:.5}, {:.1} sigma from 1, within the data's reach of 1)",
+                data.display(),
+                (factor - 1.0).abs() / sigma
+            );
+        }
+        return;
+    }
+    let place = match set.line_of(0) {
+        Some(line) => format!("{}:{line}", data.display()),
+        None => data.display().to_string(),
+    };
+    let alike = match found.alike {
+        Some((other, f)) => format!(
+            " (or, alike for these data, `{}` reads {f:.5} times: the robot's links take a scale of both together)",
+            COLUMNS[other]
+        ),
+        None => String::new(),
+    };
+    eprintln!(
+        "warning: {place}: `{name}`: the instrument's {axis} axis reads {factor:.5} times (+- {sigma:.5}, {:.0} sigma \
+         from 1) the other axes{alike}: the calibration misses the points by {before:.4} mm RMS per coordinate as read and by \
+         {after:.4} mm with `{name}` divided by {factor:.5} about the data's centroid; each arc or pose alone takes such \
+         a scale as a tilt, the robot's arcs and poses together do not, and calibration.json has absorbed it into the \
+         geometry: check the instrument's scale along {axis} (its axis scale or compensation, a photogrammetry scale \
+         bar along it) and the exporter (a column scaled or converted alone), then calibrate the corrected file again",
+        (factor - 1.0).abs() / sigma
+    );
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far

@@ -7,6 +7,7 @@ use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSu
 use axiscal::calibration::procedure::{Calibration, free_pose_scale_slips};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
+use axiscal::measurement::unit_check::axis_scale::Fit;
 use axiscal::robot::RobotDescription;
 use std::path::Path;
 
@@ -238,8 +239,27 @@ fn warn_slips(
         );
         return;
     }
-    for found in free_pose_scale_slips(cal, desc, set.rows()) {
+    let scaled = free_pose_scale_slips(cal, desc, set.rows());
+    for found in &scaled {
         eprintln!("warning: {data}: {found}");
+    }
+    if scaled.is_empty() {
+        // Every pose in every run: a pose left out in one run and not another is no profile.
+        let profile = FreePoseOptions {
+            holdout: false,
+            effects: false,
+            keep_outliers: true,
+            ..*options
+        };
+        let fit = |s: &MeasurementSet| {
+            let c = calibrate_free_poses(s, desc, &profile).ok()?;
+            let points = c.summary.points as f64;
+            Some(Fit {
+                sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
+                dof: 3.0 * points - c.summary.parameters.len() as f64,
+            })
+        };
+        super::calibrate::warn_axis_scale(set, args.data, &fit);
     }
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);
     for found in &swapped {
