@@ -244,11 +244,10 @@ fn warn_slips(
         eprintln!("warning: {data}: {found}");
     }
     if scaled.is_empty() {
-        // Every pose in every run: a pose left out in one run and not another is no profile.
+        // The poses the model cannot fit stay flagged with the column undone: no axis named.
         let profile = FreePoseOptions {
             holdout: false,
             effects: false,
-            keep_outliers: true,
             ..*options
         };
         let fit = |s: &MeasurementSet| {
@@ -257,6 +256,7 @@ fn warn_slips(
             Some(Fit {
                 sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
                 dof: 3.0 * points - c.summary.parameters.len() as f64,
+                misfit_poses: c.summary.outliers.len(),
             })
         };
         super::calibrate::warn_axis_scale(set, args.data, &fit);

@@ -14,7 +14,9 @@
 //! curvature). The reduction is tested with the F ratio against the residuals' own noise
 //! estimate at [`AXIS_SCALE_FALSE_ALARM`] shared by the three columns, and the factor is
 //! confirmed by a fourth run with the column undone, whose own reduction must pass the same
-//! test (the linearisation checked against the re-run; when it does not, one more parabola
+//! test and whose every free pose the model fits within its outlier fence (a pose the model
+//! cannot fit even so says the residuals are the model's limits, not noise, and any extra
+//! parameter reduces them; the linearisation checked against the re-run; when it does not, one more parabola
 //! about the factor found and its re-run decide). A uniform scale of all
 //! three columns is one of the links' lengths, so "x reads long" and "y and z read short" are
 //! one finding: the column named is the one whose undoing explains most.
@@ -43,6 +45,9 @@ pub struct Fit {
     pub sum_squares_mm2: f64,
     /// Its degrees of freedom (coordinates less fitted parameters).
     pub dof: f64,
+    /// Free poses the fit finds beyond its outlier fence (0 for sweeps): a pose the model
+    /// cannot fit says the residuals are not the noise the F test assumes.
+    pub misfit_poses: usize,
 }
 
 /// A coordinate column's scale the data determine.
@@ -136,7 +141,7 @@ fn confirmed(
     let c = centroid(set, found.column);
     let rate = AXIS_SCALE_FALSE_ALARM / 3.0;
     let at = fit(&undone(set, found.column, found.factor, c))?;
-    if reduction_p(base, at)? < rate {
+    if reduction_p(base, at)? < rate && at.misfit_poses == 0 {
         return Some(AxisScale {
             significant: true,
             ..found
@@ -144,7 +149,7 @@ fn confirmed(
     }
     let again = profile(set, (found.column, found.factor), at, fit)?;
     let at = fit(&undone(set, found.column, again.factor, c))?;
-    let significant = reduction_p(base, at)? < rate;
+    let significant = reduction_p(base, at)? < rate && at.misfit_poses == 0;
     Some(AxisScale {
         significant,
         rms_mm: [found.rms_mm[0], (at.sum_squares_mm2 / base.dof).sqrt()],
