@@ -86,7 +86,7 @@ fn one_coordinate_column_scaled_in_sweeps_is_named() {
 
 #[test]
 fn validate_names_one_coordinate_column_scaled() {
-    let robot = "positioner-2axis";
+    let robot = "ur5e-dh";
     let dir = tempfile::tempdir().unwrap();
     let clean = free_poses(dir.path(), robot, 1014);
     x_long(&clean, "x.csv");
