@@ -518,7 +518,7 @@ fn calibrate_axes(args: &Args, set: &MeasurementSet, desc: &RobotDescription) ->
         let c = calibrate(s, desc, &options).ok()?;
         Some(Fit {
             sum_squares_mm2: c.axes.iter().map(|a| a.points as f64 * a.residual_rms_mm.powi(2)).sum(),
-            dof: c.noise.as_ref()?.estimate.as_ref()?.dof as f64,
+            dof: c.noise.as_ref()?.estimate.as_ref()?.dof,
             misfit_poses: 0,
         })
     };

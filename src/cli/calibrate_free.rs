@@ -255,7 +255,7 @@ fn warn_slips(
             let points = c.summary.points as f64;
             Some(Fit {
                 sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
-                dof: 3.0 * points - c.summary.parameters.len() as f64,
+                dof: (3 * c.summary.points).saturating_sub(c.summary.parameters.len()),
                 misfit_poses: c.summary.outliers.len(),
             })
         };

@@ -44,7 +44,7 @@ pub struct Fit {
     /// The sum of the squared residual coordinates \[mm^2\].
     pub sum_squares_mm2: f64,
     /// Its degrees of freedom (coordinates less fitted parameters).
-    pub dof: f64,
+    pub dof: usize,
     /// Free poses the fit finds beyond its outlier fence (0 for sweeps): a pose the model
     /// cannot fit says the residuals are not the noise the F test assumes.
     pub misfit_poses: usize,
@@ -98,9 +98,10 @@ fn profile(
     let h = PROFILE_STEP;
     let plus = fit(&undone(set, column, at * (1.0 + h), c))?;
     let minus = fit(&undone(set, column, at * (1.0 - h), c))?;
-    if plus.dof != base.dof || minus.dof != base.dof || base.dof < 2.0 {
+    if plus.dof != base.dof || minus.dof != base.dof || base.dof < 2 {
         return None;
     }
+    let dof = base.dof as f64;
     let slope = (plus.sum_squares_mm2 - minus.sum_squares_mm2) / (2.0 * h);
     let curvature = (plus.sum_squares_mm2 + minus.sum_squares_mm2 - 2.0 * base.sum_squares_mm2) / (2.0 * h * h);
     if !(curvature > 0.0 && slope.is_finite()) {
@@ -108,13 +109,13 @@ fn profile(
     }
     let reduction = slope * slope / (4.0 * curvature);
     let left = (base.sum_squares_mm2 - reduction).max(0.0);
-    let variance = left / (base.dof - 1.0);
+    let variance = left / (dof - 1.0);
     Some(AxisScale {
         column,
         factor: at * (1.0 - slope / (2.0 * curvature)),
         sigma: at * (variance / curvature).sqrt(),
-        p_value: f_upper_tail(reduction / variance, 1.0, base.dof - 1.0),
-        rms_mm: [(base.sum_squares_mm2 / base.dof).sqrt(), (left / base.dof).sqrt()],
+        p_value: f_upper_tail(reduction / variance, 1.0, dof - 1.0),
+        rms_mm: [(base.sum_squares_mm2 / dof).sqrt(), (left / dof).sqrt()],
         significant: false,
         alike: None,
     })
@@ -124,7 +125,7 @@ fn profile(
 /// `at` (one parameter more; the fewer degrees of freedom of the two when the fits kept
 /// different parameters), `None` without two degrees of freedom.
 fn reduction_p(base: Fit, at: Fit) -> Option<f64> {
-    let dof = base.dof.min(at.dof) - 1.0;
+    let dof = base.dof.min(at.dof) as f64 - 1.0;
     let variance = at.sum_squares_mm2 / dof;
     (dof >= 1.0).then(|| f_upper_tail((base.sum_squares_mm2 - at.sum_squares_mm2) / variance, 1.0, dof))
 }
@@ -152,7 +153,7 @@ fn confirmed(
     let significant = reduction_p(base, at)? < rate && at.misfit_poses == 0;
     Some(AxisScale {
         significant,
-        rms_mm: [found.rms_mm[0], (at.sum_squares_mm2 / base.dof).sqrt()],
+        rms_mm: [found.rms_mm[0], (at.sum_squares_mm2 / base.dof as f64).sqrt()],
         ..again
     })
 }
@@ -165,7 +166,7 @@ fn thinned(set: &MeasurementSet) -> Option<MeasurementSet> {
         return None;
     }
     let k = n.div_ceil(PROFILE_MAX_ROWS);
-    let dropped: Vec<usize> = (0..n).filter(|&i| set.rows()[i].step % k != 0).collect();
+    let dropped: Vec<usize> = (0..n).filter(|&i| !set.rows()[i].step.is_multiple_of(k)).collect();
     Some(set.without_rows(&dropped))
 }
 
@@ -184,9 +185,10 @@ pub fn axis_scale(set: &MeasurementSet, fit: &dyn Fn(&MeasurementSet) -> Option<
     if best.p_value >= rate {
         return Some(best);
     }
-    let reduction = |a: &AxisScale| base.sum_squares_mm2 - a.rms_mm[1].powi(2) * base.dof;
-    let variance = best.rms_mm[1].powi(2) * base.dof / (base.dof - 1.0);
-    let apart = variance * f_upper_quantile(rate, 1.0, base.dof - 1.0);
+    let dof = base.dof as f64;
+    let reduction = |a: &AxisScale| base.sum_squares_mm2 - a.rms_mm[1].powi(2) * dof;
+    let variance = best.rms_mm[1].powi(2) * dof / (dof - 1.0);
+    let apart = variance * f_upper_quantile(rate, 1.0, dof - 1.0);
     let alike = profiles
         .iter()
         .filter(|a| a.column != best.column && reduction(&best) - reduction(a) < apart)
