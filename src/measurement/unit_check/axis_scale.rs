@@ -7,7 +7,7 @@
 //!
 //! A profile test: the calibration ([`Fit`], supplied by the caller, so this module knows
 //! nothing of it) is re-run with one column rescaled about the data's centroid by `1 +- h`
-//! ([`PROFILE_STEP`]); a scale about any other point is this one plus a shift, which the base
+//! (`PROFILE_STEP`); a scale about any other point is this one plus a shift, which the base
 //! frame absorbs, so only the factor is identifiable. The three residual sums of squares give
 //! the parabola of the sum against the factor, its minimum (the factor the column reads), the
 //! reduction of the sum there, and the factor's sigma (the noise over the parabola's
