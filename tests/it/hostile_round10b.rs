@@ -7,32 +7,11 @@
 
 use crate::common::altered_csv;
 use crate::common::hostile::{case, run_case};
+use crate::hostile_round9b::{robot_path, simulated};
 use std::path::Path;
 
 /// The calibrate warning's words.
 const AXIS_READS: &str = "axis reads";
-
-/// The shipped description of `robot`.
-fn robot_path(robot: &str) -> String {
-    format!("{}/scenarios/robots/{robot}.toml", env!("CARGO_MANIFEST_DIR"))
-}
-
-/// `simulate --sim analytic` of `robot` (seed `seed`, `poses` validation poses) as `out` in `dir`.
-fn simulated(dir: &Path, robot: &str, seed: u64, poses: usize, out: &str) {
-    crate::common::axiscal()
-        .current_dir(dir)
-        .args(["simulate", "--sim", "analytic", "--robot", &robot_path(robot)])
-        .args([
-            "--validation-poses",
-            &poses.to_string(),
-            "--seed",
-            &seed.to_string(),
-            "--out",
-            out,
-        ])
-        .assert()
-        .success();
-}
 
 /// The free poses (`moved_joint = 0`) of a simulation of `robot` as `fp.csv` in `dir`.
 fn free_poses(dir: &Path, robot: &str, seed: u64) -> std::path::PathBuf {
