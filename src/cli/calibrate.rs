@@ -22,6 +22,7 @@ use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, 
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates, refine_carrying};
 use axiscal::json_file::{self, Schema};
+use axiscal::measurement::unit_check::axis_scale::{AxisScale, COLUMNS, Fit, axis_scale};
 use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -188,7 +189,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
                  estimates the noise from their residuals (report.md, \"Noise from the residuals\"); it applies to axis experiments"
             );
         }
-        let mut cal = super::calibrate_free::calibrate(&args_view(&args), &set, &desc)?;
+        let mut cal = super::calibrate_free::calibrate(&args_view(&args), &set, &desc, printer)?;
         let map = predict_free_pose_accuracy(&mut cal, &desc, &set)?;
         (cal, map)
     } else {
@@ -420,7 +421,7 @@ fn calibrate_axes(
         }
         // Every row a free pose: that fit tests its poses for outliers itself, on every row.
         Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) if !args.refine => {
-            let mut cal = sweeps_as_free_poses(args, set, desc, &e)?;
+            let mut cal = sweeps_as_free_poses(args, set, desc, &e, printer)?;
             let map = predict_free_pose_accuracy(&mut cal, desc, set)?;
             return Ok((cal, map));
         }
@@ -447,6 +448,15 @@ fn calibrate_axes(
     };
     let set = screened;
     cal.outliers = screening.outliers;
+    let fit = |s: &MeasurementSet| {
+        let c = calibrate(s, desc, &options).ok()?;
+        Some(Fit {
+            sum_squares_mm2: c.axes.iter().map(|a| a.points as f64 * a.residual_rms_mm.powi(2)).sum(),
+            dof: c.noise.as_ref()?.estimate.as_ref()?.dof,
+            misfit_poses: 0,
+        })
+    };
+    warn_axis_scale(set, &args.data, &fit, printer);
     let map = predict_tool_accuracy(&mut cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
@@ -458,6 +468,60 @@ fn calibrate_axes(
     Ok((cal, map))
 }
 
+/// The scale of one coordinate column the calibration `fit` finds in `set` ([`axis_scale`]),
+/// as a warning naming the column when the data determine it beyond 1; with `--verbose` a
+/// note of the largest one either way.
+pub(super) fn warn_axis_scale(
+    set: &MeasurementSet,
+    data: &Path,
+    fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
+    printer: Printer,
+) {
+    let Some(found) = axis_scale(set, fit) else {
+        return;
+    };
+    let AxisScale {
+        column,
+        factor,
+        sigma,
+        rms_mm: [before, after],
+        ..
+    } = found;
+    let name = COLUMNS[column];
+    let axis = &name[..1];
+    if !found.significant {
+        if printer.verbose {
+            eprintln!(
+                "note: {}: of the coordinate columns `{name}` reads the most unlike the others: {factor:.5} times \
+                 (+- {sigma:.5}, {:.1} sigma from 1, within the data's reach of 1)",
+                data.display(),
+                (factor - 1.0).abs() / sigma
+            );
+        }
+        return;
+    }
+    let place = match set.line_of(0) {
+        Some(line) => format!("{}:{line}", data.display()),
+        None => data.display().to_string(),
+    };
+    let alike = match found.alike {
+        Some((other, f)) => format!(
+            " (or, alike for these data, `{}` reads {f:.5} times: the robot's links take a scale of both together)",
+            COLUMNS[other]
+        ),
+        None => String::new(),
+    };
+    eprintln!(
+        "warning: {place}: `{name}`: the instrument's {axis} axis reads {factor:.5} times (+- {sigma:.5}, {:.0} sigma \
+         from 1) the other axes{alike}: the calibration misses the points by {before:.4} mm RMS per coordinate as read and by \
+         {after:.4} mm with `{name}` divided by {factor:.5} about the data's centroid; each arc or pose alone takes such \
+         a scale as a tilt, the robot's arcs and poses together do not, and calibration.json has absorbed it into the \
+         geometry: check the instrument's scale along {axis} (its axis scale or compensation, a photogrammetry scale \
+         bar along it) and the exporter (a column scaled or converted alone), then calibrate the corrected file again",
+        (factor - 1.0).abs() / sigma
+    );
+}
+
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far
 /// from one configuration that the independent-axis correction for them does not settle
 /// (`failure`); an error when the sweeps' targets cannot be free poses.
@@ -466,6 +530,7 @@ fn sweeps_as_free_poses(
     set: &MeasurementSet,
     desc: &RobotDescription,
     failure: &ProcedureError,
+    printer: Printer,
 ) -> Result<Calibration> {
     if let Some(why_not) = free_pose::poses::why_sweeps_are_not_poses(set, desc) {
         anyhow::bail!(
@@ -481,7 +546,10 @@ fn sweeps_as_free_poses(
     );
     let mut view = args_view(args);
     view.all_rows = true;
-    let mut cal = match (super::calibrate_free::calibrate(&view, set, desc), failure.misfit()) {
+    let mut cal = match (
+        super::calibrate_free::calibrate(&view, set, desc, printer),
+        failure.misfit(),
+    ) {
         (Ok(cal), _) => cal,
         // The rows named are the likelier cause than the configurations' spread.
         (Err(_), Some(misfit)) => anyhow::bail!(

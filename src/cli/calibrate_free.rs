@@ -8,6 +8,7 @@ use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSu
 use axiscal::calibration::procedure::{Calibration, free_pose_scale_reach, free_pose_scale_slips};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
+use axiscal::measurement::unit_check::axis_scale::Fit;
 use axiscal::robot::RobotDescription;
 use std::path::Path;
 
@@ -32,7 +33,12 @@ pub struct FreeArgs<'a> {
 }
 
 /// The free-pose calibration of `set`.
-pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescription) -> Result<Calibration> {
+pub fn calibrate(
+    args: &FreeArgs<'_>,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    printer: Printer,
+) -> Result<Calibration> {
     if args.refine {
         anyhow::bail!(
             "--refine refines an independent-axis calibration on free poses; {} has free poses only, which calibrate directly (drop --refine)",
@@ -63,7 +69,7 @@ pub fn calibrate(args: &FreeArgs<'_>, set: &MeasurementSet, desc: &RobotDescript
         cal.summary.axis_rows_as_poses = Some("`--free-poses` asked for it".into());
     }
     let cal = cal.into_calibration(desc);
-    warn_slips(args, (set, desc), &options, &cal);
+    warn_slips(args, (set, desc), &options, &cal, printer);
     Ok(cal)
 }
 
@@ -230,6 +236,7 @@ fn warn_slips(
     (set, desc): (&MeasurementSet, &RobotDescription),
     options: &FreePoseOptions,
     cal: &Calibration,
+    printer: Printer,
 ) {
     let Some(summary) = cal.free_poses.as_ref() else {
         return;
@@ -253,10 +260,26 @@ fn warn_slips(
     for found in &scaled {
         eprintln!("warning: {data}: {found}");
     }
-    if scaled.is_empty()
-        && let Some(reach) = free_pose_scale_reach(cal, desc, set.rows())
-    {
-        eprintln!("note: {data}: {reach}");
+    if scaled.is_empty() {
+        // The poses the model cannot fit stay flagged with the column undone: no axis named.
+        let profile = FreePoseOptions {
+            holdout: false,
+            effects: false,
+            ..*options
+        };
+        let fit = |s: &MeasurementSet| {
+            let c = calibrate_free_poses(s, desc, &profile).ok()?;
+            let points = c.summary.points as f64;
+            Some(Fit {
+                sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
+                dof: (3 * c.summary.points).saturating_sub(c.summary.parameters.len()),
+                misfit_poses: c.summary.outliers.len(),
+            })
+        };
+        super::calibrate::warn_axis_scale(set, args.data, &fit, printer);
+        if let Some(reach) = free_pose_scale_reach(cal, desc, set.rows()) {
+            eprintln!("note: {data}: {reach}");
+        }
     }
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);
     for found in &swapped {

@@ -7,7 +7,10 @@
 //! searches ([`super::slips`], [`super::sweep_slips`]) leave as the model's error. The one
 //! factor that best explains every point (Gauss-Newton, [`fitted_parameter`]) is said when it
 //! lies beyond the false-alarm rate's normal quantile of its sigma from 1 and the file with it
-//! undone passes every test of the validation. Tried only when a test misses by more than
+//! undone passes every test of the validation. When no uniform scale does, each coordinate
+//! column alone is tried the same way: one axis of the instrument reading long or short (its
+//! axis scale, a scale bar along it) or an exporter that scaled one column, which the
+//! calibration's own file would have hidden as tilts of its arcs. Tried only when a test misses by more than
 //! [`GROSS_MISS_FACTOR`] times its acceptance and no other slip explains the miss, so clean
 //! data pay nothing.
 
@@ -33,23 +36,35 @@ fn exceeds(s: &PositionSummary) -> bool {
     s.chi_square.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds)
 }
 
-/// The uniform scale of every coordinate of `set` (module docs) that explains `v`'s misses, as
-/// one miss naming the coordinate columns; `None` when no test misses grossly, the fitted
-/// factor is within its noise of 1, or the file with it undone still fails a test. `desc` is
-/// the description `v` was made with.
-pub fn explained_file_scale(
+/// The coordinate columns a scale is tried on: every one (a uniform scale) first, then each
+/// alone (one axis of the instrument reading long or short), with the columns' names.
+const SCALED_COLUMNS: [(&[usize], &str); 4] = [
+    (&[0, 1, 2], "x_mm,y_mm,z_mm"),
+    (&[0], "x_mm"),
+    (&[1], "y_mm"),
+    (&[2], "z_mm"),
+];
+
+/// A scale of some coordinate columns that explains a validation's misses: the factor the
+/// file reads (the columns' values over what the calibration gives), its sigma, and the
+/// validation with it undone.
+struct FoundScale {
+    factor: f64,
+    sigma: f64,
+    undone: Validation,
+}
+
+/// The scale of `set`'s `columns` (about the instrument's origin) that explains `v`'s misses,
+/// fitted as in the module docs; `None` when it is within its noise of 1 or the file with it
+/// undone still fails a test.
+fn scale_of(
     set: &MeasurementSet,
-    cal: &Calibration,
-    desc: &RobotDescription,
+    (cal, desc): (&Calibration, &RobotDescription),
     v: &Validation,
-) -> Option<ExplainedMiss> {
-    let gross = summaries(v)
-        .filter(|s| {
-            exceeds(s) && s.rms_mm > GROSS_MISS_FACTOR * acceptance(s.predicted_mm.total, s.points, v.false_alarm)
-        })
-        .max_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm))?;
+    columns: &'static [usize],
+) -> Option<FoundScale> {
     let rows = set.rows();
-    let scaled = |s: f64| move |m: &mut Measurement| m.position_mm.iter_mut().for_each(|c| *c *= s);
+    let scaled = |s: f64| move |m: &mut Measurement| columns.iter().for_each(|&c| m.position_mm[c] *= s);
     let at = |s: f64| residuals_with(rows, &scaled(s), cal, desc);
     let within = |s: f64| (1.0 / MAX_SCALE_RATIO..=MAX_SCALE_RATIO).contains(&s);
     let (s, jj) = fitted_parameter(&at, 1.0, [1e-6, 1e-9], &within)?;
@@ -68,7 +83,33 @@ pub fn explained_file_scale(
     if summaries(&undone).any(exceeds) {
         return None;
     }
-    let (factor, sigma) = (1.0 / s, sigma_s / (s * s));
+    Some(FoundScale {
+        factor: 1.0 / s,
+        sigma: sigma_s / (s * s),
+        undone,
+    })
+}
+
+/// The uniform scale of every coordinate of `set` (module docs), or else the scale of one
+/// coordinate column alone (an instrument axis reading long), that explains `v`'s misses, as
+/// one miss naming the columns; `None` when no test misses grossly, the fitted factor is
+/// within its noise of 1, or the file with it undone still fails a test. `desc` is the
+/// description `v` was made with.
+pub fn explained_file_scale(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    v: &Validation,
+) -> Option<ExplainedMiss> {
+    let gross = summaries(v)
+        .filter(|s| {
+            exceeds(s) && s.rms_mm > GROSS_MISS_FACTOR * acceptance(s.predicted_mm.total, s.points, v.false_alarm)
+        })
+        .max_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm))?;
+    let (found, field) = SCALED_COLUMNS
+        .iter()
+        .find_map(|&(columns, field)| Some((scale_of(set, (cal, desc), v, columns)?, field)))?;
+    let FoundScale { factor, sigma, undone } = found;
     let after: Vec<String> = summaries(&undone)
         .map(|u| {
             format!(
@@ -77,22 +118,36 @@ pub fn explained_file_scale(
             )
         })
         .collect();
-    Some(ExplainedMiss {
-        experiment: "all".into(),
-        line: set.line_of(0),
-        field: "x_mm,y_mm,z_mm".into(),
-        message: format!(
-            "the calibrated model misses these data ({} points by {:.4} mm RMS where {:.4} mm is predicted), and every \
+    let missed = format!(
+        "the calibrated model misses these data ({} points by {:.4} mm RMS where {:.4} mm is predicted)",
+        gross.points, gross.rms_mm, gross.predicted_mm.total
+    );
+    let from_one = (factor - 1.0).abs() / sigma;
+    let message = if field.contains(',') {
+        format!(
+            "{missed}, and every \
              test passes with every coordinate divided by {factor:.5} ({}): every coordinate of the file reads \
-             {factor:.5} times (+- {sigma:.5}, {:.0} sigma from 1) what the calibration gives, about the instrument's \
+             {factor:.5} times (+- {sigma:.5}, {from_one:.0} sigma from 1) what the calibration gives, about the instrument's \
              origin: check the instrument's scale (a laser tracker's wavelength or air compensation, a photogrammetry \
              scale bar), the coordinates' units and the export's scaling, or whether the robot's size changed since \
              the calibration",
-            gross.points,
-            gross.rms_mm,
-            gross.predicted_mm.total,
             after.join(", "),
-            (factor - 1.0).abs() / sigma
-        ),
+        )
+    } else {
+        format!(
+            "{missed}, and every test passes with the `{field}` column alone divided by {factor:.5} ({}): the \
+             instrument's {} axis reads {factor:.5} times (+- {sigma:.5}, {from_one:.0} sigma from 1) what the \
+             calibration gives, the other axes as it gives, about the instrument's origin: check the instrument's \
+             scale along that axis (its axis or encoder scale, a photogrammetry scale bar along it) and the exporter \
+             (a column scaled or converted alone)",
+            after.join(", "),
+            &field[..1],
+        )
+    };
+    Some(ExplainedMiss {
+        experiment: "all".into(),
+        line: set.line_of(0),
+        field: field.into(),
+        message,
     })
 }

@@ -433,6 +433,16 @@ impl MeasurementSet {
         out
     }
 
+    /// The set with coordinate `column` of every row scaled by `factor` about `centre_mm`
+    /// (`centre + factor (value - centre)`): one axis of the instrument reading long or short.
+    pub fn with_coordinate_scaled_about(&self, column: usize, factor: f64, centre_mm: f64) -> Self {
+        let mut out = self.clone();
+        for m in &mut out.rows {
+            m.position_mm[column] = centre_mm + factor * (m.position_mm[column] - centre_mm);
+        }
+        out
+    }
+
     /// The setup of row `row` (0 without a `setup` column).
     pub fn setup_of(&self, row: usize) -> usize {
         self.row_setups.get(row).copied().unwrap_or(0)

@@ -21,6 +21,7 @@ use crate::measurement::{Measurement, MeasurementSet, format_f64};
 use crate::robot::{RobotDescription, RowEntry, commands_to_internal};
 use nalgebra::{Point3, Vector3};
 
+pub mod axis_scale;
 mod commands;
 mod experiments;
 mod handedness;

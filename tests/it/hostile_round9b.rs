@@ -14,12 +14,12 @@ use std::path::Path;
 const SHARED: &str = "at the reference pose (every joint at its held value)";
 
 /// The shipped description of `robot`.
-fn robot_path(robot: &str) -> String {
+pub(crate) fn robot_path(robot: &str) -> String {
     format!("{}/scenarios/robots/{robot}.toml", env!("CARGO_MANIFEST_DIR"))
 }
 
 /// `simulate --sim analytic` of `robot` (seed `seed`, `poses` validation poses) as `out` in `dir`.
-fn simulated(dir: &Path, robot: &str, seed: u64, poses: usize, out: &str) {
+pub(crate) fn simulated(dir: &Path, robot: &str, seed: u64, poses: usize, out: &str) {
     crate::common::axiscal()
         .current_dir(dir)
         .args(["simulate", "--sim", "analytic", "--robot", &robot_path(robot)])
