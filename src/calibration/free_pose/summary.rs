@@ -340,8 +340,16 @@ pub(super) fn value_of(p: &RefitParameter, m: &FreePoseModel) -> Option<f64> {
         RefitParameter::RowBeta(r) => Some(m.phi.rows[r - 1].beta_rad),
         RefitParameter::ZeroOffset { joint, .. } => Some(m.robot.joints[joint - 1].transducer_offset),
         RefitParameter::Harmonic { joint, order, cosine } => match &m.robot.joints[joint - 1].transmission {
-            crate::robot::Transmission::Harmonic { sin, cos } => {
+            crate::robot::Transmission::Harmonic { sin, cos } | crate::robot::Transmission::Gear { sin, cos, .. } => {
                 Some(if *cosine { cos } else { sin }.get(order - 1).copied().unwrap_or(0.0))
+            }
+            _ => None,
+        },
+        RefitParameter::Coupling { joint, coefficient } => match &m.robot.joints[joint - 1].coupling_in {
+            Some(crate::robot::CouplingFunction::Gear { sin, cos, .. }) => {
+                let cosine = coefficient.starts_with("cos");
+                let order = super::model::harmonic_order(p)?;
+                Some(if cosine { cos } else { sin }.get(order - 1).copied().unwrap_or(0.0))
             }
             _ => None,
         },
