@@ -739,7 +739,7 @@ pub fn outlier_warnings(
             (0, _) => (
                 "the calibrated model",
                 "the noise",
-                "Q3 + 3 IQR of every validation point's), and far from its pose's other targets (an effect moves them alike",
+                "Q3 + 3 IQR of every validation point's, at least what the noise reaches once in a hundred clean files), and far from its pose's other targets (an effect moves them alike",
                 "coordinates and target id",
             ),
             // A sweep's second target, judged by its passive angle (eqs. 14-15).
