@@ -15,8 +15,8 @@
 
 use super::{DiagnosisError, DiagnosisOptions, ordered, prepare, with_free_pose_targets};
 use crate::calibration::procedure::OutlierPoint;
-use crate::measurement::MeasurementSet;
 use crate::calibration::procedure::SWEEP_POINTS_FALSE_ALARM;
+use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{chi_square_quantile, far_out_fence};
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, Vector3};
@@ -90,9 +90,12 @@ pub fn pose_point_outliers(
     if tested.len() < MIN_POINTS {
         return Vec::new();
     }
-    let residuals: Vec<Vector3<f64>> = poses.iter().flat_map(|(_, points)| points.iter().map(|(_, r)| *r)).collect();
-    let fence = far_out_fence(&tested.iter().map(|t| t.3).collect::<Vec<_>>())
-        .max(noise_fence(&residuals, tested.len()));
+    let residuals: Vec<Vector3<f64>> = poses
+        .iter()
+        .flat_map(|(_, points)| points.iter().map(|(_, r)| *r))
+        .collect();
+    let fence =
+        far_out_fence(&tested.iter().map(|t| t.3).collect::<Vec<_>>()).max(noise_fence(&residuals, tested.len()));
     let fence_apart = far_out_fence(&tested.iter().map(|t| t.4).collect::<Vec<_>>());
     let mut flagged: Vec<OutlierPoint> = tested
         .iter()

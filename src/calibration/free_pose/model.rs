@@ -537,8 +537,9 @@ impl FreePoseModel {
                     Some(CouplingFunction::Gear { ratio, .. }) => *ratio,
                     _ => unreachable!("a coupling harmonic is laid out for gear couplings only"),
                 };
-                let (order, cosine) = coupling_term(coefficient)
-                    .unwrap_or_else(|| unreachable!("coupling coefficient {coefficient} is laid out as sin<k> or cos<k>"));
+                let (order, cosine) = coupling_term(coefficient).unwrap_or_else(|| {
+                    unreachable!("coupling coefficient {coefficient} is laid out as sin<k> or cos<k>")
+                });
                 let angle = order as f64 * ratio * point.theta_a[joint - 2];
                 let h = if cosine { angle.cos() } else { angle.sin() };
                 h * joint_column(self.phi.joints[joint - 1].kind, point.frames, joint - 1, &p)

@@ -186,13 +186,7 @@ pub fn explaining_slip(
         })
         .min_by(|a, b| rms(&a.2).total_cmp(&rms(&b.2)))?;
     let calibrated = super::calibrate_free_poses(&rewritten, desc, options).ok()?;
-    if slip.field != "setup"
-        && !explains_most(
-            rms(&as_written),
-            rms(&misfits),
-            calibrated.summary.calibrated_rms_mm,
-        )
-    {
+    if slip.field != "setup" && !explains_most(rms(&as_written), rms(&misfits), calibrated.summary.calibrated_rms_mm) {
         return None;
     }
     if let Some(w) = written {

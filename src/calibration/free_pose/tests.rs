@@ -531,12 +531,19 @@ fn gear_forms_jacobian_matches_central_differences() {
     let model = FreePoseModel::new(&robot, robot.phi_model().world_from_base, vec![0, 4], targets(2));
     let set = measure(&desc, &model, &commands(&desc, 6, &mut rng), &mut rng);
     let poses = FreePoses::from_set(&set, &desc, false).expect("poses");
-    let layout = layout(&robot, &model.target_ids, 2, &vec![std::f64::consts::TAU; desc.dof()], 1);
+    let layout = layout(
+        &robot,
+        &model.target_ids,
+        2,
+        &vec![std::f64::consts::TAU; desc.dof()],
+        1,
+    );
     let gear: Vec<usize> = (0..layout.len())
         .filter(|&c| super::model::harmonic_order(&layout[c]).is_some())
         .collect();
     assert!(
-        gear.iter().any(|&c| matches!(layout[c], RefitParameter::Coupling { .. })),
+        gear.iter()
+            .any(|&c| matches!(layout[c], RefitParameter::Coupling { .. })),
         "no coupling harmonic laid out"
     );
     check_against_central_differences(&desc, &model, &poses, &layout, &gear);
