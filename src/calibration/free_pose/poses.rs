@@ -286,7 +286,7 @@ impl FreePoses {
             return None;
         }
         let sigma = 1.4826 * median(&all);
-        if !(sigma > 0.0) {
+        if sigma.is_nan() || sigma <= 0.0 {
             return None;
         }
         let tail = SPACINGS_FALSE_ALARM / all.len() as f64;
