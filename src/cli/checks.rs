@@ -702,8 +702,17 @@ pub fn print_pose_outliers(
         } else {
             "kept (--keep-outliers)".to_string()
         };
+        let check = match (o.spacing_departure_mm, o.spacing_fence_mm) {
+            (Some(off), Some(fence)) if off <= fence => format!(
+                "its targets agree with each other (their spacings within {off:.3} mm of every pose's, inside the {fence:.3} mm their noise reaches), so the tool as a whole sits off: the robot did not reach this pose as the others (its repeatability, an effect the model lacks) or its commands slipped; check its commands, else measure it again"
+            ),
+            (Some(off), Some(fence)) => format!(
+                "its targets' spacings differ from every other pose's by {off:.3} mm (their noise reaches {fence:.3} mm): a target id swapped, one target's point off or the pose in other units; check its rows' target ids, coordinates and units"
+            ),
+            _ => "check its rows' target ids, coordinates, commands and units".to_string(),
+        };
         eprintln!(
-            "warning: {place}: outlier pose: experiment {} step {}: RMS {:.4} mm beyond the fence {:.4} mm (Q3 + 3 IQR of the poses' RMS): {what}; check its rows' target ids, coordinates, commands and units",
+            "warning: {place}: outlier pose: experiment {} step {}: RMS {:.4} mm beyond the fence {:.4} mm (Q3 + 3 IQR of the poses' RMS): {what}; {check}",
             o.experiment, o.step, o.rms_mm, o.fence_mm
         );
     }
@@ -739,7 +748,7 @@ pub fn outlier_warnings(
             (0, _) => (
                 "the calibrated model",
                 "the noise",
-                "Q3 + 3 IQR of every validation point's), and far from its pose's other targets (an effect moves them alike",
+                "Q3 + 3 IQR of every validation point's, at least what the noise reaches once in a hundred clean files), and far from its pose's other targets (an effect moves them alike",
                 "coordinates and target id",
             ),
             // A sweep's second target, judged by its passive angle (eqs. 14-15).

@@ -67,6 +67,8 @@ pub fn refine_carrying(
             rms_mm: f.rms,
             fence_mm: f.fence,
             dropped: !options.keep_outliers,
+            spacing_departure_mm: None,
+            spacing_fence_mm: None,
         })
         .collect();
     let mut refined = cal.clone();

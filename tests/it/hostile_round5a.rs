@@ -90,12 +90,12 @@ fn cases() -> Vec<Case> {
             "target ids 1 and 2 swapped on a symmetric target set (S4: silent, 92 mm wrong)",
             "calibrate tswap12.csv --out out",
             0,
-            &["turns 179.", "read as 1 is 2, 2 is 1", "mirror image"],
+            &["targets_mm` turns 1", "read as 1 is 2, 2 is 1", "mirror image"],
         ),
         case(
-            "target ids 0 and 1 swapped from step 30 on (refused, blamed on the description)",
+            "target ids 0 and 1 swapped from step 30 on (refused, blamed on the description; now the fit with the IRB/L6's gear forms converges and the ids are a warning, as in every pose)",
             "calibrate tswap01-late.csv --out out",
-            2,
+            0,
             &["lines ", "(10 of its 40 free poses)", "(0 is 1, 1 is 0)"],
         ),
         case(

@@ -33,6 +33,7 @@ mod hostile_inputs;
 mod hostile_results;
 mod hostile_round10a;
 mod hostile_round10b;
+mod hostile_round10c;
 mod hostile_round10d;
 mod hostile_round3a;
 mod hostile_round3b;

@@ -101,7 +101,7 @@ pub fn calibrate_free_poses(
     let controller = Controller::from_description(desc);
     let nominal = RobotModel {
         name: format!("{} (calibrated from free poses)", desc.name),
-        ..RobotModel::ideal(desc)
+        ..model::with_fit_forms(RobotModel::ideal(desc), desc)
     };
     let (train, test) = split(&poses, options.holdout);
     let mut layout = layout(
@@ -136,7 +136,7 @@ pub fn calibrate_free_poses(
             .fitted
             .iter()
             .copied()
-            .filter(|&c| !matches!(layout[c], RefitParameter::Harmonic { .. }) && !identify::is_effect(&layout[c]))
+            .filter(|&c| model::harmonic_order(&layout[c]).is_none() && !identify::is_effect(&layout[c]))
             .collect();
         fit_without_outliers(&problem, &registered.model, &train, &geometry, options)
     })?;
@@ -380,7 +380,7 @@ fn select_harmonics_and_effects(
             .copied()
             .filter(|&c| {
                 let p = &problem.layout[c];
-                !matches!(p, RefitParameter::Harmonic { .. }) && !identify::is_effect(p)
+                model::harmonic_order(p).is_none() && !identify::is_effect(p)
             })
             .collect();
         let with_effects = fit::fit(
@@ -435,10 +435,7 @@ fn select_harmonics(
     identification: &Identification,
     effects: &[usize],
 ) -> Result<(Fitted, Vec<usize>), FreePoseError> {
-    let order_of = |c: usize| match problem.layout[c] {
-        RefitParameter::Harmonic { order, .. } => order,
-        _ => 0,
-    };
+    let order_of = |c: usize| model::harmonic_order(&problem.layout[c]).unwrap_or(0);
     let max = identification.fitted.iter().map(|&c| order_of(c)).max().unwrap_or(0);
     let columns = |o: usize| -> Vec<usize> {
         identification

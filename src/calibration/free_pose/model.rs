@@ -9,7 +9,8 @@ use super::poses::FreePoses;
 use crate::calibration::refine::RefitParameter;
 use crate::kinematics::{ChainPoses, JointKind, PhiModel, link_from_phi};
 use crate::robot::{
-    BacklashTerm, Controller, LoadTerm, ModelEffects, RobotModel, SagTerm, Transmission, sag_regressor,
+    BacklashTerm, Controller, CouplingFunction, LoadTerm, ModelEffects, RobotModel, SagTerm, Transmission,
+    sag_regressor,
 };
 use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
@@ -55,11 +56,17 @@ pub fn layout(
             RefitParameter::RowBeta(r),
         ]);
     }
+    let resolved = |k: usize, order: usize, per_joint_turn: f64| {
+        order as f64 * per_joint_turn.abs() * spans_rad.get(k).copied().unwrap_or(0.0) >= std::f64::consts::FRAC_PI_4
+    };
     for (k, j) in robot.joints.iter().enumerate() {
         if j.kind == JointKind::Revolute {
-            let resolved =
-                |order: usize| order as f64 * spans_rad.get(k).copied().unwrap_or(0.0) >= std::f64::consts::FRAC_PI_4;
-            for order in (1..=harmonic_order).filter(|&o| resolved(o)) {
+            // A gear's harmonics turn with the gear angle, `theta / N`.
+            let per_joint_turn = match &j.transmission {
+                Transmission::Gear { ratio, .. } => 1.0 / ratio,
+                _ => 1.0,
+            };
+            for order in (1..=harmonic_order).filter(|&o| resolved(k, o, per_joint_turn)) {
                 for cosine in [false, true] {
                     p.push(RefitParameter::Harmonic {
                         joint: k + 1,
@@ -70,14 +77,96 @@ pub fn layout(
             }
         }
     }
+    p.extend(coupling_harmonics(robot, harmonic_order, &resolved));
     p
+}
+
+/// The harmonics of each passive coupling of gear form (`g = N t + sum_k (s_k sin k N t + c_k
+/// cos k N t)`, paper eq. 15; the bevel gear 4->5 of the IRB/L6, whose errors move the wrist by
+/// millimetres): as the transmissions', up to `harmonic_order` where the driving joint's span
+/// resolves them (`resolved(driving joint, order, N)`).
+fn coupling_harmonics(
+    robot: &RobotModel,
+    harmonic_order: usize,
+    resolved: &dyn Fn(usize, usize, f64) -> bool,
+) -> Vec<RefitParameter> {
+    let mut p = Vec::new();
+    for (k, j) in robot.joints.iter().enumerate().skip(1) {
+        let Some(CouplingFunction::Gear { ratio, .. }) = &j.coupling_in else {
+            continue;
+        };
+        if robot.joints[k - 1].kind != JointKind::Revolute {
+            continue;
+        }
+        for order in (1..=harmonic_order).filter(|&o| resolved(k - 1, o, *ratio)) {
+            for cosine in [false, true] {
+                p.push(RefitParameter::Coupling {
+                    joint: k + 1,
+                    coefficient: format!("{}{order}", if cosine { "cos" } else { "sin" }),
+                });
+            }
+        }
+    }
+    p
+}
+
+/// The harmonic order of a transmission's or a coupling's harmonic (`None` for every other
+/// parameter): the model selection's order ([`super::CV_FOLDS`]-fold cross-validation).
+pub fn harmonic_order(p: &RefitParameter) -> Option<usize> {
+    match p {
+        RefitParameter::Harmonic { order, .. } => Some(*order),
+        RefitParameter::Coupling { coefficient, .. } => coupling_term(coefficient).map(|(order, _)| order),
+        _ => None,
+    }
+}
+
+/// `(order, cosine)` of a coupling coefficient named `sin<k>` or `cos<k>`.
+fn coupling_term(coefficient: &str) -> Option<(usize, bool)> {
+    let (cosine, order) = match coefficient.split_at_checked(3)? {
+        ("sin", k) => (false, k),
+        ("cos", k) => (true, k),
+        _ => return None,
+    };
+    Some((order.parse().ok()?, cosine))
+}
+
+/// The nominal model with the transmission and coupling forms the description asks the
+/// calibrator to fit where they change what the free-pose model can carry: a gear
+/// transmission (`transmission_fit` gear: harmonics in the gear angle, the IRB/L6's joint 5)
+/// and, for every coupling, its nominal slope as a gear (already [`RobotModel::ideal`]'s
+/// form). Predictions are the nominal's: a gear without harmonics is the identity.
+pub fn with_fit_forms(mut robot: RobotModel, desc: &crate::robot::RobotDescription) -> RobotModel {
+    for (joint, entry) in robot.joints.iter_mut().zip(&desc.joints) {
+        if let Some(crate::robot::TransmissionFitForm::Gear { ratio, .. }) = entry.transmission_fit {
+            joint.transmission = Transmission::Gear {
+                ratio,
+                sin: vec![],
+                cos: vec![],
+            };
+        }
+    }
+    robot
 }
 
 /// Adds `d` to the harmonic coefficient of `order` (sine or cosine) of a harmonic
 /// transmission, growing both coefficient lists as needed: a series has one sine and one
 /// cosine per order (a coefficient the fit leaves out stays 0), as `calibration.json` holds it.
 fn add_harmonic(t: &mut Transmission, order: usize, cosine: bool, d: f64) {
-    if let Transmission::Harmonic { sin, cos } = t {
+    if let Transmission::Harmonic { sin, cos } | Transmission::Gear { sin, cos, .. } = t {
+        for list in [&mut *sin, &mut *cos] {
+            if list.len() < order {
+                list.resize(order, 0.0);
+            }
+        }
+        let list = if cosine { cos } else { sin };
+        list[order - 1] += d;
+    }
+}
+
+/// Adds `d` to the coefficient `coefficient` (`sin<k>`, `cos<k>`) of a gear coupling, growing
+/// both coefficient lists as [`add_harmonic`] does.
+fn add_coupling_harmonic(g: &mut Option<CouplingFunction>, coefficient: &str, d: f64) {
+    if let (Some(CouplingFunction::Gear { sin, cos, .. }), Some((order, cosine))) = (g, coupling_term(coefficient)) {
         for list in [&mut *sin, &mut *cos] {
             if list.len() < order {
                 list.resize(order, 0.0);
@@ -218,6 +307,9 @@ impl FreePoseModel {
                 RefitParameter::Target { target, axis } => {
                     let slot = self.slot(*target);
                     next.targets_in_tool_m[slot][*axis] += d
+                }
+                RefitParameter::Coupling { joint, coefficient } => {
+                    add_coupling_harmonic(&mut next.robot.joints[joint - 1].coupling_in, coefficient, d)
                 }
                 RefitParameter::Sag { joint, link, load } => add_sag(&mut next.robot.effects, *joint, *link, *load, d),
                 RefitParameter::Backlash { joint, .. } => add_backlash(&mut next.robot.effects, *joint, d),
@@ -429,10 +521,28 @@ impl FreePoseModel {
             RefitParameter::ZeroOffset { joint, .. } => -self.actuator_derivative(point, joint - 1),
             // f(theta_a) + c h(theta_a) = u moves theta_a by -h(theta_a) dc / f'(theta_a): as
             // the command moved by -h(theta_a) dc.
+            // A gear's `f = theta_a + N c h(k theta_a / N)`: the same with `N h`.
             RefitParameter::Harmonic { joint, order, cosine } => {
-                let angle = *order as f64 * point.theta_a[joint - 1];
+                let n = match &self.robot.joints[joint - 1].transmission {
+                    Transmission::Gear { ratio, .. } => *ratio,
+                    _ => 1.0,
+                };
+                let angle = *order as f64 * point.theta_a[joint - 1] / n;
                 let h = if *cosine { angle.cos() } else { angle.sin() };
-                -h * self.actuator_derivative(point, joint - 1)
+                -n * h * self.actuator_derivative(point, joint - 1)
+            }
+            // q_j = theta_j + g(theta_(j-1)), g's term c h(k N theta_(j-1)): joint j moves by h.
+            RefitParameter::Coupling { joint, coefficient } => {
+                let ratio = match &self.robot.joints[joint - 1].coupling_in {
+                    Some(CouplingFunction::Gear { ratio, .. }) => *ratio,
+                    _ => unreachable!("a coupling harmonic is laid out for gear couplings only"),
+                };
+                let (order, cosine) = coupling_term(coefficient).unwrap_or_else(|| {
+                    unreachable!("coupling coefficient {coefficient} is laid out as sin<k> or cos<k>")
+                });
+                let angle = order as f64 * ratio * point.theta_a[joint - 2];
+                let h = if cosine { angle.cos() } else { angle.sin() };
+                h * joint_column(self.phi.joints[joint - 1].kind, point.frames, joint - 1, &p)
             }
             RefitParameter::Target { target, axis } if *target == self.target_ids[point.slot] => {
                 point.frames.world_from_tool.rotation * Vector3::ith(*axis, 1.0)

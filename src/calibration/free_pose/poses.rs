@@ -237,3 +237,68 @@ impl FreePoses {
             .collect()
     }
 }
+
+/// The targets of one pose form a rigid figure on the tool: their spacings are the same in
+/// every pose up to the noise, whatever the robot's model. What each pose's spacings say of its
+/// rows, without the kinematic model ([`FreePoses::spacings`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spacings {
+    /// Each pose's largest departure of a spacing between two of its targets from that
+    /// spacing's median over the poses \[m\] (`None`: fewer than two targets in it).
+    pub worst_m: Vec<Option<f64>>,
+    /// The departure a pose of the noise passes with probability `1 - SPACINGS_FALSE_ALARM /
+    /// tested` \[m\]: the spacings' own noise (1.4826 times the median absolute departure over
+    /// every pose and pair, the normal's standard deviation) times the normal quantile.
+    pub fence_m: f64,
+}
+
+/// The family-wise false-alarm rate of the spacing test over a file's poses (the sweeps' rate,
+/// [`crate::calibration::procedure::SWEEP_POINTS_FALSE_ALARM`]).
+pub const SPACINGS_FALSE_ALARM: f64 = crate::calibration::procedure::SWEEP_POINTS_FALSE_ALARM;
+
+impl FreePoses {
+    /// The spacings' test of every pose ([`Spacings`]); `None` when no two targets share a
+    /// pose, or their spacings show no noise to scale by.
+    pub fn spacings(&self) -> Option<Spacings> {
+        let slots = self.target_ids.len();
+        let pair_distances = |p: &FreePose| {
+            let mut d = Vec::new();
+            for (i, (a, pa)) in p.points_m.iter().enumerate() {
+                for (b, pb) in &p.points_m[i + 1..] {
+                    d.push(((*a).min(*b) * slots + (*a).max(*b), (pa - pb).norm()));
+                }
+            }
+            d
+        };
+        let per_pose: Vec<Vec<(usize, f64)>> = self.poses.iter().map(pair_distances).collect();
+        let mut by_pair: HashMap<usize, Vec<f64>> = HashMap::new();
+        per_pose
+            .iter()
+            .flatten()
+            .for_each(|&(k, d)| by_pair.entry(k).or_default().push(d));
+        let median_of: HashMap<usize, f64> = by_pair.iter().map(|(k, v)| (*k, median(v))).collect();
+        let departures: Vec<Vec<f64>> = per_pose
+            .iter()
+            .map(|d| d.iter().map(|(k, x)| (x - median_of[k]).abs()).collect())
+            .collect();
+        let all: Vec<f64> = departures.iter().flatten().copied().collect();
+        if all.is_empty() {
+            return None;
+        }
+        let sigma = 1.4826 * median(&all);
+        if sigma.is_nan() || sigma <= 0.0 {
+            return None;
+        }
+        let tail = SPACINGS_FALSE_ALARM / all.len() as f64;
+        let z = crate::numerics::stats::chi_square_quantile(1.0 - tail, 1.0).sqrt();
+        Some(Spacings {
+            worst_m: departures.iter().map(|d| d.iter().copied().reduce(f64::max)).collect(),
+            fence_m: z * sigma,
+        })
+    }
+}
+
+/// The median of `v` (linear quantiles, as the fences').
+fn median(v: &[f64]) -> f64 {
+    crate::numerics::stats::quantile(v, 0.5, crate::numerics::stats::QuantileMethod::Linear)
+}

@@ -60,6 +60,15 @@ pub struct OutlierPose {
     pub fence_mm: f64,
     /// Whether the fit was redone without it (`false` with `--keep-outliers`).
     pub dropped: bool,
+    /// The largest departure of a spacing between two of its targets from that spacing's
+    /// median over the poses \[mm\]: a model-free test of its rows (ids swapped, one target's
+    /// point off, other units); absent with fewer than two targets in the pose.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spacing_departure_mm: Option<f64>,
+    /// What the spacings' own noise reaches at a family-wise 1 % over the file's poses \[mm\]
+    /// ([`super::poses::Spacings::fence_m`]); absent with `spacing_departure_mm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spacing_fence_mm: Option<f64>,
 }
 
 /// The check on held-out poses.
@@ -340,8 +349,16 @@ pub(super) fn value_of(p: &RefitParameter, m: &FreePoseModel) -> Option<f64> {
         RefitParameter::RowBeta(r) => Some(m.phi.rows[r - 1].beta_rad),
         RefitParameter::ZeroOffset { joint, .. } => Some(m.robot.joints[joint - 1].transducer_offset),
         RefitParameter::Harmonic { joint, order, cosine } => match &m.robot.joints[joint - 1].transmission {
-            crate::robot::Transmission::Harmonic { sin, cos } => {
+            crate::robot::Transmission::Harmonic { sin, cos } | crate::robot::Transmission::Gear { sin, cos, .. } => {
                 Some(if *cosine { cos } else { sin }.get(order - 1).copied().unwrap_or(0.0))
+            }
+            _ => None,
+        },
+        RefitParameter::Coupling { joint, coefficient } => match &m.robot.joints[joint - 1].coupling_in {
+            Some(crate::robot::CouplingFunction::Gear { sin, cos, .. }) => {
+                let cosine = coefficient.starts_with("cos");
+                let order = super::model::harmonic_order(p)?;
+                Some(if cosine { cos } else { sin }.get(order - 1).copied().unwrap_or(0.0))
             }
             _ => None,
         },
@@ -457,16 +474,24 @@ fn model_covariance(s: &Stages<'_>, covariance: &DMatrix<f64>, robot: &RobotMode
 
 /// The flagged poses in the summary's terms.
 fn outliers(flags: &[Flag], problem: &Problem<'_>, kept: &[usize]) -> Vec<OutlierPose> {
+    let spacings = if flags.is_empty() {
+        None
+    } else {
+        problem.poses.spacings()
+    };
     flags
         .iter()
         .map(|f| {
             let pose = &problem.poses.poses[f.pose];
+            let departure = spacings.as_ref().and_then(|s| Some((s.worst_m[f.pose]?, s.fence_m)));
             OutlierPose {
                 experiment: pose.experiment.clone(),
                 step: pose.step,
                 rms_mm: f.rms_m * 1e3,
                 fence_mm: f.fence_m * 1e3,
                 dropped: !kept.contains(&f.pose),
+                spacing_departure_mm: departure.map(|(d, _)| d * 1e3),
+                spacing_fence_mm: departure.map(|(_, fence)| fence * 1e3),
             }
         })
         .collect()

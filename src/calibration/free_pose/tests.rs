@@ -495,18 +495,55 @@ fn jacobian_matches_central_differences() {
         };
         j.transducer_offset = 2e-3;
     }
-    let model = FreePoseModel::new(&robot, robot.phi_model().world_from_base, vec![0, 4], targets(2));
-    let set = measure(&desc, &model, &commands(&desc, 6, &mut rng), &mut rng);
-    let poses = FreePoses::from_set(&set, &desc, false).expect("poses");
-    let layout = layout(
-        &robot,
-        &model.target_ids,
-        2,
-        &vec![std::f64::consts::TAU; desc.dof()],
-        1,
-    );
+    let (model, poses, layout) = six_poses_two_targets(&desc, &robot, &mut rng);
     let all: Vec<usize> = (0..layout.len()).collect();
     check_against_central_differences(&desc, &model, &poses, &layout, &all);
+}
+
+/// `robot` placed as its nominal with targets 0 and 4, measured at 6 random poses, and the
+/// layout of every parameter (harmonics to order 2 over full turns): what the Jacobian tests
+/// difference.
+fn six_poses_two_targets(
+    desc: &RobotDescription,
+    robot: &RobotModel,
+    rng: &mut ChaCha12Rng,
+) -> (FreePoseModel, FreePoses, Vec<RefitParameter>) {
+    let model = FreePoseModel::new(robot, robot.phi_model().world_from_base, vec![0, 4], targets(2));
+    let set = measure(desc, &model, &commands(desc, 6, rng), rng);
+    let poses = FreePoses::from_set(&set, desc, false).expect("poses");
+    let layout = layout(robot, &model.target_ids, 2, &vec![std::f64::consts::TAU; desc.dof()], 1);
+    (model, poses, layout)
+}
+
+/// The gear forms' columns (a gear transmission's harmonics in the gear angle, a gear
+/// coupling's in `N t`) against central differences, at harmonics away from 0: the IRB/L6's
+/// joint 5 as the description fits it (`with_fit_forms`).
+#[test]
+fn gear_forms_jacobian_matches_central_differences() {
+    let desc = shipped("asea-irb6l");
+    let mut rng = ChaCha12Rng::seed_from_u64(5);
+    let mut robot = super::model::with_fit_forms(RobotModel::ideal(&desc), &desc);
+    assert!(matches!(robot.joints[4].transmission, Transmission::Gear { .. }));
+    if let Transmission::Gear { sin, cos, .. } = &mut robot.joints[4].transmission {
+        *sin = vec![0.04, -2e-3];
+        *cos = vec![1e-3, 5e-4];
+    }
+    for j in robot.joints.iter_mut().skip(1) {
+        if let Some(crate::robot::CouplingFunction::Gear { sin, cos, .. }) = &mut j.coupling_in {
+            *sin = vec![-0.04, 1e-3];
+            *cos = vec![2e-3, -1e-3];
+        }
+    }
+    let (model, poses, layout) = six_poses_two_targets(&desc, &robot, &mut rng);
+    let gear: Vec<usize> = (0..layout.len())
+        .filter(|&c| super::model::harmonic_order(&layout[c]).is_some())
+        .collect();
+    assert!(
+        gear.iter()
+            .any(|&c| matches!(layout[c], RefitParameter::Coupling { .. })),
+        "no coupling harmonic laid out"
+    );
+    check_against_central_differences(&desc, &model, &poses, &layout, &gear);
 }
 
 /// The analytic columns `columns` of `layout` at `model` against central differences of the
