@@ -11,8 +11,8 @@ use axiscal::diagnosis::{
     ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate, validation_residuals_csv,
 };
 use axiscal::diagnosis::{
-    PoseResiduals, explained_combined_slips, explained_file_scale, explained_misses, explained_sweep_misses, free_poses_only,
-    pose_point_outliers, without_outliers,
+    PoseResiduals, explained_combined_slips, explained_file_scale, explained_misses, explained_sweep_misses,
+    free_poses_only, pose_point_outliers, without_outliers,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;

@@ -25,9 +25,9 @@
 //! of the joint, which the calibration fits, not a slip of the data. Runs only when a position
 //! test exceeds, so clean data pay nothing.
 
+use super::ExplainedMiss;
 use super::slips::{MAX_FITTED_OFFSET, MIN_FITTED_OFFSET, residuals_with};
 use super::validate::{PointKind, PositionSummary, Validation, ValidationOptions, Verdict, validate};
-use super::ExplainedMiss;
 use crate::calibration::procedure::Calibration;
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
 use crate::numerics::stats::chi_square_quantile;
@@ -237,11 +237,7 @@ struct Screen {
 /// The rows' residual coordinates \[mm\] (`rows` with `slips` undone), each row weighted with
 /// `3 / predicted^2` of its kind's test in `v`, and the whole-file directions of every
 /// quantity (central differences); `None` when the rows cannot be predicted.
-fn screen(
-    rows: &[Measurement],
-    (cal, desc): (&Calibration, &RobotDescription),
-    v: &Validation,
-) -> Option<Screen> {
+fn screen(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescription), v: &Validation) -> Option<Screen> {
     let residuals = residuals_with(rows, &|_: &mut Measurement| {}, cal, desc)?;
     let predicted = |kind: PointKind| {
         let s = match kind {
@@ -409,7 +405,11 @@ struct Kept {
 }
 
 /// The validation of `rows` (`None` when they are no set or cannot be predicted).
-fn validation_of(rows: Vec<Measurement>, (cal, desc): (&Calibration, &RobotDescription), options: &ValidationOptions) -> Option<Validation> {
+fn validation_of(
+    rows: Vec<Measurement>,
+    (cal, desc): (&Calibration, &RobotDescription),
+    options: &ValidationOptions,
+) -> Option<Validation> {
     let set = MeasurementSet::new(desc.dof(), rows).ok()?;
     validate(&set, cal, desc, options).ok()
 }
@@ -512,16 +512,32 @@ fn explained(
         )
     });
     let passes: Vec<String> = summaries(after)
-        .map(|u| format!("{} points {:.4} mm RMS where {:.4} mm is predicted", u.points, u.rms_mm, u.predicted_mm.total))
+        .map(|u| {
+            format!(
+                "{} points {:.4} mm RMS where {:.4} mm is predicted",
+                u.points, u.rms_mm, u.predicted_mm.total
+            )
+        })
         .collect();
     let claims: Vec<String> = kept
         .iter()
-        .map(|k| format!("{} (the validation's chi-square drops by {:.0} with it undone, where chance gives at most {:.1})", claim(&k.slip, desc), k.drop, k.bound))
+        .map(|k| {
+            format!(
+                "{} (the validation's chi-square drops by {:.0} with it undone, where chance gives at most {:.1})",
+                claim(&k.slip, desc),
+                k.drop,
+                k.bound
+            )
+        })
         .collect();
     let first = &kept[0].slip.block;
     let mut fields: Vec<String> = kept.iter().map(|k| field(k.slip.quantity)).collect();
     fields.dedup();
-    let slips = if kept.len() == 1 { "one slip".to_string() } else { format!("{} slips", kept.len()) };
+    let slips = if kept.len() == 1 {
+        "one slip".to_string()
+    } else {
+        format!("{} slips", kept.len())
+    };
     ExplainedMiss {
         experiment: set.rows()[first.rows[0]].experiment.clone(),
         line: set.line_of(first.rows[0]),

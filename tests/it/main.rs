@@ -31,6 +31,7 @@ mod hostile_calibration;
 mod hostile_files;
 mod hostile_inputs;
 mod hostile_results;
+mod hostile_round10e;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
