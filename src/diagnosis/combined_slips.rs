@@ -473,12 +473,7 @@ pub fn explained_combined_slips(
     if !any_exceeds(v, true) {
         return None;
     }
-    let options = ValidationOptions {
-        noise_rms_3d_mm: v.noise_rms_3d_mm,
-        noise_source: v.noise_source.clone(),
-        false_alarm: v.false_alarm,
-        noise_dof: v.noise_dof,
-    };
+    let options = ValidationOptions::of_validation(v);
     let blocks = blocks(set);
     let mut kept: Vec<Kept> = Vec::new();
     let mut base = total_statistic(v);

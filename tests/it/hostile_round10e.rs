@@ -14,15 +14,15 @@ fn robot(name: &str) -> String {
     format!("{}/scenarios/robots/{name}.toml", env!("CARGO_MANIFEST_DIR"))
 }
 
-/// `simulate --sim analytic` of the IRB/L6 with the paper's true robot (`--truth`), 40
+/// `simulate --sim analytic` of the SCARA with its scenario's true robot (`--truth`), 40
 /// validation poses, seed `seed`, as `out` in `dir`.
 fn simulate_truth(dir: &Path, seed: u64, out: &str) {
     crate::common::axiscal()
         .current_dir(dir)
         .args(["simulate", "--sim", "analytic", "--validation-poses", "40", "--robot"])
-        .arg(robot("asea-irb6l"))
+        .arg(robot("scara-rrpr"))
         .arg("--truth")
-        .arg(robot("asea-irb6l-paper-truth"))
+        .arg(robot("scara-rrpr-truth"))
         .args(["--seed", &seed.to_string(), "--out", out])
         .assert()
         .success();
@@ -36,7 +36,7 @@ fn write_inputs(dir: &Path) {
     crate::common::axiscal()
         .current_dir(dir)
         .args(["calibrate", "a.csv", "--robot"])
-        .arg(robot("asea-irb6l"))
+        .arg(robot("scara-rrpr"))
         .args(["--out", "cal"])
         .assert()
         .success();
@@ -54,11 +54,11 @@ fn write_inputs(dir: &Path) {
     });
 }
 
-/// The validation of `data` against `cal/` (the IRB/L6).
+/// The validation of `data` against `cal/` (the SCARA).
 fn validate_args(data: &str) -> String {
     format!(
         "validate {data} --robot {} --calibration cal/calibration.json --out out",
-        robot("asea-irb6l")
+        robot("scara-rrpr")
     )
 }
 
