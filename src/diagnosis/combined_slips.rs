@@ -507,18 +507,13 @@ fn explained(
         )
     });
     let passes: Vec<String> = summaries(after)
-        .map(|u| {
-            format!(
-                "{} points {:.4} mm RMS where {:.4} mm is predicted",
-                u.points, u.rms_mm, u.predicted_mm.total
-            )
-        })
+        .map(|u| format!("{:.4} mm RMS where {:.4} mm", u.rms_mm, u.predicted_mm.total))
         .collect();
     let claims: Vec<String> = kept
         .iter()
         .map(|k| {
             format!(
-                "{} (the validation's chi-square drops by {:.0} with it undone, where chance gives at most {:.1})",
+                "{} (chi-square down {:.0}, chance at most {:.1})",
                 claim(&k.slip, desc),
                 k.drop,
                 k.bound
@@ -538,8 +533,8 @@ fn explained(
         line: set.line_of(first.rows[0]),
         field: fields.join("; "),
         message: format!(
-            "the calibrated model misses these data{miss}, and every test passes with {slips} undone ({}): {}: \
-             correct these rows (or measure them again) and validate again",
+            "the calibrated model misses these data{miss}, and every test passes with {slips} undone ({} predicted): {}: \
+             correct these rows (or measure them again)",
             passes.join(", "),
             claims.join("; and ")
         ),
@@ -561,8 +556,8 @@ fn claim(slip: &Slip, desc: &RobotDescription) -> String {
     let shown = |v: f64, scale: f64| format_f64((v * scale).round() / scale);
     match slip.quantity {
         Quantity::Shift => format!(
-            "the coordinates of {b} sit shifted by ({}, {}, {}) mm from where the model puts them, the same for all: \
-             the instrument (or the robot) was bumped or set up again, or a constant was added to the columns",
+            "the coordinates of {b} sit shifted by ({}, {}, {}) mm, the same for all: the instrument (or robot) \
+             bumped or set up again, or a constant added to the columns",
             shown(-p[0], 1e2),
             shown(-p[1], 1e2),
             shown(-p[2], 1e2)

@@ -76,7 +76,7 @@ fn two_slips_at_once_are_named() {
         &[
             "two.csv:",
             "2 slips undone",
-            "`cmd_1` of every row of the file holds 1.03",
+            "`cmd_1` of every row of the file holds 1.0",
             "read 1.00",
         ],
     );
@@ -99,7 +99,7 @@ fn a_block_of_shifted_free_poses_is_named() {
             "block.csv:",
             "`x_mm,y_mm,z_mm`",
             "poses of steps 20-39",
-            "sit shifted by (2",
+            "sit shifted by (1.9",
         ],
     );
     run_case(dir.path(), &c);
