@@ -447,10 +447,9 @@ fn next_slip(
             });
             let all = refitted(rows, all, &screen.weights, model)?;
             let slip = all.last()?.clone();
-            if let (true, Quantity::CommandOffset(_)) = (slip.block.whole_file, slip.quantity) {
-                if slip.p[0].abs() < MIN_FITTED_OFFSET {
-                    return None;
-                }
+            let zero_error = matches!(slip.quantity, Quantity::CommandOffset(_)) && slip.block.whole_file;
+            if zero_error && slip.p[0].abs() < MIN_FITTED_OFFSET {
+                return None;
             }
             let after = validation_of(undone(rows, &all), model, options)?;
             let drop = base - total_statistic(&after);
