@@ -459,7 +459,7 @@ fn next_slip(
         .max_by(|a, b| a.1.drop.total_cmp(&b.1.drop))
 }
 
-/// The slips (at most [`MAX_SLIPS`]) whose undoing makes `set` pass every test of the
+/// The slips (at most 2, `MAX_SLIPS`) whose undoing makes `set` pass every test of the
 /// validation `v` of `set` against `cal` (module docs), as one miss naming their columns and
 /// rows; `None` when no position test exceeds or no such slips are found. `desc` is the
 /// description `v` was made with.
