@@ -11,8 +11,8 @@ use axiscal::diagnosis::{
     ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate, validation_residuals_csv,
 };
 use axiscal::diagnosis::{
-    PoseResiduals, explained_file_scale, explained_misses, explained_sweep_misses, free_poses_only,
-    pose_point_outliers, without_outliers,
+    PoseResiduals, explained_combined_slips, explained_file_scale, explained_misses, explained_sweep_misses,
+    free_poses_only, pose_point_outliers, without_outliers,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -88,6 +88,9 @@ pub fn run(args: Args) -> Result<()> {
     misses.extend(explained_sweep_misses(&set, &cal, &fitted, &v));
     if misses.is_empty() {
         misses.extend(explained_file_scale(&set, &cal, &fitted, &v));
+    }
+    if misses.is_empty() {
+        misses.extend(explained_combined_slips(&set, &cal, &fitted, &v));
     }
     checks::refuse_explained_misses(&misses, &args.data, args.checks.skip_unit_check)?;
     let outliers = free_pose_outliers(&v, &set, args.keep_outliers);

@@ -27,6 +27,7 @@
 //!    noise-only mean of the same fit.
 
 mod axes;
+mod combined_slips;
 mod decide;
 mod features;
 mod file_scale;
@@ -47,6 +48,7 @@ mod validate;
 pub use crate::calibration::refine::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnose_axes_with};
+pub use combined_slips::explained_combined_slips;
 pub use file_scale::explained_file_scale;
 pub use model::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, LoadPath, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,

@@ -245,12 +245,7 @@ pub fn explained_misses(
     for (i, m) in set.rows().iter().enumerate().filter(|(_, m)| m.moved_joint == 0) {
         experiments.entry(m.experiment.as_str()).or_default().push(i);
     }
-    let options = ValidationOptions {
-        noise_rms_3d_mm: v.noise_rms_3d_mm,
-        noise_source: v.noise_source.clone(),
-        false_alarm: v.false_alarm,
-        noise_dof: v.noise_dof,
-    };
+    let options = ValidationOptions::of_validation(v);
     let mut out = Vec::new();
     for (name, indices) in experiments {
         let kind = if name == TOOL_EXPERIMENT {

@@ -79,12 +79,7 @@ pub fn explained_sweep_misses(
     else {
         return Vec::new();
     };
-    let options = ValidationOptions {
-        noise_rms_3d_mm: v.noise_rms_3d_mm,
-        noise_source: v.noise_source.clone(),
-        false_alarm: v.false_alarm,
-        noise_dof: v.noise_dof,
-    };
+    let options = ValidationOptions::of_validation(v);
     let predicted = axis.predicted_mm.total;
     let gross: Vec<(Sweep, f64, f64)> = sweeps(set)
         .into_iter()

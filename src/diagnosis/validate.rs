@@ -64,6 +64,17 @@ impl ValidationOptions {
         }
     }
 
+    /// The options `v` was made with (its noise, source, false-alarm rate and noise degrees of
+    /// freedom): the slip searches test their rewrites as `v` tested the file.
+    pub fn of_validation(v: &Validation) -> Self {
+        ValidationOptions {
+            noise_rms_3d_mm: v.noise_rms_3d_mm,
+            noise_source: v.noise_source.clone(),
+            false_alarm: v.false_alarm,
+            noise_dof: v.noise_dof,
+        }
+    }
+
     /// The noise `cal` was weighted with; when it was estimated from the calibration's
     /// residuals, with the estimate's effective degrees of freedom (F tests).
     pub fn of_calibration(cal: &Calibration, false_alarm: f64) -> Self {

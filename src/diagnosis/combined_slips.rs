@@ -1,0 +1,584 @@
+//! Slips in a block of rows, and two slips at once (`validate`): what the one-at-a-time
+//! searches ([`super::slips`], [`super::sweep_slips`], [`super::file_scale`]) leave as the
+//! model's error. A file can carry a command column scaled and its coordinates scaled
+//! together, or a block of consecutive free poses shifted, scaled or with one command offset
+//! (the instrument bumped, a joint re-mastered part-way through the session); no single
+//! rewrite of the whole file or of one experiment then passes the tests.
+//!
+//! The search is greedy, with refit: a rewrite is a uniform change of one quantity over one
+//! block of rows: the coordinates shifted (3 parameters) or scaled about the instrument's
+//! origin, a command column scaled or offset (1 parameter). The blocks: the whole file, each
+//! axis experiment, and every run of at least [`MIN_BLOCK_POSES`] consecutive poses of a
+//! free-pose experiment. Each (rewrite, block) pair is screened by the drop of the residuals'
+//! sum of squares its least-squares parameter gives (weighted with the predicted RMS of the
+//! rows' kind: linear, cheap); the [`TESTED_CANDIDATES`] largest are fitted on the model and
+//! scored by the drop of the validation's own statistic ([`validate`], every position test).
+//! The best is kept when that drop is significant: beyond the chi-square quantile of its
+//! parameters at the false-alarm rate divided by the number of pairs screened (a Bonferroni
+//! bound: on clean data the largest drop of many pairs is large by chance). At most
+//! [`MAX_SLIPS`] rewrites are kept, each found with the previous ones undone. The slips are
+//! said only when the file with them undone passes every test of the validation (positions
+//! and orientations): a model that is wrong (another robot, an effect the model lacks) misses
+//! its data in a way no one or two uniform rewrites of blocks undo, and stays the model's.
+//!
+//! A whole file's command offset below [`MIN_FITTED_OFFSET`] is not said: it is a zero error
+//! of the joint, which the calibration fits, not a slip of the data. Runs only when a position
+//! test exceeds, so clean data pay nothing.
+
+use super::ExplainedMiss;
+use super::slips::{MAX_FITTED_OFFSET, MIN_FITTED_OFFSET, residuals_with};
+use super::validate::{PointKind, PositionSummary, Validation, ValidationOptions, Verdict, validate};
+use crate::calibration::procedure::Calibration;
+use crate::measurement::{Measurement, MeasurementSet, format_f64};
+use crate::numerics::stats::chi_square_quantile;
+use crate::robot::RobotDescription;
+use nalgebra::{DMatrix, DVector};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// At most this many slips are undone together: two slips at once are what a session's
+/// bookkeeping plausibly carries; more uniform rewrites of blocks could absorb a model's error.
+pub const MAX_SLIPS: usize = 2;
+
+/// A block of free poses has at least this many poses: fewer give too few points for a
+/// fitted shift (3 parameters) not to absorb their noise, and are outliers' business
+/// (`validate`'s outlier poses).
+pub const MIN_BLOCK_POSES: usize = 3;
+
+/// The (rewrite, block) pairs with the largest screening drop that are fitted and scored on
+/// the validation's statistic: the screening weighs rows as independent, which the
+/// calibration's shared error is not, so the best few are scored on the real statistic.
+const TESTED_CANDIDATES: usize = 4;
+
+/// Central differences of the rewrites' parameters (mm, scale, deg or mm of a command).
+const SHIFT_STEP_MM: f64 = 1e-3;
+const SCALE_STEP: f64 = 1e-6;
+const OFFSET_STEP: f64 = 1e-3;
+
+/// What a rewrite changes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Quantity {
+    /// The coordinates shifted (3 parameters).
+    Shift,
+    /// Every coordinate scaled about the instrument's origin.
+    CoordinateScale,
+    /// Command column `k` (0-based) scaled.
+    CommandScale(usize),
+    /// Command column `k` offset.
+    CommandOffset(usize),
+}
+
+impl Quantity {
+    /// The rewrite of a row by the parameters `p` (one, or three for a shift).
+    fn apply(self, m: &mut Measurement, p: &[f64; 3]) {
+        match self {
+            Quantity::Shift => (0..3).for_each(|c| m.position_mm[c] += p[c]),
+            Quantity::CoordinateScale => m.position_mm.iter_mut().for_each(|c| *c *= 1.0 + p[0]),
+            Quantity::CommandScale(k) => m.cmd[k] *= 1.0 + p[0],
+            Quantity::CommandOffset(k) => m.cmd[k] += p[0],
+        }
+    }
+
+    /// Its parameters.
+    fn parameters(self) -> usize {
+        if self == Quantity::Shift { 3 } else { 1 }
+    }
+
+    /// The unit parameter vectors of its directions and their difference step.
+    fn directions(self) -> Vec<([f64; 3], f64)> {
+        match self {
+            Quantity::Shift => (0..3)
+                .map(|c| {
+                    let mut e = [0.0; 3];
+                    e[c] = 1.0;
+                    (e, SHIFT_STEP_MM)
+                })
+                .collect(),
+            Quantity::CoordinateScale | Quantity::CommandScale(_) => vec![([1.0, 0.0, 0.0], SCALE_STEP)],
+            Quantity::CommandOffset(_) => vec![([1.0, 0.0, 0.0], OFFSET_STEP)],
+        }
+    }
+}
+
+/// A block of rows: its row indices and how it is named.
+#[derive(Clone, Debug)]
+struct Block {
+    rows: Vec<usize>,
+    whole_file: bool,
+    name: String,
+}
+
+/// One rewrite undone: the quantity, the block and the fitted parameters.
+#[derive(Clone)]
+struct Slip {
+    quantity: Quantity,
+    block: Arc<Block>,
+    p: [f64; 3],
+}
+
+impl Slip {
+    /// The row `i` (`m`) with this slip undone.
+    fn undo(&self, i: usize, m: &mut Measurement) {
+        if self.block.rows.binary_search(&i).is_ok() {
+            self.quantity.apply(m, &self.p);
+        }
+    }
+}
+
+/// `rows` with every slip of `slips` undone (by row index).
+fn undone(rows: &[Measurement], slips: &[Slip]) -> Vec<Measurement> {
+    rows.iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let mut m = m.clone();
+            slips.iter().for_each(|s| s.undo(i, &mut m));
+            m
+        })
+        .collect()
+}
+
+/// The position summaries of `v`.
+fn summaries(v: &Validation) -> impl Iterator<Item = &PositionSummary> {
+    [&v.validation, &v.tool, &v.axis].into_iter().flatten()
+}
+
+/// Whether any test of `v` (positions, orientations) exceeds.
+fn any_exceeds(v: &Validation, positions_only: bool) -> bool {
+    let exceeds = |c: Option<&super::validate::ChiSquare>| c.is_some_and(|c| c.verdict == Verdict::Exceeds);
+    summaries(v).any(|s| exceeds(s.chi_square.as_ref()))
+        || (!positions_only && v.orientation.as_ref().is_some_and(|o| exceeds(o.chi_square.as_ref())))
+}
+
+/// The sum of `v`'s position statistics (infinite without one).
+fn total_statistic(v: &Validation) -> f64 {
+    let total: f64 = summaries(v)
+        .filter_map(|s| s.chi_square.as_ref().map(|c| c.value))
+        .sum();
+    if total.is_finite() { total } else { f64::INFINITY }
+}
+
+/// The blocks of `set` (module docs).
+fn blocks(set: &MeasurementSet) -> Vec<Arc<Block>> {
+    let rows = set.rows();
+    let line = |i: usize| set.line_of(i).map_or(String::new(), |l| l.to_string());
+    let mut out = vec![Arc::new(Block {
+        rows: (0..rows.len()).collect(),
+        whole_file: true,
+        name: "every row of the file".into(),
+    })];
+    let mut experiments: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    rows.iter()
+        .enumerate()
+        .for_each(|(i, m)| experiments.entry(m.experiment.as_str()).or_default().push(i));
+    for (name, indices) in experiments.iter().filter(|(_, ix)| ix.len() < rows.len()) {
+        if rows[indices[0]].moved_joint > 0 {
+            let lines = format!("lines {}-{}", line(indices[0]), line(*indices.last().unwrap_or(&0)));
+            out.push(Arc::new(Block {
+                rows: indices.clone(),
+                whole_file: false,
+                name: format!("experiment {name}'s {} points ({lines})", indices.len()),
+            }));
+        }
+    }
+    for (name, indices) in experiments.iter().filter(|(_, ix)| rows[ix[0]].moved_joint == 0) {
+        out.extend(pose_runs(set, name, indices).into_iter().map(Arc::new));
+    }
+    out
+}
+
+/// Every run of at least [`MIN_BLOCK_POSES`] consecutive poses (in file order) of the
+/// free-pose experiment `name` with rows `indices`, but the whole experiment when it is the file.
+fn pose_runs(set: &MeasurementSet, name: &str, indices: &[usize]) -> Vec<Block> {
+    let rows = set.rows();
+    let mut poses: Vec<Vec<usize>> = Vec::new();
+    let mut step_of: BTreeMap<usize, usize> = BTreeMap::new();
+    for &i in indices {
+        let at = *step_of.entry(rows[i].step).or_insert_with(|| {
+            poses.push(Vec::new());
+            poses.len() - 1
+        });
+        poses[at].push(i);
+    }
+    let line = |i: usize| set.line_of(i).map_or(String::new(), |l| l.to_string());
+    let mut out = Vec::new();
+    for a in 0..poses.len() {
+        for b in (a + MIN_BLOCK_POSES)..=poses.len() {
+            if b - a == poses.len() && indices.len() == rows.len() {
+                continue;
+            }
+            let mut block: Vec<usize> = poses[a..b].iter().flatten().copied().collect();
+            block.sort_unstable();
+            let (first, last) = (block[0], *block.last().unwrap_or(&0));
+            out.push(Block {
+                name: format!(
+                    "experiment {name}'s {} poses of steps {}-{} (lines {}-{})",
+                    b - a,
+                    rows[poses[a][0]].step,
+                    rows[poses[b - 1][0]].step,
+                    line(first),
+                    line(last)
+                ),
+                rows: block,
+                whole_file: false,
+            });
+        }
+    }
+    out
+}
+
+/// The residuals of the rows, their weights and every quantity's whole-file directions:
+/// what the screening of the pairs needs.
+struct Screen {
+    residuals: Vec<f64>,
+    weights: Vec<f64>,
+    directions: Vec<(Quantity, Vec<Vec<f64>>)>,
+}
+
+/// The rows' residual coordinates \[mm\] (`rows` with `slips` undone), each row weighted with
+/// `3 / predicted^2` of its kind's test in `v`, and the whole-file directions of every
+/// quantity (central differences); `None` when the rows cannot be predicted.
+fn screen(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescription), v: &Validation) -> Option<Screen> {
+    let residuals = residuals_with(rows, &|_: &mut Measurement| {}, cal, desc)?;
+    let predicted = |kind: PointKind| {
+        let s = match kind {
+            PointKind::Validation => &v.validation,
+            PointKind::Tool => &v.tool,
+            PointKind::Axis => &v.axis,
+        };
+        s.as_ref().map_or(v.noise_rms_3d_mm, |s| s.predicted_mm.total)
+    };
+    let weights = v.residuals.iter().map(|r| 3.0 / predicted(r.kind).powi(2)).collect();
+    let mut quantities = vec![Quantity::Shift, Quantity::CoordinateScale];
+    for k in 0..desc.dof() {
+        quantities.extend([Quantity::CommandScale(k), Quantity::CommandOffset(k)]);
+    }
+    let mut directions = Vec::new();
+    for q in quantities {
+        let mut of_q = Vec::new();
+        for (e, h) in q.directions() {
+            let at = |sign: f64| {
+                let p = e.map(|x| x * sign * h);
+                residuals_with(rows, &move |m: &mut Measurement| q.apply(m, &p), cal, desc)
+            };
+            let (plus, minus) = (at(1.0)?, at(-1.0)?);
+            of_q.push(plus.iter().zip(&minus).map(|(a, b)| (a - b) / (2.0 * h)).collect());
+        }
+        directions.push((q, of_q));
+    }
+    Some(Screen {
+        residuals,
+        weights,
+        directions,
+    })
+}
+
+/// A pair screened: the quantity, the block, its linear parameters and the drop of the
+/// weighted sum of squares they give.
+struct Candidate {
+    quantity: Quantity,
+    block: Arc<Block>,
+    p: [f64; 3],
+    drop: f64,
+}
+
+/// The linear least-squares parameters of a quantity (its directions `d`) over `block`, the
+/// rows' residuals `residuals` weighted with `weights`, and the drop of the weighted sum of
+/// squares (directions taken as orthogonal: a shift's three are, exactly for free poses).
+fn linear_fit(residuals: &[f64], weights: &[f64], d: &[Vec<f64>], block: &Block) -> ([f64; 3], f64) {
+    let sums: Vec<(f64, f64)> = d
+        .iter()
+        .map(|dj| {
+            let (mut dr, mut dd) = (0.0, 0.0);
+            for &i in &block.rows {
+                let w = weights[i];
+                for c in 0..3 {
+                    dr += w * dj[3 * i + c] * residuals[3 * i + c];
+                    dd += w * dj[3 * i + c].powi(2);
+                }
+            }
+            (dr, dd)
+        })
+        .collect();
+    let largest = sums.iter().map(|s| s.1).fold(0.0, f64::max);
+    let (mut p, mut drop) = ([0.0; 3], 0.0);
+    for (j, (dr, dd)) in sums.into_iter().enumerate() {
+        if dd > RELATIVE_RANK_TOLERANCE * largest && dd.is_finite() {
+            p[j] = -dr / dd;
+            drop += dr * dr / dd;
+        }
+    }
+    (p, drop)
+}
+
+impl Screen {
+    /// Every pair's screening, largest drop first, and the count of pairs screened.
+    fn candidates(&self, blocks: &[Arc<Block>]) -> (Vec<Candidate>, usize) {
+        let mut out = Vec::new();
+        for block in blocks {
+            for (quantity, d) in &self.directions {
+                let (p, drop) = linear_fit(&self.residuals, &self.weights, d, block);
+                out.push(Candidate {
+                    quantity: *quantity,
+                    block: block.clone(),
+                    p,
+                    drop,
+                });
+            }
+        }
+        let screened = out.len();
+        out.retain(|c| c.drop.is_finite() && c.drop > 0.0);
+        out.sort_by(|a, b| b.drop.total_cmp(&a.drop));
+        (out, screened)
+    }
+}
+
+/// A direction of a rewrite whose weighted square norm over its block is below this fraction
+/// of the largest is not fitted: the estimated target positions of an axis experiment absorb
+/// it (a sweep's points shifted along its joint's axis), and its parameter is not measured.
+const RELATIVE_RANK_TOLERANCE: f64 = 1e-9;
+
+/// Gauss-Newton steps of the slips' parameters, all together, from their linear starts: the
+/// rewrites are linear in the coordinates, smooth in the commands.
+const REFINE_STEPS: usize = 3;
+
+/// Whether `slip`'s parameters are a slip a file carries: a command offset within
+/// [`MAX_FITTED_OFFSET`], a command scale within 5 times either way (a larger one is a unit
+/// the finite slips name), a coordinate scale within 10 % (a larger one is a unit).
+fn plausible(slip: &Slip) -> bool {
+    let p = slip.p[0];
+    slip.p.iter().all(|x| x.is_finite())
+        && match slip.quantity {
+            Quantity::Shift => true,
+            Quantity::CoordinateScale => p.abs() <= 0.1,
+            Quantity::CommandScale(_) => (0.2..=5.0).contains(&(1.0 + p)),
+            Quantity::CommandOffset(_) => p.abs() <= MAX_FITTED_OFFSET,
+        }
+}
+
+/// The parameters of every slip of `slips` refitted together on `rows` (Gauss-Newton, the
+/// residuals weighted with `weights`, central differences of each slip's rewrite over its
+/// block); `None` when the rows cannot be predicted or a slip leaves [`plausible`].
+fn refitted(
+    rows: &[Measurement],
+    mut slips: Vec<Slip>,
+    weights: &[f64],
+    (cal, desc): (&Calibration, &RobotDescription),
+) -> Option<Vec<Slip>> {
+    let parameters: Vec<(usize, usize, f64)> = slips
+        .iter()
+        .enumerate()
+        .flat_map(|(s, slip)| (0..slip.quantity.parameters()).map(move |j| (s, j, slip.quantity.directions()[j].1)))
+        .collect();
+    let w = DVector::from_iterator(3 * rows.len(), weights.iter().flat_map(|w| [*w; 3]));
+    let residuals = |slips: &[Slip]| residuals_with(&undone(rows, slips), &|_: &mut Measurement| {}, cal, desc);
+    for _ in 0..REFINE_STEPS {
+        let r = DVector::from_vec(residuals(&slips)?);
+        let mut jacobian = DMatrix::zeros(r.len(), parameters.len());
+        for (col, &(s, j, h)) in parameters.iter().enumerate() {
+            let at = |sign: f64| {
+                let mut moved = slips.clone();
+                moved[s].p[j] += sign * h;
+                residuals(&moved).map(DVector::from_vec)
+            };
+            jacobian.set_column(col, &((at(1.0)? - at(-1.0)?) / (2.0 * h)));
+        }
+        let weighted = DMatrix::from_diagonal(&w) * &jacobian;
+        let normal = jacobian.transpose() * &weighted;
+        let tolerance = RELATIVE_RANK_TOLERANCE * normal.norm();
+        let step = normal.pseudo_inverse(tolerance).ok()? * (weighted.transpose() * -r);
+        for (col, &(s, j, _)) in parameters.iter().enumerate() {
+            slips[s].p[j] += step[col];
+        }
+        if !slips.iter().all(plausible) {
+            return None;
+        }
+    }
+    Some(slips)
+}
+
+/// A slip kept: the rewrite, the drop of the validation's statistic it gives and the bound
+/// that drop had to pass.
+struct Kept {
+    slip: Slip,
+    drop: f64,
+    bound: f64,
+}
+
+/// The validation of `rows` (`None` when they are no set or cannot be predicted).
+fn validation_of(
+    rows: Vec<Measurement>,
+    (cal, desc): (&Calibration, &RobotDescription),
+    options: &ValidationOptions,
+) -> Option<Validation> {
+    let set = MeasurementSet::new(desc.dof(), rows).ok()?;
+    validate(&set, cal, desc, options).ok()
+}
+
+/// The next slip of the greedy search (module docs) on `rows` with `kept` undone, whose
+/// validation's statistic is `base`: the tested pair with the largest significant drop, with
+/// the validation of the rows with it undone too.
+fn next_slip(
+    rows: &[Measurement],
+    kept: &[Kept],
+    blocks: &[Arc<Block>],
+    model: (&Calibration, &RobotDescription),
+    (v, options, base): (&Validation, &ValidationOptions, f64),
+) -> Option<(Vec<Slip>, Kept, Validation)> {
+    let slips: Vec<Slip> = kept.iter().map(|k| k.slip.clone()).collect();
+    let current = undone(rows, &slips);
+    let screen = screen(&current, model, v)?;
+    let (candidates, screened) = screen.candidates(blocks);
+    let mut best_of: Vec<Candidate> = Vec::new();
+    for c in candidates {
+        if !best_of.iter().any(|b| b.quantity == c.quantity) {
+            best_of.push(c);
+        }
+    }
+    let rate = options.false_alarm / screened.max(1) as f64;
+    best_of
+        .iter()
+        .take(TESTED_CANDIDATES)
+        .filter_map(|c| {
+            let mut all = slips.clone();
+            all.push(Slip {
+                quantity: c.quantity,
+                block: c.block.clone(),
+                p: c.p,
+            });
+            let all = refitted(rows, all, &screen.weights, model)?;
+            let slip = all.last()?.clone();
+            let zero_error = matches!(slip.quantity, Quantity::CommandOffset(_)) && slip.block.whole_file;
+            if zero_error && slip.p[0].abs() < MIN_FITTED_OFFSET {
+                return None;
+            }
+            let after = validation_of(undone(rows, &all), model, options)?;
+            let drop = base - total_statistic(&after);
+            let bound = chi_square_quantile(1.0 - rate, slip.quantity.parameters() as f64);
+            (drop > bound).then_some((all, Kept { slip, drop, bound }, after))
+        })
+        .max_by(|a, b| a.1.drop.total_cmp(&b.1.drop))
+}
+
+/// The slips (at most 2, `MAX_SLIPS`) whose undoing makes `set` pass every test of the
+/// validation `v` of `set` against `cal` (module docs), as one miss naming their columns and
+/// rows; `None` when no position test exceeds or no such slips are found. `desc` is the
+/// description `v` was made with.
+pub fn explained_combined_slips(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    v: &Validation,
+) -> Option<ExplainedMiss> {
+    if !any_exceeds(v, true) {
+        return None;
+    }
+    let options = ValidationOptions::of_validation(v);
+    let blocks = blocks(set);
+    let mut kept: Vec<Kept> = Vec::new();
+    let mut base = total_statistic(v);
+    for _ in 0..MAX_SLIPS {
+        let (refit, next, after) = next_slip(set.rows(), &kept, &blocks, (cal, desc), (v, &options, base))?;
+        base = total_statistic(&after);
+        kept.iter_mut().zip(refit).for_each(|(k, s)| k.slip = s);
+        kept.push(next);
+        if !any_exceeds(&after, false) {
+            return Some(explained(set, desc, v, (&kept, &after)));
+        }
+    }
+    None
+}
+
+/// The miss `v` of `set` and the slips `kept` that explain it, `after` the validation with
+/// them undone, in words.
+fn explained(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    v: &Validation,
+    (kept, after): (&[Kept], &Validation),
+) -> ExplainedMiss {
+    let gross = summaries(v)
+        .filter(|s| s.chi_square.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds))
+        .max_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm));
+    let miss = gross.map_or(String::new(), |g| {
+        format!(
+            " ({} points by {:.4} mm RMS where {:.4} mm is predicted)",
+            g.points, g.rms_mm, g.predicted_mm.total
+        )
+    });
+    let passes: Vec<String> = summaries(after)
+        .map(|u| format!("{:.4} mm RMS where {:.4} mm", u.rms_mm, u.predicted_mm.total))
+        .collect();
+    let claims: Vec<String> = kept
+        .iter()
+        .map(|k| {
+            format!(
+                "{} (chi-square down {:.0}, chance at most {:.1})",
+                claim(&k.slip, desc),
+                k.drop,
+                k.bound
+            )
+        })
+        .collect();
+    let first = &kept[0].slip.block;
+    let mut fields: Vec<String> = kept.iter().map(|k| field(k.slip.quantity)).collect();
+    fields.dedup();
+    let slips = if kept.len() == 1 {
+        "one slip".to_string()
+    } else {
+        format!("{} slips", kept.len())
+    };
+    ExplainedMiss {
+        experiment: set.rows()[first.rows[0]].experiment.clone(),
+        line: set.line_of(first.rows[0]),
+        field: fields.join("; "),
+        message: format!(
+            "the calibrated model misses these data{miss}, and every test passes with {slips} undone ({} predicted): {}: \
+             correct these rows (or measure them again)",
+            passes.join(", "),
+            claims.join("; and ")
+        ),
+    }
+}
+
+/// The columns a rewrite of `q` names.
+fn field(q: Quantity) -> String {
+    match q {
+        Quantity::Shift | Quantity::CoordinateScale => "x_mm,y_mm,z_mm".into(),
+        Quantity::CommandScale(k) | Quantity::CommandOffset(k) => format!("cmd_{}", k + 1),
+    }
+}
+
+/// What the data are under `slip`, in words.
+fn claim(slip: &Slip, desc: &RobotDescription) -> String {
+    let b = &slip.block.name;
+    let p = slip.p;
+    let shown = |v: f64, scale: f64| format_f64((v * scale).round() / scale);
+    match slip.quantity {
+        Quantity::Shift => format!(
+            "the coordinates of {b} sit shifted by ({}, {}, {}) mm, the same for all: the instrument (or robot) \
+             bumped or set up again, or a constant added to the columns",
+            shown(-p[0], 1e2),
+            shown(-p[1], 1e2),
+            shown(-p[2], 1e2)
+        ),
+        Quantity::CoordinateScale => format!(
+            "the coordinates of {b} read {:.5} times what the calibration gives, about the instrument's origin: the \
+             instrument's scale (a laser tracker's wavelength or air compensation, a scale bar) or the export's \
+             scaling",
+            1.0 / (1.0 + p[0])
+        ),
+        Quantity::CommandScale(k) => format!(
+            "`cmd_{}` of {b} holds {:.4} times the values the calibration's transmission gives: the column scaled \
+             (another unit, a gear ratio applied twice), or the joint's transmission changed since the calibration",
+            k + 1,
+            1.0 / (1.0 + p[0])
+        ),
+        Quantity::CommandOffset(k) => format!(
+            "`cmd_{}` of {b} is offset by {} {} from the calibration: the joint's zero moved (re-mastered part-way?) \
+             or the column was shifted",
+            k + 1,
+            shown(-p[0], 1e3),
+            desc.joints[k].kind.file_unit()
+        ),
+    }
+}
