@@ -22,7 +22,7 @@ use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, 
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates, refine_carrying};
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::unit_check::axis_scale::{AxisScale, COLUMNS, Fit, axis_scale};
+use axiscal::measurement::unit_check::axis_scale::{AxisScale, COLUMNS, Fit, PROFILE_MAX_ROWS, axis_scale};
 use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -456,7 +456,7 @@ fn calibrate_axes(
             misfit_poses: 0,
         })
     };
-    warn_axis_scale(set, &args.data, &fit, printer);
+    warn_axis_scale(set, &args.data, &fit, PROFILE_MAX_ROWS, printer);
     let map = predict_tool_accuracy(&mut cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
@@ -475,9 +475,10 @@ pub(super) fn warn_axis_scale(
     set: &MeasurementSet,
     data: &Path,
     fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
+    max_rows: usize,
     printer: Printer,
 ) {
-    let Some(found) = axis_scale(set, fit) else {
+    let Some(found) = axis_scale(set, fit, max_rows) else {
         return;
     };
     let AxisScale {

@@ -8,7 +8,7 @@ use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSu
 use axiscal::calibration::procedure::{Calibration, free_pose_scale_reach, free_pose_scale_slips};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
-use axiscal::measurement::unit_check::axis_scale::Fit;
+use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
 use axiscal::robot::RobotDescription;
 use std::path::Path;
 
@@ -276,7 +276,7 @@ fn warn_slips(
                 misfit_poses: c.summary.outliers.len(),
             })
         };
-        super::calibrate::warn_axis_scale(set, args.data, &fit, printer);
+        super::calibrate::warn_axis_scale(set, args.data, &fit, PROFILE_MAX_FREE_POSE_ROWS, printer);
         if let Some(reach) = free_pose_scale_reach(cal, desc, set.rows()) {
             eprintln!("note: {data}: {reach}");
         }

@@ -38,6 +38,12 @@ const PROFILE_STEP: f64 = 1e-3;
 /// four runs is a whole calibration.
 pub const PROFILE_MAX_ROWS: usize = 20_000;
 
+/// The same bound for a free-pose file (about 500 poses of three targets): each run of a
+/// free-pose calibration fits every pose it is given (up to `--max-poses`), so the profile's
+/// runs on a large file would otherwise take minutes each; 500 poses resolve a per-mille
+/// scale of a metre-sized robot's poses many times over.
+pub const PROFILE_MAX_FREE_POSE_ROWS: usize = 1_500;
+
 /// The residuals of one calibration of a file.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fit {
@@ -158,14 +164,14 @@ fn confirmed(
     })
 }
 
-/// `set` thinned to at most about [`PROFILE_MAX_ROWS`] rows: every `k`-th step of each
-/// experiment, all of a step's targets kept.
-fn thinned(set: &MeasurementSet) -> Option<MeasurementSet> {
+/// `set` thinned to at most about `max_rows` rows: every `k`-th step of each experiment, all
+/// of a step's targets kept.
+fn thinned(set: &MeasurementSet, max_rows: usize) -> Option<MeasurementSet> {
     let n = set.rows().len();
-    if n <= PROFILE_MAX_ROWS {
+    if n <= max_rows {
         return None;
     }
-    let k = n.div_ceil(PROFILE_MAX_ROWS);
+    let k = n.div_ceil(max_rows);
     let dropped: Vec<usize> = (0..n).filter(|&i| !set.rows()[i].step.is_multiple_of(k)).collect();
     Some(set.without_rows(&dropped))
 }
@@ -173,8 +179,14 @@ fn thinned(set: &MeasurementSet) -> Option<MeasurementSet> {
 /// The column scale that best explains `set`'s residuals under the calibration `fit`
 /// (module docs), significant or not (`significant` says), or `None` when a fit fails or the
 /// profile is not a parabola (the fit changed its course between the runs).
-pub fn axis_scale(set: &MeasurementSet, fit: &dyn Fn(&MeasurementSet) -> Option<Fit>) -> Option<AxisScale> {
-    let thin = thinned(set);
+/// Above `max_rows` rows ([`PROFILE_MAX_ROWS`], [`PROFILE_MAX_FREE_POSE_ROWS`]) the profile
+/// runs on every `k`-th step.
+pub fn axis_scale(
+    set: &MeasurementSet,
+    fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
+    max_rows: usize,
+) -> Option<AxisScale> {
+    let thin = thinned(set, max_rows);
     let set = thin.as_ref().unwrap_or(set);
     let base = fit(set)?;
     let profiles: Vec<AxisScale> = (0..3)
