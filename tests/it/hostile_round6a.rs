@@ -114,7 +114,7 @@ fn cases() -> Vec<Case> {
             "SCARA free poses, cmd_4 x 1.05 (S1-fp: silent)",
             &format!("calibrate scara-fp-cmd4.csv {scara} --out out"),
             0,
-            &["joint 4 (free poses) turns 0.9", "`cmd_4` looks scaled by 1.0"],
+            &["joint 4 (free poses) turns 0.9", "`cmd_4` scaled by 1.0"],
         ),
     ]
 }

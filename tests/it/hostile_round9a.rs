@@ -76,7 +76,7 @@ fn one_command_column_scaled_by_one_and_a_half_to_four_per_cent_is_named() {
             "six-joint arm cmd_1 x 1.015, free poses (S1: silent)",
             &format!("calibrate arm6-fp-cmd1.csv {} --out out", robot("arm6-dh")),
             0,
-            &["joint 1 (free poses) turns 0.97", "`cmd_1` looks scaled by 1.02"],
+            &["joint 1 (free poses) turns 0.97", "`cmd_1` scaled by 1.02"],
         ),
         case(
             "SCARA cmd_4 x 1.03 with validation poses (S1: x 1.04 silent)",
@@ -174,7 +174,7 @@ mod real_rct {
                 "RCT joint 1 x 1.03 (S7: silent)",
                 &format!("calibrate x103.csv {positioner} --out out"),
                 0,
-                &["joint 1 (free poses) turns 0.97", "`cmd_1` looks scaled by 1.0"],
+                &["joint 1 (free poses) turns 0.97", "`cmd_1` scaled by 1.0"],
             ),
         );
         clear_outputs(d);

@@ -33,6 +33,12 @@ pub const AXIS_SCALE_FALSE_ALARM: f64 = 1e-4;
 /// squares within its parabola for the per-mille scales an instrument reads.
 const PROFILE_STEP: f64 = 1e-3;
 
+/// How far from its samples the parabola is trusted, in steps: the sums of squares follow a
+/// parabola near the factor the fits are run at, not 300 steps away (a minimum that far out,
+/// such as 4/3 on a coaxial SCARA's clean file, says the profile is flat, not that an axis
+/// reads a third long); a column 2 % off is a unit or exporter slip for the unit checks.
+const PROFILE_REACH_STEPS: f64 = 20.0;
+
 /// Above this many rows the profile fits a subsample of evenly spaced rows of each
 /// experiment: the test needs the robot's arcs and poses, not every point, and each of its
 /// four runs is a whole calibration.
@@ -113,12 +119,16 @@ fn profile(
     if !(curvature > 0.0 && slope.is_finite()) {
         return None;
     }
+    let shift = slope / (2.0 * curvature);
+    if shift.abs() > PROFILE_REACH_STEPS * h {
+        return None;
+    }
     let reduction = slope * slope / (4.0 * curvature);
     let left = (base.sum_squares_mm2 - reduction).max(0.0);
     let variance = left / (dof - 1.0);
     Some(AxisScale {
         column,
-        factor: at * (1.0 - slope / (2.0 * curvature)),
+        factor: at * (1.0 - shift),
         sigma: at * (variance / curvature).sqrt(),
         p_value: f_upper_tail(reduction / variance, 1.0, dof - 1.0),
         rms_mm: [(base.sum_squares_mm2 / dof).sqrt(), (left / dof).sqrt()],
