@@ -232,29 +232,9 @@ mod real_files {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
         let fanuc = format!(
-            "--robot {}/scenarios/robots/real/fanuc-r2000ic.toml",
-            env!("CARGO_MANIFEST_DIR")
+            "--robot {}",
+            crate::common::import_real_fanuc(&d.join("fanuc.csv")).display()
         );
-        axiscal()
-            .current_dir(d)
-            .args(["import", "mat"])
-            .arg(crate::common::real_data(
-                "fanuc-r2000ic-tracker/calibration_dataset.mat",
-            ))
-            .args(fanuc.split_whitespace())
-            .args([
-                "--joints",
-                "q",
-                "--targets",
-                "mA,mB,mC",
-                "--angles",
-                "rad",
-                "--units",
-                "m",
-            ])
-            .args(["--out", "fanuc.csv"])
-            .assert()
-            .success();
         let e = run_case(
             d,
             &case(

@@ -6,17 +6,8 @@ use crate::common;
 
 use crate::common::axiscal;
 use axiscal::calibration::procedure::Calibration;
-use std::path::{Path, PathBuf};
 
 /// The data set.
-fn data_file() -> PathBuf {
-    common::real_data("fanuc-r2000ic-tracker/calibration_dataset.mat")
-}
-
-fn robot() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/real/fanuc-r2000ic.toml")
-}
-
 /// Held-out RMS of a geometric calibration on the even configurations, tested on the odd ones,
 /// computed by an independent numpy/scipy implementation (error transforms before each joint,
 /// joint offsets, base, targets; column-scaled SVD for the identifiable subset; LM with a
@@ -30,26 +21,7 @@ const REFERENCE_HELDOUT_MM: [f64; 2] = [0.7068, 0.3370];
 fn imports_and_calibrates_the_free_poses_with_a_holdout() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("fanuc.csv");
-    let robot = robot();
-    axiscal()
-        .args(["import", "mat"])
-        .arg(data_file())
-        .arg("--robot")
-        .arg(&robot)
-        .args([
-            "--joints",
-            "q",
-            "--targets",
-            "mA,mB,mC",
-            "--angles",
-            "rad",
-            "--units",
-            "m",
-            "--out",
-        ])
-        .arg(&data)
-        .assert()
-        .success();
+    let robot = common::import_real_fanuc(&data);
     let rows = std::fs::read_to_string(&data)
         .unwrap()
         .lines()

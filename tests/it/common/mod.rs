@@ -238,3 +238,29 @@ pub fn scale_fields(f: &mut [String], range: std::ops::Range<usize>, factor: f64
         *v = (v.parse::<f64>().expect("a number") * factor).to_string();
     }
 }
+
+/// The real FANUC R-2000iC tracker file (`../shared`), imported with its README's command to
+/// `out`; returns the description it was imported with.
+pub fn import_real_fanuc(out: &std::path::Path) -> std::path::PathBuf {
+    let robot = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/real/fanuc-r2000ic.toml");
+    axiscal()
+        .args(["import", "mat"])
+        .arg(real_data("fanuc-r2000ic-tracker/calibration_dataset.mat"))
+        .arg("--robot")
+        .arg(&robot)
+        .args([
+            "--joints",
+            "q",
+            "--targets",
+            "mA,mB,mC",
+            "--angles",
+            "rad",
+            "--units",
+            "m",
+            "--out",
+        ])
+        .arg(out)
+        .assert()
+        .success();
+    robot
+}
