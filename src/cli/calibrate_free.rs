@@ -271,7 +271,9 @@ fn warn_slips(
             _ => eprintln!("warning: {data}: {found}"),
         }
     }
-    if !named {
+    // A joint's slope off its description's (said above, as a warning or a note) is a misfit
+    // the geometry carries; the coordinate-scale profile would read it as an axis' scale.
+    if scaled.is_empty() {
         // The poses the model cannot fit stay flagged with the column undone: no axis named.
         let profile = FreePoseOptions {
             holdout: false,
@@ -288,9 +290,9 @@ fn warn_slips(
             })
         };
         super::calibrate::warn_axis_scale(set, args.data, &fit, PROFILE_MAX_FREE_POSE_ROWS, printer);
-        if let Some(reach) = free_pose_scale_reach(cal, desc, set.rows()) {
-            eprintln!("note: {data}: {reach}");
-        }
+    }
+    if !named && let Some(reach) = free_pose_scale_reach(cal, desc, set.rows()) {
+        eprintln!("note: {data}: {reach}");
     }
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);
     for found in &swapped {
