@@ -5,7 +5,7 @@ use super::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
-use axiscal::calibration::procedure::{Calibration, ScaleSlip, free_pose_scale_reach, free_pose_scale_slips};
+use axiscal::calibration::procedure::{Calibration, free_pose_scale_reach, free_pose_scale_slips};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
@@ -259,16 +259,12 @@ fn warn_slips(
     let scaled = free_pose_scale_slips(cal, desc, set.rows());
     let mut named = false;
     for found in &scaled {
-        named |= !matches!(found, ScaleSlip::Command { sliding: false, .. });
-        match found {
-            ScaleSlip::Command {
-                joint,
-                sliding: false,
-                travel,
-                sigma,
-                ..
-            } => eprintln!("note: {data}: {}", harmonic_or_scale(*joint, *travel, *sigma)),
-            _ => eprintln!("warning: {data}: {found}"),
+        match found.free_pose_note() {
+            Some(note) => eprintln!("note: {data}: {note}"),
+            None => {
+                named = true;
+                eprintln!("warning: {data}: {found}");
+            }
         }
     }
     // A joint's slope off its description's (said above, as a warning or a note) is a misfit
@@ -408,20 +404,5 @@ fn target_ids_words(found: &SwappedTargetIds, summary: Option<&FreePoseSummary>,
          the free-pose fit takes each id for one point on the tool (fix the ids and calibrate again)",
         found.sigma_mm,
         read.join(" or, mirrored, ")
-    )
-}
-
-/// A revolute joint's mean slope over the poses off its description's, from free poses: the
-/// free-pose model's transmission is a harmonic series in the joint angle, so over less than a
-/// full turn a once-per-turn error of the joint's gear (the paper robot's joint 6 carries one of
-/// 1 deg) and a scaled command column read alike; a note with both causes, not a claim.
-fn harmonic_or_scale(joint: usize, travel: f64, sigma: f64) -> String {
-    format!(
-        "joint {joint} (free poses) turns {travel:.4} (+-{sigma:.4}) times the description's transmission per command, \
-         on average over the poses: either its gear's once-per-turn error (which the fit carries, and which over a \
-         partial turn reads as such a factor) or the column `cmd_{joint}` scaled by {:.4} on export (then \
-         calibration.json is wrong for it); free poses alone cannot tell them apart: check cmd_{joint} against the \
-         controller's reading at two poses, or sweep joint {joint} over a full turn",
-        1.0 / travel
     )
 }

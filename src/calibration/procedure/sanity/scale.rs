@@ -156,6 +156,34 @@ pub enum ScaleSlip {
     },
 }
 
+impl ScaleSlip {
+    /// The words of a revolute joint's slope found from free poses: the free-pose model's
+    /// transmission is a harmonic series in the joint angle, so over less than a full turn a
+    /// once-per-turn error of the joint's gear (the paper robot's joint 6 carries one of 1 deg)
+    /// and a scaled command column read alike; a note with both causes, not a claim. `None`
+    /// for the other findings, which stay warnings.
+    pub fn free_pose_note(&self) -> Option<String> {
+        let ScaleSlip::Command {
+            joint,
+            sliding: false,
+            travel,
+            sigma,
+            ..
+        } = self
+        else {
+            return None;
+        };
+        Some(format!(
+            "joint {joint} (free poses) turns {travel:.4} (+-{sigma:.4}) times the description's transmission per command, \
+             on average over the poses: either its gear's once-per-turn error (which the fit carries, and which over a \
+             partial turn reads as such a factor) or the column `cmd_{joint}` scaled by {:.4} on export (then \
+             calibration.json is wrong for it); free poses alone cannot tell them apart: check cmd_{joint} against the \
+             controller's reading at two poses, or sweep joint {joint} over a full turn",
+            1.0 / travel
+        ))
+    }
+}
+
 impl std::fmt::Display for ScaleSlip {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
