@@ -5,7 +5,7 @@
 
 use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
 use axiscal::calibration::refine::RefineOptions;
-use axiscal::diagnosis::refine_calibration;
+use axiscal::calibration::refit_model::refine::refine_calibration;
 use axiscal::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
 use axiscal::plan::{CalibrationPlan, ValidationPlan};
 use axiscal::robot::{Controller, RobotDescription};

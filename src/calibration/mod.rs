@@ -34,6 +34,7 @@ pub mod noise;
 pub mod outputs;
 pub mod procedure;
 pub mod refine;
+pub mod refit_model;
 pub mod shared_target;
 pub mod sliding;
 pub mod tool_accuracy;

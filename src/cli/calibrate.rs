@@ -18,9 +18,10 @@ use axiscal::calibration::procedure::{
     screen_sweeps,
 };
 use axiscal::calibration::refine::{RefineOptions, Refinement};
+use axiscal::calibration::refit_model::refine::refine_carrying;
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
-use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates, refine_carrying};
+use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::unit_check::axis_scale::{AxisScale, COLUMNS, Fit, PROFILE_MAX_ROWS, axis_scale};
 use axiscal::measurement::{MeasurementSet, format_f64};

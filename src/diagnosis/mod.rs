@@ -31,11 +31,10 @@ mod combined_slips;
 mod decide;
 mod features;
 mod file_scale;
-mod model;
 mod noise;
 mod outliers;
+mod plausible;
 mod plots;
-mod poses;
 mod predicted_error;
 mod refine;
 mod report;
@@ -46,21 +45,24 @@ mod targets;
 mod validate;
 
 pub use crate::calibration::refine::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
+pub use crate::calibration::refit_model::{
+    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, LoadPath, MIN_THERMAL_ROW_M, MassModel, ModelShape, Pose,
+    PoseFeatures, Predictor, RefitScope, SpringSite, ThermalLinks, TiltShape, drives_mechanism, free_poses_only,
+    is_geared, reference_temperature, split, target_count, training_mask, unmodelled_harmonic_order, validation_poses,
+    validation_poses_at_most,
+};
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnose_axes_with};
 pub use combined_slips::explained_combined_slips;
 pub use file_scale::explained_file_scale;
-pub use model::{
-    Candidate, DEFAULT_MAX_HARMONIC_ORDER, GRAVITY_M_S2, LoadPath, MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD,
-    MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K, MIN_THERMAL_ROW_M, MassModel, ModelShape, PoseFeatures,
-    Predictor, RefitScope, SIGN_K_SIGMA, SpringSite, ThermalLinks, TiltShape, drives_mechanism, implausible, is_geared,
-    unmodelled_harmonic_order,
-};
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use outliers::{PoseResiduals, pose_point_outliers, validation_outliers, without_outliers};
+pub use plausible::{
+    MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K,
+    SIGN_K_SIGMA, implausible,
+};
 pub use plots::{AXES_PLOT_FILES, PLOT_FILES, write_axes_plots, write_plots};
-pub use poses::{Pose, split, target_count, training_mask, validation_poses, validation_poses_at_most};
-pub use refine::{CARRIABLE, CarryError, carriable, carried_candidates, refine_calibration, refine_carrying};
+pub use refine::{CARRIABLE, CarryError, carriable, carried_candidates};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
 pub use slips::{ExplainedMiss, MAX_FITTED_OFFSET, acceptance, explained_misses, free_pose_misses};
@@ -76,7 +78,6 @@ use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureEr
 use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear_with};
 use crate::measurement::MeasurementSet;
 use crate::measurement::bounded::DIAGNOSIS_MAX_POSES;
-use crate::numerics::stats::mean;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector};
 use rand::{SeedableRng, rngs::ChaCha12Rng};
@@ -227,7 +228,7 @@ fn pose_error(
         message: match failing {
             Some(p) => format!(
                 "the calibrated model cannot execute the command of validation pose {} ({what}): a command beyond the range its transmissions were fitted on, or in other units; check that pose's cmd_k",
-                refine::pose_label(set, p)
+                crate::calibration::refit_model::refine::pose_label(set, p)
             ),
             None => format!("the calibrated model cannot execute the validation commands ({what})"),
         },
@@ -245,12 +246,6 @@ fn ordered(poses: &[Pose]) -> Vec<&Pose> {
 /// directions from the whole file; and how many it left out.
 fn diagnosed_poses(set: &MeasurementSet, desc: &RobotDescription, max_poses: usize) -> (Vec<Pose>, usize) {
     validation_poses_at_most(set.rows(), desc, max_poses)
-}
-
-/// Whether `set` holds free poses only (no axis experiment): step 1 of the module docs then
-/// calibrates from the training poses themselves.
-pub fn free_poses_only(set: &MeasurementSet) -> bool {
-    !set.rows().iter().any(|m| m.moved_joint > 0)
 }
 
 /// Step 1 of the module docs: the standard calibration of `set`'s axis experiments; for free
@@ -286,19 +281,6 @@ fn calibrate_for(
         0 | 1 => Ok(cal.into_calibration(desc)),
         setups => Err(DiagnosisError::SeveralSetups { setups }),
     }
-}
-
-/// The temperature the calibration holds at: the mean of the rows it is fitted to (the axis
-/// experiments', or every row's for free poses; 20 deg C without rows).
-fn reference_temperature(set: &MeasurementSet) -> f64 {
-    let free = free_poses_only(set);
-    let rows: Vec<f64> = set
-        .rows()
-        .iter()
-        .filter(|m| free || m.moved_joint > 0)
-        .map(|m| m.temperature_c)
-        .collect();
-    if rows.is_empty() { 20.0 } else { mean(&rows) }
 }
 
 /// The calibration, the validation poses, the observed residuals and the refit's sensitivity;

@@ -10,7 +10,7 @@
 //! the swept joint jitters from step to step.
 
 use super::DiagnosisError;
-use super::poses::Pose;
+use super::Pose;
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::FixedFrames;
 use crate::measurement::{Measurement, MeasurementSet};

@@ -5,6 +5,10 @@ use crate::csv_lines::shown_cell;
 use nalgebra::Point3;
 use std::collections::{BTreeMap, HashMap};
 
+/// Experiment id of the three tool targets observed at the reference pose (trains the
+/// calibrator's tool frame; not a validation pose).
+pub const TOOL_EXPERIMENT: &str = "tool";
+
 /// An experiment id, a target's name or a setup's label longer than this \[characters\] is no
 /// name (a cell holding a pasted file?): refused when read, so that no message or output
 /// repeats it.

@@ -20,7 +20,7 @@ pub use csv_io::{
 };
 pub use data::{
     Experiment, LoneTarget, MAX_LABEL_CHARS, MAX_PAYLOAD_KG, Measurement, MeasurementSet, MeasurementSetError,
-    POSE_COMMAND_TOLERANCE, RowProblem, TEMPERATURE_RANGE_C, is_format_char,
+    POSE_COMMAND_TOLERANCE, RowProblem, TEMPERATURE_RANGE_C, TOOL_EXPERIMENT, is_format_char,
 };
 pub use model::{IsotropicNoise, MeasurementModel};
 pub use noise_calibration::{

@@ -25,9 +25,7 @@ pub use stations::{
 };
 pub use validation::{MAX_POSES as MAX_VALIDATION_POSES, ValidationPlan};
 
-/// Experiment id of the three tool targets observed at the reference pose (trains the
-/// calibrator's tool frame; not a validation pose).
-pub const TOOL_EXPERIMENT: &str = "tool";
+pub use crate::measurement::TOOL_EXPERIMENT;
 
 /// Conditions of one pose that unmodelled effects depend on (`docs/formats.md#measurement-csv`, optional columns).
 #[derive(Clone, Copy, Debug, PartialEq)]

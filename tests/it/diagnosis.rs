@@ -591,7 +591,8 @@ fn two_compliant_campaigns() -> (RobotDescription, MeasurementSet, MeasurementSe
 fn a_named_compliance_carried_into_the_model_closes_the_gap_on_new_poses() {
     use axiscal::calibration::procedure::{CalibrationOptions, calibrate};
     use axiscal::calibration::refine::RefineOptions;
-    use axiscal::diagnosis::{ValidationOptions, carried_candidates, refine_calibration, refine_carrying, validate};
+    use axiscal::calibration::refit_model::refine::{refine_calibration, refine_carrying};
+    use axiscal::diagnosis::{ValidationOptions, carried_candidates, validate};
     let (desc, a, b) = two_compliant_campaigns();
     let d = diagnose(&a, &desc, &diagnosis_options()).unwrap();
     assert_eq!(

@@ -9,7 +9,8 @@ use crate::common;
 use crate::common::{axiscal, stderr};
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
 use axiscal::calibration::refine::RefineOptions;
-use axiscal::diagnosis::{ValidationOptions, refine_calibration, validate};
+use axiscal::calibration::refit_model::refine::refine_calibration;
+use axiscal::diagnosis::{ValidationOptions, validate};
 use axiscal::measurement::{Measurement, MeasurementSet};
 use axiscal::robot::RobotDescription;
 

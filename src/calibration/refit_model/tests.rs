@@ -3,12 +3,14 @@
 //! (`sim::JointDriver`, `sim::AnalyticArm`, `physics`) and the predictor's are written apart.
 
 use super::*;
-use crate::diagnosis::poses::validation_poses;
 use crate::measurement::{IsotropicNoise, MeasurementModel, MeasurementSet};
+use crate::physics::{ApproachSource, ComplianceEffect, LinkMass};
 use crate::physics::{AxisWobble, BacklashEffect, HarmonicPeriod, PassiveSlope, coupled_static_deflection};
 use crate::plan::{CalibrationPlan, PoseConditions, ValidationPlan};
 use crate::robot::commands_to_internal;
+use crate::robot::{Controller, RobotDescription, RobotModel};
 use crate::sim::{AnalyticArm, Effects, JointDriver, simulate_campaign};
+use nalgebra::Vector3;
 use rand::{SeedableRng, rngs::ChaCha12Rng};
 
 fn truth() -> (RobotDescription, RobotModel) {

@@ -1,14 +1,16 @@
-//! The parametric models the diagnoser fits: the calibrated robot with a geometric refit
-//! (row lengths and angles, joint zero offsets, the identified function shapes, the tool
-//! targets, base and tool frames) plus any number of candidate effects ([`Candidate`], each a
-//! member of a family), each a small extension of the phi-model (paper appendix, eqs. A1-A4)
-//! and of the fig. 3 joint semantics.
+//! The refit model: the calibrated robot with a geometric refit (row lengths and angles, joint
+//! zero offsets, the identified function shapes, the tool targets, base and tool frames) plus
+//! any number of candidate effects ([`Candidate`], each a member of a family), each a small
+//! extension of the phi-model (paper appendix, eqs. A1-A4) and of the fig. 3 joint semantics.
+//! `calibrate --refine` refines a calibration through it ([`crate::calibration::refine`]); the
+//! diagnosis fits its candidates with it.
 
 mod candidate;
 mod compliance;
 mod effect_set;
 mod layout;
-mod plausible;
+mod poses;
+pub mod refine;
 #[cfg(test)]
 mod tests;
 
@@ -16,12 +18,11 @@ pub use candidate::{
     Candidate, DEFAULT_MAX_HARMONIC_ORDER, LoadPath, MIN_THERMAL_ROW_M, MassModel, ModelShape, SpringSite,
     ThermalLinks, TiltShape, drives_mechanism, is_geared, unmodelled_harmonic_order,
 };
-pub use plausible::{
-    MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K,
-    SIGN_K_SIGMA, implausible,
+pub use poses::{
+    Pose, free_poses_only, reference_temperature, split, target_count, training_mask, validation_poses,
+    validation_poses_at_most,
 };
 
-use super::poses::Pose;
 use crate::kinematics::FixedFrames;
 use crate::physics::{
     ApproachSource, ComplianceEffect, GearHarmonic, LinkMass, add_joint_period_errors, apply_axis_tilts,

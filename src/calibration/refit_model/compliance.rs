@@ -5,7 +5,7 @@
 use super::Predictor;
 use super::candidate::{Candidate, LoadPath, MassModel, serial_load_count};
 use super::effect_set::EffectSet;
-use crate::diagnosis::poses::Pose;
+use super::poses::Pose;
 use crate::kinematics::PhiModel;
 use crate::physics::{LinkMass, coupled_first_order_deflection_at};
 use crate::robot::{ComplianceTerm, LoadProduct, RobotModel, SpringLoad};

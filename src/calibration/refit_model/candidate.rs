@@ -4,7 +4,7 @@
 //! periods, rotating and fixed-direction tilts, mass models of the gravity load, where the
 //! spring sits, whose direction signs a backlash, uniform or per-link expansion.
 
-use super::super::poses::Pose;
+use super::poses::Pose;
 use crate::kinematics::JointKind;
 use crate::physics::{ApproachSource, HarmonicPeriod};
 use crate::robot::{CouplingFitForm, RobotDescription, TransmissionFitForm};

@@ -1,10 +1,11 @@
 //! Validation poses as the diagnoser sees them: commands, approach directions from the
 //! command history, conditions and measured tool targets (`docs/formats.md#measurement-csv`).
 
-use crate::measurement::Measurement;
+use crate::measurement::TOOL_EXPERIMENT;
 use crate::measurement::bounded::evenly_spaced;
+use crate::measurement::{Measurement, MeasurementSet};
+use crate::numerics::stats::mean;
 use crate::physics::pose_approaches;
-use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::RobotDescription;
 use crate::robot::commands_to_internal;
 use nalgebra::Point3;
@@ -129,4 +130,22 @@ pub fn split(poses: &[Pose]) -> (Vec<&Pose>, Vec<&Pose>) {
 /// Number of measured targets over `poses`.
 pub fn target_count(poses: &[&Pose]) -> usize {
     poses.iter().map(|p| p.targets.len()).sum()
+}
+
+/// Whether `set` holds free poses only (no axis experiment).
+pub fn free_poses_only(set: &MeasurementSet) -> bool {
+    !set.rows().iter().any(|m| m.moved_joint > 0)
+}
+
+/// The temperature the calibration holds at: the mean of the rows it is fitted to (the axis
+/// experiments', or every row's for free poses; 20 deg C without rows).
+pub fn reference_temperature(set: &MeasurementSet) -> f64 {
+    let free = free_poses_only(set);
+    let rows: Vec<f64> = set
+        .rows()
+        .iter()
+        .filter(|m| free || m.moved_joint > 0)
+        .map(|m| m.temperature_c)
+        .collect();
+    if rows.is_empty() { 20.0 } else { mean(&rows) }
 }
