@@ -43,8 +43,9 @@
 mod scale;
 
 pub use scale::{
-    LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_REACH_CLAIM, SCALE_SIGMAS, ScaleReach,
-    ScaleSlip, free_pose_scale_reach, free_pose_scale_slips,
+    DOUBT_SIGMAS, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_REACH_CLAIM, SCALE_SIGMAS,
+    ScaleDoubt, ScaleReach, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
+    scale_doubts,
 };
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
