@@ -71,7 +71,7 @@ pub const DRIVE_SIGMAS: f64 = 6.0;
 
 /// A revolute joint's slope that departs from its description's by more than this many sigmas
 /// of the drive's ([`PLAUSIBLE_TURN_DEVIATION`]) and the fit's combined, but not beyond
-/// [`DRIVE_SIGMAS`], is said as a note with both causes ([`ScaleDoubt`]): a normal deviate
+/// `DRIVE_SIGMAS` (6), is said as a note with both causes ([`ScaleDoubt`]): a normal deviate
 /// beyond 4 has a chance of 6e-5 under the drive model. Over a partial turn the fit's
 /// once-per-turn term takes up 98 % of a command column's scale into the mean slope, so a
 /// 0.8 % scale departs by about 0.8 %, below the 0.72 % to 0.8 % the warning needs where the
@@ -475,7 +475,7 @@ impl std::fmt::Display for ScaleReach {
 }
 
 /// A revolute joint whose slope departs from its description's by [`DOUBT_SIGMAS`] to
-/// [`DRIVE_SIGMAS`]: its gear's once-per-turn error or its command column scaled, which its
+/// `DRIVE_SIGMAS` (6): its gear's once-per-turn error or its command column scaled, which its
 /// partial turn cannot tell apart (module doc); a note, not a claim.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScaleDoubt {
