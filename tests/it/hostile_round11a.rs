@@ -60,3 +60,52 @@ fn clean_sweeps_of_seven_robots_get_no_note_of_a_scale() {
         clear_outputs(d);
     }
 }
+
+/// The real SScanSS-2 table's rotation stage with `cmd_2` scaled (run 10 PU3: a misfit with
+/// the column not named).
+mod real_files {
+    use super::*;
+
+    #[test]
+    #[ignore = "needs ../shared/data/real/sscanss2-cpa (run by `make test-real`)"]
+    fn a_scaled_column_of_a_joint_swept_over_a_full_turn_is_named_in_its_misfit() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let table = format!(
+            "{}/scenarios/robots/real/sscanss2-table.toml",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        crate::common::axiscal()
+            .current_dir(d)
+            .args(["import", "sscanss2"])
+            .arg(crate::common::real_data("sscanss2-cpa/table.txt"))
+            .args(["--robot", &table, "--out", "table.csv"])
+            .assert()
+            .success();
+        scaled(d, ("table.csv", "table-cmd2.csv"), &[(2, 0.99)], false);
+        let e = run_case(
+            d,
+            &case(
+                "real table, cmd_2 x 0.99 (PU3: \"a block of rows shifted\", the column not named)",
+                &format!("calibrate table-cmd2.csv --robot {table} --out out"),
+                0,
+                &[
+                    "joint 2 (joint2): the fit misses its points by",
+                    "the column `cmd_2` scaled on export (over its 356-deg sweep no once-per-turn term",
+                ],
+            ),
+        );
+        assert!(!e.contains(DOUBT_WORDS), "{e}");
+        clear_outputs(d);
+        let e = run_case(
+            d,
+            &case(
+                "real table, clean",
+                &format!("calibrate table.csv --robot {table} --out out"),
+                0,
+                &[],
+            ),
+        );
+        assert!(!e.contains("scaled on export"), "the clean table: {e}");
+    }
+}
