@@ -229,6 +229,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         None => {
             print_axes(&cal, &desc, &source, printer);
             print_implausible(&texts.implausible, &desc, &set, &args);
+            print_scale_doubts(&cal, &desc, &texts.implausible, &args.data);
             print_moved_sweeps(&cal, &desc, &set, &args.data);
             if !args.refine
                 && let Some(miss) = misses_own_validation_poses(&cal, &desc, &set, args.repeatability_rad.as_deref())
@@ -583,6 +584,21 @@ fn print_implausible(found: &[Implausible], desc: &RobotDescription, set: &Measu
             Some(s) => eprintln!("warning: {f}{rows}; {s}"),
             None => eprintln!("warning: {f}{rows}"),
         }
+    }
+}
+
+/// The joints whose slope a gear's once-per-turn error and a scaled command column explain
+/// alike ([`scale_doubts`]) as notes; none beside a size or mirror finding, which explains the
+/// slopes.
+fn print_scale_doubts(cal: &Calibration, desc: &RobotDescription, found: &[Implausible], data: &Path) {
+    if found
+        .iter()
+        .any(|f| matches!(f, Implausible::Size { .. } | Implausible::Mirrored { .. }))
+    {
+        return;
+    }
+    for doubt in axiscal::calibration::procedure::scale_doubts(cal, desc) {
+        eprintln!("note: {}: {doubt}", data.display());
     }
 }
 

@@ -5,7 +5,9 @@ use super::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
-use axiscal::calibration::procedure::{Calibration, free_pose_scale_reach, free_pose_scale_slips};
+use axiscal::calibration::procedure::{
+    Calibration, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
+};
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
@@ -266,6 +268,9 @@ fn warn_slips(
                 eprintln!("warning: {data}: {found}");
             }
         }
+    }
+    for doubt in free_pose_scale_doubts(cal, desc, set.rows()) {
+        eprintln!("note: {data}: {doubt}");
     }
     // A joint's slope off its description's (said above, as a warning or a note) is a misfit
     // the geometry carries; the coordinate-scale profile would read it as an axis' scale.

@@ -12,7 +12,7 @@ use std::path::Path;
 
 /// `simulate` of the shipped robot `robot` (seed `seed`, `poses` validation poses; analytic,
 /// or rapier with the effects file `effects`) as `out` in `dir`.
-fn simulate(dir: &Path, robot: &str, (seed, poses): (u64, usize), effects: Option<&str>, out: &str) {
+pub(crate) fn simulate(dir: &Path, robot: &str, (seed, poses): (u64, usize), effects: Option<&str>, out: &str) {
     let robot = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/robots/{robot}.toml"));
     let mut c = axiscal();
     c.current_dir(dir).args(["simulate", "--robot"]).arg(&robot);
@@ -27,13 +27,13 @@ fn simulate(dir: &Path, robot: &str, (seed, poses): (u64, usize), effects: Optio
 }
 
 /// The robot description `robot` as an argument.
-fn robot(robot: &str) -> String {
+pub(crate) fn robot(robot: &str) -> String {
     format!("--robot {}/scenarios/robots/{robot}.toml", env!("CARGO_MANIFEST_DIR"))
 }
 
 /// `file` in `dir` with `cmd_k` times `factor` for each `(k, factor)` in every row (free poses
 /// only: the rows of moved_joint 0, when `free`), as `name`.
-fn scaled(dir: &Path, (file, name): (&str, &str), columns: &[(usize, f64)], free: bool) {
+pub(crate) fn scaled(dir: &Path, (file, name): (&str, &str), columns: &[(usize, f64)], free: bool) {
     let keep = |f: &[String]| !free || f[1] == "0";
     altered_csv(&dir.join(file), name, keep, |f| {
         for &(k, factor) in columns {

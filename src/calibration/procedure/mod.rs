@@ -58,9 +58,9 @@ pub use result::{
     PointResidual, PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,
 };
 pub use sanity::{
-    Implausible, LEAD_SPREAD, MISFIT_RATIO, PLAUSIBLE_AXIS_TILT_RAD, PLAUSIBLE_LEAD_DEVIATION,
-    PLAUSIBLE_TURN_DEVIATION, SCALE_REACH_CLAIM, SCALE_SIGMAS, SIZE_TOLERANCE, ScaleReach, ScaleSlip,
-    free_pose_scale_reach, free_pose_scale_slips, implausible, longest_length_m,
+    DOUBT_SIGMAS, Implausible, LEAD_SPREAD, MISFIT_RATIO, PLAUSIBLE_AXIS_TILT_RAD, PLAUSIBLE_LEAD_DEVIATION,
+    PLAUSIBLE_TURN_DEVIATION, SCALE_REACH_CLAIM, SCALE_SIGMAS, SIZE_TOLERANCE, ScaleDoubt, ScaleReach, ScaleSlip,
+    free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips, implausible, longest_length_m, scale_doubts,
 };
 pub use screen::{
     OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, SWEEP_POINTS_FALSE_ALARM, Screening, WorstSecondTarget, screen_sweeps,

@@ -43,8 +43,9 @@
 mod scale;
 
 pub use scale::{
-    LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_REACH_CLAIM, SCALE_SIGMAS, ScaleReach,
-    ScaleSlip, free_pose_scale_reach, free_pose_scale_slips,
+    DOUBT_SIGMAS, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_REACH_CLAIM, SCALE_SIGMAS,
+    ScaleDoubt, ScaleReach, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
+    scale_doubts,
 };
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
@@ -155,6 +156,10 @@ pub enum Implausible {
         rms_mm: f64,
         /// The median joint's \[mm\].
         median_mm: f64,
+        /// A revolute joint's span where it is more than half a turn \[deg\]: its transmission's
+        /// once-per-turn term cannot take up a scale of its command column there, which then
+        /// shows as this misfit.
+        long_sweep_deg: Option<f64>,
     },
 }
 
@@ -215,11 +220,21 @@ impl std::fmt::Display for Implausible {
                 experiment,
                 rms_mm,
                 median_mm,
-            } => write!(
-                f,
-                "joint {joint} ({experiment}): the fit misses its points by {rms_mm:.3} mm RMS, {:.1} times the median joint's {median_mm:.3} mm: its points are not on one arc or line of the joint (a block of rows shifted, part of the sweep in other units, a target moved on its link); the noise estimate and every sigma are inflated by it",
-                rms_mm / median_mm
-            ),
+                long_sweep_deg,
+            } => {
+                let scaled = long_sweep_deg.map_or_else(String::new, |span| {
+                    format!(
+                        ", the column `cmd_{joint}` scaled on export (over its {span:.0}-deg sweep no once-per-turn term of \
+                         its transmission takes a scale up, so it shows here): check cmd_{joint} against the controller's \
+                         reading at two poses"
+                    )
+                });
+                write!(
+                    f,
+                    "joint {joint} ({experiment}): the fit misses its points by {rms_mm:.3} mm RMS, {:.1} times the median joint's {median_mm:.3} mm: its points are not on one arc or line of the joint (a block of rows shifted, part of the sweep in other units, a target moved on its link{scaled}); the noise estimate and every sigma are inflated by it",
+                    rms_mm / median_mm
+                )
+            }
         }
     }
 }
@@ -429,6 +444,12 @@ fn size(cal: &Calibration, desc: &RobotDescription) -> Option<Implausible> {
     })
 }
 
+/// Half a turn \[deg\]: over a longer sweep a first harmonic's mean slope departs from 1 by
+/// less than its amplitude times 2/pi and falls to nothing over a full turn, so a scale of the
+/// command column stays in the fit's misses (the real SScanSS-2 table's rotation stage, swept
+/// over 356 deg with `cmd_2` scaled 1 %: a misfit 14 times the median joint's, its slope 1).
+const HALF_TURN_DEG: f64 = 180.0;
+
 fn misfits(cal: &Calibration) -> Vec<Implausible> {
     let rms: Vec<f64> = cal
         .axes
@@ -448,6 +469,10 @@ fn misfits(cal: &Calibration) -> Vec<Implausible> {
             experiment: a.experiment.clone(),
             rms_mm: a.residual_rms_mm,
             median_mm,
+            long_sweep_deg: match a.span {
+                super::AxisSpan::Deg(span) if span > HALF_TURN_DEG => Some(span),
+                _ => None,
+            },
         })
         .collect()
 }
