@@ -334,6 +334,24 @@ impl AxisScale {
     }
 }
 
+impl AxisScale {
+    /// The others read alike (` (or, alike for these data, ...)`), empty without any.
+    fn alike_words(&self) -> String {
+        if self.alike.is_empty() {
+            return String::new();
+        }
+        let reads: Vec<String> = self.alike.iter().map(|&(s, f)| s.reads(f, false)).collect();
+        let slide = !matches!(self.scaled, Scaled::Column(_))
+            || self.alike.iter().any(|(s, _)| !matches!(s, Scaled::Column(_)));
+        let why = if slide {
+            "a slide's travel along one instrument axis and that axis' scale move the points alike"
+        } else {
+            "the robot's links take a scale of both together"
+        };
+        format!(" (or, alike for these data, {}: {why})", reads.join("; or "))
+    }
+}
+
 impl std::fmt::Display for AxisScale {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let AxisScale {
@@ -348,20 +366,7 @@ impl std::fmt::Display for AxisScale {
             Scaled::Every => "the sliding joints' travel",
             Scaled::Command(_) => "the travel the points show",
         };
-        let alike: Vec<String> = self.alike.iter().map(|&(s, f)| s.reads(f, false)).collect();
-        let alike = match alike.is_empty() {
-            true => String::new(),
-            false => format!(
-                " (or, alike for these data, {}: {})",
-                alike.join("; or "),
-                match self.alike.iter().any(|(s, _)| !matches!(s, Scaled::Column(_)))
-                    || !matches!(scaled, Scaled::Column(_))
-                {
-                    true => "a slide's travel along one instrument axis and that axis' scale move the points alike",
-                    false => "the robot's links take a scale of both together",
-                }
-            ),
-        };
+        let alike = self.alike_words();
         write!(
             f,
             "{} (+- {sigma:.5}, {:.0} sigma from 1) {against}{alike}: the calibration misses the points by {before:.4} mm \
