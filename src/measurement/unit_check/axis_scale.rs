@@ -20,6 +20,14 @@
 //! about the factor found and its re-run decide). A uniform scale of all
 //! three columns is one of the links' lengths, so "x reads long" and "y and z read short" are
 //! one finding: the column named is the one whose undoing explains most.
+//!
+//! On a robot with sliding joints two more readings move the points alike and are profiled the
+//! same way: a slide's command column scaled (its lead or the controller's scale: the slide's
+//! travel along one instrument axis is that axis' scale on such data), and the three columns
+//! scaled together (the slides' readings are a length standard the links cannot absorb, so an
+//! isotropic scale of the instrument shows against them). The most significant is named and
+//! every other within the test's reach of it said beside it. Where nothing is named, the scale
+//! each column lets pass (the test's threshold in sigmas of its factor) is kept for a note.
 
 use super::super::MeasurementSet;
 use crate::numerics::stats::{f_upper_quantile, f_upper_tail};
