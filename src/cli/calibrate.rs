@@ -23,7 +23,7 @@ use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, 
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates};
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::unit_check::axis_scale::{AxisScale, COLUMNS, Fit, PROFILE_MAX_ROWS, axis_scale};
+use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_ROWS, axis_scale};
 use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -458,7 +458,7 @@ fn calibrate_axes(
             misfit_poses: 0,
         })
     };
-    warn_axis_scale(set, &args.data, &fit, PROFILE_MAX_ROWS, printer);
+    warn_axis_scale((set, desc), &args.data, &fit, PROFILE_MAX_ROWS, printer);
     let map = predict_tool_accuracy(&mut cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
@@ -471,35 +471,36 @@ fn calibrate_axes(
 }
 
 /// The scale of one coordinate column the calibration `fit` finds in `set` ([`axis_scale`]),
-/// as a warning naming the column when the data determine it beyond 1; with `--verbose` a
-/// note of the largest one either way.
+/// or of a slide's commands read alike (the sliding joints of `desc`), as a warning naming it
+/// when the data determine it beyond 1; else a note of how large a scale would pass where that
+/// is beyond the test's claim, and with `--verbose` a note of the largest one either way.
 pub(super) fn warn_axis_scale(
-    set: &MeasurementSet,
+    (set, desc): (&MeasurementSet, &RobotDescription),
     data: &Path,
     fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
     max_rows: usize,
     printer: Printer,
 ) {
-    let Some(found) = axis_scale(set, fit, max_rows) else {
+    let slides: Vec<usize> = (0..desc.joints.len())
+        .filter(|&j| desc.joints[j].kind == axiscal::kinematics::JointKind::Prismatic)
+        .collect();
+    let Some(found) = axis_scale(set, fit, max_rows, &slides) else {
         return;
     };
-    let AxisScale {
-        column,
-        factor,
-        sigma,
-        rms_mm: [before, after],
-        ..
-    } = found;
-    let name = COLUMNS[column];
-    let axis = &name[..1];
     if !found.significant {
         if printer.verbose {
             eprintln!(
-                "note: {}: of the coordinate columns `{name}` reads the most unlike the others: {factor:.5} times \
-                 (+- {sigma:.5}, {:.1} sigma from 1, within the data's reach of 1)",
+                "note: {}: of the coordinate columns {} reads the most unlike the others: {:.5} times \
+                 (+- {:.5}, {:.1} sigma from 1, within the data's reach of 1)",
                 data.display(),
-                (factor - 1.0).abs() / sigma
+                found.scaled.columns(),
+                found.factor,
+                found.sigma,
+                (found.factor - 1.0).abs() / found.sigma
             );
+        }
+        if let Some(reach) = found.reach_note() {
+            eprintln!("note: {}: {reach}", data.display());
         }
         return;
     }
@@ -507,22 +508,7 @@ pub(super) fn warn_axis_scale(
         Some(line) => format!("{}:{line}", data.display()),
         None => data.display().to_string(),
     };
-    let alike = match found.alike {
-        Some((other, f)) => format!(
-            " (or, alike for these data, `{}` reads {f:.5} times: the robot's links take a scale of both together)",
-            COLUMNS[other]
-        ),
-        None => String::new(),
-    };
-    eprintln!(
-        "warning: {place}: `{name}`: the instrument's {axis} axis reads {factor:.5} times (+- {sigma:.5}, {:.0} sigma \
-         from 1) the other axes{alike}: the calibration misses the points by {before:.4} mm RMS per coordinate as read and by \
-         {after:.4} mm with `{name}` divided by {factor:.5} about the data's centroid; each arc or pose alone takes such \
-         a scale as a tilt, the robot's arcs and poses together do not, and calibration.json has absorbed it into the \
-         geometry: check the instrument's scale along {axis} (its axis scale or compensation, a photogrammetry scale \
-         bar along it) and the exporter (a column scaled or converted alone), then calibrate the corrected file again",
-        (factor - 1.0).abs() / sigma
-    );
+    eprintln!("warning: {place}: {found}");
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far

@@ -290,7 +290,7 @@ fn warn_slips(
                 misfit_poses: c.summary.outliers.len(),
             })
         };
-        super::calibrate::warn_axis_scale(set, args.data, &fit, PROFILE_MAX_FREE_POSE_ROWS, printer);
+        super::calibrate::warn_axis_scale((set, desc), args.data, &fit, PROFILE_MAX_FREE_POSE_ROWS, printer);
     }
     if !named && let Some(reach) = free_pose_scale_reach(cal, desc, set.rows()) {
         eprintln!("note: {data}: {reach}");

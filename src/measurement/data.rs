@@ -447,6 +447,18 @@ impl MeasurementSet {
         out
     }
 
+    /// The set with command `joint` (0-based: `cmd_1` is 0) of every row multiplied by
+    /// `factor`: a joint's readings on another scale (a slide's lead, an exporter's factor).
+    pub fn with_command_scaled(&self, joint: usize, factor: f64) -> Self {
+        let mut out = self.clone();
+        for m in &mut out.rows {
+            if let Some(c) = m.cmd.get_mut(joint) {
+                *c *= factor;
+            }
+        }
+        out
+    }
+
     /// The setup of row `row` (0 without a `setup` column).
     pub fn setup_of(&self, row: usize) -> usize {
         self.row_setups.get(row).copied().unwrap_or(0)
