@@ -230,7 +230,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             print_implausible(&texts.implausible, &desc, &set, &args);
             print_moved_sweeps(&cal, &desc, &set, &args.data);
             if !args.refine
-                && let Some(miss) = misses_own_validation_poses(&cal, (&desc, &set, &args.data), args.repeatability_rad.as_deref())
+                && let Some(miss) =
+                    misses_own_validation_poses(&cal, (&desc, &set, &args.data), args.repeatability_rad.as_deref())
             {
                 eprintln!("warning: {miss}");
             }

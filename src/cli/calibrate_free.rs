@@ -6,9 +6,9 @@ use anyhow::Result;
 use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
 use axiscal::calibration::procedure::{Calibration, ScaleSlip, free_pose_scale_reach, free_pose_scale_slips};
-use axiscal::measurement::{Measurement, MeasurementSet};
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
+use axiscal::measurement::{Measurement, MeasurementSet};
 use axiscal::robot::RobotDescription;
 use std::path::Path;
 

@@ -11,8 +11,7 @@ use axiscal::diagnosis::{
     ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate, validation_residuals_csv,
 };
 use axiscal::diagnosis::{
-    PoseResiduals, explained_validation_misses,
-    free_poses_only, pose_point_outliers, without_outliers,
+    PoseResiduals, explained_validation_misses, free_poses_only, pose_point_outliers, without_outliers,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;

@@ -29,8 +29,8 @@
 //! test exceeds, so clean data pay nothing.
 
 use super::slips::{MAX_FITTED_OFFSET, MIN_FITTED_OFFSET, residuals_with};
-use super::{ExplainedMiss, explained_file_scale, explained_misses, explained_sweep_misses};
 use super::validate::{PointKind, PositionSummary, Validation, ValidationOptions, Verdict, validate};
+use super::{ExplainedMiss, explained_file_scale, explained_misses, explained_sweep_misses};
 use crate::calibration::procedure::Calibration;
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
 use crate::numerics::stats::chi_square_quantile;
