@@ -713,15 +713,7 @@ fn own_poses_slips(
                 an effect the model lacks, such as joints yielding under the load (`axiscal diagnose` on this file models it)"
             .to_string();
     }
-    let said: Vec<String> = named
-        .iter()
-        .map(|m| {
-            let place = m
-                .line
-                .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
-            format!("{place}: `{}`: {}", m.field, m.message)
-        })
-        .collect();
+    let said: Vec<String> = named.iter().map(|m| checks::explained_miss_words(m, data)).collect();
     format!("`axiscal validate`'s slip search names it: {}", said.join("; "))
 }
 
