@@ -232,7 +232,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             print_scale_doubts(&cal, &desc, &texts.implausible, &args.data);
             print_moved_sweeps(&cal, &desc, &set, &args.data);
             if !args.refine
-                && let Some(miss) = misses_own_validation_poses(&cal, &desc, &set, args.repeatability_rad.as_deref())
+                && let Some(miss) =
+                    misses_own_validation_poses(&cal, (&desc, &set, &args.data), args.repeatability_rad.as_deref())
             {
                 eprintln!("warning: {miss}");
             }
@@ -619,11 +620,11 @@ const OWN_POSES_CHECKED: usize = 500;
 /// [`axiscal::diagnosis::validate_free_tool`]): a miss
 /// beyond the prediction is what a slip the unit checks cannot see leaves (one experiment's
 /// commands scaled within a transmission's range, a wrong placement or description), or an
-/// effect the model lacks. `None` without validation poses or when they are consistent.
+/// effect the model lacks. The miss is then searched for the slips `validate` names
+/// ([`own_poses_slips`]). `None` without validation poses or when they are consistent.
 fn misses_own_validation_poses(
     cal: &Calibration,
-    desc: &RobotDescription,
-    set: &MeasurementSet,
+    (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
     stated_repeatability: Option<&[f64]>,
 ) -> Option<String> {
     use axiscal::diagnosis::{ValidationOptions, Verdict, validate, validate_free_tool};
@@ -639,13 +640,15 @@ fn misses_own_validation_poses(
         axiscal::measurement::bounded::evenly_spaced(poses, OWN_POSES_CHECKED)
             .into_iter()
             .collect();
-    let rows: Vec<_> = set
-        .rows()
-        .iter()
-        .filter(|m| is_pose(m) && kept.contains(&(m.experiment.as_str(), m.step)))
-        .cloned()
+    let chosen: Vec<usize> = (0..set.rows().len())
+        .filter(|&i| {
+            let m = &set.rows()[i];
+            is_pose(&m) && kept.contains(&(m.experiment.as_str(), m.step))
+        })
         .collect();
-    let poses_set = MeasurementSet::new(desc.dof(), rows).ok()?;
+    let rows: Vec<_> = chosen.iter().map(|&i| set.rows()[i].clone()).collect();
+    let lines: Vec<u64> = chosen.iter().filter_map(|&i| set.line_of(i)).collect();
+    let poses_set = MeasurementSet::new(desc.dof(), rows).ok()?.with_lines(lines);
     let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
     // A tool frame left nominal is off by an error no covariance holds: estimated from the
     // poses, so that only what no tool frame explains is judged, and a move beyond what a
@@ -656,8 +659,8 @@ fn misses_own_validation_poses(
     } else {
         (validate(&poses_set, cal, desc, &options).ok()?, None)
     };
-    let part = v.validation?;
-    let test = part.chi_square?;
+    let part = v.validation.as_ref()?;
+    let test = part.chi_square.as_ref()?;
     let implausible = tool_move.and_then(|m| implausible_tool_move(&m, desc));
     let exceeds = test.verdict == Verdict::Exceeds;
     (exceeds || implausible.is_some()).then(|| {
@@ -679,13 +682,42 @@ fn misses_own_validation_poses(
                 test.per_dof
             )
         };
-        format!(
-            "{miss}{}: {}check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
-             placement and lengths, or an effect the model lacks (`axiscal validate`, `axiscal diagnose` on this file)",
-            implausible.unwrap_or_default(),
-            understated_repeatability(desc, stated_repeatability)
-        )
+        let first = understated_repeatability(desc, stated_repeatability);
+        let cause = match tool_move {
+            // The nominal tool frame's error would be read as a slip of the coordinates.
+            Some(_) => "check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
+             placement and lengths, or an effect the model lacks (`axiscal validate`, `axiscal diagnose` on this file)"
+                .to_string(),
+            None => own_poses_slips(&poses_set, cal, desc, &v, data),
+        };
+        format!("{miss}{}: {first}{cause}", implausible.unwrap_or_default())
     })
+}
+
+/// What the slip search `validate` runs ([`axiscal::diagnosis::explained_validation_misses`])
+/// says of the misses `v` of the file's own validation poses `poses` (read from `data`)
+/// against `cal`: the slips whose undoing makes every test pass, in `validate`'s words, or,
+/// when none does, the causes left: a slip of the whole file the calibration has taken into
+/// its geometry from the axis experiments too, the description, or an effect the model
+/// lacks (a joint's compliance: `diagnose` models it).
+fn own_poses_slips(
+    poses: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    v: &axiscal::diagnosis::Validation,
+    data: &Path,
+) -> String {
+    let named = axiscal::diagnosis::explained_validation_misses(poses, cal, desc, v);
+    if named.is_empty() {
+        return "no slip `axiscal validate` tests (a command column scaled or offset, one coordinate column or all three scaled, the \
+                coordinates shifted; over these poses or a run of them, one or two at once) makes them pass against this calibration: \
+                a slip the axis experiments carry as well, which the calibration has taken into its geometry (see the warnings above, or \
+                check each column for a scale or offset throughout the file, e.g. gradians), the description's placement and lengths, or \
+                an effect the model lacks, such as joints yielding under the load (`axiscal diagnose` on this file models it)"
+            .to_string();
+    }
+    let said: Vec<String> = named.iter().map(|m| checks::explained_miss_words(m, data)).collect();
+    format!("`axiscal validate`'s slip search names it: {}", said.join("; "))
 }
 
 /// What a move `m` of the nominal tool frame that fits the validation poses says when it is

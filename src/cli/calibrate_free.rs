@@ -6,11 +6,11 @@ use anyhow::Result;
 use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
 use axiscal::calibration::procedure::{
-    Calibration, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
+    Calibration, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
 };
-use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
+use axiscal::measurement::{Measurement, MeasurementSet};
 use axiscal::robot::RobotDescription;
 use std::path::Path;
 
@@ -273,8 +273,19 @@ fn warn_slips(
         eprintln!("note: {data}: {doubt}");
     }
     // A joint's slope off its description's (said above, as a warning or a note) is a misfit
-    // the geometry carries; the coordinate-scale profile would read it as an axis' scale.
-    if scaled.is_empty() {
+    // the geometry carries; the coordinate-scale profile would read it as an axis' scale, so
+    // it runs with the joints' command columns undone by the slopes said: a second slip (a
+    // coordinate column scaled too) is then tested, not hidden behind the first.
+    let slopes: Vec<(usize, f64)> = scaled
+        .iter()
+        .filter_map(|s| match s {
+            ScaleSlip::Command { joint, travel, .. } => Some((*joint, *travel)),
+            _ => None,
+        })
+        .collect();
+    if slopes.len() == scaled.len() {
+        let undone = with_commands_scaled(set, &slopes);
+        let set = &undone;
         // The poses the model cannot fit stay flagged with the column undone: no axis named.
         let profile = FreePoseOptions {
             holdout: false,
@@ -318,6 +329,26 @@ fn warn_slips(
             moved.join(", ")
         );
     }
+}
+
+/// `set` with each joint's command column (`(joint, 1-based)`) multiplied by its factor: the
+/// commands a joint that travels `factor` times the description's transmission per command
+/// would have been given. Its lines kept.
+fn with_commands_scaled(set: &MeasurementSet, factors: &[(usize, f64)]) -> MeasurementSet {
+    if factors.is_empty() {
+        return set.clone();
+    }
+    let rows: Vec<Measurement> = set
+        .rows()
+        .iter()
+        .map(|m| {
+            let mut m = m.clone();
+            factors.iter().for_each(|&(joint, f)| m.cmd[joint - 1] *= f);
+            m
+        })
+        .collect();
+    let lines: Vec<u64> = (0..rows.len()).filter_map(|i| set.line_of(i)).collect();
+    MeasurementSet::new(set.joint_count(), rows).map_or_else(|_| set.clone(), |s| s.with_lines(lines))
 }
 
 /// Independent values one configuration of the tool gives at most: its pose (a target's

@@ -823,6 +823,15 @@ pub fn noise_far_below(
     ))
 }
 
+/// A slip found in `data` ([`axiscal::diagnosis::ExplainedMiss`]) in words: the file and line
+/// of its first row, its columns and what it is.
+pub fn explained_miss_words(m: &axiscal::diagnosis::ExplainedMiss, data: &Path) -> String {
+    let place = m
+        .line
+        .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+    format!("{place}: `{}`: {}", m.field, m.message)
+}
+
 /// The free-pose misses a slip in `data` explains ([`axiscal::diagnosis::explained_misses`]) as
 /// one error naming the file, the first row's line and the column, unless `skip`
 /// (`--skip-unit-check`): the model is not blamed for a column in other units.
@@ -830,15 +839,7 @@ pub fn refuse_explained_misses(misses: &[axiscal::diagnosis::ExplainedMiss], dat
     if skip || misses.is_empty() {
         return Ok(());
     }
-    let all: Vec<String> = misses
-        .iter()
-        .map(|m| {
-            let place = m
-                .line
-                .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
-            format!("{place}: `{}`: {}", m.field, m.message)
-        })
-        .collect();
+    let all: Vec<String> = misses.iter().map(|m| explained_miss_words(m, data)).collect();
     bail!(
         "{}; if the units are right after all, pass --skip-unit-check",
         all.join("; ")

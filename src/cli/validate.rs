@@ -11,8 +11,7 @@ use axiscal::diagnosis::{
     ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate, validation_residuals_csv,
 };
 use axiscal::diagnosis::{
-    PoseResiduals, explained_combined_slips, explained_file_scale, explained_misses, explained_sweep_misses,
-    free_poses_only, pose_point_outliers, without_outliers,
+    PoseResiduals, explained_validation_misses, free_poses_only, pose_point_outliers, without_outliers,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -84,14 +83,7 @@ pub fn run(args: Args) -> Result<()> {
     checks::print_warnings(&flagged);
     warnings.extend(flagged);
     let v = validate(&set, &cal, &fitted, &options).with_context(validating)?;
-    let mut misses = explained_misses(&set, &cal, &fitted, &v);
-    misses.extend(explained_sweep_misses(&set, &cal, &fitted, &v));
-    if misses.is_empty() {
-        misses.extend(explained_file_scale(&set, &cal, &fitted, &v));
-    }
-    if misses.is_empty() {
-        misses.extend(explained_combined_slips(&set, &cal, &fitted, &v));
-    }
+    let misses = explained_validation_misses(&set, &cal, &fitted, &v);
     checks::refuse_explained_misses(&misses, &args.data, args.checks.skip_unit_check)?;
     let outliers = free_pose_outliers(&v, &set, args.keep_outliers);
     let flagged = checks::outlier_warnings(&outliers, &args.data, "validated");

@@ -16,7 +16,10 @@
 //! The best is kept when that drop is significant: beyond the chi-square quantile of its
 //! parameters at the false-alarm rate divided by the number of pairs screened (a Bonferroni
 //! bound: on clean data the largest drop of many pairs is large by chance). At most
-//! [`MAX_SLIPS`] rewrites are kept, each found with the previous ones undone. The slips are
+//! [`MAX_SLIPS`] rewrites are kept, each found with the previous ones undone; when the
+//! largest drop's slip leaves no second one that passes, the other significant ones are
+//! tried in turn (a joint's command scale and the coordinates' scale together: the largest
+//! drop can be a rewrite that takes part of both, which no second slip completes). The slips are
 //! said only when the file with them undone passes every test of the validation (positions
 //! and orientations): a model that is wrong (another robot, an effect the model lacks) misses
 //! its data in a way no one or two uniform rewrites of blocks undo, and stays the model's.
@@ -25,9 +28,9 @@
 //! of the joint, which the calibration fits, not a slip of the data. Runs only when a position
 //! test exceeds, so clean data pay nothing.
 
-use super::ExplainedMiss;
 use super::slips::{MAX_FITTED_OFFSET, MIN_FITTED_OFFSET, residuals_with};
 use super::validate::{PointKind, PositionSummary, Validation, ValidationOptions, Verdict, validate};
+use super::{ExplainedMiss, explained_file_scale, explained_misses, explained_sweep_misses};
 use crate::calibration::procedure::Calibration;
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
 use crate::numerics::stats::chi_square_quantile;
@@ -398,6 +401,7 @@ fn refitted(
 
 /// A slip kept: the rewrite, the drop of the validation's statistic it gives and the bound
 /// that drop had to pass.
+#[derive(Clone)]
 struct Kept {
     slip: Slip,
     drop: f64,
@@ -414,16 +418,16 @@ fn validation_of(
     validate(&set, cal, desc, options).ok()
 }
 
-/// The next slip of the greedy search (module docs) on `rows` with `kept` undone, whose
-/// validation's statistic is `base`: the tested pair with the largest significant drop, with
-/// the validation of the rows with it undone too.
-fn next_slip(
+/// The next slips of the search (module docs) on `rows` with `kept` undone, whose
+/// validation's statistic is `base`: every tested pair with a significant drop, largest drop
+/// first, each with the slips refitted and the validation of the rows with them undone.
+fn next_slips(
     rows: &[Measurement],
     kept: &[Kept],
     blocks: &[Arc<Block>],
     model: (&Calibration, &RobotDescription),
     (v, options, base): (&Validation, &ValidationOptions, f64),
-) -> Option<(Vec<Slip>, Kept, Validation)> {
+) -> Option<Vec<(Vec<Slip>, Kept, Validation)>> {
     let slips: Vec<Slip> = kept.iter().map(|k| k.slip.clone()).collect();
     let current = undone(rows, &slips);
     let screen = screen(&current, model, v)?;
@@ -435,7 +439,7 @@ fn next_slip(
         }
     }
     let rate = options.false_alarm / screened.max(1) as f64;
-    best_of
+    let found = best_of
         .iter()
         .take(TESTED_CANDIDATES)
         .filter_map(|c| {
@@ -456,7 +460,10 @@ fn next_slip(
             let bound = chi_square_quantile(1.0 - rate, slip.quantity.parameters() as f64);
             (drop > bound).then_some((all, Kept { slip, drop, bound }, after))
         })
-        .max_by(|a, b| a.1.drop.total_cmp(&b.1.drop))
+        .collect::<Vec<_>>();
+    let mut found = found;
+    found.sort_by(|a, b| b.1.drop.total_cmp(&a.1.drop));
+    Some(found)
 }
 
 /// The slips (at most 2, `MAX_SLIPS`) whose undoing makes `set` pass every test of the
@@ -474,18 +481,72 @@ pub fn explained_combined_slips(
     }
     let options = ValidationOptions::of_validation(v);
     let blocks = blocks(set);
-    let mut kept: Vec<Kept> = Vec::new();
-    let mut base = total_statistic(v);
-    for _ in 0..MAX_SLIPS {
-        let (refit, next, after) = next_slip(set.rows(), &kept, &blocks, (cal, desc), (v, &options, base))?;
-        base = total_statistic(&after);
-        kept.iter_mut().zip(refit).for_each(|(k, s)| k.slip = s);
-        kept.push(next);
-        if !any_exceeds(&after, false) {
-            return Some(explained(set, desc, v, (&kept, &after)));
+    let search = Search {
+        rows: set.rows(),
+        blocks: &blocks,
+        model: (cal, desc),
+        v,
+        options: &options,
+    };
+    let (kept, after) = search.from(&[], total_statistic(v))?;
+    Some(explained(set, desc, v, (&kept, &after)))
+}
+
+/// What the search of the slips (module docs) runs on: the rows, their blocks, the model and
+/// the validation `v` of the rows as read, with its options.
+struct Search<'a> {
+    rows: &'a [Measurement],
+    blocks: &'a [Arc<Block>],
+    model: (&'a Calibration, &'a RobotDescription),
+    v: &'a Validation,
+    options: &'a ValidationOptions,
+}
+
+impl Search<'_> {
+    /// The slips, `kept` first, whose undoing makes the rows pass every test, with the
+    /// validation of the rows with them undone; `None` when no such slips are found. Greedy,
+    /// largest significant drop first; when the largest leaves no second slip that passes,
+    /// the next significant ones are tried in turn (two slips at once: the largest drop can
+    /// be a rewrite that absorbs part of both, which no second slip then completes).
+    fn from(&self, kept: &[Kept], base: f64) -> Option<(Vec<Kept>, Validation)> {
+        let next = next_slips(self.rows, kept, self.blocks, self.model, (self.v, self.options, base))?;
+        for (refit, slip, after) in next {
+            let mut all: Vec<Kept> = kept.to_vec();
+            all.iter_mut().zip(refit).for_each(|(k, s)| k.slip = s);
+            all.push(slip);
+            if !any_exceeds(&after, false) {
+                return Some((all, after));
+            }
+            if all.len() < MAX_SLIPS
+                && let Some(found) = self.from(&all, total_statistic(&after))
+            {
+                return Some(found);
+            }
         }
+        None
     }
-    None
+}
+
+/// The misses of `v` (the validation of `set` against `cal`, `desc` the description it was
+/// made with) that a slip of the data explains, as `validate` names them: the free poses'
+/// slips ([`explained_misses`]) and the sweeps' ([`explained_sweep_misses`]); without
+/// either, one coordinate column scaled over the file ([`explained_file_scale`]); without
+/// that, up to two slips at once ([`explained_combined_slips`]). Empty when none does.
+pub fn explained_validation_misses(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    v: &Validation,
+) -> Vec<ExplainedMiss> {
+    let mut misses = explained_misses(set, cal, desc, v);
+    misses.extend(explained_sweep_misses(set, cal, desc, v));
+    if misses.is_empty() {
+        misses.extend(explained_file_scale(set, cal, desc, v));
+    }
+    if misses.is_empty() {
+        misses.extend(explained_combined_slips(set, cal, desc, v));
+    }
+    misses
 }
 
 /// The miss `v` of `set` and the slips `kept` that explain it, `after` the validation with
