@@ -58,16 +58,15 @@ fn shifts(e: &str) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// `validate` of a clean sweep file against the calibration of another file (another seed)
-/// whose last joint's sweep was bumped 1 mm in y sizes the block's shift within millimetres (it said -182 mm on the SCARA,
+/// `validate` of a clean sweep file against the calibration of its copy whose last joint's sweep
+/// was bumped 1 mm in y sizes the block's shift within millimetres (it said -182 mm on the SCARA,
 /// -147 mm on the seven-axis arm, along the sweep's axis), and says the part along the axis is
 /// not determined.
 #[test]
 fn validate_sizes_a_bumped_sweep_across_its_axis_only() {
     let dir = tempfile::tempdir().unwrap();
     for (name, first) in [("scara-rrpr", "axis4"), ("arm7-dh", "axis7")] {
-        bumped(&sweeps(dir.path(), name, 303), "bumped.csv", first, 1, 1.0);
-        sweeps(dir.path(), name, 95);
+        bumped(&sweeps(dir.path(), name, 95), "bumped.csv", first, 1, 1.0);
         let r = robot(name);
         let r = r.display();
         run_case(
@@ -119,12 +118,12 @@ fn calibrate_says_how_far_the_reference_pose_test_reaches() {
         ),
         ("arm7-dh", "axis7", None, "only from about"),
     ] {
-        let clean = sweeps(dir.path(), name, 303);
+        let clean = sweeps(dir.path(), name, 95);
         bumped(&clean, "bumped.csv", first, 1, 1.0);
         let r = robot(name);
         let r = r.display();
         for (file, said) in [
-            (format!("sw_{name}_303.csv"), clean_note),
+            (format!("sw_{name}_95.csv"), clean_note),
             ("bumped.csv".to_string(), Some(bumped_note)),
         ] {
             let e = run_case(
