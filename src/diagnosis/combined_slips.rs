@@ -616,7 +616,7 @@ fn claim(slip: &Slip, desc: &RobotDescription) -> String {
 /// [`linear_fit`]): none when it measures all three.
 fn unmeasured(measured: &[[f64; 3]]) -> String {
     let shown = |v: Vector3<f64>| {
-        let v = if v.amax() == v.max() { v } else { -v };
+        let v = if v[v.iamax()] >= 0.0 { v } else { -v };
         let r = |c: f64| (c * 100.0).round() / 100.0 + 0.0;
         format!("({:.2}, {:.2}, {:.2})", r(v.x), r(v.y), r(v.z))
     };
