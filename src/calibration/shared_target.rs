@@ -27,7 +27,8 @@
 //! direction (a planar robot) that direction is left out (`pseudo_inverse`). No model of the
 //! robot: the data against themselves and the description's word that the targets are one. Not
 //! reached (`docs/formats.md`): a move along a sweep's own motion, a sweep no other meets at the
-//! reference pose, every row moved alike.
+//! reference pose, every row moved alike; [`block_reach`] says so in a file where a sweep is
+//! compared with none or a 1 mm move across its motion would pass.
 
 use super::procedure::{AxisExperiment, axis_experiments};
 use crate::kinematics::JointKind;
@@ -134,9 +135,24 @@ impl std::fmt::Display for MovedSweep {
 /// The sweeps of `set` out of place among the sightings of their shared target (module docs),
 /// with `noise_rms_3d_mm` the noise of a point; empty when the description shares no target.
 pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Vec<MovedSweep> {
-    let Ok((experiments, reference)) = axis_experiments(set, desc) else {
+    let Some((_, groups, sigma2)) = sightings(set, desc, noise_rms_3d_mm) else {
         return Vec::new();
     };
+    groups
+        .into_values()
+        .filter_map(|(target, sightings)| odd_one_out(&sightings, sigma2, target))
+        .collect()
+}
+
+/// The axis experiments' names, the sightings of each shared target and the variance of a
+/// point's coordinate \[mm²\] at the noise `noise_rms_3d_mm` (at least the rounding of the
+/// file's printed coordinates); `None` when the file has no axis experiments.
+fn sightings(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    noise_rms_3d_mm: f64,
+) -> Option<(Vec<String>, Groups, f64)> {
+    let (experiments, reference) = axis_experiments(set, desc).ok()?;
     let reach = reach_mm(desc);
     let mut groups: Groups = BTreeMap::new();
     for e in &experiments {
@@ -156,10 +172,93 @@ pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_
     // A file without noise (SScanSS-2's two-link example) is still only as exact as its printed
     // coordinates: their rounding, uniform over one step, is the floor of a point's variance.
     let sigma2 = (noise_rms_3d_mm.powi(2) / 3.0).max(printed_step_mm(set).powi(2) / 12.0);
-    groups
-        .into_values()
-        .filter_map(|(target, sightings)| odd_one_out(&sightings, sigma2, target))
-        .collect()
+    Some((experiments.into_iter().map(|e| e.name).collect(), groups, sigma2))
+}
+
+/// The move of a sweep's block the test of the module docs is meant to name wherever the
+/// sweeps share a target (1 mm across its motion): the bump of an instrument stand or a
+/// tripod our hostile runs try, which costs a calibration several times its predicted error.
+pub const BLOCK_REACH_CLAIM_MM: f64 = 1.0;
+
+/// The moves of a sweep's block the test of the module docs lets pass in a file
+/// ([`block_reach`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlockReach {
+    /// The sweeps no other sighting meets at the reference pose (a target 0 of their own in
+    /// `axis_targets`, or a sweep that does not pass through the reference pose): a move of
+    /// their block passes whatever its size.
+    pub alone: Vec<String>,
+    /// The sweeps compared whose smallest move named across their motion is beyond
+    /// [`BLOCK_REACH_CLAIM_MM`]: the experiment and that move \[mm\].
+    pub across: Vec<(String, f64)>,
+}
+
+/// How large a move of a sweep's block the test of the module docs lets pass, where it is
+/// beyond [`BLOCK_REACH_CLAIM_MM`] across some sweep's motion or a sweep is compared with none;
+/// `None` where every sweep is compared and a 1 mm move across its motion is named. A sweep's
+/// smallest move named: [`GROSS_MISS_FACTOR`] times the noise test's bound times its point's
+/// standard deviation, times the root of its target's sightings' chi-square per degree of
+/// freedom where they scatter beyond the noise (the scatter test's scale).
+pub fn block_reach(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Option<BlockReach> {
+    let (names, groups, sigma2) = sightings(set, desc, noise_rms_3d_mm)?;
+    let mut compared: BTreeMap<String, f64> = BTreeMap::new();
+    for (_, group) in groups.values().filter(|(_, g)| g.len() >= 2) {
+        let all: Vec<&Sighting> = group.iter().collect();
+        let Some((_, chi2, dof)) = consensus(&all, sigma2) else {
+            continue;
+        };
+        let scatter = if dof > 0 { (chi2 / dof as f64).max(1.0) } else { 1.0 };
+        for s in group.iter().filter(|s| s.across != Matrix3::identity()) {
+            let smallest = GROSS_MISS_FACTOR * noise_bound(s) * (variance(s, sigma2) * scatter).sqrt();
+            compared.insert(s.experiment.clone(), smallest);
+        }
+    }
+    let reach = BlockReach {
+        alone: names.iter().filter(|n| !compared.contains_key(*n)).cloned().collect(),
+        across: names
+            .iter()
+            .filter_map(|n| compared.get(n).map(|r| (n.clone(), *r)))
+            .filter(|(_, r)| *r > BLOCK_REACH_CLAIM_MM)
+            .collect(),
+    };
+    (!reach.alone.is_empty() || !reach.across.is_empty()).then_some(reach)
+}
+
+impl std::fmt::Display for BlockReach {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut parts: Vec<String> = Vec::new();
+        if !self.alone.is_empty() {
+            parts.push(format!(
+                "experiment {} not at all (no other sweep, nor the tool observation, sees its target 0 at the \
+                 reference pose: the description gives it a place of its own in `axis_targets`, or the sweep does not \
+                 pass through the reference pose)",
+                self.alone.join(", ")
+            ));
+        }
+        // Sweeps whose reach reads alike, together.
+        let mut alike: Vec<(String, Vec<&str>)> = Vec::new();
+        for (name, mm) in &self.across {
+            let shown = format!("{mm:.1}");
+            match alike.iter_mut().find(|(s, _)| *s == shown) {
+                Some((_, names)) => names.push(name),
+                None => alike.push((shown, vec![name])),
+            }
+        }
+        parts.extend(alike.iter().map(|(mm, names)| {
+            format!(
+                "experiment {} only from about {mm} mm across its motion (its point's noise and scatter there)",
+                names.join(", ")
+            )
+        }));
+        write!(
+            f,
+            "the reference-pose test cannot name a sweep's block moved here (the instrument or the robot bumped \
+             between sweeps): {}. It names a move of {BLOCK_REACH_CLAIM_MM:.0} mm across a sweep's motion where the \
+             sweeps share a target; a move along a sweep's own motion at the reference pose reads as its joint's zero \
+             and passes at any size. `validate` of a second file's sweeps against this calibration shows such a move",
+            parts.join("; ")
+        )
+    }
 }
 
 /// The variance \[mm²\] a sighting's point gets from the robot's repeatability (the

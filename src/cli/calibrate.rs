@@ -591,18 +591,25 @@ fn print_scale_doubts(cal: &Calibration, desc: &RobotDescription, found: &[Impla
 
 /// The sweeps out of place among the sightings of their shared target at the reference pose
 /// ([`axiscal::calibration::shared_target::moved_sweeps`], at the calibration's noise) as
-/// warnings naming the file and the sweep's first line.
+/// warnings naming the file and the sweep's first line; where none is, the moves the test
+/// lets pass ([`axiscal::calibration::shared_target::block_reach`]) as a note.
 fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet, data: &Path) {
     let noise = cal
         .noise
         .as_ref()
         .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
-    for moved in axiscal::calibration::shared_target::moved_sweeps(set, desc, noise) {
+    let moved_sweeps = axiscal::calibration::shared_target::moved_sweeps(set, desc, noise);
+    for moved in &moved_sweeps {
         let place = moved.lines.map_or_else(
             || data.display().to_string(),
             |(l, _)| format!("{}:{l}", data.display()),
         );
         eprintln!("warning: {place}: {moved}");
+    }
+    if moved_sweeps.is_empty()
+        && let Some(reach) = axiscal::calibration::shared_target::block_reach(set, desc, noise)
+    {
+        eprintln!("note: {}: {reach}", data.display());
     }
 }
 

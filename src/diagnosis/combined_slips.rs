@@ -35,7 +35,7 @@ use crate::calibration::procedure::Calibration;
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
 use crate::numerics::stats::chi_square_quantile;
 use crate::robot::RobotDescription;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
@@ -82,11 +82,6 @@ impl Quantity {
         }
     }
 
-    /// Its parameters.
-    fn parameters(self) -> usize {
-        if self == Quantity::Shift { 3 } else { 1 }
-    }
-
     /// The unit parameter vectors of its directions and their difference step.
     fn directions(self) -> Vec<([f64; 3], f64)> {
         match self {
@@ -111,12 +106,14 @@ struct Block {
     name: String,
 }
 
-/// One rewrite undone: the quantity, the block and the fitted parameters.
+/// One rewrite undone: the quantity, the block, the fitted parameters and the directions of
+/// parameter space the block measures ([`linear_fit`]; a shift's along a sweep's own axis not).
 #[derive(Clone)]
 struct Slip {
     quantity: Quantity,
     block: Arc<Block>,
     p: [f64; 3],
+    measured: Vec<[f64; 3]>,
 }
 
 impl Slip {
@@ -275,42 +272,67 @@ fn screen(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescription), 
     })
 }
 
-/// A pair screened: the quantity, the block, its linear parameters and the drop of the
-/// weighted sum of squares they give.
+/// A pair screened: the quantity, the block, its linear parameters, the drop of the weighted
+/// sum of squares they give and the directions the block measures.
 struct Candidate {
     quantity: Quantity,
     block: Arc<Block>,
     p: [f64; 3],
     drop: f64,
+    measured: Vec<[f64; 3]>,
 }
 
 /// The linear least-squares parameters of a quantity (its directions `d`) over `block`, the
-/// rows' residuals `residuals` weighted with `weights`, and the drop of the weighted sum of
-/// squares (directions taken as orthogonal: a shift's three are, exactly for free poses).
-fn linear_fit(residuals: &[f64], weights: &[f64], d: &[Vec<f64>], block: &Block) -> ([f64; 3], f64) {
-    let sums: Vec<(f64, f64)> = d
-        .iter()
-        .map(|dj| {
-            let (mut dr, mut dd) = (0.0, 0.0);
-            for &i in &block.rows {
-                let w = weights[i];
-                for c in 0..3 {
-                    dr += w * dj[3 * i + c] * residuals[3 * i + c];
-                    dd += w * dj[3 * i + c].powi(2);
+/// rows' residuals `residuals` weighted with `weights`, the drop of the weighted sum of squares
+/// and the directions of parameter space fitted: the eigenvectors of the directions' weighted
+/// normal matrix over the block whose eigenvalue is above [`measured_floor`] (a shift along a
+/// sweep's own axis moves no residual: the estimated target places absorb it, and a fitted
+/// value there would be rounding, hundreds of millimetres).
+fn linear_fit(residuals: &[f64], weights: &[f64], d: &[Vec<f64>], block: &Block) -> ([f64; 3], f64, Vec<[f64; 3]>) {
+    let k = d.len();
+    let (mut normal, mut right): (DMatrix<f64>, DVector<f64>) = (DMatrix::zeros(k, k), DVector::zeros(k));
+    for &i in &block.rows {
+        for c in 0..3 {
+            let (w, r) = (weights[i], residuals[3 * i + c]);
+            for a in 0..k {
+                right[a] += w * d[a][3 * i + c] * r;
+                for b in 0..k {
+                    normal[(a, b)] += w * d[a][3 * i + c] * d[b][3 * i + c];
                 }
             }
-            (dr, dd)
-        })
-        .collect();
-    let largest = sums.iter().map(|s| s.1).fold(0.0, f64::max);
-    let (mut p, mut drop) = ([0.0; 3], 0.0);
-    for (j, (dr, dd)) in sums.into_iter().enumerate() {
-        if dd > RELATIVE_RANK_TOLERANCE * largest && dd.is_finite() {
-            p[j] = -dr / dd;
-            drop += dr * dr / dd;
         }
     }
-    (p, drop)
+    let (mut p, mut drop, mut measured) = ([0.0; 3], 0.0, Vec::new());
+    if !normal.iter().chain(right.iter()).all(|x| x.is_finite()) {
+        return (p, drop, measured);
+    }
+    let floor = measured_floor(k, &normal, block, weights);
+    let eigen = normal.symmetric_eigen();
+    for (j, &lambda) in eigen.eigenvalues.iter().enumerate().filter(|(_, l)| **l > floor) {
+        let v = eigen.eigenvectors.column(j);
+        let g = v.dot(&right);
+        let mut e = [0.0; 3];
+        for a in 0..k {
+            e[a] = v[a];
+            p[a] -= v[a] * g / lambda;
+        }
+        drop += g * g / lambda;
+        measured.push(e);
+    }
+    (p, drop, measured)
+}
+
+/// The least eigenvalue of a rewrite's weighted normal matrix `normal` (`k` directions) over
+/// `block` that is fitted ([`linear_fit`]): for a shift (3 directions, in mm), the largest
+/// weight of a row of the block, so that a direction is fitted when the block's points fix it
+/// at least as well as one point fixes its own coordinate; for a one-parameter rewrite (its
+/// unit the quantity's), [`RELATIVE_RANK_TOLERANCE`] of its diagonal.
+fn measured_floor(k: usize, normal: &DMatrix<f64>, block: &Block, weights: &[f64]) -> f64 {
+    if k == 3 {
+        block.rows.iter().map(|&i| weights[i]).fold(0.0, f64::max)
+    } else {
+        RELATIVE_RANK_TOLERANCE * normal.diagonal().max()
+    }
 }
 
 impl Screen {
@@ -319,12 +341,13 @@ impl Screen {
         let mut out = Vec::new();
         for block in blocks {
             for (quantity, d) in &self.directions {
-                let (p, drop) = linear_fit(&self.residuals, &self.weights, d, block);
+                let (p, drop, measured) = linear_fit(&self.residuals, &self.weights, d, block);
                 out.push(Candidate {
                     quantity: *quantity,
                     block: block.clone(),
                     p,
                     drop,
+                    measured,
                 });
             }
         }
@@ -335,9 +358,9 @@ impl Screen {
     }
 }
 
-/// A direction of a rewrite whose weighted square norm over its block is below this fraction
-/// of the largest is not fitted: the estimated target positions of an axis experiment absorb
-/// it (a sweep's points shifted along its joint's axis), and its parameter is not measured.
+/// A one-parameter rewrite whose weighted square norm over its block is below this fraction of
+/// its diagonal, and a direction of the slips' refit below this fraction of the normal
+/// matrix's norm, is not fitted: rounding, not a measured parameter.
 const RELATIVE_RANK_TOLERANCE: f64 = 1e-9;
 
 /// Gauss-Newton steps of the slips' parameters, all together, from their linear starts: the
@@ -367,20 +390,24 @@ fn refitted(
     weights: &[f64],
     (cal, desc): (&Calibration, &RobotDescription),
 ) -> Option<Vec<Slip>> {
-    let parameters: Vec<(usize, usize, f64)> = slips
+    // Each slip along the directions its block measures ([`linear_fit`]), with its step.
+    let parameters: Vec<(usize, [f64; 3], f64)> = slips
         .iter()
         .enumerate()
-        .flat_map(|(s, slip)| (0..slip.quantity.parameters()).map(move |j| (s, j, slip.quantity.directions()[j].1)))
+        .flat_map(|(s, slip)| {
+            let h = slip.quantity.directions()[0].1;
+            slip.measured.iter().map(move |&e| (s, e, h))
+        })
         .collect();
     let w = DVector::from_iterator(3 * rows.len(), weights.iter().flat_map(|w| [*w; 3]));
     let residuals = |slips: &[Slip]| residuals_with(&undone(rows, slips), &|_: &mut Measurement| {}, cal, desc);
     for _ in 0..REFINE_STEPS {
         let r = DVector::from_vec(residuals(&slips)?);
         let mut jacobian = DMatrix::zeros(r.len(), parameters.len());
-        for (col, &(s, j, h)) in parameters.iter().enumerate() {
+        for (col, &(s, e, h)) in parameters.iter().enumerate() {
             let at = |sign: f64| {
                 let mut moved = slips.clone();
-                moved[s].p[j] += sign * h;
+                (0..3).for_each(|a| moved[s].p[a] += sign * h * e[a]);
                 residuals(&moved).map(DVector::from_vec)
             };
             jacobian.set_column(col, &((at(1.0)? - at(-1.0)?) / (2.0 * h)));
@@ -389,8 +416,8 @@ fn refitted(
         let normal = jacobian.transpose() * &weighted;
         let tolerance = RELATIVE_RANK_TOLERANCE * normal.norm();
         let step = normal.pseudo_inverse(tolerance).ok()? * (weighted.transpose() * -r);
-        for (col, &(s, j, _)) in parameters.iter().enumerate() {
-            slips[s].p[j] += step[col];
+        for (col, &(s, e, _)) in parameters.iter().enumerate() {
+            (0..3).for_each(|a| slips[s].p[a] += step[col] * e[a]);
         }
         if !slips.iter().all(plausible) {
             return None;
@@ -448,6 +475,7 @@ fn next_slips(
                 quantity: c.quantity,
                 block: c.block.clone(),
                 p: c.p,
+                measured: c.measured.clone(),
             });
             let all = refitted(rows, all, &screen.weights, model)?;
             let slip = all.last()?.clone();
@@ -457,7 +485,7 @@ fn next_slips(
             }
             let after = validation_of(undone(rows, &all), model, options)?;
             let drop = base - total_statistic(&after);
-            let bound = chi_square_quantile(1.0 - rate, slip.quantity.parameters() as f64);
+            let bound = chi_square_quantile(1.0 - rate, slip.measured.len() as f64);
             (drop > bound).then_some((all, Kept { slip, drop, bound }, after))
         })
         .collect::<Vec<_>>();
@@ -613,14 +641,15 @@ fn field(q: Quantity) -> String {
 fn claim(slip: &Slip, desc: &RobotDescription) -> String {
     let b = &slip.block.name;
     let p = slip.p;
-    let shown = |v: f64, scale: f64| format_f64((v * scale).round() / scale);
+    let shown = |v: f64, scale: f64| format_f64((v * scale).round() / scale + 0.0);
     match slip.quantity {
         Quantity::Shift => format!(
-            "the coordinates of {b} sit shifted by ({}, {}, {}) mm, the same for all: the instrument (or robot) \
+            "the coordinates of {b} sit shifted by ({}, {}, {}) mm{}, the same for all: the instrument (or robot) \
              bumped or set up again, or a constant added to the columns",
             shown(-p[0], 1e2),
             shown(-p[1], 1e2),
-            shown(-p[2], 1e2)
+            shown(-p[2], 1e2),
+            unmeasured(&slip.measured)
         ),
         Quantity::CoordinateScale => format!(
             "the coordinates of {b} read {:.5} times what the calibration gives, about the instrument's origin: the \
@@ -641,5 +670,27 @@ fn claim(slip: &Slip, desc: &RobotDescription) -> String {
             shown(-p[0], 1e3),
             desc.joints[k].kind.file_unit()
         ),
+    }
+}
+
+/// The words for a shift's directions its block does not measure (`measured` the ones it does,
+/// [`linear_fit`]): none when it measures all three.
+fn unmeasured(measured: &[[f64; 3]]) -> String {
+    let shown = |v: Vector3<f64>| {
+        let v = if v[v.iamax()] >= 0.0 { v } else { -v };
+        let r = |c: f64| (c * 100.0).round() / 100.0 + 0.0;
+        format!("({:.2}, {:.2}, {:.2})", r(v.x), r(v.y), r(v.z))
+    };
+    let why = "is not determined by these points: it moves the targets' places on their link";
+    match measured {
+        [a, b] => format!(
+            " across the direction {} (a shift along it {why}, as a shift along a sweep's own turning axis does)",
+            shown(Vector3::from(*a).cross(&Vector3::from(*b)).normalize())
+        ),
+        [a] => format!(
+            " along the direction {} (a shift across it {why}, as a shift of a sliding joint's line does)",
+            shown(Vector3::from(*a))
+        ),
+        _ => String::new(),
     }
 }
