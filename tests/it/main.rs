@@ -36,6 +36,7 @@ mod hostile_round10b;
 mod hostile_round10c;
 mod hostile_round10d;
 mod hostile_round10e;
+mod hostile_round11e;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
