@@ -118,8 +118,7 @@ fn revolute_axes_parallel(desc: &RobotDescription) -> bool {
 const PARALLEL_SINE: f64 = 1e-9;
 
 /// Every row length zero while two or more joints turn, not all about one line: every revolute
-/// axis through one point, as a gimbal's and no arm's or positioner's; one rotary axis with
-/// slides, every slide's line through it (a table's offsets left out); or all about one line in
+/// axis through one point, as a gimbal's and no arm's or positioner's; or all about one line in
 /// a chain with prismatic joints too (a SCARA's columns left out: only a stack of turntables,
 /// every joint revolute, turns coaxially by design). When the `dh` table has lengths, its convention
 /// is what put them there (a classic table read as modified moves each offset to the joint
@@ -131,22 +130,11 @@ fn zero_lengths(w: &Written<'_>) -> Option<UnitSlip> {
         .iter()
         .flat_map(|r| [r.a_m, r.b_m, r.h_m])
         .all(|v| v.abs() < ZERO_LENGTH_M);
-    let prismatic = desc.dof() - revolute(desc);
-    if !zero || desc.rows.is_empty() || revolute(desc) == 0 || desc.dof() < 2 {
+    if !zero || desc.rows.is_empty() || revolute(desc) < 2 {
         return None;
     }
-    let through_one_point = if revolute(desc) == 1 {
-        // Slides before the rotary axis only (a turntable on a track): their offsets are the
-        // placement's, zero lengths lose nothing.
-        if desc.joints.last().is_some_and(|j| j.kind == JointKind::Revolute) {
-            return None;
-        }
-        format!(
-            "the rotary axis and the line of every slide ({prismatic} prismatic joint(s)) meet at one point, where \
-             a built table's slides and top sit off its rotary axis by the offsets of its drawing (the calibration \
-             can find them, but the description's zero pose and targets are placed without them)"
-        )
-    } else if !revolute_axes_parallel(desc) {
+    let prismatic = desc.dof() - revolute(desc);
+    let through_one_point = if !revolute_axes_parallel(desc) {
         format!(
             "the {} revolute axes all pass through one point, as a gimbal's do and no arm's or positioner's",
             revolute(desc)

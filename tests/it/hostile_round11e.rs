@@ -107,3 +107,4 @@ fn a_killed_merge_leaves_one_whole_set() {
         }
     }
 }
+
