@@ -183,7 +183,20 @@ pub fn import_units(
     let slips = misfits(set);
     if slips.is_empty() {
         // No unit slip, but a spread no robot of this description gives: another robot's data.
-        print_warnings(&spread_warning(set, desc, file, None).into_iter().collect::<Vec<_>>());
+        let spread = spread_warning(set, desc, file, None);
+        let other = spread
+            .is_none()
+            .then(|| axiscal::measurement::unit_check::not_this_robot(set, desc))
+            .flatten()
+            .map(|s| {
+                format!(
+                    "{}: `{}`: {} (--skip-unit-check silences this)",
+                    file.display(),
+                    s.field,
+                    s.message
+                )
+            });
+        print_warnings(&spread.into_iter().chain(other).collect::<Vec<_>>());
         return Ok(());
     }
     let said: Vec<String> = slips.iter().map(|s| format!("`{}`: {}", s.field, s.message)).collect();

@@ -108,3 +108,129 @@ fn a_killed_merge_leaves_one_whole_set() {
     }
 }
 
+/// A shipped description.
+fn robot(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/robots/{name}.toml"))
+}
+
+/// The free poses (`moved_joint` 0 rows) of `simulate --robot ROBOT --validation-poses 40
+/// --seed SEED`, written to `dir/NAME.csv`.
+fn free_poses(dir: &Path, name: &str, seed: u64) -> PathBuf {
+    let all = dir.join(format!("{name}-{seed}-all.csv"));
+    let path = robot(name);
+    let args = ["simulate", "--sim", "analytic", "--robot", path.to_str().unwrap()];
+    let mut c = axiscal(dir, &args);
+    c.args([
+        "--validation-poses",
+        "40",
+        "--seed",
+        &seed.to_string(),
+        "--out",
+        all.to_str().unwrap(),
+    ]);
+    assert!(c.status().unwrap().success());
+    let text = std::fs::read_to_string(&all).unwrap();
+    let mut column = None;
+    let kept: Vec<&str> = text
+        .lines()
+        .filter(|line| {
+            if line.starts_with('#') {
+                return true;
+            }
+            let fields: Vec<&str> = line.split(',').collect();
+            match column {
+                None => {
+                    column = fields.iter().position(|f| *f == "moved_joint");
+                    true
+                }
+                Some(k) => fields[k] == "0",
+            }
+        })
+        .collect();
+    let out = dir.join(format!("{name}-{seed}.csv"));
+    std::fs::write(&out, kept.join("\n") + "\n").unwrap();
+    out
+}
+
+/// Run 8's S6: another robot's free poses (the FANUC's read with a UR5e's description) were
+/// imported without a word. The nominal robot placed at best misses them by a good part of
+/// their spread; the free poses of every shipped test robot, read with its own description,
+/// are not warned of (seeds not tuned on).
+#[test]
+fn another_robots_free_poses_are_named() {
+    use axiscal::measurement::{read_measurements, unit_check::not_this_robot};
+    use axiscal::robot::RobotDescription;
+    let dir = tempfile::tempdir().unwrap();
+    let robots = [
+        "asea-irb6l",
+        "scara-rrpr",
+        "ur5e-dh",
+        "arm7-dh",
+        "table-prpp",
+        "positioner-2axis",
+    ];
+    for name in robots {
+        let desc = RobotDescription::from_file(&robot(name)).unwrap();
+        for seed in [411, 412, 413] {
+            let set = read_measurements(&free_poses(dir.path(), name, seed), Some(desc.dof())).unwrap();
+            assert_eq!(not_this_robot(&set, &desc), None, "{name} seed {seed}");
+        }
+    }
+    let irb = read_measurements(&free_poses(dir.path(), "asea-irb6l", 414), Some(6)).unwrap();
+    let ur5e = RobotDescription::from_file(&robot("ur5e-dh")).unwrap();
+    let slip = not_this_robot(&irb, &ur5e).expect("the IRB's poses read as a UR5e's");
+    assert!(
+        slip.message.contains("these data do not look like UR5e"),
+        "{}",
+        slip.message
+    );
+}
+
+/// Run 8's S6 on the real file: the FANUC R-2000iC tracker data imported with the UR5e's
+/// description are warned of; with the FANUC's own, not.
+#[test]
+#[ignore = "needs ../shared/data/real/fanuc-r2000ic-tracker (run by `make test-real`)"]
+fn the_real_fanuc_data_imported_for_a_ur5e_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let mat = crate::common::real_data("fanuc-r2000ic-tracker/calibration_dataset.mat");
+    for (name, warned) in [("ur5e-dh", true), ("real/fanuc-r2000ic", false)] {
+        let path = robot(name);
+        let args = [
+            "import",
+            "mat",
+            mat.to_str().unwrap(),
+            "--robot",
+            path.to_str().unwrap(),
+        ];
+        let (ok, err) = stderr_of(
+            dir.path(),
+            &args,
+            &[
+                "--joints",
+                "q",
+                "--targets",
+                "mA,mB,mC",
+                "--angles",
+                "rad",
+                "--units",
+                "m",
+                "--out",
+                "m.csv",
+                "--force",
+            ],
+        );
+        assert!(ok, "{name}: {err}");
+        assert_eq!(err.contains("these data do not look like"), warned, "{name}: {err}");
+    }
+}
+
+/// `axiscal ARGS... MORE...` in `dir`: its exit status and stderr.
+fn stderr_of(dir: &Path, args: &[&str], more: &[&str]) -> (bool, String) {
+    let out = Command::new(assert_cmd::cargo::cargo_bin("axiscal"))
+        .current_dir(dir)
+        .args(args)
+        .args(more)
+        .output()
+        .unwrap();
+    (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
