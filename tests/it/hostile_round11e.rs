@@ -202,23 +202,11 @@ fn the_real_fanuc_data_imported_for_a_ur5e_are_named() {
             "--robot",
             path.to_str().unwrap(),
         ];
-        let (ok, err) = stderr_of(
-            dir.path(),
-            &args,
-            &[
-                "--joints",
-                "q",
-                "--targets",
-                "mA,mB,mC",
-                "--angles",
-                "rad",
-                "--units",
-                "m",
-                "--out",
-                "m.csv",
-                "--force",
-            ],
-        );
+        let more: Vec<&str> = crate::common::REAL_FANUC_OPTIONS
+            .into_iter()
+            .chain(["--out", "m.csv", "--force"])
+            .collect();
+        let (ok, err) = stderr_of(dir.path(), &args, &more);
         assert!(ok, "{name}: {err}");
         assert_eq!(err.contains("these data do not look like"), warned, "{name}: {err}");
     }

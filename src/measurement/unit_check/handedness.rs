@@ -108,14 +108,13 @@ fn free_poses_fits(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64
     Some((rotation, mirror, measured.len()))
 }
 
+/// The nominal tool frames, target ids and measured points of free poses ([`free_pose_points`]).
+type FreePosePoints = (Vec<nalgebra::Isometry3<f64>>, Vec<usize>, Vec<Point3<f64>>);
+
 /// Free poses' points to fit: the nominal robot's tool frames at the rows' commands, the
 /// rows' target ids and measured points, every n-th row of a large file. `None` unless every
 /// row is a free pose and there are [`MIN_POINTS`].
-#[allow(clippy::type_complexity)]
-fn free_pose_points(
-    set: &MeasurementSet,
-    desc: &RobotDescription,
-) -> Option<(Vec<nalgebra::Isometry3<f64>>, Vec<usize>, Vec<Point3<f64>>)> {
+fn free_pose_points(set: &MeasurementSet, desc: &RobotDescription) -> Option<FreePosePoints> {
     if set.rows().iter().any(|m| m.moved_joint != 0) {
         return None;
     }

@@ -209,6 +209,9 @@ pub fn write_resolved(dir: &Path, text: &str) -> Result<(), ExportError> {
     std::fs::write(&path, text).map_err(io(&path))
 }
 
+/// Files to write, each name with its bytes.
+pub type NamedFiles = Vec<(&'static str, Vec<u8>)>;
+
 /// The final text files of a complete run (single or merged), each name with its bytes: sorted
 /// `trials.csv`, `summary.json`, `summary.md`; and the summary. `dir` names the folder in messages.
 pub fn render_final(
@@ -216,7 +219,7 @@ pub fn render_final(
     scenario: &ResolvedScenario,
     names: &[String],
     records: &[TrialRecord],
-) -> Result<(Vec<(&'static str, Vec<u8>)>, Summary), ExportError> {
+) -> Result<(NamedFiles, Summary), ExportError> {
     let mut trials = Vec::new();
     csv::write_trials(&mut trials, scenario, names, records).map_err(|e| csv::csv_error(&dir.join(TRIALS_FILE), e))?;
     let summary = Summary::of(scenario, names, records);
