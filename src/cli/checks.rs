@@ -157,6 +157,27 @@ fn spread_warning(set: &MeasurementSet, desc: &RobotDescription, data: &Path, su
     ))
 }
 
+/// An imported file without a unit slip that is still another robot's data: a spread no robot of
+/// this description gives ([`spread_warning`]), else free poses its nominal robot misses by a
+/// good part of their spread ([`axiscal::measurement::unit_check::not_this_robot`]).
+fn another_robot(set: &MeasurementSet, desc: &RobotDescription, file: &Path) -> Vec<String> {
+    if let Some(spread) = spread_warning(set, desc, file, None) {
+        return vec![spread];
+    }
+    let said = |s: UnitSlip| {
+        format!(
+            "{}: `{}`: {} (--skip-unit-check silences this)",
+            file.display(),
+            s.field,
+            s.message
+        )
+    };
+    axiscal::measurement::unit_check::not_this_robot(set, desc)
+        .map(said)
+        .into_iter()
+        .collect()
+}
+
 /// The options an import's units are read with: revolute joint values in radians (`--angles
 /// rad`), and the length unit (`--units`).
 pub type ImportUnits = (bool, LengthUnit);
@@ -182,8 +203,8 @@ pub fn import_units(
     };
     let slips = misfits(set);
     if slips.is_empty() {
-        // No unit slip, but a spread no robot of this description gives: another robot's data.
-        print_warnings(&spread_warning(set, desc, file, None).into_iter().collect::<Vec<_>>());
+        // No unit slip, but another robot's data?
+        print_warnings(&another_robot(set, desc, file));
         return Ok(());
     }
     let said: Vec<String> = slips.iter().map(|s| format!("`{}`: {}", s.field, s.message)).collect();

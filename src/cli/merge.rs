@@ -5,8 +5,8 @@ use super::output::Outputs;
 use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::harness::scenario::export::{self, RESOLVED_FILE, RUN_FILES, RunLock, SHARD_FILE, TRIALS_FILE};
-use axiscal::harness::scenario::{ResolvedScenario, Shard, complete_run};
-use std::path::PathBuf;
+use axiscal::harness::scenario::{ResolvedScenario, Shard, Summary, TrialRecord, complete_run};
+use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal merge`.
 #[derive(Debug, clap::Args)]
@@ -86,6 +86,35 @@ fn check_shard_folders(dirs: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
+/// Writes the merged set into `out` as calibrate writes its folder ([`Outputs::staged_in`]):
+/// every file under a temporary name first, then put in place by renames only, the earlier
+/// run's files the set does not replace removed. An interrupt (even SIGKILL) while the files
+/// are written leaves the whole old set, and the temporaries a SIGKILL leaves are removed by
+/// the next command writing into the folder.
+fn write_set(
+    outputs: &Outputs,
+    out: &Path,
+    resolved_text: &str,
+    scenario: &ResolvedScenario,
+    names: &[String],
+    records: &[TrialRecord],
+) -> Result<Summary> {
+    let (files, summary) = export::render_final(out, scenario, names, records)?;
+    let mut set = outputs.staged_in(out)?;
+    set.write(RESOLVED_FILE, resolved_text)?;
+    for (name, bytes) in &files {
+        set.write(name, bytes)?;
+    }
+    if let Some(histogram) = export::histogram_name(scenario, names) {
+        set.draw(&[histogram.as_str()], |dir| {
+            export::draw_histogram(dir, scenario, names, records)
+        })?;
+    }
+    let stale = export::run_outputs_in(out);
+    set.commit(&stale.iter().map(String::as_str).collect::<Vec<_>>())?;
+    Ok(summary)
+}
+
 /// Runs `axiscal merge`.
 pub fn run(args: Args, printer: Printer) -> Result<()> {
     let printer = printer.with_json(args.json);
@@ -125,14 +154,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         outputs.check_not_input(&args.out.join(name))?;
     }
     let _lock = RunLock::acquire(&args.out)?;
-    // The old result goes and the new one is written with SIGINT/SIGTERM/SIGHUP held, so an
-    // interrupt leaves the whole new set (SIGKILL still can stop it between files; merge
-    // again).
-    let summary = super::signals::deferred(|| -> Result<_> {
-        export::prepare_dir(&args.out, args.force)?;
-        export::write_resolved(&args.out, &resolved_text)?;
-        Ok(export::write_final(&args.out, &scenario, &names, &records)?)
-    })?;
+    export::check_replace(&args.out, args.force)?;
+    let summary = write_set(&outputs, &args.out, &resolved_text, &scenario, &names, &records)?;
     printer.emit_json(&args.out.join(export::SUMMARY_JSON))?;
     super::run::report(&summary, &args.out, printer)
 }

@@ -998,6 +998,12 @@ pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<Uni
     vec![slip]
 }
 
+/// Data that do not look like the description's robot at all: its nominal model, placed at best,
+/// misses the points by a good part of their spread (the handedness module's rotation fit).
+pub fn not_this_robot(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
+    handedness::not_this_robot(set, desc)
+}
+
 /// A payload may weigh this many times the robot's moving links (the sum of the description's
 /// `mass_kg`) before a warning: an arm carries a fraction of its own mass (the paper's IRB/L6 6 kg
 /// on about 90 kg of links, a UR5e 5 kg on about 18 kg, the lightest cobots up to about half), so

@@ -99,7 +99,23 @@ fn fitted_targets_rms(
 /// the tool fitted ([`fitted_targets_rms`]); taken at the tool frame's origin, the targets'
 /// offsets (a tool's size) would blur both fits alike and hide a mirror.
 fn free_poses_fits(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64, f64, usize)> {
-    if !desc.tool_targets_m().is_empty() || set.rows().iter().any(|m| m.moved_joint != 0) {
+    if !desc.tool_targets_m().is_empty() {
+        return None;
+    }
+    let (tools, targets, measured) = free_pose_points(set, desc)?;
+    let rotation = fitted_targets_rms(&tools, &targets, &measured, false)?;
+    let mirror = fitted_targets_rms(&tools, &targets, &measured, true)?;
+    Some((rotation, mirror, measured.len()))
+}
+
+/// The nominal tool frames, target ids and measured points of free poses ([`free_pose_points`]).
+type FreePosePoints = (Vec<nalgebra::Isometry3<f64>>, Vec<usize>, Vec<Point3<f64>>);
+
+/// Free poses' points to fit: the nominal robot's tool frames at the rows' commands, the
+/// rows' target ids and measured points, every n-th row of a large file. `None` unless every
+/// row is a free pose and there are [`MIN_POINTS`].
+fn free_pose_points(set: &MeasurementSet, desc: &RobotDescription) -> Option<FreePosePoints> {
+    if set.rows().iter().any(|m| m.moved_joint != 0) {
         return None;
     }
     let ideal = RobotModel::ideal(desc);
@@ -107,6 +123,9 @@ fn free_poses_fits(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64
     let model = ideal.phi_model();
     let every = set.rows().len().div_ceil(MAX_ROWS).max(1);
     let rows: Vec<&Measurement> = set.rows().iter().step_by(every).collect();
+    if rows.len() < MIN_POINTS {
+        return None;
+    }
     let tools: Vec<nalgebra::Isometry3<f64>> = rows
         .iter()
         .map(|m| {
@@ -116,12 +135,7 @@ fn free_poses_fits(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64
         .collect();
     let targets: Vec<usize> = rows.iter().map(|m| m.target).collect();
     let measured: Vec<Point3<f64>> = rows.iter().map(|m| m.position_m()).collect();
-    if rows.len() < MIN_POINTS {
-        return None;
-    }
-    let rotation = fitted_targets_rms(&tools, &targets, &measured, false)?;
-    let mirror = fitted_targets_rms(&tools, &targets, &measured, true)?;
-    Some((rotation, mirror, rows.len()))
+    Some((tools, targets, measured))
 }
 
 /// The nominal and the measured points of the `rows` whose targets the description places
@@ -224,6 +238,33 @@ fn mirror_slip(mirror_m: f64, rotation_m: f64, points: usize, swaps: &[(usize, u
             }
         }
     }
+}
+
+/// Free poses only (a sweep's targets sit where the description's `axis_targets` may not say):
+/// the description's nominal robot at the rows' commands against the measured points, placed at
+/// best with each target's place on the tool fitted (the rotation fit of [`mirrored`]): another robot's data (a FANUC's read with a UR5e's
+/// description) miss by a good part of their spread ([`crate::numerics::stats::ABSURD_SHARE`],
+/// the share past which a calibrated fit is refused), where a robot its description fits misses
+/// by its drawing's tolerances, millimetres. `None` when it fits, or with too few placed points.
+pub(super) fn not_this_robot(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
+    let (tools, targets, measured) = free_pose_points(set, desc)?;
+    let rotation_m = fitted_targets_rms(&tools, &targets, &measured, false)?;
+    let points = measured.len();
+    let all: Vec<Point3<f64>> = set.rows().iter().map(|m| m.position_m()).collect();
+    let spread_m = crate::numerics::stats::rms_spread(&all);
+    (rotation_m > crate::numerics::stats::ABSURD_SHARE * spread_m).then(|| UnitSlip {
+        field: "x_mm,y_mm,z_mm".into(),
+        message: format!(
+            "these data do not look like {}: the description's nominal robot at the file's commands, placed in the \
+             instrument frame at best, misses the {points} measured points by {:.1} mm RMS, {:.0} % of their spread \
+             about their centroid ({:.1} mm), where a robot its description fits misses by millimetres: the data of \
+             another robot, or another joint order or zero than the description's; check --robot",
+            desc.name,
+            rotation_m * 1e3,
+            100.0 * rotation_m / spread_m,
+            spread_m * 1e3
+        ),
+    })
 }
 
 /// A left-handed instrument frame (module docs), said as a slip of the coordinate columns; or,

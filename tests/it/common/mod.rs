@@ -239,6 +239,18 @@ pub fn scale_fields(f: &mut [String], range: std::ops::Range<usize>, factor: f64
     }
 }
 
+/// The options of the README's command importing the real FANUC R-2000iC tracker file.
+pub const REAL_FANUC_OPTIONS: [&str; 8] = [
+    "--joints",
+    "q",
+    "--targets",
+    "mA,mB,mC",
+    "--angles",
+    "rad",
+    "--units",
+    "m",
+];
+
 /// The real FANUC R-2000iC tracker file (`../shared`), imported with its README's command to
 /// `out`; returns the description it was imported with.
 pub fn import_real_fanuc(out: &std::path::Path) -> std::path::PathBuf {
@@ -248,17 +260,8 @@ pub fn import_real_fanuc(out: &std::path::Path) -> std::path::PathBuf {
         .arg(real_data("fanuc-r2000ic-tracker/calibration_dataset.mat"))
         .arg("--robot")
         .arg(&robot)
-        .args([
-            "--joints",
-            "q",
-            "--targets",
-            "mA,mB,mC",
-            "--angles",
-            "rad",
-            "--units",
-            "m",
-            "--out",
-        ])
+        .args(REAL_FANUC_OPTIONS)
+        .arg("--out")
         .arg(out)
         .assert()
         .success();

@@ -67,7 +67,7 @@ pub fn write_trials_file(
     write_trials(std::io::BufWriter::new(file), scenario, names, records).map_err(|e| csv_error(path, e))
 }
 
-fn csv_error(path: &Path, e: csv::Error) -> ExportError {
+pub(crate) fn csv_error(path: &Path, e: csv::Error) -> ExportError {
     ExportError::Malformed {
         path: path.to_owned(),
         line: e.position().map_or(0, |p| p.line()),

@@ -118,27 +118,44 @@ pub fn describe_results(dir: &Path) -> String {
     }
 }
 
+/// Refuses to write a new run into `dir` when it holds anything but the lock file, unless
+/// `force` ([`ExportError::Exists`], saying what it holds).
+pub fn check_replace(dir: &Path, force: bool) -> Result<(), ExportError> {
+    if !force && dir.exists() && existing_entries(dir)?.iter().any(|n| n != LOCK_FILE) {
+        return Err(ExportError::Exists {
+            path: dir.to_owned(),
+            state: describe_results(dir),
+        });
+    }
+    Ok(())
+}
+
+/// The names of the files in `dir`.
+fn existing_entries(dir: &Path) -> Result<Vec<String>, ExportError> {
+    Ok(std::fs::read_dir(dir)
+        .map_err(io(dir))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect())
+}
+
+/// The files of an earlier run or merge in `dir` ([`is_run_output`]; none when `dir` is missing).
+pub fn run_outputs_in(dir: &Path) -> Vec<String> {
+    existing_entries(dir)
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|n| is_run_output(n))
+        .collect()
+}
+
 /// Creates `dir` for a new run. A folder holding anything but the lock file is refused unless
-/// `force`; with `force` the files of an earlier run ([`is_run_output`]) are deleted first
-/// (other files stay), so no old summary sits beside new trials.
+/// `force` ([`check_replace`]); with `force` the files of an earlier run ([`is_run_output`]) are
+/// deleted first (other files stay), so no old summary sits beside new trials.
 pub fn prepare_dir(dir: &Path, force: bool) -> Result<(), ExportError> {
-    if dir.exists() {
-        let entries: Vec<String> = std::fs::read_dir(dir)
-            .map_err(io(dir))?
-            .filter_map(|e| e.ok())
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .filter(|n| n != LOCK_FILE)
-            .collect();
-        if !entries.is_empty() && !force {
-            return Err(ExportError::Exists {
-                path: dir.to_owned(),
-                state: describe_results(dir),
-            });
-        }
-        for name in entries.iter().filter(|n| is_run_output(n)) {
-            let path = dir.join(name);
-            std::fs::remove_file(&path).map_err(io(&path))?;
-        }
+    check_replace(dir, force)?;
+    for name in run_outputs_in(dir) {
+        let path = dir.join(name);
+        std::fs::remove_file(&path).map_err(io(&path))?;
     }
     std::fs::create_dir_all(dir).map_err(io(dir))
 }
@@ -192,28 +209,65 @@ pub fn write_resolved(dir: &Path, text: &str) -> Result<(), ExportError> {
     std::fs::write(&path, text).map_err(io(&path))
 }
 
-/// Final outputs of a complete run (single or merged): sorted `trials.csv`, `summary.json`,
-/// `summary.md`, the histogram. Returns the summary.
+/// Files to write, each name with its bytes.
+pub type NamedFiles = Vec<(&'static str, Vec<u8>)>;
+
+/// The final text files of a complete run (single or merged), each name with its bytes: sorted
+/// `trials.csv`, `summary.json`, `summary.md`; and the summary. `dir` names the folder in messages.
+pub fn render_final(
+    dir: &Path,
+    scenario: &ResolvedScenario,
+    names: &[String],
+    records: &[TrialRecord],
+) -> Result<(NamedFiles, Summary), ExportError> {
+    let mut trials = Vec::new();
+    csv::write_trials(&mut trials, scenario, names, records).map_err(|e| csv::csv_error(&dir.join(TRIALS_FILE), e))?;
+    let summary = Summary::of(scenario, names, records);
+    let files = vec![
+        (TRIALS_FILE, trials),
+        (SUMMARY_JSON, json::render(&summary).into_bytes()),
+        (SUMMARY_MD, markdown::render(scenario, &summary).into_bytes()),
+    ];
+    Ok((files, summary))
+}
+
+/// The histogram's file name (`hist-<main metric>.svg`), when the run has the main metric.
+pub fn histogram_name(scenario: &ResolvedScenario, names: &[String]) -> Option<String> {
+    names
+        .iter()
+        .find(|n| **n == scenario.main_metric)
+        .map(|n| format!("hist-{n}.svg"))
+}
+
+/// Draws the histogram of the main metric into `dir` (nothing when the run has no main
+/// metric); the files drawn.
+pub fn draw_histogram(
+    dir: &Path,
+    scenario: &ResolvedScenario,
+    names: &[String],
+    records: &[TrialRecord],
+) -> Result<Vec<PathBuf>, ExportError> {
+    let Some(i) = names.iter().position(|n| n == &scenario.main_metric) else {
+        return Ok(Vec::new());
+    };
+    let path = dir.join(format!("hist-{}.svg", names[i]));
+    plot::histogram_svg(&path, scenario, &names[i], i, records)?;
+    Ok(vec![path])
+}
+
+/// Final outputs of a complete run (single or merged), written into `dir` one by one: the
+/// files of [`render_final`] and the histogram. Returns the summary.
 pub fn write_final(
     dir: &Path,
     scenario: &ResolvedScenario,
     names: &[String],
     records: &[TrialRecord],
 ) -> Result<Summary, ExportError> {
-    csv::write_trials_file(&dir.join(TRIALS_FILE), scenario, names, records)?;
-    let summary = Summary::of(scenario, names, records);
-    let path = dir.join(SUMMARY_JSON);
-    std::fs::write(&path, json::render(&summary)).map_err(io(&path))?;
-    let path = dir.join(SUMMARY_MD);
-    std::fs::write(&path, markdown::render(scenario, &summary)).map_err(io(&path))?;
-    if let Some(i) = names.iter().position(|n| n == &scenario.main_metric) {
-        plot::histogram_svg(
-            &dir.join(format!("hist-{}.svg", names[i])),
-            scenario,
-            &names[i],
-            i,
-            records,
-        )?;
+    let (files, summary) = render_final(dir, scenario, names, records)?;
+    for (name, bytes) in files {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).map_err(io(&path))?;
     }
+    draw_histogram(dir, scenario, names, records)?;
     Ok(summary)
 }
