@@ -7,7 +7,7 @@ use crate::measurement::MeasurementSet;
 use crate::physics::{ApproachSource, HarmonicPeriod};
 use crate::robot::RobotDescription;
 
-/// Whether a model can carry candidate `c` of a robot of `desc` ([`Predictor::carried_robot`]):
+/// Whether a model can carry candidate `c` of a robot of `desc` ([`crate::calibration::refit_model::Predictor::carried_robot`]):
 /// a joint compliance (`robot.effects.compliance`); a backlash signed by the actuator's
 /// direction, or by the command's on a joint whose command the controller does not couple (the
 /// two directions are then one; `robot.effects.backlash`); a gear harmonic in the
