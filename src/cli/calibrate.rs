@@ -17,8 +17,9 @@ use axiscal::calibration::procedure::{
     ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, longest_length_m, ros_name,
     screen_sweeps,
 };
-use axiscal::calibration::refine::{RefineOptions, Refinement};
+use axiscal::calibration::refine::{RefineOptions, Refinement, enough_free_poses};
 use axiscal::calibration::refit_model::refine::refine_carrying;
+use axiscal::calibration::refit_model::validation_poses_at_most;
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates};
@@ -182,6 +183,11 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
+    if args.refine {
+        let (poses, _) = validation_poses_at_most(set.rows(), &desc, max_poses(&args));
+        enough_free_poses(poses.len(), args.refine_folds as usize)
+            .map_err(|e| anyhow::anyhow!("--refine on {}: {e}", args.data.display()))?;
+    }
     let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
     let (mut cal, map) = if free_poses_only {
         if let Some(noise) = args.noise_mm {

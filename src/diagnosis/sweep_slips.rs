@@ -371,18 +371,12 @@ fn moved_by(m: &mut Measurement, params: &[f64; 6], centre: &Point3<f64>) {
 
 /// The rigid move of the whole block `rows` that brings it nearest the calibration's prediction
 /// (module docs, item 5): a rotation about the block's centroid and a translation, fitted by
-/// Gauss-Newton (central differences) on the moves the points measure ([`measured_step`]: a
-/// turn about the swept axis, or a shift along it, only moves the targets on the link, which
-/// are re-estimated from the moved points); as a hypothesis with its angle and shift.
+/// Gauss-Newton (central differences, the normal equations solved by a pseudo-inverse: a turn
+/// about the swept axis only moves the targets on the link, which are re-estimated from the
+/// moved points); as a hypothesis with its angle and shift.
 fn rigid_move(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescription)) -> Option<Hypothesis> {
     let n = rows.len() as f64;
     let centre = Point3::from(rows.iter().map(|m| m.position_m().coords).sum::<Vector3<f64>>() / n);
-    let radius_m = (rows
-        .iter()
-        .map(|m| (m.position_m() - centre).norm_squared())
-        .sum::<f64>()
-        / n)
-        .sqrt();
     let at = |x: &[f64; 6]| residuals_with(rows, &|m: &mut Measurement| moved_by(m, x, &centre), cal, desc);
     let mut x = [0.0; 6];
     for _ in 0..RIGID_ITERATIONS {
@@ -395,7 +389,9 @@ fn rigid_move(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescriptio
             let column = (DVector::from_vec(at(&plus)?) - DVector::from_vec(at(&minus)?)) / (2.0 * RIGID_STEP);
             jacobian.set_column(k, &column);
         }
-        let step = measured_step(&jacobian, &r, radius_m)?;
+        let normal = jacobian.transpose() * &jacobian;
+        let tolerance = 1e-9 * normal.norm();
+        let step = normal.pseudo_inverse(tolerance).ok()? * (jacobian.transpose() * -r);
         x.iter_mut().zip(step.iter()).for_each(|(a, d)| *a += d);
         if step.norm() < RIGID_DONE {
             break;
@@ -419,33 +415,6 @@ fn rigid_move(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescriptio
         moved_by(m, &x, &centre)
     }))
 }
-
-/// The Gauss-Newton step of the rigid move ([`rigid_move`]) from the residuals `r` \[mm\] and
-/// their derivatives `jacobian` (per rad of turn, per m of shift), on the moves the block
-/// measures: with a turn counted as the move of a point `radius_m` (the block's RMS radius)
-/// from the centroid, the eigenvectors of the normal matrix whose eigenvalue is above 1e6
-/// (mm per m, squared: the block's points fix the move at least as well as one point fixes its
-/// own coordinate); the others (a shift along a sweep's own axis, a turn about it) are
-/// rounding, and a step along them would be hundreds of millimetres. `None` without a radius.
-fn measured_step(jacobian: &DMatrix<f64>, r: &DVector<f64>, radius_m: f64) -> Option<DVector<f64>> {
-    (radius_m > 0.0).then_some(())?;
-    let scale = DVector::from_fn(6, |k, _| if k < 3 { 1.0 / radius_m } else { 1.0 });
-    let scaled = jacobian * DMatrix::from_diagonal(&scale);
-    let eigen = (scaled.transpose() * &scaled).symmetric_eigen();
-    let gradient = scaled.transpose() * -r;
-    let mut step = DVector::zeros(6);
-    for (k, &lambda) in eigen.eigenvalues.iter().enumerate() {
-        if lambda > ONE_POINT_MM_PER_M.powi(2) {
-            let v = eigen.eigenvectors.column(k);
-            step += v * (v.dot(&gradient) / lambda);
-        }
-    }
-    Some(step.component_mul(&scale))
-}
-
-/// A point's residual \[mm\] per metre of its own move: the scale of [`measured_step`]'s
-/// floor.
-const ONE_POINT_MM_PER_M: f64 = 1e3;
 
 /// The slips of `set`'s axis experiments found against its own free poses (`diagnose`, which
 /// has no other calibration to hold the sweeps against): when `cal`, the calibration of the

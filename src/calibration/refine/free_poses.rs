@@ -496,12 +496,19 @@ fn rms_mm(r: &[f64]) -> f64 {
     (r.iter().map(|x| x * x).sum::<f64>() / points as f64).sqrt() * 1e3
 }
 
-/// Enough free poses for the folds (at least two) and a positive noise.
-fn check_inputs(poses: usize, options: &RefineOptions) -> Result<(), RefineError> {
-    let needed = options.folds.max(2);
+/// Enough free poses for `folds` held-out folds (at least two): a caller checks it before any
+/// work, the refinement again.
+pub fn enough_free_poses(poses: usize, folds: usize) -> Result<(), RefineError> {
+    let needed = folds.max(2);
     if poses < needed {
         return Err(RefineError::TooFewPoses { found: poses, needed });
     }
+    Ok(())
+}
+
+/// Enough free poses for the folds (at least two) and a positive noise.
+fn check_inputs(poses: usize, options: &RefineOptions) -> Result<(), RefineError> {
+    enough_free_poses(poses, options.folds)?;
     if options.noise_rms_3d_mm.is_nan() || options.noise_rms_3d_mm <= 0.0 {
         return Err(RefineError::Noise(options.noise_rms_3d_mm));
     }

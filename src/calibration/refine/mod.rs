@@ -22,7 +22,7 @@ mod steps;
 
 pub use free_poses::{
     DirectionWeight, DroppedDirection, FoldCheck, IMPLAUSIBLE_RMS_OVER_NOISE, ParameterChange, ParameterUnit,
-    RefineError, RefineOptions, Refinement, RefinementResult, RefitParameter, refine_free_poses,
+    RefineError, RefineOptions, Refinement, RefinementResult, RefitParameter, enough_free_poses, refine_free_poses,
 };
 pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use prior::unrefined_sigma;

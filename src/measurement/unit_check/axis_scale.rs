@@ -334,7 +334,7 @@ impl AxisScale {
             "one instrument axis read long or short would pass the coordinate-scale test in this file: {}. Each \
              arc or pose alone takes such a scale as a tilt or a slightly different radius, and these data's arcs \
              and poses together pin it no closer (the test names {:.1} % where they do): a length standard along \
-             that axis, or free poses spread over the workspace (calibrated with the sweeps, or checked by \
+             that axis, or free poses spread over the workspace (fitted with the sweeps, or checked by \
              `validate`), close it",
             parts.join(", "),
             AXIS_SCALE_REACH_CLAIM * 100.0
