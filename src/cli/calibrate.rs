@@ -183,11 +183,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
-    if args.refine {
-        let (poses, _) = validation_poses_at_most(set.rows(), &desc, max_poses(&args));
-        enough_free_poses(poses.len(), args.refine_folds as usize)
-            .map_err(|e| anyhow::anyhow!("--refine on {}: {e}", args.data.display()))?;
-    }
+    check_refine_poses(&args, &set, &desc)?;
     let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
     let (mut cal, map) = if free_poses_only {
         if let Some(noise) = args.noise_mm {
@@ -877,6 +873,16 @@ fn fill_tool_accuracy(cal: &mut Calibration, desc: &RobotDescription, spans: Vec
             vec![]
         }
     })
+}
+
+/// With `--refine`, enough free poses in `set` for its folds, said before any calibration.
+fn check_refine_poses(args: &Args, set: &MeasurementSet, desc: &RobotDescription) -> Result<()> {
+    if args.refine {
+        let (poses, _) = validation_poses_at_most(set.rows(), desc, max_poses(args));
+        enough_free_poses(poses.len(), args.refine_folds as usize)
+            .map_err(|e| anyhow::anyhow!("--refine on {}: {e}", args.data.display()))?;
+    }
+    Ok(())
 }
 
 /// `cal` refined on the free poses of `set` (`--refine`), its summary printed.
