@@ -16,9 +16,10 @@
 //! (each point's variance: the interpolation's at the noise of a point, plus what the joints
 //! positioned once for it give at the description's repeatability, `held_variance_mm2`);
 //! the sweep without which the others agree is named, with its offset, when that offset is
-//! beyond [`GROSS_MISS_FACTOR`] times the test's bound for it: an effect the model lacks (a held
-//! joint's backlash taken up differently between the sweeps, sag bending one sweep's arc) moves
-//! a sweep's point by tenths of a millimetre, a moved block by millimetres. Where no sweep's
+//! beyond [`GROSS_MISS_FACTOR`] times the test's bound for it: sag bending one sweep's arc moves
+//! a sweep's point by tenths of a millimetre, a moved block by millimetres; a held joint's
+//! backlash taken up on another side between the sweeps moves it by the band times the lever
+//! arm (a millimetre for a milliradian at a metre), which the warning names beside a moved block. Where no sweep's
 //! removal lets the others agree at the noise (a real robot whose effects scatter every sweep's
 //! point: Boby & Klimchik's arm), each sweep is tested against the others' scatter instead
 //! (`scattered_odd_one_out`, an F ratio). A description without `axis_targets` (SScanSS-2's
@@ -124,8 +125,9 @@ impl std::fmt::Display for MovedSweep {
              from where the others see it: the block was moved (the instrument or the robot bumped or set up again between \
              the sweeps) or its coordinates shifted or scaled; the calibration absorbs it into the axis, so \
              calibration.json is wrong for the robot: check these rows and measure the sweep again (if the targets \
-             are different ones, give each its own place in `axis_targets`; an effect the model lacks moves a sweep \
-             by tenths of a millimetre, not this far)",
+             are different ones, give each its own place in `axis_targets`; a held joint's backlash taken up on \
+             another side between the sweeps moves a sweep too, by its band times the target's distance from that \
+             joint, 0.9 mm for 1 mrad at 0.9 m: then approach the reference pose from one side before every sweep)",
             Vector3::new(x, y, z).norm(),
             self.sigmas,
         )
