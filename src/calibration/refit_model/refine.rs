@@ -24,8 +24,8 @@ pub fn refine_calibration(
 }
 
 /// [`refine_calibration`] with the effects `carried` (candidates a model can carry, as
-/// `crate::diagnosis::carried_candidates` picks them) fitted with the refit and folded into the refined robot
-/// ([`Predictor::carried_robot`]).
+/// `crate::diagnosis::carried_candidates` picks them) fitted with the refit and folded into the
+/// refined robot ([`Predictor::carried_robot`]).
 pub fn refine_carrying(
     set: &MeasurementSet,
     desc: &RobotDescription,
