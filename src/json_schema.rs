@@ -3,7 +3,8 @@
 //! (the serialisation contract). `tests/it/json_schemas.rs` checks that the committed files equal
 //! these and that real outputs of each command validate against them.
 
-use crate::calibration::procedure::{Calibration, Finding};
+use crate::calibration::procedure::Finding;
+use crate::calibration::record::CalibrationRecord;
 use crate::diagnosis::{AxesDiagnosis, Diagnosis, Validation};
 use crate::harness::blind::{BlindScore, CaseKey, CaseResult};
 use crate::harness::evaluation::{BudgetReport, FloorCheck, PaperReport};
@@ -102,7 +103,7 @@ fn list_under<T: JsonSchema>(key: &str) -> Value {
 /// the schema, generated now.
 pub fn schemas() -> Vec<(Schema, Value)> {
     [
-        (Schema::CALIBRATION, schema_of::<Calibration>()),
+        (Schema::CALIBRATION, schema_of::<CalibrationRecord>()),
         (Schema::REPORT, list_under::<Finding>("findings")),
         (Schema::DIAGNOSIS, schema_of::<DiagnosisFile>()),
         (Schema::SUMMARY, schema_of::<Summary>()),

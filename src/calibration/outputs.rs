@@ -8,6 +8,7 @@ use super::procedure::{
     Calibration, Implausible, JointMap, MapTable, RawReadingDeviation, UrdfOptions, controller_zero_offsets, findings,
     implausible, joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, urdf,
 };
+use super::record::CalibrationRecord;
 use crate::json_file::{self, Schema};
 use crate::measurement::format_f64;
 use crate::numerics::lsq::LsqError;
@@ -59,17 +60,19 @@ pub struct OutputError {
     pub cause: serde_json::Error,
 }
 
-/// Renders every output of `cal` (see [`OUTPUT_FILES`]); `poses` (file units) are the commands
-/// the raw-reading deviation and the zero offsets are computed over, `source` names the data.
+/// Renders every output of `record` (see [`OUTPUT_FILES`]); `poses` (file units) are the
+/// commands the raw-reading deviation and the zero offsets are computed over, `source` names
+/// the data.
 pub fn render(
-    cal: &Calibration,
+    record: &CalibrationRecord,
     desc: &RobotDescription,
     source: &str,
     poses: &[Vec<f64>],
     options: &OutputOptions,
 ) -> Result<CalibrationOutputs, OutputError> {
     let json = |file: &'static str, r: serde_json::Result<String>| r.map_err(|cause| OutputError { file, cause });
-    let implausible = match cal.free_poses {
+    let cal = &record.calibration;
+    let implausible = match record.reports.free_poses {
         None => implausible(cal, desc),
         Some(_) => vec![],
     };
@@ -78,13 +81,10 @@ pub fn render(
     report_findings.extend(deviation.findings());
     let map = joint_map(cal, desc, options.joint_map_step);
     let mut files = vec![
-        (
-            OUTPUT_FILES[0],
-            json(OUTPUT_FILES[0], json_file::to_string(Schema::CALIBRATION, cal))?,
-        ),
+        (OUTPUT_FILES[0], json(OUTPUT_FILES[0], record.to_json())?),
         (
             OUTPUT_FILES[1],
-            report_markdown(cal, desc, source, &implausible) + &deviation.markdown(),
+            report_markdown(record, desc, source, &implausible) + &deviation.markdown(),
         ),
         (
             OUTPUT_FILES[2],
@@ -117,15 +117,20 @@ pub fn render(
 }
 
 /// `report.md`: the free-pose report or the independent-axis one.
-fn report_markdown(cal: &Calibration, desc: &RobotDescription, source: &str, warnings: &[Implausible]) -> String {
-    match &cal.free_poses {
+fn report_markdown(
+    record: &CalibrationRecord,
+    desc: &RobotDescription,
+    source: &str,
+    warnings: &[Implausible],
+) -> String {
+    match &record.reports.free_poses {
         Some(summary) => free_pose::markdown(
             summary,
-            cal.noise.as_ref().and_then(|n| n.estimate.as_ref()),
+            record.calibration.noise.as_ref().and_then(|n| n.estimate.as_ref()),
             &desc.name,
             source,
         ),
-        None => markdown(cal, desc, source, warnings),
+        None => markdown(record, desc, source, warnings),
     }
 }
 

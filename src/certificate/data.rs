@@ -12,6 +12,7 @@
 
 use crate::calibration::free_pose::FreePoseSummary;
 use crate::calibration::procedure::Calibration;
+use crate::calibration::record::CalibrationRecord;
 use crate::measurement::MeasurementSet;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
@@ -58,10 +59,11 @@ pub(super) fn data_section(file: &str, set: &MeasurementSet) -> DataSection {
     }
 }
 
-/// How `set` differs from the data `cal` records (module doc), one sentence each; empty when it
-/// matches.
-pub fn data_mismatches(cal: &Calibration, set: &MeasurementSet) -> Vec<String> {
-    let mismatches = structure_mismatches(cal, set);
+/// How `set` differs from the data `record` records (module doc), one sentence each; empty
+/// when it matches.
+pub fn data_mismatches(record: &CalibrationRecord, set: &MeasurementSet) -> Vec<String> {
+    let cal = &record.calibration;
+    let mismatches = structure_mismatches(cal, record.reports.free_poses.as_ref(), set);
     let digest = set.digest();
     match &cal.data_digest {
         Some(recorded) if mismatches.is_empty() && *recorded != digest => vec![format!(
@@ -72,9 +74,10 @@ pub fn data_mismatches(cal: &Calibration, set: &MeasurementSet) -> Vec<String> {
     }
 }
 
-/// How the experiments and poses of `set` differ from those `cal` records.
-fn structure_mismatches(cal: &Calibration, set: &MeasurementSet) -> Vec<String> {
-    if let Some(fp) = &cal.free_poses {
+/// How the experiments and poses of `set` differ from those `cal` (with its free-pose
+/// summary, for a free-pose calibration) records.
+fn structure_mismatches(cal: &Calibration, free_poses: Option<&FreePoseSummary>, set: &MeasurementSet) -> Vec<String> {
+    if let Some(fp) = free_poses {
         return free_pose_mismatches(fp, set);
     }
     if cal.axes.is_empty() {

@@ -8,7 +8,7 @@
 //! misses beyond its prediction are a warning ([`HeldOut::warning`]): data in other units or of
 //! another setup look like a calibration that failed.
 
-use crate::calibration::procedure::Calibration;
+use crate::calibration::record::CalibrationRecord;
 use crate::diagnosis::{CleanCampaign, ValidationOptions, Verdict, is_validation, validate};
 use crate::kinematics::rigid_fit;
 use crate::measurement::MeasurementSet;
@@ -105,13 +105,14 @@ fn errors(predicted: &[Point3<f64>], measured: &[Point3<f64>]) -> ErrorLine {
 
 /// The nominal and calibrated models on the held-out poses of `set` (`file` its name), the
 /// calibrated model tested against the noise it was weighted with, the robot's repeatability
-/// and its own predicted error ([`validate`]).
+/// and its own predicted error ([`validate`]) and tool accuracy (`record`'s reports).
 pub fn held_out(
     file: &str,
     set: &MeasurementSet,
-    cal: &Calibration,
+    record: &CalibrationRecord,
     desc: &RobotDescription,
 ) -> Result<HeldOut, HeldOutError> {
+    let cal = &record.calibration;
     let rows: Vec<usize> = (0..set.rows().len())
         .filter(|&i| is_validation(&set.rows()[i]))
         .collect();
@@ -140,14 +141,15 @@ pub fn held_out(
     )
     .map_err(model)?;
     let summary = v.validation.as_ref().ok_or(HeldOutError::NoPoses)?;
+    let accuracy = record.reports.tool_accuracy.as_ref();
     Ok(HeldOut {
         file: file.to_string(),
         points: rows.len(),
         before: errors(&registered, &measured),
         after: errors(&calibrated, &measured),
         noise_predicted_rms_mm: summary.predicted_mm.noise,
-        predicted_tool_spans_rms_mm: cal.tool_accuracy.as_ref().map(|t| t.spans.position_rms_mm),
-        predicted_tool_workspace_rms_mm: cal.tool_accuracy.as_ref().map(|t| t.workspace.position_rms_mm),
+        predicted_tool_spans_rms_mm: accuracy.map(|t| t.spans.position_rms_mm),
+        predicted_tool_workspace_rms_mm: accuracy.map(|t| t.workspace.position_rms_mm),
         predicted_rms_mm: summary.predicted_mm.total,
         beyond_prediction: summary
             .chi_square

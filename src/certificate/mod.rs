@@ -16,8 +16,9 @@ mod svg;
 pub use data::{DataSection, ExperimentLine, data_mismatches};
 pub use held_out::{HELD_OUT_FALSE_ALARM, HeldOut, HeldOutError, held_out};
 
+use crate::calibration::model_parameters::{model_parameter_names, model_parameter_values};
 use crate::calibration::procedure::{Calibration, FrameSigma, InvalidCalibration, PointResidual};
-use crate::calibration::tool_accuracy::{model_parameter_names, model_parameter_values};
+use crate::calibration::record::CalibrationRecord;
 use crate::iso9283::IsoFigures;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
@@ -38,7 +39,7 @@ pub enum CertificateError {
         "the calibration has no `model_covariance` (a file written before it was recorded): its parameters' uncertainties are not known; recalibrate with `axiscal calibrate`"
     )]
     NoCovariance,
-    /// The covariance is not one of the model's parameters ([`crate::calibration::tool_accuracy::ModelCovariance::validate`]).
+    /// The covariance is not one of the model's parameters ([`crate::calibration::model_parameters::ModelCovariance::validate`]).
     #[error("the calibration's {0}")]
     Covariance(InvalidCalibration),
 }
@@ -46,8 +47,8 @@ pub enum CertificateError {
 /// Everything the certificate is made from.
 #[derive(Clone, Debug)]
 pub struct CertificateInputs<'a> {
-    /// The calibration.
-    pub calibration: &'a Calibration,
+    /// The calibration, with the reports written beside it.
+    pub calibration: &'a CalibrationRecord,
     /// Its file, as the user named it.
     pub calibration_file: String,
     /// The nominal description.
@@ -267,7 +268,7 @@ pub struct ResidualPoint {
 
 /// The certificate of `inputs` (module docs).
 pub fn certificate(inputs: &CertificateInputs<'_>) -> Result<Certificate, CertificateError> {
-    let cal = inputs.calibration;
+    let cal = &inputs.calibration.calibration;
     let covariance = cal.model_covariance.as_ref().ok_or(CertificateError::NoCovariance)?;
     covariance.validate(&cal.robot)?;
     let names = model_parameter_names(&cal.robot);
@@ -301,14 +302,14 @@ pub fn certificate(inputs: &CertificateInputs<'_>) -> Result<Certificate, Certif
 pub const UNCERTAINTY_STATEMENT: &str = "Standard uncertainties u are Type A evaluations (GUM 4.2) from the residuals of the axis fits, with the measurement noise estimated from those residuals (or the noise given, tested against them), propagated to the model's parameters to first order with their correlations (GUM 5.2, law of propagation of uncertainty). Expanded uncertainties U = k u with coverage factor k = 2 (GUM 6.2), which for a normal distribution gives a coverage probability of about 95 %. Effects the model does not contain (compliance, backlash, thermal expansion, the instrument's own systematic errors) are not included.";
 
 fn calibration_section(inputs: &CertificateInputs<'_>) -> CalibrationSection {
-    let cal = inputs.calibration;
-    let method = if cal.free_poses.is_some() {
+    let (cal, reports) = (&inputs.calibration.calibration, &inputs.calibration.reports);
+    let method = if reports.free_poses.is_some() {
         "free poses: every parameter fitted jointly to the measured tool targets".to_string()
     } else {
         format!(
             "independent-axis method (Sultan & Wager): each axis fitted from its own experiment (estimator `{}`), transmissions and couplings fitted on the axes, the phi-model built from them{}",
             cal.options.estimator.name(),
-            if cal.refinement.is_some() {
+            if reports.refinement.is_some() {
                 ", then refined on the free poses"
             } else {
                 ""
@@ -324,7 +325,7 @@ fn calibration_section(inputs: &CertificateInputs<'_>) -> CalibrationSection {
 }
 
 fn instrument_section(inputs: &CertificateInputs<'_>) -> InstrumentSection {
-    let noise = inputs.calibration.noise.as_ref();
+    let noise = inputs.calibration.calibration.noise.as_ref();
     InstrumentSection {
         description: inputs.instrument.clone(),
         noise_used_rms_3d_mm: noise.map(|n| n.used_rms_3d_mm),
@@ -527,10 +528,11 @@ fn not_calibrated(cal: &Calibration, u: &[f64], names: &[String]) -> Vec<String>
 
 /// What a reader must know before trusting the uncertainties and the held-out comparison.
 fn warnings(inputs: &CertificateInputs<'_>) -> Vec<String> {
-    let (cal, held_out) = (inputs.calibration, inputs.held_out.as_ref());
+    let (record, held_out) = (inputs.calibration, inputs.held_out.as_ref());
+    let cal = &record.calibration;
     let mut out: Vec<String> = held_out.and_then(HeldOut::warning).into_iter().collect();
     if let Some((file, set)) = &inputs.data {
-        let mismatches = data_mismatches(cal, set);
+        let mismatches = data_mismatches(record, set);
         if !mismatches.is_empty() {
             out.push(format!(
                 "the data summarised ({file}) are not the ones the calibration records: {}",
@@ -538,7 +540,7 @@ fn warnings(inputs: &CertificateInputs<'_>) -> Vec<String> {
             ));
         }
     }
-    if held_out.is_some() && cal.free_poses.is_some() {
+    if held_out.is_some() && record.reports.free_poses.is_some() {
         out.push(
             "the calibration was fitted to free poses: the held-out poses are held out only if their file is not the one the calibration was made from"
                 .into(),

@@ -17,10 +17,11 @@ use axiscal::calibration::procedure::{
     ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, longest_length_m, ros_name,
     screen_sweeps,
 };
+use axiscal::calibration::record::{CalibrationRecord, Reports};
 use axiscal::calibration::refine::{RefineOptions, Refinement, enough_free_poses};
 use axiscal::calibration::refit_model::refine::refine_carrying;
 use axiscal::calibration::refit_model::validation_poses_at_most;
-use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, predict, swept_ranges};
+use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccuracy, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates};
 use axiscal::json_file::{self, Schema};
@@ -185,23 +186,25 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     check_refine_poses(&args, &set, &desc)?;
     let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
-    let (mut cal, map) = if free_poses_only {
+    let (mut record, map) = if free_poses_only {
         if let Some(noise) = args.noise_mm {
             eprintln!(
                 "warning: --noise-mm {noise} has no effect here: a free-pose calibration weights its poses alike and \
                  estimates the noise from their residuals (report.md, \"Noise from the residuals\"); it applies to axis experiments"
             );
         }
-        let mut cal = super::calibrate_free::calibrate(&args_view(&args), &set, &desc, printer)?;
-        let map = predict_free_pose_accuracy(&mut cal, &desc, &set)?;
-        (cal, map)
+        let mut record = super::calibrate_free::calibrate(&args_view(&args), &set, &desc, printer)?;
+        let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, &desc, &set);
+        record.reports.tool_accuracy = accuracy;
+        (record, map)
     } else {
         checks::one_setup(&set, &args.data, "the axis-experiment calibration")?;
         calibrate_axes(&args, &set, &desc, printer)?
     };
-    cal.data_digest = Some(set.digest());
-    cal.model_digest = Some(cal.robot.digest());
-    readable(&cal, &args, (&set, &desc))?;
+    record.calibration.data_digest = Some(set.digest());
+    record.calibration.model_digest = Some(record.calibration.robot.digest());
+    readable(&record, &args, (&set, &desc))?;
+    let cal = &record.calibration;
     let source = args.data.display().to_string();
     let options = OutputOptions {
         urdf: UrdfOptions {
@@ -210,7 +213,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         },
         joint_map_step: args.joint_map_step,
     };
-    let texts = outputs::render(&cal, &desc, &source, &export_poses(&set, &desc, &cal), &options)?;
+    let texts = outputs::render(&record, &desc, &source, &export_poses(&set, &desc, cal), &options)?;
     // Every file is written before any is put in place; an output left out must not leave an
     // earlier run's file beside the new calibration.
     let mut staged = outputs.staged_in(&args.out)?;
@@ -223,19 +226,20 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         written.extend(TOOL_MAP_FILES);
     }
     staged.commit(&[&OUTPUT_FILES[..], &TOOL_MAP_FILES[..]].concat())?;
-    match &cal.free_poses {
+    let accuracy = record.reports.tool_accuracy.as_ref();
+    match &record.reports.free_poses {
         Some(summary) => {
             super::calibrate_free::print(summary, &desc, &set, &args.data, printer);
-            print_tool_accuracy(&cal, printer);
+            print_tool_accuracy(accuracy, printer);
         }
         None => {
-            print_axes(&cal, &desc, &source, printer);
+            print_axes((cal, accuracy), &desc, &source, printer);
             print_implausible(&texts.implausible, &desc, &set, &args);
-            print_scale_doubts(&cal, &desc, &texts.implausible, &args.data);
-            print_moved_sweeps(&cal, &desc, &set, &args.data);
+            print_scale_doubts(cal, &desc, &texts.implausible, &args.data);
+            print_moved_sweeps(cal, &desc, &set, &args.data);
             if !args.refine
                 && let Some(miss) =
-                    misses_own_validation_poses(&cal, (&desc, &set, &args.data), args.repeatability_rad.as_deref())
+                    misses_own_validation_poses(cal, (&desc, &set, &args.data), args.repeatability_rad.as_deref())
             {
                 eprintln!("warning: {miss}");
             }
@@ -259,7 +263,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         let campaign = super::record::calibrated::CalibratedCampaign {
             desc: &desc,
             set: &set,
-            calibration: &cal,
+            calibration: cal,
             verdict: None,
         };
         super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
@@ -289,10 +293,11 @@ fn tool_rows(found: &Implausible, set: &MeasurementSet, data: &Path) -> String {
 /// `cal` passes the checks every command makes when it reads `calibration.json`: a parameter
 /// the data leave free is said here, before anything is written, not by the next command (with
 /// free poses at too few configurations as its cause, when they are).
-fn readable(cal: &Calibration, args: &Args, (set, desc): (&MeasurementSet, &RobotDescription)) -> Result<()> {
-    let data = &args.data;
+fn readable(record: &CalibrationRecord, args: &Args, (set, desc): (&MeasurementSet, &RobotDescription)) -> Result<()> {
+    let (data, cal) = (&args.data, &record.calibration);
     if let Some((_, name, variance)) = cal.model_covariance.as_ref().and_then(|c| c.undetermined()) {
-        let few = cal
+        let few = record
+            .reports
             .free_poses
             .as_ref()
             .and_then(|s| super::calibrate_free::few_configurations_of(set, desc, s.axis_rows_as_poses.is_some()));
@@ -388,13 +393,14 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
     }
 }
 
-/// The independent-axis calibration of `set` (`--refine` applied) and the tool-accuracy map.
+/// The independent-axis calibration of `set` (`--refine` applied) with its reports, and the
+/// tool-accuracy map.
 fn calibrate_axes(
     args: &Args,
     set: &MeasurementSet,
     desc: &RobotDescription,
     printer: Printer,
-) -> Result<(Calibration, Vec<MapPoint>)> {
+) -> Result<(CalibrationRecord, Vec<MapPoint>)> {
     if args.holdout {
         anyhow::bail!(
             "--holdout applies to free-pose files (no axis experiment); {} has axis experiments",
@@ -426,9 +432,10 @@ fn calibrate_axes(
         }
         // Every row a free pose: that fit tests its poses for outliers itself, on every row.
         Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) if !args.refine => {
-            let mut cal = sweeps_as_free_poses(args, set, desc, &e, printer)?;
-            let map = predict_free_pose_accuracy(&mut cal, desc, set)?;
-            return Ok((cal, map));
+            let mut record = sweeps_as_free_poses(args, set, desc, &e, printer)?;
+            let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, desc, set);
+            record.reports.tool_accuracy = accuracy;
+            return Ok((record, map));
         }
         Err(e) => {
             super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
@@ -462,15 +469,21 @@ fn calibrate_axes(
         })
     };
     warn_axis_scale((set, desc), &args.data, &fit, PROFILE_MAX_ROWS, printer);
-    let map = predict_tool_accuracy(&mut cal, desc, set, args.held_tolerance)?;
+    let (tool_accuracy, map) = predict_tool_accuracy(&cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
-    let cal = if args.refine {
-        refine(args, set, desc, cal, printer)?
+    let (calibration, refinement) = if args.refine {
+        let (refined, refinement) = refine(args, set, desc, &cal, printer)?;
+        (refined, Some(refinement))
     } else {
-        cal
+        (cal, None)
     };
-    Ok((cal, map))
+    let reports = Reports {
+        tool_accuracy,
+        refinement,
+        free_poses: None,
+    };
+    Ok((CalibrationRecord { calibration, reports }, map))
 }
 
 /// The scale of one coordinate column the calibration `fit` finds in `set` ([`axis_scale`]),
@@ -523,7 +536,7 @@ fn sweeps_as_free_poses(
     desc: &RobotDescription,
     failure: &ProcedureError,
     printer: Printer,
-) -> Result<Calibration> {
+) -> Result<CalibrationRecord> {
     if let Some(why_not) = free_pose::poses::why_sweeps_are_not_poses(set, desc) {
         anyhow::bail!(
             "calibrating {}: {failure}; the sweeps cannot be fitted as free poses either: {why_not}",
@@ -538,11 +551,11 @@ fn sweeps_as_free_poses(
     );
     let mut view = args_view(args);
     view.all_rows = true;
-    let mut cal = match (
+    let mut record = match (
         super::calibrate_free::calibrate(&view, set, desc, printer),
         failure.misfit(),
     ) {
-        (Ok(cal), _) => cal,
+        (Ok(record), _) => record,
         // The rows named are the likelier cause than the configurations' spread.
         (Err(_), Some(misfit)) => anyhow::bail!(
             "calibrating {}: {misfit}; fitted as free poses, the sweeps fail too",
@@ -550,10 +563,10 @@ fn sweeps_as_free_poses(
         ),
         (Err(e), None) => return Err(e),
     };
-    if let Some(summary) = cal.free_poses.as_mut() {
+    if let Some(summary) = record.reports.free_poses.as_mut() {
         summary.axis_rows_as_poses = Some(why);
     }
-    Ok(cal)
+    Ok(record)
 }
 
 /// The sanity checks' findings ([`implausible`]) as warnings; a size off by a factor says
@@ -780,8 +793,13 @@ fn understated_repeatability(desc: &RobotDescription, stated: Option<&[f64]>) ->
     )
 }
 
-/// The console summary of an independent-axis calibration.
-fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str, printer: Printer) {
+/// The console summary of an independent-axis calibration and its predicted tool accuracy.
+fn print_axes(
+    (cal, accuracy): (&Calibration, Option<&ToolAccuracy>),
+    desc: &RobotDescription,
+    source: &str,
+    printer: Printer,
+) {
     say!(
         printer,
         "calibrated {} from {} ({} axes)",
@@ -807,12 +825,12 @@ fn print_axes(cal: &Calibration, desc: &RobotDescription, source: &str, printer:
             a.direction_sigma.major_rad * 1e3
         );
     }
-    print_tool_accuracy(cal, printer);
+    print_tool_accuracy(accuracy, printer);
 }
 
 /// The predicted tool 1-sigma line, when there is one.
-pub(super) fn print_tool_accuracy(cal: &Calibration, printer: Printer) {
-    if let Some(a) = &cal.tool_accuracy {
+pub(super) fn print_tool_accuracy(accuracy: Option<&ToolAccuracy>, printer: Printer) {
+    if let Some(a) = accuracy {
         say!(
             printer,
             "  predicted tool 1-sigma: inside the spans RMS {:.3} mm / {:.3} mrad (max {:.3} mm), workspace RMS {:.3} mm / {:.3} mrad (max {:.3} mm)",
@@ -826,26 +844,26 @@ pub(super) fn print_tool_accuracy(cal: &Calibration, printer: Printer) {
     }
 }
 
-/// Fills `cal.tool_accuracy` (inside the spans of `set`'s sweeps and over the joint limits)
-/// and returns the workspace poses for the map (none without a model covariance).
+/// The tool accuracy of `cal` inside the spans of `set`'s sweeps and over the joint limits
+/// ([`tool_accuracy`]).
 fn predict_tool_accuracy(
-    cal: &mut Calibration,
+    cal: &Calibration,
     desc: &RobotDescription,
     set: &MeasurementSet,
     held_tolerance: f64,
-) -> Result<Vec<MapPoint>> {
+) -> Result<(Option<ToolAccuracy>, Vec<MapPoint>)> {
     let (experiments, _) = axis_experiments_with(set, desc, held_tolerance)?;
     let spans = swept_ranges(&experiments, &cal.reference_cmd);
-    fill_tool_accuracy(cal, desc, spans)
+    Ok(tool_accuracy(cal, desc, spans))
 }
 
-/// Fills `cal.tool_accuracy` of a free-pose calibration: "inside the spans" is within the
-/// range of every joint's values over the rows of `set`.
+/// The tool accuracy of a free-pose calibration ([`tool_accuracy`]): "inside the spans" is
+/// within the range of every joint's values over the rows of `set`.
 fn predict_free_pose_accuracy(
-    cal: &mut Calibration,
+    cal: &Calibration,
     desc: &RobotDescription,
     set: &MeasurementSet,
-) -> Result<Vec<MapPoint>> {
+) -> (Option<ToolAccuracy>, Vec<MapPoint>) {
     let spans = (0..desc.dof())
         .map(|k| {
             set.rows()
@@ -854,25 +872,26 @@ fn predict_free_pose_accuracy(
                 .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], v| [lo.min(v), hi.max(v)])
         })
         .collect();
-    fill_tool_accuracy(cal, desc, spans)
+    tool_accuracy(cal, desc, spans)
 }
 
-/// The tool accuracy of `cal` predicted over `spans` and the workspace, stored in `cal`; the
-/// workspace poses for the map (none without a model covariance).
-fn fill_tool_accuracy(cal: &mut Calibration, desc: &RobotDescription, spans: Vec<[f64; 2]>) -> Result<Vec<MapPoint>> {
+/// The tool accuracy of `cal` predicted over `spans` and the workspace, with the workspace
+/// poses for the map (neither without a model covariance).
+fn tool_accuracy(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    spans: Vec<[f64; 2]>,
+) -> (Option<ToolAccuracy>, Vec<MapPoint>) {
     // The calibration stands without its prediction: a model that cannot execute some drawn
     // pose (a fitted transmission not invertible beyond the data's range) is said, not fatal.
-    Ok(match predict(cal, desc, spans, PredictionOptions::default()) {
-        Ok(Some((accuracy, map))) => {
-            cal.tool_accuracy = Some(accuracy);
-            map
-        }
-        Ok(None) => vec![],
+    match predict(cal, desc, spans, PredictionOptions::default()) {
+        Ok(Some((accuracy, map))) => (Some(accuracy), map),
+        Ok(None) => (None, vec![]),
         Err(e) => {
             eprintln!("warning: the tool accuracy is not predicted: {e}");
-            vec![]
+            (None, vec![])
         }
-    })
+    }
 }
 
 /// With `--refine`, enough free poses in `set` for its folds, said before any calibration.
@@ -885,14 +904,15 @@ fn check_refine_poses(args: &Args, set: &MeasurementSet, desc: &RobotDescription
     Ok(())
 }
 
-/// `cal` refined on the free poses of `set` (`--refine`), its summary printed.
+/// `cal` refined on the free poses of `set` (`--refine`) and the refinement, its summary
+/// printed.
 fn refine(
     args: &Args,
     set: &MeasurementSet,
     desc: &RobotDescription,
-    cal: Calibration,
+    cal: &Calibration,
     printer: Printer,
-) -> Result<Calibration> {
+) -> Result<(Calibration, Refinement)> {
     let options = RefineOptions {
         noise_rms_3d_mm: cal
             .noise
@@ -907,44 +927,54 @@ fn refine(
         Some(path) => carried_effects(path, desc, set)?,
         None => Vec::new(),
     };
-    let refined = refine_carrying(set, desc, &cal, &options, &carried)
+    let (refined, r) = refine_carrying(set, desc, cal, &options, &carried)
         .map_err(|e| anyhow::anyhow!("--refine on {}: {e}", args.data.display()))?;
-    if let Some(r) = &refined.refinement {
+    print_refinement(&r, (set, &args.data), &carried, printer)?;
+    Ok((refined, r))
+}
+
+/// The console lines of a refinement `r` of the free poses of `set` (read from `data`); an
+/// error when its result is implausible.
+fn print_refinement(
+    r: &Refinement,
+    (set, data): (&MeasurementSet, &Path),
+    carried: &[Candidate],
+    printer: Printer,
+) -> Result<()> {
+    say!(
+        printer,
+        "refined on {} free poses: rank {} of {} parameters ({} directions dropped), RMS {:.4} -> {:.4} mm (noise alone {:.4} mm); {}-fold held-out RMS {:.4} -> {:.4} mm",
+        r.poses,
+        r.rank,
+        r.parameters,
+        r.dropped.len(),
+        r.rms_before_mm,
+        r.rms_after_mm,
+        r.expected_rms_after_mm,
+        r.folds.len(),
+        r.heldout_rms_before_mm,
+        r.heldout_rms_after_mm
+    );
+    if r.poses_left_out > 0 {
         say!(
             printer,
-            "refined on {} free poses: rank {} of {} parameters ({} directions dropped), RMS {:.4} -> {:.4} mm (noise alone {:.4} mm); {}-fold held-out RMS {:.4} -> {:.4} mm",
+            "  refined on {} of the file's {} free poses, evenly spaced through it (`--max-poses`; memory grows with them)",
             r.poses,
-            r.rank,
-            r.parameters,
-            r.dropped.len(),
-            r.rms_before_mm,
-            r.rms_after_mm,
-            r.expected_rms_after_mm,
-            r.folds.len(),
-            r.heldout_rms_before_mm,
-            r.heldout_rms_after_mm
+            r.poses + r.poses_left_out
         );
-        if r.poses_left_out > 0 {
-            say!(
-                printer,
-                "  refined on {} of the file's {} free poses, evenly spaced through it (`--max-poses`; memory grows with them)",
-                r.poses,
-                r.poses + r.poses_left_out
-            );
-        }
-        if !r.converged {
-            eprintln!("warning: --refine: the Gauss-Newton steps reached their limit without converging");
-        }
-        checks::print_pose_outliers(&r.outliers, set, &args.data, "refined");
-        if let Some(why) = r.implausible() {
-            anyhow::bail!(
-                "--refine on {}: {why}; nothing written (without --refine the axis calibration stands)",
-                args.data.display()
-            );
-        }
-        print_carried(&carried, r, printer);
     }
-    Ok(refined)
+    if !r.converged {
+        eprintln!("warning: --refine: the Gauss-Newton steps reached their limit without converging");
+    }
+    checks::print_pose_outliers(&r.outliers, set, data, "refined");
+    if let Some(why) = r.implausible() {
+        anyhow::bail!(
+            "--refine on {}: {why}; nothing written (without --refine the axis calibration stands)",
+            data.display()
+        );
+    }
+    print_carried(carried, r, printer);
+    Ok(())
 }
 
 /// The effects the diagnosis in `path` names, as candidates a model carries (`--carry`).

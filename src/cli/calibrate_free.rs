@@ -8,6 +8,7 @@ use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSu
 use axiscal::calibration::procedure::{
     Calibration, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
 };
+use axiscal::calibration::record::CalibrationRecord;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
 use axiscal::measurement::{Measurement, MeasurementSet};
@@ -34,13 +35,13 @@ pub struct FreeArgs<'a> {
     pub max_poses: usize,
 }
 
-/// The free-pose calibration of `set`.
+/// The free-pose calibration of `set`, its summary beside it.
 pub fn calibrate(
     args: &FreeArgs<'_>,
     set: &MeasurementSet,
     desc: &RobotDescription,
     printer: Printer,
-) -> Result<Calibration> {
+) -> Result<CalibrationRecord> {
     if args.refine {
         anyhow::bail!(
             "--refine refines an independent-axis calibration on free poses; {} has free poses only, which calibrate directly (drop --refine)",
@@ -70,9 +71,11 @@ pub fn calibrate(
     if args.all_rows && set.experiments().iter().any(|e| e.moved_joint > 0) {
         cal.summary.axis_rows_as_poses = Some("`--free-poses` asked for it".into());
     }
-    let cal = cal.into_calibration(desc);
-    warn_slips(args, (set, desc), &options, &cal, printer);
-    Ok(cal)
+    let (cal, summary) = cal.into_calibration(desc);
+    warn_slips(args, (set, desc), &options, (&cal, &summary), printer);
+    let mut record = CalibrationRecord::new(cal);
+    record.reports.free_poses = Some(summary);
+    Ok(record)
 }
 
 /// A failed free-pose calibration in words: its cause in the data when one is found (few
@@ -237,12 +240,9 @@ fn warn_slips(
     args: &FreeArgs<'_>,
     (set, desc): (&MeasurementSet, &RobotDescription),
     options: &FreePoseOptions,
-    cal: &Calibration,
+    (cal, summary): (&Calibration, &FreePoseSummary),
     printer: Printer,
 ) {
-    let Some(summary) = cal.free_poses.as_ref() else {
-        return;
-    };
     let data = args.data.display();
     // Sweeps fitted as free poses (at their own configurations) count every row as a pose.
     let all_rows = summary.axis_rows_as_poses.is_some();
@@ -258,7 +258,7 @@ fn warn_slips(
         );
         return;
     }
-    let scaled = free_pose_scale_slips(cal, desc, set.rows());
+    let scaled = free_pose_scale_slips((cal, summary), desc, set.rows());
     let mut named = false;
     for found in &scaled {
         match found.free_pose_note() {
@@ -269,7 +269,7 @@ fn warn_slips(
             }
         }
     }
-    for doubt in free_pose_scale_doubts(cal, desc, set.rows()) {
+    for doubt in free_pose_scale_doubts((cal, summary), desc, set.rows()) {
         eprintln!("note: {data}: {doubt}");
     }
     // A joint's slope off its description's (said above, as a warning or a note) is a misfit
@@ -303,7 +303,7 @@ fn warn_slips(
         };
         super::calibrate::warn_axis_scale((set, desc), args.data, &fit, PROFILE_MAX_FREE_POSE_ROWS, printer);
     }
-    if !named && let Some(reach) = free_pose_scale_reach(cal, desc, set.rows()) {
+    if !named && let Some(reach) = free_pose_scale_reach((cal, summary), desc, set.rows()) {
         eprintln!("note: {data}: {reach}");
     }
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);

@@ -4,7 +4,7 @@
 
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, calibrate};
-use axiscal::json_file::{self, Schema};
+use axiscal::calibration::record::CalibrationRecord;
 use axiscal::kinematics::JointKind;
 use axiscal::measurement::description_check::description_warnings;
 use axiscal::measurement::import::points::LengthUnit;
@@ -524,21 +524,24 @@ pub fn same_robot(
 /// Reads a `calibration.json` (`docs/formats.md#calibration-json`) and checks its values
 /// ([`Calibration::validate`]): a damaged file is one error naming the file and the field,
 /// never a panic or a silently wrong result later.
-pub fn read_calibration_file(path: &Path) -> Result<Calibration> {
+pub fn read_calibration_file(path: &Path) -> Result<CalibrationRecord> {
     let text = axiscal::presets::read_text(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let cal: Calibration = json_file::from_str(Schema::CALIBRATION, &text)
-        .with_context(|| format!("{}: not a calibration JSON", path.display()))?;
-    cal.validate().with_context(|| path.display().to_string())?;
-    Ok(cal)
+    let record =
+        CalibrationRecord::from_json(&text).with_context(|| format!("{}: not a calibration JSON", path.display()))?;
+    record
+        .calibration
+        .validate()
+        .with_context(|| path.display().to_string())?;
+    Ok(record)
 }
 
-/// The calibration in `path` (`calibration.json` written by `axiscal calibrate`), checked
-/// against the description `desc` read from `robot`: the same joint count, and the same
-/// geometry unless `allow` ([`same_robot`]).
-pub fn read_calibration(path: &Path, desc: &RobotDescription, robot: &Path, allow: bool) -> Result<Calibration> {
-    let (cal, warnings) = read_calibration_warned(path, desc, robot, allow)?;
+/// The calibration in `path` (`calibration.json` written by `axiscal calibrate`) with the
+/// reports beside it, checked against the description `desc` read from `robot`: the same joint
+/// count, and the same geometry unless `allow` ([`same_robot`]).
+pub fn read_calibration(path: &Path, desc: &RobotDescription, robot: &Path, allow: bool) -> Result<CalibrationRecord> {
+    let (record, warnings) = read_calibration_warned(path, desc, robot, allow)?;
     print_warnings(&warnings);
-    Ok(cal)
+    Ok(record)
 }
 
 /// [`read_calibration`] with its warnings returned, not printed.
@@ -547,10 +550,11 @@ pub fn read_calibration_warned(
     desc: &RobotDescription,
     robot: &Path,
     allow: bool,
-) -> Result<(Calibration, Vec<String>)> {
-    let cal = read_calibration_file(path)?;
+) -> Result<(CalibrationRecord, Vec<String>)> {
+    let record = read_calibration_file(path)?;
+    let cal = &record.calibration;
     let mut warnings = Vec::from_iter(same_robot(cal.description.as_ref(), path, desc, robot, allow)?);
-    warnings.extend(edited_model(&cal, path));
+    warnings.extend(edited_model(cal, path));
     if cal.robot.dof() != desc.dof() {
         bail!(
             "{} has {} joints but {} describes {}",
@@ -575,7 +579,7 @@ pub fn read_calibration_warned(
     if cal.model_digest.as_deref() != Some(cal.robot.digest().as_str()) {
         cal.plausible_for(desc).with_context(|| path.display().to_string())?;
     }
-    Ok((cal, warnings))
+    Ok((record, warnings))
 }
 
 /// A warning when the calibration's `robot` is not the model `axiscal calibrate` wrote (its

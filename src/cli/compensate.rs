@@ -189,7 +189,8 @@ pub fn run(args: Args) -> Result<()> {
     outputs.check(&args.out)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
-    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
+    let cal =
+        checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?.calibration;
     if args.payload_kg > 0.0 && !cal.robot.effects.payload_sags() {
         eprintln!(
             "warning: --payload-kg {} has no effect: {} models no sag under a payload (no payload term in \

@@ -101,7 +101,8 @@ fn inputs(common: &Common, extra: &[(&str, &Path)]) -> Result<(RobotDescription,
     }
     outputs.check(&common.out)?;
     let desc = RobotDescription::from_file(&common.robot)?;
-    let cal = super::checks::read_calibration(&common.calibration, &desc, &common.robot, common.allow_other_robot)?;
+    let cal = super::checks::read_calibration(&common.calibration, &desc, &common.robot, common.allow_other_robot)?
+        .calibration;
     Ok((desc, cal, outputs))
 }
 

@@ -186,7 +186,11 @@ fn plan(args: PlanArgs, printer: Printer) -> Result<()> {
     outputs.check(&args.out)?;
     let desc = RobotDescription::from_file(robot)?;
     let model = match &args.calibration {
-        Some(path) => checks::read_calibration(path, &desc, robot, args.cube.allow_other_robot)?.robot,
+        Some(path) => {
+            checks::read_calibration(path, &desc, robot, args.cube.allow_other_robot)?
+                .calibration
+                .robot
+        }
         None => RobotModel::ideal(&desc),
     };
     let cube = cube_of(&args.cube, &desc, &model)?;
@@ -266,7 +270,9 @@ fn evaluate_cycles(args: EvaluateArgs, printer: Printer) -> Result<()> {
     checks::one_setup(&set, &args.data, "iso9283 evaluate")?;
     let (model, commanded_by) = match &args.calibration {
         Some(path) => (
-            checks::read_calibration(path, &desc, &args.robot, args.checks.allow_other_robot)?.robot,
+            checks::read_calibration(path, &desc, &args.robot, args.checks.allow_other_robot)?
+                .calibration
+                .robot,
             format!("the calibrated model of {}", path.display()),
         ),
         None => (
@@ -349,7 +355,7 @@ fn predict_figures(args: PredictArgs, printer: Printer) -> Result<()> {
         .input("--calibration", &args.calibration);
     outputs.check_in(&args.out, &PREDICTION_OUTPUTS)?;
     let desc = RobotDescription::from_file(robot)?;
-    let cal = checks::read_calibration(&args.calibration, &desc, robot, args.cube.allow_other_robot)?;
+    let cal = checks::read_calibration(&args.calibration, &desc, robot, args.cube.allow_other_robot)?.calibration;
     let Some(covariance) = &cal.model_covariance else {
         bail!(
             "{} has no `model_covariance` (a file written before it was recorded): the calibration's error cannot be drawn; recalibrate with `axiscal calibrate`",

@@ -75,7 +75,8 @@ fn within_limits(desc: &RobotDescription, cmd_file: &[f64], what: &str) -> Resul
 /// Runs `axiscal joints`.
 pub fn run(args: Args) -> Result<()> {
     let desc = RobotDescription::from_file(&args.robot)?;
-    let cal = super::checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?;
+    let cal =
+        super::checks::read_calibration(&args.calibration, &desc, &args.robot, args.allow_other_robot)?.calibration;
     match &args.csv {
         Some(path) => convert_csv(&cal, &desc, path, &args.calibration),
         None => {

@@ -6,8 +6,8 @@ use super::checks;
 use super::output::Outputs;
 use super::printer::Printer;
 use anyhow::{Context, Result, bail};
-use axiscal::calibration::procedure::Calibration;
 use axiscal::calibration::procedure::{PointResidual, read_residuals_csv};
+use axiscal::calibration::record::CalibrationRecord;
 use axiscal::certificate::{CertificateInputs, HELD_OUT_FALSE_ALARM, certificate, data_mismatches, held_out, html};
 use axiscal::diagnosis::free_pose_misses;
 use axiscal::iso9283::IsoFigures;
@@ -100,8 +100,8 @@ fn residuals_beside(calibration: &Path) -> Result<Option<Vec<PointResidual>>> {
 
 /// Refuses `set` (read from `data`) as the calibration's data when it is not what the
 /// calibration records ([`data_mismatches`]), unless `--allow-other-data`.
-fn same_data(set: &MeasurementSet, cal: &Calibration, data: &Path, args: &Args) -> Result<()> {
-    let mismatches = data_mismatches(cal, set);
+fn same_data(set: &MeasurementSet, record: &CalibrationRecord, data: &Path, args: &Args) -> Result<()> {
+    let mismatches = data_mismatches(record, set);
     if mismatches.is_empty() || args.allow_other_data {
         return Ok(());
     }
@@ -136,14 +136,15 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     }
     outputs.check_in(&args.out, &OUTPUTS)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    let cal = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
+    let record = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
+    let cal = &record.calibration;
     // A free-pose calibration fitted the targets the description may not give; the data
     // record the description as given.
-    let fitted = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
+    let fitted = axiscal::calibration::free_pose::with_fitted_targets(&desc, record.reports.free_poses.as_ref());
     let data = match &args.data {
         Some(p) => {
             let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
-            same_data(&set, &cal, p, &args)?;
+            same_data(&set, &record, p, &args)?;
             Some((p.display().to_string(), set))
         }
         None => None,
@@ -153,12 +154,12 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
             checks::one_setup(&set, p, "the held-out poses' prediction")?;
             if !args.checks.skip_unit_check {
-                let misses = free_pose_misses(&set, &cal, &fitted, HELD_OUT_FALSE_ALARM)
+                let misses = free_pose_misses(&set, cal, &fitted, HELD_OUT_FALSE_ALARM)
                     .with_context(|| format!("held-out poses of {}", p.display()))?;
                 checks::refuse_explained_misses(&misses, p, false)?;
             }
             Some(
-                held_out(&p.display().to_string(), &set, &cal, &fitted)
+                held_out(&p.display().to_string(), &set, &record, &fitted)
                     .with_context(|| format!("held-out poses of {}", p.display()))?,
             )
         }
@@ -174,7 +175,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         );
     }
     let inputs = CertificateInputs {
-        calibration: &cal,
+        calibration: &record,
         calibration_file: args.calibration.display().to_string(),
         desc: &fitted,
         instrument: args.instrument.clone(),

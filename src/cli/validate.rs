@@ -66,14 +66,15 @@ pub fn run(args: Args) -> Result<()> {
     outputs.check_in(&args.out, &OUTPUTS)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
-    let (cal, identity) =
+    let (record, identity) =
         checks::read_calibration_warned(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
     let (set, mut warnings) = checks::read_data_warned(&args.data, &desc, &args.robot, args.checks)?;
     warnings.splice(0..0, identity);
     checks::print_warnings(&warnings);
     checks::one_setup(&set, &args.data, "validate")?;
     // A free-pose calibration fitted the targets the description may not give.
-    let fitted = axiscal::calibration::free_pose::with_fitted_targets(&desc, &cal);
+    let fitted = axiscal::calibration::free_pose::with_fitted_targets(&desc, record.reports.free_poses.as_ref());
+    let cal = record.calibration;
     let options = match args.noise_mm {
         Some(mm) => ValidationOptions::given(mm, args.false_alarm),
         None => ValidationOptions::of_calibration(&cal, args.false_alarm),

@@ -73,7 +73,7 @@ pub use validate::{
     ValidationOptions, ValidationResidual, Verdict, validate, validate_free_tool, validation_residuals_csv,
 };
 
-use crate::calibration::free_pose::{FreePoseOptions, calibrate_free_poses, with_fitted_targets};
+use crate::calibration::free_pose::{FreePoseOptions, FreePoseSummary, calibrate_free_poses, with_fitted_targets};
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};
 use crate::calibration::refine::{GaussNewtonSteps, refine_from_linear_with};
 use crate::measurement::MeasurementSet;
@@ -259,15 +259,26 @@ fn calibrate_for(
     noise_rms_3d_mm: f64,
     max_poses: usize,
 ) -> Result<Calibration, DiagnosisError> {
+    Ok(calibrate_with_summary(set, desc, noise_rms_3d_mm, max_poses)?.0)
+}
+
+/// [`calibrate_for`] with the free-pose calibration's summary, for free poses only.
+fn calibrate_with_summary(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    noise_rms_3d_mm: f64,
+    max_poses: usize,
+) -> Result<(Calibration, Option<FreePoseSummary>), DiagnosisError> {
     if !free_poses_only(set) {
-        return Ok(calibrate(
+        let cal = calibrate(
             set,
             desc,
             &CalibrationOptions {
                 noise_rms_3d_mm,
                 ..CalibrationOptions::default()
             },
-        )?);
+        )?;
+        return Ok((cal, None));
     }
     let options = FreePoseOptions {
         keep_outliers: true,
@@ -278,7 +289,10 @@ fn calibrate_for(
     };
     let cal = calibrate_free_poses(set, desc, &options)?;
     match cal.summary.setups.len() {
-        0 | 1 => Ok(cal.into_calibration(desc)),
+        0 | 1 => {
+            let (cal, summary) = cal.into_calibration(desc);
+            Ok((cal, Some(summary)))
+        }
         setups => Err(DiagnosisError::SeveralSetups { setups }),
     }
 }
@@ -671,7 +685,9 @@ fn with_free_pose_targets(
     Ok(match free_poses_only(set) {
         true => Some(with_fitted_targets(
             desc,
-            &calibrate_for(set, desc, options.noise_rms_3d_mm, options.max_poses)?,
+            calibrate_with_summary(set, desc, options.noise_rms_3d_mm, options.max_poses)?
+                .1
+                .as_ref(),
         )),
         false => None,
     })

@@ -61,7 +61,7 @@ impl<'a> PredictionError<'a> {
     /// From `cal`'s `model_covariance` (none: the calibration's error is left out, for a file
     /// written before it was recorded) and the repeatability `cal` was made with. A
     /// covariance that is not one of the model's parameters
-    /// ([`crate::calibration::tool_accuracy::ModelCovariance::validate`]) is an error.
+    /// ([`crate::calibration::model_parameters::ModelCovariance::validate`]) is an error.
     pub(super) fn new(
         cal: &'a Calibration,
         controller: &'a Controller,

@@ -459,8 +459,8 @@ fn own_sweep_misses_of(
         .map(|o| (o.experiment.clone(), o.step))
         .collect();
     let fitted_poses = free.summary.poses;
-    let reference = free.into_calibration(desc);
-    let fitted = with_fitted_targets(desc, &reference);
+    let (reference, summary) = free.into_calibration(desc);
+    let fitted = with_fitted_targets(desc, Some(&summary));
     let outlier_rows: Vec<usize> = (0..set.rows().len())
         .filter(|&i| dropped.contains(&(set.rows()[i].experiment.clone(), set.rows()[i].step)))
         .collect();

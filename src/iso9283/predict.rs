@@ -13,7 +13,7 @@
 //! jitter and the noise.
 
 use super::evaluate::{EvaluateOptions, IsoError, IsoFigures, evaluate};
-use crate::calibration::tool_accuracy::{model_displaced, model_parameter_names};
+use crate::calibration::model_parameters::{model_displaced, model_parameter_names};
 use crate::diagnosis::{CleanCampaign, NoiseModel, replica};
 use crate::measurement::{Measurement, MeasurementModel, MeasurementSet};
 use crate::numerics::stats::{CorrelatedNormal, Stats};

@@ -87,7 +87,7 @@ impl PlanObjective {
         options: &CalibrationOptions,
     ) -> Result<Self, PredictError> {
         let fit = calibrate_plan(desc, plan, sight, options)?;
-        let names = crate::calibration::tool_accuracy::model_parameter_names(&fit.0);
+        let names = crate::calibration::model_parameters::model_parameter_names(&fit.0);
         let controller = Controller::from_description(desc);
         let steps = DMatrix::from_diagonal_element(names.len(), names.len(), (JACOBIAN_STEP / 1e-3).powi(2));
         let sensitivity = ToolSensitivity::new(&fit.0, &controller, &steps);
@@ -121,7 +121,7 @@ impl PlanObjective {
     /// the limits, hides a point from a station or cannot be calibrated.
     pub fn predict(&self, plan: &CalibrationPlan) -> Result<PlanPrediction, PredictError> {
         let (robot, cov, [axis_points, hidden_points]) = calibrate_plan(&self.desc, plan, &self.sight, &self.options)?;
-        if crate::calibration::tool_accuracy::model_parameter_names(&robot) != self.names {
+        if crate::calibration::model_parameters::model_parameter_names(&robot) != self.names {
             return Err(PredictError::Covariance(
                 "a model of another structure than the reference plan's".into(),
             ));
@@ -149,7 +149,7 @@ impl PlanObjective {
     }
 }
 
-/// The group of a parameter name of [`crate::calibration::tool_accuracy::model_parameter_names`]:
+/// The group of a parameter name of [`crate::calibration::model_parameters::model_parameter_names`]:
 /// its first two words (`row 3`, `joint 5`, `coupling 4->5`) or `base` / `tool`.
 fn parameter_group(name: &str) -> String {
     let words: Vec<&str> = name.split_whitespace().collect();

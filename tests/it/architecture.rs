@@ -470,39 +470,9 @@ fn cycle_text(cycles: &[Vec<imports::ModulePath>]) -> Vec<String> {
 /// gone (so the list only shrinks).
 const KNOWN_BACK_ARROWS: &[(&str, &str, &str)] = &[
     (
-        "calibration::procedure::result",
-        "calibration::free_pose::summary",
-        "`Calibration::free_poses` holds the free-pose summary, and the free-pose calibration builds a `Calibration`",
-    ),
-    (
-        "calibration::procedure::result",
-        "calibration::refine::free_poses",
-        "`Calibration::refinement` holds the refinement, which is computed from a `Calibration`",
-    ),
-    (
-        "calibration::procedure::result",
-        "calibration::tool_accuracy",
-        "`Calibration::tool_accuracy` and `model_covariance` hold tool-accuracy types",
-    ),
-    (
-        "calibration::tool_accuracy",
-        "calibration::procedure::result",
-        "the tool accuracy is predicted from a `Calibration`",
-    ),
-    (
-        "calibration::procedure::screen::second_target",
-        "calibration::procedure",
-        "the second-target screen refits the whole procedure (`calibrate_model`) without a point",
-    ),
-    (
         "calibration::procedure::screen::second_target",
         "calibration::procedure::screen",
         "the second-target screen shares its parent's fences and row helpers",
-    ),
-    (
-        "calibration::refine::free_poses",
-        "calibration::free_pose::summary",
-        "the refinement reports the free-pose fit's `OutlierPose`",
     ),
 ];
 

@@ -90,10 +90,7 @@ fn a_bounded_refinement_is_the_refinement_of_the_kept_poses() {
         ..bounded
     };
     let reference = refine_calibration(&small, &desc, &cal, &unbounded).expect("refines");
-    let (a, b) = (
-        refined.refinement.expect("a summary"),
-        reference.refinement.expect("a summary"),
-    );
+    let ((refined, a), (reference, b)) = (refined, reference);
     assert_eq!((a.poses, a.poses_left_out, b.poses_left_out), (20, 30, 0));
     assert_eq!(
         serde_json::to_string(&refined.robot).expect("JSON"),
@@ -154,8 +151,10 @@ fn the_commands_say_how_many_poses_they_left_out() {
         "refined",
     ]);
     assert!(out.contains("refined on 12 of the file's 24 free poses"), "{out}");
-    let cal = common::read_calibration(&dir.path().join("refined"));
-    let r = cal.refinement.expect("a refinement");
+    let r = common::read_record(&dir.path().join("refined"))
+        .reports
+        .refinement
+        .expect("a refinement");
     assert_eq!((r.poses, r.poses_left_out), (12, 12));
 
     // The free poses alone: a free-pose calibration.
@@ -178,7 +177,8 @@ fn the_commands_say_how_many_poses_they_left_out() {
         "free",
     ]);
     assert!(out.contains("of the file's 24 free poses, evenly spaced"), "{out}");
-    let summary = common::read_calibration(&dir.path().join("free"))
+    let summary = common::read_record(&dir.path().join("free"))
+        .reports
         .free_poses
         .expect("a free-pose summary");
     assert_eq!(summary.poses_left_out, 8);

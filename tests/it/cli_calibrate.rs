@@ -4,6 +4,7 @@ use crate::common;
 
 use crate::common::{axiscal, simulated_campaign_csv};
 use axiscal::calibration::procedure::Calibration;
+use axiscal::calibration::record::CalibrationRecord;
 
 /// A temporary folder holding `campaign.csv`, a simulated Table-1 campaign (seed 5).
 fn simulated_campaign() -> (tempfile::TempDir, std::path::PathBuf) {
@@ -259,8 +260,11 @@ fn calibrate_free_poses_only_with_holdout() {
         .assert()
         .success();
     assert!(common::stdout(&run).contains("free poses") || common::stderr(&run).contains("free poses"));
-    let cal: Calibration = common::read_calibration(&out);
-    let summary = cal.free_poses.expect("free-pose summary");
+    let CalibrationRecord {
+        calibration: cal,
+        reports,
+    } = common::read_record(&out);
+    let summary = reports.free_poses.expect("free-pose summary");
     assert!(cal.axes.is_empty());
     let h = summary.holdout.expect("holdout");
     let points = 3.0 * h.heldout_poses as f64;
@@ -336,8 +340,10 @@ fn sweeps_at_their_own_configurations_calibrate_as_free_poses() {
         .assert()
         .success();
     assert!(common::stderr(&run).contains("every point is fitted as a free pose instead"));
-    let cal: Calibration = common::read_calibration(&out);
-    let summary = cal.free_poses.expect("a free-pose calibration");
+    let summary = common::read_record(&out)
+        .reports
+        .free_poses
+        .expect("a free-pose calibration");
     assert!(
         summary
             .axis_rows_as_poses
@@ -363,8 +369,11 @@ fn independent(file: &str) -> std::path::PathBuf {
 /// The held-out RMS a model at the noise floor stays under \[mm\]: the calibration's own noise
 /// estimate, inflated by the fitted parameters' error (`p / (3 n)` of the variance, `n`
 /// training points) and by 4 standard errors of an RMS over the held-out points.
-fn noise_floor_bound(cal: &Calibration) -> f64 {
-    let summary = cal.free_poses.as_ref().expect("free poses");
+fn noise_floor_bound(record: &CalibrationRecord) -> f64 {
+    let (cal, summary) = (
+        &record.calibration,
+        record.reports.free_poses.as_ref().expect("free poses"),
+    );
     let h = summary.holdout.as_ref().expect("holdout");
     let noise = cal
         .noise
@@ -402,9 +411,10 @@ fn free_pose_effects_close_the_gap_on_an_independent_generator() {
                 .arg(&out)
                 .assert()
                 .success();
-            common::read_calibration(&out)
+            common::read_record(&out)
         };
-        let cal = run("auto");
+        let record = run("auto");
+        let cal = &record.calibration;
         // `validate` predicts with the model's effects: every pose of the file (the held-out
         // ones too) at the noise floor.
         let validation = dir.path().join("validation");
@@ -421,7 +431,7 @@ fn free_pose_effects_close_the_gap_on_an_independent_generator() {
         let validated: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(validation.join("summary.json")).unwrap()).unwrap();
         let validated_rms = validated["validation"]["rms_mm"].as_f64().unwrap();
-        let summary = cal.free_poses.as_ref().unwrap();
+        let summary = record.reports.free_poses.as_ref().unwrap();
         let chosen: Vec<&str> = summary
             .effects_tried
             .iter()
@@ -436,7 +446,7 @@ fn free_pose_effects_close_the_gap_on_an_independent_generator() {
             "{file}"
         );
         let held = summary.holdout.as_ref().unwrap().calibrated_rms_mm;
-        let bound = noise_floor_bound(&cal);
+        let bound = noise_floor_bound(&record);
         assert!(
             held < bound,
             "{file}: held out {held:.4} mm, noise floor bound {bound:.4} mm"
@@ -461,6 +471,7 @@ fn free_pose_effects_close_the_gap_on_an_independent_generator() {
         }
         let geometric = run("none");
         let held_geometric = geometric
+            .reports
             .free_poses
             .as_ref()
             .unwrap()

@@ -608,8 +608,8 @@ fn a_named_compliance_carried_into_the_model_closes_the_gap_on_new_poses() {
         ..RefineOptions::default()
     };
     let carried = carried_candidates(&d, &desc, &a).unwrap();
-    let refined = refine_calibration(&a, &desc, &cal, &refine).unwrap();
-    let with_effect = refine_carrying(&a, &desc, &cal, &refine, &carried).unwrap();
+    let (refined, _) = refine_calibration(&a, &desc, &cal, &refine).unwrap();
+    let (with_effect, _) = refine_carrying(&a, &desc, &cal, &refine, &carried).unwrap();
     assert!(!with_effect.robot.effects.compliance.is_empty());
     let check = ValidationOptions::given(noise_mm, 0.01);
     let on_b = |cal| validate(&b, cal, &desc, &check).unwrap().validation.unwrap();

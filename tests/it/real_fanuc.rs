@@ -5,7 +5,6 @@
 use crate::common;
 
 use crate::common::axiscal;
-use axiscal::calibration::procedure::Calibration;
 
 /// The data set.
 /// Held-out RMS of a geometric calibration on the even configurations, tested on the odd ones,
@@ -54,12 +53,8 @@ fn imports_and_calibrates_the_free_poses_with_a_holdout() {
         !e.contains("sit about") && !e.contains("absorbed it"),
         "a false alarm on the real data: {e}"
     );
-    let cal: Calibration = axiscal::json_file::from_str(
-        axiscal::json_file::Schema::CALIBRATION,
-        &std::fs::read_to_string(out.join("calibration.json")).unwrap(),
-    )
-    .unwrap();
-    let h = cal.free_poses.expect("free poses").holdout.expect("holdout");
+    let record = common::read_record(&out);
+    let h = record.reports.free_poses.expect("free poses").holdout.expect("holdout");
     assert_eq!((h.training_poses, h.heldout_poses), (120, 120));
     for (ours, reference) in [h.nominal_rms_mm, h.calibrated_rms_mm].iter().zip(REFERENCE_HELDOUT_MM) {
         assert!(

@@ -120,8 +120,10 @@ fn imports_and_calibrates_the_positioner_to_the_turns_floor() {
         .arg(&held)
         .assert()
         .success();
-    let cal = common::read_calibration(&held);
-    let summary = cal.free_poses.expect("a free-pose calibration");
+    let summary = common::read_record(&held)
+        .reports
+        .free_poses
+        .expect("a free-pose calibration");
     let h = summary.holdout.expect("the held-out check");
 
     // The floor without a robot model: each turn on its own circle at its readings' angles,

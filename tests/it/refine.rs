@@ -60,7 +60,7 @@ fn the_refined_model_predicts_held_out_poses_to_the_noise() {
         },
     )
     .expect("the refinement runs");
-    let r = refined.refinement.as_ref().expect("a refinement summary");
+    let (refined, r) = (&refined.0, &refined.1);
     assert_eq!(r.poses, 30);
     assert!(
         r.rank > 0 && r.rank <= r.parameters,
@@ -71,7 +71,7 @@ fn the_refined_model_predicts_held_out_poses_to_the_noise() {
     assert_eq!(r.changes.len(), r.parameters);
     assert_eq!(r.folds.len(), 5);
     let before = validate(&test, &cal, &desc, &validation_options()).unwrap();
-    let after = validate(&test, &refined, &desc, &validation_options()).unwrap();
+    let after = validate(&test, refined, &desc, &validation_options()).unwrap();
     let (b, a) = (before.validation.unwrap(), after.validation.unwrap());
     eprintln!(
         "test RMS: unrefined {:.4} mm, refined {:.4} mm, noise alone {:.4} mm; k-fold {:.4} -> {:.4} mm",
@@ -107,8 +107,7 @@ fn the_written_robot_is_the_refined_model() {
     let desc = RobotDescription::asea_irb6l();
     let (train, _) = split_campaign(24, 5);
     let cal = calibrated(&train, &desc);
-    let refined = refine_calibration(&train, &desc, &cal, &RefineOptions::default()).unwrap();
-    let r = refined.refinement.as_ref().unwrap();
+    let (refined, r) = refine_calibration(&train, &desc, &cal, &RefineOptions::default()).unwrap();
     let v = validate(&train, &refined, &desc, &validation_options()).unwrap();
     let rms = v.validation.unwrap().rms_mm;
     // Rounding: positions of a few metres through two chains of ~20 transforms each, and the

@@ -42,7 +42,6 @@ pub use summary::{
     SetupPlacement, TargetEstimate,
 };
 
-use crate::calibration::procedure::Calibration;
 use crate::calibration::refine::RefitParameter;
 use crate::measurement::MeasurementSet;
 use crate::numerics::lsq::LsqError;
@@ -623,11 +622,12 @@ fn check_plausible(fitted: &Fitted, poses: &FreePoses, kept: &[usize]) -> Result
     Ok(())
 }
 
-/// `desc` with the tool targets a free-pose calibration fitted, where the description gives
-/// none and the calibration fitted targets 0, 1 and 2 (in the description's tool frame): what
-/// `validate` needs to predict the points of such a calibration's targets. Otherwise `desc`.
-pub fn with_fitted_targets(desc: &RobotDescription, cal: &Calibration) -> RobotDescription {
-    let Some(summary) = &cal.free_poses else {
+/// `desc` with the tool targets a free-pose calibration fitted (its `summary`; `None` for
+/// another calibration), where the description gives none and the calibration fitted targets
+/// 0, 1 and 2 (in the description's tool frame): what `validate` needs to predict the points
+/// of such a calibration's targets. Otherwise `desc`.
+pub fn with_fitted_targets(desc: &RobotDescription, summary: Option<&FreePoseSummary>) -> RobotDescription {
+    let Some(summary) = summary else {
         return desc.clone();
     };
     let ids: Vec<usize> = summary.targets.iter().map(|t| t.id).collect();

@@ -5,10 +5,10 @@ use super::error::FreePoseError;
 use super::fit::{Fitted, Flag, Problem};
 use super::identify::{Identification, Unidentified};
 use super::model::FreePoseModel;
+use crate::calibration::model_parameters::{ModelCovariance, model_difference, model_parameter_names};
 use crate::calibration::noise::{NoiseEstimate, ResidualMoments, estimate_noise};
 use crate::calibration::procedure::{Calibration, CalibrationOptions, NoiseReport, ZeroOffsetSigma};
 use crate::calibration::refine::{ParameterUnit, RefitParameter};
-use crate::calibration::tool_accuracy::{ModelCovariance, model_difference, model_parameter_names};
 use crate::kinematics::JointKind;
 use crate::kinematics::rigid_fit;
 use crate::robot::RobotDescription;
@@ -548,7 +548,7 @@ pub struct FreePoseCalibration {
     /// The noise estimated from the residuals.
     pub noise: Option<NoiseEstimate>,
     /// The covariance of `robot`'s parameters (base, every scalar, tool frame;
-    /// [`crate::calibration::tool_accuracy::model_parameter_names`]) propagated from the fitted
+    /// [`crate::calibration::model_parameters::model_parameter_names`]) propagated from the fitted
     /// parameters': what the predicted tool accuracy reads. `None` when a parameter's step
     /// changes the model's structure.
     pub model_covariance: Option<ModelCovariance>,
@@ -565,9 +565,9 @@ fn noise_of(fitted: &Fitted) -> Option<NoiseEstimate> {
 
 impl FreePoseCalibration {
     /// The calibration in the shape every command reads (`calibration.json`): the calibrated
-    /// robot, the zero offsets' sigmas, the noise, and the summary as `free_poses`; no axis
-    /// reports.
-    pub fn into_calibration(self, desc: &RobotDescription) -> Calibration {
+    /// robot, the zero offsets' sigmas and the noise, no axis reports; with the summary, which
+    /// `calibration.json` holds beside it as `free_poses`.
+    pub fn into_calibration(self, desc: &RobotDescription) -> (Calibration, FreePoseSummary) {
         let sigma = |name: String| {
             self.summary
                 .parameters
@@ -587,7 +587,7 @@ impl FreePoseCalibration {
             })
             .collect();
         let used_rms_3d_mm = self.noise.as_ref().map_or(0.0, |n| n.rms_3d_mm);
-        Calibration {
+        let calibration = Calibration {
             robot: self.robot,
             reference_cmd: vec![0.0; desc.dof()],
             axes: vec![],
@@ -610,11 +610,9 @@ impl FreePoseCalibration {
             }),
             held_passes: 1,
             model_covariance: self.model_covariance,
-            tool_accuracy: None,
-            refinement: None,
             outliers: vec![],
-            free_poses: Some(self.summary),
             residuals: vec![],
-        }
+        };
+        (calibration, self.summary)
     }
 }

@@ -30,7 +30,7 @@
 
 use crate::calibration::arc_model::ArcParams;
 use crate::calibration::line_ml::LineParams;
-use crate::calibration::tool_accuracy::{ModelCovariance, ModelOrigin, model_parameter_names};
+use crate::calibration::model_parameters::{ModelCovariance, ModelOrigin, model_parameter_names};
 use crate::kinematics::AxisLine;
 use crate::robot::TransmissionFitForm;
 use crate::robot::{RobotModel, Transmission};
@@ -292,7 +292,7 @@ impl Derived {
 
     /// `(self - other) / step` as a column: the values, then the tool frame's translation
     /// and rotation vector, both in the tool frame of `other`, then the model's parameters
-    /// ([`crate::calibration::tool_accuracy::model_difference`]).
+    /// ([`crate::calibration::model_parameters::model_difference`]).
     pub(super) fn difference(mut self, origin: &Origin, step: f64) -> Vec<f64> {
         let other = origin.derived;
         let mut d: Vec<f64> = Vec::with_capacity(self.values.len() + 6);

@@ -3,6 +3,8 @@
 
 use super::result::{Calibration, PointResidual};
 use super::uncertainty::SIGNIFICANT_SIGMAS;
+use crate::calibration::record::CalibrationRecord;
+use crate::calibration::tool_accuracy::ToolAccuracy;
 use crate::kinematics::JointKind;
 use crate::robot::{RobotDescription, Transmission};
 use serde::{Deserialize, Serialize};
@@ -242,8 +244,14 @@ fn coupling_findings(cal: &Calibration, out: &mut Vec<Finding>) {
     }
 }
 
-/// The report as Markdown.
-pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str, warnings: &[super::Implausible]) -> String {
+/// The report of `record` as Markdown.
+pub fn markdown(
+    record: &CalibrationRecord,
+    desc: &RobotDescription,
+    source: &str,
+    warnings: &[super::Implausible],
+) -> String {
+    let (cal, reports) = (&record.calibration, &record.reports);
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration of {}\n", desc.name);
     let _ = writeln!(
@@ -259,10 +267,10 @@ pub fn markdown(cal: &Calibration, desc: &RobotDescription, source: &str, warnin
     write_sweeps(&mut s, cal, desc);
     write_rows_table(&mut s, cal, desc);
     write_tool(&mut s, cal);
-    write_tool_accuracy(&mut s, cal);
+    write_tool_accuracy(&mut s, reports.tool_accuracy.as_ref());
     write_findings(&mut s, cal, desc);
     write_identifiability(&mut s, cal);
-    if let Some(r) = &cal.refinement {
+    if let Some(r) = &reports.refinement {
         s += &crate::calibration::refine::markdown(r);
     }
     s
@@ -303,8 +311,8 @@ fn write_outliers(s: &mut String, cal: &Calibration) {
 }
 
 /// The predicted tool 1-sigma inside the spans and over the workspace, when predicted.
-fn write_tool_accuracy(s: &mut String, cal: &Calibration) {
-    let Some(a) = &cal.tool_accuracy else { return };
+fn write_tool_accuracy(s: &mut String, accuracy: Option<&ToolAccuracy>) {
+    let Some(a) = accuracy else { return };
     let _ = writeln!(
         s,
         "## Predicted tool accuracy

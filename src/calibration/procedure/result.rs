@@ -11,8 +11,8 @@ use crate::calibration::arc_model::N_GEOMETRY;
 use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::line_ml::LineFit;
+use crate::calibration::model_parameters::ModelCovariance;
 use crate::calibration::noise::NoiseEstimate;
-use crate::calibration::tool_accuracy::{ModelCovariance, ToolAccuracy};
 use crate::calibration::transmission_fit::TransmissionFit;
 use crate::calibration::{ArcFit, PaperAxisFit};
 use crate::json_file;
@@ -604,25 +604,10 @@ pub struct Calibration {
     #[serde(default)]
     pub held_passes: usize,
     /// The covariance of the calibrated model's parameters, propagated from the axis fits and
-    /// the second and tool targets ([`crate::calibration::tool_accuracy`]); absent in older
+    /// the second and tool targets ([`crate::calibration::model_parameters`]); absent in older
     /// files.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_covariance: Option<ModelCovariance>,
-    /// The predicted tool 1-sigma inside the calibrated spans and over the workspace
-    /// ([`crate::calibration::tool_accuracy::predict`]): filled when a report is written
-    /// (`axiscal calibrate`), not by [`super::calibrate`].
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tool_accuracy: Option<ToolAccuracy>,
-    /// Present when `robot` was refined on the file's free poses (`calibrate --refine`): the
-    /// refinement's summary. `axes`, `couplings` and the sigmas above stay the axis
-    /// experiments' (unrefined) estimates; `robot` is the refined model.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub refinement: Option<crate::calibration::refine::Refinement>,
-    /// Present when the model was calibrated from free poses alone (no axis experiments,
-    /// [`crate::calibration::free_pose`]): the fitted parameters with their sigmas, what the
-    /// poses do not identify, the outliers and the held-out check. `axes` is then empty.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub free_poses: Option<crate::calibration::free_pose::FreePoseSummary>,
     /// The sweep points the outlier test flagged ([`super::screen_sweeps`]), each with whether
     /// the calibration was made without it (absent when none was flagged).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -4,7 +4,7 @@
 //! prediction later.
 
 use super::Calibration;
-use crate::calibration::tool_accuracy::{ModelCovariance, model_parameter_names};
+use crate::calibration::model_parameters::{ModelCovariance, model_parameter_names};
 use crate::measurement::format_f64;
 use crate::measurement::unit_check::{MAX_ROW_LENGTH_M, row_slips};
 use crate::robot::{

@@ -16,15 +16,17 @@
 
 mod free_poses;
 mod linear;
+mod parameters;
 mod prior;
 mod report;
 mod steps;
 
 pub use free_poses::{
-    DirectionWeight, DroppedDirection, FoldCheck, IMPLAUSIBLE_RMS_OVER_NOISE, ParameterChange, ParameterUnit,
-    RefineError, RefineOptions, Refinement, RefinementResult, RefitParameter, enough_free_poses, refine_free_poses,
+    DroppedDirection, FoldCheck, IMPLAUSIBLE_RMS_OVER_NOISE, ParameterChange, RefineError, RefineOptions, Refinement,
+    RefinementResult, enough_free_poses, refine_free_poses,
 };
 pub use linear::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
+pub use parameters::{DirectionWeight, ParameterUnit, RefitParameter};
 pub use prior::unrefined_sigma;
 pub use report::markdown;
 

@@ -13,13 +13,13 @@ use crate::measurement::MeasurementSet;
 use crate::robot::RobotDescription;
 
 /// `cal` with its robot refined on the free poses of `set` (`moved_joint = 0`, not the `tool`
-/// experiment) and the refinement's summary in `refinement`.
+/// experiment), and the refinement's summary.
 pub fn refine_calibration(
     set: &MeasurementSet,
     desc: &RobotDescription,
     cal: &Calibration,
     options: &RefineOptions,
-) -> Result<Calibration, RefineError> {
+) -> Result<(Calibration, Refinement), RefineError> {
     refine_carrying(set, desc, cal, options, &[])
 }
 
@@ -32,7 +32,7 @@ pub fn refine_carrying(
     cal: &Calibration,
     options: &RefineOptions,
     carried: &[Candidate],
-) -> Result<Calibration, RefineError> {
+) -> Result<(Calibration, Refinement), RefineError> {
     let (poses, left_out) = validation_poses_at_most(set.rows(), desc, options.max_poses);
     let predictor =
         Predictor::new(&cal.robot, desc, reference_temperature(set), RefitScope::Identified).with_candidates(carried);
@@ -69,12 +69,12 @@ pub fn refine_carrying(
         .collect();
     let mut refined = cal.clone();
     refined.robot = predictor.carried_robot(&out.params);
-    refined.refinement = Some(Refinement {
+    let refinement = Refinement {
         poses_left_out: left_out,
         outliers,
         ..out.summary
-    });
-    Ok(refined)
+    };
+    Ok((refined, refinement))
 }
 
 /// `validation step 5 (line 150)`: pose `p` of `set` in messages.

@@ -1,5 +1,8 @@
 use super::*;
+use crate::calibration::model_parameters::{model_difference, model_displaced, model_parameter_names};
+use crate::robot::{CouplingFunction, Transmission};
 use nalgebra::DMatrix;
+use nalgebra::Vector3;
 
 /// The paper robot's description and a model with every kind of parameter: harmonic and gear
 /// transmissions, gear and fractional couplings, placed base and tool (the nominal model with

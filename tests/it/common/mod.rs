@@ -180,6 +180,13 @@ pub fn read_calibration(out: &std::path::Path) -> axiscal::calibration::procedur
     axiscal::json_file::from_str(axiscal::json_file::Schema::CALIBRATION, &text).expect("a calibration")
 }
 
+/// The `calibration.json` in the folder `out` with the reports beside the calibration.
+pub fn read_record(out: &std::path::Path) -> axiscal::calibration::record::CalibrationRecord {
+    let path = out.join("calibration.json");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    axiscal::calibration::record::CalibrationRecord::from_json(&text).expect("a calibration")
+}
+
 /// The points' centroid and the eigenvectors of their scatter matrix, the largest eigenvalue's
 /// first (a second, model-free estimate of a line's direction or a circle's plane).
 pub fn principal_axes(points: &[nalgebra::Point3<f64>]) -> (nalgebra::Point3<f64>, [nalgebra::Vector3<f64>; 3]) {

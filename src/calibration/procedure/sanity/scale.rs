@@ -37,6 +37,7 @@
 //!   are one scale of the coordinates, said once, instead of each joint.
 
 use super::super::{AxisReport, Calibration};
+use crate::calibration::free_pose::FreePoseSummary;
 use crate::kinematics::JointKind;
 use crate::measurement::Measurement;
 use crate::robot::{RobotDescription, RobotModel, Transmission, TransmissionFitForm};
@@ -405,8 +406,12 @@ pub(super) fn scale_slips(cal: &Calibration, desc: &RobotDescription) -> Vec<Sca
 /// The transmission check of the module doc on a free-pose calibration `cal` (its rotary
 /// joints' harmonics, each coefficient's sigma from the fit's summary), over the range of each
 /// joint's commands in `rows`.
-pub fn free_pose_scale_slips(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Vec<ScaleSlip> {
-    said(&free_pose_slopes(cal, desc, rows))
+pub fn free_pose_scale_slips(
+    (cal, summary): (&Calibration, &FreePoseSummary),
+    desc: &RobotDescription,
+    rows: &[Measurement],
+) -> Vec<ScaleSlip> {
+    said(&free_pose_slopes((cal, summary), desc, rows))
 }
 
 /// The scale of a command column the transmission test lets pass ([`free_pose_scale_reach`]).
@@ -427,8 +432,12 @@ pub const SCALE_REACH_CLAIM: f64 = 0.01;
 /// How large a command-column scale the transmission test lets pass on a free-pose
 /// calibration, where it is beyond [`SCALE_REACH_CLAIM`] for some rotary joint or a joint has
 /// no fitted transmission; `None` where the test reaches 1 % on every rotary joint.
-pub fn free_pose_scale_reach(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Option<ScaleReach> {
-    let slopes = free_pose_slopes(cal, desc, rows);
+pub fn free_pose_scale_reach(
+    (cal, summary): (&Calibration, &FreePoseSummary),
+    desc: &RobotDescription,
+    rows: &[Measurement],
+) -> Option<ScaleReach> {
+    let slopes = free_pose_slopes((cal, summary), desc, rows);
     let reach = ScaleReach {
         joints: slopes
             .iter()
@@ -509,9 +518,13 @@ pub fn scale_doubts(cal: &Calibration, desc: &RobotDescription) -> Vec<ScaleDoub
 
 /// The joints of a free-pose calibration whose slope is in doubt ([`ScaleDoubt`]), over the
 /// range of each joint's commands in `rows`.
-pub fn free_pose_scale_doubts(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Vec<ScaleDoubt> {
+pub fn free_pose_scale_doubts(
+    (cal, summary): (&Calibration, &FreePoseSummary),
+    desc: &RobotDescription,
+    rows: &[Measurement],
+) -> Vec<ScaleDoubt> {
     let ranges = free_pose_ranges(desc, rows);
-    free_pose_slopes(cal, desc, rows)
+    free_pose_slopes((cal, summary), desc, rows)
         .iter()
         .filter_map(|s| {
             doubt(
@@ -577,10 +590,11 @@ impl std::fmt::Display for ScaleDoubt {
 }
 
 /// The slopes of a free-pose calibration's rotary joints ([`free_pose_scale_slips`]).
-fn free_pose_slopes(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Vec<Slope> {
-    let Some(summary) = cal.free_poses.as_ref() else {
-        return vec![];
-    };
+fn free_pose_slopes(
+    (cal, summary): (&Calibration, &FreePoseSummary),
+    desc: &RobotDescription,
+    rows: &[Measurement],
+) -> Vec<Slope> {
     let ideal = RobotModel::ideal(desc);
     let sigma = |joint: usize, name: String| {
         let full = format!("joint{joint}.transmission.{name}");

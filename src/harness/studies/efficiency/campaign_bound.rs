@@ -37,9 +37,9 @@ use crate::calibration::arc_model::MeasurementNoise;
 use crate::calibration::crb::{
     CampaignBound, ESTIMABLE_TOLERANCE, arc_crb_with_angle_noise, convention_bound, covariance_range, fisher_bound,
 };
+use crate::calibration::model_parameters::{model_moved, model_parameter_names};
 use crate::calibration::procedure::{AxisExperiment, CalibrationOptions, Detail, calibrate, calibrate_model};
 use crate::calibration::refine::{NULL_DIRECTION_TOLERANCE, sensitivity};
-use crate::calibration::tool_accuracy::{model_moved, model_parameter_names};
 use crate::diagnosis::CleanCampaign;
 use crate::measurement::MeasurementSet;
 use crate::numerics::lsq::TruncatedSvd;
