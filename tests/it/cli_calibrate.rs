@@ -264,6 +264,19 @@ fn calibrate_free_poses_only_with_holdout() {
         calibration: cal,
         reports,
     } = common::read_record(&out);
+    // The reports sit beside the calibration: after its keys, and a reader of the calibration
+    // alone reads the same file to the same value.
+    let text = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+    let alone: Calibration = axiscal::json_file::from_str(axiscal::json_file::Schema::CALIBRATION, &text).unwrap();
+    assert_eq!(alone, cal);
+    let keys: Vec<&str> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("  \""))
+        .filter_map(|l| l.split('"').next())
+        .collect();
+    let at = |k: &str| keys.iter().position(|x| *x == k).unwrap_or_else(|| panic!("no `{k}` in {keys:?}"));
+    assert!(at("robot") < at("model_covariance") && at("model_covariance") < at("tool_accuracy"));
+    assert_eq!(keys[keys.len() - 2..], ["tool_accuracy", "free_poses"], "{keys:?}");
     let summary = reports.free_poses.expect("free-pose summary");
     assert!(cal.axes.is_empty());
     let h = summary.holdout.expect("holdout");
