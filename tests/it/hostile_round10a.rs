@@ -128,8 +128,8 @@ fn free_poses_say_what_the_scale_test_cannot_tell() {
             &format!("calibrate irb24-fp.csv {} --out out", robot("asea-irb6l")),
             0,
             &[
-                "note: irb24-fp.csv: the transmission test cannot name a command column scaled on export here: ",
-                "a second file with sweeps of these joints, or a length standard, closes it",
+                "note: irb24-fp.csv: command-column scales this file cannot show: `cmd_1` ",
+                "(report.md, \"Detection limits\")",
             ],
         ),
     );

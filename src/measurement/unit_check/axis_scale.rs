@@ -326,20 +326,28 @@ impl AxisScale {
         let parts: Vec<String> = (0..3)
             .filter(|&c| short(&self.reach[c]))
             .map(|c| match self.reach[c] {
-                Some(r) => format!("`{}` by up to {:.2} %", COLUMNS[c], r * 100.0),
-                None => format!("`{}` not within {:.0} %", COLUMNS[c], PROFILE_REACH * 100.0),
+                Some(r) => format!("`{}` below {:.2} %", COLUMNS[c], r * 100.0),
+                None => format!("`{}` at any size within {:.0} %", COLUMNS[c], PROFILE_REACH * 100.0),
             })
             .collect();
         Some(format!(
-            "one instrument axis read long or short would pass the coordinate-scale test in this file: {}. Each \
-             arc or pose alone takes such a scale as a tilt or a slightly different radius, and these data's arcs \
-             and poses together pin it no closer (the test names {:.1} % where they do): a length standard along \
-             that axis, or free poses spread over the workspace (fitted with the sweeps, or checked by \
-             `validate`), close it",
-            parts.join(", "),
-            AXIS_SCALE_REACH_CLAIM * 100.0
+            "one-axis instrument scales this file cannot show: {} (report.md, \"Detection limits\")",
+            parts.join(", ")
         ))
     }
+}
+
+/// The words of [`AxisScale::reach_note`] for report.md: why a file lets a one-axis scale pass
+/// and what closes it.
+pub fn axis_reach_words() -> String {
+    format!(
+        "Where `calibrate` notes one-axis instrument scales this file cannot show (`x_mm` below 0.44 %, say), one \
+         instrument axis read that much long or short would pass the coordinate-scale test: each arc or pose alone \
+         takes such a scale as a tilt or a slightly different radius, and these data's arcs and poses together pin it \
+         no closer (the test names {:.1} % where they do). A length standard along that axis, or free poses spread \
+         over the workspace (fitted with the sweeps, or checked by `validate`), close it.",
+        AXIS_SCALE_REACH_CLAIM * 100.0
+    )
 }
 
 impl AxisScale {
