@@ -146,6 +146,10 @@ pub struct AxisScale {
     /// column's factor), `None` where the profile is flat (the data do not resolve it within
     /// [`PROFILE_REACH`]).
     pub reach: [Option<f64>; 3],
+    /// Whether the profile found it beyond the test's threshold but the fit with it undone did
+    /// not confirm it (a free pose the model cannot fit remains, the reduction fails the test,
+    /// or the re-run fails): the test names nothing on such a file, at any size.
+    pub unconfirmed: bool,
 }
 
 /// The column names, by column.
@@ -214,6 +218,7 @@ fn profile(
         significant: false,
         alike: vec![],
         reach: [None; 3],
+        unconfirmed: false,
     })
 }
 
@@ -267,8 +272,9 @@ fn thinned(set: &MeasurementSet, max_rows: usize) -> Option<MeasurementSet> {
 }
 
 /// The column scale that best explains `set`'s residuals under the calibration `fit`
-/// (module docs), significant or not (`significant` says), or `None` when a fit fails or no
-/// profile is a parabola (the fit changed its course between the runs). `slides` are the
+/// (module docs), significant or not (`significant` says; `unconfirmed` where the profile found
+/// it but the re-run with it undone did not confirm it), or `None` when the fit of the file as
+/// read fails or no profile is a parabola (the fit changed its course between the runs). `slides` are the
 /// sliding joints (0-based): each one's command scale, and the three columns' together, are
 /// tried beside the columns, as what moves the points alike with a column's scale.
 /// Above `max_rows` rows ([`PROFILE_MAX_ROWS`], [`PROFILE_MAX_FREE_POSE_ROWS`]) the profile
@@ -307,10 +313,13 @@ pub fn axis_scale(
         .filter(|a| a.scaled != best.scaled && a.p_value < rate && reduction(&best) - reduction(a) < apart)
         .map(|a| (a.scaled, a.factor))
         .collect();
+    // A re-run that fails leaves the finding as profiled, unconfirmed.
+    let checked = confirmed(set, best.clone(), base, fit).unwrap_or(best);
     Some(AxisScale {
         alike,
         reach,
-        ..confirmed(set, best, base, fit)?
+        unconfirmed: !checked.significant,
+        ..checked
     })
 }
 
@@ -319,6 +328,16 @@ impl AxisScale {
     /// beyond [`AXIS_SCALE_REACH_CLAIM`] for some column and nothing was named; `None`
     /// otherwise.
     pub fn reach_note(&self) -> Option<String> {
+        if self.unconfirmed {
+            return Some(format!(
+                "one-axis instrument scales this file cannot show: any, at any size ({} reads {:.5} times (+- {:.5}), \
+                 but the fit with it undone does not confirm it: a pose the model cannot fit remains, or the re-run \
+                 fails; report.md, \"Detection limits\")",
+                self.scaled.columns(),
+                self.factor,
+                self.sigma
+            ));
+        }
         let short = |r: &Option<f64>| r.is_none_or(|r| r > AXIS_SCALE_REACH_CLAIM);
         if self.significant || !self.reach.iter().any(short) {
             return None;

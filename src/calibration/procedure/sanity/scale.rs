@@ -677,15 +677,7 @@ impl std::fmt::Display for ScaleDoubt {
 
 /// The words of a sliding joint's [`ScaleDoubt`]: its lead or its column.
 fn slide_doubt_words(f: &mut std::fmt::Formatter<'_>, d: &ScaleDoubt) -> std::fmt::Result {
-    let ScaleDoubt {
-        joint,
-        experiment,
-        travel,
-        sigma,
-        sigmas,
-        span_deg: span_mm,
-        ..
-    } = d;
+    let (joint, experiment, travel, sigmas, span_mm) = (d.joint, &d.experiment, d.travel, d.sigmas, d.span_deg);
     write!(
         f,
         "joint {joint} ({experiment}) travels {travel:.4} (+-{}) times as far per command as the description's lead \
@@ -694,7 +686,7 @@ fn slide_doubt_words(f: &mut std::fmt::Formatter<'_>, d: &ScaleDoubt) -> std::fm
          {joint}'s lead departs so, or the column `cmd_{joint}` (joint {joint} slides) holds {:.4} times its travel \
          (scaled on export; then calibration.json is wrong for joint {joint}): check cmd_{joint} against a length \
          standard or the controller's reading at two positions",
-        two_digits(*sigma),
+        two_digits(d.sigma),
         PLAUSIBLE_LEAD_DEVIATION * 100.0,
         1.0 / travel,
     )
