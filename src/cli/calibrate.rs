@@ -491,7 +491,8 @@ pub(super) fn warn_axis_scale(
     let Some(found) = axis_scale(set, fit, max_rows, &slides) else {
         eprintln!(
             "note: {}: one-axis instrument scales this file cannot show: any column, at any size (the \
-             coordinate-scale test's re-run calibrations failed on this file; report.md, \"Detection limits\")",
+             coordinate-scale test could not run: its re-run calibrations did not keep the same poses and \
+             parameters, or failed; report.md, \"Detection limits\")",
             data.display()
         );
         return;

@@ -241,7 +241,7 @@ mod real_files {
                 "real FANUC, clean (NS1: cmd_1 x 1.01 passes without a word)",
                 &format!("calibrate fanuc.csv {fanuc} --out out"),
                 0,
-                &["`cmd_1` not at all (no transmission fitted for joint 1"],
+                &["`cmd_1` at any size (no transmission fitted)"],
             ),
         );
         for words in SCALE_WORDS {

@@ -147,8 +147,8 @@ pub struct AxisScale {
     /// [`PROFILE_REACH`]).
     pub reach: [Option<f64>; 3],
     /// Whether the profile found it beyond the test's threshold but the fit with it undone did
-    /// not confirm it (a free pose the model cannot fit remains, the reduction fails the test,
-    /// or the re-run fails): the test names nothing on such a file, at any size.
+    /// not confirm it (its reduction passes, but a free pose the model cannot fit remains; or
+    /// the re-run fails): the test names nothing on such a file, at any size.
     pub unconfirmed: bool,
 }
 
@@ -251,9 +251,11 @@ fn confirmed(
     }
     let again = profile(set, (found.scaled, found.factor), at, fit)?;
     let at = fit(&found.scaled.undone(set, again.factor, c))?;
-    let significant = reduction_p(base, at)? < rate && at.misfit_poses == 0;
+    let reduced = reduction_p(base, at)? < rate;
     Some(AxisScale {
-        significant,
+        significant: reduced && at.misfit_poses == 0,
+        // The reduction passes, but a pose the model cannot fit remains with it undone.
+        unconfirmed: reduced && at.misfit_poses > 0,
         rms_mm: [found.rms_mm[0], (at.sum_squares_mm2 / base.dof as f64).sqrt()],
         ..again
     })
@@ -273,7 +275,7 @@ fn thinned(set: &MeasurementSet, max_rows: usize) -> Option<MeasurementSet> {
 
 /// The column scale that best explains `set`'s residuals under the calibration `fit`
 /// (module docs), significant or not (`significant` says; `unconfirmed` where the profile found
-/// it but the re-run with it undone did not confirm it), or `None` when the fit of the file as
+/// it but the re-run with it undone left a pose the model cannot fit, or failed), or `None` when the fit of the file as
 /// read fails or no profile is a parabola (the fit changed its course between the runs). `slides` are the
 /// sliding joints (0-based): each one's command scale, and the three columns' together, are
 /// tried beside the columns, as what moves the points alike with a column's scale.
@@ -314,11 +316,13 @@ pub fn axis_scale(
         .map(|a| (a.scaled, a.factor))
         .collect();
     // A re-run that fails leaves the finding as profiled, unconfirmed.
-    let checked = confirmed(set, best.clone(), base, fit).unwrap_or(best);
+    let checked = confirmed(set, best.clone(), base, fit).unwrap_or(AxisScale {
+        unconfirmed: true,
+        ..best
+    });
     Some(AxisScale {
         alike,
         reach,
-        unconfirmed: !checked.significant,
         ..checked
     })
 }
@@ -331,8 +335,8 @@ impl AxisScale {
         if self.unconfirmed {
             return Some(format!(
                 "one-axis instrument scales this file cannot show: any, at any size ({} reads {:.5} times (+- {:.5}), \
-                 but the fit with it undone does not confirm it: a pose the model cannot fit remains, or the re-run \
-                 fails; report.md, \"Detection limits\")",
+                 but with it undone a pose the model cannot fit remains, or the re-run fails, so it is not named; \
+                 report.md, \"Detection limits\")",
                 self.scaled.columns(),
                 self.factor,
                 self.sigma
