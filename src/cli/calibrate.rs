@@ -213,7 +213,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         },
         joint_map_step: args.joint_map_step,
     };
-    let texts = outputs::render(&record, &desc, &source, &export_poses(&set, &desc, cal), &options)?;
+    let mut texts = outputs::render(&record, &desc, &source, &export_poses(&set, &desc, cal), &options)?;
+    add_detection_limits(&mut texts.files, &record, &desc, &set);
     // Every file is written before any is put in place; an output left out must not leave an
     // earlier run's file beside the new calibration.
     let mut staged = outputs.staged_in(&args.out)?;
@@ -501,6 +502,12 @@ pub(super) fn warn_axis_scale(
         .filter(|&j| desc.joints[j].kind == axiscal::kinematics::JointKind::Prismatic)
         .collect();
     let Some(found) = axis_scale(set, fit, max_rows, &slides) else {
+        eprintln!(
+            "note: {}: one-axis instrument scales this file cannot show: any column, at any size (the \
+             coordinate-scale test could not run: its re-run calibrations did not keep the same poses and \
+             parameters, or failed; report.md, \"Detection limits\")",
+            data.display()
+        );
         return;
     };
     if !found.significant {
@@ -602,6 +609,35 @@ fn print_scale_doubts(cal: &Calibration, desc: &RobotDescription, found: &[Impla
     for doubt in axiscal::calibration::procedure::scale_doubts(cal, desc) {
         eprintln!("note: {}: {doubt}", data.display());
     }
+    if !found.iter().any(|f| matches!(f, Implausible::Scaled(_)))
+        && let Some(reach) = axiscal::calibration::procedure::scale_reach(cal, desc)
+    {
+        eprintln!("note: {}: {reach}", data.display());
+    }
+}
+
+/// report.md's "Detection limits": the command-column scales the transmission test lets pass
+/// on this file ([`axiscal::calibration::procedure::scale_reach`], its free-pose form), and what
+/// the coordinate-scale note means where it was printed.
+fn add_detection_limits(
+    files: &mut [(&'static str, String)],
+    record: &CalibrationRecord,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+) {
+    let Some((_, report)) = files.iter_mut().find(|(name, _)| *name == "report.md") else {
+        return;
+    };
+    let cal = &record.calibration;
+    let reach = match &record.reports.free_poses {
+        None => axiscal::calibration::procedure::scale_reach(cal, desc),
+        Some(summary) => axiscal::calibration::procedure::free_pose_scale_reach((cal, summary), desc, set.rows()),
+    };
+    let commands = reach.map(|r| format!("{}\n\n", r.words())).unwrap_or_default();
+    report.push_str(&format!(
+        "\n## Detection limits\n\n{commands}{}\n",
+        axiscal::measurement::unit_check::axis_scale::axis_reach_words()
+    ));
 }
 
 /// The sweeps out of place among the sightings of their shared target at the reference pose

@@ -274,7 +274,11 @@ fn calibrate_free_poses_only_with_holdout() {
         .filter_map(|l| l.strip_prefix("  \""))
         .filter_map(|l| l.split('"').next())
         .collect();
-    let at = |k: &str| keys.iter().position(|x| *x == k).unwrap_or_else(|| panic!("no `{k}` in {keys:?}"));
+    let at = |k: &str| {
+        keys.iter()
+            .position(|x| *x == k)
+            .unwrap_or_else(|| panic!("no `{k}` in {keys:?}"))
+    };
     assert!(at("robot") < at("model_covariance") && at("model_covariance") < at("tool_accuracy"));
     assert_eq!(keys[keys.len() - 2..], ["tool_accuracy", "free_poses"], "{keys:?}");
     let summary = reports.free_poses.expect("free-pose summary");

@@ -128,8 +128,8 @@ fn free_poses_say_what_the_scale_test_cannot_tell() {
             &format!("calibrate irb24-fp.csv {} --out out", robot("asea-irb6l")),
             0,
             &[
-                "note: irb24-fp.csv: the transmission test cannot name a command column scaled on export here: ",
-                "a second file with sweeps of these joints, or a length standard, closes it",
+                "note: irb24-fp.csv: command-column scales this file cannot show: `cmd_1` ",
+                "(report.md, \"Detection limits\")",
             ],
         ),
     );
@@ -241,7 +241,7 @@ mod real_files {
                 "real FANUC, clean (NS1: cmd_1 x 1.01 passes without a word)",
                 &format!("calibrate fanuc.csv {fanuc} --out out"),
                 0,
-                &["`cmd_1` not at all (no transmission fitted for joint 1"],
+                &["`cmd_1` at any size (no transmission fitted)"],
             ),
         );
         for words in SCALE_WORDS {

@@ -71,11 +71,11 @@ fn a_sweep_file_that_cannot_pin_an_axis_scale_says_how_large_would_pass() {
         let e = calibrated(dir.path(), file, robot, &file.replace(".csv", ""));
         assert!(!e.contains(AXIS_READS), "{file}: {e}");
         assert!(
-            e.contains("one instrument axis read long or short would pass the coordinate-scale test in this file"),
+            e.contains("one-axis instrument scales this file cannot show: "),
             "{file}: {e}"
         );
         assert!(
-            e.contains("`y_mm` by up to") || e.contains("`y_mm` not within"),
+            e.contains("`y_mm` below") || e.contains("`y_mm` at any size"),
             "{file}: {e}"
         );
     }

@@ -43,9 +43,9 @@
 mod scale;
 
 pub use scale::{
-    DOUBT_SIGMAS, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_REACH_CLAIM, SCALE_SIGMAS,
-    ScaleDoubt, ScaleReach, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
-    scale_doubts,
+    DOUBT_SIGMAS, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, ScaleDoubt,
+    ScaleReach, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips, scale_doubts,
+    scale_reach,
 };
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};

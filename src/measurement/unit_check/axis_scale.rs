@@ -146,6 +146,10 @@ pub struct AxisScale {
     /// column's factor), `None` where the profile is flat (the data do not resolve it within
     /// [`PROFILE_REACH`]).
     pub reach: [Option<f64>; 3],
+    /// Whether the profile found it beyond the test's threshold but the fit with it undone did
+    /// not confirm it (its reduction passes, but a free pose the model cannot fit remains; or
+    /// the re-run fails): the test names nothing on such a file, at any size.
+    pub unconfirmed: bool,
 }
 
 /// The column names, by column.
@@ -214,6 +218,7 @@ fn profile(
         significant: false,
         alike: vec![],
         reach: [None; 3],
+        unconfirmed: false,
     })
 }
 
@@ -246,9 +251,11 @@ fn confirmed(
     }
     let again = profile(set, (found.scaled, found.factor), at, fit)?;
     let at = fit(&found.scaled.undone(set, again.factor, c))?;
-    let significant = reduction_p(base, at)? < rate && at.misfit_poses == 0;
+    let reduced = reduction_p(base, at)? < rate;
     Some(AxisScale {
-        significant,
+        significant: reduced && at.misfit_poses == 0,
+        // The reduction passes, but a pose the model cannot fit remains with it undone.
+        unconfirmed: reduced && at.misfit_poses > 0,
         rms_mm: [found.rms_mm[0], (at.sum_squares_mm2 / base.dof as f64).sqrt()],
         ..again
     })
@@ -267,8 +274,9 @@ fn thinned(set: &MeasurementSet, max_rows: usize) -> Option<MeasurementSet> {
 }
 
 /// The column scale that best explains `set`'s residuals under the calibration `fit`
-/// (module docs), significant or not (`significant` says), or `None` when a fit fails or no
-/// profile is a parabola (the fit changed its course between the runs). `slides` are the
+/// (module docs), significant or not (`significant` says; `unconfirmed` where the profile found
+/// it but the re-run with it undone left a pose the model cannot fit, or failed), or `None` when the fit of the file as
+/// read fails or no profile is a parabola (the fit changed its course between the runs). `slides` are the
 /// sliding joints (0-based): each one's command scale, and the three columns' together, are
 /// tried beside the columns, as what moves the points alike with a column's scale.
 /// Above `max_rows` rows ([`PROFILE_MAX_ROWS`], [`PROFILE_MAX_FREE_POSE_ROWS`]) the profile
@@ -307,10 +315,15 @@ pub fn axis_scale(
         .filter(|a| a.scaled != best.scaled && a.p_value < rate && reduction(&best) - reduction(a) < apart)
         .map(|a| (a.scaled, a.factor))
         .collect();
+    // A re-run that fails leaves the finding as profiled, unconfirmed.
+    let checked = confirmed(set, best.clone(), base, fit).unwrap_or(AxisScale {
+        unconfirmed: true,
+        ..best
+    });
     Some(AxisScale {
         alike,
         reach,
-        ..confirmed(set, best, base, fit)?
+        ..checked
     })
 }
 
@@ -319,6 +332,16 @@ impl AxisScale {
     /// beyond [`AXIS_SCALE_REACH_CLAIM`] for some column and nothing was named; `None`
     /// otherwise.
     pub fn reach_note(&self) -> Option<String> {
+        if self.unconfirmed {
+            return Some(format!(
+                "one-axis instrument scales this file cannot show: any, at any size ({} reads {:.5} times (+- {:.5}), \
+                 but with it undone a pose the model cannot fit remains, or the re-run fails, so it is not named; \
+                 report.md, \"Detection limits\")",
+                self.scaled.columns(),
+                self.factor,
+                self.sigma
+            ));
+        }
         let short = |r: &Option<f64>| r.is_none_or(|r| r > AXIS_SCALE_REACH_CLAIM);
         if self.significant || !self.reach.iter().any(short) {
             return None;
@@ -326,20 +349,28 @@ impl AxisScale {
         let parts: Vec<String> = (0..3)
             .filter(|&c| short(&self.reach[c]))
             .map(|c| match self.reach[c] {
-                Some(r) => format!("`{}` by up to {:.2} %", COLUMNS[c], r * 100.0),
-                None => format!("`{}` not within {:.0} %", COLUMNS[c], PROFILE_REACH * 100.0),
+                Some(r) => format!("`{}` below {:.2} %", COLUMNS[c], r * 100.0),
+                None => format!("`{}` at any size within {:.0} %", COLUMNS[c], PROFILE_REACH * 100.0),
             })
             .collect();
         Some(format!(
-            "one instrument axis read long or short would pass the coordinate-scale test in this file: {}. Each \
-             arc or pose alone takes such a scale as a tilt or a slightly different radius, and these data's arcs \
-             and poses together pin it no closer (the test names {:.1} % where they do): a length standard along \
-             that axis, or free poses spread over the workspace (fitted with the sweeps, or checked by \
-             `validate`), close it",
-            parts.join(", "),
-            AXIS_SCALE_REACH_CLAIM * 100.0
+            "one-axis instrument scales this file cannot show: {} (report.md, \"Detection limits\")",
+            parts.join(", ")
         ))
     }
+}
+
+/// The words of [`AxisScale::reach_note`] for report.md: why a file lets a one-axis scale pass
+/// and what closes it.
+pub fn axis_reach_words() -> String {
+    format!(
+        "Where `calibrate` notes one-axis instrument scales this file cannot show (`x_mm` below 0.44 %, say), one \
+         instrument axis read that much long or short would pass the coordinate-scale test: each arc or pose alone \
+         takes such a scale as a tilt or a slightly different radius, and these data's arcs and poses together pin it \
+         no closer (the test names {:.1} % where they do). A length standard along that axis, or free poses spread \
+         over the workspace (fitted with the sweeps, or checked by `validate`), close it.",
+        AXIS_SCALE_REACH_CLAIM * 100.0
+    )
 }
 
 impl AxisScale {

@@ -20,12 +20,14 @@
 //!   commanded, and its fitted slope departs by `-(d tau / d theta) / K`: where the
 //!   description's masses give a torque change of the departure's sign along the joint's
 //!   points and a stiffness that holds the robot within a plausible sag, the departure is
-//!   said as the sag ([`ScaleSlip::Sag`]), the scale as the alternative. Where a free-pose fit
-//!   cannot reach a [`SCALE_REACH_CLAIM`] scale, [`free_pose_scale_reach`] says how large one
-//!   would pass. A revolute joint's departure between [`DOUBT_SIGMAS`] and [`DRIVE_SIGMAS`]
+//!   said as the sag ([`ScaleSlip::Sag`]), the scale as the alternative. Every file says how
+//!   large a scale of each column would pass ([`scale_reach`], [`free_pose_scale_reach`]): a
+//!   0.5 % scale is within what a drive departs by on most files. A joint's departure between [`DOUBT_SIGMAS`] and [`DRIVE_SIGMAS`]
 //!   is a note with both causes ([`ScaleDoubt`]): few drives depart so far, and over a partial
 //!   turn the fitted once-per-turn term carries a column's scale into the mean slope almost
-//!   whole, so a 0.8 % scale departs by about as much.
+//!   whole, so a 0.8 % scale departs by about as much. A sliding joint's departure in that band
+//!   is a note too: its lead departs so, or its column was scaled (a sweep measures a slide's
+//!   travel per command directly, so its sigma is the fit's and the lead's alone).
 //!   A joint whose description declares a gear form (`transmission_fit = { form = "gear" }`:
 //!   a drive periodic in a gear's angle, as the paper's joint 5, whose bevel gear turns it 4.1 %
 //!   off) is left out: its description expects a large periodic error.
@@ -414,50 +416,107 @@ pub fn free_pose_scale_slips(
     said(&free_pose_slopes((cal, summary), desc, rows))
 }
 
-/// The scale of a command column the transmission test lets pass ([`free_pose_scale_reach`]).
+/// The scale of each command column the transmission test lets pass on one file
+/// ([`scale_reach`], [`free_pose_scale_reach`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScaleReach {
-    /// The rotary joints whose column could be scaled by more than [`SCALE_REACH_CLAIM`]
-    /// unsaid: `(joint, the smallest scale said [1], the fit's sigma of the slope [1])`.
-    pub joints: Vec<(usize, f64, f64)>,
-    /// The rotary joints without a fitted transmission, whose scale the test cannot see.
+    /// The joints with a fitted transmission: `(joint, the smallest scale of its column the
+    /// test names [1], the fit's sigma of the slope [1], whether it slides)`.
+    pub joints: Vec<(usize, f64, f64, bool)>,
+    /// The joints without a fitted transmission, whose scale the test cannot see.
     pub unfitted: Vec<usize>,
+    /// The joints whose description declares a gear form, which the test leaves out (module doc).
+    pub gear: Vec<usize>,
 }
 
-/// The command-column scale the test of the module doc is meant to name wherever the data
-/// resolve it (1 %): a 1 % scale of one column costs a calibration 5 to 20 times its
-/// predicted error in our hostile runs, so a file that cannot show it says so.
-pub const SCALE_REACH_CLAIM: f64 = 0.01;
+/// The smallest scale of `s`'s column the test names whatever the drive departs by within two
+/// of its sigmas: a departure is named in a note ([`ScaleDoubt`]) from [`DOUBT_SIGMAS`] of the
+/// fit's sigma and the drive's combined, and the drive's own departure may take two of them
+/// off the scale's, so [`DRIVE_SIGMAS`] of them (where a departure is a warning).
+fn smallest_named(s: &Slope) -> f64 {
+    let drive = if s.sliding {
+        PLAUSIBLE_LEAD_DEVIATION
+    } else {
+        PLAUSIBLE_TURN_DEVIATION
+    };
+    DRIVE_SIGMAS * s.sigma.hypot(drive)
+}
 
-/// How large a command-column scale the transmission test lets pass on a free-pose
-/// calibration, where it is beyond [`SCALE_REACH_CLAIM`] for some rotary joint or a joint has
-/// no fitted transmission; `None` where the test reaches 1 % on every rotary joint.
+/// The reach of `slopes`; `joints` the joints the test covers (1-based), those without a
+/// slope being gear forms or unfitted.
+fn reach_of(slopes: &[Slope], joints: &[usize], desc: &RobotDescription) -> Option<ScaleReach> {
+    let gear_form = |j: usize| {
+        desc.joints
+            .get(j - 1)
+            .is_some_and(|e| matches!(e.transmission_fit_form(), TransmissionFitForm::Gear { .. }))
+    };
+    let reach = ScaleReach {
+        joints: slopes
+            .iter()
+            .filter(|s| s.fitted)
+            .map(|s| (s.joint, smallest_named(s), s.sigma, s.sliding))
+            .collect(),
+        unfitted: slopes.iter().filter(|s| !s.fitted).map(|s| s.joint).collect(),
+        gear: joints.iter().copied().filter(|&j| gear_form(j)).collect(),
+    };
+    (!reach.joints.is_empty() || !reach.unfitted.is_empty() || !reach.gear.is_empty()).then_some(reach)
+}
+
+/// How large a scale of each command column the transmission test lets pass on a free-pose
+/// calibration (its rotary joints; a slide's scale is the coordinate-scale profile's).
 pub fn free_pose_scale_reach(
     (cal, summary): (&Calibration, &FreePoseSummary),
     desc: &RobotDescription,
     rows: &[Measurement],
 ) -> Option<ScaleReach> {
-    let slopes = free_pose_slopes((cal, summary), desc, rows);
-    let reach = ScaleReach {
-        joints: slopes
-            .iter()
-            .filter(|s| s.fitted)
-            .map(|s| (s.joint, DRIVE_SIGMAS * s.sigma.hypot(PLAUSIBLE_TURN_DEVIATION), s.sigma))
-            .filter(|(_, r, _)| *r > SCALE_REACH_CLAIM)
-            .collect(),
-        unfitted: slopes.iter().filter(|s| !s.fitted).map(|s| s.joint).collect(),
-    };
-    (!reach.joints.is_empty() || !reach.unfitted.is_empty()).then_some(reach)
+    let revolute: Vec<usize> = (1..=desc.dof())
+        .filter(|&k| desc.joints[k - 1].kind == JointKind::Revolute)
+        .collect();
+    reach_of(&free_pose_slopes((cal, summary), desc, rows), &revolute, desc)
 }
 
-impl std::fmt::Display for ScaleReach {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+/// How large a scale of each command column the transmission test lets pass on a sweep
+/// calibration: a sweep measures a joint's travel per command directly, to the fit's sigma,
+/// and a drive departs by [`PLAUSIBLE_TURN_DEVIATION`] (a slide's lead by
+/// [`PLAUSIBLE_LEAD_DEVIATION`]).
+pub fn scale_reach(cal: &Calibration, desc: &RobotDescription) -> Option<ScaleReach> {
+    let ideal = RobotModel::ideal(desc);
+    let slopes: Vec<Slope> = cal.axes.iter().filter_map(|a| slope_of(cal, desc, &ideal, a)).collect();
+    let swept: Vec<usize> = cal.axes.iter().map(|a| a.joint).collect();
+    reach_of(&slopes, &swept, desc)
+}
+
+impl ScaleReach {
+    /// Each column's bound, compactly: "`cmd_1` below 0.49 %, `cmd_6` at any size".
+    fn bounds(&self) -> Vec<(usize, String)> {
+        let mut parts: Vec<(usize, String)> = self
+            .joints
+            .iter()
+            .map(|(j, r, _, _)| (*j, format!("`cmd_{j}` below {:.2} %", r * 100.0)))
+            .collect();
+        parts.extend(
+            self.unfitted
+                .iter()
+                .map(|j| (*j, format!("`cmd_{j}` at any size (no transmission fitted)"))),
+        );
+        parts.extend(
+            self.gear
+                .iter()
+                .map(|j| (*j, format!("`cmd_{j}` at any size (a gear form)"))),
+        );
+        parts.sort_by_key(|(j, _)| *j);
+        parts
+    }
+
+    /// The full words, for report.md's "Detection limits".
+    pub fn words(&self) -> String {
         let mut parts: Vec<String> = self
             .joints
             .iter()
-            .map(|(j, r, s)| {
+            .map(|(j, r, s, sliding)| {
+                let moves = if *sliding { "travel" } else { "slope" };
                 format!(
-                    "`cmd_{j}` by up to {:.1} % (its joint's slope fitted to +-{:.2} %)",
+                    "`cmd_{j}`: a scale below {:.2} % (joint {j}'s {moves} per command fitted to +-{:.2} %)",
                     r * 100.0,
                     s * 100.0
                 )
@@ -465,20 +524,41 @@ impl std::fmt::Display for ScaleReach {
             .collect();
         if !self.unfitted.is_empty() {
             let columns: Vec<String> = self.unfitted.iter().map(|j| format!("`cmd_{j}`")).collect();
-            let joints: Vec<String> = self.unfitted.iter().map(|j| j.to_string()).collect();
             parts.push(format!(
-                "{} not at all (no transmission fitted for joint {}: a scale of it shows only in the fit's misses)",
-                columns.join(", "),
-                joints.join(", ")
+                "{}: a scale of any size (no transmission fitted: it shows only in the fit's misses)",
+                columns.join(", ")
             ));
         }
+        if !self.gear.is_empty() {
+            let columns: Vec<String> = self.gear.iter().map(|j| format!("`cmd_{j}`")).collect();
+            parts.push(format!(
+                "{}: a scale of any size (the description declares a gear form, which expects a large periodic error)",
+                columns.join(", ")
+            ));
+        }
+        format!(
+            "The transmission test lets these command-column scales (a column exported in another unit or through \
+             another ratio) pass on this file: {}. It names a joint's travel per command that departs from its \
+             description's by more than {DOUBT_SIGMAS:.0} sigma of the fit's and a drive's departure combined (about \
+             {:.2} % for a turning joint: over a partial turn the gear's once-per-turn error reads as a scale; \
+             {:.2} % for a slide's lead) in a note, and beyond {DRIVE_SIGMAS:.0} sigma as a warning; the bound is \
+             {DRIVE_SIGMAS:.0} sigma, as the drive's own departure may take up to two of them off a scale's. A smaller \
+             scale may pass: checking each column against the controller's reading at two poses, or a sweep of the \
+             joint over a full turn, closes it.",
+            parts.join("; "),
+            PLAUSIBLE_TURN_DEVIATION * 100.0,
+            PLAUSIBLE_LEAD_DEVIATION * 100.0,
+        )
+    }
+}
+
+impl std::fmt::Display for ScaleReach {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let parts: Vec<String> = self.bounds().into_iter().map(|(_, p)| p).collect();
         write!(
             f,
-            "the transmission test cannot name a command column scaled on export here: {}. It names {:.0} % where the \
-             poses resolve a joint's slope to about 0.1 %: a second file with sweeps of these joints, or a length \
-             standard, closes it",
-            parts.join("; "),
-            SCALE_REACH_CLAIM * 100.0
+            "command-column scales this file cannot show: {} (report.md, \"Detection limits\")",
+            parts.join(", ")
         )
     }
 }
@@ -500,19 +580,28 @@ pub struct ScaleDoubt {
     pub sigmas: f64,
     /// The range of its commands \[deg\].
     pub span_deg: f64,
-    /// The amplitude of the once-per-turn term its fitted transmission carries \[rad\].
+    /// The amplitude of the once-per-turn term its fitted transmission carries \[rad\] (0 for
+    /// a slide).
     pub amplitude_rad: f64,
+    /// Whether it slides (its travel per command against its lead; `span_deg` is then mm).
+    pub sliding: bool,
 }
 
-/// The joints of a sweep calibration whose slope is in doubt ([`ScaleDoubt`]).
+/// The joints of a sweep calibration whose slope is in doubt ([`ScaleDoubt`]); no slide's
+/// where the slides agree on one scale of the coordinates ([`ScaleSlip::Coordinates`]).
 pub fn scale_doubts(cal: &Calibration, desc: &RobotDescription) -> Vec<ScaleDoubt> {
     let ideal = RobotModel::ideal(desc);
-    cal.axes
+    let slopes: Vec<(Slope, &AxisReport)> = cal
+        .axes
         .iter()
-        .filter_map(|a| {
-            let range = sweep(cal, desc, a)?;
-            doubt(&slope_of(cal, desc, &ideal, a)?, &a.transmission, range)
-        })
+        .filter_map(|a| Some((slope_of(cal, desc, &ideal, a)?, a)))
+        .collect();
+    let plain: Vec<Slope> = slopes.iter().map(|(s, _)| s.clone()).collect();
+    let common = common_scale(&plain).is_some();
+    slopes
+        .iter()
+        .filter(|(s, _)| !(s.sliding && common))
+        .filter_map(|(s, a)| doubt(s, &a.transmission, sweep(cal, desc, a)?))
         .collect()
 }
 
@@ -536,23 +625,29 @@ pub fn free_pose_scale_doubts(
         .collect()
 }
 
-/// `s` as a [`ScaleDoubt`] where it is a fitted revolute joint's slope between
-/// [`DOUBT_SIGMAS`] and [`DRIVE_SIGMAS`] with a once-per-turn term; its transmission `t`,
-/// over `range` (rad).
+/// `s` as a [`ScaleDoubt`] where it is a fitted joint's slope between [`DOUBT_SIGMAS`] and
+/// [`DRIVE_SIGMAS`] (a revolute joint's with a once-per-turn term, a slide's with a fitted
+/// lead); its transmission `t`, over `range` (rad or m).
 fn doubt(s: &Slope, t: &Transmission, range: (f64, f64)) -> Option<ScaleDoubt> {
-    let Transmission::Harmonic { sin, cos } = t else {
-        return None;
+    let (drive, amplitude_rad, span) = match t {
+        Transmission::Harmonic { sin, cos } if !s.sliding => (
+            PLAUSIBLE_TURN_DEVIATION,
+            sin.first()?.hypot(*cos.first()?),
+            (range.1 - range.0).to_degrees(),
+        ),
+        Transmission::Polynomial { .. } if s.sliding => (PLAUSIBLE_LEAD_DEVIATION, 0.0, (range.1 - range.0) * 1e3),
+        _ => return None,
     };
-    let sigmas = (s.ratio - 1.0).abs() / s.sigma.hypot(PLAUSIBLE_TURN_DEVIATION);
-    let amplitude_rad = sin.first()?.hypot(*cos.first()?);
-    (!s.sliding && s.fitted && sigmas > DOUBT_SIGMAS && !beyond(s, PLAUSIBLE_TURN_DEVIATION)).then(|| ScaleDoubt {
+    let sigmas = (s.ratio - 1.0).abs() / s.sigma.hypot(drive);
+    (s.fitted && sigmas > DOUBT_SIGMAS && !beyond(s, drive)).then(|| ScaleDoubt {
         joint: s.joint,
         experiment: s.experiment.clone(),
         travel: 1.0 / s.ratio,
         sigma: s.sigma / s.ratio.powi(2),
         sigmas,
-        span_deg: (range.1 - range.0).to_degrees(),
+        span_deg: span,
         amplitude_rad,
+        sliding: s.sliding,
     })
 }
 
@@ -566,7 +661,11 @@ impl std::fmt::Display for ScaleDoubt {
             sigmas,
             span_deg,
             amplitude_rad,
+            sliding,
         } = self;
+        if *sliding {
+            return slide_doubt_words(f, self);
+        }
         let over = if experiment == "free poses" {
             format!("on average over the free poses ({span_deg:.0} deg of it)")
         } else {
@@ -587,6 +686,23 @@ impl std::fmt::Display for ScaleDoubt {
             1.0 / travel,
         )
     }
+}
+
+/// The words of a sliding joint's [`ScaleDoubt`]: its lead or its column.
+fn slide_doubt_words(f: &mut std::fmt::Formatter<'_>, d: &ScaleDoubt) -> std::fmt::Result {
+    let (joint, experiment, travel, sigmas, span_mm) = (d.joint, &d.experiment, d.travel, d.sigmas, d.span_deg);
+    write!(
+        f,
+        "joint {joint} ({experiment}) travels {travel:.4} (+-{}) times as far per command as the description's lead \
+         says over its {span_mm:.0}-mm sweep, {sigmas:.1} sigma from 1 counting what a lead departs by (about {:.2} %): \
+         few screws or scales depart so, so it is not said as a scale below {DRIVE_SIGMAS:.0} sigma. Either joint \
+         {joint}'s lead departs so, or the column `cmd_{joint}` (joint {joint} slides) holds {:.4} times its travel \
+         (scaled on export; then calibration.json is wrong for joint {joint}): check cmd_{joint} against a length \
+         standard or the controller's reading at two positions",
+        two_digits(d.sigma),
+        PLAUSIBLE_LEAD_DEVIATION * 100.0,
+        1.0 / travel,
+    )
 }
 
 /// The slopes of a free-pose calibration's rotary joints ([`free_pose_scale_slips`]).
