@@ -6,28 +6,9 @@
 //! the first slip undone: a second column it then names is said, and where it names none the
 //! note says that the test ran and the scale it would have named.
 
+use crate::common::altered_csv;
 use crate::common::hostile::{case, stderr_of_case};
-use crate::common::{altered_csv, axiscal};
-use std::path::Path;
-
-/// The shipped description `name` under `scenarios/robots/`, as an argument.
-fn robot(name: &str) -> String {
-    format!("--robot {}/scenarios/robots/{name}.toml", env!("CARGO_MANIFEST_DIR"))
-}
-
-/// `simulate --sim analytic` of the shipped robot `name` with `poses` validation poses and
-/// seed `seed`, written as `out` in `dir`.
-fn simulated(dir: &Path, name: &str, poses: usize, seed: u64, out: &str) {
-    let args = format!(
-        "simulate {} --sim analytic --validation-poses {poses} --seed {seed} --out {out}",
-        robot(name)
-    );
-    axiscal()
-        .current_dir(dir)
-        .args(args.split_whitespace())
-        .assert()
-        .success();
-}
+use crate::hostile_round11d::{robot, simulated};
 
 /// Field `i` (0-based, of `experiment, moved_joint, step, target, x_mm, y_mm, z_mm, cmd_1, ..`)
 /// of a row `f`, multiplied by `factor`.
