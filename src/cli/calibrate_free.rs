@@ -386,10 +386,10 @@ fn second_scales(
     );
     let data = data.display();
     if found.is_empty() {
-        let reach = free_pose_scale_reach(&again, desc, undone.rows()).map_or(String::new(), |r| format!("; {r}"));
         eprintln!(
             "note: {data}: {undone_words}: it names no other command column scaled by {:.0} % or more (a smaller \
-             scale reads as a gear's once-per-turn error over a partial turn){reach}",
+             scale reads as a gear's once-per-turn error over a partial turn; where a joint's slope is fitted \
+             too loosely for that, the reach note below says how large a scale passes)",
             SCALE_REACH_CLAIM * 100.0
         );
     }
