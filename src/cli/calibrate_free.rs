@@ -6,7 +6,7 @@ use anyhow::Result;
 use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
 use axiscal::calibration::procedure::{
-    Calibration, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
+    Calibration, ScaleDoubt, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
 };
 use axiscal::calibration::record::CalibrationRecord;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
@@ -269,7 +269,8 @@ fn warn_slips(
             }
         }
     }
-    for doubt in free_pose_scale_doubts((cal, summary), desc, set.rows()) {
+    let doubts = free_pose_scale_doubts((cal, summary), desc, set.rows());
+    for doubt in &doubts {
         eprintln!("note: {data}: {doubt}");
     }
     // A joint's slope off its description's (said above, as a warning or a note) is a misfit
@@ -283,6 +284,7 @@ fn warn_slips(
             _ => None,
         })
         .collect();
+    second_scales((set, desc), options, (&slopes, &doubts), args.data);
     if slopes.len() == scaled.len() {
         let undone = with_commands_scaled(set, &slopes);
         let set = &undone;
@@ -328,6 +330,71 @@ fn warn_slips(
             m.reordered_deg,
             moved.join(", ")
         );
+    }
+}
+
+/// A second command column's scale behind the joints said above (`slopes`, `(joint, slope)`, as
+/// a warning or a note, and `doubts`): the poses calibrated again with those joints' columns undone by
+/// their slopes and the transmission test run on that calibration, as `validate`'s two-slip
+/// search refits with the first slip undone (`diagnosis/combined_slips.rs`): a
+/// one-per-cent column scale beside another reads partly as the other's slope, and shows whole
+/// once the other is undone. A joint it then names is said; where none is, that the test ran.
+fn second_scales(
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+    (slopes, doubts): (&[(usize, f64)], &[ScaleDoubt]),
+    data: &Path,
+) {
+    let said: Vec<(usize, f64)> = slopes
+        .iter()
+        .copied()
+        .chain(doubts.iter().map(|d| (d.joint, d.travel)))
+        .collect();
+    if said.is_empty() {
+        return;
+    }
+    let undone = with_commands_scaled(set, &said);
+    let profile = FreePoseOptions {
+        holdout: false,
+        effects: false,
+        ..*options
+    };
+    let Ok(again) = calibrate_free_poses(&undone, desc, &profile) else {
+        return;
+    };
+    let (again, again_summary) = again.into_calibration(desc);
+    let again = (&again, &again_summary);
+    let new = |joint: &usize| !said.iter().any(|(j, _)| j == joint);
+    let mut found: Vec<(bool, String)> = free_pose_scale_slips(again, desc, undone.rows())
+        .iter()
+        .filter(|s| matches!(s, ScaleSlip::Command { joint, .. } if new(joint)))
+        .map(|s| s.free_pose_note().map_or((true, s.to_string()), |n| (false, n)))
+        .collect();
+    found.extend(
+        free_pose_scale_doubts(again, desc, undone.rows())
+            .iter()
+            .filter(|d| new(&d.joint))
+            .map(|d| (false, d.to_string())),
+    );
+    let columns: Vec<String> = said
+        .iter()
+        .map(|(j, slope)| format!("`cmd_{j}` divided by {:.4}", 1.0 / slope))
+        .collect();
+    let undone_words = format!(
+        "with {} (as said above) the poses were calibrated again and the transmission test run on them",
+        columns.join(" and ")
+    );
+    let data = data.display();
+    if found.is_empty() {
+        eprintln!(
+            "note: {data}: {undone_words}: it names no other command column (a scale within the file's \
+             detection limits, the line on command-column scales, passes: over a partial turn it reads as a \
+             gear's once-per-turn error)"
+        );
+    }
+    for (firm, text) in found {
+        let level = if firm { "warning" } else { "note" };
+        eprintln!("{level}: {data}: {undone_words}, and a second column shows: {text}");
     }
 }
 

@@ -13,13 +13,13 @@ use crate::common::{altered_csv, axiscal};
 use std::path::Path;
 
 /// The shipped description `name` under `scenarios/robots/`, as an argument.
-fn robot(name: &str) -> String {
+pub(crate) fn robot(name: &str) -> String {
     format!("--robot {}/scenarios/robots/{name}.toml", env!("CARGO_MANIFEST_DIR"))
 }
 
 /// `simulate --sim analytic` of the shipped robot `name` with `poses` validation poses and
 /// seed `seed`, written as `out` in `dir`.
-fn simulated(dir: &Path, name: &str, poses: usize, seed: u64, out: &str) {
+pub(crate) fn simulated(dir: &Path, name: &str, poses: usize, seed: u64, out: &str) {
     let args = format!(
         "simulate {} --sim analytic --validation-poses {poses} --seed {seed} --out {out}",
         robot(name)
