@@ -206,15 +206,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     readable(&record, &args, (&set, &desc))?;
     let cal = &record.calibration;
     let source = args.data.display().to_string();
-    let options = OutputOptions {
-        urdf: UrdfOptions {
-            robot_name: args.urdf_name.clone().unwrap_or_else(|| ros_name(&desc.name)),
-            root: args.urdf_root,
-        },
-        joint_map_step: args.joint_map_step,
-    };
-    let mut texts = outputs::render(&record, &desc, &source, &export_poses(&set, &desc, cal), &options)?;
-    add_detection_limits(&mut texts.files, &record, &desc, &set);
+    let texts = render(&record, &args, (&desc, &set))?;
     // Every file is written before any is put in place; an output left out must not leave an
     // earlier run's file beside the new calibration.
     let mut staged = outputs.staged_in(&args.out)?;
@@ -270,6 +262,27 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
     }
     Ok(())
+}
+
+/// Every output of `record` rendered (`outputs::render` with the options `args` give), with
+/// the detection limits in `report.md`.
+fn render(
+    record: &CalibrationRecord,
+    args: &Args,
+    (desc, set): (&RobotDescription, &MeasurementSet),
+) -> Result<outputs::CalibrationOutputs> {
+    let options = OutputOptions {
+        urdf: UrdfOptions {
+            robot_name: args.urdf_name.clone().unwrap_or_else(|| ros_name(&desc.name)),
+            root: args.urdf_root,
+        },
+        joint_map_step: args.joint_map_step,
+    };
+    let source = args.data.display().to_string();
+    let poses = export_poses(set, desc, &record.calibration);
+    let mut texts = outputs::render(record, desc, &source, &poses, &options)?;
+    add_detection_limits(&mut texts.files, record, desc, set);
+    Ok(texts)
 }
 
 /// The file lines of the tool rows a [`Implausible::ToolMisfit`] is about (` (FILE lines

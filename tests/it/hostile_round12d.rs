@@ -45,7 +45,8 @@ fn a_second_command_scale_is_tested_with_the_first_joints_slope_undone() {
         ),
     );
     assert!(
-        e.contains("it names no other command column (a scale within the file's detection limits") || e.contains("a second column shows"),
+        e.contains("it names no other command column (a scale within the file's detection limits")
+            || e.contains("a second column shows"),
         "the second test's outcome said: {e}"
     );
 }
