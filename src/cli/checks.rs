@@ -743,6 +743,38 @@ pub fn print_pose_outliers(
 /// point, `joint` 0); `done` is what the command did without it (`calibrated`, `diagnosed`).
 pub fn print_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
     print_warnings(&outlier_warnings(outliers, data, done));
+    print_approach_notes(outliers, data, done);
+}
+
+/// One note per sweep's first point the outlier test found off only by its joint's backlash
+/// (`approach`, [`axiscal::calibration::procedure::OutlierPoint`]): not a wrong row, so not a
+/// warning; `done` as in [`print_outliers`].
+pub fn print_approach_notes(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
+    for o in outliers {
+        let Some(turn) = o.approach else { continue };
+        let place = o
+            .line
+            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+        let what = if o.dropped {
+            format!("{done} without it (--keep-outliers keeps it)")
+        } else {
+            "kept (--keep-outliers)".to_string()
+        };
+        // A turning joint's turn in mrad, a sliding one's travel in mm: both 1e3 times the value.
+        eprintln!(
+            "note: {place}: experiment {} step {}, the sweep's first point, taken before joint {} moved: {:.3} mm ahead \
+             along the sweep's motion of the fit of its other points ({:.1} times their noise), as {:.2} mrad (mm on a \
+             sliding joint) more of the joint's travel would put it, and on it across the motion: the joint's backlash \
+             (or a reversal's lost motion), taken up on the other side before the sweep's first move, not a wrong row: \
+             {what}. Approach every sweep's first point in the direction the sweep then moves to keep it",
+            o.experiment,
+            o.step,
+            o.joint,
+            o.residual_mm,
+            o.normalised_residual,
+            turn * 1e3
+        );
+    }
 }
 
 /// [`print_outliers`]'s lines, without `warning: `.
@@ -752,7 +784,7 @@ pub fn outlier_warnings(
     done: &str,
 ) -> Vec<String> {
     let mut lines = Vec::new();
-    for o in outliers {
+    for o in outliers.iter().filter(|o| o.approach.is_none()) {
         let place = o
             .line
             .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
