@@ -763,8 +763,8 @@ pub fn print_approach_notes(outliers: &[axiscal::calibration::procedure::Outlier
         // A turning joint's turn in mrad, a sliding one's travel in mm: both 1e3 times the value.
         eprintln!(
             "note: {place}: experiment {} step {}, the sweep's first point, taken before joint {} moved: {:.3} mm ahead \
-             along the sweep's motion of the fit of its other points ({:.1} times their noise), as {:.2} mrad (mm on a \
-             sliding joint) more of the joint's travel would put it, and on it across the motion: the joint's backlash \
+             along the sweep's motion of the fit of its other points ({:.1} times their noise), as {:.2} mrad more of \
+             the joint's turn (mm of a sliding joint's travel) would put it, and on it across the motion: the joint's backlash \
              (or a reversal's lost motion), taken up on the other side before the sweep's first move, not a wrong row: \
              {what}. Approach every sweep's first point in the direction the sweep then moves to keep it",
             o.experiment,
