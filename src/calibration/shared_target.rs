@@ -21,8 +21,8 @@
 //! backlash taken up on another side between the sweeps moves it by the band times the lever
 //! arm (a millimetre for a milliradian at a metre): where the held joints, turned within the band
 //! their own sweeps' first points show, explain the offset (`backlash`), the sweep is named for
-//! that, not a moved block; a sweep whose points do not fix its circle (its turn per command
-//! beyond `SIZE_TOLERANCE` of the description's) is not compared. Where no sweep's
+//! that, not a moved block; a circle whose turn per command is beyond `SIZE_TOLERANCE` of the
+//! description's, an alias its points do not tell apart, is sought within it. Where no sweep's
 //! removal lets the others agree at the noise (a real robot whose effects scatter every sweep's
 //! point: Boby & Klimchik's arm), each sweep is tested against the others' scatter instead
 //! (`scattered_odd_one_out`, an F ratio). A description without `axis_targets` (SScanSS-2's
@@ -444,11 +444,6 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
     let points: Vec<Vector3<f64>> = e.target0_m.iter().map(|p| p.coords * 1e3).collect();
     let kind = desc.joints[k].kind;
     let curve = Curve::fit(&u, &points, kind)?;
-    // A turn per command far from the description's: the sweep's points do not fix its circle
-    // (six points 144 deg apart over two turns fit one at 1.49 as well), so nor its point.
-    if kind == JointKind::Revolute && (curve.b - 1.0).abs() > SIZE_TOLERANCE {
-        return None;
-    }
     let (point, leverage, tangent) = curve.at_reference();
     let t = tangent.try_normalize(1e-12)?;
     let first = e.target0_steps.first() == Some(&0);
@@ -514,11 +509,19 @@ impl Curve {
             JointKind::Revolute => {
                 let rss = |b: f64| basis_fit(u, points, &|v| circle(b, v)).map_or(f64::INFINITY, |f| f.2);
                 let h = 1e-6;
-                let stop = Bisection::to_width(1e-6);
-                let [lo, hi] = bisect_infallible(1.0 / TURN_RATE_RANGE, TURN_RATE_RANGE, stop, |x| {
-                    rss(x + h) < rss(x - h)
-                });
-                0.5 * (lo + hi)
+                let least = |from: f64, to: f64| {
+                    let stop = Bisection::to_width(1e-6);
+                    let [lo, hi] = bisect_infallible(from, to, stop, |x| rss(x + h) < rss(x - h));
+                    0.5 * (lo + hi)
+                };
+                let b = least(1.0 / TURN_RATE_RANGE, TURN_RATE_RANGE);
+                // Beyond SIZE_TOLERANCE of the description's, an alias of the circle its
+                // points do not fix (six points 144 deg apart over two turns fit one at 1.49
+                // as well as at 1): the least residuals within that tolerance instead.
+                match (b - 1.0).abs() > SIZE_TOLERANCE {
+                    true => least(1.0 - SIZE_TOLERANCE, 1.0 + SIZE_TOLERANCE),
+                    false => b,
+                }
             }
         };
         let curve = Curve {
