@@ -752,14 +752,7 @@ pub fn print_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint]
 pub fn print_approach_notes(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
     for o in outliers {
         let Some(turn) = o.approach else { continue };
-        let place = o
-            .line
-            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
-        let what = if o.dropped {
-            format!("{done} without it (--keep-outliers keeps it)")
-        } else {
-            "kept (--keep-outliers)".to_string()
-        };
+        let (place, what) = outlier_place(o, data, done);
         // A turning joint's turn in mrad, a sliding one's travel in mm: both 1e3 times the value.
         eprintln!(
             "note: {place}: experiment {} step {}, the sweep's first point, taken before joint {} moved: {:.3} mm ahead \
@@ -777,6 +770,19 @@ pub fn print_approach_notes(outliers: &[axiscal::calibration::procedure::Outlier
     }
 }
 
+/// A flagged point's place (`FILE:LINE`) and what the command did with it.
+fn outlier_place(o: &axiscal::calibration::procedure::OutlierPoint, data: &Path, done: &str) -> (String, String) {
+    let place = o
+        .line
+        .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+    let what = if o.dropped {
+        format!("{done} without it (--keep-outliers keeps it)")
+    } else {
+        "kept (--keep-outliers)".to_string()
+    };
+    (place, what)
+}
+
 /// [`print_outliers`]'s lines, without `warning: `.
 pub fn outlier_warnings(
     outliers: &[axiscal::calibration::procedure::OutlierPoint],
@@ -785,14 +791,7 @@ pub fn outlier_warnings(
 ) -> Vec<String> {
     let mut lines = Vec::new();
     for o in outliers.iter().filter(|o| o.approach.is_none()) {
-        let place = o
-            .line
-            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
-        let what = if o.dropped {
-            format!("{done} without it (--keep-outliers keeps it)")
-        } else {
-            "kept (--keep-outliers)".to_string()
-        };
+        let (place, what) = outlier_place(o, data, done);
         let clean_pass = format!(
             "a clean file's sweeps pass it with {:.0} % probability",
             100.0 * (1.0 - axiscal::calibration::procedure::SWEEP_POINTS_FALSE_ALARM)
