@@ -8,7 +8,7 @@
 //! axis, a longer link): nothing else in the sweeps contradicts it.
 //!
 //! Each sweep's point at the reference pose is interpolated from its own points
-//! (`at_reference`: a circle in the command for a turning joint, with its turn per command
+//! (`Curve`: a circle in the command for a turning joint, with its turn per command
 //! fitted; a line for a sliding one), with the variance its least squares give at the noise of
 //! a point. Only the part across the sweep's motion is compared: a joint's zero, its backlash or
 //! a transmission error move the point along the arc, not off it. The points of one target are
@@ -19,7 +19,10 @@
 //! beyond [`GROSS_MISS_FACTOR`] times the test's bound for it: sag bending one sweep's arc moves
 //! a sweep's point by tenths of a millimetre, a moved block by millimetres; a held joint's
 //! backlash taken up on another side between the sweeps moves it by the band times the lever
-//! arm (a millimetre for a milliradian at a metre), which the warning names beside a moved block. Where no sweep's
+//! arm (a millimetre for a milliradian at a metre): where the held joints, turned within the band
+//! their own sweeps' first points show, explain the offset (`backlash`), the sweep is named for
+//! that, not a moved block; a circle whose turn per command is beyond `SIZE_TOLERANCE` of the
+//! description's, an alias its points do not tell apart, is sought within it. Where no sweep's
 //! removal lets the others agree at the noise (a real robot whose effects scatter every sweep's
 //! point: Boby & Klimchik's arm), each sweep is tested against the others' scatter instead
 //! (`scattered_odd_one_out`, an F ratio). A description without `axis_targets` (SScanSS-2's
@@ -31,7 +34,9 @@
 //! reference pose, every row moved alike; [`block_reach`] says so in a file where a sweep is
 //! compared with none or a 1 mm move across its motion would pass.
 
-use super::procedure::{AxisExperiment, axis_experiments};
+mod backlash;
+
+use super::procedure::{AxisExperiment, SIZE_TOLERANCE, axis_experiments};
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::column_slips::GROSS_MISS_FACTOR;
@@ -74,6 +79,10 @@ struct Sighting {
     held_mm2: f64,
     /// The projection across the sweep's motion (identity for a measured point).
     across: Matrix3<f64>,
+    /// The swept joint (0: the tool observation).
+    joint: usize,
+    /// A turning sweep's axis and the backlash its first point shows ([`backlash::Turning`]).
+    turning: Option<backlash::Turning>,
 }
 
 /// A sweep whose point at the reference pose contradicts the other sightings of its target.
@@ -95,6 +104,10 @@ pub struct MovedSweep {
     /// Whether another sighting could as well be the one out of place (two sightings only, or
     /// several sweeps without each of which the others agree): `others` then names those.
     pub ambiguous: bool,
+    /// The held joints' turns \[rad\] within the backlash band their own sweeps' first points
+    /// show that put the target where this sweep sees it (`(joint, turn)`); empty when no
+    /// such turns explain it (then the block was moved).
+    pub backlash: Vec<(usize, f64)>,
 }
 
 impl std::fmt::Display for MovedSweep {
@@ -117,6 +130,9 @@ impl std::fmt::Display for MovedSweep {
                 self.others.join(", ")
             )
         };
+        if !self.backlash.is_empty() {
+            return self.fmt_backlash(f, &lines);
+        }
         write!(
             f,
             "{who}: at the reference pose (every joint at its held value), which each sweep passes through, its \
@@ -130,6 +146,31 @@ impl std::fmt::Display for MovedSweep {
              joint, 0.9 mm for 1 mrad at 0.9 m: then approach the reference pose from one side before every sweep)",
             Vector3::new(x, y, z).norm(),
             self.sigmas,
+        )
+    }
+}
+
+impl MovedSweep {
+    /// The note for a sweep out of place by what the held joints' backlash explains.
+    fn fmt_backlash(&self, f: &mut std::fmt::Formatter<'_>, lines: &str) -> std::fmt::Result {
+        let [x, y, z] = self.offset_mm;
+        let turns: Vec<String> = self
+            .backlash
+            .iter()
+            .map(|(j, t)| format!("joint {j} by {:.2} mrad", t * 1e3))
+            .collect();
+        write!(
+            f,
+            "experiment {}{lines} sees its target at the reference pose ({x:.2}, {y:.2}, {z:.2}) mm ({:.2} mm across its \
+             motion, {:.0} times the noise of that comparison) from where {} see it, as the joints it holds turned \
+             within the backlash their own sweeps' first points show would put it ({}, each about its own sweep's \
+             axis): a held joint's backlash taken up on another side between the sweeps, not a moved block. \
+             Approach the reference pose from one side before every sweep to keep the sweeps alike",
+            self.experiment,
+            Vector3::new(x, y, z).norm(),
+            self.sigmas,
+            self.others.join(", "),
+            turns.join(", "),
         )
     }
 }
@@ -372,6 +413,8 @@ fn tool_sightings(
                 leverage: 1.0 / n,
                 held_mm2: held_variance_mm2(desc, 0, reach_mm),
                 across: Matrix3::identity(),
+                joint: 0,
+                turning: None,
             };
             ((on_link.coords * 1e3).into(), sighting)
         })
@@ -399,8 +442,11 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
         return None;
     }
     let points: Vec<Vector3<f64>> = e.target0_m.iter().map(|p| p.coords * 1e3).collect();
-    let (point, leverage, tangent) = at_reference(&u, &points, desc.joints[k].kind)?;
+    let kind = desc.joints[k].kind;
+    let curve = Curve::fit(&u, &points, kind)?;
+    let (point, leverage, tangent) = curve.at_reference();
     let t = tangent.try_normalize(1e-12)?;
+    let first = e.target0_steps.first() == Some(&0);
     Some(Sighting {
         experiment: e.name.clone(),
         lines: e.lines,
@@ -408,6 +454,8 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
         leverage,
         held_mm2: held_variance_mm2(desc, e.joint, reach_mm),
         across: Matrix3::identity() - t * t.transpose(),
+        joint: e.joint,
+        turning: backlash::Turning::of(&curve, (&u, &points), first),
     })
 }
 
@@ -440,37 +488,90 @@ fn basis_fit(
     Some((coefficients, inverse, rss))
 }
 
-/// The point of a sweep at command 0 (the reference, `u` relative to it, internal units) from
-/// its `points` \[mm\], the interpolation's leverage and the direction of motion there: a
-/// circle `c + a cos(b u) + d sin(b u)` for a turning joint (its turn per command `b` the one of
-/// least residuals within [`TURN_RATE_RANGE`] of 1), a line `c + d u` for a sliding one.
-fn at_reference(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<(Vector3<f64>, f64, Vector3<f64>)> {
-    let circle = |b: f64| move |v: f64| Vector3::new(1.0, (b * v).cos(), (b * v).sin());
-    let b = match kind {
-        JointKind::Prismatic => 0.0,
-        JointKind::Revolute => {
-            let rss = |b: f64| basis_fit(u, points, &circle(b)).map_or(f64::INFINITY, |f| f.2);
-            let h = 1e-6;
-            let stop = Bisection::to_width(1e-6);
-            let [lo, hi] = bisect_infallible(1.0 / TURN_RATE_RANGE, TURN_RATE_RANGE, stop, |x| {
-                rss(x + h) < rss(x - h)
-            });
-            0.5 * (lo + hi)
+/// A sweep's path in its command (`u` relative to the reference, internal units): a circle
+/// `c + a cos(b u) + d sin(b u)` for a turning joint (its turn per command `b` the one of least
+/// residuals within [`TURN_RATE_RANGE`] of 1), a line `c + d u` for a sliding one; the rows of
+/// `coefficients` are `c`, `a` (a line: `d`) and `d` (a line: zero).
+struct Curve {
+    kind: JointKind,
+    /// The turn per command (0 for a line).
+    b: f64,
+    coefficients: Matrix3<f64>,
+    /// The inverse normal matrix of the least squares.
+    inverse: Matrix3<f64>,
+}
+
+impl Curve {
+    /// The path through `points` \[mm\] at the commands `u`; `None` when they do not fix one.
+    fn fit(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<Curve> {
+        let b = match kind {
+            JointKind::Prismatic => 0.0,
+            JointKind::Revolute => {
+                let rss = |b: f64| basis_fit(u, points, &|v| circle(b, v)).map_or(f64::INFINITY, |f| f.2);
+                let h = 1e-6;
+                let least = |from: f64, to: f64| {
+                    let stop = Bisection::to_width(1e-6);
+                    let [lo, hi] = bisect_infallible(from, to, stop, |x| rss(x + h) < rss(x - h));
+                    0.5 * (lo + hi)
+                };
+                let b = least(1.0 / TURN_RATE_RANGE, TURN_RATE_RANGE);
+                // Beyond SIZE_TOLERANCE of the description's, an alias of the circle its
+                // points do not fix (six points 144 deg apart over two turns fit one at 1.49
+                // as well as at 1): the least residuals within that tolerance instead.
+                match (b - 1.0).abs() > SIZE_TOLERANCE {
+                    true => least(1.0 - SIZE_TOLERANCE, 1.0 + SIZE_TOLERANCE),
+                    false => b,
+                }
+            }
+        };
+        let curve = Curve {
+            kind,
+            b,
+            coefficients: Matrix3::zeros(),
+            inverse: Matrix3::zeros(),
+        };
+        let (coefficients, inverse, _) = basis_fit(u, points, &|v| curve.basis(v))?;
+        Some(Curve {
+            coefficients,
+            inverse,
+            ..curve
+        })
+    }
+
+    /// The basis functions at command `v`.
+    fn basis(&self, v: f64) -> Vector3<f64> {
+        match self.kind {
+            JointKind::Prismatic => Vector3::new(1.0, v, 0.0),
+            JointKind::Revolute => circle(self.b, v),
         }
-    };
-    let (coefficients, inverse, at0, slope) = match kind {
-        JointKind::Prismatic => {
-            let (c, i, _) = basis_fit(u, points, &|v| Vector3::new(1.0, v, 0.0))?;
-            (c, i, Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0))
-        }
-        JointKind::Revolute => {
-            let (c, i, _) = basis_fit(u, points, &circle(b))?;
-            (c, i, Vector3::new(1.0, 1.0, 0.0), Vector3::new(0.0, 0.0, b))
-        }
-    };
-    let point = coefficients.transpose() * at0;
-    let leverage = (at0.transpose() * inverse * at0)[0];
-    Some((point, leverage, coefficients.transpose() * slope))
+    }
+
+    /// The path's point at command `v` \[mm\].
+    fn point(&self, v: f64) -> Vector3<f64> {
+        self.coefficients.transpose() * self.basis(v)
+    }
+
+    /// The path's direction of motion at command `v` \[mm per unit command\].
+    fn slope(&self, v: f64) -> Vector3<f64> {
+        let derivative = match self.kind {
+            JointKind::Prismatic => Vector3::new(0.0, 1.0, 0.0),
+            JointKind::Revolute => Vector3::new(0.0, -self.b * (self.b * v).sin(), self.b * (self.b * v).cos()),
+        };
+        self.coefficients.transpose() * derivative
+    }
+
+    /// The point at command 0 (the reference), the interpolation's leverage there and the
+    /// direction of motion.
+    fn at_reference(&self) -> (Vector3<f64>, f64, Vector3<f64>) {
+        let at0 = self.basis(0.0);
+        let leverage = (at0.transpose() * self.inverse * at0)[0];
+        (self.point(0.0), leverage, self.slope(0.0))
+    }
+}
+
+/// The circle's basis `(1, cos(b v), sin(b v))`.
+fn circle(b: f64, v: f64) -> Vector3<f64> {
+    Vector3::new(1.0, (b * v).cos(), (b * v).sin())
 }
 
 /// The weighted consensus of `sightings` (the point whose offsets across each one's motion,
@@ -559,11 +660,13 @@ fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -
     if sigmas <= GROSS_MISS_FACTOR * noise_bound(s) {
         return None;
     }
+    let backlash = backlash::explained(sightings, k, centre, offset, sigma2).unwrap_or_default();
     // Several sweeps without each of which the others agree, or two sightings: either may be
     // the one out of place.
     let rivals: Vec<usize> = passing[1..].iter().map(|p| p.0).collect();
     let ambiguous = sightings.len() == 2;
-    Some(moved_sweep(sightings, (k, &rivals, ambiguous), offset, sigmas, target))
+    let moved = moved_sweep(sightings, (k, &rivals, ambiguous), offset, sigmas, target);
+    Some(MovedSweep { backlash, ..moved })
 }
 
 /// Sighting `k` of `sightings` said out of place, with `rivals` the other sightings that could
@@ -592,6 +695,7 @@ fn moved_sweep(
         ambiguous: ambiguous || !rivals.is_empty(),
         others,
         target,
+        backlash: Vec::new(),
     }
 }
 

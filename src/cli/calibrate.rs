@@ -668,7 +668,9 @@ fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &Measurem
             || data.display().to_string(),
             |(l, _)| format!("{}:{l}", data.display()),
         );
-        eprintln!("warning: {place}: {moved}");
+        // Out of place by the held joints' backlash only: a note.
+        let kind = if moved.backlash.is_empty() { "warning" } else { "note" };
+        eprintln!("{kind}: {place}: {moved}");
     }
     if moved_sweeps.is_empty()
         && let Some(reach) = axiscal::calibration::shared_target::block_reach(set, desc, noise)

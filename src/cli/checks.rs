@@ -747,6 +747,44 @@ pub fn print_pose_outliers(
 /// point, `joint` 0); `done` is what the command did without it (`calibrated`, `diagnosed`).
 pub fn print_outliers(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
     print_warnings(&outlier_warnings(outliers, data, done));
+    print_approach_notes(outliers, data, done);
+}
+
+/// One note per sweep's first point the outlier test found off only by its joint's backlash
+/// (`approach`, [`axiscal::calibration::procedure::OutlierPoint`]): not a wrong row, so not a
+/// warning; `done` as in [`print_outliers`].
+pub fn print_approach_notes(outliers: &[axiscal::calibration::procedure::OutlierPoint], data: &Path, done: &str) {
+    for o in outliers {
+        let Some(turn) = o.approach else { continue };
+        let (place, what) = outlier_place(o, data, done);
+        // A turning joint's turn in mrad, a sliding one's travel in mm: both 1e3 times the value.
+        eprintln!(
+            "note: {place}: experiment {} step {}, the sweep's first point, taken before joint {} moved: {:.3} mm ahead \
+             along the sweep's motion of the fit of its other points ({:.1} times their noise), as {:.2} mrad more of \
+             the joint's turn (mm of a sliding joint's travel) would put it, and on it across the motion: the joint's backlash \
+             (or a reversal's lost motion), taken up on the other side before the sweep's first move, not a wrong row: \
+             {what}. Approach every sweep's first point in the direction the sweep then moves to keep it",
+            o.experiment,
+            o.step,
+            o.joint,
+            o.residual_mm,
+            o.normalised_residual,
+            turn * 1e3
+        );
+    }
+}
+
+/// A flagged point's place (`FILE:LINE`) and what the command did with it.
+fn outlier_place(o: &axiscal::calibration::procedure::OutlierPoint, data: &Path, done: &str) -> (String, String) {
+    let place = o
+        .line
+        .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+    let what = if o.dropped {
+        format!("{done} without it (--keep-outliers keeps it)")
+    } else {
+        "kept (--keep-outliers)".to_string()
+    };
+    (place, what)
 }
 
 /// [`print_outliers`]'s lines, without `warning: `.
@@ -756,15 +794,8 @@ pub fn outlier_warnings(
     done: &str,
 ) -> Vec<String> {
     let mut lines = Vec::new();
-    for o in outliers {
-        let place = o
-            .line
-            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
-        let what = if o.dropped {
-            format!("{done} without it (--keep-outliers keeps it)")
-        } else {
-            "kept (--keep-outliers)".to_string()
-        };
+    for o in outliers.iter().filter(|o| o.approach.is_none()) {
+        let (place, what) = outlier_place(o, data, done);
         let clean_pass = format!(
             "a clean file's sweeps pass it with {:.0} % probability",
             100.0 * (1.0 - axiscal::calibration::procedure::SWEEP_POINTS_FALSE_ALARM)

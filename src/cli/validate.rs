@@ -144,6 +144,7 @@ fn without_sweep_outliers(
                 screening.set = None;
             }
             let flagged = checks::outlier_warnings(&screening.outliers, &args.data, "validated");
+            checks::print_approach_notes(&screening.outliers, &args.data, "validated");
             Ok((screening.set.unwrap_or(set), flagged))
         }
         Err(

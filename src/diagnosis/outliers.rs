@@ -110,6 +110,7 @@ pub fn pose_point_outliers(
             normalised_residual: z,
             fence,
             dropped: !keep,
+            approach: None,
         })
         .collect();
     let rows: HashMap<(&str, usize, usize), usize> = set

@@ -143,6 +143,7 @@ impl SweepPoints<'_> {
             normalised_residual: residual_mm / (noise_mm / 3f64.sqrt()),
             fence: fence_mm / (noise_mm / 3f64.sqrt()),
             dropped: false,
+            approach: None,
         }
     }
 }

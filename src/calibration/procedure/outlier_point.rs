@@ -30,6 +30,12 @@ pub struct OutlierPoint {
     /// Whether the calibration (the diagnosis) was made without it, and for a sweep point
     /// without the other targets of its pose (`false` with `--keep-outliers`).
     pub dropped: bool,
+    /// A sweep's first point, taken before its joint moved, off its fit only along the sweep's
+    /// motion, ahead toward its second point: the swept joint's turn \[rad\] (a sliding joint's
+    /// travel \[m\]) that puts it there, its backlash taken up on the other side before the
+    /// sweep's first move (`screen`'s approach test); `None` for any other point.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub approach: Option<f64>,
 }
 
 /// The set's row of a flagged point.

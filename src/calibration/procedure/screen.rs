@@ -134,11 +134,11 @@ pub fn screen_sweeps(
                 which: too_many_which(&off.into_iter().map(at).collect::<Vec<_>>()),
             });
         }
-        outliers.extend(
-            flagged
-                .into_iter()
-                .map(|i| s.outlier(i, &last[i], scale.z(i, &last[i]), fence, !keep, set)),
-        );
+        outliers.extend(flagged.into_iter().map(|i| {
+            let mut o = s.outlier(i, &last[i], scale.z(i, &last[i]), fence, !keep, set);
+            o.approach = s.approach(i, &last[i], &|r| scale.z(i, r), fence);
+            o
+        }));
     }
     let first_pass = without_poses(set, &outliers);
     let second = second_target::outliers(
@@ -410,6 +410,26 @@ impl<'a> Sweep<'a> {
         (kept, residuals)
     }
 
+    /// Where point `i` (residual `r` \[m\]) is the sweep's first, taken before its joint moved
+    /// (its step the experiment's first), and off its fit along the sweep's motion only (across
+    /// it, `z` of what is left within `fence`), ahead toward the second point: the joint's turn
+    /// (a sliding joint's travel) that puts it there, its chord's length over the commands'
+    /// difference the path's length per unit. A joint with backlash sits anywhere in its band
+    /// before the first move and lags on one side after it, so the first point alone runs ahead
+    /// of the fit of the others by up to the band; a typo or a moved block sets it off in any
+    /// direction.
+    fn approach(&self, i: usize, r: &Vector3<f64>, z: &dyn Fn(&Vector3<f64>) -> f64, fence: f64) -> Option<f64> {
+        let first = self.experiment.target0_steps.first() == Some(&0);
+        if i != 0 || !first || self.points.len() < 2 {
+            return None;
+        }
+        let chord = self.points[1] - self.points[0];
+        let du = (self.u[1] - self.u[0]).abs();
+        let t = chord.try_normalize(1e-12)?;
+        let along = r.dot(&t);
+        (along > 0.0 && du > 0.0 && z(&(r - t * along)) <= fence).then(|| along / (chord.norm() / du))
+    }
+
     fn outlier(
         &self,
         i: usize,
@@ -430,6 +450,7 @@ impl<'a> Sweep<'a> {
             normalised_residual: z,
             fence,
             dropped,
+            approach: None,
         };
         o.line = row_of(set, &o).and_then(|row| set.line_of(row));
         o

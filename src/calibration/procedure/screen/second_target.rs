@@ -70,6 +70,7 @@ pub(super) fn outliers(
                         normalised_residual: w.ratio,
                         fence,
                         dropped: !keep,
+                        approach: None,
                     };
                     o.line = row_of(original, &o).and_then(|row| original.line_of(row));
                     o
@@ -101,6 +102,7 @@ pub(super) fn outliers(
             .iter()
             .map(|o| OutlierPoint {
                 dropped: true,
+                approach: None,
                 ..o.clone()
             })
             .collect();
