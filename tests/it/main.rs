@@ -41,6 +41,7 @@ mod hostile_round11b;
 mod hostile_round11c;
 mod hostile_round11d;
 mod hostile_round11e;
+mod hostile_round12c;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
