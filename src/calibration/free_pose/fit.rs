@@ -206,7 +206,7 @@ fn tested(
             let j = jacobian.rows(row, n);
             let r = residual.rows(row, n).into_owned();
             row += n;
-            let h = &j * &c * j.transpose();
+            let h = j * &c * j.transpose();
             let inside = kept.contains(&i);
             let a = if inside {
                 DMatrix::identity(n, n) - &h
