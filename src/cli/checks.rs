@@ -736,8 +736,15 @@ pub fn print_pose_outliers(
             ),
             _ => "check its rows' target ids, coordinates, commands and units".to_string(),
         };
+        let fence = match o.false_alarm {
+            Some(rate) => format!(
+                "its leverage in the fit and the noise of the poses near it allow, a clean file's poses passing with {:.0} % probability",
+                100.0 * (1.0 - rate)
+            ),
+            None => "Q3 + 3 IQR of the poses' RMS".to_string(),
+        };
         eprintln!(
-            "warning: {place}: outlier pose: experiment {} step {}: RMS {:.4} mm beyond the fence {:.4} mm (Q3 + 3 IQR of the poses' RMS): {what}; {check}",
+            "warning: {place}: outlier pose: experiment {} step {}: RMS {:.4} mm beyond the fence {:.4} mm ({fence}): {what}; {check}",
             o.experiment, o.step, o.rms_mm, o.fence_mm
         );
     }

@@ -269,7 +269,11 @@ fn registered_start(
 }
 
 /// The fit of the parameters `columns` (the geometry), refitted without the poses the outlier
-/// test flags (unless `keep_outliers`): the fit, the poses it kept, every flag raised.
+/// test flags (unless `keep_outliers`; [`fit::flag_outliers`]): the fit, the poses it kept,
+/// every flag raised. Each round tests every pose against the fit of the poses kept so far, the
+/// noise estimated from them (a gross error of the first fit inflates it and may mask a smaller
+/// one, which the next round finds), and against the first fit's far-out fence; it ends when
+/// the flags settle.
 fn fit_without_outliers(
     problem: &Problem<'_>,
     start: &FreePoseModel,
@@ -277,12 +281,18 @@ fn fit_without_outliers(
     columns: &[usize],
     options: &FreePoseOptions,
 ) -> Result<(Fitted, Vec<usize>, Vec<fit::Flag>), FreePoseError> {
-    let first = fit::fit(problem, start, train, columns)?;
-    // The fence is the first fit's and stays: re-computed on the poses left it would shrink
+    let mut fitted = fit::fit(problem, start, train, columns)?;
+    // Tukey's fence is the first fit's and stays: re-computed on the poses left it would shrink
     // round by round and peel off the tail of clean data.
-    let fence = fit::outlier_fence(&first.residual, problem.poses, train);
-    let mut flags = fit::flag_outliers(&first.residual, problem.poses, train, fence);
-    let mut fitted = first;
+    let tukey = fit::outlier_fence(&fitted.residual, problem.poses, train);
+    let mut flags = fit::flag_outliers(problem, &fitted.model, train, train, columns, tukey)?;
+    let without = |flags: &[fit::Flag]| -> Vec<usize> {
+        train
+            .iter()
+            .copied()
+            .filter(|i| !flags.iter().any(|f| f.pose == *i))
+            .collect()
+    };
     for _ in 0..OUTLIER_ROUNDS {
         if flags.is_empty() || options.keep_outliers {
             break;
@@ -293,17 +303,9 @@ fn fit_without_outliers(
                 poses: train.len(),
             });
         }
-        let kept: Vec<usize> = train
-            .iter()
-            .copied()
-            .filter(|i| !flags.iter().any(|f| f.pose == *i))
-            .collect();
+        let kept = without(&flags);
         fitted = fit::fit(problem, &fitted.model, &kept, columns)?;
-        let all = fitted
-            .model
-            .residuals(problem.controller, problem.poses, train)
-            .map_err(|u| u.error(problem.poses))?;
-        let again = fit::flag_outliers(&all, problem.poses, train, fence);
+        let again = fit::flag_outliers(problem, &fitted.model, train, &kept, columns, tukey)?;
         let settled = again.iter().map(|f| f.pose).eq(flags.iter().map(|f| f.pose));
         flags = again;
         if settled {
@@ -313,11 +315,7 @@ fn fit_without_outliers(
     let kept: Vec<usize> = if options.keep_outliers {
         train.to_vec()
     } else {
-        train
-            .iter()
-            .copied()
-            .filter(|i| !flags.iter().any(|f| f.pose == *i))
-            .collect()
+        without(&flags)
     };
     if kept.len() != fitted.residual.len() / 3 && !options.keep_outliers {
         fitted = fit::fit(problem, &fitted.model, &kept, columns)?;

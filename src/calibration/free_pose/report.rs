@@ -186,7 +186,7 @@ fn outliers(md: &mut String, s: &FreePoseSummary) {
     if s.outliers.is_empty() {
         let _ = writeln!(
             md,
-            "No pose beyond the outlier fence (Tukey's far-out fence of the poses' RMS)."
+            "No pose beyond the outlier fences (its residual studentised by its leverage against the noise of the poses near it, at a family-wise 1 % over the poses, and Tukey's far-out fence of the poses' RMS)."
         );
         return;
     }

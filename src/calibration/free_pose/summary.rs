@@ -55,9 +55,15 @@ pub struct OutlierPose {
     pub step: usize,
     /// RMS distance of its points from the last fit \[mm\].
     pub rms_mm: f64,
-    /// The fence it exceeds: Tukey's far-out fence `Q3 + 3 IQR` of the poses' RMS in the first
-    /// fit \[mm\].
+    /// The fence it exceeds \[mm\]: the RMS at which its normalised residual (studentised by
+    /// its leverage, against its neighbours' noise) meets the fence of the family-wise
+    /// `false_alarm` rate; without it (a refinement's), Tukey's far-out fence `Q3 + 3 IQR` of the
+    /// poses' RMS.
     pub fence_mm: f64,
+    /// The family-wise false-alarm rate of the test over the file's poses (a free-pose
+    /// calibration's); absent for Tukey's fence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub false_alarm: Option<f64>,
     /// Whether the fit was redone without it (`false` with `--keep-outliers`).
     pub dropped: bool,
     /// The largest departure of a spacing between two of its targets from that spacing's
@@ -489,6 +495,7 @@ fn outliers(flags: &[Flag], problem: &Problem<'_>, kept: &[usize]) -> Vec<Outlie
                 step: pose.step,
                 rms_mm: f.rms_m * 1e3,
                 fence_mm: f.fence_m * 1e3,
+                false_alarm: Some(super::fit::FREE_POSES_FALSE_ALARM),
                 dropped: !kept.contains(&f.pose),
                 spacing_departure_mm: departure.map(|(d, _)| d * 1e3),
                 spacing_fence_mm: departure.map(|(_, fence)| fence * 1e3),

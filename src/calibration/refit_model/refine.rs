@@ -62,6 +62,7 @@ pub fn refine_carrying(
             step: poses[f.group].step,
             rms_mm: f.rms,
             fence_mm: f.fence,
+            false_alarm: None,
             dropped: !options.keep_outliers,
             spacing_departure_mm: None,
             spacing_fence_mm: None,
