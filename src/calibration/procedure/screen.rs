@@ -19,8 +19,11 @@
 //!
 //! Then the second targets of the sweeps that measure a coupling ([`second_target`]).
 
+mod rounds;
 mod second_target;
 
+pub use rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX};
+use rounds::{median, too_many_which, without_poses};
 pub use second_target::WorstSecondTarget;
 
 use super::experiments::actuator_commands;
@@ -31,14 +34,10 @@ use crate::calibration::line_ml::{fit_line, predict_line};
 use crate::calibration::{ArcFitOptions, CalibrationError, Studies, fit_arc_with_angle_noise_studies};
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
-use crate::numerics::stats::{QuantileMethod, chi3_far_out_over_median, f_upper_quantile, far_out_fence, quantile};
+use crate::numerics::stats::{chi3_far_out_over_median, f_upper_quantile, far_out_fence};
 use crate::robot::TransmissionFitForm;
 use crate::robot::{Controller, RobotDescription};
 use nalgebra::{Point3, Vector3};
-
-/// At most this share of a sweep's points may be set aside: beyond it the sweep, not single
-/// points, is wrong.
-pub const OUTLIER_SHARE_MAX: f64 = 0.2;
 
 /// The outcome of the test: the points flagged and, when some were set aside, the set
 /// without their poses (every target of a flagged point's step).
@@ -49,11 +48,6 @@ pub struct Screening {
     /// The set without the dropped points; `None` when none was dropped.
     pub set: Option<MeasurementSet>,
 }
-
-/// At most this many points of one sweep are set aside, one refit each: more gross errors in
-/// one sweep make it wrong, not its points (and a million-point sweep is not refitted a
-/// hundred thousand times).
-pub const OUTLIER_ROUNDS_MAX: usize = 25;
 
 /// A sweep's points lie within about twice their median distance from their median point
 /// when evenly spread (a line's end at half its length against a quarter); a point beyond this
@@ -151,43 +145,6 @@ pub fn screen_sweeps(
     outliers.extend(second);
     let set = without_poses(set, &outliers);
     Ok(Screening { outliers, set })
-}
-
-/// What a sweep with too many points beyond the fence says, from those points (their place
-/// among the sweep's points, step and file line, in sweep order): points in one run of
-/// consecutive steps are a block of the sweep gone wrong; points apart are single rows, named.
-pub(super) fn too_many_which(off: &[(usize, usize, Option<u64>)]) -> String {
-    let run = off.windows(2).all(|w| w[1].0 == w[0].0 + 1);
-    let lines: Option<Vec<String>> = off.iter().map(|o| o.2.map(|l| l.to_string())).collect();
-    let steps: Vec<String> = off.iter().map(|o| o.1.to_string()).collect();
-    let rows = match &lines {
-        Some(lines) => format!("lines {}, steps {}", lines.join(", "), steps.join(", ")),
-        None => format!("steps {}", steps.join(", ")),
-    };
-    if run {
-        format!(
-            " ({rows}, one run of consecutive steps): the sweep, not single points, is wrong (check its joint, its target ids, its units)"
-        )
-    } else {
-        format!(
-            ", more than the {:.0} % the test may set aside; they are single rows apart in the sweep ({rows}): check those rows' commands and coordinates (a typo, another unit, a command scaled in those rows); if they are right, the sweep itself is wrong (its joint, its target ids, its units)",
-            OUTLIER_SHARE_MAX * 100.0
-        )
-    }
-}
-
-/// `set` without the poses of the `outliers` dropped (every target of a flagged point's step:
-/// a wrong reading is wrong for each of its targets); `None` when none was dropped.
-fn without_poses(set: &MeasurementSet, outliers: &[OutlierPoint]) -> Option<MeasurementSet> {
-    let poses: std::collections::HashSet<(&str, usize)> = outliers
-        .iter()
-        .filter(|o| o.dropped)
-        .map(|o| (o.experiment.as_str(), o.step))
-        .collect();
-    let dropped: Vec<usize> = (0..set.rows().len())
-        .filter(|&i| poses.contains(&(set.rows()[i].experiment.as_str(), set.rows()[i].step)))
-        .collect();
-    (!dropped.is_empty()).then(|| set.without_rows(&dropped))
 }
 
 /// Every point of `s`.
@@ -455,10 +412,6 @@ impl<'a> Sweep<'a> {
         o.line = row_of(set, &o).and_then(|row| set.line_of(row));
         o
     }
-}
-
-fn median(v: &[f64]) -> f64 {
-    quantile(v, 0.5, QuantileMethod::Linear)
 }
 
 fn centroid(points: &[Point3<f64>]) -> Point3<f64> {

@@ -6,7 +6,7 @@
 
 use super::super::outlier_point::{OutlierPoint, row_of};
 use super::super::{CalibrationOptions, Detail, ProcedureError, SecondTargetData, calibrate_model};
-use super::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, median, without_poses};
+use super::rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, median, too_many_which, without_poses};
 use crate::measurement::MeasurementSet;
 use crate::numerics::lsq::linear_lsq;
 use crate::numerics::stats::chi_square_quantile;
@@ -93,7 +93,7 @@ pub(super) fn outliers(
                     flagged: points.len(),
                     points: data.steps.len(),
                     fence,
-                    which: super::too_many_which(&off),
+                    which: too_many_which(&off),
                 });
             }
             out.extend(points);
