@@ -394,12 +394,15 @@ impl Assembly<'_> {
             None => passive_start(&cform, slope, &active, &passive),
         };
         let known = self.refit.fitted.and_then(|f| f.iter().find(|c| c.from == from));
-        let data = SecondTargetData {
+        let data_of = || SecondTargetData {
             steps: e.target1_steps.iter().map(|&i| e.steps[i]).collect(),
             active_rad: active.clone(),
             passive_rad: passive.clone(),
             lever_arms_m: second_target_lever_arms_m(&frame_next, &axis_from, &t_from_start, second),
         };
+        // A warm refit (the propagation's finite differences) reads the couplings' values only:
+        // the points they were fitted to are kept for the reports of the fit itself.
+        let data = warm.is_none().then(data_of);
         let fit = match (warm, known) {
             (Some(response), _) => response.refit(&active, &passive, start),
             (None, Some(c)) => Ok(CouplingFit {
@@ -414,7 +417,7 @@ impl Assembly<'_> {
             experiment: e.name.clone(),
             joint: from,
             cause: source,
-            data: Box::new(data.clone()),
+            data: Box::new(data.clone().unwrap_or_else(data_of)),
         })?;
         if let Some(record) = self.refit.record {
             let response = CouplingResponse::at(&cform, &active, &passive, start, &fit.parameters).map_err(fit_err)?;
@@ -431,7 +434,7 @@ impl Assembly<'_> {
             });
         }
         let mut report = CouplingReport::new(from, e, &fit, &cform);
-        report.second_target = data;
+        report.second_target = data.unwrap_or_default();
         Ok((fit.function, report))
     }
 
