@@ -6,7 +6,7 @@
 //! Conventions (`docs/method.md`, "Joint offsets and the reference pose"): the calibrated joint values at the reference pose are the
 //! reference commands; `theta_act_k = f_k^-1(u_k - offset_k)` and
 //! `q_k = theta_act_k + g_{k-1,k}(theta_act_{k-1})`, the same semantics as the truth model,
-//! so a calibrated robot is expressed as a [`RobotModel`]-shaped model (a data type; no truth
+//! so a calibrated robot is expressed as a [`RobotModel`](crate::robot::RobotModel)-shaped model (a data type; no truth
 //! value is read).
 //!
 //! Repeatability ([`CalibrationOptions::repeatability_sigma_rad`], default the description's
