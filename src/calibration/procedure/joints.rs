@@ -3,18 +3,20 @@
 //! joint's sweep when observed (eqs. 14-15), else the nominal one. A joint no experiment
 //! sweeps keeps its nominal model (identity transmission, nominal coupling, zero offset).
 
+use super::assembly_cache::{CacheUse, CouplingInputs};
+use super::coupling_start::{gear_passive_start_weights, passive_start, weighted_gear_start};
 use super::experiments::actuator_commands;
+use super::recorded_coupling::RecordedCoupling;
 use super::{AxisExperiment, CouplingReport, ProcedureError, SecondTargetData};
 use crate::calibration::CalibrationError;
 use crate::calibration::coupling_fit::{
     CouplingFit, CouplingForm, CouplingResponse, fit_coupling, fixed_coupling, passive_displacements,
     second_target_lever_arms_m,
 };
-use crate::kinematics::AxisLine;
 use crate::kinematics::{ChainPoses, FixedFrames, PhiModel};
 use crate::robot::{Controller, CouplingFitForm, CouplingFunction, JointModel, RobotDescription, Transmission};
-use nalgebra::{DMatrix, Isometry3, Point3};
-use std::cell::{OnceCell, RefCell};
+use nalgebra::Point3;
+use std::cell::OnceCell;
 
 /// The fitted axes of a campaign and the reference pose the joint models are assembled from.
 pub(super) struct Assembly<'a> {
@@ -51,120 +53,14 @@ pub(super) struct Refit<'a> {
     pub(super) warm: Option<&'a [Option<CouplingResponse>]>,
     /// The coupling into this joint (0-based) not fitted but set to these parameters.
     pub(super) fixed: Option<(usize, &'a [f64])>,
-    /// Where to record every fitted coupling's inputs.
-    pub(super) record: Option<&'a RefCell<Vec<RecordedCoupling>>>,
-    /// The couplings' inputs of the recording assembly and their warm refits: a refit whose
-    /// inputs are those of the recording (a propagation column that moves another joint's
-    /// fit) is computed once and reused, bit for bit the same.
-    pub(super) memo: Option<&'a RefCell<Vec<CouplingMemo>>>,
-    /// The driving joints' inverted transmissions at the couplings' sweeps, recorded by the
-    /// recording assembly: a column that does not move a driving joint's transmission reuses
-    /// them (the same arithmetic).
-    pub(super) angles: Option<&'a RefCell<Vec<RawAngles>>>,
     /// The phi-model of the axes when it is already known (the axes are those it was built
     /// from): not built again.
     pub(super) geometry: Option<&'a (PhiModel, super::BaseRule)>,
     /// The couplings as an assembly of the same axes, transmissions and second targets
     /// fitted them (the calibration's): taken, not fitted again.
     pub(super) fitted: Option<&'a [CouplingReport]>,
-    /// The gear couplings' start weights by raw driving angles ([`GearStart`]): a warm
-    /// refit's start is their product with its data, the decomposition done once per
-    /// driving transmission.
-    pub(super) starts: Option<&'a RefCell<Vec<GearStart>>>,
-}
-
-/// The weights of a gear coupling's start at one set of raw driving angles
-/// ([`Assembly::warm_start`]).
-pub(super) struct GearStart {
-    raw: Vec<f64>,
-    weights: Vec<f64>,
-}
-
-/// What a coupling fit depends on besides the fixed data (experiments, second targets,
-/// reference pose, controller): the base placement and the rows below the driven joint (its
-/// frames), the driving joint's transmission and zero shift.
-#[derive(Clone, PartialEq)]
-struct CouplingInputs {
-    world_from_base: Isometry3<f64>,
-    rows: Vec<crate::kinematics::PhiRow>,
-    transmission: Option<Transmission>,
-    shift: f64,
-}
-
-/// A driving joint's transmission inverted at a coupling sweep's target-1 commands and at
-/// the reference command ([`Assembly::raw_active_angles`]).
-pub(super) struct RawAngles {
-    /// The sweep (experiment index).
-    index: usize,
-    transmission: Transmission,
-    raw: Vec<f64>,
-    raw_ref: Option<f64>,
-}
-
-/// One coupling's recorded inputs and, once computed, its warm refit on them.
-pub(super) struct CouplingMemo {
-    /// Driven joint (0-based).
-    k: usize,
-    inputs: CouplingInputs,
-    refit: Option<(CouplingFunction, CouplingReport)>,
-}
-
-/// A fitted coupling's inputs other than the second targets, its parameters and its
-/// first-order response to its data (the propagation's).
-pub(super) struct RecordedCoupling {
-    /// Driven joint (0-based).
-    pub(super) k: usize,
-    /// Index of the experiment whose second targets it is fitted from.
-    pub(super) index: usize,
-    /// Calibrated frame `k` at step 0 of the sweep.
-    pub(super) frame_next: Isometry3<f64>,
-    /// Calibrated axis `k-1`.
-    pub(super) axis_from: AxisLine,
-    /// Absolute active angles of the driving joint (rad).
-    pub(super) active: Vec<f64>,
-    /// The form fitted.
-    pub(super) form: CouplingForm,
-    /// The nominal slope (the fractional form's passive start is `slope * active[0]`).
-    pub(super) slope: f64,
-    /// The fitted parameters.
-    pub(super) parameters: Vec<f64>,
-    /// The fit's response at these parameters to its data.
-    pub(super) response: CouplingResponse,
-}
-
-impl RecordedCoupling {
-    /// The active motion since step 0 (rad).
-    pub(super) fn active_from_start(&self) -> Vec<f64> {
-        self.active.iter().map(|a| a - self.active[0]).collect()
-    }
-
-    /// `S = d x / d y`, the fitted parameters' derivative with respect to the passive
-    /// displacements they are fitted to (`y`; eq. 15's targets are `y_j + start`):
-    /// `S = H^-1 J^T (I + 1 w^T)` ([`CouplingResponse::target_sensitivity`]), `w = d start /
-    /// d y` (zero for the fractional form, whose start is the nominal coupling's; a gear's
-    /// start is linear in `y`, [`gear_passive_start_weights`]).
-    pub(super) fn passive_sensitivity(&self) -> Result<DMatrix<f64>, CalibrationError> {
-        let mut s = self.response.target_sensitivity(&self.active)?;
-        if let CouplingForm::Gear { order, .. } = self.form {
-            let w = gear_passive_start_weights(self.slope, order, &self.active);
-            let row_sums: Vec<f64> = s.row_iter().map(|r| r.sum()).collect();
-            for (i, total) in row_sums.iter().enumerate() {
-                for (j, wj) in w.iter().enumerate() {
-                    s[(i, j)] += total * wj;
-                }
-            }
-        }
-        Ok(s)
-    }
-}
-
-/// The absolute passive angle at step 0 the coupling fit of `form` uses: the nominal
-/// coupling's for the fractional form, the harmonics' least squares for a gear.
-fn passive_start(form: &CouplingForm, slope: f64, active: &[f64], passive: &[f64]) -> f64 {
-    match *form {
-        CouplingForm::Fractional => slope * active[0],
-        CouplingForm::Gear { order, .. } => gear_passive_start(slope, order, active, passive),
-    }
+    /// The propagation's cache: recorded into by its first assembly, reused by the others.
+    pub(super) cache: Option<CacheUse<'a>>,
 }
 
 impl Assembly<'_> {
@@ -304,8 +200,8 @@ impl Assembly<'_> {
     }
 
     /// The coupling into joint `k` (0-based) that `fit` fits from the zero shifts `shift` of
-    /// the joints below, its report pushed onto `couplings`; taken from [`Refit::memo`] when
-    /// its inputs are the recorded ones and already refitted there.
+    /// the joints below, its report pushed onto `couplings`; taken from the propagation's cache
+    /// ([`Refit::cache`]) when its inputs are the recorded ones and already refitted there.
     fn memoized(
         &self,
         k: usize,
@@ -319,30 +215,19 @@ impl Assembly<'_> {
             transmission: self.transmissions[k - 1].clone(),
             shift: shift[k - 1],
         };
-        let memo = match (self.refit.memo, self.refit.fixed, self.refit.warm) {
-            (Some(m), fixed, Some(_)) if fixed.is_none_or(|(j, _)| j != k) => Some(m),
-            _ => None,
-        };
-        let hit = memo.and_then(|m| {
-            m.borrow()
-                .iter()
-                .find(|entry| entry.k == k && entry.inputs == inputs)
-                .and_then(|entry| entry.refit.clone())
-        });
-        if let Some((function, report)) = hit {
+        let fixed_here = self.refit.fixed.is_some_and(|(j, _)| j == k);
+        let reuse = (self.refit.warm.is_some() && !fixed_here)
+            .then(|| self.refit.cache.and_then(CacheUse::reusing))
+            .flatten();
+        if let Some((function, report)) = reuse.and_then(|c| c.memo_refit(k, &inputs)) {
             couplings.push(report);
             return Ok(function);
         }
         let (function, report) = fit()?;
-        if let Some(m) = self.refit.memo {
-            let mut m = m.borrow_mut();
-            if memo.is_some() {
-                if let Some(entry) = m.iter_mut().find(|entry| entry.k == k && entry.inputs == inputs) {
-                    entry.refit = Some((function.clone(), report.clone()));
-                }
-            } else if self.refit.record.is_some() {
-                m.push(CouplingMemo { k, inputs, refit: None });
-            }
+        if let Some(cache) = reuse {
+            cache.keep_refit(k, &inputs, (function.clone(), report.clone()));
+        } else if let Some(cache) = self.refit.cache.and_then(CacheUse::recording) {
+            cache.record_inputs(k, inputs);
         }
         couplings.push(report);
         Ok(function)
@@ -419,9 +304,9 @@ impl Assembly<'_> {
             cause: source,
             data: Box::new(data.clone().unwrap_or_else(data_of)),
         })?;
-        if let Some(record) = self.refit.record {
+        if let Some(cache) = self.refit.cache.and_then(CacheUse::recording) {
             let response = CouplingResponse::at(&cform, &active, &passive, start, &fit.parameters).map_err(fit_err)?;
-            record.borrow_mut().push(RecordedCoupling {
+            cache.record_coupling(RecordedCoupling {
                 response,
                 k,
                 index,
@@ -444,30 +329,24 @@ impl Assembly<'_> {
     /// driving transmission's inversions, before the zero shift that makes them the active
     /// angles `t`): a constant shift of the angles turns each harmonic's sine and cosine
     /// columns into combinations of each other, so the design's column space and the
-    /// constant's weights do not change. Taken from [`Refit::starts`] when known there for
-    /// these raw angles (a column that does not move the driving transmission), else computed
-    /// and kept.
+    /// constant's weights do not change. Taken from the propagation's cache when known there
+    /// for these raw angles (a column that does not move the driving transmission), else
+    /// computed and kept.
     fn warm_start(&self, form: &CouplingForm, slope: f64, (raw, active): (&[f64], &[f64]), passive: &[f64]) -> f64 {
-        let (CouplingForm::Gear { order, .. }, Some(cache)) = (form, self.refit.starts) else {
+        let cache = self.refit.cache.and_then(CacheUse::reusing);
+        let (CouplingForm::Gear { order, .. }, Some(cache)) = (form, cache) else {
             return passive_start(form, slope, active, passive);
         };
-        let mut cache = cache.borrow_mut();
-        let at = match cache.iter().position(|s| s.raw == raw) {
-            Some(at) => at,
-            None => {
-                cache.push(GearStart {
-                    raw: raw.to_vec(),
-                    weights: gear_passive_start_weights(slope, *order, raw),
-                });
-                cache.len() - 1
-            }
-        };
-        weighted_gear_start(&cache[at].weights, slope, active, passive)
+        cache.with_gear_weights(
+            raw,
+            || gear_passive_start_weights(slope, *order, raw),
+            |weights| weighted_gear_start(weights, slope, active, passive),
+        )
     }
 
     /// The driving joint `k-1`'s (0-based) transmission inverted (rad, before its zero shift)
     /// at the steps of sweep `index` where its second target was seen, and at the reference
-    /// command (`None`: not invertible there); taken from [`Refit::angles`] when that
+    /// command (`None`: not invertible there); taken from the propagation's cache when that
     /// transmission's are recorded there (the same arithmetic), recorded by a recording
     /// assembly.
     fn raw_active_angles(
@@ -476,15 +355,12 @@ impl Assembly<'_> {
         (index, e): (usize, &AxisExperiment),
     ) -> Result<(Vec<f64>, Option<f64>), ProcedureError> {
         let from_transmission = self.transmissions[k - 1].as_ref().expect("checked by coupling_into");
-        if let Some(cache) = self.refit.angles {
-            let hit = cache
-                .borrow()
-                .iter()
-                .find(|a| a.index == index && &a.transmission == from_transmission)
-                .map(|a| (a.raw.clone(), a.raw_ref));
-            if let Some(hit) = hit {
-                return Ok(hit);
-            }
+        if let Some(hit) = self
+            .refit
+            .cache
+            .and_then(|c| c.cache().raw_angles(index, from_transmission))
+        {
+            return Ok(hit);
         }
         let u = &self.target1_commands[index];
         let raw: Vec<f64> = u
@@ -502,13 +378,8 @@ impl Assembly<'_> {
                 )
             })?;
         let raw_ref = from_transmission.actual_from_command(self.u_ref[k - 1]);
-        if let (Some(cache), Some(_)) = (self.refit.angles, self.refit.record) {
-            cache.borrow_mut().push(RawAngles {
-                index,
-                transmission: from_transmission.clone(),
-                raw: raw.clone(),
-                raw_ref,
-            });
+        if let Some(cache) = self.refit.cache.and_then(CacheUse::recording) {
+            cache.record_raw_angles(index, from_transmission, (&raw, raw_ref));
         }
         Ok((raw, raw_ref))
     }
@@ -538,149 +409,5 @@ fn fit_error(e: &AxisExperiment, from: usize, source: CalibrationError) -> Proce
         experiment: e.name.clone(),
         joint: from,
         error: source,
-    }
-}
-
-/// The absolute passive angle at step 0 for a gear form `N t + sum (s sin kNt + c cos kNt)`,
-/// which has no free constant: linear least squares of the increments `y - N t` on
-/// [`gear_start_design`].
-fn gear_passive_start(ratio: f64, order: usize, active: &[f64], passive_from_start: &[f64]) -> f64 {
-    let a = gear_start_design(ratio, order, active);
-    let b = nalgebra::DVector::from_fn(active.len(), |j, _| passive_from_start[j] - ratio * active[j]);
-    match a.svd(true, true).solve(&b, 1e-12) {
-        Ok(x) => x[2 * order],
-        Err(_) => ratio * active[0],
-    }
-}
-
-/// [`gear_passive_start`] from its weights `w` ([`gear_passive_start_weights`]):
-/// `w . (y - N t)`, or the nominal `N t_0` without weights (as there when the SVD fails).
-fn weighted_gear_start(w: &[f64], ratio: f64, active: &[f64], passive_from_start: &[f64]) -> f64 {
-    if w.is_empty() {
-        return ratio * active[0];
-    }
-    w.iter()
-        .zip(active.iter().zip(passive_from_start))
-        .map(|(w, (t, y))| w * (y - ratio * t))
-        .sum()
-}
-
-/// The design `[sin kNt, cos kNt, -1]` of the gear form's start ([`gear_passive_start`]).
-fn gear_start_design(ratio: f64, order: usize, active: &[f64]) -> DMatrix<f64> {
-    let mut a = DMatrix::zeros(active.len(), 2 * order + 1);
-    for (j, &t) in active.iter().enumerate() {
-        for h in 0..order {
-            let x = (h + 1) as f64 * ratio * t;
-            a[(j, h)] = x.sin();
-            a[(j, order + h)] = x.cos();
-        }
-        a[(j, 2 * order)] = -1.0;
-    }
-    a
-}
-
-/// The weights `w` of the gear form's start, `start = w . (y - N t)` ([`gear_passive_start`]
-/// is linear in the increments `y`): the last row of the pseudo-inverse of
-/// [`gear_start_design`] (singular values below 1e-12 dropped, as there); empty when its SVD
-/// fails (the start is then the nominal `N t_0`, which `y` does not move).
-fn gear_passive_start_weights(ratio: f64, order: usize, active: &[f64]) -> Vec<f64> {
-    match gear_start_design(ratio, order, active)
-        .svd(true, true)
-        .pseudo_inverse(1e-12)
-    {
-        Ok(p) => p.row(2 * order).iter().copied().collect(),
-        Err(_) => Vec::new(),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::kinematics::AxisLine;
-    use nalgebra::{Unit, Vector3};
-
-    /// The gear start from its weights at the angles before their zero shift (the warm
-    /// refits') against the least-squares solve of the fits at the shifted angles (a second
-    /// path: nalgebra's SVD solve instead of the pseudo-inverse's row): the same number to
-    /// rounding (the start is ~1 rad; 1e-12 leaves the solve's rounding,
-    /// ~1e-15, a thousandfold margin), for the first- and second-order gear on noisy data;
-    /// with the weights of the wrong order it fails.
-    #[test]
-    fn weighted_gear_start_is_the_least_squares_start() {
-        let active: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
-        for order in [1, 2] {
-            let ratio = -1.6;
-            let passive: Vec<f64> = active
-                .iter()
-                .enumerate()
-                .map(|(j, t)| ratio * t + 0.3 + 2e-3 * (2.1 * ratio * t).sin() + 1e-4 * ((j * 5 % 7) as f64 - 3.0))
-                .map(|y| y - (ratio * active[0] + 0.3 + 2e-3 * (2.1 * ratio * active[0]).sin()))
-                .collect();
-            let solved = gear_passive_start(ratio, order, &active, &passive);
-            // The weights of the angles before a zero shift of 0.37 rad (the warm refits').
-            let raw: Vec<f64> = active.iter().map(|t| t - 0.37).collect();
-            let w = gear_passive_start_weights(ratio, order, &raw);
-            let weighted = weighted_gear_start(&w, ratio, &active, &passive);
-            assert!((solved - weighted).abs() <= 1e-12, "order {order}: {solved} {weighted}");
-            let wrong = gear_passive_start_weights(ratio, 3 - order, &active);
-            let off = (weighted_gear_start(&wrong, ratio, &active, &passive) - solved).abs();
-            assert!(off > 1e-6, "order {order}: {off:e}");
-        }
-    }
-
-    /// `passive_sensitivity` against central differences (the project's finite-difference
-    /// tool, [`crate::calibration::refine::sensitivity`]) of the Newton refit with the start
-    /// recomputed from the moved displacements (the refit's derivative at the optimum is the
-    /// optimum's: [`CouplingResponse`]), for the fractional form (start fixed) and a fitted
-    /// gear (start a least-squares function of the displacements, which the chain rule's
-    /// `w` carries): agreement to the differences' truncation at steps of 1e-7 rad (~1e-6
-    /// relative; the refit is linear in the displacements, so only rounding is left),
-    /// checked at 1e-5 of the largest entry.
-    #[test]
-    fn passive_sensitivity_matches_central_differences_of_the_refit() {
-        let active: Vec<f64> = (0..16).map(|j| -0.4 + 0.0524 * j as f64).collect();
-        // The nominal slope: the parallelogram's for the four-bar, the gear's own ratio.
-        let cases = crate::calibration::coupling_fit::tests::paper_couplings().map(|(form, truth, _)| {
-            let slope = match form {
-                CouplingForm::Gear { ratio, .. } => ratio,
-                CouplingForm::Fractional => -1.0,
-            };
-            (form, truth, slope)
-        });
-        for (form, truth, slope) in cases {
-            let g: Vec<f64> = active
-                .iter()
-                .enumerate()
-                .map(|(j, t)| truth.passive(*t) + 1e-4 * ((j * 5 % 7) as f64 - 3.0))
-                .collect();
-            let passive: Vec<f64> = g.iter().map(|v| v - g[0]).collect();
-            let start = passive_start(&form, slope, &active, &passive);
-            let fit = fit_coupling(&form, &active, &passive, start).unwrap();
-            let response = CouplingResponse::at(&form, &active, &passive, start, &fit.parameters).unwrap();
-            let coupling = RecordedCoupling {
-                k: 1,
-                index: 0,
-                frame_next: Isometry3::identity(),
-                axis_from: AxisLine {
-                    origin_m: Point3::origin(),
-                    direction: Unit::new_normalize(Vector3::z()),
-                },
-                active: active.clone(),
-                form,
-                slope,
-                parameters: fit.parameters.clone(),
-                response: response.clone(),
-            };
-            let analytic = coupling.passive_sensitivity().unwrap();
-            let refit = |y: &[f64]| {
-                let start = passive_start(&form, slope, &active, y);
-                let x = response.refit(&active, y, start).unwrap().parameters;
-                Some(x.iter().map(|v| -v).collect())
-            };
-            let fd = crate::calibration::refine::sensitivity(refit, &passive, &vec![1e-7; passive.len()]).unwrap();
-            let scale = analytic.abs().max();
-            let diff = (&analytic - &fd).abs().max();
-            assert!(diff <= 1e-5 * scale, "{form:?}: {diff:e} of {scale:e}");
-        }
     }
 }

@@ -22,7 +22,9 @@
 //! the second and tool targets (`propagation`); the coupling fit's own a-posteriori sigma is
 //! kept beside it (`CouplingReport::fit_only_sigma`).
 
+mod assembly_cache;
 mod axis_fit;
+mod coupling_start;
 mod error;
 mod experiments;
 mod frames;
@@ -34,6 +36,7 @@ mod options;
 mod outlier_point;
 mod pipeline;
 mod propagation;
+mod recorded_coupling;
 mod report;
 mod result;
 mod sanity;

@@ -3,11 +3,13 @@
 //! and tool frames), the held joints corrected, the sigmas propagated ([`calibrate`]); the
 //! lean path a Monte-Carlo trial takes stops after the assembly ([`calibrate_model`]).
 
+use super::assembly_cache::{AssemblyCache, CacheUse};
 use super::axis_fit::{AxisFitOutcome, JointData, add_held_joint_covariances, fit_joint};
 use super::experiments::actuator_commands;
 use super::held::{Corrector, design_distance, exactly_as_designed};
-use super::joints::{Assembly, RecordedCoupling, Refit, swept_commands_at_target1};
+use super::joints::{Assembly, Refit, swept_commands_at_target1};
 use super::propagation::{Derived, Propagation, add_axis_fit, moved_point};
+use super::recorded_coupling::RecordedCoupling;
 use super::{
     AxisCovariance, AxisExperiment, BaseRule, COMMAND_TOLERANCE, Calibration, CalibrationOptions, CouplingReport,
     DerivedSigma, Detail, NoiseReport, NominalGeometry, ProcedureError, RowSigma, ToolReport, ZeroOffsetSigma,
@@ -21,7 +23,6 @@ use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel, Transmission};
 use nalgebra::{DMatrix, Isometry3, Point3};
-use std::cell::RefCell;
 
 /// The lean result of [`calibrate_model`]: the fitted model, as [`calibrate`] would fit it
 /// bit for bit, without the report.
@@ -472,26 +473,19 @@ impl<'a> Context<'a> {
         let world_from_tool = tool_points.as_deref().and_then(tool_fit);
         let tool = world_from_tool.as_ref();
         let (axes, target1) = (&state.axes, &state.target1);
-        let record = RefCell::new(Vec::new());
-        let memo = RefCell::new(Vec::new());
-        let angles = RefCell::new(Vec::new());
+        let cache = AssemblyCache::default();
         let recording = Refit {
-            record: Some(&record),
-            memo: Some(&memo),
-            angles: Some(&angles),
             fitted: Some(&state.couplings),
+            cache: Some(CacheUse::Record(&cache)),
             ..Refit::default()
         };
         let (base, world_from_link) = self.derived((axes, &transmissions), target1, tool, recording)?;
-        let record = record.into_inner();
+        let record = cache.take_recorded();
         let mut responses: Vec<Option<CouplingResponse>> = vec![None; self.desc.dof()];
         record.iter().for_each(|c| responses[c.k] = Some(c.response.clone()));
-        let starts = RefCell::new(Vec::new());
         let warm = Refit {
             warm: Some(&responses),
-            memo: Some(&memo),
-            angles: Some(&angles),
-            starts: Some(&starts),
+            cache: Some(CacheUse::Reuse(&cache)),
             ..Refit::default()
         };
         let geometry = self.nominal.model_from_axes(axes)?;
