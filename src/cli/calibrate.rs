@@ -14,8 +14,8 @@ use axiscal::calibration::outputs::{self, OUTPUT_FILES, OutputOptions};
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Implausible, PLAUSIBLE_AXIS_TILT_RAD,
-    ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, UrdfOptions, UrdfRoot, calibrate, longest_length_m, ros_name,
-    screen_sweeps,
+    ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, ScaleSlip, UrdfOptions, UrdfRoot, calibrate, longest_length_m,
+    ros_name, screen_sweeps,
 };
 use axiscal::calibration::record::{CalibrationRecord, Reports};
 use axiscal::calibration::refine::{RefineOptions, Refinement, enough_free_poses};
@@ -26,7 +26,7 @@ use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates};
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_ROWS, axis_scale};
-use axiscal::measurement::{MeasurementSet, format_f64};
+use axiscal::measurement::{Measurement, MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
 use std::path::{Path, PathBuf};
@@ -228,7 +228,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         None => {
             print_axes((cal, accuracy), &desc, &source, printer);
             print_implausible(&texts.implausible, &desc, &set, &args);
-            print_scale_doubts(cal, &desc, &texts.implausible, &args.data);
+            print_scale_doubts((cal, &desc, set.rows()), &texts.implausible, &args.data);
             print_moved_sweeps(cal, &desc, &set, &args.data);
             if !args.refine
                 && let Some(miss) =
@@ -612,7 +612,11 @@ fn print_implausible(found: &[Implausible], desc: &RobotDescription, set: &Measu
 /// The joints whose slope a gear's once-per-turn error and a scaled command column explain
 /// alike ([`scale_doubts`]) as notes; none beside a size or mirror finding, which explains the
 /// slopes.
-fn print_scale_doubts(cal: &Calibration, desc: &RobotDescription, found: &[Implausible], data: &Path) {
+fn print_scale_doubts(
+    (cal, desc, rows): (&Calibration, &RobotDescription, &[Measurement]),
+    found: &[Implausible],
+    data: &Path,
+) {
     if found
         .iter()
         .any(|f| matches!(f, Implausible::Size { .. } | Implausible::Mirrored { .. }))
@@ -622,9 +626,16 @@ fn print_scale_doubts(cal: &Calibration, desc: &RobotDescription, found: &[Impla
     for doubt in axiscal::calibration::procedure::scale_doubts(cal, desc) {
         eprintln!("note: {}: {doubt}", data.display());
     }
-    if !found.iter().any(|f| matches!(f, Implausible::Scaled(_)))
-        && let Some(reach) = axiscal::calibration::procedure::scale_reach(cal, desc)
-    {
+    // The columns a warning named are said; the line bounds the others.
+    let scaled: Vec<ScaleSlip> = found
+        .iter()
+        .filter_map(|f| match f {
+            Implausible::Scaled(s) => Some(s.clone()),
+            _ => None,
+        })
+        .collect();
+    let named = axiscal::calibration::procedure::named_joints(&scaled);
+    if let Some(reach) = axiscal::calibration::procedure::scale_reach(cal, desc, rows).and_then(|r| r.without(&named)) {
         eprintln!("note: {}: {reach}", data.display());
     }
 }
@@ -643,7 +654,7 @@ fn add_detection_limits(
     };
     let cal = &record.calibration;
     let reach = match &record.reports.free_poses {
-        None => axiscal::calibration::procedure::scale_reach(cal, desc),
+        None => axiscal::calibration::procedure::scale_reach(cal, desc, set.rows()),
         Some(summary) => axiscal::calibration::procedure::free_pose_scale_reach((cal, summary), desc, set.rows()),
     };
     let commands = reach.map(|r| format!("{}\n\n", r.words())).unwrap_or_default();

@@ -7,6 +7,7 @@ use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mir
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
 use axiscal::calibration::procedure::{
     Calibration, ScaleDoubt, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
+    named_joints,
 };
 use axiscal::calibration::record::CalibrationRecord;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
@@ -234,8 +235,8 @@ fn slip_words(s: &ExplainingSlip) -> String {
 /// [`axiscal::calibration::free_pose::slip`]): a column slip; else tool target ids in another
 /// order, by their distances ([`swapped_target_ids`]) or, for a symmetric set, by the fitted
 /// tool frame's turn ([`mirrored_targets`]); and, without a column slip, a joint's transmission
-/// beyond what a drive gives ([`free_pose_scale_slips`]), or else how large a column scale
-/// that test lets pass ([`free_pose_scale_reach`]).
+/// beyond what a drive gives ([`free_pose_scale_slips`]), and how large a scale of each other
+/// column that test lets pass ([`free_pose_scale_reach`]).
 fn warn_slips(
     args: &FreeArgs<'_>,
     (set, desc): (&MeasurementSet, &RobotDescription),
@@ -259,14 +260,10 @@ fn warn_slips(
         return;
     }
     let scaled = free_pose_scale_slips((cal, summary), desc, set.rows());
-    let mut named = false;
     for found in &scaled {
         match found.free_pose_note() {
             Some(note) => eprintln!("note: {data}: {note}"),
-            None => {
-                named = true;
-                eprintln!("warning: {data}: {found}");
-            }
+            None => eprintln!("warning: {data}: {found}"),
         }
     }
     let doubts = free_pose_scale_doubts((cal, summary), desc, set.rows());
@@ -305,7 +302,10 @@ fn warn_slips(
         };
         super::calibrate::warn_axis_scale((set, desc), args.data, &fit, PROFILE_MAX_FREE_POSE_ROWS, printer);
     }
-    if !named && let Some(reach) = free_pose_scale_reach((cal, summary), desc, set.rows()) {
+    // The columns said above are named; the line bounds the others.
+    if let Some(reach) =
+        free_pose_scale_reach((cal, summary), desc, set.rows()).and_then(|r| r.without(&named_joints(&scaled)))
+    {
         eprintln!("note: {data}: {reach}");
     }
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);

@@ -41,11 +41,12 @@
 //!   mirror finding, which explains it; a joint's misfit is not said beside its scale.
 
 mod scale;
+mod scale_absorption;
 
 pub use scale::{
     DOUBT_SIGMAS, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, ScaleDoubt,
-    ScaleReach, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips, scale_doubts,
-    scale_reach,
+    ScaleReach, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips, named_joints,
+    scale_doubts, scale_reach,
 };
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};

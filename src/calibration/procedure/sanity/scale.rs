@@ -21,8 +21,10 @@
 //!   description's masses give a torque change of the departure's sign along the joint's
 //!   points and a stiffness that holds the robot within a plausible sag, the departure is
 //!   said as the sag ([`ScaleSlip::Sag`]), the scale as the alternative. Every file says how
-//!   large a scale of each column would pass ([`scale_reach`], [`free_pose_scale_reach`]): a
-//!   0.5 % scale is within what a drive departs by on most files. A joint's departure between [`DOUBT_SIGMAS`] and [`DRIVE_SIGMAS`]
+//!   large a scale of each column would pass ([`scale_reach`], [`free_pose_scale_reach`]): the
+//!   test's minimum detectable scale, from the share of a scale the fitted transmission leaves
+//!   in the mean slope over the joint's commands ([`super::scale_absorption`]); a 0.5 % scale is
+//!   within what a drive departs by on most files. A joint's departure between [`DOUBT_SIGMAS`] and [`DRIVE_SIGMAS`]
 //!   is a note with both causes ([`ScaleDoubt`]): few drives depart so far, and over a partial
 //!   turn the fitted once-per-turn term carries a column's scale into the mean slope almost
 //!   whole, so a 0.8 % scale departs by about as much. A sliding joint's departure in that band
@@ -39,6 +41,7 @@
 //!   are one scale of the coordinates, said once, instead of each joint.
 
 use super::super::{AxisReport, Calibration};
+use super::scale_absorption::{Absorption, NoiseSource, absorption, mean_slope, with_coefficients};
 use crate::calibration::free_pose::FreePoseSummary;
 use crate::kinematics::JointKind;
 use crate::measurement::Measurement;
@@ -232,30 +235,6 @@ impl std::fmt::Display for ScaleSlip {
     }
 }
 
-/// The transmission with its fitted coefficients (`[sin.., cos..]` or `[c_1..]`) replaced.
-fn with_coefficients(t: &Transmission, coefficients: &[f64]) -> Transmission {
-    match t {
-        Transmission::Harmonic { sin, .. } => Transmission::Harmonic {
-            sin: coefficients[..sin.len()].to_vec(),
-            cos: coefficients[sin.len()..].to_vec(),
-        },
-        Transmission::Gear { ratio, sin, .. } => Transmission::Gear {
-            ratio: *ratio,
-            sin: coefficients[..sin.len()].to_vec(),
-            cos: coefficients[sin.len()..].to_vec(),
-        },
-        Transmission::Polynomial { c0, .. } => Transmission::Polynomial {
-            c0: *c0,
-            c: coefficients.to_vec(),
-        },
-    }
-}
-
-/// `(f(b) - f(a)) / (b - a)`.
-fn mean_slope(t: &Transmission, (a, b): (f64, f64)) -> f64 {
-    (t.value_and_slope(b).0 - t.value_and_slope(a).0) / (b - a)
-}
-
 /// The sweep of axis `a` in internal units (rad or m): its span centred on the reference
 /// command (the plan's sweeps are).
 fn sweep(cal: &Calibration, desc: &RobotDescription, a: &AxisReport) -> Option<(f64, f64)> {
@@ -420,50 +399,106 @@ pub fn free_pose_scale_slips(
 /// ([`scale_reach`], [`free_pose_scale_reach`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScaleReach {
-    /// The joints with a fitted transmission: `(joint, the smallest scale of its column the
-    /// test names [1], the fit's sigma of the slope [1], whether it slides)`.
-    pub joints: Vec<(usize, f64, f64, bool)>,
+    /// The joints with a fitted transmission that shows a scale: `(joint, the smallest scale
+    /// of its column the test names [1], the fit's sigma of the slope [1], whether it slides,
+    /// the share of a scale its fitted mean slope carries [1])`.
+    pub joints: Vec<(usize, f64, f64, bool, f64)>,
+    /// The joints whose fitted transmission takes up a scale of any size (over most of a turn
+    /// its harmonics follow a scale, and the misses they leave hide the rest): `(joint, the
+    /// share of a scale its fitted mean slope carries [1])`.
+    pub absorbed: Vec<(usize, f64)>,
     /// The joints without a fitted transmission, whose scale the test cannot see.
     pub unfitted: Vec<usize>,
     /// The joints whose description declares a gear form, which the test leaves out (module doc).
     pub gear: Vec<usize>,
 }
 
-/// The smallest scale of `s`'s column the test names whatever the drive departs by within two
-/// of its sigmas: a departure is named in a note ([`ScaleDoubt`]) from [`DOUBT_SIGMAS`] of the
-/// fit's sigma and the drive's combined, and the drive's own departure may take two of them
-/// off the scale's, so [`DRIVE_SIGMAS`] of them (where a departure is a warning).
-fn smallest_named(s: &Slope) -> f64 {
+/// The smallest scale of `s`'s column the test names whichever its sign, where the fitted
+/// transmission takes part of a scale up (`taken`, Baarda's minimum detectable bias,
+/// [`super::scale_absorption`]): a departure is named in a note ([`ScaleDoubt`]) from
+/// [`DOUBT_SIGMAS`] of the fit's sigma and the drive's combined, and a scale added to this
+/// file's data adds to the departure the file already shows, which may take its own size off a
+/// scale of the other sign: that departure in sigmas, at least two of them (what a drive
+/// departs by), on top, so [`DRIVE_SIGMAS`] sigmas where the file departs by less than two
+/// (where a departure is a warning). `None` where no scale is named.
+fn smallest_named(s: &Slope, taken: &Absorption) -> Option<f64> {
     let drive = if s.sliding {
         PLAUSIBLE_LEAD_DEVIATION
     } else {
         PLAUSIBLE_TURN_DEVIATION
     };
-    DRIVE_SIGMAS * s.sigma.hypot(drive)
+    let sigma = s.sigma.hypot(drive);
+    let shown = (s.ratio - 1.0).abs() / sigma;
+    let k = DOUBT_SIGMAS + shown.max(DRIVE_SIGMAS - DOUBT_SIGMAS);
+    taken.smallest_named(k, s.sigma, drive)
 }
 
-/// The reach of `slopes`; `joints` the joints the test covers (1-based), those without a
-/// slope being gear forms or unfitted.
-fn reach_of(slopes: &[Slope], joints: &[usize], desc: &RobotDescription) -> Option<ScaleReach> {
+/// The reach of `slopes`, each with what its fitted transmission takes of a scale; `joints`
+/// the joints the test covers (1-based), those without a slope being gear forms or unfitted.
+fn reach_of(slopes: &[(Slope, Absorption)], joints: &[usize], desc: &RobotDescription) -> Option<ScaleReach> {
     let gear_form = |j: usize| {
         desc.joints
             .get(j - 1)
             .is_some_and(|e| matches!(e.transmission_fit_form(), TransmissionFitForm::Gear { .. }))
     };
+    let fitted = || slopes.iter().filter(|(s, _)| s.fitted);
     let reach = ScaleReach {
-        joints: slopes
-            .iter()
-            .filter(|s| s.fitted)
-            .map(|s| (s.joint, smallest_named(s), s.sigma, s.sliding))
+        joints: fitted()
+            .filter_map(|(s, a)| Some((s.joint, smallest_named(s, a)?, s.sigma, s.sliding, a.transfer)))
             .collect(),
-        unfitted: slopes.iter().filter(|s| !s.fitted).map(|s| s.joint).collect(),
+        absorbed: fitted()
+            .filter(|(s, a)| smallest_named(s, a).is_none())
+            .map(|(s, a)| (s.joint, a.transfer))
+            .collect(),
+        unfitted: slopes.iter().filter(|(s, _)| !s.fitted).map(|(s, _)| s.joint).collect(),
         gear: joints.iter().copied().filter(|&j| gear_form(j)).collect(),
     };
-    (!reach.joints.is_empty() || !reach.unfitted.is_empty() || !reach.gear.is_empty()).then_some(reach)
+    let empty = reach.joints.is_empty() && reach.absorbed.is_empty() && reach.unfitted.is_empty();
+    (!empty || !reach.gear.is_empty()).then_some(reach)
+}
+
+/// Joint `joint`'s commanded position (internal units) at each distinct configuration of
+/// `rows` (a configuration's targets counted once), in a fixed order.
+fn positions<'a>(desc: &RobotDescription, rows: impl Iterator<Item = &'a Measurement>, joint: usize) -> Vec<f64> {
+    let mut configurations: Vec<Vec<u64>> = rows
+        .filter(|m| m.cmd.len() == desc.dof())
+        .map(|m| m.cmd.iter().map(|c| c.to_bits()).collect())
+        .collect();
+    configurations.sort_unstable();
+    configurations.dedup();
+    configurations
+        .iter()
+        .map(|bits| {
+            let cmd: Vec<f64> = bits.iter().map(|b| f64::from_bits(*b)).collect();
+            crate::robot::commands_to_internal(desc, &cmd)[joint - 1]
+        })
+        .collect()
+}
+
+/// What joint `joint`'s fitted transmission `t` takes of its column's scale, fitted at the
+/// configurations `rows` over `range` (internal units), its sigma scaled by a noise from `noise`.
+fn taken_up<'a>(
+    (desc, ideal): (&RobotDescription, &RobotModel),
+    (joint, t): (usize, &Transmission),
+    rows: impl Iterator<Item = &'a Measurement>,
+    (range, noise): ((f64, f64), Option<f64>),
+) -> Absorption {
+    let rows: Vec<&Measurement> = rows.filter(|m| m.cmd.len() == desc.dof()).collect();
+    let at = positions(desc, rows.iter().copied(), joint);
+    let nominal = ideal
+        .joints
+        .get(joint - 1)
+        .map_or(1.0, |j| mean_slope(&j.transmission, range));
+    let noise = match noise {
+        None => NoiseSource::Given,
+        Some(dof) => NoiseSource::Estimated(rows.len() as f64 / at.len().max(1) as f64, dof),
+    };
+    absorption(t, &at, (range, nominal), noise)
 }
 
 /// How large a scale of each command column the transmission test lets pass on a free-pose
-/// calibration (its rotary joints; a slide's scale is the coordinate-scale profile's).
+/// calibration (its rotary joints; a slide's scale is the coordinate-scale profile's), over
+/// the configurations of `rows`.
 pub fn free_pose_scale_reach(
     (cal, summary): (&Calibration, &FreePoseSummary),
     desc: &RobotDescription,
@@ -472,28 +507,95 @@ pub fn free_pose_scale_reach(
     let revolute: Vec<usize> = (1..=desc.dof())
         .filter(|&k| desc.joints[k - 1].kind == JointKind::Revolute)
         .collect();
-    reach_of(&free_pose_slopes((cal, summary), desc, rows), &revolute, desc)
+    let ideal = RobotModel::ideal(desc);
+    let ranges = free_pose_ranges(desc, rows);
+    // The free-pose fit's sigmas are scaled by its a-posteriori noise.
+    let dof = (3 * summary.points).saturating_sub(summary.parameters.len()) as f64;
+    let slopes: Vec<(Slope, Absorption)> = free_pose_slopes((cal, summary), desc, rows)
+        .into_iter()
+        .filter_map(|s| {
+            let t = &cal.robot.joints.get(s.joint - 1)?.transmission;
+            let range = ranges.get(s.joint - 1)?.1;
+            let taken = taken_up((desc, &ideal), (s.joint, t), rows.iter(), (range, Some(dof)));
+            Some((s, taken))
+        })
+        .collect();
+    reach_of(&slopes, &revolute, desc)
 }
 
 /// How large a scale of each command column the transmission test lets pass on a sweep
-/// calibration: a sweep measures a joint's travel per command directly, to the fit's sigma,
-/// and a drive departs by [`PLAUSIBLE_TURN_DEVIATION`] (a slide's lead by
-/// [`PLAUSIBLE_LEAD_DEVIATION`]).
-pub fn scale_reach(cal: &Calibration, desc: &RobotDescription) -> Option<ScaleReach> {
+/// calibration: a sweep measures a joint's travel per command to the fit's sigma, a drive
+/// departs by [`PLAUSIBLE_TURN_DEVIATION`] (a slide's lead by [`PLAUSIBLE_LEAD_DEVIATION`]),
+/// and the fitted transmission takes part of a scale up over the sweep's steps in `rows`.
+pub fn scale_reach(cal: &Calibration, desc: &RobotDescription, rows: &[Measurement]) -> Option<ScaleReach> {
     let ideal = RobotModel::ideal(desc);
-    let slopes: Vec<Slope> = cal.axes.iter().filter_map(|a| slope_of(cal, desc, &ideal, a)).collect();
+    // The sweeps' sigmas are scaled by the noise pooled over their fits, unless it was given.
+    let noise = match &cal.noise {
+        Some(n) if n.source == "given" => None,
+        Some(n) => Some(n.estimate.as_ref().map_or(0.0, |e| e.dof as f64)),
+        None => Some(0.0),
+    };
+    let slopes: Vec<(Slope, Absorption)> = cal
+        .axes
+        .iter()
+        .filter_map(|a| {
+            let s = slope_of(cal, desc, &ideal, a)?;
+            let parts: Vec<&str> = a.experiment.split('+').collect();
+            let rows = rows
+                .iter()
+                .filter(|m| m.moved_joint == a.joint && parts.contains(&m.experiment.as_str()));
+            let taken = taken_up(
+                (desc, &ideal),
+                (a.joint, &a.transmission),
+                rows,
+                (sweep(cal, desc, a)?, noise),
+            );
+            Some((s, taken))
+        })
+        .collect();
     let swept: Vec<usize> = cal.axes.iter().map(|a| a.joint).collect();
     reach_of(&slopes, &swept, desc)
 }
 
+/// The joints whose command column `found` names (a scale, a sag with a scale as the
+/// alternative, the slides of a scale of the coordinates): the bounds line leaves them out.
+pub fn named_joints(found: &[ScaleSlip]) -> Vec<usize> {
+    found
+        .iter()
+        .flat_map(|f| match f {
+            ScaleSlip::Command { joint, .. } | ScaleSlip::Sag { joint, .. } => vec![*joint],
+            ScaleSlip::Coordinates { joints, .. } => joints.clone(),
+        })
+        .collect()
+}
+
 impl ScaleReach {
+    /// The reach without the joints `named` (their columns said already).
+    pub fn without(&self, named: &[usize]) -> Option<ScaleReach> {
+        let keep = |j: &usize| !named.contains(j);
+        let reach = ScaleReach {
+            joints: self.joints.iter().copied().filter(|r| keep(&r.0)).collect(),
+            absorbed: self.absorbed.iter().copied().filter(|r| keep(&r.0)).collect(),
+            unfitted: self.unfitted.iter().copied().filter(keep).collect(),
+            gear: self.gear.iter().copied().filter(keep).collect(),
+        };
+        let empty = reach.joints.is_empty() && reach.absorbed.is_empty() && reach.unfitted.is_empty();
+        (!empty || !reach.gear.is_empty()).then_some(reach)
+    }
+
     /// Each column's bound, compactly: "`cmd_1` below 0.49 %, `cmd_6` at any size".
     fn bounds(&self) -> Vec<(usize, String)> {
         let mut parts: Vec<(usize, String)> = self
             .joints
             .iter()
-            .map(|(j, r, _, _)| (*j, format!("`cmd_{j}` below {:.2} %", r * 100.0)))
+            .map(|(j, r, ..)| (*j, format!("`cmd_{j}` below {:.2} %", r * 100.0)))
             .collect();
+        parts.extend(self.absorbed.iter().map(|(j, _)| {
+            (
+                *j,
+                format!("`cmd_{j}` at any size (the test cannot see it over this range)"),
+            )
+        }));
         parts.extend(
             self.unfitted
                 .iter()
@@ -513,15 +615,25 @@ impl ScaleReach {
         let mut parts: Vec<String> = self
             .joints
             .iter()
-            .map(|(j, r, s, sliding)| {
+            .map(|(j, r, s, sliding, share)| {
                 let moves = if *sliding { "travel" } else { "slope" };
                 format!(
-                    "`cmd_{j}`: a scale below {:.2} % (joint {j}'s {moves} per command fitted to +-{:.2} %)",
+                    "`cmd_{j}`: a scale below {:.2} % (joint {j}'s {moves} per command fitted to +-{:.2} %, {:.0} % of \
+                     a scale reaching it)",
                     r * 100.0,
-                    s * 100.0
+                    s * 100.0,
+                    share * 100.0
                 )
             })
             .collect();
+        parts.extend(self.absorbed.iter().map(|(j, share)| {
+            format!(
+                "`cmd_{j}`: a scale of any size passes the transmission test (over the range of joint {j}'s commands \
+                 {:.0} % of a scale reaches its fitted mean slope, and the misses the rest leaves widen that slope's \
+                 sigma as fast; a scale the harmonics cannot follow shows as the joint's misfit instead)",
+                share * 100.0
+            )
+        }));
         if !self.unfitted.is_empty() {
             let columns: Vec<String> = self.unfitted.iter().map(|j| format!("`cmd_{j}`")).collect();
             parts.push(format!(
@@ -541,13 +653,18 @@ impl ScaleReach {
              another ratio) pass on this file: {}. It names a joint's travel per command that departs from its \
              description's by more than {DOUBT_SIGMAS:.0} sigma of the fit's and a drive's departure combined (about \
              {:.2} % for a turning joint: over a partial turn the gear's once-per-turn error reads as a scale; \
-             {:.2} % for a slide's lead) in a note, and beyond {DRIVE_SIGMAS:.0} sigma as a warning; the bound is \
-             {DRIVE_SIGMAS:.0} sigma, as the drive's own departure may take up to two of them off a scale's. A smaller \
-             scale may pass: checking each column against the controller's reading at two poses, or a sweep of the \
-             joint over a full turn, closes it.",
+             {:.2} % for a slide's lead) in a note, and beyond {DRIVE_SIGMAS:.0} sigma as a warning. The fitted \
+             transmission takes part of a scale up (its harmonics follow a scale over the commands' range, most \
+             over most of a turn), so the slope departs by that share of the scale only, and the misses the rest \
+             leaves widen the slope's sigma (Baarda's minimum detectable bias): the bound is the scale whose share \
+             reaches {DOUBT_SIGMAS:.0} sigma beyond the departure this file shows, counted as at least {:.0} sigma (what \
+             a drive departs by), which a scale of the other sign must first undo. \
+             A smaller scale may pass: checking each column against the controller's reading at two poses, or a \
+             sweep of the joint over a full turn, closes it.",
             parts.join("; "),
             PLAUSIBLE_TURN_DEVIATION * 100.0,
             PLAUSIBLE_LEAD_DEVIATION * 100.0,
+            DRIVE_SIGMAS - DOUBT_SIGMAS,
         )
     }
 }
