@@ -54,6 +54,16 @@ pub struct Screening {
 /// many times it is a gross error, left out of the first fit when the fit on every point fails.
 pub const GROSS_DISTANCE_OVER_MEDIAN: f64 = 10.0;
 
+/// A measure of each point from the residuals of a sweep's points ([`Sweep::peel`]).
+type Measure<'a> = &'a dyn Fn(&[Vector3<f64>]) -> Vec<f64>;
+
+/// The fence from the measures of the points kept ([`Sweep::peel`]).
+type Fence<'a> = &'a dyn Fn(&[f64]) -> f64;
+
+/// The residuals of the fit without the first point where [`Sweep::peel`] sets it aside first:
+/// from the points kept, their fit's residuals and the measure it must exceed.
+type Lead<'a> = &'a dyn Fn(&[usize], &[Vector3<f64>], f64) -> Option<Vec<Vector3<f64>>>;
+
 /// One sweep's target-0 points and its joint's actuator command at each.
 struct Sweep<'a> {
     experiment: &'a AxisExperiment,
@@ -106,7 +116,14 @@ pub fn screen_sweeps(
         let (Some(r), Some(scale)) = (r, scale) else { continue };
         let Some(fence) = scale.fence(tested) else { continue };
         let z = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().enumerate().map(|(i, r)| scale.z(i, r)).collect() };
-        let (kept, last) = s.peel(r, &z, &|_| fence, sigma, max_iterations);
+        let led = std::cell::Cell::new(false);
+        let lead = |kept: &[usize], e: &[Vector3<f64>], bar: f64| {
+            let d = s.first_point_lead((kept, e), &|v| scale.z(0, v), (fence, bar), (sigma, max_iterations));
+            led.set(led.get() || d.is_some());
+            d
+        };
+        let (kept, last) = s.peel(r, (&z, &|_| fence), &lead, sigma, max_iterations);
+        let first_led = led.get();
         let mut is_kept = vec![false; s.points.len()];
         kept.iter().for_each(|&i| is_kept[i] = true);
         let flagged: Vec<usize> = (0..s.points.len()).filter(|&i| !is_kept[i]).collect();
@@ -130,7 +147,10 @@ pub fn screen_sweeps(
         }
         outliers.extend(flagged.into_iter().map(|i| {
             let mut o = s.outlier(i, &last[i], scale.z(i, &last[i]), fence, !keep, set);
-            o.approach = s.approach(i, &last[i], &|r| scale.z(i, r), fence);
+            o.approach = match first_led && i == 0 {
+                true => s.lead(&last[0]),
+                false => s.approach(i, &last[i], &|r| scale.z(i, r), fence),
+            };
             o
         }));
     }
@@ -182,7 +202,8 @@ impl Scale {
     fn of(s: &Sweep<'_>, first: &[Vector3<f64>], sigma: f64, max_iterations: usize) -> Option<Scale> {
         let ratio = chi3_far_out_over_median();
         let norms = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().map(|r| r.norm()).collect() };
-        let (kept, last) = s.peel(first, &norms, &|kept| ratio * median(kept), sigma, max_iterations);
+        let fence = |kept: &[f64]| ratio * median(kept);
+        let (kept, last) = s.peel(first, (&norms, &fence), &|_, _, _| None, sigma, max_iterations);
         let mut own = vec![None; s.points.len()];
         kept.iter().for_each(|&i| own[i] = Some(last[i].norm_squared()));
         let sum_sq: f64 = own.iter().flatten().sum();
@@ -337,12 +358,15 @@ impl<'a> Sweep<'a> {
 
     /// Sets aside, worst first by `measure`, the points whose measure exceeds `fence(measures
     /// of the points kept)` and refits: the points kept and the residuals of the last fit
-    /// (`first`: those of the fit with every point).
+    /// (`first`: those of the fit with every point). Before each round `lead` (the points kept,
+    /// their fit's residuals, the worst measure or the fence if larger) may set the sweep's
+    /// first point aside instead, with the residuals of the fit without it
+    /// ([`Self::first_point_lead`]).
     fn peel(
         &self,
         first: &[Vector3<f64>],
-        measure: &dyn Fn(&[Vector3<f64>]) -> Vec<f64>,
-        fence: &dyn Fn(&[f64]) -> f64,
+        (measure, fence): (Measure<'_>, Fence<'_>),
+        lead: Lead<'_>,
         sigma: f64,
         max_iterations: usize,
     ) -> (Vec<usize>, Vec<Vector3<f64>>) {
@@ -355,7 +379,13 @@ impl<'a> Sweep<'a> {
                 break;
             };
             let kept_m: Vec<f64> = kept.iter().map(|&i| m[i]).collect();
-            if m[worst] <= fence(&kept_m) {
+            let bar = fence(&kept_m);
+            if let Some(without_first) = lead(&kept, &residuals, m[worst].max(bar)) {
+                kept.retain(|&i| i != 0);
+                residuals = without_first;
+                continue;
+            }
+            if m[worst] <= bar {
                 break;
             }
             kept.retain(|&i| i != worst);
@@ -367,6 +397,59 @@ impl<'a> Sweep<'a> {
         (kept, residuals)
     }
 
+    /// The residuals of the fit without the sweep's first point, where that point (still among
+    /// the points `kept`, `e` their fit's residuals), taken before its joint moved, runs ahead
+    /// of the fit of the others along the motion (toward the second point,
+    /// [`Self::first_motion`]), its studentised residual beyond `bar` (the fence, or the worst
+    /// point's measure if larger: the point set aside is the worst) and its studentised part
+    /// across the motion within `fence` (`z`: a residual over the noise of the other points);
+    /// `None` otherwise. A backlash lead moves only the first point, but a transmission with a
+    /// harmonic bends toward an end point (its leverage is large), so that its residual from
+    /// the fit of every point shrinks and its neighbours' grow: tested that way, a clean
+    /// neighbour is blamed and the first point kept. The studentised residual (Cook and
+    /// Weisberg, *Residuals and Influence in Regression*, 1982, ch. 2) is
+    /// `sqrt(e^T (I - H)^-1 e)` for the point's residual `e` from the fit with it and its
+    /// leverage `H`; with its residual `d` from the fit without it, `e = (I - H) d`, so it is
+    /// `sqrt(e . d)` and needs no Jacobian. A clean first point has the law the fence assumes.
+    fn first_point_lead(
+        &self,
+        (kept, e): (&[usize], &[Vector3<f64>]),
+        z: &dyn Fn(&Vector3<f64>) -> f64,
+        (fence, bar): (f64, f64),
+        (sigma, max_iterations): (f64, usize),
+    ) -> Option<Vec<Vector3<f64>>> {
+        let (t, _) = self.first_motion().filter(|_| kept.first() == Some(&0))?;
+        let deleted = self.residuals(&kept[1..], sigma, max_iterations).ok()?;
+        let (e, d) = (e[0], deleted[0]);
+        let one = |x: f64| z(&Vector3::new(x.max(0.0).sqrt(), 0.0, 0.0));
+        // Across the motion, studentised the same way: the fit of the others extrapolates to
+        // the first point, and its circle's radius and plane are uncertain there.
+        let across = (e - t * e.dot(&t)).dot(&(d - t * d.dot(&t)));
+        let lead = one(e.dot(&d)) > bar && d.dot(&t) > 0.0 && one(across) <= fence;
+        lead.then_some(deleted)
+    }
+
+    /// The unit direction from the sweep's first point to its second and the path's length per
+    /// unit of command between them, where the first point is the experiment's first step (taken
+    /// before its joint moved); `None` otherwise.
+    fn first_motion(&self) -> Option<(Vector3<f64>, f64)> {
+        let first = self.experiment.target0_steps.first() == Some(&0);
+        if !first || self.points.len() < 2 {
+            return None;
+        }
+        let chord = self.points[1] - self.points[0];
+        let du = (self.u[1] - self.u[0]).abs();
+        (du > 0.0).then_some((chord.try_normalize(1e-12)?, chord.norm() / du))
+    }
+
+    /// The joint's turn (a sliding joint's travel) that puts the first point where its residual
+    /// `r` \[m\] says, ahead along the motion ([`Self::first_motion`]); `None` when behind.
+    fn lead(&self, r: &Vector3<f64>) -> Option<f64> {
+        let (t, per_unit) = self.first_motion()?;
+        let along = r.dot(&t);
+        (along > 0.0).then_some(along / per_unit)
+    }
+
     /// Where point `i` (residual `r` \[m\]) is the sweep's first, taken before its joint moved
     /// (its step the experiment's first), and off its fit along the sweep's motion only (across
     /// it, `z` of what is left within `fence`), ahead toward the second point: the joint's turn
@@ -376,15 +459,8 @@ impl<'a> Sweep<'a> {
     /// of the fit of the others by up to the band; a typo or a moved block sets it off in any
     /// direction.
     fn approach(&self, i: usize, r: &Vector3<f64>, z: &dyn Fn(&Vector3<f64>) -> f64, fence: f64) -> Option<f64> {
-        let first = self.experiment.target0_steps.first() == Some(&0);
-        if i != 0 || !first || self.points.len() < 2 {
-            return None;
-        }
-        let chord = self.points[1] - self.points[0];
-        let du = (self.u[1] - self.u[0]).abs();
-        let t = chord.try_normalize(1e-12)?;
-        let along = r.dot(&t);
-        (along > 0.0 && du > 0.0 && z(&(r - t * along)) <= fence).then(|| along / (chord.norm() / du))
+        let (t, _) = self.first_motion().filter(|_| i == 0)?;
+        (z(&(r - t * r.dot(&t))) <= fence).then(|| self.lead(r)).flatten()
     }
 
     fn outlier(
