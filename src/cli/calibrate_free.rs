@@ -290,30 +290,7 @@ fn warn_slips(
     }
     // A scale the screen named is the profile's finding already, with its alternatives.
     if slopes.len() == scaled.len() && summary.scales.is_empty() {
-        let undone = with_commands_scaled(set, &slopes);
-        let set = &undone;
-        // The poses the model cannot fit stay flagged with the column undone: no axis named.
-        let profile = FreePoseOptions {
-            holdout: false,
-            effects: false,
-            ..*options
-        };
-        let fit = |s: &MeasurementSet| {
-            let c = calibrate_free_poses(s, desc, &profile).ok()?;
-            let points = c.summary.points as f64;
-            Some(Fit {
-                sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
-                dof: (3 * c.summary.points).saturating_sub(c.summary.parameters.len()),
-                misfit_poses: c.summary.outliers.len(),
-            })
-        };
-        super::calibrate::warn_axis_scale(
-            (set, desc),
-            args.data,
-            &fit,
-            (PROFILE_MAX_FREE_POSE_ROWS, true),
-            printer,
-        );
+        profile_axis_scale((set, desc), options, &slopes, args.data, printer);
     }
     if !named && let Some(reach) = free_pose_scale_reach((cal, summary), desc, set.rows()) {
         eprintln!("note: {data}: {reach}");
@@ -341,6 +318,35 @@ fn warn_slips(
             moved.join(", ")
         );
     }
+}
+
+/// The coordinate-scale profile ([`super::calibrate::warn_axis_scale`]) of the free poses of
+/// `set` with the joints' command columns said (`slopes`) undone.
+fn profile_axis_scale(
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+    slopes: &[(usize, f64)],
+    data: &Path,
+    printer: Printer,
+) {
+    let undone = with_commands_scaled(set, slopes);
+    let set = &undone;
+    // The poses the model cannot fit stay flagged with the column undone: no axis named.
+    let profile = FreePoseOptions {
+        holdout: false,
+        effects: false,
+        ..*options
+    };
+    let fit = |s: &MeasurementSet| {
+        let c = calibrate_free_poses(s, desc, &profile).ok()?;
+        let points = c.summary.points as f64;
+        Some(Fit {
+            sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
+            dof: (3 * c.summary.points).saturating_sub(c.summary.parameters.len()),
+            misfit_poses: c.summary.outliers.len(),
+        })
+    };
+    super::calibrate::warn_axis_scale((set, desc), data, &fit, (PROFILE_MAX_FREE_POSE_ROWS, true), printer);
 }
 
 /// A column scale the free-pose fit named before screening the poses

@@ -259,6 +259,10 @@ fn screen(
     (Some(found), passing)
 }
 
+/// One candidate's test against a residual, given its direction: [`tested`] with the file's
+/// clusters and the candidate's drive.
+type CandidateTest<'a> = dyn Fn(Candidate, &DVector<f64>, &DVector<f64>) -> Option<Tested> + 'a;
+
 /// The candidates of `all` (each with its direction given the scales named) that pass on their
 /// own while `best` (its direction `u_best`), given each, does not: they explain the residual
 /// `e` alike on these data.
@@ -266,7 +270,7 @@ fn alike(
     all: &[(Tested, DVector<f64>)],
     (best, u_best): (&Tested, &DVector<f64>),
     e: &DVector<f64>,
-    test: &dyn Fn(Candidate, &DVector<f64>, &DVector<f64>) -> Option<Tested>,
+    test: &CandidateTest<'_>,
 ) -> Vec<ColumnScale> {
     all.iter()
         .filter(|(t, _)| t.candidate != best.candidate && t.p < SCREEN_FALSE_ALARM)
