@@ -295,6 +295,27 @@ fn longer_value(written: &toml::Value, read: &toml::Value, key: &str) -> Option<
 }
 
 /// `line L, column C: message (at `text of the line`)`, or the message alone without a span.
+/// The line whose key (`a.b.c = ...`, `[a.b.c]`, `[[a.b]]`) has the most dotted parts, with
+/// that count and the key: where a parser error without a position (its recursion limit)
+/// comes from.
+fn deepest_key(text: &str) -> Option<(usize, usize, String)> {
+    let key_of = |line: &str| {
+        let line = line.trim();
+        let key = match line.strip_prefix('[') {
+            Some(rest) => rest.trim_start_matches('[').split(']').next().unwrap_or(""),
+            None => line.split('=').next().unwrap_or(""),
+        };
+        key.trim().to_owned()
+    };
+    text.lines()
+        .enumerate()
+        .map(|(i, line)| {
+            let key = key_of(line);
+            (i + 1, key.matches('.').count() + 1, key)
+        })
+        .max_by_key(|&(line, depth, _)| (depth, std::cmp::Reverse(line)))
+}
+
 fn one_line_message(e: &toml::de::Error, text: &str) -> String {
     let message = e
         .message()
@@ -304,7 +325,16 @@ fn one_line_message(e: &toml::de::Error, text: &str) -> String {
         .collect::<Vec<_>>()
         .join("; ");
     let message = shown_message(&message);
-    let Some(span) = e.span() else { return message };
+    let Some(span) = e.span() else {
+        return match deepest_key(text) {
+            Some((line, depth, key)) if message.contains("recursion") => format!(
+                "line {line}: key `{}` is nested {depth} levels deep: {message}; axiscal's files nest their keys a \
+                 few levels at most (docs/formats.md): write the documented keys",
+                shown_cell(&key)
+            ),
+            _ => message,
+        };
+    };
     let start = span.start.min(text.len());
     let before = &text[..text.floor_char_boundary(start)];
     let line = before.matches('\n').count() + 1;

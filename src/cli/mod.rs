@@ -28,6 +28,7 @@ mod plan;
 mod printer;
 mod progress;
 mod record;
+mod referenced;
 mod report;
 mod run;
 mod signals;

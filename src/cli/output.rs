@@ -80,9 +80,19 @@ impl Outputs {
         }
     }
 
-    /// Registers `path`, named by `what` (e.g. `--calibration`), as an input. A path that does
-    /// not exist is kept too: the command's reader reports it.
+    /// Registers `path`, named by `what` (e.g. `--calibration`), as an input, and with it the
+    /// files it names that the command reads too ([`super::referenced`]: a description's URDF,
+    /// a scenario's robot, truth and plans). A path that does not exist is kept too: the
+    /// command's reader reports it.
     pub fn input(mut self, what: &str, path: &Path) -> Self {
+        self.push_input(what, path);
+        for (what, file) in super::referenced::referenced_files(what, path) {
+            self.push_input(&what, &file);
+        }
+        self
+    }
+
+    fn push_input(&mut self, what: &str, path: &Path) {
         if let Some(canonical) = canonical(path) {
             self.inputs.push(Input {
                 what: what.to_owned(),
@@ -90,7 +100,6 @@ impl Outputs {
                 canonical,
             });
         }
-        self
     }
 
     /// Registers `files` in each of `dirs` as inputs (e.g. the shards a merge reads).
@@ -236,7 +245,7 @@ impl Outputs {
             OPENED.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
         ));
         let tracked = super::signals::track_temporary(&temporary);
-        let file = std::fs::File::create(&temporary).with_context(|| format!("creating {}", temporary.display()));
+        let file = std::fs::File::create(&temporary).map_err(|e| cannot_create(path, &temporary, e));
         let file = match file {
             Ok(file) => file,
             Err(e) => {
@@ -254,6 +263,25 @@ impl Outputs {
             tracked,
         })
     }
+}
+
+/// The error of an output `path` whose temporary could not be created: it names the output
+/// and the cause (a read-only file system, a folder without write permission); the temporary's
+/// name, which the user never gave, comes last.
+fn cannot_create(path: &Path, temporary: &Path, e: std::io::Error) -> anyhow::Error {
+    let folder = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    anyhow::anyhow!(
+        "cannot write {}: creating a file in {} fails: {e} (the output is written to a temporary beside it, {}, \
+         then renamed): choose a writable folder",
+        path.display(),
+        folder.display(),
+        temporary
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    )
 }
 
 /// The process id in the name of one of axiscal's temporaries (`.NAME.axiscal-PID-N.tmp`, a

@@ -77,7 +77,9 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     super::checks::description_units(&plan.scenario.robot, &args.scenario, args.skip_unit_check)?;
     let outputs = Outputs::new(args.force).input("SCENARIO", &args.scenario);
     Outputs::check_folder(&plan.out)?;
-    for name in RUN_FILES {
+    // The files the run writes, and those of an earlier run it removes with --force.
+    let replaced = export::run_outputs_in(&plan.out);
+    for name in RUN_FILES.iter().copied().chain(replaced.iter().map(String::as_str)) {
         outputs.check_not_input(&plan.out.join(name))?;
     }
     let _lock = RunLock::acquire(&plan.out)?;

@@ -209,15 +209,19 @@ enum Instrument {
 
 /// Runs `axiscal simulate`.
 pub fn run(args: Args, printer: Printer) -> Result<()> {
-    let outputs = [("--truth", &args.truth), ("--effects", &args.effects)]
-        .into_iter()
-        .fold(
-            Outputs::new(args.force).input("--robot", &args.robot),
-            |o, (what, path)| match path {
-                Some(p) => o.input(what, p),
-                None => o,
-            },
-        );
+    let outputs = [
+        ("--truth", &args.truth),
+        ("--effects", &args.effects),
+        ("--plan", &args.plan),
+    ]
+    .into_iter()
+    .fold(
+        Outputs::new(args.force).input("--robot", &args.robot),
+        |o, (what, path)| match path {
+            Some(p) => o.input(what, p),
+            None => o,
+        },
+    );
     outputs.check(&args.out)?;
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     if let Some(record) = &args.record {

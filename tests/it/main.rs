@@ -48,6 +48,7 @@ mod hostile_round12d;
 mod hostile_round13a;
 mod hostile_round13b;
 mod hostile_round13c;
+mod hostile_round13e;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;

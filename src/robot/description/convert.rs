@@ -18,6 +18,77 @@ fn invalid(path: &Path, field: impl Into<String>, message: impl Into<String>) ->
     }
 }
 
+/// The deepest element nesting a URDF may have (docs/formats.md#robot-description): real
+/// URDFs nest 5 to 10 levels; the XML parser recurses once per level, so a file nested
+/// thousands deep would exhaust the stack.
+pub const MAX_URDF_DEPTH: usize = 100;
+
+/// The 1-based line where `text`'s element nesting first exceeds `max`, and that depth; `None`
+/// when it stays within. One linear pass over the bytes, before any parsing, following the
+/// markup of XML 1.0 (W3C, 5th ed.): start tags `<name ...>` open an element (3.1) unless
+/// empty-element tags `<name .../>`; end tags `</name>` close one; comments `<!-- -->` (2.5),
+/// CDATA sections `<![CDATA[ ]]>` (2.7), the document type declaration `<!DOCTYPE ... [ ... ]>`
+/// (2.8) and processing instructions `<? ?>` (2.6) open none; quoted attribute values may hold
+/// `>` (3.1).
+pub fn nesting_beyond(text: &str, max: usize) -> Option<(usize, usize)> {
+    let b = text.as_bytes();
+    let (mut i, mut line, mut depth) = (0, 1, 0usize);
+    // The index just past the first `end` at or after `from` (the text's end if none).
+    let skip_to = |from: usize, end: &[u8]| {
+        b[from..]
+            .windows(end.len())
+            .position(|w| w == end)
+            .map_or(b.len(), |p| from + p + end.len())
+    };
+    while i < b.len() {
+        if b[i] != b'<' {
+            line += usize::from(b[i] == b'\n');
+            i += 1;
+            continue;
+        }
+        let rest = &b[i..];
+        let next = if rest.starts_with(b"<!--") {
+            skip_to(i + 4, b"-->")
+        } else if rest.starts_with(b"<![CDATA[") {
+            skip_to(i + 9, b"]]>")
+        } else if rest.starts_with(b"<?") {
+            skip_to(i + 2, b"?>")
+        } else {
+            let (end, self_closing) = tag_end(b, i + 1);
+            if rest.starts_with(b"</") {
+                depth = depth.saturating_sub(1);
+            } else if !rest.starts_with(b"<!") && !self_closing {
+                depth += 1;
+                if depth > max {
+                    return Some((line, depth));
+                }
+            }
+            end
+        };
+        line += b[i..next].iter().filter(|&&c| c == b'\n').count();
+        i = next;
+    }
+    None
+}
+
+/// The index just past the `>` that ends the markup starting before `from`, skipping quoted
+/// values and a declaration's `[...]` subset; and whether it is an empty-element tag (`/>`).
+fn tag_end(b: &[u8], from: usize) -> (usize, bool) {
+    let (mut quote, mut bracket) = (None, 0usize);
+    for (k, &c) in b.iter().enumerate().skip(from) {
+        match (quote, c) {
+            (Some(q), _) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, b'"' | b'\'') => quote = Some(c),
+            (None, b'[') => bracket += 1,
+            (None, b']') => bracket = bracket.saturating_sub(1),
+            (None, b'>') if bracket == 0 => return (k + 1, k > from && b[k - 1] == b'/'),
+            _ => {}
+        }
+    }
+    (b.len(), false)
+}
+
 impl RobotDescription {
     /// Converts `dh` rows or a `urdf` file to the phi-model in place; returns the source chain
     /// and the placement of its base as written.
@@ -146,6 +217,18 @@ impl RobotDescription {
         let file = path.parent().unwrap_or(Path::new(".")).join(&u.file);
         let text = crate::presets::read_text(&file)
             .map_err(|e| invalid(path, "urdf.file", format!("reading {}: {e}", file.display())))?;
+        if let Some((line, depth)) = nesting_beyond(&text, MAX_URDF_DEPTH) {
+            return Err(invalid(
+                path,
+                "urdf.file",
+                format!(
+                    "{}: line {line}: elements nested {depth} deep; a URDF nests a few levels (`robot` > `link` > \
+                     `visual` > `geometry` > `mesh`), axiscal reads at most {MAX_URDF_DEPTH}: point `urdf.file` at \
+                     the robot's .urdf file (xacro expanded)",
+                    file.display()
+                ),
+            ));
+        }
         let robot = urdf_rs::read_from_string(&text).map_err(|e| {
             let message = match crate::toml_file::not_xml(&text, &file) {
                 Some(kind) => format!(
@@ -463,4 +546,20 @@ fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> Result<JointEntry, String
         max_velocity: (l.velocity > 0.0).then_some(l.velocity * scale),
         max_effort: (l.effort > 0.0).then_some(l.effort),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nesting_counts_elements_not_comments_declarations_or_empty_tags() {
+        let deep = |n: usize| format!("<robot>{}{}</robot>", "<a>".repeat(n), "</a>".repeat(n));
+        assert_eq!(nesting_beyond(&deep(99), 100), None);
+        assert_eq!(nesting_beyond(&deep(100), 100), Some((1, 101)));
+        let text = "<?xml version=\"1.0\"?>\n<!DOCTYPE r [<!ENTITY e \"<a>\">]>\n<!-- <a><a> -->\n\
+                    <robot name=\"a>b\">\n<link name=\"x\"/><![CDATA[<a><a>]]>\n<a>\n</robot>";
+        assert_eq!(nesting_beyond(text, 2), None);
+        assert_eq!(nesting_beyond(text, 1), Some((6, 2)));
+    }
 }
