@@ -39,6 +39,11 @@ pub enum CertificateError {
         "the calibration has no `model_covariance` (a file written before it was recorded): its parameters' uncertainties are not known; recalibrate with `axiscal calibrate`"
     )]
     NoCovariance,
+    /// The calibration was made by the paper's estimator, which gives its axes no covariance.
+    #[error(
+        "the calibration was made by the paper's estimator (`--estimator paper`), which gives its parameters no uncertainty, and a certificate states one: calibrate with `--estimator ml` for a certificate"
+    )]
+    PaperEstimator,
     /// The covariance is not one of the model's parameters ([`crate::calibration::model_parameters::ModelCovariance::validate`]).
     #[error("the calibration's {0}")]
     Covariance(InvalidCalibration),
@@ -269,6 +274,9 @@ pub struct ResidualPoint {
 /// The certificate of `inputs` (module docs).
 pub fn certificate(inputs: &CertificateInputs<'_>) -> Result<Certificate, CertificateError> {
     let cal = &inputs.calibration.calibration;
+    if cal.model_covariance.is_none() && cal.options.estimator == crate::calibration::procedure::AxisEstimator::Paper {
+        return Err(CertificateError::PaperEstimator);
+    }
     let covariance = cal.model_covariance.as_ref().ok_or(CertificateError::NoCovariance)?;
     covariance.validate(&cal.robot)?;
     let names = model_parameter_names(&cal.robot);

@@ -632,6 +632,16 @@ fn print_scale_doubts(
     found: &[Implausible],
     data: &Path,
 ) {
+fn print_scale_doubts(cal: &Calibration, desc: &RobotDescription, found: &[Implausible], data: &Path) {
+    if cal.options.estimator == AxisEstimator::Paper {
+        eprintln!(
+            "note: {}: the command-column scale test does not run on the paper's estimator: its transmission sigmas \
+             (eq. 8, a-posteriori, given the fitted axis) leave out the axis's own error and would name scales a clean \
+             file does not have; `--estimator ml` tests every column",
+            data.display()
+        );
+        return;
+    }
     if found
         .iter()
         .any(|f| matches!(f, Implausible::Size { .. } | Implausible::Mirrored { .. }))
@@ -713,20 +723,9 @@ const OWN_POSES_FALSE_ALARM: f64 = 1e-4;
 /// file (as the URDF and zero-offset checks take them).
 const OWN_POSES_CHECKED: usize = 500;
 
-/// The axis-experiment calibration tested on the file's own validation poses, which it did not
-/// fit (`validate`'s test, [`axiscal::diagnosis::validate`], at [`OWN_POSES_FALSE_ALARM`]; with
-/// the tool frame estimated from the poses when it was not measured,
-/// [`axiscal::diagnosis::validate_free_tool`]): a miss
-/// beyond the prediction is what a slip the unit checks cannot see leaves (one experiment's
-/// commands scaled within a transmission's range, a wrong placement or description), or an
-/// effect the model lacks. The miss is then searched for the slips `validate` names
-/// ([`own_poses_slips`]). `None` without validation poses or when they are consistent.
-fn misses_own_validation_poses(
-    cal: &Calibration,
-    (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
-    stated_repeatability: Option<&[f64]>,
-) -> Option<String> {
-    use axiscal::diagnosis::{ValidationOptions, Verdict, validate, validate_free_tool};
+/// The file's own validation poses (free poses other than the tool's, at most
+/// [`OWN_POSES_CHECKED`] evenly spaced through the file) as a set of their rows, with how many.
+fn own_poses(set: &MeasurementSet, desc: &RobotDescription) -> Option<(MeasurementSet, usize)> {
     let is_pose = |m: &&axiscal::measurement::Measurement| m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT;
     let mut poses: Vec<(&str, usize)> = set
         .rows()
@@ -748,6 +747,24 @@ fn misses_own_validation_poses(
     let rows: Vec<_> = chosen.iter().map(|&i| set.rows()[i].clone()).collect();
     let lines: Vec<u64> = chosen.iter().filter_map(|&i| set.line_of(i)).collect();
     let poses_set = MeasurementSet::new(desc.dof(), rows).ok()?.with_lines(lines);
+    Some((poses_set, kept.len()))
+}
+
+/// The axis-experiment calibration tested on the file's own validation poses, which it did not
+/// fit (`validate`'s test, [`axiscal::diagnosis::validate`], at [`OWN_POSES_FALSE_ALARM`]; with
+/// the tool frame estimated from the poses when it was not measured,
+/// [`axiscal::diagnosis::validate_free_tool`]): a miss
+/// beyond the prediction is what a slip the unit checks cannot see leaves (one experiment's
+/// commands scaled within a transmission's range, a wrong placement or description), or an
+/// effect the model lacks. The miss is then searched for the slips `validate` names
+/// ([`own_poses_slips`]). `None` without validation poses or when they are consistent.
+fn misses_own_validation_poses(
+    cal: &Calibration,
+    (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
+    stated_repeatability: Option<&[f64]>,
+) -> Option<String> {
+    use axiscal::diagnosis::{ValidationOptions, Verdict, validate, validate_free_tool};
+    let (poses_set, n) = own_poses(set, desc)?;
     let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
     // A tool frame left nominal is off by an error no covariance holds: estimated from the
     // poses, so that only what no tool frame explains is judged, and a move beyond what a
@@ -758,13 +775,31 @@ fn misses_own_validation_poses(
     } else {
         (validate(&poses_set, cal, desc, &options).ok()?, None)
     };
+    if cal.options.estimator == AxisEstimator::Paper {
+        // No covariance: the prediction holds the noise and repeatability only, and a miss
+        // beyond them is the calibration's own error, which this estimator does not predict.
+        let part = v.validation.as_ref()?;
+        eprintln!(
+            "note: {}: the calibrated model misses this file's own {n} validation poses (not fitted) by {:.3} mm RMS{}; \
+             not tested: the paper's estimator predicts no error of its calibration (the noise and repeatability alone \
+             give {:.3} mm; `--estimator ml` predicts and tests it)",
+            data.display(),
+            part.rms_mm,
+            if tool_move.is_some() {
+                ", with the tool frame fitted to them"
+            } else {
+                ""
+            },
+            part.predicted_mm.total
+        );
+        return None;
+    }
     let part = v.validation.as_ref()?;
     let test = part.chi_square.as_ref()?;
     let implausible = tool_move.and_then(|m| implausible_tool_move(&m, desc));
     let exceeds = test.verdict == Verdict::Exceeds;
     (exceeds || implausible.is_some()).then(|| {
         let (rms, predicted) = (part.rms_mm, part.predicted_mm.total);
-        let n = kept.len();
         let tool = if tool_move.is_some() {
             ", with the tool frame, which no pose measured, fitted to these poses"
         } else {
@@ -891,18 +926,32 @@ fn print_axes(
     );
     for a in &cal.axes {
         let unit = a.span.unit();
+        let sigma = a.direction_sigma.major_rad * 1e3;
+        // The paper's estimator gives its line no covariance: said, not printed as NaN.
+        let sigma = if sigma.is_finite() {
+            format!("{sigma:.4}")
+        } else {
+            "none (paper)".to_owned()
+        };
         say!(
             printer,
-            "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24.4}",
+            "  {:>5}  {:>6}  {:>9.1} {:<3}  {:>17.4}  {:>24}",
             a.joint,
             a.points,
             a.span.value(),
             unit,
             a.residual_rms_mm,
-            a.direction_sigma.major_rad * 1e3
+            sigma
         );
     }
     print_tool_accuracy(accuracy, printer);
+    if cal.options.estimator == AxisEstimator::Paper {
+        say!(
+            printer,
+            "  no sigmas: the paper's estimator (eqs. 1-8) gives its axes no covariance, so no row, zero-offset or tool \
+             sigma and no predicted tool accuracy is computed (null or absent in calibration.json); `--estimator ml` gives them"
+        );
+    }
 }
 
 /// The predicted tool 1-sigma line, when there is one.

@@ -81,7 +81,12 @@ impl<'a> PredictionError<'a> {
             message: format!("the calibration's {e}"),
         })?;
         let sensitivity = ToolSensitivity::new(&cal.robot, controller, &covariance.matrix());
-        let factor = CorrelatedNormal::new(sensitivity.covariance()).factor().clone();
+        let factor = CorrelatedNormal::new(sensitivity.covariance())
+            .map_err(|e| DiagnosisError::Model {
+                message: format!("the calibration's `model_covariance` over the parameters the tool depends on: {e}"),
+            })?
+            .factor()
+            .clone();
         Ok(PredictionError {
             calibration: Some((sensitivity, factor)),
             repeatability,

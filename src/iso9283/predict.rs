@@ -41,6 +41,10 @@ pub enum PredictionError {
         /// Why.
         message: String,
     },
+    /// The covariance has no factor to draw the calibration's error from
+    /// ([`CorrelatedNormal::new`]).
+    #[error("the calibration's covariance: {0}")]
+    Factor(String),
     /// Fewer than one trial.
     #[error("a prediction needs at least one trial")]
     NoTrials,
@@ -158,7 +162,7 @@ pub fn predict(
             message: e.to_string(),
         }
     })?;
-    let error = CorrelatedNormal::new(inputs.covariance);
+    let error = CorrelatedNormal::new(inputs.covariance).map_err(PredictionError::Factor)?;
     let jitter = NoiseModel {
         noise_rms_3d_m: 0.0,
         repeatability_rad: inputs.repeatability_rad_or_m.to_vec(),
@@ -291,7 +295,7 @@ mod tests {
             let cmd = commands_to_internal(&desc, &cube.commands[pose.pose - 1]);
             let j = sensitivity.jacobian(&cmd).unwrap();
             let cov = j.rows(0, 3) * sensitivity_covariance(&c) * j.rows(0, 3).transpose();
-            let dist = CorrelatedNormal::new(&cov);
+            let dist = CorrelatedNormal::new(&cov).unwrap();
             let n = 200_000;
             let reference = (0..n).map(|_| dist.draw(&mut rng).norm()).sum::<f64>() / n as f64 * 1e3;
             let stats = &pose.ap_p_mm;

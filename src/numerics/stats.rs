@@ -242,14 +242,31 @@ pub struct CorrelatedNormal {
 }
 
 impl CorrelatedNormal {
-    /// The distribution of covariance `c`.
-    pub fn new(c: &nalgebra::DMatrix<f64>) -> Self {
+    /// The distribution of covariance `c`; an error (in words) for a matrix that is empty, not
+    /// square, or holds a number that is not finite: none has a factor (the eigen-decomposition
+    /// needs a non-empty finite square matrix).
+    pub fn new(c: &nalgebra::DMatrix<f64>) -> Result<Self, String> {
+        if c.is_empty() || !c.is_square() {
+            return Err(format!(
+                "a covariance of {} x {} numbers has no factor (a non-empty square matrix is needed)",
+                c.nrows(),
+                c.ncols()
+            ));
+        }
+        if let Some(i) = c.iter().position(|x| !x.is_finite()) {
+            return Err(format!(
+                "covariance entry ({}, {}) is {}: no factor",
+                i % c.nrows(),
+                i / c.nrows(),
+                c[i]
+            ));
+        }
         let sym = 0.5 * (c + c.transpose());
         let eig = nalgebra::SymmetricEigen::new(sym);
         let roots = eig.eigenvalues.map(|l| l.max(0.0).sqrt());
-        CorrelatedNormal {
+        Ok(CorrelatedNormal {
             factor: eig.eigenvectors * nalgebra::DMatrix::from_diagonal(&roots),
-        }
+        })
     }
 
     /// `V sqrt(L)`: the factor `F` with `F F^T = C`.
@@ -290,13 +307,33 @@ mod tests {
         assert!(rms_off_line(&points[..2]).abs() < f64::MIN_POSITIVE);
     }
 
+    /// An empty matrix, a non-square one, or one holding a NaN or an infinity has no factor:
+    /// an error naming it, not a panic (hostile run 13: an empty model covariance); a 1 x 1
+    /// covariance's factor is its square root, by hand.
+    #[test]
+    fn a_covariance_without_a_factor_is_an_error() {
+        use nalgebra::DMatrix;
+        assert!(
+            CorrelatedNormal::new(&DMatrix::zeros(0, 0))
+                .unwrap_err()
+                .contains("0 x 0")
+        );
+        assert!(CorrelatedNormal::new(&DMatrix::zeros(2, 3)).is_err());
+        let nan = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, f64::NAN]);
+        assert!(CorrelatedNormal::new(&nan).unwrap_err().contains("(1, 1) is NaN"));
+        let inf = DMatrix::from_row_slice(2, 2, &[1.0, f64::INFINITY, 0.0, 1.0]);
+        assert!(CorrelatedNormal::new(&inf).unwrap_err().contains("(0, 1) is inf"));
+        let one = CorrelatedNormal::new(&DMatrix::from_element(1, 1, 6.25)).unwrap();
+        assert!((one.factor()[(0, 0)].abs() - 2.5).abs() < 1e-15);
+    }
+
     /// The sample covariance of many draws recovers the covariance: each entry within 5
     /// standard errors (`sqrt((C_ii C_jj + C_ij^2) / n)`), a singular direction drawn as 0.
     #[test]
     fn correlated_normal_draws_have_the_covariance() {
         use rand::SeedableRng;
         let c = nalgebra::DMatrix::from_row_slice(3, 3, &[4.0, 1.2, 0.0, 1.2, 1.0, 0.0, 0.0, 0.0, 0.0]);
-        let dist = CorrelatedNormal::new(&c);
+        let dist = CorrelatedNormal::new(&c).unwrap();
         let mut rng = rand::rngs::ChaCha12Rng::seed_from_u64(5);
         let n = 20_000;
         let mut s = nalgebra::DMatrix::<f64>::zeros(3, 3);

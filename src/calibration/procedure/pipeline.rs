@@ -11,9 +11,9 @@ use super::joints::{Assembly, Refit, swept_commands_at_target1};
 use super::propagation::{Derived, Propagation, add_axis_fit, moved_point};
 use super::recorded_coupling::RecordedCoupling;
 use super::{
-    AxisCovariance, AxisExperiment, BaseRule, COMMAND_TOLERANCE, Calibration, CalibrationOptions, CouplingReport,
-    DerivedSigma, Detail, NoiseReport, NominalGeometry, ProcedureError, RowSigma, ToolReport, ZeroOffsetSigma,
-    axis_experiments_with,
+    AxisCovariance, AxisEstimator, AxisExperiment, BaseRule, COMMAND_TOLERANCE, Calibration, CalibrationOptions,
+    CouplingReport, DerivedSigma, Detail, NoiseReport, NominalGeometry, ProcedureError, RowSigma, ToolReport,
+    ZeroOffsetSigma, axis_experiments_with,
 };
 use crate::calibration::coupling_fit::{CouplingResponse, passive_angle_gradients};
 use crate::calibration::model_parameters::ModelCovariance;
@@ -318,8 +318,13 @@ impl<'a> Context<'a> {
         reference_cmd: &[f64],
         passes: usize,
     ) -> Result<(FittedModel, Option<ToolReport>), ProcedureError> {
+        // The paper's estimator gives its lines no covariance: nothing to propagate, so no
+        // sigma is reported (none in the file) rather than the zero the propagation of nothing
+        // would give.
+        let paper = self.options.estimator == AxisEstimator::Paper;
         let row_sigma = match self.detail {
             Detail::Model => None,
+            _ if paper => Some(vec![]),
             _ => Some(calibrated_row_sigmas(self.nominal, &state.axes, &state.fits)?),
         };
         let mut robot = state.robot.clone();
@@ -330,6 +335,7 @@ impl<'a> Context<'a> {
         let mut couplings = state.couplings.clone();
         let (derived_sigma, model_covariance) = match self.detail {
             Detail::Model => (None, None),
+            _ if paper => (None, None),
             _ => {
                 let (d, m) = self.derived_sigma(set, state, reference_cmd)?;
                 (Some(d), m)

@@ -1,7 +1,7 @@
 //! The diagnostic report, like the paper's section-4 bullets: what the identified parameters
 //! mean physically, each with its uncertainty and whether the data resolve it (> 3 sigma).
 
-use super::result::{Calibration, PointResidual};
+use super::result::{Calibration, PointResidual, RowSigma};
 use super::uncertainty::SIGNIFICANT_SIGMAS;
 use crate::calibration::record::CalibrationRecord;
 use crate::calibration::tool_accuracy::ToolAccuracy;
@@ -40,6 +40,27 @@ fn finding(subject: String, value: f64, sigma: f64, unit: &str, text: String) ->
     }
 }
 
+/// ` +- sigma` at `digits` decimals, or ` (no sigma)` where none is computed (NaN: the paper's
+/// estimator).
+fn pm(sigma: f64, digits: usize) -> String {
+    if sigma.is_finite() {
+        format!(" +- {sigma:.digits$}")
+    } else {
+        " (no sigma)".to_owned()
+    }
+}
+
+/// Each row's 1-sigma, NaN for every row when none was propagated (the paper's estimator).
+fn row_sigmas(cal: &Calibration) -> impl Iterator<Item = RowSigma> + '_ {
+    let none = RowSigma {
+        a_mm: f64::NAN,
+        b_mm: f64::NAN,
+        alpha_deg: f64::NAN,
+        beta_deg: f64::NAN,
+    };
+    cal.row_sigma.iter().copied().chain(std::iter::repeat(none))
+}
+
 /// Whether `sigma` is a real 1-sigma (finite and positive).
 fn has_sigma(sigma: f64) -> bool {
     sigma.is_finite() && sigma > 0.0
@@ -58,7 +79,7 @@ pub fn findings(cal: &Calibration, desc: &RobotDescription) -> Vec<Finding> {
 /// The deviations of each row's `a`, `b`, `alpha` and `beta` from the design, appended to
 /// `out`.
 fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Finding>) {
-    for (k, ((r, n), s)) in cal.robot.rows.iter().zip(&desc.rows).zip(&cal.row_sigma).enumerate() {
+    for (k, ((r, n), s)) in cal.robot.rows.iter().zip(&desc.rows).zip(row_sigmas(cal)).enumerate() {
         let (i, j) = (k + 1, k + 2);
         let da = (r.a_m - n.a_m) * 1e3;
         out.push(finding(
@@ -67,8 +88,9 @@ fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Findin
             s.a_mm,
             "mm",
             format!(
-                "frame {j} (on axis {j}) sits {:.2} +- {:.2} mm from its design position along Z_phi{i}, the direction from axis {i} towards axis {j}",
-                da, s.a_mm
+                "frame {j} (on axis {j}) sits {:.2}{} mm from its design position along Z_phi{i}, the direction from axis {i} towards axis {j}",
+                da,
+                pm(s.a_mm, 2)
             ),
         ));
         let db = (r.b_m - n.b_m) * 1e3;
@@ -78,9 +100,9 @@ fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Findin
             s.b_mm,
             "mm",
             format!(
-                "the common normal from Z_phi{i} to axis {j} is {:.2} +- {:.2} mm {} than designed",
+                "the common normal from Z_phi{i} to axis {j} is {:.2}{} mm {} than designed",
                 db.abs(),
-                s.b_mm,
+                pm(s.b_mm, 2),
                 if db >= 0.0 { "longer" } else { "shorter" }
             ),
         ));
@@ -91,8 +113,9 @@ fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Findin
             s.alpha_deg,
             "deg",
             format!(
-                "axis {j} is tilted {:.3} +- {:.3} deg from its designed angle about the common normal",
-                dalpha, s.alpha_deg
+                "axis {j} is tilted {:.3}{} deg from its designed angle about the common normal",
+                dalpha,
+                pm(s.alpha_deg, 3)
             ),
         ));
         let dbeta = r.beta_deg - n.beta_deg;
@@ -102,8 +125,9 @@ fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Findin
             s.beta_deg,
             "deg",
             format!(
-                "axis {j} is turned {:.3} +- {:.3} deg about Z_phi{i} from its designed direction (joint-{i} zero and axis misalignment)",
-                dbeta, s.beta_deg
+                "axis {j} is turned {:.3}{} deg about Z_phi{i} from its designed direction (joint-{i} zero and axis misalignment)",
+                dbeta,
+                pm(s.beta_deg, 3)
             ),
         ));
     }
@@ -131,10 +155,10 @@ fn zero_offset_findings(cal: &Calibration, out: &mut Vec<Finding>) {
             sigma.unwrap_or(f64::NAN),
             unit,
             format!(
-                "joint {} reads {:.3} +- {:.3} {unit} off its calibrated zero at the reference pose",
+                "joint {} reads {:.3}{} {unit} off its calibrated zero at the reference pose",
                 k + 1,
                 off,
-                sigma.unwrap_or(f64::NAN)
+                pm(sigma.unwrap_or(f64::NAN), 3)
             ),
         ));
     }
@@ -583,11 +607,17 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
         let unit = a.span.unit();
         let position_sigma = match a.kind {
             JointKind::Prismatic => "- (sliding)".to_owned(),
+            JointKind::Revolute if a.position_sigma.major_mm.is_nan() => "- (none)".to_owned(),
             JointKind::Revolute => format!("{:.3}", a.position_sigma.major_mm),
+        };
+        // The paper's estimator gives the line no covariance.
+        let direction_sigma = match a.direction_sigma.major_rad * 1e3 {
+            x if x.is_nan() => "- (none)".to_owned(),
+            x => format!("{x:.3}"),
         };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.1} {unit} | ({:.2}, {:.2}, {:.2}) | ({:.6}, {:.6}, {:.6}) | {:.3} | {position_sigma} | {:.3} |",
+            "| {} | {} | {} | {:.1} {unit} | ({:.2}, {:.2}, {:.2}) | ({:.6}, {:.6}, {:.6}) | {direction_sigma} | {position_sigma} | {:.3} |",
             a.joint,
             a.experiment,
             a.points,
@@ -598,7 +628,6 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
             a.direction[0],
             a.direction[1],
             a.direction[2],
-            a.direction_sigma.major_rad * 1e3,
             a.residual_rms_mm
         );
     }
@@ -612,23 +641,23 @@ fn write_rows_table(s: &mut String, cal: &Calibration, desc: &RobotDescription) 
         "| row | nominal a, b (m); alpha, beta (deg) | calibrated a (m) | b (m) | alpha (deg) | beta (deg) |"
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|");
-    for (k, ((r, n), sg)) in cal.robot.rows.iter().zip(&desc.rows).zip(&cal.row_sigma).enumerate() {
+    for (k, ((r, n), sg)) in cal.robot.rows.iter().zip(&desc.rows).zip(row_sigmas(cal)).enumerate() {
         let _ = writeln!(
             s,
-            "| {} | {:.6}, {:.6}; {:.4}, {:.4} | {:.5} +- {:.5} | {:.5} +- {:.5} | {:.4} +- {:.4} | {:.4} +- {:.4} |",
+            "| {} | {:.6}, {:.6}; {:.4}, {:.4} | {:.5}{} | {:.5}{} | {:.4}{} | {:.4}{} |",
             k + 1,
             n.a_m,
             n.b_m,
             n.alpha_deg,
             n.beta_deg,
             r.a_m,
-            sg.a_mm * 1e-3,
+            pm(sg.a_mm * 1e-3, 5),
             r.b_m,
-            sg.b_mm * 1e-3,
+            pm(sg.b_mm * 1e-3, 5),
             r.alpha_deg,
-            sg.alpha_deg,
+            pm(sg.alpha_deg, 4),
             r.beta_deg,
-            sg.beta_deg
+            pm(sg.beta_deg, 4)
         );
     }
 }
@@ -688,7 +717,15 @@ fn write_findings(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
 fn write_identifiability(s: &mut String, cal: &Calibration) {
     let _ = writeln!(s, "\n## Identifiability\n");
     for a in &cal.axes {
-        let _ = writeln!(s, "- joint {}: condition number {:.3e}", a.joint, a.condition_number);
+        if a.condition_number.is_nan() {
+            let _ = writeln!(
+                s,
+                "- joint {}: condition number not computed (the paper's estimator)",
+                a.joint
+            );
+        } else {
+            let _ = writeln!(s, "- joint {}: condition number {:.3e}", a.joint, a.condition_number);
+        }
         for note in &a.identifiability {
             let _ = writeln!(s, "  - {note}");
         }

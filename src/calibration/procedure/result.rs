@@ -63,7 +63,10 @@ pub struct AxisReport {
     pub coefficient_sigma: Vec<f64>,
     /// RMS of the point residuals \[mm\].
     pub residual_rms_mm: f64,
-    /// Scaled condition number of the fit.
+    /// Scaled condition number of the fit; NaN (null in JSON) for a sliding axis fitted by the
+    /// paper's estimator, which computes none.
+    #[serde(deserialize_with = "nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub condition_number: f64,
     /// What the data cannot pin down, in words.
     pub identifiability: Vec<String>,
@@ -83,12 +86,17 @@ pub struct AxisReport {
     pub sweeps: Vec<SweepReport>,
 }
 
-/// The principal 1-sigmas of an axis direction, largest first.
+/// The principal 1-sigmas of an axis direction, largest first; NaN (null in JSON) for an axis
+/// fitted by the paper's estimator, which gives its line no covariance.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct DirectionSigma {
     /// The largest \[rad\].
+    #[serde(deserialize_with = "nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub major_rad: f64,
     /// The smallest \[rad\].
+    #[serde(deserialize_with = "nan_from_null")]
+    #[schemars(with = "Option<f64>")]
     pub minor_rad: f64,
 }
 

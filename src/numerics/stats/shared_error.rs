@@ -202,7 +202,7 @@ mod tests {
             let shared = DVector::from_fn(4, |_, _| StandardNormal.sample(&mut rng));
             let mut chi = SharedErrorChiSquare::new(4);
             for (noise, g) in &blocks {
-                let r = CorrelatedNormal::new(noise).draw(&mut rng) + g * &shared;
+                let r = CorrelatedNormal::new(noise).unwrap().draw(&mut rng) + g * &shared;
                 chi.add(&r, &noise.clone().try_inverse().unwrap(), g);
             }
             sum += chi.value();

@@ -252,6 +252,13 @@ fn sweep(cal: &Calibration, desc: &RobotDescription, a: &AxisReport) -> Option<(
 
 /// The fitted over described mean slope of axis `a` over its sweep, and its sigma.
 fn slope_of(cal: &Calibration, desc: &RobotDescription, ideal: &RobotModel, a: &AxisReport) -> Option<Slope> {
+    // The paper's eq.-8 sigmas are the a-posteriori ones of the angle fit alone, given its
+    // axis: they leave out the axis's own error, which the ML fit's carry, and understate the
+    // slope's (asea-irb6l joint 6: 0.0009 rad against the ML's 0.012 on one sweep), so a test
+    // on them names scales a clean file does not have. No test on them.
+    if a.estimator == super::super::AxisEstimator::Paper {
+        return None;
+    }
     let fitted = Fitted {
         joint: a.joint,
         experiment: &a.experiment,
