@@ -45,6 +45,7 @@ mod hostile_round12a;
 mod hostile_round12b;
 mod hostile_round12c;
 mod hostile_round12d;
+mod hostile_round13f;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
