@@ -632,7 +632,6 @@ fn print_scale_doubts(
     found: &[Implausible],
     data: &Path,
 ) {
-fn print_scale_doubts(cal: &Calibration, desc: &RobotDescription, found: &[Implausible], data: &Path) {
     if cal.options.estimator == AxisEstimator::Paper {
         eprintln!(
             "note: {}: the command-column scale test does not run on the paper's estimator: its transmission sigmas \
