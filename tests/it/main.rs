@@ -47,7 +47,6 @@ mod hostile_round12c;
 mod hostile_round12d;
 mod hostile_round13a;
 mod hostile_round13b;
-mod hostile_round13c;
 mod hostile_round13e;
 mod hostile_round13d;
 mod hostile_round13f;

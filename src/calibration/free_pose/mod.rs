@@ -27,7 +27,6 @@ pub mod model;
 pub mod poses;
 pub mod register;
 mod report;
-mod scales;
 pub mod slip;
 mod summary;
 #[cfg(test)]
@@ -38,7 +37,6 @@ pub use identify::{Identification, Unidentified};
 pub use model::{FreePoseModel, layout};
 pub use poses::{FreePose, FreePoses};
 pub use report::markdown;
-pub use scales::{ColumnScale, NamedScale};
 pub use summary::{
     EffectJoint, EffectTrial, FreePoseCalibration, FreePoseSummary, Holdout, OutlierPose, ParameterEstimate,
     SetupPlacement, TargetEstimate,
@@ -130,40 +128,16 @@ pub fn calibrate_free_poses(
         .residuals_and_jacobian(&controller, &poses, &train, &layout, &all)
         .map_err(|u| u.error(&poses))?;
     let mut identification = identify::identify(&design, &layout, &registered.model.phi);
-    let geometry = |id: &Identification| -> Vec<usize> {
-        id.fitted
-            .iter()
-            .copied()
-            .filter(|&c| model::harmonic_order(&layout[c]).is_none() && !identify::is_effect(&layout[c]))
-            .collect()
-    };
-    // The column scales are tested before any pose is screened, and the screen runs on the
-    // poses with the scales named undone (`scales` module doc).
-    // The scales are tested against the geometry, and against the geometry with the effects
-    // the model may carry, never the harmonics, which take most of a command column's scale
-    // over a partial turn (`scales::named_scales`).
-    let screened_columns: Vec<usize> = identification
-        .fitted
-        .iter()
-        .copied()
-        .filter(|&c| model::harmonic_order(&layout[c]).is_none())
-        .collect();
-    let (found, undone) = scales::named_scales(
-        &problem,
-        &registered.model,
-        &train,
-        (&geometry(&identification), &screened_columns),
-    );
-    let screening = Problem {
-        poses: undone.as_ref().unwrap_or(&poses),
-        description_targets_m: problem.description_targets_m.clone(),
-        ..problem
-    };
-    let screens = (&problem, &screening);
     // The outliers of the geometry pick the poses the harmonics are chosen on; the chosen
     // model's own test on every pose then decides which poses the calibration drops.
     let (fitted, kept, _) = converging(&mut identification, &design, &layout, |id| {
-        screened(screens, &registered.model, &train, &geometry(id), options)
+        let geometry: Vec<usize> = id
+            .fitted
+            .iter()
+            .copied()
+            .filter(|&c| model::harmonic_order(&layout[c]).is_none() && !identify::is_effect(&layout[c]))
+            .collect();
+        fit_without_outliers(&problem, &registered.model, &train, &geometry, options)
     })?;
     let Selected {
         fitted,
@@ -174,10 +148,9 @@ pub fn calibrate_free_poses(
     identification.drop_insignificant(&harmonics_left_out, &layout);
     identification.fitted.retain(|c| !effects_left_out.contains(c));
     let (fitted, kept, flags) = converging(&mut identification, &design, &layout, |id| {
-        screened(screens, &fitted.model, &train, &id.fitted, options)
+        fit_without_outliers(&problem, &fitted.model, &train, &id.fitted, options)
     })?;
     check_plausible(&fitted, &poses, &kept)?;
-    let scales = found.into_iter().map(|f| f.named).collect();
     summary::summarise(summary::Stages {
         problem: &problem,
         start: &start,
@@ -188,25 +161,7 @@ pub fn calibrate_free_poses(
         flags: &flags,
         test: &test,
         effects_tried,
-        scales,
     })
-}
-
-/// [`fit_without_outliers`] on the poses the outlier screen sees (`screening`: the file's, or
-/// with the column scales named undone), then, where those differ from the file's (`problem`),
-/// the fit of the file's poses it kept.
-fn screened(
-    (problem, screening): (&Problem<'_>, &Problem<'_>),
-    start: &FreePoseModel,
-    train: &[usize],
-    columns: &[usize],
-    options: &FreePoseOptions,
-) -> Result<(Fitted, Vec<usize>, Vec<fit::Flag>), FreePoseError> {
-    let (fitted, kept, flags) = fit_without_outliers(screening, start, train, columns, options)?;
-    if std::ptr::eq(screening.poses, problem.poses) {
-        return Ok((fitted, kept, flags));
-    }
-    Ok((fit::fit(problem, &fitted.model, &kept, columns)?, kept, flags))
 }
 
 /// `attempt` with the parameters of `identification`; while its fit does not converge, again
