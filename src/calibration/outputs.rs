@@ -189,6 +189,14 @@ pub fn zero_offsets_csv(cal: &Calibration, desc: &RobotDescription, commands: &[
         "# tool-target RMS, nominal vs calibrated, over {} poses: {:.3} mm without offsets, {:.3} mm with them (what offsets alone cannot take)",
         fit.poses, fit.rms_before_mm, fit.rms_after_mm
     );
+    if !fit.undetermined.is_empty() {
+        let joints: Vec<String> = fit.undetermined.iter().map(usize::to_string).collect();
+        let _ = writeln!(
+            s,
+            "# joint {}: its turn moves none of the tool targets (they lie on its axis): no offset of it is seen, 0 written",
+            joints.join(", ")
+        );
+    }
     s.push_str("joint,offset,unit\n");
     for (k, (offset, unit)) in fit.offsets.iter().zip(&fit.units).enumerate() {
         let _ = writeln!(s, "{},{},{unit}", k + 1, format_f64(*offset));

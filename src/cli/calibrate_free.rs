@@ -3,16 +3,19 @@
 
 use super::printer::Printer;
 use anyhow::Result;
-use axiscal::calibration::free_pose::slip::{ExplainingSlip, explaining_slip, mirrored_targets, tool_turn_deg};
+use axiscal::calibration::free_pose::block::{BlockShift, block_shift};
+use axiscal::calibration::free_pose::slip::{ExplainingSlip, SLIP_FALSE_ALARM, explaining_slip, mirrored_targets, tool_turn_deg};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
 use axiscal::calibration::procedure::{
     Calibration, ScaleDoubt, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
     named_joints,
 };
+use axiscal::calibration::noise::NOISE_CONFIDENCE;
 use axiscal::calibration::record::CalibrationRecord;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
 use axiscal::measurement::{Measurement, MeasurementSet};
+use axiscal::numerics::stats::chi_square_quantile;
 use axiscal::robot::RobotDescription;
 use std::path::Path;
 
@@ -72,8 +75,10 @@ pub fn calibrate(
     if args.all_rows && set.experiments().iter().any(|e| e.moved_joint > 0) {
         cal.summary.axis_rows_as_poses = Some("`--free-poses` asked for it".into());
     }
+    let block = block_shift(set, desc, &options, &cal);
     let (cal, summary) = cal.into_calibration(desc);
-    warn_slips(args, (set, desc), &options, (&cal, &summary), printer);
+    warn_few_degrees_of_freedom(args.data, &cal, &summary);
+    warn_slips(args, (set, desc), &options, (&cal, &summary), block.as_ref(), printer);
     let mut record = CalibrationRecord::new(cal);
     record.reports.free_poses = Some(summary);
     Ok(record)
@@ -213,6 +218,86 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
     }
 }
 
+/// A [`BlockShift`] in words: where, by how much, how significant, what it did and the fix.
+fn block_words(b: &BlockShift) -> String {
+    let line = |l: Option<u64>| l.map_or_else(|| "?".to_owned(), |l| l.to_string());
+    let place = match b.to_end {
+        true => format!("from line {} on", line(b.lines.0)),
+        false => format!("of lines {}-{}", line(b.lines.0), line(b.lines.1)),
+    };
+    format!(
+        "the free poses {place} ({} of the {} fitted) sit about ({:.2}, {:.2}, {:.2}) mm off the others: the calibrated \
+         residuals step there in file order (p {} for the most significant of the {} blocks of consecutive poses \
+         tried, against a false-alarm rate of {SLIP_FALSE_ALARM} shared by them); the instrument or the robot moved between \
+         them (a bump, a re-setup). The free-pose fit took part of it into the geometry and the noise estimate \
+         (calibrated RMS {:.3} mm as written, {:.3} mm with those poses moved back), so calibration.json is wrong for \
+         the robot: give those rows their own `setup` label (or measure them again) and calibrate again",
+        b.poses,
+        b.tested,
+        b.shift_mm[0],
+        b.shift_mm[1],
+        b.shift_mm[2],
+        match b.p_value {
+            p if p < 1e-99 => "< 1e-99".to_owned(),
+            p => format!("= {p:.1e}"),
+        },
+        b.blocks_tried,
+        b.written_rms_mm,
+        b.undone_rms_mm
+    )
+}
+
+/// The factor by which the noise estimate's [`NOISE_CONFIDENCE`] interval may reach above the
+/// estimate before the prediction resting on it is said to be unreliable: a predicted
+/// accuracy that may be more than twice as poor as printed tells the user little.
+const NOISE_INTERVAL_FACTOR: f64 = 2.0;
+
+/// The upper end of the noise estimate's two-sided `NOISE_CONFIDENCE` interval over the
+/// estimate, for `dof` degrees of freedom: `sqrt(dof / chi2_{alpha/2}(dof))` (`s^2 dof /
+/// sigma^2 ~ chi^2(dof)`).
+fn noise_upper_factor(dof: f64) -> f64 {
+    let alpha = 1.0 - NOISE_CONFIDENCE;
+    (dof / chi_square_quantile(alpha / 2.0, dof)).sqrt()
+}
+
+/// Warns when the free-pose fit's noise estimate (its residual's sum of squares over `3 points
+/// - parameters` degrees of freedom) is so uncertain that the upper end of its
+/// [`NOISE_CONFIDENCE`] interval lies beyond [`NOISE_INTERVAL_FACTOR`] times the estimate: every
+/// predicted accuracy (the tool 1-sigma, the sigmas, validate's test) scales with it. Says the
+/// degrees of freedom, the interval and the poses that would bring it within the factor.
+fn warn_few_degrees_of_freedom(data: &Path, cal: &Calibration, s: &FreePoseSummary) {
+    let parameters = s.parameters.len();
+    let dof = (3 * s.points).saturating_sub(parameters);
+    let factor = noise_upper_factor(dof as f64);
+    if dof > 0 && factor <= NOISE_INTERVAL_FACTOR {
+        return;
+    }
+    let needed = (1..10_000).find(|&d| noise_upper_factor(d as f64) <= NOISE_INTERVAL_FACTOR).unwrap_or(1);
+    let per_pose = 3.0 * s.points as f64 / s.poses.max(1) as f64;
+    let poses = ((parameters + needed) as f64 / per_pose).ceil() as usize;
+    let noise = cal.noise.as_ref().and_then(|n| n.estimate.as_ref());
+    let estimate = match noise {
+        Some(n) => format!(
+            "the noise estimate {:.3} mm (3-D RMS) has the {:.0} % interval {:.3}-{:.3} mm, up to {factor:.1} times itself",
+            n.rms_3d_mm,
+            100.0 * NOISE_CONFIDENCE,
+            n.interval.low_mm,
+            n.interval.high_mm
+        ),
+        None => "no noise estimate is left".to_owned(),
+    };
+    eprintln!(
+        "warning: {}: the fit leaves {dof} degrees of freedom ({} points x 3 coordinates - {parameters} parameters fitted, \
+         from {} free poses): {estimate}; every predicted accuracy (the tool 1-sigma, the sigmas in calibration.json, \
+         validate's test) scales with it, and the model holds near these poses only; measure about {poses} free poses or \
+         more across the workspace ({needed} degrees of freedom bring the interval's upper end within {NOISE_INTERVAL_FACTOR} \
+         times the estimate)",
+        data.display(),
+        s.points,
+        s.poses
+    );
+}
+
 /// The error's first clause (before its advice): "the calibrated model misses the points by ...".
 fn first_clause(e: &str) -> &str {
     e.split(": the description").next().unwrap_or(e)
@@ -242,6 +327,7 @@ fn warn_slips(
     (set, desc): (&MeasurementSet, &RobotDescription),
     options: &FreePoseOptions,
     (cal, summary): (&Calibration, &FreePoseSummary),
+    block: Option<&BlockShift>,
     printer: Printer,
 ) {
     let data = args.data.display();
@@ -257,6 +343,11 @@ fn warn_slips(
             "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
             slip_words(&s)
         );
+        return;
+    }
+    // A shifted block misfits every test below (a column's scale, the coordinates' scale).
+    if let Some(b) = block {
+        eprintln!("warning: {data}: {}", block_words(b));
         return;
     }
     let scaled = free_pose_scale_slips((cal, summary), desc, set.rows());

@@ -19,6 +19,7 @@
 //!
 //! Pure maths: no files, no CLI, no simulator.
 
+pub mod block;
 mod effects;
 mod error;
 mod fit;

@@ -167,7 +167,11 @@ pub fn joint_map(cal: &Calibration, desc: &RobotDescription, step: f64) -> Joint
 /// robot (for a controller that takes nothing but zero offsets): `delta` minimising
 /// `sum |base^-1 FK_nominal(cmd + delta) t - base_cal^-1 FK_calibrated(q(cmd)) t|^2` over the
 /// poses and the tool targets `t`, each robot in its own base frame (the numerics' one
-/// Levenberg-Marquardt loop, Jacobian [`crate::kinematics::point_jacobian`]).
+/// Levenberg-Marquardt loop, Jacobian [`crate::kinematics::point_jacobian`]). A joint whose
+/// turn moves no tool target at any pose (the targets on its axis: a description without
+/// targets, whose tool point lies on the last joint's axis) has no offset the fit can see: its
+/// Jacobian column is rounding noise, whose spurious gradient kept the loop from ever meeting
+/// its stopping rules; it is kept at 0 and named in [`ZeroOffsetFit::undetermined`].
 #[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ZeroOffsetFit {
     /// Per joint, the offset to ADD to a controller reading (equivalently, to subtract from a
@@ -181,7 +185,15 @@ pub struct ZeroOffsetFit {
     pub rms_before_mm: f64,
     /// ... and with them: what the offsets alone cannot take \[mm\].
     pub rms_after_mm: f64,
+    /// Joints (1-based) whose turn moves no tool target at any pose: offset 0, not fitted.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub undetermined: Vec<usize>,
 }
+
+/// A Jacobian column at most this fraction of the largest column's norm is rounding noise
+/// (about `sqrt(eps)`: a joint whose turn moves a target by a micrometre over a metre's reach
+/// still counts).
+const NEGLIGIBLE_COLUMN: f64 = 1e-8;
 
 /// [`ZeroOffsetFit`] of `cal` over `commands` (file units); commands the calibrated model
 /// cannot execute are skipped. Fails when the fit does not converge.
@@ -229,17 +241,24 @@ pub fn controller_zero_offsets(
         }
         Ok((r, j))
     };
+    let (before, j0) = eval(&DVector::zeros(n))?;
+    let norms: Vec<f64> = (0..n).map(|k| j0.column(k).norm()).collect();
+    let largest = norms.iter().copied().fold(0.0, f64::max);
+    let fitted: Vec<usize> = (0..n).filter(|&k| norms[k] > NEGLIGIBLE_COLUMN * largest).collect();
+    let full = |d: &DVector<f64>| {
+        let mut all = DVector::zeros(n);
+        fitted.iter().zip(d.iter()).for_each(|(&k, v)| all[k] = *v);
+        all
+    };
     let outcome = levenberg_marquardt(
-        DVector::zeros(n),
+        DVector::zeros(fitted.len()),
         &LmOptions::marquardt("controller zero offsets", 100),
-        eval,
+        |d: &DVector<f64>| eval(&full(d)).map(|(r, j)| (r, j.select_columns(&fitted))),
         |d, step| Ok(d + step),
     )?
     .converged("controller zero offsets", None)?;
     let rms = |r: &DVector<f64>| (r.norm_squared() / (r.len() / 3).max(1) as f64).sqrt();
-    let before = eval(&DVector::zeros(n))?.0;
-    let (offsets, units): (Vec<f64>, Vec<&'static str>) = outcome
-        .state
+    let (offsets, units): (Vec<f64>, Vec<&'static str>) = full(&outcome.state)
         .iter()
         .enumerate()
         .map(|(k, d)| {
@@ -253,5 +272,6 @@ pub fn controller_zero_offsets(
         poses: data.len(),
         rms_before_mm: rms(&before),
         rms_after_mm: rms(&outcome.residual),
+        undetermined: (1..=n).filter(|j| !fitted.contains(&(j - 1))).collect(),
     })
 }

@@ -50,7 +50,9 @@ fn pm(sigma: f64, digits: usize) -> String {
     }
 }
 
-/// Each row's 1-sigma, NaN for every row when none was propagated (the paper's estimator).
+/// Each row's 1-sigma: the propagated ones; without them, from the model covariance where
+/// there is one ([`covariance_row_sigmas`], a free-pose calibration); else NaN for every row
+/// (the paper's estimator).
 fn row_sigmas(cal: &Calibration) -> impl Iterator<Item = RowSigma> + '_ {
     let none = RowSigma {
         a_mm: f64::NAN,
@@ -58,7 +60,37 @@ fn row_sigmas(cal: &Calibration) -> impl Iterator<Item = RowSigma> + '_ {
         alpha_deg: f64::NAN,
         beta_deg: f64::NAN,
     };
-    cal.row_sigma.iter().copied().chain(std::iter::repeat(none))
+    let rows = match cal.row_sigma.is_empty() {
+        true => covariance_row_sigmas(cal).unwrap_or_default(),
+        false => cal.row_sigma.clone(),
+    };
+    rows.into_iter().chain(std::iter::repeat(none))
+}
+
+/// Each row's 1-sigma from the diagonal of the model covariance
+/// ([`crate::calibration::model_parameters::ModelCovariance`], `row K a [m]`, `row K alpha
+/// [rad]`, ...): the free-pose fit's covariance of its parameters propagated to the model's
+/// scalars (`free_pose::summary`). 0 for a scalar the fit kept at its design value (not
+/// identified); NaN for one the covariance does not name. `None` without a covariance.
+fn covariance_row_sigmas(cal: &Calibration) -> Option<Vec<RowSigma>> {
+    let mc = cal.model_covariance.as_ref()?;
+    let sigma = |name: String| {
+        mc.names
+            .iter()
+            .position(|n| *n == name)
+            .and_then(|i| mc.covariance.get(i).and_then(|r| r.get(i)))
+            .map_or(f64::NAN, |v| v.max(0.0).sqrt())
+    };
+    Some(
+        (1..=cal.robot.rows.len())
+            .map(|k| RowSigma {
+                a_mm: sigma(format!("row {k} a [m]")) * 1e3,
+                b_mm: sigma(format!("row {k} b [m]")) * 1e3,
+                alpha_deg: sigma(format!("row {k} alpha [rad]")).to_degrees(),
+                beta_deg: sigma(format!("row {k} beta [rad]")).to_degrees(),
+            })
+            .collect(),
+    )
 }
 
 /// Whether `sigma` is a real 1-sigma (finite and positive).
@@ -77,8 +109,23 @@ pub fn findings(cal: &Calibration, desc: &RobotDescription) -> Vec<Finding> {
 }
 
 /// The deviations of each row's `a`, `b`, `alpha` and `beta` from the design, appended to
-/// `out`.
+/// `out`. A free-pose calibration's rows (sigmas from its model covariance) leave out the scalars its
+/// fit kept at their design values (sigma 0: nothing to report).
 fn row_findings(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Finding>) {
+    let from_covariance = cal.row_sigma.is_empty() && cal.model_covariance.is_some();
+    let first = out.len();
+    row_findings_all(cal, desc, out);
+    if from_covariance {
+        let mut k = 0;
+        out.retain(|f| {
+            k += 1;
+            k <= first || f.sigma != 0.0
+        });
+    }
+}
+
+/// [`row_findings`], every scalar of every row.
+fn row_findings_all(cal: &Calibration, desc: &RobotDescription, out: &mut Vec<Finding>) {
     for (k, ((r, n), s)) in cal.robot.rows.iter().zip(&desc.rows).zip(row_sigmas(cal)).enumerate() {
         let (i, j) = (k + 1, k + 2);
         let da = (r.a_m - n.a_m) * 1e3;
