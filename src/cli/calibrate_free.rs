@@ -4,13 +4,15 @@
 use super::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::free_pose::block::{BlockShift, block_shift};
-use axiscal::calibration::free_pose::slip::{ExplainingSlip, SLIP_FALSE_ALARM, explaining_slip, mirrored_targets, tool_turn_deg};
+use axiscal::calibration::free_pose::slip::{
+    ExplainingSlip, SLIP_FALSE_ALARM, explaining_slip, mirrored_targets, tool_turn_deg,
+};
 use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
+use axiscal::calibration::noise::NOISE_CONFIDENCE;
 use axiscal::calibration::procedure::{
     Calibration, ScaleDoubt, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
     named_joints,
 };
-use axiscal::calibration::noise::NOISE_CONFIDENCE;
 use axiscal::calibration::record::CalibrationRecord;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
@@ -272,7 +274,9 @@ fn warn_few_degrees_of_freedom(data: &Path, cal: &Calibration, s: &FreePoseSumma
     if dof > 0 && factor <= NOISE_INTERVAL_FACTOR {
         return;
     }
-    let needed = (1..10_000).find(|&d| noise_upper_factor(d as f64) <= NOISE_INTERVAL_FACTOR).unwrap_or(1);
+    let needed = (1..10_000)
+        .find(|&d| noise_upper_factor(d as f64) <= NOISE_INTERVAL_FACTOR)
+        .unwrap_or(1);
     let per_pose = 3.0 * s.points as f64 / s.poses.max(1) as f64;
     let poses = ((parameters + needed) as f64 / per_pose).ceil() as usize;
     let noise = cal.noise.as_ref().and_then(|n| n.estimate.as_ref());

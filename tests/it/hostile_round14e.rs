@@ -26,13 +26,19 @@ fn robot(name: &str) -> String {
 fn free_poses(dir: &Path, name: &str, seed: u64, poses: usize) -> PathBuf {
     let source = format!("src_{name}_{seed}.csv");
     let mut cmd = axiscal();
-    cmd.current_dir(dir).args(["simulate", "-q", "--validation-poses", &poses.to_string()]);
+    cmd.current_dir(dir)
+        .args(["simulate", "-q", "--validation-poses", &poses.to_string()]);
     cmd.args(["--seed", &seed.to_string(), "--out", &source, "--force"]);
     if name != "asea-irb6l" {
         cmd.args(["--sim", "analytic", "--robot", &robot(name)]);
     }
     cmd.assert().success();
-    altered_csv(&dir.join(source), &format!("fp_{name}_{seed}.csv"), |f| f[1] == "0", |_| {})
+    altered_csv(
+        &dir.join(source),
+        &format!("fp_{name}_{seed}.csv"),
+        |f| f[1] == "0",
+        |_| {},
+    )
 }
 
 /// `file` with `delta` added to coordinate `axis` (0-2: x, y, z) of the data rows `rows`
@@ -69,15 +75,24 @@ fn paper_robot_blocks_are_named_by_line() {
         let clean = free_poses(dir.path(), "asea-irb6l", seed, 150);
         let z = shifted(&clean, "z.csv", 2, 2.0, 120..=usize::MAX);
         let args = format!("calibrate {} --out out --force", z.display());
-        let e = run_case(dir.path(), &case("z +2 mm from row 120", &args, 0, &["sit about", "from line"]));
+        let e = run_case(
+            dir.path(),
+            &case("z +2 mm from row 120", &args, 0, &["sit about", "from line"]),
+        );
         let first = number_after(&e, "the free poses from line ").expect("a line");
         assert!(first.abs_diff(122) <= 3, "seed {seed}: from line {first}: {e}");
         let x = shifted(&clean, "x.csv", 0, 2.0, 60..=150);
         let args = format!("calibrate {} --out out --force", x.display());
-        let e = run_case(dir.path(), &case("x +2 mm rows 60-150", &args, 0, &["sit about", "of lines"]));
+        let e = run_case(
+            dir.path(),
+            &case("x +2 mm rows 60-150", &args, 0, &["sit about", "of lines"]),
+        );
         let first = number_after(&e, "the free poses of lines ").expect("a line");
         let last = number_after(&e, &format!("of lines {first}-")).expect("a last line");
-        assert!(first.abs_diff(62) <= 3 && last.abs_diff(152) <= 3, "seed {seed}: {first}-{last}: {e}");
+        assert!(
+            first.abs_diff(62) <= 3 && last.abs_diff(152) <= 3,
+            "seed {seed}: {first}-{last}: {e}"
+        );
     }
 }
 
@@ -124,10 +139,19 @@ fn few_free_poses_are_warned_with_the_numbers() {
         },
         |_| {},
     );
-    let args = format!("calibrate {} --robot {} --out out --force", few.display(), robot("arm6-dh"));
+    let args = format!(
+        "calibrate {} --robot {} --out out --force",
+        few.display(),
+        robot("arm6-dh")
+    );
     let e = run_case(
         dir.path(),
-        &case("5 free poses", &args, 0, &["degrees of freedom (10 points", "measure about"]),
+        &case(
+            "5 free poses",
+            &args,
+            0,
+            &["degrees of freedom (10 points", "measure about"],
+        ),
     );
     let dof = number_after(&e, "the fit leaves ").expect("degrees of freedom");
     assert!(dof < 8, "{dof} degrees of freedom: {e}");
@@ -192,7 +216,11 @@ fn real_fanuc_zero_offsets_rows_and_a_block() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("fanuc.csv");
     let desc = crate::common::import_real_fanuc(&data);
-    let args = format!("calibrate {} --robot {} --out out --force", data.display(), desc.display());
+    let args = format!(
+        "calibrate {} --robot {} --out out --force",
+        data.display(),
+        desc.display()
+    );
     let e = run_case(dir.path(), &case("real FANUC", &args, 0, &[]));
     assert!(!e.contains("not converged") && !e.contains("sit about"), "{e}");
     let offsets = std::fs::read_to_string(dir.path().join("out/zero_offsets.csv")).unwrap();
@@ -200,6 +228,9 @@ fn real_fanuc_zero_offsets_rows_and_a_block() {
     assert!(row_sigmas_match(&dir.path().join("out")) > 4);
     let z = shifted(&data, "z.csv", 2, 1.0, 400..=usize::MAX);
     let args = format!("calibrate {} --robot {} --out out --force", z.display(), desc.display());
-    let e = run_case(dir.path(), &case("z +1 mm from row 400", &args, 0, &["sit about", " 403"]));
+    let e = run_case(
+        dir.path(),
+        &case("z +1 mm from row 400", &args, 0, &["sit about", " 403"]),
+    );
     assert!(!e.contains("reads 1.0"), "a z scale named: {e}");
 }

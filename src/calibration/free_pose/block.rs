@@ -162,7 +162,8 @@ fn serial_test(x: &[Vector3<f64>], start: usize, end: usize) -> Option<(f64, f64
     let (m1, m0) = (mean_of(true), mean_of(false));
     let e: Vec<Vector3<f64>> = (0..n).map(|i| x[i] - if inside(i) { m1 } else { m0 }).collect();
     let lags = (4.0 * (n as f64 / 100.0).powf(2.0 / 9.0)).floor() as usize;
-    let autocovariance = |l: usize| -> Matrix3<f64> { (l..n).map(|i| e[i] * e[i - l].transpose()).sum::<Matrix3<f64>>() / n as f64 };
+    let autocovariance =
+        |l: usize| -> Matrix3<f64> { (l..n).map(|i| e[i] * e[i - l].transpose()).sum::<Matrix3<f64>>() / n as f64 };
     let mut long_run = autocovariance(0);
     for l in 1..=lags.min(n - 1) {
         let g = autocovariance(l);
@@ -175,7 +176,11 @@ fn serial_test(x: &[Vector3<f64>], start: usize, end: usize) -> Option<(f64, f64
 }
 
 /// `set` with the rows of the poses `block` (experiment, step) moved by `-shift_m`.
-fn moved_back(set: &MeasurementSet, block: &HashSet<(String, usize)>, shift_m: &Vector3<f64>) -> Option<MeasurementSet> {
+fn moved_back(
+    set: &MeasurementSet,
+    block: &HashSet<(String, usize)>,
+    shift_m: &Vector3<f64>,
+) -> Option<MeasurementSet> {
     let rows: Vec<Measurement> = set
         .rows()
         .iter()
@@ -288,11 +293,20 @@ mod tests {
         let mut x = noise(100, 7);
         x[40..70].iter_mut().for_each(|v| v.z += 1.5);
         let f = most_significant_block(&x).unwrap();
-        assert!(f.start.abs_diff(40) <= 1 && f.end.abs_diff(70) <= 1, "{}..{}", f.start, f.end);
+        assert!(
+            f.start.abs_diff(40) <= 1 && f.end.abs_diff(70) <= 1,
+            "{}..{}",
+            f.start,
+            f.end
+        );
         assert!(f.p_value * (f.tried as f64) < SLIP_FALSE_ALARM);
         for seed in 0..20 {
             let f = most_significant_block(&noise(100, seed)).unwrap();
-            assert!(f.p_value * (f.tried as f64) > SLIP_FALSE_ALARM, "seed {seed}: {}", f.p_value);
+            assert!(
+                f.p_value * (f.tried as f64) > SLIP_FALSE_ALARM,
+                "seed {seed}: {}",
+                f.p_value
+            );
         }
     }
 }
