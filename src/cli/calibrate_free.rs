@@ -349,10 +349,9 @@ fn warn_slips(
         );
         return;
     }
-    // A shifted block misfits every test below (a column's scale, the coordinates' scale).
     if let Some(b) = block {
-        eprintln!("warning: {data}: {}", block_words(b));
-        return;
+        // A shifted block misfits every test below (a column's scale, the coordinates' scale).
+        return eprintln!("warning: {data}: {}", block_words(b));
     }
     let scaled = free_pose_scale_slips((cal, summary), desc, set.rows());
     for found in &scaled {
