@@ -262,8 +262,8 @@ fn noise_upper_factor(dof: f64) -> f64 {
     (dof / chi_square_quantile(alpha / 2.0, dof)).sqrt()
 }
 
-/// Warns when the free-pose fit's noise estimate (its residual's sum of squares over `3 points
-/// - parameters` degrees of freedom) is so uncertain that the upper end of its
+/// Warns when the free-pose fit's noise estimate (its residual's sum of squares over
+/// `3 points - parameters` degrees of freedom) is so uncertain that the upper end of its
 /// [`NOISE_CONFIDENCE`] interval lies beyond [`NOISE_INTERVAL_FACTOR`] times the estimate: every
 /// predicted accuracy (the tool 1-sigma, the sigmas, validate's test) scales with it. Says the
 /// degrees of freedom, the interval and the poses that would bring it within the factor.
