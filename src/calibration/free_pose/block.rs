@@ -10,18 +10,18 @@
 //! configurations, and a step between the block and the other poses stays.
 //!
 //! The test: for every block of consecutive poses in file order (from a pose to the end, or
-//! between two poses; [`MIN_BLOCK_POSES`] at least inside and outside), the two-sample
+//! between two poses; three poses at least inside and outside), the two-sample
 //! Hotelling `T^2` of the poses' mean residuals inside against outside, with the within-group
 //! pooled covariance (Mardia, Kent & Bibby, *Multivariate Analysis*, 1979, sec. 3.6.1),
 //! finds the block; that block is then tested with the long-run (serially correlated)
-//! covariance of the within-group residuals ([`serial_test`], `T^2 ~ chi^2(3)` without a
+//! covariance of the within-group residuals (`serial_test`, `T^2 ~ chi^2(3)` without a
 //! shift), its p-value times the blocks tried (Bonferroni over the candidate change points)
 //! held against [`SLIP_FALSE_ALARM`]. The fit's leverage (a few per cent of each residual's
 //! variance over tens of poses a parameter) shrinks the step and the scatter alike to first
 //! order; the part of the shift the fit took makes the test conservative.
 //!
 //! The size: the calibration repeated with the block moved back by the step found so far, the
-//! step left then added ([`BLOCK_ROUNDS`] calibrations). Named only when that calibration fits
+//! step left then added (two calibrations). Named only when that calibration fits
 //! better than the poses as written by the same family-wise quantile of the RMS's relative
 //! standard error `1 / sqrt(2 dof)`, the dof divided by the serial correlation's inflation (a
 //! second, differently computed test: the sum of squares of the whole fit, not the residual
