@@ -251,6 +251,14 @@ pub fn read_export(t: &Table) -> Result<(Vec<ExportPoint>, Option<LengthUnit>), 
             t.number(&row, xyz[1])?,
             t.number(&row, xyz[2])?,
         ];
+        // In mm, or in m when the header says so (an export of unknown unit is read as mm:
+        // a value beyond the range in metres is beyond it in mm too).
+        let to_mm = stated.map_or(1.0, LengthUnit::to_mm);
+        for (c, &k) in xyz.iter().enumerate() {
+            if let Some(range) = crate::measurement::data::coordinate_beyond(position[c] * to_mm) {
+                return Err(t.row_error(row.line, k, format!("{:e} is outside {range}", position[c])));
+            }
+        }
         let sigma = match sigma {
             Some(k) => {
                 let s = t.number(&row, k)?;
@@ -486,13 +494,35 @@ fn check_slips(t: &Table, pairs: &[(&PlanRow, &ExportPoint)], unit: LengthUnit) 
             pairs.len()
         ),
     };
-    let x = t.column(&["x", "x_mm", "x_m"]).unwrap_or(0);
+    let c = farthest_coordinate(&measured, &nominal, k);
+    let axis = ["x", "y", "z"][c];
+    let column = t
+        .column(&[axis, &format!("{axis}_mm"), &format!("{axis}_m")])
+        .unwrap_or(0);
     Err(t.row_error(
         point.line,
-        x,
+        column,
         format!(
             "point {} is {:.1} mm from the points' median, the plan puts it {:.1} mm away: {cause}",
             plan_row.point, rm[k], rn[k]
         ),
     ))
+}
+
+/// The coordinate (0 x, 1 y, 2 z) of point `k` whose offset from the measured points' median
+/// differs most from its plan point's offset from the plan points' median: the column of a
+/// slip in one cell.
+fn farthest_coordinate(measured: &[Vector3<f64>], nominal: &[Vector3<f64>], k: usize) -> usize {
+    let median = |points: &[Vector3<f64>], c: usize| {
+        let mut v: Vec<f64> = points.iter().map(|p| p[c]).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    (0..3)
+        .map(|c| {
+            let off = (measured[k][c] - median(measured, c)) - (nominal[k][c] - median(nominal, c));
+            (c, off.abs())
+        })
+        .fold((0, f64::NEG_INFINITY), |best, x| if x.1 > best.1 { x } else { best })
+        .0
 }
