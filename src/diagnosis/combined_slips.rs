@@ -642,30 +642,15 @@ fn explained(
     v: &Validation,
     (kept, after): (&[Kept], &Validation),
 ) -> ExplainedMiss {
-    let kinds = [
-        (&v.validation, "the validation poses'"),
-        (&v.tool, "the tool observation's"),
-        (&v.axis, "the axis experiments'"),
-    ];
-    let gross: Vec<String> = kinds
-        .iter()
-        .filter_map(|(s, what)| s.as_ref().map(|s| (s, what)))
-        .filter(|(s, _)| s.chi_square.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds))
-        .map(|(g, what)| {
-            format!(
-                "{what} {} point{} by {:.4} mm RMS where {:.4} mm is predicted",
-                g.points,
-                if g.points == 1 { "" } else { "s" },
-                g.rms_mm,
-                g.predicted_mm.total
-            )
-        })
-        .collect();
-    let miss = if gross.is_empty() {
-        String::new()
-    } else {
-        format!(" ({})", gross.join("; "))
-    };
+    let gross = summaries(v)
+        .filter(|s| s.chi_square.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds))
+        .max_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm));
+    let miss = gross.map_or(String::new(), |g| {
+        format!(
+            " ({} points by {:.4} mm RMS where {:.4} mm is predicted)",
+            g.points, g.rms_mm, g.predicted_mm.total
+        )
+    });
     let passes: Vec<String> = summaries(after)
         .map(|u| format!("{:.4} mm RMS where {:.4} mm", u.rms_mm, u.predicted_mm.total))
         .collect();

@@ -494,35 +494,13 @@ fn check_slips(t: &Table, pairs: &[(&PlanRow, &ExportPoint)], unit: LengthUnit) 
             pairs.len()
         ),
     };
-    let c = farthest_coordinate(&measured, &nominal, k);
-    let axis = ["x", "y", "z"][c];
-    let column = t
-        .column(&[axis, &format!("{axis}_mm"), &format!("{axis}_m")])
-        .unwrap_or(0);
+    let x = t.column(&["x", "x_mm", "x_m"]).unwrap_or(0);
     Err(t.row_error(
         point.line,
-        column,
+        x,
         format!(
             "point {} is {:.1} mm from the points' median, the plan puts it {:.1} mm away: {cause}",
             plan_row.point, rm[k], rn[k]
         ),
     ))
-}
-
-/// The coordinate (0 x, 1 y, 2 z) of point `k` whose offset from the measured points' median
-/// differs most from its plan point's offset from the plan points' median: the column of a
-/// slip in one cell.
-fn farthest_coordinate(measured: &[Vector3<f64>], nominal: &[Vector3<f64>], k: usize) -> usize {
-    let median = |points: &[Vector3<f64>], c: usize| {
-        let mut v: Vec<f64> = points.iter().map(|p| p[c]).collect();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    (0..3)
-        .map(|c| {
-            let off = (measured[k][c] - median(measured, c)) - (nominal[k][c] - median(nominal, c));
-            (c, off.abs())
-        })
-        .fold((0, f64::NEG_INFINITY), |best, x| if x.1 > best.1 { x } else { best })
-        .0
 }
