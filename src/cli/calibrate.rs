@@ -742,7 +742,7 @@ fn own_poses(set: &MeasurementSet, desc: &RobotDescription) -> Option<(Measureme
 /// commands scaled within a transmission's range, a wrong placement or description), or an
 /// effect the model lacks. The miss is then searched for the slips `validate` names
 /// ([`own_poses_slips`]). `None` without validation poses or when they are consistent.
-fn misses_own_validation_poses(
+pub(super) fn misses_own_validation_poses(
     cal: &Calibration,
     (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
     stated_repeatability: Option<&[f64]>,

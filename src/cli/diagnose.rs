@@ -105,6 +105,9 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     if let Some(cal) = cal.as_ref().filter(|_| !args.checks.skip_unit_check) {
         refuse_data_slips(&args, &set, cal, &desc)?;
     }
+    let own_miss = cal
+        .as_ref()
+        .and_then(|cal| own_poses_miss(cal, &desc, &set, &args.data));
     let set = without_sweep_outliers(&args, set, &desc)?;
     let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc, printer)?;
     let options = DiagnosisOptions {
@@ -143,6 +146,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     if let Some(warning) = d.tool_targets.as_ref().and_then(|t| t.warning()) {
         eprintln!("warning: {warning}");
     }
+    print_own_miss(own_miss, &d.outcome.effect);
     let report = Report {
         out: &args.out,
         json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
@@ -186,6 +190,25 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     say!(printer, "wrote {written}");
     printer.emit_json(&args.out.join("diagnosis.json"))?;
     record(&args, &desc, &set, noise_mm, &format!("{headline}. {}", d.verdict))
+}
+
+/// What `calibrate` warns of the file's own validation poses (`set`, read from `data`) against
+/// `cal`, the calibration of its sweeps, with the file named: a miss beyond the prediction.
+fn own_poses_miss(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet, data: &Path) -> Option<String> {
+    super::calibrate::misses_own_validation_poses(cal, (desc, set, data), None)
+        .map(|miss| format!("{}: {miss}", data.display()))
+}
+
+/// Prints `miss` ([`own_poses_miss`]) as a warning when the diagnosis's `effect` is `none`:
+/// its refit on the training poses takes in what every validation pose shares (one command
+/// column offset in all of them), and the gap it tests is then gone.
+fn print_own_miss(miss: Option<String>, effect: &str) {
+    if let Some(miss) = miss.filter(|_| effect == "none") {
+        eprintln!(
+            "warning: {miss}; no effect the diagnosis models explains it (it reads `none`: its refit on the training \
+             poses takes in what all validation poses share)"
+        );
+    }
 }
 
 /// Refuses the data when a slip explains the miss of `cal` (the calibration of `set`'s sweeps):

@@ -6,6 +6,66 @@ use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::harness::scenario::export::{self, RESOLVED_FILE, RUN_FILES, RunLock, SHARD_FILE, TRIALS_FILE};
 use axiscal::harness::scenario::{ResolvedScenario, Shard, Summary, TrialRecord, complete_run};
+
+/// Where a record was read: the index of its shard folder and its 1-based line in that
+/// folder's trials file.
+type Origin = (usize, u64);
+
+/// The first line of `dir`'s `shard.txt` as a shard, when it has one.
+fn shard_of(dir: &Path) -> Option<Shard> {
+    let text = std::fs::read_to_string(dir.join(SHARD_FILE)).ok()?;
+    text.lines().next().and_then(|l| l.trim().parse::<Shard>().ok())
+}
+
+/// Refuses shard records (`records`, each read at `origin` of `dirs`) that do not make one
+/// run, naming the files and lines: a trial twice (both rows), a trial missing (the shard
+/// folder whose `shard.txt` range holds it, or that no folder given holds it).
+fn check_coverage(
+    scenario: &ResolvedScenario,
+    dirs: &[PathBuf],
+    records: &[TrialRecord],
+    origin: &[Origin],
+) -> Result<()> {
+    let (n, total) = (scenario.trials, scenario.units());
+    let at = |k: usize| format!("{}:{}", dirs[origin[k].0].join(TRIALS_FILE).display(), origin[k].1);
+    let mut seen: Vec<Option<usize>> = vec![None; total];
+    for (i, r) in records.iter().enumerate() {
+        let Some(slot) = seen.get_mut(r.unit(n)) else { continue };
+        if let Some(first) = *slot {
+            bail!(
+                "merging the shards: trial {} of case {} appears more than once: {} and {} (a row repeated, or a shard's \
+                 rows copied into another): remove one of the two rows",
+                r.trial,
+                scenario.cases[r.case].name,
+                at(first),
+                at(i)
+            );
+        }
+        *slot = Some(i);
+    }
+    let missing: Vec<usize> = (0..total).filter(|&u| seen[u].is_none()).collect();
+    let Some(&first) = missing.first() else { return Ok(()) };
+    let holder = dirs
+        .iter()
+        .find_map(|d| shard_of(d).filter(|s| s.units(total).contains(&first)).map(|s| (d, s)));
+    let whose = match holder {
+        Some((dir, s)) => format!(
+            "shard {} of {} ({}) should hold it, and its {TRIALS_FILE} lacks it: that shard's run did not finish or rows \
+             were removed; finish it (`axiscal run ... --shard {s} --out {} --resume`) and merge again",
+            s.index,
+            s.count,
+            dir.display(),
+            dir.display()
+        ),
+        None => "no shard folder given holds it (by their shard.txt): give every shard of the split".to_string(),
+    };
+    bail!(
+        "merging the shards: {} of {total} trials are missing (first: trial {} of case {}): {whose}",
+        missing.len(),
+        first % n,
+        scenario.cases[first / n].name
+    )
+}
 use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal merge`.
@@ -124,8 +184,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let scenario = ResolvedScenario::from_resolved_file(&first)?;
     check_splits(&args.dirs)?;
     let mut names: Option<Vec<String>> = None;
-    let mut records = Vec::new();
-    for dir in &args.dirs {
+    let (mut records, mut origin) = (Vec::new(), Vec::new());
+    for (d, dir) in args.dirs.iter().enumerate() {
         let path = dir.join(RESOLVED_FILE);
         let text = axiscal::presets::read_text(&path).with_context(|| format!("reading {}", path.display()))?;
         if text != resolved_text {
@@ -135,7 +195,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
                 first.display()
             );
         }
-        let (n, r) = export::csv::read_trials(&dir.join(TRIALS_FILE), &scenario)?;
+        let (n, r, lines) = export::csv::read_trials_located(&dir.join(TRIALS_FILE), &scenario)?;
+        origin.extend(lines.into_iter().map(|l| (d, l)));
         match &names {
             Some(known) if *known != n => bail!(
                 "{}: metric columns {n:?} differ from the first shard's {known:?}",
@@ -146,6 +207,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         records.extend(r);
     }
     let names = names.unwrap_or_default();
+    check_coverage(&scenario, &args.dirs, &records, &origin)?;
     let records = complete_run(&scenario, records).context("merging the shards")?;
     scenario.check_metrics(&names, &first)?;
     let outputs = Outputs::new(args.force).inputs_in("a shard", &args.dirs, &[RESOLVED_FILE, TRIALS_FILE]);

@@ -190,8 +190,36 @@ pub fn campaign_plan(desc: &RobotDescription, robot: &Path, path: Option<&Path>)
     Ok(plan)
 }
 
+/// Refuses a `--span` whose sweep leaves the joint limits, naming the option (the plan's own
+/// sweeps are checked where the plan is made).
+fn span_within_limits(plan: &CalibrationPlan, args: &Args, desc: &RobotDescription) -> Result<()> {
+    if let Err(axiscal::plan::PlanError::OutOfLimits {
+        index,
+        joint,
+        low,
+        high,
+        limit_low,
+        limit_high,
+    }) = plan.validate(desc)
+        && let Some(&(swept, span)) = args.span.iter().find(|(j, _)| *j == plan.sweeps[index].joint)
+    {
+        let shown = axiscal::measurement::format_f64;
+        bail!(
+            "--span {swept}={}: joint {swept}'s sweep of {} {} about the reference pose's {} takes joint {joint}'s commands to \
+             {}..{}, beyond its limits {limit_low:.3}..{limit_high:.3}: give a shorter span",
+            shown(span),
+            shown(span),
+            desc.joints[swept - 1].kind.file_unit(),
+            shown(plan.reference[swept - 1]),
+            shown(low),
+            shown(high)
+        );
+    }
+    Ok(())
+}
+
 /// `plan` with the command line's `--span`, `--intervals` and `--order` applied.
-fn adjusted(mut plan: CalibrationPlan, args: &Args) -> Result<CalibrationPlan> {
+fn adjusted(mut plan: CalibrationPlan, args: &Args, desc: &RobotDescription) -> Result<CalibrationPlan> {
     for (k, &(joint, span)) in args.span.iter().enumerate() {
         if let Some(&(_, earlier)) = args.span[..k].iter().find(|(j, _)| *j == joint) {
             bail!(
@@ -207,6 +235,7 @@ fn adjusted(mut plan: CalibrationPlan, args: &Args) -> Result<CalibrationPlan> {
             bail!("--span {joint}={span}: the plan sweeps no joint {joint}");
         }
     }
+    span_within_limits(&plan, args, desc)?;
     if let Some(n) = args.intervals {
         plan.sweeps.iter_mut().for_each(|s| s.intervals = n);
     }
@@ -249,7 +278,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let desc = RobotDescription::from_file(&args.robot)?;
     super::checks::description_units(&desc, &args.robot, args.skip_unit_check)?;
-    let mut plan = adjusted(campaign_plan(&desc, &args.robot, args.plan.as_deref())?, &args)?;
+    let mut plan = adjusted(campaign_plan(&desc, &args.robot, args.plan.as_deref())?, &args, &desc)?;
     let default_validation = ValidationPlan::workspace_default(desc.dof());
     let validation = ValidationPlan {
         poses: validation_poses(args.validation_poses, &desc, &args.robot)?,

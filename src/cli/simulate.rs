@@ -346,7 +346,8 @@ fn instrument_model(
             other.len()
         ),
         (Instrument::Theodolite, other) => bail!(
-            "the theodolites need two stations, {} has {} (`[instrument] stations_mm`): give two with --station X,Y,Z --station X,Y,Z, or --instrument isotropic",
+            "{}: field `instrument.stations_mm`: the theodolites need two stations, {} has {}: give two there, or with --station X,Y,Z --station X,Y,Z, or --instrument isotropic",
+            robot.display(),
             desc.name,
             other.len()
         ),

@@ -121,6 +121,22 @@ pub enum PlanError {
         /// What is wrong.
         message: String,
     },
+    /// A joint's value of the reference pose is outside its limits.
+    #[error(
+        "key `reference`: joint {joint}'s command {} leaves its limits {limit_low:.3}..{limit_high:.3} (the reference \
+         pose is measured as the tool observation and every sweep starts from it): give a `reference` within the limits",
+        crate::measurement::format_f64(*value)
+    )]
+    ReferenceOutOfLimits {
+        /// The joint (1-based).
+        joint: usize,
+        /// Its reference command.
+        value: f64,
+        /// Lower limit.
+        limit_low: f64,
+        /// Upper limit.
+        limit_high: f64,
+    },
     /// The reference pose has the wrong length.
     #[error("reference pose has {found} values, the robot has {dof} joints")]
     ReferenceLength {
@@ -315,6 +331,17 @@ impl CalibrationPlan {
                 found: self.reference.len(),
                 dof,
             });
+        }
+        for (j, (&value, joint)) in self.reference.iter().zip(&desc.joints).enumerate() {
+            let [limit_low, limit_high] = joint.limits;
+            if !(limit_low..=limit_high).contains(&value) {
+                return Err(PlanError::ReferenceOutOfLimits {
+                    joint: j + 1,
+                    value,
+                    limit_low,
+                    limit_high,
+                });
+            }
         }
         if let Some([min, max]) = self.held_jitter
             && !(0.0 <= min && min <= max && max <= MAX_HELD_JITTER)

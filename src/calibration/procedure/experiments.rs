@@ -239,11 +239,17 @@ fn check_sweep_commands(e: &AxisExperiment, desc: &RobotDescription, tolerance: 
                 if let Some(slip) = scaled_follower(e, desc, (&next, &swept), tolerance) {
                     return Err(slip);
                 }
+                let (f, j) = (e.joint + 1, e.joint);
                 return Err(too_far(
                     k + 1,
                     i_f,
                     d_f,
-                    "its command leaves the hold-still formula cmd(0) + slope (cmd_k - cmd_k(0))",
+                    &format!(
+                        "its command leaves the hold-still formula cmd_{f}(s) = cmd_{f}(0) + slope (cmd_{j}(s) - cmd_{j}(0)) \
+                         (slope {}: the formula reads the columns cmd_{j} and cmd_{f}{}) at its farthest step",
+                        desc.nominal_coupling_from(e.joint).unwrap_or(f64::NAN),
+                        lines_words(e.lines)
+                    ),
                 ));
             }
             _ if d_const > tolerance => return Err(too_far(k + 1, i_const, d_const, "moves")),
@@ -281,10 +287,13 @@ fn scaled_follower(
             .map(|(c, u)| c - ratio * slope * u)
             .collect::<Vec<_>>(),
     );
-    if !(ratio.is_finite() && ratio > 0.0 && worst <= tolerance) {
+    if !(ratio.is_finite() && ratio != 0.0 && worst <= tolerance) {
         return None;
     }
     let (k, f) = (e.joint, e.joint + 1);
+    if ratio < 0.0 {
+        return Some(negated_follower(e, desc, (slope, ratio, worst)));
+    }
     Some(ProcedureError::InconsistentCommands {
         experiment: e.name.clone(),
         step: e.steps[0],
@@ -298,6 +307,39 @@ fn scaled_follower(
             1.0 / ratio,
         ),
     })
+}
+
+/// The file lines of a sweep (`lines`), in words: ` (lines A-B of the file)`, empty when unknown.
+fn lines_words(lines: Option<(u64, u64)>) -> String {
+    lines.map_or(String::new(), |(a, b)| format!("; the sweep's lines {a}-{b}"))
+}
+
+/// A follower column that keeps to a straight line through step 0 against the swept column,
+/// but with the slope's sign turned (`ratio` below 0 times the description's `slope`, every
+/// step within `worst` of that line): one of the two columns the hold-still formula reads is
+/// negated, most often the swept one (an export's direction convention). Named on the swept
+/// column, with the sweep's lines and the fix.
+fn negated_follower(
+    e: &AxisExperiment,
+    desc: &RobotDescription,
+    (slope, ratio, worst): (f64, f64, f64),
+) -> ProcedureError {
+    let (k, f) = (e.joint, e.joint + 1);
+    ProcedureError::InconsistentCommands {
+        experiment: e.name.clone(),
+        step: e.steps[0],
+        joint: k,
+        reason: format!(
+            "joint {f} is held while joint {k} is swept, and its command follows cmd_{k} on a straight line, but \
+             opposite to the hold-still formula cmd_{f}(s) = cmd_{f}(0) + slope (cmd_{k}(s) - cmd_{k}(0)) (the formula \
+             reads the columns cmd_{k} and cmd_{f}; slope {slope}): at {ratio:.4} times the slope (every step within \
+             {worst:.4} {} of that line{}): cmd_{k} looks negated on export (the controller's direction of joint {k} \
+             turned), or cmd_{f}; check cmd_{k} and cmd_{f} against the controller's readings at two poses and negate \
+             the column that differs",
+            unit(desc, f - 1),
+            lines_words(e.lines).replace("; the sweep's", ", the sweep's"),
+        ),
+    }
 }
 
 /// Why the swept joint's command of `e` does not move, in words: a single step (one row's id

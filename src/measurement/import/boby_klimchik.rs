@@ -98,6 +98,23 @@ pub enum ImportError {
         /// The text.
         text: String,
     },
+    /// A field is a number no instrument or joint reads (a coordinate beyond 10 km, a joint
+    /// reading beyond 2,800 turns).
+    #[error("{path}:{line}: field {field} ({meaning}): {value:e} is outside {range}")]
+    OutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// Line.
+        line: usize,
+        /// Field.
+        field: usize,
+        /// What the field holds.
+        meaning: String,
+        /// The value.
+        value: f64,
+        /// The range it leaves, in words.
+        range: &'static str,
+    },
     /// The file does not have six blocks of six poses.
     #[error("{path}: {found} data lines, expected {LINES} (six blocks of six poses, one block per joint)")]
     LineCount {
@@ -214,6 +231,21 @@ fn read_poses(text: &str, path: &Path) -> Result<Vec<Pose>, ImportError> {
                     meaning: meaning(f + 1),
                     text: (*t).to_owned(),
                 })?;
+            let beyond = match f + 1 {
+                1..=9 => crate::measurement::data::coordinate_beyond(*v),
+                10..=15 => None,
+                _ => crate::measurement::data::command_beyond(*v),
+            };
+            if let Some(range) = beyond {
+                return Err(ImportError::OutOfRange {
+                    path: path.into(),
+                    line: i + 1,
+                    field: f + 1,
+                    meaning: meaning(f + 1),
+                    value: *v,
+                    range,
+                });
+            }
         }
         poses.push((i + 1, values));
     }

@@ -251,6 +251,14 @@ pub fn read_export(t: &Table) -> Result<(Vec<ExportPoint>, Option<LengthUnit>), 
             t.number(&row, xyz[1])?,
             t.number(&row, xyz[2])?,
         ];
+        // In mm, or in m when the header says so (an export of unknown unit is read as mm:
+        // a value beyond the range in metres is beyond it in mm too).
+        let to_mm = stated.map_or(1.0, LengthUnit::to_mm);
+        for (c, &k) in xyz.iter().enumerate() {
+            if let Some(range) = crate::measurement::data::coordinate_beyond(position[c] * to_mm) {
+                return Err(t.row_error(row.line, k, format!("{:e} is outside {range}", position[c])));
+            }
+        }
         let sigma = match sigma {
             Some(k) => {
                 let s = t.number(&row, k)?;

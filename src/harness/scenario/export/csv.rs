@@ -130,23 +130,32 @@ impl PartialTrials {
 /// failed trials were recorded) has none. A row without its line end at the end of the file
 /// (a run killed while writing it) is dropped when `allow_torn_end`.
 pub fn read_trials(path: &Path, scenario: &ResolvedScenario) -> Result<(Vec<String>, Vec<TrialRecord>), ExportError> {
+    read_trials_with(path, scenario, false).map(|(names, records, _)| (names, records))
+}
+
+/// [`read_trials`] with each record's 1-based file line (for messages naming a row).
+pub fn read_trials_located(path: &Path, scenario: &ResolvedScenario) -> Result<TrialsWithLines, ExportError> {
     read_trials_with(path, scenario, false)
 }
+
+/// A trials file's metric names, its records and each record's 1-based file line.
+pub type TrialsWithLines = (Vec<String>, Vec<TrialRecord>, Vec<u64>);
 
 /// [`read_trials`] of an interrupted run's file: its unfinished last row is dropped.
 pub fn read_partial_trials(
     path: &Path,
     scenario: &ResolvedScenario,
 ) -> Result<(Vec<String>, Vec<TrialRecord>), ExportError> {
-    read_trials_with(path, scenario, true)
+    read_trials_with(path, scenario, true).map(|(names, records, _)| (names, records))
 }
 
 fn read_trials_with(
     path: &Path,
     scenario: &ResolvedScenario,
     allow_torn_end: bool,
-) -> Result<(Vec<String>, Vec<TrialRecord>), ExportError> {
+) -> Result<TrialsWithLines, ExportError> {
     let mut bytes = std::fs::read(path).map_err(io(path))?;
+    crate::presets::check_encoding(&bytes).map_err(io(path))?;
     if allow_torn_end {
         bytes.truncate(bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1));
     }
@@ -167,7 +176,7 @@ fn read_trials_with(
     }
     let has_error = head.last().is_some_and(|h| h == ERROR_COLUMN);
     let names = head[3..head.len() - usize::from(has_error)].to_vec();
-    let mut records = Vec::new();
+    let (mut records, mut lines) = (Vec::new(), Vec::new());
     for rec in reader.records() {
         let rec = rec.map_err(|e| csv_error(path, e))?;
         let line = rec.position().map_or(0, |p| p.line());
@@ -178,8 +187,9 @@ fn read_trials_with(
             ));
         }
         records.push(parse_row(&rec, &head, &names, has_error, scenario).map_err(|m| bad(line, m))?);
+        lines.push(line);
     }
-    Ok((names, records))
+    Ok((names, records, lines))
 }
 
 /// One row of a trials file (`rec`, header `head`).
