@@ -119,9 +119,10 @@ fn measured(file: &std::path::Path, cal: &std::path::Path) -> [f64; 5] {
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    // The harness prints `test NAME ... ` before the child's line.
     let line = stdout
         .lines()
-        .find(|l| l.starts_with("rows="))
+        .find_map(|l| l.find("rows=").map(|at| &l[at..]))
         .unwrap_or_else(|| panic!("{stdout}"));
     let values: Vec<f64> = line
         .split_whitespace()
