@@ -133,6 +133,9 @@ pub fn held_out(
         HeldOutError::Model("the held-out points are fewer than three or in a line: no base to register".into())
     })?;
     let registered: Vec<Point3<f64>> = nominal.iter().map(|p| registration * p).collect();
+    let (before, after) = (errors(&registered, &measured), errors(&calibrated, &measured));
+    // Let go before the validation: a million-row file's points are not held beside its rows.
+    drop((nominal, calibrated, registered, measured));
     let v = validate(
         set,
         cal,
@@ -145,8 +148,8 @@ pub fn held_out(
     Ok(HeldOut {
         file: file.to_string(),
         points: rows.len(),
-        before: errors(&registered, &measured),
-        after: errors(&calibrated, &measured),
+        before,
+        after,
         noise_predicted_rms_mm: summary.predicted_mm.noise,
         predicted_tool_spans_rms_mm: accuracy.map(|t| t.spans.position_rms_mm),
         predicted_tool_workspace_rms_mm: accuracy.map(|t| t.workspace.position_rms_mm),

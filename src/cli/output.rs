@@ -474,6 +474,12 @@ impl StagedSet<'_> {
     /// Writes `dir/name` under its temporary name (`name` may hold a subfolder: created now,
     /// and removed again, when left empty, if the set is not committed).
     pub fn write(&mut self, name: &str, contents: impl AsRef<[u8]>) -> Result<()> {
+        self.write_with(name, |file| file.write_all(contents.as_ref()))
+    }
+
+    /// [`Self::write`] with the contents written by `write` into the temporary file as they are
+    /// made (a large table is not held in memory first).
+    pub fn write_with(&mut self, name: &str, write: impl FnOnce(&mut OutputFile) -> std::io::Result<()>) -> Result<()> {
         let target = self.dir.join(name);
         if let Some(sub) = target.parent().filter(|d| !d.exists()) {
             self.outputs.check_not_input(sub)?;
@@ -482,8 +488,7 @@ impl StagedSet<'_> {
                 .push((sub.to_owned(), super::signals::track_temporary(sub)));
         }
         let mut file = self.outputs.create(&target)?;
-        file.write_all(contents.as_ref())
-            .with_context(|| format!("writing {}", target.display()))?;
+        write(&mut file).with_context(|| format!("writing {}", target.display()))?;
         self.staged.push(file.finish()?);
         Ok(())
     }

@@ -8,7 +8,8 @@ use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, OutlierPoint, ProcedureError, screen_sweeps};
 use axiscal::diagnosis::{
-    ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate, validation_residuals_csv,
+    ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate,
+    write_validation_residuals_csv,
 };
 use axiscal::diagnosis::{
     PoseResiduals, explained_validation_misses, free_poses_only, pose_point_outliers, without_outliers,
@@ -103,9 +104,10 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     noise_not_far_below(&args, &set, &desc, &v)?;
+    drop(set);
     let v = Validation { warnings, ..v };
     let mut staged = outputs.staged_in(&args.out)?;
-    staged.write(OUTPUTS[0], validation_residuals_csv(&v))?;
+    staged.write_with(OUTPUTS[0], |file| write_validation_residuals_csv(&v, file))?;
     staged.write(OUTPUTS[1], json_file::to_string(Schema::VALIDATION, &v)?)?;
     staged.commit(&[])?;
     print_summary(&v);

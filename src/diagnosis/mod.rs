@@ -71,6 +71,7 @@ pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
 pub use validate::{
     ChiSquare, Dominant, FittedToolMove, OrientationSummary, PointKind, PositionSummary, Prediction, Validation,
     ValidationOptions, ValidationResidual, Verdict, validate, validate_free_tool, validation_residuals_csv,
+    write_validation_residuals_csv,
 };
 
 use crate::calibration::free_pose::{FreePoseOptions, FreePoseSummary, calibrate_free_poses, with_fitted_targets};

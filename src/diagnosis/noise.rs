@@ -33,13 +33,10 @@ pub struct NoiseModel {
     pub repeatability_rad: Vec<f64>,
 }
 
-/// One row of a campaign on the calibrated robot, noise-free.
+/// One row of a campaign on the calibrated robot, noise-free (its joint values and actuator
+/// commands are in [`CleanCampaign::joints`]).
 #[derive(Clone, Debug)]
 struct CleanRow {
-    /// The calibrated joint values of the row's command.
-    q: Vec<f64>,
-    /// Its actuator commands (fig. 3 decoupling): when they change, the joints re-position.
-    u: Vec<f64>,
     /// The link carrying the target (0-based) and the target in its moving frame \[m\].
     link: usize,
     point_in_link_m: Point3<f64>,
@@ -66,6 +63,12 @@ pub struct CleanCampaign {
     /// The calibrated model with its constant frames (computed once for every row).
     frames: FixedFrames,
     rows: Vec<CleanRow>,
+    /// Every row's calibrated joint values then its actuator commands (fig. 3 decoupling: when
+    /// they change, the joints re-position), `2 * width` numbers a row, one after the other:
+    /// one allocation for the campaign, not two a row (a million-row file's rows).
+    joints: Vec<f64>,
+    /// The number of joint values (and of actuator commands) of a row.
+    width: usize,
 }
 
 fn model_error(message: String) -> DiagnosisError {
@@ -106,21 +109,34 @@ impl CleanCampaign {
     ) -> Result<Self, DiagnosisError> {
         let controller = Controller::from_description(desc);
         let model = robot.phi_model();
-        let mut joint_values = Vec::with_capacity(set.rows().len());
+        let width = desc.dof();
+        let mut joints = Vec::with_capacity(2 * width * set.rows().len());
         let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
         for m in set.rows() {
             let q = calibrated_joint_values(robot, &controller, &model, desc, m, &approach)?;
             let u = controller
                 .decouple(&commands_to_internal(desc, &m.cmd))
                 .map_err(|e| model_error(format!("experiment {} step {}: {e}", m.experiment, m.step)))?;
-            joint_values.push((q, u));
+            if q.len() != width || u.len() != width {
+                return Err(model_error(format!(
+                    "experiment {} step {}: {} joint values and {} actuator commands for {width} joints",
+                    m.experiment,
+                    m.step,
+                    q.len(),
+                    u.len()
+                )));
+            }
+            joints.extend_from_slice(&q);
+            joints.extend_from_slice(&u);
         }
+        drop(approach);
+        let q_of = |i: usize| &joints[2 * width * i..2 * width * i + width];
         // Mean link-frame position of each axis target.
         let mut sums: HashMap<(&str, usize), (Vector3<f64>, usize, usize)> = HashMap::new();
-        for (m, (q, _)) in set.rows().iter().zip(&joint_values) {
+        for (i, m) in set.rows().iter().enumerate() {
             if m.moved_joint > 0 {
                 let l = axis_target_link(desc, m);
-                let p = model.poses(q).world_from_link[l].inverse() * m.position_m();
+                let p = model.poses(q_of(i)).world_from_link[l].inverse() * m.position_m();
                 let group = sums.len();
                 let e = sums
                     .entry((m.experiment.as_str(), m.target))
@@ -133,8 +149,7 @@ impl CleanCampaign {
         let rows = set
             .rows()
             .iter()
-            .zip(joint_values)
-            .map(|(m, (q, u))| {
+            .map(|m| {
                 let (link, point_in_link_m, target) = if m.moved_joint > 0 {
                     let l = axis_target_link(desc, m);
                     let (s, n, group) = sums[&(m.experiment.as_str(), m.target)];
@@ -149,8 +164,6 @@ impl CleanCampaign {
                     (last, model.last_link_from_tool * t, RowTarget::Tool(*t))
                 };
                 Ok(CleanRow {
-                    q,
-                    u,
                     link,
                     point_in_link_m,
                     target,
@@ -160,7 +173,21 @@ impl CleanCampaign {
         Ok(CleanCampaign {
             frames: FixedFrames::new(model),
             rows,
+            joints,
+            width,
         })
+    }
+
+    /// Row `i`'s calibrated joint values.
+    fn q(&self, i: usize) -> &[f64] {
+        let at = 2 * self.width * i;
+        &self.joints[at..at + self.width]
+    }
+
+    /// Row `i`'s actuator commands.
+    fn u(&self, i: usize) -> &[f64] {
+        let at = 2 * self.width * i + self.width;
+        &self.joints[at..at + self.width]
     }
 
     /// The number of axis targets (one per experiment and target): the nuisance positions of
@@ -190,8 +217,9 @@ impl CleanCampaign {
         let model = robot.phi_model();
         self.rows
             .iter()
-            .map(|r| {
-                let q = robot.joint_values_from_actuators(&r.u)?;
+            .enumerate()
+            .map(|(i, r)| {
+                let q = robot.joint_values_from_actuators(self.u(i))?;
                 let point = match r.target {
                     RowTarget::Axis(g) => r.point_in_link_m + axis_target_shift_m[g],
                     RowTarget::Tool(t) => model.last_link_from_tool * t,
@@ -206,35 +234,38 @@ impl CleanCampaign {
     pub fn link_frames(&self) -> Vec<nalgebra::Isometry3<f64>> {
         self.rows
             .iter()
-            .map(|r| self.frames.poses(&r.q).world_from_link[r.link])
+            .enumerate()
+            .map(|(i, r)| self.frames.poses(self.q(i)).world_from_link[r.link])
             .collect()
     }
 
     /// Noise-free positions of every row \[m\].
     pub fn positions(&self) -> Vec<Point3<f64>> {
-        self.rows.iter().map(|r| self.position(r, None)).collect()
+        (0..self.rows.len()).map(|i| self.position(i, None)).collect()
     }
 
     /// How row `i`'s target moves with joint `joint`'s (0-based) value \[m per rad or m\]:
     /// central differences of the target's position with a step of 1e-6 (rad or m), far below
     /// the chain's curvature scale.
     pub fn joint_sensitivity(&self, i: usize, joint: usize) -> Vector3<f64> {
-        let r = &self.rows[i];
         let h = 1e-6;
-        let mut dq = vec![0.0; r.q.len()];
+        let mut dq = vec![0.0; self.width];
         dq[joint] = h;
-        let plus = self.position(r, Some(&dq));
+        let plus = self.position(i, Some(&dq));
         dq[joint] = -h;
-        (plus - self.position(r, Some(&dq))) / (2.0 * h)
+        (plus - self.position(i, Some(&dq))) / (2.0 * h)
     }
 
-    /// Where row `r`'s target is with the joint values moved by `dq`.
-    fn position(&self, r: &CleanRow, dq: Option<&[f64]>) -> Point3<f64> {
-        let q: Vec<f64> = match dq {
-            Some(d) => r.q.iter().zip(d).map(|(a, b)| a + b).collect(),
-            None => r.q.clone(),
+    /// Where row `i`'s target is with the joint values moved by `dq`.
+    fn position(&self, i: usize, dq: Option<&[f64]>) -> Point3<f64> {
+        let (r, q) = (&self.rows[i], self.q(i));
+        let poses = match dq {
+            Some(d) => self
+                .frames
+                .poses(&q.iter().zip(d).map(|(a, b)| a + b).collect::<Vec<f64>>()),
+            None => self.frames.poses(q),
         };
-        self.frames.poses(&q).world_from_link[r.link] * r.point_in_link_m
+        poses.world_from_link[r.link] * r.point_in_link_m
     }
 }
 
@@ -317,18 +348,18 @@ pub fn replica<R: Rng + ?Sized>(
     let mut jitter = Jitter::new(&noise.repeatability_rad);
     let mut execution: Option<((&str, usize), Vec<f64>)> = None;
     let mut rows = Vec::with_capacity(set.rows().len());
-    for (m, r) in set.rows().iter().zip(&clean.rows) {
+    for (i, m) in set.rows().iter().enumerate().take(clean.rows.len()) {
         let mut out = m.clone();
         let p = if validation_noise || !is_validation(m) {
             let key = (m.experiment.as_str(), m.step);
             if execution.as_ref().is_none_or(|(k, _)| *k != key) {
-                execution = Some((key, jitter.draw(&r.u, rng)));
+                execution = Some((key, jitter.draw(clean.u(i), rng)));
             }
             let dq = execution.as_ref().map(|(_, d)| d.as_slice());
-            clean.position(r, dq).coords
+            clean.position(i, dq).coords
                 + Vector3::from_fn(|_, _| sigma * Distribution::<f64>::sample(&StandardNormal, rng))
         } else {
-            clean.position(r, None).coords
+            clean.position(i, None).coords
         };
         for (c, x) in out.position_mm.iter_mut().zip(p.iter()) {
             *c = x * 1e3;

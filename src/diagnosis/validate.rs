@@ -429,11 +429,10 @@ fn validate_with(
     free_tool: bool,
 ) -> Result<(Validation, DVector<f64>), DiagnosisError> {
     let clean = CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?;
-    let predicted = clean.positions();
     let residuals: Vec<ValidationResidual> = set
         .rows()
         .iter()
-        .zip(&predicted)
+        .zip(clean.positions())
         .map(|(m, p)| {
             let p_mm = (p.coords * 1e3).into();
             ValidationResidual {
@@ -672,23 +671,33 @@ struct FreePoses {
 /// A free pose: its first row, every row's index and its measured targets by id \[m\].
 struct FreePose<'a> {
     first: &'a Measurement,
-    rows: Vec<usize>,
+    rows: &'a [usize],
     measured: BTreeMap<usize, Point3<f64>>,
 }
 
-/// The free poses of `set` (validation and tool), in (experiment, step) order.
-fn group_free_poses(set: &MeasurementSet) -> BTreeMap<(&str, usize), FreePose<'_>> {
-    let mut poses: BTreeMap<(&str, usize), FreePose> = BTreeMap::new();
-    for (i, m) in set.rows().iter().enumerate().filter(|(_, m)| m.moved_joint == 0) {
-        let e = poses.entry((m.experiment.as_str(), m.step)).or_insert(FreePose {
-            first: m,
-            rows: Vec::new(),
-            measured: BTreeMap::new(),
-        });
-        e.rows.push(i);
-        e.measured.insert(m.target, m.position_m());
-    }
-    poses
+/// The free rows of `set` (validation and tool poses), each pose's rows together in file order
+/// and the poses in (experiment, step) order: one index a row, each pose's [`FreePose`] made
+/// when it is tested ([`free_pose_groups`]), not a map entry per pose held for all of them.
+fn free_rows_by_pose(set: &MeasurementSet) -> Vec<usize> {
+    let rows = set.rows();
+    let mut order: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].moved_joint == 0).collect();
+    // A stable sort: a pose's rows stay in file order.
+    order.sort_by(|&a, &b| {
+        (rows[a].experiment.as_str(), rows[a].step).cmp(&(rows[b].experiment.as_str(), rows[b].step))
+    });
+    order
+}
+
+/// The free poses of `order` ([`free_rows_by_pose`]) one by one.
+fn free_pose_groups<'a>(set: &'a MeasurementSet, order: &'a [usize]) -> impl Iterator<Item = FreePose<'a>> {
+    let rows = set.rows();
+    order
+        .chunk_by(move |&a, &b| rows[a].experiment == rows[b].experiment && rows[a].step == rows[b].step)
+        .map(move |group| FreePose {
+            first: &rows[group[0]],
+            rows: group,
+            measured: group.iter().map(|&i| (rows[i].target, rows[i].position_m())).collect(),
+        })
 }
 
 /// The free poses' tests: every pose's points, and the orientation of those with at least
@@ -713,7 +722,8 @@ fn free_poses(
     );
     let (mut angles_mrad, mut noise_sq) = (Vec::new(), 0.0);
     let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
-    for pose in group_free_poses(set).values() {
+    let order = free_rows_by_pose(set);
+    for pose in free_pose_groups(set, &order) {
         let m = pose.first;
         let q = calibrated_joint_values(&cal.robot, controller, &model, desc, m, &approach)?;
         let mut pose_error = error.at(&model, &commands_to_internal(desc, &m.cmd), &q)?;
@@ -721,7 +731,7 @@ fn free_poses(
             pose_error = pose_error.with_free_tool();
         }
         let targets: Vec<Point3<f64>> = pose.rows.iter().map(|&i| tool_targets[set.rows()[i].target]).collect();
-        let r = stacked_residuals(residuals, &pose.rows);
+        let r = stacked_residuals(residuals, pose.rows);
         let statistic = if kind_of(m) == PointKind::Tool {
             &mut tool
         } else {
@@ -856,6 +866,15 @@ fn position_verdict(p: &PositionSummary, orientation: Option<&OrientationSummary
 
 /// `residuals.csv` of `axiscal validate` (`docs/formats.md#validation-residuals-csv`).
 pub fn validation_residuals_csv(v: &Validation) -> String {
+    let mut text = Vec::new();
+    // Writing into memory has no I/O to fail, and cells are UTF-8 strings.
+    write_validation_residuals_csv(v, &mut text).expect("a CSV table into memory");
+    String::from_utf8(text).expect("UTF-8 cells")
+}
+
+/// [`validation_residuals_csv`] written into `w` row by row, the same bytes: a million-row
+/// file's table is not held in memory before it is written.
+pub fn write_validation_residuals_csv<W: std::io::Write>(v: &Validation, w: W) -> std::io::Result<()> {
     let header = [
         "experiment",
         "kind",
@@ -873,7 +892,10 @@ pub fn validation_residuals_csv(v: &Validation) -> String {
         "dz_mm",
         "error_mm",
     ];
-    let rows = v.residuals.iter().map(|r| {
+    let mut w = crate::csv_lines::writer(w);
+    w.write_record(header)?;
+    let mut row: Vec<String> = Vec::with_capacity(header.len());
+    for r in &v.residuals {
         let kind = match r.kind {
             PointKind::Validation => "validation",
             PointKind::Tool => "tool",
@@ -881,22 +903,23 @@ pub fn validation_residuals_csv(v: &Validation) -> String {
         };
         let (measured, predicted) = (r.measured_mm, r.predicted_mm);
         let difference = [0, 1, 2].map(|i| measured[i] - predicted[i]);
-        let mut row = vec![
+        row.clear();
+        row.extend([
             r.experiment.clone(),
             kind.into(),
             r.moved_joint.to_string(),
             r.step.to_string(),
             r.target.to_string(),
-        ];
+        ]);
         let numbers = measured
             .iter()
             .chain(&predicted)
             .chain(&difference)
             .chain([&r.error_mm]);
         row.extend(numbers.map(|x| format!("{x:.4}")));
-        row
-    });
-    crate::csv_lines::table_text(&header, rows)
+        w.write_record(&row)?;
+    }
+    w.flush()
 }
 
 #[cfg(test)]

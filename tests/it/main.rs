@@ -52,6 +52,7 @@ mod hostile_round13e;
 mod hostile_round13f;
 mod hostile_round14e;
 mod hostile_round14f;
+mod hostile_round14c;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
