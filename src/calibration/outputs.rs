@@ -5,8 +5,9 @@
 
 use super::free_pose;
 use super::procedure::{
-    Calibration, Implausible, JointMap, MapTable, RawReadingDeviation, UrdfOptions, controller_zero_offsets, findings,
-    implausible, joint_map, joints_without_speed_limits, markdown, raw_reading_deviation, residuals_csv, urdf,
+    Calibration, ColumnSource, Implausible, JointMap, MapTable, RawReadingDeviation, UrdfOptions,
+    controller_zero_offsets, findings, implausible, joint_map, joints_without_speed_limits, markdown,
+    raw_reading_deviation, residuals_csv, urdf, with_column_source,
 };
 use super::record::CalibrationRecord;
 use crate::json_file::{self, Schema};
@@ -33,6 +34,9 @@ pub struct OutputOptions {
     pub urdf: UrdfOptions,
     /// Step of the tabulated joint map (deg or mm).
     pub joint_map_step: f64,
+    /// The instrument axis whose scale explains the joints' transmission departures, found on
+    /// the data (`calibration::procedure::column_source`): said in their place.
+    pub column_source: Option<ColumnSource>,
 }
 
 /// The rendered outputs of a calibration.
@@ -73,7 +77,7 @@ pub fn render(
     let json = |file: &'static str, r: serde_json::Result<String>| r.map_err(|cause| OutputError { file, cause });
     let cal = &record.calibration;
     let implausible = match record.reports.free_poses {
-        None => implausible(cal, desc),
+        None => with_column_source(implausible(cal, desc), options.column_source.as_ref()),
         Some(_) => vec![],
     };
     let deviation = raw_reading_deviation(cal, desc, poses);

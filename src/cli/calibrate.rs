@@ -13,9 +13,9 @@ use axiscal::calibration::free_pose;
 use axiscal::calibration::outputs::{self, OUTPUT_FILES, OutputOptions};
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
-    AxisEstimator, Calibration, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Implausible, PLAUSIBLE_AXIS_TILT_RAD,
-    ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, ScaleSlip, UrdfOptions, UrdfRoot, calibrate, longest_length_m,
-    ros_name, screen_sweeps,
+    AxisEstimator, Calibration, CalibrationOptions, ColumnSource, DEFAULT_HELD_TOLERANCE, Implausible,
+    PLAUSIBLE_AXIS_TILT_RAD, ProcedureError, RawReadingDeviation, Refit, SIZE_TOLERANCE, ScaleSlip, UrdfOptions,
+    UrdfRoot, calibrate, column_source, implausible, joint_slopes, longest_length_m, ros_name, screen_sweeps,
 };
 use axiscal::calibration::record::{CalibrationRecord, Reports};
 use axiscal::calibration::refine::{RefineOptions, Refinement, enough_free_poses};
@@ -25,7 +25,7 @@ use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccur
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates};
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_ROWS, axis_scale};
+use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_ROWS, Scaled, axis_scale};
 use axiscal::measurement::{Measurement, MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -186,7 +186,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     check_refine_poses(&args, &set, &desc)?;
     let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
-    let (mut record, map) = if free_poses_only {
+    let (mut record, map, column_source) = if free_poses_only {
         if let Some(noise) = args.noise_mm {
             eprintln!(
                 "warning: --noise-mm {noise} has no effect here: a free-pose calibration weights its poses alike and \
@@ -196,7 +196,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         let mut record = super::calibrate_free::calibrate(&args_view(&args), &set, &desc, printer)?;
         let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, &desc, &set);
         record.reports.tool_accuracy = accuracy;
-        (record, map)
+        (record, map, None)
     } else {
         checks::one_setup(&set, &args.data, "the axis-experiment calibration")?;
         calibrate_axes(&args, &set, &desc, printer)?
@@ -206,7 +206,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     readable(&record, &args, (&set, &desc))?;
     let cal = &record.calibration;
     let source = args.data.display().to_string();
-    let texts = render(&record, &args, (&desc, &set))?;
+    let texts = render(&record, &args, (&desc, &set), column_source)?;
     // Every file is written before any is put in place; an output left out must not leave an
     // earlier run's file beside the new calibration.
     let mut staged = outputs.staged_in(&args.out)?;
@@ -270,6 +270,7 @@ fn render(
     record: &CalibrationRecord,
     args: &Args,
     (desc, set): (&RobotDescription, &MeasurementSet),
+    column_source: Option<ColumnSource>,
 ) -> Result<outputs::CalibrationOutputs> {
     let options = OutputOptions {
         urdf: UrdfOptions {
@@ -277,6 +278,7 @@ fn render(
             root: args.urdf_root,
         },
         joint_map_step: args.joint_map_step,
+        column_source,
     };
     let source = args.data.display().to_string();
     let poses = export_poses(set, desc, &record.calibration);
@@ -407,14 +409,15 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
     }
 }
 
-/// The independent-axis calibration of `set` (`--refine` applied) with its reports, and the
-/// tool-accuracy map.
+/// The independent-axis calibration of `set` (`--refine` applied) with its reports, the
+/// tool-accuracy map, and the instrument axis whose scale explains the joints' transmission
+/// departures ([`column_source`]).
 fn calibrate_axes(
     args: &Args,
     set: &MeasurementSet,
     desc: &RobotDescription,
     printer: Printer,
-) -> Result<(CalibrationRecord, Vec<MapPoint>)> {
+) -> Result<(CalibrationRecord, Vec<MapPoint>, Option<ColumnSource>)> {
     if args.holdout {
         anyhow::bail!(
             "--holdout applies to free-pose files (no axis experiment); {} has axis experiments",
@@ -449,7 +452,7 @@ fn calibrate_axes(
             let mut record = sweeps_as_free_poses(args, set, desc, &e, printer)?;
             let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, desc, set);
             record.reports.tool_accuracy = accuracy;
-            return Ok((record, map));
+            return Ok((record, map, None));
         }
         Err(e) => {
             super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
@@ -482,7 +485,14 @@ fn calibrate_axes(
             misfit_poses: 0,
         })
     };
-    warn_axis_scale((set, desc), &args.data, &fit, PROFILE_MAX_ROWS, printer);
+    let source = instrument_axis_source(&cal, (set, desc), &options);
+    warn_axis_scale(
+        (set, desc),
+        &args.data,
+        (&fit, source.as_ref()),
+        PROFILE_MAX_ROWS,
+        printer,
+    );
     let (tool_accuracy, map) = predict_tool_accuracy(&cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
@@ -497,7 +507,39 @@ fn calibrate_axes(
         refinement,
         free_poses: None,
     };
-    Ok((CalibrationRecord { calibration, reports }, map))
+    Ok((CalibrationRecord { calibration, reports }, map, source))
+}
+
+/// The instrument axis whose scale explains the departures of the joints the transmission
+/// test names in `cal` ([`column_source`]), the calibrations re-run on `set` with `options`;
+/// `None` where the test names none.
+fn instrument_axis_source(
+    cal: &Calibration,
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &CalibrationOptions,
+) -> Option<ColumnSource> {
+    let named: Vec<usize> = implausible(cal, desc)
+        .iter()
+        .filter_map(|f| match f {
+            Implausible::Scaled(ScaleSlip::Command { joint, .. }) => Some(*joint),
+            _ => None,
+        })
+        .collect();
+    if named.is_empty() {
+        return None;
+    }
+    let refit = |s: &MeasurementSet| {
+        let c = calibrate(s, desc, options).ok()?;
+        Some(Refit {
+            slopes: joint_slopes(&c, desc),
+            fit: Fit {
+                sum_squares_mm2: c.axes.iter().map(|a| a.points as f64 * a.residual_rms_mm.powi(2)).sum(),
+                dof: c.noise.as_ref()?.estimate.as_ref()?.dof,
+                misfit_poses: 0,
+            },
+        })
+    };
+    column_source(set, &named, &refit)
 }
 
 /// The scale of one coordinate column the calibration `fit` finds in `set` ([`axis_scale`]),
@@ -507,7 +549,7 @@ fn calibrate_axes(
 pub(super) fn warn_axis_scale(
     (set, desc): (&MeasurementSet, &RobotDescription),
     data: &Path,
-    fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
+    (fit, source): (&dyn Fn(&MeasurementSet) -> Option<Fit>, Option<&ColumnSource>),
     max_rows: usize,
     printer: Printer,
 ) {
@@ -523,6 +565,16 @@ pub(super) fn warn_axis_scale(
         );
         return;
     };
+    // A column named from the joints' slopes (with the points' fit counted): the profile's note
+    // of what it cannot show is moot, its finding of the same column said there, and a finding
+    // of another scale that the column undone takes away too is that column's.
+    if let Some(source) = source.filter(|s| !s.alike)
+        && (!found.significant
+            || found.scaled == Scaled::Column(source.column)
+            || explained_by(set, source, fit, max_rows, &slides))
+    {
+        return;
+    }
     if !found.significant {
         if printer.verbose {
             eprintln!(
@@ -545,6 +597,22 @@ pub(super) fn warn_axis_scale(
         None => data.display().to_string(),
     };
     eprintln!("warning: {place}: {found}");
+}
+
+/// Whether the coordinate-scale profile of `set` with `source`'s column undone names nothing:
+/// the scale it named on the file as read is that column's, seen through another reading.
+fn explained_by(
+    set: &MeasurementSet,
+    source: &ColumnSource,
+    fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
+    max_rows: usize,
+    slides: &[usize],
+) -> bool {
+    let rows = set.rows();
+    let n = rows.len().max(1) as f64;
+    let centre = rows.iter().map(|m| m.position_mm[source.column]).sum::<f64>() / n;
+    let undone = set.with_coordinate_scaled_about(source.column, 1.0 / source.factor, centre);
+    axis_scale(&undone, fit, max_rows, slides).is_some_and(|a| !a.significant)
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far

@@ -394,7 +394,13 @@ fn warn_slips(
                 misfit_poses: c.summary.outliers.len(),
             })
         };
-        super::calibrate::warn_axis_scale((set, desc), args.data, &fit, PROFILE_MAX_FREE_POSE_ROWS, printer);
+        super::calibrate::warn_axis_scale(
+            (set, desc),
+            args.data,
+            (&fit, None),
+            PROFILE_MAX_FREE_POSE_ROWS,
+            printer,
+        );
     }
     // The columns said above are named; the line bounds the others.
     if let Some(reach) =

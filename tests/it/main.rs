@@ -53,6 +53,7 @@ mod hostile_round13f;
 mod hostile_round14e;
 mod hostile_round14f;
 mod hostile_round14c;
+mod hostile_round14b;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;

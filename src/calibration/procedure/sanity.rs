@@ -38,16 +38,20 @@
 //! - **Scale.** A joint's fitted transmission against what a drive gives, and the sliding
 //!   joints' common scale ([`scale`]): a command column or the coordinates scaled by a few per
 //!   cent, which the fit absorbs into a transmission or the geometry. Not said beside a size or
-//!   mirror finding, which explains it; a joint's misfit is not said beside its scale.
+//!   mirror finding, which explains it; a joint's misfit is not said beside its scale. Several
+//!   joints' departures that one instrument axis' scale explains are said as that axis
+//!   ([`scale_source`], [`with_column_source`]).
 
 mod scale;
 mod scale_absorption;
+mod scale_source;
 
 pub use scale::{
-    DOUBT_SIGMAS, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS, ScaleDoubt,
-    ScaleReach, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips, named_joints,
-    scale_doubts, scale_reach,
+    DOUBT_SIGMAS, JointSlope, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS,
+    ScaleDoubt, ScaleReach, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
+    joint_slopes, named_joints, scale_doubts, scale_reach,
 };
+pub use scale_source::{ColumnSource, Refit, column_source};
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
 use crate::kinematics::JointKind;
@@ -284,6 +288,28 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
         found.extend(tool_misfit(cal, desc));
     }
     found
+}
+
+/// `found` ([`implausible`]) with the command-column scales that `source` explains as one
+/// instrument axis' scale ([`scale_source`]) said as that, in the place of the first.
+pub fn with_column_source(found: Vec<Implausible>, source: Option<&ColumnSource>) -> Vec<Implausible> {
+    let Some(source) = source else {
+        return found;
+    };
+    let explained = |f: &Implausible| matches!(f, Implausible::Scaled(ScaleSlip::Command { joint, .. }) if source.joints.iter().any(|j| j.0 == *joint));
+    let Some(first) = found.iter().position(explained) else {
+        return found;
+    };
+    let mut out: Vec<Implausible> = Vec::with_capacity(found.len());
+    for (i, f) in found.into_iter().enumerate() {
+        if i == first {
+            out.push(Implausible::Scaled(ScaleSlip::Column(source.clone())));
+        }
+        if !explained(&f) {
+            out.push(f);
+        }
+    }
+    out
 }
 
 /// The tool-fit check of the module doc.

@@ -166,6 +166,9 @@ pub enum ScaleSlip {
         /// The sag at that stiffness under the largest torque about the joint at its points \[rad\].
         sag_rad: f64,
     },
+    /// One instrument axis read long or short explains the departures of the joints the
+    /// transmission test names ([`super::scale_source`]).
+    Column(super::scale_source::ColumnSource),
     /// Every sliding joint travels the same factor per command off its description: the
     /// coordinates are scaled.
     Coordinates {
@@ -218,6 +221,7 @@ impl std::fmt::Display for ScaleSlip {
                 bound,
             } => command_scaled_words(f, (*joint, experiment, *sliding), (*travel, *sigma, *bound)),
             ScaleSlip::Coordinates { factor, sigma, joints } => coordinates_scaled_words(f, *factor, *sigma, joints),
+            ScaleSlip::Column(source) => source.fmt(f),
             ScaleSlip::Sag {
                 joint,
                 experiment,
@@ -389,6 +393,53 @@ pub(super) fn scale_slips(cal: &Calibration, desc: &RobotDescription) -> Vec<Sca
     let ideal = RobotModel::ideal(desc);
     let slopes: Vec<Slope> = cal.axes.iter().filter_map(|a| slope_of(cal, desc, &ideal, a)).collect();
     said(&slopes)
+}
+
+/// One swept joint's fitted mean slope over its sweep against its description's (the slope
+/// the transmission test reads), for the attribution of several joints' departures to one
+/// instrument axis ([`super::scale_source`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointSlope {
+    /// The joint (1-based).
+    pub joint: usize,
+    /// Fitted over described mean slope (commanded per actual) \[1\].
+    pub ratio: f64,
+    /// Its 1-sigma (the fit's).
+    pub sigma: f64,
+    /// The sigma of what its drive departs by ([`PLAUSIBLE_TURN_DEVIATION`], [`PLAUSIBLE_LEAD_DEVIATION`]).
+    pub drive: f64,
+    /// Whether it slides (else it turns).
+    pub sliding: bool,
+}
+
+impl JointSlope {
+    /// Whether it departs from 1 beyond [`DRIVE_SIGMAS`] of its sigma and its drive's combined
+    /// (the transmission test's warning).
+    pub fn beyond(&self) -> bool {
+        (self.ratio - 1.0).abs() > DRIVE_SIGMAS * self.sigma.hypot(self.drive)
+    }
+}
+
+/// The slopes of `cal`'s swept joints with a fitted transmission (those the transmission test
+/// reads; none on the paper's estimator).
+pub fn joint_slopes(cal: &Calibration, desc: &RobotDescription) -> Vec<JointSlope> {
+    let ideal = RobotModel::ideal(desc);
+    cal.axes
+        .iter()
+        .filter_map(|a| slope_of(cal, desc, &ideal, a))
+        .filter(|s| s.fitted)
+        .map(|s| JointSlope {
+            joint: s.joint,
+            ratio: s.ratio,
+            sigma: s.sigma,
+            drive: if s.sliding {
+                PLAUSIBLE_LEAD_DEVIATION
+            } else {
+                PLAUSIBLE_TURN_DEVIATION
+            },
+            sliding: s.sliding,
+        })
+        .collect()
 }
 
 /// The transmission check of the module doc on a free-pose calibration `cal` (its rotary
@@ -572,6 +623,7 @@ pub fn named_joints(found: &[ScaleSlip]) -> Vec<usize> {
         .flat_map(|f| match f {
             ScaleSlip::Command { joint, .. } | ScaleSlip::Sag { joint, .. } => vec![*joint],
             ScaleSlip::Coordinates { joints, .. } => joints.clone(),
+            ScaleSlip::Column(source) => source.joints.iter().map(|j| j.0).collect(),
         })
         .collect()
 }
