@@ -50,6 +50,7 @@ mod hostile_round13b;
 mod hostile_round13d;
 mod hostile_round13e;
 mod hostile_round13f;
+mod hostile_round14d;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
