@@ -80,8 +80,9 @@ fn the_paper_campaigns_one_axis_scales_are_named_as_their_column() {
         "{clean}"
     );
     for (field, column, factor) in [(5, "y_mm", 1.035), (6, "z_mm", 1.05), (4, "x_mm", 0.97)] {
-        scaled(d, "camp.csv", "d.csv", (field, factor), |_| true);
-        let e = calibrated(d, "d.csv", None, "out");
+        let name = format!("{column}.csv");
+        scaled(d, "camp.csv", &name, (field, factor), |_| true);
+        let e = calibrated(d, &name, None, &format!("out-{column}"));
         named_alone(&e, column, factor);
     }
 }
@@ -94,7 +95,7 @@ fn a_ur5e_z_scale_is_named_as_z_with_and_without_validation_rows() {
     scaled(d, "all.csv", "z.csv", (6, 1.03), |_| true);
     scaled(d, "all.csv", "zs.csv", (6, 1.03), |f| f[0] != "validation");
     for file in ["z.csv", "zs.csv"] {
-        let e = calibrated(d, file, Some("ur5e-dh"), "out");
+        let e = calibrated(d, file, Some("ur5e-dh"), &format!("out-{file}"));
         named_alone(&e, "z_mm", 1.03);
         assert!(
             column_named(&e, "y_mm").is_none() && column_named(&e, "x_mm").is_none(),
@@ -119,9 +120,11 @@ fn a_genuine_command_column_scale_is_still_that_column() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     for (robot, joint) in [("arm6-dh", 2), ("ur5e-dh", 3)] {
-        simulated(d, robot, 1404, 20, "all.csv");
-        scaled(d, "all.csv", "c.csv", (6 + joint, 1.03), |_| true);
-        let e = calibrated(d, "c.csv", Some(robot), "out");
+        let all = format!("{robot}.csv");
+        simulated(d, robot, 1404, 20, &all);
+        let name = format!("c-{robot}.csv");
+        scaled(d, &all, &name, (6 + joint, 1.03), |_| true);
+        let e = calibrated(d, &name, Some(robot), &format!("out-{robot}"));
         assert_eq!(commands_blamed(&e), vec![format!("cmd_{joint}")], "{robot}: {e}");
         assert!(!e.contains("the instrument's"), "{robot}: {e}");
     }
