@@ -408,6 +408,12 @@ fn warn_slips(
     {
         eprintln!("note: {data}: {reach}");
     }
+    warn_target_ids(set, desc, summary, &data.to_string());
+}
+
+/// The target ids swapped between rows, or mirrored as a whole against the description's
+/// `[tool] targets_mm`, as warnings naming `data`.
+fn warn_target_ids(set: &MeasurementSet, desc: &RobotDescription, summary: &FreePoseSummary, data: &str) {
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);
     for found in &swapped {
         eprintln!("warning: {data}{}", target_ids_words(found, Some(summary), desc));

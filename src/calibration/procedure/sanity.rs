@@ -45,6 +45,7 @@
 mod scale;
 mod scale_absorption;
 mod scale_source;
+mod slope;
 
 pub use scale::{
     DOUBT_SIGMAS, JointSlope, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS,

@@ -42,6 +42,7 @@
 
 use super::super::{AxisReport, Calibration};
 use super::scale_absorption::{Absorption, NoiseSource, absorption, mean_slope, with_coefficients};
+pub use super::slope::{DRIVE_SIGMAS, JointSlope};
 use crate::calibration::free_pose::FreePoseSummary;
 use crate::kinematics::JointKind;
 use crate::measurement::Measurement;
@@ -67,13 +68,6 @@ pub const PLAUSIBLE_TURN_DEVIATION: f64 = 0.0012;
 /// SScanSS-2 table's stages within 0.056 %, the simulations' (300 ppm) within 0.25 % at 1.4
 /// of their sigma.
 pub const PLAUSIBLE_LEAD_DEVIATION: f64 = 0.001;
-
-/// A joint's slope is said when it departs from its description's by more than this many
-/// sigmas of the drive's ([`PLAUSIBLE_TURN_DEVIATION`], [`PLAUSIBLE_LEAD_DEVIATION`]) and the
-/// fit's combined: 6, not 5, because the fit's sigma (its coefficients' correlation left out)
-/// runs short on a poorly resolved wrist joint: the clean simulations reach 4.5 on the paper
-/// robot's joint 6 (6.3 % +-1.4 % where 1.7 % is true).
-pub const DRIVE_SIGMAS: f64 = 6.0;
 
 /// A revolute joint's slope that departs from its description's by more than this many sigmas
 /// of the drive's ([`PLAUSIBLE_TURN_DEVIATION`]) and the fit's combined, but not beyond
@@ -395,31 +389,6 @@ pub(super) fn scale_slips(cal: &Calibration, desc: &RobotDescription) -> Vec<Sca
     said(&slopes)
 }
 
-/// One swept joint's fitted mean slope over its sweep against its description's (the slope
-/// the transmission test reads), for the attribution of several joints' departures to one
-/// instrument axis ([`super::scale_source`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct JointSlope {
-    /// The joint (1-based).
-    pub joint: usize,
-    /// Fitted over described mean slope (commanded per actual) \[1\].
-    pub ratio: f64,
-    /// Its 1-sigma (the fit's).
-    pub sigma: f64,
-    /// The sigma of what its drive departs by ([`PLAUSIBLE_TURN_DEVIATION`], [`PLAUSIBLE_LEAD_DEVIATION`]).
-    pub drive: f64,
-    /// Whether it slides (else it turns).
-    pub sliding: bool,
-}
-
-impl JointSlope {
-    /// Whether it departs from 1 beyond [`DRIVE_SIGMAS`] of its sigma and its drive's combined
-    /// (the transmission test's warning).
-    pub fn beyond(&self) -> bool {
-        (self.ratio - 1.0).abs() > DRIVE_SIGMAS * self.sigma.hypot(self.drive)
-    }
-}
-
 /// The slopes of `cal`'s swept joints with a fitted transmission (those the transmission test
 /// reads; none on the paper's estimator).
 pub fn joint_slopes(cal: &Calibration, desc: &RobotDescription) -> Vec<JointSlope> {
@@ -438,6 +407,7 @@ pub fn joint_slopes(cal: &Calibration, desc: &RobotDescription) -> Vec<JointSlop
                 PLAUSIBLE_TURN_DEVIATION
             },
             sliding: s.sliding,
+            experiment: s.experiment,
         })
         .collect()
 }

@@ -31,7 +31,7 @@
 //! a column's scale that cancels it moves every other joint whose arcs it bends, which then
 //! departs, so it does not pass.
 
-use super::scale::{DRIVE_SIGMAS, JointSlope};
+use super::slope::{DRIVE_SIGMAS, JointSlope};
 use crate::measurement::MeasurementSet;
 use crate::measurement::unit_check::axis_scale::{AXIS_SCALE_FALSE_ALARM, COLUMNS, Fit};
 use crate::numerics::stats::{chi_square_quantile, f_upper_quantile};
@@ -63,8 +63,8 @@ pub struct ColumnSource {
     /// Its 1-sigma.
     pub sigma: f64,
     /// The joints the transmission test named: `(joint, how far it travels per command over
-    /// the description's, its sigma, whether it slides)`.
-    pub joints: Vec<(usize, f64, f64, bool)>,
+    /// the description's, its sigma, whether it slides, its sweep's experiment)`.
+    pub joints: Vec<(usize, f64, f64, bool, String)>,
     /// The chi-square of every joint's departure with the column undone, and the joints.
     pub left: (f64, usize),
     /// The residual RMS per coordinate \[mm\] as read and with the column undone.
@@ -107,7 +107,7 @@ fn matched(base: &Refit, at: &Refit) -> Option<Vec<JointSlope>> {
     }
     base.slopes
         .iter()
-        .map(|s| at.slopes.iter().find(|a| a.joint == s.joint).copied())
+        .map(|s| at.slopes.iter().find(|a| a.joint == s.joint).cloned())
         .collect()
 }
 
@@ -237,7 +237,15 @@ pub fn column_source(
         .slopes
         .iter()
         .filter(|s| named.contains(&s.joint))
-        .map(|s| (s.joint, 1.0 / s.ratio, s.sigma / s.ratio.powi(2), s.sliding))
+        .map(|s| {
+            (
+                s.joint,
+                1.0 / s.ratio,
+                s.sigma / s.ratio.powi(2),
+                s.sliding,
+                s.experiment.clone(),
+            )
+        })
         .collect();
     Some(ColumnSource {
         column,
@@ -268,8 +276,8 @@ impl ColumnSource {
         };
         match self.joints.len() {
             1 => format!(
-                "joint {} {}s {} (+-{:.4}) times",
-                joints[0], moves, travels[0], self.joints[0].2
+                "joint {} ({}) {}s {} (+-{:.4}) times",
+                joints[0], self.joints[0].4, moves, travels[0], self.joints[0].2
             ),
             _ => format!("joints {} {moves} {} times", joints.join(", "), travels.join(", ")),
         }
@@ -297,11 +305,19 @@ impl std::fmt::Display for ColumnSource {
              and the exporter (a column scaled or converted alone)"
         );
         if self.alike {
-            let (joint, travel, ..) = self.joints[0];
+            let (joint, travel, _, sliding, _) = self.joints[0];
+            let drive = match sliding {
+                true => format!(
+                    "lead (its screw's lead, a rack's or a scale's pitch) for joint {joint} is wrong, or the coordinates of \
+                     {} alone are scaled by {travel:.4}",
+                    self.joints[0].4
+                ),
+                false => format!("gear ratio for joint {joint} is wrong"),
+            };
             return write!(
                 f,
                 "{} as far per command as the description's transmission says: the column `cmd_{joint}` looks scaled by \
-                 {:.4} on export (or the description's ratio for joint {joint} is wrong), or {name}: the instrument's \
+                 {:.4} on export (or the description's {drive}), or {name}: the instrument's \
                  {axis} axis reads {factor:.5} times (+- {sigma:.5}){other}, which explains it alike ({undone}); these data \
                  cannot tell them apart: check cmd_{joint} against the controller's reading at two poses and {check}, \
                  then calibrate the corrected file again. The fit took the factor into joint {joint}'s transmission, so \
