@@ -542,6 +542,9 @@ fn instrument_axis_source(
     column_source(set, &named, &refit)
 }
 
+/// A calibration of a set as the coordinate-scale profile reads it ([`axis_scale`]).
+type ProfileFit<'a> = &'a dyn Fn(&MeasurementSet) -> Option<Fit>;
+
 /// The scale of one coordinate column the calibration `fit` finds in `set` ([`axis_scale`]),
 /// or of a slide's commands read alike (the sliding joints of `desc`), as a warning naming it
 /// when the data determine it beyond 1; else a note of how large a scale would pass where that
@@ -549,7 +552,7 @@ fn instrument_axis_source(
 pub(super) fn warn_axis_scale(
     (set, desc): (&MeasurementSet, &RobotDescription),
     data: &Path,
-    (fit, source): (&dyn Fn(&MeasurementSet) -> Option<Fit>, Option<&ColumnSource>),
+    (fit, source): (ProfileFit<'_>, Option<&ColumnSource>),
     max_rows: usize,
     printer: Printer,
 ) {

@@ -292,7 +292,7 @@ pub fn implausible(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausibl
 }
 
 /// `found` ([`implausible`]) with the command-column scales that `source` explains as one
-/// instrument axis' scale ([`scale_source`]) said as that, in the place of the first.
+/// instrument axis' scale ([`column_source`]) said as that, in the place of the first.
 pub fn with_column_source(found: Vec<Implausible>, source: Option<&ColumnSource>) -> Vec<Implausible> {
     let Some(source) = source else {
         return found;

@@ -161,7 +161,7 @@ pub enum ScaleSlip {
         sag_rad: f64,
     },
     /// One instrument axis read long or short explains the departures of the joints the
-    /// transmission test names ([`super::scale_source`]).
+    /// transmission test names ([`super::column_source`]).
     Column(super::scale_source::ColumnSource),
     /// Every sliding joint travels the same factor per command off its description: the
     /// coordinates are scaled.

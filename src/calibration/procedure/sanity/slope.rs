@@ -11,7 +11,7 @@ pub const DRIVE_SIGMAS: f64 = 6.0;
 
 /// One swept joint's fitted mean slope over its sweep against its description's (the slope
 /// the transmission test reads), for the attribution of several joints' departures to one
-/// instrument axis ([`super::scale_source`]; [`super::scale::joint_slopes`] reads them).
+/// instrument axis ([`super::column_source`]; `joint_slopes` reads them).
 #[derive(Clone, Debug, PartialEq)]
 pub struct JointSlope {
     /// The joint (1-based).
@@ -29,7 +29,7 @@ pub struct JointSlope {
 }
 
 impl JointSlope {
-    /// Whether it departs from 1 beyond [`DRIVE_SIGMAS`] of its sigma and its drive's combined
+    /// Whether it departs from 1 beyond `DRIVE_SIGMAS` of its sigma and its drive's combined
     /// (the transmission test's warning).
     pub fn beyond(&self) -> bool {
         (self.ratio - 1.0).abs() > DRIVE_SIGMAS * self.sigma.hypot(self.drive)
