@@ -642,13 +642,25 @@ fn explained(
     v: &Validation,
     (kept, after): (&[Kept], &Validation),
 ) -> ExplainedMiss {
-    let gross = summaries(v)
-        .filter(|s| s.chi_square.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds))
-        .max_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm));
-    let miss = gross.map_or(String::new(), |g| {
+    let labelled = [
+        ("validation poses'", &v.validation),
+        ("tool observation's", &v.tool),
+        ("axis experiments'", &v.axis),
+    ];
+    let gross = labelled
+        .into_iter()
+        .filter_map(|(label, s)| Some((label, s.as_ref()?)))
+        .filter(|(_, s)| s.chi_square.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds))
+        .max_by(|a, b| a.1.rms_mm.total_cmp(&b.1.rms_mm));
+    let miss = gross.map_or(String::new(), |(label, g)| {
         format!(
-            " ({} points by {:.4} mm RMS where {:.4} mm is predicted)",
-            g.points, g.rms_mm, g.predicted_mm.total
+            " (the {label} {} by {:.4} mm RMS where {:.4} mm is predicted)",
+            match g.points {
+                1 => "1 point".to_string(),
+                n => format!("{n} points"),
+            },
+            g.rms_mm,
+            g.predicted_mm.total
         )
     });
     let passes: Vec<String> = summaries(after)
