@@ -1,8 +1,9 @@
 //! Numerical tools shared by the maths: dense least squares (one Levenberg-Marquardt /
 //! Gauss-Newton loop, covariances, condition numbers), the thin SVD of tall designs, sample
-//! statistics with named quantile definitions, bisection, and the selection of a design's
+//! statistics with named quantile definitions, a change-point test, bisection, and the selection of a design's
 //! identifiable columns.
 
+pub mod change_point;
 pub mod lsq;
 pub mod outlier_rounds;
 pub mod roots;
