@@ -445,6 +445,7 @@ fn calibrate_axes(
     let mut cal = match calibrate(screened, desc, &options) {
         Ok(cal) => {
             super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
+            super::checks::print_sweep_bumps(&screening.bumps, &args.data);
             cal
         }
         // Every row a free pose: that fit tests its poses for outliers itself, on every row.

@@ -908,3 +908,34 @@ pub fn refuse_explained_misses(misses: &[axiscal::diagnosis::ExplainedMiss], dat
         all.join("; ")
     )
 }
+
+/// One warning per sweep whose points from one step on sit off its earlier ones
+/// ([`axiscal::calibration::procedure::SweepBump`]): the instrument or the target moved during
+/// the sweep.
+pub fn print_sweep_bumps(bumps: &[axiscal::calibration::procedure::SweepBump], data: &Path) {
+    for b in bumps {
+        let place = b
+            .line
+            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+        let [x, y, z] = b.shift_mm;
+        let [sx, sy, sz] = b.shift_sigma_mm;
+        eprintln!(
+            "warning: {place}: experiment {}'s last {} of {} points, from step {} on, sit ({x:.2}, {y:.2}, {z:.2}) \
+             (+- {sx:.2}, {sy:.2}, {sz:.2}) mm off its earlier points (p = {:.1e} over the {} change points tried in the \
+             file's sweeps; the sweep's fit RMS {:.3} mm as written, {:.3} mm with them moved back): the instrument or \
+             the target moved during the sweep (bumped, re-set up, the target re-seated). The fits take the step into \
+             joint {}'s axis and transmission, so a calibration from this file is wrong for that joint; if the \
+             instrument moved, every later row is in its new place too: measure the sweep again, or split the file at \
+             that line",
+            b.experiment,
+            b.points,
+            b.tested,
+            b.step,
+            b.p_value,
+            b.blocks_tried,
+            b.rms_mm.0,
+            b.rms_mm.1,
+            b.joint,
+        );
+    }
+}

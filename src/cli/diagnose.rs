@@ -318,6 +318,7 @@ fn without_sweep_outliers(args: &Args, set: MeasurementSet, desc: &RobotDescript
     let screening = screen_sweeps(&set, desc, &options, args.keep_outliers)
         .map_err(|e| failed(args, &set, desc, DiagnosisError::Calibration(e)))?;
     super::checks::print_outliers(&screening.outliers, &args.data, "diagnosed");
+    super::checks::print_sweep_bumps(&screening.bumps, &args.data);
     Ok(screening.set.unwrap_or(set))
 }
 

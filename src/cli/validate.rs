@@ -151,6 +151,7 @@ fn without_sweep_outliers(
             }
             let flagged = checks::outlier_warnings(&screening.outliers, &args.data, "validated");
             checks::print_approach_notes(&screening.outliers, &args.data, "validated");
+            checks::print_sweep_bumps(&screening.bumps, &args.data);
             Ok((screening.set.unwrap_or(set), flagged))
         }
         Err(

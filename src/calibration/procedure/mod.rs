@@ -69,7 +69,8 @@ pub use sanity::{
     joint_slopes, longest_length_m, named_joints, scale_doubts, scale_reach, with_column_source,
 };
 pub use screen::{
-    OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, SWEEP_POINTS_FALSE_ALARM, Screening, WorstSecondTarget, screen_sweeps,
+    OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, SWEEP_BUMP_FALSE_ALARM, SWEEP_POINTS_FALSE_ALARM, Screening, SweepBump,
+    WorstSecondTarget, screen_sweeps,
 };
 pub use second_targets::SecondTargetData;
 pub use uncertainty::{AxisCovariance, SIGNIFICANT_SIGMAS, row_sigmas};

@@ -19,9 +19,11 @@
 //!
 //! Then the second targets of the sweeps that measure a coupling ([`second_target`]).
 
+mod bump;
 mod rounds;
 mod second_target;
 
+pub use bump::{SWEEP_BUMP_FALSE_ALARM, SweepBump};
 pub use rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX};
 use rounds::{median, too_many_which, without_poses};
 pub use second_target::WorstSecondTarget;
@@ -40,13 +42,16 @@ use crate::robot::{Controller, RobotDescription};
 use nalgebra::{Point3, Vector3};
 
 /// The outcome of the test: the points flagged and, when some were set aside, the set
-/// without their poses (every target of a flagged point's step).
+/// without their poses (every target of a flagged point's step); and the sweeps whose points
+/// shift part-way through ([`bump`]).
 #[derive(Clone, Debug)]
 pub struct Screening {
     /// The points beyond the fence, in experiment and step order.
     pub outliers: Vec<OutlierPoint>,
     /// The set without the dropped points; `None` when none was dropped.
     pub set: Option<MeasurementSet>,
+    /// The sweeps whose points from one step on sit off their earlier ones, in experiment order.
+    pub bumps: Vec<SweepBump>,
 }
 
 /// A sweep's points lie within about twice their median distance from their median point
@@ -106,13 +111,15 @@ pub fn screen_sweeps(
         return Ok(Screening {
             outliers: vec![],
             set: None,
+            bumps: vec![],
         });
     }
     // The second targets keep their fence: Tukey's far-out fence of the sweeps' points.
     let second_fence = far_out_fence(&pooled);
     let tested: usize = scales.iter().flatten().map(|t| t.points).sum();
     let mut outliers = Vec::new();
-    for ((s, r), scale) in sweeps.iter().zip(&first).zip(&scales) {
+    let mut peeled = Vec::new();
+    for (((s, r), scale), index) in sweeps.iter().zip(&first).zip(&scales).zip(0..) {
         let (Some(r), Some(scale)) = (r, scale) else { continue };
         let Some(fence) = scale.fence(tested) else { continue };
         let z = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().enumerate().map(|(i, r)| scale.z(i, r)).collect() };
@@ -153,6 +160,7 @@ pub fn screen_sweeps(
             };
             o
         }));
+        peeled.push(Peeled { index, kept, last });
     }
     let first_pass = without_poses(set, &outliers);
     let second = second_target::outliers(
@@ -163,8 +171,67 @@ pub fn screen_sweeps(
         (second_fence, keep),
     )?;
     outliers.extend(second);
+    let bumps = sweep_bumps(&sweeps, &peeled, set, (sigma, max_iterations));
     let set = without_poses(set, &outliers);
-    Ok(Screening { outliers, set })
+    Ok(Screening { outliers, set, bumps })
+}
+
+/// A tested sweep's points kept by the outlier test and every point's residual from their fit.
+struct Peeled {
+    /// The sweep's index.
+    index: usize,
+    kept: Vec<usize>,
+    last: Vec<Vector3<f64>>,
+}
+
+/// The sweeps of `peeled` whose kept points shift part-way through ([`bump`]: a change point
+/// of their residuals, confirmed by fitting the sweep again with the block moved back).
+fn sweep_bumps(
+    sweeps: &[Sweep<'_>],
+    peeled: &[Peeled],
+    set: &MeasurementSet,
+    (sigma, max_iterations): (f64, usize),
+) -> Vec<SweepBump> {
+    let kept_residuals = |p: &Peeled| -> Vec<Vector3<f64>> { p.kept.iter().map(|&k| p.last[k]).collect() };
+    let refit_of = |p: &Peeled| {
+        let s = &sweeps[p.index];
+        let kept = p.kept.clone();
+        move |start: usize, shift: &Vector3<f64>| s.refit_moved(&kept, start, shift, (sigma, max_iterations))
+    };
+    let found: Vec<_> = peeled
+        .iter()
+        .map(|p| bump::best_start(&kept_residuals(p), &refit_of(p)))
+        .collect();
+    let tried: usize = found.iter().flatten().map(|c| c.1).sum();
+    let mut bumps = Vec::new();
+    for (p, found) in peeled.iter().zip(&found) {
+        let Some((found, _)) = found else { continue };
+        let s = &sweeps[p.index];
+        let x = kept_residuals(p);
+        let dof = (3 * p.kept.len()) as f64 - s.parameters() as f64;
+        let Some(p_value) = bump::confirmed(&x, found, dof, tried) else {
+            continue;
+        };
+        let (start, shift, undone) = (found.start, found.shift, found.sum_sq);
+        let written: f64 = x.iter().map(|v| v.norm_squared()).sum();
+        let sigma_m = found.unit_sigma * (undone / (dof - 3.0)).sqrt();
+        let (step, line) = s.step_line(p.kept[start], set);
+        let rms = |sum_sq: f64| (sum_sq / (3 * p.kept.len()) as f64).sqrt() * 1e3;
+        bumps.push(SweepBump {
+            experiment: s.experiment.name.clone(),
+            joint: s.experiment.joint,
+            step,
+            line,
+            points: p.kept.len() - start,
+            tested: p.kept.len(),
+            shift_mm: [shift.x * 1e3, shift.y * 1e3, shift.z * 1e3],
+            shift_sigma_mm: std::array::from_fn(|c| sigma_m[c] * 1e3),
+            p_value,
+            blocks_tried: tried,
+            rms_mm: (rms(written), rms(undone)),
+        });
+    }
+    bumps
 }
 
 /// Every point of `s`.
@@ -461,6 +528,37 @@ impl<'a> Sweep<'a> {
     fn approach(&self, i: usize, r: &Vector3<f64>, z: &dyn Fn(&Vector3<f64>) -> f64, fence: f64) -> Option<f64> {
         let (t, _) = self.first_motion().filter(|_| i == 0)?;
         (z(&(r - t * r.dot(&t))) <= fence).then(|| self.lead(r)).flatten()
+    }
+
+    /// The residuals of the points `kept` fitted with those from `kept[start]` on moved back by
+    /// `shift` \[m\].
+    fn refit_moved(
+        &self,
+        kept: &[usize],
+        start: usize,
+        shift: &Vector3<f64>,
+        (sigma, max_iterations): (f64, usize),
+    ) -> Option<Vec<Vector3<f64>>> {
+        let mut points = self.points.clone();
+        kept[start..].iter().for_each(|&k| points[k] -= shift);
+        let moved = Sweep {
+            points,
+            u: self.u.clone(),
+            ..*self
+        };
+        let r = moved.residuals(kept, sigma, max_iterations).ok()?;
+        Some(kept.iter().map(|&k| r[k]).collect())
+    }
+
+    /// The step of point `i` and the line of its row in `set`, when known.
+    fn step_line(&self, i: usize, set: &MeasurementSet) -> (usize, Option<u64>) {
+        let e = self.experiment;
+        let step = e.steps[e.target0_steps[i]];
+        let row = set
+            .rows()
+            .iter()
+            .position(|m| m.experiment == e.name && m.step == step && m.target == 0);
+        (step, row.and_then(|r| set.line_of(r)))
     }
 
     fn outlier(

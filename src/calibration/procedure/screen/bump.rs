@@ -1,0 +1,204 @@
+//! A sweep's points shifted part-way through it (the instrument or the target bumped, an
+//! instrument re-set up during the sweep): a change-point test on the residuals of the sweep's
+//! own fit, in the order the sweep lists its points.
+//!
+//! A sweep's fit (the ML arc through the transmission, eqs. 1-8 and 14; the ML line, eqs.
+//! 9-13) cannot follow a step in its points: it takes part of it into its centre, axis and
+//! transmission (a step along the motion reads as a scale of the joint's command) and leaves a
+//! step between the residuals before and after it. The test ([`crate::numerics::change_point`],
+//! blocks that run to the sweep's end: an instrument moved stays moved) finds the most
+//! significant change point of each sweep; its p-value times the blocks tried over every sweep
+//! of the file is held against [`SWEEP_BUMP_FALSE_ALARM`]. A smooth misfit (an unmodelled
+//! effect along the sweep) correlates neighbouring residuals, which the serial test's long-run
+//! covariance takes in. The size: the sweep fitted again with the block moved back by the step
+//! found so far, the step left then added ([`BUMP_ROUNDS`] fits), and said only when that fit's
+//! sum of squares beats the sweep's as written by an `F` likelihood-ratio test (its degrees of
+//! freedom those of the directions the residuals spread over, Satterthwaite) at
+//! the same family-wise rate (a second, differently computed test: the whole fit's sum of
+//! squares, not the residuals' means), its dof divided by the serial correlation's inflation.
+
+use crate::numerics::stats::f_upper_tail;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+/// The family-wise false-alarm rate of the test over a whole file's sweeps.
+pub const SWEEP_BUMP_FALSE_ALARM: f64 = 1e-4;
+
+/// Points at least on each side of a change point.
+pub const MIN_BUMP_POINTS: usize = 3;
+
+/// Gauss-Newton steps of the block's shift ([`fitted_shift`]).
+pub const BUMP_ROUNDS: usize = 2;
+
+/// A sweep whose points from one step on sit off its earlier ones (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepBump {
+    /// The experiment.
+    pub experiment: String,
+    /// Its swept joint.
+    pub joint: usize,
+    /// The step of the block's first point.
+    pub step: usize,
+    /// Its line in the data file, when known.
+    pub line: Option<u64>,
+    /// Points in the block (from `step` to the sweep's end).
+    pub points: usize,
+    /// The sweep's points tested.
+    pub tested: usize,
+    /// The block's shift from the earlier points \[mm\] (instrument axes).
+    pub shift_mm: [f64; 3],
+    /// Its sigma per axis \[mm\] (the Gauss-Newton covariance, with the residuals' variance
+    /// of the sweep's fit with the block moved back).
+    pub shift_sigma_mm: [f64; 3],
+    /// The change point's p-value, before the multiple-test correction.
+    pub p_value: f64,
+    /// Blocks tried over every sweep of the file.
+    pub blocks_tried: usize,
+    /// The sweep's fit RMS per coordinate \[mm\] as written, and with the block moved back.
+    pub rms_mm: (f64, f64),
+}
+
+/// The change point of a sweep whose block, moved back by its fitted shift
+/// ([`fitted_shift`]), leaves the sweep's fit the least sum of squares: its first point (an
+/// index into the points kept), shift \[m\] and sum of squares \[m^2\], with the starts tried.
+pub fn best_start(x: &[Vector3<f64>], refit: Refit<'_>) -> Option<(Bumped, usize)> {
+    let n = x.len();
+    let starts = MIN_BUMP_POINTS..=n.checked_sub(MIN_BUMP_POINTS)?;
+    let tried = starts.clone().count();
+    let best = starts
+        .filter_map(|start| fitted_shift(x, start, refit))
+        .min_by(|a, b| a.sum_sq.total_cmp(&b.sum_sq))?;
+    Some((best, tried))
+}
+
+/// A change point with its fitted shift.
+#[derive(Clone, Copy, Debug)]
+pub struct Bumped {
+    /// The block's first point (an index into the points kept).
+    pub start: usize,
+    /// The shift \[m\] that, taken off the block, fits the sweep best.
+    pub shift: Vector3<f64>,
+    /// The sweep fit's sum of squares with the block moved back \[m^2\].
+    pub sum_sq: f64,
+    /// The shift's sigma per axis for a unit variance of the residuals: the square roots of
+    /// the diagonal of the Gauss-Newton covariance `(J^T J)^-1`.
+    pub unit_sigma: Vector3<f64>,
+    /// The directions its residuals spread over (1 to 3): `tr(S)^2 / tr(S^2)` of their scatter
+    /// matrix `S` (Satterthwaite's effective degrees of freedom, as the outlier test's).
+    pub spread: f64,
+}
+
+/// `tr(S)^2 / tr(S^2)` of the scatter matrix `S` of the 3-D residuals `r` (flattened), in
+/// 1..=3.
+fn spread(r: &DVector<f64>) -> f64 {
+    let scatter: Matrix3<f64> = r
+        .as_slice()
+        .chunks_exact(3)
+        .map(|v| Vector3::new(v[0], v[1], v[2]))
+        .map(|v| v * v.transpose())
+        .sum();
+    (scatter.trace().powi(2) / scatter.norm_squared()).clamp(1.0, 3.0)
+}
+
+/// A sweep's refit with its points from a start on moved back by a shift ([`best_start`]):
+/// the residuals of the points kept.
+pub type Refit<'a> = &'a dyn Fn(usize, &Vector3<f64>) -> Option<Vec<Vector3<f64>>>;
+
+/// The shift \[m\] of the points `start..` of residuals `x` that minimises the sweep fit's sum
+/// of squares: Gauss-Newton on the refit's residuals, their Jacobian in the shift by forward
+/// differences of [`DIFFERENCE_M`] (the fit's residuals are near linear in a shift of
+/// millimetres), [`BUMP_ROUNDS`] steps with that Jacobian.
+fn fitted_shift(x: &[Vector3<f64>], start: usize, refit: Refit<'_>) -> Option<Bumped> {
+    let flat = |r: &[Vector3<f64>]| DVector::from_iterator(3 * r.len(), r.iter().flat_map(|v| v.iter().copied()));
+    let r0 = flat(x);
+    let mut jacobian = DMatrix::zeros(r0.len(), 3);
+    for c in 0..3 {
+        let moved = flat(&refit(start, &(Vector3::ith(c, DIFFERENCE_M)))?);
+        jacobian.set_column(c, &((moved - &r0) / DIFFERENCE_M));
+    }
+    let solver = (jacobian.transpose() * &jacobian).cholesky()?;
+    let inverse = solver.inverse();
+    let unit_sigma = Vector3::from_fn(|c, _| inverse[(c, c)].sqrt());
+    let mut best = Bumped {
+        start,
+        shift: Vector3::zeros(),
+        sum_sq: r0.norm_squared(),
+        unit_sigma,
+        spread: spread(&r0),
+    };
+    let mut r = r0;
+    for _ in 0..BUMP_ROUNDS {
+        let shift = best.shift - solver.solve(&(jacobian.transpose() * &r));
+        let Some(left) = refit(start, &Vector3::new(shift[0], shift[1], shift[2])) else { break };
+        r = flat(&left);
+        if r.norm_squared() >= best.sum_sq {
+            break;
+        }
+        best = Bumped {
+            start,
+            shift: Vector3::new(shift[0], shift[1], shift[2]),
+            sum_sq: r.norm_squared(),
+            unit_sigma,
+            spread: spread(&r),
+        };
+    }
+    Some(best)
+}
+
+/// The forward difference of the shift's Jacobian \[m\].
+const DIFFERENCE_M: f64 = 1e-3;
+
+/// Whether the change point `found` of residuals `x` passes the likelihood-ratio test over
+/// `tried` change points of the file (module docs): its p-value, before the correction, when
+/// it does. `dof` is the sweep fit's degrees of freedom.
+pub fn confirmed(x: &[Vector3<f64>], found: &Bumped, dof: f64, tried: usize) -> Option<f64> {
+    let written: f64 = x.iter().map(|v| v.norm_squared()).sum();
+    let nu = dof - 3.0;
+    if !(nu >= 1.0 && found.sum_sq > 0.0 && found.sum_sq < written) {
+        return None;
+    }
+    // With the noise spread over `m` directions the ratio is about `F(m, m nu / 3)`
+    // (Satterthwaite): `m = 3` isotropic, `m = 1` all along one direction, the heaviest tail.
+    let m = found.spread;
+    let p = f_upper_tail((written - found.sum_sq) / 3.0 / (found.sum_sq / nu), m, m * nu / 3.0);
+    (p * (tried as f64) < SWEEP_BUMP_FALSE_ALARM).then_some(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    /// 16 residuals of a fixed-seed generator, 3-D, scale `sigma`.
+    fn noise(seed: u64, sigma: f64) -> Vec<Vector3<f64>> {
+        let mut rng = rand::rngs::ChaCha12Rng::seed_from_u64(seed);
+        (0..16)
+            .map(|_| Vector3::from_fn(|_, _| sigma * StandardNormal.sample(&mut rng)))
+            .collect()
+    }
+
+    /// A refit that takes nothing of the step (the residuals of the block less the shift):
+    /// Gauss-Newton is exact on it, so the shift found is the block's mean step, found at its
+    /// start, and significant; pure noise passes on 20 seeds (the F test's own rate).
+    #[test]
+    fn a_step_is_found_where_the_fit_takes_none_of_it() {
+        let step = Vector3::new(0.0, 6.0, 1.0);
+        let mut x = noise(1, 1.0);
+        x[10..].iter_mut().for_each(|v| *v += step);
+        let refit_of = |x: Vec<Vector3<f64>>| {
+            move |start: usize, shift: &Vector3<f64>| -> Option<Vec<Vector3<f64>>> {
+                Some((0..x.len()).map(|i| if i >= start { x[i] - shift } else { x[i] }).collect())
+            }
+        };
+        let (found, tried) = best_start(&x, &refit_of(x.clone())).unwrap();
+        assert_eq!((found.start, tried), (10, 11));
+        let expected = x[10..].iter().sum::<Vector3<f64>>() / 6.0;
+        assert!((found.shift - expected).norm() < 1e-9, "{} against {expected}", found.shift);
+        assert!(confirmed(&x, &found, 48.0, tried).is_some());
+        for seed in 0..20 {
+            let x = noise(100 + seed, 1.0);
+            let (found, tried) = best_start(&x, &refit_of(x.clone())).unwrap();
+            assert!(confirmed(&x, &found, 48.0, tried).is_none(), "seed {seed}");
+        }
+    }
+}
