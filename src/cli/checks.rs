@@ -927,15 +927,7 @@ pub fn print_sweep_bumps(bumps: &[axiscal::calibration::procedure::SweepBump], d
              joint {}'s axis and transmission, so a calibration from this file is wrong for that joint; if the \
              instrument moved, every later row is in its new place too: measure the sweep again, or split the file at \
              that line",
-            b.experiment,
-            b.points,
-            b.tested,
-            b.step,
-            b.p_value,
-            b.blocks_tried,
-            b.rms_mm.0,
-            b.rms_mm.1,
-            b.joint,
+            b.experiment, b.points, b.tested, b.step, b.p_value, b.blocks_tried, b.rms_mm.0, b.rms_mm.1, b.joint,
         );
     }
 }

@@ -168,11 +168,7 @@ mod tests {
         assert!(f.p_value * (f.tried as f64) < 1e-4);
         for seed in 0..20 {
             let f = most_significant_block(&noise(100, seed), 3, Blocks::Any).unwrap();
-            assert!(
-                f.p_value * (f.tried as f64) > 1e-4,
-                "seed {seed}: {}",
-                f.p_value
-            );
+            assert!(f.p_value * (f.tried as f64) > 1e-4, "seed {seed}: {}", f.p_value);
         }
     }
 

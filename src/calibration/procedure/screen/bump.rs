@@ -128,7 +128,9 @@ fn fitted_shift(x: &[Vector3<f64>], start: usize, refit: Refit<'_>) -> Option<Bu
     let mut r = r0;
     for _ in 0..BUMP_ROUNDS {
         let shift = best.shift - solver.solve(&(jacobian.transpose() * &r));
-        let Some(left) = refit(start, &Vector3::new(shift[0], shift[1], shift[2])) else { break };
+        let Some(left) = refit(start, &Vector3::new(shift[0], shift[1], shift[2])) else {
+            break;
+        };
         r = flat(&left);
         if r.norm_squared() >= best.sum_sq {
             break;
@@ -173,7 +175,12 @@ mod tests {
     fn noise(seed: u64, sigma: f64) -> Vec<Vector3<f64>> {
         let mut rng = rand::rngs::ChaCha12Rng::seed_from_u64(seed);
         (0..16)
-            .map(|_| Vector3::from_fn(|_, _| sigma * StandardNormal.sample(&mut rng)))
+            .map(|_| {
+                Vector3::from_fn(|_, _| {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    sigma * z
+                })
+            })
             .collect()
     }
 
@@ -187,13 +194,21 @@ mod tests {
         x[10..].iter_mut().for_each(|v| *v += step);
         let refit_of = |x: Vec<Vector3<f64>>| {
             move |start: usize, shift: &Vector3<f64>| -> Option<Vec<Vector3<f64>>> {
-                Some((0..x.len()).map(|i| if i >= start { x[i] - shift } else { x[i] }).collect())
+                Some(
+                    (0..x.len())
+                        .map(|i| if i >= start { x[i] - shift } else { x[i] })
+                        .collect(),
+                )
             }
         };
         let (found, tried) = best_start(&x, &refit_of(x.clone())).unwrap();
         assert_eq!((found.start, tried), (10, 11));
         let expected = x[10..].iter().sum::<Vector3<f64>>() / 6.0;
-        assert!((found.shift - expected).norm() < 1e-9, "{} against {expected}", found.shift);
+        assert!(
+            (found.shift - expected).norm() < 1e-9,
+            "{} against {expected}",
+            found.shift
+        );
         assert!(confirmed(&x, &found, 48.0, tried).is_some());
         for seed in 0..20 {
             let x = noise(100 + seed, 1.0);
