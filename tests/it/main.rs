@@ -55,6 +55,7 @@ mod hostile_round14c;
 mod hostile_round14e;
 mod hostile_round14f;
 mod hostile_round15s;
+mod hostile_round15w;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
