@@ -26,7 +26,10 @@
 //! removal lets the others agree at the noise (a real robot whose effects scatter every sweep's
 //! point: Boby & Klimchik's arm), each sweep is tested against the others' scatter instead
 //! (`scattered_odd_one_out`, an F ratio). A description without `axis_targets` (SScanSS-2's
-//! robots) has every sweep read the tool frame's origin; a noise-free file's points are as exact
+//! robots) has every sweep read the tool frame's origin; a sweep whose held joints stand, as
+//! recorded, off the reference pose is moved to it by their motions, which their own sweeps
+//! measure, and a sweep out of place by one held joint's motion is named for that joint's
+//! recorded command (`held`); a noise-free file's points are as exact
 //! as their printed decimals (`printed_step_mm`); where every sweep moves the point along one
 //! direction (a planar robot) that direction is left out (`pseudo_inverse`). No model of the
 //! robot: the data against themselves and the description's word that the targets are one. Not
@@ -35,6 +38,9 @@
 //! compared with none or a 1 mm move across its motion would pass.
 
 mod backlash;
+mod held;
+
+pub use held::HeldSlip;
 
 use super::procedure::{AxisExperiment, SIZE_TOLERANCE, axis_experiments};
 use crate::kinematics::JointKind;
@@ -83,6 +89,8 @@ struct Sighting {
     joint: usize,
     /// A turning sweep's axis and the backlash its first point shows ([`backlash::Turning`]).
     turning: Option<backlash::Turning>,
+    /// The joints (0-based) the sweep holds at a constant command (none: the tool observation).
+    held: Vec<usize>,
 }
 
 /// A sweep whose point at the reference pose contradicts the other sightings of its target.
@@ -108,6 +116,10 @@ pub struct MovedSweep {
     /// show that put the target where this sweep sees it (`(joint, turn)`); empty when no
     /// such turns explain it (then the block was moved).
     pub backlash: Vec<(usize, f64)>,
+    /// The held joints whose recorded command, off where the robot stood by the offset given,
+    /// puts the target where this sweep sees it (the smallest first; [`held`]); empty when none does or
+    /// the held joints' backlash explains it.
+    pub held: Vec<HeldSlip>,
 }
 
 impl std::fmt::Display for MovedSweep {
@@ -133,6 +145,9 @@ impl std::fmt::Display for MovedSweep {
         if !self.backlash.is_empty() {
             return self.fmt_backlash(f, &lines);
         }
+        if !self.held.is_empty() {
+            return self.fmt_held(f, &lines);
+        }
         write!(
             f,
             "{who}: at the reference pose (every joint at its held value), which each sweep passes through, its \
@@ -151,6 +166,39 @@ impl std::fmt::Display for MovedSweep {
 }
 
 impl MovedSweep {
+    /// The warning for a sweep out of place by what a held joint's recorded command explains.
+    fn fmt_held(&self, f: &mut std::fmt::Formatter<'_>, lines: &str) -> std::fmt::Result {
+        let [x, y, z] = self.offset_mm;
+        let slip = &self.held[0];
+        let (j, unit) = (slip.joint, slip.unit);
+        let or: Vec<String> = self.held[1..]
+            .iter()
+            .map(|h| format!(", or the held `cmd_{}` by {:+.3} {}", h.joint, h.offset, h.unit))
+            .collect();
+        let among = match self.ambiguous {
+            true => format!("{} (either may be the one out of place)", self.others.join(", ")),
+            false => self.others.join(", "),
+        };
+        write!(
+            f,
+            "experiment {}{lines}: the held `cmd_{j}` looks offset by {:+.3} {unit} (1-sigma {:.3}) from where the robot \
+             stood{}: at \
+             the reference pose its target 0 sits ({x:.2}, {y:.2}, {z:.2}) mm ({:.2} mm across its motion, {:.0} times the \
+             noise of that comparison) from where {among} see it, where joint {j} turned by {:+.3} {unit} from its \
+             recorded value (about the axis its own sweep gives) puts it: a value typed wrong for this experiment, or the \
+             joint re-mastered between the sweeps; the calibration places the sweep's axis by the recorded value, so \
+             calibration.json is wrong for the robot: check `cmd_{j}` in these rows against the controller, or measure \
+             the sweep again",
+            self.experiment,
+            slip.offset,
+            slip.sigma,
+            or.concat(),
+            Vector3::new(x, y, z).norm(),
+            self.sigmas,
+            -slip.offset,
+        )
+    }
+
     /// The note for a sweep out of place by what the held joints' backlash explains.
     fn fmt_backlash(&self, f: &mut std::fmt::Formatter<'_>, lines: &str) -> std::fmt::Result {
         let [x, y, z] = self.offset_mm;
@@ -178,31 +226,54 @@ impl MovedSweep {
 /// The sweeps of `set` out of place among the sightings of their shared target (module docs),
 /// with `noise_rms_3d_mm` the noise of a point; empty when the description shares no target.
 pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Vec<MovedSweep> {
-    let Some((_, groups, sigma2)) = sightings(set, desc, noise_rms_3d_mm) else {
+    let Some(seen) = sightings(set, desc, noise_rms_3d_mm) else {
         return Vec::new();
     };
-    groups
+    let context = Context {
+        desc,
+        motions: &seen.motions,
+        sigma2: seen.sigma2,
+    };
+    seen.groups
         .into_values()
-        .filter_map(|(target, sightings)| odd_one_out(&sightings, sigma2, target))
+        .filter_map(|(target, sightings)| odd_one_out(&sightings, &context, target))
         .collect()
 }
 
-/// The axis experiments' names, the sightings of each shared target and the variance of a
+/// What [`odd_one_out`] names a sweep by beside the sightings: the description, each joint's
+/// motion ([`held::motions`]) and the variance of a point's coordinate \[mm²\].
+struct Context<'a> {
+    desc: &'a RobotDescription,
+    motions: &'a [Option<held::Motion>],
+    sigma2: f64,
+}
+
+/// The sightings of a file ([`sightings`]).
+struct Seen {
+    /// The axis experiments' names.
+    names: Vec<String>,
+    /// The sightings of each shared target.
+    groups: Groups,
+    /// The variance of a point's coordinate \[mm²\].
+    sigma2: f64,
+    /// Each joint's motion at the reference pose ([`held::motions`]).
+    motions: Vec<Option<held::Motion>>,
+}
+
+/// The axis experiments' names, the sightings of each shared target, the variance of a
 /// point's coordinate \[mm²\] at the noise `noise_rms_3d_mm` (at least the rounding of the
-/// file's printed coordinates); `None` when the file has no axis experiments.
-fn sightings(
-    set: &MeasurementSet,
-    desc: &RobotDescription,
-    noise_rms_3d_mm: f64,
-) -> Option<(Vec<String>, Groups, f64)> {
+/// file's printed coordinates) and each joint's motion; `None` when the file has no axis
+/// experiments.
+fn sightings(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Option<Seen> {
     let (experiments, reference) = axis_experiments(set, desc).ok()?;
     let reach = reach_mm(desc);
+    let motions = held::motions(&experiments, desc, &reference);
     let mut groups: Groups = BTreeMap::new();
     for e in &experiments {
         let Some((link, place)) = sweep_target(desc, e.joint) else {
             continue;
         };
-        if let Some(s) = sweep_sighting(e, desc, &reference, reach) {
+        if let Some(s) = sweep_sighting(e, (desc, &motions), &reference, reach) {
             let entry = groups.entry(key(link, place)).or_insert(((link, place), Vec::new()));
             entry.1.push(s);
         }
@@ -215,7 +286,12 @@ fn sightings(
     // A file without noise (SScanSS-2's two-link example) is still only as exact as its printed
     // coordinates: their rounding, uniform over one step, is the floor of a point's variance.
     let sigma2 = (noise_rms_3d_mm.powi(2) / 3.0).max(printed_step_mm(set).powi(2) / 12.0);
-    Some((experiments.into_iter().map(|e| e.name).collect(), groups, sigma2))
+    Some(Seen {
+        names: experiments.into_iter().map(|e| e.name).collect(),
+        groups,
+        sigma2,
+        motions,
+    })
 }
 
 /// The move of a sweep's block the test of the module docs is meant to name wherever the
@@ -243,7 +319,9 @@ pub struct BlockReach {
 /// standard deviation, times the root of its target's sightings' chi-square per degree of
 /// freedom where they scatter beyond the noise (the scatter test's scale).
 pub fn block_reach(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Option<BlockReach> {
-    let (names, groups, sigma2) = sightings(set, desc, noise_rms_3d_mm)?;
+    let Seen {
+        names, groups, sigma2, ..
+    } = sightings(set, desc, noise_rms_3d_mm)?;
     let mut compared: BTreeMap<String, f64> = BTreeMap::new();
     for (_, group) in groups.values().filter(|(_, g)| g.len() >= 2) {
         let all: Vec<&Sighting> = group.iter().collect();
@@ -415,6 +493,7 @@ fn tool_sightings(
                 across: Matrix3::identity(),
                 joint: 0,
                 turning: None,
+                held: Vec::new(),
             };
             ((on_link.coords * 1e3).into(), sighting)
         })
@@ -422,15 +501,15 @@ fn tool_sightings(
 }
 
 /// Sweep `e`'s sighting of its target 0 at the reference pose `reference` (file units), when
-/// the sweep holds the other joints there and its own command spans the reference's.
-fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64], reach_mm: f64) -> Option<Sighting> {
+/// its own command spans the reference's; a sweep whose held joints stand elsewhere is moved
+/// to it by their motions (`motions`, [`held::at_reference`]), when those are measured.
+fn sweep_sighting(
+    e: &AxisExperiment,
+    (desc, motions): (&RobotDescription, &[Option<held::Motion>]),
+    reference: &[f64],
+    reach_mm: f64,
+) -> Option<Sighting> {
     let k = e.joint - 1;
-    let held = e.commands.iter().all(|c| {
-        c.iter()
-            .zip(reference)
-            .enumerate()
-            .all(|(j, (a, b))| !e.holds_constant(j) || (a - b).abs() <= AT_REFERENCE)
-    });
     let u_ref = commands_to_internal(desc, reference)[k];
     let u: Vec<f64> = e
         .target0_steps
@@ -438,10 +517,10 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
         .map(|&i| commands_to_internal(desc, &e.commands[i])[k] - u_ref)
         .collect();
     let spans = u.iter().any(|&v| v <= 0.0) && u.iter().any(|&v| v >= 0.0);
-    if !held || !spans || u.len() < 5 {
+    if !spans || u.len() < 5 {
         return None;
     }
-    let points: Vec<Vector3<f64>> = e.target0_m.iter().map(|p| p.coords * 1e3).collect();
+    let points = held::at_reference(e, desc, reference, (&u, motions))?;
     let kind = desc.joints[k].kind;
     let curve = Curve::fit(&u, &points, kind)?;
     let (point, leverage, tangent) = curve.at_reference();
@@ -456,6 +535,7 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
         across: Matrix3::identity() - t * t.transpose(),
         joint: e.joint,
         turning: backlash::Turning::of(&curve, (&u, &points), first),
+        held: (0..desc.dof()).filter(|&j| e.holds_constant(j)).collect(),
     })
 }
 
@@ -635,8 +715,11 @@ fn exceeds(chi2: f64, dof: usize) -> bool {
 }
 
 /// The sweep among `sightings` of one `target` without which the others agree, when all of
-/// them do not (module docs); with two sightings either may be the moved one.
-fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -> Option<MovedSweep> {
+/// them do not (module docs); with two sightings either may be the moved one. Named for the
+/// held joints' backlash where that explains it, else for a held joint's recorded command
+/// ([`held::explained`]) where one explains it.
+fn odd_one_out(sightings: &[Sighting], context: &Context, target: (usize, [f64; 3])) -> Option<MovedSweep> {
+    let sigma2 = context.sigma2;
     let all: Vec<&Sighting> = sightings.iter().collect();
     let (_, chi2, dof) = consensus(&all, sigma2)?;
     if !exceeds(chi2, dof) {
@@ -661,12 +744,20 @@ fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -
         return None;
     }
     let backlash = backlash::explained(sightings, k, centre, offset, sigma2).unwrap_or_default();
+    let held = match backlash.is_empty() {
+        true => held::explained(sightings, k, centre, context.motions, (context.desc, sigma2)),
+        false => Vec::new(),
+    };
     // Several sweeps without each of which the others agree, or two sightings: either may be
     // the one out of place.
     let rivals: Vec<usize> = passing[1..].iter().map(|p| p.0).collect();
     let ambiguous = sightings.len() == 2;
     let moved = moved_sweep(sightings, (k, &rivals, ambiguous), offset, sigmas, target);
-    Some(MovedSweep { backlash, ..moved })
+    Some(MovedSweep {
+        backlash,
+        held,
+        ..moved
+    })
 }
 
 /// Sighting `k` of `sightings` said out of place, with `rivals` the other sightings that could
@@ -696,6 +787,7 @@ fn moved_sweep(
         others,
         target,
         backlash: Vec::new(),
+        held: Vec::new(),
     }
 }
 

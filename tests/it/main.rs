@@ -52,6 +52,7 @@ mod hostile_round13e;
 mod hostile_round13f;
 mod hostile_round14b;
 mod hostile_round14c;
+mod hostile_round14d;
 mod hostile_round14e;
 mod hostile_round14f;
 mod hostile_round3a;
