@@ -117,7 +117,7 @@ pub struct MovedSweep {
     /// such turns explain it (then the block was moved).
     pub backlash: Vec<(usize, f64)>,
     /// The held joints whose recorded command, off where the robot stood by the offset given,
-    /// puts the target where this sweep sees it (the smallest first; [`held`]); empty when none does or
+    /// puts the target where this sweep sees it (the smallest first; the `held` test); empty when none does or
     /// the held joints' backlash explains it.
     pub held: Vec<HeldSlip>,
 }

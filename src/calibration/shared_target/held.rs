@@ -15,7 +15,7 @@
 //! named for that joint's recorded value ([`explained`]), with the offset in its command's
 //! units. Not reached: an offset whose motion at the target runs along the sweep's own motion
 //! (a held joint parallel to the swept one, the target on the line through both axes), which
-//! reads as the swept joint's zero; `held_reach` says where that is.
+//! reads as the swept joint's zero (`docs/formats.md`).
 
 use super::{AT_REFERENCE, Curve, GROSS_MISS_FACTOR, Sighting, noise_bound, variance};
 use crate::calibration::axis_circle::fit_circle;
