@@ -39,59 +39,26 @@
 
 mod backlash;
 mod held;
+mod sighting;
 
 pub use held::HeldSlip;
+pub use sighting::SHARED_TARGET_FALSE_ALARM;
 
-use super::procedure::{AxisExperiment, SIZE_TOLERANCE, axis_experiments};
+use super::procedure::{AxisExperiment, axis_experiments};
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::column_slips::GROSS_MISS_FACTOR;
-use crate::numerics::roots::{Bisection, bisect_infallible};
 use crate::numerics::stats::{chi_square_quantile, f_upper_quantile};
+use sighting::{AT_REFERENCE, Curve, Sighting, Turning, noise_bound, variance};
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::{Matrix3, Point3, Vector3};
 use std::collections::BTreeMap;
-
-/// The test's false-alarm rate: a warning on consistent sweeps once in ten thousand files (the
-/// rate of `calibrate`'s test of its own validation poses).
-pub const SHARED_TARGET_FALSE_ALARM: f64 = 1e-4;
-
-/// A turning sweep's fitted turn per command lies within this factor of the description's
-/// either way: a command column halved or doubled is a unit slip the unit checks name.
-const TURN_RATE_RANGE: f64 = 2.0;
-
-/// Commands within this of the reference pose's are at it (file units: the tool frame's rule,
-/// `docs/formats.md#experiments-and-targets`).
-const AT_REFERENCE: f64 = 1e-6;
 
 /// The sightings of each shared target (by [`key`]): its link and place \[mm\], and the sightings.
 type Groups = BTreeMap<String, ((usize, [f64; 3]), Vec<Sighting>)>;
 
 /// The tool observation's points of each tool target, the experiment and the first line.
 type ToolPoints = BTreeMap<usize, (Vec<Vector3<f64>>, String, Option<u64>)>;
-
-/// One sighting of a shared target at the reference pose.
-struct Sighting {
-    /// The experiment (`tool` observation or sweep).
-    experiment: String,
-    /// Its lines in the file.
-    lines: Option<(u64, u64)>,
-    /// The point \[mm\].
-    point: Vector3<f64>,
-    /// Its coordinates' variance over a point's (leverage of the interpolation).
-    leverage: f64,
-    /// The variance its point gets from the joints positioned once for it \[mm²\]
-    /// ([`held_variance_mm2`]).
-    held_mm2: f64,
-    /// The projection across the sweep's motion (identity for a measured point).
-    across: Matrix3<f64>,
-    /// The swept joint (0: the tool observation).
-    joint: usize,
-    /// A turning sweep's axis and the backlash its first point shows ([`backlash::Turning`]).
-    turning: Option<backlash::Turning>,
-    /// The joints (0-based) the sweep holds at a constant command (none: the tool observation).
-    held: Vec<usize>,
-}
 
 /// A sweep whose point at the reference pose contradicts the other sightings of its target.
 #[derive(Clone, Debug, PartialEq)]
@@ -534,124 +501,9 @@ fn sweep_sighting(
         held_mm2: held_variance_mm2(desc, e.joint, reach_mm),
         across: Matrix3::identity() - t * t.transpose(),
         joint: e.joint,
-        turning: backlash::Turning::of(&curve, (&u, &points), first),
+        turning: Turning::of(&curve, (&u, &points), first),
         held: (0..desc.dof()).filter(|&j| e.holds_constant(j)).collect(),
     })
-}
-
-/// The least squares of `points` on the basis `basis(u)` (3 functions of the command; a line's
-/// unused third, zero at every command, padded with a unit diagonal): the coefficients (one row
-/// per function), the inverse normal matrix and the residual sum of squares, or `None` when the
-/// normal equations are singular.
-fn basis_fit(
-    u: &[f64],
-    points: &[Vector3<f64>],
-    basis: &dyn Fn(f64) -> Vector3<f64>,
-) -> Option<(Matrix3<f64>, Matrix3<f64>, f64)> {
-    let mut normal = Matrix3::zeros();
-    let mut right = Matrix3::zeros();
-    for (&v, p) in u.iter().zip(points) {
-        let f = basis(v);
-        normal += f * f.transpose();
-        right += f * p.transpose();
-    }
-    if normal[(2, 2)] == 0.0 {
-        normal[(2, 2)] = 1.0;
-    }
-    let inverse = normal.try_inverse()?;
-    let coefficients = inverse * right;
-    let rss: f64 = u
-        .iter()
-        .zip(points)
-        .map(|(&v, p)| (p - coefficients.transpose() * basis(v)).norm_squared())
-        .sum();
-    Some((coefficients, inverse, rss))
-}
-
-/// A sweep's path in its command (`u` relative to the reference, internal units): a circle
-/// `c + a cos(b u) + d sin(b u)` for a turning joint (its turn per command `b` the one of least
-/// residuals within [`TURN_RATE_RANGE`] of 1), a line `c + d u` for a sliding one; the rows of
-/// `coefficients` are `c`, `a` (a line: `d`) and `d` (a line: zero).
-struct Curve {
-    kind: JointKind,
-    /// The turn per command (0 for a line).
-    b: f64,
-    coefficients: Matrix3<f64>,
-    /// The inverse normal matrix of the least squares.
-    inverse: Matrix3<f64>,
-}
-
-impl Curve {
-    /// The path through `points` \[mm\] at the commands `u`; `None` when they do not fix one.
-    fn fit(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<Curve> {
-        let b = match kind {
-            JointKind::Prismatic => 0.0,
-            JointKind::Revolute => {
-                let rss = |b: f64| basis_fit(u, points, &|v| circle(b, v)).map_or(f64::INFINITY, |f| f.2);
-                let h = 1e-6;
-                let least = |from: f64, to: f64| {
-                    let stop = Bisection::to_width(1e-6);
-                    let [lo, hi] = bisect_infallible(from, to, stop, |x| rss(x + h) < rss(x - h));
-                    0.5 * (lo + hi)
-                };
-                let b = least(1.0 / TURN_RATE_RANGE, TURN_RATE_RANGE);
-                // Beyond SIZE_TOLERANCE of the description's, an alias of the circle its
-                // points do not fix (six points 144 deg apart over two turns fit one at 1.49
-                // as well as at 1): the least residuals within that tolerance instead.
-                match (b - 1.0).abs() > SIZE_TOLERANCE {
-                    true => least(1.0 - SIZE_TOLERANCE, 1.0 + SIZE_TOLERANCE),
-                    false => b,
-                }
-            }
-        };
-        let curve = Curve {
-            kind,
-            b,
-            coefficients: Matrix3::zeros(),
-            inverse: Matrix3::zeros(),
-        };
-        let (coefficients, inverse, _) = basis_fit(u, points, &|v| curve.basis(v))?;
-        Some(Curve {
-            coefficients,
-            inverse,
-            ..curve
-        })
-    }
-
-    /// The basis functions at command `v`.
-    fn basis(&self, v: f64) -> Vector3<f64> {
-        match self.kind {
-            JointKind::Prismatic => Vector3::new(1.0, v, 0.0),
-            JointKind::Revolute => circle(self.b, v),
-        }
-    }
-
-    /// The path's point at command `v` \[mm\].
-    fn point(&self, v: f64) -> Vector3<f64> {
-        self.coefficients.transpose() * self.basis(v)
-    }
-
-    /// The path's direction of motion at command `v` \[mm per unit command\].
-    fn slope(&self, v: f64) -> Vector3<f64> {
-        let derivative = match self.kind {
-            JointKind::Prismatic => Vector3::new(0.0, 1.0, 0.0),
-            JointKind::Revolute => Vector3::new(0.0, -self.b * (self.b * v).sin(), self.b * (self.b * v).cos()),
-        };
-        self.coefficients.transpose() * derivative
-    }
-
-    /// The point at command 0 (the reference), the interpolation's leverage there and the
-    /// direction of motion.
-    fn at_reference(&self) -> (Vector3<f64>, f64, Vector3<f64>) {
-        let at0 = self.basis(0.0);
-        let leverage = (at0.transpose() * self.inverse * at0)[0];
-        (self.point(0.0), leverage, self.slope(0.0))
-    }
-}
-
-/// The circle's basis `(1, cos(b v), sin(b v))`.
-fn circle(b: f64, v: f64) -> Vector3<f64> {
-    Vector3::new(1.0, (b * v).cos(), (b * v).sin())
 }
 
 /// The weighted consensus of `sightings` (the point whose offsets across each one's motion,
@@ -696,12 +548,6 @@ fn pseudo_inverse(total: &Matrix3<f64>) -> Option<(Matrix3<f64>, usize)> {
         }
         _ => None,
     }
-}
-
-/// The variance \[mm²\] of a sighting's point at the noise `sigma2` of a coordinate: its
-/// interpolation's and the joints' positioned once for it.
-fn variance(s: &Sighting, sigma2: f64) -> f64 {
-    s.leverage * sigma2 + s.held_mm2
 }
 
 /// A sighting's weight in a consensus: its projection across its motion over its variance.
@@ -799,12 +645,6 @@ fn without(sightings: &[Sighting], k: usize) -> Vec<&Sighting> {
         .filter(|(j, _)| *j != k)
         .map(|(_, s)| s)
         .collect()
-}
-
-/// The noise test's bound on a sighting's offset over its standard deviation: the chi-square
-/// quantile at [`SHARED_TARGET_FALSE_ALARM`] with its dimensions across its motion.
-fn noise_bound(s: &Sighting) -> f64 {
-    chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, s.across.trace().round()).sqrt()
 }
 
 /// The sweep out of the others' scatter, when no sighting's removal lets the others agree at

@@ -17,10 +17,11 @@
 //! (a held joint parallel to the swept one, the target on the line through both axes), which
 //! reads as the swept joint's zero (`docs/formats.md`).
 
-use super::{AT_REFERENCE, Curve, GROSS_MISS_FACTOR, Sighting, noise_bound, variance};
+use super::sighting::{AT_REFERENCE, Curve, SHARED_TARGET_FALSE_ALARM, Sighting, noise_bound, variance};
 use crate::calibration::axis_circle::fit_circle;
 use crate::calibration::procedure::AxisExperiment;
 use crate::kinematics::JointKind;
+use crate::measurement::column_slips::GROSS_MISS_FACTOR;
 use crate::numerics::stats::chi_square_quantile;
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
@@ -234,7 +235,7 @@ const STEPS: usize = 8;
 
 /// The held joints (each alone) whose command, off by a fitted amount, moves the others'
 /// consensus `centre` \[mm\] onto sighting `k`'s point across its motion within the noise test's
-/// bound at the noise `sigma2` (chi-square at [`super::SHARED_TARGET_FALSE_ALARM`] with the
+/// bound at the noise `sigma2` (chi-square at [`SHARED_TARGET_FALSE_ALARM`] with the
 /// dimensions across the motion less the one fitted), smallest first; empty when none does or the
 /// sighting is the tool observation.
 pub(super) fn explained(
@@ -249,7 +250,7 @@ pub(super) fn explained(
         return Vec::new();
     }
     let dims = s.across.trace().round();
-    let bound = chi_square_quantile(1.0 - super::SHARED_TARGET_FALSE_ALARM, (dims - 1.0).max(1.0));
+    let bound = chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, (dims - 1.0).max(1.0));
     let sd2 = variance(s, sigma2);
     let mut found: Vec<(f64, HeldSlip)> = Vec::new();
     for (j, motion) in motions.iter().enumerate() {
