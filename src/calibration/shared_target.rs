@@ -49,9 +49,9 @@ use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::column_slips::GROSS_MISS_FACTOR;
 use crate::numerics::stats::{chi_square_quantile, f_upper_quantile};
-use sighting::{AT_REFERENCE, Curve, Sighting, Turning, noise_bound, variance};
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::{Matrix3, Point3, Vector3};
+use sighting::{AT_REFERENCE, Curve, Sighting, Turning, noise_bound, variance};
 use std::collections::BTreeMap;
 
 /// The sightings of each shared target (by [`key`]): its link and place \[mm\], and the sightings.
@@ -142,6 +142,11 @@ impl MovedSweep {
             .iter()
             .map(|h| format!(", or the held `cmd_{}` by {:+.3} {}", h.joint, h.offset, h.unit))
             .collect();
+        // A turning joint turns about its sweep's axis; a sliding one slides along its line.
+        let (moved, path) = match unit {
+            "mm" => ("slid", "along the line"),
+            _ => ("turned", "about the axis"),
+        };
         let among = match self.ambiguous {
             true => format!("{} (either may be the one out of place)", self.others.join(", ")),
             false => self.others.join(", "),
@@ -151,8 +156,8 @@ impl MovedSweep {
             "experiment {}{lines}: the held `cmd_{j}` looks offset by {:+.3} {unit} (1-sigma {:.3}) from where the robot \
              stood{}: at \
              the reference pose its target 0 sits ({x:.2}, {y:.2}, {z:.2}) mm ({:.2} mm across its motion, {:.0} times the \
-             noise of that comparison) from where {among} see it, where joint {j} turned by {:+.3} {unit} from its \
-             recorded value (about the axis its own sweep gives) puts it: a value typed wrong for this experiment, or the \
+             noise of that comparison) from where {among} see it, where joint {j} {moved} by {:+.3} {unit} from its \
+             recorded value ({path} its own sweep gives) puts it: a value typed wrong for this experiment, or the \
              joint re-mastered between the sweeps; the calibration places the sweep's axis by the recorded value, so \
              calibration.json is wrong for the robot: check `cmd_{j}` in these rows against the controller, or measure \
              the sweep again",

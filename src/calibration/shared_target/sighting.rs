@@ -222,4 +222,3 @@ fn lead(u: &[f64], points: &[Vector3<f64>]) -> Option<(Option<f64>, f64)> {
     let turn = ahead / slope.norm() * rest.b;
     Some(((ahead > 0.0).then_some(turn), ahead))
 }
-
