@@ -112,9 +112,13 @@ impl std::fmt::Display for MovedSweep {
         if !self.backlash.is_empty() {
             return self.fmt_backlash(f, &lines);
         }
-        if !self.held.is_empty() {
-            return self.fmt_held(f, &lines);
-        }
+        // A held slide's offset moves the point as a moved block does (a translation): named
+        // beside the block, not for it; a held turn moves it about an axis (h15d).
+        let slides = match self.held.first() {
+            Some(h) if h.unit == "deg" => return self.fmt_held(f, &lines),
+            Some(_) => self.held_slides(),
+            None => String::new(),
+        };
         write!(
             f,
             "{who}: at the reference pose (every joint at its held value), which each sweep passes through, its \
@@ -125,7 +129,7 @@ impl std::fmt::Display for MovedSweep {
              calibration.json is wrong for the robot: check these rows and measure the sweep again (if the targets \
              are different ones, give each its own place in `axis_targets`; a held joint's backlash taken up on \
              another side between the sweeps moves a sweep too, by its band times the target's distance from that \
-             joint, 0.9 mm for 1 mrad at 0.9 m: then approach the reference pose from one side before every sweep)",
+             joint, 0.9 mm for 1 mrad at 0.9 m: then approach the reference pose from one side before every sweep){slides}",
             Vector3::new(x, y, z).norm(),
             self.sigmas,
         )
@@ -133,6 +137,26 @@ impl std::fmt::Display for MovedSweep {
 }
 
 impl MovedSweep {
+    /// The held slides whose recorded command, off where the robot stood, moves the point as
+    /// the block moved does: a clause for the moved-block warning.
+    fn held_slides(&self) -> String {
+        let each: Vec<String> = self
+            .held
+            .iter()
+            .map(|h| {
+                format!(
+                    "`cmd_{}` by {:+.3} {} (1-sigma {:.3})",
+                    h.joint, h.offset, h.unit, h.sigma
+                )
+            })
+            .collect();
+        format!(
+            "; a held slide's recorded command off where the robot stood moves it the same way ({}): check \
+             those in these rows against the controller too",
+            each.join(", or ")
+        )
+    }
+
     /// The warning for a sweep out of place by what a held joint's recorded command explains.
     fn fmt_held(&self, f: &mut std::fmt::Formatter<'_>, lines: &str) -> std::fmt::Result {
         let [x, y, z] = self.offset_mm;
@@ -142,11 +166,6 @@ impl MovedSweep {
             .iter()
             .map(|h| format!(", or the held `cmd_{}` by {:+.3} {}", h.joint, h.offset, h.unit))
             .collect();
-        // A turning joint turns about its sweep's axis; a sliding one slides along its line.
-        let (moved, path) = match unit {
-            "mm" => ("slid", "along the line"),
-            _ => ("turned", "about the axis"),
-        };
         let among = match self.ambiguous {
             true => format!("{} (either may be the one out of place)", self.others.join(", ")),
             false => self.others.join(", "),
@@ -156,8 +175,8 @@ impl MovedSweep {
             "experiment {}{lines}: the held `cmd_{j}` looks offset by {:+.3} {unit} (1-sigma {:.3}) from where the robot \
              stood{}: at \
              the reference pose its target 0 sits ({x:.2}, {y:.2}, {z:.2}) mm ({:.2} mm across its motion, {:.0} times the \
-             noise of that comparison) from where {among} see it, where joint {j} {moved} by {:+.3} {unit} from its \
-             recorded value ({path} its own sweep gives) puts it: a value typed wrong for this experiment, or the \
+             noise of that comparison) from where {among} see it, where joint {j} turned by {:+.3} {unit} from its \
+             recorded value (about the axis its own sweep gives) puts it: a value typed wrong for this experiment, or the \
              joint re-mastered between the sweeps; the calibration places the sweep's axis by the recorded value, so \
              calibration.json is wrong for the robot: check `cmd_{j}` in these rows against the controller, or measure \
              the sweep again",
