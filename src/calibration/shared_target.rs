@@ -137,8 +137,8 @@ impl std::fmt::Display for MovedSweep {
 }
 
 impl MovedSweep {
-    /// The held slides whose recorded command, off where the robot stood, moves the point as
-    /// the block moved does: a clause for the moved-block warning.
+    /// The held joints (a slide first) whose recorded command, off where the robot stood, moves
+    /// the point as the block moved does: a clause for the moved-block warning.
     fn held_slides(&self) -> String {
         let each: Vec<String> = self
             .held
@@ -151,7 +151,7 @@ impl MovedSweep {
             })
             .collect();
         format!(
-            "; a held slide's recorded command off where the robot stood moves it the same way ({}): check \
+            "; a held joint's recorded command off where the robot stood moves it the same way ({}): check \
              those in these rows against the controller too",
             each.join(", or ")
         )
