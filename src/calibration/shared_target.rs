@@ -26,7 +26,10 @@
 //! removal lets the others agree at the noise (a real robot whose effects scatter every sweep's
 //! point: Boby & Klimchik's arm), each sweep is tested against the others' scatter instead
 //! (`scattered_odd_one_out`, an F ratio). A description without `axis_targets` (SScanSS-2's
-//! robots) has every sweep read the tool frame's origin; a noise-free file's points are as exact
+//! robots) has every sweep read the tool frame's origin; a sweep whose held joints stand, as
+//! recorded, off the reference pose is moved to it by their motions, which their own sweeps
+//! measure, and a sweep out of place by one held joint's motion is named for that joint's
+//! recorded command (`held`); a noise-free file's points are as exact
 //! as their printed decimals (`printed_step_mm`); where every sweep moves the point along one
 //! direction (a planar robot) that direction is left out (`pseudo_inverse`). No model of the
 //! robot: the data against themselves and the description's word that the targets are one. Not
@@ -35,55 +38,27 @@
 //! compared with none or a 1 mm move across its motion would pass.
 
 mod backlash;
+mod held;
+mod sighting;
 
-use super::procedure::{AxisExperiment, SIZE_TOLERANCE, axis_experiments};
+pub use held::HeldSlip;
+pub use sighting::SHARED_TARGET_FALSE_ALARM;
+
+use super::procedure::{AxisExperiment, axis_experiments};
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::column_slips::GROSS_MISS_FACTOR;
-use crate::numerics::roots::{Bisection, bisect_infallible};
 use crate::numerics::stats::{chi_square_quantile, f_upper_quantile};
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::{Matrix3, Point3, Vector3};
+use sighting::{AT_REFERENCE, Curve, Sighting, Turning, noise_bound, variance};
 use std::collections::BTreeMap;
-
-/// The test's false-alarm rate: a warning on consistent sweeps once in ten thousand files (the
-/// rate of `calibrate`'s test of its own validation poses).
-pub const SHARED_TARGET_FALSE_ALARM: f64 = 1e-4;
-
-/// A turning sweep's fitted turn per command lies within this factor of the description's
-/// either way: a command column halved or doubled is a unit slip the unit checks name.
-const TURN_RATE_RANGE: f64 = 2.0;
-
-/// Commands within this of the reference pose's are at it (file units: the tool frame's rule,
-/// `docs/formats.md#experiments-and-targets`).
-const AT_REFERENCE: f64 = 1e-6;
 
 /// The sightings of each shared target (by [`key`]): its link and place \[mm\], and the sightings.
 type Groups = BTreeMap<String, ((usize, [f64; 3]), Vec<Sighting>)>;
 
 /// The tool observation's points of each tool target, the experiment and the first line.
 type ToolPoints = BTreeMap<usize, (Vec<Vector3<f64>>, String, Option<u64>)>;
-
-/// One sighting of a shared target at the reference pose.
-struct Sighting {
-    /// The experiment (`tool` observation or sweep).
-    experiment: String,
-    /// Its lines in the file.
-    lines: Option<(u64, u64)>,
-    /// The point \[mm\].
-    point: Vector3<f64>,
-    /// Its coordinates' variance over a point's (leverage of the interpolation).
-    leverage: f64,
-    /// The variance its point gets from the joints positioned once for it \[mm²\]
-    /// ([`held_variance_mm2`]).
-    held_mm2: f64,
-    /// The projection across the sweep's motion (identity for a measured point).
-    across: Matrix3<f64>,
-    /// The swept joint (0: the tool observation).
-    joint: usize,
-    /// A turning sweep's axis and the backlash its first point shows ([`backlash::Turning`]).
-    turning: Option<backlash::Turning>,
-}
 
 /// A sweep whose point at the reference pose contradicts the other sightings of its target.
 #[derive(Clone, Debug, PartialEq)]
@@ -108,6 +83,10 @@ pub struct MovedSweep {
     /// show that put the target where this sweep sees it (`(joint, turn)`); empty when no
     /// such turns explain it (then the block was moved).
     pub backlash: Vec<(usize, f64)>,
+    /// The held joints whose recorded command, off where the robot stood by the offset given,
+    /// puts the target where this sweep sees it (the smallest first; the `held` test); empty when none does or
+    /// the held joints' backlash explains it.
+    pub held: Vec<HeldSlip>,
 }
 
 impl std::fmt::Display for MovedSweep {
@@ -133,6 +112,13 @@ impl std::fmt::Display for MovedSweep {
         if !self.backlash.is_empty() {
             return self.fmt_backlash(f, &lines);
         }
+        // A held slide's offset moves the point as a moved block does (a translation): named
+        // beside the block, not for it; a held turn moves it about an axis (h15d).
+        let slides = match self.held.first() {
+            Some(h) if h.unit == "deg" => return self.fmt_held(f, &lines),
+            Some(_) => self.held_slides(),
+            None => String::new(),
+        };
         write!(
             f,
             "{who}: at the reference pose (every joint at its held value), which each sweep passes through, its \
@@ -143,7 +129,7 @@ impl std::fmt::Display for MovedSweep {
              calibration.json is wrong for the robot: check these rows and measure the sweep again (if the targets \
              are different ones, give each its own place in `axis_targets`; a held joint's backlash taken up on \
              another side between the sweeps moves a sweep too, by its band times the target's distance from that \
-             joint, 0.9 mm for 1 mrad at 0.9 m: then approach the reference pose from one side before every sweep)",
+             joint, 0.9 mm for 1 mrad at 0.9 m: then approach the reference pose from one side before every sweep){slides}",
             Vector3::new(x, y, z).norm(),
             self.sigmas,
         )
@@ -151,6 +137,59 @@ impl std::fmt::Display for MovedSweep {
 }
 
 impl MovedSweep {
+    /// The held joints (a slide first) whose recorded command, off where the robot stood, moves
+    /// the point as the block moved does: a clause for the moved-block warning.
+    fn held_slides(&self) -> String {
+        let each: Vec<String> = self
+            .held
+            .iter()
+            .map(|h| {
+                format!(
+                    "`cmd_{}` by {:+.3} {} (1-sigma {:.3})",
+                    h.joint, h.offset, h.unit, h.sigma
+                )
+            })
+            .collect();
+        format!(
+            "; a held joint's recorded command off where the robot stood moves it the same way ({}): check \
+             those in these rows against the controller too",
+            each.join(", or ")
+        )
+    }
+
+    /// The warning for a sweep out of place by what a held joint's recorded command explains.
+    fn fmt_held(&self, f: &mut std::fmt::Formatter<'_>, lines: &str) -> std::fmt::Result {
+        let [x, y, z] = self.offset_mm;
+        let slip = &self.held[0];
+        let (j, unit) = (slip.joint, slip.unit);
+        let or: Vec<String> = self.held[1..]
+            .iter()
+            .map(|h| format!(", or the held `cmd_{}` by {:+.3} {}", h.joint, h.offset, h.unit))
+            .collect();
+        let among = match self.ambiguous {
+            true => format!("{} (either may be the one out of place)", self.others.join(", ")),
+            false => self.others.join(", "),
+        };
+        write!(
+            f,
+            "experiment {}{lines}: the held `cmd_{j}` looks offset by {:+.3} {unit} (1-sigma {:.3}) from where the robot \
+             stood{}: at \
+             the reference pose its target 0 sits ({x:.2}, {y:.2}, {z:.2}) mm ({:.2} mm across its motion, {:.0} times the \
+             noise of that comparison) from where {among} see it, where joint {j} turned by {:+.3} {unit} from its \
+             recorded value (about the axis its own sweep gives) puts it: a value typed wrong for this experiment, or the \
+             joint re-mastered between the sweeps; the calibration places the sweep's axis by the recorded value, so \
+             calibration.json is wrong for the robot: check `cmd_{j}` in these rows against the controller, or measure \
+             the sweep again",
+            self.experiment,
+            slip.offset,
+            slip.sigma,
+            or.concat(),
+            Vector3::new(x, y, z).norm(),
+            self.sigmas,
+            -slip.offset,
+        )
+    }
+
     /// The note for a sweep out of place by what the held joints' backlash explains.
     fn fmt_backlash(&self, f: &mut std::fmt::Formatter<'_>, lines: &str) -> std::fmt::Result {
         let [x, y, z] = self.offset_mm;
@@ -178,31 +217,54 @@ impl MovedSweep {
 /// The sweeps of `set` out of place among the sightings of their shared target (module docs),
 /// with `noise_rms_3d_mm` the noise of a point; empty when the description shares no target.
 pub fn moved_sweeps(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Vec<MovedSweep> {
-    let Some((_, groups, sigma2)) = sightings(set, desc, noise_rms_3d_mm) else {
+    let Some(seen) = sightings(set, desc, noise_rms_3d_mm) else {
         return Vec::new();
     };
-    groups
+    let context = Context {
+        desc,
+        motions: &seen.motions,
+        sigma2: seen.sigma2,
+    };
+    seen.groups
         .into_values()
-        .filter_map(|(target, sightings)| odd_one_out(&sightings, sigma2, target))
+        .filter_map(|(target, sightings)| odd_one_out(&sightings, &context, target))
         .collect()
 }
 
-/// The axis experiments' names, the sightings of each shared target and the variance of a
+/// What [`odd_one_out`] names a sweep by beside the sightings: the description, each joint's
+/// motion ([`held::motions`]) and the variance of a point's coordinate \[mm²\].
+struct Context<'a> {
+    desc: &'a RobotDescription,
+    motions: &'a [Option<held::Motion>],
+    sigma2: f64,
+}
+
+/// The sightings of a file ([`sightings`]).
+struct Seen {
+    /// The axis experiments' names.
+    names: Vec<String>,
+    /// The sightings of each shared target.
+    groups: Groups,
+    /// The variance of a point's coordinate \[mm²\].
+    sigma2: f64,
+    /// Each joint's motion at the reference pose ([`held::motions`]).
+    motions: Vec<Option<held::Motion>>,
+}
+
+/// The axis experiments' names, the sightings of each shared target, the variance of a
 /// point's coordinate \[mm²\] at the noise `noise_rms_3d_mm` (at least the rounding of the
-/// file's printed coordinates); `None` when the file has no axis experiments.
-fn sightings(
-    set: &MeasurementSet,
-    desc: &RobotDescription,
-    noise_rms_3d_mm: f64,
-) -> Option<(Vec<String>, Groups, f64)> {
+/// file's printed coordinates) and each joint's motion; `None` when the file has no axis
+/// experiments.
+fn sightings(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Option<Seen> {
     let (experiments, reference) = axis_experiments(set, desc).ok()?;
     let reach = reach_mm(desc);
+    let motions = held::motions(&experiments, desc, &reference);
     let mut groups: Groups = BTreeMap::new();
     for e in &experiments {
         let Some((link, place)) = sweep_target(desc, e.joint) else {
             continue;
         };
-        if let Some(s) = sweep_sighting(e, desc, &reference, reach) {
+        if let Some(s) = sweep_sighting(e, (desc, &motions), &reference, reach) {
             let entry = groups.entry(key(link, place)).or_insert(((link, place), Vec::new()));
             entry.1.push(s);
         }
@@ -215,7 +277,12 @@ fn sightings(
     // A file without noise (SScanSS-2's two-link example) is still only as exact as its printed
     // coordinates: their rounding, uniform over one step, is the floor of a point's variance.
     let sigma2 = (noise_rms_3d_mm.powi(2) / 3.0).max(printed_step_mm(set).powi(2) / 12.0);
-    Some((experiments.into_iter().map(|e| e.name).collect(), groups, sigma2))
+    Some(Seen {
+        names: experiments.into_iter().map(|e| e.name).collect(),
+        groups,
+        sigma2,
+        motions,
+    })
 }
 
 /// The move of a sweep's block the test of the module docs is meant to name wherever the
@@ -243,7 +310,9 @@ pub struct BlockReach {
 /// standard deviation, times the root of its target's sightings' chi-square per degree of
 /// freedom where they scatter beyond the noise (the scatter test's scale).
 pub fn block_reach(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Option<BlockReach> {
-    let (names, groups, sigma2) = sightings(set, desc, noise_rms_3d_mm)?;
+    let Seen {
+        names, groups, sigma2, ..
+    } = sightings(set, desc, noise_rms_3d_mm)?;
     let mut compared: BTreeMap<String, f64> = BTreeMap::new();
     for (_, group) in groups.values().filter(|(_, g)| g.len() >= 2) {
         let all: Vec<&Sighting> = group.iter().collect();
@@ -415,6 +484,7 @@ fn tool_sightings(
                 across: Matrix3::identity(),
                 joint: 0,
                 turning: None,
+                held: Vec::new(),
             };
             ((on_link.coords * 1e3).into(), sighting)
         })
@@ -422,15 +492,15 @@ fn tool_sightings(
 }
 
 /// Sweep `e`'s sighting of its target 0 at the reference pose `reference` (file units), when
-/// the sweep holds the other joints there and its own command spans the reference's.
-fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64], reach_mm: f64) -> Option<Sighting> {
+/// its own command spans the reference's; a sweep whose held joints stand elsewhere is moved
+/// to it by their motions (`motions`, [`held::at_reference`]), when those are measured.
+fn sweep_sighting(
+    e: &AxisExperiment,
+    (desc, motions): (&RobotDescription, &[Option<held::Motion>]),
+    reference: &[f64],
+    reach_mm: f64,
+) -> Option<Sighting> {
     let k = e.joint - 1;
-    let held = e.commands.iter().all(|c| {
-        c.iter()
-            .zip(reference)
-            .enumerate()
-            .all(|(j, (a, b))| !e.holds_constant(j) || (a - b).abs() <= AT_REFERENCE)
-    });
     let u_ref = commands_to_internal(desc, reference)[k];
     let u: Vec<f64> = e
         .target0_steps
@@ -438,10 +508,10 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
         .map(|&i| commands_to_internal(desc, &e.commands[i])[k] - u_ref)
         .collect();
     let spans = u.iter().any(|&v| v <= 0.0) && u.iter().any(|&v| v >= 0.0);
-    if !held || !spans || u.len() < 5 {
+    if !spans || u.len() < 5 {
         return None;
     }
-    let points: Vec<Vector3<f64>> = e.target0_m.iter().map(|p| p.coords * 1e3).collect();
+    let points = held::at_reference(e, desc, reference, (&u, motions))?;
     let kind = desc.joints[k].kind;
     let curve = Curve::fit(&u, &points, kind)?;
     let (point, leverage, tangent) = curve.at_reference();
@@ -455,123 +525,9 @@ fn sweep_sighting(e: &AxisExperiment, desc: &RobotDescription, reference: &[f64]
         held_mm2: held_variance_mm2(desc, e.joint, reach_mm),
         across: Matrix3::identity() - t * t.transpose(),
         joint: e.joint,
-        turning: backlash::Turning::of(&curve, (&u, &points), first),
+        turning: Turning::of(&curve, (&u, &points), first),
+        held: (0..desc.dof()).filter(|&j| e.holds_constant(j)).collect(),
     })
-}
-
-/// The least squares of `points` on the basis `basis(u)` (3 functions of the command; a line's
-/// unused third, zero at every command, padded with a unit diagonal): the coefficients (one row
-/// per function), the inverse normal matrix and the residual sum of squares, or `None` when the
-/// normal equations are singular.
-fn basis_fit(
-    u: &[f64],
-    points: &[Vector3<f64>],
-    basis: &dyn Fn(f64) -> Vector3<f64>,
-) -> Option<(Matrix3<f64>, Matrix3<f64>, f64)> {
-    let mut normal = Matrix3::zeros();
-    let mut right = Matrix3::zeros();
-    for (&v, p) in u.iter().zip(points) {
-        let f = basis(v);
-        normal += f * f.transpose();
-        right += f * p.transpose();
-    }
-    if normal[(2, 2)] == 0.0 {
-        normal[(2, 2)] = 1.0;
-    }
-    let inverse = normal.try_inverse()?;
-    let coefficients = inverse * right;
-    let rss: f64 = u
-        .iter()
-        .zip(points)
-        .map(|(&v, p)| (p - coefficients.transpose() * basis(v)).norm_squared())
-        .sum();
-    Some((coefficients, inverse, rss))
-}
-
-/// A sweep's path in its command (`u` relative to the reference, internal units): a circle
-/// `c + a cos(b u) + d sin(b u)` for a turning joint (its turn per command `b` the one of least
-/// residuals within [`TURN_RATE_RANGE`] of 1), a line `c + d u` for a sliding one; the rows of
-/// `coefficients` are `c`, `a` (a line: `d`) and `d` (a line: zero).
-struct Curve {
-    kind: JointKind,
-    /// The turn per command (0 for a line).
-    b: f64,
-    coefficients: Matrix3<f64>,
-    /// The inverse normal matrix of the least squares.
-    inverse: Matrix3<f64>,
-}
-
-impl Curve {
-    /// The path through `points` \[mm\] at the commands `u`; `None` when they do not fix one.
-    fn fit(u: &[f64], points: &[Vector3<f64>], kind: JointKind) -> Option<Curve> {
-        let b = match kind {
-            JointKind::Prismatic => 0.0,
-            JointKind::Revolute => {
-                let rss = |b: f64| basis_fit(u, points, &|v| circle(b, v)).map_or(f64::INFINITY, |f| f.2);
-                let h = 1e-6;
-                let least = |from: f64, to: f64| {
-                    let stop = Bisection::to_width(1e-6);
-                    let [lo, hi] = bisect_infallible(from, to, stop, |x| rss(x + h) < rss(x - h));
-                    0.5 * (lo + hi)
-                };
-                let b = least(1.0 / TURN_RATE_RANGE, TURN_RATE_RANGE);
-                // Beyond SIZE_TOLERANCE of the description's, an alias of the circle its
-                // points do not fix (six points 144 deg apart over two turns fit one at 1.49
-                // as well as at 1): the least residuals within that tolerance instead.
-                match (b - 1.0).abs() > SIZE_TOLERANCE {
-                    true => least(1.0 - SIZE_TOLERANCE, 1.0 + SIZE_TOLERANCE),
-                    false => b,
-                }
-            }
-        };
-        let curve = Curve {
-            kind,
-            b,
-            coefficients: Matrix3::zeros(),
-            inverse: Matrix3::zeros(),
-        };
-        let (coefficients, inverse, _) = basis_fit(u, points, &|v| curve.basis(v))?;
-        Some(Curve {
-            coefficients,
-            inverse,
-            ..curve
-        })
-    }
-
-    /// The basis functions at command `v`.
-    fn basis(&self, v: f64) -> Vector3<f64> {
-        match self.kind {
-            JointKind::Prismatic => Vector3::new(1.0, v, 0.0),
-            JointKind::Revolute => circle(self.b, v),
-        }
-    }
-
-    /// The path's point at command `v` \[mm\].
-    fn point(&self, v: f64) -> Vector3<f64> {
-        self.coefficients.transpose() * self.basis(v)
-    }
-
-    /// The path's direction of motion at command `v` \[mm per unit command\].
-    fn slope(&self, v: f64) -> Vector3<f64> {
-        let derivative = match self.kind {
-            JointKind::Prismatic => Vector3::new(0.0, 1.0, 0.0),
-            JointKind::Revolute => Vector3::new(0.0, -self.b * (self.b * v).sin(), self.b * (self.b * v).cos()),
-        };
-        self.coefficients.transpose() * derivative
-    }
-
-    /// The point at command 0 (the reference), the interpolation's leverage there and the
-    /// direction of motion.
-    fn at_reference(&self) -> (Vector3<f64>, f64, Vector3<f64>) {
-        let at0 = self.basis(0.0);
-        let leverage = (at0.transpose() * self.inverse * at0)[0];
-        (self.point(0.0), leverage, self.slope(0.0))
-    }
-}
-
-/// The circle's basis `(1, cos(b v), sin(b v))`.
-fn circle(b: f64, v: f64) -> Vector3<f64> {
-    Vector3::new(1.0, (b * v).cos(), (b * v).sin())
 }
 
 /// The weighted consensus of `sightings` (the point whose offsets across each one's motion,
@@ -618,12 +574,6 @@ fn pseudo_inverse(total: &Matrix3<f64>) -> Option<(Matrix3<f64>, usize)> {
     }
 }
 
-/// The variance \[mm²\] of a sighting's point at the noise `sigma2` of a coordinate: its
-/// interpolation's and the joints' positioned once for it.
-fn variance(s: &Sighting, sigma2: f64) -> f64 {
-    s.leverage * sigma2 + s.held_mm2
-}
-
 /// A sighting's weight in a consensus: its projection across its motion over its variance.
 fn weight(s: &Sighting, sigma2: f64) -> Matrix3<f64> {
     s.across / variance(s, sigma2)
@@ -635,8 +585,11 @@ fn exceeds(chi2: f64, dof: usize) -> bool {
 }
 
 /// The sweep among `sightings` of one `target` without which the others agree, when all of
-/// them do not (module docs); with two sightings either may be the moved one.
-fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -> Option<MovedSweep> {
+/// them do not (module docs); with two sightings either may be the moved one. Named for the
+/// held joints' backlash where that explains it, else for a held joint's recorded command
+/// ([`held::explained`]) where one explains it.
+fn odd_one_out(sightings: &[Sighting], context: &Context, target: (usize, [f64; 3])) -> Option<MovedSweep> {
+    let sigma2 = context.sigma2;
     let all: Vec<&Sighting> = sightings.iter().collect();
     let (_, chi2, dof) = consensus(&all, sigma2)?;
     if !exceeds(chi2, dof) {
@@ -661,12 +614,20 @@ fn odd_one_out(sightings: &[Sighting], sigma2: f64, target: (usize, [f64; 3])) -
         return None;
     }
     let backlash = backlash::explained(sightings, k, centre, offset, sigma2).unwrap_or_default();
+    let held = match backlash.is_empty() {
+        true => held::explained(sightings, k, centre, context.motions, (context.desc, sigma2)),
+        false => Vec::new(),
+    };
     // Several sweeps without each of which the others agree, or two sightings: either may be
     // the one out of place.
     let rivals: Vec<usize> = passing[1..].iter().map(|p| p.0).collect();
     let ambiguous = sightings.len() == 2;
     let moved = moved_sweep(sightings, (k, &rivals, ambiguous), offset, sigmas, target);
-    Some(MovedSweep { backlash, ..moved })
+    Some(MovedSweep {
+        backlash,
+        held,
+        ..moved
+    })
 }
 
 /// Sighting `k` of `sightings` said out of place, with `rivals` the other sightings that could
@@ -696,6 +657,7 @@ fn moved_sweep(
         others,
         target,
         backlash: Vec::new(),
+        held: Vec::new(),
     }
 }
 
@@ -707,12 +669,6 @@ fn without(sightings: &[Sighting], k: usize) -> Vec<&Sighting> {
         .filter(|(j, _)| *j != k)
         .map(|(_, s)| s)
         .collect()
-}
-
-/// The noise test's bound on a sighting's offset over its standard deviation: the chi-square
-/// quantile at [`SHARED_TARGET_FALSE_ALARM`] with its dimensions across its motion.
-fn noise_bound(s: &Sighting) -> f64 {
-    chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, s.across.trace().round()).sqrt()
 }
 
 /// The sweep out of the others' scatter, when no sighting's removal lets the others agree at

@@ -54,6 +54,7 @@ mod hostile_round14b;
 mod hostile_round14c;
 mod hostile_round14e;
 mod hostile_round14f;
+mod hostile_round15d;
 mod hostile_round15s;
 mod hostile_round15w;
 mod hostile_round3a;

@@ -11,62 +11,15 @@
 //! ([`explained`]). The data against themselves: every axis is a sweep's fitted circle, every
 //! band a sweep's first point.
 
-use super::{Curve, GROSS_MISS_FACTOR, Sighting, noise_bound, variance};
-use crate::kinematics::JointKind;
+use super::sighting::{SHARED_TARGET_FALSE_ALARM, Sighting, Turning, noise_bound, variance};
+use crate::measurement::column_slips::GROSS_MISS_FACTOR;
 use crate::numerics::stats::chi_square_quantile;
 use nalgebra::Vector3;
-
-/// A turning sweep's axis, and the backlash its first point shows.
-pub(super) struct Turning {
-    /// A point of the axis (the circle's centre) \[mm\].
-    centre: Vector3<f64>,
-    /// The axis's unit direction, positive turn right-handed about it.
-    axis: Vector3<f64>,
-    /// How far \[rad of the joint\] the first point, taken before the joint moved, runs ahead
-    /// along the sweep's motion of the path of the others (`None`: not beyond the noise or
-    /// not ahead; the first step not seen).
-    lead_rad: Option<f64>,
-    /// The miss \[mm\] along the motion that lead is (its significance is judged at the noise).
-    lead_mm: f64,
-}
-
-impl Turning {
-    /// The axis of the circle `curve` and, where `first` (the sweep's first step is its first
-    /// point) and `u`, `points` hold enough points, the first point's lead.
-    pub(super) fn of(curve: &Curve, (u, points): (&[f64], &[Vector3<f64>]), first: bool) -> Option<Turning> {
-        if curve.kind != JointKind::Revolute {
-            return None;
-        }
-        let [c, a, d] = [0, 1, 2].map(|i| curve.coefficients.row(i).transpose());
-        let axis = a.cross(&d).try_normalize(1e-12)?;
-        let (lead_rad, lead_mm) = match first && u.len() >= 6 {
-            true => lead(u, points).unwrap_or((None, 0.0)),
-            false => (None, 0.0),
-        };
-        Some(Turning {
-            centre: c,
-            axis,
-            lead_rad,
-            lead_mm,
-        })
-    }
-}
-
-/// The first point's miss along the sweep's motion of the circle through the others \[mm\],
-/// and that miss in the joint's turn where it runs ahead (`None` when behind).
-fn lead(u: &[f64], points: &[Vector3<f64>]) -> Option<(Option<f64>, f64)> {
-    let rest = Curve::fit(&u[1..], &points[1..], JointKind::Revolute)?;
-    let slope = rest.slope(u[0]) * (u[1] - u[0]).signum();
-    let ahead = (points[0] - rest.point(u[0])).dot(&slope.try_normalize(1e-12)?);
-    // The turn of the joint is the command's times the circle's turn per command.
-    let turn = ahead / slope.norm() * rest.b;
-    Some(((ahead > 0.0).then_some(turn), ahead))
-}
 
 /// The band each held joint's sweep shows (`(joint, band)`), its first point's lead beyond the
 /// noise test's bound at the noise `sigma2` of a coordinate.
 fn bands(sightings: &[Sighting], sigma2: f64) -> Vec<(usize, f64, &Turning)> {
-    let bound = chi_square_quantile(1.0 - super::SHARED_TARGET_FALSE_ALARM, 1.0).sqrt() * sigma2.sqrt();
+    let bound = chi_square_quantile(1.0 - SHARED_TARGET_FALSE_ALARM, 1.0).sqrt() * sigma2.sqrt();
     let mut out: Vec<(usize, f64, &Turning)> = Vec::new();
     for s in sightings {
         let Some(t) = &s.turning else { continue };
