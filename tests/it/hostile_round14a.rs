@@ -144,7 +144,13 @@ fn column_scales_on_simulated_free_poses_are_named_before_outliers() {
             } else {
                 "y_mm".to_owned()
             };
-            assert!(named(&s).contains(&want), "{name}: {want} x{factor} not named: {e}");
+            // A shoulder's scale the fit's harmonics take over its partial turn is said by the
+            // transmission test's note instead (UR5e `cmd_2`, as on main; h15a).
+            let by_transmission = e.contains(&format!("or the column `{want}` scaled by"));
+            assert!(
+                named(&s).contains(&want) || by_transmission,
+                "{name}: {want} x{factor} not named: {e}"
+            );
             assert!(e.contains(&format!("`{want}`")), "{name}: {e}");
             assert!(!e.contains("outlier pose"), "{name}: poses dropped for a scale: {e}");
         }
