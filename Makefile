@@ -39,7 +39,7 @@ test:
 ## test-real: the tests on public real data sets, which need ../shared/data/real/ beside the
 ## repository (or AXISCAL_SHARED_DIR naming the shared folder)
 test-real:
-	$(CARGO) test --test it -- --ignored real_boby_klimchik:: real_fanuc:: real_sscanss2:: real_rct:: hostile_calibration:: hostile_round6a:: hostile_round9a:: hostile_round9c:: hostile_round9e:: hostile_round10a:: hostile_round10c:: hostile_round10d:: hostile_round11a:: hostile_round11e:: hostile_round13a:: hostile_round14e::
+	$(CARGO) test --test it -- --ignored real_boby_klimchik:: real_fanuc:: real_sscanss2:: real_rct:: hostile_calibration:: hostile_round6a:: hostile_round9a:: hostile_round9c:: hostile_round9e:: hostile_round10a:: hostile_round10c:: hostile_round10d:: hostile_round11a:: hostile_round11e:: hostile_round13a:: hostile_round14a:: hostile_round14e:: hostile_round15a::
 
 ## test-robots: the four issue-15 test robots (P-R-P-P table, two-axis positioner, SCARA,
 ## six-axis arm with a repeated sweep and wandering held joints), 50 seeds of noise each:

@@ -491,7 +491,7 @@ fn calibrate_axes(
         (set, desc),
         &args.data,
         (&fit, source.as_ref()),
-        PROFILE_MAX_ROWS,
+        (PROFILE_MAX_ROWS, false),
         printer,
     );
     let (tool_accuracy, map) = predict_tool_accuracy(&cal, desc, set, args.held_tolerance)?;
@@ -550,11 +550,14 @@ type ProfileFit<'a> = &'a dyn Fn(&MeasurementSet) -> Option<Fit>;
 /// or of a slide's commands read alike (the sliding joints of `desc`), as a warning naming it
 /// when the data determine it beyond 1; else a note of how large a scale would pass where that
 /// is beyond the test's claim, and with `--verbose` a note of the largest one either way.
+/// With `screened` (free poses whose column-scale screen, clustered by configuration, named
+/// none: `free_pose/scales.rs`), a scale the profile finds is a note: the profile counts every
+/// point as independent, which repeated visits of one configuration are not.
 pub(super) fn warn_axis_scale(
     (set, desc): (&MeasurementSet, &RobotDescription),
     data: &Path,
     (fit, source): (ProfileFit<'_>, Option<&ColumnSource>),
-    max_rows: usize,
+    (max_rows, screened): (usize, bool),
     printer: Printer,
 ) {
     let slides: Vec<usize> = (0..desc.joints.len())
@@ -594,6 +597,24 @@ pub(super) fn warn_axis_scale(
         if let Some(reach) = found.reach_note() {
             eprintln!("note: {}: {reach}", data.display());
         }
+        return;
+    }
+    // The screen leaves a scale of every coordinate (a length scale) to the profile.
+    if screened
+        && !matches!(
+            found.scaled,
+            axiscal::measurement::unit_check::axis_scale::Scaled::Every
+        )
+    {
+        eprintln!(
+            "note: {}: the coordinate-scale profile reads {} {:.5} times (+- {:.5}, counting every point as \
+             independent), but the column-scale screen over the configurations (repeated visits share the model's \
+             error at each) names no command column or instrument axis: not named",
+            data.display(),
+            found.scaled.columns(),
+            found.factor,
+            found.sigma
+        );
         return;
     }
     let place = match set.line_of(0) {

@@ -376,31 +376,12 @@ fn warn_slips(
         })
         .collect();
     second_scales((set, desc), options, (&slopes, &doubts), args.data);
-    if slopes.len() == scaled.len() {
-        let undone = with_commands_scaled(set, &slopes);
-        let set = &undone;
-        // The poses the model cannot fit stay flagged with the column undone: no axis named.
-        let profile = FreePoseOptions {
-            holdout: false,
-            effects: false,
-            ..*options
-        };
-        let fit = |s: &MeasurementSet| {
-            let c = calibrate_free_poses(s, desc, &profile).ok()?;
-            let points = c.summary.points as f64;
-            Some(Fit {
-                sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
-                dof: (3 * c.summary.points).saturating_sub(c.summary.parameters.len()),
-                misfit_poses: c.summary.outliers.len(),
-            })
-        };
-        super::calibrate::warn_axis_scale(
-            (set, desc),
-            args.data,
-            (&fit, None),
-            PROFILE_MAX_FREE_POSE_ROWS,
-            printer,
-        );
+    for named in &summary.scales {
+        eprintln!("warning: {data}: {}", named_scale_words(named));
+    }
+    // A scale the screen named is the profile's finding already, with its alternatives.
+    if slopes.len() == scaled.len() && summary.scales.is_empty() {
+        profile_axis_scale((set, desc), options, &slopes, args.data, printer);
     }
     // The columns said above are named; the line bounds the others.
     if let Some(reach) =
@@ -437,6 +418,81 @@ fn warn_target_ids(set: &MeasurementSet, desc: &RobotDescription, summary: &Free
             moved.join(", ")
         );
     }
+}
+
+/// The coordinate-scale profile ([`super::calibrate::warn_axis_scale`]) of the free poses of
+/// `set` with the joints' command columns said (`slopes`) undone.
+fn profile_axis_scale(
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+    slopes: &[(usize, f64)],
+    data: &Path,
+    printer: Printer,
+) {
+    let undone = with_commands_scaled(set, slopes);
+    let set = &undone;
+    // The poses the model cannot fit stay flagged with the column undone: no axis named.
+    let profile = FreePoseOptions {
+        holdout: false,
+        effects: false,
+        ..*options
+    };
+    let fit = |s: &MeasurementSet| {
+        let c = calibrate_free_poses(s, desc, &profile).ok()?;
+        let points = c.summary.points as f64;
+        Some(Fit {
+            sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
+            dof: (3 * c.summary.points).saturating_sub(c.summary.parameters.len()),
+            misfit_poses: c.summary.outliers.len(),
+        })
+    };
+    super::calibrate::warn_axis_scale(
+        (set, desc),
+        data,
+        (&fit, None),
+        (PROFILE_MAX_FREE_POSE_ROWS, true),
+        printer,
+    );
+}
+
+/// A column scale the free-pose fit named before screening the poses
+/// ([`axiscal::calibration::free_pose::NamedScale`]), in words.
+fn named_scale_words(n: &axiscal::calibration::free_pose::NamedScale) -> String {
+    let reads = |c: &axiscal::calibration::free_pose::ColumnScale| {
+        let what = if c.column.starts_with("cmd_") { "holds" } else { "reads" };
+        format!(
+            "`{}` {what} {:.5} (+- {:.5}) times what the model fits",
+            c.column, c.factor, c.sigma
+        )
+    };
+    let alike = match n.alike.as_slice() {
+        [] => String::new(),
+        others => {
+            let words: Vec<String> = others.iter().map(reads).collect();
+            format!(
+                " (or, alike for these data, {}: their patterns over these poses are nearly the same, and the data cannot tell them apart)",
+                words.join("; or ")
+            )
+        }
+    };
+    format!(
+        "a column scale explains the poses' residuals: {}, {:.1} times its sigma over {} configurations{} (family-wise p {:.1e} over \
+         the command and coordinate columns){alike}; the geometric fit misses the points by {:.4} mm RMS per coordinate as read and \
+         by {:.4} mm with it undone. The outlier screen ran with it undone; calibration.json has absorbed it into the geometry: \
+         check the column{} (the export's units or ratio, the instrument's axis scale) and calibrate the corrected file again",
+        reads(&n.scale),
+        n.t,
+        n.configurations,
+        if n.scale.column.starts_with("cmd_") {
+            ", counting what a drive departs by (0.12 %: over a partial turn a gear's once-per-turn error reads as a scale)"
+        } else {
+            ""
+        },
+        n.p_value,
+        n.rms_mm[0],
+        n.rms_mm[1],
+        if n.alike.is_empty() { "" } else { "s named" },
+    )
 }
 
 /// A second command column's scale behind the joints said above (`slopes`, `(joint, slope)`, as

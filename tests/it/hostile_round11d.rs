@@ -124,7 +124,9 @@ fn a_coordinate_column_scaled_beside_a_joints_command_scale_in_free_poses_is_nam
             0,
             &[
                 "joint 2 (free poses) turns",
-                "`y_mm`: the instrument's y axis reads 1.003",
+                // The coordinate-scale profile's words or the free-pose column-scale screen's.
+                "`y_mm`",
+                "reads 1.003",
             ],
         ),
     );

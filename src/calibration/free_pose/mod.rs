@@ -28,6 +28,7 @@ pub mod model;
 pub mod poses;
 pub mod register;
 mod report;
+mod scales;
 pub mod slip;
 mod summary;
 #[cfg(test)]
@@ -38,6 +39,7 @@ pub use identify::{Identification, Unidentified};
 pub use model::{FreePoseModel, layout};
 pub use poses::{FreePose, FreePoses};
 pub use report::markdown;
+pub use scales::{ColumnScale, NamedScale};
 pub use summary::{
     EffectJoint, EffectTrial, FreePoseCalibration, FreePoseSummary, Holdout, OutlierPose, ParameterEstimate,
     SetupPlacement, TargetEstimate,
@@ -129,16 +131,42 @@ pub fn calibrate_free_poses(
         .residuals_and_jacobian(&controller, &poses, &train, &layout, &all)
         .map_err(|u| u.error(&poses))?;
     let mut identification = identify::identify(&design, &layout, &registered.model.phi);
-    // The outliers of the geometry pick the poses the harmonics are chosen on; the chosen
-    // model's own test on every pose then decides which poses the calibration drops.
-    let (fitted, kept, _) = converging(&mut identification, &design, &layout, |id| {
-        let geometry: Vec<usize> = id
-            .fitted
+    let geometry = |id: &Identification| -> Vec<usize> {
+        id.fitted
             .iter()
             .copied()
             .filter(|&c| model::harmonic_order(&layout[c]).is_none() && !identify::is_effect(&layout[c]))
-            .collect();
-        fit_without_outliers(&problem, &registered.model, &train, &geometry, options)
+            .collect()
+    };
+    // The column scales are tested before any pose is screened, and the screen runs on the
+    // poses with the scales named undone (`scales` module doc): each on the geometric fit and
+    // on the fit of every parameter the poses identify (the effects, the transmissions'
+    // harmonics and the description's gear forms), whose residual is the noise: on the
+    // geometry alone a drive's periodic error the model carries reads as a command scale.
+    let full_fit = |here: &Problem<'_>, from: &FreePoseModel| {
+        let mut id = identification.clone();
+        converging(&mut id, &design, &layout, |id| fit::fit(here, from, &train, &id.fitted))
+    };
+    let with_more = identification.fitted.len() > geometry(&identification).len();
+    let (found, undone) = scales::named_scales(
+        &problem,
+        &registered.model,
+        &train,
+        (
+            &geometry(&identification),
+            with_more.then_some(&full_fit as &scales::FullFit<'_>),
+        ),
+    );
+    let screening = Problem {
+        poses: undone.as_ref().unwrap_or(&poses),
+        description_targets_m: problem.description_targets_m.clone(),
+        ..problem
+    };
+    let screens = (&problem, &screening);
+    // The outliers of the geometry pick the poses the harmonics are chosen on; the chosen
+    // model's own test on every pose then decides which poses the calibration drops.
+    let (fitted, kept, _) = converging(&mut identification, &design, &layout, |id| {
+        screened(screens, &registered.model, &train, &geometry(id), options)
     })?;
     let Selected {
         fitted,
@@ -149,9 +177,10 @@ pub fn calibrate_free_poses(
     identification.drop_insignificant(&harmonics_left_out, &layout);
     identification.fitted.retain(|c| !effects_left_out.contains(c));
     let (fitted, kept, flags) = converging(&mut identification, &design, &layout, |id| {
-        fit_without_outliers(&problem, &fitted.model, &train, &id.fitted, options)
+        screened(screens, &fitted.model, &train, &id.fitted, options)
     })?;
     check_plausible(&fitted, &poses, &kept)?;
+    let scales = found.into_iter().map(|f| f.named).collect();
     summary::summarise(summary::Stages {
         problem: &problem,
         start: &start,
@@ -162,7 +191,25 @@ pub fn calibrate_free_poses(
         flags: &flags,
         test: &test,
         effects_tried,
+        scales,
     })
+}
+
+/// [`fit_without_outliers`] on the poses the outlier screen sees (`screening`: the file's, or
+/// with the column scales named undone), then, where those differ from the file's (`problem`),
+/// the fit of the file's poses it kept.
+fn screened(
+    (problem, screening): (&Problem<'_>, &Problem<'_>),
+    start: &FreePoseModel,
+    train: &[usize],
+    columns: &[usize],
+    options: &FreePoseOptions,
+) -> Result<(Fitted, Vec<usize>, Vec<fit::Flag>), FreePoseError> {
+    let (fitted, kept, flags) = fit_without_outliers(screening, start, train, columns, options)?;
+    if std::ptr::eq(screening.poses, problem.poses) {
+        return Ok((fitted, kept, flags));
+    }
+    Ok((fit::fit(problem, &fitted.model, &kept, columns)?, kept, flags))
 }
 
 /// `attempt` with the parameters of `identification`; while its fit does not converge, again

@@ -153,6 +153,11 @@ pub struct FreePoseSummary {
     /// The kept effects joint by joint (sag first, then backlash, joints ascending).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub effect_joints: Vec<EffectJoint>,
+    /// The column scales the geometric fit of every pose names before the outlier screen
+    /// (a command column or an instrument axis, with the others alike on these data); the
+    /// screen ran with them undone (absent when none is named).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub scales: Vec<super::NamedScale>,
 }
 
 /// One joint's part of the effects the model keeps.
@@ -206,6 +211,7 @@ pub(super) struct Stages<'a> {
     pub flags: &'a [Flag],
     pub test: &'a [usize],
     pub effects_tried: Vec<EffectTrial>,
+    pub scales: Vec<super::NamedScale>,
 }
 
 /// The calibration of the stages.
@@ -258,6 +264,7 @@ pub(super) fn summarise(s: Stages<'_>) -> Result<FreePoseCalibration, FreePoseEr
         axis_rows_as_poses: None,
         effects_tried: s.effects_tried.clone(),
         effect_joints,
+        scales: s.scales.clone(),
     };
     let model_covariance = model_covariance(&s, &covariance, &robot);
     Ok(FreePoseCalibration {
