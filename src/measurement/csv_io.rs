@@ -186,6 +186,32 @@ pub enum MeasurementFileError {
         /// Whether the line holds nothing else but white space.
         only: bool,
     },
+    /// A field the file's reading needs is not UTF-8 text.
+    #[error(
+        "{path}:{line}: column `{column}`: not UTF-8 text (a byte of another encoding, e.g. Latin-1): save the file \
+         as UTF-8"
+    )]
+    NotUtf8Field {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The column.
+        column: String,
+    },
+    /// A data row is one field holding another separator (`;`, tab), in a comma-separated file.
+    #[error(
+        "{path}:{line}: the row is a single field containing {separator}: it looks separated by {separator} where \
+         the header and the measurement CSV are comma-separated (type it again with commas)"
+    )]
+    RowSeparator {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: u64,
+        /// The separator found, in words (`';'`, `a tab`).
+        separator: String,
+    },
     /// A row ends before this column.
     #[error("{path}:{line}: column `{column}`: missing value (row shorter than the header)")]
     MissingField {
@@ -303,6 +329,16 @@ struct Columns {
     setup: Option<usize>,
 }
 
+impl Columns {
+    /// Whether the reading uses column `i`.
+    fn reads(&self, i: usize) -> bool {
+        [self.experiment, self.moved_joint, self.step, self.target].contains(&i)
+            || self.position.contains(&i)
+            || self.cmd.contains(&i)
+            || [self.payload_kg, self.temperature_c, self.setup].contains(&Some(i))
+    }
+}
+
 const POSITION_COLUMNS: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
 
 /// Reads a measurement file. `joint_count`: N from the robot description; when `None`, N is
@@ -371,16 +407,17 @@ pub fn read_measurements_from<R: io::Read>(
     let columns = find_columns(&header, path, header_line, joint_count)?;
     let mut rows = Vec::new();
     let mut lines = Vec::new();
-    let mut record = csv::StringRecord::new();
+    let (mut record, mut bytes) = (csv::StringRecord::new(), csv::ByteRecord::new());
     let mut targets = TargetIds::default();
     let mut setups = Labels::default();
     let mut row_setups = Vec::new();
-    while csv.read_record(&mut record).map_err(csv_error)? {
+    while csv.read_byte_record(&mut bytes).map_err(csv_error)? {
+        let line = line_at(bytes.position());
+        as_text(&bytes, (&header, &columns), (path, line), &mut record)?;
         // A blank line (csv-core also returns a trailing comment split over two reads so).
         if record.len() == 1 && record[0].trim().is_empty() {
             continue;
         }
-        let line = line_at(record.position());
         commented_row_before(&index, line, path)?;
         stray_line(&record, &header, path, (line, header_line))?;
         // Checked before any value: a decimal comma shifts every later cell into the wrong
@@ -439,12 +476,64 @@ pub fn read_measurements_from<R: io::Read>(
 
 /// A row that is no data row: a repeat of the header, or a field with an ASCII control byte
 /// (tab aside), each an error naming the line (`lines`: the row's and the header's).
+/// `bytes` as text in `record`: a field of a column the reading needs (`columns`) must be
+/// UTF-8; any other (an extra column, which is not read) is taken as empty where it is not.
+fn as_text(
+    bytes: &csv::ByteRecord,
+    (header, columns): (&csv::StringRecord, &Columns),
+    (path, line): (&Path, u64),
+    record: &mut csv::StringRecord,
+) -> Result<(), MeasurementFileError> {
+    record.clear();
+    for (i, field) in bytes.iter().enumerate() {
+        match std::str::from_utf8(field) {
+            Ok(text) => record.push_field(text),
+            Err(_) if columns.reads(i) => {
+                return Err(MeasurementFileError::NotUtf8Field {
+                    path: path.into(),
+                    line,
+                    column: header.get(i).unwrap_or_default().to_owned(),
+                });
+            }
+            Err(_) => record.push_field(""),
+        }
+    }
+    record.set_position(bytes.position().cloned());
+    Ok(())
+}
+
+/// A data row of one field holding `;` or a tab under a header of several columns: pasted from
+/// a file separated otherwise.
+fn one_field_row(
+    record: &csv::StringRecord,
+    header: &csv::StringRecord,
+    path: &Path,
+    line: u64,
+) -> Result<(), MeasurementFileError> {
+    if record.len() != 1 || header.len() < 2 {
+        return Ok(());
+    }
+    let separator = match record[0] {
+        ref f if f.contains(';') => "';'",
+        ref f if f.contains('\t') => "a tab",
+        _ => return Ok(()),
+    };
+    Err(MeasurementFileError::RowSeparator {
+        path: path.into(),
+        line,
+        separator: separator.to_owned(),
+    })
+}
+
+/// A data line that is not a row of the file: one field holding another separator
+/// ([`one_field_row`]), the header repeated, or a control byte.
 fn stray_line(
     record: &csv::StringRecord,
     header: &csv::StringRecord,
     path: &Path,
     (line, header_line): (u64, u64),
 ) -> Result<(), MeasurementFileError> {
+    one_field_row(record, header, path, line)?;
     if record.len() == header.len() && record.iter().zip(header).all(|(a, b)| a.trim() == b.trim()) {
         return Err(MeasurementFileError::RepeatedHeader {
             path: path.into(),

@@ -42,21 +42,17 @@ fn a_scaled_quill_command_is_named_as_its_column() {
     }
 }
 
-/// The real FANUC file: `cmd_4` scaled by 1 % and `cmd_6` by 1 and 2 % are named as those
-/// columns (main: `y_mm`, nothing, nothing), their factors within 4 of their sigmas (with a
-/// drive's departure, 0.12 %); the file as shipped names none.
+/// The real FANUC file: `cmd_4` scaled by 1 % and `cmd_6` by 2 % are named as those columns
+/// (main: `y_mm`, nothing), their factors within 4 of their sigmas (with a drive's departure,
+/// 0.12 %). The file as shipped names none (`hostile_round14a`); `cmd_6` x1.01 is named too
+/// (measured, not kept here: each debug calibration of this file takes minutes).
 #[test]
 #[ignore = "needs ../shared/data/real/fanuc-r2000ic-tracker (run by `make test-real`)"]
 fn the_real_fanuc_wrist_columns_are_named() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("fanuc.csv");
     let r = crate::common::import_real_fanuc(&data);
-    let (e, s) = calibrate(dir.path(), &data, &r);
-    assert!(
-        s.scales.is_empty() && !e.contains("a column scale"),
-        "a false alarm: {e}"
-    );
-    for (joint, factor) in [(4, 1.01), (6, 1.01), (6, 1.02)] {
+    for (joint, factor) in [(4, 1.01), (6, 1.02)] {
         let file = scaled(&data, "scaled.csv", CMD_1 + joint - 1, factor);
         let (e, s) = calibrate(dir.path(), &file, &r);
         let want = format!("cmd_{joint}");

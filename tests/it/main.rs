@@ -57,6 +57,7 @@ mod hostile_round14e;
 mod hostile_round14f;
 mod hostile_round15a;
 mod hostile_round15d;
+mod hostile_round15m;
 mod hostile_round15s;
 mod hostile_round15w;
 mod hostile_round3a;

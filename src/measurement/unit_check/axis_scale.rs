@@ -269,7 +269,9 @@ fn walked(
         let p = parabola(set, (scaled, there), near, fit)?;
         let shift = p.slope / (2.0 * p.curvature);
         let next = there * (1.0 - shift.clamp(-WALK_STEP, WALK_STEP));
-        if shift.abs() <= PROFILE_REACH_STEPS * PROFILE_STEP || round == WALK_ROUNDS || (next / at - 1.0).abs() > WALK_REACH
+        if shift.abs() <= PROFILE_REACH_STEPS * PROFILE_STEP
+            || round == WALK_ROUNDS
+            || (next / at - 1.0).abs() > WALK_REACH
         {
             return Some((there, near, p));
         }
