@@ -5,7 +5,7 @@
 //! two-sample Hotelling `T^2` of the block's mean against the others', with the within-group
 //! pooled covariance (Mardia, Kent & Bibby, *Multivariate Analysis*, 1979, sec. 3.6.1), finds
 //! the block; that block is then tested with the long-run (serially correlated) covariance of
-//! the within-group residuals ([`serial_test`]), its `T^2` read as Hotelling's, an
+//! the within-group residuals (`serial_test`), its `T^2` read as Hotelling's, an
 //! `F(3, n - 4)` multiple, without a shift. The caller multiplies the p-value by the blocks
 //! tried (Bonferroni over the candidate change points) and holds it against its false-alarm
 //! rate.

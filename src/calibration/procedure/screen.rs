@@ -43,7 +43,7 @@ use nalgebra::{Point3, Vector3};
 
 /// The outcome of the test: the points flagged and, when some were set aside, the set
 /// without their poses (every target of a flagged point's step); and the sweeps whose points
-/// shift part-way through ([`bump`]).
+/// shift part-way through ([`SweepBump`]).
 #[derive(Clone, Debug)]
 pub struct Screening {
     /// The points beyond the fence, in experiment and step order.
