@@ -49,6 +49,20 @@ pub struct AxisExperiment {
 }
 
 impl AxisExperiment {
+    /// How far its held joints stand from `reference`, worst step: the sum over constant held
+    /// joints of `|cmd_j - reference_j|` (file units).
+    pub fn held_distance(&self, reference: &[f64]) -> f64 {
+        self.commands
+            .iter()
+            .map(|c| {
+                (0..c.len())
+                    .filter(|&j| self.holds_constant(j))
+                    .map(|j| (c[j] - reference[j]).abs())
+                    .sum::<f64>()
+            })
+            .fold(0.0, f64::max)
+    }
+
     /// Whether joint `j` (0-based) is held at a constant command in this experiment.
     pub fn holds_constant(&self, j: usize) -> bool {
         j + 1 != self.joint && !(j == self.joint && self.holds_next_still)

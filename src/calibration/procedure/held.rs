@@ -47,20 +47,6 @@ pub(super) fn exactly_as_designed(experiments: &[AxisExperiment], reference: &[f
     })
 }
 
-/// How far from the design the held joints of `e` stand, worst step: the sum over constant
-/// held joints of `|cmd_j - reference_j|` (file units), to pick each joint's first sweep.
-pub(super) fn design_distance(e: &AxisExperiment, reference: &[f64]) -> f64 {
-    e.commands
-        .iter()
-        .map(|c| {
-            (0..c.len())
-                .filter(|&j| e.holds_constant(j))
-                .map(|j| (c[j] - reference[j]).abs())
-                .sum::<f64>()
-        })
-        .fold(0.0, f64::max)
-}
-
 /// The model and reference the design poses are computed with.
 pub(super) struct Corrector<'a> {
     /// The current calibrated robot.

@@ -6,7 +6,7 @@
 use super::assembly_cache::{AssemblyCache, CacheUse};
 use super::axis_fit::{AxisFitOutcome, JointData, add_held_joint_covariances, fit_joint};
 use super::experiments::actuator_commands;
-use super::held::{Corrector, design_distance, exactly_as_designed};
+use super::held::{Corrector, exactly_as_designed};
 use super::joints::{Assembly, Refit, swept_commands_at_target1};
 use super::propagation::{Derived, Propagation, add_axis_fit, moved_point};
 use super::recorded_coupling::RecordedCoupling;
@@ -243,7 +243,7 @@ impl<'a> Context<'a> {
             let best = sweeps
                 .iter()
                 .copied()
-                .min_by(|a, b| design_distance(a, reference).total_cmp(&design_distance(b, reference)))?;
+                .min_by(|a, b| a.held_distance(reference).total_cmp(&b.held_distance(reference)))?;
             sweeps = vec![best];
         }
         let points = sweeps.iter().map(|e| e.target0_m.clone()).collect();

@@ -123,7 +123,7 @@ pub(super) fn motions(
             experiments
                 .iter()
                 .filter(|e| e.joint == k + 1 && e.target0_m.len() >= 5)
-                .map(|e| (distance(e, reference), e))
+                .map(|e| (e.held_distance(reference), e))
                 .min_by(|a, b| a.0.total_cmp(&b.0))
                 .map(|n| n.1)
         })
@@ -148,19 +148,6 @@ pub(super) fn motions(
         }
     }
     motions
-}
-
-/// How far the held joints of `e` stand from `reference`, worst step (file units summed).
-fn distance(e: &AxisExperiment, reference: &[f64]) -> f64 {
-    e.commands
-        .iter()
-        .map(|c| {
-            (0..c.len())
-                .filter(|&j| e.holds_constant(j))
-                .map(|j| (c[j] - reference[j]).abs())
-                .sum::<f64>()
-        })
-        .fold(0.0, f64::max)
 }
 
 /// The held joints' deviations from `reference` at step `i` of `e` (internal units, 0 for the
