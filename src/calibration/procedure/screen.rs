@@ -203,8 +203,19 @@ fn sweep_bumps(
         .map(|p| bump::best_start(&kept_residuals(p), &refit_of(p)))
         .collect();
     let tried: usize = found.iter().flatten().map(|c| c.1).sum();
+    // Each sweep's residual variance as written and its degrees of freedom.
+    let variances: Vec<(f64, f64)> = peeled
+        .iter()
+        .map(|p| {
+            let dof = (3 * p.kept.len()) as f64 - sweeps[p.index].parameters() as f64;
+            (
+                kept_residuals(p).iter().map(|v| v.norm_squared()).sum::<f64>() / dof,
+                dof,
+            )
+        })
+        .collect();
     let mut bumps = Vec::new();
-    for (p, found) in peeled.iter().zip(&found) {
+    for ((p, found), i) in peeled.iter().zip(&found).zip(0..) {
         let Some((found, _)) = found else { continue };
         let s = &sweeps[p.index];
         let x = kept_residuals(p);
@@ -212,6 +223,13 @@ fn sweep_bumps(
         let Some(p_value) = bump::confirmed(&x, found, dof, tried) else {
             continue;
         };
+        let noisiest_other = (0..variances.len())
+            .filter(|&j| j != i)
+            .map(|j| variances[j])
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        if !bump::explains(found, dof, noisiest_other, tried) {
+            continue;
+        }
         let (start, shift, undone) = (found.start, found.shift, found.sum_sq);
         let written: f64 = x.iter().map(|v| v.norm_squared()).sum();
         let sigma_m = found.unit_sigma * (undone / (dof - 3.0)).sqrt();

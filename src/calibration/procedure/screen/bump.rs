@@ -15,9 +15,10 @@
 //! sum of squares beats the sweep's as written by an `F` likelihood-ratio test (its degrees of
 //! freedom those of the directions the residuals spread over, Satterthwaite) at
 //! the same family-wise rate (a second, differently computed test: the whole fit's sum of
-//! squares, not the residuals' means), its dof divided by the serial correlation's inflation.
+//! squares, not the residuals' means), and when the sweep so moved back fits within the noise
+//! of the file's noisiest other sweep ([`explains`]): a scrambled sweep is not a bumped one.
 
-use crate::numerics::stats::f_upper_tail;
+use crate::numerics::stats::{f_upper_quantile, f_upper_tail};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// The family-wise false-alarm rate of the test over a whole file's sweeps.
@@ -163,6 +164,23 @@ pub fn confirmed(x: &[Vector3<f64>], found: &Bumped, dof: f64, tried: usize) -> 
     let m = found.spread;
     let p = f_upper_tail((written - found.sum_sq) / 3.0 / (found.sum_sq / nu), m, m * nu / 3.0);
     (p * (tried as f64) < SWEEP_BUMP_FALSE_ALARM).then_some(p)
+}
+
+/// Whether the sweep with the block moved back (`found`, its fit's `dof`) fits within the
+/// noise of the file's noisiest other sweep (`noisiest_other`: its residual variance \[m^2\]
+/// and degrees of freedom): its variance ratio to that sweep's within the `F` quantile at
+/// [`SWEEP_BUMP_FALSE_ALARM`] over the `tried` change points. A sweep whose points are
+/// scrambled, in other units or of another robot has a step that fits better than none, but
+/// misses its points by far more than any sweep's noise even so: the step does not explain it.
+/// True without another sweep to compare with.
+pub fn explains(found: &Bumped, dof: f64, noisiest_other: Option<(f64, f64)>, tried: usize) -> bool {
+    let Some((variance, other_dof)) = noisiest_other else {
+        return true;
+    };
+    let nu = dof - 3.0;
+    let ratio = found.sum_sq / nu / variance;
+    !(variance > 0.0 && nu >= 1.0 && other_dof >= 1.0)
+        || ratio <= f_upper_quantile(SWEEP_BUMP_FALSE_ALARM / tried.max(1) as f64, nu, other_dof)
 }
 
 #[cfg(test)]
