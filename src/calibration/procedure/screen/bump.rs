@@ -27,6 +27,9 @@ pub const SWEEP_BUMP_FALSE_ALARM: f64 = 1e-4;
 /// Points at least on each side of a change point.
 pub const MIN_BUMP_POINTS: usize = 3;
 
+/// Change points tried at most in one sweep ([`best_start`]).
+pub const MAX_BUMP_STARTS: usize = 24;
+
 /// Gauss-Newton steps of the block's shift ([`fitted_shift`]).
 pub const BUMP_ROUNDS: usize = 2;
 
@@ -63,9 +66,18 @@ pub struct SweepBump {
 /// index into the points kept), shift \[m\] and sum of squares \[m^2\], with the starts tried.
 pub fn best_start(x: &[Vector3<f64>], refit: Refit<'_>) -> Option<(Bumped, usize)> {
     let n = x.len();
-    let starts = MIN_BUMP_POINTS..=n.checked_sub(MIN_BUMP_POINTS)?;
-    let tried = starts.clone().count();
+    let every: Vec<usize> = (MIN_BUMP_POINTS..=n.checked_sub(MIN_BUMP_POINTS)?).collect();
+    // A long sweep (a tracker streaming thousands of points) is searched at evenly spaced
+    // starts: each is several fits of the whole sweep.
+    let starts: Vec<usize> = match every.len() <= MAX_BUMP_STARTS {
+        true => every,
+        false => (0..MAX_BUMP_STARTS)
+            .map(|k| every[k * (every.len() - 1) / (MAX_BUMP_STARTS - 1)])
+            .collect(),
+    };
+    let tried = starts.len();
     let best = starts
+        .into_iter()
         .filter_map(|start| fitted_shift(x, start, refit))
         .min_by(|a, b| a.sum_sq.total_cmp(&b.sum_sq))?;
     Some((best, tried))
