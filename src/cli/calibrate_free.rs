@@ -7,16 +7,18 @@ use axiscal::calibration::free_pose::block::{BlockShift, block_shift};
 use axiscal::calibration::free_pose::slip::{
     ExplainingSlip, SLIP_FALSE_ALARM, explaining_slip, mirrored_targets, tool_turn_deg,
 };
-use axiscal::calibration::free_pose::{FreePoseError, FreePoseOptions, FreePoseSummary, calibrate_free_poses};
+use axiscal::calibration::free_pose::{
+    FreePoseError, FreePoseOptions, FreePoseSummary, NamedScale, calibrate_free_poses,
+};
 use axiscal::calibration::noise::NOISE_CONFIDENCE;
 use axiscal::calibration::procedure::{
     Calibration, ScaleDoubt, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
     named_joints,
 };
 use axiscal::calibration::record::CalibrationRecord;
+use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
 use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
-use axiscal::measurement::{Measurement, MeasurementSet};
 use axiscal::numerics::stats::chi_square_quantile;
 use axiscal::robot::RobotDescription;
 use std::path::Path;
@@ -353,16 +355,25 @@ fn warn_slips(
         // A shifted block misfits every test below (a column's scale, the coordinates' scale).
         return eprintln!("warning: {data}: {}", block_words(b));
     }
-    let scaled = free_pose_scale_slips((cal, summary), desc, set.rows());
+    for named in &summary.scales {
+        eprintln!("warning: {data}: {}", named_scale_words(named));
+    }
+    // A named column scale misfits the joints' transmissions of the calibration that absorbed
+    // it: their tests run on the poses calibrated again with it undone, so that a slope said
+    // below is one the scale does not explain.
+    let again = Undone::of(set, desc, options, &summary.scales);
+    let (set_u, (cal_u, summary_u)) = again.as_ref().map_or((set, (cal, summary)), Undone::parts);
+    let prefix = again.as_ref().map_or_else(String::new, |u| format!("{}: ", u.words));
+    let scaled = free_pose_scale_slips((cal_u, summary_u), desc, set_u.rows());
     for found in &scaled {
         match found.free_pose_note() {
-            Some(note) => eprintln!("note: {data}: {note}"),
-            None => eprintln!("warning: {data}: {found}"),
+            Some(note) => eprintln!("note: {data}: {prefix}{note}"),
+            None => eprintln!("warning: {data}: {prefix}{found}"),
         }
     }
-    let doubts = free_pose_scale_doubts((cal, summary), desc, set.rows());
+    let doubts = free_pose_scale_doubts((cal_u, summary_u), desc, set_u.rows());
     for doubt in &doubts {
-        eprintln!("note: {data}: {doubt}");
+        eprintln!("note: {data}: {prefix}{doubt}");
     }
     // A joint's slope off its description's (said above, as a warning or a note) is a misfit
     // the geometry carries; the coordinate-scale profile would read it as an axis' scale, so
@@ -375,19 +386,16 @@ fn warn_slips(
             _ => None,
         })
         .collect();
-    second_scales((set, desc), options, (&slopes, &doubts), args.data);
-    for named in &summary.scales {
-        eprintln!("warning: {data}: {}", named_scale_words(named));
-    }
+    second_scales((set_u, desc), options, (&slopes, &doubts), args.data);
     // A scale the screen named is the profile's finding already, with its alternatives.
     if slopes.len() == scaled.len() && summary.scales.is_empty() {
         profile_axis_scale((set, desc), options, &slopes, args.data, printer);
     }
     // The columns said above are named; the line bounds the others.
     if let Some(reach) =
-        free_pose_scale_reach((cal, summary), desc, set.rows()).and_then(|r| r.without(&named_joints(&scaled)))
+        free_pose_scale_reach((cal_u, summary_u), desc, set_u.rows()).and_then(|r| r.without(&named_joints(&scaled)))
     {
-        eprintln!("note: {data}: {reach}");
+        eprintln!("note: {data}: {prefix}{reach}");
     }
     warn_target_ids(set, desc, summary, &data.to_string());
 }
@@ -421,6 +429,76 @@ fn warn_target_ids(set: &MeasurementSet, desc: &RobotDescription, summary: &Free
 }
 
 /// The coordinate-scale profile ([`super::calibrate::warn_axis_scale`]) of the free poses of
+/// The poses calibrated again with the column scales the screen named
+/// ([`FreePoseSummary::scales`]) undone: each column divided by its factor (a coordinate column
+/// about the origin: the centre a scale is read about moves only the base, which the fit
+/// places).
+struct Undone {
+    set: MeasurementSet,
+    cal: Calibration,
+    summary: FreePoseSummary,
+    /// The columns undone, in words (`with `x_mm` divided by 1.02510 (the scale named above)`).
+    words: String,
+}
+
+impl Undone {
+    /// `None` without a named scale, or when the calibration of the undone poses fails (the
+    /// tests then run on the calibration as read).
+    fn of(
+        set: &MeasurementSet,
+        desc: &RobotDescription,
+        options: &FreePoseOptions,
+        named: &[NamedScale],
+    ) -> Option<Self> {
+        if named.is_empty() {
+            return None;
+        }
+        let undone = named
+            .iter()
+            .fold(set.clone(), |s, n| match coordinate_index(&n.scale.column) {
+                Some(c) => s.with_coordinate_scaled(c, 1.0 / n.scale.factor),
+                None => {
+                    command_index(&n.scale.column).map_or(s.clone(), |j| s.with_command_scaled(j, 1.0 / n.scale.factor))
+                }
+            });
+        let profile = FreePoseOptions {
+            holdout: false,
+            effects: false,
+            ..*options
+        };
+        let (cal, summary) = calibrate_free_poses(&undone, desc, &profile)
+            .ok()?
+            .into_calibration(desc);
+        let columns: Vec<String> = named
+            .iter()
+            .map(|n| format!("`{}` divided by {:.5}", n.scale.column, n.scale.factor))
+            .collect();
+        Some(Undone {
+            set: undone,
+            cal,
+            summary,
+            words: format!(
+                "with {} (the scale named above) the poses were calibrated again",
+                columns.join(" and ")
+            ),
+        })
+    }
+
+    fn parts(&self) -> (&MeasurementSet, (&Calibration, &FreePoseSummary)) {
+        (&self.set, (&self.cal, &self.summary))
+    }
+}
+
+/// The 0-based coordinate of `x_mm`, `y_mm`, `z_mm`.
+fn coordinate_index(column: &str) -> Option<usize> {
+    ["x_mm", "y_mm", "z_mm"].iter().position(|c| *c == column)
+}
+
+/// The 0-based joint of `cmd_K`.
+fn command_index(column: &str) -> Option<usize> {
+    column.strip_prefix("cmd_")?.parse::<usize>().ok()?.checked_sub(1)
+}
+
 /// `set` with the joints' command columns said (`slopes`) undone.
 fn profile_axis_scale(
     (set, desc): (&MeasurementSet, &RobotDescription),
@@ -564,20 +642,9 @@ fn second_scales(
 /// commands a joint that travels `factor` times the description's transmission per command
 /// would have been given. Its lines kept.
 fn with_commands_scaled(set: &MeasurementSet, factors: &[(usize, f64)]) -> MeasurementSet {
-    if factors.is_empty() {
-        return set.clone();
-    }
-    let rows: Vec<Measurement> = set
-        .rows()
+    factors
         .iter()
-        .map(|m| {
-            let mut m = m.clone();
-            factors.iter().for_each(|&(joint, f)| m.cmd[joint - 1] *= f);
-            m
-        })
-        .collect();
-    let lines: Vec<u64> = (0..rows.len()).filter_map(|i| set.line_of(i)).collect();
-    MeasurementSet::new(set.joint_count(), rows).map_or_else(|_| set.clone(), |s| s.with_lines(lines))
+        .fold(set.clone(), |s, &(joint, f)| s.with_command_scaled(joint - 1, f))
 }
 
 /// Independent values one configuration of the tool gives at most: its pose (a target's
