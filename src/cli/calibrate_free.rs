@@ -82,6 +82,15 @@ pub fn calibrate(
     let block = block_shift(set, desc, &options, &cal);
     let (cal, summary) = cal.into_calibration(desc);
     warn_few_degrees_of_freedom(args.data, &cal, &summary);
+    if let Some(words) = summary.predicts_no_better_than_nominal() {
+        eprintln!(
+            "warning: {}: the calibrated model predicts {words}: it explains nothing the description does not, \
+             and has fitted something no robot parameter is (a column's units, scale or sign; a block of poses \
+             moved; target ids swapped; an effect it lacks): calibration.json is wrong for the robot; check the \
+             columns the notes below name, or none named, each column against the controller at two poses",
+            args.data.display()
+        );
+    }
     warn_slips(args, (set, desc), &options, (&cal, &summary), block.as_ref(), printer);
     let mut record = CalibrationRecord::new(cal);
     record.reports.free_poses = Some(summary);

@@ -62,3 +62,31 @@ fn a_command_scale_behind_an_axis_scale_is_said_with_the_axis_undone() {
             .any(|l| l.contains("with `x_mm` divided by") && l.contains("`cmd_3`"));
     assert!(said, "cmd_3 not said: {e}");
 }
+
+/// The real FANUC file with `cmd_4` scaled by 2 % (hostile run 16's `colf-fanuc-cmd_4`): the
+/// column-scale screen names nothing and the fit took the scale into a 1.5-degree joint-4
+/// backlash, calibrated RMS 4.96 mm where the file as shipped gives 0.13 mm. The calibrated
+/// model predicts the poses it was not fitted to (cross-validated) worse than the nominal
+/// model fits them, which is now said; the file as shipped, whose cross-validated RMS is a
+/// third of the nominal's, says nothing of the kind.
+#[test]
+#[ignore = "needs ../shared/data/real/fanuc-r2000ic-tracker (run by `make test-real`)"]
+fn a_calibration_that_predicts_no_better_than_the_nominal_model_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("fanuc.csv");
+    let r = crate::common::import_real_fanuc(&data);
+    let words = "it explains nothing the description does not";
+    let (e, s) = calibrate(dir.path(), &data, &r);
+    assert!(!e.contains(words), "a false alarm: {e}");
+    let kept = s.effects_tried.iter().find(|t| t.chosen).expect("effects tried");
+    assert!(kept.cross_validated_rms_mm < s.nominal_rms_mm, "{kept:?}");
+    let file = scaled(&data, "cmd4.csv", CMD_1 + 3, 1.02);
+    let (e, s) = calibrate(dir.path(), &file, &r);
+    let kept = s.effects_tried.iter().find(|t| t.chosen).expect("effects tried");
+    assert!(
+        kept.cross_validated_rms_mm >= s.nominal_rms_mm,
+        "{kept:?} vs {}",
+        s.nominal_rms_mm
+    );
+    assert!(e.contains(words), "{e}");
+}

@@ -176,6 +176,40 @@ pub struct EffectJoint {
     pub sigma: Option<f64>,
 }
 
+impl FreePoseSummary {
+    /// The calibration predicts poses it was not fitted to no better than the nominal model
+    /// fits every pose (its base registered, 6 parameters): the chosen effects'
+    /// cross-validated RMS, or the held-out poses' calibrated RMS, at or above the nominal's.
+    /// A model of more parameters that predicts no better has fitted something no robot
+    /// parameter is (a column slip, a moved block, swapped ids, a missing effect): the
+    /// comparison of a model's out-of-sample error with a simpler model's is the
+    /// cross-validation criterion of Stone (*J. R. Statist. Soc. B* 36, 1974). Returns the
+    /// words of what predicts no better, and `None` otherwise.
+    pub fn predicts_no_better_than_nominal(&self) -> Option<String> {
+        let held = self
+            .holdout
+            .as_ref()
+            .filter(|h| h.calibrated_rms_mm >= h.nominal_rms_mm)
+            .map(|h| {
+                format!(
+                    "the {} held-out poses by {:.4} mm RMS where the nominal model misses them by {:.4} mm",
+                    h.heldout_poses, h.calibrated_rms_mm, h.nominal_rms_mm
+                )
+            });
+        let cross = self
+            .effects_tried
+            .iter()
+            .find(|t| t.chosen && t.cross_validated_rms_mm >= self.nominal_rms_mm)
+            .map(|t| {
+                format!(
+                    "each configuration's poses, fitted without them, by {:.4} mm RMS (cross-validated, effects: {}) where the nominal model fits every pose to {:.4} mm",
+                    t.cross_validated_rms_mm, t.effects, self.nominal_rms_mm
+                )
+            });
+        cross.or(held)
+    }
+}
+
 /// One set of effects tried in the free-pose model.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct EffectTrial {
