@@ -321,7 +321,7 @@ fn readable(record: &CalibrationRecord, args: &Args, (set, desc): (&MeasurementS
             "calibrating {}: the data do not determine `{name}` (1-sigma {:.3e}, beyond 1 in its unit): nothing written; {}",
             data.display(),
             variance.sqrt(),
-            match (few, weighting_options(args, cal)) {
+            match (few.or_else(|| absorbed_scales(record)), weighting_options(args, cal)) {
                 (Some(few), _) => few,
                 (None, Some(options)) => format!(
                     "every sigma grows with the noise the fits assume: {options}; without them the noise is estimated from the residuals and the repeatability is the description's"
@@ -339,6 +339,22 @@ fn readable(record: &CalibrationRecord, args: &Args, (set, desc): (&MeasurementS
             data.display()
         )
     })
+}
+
+/// The column scales the free-pose screen named, in words, as the cause of a parameter left
+/// free: the fit of the file as written absorbed them into the geometry.
+fn absorbed_scales(record: &CalibrationRecord) -> Option<String> {
+    let summary = record.reports.free_poses.as_ref().filter(|s| !s.scales.is_empty())?;
+    let columns: Vec<String> = summary
+        .scales
+        .iter()
+        .map(|n| format!("`{}` divided by {:.5}", n.scale.column, n.scale.factor))
+        .collect();
+    Some(format!(
+        "the fit of the file as written took the column scale named above into the geometry, which leaves it free: \
+         correct the export ({}) and calibrate again",
+        columns.join(", ")
+    ))
 }
 
 /// The options that set the noise the fits assume (`--noise-mm`, `--repeatability-rad`), as
