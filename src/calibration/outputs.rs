@@ -104,7 +104,8 @@ pub fn render(
     // The zero offsets are a convenience for controllers that take nothing else: when their
     // fit fails, the calibration stands and the file is left out with the reason.
     let mut left_out = Vec::new();
-    match zero_offsets_csv(cal, desc, poses) {
+    let fitted = free_pose::with_fitted_targets(desc, record.reports.free_poses.as_ref());
+    match zero_offsets_csv(cal, (desc, &fitted), poses) {
         Ok(text) => files.push((OUTPUT_FILES[6], text)),
         Err(e) => left_out.push(format!(
             "{} not written: fitting the controller zero offsets: {e}",
@@ -117,6 +118,23 @@ pub fn render(
         deviation,
         missing_speed_limits: joints_without_speed_limits(desc),
         implausible,
+    })
+}
+
+/// Whether the turn of `joint` (1-based) moves any tool target of `desc` at any of the first
+/// poses of `commands` (file units) on the nominal model: its column of the point Jacobian
+/// ([`crate::kinematics::point_jacobian`]) beyond rounding (`1e-8` of the largest column, as
+/// the zero-offset fit's test).
+fn turn_moves_targets(desc: &RobotDescription, commands: &[Vec<f64>], joint: usize) -> bool {
+    let nominal = desc.nominal_model();
+    let n = desc.dof();
+    commands.iter().take(10).any(|cmd| {
+        let q = crate::robot::commands_to_internal(desc, cmd);
+        desc.tool_targets_m().iter().any(|t| {
+            let j = crate::kinematics::point_jacobian(&nominal, &q, n - 1, &(nominal.last_link_from_tool * t));
+            let largest = (0..n).map(|k| j.column(k).norm()).fold(0.0, f64::max);
+            j.column(joint - 1).norm() > 1e-8 * largest
+        })
     })
 }
 
@@ -180,8 +198,17 @@ pub fn joint_map_csv(map: &JointMap, robot_name: &str) -> String {
 }
 
 /// `zero_offsets.csv` (`docs/formats.md#zero-offsets`): the zero offsets a controller that
-/// takes nothing else can use, fitted over `commands` (file units).
-pub fn zero_offsets_csv(cal: &Calibration, desc: &RobotDescription, commands: &[Vec<f64>]) -> Result<String, LsqError> {
+/// takes nothing else can use, fitted over `commands` (file units) on `desc`'s tool targets.
+/// A joint the fit cannot see is named with its reason: its turn moves no target of `desc`
+/// (they lie on its axis), or, `desc` giving none and `fitted` holding the targets a free-pose
+/// calibration fitted ([`free_pose::with_fitted_targets`]) off its axis, its offset is
+/// confounded with their positions (a turn of the last joint is a turn of the targets about
+/// its axis).
+pub fn zero_offsets_csv(
+    cal: &Calibration,
+    (desc, fitted): (&RobotDescription, &RobotDescription),
+    commands: &[Vec<f64>],
+) -> Result<String, LsqError> {
     let fit = controller_zero_offsets(cal, desc, commands)?;
     let mut s = String::new();
     let _ = writeln!(
@@ -193,12 +220,23 @@ pub fn zero_offsets_csv(cal: &Calibration, desc: &RobotDescription, commands: &[
         "# tool-target RMS, nominal vs calibrated, over {} poses: {:.3} mm without offsets, {:.3} mm with them (what offsets alone cannot take)",
         fit.poses, fit.rms_before_mm, fit.rms_after_mm
     );
-    if !fit.undetermined.is_empty() {
-        let joints: Vec<String> = fit.undetermined.iter().map(usize::to_string).collect();
+    let (confounded, on_axis): (Vec<usize>, Vec<usize>) = fit
+        .undetermined
+        .iter()
+        .partition(|&&j| desc.tool.targets_mm.is_empty() && turn_moves_targets(fitted, commands, j));
+    let list = |joints: &[usize]| joints.iter().map(usize::to_string).collect::<Vec<_>>().join(", ");
+    if !on_axis.is_empty() {
         let _ = writeln!(
             s,
             "# joint {}: its turn moves none of the tool targets (they lie on its axis): no offset of it is seen, 0 written",
-            joints.join(", ")
+            list(&on_axis)
+        );
+    }
+    if !confounded.is_empty() {
+        let _ = writeln!(
+            s,
+            "# joint {}: its offset is confounded with the tool targets' positions the free-pose calibration fitted (calibration.json free_poses.targets, off its axis): turning it moves them as turning the targets about its axis would, so the data cannot tell it; the description gives no targets to fit it on, 0 written",
+            list(&confounded)
         );
     }
     s.push_str("joint,offset,unit\n");

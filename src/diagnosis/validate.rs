@@ -271,14 +271,21 @@ impl Prediction {
         if let Some(r) = self.repeatability {
             parts.push(format!("repeatability {r:.4}"));
         }
-        match self.calibration {
-            Some(c) => parts.push(format!("calibration {c:.4}")),
-            None if self.repeatability.is_some() => {
-                parts.push("calibration not included: no model covariance".into());
+        let left_out = match self.calibration {
+            Some(c) => {
+                parts.push(format!("calibration {c:.4}"));
+                ""
             }
-            None => {}
-        }
-        format!("{} {unit}: {} dominates", parts.join(", "), self.dominant.words())
+            None if self.repeatability.is_some() => {
+                " (the calibration's own error not included: the calibration has no model covariance)"
+            }
+            None => "",
+        };
+        format!(
+            "{} {unit}{left_out}: {} dominates",
+            parts.join(", "),
+            self.dominant.words()
+        )
     }
 }
 

@@ -78,6 +78,21 @@ pub enum MeasurementFileError {
         /// The separator found, in words (`';'`, `a tab`).
         separator: String,
     },
+    /// A required column is missing and a header name spells it with a look-alike character
+    /// (a non-breaking space, a Unicode dash).
+    #[error(
+        "{path}:{line}: column `{column}`: missing; the header has \"{found}\", which reads `{column}` but holds a character that only looks like `_` or a space (a non-breaking space or a Unicode dash, copied from a web page or a word processor): retype the header name as `{column}`"
+    )]
+    LookAlikeColumn {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the header.
+        line: u64,
+        /// The missing column.
+        column: String,
+        /// The header name that looks like it (non-ASCII characters escaped).
+        found: String,
+    },
     /// A column appears twice in the header.
     #[error("{path}:{line}: column `{column}`: appears more than once in the header")]
     DuplicateColumn {

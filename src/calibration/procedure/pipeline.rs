@@ -184,12 +184,17 @@ fn calibrate_at<T>(
                 .iter()
                 .map(|e| corrector.corrected(e, 1))
                 .collect::<Result<_, _>>()?;
-            let next =
-                ctx.assemble(|k| ctx.all_sweeps(k, &t0), &t1)
-                    .map_err(|source| ProcedureError::HeldDiverged {
+            let next = ctx
+                .assemble(|k| ctx.all_sweeps(k, &t0), &t1)
+                .map_err(|source| match source {
+                    // A refused option (the paper's estimator on a joint swept twice) is
+                    // refused as such, not as a divergence of the correction.
+                    e @ ProcedureError::InvalidOption(_) => e,
+                    source => ProcedureError::HeldDiverged {
                         pass: passes + 1,
                         cause: Box::new(source),
-                    })?;
+                    },
+                })?;
             change = if next.points.len() == state.points.len() && passes > 1 {
                 next.points
                     .iter()

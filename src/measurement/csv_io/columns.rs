@@ -120,6 +120,51 @@ fn other_file(names: &[String], index: &HashMap<String, usize>) -> Option<&'stat
         .map(|(_, what)| *what)
 }
 
+/// The columns a measurement CSV must have (besides `cmd_1..cmd_N`).
+const REQUIRED: [&str; 7] = ["experiment", "moved_joint", "step", "target", "x_mm", "y_mm", "z_mm"];
+
+/// `name` with every character that looks like a space, an underscore or a dash (U+00A0, the
+/// Unicode dashes, a full-width low line) written as `_`, lower-cased: `cmd 1` (a non-breaking
+/// space copied from a web page or a word processor) reads `cmd_1`.
+fn look_alike_name(name: &str) -> String {
+    name.trim_start_matches('\u{feff}')
+        .trim()
+        .chars()
+        .map(|c| match c {
+            c if c.is_whitespace() => '_',
+            '-' | '\u{2010}'..='\u{2015}' | '\u{2212}' | '\u{2017}' | '\u{ff3f}' | '\u{ff0d}' => '_',
+            c => c.to_ascii_lowercase(),
+        })
+        .collect()
+}
+
+/// A required column (or `cmd_k` of the `joint_count` expected, or `cmd_1`) missing from
+/// `index` whose name a header name spells with a look-alike character ([`look_alike_name`]):
+/// an error naming both, rather than the column's absence (or "0 joint command columns").
+fn look_alike_columns(
+    header: &csv::StringRecord,
+    index: &HashMap<String, usize>,
+    joint_count: Option<usize>,
+    path: &Path,
+    line: u64,
+) -> Result<(), MeasurementFileError> {
+    let commands = (1..=joint_count.unwrap_or(1)).map(|k| format!("cmd_{k}"));
+    for column in REQUIRED.iter().map(|c| c.to_string()).chain(commands) {
+        if index.contains_key(&column) {
+            continue;
+        }
+        if let Some(found) = header.iter().find(|n| look_alike_name(n) == column) {
+            return Err(MeasurementFileError::LookAlikeColumn {
+                path: path.into(),
+                line,
+                column,
+                found: found.escape_debug().to_string(),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The columns of the file's `header` (at `line` of `path`), checked against `joint_count`.
 pub(super) fn find_columns(
     header: &csv::StringRecord,
@@ -144,6 +189,7 @@ pub(super) fn find_columns(
             what: what.into(),
         });
     }
+    look_alike_columns(header, &index, joint_count, path, line)?;
     let required = |column: &str| {
         index
             .get(column)
