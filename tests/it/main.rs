@@ -60,6 +60,7 @@ mod hostile_round15d;
 mod hostile_round15m;
 mod hostile_round15s;
 mod hostile_round15w;
+mod hostile_round16s;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;

@@ -28,6 +28,7 @@ mod coupling_start;
 mod error;
 mod experiments;
 mod frames;
+mod height;
 mod held;
 mod joint_map;
 mod joints;
