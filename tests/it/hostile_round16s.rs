@@ -42,16 +42,16 @@ fn scara(dir: &Path, seed: u64) -> PathBuf {
     )
 }
 
-/// `calibrate` of `file` into `out`, its stderr.
+/// `calibrate` of `file` into `out`, its stdout (the summary, with the base rule) and stderr.
 fn calibrate(dir: &Path, file: &Path, out: &str) -> String {
     let a = axiscal()
         .current_dir(dir)
         .args(["calibrate", "--robot", &robot("scara-rrpr")])
         .arg(file)
-        .args(["--out", out])
+        .args(["--out", out, "--force"])
         .assert()
         .success();
-    stderr(&a)
+    format!("{}{}", String::from_utf8_lossy(&a.get_output().stdout), stderr(&a))
 }
 
 /// `validate` of `file` against `cal/calibration.json`: the summary's validation part.
@@ -61,7 +61,7 @@ fn validate(dir: &Path, cal: &str, file: &Path, out: &str) -> serde_json::Value 
         .args(["validate", "--robot", &robot("scara-rrpr"), "--calibration"])
         .arg(dir.join(cal).join("calibration.json"))
         .arg(file)
-        .args(["--out", out])
+        .args(["--out", out, "--force"])
         .assert()
         .success();
     let text = std::fs::read_to_string(dir.join(out).join("summary.json")).unwrap();
