@@ -43,6 +43,7 @@ mod result;
 mod sanity;
 mod screen;
 mod second_targets;
+mod size;
 mod uncertainty;
 mod urdf;
 mod validate;

@@ -227,6 +227,16 @@ struct Seen<'s> {
     height: Option<(&'s HeightObservation, &'s [Point3<f64>])>,
 }
 
+impl<'s> Seen<'s> {
+    /// The rigid fit `tool` and the height observation of `height` at its measured points.
+    fn new(tool: Option<&'s Isometry3<f64>>, height: Option<&'s (HeightObservation, Unit<Vector3<f64>>)>) -> Self {
+        Seen {
+            tool,
+            height: height.map(|(obs, _)| (obs, obs.measured.as_slice())),
+        }
+    }
+}
+
 /// What every pass of the procedure shares.
 struct Context<'a> {
     desc: &'a RobotDescription,
@@ -395,7 +405,17 @@ impl<'a> Context<'a> {
         }
         let obs = height_observation(set, self.desc, reference_cmd, &state.base_rule)?;
         let direction = state.axes.get(obs.axis).copied().flatten()?.direction;
-        Some((obs, direction))
+        // A move beyond a description's error (`SIZE_TOLERANCE` of its longest length) is not
+        // taken: the description is off there, which the check of the file's own validation
+        // poses then says (the tool frame would have to move as far).
+        let (_, delta) = moved_along(
+            &state.robot,
+            (&obs, &obs.measured),
+            &direction,
+            (self.desc, self.controller, self.q_ref),
+        )?;
+        let bound = super::size::SIZE_TOLERANCE * super::size::longest_length_m(self.desc);
+        (delta.abs() <= bound).then_some((obs, direction))
     }
 
     /// The phi-model of the fitted `axes` (with its base rule) and the joint models and
@@ -534,10 +554,7 @@ impl<'a> Context<'a> {
         let world_from_tool = tool_points.as_deref().and_then(tool_fit);
         let tool = world_from_tool.as_ref();
         let height = self.height(set, state, reference_cmd);
-        let seen = Seen {
-            tool,
-            height: height.as_ref().map(|(obs, _)| (obs, obs.measured.as_slice())),
-        };
+        let seen = Seen::new(tool, height.as_ref());
         let (axes, target1) = (&state.axes, &state.target1);
         let cache = AssemblyCache::default();
         let recording = Refit {
@@ -614,24 +631,35 @@ impl<'a> Context<'a> {
                 Ok::<_, ProcedureError>(self.with_tool(moved, robot, world_from_link.as_ref(), moved_tool.as_ref()))
             })?;
         }
-        if let Some((obs, direction)) = &height {
-            // The seen targets' noise moves the model along the axis only (`delta` is linear
-            // in them): the unmoved model moved by the change of `delta`.
-            let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
-            let lists = vec![obs.measured.clone()];
-            let at: Vec<(usize, usize)> = (0..obs.measured.len()).map(|j| (0, j)).collect();
-            let context = (self.desc, self.controller, self.q_ref);
-            prop.add_independent(3 * obs.measured.len(), sigma, &base, |k, h| {
-                let moved = moved_point(&lists, &at, k, h);
-                let mut derived = base.clone();
-                derived.robot = derived
-                    .robot
-                    .take()
-                    .and_then(|r| moved_along(&r, (obs, &moved[0]), direction, context).map(|m| m.0));
-                Ok::<_, ProcedureError>(derived)
-            })?;
-        }
+        height
+            .as_ref()
+            .map_or(Ok(()), |(o, d)| self.add_height_noise(&mut prop, &base, o, d))?;
         Ok((base.sigma(&prop.covariance), base.model_covariance(&prop.covariance)))
+    }
+
+    /// Adds to `prop` the noise of the tool targets `obs` that fixed the position along
+    /// `direction` ([`super::height`]): they move the model along it only (`delta` is linear
+    /// in them), so each column is the unmoved model `base` moved by the change of `delta`.
+    fn add_height_noise(
+        &self,
+        prop: &mut Propagation,
+        base: &Derived,
+        obs: &HeightObservation,
+        direction: &Unit<Vector3<f64>>,
+    ) -> Result<(), ProcedureError> {
+        let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
+        let lists = vec![obs.measured.clone()];
+        let at: Vec<(usize, usize)> = (0..obs.measured.len()).map(|j| (0, j)).collect();
+        let context = (self.desc, self.controller, self.q_ref);
+        prop.add_independent(3 * obs.measured.len(), sigma, base, |k, h| {
+            let moved = moved_point(&lists, &at, k, h);
+            let mut derived = base.clone();
+            derived.robot = derived
+                .robot
+                .take()
+                .and_then(|r| moved_along(&r, (obs, &moved[0]), direction, context).map(|m| m.0));
+            Ok::<_, ProcedureError>(derived)
+        })
     }
 
     /// The covariance of a fitted coupling's parameters from the noise of its second targets
