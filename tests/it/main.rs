@@ -61,6 +61,7 @@ mod hostile_round15m;
 mod hostile_round15s;
 mod hostile_round15w;
 mod hostile_round16m;
+mod hostile_round16s;
 mod hostile_round16v;
 mod hostile_round3a;
 mod hostile_round3b;

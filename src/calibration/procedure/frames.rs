@@ -22,7 +22,9 @@
 //!    the perpendicular between them); the first later rotary axis not parallel fixes the
 //!    position along it (common-normal feet; for a sliding first axis, the first two rotary
 //!    axes fix the position). Whatever no observed axis fixes keeps the nominal placement;
-//!    the rule names those degrees of freedom.
+//!    the rule names those degrees of freedom. The position along parallel axes (a SCARA's
+//!    height) is then fixed by a tool target seen at the reference pose when the tool frame is
+//!    not measured ([`BaseRule::with_along_fixed`], `procedure/height.rs`).
 //!
 //! **Rows**, joint by joint: the `phi_i` frame at the reference displacement (eq. A2) and the
 //! row `(a, b, alpha, beta)` that puts `Z_{i+1}` on the observed axis `i+1` in DH fashion
@@ -72,6 +74,39 @@ pub struct BaseRule {
     pub unobserved: Vec<String>,
     /// The rule in words.
     pub text: String,
+}
+
+/// How [`BaseRule::unobserved`] names the position along an axis that no observed axis fixes
+/// (every rotary axis parallel to it), followed by the axis (1-based).
+const ALONG_AXIS: &str = "position along axis ";
+
+impl BaseRule {
+    /// The axis (0-based) along which the rule kept the description's position (every observed
+    /// rotary axis parallel to it: a SCARA's height), if any.
+    pub fn unobserved_along(&self) -> Option<usize> {
+        self.unobserved
+            .iter()
+            .find_map(|u| u.strip_prefix(ALONG_AXIS)?.parse::<usize>().ok())
+            .and_then(|a| a.checked_sub(1))
+    }
+
+    /// The rule with the position along axis `axis` (0-based) fixed by `how` instead of kept
+    /// from the description's placement.
+    pub fn with_along_fixed(mut self, axis: usize, how: &str) -> BaseRule {
+        let name = format!("{ALONG_AXIS}{}", axis + 1);
+        self.unobserved.retain(|u| *u != name);
+        let kept = "; kept from the description's placement: ";
+        if let Some(at) = self.text.find(kept) {
+            self.text.truncate(at);
+            self.text.push(')');
+        }
+        if !self.unobserved.is_empty() {
+            self.text.pop();
+            self.text.push_str(&format!("{kept}{})", self.unobserved.join(", ")));
+        }
+        self.text.push_str(&format!("; {name}: {how}"));
+        self
+    }
 }
 
 /// The closest points of two lines: `(on a, on b)`, or `None` when they are parallel.
@@ -248,7 +283,7 @@ impl BaseMotion<'_> {
                     self.translate(s);
                 }
             }
-            None => self.unobserved.push(format!("position along axis {}", a + 1)),
+            None => self.unobserved.push(format!("{ALONG_AXIS}{}", a + 1)),
         }
     }
 

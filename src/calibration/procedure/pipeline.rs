@@ -6,6 +6,7 @@
 use super::assembly_cache::{AssemblyCache, CacheUse};
 use super::axis_fit::{AxisFitOutcome, JointData, add_held_joint_covariances, fit_joint};
 use super::experiments::actuator_commands;
+use super::height::{HeightObservation, fixed_words, height_observation, moved_along};
 use super::held::{Corrector, exactly_as_designed};
 use super::joints::{Assembly, Refit, swept_commands_at_target1};
 use super::propagation::{Derived, Propagation, add_axis_fit, moved_point};
@@ -22,7 +23,7 @@ use crate::kinematics::{AxisLine, FixedFrames, JointKind, PhiModel, rigid_fit};
 use crate::measurement::MeasurementSet;
 use crate::robot::commands_to_internal;
 use crate::robot::{Controller, JointModel, Placement, RobotDescription, RobotModel, Transmission};
-use nalgebra::{DMatrix, Isometry3, Point3};
+use nalgebra::{DMatrix, Isometry3, Point3, Unit, Vector3};
 
 /// The lean result of [`calibrate_model`]: the fitted model, as [`calibrate`] would fit it
 /// bit for bit, without the report.
@@ -221,6 +222,26 @@ fn calibrate_at<T>(
 /// and the last link at the reference pose ([`Context::joints_from`]).
 type AssembledJoints = (PhiModel, BaseRule, Vec<JointModel>, Vec<CouplingReport>, Isometry3<f64>);
 
+/// What the poses at the reference commands measured of the tool: the rigid fit of the three
+/// tool targets (the tool frame, world) and, when no pose sees all three, the targets seen that
+/// fix the position along the axes the sweeps leave open ([`super::height`]) at their measured
+/// positions.
+#[derive(Clone, Copy)]
+struct Seen<'s> {
+    tool: Option<&'s Isometry3<f64>>,
+    height: Option<(&'s HeightObservation, &'s [Point3<f64>])>,
+}
+
+impl<'s> Seen<'s> {
+    /// The rigid fit `tool` and the height observation of `height` at its measured points.
+    fn new(tool: Option<&'s Isometry3<f64>>, height: Option<&'s (HeightObservation, Unit<Vector3<f64>>)>) -> Self {
+        Seen {
+            tool,
+            height: height.map(|(obs, _)| (obs, obs.measured.as_slice())),
+        }
+    }
+}
+
 /// What every pass of the procedure shares.
 struct Context<'a> {
     desc: &'a RobotDescription,
@@ -336,6 +357,15 @@ impl<'a> Context<'a> {
         let mut tool = tool_frame(set, self.desc, &robot, reference_cmd, self.controller);
         if let Some(t) = &tool {
             robot.tool_frame = Placement::from_isometry(&t.last_link_from_tool);
+        } else if let Some((moved, _)) = self.height(set, state, reference_cmd).and_then(|(obs, direction)| {
+            moved_along(
+                &robot,
+                (&obs, &obs.measured),
+                &direction,
+                (self.desc, self.controller, self.q_ref),
+            )
+        }) {
+            robot = moved;
         }
         let mut couplings = state.couplings.clone();
         let (derived_sigma, model_covariance) = match self.detail {
@@ -363,6 +393,34 @@ impl<'a> Context<'a> {
             model_covariance,
         };
         Ok((model, tool))
+    }
+
+    /// The tool targets seen at the reference pose that fix the position along the axis the
+    /// base rule of `state` leaves open, with that axis's observed direction
+    /// ([`super::height`]); `None` when the tool frame is measured (it takes that position) or
+    /// nothing fixes it.
+    fn height(
+        &self,
+        set: &MeasurementSet,
+        state: &Assembled,
+        reference_cmd: &[f64],
+    ) -> Option<(HeightObservation, Unit<Vector3<f64>>)> {
+        if tool_observation(set, self.desc, reference_cmd).is_some() {
+            return None;
+        }
+        let obs = height_observation(set, self.desc, reference_cmd, &state.base_rule)?;
+        let direction = state.axes.get(obs.axis).copied().flatten()?.direction;
+        // A move beyond a description's error (`SIZE_TOLERANCE` of its longest length) is not
+        // taken: the description is off there, which the check of the file's own validation
+        // poses then says (the tool frame would have to move as far).
+        let (_, delta) = moved_along(
+            &state.robot,
+            (&obs, &obs.measured),
+            &direction,
+            (self.desc, self.controller, self.q_ref),
+        )?;
+        let bound = super::size::SIZE_TOLERANCE * super::size::longest_length_m(self.desc);
+        (delta.abs() <= bound).then_some((obs, direction))
     }
 
     /// The phi-model of the fitted `axes` (with its base rule) and the joint models and
@@ -417,9 +475,10 @@ impl<'a> Context<'a> {
         &self,
         (axes, transmissions): (&[Option<AxisLine>], &[Option<Transmission>]),
         target1: &[Vec<Point3<f64>>],
-        tool: Option<&Isometry3<f64>>,
+        seen: Seen<'_>,
         refit: Refit,
     ) -> Result<(Derived, Option<Isometry3<f64>>), ProcedureError> {
+        let tool = seen.tool;
         let (geometry, _, joints, couplings, last_link) = self.joints_from(axes, transmissions, target1, refit)?;
         let mut values: Vec<f64> = couplings.iter().flat_map(|c| c.parameters.iter().copied()).collect();
         values.extend(joints.iter().map(|j| j.transducer_offset));
@@ -431,7 +490,23 @@ impl<'a> Context<'a> {
             robot: None,
         };
         let robot = matches!(self.detail, Detail::Report | Detail::ModelCovariance)
-            .then(|| calibrated_robot(self.desc, joints, &geometry));
+            .then(|| calibrated_robot(self.desc, joints, &geometry))
+            .map(|robot| match seen.height {
+                Some((obs, measured)) => axes
+                    .get(obs.axis)
+                    .copied()
+                    .flatten()
+                    .and_then(|axis| {
+                        moved_along(
+                            &robot,
+                            (obs, measured),
+                            &axis.direction,
+                            (self.desc, self.controller, self.q_ref),
+                        )
+                    })
+                    .map_or(robot, |(moved, _)| moved),
+                None => robot,
+            });
         Ok((
             self.with_tool(derived, robot, world_from_link.as_ref(), tool),
             world_from_link,
@@ -483,6 +558,8 @@ impl<'a> Context<'a> {
         let tool_fit = |points: &[Point3<f64>]| rigid_fit(&self.desc.tool_targets_m(), points).map(|(w, _)| w);
         let world_from_tool = tool_points.as_deref().and_then(tool_fit);
         let tool = world_from_tool.as_ref();
+        let height = self.height(set, state, reference_cmd);
+        let seen = Seen::new(tool, height.as_ref());
         let (axes, target1) = (&state.axes, &state.target1);
         let cache = AssemblyCache::default();
         let recording = Refit {
@@ -490,7 +567,7 @@ impl<'a> Context<'a> {
             cache: Some(CacheUse::Record(&cache)),
             ..Refit::default()
         };
-        let (base, world_from_link) = self.derived((axes, &transmissions), target1, tool, recording)?;
+        let (base, world_from_link) = self.derived((axes, &transmissions), target1, seen, recording)?;
         let record = cache.take_recorded();
         let mut responses: Vec<Option<CouplingResponse>> = vec![None; self.desc.dof()];
         record.iter().for_each(|c| responses[c.k] = Some(c.response.clone()));
@@ -505,7 +582,7 @@ impl<'a> Context<'a> {
             geometry: Some(&geometry),
             ..warm
         };
-        let warm_base = self.derived((axes, &transmissions), target1, tool, unmoved)?.0;
+        let warm_base = self.derived((axes, &transmissions), target1, seen, unmoved)?.0;
         let mut prop = Propagation::new(base.len());
         for (k, local) in state.fits.iter().enumerate() {
             let Some(local) = local.as_ref().and_then(|f| f.local.as_ref()) else {
@@ -527,7 +604,7 @@ impl<'a> Context<'a> {
                         ..warm
                     },
                 };
-                Ok::<_, ProcedureError>(self.derived((&a, &t), target1, tool, refit)?.0)
+                Ok::<_, ProcedureError>(self.derived((&a, &t), target1, seen, refit)?.0)
             })?;
         }
         for coupling in record {
@@ -542,7 +619,7 @@ impl<'a> Context<'a> {
                     geometry: Some(&geometry),
                     ..warm
                 };
-                Ok::<_, ProcedureError>(self.derived((axes, &transmissions), target1, tool, fixed)?.0)
+                Ok::<_, ProcedureError>(self.derived((axes, &transmissions), target1, seen, fixed)?.0)
             };
             let at_fit = set_to(usize::MAX, 0.0)?;
             prop.add(&c, &at_fit, set_to)?;
@@ -559,7 +636,35 @@ impl<'a> Context<'a> {
                 Ok::<_, ProcedureError>(self.with_tool(moved, robot, world_from_link.as_ref(), moved_tool.as_ref()))
             })?;
         }
+        height
+            .as_ref()
+            .map_or(Ok(()), |(o, d)| self.add_height_noise(&mut prop, &base, o, d))?;
         Ok((base.sigma(&prop.covariance), base.model_covariance(&prop.covariance)))
+    }
+
+    /// Adds to `prop` the noise of the tool targets `obs` that fixed the position along
+    /// `direction` ([`super::height`]): they move the model along it only (`delta` is linear
+    /// in them), so each column is the unmoved model `base` moved by the change of `delta`.
+    fn add_height_noise(
+        &self,
+        prop: &mut Propagation,
+        base: &Derived,
+        obs: &HeightObservation,
+        direction: &Unit<Vector3<f64>>,
+    ) -> Result<(), ProcedureError> {
+        let sigma = self.noise_mm * 1e-3 / 3f64.sqrt();
+        let lists = vec![obs.measured.clone()];
+        let at: Vec<(usize, usize)> = (0..obs.measured.len()).map(|j| (0, j)).collect();
+        let context = (self.desc, self.controller, self.q_ref);
+        prop.add_independent(3 * obs.measured.len(), sigma, base, |k, h| {
+            let moved = moved_point(&lists, &at, k, h);
+            let mut derived = base.clone();
+            derived.robot = derived
+                .robot
+                .take()
+                .and_then(|r| moved_along(&r, (obs, &moved[0]), direction, context).map(|m| m.0));
+            Ok::<_, ProcedureError>(derived)
+        })
     }
 
     /// The covariance of a fitted coupling's parameters from the noise of its second targets
@@ -628,6 +733,12 @@ impl<'a> Context<'a> {
             ..
         } = model;
         let zero_offset_sigma = zero_offset_sigmas(self.desc, derived_sigma.as_ref());
+        let height = if tool.is_none() {
+            self.height(set, &state, &reference_cmd)
+        } else {
+            None
+        };
+        let state_placement_mm = state.robot.placement.translation_mm;
         let Assembled {
             mut fits,
             axes,
@@ -644,6 +755,18 @@ impl<'a> Context<'a> {
             residuals.extend(f.residuals);
             axes_reports.push(f.report);
         }
+        let base_rule = match height {
+            Some((obs, direction)) => {
+                let moved: f64 = robot.placement.translation_mm[..]
+                    .iter()
+                    .zip(&state_placement_mm)
+                    .zip(direction.iter())
+                    .map(|((a, b), d)| (a - b) * 1e-3 * d)
+                    .sum();
+                base_rule.with_along_fixed(obs.axis, &fixed_words(&obs, moved))
+            }
+            None => base_rule,
+        };
         Ok(Calibration {
             robot,
             reference_cmd,

@@ -70,9 +70,8 @@ pub const SIGNIFICANT_LENGTH: f64 = 0.05;
 /// any factor at all).
 pub const MIN_SIGNIFICANT_LENGTH_M: f64 = 0.02;
 
-/// The size factor may differ from 1 by this much before it is said: a description of the
-/// robot measured is within a few per cent of it.
-pub const SIZE_TOLERANCE: f64 = 0.2;
+use super::size::row_lengths;
+pub use super::size::{SIZE_TOLERANCE, longest_length_m};
 
 /// A joint's residual RMS beyond this many times the median joint's is said: 9 times the
 /// variance, more than the swept joints' repeatability at different radii gives (1.7 times on
@@ -407,19 +406,6 @@ fn directions(cal: &Calibration, desc: &RobotDescription) -> Vec<Implausible> {
         }
         _ => vec![],
     }
-}
-
-/// The lengths `a`, `b`, `h` of every row of `rows` \[m\].
-fn row_lengths(rows: &[crate::kinematics::PhiRow]) -> Vec<f64> {
-    rows.iter().flat_map(|r| [r.a_m, r.b_m, r.h_m]).collect()
-}
-
-/// The longest length of the description's rows \[m\]: the robot's size, which
-/// `SIGNIFICANT_LENGTH` and [`SIZE_TOLERANCE`] are shares of.
-pub fn longest_length_m(desc: &RobotDescription) -> f64 {
-    row_lengths(&desc.nominal_model().rows)
-        .iter()
-        .fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
 /// The significant lengths' `(nominal, calibrated)` pairs.
