@@ -16,7 +16,7 @@
 //! differences as the tool frame's (`docs/method.md`, "Base frame").
 
 use super::{BaseRule, COMMAND_TOLERANCE};
-use crate::measurement::MeasurementSet;
+use crate::measurement::{Measurement, MeasurementSet};
 use crate::robot::{Controller, Placement, RobotDescription, RobotModel};
 use nalgebra::{Point3, Translation3, Unit, Vector3};
 
@@ -48,12 +48,7 @@ pub(super) fn height_observation(
     let count = desc.tool_targets_m().len();
     for e in set.experiments().iter().filter(|e| e.moved_joint == 0) {
         for (step, rows) in e.by_step() {
-            let at_ref = rows.iter().all(|r| {
-                r.cmd
-                    .iter()
-                    .zip(reference_cmd)
-                    .all(|(a, b)| (a - b).abs() <= COMMAND_TOLERANCE)
-            });
+            let at_ref = at_reference(&rows, reference_cmd);
             if !at_ref {
                 continue;
             }
@@ -117,6 +112,17 @@ pub(super) fn fixed_words(obs: &HeightObservation, delta_m: f64) -> String {
         obs.step,
         delta_m * 1e3
     )
+}
+
+/// Whether every row of one step stands at the reference commands (within
+/// [`COMMAND_TOLERANCE`]).
+pub(super) fn at_reference(rows: &[&Measurement], reference_cmd: &[f64]) -> bool {
+    rows.iter().all(|r| {
+        r.cmd
+            .iter()
+            .zip(reference_cmd)
+            .all(|(a, b)| (a - b).abs() <= COMMAND_TOLERANCE)
+    })
 }
 
 #[cfg(test)]

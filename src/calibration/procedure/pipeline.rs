@@ -6,15 +6,15 @@
 use super::assembly_cache::{AssemblyCache, CacheUse};
 use super::axis_fit::{AxisFitOutcome, JointData, add_held_joint_covariances, fit_joint};
 use super::experiments::actuator_commands;
-use super::height::{HeightObservation, fixed_words, height_observation, moved_along};
+use super::height::{HeightObservation, at_reference, fixed_words, height_observation, moved_along};
 use super::held::{Corrector, exactly_as_designed};
 use super::joints::{Assembly, Refit, swept_commands_at_target1};
 use super::propagation::{Derived, Propagation, add_axis_fit, moved_point};
 use super::recorded_coupling::RecordedCoupling;
 use super::{
-    AxisCovariance, AxisEstimator, AxisExperiment, BaseRule, COMMAND_TOLERANCE, Calibration, CalibrationOptions,
-    CouplingReport, DerivedSigma, Detail, NoiseReport, NominalGeometry, ProcedureError, RowSigma, ToolReport,
-    ZeroOffsetSigma, axis_experiments_with,
+    AxisCovariance, AxisEstimator, AxisExperiment, BaseRule, Calibration, CalibrationOptions, CouplingReport,
+    DerivedSigma, Detail, NoiseReport, NominalGeometry, ProcedureError, RowSigma, ToolReport, ZeroOffsetSigma,
+    axis_experiments_with,
 };
 use crate::calibration::coupling_fit::{CouplingResponse, passive_angle_gradients};
 use crate::calibration::model_parameters::ModelCovariance;
@@ -898,12 +898,7 @@ fn tool_observation(set: &MeasurementSet, desc: &RobotDescription, reference_cmd
     let experiments = set.experiments();
     for e in experiments.iter().filter(|e| e.moved_joint == 0) {
         for (step, rows) in e.by_step() {
-            let at_ref = rows.iter().all(|r| {
-                r.cmd
-                    .iter()
-                    .zip(reference_cmd)
-                    .all(|(a, b)| (a - b).abs() <= COMMAND_TOLERANCE)
-            });
+            let at_ref = at_reference(&rows, reference_cmd);
             let measured: Option<Vec<Point3<f64>>> = (0..count)
                 .map(|t| rows.iter().find(|r| r.target == t).map(|r| r.position_m()))
                 .collect();
