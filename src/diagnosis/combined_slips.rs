@@ -191,8 +191,16 @@ fn blocks(set: &MeasurementSet) -> Vec<Arc<Block>> {
     out
 }
 
+/// The most row indices the free poses' runs of one experiment hold together ([`pose_runs`]):
+/// every run of `P` poses of `r` rows each holds about `r P^3 / 6`, 20 million (160 MB) at
+/// about 340 poses of three targets.
+const MAX_RUN_ROWS: usize = 20_000_000;
+
 /// Every run of at least [`MIN_BLOCK_POSES`] consecutive poses (in file order) of the
 /// free-pose experiment `name` with rows `indices`, but the whole experiment when it is the file.
+/// Where every run would hold more than [`MAX_RUN_ROWS`] rows, the runs start and end on
+/// evenly spaced poses instead ([`run_boundaries`]): memory and time stay bounded, and a slip
+/// that starts between two of them is not undone by any block (the miss stays the model's).
 fn pose_runs(set: &MeasurementSet, name: &str, indices: &[usize]) -> Vec<Block> {
     let rows = set.rows();
     let mut poses: Vec<Vec<usize>> = Vec::new();
@@ -205,9 +213,10 @@ fn pose_runs(set: &MeasurementSet, name: &str, indices: &[usize]) -> Vec<Block> 
         poses[at].push(i);
     }
     let line = |i: usize| set.line_of(i).map_or(String::new(), |l| l.to_string());
+    let bounds = run_boundaries(poses.len(), indices.len());
     let mut out = Vec::new();
-    for a in 0..poses.len() {
-        for b in (a + MIN_BLOCK_POSES)..=poses.len() {
+    for (x, &a) in bounds.iter().enumerate() {
+        for &b in bounds[x + 1..].iter().filter(|&&b| b >= a + MIN_BLOCK_POSES) {
             if b - a == poses.len() && indices.len() == rows.len() {
                 continue;
             }
@@ -229,6 +238,30 @@ fn pose_runs(set: &MeasurementSet, name: &str, indices: &[usize]) -> Vec<Block> 
         }
     }
     out
+}
+
+/// The poses where [`pose_runs`] start and end runs, of `poses` poses holding `rows` rows:
+/// every one from 0 to `poses`, or, where the runs would hold more than [`MAX_RUN_ROWS`] rows,
+/// the `g + 1` evenly spaced ones (`g` segments) whose runs hold at most that many. The runs
+/// between `g + 1` boundaries of `rows / g` rows a segment hold
+/// `rows / g * sum_d d (g + 1 - d) = rows (g + 1) (g + 2) / 6` rows, and each of the
+/// `g (g + 1) / 2` runs at most one pose more where the segments are rounded to whole poses.
+fn run_boundaries(poses: usize, rows: usize) -> Vec<usize> {
+    let (r, per_pose) = (rows as f64, rows as f64 / poses.max(1) as f64);
+    let held = |g: usize| {
+        let g = g as f64;
+        r * (g + 1.0) * (g + 2.0) / 6.0 + per_pose * g * (g + 1.0) / 2.0
+    };
+    if r * (poses as f64 + 1.0) * (poses as f64 + 2.0) / 6.0 <= MAX_RUN_ROWS as f64 {
+        return (0..=poses).collect();
+    }
+    let mut g = ((6.0 * MAX_RUN_ROWS as f64 / rows.max(1) as f64).sqrt() as usize).min(poses);
+    while g > 1 && held(g) > MAX_RUN_ROWS as f64 {
+        g -= 1;
+    }
+    let mut bounds: Vec<usize> = (0..=g.max(1)).map(|j| j * poses / g.max(1)).collect();
+    bounds.dedup();
+    bounds
 }
 
 /// The residuals of the rows, their weights and every quantity's whole-file directions:
@@ -417,7 +450,9 @@ fn refitted(
             };
             jacobian.set_column(col, &((at(1.0)? - at(-1.0)?) / (2.0 * h)));
         }
-        let weighted = DMatrix::from_diagonal(&w) * &jacobian;
+        // The rows scaled by their weights: a dense diagonal of the 3N rows was 3N x 3N.
+        let mut weighted = jacobian.clone();
+        weighted.row_iter_mut().zip(w.iter()).for_each(|(mut row, w)| row *= *w);
         let normal = jacobian.transpose() * &weighted;
         let tolerance = RELATIVE_RANK_TOLERANCE * normal.norm();
         let step = normal.pseudo_inverse(tolerance).ok()? * (weighted.transpose() * -r);
@@ -761,5 +796,38 @@ fn unmeasured(measured: &[[f64; 3]]) -> String {
             shown(Vector3::from(*a))
         ),
         _ => String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The row indices the runs between `bounds` hold, poses of `per_pose` rows, counted one
+    /// run at a time (a second path to [`run_boundaries`]' closed form).
+    fn held(bounds: &[usize], per_pose: usize) -> usize {
+        let mut total = 0;
+        for (x, &a) in bounds.iter().enumerate() {
+            total += bounds[x + 1..].iter().map(|&b| (b - a) * per_pose).sum::<usize>();
+        }
+        total
+    }
+
+    /// Every pose is a boundary while the runs fit, and otherwise the evenly spaced ones hold
+    /// at most [`MAX_RUN_ROWS`] rows, from the first pose to the last, increasing.
+    #[test]
+    fn the_runs_hold_at_most_the_bound() {
+        for per_pose in [1, 3, 4] {
+            for poses in [3, 10, 60, 300, 340, 400, 2000, 333_334] {
+                let bounds = run_boundaries(poses, poses * per_pose);
+                assert_eq!((bounds[0], *bounds.last().unwrap()), (0, poses));
+                assert!(bounds.windows(2).all(|w| w[0] < w[1]));
+                let all = (0..=poses).collect::<Vec<_>>();
+                if bounds != all {
+                    assert!(held(&all, per_pose) > MAX_RUN_ROWS, "{poses} x {per_pose}");
+                }
+                assert!(held(&bounds, per_pose) <= MAX_RUN_ROWS, "{poses} x {per_pose}");
+            }
+        }
     }
 }

@@ -30,14 +30,14 @@ use super::DiagnosisError;
 use super::noise::{CleanCampaign, calibrated_joint_values};
 use super::predicted_error::{BlockFactors, PoseError, PredictionError};
 use crate::calibration::procedure::Calibration;
-use crate::kinematics::rigid_fit;
+use crate::kinematics::{PhiModel, rigid_fit};
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::numerics::stats::{SharedErrorChiSquare, chi_square_cdf, f_cdf};
 use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::{Controller, RobotDescription, commands_to_internal};
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 /// Options of [`validate`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -718,7 +718,6 @@ fn free_poses(
     (options, free_tool): (&ValidationOptions, bool),
 ) -> Result<FreePoses, DiagnosisError> {
     let tool_targets = desc.tool_targets_m();
-    let model = cal.robot.phi_model();
     let variance_coord_mm2 = options.noise_rms_3d_mm.powi(2) / 3.0;
     let variance_coord_m2 = variance_coord_mm2 * 1e-6;
     let free = if free_tool { PoseError::FREE_TOOL } else { 0 };
@@ -728,36 +727,33 @@ fn free_poses(
         FreeStatistic::new(error, free),
     );
     let (mut angles_mrad, mut noise_sq) = (Vec::new(), 0.0);
-    let approach = crate::physics::actuator_approach_by_pose(set.rows(), desc);
+    let context = PoseContext::new(set, (cal, desc, controller), residuals, error, free_tool);
     let order = free_rows_by_pose(set);
     for pose in free_pose_groups(set, &order) {
-        let m = pose.first;
-        let q = calibrated_joint_values(&cal.robot, controller, &model, desc, m, &approach)?;
-        let mut pose_error = error.at(&model, &commands_to_internal(desc, &m.cmd), &q)?;
-        if free_tool {
-            pose_error = pose_error.with_free_tool();
-        }
-        let targets: Vec<Point3<f64>> = pose.rows.iter().map(|&i| tool_targets[set.rows()[i].target]).collect();
-        let r = stacked_residuals(residuals, pose.rows);
-        let statistic = if kind_of(m) == PointKind::Tool {
+        let block = context.block(&pose, &tool_targets)?;
+        let statistic = if kind_of(pose.first) == PointKind::Tool {
             &mut tool
         } else {
             &mut validation
         };
-        let noise = DMatrix::identity(r.len(), r.len()) * variance_coord_mm2;
-        statistic.add(&r, noise, &pose_error.targets(&targets));
+        let noise = DMatrix::identity(block.r.len(), block.r.len()) * variance_coord_mm2;
+        statistic.add(&block.r, noise, &block.factors);
         let Some((measured_frame, normal)) = measured_tool_frame(&tool_targets, &pose.measured) else {
             continue;
         };
         let Some(normal_inv) = normal.try_inverse() else {
             continue;
         };
-        let predicted = model.world_from_tool(&q);
+        let predicted = context.model.world_from_tool(&block.q);
         let w = (predicted.rotation.inverse() * measured_frame.rotation).scaled_axis();
         angles_mrad.push(w.norm() * 1e3);
         noise_sq += variance_coord_m2 * normal_inv.trace();
         let noise = DMatrix::from_column_slice(3, 3, (normal_inv * variance_coord_m2).as_slice());
-        rotation.add(&DVector::from_column_slice(w.as_slice()), noise, &pose_error.rotation());
+        rotation.add(
+            &DVector::from_column_slice(w.as_slice()),
+            noise,
+            &block.error.rotation(),
+        );
     }
     let orientation = orientation_summary(&angles_mrad, noise_sq, &rotation, options);
     Ok(FreePoses {
@@ -765,6 +761,133 @@ fn free_poses(
         tool,
         orientation,
     })
+}
+
+/// One free pose's residuals and what they may miss by beside the noise.
+struct PoseBlock {
+    /// The pose's calibrated joint values.
+    q: Vec<f64>,
+    /// The error factors of its tool frame.
+    error: PoseError,
+    /// Its points' residuals (measured minus predicted), stacked \[mm\].
+    r: DVector<f64>,
+    /// Its points' covariance factors.
+    factors: BlockFactors,
+}
+
+/// What every free pose's [`PoseBlock`] is made with.
+struct PoseContext<'a> {
+    set: &'a MeasurementSet,
+    cal: &'a Calibration,
+    desc: &'a RobotDescription,
+    controller: &'a Controller,
+    model: PhiModel,
+    /// Each pose's actuator approach directions ([`crate::physics::actuator_approach_by_pose`]).
+    approach: HashMap<(String, usize), Vec<f64>>,
+    /// Every row's residual.
+    residuals: &'a [ValidationResidual],
+    error: &'a PredictionError<'a>,
+    /// The tool frame's error free ([`validate_free_tool`]).
+    free_tool: bool,
+}
+
+impl<'a> PoseContext<'a> {
+    fn new(
+        set: &'a MeasurementSet,
+        (cal, desc, controller): (&'a Calibration, &'a RobotDescription, &'a Controller),
+        residuals: &'a [ValidationResidual],
+        error: &'a PredictionError<'a>,
+        free_tool: bool,
+    ) -> Self {
+        PoseContext {
+            set,
+            cal,
+            desc,
+            controller,
+            model: cal.robot.phi_model(),
+            approach: crate::physics::actuator_approach_by_pose(set.rows(), desc),
+            residuals,
+            error,
+            free_tool,
+        }
+    }
+
+    /// `pose`'s block.
+    fn block(&self, pose: &FreePose<'_>, tool_targets: &[Point3<f64>]) -> Result<PoseBlock, DiagnosisError> {
+        let m = pose.first;
+        let q = calibrated_joint_values(
+            &self.cal.robot,
+            self.controller,
+            &self.model,
+            self.desc,
+            m,
+            &self.approach,
+        )?;
+        let mut error = self
+            .error
+            .at(&self.model, &commands_to_internal(self.desc, &m.cmd), &q)?;
+        if self.free_tool {
+            error = error.with_free_tool();
+        }
+        let targets: Vec<Point3<f64>> = pose
+            .rows
+            .iter()
+            .map(|&i| tool_targets[self.set.rows()[i].target])
+            .collect();
+        Ok(PoseBlock {
+            factors: error.targets(&targets),
+            q,
+            error,
+            r: stacked_residuals(self.residuals, pose.rows),
+        })
+    }
+}
+
+/// The free points' residuals of `v` (validated on `set` with `cal`) less the calibration's
+/// error that all of them estimate together: with `e_hat` the posterior mean of the shared
+/// error `e` given every free pose's residuals ([`SharedErrorChiSquare::estimate`], each pose
+/// weighted by its noise and repeatability), each pose's residuals `r_i - G_i e_hat` (`G_i`
+/// its factor, [`PredictionError`]); the rows that are not free keep theirs. A point the
+/// calibration's own error moves far (its error is one for every pose) comes back to the
+/// noise; a corrupted one stays off. Every residual unchanged without a model covariance.
+pub fn residuals_less_calibration_error(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    v: &Validation,
+) -> Result<Vec<Vector3<f64>>, DiagnosisError> {
+    let mut out: Vec<Vector3<f64>> = v
+        .residuals
+        .iter()
+        .map(|r| Vector3::from(r.measured_mm) - Vector3::from(r.predicted_mm))
+        .collect();
+    let controller = Controller::from_description(desc);
+    let error = PredictionError::new(cal, &controller, desc)?;
+    if !error.has_calibration() {
+        return Ok(out);
+    }
+    let context = PoseContext::new(set, (cal, desc, &controller), &v.residuals, &error, false);
+    let tool_targets = desc.tool_targets_m();
+    let block = |pose: &FreePose<'_>| context.block(pose, &tool_targets);
+    let order = free_rows_by_pose(set);
+    let variance_coord_mm2 = v.noise_rms_3d_mm.powi(2) / 3.0;
+    let mut shared = FreeStatistic::new(&error, 0);
+    for pose in free_pose_groups(set, &order) {
+        let b = block(&pose)?;
+        shared.add(
+            &b.r,
+            DMatrix::identity(b.r.len(), b.r.len()) * variance_coord_mm2,
+            &b.factors,
+        );
+    }
+    let estimate = shared.chi.estimate();
+    for pose in free_pose_groups(set, &order) {
+        let explained = &block(&pose)?.factors.calibration * &estimate;
+        for (k, &i) in pose.rows.iter().enumerate() {
+            out[i] -= explained.fixed_rows::<3>(3 * k);
+        }
+    }
+    Ok(out)
 }
 
 /// The orientation summary of the poses' angles, their summed noise variance `noise_sq`
