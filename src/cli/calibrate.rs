@@ -935,6 +935,10 @@ fn own_poses_slips(
     data: &Path,
 ) -> String {
     let named = axiscal::diagnosis::explained_validation_misses(poses, cal, desc, v);
+    if named.is_empty() && !axiscal::diagnosis::combined_slips_searched(poses) {
+        let words = checks::unsearched_words(poses, data);
+        return format!("{words} (`axiscal validate` on a part of the file runs it)");
+    }
     if named.is_empty() {
         return "no slip `axiscal validate` tests (a command column scaled or offset, one coordinate column or all three scaled, the \
                 coordinates shifted; over these poses or a run of them, one or two at once) makes them pass against this calibration: \

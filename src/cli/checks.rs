@@ -912,6 +912,18 @@ pub fn refuse_explained_misses(misses: &[axiscal::diagnosis::ExplainedMiss], dat
 /// One warning per sweep whose points from one step on sit off its earlier ones
 /// ([`axiscal::calibration::procedure::SweepBump`]): the instrument or the target moved during
 /// the sweep.
+/// That the search of slips in runs of rows and of two slips at once did not run on `set` (read
+/// from `data`): more rows than [`axiscal::diagnosis::MAX_SEARCH_ROWS`].
+pub fn unsearched_words(set: &MeasurementSet, data: &Path) -> String {
+    format!(
+        "the search for slips in runs of rows and for two slips at once runs on files of up to {} rows, and {} has {}: \
+         it was not run",
+        axiscal::diagnosis::MAX_SEARCH_ROWS,
+        data.display(),
+        set.rows().len()
+    )
+}
+
 pub fn print_sweep_bumps(bumps: &[axiscal::calibration::procedure::SweepBump], data: &Path) {
     for b in bumps {
         let place = b

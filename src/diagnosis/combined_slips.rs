@@ -53,6 +53,16 @@ pub const MAX_SLIPS: usize = 2;
 /// (`validate`'s outlier poses).
 pub const MIN_BLOCK_POSES: usize = 3;
 
+/// The most rows the search runs on ([`combined_slips_searched`]): each candidate is fitted on the model with
+/// every row predicted again, some hundreds of times over a search; at a million rows that
+/// took more than 2 GB and many minutes.
+pub const MAX_SEARCH_ROWS: usize = 100_000;
+
+/// Whether [`explained_combined_slips`] searches `set`: at most [`MAX_SEARCH_ROWS`] rows.
+pub fn combined_slips_searched(set: &MeasurementSet) -> bool {
+    set.rows().len() <= MAX_SEARCH_ROWS
+}
+
 /// The (rewrite, block) pairs with the largest screening drop that are fitted and scored on
 /// the validation's statistic: the screening weighs rows as independent, which the
 /// calibration's shared error is not, so the best few are scored on the real statistic.
@@ -536,15 +546,15 @@ fn next_slips(
 
 /// The slips (at most 2, `MAX_SLIPS`) whose undoing makes `set` pass every test of the
 /// validation `v` of `set` against `cal` (module docs), as one miss naming their columns and
-/// rows; `None` when no position test exceeds or no such slips are found. `desc` is the
-/// description `v` was made with.
+/// rows; `None` when no position test exceeds, no such slips are found or `set` has more rows
+/// than the search runs on ([`combined_slips_searched`]). `desc` is the description `v` was made with.
 pub fn explained_combined_slips(
     set: &MeasurementSet,
     cal: &Calibration,
     desc: &RobotDescription,
     v: &Validation,
 ) -> Option<ExplainedMiss> {
-    if !any_exceeds(v, true) {
+    if !any_exceeds(v, true) || !combined_slips_searched(set) {
         return None;
     }
     let options = ValidationOptions::of_validation(v);

@@ -53,7 +53,9 @@ pub use crate::calibration::refit_model::{
 };
 pub use crate::plotting::PlotError;
 pub use axes::{AxesDiagnosis, FlaggedAxis, axes_markdown, diagnose_axes, diagnose_axes_with};
-pub use combined_slips::{explained_combined_slips, explained_validation_misses};
+pub use combined_slips::{
+    MAX_SEARCH_ROWS, combined_slips_searched, explained_combined_slips, explained_validation_misses,
+};
 pub use file_scale::explained_file_scale;
 pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_validation, replica};
 pub use outliers::{PoseResiduals, pose_point_outliers, validation_outliers, without_outliers};
