@@ -909,6 +909,53 @@ pub fn refuse_explained_misses(misses: &[axiscal::diagnosis::ExplainedMiss], dat
     )
 }
 
+/// The warning of a sweep whose first or last points sit off its others (`end`): the points
+/// named by their lines, since two moved points at an end cannot be told from two wrong
+/// readings; the offset is the end points' from the others.
+fn print_sweep_end(
+    b: &axiscal::calibration::procedure::SweepBump,
+    end: &axiscal::calibration::procedure::SweepEnd,
+    data: &Path,
+) {
+    let file = data.display();
+    let place = end.points[0]
+        .1
+        .map_or_else(|| file.to_string(), |l| format!("{file}:{l}"));
+    let lines: Vec<String> = end.points.iter().filter_map(|p| p.1.map(|l| l.to_string())).collect();
+    let steps: Vec<String> = end.points.iter().map(|p| p.0.to_string()).collect();
+    let rows = match lines.len() == end.points.len() {
+        true => format!("lines {}, steps {}", lines.join(", "), steps.join(", ")),
+        false => format!("steps {}", steps.join(", ")),
+    };
+    let sign = if end.first { -1.0 } else { 1.0 };
+    let [x, y, z] = b.shift_mm.map(|v| sign * v);
+    let [sx, sy, sz] = b.shift_sigma_mm;
+    let (which, others, moved) = match end.first {
+        true => (
+            "first",
+            "later",
+            "after them (every later row of the file is then in its new place too)",
+        ),
+        false => ("last", "earlier", "before them"),
+    };
+    eprintln!(
+        "warning: {place}: experiment {}'s {which} {} of {} points ({rows}) sit ({x:.2}, {y:.2}, {z:.2}) \
+         (+- {sx:.2}, {sy:.2}, {sz:.2}) mm off its {others} points (p = {:.1e} over the {} sweep ends tried in the \
+         file; the sweep's fit RMS {:.3} mm as written, {:.3} mm with them moved back): the instrument or the target \
+         moved {moved}, or these rows are wrong readings (two points at a sweep's end look alike either way). The fits \
+         take them into joint {}'s axis and transmission, so a calibration from this file is wrong for that joint: \
+         check these rows, measure them again or drop them",
+        b.experiment,
+        end.points.len(),
+        b.tested,
+        b.p_value,
+        b.blocks_tried,
+        b.rms_mm.0,
+        b.rms_mm.1,
+        b.joint,
+    );
+}
+
 /// One warning per sweep whose points from one step on sit off its earlier ones
 /// ([`axiscal::calibration::procedure::SweepBump`]): the instrument or the target moved during
 /// the sweep.
@@ -926,6 +973,10 @@ pub fn unsearched_words(set: &MeasurementSet, data: &Path) -> String {
 
 pub fn print_sweep_bumps(bumps: &[axiscal::calibration::procedure::SweepBump], data: &Path) {
     for b in bumps {
+        if let Some(end) = &b.end {
+            print_sweep_end(b, end, data);
+            continue;
+        }
         let place = b
             .line
             .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));

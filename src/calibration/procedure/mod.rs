@@ -72,7 +72,7 @@ pub use sanity::{
 };
 pub use screen::{
     OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, SWEEP_BUMP_FALSE_ALARM, SWEEP_POINTS_FALSE_ALARM, Screening, SweepBump,
-    WorstSecondTarget, screen_sweeps,
+    SweepEnd, WorstSecondTarget, screen_sweeps,
 };
 pub use second_targets::SecondTargetData;
 pub use uncertainty::{AxisCovariance, SIGNIFICANT_SIGMAS, row_sigmas};

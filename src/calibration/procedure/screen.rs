@@ -23,7 +23,7 @@ mod bump;
 mod rounds;
 mod second_target;
 
-pub use bump::{SWEEP_BUMP_FALSE_ALARM, SweepBump};
+pub use bump::{SWEEP_BUMP_FALSE_ALARM, SweepBump, SweepEnd};
 pub use rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX};
 use rounds::{median, too_many_which, without_poses};
 pub use second_target::WorstSecondTarget;
@@ -185,14 +185,15 @@ struct Peeled {
 }
 
 /// The sweeps of `peeled` whose kept points shift part-way through ([`bump`]: a change point
-/// of their residuals, confirmed by fitting the sweep again with the block moved back).
+/// of their residuals, confirmed by fitting the sweep again with the block moved back); a
+/// sweep with none, whose first or last [`bump::END_BUMP_POINTS`] sit off its others
+/// ([`bump::best_end`]), tested the same way over the ends tried in the file's sweeps.
 fn sweep_bumps(
     sweeps: &[Sweep<'_>],
     peeled: &[Peeled],
     set: &MeasurementSet,
     (sigma, max_iterations): (f64, usize),
 ) -> Vec<SweepBump> {
-    let kept_residuals = |p: &Peeled| -> Vec<Vector3<f64>> { p.kept.iter().map(|&k| p.last[k]).collect() };
     let refit_of = |p: &Peeled| {
         let s = &sweeps[p.index];
         let kept = p.kept.clone();
@@ -200,56 +201,103 @@ fn sweep_bumps(
     };
     let found: Vec<_> = peeled
         .iter()
-        .map(|p| bump::best_start(&kept_residuals(p), &refit_of(p)))
+        .map(|p| bump::best_start(&p.kept_residuals(), &refit_of(p)))
+        .collect();
+    let ends: Vec<_> = peeled
+        .iter()
+        .map(|p| bump::best_end(&p.kept_residuals(), &refit_of(p)))
         .collect();
     let tried: usize = found.iter().flatten().map(|c| c.1).sum();
+    let ends_tried: usize = ends.iter().flatten().map(|c| c.1).sum();
     // Each sweep's residual variance as written and its degrees of freedom.
     let variances: Vec<(f64, f64)> = peeled
         .iter()
         .map(|p| {
-            let dof = (3 * p.kept.len()) as f64 - sweeps[p.index].parameters() as f64;
+            let dof = p.dof(&sweeps[p.index]);
             (
-                kept_residuals(p).iter().map(|v| v.norm_squared()).sum::<f64>() / dof,
+                p.kept_residuals().iter().map(|v| v.norm_squared()).sum::<f64>() / dof,
                 dof,
             )
         })
         .collect();
     let mut bumps = Vec::new();
-    for ((p, found), i) in peeled.iter().zip(&found).zip(0..) {
-        let Some((found, _)) = found else { continue };
-        let s = &sweeps[p.index];
-        let x = kept_residuals(p);
-        let dof = (3 * p.kept.len()) as f64 - s.parameters() as f64;
-        let Some(p_value) = bump::confirmed(&x, found, dof, tried) else {
-            continue;
-        };
+    for (p, i) in peeled.iter().zip(0..) {
+        let (x, dof) = (p.kept_residuals(), p.dof(&sweeps[p.index]));
         let noisiest_other = (0..variances.len())
             .filter(|&j| j != i)
             .map(|j| variances[j])
             .max_by(|a, b| a.0.total_cmp(&b.0));
-        if !bump::explains(found, dof, noisiest_other, tried) {
-            continue;
-        }
+        // A change point that passes both tests, or else an end that does (over the ends).
+        let passes = |candidate: &Option<(bump::Bumped, usize)>, tried: usize| {
+            let (found, _) = candidate.as_ref()?;
+            let p_value = bump::confirmed(&x, found, dof, tried)?;
+            bump::explains(found, dof, noisiest_other, tried).then_some((*found, p_value, tried))
+        };
+        let (chosen, end) = match passes(&found[i], tried) {
+            Some(c) => (c, false),
+            None => match passes(&ends[i], ends_tried) {
+                Some(c) => (c, true),
+                None => continue,
+            },
+        };
+        bumps.push(p.bump(&sweeps[p.index], chosen, end, set));
+    }
+    bumps
+}
+
+impl Peeled {
+    /// The residuals of the points kept.
+    fn kept_residuals(&self) -> Vec<Vector3<f64>> {
+        self.kept.iter().map(|&k| self.last[k]).collect()
+    }
+
+    /// The degrees of freedom of the fit of the points kept of sweep `s`.
+    fn dof(&self, s: &Sweep<'_>) -> f64 {
+        (3 * self.kept.len()) as f64 - s.parameters() as f64
+    }
+
+    /// The bump of sweep `s` (these its points kept) at the change point `found`, with its
+    /// p-value and the blocks tried; with `end`, its block an end's ([`bump::SweepEnd`]).
+    fn bump(
+        &self,
+        s: &Sweep<'_>,
+        (found, p_value, tried): (bump::Bumped, f64, usize),
+        end: bool,
+        set: &MeasurementSet,
+    ) -> SweepBump {
+        let (x, dof) = (self.kept_residuals(), self.dof(s));
         let (start, shift, undone) = (found.start, found.shift, found.sum_sq);
         let written: f64 = x.iter().map(|v| v.norm_squared()).sum();
         let sigma_m = found.unit_sigma * (undone / (dof - 3.0)).sqrt();
-        let (step, line) = s.step_line(p.kept[start], set);
-        let rms = |sum_sq: f64| (sum_sq / (3 * p.kept.len()) as f64).sqrt() * 1e3;
-        bumps.push(SweepBump {
+        let (step, line) = s.step_line(self.kept[start], set);
+        let rms = |sum_sq: f64| (sum_sq / (3 * self.kept.len()) as f64).sqrt() * 1e3;
+        let end = end.then(|| {
+            let first = start < self.kept.len() - start;
+            let which = if first {
+                &self.kept[..start]
+            } else {
+                &self.kept[start..]
+            };
+            bump::SweepEnd {
+                first,
+                points: which.iter().map(|&k| s.step_line(k, set)).collect(),
+            }
+        });
+        SweepBump {
             experiment: s.experiment.name.clone(),
             joint: s.experiment.joint,
             step,
             line,
-            points: p.kept.len() - start,
-            tested: p.kept.len(),
+            points: self.kept.len() - start,
+            tested: self.kept.len(),
             shift_mm: [shift.x * 1e3, shift.y * 1e3, shift.z * 1e3],
             shift_sigma_mm: std::array::from_fn(|c| sigma_m[c] * 1e3),
             p_value,
             blocks_tried: tried,
             rms_mm: (rms(written), rms(undone)),
-        });
+            end,
+        }
     }
-    bumps
 }
 
 /// Every point of `s`.

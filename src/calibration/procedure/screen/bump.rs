@@ -27,6 +27,10 @@ pub const SWEEP_BUMP_FALSE_ALARM: f64 = 1e-4;
 /// Points at least on each side of a change point.
 pub const MIN_BUMP_POINTS: usize = 3;
 
+/// Points of a sweep's end tested as a block of their own ([`best_end`]): fewer than
+/// [`MIN_BUMP_POINTS`], more than one (a single point is the outlier test's).
+pub const END_BUMP_POINTS: usize = 2;
+
 /// Change points tried at most in one sweep ([`best_start`]).
 pub const MAX_BUMP_STARTS: usize = 24;
 
@@ -59,6 +63,21 @@ pub struct SweepBump {
     pub blocks_tried: usize,
     /// The sweep's fit RMS per coordinate \[mm\] as written, and with the block moved back.
     pub rms_mm: (f64, f64),
+    /// Whether it is the sweep's first or last 2 points that sit off its others (`best_end`),
+    /// tested over the ends tried (`blocks_tried`), rather than a change point with 3 points at
+    /// least on each side.
+    pub end: Option<SweepEnd>,
+}
+
+/// The points of a sweep's end that sit off its other points ([`SweepBump::end`]): two moved
+/// points at an end cannot be told from two wrong readings by the step test, so they are named
+/// by their lines.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepEnd {
+    /// Whether they are the sweep's first points (else its last).
+    pub first: bool,
+    /// Their steps and lines in the data file, when known, in sweep order.
+    pub points: Vec<(usize, Option<u64>)>,
 }
 
 /// The change point of a sweep whose block, moved back by its fitted shift
@@ -81,6 +100,24 @@ pub fn best_start(x: &[Vector3<f64>], refit: Refit<'_>) -> Option<(Bumped, usize
         .filter_map(|start| fitted_shift(x, start, refit))
         .min_by(|a, b| a.sum_sq.total_cmp(&b.sum_sq))?;
     Some((best, tried))
+}
+
+/// The block of a sweep's end points ([`END_BUMP_POINTS`] of them, first or last) whose
+/// moving back ([`fitted_shift`]) leaves the sweep's fit the least sum of squares, with the ends
+/// tried: the same search as [`best_start`] at the starts it leaves out (fewer than
+/// [`MIN_BUMP_POINTS`] on one side), tested over the ends of the file's sweeps on their own.
+/// `None` when the sweep has fewer than [`END_BUMP_POINTS`] plus twice [`MIN_BUMP_POINTS`]
+/// points (the other points then fit too loosely to set two apart).
+pub fn best_end(x: &[Vector3<f64>], refit: Refit<'_>) -> Option<(Bumped, usize)> {
+    let n = x.len();
+    if n < END_BUMP_POINTS + 2 * MIN_BUMP_POINTS {
+        return None;
+    }
+    let best = [END_BUMP_POINTS, n - END_BUMP_POINTS]
+        .into_iter()
+        .filter_map(|start| fitted_shift(x, start, refit))
+        .min_by(|a, b| a.sum_sq.total_cmp(&b.sum_sq))?;
+    Some((best, 2))
 }
 
 /// A change point with its fitted shift.
