@@ -9,8 +9,8 @@
 //!    of a point (as `calibrate` refuses it) while the model moves them;
 //! 2. the free poses' command slips ([`super::slips`]): a command column in radians, negated
 //!    (the sign `calibrate` finds as an axis pointing opposite to its nominal), halved or
-//!    doubled, two command columns swapped, and a held joint's command recorded off through the
-//!    rows (`held_offsets`): of these the one that explains the rows best (a coordinate column's unit in one experiment is the
+//!    doubled, two command columns swapped, after a held joint's command recorded off through the
+//!    rows (`held_offsets`, tried first) (a coordinate column's unit in one experiment is the
 //!    unit checks' `experiments` finding, and with the target's place on its link estimated
 //!    from the points, a column flattened or negated is nearly absorbed);
 //! 3. the coordinates in another order than the steps: the permutation of the points that
@@ -203,17 +203,20 @@ fn explanation(
         (1, &|| swept_scale(rows, joint - 1, model, options)),
         (RIGID_PARAMETERS, &|| rigid_move(rows, model)),
     ];
-    // A held command recorded off (`calibrate`'s "the held `cmd_k` looks offset") competes with
-    // the column slips: of two that pass, the one that explains the rows better is said.
-    let mut finite = command_hypotheses(model.1);
-    finite.extend(held_offsets(rows, joint, model));
-    first_confirmed(finite, rows, model, options, bound_mm).or_else(|| {
-        let passing = fitted
-            .iter()
-            .filter_map(|(p, h)| Some((*p, first_confirmed(vec![h()?], rows, model, options, bound_mm)?)))
-            .collect();
-        simplest_sufficient(passing, options.false_alarm)
-    })
+    // A held command recorded off (`calibrate`'s "the held `cmd_k` looks offset") is tried
+    // before the column slips: one wrong value of a held column, where a swap of it with a
+    // column the rows leave at the reference moves the offset to that joint, and passes too
+    // when that joint barely moves the target. A swap involving the swept column, or two held
+    // columns at other values, is not undone by moving one column back: it passes alone.
+    first_confirmed(held_offsets(rows, joint, model), rows, model, options, bound_mm)
+        .or_else(|| first_confirmed(command_hypotheses(model.1), rows, model, options, bound_mm))
+        .or_else(|| {
+            let passing = fitted
+                .iter()
+                .filter_map(|(p, h)| Some((*p, first_confirmed(vec![h()?], rows, model, options, bound_mm)?)))
+                .collect();
+            simplest_sufficient(passing, options.false_alarm)
+        })
 }
 
 /// A held joint's command recorded off through `rows` (an experiment sweeping `joint`,
