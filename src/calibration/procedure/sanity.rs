@@ -165,13 +165,13 @@ pub enum Implausible {
         /// once-per-turn term cannot take up a scale of its command column there, which then
         /// shows as this misfit.
         long_sweep_deg: Option<f64>,
-        /// With several sweeps: the one that carries the misfit ([`misfit_sweep`]).
+        /// With several sweeps: the one that carries the misfit (`misfit_sweep`).
         sweep: Option<MisfitSweep>,
     },
 }
 
 /// The sweep of a joint fitted from several whose points carry the joint's misfit: the joint's
-/// other sweeps fit without it ([`misfit_sweep`]).
+/// other sweeps fit without it (`misfit_sweep`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MisfitSweep {
     /// The experiment.
