@@ -9,6 +9,12 @@
 //! warning and predict their own validation poses; a sweep's commands shuffled on a jittered
 //! file are still refused with the words of that cause, and a held command offset through one
 //! sweep of a jittered file (a refusal before) is named.
+//!
+//! Defect 10 (U): a held-command slip, a bump or an outlier in one of a joint's several short
+//! sweeps was said only as the joint's misfit over all its sweeps; the misfit now names the
+//! sweep (the one without which the joint's other sweeps fit) with its lines, and the row of a
+//! one-point outlier. Defect 11 (U): `validate` named a held command recorded 1 deg off through
+//! one sweep as two columns swapped; the held offset is now tried first and named.
 
 use crate::common::{altered_csv, axiscal, stderr};
 use std::path::{Path, PathBuf};
