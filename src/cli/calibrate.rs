@@ -306,6 +306,26 @@ fn tool_rows(found: &Implausible, set: &MeasurementSet, data: &Path) -> String {
     format!(" ({} lines {})", data.display(), lines.join(", "))
 }
 
+/// A joint's misfit with the file lines of the sweep that carries it (its first and last, and
+/// its worst point's), from `set`.
+fn with_sweep_lines(mut found: Implausible, set: &MeasurementSet) -> Implausible {
+    if let Implausible::Misfit { sweep: Some(s), .. } = &mut found {
+        let lines: Vec<(u64, &Measurement)> = set
+            .rows()
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.experiment == s.experiment)
+            .filter_map(|(i, m)| set.line_of(i).map(|l| (l, m)))
+            .collect();
+        s.lines = lines.first().zip(lines.last()).map(|(a, b)| (a.0, b.0));
+        s.worst_line = lines
+            .iter()
+            .find(|(_, m)| m.step == s.worst.0 && m.target == 0)
+            .map(|(l, _)| *l);
+    }
+    found
+}
+
 /// `cal` passes the checks every command makes when it reads `calibration.json`: a parameter
 /// the data leave free is said here, before anything is written, not by the next command (with
 /// free poses at too few configurations as its cause, when they are).
@@ -703,6 +723,7 @@ fn sweeps_as_free_poses(
 /// this very description ([`checks::description_suspect`]).
 fn print_implausible(found: &[Implausible], desc: &RobotDescription, set: &MeasurementSet, args: &Args) {
     for f in found {
+        let f = &with_sweep_lines(f.clone(), set);
         let rows = tool_rows(f, set, &args.data);
         let suspect = match f {
             Implausible::Size { .. } => {

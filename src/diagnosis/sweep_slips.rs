@@ -9,7 +9,8 @@
 //!    of a point (as `calibrate` refuses it) while the model moves them;
 //! 2. the free poses' command slips ([`super::slips`]): a command column in radians, negated
 //!    (the sign `calibrate` finds as an axis pointing opposite to its nominal), halved or
-//!    doubled, two command columns swapped (a coordinate column's unit in one experiment is the
+//!    doubled, two command columns swapped, after a held joint's command recorded off through the
+//!    rows (`held_offsets`, tried first) (a coordinate column's unit in one experiment is the
 //!    unit checks' `experiments` finding, and with the target's place on its link estimated
 //!    from the points, a column flattened or negated is nearly absorbed);
 //! 3. the coordinates in another order than the steps: the permutation of the points that
@@ -202,13 +203,56 @@ fn explanation(
         (1, &|| swept_scale(rows, joint - 1, model, options)),
         (RIGID_PARAMETERS, &|| rigid_move(rows, model)),
     ];
-    first_confirmed(command_hypotheses(model.1), rows, model, options, bound_mm).or_else(|| {
-        let passing = fitted
-            .iter()
-            .filter_map(|(p, h)| Some((*p, first_confirmed(vec![h()?], rows, model, options, bound_mm)?)))
-            .collect();
-        simplest_sufficient(passing, options.false_alarm)
-    })
+    // A held command recorded off (`calibrate`'s "the held `cmd_k` looks offset") is tried
+    // before the column slips: one wrong value of a held column, where a swap of it with a
+    // column the rows leave at the reference moves the offset to that joint, and passes too
+    // when that joint barely moves the target. A swap involving the swept column, or two held
+    // columns at other values, is not undone by moving one column back: it passes alone.
+    first_confirmed(held_offsets(rows, joint, model), rows, model, options, bound_mm)
+        .or_else(|| first_confirmed(command_hypotheses(model.1), rows, model, options, bound_mm))
+        .or_else(|| {
+            let passing = fitted
+                .iter()
+                .filter_map(|(p, h)| Some((*p, first_confirmed(vec![h()?], rows, model, options, bound_mm)?)))
+                .collect();
+            simplest_sufficient(passing, options.false_alarm)
+        })
+}
+
+/// A held joint's command recorded off through `rows` (an experiment sweeping `joint`,
+/// 1-based): for each other joint whose median command in the rows differs from the
+/// calibration's reference pose, the rewrite that moves its commands back by that difference
+/// (its wander kept). A sweep held at another pose on purpose is missed by the rewrite, not
+/// explained: only a command that should have been the reference's passes.
+fn held_offsets(rows: &[Measurement], joint: usize, (cal, desc): (&Calibration, &RobotDescription)) -> Vec<Hypothesis> {
+    use crate::numerics::stats::{QuantileMethod, quantile};
+    let mut out = Vec::new();
+    for (j, reference) in cal.reference_cmd.iter().copied().enumerate() {
+        if j + 1 == joint || rows.is_empty() {
+            continue;
+        }
+        let values: Vec<f64> = rows.iter().map(|m| m.cmd[j]).collect();
+        let offset = quantile(&values, 0.5, QuantileMethod::Linear) - reference;
+        if offset == 0.0 {
+            continue;
+        }
+        let unit = match desc.joints[j].kind {
+            JointKind::Revolute => "deg",
+            JointKind::Prismatic => "mm",
+        };
+        let c = format!("`cmd_{}`", j + 1);
+        out.push(hypothesis(
+            format!("cmd_{}", j + 1),
+            [
+                format!(
+                    "the held {c} is recorded {offset:+.3} {unit} off where the robot stood (the reference pose's {reference} {unit}): a value typed wrong for these rows, or the joint re-mastered between the sweeps"
+                ),
+                format!("with the held {c} moved back by {offset:+.3} {unit}"),
+            ],
+            move |m| m.cmd[j] -= offset,
+        ));
+    }
+    out
 }
 
 /// The rigid move's parameters: a turn (3) and a shift (3).

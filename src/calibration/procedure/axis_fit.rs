@@ -52,6 +52,11 @@ pub(super) struct JointData<'a> {
     pub(super) sweeps: Vec<&'a AxisExperiment>,
     /// Target-0 points of each sweep (corrected to the design pose or as measured).
     pub(super) points: Vec<Vec<Point3<f64>>>,
+    /// Whether the fit only starts the held joints' correction (its points as measured, the
+    /// held joints' wander still in them): the gate of a fit that misses its points by a
+    /// good part of their spread ([`crate::numerics::stats::ABSURD_SHARE`]) then waits for
+    /// the corrected points.
+    pub(super) start_only: bool,
 }
 
 fn span(u: &[f64]) -> f64 {
@@ -300,7 +305,7 @@ pub(super) fn fit_joint(
             Ok(fitted) => break fitted,
         }
     };
-    if out.report.residual_rms_mm > crate::numerics::stats::ABSURD_SHARE * spread_mm {
+    if !data.start_only && out.report.residual_rms_mm > crate::numerics::stats::ABSURD_SHARE * spread_mm {
         if let Some(cause) = explained() {
             return Err(cause);
         }
@@ -322,8 +327,50 @@ pub(super) fn fit_joint(
     }
     if detail == Detail::Report {
         out.report.sweeps = sweep_reports(data, &out, desc, controller, options, noise_mm * 1e-3 / 3f64.sqrt());
+        for (sweep, rms) in out.report.sweeps.iter_mut().zip(rms_without_each(data, form, &setting)) {
+            sweep.without_rms_mm = rms;
+        }
     }
     Ok(out)
+}
+
+/// With several sweeps: the residual RMS \[mm\] of the joint's fit (transmission `form`)
+/// from every sweep but each in turn (none where that fit fails, nor with one sweep): the
+/// leave-one-out that tells the sweep carrying a joint's misfit (`sanity.rs`).
+fn rms_without_each(data: &JointData<'_>, form: TransmissionFitForm, setting: &FitSetting<'_>) -> Vec<Option<f64>> {
+    let n = data.sweeps.len();
+    if n < 2 {
+        return vec![None; n];
+    }
+    let lean = FitSetting {
+        detail: Detail::Model,
+        ..*setting
+    };
+    (0..n)
+        .map(|i| {
+            let keep = |v: usize| v != i;
+            let others = JointData {
+                sweeps: data
+                    .sweeps
+                    .iter()
+                    .enumerate()
+                    .filter(|(v, _)| keep(*v))
+                    .map(|(_, s)| *s)
+                    .collect(),
+                points: data
+                    .points
+                    .iter()
+                    .enumerate()
+                    .filter(|(v, _)| keep(*v))
+                    .map(|(_, p)| p.clone())
+                    .collect(),
+                start_only: false,
+            };
+            fit_joint_as(&others, form, &lean)
+                .ok()
+                .map(|f| f.report.residual_rms_mm)
+        })
+        .collect()
 }
 
 /// A fit error `e` of too few points as the description's transmission order's fault, when
@@ -648,6 +695,7 @@ fn sweep_reports(
                 held_wander: wander,
                 own_axis_angle_mrad: own.map(|o| o.0),
                 own_axis_offset_mm: own.and_then(|o| o.1),
+                without_rms_mm: None,
             }
         })
         .collect()

@@ -159,56 +159,20 @@ fn calibrate_at<T>(
     let exact = exactly_as_designed(&experiments, &reference_cmd, desc);
     // First pass: each joint from its sweep nearest the design, as measured.
     let raw_t1: Vec<Vec<Point3<f64>>> = experiments.iter().map(|e| e.target1_m.clone()).collect();
-    let mut state = ctx.assemble(|k| ctx.first_sweep(k, &reference_cmd, exact), &raw_t1)?;
-    let mut passes = 1;
-    if !exact {
-        let tolerance_m = (1e-3 * noise_mm * 1e-3 / 3f64.sqrt()).max(1e-12);
-        let mut change = f64::INFINITY;
-        while change > tolerance_m {
-            if passes >= MAX_HELD_PASSES {
-                return Err(ProcedureError::HeldNotConverged {
-                    passes,
-                    change_mm: change * 1e3,
-                });
-            }
-            let corrector = Corrector {
-                model: &state.robot,
-                controller: &controller,
-                desc,
-                reference_cmd: &reference_cmd,
-            };
-            let t0: Vec<Vec<Point3<f64>>> = experiments
-                .iter()
-                .map(|e| corrector.corrected(e, 0))
-                .collect::<Result<_, _>>()?;
-            let t1: Vec<Vec<Point3<f64>>> = experiments
-                .iter()
-                .map(|e| corrector.corrected(e, 1))
-                .collect::<Result<_, _>>()?;
-            let next = ctx
-                .assemble(|k| ctx.all_sweeps(k, &t0), &t1)
-                .map_err(|source| match source {
-                    // A refused option (the paper's estimator on a joint swept twice) is
-                    // refused as such, not as a divergence of the correction.
-                    e @ ProcedureError::InvalidOption(_) => e,
-                    source => ProcedureError::HeldDiverged {
-                        pass: passes + 1,
-                        cause: Box::new(source),
-                    },
-                })?;
-            change = if next.points.len() == state.points.len() && passes > 1 {
-                next.points
-                    .iter()
-                    .zip(&state.points)
-                    .map(|(a, b)| (a - b).norm())
-                    .fold(0.0, f64::max)
-            } else {
-                f64::INFINITY
-            };
-            state = next;
-            passes += 1;
+    let (state, passes) = match ctx.assemble(|k| ctx.first_sweep(k, &reference_cmd, exact, false), &raw_t1) {
+        Ok(first) if exact => (first, 1),
+        Ok(first) => ctx.held_passes(first, &reference_cmd)?,
+        // Held joints that wander step by step move the measured points off one arc by their
+        // wander times its lever: the measured points' fit then only starts the correction,
+        // and the corrected points face the gate. Data the correction does not bring onto
+        // one arc keep the first refusal.
+        Err(refused) if !exact && matches!(refused, ProcedureError::Absurd { .. } | ProcedureError::Misfit { .. }) => {
+            ctx.assemble(|k| ctx.first_sweep(k, &reference_cmd, exact, true), &raw_t1)
+                .and_then(|first| ctx.held_passes(first, &reference_cmd))
+                .map_err(|_| refused)?
         }
-    }
+        Err(e) => return Err(e),
+    };
     let estimate = if options.estimate_noise {
         let moments: Vec<_> = state.fits.iter().flatten().filter_map(|f| f.moments).collect();
         estimate_noise(&moments)
@@ -261,9 +225,66 @@ struct Context<'a> {
 }
 
 impl<'a> Context<'a> {
+    /// The fit-and-correct passes for the held joints' recorded values from the first pass's
+    /// state `state` (`docs/formats.md#held-joints`; [`Corrector`]): the last state and the
+    /// passes made, once no corrected point moves by more than a thousandth of the noise.
+    fn held_passes(&self, mut state: Assembled, reference_cmd: &[f64]) -> Result<(Assembled, usize), ProcedureError> {
+        let mut passes = 1;
+        let tolerance_m = (1e-3 * self.noise_mm * 1e-3 / 3f64.sqrt()).max(1e-12);
+        let mut change = f64::INFINITY;
+        while change > tolerance_m {
+            if passes >= MAX_HELD_PASSES {
+                return Err(ProcedureError::HeldNotConverged {
+                    passes,
+                    change_mm: change * 1e3,
+                });
+            }
+            let corrector = Corrector {
+                model: &state.robot,
+                controller: self.controller,
+                desc: self.desc,
+                reference_cmd,
+            };
+            let t0: Vec<Vec<Point3<f64>>> = self
+                .experiments
+                .iter()
+                .map(|e| corrector.corrected(e, 0))
+                .collect::<Result<_, _>>()?;
+            let t1: Vec<Vec<Point3<f64>>> = self
+                .experiments
+                .iter()
+                .map(|e| corrector.corrected(e, 1))
+                .collect::<Result<_, _>>()?;
+            let next = self
+                .assemble(|k| self.all_sweeps(k, &t0), &t1)
+                .map_err(|source| match source {
+                    // A refused option (the paper's estimator on a joint swept twice) is
+                    // refused as such, not as a divergence of the correction.
+                    e @ ProcedureError::InvalidOption(_) => e,
+                    source => ProcedureError::HeldDiverged {
+                        pass: passes + 1,
+                        cause: Box::new(source),
+                    },
+                })?;
+            change = if next.points.len() == state.points.len() && passes > 1 {
+                next.points
+                    .iter()
+                    .zip(&state.points)
+                    .map(|(a, b)| (a - b).norm())
+                    .fold(0.0, f64::max)
+            } else {
+                f64::INFINITY
+            };
+            state = next;
+            passes += 1;
+        }
+        Ok((state, passes))
+    }
+
     /// Joint `k`'s (0-based) data of the first pass: every sweep when the campaign is exactly
-    /// as designed (one each), else the sweep nearest the design, as measured.
-    fn first_sweep(&self, k: usize, reference: &[f64], exact: bool) -> Option<JointData<'a>> {
+    /// as designed (one each), else the sweep nearest the design, as measured; `start_only`:
+    /// its fit only starts the held joints' correction ([`JointData::start_only`]).
+    fn first_sweep(&self, k: usize, reference: &[f64], exact: bool, start_only: bool) -> Option<JointData<'a>> {
         let mut sweeps: Vec<&AxisExperiment> = self.experiments.iter().filter(|e| e.joint == k + 1).collect();
         if !exact && sweeps.len() > 1 {
             let best = sweeps
@@ -273,7 +294,11 @@ impl<'a> Context<'a> {
             sweeps = vec![best];
         }
         let points = sweeps.iter().map(|e| e.target0_m.clone()).collect();
-        (!sweeps.is_empty()).then_some(JointData { sweeps, points })
+        (!sweeps.is_empty()).then_some(JointData {
+            sweeps,
+            points,
+            start_only,
+        })
     }
 
     /// Joint `k`'s data: every sweep with the corrected target-0 points `t0` (by experiment).
@@ -285,7 +310,11 @@ impl<'a> Context<'a> {
             .filter(|(e, _)| e.joint == k + 1)
             .map(|(e, p)| (e, p.clone()))
             .unzip();
-        (!sweeps.is_empty()).then_some(JointData { sweeps, points })
+        (!sweeps.is_empty()).then_some(JointData {
+            sweeps,
+            points,
+            start_only: false,
+        })
     }
 
     /// Fits every swept joint from `data(k)` and assembles the model (target 1 of each

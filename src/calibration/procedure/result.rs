@@ -195,6 +195,12 @@ pub struct SweepReport {
     /// With several sweeps (rotary): the distance of this sweep's own axis from the joint
     /// fit's at the axis point \[mm\].
     pub own_axis_offset_mm: Option<f64>,
+    /// With several sweeps: the residual RMS of the joint's fit from its other sweeps
+    /// \[mm\] (null when that fit fails): the leave-one-out the misfit check names a sweep by
+    /// (`sanity.rs`). Not written to `calibration.json`.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub without_rms_mm: Option<f64>,
 }
 
 /// A held joint whose value in a sweep differs from the reference pose.

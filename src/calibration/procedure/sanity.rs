@@ -165,7 +165,60 @@ pub enum Implausible {
         /// once-per-turn term cannot take up a scale of its command column there, which then
         /// shows as this misfit.
         long_sweep_deg: Option<f64>,
+        /// With several sweeps: the one that carries the misfit (`misfit_sweep`).
+        sweep: Option<MisfitSweep>,
     },
+}
+
+/// The sweep of a joint fitted from several whose points carry the joint's misfit: the joint's
+/// other sweeps fit without it (`misfit_sweep`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MisfitSweep {
+    /// The experiment.
+    pub experiment: String,
+    /// Its residual RMS in the joint fit \[mm\].
+    pub rms_mm: f64,
+    /// The residual RMS of the joint's fit from its other sweeps \[mm\].
+    pub others_mm: f64,
+    /// Its worst point: step and residual \[mm\].
+    pub worst: (usize, f64),
+    /// Its other points' residual RMS \[mm\].
+    pub rest_mm: f64,
+    /// Its first and last file lines (the caller's, from the measurement set).
+    pub lines: Option<(u64, u64)>,
+    /// The worst point's file line (the caller's).
+    pub worst_line: Option<u64>,
+}
+
+impl MisfitSweep {
+    /// Whether its worst point alone carries its misfit: the sweep's other points within
+    /// [`MISFIT_RATIO`] times `median_mm`, as the joint's other sweeps are.
+    fn one_point(&self, median_mm: f64) -> bool {
+        self.rest_mm <= MISFIT_RATIO * median_mm
+    }
+
+    /// The words appended to the joint's misfit.
+    fn words(&self, median_mm: f64) -> String {
+        let lines = self
+            .lines
+            .map_or_else(String::new, |(a, b)| format!(" (lines {a}-{b})"));
+        let head = format!(
+            "; the misfit is experiment {}'s{lines}: {:.3} mm RMS in the joint's fit, where the joint's other sweeps fitted without it miss their points by {:.3} mm",
+            self.experiment, self.rms_mm, self.others_mm
+        );
+        let (step, off) = self.worst;
+        if self.one_point(median_mm) {
+            let at = self.worst_line.map_or_else(String::new, |l| format!("line {l}, "));
+            format!(
+                "{head}, and in it one point: {at}step {step}, {off:.3} mm off the arc where its other points miss by {:.3} mm (a mistyped coordinate, a target mis-sighted): check that row",
+                self.rest_mm
+            )
+        } else {
+            format!(
+                "{head}: check that sweep's rows (its block moved part-way, a bump of the instrument or the robot, or a held joint's recorded command off through it: a value typed wrong or the joint re-mastered between the sweeps)"
+            )
+        }
+    }
 }
 
 impl std::fmt::Display for Implausible {
@@ -226,6 +279,7 @@ impl std::fmt::Display for Implausible {
                 rms_mm,
                 median_mm,
                 long_sweep_deg,
+                sweep,
             } => {
                 let scaled = long_sweep_deg.map_or_else(String::new, |span| {
                     format!(
@@ -234,9 +288,10 @@ impl std::fmt::Display for Implausible {
                          reading at two poses"
                     )
                 });
+                let carrier = sweep.as_ref().map_or_else(String::new, |s| s.words(*median_mm));
                 write!(
                     f,
-                    "joint {joint} ({experiment}): the fit misses its points by {rms_mm:.3} mm RMS, {:.1} times the median joint's {median_mm:.3} mm: its points are not on one arc or line of the joint (a block of rows shifted, part of the sweep in other units, a target moved on its link{scaled}); the noise estimate and every sigma are inflated by it",
+                    "joint {joint} ({experiment}): the fit misses its points by {rms_mm:.3} mm RMS, {:.1} times the median joint's {median_mm:.3} mm: its points are not on one arc or line of the joint (a block of rows shifted, part of the sweep in other units, a target moved on its link{scaled}){carrier}; the noise estimate and every sigma are inflated by it",
                     rms_mm / median_mm
                 )
             }
@@ -487,6 +542,42 @@ fn misfits(cal: &Calibration) -> Vec<Implausible> {
                 super::AxisSpan::Deg(span) if span > HALF_TURN_DEG => Some(span),
                 _ => None,
             },
+            sweep: misfit_sweep(cal, a, median_mm),
         })
         .collect()
+}
+
+/// The sweep of `axis` (a joint fitted from several sweeps) that carries its misfit: the one
+/// sweep without which the joint's other sweeps, fitted alone
+/// ([`super::SweepReport::without_rms_mm`]), pass the joint's misfit test (within
+/// [`MISFIT_RATIO`] times `median_mm`), where without any other they do not. None where no
+/// sweep or several do (two sweeps that each fit alone: either could be the one). Its worst
+/// point and the RMS of its other points come from the calibration's point residuals.
+fn misfit_sweep(cal: &Calibration, axis: &AxisReport, median_mm: f64) -> Option<MisfitSweep> {
+    let passing: Vec<(&super::SweepReport, f64)> = axis
+        .sweeps
+        .iter()
+        .filter_map(|s| s.without_rms_mm.map(|r| (s, r)))
+        .filter(|(_, r)| *r <= MISFIT_RATIO * median_mm)
+        .collect();
+    let [(worst, others_mm)] = passing[..] else {
+        return None;
+    };
+    let points: Vec<(usize, f64)> = cal
+        .residuals
+        .iter()
+        .filter(|r| r.experiment == worst.experiment && r.joint == axis.joint && r.target == 0)
+        .map(|r| (r.step, r.components_mm.iter().map(|c| c * c).sum::<f64>().sqrt()))
+        .collect();
+    let &(step, off) = points.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    let rest = points.iter().filter(|p| p.0 != step).map(|p| p.1 * p.1).sum::<f64>();
+    Some(MisfitSweep {
+        experiment: worst.experiment.clone(),
+        rms_mm: worst.residual_rms_mm,
+        others_mm,
+        worst: (step, off),
+        rest_mm: (rest / (points.len() - 1).max(1) as f64).sqrt(),
+        lines: None,
+        worst_line: None,
+    })
 }
