@@ -353,20 +353,28 @@ fn warn_slips(
         eprintln!("warning: {data}: {few}");
         return;
     }
-    if let Some(s) = explaining_slip(set, desc, options, Some(summary)) {
-        eprintln!(
-            "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
-            slip_words(&s)
-        );
-        return;
+    let shift = shift_behind_scales((set, desc), options, summary, block);
+    let say_scales = || {
+        for named in &summary.scales {
+            eprintln!("warning: {data}: {}", named_scale_words(named));
+        }
+    };
+    // A slip or a shifted block misfits every test below (a column's scale, the coordinates'
+    // scale); one found with the scales named undone is said beside them.
+    if let Some((found, behind)) = shift {
+        let behind = behind.map_or_else(String::new, |words| {
+            say_scales();
+            format!("{words}: ")
+        });
+        return match found {
+            Shift::Slip(s) => eprintln!(
+                "warning: {data}: {behind}{}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
+                slip_words(&s)
+            ),
+            Shift::Block(b) => eprintln!("warning: {data}: {behind}{}", block_words(&b)),
+        };
     }
-    if let Some(b) = block {
-        // A shifted block misfits every test below (a column's scale, the coordinates' scale).
-        return eprintln!("warning: {data}: {}", block_words(b));
-    }
-    for named in &summary.scales {
-        eprintln!("warning: {data}: {}", named_scale_words(named));
-    }
+    say_scales();
     // A named column scale misfits the joints' transmissions of the calibration that absorbed
     // it: their tests run on the poses calibrated again with it undone, so that a slope said
     // below is one the scale does not explain.
@@ -437,6 +445,85 @@ fn warn_target_ids(set: &MeasurementSet, desc: &RobotDescription, summary: &Free
     }
 }
 
+/// A column slip or a block of poses moved ([`explaining_slip`], [`block_shift`]).
+enum Shift {
+    /// A column slip, or a block found by the nominal model's slip search.
+    Slip(ExplainingSlip),
+    /// A block found in the calibrated residuals.
+    Block(BlockShift),
+}
+
+/// The slip ([`explaining_slip`]), else the shifted block (`block`, [`block_shift`] of the
+/// calibration as read), the poses show; where the column-scale screen named a scale
+/// ([`FreePoseSummary::scales`]) and one of them is found, the two explanations are compared
+/// by their fit: a scale moves the poses it reaches far (a wrist's command at its extremes, a
+/// coordinate far from the centroid) by a pattern the nominal model's slip search and the
+/// calibrated residuals' change-point test read as a step in file order where those poses
+/// stand together (a KR's `cmd_5` x1.025 read as lines 474-482 moved; its `x_mm` x1.025 as
+/// the poses from line 780 on). The poses with the scales undone are calibrated again with the
+/// same options and both tests run on them: a step that remains is the data's, said beside
+/// the scales (with the words of what was undone), unless the block moved back fits the poses
+/// better than the scales undone (calibrated RMS), when the block alone is said, as before; a
+/// step that does not remain was the scale's, and none is said (the augmented-model comparison
+/// of the two explanations, as the sweep side's `diagnosis/combined_slips.rs` refits with the
+/// first slip undone).
+fn shift_behind_scales(
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+    summary: &FreePoseSummary,
+    block: Option<&BlockShift>,
+) -> Option<(Shift, Option<String>)> {
+    let as_read = explaining_slip(set, desc, options, Some(summary))
+        .map(Shift::Slip)
+        .or_else(|| block.cloned().map(Shift::Block));
+    if summary.scales.is_empty() {
+        return as_read.map(|s| (s, None));
+    }
+    let as_read = as_read?;
+    let undone = scales_undone(set, &summary.scales);
+    let Ok(again) = calibrate_free_poses(&undone, desc, options) else {
+        return Some((as_read, None));
+    };
+    if let Shift::Block(b) = &as_read
+        && b.undone_rms_mm < again.summary.calibrated_rms_mm
+    {
+        return Some((as_read, None));
+    }
+    let remains = block_shift(&undone, desc, options, &again);
+    let (_, summary_again) = again.into_calibration(desc);
+    let found = explaining_slip(&undone, desc, options, Some(&summary_again))
+        .map(Shift::Slip)
+        .or_else(|| remains.map(Shift::Block))?;
+    Some((found, Some(undone_words(&summary.scales))))
+}
+
+/// `set` with the column scales `named` undone: each column divided by its factor (a
+/// coordinate column about the origin: the centre a scale is read about moves only the base,
+/// which the fit places).
+fn scales_undone(set: &MeasurementSet, named: &[NamedScale]) -> MeasurementSet {
+    named
+        .iter()
+        .fold(set.clone(), |s, n| match coordinate_index(&n.scale.column) {
+            Some(c) => s.with_coordinate_scaled(c, 1.0 / n.scale.factor),
+            None => {
+                command_index(&n.scale.column).map_or(s.clone(), |j| s.with_command_scaled(j, 1.0 / n.scale.factor))
+            }
+        })
+}
+
+/// The column scales `named` undone, in words (`with `x_mm` divided by 1.02510 (the scale
+/// named above) the poses were calibrated again`).
+fn undone_words(named: &[NamedScale]) -> String {
+    let columns: Vec<String> = named
+        .iter()
+        .map(|n| format!("`{}` divided by {:.5}", n.scale.column, n.scale.factor))
+        .collect();
+    format!(
+        "with {} (the scale named above) the poses were calibrated again",
+        columns.join(" and ")
+    )
+}
+
 /// The coordinate-scale profile ([`super::calibrate::warn_axis_scale`]) of the free poses of
 /// The poses calibrated again with the column scales the screen named
 /// ([`FreePoseSummary::scales`]) undone: each column divided by its factor (a coordinate column
@@ -462,14 +549,7 @@ impl Undone {
         if named.is_empty() {
             return None;
         }
-        let undone = named
-            .iter()
-            .fold(set.clone(), |s, n| match coordinate_index(&n.scale.column) {
-                Some(c) => s.with_coordinate_scaled(c, 1.0 / n.scale.factor),
-                None => {
-                    command_index(&n.scale.column).map_or(s.clone(), |j| s.with_command_scaled(j, 1.0 / n.scale.factor))
-                }
-            });
+        let undone = scales_undone(set, named);
         let profile = FreePoseOptions {
             holdout: false,
             effects: false,
@@ -478,18 +558,11 @@ impl Undone {
         let (cal, summary) = calibrate_free_poses(&undone, desc, &profile)
             .ok()?
             .into_calibration(desc);
-        let columns: Vec<String> = named
-            .iter()
-            .map(|n| format!("`{}` divided by {:.5}", n.scale.column, n.scale.factor))
-            .collect();
         Some(Undone {
             set: undone,
             cal,
             summary,
-            words: format!(
-                "with {} (the scale named above) the poses were calibrated again",
-                columns.join(" and ")
-            ),
+            words: undone_words(named),
         })
     }
 

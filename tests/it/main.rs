@@ -63,6 +63,7 @@ mod hostile_round15w;
 mod hostile_round16m;
 mod hostile_round16s;
 mod hostile_round16v;
+mod hostile_round17f;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;
