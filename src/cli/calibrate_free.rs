@@ -353,28 +353,21 @@ fn warn_slips(
         eprintln!("warning: {data}: {few}");
         return;
     }
-    let shift = shift_behind_scales((set, desc), options, summary, block);
-    let say_scales = || {
-        for named in &summary.scales {
-            eprintln!("warning: {data}: {}", named_scale_words(named));
-        }
-    };
     // A slip or a shifted block misfits every test below (a column's scale, the coordinates'
-    // scale); one found with the scales named undone is said beside them.
-    if let Some((found, behind)) = shift {
-        let behind = behind.map_or_else(String::new, |words| {
-            say_scales();
-            format!("{words}: ")
-        });
-        return match found {
-            Shift::Slip(s) => eprintln!(
-                "warning: {data}: {behind}{}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
+    // scale).
+    match shift_behind_scales((set, desc), options, summary, block) {
+        Some(Shift::Slip(s)) => {
+            return eprintln!(
+                "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
                 slip_words(&s)
-            ),
-            Shift::Block(b) => eprintln!("warning: {data}: {behind}{}", block_words(&b)),
-        };
+            );
+        }
+        Some(Shift::Block(b)) => return eprintln!("warning: {data}: {}", block_words(&b)),
+        None => {}
     }
-    say_scales();
+    for named in &summary.scales {
+        eprintln!("warning: {data}: {}", named_scale_words(named));
+    }
     // A named column scale misfits the joints' transmissions of the calibration that absorbed
     // it: their tests run on the poses calibrated again with it undone, so that a slope said
     // below is one the scale does not explain.
@@ -454,47 +447,44 @@ enum Shift {
 }
 
 /// The slip ([`explaining_slip`]), else the shifted block (`block`, [`block_shift`] of the
-/// calibration as read), the poses show; where the column-scale screen named a scale
-/// ([`FreePoseSummary::scales`]) and one of them is found, the two explanations are compared
-/// by their fit: a scale moves the poses it reaches far (a wrist's command at its extremes, a
-/// coordinate far from the centroid) by a pattern the nominal model's slip search and the
-/// calibrated residuals' change-point test read as a step in file order where those poses
-/// stand together (a KR's `cmd_5` x1.025 read as lines 474-482 moved; its `x_mm` x1.025 as
-/// the poses from line 780 on). The poses with the scales undone are calibrated again with the
-/// same options and both tests run on them: a step that remains is the data's, said beside
-/// the scales (with the words of what was undone), unless the block moved back fits the poses
-/// better than the scales undone (calibrated RMS), when the block alone is said, as before; a
-/// step that does not remain was the scale's, and none is said (the augmented-model comparison
-/// of the two explanations, as the sweep side's `diagnosis/combined_slips.rs` refits with the
-/// first slip undone).
+/// calibration as read), the poses show, unless the column-scale screen named a scale
+/// ([`FreePoseSummary::scales`]) that explains it: a scale moves the poses it reaches far (a
+/// wrist's command at its extremes, a coordinate far from the centroid) by a pattern the
+/// nominal model's slip search and the calibrated residuals' change-point test read as a step
+/// in file order where those poses stand together (a KR's `cmd_5` x1.025 read as lines
+/// 474-482 moved; its `x_mm` x1.025 as the poses from line 780 on). The two explanations are
+/// compared by their fit: the poses with the scales undone are calibrated again with the same
+/// options; a block whose moving back fits the poses better than the scales undone (calibrated
+/// RMS) is said, as is a slip or block that both tests still find on the undone poses (the
+/// scale may then be the shift's shadow: the shift is said alone, as without a scale); where
+/// neither remains, the shift was the scale's and `None` is returned (the refit with the first
+/// explanation undone, as the sweep side's `diagnosis/combined_slips.rs`).
 fn shift_behind_scales(
     (set, desc): (&MeasurementSet, &RobotDescription),
     options: &FreePoseOptions,
     summary: &FreePoseSummary,
     block: Option<&BlockShift>,
-) -> Option<(Shift, Option<String>)> {
+) -> Option<Shift> {
     let as_read = explaining_slip(set, desc, options, Some(summary))
         .map(Shift::Slip)
-        .or_else(|| block.cloned().map(Shift::Block));
+        .or_else(|| block.cloned().map(Shift::Block))?;
     if summary.scales.is_empty() {
-        return as_read.map(|s| (s, None));
+        return Some(as_read);
     }
-    let as_read = as_read?;
     let undone = scales_undone(set, &summary.scales);
     let Ok(again) = calibrate_free_poses(&undone, desc, options) else {
-        return Some((as_read, None));
+        return Some(as_read);
     };
     if let Shift::Block(b) = &as_read
         && b.undone_rms_mm < again.summary.calibrated_rms_mm
     {
-        return Some((as_read, None));
+        return Some(as_read);
     }
-    let remains = block_shift(&undone, desc, options, &again);
-    let (_, summary_again) = again.into_calibration(desc);
-    let found = explaining_slip(&undone, desc, options, Some(&summary_again))
-        .map(Shift::Slip)
-        .or_else(|| remains.map(Shift::Block))?;
-    Some((found, Some(undone_words(&summary.scales))))
+    let remains = block_shift(&undone, desc, options, &again).is_some() || {
+        let (_, summary_again) = again.into_calibration(desc);
+        explaining_slip(&undone, desc, options, Some(&summary_again)).is_some()
+    };
+    remains.then_some(as_read)
 }
 
 /// `set` with the column scales `named` undone: each column divided by its factor (a
