@@ -658,6 +658,44 @@ pub(super) fn warn_axis_scale(
         None => data.display().to_string(),
     };
     eprintln!("warning: {place}: {found}");
+    if let Some((words, second)) = second_axis_scale(set, &found, fit, max_rows, &slides) {
+        eprintln!("warning: {place}: {words}: {second}");
+    }
+}
+
+/// A second instrument axis' scale behind the column `found` names: the coordinate-scale
+/// profile ([`axis_scale`]) of `set` with that column undone about the data's centroid, as the
+/// free-pose side calibrates again with a named scale undone (`calibrate_free.rs`, `Undone`):
+/// two axes scaled by different factors (x long, z short) read as the first axis and, for the
+/// second's share, as the joints' transmissions or the slides' leads. The second column the
+/// profile then names on its own test (the same false-alarm rate) is returned with the first's
+/// undo in words; `None` where it names none, or the same column, or no single column.
+fn second_axis_scale(
+    set: &MeasurementSet,
+    found: &axiscal::measurement::unit_check::axis_scale::AxisScale,
+    fit: ProfileFit<'_>,
+    max_rows: usize,
+    slides: &[usize],
+) -> Option<(String, axiscal::measurement::unit_check::axis_scale::AxisScale)> {
+    let Scaled::Column(first) = found.scaled else {
+        return None;
+    };
+    let rows = set.rows();
+    let centre = rows.iter().map(|m| m.position_mm[first]).sum::<f64>() / rows.len().max(1) as f64;
+    let undone = set.with_coordinate_scaled_about(first, 1.0 / found.factor, centre);
+    let second = axis_scale(&undone, fit, max_rows, slides)?;
+    let other = matches!(second.scaled, Scaled::Column(c) if c != first);
+    (second.significant && other).then(|| {
+        (
+            format!(
+                "with `{}` divided by {:.5} about the data's centroid (the scale named above) the coordinate-scale \
+                 profile was run again, and a second axis shows",
+                axiscal::measurement::unit_check::axis_scale::COLUMNS[first],
+                found.factor
+            ),
+            second,
+        )
+    })
 }
 
 /// Whether the coordinate-scale profile of `set` with `source`'s column undone names nothing:

@@ -353,16 +353,17 @@ fn warn_slips(
         eprintln!("warning: {data}: {few}");
         return;
     }
-    if let Some(s) = explaining_slip(set, desc, options, Some(summary)) {
-        eprintln!(
-            "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
-            slip_words(&s)
-        );
-        return;
-    }
-    if let Some(b) = block {
-        // A shifted block misfits every test below (a column's scale, the coordinates' scale).
-        return eprintln!("warning: {data}: {}", block_words(b));
+    // A slip or a shifted block misfits every test below (a column's scale, the coordinates'
+    // scale).
+    match shift_behind_scales((set, desc), options, summary, block) {
+        Some(Shift::Slip(s)) => {
+            return eprintln!(
+                "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
+                slip_words(&s)
+            );
+        }
+        Some(Shift::Block(b)) => return eprintln!("warning: {data}: {}", block_words(&b)),
+        None => {}
     }
     for named in &summary.scales {
         eprintln!("warning: {data}: {}", named_scale_words(named));
@@ -437,6 +438,82 @@ fn warn_target_ids(set: &MeasurementSet, desc: &RobotDescription, summary: &Free
     }
 }
 
+/// A column slip or a block of poses moved ([`explaining_slip`], [`block_shift`]).
+enum Shift {
+    /// A column slip, or a block found by the nominal model's slip search.
+    Slip(ExplainingSlip),
+    /// A block found in the calibrated residuals.
+    Block(BlockShift),
+}
+
+/// The slip ([`explaining_slip`]), else the shifted block (`block`, [`block_shift`] of the
+/// calibration as read), the poses show, unless the column-scale screen named a scale
+/// ([`FreePoseSummary::scales`]) that explains it: a scale moves the poses it reaches far (a
+/// wrist's command at its extremes, a coordinate far from the centroid) by a pattern the
+/// nominal model's slip search and the calibrated residuals' change-point test read as a step
+/// in file order where those poses stand together (a KR's `cmd_5` x1.025 read as lines
+/// 474-482 moved; its `x_mm` x1.025 as the poses from line 780 on). The two explanations are
+/// compared by their fit: the poses with the scales undone are calibrated again with the same
+/// options; a block whose moving back fits the poses better than the scales undone (calibrated
+/// RMS) is said, as is a slip or block that both tests still find on the undone poses (the
+/// scale may then be the shift's shadow: the shift is said alone, as without a scale); where
+/// neither remains, the shift was the scale's and `None` is returned (the refit with the first
+/// explanation undone, as the sweep side's `diagnosis/combined_slips.rs`).
+fn shift_behind_scales(
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+    summary: &FreePoseSummary,
+    block: Option<&BlockShift>,
+) -> Option<Shift> {
+    let as_read = explaining_slip(set, desc, options, Some(summary))
+        .map(Shift::Slip)
+        .or_else(|| block.cloned().map(Shift::Block))?;
+    if summary.scales.is_empty() {
+        return Some(as_read);
+    }
+    let undone = scales_undone(set, &summary.scales);
+    let Ok(again) = calibrate_free_poses(&undone, desc, options) else {
+        return Some(as_read);
+    };
+    if let Shift::Block(b) = &as_read
+        && b.undone_rms_mm < again.summary.calibrated_rms_mm
+    {
+        return Some(as_read);
+    }
+    let remains = block_shift(&undone, desc, options, &again).is_some() || {
+        let (_, summary_again) = again.into_calibration(desc);
+        explaining_slip(&undone, desc, options, Some(&summary_again)).is_some()
+    };
+    remains.then_some(as_read)
+}
+
+/// `set` with the column scales `named` undone: each column divided by its factor (a
+/// coordinate column about the origin: the centre a scale is read about moves only the base,
+/// which the fit places).
+fn scales_undone(set: &MeasurementSet, named: &[NamedScale]) -> MeasurementSet {
+    named
+        .iter()
+        .fold(set.clone(), |s, n| match coordinate_index(&n.scale.column) {
+            Some(c) => s.with_coordinate_scaled(c, 1.0 / n.scale.factor),
+            None => {
+                command_index(&n.scale.column).map_or(s.clone(), |j| s.with_command_scaled(j, 1.0 / n.scale.factor))
+            }
+        })
+}
+
+/// The column scales `named` undone, in words (`with `x_mm` divided by 1.02510 (the scale
+/// named above) the poses were calibrated again`).
+fn undone_words(named: &[NamedScale]) -> String {
+    let columns: Vec<String> = named
+        .iter()
+        .map(|n| format!("`{}` divided by {:.5}", n.scale.column, n.scale.factor))
+        .collect();
+    format!(
+        "with {} (the scale named above) the poses were calibrated again",
+        columns.join(" and ")
+    )
+}
+
 /// The coordinate-scale profile ([`super::calibrate::warn_axis_scale`]) of the free poses of
 /// The poses calibrated again with the column scales the screen named
 /// ([`FreePoseSummary::scales`]) undone: each column divided by its factor (a coordinate column
@@ -462,14 +539,7 @@ impl Undone {
         if named.is_empty() {
             return None;
         }
-        let undone = named
-            .iter()
-            .fold(set.clone(), |s, n| match coordinate_index(&n.scale.column) {
-                Some(c) => s.with_coordinate_scaled(c, 1.0 / n.scale.factor),
-                None => {
-                    command_index(&n.scale.column).map_or(s.clone(), |j| s.with_command_scaled(j, 1.0 / n.scale.factor))
-                }
-            });
+        let undone = scales_undone(set, named);
         let profile = FreePoseOptions {
             holdout: false,
             effects: false,
@@ -478,18 +548,11 @@ impl Undone {
         let (cal, summary) = calibrate_free_poses(&undone, desc, &profile)
             .ok()?
             .into_calibration(desc);
-        let columns: Vec<String> = named
-            .iter()
-            .map(|n| format!("`{}` divided by {:.5}", n.scale.column, n.scale.factor))
-            .collect();
         Some(Undone {
             set: undone,
             cal,
             summary,
-            words: format!(
-                "with {} (the scale named above) the poses were calibrated again",
-                columns.join(" and ")
-            ),
+            words: undone_words(named),
         })
     }
 
