@@ -458,7 +458,9 @@ enum Shift {
 /// RMS) is said, as is a slip or block that both tests still find on the undone poses (the
 /// scale may then be the shift's shadow: the shift is said alone, as without a scale); where
 /// neither remains, the shift was the scale's and `None` is returned (the refit with the first
-/// explanation undone, as the sweep side's `diagnosis/combined_slips.rs`).
+/// explanation undone, as the sweep side's `diagnosis/combined_slips.rs`). A column slip of a
+/// column the screen named (`cmd_3` in gradians, read as `cmd_3` x 1.135 +- 0.018) is said: the
+/// two agree on the column, and the slip's exact factor names the cause.
 fn shift_behind_scales(
     (set, desc): (&MeasurementSet, &RobotDescription),
     options: &FreePoseOptions,
@@ -468,7 +470,8 @@ fn shift_behind_scales(
     let as_read = explaining_slip(set, desc, options, Some(summary))
         .map(Shift::Slip)
         .or_else(|| block.cloned().map(Shift::Block))?;
-    if summary.scales.is_empty() {
+    let same_column = matches!(&as_read, Shift::Slip(s) if summary.scales.iter().any(|n| n.scale.column == s.field));
+    if summary.scales.is_empty() || same_column {
         return Some(as_read);
     }
     let undone = scales_undone(set, &summary.scales);

@@ -963,11 +963,11 @@ fn print_sweep_end(
 /// from `data`): more rows than [`axiscal::diagnosis::MAX_SEARCH_ROWS`].
 pub fn unsearched_words(set: &MeasurementSet, data: &Path) -> String {
     format!(
-        "the search for slips in runs of rows and for two slips at once runs on files of up to {} rows, and {} has {}: \
+        "the search for slips in runs of rows and for two slips at once runs on up to {} rows, and these are {} rows of {}: \
          it was not run",
         axiscal::diagnosis::MAX_SEARCH_ROWS,
-        data.display(),
-        set.rows().len()
+        set.rows().len(),
+        data.display()
     )
 }
 

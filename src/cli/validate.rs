@@ -178,7 +178,7 @@ fn without_sweep_outliers(
 /// far-out fences of every point's residual and of its distance from its pose's other targets'
 /// residuals; an error of the model moves a pose's targets alike), dropped unless `keep`. A
 /// point is flagged only if it is also beyond them once the calibration's own error, which
-/// every pose's residuals estimate together, is taken out
+/// the residuals of every pose but the flagged points' estimate together, is taken out
 /// ([`residuals_less_calibration_error`]): where that error dominates the prediction, a clean
 /// point may sit tens of noise sigmas off, and it is the calibration's error, not a gross one.
 fn free_pose_outliers(
@@ -197,7 +197,9 @@ fn free_pose_outliers(
     if flagged.is_empty() {
         return Ok(flagged);
     }
-    let explained = residuals_less_calibration_error(set, cal, desc, v)?;
+    let suspects: std::collections::BTreeSet<(&str, usize)> =
+        flagged.iter().map(|o| (o.experiment.as_str(), o.step)).collect();
+    let explained = residuals_less_calibration_error(set, cal, desc, v, &suspects)?;
     let still = pose_point_outliers(set, &free_pose_residuals(set, &explained), sigma_m, keep);
     let key = |o: &OutlierPoint| (o.experiment.clone(), o.step, o.target);
     let still: std::collections::HashSet<_> = still.iter().map(key).collect();

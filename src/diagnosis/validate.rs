@@ -845,9 +845,10 @@ impl<'a> PoseContext<'a> {
 
 /// The free points' residuals of `v` (validated on `set` with `cal`) less the calibration's
 /// error that all of them estimate together: with `e_hat` the posterior mean of the shared
-/// error `e` given every free pose's residuals ([`SharedErrorChiSquare::estimate`], each pose
-/// weighted by its noise and repeatability), each pose's residuals `r_i - G_i e_hat` (`G_i`
-/// its factor, [`PredictionError`]); the rows that are not free keep theirs. A point the
+/// error `e` given every free pose's residuals but those of the poses `left_out` (experiment,
+/// step: suspected gross errors, which would drag it; [`SharedErrorChiSquare::estimate`], each
+/// pose weighted by its noise and repeatability), each pose's residuals `r_i - G_i e_hat`
+/// (`G_i` its factor, [`PredictionError`]); the rows that are not free keep theirs. A point the
 /// calibration's own error moves far (its error is one for every pose) comes back to the
 /// noise; a corrupted one stays off. Every residual unchanged without a model covariance.
 pub fn residuals_less_calibration_error(
@@ -855,6 +856,7 @@ pub fn residuals_less_calibration_error(
     cal: &Calibration,
     desc: &RobotDescription,
     v: &Validation,
+    left_out: &BTreeSet<(&str, usize)>,
 ) -> Result<Vec<Vector3<f64>>, DiagnosisError> {
     let mut out: Vec<Vector3<f64>> = v
         .residuals
@@ -872,7 +874,8 @@ pub fn residuals_less_calibration_error(
     let order = free_rows_by_pose(set);
     let variance_coord_mm2 = v.noise_rms_3d_mm.powi(2) / 3.0;
     let mut shared = FreeStatistic::new(&error, 0);
-    for pose in free_pose_groups(set, &order) {
+    let kept = |pose: &FreePose<'_>| !left_out.contains(&(pose.first.experiment.as_str(), pose.first.step));
+    for pose in free_pose_groups(set, &order).filter(kept) {
         let b = block(&pose)?;
         shared.add(
             &b.r,

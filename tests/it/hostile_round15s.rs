@@ -9,13 +9,13 @@ use std::cell::Cell;
 use std::path::{Path, PathBuf};
 
 /// The shipped description of `robot`.
-fn robot(name: &str) -> String {
+pub fn robot(name: &str) -> String {
     format!("{}/scenarios/robots/{name}.toml", env!("CARGO_MANIFEST_DIR"))
 }
 
 /// `simulate --seed seed` of `name` as `<name>_<seed>.csv` in `dir` (`asea-irb6l`: the paper
 /// robot with the rapier simulation, as `simulate` runs it by default; any other: analytic).
-fn simulated(dir: &Path, name: &str, seed: u64) -> PathBuf {
+pub fn simulated(dir: &Path, name: &str, seed: u64) -> PathBuf {
     let out = format!("{name}_{seed}.csv");
     let mut cmd = axiscal();
     cmd.current_dir(dir)
@@ -28,7 +28,7 @@ fn simulated(dir: &Path, name: &str, seed: u64) -> PathBuf {
 }
 
 /// `calibrate` of `file`, its stderr.
-fn calibrated(dir: &Path, name: &str, file: &Path) -> String {
+pub fn calibrated(dir: &Path, name: &str, file: &Path) -> String {
     let mut cmd = axiscal();
     cmd.current_dir(dir).arg("calibrate");
     if name != "asea-irb6l" {

@@ -21,10 +21,9 @@ fn run(dir: &Path, args: &[&str], code: i32) -> (String, String) {
     (stdout(&a), stderr(&a))
 }
 
-/// The validation rows of `simulate --sim analytic --validation-poses POSES --seed SEED` (with
-/// `--robot ROBOT` unless the paper robot), as `name` in `dir`.
-fn validation_poses(dir: &Path, robot_args: &[&str], poses: usize, seed: u64, name: &str) -> PathBuf {
-    let source = format!("src-{name}");
+/// `simulate --sim analytic --validation-poses POSES --seed SEED` (with `ROBOT_ARGS`, none for
+/// the paper robot) as `name` in `dir`.
+pub fn simulated_with_poses(dir: &Path, robot_args: &[&str], poses: usize, seed: u64, name: &str) -> PathBuf {
     let (poses, seed) = (poses.to_string(), seed.to_string());
     let mut args = vec![
         "simulate",
@@ -36,9 +35,15 @@ fn validation_poses(dir: &Path, robot_args: &[&str], poses: usize, seed: u64, na
         &seed,
     ];
     args.extend(robot_args);
-    args.extend(["--out", &source, "--force", "-q"]);
+    args.extend(["--out", name, "--force", "-q"]);
     run(dir, &args, 0);
-    altered_csv(&dir.join(&source), name, |f| f[0] == "validation", |_| {})
+    dir.join(name)
+}
+
+/// The validation rows of [`simulated_with_poses`] as `name` in `dir`.
+fn validation_poses(dir: &Path, robot_args: &[&str], poses: usize, seed: u64, name: &str) -> PathBuf {
+    let source = simulated_with_poses(dir, robot_args, poses, seed, &format!("src-{name}"));
+    altered_csv(&source, name, |f| f[0] == "validation", |_| {})
 }
 
 /// The independent KR free poses (description without targets; the calibration fits them

@@ -6,38 +6,9 @@
 //! (`procedure/screen/bump.rs`, `best_end`), over the ends tried in the file at the bump test's
 //! family-wise rate, and names them by their lines; clean files of eight robots stay quiet.
 
-use crate::common::{altered_csv, axiscal, stderr};
-use std::path::{Path, PathBuf};
-
-/// The shipped description of `robot`.
-fn robot(name: &str) -> String {
-    format!("{}/scenarios/robots/{name}.toml", env!("CARGO_MANIFEST_DIR"))
-}
-
-/// `simulate --seed seed` of `name` as `<name>_<seed>.csv` in `dir` (`asea-irb6l`: the paper
-/// robot with the rapier simulation, as `simulate` runs it by default; any other: analytic).
-fn simulated(dir: &Path, name: &str, seed: u64) -> PathBuf {
-    let out = format!("{name}_{seed}.csv");
-    let mut cmd = axiscal();
-    cmd.current_dir(dir)
-        .args(["simulate", "-q", "--seed", &seed.to_string(), "--out", &out, "--force"]);
-    if name != "asea-irb6l" {
-        cmd.args(["--sim", "analytic", "--robot", &robot(name)]);
-    }
-    cmd.assert().success();
-    dir.join(out)
-}
-
-/// `calibrate` of `file`, its stderr.
-fn calibrated(dir: &Path, name: &str, file: &Path) -> String {
-    let mut cmd = axiscal();
-    cmd.current_dir(dir).arg("calibrate");
-    if name != "asea-irb6l" {
-        cmd.args(["--robot", &robot(name)]);
-    }
-    let a = cmd.arg(file).args(["--out", "cal", "--force"]).assert().success();
-    stderr(&a)
-}
+use crate::common::altered_csv;
+use crate::hostile_round15s::{calibrated, simulated};
+use std::path::Path;
 
 /// The steps of `experiment` in `file`, in file order.
 fn steps_of(file: &Path, experiment: &str) -> Vec<usize> {

@@ -10,6 +10,7 @@
 //! matrix. It now finishes in bounded memory.
 
 use crate::common::{altered_csv, axiscal, stderr};
+use crate::hostile_round16v::simulated_with_poses as simulated;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -27,25 +28,6 @@ const X_MM: usize = 4;
 /// `axiscal ARGS` in `dir`, expecting `code`: its stderr.
 fn run(dir: &Path, args: &[&str], code: i32) -> String {
     stderr(&axiscal().current_dir(dir).args(args).assert().code(code))
-}
-
-/// `simulate --sim analytic --validation-poses POSES --seed SEED` (with `ROBOT_ARGS`) as
-/// `name` in `dir`.
-fn simulated(dir: &Path, robot_args: &[&str], poses: usize, seed: u64, name: &str) -> PathBuf {
-    let (poses, seed) = (poses.to_string(), seed.to_string());
-    let mut args = vec![
-        "simulate",
-        "--sim",
-        "analytic",
-        "--validation-poses",
-        &poses,
-        "--seed",
-        &seed,
-    ];
-    args.extend(robot_args);
-    args.extend(["--out", name, "--force", "-q"]);
-    run(dir, &args, 0);
-    dir.join(name)
 }
 
 /// `file` with `x_mm` of data row `row` (0-based) moved by `mm`, as `name`.

@@ -171,6 +171,32 @@ mod tests {
             .collect()
     }
 
+    /// `blocks` stacked with residuals drawn from the standard normal: the dense covariance
+    /// `blockdiag(N_i) + G G^T`, `G`, the residuals and their statistic.
+    fn stacked(
+        blocks: &[(DMatrix<f64>, DMatrix<f64>)],
+        rng: &mut ChaCha12Rng,
+    ) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>, SharedErrorChiSquare) {
+        let n: usize = blocks.iter().map(|(noise, _)| noise.nrows()).sum();
+        let (mut dense, mut g_all) = (DMatrix::zeros(n, n), DMatrix::zeros(n, 4));
+        let r_all = DVector::from_fn(n, |_, _| StandardNormal.sample(rng));
+        let mut chi = SharedErrorChiSquare::new(4);
+        let mut at = 0;
+        for (noise, g) in blocks {
+            let m = noise.nrows();
+            dense.view_mut((at, at), (m, m)).copy_from(noise);
+            g_all.view_mut((at, 0), (m, 4)).copy_from(g);
+            chi.add(
+                &r_all.rows(at, m).into_owned(),
+                &noise.clone().try_inverse().unwrap(),
+                g,
+            );
+            at += m;
+        }
+        dense += &g_all * g_all.transpose();
+        (dense, g_all, r_all, chi)
+    }
+
     /// The accumulated Woodbury form against the dense `r^T S^-1 r` (a second path: the whole
     /// covariance built and solved by LU).
     #[test]
@@ -178,21 +204,8 @@ mod tests {
         let mut rng = ChaCha12Rng::seed_from_u64(41);
         for _ in 0..20 {
             let blocks = problem(&mut rng);
-            let n: usize = blocks.iter().map(|(noise, _)| noise.nrows()).sum();
-            let mut dense = DMatrix::zeros(n, n);
-            let mut g_all = DMatrix::zeros(n, 4);
-            let r_all = DVector::from_fn(n, |_, _| StandardNormal.sample(&mut rng));
-            let mut chi = SharedErrorChiSquare::new(4);
-            let mut at = 0;
-            for (noise, g) in &blocks {
-                let m = noise.nrows();
-                dense.view_mut((at, at), (m, m)).copy_from(noise);
-                g_all.view_mut((at, 0), (m, 4)).copy_from(g);
-                let r = r_all.rows(at, m).into_owned();
-                chi.add(&r, &noise.clone().try_inverse().unwrap(), g);
-                at += m;
-            }
-            dense += &g_all * g_all.transpose();
+            let (dense, g_all, r_all, chi) = stacked(&blocks, &mut rng);
+            let n = r_all.len();
             let expected = r_all.dot(&dense.lu().solve(&r_all).unwrap());
             assert!(
                 (chi.value() - expected).abs() <= 1e-9 * expected,
@@ -211,23 +224,7 @@ mod tests {
         let mut rng = ChaCha12Rng::seed_from_u64(44);
         for _ in 0..20 {
             let blocks = problem(&mut rng);
-            let n: usize = blocks.iter().map(|(noise, _)| noise.nrows()).sum();
-            let (mut dense, mut g_all) = (DMatrix::zeros(n, n), DMatrix::zeros(n, 4));
-            let r_all = DVector::from_fn(n, |_, _| StandardNormal.sample(&mut rng));
-            let mut chi = SharedErrorChiSquare::new(4);
-            let mut at = 0;
-            for (noise, g) in &blocks {
-                let m = noise.nrows();
-                dense.view_mut((at, at), (m, m)).copy_from(noise);
-                g_all.view_mut((at, 0), (m, 4)).copy_from(g);
-                chi.add(
-                    &r_all.rows(at, m).into_owned(),
-                    &noise.clone().try_inverse().unwrap(),
-                    g,
-                );
-                at += m;
-            }
-            dense += &g_all * g_all.transpose();
+            let (dense, g_all, r_all, chi) = stacked(&blocks, &mut rng);
             let expected = g_all.transpose() * dense.lu().solve(&r_all).unwrap();
             assert!(
                 (chi.estimate() - &expected).norm() <= 1e-9 * expected.norm(),
