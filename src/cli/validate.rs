@@ -88,7 +88,7 @@ pub fn run(args: Args) -> Result<()> {
     let v = validate(&set, &cal, &fitted, &options).with_context(validating)?;
     let misses = explained_validation_misses(&set, &cal, &fitted, &v);
     checks::refuse_explained_misses(&misses, &args.data, args.checks.skip_unit_check)?;
-    if misses.is_empty() && misses_any(&v) && !combined_slips_searched(&set) {
+    if misses.is_empty() && v.exceeds(false) && !combined_slips_searched(&set) {
         let note = format!(
             "{} (validate a part of the file, e.g. one session's rows, to run it)",
             checks::unsearched_words(&set, &args.data)
@@ -223,21 +223,11 @@ fn free_pose_residuals<'a>(set: &'a MeasurementSet, residuals_mm: &[Vector3<f64>
     poses
 }
 
-/// Whether a test of `v` (positions or orientations) says the model misses the data.
-fn misses_any(v: &Validation) -> bool {
-    let exceeds = |c: &Option<ChiSquare>| c.as_ref().is_some_and(|c| c.verdict == Verdict::Exceeds);
-    [&v.validation, &v.tool, &v.axis]
-        .into_iter()
-        .flatten()
-        .any(|s| exceeds(&s.chi_square))
-        || v.orientation.as_ref().is_some_and(|o| exceeds(&o.chi_square))
-}
-
 /// A verdict that the model misses DATA with `--noise-mm` far below the noise DATA's axis
 /// experiments show is refused, as `calibrate` refuses that value ([`checks::noise_far_below`]):
 /// the verdict would blame the model for the instrument's noise.
 fn noise_not_far_below(args: &Args, set: &MeasurementSet, desc: &RobotDescription, v: &Validation) -> Result<()> {
-    let Some(given_mm) = args.noise_mm.filter(|_| misses_any(v)) else {
+    let Some(given_mm) = args.noise_mm.filter(|_| v.exceeds(false)) else {
         return Ok(());
     };
     let options = CalibrationOptions {

@@ -159,13 +159,6 @@ fn summaries(v: &Validation) -> impl Iterator<Item = &PositionSummary> {
     [&v.validation, &v.tool, &v.axis].into_iter().flatten()
 }
 
-/// Whether any test of `v` (positions, orientations) exceeds.
-fn any_exceeds(v: &Validation, positions_only: bool) -> bool {
-    let exceeds = |c: Option<&super::validate::ChiSquare>| c.is_some_and(|c| c.verdict == Verdict::Exceeds);
-    summaries(v).any(|s| exceeds(s.chi_square.as_ref()))
-        || (!positions_only && v.orientation.as_ref().is_some_and(|o| exceeds(o.chi_square.as_ref())))
-}
-
 /// The sum of `v`'s position statistics (infinite without one).
 fn total_statistic(v: &Validation) -> f64 {
     let total: f64 = summaries(v)
@@ -556,7 +549,7 @@ pub fn explained_combined_slips(
     desc: &RobotDescription,
     v: &Validation,
 ) -> Option<ExplainedMiss> {
-    if !any_exceeds(v, true) || !combined_slips_searched(set) {
+    if !v.exceeds(true) || !combined_slips_searched(set) {
         return None;
     }
     let options = ValidationOptions::of_validation(v);
@@ -646,7 +639,7 @@ impl Search<'_> {
             let mut all: Vec<Kept> = kept.to_vec();
             all.iter_mut().zip(refit).for_each(|(k, s)| k.slip = s);
             all.push(slip);
-            if !any_exceeds(&after, false) {
+            if !after.exceeds(false) {
                 return Some((all, after));
             }
             if all.len() < MAX_SLIPS

@@ -371,6 +371,22 @@ pub struct Validation {
     pub residuals: Vec<ValidationResidual>,
 }
 
+impl Validation {
+    /// Whether any position test exceeds, or (unless `positions_only`) the orientations'.
+    pub fn exceeds(&self, positions_only: bool) -> bool {
+        let exceeds = |c: Option<&ChiSquare>| c.is_some_and(|c| c.verdict == Verdict::Exceeds);
+        [&self.validation, &self.tool, &self.axis]
+            .into_iter()
+            .flatten()
+            .any(|s| exceeds(s.chi_square.as_ref()))
+            || (!positions_only
+                && self
+                    .orientation
+                    .as_ref()
+                    .is_some_and(|o| exceeds(o.chi_square.as_ref())))
+    }
+}
+
 /// The kind of `m`.
 fn kind_of(m: &Measurement) -> PointKind {
     if m.moved_joint > 0 {
