@@ -8,8 +8,7 @@ use super::output::Outputs;
 use anyhow::{Context, Result};
 use axiscal::calibration::procedure::{Calibration, CalibrationOptions, OutlierPoint, ProcedureError, screen_sweeps};
 use axiscal::diagnosis::{
-    ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, Verdict, validate,
-    write_validation_residuals_csv,
+    ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, validate, write_validation_residuals_csv,
 };
 use axiscal::diagnosis::{
     PoseResiduals, combined_slips_searched, explained_validation_misses, free_poses_only, pose_point_outliers,
