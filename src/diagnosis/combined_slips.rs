@@ -57,7 +57,7 @@ pub const MIN_BLOCK_POSES: usize = 3;
 /// the model with every row predicted again, some hundreds of times over a search. At 100 000
 /// rows that took 257 s and 552 MB (quick-release build), at a million more than 2 GB and many
 /// minutes; and beyond about 340 poses the runs start on evenly spaced poses only
-/// ([`run_boundaries`]), so a slip starting between them is not found anyway.
+/// (the runs' boundaries), so a slip starting between them is not found anyway.
 pub const MAX_SEARCH_ROWS: usize = 20_000;
 
 /// Whether [`explained_combined_slips`] searches `set`: at most [`MAX_SEARCH_ROWS`] rows.

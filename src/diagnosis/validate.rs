@@ -864,9 +864,10 @@ impl<'a> PoseContext<'a> {
 /// error `e` given every free pose's residuals but those of the poses `left_out` (experiment,
 /// step: suspected gross errors, which would drag it; [`SharedErrorChiSquare::estimate`], each
 /// pose weighted by its noise and repeatability), each pose's residuals `r_i - G_i e_hat`
-/// (`G_i` its factor, [`PredictionError`]); the rows that are not free keep theirs. A point the
-/// calibration's own error moves far (its error is one for every pose) comes back to the
-/// noise; a corrupted one stays off. Every residual unchanged without a model covariance.
+/// (`G_i` its factor, `predicted_error::PredictionError`); the rows that are not free keep
+/// theirs. A point the calibration's own error moves far (its error is one for every pose)
+/// comes back to the noise; a corrupted one stays off. Every residual unchanged without a
+/// model covariance.
 pub fn residuals_less_calibration_error(
     set: &MeasurementSet,
     cal: &Calibration,
