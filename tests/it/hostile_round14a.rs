@@ -18,22 +18,34 @@ pub(crate) fn robot(name: &str) -> PathBuf {
 /// The free poses (`moved_joint = 0`) of `simulate --sim analytic --validation-poses 60 --seed
 /// SEED` in `dir`, as `fp_<robot>_<seed>.csv`.
 pub(crate) fn free_poses(dir: &Path, name: &str, seed: u64) -> PathBuf {
-    let source = format!("src_{name}_{seed}.csv");
+    free_poses_of(dir, name, seed, 60)
+}
+
+/// [`free_poses`] of `poses` validation poses, as `fp_<robot>_<seed>.csv` (60) or
+/// `fp_<robot>_<seed>_<poses>.csv`.
+pub(crate) fn free_poses_of(dir: &Path, name: &str, seed: u64, poses: usize) -> PathBuf {
+    let source = format!("src_{name}_{seed}_{poses}.csv");
     axiscal()
         .current_dir(dir)
-        .args(["simulate", "--sim", "analytic", "--validation-poses", "60", "--seed"])
+        .args([
+            "simulate",
+            "--sim",
+            "analytic",
+            "--validation-poses",
+            &poses.to_string(),
+            "--seed",
+        ])
         .arg(seed.to_string())
         .arg("--robot")
         .arg(robot(name))
         .args(["--out", &source, "--force"])
         .assert()
         .success();
-    altered_csv(
-        &dir.join(source),
-        &format!("fp_{name}_{seed}.csv"),
-        |f| f[1] == "0",
-        |_| {},
-    )
+    let out = match poses {
+        60 => format!("fp_{name}_{seed}.csv"),
+        _ => format!("fp_{name}_{seed}_{poses}.csv"),
+    };
+    altered_csv(&dir.join(source), &out, |f| f[1] == "0", |_| {})
 }
 
 /// `calibrate FILE --robot ROBOT` in `dir`: its stderr and the free-pose summary.

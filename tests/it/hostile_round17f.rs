@@ -16,8 +16,8 @@
 //! made on the poses with the geometry's finding undone, and the poses as read are tested at
 //! it: the column is named.
 
-use crate::common::{altered_csv, axiscal};
-use crate::hostile_round14a::{calibrate, robot, scaled};
+use crate::common::altered_csv;
+use crate::hostile_round14a::{calibrate, free_poses_of, robot, scaled};
 use std::path::{Path, PathBuf};
 
 /// Fields of the measurement CSV: `x_mm` is 4, `z_mm` 6, `cmd_1` 7.
@@ -79,29 +79,13 @@ fn a_bump_on_the_kr_is_still_said() {
     assert!(e.contains(MOVED), "the bump not said: {e}");
 }
 
-/// The free poses of `simulate --sim analytic --validation-poses 150 --seed SEED` of `name`
-/// in `dir` (the hostile run's 7-axis files), as `free_<seed>.csv`.
-fn free_poses_150(dir: &Path, name: &str, seed: u64) -> PathBuf {
-    let source = format!("sim_{seed}.csv");
-    axiscal()
-        .current_dir(dir)
-        .args(["simulate", "--sim", "analytic", "--validation-poses", "150", "--seed"])
-        .arg(seed.to_string())
-        .arg("--robot")
-        .arg(robot(name))
-        .args(["--out", &source, "--force"])
-        .assert()
-        .success();
-    altered_csv(&dir.join(source), &format!("free_{seed}.csv"), |f| f[1] == "0", |_| {})
-}
-
 /// The 7-axis arm's free poses (seed 7, hostile run 16's file): clean, nothing named; `x_mm`
 /// x1.025 and `y_mm` x1.05, that column named first.
 #[test]
 fn an_axis_scale_on_the_7_axis_arm_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let r = robot("arm7-dh");
-    let clean = free_poses_150(dir.path(), "arm7-dh", 7);
+    let clean = free_poses_of(dir.path(), "arm7-dh", 7, 150);
     let (e, s) = calibrate(dir.path(), &clean, &r);
     assert!(s.scales.is_empty(), "a false alarm: {e}");
     for (column, factor, name) in [(X_MM, 1.025, "x_mm"), (X_MM + 1, 1.05, "y_mm")] {
