@@ -62,6 +62,8 @@ pub struct ToolSensitivity<'a> {
     frames: FixedFrames,
     /// Per parameter with a variance: the models at `+h` and `-h` and `2 h`.
     moved: Vec<(Moved, Moved, f64)>,
+    /// The parameters with a variance (indices into the model's parameter vector).
+    used: Vec<usize>,
     /// The covariance of those parameters.
     covariance: DMatrix<f64>,
 }
@@ -86,8 +88,15 @@ impl<'a> ToolSensitivity<'a> {
             controller,
             frames,
             moved,
+            used,
             covariance,
         }
+    }
+
+    /// The parameters with a variance, in the order of [`Self::jacobian`]'s columns: indices
+    /// into the model's parameter vector ([`model_parameter_names`](crate::calibration::model_parameters::model_parameter_names)).
+    pub fn parameters(&self) -> &[usize] {
+        &self.used
     }
 
     /// Per parameter with a variance (the columns of [`Self::jacobian`], in order): the

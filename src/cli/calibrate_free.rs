@@ -454,8 +454,8 @@ enum Shift {
 /// in file order where those poses stand together (a KR's `cmd_5` x1.025 read as lines
 /// 474-482 moved; its `x_mm` x1.025 as the poses from line 780 on). The two explanations are
 /// compared by their fit: the poses with the scales undone are calibrated again with the same
-/// options; a block whose moving back fits the poses better than the scales undone (calibrated
-/// RMS) is said, as is a slip or block that both tests still find on the undone poses (the
+/// options; a block or slip whose undoing fits the poses better than the scales undone
+/// (calibrated RMS) is said (a `cmd_2`/`cmd_3` swap the screen reads as `cmd_2` x 1.31), as is a slip or block that both tests still find on the undone poses (the
 /// scale may then be the shift's shadow: the shift is said alone, as without a scale); where
 /// neither remains, the shift was the scale's and `None` is returned (the refit with the first
 /// explanation undone, as the sweep side's `diagnosis/combined_slips.rs`). A column slip of a
@@ -478,9 +478,13 @@ fn shift_behind_scales(
     let Ok(again) = calibrate_free_poses(&undone, desc, options) else {
         return Some(as_read);
     };
-    if let Shift::Block(b) = &as_read
-        && b.undone_rms_mm < again.summary.calibrated_rms_mm
-    {
+    // A shift that leaves less than the scales' refit does explains more than they do (a
+    // column swap read as a scale that takes a twentieth of its misfit).
+    let undone_rms_mm = match &as_read {
+        Shift::Block(b) => b.undone_rms_mm,
+        Shift::Slip(s) => s.undone_rms_mm,
+    };
+    if undone_rms_mm < again.summary.calibrated_rms_mm {
         return Some(as_read);
     }
     let remains = block_shift(&undone, desc, options, &again).is_some() || {

@@ -36,6 +36,7 @@ mod outliers;
 mod plausible;
 mod plots;
 mod predicted_error;
+mod prediction_curvature;
 mod refine;
 mod report;
 mod result;

@@ -18,15 +18,20 @@
 //! frame is `R^T w`. Both Jacobians are taken at the pose's calibrated joint values; the
 //! calibration's without the model's carried effects (a sag or backlash moves the joints by
 //! far less than the Jacobian's curvature scale).
+//!
+//! Where the calibration's error is wide enough for the model's curvature to count, its
+//! remainder beyond the Jacobian joins the shared error as more components
+//! ([`super::prediction_curvature`]), after the Jacobian's and before a free tool frame's.
 
 use super::DiagnosisError;
 use super::noise::CleanCampaign;
+use super::prediction_curvature::{Curvature, DrawnFrames, with_remainder};
 use crate::calibration::procedure::Calibration;
 use crate::calibration::tool_accuracy::ToolSensitivity;
 use crate::kinematics::{PhiModel, geometric_jacobian};
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::CorrelatedNormal;
-use crate::robot::{Controller, RobotDescription};
+use crate::robot::{Controller, RobotDescription, RobotModel};
 use nalgebra::{DMatrix, Isometry3, Point3};
 
 /// The calibration's parameter error and the robot's repeatability as factors of the tool
@@ -37,16 +42,26 @@ pub(super) struct PredictionError<'a> {
     calibration: Option<(ToolSensitivity<'a>, DMatrix<f64>)>,
     /// The repeatability of each joint \[rad or m\].
     repeatability: Vec<f64>,
+    /// The calibrated model, and the controller its poses are commanded through.
+    robot: &'a RobotModel,
+    controller: &'a Controller,
+    /// The models drawn from the calibration's error, when its curvature counts.
+    curvature: Option<Curvature>,
 }
 
 /// The error factors of the tool pose at one pose.
-pub(super) struct PoseError {
+pub(super) struct PoseError<'a> {
     /// The calibrated tool frame (instrument frame, m).
     world_from_tool: Isometry3<f64>,
-    /// `J_p L`: rows 0-2 the origin \[mm\], rows 3-5 the rotation \[rad\].
+    /// `J_p L`: rows 0-2 the origin \[mm\], rows 3-5 the rotation \[rad\]; then the free
+    /// tool frame's columns ([`PoseError::with_free_tool`]).
     calibration: DMatrix<f64>,
+    /// Columns of `calibration` after `J_p L`'s: the free tool frame's.
+    free: usize,
     /// `J_q diag(sigma)`, the same rows.
     repeatability: DMatrix<f64>,
+    /// The drawn models and their tool frames at this pose ([`super::prediction_curvature`]).
+    drawn: Option<(&'a Curvature, DrawnFrames)>,
 }
 
 /// A block of residuals' covariance factors: the noise-free parts of what they may miss by.
@@ -75,6 +90,9 @@ impl<'a> PredictionError<'a> {
             return Ok(PredictionError {
                 calibration: None,
                 repeatability,
+                robot: &cal.robot,
+                controller,
+                curvature: None,
             });
         };
         covariance.validate(&cal.robot).map_err(|e| DiagnosisError::Model {
@@ -90,7 +108,37 @@ impl<'a> PredictionError<'a> {
         Ok(PredictionError {
             calibration: Some((sensitivity, factor)),
             repeatability,
+            robot: &cal.robot,
+            controller,
+            curvature: None,
         })
+    }
+
+    /// With the calibration's error also drawn ([`super::prediction_curvature`]): its
+    /// remainder beyond the Jacobian among the shared components. Unchanged without a model
+    /// covariance.
+    pub(super) fn with_curvature(mut self) -> Self {
+        self.curvature = self
+            .calibration
+            .as_ref()
+            .map(|(sensitivity, l)| Curvature::draw(self.robot, sensitivity.parameters(), l));
+        self
+    }
+
+    /// Without the drawn remainder: the linear prediction.
+    pub(super) fn without_curvature(mut self) -> Self {
+        self.curvature = None;
+        self
+    }
+
+    /// Whether the drawn remainder is among the shared components.
+    pub(super) fn has_curvature(&self) -> bool {
+        self.curvature.is_some()
+    }
+
+    /// Shared components of the Jacobian (`L`'s columns), before the remainder's.
+    pub(super) fn linear_rank(&self) -> usize {
+        self.calibration.as_ref().map_or(0, |(_, l)| l.ncols())
     }
 
     /// The repeatability of each joint \[rad or m\].
@@ -103,9 +151,10 @@ impl<'a> PredictionError<'a> {
         self.calibration.is_some()
     }
 
-    /// Components of the calibration's shared error `e` (0 without it).
+    /// Components of the calibration's shared error `e` (0 without it): the Jacobian's, then
+    /// the remainder's draws.
     pub(super) fn rank(&self) -> usize {
-        self.calibration.as_ref().map_or(0, |(_, l)| l.ncols())
+        self.linear_rank() + self.curvature.as_ref().map_or(0, |_| Curvature::DRAWS)
     }
 
     /// The calibration's error factor (rows x rank, mm) of the points of `subset`, predicted
@@ -123,19 +172,31 @@ impl<'a> PredictionError<'a> {
             return Ok(DMatrix::zeros(3 * n, 0));
         };
         let mut j = DMatrix::zeros(3 * n, l.nrows());
+        let at = |robot| CleanCampaign::on_robot(subset, robot, desc, tool_targets_m).map(|c| c.positions());
         for (column, (plus, minus, step)) in sensitivity.moved_models().enumerate() {
-            let at = |robot| CleanCampaign::on_robot(subset, robot, desc, tool_targets_m).map(|c| c.positions());
             for (i, (a, b)) in at(plus)?.iter().zip(at(minus)?).enumerate() {
                 let d_mm = (a - b) / step * 1e3;
                 j.view_mut((3 * i, column), (3, 1)).copy_from(&d_mm);
             }
         }
-        Ok(j * l)
+        let linear = j * l;
+        let Some(curvature) = &self.curvature else {
+            return Ok(linear);
+        };
+        let calibrated = at(self.robot)?;
+        let mut moved = DMatrix::zeros(3 * n, Curvature::DRAWS);
+        for (column, robot) in curvature.models().enumerate() {
+            for (i, (a, b)) in at(robot)?.iter().zip(&calibrated).enumerate() {
+                moved.view_mut((3 * i, column), (3, 1)).copy_from(&((a - b) * 1e3));
+            }
+        }
+        let remainder = curvature.remainder(&moved, &linear);
+        Ok(with_remainder(&linear, linear.ncols(), &remainder))
     }
 
     /// The error factors of the tool pose at internal commands `cmd`, whose calibrated joint
     /// values on `phi` are `q`.
-    pub(super) fn at(&self, phi: &PhiModel, cmd: &[f64], q: &[f64]) -> Result<PoseError, DiagnosisError> {
+    pub(super) fn at(&self, phi: &PhiModel, cmd: &[f64], q: &[f64]) -> Result<PoseError<'_>, DiagnosisError> {
         let in_mm = |mut m: DMatrix<f64>| {
             m.rows_mut(0, 3).scale_mut(1e3);
             m
@@ -151,15 +212,26 @@ impl<'a> PredictionError<'a> {
         };
         let jq = geometric_jacobian(phi, q);
         let repeatability = in_mm(DMatrix::from_fn(6, q.len(), |r, c| jq[(r, c)] * self.repeatability[c]));
+        let drawn = match &self.curvature {
+            Some(curvature) => Some((
+                curvature,
+                curvature
+                    .tool_frames(self.robot, self.controller, cmd)
+                    .map_err(|e| DiagnosisError::Model { message: e.to_string() })?,
+            )),
+            None => None,
+        };
         Ok(PoseError {
             world_from_tool: phi.world_from_tool(q),
             calibration,
+            free: 0,
             repeatability,
+            drawn,
         })
     }
 }
 
-impl PoseError {
+impl PoseError<'_> {
     /// Components of a tool frame nobody measured ([`PoseError::with_free_tool`]).
     pub(super) const FREE_TOOL: usize = 6;
 
@@ -177,6 +249,7 @@ impl PoseError {
             view.copy_from(rotation.matrix());
         }
         self.calibration = columns;
+        self.free = Self::FREE_TOOL;
         self
     }
 
@@ -192,18 +265,47 @@ impl PoseError {
             }
             out
         };
+        let calibration = stacked(&self.calibration);
+        let calibration = match &self.drawn {
+            None => calibration,
+            Some((curvature, frames)) => {
+                let moved = DMatrix::from_fn(3 * targets_m.len(), Curvature::DRAWS, |r, j| {
+                    let t = &targets_m[r / 3];
+                    ((frames.drawn[j] * t - frames.calibrated * t) * 1e3)[r % 3]
+                });
+                self.with_drawn(&calibration, curvature, &moved)
+            }
+        };
         BlockFactors {
-            calibration: stacked(&self.calibration),
+            calibration,
             repeatability: stacked(&self.repeatability),
         }
+    }
+
+    /// `factor` (this pose's calibration columns, moved to some rows) with the remainder of
+    /// `moved` (those rows' displacement under each draw) inserted before the free columns.
+    fn with_drawn(&self, factor: &DMatrix<f64>, curvature: &Curvature, moved: &DMatrix<f64>) -> DMatrix<f64> {
+        let k = factor.ncols() - self.free;
+        let remainder = curvature.remainder(moved, &factor.columns(0, k).into_owned());
+        with_remainder(factor, k, &remainder)
     }
 
     /// The factors of the tool frame's rotation, in the tool frame \[rad\].
     pub(super) fn rotation(&self) -> BlockFactors {
         let to_tool = self.world_from_tool.rotation.inverse().to_rotation_matrix();
         let to_tool = DMatrix::from_column_slice(3, 3, to_tool.matrix().as_slice());
+        let calibration = self.calibration.rows(3, 3).into_owned();
+        let calibration = match &self.drawn {
+            None => calibration,
+            Some((curvature, frames)) => {
+                let moved = DMatrix::from_fn(3, Curvature::DRAWS, |r, j| {
+                    (frames.drawn[j].rotation * frames.calibrated.rotation.inverse()).scaled_axis()[r]
+                });
+                self.with_drawn(&calibration, curvature, &moved)
+            }
+        };
         BlockFactors {
-            calibration: &to_tool * self.calibration.rows(3, 3),
+            calibration: &to_tool * calibration,
             repeatability: &to_tool * self.repeatability.rows(3, 3),
         }
     }

@@ -29,6 +29,7 @@
 use super::DiagnosisError;
 use super::noise::{CleanCampaign, calibrated_joint_values};
 use super::predicted_error::{BlockFactors, PoseError, PredictionError};
+use super::prediction_curvature::Curvature;
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::{PhiModel, rigid_fit};
 use crate::measurement::{Measurement, MeasurementSet};
@@ -471,7 +472,7 @@ fn validate_with(
         })
         .collect();
     let controller = Controller::from_description(desc);
-    let error = PredictionError::new(cal, &controller, desc)?;
+    let error = prediction_error(set, (cal, desc, &controller), &residuals, options.noise_rms_3d_mm)?;
     let free = free_poses(set, (cal, desc, &controller), &residuals, &error, (options, free_tool))?;
     let axis_steps = axis_statistic(set, desc, &clean, &residuals, &error, options)?;
     let summary = |kind, statistic| position_summary(&residuals, kind, statistic, options);
@@ -779,12 +780,68 @@ fn free_poses(
     })
 }
 
+/// Free poses [`prediction_error`] samples, evenly spaced through the file.
+const CURVATURE_SAMPLE: usize = 64;
+
+/// Free poses beyond which [`prediction_error`] keeps the linear prediction: the drawn
+/// remainder costs about two million operations a pose (256 more components), ten seconds at
+/// this many.
+const CURVATURE_MAX_POSES: usize = 5000;
+
+/// What `set`'s points may miss by beside the noise ([`PredictionError`]), the model's
+/// curvature over the calibration's error included where it counts
+/// ([`super::prediction_curvature`]): judged on at most [`CURVATURE_SAMPLE`] of its free
+/// poses, each with its noise (`noise_rms_3d_mm`), repeatability and linear calibration
+/// covariance. A set without free poses, or with more than [`CURVATURE_MAX_POSES`], keeps the
+/// linear prediction.
+fn prediction_error<'a>(
+    set: &MeasurementSet,
+    (cal, desc, controller): (&'a Calibration, &RobotDescription, &'a Controller),
+    residuals: &[ValidationResidual],
+    noise_rms_3d_mm: f64,
+) -> Result<PredictionError<'a>, DiagnosisError> {
+    let error = PredictionError::new(cal, controller, desc)?.with_curvature();
+    if !error.has_curvature() {
+        return Ok(error);
+    }
+    let order = free_rows_by_pose(set);
+    let poses = free_pose_groups(set, &order).count();
+    if poses > CURVATURE_MAX_POSES {
+        return Ok(error.without_curvature());
+    }
+    let sampled: BTreeSet<usize> = crate::measurement::bounded::evenly_spaced((0..poses).collect(), CURVATURE_SAMPLE)
+        .into_iter()
+        .collect();
+    let counts = {
+        let context = PoseContext::new(set, (cal, desc, controller), residuals, &error, false);
+        let tool_targets = desc.tool_targets_m();
+        let (linear, variance_coord_mm2) = (error.linear_rank(), noise_rms_3d_mm.powi(2) / 3.0);
+        let mut blocks = Vec::with_capacity(sampled.len());
+        for (_, pose) in free_pose_groups(set, &order)
+            .enumerate()
+            .filter(|(i, _)| sampled.contains(i))
+        {
+            let factors = context.block(&pose, &tool_targets)?.factors;
+            let (g, jitter) = (factors.calibration.columns(0, linear), &factors.repeatability);
+            let n = g.nrows();
+            let covariance =
+                DMatrix::identity(n, n) * variance_coord_mm2 + jitter * jitter.transpose() + g * g.transpose();
+            blocks.push((
+                covariance,
+                factors.calibration.columns(linear, Curvature::DRAWS).into_owned(),
+            ));
+        }
+        Curvature::counts(blocks.into_iter(), poses as f64 / sampled.len().max(1) as f64)
+    };
+    Ok(if counts { error } else { error.without_curvature() })
+}
+
 /// One free pose's residuals and what they may miss by beside the noise.
-struct PoseBlock {
+struct PoseBlock<'a> {
     /// The pose's calibrated joint values.
     q: Vec<f64>,
     /// The error factors of its tool frame.
-    error: PoseError,
+    error: PoseError<'a>,
     /// Its points' residuals (measured minus predicted), stacked \[mm\].
     r: DVector<f64>,
     /// Its points' covariance factors.
@@ -829,7 +886,7 @@ impl<'a> PoseContext<'a> {
     }
 
     /// `pose`'s block.
-    fn block(&self, pose: &FreePose<'_>, tool_targets: &[Point3<f64>]) -> Result<PoseBlock, DiagnosisError> {
+    fn block(&self, pose: &FreePose<'_>, tool_targets: &[Point3<f64>]) -> Result<PoseBlock<'_>, DiagnosisError> {
         let m = pose.first;
         let q = calibrated_joint_values(
             &self.cal.robot,
@@ -881,7 +938,7 @@ pub fn residuals_less_calibration_error(
         .map(|r| Vector3::from(r.measured_mm) - Vector3::from(r.predicted_mm))
         .collect();
     let controller = Controller::from_description(desc);
-    let error = PredictionError::new(cal, &controller, desc)?;
+    let error = prediction_error(set, (cal, desc, &controller), &v.residuals, v.noise_rms_3d_mm)?;
     if !error.has_calibration() {
         return Ok(out);
     }

@@ -24,8 +24,8 @@
 //!   along the other's nominal line, their experiments are labelled the other's. A description
 //!   placed otherwise than the robot stands turns every axis, which says neither.
 //! - **Tool.** The tool frame fitted from the tool observation against the description's, in
-//!   the last link: beyond [`PLAUSIBLE_AXIS_TILT_RAD`] it is no tool's deviation from its
-//!   drawing. Three targets in a plane fit their mirror image (two ids swapped) exactly, turned
+//!   the last link: beyond [`PLAUSIBLE_AXIS_TILT_RAD`] (plus [`SIGNIFICANT_SIGMAS`] of its
+//!   rotation sigma) it is no tool's deviation from its drawing. Three targets in a plane fit their mirror image (two ids swapped) exactly, turned
 //!   over by up to 180 deg. A mirrored frame or a flipped or swapped axis turns the tool over
 //!   too: it is then left unsaid.
 //! - **Tool fit.** The three-point fit of the tool frame leaves `3 n - 6` degrees of freedom
@@ -389,13 +389,33 @@ fn tool_misfit(cal: &Calibration, desc: &RobotDescription) -> Option<Implausible
 }
 
 /// The tool check of the module doc: the fitted tool frame against the described one, both in
-/// the last link, beyond [`PLAUSIBLE_AXIS_TILT_RAD`].
+/// the last link, beyond [`PLAUSIBLE_AXIS_TILT_RAD`] (a drawing's tool) plus
+/// [`SIGNIFICANT_SIGMAS`] of the fitted frame's rotation sigma (its estimate's: a tool seen
+/// from a flange the calibration knows to a few degrees is known no better; a few mrad after
+/// full sweeps).
 fn tool_turned(cal: &Calibration, desc: &RobotDescription) -> Option<Implausible> {
     let described = RobotModel::ideal(desc).tool_frame.to_isometry().rotation;
     let angle = described.angle_to(&cal.robot.tool_frame.to_isometry().rotation);
-    (angle > PLAUSIBLE_AXIS_TILT_RAD).then(|| Implausible::ToolTurned {
+    let tolerance = PLAUSIBLE_AXIS_TILT_RAD + SIGNIFICANT_SIGMAS * tool_rotation_sigma_rad(cal);
+    (angle > tolerance).then(|| Implausible::ToolTurned {
         angle_deg: angle.to_degrees(),
     })
+}
+
+/// The fitted tool frame's rotation 1-sigma, its covariance's largest principal one (the
+/// last three of the model's parameters, [`crate::calibration::model_parameters::model_parameter_names`]);
+/// 0 without a model covariance.
+fn tool_rotation_sigma_rad(cal: &Calibration) -> f64 {
+    let Some(covariance) = &cal.model_covariance else {
+        return 0.0;
+    };
+    let c = covariance.matrix();
+    let n = c.nrows();
+    if n < 3 {
+        return 0.0;
+    }
+    let rotation = c.view((n - 3, n - 3), (3, 3)).into_owned();
+    rotation.symmetric_eigenvalues().max().max(0.0).sqrt()
 }
 
 /// Each fitted axis's direction, the nominal one at the reference pose (instrument frame, the
