@@ -196,3 +196,31 @@ fn a_bump_in_a_jittered_sweep_is_named_and_clean_ones_are_quiet() {
         }
     }
 }
+
+/// The instrument moved for good after axis3's first 2 points (arm6-dh, z +2 mm on every row
+/// from axis3's step 2 to the file's end): the bump is named, and no `z_mm` scale beside it
+/// (main said "`z_mm` reads 1.00559 times"); the validation poses, all in the new place, are
+/// missed by the calibration as written, which says so.
+#[test]
+fn an_instrument_moved_for_good_is_not_a_scale_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = simulated(dir.path(), &["--robot", "arm6-dh"], 201, "clean.csv");
+    let moved = std::cell::Cell::new(false);
+    let file = altered_csv(
+        &clean,
+        "in.csv",
+        |_| true,
+        |f| {
+            moved.set(moved.get() || (f[0] == "axis3" && f[2] == "2"));
+            if moved.get() {
+                f[6] = (f[6].parse::<f64>().unwrap() + 2.0).to_string();
+            }
+        },
+    );
+    let e = calibrated(dir.path(), "arm6-dh", &file);
+    let said = warnings(&e);
+    assert!(
+        said.len() == 1 && said[0].contains("experiment axis3's first 2 of 16 points"),
+        "{e}"
+    );
+}
