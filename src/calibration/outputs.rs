@@ -37,6 +37,10 @@ pub struct OutputOptions {
     /// The instrument axis whose scale explains the joints' transmission departures, found on
     /// the data (`calibration::procedure::column_source`): said in their place.
     pub column_source: Option<ColumnSource>,
+    /// The checks' findings ([`implausible`]) of the calibration of the data with the sweep
+    /// screen's named bumps moved back (`procedure::bumps_undone`), said in place of this
+    /// calibration's, whose fits took each bump into its joint; `None`: no bump was named.
+    pub bumps_undone: Option<Vec<Implausible>>,
 }
 
 /// The rendered outputs of a calibration.
@@ -77,7 +81,10 @@ pub fn render(
     let json = |file: &'static str, r: serde_json::Result<String>| r.map_err(|cause| OutputError { file, cause });
     let cal = &record.calibration;
     let implausible = match record.reports.free_poses {
-        None => with_column_source(implausible(cal, desc), options.column_source.as_ref()),
+        None => with_column_source(
+            options.bumps_undone.clone().unwrap_or_else(|| implausible(cal, desc)),
+            options.column_source.as_ref(),
+        ),
         Some(_) => vec![],
     };
     let deviation = raw_reading_deviation(cal, desc, poses);

@@ -15,7 +15,8 @@ use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, ColumnSource, DEFAULT_HELD_TOLERANCE, Implausible,
     PLAUSIBLE_AXIS_TILT_RAD, ProcedureError, RawReadingDeviation, Refit, SIZE_TOLERANCE, ScaleSlip, UrdfOptions,
-    UrdfRoot, calibrate, column_source, implausible, joint_slopes, longest_length_m, ros_name, screen_sweeps,
+    UrdfRoot, bumps_undone, calibrate, column_source, implausible, joint_slopes, longest_length_m, ros_name,
+    screen_sweeps, wandering_sweep_bumps,
 };
 use axiscal::calibration::record::{CalibrationRecord, Reports};
 use axiscal::calibration::refine::{RefineOptions, Refinement, enough_free_poses};
@@ -186,7 +187,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let set = checks::read_data(&args.data, &desc, &args.robot, args.checks)?;
     check_refine_poses(&args, &set, &desc)?;
     let free_poses_only = args.free_poses || !set.experiments().iter().any(|e| e.moved_joint > 0);
-    let (mut record, map, column_source) = if free_poses_only {
+    let (mut record, map, found) = if free_poses_only {
         if let Some(noise) = args.noise_mm {
             eprintln!(
                 "warning: --noise-mm {noise} has no effect here: a free-pose calibration weights its poses alike and \
@@ -196,7 +197,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         let mut record = super::calibrate_free::calibrate(&args_view(&args), &set, &desc, printer)?;
         let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, &desc, &set);
         record.reports.tool_accuracy = accuracy;
-        (record, map, None)
+        (record, map, AxesFound::default())
     } else {
         checks::one_setup(&set, &args.data, "the axis-experiment calibration")?;
         calibrate_axes(&args, &set, &desc, printer)?
@@ -206,7 +207,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     readable(&record, &args, (&set, &desc))?;
     let cal = &record.calibration;
     let source = args.data.display().to_string();
-    let texts = render(&record, &args, (&desc, &set), column_source)?;
+    let texts = render(&record, &args, (&desc, &set), &found)?;
     // Every file is written before any is put in place; an output left out must not leave an
     // earlier run's file beside the new calibration.
     let mut staged = outputs.staged_in(&args.out)?;
@@ -228,8 +229,11 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         None => {
             print_axes((cal, accuracy), &desc, &source, printer);
             print_implausible(&texts.implausible, &desc, &set, &args);
-            print_scale_doubts((cal, &desc, set.rows()), &texts.implausible, &args.data);
-            print_moved_sweeps(cal, &desc, &set, &args.data);
+            // The checks that read a sweep's fit as its joint's judge the data with a named bump
+            // moved back: the bump is not a scale's or a held joint's too.
+            let (judged_cal, judged) = found.bumps_undone.as_ref().map_or((cal, &set), |u| (&u.cal, &u.set));
+            print_scale_doubts((judged_cal, &desc, judged.rows()), &texts.implausible, &args.data);
+            print_moved_sweeps(judged_cal, &desc, judged, &args.data);
             if !args.refine
                 && let Some(miss) =
                     misses_own_validation_poses(cal, (&desc, &set, &args.data), args.repeatability_rad.as_deref())
@@ -270,7 +274,7 @@ fn render(
     record: &CalibrationRecord,
     args: &Args,
     (desc, set): (&RobotDescription, &MeasurementSet),
-    column_source: Option<ColumnSource>,
+    found: &AxesFound,
 ) -> Result<outputs::CalibrationOutputs> {
     let options = OutputOptions {
         urdf: UrdfOptions {
@@ -278,12 +282,19 @@ fn render(
             root: args.urdf_root,
         },
         joint_map_step: args.joint_map_step,
-        column_source,
+        column_source: found.column_source.clone(),
+        bumps_undone: found.bumps_undone.as_ref().map(|u| implausible(&u.cal, desc)),
     };
     let source = args.data.display().to_string();
     let poses = export_poses(set, desc, &record.calibration);
     let mut texts = outputs::render(record, desc, &source, &poses, &options)?;
-    add_detection_limits(&mut texts.files, record, desc, set);
+    let judged = found.bumps_undone.as_ref().map(|u| (&u.cal, &u.set));
+    add_detection_limits(
+        &mut texts.files,
+        record,
+        desc,
+        judged.unwrap_or((&record.calibration, set)),
+    );
     Ok(texts)
 }
 
@@ -445,15 +456,75 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
     }
 }
 
+/// What the axis-experiment calibration found beside its record ([`calibrate_axes`]).
+#[derive(Default)]
+struct AxesFound {
+    /// The instrument axis whose scale explains the joints' transmission departures
+    /// ([`column_source`]).
+    column_source: Option<ColumnSource>,
+    /// The data with the sweep screen's named bumps moved back ([`bumps_undone`]), where it
+    /// named any.
+    bumps_undone: Option<BumpsUndone>,
+}
+
+/// The data with the sweep screen's named bumps moved back and the calibration of its rows
+/// the screen kept: the checks that read a sweep's fit as its joint's judge these, so that a
+/// bump named is not blamed on a scale or a held joint too.
+struct BumpsUndone {
+    /// Every row read, the bumps' blocks moved back.
+    set: MeasurementSet,
+    /// The calibration of the rows kept, so moved.
+    cal: Calibration,
+}
+
+/// `set` (screened) with `bumps` moved back ([`bumps_undone`]) and its calibration; `None`
+/// when no bump was named or that calibration fails (the checks then read the data as written).
+fn undo_bumps(
+    set: &MeasurementSet,
+    bumps: &[axiscal::calibration::procedure::SweepBump],
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+) -> Option<(MeasurementSet, Calibration)> {
+    let undone = bumps_undone(set, bumps)?;
+    let cal = calibrate(&undone, desc, options).ok()?;
+    Some((undone, cal))
+}
+
+/// Why the axis-experiment calibration of `screened` failed (`e`), with what `--noise-mm` or
+/// `--repeatability-rad` had to do with it.
+fn calibration_failed(
+    args: &Args,
+    (screened, desc): (&MeasurementSet, &RobotDescription),
+    options: &CalibrationOptions,
+    e: &ProcedureError,
+) -> anyhow::Error {
+    if let Some(too_small) = args
+        .noise_mm
+        .and_then(|n| checks::noise_far_below(screened, desc, options, n, e.joint(), ["the fits", "it"]))
+    {
+        return anyhow::anyhow!("calibrating {}: {too_small}", args.data.display());
+    }
+    let hint = match (args.noise_mm, &args.repeatability_rad) {
+        (Some(n), _) => format!(
+            " (with --noise-mm {n:e}: a noise far below the data's makes the fits trust each point more than the joints' repeatability allows; without --noise-mm it is estimated from the residuals)"
+        ),
+        (None, Some(r)) => format!(
+            " (with --repeatability-rad {}: a repeatability far above the joints' own weights the fits away from their points; without it the description's repeatability_sigma is used)",
+            r.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
+        ),
+        (None, None) => String::new(),
+    };
+    anyhow::anyhow!("calibrating {}: {e}{hint}", args.data.display())
+}
+
 /// The independent-axis calibration of `set` (`--refine` applied) with its reports, the
-/// tool-accuracy map, and the instrument axis whose scale explains the joints' transmission
-/// departures ([`column_source`]).
+/// tool-accuracy map, and what the checks found beside it ([`AxesFound`]).
 fn calibrate_axes(
     args: &Args,
     set: &MeasurementSet,
     desc: &RobotDescription,
     printer: Printer,
-) -> Result<(CalibrationRecord, Vec<MapPoint>, Option<ColumnSource>)> {
+) -> Result<(CalibrationRecord, Vec<MapPoint>, AxesFound)> {
     if args.holdout {
         anyhow::bail!(
             "--holdout applies to free-pose files (no axis experiment); {} has axis experiments",
@@ -474,13 +545,18 @@ fn calibrate_axes(
     options
         .joint_repeatability_rad(desc)
         .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
-    let screening = screen_sweeps(set, desc, &options, args.keep_outliers)
+    let mut screening = screen_sweeps(set, desc, &options, args.keep_outliers)
         .map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
     let screened = screening.set.as_ref().unwrap_or(set);
     // The procedure's message already contains its cause: one line, not the cause twice.
     let mut cal = match calibrate(screened, desc, &options) {
         Ok(cal) => {
             super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
+            // The sweeps whose held joints wander are tested once the model that moves their
+            // points to the design pose is fitted.
+            screening
+                .bumps
+                .extend(wandering_sweep_bumps(screened, desc, &options, &cal));
             super::checks::print_sweep_bumps(&screening.bumps, &args.data);
             cal
         }
@@ -489,31 +565,18 @@ fn calibrate_axes(
             let mut record = sweeps_as_free_poses(args, set, desc, &e, printer)?;
             let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, desc, set);
             record.reports.tool_accuracy = accuracy;
-            return Ok((record, map, None));
+            return Ok((record, map, AxesFound::default()));
         }
         Err(e) => {
             super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
-            if let Some(too_small) = args
-                .noise_mm
-                .and_then(|n| checks::noise_far_below(screened, desc, &options, n, e.joint(), ["the fits", "it"]))
-            {
-                anyhow::bail!("calibrating {}: {too_small}", args.data.display())
-            }
-            let hint = match (args.noise_mm, &args.repeatability_rad) {
-                (Some(n), _) => format!(
-                    " (with --noise-mm {n:e}: a noise far below the data's makes the fits trust each point more than the joints' repeatability allows; without --noise-mm it is estimated from the residuals)"
-                ),
-                (None, Some(r)) => format!(
-                    " (with --repeatability-rad {}: a repeatability far above the joints' own weights the fits away from their points; without it the description's repeatability_sigma is used)",
-                    r.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
-                ),
-                (None, None) => String::new(),
-            };
-            anyhow::bail!("calibrating {}: {e}{hint}", args.data.display())
+            return Err(calibration_failed(args, (screened, desc), &options, &e));
         }
     };
+    let written = set;
     let set = screened;
     cal.outliers = screening.outliers;
+    let undone = undo_bumps(set, &screening.bumps, desc, &options);
+    let (judged, judged_cal) = undone.as_ref().map_or((set, &cal), |(s, c)| (s, c));
     let fit = |s: &MeasurementSet| {
         let c = calibrate(s, desc, &options).ok()?;
         Some(Fit {
@@ -522,9 +585,9 @@ fn calibrate_axes(
             misfit_poses: 0,
         })
     };
-    let source = instrument_axis_source(&cal, (set, desc), &options);
+    let source = instrument_axis_source(judged_cal, (judged, desc), &options);
     warn_axis_scale(
-        (set, desc),
+        (judged, desc),
         &args.data,
         (&fit, source.as_ref()),
         (PROFILE_MAX_ROWS, false),
@@ -544,7 +607,14 @@ fn calibrate_axes(
         refinement,
         free_poses: None,
     };
-    Ok((CalibrationRecord { calibration, reports }, map, source))
+    let found = AxesFound {
+        column_source: source,
+        bumps_undone: undone.and_then(|(_, cal)| {
+            let set = bumps_undone(written, &screening.bumps)?;
+            Some(BumpsUndone { set, cal })
+        }),
+    };
+    Ok((CalibrationRecord { calibration, reports }, map, found))
 }
 
 /// The instrument axis whose scale explains the departures of the joints the transmission
@@ -818,18 +888,18 @@ fn print_scale_doubts(
 }
 
 /// report.md's "Detection limits": the command-column scales the transmission test lets pass
-/// on this file ([`axiscal::calibration::procedure::scale_reach`], its free-pose form), and what
-/// the coordinate-scale note means where it was printed.
+/// on this file ([`axiscal::calibration::procedure::scale_reach`], its free-pose form; on the
+/// calibration `cal` of `set` the test judged, [`BumpsUndone`] where bumps were named), and
+/// what the coordinate-scale note means where it was printed.
 fn add_detection_limits(
     files: &mut [(&'static str, String)],
     record: &CalibrationRecord,
     desc: &RobotDescription,
-    set: &MeasurementSet,
+    (cal, set): (&Calibration, &MeasurementSet),
 ) {
     let Some((_, report)) = files.iter_mut().find(|(name, _)| *name == "report.md") else {
         return;
     };
-    let cal = &record.calibration;
     let reach = match &record.reports.free_poses {
         None => axiscal::calibration::procedure::scale_reach(cal, desc, set.rows()),
         Some(summary) => axiscal::calibration::procedure::free_pose_scale_reach((cal, summary), desc, set.rows()),

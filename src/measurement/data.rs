@@ -447,6 +447,18 @@ impl MeasurementSet {
         out
     }
 
+    /// The set with each row `i` of `moves` moved by its `[x, y, z]` \[mm\] (its coordinates
+    /// plus it): rows as they would read had the instrument not moved before them.
+    pub fn with_rows_moved(&self, moves: &[(usize, [f64; 3])]) -> Self {
+        let mut out = self.clone();
+        for (i, by) in moves {
+            if let Some(m) = out.rows.get_mut(*i) {
+                (0..3).for_each(|c| m.position_mm[c] += by[c]);
+            }
+        }
+        out
+    }
+
     /// The set with command `joint` (0-based: `cmd_1` is 0) of every row multiplied by
     /// `factor`: a joint's readings on another scale (a slide's lead, an exporter's factor).
     pub fn with_command_scaled(&self, joint: usize, factor: f64) -> Self {

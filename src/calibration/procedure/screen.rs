@@ -23,7 +23,8 @@ mod bump;
 mod rounds;
 mod second_target;
 
-pub use bump::{SWEEP_BUMP_FALSE_ALARM, SweepBump, SweepEnd};
+pub use bump::{SWEEP_BUMP_FALSE_ALARM, SweepBump, SweepEnd, bumps_undone};
+
 pub use rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX};
 use rounds::{median, too_many_which, without_poses};
 pub use second_target::WorstSecondTarget;
@@ -174,6 +175,57 @@ pub fn screen_sweeps(
     let bumps = sweep_bumps(&sweeps, &peeled, set, (sigma, max_iterations));
     let set = without_poses(set, &outliers);
     Ok(Screening { outliers, set, bumps })
+}
+
+/// The bumps ([`SweepBump`]) of the sweeps of `set` whose held joints wander, which
+/// [`screen_sweeps`] does not test: their points moved to the design pose by the calibrated
+/// model of `cal` as the procedure moves them (`held.rs`, `p' = W_L(q_design) W_L(q_recorded)^-1
+/// p`), then every point tested as [`screen_sweeps`] tests a still sweep's kept points, the
+/// family-wise rate over these sweeps' blocks. The shift is in the design pose's frame, which
+/// the wander turns from the instrument's by the held joints' wander only (a tenth of a degree
+/// turns a 2 mm shift by under 4 um).
+pub fn wandering_sweep_bumps(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    cal: &super::Calibration,
+) -> Vec<SweepBump> {
+    let Ok((experiments, _)) = axis_experiments_with(set, desc, options.held_tolerance) else {
+        return vec![];
+    };
+    let controller = Controller::from_description(desc);
+    let corrector = super::held::Corrector {
+        model: &cal.robot,
+        controller: &controller,
+        desc,
+        reference_cmd: &cal.reference_cmd,
+    };
+    let sigma = options.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
+    let sweeps: Vec<Sweep<'_>> = experiments
+        .iter()
+        .map(|e| {
+            let mut s = Sweep::new(e, desc, &controller);
+            s.points = match s.holds_still() {
+                true => vec![],
+                false => corrector.corrected(e, 0).unwrap_or_default(),
+            };
+            s
+        })
+        .collect();
+    let peeled: Vec<Peeled> = sweeps
+        .iter()
+        .zip(0..)
+        .filter(|(s, _)| !s.points.is_empty())
+        .filter_map(|(s, index)| {
+            let last = s.residuals(&all(s), sigma, options.max_iterations).ok()?;
+            Some(Peeled {
+                index,
+                kept: all(s),
+                last,
+            })
+        })
+        .collect();
+    sweep_bumps(&sweeps, &peeled, set, (sigma, options.max_iterations))
 }
 
 /// A tested sweep's points kept by the outlier test and every point's residual from their fit.

@@ -18,6 +18,7 @@
 //! squares, not the residuals' means), and when the sweep so moved back fits within the noise
 //! of the file's noisiest other sweep ([`explains`]): a scrambled sweep is not a bumped one.
 
+use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{f_upper_quantile, f_upper_tail};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
@@ -230,6 +231,30 @@ pub fn explains(found: &Bumped, dof: f64, noisiest_other: Option<(f64, f64)>, tr
     let ratio = found.sum_sq / nu / variance;
     !(variance > 0.0 && nu >= 1.0 && other_dof >= 1.0)
         || ratio <= f_upper_quantile(SWEEP_BUMP_FALSE_ALARM / tried.max(1) as f64, nu, other_dof)
+}
+
+/// `set` with the block of each of `bumps` moved back by its shift: every row of its
+/// experiment from its step on (each target: an instrument moved moves them alike) less
+/// [`SweepBump::shift_mm`], as the sweep screen's refit moved it to confirm the bump; `None`
+/// when there is none. The checks that read a sweep's fit as the joint's (its transmission's
+/// scale, an instrument axis' scale, a held joint's offset) run on it, so that they do not
+/// name the bump's own signature as a second cause.
+pub fn bumps_undone(set: &MeasurementSet, bumps: &[SweepBump]) -> Option<MeasurementSet> {
+    if bumps.is_empty() {
+        return None;
+    }
+    let moves: Vec<(usize, [f64; 3])> = set
+        .rows()
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| {
+            let b = bumps
+                .iter()
+                .find(|b| b.experiment == m.experiment && m.step >= b.step)?;
+            Some((i, b.shift_mm.map(|v| -v)))
+        })
+        .collect();
+    Some(set.with_rows_moved(&moves))
 }
 
 #[cfg(test)]
