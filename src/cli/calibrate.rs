@@ -950,6 +950,9 @@ pub(super) fn misses_own_validation_poses(
     let test = part.chi_square.as_ref()?;
     let implausible = tool_move.and_then(|m| implausible_tool_move(&m, desc));
     let exceeds = test.verdict == Verdict::Exceeds;
+    if exceeds && let Some(held) = super::own_held::own_held_offset(cal, desc, set, &poses_set) {
+        return Some(held.words(&data.display().to_string(), n));
+    }
     (exceeds || implausible.is_some()).then(|| {
         let (rms, predicted) = (part.rms_mm, part.predicted_mm.total);
         let tool = if tool_move.is_some() {
