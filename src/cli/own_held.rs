@@ -20,8 +20,13 @@
 //! the poses: the correction explains the miss, not only part of it (Seber & Wild, *Nonlinear
 //! Regression*, 1989, sec. 5.3: the extra-sum-of-squares F test of a nested model). Other
 //! hypotheses that pass both are named beside it, as alternatives the data do not tell apart.
+//! The sweeps are taken as the calibration fitted them (the points the screen drops left out);
+//! a sweep whose points shift part-way (`screen::bump`, a bump the fit takes in) and one the
+//! reference-pose test names as a moved block (`shared_target::moved_sweeps`) are not tried:
+//! their cause is said already.
 
-use axiscal::calibration::procedure::{AxisExperiment, Calibration, axis_experiments_with, calibrate};
+use axiscal::calibration::procedure::{AxisExperiment, Calibration, axis_experiments_with, calibrate, screen_sweeps};
+use axiscal::calibration::shared_target::moved_sweeps;
 use axiscal::diagnosis::{ValidationOptions, Verdict, validate, validate_free_tool};
 use axiscal::kinematics::JointKind;
 use axiscal::measurement::MeasurementSet;
@@ -68,6 +73,11 @@ pub(super) struct OwnHeld {
     pub rms_mm: (f64, f64),
     /// Other (experiment, joint, offset) that pass as well.
     pub alternatives: Vec<(String, usize, f64)>,
+    /// Whether the corrected calibration passes the poses' test; `false`: the correction
+    /// explains a part of the miss beyond chance, another cause the rest.
+    pub passes: bool,
+    /// The held commands tried.
+    pub tried: usize,
 }
 
 /// One validation of a calibration of the file with a held command changed.
@@ -83,14 +93,37 @@ struct Score {
 type Hypothesis = (usize, usize);
 
 /// The held joint of one sweep whose recorded command, corrected, explains the miss of the
-/// validation poses `poses` (module docs), or `None`.
+/// validation poses `poses` (module docs); where none makes them pass, the one whose correction
+/// explains a part of the miss beyond chance (the F test alone; [`OwnHeld::passes`] false);
+/// `None` when none does.
 pub(super) fn own_held_offset(
     cal: &Calibration,
     desc: &RobotDescription,
     set: &MeasurementSet,
     poses: &MeasurementSet,
 ) -> Option<OwnHeld> {
-    let (experiments, _) = axis_experiments_with(set, desc, cal.options.held_tolerance).ok()?;
+    // The sweeps as the calibration fitted them: without the points its screen dropped; a sweep
+    // whose points shift part-way (a bump, which the fit takes in) is no held offset's.
+    let screening = screen_sweeps(set, desc, &cal.options, false).ok()?;
+    let set = screening.set.as_ref().unwrap_or(set);
+    let (mut experiments, _) = axis_experiments_with(set, desc, cal.options.held_tolerance).ok()?;
+    experiments.retain(|e| !screening.bumps.iter().any(|b| b.experiment == e.name));
+    // A sweep the reference-pose test names as a moved block (or as one of two that disagree)
+    // has that cause named already: no held offset is sought in it.
+    let noise = cal
+        .noise
+        .as_ref()
+        .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
+    for moved in moved_sweeps(set, desc, noise) {
+        if moved.held.is_empty() && moved.backlash.is_empty() {
+            let others = if moved.ambiguous {
+                moved.others.clone()
+            } else {
+                Vec::new()
+            };
+            experiments.retain(|e| e.name != moved.experiment && !others.contains(&e.name));
+        }
+    }
     let options = ValidationOptions::of_calibration(cal, OWN_HELD_FALSE_ALARM);
     let score = |h: Option<(Hypothesis, f64)>| -> Option<Score> {
         let changed = match h {
@@ -127,12 +160,22 @@ pub(super) fn own_held_offset(
             let (c, q, s) = refined(&score, h, c)?;
             let left = s.chi2 / (s.dof as f64 - 1.0);
             let ratio = (recorded.chi2 - s.chi2) / left;
-            (s.dof > 1 && s.passes && ratio > quantile(s.dof)).then_some((h, c, left.max(1.0) / q, s))
+            (s.dof > 1 && ratio > quantile(s.dof)).then_some((h, c, left.max(1.0) / q, s))
         })
         .collect();
     named.sort_by(|a, b| a.3.chi2.total_cmp(&b.3.chi2));
+    // Those whose correction makes the poses pass; else the best, as a part of the miss.
+    let passes = named.iter().any(|n| n.3.passes);
+    named.retain(|n| n.3.passes == passes);
     let &((e, k), c, variance, best) = named.first()?;
     let x = &experiments[e];
+    let alternatives = match passes {
+        true => named[1..]
+            .iter()
+            .map(|&((e, k), c, _, _)| (experiments[e].name.clone(), k + 1, -c))
+            .collect(),
+        false => Vec::new(),
+    };
     Some(OwnHeld {
         experiment: x.name.clone(),
         lines: x.lines,
@@ -142,10 +185,9 @@ pub(super) fn own_held_offset(
         unit: desc.joints[k].kind.file_unit(),
         per_dof: (recorded.chi2 / recorded.dof as f64, best.chi2 / best.dof as f64),
         rms_mm: (recorded.rms_mm, best.rms_mm),
-        alternatives: named[1..]
-            .iter()
-            .map(|&((e, k), c, _, _)| (experiments[e].name.clone(), k + 1, -c))
-            .collect(),
+        alternatives,
+        passes,
+        tried: hypotheses.len(),
     })
 }
 
@@ -153,19 +195,24 @@ pub(super) fn own_held_offset(
 /// it and [`REFINE_STEP`] either side (Newton's method on the chi-square, its derivatives by
 /// central differences: the model is a rotation, not quite linear over the 1-deg trial step),
 /// with the last parabola's curvature `q` (`chi2(c) = least + q (c - c*)^2`) and the score at
-/// the refined correction; `None` where a calibration fails or a parabola opens downwards.
+/// the refined correction; `None` where a calibration fails, a parabola opens downwards or the
+/// last step leaves the last parabola's span (not converged).
 fn refined(
     score: &dyn Fn(Option<(Hypothesis, f64)>) -> Option<Score>,
     h: Hypothesis,
     mut c: f64,
 ) -> Option<(f64, f64, Score)> {
-    let mut q = 0.0;
+    let (mut q, mut step) = (0.0, 0.0);
     for _ in 0..REFINE_PASSES {
         let at = |x: f64| score(Some((h, x))).map(|s| s.chi2);
         let (minus, zero, plus) = (at(c - REFINE_STEP)?, at(c)?, at(c + REFINE_STEP)?);
         q = (plus + minus - 2.0 * zero) / (2.0 * REFINE_STEP * REFINE_STEP);
-        let (step, _) = parabola_least(minus, zero, plus, REFINE_STEP)?;
+        step = parabola_least(minus, zero, plus, REFINE_STEP)?.0;
         c += step;
+    }
+    // Newton's last step beyond the parabola's own span: not converged, no least found.
+    if step.abs() > REFINE_STEP {
+        return None;
     }
     Some((c, q, score(Some((h, c)))?))
 }
@@ -184,7 +231,7 @@ fn held_joints(e: &AxisExperiment, desc: &RobotDescription) -> Vec<usize> {
 fn parabola_least(minus: f64, zero: f64, plus: f64, step: f64) -> Option<(f64, f64)> {
     let q = (plus + minus - 2.0 * zero) / (2.0 * step * step);
     let b = (plus - minus) / (2.0 * step);
-    if !(q > 0.0) {
+    if q.is_nan() || q <= 0.0 {
         return None;
     }
     let c = -b / (2.0 * q);
@@ -215,6 +262,31 @@ fn score_of(
 }
 
 impl OwnHeld {
+    /// The clause for the miss's cause where the correction explains a part of it
+    /// ([`OwnHeld::passes`] false), for the file `data` (its name).
+    pub(super) fn part_words(&self, data: &str) -> String {
+        let lines = self
+            .lines
+            .map_or(String::new(), |(a, b)| format!(" ({data} lines {a}-{b})"));
+        let j = self.joint;
+        format!(
+            "the held `cmd_{j}` of experiment {}{lines} looks offset by {:+.3} {} (1-sigma {:.3}) from where the robot \
+             stood: recalibrated with `cmd_{j}` in these rows moved by {:+.3} {} the model misses the poses by {:.3} mm \
+             RMS (chi2/dof {:.2}), a gain beyond chance among the {} held commands tried (an F test at {OWN_HELD_FALSE_ALARM:e}) \
+             though not within their test: check `cmd_{j}` in these rows against the controller, and another cause \
+             besides: ",
+            self.experiment,
+            self.offset,
+            self.unit,
+            self.sigma,
+            -self.offset,
+            self.unit,
+            self.rms_mm.1,
+            self.per_dof.1,
+            self.tried,
+        )
+    }
+
     /// The warning, for the file `data` (its name).
     pub(super) fn words(&self, data: &str, poses: usize) -> String {
         let place = self.lines.map_or(data.to_string(), |(l, _)| format!("{data}:{l}"));
@@ -231,7 +303,8 @@ impl OwnHeld {
              RMS (chi2/dof {:.2}), and recalibrated with `cmd_{j}` in these rows moved by {:+.3} {} it fits them (RMS \
              {:.3} mm, chi2/dof {:.2}); the sweep's own axis fit takes such an offset in as a turn of its axis about joint \
              {j}'s, which the sweeps alone do not show: a value typed wrong for this experiment, or the joint re-mastered \
-             between the sweeps; calibration.json is wrong for the robot: check `cmd_{j}` in these rows against the \
+             between the sweeps (or the sweep's block moved between the sweeps, the instrument or the robot bumped, which \
+             moves its points much alike where joint {j}'s axis is far from them); calibration.json is wrong for the robot: check `cmd_{j}` in these rows against the \
              controller, or measure the sweep again",
             self.experiment,
             self.offset,
