@@ -20,10 +20,11 @@ const HELD: &str = "the held `cmd_";
 
 /// The hostile run's cases, shapes apart: (robot, experiment, held joint, offset in deg): the
 /// table's turning joint held through a slide's sweep, the positioner's tilt held through the
-/// turntable's sweep, the IRB/L6's base held through a wrist sweep (rapier simulation).
+/// turntable's sweep, the IRB/L6's base held through a wrist sweep (rapier simulation). (The
+/// positioner at 4 deg is named by the reference-pose test: "axis2 and axis1 disagree".)
 const CASES: [(&str, &str, usize, f64); 3] = [
     ("table-prpp", "axis3", 2, 1.0),
-    ("positioner-2axis", "axis2", 1, 2.0),
+    ("positioner-2axis", "axis2", 1, 1.0),
     ("asea-irb6l", "axis5", 1, 1.0),
 ];
 
@@ -160,7 +161,13 @@ fn without_validation_poses_the_note_names_the_sweeps_a_held_offset_passes_in() 
         let dir = tempfile::tempdir().unwrap();
         let clean = without_poses(dir.path(), robot, 9, "clean.csv");
         let e = calibrated(dir.path(), robot, &clean);
-        assert_eq!(held_reach(&e, experiment, joint), Some(None), "{robot}: {e}");
+        // At any size, or from beyond the 1-deg claim.
+        let passes = match held_reach(&e, experiment, joint) {
+            Some(None) => true,
+            Some(Some(deg)) => deg > 1.0,
+            None => false,
+        };
+        assert!(passes, "{robot}: {e}");
         // A second path: twice the size the note gives (1 deg, the claim, where it names none)
         // is named by the reference-pose test (the table's axis4 with `cmd_2` off).
         if robot == "table-prpp" {
