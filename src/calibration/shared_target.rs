@@ -397,7 +397,7 @@ pub struct HeldReach {
 /// [`HELD_REACH_CLAIM_DEG`] the reference-pose test lets pass, with the smallest offset it
 /// names: the sweep's smallest move named across its motion (`block_reach`'s rule) over what a
 /// degree of the held joint moves its point across that motion (the joint's motion at the
-/// reference pose, as its own sweep measures it, [`held::Motion`]); `None` when every one is named.
+/// reference pose, as its own sweep measures it, `held::Motion`); `None` when every one is named.
 pub fn held_reach(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Option<HeldReach> {
     let Seen {
         groups,
