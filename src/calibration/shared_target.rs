@@ -457,8 +457,8 @@ impl std::fmt::Display for HeldReach {
             .collect();
         write!(
             f,
-            "the reference-pose test cannot name a held joint's recorded command off where the robot stood through \
-             one sweep here ({}), and the file has no validation poses, against which `calibrate` seeks one: such an \
+            "a held joint's recorded command off where the robot stood through one sweep passes the reference-pose \
+             test unnamed here ({}), and the file has no validation poses, against which `calibrate` seeks one: such an \
              offset turns the sweep's arc about the held joint's axis and the sweep's axis fit takes it in (a joint \
              held by one sweep only takes that sweep's value as its reference). `validate` of a second file's sweeps \
              against this calibration shows it",
