@@ -53,6 +53,7 @@ use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::{Matrix3, Point3, Vector3};
 use sighting::{AT_REFERENCE, Curve, Sighting, Turning, noise_bound, variance};
 use std::collections::BTreeMap;
+use std::f64::consts::PI;
 
 /// The sightings of each shared target (by [`key`]): its link and place \[mm\], and the sightings.
 type Groups = BTreeMap<String, ((usize, [f64; 3]), Vec<Sighting>)>;
@@ -369,6 +370,99 @@ impl std::fmt::Display for BlockReach {
              sweeps share a target; a move along a sweep's own motion at the reference pose reads as its joint's zero \
              and passes at any size. `validate` of a second file's sweeps against this calibration shows such a move",
             parts.join("; ")
+        )
+    }
+}
+
+/// The held turning joint's offset through one sweep the reference-pose test is meant to name
+/// wherever that offset moves the sweep's point across its motion (1 deg; hostile runs write
+/// 0.5 to 2 deg).
+pub const HELD_REACH_CLAIM_DEG: f64 = 1.0;
+
+/// Half a turn \[deg\]: an offset named only beyond it is named at no size.
+const HALF_TURN_DEG: f64 = 180.0;
+
+/// The held turning joints' recorded commands off through one sweep that the reference-pose
+/// test lets pass in a file ([`held_reach`]): each is `(experiment, joint (1-based), smallest
+/// offset named in deg)`, the offset `None` where the sweep is compared with no other, the
+/// held joint has no sweep of its own (its motion unmeasured) or is held by this sweep only, or
+/// the offset named is beyond half a turn: any size passes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeldReach {
+    /// The sweeps' held joints beyond [`HELD_REACH_CLAIM_DEG`].
+    pub passing: Vec<(String, usize, Option<f64>)>,
+}
+
+/// The held turning joints whose recorded command off through one sweep by
+/// [`HELD_REACH_CLAIM_DEG`] the reference-pose test lets pass, with the smallest offset it
+/// names: the sweep's smallest move named across its motion (`block_reach`'s rule) over what a
+/// degree of the held joint moves its point across that motion (the joint's motion at the
+/// reference pose, as its own sweep measures it, `held::Motion`); `None` when every one is named.
+pub fn held_reach(set: &MeasurementSet, desc: &RobotDescription, noise_rms_3d_mm: f64) -> Option<HeldReach> {
+    let Seen {
+        groups,
+        sigma2,
+        motions,
+        ..
+    } = sightings(set, desc, noise_rms_3d_mm)?;
+    // A joint held by one sweep only has that sweep's value as its reference: nothing to compare.
+    let holding = |j: usize| {
+        groups
+            .values()
+            .flat_map(|g| &g.1)
+            .filter(|s| s.held.contains(&j))
+            .count()
+    };
+    let mut passing: Vec<(String, usize, Option<f64>)> = Vec::new();
+    for (_, group) in groups.values() {
+        let all: Vec<&Sighting> = group.iter().collect();
+        let scatter = match consensus(&all, sigma2) {
+            Some((_, chi2, dof)) if dof > 0 && group.len() >= 2 => Some((chi2 / dof as f64).max(1.0)),
+            Some(_) if group.len() >= 2 => Some(1.0),
+            _ => None,
+        };
+        for s in group.iter().filter(|s| s.joint > 0) {
+            let smallest_mm = scatter.map(|c| GROSS_MISS_FACTOR * noise_bound(s) * (variance(s, sigma2) * c).sqrt());
+            for &j in s.held.iter().filter(|&&j| desc.joints[j].kind == JointKind::Revolute) {
+                let per_deg = motions[j]
+                    .as_ref()
+                    .map(|m| (s.across * m.velocity(s.point)).norm() * PI / 180.0);
+                let deg = smallest_mm
+                    .zip(per_deg)
+                    .map(|(mm, v)| mm / v)
+                    .filter(|d| *d <= HALF_TURN_DEG && holding(j) > 1);
+                if deg.is_none_or(|d| d > HELD_REACH_CLAIM_DEG) {
+                    passing.push((s.experiment.clone(), j + 1, deg));
+                }
+            }
+        }
+    }
+    (!passing.is_empty()).then_some(HeldReach { passing })
+}
+
+impl std::fmt::Display for HeldReach {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // The held commands of one sweep whose reach reads alike, together.
+        let mut alike: Vec<(String, String, Vec<String>)> = Vec::new();
+        for (e, j, deg) in &self.passing {
+            let reach = deg.map_or("at any size".to_string(), |d| format!("below about {d:.1} deg"));
+            match alike.iter_mut().find(|(x, r, _)| x == e && *r == reach) {
+                Some((_, _, joints)) => joints.push(format!("`cmd_{j}`")),
+                None => alike.push((e.clone(), reach, vec![format!("`cmd_{j}`")])),
+            }
+        }
+        let each: Vec<String> = alike
+            .iter()
+            .map(|(e, reach, joints)| format!("experiment {e}'s {} {reach}", joints.join(", ")))
+            .collect();
+        write!(
+            f,
+            "a held joint's recorded command off where the robot stood through one sweep passes the reference-pose \
+             test unnamed here ({}), and the file has no validation poses, against which `calibrate` seeks one: such an \
+             offset turns the sweep's arc about the held joint's axis and the sweep's axis fit takes it in (a joint \
+             held by one sweep only takes that sweep's value as its reference). `validate` of a second file's sweeps \
+             against this calibration shows it",
+            each.join("; ")
         )
     }
 }

@@ -914,7 +914,9 @@ fn add_detection_limits(
 /// The sweeps out of place among the sightings of their shared target at the reference pose
 /// ([`axiscal::calibration::shared_target::moved_sweeps`], at the calibration's noise) as
 /// warnings naming the file and the sweep's first line; where none is, the moves the test
-/// lets pass ([`axiscal::calibration::shared_target::block_reach`]) as a note.
+/// lets pass ([`axiscal::calibration::shared_target::block_reach`]) as a note, and in a file
+/// without validation poses the held joints' offsets it lets pass
+/// ([`axiscal::calibration::shared_target::held_reach`]).
 fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet, data: &Path) {
     let noise = cal
         .noise
@@ -932,6 +934,17 @@ fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &Measurem
     }
     if moved_sweeps.is_empty()
         && let Some(reach) = axiscal::calibration::shared_target::block_reach(set, desc, noise)
+    {
+        eprintln!("note: {}: {reach}", data.display());
+    }
+    // With validation poses, `misses_own_validation_poses` seeks a held offset the sweeps hide.
+    let poses = set
+        .rows()
+        .iter()
+        .any(|m| m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT);
+    if moved_sweeps.is_empty()
+        && !poses
+        && let Some(reach) = axiscal::calibration::shared_target::held_reach(set, desc, noise)
     {
         eprintln!("note: {}: {reach}", data.display());
     }
@@ -1020,6 +1033,15 @@ pub(super) fn misses_own_validation_poses(
     let test = part.chi_square.as_ref()?;
     let implausible = tool_move.and_then(|m| implausible_tool_move(&m, desc));
     let exceeds = test.verdict == Verdict::Exceeds;
+    let held = exceeds
+        .then(|| super::own_held::own_held_offset(cal, desc, set, &poses_set))
+        .flatten();
+    if let Some(held) = held.as_ref().filter(|h| h.passes) {
+        return Some(held.words(&data.display().to_string(), n));
+    }
+    let held_part = held
+        .map(|h| h.part_words(&data.display().to_string()))
+        .unwrap_or_default();
     (exceeds || implausible.is_some()).then(|| {
         let (rms, predicted) = (part.rms_mm, part.predicted_mm.total);
         let tool = if tool_move.is_some() {
@@ -1046,7 +1068,7 @@ pub(super) fn misses_own_validation_poses(
                 .to_string(),
             None => own_poses_slips(&poses_set, cal, desc, &v, data),
         };
-        format!("{miss}{}: {first}{cause}", implausible.unwrap_or_default())
+        format!("{miss}{}: {first}{held_part}{cause}", implausible.unwrap_or_default())
     })
 }
 

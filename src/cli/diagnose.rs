@@ -195,8 +195,14 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
 /// What `calibrate` warns of the file's own validation poses (`set`, read from `data`) against
 /// `cal`, the calibration of its sweeps, with the file named: a miss beyond the prediction.
 fn own_poses_miss(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet, data: &Path) -> Option<String> {
-    super::calibrate::misses_own_validation_poses(cal, (desc, set, data), None)
-        .map(|miss| format!("{}: {miss}", data.display()))
+    // A held offset the miss names starts with the file and the sweep's line already.
+    let file = data.display().to_string();
+    super::calibrate::misses_own_validation_poses(cal, (desc, set, data), None).map(|miss| {
+        match miss.starts_with(&format!("{file}:")) {
+            true => miss,
+            false => format!("{file}: {miss}"),
+        }
+    })
 }
 
 /// Prints `miss` ([`own_poses_miss`]) as a warning when the diagnosis's `effect` is `none`:

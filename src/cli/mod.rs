@@ -24,6 +24,7 @@ mod joints;
 mod merge;
 mod options;
 mod output;
+mod own_held;
 mod plan;
 mod printer;
 mod progress;

@@ -471,6 +471,18 @@ impl MeasurementSet {
         out
     }
 
+    /// The set with command `joint` (0-based) of the rows of experiment `experiment` moved by
+    /// `change` (file units): a held joint's recorded value in one sweep corrected.
+    pub fn with_command_offset_in(&self, experiment: &str, joint: usize, change: f64) -> Self {
+        let mut out = self.clone();
+        for m in out.rows.iter_mut().filter(|m| m.experiment == experiment) {
+            if let Some(c) = m.cmd.get_mut(joint) {
+                *c += change;
+            }
+        }
+        out
+    }
+
     /// The setup of row `row` (0 without a `setup` column).
     pub fn setup_of(&self, row: usize) -> usize {
         self.row_setups.get(row).copied().unwrap_or(0)

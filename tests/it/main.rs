@@ -68,6 +68,7 @@ mod hostile_round17f;
 mod hostile_round17j;
 mod hostile_round17m;
 mod hostile_round18b;
+mod hostile_round18h;
 mod hostile_round18m;
 mod hostile_round3a;
 mod hostile_round3b;

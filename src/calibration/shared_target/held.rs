@@ -95,7 +95,7 @@ impl Motion {
     }
 
     /// The motion of `p` per unit of command at no change (the derivative of [`Motion::apply`]).
-    fn velocity(&self, p: Vector3<f64>) -> Vector3<f64> {
+    pub(super) fn velocity(&self, p: Vector3<f64>) -> Vector3<f64> {
         match self {
             Motion::Turn { centre, axis, rate } => axis.cross(&(p - centre)) * *rate,
             Motion::Slide { per_command } => *per_command,
