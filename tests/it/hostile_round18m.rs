@@ -214,6 +214,7 @@ impl<'a> ValidationPoints<'a> {
 /// as `cmd_2` read 1.314 times (a scale whose undoing left 5.55 of 5.85 mm); the swap, which
 /// leaves 0.73 mm of 116, is said again, and nothing else of it.
 #[test]
+#[ignore = "minutes in a debug build (the free-pose slip search): `make test-real` runs it on the optimised build"]
 fn a_swap_of_free_poses_is_not_said_as_a_scale() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
