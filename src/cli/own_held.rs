@@ -31,7 +31,9 @@
 //! reference-pose test names as a moved block (`shared_target::moved_sweeps`) are not tried:
 //! their cause is said already.
 
-use axiscal::calibration::procedure::{AxisExperiment, Calibration, axis_experiments_with, calibrate, screen_sweeps};
+use axiscal::calibration::procedure::{
+    AxisExperiment, Calibration, axis_experiments_with, calibrate, screen_sweeps, wandering_sweep_bumps,
+};
 use axiscal::calibration::shared_target::moved_sweeps;
 use axiscal::diagnosis::{ValidationOptions, Verdict, validate, validate_free_tool};
 use axiscal::kinematics::JointKind;
@@ -113,9 +115,11 @@ pub(super) fn own_held_offset(
     let screening = screen_sweeps(set, desc, &cal.options, false).ok()?;
     let set = screening.set.as_ref().unwrap_or(set);
     let (mut experiments, _) = axis_experiments_with(set, desc, cal.options.held_tolerance).ok()?;
-    experiments.retain(|e| !screening.bumps.iter().any(|b| b.experiment == e.name));
-    // A sweep the reference-pose test names as a moved block (or as one of two that disagree)
-    // has that cause named already: no held offset is sought in it.
+    // Sweeps whose held joints wander are tested for bumps once the model is fitted.
+    let wandering = wandering_sweep_bumps(set, desc, &cal.options, cal);
+    experiments.retain(|e| !screening.bumps.iter().chain(&wandering).any(|b| b.experiment == e.name));
+    // A sweep the reference-pose test names as a moved block (or as one of two that disagree),
+    // or with a held offset, has that cause named already: no held offset is sought in it.
     let noise = cal
         .noise
         .as_ref()
@@ -128,6 +132,9 @@ pub(super) fn own_held_offset(
                 Vec::new()
             };
             experiments.retain(|e| e.name != moved.experiment && !others.contains(&e.name));
+        } else if !moved.held.is_empty() {
+            // Its held offset is that test's finding, said already.
+            experiments.retain(|e| e.name != moved.experiment);
         }
     }
     let options = ValidationOptions::of_calibration(cal, OWN_HELD_FALSE_ALARM);

@@ -13,7 +13,7 @@
 //! `shared_target::held`; the shared items now live in `shared_target::sighting`.)
 
 use crate::common::altered_csv;
-use crate::common::hostile::{case, run_case};
+use crate::common::hostile::{assert_twice_less_once, case, run_case};
 use crate::hostile_round9b::{robot_path, simulated};
 use std::path::Path;
 
@@ -100,10 +100,11 @@ fn a_held_joints_offset_through_one_sweep_is_named_with_its_size() {
         let e = calibrated(dir.path(), robot, "slip.csv");
         let (twice, sigma_twice) =
             named_offset(&e, experiment, joint).unwrap_or_else(|| panic!("{robot}: cmd_{joint} not named: {e}"));
-        let sigma = sigma_once.hypot(sigma_twice);
-        assert!(
-            (twice - once - delta).abs() < 4.0 * sigma,
-            "{robot}: {twice} - {once} against {delta} +- {sigma}: {e}"
+        assert_twice_less_once(
+            &format!("{robot}: {e}"),
+            (once, sigma_once),
+            (twice, sigma_twice),
+            delta,
         );
     }
 }
@@ -202,9 +203,10 @@ fn a_held_slide_is_named_beside_a_moved_block() {
     // of their sigmas (the clean sweep's own miss cancels).
     with_held_offset(dir.path(), "table-prpp", 3, ("axis1", 3, 2.0));
     let (twice, sigma_twice) = named_slide(&calibrated(dir.path(), "table-prpp", "slip.csv"), "axis1", 3);
-    let sigma = sigma_once.hypot(sigma_twice);
-    assert!(
-        (twice - once - 1.0).abs() < 4.0 * sigma,
-        "{twice} - {once} against 1 mm +- {sigma}"
+    assert_twice_less_once(
+        "table-prpp axis1's slide",
+        (once, sigma_once),
+        (twice, sigma_twice),
+        1.0,
     );
 }

@@ -12,6 +12,7 @@
 //! (`docs/formats.md`).
 
 use crate::common::altered_csv;
+use crate::common::hostile::assert_twice_less_once;
 use crate::hostile_round15s::{calibrated, simulated};
 use std::path::Path;
 
@@ -92,10 +93,11 @@ fn a_held_offset_the_sweep_absorbs_is_named_by_the_validation_poses() {
         let e = calibrated(dir.path(), robot, &dir.path().join("twice.csv"));
         let (twice, sigma_twice, _) =
             named_offset(&e, experiment, joint).unwrap_or_else(|| panic!("{robot}: cmd_{joint} not named: {e}"));
-        let sigma = sigma_once.hypot(sigma_twice);
-        assert!(
-            (twice - once - delta).abs() < 4.0 * sigma,
-            "{robot}: {twice} - {once} against {delta} +- {sigma}: {e}"
+        assert_twice_less_once(
+            &format!("{robot}: {e}"),
+            (once, sigma_once),
+            (twice, sigma_twice),
+            delta,
         );
     }
 }

@@ -80,3 +80,16 @@ pub fn calibrated_campaign(dir: &Path, seed: u64) {
         .assert()
         .success();
 }
+
+/// The second path of the held-offset tests: an offset named once (`(value, sigma)`) and
+/// named again with twice the offset written differ by the one written, `delta`, within 4 of
+/// their combined sigmas (the clean file's own miss cancels); `what` names the case.
+pub fn assert_twice_less_once(what: &str, once: (f64, f64), twice: (f64, f64), delta: f64) {
+    let sigma = once.1.hypot(twice.1);
+    assert!(
+        (twice.0 - once.0 - delta).abs() < 4.0 * sigma,
+        "{what}: {} - {} against {delta} +- {sigma}",
+        twice.0,
+        once.0
+    );
+}
