@@ -100,6 +100,33 @@ struct Score {
 /// A hypothesis: the experiment (its index), the held joint (0-based).
 type Hypothesis = (usize, usize);
 
+/// `experiments` less the sweeps of `set` the reference-pose test ([`moved_sweeps`]) names as
+/// a moved block (or as one of two that disagree) or with a held offset: that cause is named
+/// already, and no held offset is sought in them.
+fn retain_unnamed(
+    experiments: &mut Vec<AxisExperiment>,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    cal: &Calibration,
+) {
+    let noise = cal
+        .noise
+        .as_ref()
+        .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
+    for moved in moved_sweeps(set, desc, noise) {
+        if moved.held.is_empty() && moved.backlash.is_empty() {
+            let others = if moved.ambiguous {
+                moved.others.clone()
+            } else {
+                Vec::new()
+            };
+            experiments.retain(|e| e.name != moved.experiment && !others.contains(&e.name));
+        } else if !moved.held.is_empty() {
+            experiments.retain(|e| e.name != moved.experiment);
+        }
+    }
+}
+
 /// The held joint of one sweep whose recorded command, corrected, explains the miss of the
 /// validation poses `poses` (module docs); where none makes them pass, the one whose correction
 /// explains a part of the miss beyond chance (the F test alone; [`OwnHeld::passes`] false);
@@ -118,25 +145,7 @@ pub(super) fn own_held_offset(
     // Sweeps whose held joints wander are tested for bumps once the model is fitted.
     let wandering = wandering_sweep_bumps(set, desc, &cal.options, cal);
     experiments.retain(|e| !screening.bumps.iter().chain(&wandering).any(|b| b.experiment == e.name));
-    // A sweep the reference-pose test names as a moved block (or as one of two that disagree),
-    // or with a held offset, has that cause named already: no held offset is sought in it.
-    let noise = cal
-        .noise
-        .as_ref()
-        .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
-    for moved in moved_sweeps(set, desc, noise) {
-        if moved.held.is_empty() && moved.backlash.is_empty() {
-            let others = if moved.ambiguous {
-                moved.others.clone()
-            } else {
-                Vec::new()
-            };
-            experiments.retain(|e| e.name != moved.experiment && !others.contains(&e.name));
-        } else if !moved.held.is_empty() {
-            // Its held offset is that test's finding, said already.
-            experiments.retain(|e| e.name != moved.experiment);
-        }
-    }
+    retain_unnamed(&mut experiments, set, desc, cal);
     let options = ValidationOptions::of_calibration(cal, OWN_HELD_FALSE_ALARM);
     let score = |h: Option<(Hypothesis, f64)>| -> Option<Score> {
         let changed = match h {
