@@ -6,8 +6,10 @@ VENV  ?= .venv
 RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' Cargo.toml)
 
 FUZZ_SECONDS ?= 600
-# The binary `cargo test` builds for the integration tests.
-TEST_BIN ?= $${CARGO_TARGET_DIR:-target}/debug/axiscal
+# The binary the integration tests run: the optimised build (`quick-release`, the profile
+# `make run` uses, without its viewer feature). The debug build takes about 10 times the CPU
+# on the tests' calibrations and searches; the library's own tests run in the debug build.
+TEST_BIN ?= $$(cd $${CARGO_TARGET_DIR:-target} && pwd)/quick-release/axiscal
 
 .PHONY: run test test-real test-robots noise-check iso9283-check certificate tool-accuracy bench fuzz study blind blind-free-poses blind-analytic budget lint doc clean-results setup-viewer view
 
@@ -29,10 +31,11 @@ view:
 	$(CARGO) run --profile quick-release --features viz -- view $(OUT)/campaign.rrd
 
 ## test: the whole test suite (unit, integration, doc tests; the benchmarks are `make bench`'s);
-## reads nothing outside the repository. The smoke scenario runs on the binary the integration
-## tests built (`cargo run` would build it again, with other dependency features).
+## reads nothing outside the repository. The integration tests and the smoke scenario run the
+## optimised binary (TEST_BIN); the library's tests run in the debug build.
 test:
-	$(CARGO) test --lib --bins --tests --examples
+	$(CARGO) build --profile quick-release
+	AXISCAL_TEST_BIN="$(TEST_BIN)" $(CARGO) test --lib --bins --tests --examples
 	$(CARGO) test --doc
 	$(TEST_BIN) run scenarios/ci-smoke.toml --force --out results/ci-smoke
 
@@ -41,7 +44,7 @@ test:
 ## optimised build's (`quick-release`, the profile `make run` uses without its viewer feature)
 test-real:
 	$(CARGO) build --profile quick-release
-	AXISCAL_TEST_BIN="$$(cd $${CARGO_TARGET_DIR:-target} && pwd)/quick-release/axiscal" $(CARGO) test --test it -- --ignored real_boby_klimchik:: real_fanuc:: real_sscanss2:: real_rct:: hostile_calibration:: hostile_round6a:: hostile_round9a:: hostile_round9c:: hostile_round9e:: hostile_round10a:: hostile_round10c:: hostile_round10d:: hostile_round11a:: hostile_round11e:: hostile_round13a:: hostile_round14a:: hostile_round14e:: hostile_round15a:: hostile_round16m:: hostile_round18m::a_swap
+	AXISCAL_TEST_BIN="$(TEST_BIN)" $(CARGO) test --test it -- --ignored real_boby_klimchik:: real_fanuc:: real_sscanss2:: real_rct:: hostile_calibration:: hostile_round6a:: hostile_round9a:: hostile_round9c:: hostile_round9e:: hostile_round10a:: hostile_round10c:: hostile_round10d:: hostile_round11a:: hostile_round11e:: hostile_round13a:: hostile_round14a:: hostile_round14e:: hostile_round15a:: hostile_round16m:: hostile_round18m::a_swap
 
 ## test-robots: the four issue-15 test robots (P-R-P-P table, two-axis positioner, SCARA,
 ## six-axis arm with a repeated sweep and wandering held joints), 50 seeds of noise each:

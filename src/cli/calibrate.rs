@@ -1033,14 +1033,15 @@ pub(super) fn misses_own_validation_poses(
     let test = part.chi_square.as_ref()?;
     let implausible = tool_move.and_then(|m| implausible_tool_move(&m, desc));
     let exceeds = test.verdict == Verdict::Exceeds;
-    let held = exceeds
-        .then(|| super::own_held::own_held_offset(cal, desc, set, &poses_set))
-        .flatten();
-    if let Some(held) = held.as_ref().filter(|h| h.passes) {
-        return Some(held.words(&data.display().to_string(), n));
+    let sweep = exceeds
+        .then(|| axiscal::diagnosis::sweep_cause_of_misses(cal, desc, set, &poses_set))
+        .flatten()
+        .filter(|s| held_or_unnamed_by_slips(s, (&poses_set, cal, desc, &v), tool_move.is_some()));
+    if let Some(sweep) = sweep.as_ref().filter(|h| h.passes) {
+        return Some(super::sweep_cause::words(sweep, &data.display().to_string(), n));
     }
-    let held_part = held
-        .map(|h| h.part_words(&data.display().to_string()))
+    let held_part = sweep
+        .map(|h| super::sweep_cause::part_words(&h, &data.display().to_string()))
         .unwrap_or_default();
     (exceeds || implausible.is_some()).then(|| {
         let (rms, predicted) = (part.rms_mm, part.predicted_mm.total);
@@ -1070,6 +1071,26 @@ pub(super) fn misses_own_validation_poses(
         };
         format!("{miss}{}: {first}{held_part}{cause}", implausible.unwrap_or_default())
     })
+}
+
+/// Whether a sweep's cause found against the file's own validation poses is said: a held
+/// command's offset always; a drift or a moved block (three parameters, which take in much of a
+/// miss of another cause) only where the slip search `validate` runs names no slip of the
+/// poses themselves (a column scaled on the validation rows alone reads as a move of the sweep
+/// whose joint it turns). With the tool frame fitted to the poses, that search does not run.
+fn held_or_unnamed_by_slips(
+    sweep: &axiscal::diagnosis::SweepCause,
+    (poses, cal, desc, v): (
+        &MeasurementSet,
+        &Calibration,
+        &RobotDescription,
+        &axiscal::diagnosis::Validation,
+    ),
+    tool_fitted: bool,
+) -> bool {
+    matches!(sweep.fault, axiscal::diagnosis::SweepFault::HeldOffset { .. })
+        || tool_fitted
+        || axiscal::diagnosis::explained_validation_misses(poses, cal, desc, v).is_empty()
 }
 
 /// What the slip search `validate` runs ([`axiscal::diagnosis::explained_validation_misses`])

@@ -24,7 +24,6 @@ mod joints;
 mod merge;
 mod options;
 mod output;
-mod own_held;
 mod plan;
 mod printer;
 mod progress;
@@ -35,6 +34,7 @@ mod run;
 mod signals;
 mod simulate;
 mod study;
+mod sweep_cause;
 mod validate;
 mod view;
 

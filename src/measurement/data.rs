@@ -483,6 +483,43 @@ impl MeasurementSet {
         out
     }
 
+    /// The set with the rows of experiment `experiment` moved by `-(block_mm + t drift_mm)`,
+    /// `t` running linearly from 0 at its first step to 1 at its last: a move of the sweep's
+    /// block and a drift through it undone.
+    pub fn with_sweep_move_undone_in(&self, experiment: &str, block_mm: [f64; 3], drift_mm: [f64; 3]) -> Self {
+        let steps = self.rows.iter().filter(|m| m.experiment == experiment).map(|m| m.step);
+        let (first, last) = steps.fold((usize::MAX, 0), |(a, b), s| (a.min(s), b.max(s)));
+        let span = last.saturating_sub(first).max(1) as f64;
+        let mut out = self.clone();
+        for m in out.rows.iter_mut().filter(|m| m.experiment == experiment) {
+            let t = (m.step - first) as f64 / span;
+            (0..3).for_each(|c| m.position_mm[c] -= block_mm[c] + t * drift_mm[c]);
+        }
+        out
+    }
+
+    /// The set with each row moved by `-t drift_mm`, `t` running linearly with its file line
+    /// from 0 at line `lines.0` to 1 at line `lines.1`: a drift through the whole file undone
+    /// (rows without a line are left as they are).
+    pub fn with_file_drift_undone(&self, drift_mm: [f64; 3], lines: (u64, u64)) -> Self {
+        let span = lines.1.saturating_sub(lines.0).max(1) as f64;
+        let mut out = self.clone();
+        for (i, m) in out.rows.iter_mut().enumerate() {
+            if let Some(&line) = self.lines.0.get(i) {
+                let t = line.saturating_sub(lines.0) as f64 / span;
+                (0..3).for_each(|c| m.position_mm[c] -= t * drift_mm[c]);
+            }
+        }
+        out
+    }
+
+    /// The first and last file lines of the rows, when the set was read from a file.
+    pub fn line_span(&self) -> Option<(u64, u64)> {
+        let first = self.lines.0.iter().min()?;
+        let last = self.lines.0.iter().max()?;
+        Some((*first, *last))
+    }
+
     /// The setup of row `row` (0 without a `setup` column).
     pub fn setup_of(&self, row: usize) -> usize {
         self.row_setups.get(row).copied().unwrap_or(0)

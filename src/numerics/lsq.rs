@@ -251,6 +251,31 @@ pub fn inverse_symmetric(h: &DMatrix<f64>, fit: &'static str) -> Result<DMatrix<
     }))
 }
 
+/// The pseudo-inverse of a symmetric positive semi-definite matrix `h` (a quadratic's Hessian
+/// with directions it does not change along) by its eigen-decomposition `V diag(1 / lambda)
+/// V^T`, the eigenvalues below `tolerance` times the largest taken as null directions (inverted
+/// as 0, returned as unit vectors); `None` when an eigenvalue is below minus that (not
+/// semi-definite), none is positive, or one is NaN.
+pub fn pseudo_inverse_semidefinite(h: &DMatrix<f64>, tolerance: f64) -> Option<(DMatrix<f64>, Vec<DVector<f64>>)> {
+    let n = h.nrows();
+    let eigen = h.clone().symmetric_eigen();
+    let largest = eigen.eigenvalues.iter().fold(0.0f64, |a, &l| a.max(l));
+    let null_below = tolerance * largest;
+    if largest.is_nan() || largest <= 0.0 || eigen.eigenvalues.iter().any(|&l| l.is_nan() || l < -null_below) {
+        return None;
+    }
+    let v = &eigen.eigenvectors;
+    let kept: Vec<usize> = (0..n).filter(|&k| eigen.eigenvalues[k] > null_below).collect();
+    let inverse = DMatrix::from_fn(n, n, |r, c| {
+        kept.iter().map(|&k| v[(r, k)] * v[(c, k)] / eigen.eigenvalues[k]).sum()
+    });
+    let null = (0..n)
+        .filter(|k| !kept.contains(k))
+        .map(|k| v.column(k).into_owned())
+        .collect();
+    Some((inverse, null))
+}
+
 /// `(x, (A^T A)^-1, residual)` of a linear least-squares problem.
 pub type LinearSolution = (DVector<f64>, DMatrix<f64>, DVector<f64>);
 

@@ -4,7 +4,7 @@
 //! joint's axis, the sweep's own axis fit takes it in and the reference-pose test has nothing to
 //! see, so `calibrate` said only "the calibrated model misses this file's own N validation
 //! poses". Now, where the file's own validation poses miss, each held command of each sweep is
-//! tried corrected by a fitted amount (recalibrating, `src/cli/own_held.rs`), and one whose
+//! tried corrected by a fitted amount (recalibrating, `src/diagnosis/sweep_causes.rs`), and one whose
 //! correction makes the poses pass, by an F test shared among the hypotheses, is named with
 //! the sweep's lines, the offset and its 1-sigma: "in.csv:19: experiment axis3 (lines 19-34):
 //! the held `cmd_2` looks offset by +1.0 deg". Clean files of six robots stay quiet. Not

@@ -1,0 +1,157 @@
+//! The words `calibrate` says of a sweep whose records, corrected, let the calibration fit the
+//! file's own validation poses ([`axiscal::diagnosis::sweep_cause_of_misses`]): a held
+//! command off through the sweep, the sweep's points drifting, or the whole file's.
+
+use axiscal::diagnosis::{SWEEP_CAUSE_FALSE_ALARM, SweepCause, SweepFault, SweepShadow};
+
+/// `(x, y, z)` with three decimals.
+fn triple(v: &[f64; 3]) -> String {
+    format!("({:.3}, {:.3}, {:.3})", v[0], v[1], v[2])
+}
+
+/// What the records look off by, as said in a sentence (`whole`: the whole file's drift).
+fn fault_words(fault: &SweepFault, whole: bool) -> String {
+    match fault {
+        SweepFault::HeldOffset {
+            joint,
+            offset,
+            sigma,
+            unit,
+        } => format!(
+            "the held `cmd_{joint}` looks offset by {offset:+.3} {unit} (1-sigma {sigma:.3}) from where the robot stood"
+        ),
+        SweepFault::Drift { drift_mm, sigma_mm } => format!(
+            "its points look to drift by {} mm (1-sigma {} mm) from its first {} to its last",
+            triple(drift_mm),
+            triple(sigma_mm),
+            if whole { "row" } else { "step" }
+        ),
+        SweepFault::Block { moved_mm, sigma_mm } => format!(
+            "its block looks moved by {} mm (1-sigma {} mm)",
+            triple(moved_mm),
+            triple(sigma_mm)
+        ),
+    }
+}
+
+/// The correction that undoes `fault`, as said after "recalibrated with".
+fn undone_words(fault: &SweepFault) -> String {
+    match fault {
+        SweepFault::HeldOffset {
+            joint, offset, unit, ..
+        } => {
+            format!("`cmd_{joint}` in these rows moved by {:+.3} {unit}", -offset)
+        }
+        SweepFault::Drift { .. } => "that drift undone (each point moved back by its share of it)".to_string(),
+        SweepFault::Block { .. } => "that move undone".to_string(),
+    }
+}
+
+/// The records' owner: `experiment E` or `the whole file`.
+fn owner(experiment: &Option<String>) -> String {
+    experiment
+        .as_ref()
+        .map_or("the whole file".to_string(), |e| format!("experiment {e}"))
+}
+
+/// An alternative, after "or".
+fn alternative_words((experiment, fault): &(Option<String>, SweepFault)) -> String {
+    let who = owner(experiment);
+    match fault {
+        SweepFault::HeldOffset {
+            joint, offset, unit, ..
+        } => format!(", or the held `cmd_{joint}` of {who} by {offset:+.3} {unit}"),
+        SweepFault::Drift { drift_mm, .. } => format!(", or {who}'s points drifting by {} mm", triple(drift_mm)),
+        SweepFault::Block { moved_mm, .. } => format!(", or {who}'s block moved by {} mm", triple(moved_mm)),
+    }
+}
+
+/// The clause for the miss's cause where the correction explains a part of it
+/// ([`SweepCause::passes`] false), for the file `data` (its name).
+pub(super) fn part_words(cause: &SweepCause, data: &str) -> String {
+    let lines = cause
+        .lines
+        .map_or(String::new(), |(a, b)| format!(" ({data} lines {a}-{b})"));
+    let check = match cause.fault {
+        SweepFault::HeldOffset { joint, .. } => format!("check `cmd_{joint}` in these rows against the controller"),
+        SweepFault::Drift { .. } | SweepFault::Block { .. } => {
+            "check whether the instrument or the robot moved while these rows were measured".to_string()
+        }
+    };
+    format!(
+        "in {}{lines} {}: recalibrated with {} the model misses the poses by {:.3} mm RMS (chi2/dof {:.2}), a gain \
+         beyond chance among the {} corrections of held commands and drifts tried (an F test at \
+         {SWEEP_CAUSE_FALSE_ALARM:e}) though not within their test: {check}, and another cause besides: ",
+        owner(&cause.experiment),
+        fault_words(&cause.fault, cause.experiment.is_none()),
+        undone_words(&cause.fault),
+        cause.rms_mm.1,
+        cause.per_dof.1,
+        cause.tried,
+    )
+}
+
+/// The clause naming what the reference-pose test said of the sweep, where the drift found
+/// fits the poses best.
+fn shadow_words(shadow: &Option<SweepShadow>) -> String {
+    let named = match shadow {
+        None => return String::new(),
+        Some(SweepShadow::HeldOffset(joints)) => {
+            let held: Vec<String> = joints.iter().map(|k| format!("`cmd_{k}`")).collect();
+            format!("the offset of the held {}", held.join(" or "))
+        }
+        Some(SweepShadow::MovedBlock) => "the move of the block".to_string(),
+    };
+    format!(
+        " (rather than {named} the reference-pose test names above for this experiment: where the sweep passes the \
+         reference pose a drift moves its point as that does, and over the validation poses the drift fits best)"
+    )
+}
+
+/// Why the sweeps did not show the fault, and what to do.
+fn why_words(fault: &SweepFault, whole: bool) -> String {
+    match fault {
+        SweepFault::HeldOffset { joint: j, .. } => format!(
+            "the sweep's own axis fit takes such an offset in as a turn of its axis about joint {j}'s, which the sweeps \
+             alone do not show: a value typed wrong for this experiment, or the joint re-mastered between the sweeps (or \
+             the sweep's block moved between the sweeps, the instrument or the robot bumped, which moves its points much \
+             alike where joint {j}'s axis is far from them); calibration.json is wrong for the robot: check `cmd_{j}` in \
+             these rows against the controller, or measure the sweep again"
+        ),
+        SweepFault::Drift { .. } if whole => "each sweep's own axis fit takes its share of a slow drift in as a tilt or \
+             shift of its axis, which the sweeps alone do not show: the instrument creeping through the campaign (warming \
+             up, a settling stand or base); calibration.json is wrong for the robot: measure again once the instrument \
+             and the robot have settled, with a reference point measured at intervals to show a drift"
+            .to_string(),
+        SweepFault::Drift { .. } => "the sweep's own axis fit takes a slow drift in as a tilt or shift of its axis, \
+             which the sweeps alone do not show: the instrument or the robot's base creeping while the sweep ran \
+             (warming up, a settling mount or stand); calibration.json is wrong for the robot: measure the sweep again \
+             once the instrument and the robot have settled"
+            .to_string(),
+        SweepFault::Block { .. } => "the instrument or the robot bumped between the sweeps; calibration.json is wrong \
+             for the robot: measure the sweep again"
+            .to_string(),
+    }
+}
+
+/// The warning, for the file `data` (its name) with `poses` validation poses.
+pub(super) fn words(cause: &SweepCause, data: &str, poses: usize) -> String {
+    let place = cause.lines.map_or(data.to_string(), |(l, _)| format!("{data}:{l}"));
+    let lines = cause.lines.map_or(String::new(), |(a, b)| format!(" (lines {a}-{b})"));
+    let or: String = cause.alternatives.iter().map(alternative_words).collect();
+    let whole = cause.experiment.is_none();
+    format!(
+        "{place}: {}{lines}: {}{or}{}: the calibrated model misses this file's own {poses} validation poses (not \
+         fitted) by {:.3} mm RMS (chi2/dof {:.2}), and recalibrated with {} it fits them (RMS {:.3} mm, chi2/dof \
+         {:.2}); {}",
+        owner(&cause.experiment),
+        fault_words(&cause.fault, whole),
+        shadow_words(&cause.shadows),
+        cause.rms_mm.0,
+        cause.per_dof.0,
+        undone_words(&cause.fault),
+        cause.rms_mm.1,
+        cause.per_dof.1,
+        why_words(&cause.fault, whole),
+    )
+}

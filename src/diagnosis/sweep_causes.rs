@@ -1,0 +1,646 @@
+//! One sweep's records off from what the robot did, sought by recalibrating against the
+//! file's own validation poses (`calibrate`, when the calibrated model misses them). Four
+//! corrections are tried, as hypotheses:
+//! - **a held command** ([`SweepCorrection::HeldCommand`]): on some robots (a table, a two-axis
+//!   positioner, the IRB/L6) a held joint's offset through one sweep turns the swept arc
+//!   rigidly about the held joint's axis; the sweep's own axis fit absorbs it and the
+//!   reference-pose comparison (`calibration::shared_target`) has nothing to see;
+//! - **a drift** ([`SweepCorrection::Drift`]): the sweep's points moving by a fixed vector
+//!   growing linearly from its first step to its last (the instrument or the robot's base
+//!   creeping while it ran); the sweep's own fit takes most of a slow drift into its axis
+//!   (`screen::bump`, a step, does not name it);
+//! - **a drift of the whole file**: every row, the validation poses' too, moving by a fixed
+//!   vector growing linearly with its file line (an instrument creeping through the campaign);
+//! - **a move of the sweep's block** ([`SweepCorrection::Block`]), all its points alike (the
+//!   instrument or the robot bumped between sweeps), where the reference-pose test does not
+//!   name it (the sweep not compared there), and against a drift where it does.
+//!
+//! Either way the validation poses, which the calibration predicts with the sweep's axis as
+//! fitted, miss. Each hypothesis is tested by recalibrating with the sweep's records corrected
+//! by `c` (a vector of 1 or 3 parameters): the validation chi-square (`validate`'s, against the
+//! original calibration's noise) is a quadratic in `c` where the model is linear in it (a
+//! rotation by a few degrees, a shift of a few millimetres), so calibrations at 0, at plus and
+//! minus a trial step along each parameter and at the sum of two steps for each pair give its
+//! gradient and Hessian by central differences, and Newton's step its least; the best few are
+//! refined by narrower quadratics about it and confirmed by a calibration at the refined
+//! correction; the correction's covariance is the inverse of half the chi-square's Hessian
+//! there, scaled by the chi-square per degree of freedom left where that is beyond 1. The
+//! hypothesis is named when (1) its improvement over the file as recorded, per parameter and
+//! over the confirmed chi-square per degree of freedom left, is an F ratio `F(p, dof - p)`
+//! beyond its quantile at [`SWEEP_CAUSE_FALSE_ALARM`] shared among the hypotheses tried
+//! (Bonferroni, as the slip searches share theirs), and (2) the corrected calibration passes
+//! `validate`'s test of the poses: the correction explains the miss, not only part of it
+//! (Seber & Wild, *Nonlinear Regression*, 1989, sec. 5.3: the extra-sum-of-squares F test of a
+//! nested model). Its gain must also exceed the chi-square's excess left beyond its degrees of
+//! freedom: that excess is the model's own error, which the poses share (not independent, as
+//! the F test counts them), and a fit moves by as much where the poses miss for another reason
+//! (a clean file of five-point sweeps, its poses missed at chi2/dof 3.28, 3.03 with a held
+//! `cmd_4` moved 15 deg). Other hypotheses that pass all three are given beside it, as
+//! alternatives the data do not tell apart, best first by the chi-square per degree of freedom
+//! left; where none passes the poses' test, the best held command that passes the other two is
+//! said as a part of the miss (a move's three parameters take in a part of most misses).
+//! The sweeps are taken as the calibration fitted them (the points the screen drops left out);
+//! a sweep whose points shift part-way (`screen::bump`, a bump the fit takes in) and one the
+//! reference-pose test names as one of two that disagree (`shared_target::moved_sweeps`) are
+//! not tried:
+//! their cause is said already. In a sweep that test names with a held offset or as a moved
+//! block (not one of two that disagree), only that correction and a drift are tried, and only
+//! the drift is said, where it fits the poses best (the other is said already; at the
+//! reference pose a drift reads as either).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{ValidationOptions, Verdict, validate, validate_free_tool};
+use crate::calibration::procedure::{
+    AxisExperiment, Calibration, axis_experiments_with, calibrate, screen_sweeps, wandering_sweep_bumps,
+};
+use crate::calibration::shared_target::moved_sweeps;
+use crate::kinematics::JointKind;
+use crate::measurement::MeasurementSet;
+use crate::numerics::lsq::pseudo_inverse_semidefinite;
+use crate::numerics::stats::f_upper_quantile;
+use crate::robot::RobotDescription;
+
+/// The family-wise false-alarm rate of the search: the own-poses test's.
+pub const SWEEP_CAUSE_FALSE_ALARM: f64 = 1e-4;
+
+/// Hypotheses refined and confirmed by a calibration at their fitted correction, best
+/// predicted first.
+const CONFIRMED: usize = 3;
+
+/// Refining quadratics ([`refined`]).
+const REFINE_PASSES: usize = 2;
+
+/// A correction of one sweep's records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SweepCorrection {
+    /// Held joint `k`'s (0-based) recorded command moved by `c` (file units).
+    HeldCommand(usize),
+    /// The points moved by `-t c` \[mm\], `t` running from 0 at the sweep's first step to 1 at
+    /// its last: a linear drift `c` undone.
+    Drift,
+    /// The points moved by `-c` \[mm\]: a move of the sweep's block undone (the
+    /// reference-pose test names most; this one where the sweep is not compared, or against a
+    /// drift).
+    Block,
+}
+
+impl SweepCorrection {
+    /// Its parameters.
+    fn parameters(self) -> usize {
+        match self {
+            Self::HeldCommand(_) => 1,
+            Self::Drift | Self::Block => 3,
+        }
+    }
+
+    /// The trial change (1 deg or 1 mm of a held command; 1 mm of drift), about the size of
+    /// the slips sought, so that the quadratic is read where they lie.
+    fn trial_step(self) -> f64 {
+        1.0
+    }
+
+    /// The half-width of a refining quadratic: within it a rotation's or a shift's chi-square
+    /// is quadratic to well below its noise.
+    fn refine_step(self) -> f64 {
+        0.25
+    }
+
+    /// `set` with experiment `experiment` corrected by `c`.
+    fn applied(self, set: &MeasurementSet, experiment: &str, c: &[f64]) -> MeasurementSet {
+        match self {
+            Self::HeldCommand(k) => set.with_command_offset_in(experiment, k, c[0]),
+            Self::Drift => set.with_sweep_move_undone_in(experiment, [0.0; 3], [c[0], c[1], c[2]]),
+            Self::Block => set.with_sweep_move_undone_in(experiment, [c[0], c[1], c[2]], [0.0; 3]),
+        }
+    }
+}
+
+/// What a sweep's records look off by: the correction's negative.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SweepFault {
+    /// A held joint's recorded command minus where the robot stood.
+    HeldOffset {
+        /// The held joint (1-based).
+        joint: usize,
+        /// The offset (file units).
+        offset: f64,
+        /// Its 1-sigma (file units).
+        sigma: f64,
+        /// `deg` or `mm`.
+        unit: &'static str,
+    },
+    /// The points' drift from the sweep's first step to its last, in the instrument frame.
+    Drift {
+        /// The drift \[mm\].
+        drift_mm: [f64; 3],
+        /// Its 1-sigma per axis \[mm\].
+        sigma_mm: [f64; 3],
+    },
+    /// The sweep's block moved, all its points alike, in the instrument frame.
+    Block {
+        /// The move \[mm\].
+        moved_mm: [f64; 3],
+        /// Its 1-sigma per axis \[mm\].
+        sigma_mm: [f64; 3],
+    },
+}
+
+/// What the reference-pose test (`shared_target::moved_sweeps`) names in a sweep, where the
+/// drift found there fits the validation poses best: at the reference pose a drift through the
+/// sweep moves its point as either does.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SweepShadow {
+    /// The held joints (1-based) it names with an offset.
+    HeldOffset(Vec<usize>),
+    /// A move of the sweep's block.
+    MovedBlock,
+}
+
+/// A sweep whose records, corrected, let the calibration fit the file's own validation poses.
+#[derive(Clone, Debug)]
+pub struct SweepCause {
+    /// The experiment; `None`: the whole file (a [`SweepFault::Drift`] in file order, from its
+    /// first line to its last).
+    pub experiment: Option<String>,
+    /// Its first and last lines.
+    pub lines: Option<(u64, u64)>,
+    /// What its records look off by.
+    pub fault: SweepFault,
+    /// The validation chi-square per degree of freedom as recorded and corrected.
+    pub per_dof: (f64, f64),
+    /// The validation RMS as recorded and corrected \[mm\].
+    pub rms_mm: (f64, f64),
+    /// Other (experiment, fault) that pass as well (empty where [`SweepCause::passes`] is
+    /// false; experiment `None`: the whole file).
+    pub alternatives: Vec<(Option<String>, SweepFault)>,
+    /// Whether the corrected calibration passes the poses' test; `false`: the correction
+    /// explains a part of the miss beyond chance, another cause the rest.
+    pub passes: bool,
+    /// What the reference-pose test names in this sweep, where the drift found fits the
+    /// poses best.
+    pub shadows: Option<SweepShadow>,
+    /// The corrections tried (held commands, drifts, moved blocks).
+    pub tried: usize,
+}
+
+/// One validation of a calibration of the file with a sweep corrected.
+#[derive(Clone, Copy, Debug)]
+struct Score {
+    chi2: f64,
+    dof: usize,
+    rms_mm: f64,
+    passes: bool,
+}
+
+/// A hypothesis: the experiment (its index; `None`: the whole file, its validation poses
+/// too, a drift in file order) and the correction.
+type Hypothesis = (Option<usize>, SweepCorrection);
+
+/// The validation of the file as recorded (`None`) or with a hypothesis's correction.
+type ScoreOf<'a> = dyn Fn(Option<Hypothesis>, &[f64]) -> Option<Score> + 'a;
+
+/// A quadratic read about a point: where its least is, its value there, and its Hessian.
+struct Quadratic {
+    least_at: Vec<f64>,
+    least: f64,
+    /// The Hessian's pseudo-inverse.
+    inverse_hessian: DMatrix<f64>,
+    /// The directions the quadratic does not change along (unit vectors).
+    null: Vec<DVector<f64>>,
+}
+
+/// A hypothesis with its confirmed correction, that correction's covariance and its score.
+struct Confirmed {
+    hypothesis: Hypothesis,
+    c: Vec<f64>,
+    covariance: DMatrix<f64>,
+    /// The parameters the poses determine: the hypothesis's less its null directions.
+    rank: usize,
+    /// Whether each parameter has a share in a null direction (its sigma is then infinite).
+    undetermined: Vec<bool>,
+    score: Score,
+}
+
+impl Confirmed {
+    /// The chi-square per degree of freedom left.
+    fn left(&self) -> f64 {
+        self.score.chi2 / (self.score.dof as f64 - self.rank as f64)
+    }
+}
+
+/// The curvature, relative to the stiffest direction's, below which a direction of the
+/// chi-square's Hessian is taken as null (either sign): central differences over a
+/// millimetre's step read a direction the model does not change along (a sweep's block moved
+/// along its own axis, which leaves the axis line) at about -1e-4 of the stiffest, through the
+/// fit's curvature, not at 0.
+const WEAK_DIRECTION: f64 = 1e-3;
+
+/// A null direction's share in a parameter beyond which that parameter is undetermined.
+const NULL_SHARE: f64 = 1e-3;
+
+/// `experiments` less the sweeps of `set` the reference-pose test ([`moved_sweeps`]) names as
+/// one of two that disagree: that cause is named already, and nothing is sought in them.
+/// Returned: the sweeps it names with a held offset (the held joints, 0-based) or as a moved
+/// block: in them only that correction and a drift are tried (a drift through the sweep reads
+/// as either at the reference pose).
+fn retain_unnamed(
+    experiments: &mut Vec<AxisExperiment>,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    cal: &Calibration,
+) -> Vec<(String, Named)> {
+    let noise = cal
+        .noise
+        .as_ref()
+        .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
+    let mut held = Vec::new();
+    for moved in moved_sweeps(set, desc, noise) {
+        if moved.held.is_empty() && moved.backlash.is_empty() {
+            if moved.ambiguous {
+                experiments.retain(|e| e.name != moved.experiment && !moved.others.contains(&e.name));
+            } else {
+                held.push((moved.experiment.clone(), Named::Block));
+            }
+        } else if !moved.held.is_empty() {
+            let joints = moved.held.iter().map(|h| h.joint - 1).collect();
+            held.push((moved.experiment.clone(), Named::Held(joints)));
+        }
+    }
+    held
+}
+
+/// What the reference-pose test names in a sweep: held joints' offsets (0-based) or a move
+/// of its block.
+enum Named {
+    Held(Vec<usize>),
+    Block,
+}
+
+/// The sweeps tried ([`sweeps_tried`]): the set they come from, the sweeps, and those the
+/// reference-pose test names ([`retain_unnamed`]).
+struct Tried {
+    set: MeasurementSet,
+    experiments: Vec<AxisExperiment>,
+    named: Vec<(String, Named)>,
+}
+
+impl Tried {
+    /// What the reference-pose test names in experiment `e`.
+    fn named_of(&self, e: usize) -> Option<&Named> {
+        let name = &self.experiments[e].name;
+        self.named.iter().find(|(n, _)| n == name).map(|(_, k)| k)
+    }
+
+    /// The hypotheses: each sweep's held turning commands and its drift; in a sweep the
+    /// reference-pose test names, the correction it names and the drift.
+    fn hypotheses(&self, desc: &RobotDescription) -> Vec<Hypothesis> {
+        (0..self.experiments.len())
+            .flat_map(|e| {
+                let named: Vec<SweepCorrection> = match self.named_of(e) {
+                    Some(Named::Held(joints)) => joints.iter().map(|&k| SweepCorrection::HeldCommand(k)).collect(),
+                    Some(Named::Block) => vec![SweepCorrection::Block],
+                    None => held_joints(&self.experiments[e], desc)
+                        .into_iter()
+                        .map(SweepCorrection::HeldCommand)
+                        .chain([SweepCorrection::Block])
+                        .collect(),
+                };
+                named
+                    .into_iter()
+                    .chain([SweepCorrection::Drift])
+                    .map(move |c| (Some(e), c))
+            })
+            .collect()
+    }
+
+    /// What a drift found in experiment `e` stands beside: what the reference-pose test names
+    /// there.
+    fn shadow_of(&self, e: usize) -> Option<SweepShadow> {
+        Some(match self.named_of(e)? {
+            Named::Held(joints) => SweepShadow::HeldOffset(joints.iter().map(|k| k + 1).collect()),
+            Named::Block => SweepShadow::MovedBlock,
+        })
+    }
+}
+
+/// The sweeps of `set` as the calibration `cal` fitted them (without the points its screen
+/// dropped), less those whose cause is said already (a bump, which the fit takes in; a moved
+/// block the reference-pose test names).
+fn sweeps_tried(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet) -> Option<Tried> {
+    let screening = screen_sweeps(set, desc, &cal.options, false).ok()?;
+    let set = screening.set.unwrap_or_else(|| set.clone());
+    let (mut experiments, _) = axis_experiments_with(&set, desc, cal.options.held_tolerance).ok()?;
+    // Sweeps whose held joints wander are tested for bumps once the model is fitted.
+    let wandering = wandering_sweep_bumps(&set, desc, &cal.options, cal);
+    experiments.retain(|e| !screening.bumps.iter().chain(&wandering).any(|b| b.experiment == e.name));
+    let named = retain_unnamed(&mut experiments, &set, desc, cal);
+    Some(Tried {
+        set,
+        experiments,
+        named,
+    })
+}
+
+/// The sweep whose records, corrected, explain the miss of the validation poses `poses` by
+/// the calibration `cal` of `set` (module docs); where none makes them pass, the one whose
+/// correction explains a part of the miss beyond chance (the F test alone;
+/// [`SweepCause::passes`] false); `None` when none does or the poses pass as recorded.
+pub fn sweep_cause_of_misses(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    poses: &MeasurementSet,
+) -> Option<SweepCause> {
+    let file_lines = set.line_span();
+    let tried_sweeps = sweeps_tried(cal, desc, set)?;
+    let (set, experiments) = (&tried_sweeps.set, &tried_sweeps.experiments);
+    let options = ValidationOptions::of_calibration(cal, SWEEP_CAUSE_FALSE_ALARM);
+    let score = |h: Option<Hypothesis>, c: &[f64]| -> Option<Score> {
+        match h {
+            None => score_of(set, cal, desc, (poses, &options)),
+            Some((Some(e), correction)) => {
+                let changed = correction.applied(set, &experiments[e].name, c);
+                score_of(&changed, cal, desc, (poses, &options))
+            }
+            // The whole file's drift: the poses drifted too.
+            Some((None, _)) => {
+                let (drift, lines) = ([c[0], c[1], c[2]], file_lines?);
+                let changed = set.with_file_drift_undone(drift, lines);
+                score_of(
+                    &changed,
+                    cal,
+                    desc,
+                    (&poses.with_file_drift_undone(drift, lines), &options),
+                )
+            }
+        }
+    };
+    let recorded = score(None, &[])?;
+    if recorded.passes {
+        return None;
+    }
+    let mut hypotheses = tried_sweeps.hypotheses(desc);
+    if file_lines.is_some() {
+        hypotheses.push((None, SweepCorrection::Drift));
+    }
+    let mut named = confirmed(&score, &hypotheses, recorded);
+    named.sort_by(|a, b| a.left().total_cmp(&b.left()));
+    // Those whose correction makes the poses pass; else the best held command, as a part of the
+    // miss (a move's three parameters take in a part of most misses).
+    let passes = named.iter().any(|n| n.score.passes);
+    named.retain(|n| n.score.passes == passes);
+    if !passes {
+        named.retain(|n| matches!(n.hypothesis.1, SweepCorrection::HeldCommand(_)));
+    }
+    let best = named.first()?;
+    // What the reference-pose test names is said there.
+    let shadows = best.hypothesis.0.and_then(|e| tried_sweeps.shadow_of(e));
+    if shadows.is_some() && best.hypothesis.1 != SweepCorrection::Drift {
+        return None;
+    }
+    let fault = |n: &Confirmed| fault_of(n, desc);
+    let name = |n: &Confirmed| n.hypothesis.0.map(|e| experiments[e].name.clone());
+    let alternatives = match passes {
+        true => named[1..].iter().map(|n| (name(n), fault(n))).collect(),
+        false => Vec::new(),
+    };
+    Some(SweepCause {
+        experiment: name(best),
+        lines: best.hypothesis.0.map_or(file_lines, |e| experiments[e].lines),
+        fault: fault(best),
+        per_dof: (
+            recorded.chi2 / recorded.dof as f64,
+            best.score.chi2 / best.score.dof as f64,
+        ),
+        rms_mm: (recorded.rms_mm, best.score.rms_mm),
+        alternatives,
+        passes,
+        shadows,
+        tried: hypotheses.len(),
+    })
+}
+
+/// The hypotheses whose correction, fitted and confirmed, passes the F test and explains more
+/// than it leaves (module docs), against the file as `recorded`.
+fn confirmed(score: &ScoreOf, hypotheses: &[Hypothesis], recorded: Score) -> Vec<Confirmed> {
+    let mut fitted: Vec<(Hypothesis, Vec<f64>, f64)> = hypotheses
+        .iter()
+        .filter_map(|&h| {
+            let at = |c: &[f64]| score(Some(h), c).map(|s| s.chi2);
+            let zero = vec![0.0; h.1.parameters()];
+            let q = quadratic_least(&at, &zero, recorded.chi2, h.1.trial_step())?;
+            Some((h, q.least_at, q.least))
+        })
+        .collect();
+    fitted.sort_by(|a, b| a.2.total_cmp(&b.2));
+    let tried = hypotheses.len().max(1) as f64;
+    let quantile = |p: usize, dof: usize| f_upper_quantile(SWEEP_CAUSE_FALSE_ALARM / tried, p as f64, (dof - p) as f64);
+    fitted
+        .iter()
+        .take(CONFIRMED)
+        .filter_map(|(h, c, _)| refined(&|c: &[f64]| score(Some(*h), c), *h, c.clone()))
+        .filter(|n| {
+            let (s, p) = (n.score, n.rank);
+            let gain = recorded.chi2 - s.chi2;
+            // The excess left beyond the noise is the model's own error, shared by the poses: a
+            // correction that explains less than it leaves is within what that error does.
+            let most = gain > s.chi2 - s.dof as f64;
+            s.dof > p && gain / p as f64 / n.left() > quantile(p, s.dof) && most
+        })
+        .collect()
+}
+
+/// The fault a confirmed correction undoes, with its 1-sigma: a held command's offset is the
+/// correction's negative, a drift the drift undone.
+fn fault_of(n: &Confirmed, desc: &RobotDescription) -> SweepFault {
+    let sigma = |i: usize| match n.undetermined[i] {
+        true => f64::INFINITY,
+        false => n.covariance[(i, i)].sqrt(),
+    };
+    match n.hypothesis.1 {
+        SweepCorrection::HeldCommand(k) => SweepFault::HeldOffset {
+            joint: k + 1,
+            offset: -n.c[0],
+            sigma: sigma(0),
+            unit: desc.joints[k].kind.file_unit(),
+        },
+        SweepCorrection::Drift => SweepFault::Drift {
+            drift_mm: [n.c[0], n.c[1], n.c[2]],
+            sigma_mm: [sigma(0), sigma(1), sigma(2)],
+        },
+        SweepCorrection::Block => SweepFault::Block {
+            moved_mm: [n.c[0], n.c[1], n.c[2]],
+            sigma_mm: [sigma(0), sigma(1), sigma(2)],
+        },
+    }
+}
+
+/// The correction of hypothesis `h` refined from `c` by [`REFINE_PASSES`] quadratics about
+/// it ([`SweepCorrection::refine_step`] either side: Newton's method on the chi-square, its
+/// derivatives by central differences: the model is a rotation or a fit's shift, not quite
+/// linear over the trial step), confirmed by the score at the refined correction, with the
+/// covariance from the last quadratic's Hessian; `None` where a calibration fails, a
+/// quadratic is not convex or the last step leaves the last quadratic's span (not converged).
+fn refined(score: &dyn Fn(&[f64]) -> Option<Score>, h: Hypothesis, mut c: Vec<f64>) -> Option<Confirmed> {
+    let step = h.1.refine_step();
+    let at = |x: &[f64]| score(x).map(|s| s.chi2);
+    let mut last = None;
+    for _ in 0..REFINE_PASSES {
+        let q = quadratic_least(&at, &c, at(&c)?, step)?;
+        let newton: Vec<f64> = q.least_at.iter().zip(&c).map(|(a, b)| a - b).collect();
+        c = q.least_at.clone();
+        last = Some((newton, q));
+    }
+    let (newton, q) = last?;
+    // Newton's last step beyond the quadratic's own span: not converged, no least found.
+    if newton.iter().any(|s| s.abs() > step) {
+        return None;
+    }
+    let score = score(&c)?;
+    let rank = c.len() - q.null.len();
+    let left = score.chi2 / (score.dof as f64 - rank as f64);
+    // chi2 = least + (c - c*)' (H / 2) (c - c*): the covariance is (H / 2)^-1, scaled by the
+    // chi-square per degree of freedom left where that is beyond 1.
+    let covariance = q.inverse_hessian * (2.0 * left.max(1.0));
+    let undetermined = (0..c.len())
+        .map(|i| q.null.iter().any(|v| v[i].abs() > NULL_SHARE))
+        .collect();
+    Some(Confirmed {
+        hypothesis: h,
+        c,
+        covariance,
+        rank,
+        undetermined,
+        score,
+    })
+}
+
+/// The least of the quadratic through `f` about `centre` (where it is `f_centre`), from
+/// central differences `step` wide along each parameter and at the sum of two steps for each
+/// pair: where it is and its value, with the Hessian's pseudo-inverse and the directions it
+/// does not change along (a move of a sweep's block along its own axis: the axis line stays);
+/// `None` where an evaluation fails or the quadratic is not convex.
+fn quadratic_least(f: &dyn Fn(&[f64]) -> Option<f64>, centre: &[f64], f_centre: f64, step: f64) -> Option<Quadratic> {
+    let p = centre.len();
+    let moved = |d: &[(usize, f64)]| {
+        let mut x = centre.to_vec();
+        d.iter().for_each(|&(i, by)| x[i] += by);
+        f(&x)
+    };
+    let plus: Vec<f64> = (0..p).map(|i| moved(&[(i, step)])).collect::<Option<_>>()?;
+    let minus: Vec<f64> = (0..p).map(|i| moved(&[(i, -step)])).collect::<Option<_>>()?;
+    let gradient = DVector::from_fn(p, |i, _| (plus[i] - minus[i]) / (2.0 * step));
+    let mut hessian = DMatrix::from_fn(p, p, |i, j| match i == j {
+        true => (plus[i] + minus[i] - 2.0 * f_centre) / (step * step),
+        false => 0.0,
+    });
+    for i in 0..p {
+        for j in i + 1..p {
+            let both = moved(&[(i, step), (j, step)])?;
+            let h = (both - plus[i] - plus[j] + f_centre) / (step * step);
+            (hessian[(i, j)], hessian[(j, i)]) = (h, h);
+        }
+    }
+    let (inverse_hessian, null) = pseudo_inverse_semidefinite(&hessian, WEAK_DIRECTION)?;
+    let newton = &inverse_hessian * &gradient;
+    Some(Quadratic {
+        least_at: centre.iter().zip(newton.iter()).map(|(c, n)| c - n).collect(),
+        least: f_centre - gradient.dot(&newton) / 2.0,
+        inverse_hessian,
+        null,
+    })
+}
+
+/// The joints (0-based) experiment `e` holds at one command, turning ones only where the
+/// description's joint turns (a held slide's offset moves a sweep as a moved block does, which
+/// the reference-pose test names).
+fn held_joints(e: &AxisExperiment, desc: &RobotDescription) -> Vec<usize> {
+    (0..desc.dof())
+        .filter(|&k| e.holds_constant(k) && desc.joints[k].kind == JointKind::Revolute)
+        .collect()
+}
+
+/// The validation of `poses` against the calibration of `set` (with its options), tested with
+/// `options`; the tool frame estimated from the poses when the calibration measured none.
+fn score_of(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    (poses, options): (&MeasurementSet, &ValidationOptions),
+) -> Option<Score> {
+    let c = calibrate(set, desc, &cal.options).ok()?;
+    let v = match c.tool {
+        None => validate_free_tool(poses, &c, desc, options).ok()?.0,
+        Some(_) => validate(poses, &c, desc, options).ok()?,
+    };
+    let part = v.validation.as_ref()?;
+    let test = part.chi_square.as_ref()?;
+    Some(Score {
+        chi2: test.value,
+        dof: test.dof,
+        rms_mm: part.rms_mm,
+        passes: test.verdict != Verdict::Exceeds,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quadratic's least and inverse Hessian are exact on a quadratic (a second path: the
+    /// least written out by hand, the Hessian's inverse by hand).
+    #[test]
+    fn a_quadratics_least_and_hessian_are_read_exactly() {
+        // f = 3 + (x - 1)^2 + 2 (y + 0.5)^2 + (x - 1)(y + 0.5) + 0.5 (z - 2)^2
+        let f = |v: &[f64]| {
+            let (x, y, z) = (v[0] - 1.0, v[1] + 0.5, v[2] - 2.0);
+            Some(3.0 + x * x + 2.0 * y * y + x * y + 0.5 * z * z)
+        };
+        let centre = [0.3, 0.2, -0.4];
+        let q = quadratic_least(&f, &centre, f(&centre).unwrap(), 0.7).unwrap();
+        let (at, least, h) = (q.least_at, q.least, q.inverse_hessian);
+        let tight = 1e-12;
+        for (a, b) in at.iter().zip([1.0, -0.5, 2.0]) {
+            assert!((a - b).abs() < tight, "{at:?}");
+        }
+        assert!((least - 3.0).abs() < tight);
+        // The Hessian [[2, 1, 0], [1, 4, 0], [0, 0, 1]] inverted by hand.
+        let expected = [
+            [4.0 / 7.0, -1.0 / 7.0, 0.0],
+            [-1.0 / 7.0, 2.0 / 7.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        for (i, row) in expected.iter().enumerate() {
+            for (j, e) in row.iter().enumerate() {
+                assert!((h[(i, j)] - e).abs() < 1e-9, "{h}");
+            }
+        }
+    }
+
+    /// A direction the quadratic does not change along is null: no step along it, the others'
+    /// least found.
+    #[test]
+    fn a_flat_direction_is_null_and_the_others_least_is_found() {
+        // f = (x + y - 2)^2 + (z - 1)^2: flat along (1, -1, 0).
+        let f = |v: &[f64]| Some((v[0] + v[1] - 2.0).powi(2) + (v[2] - 1.0).powi(2));
+        let centre = [0.5, 0.25, 0.0];
+        let q = quadratic_least(&f, &centre, f(&centre).unwrap(), 0.5).unwrap();
+        assert_eq!(q.null.len(), 1);
+        let n = &q.null[0];
+        assert!((n[0].abs() - 0.5f64.sqrt()).abs() < 1e-9 && (n[0] + n[1]).abs() < 1e-9 && n[2].abs() < 1e-9);
+        assert!((q.least_at[0] + q.least_at[1] - 2.0).abs() < 1e-9 && (q.least_at[2] - 1.0).abs() < 1e-9);
+        // The step is orthogonal to the null direction: x - y as at the centre.
+        assert!((q.least_at[0] - q.least_at[1] - 0.25).abs() < 1e-9);
+        assert!(q.least.abs() < 1e-9);
+    }
+
+    /// A saddle or a maximum has no least.
+    #[test]
+    fn a_quadratic_that_is_not_convex_has_no_least() {
+        let saddle = |v: &[f64]| Some(v[0] * v[0] - v[1] * v[1]);
+        assert!(quadratic_least(&saddle, &[0.1, 0.2], saddle(&[0.1, 0.2]).unwrap(), 0.5).is_none());
+        let max = |v: &[f64]| Some(-v[0] * v[0]);
+        assert!(quadratic_least(&max, &[0.3], max(&[0.3]).unwrap(), 1.0).is_none());
+    }
+}
