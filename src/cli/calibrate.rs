@@ -1074,10 +1074,11 @@ pub(super) fn misses_own_validation_poses(
 }
 
 /// Whether a sweep's cause found against the file's own validation poses is said: a held
-/// command's offset always; a drift or a moved block (three parameters, which take in much of a
-/// miss of another cause) only where the slip search `validate` runs names no slip of the
-/// poses themselves (a column scaled on the validation rows alone reads as a move of the sweep
-/// whose joint it turns). With the tool frame fitted to the poses, that search does not run.
+/// command's offset and the whole file's drift (which moves the poses too) always; a sweep's
+/// drift or moved block (three parameters, which take in much of a miss of another cause) only
+/// where the slip search `validate` runs names no slip of the poses themselves (a column scaled
+/// on the validation rows alone reads as a move of the sweep whose joint it turns). With the
+/// tool frame fitted to the poses, that search does not run.
 fn held_or_unnamed_by_slips(
     sweep: &axiscal::diagnosis::SweepCause,
     (poses, cal, desc, v): (
@@ -1089,6 +1090,7 @@ fn held_or_unnamed_by_slips(
     tool_fitted: bool,
 ) -> bool {
     matches!(sweep.fault, axiscal::diagnosis::SweepFault::HeldOffset { .. })
+        || sweep.experiment.is_none()
         || tool_fitted
         || axiscal::diagnosis::explained_validation_misses(poses, cal, desc, v).is_empty()
 }

@@ -418,16 +418,9 @@ fn a_jittered_wide_table_names_the_still_tolerance_that_recovers_its_sweeps() {
 /// The rows of an axis experiment of `file` with the command `cmd_k` negated, as `name`.
 fn negated(file: &Path, name: &str, joint: usize) -> PathBuf {
     let experiment = format!("axis{joint}");
-    altered_csv(
-        file,
-        name,
-        |_| true,
-        |f| {
-            if f[0] == experiment {
-                common::scale_fields(f, 6 + joint..7 + joint, -1.0);
-            }
-        },
-    )
+    common::altered_experiment(file, name, &experiment, |f| {
+        common::scale_fields(f, 6 + joint..7 + joint, -1.0)
+    })
 }
 
 /// Item: a joint whose readings count the other way (a sliding table's slide, a rotary table's

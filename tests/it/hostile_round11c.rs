@@ -7,7 +7,6 @@
 //!   whose target 0 no other sweep shares: the SCARA's wrist sweep); it now says how far the
 //!   test reaches, once, in a note.
 
-use crate::common::altered_csv;
 use crate::common::hostile::{case, run_case};
 use std::path::{Path, PathBuf};
 
@@ -35,16 +34,9 @@ fn sweeps(dir: &Path, name: &str, seed: u64) -> PathBuf {
 /// `file` with `by` mm added to coordinate `axis` (0 x, 1 y, 2 z) of experiment `experiment`'s
 /// rows, as `name` (a hand edit, as a bumped instrument gives).
 fn bumped(file: &Path, name: &str, experiment: &str, axis: usize, by: f64) -> PathBuf {
-    altered_csv(
-        file,
-        name,
-        |_| true,
-        |f| {
-            if f[0] == experiment {
-                f[4 + axis] = (f[4 + axis].parse::<f64>().unwrap() + by).to_string();
-            }
-        },
-    )
+    crate::common::altered_experiment(file, name, experiment, |f| {
+        f[4 + axis] = (f[4 + axis].parse::<f64>().unwrap() + by).to_string()
+    })
 }
 
 /// The three numbers of every `sit shifted by (x, y, z) mm` in `e`.

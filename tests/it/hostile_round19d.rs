@@ -12,13 +12,13 @@
 //! poses best. A drift through the whole file (the validation poses too) is tried the same
 //! way, in file order. Not reached: a file without validation poses.
 
-use crate::common::altered_csv;
-use crate::common::hostile::assert_twice_less_once;
+use crate::common::hostile::{assert_twice_less_once_3, lines_of};
+use crate::common::{altered_csv, altered_experiment};
 use crate::hostile_round15s::{calibrated, simulated};
 use std::path::{Path, PathBuf};
 
-/// The words of the drift warning before the vector.
-const DRIFT: &str = "its points look to drift by (";
+/// The words of the drift warning before the vector (clean files: `hostile_round18h`).
+pub const DRIFT: &str = "its points look to drift by (";
 
 /// Shapes apart, seeds not tuned: (robot, experiment, drift from the sweep's first step to
 /// its last in mm): the table's turning joint along y, the 6-axis arm's wrist sweep along x,
@@ -41,19 +41,12 @@ fn with_drift(dir: &Path, clean: &Path, name: &str, experiment: &str, drift_mm: 
     let (first, last) = steps
         .iter()
         .fold((f64::MAX, f64::MIN), |(a, b), &s| (a.min(s), b.max(s)));
-    altered_csv(
-        clean,
-        name,
-        |_| true,
-        |f| {
-            if f[0] == experiment {
-                let t = (f[2].parse::<f64>().unwrap() - first) / (last - first);
-                for (c, d) in drift_mm.iter().enumerate() {
-                    f[4 + c] = (f[4 + c].parse::<f64>().unwrap() + t * d).to_string();
-                }
-            }
-        },
-    );
+    altered_experiment(clean, name, experiment, |f| {
+        let t = (f[2].parse::<f64>().unwrap() - first) / (last - first);
+        for (c, d) in drift_mm.iter().enumerate() {
+            f[4 + c] = (f[4 + c].parse::<f64>().unwrap() + t * d).to_string();
+        }
+    });
     dir.join(name)
 }
 
@@ -72,18 +65,6 @@ fn named_drift(stderr: &str, owner: &str) -> Option<([f64; 3], [f64; 3], String)
     let drift = triple(rest.split(')').next()?)?;
     let sigma = triple(rest.split("(1-sigma (").nth(1)?.split(')').next()?)?;
     Some((drift, sigma, lines))
-}
-
-/// The first and last file line of experiment `experiment`'s rows in `file`.
-fn lines_of(file: &Path, experiment: &str) -> String {
-    let text = std::fs::read_to_string(file).unwrap();
-    let rows: Vec<usize> = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| l.split(',').next() == Some(experiment))
-        .map(|(i, _)| i + 1)
-        .collect();
-    format!("{}-{}", rows[0], rows[rows.len() - 1])
 }
 
 #[test]
@@ -105,31 +86,12 @@ fn a_drift_through_one_sweep_is_named_by_the_validation_poses() {
         let e = calibrated(dir.path(), robot, &twice_file);
         let (twice, sigma_twice, _) = named_drift(&e, &format!("experiment {experiment}"))
             .unwrap_or_else(|| panic!("{robot}: twice the drift not named: {e}"));
-        for c in 0..3 {
-            assert_twice_less_once(
-                &format!("{robot}: axis {c}: {e}"),
-                (once[c], sigma_once[c]),
-                (twice[c], sigma_twice[c]),
-                drift[c],
-            );
-        }
-    }
-}
-
-#[test]
-fn clean_files_of_six_robots_name_no_drift() {
-    for robot in [
-        "table-prpp",
-        "positioner-2axis",
-        "asea-irb6l",
-        "scara-rrpr",
-        "arm6-dh",
-        "ur5e-dh",
-    ] {
-        let dir = tempfile::tempdir().unwrap();
-        let clean = simulated(dir.path(), robot, 9);
-        let e = calibrated(dir.path(), robot, &clean);
-        assert!(!e.contains(DRIFT), "{robot}: {e}");
+        assert_twice_less_once_3(
+            &format!("{robot}: {e}"),
+            (once, sigma_once),
+            (twice, sigma_twice),
+            drift,
+        );
     }
 }
 
@@ -176,13 +138,11 @@ fn a_drift_through_the_whole_file_is_named_in_file_order() {
         let e = calibrated(dir.path(), robot, &twice_file);
         let (twice, sigma_twice, _) =
             named_drift(&e, whole).unwrap_or_else(|| panic!("{robot}: twice the file's drift not named: {e}"));
-        for c in 0..3 {
-            assert_twice_less_once(
-                &format!("{robot}: axis {c}: {e}"),
-                (once[c], sigma_once[c]),
-                (twice[c], sigma_twice[c]),
-                drift[c],
-            );
-        }
+        assert_twice_less_once_3(
+            &format!("{robot}: {e}"),
+            (once, sigma_once),
+            (twice, sigma_twice),
+            drift,
+        );
     }
 }

@@ -93,3 +93,28 @@ pub fn assert_twice_less_once(what: &str, once: (f64, f64), twice: (f64, f64), d
         once.0
     );
 }
+
+/// [`assert_twice_less_once`] on each axis of a vector named once and with twice the vector
+/// written (`(value, sigma)` per axis).
+pub fn assert_twice_less_once_3(what: &str, once: ([f64; 3], [f64; 3]), twice: ([f64; 3], [f64; 3]), delta: [f64; 3]) {
+    for c in 0..3 {
+        assert_twice_less_once(
+            &format!("axis {c}: {what}"),
+            (once.0[c], once.1[c]),
+            (twice.0[c], twice.1[c]),
+            delta[c],
+        );
+    }
+}
+
+/// The first and last file line of experiment `experiment`'s rows in `file`, as `a-b`.
+pub fn lines_of(file: &std::path::Path, experiment: &str) -> String {
+    let text = std::fs::read_to_string(file).unwrap();
+    let rows: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.split(',').next() == Some(experiment))
+        .map(|(i, _)| i + 1)
+        .collect();
+    format!("{}-{}", rows[0], rows[rows.len() - 1])
+}

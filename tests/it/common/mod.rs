@@ -215,6 +215,25 @@ pub fn number_after(text: &str, label: &str) -> f64 {
         .unwrap_or_else(|_| panic!("`{word}` after `{label}` is not a number"))
 }
 
+/// `file` with `change` applied to the rows of experiment `experiment`, as `name` beside it.
+pub fn altered_experiment(
+    file: &std::path::Path,
+    name: &str,
+    experiment: &str,
+    change: impl Fn(&mut Vec<String>),
+) -> std::path::PathBuf {
+    altered_csv(
+        file,
+        name,
+        |_| true,
+        |f| {
+            if f[0] == experiment {
+                change(f)
+            }
+        },
+    )
+}
+
 /// The measurement CSV `file` with `change` applied to the fields of every data row
 /// (`experiment, moved_joint, step, target, x_mm, y_mm, z_mm, cmd_1, ..`) and the rows `keep`
 /// refuses left out, written as `name` beside it: a campaign made wrong in a known way.
