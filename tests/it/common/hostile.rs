@@ -97,12 +97,12 @@ pub fn assert_twice_less_once(what: &str, once: (f64, f64), twice: (f64, f64), d
 /// [`assert_twice_less_once`] on each axis of a vector named once and with twice the vector
 /// written (`(value, sigma)` per axis).
 pub fn assert_twice_less_once_3(what: &str, once: ([f64; 3], [f64; 3]), twice: ([f64; 3], [f64; 3]), delta: [f64; 3]) {
-    for c in 0..3 {
+    for (c, &d) in delta.iter().enumerate() {
         assert_twice_less_once(
             &format!("axis {c}: {what}"),
             (once.0[c], once.1[c]),
             (twice.0[c], twice.1[c]),
-            delta[c],
+            d,
         );
     }
 }
