@@ -1040,7 +1040,7 @@ pub(super) fn misses_own_validation_poses(
     if let Some(sweep) = sweep.as_ref().filter(|h| h.passes) {
         return Some(super::sweep_cause::words(sweep, &data.display().to_string(), n));
     }
-    let held_part = sweep
+    let sweep_part = sweep
         .map(|h| super::sweep_cause::part_words(&h, &data.display().to_string()))
         .unwrap_or_default();
     (exceeds || implausible.is_some()).then(|| {
@@ -1069,7 +1069,7 @@ pub(super) fn misses_own_validation_poses(
                 .to_string(),
             None => own_poses_slips(&poses_set, cal, desc, &v, data),
         };
-        format!("{miss}{}: {first}{held_part}{cause}", implausible.unwrap_or_default())
+        format!("{miss}{}: {first}{sweep_part}{cause}", implausible.unwrap_or_default())
     })
 }
 
