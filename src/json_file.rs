@@ -148,6 +148,29 @@ pub fn list_to_string<T: Serialize>(schema: Schema, key: &str, items: &[T]) -> s
 /// A leading byte-order mark is skipped (as the CSV readers do). An error names the line, the
 /// column and the key's path there (`robot.rows[1].a_m`).
 pub fn from_str<T: DeserializeOwned>(schema: Schema, text: &str) -> Result<T, JsonFileError> {
+    parse(schema, text)?.read()
+}
+
+/// A file written by [`to_string`], parsed once and its schema checked ([`parse`]), to be read
+/// as one or more types ([`Parsed::read`]: a file that holds several values side by side).
+#[derive(Debug)]
+pub struct Parsed<'a> {
+    /// The text, for the line and column of an error.
+    text: &'a str,
+    /// The parsed text less `schema` and `axiscal_version`.
+    value: serde_json::Value,
+}
+
+impl Parsed<'_> {
+    /// The parsed file read as `T`; an error names the line, the column and the key's path.
+    pub fn read<T: DeserializeOwned>(&self) -> Result<T, JsonFileError> {
+        T::deserialize(&self.value).map_err(|e| placed::<T>(self.text, &e))
+    }
+}
+
+/// The text of a file written by [`to_string`] parsed once, its schema checked as
+/// [`from_str`] checks it.
+pub fn parse(schema: Schema, text: &str) -> Result<Parsed<'_>, JsonFileError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut value: serde_json::Value = serde_json::from_str(text).map_err(|e| located(text, &e))?;
     if let Some(object) = value.as_object_mut() {
@@ -164,7 +187,7 @@ pub fn from_str<T: DeserializeOwned>(schema: Schema, text: &str) -> Result<T, Js
             }
         }
     }
-    serde_json::from_value(value).map_err(|e| placed::<T>(text, &e))
+    Ok(Parsed { text, value })
 }
 
 /// `e`, an error of reading the parsed value (which has no positions), placed in `text`: the

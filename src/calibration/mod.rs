@@ -17,6 +17,8 @@
 //!   `kinematics.yaml`, per-joint URDF origins), each read back and checked.
 //! - [`refine`]: the calibrated model refined on free poses (`calibrate --refine`, the
 //!   diagnosis's baseline refit).
+//! - [`recalibrated`]: the checks that calibrate a file again on its data altered (an
+//!   instrument axis' scale undone, named bumps moved back, the scale profile's fits).
 
 mod error;
 
@@ -34,6 +36,7 @@ pub mod model_parameters;
 pub mod noise;
 pub mod outputs;
 pub mod procedure;
+pub mod recalibrated;
 pub mod record;
 pub mod refine;
 pub mod refit_model;

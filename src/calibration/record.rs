@@ -51,13 +51,14 @@ impl CalibrationRecord {
         }
     }
 
-    /// Reads the text of a `calibration.json`: the calibration and the reports each through
-    /// the file's schema ([`json_file::from_str`]), so that an error in either names its line,
-    /// column and key.
+    /// Reads the text of a `calibration.json`, parsed once ([`json_file::parse`]): the
+    /// calibration and the reports each read from it, so that an error in either names its
+    /// line, column and key.
     pub fn from_json(text: &str) -> Result<Self, JsonFileError> {
+        let parsed = json_file::parse(Schema::CALIBRATION, text)?;
         Ok(CalibrationRecord {
-            calibration: json_file::from_str(Schema::CALIBRATION, text)?,
-            reports: json_file::from_str(Schema::CALIBRATION, text)?,
+            calibration: parsed.read()?,
+            reports: parsed.read()?,
         })
     }
 

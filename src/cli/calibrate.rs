@@ -14,19 +14,24 @@ use axiscal::calibration::outputs::{self, OUTPUT_FILES, OutputOptions};
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, ColumnSource, DEFAULT_HELD_TOLERANCE, Implausible,
-    PLAUSIBLE_AXIS_TILT_RAD, ProcedureError, RawReadingDeviation, Refit, SIZE_TOLERANCE, ScaleSlip, UrdfOptions,
-    UrdfRoot, bumps_undone, calibrate, column_source, implausible, joint_slopes, longest_length_m, ros_name,
-    screen_sweeps, wandering_sweep_bumps,
+    PLAUSIBLE_AXIS_TILT_RAD, ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, ScaleSlip, UrdfOptions, UrdfRoot,
+    bumps_undone, calibrate, implausible, ros_name, screen_sweeps, wandering_sweep_bumps,
 };
+use axiscal::calibration::recalibrated::{axes_profile_fit, calibrated_with_bumps_undone, instrument_axis_source};
 use axiscal::calibration::record::{CalibrationRecord, Reports};
 use axiscal::calibration::refine::{RefineOptions, Refinement, enough_free_poses};
 use axiscal::calibration::refit_model::refine::refine_carrying;
 use axiscal::calibration::refit_model::validation_poses_at_most;
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccuracy, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
-use axiscal::diagnosis::{Candidate, Diagnosis, carried_candidates};
+use axiscal::diagnosis::{
+    Candidate, Diagnosis, OwnPoses, OwnPosesCause, OwnPosesMiss, OwnPosesSlips, ToolMoveBeyond, carried_candidates,
+    test_own_validation_poses,
+};
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_ROWS, Scaled, axis_scale};
+use axiscal::measurement::unit_check::axis_scale::{
+    Fit, PROFILE_MAX_ROWS, Scaled, axis_scale, axis_scale_with_column_undone,
+};
 use axiscal::measurement::{Measurement, MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -477,19 +482,6 @@ struct BumpsUndone {
     cal: Calibration,
 }
 
-/// `set` (screened) with `bumps` moved back ([`bumps_undone`]) and its calibration; `None`
-/// when no bump was named or that calibration fails (the checks then read the data as written).
-fn undo_bumps(
-    set: &MeasurementSet,
-    bumps: &[axiscal::calibration::procedure::SweepBump],
-    desc: &RobotDescription,
-    options: &CalibrationOptions,
-) -> Option<(MeasurementSet, Calibration)> {
-    let undone = bumps_undone(set, bumps)?;
-    let cal = calibrate(&undone, desc, options).ok()?;
-    Some((undone, cal))
-}
-
 /// Why the axis-experiment calibration of `screened` failed (`e`), with what `--noise-mm` or
 /// `--repeatability-rad` had to do with it.
 fn calibration_failed(
@@ -575,16 +567,9 @@ fn calibrate_axes(
     let written = set;
     let set = screened;
     cal.outliers = screening.outliers;
-    let undone = undo_bumps(set, &screening.bumps, desc, &options);
+    let undone = calibrated_with_bumps_undone(set, &screening.bumps, desc, &options);
     let (judged, judged_cal) = undone.as_ref().map_or((set, &cal), |(s, c)| (s, c));
-    let fit = |s: &MeasurementSet| {
-        let c = calibrate(s, desc, &options).ok()?;
-        Some(Fit {
-            sum_squares_mm2: c.axes.iter().map(|a| a.points as f64 * a.residual_rms_mm.powi(2)).sum(),
-            dof: c.noise.as_ref()?.estimate.as_ref()?.dof,
-            misfit_poses: 0,
-        })
-    };
+    let fit = |s: &MeasurementSet| axes_profile_fit(s, desc, &options);
     let source = instrument_axis_source(judged_cal, (judged, desc), &options);
     warn_axis_scale(
         (judged, desc),
@@ -615,38 +600,6 @@ fn calibrate_axes(
         }),
     };
     Ok((CalibrationRecord { calibration, reports }, map, found))
-}
-
-/// The instrument axis whose scale explains the departures of the joints the transmission
-/// test names in `cal` ([`column_source`]), the calibrations re-run on `set` with `options`;
-/// `None` where the test names none.
-fn instrument_axis_source(
-    cal: &Calibration,
-    (set, desc): (&MeasurementSet, &RobotDescription),
-    options: &CalibrationOptions,
-) -> Option<ColumnSource> {
-    let named: Vec<usize> = implausible(cal, desc)
-        .iter()
-        .filter_map(|f| match f {
-            Implausible::Scaled(ScaleSlip::Command { joint, .. }) => Some(*joint),
-            _ => None,
-        })
-        .collect();
-    if named.is_empty() {
-        return None;
-    }
-    let refit = |s: &MeasurementSet| {
-        let c = calibrate(s, desc, options).ok()?;
-        Some(Refit {
-            slopes: joint_slopes(&c, desc),
-            fit: Fit {
-                sum_squares_mm2: c.axes.iter().map(|a| a.points as f64 * a.residual_rms_mm.powi(2)).sum(),
-                dof: c.noise.as_ref()?.estimate.as_ref()?.dof,
-                misfit_poses: 0,
-            },
-        })
-    };
-    column_source(set, &named, &refit)
 }
 
 /// A calibration of a set as the coordinate-scale profile reads it ([`axis_scale`]).
@@ -750,10 +703,7 @@ fn second_axis_scale(
     let Scaled::Column(first) = found.scaled else {
         return None;
     };
-    let rows = set.rows();
-    let centre = rows.iter().map(|m| m.position_mm[first]).sum::<f64>() / rows.len().max(1) as f64;
-    let undone = set.with_coordinate_scaled_about(first, 1.0 / found.factor, centre);
-    let second = axis_scale(&undone, fit, max_rows, slides)?;
+    let second = axis_scale_with_column_undone(set, (first, found.factor), fit, max_rows, slides)?;
     let other = matches!(second.scaled, Scaled::Column(c) if c != first);
     (second.significant && other).then(|| {
         (
@@ -777,11 +727,8 @@ fn explained_by(
     max_rows: usize,
     slides: &[usize],
 ) -> bool {
-    let rows = set.rows();
-    let n = rows.len().max(1) as f64;
-    let centre = rows.iter().map(|m| m.position_mm[source.column]).sum::<f64>() / n;
-    let undone = set.with_coordinate_scaled_about(source.column, 1.0 / source.factor, centre);
-    axis_scale(&undone, fit, max_rows, slides).is_some_and(|a| !a.significant)
+    axis_scale_with_column_undone(set, (source.column, source.factor), fit, max_rows, slides)
+        .is_some_and(|a| !a.significant)
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far
@@ -950,199 +897,113 @@ fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &Measurem
     }
 }
 
-/// The false-alarm rate of [`misses_own_validation_poses`]: a warning on data the model fits
-/// once in ten thousand files.
-const OWN_POSES_FALSE_ALARM: f64 = 1e-4;
-
-/// Validation poses [`misses_own_validation_poses`] predicts at most, evenly spaced through the
-/// file (as the URDF and zero-offset checks take them).
-const OWN_POSES_CHECKED: usize = 500;
-
-/// The file's own validation poses (free poses other than the tool's, at most
-/// [`OWN_POSES_CHECKED`] evenly spaced through the file) as a set of their rows, with how many.
-fn own_poses(set: &MeasurementSet, desc: &RobotDescription) -> Option<(MeasurementSet, usize)> {
-    let is_pose = |m: &&axiscal::measurement::Measurement| m.moved_joint == 0 && m.experiment != TOOL_EXPERIMENT;
-    let mut poses: Vec<(&str, usize)> = set
-        .rows()
-        .iter()
-        .filter(is_pose)
-        .map(|m| (m.experiment.as_str(), m.step))
-        .collect();
-    poses.dedup();
-    let kept: std::collections::HashSet<(&str, usize)> =
-        axiscal::measurement::bounded::evenly_spaced(poses, OWN_POSES_CHECKED)
-            .into_iter()
-            .collect();
-    let chosen: Vec<usize> = (0..set.rows().len())
-        .filter(|&i| {
-            let m = &set.rows()[i];
-            is_pose(&m) && kept.contains(&(m.experiment.as_str(), m.step))
-        })
-        .collect();
-    let rows: Vec<_> = chosen.iter().map(|&i| set.rows()[i].clone()).collect();
-    let lines: Vec<u64> = chosen.iter().filter_map(|&i| set.line_of(i)).collect();
-    let poses_set = MeasurementSet::new(desc.dof(), rows).ok()?.with_lines(lines);
-    Some((poses_set, kept.len()))
-}
-
 /// The axis-experiment calibration tested on the file's own validation poses, which it did not
-/// fit (`validate`'s test, [`axiscal::diagnosis::validate`], at [`OWN_POSES_FALSE_ALARM`]; with
-/// the tool frame estimated from the poses when it was not measured,
-/// [`axiscal::diagnosis::validate_free_tool`]): a miss
-/// beyond the prediction is what a slip the unit checks cannot see leaves (one experiment's
-/// commands scaled within a transmission's range, a wrong placement or description), or an
-/// effect the model lacks. The miss is then searched for the slips `validate` names
-/// ([`own_poses_slips`]). `None` without validation poses or when they are consistent.
+/// fit ([`test_own_validation_poses`]), in words: a sweep's cause that makes them pass alone,
+/// else the miss with what the slip search `validate` runs names; the paper's estimator's
+/// untested miss as a note. `None` without validation poses or when they are consistent.
 pub(super) fn misses_own_validation_poses(
     cal: &Calibration,
     (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
     stated_repeatability: Option<&[f64]>,
 ) -> Option<String> {
-    use axiscal::diagnosis::{ValidationOptions, Verdict, validate, validate_free_tool};
-    let (poses_set, n) = own_poses(set, desc)?;
-    let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
-    // A tool frame left nominal is off by an error no covariance holds: estimated from the
-    // poses, so that only what no tool frame explains is judged, and a move beyond what a
-    // description may be off by is said.
-    let (v, tool_move) = if cal.tool.is_none() {
-        let (v, fitted) = validate_free_tool(&poses_set, cal, desc, &options).ok()?;
-        (v, Some(fitted))
-    } else {
-        (validate(&poses_set, cal, desc, &options).ok()?, None)
+    let place = data.display().to_string();
+    let miss = match test_own_validation_poses(cal, desc, set)? {
+        OwnPoses::NotTested(fit) => {
+            eprintln!(
+                "note: {place}: the calibrated model misses this file's own {} validation poses (not fitted) by {:.3} mm RMS{}; \
+                 not tested: the paper's estimator predicts no error of its calibration (the noise and repeatability alone \
+                 give {:.3} mm; `--estimator ml` predicts and tests it)",
+                fit.poses,
+                fit.rms_mm,
+                if fit.tool_fitted {
+                    ", with the tool frame fitted to them"
+                } else {
+                    ""
+                },
+                fit.predicted_mm
+            );
+            return None;
+        }
+        OwnPoses::Misses(miss) => miss,
     };
-    if cal.options.estimator == AxisEstimator::Paper {
-        // No covariance: the prediction holds the noise and repeatability only, and a miss
-        // beyond them is the calibration's own error, which this estimator does not predict.
-        let part = v.validation.as_ref()?;
-        eprintln!(
-            "note: {}: the calibrated model misses this file's own {n} validation poses (not fitted) by {:.3} mm RMS{}; \
-             not tested: the paper's estimator predicts no error of its calibration (the noise and repeatability alone \
-             give {:.3} mm; `--estimator ml` predicts and tests it)",
-            data.display(),
-            part.rms_mm,
-            if tool_move.is_some() {
-                ", with the tool frame fitted to them"
-            } else {
-                ""
-            },
-            part.predicted_mm.total
-        );
-        return None;
-    }
-    let part = v.validation.as_ref()?;
-    let test = part.chi_square.as_ref()?;
-    let implausible = tool_move.and_then(|m| implausible_tool_move(&m, desc));
-    let exceeds = test.verdict == Verdict::Exceeds;
-    let sweep = exceeds
-        .then(|| axiscal::diagnosis::sweep_cause_of_misses(cal, desc, set, &poses_set))
-        .flatten()
-        .filter(|s| held_or_unnamed_by_slips(s, (&poses_set, cal, desc, &v), tool_move.is_some()));
-    if let Some(sweep) = sweep.as_ref().filter(|h| h.passes) {
-        return Some(super::sweep_cause::words(sweep, &data.display().to_string(), n));
-    }
-    let sweep_part = sweep
-        .map(|h| super::sweep_cause::part_words(&h, &data.display().to_string()))
+    let (partial, slips) = match &miss.cause {
+        OwnPosesCause::Sweep(sweep) => return Some(super::sweep_cause::words(sweep, &place, miss.fit.poses)),
+        OwnPosesCause::Unnamed { partial, slips } => (partial, slips),
+    };
+    let sweep_part = partial
+        .as_ref()
+        .map(|h| super::sweep_cause::part_words(h, &place))
         .unwrap_or_default();
-    (exceeds || implausible.is_some()).then(|| {
-        let (rms, predicted) = (part.rms_mm, part.predicted_mm.total);
-        let tool = if tool_move.is_some() {
-            ", with the tool frame, which no pose measured, fitted to these poses"
-        } else {
-            ""
-        };
-        let miss = if !exceeds || rms > predicted {
-            format!(
-                "the calibrated model misses this file's own {n} validation poses (not fitted) by {rms:.3} mm RMS against {predicted:.3} mm predicted (chi2/dof {:.2}{tool})",
-                test.per_dof
-            )
-        } else {
-            format!(
-                "the calibrated model's misses of this file's own {n} validation poses (not fitted) fail the prediction's chi-square test (chi2/dof {:.2}{tool}) though their RMS, {rms:.3} mm, is within the {predicted:.3} mm predicted: their pattern, not their size, contradicts it (some poses or directions missed well beyond their own predicted error, where the prediction is tight)",
-                test.per_dof
-            )
-        };
-        let first = understated_repeatability(desc, stated_repeatability);
-        let cause = match tool_move {
-            // The nominal tool frame's error would be read as a slip of the coordinates.
-            Some(_) => "check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
+    let first = understated_repeatability(desc, stated_repeatability);
+    let cause = match slips {
+        // The nominal tool frame's error would be read as a slip of the coordinates.
+        OwnPosesSlips::ToolFitted => "check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
              placement and lengths, or an effect the model lacks (`axiscal validate`, `axiscal diagnose` on this file)"
-                .to_string(),
-            None => own_poses_slips(&poses_set, cal, desc, &v, data),
-        };
-        format!("{miss}{}: {first}{sweep_part}{cause}", implausible.unwrap_or_default())
-    })
+            .to_string(),
+        slips => own_poses_slips(slips, data),
+    };
+    let beyond = miss.tool_move.map(tool_move_words).unwrap_or_default();
+    Some(format!("{}{beyond}: {first}{sweep_part}{cause}", own_miss_words(&miss)))
 }
 
-/// Whether a sweep's cause found against the file's own validation poses is said: a held
-/// command's offset and the whole file's drift (which moves the poses too) always; a sweep's
-/// drift or moved block (three parameters, which take in much of a miss of another cause) only
-/// where the slip search `validate` runs names no slip of the poses themselves (a column scaled
-/// on the validation rows alone reads as a move of the sweep whose joint it turns). With the
-/// tool frame fitted to the poses, that search does not run.
-fn held_or_unnamed_by_slips(
-    sweep: &axiscal::diagnosis::SweepCause,
-    (poses, cal, desc, v): (
-        &MeasurementSet,
-        &Calibration,
-        &RobotDescription,
-        &axiscal::diagnosis::Validation,
-    ),
-    tool_fitted: bool,
-) -> bool {
-    matches!(sweep.fault, axiscal::diagnosis::SweepFault::HeldOffset { .. })
-        || sweep.experiment.is_none()
-        || tool_fitted
-        || axiscal::diagnosis::explained_validation_misses(poses, cal, desc, v).is_empty()
-}
-
-/// What the slip search `validate` runs ([`axiscal::diagnosis::explained_validation_misses`])
-/// says of the misses `v` of the file's own validation poses `poses` (read from `data`)
-/// against `cal`: the slips whose undoing makes every test pass, in `validate`'s words, or,
-/// when none does, the causes left: a slip of the whole file the calibration has taken into
-/// its geometry from the axis experiments too, the description, or an effect the model
-/// lacks (a joint's compliance: `diagnose` models it).
-fn own_poses_slips(
-    poses: &MeasurementSet,
-    cal: &Calibration,
-    desc: &RobotDescription,
-    v: &axiscal::diagnosis::Validation,
-    data: &Path,
-) -> String {
-    let named = axiscal::diagnosis::explained_validation_misses(poses, cal, desc, v);
-    if named.is_empty() && !axiscal::diagnosis::combined_slips_searched(poses) {
-        let words = checks::unsearched_words(poses, data);
-        return format!("{words} (`axiscal validate` on a part of the file runs it)");
+/// The first clause of a miss of the file's own validation poses: by how much, against what.
+fn own_miss_words(miss: &OwnPosesMiss) -> String {
+    let (n, rms, predicted) = (miss.fit.poses, miss.fit.rms_mm, miss.fit.predicted_mm);
+    let tool = if miss.fit.tool_fitted {
+        ", with the tool frame, which no pose measured, fitted to these poses"
+    } else {
+        ""
+    };
+    if !miss.exceeds || rms > predicted {
+        format!(
+            "the calibrated model misses this file's own {n} validation poses (not fitted) by {rms:.3} mm RMS against {predicted:.3} mm predicted (chi2/dof {:.2}{tool})",
+            miss.per_dof
+        )
+    } else {
+        format!(
+            "the calibrated model's misses of this file's own {n} validation poses (not fitted) fail the prediction's chi-square test (chi2/dof {:.2}{tool}) though their RMS, {rms:.3} mm, is within the {predicted:.3} mm predicted: their pattern, not their size, contradicts it (some poses or directions missed well beyond their own predicted error, where the prediction is tight)",
+            miss.per_dof
+        )
     }
-    if named.is_empty() {
-        return "no slip `axiscal validate` tests (a command column scaled or offset, one coordinate column or all three scaled, the \
+}
+
+/// What the slip search `validate` runs says of the misses of the file's own validation poses
+/// (read from `data`): the slips whose undoing makes every test pass, in
+/// `validate`'s words, or, when none does, the causes left: a slip of the whole file the
+/// calibration has taken into its geometry from the axis experiments too, the description, or
+/// an effect the model lacks (a joint's compliance: `diagnose` models it).
+fn own_poses_slips(slips: &OwnPosesSlips, data: &Path) -> String {
+    match slips {
+        OwnPosesSlips::Unsearched { rows } => {
+            let words = checks::unsearched_words(*rows, data);
+            format!("{words} (`axiscal validate` on a part of the file runs it)")
+        }
+        OwnPosesSlips::Named(named) => {
+            let said: Vec<String> = named.iter().map(|m| checks::explained_miss_words(m, data)).collect();
+            format!("`axiscal validate`'s slip search names it: {}", said.join("; "))
+        }
+        OwnPosesSlips::NoneNamed | OwnPosesSlips::ToolFitted => "no slip `axiscal validate` tests (a command column scaled or offset, one coordinate column or all three scaled, the \
                 coordinates shifted; over these poses or a run of them, one or two at once) makes them pass against this calibration: \
                 a slip the axis experiments carry as well, which the calibration has taken into its geometry (see the warnings above, or \
                 check each column for a scale or offset throughout the file, e.g. gradians), the description's placement and lengths, or \
                 an effect the model lacks, such as joints yielding under the load (`axiscal diagnose` on this file models it)"
-            .to_string();
+            .to_string(),
     }
-    let said: Vec<String> = named.iter().map(|m| checks::explained_miss_words(m, data)).collect();
-    format!("`axiscal validate`'s slip search names it: {}", said.join("; "))
 }
 
-/// What a move `m` of the nominal tool frame that fits the validation poses says when it is
-/// beyond a description's error: more than [`SIZE_TOLERANCE`] of the description's longest
-/// length or a turn beyond [`PLAUSIBLE_AXIS_TILT_RAD`] (the sanity checks' bounds on how far
-/// a description may be off the robot): the poses then miss by more than the unmeasured tool
-/// frame's error, e.g. along an axis the sweeps cannot place (a SCARA's height). `None`
-/// within.
-fn implausible_tool_move(m: &axiscal::diagnosis::FittedToolMove, desc: &RobotDescription) -> Option<String> {
-    let bound_mm = SIZE_TOLERANCE * longest_length_m(desc) * 1e3;
-    let (moved_mm, turned_rad) = (m.translation_mm.norm(), m.rotation_rad.norm());
-    (moved_mm > bound_mm || turned_rad > PLAUSIBLE_AXIS_TILT_RAD).then(|| {
-        format!(
-            "; the tool frame would have to move {moved_mm:.1} mm and turn {:.2} deg from the description's to fit them, beyond a description's error \
-             ({bound_mm:.1} mm, {:.0} % of its longest length; {:.0} deg): the poses are off by more than the unmeasured tool frame explains",
-            turned_rad.to_degrees(),
-            SIZE_TOLERANCE * 100.0,
-            PLAUSIBLE_AXIS_TILT_RAD.to_degrees()
-        )
-    })
+/// What a move of the nominal tool frame that fits the validation poses beyond a description's
+/// error says ([`axiscal::diagnosis::ToolMoveBeyond`]): the poses then miss by more than the
+/// unmeasured tool frame's error, e.g. along an axis the sweeps cannot place (a SCARA's height).
+fn tool_move_words(m: ToolMoveBeyond) -> String {
+    format!(
+        "; the tool frame would have to move {:.1} mm and turn {:.2} deg from the description's to fit them, beyond a description's error \
+         ({:.1} mm, {:.0} % of its longest length; {:.0} deg): the poses are off by more than the unmeasured tool frame explains",
+        m.moved_mm,
+        m.turned_rad.to_degrees(),
+        m.bound_mm,
+        SIZE_TOLERANCE * 100.0,
+        PLAUSIBLE_AXIS_TILT_RAD.to_degrees()
+    )
 }
 
 /// The first cause of a miss of the validation poses when `--repeatability-rad` (`stated`) is

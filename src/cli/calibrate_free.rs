@@ -15,10 +15,11 @@ use axiscal::calibration::procedure::{
     Calibration, ScaleDoubt, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
     named_joints,
 };
+use axiscal::calibration::recalibrated::free_pose_profile_fit;
 use axiscal::calibration::record::CalibrationRecord;
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
-use axiscal::measurement::unit_check::axis_scale::{Fit, PROFILE_MAX_FREE_POSE_ROWS};
+use axiscal::measurement::unit_check::axis_scale::PROFILE_MAX_FREE_POSE_ROWS;
 use axiscal::numerics::stats::chi_square_quantile;
 use axiscal::robot::RobotDescription;
 use std::path::Path;
@@ -589,20 +590,7 @@ fn profile_axis_scale(
     let undone = with_commands_scaled(set, slopes);
     let set = &undone;
     // The poses the model cannot fit stay flagged with the column undone: no axis named.
-    let profile = FreePoseOptions {
-        holdout: false,
-        effects: false,
-        ..*options
-    };
-    let fit = |s: &MeasurementSet| {
-        let c = calibrate_free_poses(s, desc, &profile).ok()?;
-        let points = c.summary.points as f64;
-        Some(Fit {
-            sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
-            dof: (3 * c.summary.points).saturating_sub(c.summary.parameters.len()),
-            misfit_poses: c.summary.outliers.len(),
-        })
-    };
+    let fit = |s: &MeasurementSet| free_pose_profile_fit(s, desc, options);
     super::calibrate::warn_axis_scale(
         (set, desc),
         data,

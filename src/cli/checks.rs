@@ -959,14 +959,14 @@ fn print_sweep_end(
 /// One warning per sweep whose points from one step on sit off its earlier ones
 /// ([`axiscal::calibration::procedure::SweepBump`]): the instrument or the target moved during
 /// the sweep.
-/// That the search of slips in runs of rows and of two slips at once did not run on `set` (read
-/// from `data`): more rows than [`axiscal::diagnosis::MAX_SEARCH_ROWS`].
-pub fn unsearched_words(set: &MeasurementSet, data: &Path) -> String {
+/// That the search of slips in runs of rows and of two slips at once did not run on `rows` rows
+/// (read from `data`): more than [`axiscal::diagnosis::MAX_SEARCH_ROWS`].
+pub fn unsearched_words(rows: usize, data: &Path) -> String {
     format!(
         "the search for slips in runs of rows and for two slips at once runs on up to {} rows, and these are {} rows of {}: \
          it was not run",
         axiscal::diagnosis::MAX_SEARCH_ROWS,
-        set.rows().len(),
+        rows,
         data.display()
     )
 }

@@ -38,6 +38,7 @@ use super::validate::{PointKind, PositionSummary, Validation, ValidationOptions,
 use super::{ExplainedMiss, explained_file_scale, explained_misses, explained_sweep_misses};
 use crate::calibration::procedure::Calibration;
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
+use crate::numerics::finite_diff::central_difference;
 use crate::numerics::stats::chi_square_quantile;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -299,12 +300,12 @@ fn screen(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescription), 
     for q in quantities {
         let mut of_q = Vec::new();
         for (e, h) in q.directions() {
-            let at = |sign: f64| {
-                let p = e.map(|x| x * sign * h);
-                residuals_with(rows, &move |m: &mut Measurement| q.apply(m, &p), cal, desc)
+            let at = |t: f64| {
+                let p = e.map(|x| x * t);
+                residuals_with(rows, &move |m: &mut Measurement| q.apply(m, &p), cal, desc).map(DVector::from_vec)
             };
-            let (plus, minus) = (at(1.0)?, at(-1.0)?);
-            of_q.push(plus.iter().zip(&minus).map(|(a, b)| (a - b) / (2.0 * h)).collect());
+            let derivative: DVector<f64> = central_difference(at, h)?;
+            of_q.push(derivative.data.into());
         }
         directions.push((q, of_q));
     }
@@ -448,12 +449,12 @@ fn refitted(
         let r = DVector::from_vec(residuals(&slips)?);
         let mut jacobian = DMatrix::zeros(r.len(), parameters.len());
         for (col, &(s, e, h)) in parameters.iter().enumerate() {
-            let at = |sign: f64| {
+            let at = |t: f64| {
                 let mut moved = slips.clone();
-                (0..3).for_each(|a| moved[s].p[a] += sign * h * e[a]);
+                (0..3).for_each(|a| moved[s].p[a] += t * e[a]);
                 residuals(&moved).map(DVector::from_vec)
             };
-            jacobian.set_column(col, &((at(1.0)? - at(-1.0)?) / (2.0 * h)));
+            jacobian.set_column(col, &central_difference(at, h)?);
         }
         // The rows scaled by their weights: a dense diagonal of the 3N rows was 3N x 3N.
         let mut weighted = jacobian.clone();

@@ -14,6 +14,7 @@ use super::Pose;
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::FixedFrames;
 use crate::measurement::{Measurement, MeasurementSet};
+use crate::numerics::finite_diff::central_difference;
 use crate::physics::UNMOVED_ACTUATOR_RAD;
 use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::commands_to_internal;
@@ -248,12 +249,12 @@ impl CleanCampaign {
     /// central differences of the target's position with a step of 1e-6 (rad or m), far below
     /// the chain's curvature scale.
     pub fn joint_sensitivity(&self, i: usize, joint: usize) -> Vector3<f64> {
-        let h = 1e-6;
-        let mut dq = vec![0.0; self.width];
-        dq[joint] = h;
-        let plus = self.position(i, Some(&dq));
-        dq[joint] = -h;
-        (plus - self.position(i, Some(&dq))) / (2.0 * h)
+        let moved = |t: f64| {
+            let mut dq = vec![0.0; self.width];
+            dq[joint] = t;
+            Some(self.position(i, Some(&dq)))
+        };
+        central_difference(moved, 1e-6).expect("a position at any joint values")
     }
 
     /// Where row `i`'s target is with the joint values moved by `dq`.

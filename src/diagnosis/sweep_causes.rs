@@ -48,7 +48,7 @@
 //! the drift is said, where it fits the poses best (the other is said already; at the
 //! reference pose a drift reads as either).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
 use super::{ValidationOptions, Verdict, validate, validate_free_tool};
 use crate::calibration::procedure::{
@@ -57,7 +57,7 @@ use crate::calibration::procedure::{
 use crate::calibration::shared_target::moved_sweeps;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
-use crate::numerics::lsq::pseudo_inverse_semidefinite;
+use crate::numerics::finite_diff::quadratic_least;
 use crate::numerics::stats::f_upper_quantile;
 use crate::robot::RobotDescription;
 
@@ -199,16 +199,6 @@ type Hypothesis = (Option<usize>, SweepCorrection);
 
 /// The validation of the file as recorded (`None`) or with a hypothesis's correction.
 type ScoreOf<'a> = dyn Fn(Option<Hypothesis>, &[f64]) -> Option<Score> + 'a;
-
-/// A quadratic read about a point: where its least is, its value there, and its Hessian.
-struct Quadratic {
-    least_at: Vec<f64>,
-    least: f64,
-    /// The Hessian's pseudo-inverse.
-    inverse_hessian: DMatrix<f64>,
-    /// The directions the quadratic does not change along (unit vectors).
-    null: Vec<DVector<f64>>,
-}
 
 /// A hypothesis with its confirmed correction, that correction's covariance and its score.
 struct Confirmed {
@@ -429,7 +419,7 @@ fn confirmed(score: &ScoreOf, hypotheses: &[Hypothesis], recorded: Score) -> Vec
         .filter_map(|&h| {
             let at = |c: &[f64]| score(Some(h), c).map(|s| s.chi2);
             let zero = vec![0.0; h.1.parameters()];
-            let q = quadratic_least(&at, &zero, recorded.chi2, h.1.trial_step())?;
+            let q = quadratic_least(&at, &zero, recorded.chi2, (h.1.trial_step(), WEAK_DIRECTION))?;
             Some((h, q.least_at, q.least))
         })
         .collect();
@@ -487,7 +477,7 @@ fn refined(score: &dyn Fn(&[f64]) -> Option<Score>, h: Hypothesis, mut c: Vec<f6
     let at = |x: &[f64]| score(x).map(|s| s.chi2);
     let mut last = None;
     for _ in 0..REFINE_PASSES {
-        let q = quadratic_least(&at, &c, at(&c)?, step)?;
+        let q = quadratic_least(&at, &c, at(&c)?, (step, WEAK_DIRECTION))?;
         let newton: Vec<f64> = q.least_at.iter().zip(&c).map(|(a, b)| a - b).collect();
         c = q.least_at.clone();
         last = Some((newton, q));
@@ -513,42 +503,6 @@ fn refined(score: &dyn Fn(&[f64]) -> Option<Score>, h: Hypothesis, mut c: Vec<f6
         rank,
         undetermined,
         score,
-    })
-}
-
-/// The least of the quadratic through `f` about `centre` (where it is `f_centre`), from
-/// central differences `step` wide along each parameter and at the sum of two steps for each
-/// pair: where it is and its value, with the Hessian's pseudo-inverse and the directions it
-/// does not change along (a move of a sweep's block along its own axis: the axis line stays);
-/// `None` where an evaluation fails or the quadratic is not convex.
-fn quadratic_least(f: &dyn Fn(&[f64]) -> Option<f64>, centre: &[f64], f_centre: f64, step: f64) -> Option<Quadratic> {
-    let p = centre.len();
-    let moved = |d: &[(usize, f64)]| {
-        let mut x = centre.to_vec();
-        d.iter().for_each(|&(i, by)| x[i] += by);
-        f(&x)
-    };
-    let plus: Vec<f64> = (0..p).map(|i| moved(&[(i, step)])).collect::<Option<_>>()?;
-    let minus: Vec<f64> = (0..p).map(|i| moved(&[(i, -step)])).collect::<Option<_>>()?;
-    let gradient = DVector::from_fn(p, |i, _| (plus[i] - minus[i]) / (2.0 * step));
-    let mut hessian = DMatrix::from_fn(p, p, |i, j| match i == j {
-        true => (plus[i] + minus[i] - 2.0 * f_centre) / (step * step),
-        false => 0.0,
-    });
-    for i in 0..p {
-        for j in i + 1..p {
-            let both = moved(&[(i, step), (j, step)])?;
-            let h = (both - plus[i] - plus[j] + f_centre) / (step * step);
-            (hessian[(i, j)], hessian[(j, i)]) = (h, h);
-        }
-    }
-    let (inverse_hessian, null) = pseudo_inverse_semidefinite(&hessian, WEAK_DIRECTION)?;
-    let newton = &inverse_hessian * &gradient;
-    Some(Quadratic {
-        least_at: centre.iter().zip(newton.iter()).map(|(c, n)| c - n).collect(),
-        least: f_centre - gradient.dot(&newton) / 2.0,
-        inverse_hessian,
-        null,
     })
 }
 
@@ -582,65 +536,4 @@ fn score_of(
         rms_mm: part.rms_mm,
         passes: test.verdict != Verdict::Exceeds,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The quadratic's least and inverse Hessian are exact on a quadratic (a second path: the
-    /// least written out by hand, the Hessian's inverse by hand).
-    #[test]
-    fn a_quadratics_least_and_hessian_are_read_exactly() {
-        // f = 3 + (x - 1)^2 + 2 (y + 0.5)^2 + (x - 1)(y + 0.5) + 0.5 (z - 2)^2
-        let f = |v: &[f64]| {
-            let (x, y, z) = (v[0] - 1.0, v[1] + 0.5, v[2] - 2.0);
-            Some(3.0 + x * x + 2.0 * y * y + x * y + 0.5 * z * z)
-        };
-        let centre = [0.3, 0.2, -0.4];
-        let q = quadratic_least(&f, &centre, f(&centre).unwrap(), 0.7).unwrap();
-        let (at, least, h) = (q.least_at, q.least, q.inverse_hessian);
-        let tight = 1e-12;
-        for (a, b) in at.iter().zip([1.0, -0.5, 2.0]) {
-            assert!((a - b).abs() < tight, "{at:?}");
-        }
-        assert!((least - 3.0).abs() < tight);
-        // The Hessian [[2, 1, 0], [1, 4, 0], [0, 0, 1]] inverted by hand.
-        let expected = [
-            [4.0 / 7.0, -1.0 / 7.0, 0.0],
-            [-1.0 / 7.0, 2.0 / 7.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ];
-        for (i, row) in expected.iter().enumerate() {
-            for (j, e) in row.iter().enumerate() {
-                assert!((h[(i, j)] - e).abs() < 1e-9, "{h}");
-            }
-        }
-    }
-
-    /// A direction the quadratic does not change along is null: no step along it, the others'
-    /// least found.
-    #[test]
-    fn a_flat_direction_is_null_and_the_others_least_is_found() {
-        // f = (x + y - 2)^2 + (z - 1)^2: flat along (1, -1, 0).
-        let f = |v: &[f64]| Some((v[0] + v[1] - 2.0).powi(2) + (v[2] - 1.0).powi(2));
-        let centre = [0.5, 0.25, 0.0];
-        let q = quadratic_least(&f, &centre, f(&centre).unwrap(), 0.5).unwrap();
-        assert_eq!(q.null.len(), 1);
-        let n = &q.null[0];
-        assert!((n[0].abs() - 0.5f64.sqrt()).abs() < 1e-9 && (n[0] + n[1]).abs() < 1e-9 && n[2].abs() < 1e-9);
-        assert!((q.least_at[0] + q.least_at[1] - 2.0).abs() < 1e-9 && (q.least_at[2] - 1.0).abs() < 1e-9);
-        // The step is orthogonal to the null direction: x - y as at the centre.
-        assert!((q.least_at[0] - q.least_at[1] - 0.25).abs() < 1e-9);
-        assert!(q.least.abs() < 1e-9);
-    }
-
-    /// A saddle or a maximum has no least.
-    #[test]
-    fn a_quadratic_that_is_not_convex_has_no_least() {
-        let saddle = |v: &[f64]| Some(v[0] * v[0] - v[1] * v[1]);
-        assert!(quadratic_least(&saddle, &[0.1, 0.2], saddle(&[0.1, 0.2]).unwrap(), 0.5).is_none());
-        let max = |v: &[f64]| Some(-v[0] * v[0]);
-        assert!(quadratic_least(&max, &[0.3], max(&[0.3]).unwrap(), 1.0).is_none());
-    }
 }

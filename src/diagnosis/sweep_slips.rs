@@ -39,9 +39,10 @@ use crate::calibration::free_pose::{FreePoseOptions, calibrate_free_poses, with_
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::JointKind;
 use crate::measurement::{Measurement, MeasurementSet};
+use crate::numerics::finite_diff::central_jacobian;
 use crate::numerics::stats::{UNRESOLVED_SPREAD_OVER_NOISE, chi_square_quantile, rms_spread};
 use crate::robot::RobotDescription;
-use nalgebra::{DMatrix, DVector, Point3, Vector3};
+use nalgebra::{DVector, Point3, Vector3};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Gauss-Newton steps of the rigid move's fit ([`rigid_move`]) at most: the residuals are
@@ -425,14 +426,7 @@ fn rigid_move(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescriptio
     let mut x = [0.0; 6];
     for _ in 0..RIGID_ITERATIONS {
         let r = DVector::from_vec(at(&x)?);
-        let mut jacobian = DMatrix::zeros(r.len(), 6);
-        for k in 0..6 {
-            let (mut plus, mut minus) = (x, x);
-            plus[k] += RIGID_STEP;
-            minus[k] -= RIGID_STEP;
-            let column = (DVector::from_vec(at(&plus)?) - DVector::from_vec(at(&minus)?)) / (2.0 * RIGID_STEP);
-            jacobian.set_column(k, &column);
-        }
+        let jacobian = central_jacobian(|p: &[f64]| at(p.try_into().ok()?), &x, &[RIGID_STEP; 6])?;
         let normal = jacobian.transpose() * &jacobian;
         let tolerance = 1e-9 * normal.norm();
         let step = normal.pseudo_inverse(tolerance).ok()? * (jacobian.transpose() * -r);

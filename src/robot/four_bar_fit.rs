@@ -9,6 +9,7 @@
 //! solution is smooth away from the dead-centre positions.
 
 use super::four_bar::{FourBarError, FourBarGeometry};
+use crate::numerics::finite_diff::central_difference;
 use crate::numerics::lsq::{LmOptions, LsqError, levenberg_marquardt};
 use nalgebra::{DMatrix, DVector};
 
@@ -97,11 +98,13 @@ fn residual_and_jacobian(
     };
     for j in 0..NP {
         let h = 1e-7 * (1.0 + p[j].abs());
-        let (mut plus, mut minus) = (p.clone(), p.clone());
-        plus[j] += h;
-        minus[j] -= h;
-        if let (Ok(rp), Ok(rm)) = (at(&plus), at(&minus)) {
-            jacobian.set_column(j, &((rp - rm) / (2.0 * h)));
+        let moved = |t: f64| {
+            let mut q = p.clone();
+            q[j] += t;
+            at(&q).ok()
+        };
+        if let Some(column) = central_difference(moved, h) {
+            jacobian.set_column(j, &column);
         }
     }
     (r, jacobian)

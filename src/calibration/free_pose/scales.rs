@@ -64,6 +64,7 @@
 use super::fit::{Fitted, Problem};
 use super::model::FreePoseModel;
 use super::poses::FreePoses;
+use crate::numerics::finite_diff::central_difference;
 use crate::numerics::stats::f_upper_tail;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -476,10 +477,10 @@ fn directions(problem: &Problem<'_>, fitted: &Fitted, which: &[usize]) -> Vec<(C
             let moved = with_command_scaled(poses, k, f);
             fitted.model.residuals(problem.controller, &moved, which).ok()
         };
-        if let (Some(plus), Some(minus)) = (at(1.0 + COMMAND_STEP), at(1.0 - COMMAND_STEP))
-            && plus.len() == rows
+        if let Some(direction) = central_difference(|t| at(1.0 + t), COMMAND_STEP)
+            && direction.len() == rows
         {
-            out.push((Candidate::Command(k), (plus - minus) / (2.0 * COMMAND_STEP)));
+            out.push((Candidate::Command(k), direction));
         }
     }
     let centroid = centroid_m(poses, which);

@@ -32,9 +32,10 @@ use crate::calibration::arc_model::ArcParams;
 use crate::calibration::line_ml::LineParams;
 use crate::calibration::model_parameters::{ModelCovariance, ModelOrigin, model_parameter_names};
 use crate::kinematics::AxisLine;
+use crate::numerics::finite_diff::central_difference;
 use crate::robot::TransmissionFitForm;
 use crate::robot::{RobotModel, Transmission};
-use nalgebra::{DMatrix, Isometry3, Point3, Unit, Vector3};
+use nalgebra::{DMatrix, Isometry3, Point3, Unit, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 
 /// An ML axis fit's parameters at the optimum and their covariance, to rebuild the axis and
@@ -200,11 +201,9 @@ pub(super) fn add_axis_fit<E>(
     let mut l = DMatrix::<f64>::zeros(4 + m, n);
     for j in (0..geometric).filter(|&j| local.moves_model(j) && c[(j, j)] > 0.0) {
         let h = 1e-3 * c[(j, j)].sqrt();
-        let (plus, minus) = (moved(j, h).0, moved(j, -h).0);
-        let (qp, qm) = (coordinates.coordinates(&plus), coordinates.coordinates(&minus));
-        for r in 0..4 {
-            l[(r, j)] = (qp[r] - qm[r]) / (2.0 * h);
-        }
+        let at = |t: f64| Some(Vector4::from(coordinates.coordinates(&moved(j, t).0)));
+        let column: Vector4<f64> = central_difference(at, h).expect("an axis rebuilt at any step");
+        l.fixed_view_mut::<4, 1>(0, j).copy_from(&column);
     }
     for i in 0..m {
         l[(4 + i, geometric + i)] = 1.0;

@@ -6,6 +6,7 @@
 //! held-out residuals are a fixed linear map of the data: `r_h - X_h X_t^+ r_t`, applied as
 //! `r_h - X_h (X_t^+ r_t)` (through the few parameters, never the rows-by-rows matrix).
 
+use crate::numerics::finite_diff::central_jacobian;
 use crate::numerics::lsq::TruncatedSvd;
 use nalgebra::{DMatrix, DVector};
 
@@ -15,37 +16,14 @@ use nalgebra::{DMatrix, DVector};
 pub const NULL_DIRECTION_TOLERANCE: f64 = 1e-7;
 
 /// Central-difference sensitivity `X = d prediction / d p = -d residual / d p` at `p0` of a
-/// residual function `f` (`measured - predicted`): `2 len(p0)` evaluations of `f` (the centre
-/// itself is not evaluated; `None` when an evaluation fails or two differ in length). The
-/// columns are independent evaluations: they run in parallel on the current rayon pool, each
-/// computed by the same arithmetic whatever the thread count (bit for bit the serial result).
+/// residual function `f` (`measured - predicted`): the residuals' Jacobian
+/// ([`central_jacobian`], its columns in parallel, bit for bit the serial result) negated;
+/// `None` when an evaluation fails or two differ in length.
 pub fn sensitivity<F>(f: F, p0: &[f64], steps: &[f64]) -> Option<DMatrix<f64>>
 where
     F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
 {
-    use rayon::prelude::*;
-    if p0.is_empty() {
-        return Some(DMatrix::zeros(f(p0)?.len(), 0));
-    }
-    let column = |c: usize| -> Option<Vec<f64>> {
-        let mut q = p0.to_vec();
-        q[c] = p0[c] + steps[c];
-        let plus = f(&q)?;
-        q[c] = p0[c] - steps[c];
-        let minus = f(&q)?;
-        (plus.len() == minus.len()).then(|| {
-            plus.iter()
-                .zip(&minus)
-                .map(|(p, m)| -(p - m) / (2.0 * steps[c]))
-                .collect()
-        })
-    };
-    let columns: Vec<Vec<f64>> = (0..p0.len()).into_par_iter().map(column).collect::<Option<_>>()?;
-    let n = columns[0].len();
-    if columns.iter().any(|c| c.len() != n) {
-        return None;
-    }
-    Some(DMatrix::from_fn(n, p0.len(), |i, c| columns[c][i]))
+    central_jacobian(f, p0, steps).map(|j| -j)
 }
 
 /// A linear least-squares fit `r_t ~ X_t p` on training rows, truncated to the identifiable
@@ -322,31 +300,6 @@ mod tests {
             DMatrix::from_row_slice(2, 2, &[2.0, 0.0, 1.0, 4.0]),
             max_relative = 1e-8
         );
-    }
-
-    /// The parallel columns are the serial ones bit for bit, whatever the pool's size.
-    #[test]
-    fn sensitivity_is_the_same_on_any_thread_count() {
-        let f = |p: &[f64]| {
-            Some(
-                (0..40)
-                    .map(|i| (p[i % 7] * (i as f64 + 0.3)).sin() * p[(i + 3) % 7])
-                    .collect(),
-            )
-        };
-        let p0: Vec<f64> = (0..7).map(|k| 0.1 + 0.07 * k as f64).collect();
-        let on = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("a pool");
-            pool.install(|| sensitivity(f, &p0, &[1e-6; 7]).expect("finite"))
-        };
-        let one = on(1);
-        for threads in [2, 3, 8] {
-            let many = on(threads);
-            assert!(one.iter().zip(many.iter()).all(|(a, b)| a.to_bits() == b.to_bits()));
-        }
     }
 
     /// The held-out sums of squares of several blocks at once ([`Block::heldout_ssr_of`],

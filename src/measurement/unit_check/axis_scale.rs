@@ -421,6 +421,21 @@ impl AxisScale {
     }
 }
 
+/// The profile ([`axis_scale`]) of `set` with coordinate `column` (0 `x_mm`, 1 `y_mm`, 2
+/// `z_mm`) divided by `factor` about the data's centroid: what the profile reads once a named
+/// column scale is undone (a second axis behind it, or nothing where the named one explains
+/// the rest).
+pub fn axis_scale_with_column_undone(
+    set: &MeasurementSet,
+    (column, factor): (usize, f64),
+    fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
+    max_rows: usize,
+    slides: &[usize],
+) -> Option<AxisScale> {
+    let undone = set.with_coordinate_scaled_about(column, 1.0 / factor, centroid(set)[column]);
+    axis_scale(&undone, fit, max_rows, slides)
+}
+
 /// The words of [`AxisScale::reach_note`] for report.md: why a file lets a one-axis scale pass
 /// and what closes it.
 pub fn axis_reach_words() -> String {
