@@ -18,7 +18,8 @@
 //! - [`refine`]: the calibrated model refined on free poses (`calibrate --refine`, the
 //!   diagnosis's baseline refit).
 //! - [`recalibrated`]: the checks that calibrate a file again on its data altered (an
-//!   instrument axis' scale undone, named bumps moved back, the scale profile's fits).
+//!   instrument axis' scale undone, named bumps moved back, the scale profile's fits, free
+//!   poses' column scales undone).
 
 mod error;
 

@@ -15,7 +15,9 @@ use axiscal::calibration::procedure::{
     Calibration, ScaleDoubt, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
     named_joints,
 };
-use axiscal::calibration::recalibrated::free_pose_profile_fit;
+use axiscal::calibration::recalibrated::{
+    FreePoseShift, calibrated_with_scales_undone, free_pose_profile_fit, shift_behind_scales,
+};
 use axiscal::calibration::record::CalibrationRecord;
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
@@ -357,13 +359,13 @@ fn warn_slips(
     // A slip or a shifted block misfits every test below (a column's scale, the coordinates'
     // scale).
     match shift_behind_scales((set, desc), options, summary, block) {
-        Some(Shift::Slip(s)) => {
+        Some(FreePoseShift::Slip(s)) => {
             return eprintln!(
                 "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
                 slip_words(&s)
             );
         }
-        Some(Shift::Block(b)) => return eprintln!("warning: {data}: {}", block_words(&b)),
+        Some(FreePoseShift::Block(b)) => return eprintln!("warning: {data}: {}", block_words(&b)),
         None => {}
     }
     for named in &summary.scales {
@@ -372,9 +374,13 @@ fn warn_slips(
     // A named column scale misfits the joints' transmissions of the calibration that absorbed
     // it: their tests run on the poses calibrated again with it undone, so that a slope said
     // below is one the scale does not explain.
-    let again = Undone::of(set, desc, options, &summary.scales);
-    let (set_u, (cal_u, summary_u)) = again.as_ref().map_or((set, (cal, summary)), Undone::parts);
-    let prefix = again.as_ref().map_or_else(String::new, |u| format!("{}: ", u.words));
+    let again = calibrated_with_scales_undone(set, desc, options, &summary.scales);
+    let (set_u, (cal_u, summary_u)) = again
+        .as_ref()
+        .map_or((set, (cal, summary)), |u| (&u.set, (&u.cal, &u.summary)));
+    let prefix = again
+        .as_ref()
+        .map_or_else(String::new, |_| format!("{}: ", undone_words(&summary.scales)));
     let scaled = free_pose_scale_slips((cal_u, summary_u), desc, set_u.rows());
     for found in &scaled {
         match found.free_pose_note() {
@@ -439,76 +445,6 @@ fn warn_target_ids(set: &MeasurementSet, desc: &RobotDescription, summary: &Free
     }
 }
 
-/// A column slip or a block of poses moved ([`explaining_slip`], [`block_shift`]).
-enum Shift {
-    /// A column slip, or a block found by the nominal model's slip search.
-    Slip(ExplainingSlip),
-    /// A block found in the calibrated residuals.
-    Block(BlockShift),
-}
-
-/// The slip ([`explaining_slip`]), else the shifted block (`block`, [`block_shift`] of the
-/// calibration as read), the poses show, unless the column-scale screen named a scale
-/// ([`FreePoseSummary::scales`]) that explains it: a scale moves the poses it reaches far (a
-/// wrist's command at its extremes, a coordinate far from the centroid) by a pattern the
-/// nominal model's slip search and the calibrated residuals' change-point test read as a step
-/// in file order where those poses stand together (a KR's `cmd_5` x1.025 read as lines
-/// 474-482 moved; its `x_mm` x1.025 as the poses from line 780 on). The two explanations are
-/// compared by their fit: the poses with the scales undone are calibrated again with the same
-/// options; a block or slip whose undoing fits the poses better than the scales undone
-/// (calibrated RMS) is said (a `cmd_2`/`cmd_3` swap the screen reads as `cmd_2` x 1.31), as is a slip or block that both tests still find on the undone poses (the
-/// scale may then be the shift's shadow: the shift is said alone, as without a scale); where
-/// neither remains, the shift was the scale's and `None` is returned (the refit with the first
-/// explanation undone, as the sweep side's `diagnosis/combined_slips.rs`). A column slip of a
-/// column the screen named (`cmd_3` in gradians, read as `cmd_3` x 1.135 +- 0.018) is said: the
-/// two agree on the column, and the slip's exact factor names the cause.
-fn shift_behind_scales(
-    (set, desc): (&MeasurementSet, &RobotDescription),
-    options: &FreePoseOptions,
-    summary: &FreePoseSummary,
-    block: Option<&BlockShift>,
-) -> Option<Shift> {
-    let as_read = explaining_slip(set, desc, options, Some(summary))
-        .map(Shift::Slip)
-        .or_else(|| block.cloned().map(Shift::Block))?;
-    let same_column = matches!(&as_read, Shift::Slip(s) if summary.scales.iter().any(|n| n.scale.column == s.field));
-    if summary.scales.is_empty() || same_column {
-        return Some(as_read);
-    }
-    let undone = scales_undone(set, &summary.scales);
-    let Ok(again) = calibrate_free_poses(&undone, desc, options) else {
-        return Some(as_read);
-    };
-    // A shift that leaves less than the scales' refit does explains more than they do (a
-    // column swap read as a scale that takes a twentieth of its misfit).
-    let undone_rms_mm = match &as_read {
-        Shift::Block(b) => b.undone_rms_mm,
-        Shift::Slip(s) => s.undone_rms_mm,
-    };
-    if undone_rms_mm < again.summary.calibrated_rms_mm {
-        return Some(as_read);
-    }
-    let remains = block_shift(&undone, desc, options, &again).is_some() || {
-        let (_, summary_again) = again.into_calibration(desc);
-        explaining_slip(&undone, desc, options, Some(&summary_again)).is_some()
-    };
-    remains.then_some(as_read)
-}
-
-/// `set` with the column scales `named` undone: each column divided by its factor (a
-/// coordinate column about the origin: the centre a scale is read about moves only the base,
-/// which the fit places).
-fn scales_undone(set: &MeasurementSet, named: &[NamedScale]) -> MeasurementSet {
-    named
-        .iter()
-        .fold(set.clone(), |s, n| match coordinate_index(&n.scale.column) {
-            Some(c) => s.with_coordinate_scaled(c, 1.0 / n.scale.factor),
-            None => {
-                command_index(&n.scale.column).map_or(s.clone(), |j| s.with_command_scaled(j, 1.0 / n.scale.factor))
-            }
-        })
-}
-
 /// The column scales `named` undone, in words (`with `x_mm` divided by 1.02510 (the scale
 /// named above) the poses were calibrated again`).
 fn undone_words(named: &[NamedScale]) -> String {
@@ -520,63 +456,6 @@ fn undone_words(named: &[NamedScale]) -> String {
         "with {} (the scale named above) the poses were calibrated again",
         columns.join(" and ")
     )
-}
-
-/// The coordinate-scale profile ([`super::calibrate::warn_axis_scale`]) of the free poses of
-/// The poses calibrated again with the column scales the screen named
-/// ([`FreePoseSummary::scales`]) undone: each column divided by its factor (a coordinate column
-/// about the origin: the centre a scale is read about moves only the base, which the fit
-/// places).
-struct Undone {
-    set: MeasurementSet,
-    cal: Calibration,
-    summary: FreePoseSummary,
-    /// The columns undone, in words (`with `x_mm` divided by 1.02510 (the scale named above)`).
-    words: String,
-}
-
-impl Undone {
-    /// `None` without a named scale, or when the calibration of the undone poses fails (the
-    /// tests then run on the calibration as read).
-    fn of(
-        set: &MeasurementSet,
-        desc: &RobotDescription,
-        options: &FreePoseOptions,
-        named: &[NamedScale],
-    ) -> Option<Self> {
-        if named.is_empty() {
-            return None;
-        }
-        let undone = scales_undone(set, named);
-        let profile = FreePoseOptions {
-            holdout: false,
-            effects: false,
-            ..*options
-        };
-        let (cal, summary) = calibrate_free_poses(&undone, desc, &profile)
-            .ok()?
-            .into_calibration(desc);
-        Some(Undone {
-            set: undone,
-            cal,
-            summary,
-            words: undone_words(named),
-        })
-    }
-
-    fn parts(&self) -> (&MeasurementSet, (&Calibration, &FreePoseSummary)) {
-        (&self.set, (&self.cal, &self.summary))
-    }
-}
-
-/// The 0-based coordinate of `x_mm`, `y_mm`, `z_mm`.
-fn coordinate_index(column: &str) -> Option<usize> {
-    ["x_mm", "y_mm", "z_mm"].iter().position(|c| *c == column)
-}
-
-/// The 0-based joint of `cmd_K`.
-fn command_index(column: &str) -> Option<usize> {
-    column.strip_prefix("cmd_")?.parse::<usize>().ok()?.checked_sub(1)
 }
 
 /// `set` with the joints' command columns said (`slopes`) undone.
