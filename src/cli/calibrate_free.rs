@@ -4,6 +4,7 @@
 use super::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::free_pose::block::{BlockShift, block_shift};
+use axiscal::calibration::free_pose::poses::{configurations, minimal_geometry_parameters};
 use axiscal::calibration::free_pose::slip::{
     ExplainingSlip, SLIP_FALSE_ALARM, explaining_slip, mirrored_targets, tool_turn_deg,
 };
@@ -593,24 +594,13 @@ fn with_commands_scaled(set: &MeasurementSet, factors: &[(usize, f64)]) -> Measu
         .fold(set.clone(), |s, &(joint, f)| s.with_command_scaled(joint - 1, f))
 }
 
-/// Independent values one configuration of the tool gives at most: its pose (a target's
-/// position, 3, when fewer than three targets are seen).
-const POSE_VALUES: usize = 6;
-
 /// A count of parameters and what they are, in words.
 struct Parameters(usize, &'static str);
 
-/// The fewest parameters a robot's geometry with its base placement has, `4 R + 2 P + 6` for `R`
-/// revolute and `P` prismatic joints (Everett, Driels & Mooring 1987, the minimal complete
-/// model): fewer independent values than these leave the geometry free.
+/// The geometry's minimal parameters ([`minimal_geometry_parameters`]), in words.
 fn minimal_parameters(desc: &RobotDescription) -> Parameters {
-    let revolute = desc
-        .joints
-        .iter()
-        .filter(|j| j.kind == axiscal::kinematics::JointKind::Revolute)
-        .count();
     Parameters(
-        4 * revolute + 2 * (desc.joints.len() - revolute) + 6,
+        minimal_geometry_parameters(desc),
         "parameters of the robot's geometry and placement (4 per turning joint, 2 per sliding one, 6 for the base)",
     )
 }
@@ -621,25 +611,19 @@ pub(super) fn few_configurations_of(set: &MeasurementSet, desc: &RobotDescriptio
     few_configurations(set, minimal_parameters(desc), all_rows)
 }
 
-/// The free poses' distinct configurations (commands equal to 1e-6) in words, when they give
-/// fewer independent values ([`POSE_VALUES`] each, 3 per target below three targets) than the
-/// `fitted` parameters: repeated measurements of a few configurations add noise averaging,
-/// no geometry, and the covariance then holds at those configurations only. With `all_rows`, every row
-/// counts as a pose (the sweeps fitted as free poses).
+/// The free poses' distinct configurations ([`configurations`]) in words, when they give fewer
+/// independent values than the `fitted` parameters: repeated measurements of a few
+/// configurations add noise averaging, no geometry, and the covariance then holds at those
+/// configurations only. With `all_rows`, every row counts as a pose (the sweeps fitted as free
+/// poses).
 fn few_configurations(set: &MeasurementSet, Parameters(fitted, what): Parameters, all_rows: bool) -> Option<String> {
-    let key = |cmd: &[f64]| cmd.iter().map(|c| (c * 1e6).round() as i64).collect::<Vec<i64>>();
-    let free = set.rows().iter().filter(|m| all_rows || m.moved_joint == 0);
-    let configurations: std::collections::HashSet<Vec<i64>> = free.clone().map(|m| key(&m.cmd)).collect();
-    let targets: std::collections::HashSet<usize> = free.clone().map(|m| m.target).collect();
-    let poses: std::collections::HashSet<(&str, usize)> = free.map(|m| (m.experiment.as_str(), m.step)).collect();
-    let values = configurations.len() * POSE_VALUES.min(3 * targets.len());
-    (values < fitted).then(|| {
+    let c = configurations(set, all_rows);
+    (c.values < fitted).then(|| {
         format!(
-            "its {} free poses stand at {} distinct configurations (commands), which give at most {values} independent \
+            "its {} free poses stand at {} distinct configurations (commands), which give at most {} independent \
              values for the {fitted} {what}: repeated poses add no geometry, and the predicted accuracy holds \
              near those configurations only; measure the robot at more configurations across its workspace",
-            poses.len(),
-            configurations.len()
+            c.poses, c.distinct, c.values
         )
     })
 }

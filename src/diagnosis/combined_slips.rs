@@ -38,7 +38,7 @@ use super::validate::{PointKind, PositionSummary, Validation, ValidationOptions,
 use super::{ExplainedMiss, explained_file_scale, explained_misses, explained_sweep_misses};
 use crate::calibration::procedure::Calibration;
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
-use crate::numerics::finite_diff::central_difference;
+use crate::numerics::finite_diff::try_central_difference;
 use crate::numerics::stats::chi_square_quantile;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -304,7 +304,7 @@ fn screen(rows: &[Measurement], (cal, desc): (&Calibration, &RobotDescription), 
                 let p = e.map(|x| x * t);
                 residuals_with(rows, &move |m: &mut Measurement| q.apply(m, &p), cal, desc).map(DVector::from_vec)
             };
-            let derivative: DVector<f64> = central_difference(at, h)?;
+            let derivative: DVector<f64> = try_central_difference(at, h)?;
             of_q.push(derivative.data.into());
         }
         directions.push((q, of_q));
@@ -454,7 +454,7 @@ fn refitted(
                 (0..3).for_each(|a| moved[s].p[a] += t * e[a]);
                 residuals(&moved).map(DVector::from_vec)
             };
-            jacobian.set_column(col, &central_difference(at, h)?);
+            jacobian.set_column(col, &try_central_difference(at, h)?);
         }
         // The rows scaled by their weights: a dense diagonal of the 3N rows was 3N x 3N.
         let mut weighted = jacobian.clone();

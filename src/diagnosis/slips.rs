@@ -26,7 +26,7 @@ use crate::kinematics::JointKind;
 use crate::measurement::column_slips;
 pub(super) use crate::measurement::column_slips::{ColumnSlip as Hypothesis, slip as hypothesis};
 use crate::measurement::{Measurement, MeasurementSet, format_f64};
-use crate::numerics::finite_diff::central_difference;
+use crate::numerics::finite_diff::try_central_difference;
 use crate::numerics::roots::{Bisection, bisect_infallible};
 use crate::numerics::stats::chi_square_quantile;
 use crate::plan::TOOL_EXPERIMENT;
@@ -162,7 +162,7 @@ pub(super) fn residuals_with(
 /// (`J^T J`); `None` when the rows cannot be predicted or do not move with the parameter.
 fn parameter_step(at: &dyn Fn(f64) -> Option<Vec<f64>>, d: f64, h: f64) -> Option<(f64, f64)> {
     let r = at(d)?;
-    let jacobian: DVector<f64> = central_difference(|t| at(d + t).map(DVector::from_vec), h)?;
+    let jacobian: DVector<f64> = try_central_difference(|t| at(d + t).map(DVector::from_vec), h)?;
     let jj: f64 = jacobian.iter().map(|j| j * j).sum();
     (jj > 0.0).then(|| (-jacobian.iter().zip(&r).map(|(j, r)| j * r).sum::<f64>() / jj, jj))
 }

@@ -1,6 +1,6 @@
 //! Derivatives by central differences, the project's one implementation: `(f(x + h) - f(x -
 //! h)) / 2h`, whose error is `h^2 f''' / 6` (Nocedal & Wright, Numerical Optimization, 2nd ed.,
-//! eq. 8.7), for a value along one parameter ([`central_difference`]), for a vector function's
+//! eq. 8.7), for a value along one parameter ([`central_difference`], [`try_central_difference`]), for a vector function's
 //! Jacobian ([`central_jacobian`]) and for a scalar function's gradient and Hessian, read as a
 //! quadratic with its least ([`quadratic_least`], eqs. 8.7 and 8.9).
 
@@ -10,15 +10,32 @@ use std::ops::{Div, Sub};
 
 /// The derivative at 0 of `f` along its one parameter by a central difference `h` wide:
 /// `(f(h) - f(-h)) / 2h`, of any value whose difference divides by a length (a vector, a point's
-/// move); `None` when either evaluation fails.
-pub fn central_difference<P, V>(f: impl Fn(f64) -> Option<P>, h: f64) -> Option<V>
+/// move).
+pub fn central_difference<P, V>(f: impl Fn(f64) -> P, h: f64) -> V
+where
+    P: Sub<Output = V>,
+    V: Div<f64, Output = V>,
+{
+    quotient(f(h), f(-h), h)
+}
+
+/// [`central_difference`] of an `f` that may fail: `None` when either evaluation does.
+pub fn try_central_difference<P, V>(f: impl Fn(f64) -> Option<P>, h: f64) -> Option<V>
 where
     P: Sub<Output = V>,
     V: Div<f64, Output = V>,
 {
     let plus = f(h)?;
-    let minus = f(-h)?;
-    Some((plus - minus) / (2.0 * h))
+    Some(quotient(plus, f(-h)?, h))
+}
+
+/// The central difference quotient `(plus - minus) / 2h`.
+fn quotient<P, V>(plus: P, minus: P, h: f64) -> V
+where
+    P: Sub<Output = V>,
+    V: Div<f64, Output = V>,
+{
+    (plus - minus) / (2.0 * h)
 }
 
 /// The Jacobian `d f / d x` at `x0` of a vector function `f` by central differences, parameter
@@ -124,12 +141,12 @@ mod tests {
         // f(t) = 2 + 3 t + t^3 about 0.5: f'(0.5) = 3 + 3 (0.25) = 3.75, f''' = 6.
         let f = |t: f64| Some(DVector::from_vec(vec![2.0 + 3.0 * (t + 0.5) + (t + 0.5).powi(3)]));
         let h = 0.1;
-        let d: DVector<f64> = central_difference(f, h).unwrap();
+        let d: DVector<f64> = try_central_difference(f, h).unwrap();
         assert_relative_eq!(d[0], 3.75 + h * h * 6.0 / 6.0, max_relative = 1e-12);
-        let point = |t: f64| Some(Point3::new(t, 2.0 * t, t * t));
-        let v: Vector3<f64> = central_difference(point, 1e-3).unwrap();
+        let point = |t: f64| Point3::new(t, 2.0 * t, t * t);
+        let v: Vector3<f64> = central_difference(point, 1e-3);
         assert_relative_eq!(v, Vector3::new(1.0, 2.0, 0.0), epsilon = 1e-12);
-        assert!(central_difference(|t: f64| (t > 0.0).then_some(DVector::from_vec(vec![t])), 0.1).is_none());
+        assert!(try_central_difference(|t: f64| (t > 0.0).then_some(DVector::from_vec(vec![t])), 0.1).is_none());
     }
 
     /// The Jacobian of a linear map is the map (a second path: the matrix written out).

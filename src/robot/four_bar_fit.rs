@@ -9,7 +9,7 @@
 //! solution is smooth away from the dead-centre positions.
 
 use super::four_bar::{FourBarError, FourBarGeometry};
-use crate::numerics::finite_diff::central_difference;
+use crate::numerics::finite_diff::try_central_difference;
 use crate::numerics::lsq::{LmOptions, LsqError, levenberg_marquardt};
 use nalgebra::{DMatrix, DVector};
 
@@ -103,7 +103,7 @@ fn residual_and_jacobian(
             q[j] += t;
             at(&q).ok()
         };
-        if let Some(column) = central_difference(moved, h) {
+        if let Some(column) = try_central_difference(moved, h) {
             jacobian.set_column(j, &column);
         }
     }

@@ -1,11 +1,13 @@
-//! The measured free poses of a measurement set: each pose's commands and its targets' points.
+//! The measured free poses of a measurement set: each pose's commands and its targets' points,
+//! and how many configurations they stand at against the parameters a geometry has.
 
 use super::FreePoseError;
+use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::bounded::evenly_spaced;
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::Point3;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// One free pose: the robot stood still at `cmd` while the instrument measured its targets.
 #[derive(Clone, Debug, PartialEq)]
@@ -301,4 +303,43 @@ impl FreePoses {
 /// The median of `v` (linear quantiles, as the fences').
 fn median(v: &[f64]) -> f64 {
     crate::numerics::stats::quantile(v, 0.5, crate::numerics::stats::QuantileMethod::Linear)
+}
+
+/// Independent values one configuration of the tool gives at most: its pose (a target's
+/// position, 3, when fewer than three targets are seen).
+pub const POSE_VALUES: usize = 6;
+
+/// The fewest parameters a robot's geometry with its base placement has, `4 R + 2 P + 6` for `R`
+/// revolute and `P` prismatic joints (Everett, Driels & Mooring 1987, the minimal complete
+/// model): fewer independent values than these leave the geometry free.
+pub fn minimal_geometry_parameters(desc: &RobotDescription) -> usize {
+    let revolute = desc.joints.iter().filter(|j| j.kind == JointKind::Revolute).count();
+    4 * revolute + 2 * (desc.joints.len() - revolute) + 6
+}
+
+/// How many configurations a set's free poses stand at ([`configurations`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Configurations {
+    /// The free poses (experiment and step).
+    pub poses: usize,
+    /// Their distinct configurations (commands equal to 1e-6).
+    pub distinct: usize,
+    /// The independent values those configurations give at most: [`POSE_VALUES`] each, 3 per
+    /// target below three targets.
+    pub values: usize,
+}
+
+/// The configurations of the free poses of `set` (with `all_rows`, every row counts as a pose:
+/// the sweeps fitted as free poses).
+pub fn configurations(set: &MeasurementSet, all_rows: bool) -> Configurations {
+    let key = |cmd: &[f64]| cmd.iter().map(|c| (c * 1e6).round() as i64).collect::<Vec<i64>>();
+    let free = set.rows().iter().filter(|m| all_rows || m.moved_joint == 0);
+    let distinct: HashSet<Vec<i64>> = free.clone().map(|m| key(&m.cmd)).collect();
+    let targets: HashSet<usize> = free.clone().map(|m| m.target).collect();
+    let poses: HashSet<(&str, usize)> = free.map(|m| (m.experiment.as_str(), m.step)).collect();
+    Configurations {
+        poses: poses.len(),
+        distinct: distinct.len(),
+        values: distinct.len() * POSE_VALUES.min(3 * targets.len()),
+    }
 }

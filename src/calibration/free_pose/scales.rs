@@ -64,7 +64,7 @@
 use super::fit::{Fitted, Problem};
 use super::model::FreePoseModel;
 use super::poses::FreePoses;
-use crate::numerics::finite_diff::central_difference;
+use crate::numerics::finite_diff::try_central_difference;
 use crate::numerics::stats::f_upper_tail;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -477,7 +477,7 @@ fn directions(problem: &Problem<'_>, fitted: &Fitted, which: &[usize]) -> Vec<(C
             let moved = with_command_scaled(poses, k, f);
             fitted.model.residuals(problem.controller, &moved, which).ok()
         };
-        if let Some(direction) = central_difference(|t| at(1.0 + t), COMMAND_STEP)
+        if let Some(direction) = try_central_difference(|t| at(1.0 + t), COMMAND_STEP)
             && direction.len() == rows
         {
             out.push((Candidate::Command(k), direction));
