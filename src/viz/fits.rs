@@ -79,39 +79,3 @@ impl Recorder {
         Ok(())
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::calibration::{ArcFitOptions, MeasurementNoise, fit_arc};
-    use crate::robot::TransmissionFitForm;
-    use approx::assert_relative_eq;
-    use nalgebra::Vector3;
-
-    #[test]
-    fn arc_points_lie_on_the_fitted_circle_over_the_swept_range() {
-        // An exact arc of radius 0.5 about z through (1, 2, 3), swept over 1 rad.
-        let commands: Vec<f64> = (0..8).map(|j| 0.2 + j as f64 / 7.0).collect();
-        let centre = Point3::new(1.0, 2.0, 3.0);
-        let pts: Vec<Point3<f64>> = commands
-            .iter()
-            .map(|c| centre + 0.5 * Vector3::new(c.cos(), c.sin(), 0.0))
-            .collect();
-        let options = ArcFitOptions {
-            form: TransmissionFitForm::Harmonic { order: 1 },
-            noise: MeasurementNoise::Isotropic { sigma_per_axis: 1e-4 },
-            reference_point: centre,
-            max_iterations: 50,
-        };
-        let fit = fit_arc(&pts, &commands, &options).expect("fit");
-        let arc = arc_points(&fit, &commands, 16).expect("arc");
-        assert_eq!(arc.len(), 16);
-        for p in &arc {
-            assert_relative_eq!((p - centre).xy().norm(), 0.5, epsilon = 1e-6);
-        }
-        let ends = [arc[0], arc[15]];
-        let firsts = [pts[0], pts[7]];
-        let matched = ends.iter().all(|e| firsts.iter().any(|f| (e - f).norm() < 1e-6));
-        assert!(matched, "arc ends at the first and last measured points");
-    }
-}
