@@ -935,13 +935,7 @@ pub(super) fn misses_own_validation_poses(
         .map(|h| super::sweep_cause::part_words(h, &place))
         .unwrap_or_default();
     let first = understated_repeatability(desc, stated_repeatability);
-    let cause = match slips {
-        // The nominal tool frame's error would be read as a slip of the coordinates.
-        OwnPosesSlips::ToolFitted => "check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
-             placement and lengths, or an effect the model lacks (`axiscal validate`, `axiscal diagnose` on this file)"
-            .to_string(),
-        slips => own_poses_slips(slips, data),
-    };
+    let cause = own_poses_slips(slips, data);
     let beyond = miss.tool_move.map(tool_move_words).unwrap_or_default();
     Some(format!("{}{beyond}: {first}{sweep_part}{cause}", own_miss_words(&miss)))
 }
@@ -971,7 +965,8 @@ fn own_miss_words(miss: &OwnPosesMiss) -> String {
 /// (read from `data`): the slips whose undoing makes every test pass, in
 /// `validate`'s words, or, when none does, the causes left: a slip of the whole file the
 /// calibration has taken into its geometry from the axis experiments too, the description, or
-/// an effect the model lacks (a joint's compliance: `diagnose` models it).
+/// an effect the model lacks (a joint's compliance: `diagnose` models it); with the tool frame fitted
+/// to the poses (the search not run), what to check.
 fn own_poses_slips(slips: &OwnPosesSlips, data: &Path) -> String {
     match slips {
         OwnPosesSlips::Unsearched { rows } => {
@@ -982,7 +977,11 @@ fn own_poses_slips(slips: &OwnPosesSlips, data: &Path) -> String {
             let said: Vec<String> = named.iter().map(|m| checks::explained_miss_words(m, data)).collect();
             format!("`axiscal validate`'s slip search names it: {}", said.join("; "))
         }
-        OwnPosesSlips::NoneNamed | OwnPosesSlips::ToolFitted => "no slip `axiscal validate` tests (a command column scaled or offset, one coordinate column or all three scaled, the \
+        // The nominal tool frame's error would be read as a slip of the coordinates.
+        OwnPosesSlips::ToolFitted => "check one experiment's commands or coordinates for a scale or offset the unit checks cannot tell (e.g. gradians), the description's \
+             placement and lengths, or an effect the model lacks (`axiscal validate`, `axiscal diagnose` on this file)"
+            .to_string(),
+        OwnPosesSlips::NoneNamed => "no slip `axiscal validate` tests (a command column scaled or offset, one coordinate column or all three scaled, the \
                 coordinates shifted; over these poses or a run of them, one or two at once) makes them pass against this calibration: \
                 a slip the axis experiments carry as well, which the calibration has taken into its geometry (see the warnings above, or \
                 check each column for a scale or offset throughout the file, e.g. gradians), the description's placement and lengths, or \
