@@ -41,6 +41,7 @@ pub mod recalibrated;
 pub mod record;
 pub mod refine;
 pub mod refit_model;
+pub mod screened;
 pub mod shared_target;
 pub mod sliding;
 pub mod tool_accuracy;

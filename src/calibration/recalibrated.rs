@@ -4,18 +4,25 @@
 //! calibration per trial scale), and the data with the sweep screen's named bumps moved back,
 //! calibrated ([`calibrated_with_bumps_undone`]); for free poses, the slip or moved block behind
 //! the column scales the screen named ([`shift_behind_scales`]) and the poses with those scales
-//! undone, calibrated ([`calibrated_with_scales_undone`]). Each calibration is the procedure's own
-//! (`procedure::calibrate`, or the free-pose fit); the checks' words are the callers'.
+//! undone, calibrated ([`calibrated_with_scales_undone`]); the coordinate-scale profile weighed
+//! against the joints' named column, with a second axis behind a named one
+//! ([`coordinate_scale`]); a free-pose calibration's scale tests, with the poses calibrated
+//! again with each scale said undone ([`free_pose_scale_checks`]). Each calibration is the procedure's own (`procedure::calibrate`, or
+//! the free-pose fit); the checks' words are the callers'.
 
 use crate::calibration::free_pose::block::{BlockShift, block_shift};
 use crate::calibration::free_pose::slip::{ExplainingSlip, explaining_slip};
 use crate::calibration::free_pose::{FreePoseOptions, FreePoseSummary, NamedScale, calibrate_free_poses};
 use crate::calibration::procedure::{
-    Calibration, CalibrationOptions, ColumnSource, Implausible, Refit, ScaleSlip, SweepBump, bumps_undone, calibrate,
-    column_source, implausible, joint_slopes,
+    Calibration, CalibrationOptions, ColumnSource, Implausible, Refit, ScaleDoubt, ScaleReach, ScaleSlip, SweepBump,
+    bumps_undone, calibrate, column_source, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
+    implausible, joint_slopes, named_joints,
 };
+use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
-use crate::measurement::unit_check::axis_scale::Fit;
+use crate::measurement::unit_check::axis_scale::{
+    AxisScale, Fit, PROFILE_MAX_FREE_POSE_ROWS, Scaled, axis_scale, axis_scale_with_column_undone,
+};
 use crate::robot::RobotDescription;
 
 /// The axis fits' residuals of `cal` as the coordinate-scale profile reads them: the sum of
@@ -220,4 +227,255 @@ fn coordinate_index(column: &str) -> Option<usize> {
 /// The 0-based joint of `cmd_K`.
 fn command_index(column: &str) -> Option<usize> {
     column.strip_prefix("cmd_")?.parse::<usize>().ok()?.checked_sub(1)
+}
+
+/// A calibration of a set as the coordinate-scale profile reads it ([`axes_profile_fit`],
+/// [`free_pose_profile_fit`]).
+pub type ProfileFit<'a> = &'a dyn Fn(&MeasurementSet) -> Option<Fit>;
+
+/// What the coordinate-scale profile ([`axis_scale`]) of a file reads, weighed against the
+/// instrument column the joints' slopes named ([`instrument_axis_source`]).
+#[derive(Clone, Debug)]
+pub enum CoordinateScale {
+    /// The profile could not run: its re-run calibrations did not keep the same poses and
+    /// parameters, or failed.
+    Untested,
+    /// The column named from the joints' slopes (with the points' fit counted) explains what
+    /// the profile reads, or the profile names nothing beside it: said with that column.
+    SourceNamed,
+    /// No scale the data determine beyond 1; the column that reads the most unlike the others.
+    Within(AxisScale),
+    /// Free poses whose column-scale screen, clustered by configuration, named none
+    /// (`free_pose/scales.rs`): the profile's scale of one column, not named (the profile counts
+    /// every point as independent, which repeated visits of one configuration are not).
+    ScreenNamedNone(AxisScale),
+    /// A scale the data determine beyond 1, and a second instrument axis behind it where the
+    /// profile of the data with that column undone names another column.
+    Named {
+        /// The scale named.
+        found: AxisScale,
+        /// The second axis: the profile of the data with the named column divided by its factor
+        /// about their centroid ([`axis_scale_with_column_undone`]), where it names another column.
+        second: Option<AxisScale>,
+    },
+}
+
+/// The coordinate-scale profile of `set` under the calibration `fit`, or of a slide's
+/// commands read alike (the sliding joints of `desc`), weighed against `source`: a column named
+/// from the joints' slopes that the profile's finding is, or that explains it once undone,
+/// leaves nothing more to say. With `screened` (free poses whose column-scale screen named
+/// none), a scale of one column is [`CoordinateScale::ScreenNamedNone`]; a scale of every
+/// coordinate (a length scale) the screen leaves to the profile. Above `max_rows` rows the
+/// profile thins the data ([`axis_scale`]).
+pub fn coordinate_scale(
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    (fit, source): (ProfileFit<'_>, Option<&ColumnSource>),
+    (max_rows, screened): (usize, bool),
+) -> CoordinateScale {
+    let slides: Vec<usize> = (0..desc.joints.len())
+        .filter(|&j| desc.joints[j].kind == JointKind::Prismatic)
+        .collect();
+    let Some(found) = axis_scale(set, fit, max_rows, &slides) else {
+        return CoordinateScale::Untested;
+    };
+    let explained = |source: &ColumnSource| {
+        axis_scale_with_column_undone(set, (source.column, source.factor), fit, max_rows, &slides)
+            .is_some_and(|a| !a.significant)
+    };
+    if let Some(source) = source.filter(|s| !s.alike)
+        && (!found.significant || found.scaled == Scaled::Column(source.column) || explained(source))
+    {
+        return CoordinateScale::SourceNamed;
+    }
+    if !found.significant {
+        return CoordinateScale::Within(found);
+    }
+    if screened && found.scaled != Scaled::Every {
+        return CoordinateScale::ScreenNamedNone(found);
+    }
+    let second = second_axis_scale(set, &found, fit, (max_rows, &slides));
+    CoordinateScale::Named { found, second }
+}
+
+/// A second instrument axis' scale behind the column `found` names: the coordinate-scale
+/// profile of `set` with that column divided by its factor about the data's centroid
+/// ([`axis_scale_with_column_undone`]), as the free-pose side calibrates again with a named
+/// scale undone ([`calibrated_with_scales_undone`]): two axes scaled by different factors (x
+/// long, z short) read as the first axis and, for the second's share, as the joints'
+/// transmissions or the slides' leads. The second column the profile then names on its own
+/// test (the same false-alarm rate); `None` where it names none, or the same column, or
+/// `found` is no single column.
+fn second_axis_scale(
+    set: &MeasurementSet,
+    found: &AxisScale,
+    fit: ProfileFit<'_>,
+    (max_rows, slides): (usize, &[usize]),
+) -> Option<AxisScale> {
+    let Scaled::Column(first) = found.scaled else {
+        return None;
+    };
+    let second = axis_scale_with_column_undone(set, (first, found.factor), fit, max_rows, slides)?;
+    let other = matches!(second.scaled, Scaled::Column(c) if c != first);
+    (second.significant && other).then_some(second)
+}
+
+/// What the scale tests of a free-pose calibration found that the fit absorbed
+/// ([`free_pose_scale_checks`]).
+#[derive(Clone, Debug)]
+pub enum FreePoseChecks {
+    /// A column slip or a moved block of poses ([`shift_behind_scales`]): it misfits every test
+    /// of a scale, which did not run.
+    Shift(FreePoseShift),
+    /// The scale tests.
+    Scales(Box<FreePoseScales>),
+}
+
+/// The scale tests of a free-pose calibration, run on the poses calibrated again with the
+/// column scales the screen named undone where it named any ([`calibrated_with_scales_undone`]),
+/// so that a slope said is one the scales do not explain.
+#[derive(Clone, Debug)]
+pub struct FreePoseScales {
+    /// The poses with the screen's scales undone, calibrated; `None` where it named none or
+    /// that calibration failed (the tests then read the calibration as read).
+    pub undone: Option<ScalesUndone>,
+    /// The joints whose transmission departs beyond what a drive gives
+    /// ([`free_pose_scale_slips`]).
+    pub scaled: Vec<ScaleSlip>,
+    /// The joints whose slope a gear's once-per-turn error and a scaled command column explain
+    /// alike ([`free_pose_scale_doubts`]).
+    pub doubts: Vec<ScaleDoubt>,
+    /// The command columns the transmission test names once the joints said above are undone;
+    /// `None` where none was said or that calibration failed.
+    pub second: Option<SecondScales>,
+    /// The coordinate-scale profile with the slopes' command columns undone, where every joint
+    /// said is a command slope and the screen named no scale (one it named is the profile's
+    /// finding already).
+    pub profile: Option<CoordinateScale>,
+    /// How large a scale of each other command column the transmission test lets pass
+    /// ([`free_pose_scale_reach`] without the joints said).
+    pub reach: Option<ScaleReach>,
+}
+
+/// The joints a free-pose calibration's transmission test said, and the command columns it
+/// names once they are undone ([`second_command_scales`]).
+#[derive(Clone, Debug)]
+pub struct SecondScales {
+    /// The joints said, `(joint, 1-based; its slope)`: scaled beyond a drive, then doubted.
+    pub said: Vec<(usize, f64)>,
+    /// What the test names with them undone.
+    pub found: Vec<SecondCommandScale>,
+}
+
+/// The scale tests of the free-pose calibration `(cal, summary)` of `set` with `options`
+/// ([`FreePoseChecks`]); `block` is [`block_shift`] of the calibration as read. A slip or a
+/// shifted block misfits every test of a scale (a column's, the coordinates'): where one is
+/// found ([`shift_behind_scales`]) the others do not run.
+pub fn free_pose_scale_checks(
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+    (cal, summary): (&Calibration, &FreePoseSummary),
+    block: Option<&BlockShift>,
+) -> FreePoseChecks {
+    if let Some(shift) = shift_behind_scales((set, desc), options, summary, block) {
+        return FreePoseChecks::Shift(shift);
+    }
+    let undone = calibrated_with_scales_undone(set, desc, options, &summary.scales);
+    let (set_u, (cal_u, summary_u)) = undone
+        .as_ref()
+        .map_or((set, (cal, summary)), |u| (&u.set, (&u.cal, &u.summary)));
+    let scaled = free_pose_scale_slips((cal_u, summary_u), desc, set_u.rows());
+    let doubts = free_pose_scale_doubts((cal_u, summary_u), desc, set_u.rows());
+    // A joint's slope off its description's is a misfit the geometry carries; the
+    // coordinate-scale profile would read it as an axis' scale, so it runs with the joints'
+    // command columns undone by the slopes said: a second slip (a coordinate column scaled
+    // too) is then tested, not hidden behind the first.
+    let slopes: Vec<(usize, f64)> = scaled
+        .iter()
+        .filter_map(|s| match s {
+            ScaleSlip::Command { joint, travel, .. } => Some((*joint, *travel)),
+            _ => None,
+        })
+        .collect();
+    let said: Vec<(usize, f64)> = slopes
+        .iter()
+        .copied()
+        .chain(doubts.iter().map(|d| (d.joint, d.travel)))
+        .collect();
+    let second = second_command_scales((set_u, desc), options, &said).map(|found| SecondScales { said, found });
+    let profile = (slopes.len() == scaled.len() && summary.scales.is_empty()).then(|| {
+        let fit = |s: &MeasurementSet| free_pose_profile_fit(s, desc, options);
+        let commands_undone = with_commands_scaled(set, &slopes);
+        coordinate_scale(
+            (&commands_undone, desc),
+            (&fit, None),
+            (PROFILE_MAX_FREE_POSE_ROWS, true),
+        )
+    });
+    let reach =
+        free_pose_scale_reach((cal_u, summary_u), desc, set_u.rows()).and_then(|r| r.without(&named_joints(&scaled)));
+    FreePoseChecks::Scales(Box::new(FreePoseScales {
+        undone,
+        scaled,
+        doubts,
+        second,
+        profile,
+        reach,
+    }))
+}
+
+/// A command column's scale the transmission test names once the joints said are undone
+/// ([`second_command_scales`]).
+#[derive(Clone, Debug)]
+pub enum SecondCommandScale {
+    /// A slope beyond what a drive gives ([`free_pose_scale_slips`]).
+    Slip(ScaleSlip),
+    /// A slope a gear's once-per-turn error and a scaled column explain alike
+    /// ([`free_pose_scale_doubts`]).
+    Doubt(ScaleDoubt),
+}
+
+/// The command columns behind the joints `said` (`(joint, 1-based; its slope)`): the poses
+/// calibrated again with those joints' columns undone by their slopes (no held-out half, no
+/// effects) and the transmission test run on that calibration, as `validate`'s two-slip search
+/// refits with the first slip undone (`diagnosis/combined_slips.rs`): a one-per-cent column
+/// scale beside another reads partly as the other's slope, and shows whole once the other is
+/// undone. The joints not said that it names; `None` where none was said or the calibration
+/// fails.
+pub fn second_command_scales(
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &FreePoseOptions,
+    said: &[(usize, f64)],
+) -> Option<Vec<SecondCommandScale>> {
+    if said.is_empty() {
+        return None;
+    }
+    let undone = with_commands_scaled(set, said);
+    let profile = FreePoseOptions {
+        holdout: false,
+        effects: false,
+        ..*options
+    };
+    let (again, again_summary) = calibrate_free_poses(&undone, desc, &profile)
+        .ok()?
+        .into_calibration(desc);
+    let again = (&again, &again_summary);
+    let new = |joint: &usize| !said.iter().any(|(j, _)| j == joint);
+    let slips = free_pose_scale_slips(again, desc, undone.rows())
+        .into_iter()
+        .filter(|s| matches!(s, ScaleSlip::Command { joint, .. } if new(joint)))
+        .map(SecondCommandScale::Slip);
+    let doubts = free_pose_scale_doubts(again, desc, undone.rows())
+        .into_iter()
+        .filter(|d| new(&d.joint))
+        .map(SecondCommandScale::Doubt);
+    Some(slips.chain(doubts).collect())
+}
+
+/// `set` with each joint's command column (`(joint, 1-based)`) multiplied by its factor: the
+/// commands a joint that travels `factor` times the description's transmission per command
+/// would have been given. Its lines kept.
+pub fn with_commands_scaled(set: &MeasurementSet, factors: &[(usize, f64)]) -> MeasurementSet {
+    factors
+        .iter()
+        .fold(set.clone(), |s, &(joint, f)| s.with_command_scaled(joint - 1, f))
 }

@@ -13,15 +13,16 @@ use axiscal::calibration::free_pose;
 use axiscal::calibration::outputs::{self, OUTPUT_FILES, OutputOptions};
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
-    AxisEstimator, Calibration, CalibrationOptions, ColumnSource, DEFAULT_HELD_TOLERANCE, Implausible,
+    AxisEstimator, Calibration, CalibrationOptions, ColumnSource, DEFAULT_HELD_TOLERANCE, Implausible, OutlierPoint,
     PLAUSIBLE_AXIS_TILT_RAD, ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, ScaleSlip, UrdfOptions, UrdfRoot,
-    bumps_undone, calibrate, implausible, ros_name, screen_sweeps, wandering_sweep_bumps,
+    implausible, ros_name,
 };
-use axiscal::calibration::recalibrated::{axes_profile_fit, calibrated_with_bumps_undone, instrument_axis_source};
+use axiscal::calibration::recalibrated::CoordinateScale;
 use axiscal::calibration::record::{CalibrationRecord, Reports};
 use axiscal::calibration::refine::{RefineOptions, Refinement, enough_free_poses};
 use axiscal::calibration::refit_model::refine::refine_carrying;
 use axiscal::calibration::refit_model::validation_poses_at_most;
+use axiscal::calibration::screened::{BumpsUndone, CalibrationFailed, ScreenFailure, calibrate_screened};
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccuracy, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{
@@ -29,9 +30,6 @@ use axiscal::diagnosis::{
     test_own_validation_poses,
 };
 use axiscal::json_file::{self, Schema};
-use axiscal::measurement::unit_check::axis_scale::{
-    Fit, PROFILE_MAX_ROWS, Scaled, axis_scale, axis_scale_with_column_undone,
-};
 use axiscal::measurement::{Measurement, MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -236,12 +234,14 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             print_implausible(&texts.implausible, &desc, &set, &args);
             // The checks that read a sweep's fit as its joint's judge the data with a named bump
             // moved back: the bump is not a scale's or a held joint's too.
-            let (judged_cal, judged) = found.bumps_undone.as_ref().map_or((cal, &set), |u| (&u.cal, &u.set));
+            // The rows the screens kept: a point dropped is no sweep's and no held joint's.
+            let kept = found.kept.as_ref().unwrap_or(&set);
+            let (judged_cal, judged) = found.bumps_undone.as_ref().map_or((cal, kept), |u| (&u.cal, &u.set));
             print_scale_doubts((judged_cal, &desc, judged.rows()), &texts.implausible, &args.data);
             print_moved_sweeps(judged_cal, &desc, judged, &args.data);
             if !args.refine
                 && let Some(miss) =
-                    misses_own_validation_poses(cal, (&desc, &set, &args.data), args.repeatability_rad.as_deref())
+                    misses_own_validation_poses(cal, (&desc, kept, &args.data), args.repeatability_rad.as_deref())
             {
                 eprintln!("warning: {miss}");
             }
@@ -298,7 +298,7 @@ fn render(
         &mut texts.files,
         record,
         desc,
-        judged.unwrap_or((&record.calibration, set)),
+        judged.unwrap_or((&record.calibration, found.kept.as_ref().unwrap_or(set))),
     );
     Ok(texts)
 }
@@ -465,26 +465,63 @@ fn args_view(args: &Args) -> super::calibrate_free::FreeArgs<'_> {
 #[derive(Default)]
 struct AxesFound {
     /// The instrument axis whose scale explains the joints' transmission departures
-    /// ([`column_source`]).
+    /// ([`ScreenedCalibration::column_source`]).
     column_source: Option<ColumnSource>,
-    /// The data with the sweep screen's named bumps moved back ([`bumps_undone`]), where it
-    /// named any.
+    /// The data with the sweep screen's named bumps moved back, where it named any.
     bumps_undone: Option<BumpsUndone>,
+    /// The rows the screens kept; `None` when they dropped none.
+    kept: Option<MeasurementSet>,
 }
 
-/// The data with the sweep screen's named bumps moved back and the calibration of its rows
-/// the screen kept: the checks that read a sweep's fit as its joint's judge these, so that a
-/// bump named is not blamed on a scale or a held joint too.
-struct BumpsUndone {
-    /// Every row read, the bumps' blocks moved back.
-    set: MeasurementSet,
-    /// The calibration of the rows kept, so moved.
-    cal: Calibration,
+/// The axis-experiment calibration of `set` after its failure on the rows the screen kept
+/// (`failed`): every row a free pose where the sweeps' held joints stand too far apart for the
+/// independent-axis correction to settle (that fit tests its poses for outliers itself, on
+/// every row); else the points flagged and why it failed.
+fn calibration_failed(
+    args: &Args,
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    options: &CalibrationOptions,
+    failed: CalibrationFailed,
+    printer: Printer,
+) -> Result<(CalibrationRecord, Vec<MapPoint>, AxesFound)> {
+    if let e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. }) = &failed.error
+        && !args.refine
+    {
+        let mut record = sweeps_as_free_poses(args, set, desc, e, printer)?;
+        let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, desc, set);
+        record.reports.tool_accuracy = accuracy;
+        return Ok((record, map, AxesFound::default()));
+    }
+    checks::print_outliers(&failed.outliers, &args.data, "calibrated");
+    let kept = failed.screened.as_ref().unwrap_or(set);
+    Err(failure_words(args, (kept, desc), options, &failed.error))
+}
+
+/// The points the procedure's failed fit named off their sweep's path, dropped with their
+/// poses ([`axiscal::calibration::screened::ScreenedCalibration::off_path`]), as warnings naming each row.
+fn print_off_path(off_path: &[OutlierPoint], desc: &RobotDescription, data: &Path) {
+    for o in off_path {
+        let place = o
+            .line
+            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+        let path = match desc.joints.get(o.joint.wrapping_sub(1)).map(|j| j.kind) {
+            Some(axiscal::kinematics::JointKind::Prismatic) => "line",
+            _ => "arc",
+        };
+        eprintln!(
+            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm off the {path} its sweep's other points \
+             draw (or along it, off its command), {:.1} times the noise, beyond the fence {:.1} of their distances: the \
+             sweep screen cannot test a sweep whose held joints wander (its points lie on no one {path}), and the axis \
+             fit failed with it: calibrated without it and the other targets of its pose (--keep-outliers keeps it, and \
+             the fit fails); check this row's coordinates and commands",
+            o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
+        );
+    }
 }
 
 /// Why the axis-experiment calibration of `screened` failed (`e`), with what `--noise-mm` or
 /// `--repeatability-rad` had to do with it.
-fn calibration_failed(
+fn failure_words(
     args: &Args,
     (screened, desc): (&MeasurementSet, &RobotDescription),
     options: &CalibrationOptions,
@@ -537,47 +574,23 @@ fn calibrate_axes(
     options
         .joint_repeatability_rad(desc)
         .map_err(|e| anyhow::anyhow!("--repeatability-rad: {e}"))?;
-    let mut screening = screen_sweeps(set, desc, &options, args.keep_outliers)
-        .map_err(|e| anyhow::anyhow!("calibrating {}: {e}", args.data.display()))?;
-    let screened = screening.set.as_ref().unwrap_or(set);
-    // The procedure's message already contains its cause: one line, not the cause twice.
-    let mut cal = match calibrate(screened, desc, &options) {
-        Ok(cal) => {
-            super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
-            // The sweeps whose held joints wander are tested once the model that moves their
-            // points to the design pose is fitted.
-            screening
-                .bumps
-                .extend(wandering_sweep_bumps(screened, desc, &options, &cal));
-            super::checks::print_sweep_bumps(&screening.bumps, &args.data);
-            cal
-        }
-        // Every row a free pose: that fit tests its poses for outliers itself, on every row.
-        Err(e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. })) if !args.refine => {
-            let mut record = sweeps_as_free_poses(args, set, desc, &e, printer)?;
-            let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, desc, set);
-            record.reports.tool_accuracy = accuracy;
-            return Ok((record, map, AxesFound::default()));
-        }
-        Err(e) => {
-            super::checks::print_outliers(&screening.outliers, &args.data, "calibrated");
-            return Err(calibration_failed(args, (screened, desc), &options, &e));
+    let screened = match calibrate_screened(set, desc, &options, args.keep_outliers) {
+        Ok(screened) => screened,
+        Err(ScreenFailure::Screen(e)) => anyhow::bail!("calibrating {}: {e}", args.data.display()),
+        Err(ScreenFailure::Calibration(failed)) => {
+            return calibration_failed(args, (set, desc), &options, *failed, printer);
         }
     };
-    let written = set;
-    let set = screened;
-    cal.outliers = screening.outliers;
-    let undone = calibrated_with_bumps_undone(set, &screening.bumps, desc, &options);
-    let (judged, judged_cal) = undone.as_ref().map_or((set, &cal), |(s, c)| (s, c));
-    let fit = |s: &MeasurementSet| axes_profile_fit(s, desc, &options);
-    let source = instrument_axis_source(judged_cal, (judged, desc), &options);
-    warn_axis_scale(
-        (judged, desc),
-        &args.data,
-        (&fit, source.as_ref()),
-        (PROFILE_MAX_ROWS, false),
-        printer,
-    );
+    let screen_outliers: Vec<OutlierPoint> = (screened.cal.outliers.iter())
+        .filter(|o| !screened.off_path.contains(o))
+        .cloned()
+        .collect();
+    checks::print_outliers(&screen_outliers, &args.data, "calibrated");
+    print_off_path(&screened.off_path, desc, &args.data);
+    checks::print_sweep_bumps(&screened.bumps, &args.data);
+    let set = screened.screened.as_ref().unwrap_or(set);
+    print_coordinate_scale(&screened.coordinate_scale, set, &args.data, printer);
+    let cal = screened.cal;
     let (tool_accuracy, map) = predict_tool_accuracy(&cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
     // `--refine` reports its own covariance and held-out check beside it.
@@ -593,79 +606,43 @@ fn calibrate_axes(
         free_poses: None,
     };
     let found = AxesFound {
-        column_source: source,
-        bumps_undone: undone.and_then(|(_, cal)| {
-            let set = bumps_undone(written, &screening.bumps)?;
-            Some(BumpsUndone { set, cal })
-        }),
+        column_source: screened.column_source,
+        bumps_undone: screened.bumps_undone,
+        kept: screened.screened,
     };
     Ok((CalibrationRecord { calibration, reports }, map, found))
 }
 
-/// A calibration of a set as the coordinate-scale profile reads it ([`axis_scale`]).
-type ProfileFit<'a> = &'a dyn Fn(&MeasurementSet) -> Option<Fit>;
-
-/// The scale of one coordinate column the calibration `fit` finds in `set` ([`axis_scale`]),
-/// or of a slide's commands read alike (the sliding joints of `desc`), as a warning naming it
-/// when the data determine it beyond 1; else a note of how large a scale would pass where that
-/// is beyond the test's claim, and with `--verbose` a note of the largest one either way.
-/// With `screened` (free poses whose column-scale screen, clustered by configuration, named
-/// none: `free_pose/scales.rs`), a scale the profile finds is a note: the profile counts every
-/// point as independent, which repeated visits of one configuration are not.
-pub(super) fn warn_axis_scale(
-    (set, desc): (&MeasurementSet, &RobotDescription),
-    data: &Path,
-    (fit, source): (ProfileFit<'_>, Option<&ColumnSource>),
-    (max_rows, screened): (usize, bool),
-    printer: Printer,
-) {
-    let slides: Vec<usize> = (0..desc.joints.len())
-        .filter(|&j| desc.joints[j].kind == axiscal::kinematics::JointKind::Prismatic)
-        .collect();
-    let Some(found) = axis_scale(set, fit, max_rows, &slides) else {
-        eprintln!(
+/// The coordinate-scale profile's finding on `set` ([`coordinate_scale`]) in words: a scale
+/// named as a warning, with a second axis behind it; else a note of how large a scale would
+/// pass where that is beyond the test's claim, and with `--verbose` a note of the largest one
+/// either way. A scale the free poses' screen named none of is a note.
+pub(super) fn print_coordinate_scale(found: &CoordinateScale, set: &MeasurementSet, data: &Path, printer: Printer) {
+    match found {
+        CoordinateScale::Untested => eprintln!(
             "note: {}: one-axis instrument scales this file cannot show: any column, at any size (the \
              coordinate-scale test could not run: its re-run calibrations did not keep the same poses and \
              parameters, or failed; report.md, \"Detection limits\")",
             data.display()
-        );
-        return;
-    };
-    // A column named from the joints' slopes (with the points' fit counted): the profile's note
-    // of what it cannot show is moot, its finding of the same column said there, and a finding
-    // of another scale that the column undone takes away too is that column's.
-    if let Some(source) = source.filter(|s| !s.alike)
-        && (!found.significant
-            || found.scaled == Scaled::Column(source.column)
-            || explained_by(set, source, fit, max_rows, &slides))
-    {
-        return;
-    }
-    if !found.significant {
-        if printer.verbose {
-            eprintln!(
-                "note: {}: of the coordinate columns {} reads the most unlike the others: {:.5} times \
-                 (+- {:.5}, {:.1} sigma from 1, within the data's reach of 1)",
-                data.display(),
-                found.scaled.columns(),
-                found.factor,
-                found.sigma,
-                (found.factor - 1.0).abs() / found.sigma
-            );
+        ),
+        CoordinateScale::SourceNamed => {}
+        CoordinateScale::Within(found) => {
+            if printer.verbose {
+                eprintln!(
+                    "note: {}: of the coordinate columns {} reads the most unlike the others: {:.5} times \
+                     (+- {:.5}, {:.1} sigma from 1, within the data's reach of 1)",
+                    data.display(),
+                    found.scaled.columns(),
+                    found.factor,
+                    found.sigma,
+                    (found.factor - 1.0).abs() / found.sigma
+                );
+            }
+            if let Some(reach) = found.reach_note() {
+                eprintln!("note: {}: {reach}", data.display());
+            }
         }
-        if let Some(reach) = found.reach_note() {
-            eprintln!("note: {}: {reach}", data.display());
-        }
-        return;
-    }
-    // The screen leaves a scale of every coordinate (a length scale) to the profile.
-    if screened
-        && !matches!(
-            found.scaled,
-            axiscal::measurement::unit_check::axis_scale::Scaled::Every
-        )
-    {
-        eprintln!(
+        CoordinateScale::ScreenNamedNone(found) => eprintln!(
             "note: {}: the coordinate-scale profile reads {} {:.5} times (+- {:.5}, counting every point as \
              independent), but the column-scale screen over the configurations (repeated visits share the model's \
              error at each) names no command column or instrument axis: not named",
@@ -673,62 +650,23 @@ pub(super) fn warn_axis_scale(
             found.scaled.columns(),
             found.factor,
             found.sigma
-        );
-        return;
+        ),
+        CoordinateScale::Named { found, second } => {
+            let place = match set.line_of(0) {
+                Some(line) => format!("{}:{line}", data.display()),
+                None => data.display().to_string(),
+            };
+            eprintln!("warning: {place}: {found}");
+            if let Some(second) = second {
+                eprintln!(
+                    "warning: {place}: with {} divided by {:.5} about the data's centroid (the scale named above) \
+                     the coordinate-scale profile was run again, and a second axis shows: {second}",
+                    found.scaled.columns(),
+                    found.factor
+                );
+            }
+        }
     }
-    let place = match set.line_of(0) {
-        Some(line) => format!("{}:{line}", data.display()),
-        None => data.display().to_string(),
-    };
-    eprintln!("warning: {place}: {found}");
-    if let Some((words, second)) = second_axis_scale(set, &found, fit, max_rows, &slides) {
-        eprintln!("warning: {place}: {words}: {second}");
-    }
-}
-
-/// A second instrument axis' scale behind the column `found` names: the coordinate-scale
-/// profile ([`axis_scale`]) of `set` with that column undone about the data's centroid, as the
-/// free-pose side calibrates again with a named scale undone (`calibrate_free.rs`, `Undone`):
-/// two axes scaled by different factors (x long, z short) read as the first axis and, for the
-/// second's share, as the joints' transmissions or the slides' leads. The second column the
-/// profile then names on its own test (the same false-alarm rate) is returned with the first's
-/// undo in words; `None` where it names none, or the same column, or no single column.
-fn second_axis_scale(
-    set: &MeasurementSet,
-    found: &axiscal::measurement::unit_check::axis_scale::AxisScale,
-    fit: ProfileFit<'_>,
-    max_rows: usize,
-    slides: &[usize],
-) -> Option<(String, axiscal::measurement::unit_check::axis_scale::AxisScale)> {
-    let Scaled::Column(first) = found.scaled else {
-        return None;
-    };
-    let second = axis_scale_with_column_undone(set, (first, found.factor), fit, max_rows, slides)?;
-    let other = matches!(second.scaled, Scaled::Column(c) if c != first);
-    (second.significant && other).then(|| {
-        (
-            format!(
-                "with `{}` divided by {:.5} about the data's centroid (the scale named above) the coordinate-scale \
-                 profile was run again, and a second axis shows",
-                axiscal::measurement::unit_check::axis_scale::COLUMNS[first],
-                found.factor
-            ),
-            second,
-        )
-    })
-}
-
-/// Whether the coordinate-scale profile of `set` with `source`'s column undone names nothing:
-/// the scale it named on the file as read is that column's, seen through another reading.
-fn explained_by(
-    set: &MeasurementSet,
-    source: &ColumnSource,
-    fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
-    max_rows: usize,
-    slides: &[usize],
-) -> bool {
-    axis_scale_with_column_undone(set, (source.column, source.factor), fit, max_rows, slides)
-        .is_some_and(|a| !a.significant)
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far

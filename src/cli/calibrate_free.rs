@@ -12,17 +12,13 @@ use axiscal::calibration::free_pose::{
     FreePoseError, FreePoseOptions, FreePoseSummary, NamedScale, calibrate_free_poses,
 };
 use axiscal::calibration::noise::NOISE_CONFIDENCE;
-use axiscal::calibration::procedure::{
-    Calibration, ScaleDoubt, ScaleSlip, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
-    named_joints,
-};
+use axiscal::calibration::procedure::Calibration;
 use axiscal::calibration::recalibrated::{
-    FreePoseShift, calibrated_with_scales_undone, free_pose_profile_fit, shift_behind_scales,
+    FreePoseChecks, FreePoseScales, FreePoseShift, SecondCommandScale, free_pose_scale_checks,
 };
 use axiscal::calibration::record::CalibrationRecord;
 use axiscal::measurement::MeasurementSet;
 use axiscal::measurement::target_ids::{SwappedTargetIds, swapped_target_ids};
-use axiscal::measurement::unit_check::axis_scale::PROFILE_MAX_FREE_POSE_ROWS;
 use axiscal::numerics::stats::chi_square_quantile;
 use axiscal::robot::RobotDescription;
 use std::path::Path;
@@ -338,9 +334,8 @@ fn slip_words(s: &ExplainingSlip) -> String {
 /// The warnings of a free-pose calibration the fit absorbed (module docs of
 /// [`axiscal::calibration::free_pose::slip`]): a column slip; else tool target ids in another
 /// order, by their distances ([`swapped_target_ids`]) or, for a symmetric set, by the fitted
-/// tool frame's turn ([`mirrored_targets`]); and, without a column slip, a joint's transmission
-/// beyond what a drive gives ([`free_pose_scale_slips`]), and how large a scale of each other
-/// column that test lets pass ([`free_pose_scale_reach`]).
+/// tool frame's turn ([`mirrored_targets`]); and, without a column slip, the scale tests
+/// ([`free_pose_scale_checks`]).
 fn warn_slips(
     args: &FreeArgs<'_>,
     (set, desc): (&MeasurementSet, &RobotDescription),
@@ -357,65 +352,49 @@ fn warn_slips(
         eprintln!("warning: {data}: {few}");
         return;
     }
-    // A slip or a shifted block misfits every test below (a column's scale, the coordinates'
-    // scale).
-    match shift_behind_scales((set, desc), options, summary, block) {
-        Some(FreePoseShift::Slip(s)) => {
-            return eprintln!(
-                "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
-                slip_words(&s)
-            );
-        }
-        Some(FreePoseShift::Block(b)) => return eprintln!("warning: {data}: {}", block_words(&b)),
-        None => {}
-    }
-    for named in &summary.scales {
-        eprintln!("warning: {data}: {}", named_scale_words(named));
-    }
-    // A named column scale misfits the joints' transmissions of the calibration that absorbed
-    // it: their tests run on the poses calibrated again with it undone, so that a slope said
-    // below is one the scale does not explain.
-    let again = calibrated_with_scales_undone(set, desc, options, &summary.scales);
-    let (set_u, (cal_u, summary_u)) = again
-        .as_ref()
-        .map_or((set, (cal, summary)), |u| (&u.set, (&u.cal, &u.summary)));
-    let prefix = again
-        .as_ref()
-        .map_or_else(String::new, |_| format!("{}: ", undone_words(&summary.scales)));
-    let scaled = free_pose_scale_slips((cal_u, summary_u), desc, set_u.rows());
-    for found in &scaled {
-        match found.free_pose_note() {
-            Some(note) => eprintln!("note: {data}: {prefix}{note}"),
-            None => eprintln!("warning: {data}: {prefix}{found}"),
+    match free_pose_scale_checks((set, desc), options, (cal, summary), block) {
+        FreePoseChecks::Shift(FreePoseShift::Slip(s)) => eprintln!(
+            "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
+            slip_words(&s)
+        ),
+        FreePoseChecks::Shift(FreePoseShift::Block(b)) => eprintln!("warning: {data}: {}", block_words(&b)),
+        FreePoseChecks::Scales(found) => {
+            print_scales(&found, (set, &summary.scales), args.data, printer);
+            warn_target_ids(set, desc, summary, &data.to_string());
         }
     }
-    let doubts = free_pose_scale_doubts((cal_u, summary_u), desc, set_u.rows());
-    for doubt in &doubts {
-        eprintln!("note: {data}: {prefix}{doubt}");
+}
+
+/// The free-pose scale tests' findings ([`FreePoseScales`]) on `set` in words, after the
+/// column scales the screen `named`: each test run with those undone says so.
+fn print_scales(found: &FreePoseScales, (set, named): (&MeasurementSet, &[NamedScale]), data: &Path, printer: Printer) {
+    let shown = data.display();
+    for n in named {
+        eprintln!("warning: {shown}: {}", named_scale_words(n));
     }
-    // A joint's slope off its description's (said above, as a warning or a note) is a misfit
-    // the geometry carries; the coordinate-scale profile would read it as an axis' scale, so
-    // it runs with the joints' command columns undone by the slopes said: a second slip (a
-    // coordinate column scaled too) is then tested, not hidden behind the first.
-    let slopes: Vec<(usize, f64)> = scaled
-        .iter()
-        .filter_map(|s| match s {
-            ScaleSlip::Command { joint, travel, .. } => Some((*joint, *travel)),
-            _ => None,
-        })
-        .collect();
-    second_scales((set_u, desc), options, (&slopes, &doubts), args.data);
-    // A scale the screen named is the profile's finding already, with its alternatives.
-    if slopes.len() == scaled.len() && summary.scales.is_empty() {
-        profile_axis_scale((set, desc), options, &slopes, args.data, printer);
+    let prefix = found
+        .undone
+        .as_ref()
+        .map_or_else(String::new, |_| format!("{}: ", undone_words(named)));
+    for s in &found.scaled {
+        match s.free_pose_note() {
+            Some(note) => eprintln!("note: {shown}: {prefix}{note}"),
+            None => eprintln!("warning: {shown}: {prefix}{s}"),
+        }
+    }
+    for doubt in &found.doubts {
+        eprintln!("note: {shown}: {prefix}{doubt}");
+    }
+    if let Some(second) = &found.second {
+        print_second_scales(&second.said, &second.found, data);
+    }
+    if let Some(profile) = &found.profile {
+        super::calibrate::print_coordinate_scale(profile, set, data, printer);
     }
     // The columns said above are named; the line bounds the others.
-    if let Some(reach) =
-        free_pose_scale_reach((cal_u, summary_u), desc, set_u.rows()).and_then(|r| r.without(&named_joints(&scaled)))
-    {
-        eprintln!("note: {data}: {prefix}{reach}");
+    if let Some(reach) = &found.reach {
+        eprintln!("note: {shown}: {prefix}{reach}");
     }
-    warn_target_ids(set, desc, summary, &data.to_string());
 }
 
 /// The target ids swapped between rows, or mirrored as a whole against the description's
@@ -453,31 +432,11 @@ fn undone_words(named: &[NamedScale]) -> String {
         .iter()
         .map(|n| format!("`{}` divided by {:.5}", n.scale.column, n.scale.factor))
         .collect();
+    let scales = if named.len() == 1 { "the scale" } else { "the scales" };
     format!(
-        "with {} (the scale named above) the poses were calibrated again",
+        "with {} ({scales} named above) the poses were calibrated again",
         columns.join(" and ")
     )
-}
-
-/// `set` with the joints' command columns said (`slopes`) undone.
-fn profile_axis_scale(
-    (set, desc): (&MeasurementSet, &RobotDescription),
-    options: &FreePoseOptions,
-    slopes: &[(usize, f64)],
-    data: &Path,
-    printer: Printer,
-) {
-    let undone = with_commands_scaled(set, slopes);
-    let set = &undone;
-    // The poses the model cannot fit stay flagged with the column undone: no axis named.
-    let fit = |s: &MeasurementSet| free_pose_profile_fit(s, desc, options);
-    super::calibrate::warn_axis_scale(
-        (set, desc),
-        data,
-        (&fit, None),
-        (PROFILE_MAX_FREE_POSE_ROWS, true),
-        printer,
-    );
 }
 
 /// A column scale the free-pose fit named before screening the poses
@@ -520,49 +479,10 @@ fn named_scale_words(n: &axiscal::calibration::free_pose::NamedScale) -> String 
     )
 }
 
-/// A second command column's scale behind the joints said above (`slopes`, `(joint, slope)`, as
-/// a warning or a note, and `doubts`): the poses calibrated again with those joints' columns undone by
-/// their slopes and the transmission test run on that calibration, as `validate`'s two-slip
-/// search refits with the first slip undone (`diagnosis/combined_slips.rs`): a
-/// one-per-cent column scale beside another reads partly as the other's slope, and shows whole
-/// once the other is undone. A joint it then names is said; where none is, that the test ran.
-fn second_scales(
-    (set, desc): (&MeasurementSet, &RobotDescription),
-    options: &FreePoseOptions,
-    (slopes, doubts): (&[(usize, f64)], &[ScaleDoubt]),
-    data: &Path,
-) {
-    let said: Vec<(usize, f64)> = slopes
-        .iter()
-        .copied()
-        .chain(doubts.iter().map(|d| (d.joint, d.travel)))
-        .collect();
-    if said.is_empty() {
-        return;
-    }
-    let undone = with_commands_scaled(set, &said);
-    let profile = FreePoseOptions {
-        holdout: false,
-        effects: false,
-        ..*options
-    };
-    let Ok(again) = calibrate_free_poses(&undone, desc, &profile) else {
-        return;
-    };
-    let (again, again_summary) = again.into_calibration(desc);
-    let again = (&again, &again_summary);
-    let new = |joint: &usize| !said.iter().any(|(j, _)| j == joint);
-    let mut found: Vec<(bool, String)> = free_pose_scale_slips(again, desc, undone.rows())
-        .iter()
-        .filter(|s| matches!(s, ScaleSlip::Command { joint, .. } if new(joint)))
-        .map(|s| s.free_pose_note().map_or((true, s.to_string()), |n| (false, n)))
-        .collect();
-    found.extend(
-        free_pose_scale_doubts(again, desc, undone.rows())
-            .iter()
-            .filter(|d| new(&d.joint))
-            .map(|d| (false, d.to_string())),
-    );
+/// The command columns the transmission test named with the joints `said` (`(joint, slope)`,
+/// as a warning or a note) undone ([`axiscal::calibration::recalibrated::second_command_scales`]);
+/// where it named none, that the test ran.
+fn print_second_scales(said: &[(usize, f64)], second: &[SecondCommandScale], data: &Path) {
     let columns: Vec<String> = said
         .iter()
         .map(|(j, slope)| format!("`cmd_{j}` divided by {:.4}", 1.0 / slope))
@@ -572,26 +492,21 @@ fn second_scales(
         columns.join(" and ")
     );
     let data = data.display();
-    if found.is_empty() {
+    if second.is_empty() {
         eprintln!(
             "note: {data}: {undone_words}: it names no other command column (a scale within the file's \
              detection limits, the line on command-column scales, passes: over a partial turn it reads as a \
              gear's once-per-turn error)"
         );
     }
-    for (firm, text) in found {
+    for found in second {
+        let (firm, text) = match found {
+            SecondCommandScale::Slip(s) => s.free_pose_note().map_or((true, s.to_string()), |n| (false, n)),
+            SecondCommandScale::Doubt(d) => (false, d.to_string()),
+        };
         let level = if firm { "warning" } else { "note" };
         eprintln!("{level}: {data}: {undone_words}, and a second column shows: {text}");
     }
-}
-
-/// `set` with each joint's command column (`(joint, 1-based)`) multiplied by its factor: the
-/// commands a joint that travels `factor` times the description's transmission per command
-/// would have been given. Its lines kept.
-fn with_commands_scaled(set: &MeasurementSet, factors: &[(usize, f64)]) -> MeasurementSet {
-    factors
-        .iter()
-        .fold(set.clone(), |s, &(joint, f)| s.with_command_scaled(joint - 1, f))
 }
 
 /// A count of parameters and what they are, in words.

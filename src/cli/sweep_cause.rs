@@ -4,9 +4,27 @@
 
 use axiscal::diagnosis::{SWEEP_CAUSE_FALSE_ALARM, SweepCause, SweepFault, SweepShadow};
 
-/// `(x, y, z)` with three decimals.
-fn triple(v: &[f64; 3]) -> String {
-    format!("({:.3}, {:.3}, {:.3})", v[0], v[1], v[2])
+/// `(x, y, z)` with three decimals; a component whose 1-sigma (`sigma`) is infinite, which
+/// these points do not determine (a move along it changes nothing they show), reads
+/// `undetermined`.
+fn triple(v: &[f64; 3], sigma: &[f64; 3]) -> String {
+    let c: Vec<String> = v
+        .iter()
+        .zip(sigma)
+        .map(|(x, s)| match s.is_finite() {
+            true => format!("{x:.3}"),
+            false => "undetermined".to_string(),
+        })
+        .collect();
+    format!("({})", c.join(", "))
+}
+
+/// A 1-sigma with three decimals, or `undetermined` where it is infinite ([`triple`]).
+fn one_sigma(sigma: f64) -> String {
+    match sigma.is_finite() {
+        true => format!("{sigma:.3}"),
+        false => "undetermined".to_string(),
+    }
 }
 
 /// What the records look off by, as said in a sentence (`whole`: the whole file's drift).
@@ -18,18 +36,19 @@ fn fault_words(fault: &SweepFault, whole: bool) -> String {
             sigma,
             unit,
         } => format!(
-            "the held `cmd_{joint}` looks offset by {offset:+.3} {unit} (1-sigma {sigma:.3}) from where the robot stood"
+            "the held `cmd_{joint}` looks offset by {offset:+.3} {unit} (1-sigma {}) from where the robot stood",
+            one_sigma(*sigma)
         ),
         SweepFault::Drift { drift_mm, sigma_mm } => format!(
             "its points look to drift by {} mm (1-sigma {} mm) from its first {} to its last",
-            triple(drift_mm),
-            triple(sigma_mm),
+            triple(drift_mm, sigma_mm),
+            triple(sigma_mm, sigma_mm),
             if whole { "row" } else { "step" }
         ),
         SweepFault::Block { moved_mm, sigma_mm } => format!(
             "its block looks moved by {} mm (1-sigma {} mm)",
-            triple(moved_mm),
-            triple(sigma_mm)
+            triple(moved_mm, sigma_mm),
+            triple(sigma_mm, sigma_mm)
         ),
     }
 }
@@ -61,8 +80,12 @@ fn alternative_words((experiment, fault): &(Option<String>, SweepFault)) -> Stri
         SweepFault::HeldOffset {
             joint, offset, unit, ..
         } => format!(", or the held `cmd_{joint}` of {who} by {offset:+.3} {unit}"),
-        SweepFault::Drift { drift_mm, .. } => format!(", or {who}'s points drifting by {} mm", triple(drift_mm)),
-        SweepFault::Block { moved_mm, .. } => format!(", or {who}'s block moved by {} mm", triple(moved_mm)),
+        SweepFault::Drift { drift_mm, sigma_mm } => {
+            format!(", or {who}'s points drifting by {} mm", triple(drift_mm, sigma_mm))
+        }
+        SweepFault::Block { moved_mm, sigma_mm } => {
+            format!(", or {who}'s block moved by {} mm", triple(moved_mm, sigma_mm))
+        }
     }
 }
 
@@ -154,4 +177,42 @@ pub(super) fn words(cause: &SweepCause, data: &str, poses: usize) -> String {
         cause.per_dof.1,
         why_words(&cause.fault, whole),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_move_along_an_undetermined_axis_reads_undetermined_not_inf() {
+        let block = SweepFault::Block {
+            moved_mm: [0.5124, -0.25, 7.0],
+            sigma_mm: [0.0101, 0.02, f64::INFINITY],
+        };
+        let words = fault_words(&block, false);
+        assert_eq!(
+            words,
+            "its block looks moved by (0.512, -0.250, undetermined) mm (1-sigma (0.010, 0.020, undetermined) mm)"
+        );
+        let alternative = alternative_words(&(Some("axis2".into()), block));
+        assert_eq!(
+            alternative,
+            ", or experiment axis2's block moved by (0.512, -0.250, undetermined) mm"
+        );
+        let held = SweepFault::HeldOffset {
+            joint: 2,
+            offset: 0.25,
+            sigma: f64::INFINITY,
+            unit: "deg",
+        };
+        assert!(fault_words(&held, false).contains("(1-sigma undetermined)"));
+        let drift = SweepFault::Drift {
+            drift_mm: [1.0, 2.0, 3.0],
+            sigma_mm: [0.1, 0.2, 0.3],
+        };
+        assert_eq!(
+            fault_words(&drift, true),
+            "its points look to drift by (1.000, 2.000, 3.000) mm (1-sigma (0.100, 0.200, 0.300) mm) from its first row to its last"
+        );
+    }
 }

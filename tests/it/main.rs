@@ -71,6 +71,7 @@ mod hostile_round18b;
 mod hostile_round18h;
 mod hostile_round18m;
 mod hostile_round19d;
+mod hostile_round20a;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;

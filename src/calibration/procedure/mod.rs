@@ -73,7 +73,7 @@ pub use sanity::{
 };
 pub use screen::{
     OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, SWEEP_BUMP_FALSE_ALARM, SWEEP_POINTS_FALSE_ALARM, Screening, SweepBump,
-    SweepEnd, WorstSecondTarget, bumps_undone, screen_sweeps, wandering_sweep_bumps,
+    SweepEnd, WorstSecondTarget, bumps_undone, screen_sweeps, wandering_sweep_bumps, without_poses,
 };
 pub use second_targets::SecondTargetData;
 pub use uncertainty::{AxisCovariance, SIGNIFICANT_SIGMAS, row_sigmas};

@@ -40,7 +40,7 @@ pub(super) fn too_many_which(off: &[(usize, usize, Option<u64>)]) -> String {
 
 /// `set` without the poses of the `outliers` dropped (every target of a flagged point's step:
 /// a wrong reading is wrong for each of its targets); `None` when none was dropped.
-pub(super) fn without_poses(set: &MeasurementSet, outliers: &[OutlierPoint]) -> Option<MeasurementSet> {
+pub fn without_poses(set: &MeasurementSet, outliers: &[OutlierPoint]) -> Option<MeasurementSet> {
     let poses: std::collections::HashSet<(&str, usize)> = outliers
         .iter()
         .filter(|o| o.dropped)

@@ -1,0 +1,182 @@
+//! The independent-axis calibration of a file as `axiscal calibrate` runs it: the sweep screen
+//! ([`screen_sweeps`]: outliers, bumps), the procedure on the rows it kept, the sweeps whose held
+//! joints wander (tested on the model fitted), and the checks that read the calibration with
+//! the named bumps moved back: the instrument axis whose scale explains the joints'
+//! departures ([`instrument_axis_source`]) and the coordinate-scale profile
+//! ([`coordinate_scale`]). Each finding is a value; the words are the caller's.
+//!
+//! A sweep whose held joints wander is not on one arc, so the screen cannot test its points;
+//! where the procedure's fit of such a sweep then fails on a few points off the path the others
+//! draw (or off their commands along it: [`SweepMisfit`]), those poses are dropped and the
+//! procedure runs again, unless the outliers are kept: they are the screen's outliers found by
+//! the fit that failed.
+
+use crate::calibration::procedure::{
+    Calibration, CalibrationOptions, ColumnSource, OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, ProcedureError,
+    SweepBump, SweepMisfit, calibrate, screen_sweeps, wandering_sweep_bumps, without_poses,
+};
+use crate::calibration::recalibrated::{
+    CoordinateScale, axes_profile_fit, calibrated_with_bumps_undone, coordinate_scale, instrument_axis_source,
+};
+use crate::measurement::MeasurementSet;
+use crate::measurement::unit_check::axis_scale::PROFILE_MAX_ROWS;
+use crate::robot::RobotDescription;
+
+/// The data with the sweep screen's named bumps moved back and the calibration of its rows
+/// the screen kept: the checks that read a sweep's fit as its joint's judge these, so that a
+/// bump named is not blamed on a scale or a held joint too.
+#[derive(Clone, Debug)]
+pub struct BumpsUndone {
+    /// The rows the screen kept, the bumps' blocks moved back.
+    pub set: MeasurementSet,
+    /// The calibration of the rows kept, so moved.
+    pub cal: Calibration,
+}
+
+/// A screened calibration ([`calibrate_screened`]) and what its checks found.
+#[derive(Clone, Debug)]
+pub struct ScreenedCalibration {
+    /// The calibration of the rows the screen kept, with the points it flagged
+    /// ([`Calibration::outliers`]), then those the procedure's failed fit named.
+    pub cal: Calibration,
+    /// The points the procedure's failed fit named off their sweep's path, in a sweep the
+    /// screen could not test (module docs), dropped with their poses (also in
+    /// [`Calibration::outliers`]).
+    pub off_path: Vec<OutlierPoint>,
+    /// The rows the screen kept; `None` when it dropped none.
+    pub screened: Option<MeasurementSet>,
+    /// The sweeps whose points from one step on sit off their earlier ones, then those whose
+    /// held joints wander ([`wandering_sweep_bumps`]).
+    pub bumps: Vec<SweepBump>,
+    /// The data with those bumps moved back, calibrated; `None` when none was named or that
+    /// calibration failed.
+    pub bumps_undone: Option<BumpsUndone>,
+    /// The instrument axis whose scale explains the joints' transmission departures, judged with
+    /// the bumps moved back.
+    pub column_source: Option<ColumnSource>,
+    /// The coordinate-scale profile, so judged, weighed against that axis.
+    pub coordinate_scale: CoordinateScale,
+}
+
+/// Why [`calibrate_screened`] failed.
+#[derive(Debug)]
+pub enum ScreenFailure {
+    /// The screen itself refused the sweeps (a sweep with too many points beyond the fence).
+    Screen(ProcedureError),
+    /// The procedure failed on the rows the screen kept.
+    Calibration(Box<CalibrationFailed>),
+}
+
+/// The procedure's failure on the rows the sweep screen kept ([`ScreenFailure::Calibration`]).
+#[derive(Debug)]
+pub struct CalibrationFailed {
+    /// The procedure's error.
+    pub error: ProcedureError,
+    /// The points the screen flagged.
+    pub outliers: Vec<OutlierPoint>,
+    /// The rows it kept; `None` when it dropped none.
+    pub screened: Option<MeasurementSet>,
+}
+
+/// The independent-axis calibration of `set` with `options` as `calibrate` runs it (module
+/// docs): the points beyond the screen's fence dropped unless `keep_outliers`.
+pub fn calibrate_screened(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    keep_outliers: bool,
+) -> Result<ScreenedCalibration, ScreenFailure> {
+    let mut screening = screen_sweeps(set, desc, options, keep_outliers).map_err(ScreenFailure::Screen)?;
+    let kept = screening.set.as_ref().unwrap_or(set);
+    let (mut cal, off_path) = match calibrate(kept, desc, options) {
+        Ok(cal) => (cal, Vec::new()),
+        Err(error) => match without_off_path(kept, desc, options, (&error, keep_outliers)) {
+            Some((without, cal, off_path)) => {
+                screening.set = Some(without);
+                (cal, off_path)
+            }
+            None => {
+                return Err(ScreenFailure::Calibration(Box::new(CalibrationFailed {
+                    error,
+                    outliers: screening.outliers,
+                    screened: screening.set,
+                })));
+            }
+        },
+    };
+    let kept = screening.set.as_ref().unwrap_or(set);
+    screening.bumps.extend(wandering_sweep_bumps(kept, desc, options, &cal));
+    cal.outliers = std::mem::take(&mut screening.outliers);
+    cal.outliers.extend(off_path.iter().cloned());
+    let undone = calibrated_with_bumps_undone(kept, &screening.bumps, desc, options);
+    let (judged, judged_cal) = undone.as_ref().map_or((kept, &cal), |(s, c)| (s, c));
+    let fit = |s: &MeasurementSet| axes_profile_fit(s, desc, options);
+    let column_source = instrument_axis_source(judged_cal, (judged, desc), options);
+    let coordinate_scale = coordinate_scale(
+        (judged, desc),
+        (&fit, column_source.as_ref()),
+        (PROFILE_MAX_ROWS, false),
+    );
+    let bumps_undone = undone.map(|(set, cal)| BumpsUndone { set, cal });
+    Ok(ScreenedCalibration {
+        cal,
+        off_path,
+        screened: screening.set,
+        bumps: screening.bumps,
+        bumps_undone,
+        column_source,
+        coordinate_scale,
+    })
+}
+
+/// `set` without the poses of the points the procedure's failed fits name off their sweep's
+/// path (or off their commands along it: [`SweepMisfit::OffPath`], [`SweepMisfit::OffCommand`]),
+/// calibrated again, with those points flagged as dropped: one point a round, the farthest the
+/// failed fit names (a sweep whose held joints wander puts its good points off the arc too, by
+/// less), as the screen peels its outliers; `None` with `keep_outliers`, where a failure names
+/// no such point or another cause, or where more would be dropped than the screen sets aside
+/// of a sweep ([`OUTLIER_SHARE_MAX`] of its points, at most [`OUTLIER_ROUNDS_MAX`]: then the
+/// sweep, not its points, is wrong).
+fn without_off_path(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    (error, keep_outliers): (&ProcedureError, bool),
+) -> Option<(MeasurementSet, Calibration, Vec<OutlierPoint>)> {
+    if keep_outliers {
+        return None;
+    }
+    let swept = |e: &str| set.rows().iter().filter(|m| m.experiment == e && m.target == 0).count();
+    let mut dropped: Vec<OutlierPoint> = Vec::new();
+    let mut failure = farthest_off_path(error)?;
+    loop {
+        let off = dropped.iter().filter(|o| o.experiment == failure.experiment).count() + 1;
+        if off > OUTLIER_ROUNDS_MAX || off as f64 > OUTLIER_SHARE_MAX * swept(&failure.experiment) as f64 {
+            return None;
+        }
+        dropped.push(OutlierPoint {
+            dropped: true,
+            ..failure
+        });
+        let without = without_poses(set, &dropped)?;
+        match calibrate(&without, desc, options) {
+            Ok(cal) => return Some((without, cal, dropped)),
+            Err(e) => failure = farthest_off_path(&e)?,
+        }
+    }
+}
+
+/// The point farthest off its sweep's path that `error`'s fit names ([`without_off_path`]);
+/// `None` for any other failure.
+fn farthest_off_path(error: &ProcedureError) -> Option<OutlierPoint> {
+    let ProcedureError::Misfit { finding, .. } = error.misfit()? else {
+        return None;
+    };
+    let (SweepMisfit::OffPath { points, .. } | SweepMisfit::OffCommand { points, .. }) = finding else {
+        return None;
+    };
+    points
+        .iter()
+        .max_by(|a, b| a.residual_mm.total_cmp(&b.residual_mm))
+        .cloned()
+}
