@@ -204,19 +204,27 @@ pub fn calibrated_with_scales_undone(
         return None;
     }
     let undone = scales_undone(set, named);
-    let profile = FreePoseOptions {
-        holdout: false,
-        effects: false,
-        ..*options
-    };
-    let (cal, summary) = calibrate_free_poses(&undone, desc, &profile)
-        .ok()?
-        .into_calibration(desc);
+    let (cal, summary) = geometry_calibration(&undone, desc, options)?;
     Some(ScalesUndone {
         set: undone,
         cal,
         summary,
     })
+}
+
+/// The free-pose calibration of `set` with `options` as the tests of the joints' transmissions
+/// read it: no held-out half, no effects (they read the geometry); `None` where it fails.
+fn geometry_calibration(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &FreePoseOptions,
+) -> Option<(Calibration, FreePoseSummary)> {
+    let geometry = FreePoseOptions {
+        holdout: false,
+        effects: false,
+        ..*options
+    };
+    Some(calibrate_free_poses(set, desc, &geometry).ok()?.into_calibration(desc))
 }
 
 /// The 0-based coordinate of `x_mm`, `y_mm`, `z_mm`.
@@ -450,14 +458,7 @@ pub fn second_command_scales(
         return None;
     }
     let undone = with_commands_scaled(set, said);
-    let profile = FreePoseOptions {
-        holdout: false,
-        effects: false,
-        ..*options
-    };
-    let (again, again_summary) = calibrate_free_poses(&undone, desc, &profile)
-        .ok()?
-        .into_calibration(desc);
+    let (again, again_summary) = geometry_calibration(&undone, desc, options)?;
     let again = (&again, &again_summary);
     let new = |joint: &usize| !said.iter().any(|(j, _)| j == joint);
     let slips = free_pose_scale_slips(again, desc, undone.rows())
