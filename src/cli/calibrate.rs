@@ -501,9 +501,7 @@ fn calibration_failed(
 /// poses ([`axiscal::calibration::screened::ScreenedCalibration::off_path`]), as warnings naming each row.
 fn print_off_path(off_path: &[OutlierPoint], desc: &RobotDescription, data: &Path) {
     for o in off_path {
-        let place = o
-            .line
-            .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
+        let (place, _) = checks::outlier_place(o, data, "calibrated");
         let path = match desc.joints.get(o.joint.wrapping_sub(1)).map(|j| j.kind) {
             Some(axiscal::kinematics::JointKind::Prismatic) => "line",
             _ => "arc",

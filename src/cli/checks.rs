@@ -782,7 +782,11 @@ pub fn print_approach_notes(outliers: &[axiscal::calibration::procedure::Outlier
 }
 
 /// A flagged point's place (`FILE:LINE`) and what the command did with it.
-fn outlier_place(o: &axiscal::calibration::procedure::OutlierPoint, data: &Path, done: &str) -> (String, String) {
+pub(super) fn outlier_place(
+    o: &axiscal::calibration::procedure::OutlierPoint,
+    data: &Path,
+    done: &str,
+) -> (String, String) {
     let place = o
         .line
         .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
