@@ -9,11 +9,14 @@
 //! where the procedure's fit of such a sweep then fails on a few points off the path the others
 //! draw (or off their commands along it: [`SweepMisfit`]), those poses are dropped and the
 //! procedure runs again, unless the outliers are kept: they are the screen's outliers found by
-//! the fit that failed.
+//! the fit that failed. Once the procedure has fitted the model, the points of such sweeps
+//! moved to the design pose by it are screened as a still sweep's are
+//! ([`screen_wandering_sweeps`]): a gross error the fit took in without failing is dropped with
+//! its pose, and the procedure runs again, at most [`WANDERING_ROUNDS_MAX`] times.
 
 use crate::calibration::procedure::{
     Calibration, CalibrationOptions, ColumnSource, OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, ProcedureError,
-    SweepBump, SweepMisfit, calibrate, screen_sweeps, wandering_sweep_bumps, without_poses,
+    SweepBump, SweepMisfit, calibrate, screen_sweeps, screen_wandering_sweeps, without_poses,
 };
 use crate::calibration::recalibrated::{
     CoordinateScale, axes_profile_fit, calibrated_with_bumps_undone, coordinate_scale, instrument_axis_source,
@@ -36,17 +39,17 @@ pub struct BumpsUndone {
 /// A screened calibration ([`calibrate_screened`]) and what its checks found.
 #[derive(Clone, Debug)]
 pub struct ScreenedCalibration {
-    /// The calibration of the rows the screen kept, with the points it flagged
-    /// ([`Calibration::outliers`]), then those the procedure's failed fit named.
+    /// The calibration of the rows the screens kept, with the points they flagged
+    /// ([`Calibration::outliers`]): the sweep screen's, then those the procedure's failed fit
+    /// named off their sweep's path in a sweep the screen could not test (module docs;
+    /// [`crate::calibration::procedure::OutlierTest::AxisFit`]), then those the screen of such sweeps' points moved by the
+    /// model flagged ([`crate::calibration::procedure::OutlierTest::Moved`]: dropped with their poses unless the outliers are
+    /// kept or the calibration without them failed).
     pub cal: Calibration,
-    /// The points the procedure's failed fit named off their sweep's path, in a sweep the
-    /// screen could not test (module docs), dropped with their poses (also in
-    /// [`Calibration::outliers`]).
-    pub off_path: Vec<OutlierPoint>,
-    /// The rows the screen kept; `None` when it dropped none.
+    /// The rows the screens kept; `None` when they dropped none.
     pub screened: Option<MeasurementSet>,
     /// The sweeps whose points from one step on sit off their earlier ones, then those whose
-    /// held joints wander ([`wandering_sweep_bumps`]).
+    /// held joints wander ([`screen_wandering_sweeps`]).
     pub bumps: Vec<SweepBump>,
     /// The data with those bumps moved back, calibrated; `None` when none was named or that
     /// calibration failed.
@@ -88,7 +91,7 @@ pub fn calibrate_screened(
 ) -> Result<ScreenedCalibration, ScreenFailure> {
     let mut screening = screen_sweeps(set, desc, options, keep_outliers).map_err(ScreenFailure::Screen)?;
     let kept = screening.set.as_ref().unwrap_or(set);
-    let (mut cal, off_path) = match calibrate(kept, desc, options) {
+    let (cal, off_path) = match calibrate(kept, desc, options) {
         Ok(cal) => (cal, Vec::new()),
         Err(error) => match without_off_path(kept, desc, options, (&error, keep_outliers)) {
             Some((without, cal, off_path)) => {
@@ -105,9 +108,16 @@ pub fn calibrate_screened(
         },
     };
     let kept = screening.set.as_ref().unwrap_or(set);
-    screening.bumps.extend(wandering_sweep_bumps(kept, desc, options, &cal));
+    let wandering = without_wandering_outliers((kept, cal), desc, options, keep_outliers);
+    let mut cal = wandering.cal;
+    if wandering.set.is_some() {
+        screening.set = wandering.set;
+    }
+    let kept = screening.set.as_ref().unwrap_or(set);
+    screening.bumps.extend(wandering.bumps);
     cal.outliers = std::mem::take(&mut screening.outliers);
-    cal.outliers.extend(off_path.iter().cloned());
+    cal.outliers.extend(off_path);
+    cal.outliers.extend(wandering.outliers);
     let undone = calibrated_with_bumps_undone(kept, &screening.bumps, desc, options);
     let (judged, judged_cal) = undone.as_ref().map_or((kept, &cal), |(s, c)| (s, c));
     let fit = |s: &MeasurementSet| axes_profile_fit(s, desc, options);
@@ -120,13 +130,72 @@ pub fn calibrate_screened(
     let bumps_undone = undone.map(|(set, cal)| BumpsUndone { set, cal });
     Ok(ScreenedCalibration {
         cal,
-        off_path,
         screened: screening.set,
         bumps: screening.bumps,
         bumps_undone,
         column_source,
         coordinate_scale,
     })
+}
+
+/// The screen of the sweeps whose held joints wander runs at most this many times: again on
+/// the model calibrated without the points it dropped (which a gross error had bent), once.
+pub const WANDERING_ROUNDS_MAX: usize = 2;
+
+/// What the screen of the sweeps whose held joints wander found ([`without_wandering_outliers`]).
+struct Wandering {
+    /// The calibration of the rows kept.
+    cal: Calibration,
+    /// The rows kept, where the screen dropped some.
+    set: Option<MeasurementSet>,
+    /// The points flagged, every round's.
+    outliers: Vec<OutlierPoint>,
+    /// The bumps of the last round.
+    bumps: Vec<SweepBump>,
+}
+
+/// The calibration `cal` of `set` without the points the screen of its sweeps whose held
+/// joints wander drops ([`screen_wandering_sweeps`], on `cal`'s model): their poses dropped and
+/// the procedure run again, then the screen again on that model, while it drops points, at
+/// most [`WANDERING_ROUNDS_MAX`] times. Where the procedure fails without them, the points are
+/// flagged as kept, with the calibration of the rows before.
+fn without_wandering_outliers(
+    (set, cal): (&MeasurementSet, Calibration),
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    keep_outliers: bool,
+) -> Wandering {
+    let mut found = Wandering {
+        cal,
+        set: None,
+        outliers: Vec::new(),
+        bumps: Vec::new(),
+    };
+    for _ in 0..WANDERING_ROUNDS_MAX {
+        let on = found.set.as_ref().unwrap_or(set);
+        let screening = screen_wandering_sweeps(on, desc, options, &found.cal, keep_outliers);
+        found.bumps = screening.bumps;
+        let Some(without) = screening.set else {
+            found.outliers.extend(screening.outliers);
+            break;
+        };
+        match calibrate(&without, desc, options) {
+            Ok(cal) => {
+                found.outliers.extend(screening.outliers);
+                found.cal = cal;
+                found.set = Some(without);
+            }
+            Err(_) => {
+                let kept = screening
+                    .outliers
+                    .into_iter()
+                    .map(|o| OutlierPoint { dropped: false, ..o });
+                found.outliers.extend(kept);
+                break;
+            }
+        }
+    }
+    found
 }
 
 /// `set` without the poses of the points the procedure's failed fits name off their sweep's

@@ -14,8 +14,8 @@ use axiscal::calibration::outputs::{self, OUTPUT_FILES, OutputOptions};
 use axiscal::calibration::procedure::axis_experiments_with;
 use axiscal::calibration::procedure::{
     AxisEstimator, Calibration, CalibrationOptions, ColumnSource, DEFAULT_HELD_TOLERANCE, Implausible, OutlierPoint,
-    PLAUSIBLE_AXIS_TILT_RAD, ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, ScaleSlip, UrdfOptions, UrdfRoot,
-    implausible, ros_name,
+    OutlierTest, PLAUSIBLE_AXIS_TILT_RAD, ProcedureError, RawReadingDeviation, SIZE_TOLERANCE, ScaleSlip, UrdfOptions,
+    UrdfRoot, implausible, ros_name,
 };
 use axiscal::calibration::recalibrated::CoordinateScale;
 use axiscal::calibration::record::{CalibrationRecord, Reports};
@@ -497,15 +497,18 @@ fn calibration_failed(
     Err(failure_words(args, (kept, desc), options, &failed.error))
 }
 
-/// The points the procedure's failed fit named off their sweep's path, dropped with their
-/// poses ([`axiscal::calibration::screened::ScreenedCalibration::off_path`]), as warnings naming each row.
-fn print_off_path(off_path: &[OutlierPoint], desc: &RobotDescription, data: &Path) {
-    for o in off_path {
-        let (place, _) = checks::outlier_place(o, data, "calibrated");
-        let path = match desc.joints.get(o.joint.wrapping_sub(1)).map(|j| j.kind) {
-            Some(axiscal::kinematics::JointKind::Prismatic) => "line",
-            _ => "arc",
-        };
+/// The outliers of the sweeps whose held joints wander, as warnings naming each row: those the
+/// procedure's failed fit named off their sweep's path, dropped with their poses
+/// ([`OutlierTest::AxisFit`]), and those the screen of these sweeps' points moved by the
+/// calibrated model flagged ([`OutlierTest::Moved`]).
+fn print_wandering_outliers(outliers: &[OutlierPoint], desc: &RobotDescription, args: &Args) {
+    let path_of = |o: &OutlierPoint| match desc.joints.get(o.joint.wrapping_sub(1)).map(|j| j.kind) {
+        Some(axiscal::kinematics::JointKind::Prismatic) => "line",
+        _ => "arc",
+    };
+    for o in outliers.iter().filter(|o| o.test == OutlierTest::AxisFit) {
+        let (place, _) = checks::outlier_place(o, &args.data, "calibrated");
+        let path = path_of(o);
         eprintln!(
             "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm off the {path} its sweep's other points \
              draw (or along it, off its command), {:.1} times the noise, beyond the fence {:.1} of their distances: the \
@@ -515,6 +518,32 @@ fn print_off_path(off_path: &[OutlierPoint], desc: &RobotDescription, data: &Pat
             o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence
         );
     }
+    let moved: Vec<OutlierPoint> = (outliers.iter())
+        .filter(|o| o.test == OutlierTest::Moved)
+        .cloned()
+        .collect();
+    for o in moved.iter().filter(|o| o.approach.is_none()) {
+        let (place, what) = checks::outlier_place(o, &args.data, "calibrated again");
+        let what = match o.dropped || args.keep_outliers {
+            true => what,
+            false => "kept: the calibration without its pose failed".to_string(),
+        };
+        let path = path_of(o);
+        eprintln!(
+            "warning: {place}: outlier: experiment {} step {} target {}: {:.3} mm from the fit of its sweep's other \
+             points, {:.1} times their noise, beyond the fence {:.1} (a clean file's sweeps pass it with {:.0} % \
+             probability), its sweep's points moved to the design pose by the calibrated model (its held joints wander, \
+             so that as measured they lie on no one {path}): {what}; check this row's coordinates and commands",
+            o.experiment,
+            o.step,
+            o.target,
+            o.residual_mm,
+            o.normalised_residual,
+            o.fence,
+            100.0 * (1.0 - axiscal::calibration::procedure::SWEEP_POINTS_FALSE_ALARM)
+        );
+    }
+    checks::print_approach_notes(&moved, &args.data, "calibrated again");
 }
 
 /// Why the axis-experiment calibration of `screened` failed (`e`), with what `--noise-mm` or
@@ -580,11 +609,11 @@ fn calibrate_axes(
         }
     };
     let screen_outliers: Vec<OutlierPoint> = (screened.cal.outliers.iter())
-        .filter(|o| !screened.off_path.contains(o))
+        .filter(|o| o.test.is_screen())
         .cloned()
         .collect();
     checks::print_outliers(&screen_outliers, &args.data, "calibrated");
-    print_off_path(&screened.off_path, desc, &args.data);
+    print_wandering_outliers(&screened.cal.outliers, desc, args);
     checks::print_sweep_bumps(&screened.bumps, &args.data);
     let set = screened.screened.as_ref().unwrap_or(set);
     print_coordinate_scale(&screened.coordinate_scale, set, &args.data, printer);

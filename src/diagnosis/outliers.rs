@@ -14,8 +14,8 @@
 //! tested.
 
 use super::{DiagnosisError, DiagnosisOptions, ordered, prepare, with_free_pose_targets};
-use crate::calibration::procedure::OutlierPoint;
 use crate::calibration::procedure::SWEEP_POINTS_FALSE_ALARM;
+use crate::calibration::procedure::{OutlierPoint, OutlierTest};
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{chi_square_quantile, far_out_fence};
 use crate::robot::RobotDescription;
@@ -111,6 +111,7 @@ pub fn pose_point_outliers(
             fence,
             dropped: !keep,
             approach: None,
+            test: OutlierTest::Screen,
         })
         .collect();
     let rows: HashMap<(&str, usize, usize), usize> = set

@@ -288,6 +288,24 @@ struct Arc {
     /// Median absolute deviation of the point triples' radii from their median, over it: how
     /// far the points lie from one circle.
     radius_scatter: f64,
+    /// The standard error of `radius` \[file length units\]: the triples' spread (1.4826 times
+    /// their median absolute deviation) times the median's 1.2533 over the square root of the
+    /// triples (disjoint, so independent).
+    radius_sigma: f64,
+}
+
+/// A radius departs from the described one by more than this many of its standard errors
+/// ([`Arc::radius_sigma`]) before its size is read as a unit: a sweep whose held joints wander
+/// by a tenth of a degree scatters its point triples' radii by a fifth of a short wrist radius.
+const RADIUS_SIGMAS: f64 = 3.0;
+
+impl Arc {
+    /// Whether the radius departs from `nominal` (the same unit) beyond [`SPREAD_WARNING`] and
+    /// beyond [`RADIUS_SIGMAS`] of its standard error.
+    fn radius_off(&self, nominal: f64) -> bool {
+        (self.radius / nominal).ln().abs() > SPREAD_WARNING.ln()
+            && (self.radius - nominal).abs() > RADIUS_SIGMAS * self.radius_sigma
+    }
 }
 
 /// `rows` in the order of command `k` (0-based) when they are not in it already (either way):
@@ -332,11 +350,13 @@ fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
     let turn_ratio = median(ratios);
     let centre = Point3::from(Vector3::from_fn(|k, _| median(centres.iter().map(|c| c[k]).collect())));
     let radius = median(radii.clone());
+    let deviation = median(radii.iter().map(|r| (r - radius).abs()).collect());
     Some(Arc {
         centre,
         radius,
         turn_ratio,
-        radius_scatter: median(radii.iter().map(|r| (r - radius).abs()).collect()) / radius,
+        radius_scatter: deviation / radius,
+        radius_sigma: 1.2533 * 1.4826 * deviation / (radii.len() as f64).sqrt(),
     })
 }
 
@@ -655,7 +675,9 @@ fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip>
     // read for the one described turns on a small radius, which no scale puts in place).
     if !slipped(ratio) {
         let scaled_back = |s: &&(f64, String, usize)| experiments::in_place_scaled(s.2, &all, 1.0 / s.0);
-        for (r, example, _) in scale.iter().filter(|s| slipped(s.0)).filter(scaled_back) {
+        let off =
+            |s: &&(f64, String, usize)| slipped(s.0) && all[s.2].nominal_mm.is_some_and(|n| all[s.2].arc.radius_off(n));
+        for (r, example, _) in scale.iter().filter(off).filter(scaled_back) {
             slips.push(UnitSlip {
                 field: "x_mm,y_mm,z_mm".into(),
                 message: format!(

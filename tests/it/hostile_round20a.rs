@@ -79,6 +79,7 @@ fn an_outlier_in_a_wandering_sweep_is_dropped_as_the_file_without_its_pose() {
         let record = common::read_record(&out);
         let flagged: Vec<_> = record.calibration.outliers.iter().filter(|o| o.dropped).collect();
         assert_eq!(flagged.len(), 1, "{experiment}: {:?}", record.calibration.outliers);
+        assert_eq!(flagged[0].test, axiscal::calibration::procedure::OutlierTest::AxisFit);
         assert_eq!(
             (flagged[0].experiment.as_str(), flagged[0].line),
             (experiment, Some(line as u64))

@@ -72,6 +72,8 @@ mod hostile_round18h;
 mod hostile_round18m;
 mod hostile_round19d;
 mod hostile_round20a;
+mod hostile_round20b;
+mod hostile_round20c;
 mod hostile_round3a;
 mod hostile_round3b;
 mod hostile_round3c;

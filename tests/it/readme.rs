@@ -141,8 +141,18 @@ fn run(dir: &Path, steps: &[Step]) -> Vec<String> {
         .iter()
         .map(|s| format!("echo '{SEPARATOR}'\n(exit $status); {}\nstatus=$?\n", s.command))
         .collect();
-    let bin = Path::new(env!("CARGO_BIN_EXE_axiscal")).parent().unwrap();
-    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    // The binary under test as `axiscal` on the PATH: the optimised one `make test` names
+    // (AXISCAL_TEST_BIN, whatever its file name), else cargo's.
+    let bin = std::env::var_os("AXISCAL_TEST_BIN")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| env!("CARGO_BIN_EXE_axiscal").into());
+    let on_path = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink(std::fs::canonicalize(&bin).unwrap(), on_path.path().join("axiscal")).unwrap();
+    let path = format!(
+        "{}:{}",
+        on_path.path().display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
     let out = std::process::Command::new("bash")
         .arg("-c")
         .arg(format!("exec 2>&1\nstatus=0\n{script}"))

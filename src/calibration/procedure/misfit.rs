@@ -16,7 +16,7 @@
 //! points are in another order than the commands. Only a failed fit is explained: clean data
 //! never reach it.
 
-use super::OutlierPoint;
+use super::{OutlierPoint, OutlierTest};
 use crate::calibration::fit_circle;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
@@ -144,6 +144,7 @@ impl SweepPoints<'_> {
             fence: fence_mm / (noise_mm / 3f64.sqrt()),
             dropped: false,
             approach: None,
+            test: OutlierTest::AxisFit,
         }
     }
 }

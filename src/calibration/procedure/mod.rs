@@ -56,7 +56,7 @@ pub use joint_map::{
 };
 pub use misfit::SweepMisfit;
 pub use options::{AxisEstimator, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Detail};
-pub use outlier_point::OutlierPoint;
+pub use outlier_point::{OutlierPoint, OutlierTest};
 pub use pipeline::{FittedModel, calibrate, calibrate_model};
 pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
 pub use report::{Finding, findings, markdown, read_residuals_csv, residuals_csv};
@@ -73,7 +73,8 @@ pub use sanity::{
 };
 pub use screen::{
     OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, SWEEP_BUMP_FALSE_ALARM, SWEEP_POINTS_FALSE_ALARM, Screening, SweepBump,
-    SweepEnd, WorstSecondTarget, bumps_undone, screen_sweeps, wandering_sweep_bumps, without_poses,
+    SweepEnd, WorstSecondTarget, bumps_undone, screen_sweeps, screen_wandering_sweeps, wandering_sweep_bumps,
+    without_poses,
 };
 pub use second_targets::SecondTargetData;
 pub use uncertainty::{AxisCovariance, SIGNIFICANT_SIGMAS, row_sigmas};

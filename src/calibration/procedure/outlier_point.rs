@@ -36,6 +36,34 @@ pub struct OutlierPoint {
     /// sweep's first move (`screen`'s approach test); `None` for any other point.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub approach: Option<f64>,
+    /// The test that flagged it; absent for the sweep screen's (and the validation poses').
+    #[serde(default, skip_serializing_if = "OutlierTest::is_screen")]
+    pub test: OutlierTest,
+}
+
+/// The test that flagged an [`OutlierPoint`] (`docs/method.md`, "Outliers").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum OutlierTest {
+    /// The sweep screen: the point's residual from the fit of its sweep's other points over
+    /// their noise, against a fence a clean file passes with 99 % probability (the validation
+    /// poses' screen in a diagnosis).
+    #[default]
+    Screen,
+    /// The procedure's axis fit of a sweep whose held joints wander, which failed with it: its
+    /// distance from the path the sweep's other points draw, beyond Tukey's far-out fence of
+    /// their distances (`procedure/misfit.rs`).
+    AxisFit,
+    /// The screen of a sweep whose held joints wander, its points moved to the design pose by
+    /// the calibrated model (`screen_wandering_sweeps`): the sweep screen's test and fence.
+    Moved,
+}
+
+impl OutlierTest {
+    /// Whether it is the sweep screen's ([`OutlierTest::Screen`]).
+    pub fn is_screen(&self) -> bool {
+        *self == OutlierTest::Screen
+    }
 }
 
 /// The set's row of a flagged point.

@@ -1,6 +1,7 @@
 //! The diagnostic report, like the paper's section-4 bullets: what the identified parameters
 //! mean physically, each with its uncertainty and whether the data resolve it (> 3 sigma).
 
+use super::outlier_point::OutlierTest;
 use super::result::{Calibration, PointResidual, RowSigma};
 use super::uncertainty::SIGNIFICANT_SIGMAS;
 use crate::calibration::record::CalibrationRecord;
@@ -379,6 +380,31 @@ fn write_outliers(s: &mut String, cal: &Calibration) {
         );
     }
     s.push('\n');
+    let of_test = |test: OutlierTest| -> Vec<String> {
+        let lines = cal.outliers.iter().filter(|o| o.test == test);
+        lines
+            .map(|o| {
+                o.line
+                    .map_or_else(|| format!("{} step {}", o.experiment, o.step), |l| l.to_string())
+            })
+            .collect()
+    };
+    let moved = of_test(OutlierTest::Moved);
+    if !moved.is_empty() {
+        let _ = writeln!(
+            s,
+            "In a sweep whose held joints wander (as measured its points lie on no one arc or line), tested on its points moved to the design pose by the calibrated model, then calibrated again without them unless kept: lines {}.\n",
+            moved.join(", ")
+        );
+    }
+    let axis_fit = of_test(OutlierTest::AxisFit);
+    if !axis_fit.is_empty() {
+        let _ = writeln!(
+            s,
+            "Named by the axis fit of a sweep whose held joints wander, which failed with them: their distance off the path the sweep's other points draw, over the noise, beyond Tukey's far-out fence of those distances (`Q3 + 3 IQR`), not the screen's: lines {}.\n",
+            axis_fit.join(", ")
+        );
+    }
 }
 
 /// The predicted tool 1-sigma inside the spans and over the workspace, when predicted.

@@ -30,7 +30,7 @@ use rounds::{median, too_many_which};
 pub use second_target::WorstSecondTarget;
 
 use super::experiments::actuator_commands;
-use super::outlier_point::{OutlierPoint, row_of};
+use super::outlier_point::{OutlierPoint, OutlierTest, row_of};
 use super::{AxisExperiment, COMMAND_TOLERANCE, CalibrationOptions, ProcedureError, axis_experiments_with};
 use crate::calibration::arc_model::{ArcModel, MeasurementNoise};
 use crate::calibration::line_ml::{fit_line, predict_line};
@@ -94,20 +94,13 @@ pub fn screen_sweeps(
     let sweeps: Vec<Sweep<'_>> = experiments.iter().map(|e| Sweep::new(e, desc, &controller)).collect();
     let sigma = options.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
     let max_iterations = options.max_iterations;
-    let first: Vec<Option<Vec<Vector3<f64>>>> = sweeps
+    let fits = FirstFits::of(&sweeps, Sweep::holds_still, (sigma, max_iterations));
+    let pooled: Vec<f64> = fits
+        .scales
         .iter()
-        .map(|s| {
-            s.holds_still()
-                .then(|| s.first_residuals(sigma, max_iterations))
-                .flatten()
-        })
+        .flatten()
+        .flat_map(|s| s.kept_z.iter().copied())
         .collect();
-    let scales: Vec<Option<Scale>> = sweeps
-        .iter()
-        .zip(&first)
-        .map(|(s, r)| Scale::of(s, r.as_ref()?, sigma, max_iterations))
-        .collect();
-    let pooled: Vec<f64> = scales.iter().flatten().flat_map(|s| s.kept_z.iter().copied()).collect();
     if pooled.len() < 8 {
         return Ok(Screening {
             outliers: vec![],
@@ -117,12 +110,171 @@ pub fn screen_sweeps(
     }
     // The second targets keep their fence: Tukey's far-out fence of the sweeps' points.
     let second_fence = far_out_fence(&pooled);
-    let tested: usize = scales.iter().flatten().map(|t| t.points).sum();
     let mut outliers = Vec::new();
     let mut peeled = Vec::new();
-    for (((s, r), scale), index) in sweeps.iter().zip(&first).zip(&scales).zip(0..) {
-        let (Some(r), Some(scale)) = (r, scale) else { continue };
-        let Some(fence) = scale.fence(tested) else { continue };
+    for index in 0..sweeps.len() {
+        match fits.test(&sweeps, index, (set, keep), (sigma, max_iterations)) {
+            None => {}
+            Some(SweepTest::TooMany(e)) => return Err(e),
+            Some(SweepTest::Tested(flagged, p)) => {
+                outliers.extend(flagged);
+                peeled.push(p);
+            }
+        }
+    }
+    let first_pass = without_poses(set, &outliers);
+    let second = second_target::outliers(
+        first_pass.as_ref().unwrap_or(set),
+        set,
+        desc,
+        options,
+        (second_fence, keep),
+    )?;
+    outliers.extend(second);
+    let bumps = sweep_bumps(&sweeps, &peeled, set, (sigma, max_iterations));
+    let set = without_poses(set, &outliers);
+    Ok(Screening { outliers, set, bumps })
+}
+
+/// The test of the sweeps of `set` whose held joints wander, which [`screen_sweeps`] does not
+/// test: their points moved to the design pose by the calibrated model of `cal` as the
+/// procedure moves them (`held.rs`, `p' = W_L(q_design) W_L(q_recorded)^-1 p`), then tested as
+/// [`screen_sweeps`] tests a still sweep's (the fence's family-wise rate over these sweeps'
+/// points, their bumps' over these sweeps' blocks). A gross error moves its point as much once
+/// moved; the wander the model leaves unexplained moves every point of the sweep a little, and
+/// the fence is the sweep's own noise. A sweep with more points beyond the fence than a sweep
+/// may lose is left to the procedure's misfit warning (the model, not its points, may be wrong
+/// there). The bumps' shift is in the design pose's frame, which the wander turns from the
+/// instrument's by the held joints' wander only (a tenth of a degree turns a 2 mm shift by
+/// under 4 um). `set` of the screening is the rows kept: `set` less the poses of the points
+/// dropped (none with `keep`).
+pub fn screen_wandering_sweeps(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    cal: &super::Calibration,
+    keep: bool,
+) -> Screening {
+    let none = Screening {
+        outliers: vec![],
+        set: None,
+        bumps: vec![],
+    };
+    let Ok((experiments, _)) = axis_experiments_with(set, desc, options.held_tolerance) else {
+        return none;
+    };
+    let controller = Controller::from_description(desc);
+    let corrector = super::held::Corrector {
+        model: &cal.robot,
+        controller: &controller,
+        desc,
+        reference_cmd: &cal.reference_cmd,
+    };
+    let sigma = options.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
+    let sweeps: Vec<Sweep<'_>> = experiments
+        .iter()
+        .map(|e| {
+            let mut s = Sweep::new(e, desc, &controller);
+            s.points = match s.holds_still() {
+                true => vec![],
+                false => corrector.corrected(e, 0).unwrap_or_default(),
+            };
+            s
+        })
+        .collect();
+    let fits = FirstFits::of(&sweeps, |s| !s.points.is_empty(), (sigma, options.max_iterations));
+    let mut outliers = Vec::new();
+    let mut peeled = Vec::new();
+    for (index, s) in sweeps.iter().enumerate() {
+        match fits.test(&sweeps, index, (set, keep), (sigma, options.max_iterations)) {
+            Some(SweepTest::Tested(flagged, p)) => {
+                outliers.extend(flagged.into_iter().map(|o| OutlierPoint {
+                    test: OutlierTest::Moved,
+                    ..o
+                }));
+                peeled.push(p);
+            }
+            // Untested, or the model rather than the points: the bumps read every point.
+            Some(SweepTest::TooMany(_)) | None => {
+                let Some(last) = fits.first[index].clone() else {
+                    continue;
+                };
+                peeled.push(Peeled {
+                    index,
+                    kept: all(s),
+                    last,
+                });
+            }
+        }
+    }
+    let bumps = sweep_bumps(&sweeps, &peeled, set, (sigma, options.max_iterations));
+    let set = without_poses(set, &outliers);
+    Screening { outliers, set, bumps }
+}
+
+/// The bumps of [`screen_wandering_sweeps`] (its outliers not dropped).
+pub fn wandering_sweep_bumps(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    cal: &super::Calibration,
+) -> Vec<SweepBump> {
+    screen_wandering_sweeps(set, desc, options, cal, true).bumps
+}
+
+/// The first fits of the sweeps a screen tests: each one's residuals from the fit of every
+/// point ([`Sweep::first_residuals`]) and its noise ([`Scale`]), `None` for a sweep not tested.
+struct FirstFits {
+    first: Vec<Option<Vec<Vector3<f64>>>>,
+    scales: Vec<Option<Scale>>,
+    /// The points of the sweeps with a scale: the family the fence's false-alarm rate covers.
+    tested: usize,
+}
+
+/// What the test of one sweep found ([`FirstFits::test`]).
+enum SweepTest {
+    /// The points flagged and the sweep's points kept with the residuals of their fit.
+    Tested(Vec<OutlierPoint>, Peeled),
+    /// More points beyond the fence than a sweep may lose: the error naming them.
+    TooMany(ProcedureError),
+}
+
+impl FirstFits {
+    /// The first fits of the `sweeps` that pass `tested`.
+    fn of<'a>(
+        sweeps: &[Sweep<'a>],
+        tested: impl Fn(&Sweep<'a>) -> bool,
+        (sigma, max_iterations): (f64, usize),
+    ) -> Self {
+        let first: Vec<Option<Vec<Vector3<f64>>>> = sweeps
+            .iter()
+            .map(|s| tested(s).then(|| s.first_residuals(sigma, max_iterations)).flatten())
+            .collect();
+        let scales: Vec<Option<Scale>> = sweeps
+            .iter()
+            .zip(&first)
+            .map(|(s, r)| Scale::of(s, r.as_ref()?, sigma, max_iterations))
+            .collect();
+        let tested = scales.iter().flatten().map(|t| t.points).sum();
+        FirstFits { first, scales, tested }
+    }
+
+    /// The test of sweep `sweeps[index]`: its points beyond the fence set aside worst first
+    /// ([`Sweep::peel`]), flagged as dropped unless `keep`, their lines read in `set`; `None`
+    /// for a sweep untested or with too few degrees of freedom to test.
+    fn test(
+        &self,
+        sweeps: &[Sweep<'_>],
+        index: usize,
+        (set, keep): (&MeasurementSet, bool),
+        (sigma, max_iterations): (f64, usize),
+    ) -> Option<SweepTest> {
+        let (s, r, scale) = (
+            &sweeps[index],
+            self.first[index].as_ref()?,
+            self.scales[index].as_ref()?,
+        );
+        let fence = scale.fence(self.tested)?;
         let z = |v: &[Vector3<f64>]| -> Vec<f64> { v.iter().enumerate().map(|(i, r)| scale.z(i, r)).collect() };
         let led = std::cell::Cell::new(false);
         let lead = |kept: &[usize], e: &[Vector3<f64>], bar: f64| {
@@ -145,87 +297,27 @@ pub fn screen_sweeps(
                 let o = s.outlier(i, &last[i], scale.z(i, &last[i]), fence, false, set);
                 (i, o.step, o.line)
             };
-            return Err(ProcedureError::TooManyOutliers {
+            return Some(SweepTest::TooMany(ProcedureError::TooManyOutliers {
                 experiment: s.experiment.name.clone(),
                 flagged: off.len(),
                 points: s.points.len(),
                 fence,
                 which: too_many_which(&off.into_iter().map(at).collect::<Vec<_>>()),
-            });
+            }));
         }
-        outliers.extend(flagged.into_iter().map(|i| {
-            let mut o = s.outlier(i, &last[i], scale.z(i, &last[i]), fence, !keep, set);
-            o.approach = match first_led && i == 0 {
-                true => s.lead(&last[0]),
-                false => s.approach(i, &last[i], &|r| scale.z(i, r), fence),
-            };
-            o
-        }));
-        peeled.push(Peeled { index, kept, last });
-    }
-    let first_pass = without_poses(set, &outliers);
-    let second = second_target::outliers(
-        first_pass.as_ref().unwrap_or(set),
-        set,
-        desc,
-        options,
-        (second_fence, keep),
-    )?;
-    outliers.extend(second);
-    let bumps = sweep_bumps(&sweeps, &peeled, set, (sigma, max_iterations));
-    let set = without_poses(set, &outliers);
-    Ok(Screening { outliers, set, bumps })
-}
-
-/// The bumps ([`SweepBump`]) of the sweeps of `set` whose held joints wander, which
-/// [`screen_sweeps`] does not test: their points moved to the design pose by the calibrated
-/// model of `cal` as the procedure moves them (`held.rs`, `p' = W_L(q_design) W_L(q_recorded)^-1
-/// p`), then every point tested as [`screen_sweeps`] tests a still sweep's kept points, the
-/// family-wise rate over these sweeps' blocks. The shift is in the design pose's frame, which
-/// the wander turns from the instrument's by the held joints' wander only (a tenth of a degree
-/// turns a 2 mm shift by under 4 um).
-pub fn wandering_sweep_bumps(
-    set: &MeasurementSet,
-    desc: &RobotDescription,
-    options: &CalibrationOptions,
-    cal: &super::Calibration,
-) -> Vec<SweepBump> {
-    let Ok((experiments, _)) = axis_experiments_with(set, desc, options.held_tolerance) else {
-        return vec![];
-    };
-    let controller = Controller::from_description(desc);
-    let corrector = super::held::Corrector {
-        model: &cal.robot,
-        controller: &controller,
-        desc,
-        reference_cmd: &cal.reference_cmd,
-    };
-    let sigma = options.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
-    let sweeps: Vec<Sweep<'_>> = experiments
-        .iter()
-        .map(|e| {
-            let mut s = Sweep::new(e, desc, &controller);
-            s.points = match s.holds_still() {
-                true => vec![],
-                false => corrector.corrected(e, 0).unwrap_or_default(),
-            };
-            s
-        })
-        .collect();
-    let peeled: Vec<Peeled> = sweeps
-        .iter()
-        .zip(0..)
-        .filter(|(s, _)| !s.points.is_empty())
-        .filter_map(|(s, index)| {
-            let last = s.residuals(&all(s), sigma, options.max_iterations).ok()?;
-            Some(Peeled {
-                index,
-                kept: all(s),
-                last,
+        let outliers = flagged
+            .into_iter()
+            .map(|i| {
+                let mut o = s.outlier(i, &last[i], scale.z(i, &last[i]), fence, !keep, set);
+                o.approach = match first_led && i == 0 {
+                    true => s.lead(&last[0]),
+                    false => s.approach(i, &last[i], &|r| scale.z(i, r), fence),
+                };
+                o
             })
-        })
-        .collect();
-    sweep_bumps(&sweeps, &peeled, set, (sigma, options.max_iterations))
+            .collect();
+        Some(SweepTest::Tested(outliers, Peeled { index, kept, last }))
+    }
 }
 
 /// A tested sweep's points kept by the outlier test and every point's residual from their fit.
@@ -700,6 +792,7 @@ impl<'a> Sweep<'a> {
             fence,
             dropped,
             approach: None,
+            test: OutlierTest::Screen,
         };
         o.line = row_of(set, &o).and_then(|row| set.line_of(row));
         o

@@ -5,8 +5,9 @@
 //! Each revolute experiment's target 0 turns on a circle whose radius and centre the
 //! description gives at the experiment's commands. The radius is the frame's own; the centres
 //! are compared by their distances to the other experiments' centres, which no instrument
-//! frame changes. An experiment whose radius is beyond [`SPREAD_WARNING`] of the description's,
-//! or whose centre's distance to every other experiment's centre is off the description's by
+//! frame changes. An experiment whose radius is beyond [`SPREAD_WARNING`] of the description's
+//! and beyond three of its standard errors (`Arc::radius_off`: a sweep whose held joints wander
+//! scatters its radius), or whose centre's distance to every other experiment's centre is off the description's by
 //! more than [`SPREAD_WARNING`]` - 1` (a quarter) of the robot's size (the largest distance
 //! between the described centres) while the others agree among themselves, is out of place: a
 //! robot within its drawing's tolerances is off by millimetres, a column in centimetres by
@@ -47,11 +48,10 @@ fn centre_mismatch_mm(centre: &Point3<f64>, i: usize, arcs: &[ExperimentArc]) ->
 }
 
 /// Whether experiment `i`'s arc `arc` (as measured or converted) is in place: its radius
-/// within [`SPREAD_WARNING`] of the description's and its centre within `tolerance_mm`.
+/// within [`SPREAD_WARNING`] of the description's or of its noise (`Arc::radius_off`) and its
+/// centre within `tolerance_mm`.
 fn in_place(arc: &super::Arc, i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> bool {
-    let radius = arcs[i]
-        .nominal_mm
-        .is_none_or(|n| (arc.radius / n).ln().abs() <= SPREAD_WARNING.ln());
+    let radius = arcs[i].nominal_mm.is_none_or(|n| !arc.radius_off(n));
     radius && centre_mismatch_mm(&arc.centre, i, arcs).is_none_or(|d| d <= tolerance_mm)
 }
 

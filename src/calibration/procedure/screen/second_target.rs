@@ -4,7 +4,7 @@
 //! A reading swapped with another step's, or off, would shift the coupling by tens of its
 //! sigmas, or fail its fit (the fractional form does not converge through it).
 
-use super::super::outlier_point::{OutlierPoint, row_of};
+use super::super::outlier_point::{OutlierPoint, OutlierTest, row_of};
 use super::super::{CalibrationOptions, Detail, ProcedureError, SecondTargetData, calibrate_model};
 use super::rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, median, too_many_which, without_poses};
 use crate::measurement::MeasurementSet;
@@ -71,6 +71,7 @@ pub(super) fn outliers(
                         fence,
                         dropped: !keep,
                         approach: None,
+                        test: OutlierTest::Screen,
                     };
                     o.line = row_of(original, &o).and_then(|row| original.line_of(row));
                     o
