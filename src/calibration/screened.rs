@@ -42,9 +42,10 @@ pub struct ScreenedCalibration {
     /// The calibration of the rows the screens kept, with the points they flagged
     /// ([`Calibration::outliers`]): the sweep screen's, then those the procedure's failed fit
     /// named off their sweep's path in a sweep the screen could not test (module docs;
-    /// [`crate::calibration::procedure::OutlierTest::AxisFit`]), then those the screen of such sweeps' points moved by the
-    /// model flagged ([`crate::calibration::procedure::OutlierTest::Moved`]: dropped with their poses unless the outliers are
-    /// kept or the calibration without them failed).
+    /// [`OutlierTest::AxisFit`](crate::calibration::procedure::OutlierTest::AxisFit)), then
+    /// those the screen of such sweeps' points moved by the model flagged
+    /// ([`OutlierTest::Moved`](crate::calibration::procedure::OutlierTest::Moved): dropped with
+    /// their poses unless the outliers are kept or the calibration without them failed).
     pub cal: Calibration,
     /// The rows the screens kept; `None` when they dropped none.
     pub screened: Option<MeasurementSet>,
