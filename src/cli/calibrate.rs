@@ -26,8 +26,8 @@ use axiscal::calibration::screened::{BumpsUndone, CalibrationFailed, ScreenFailu
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccuracy, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{
-    Candidate, Diagnosis, OwnPoses, OwnPosesCause, OwnPosesMiss, OwnPosesSlips, ToolMoveBeyond, carried_candidates,
-    test_own_validation_poses,
+    Candidate, Diagnosis, OwnPoses, OwnPosesCause, OwnPosesMiss, OwnPosesSlips, SweepSearch, ToolMoveBeyond,
+    carried_candidates, test_own_validation_poses,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{Measurement, MeasurementSet, format_f64};
@@ -239,12 +239,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             let (judged_cal, judged) = found.bumps_undone.as_ref().map_or((cal, kept), |u| (&u.cal, &u.set));
             print_scale_doubts((judged_cal, &desc, judged.rows()), &texts.implausible, &args.data);
             print_moved_sweeps(judged_cal, &desc, judged, &args.data);
-            if !args.refine
-                && let Some(miss) =
-                    misses_own_validation_poses(cal, (&desc, kept, &args.data), args.repeatability_rad.as_deref())
-            {
-                eprintln!("warning: {miss}");
-            }
+            print_own_poses_miss(cal, (&desc, kept), &args, &texts.implausible);
         }
     }
     say!(printer, "{}", deviation_line(&texts.deviation));
@@ -862,17 +857,51 @@ fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &Measurem
     }
 }
 
+/// The warning of a miss of the file's own validation poses by `cal` (calibrated from `kept`;
+/// [`misses_own_validation_poses`]; not with `--refine`, which fits them), seeking a sweep's
+/// cause unless the checks `found` a slip of the coordinates ([`sweep_search`]).
+fn print_own_poses_miss(
+    cal: &Calibration,
+    (desc, kept): (&RobotDescription, &MeasurementSet),
+    args: &Args,
+    found: &[Implausible],
+) {
+    if args.refine {
+        return;
+    }
+    let stated = args.repeatability_rad.as_deref();
+    if let Some(miss) = misses_own_validation_poses(cal, (desc, kept, &args.data), (stated, sweep_search(found))) {
+        eprintln!("warning: {miss}");
+    }
+}
+
+/// Whether the test of the file's own validation poses seeks one sweep's cause of a miss: not
+/// where the checks named a slip of the instrument's coordinates (an axis or all three read
+/// scaled, the robot's size or handedness off), which moves every sweep and the poses alike.
+fn sweep_search(found: &[Implausible]) -> SweepSearch {
+    let coordinates = |f: &Implausible| match f {
+        Implausible::Size { .. } | Implausible::Mirrored { .. } => true,
+        Implausible::Scaled(slip) => matches!(slip, ScaleSlip::Column(_) | ScaleSlip::Coordinates { .. }),
+        _ => false,
+    };
+    match found.iter().any(coordinates) {
+        true => SweepSearch::Skipped,
+        false => SweepSearch::Run,
+    }
+}
+
 /// The axis-experiment calibration tested on the file's own validation poses, which it did not
-/// fit ([`test_own_validation_poses`]), in words: a sweep's cause that makes them pass alone,
-/// else the miss with what the slip search `validate` runs names; the paper's estimator's
-/// untested miss as a note. `None` without validation poses or when they are consistent.
+/// fit ([`test_own_validation_poses`], seeking a sweep's cause as `search` says), in words: a
+/// sweep's cause that makes them pass alone, else the miss with what the slip search `validate`
+/// runs names; the paper's estimator's untested miss as a note. `None` without validation poses
+/// or when they are consistent.
 pub(super) fn misses_own_validation_poses(
     cal: &Calibration,
     (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
-    stated_repeatability: Option<&[f64]>,
+    (stated_repeatability, search): (Option<&[f64]>, SweepSearch),
 ) -> Option<String> {
     let place = data.display().to_string();
-    let miss = match test_own_validation_poses(cal, desc, set)? {
+    let miss = match test_own_validation_poses(cal, desc, set, search)? {
         OwnPoses::NotTested(fit) => {
             eprintln!(
                 "note: {place}: the calibrated model misses this file's own {} validation poses (not fitted) by {:.3} mm RMS{}; \

@@ -11,7 +11,7 @@ use axiscal::calibration::procedure::{
     Calibration, CalibrationOptions, ProcedureError, calibrate, implausible, screen_sweeps,
 };
 use axiscal::diagnosis::{
-    AXES_PLOT_FILES, DiagnosisError, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, axes_markdown,
+    AXES_PLOT_FILES, DiagnosisError, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, SweepSearch, axes_markdown,
     diagnose_axes_with, diagnose_with, estimated_noise, free_pose_misses, free_poses_only, markdown, own_sweep_misses,
     validation_outliers, validation_poses, without_outliers, write_axes_plots, write_plots,
 };
@@ -197,7 +197,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
 fn own_poses_miss(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet, data: &Path) -> Option<String> {
     // A held offset the miss names starts with the file and the sweep's line already.
     let file = data.display().to_string();
-    super::calibrate::misses_own_validation_poses(cal, (desc, set, data), None).map(|miss| {
+    super::calibrate::misses_own_validation_poses(cal, (desc, set, data), (None, SweepSearch::Run)).map(|miss| {
         match miss.starts_with(&format!("{file}:")) {
             true => miss,
             false => format!("{file}: {miss}"),

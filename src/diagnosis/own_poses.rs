@@ -136,10 +136,29 @@ pub enum OwnPoses {
     Misses(Box<OwnPosesMiss>),
 }
 
+/// Whether [`test_own_validation_poses`] seeks a sweep's cause of a miss
+/// ([`sweep_cause_of_misses`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SweepSearch {
+    /// It does.
+    Run,
+    /// It does not: a slip of the instrument's coordinates was named (an axis or all three
+    /// read scaled, the robot's size or handedness off), which moves every sweep and the poses
+    /// alike, so that no one sweep's cause is to be sought (each hypothesis the search tries
+    /// costs a calibration per trial, half a minute on a paper campaign).
+    Skipped,
+}
+
 /// The axis-experiment calibration `cal` of `set` tested on the file's own validation poses
-/// (module docs); `None` without validation poses, when they cannot be validated, or when they
-/// are consistent with the prediction.
-pub fn test_own_validation_poses(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet) -> Option<OwnPoses> {
+/// (module docs), seeking a sweep's cause of a miss as `search` says; `None` without
+/// validation poses, when they cannot be validated, or when they are consistent with the
+/// prediction.
+pub fn test_own_validation_poses(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    search: SweepSearch,
+) -> Option<OwnPoses> {
     let (poses_set, n) = own_validation_poses(set, desc)?;
     let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
     // A tool frame left nominal is off by an error no covariance holds: estimated from the
@@ -169,7 +188,7 @@ pub fn test_own_validation_poses(cal: &Calibration, desc: &RobotDescription, set
     // The slip search runs at most once: the sweep's guard and the answer share it.
     let named = OnceCell::new();
     let slips_named = || named.get_or_init(|| explained_validation_misses(&poses_set, cal, desc, &v));
-    let sweep = exceeds
+    let sweep = (exceeds && search == SweepSearch::Run)
         .then(|| sweep_cause_of_misses(cal, desc, set, &poses_set))
         .flatten()
         .filter(|s| said_beside_slips(s, fit.tool_fitted, || slips_named().is_empty()));
