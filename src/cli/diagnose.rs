@@ -18,6 +18,7 @@ use axiscal::diagnosis::{
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal diagnose`.
@@ -105,11 +106,12 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     if let Some(cal) = cal.as_ref().filter(|_| !args.checks.skip_unit_check) {
         refuse_data_slips(&args, &set, cal, &desc)?;
     }
-    let own_miss = cal
-        .as_ref()
-        .and_then(|cal| own_poses_miss(cal, &desc, &set, &args.data));
-    let set = without_sweep_outliers(&args, set, &desc)?;
-    let (noise_mm, noise_source, noise_dof) = noise(&args, &set, &desc, printer)?;
+    // The rows as read: the test of the file's own validation poses reads them, once the
+    // diagnosis has said whether it needs it.
+    let read = set;
+    let screened = without_sweep_outliers(&args, &read, &desc)?;
+    let set = screened.as_ref().unwrap_or(&read);
+    let (noise_mm, noise_source, noise_dof) = noise(&args, set, &desc, printer)?;
     let options = DiagnosisOptions {
         noise_rms_3d_mm: noise_mm,
         noise_trials: args.noise_trials,
@@ -129,14 +131,14 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let source = args.data.display().to_string();
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
-        return run_axes(&args, &desc, &set, &options, &outputs, noise_source, printer);
+        return run_axes(&args, &desc, set, &options, &outputs, noise_source, printer);
     }
     let outliers =
-        validation_outliers(&set, &desc, &options, args.keep_outliers).map_err(|e| failed(&args, &set, &desc, e))?;
+        validation_outliers(set, &desc, &options, args.keep_outliers).map_err(|e| failed(&args, set, &desc, e))?;
     checks::print_outliers(&outliers, &args.data, "diagnosed");
     let set = match args.keep_outliers || outliers.is_empty() {
-        true => set,
-        false => without_outliers(&set, &outliers),
+        true => Cow::Borrowed(set),
+        false => Cow::Owned(without_outliers(set, &outliers)),
     };
     let progress = super::progress::Progress::stage("diagnosing", printer);
     let mut d = diagnose_with(&set, &desc, &options, &progress).map_err(|e| failed(&args, &set, &desc, e))?;
@@ -146,7 +148,12 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     if let Some(warning) = d.tool_targets.as_ref().and_then(|t| t.warning()) {
         eprintln!("warning: {warning}");
     }
-    print_own_miss(own_miss, &d.outcome.effect);
+    if d.outcome.effect == "none" {
+        print_own_miss(
+            cal.as_ref()
+                .and_then(|cal| own_poses_miss(cal, &desc, &read, &args.data)),
+        );
+    }
     let report = Report {
         out: &args.out,
         json: json_file::to_string(Schema::DIAGNOSIS, &d)?,
@@ -205,11 +212,12 @@ fn own_poses_miss(cal: &Calibration, desc: &RobotDescription, set: &MeasurementS
     })
 }
 
-/// Prints `miss` ([`own_poses_miss`]) as a warning when the diagnosis's `effect` is `none`:
-/// its refit on the training poses takes in what every validation pose shares (one command
-/// column offset in all of them), and the gap it tests is then gone.
-fn print_own_miss(miss: Option<String>, effect: &str) {
-    if let Some(miss) = miss.filter(|_| effect == "none") {
+/// Prints `miss` ([`own_poses_miss`]) as a warning, where the diagnosis's effect is `none` (its
+/// caller tests it first: the test seeks a sweep's cause, a calibration per trial): its refit on
+/// the training poses takes in what every validation pose shares (one command column offset in
+/// all of them), and the gap it tests is then gone.
+fn print_own_miss(miss: Option<String>) {
+    if let Some(miss) = miss {
         eprintln!(
             "warning: {miss}; no effect the diagnosis models explains it (it reads `none`: its refit on the training \
              poses takes in what all validation poses share)"
@@ -312,20 +320,24 @@ fn failed(args: &Args, set: &MeasurementSet, desc: &RobotDescription, e: Diagnos
 }
 
 /// `set` without the sweep points the outlier test flags ([`screen_sweeps`], as `calibrate`
-/// tests them; kept with `--keep-outliers`), each said on stderr.
-fn without_sweep_outliers(args: &Args, set: MeasurementSet, desc: &RobotDescription) -> Result<MeasurementSet> {
-    if free_poses_only(&set) {
-        return Ok(set);
+/// tests them; kept with `--keep-outliers`), each said on stderr; `None` where it drops none.
+fn without_sweep_outliers(
+    args: &Args,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+) -> Result<Option<MeasurementSet>> {
+    if free_poses_only(set) {
+        return Ok(None);
     }
     let options = CalibrationOptions {
         noise_rms_3d_mm: args.noise_mm.unwrap_or(CalibrationOptions::default().noise_rms_3d_mm),
         ..CalibrationOptions::default()
     };
-    let screening = screen_sweeps(&set, desc, &options, args.keep_outliers)
-        .map_err(|e| failed(args, &set, desc, DiagnosisError::Calibration(e)))?;
+    let screening = screen_sweeps(set, desc, &options, args.keep_outliers)
+        .map_err(|e| failed(args, set, desc, DiagnosisError::Calibration(e)))?;
     super::checks::print_outliers(&screening.outliers, &args.data, "diagnosed");
     super::checks::print_sweep_bumps(&screening.bumps, &args.data);
-    Ok(screening.set.unwrap_or(set))
+    Ok(screening.set)
 }
 
 /// `set`, or, when the independent-axis procedure cannot use its sweeps (the correction for
