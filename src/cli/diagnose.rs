@@ -112,22 +112,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let screened = without_sweep_outliers(&args, &read, &desc)?;
     let set = screened.as_ref().unwrap_or(&read);
     let (noise_mm, noise_source, noise_dof) = noise(&args, set, &desc, printer)?;
-    let options = DiagnosisOptions {
-        noise_rms_3d_mm: noise_mm,
-        noise_trials: args.noise_trials,
-        noise_draws: args.noise_draws,
-        false_alarm: args.false_alarm,
-        refit: match args.refit {
-            Refit::Identified => RefitScope::Identified,
-            Refit::Geometry => RefitScope::Geometry,
-        },
-        seed: args.seed,
-        axis_replicas: args.axis_replicas,
-        refine_tool_targets: !args.nominal_tool_targets,
-        noise_dof,
-        max_poses: args.max_poses,
-        ..DiagnosisOptions::default()
-    };
+    let options = diagnosis_options(&args, noise_mm, noise_dof);
     let source = args.data.display().to_string();
     // Fewer than 4 validation poses cannot be split into training and held-out halves of 2+.
     if validation_poses(set.rows(), &desc).len() < 4 {
@@ -197,6 +182,27 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     say!(printer, "wrote {written}");
     printer.emit_json(&args.out.join("diagnosis.json"))?;
     record(&args, &desc, &set, noise_mm, &format!("{headline}. {}", d.verdict))
+}
+
+/// The diagnosis's options from the arguments, at noise `noise_mm` (3-D RMS) estimated with
+/// `noise_dof` degrees of freedom (`None` when given).
+fn diagnosis_options(args: &Args, noise_mm: f64, noise_dof: Option<f64>) -> DiagnosisOptions {
+    DiagnosisOptions {
+        noise_rms_3d_mm: noise_mm,
+        noise_trials: args.noise_trials,
+        noise_draws: args.noise_draws,
+        false_alarm: args.false_alarm,
+        refit: match args.refit {
+            Refit::Identified => RefitScope::Identified,
+            Refit::Geometry => RefitScope::Geometry,
+        },
+        seed: args.seed,
+        axis_replicas: args.axis_replicas,
+        refine_tool_targets: !args.nominal_tool_targets,
+        noise_dof,
+        max_poses: args.max_poses,
+        ..DiagnosisOptions::default()
+    }
 }
 
 /// What `calibrate` warns of the file's own validation poses (`set`, read from `data`) against
