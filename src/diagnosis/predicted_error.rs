@@ -195,8 +195,14 @@ impl<'a> PredictionError<'a> {
     }
 
     /// The error factors of the tool pose at internal commands `cmd`, whose calibrated joint
-    /// values on `phi` are `q`.
-    pub(super) fn at(&self, phi: &PhiModel, cmd: &[f64], q: &[f64]) -> Result<PoseError<'_>, DiagnosisError> {
+    /// values on `phi` are `q`; `known` the drawn models' tool frames there where they were
+    /// already computed ([`Curvature::tool_frames`] at the same commands), else computed.
+    pub(super) fn at(
+        &self,
+        phi: &PhiModel,
+        (cmd, q): (&[f64], &[f64]),
+        known: Option<&DrawnFrames>,
+    ) -> Result<PoseError<'_>, DiagnosisError> {
         let in_mm = |mut m: DMatrix<f64>| {
             m.rows_mut(0, 3).scale_mut(1e3);
             m
@@ -215,9 +221,12 @@ impl<'a> PredictionError<'a> {
         let drawn = match &self.curvature {
             Some(curvature) => Some((
                 curvature,
-                curvature
-                    .tool_frames(self.robot, self.controller, cmd)
-                    .map_err(|e| DiagnosisError::Model { message: e.to_string() })?,
+                match known {
+                    Some(frames) => frames.clone(),
+                    None => curvature
+                        .tool_frames(self.robot, self.controller, cmd)
+                        .map_err(|e| DiagnosisError::Model { message: e.to_string() })?,
+                },
             )),
             None => None,
         };
@@ -251,6 +260,11 @@ impl PoseError<'_> {
         self.calibration = columns;
         self.free = Self::FREE_TOOL;
         self
+    }
+
+    /// The drawn models' tool frames at this pose (none without the remainder).
+    pub(super) fn into_drawn_frames(self) -> Option<DrawnFrames> {
+        self.drawn.map(|(_, frames)| frames)
     }
 
     /// The factors of the positions of the tool targets at `targets_m` (tool frame), stacked

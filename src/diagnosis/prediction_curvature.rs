@@ -118,6 +118,7 @@ impl Curvature {
 }
 
 /// The tool frames of the calibrated model and of the drawn ones at one pose.
+#[derive(Clone)]
 pub(super) struct DrawnFrames {
     /// The calibrated model's.
     pub calibrated: Isometry3<f64>,

@@ -29,11 +29,11 @@
 use super::DiagnosisError;
 use super::noise::{CleanCampaign, calibrated_joint_values};
 use super::predicted_error::{BlockFactors, PoseError, PredictionError};
-use super::prediction_curvature::Curvature;
+use super::prediction_curvature::{Curvature, DrawnFrames};
 use crate::calibration::procedure::Calibration;
 use crate::kinematics::{PhiModel, rigid_fit};
 use crate::measurement::{Measurement, MeasurementSet};
-use crate::numerics::stats::{SharedErrorChiSquare, chi_square_cdf, f_cdf};
+use crate::numerics::stats::{SharedErrorChiSquare, SharedErrorFit, chi_square_cdf, f_cdf};
 use crate::plan::TOOL_EXPERIMENT;
 use crate::robot::{Controller, RobotDescription, commands_to_internal};
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Point3, Vector3};
@@ -472,8 +472,14 @@ fn validate_with(
         })
         .collect();
     let controller = Controller::from_description(desc);
-    let error = prediction_error(set, (cal, desc, &controller), &residuals, options.noise_rms_3d_mm)?;
-    let free = free_poses(set, (cal, desc, &controller), &residuals, &error, (options, free_tool))?;
+    let (error, frames) = prediction_error(set, (cal, desc, &controller), &residuals, options.noise_rms_3d_mm)?;
+    let free = free_poses(
+        set,
+        (cal, desc, &controller),
+        &residuals,
+        (&error, &frames),
+        (options, free_tool),
+    )?;
     let axis_steps = axis_statistic(set, desc, &clean, &residuals, &error, options)?;
     let summary = |kind, statistic| position_summary(&residuals, kind, statistic, options);
     let (validation, tool, axis) = (
@@ -482,7 +488,7 @@ fn validate_with(
         summary(PointKind::Axis, &axis_steps),
     );
     let verdict = verdict(&validation, &tool, &axis, free.orientation.as_ref());
-    let fitted = free.validation.chi.free_estimate();
+    let fitted = free.validation.free_estimate();
     let v = Validation {
         noise_rms_3d_mm: options.noise_rms_3d_mm,
         noise_source: options.noise_source.clone(),
@@ -534,22 +540,55 @@ impl FreeStatistic {
         self.repeatability_variance += jitter.norm_squared();
     }
 
+    /// The sums' statistic, factorised once: none without a block.
+    fn finish(self) -> FinishedStatistic {
+        FinishedStatistic {
+            fit: (!self.chi.is_empty()).then(|| self.chi.fit()),
+            noise_alone: self.chi.noise_alone(),
+            shared_variance: self.chi.shared_variance(),
+            repeatability_variance: self.repeatability_variance,
+            with_calibration: self.with_calibration,
+        }
+    }
+}
+
+/// A [`FreeStatistic`] with every block added: its fit and sums.
+struct FinishedStatistic {
+    /// The statistic with the calibration's error; `None` without a block.
+    fit: Option<SharedErrorFit>,
+    noise_alone: f64,
+    shared_variance: f64,
+    repeatability_variance: f64,
+    with_calibration: bool,
+}
+
+impl FinishedStatistic {
     /// The prediction per point (or rotation) of `n` with the noise part `noise`.
     fn prediction(&self, noise: f64, n: usize, scale: f64) -> Prediction {
         let rms = |variance: f64| (variance / n as f64).sqrt() * scale;
         Prediction::new(
             noise,
             Some(rms(self.repeatability_variance)),
-            self.with_calibration.then(|| rms(self.chi.shared_variance())),
+            self.with_calibration.then(|| rms(self.shared_variance)),
         )
     }
 
     /// The tests with and without the calibration's error, `estimated` target positions
-    /// (3 dof each) fitted to the same residuals.
+    /// (3 dof each) fitted to the same residuals; none without a block.
     fn tests(&self, options: &ValidationOptions, estimated: usize) -> (Option<ChiSquare>, Option<ChiSquare>) {
-        let dof = self.chi.dof().saturating_sub(3 * estimated);
+        let Some(fit) = &self.fit else {
+            return (None, None);
+        };
+        let dof = fit.dof.saturating_sub(3 * estimated);
         let test = |value| ChiSquare::new(value, dof, options.false_alarm, options.noise_dof);
-        (test(self.chi.value()), test(self.chi.noise_alone()))
+        (test(fit.value), test(self.noise_alone))
+    }
+
+    /// The free components' estimate (empty without a block or free components).
+    fn free_estimate(&self) -> DVector<f64> {
+        self.fit
+            .as_ref()
+            .map_or_else(|| DVector::zeros(0), SharedErrorFit::free_estimate)
     }
 }
 
@@ -558,7 +597,7 @@ impl FreeStatistic {
 fn position_summary(
     residuals: &[ValidationResidual],
     kind: PointKind,
-    statistic: &FreeStatistic,
+    statistic: &FinishedStatistic,
     options: &ValidationOptions,
 ) -> Option<PositionSummary> {
     let of_kind: Vec<&ValidationResidual> = residuals.iter().filter(|r| r.kind == kind).collect();
@@ -610,7 +649,7 @@ fn axis_statistic(
     residuals: &[ValidationResidual],
     error: &PredictionError,
     options: &ValidationOptions,
-) -> Result<FreeStatistic, DiagnosisError> {
+) -> Result<FinishedStatistic, DiagnosisError> {
     let repeatability = error.repeatability();
     let tool_targets = desc.tool_targets_m();
     let mut experiments: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
@@ -650,7 +689,7 @@ fn axis_statistic(
         let noise = DMatrix::identity(3 * rows.len(), 3 * rows.len()) * variance_coord_mm2;
         statistic.add(&stacked_residuals(residuals, rows), noise, &factors);
     }
-    Ok(statistic)
+    Ok(statistic.finish())
 }
 
 /// The residuals (measured minus predicted) of `rows`, stacked \[mm\].
@@ -687,8 +726,8 @@ fn measured_tool_frame(
 /// What [`free_poses`] finds: the statistics of the validation and tool points and of the
 /// orientations.
 struct FreePoses {
-    validation: FreeStatistic,
-    tool: FreeStatistic,
+    validation: FinishedStatistic,
+    tool: FinishedStatistic,
     orientation: Option<OrientationSummary>,
 }
 
@@ -731,7 +770,7 @@ fn free_poses(
     set: &MeasurementSet,
     (cal, desc, controller): (&Calibration, &RobotDescription, &Controller),
     residuals: &[ValidationResidual],
-    error: &PredictionError,
+    (error, frames): (&PredictionError, &SampledFrames),
     (options, free_tool): (&ValidationOptions, bool),
 ) -> Result<FreePoses, DiagnosisError> {
     let tool_targets = desc.tool_targets_m();
@@ -744,7 +783,7 @@ fn free_poses(
         FreeStatistic::new(error, free),
     );
     let (mut angles_mrad, mut noise_sq) = (Vec::new(), 0.0);
-    let context = PoseContext::new(set, (cal, desc, controller), residuals, error, free_tool);
+    let context = PoseContext::new(set, (cal, desc, controller), residuals, (error, frames), free_tool);
     let order = free_rows_by_pose(set);
     for pose in free_pose_groups(set, &order) {
         let block = context.block(&pose, &tool_targets)?;
@@ -772,10 +811,10 @@ fn free_poses(
             &block.error.rotation(),
         );
     }
-    let orientation = orientation_summary(&angles_mrad, noise_sq, &rotation, options);
+    let orientation = orientation_summary(&angles_mrad, noise_sq, &rotation.finish(), options);
     Ok(FreePoses {
-        validation,
-        tool,
+        validation: validation.finish(),
+        tool: tool.finish(),
         orientation,
     })
 }
@@ -796,32 +835,34 @@ const CURVATURE_MAX_POSES: usize = 5000;
 /// linear prediction.
 fn prediction_error<'a>(
     set: &MeasurementSet,
-    (cal, desc, controller): (&'a Calibration, &RobotDescription, &'a Controller),
+    (cal, desc, controller): (&'a Calibration, &'a RobotDescription, &'a Controller),
     residuals: &[ValidationResidual],
     noise_rms_3d_mm: f64,
-) -> Result<PredictionError<'a>, DiagnosisError> {
+) -> Result<(PredictionError<'a>, SampledFrames), DiagnosisError> {
     let error = PredictionError::new(cal, controller, desc)?.with_curvature();
     if !error.has_curvature() {
-        return Ok(error);
+        return Ok((error, SampledFrames::new()));
     }
     let order = free_rows_by_pose(set);
     let poses = free_pose_groups(set, &order).count();
     if poses > CURVATURE_MAX_POSES {
-        return Ok(error.without_curvature());
+        return Ok((error.without_curvature(), SampledFrames::new()));
     }
     let sampled: BTreeSet<usize> = crate::measurement::bounded::evenly_spaced((0..poses).collect(), CURVATURE_SAMPLE)
         .into_iter()
         .collect();
-    let counts = {
-        let context = PoseContext::new(set, (cal, desc, controller), residuals, &error, false);
+    let (counts, frames) = {
+        let none = SampledFrames::new();
+        let context = PoseContext::new(set, (cal, desc, controller), residuals, (&error, &none), false);
         let tool_targets = desc.tool_targets_m();
         let (linear, variance_coord_mm2) = (error.linear_rank(), noise_rms_3d_mm.powi(2) / 3.0);
-        let mut blocks = Vec::with_capacity(sampled.len());
+        let (mut blocks, mut frames) = (Vec::with_capacity(sampled.len()), SampledFrames::new());
         for (_, pose) in free_pose_groups(set, &order)
             .enumerate()
             .filter(|(i, _)| sampled.contains(i))
         {
-            let factors = context.block(&pose, &tool_targets)?.factors;
+            let PoseBlock { factors, error, .. } = context.block(&pose, &tool_targets)?;
+            frames.extend(error.into_drawn_frames().map(|f| (pose.rows[0], f)));
             let (g, jitter) = (factors.calibration.columns(0, linear), &factors.repeatability);
             let n = g.nrows();
             let covariance =
@@ -831,10 +872,18 @@ fn prediction_error<'a>(
                 factors.calibration.columns(linear, Curvature::DRAWS).into_owned(),
             ));
         }
-        Curvature::counts(blocks.into_iter(), poses as f64 / sampled.len().max(1) as f64)
+        let scale = poses as f64 / sampled.len().max(1) as f64;
+        (Curvature::counts(blocks.into_iter(), scale), frames)
     };
-    Ok(if counts { error } else { error.without_curvature() })
+    Ok(match counts {
+        true => (error, frames),
+        false => (error.without_curvature(), SampledFrames::new()),
+    })
 }
+
+/// The drawn models' tool frames at the free poses [`prediction_error`] sampled, by each pose's
+/// first row: the tests take them rather than compute the drawn models' kinematics again.
+type SampledFrames = HashMap<usize, DrawnFrames>;
 
 /// One free pose's residuals and what they may miss by beside the noise.
 struct PoseBlock<'a> {
@@ -860,6 +909,8 @@ struct PoseContext<'a> {
     /// Every row's residual.
     residuals: &'a [ValidationResidual],
     error: &'a PredictionError<'a>,
+    /// The drawn models' tool frames [`prediction_error`] computed.
+    frames: &'a SampledFrames,
     /// The tool frame's error free ([`validate_free_tool`]).
     free_tool: bool,
 }
@@ -869,7 +920,7 @@ impl<'a> PoseContext<'a> {
         set: &'a MeasurementSet,
         (cal, desc, controller): (&'a Calibration, &'a RobotDescription, &'a Controller),
         residuals: &'a [ValidationResidual],
-        error: &'a PredictionError<'a>,
+        (error, frames): (&'a PredictionError<'a>, &'a SampledFrames),
         free_tool: bool,
     ) -> Self {
         PoseContext {
@@ -881,6 +932,7 @@ impl<'a> PoseContext<'a> {
             approach: crate::physics::actuator_approach_by_pose(set.rows(), desc),
             residuals,
             error,
+            frames,
             free_tool,
         }
     }
@@ -896,9 +948,8 @@ impl<'a> PoseContext<'a> {
             m,
             &self.approach,
         )?;
-        let mut error = self
-            .error
-            .at(&self.model, &commands_to_internal(self.desc, &m.cmd), &q)?;
+        let cmd = commands_to_internal(self.desc, &m.cmd);
+        let mut error = self.error.at(&self.model, (&cmd, &q), self.frames.get(&pose.rows[0]))?;
         if self.free_tool {
             error = error.with_free_tool();
         }
@@ -919,7 +970,7 @@ impl<'a> PoseContext<'a> {
 /// The free points' residuals of `v` (validated on `set` with `cal`) less the calibration's
 /// error that all of them estimate together: with `e_hat` the posterior mean of the shared
 /// error `e` given every free pose's residuals but those of the poses `left_out` (experiment,
-/// step: suspected gross errors, which would drag it; [`SharedErrorChiSquare::estimate`], each
+/// step: suspected gross errors, which would drag it; [`SharedErrorFit::estimate`], each
 /// pose weighted by its noise and repeatability), each pose's residuals `r_i - G_i e_hat`
 /// (`G_i` its factor, `predicted_error::PredictionError`); the rows that are not free keep
 /// theirs. A point the calibration's own error moves far (its error is one for every pose)
@@ -938,11 +989,11 @@ pub fn residuals_less_calibration_error(
         .map(|r| Vector3::from(r.measured_mm) - Vector3::from(r.predicted_mm))
         .collect();
     let controller = Controller::from_description(desc);
-    let error = prediction_error(set, (cal, desc, &controller), &v.residuals, v.noise_rms_3d_mm)?;
+    let (error, frames) = prediction_error(set, (cal, desc, &controller), &v.residuals, v.noise_rms_3d_mm)?;
     if !error.has_calibration() {
         return Ok(out);
     }
-    let context = PoseContext::new(set, (cal, desc, &controller), &v.residuals, &error, false);
+    let context = PoseContext::new(set, (cal, desc, &controller), &v.residuals, (&error, &frames), false);
     let tool_targets = desc.tool_targets_m();
     let block = |pose: &FreePose<'_>| context.block(pose, &tool_targets);
     let order = free_rows_by_pose(set);
@@ -957,7 +1008,7 @@ pub fn residuals_less_calibration_error(
             &b.factors,
         );
     }
-    let estimate = shared.chi.estimate();
+    let estimate = shared.chi.fit().estimate;
     for pose in free_pose_groups(set, &order) {
         let explained = &block(&pose)?.factors.calibration * &estimate;
         for (k, &i) in pose.rows.iter().enumerate() {
@@ -972,7 +1023,7 @@ pub fn residuals_less_calibration_error(
 fn orientation_summary(
     angles_mrad: &[f64],
     noise_sq: f64,
-    statistic: &FreeStatistic,
+    statistic: &FinishedStatistic,
     options: &ValidationOptions,
 ) -> Option<OrientationSummary> {
     if angles_mrad.is_empty() {

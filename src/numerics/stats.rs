@@ -12,7 +12,7 @@ mod shared_error;
 pub use chi_square::{chi_square_cdf, chi_square_quantile, ln_gamma, regularized_lower_gamma};
 pub use f_ratio::{f_cdf, f_upper_quantile, f_upper_tail, regularized_incomplete_beta};
 use serde::{Deserialize, Serialize};
-pub use shared_error::SharedErrorChiSquare;
+pub use shared_error::{SharedErrorChiSquare, SharedErrorFit};
 
 /// RMS distance of `points` from their centroid (0 for none): the spread a fit's RMS is
 /// judged against.

@@ -21,7 +21,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-/// The running sums of [`SharedErrorChiSquare::add`]; [`SharedErrorChiSquare::value`] the
+/// The running sums of [`SharedErrorChiSquare::add`]; [`SharedErrorChiSquare::fit`] the
 /// statistic (module docs).
 #[derive(Clone, Debug)]
 pub struct SharedErrorChiSquare {
@@ -37,6 +37,32 @@ pub struct SharedErrorChiSquare {
     dof: usize,
     /// The last `free` components have no prior (module docs).
     free: usize,
+}
+
+/// What the sums of a [`SharedErrorChiSquare`] give, from one factorisation
+/// ([`SharedErrorChiSquare::fit`]).
+#[derive(Clone, Debug)]
+pub struct SharedErrorFit {
+    /// `r^T S^-1 r`; NaN if a residual or factor was not finite.
+    pub value: f64,
+    /// Degrees of freedom: residual components added, less the free components they resolve.
+    pub dof: usize,
+    /// The estimate of every component from the residuals: `(I_k + A)^-1 b`, the posterior mean
+    /// of the shared error `e` (`G^T S^-1 r` by the Woodbury identity), with free components
+    /// `(P + A)^+ b` (module docs); NaN where a residual or factor was not finite. `G_i` times it
+    /// is the part of block `i` the shared error explains.
+    pub estimate: DVector<f64>,
+    /// The last `free` components of `estimate` have no prior.
+    free: usize,
+}
+
+impl SharedErrorFit {
+    /// The free components' estimate: the last `free` entries of [`Self::estimate`], the values
+    /// that minimise the statistic (module docs); empty without free components.
+    pub fn free_estimate(&self) -> DVector<f64> {
+        let n = self.estimate.len();
+        self.estimate.rows(n - self.free, self.free).into_owned()
+    }
 }
 
 impl SharedErrorChiSquare {
@@ -71,45 +97,28 @@ impl SharedErrorChiSquare {
         self.dof += r.len();
     }
 
-    /// `r^T S^-1 r`; NaN if a residual or factor was not finite.
-    pub fn value(&self) -> f64 {
-        if self.free > 0 {
-            let (inverse, _) = self.free_capacitance();
-            return self.independent - self.projected.dot(&(inverse * &self.projected));
+    /// The statistic, its degrees of freedom and every component's estimate, from one
+    /// factorisation of the sums: `I_k + A` by Cholesky, or with free components `P + A` by its
+    /// pseudo-inverse (module docs).
+    pub fn fit(&self) -> SharedErrorFit {
+        let (estimate, dof) = if self.free > 0 {
+            let (inverse, resolved) = self.free_capacitance();
+            (inverse * &self.projected, self.dof.saturating_sub(resolved))
+        } else {
+            let k = self.projected.len();
+            let capacitance = DMatrix::identity(k, k) + &self.normal;
+            let estimate = match capacitance.cholesky() {
+                Some(ch) => ch.solve(&self.projected),
+                None => DVector::from_element(k, f64::NAN),
+            };
+            (estimate, self.dof)
+        };
+        SharedErrorFit {
+            value: self.independent - self.projected.dot(&estimate),
+            dof,
+            estimate,
+            free: self.free,
         }
-        let k = self.projected.len();
-        let capacitance = DMatrix::identity(k, k) + &self.normal;
-        match capacitance.cholesky() {
-            Some(ch) => self.independent - self.projected.dot(&ch.solve(&self.projected)),
-            None => f64::NAN,
-        }
-    }
-
-    /// The estimate of every component from the residuals: `(I_k + A)^-1 b`, the posterior mean
-    /// of the shared error `e` (`G^T S^-1 r` by the Woodbury identity), with free components
-    /// `(P + A)^+ b` (module docs); NaN where a residual or factor was not finite. `G_i` times it
-    /// is the part of block `i` the shared error explains.
-    pub fn estimate(&self) -> DVector<f64> {
-        if self.free > 0 {
-            return self.free_capacitance().0 * &self.projected;
-        }
-        let k = self.projected.len();
-        let capacitance = DMatrix::identity(k, k) + &self.normal;
-        match capacitance.cholesky() {
-            Some(ch) => ch.solve(&self.projected),
-            None => DVector::from_element(k, f64::NAN),
-        }
-    }
-
-    /// The free components' estimate: the last `free` entries of `(P + A)^+ b`, the values
-    /// that minimise the statistic (module docs); empty without free components.
-    pub fn free_estimate(&self) -> DVector<f64> {
-        if self.free == 0 {
-            return DVector::zeros(0);
-        }
-        let (inverse, _) = self.free_capacitance();
-        let all = inverse * &self.projected;
-        all.rows(all.len() - self.free, self.free).into_owned()
     }
 
     /// With free components: the pseudo-inverse of `P + A` and the free components it
@@ -128,6 +137,11 @@ impl SharedErrorChiSquare {
         (inverse, rank.saturating_sub(shared))
     }
 
+    /// Whether no block was added.
+    pub fn is_empty(&self) -> bool {
+        self.dof == 0
+    }
+
     /// `sum r_i^T W_i r_i`: the statistic of the noise alone.
     pub fn noise_alone(&self) -> f64 {
         self.independent
@@ -136,14 +150,6 @@ impl SharedErrorChiSquare {
     /// The shared error's variance summed over every residual component, `trace(G G^T)`.
     pub fn shared_variance(&self) -> f64 {
         self.shared_variance
-    }
-
-    /// Degrees of freedom: residual components added, less the free components they resolve.
-    pub fn dof(&self) -> usize {
-        if self.free == 0 {
-            return self.dof;
-        }
-        self.dof.saturating_sub(self.free_capacitance().1)
     }
 }
 
@@ -208,11 +214,11 @@ mod tests {
             let n = r_all.len();
             let expected = r_all.dot(&dense.lu().solve(&r_all).unwrap());
             assert!(
-                (chi.value() - expected).abs() <= 1e-9 * expected,
+                (chi.fit().value - expected).abs() <= 1e-9 * expected,
                 "{} vs {expected}",
-                chi.value()
+                chi.fit().value
             );
-            assert_eq!(chi.dof(), n);
+            assert_eq!(chi.fit().dof, n);
             assert!((chi.shared_variance() - g_all.norm_squared()).abs() <= 1e-12 * g_all.norm_squared());
         }
     }
@@ -227,9 +233,9 @@ mod tests {
             let (dense, g_all, r_all, chi) = stacked(&blocks, &mut rng);
             let expected = g_all.transpose() * dense.lu().solve(&r_all).unwrap();
             assert!(
-                (chi.estimate() - &expected).norm() <= 1e-9 * expected.norm(),
+                (chi.fit().estimate - &expected).norm() <= 1e-9 * expected.norm(),
                 "{} vs {expected}",
-                chi.estimate()
+                chi.fit().estimate
             );
         }
     }
@@ -251,9 +257,9 @@ mod tests {
                 let r = CorrelatedNormal::new(noise).unwrap().draw(&mut rng) + g * &shared;
                 chi.add(&r, &noise.clone().try_inverse().unwrap(), g);
             }
-            sum += chi.value();
+            sum += chi.fit().value;
             sum_alone += chi.noise_alone();
-            dof = chi.dof();
+            dof = chi.fit().dof;
         }
         let (mean, mean_alone) = (sum / draws as f64, sum_alone / draws as f64);
         let standard_error = (2.0 * dof as f64 / draws as f64).sqrt();
@@ -298,15 +304,15 @@ mod tests {
             let d = normal.try_inverse().unwrap() * &b;
             let expected = r_all.dot(&sr) - b.dot(&d);
             assert!(
-                (chi.value() - expected).abs() <= 1e-6 * expected,
+                (chi.fit().value - expected).abs() <= 1e-6 * expected,
                 "{} vs {expected}",
-                chi.value()
+                chi.fit().value
             );
-            assert_eq!(chi.dof(), n - 2);
+            assert_eq!(chi.fit().dof, n - 2);
             assert!(
-                (chi.free_estimate() - &d).norm() <= 1e-6 * d.norm(),
+                (chi.fit().free_estimate() - &d).norm() <= 1e-6 * d.norm(),
                 "{} vs {d}",
-                chi.free_estimate()
+                chi.fit().free_estimate()
             );
             assert!((chi.shared_variance() - g_all.norm_squared()).abs() <= 1e-12 * g_all.norm_squared());
         }
