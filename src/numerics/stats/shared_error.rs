@@ -15,9 +15,14 @@
 //! error has no prior (a quantity the data must give, e.g. a frame nobody measured). Their
 //! prior precision is 0 instead of 1, so the statistic is the minimum of
 //! `(r - T d)^T S^-1 (r - T d)` over their values `d` (generalised least squares), chi-square
-//! with `sum dim r_i - f'` degrees of freedom, `f'` the free components the residuals resolve:
-//! `(P + A)` with `P = diag(I_k, 0_f)` is then inverted by its pseudo-inverse, whose numerical
-//! rank (singular values above `max * dim * epsilon`, the rounding of the sums) counts them.
+//! with `sum dim r_i - f'` degrees of freedom, `f'` the free components the residuals resolve.
+//! `M = P + A`, `P = diag(I_k, 0_f)`, is then solved by blocks (Golub & Van Loan, section
+//! 3.2.10): with `C = I_k + A_kk` (positive definite, by Cholesky) and the free block's Schur
+//! complement `F = A_ff - A_fk C^-1 A_kf` (`f x f`, semidefinite), `x_f = F^+ (b_f - A_fk C^-1
+//! b_k)` and `x_k = C^-1 (b_k - A_kf x_f)`, a solution of `M x = b` (`b` lies in `M`'s range, so
+//! `b^T x` is the same for every solution). `F`'s numerical rank (singular values above
+//! `d dim epsilon`, `d` the largest diagonal entry of `M`: the rounding of the sums) counts the
+//! resolved components, and `x_f` is zero in the directions it does not resolve.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -102,8 +107,8 @@ impl SharedErrorChiSquare {
     /// pseudo-inverse (module docs).
     pub fn fit(&self) -> SharedErrorFit {
         let (estimate, dof) = if self.free > 0 {
-            let (inverse, resolved) = self.free_capacitance();
-            (inverse * &self.projected, self.dof.saturating_sub(resolved))
+            let (estimate, resolved) = self.free_solution();
+            (estimate, self.dof.saturating_sub(resolved))
         } else {
             let k = self.projected.len();
             let capacitance = DMatrix::identity(k, k) + &self.normal;
@@ -121,20 +126,39 @@ impl SharedErrorChiSquare {
         }
     }
 
-    /// With free components: the pseudo-inverse of `P + A` and the free components it
-    /// resolves (its numerical rank beyond the `k` shared ones, module docs).
-    fn free_capacitance(&self) -> (DMatrix<f64>, usize) {
+    /// With free components: `M x = b` solved by blocks, and the free components the sums
+    /// resolve (`F`'s numerical rank, module docs); NaN where a sum was not finite.
+    fn free_solution(&self) -> (DVector<f64>, usize) {
         let n = self.projected.len();
-        let shared = n - self.free;
-        let prior = DMatrix::from_fn(n, n, |i, j| if i == j && i < shared { 1.0 } else { 0.0 });
-        let svd = (prior + &self.normal).svd(true, true);
-        let largest = svd.singular_values.max();
+        let (k, f) = (n - self.free, self.free);
+        let not_finite = (DVector::from_element(n, f64::NAN), 0);
+        let capacitance = DMatrix::identity(k, k) + self.normal.view((0, 0), (k, k));
+        let Some(ch) = capacitance.cholesky() else {
+            return not_finite;
+        };
+        let coupling = self.normal.view((0, k), (k, f));
+        let (b_k, b_f) = (self.projected.rows(0, k), self.projected.rows(k, f));
+        let solved_coupling = ch.solve(&coupling.into_owned());
+        let solved_b = ch.solve(&b_k.into_owned());
+        let schur = self.normal.view((k, k), (f, f)) - coupling.transpose() * &solved_coupling;
+        let reduced = b_f - coupling.transpose() * &solved_b;
+        if !schur.iter().chain(reduced.iter()).all(|v| v.is_finite()) {
+            return not_finite;
+        }
+        let largest = (0..n)
+            .map(|i| self.normal[(i, i)] + f64::from(i < k))
+            .fold(0.0, f64::max);
         let tolerance = largest * n as f64 * f64::EPSILON;
-        let rank = svd.rank(tolerance);
-        let inverse = svd
-            .pseudo_inverse(tolerance)
-            .unwrap_or_else(|_| DMatrix::from_element(n, n, f64::NAN));
-        (inverse, rank.saturating_sub(shared))
+        let svd = schur.svd(true, true);
+        let resolved = svd.rank(tolerance);
+        let Ok(inverse) = svd.pseudo_inverse(tolerance) else {
+            return not_finite;
+        };
+        let x_f = inverse * reduced;
+        let mut x = DVector::zeros(n);
+        x.rows_mut(0, k).copy_from(&(solved_b - &solved_coupling * &x_f));
+        x.rows_mut(k, f).copy_from(&x_f);
+        (x, resolved)
     }
 
     /// Whether no block was added.
@@ -315,6 +339,64 @@ mod tests {
                 chi.fit().free_estimate()
             );
             assert!((chi.shared_variance() - g_all.norm_squared()).abs() <= 1e-12 * g_all.norm_squared());
+        }
+    }
+
+    /// A free column that is the sum of two others (a component no residual resolves): one
+    /// degree of freedom fewer than the columns, the statistic that of the two independent
+    /// columns (a second path: the dense generalised least squares over them), and the estimate
+    /// zero along the unresolved direction. Without shared components (`k = 0`) the same.
+    #[test]
+    fn an_unresolved_free_component_counts_no_degree_of_freedom() {
+        let mut rng = ChaCha12Rng::seed_from_u64(45);
+        for k in [4, 0] {
+            let blocks = problem(&mut rng);
+            let n: usize = blocks.iter().map(|(noise, _)| noise.nrows()).sum();
+            let t_two = DMatrix::from_fn(n, 2, |_, _| StandardNormal.sample(&mut rng));
+            let t_all = DMatrix::from_fn(n, 3, |i, j| {
+                if j < 2 {
+                    t_two[(i, j)]
+                } else {
+                    t_two[(i, 0)] + t_two[(i, 1)]
+                }
+            });
+            let r_all = DVector::from_fn(n, |_, _| StandardNormal.sample(&mut rng))
+                + &t_two * DVector::from_vec(vec![1e3, -4e2]);
+            let (mut dense, mut g_all) = (DMatrix::zeros(n, n), DMatrix::zeros(n, 4));
+            let mut chi = SharedErrorChiSquare::with_free(k, 3);
+            let mut at = 0;
+            for (noise, g) in &blocks {
+                let m = noise.nrows();
+                dense.view_mut((at, at), (m, m)).copy_from(noise);
+                g_all.view_mut((at, 0), (m, 4)).copy_from(g);
+                let mut factor = DMatrix::zeros(m, k + 3);
+                factor.columns_mut(0, k).copy_from(&g.columns(0, k));
+                factor.columns_mut(k, 3).copy_from(&t_all.rows(at, m));
+                chi.add(
+                    &r_all.rows(at, m).into_owned(),
+                    &noise.clone().try_inverse().unwrap(),
+                    &factor,
+                );
+                at += m;
+            }
+            let g_used = g_all.columns(0, k);
+            dense += &g_used * g_used.transpose();
+            let s_inv = dense.try_inverse().unwrap();
+            let (sr, st) = (&s_inv * &r_all, &s_inv * &t_two);
+            let b = t_two.transpose() * &sr;
+            let d = (t_two.transpose() * &st).try_inverse().unwrap() * &b;
+            let expected = r_all.dot(&sr) - b.dot(&d);
+            let fit = chi.fit();
+            assert!(
+                (fit.value - expected).abs() <= 1e-6 * expected,
+                "k {k}: {} vs {expected}",
+                fit.value
+            );
+            assert_eq!(fit.dof, n - 2, "k {k}");
+            let x = fit.free_estimate();
+            let offsets = DVector::from_vec(vec![x[0] + x[2], x[1] + x[2]]);
+            assert!((&offsets - &d).norm() <= 1e-6 * d.norm(), "k {k}: {offsets} vs {d}");
+            assert!((x[0] + x[1] - x[2]).abs() <= 1e-9 * d.norm(), "k {k}: {x}");
         }
     }
 }
