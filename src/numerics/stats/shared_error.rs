@@ -380,7 +380,7 @@ mod tests {
                 at += m;
             }
             let g_used = g_all.columns(0, k);
-            dense += &g_used * g_used.transpose();
+            dense += g_used * g_used.transpose();
             let s_inv = dense.try_inverse().unwrap();
             let (sr, st) = (&s_inv * &r_all, &s_inv * &t_two);
             let b = t_two.transpose() * &sr;
