@@ -556,9 +556,13 @@ impl FreeStatistic {
 struct FinishedStatistic {
     /// The statistic with the calibration's error; `None` without a block.
     fit: Option<SharedErrorFit>,
+    /// The statistic against the noise and repeatability alone.
     noise_alone: f64,
+    /// The calibration's error's summed variance over every residual component.
     shared_variance: f64,
+    /// The repeatability's summed variance.
     repeatability_variance: f64,
+    /// Whether the calibration's error is included.
     with_calibration: bool,
 }
 
