@@ -54,7 +54,8 @@ pub struct SharedErrorFit {
     pub dof: usize,
     /// The estimate of every component from the residuals: `(I_k + A)^-1 b`, the posterior mean
     /// of the shared error `e` (`G^T S^-1 r` by the Woodbury identity), with free components
-    /// `(P + A)^+ b` (module docs); NaN where a residual or factor was not finite. `G_i` times it
+    /// the block solution of `(P + A) x = b` (module docs); NaN where a residual or factor was
+    /// not finite. `G_i` times it
     /// is the part of block `i` the shared error explains.
     pub estimate: DVector<f64>,
     /// The last `free` components of `estimate` have no prior.
@@ -103,8 +104,8 @@ impl SharedErrorChiSquare {
     }
 
     /// The statistic, its degrees of freedom and every component's estimate, from one
-    /// factorisation of the sums: `I_k + A` by Cholesky, or with free components `P + A` by its
-    /// pseudo-inverse (module docs).
+    /// factorisation of the sums: `I_k + A` by Cholesky, or with free components `P + A` by
+    /// blocks (module docs).
     pub fn fit(&self) -> SharedErrorFit {
         let (estimate, dof) = if self.free > 0 {
             let (estimate, resolved) = self.free_solution();
