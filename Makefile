@@ -6,9 +6,11 @@ VENV  ?= .venv
 RERUN_VERSION := $(shell sed -n 's/^rerun = { version = "=\([0-9.]*\)".*/\1/p' Cargo.toml)
 
 FUZZ_SECONDS ?= 600
-# The binary the integration tests run: the optimised build (`quick-release`, the profile
-# `make run` uses, without its viewer feature). The debug build takes about 10 times the CPU
-# on the tests' calibrations and searches; the library's own tests run in the debug build.
+# One optimised build for every target here: the `quick-release` profile with the rerun
+# recorder (feature `viz`), so that `make run`, `make test` and the rest build it once.
+QUICK := --profile quick-release --features viz
+# The binary the integration tests run: that build. The debug build takes about 10 times the
+# CPU on the tests' calibrations and searches; the library's own tests run in the debug build.
 TEST_BIN ?= $$(cd $${CARGO_TARGET_DIR:-target} && pwd)/quick-release/axiscal
 
 .PHONY: run test test-real test-robots noise-check iso9283-check certificate tool-accuracy bench fuzz study blind blind-free-poses blind-analytic budget lint doc clean-results setup-viewer view
@@ -16,10 +18,10 @@ TEST_BIN ?= $$(cd $${CARGO_TARGET_DIR:-target} && pwd)/quick-release/axiscal
 ## run: the paper scenario end to end; results under results/ (with a rerun recording:
 ## `make view`). Built with the rerun recorder (feature `viz`) in the `quick-release` profile.
 run:
-	$(CARGO) run --profile quick-release --features viz -- simulate --seed 1 --out $(OUT)/campaign.csv --record $(OUT)/campaign.rrd --force
-	$(CARGO) run --profile quick-release --features viz -- evaluate --seed 1 --floor-seeds 30 --force --out $(OUT)
-	$(CARGO) run --profile quick-release --features viz -- budget --seeds 30 --force --out results/budget
-	$(CARGO) run --profile quick-release --features viz -- run scenarios/paper.toml --force --out $(OUT)/montecarlo
+	$(CARGO) run $(QUICK) -- simulate --seed 1 --out $(OUT)/campaign.csv --record $(OUT)/campaign.rrd --force
+	$(CARGO) run $(QUICK) -- evaluate --seed 1 --floor-seeds 30 --force --out $(OUT)
+	$(CARGO) run $(QUICK) -- budget --seeds 30 --force --out results/budget
+	$(CARGO) run $(QUICK) -- run scenarios/paper.toml --force --out $(OUT)/montecarlo
 
 ## setup-viewer: the matching rerun viewer (`rerun` binary) in a local virtual environment
 setup-viewer:
@@ -28,22 +30,23 @@ setup-viewer:
 
 ## view: open the recording of `make run` (prints the install command if no viewer is found)
 view:
-	$(CARGO) run --profile quick-release --features viz -- view $(OUT)/campaign.rrd
+	$(CARGO) run $(QUICK) -- view $(OUT)/campaign.rrd
 
 ## test: the whole test suite (unit, integration, doc tests; the benchmarks are `make bench`'s);
-## reads nothing outside the repository. The integration tests and the smoke scenario run the
-## optimised binary (TEST_BIN); the library's tests run in the debug build.
+## reads nothing outside the repository. The integration tests (the recorder's included) and
+## the smoke scenario run the optimised binary with the recorder (TEST_BIN, `make run`'s
+## build); the library's tests run in the debug build.
 test:
-	$(CARGO) build --profile quick-release
+	$(CARGO) build $(QUICK)
 	AXISCAL_TEST_BIN="$(TEST_BIN)" $(CARGO) test --lib --bins --tests --examples
 	$(CARGO) test --doc
 	$(TEST_BIN) run scenarios/ci-smoke.toml --force --out results/ci-smoke
 
 ## test-real: the tests on public real data sets, which need ../shared/data/real/ beside the
 ## repository (or AXISCAL_SHARED_DIR naming the shared folder); the commands they run are the
-## optimised build's (`quick-release`, the profile `make run` uses without its viewer feature)
+## optimised build's (TEST_BIN, as `make test`)
 test-real:
-	$(CARGO) build --profile quick-release
+	$(CARGO) build $(QUICK)
 	AXISCAL_TEST_BIN="$(TEST_BIN)" $(CARGO) test --test it -- --ignored real_boby_klimchik:: real_fanuc:: real_sscanss2:: real_rct:: hostile_calibration:: hostile_round6a:: hostile_round9a:: hostile_round9c:: hostile_round9e:: hostile_round10a:: hostile_round10c:: hostile_round10d:: hostile_round11a:: hostile_round11e:: hostile_round13a:: hostile_round14a:: hostile_round14e:: hostile_round15a:: hostile_round16m:: hostile_round18m::a_swap
 
 ## test-robots: the four issue-15 test robots (P-R-P-P table, two-axis positioner, SCARA,
@@ -55,15 +58,15 @@ test-robots:
 ## iso9283-check: ISO 9283 tests after calibration, 200 simulated (paper robot, theodolites),
 ## measured against their Monte-Carlo prediction: mean measured / predicted AP and RP within 10 %
 iso9283-check:
-	$(CARGO) run --profile quick-release -- run scenarios/iso9283.toml --force --out results/iso9283
+	$(CARGO) run $(QUICK) -- run scenarios/iso9283.toml --force --out results/iso9283
 
 ## certificate: the calibration certificate of the simulated paper campaign (seed 1), as
 ## results/certificate/certificate.html and .json, rendered to certificate.png by headless
 ## Chromium (Debian's package, installed when missing)
 certificate:
-	$(CARGO) run --profile quick-release -- simulate --seed 1 --out results/certificate/campaign.csv --force
-	$(CARGO) run --profile quick-release -- calibrate results/certificate/campaign.csv --out results/certificate/cal --force
-	$(CARGO) run --profile quick-release -- report --calibration results/certificate/cal/calibration.json \
+	$(CARGO) run $(QUICK) -- simulate --seed 1 --out results/certificate/campaign.csv --force
+	$(CARGO) run $(QUICK) -- calibrate results/certificate/campaign.csv --out results/certificate/cal --force
+	$(CARGO) run $(QUICK) -- report --calibration results/certificate/cal/calibration.json \
 		--data results/certificate/campaign.csv --held-out results/certificate/campaign.csv \
 		--instrument "two theodolites (simulated), 0.19 mm net radial error" --out results/certificate --force
 	scripts/render-html.sh results/certificate/certificate.html results/certificate/certificate.png

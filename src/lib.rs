@@ -27,7 +27,7 @@
 //! | [`harness`] | evaluation, Monte-Carlo scenarios, studies, the blind check |
 //! | [`json_file`], [`json_schema`] | the versioned JSON outputs and their JSON Schemas (`docs/schemas/`) |
 //! | [`progress`] | counts of long work, for whoever shows them |
-//! | `viz` | rerun recordings (cargo feature `viz`) |
+//! | `viz` | rerun recordings: the shapes drawn, and the recorder (cargo feature `viz`) |
 //!
 //! `calibration`, `compensation` and `diagnosis` see only measurements and the nominal
 //! description, never [`sim`] or [`harness`] (`tests/it/architecture.rs` enforces it).
@@ -129,6 +129,5 @@ pub mod progress;
 pub mod robot;
 pub mod sim;
 pub mod toml_file;
-#[cfg(feature = "viz")]
 pub mod viz;
 pub mod yaml_file;

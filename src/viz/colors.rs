@@ -1,4 +1,9 @@
-//! Colours of a recording: one per experiment, and a colour map for error magnitudes.
+//! Colours of a recording: one per experiment, the robot's, and a colour map for error
+//! magnitudes.
+
+/// Colour of the simulated robot in a recording (`world/robot`), and of the nominal one beside
+/// a calibrated robot.
+pub const ROBOT_COLOR: [u8; 4] = [150, 150, 160, 255];
 
 /// The colour map of [`error_color`]: `(fraction of full scale, RGB)` stops, linearly
 /// interpolated in sRGB: green (no error) -> yellow (half scale) -> red (full scale and above).
@@ -57,4 +62,34 @@ pub fn experiment_color(experiment: &str) -> [u8; 4] {
     };
     let [r, g, b] = PALETTE[index];
     [r, g, b, 255]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn error_colours_follow_the_documented_stops() {
+        for (at, rgb) in ERROR_COLOR_STOPS {
+            let c = error_color(at * 2.0, 2.0);
+            assert_eq!(&c[..3], &rgb[..], "stop at {at}");
+        }
+        assert_eq!(error_color(5.0, 1.0), error_color(1.0, 1.0), "clamped above full scale");
+        assert_eq!(error_color(1.0, 0.0), error_color(1.0, 1.0), "bad scale is red");
+        let quarter = error_color(0.25, 1.0);
+        assert_eq!(quarter, [120, 185, 30, 255], "halfway between green and yellow");
+    }
+
+    #[test]
+    fn experiments_get_distinct_stable_colours() {
+        let axes: Vec<_> = (1..=6).map(|k| experiment_color(&format!("axis{k}"))).collect();
+        for (i, a) in axes.iter().enumerate() {
+            for b in &axes[i + 1..] {
+                assert_ne!(a, b);
+            }
+        }
+        assert_eq!(experiment_color("custom"), experiment_color("custom"));
+        assert_eq!(experiment_color("axis2/target1"), axes[1]);
+        assert_ne!(experiment_color("validation"), axes[0]);
+    }
 }

@@ -1,39 +1,12 @@
 //! Fitted axes (arrows) and arcs (line strips) in a recording.
 
-use super::{Recorder, VizError, colors::experiment_color, vec3};
+use super::{Recorder, VizError, vec3};
 use crate::calibration::ArcFit;
 use crate::kinematics::AxisLine;
-use nalgebra::Point3;
+use crate::viz::{LengthMismatch, arc_points, experiment_color};
 
 /// Number of line-strip vertices of a drawn arc.
 const ARC_SAMPLES: usize = 64;
-
-/// `samples` points of the fitted arc of `fit` over the swept range of `commands_rad`, in the
-/// fit's unit: `p(D) = c + r (cos(phi0 + D) u + sin(phi0 + D) v)` for `D` from the smallest to
-/// the largest `D_j = f^-1(theta_c^j) - f^-1(theta_c^0)` (the arc model of
-/// [`crate::calibration::arc_model`], paper eqs. 6-8). Commands that the fitted transmission
-/// cannot invert are skipped; `None` if none is left.
-pub fn arc_points(fit: &ArcFit, commands_rad: &[f64], samples: usize) -> Option<Vec<Point3<f64>>> {
-    let d: Vec<f64> = commands_rad
-        .iter()
-        .filter_map(|&c| fit.transmission.actual_from_command(c))
-        .map(|a| a - fit.actual_start_rad)
-        .collect();
-    let lo = d.iter().copied().reduce(f64::min)?;
-    let hi = d.iter().copied().reduce(f64::max)?;
-    let p = &fit.params;
-    let (u, v) = (p.u().into_inner(), p.v().into_inner());
-    let samples = samples.max(2);
-    Some(
-        (0..samples)
-            .map(|i| {
-                let dj = lo + (hi - lo) * i as f64 / (samples - 1) as f64;
-                let (s, c) = (p.phase_rad + dj).sin_cos();
-                p.centre + p.radius * (c * u + s * v)
-            })
-            .collect(),
-    )
-}
 
 impl Recorder {
     /// Logs a joint axis as an arrow at `world/fits/{experiment}/axis`: from `length_m / 2`
@@ -61,7 +34,7 @@ impl Recorder {
         commands_rad: &[f64],
         unit_m: f64,
     ) -> Result<(), VizError> {
-        let points = arc_points(fit, commands_rad, ARC_SAMPLES).ok_or(VizError::LengthMismatch {
+        let points = arc_points(fit, commands_rad, ARC_SAMPLES).ok_or(LengthMismatch {
             what: "invertible sweep commands",
             expected: commands_rad.len(),
             found: 0,

@@ -3,69 +3,13 @@
 
 use super::{Recorder, vec3};
 use crate::kinematics::PhiModel;
-use crate::robot::FourBarGeometry;
-use nalgebra::{Isometry3, Point3, Rotation3, Unit, UnitQuaternion, Vector3};
+use crate::viz::{ROBOT_COLOR, segment_boxes};
+use nalgebra::Point3;
 
 /// Half-width of the link boxes \[m\].
 const LINK_HALF_WIDTH_M: f32 = 0.025;
-/// Colour of the robot of [`Recorder::log_robot`] (the simulated one).
-pub const ROBOT_COLOR: [u8; 4] = [150, 150, 160, 255];
 /// Length of the drawn link-frame axes \[m\].
 const FRAME_AXIS_LENGTH_M: f32 = 0.12;
-
-/// One box per segment `points[i] -> points[i+1]` of a polyline: `(centre, half sizes,
-/// rotation)`, the box's local x along the segment, `half_width` across. Zero-length segments
-/// are skipped.
-pub fn segment_boxes(
-    points_m: &[Point3<f64>],
-    half_width_m: f64,
-) -> Vec<(Point3<f64>, Vector3<f64>, UnitQuaternion<f64>)> {
-    points_m
-        .windows(2)
-        .filter_map(|w| {
-            let d = w[1] - w[0];
-            let length = d.norm();
-            if length <= f64::EPSILON {
-                return None;
-            }
-            let rotation = UnitQuaternion::rotation_between(&Vector3::x(), &d)
-                // x and d antiparallel: half a turn about z.
-                .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI));
-            Some((
-                nalgebra::center(&w[0], &w[1]),
-                Vector3::new(length / 2.0, half_width_m, half_width_m),
-                rotation,
-            ))
-        })
-        .collect()
-}
-
-/// The closed loop `O2 -> C -> P -> O3 -> O2` of the 2->3 four-bar (the planar construction
-/// documented with [`FourBarGeometry`]: arm, crank, rod, lever) in the world \[m\]: the linkage's plane is the one
-/// through `O2` (origin of `world_from_frame2`, the fixed frame of axis 2) normal to axis 2;
-/// its planar x axis is the arm direction `O2 -> O3` (projected in the plane) turned back by
-/// `theta_2_rad`, the active displacement of joint 2; `passive_rad` is `g(theta_2)`.
-pub fn four_bar_loop_m(
-    geometry: &FourBarGeometry,
-    world_from_frame2: &Isometry3<f64>,
-    axis3_point_m: &Point3<f64>,
-    theta_2_rad: f64,
-    passive_rad: f64,
-) -> [Point3<f64>; 5] {
-    let o2 = world_from_frame2 * Point3::origin();
-    let n = world_from_frame2 * Vector3::z_axis();
-    let to_o3 = axis3_point_m - o2;
-    let in_plane = to_o3 - n.into_inner() * n.dot(&to_o3);
-    let arm = Unit::try_new(in_plane, 1e-9).unwrap_or(world_from_frame2 * Vector3::x_axis());
-    let ex = Rotation3::from_axis_angle(&n, -theta_2_rad) * arm.into_inner();
-    let ey = n.cross(&ex);
-    let at = |radius: f64, angle: f64| radius * (angle.cos() * ex + angle.sin() * ey);
-    let g = geometry;
-    let o3 = o2 + at(g.arm_m, theta_2_rad);
-    let c = o2 + at(g.crank_m, g.crank_angle_rad);
-    let p = o3 + at(g.lever_m, theta_2_rad + g.lever_angle_rad + passive_rad);
-    [o2, c, p, o3, o2]
-}
 
 impl Recorder {
     /// Logs the arm of `model` at joint values `q` (rad, m) under `world/robot`, in grey (see
@@ -118,7 +62,7 @@ impl Recorder {
     }
 
     /// Logs the four-bar as a closed line strip at `world/robot/four_bar` (points in the world
-    /// \[m\], e.g. from [`four_bar_loop_m`]).
+    /// \[m\], e.g. from [`crate::viz::four_bar_loop_m`]).
     pub fn log_four_bar(&self, points_m: &[Point3<f64>]) {
         let strip = rerun::LineStrips3D::new([points_m.iter().map(vec3).collect::<Vec<_>>()])
             .with_radii([0.005_f32])
