@@ -238,8 +238,11 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             let kept = found.kept.as_ref().unwrap_or(&set);
             let (judged_cal, judged) = found.bumps_undone.as_ref().map_or((cal, kept), |u| (&u.cal, &u.set));
             print_scale_doubts((judged_cal, &desc, judged.rows()), &texts.implausible, &args.data);
-            print_moved_sweeps(judged_cal, &desc, judged, &args.data);
-            print_own_poses_miss(cal, (&desc, kept), &args, &texts.implausible);
+            let own = own_poses_miss(cal, (&desc, kept), &args, &texts.implausible);
+            print_moved_sweeps(judged_cal, &desc, judged, &args.data, own.as_ref());
+            if let Some(own) = own {
+                eprintln!("warning: {}", own.text);
+            }
         }
     }
     say!(printer, "{}", deviation_line(&texts.deviation));
@@ -823,14 +826,23 @@ fn add_detection_limits(
 /// warnings naming the file and the sweep's first line; where none is, the moves the test
 /// lets pass ([`axiscal::calibration::shared_target::block_reach`]) as a note, and in a file
 /// without validation poses the held joints' offsets it lets pass
-/// ([`axiscal::calibration::shared_target::held_reach`]).
-fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet, data: &Path) {
+/// ([`axiscal::calibration::shared_target::held_reach`]). The warning of a sweep whose drift the
+/// file's own validation poses name (`own`: [`OwnPosesWarning::replaces`]) is left to that
+/// warning, which says how the test read the sweep.
+fn print_moved_sweeps(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    data: &Path,
+    own: Option<&OwnPosesWarning>,
+) {
     let noise = cal
         .noise
         .as_ref()
         .map_or(cal.options.noise_rms_3d_mm, |n| n.used_rms_3d_mm);
     let moved_sweeps = axiscal::calibration::shared_target::moved_sweeps(set, desc, noise);
-    for moved in &moved_sweeps {
+    let replaced = own.and_then(|o| o.replaces.as_deref());
+    for moved in moved_sweeps.iter().filter(|m| Some(m.experiment.as_str()) != replaced) {
         let place = moved.lines.map_or_else(
             || data.display().to_string(),
             |(l, _)| format!("{}:{l}", data.display()),
@@ -859,35 +871,28 @@ fn print_moved_sweeps(cal: &Calibration, desc: &RobotDescription, set: &Measurem
 
 /// The warning of a miss of the file's own validation poses by `cal` (calibrated from `kept`;
 /// [`misses_own_validation_poses`]; not with `--refine`, which fits them), seeking a sweep's
-/// cause unless the checks `found` a slip of the coordinates ([`sweep_search`]).
-fn print_own_poses_miss(
+/// cause unless the checks `found` a slip of the coordinates ([`SweepSearch::after`]).
+fn own_poses_miss(
     cal: &Calibration,
     (desc, kept): (&RobotDescription, &MeasurementSet),
     args: &Args,
     found: &[Implausible],
-) {
+) -> Option<OwnPosesWarning> {
     if args.refine {
-        return;
+        return None;
     }
     let stated = args.repeatability_rad.as_deref();
-    if let Some(miss) = misses_own_validation_poses(cal, (desc, kept, &args.data), (stated, sweep_search(found))) {
-        eprintln!("warning: {miss}");
-    }
+    misses_own_validation_poses(cal, (desc, kept, &args.data), (stated, SweepSearch::after(found)))
 }
 
-/// Whether the test of the file's own validation poses seeks one sweep's cause of a miss: not
-/// where the checks named a slip of the instrument's coordinates (an axis or all three read
-/// scaled, the robot's size or handedness off), which moves every sweep and the poses alike.
-fn sweep_search(found: &[Implausible]) -> SweepSearch {
-    let coordinates = |f: &Implausible| match f {
-        Implausible::Size { .. } | Implausible::Mirrored { .. } => true,
-        Implausible::Scaled(slip) => matches!(slip, ScaleSlip::Column(_) | ScaleSlip::Coordinates { .. }),
-        _ => false,
-    };
-    match found.iter().any(coordinates) {
-        true => SweepSearch::Skipped,
-        false => SweepSearch::Run,
-    }
+/// A miss of the file's own validation poses, in words ([`misses_own_validation_poses`]).
+pub(super) struct OwnPosesWarning {
+    /// The warning.
+    pub text: String,
+    /// The experiment whose reading by the reference-pose test (a moved block, a held offset)
+    /// it replaces: a drift through that sweep, which the test reads so at the reference pose,
+    /// and which fits the validation poses.
+    pub replaces: Option<String>,
 }
 
 /// The axis-experiment calibration tested on the file's own validation poses, which it did not
@@ -899,7 +904,7 @@ pub(super) fn misses_own_validation_poses(
     cal: &Calibration,
     (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
     (stated_repeatability, search): (Option<&[f64]>, SweepSearch),
-) -> Option<String> {
+) -> Option<OwnPosesWarning> {
     let place = data.display().to_string();
     let miss = match test_own_validation_poses(cal, desc, set, search)? {
         OwnPoses::NotTested(fit) => {
@@ -921,7 +926,12 @@ pub(super) fn misses_own_validation_poses(
         OwnPoses::Misses(miss) => miss,
     };
     let (partial, slips) = match &miss.cause {
-        OwnPosesCause::Sweep(sweep) => return Some(super::sweep_cause::words(sweep, &place, miss.fit.poses)),
+        OwnPosesCause::Sweep(sweep) => {
+            return Some(OwnPosesWarning {
+                text: super::sweep_cause::words(sweep, &place, miss.fit.poses),
+                replaces: sweep.shadows.as_ref().and(sweep.experiment.clone()),
+            });
+        }
         OwnPosesCause::Unnamed { partial, slips } => (partial, slips),
     };
     let sweep_part = partial
@@ -931,7 +941,10 @@ pub(super) fn misses_own_validation_poses(
     let first = understated_repeatability(desc, stated_repeatability);
     let cause = own_poses_slips(slips, data);
     let beyond = miss.tool_move.map(tool_move_words).unwrap_or_default();
-    Some(format!("{}{beyond}: {first}{sweep_part}{cause}", own_miss_words(&miss)))
+    Some(OwnPosesWarning {
+        text: format!("{}{beyond}: {first}{sweep_part}{cause}", own_miss_words(&miss)),
+        replaces: None,
+    })
 }
 
 /// The first clause of a miss of the file's own validation poses: by how much, against what.

@@ -114,20 +114,21 @@ pub(super) fn part_words(cause: &SweepCause, data: &str) -> String {
     )
 }
 
-/// The clause naming what the reference-pose test said of the sweep, where the drift found
-/// fits the poses best.
+/// The clause naming how the reference-pose test reads the sweep, where the drift found there
+/// fits the poses best (`calibrate` then leaves out that test's own warning of the sweep).
 fn shadow_words(shadow: &Option<SweepShadow>) -> String {
     let named = match shadow {
         None => return String::new(),
         Some(SweepShadow::HeldOffset(joints)) => {
             let held: Vec<String> = joints.iter().map(|k| format!("`cmd_{k}`")).collect();
-            format!("the offset of the held {}", held.join(" or "))
+            format!("an offset of the held {}", held.join(" or "))
         }
-        Some(SweepShadow::MovedBlock) => "the move of the block".to_string(),
+        Some(SweepShadow::MovedBlock) => "a move of its block".to_string(),
     };
     format!(
-        " (rather than {named} the reference-pose test names above for this experiment: where the sweep passes the \
-         reference pose a drift moves its point as that does, and over the validation poses the drift fits best)"
+        " (the reference-pose test, which compares the sweeps where each passes the pose with every joint at its held \
+         value, reads this sweep as {named}: a drift through the sweep moves its point there as that does, and over the \
+         validation poses the drift fits best)"
     )
 }
 

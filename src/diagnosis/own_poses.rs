@@ -13,7 +13,7 @@ use super::slips::ExplainedMiss;
 use super::sweep_causes::{SweepCause, SweepFault, sweep_cause_of_misses};
 use super::validate::{FittedToolMove, ValidationOptions, Verdict, validate, validate_free_tool};
 use crate::calibration::procedure::{
-    AxisEstimator, Calibration, PLAUSIBLE_AXIS_TILT_RAD, SIZE_TOLERANCE, longest_length_m,
+    AxisEstimator, Calibration, Implausible, PLAUSIBLE_AXIS_TILT_RAD, SIZE_TOLERANCE, longest_length_m,
 };
 use crate::measurement::{Measurement, MeasurementSet, bounded};
 use crate::plan::TOOL_EXPERIMENT;
@@ -147,6 +147,17 @@ pub enum SweepSearch {
     /// alike, so that no one sweep's cause is to be sought (each hypothesis the search tries
     /// costs a calibration per trial, half a minute on a paper campaign).
     Skipped,
+}
+
+impl SweepSearch {
+    /// The search after the calibration's checks `found` these: skipped where one is a slip of
+    /// the coordinates ([`Implausible::is_coordinate_slip`]).
+    pub fn after(found: &[Implausible]) -> SweepSearch {
+        match found.iter().any(Implausible::is_coordinate_slip) {
+            true => SweepSearch::Skipped,
+            false => SweepSearch::Run,
+        }
+    }
 }
 
 /// The axis-experiment calibration `cal` of `set` tested on the file's own validation poses

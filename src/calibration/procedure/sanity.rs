@@ -221,6 +221,19 @@ impl MisfitSweep {
     }
 }
 
+impl Implausible {
+    /// Whether this is a slip of the instrument's coordinates (an axis or all three read
+    /// scaled, the robot's size or handedness off), which moves every sweep and every pose
+    /// alike, so that no one sweep is its cause.
+    pub fn is_coordinate_slip(&self) -> bool {
+        match self {
+            Implausible::Size { .. } | Implausible::Mirrored { .. } => true,
+            Implausible::Scaled(slip) => matches!(slip, ScaleSlip::Column(_) | ScaleSlip::Coordinates { .. }),
+            _ => false,
+        }
+    }
+}
+
 impl std::fmt::Display for Implausible {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
