@@ -73,12 +73,7 @@ fn scale_of(
     if (s - 1.0).abs() <= z * sigma_s {
         return None;
     }
-    let options = ValidationOptions {
-        noise_rms_3d_mm: v.noise_rms_3d_mm,
-        noise_source: v.noise_source.clone(),
-        false_alarm: v.false_alarm,
-        noise_dof: v.noise_dof,
-    };
+    let options = ValidationOptions::of_validation(v);
     let undone = validate(&rewritten(rows, &scaled(s), desc)?, cal, desc, &options).ok()?;
     if summaries(&undone).any(exceeds) {
         return None;

@@ -80,8 +80,8 @@ pub use sweep_slips::{explained_sweep_misses, own_sweep_misses};
 pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
 pub use validate::{
     ChiSquare, Dominant, FittedToolMove, OrientationSummary, PointKind, PositionSummary, Prediction, Validation,
-    ValidationOptions, ValidationResidual, Verdict, residuals_less_calibration_error, validate, validate_free_tool,
-    validation_residuals_csv, write_validation_residuals_csv,
+    ValidationOptions, ValidationResidual, Verdict, curvature_counts, residuals_less_calibration_error, validate,
+    validate_free_tool, validation_residuals_csv, write_validation_residuals_csv,
 };
 
 use crate::calibration::free_pose::{FreePoseOptions, FreePoseSummary, calibrate_free_poses, with_fitted_targets};

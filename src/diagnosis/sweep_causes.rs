@@ -50,7 +50,7 @@
 
 use nalgebra::DMatrix;
 
-use super::{ValidationOptions, Verdict, validate, validate_free_tool};
+use super::{ValidationOptions, Verdict, curvature_counts, validate, validate_free_tool};
 use crate::calibration::procedure::{
     AxisExperiment, Calibration, axis_experiments_with, calibrate, screen_sweeps, wandering_sweep_bumps,
 };
@@ -345,7 +345,9 @@ pub fn sweep_cause_of_misses(
     let file_lines = set.line_span();
     let tried_sweeps = sweeps_tried(cal, desc, set)?;
     let (set, experiments) = (&tried_sweeps.set, &tried_sweeps.experiments);
-    let options = ValidationOptions::of_calibration(cal, SWEEP_CAUSE_FALSE_ALARM);
+    let mut options = ValidationOptions::of_calibration(cal, SWEEP_CAUSE_FALSE_ALARM);
+    // Every hypothesis is tested with the prediction the file as recorded is.
+    options.curvature_counts = Some(curvature_counts(poses, cal, desc, &options).ok()?);
     let score = |h: Option<Hypothesis>, c: &[f64]| -> Option<Score> {
         match h {
             None => score_of(set, cal, desc, (poses, &options)),

@@ -52,6 +52,14 @@ pub struct ValidationOptions {
     /// The degrees of freedom of the noise when it was estimated from data (the
     /// calibration's effective ones); the verdicts are then F tests. `None`: a known noise.
     pub noise_dof: Option<f64>,
+    /// Whether the model's curvature over the calibration's error counts in the prediction of
+    /// the free poses ([`curvature_counts`]); `None`: judged on the data validated. A search
+    /// that validates many recalibrations of one file against the same poses passes the
+    /// judgement of the file as recorded, so that its hypotheses are tested with the same
+    /// prediction (and the judgement, the drawn models' tool frames at up to 64 poses, is made
+    /// once).
+    #[serde(default)]
+    pub curvature_counts: Option<bool>,
 }
 
 impl ValidationOptions {
@@ -62,6 +70,7 @@ impl ValidationOptions {
             noise_source: "given".into(),
             false_alarm,
             noise_dof: None,
+            curvature_counts: None,
         }
     }
 
@@ -73,6 +82,7 @@ impl ValidationOptions {
             noise_source: v.noise_source.clone(),
             false_alarm: v.false_alarm,
             noise_dof: v.noise_dof,
+            curvature_counts: None,
         }
     }
 
@@ -94,6 +104,7 @@ impl ValidationOptions {
             noise_source: "calibration".into(),
             false_alarm,
             noise_dof,
+            curvature_counts: None,
         }
     }
 }
@@ -443,18 +454,9 @@ pub struct FittedToolMove {
     pub rotation_rad: Vector3<f64>,
 }
 
-/// [`validate`], the tool frame estimated from the free poses with `free_tool`, and that
-/// estimate (the validation poses' free components; empty without).
-fn validate_with(
-    set: &MeasurementSet,
-    cal: &Calibration,
-    desc: &RobotDescription,
-    options: &ValidationOptions,
-    free_tool: bool,
-) -> Result<(Validation, DVector<f64>), DiagnosisError> {
-    let clean = CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?;
-    let residuals: Vec<ValidationResidual> = set
-        .rows()
+/// Each row of `set` against its prediction `clean` (measured minus predicted).
+fn residuals_of(set: &MeasurementSet, clean: &CleanCampaign) -> Vec<ValidationResidual> {
+    set.rows()
         .iter()
         .zip(clean.positions())
         .map(|(m, p)| {
@@ -470,9 +472,37 @@ fn validate_with(
                 error_mm: (Vector3::from(m.position_mm) - Vector3::from(p_mm)).norm(),
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Whether the model's curvature over `cal`'s error counts in the prediction of `set`'s free
+/// poses, as [`validate`] judges it with `options` (where they leave it to be judged): a
+/// search passes it to the validations of its rewrites ([`ValidationOptions::curvature_counts`]).
+pub fn curvature_counts(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    options: &ValidationOptions,
+) -> Result<bool, DiagnosisError> {
+    let clean = CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?;
     let controller = Controller::from_description(desc);
-    let (error, frames) = prediction_error(set, (cal, desc, &controller), &residuals, options.noise_rms_3d_mm)?;
+    let (error, _) = prediction_error(set, (cal, desc, &controller), &residuals_of(set, &clean), options)?;
+    Ok(error.has_curvature())
+}
+
+/// [`validate`], the tool frame estimated from the free poses with `free_tool`, and that
+/// estimate (the validation poses' free components; empty without).
+fn validate_with(
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+    options: &ValidationOptions,
+    free_tool: bool,
+) -> Result<(Validation, DVector<f64>), DiagnosisError> {
+    let clean = CleanCampaign::new(set, cal, desc, &desc.tool_targets_m())?;
+    let residuals = residuals_of(set, &clean);
+    let controller = Controller::from_description(desc);
+    let (error, frames) = prediction_error(set, (cal, desc, &controller), &residuals, options)?;
     let free = free_poses(
         set,
         (cal, desc, &controller),
@@ -833,17 +863,21 @@ const CURVATURE_MAX_POSES: usize = 5000;
 
 /// What `set`'s points may miss by beside the noise ([`PredictionError`]), the model's
 /// curvature over the calibration's error included where it counts
-/// ([`super::prediction_curvature`]): judged on at most [`CURVATURE_SAMPLE`] of its free
-/// poses, each with its noise (`noise_rms_3d_mm`), repeatability and linear calibration
-/// covariance. A set without free poses, or with more than [`CURVATURE_MAX_POSES`], keeps the
-/// linear prediction.
+/// ([`super::prediction_curvature`]): as `options` say ([`ValidationOptions::curvature_counts`]),
+/// else judged on at most [`CURVATURE_SAMPLE`] of its free poses, each with its noise
+/// (`options.noise_rms_3d_mm`), repeatability and linear calibration covariance. A set without
+/// free poses, or with more than [`CURVATURE_MAX_POSES`], keeps the linear prediction.
 fn prediction_error<'a>(
     set: &MeasurementSet,
     (cal, desc, controller): (&'a Calibration, &'a RobotDescription, &'a Controller),
     residuals: &[ValidationResidual],
-    noise_rms_3d_mm: f64,
+    options: &ValidationOptions,
 ) -> Result<(PredictionError<'a>, SampledFrames), DiagnosisError> {
-    let error = PredictionError::new(cal, controller, desc)?.with_curvature();
+    let linear = PredictionError::new(cal, controller, desc)?;
+    if options.curvature_counts == Some(false) {
+        return Ok((linear, SampledFrames::new()));
+    }
+    let error = linear.with_curvature();
     if !error.has_curvature() {
         return Ok((error, SampledFrames::new()));
     }
@@ -852,6 +886,9 @@ fn prediction_error<'a>(
     if poses > CURVATURE_MAX_POSES {
         return Ok((error.without_curvature(), SampledFrames::new()));
     }
+    if options.curvature_counts == Some(true) {
+        return Ok((error, SampledFrames::new()));
+    }
     let sampled: BTreeSet<usize> = crate::measurement::bounded::evenly_spaced((0..poses).collect(), CURVATURE_SAMPLE)
         .into_iter()
         .collect();
@@ -859,7 +896,7 @@ fn prediction_error<'a>(
         let none = SampledFrames::new();
         let context = PoseContext::new(set, (cal, desc, controller), residuals, (&error, &none), false);
         let tool_targets = desc.tool_targets_m();
-        let (linear, variance_coord_mm2) = (error.linear_rank(), noise_rms_3d_mm.powi(2) / 3.0);
+        let (linear, variance_coord_mm2) = (error.linear_rank(), options.noise_rms_3d_mm.powi(2) / 3.0);
         let (mut blocks, mut frames) = (Vec::with_capacity(sampled.len()), SampledFrames::new());
         for (_, pose) in free_pose_groups(set, &order)
             .enumerate()
