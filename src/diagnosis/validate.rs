@@ -1030,7 +1030,8 @@ pub fn residuals_less_calibration_error(
         .map(|r| Vector3::from(r.measured_mm) - Vector3::from(r.predicted_mm))
         .collect();
     let controller = Controller::from_description(desc);
-    let (error, frames) = prediction_error(set, (cal, desc, &controller), &v.residuals, v.noise_rms_3d_mm)?;
+    let options = ValidationOptions::of_validation(v);
+    let (error, frames) = prediction_error(set, (cal, desc, &controller), &v.residuals, &options)?;
     if !error.has_calibration() {
         return Ok(out);
     }
