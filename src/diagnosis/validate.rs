@@ -75,14 +75,15 @@ impl ValidationOptions {
     }
 
     /// The options `v` was made with (its noise, source, false-alarm rate and noise degrees of
-    /// freedom): the slip searches test their rewrites as `v` tested the file.
+    /// freedom, and whether the curvature counted): the slip searches test their rewrites as
+    /// `v` tested the file.
     pub fn of_validation(v: &Validation) -> Self {
         ValidationOptions {
             noise_rms_3d_mm: v.noise_rms_3d_mm,
             noise_source: v.noise_source.clone(),
             false_alarm: v.false_alarm,
             noise_dof: v.noise_dof,
-            curvature_counts: None,
+            curvature_counts: v.curvature_counted,
         }
     }
 
@@ -381,6 +382,11 @@ pub struct Validation {
     /// Per point (written as `residuals.csv`, not in the JSON).
     #[serde(skip)]
     pub residuals: Vec<ValidationResidual>,
+    /// Whether the model's curvature over the calibration's error counted in the prediction
+    /// of the free poses ([`ValidationOptions::curvature_counts`]; not in the JSON, `None` for
+    /// a validation read back).
+    #[serde(skip)]
+    pub curvature_counted: Option<bool>,
 }
 
 impl Validation {
@@ -536,6 +542,7 @@ fn validate_with(
         verdict,
         warnings: Vec::new(),
         residuals,
+        curvature_counted: Some(error.has_curvature()),
     };
     Ok((v, fitted))
 }
