@@ -413,3 +413,26 @@ fn the_validate_headline_never_contradicts_a_part_that_exceeds() {
         "{text}"
     );
 }
+
+/// The curvature's judgement passed in (`ValidationOptions::curvature_counts`, as the slip and
+/// sweep-cause searches pass the file's to the validations of their rewrites) gives the
+/// validation judged afresh, to the bit; the opposite judgement changes the prediction (the
+/// drawn remainder's variance is in it or not).
+#[test]
+fn a_curvature_judgement_passed_in_is_the_one_validate_makes() {
+    let desc = RobotDescription::asea_irb6l();
+    let cal = calibration(&desc);
+    let set = campaign(0.19, 30, 23);
+    let judged = validate(&set, &cal, &desc, &options(0.19)).unwrap();
+    let counted = judged.curvature_counted.expect("made by validate");
+    let given = |counts: bool| ValidationOptions {
+        curvature_counts: Some(counts),
+        ..options(0.19)
+    };
+    let passed = validate(&set, &cal, &desc, &given(counted)).unwrap();
+    let json = |v: &Validation| serde_json::to_string(v).unwrap();
+    assert_eq!(json(&passed), json(&judged));
+    let flipped = validate(&set, &cal, &desc, &given(!counted)).unwrap();
+    let predicted = |v: &Validation| v.validation.as_ref().unwrap().predicted_mm.total;
+    assert_ne!(predicted(&flipped), predicted(&judged), "counted: {counted}");
+}
