@@ -346,7 +346,7 @@ pub fn sweep_cause_of_misses(
     let tried_sweeps = sweeps_tried(cal, desc, set)?;
     let (set, experiments) = (&tried_sweeps.set, &tried_sweeps.experiments);
     let mut options = ValidationOptions::of_calibration(cal, SWEEP_CAUSE_FALSE_ALARM);
-    // Every hypothesis is tested with the prediction the file as recorded is.
+    // Every hypothesis is tested with the curvature judgement of the file as recorded.
     options.curvature_counts = Some(curvature_counts(poses, cal, desc, &options).ok()?);
     let score = |h: Option<Hypothesis>, c: &[f64]| -> Option<Score> {
         match h {
