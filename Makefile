@@ -9,8 +9,9 @@ FUZZ_SECONDS ?= 600
 # One optimised build for every target here: the `quick-release` profile with the rerun
 # recorder (feature `viz`), so that `make run`, `make test` and the rest build it once.
 QUICK := --profile quick-release --features viz
-# The binary the integration tests run: that build. The debug build takes about 10 times the
-# CPU on the tests' calibrations and searches; the library's own tests run in the debug build.
+# The binary the integration tests run: that build. The tests themselves are built in the same
+# profile with the same features, so they link the libraries that build compiled (a debug build
+# would compile every dependency again and run the calibrations about 10 times slower).
 TEST_BIN ?= $$(cd $${CARGO_TARGET_DIR:-target} && pwd)/quick-release/axiscal
 
 .PHONY: run test test-real test-robots noise-check iso9283-check certificate tool-accuracy bench fuzz study blind blind-free-poses blind-analytic budget lint doc clean-results setup-viewer view
@@ -33,13 +34,14 @@ view:
 	$(CARGO) run $(QUICK) -- view $(OUT)/campaign.rrd
 
 ## test: the whole test suite (unit, integration, doc tests; the benchmarks are `make bench`'s);
-## reads nothing outside the repository. The integration tests (the recorder's included) and
-## the smoke scenario run the optimised binary with the recorder (TEST_BIN, `make run`'s
-## build); the library's tests run in the debug build.
+## reads nothing outside the repository. Built as `make run` builds (the `quick-release` profile
+## with the recorder): the integration tests (the recorder's included) and the smoke scenario
+## run that binary (TEST_BIN). A plain `cargo test` runs the same tests in the debug build,
+## and there also the refusal of `--record` by a build without the recorder.
 test:
 	$(CARGO) build $(QUICK)
-	AXISCAL_TEST_BIN="$(TEST_BIN)" $(CARGO) test --lib --bins --tests --examples
-	$(CARGO) test --doc
+	AXISCAL_TEST_BIN="$(TEST_BIN)" $(CARGO) test $(QUICK) --lib --bins --tests --examples
+	$(CARGO) test $(QUICK) --doc
 	$(TEST_BIN) run scenarios/ci-smoke.toml --force --out results/ci-smoke
 
 ## test-real: the tests on public real data sets, which need ../shared/data/real/ beside the
@@ -47,7 +49,7 @@ test:
 ## optimised build's (TEST_BIN, as `make test`)
 test-real:
 	$(CARGO) build $(QUICK)
-	AXISCAL_TEST_BIN="$(TEST_BIN)" $(CARGO) test --test it -- --ignored real_boby_klimchik:: real_fanuc:: real_sscanss2:: real_rct:: hostile_calibration:: hostile_round6a:: hostile_round9a:: hostile_round9c:: hostile_round9e:: hostile_round10a:: hostile_round10c:: hostile_round10d:: hostile_round11a:: hostile_round11e:: hostile_round13a:: hostile_round14a:: hostile_round14e:: hostile_round15a:: hostile_round16m:: hostile_round18m::a_swap
+	AXISCAL_TEST_BIN="$(TEST_BIN)" $(CARGO) test $(QUICK) --test it -- --ignored real_boby_klimchik:: real_fanuc:: real_sscanss2:: real_rct:: hostile_calibration:: hostile_round6a:: hostile_round9a:: hostile_round9c:: hostile_round9e:: hostile_round10a:: hostile_round10c:: hostile_round10d:: hostile_round11a:: hostile_round11e:: hostile_round13a:: hostile_round14a:: hostile_round14e:: hostile_round15a:: hostile_round16m:: hostile_round18m::a_swap
 
 ## test-robots: the four issue-15 test robots (P-R-P-P table, two-axis positioner, SCARA,
 ## six-axis arm with a repeated sweep and wandering held joints), 50 seeds of noise each:

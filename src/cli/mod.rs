@@ -85,7 +85,7 @@ struct Cli {
 
 /// The error as one line: its context and causes joined by `: `, line breaks folded into `; `.
 /// Each error is handled once: the library's errors show their cause and do not also chain it,
-/// so no cause is repeated (checked in debug builds, which the tests run).
+/// so no cause is repeated (checked in debug builds: a plain `cargo test` runs the commands so).
 pub fn one_line(e: &anyhow::Error) -> String {
     debug_assert!(
         !e.chain().skip(1).any(|cause| {

@@ -5,7 +5,8 @@
 //!
 //! The recordings are made by the binary `make test` builds (`AXISCAL_TEST_BIN`, the
 //! `quick-release` profile with the feature, as `make run` builds it), and the refusals by this
-//! build's own binary (the tests' build, without the feature unless asked for).
+//! build's own binary when it has no recorder: a plain `cargo test` tests them, `make test`
+//! (which builds the tests with the feature) leaves them out.
 
 use crate::common;
 

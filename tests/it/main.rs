@@ -7,6 +7,7 @@ mod common;
 mod anywhere;
 mod architecture;
 mod bounded_fits;
+mod build_features;
 mod calibration_procedure;
 mod calibration_study;
 mod campaign_plan;
