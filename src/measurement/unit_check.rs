@@ -326,6 +326,21 @@ fn in_command_order<'a>(rows: &[&'a Measurement], k: usize) -> Vec<&'a Measureme
     sorted
 }
 
+/// The command of joint `k` (0-based) that separates the first and last points of a triple
+/// of [`arc_of`]: the median over its triples (`rows[i]`, `rows[i + m]`, `rows[i + 2m]` in
+/// command order, `m` a third of the rows) of their commanded span, read in degrees; 0 with
+/// fewer than 3 rows. Five points over 30 degrees make one triple over 15 degrees.
+fn triple_span_deg(rows: &[&Measurement], k: usize) -> f64 {
+    let rows = in_command_order(rows, k);
+    let m = rows.len() / 3;
+    median(
+        (0..m)
+            .map(|i| (rows[i + 2 * m].cmd[k] - rows[i].cmd[k]).abs().min(360.0))
+            .collect(),
+    )
+    .max(0.0)
+}
+
 /// One axis experiment's target-0 arc from the circles through its point triples, taken in the
 /// order of the commands ([`in_command_order`]).
 fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
@@ -393,13 +408,15 @@ fn measured_chord(rows: &[&Measurement], k: usize) -> f64 {
 }
 
 /// Whether the arc of `rows` (target 0 of joint `k`, 0-based, `radius_mm` from its axis by the
-/// description) is too short to judge: its sagitta by the description and the commands is below
-/// [`MIN_JUDGED_SAGITTA_MM`], and its points spread either that little too or as far as the
-/// commands move them (the chord the description and the commands give, within
-/// [`SLIP_FACTOR`]): a short sweep, not a slip. Commands in radians draw a chord 57 times the
-/// commanded one; coordinates in metres a thousandth of it.
+/// description) is too short to judge: the sagitta of the arc through one of its point triples
+/// ([`triple_span_deg`]: the circles [`arc_of`] judges) by the description and the commands is
+/// below [`MIN_JUDGED_SAGITTA_MM`], and its points spread either that little too or as far as
+/// the commands move them (the chord of the whole sweep the description and the commands give,
+/// within [`SLIP_FACTOR`]): a short sweep, not a slip. Commands in radians draw a chord 57 times
+/// the commanded one; coordinates in metres a thousandth of it.
 fn too_short_to_judge(rows: &[&Measurement], k: usize, radius_mm: f64) -> bool {
-    let (sagitta, chord) = arc_extent_mm(radius_mm, commanded_span_deg(rows, k));
+    let (sagitta, _) = arc_extent_mm(radius_mm, triple_span_deg(rows, k));
+    let (_, chord) = arc_extent_mm(radius_mm, commanded_span_deg(rows, k));
     let points: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.position_mm)).collect();
     sagitta < MIN_JUDGED_SAGITTA_MM
         && (crate::numerics::stats::rms_spread(&points) < MIN_JUDGED_SAGITTA_MM
@@ -1084,6 +1101,41 @@ pub fn pose_slips(positions_m: &[Point3<f64>], desc: &RobotDescription) -> Optio
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rows of joint 1 at `commands` (degrees), the other fields irrelevant here.
+    fn at_commands(commands: &[f64]) -> Vec<Measurement> {
+        commands
+            .iter()
+            .enumerate()
+            .map(|(step, c)| Measurement {
+                experiment: "axis1".into(),
+                moved_joint: 1,
+                step,
+                target: 0,
+                position_mm: [0.0; 3],
+                cmd: vec![*c],
+                payload_kg: Measurement::DEFAULT_PAYLOAD_KG,
+                temperature_c: Measurement::DEFAULT_TEMPERATURE_C,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_triple_spans_two_thirds_of_the_points_it_is_taken_from() {
+        let span = |commands: &[f64]| {
+            let rows = at_commands(commands);
+            triple_span_deg(&rows.iter().collect::<Vec<_>>(), 0)
+        };
+        // Five points over 30 degrees: one triple, over its first three points.
+        assert_eq!(span(&[0.0, 7.5, 15.0, 22.5, 30.0]), 15.0);
+        // Sixteen points over 45 degrees: five triples, each over ten steps of 3 degrees.
+        let sixteen: Vec<f64> = (0..16).map(|i| 3.0 * i as f64).collect();
+        assert_eq!(span(&sixteen), 30.0);
+        // Written in another order (descending): the same triples.
+        let reversed: Vec<f64> = sixteen.iter().rev().copied().collect();
+        assert_eq!(span(&reversed), 30.0);
+        assert_eq!(span(&[0.0, 10.0]), 0.0);
+    }
 
     #[test]
     fn a_circle_through_three_points_has_its_radius_and_angle() {

@@ -123,6 +123,7 @@ mod reproducible_streams;
 mod robot_description;
 mod scenario_run;
 mod seven_joints;
+mod short_sweeps;
 mod sliding_end_to_end;
 mod test_robots;
 mod thread_determinism;
