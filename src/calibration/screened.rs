@@ -12,7 +12,9 @@
 //! the fit that failed. Once the procedure has fitted the model, the points of such sweeps
 //! moved to the design pose by it are screened as a still sweep's are
 //! ([`screen_wandering_sweeps`]): a gross error the fit took in without failing is dropped with
-//! its pose, and the procedure runs again, at most [`WANDERING_ROUNDS_MAX`] times.
+//! its pose, and the procedure runs again, at most [`WANDERING_ROUNDS_MAX`] times. Where the
+//! procedure fails on a joint fitted from several sweeps, the one sweep without which it passes
+//! is named ([`failing_sweep`]).
 
 use crate::calibration::procedure::{
     Calibration, CalibrationOptions, ColumnSource, OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, OutlierPoint, ProcedureError,
@@ -80,6 +82,59 @@ pub struct CalibrationFailed {
     pub outliers: Vec<OutlierPoint>,
     /// The rows it kept; `None` when it dropped none.
     pub screened: Option<MeasurementSet>,
+    /// The one sweep of the failing joint without which the procedure passes, where the error
+    /// names a joint fitted from several sweeps ([`failing_sweep`]).
+    pub sweep: Option<FailingSweep>,
+}
+
+/// The sweep that carries a joint's failure in the procedure ([`failing_sweep`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FailingSweep {
+    /// The experiment.
+    pub experiment: String,
+    /// Its joint.
+    pub joint: usize,
+    /// Its first and last file lines, when the data know them.
+    pub lines: Option<(u64, u64)>,
+}
+
+/// Where the procedure failed on a joint (`error` names one: its axis fit misses its points, or
+/// the held joints' correction diverged on it) fitted from several sweeps: the one sweep
+/// without which the procedure on `set` passes, where without each other sweep of the joint it
+/// still fails, as [`crate::calibration::procedure::MisfitSweep`] locates a misfit in a
+/// calibration that passes. `None` when none or more than one does.
+pub fn failing_sweep(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    options: &CalibrationOptions,
+    error: &ProcedureError,
+) -> Option<FailingSweep> {
+    let joint = error.joint()?;
+    let sweeps: Vec<String> = (set.experiments().iter())
+        .filter(|e| e.moved_joint == joint)
+        .map(|e| e.name.to_string())
+        .collect();
+    if sweeps.len() < 2 {
+        return None;
+    }
+    let rows_of = |name: &str| -> Vec<usize> {
+        (set.rows().iter().enumerate())
+            .filter(|(_, m)| m.experiment == name)
+            .map(|(i, _)| i)
+            .collect()
+    };
+    let passing: Vec<&String> = (sweeps.iter())
+        .filter(|name| calibrate(&set.without_rows(&rows_of(name)), desc, options).is_ok())
+        .collect();
+    let [experiment] = passing[..] else {
+        return None;
+    };
+    let lines: Vec<u64> = rows_of(experiment).into_iter().filter_map(|i| set.line_of(i)).collect();
+    Some(FailingSweep {
+        experiment: experiment.clone(),
+        joint,
+        lines: lines.first().zip(lines.last()).map(|(a, b)| (*a, *b)),
+    })
 }
 
 /// The independent-axis calibration of `set` with `options` as `calibrate` runs it (module
@@ -100,10 +155,12 @@ pub fn calibrate_screened(
                 (cal, off_path)
             }
             None => {
+                let sweep = failing_sweep(kept, desc, options, &error);
                 return Err(ScreenFailure::Calibration(Box::new(CalibrationFailed {
                     error,
                     outliers: screening.outliers,
                     screened: screening.set,
+                    sweep,
                 })));
             }
         },

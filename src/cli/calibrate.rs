@@ -22,7 +22,7 @@ use axiscal::calibration::record::{CalibrationRecord, Reports};
 use axiscal::calibration::refine::{RefineOptions, Refinement, enough_free_poses};
 use axiscal::calibration::refit_model::refine::refine_carrying;
 use axiscal::calibration::refit_model::validation_poses_at_most;
-use axiscal::calibration::screened::{BumpsUndone, CalibrationFailed, ScreenFailure, calibrate_screened};
+use axiscal::calibration::screened::{BumpsUndone, CalibrationFailed, FailingSweep, ScreenFailure, calibrate_screened};
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccuracy, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{
@@ -482,17 +482,32 @@ fn calibration_failed(
     failed: CalibrationFailed,
     printer: Printer,
 ) -> Result<(CalibrationRecord, Vec<MapPoint>, AxesFound)> {
+    let sweep = failing_sweep_words(failed.sweep.as_ref());
     if let e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. }) = &failed.error
         && !args.refine
     {
-        let mut record = sweeps_as_free_poses(args, set, desc, e, printer)?;
+        let mut record = sweeps_as_free_poses(args, (set, desc), (e, &sweep), printer)?;
         let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, desc, set);
         record.reports.tool_accuracy = accuracy;
         return Ok((record, map, AxesFound::default()));
     }
     checks::print_outliers(&failed.outliers, &args.data, "calibrated");
     let kept = failed.screened.as_ref().unwrap_or(set);
-    Err(failure_words(args, (kept, desc), options, &failed.error))
+    Err(failure_words(args, (kept, desc), options, (&failed.error, &sweep)))
+}
+
+/// The words naming the sweep that carries a joint's failure (empty without one).
+fn failing_sweep_words(sweep: Option<&FailingSweep>) -> String {
+    let Some(s) = sweep else {
+        return String::new();
+    };
+    let lines = s.lines.map_or_else(String::new, |(a, b)| format!(" (lines {a}-{b})"));
+    format!(
+        "; the failure is experiment {}'s{lines}: without it the calibration passes, without any other sweep of joint {} \
+         it fails: check that sweep's rows (its block moved part-way, a bump of the instrument or the robot, or a held \
+         joint's recorded command off through it: a value typed wrong or the joint re-mastered between the sweeps)",
+        s.experiment, s.joint
+    )
 }
 
 /// The outliers of the sweeps whose held joints wander, as warnings naming each row: those the
@@ -544,13 +559,14 @@ fn print_wandering_outliers(outliers: &[OutlierPoint], desc: &RobotDescription, 
     checks::print_approach_notes(&moved, &args.data, "calibrated again");
 }
 
-/// Why the axis-experiment calibration of `screened` failed (`e`), with what `--noise-mm` or
+/// Why the axis-experiment calibration of `screened` failed (`e`, and the words naming the sweep
+/// that carries it, [`failing_sweep_words`]), with what `--noise-mm` or
 /// `--repeatability-rad` had to do with it.
 fn failure_words(
     args: &Args,
     (screened, desc): (&MeasurementSet, &RobotDescription),
     options: &CalibrationOptions,
-    e: &ProcedureError,
+    (e, sweep): (&ProcedureError, &str),
 ) -> anyhow::Error {
     if let Some(too_small) = args
         .noise_mm
@@ -568,7 +584,7 @@ fn failure_words(
         ),
         (None, None) => String::new(),
     };
-    anyhow::anyhow!("calibrating {}: {e}{hint}", args.data.display())
+    anyhow::anyhow!("calibrating {}: {e}{sweep}{hint}", args.data.display())
 }
 
 /// The independent-axis calibration of `set` (`--refine` applied) with its reports, the
@@ -699,19 +715,19 @@ pub(super) fn print_coordinate_scale(found: &CoordinateScale, set: &MeasurementS
 /// (`failure`); an error when the sweeps' targets cannot be free poses.
 fn sweeps_as_free_poses(
     args: &Args,
-    set: &MeasurementSet,
-    desc: &RobotDescription,
-    failure: &ProcedureError,
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    (failure, sweep): (&ProcedureError, &str),
     printer: Printer,
 ) -> Result<CalibrationRecord> {
     if let Some(why_not) = free_pose::poses::why_sweeps_are_not_poses(set, desc) {
         anyhow::bail!(
-            "calibrating {}: {failure}; the sweeps cannot be fitted as free poses either: {why_not}",
+            "calibrating {}: {failure}{sweep}; the sweeps cannot be fitted as free poses either: {why_not}",
             args.data.display()
         );
     }
-    let why =
-        format!("the sweeps stand at configurations too far apart for the independent-axis procedure ({failure})");
+    let why = format!(
+        "the sweeps stand at configurations too far apart for the independent-axis procedure ({failure}{sweep})"
+    );
     eprintln!(
         "warning: {}: {why}; every point is fitted as a free pose instead (docs/method.md, \"Calibration from free poses\")",
         args.data.display()
@@ -725,7 +741,7 @@ fn sweeps_as_free_poses(
         (Ok(record), _) => record,
         // The rows named are the likelier cause than the configurations' spread.
         (Err(_), Some(misfit)) => anyhow::bail!(
-            "calibrating {}: {misfit}; fitted as free poses, the sweeps fail too",
+            "calibrating {}: {misfit}{sweep}; fitted as free poses, the sweeps fail too",
             args.data.display()
         ),
         (Err(e), None) => return Err(e),

@@ -213,12 +213,12 @@ fn manyfew_plan(dir: &Path) -> PathBuf {
     path
 }
 
-/// The six-axis arm's many-few campaign of `seed` (analytic, 20 validation poses) in `dir`.
-fn manyfew(dir: &Path, seed: u64) -> PathBuf {
+/// The many-few campaign of robot `name` and `seed` (analytic, 20 validation poses) in `dir`.
+fn manyfew(dir: &Path, name: &str, seed: u64) -> PathBuf {
     let plan = manyfew_plan(dir);
-    let out = dir.join(format!("manyfew_{seed}.csv"));
+    let out = dir.join(format!("manyfew_{name}_{seed}.csv"));
     axiscal()
-        .args(["simulate", "-q", "--sim", "analytic", "--robot", &robot("arm6-dh")])
+        .args(["simulate", "-q", "--sim", "analytic", "--robot", &robot(name)])
         .arg("--plan")
         .arg(&plan)
         .args(["--validation-poses", "20", "--seed", &seed.to_string(), "--out"])
@@ -250,7 +250,7 @@ fn lines_of(file: &Path, experiment: &str) -> (usize, usize) {
 #[test]
 fn a_slip_in_one_of_several_sweeps_is_named_with_its_lines() {
     let dir = tempfile::tempdir().unwrap();
-    let clean = manyfew(dir.path(), 41);
+    let clean = manyfew(dir.path(), "arm6-dh", 41);
     let (code, e) = calibrate(dir.path(), &clean, "arm6-dh");
     assert_eq!(code, 0, "{e}");
     assert!(alarms(&e).is_empty(), "a false alarm: {e}");
@@ -295,6 +295,35 @@ fn a_slip_in_one_of_several_sweeps_is_named_with_its_lines() {
             assert!(said.contains(&format!("one point: line {line}, step 2")), "{said}");
         }
     }
+}
+
+/// The same plan on the UR5e (seed 41, as above): a held `cmd_1` recorded 1 deg off through
+/// axis3-2 makes the correction for the held joints' recorded values diverge, and the
+/// calibration fails (the sweeps cannot be free poses either); the error used to name joint 3's
+/// three sweeps together. It now names axis3-2 with its lines: without it the procedure passes,
+/// without either other sweep of joint 3 it fails.
+#[test]
+fn a_sweep_that_fails_the_calibration_is_named_with_its_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = manyfew(dir.path(), "ur5e-dh", 41);
+    let (code, e) = calibrate(dir.path(), &clean, "ur5e-dh");
+    assert_eq!(code, 0, "{e}");
+    assert!(alarms(&e).is_empty(), "a false alarm: {e}");
+    let held = altered_csv(
+        &clean,
+        "held.csv",
+        |_| true,
+        |f| {
+            if f[0] == "axis3-2" {
+                f[7] = (f[7].parse::<f64>().unwrap() + 1.0).to_string()
+            }
+        },
+    );
+    let (code, e) = calibrate(dir.path(), &held, "ur5e-dh");
+    assert_eq!(code, 2, "{e}");
+    let (a, b) = lines_of(&clean, "axis3-2");
+    let named = format!("the failure is experiment axis3-2's (lines {a}-{b}): without it the calibration passes");
+    assert!(e.lines().any(|l| l.starts_with("error:") && l.contains(&named)), "{e}");
 }
 
 /// `simulate --sim analytic` of the six-axis arm's shipped truth with `seed` (30 validation
