@@ -326,10 +326,10 @@ fn in_command_order<'a>(rows: &[&'a Measurement], k: usize) -> Vec<&'a Measureme
     sorted
 }
 
-/// The command of joint `k` (0-based) that separates the first and last points of a triple
-/// of [`arc_of`]: the median over its triples (`rows[i]`, `rows[i + m]`, `rows[i + 2m]` in
-/// command order, `m` a third of the rows) of their commanded span, read in degrees; 0 with
-/// fewer than 3 rows. Five points over 30 degrees make one triple over 15 degrees.
+/// How far the command of joint `k` (0-based) moves from the first to the last point of a
+/// triple of [`arc_of`] (`rows[i]`, `rows[i + m]`, `rows[i + 2m]` in command order, `m` a third
+/// of the rows): the median over the triples, read in degrees; 0 with fewer than 3 rows. Five
+/// points over 30 degrees make one triple over 15 degrees.
 fn triple_span_deg(rows: &[&Measurement], k: usize) -> f64 {
     let rows = in_command_order(rows, k);
     let m = rows.len() / 3;
@@ -1122,19 +1122,24 @@ mod tests {
 
     #[test]
     fn a_triple_spans_two_thirds_of_the_points_it_is_taken_from() {
-        let span = |commands: &[f64]| {
+        // The commands are whole degrees or halves: each difference is exact, to a rounding.
+        let spans = |commands: &[f64], expected: f64| {
             let rows = at_commands(commands);
-            triple_span_deg(&rows.iter().collect::<Vec<_>>(), 0)
+            let span = triple_span_deg(&rows.iter().collect::<Vec<_>>(), 0);
+            assert!(
+                (span - expected).abs() <= f64::EPSILON * expected,
+                "{commands:?}: {span}"
+            );
         };
         // Five points over 30 degrees: one triple, over its first three points.
-        assert_eq!(span(&[0.0, 7.5, 15.0, 22.5, 30.0]), 15.0);
+        spans(&[0.0, 7.5, 15.0, 22.5, 30.0], 15.0);
         // Sixteen points over 45 degrees: five triples, each over ten steps of 3 degrees.
         let sixteen: Vec<f64> = (0..16).map(|i| 3.0 * i as f64).collect();
-        assert_eq!(span(&sixteen), 30.0);
+        spans(&sixteen, 30.0);
         // Written in another order (descending): the same triples.
         let reversed: Vec<f64> = sixteen.iter().rev().copied().collect();
-        assert_eq!(span(&reversed), 30.0);
-        assert_eq!(span(&[0.0, 10.0]), 0.0);
+        spans(&reversed, 30.0);
+        spans(&[0.0, 10.0], 0.0);
     }
 
     #[test]

@@ -16,7 +16,7 @@
 //! one-point outlier. Defect 11 (U): `validate` named a held command recorded 1 deg off through
 //! one sweep as two columns swapped; the held offset is now tried first and named.
 
-use crate::common::{altered_csv, axiscal, stderr};
+use crate::common::{altered_csv, altered_experiment, axiscal, stderr};
 use std::path::{Path, PathBuf};
 
 /// The shipped description `name` under `scenarios/robots/`.
@@ -216,11 +216,17 @@ fn manyfew_plan(dir: &Path) -> PathBuf {
 /// The many-few campaign of robot `name` and `seed` (analytic, 20 validation poses) in `dir`.
 fn manyfew(dir: &Path, name: &str, seed: u64) -> PathBuf {
     let plan = manyfew_plan(dir);
-    let out = dir.join(format!("manyfew_{name}_{seed}.csv"));
+    simulated_with_plan(dir, name, &plan, seed, &format!("manyfew_{name}_{seed}.csv"))
+}
+
+/// `simulate --sim analytic` of robot `name` with `plan` and `seed` (20 validation poses) as
+/// `file` in `dir`.
+pub fn simulated_with_plan(dir: &Path, name: &str, plan: &Path, seed: u64, file: &str) -> PathBuf {
+    let out = dir.join(file);
     axiscal()
         .args(["simulate", "-q", "--sim", "analytic", "--robot", &robot(name)])
         .arg("--plan")
-        .arg(&plan)
+        .arg(plan)
         .args(["--validation-poses", "20", "--seed", &seed.to_string(), "--out"])
         .arg(&out)
         .arg("--force")
@@ -254,18 +260,8 @@ fn a_slip_in_one_of_several_sweeps_is_named_with_its_lines() {
     let (code, e) = calibrate(dir.path(), &clean, "arm6-dh");
     assert_eq!(code, 0, "{e}");
     assert!(alarms(&e).is_empty(), "a false alarm: {e}");
-    let change = |name: &str, experiment: &'static str, edit: fn(&mut Vec<String>)| {
-        altered_csv(
-            &clean,
-            name,
-            |_| true,
-            move |f| {
-                if f[0] == experiment {
-                    edit(f)
-                }
-            },
-        )
-    };
+    let change =
+        |name: &str, experiment: &str, edit: fn(&mut Vec<String>)| altered_experiment(&clean, name, experiment, edit);
     let held = change("held.csv", "axis3-2", |f| {
         f[7] = (f[7].parse::<f64>().unwrap() + 1.0).to_string()
     });
@@ -309,16 +305,9 @@ fn a_sweep_that_fails_the_calibration_is_named_with_its_lines() {
     let (code, e) = calibrate(dir.path(), &clean, "ur5e-dh");
     assert_eq!(code, 0, "{e}");
     assert!(alarms(&e).is_empty(), "a false alarm: {e}");
-    let held = altered_csv(
-        &clean,
-        "held.csv",
-        |_| true,
-        |f| {
-            if f[0] == "axis3-2" {
-                f[7] = (f[7].parse::<f64>().unwrap() + 1.0).to_string()
-            }
-        },
-    );
+    let held = altered_experiment(&clean, "held.csv", "axis3-2", |f| {
+        f[7] = (f[7].parse::<f64>().unwrap() + 1.0).to_string()
+    });
     let (code, e) = calibrate(dir.path(), &held, "ur5e-dh");
     assert_eq!(code, 2, "{e}");
     let (a, b) = lines_of(&clean, "axis3-2");

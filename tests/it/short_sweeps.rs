@@ -6,8 +6,9 @@
 //! as a command offset by a quarter turn (seeds 42 and 44) or a column in micrometres. A column
 //! in other units still moves the sweep by far more than its noise and is still named.
 
-use crate::common::{altered_csv, axiscal, stderr};
+use crate::common::{altered_experiment, axiscal, scale_fields, stderr};
 use crate::hostile_round15s::robot;
+use crate::hostile_round17j::simulated_with_plan;
 use std::path::{Path, PathBuf};
 
 /// A plan sweeping each joint once over 30 degrees in 4 intervals about the zero pose.
@@ -24,17 +25,7 @@ fn short_plan(dir: &Path) -> PathBuf {
 /// The UR5e's short campaign of `seed` (analytic, 20 validation poses) in `dir`.
 fn short_campaign(dir: &Path, seed: u64) -> PathBuf {
     let plan = short_plan(dir);
-    let out = dir.join(format!("short_{seed}.csv"));
-    axiscal()
-        .args(["simulate", "-q", "--sim", "analytic", "--robot", &robot("ur5e-dh")])
-        .arg("--plan")
-        .arg(&plan)
-        .args(["--validation-poses", "20", "--seed", &seed.to_string(), "--out"])
-        .arg(&out)
-        .arg("--force")
-        .assert()
-        .success();
-    out
+    simulated_with_plan(dir, "ur5e-dh", &plan, seed, &format!("short_{seed}.csv"))
 }
 
 /// `calibrate` of `file` on the UR5e: exit code and stderr.
@@ -66,17 +57,10 @@ fn clean_short_sweeps_are_calibrated_not_read_as_a_unit_slip() {
 fn a_column_in_other_units_in_a_short_sweep_is_still_named() {
     let dir = tempfile::tempdir().unwrap();
     let clean = short_campaign(dir.path(), 41);
-    let scaled = |name: &str, experiment: &'static str, column: usize, factor: f64| {
-        altered_csv(
-            &clean,
-            name,
-            |_| true,
-            move |f| {
-                if f[0] == experiment {
-                    f[column] = (f[column].parse::<f64>().unwrap() * factor).to_string();
-                }
-            },
-        )
+    let scaled = |name: &str, experiment: &str, column: usize, factor: f64| {
+        altered_experiment(&clean, name, experiment, |f| {
+            scale_fields(f, column..column + 1, factor)
+        })
     };
     for (file, field, unit) in [
         (scaled("um.csv", "axis4", 5, 1000.0), "`y_mm`", "micrometres"),
