@@ -13,10 +13,11 @@
 use crate::calibration::free_pose::block::{BlockShift, block_shift};
 use crate::calibration::free_pose::slip::{ExplainingSlip, explaining_slip};
 use crate::calibration::free_pose::{FreePoseOptions, FreePoseSummary, NamedScale, calibrate_free_poses};
+use crate::calibration::noise::NOISE_TEST_LEVEL;
 use crate::calibration::procedure::{
     Calibration, CalibrationOptions, ColumnSource, Implausible, Refit, ScaleDoubt, ScaleReach, ScaleSlip, SweepBump,
     bumps_undone, calibrate, column_source, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
-    implausible, joint_slopes, named_joints,
+    implausible, joint_slopes, named_joints, sweeps_agreement,
 };
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
@@ -26,8 +27,9 @@ use crate::measurement::unit_check::axis_scale::{
 use crate::robot::RobotDescription;
 
 /// The axis fits' residuals of `cal` as the coordinate-scale profile reads them: the sum of
-/// each axis's squared residual coordinates over the noise estimate's degrees of freedom;
-/// `None` without a noise estimate.
+/// each axis's squared residual coordinates over the noise estimate's degrees of freedom, and
+/// a misfit where the sweeps of the joints fitted from several disagree beyond their own
+/// noise ([`sweeps_agreement`] below [`NOISE_TEST_LEVEL`]); `None` without a noise estimate.
 pub fn axes_fit(cal: &Calibration) -> Option<Fit> {
     Some(Fit {
         sum_squares_mm2: cal
@@ -36,7 +38,7 @@ pub fn axes_fit(cal: &Calibration) -> Option<Fit> {
             .map(|a| a.points as f64 * a.residual_rms_mm.powi(2))
             .sum(),
         dof: cal.noise.as_ref()?.estimate.as_ref()?.dof,
-        misfit_poses: 0,
+        misfits: usize::from(sweeps_agreement(cal).is_some_and(|a| a.p_value < NOISE_TEST_LEVEL)),
     })
 }
 
@@ -61,7 +63,7 @@ pub fn free_pose_profile_fit(set: &MeasurementSet, desc: &RobotDescription, opti
     Some(Fit {
         sum_squares_mm2: points * c.summary.calibrated_rms_mm.powi(2),
         dof: (3 * c.summary.points).saturating_sub(c.summary.parameters.len()),
-        misfit_poses: c.summary.outliers.len(),
+        misfits: c.summary.outliers.len(),
     })
 }
 
@@ -73,13 +75,7 @@ pub fn instrument_axis_source(
     (set, desc): (&MeasurementSet, &RobotDescription),
     options: &CalibrationOptions,
 ) -> Option<ColumnSource> {
-    let named: Vec<usize> = implausible(cal, desc)
-        .iter()
-        .filter_map(|f| match f {
-            Implausible::Scaled(ScaleSlip::Command { joint, .. }) => Some(*joint),
-            _ => None,
-        })
-        .collect();
+    let named: Vec<usize> = command_slopes(cal, desc).iter().map(|&(joint, _)| joint).collect();
     if named.is_empty() {
         return None;
     }
@@ -91,6 +87,18 @@ pub fn instrument_axis_source(
         })
     };
     column_source(set, &named, &refit)
+}
+
+/// The joints the transmission test names as their command columns scaled in `cal`
+/// ([`implausible`]): `(joint, 1-based; how far it travels per command over the description's)`.
+pub fn command_slopes(cal: &Calibration, desc: &RobotDescription) -> Vec<(usize, f64)> {
+    implausible(cal, desc)
+        .iter()
+        .filter_map(|f| match f {
+            Implausible::Scaled(ScaleSlip::Command { joint, travel, .. }) => Some((*joint, *travel)),
+            _ => None,
+        })
+        .collect()
 }
 
 /// `set` (screened) with the sweep screen's `bumps` moved back ([`bumps_undone`]) and its

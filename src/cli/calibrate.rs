@@ -1303,6 +1303,33 @@ fn print_carried(carried: &[Candidate], r: &Refinement, printer: Printer) {
     );
 }
 
+/// A note where the sweeps of the joints fitted from several miss one another beyond the noise
+/// their own fits show ([`sweeps_agreement`] below [`NOISE_TEST_LEVEL`]): the noise estimate
+/// then holds the held joints' correction's model error.
+fn print_sweeps_disagree(cal: &axiscal::calibration::procedure::Calibration) {
+    use axiscal::calibration::noise::NOISE_TEST_LEVEL;
+    use axiscal::calibration::procedure::sweeps_agreement;
+    let Some(a) = sweeps_agreement(cal).filter(|a| a.p_value < NOISE_TEST_LEVEL) else {
+        return;
+    };
+    let joints: Vec<String> = a.joints.iter().map(ToString::to_string).collect();
+    eprintln!(
+        "note: the sweeps of joint{} {} miss one another, once the held joints' correction has moved them to one pose, by \
+         more than the noise each sweep's own fit shows: the joint fits' residuals are {:.4} mm RMS per coordinate \
+         against {:.4} mm in the sweeps' own fits (F = {:.2} on {} and {} dof, p = {:.1e}); the calibrated model that \
+         corrects them is that uncertain (longer sweeps locate its axes better), and the noise estimate, every \
+         sigma and the coordinate-scale test count that model error as noise",
+        if joints.len() == 1 { "" } else { "s" },
+        joints.join(", "),
+        a.rms_mm[1],
+        a.rms_mm[0],
+        a.variance_ratio,
+        a.dof.0,
+        a.dof.1,
+        a.p_value
+    );
+}
+
 /// The noise (estimated, used, contradicted), joints not calibrated, the base-frame rule.
 fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotDescription, printer: Printer) {
     if let Some(n) = &cal.noise {
@@ -1318,6 +1345,7 @@ fn print_scope(cal: &axiscal::calibration::procedure::Calibration, desc: &RobotD
                 n.used_rms_3d_mm,
                 n.source
             );
+            print_sweeps_disagree(cal);
         }
         if n.source == "default" && n.estimate.is_some() {
             let (joint, sigma) = desc

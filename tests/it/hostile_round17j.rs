@@ -195,20 +195,31 @@ fn a_held_offset_in_a_jittered_file_is_named() {
 /// pose, with joint 1 at 20 deg, and with joint 1 at -20 deg and joint 2 at 10 deg (hostile
 /// run 16's `arm6-manyfew`), written in `dir`.
 fn manyfew_plan(dir: &Path) -> PathBuf {
+    three_pose_plan(
+        dir,
+        "manyfew.toml",
+        |joint| if joint == 2 || joint == 3 { 45.0 } else { 60.0 },
+    )
+}
+
+/// A plan sweeping each of the six-axis arm's joints over `span(joint)` degrees in 4 intervals
+/// three times: at the zero pose, with joint 1 at 20 deg, and with joint 1 at -20 deg and
+/// joint 2 at 10 deg; written as `name` in `dir`.
+pub fn three_pose_plan(dir: &Path, name: &str, span: impl Fn(usize) -> f64) -> PathBuf {
     let mut text = String::from("reference = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]\n");
     for joint in (1..=6).rev() {
-        let span = if joint == 2 || joint == 3 { 45.0 } else { 60.0 };
         for held in [
             "",
             "held_at = [20.0, 0, 0, 0, 0, 0]\n",
             "held_at = [-20.0, 10.0, 0, 0, 0, 0]\n",
         ] {
             text.push_str(&format!(
-                "\n[[sweeps]]\njoint = {joint}\nspan = {span:.1}\nintervals = 4\n{held}"
+                "\n[[sweeps]]\njoint = {joint}\nspan = {:.1}\nintervals = 4\n{held}",
+                span(joint)
             ));
         }
     }
-    let path = dir.join("manyfew.toml");
+    let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     path
 }

@@ -19,6 +19,7 @@ mod cli_run;
 mod cli_safety;
 mod cli_scripting;
 mod cli_simulate;
+mod command_slopes;
 mod compensation;
 mod diagnosis;
 mod documented_keys;

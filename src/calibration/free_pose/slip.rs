@@ -309,6 +309,7 @@ fn block_shift(
         mm.y,
         mm.z
     );
+    let claim = claim + &stepping_joints_words(&poses.poses[..k], &poses.poses[k..]);
     let reading = "with the later poses moved back".to_string();
     let shift = slip("setup".into(), [claim, reading], move |m: &mut Measurement| {
         if later.contains(&(m.experiment.clone(), m.step)) {
@@ -318,6 +319,42 @@ fn block_shift(
         }
     });
     Some((shift, n + 1 - 2 * MIN_BLOCK_POSES))
+}
+
+/// The joints whose file commands (`cmd_file`) over the poses `after` a break all lie beyond
+/// their range over the poses `before` it, in words (empty without one): such a joint's
+/// command column read with another zero or scale for the later poses turns them about its
+/// axis, which moves them much as a block would (a `cmd_1` scaled 0.98 on the real FANUC,
+/// whose joint 1 sits at 45 deg for 210 poses and at 26-29 deg for the last 30).
+fn stepping_joints_words(before: &[super::FreePose], after: &[super::FreePose]) -> String {
+    let range = |poses: &[super::FreePose], j: usize| {
+        poses
+            .iter()
+            .map(|p| p.cmd_file[j])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    };
+    let dof = before.first().map_or(0, |p| p.cmd_file.len());
+    let words: Vec<String> = (0..dof)
+        .filter_map(|j| {
+            let (b, a) = (range(before, j), range(after, j));
+            (a.0 > b.1 || a.1 < b.0).then(|| {
+                let span = |(lo, hi): (f64, f64)| match hi - lo {
+                    d if d.abs() < 1e-9 * hi.abs().max(1.0) => format!("{lo:.4}"),
+                    _ => format!("{lo:.4} to {hi:.4}"),
+                };
+                format!("`cmd_{}` {} before, {} from there on", j + 1, span(b), span(a))
+            })
+        })
+        .collect();
+    if words.is_empty() {
+        return String::new();
+    }
+    format!(
+        " (or a command column read with another zero or scale for them: {} (file units); a joint's command \
+         that changes at the break as a whole turns the later poses about its axis, much as a move of the block \
+         would: check it against the controller's reading at a pose of each side)",
+        words.join("; ")
+    )
 }
 
 /// The claim of a mirror slip ([`crate::measurement::column_slips::ColumnSlip::mirror`]).

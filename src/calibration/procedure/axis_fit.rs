@@ -326,6 +326,7 @@ pub(super) fn fit_joint(
         ));
     }
     if detail == Detail::Report {
+        out.report.moments = out.moments;
         out.report.sweeps = sweep_reports(data, &out, desc, controller, options, noise_mm * 1e-3 / 3f64.sqrt());
         for (sweep, rms) in out.report.sweeps.iter_mut().zip(rms_without_each(data, form, &setting)) {
             sweep.without_rms_mm = rms;
@@ -644,6 +645,7 @@ fn fit_line_paper(
         kind: crate::kinematics::JointKind::Prismatic,
         harmonics: vec![],
         sweeps: vec![],
+        moments: None,
     };
     Ok(AxisFitOutcome {
         form,
@@ -693,9 +695,10 @@ fn sweep_reports(
                 residual_rms_mm: rms,
                 held_offsets: offsets.into_iter().map(Into::into).collect(),
                 held_wander: wander,
-                own_axis_angle_mrad: own.map(|o| o.0),
-                own_axis_offset_mm: own.and_then(|o| o.1),
+                own_axis_angle_mrad: own.map(|o| o.angle_mrad),
+                own_axis_offset_mm: own.and_then(|o| o.offset_mm),
                 without_rms_mm: None,
+                own_moments: own.map(|o| o.moments),
             }
         })
         .collect()
@@ -716,7 +719,18 @@ fn held_offsets(e: &AxisExperiment, desc: &RobotDescription, _report: &AxisRepor
     (offsets, wander)
 }
 
-/// This sweep's own axis against the joint's: angle \[mrad\] and (rotary) offset \[mm\].
+/// A sweep's own axis fit against its joint's.
+#[derive(Clone, Copy)]
+struct OwnAxis {
+    /// The angle between the two axes \[mrad\].
+    angle_mrad: f64,
+    /// (Rotary) the own axis's distance from the joint's at its point \[mm\].
+    offset_mm: Option<f64>,
+    /// The own fit's residual moments: the noise of the sweep's points alone.
+    moments: ResidualMoments,
+}
+
+/// This sweep's own axis against the joint's ([`OwnAxis`]).
 #[allow(clippy::too_many_arguments)]
 fn own_axis(
     e: &AxisExperiment,
@@ -728,7 +742,7 @@ fn own_axis(
     sigma: f64,
     joint_axis: &AxisLine,
     form: TransmissionFitForm,
-) -> Option<(f64, Option<f64>)> {
+) -> Option<OwnAxis> {
     let u: Vec<f64> = e
         .target0_steps
         .iter()
@@ -750,11 +764,19 @@ fn own_axis(
             .ok()?;
             let w = fit.axis.origin_m - joint_axis.origin_m;
             let across = w - joint_axis.direction.into_inner() * w.dot(&joint_axis.direction);
-            Some((dir_angle(&fit.axis.direction), Some(across.norm() * 1e3)))
+            Some(OwnAxis {
+                angle_mrad: dir_angle(&fit.axis.direction),
+                offset_mm: Some(across.norm() * 1e3),
+                moments: fit.moments,
+            })
         }
         JointKind::Prismatic => {
             let fit = fit_line(pts, &u, &form, sigma, 0.0, options.max_iterations).ok()?;
-            Some((dir_angle(&fit.direction), None))
+            Some(OwnAxis {
+                angle_mrad: dir_angle(&fit.direction),
+                offset_mm: None,
+                moments: fit.moments,
+            })
         }
     }
 }

@@ -135,8 +135,9 @@ pub enum ProcedureError {
         span: ShortSpan,
     },
     /// A fit-and-correct pass for the held joints' recorded values failed: the correction
-    /// moved the points away from any arc (it diverges).
-    #[error("the correction for the held joints' recorded values diverged in pass {pass}: {cause}")]
+    /// moved the points away from any arc (it diverges), or the joint's sweeps fitted together
+    /// show what no correction mends (too short, no motion, a straight line), said as such.
+    #[error("{}", held_failure_words(*pass, cause))]
     HeldDiverged {
         /// The pass that failed (the first correction is pass 2).
         pass: usize,
@@ -361,6 +362,20 @@ impl ShortSpan {
 }
 
 /// ` (lines A-B)` of an experiment read from a file, or nothing.
+/// [`ProcedureError::HeldDiverged`]'s words: a cause the sweeps' shape explains first (the
+/// correction did not make the sweep short), any other as the correction's divergence.
+fn held_failure_words(pass: usize, cause: &ProcedureError) -> String {
+    match cause {
+        ProcedureError::ShortArc { .. } | ProcedureError::Unresolved { .. } | ProcedureError::Straight { .. } => {
+            format!(
+                "{cause} (found in pass {pass} of the correction for the held joints' recorded values, which fits each \
+             joint's sweeps together)"
+            )
+        }
+        _ => format!("the correction for the held joints' recorded values diverged in pass {pass}: {cause}"),
+    }
+}
+
 fn lines_text(lines: Option<(u64, u64)>) -> String {
     match lines {
         Some((a, b)) if a == b => format!(" (line {a})"),

@@ -44,6 +44,7 @@ mod sanity;
 mod screen;
 mod second_targets;
 mod size;
+mod sweeps_agree;
 mod uncertainty;
 mod urdf;
 mod validate;
@@ -77,6 +78,7 @@ pub use screen::{
     without_poses,
 };
 pub use second_targets::SecondTargetData;
+pub use sweeps_agree::{SweepsAgreement, sweeps_agreement};
 pub use uncertainty::{AxisCovariance, SIGNIFICANT_SIGMAS, row_sigmas};
 pub use urdf::{
     RawReadingDeviation, UrdfOptions, UrdfRoot, joints_without_speed_limits, raw_reading_deviation, ros_name, urdf,

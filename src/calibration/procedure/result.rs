@@ -12,7 +12,7 @@ use crate::calibration::coupling_fit::{CouplingFit, CouplingForm};
 use crate::calibration::crb::held_joint_axis_covariance;
 use crate::calibration::line_ml::LineFit;
 use crate::calibration::model_parameters::ModelCovariance;
-use crate::calibration::noise::NoiseEstimate;
+use crate::calibration::noise::{NoiseEstimate, ResidualMoments};
 use crate::calibration::transmission_fit::TransmissionFit;
 use crate::calibration::{ArcFit, PaperAxisFit};
 use crate::json_file;
@@ -84,6 +84,11 @@ pub struct AxisReport {
     /// The sweeps fitted jointly as this axis, and what differs between them.
     #[serde(default)]
     pub sweeps: Vec<SweepReport>,
+    /// The joint fit's residual moments (a calibration's report only): what its sweeps'
+    /// agreement is tested with (`sweeps_agree.rs`). Not written to `calibration.json`.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub moments: Option<ResidualMoments>,
 }
 
 /// The principal 1-sigmas of an axis direction, largest first; NaN (null in JSON) for an axis
@@ -201,6 +206,12 @@ pub struct SweepReport {
     #[serde(skip)]
     #[schemars(skip)]
     pub without_rms_mm: Option<f64>,
+    /// With several sweeps: the residual moments of this sweep's own axis fit, the noise of
+    /// its points whatever the held joints' correction did (`sweeps_agree.rs`). Not written to
+    /// `calibration.json`.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub own_moments: Option<ResidualMoments>,
 }
 
 /// A held joint whose value in a sweep differs from the reference pose.
@@ -282,6 +293,7 @@ impl AxisReport {
             covariance: None,
             kind: revolute(),
             sweeps: vec![],
+            moments: None,
             harmonics: harmonics(&fit.transmission, &|a, b| {
                 fit.covariance[(N_GEOMETRY + a, N_GEOMETRY + b)]
             }),
@@ -321,6 +333,7 @@ impl AxisReport {
             kind: JointKind::Prismatic,
             harmonics: vec![],
             sweeps: vec![],
+            moments: None,
         }
     }
 
@@ -372,6 +385,7 @@ impl AxisReport {
             covariance: None,
             kind: revolute(),
             sweeps: vec![],
+            moments: None,
             // The paper's estimator gives no correlation of the coefficients: taken as none.
             harmonics: harmonics(&t.transmission, &|a, b| if a == b { t.sigma[a].powi(2) } else { 0.0 }),
         }

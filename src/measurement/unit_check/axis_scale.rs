@@ -14,10 +14,12 @@
 //! curvature). The reduction is tested with the F ratio against the residuals' own noise
 //! estimate at [`AXIS_SCALE_FALSE_ALARM`] shared by the three columns, and the factor is
 //! confirmed by a fourth run with the column undone, whose own reduction must pass the same
-//! test and whose every free pose the model fits within its outlier fence (a pose the model
-//! cannot fit even so says the residuals are the model's limits, not noise, and any extra
-//! parameter reduces them; the linearisation checked against the re-run; when it does not, one more parabola
-//! about the factor found and its re-run decide). A uniform scale of all
+//! test and whose every free pose the model fits within its outlier fence, and whose joints'
+//! sweeps at several poses agree on their axes within the noise their own fits show (a pose
+//! the model cannot fit, or sweeps its held joints' correction cannot bring together, say the
+//! residuals are the model's limits, not noise, and any extra parameter reduces them; the
+//! linearisation checked against the re-run; when it does not, one more parabola about the
+//! factor found and its re-run decide). A uniform scale of all
 //! three columns is one of the links' lengths, so "x reads long" and "y and z read short" are
 //! one finding: the column named is the one whose undoing explains most.
 //!
@@ -65,9 +67,12 @@ pub struct Fit {
     pub sum_squares_mm2: f64,
     /// Its degrees of freedom (coordinates less fitted parameters).
     pub dof: usize,
-    /// Free poses the fit finds beyond its outlier fence (0 for sweeps): a pose the model
-    /// cannot fit says the residuals are not the noise the F test assumes.
-    pub misfit_poses: usize,
+    /// What the model cannot fit within the noise: the free poses beyond the fit's outlier
+    /// fence, or (sweeps) 1 where the sweeps of the joints fitted from several miss one
+    /// another beyond the noise their own fits show
+    /// ([`crate::calibration::procedure::sweeps_agreement`]). Either says the residuals are not
+    /// the noise the F test assumes.
+    pub misfits: usize,
 }
 
 /// What a profile scales: one coordinate column, the three together, or a sliding joint's
@@ -147,8 +152,9 @@ pub struct AxisScale {
     /// [`PROFILE_REACH`]).
     pub reach: [Option<f64>; 3],
     /// Whether the profile found it beyond the test's threshold but the fit with it undone did
-    /// not confirm it (its reduction passes, but a free pose the model cannot fit remains; or
-    /// the re-run fails): the test names nothing on such a file, at any size.
+    /// not confirm it (its reduction passes, but a free pose the model cannot fit, or a
+    /// joint's sweeps that miss one another beyond their noise, remain; or the re-run fails):
+    /// the test names nothing on such a file, at any size.
     pub unconfirmed: bool,
 }
 
@@ -304,7 +310,7 @@ fn confirmed(
     let c = centroid(set);
     let rate = AXIS_SCALE_FALSE_ALARM / 3.0;
     let at = fit(&found.scaled.undone(set, found.factor, c))?;
-    if reduction_p(base, at)? < rate && at.misfit_poses == 0 {
+    if reduction_p(base, at)? < rate && at.misfits == 0 {
         return Some(AxisScale {
             significant: true,
             ..found
@@ -314,9 +320,9 @@ fn confirmed(
     let at = fit(&found.scaled.undone(set, again.factor, c))?;
     let reduced = reduction_p(base, at)? < rate;
     Some(AxisScale {
-        significant: reduced && at.misfit_poses == 0,
+        significant: reduced && at.misfits == 0,
         // The reduction passes, but a pose the model cannot fit remains with it undone.
-        unconfirmed: reduced && at.misfit_poses > 0,
+        unconfirmed: reduced && at.misfits > 0,
         rms_mm: [found.rms_mm[0], (at.sum_squares_mm2 / base.dof as f64).sqrt()],
         ..again
     })
@@ -396,8 +402,8 @@ impl AxisScale {
         if self.unconfirmed {
             return Some(format!(
                 "one-axis instrument scales this file cannot show: any, at any size ({} reads {:.5} times (+- {:.5}), \
-                 but with it undone a pose the model cannot fit remains, or the re-run fails, so it is not named; \
-                 report.md, \"Detection limits\")",
+                 but with it undone a pose the model cannot fit, or sweeps of a joint that miss one another beyond \
+                 their noise, remain, or the re-run fails, so it is not named; report.md, \"Detection limits\")",
                 self.scaled.columns(),
                 self.factor,
                 self.sigma

@@ -270,6 +270,26 @@ pub fn scale_fields(f: &mut [String], range: std::ops::Range<usize>, factor: f64
     }
 }
 
+/// `file` with field `column` (0-based) of every data row (neither a `#` comment nor the
+/// header) multiplied by `factor`, as `name` in its folder.
+pub fn column_scaled(file: &std::path::Path, name: &str, column: usize, factor: f64) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(file).unwrap();
+    let lines: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') || l.starts_with("experiment,") {
+                return l.to_string();
+            }
+            let mut f: Vec<String> = l.split(',').map(String::from).collect();
+            scale_fields(&mut f, column..column + 1, factor);
+            f.join(",")
+        })
+        .collect();
+    let out = file.with_file_name(name);
+    std::fs::write(&out, lines.join("\n") + "\n").unwrap();
+    out
+}
+
 /// The options of the README's command importing the real FANUC R-2000iC tracker file.
 pub const REAL_FANUC_OPTIONS: [&str; 8] = [
     "--joints",
