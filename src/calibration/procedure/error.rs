@@ -361,7 +361,6 @@ impl ShortSpan {
     }
 }
 
-/// ` (lines A-B)` of an experiment read from a file, or nothing.
 /// [`ProcedureError::HeldDiverged`]'s words: a cause the sweeps' shape explains first (the
 /// correction did not make the sweep short), any other as the correction's divergence.
 fn held_failure_words(pass: usize, cause: &ProcedureError) -> String {
@@ -376,6 +375,7 @@ fn held_failure_words(pass: usize, cause: &ProcedureError) -> String {
     }
 }
 
+/// ` (lines A-B)` of an experiment read from a file, or nothing.
 fn lines_text(lines: Option<(u64, u64)>) -> String {
     match lines {
         Some((a, b)) if a == b => format!(" (line {a})"),

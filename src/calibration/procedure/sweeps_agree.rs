@@ -92,7 +92,7 @@ mod tests {
         }
     }
 
-    /// The pooled ratio by hand: two joints, one left out (its own fits as free as it).
+    /// The pooled ratio by hand: three joints, one left out (its own fits as free as its joint fit).
     #[test]
     fn the_pooled_ratio_is_the_excess_per_dof_over_the_own_fits_per_dof() {
         let a = pooled(
