@@ -67,15 +67,15 @@ pub fn free_pose_profile_fit(set: &MeasurementSet, desc: &RobotDescription, opti
     })
 }
 
-/// The instrument axis whose scale explains the departures of the joints the transmission
-/// test names in `cal` ([`column_source`]), the calibrations re-run on `set` with `options`;
-/// `None` where the test names none.
+/// The instrument axis whose scale explains the departures of the joints in `slopes` (those
+/// the transmission test names, [`command_slopes`]; [`column_source`]), the calibrations re-run
+/// on `set` with `options`; `None` where `slopes` is empty.
 pub fn instrument_axis_source(
-    cal: &Calibration,
+    slopes: &[(usize, f64)],
     (set, desc): (&MeasurementSet, &RobotDescription),
     options: &CalibrationOptions,
 ) -> Option<ColumnSource> {
-    let named: Vec<usize> = command_slopes(cal, desc).iter().map(|&(joint, _)| joint).collect();
+    let named: Vec<usize> = slopes.iter().map(|&(joint, _)| joint).collect();
     if named.is_empty() {
         return None;
     }

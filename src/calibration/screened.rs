@@ -180,12 +180,12 @@ pub fn calibrate_screened(
     let undone = calibrated_with_bumps_undone(kept, &screening.bumps, desc, options);
     let (judged, judged_cal) = undone.as_ref().map_or((kept, &cal), |(s, c)| (s, c));
     let fit = |s: &MeasurementSet| axes_profile_fit(s, desc, options);
-    let column_source = instrument_axis_source(judged_cal, (judged, desc), options);
+    let slopes = command_slopes(judged_cal, desc);
+    let column_source = instrument_axis_source(&slopes, (judged, desc), options);
     // A joint's slope off its description's that no instrument axis explains is its command
     // column's: the fits carry it, and the coordinate-scale profile would read part of it as
     // an axis' scale (`cmd_2` x1.02 on the UR5e read as `z_mm` x1.0055), so it runs with those
     // columns undone by their slopes, as on free poses.
-    let slopes = command_slopes(judged_cal, desc);
     let commands_undone =
         (column_source.is_none() && !slopes.is_empty()).then(|| with_commands_scaled(judged, &slopes));
     let coordinate_scale = coordinate_scale(
