@@ -4,22 +4,24 @@
 
 use axiscal::diagnosis::{SWEEP_CAUSE_FALSE_ALARM, SweepCause, SweepFault, SweepShadow};
 
-/// `(x, y, z)` with three decimals; a component whose 1-sigma (`sigma`) is infinite, which
-/// these points do not determine (a move along it changes nothing they show), reads
-/// `undetermined`.
-fn triple(v: &[f64; 3], sigma: &[f64; 3]) -> String {
-    let c: Vec<String> = v
-        .iter()
-        .zip(sigma)
-        .map(|(x, s)| match s.is_finite() {
-            true => format!("{x:.3}"),
-            false => "undetermined".to_string(),
-        })
-        .collect();
-    format!("({})", c.join(", "))
+/// `(x, y, z)` with three decimals.
+fn triple(v: &[f64; 3]) -> String {
+    format!("({:.3}, {:.3}, {:.3})", v[0], v[1], v[2])
 }
 
-/// A 1-sigma with three decimals, or `undetermined` where it is infinite ([`triple`]).
+/// The directions along which a move changes nothing the validation poses show, after a move
+/// given across them: empty where there are none.
+fn free_words(free_along: &[[f64; 3]]) -> String {
+    let directions: Vec<String> = free_along.iter().map(triple).collect();
+    match directions.len() {
+        0 => String::new(),
+        1 => format!(" plus any amount along {}", directions[0]),
+        _ => format!(" plus any amount in the span of {}", directions.join(" and ")),
+    }
+}
+
+/// A 1-sigma with three decimals, or `undetermined` where it is infinite (the poses do not
+/// show the correction).
 fn one_sigma(sigma: f64) -> String {
     match sigma.is_finite() {
         true => format!("{sigma:.3}"),
@@ -39,17 +41,39 @@ fn fault_words(fault: &SweepFault, whole: bool) -> String {
             "the held `cmd_{joint}` looks offset by {offset:+.3} {unit} (1-sigma {}) from where the robot stood",
             one_sigma(*sigma)
         ),
-        SweepFault::Drift { drift_mm, sigma_mm } => format!(
-            "its points look to drift by {} mm (1-sigma {} mm) from its first {} to its last",
-            triple(drift_mm, sigma_mm),
-            triple(sigma_mm, sigma_mm),
-            if whole { "row" } else { "step" }
+        SweepFault::Drift {
+            drift_mm,
+            sigma_mm,
+            free_along,
+        } => format!(
+            "its points look to drift by {} mm (1-sigma {} mm){} from its first {} to its last{}",
+            triple(drift_mm),
+            triple(sigma_mm),
+            free_words(free_along),
+            if whole { "row" } else { "step" },
+            shown_words(free_along),
         ),
-        SweepFault::Block { moved_mm, sigma_mm } => format!(
-            "its block looks moved by {} mm (1-sigma {} mm)",
-            triple(moved_mm, sigma_mm),
-            triple(sigma_mm, sigma_mm)
+        SweepFault::Block {
+            moved_mm,
+            sigma_mm,
+            free_along,
+        } => format!(
+            "its block looks moved by {} mm (1-sigma {} mm){}{}",
+            triple(moved_mm),
+            triple(sigma_mm),
+            free_words(free_along),
+            shown_words(free_along),
         ),
+    }
+}
+
+/// Why a move is given across some directions: empty where it has none.
+fn shown_words(free_along: &[[f64; 3]]) -> String {
+    match free_along.is_empty() {
+        true => String::new(),
+        false => " (these poses do not show a move along it: a block moved along the axis its sweep turns about \
+                  leaves that axis where it is)"
+            .to_string(),
     }
 }
 
@@ -80,11 +104,23 @@ fn alternative_words((experiment, fault): &(Option<String>, SweepFault)) -> Stri
         SweepFault::HeldOffset {
             joint, offset, unit, ..
         } => format!(", or the held `cmd_{joint}` of {who} by {offset:+.3} {unit}"),
-        SweepFault::Drift { drift_mm, sigma_mm } => {
-            format!(", or {who}'s points drifting by {} mm", triple(drift_mm, sigma_mm))
+        SweepFault::Drift {
+            drift_mm, free_along, ..
+        } => {
+            format!(
+                ", or {who}'s points drifting by {} mm{}",
+                triple(drift_mm),
+                free_words(free_along)
+            )
         }
-        SweepFault::Block { moved_mm, sigma_mm } => {
-            format!(", or {who}'s block moved by {} mm", triple(moved_mm, sigma_mm))
+        SweepFault::Block {
+            moved_mm, free_along, ..
+        } => {
+            format!(
+                ", or {who}'s block moved by {} mm{}",
+                triple(moved_mm),
+                free_words(free_along)
+            )
         }
     }
 }
@@ -114,9 +150,10 @@ pub(super) fn part_words(cause: &SweepCause, data: &str) -> String {
     )
 }
 
-/// The clause naming how the reference-pose test reads the sweep, where the drift found there
-/// fits the poses best (`calibrate` then leaves out that test's own warning of the sweep).
-fn shadow_words(shadow: &Option<SweepShadow>) -> String {
+/// The clause naming how the reference-pose test reads the sweep, where the drift or the moved
+/// block found there (`fault`) fits the poses best (`calibrate` then leaves out that test's own
+/// warning of the sweep).
+fn shadow_words(shadow: &Option<SweepShadow>, fault: &SweepFault) -> String {
     let named = match shadow {
         None => return String::new(),
         Some(SweepShadow::HeldOffset(joints)) => {
@@ -125,10 +162,14 @@ fn shadow_words(shadow: &Option<SweepShadow>) -> String {
         }
         Some(SweepShadow::MovedBlock) => "a move of its block".to_string(),
     };
+    let (found, which) = match fault {
+        SweepFault::Block { .. } => ("a move of its block", "move"),
+        _ => ("a drift through the sweep", "drift"),
+    };
     format!(
         " (the reference-pose test, which compares the sweeps where each passes the pose with every joint at its held \
-         value, reads this sweep as {named}: a drift through the sweep moves its point there as that does, and over the \
-         validation poses the drift fits best)"
+         value, reads this sweep as {named}: {found} moves its point there as that does, and over the validation poses \
+         the {which} fits best)"
     )
 }
 
@@ -170,7 +211,7 @@ pub(super) fn words(cause: &SweepCause, data: &str, poses: usize) -> String {
          {:.2}); {}",
         owner(&cause.experiment),
         fault_words(&cause.fault, whole),
-        shadow_words(&cause.shadows),
+        shadow_words(&cause.shadows, &cause.fault),
         cause.rms_mm.0,
         cause.per_dof.0,
         undone_words(&cause.fault),
@@ -185,20 +226,22 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_move_along_an_undetermined_axis_reads_undetermined_not_inf() {
+    fn a_move_is_given_across_the_directions_the_poses_do_not_show_with_them() {
         let block = SweepFault::Block {
-            moved_mm: [0.5124, -0.25, 7.0],
-            sigma_mm: [0.0101, 0.02, f64::INFINITY],
+            moved_mm: [0.5124, -0.25, 0.0],
+            sigma_mm: [0.0101, 0.02, 0.0],
+            free_along: vec![[0.0, 0.0, 1.0]],
         };
-        let words = fault_words(&block, false);
         assert_eq!(
-            words,
-            "its block looks moved by (0.512, -0.250, undetermined) mm (1-sigma (0.010, 0.020, undetermined) mm)"
+            fault_words(&block, false),
+            "its block looks moved by (0.512, -0.250, 0.000) mm (1-sigma (0.010, 0.020, 0.000) mm) plus any amount \
+             along (0.000, 0.000, 1.000) (these poses do not show a move along it: a block moved along the axis its \
+             sweep turns about leaves that axis where it is)"
         );
         let alternative = alternative_words(&(Some("axis2".into()), block));
         assert_eq!(
             alternative,
-            ", or experiment axis2's block moved by (0.512, -0.250, undetermined) mm"
+            ", or experiment axis2's block moved by (0.512, -0.250, 0.000) mm plus any amount along (0.000, 0.000, 1.000)"
         );
         let held = SweepFault::HeldOffset {
             joint: 2,
@@ -210,6 +253,7 @@ mod tests {
         let drift = SweepFault::Drift {
             drift_mm: [1.0, 2.0, 3.0],
             sigma_mm: [0.1, 0.2, 0.3],
+            free_along: Vec::new(),
         };
         assert_eq!(
             fault_words(&drift, true),

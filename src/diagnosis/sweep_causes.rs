@@ -44,11 +44,16 @@
 //! reference-pose test names as one of two that disagree (`shared_target::moved_sweeps`) are
 //! not tried:
 //! their cause is said already. In a sweep that test names with a held offset or as a moved
-//! block (not one of two that disagree), only that correction and a drift are tried, and only
-//! the drift is said, where it fits the poses best (the other is said already; at the
-//! reference pose a drift reads as either).
+//! block (not one of two that disagree), only that correction, a move of its block and a drift
+//! are tried, and another than the one it names is said only where it fits the poses best (the
+//! one named is said already; at the reference pose a drift reads as either, and a block
+//! moved as a held offset where the held joint's axis is far from the sweep's point).
+//!
+//! A move of a sweep's block along the axis it turns about (a drift, likewise) leaves that axis
+//! where it is: the poses do not show it. A move is given across such directions (the least
+//! that fits: the Hessian's pseudo-inverse's Newton step and covariance) with the directions.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use super::{ValidationOptions, Verdict, curvature_counts, validate, validate_free_tool};
 use crate::calibration::procedure::{
@@ -117,7 +122,7 @@ impl SweepCorrection {
 }
 
 /// What a sweep's records look off by: the correction's negative.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum SweepFault {
     /// A held joint's recorded command minus where the robot stood.
     HeldOffset {
@@ -132,23 +137,29 @@ pub enum SweepFault {
     },
     /// The points' drift from the sweep's first step to its last, in the instrument frame.
     Drift {
-        /// The drift \[mm\].
+        /// The drift \[mm\]: its part across `free_along`.
         drift_mm: [f64; 3],
         /// Its 1-sigma per axis \[mm\].
         sigma_mm: [f64; 3],
+        /// Unit directions along which more drift changes nothing the poses show.
+        free_along: Vec<[f64; 3]>,
     },
     /// The sweep's block moved, all its points alike, in the instrument frame.
     Block {
-        /// The move \[mm\].
+        /// The move \[mm\]: its part across `free_along`.
         moved_mm: [f64; 3],
         /// Its 1-sigma per axis \[mm\].
         sigma_mm: [f64; 3],
+        /// Unit directions along which a further move changes nothing the poses show (a
+        /// sweep's block moved along the axis it turns about leaves that axis where it is).
+        free_along: Vec<[f64; 3]>,
     },
 }
 
-/// What the reference-pose test (`shared_target::moved_sweeps`) names in a sweep, where the
-/// drift found there fits the validation poses best: at the reference pose a drift through the
-/// sweep moves its point as either does.
+/// What the reference-pose test (`shared_target::moved_sweeps`) names in a sweep, where a
+/// drift or (against a held offset) a moved block found there fits the validation poses best:
+/// at the reference pose a drift through the sweep moves its point as either does, and a moved
+/// block as a held offset does where the held joint's axis is far from it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum SweepShadow {
     /// The held joints (1-based) it names with an offset.
@@ -177,8 +188,8 @@ pub struct SweepCause {
     /// Whether the corrected calibration passes the poses' test; `false`: the correction
     /// explains a part of the miss beyond chance, another cause the rest.
     pub passes: bool,
-    /// What the reference-pose test names in this sweep, where the drift found fits the
-    /// poses best.
+    /// What the reference-pose test names in this sweep, where the drift or the moved block
+    /// found fits the poses best.
     pub shadows: Option<SweepShadow>,
     /// The corrections tried (held commands, drifts, moved blocks).
     pub tried: usize,
@@ -207,8 +218,8 @@ struct Confirmed {
     covariance: DMatrix<f64>,
     /// The parameters the poses determine: the hypothesis's less its null directions.
     rank: usize,
-    /// Whether each parameter has a share in a null direction (its sigma is then infinite).
-    undetermined: Vec<bool>,
+    /// The directions the poses do not show a correction along (unit vectors).
+    null: Vec<DVector<f64>>,
     score: Score,
 }
 
@@ -226,14 +237,11 @@ impl Confirmed {
 /// fit's curvature, not at 0.
 const WEAK_DIRECTION: f64 = 1e-3;
 
-/// A null direction's share in a parameter beyond which that parameter is undetermined.
-const NULL_SHARE: f64 = 1e-3;
-
 /// `experiments` less the sweeps of `set` the reference-pose test ([`moved_sweeps`]) names as
 /// one of two that disagree: that cause is named already, and nothing is sought in them.
 /// Returned: the sweeps it names with a held offset (the held joints, 0-based) or as a moved
-/// block: in them only that correction and a drift are tried (a drift through the sweep reads
-/// as either at the reference pose).
+/// block: in them only that correction, a move of the block and a drift are tried (a drift
+/// through the sweep reads as either at the reference pose, a moved block as a held offset).
 fn retain_unnamed(
     experiments: &mut Vec<AxisExperiment>,
     set: &MeasurementSet,
@@ -282,13 +290,20 @@ impl Tried {
         self.named.iter().find(|(n, _)| n == name).map(|(_, k)| k)
     }
 
-    /// The hypotheses: each sweep's held turning commands and its drift; in a sweep the
-    /// reference-pose test names, the correction it names and the drift.
+    /// The hypotheses: each sweep's held turning commands, its block and its drift; in a
+    /// sweep the reference-pose test names, the correction it names (a held offset, or a
+    /// move of its block), a move of its block and the drift.
     fn hypotheses(&self, desc: &RobotDescription) -> Vec<Hypothesis> {
         (0..self.experiments.len())
             .flat_map(|e| {
                 let named: Vec<SweepCorrection> = match self.named_of(e) {
-                    Some(Named::Held(joints)) => joints.iter().map(|&k| SweepCorrection::HeldCommand(k)).collect(),
+                    // At the reference pose a block moved reads as a held offset where the held
+                    // joint's axis is far from the sweep's point.
+                    Some(Named::Held(joints)) => joints
+                        .iter()
+                        .map(|&k| SweepCorrection::HeldCommand(k))
+                        .chain([SweepCorrection::Block])
+                        .collect(),
                     Some(Named::Block) => vec![SweepCorrection::Block],
                     None => held_joints(&self.experiments[e], desc)
                         .into_iter()
@@ -304,8 +319,18 @@ impl Tried {
             .collect()
     }
 
-    /// What a drift found in experiment `e` stands beside: what the reference-pose test names
-    /// there.
+    /// Whether `correction` in experiment `e` is what the reference-pose test names there
+    /// (said already).
+    fn names(&self, e: usize, correction: SweepCorrection) -> bool {
+        match (self.named_of(e), correction) {
+            (Some(Named::Held(joints)), SweepCorrection::HeldCommand(k)) => joints.contains(&k),
+            (Some(Named::Block), SweepCorrection::Block) => true,
+            _ => false,
+        }
+    }
+
+    /// What a drift or a block found in experiment `e` stands beside: what the reference-pose
+    /// test names there.
     fn shadow_of(&self, e: usize) -> Option<SweepShadow> {
         Some(match self.named_of(e)? {
             Named::Held(joints) => SweepShadow::HeldOffset(joints.iter().map(|k| k + 1).collect()),
@@ -387,10 +412,12 @@ pub fn sweep_cause_of_misses(
     }
     let best = named.first()?;
     // What the reference-pose test names is said there.
-    let shadows = best.hypothesis.0.and_then(|e| tried_sweeps.shadow_of(e));
-    if shadows.is_some() && best.hypothesis.1 != SweepCorrection::Drift {
+    if let (Some(e), correction) = best.hypothesis
+        && tried_sweeps.names(e, correction)
+    {
         return None;
     }
+    let shadows = best.hypothesis.0.and_then(|e| tried_sweeps.shadow_of(e));
     let fault = |n: &Confirmed| fault_of(n, desc);
     let name = |n: &Confirmed| n.hypothesis.0.map(|e| experiments[e].name.clone());
     let alternatives = match passes {
@@ -444,28 +471,61 @@ fn confirmed(score: &ScoreOf, hypotheses: &[Hypothesis], recorded: Score) -> Vec
 }
 
 /// The fault a confirmed correction undoes, with its 1-sigma: a held command's offset is the
-/// correction's negative, a drift the drift undone.
+/// correction's negative (undetermined where the poses do not show it), a drift the drift
+/// undone. A move (a drift, a block) is given across the directions the poses do not show it
+/// along, with those directions: the least move that fits, its covariance the Hessian's
+/// pseudo-inverse's.
 fn fault_of(n: &Confirmed, desc: &RobotDescription) -> SweepFault {
-    let sigma = |i: usize| match n.undetermined[i] {
-        true => f64::INFINITY,
-        false => n.covariance[(i, i)].sqrt(),
+    let sigma = |i: usize| n.covariance[(i, i)].sqrt();
+    let across = || {
+        let c = part_across(&n.c, &n.null);
+        let free_along = n.null.iter().map(pointing_up).collect();
+        ([c[0], c[1], c[2]], [sigma(0), sigma(1), sigma(2)], free_along)
     };
     match n.hypothesis.1 {
         SweepCorrection::HeldCommand(k) => SweepFault::HeldOffset {
             joint: k + 1,
             offset: -n.c[0],
-            sigma: sigma(0),
+            sigma: if n.null.is_empty() { sigma(0) } else { f64::INFINITY },
             unit: desc.joints[k].kind.file_unit(),
         },
-        SweepCorrection::Drift => SweepFault::Drift {
-            drift_mm: [n.c[0], n.c[1], n.c[2]],
-            sigma_mm: [sigma(0), sigma(1), sigma(2)],
-        },
-        SweepCorrection::Block => SweepFault::Block {
-            moved_mm: [n.c[0], n.c[1], n.c[2]],
-            sigma_mm: [sigma(0), sigma(1), sigma(2)],
-        },
+        SweepCorrection::Drift => {
+            let (drift_mm, sigma_mm, free_along) = across();
+            SweepFault::Drift {
+                drift_mm,
+                sigma_mm,
+                free_along,
+            }
+        }
+        SweepCorrection::Block => {
+            let (moved_mm, sigma_mm, free_along) = across();
+            SweepFault::Block {
+                moved_mm,
+                sigma_mm,
+                free_along,
+            }
+        }
     }
+}
+
+/// `c` less its parts along the orthonormal directions `null`.
+fn part_across(c: &[f64], null: &[DVector<f64>]) -> DVector<f64> {
+    let mut c = DVector::from_column_slice(c);
+    for u in null {
+        c -= u * u.dot(&c);
+    }
+    c
+}
+
+/// A unit direction of three components, signed so that its largest component is positive
+/// (a null direction's sign is arbitrary).
+fn pointing_up(u: &DVector<f64>) -> [f64; 3] {
+    let largest = u
+        .iter()
+        .copied()
+        .fold(0.0, |a: f64, x| if x.abs() > a.abs() { x } else { a });
+    let sign = if largest < 0.0 { -1.0 } else { 1.0 };
+    [sign * u[0], sign * u[1], sign * u[2]]
 }
 
 /// The correction of hypothesis `h` refined from `c` by [`REFINE_PASSES`] quadratics about
@@ -495,15 +555,12 @@ fn refined(score: &dyn Fn(&[f64]) -> Option<Score>, h: Hypothesis, mut c: Vec<f6
     // chi2 = least + (c - c*)' (H / 2) (c - c*): the covariance is (H / 2)^-1, scaled by the
     // chi-square per degree of freedom left where that is beyond 1.
     let covariance = q.inverse_hessian * (2.0 * left.max(1.0));
-    let undetermined = (0..c.len())
-        .map(|i| q.null.iter().any(|v| v[i].abs() > NULL_SHARE))
-        .collect();
     Some(Confirmed {
         hypothesis: h,
         c,
         covariance,
         rank,
-        undetermined,
+        null: q.null,
         score,
     })
 }
@@ -538,4 +595,27 @@ fn score_of(
         rms_mm: part.rms_mm,
         passes: test.verdict != Verdict::Exceeds,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    /// A move along a null direction is left out and the rest kept (a second path: the
+    /// component along the direction written out); a null direction reads the same either sign.
+    #[test]
+    fn a_move_is_given_across_its_null_directions() {
+        let u = DVector::from_vec(vec![0.6, 0.0, -0.8]);
+        let across = part_across(&[3.0, 1.0, 0.0], std::slice::from_ref(&u));
+        // (3, 1, 0) . u = 1.8: less 1.8 u.
+        assert_relative_eq!(across, DVector::from_vec(vec![3.0 - 1.08, 1.0, 1.44]), epsilon = 1e-12);
+        assert_relative_eq!(across.dot(&u), 0.0, epsilon = 1e-12);
+        assert_eq!(
+            part_across(&[3.0, 1.0, 0.0], &[]),
+            DVector::from_vec(vec![3.0, 1.0, 0.0])
+        );
+        assert_eq!(pointing_up(&u), pointing_up(&-&u));
+        assert_eq!(pointing_up(&u), [-0.6, -0.0, 0.8]);
+    }
 }

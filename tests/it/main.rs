@@ -104,6 +104,7 @@ mod json_schemas;
 mod kinematics_props;
 mod lean_calibration;
 mod measurement_csv_roundtrip;
+mod moved_blocks;
 mod noise_and_held;
 mod nominal_frames;
 mod outliers;
