@@ -960,9 +960,6 @@ fn print_sweep_end(
     );
 }
 
-/// One warning per sweep whose points from one step on sit off its earlier ones
-/// ([`axiscal::calibration::procedure::SweepBump`]): the instrument or the target moved during
-/// the sweep.
 /// That the search of slips in runs of rows and of two slips at once did not run on `rows` rows
 /// (read from `data`): more than [`axiscal::diagnosis::MAX_SEARCH_ROWS`].
 pub fn unsearched_words(rows: usize, data: &Path) -> String {
@@ -975,6 +972,9 @@ pub fn unsearched_words(rows: usize, data: &Path) -> String {
     )
 }
 
+/// One warning per sweep whose points from one step on sit off its earlier ones (two where
+/// they shift twice; [`axiscal::calibration::procedure::SweepBump`]): the instrument or the
+/// target moved during the sweep.
 pub fn print_sweep_bumps(bumps: &[axiscal::calibration::procedure::SweepBump], data: &Path) {
     for b in bumps {
         if let Some(end) = &b.end {
@@ -986,14 +986,25 @@ pub fn print_sweep_bumps(bumps: &[axiscal::calibration::procedure::SweepBump], d
             .map_or_else(|| data.display().to_string(), |l| format!("{}:{l}", data.display()));
         let [x, y, z] = b.shift_mm;
         let [sx, sy, sz] = b.shift_sigma_mm;
+        let (twice, tried, moved) = match b.beside {
+            Some(other) => (
+                format!(
+                    " (one of two steps in this sweep, the other from step {other} on: each block's shift is from \
+                     the points before it)"
+                ),
+                "pairs of change points",
+                "both blocks",
+            ),
+            None => (String::new(), "change points", "them"),
+        };
         eprintln!(
             "warning: {place}: experiment {}'s last {} of {} points, from step {} on, sit ({x:.2}, {y:.2}, {z:.2}) \
-             (+- {sx:.2}, {sy:.2}, {sz:.2}) mm off its earlier points (p = {:.1e} over the {} change points tried in the \
-             file's sweeps; the sweep's fit RMS {:.3} mm as written, {:.3} mm with them moved back): the instrument or \
-             the target moved during the sweep (bumped, re-set up, the target re-seated). The fits take the step into \
-             joint {}'s axis and transmission, so a calibration from this file is wrong for that joint; if the \
-             instrument moved, every later row is in its new place too: measure the sweep again, or split the file at \
-             that line",
+             (+- {sx:.2}, {sy:.2}, {sz:.2}) mm off its earlier points{twice} (p = {:.1e} over the {} {tried} tried in the \
+             file's sweeps; the sweep's fit RMS {:.3} mm as written, {:.3} mm with {moved} moved back): the \
+             instrument or the target moved during the sweep (bumped, re-set up, the target re-seated). The fits take \
+             the step into joint {}'s axis and transmission, so a calibration from this file is wrong for that joint; \
+             if the instrument moved, every later row is in its new place too: measure the sweep again, or split the \
+             file at that line",
             b.experiment, b.points, b.tested, b.step, b.p_value, b.blocks_tried, b.rms_mm.0, b.rms_mm.1, b.joint,
         );
     }

@@ -615,7 +615,8 @@ mod tests {
             part_across(&[3.0, 1.0, 0.0], &[]),
             DVector::from_vec(vec![3.0, 1.0, 0.0])
         );
-        assert_eq!(pointing_up(&u), pointing_up(&-&u));
-        assert_eq!(pointing_up(&u), [-0.6, -0.0, 0.8]);
+        let up = |u: &DVector<f64>| nalgebra::Vector3::from(pointing_up(u));
+        assert_relative_eq!(up(&u), up(&-&u), epsilon = 1e-15);
+        assert_relative_eq!(up(&u), nalgebra::Vector3::new(-0.6, 0.0, 0.8), epsilon = 1e-15);
     }
 }

@@ -131,5 +131,6 @@ mod test_robots;
 mod thread_determinism;
 mod tool_accuracy;
 mod truth_model;
+mod twice_bumped;
 mod urdf_parser;
 mod validate;

@@ -56,9 +56,12 @@ fn triples_after(words: &str, from: &str) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// The move named for `experiment`, its 1-sigma, the direction the poses do not show and the
-/// warning's lines (`None` when no move is named there).
-fn named_move(stderr: &str, experiment: &str) -> Option<([f64; 3], [f64; 3], [f64; 3], String)> {
+/// A move named: the move, its 1-sigma, the direction the poses do not show (mm, mm, unit)
+/// and the warning's lines.
+type NamedMove = ([f64; 3], [f64; 3], [f64; 3], String);
+
+/// The move named for `experiment` (`None` when no move is named there).
+fn named_move(stderr: &str, experiment: &str) -> Option<NamedMove> {
     let line = stderr.lines().find(|l| {
         l.starts_with("warning:") && l.contains(&format!(": experiment {experiment} (lines ")) && l.contains(BLOCK)
     })?;

@@ -338,10 +338,14 @@ fn sweep_bumps(
     set: &MeasurementSet,
     (sigma, max_iterations): (f64, usize),
 ) -> Vec<SweepBump> {
-    let refit_of = |p: &Peeled| {
+    let refits_of = |p: &Peeled| {
         let s = &sweeps[p.index];
         let kept = p.kept.clone();
-        move |start: usize, shift: &Vector3<f64>| s.refit_moved(&kept, start, shift, (sigma, max_iterations))
+        move |blocks: &[(usize, Vector3<f64>)]| s.refit_moved(&kept, blocks, (sigma, max_iterations))
+    };
+    let refit_of = |p: &Peeled| {
+        let refits = refits_of(p);
+        move |start: usize, shift: &Vector3<f64>| refits(&[(start, *shift)])
     };
     let found: Vec<_> = peeled
         .iter()
@@ -374,17 +378,52 @@ fn sweep_bumps(
         // A change point that passes both tests, or else an end that does (over the ends).
         let passes = |candidate: &Option<(bump::Bumped, usize)>, tried: usize| {
             let (found, _) = candidate.as_ref()?;
-            let p_value = bump::confirmed(&x, found, dof, tried)?;
-            bump::explains(found, dof, noisiest_other, tried).then_some((*found, p_value, tried))
+            let p_value = bump::confirmed(&x, found, (dof, 1), tried)?;
+            bump::explains(found, (dof, 1), noisiest_other, tried).then_some((*found, p_value, tried))
+        };
+        // Two change points, where none alone passes and the sweep as written misfits: both
+        // tested together, over the pairs tried.
+        let twice = || {
+            let (first, _) = found[i].as_ref()?;
+            let written = bump::Bumped {
+                sum_sq: x.iter().map(|v| v.norm_squared()).sum(),
+                ..*first
+            };
+            if bump::explains(&written, (dof, 0), noisiest_other, tried) {
+                return None;
+            }
+            let ([first, second], more) = bump::second_start(&x, first, &refits_of(p))?;
+            let pairs = tried * more;
+            let p_value = bump::confirmed(&x, &second, (dof, 2), pairs)?;
+            bump::explains(&second, (dof, 2), noisiest_other, pairs)
+                .then_some([(first, p_value, pairs), (second, p_value, pairs)])
         };
         let (chosen, end) = match passes(&found[i], tried) {
             Some(c) => (c, false),
-            None => match passes(&ends[i], ends_tried) {
-                Some(c) => (c, true),
-                None => continue,
+            None => match (twice(), passes(&ends[i], ends_tried)) {
+                (Some([first, second]), _) => {
+                    let s = &sweeps[p.index];
+                    let (a, b) = (p.bump(s, first, (false, 2), set), p.bump(s, second, (false, 2), set));
+                    let (a_step, b_step) = (a.step, b.step);
+                    let mut two = [
+                        SweepBump {
+                            beside: Some(b_step),
+                            ..a
+                        },
+                        SweepBump {
+                            beside: Some(a_step),
+                            ..b
+                        },
+                    ];
+                    two.sort_by_key(|b| b.step);
+                    bumps.extend(two);
+                    continue;
+                }
+                (None, Some(c)) => (c, true),
+                (None, None) => continue,
             },
         };
-        bumps.push(p.bump(&sweeps[p.index], chosen, end, set));
+        bumps.push(p.bump(&sweeps[p.index], chosen, (end, 1), set));
     }
     bumps
 }
@@ -400,19 +439,21 @@ impl Peeled {
         (3 * self.kept.len()) as f64 - s.parameters() as f64
     }
 
-    /// The bump of sweep `s` (these its points kept) at the change point `found`, with its
-    /// p-value and the blocks tried; with `end`, its block an end's ([`bump::SweepEnd`]).
+    /// The bump of sweep `s` (these its points kept) at the change point `found` (its
+    /// `sum_sq` with every block moved back), with its p-value and the blocks tried; with
+    /// `end`, its block an end's ([`bump::SweepEnd`]); `blocks` moved back in the sweep (1, or
+    /// 2 where it shifts twice).
     fn bump(
         &self,
         s: &Sweep<'_>,
         (found, p_value, tried): (bump::Bumped, f64, usize),
-        end: bool,
+        (end, blocks): (bool, usize),
         set: &MeasurementSet,
     ) -> SweepBump {
         let (x, dof) = (self.kept_residuals(), self.dof(s));
         let (start, shift, undone) = (found.start, found.shift, found.sum_sq);
         let written: f64 = x.iter().map(|v| v.norm_squared()).sum();
-        let sigma_m = found.unit_sigma * (undone / (dof - 3.0)).sqrt();
+        let sigma_m = found.unit_sigma * (undone / (dof - 3.0 * blocks as f64)).sqrt();
         let (step, line) = s.step_line(self.kept[start], set);
         let rms = |sum_sq: f64| (sum_sq / (3 * self.kept.len()) as f64).sqrt() * 1e3;
         let end = end.then(|| {
@@ -439,6 +480,7 @@ impl Peeled {
             p_value,
             blocks_tried: tried,
             rms_mm: (rms(written), rms(undone)),
+            beside: None,
             end,
         }
     }
@@ -741,16 +783,17 @@ impl<'a> Sweep<'a> {
     }
 
     /// The residuals of the points `kept` fitted with those from `kept[start]` on moved back by
-    /// `shift` \[m\].
+    /// `shift` \[m\], for each `(start, shift)` of `blocks`.
     fn refit_moved(
         &self,
         kept: &[usize],
-        start: usize,
-        shift: &Vector3<f64>,
+        blocks: &[(usize, Vector3<f64>)],
         (sigma, max_iterations): (f64, usize),
     ) -> Option<Vec<Vector3<f64>>> {
         let mut points = self.points.clone();
-        kept[start..].iter().for_each(|&k| points[k] -= shift);
+        for (start, shift) in blocks {
+            kept[*start..].iter().for_each(|&k| points[k] -= shift);
+        }
         let moved = Sweep {
             points,
             u: self.u.clone(),

@@ -17,6 +17,11 @@
 //! the same family-wise rate (a second, differently computed test: the whole fit's sum of
 //! squares, not the residuals' means), and when the sweep so moved back fits within the noise
 //! of the file's noisiest other sweep ([`explains`]): a scrambled sweep is not a bumped one.
+//! Where no change point passes both and the sweep as written misfits beyond that noise, a
+//! second change point is sought with the best first block moved back ([`second_start`]: the
+//! instrument or the target moved twice); the two blocks' six shift components are tested
+//! together the same way, over the pairs tried (the file's change points times that search's),
+//! and both are said where the sweep with both blocks moved back fits within that noise.
 
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{f_upper_quantile, f_upper_tail};
@@ -64,6 +69,9 @@ pub struct SweepBump {
     pub blocks_tried: usize,
     /// The sweep's fit RMS per coordinate \[mm\] as written, and with the block moved back.
     pub rms_mm: (f64, f64),
+    /// The step of the other block's first point where the sweep's points shift twice
+    /// ([`second_start`]; each block's shift is from the points before it).
+    pub beside: Option<usize>,
     /// Whether it is the sweep's first or last 2 points that sit off its others (`best_end`),
     /// tested over the ends tried (`blocks_tried`), rather than a change point with 3 points at
     /// least on each side.
@@ -121,6 +129,24 @@ pub fn best_end(x: &[Vector3<f64>], refit: Refit<'_>) -> Option<(Bumped, usize)>
     Some((best, 2))
 }
 
+/// A second change point of a sweep (residuals `x`) whose first (`first`, from
+/// [`best_start`]) does not explain its misfit (the instrument or the target moved twice): the
+/// best start with the first block moved back, then both blocks' shifts fitted together
+/// ([`fitted_shifts`]). Returned: the two blocks in the order found (each shift from the
+/// points before its start; `sum_sq` with both moved back) and the starts tried; `None` where
+/// the best second start is the first's.
+pub fn second_start(x: &[Vector3<f64>], first: &Bumped, refit: Refits<'_>) -> Option<([Bumped; 2], usize)> {
+    let moved_first = refit(&[(first.start, first.shift)])?;
+    let (second, tried) = best_start(&moved_first, &|start, shift| {
+        refit(&[(first.start, first.shift), (start, *shift)])
+    })?;
+    if second.start == first.start {
+        return None;
+    }
+    let both = fitted_shifts(x, &[first.start, second.start], refit)?;
+    Some(([both[0], both[1]], tried))
+}
+
 /// A change point with its fitted shift.
 #[derive(Clone, Copy, Debug)]
 pub struct Bumped {
@@ -154,80 +180,103 @@ fn spread(r: &DVector<f64>) -> f64 {
 /// the residuals of the points kept.
 pub type Refit<'a> = &'a dyn Fn(usize, &Vector3<f64>) -> Option<Vec<Vector3<f64>>>;
 
+/// A sweep's refit with its points from each start on moved back by that start's shift
+/// ([`second_start`]; the shifts of blocks that overlap add): the residuals of the points kept.
+pub type Refits<'a> = &'a dyn Fn(&[(usize, Vector3<f64>)]) -> Option<Vec<Vector3<f64>>>;
+
 /// The shift \[m\] of the points `start..` of residuals `x` that minimises the sweep fit's sum
-/// of squares: Gauss-Newton on the refit's residuals, their Jacobian in the shift by forward
-/// differences of [`DIFFERENCE_M`] (the fit's residuals are near linear in a shift of
-/// millimetres), [`BUMP_ROUNDS`] steps with that Jacobian.
+/// of squares ([`fitted_shifts`] of one block).
 fn fitted_shift(x: &[Vector3<f64>], start: usize, refit: Refit<'_>) -> Option<Bumped> {
+    let one = fitted_shifts(x, &[start], &|blocks| refit(blocks[0].0, &blocks[0].1))?;
+    Some(one[0])
+}
+
+/// The shifts \[m\] of the points from each of `starts` on (residuals `x`, every block in
+/// place) that together minimise the sweep fit's sum of squares: Gauss-Newton on the refit's
+/// residuals, their Jacobian in the shifts by forward differences of [`DIFFERENCE_M`] (the
+/// fit's residuals are near linear in a shift of millimetres), [`BUMP_ROUNDS`] steps with that
+/// Jacobian. Each block's `unit_sigma` is from the joint covariance; `sum_sq` and `spread` are
+/// the fit's with every block moved back.
+fn fitted_shifts(x: &[Vector3<f64>], starts: &[usize], refit: Refits<'_>) -> Option<Vec<Bumped>> {
     let flat = |r: &[Vector3<f64>]| DVector::from_iterator(3 * r.len(), r.iter().flat_map(|v| v.iter().copied()));
+    let shift_of = |s: &DVector<f64>, b: usize| Vector3::new(s[3 * b], s[3 * b + 1], s[3 * b + 2]);
+    let blocks = |s: &DVector<f64>| -> Vec<(usize, Vector3<f64>)> {
+        starts
+            .iter()
+            .enumerate()
+            .map(|(b, &start)| (start, shift_of(s, b)))
+            .collect()
+    };
+    let n = 3 * starts.len();
     let r0 = flat(x);
-    let mut jacobian = DMatrix::zeros(r0.len(), 3);
-    for c in 0..3 {
-        let moved = flat(&refit(start, &(Vector3::ith(c, DIFFERENCE_M)))?);
+    let mut jacobian = DMatrix::zeros(r0.len(), n);
+    for c in 0..n {
+        let moved = flat(&refit(&blocks(&DVector::from_fn(n, |i, _| {
+            if i == c { DIFFERENCE_M } else { 0.0 }
+        })))?);
         jacobian.set_column(c, &((moved - &r0) / DIFFERENCE_M));
     }
     let solver = (jacobian.transpose() * &jacobian).cholesky()?;
     let inverse = solver.inverse();
-    let unit_sigma = Vector3::from_fn(|c, _| inverse[(c, c)].sqrt());
-    let mut best = Bumped {
-        start,
-        shift: Vector3::zeros(),
-        sum_sq: r0.norm_squared(),
-        unit_sigma,
-        spread: spread(&r0),
-    };
+    let (mut shift, mut sum_sq, mut spread_of) = (DVector::zeros(n), r0.norm_squared(), spread(&r0));
     let mut r = r0;
     for _ in 0..BUMP_ROUNDS {
-        let shift = best.shift - solver.solve(&(jacobian.transpose() * &r));
-        let Some(left) = refit(start, &Vector3::new(shift[0], shift[1], shift[2])) else {
+        let next = &shift - solver.solve(&(jacobian.transpose() * &r));
+        let Some(left) = refit(&blocks(&next)) else {
             break;
         };
         r = flat(&left);
-        if r.norm_squared() >= best.sum_sq {
+        if r.norm_squared() >= sum_sq {
             break;
         }
-        best = Bumped {
-            start,
-            shift: Vector3::new(shift[0], shift[1], shift[2]),
-            sum_sq: r.norm_squared(),
-            unit_sigma,
-            spread: spread(&r),
-        };
+        (shift, sum_sq, spread_of) = (next, r.norm_squared(), spread(&r));
     }
-    Some(best)
+    let bumped = |(b, &start): (usize, &usize)| Bumped {
+        start,
+        shift: shift_of(&shift, b),
+        sum_sq,
+        unit_sigma: Vector3::from_fn(|c, _| inverse[(3 * b + c, 3 * b + c)].sqrt()),
+        spread: spread_of,
+    };
+    Some(starts.iter().enumerate().map(bumped).collect())
 }
 
 /// The forward difference of the shift's Jacobian \[m\].
 const DIFFERENCE_M: f64 = 1e-3;
 
-/// Whether the change point `found` of residuals `x` passes the likelihood-ratio test over
-/// `tried` change points of the file (module docs): its p-value, before the correction, when
-/// it does. `dof` is the sweep fit's degrees of freedom.
-pub fn confirmed(x: &[Vector3<f64>], found: &Bumped, dof: f64, tried: usize) -> Option<f64> {
+/// Whether the change points of residuals `x` (`blocks` of them: 1, or 2 where a sweep shifts
+/// twice; `found` the last, its `sum_sq` with every block moved back) pass the
+/// likelihood-ratio test over `tried` change points (or pairs) of the file (module docs): its
+/// p-value, before the correction, when they do. `dof` is the sweep fit's degrees of freedom.
+pub fn confirmed(x: &[Vector3<f64>], found: &Bumped, (dof, blocks): (f64, usize), tried: usize) -> Option<f64> {
     let written: f64 = x.iter().map(|v| v.norm_squared()).sum();
-    let nu = dof - 3.0;
+    let shifts = 3.0 * blocks as f64;
+    let nu = dof - shifts;
     if !(nu >= 1.0 && found.sum_sq > 0.0 && found.sum_sq < written) {
         return None;
     }
-    // With the noise spread over `m` directions the ratio is about `F(m, m nu / 3)`
-    // (Satterthwaite): `m = 3` isotropic, `m = 1` all along one direction, the heaviest tail.
+    // With the noise spread over `m` directions the ratio is about `F(m b, m nu / 3)` for `b`
+    // blocks (Satterthwaite): `m = 3` isotropic, `m = 1` all along one direction, the heaviest
+    // tail.
     let m = found.spread;
-    let p = f_upper_tail((written - found.sum_sq) / 3.0 / (found.sum_sq / nu), m, m * nu / 3.0);
+    let ratio = (written - found.sum_sq) / shifts / (found.sum_sq / nu);
+    let p = f_upper_tail(ratio, m * blocks as f64, m * nu / 3.0);
     (p * (tried as f64) < SWEEP_BUMP_FALSE_ALARM).then_some(p)
 }
 
-/// Whether the sweep with the block moved back (`found`, its fit's `dof`) fits within the
-/// noise of the file's noisiest other sweep (`noisiest_other`: its residual variance \[m^2\]
-/// and degrees of freedom): its variance ratio to that sweep's within the `F` quantile at
-/// [`SWEEP_BUMP_FALSE_ALARM`] over the `tried` change points. A sweep whose points are
-/// scrambled, in other units or of another robot has a step that fits better than none, but
-/// misses its points by far more than any sweep's noise even so: the step does not explain it.
-/// True without another sweep to compare with.
-pub fn explains(found: &Bumped, dof: f64, noisiest_other: Option<(f64, f64)>, tried: usize) -> bool {
+/// Whether the sweep with its blocks moved back (`found`, its `sum_sq` with every block moved
+/// back; `blocks` of them; the fit's `dof`) fits within the noise of the file's noisiest other
+/// sweep (`noisiest_other`: its residual variance \[m^2\] and degrees of freedom): its
+/// variance ratio to that sweep's within the `F` quantile at [`SWEEP_BUMP_FALSE_ALARM`] over
+/// the `tried` change points. A sweep whose points are scrambled, in other units or of another
+/// robot has a step that fits better than none, but misses its points by far more than any
+/// sweep's noise even so: the step does not explain it. True without another sweep to compare
+/// with. With no block (`blocks` 0) it tells whether the sweep as written fits so.
+pub fn explains(found: &Bumped, (dof, blocks): (f64, usize), noisiest_other: Option<(f64, f64)>, tried: usize) -> bool {
     let Some((variance, other_dof)) = noisiest_other else {
         return true;
     };
-    let nu = dof - 3.0;
+    let nu = dof - 3.0 * blocks as f64;
     let ratio = found.sum_sq / nu / variance;
     !(variance > 0.0 && nu >= 1.0 && other_dof >= 1.0)
         || ratio <= f_upper_quantile(SWEEP_BUMP_FALSE_ALARM / tried.max(1) as f64, nu, other_dof)
@@ -235,7 +284,7 @@ pub fn explains(found: &Bumped, dof: f64, noisiest_other: Option<(f64, f64)>, tr
 
 /// `set` with the block of each of `bumps` moved back by its shift: every row of its
 /// experiment from its step on (each target: an instrument moved moves them alike) less
-/// [`SweepBump::shift_mm`], as the sweep screen's refit moved it to confirm the bump; `None`
+/// [`SweepBump::shift_mm`] (less both where a sweep shifts twice), as the sweep screen's refit moved it to confirm the bump; `None`
 /// when there is none. The checks that read a sweep's fit as the joint's (its transmission's
 /// scale, an instrument axis' scale, a held joint's offset) run on it, so that they do not
 /// name the bump's own signature as a second cause.
@@ -248,10 +297,13 @@ pub fn bumps_undone(set: &MeasurementSet, bumps: &[SweepBump]) -> Option<Measure
         .iter()
         .enumerate()
         .filter_map(|(i, m)| {
-            let b = bumps
+            let mut moved = bumps
                 .iter()
-                .find(|b| b.experiment == m.experiment && m.step >= b.step)?;
-            Some((i, b.shift_mm.map(|v| -v)))
+                .filter(|b| b.experiment == m.experiment && m.step >= b.step)
+                .peekable();
+            moved.peek()?;
+            let shift = moved.fold([0.0; 3], |a, b| std::array::from_fn(|c| a[c] - b.shift_mm[c]));
+            Some((i, shift))
         })
         .collect();
     Some(set.with_rows_moved(&moves))
@@ -301,11 +353,60 @@ mod tests {
             "{} against {expected}",
             found.shift
         );
-        assert!(confirmed(&x, &found, 48.0, tried).is_some());
+        assert!(confirmed(&x, &found, (48.0, 1), tried).is_some());
         for seed in 0..20 {
             let x = noise(100 + seed, 1.0);
             let (found, tried) = best_start(&x, &refit_of(x.clone())).unwrap();
-            assert!(confirmed(&x, &found, 48.0, tried).is_none(), "seed {seed}");
+            assert!(confirmed(&x, &found, (48.0, 1), tried).is_none(), "seed {seed}");
+        }
+    }
+
+    /// Two steps where the refit takes nothing of them: the second search, with the first block
+    /// moved back, finds the other start; the joint fit's shifts are the means written out (a
+    /// second path), the pair passes the test of six shift components, and noise alone passes
+    /// it on 20 seeds.
+    #[test]
+    fn two_steps_are_found_each_with_its_own_shift() {
+        let (a, b) = (Vector3::new(0.0, 4.0, 0.0), Vector3::new(3.0, 0.0, -3.0));
+        let mut x = noise(2, 1.0);
+        x[5..].iter_mut().for_each(|v| *v += a);
+        x[11..].iter_mut().for_each(|v| *v += b);
+        let refits_of = |x: Vec<Vector3<f64>>| {
+            move |blocks: &[(usize, Vector3<f64>)]| -> Option<Vec<Vector3<f64>>> {
+                Some(
+                    (0..x.len())
+                        .map(|i| {
+                            x[i] - blocks
+                                .iter()
+                                .filter(|(s, _)| i >= *s)
+                                .map(|(_, v)| v)
+                                .sum::<Vector3<f64>>()
+                        })
+                        .collect(),
+                )
+            }
+        };
+        let refits = refits_of(x.clone());
+        let (first, tried) = best_start(&x, &|s, v| refits(&[(s, *v)])).unwrap();
+        let ([first, second], more) = second_start(&x, &first, &refits).unwrap();
+        let mut found = [(first.start, first.shift), (second.start, second.shift)];
+        found.sort_by_key(|f| f.0);
+        // Gauss-Newton is exact on this refit: the points before the first start are fitted by
+        // nothing, so the first shift is the mean of the points between the starts and the
+        // second the mean after less it.
+        let mean = |r: std::ops::Range<usize>| x[r.clone()].iter().sum::<Vector3<f64>>() / r.len() as f64;
+        assert_eq!((found[0].0, found[1].0), (5, 11));
+        assert!((found[0].1 - mean(5..11)).norm() < 1e-9, "{found:?}");
+        assert!((found[1].1 - (mean(11..16) - mean(5..11))).norm() < 1e-9, "{found:?}");
+        assert!(confirmed(&x, &second, (48.0, 2), tried * more).is_some());
+        for seed in 0..20 {
+            let x = noise(200 + seed, 1.0);
+            let refits = refits_of(x.clone());
+            let (first, tried) = best_start(&x, &|s, v| refits(&[(s, *v)])).unwrap();
+            let Some(([_, second], more)) = second_start(&x, &first, &refits) else {
+                continue;
+            };
+            assert!(confirmed(&x, &second, (48.0, 2), tried * more).is_none(), "seed {seed}");
         }
     }
 }
