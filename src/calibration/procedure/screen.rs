@@ -401,22 +401,8 @@ fn sweep_bumps(
         let (chosen, end) = match passes(&found[i], tried) {
             Some(c) => (c, false),
             None => match (twice(), passes(&ends[i], ends_tried)) {
-                (Some([first, second]), _) => {
-                    let s = &sweeps[p.index];
-                    let (a, b) = (p.bump(s, first, (false, 2), set), p.bump(s, second, (false, 2), set));
-                    let (a_step, b_step) = (a.step, b.step);
-                    let mut two = [
-                        SweepBump {
-                            beside: Some(b_step),
-                            ..a
-                        },
-                        SweepBump {
-                            beside: Some(a_step),
-                            ..b
-                        },
-                    ];
-                    two.sort_by_key(|b| b.step);
-                    bumps.extend(two);
+                (Some(two), _) => {
+                    bumps.extend(p.two_bumps(&sweeps[p.index], two, set));
                     continue;
                 }
                 (None, Some(c)) => (c, true),
@@ -437,6 +423,25 @@ impl Peeled {
     /// The degrees of freedom of the fit of the points kept of sweep `s`.
     fn dof(&self, s: &Sweep<'_>) -> f64 {
         (3 * self.kept.len()) as f64 - s.parameters() as f64
+    }
+
+    /// The bumps of sweep `s` shifted at two steps (`two`: each change point with the pair's
+    /// p-value and the pairs tried), in step order, each naming the other's step.
+    fn two_bumps(&self, s: &Sweep<'_>, two: [(bump::Bumped, f64, usize); 2], set: &MeasurementSet) -> [SweepBump; 2] {
+        let [a, b] = two.map(|found| self.bump(s, found, (false, 2), set));
+        let (a_step, b_step) = (a.step, b.step);
+        let mut two = [
+            SweepBump {
+                beside: Some(b_step),
+                ..a
+            },
+            SweepBump {
+                beside: Some(a_step),
+                ..b
+            },
+        ];
+        two.sort_by_key(|b| b.step);
+        two
     }
 
     /// The bump of sweep `s` (these its points kept) at the change point `found` (its
