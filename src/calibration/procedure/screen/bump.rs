@@ -70,7 +70,7 @@ pub struct SweepBump {
     /// The sweep's fit RMS per coordinate \[mm\] as written, and with the block moved back.
     pub rms_mm: (f64, f64),
     /// The step of the other block's first point where the sweep's points shift twice
-    /// ([`second_start`]; each block's shift is from the points before it).
+    /// (`bump::second_start`; each block's shift is from the points before it).
     pub beside: Option<usize>,
     /// Whether it is the sweep's first or last 2 points that sit off its others (`best_end`),
     /// tested over the ends tried (`blocks_tried`), rather than a change point with 3 points at
