@@ -51,7 +51,7 @@ fn fault_words(fault: &SweepFault, whole: bool) -> String {
             triple(sigma_mm),
             free_words(free_along),
             if whole { "row" } else { "step" },
-            shown_words(free_along),
+            shown_words(free_along, "a drift"),
         ),
         SweepFault::Block {
             moved_mm,
@@ -62,18 +62,20 @@ fn fault_words(fault: &SweepFault, whole: bool) -> String {
             triple(moved_mm),
             triple(sigma_mm),
             free_words(free_along),
-            shown_words(free_along),
+            shown_words(free_along, "a block moved"),
         ),
     }
 }
 
-/// Why a move is given across some directions: empty where it has none.
-fn shown_words(free_along: &[[f64; 3]]) -> String {
+/// Why a move (`what`: `a block moved`, `a drift`) is given across some directions: empty
+/// where it has none.
+fn shown_words(free_along: &[[f64; 3]], what: &str) -> String {
     match free_along.is_empty() {
         true => String::new(),
-        false => " (these poses do not show a move along it: a block moved along the axis its sweep turns about \
-                  leaves that axis where it is)"
-            .to_string(),
+        false => format!(
+            " (these poses do not show a move along it: {what} along the axis its sweep turns about leaves that axis \
+             where it is)"
+        ),
     }
 }
 
