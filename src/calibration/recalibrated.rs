@@ -17,14 +17,18 @@ use crate::calibration::noise::NOISE_TEST_LEVEL;
 use crate::calibration::procedure::{
     Calibration, CalibrationOptions, ColumnSource, Implausible, Refit, ScaleDoubt, ScaleReach, ScaleSlip, SweepBump,
     bumps_undone, calibrate, column_source, free_pose_scale_doubts, free_pose_scale_reach, free_pose_scale_slips,
-    implausible, joint_slopes, named_joints, sweeps_agreement,
+    implausible, joint_slopes, named_joints, simulated_sweeps, sweeps_agreement,
 };
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::unit_check::axis_scale::{
-    AxisScale, Fit, PROFILE_MAX_FREE_POSE_ROWS, Scaled, axis_scale, axis_scale_with_column_undone,
+    AxisScale, Fit, NullSpread, PROFILE_MAX_FREE_POSE_ROWS, Scaled, axis_scale, axis_scale_with_column_undone,
+    factor_read, null_spread,
 };
 use crate::robot::RobotDescription;
+use rand::SeedableRng;
+use rand::rngs::ChaCha12Rng;
+use rayon::prelude::*;
 
 /// The axis fits' residuals of `cal` as the coordinate-scale profile reads them: the sum of
 /// each axis's squared residual coordinates over the noise estimate's degrees of freedom, and
@@ -247,7 +251,7 @@ fn command_index(column: &str) -> Option<usize> {
 
 /// A calibration of a set as the coordinate-scale profile reads it ([`axes_profile_fit`],
 /// [`free_pose_profile_fit`]).
-pub type ProfileFit<'a> = &'a dyn Fn(&MeasurementSet) -> Option<Fit>;
+pub type ProfileFit<'a> = &'a (dyn Fn(&MeasurementSet) -> Option<Fit> + Sync);
 
 /// What the coordinate-scale profile ([`axis_scale`]) of a file reads, weighed against the
 /// instrument column the joints' slopes named ([`instrument_axis_source`]).
@@ -273,7 +277,84 @@ pub enum CoordinateScale {
         /// The second axis: the profile of the data with the named column divided by its factor
         /// about their centroid ([`axis_scale_with_column_undone`]), where it names another column.
         second: Option<AxisScale>,
+        /// On sweeps the held joints' correction moved, what files simulated without any scale
+        /// read ([`beyond_correction_error`]): the finding stands beyond it.
+        null: Option<NullSpread>,
     },
+    /// A scale the noise would name, on sweeps the held joints' correction moved, that files
+    /// simulated from the calibration without any scale read as far from 1
+    /// ([`beyond_correction_error`]): not named.
+    WithinCorrectionError {
+        /// The scale the profile reads.
+        found: AxisScale,
+        /// The spread the simulated files read.
+        null: NullSpread,
+    },
+}
+
+/// The files simulated from a calibration that [`beyond_correction_error`] profiles: with 20,
+/// the prediction interval's threshold at the per-column false-alarm rate is 5.4 of their
+/// standard deviations (Student's t, 19 degrees of freedom; 4.2 with the spread known), and
+/// each file is a profile (three calibrations).
+pub const NULL_FILES: usize = 20;
+
+/// The seed of the first simulated file's noise (file `b` draws from `NULL_SEED + b`): a file
+/// gets the same verdict on every run.
+const NULL_SEED: u64 = 0x5ca1e;
+
+/// `scale` weighed against the model error the held joints' correction carries
+/// ([`NullSpread`]): a scale [`CoordinateScale::Named`] on sweeps that `cal` corrected (more
+/// than one fit-and-correct pass) stands only beyond what files simulated from `cal` read
+/// ([`correction_null`]); otherwise it is [`CoordinateScale::WithinCorrectionError`]. A
+/// second axis behind a named one is kept only where it stands beyond them too. Other
+/// findings, and sweeps that needed no correction, are returned as they are, as is a finding
+/// whose simulated files cannot be made or calibrated.
+pub fn beyond_correction_error(
+    scale: CoordinateScale,
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    (cal, fit): (&Calibration, ProfileFit<'_>),
+    max_rows: usize,
+) -> CoordinateScale {
+    let CoordinateScale::Named { found, second, .. } = scale else {
+        return scale;
+    };
+    let null_of = |found: &AxisScale| correction_null(found, (set, desc), (cal, fit), max_rows);
+    match null_of(&found) {
+        Some(null) if !null.passes() => CoordinateScale::WithinCorrectionError { found, null },
+        null => CoordinateScale::Named {
+            second: second.filter(|s| null_of(s).is_none_or(|n| n.passes())),
+            found,
+            null,
+        },
+    }
+}
+
+/// What [`NULL_FILES`] files simulated from `cal` at `set`'s commands without any scale read
+/// of `found`'s column ([`simulated_sweeps`], with the noise of the sweeps' own fits; each
+/// profiled with `fit`, thinned above `max_rows` rows), against `found` ([`null_spread`]);
+/// `None` where `cal` needed no correction (one fit-and-correct pass), or the files cannot be
+/// made or calibrated.
+fn correction_null(
+    found: &AxisScale,
+    (set, desc): (&MeasurementSet, &RobotDescription),
+    (cal, fit): (&Calibration, ProfileFit<'_>),
+    max_rows: usize,
+) -> Option<NullSpread> {
+    if cal.held_passes <= 1 {
+        return None;
+    }
+    let sigma_mm = sweeps_agreement(cal)
+        .map(|a| a.rms_mm[0])
+        .or_else(|| Some(cal.noise.as_ref()?.used_rms_3d_mm / 3f64.sqrt()))?;
+    let reads: Vec<Option<f64>> = (0..NULL_FILES as u64)
+        .into_par_iter()
+        .map(|b| {
+            let mut rng = ChaCha12Rng::seed_from_u64(NULL_SEED + b);
+            let simulated = simulated_sweeps(set, (desc, &cal.robot), sigma_mm, &mut rng)?;
+            factor_read(&simulated, found.scaled, fit, max_rows)
+        })
+        .collect::<Option<_>>()?;
+    null_spread(found, &reads)
 }
 
 /// The coordinate-scale profile of `set` under the calibration `fit`, or of a slide's
@@ -310,7 +391,11 @@ pub fn coordinate_scale(
         return CoordinateScale::ScreenNamedNone(found);
     }
     let second = second_axis_scale(set, &found, fit, (max_rows, &slides));
-    CoordinateScale::Named { found, second }
+    CoordinateScale::Named {
+        found,
+        second,
+        null: None,
+    }
 }
 
 /// A second instrument axis' scale behind the column `found` names: the coordinate-scale

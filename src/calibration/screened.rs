@@ -21,8 +21,8 @@ use crate::calibration::procedure::{
     SweepBump, SweepMisfit, calibrate, screen_sweeps, screen_wandering_sweeps, without_poses,
 };
 use crate::calibration::recalibrated::{
-    CoordinateScale, axes_profile_fit, calibrated_with_bumps_undone, command_slopes, coordinate_scale,
-    instrument_axis_source, with_commands_scaled,
+    CoordinateScale, axes_profile_fit, beyond_correction_error, calibrated_with_bumps_undone, command_slopes,
+    coordinate_scale, instrument_axis_source, with_commands_scaled,
 };
 use crate::measurement::MeasurementSet;
 use crate::measurement::unit_check::axis_scale::PROFILE_MAX_ROWS;
@@ -188,10 +188,16 @@ pub fn calibrate_screened(
     // columns undone by their slopes, as on free poses.
     let commands_undone =
         (column_source.is_none() && !slopes.is_empty()).then(|| with_commands_scaled(judged, &slopes));
-    let coordinate_scale = coordinate_scale(
-        (commands_undone.as_ref().unwrap_or(judged), desc),
-        (&fit, column_source.as_ref()),
-        (PROFILE_MAX_ROWS, false),
+    let profiled = commands_undone.as_ref().unwrap_or(judged);
+    let coordinate_scale = beyond_correction_error(
+        coordinate_scale(
+            (profiled, desc),
+            (&fit, column_source.as_ref()),
+            (PROFILE_MAX_ROWS, false),
+        ),
+        (profiled, desc),
+        (judged_cal, &fit),
+        PROFILE_MAX_ROWS,
     );
     let bumps_undone = undone.map(|(set, cal)| BumpsUndone { set, cal });
     Ok(ScreenedCalibration {

@@ -30,6 +30,7 @@ use axiscal::diagnosis::{
     carried_candidates, test_own_validation_poses,
 };
 use axiscal::json_file::{self, Schema};
+use axiscal::measurement::unit_check::axis_scale::NullSpread;
 use axiscal::measurement::{Measurement, MeasurementSet, format_f64};
 use axiscal::plan::{TOOL_EXPERIMENT, ValidationPlan};
 use axiscal::robot::RobotDescription;
@@ -692,12 +693,30 @@ pub(super) fn print_coordinate_scale(found: &CoordinateScale, set: &MeasurementS
             found.factor,
             found.sigma
         ),
-        CoordinateScale::Named { found, second } => {
+        CoordinateScale::WithinCorrectionError { found, null } => eprintln!(
+            "note: {}: the coordinate-scale profile reads {} {:.5} times (+- {:.5} from the noise, {:.1} sigma from \
+             1), but {}: the sweeps at other poses enter through the held joints' correction, whose model error reads \
+             as a scale (longer sweeps locate the axes better): not named",
+            data.display(),
+            found.scaled.columns(),
+            found.factor,
+            found.sigma,
+            (found.factor - 1.0).abs() / found.sigma,
+            simulated_words(null)
+        ),
+        CoordinateScale::Named { found, second, null } => {
             let place = match set.line_of(0) {
                 Some(line) => format!("{}:{line}", data.display()),
                 None => data.display().to_string(),
             };
-            eprintln!("warning: {place}: {found}");
+            let beyond = null.as_ref().map_or(String::new(), |null| {
+                format!(
+                    " (the sweeps at other poses enter through the held joints' correction, whose model error reads as \
+                     a scale; {}, so it stands beyond that)",
+                    simulated_words(null)
+                )
+            });
+            eprintln!("warning: {place}: {found}{beyond}");
             if let Some(second) = second {
                 eprintln!(
                     "warning: {place}: with {} divided by {:.5} about the data's centroid (the scale named above) \
@@ -708,6 +727,15 @@ pub(super) fn print_coordinate_scale(found: &CoordinateScale, set: &MeasurementS
             }
         }
     }
+}
+
+/// What the files simulated without a scale read ([`NullSpread`]), in words.
+fn simulated_words(null: &NullSpread) -> String {
+    format!(
+        "{} files simulated from this calibration at these commands, with this noise and no scale, read it {:.5} \
+         times (+- {:.5}; p = {:.1e} for this file among them)",
+        null.files, null.centre, null.sigma, null.p_value
+    )
 }
 
 /// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far

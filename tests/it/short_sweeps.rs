@@ -11,7 +11,9 @@
 //! correction, whose model is uncertain by millimetres: the corrected sweeps miss one another
 //! beyond their noise, and the coordinate-scale profile read part of that model error as an
 //! instrument axis 0.7-0.9 % long at 6-7 sigma (seeds 45, 46, 47). Such a scale is named only
-//! where, with it undone, the sweeps agree; a note says they do not.
+//! where, with it undone, the sweeps agree; a note says they do not. Where they agree within
+//! that test, the same error still reads as a scale beyond the noise (seeds 42 and 60), and a
+//! scale is named only beyond what files simulated from the calibration without one read.
 
 use crate::common::{altered_experiment, axiscal, column_scaled, scale_fields, stderr};
 use crate::hostile_round15s::robot;
@@ -99,34 +101,75 @@ fn short_sweeps_at_three_poses_are_not_read_as_an_instrument_axis_scale() {
     }
 }
 
+/// Clean 30-degree sweeps at three poses whose held joints' correction reads as a scale the
+/// noise test names (seeds 42 and 60: `y_mm` 1.0060 and `x_mm` 0.9902 at 5 and 8 of the
+/// noise's sigmas; they were warned of it): files simulated from the calibration without a
+/// scale read it as far from 1, so it is a note, not a warning.
 #[test]
-fn an_axis_scale_is_still_named_where_the_sweeps_at_three_poses_agree_once_it_is_undone() {
+fn a_scale_the_correction_error_explains_is_a_note_not_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = three_pose_plan(dir.path(), "three_30.toml", |_| 30.0);
+    for seed in [42, 60] {
+        let file = simulated_with_plan(dir.path(), "ur5e-dh", &plan, seed, &format!("three_{seed}.csv"));
+        let (code, e) = calibrate(dir.path(), &file);
+        assert_eq!(code, 0, "seed {seed}: {e}");
+        assert!(!e.contains("the instrument's"), "seed {seed}: {e}");
+        let note = e
+            .lines()
+            .find(|l| l.contains("the coordinate-scale profile reads"))
+            .unwrap_or_else(|| panic!("seed {seed}: no note: {e}"));
+        assert!(
+            note.contains("20 files simulated from this calibration") && note.ends_with("not named"),
+            "seed {seed}: {note}"
+        );
+    }
+}
+
+/// The factor a named scale's warning reads and the spread of the files simulated without a
+/// scale (`... reads F times ... read it C times (+- S; p = ...`).
+fn factor_and_spread(warning: &str) -> (f64, f64) {
+    let number = |text: &str, after: &str, before: char| -> Option<f64> {
+        text.split(after).nth(1)?.split(before).next()?.parse().ok()
+    };
+    let simulated = warning.split("read it ").nth(1).unwrap_or_default();
+    let factor = number(warning, "reads ", ' ');
+    let spread = number(simulated, "times (+- ", ';');
+    factor.zip(spread).unwrap_or_else(|| panic!("{warning}"))
+}
+
+/// 60-degree sweeps at three poses: the correction's model error reads as a scale about
+/// 1.8 times the noise's sigma (the simulated files' spread), so `y_mm` x1.005 (7.5 of the
+/// noise's sigmas, 4 of the spread's) is a note, and `y_mm` x1.01 is named, its factor within
+/// 3 of that spread, with the simulated files said. Seed 43 as the clean file's test.
+#[test]
+fn an_axis_scale_beyond_the_correction_error_is_still_named() {
     let dir = tempfile::tempdir().unwrap();
     let plan = three_pose_plan(dir.path(), "three_60.toml", |_| 60.0);
     let clean = simulated_with_plan(dir.path(), "ur5e-dh", &plan, 43, "three_60.csv");
     let (code, e) = calibrate(dir.path(), &clean);
     assert_eq!(code, 0, "{e}");
-    assert!(!e.contains(DISAGREE) && !e.contains("the instrument's"), "{e}");
-    let scaled = column_scaled(&clean, "three_60_y.csv", 5, 1.005);
-    let (code, e) = calibrate(dir.path(), &scaled);
+    assert!(
+        !e.contains(DISAGREE) && !e.contains("the instrument's") && !e.contains("coordinate-scale profile reads"),
+        "{e}"
+    );
+    let (code, e) = calibrate(dir.path(), &column_scaled(&clean, "three_60_y5.csv", 5, 1.005));
+    assert_eq!(code, 0, "{e}");
+    assert!(
+        !e.contains("the instrument's") && e.contains("the coordinate-scale profile reads `y_mm`"),
+        "{e}"
+    );
+    let (code, e) = calibrate(dir.path(), &column_scaled(&clean, "three_60_y10.csv", 5, 1.01));
     assert_eq!(code, 0, "{e}");
     let warning = e
         .lines()
         .find(|l| l.contains("the instrument's y axis reads"))
-        .unwrap_or_default();
-    let factor: f64 = warning
-        .split("reads ")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .and_then(|f| f.parse().ok())
-        .unwrap_or_else(|| panic!("`y_mm` x1.005 not named: {e}"));
-    let sigma: f64 = warning
-        .split("(+- ")
-        .nth(1)
-        .and_then(|r| r.split([',', ')']).next())
-        .and_then(|f| f.parse().ok())
-        .unwrap();
-    assert!((factor - 1.005).abs() < 3.0 * sigma, "{factor} +- {sigma}: {e}");
+        .unwrap_or_else(|| panic!("`y_mm` x1.01 not named: {e}"));
+    assert!(
+        warning.contains("20 files simulated from this calibration"),
+        "{warning}"
+    );
+    let (factor, spread) = factor_and_spread(warning);
+    assert!((factor - 1.01).abs() < 3.0 * spread, "{factor} +- {spread}: {warning}");
 }
 
 /// Sweeps of 20 degrees at three poses: the wrist's arcs bow less than five times the noise.

@@ -68,11 +68,7 @@ impl Corrector<'_> {
         };
         let n = self.desc.dof();
         let k = e.joint - 1;
-        let link = self
-            .desc
-            .axis_targets_of(e.joint)
-            .and_then(|t| if target == 0 { Some(t.target0) } else { t.target1 })
-            .map_or(n - 1, |t| t.link - 1);
+        let link = target_link(self.desc, e.joint, target);
         let u_ref = self
             .controller
             .decouple(&commands_to_internal(self.desc, self.reference_cmd))?;
@@ -109,4 +105,12 @@ impl Corrector<'_> {
             })
             .collect()
     }
+}
+
+/// The link (0-based) carrying target `target` (0 or 1) of a sweep of `joint` (1-based): the
+/// description's `axis_targets`, else the last link.
+pub(super) fn target_link(desc: &RobotDescription, joint: usize, target: usize) -> usize {
+    desc.axis_targets_of(joint)
+        .and_then(|t| if target == 0 { Some(t.target0) } else { t.target1 })
+        .map_or(desc.dof() - 1, |t| t.link - 1)
 }

@@ -43,6 +43,7 @@ mod result;
 mod sanity;
 mod screen;
 mod second_targets;
+mod simulated_sweeps;
 mod size;
 mod sweeps_agree;
 mod uncertainty;
@@ -78,6 +79,7 @@ pub use screen::{
     without_poses,
 };
 pub use second_targets::SecondTargetData;
+pub use simulated_sweeps::simulated_sweeps;
 pub use sweeps_agree::{SweepsAgreement, sweeps_agreement};
 pub use uncertainty::{AxisCovariance, SIGNIFICANT_SIGMAS, row_sigmas};
 pub use urdf::{

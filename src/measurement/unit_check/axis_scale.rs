@@ -427,6 +427,72 @@ impl AxisScale {
     }
 }
 
+/// What the profile reads on files that hold no scale: files simulated from the file's own
+/// calibration at its commands (a robot that holds together exactly, with the file's noise),
+/// each calibrated and profiled as the file was. Where the file's sweeps enter through the
+/// held joints' correction, its model error (the calibration's own uncertainty, carried into
+/// every corrected point) reads as a scale the noise alone does not explain: on a UR5e swept
+/// 30 degrees at three poses per joint the profile read `x_mm` and `y_mm` from 1 by 3.7 of its
+/// noise sigmas RMS over 61 clean files, and files simulated from one of them read `y_mm`
+/// 1.0068 +- 0.0040 where the file read 1.0060. The simulated files carry that error as the
+/// file does, so the finding is tested against their spread about their centre: a
+/// prediction interval, Student's t with one file fewer degrees of freedom than files.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NullSpread {
+    /// The simulated files whose profile resolved a factor (a flat profile resolves none).
+    pub files: usize,
+    /// Their factors' mean.
+    pub centre: f64,
+    /// Their factors' standard deviation.
+    pub sigma: f64,
+    /// The two-sided tail probability of the finding's departure from `centre` over
+    /// `sigma * sqrt(1 + 1 / files)` (the F ratio `(1, files - 1)` of its square).
+    pub p_value: f64,
+}
+
+impl NullSpread {
+    /// Whether the finding stands beyond the spread at the test's false-alarm rate per
+    /// column ([`AXIS_SCALE_FALSE_ALARM`] over the three columns).
+    pub fn passes(&self) -> bool {
+        self.p_value < AXIS_SCALE_FALSE_ALARM / 3.0
+    }
+}
+
+/// The factor the profile of `scaled` reads on `set` (calibrated with `fit`, thinned above
+/// `max_rows` rows as [`axis_scale`] thins): `Some(None)` where the profile is flat (the factor
+/// left at 1, a p-value of 1: it resolves nothing), `None` where a calibration fails.
+pub fn factor_read(
+    set: &MeasurementSet,
+    scaled: Scaled,
+    fit: &dyn Fn(&MeasurementSet) -> Option<Fit>,
+    max_rows: usize,
+) -> Option<Option<f64>> {
+    let thin = thinned(set, max_rows);
+    let set = thin.as_ref().unwrap_or(set);
+    let read = profile(set, (scaled, 1.0), fit(set)?, fit)?;
+    Some((read.p_value < 1.0).then_some(read.factor))
+}
+
+/// `found` against the factors `reads` of files that hold no scale ([`factor_read`] of each;
+/// [`NullSpread`]); `None` where fewer than half of them (and than three) resolve a factor.
+pub fn null_spread(found: &AxisScale, reads: &[Option<f64>]) -> Option<NullSpread> {
+    let factors: Vec<f64> = reads.iter().flatten().copied().collect();
+    let files = factors.len();
+    if files < 3 || 2 * files < reads.len() {
+        return None;
+    }
+    let n = files as f64;
+    let centre = factors.iter().sum::<f64>() / n;
+    let sigma = (factors.iter().map(|f| (f - centre).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let t = (found.factor - centre) / (sigma * (1.0 + 1.0 / n).sqrt());
+    Some(NullSpread {
+        files,
+        centre,
+        sigma,
+        p_value: f_upper_tail(t * t, 1.0, n - 1.0),
+    })
+}
+
 /// The profile ([`axis_scale`]) of `set` with coordinate `column` (0 `x_mm`, 1 `y_mm`, 2
 /// `z_mm`) divided by `factor` about the data's centroid: what the profile reads once a named
 /// column scale is undone (a second axis behind it, or nothing where the named one explains
@@ -525,5 +591,88 @@ impl std::fmt::Display for AxisScale {
                 j + 1
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `y_mm` finding of `factor` as the profile would give it.
+    fn found(factor: f64) -> AxisScale {
+        AxisScale {
+            scaled: Scaled::Column(1),
+            factor,
+            sigma: 1e-3,
+            p_value: 0.0,
+            rms_mm: [0.1, 0.1],
+            significant: true,
+            alike: vec![],
+            reach: [None; 3],
+            unconfirmed: false,
+        }
+    }
+
+    /// Twenty files reading 1.001 +- 0.002 (ten each side): the spread is their sample
+    /// standard deviation, and the prediction interval's p-value is Student's t with 19
+    /// degrees of freedom, checked against the t density integrated numerically (a second
+    /// path to `f_upper_tail`): a finding at the centre has p = 1, one 3 of their deviations
+    /// out p ~ 7.8e-3 (inside the interval at the test's rate), one 8 out passes it.
+    #[test]
+    fn a_finding_is_tested_against_the_simulated_files_spread_about_their_centre() {
+        let reads: Vec<Option<f64>> = (0..20)
+            .map(|i| Some(1.001 + if i % 2 == 0 { 0.002 } else { -0.002 }))
+            .collect();
+        let at = |f: f64| null_spread(&found(f), &reads).unwrap();
+        let centred = at(1.001);
+        assert!((centred.centre - 1.001).abs() < 1e-12);
+        let sd = 0.002 * (20.0f64 / 19.0).sqrt();
+        assert!((centred.sigma - sd).abs() < 1e-12, "{}", centred.sigma);
+        assert!((centred.p_value - 1.0).abs() < 1e-12 && !centred.passes());
+        let width = sd * (1.0f64 + 1.0 / 20.0).sqrt();
+        let t_tail = |t: f64| {
+            // Two-sided tail of Student's t with 19 dof: the density integrated on x = t / u,
+            // its constant Gamma(10) / (sqrt(19 pi) Gamma(9.5)), Gamma(9.5) = sqrt(pi) 0.5 1.5 .. 8.5.
+            let nu = 19.0f64;
+            let pi = std::f64::consts::PI;
+            let gamma_half: f64 = pi.sqrt() * (0..9).map(|k| k as f64 + 0.5).product::<f64>();
+            let c = 362_880.0 / ((nu * pi).sqrt() * gamma_half);
+            let n = 200_000;
+            let sum: f64 = (0..n)
+                .map(|i| {
+                    let u = (i as f64 + 0.5) / n as f64;
+                    let x = t / u;
+                    c * (1.0 + x * x / nu).powf(-(nu + 1.0) / 2.0) * t / (u * u)
+                })
+                .sum();
+            2.0 * sum / n as f64
+        };
+        let three = at(1.001 + 3.0 * width);
+        assert!(
+            (three.p_value / t_tail(3.0) - 1.0).abs() < 1e-4,
+            "{} vs {}",
+            three.p_value,
+            t_tail(3.0)
+        );
+        assert!(!three.passes());
+        let eight = at(1.001 - 8.0 * width);
+        assert!(
+            (eight.p_value / t_tail(8.0) - 1.0).abs() < 1e-4,
+            "{} vs {}",
+            eight.p_value,
+            t_tail(8.0)
+        );
+        assert!(eight.passes());
+    }
+
+    /// Files whose profile is flat resolve nothing: with fewer than half resolving a factor
+    /// there is no verdict.
+    #[test]
+    fn too_few_files_resolving_a_factor_give_no_verdict() {
+        let mut reads: Vec<Option<f64>> = vec![None; 11];
+        reads.extend((0..9).map(|i| Some(1.0 + 1e-3 * i as f64)));
+        assert!(null_spread(&found(1.01), &reads).is_none());
+        reads[0] = Some(1.0);
+        assert_eq!(null_spread(&found(1.01), &reads).unwrap().files, 10);
     }
 }
