@@ -305,10 +305,11 @@ const NULL_SEED: u64 = 0x5ca1e;
 /// `scale` weighed against the model error the held joints' correction carries
 /// ([`NullSpread`]): a scale [`CoordinateScale::Named`] on sweeps that `cal` corrected (more
 /// than one fit-and-correct pass) stands only beyond what files simulated from `cal` read
-/// ([`correction_null`]); otherwise it is [`CoordinateScale::WithinCorrectionError`]. A
-/// second axis behind a named one is kept only where it stands beyond them too. Other
-/// findings, and sweeps that needed no correction, are returned as they are, as is a finding
-/// whose simulated files cannot be made or calibrated.
+/// (`correction_null`: [`NULL_FILES`] files simulated with [`simulated_sweeps`]); otherwise
+/// it is [`CoordinateScale::WithinCorrectionError`]. A second axis behind a named one is kept
+/// only where it stands beyond them too. Other findings, and sweeps that needed no
+/// correction, are returned as they are, as is a finding whose simulated files cannot be
+/// made or calibrated.
 pub fn beyond_correction_error(
     scale: CoordinateScale,
     (set, desc): (&MeasurementSet, &RobotDescription),
