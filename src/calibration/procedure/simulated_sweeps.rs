@@ -3,8 +3,10 @@
 //! sweeps enter through the held joints' correction
 //! ([`crate::calibration::recalibrated::beyond_correction_error`]). Each target's place on its
 //! link is read from the file itself (the measured points carried into the link's frame by the
-//! model at each row's recorded commands, averaged over the target's rows), so the simulated
-//! sweeps stand where the file's do, at its commands, on a robot that holds together exactly.
+//! model at each row's recorded commands, averaged over the rows of every sweep of its joint
+//! with its target id: the procedure takes one target per joint and id, which the held
+//! joints' correction moves its sweeps at other poses onto), so the simulated sweeps stand
+//! where the file's do, at its commands, on a robot that holds together exactly.
 
 use super::held::target_link;
 use crate::measurement::MeasurementSet;
