@@ -435,8 +435,10 @@ impl AxisScale {
 /// 30 degrees at three poses per joint the profile read `x_mm` and `y_mm` from 1 by 3.7 of its
 /// noise sigmas RMS over 61 clean files, and files simulated from one of them read `y_mm`
 /// 1.0068 +- 0.0040 where the file read 1.0060. The simulated files carry that error as the
-/// file does, so the finding is tested against their spread about their centre: a
-/// prediction interval, Student's t with one file fewer degrees of freedom than files.
+/// file does, so the finding is tested against their spread about their centre (a parametric
+/// bootstrap, Efron & Tibshirani 1993, "An Introduction to the Bootstrap"): the normal-theory
+/// prediction interval for one more draw, `centre +- t sigma sqrt(1 + 1/n)`, Student's t with
+/// `n - 1` degrees of freedom for `n` files.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NullSpread {
     /// The simulated files whose profile resolved a factor (a flat profile resolves none).
