@@ -473,9 +473,9 @@ struct AxesFound {
 }
 
 /// The axis-experiment calibration of `set` after its failure on the rows the screen kept
-/// (`failed`): every row a free pose where the sweeps' held joints stand too far apart for the
-/// independent-axis correction to settle (that fit tests its poses for outliers itself, on
-/// every row); else the points flagged and why it failed.
+/// (`failed`): every row a free pose where the independent-axis correction for the held joints
+/// does not settle (that fit tests its poses for outliers itself, on every row); else the
+/// points flagged and why it failed.
 fn calibration_failed(
     args: &Args,
     (set, desc): (&MeasurementSet, &RobotDescription),
@@ -487,7 +487,7 @@ fn calibration_failed(
     if let e @ (ProcedureError::HeldNotConverged { .. } | ProcedureError::HeldDiverged { .. }) = &failed.error
         && !args.refine
     {
-        let mut record = sweeps_as_free_poses(args, (set, desc), (e, &sweep), printer)?;
+        let mut record = sweeps_as_free_poses(args, (set, desc), (e, failed.sweep.as_ref()), printer)?;
         let (accuracy, map) = predict_free_pose_accuracy(&record.calibration, desc, set);
         record.reports.tool_accuracy = accuracy;
         return Ok((record, map, AxesFound::default()));
@@ -738,30 +738,44 @@ fn simulated_words(null: &NullSpread) -> String {
     )
 }
 
-/// The free-pose calibration of every row of `set`, for sweeps whose held joints stand so far
-/// from one configuration that the independent-axis correction for them does not settle
-/// (`failure`); an error when the sweeps' targets cannot be free poses.
+/// The free-pose calibration of every row of `set`, for sweeps the independent-axis correction
+/// for their held joints does not bring to one pose (`failure`); an error when the sweeps'
+/// targets cannot be free poses (on a link before the last), or when the procedure passes
+/// without one sweep (`sweep`) and the free-pose fit finds a block of rows shifted off the
+/// others: then that sweep is the fault, not the configurations.
 fn sweeps_as_free_poses(
     args: &Args,
     (set, desc): (&MeasurementSet, &RobotDescription),
-    (failure, sweep): (&ProcedureError, &str),
+    (failure, sweep): (&ProcedureError, Option<&FailingSweep>),
     printer: Printer,
 ) -> Result<CalibrationRecord> {
+    let sweep_words = failing_sweep_words(sweep);
     if let Some(why_not) = free_pose::poses::why_sweeps_are_not_poses(set, desc) {
         anyhow::bail!(
-            "calibrating {}: {failure}{sweep}; the sweeps cannot be fitted as free poses either: {why_not}",
+            "calibrating {}: {failure}{sweep_words}; the sweeps cannot be fitted as free poses either: {why_not}",
             args.data.display()
         );
     }
+    let mut view = args_view(args);
+    view.all_rows = true;
+    if sweep.is_some()
+        && let Some(block) = super::calibrate_free::quietly_shifted_block(&view, set, desc)
+    {
+        let [x, y, z] = block.shift_mm;
+        anyhow::bail!(
+            "calibrating {}: {failure}{sweep_words}; fitted as free poses instead, the poses {} sit about ({x:.2}, \
+             {y:.2}, {z:.2}) mm off the others",
+            args.data.display(),
+            super::calibrate_free::block_place(&block)
+        );
+    }
     let why = format!(
-        "the sweeps stand at configurations too far apart for the independent-axis procedure ({failure}{sweep})"
+        "the independent-axis procedure cannot bring the sweeps from their configurations to one pose ({failure}{sweep_words})"
     );
     eprintln!(
         "warning: {}: {why}; every point is fitted as a free pose instead (docs/method.md, \"Calibration from free poses\")",
         args.data.display()
     );
-    let mut view = args_view(args);
-    view.all_rows = true;
     let mut record = match (
         super::calibrate_free::calibrate(&view, set, desc, printer),
         failure.misfit(),
@@ -769,7 +783,7 @@ fn sweeps_as_free_poses(
         (Ok(record), _) => record,
         // The rows named are the likelier cause than the configurations' spread.
         (Err(_), Some(misfit)) => anyhow::bail!(
-            "calibrating {}: {misfit}{sweep}; fitted as free poses, the sweeps fail too",
+            "calibrating {}: {misfit}{sweep_words}; fitted as free poses, the sweeps fail too",
             args.data.display()
         ),
         (Err(e), None) => return Err(e),

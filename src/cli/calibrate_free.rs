@@ -61,20 +61,12 @@ pub fn calibrate(
         && let Some(why_not) = axiscal::calibration::free_pose::poses::why_sweeps_are_not_poses(set, desc)
     {
         anyhow::bail!(
-            "{}: --free-poses fits every row as a free pose, whose targets are tool targets on the last link \
-             (`[tool] targets_mm`); the file's sweeps measure other points: {why_not}; drop --free-poses to \
-             calibrate its axis experiments",
+            "{}: --free-poses fits every row as a free pose, whose targets ride on the last link; the file's \
+             sweeps measure other points: {why_not}; drop --free-poses to calibrate its axis experiments",
             args.data.display()
         );
     }
-    let options = FreePoseOptions {
-        keep_outliers: args.keep_outliers,
-        holdout: args.holdout,
-        max_harmonic_order: args.harmonics,
-        all_rows: args.all_rows,
-        effects: args.effects,
-        max_poses: args.max_poses,
-    };
+    let options = free_pose_options(args);
     let mut cal = calibrate_free_poses(set, desc, &options).map_err(|e| failure(e, args, (set, desc), &options))?;
     if args.all_rows && set.experiments().iter().any(|e| e.moved_joint > 0) {
         cal.summary.axis_rows_as_poses = Some("`--free-poses` asked for it".into());
@@ -95,6 +87,31 @@ pub fn calibrate(
     let mut record = CalibrationRecord::new(cal);
     record.reports.free_poses = Some(summary);
     Ok(record)
+}
+
+/// The free-pose fit's options from the command's arguments.
+fn free_pose_options(args: &FreeArgs<'_>) -> FreePoseOptions {
+    FreePoseOptions {
+        keep_outliers: args.keep_outliers,
+        holdout: args.holdout,
+        max_harmonic_order: args.harmonics,
+        all_rows: args.all_rows,
+        effects: args.effects,
+        max_poses: args.max_poses,
+    }
+}
+
+/// The block of consecutive poses the free-pose calibration of `set` finds shifted off the
+/// others ([`block_shift`]), computed without a word on the console; `None` when it finds
+/// none or the calibration fails.
+pub(super) fn quietly_shifted_block(
+    args: &FreeArgs<'_>,
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+) -> Option<BlockShift> {
+    let options = free_pose_options(args);
+    let cal = calibrate_free_poses(set, desc, &options).ok()?;
+    block_shift(set, desc, &options, &cal)
 }
 
 /// A failed free-pose calibration in words: its cause in the data when one is found (few
@@ -231,13 +248,18 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
     }
 }
 
-/// A [`BlockShift`] in words: where, by how much, how significant, what it did and the fix.
-fn block_words(b: &BlockShift) -> String {
+/// Where a [`BlockShift`] lies in the file: `of lines A-B` or `from line A on`.
+pub(super) fn block_place(b: &BlockShift) -> String {
     let line = |l: Option<u64>| l.map_or_else(|| "?".to_owned(), |l| l.to_string());
-    let place = match b.to_end {
+    match b.to_end {
         true => format!("from line {} on", line(b.lines.0)),
         false => format!("of lines {}-{}", line(b.lines.0), line(b.lines.1)),
-    };
+    }
+}
+
+/// A [`BlockShift`] in words: where, by how much, how significant, what it did and the fix.
+fn block_words(b: &BlockShift) -> String {
+    let place = block_place(b);
     format!(
         "the free poses {place} ({} of the {} fitted) sit about ({:.2}, {:.2}, {:.2}) mm off the others: the calibrated \
          residuals step there in file order (p {} for the most significant of the {} blocks of consecutive poses \

@@ -313,8 +313,8 @@ fn calibrate_free_poses_only_with_holdout() {
 /// shape): the independent-axis correction for the held joints does not settle, so every
 /// point is fitted as a free pose, said on stderr and in the report; the joint-2 sweep
 /// (95 deg, 20 points) does not stop the procedure on its transmission order. With the
-/// tool experiment's targets (other points under the same ids) the fallback is refused,
-/// naming why.
+/// tool experiment's targets (the sweeps' target 0 another point than the tool's target 0)
+/// the sweeps' point is a target of its own.
 #[test]
 fn sweeps_at_their_own_configurations_calibrate_as_free_poses() {
     let dir = tempfile::tempdir().unwrap();
@@ -332,14 +332,18 @@ fn sweeps_at_their_own_configurations_calibrate_as_free_poses() {
         .arg(&data)
         .assert()
         .success();
-    let refused = axiscal()
+    let with_tool = dir.path().join("with_tool");
+    let run = axiscal()
         .args(["calibrate", "--robot", "scenarios/robots/arm6-dh.toml"])
         .arg(&data)
         .arg("--out")
-        .arg(dir.path().join("refused"))
+        .arg(&with_tool)
         .assert()
-        .code(2);
-    assert!(common::stderr(&refused).contains("is not the free poses' target 0"));
+        .success();
+    assert!(common::stderr(&run).contains("every point is fitted as a free pose instead"));
+    let targets = common::read_record(&with_tool).reports.free_poses.expect("free poses").targets;
+    let names: Vec<&str> = targets.iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(names, ["0", "1", "2", "0 of the sweeps of joint 1, 2, 5, 6"], "{targets:?}");
     let text = std::fs::read_to_string(&data).unwrap();
     let sweeps: String = text
         .lines()
@@ -364,7 +368,7 @@ fn sweeps_at_their_own_configurations_calibrate_as_free_poses() {
     assert!(
         summary
             .axis_rows_as_poses
-            .is_some_and(|why| why.contains("too far apart"))
+            .is_some_and(|why| why.contains("cannot bring the sweeps"))
     );
     assert_eq!(summary.poses + summary.outliers.len(), 25 + 20 + 41 + 55);
     assert!(

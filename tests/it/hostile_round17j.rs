@@ -206,12 +206,18 @@ fn manyfew_plan(dir: &Path) -> PathBuf {
 /// three times: at the zero pose, with joint 1 at 20 deg, and with joint 1 at -20 deg and
 /// joint 2 at 10 deg; written as `name` in `dir`.
 pub fn three_pose_plan(dir: &Path, name: &str, span: impl Fn(usize) -> f64) -> PathBuf {
-    let mut text = String::from("reference = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]\n");
-    for joint in (1..=6).rev() {
+    three_pose_plan_of(dir, name, 6, span)
+}
+
+/// [`three_pose_plan`] for a robot of `joints` joints.
+pub fn three_pose_plan_of(dir: &Path, name: &str, joints: usize, span: impl Fn(usize) -> f64) -> PathBuf {
+    let zeros = |from: usize| vec!["0"; joints - from].join(", ");
+    let mut text = format!("reference = [{}]\n", vec!["0.0"; joints].join(", "));
+    for joint in (1..=joints).rev() {
         for held in [
-            "",
-            "held_at = [20.0, 0, 0, 0, 0, 0]\n",
-            "held_at = [-20.0, 10.0, 0, 0, 0, 0]\n",
+            String::new(),
+            format!("held_at = [20.0, {}]\n", zeros(1)),
+            format!("held_at = [-20.0, 10.0, {}]\n", zeros(2)),
         ] {
             text.push_str(&format!(
                 "\n[[sweeps]]\njoint = {joint}\nspan = {:.1}\nintervals = 4\n{held}",
@@ -233,12 +239,18 @@ fn manyfew(dir: &Path, name: &str, seed: u64) -> PathBuf {
 /// `simulate --sim analytic` of robot `name` with `plan` and `seed` (20 validation poses) as
 /// `file` in `dir`.
 pub fn simulated_with_plan(dir: &Path, name: &str, plan: &Path, seed: u64, file: &str) -> PathBuf {
+    simulated_with(dir, (name, plan), seed, 20, file)
+}
+
+/// `simulate --sim analytic` of robot `name` with `plan`, `seed` and `validation_poses` as
+/// `file` in `dir`: one truth per seed, whatever the plan and the validation poses.
+pub fn simulated_with(dir: &Path, (name, plan): (&str, &Path), seed: u64, validation_poses: usize, file: &str) -> PathBuf {
     let out = dir.join(file);
     axiscal()
         .args(["simulate", "-q", "--sim", "analytic", "--robot", &robot(name)])
         .arg("--plan")
         .arg(plan)
-        .args(["--validation-poses", "20", "--seed", &seed.to_string(), "--out"])
+        .args(["--validation-poses", &validation_poses.to_string(), "--seed", &seed.to_string(), "--out"])
         .arg(&out)
         .arg("--force")
         .assert()

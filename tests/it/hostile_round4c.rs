@@ -262,7 +262,7 @@ fn payload_wide_units_and_free_poses_on_sweeps_are_said() {
             2,
             &[
                 "--free-poses fits every row as a free pose",
-                "are two different points",
+                "not on the last link",
                 "drop --free-poses",
             ],
         ),

@@ -64,50 +64,105 @@ pub struct FreePoses {
 }
 
 /// Why the axis experiments' rows of `set` cannot be fitted as free poses, if so: a swept
-/// joint's target on a link before the last, or one target id on two different points of the
-/// description's `axis_targets` (a free pose's target is one point on the last link).
+/// joint's target on a link before the last (a free pose's targets ride on the last link). A
+/// sweep's target elsewhere on the last link than the tool's target of its id is a target of
+/// its own ([`FreePoses::from_set`]).
 pub fn why_sweeps_are_not_poses(set: &MeasurementSet, desc: &RobotDescription) -> Option<String> {
     let last = desc.dof();
-    let mut seen: Vec<(usize, usize, [f64; 3])> = Vec::new();
     for e in set.experiments().iter().filter(|e| e.moved_joint > 0) {
         let Some(t) = desc.axis_targets_of(e.moved_joint) else {
             continue;
         };
-        let targets = [Some(t.target0), t.target1];
-        for (id, target) in targets.iter().enumerate() {
-            let Some(target) = target else { continue };
-            if target.link != last {
+        for (id, target) in [Some(t.target0), t.target1].iter().enumerate() {
+            if let Some(target) = target.filter(|t| t.link != last) {
                 return Some(format!(
                     "joint {}'s target {id} sits on link {}, not on the last link {last} (the description's axis_targets)",
                     e.moved_joint, target.link
                 ));
             }
-            if let Some((joint, _, _)) = seen
-                .iter()
-                .find(|(_, i, p)| *i == id && (0..3).any(|c| (p[c] - target.position_mm[c]).abs() > 1e-9))
-            {
-                return Some(format!(
-                    "target {id} of the sweeps of joints {joint} and {} are two different points (the description's axis_targets)",
-                    e.moved_joint
-                ));
-            }
-            seen.push((e.moved_joint, id, target.position_mm));
-        }
-    }
-    let has_free_poses = set.experiments().iter().any(|e| e.moved_joint == 0);
-    let tool = desc.tool.frame.to_isometry();
-    for (joint, id, p_mm) in seen.iter().filter(|_| has_free_poses) {
-        let Some(t) = desc.tool.targets_mm.get(*id) else {
-            continue;
-        };
-        let on_link_mm = tool * Point3::from(*t);
-        if (on_link_mm.coords - nalgebra::Vector3::from(*p_mm)).norm() > 1e-6 {
-            return Some(format!(
-                "target {id} of the sweep of joint {joint} (axis_targets) is not the free poses' target {id} (tool.targets_mm)"
-            ));
         }
     }
     None
+}
+
+/// A point the description places on the last link, to the nanometre (mm times 1e6): what
+/// tells two targets of one id apart.
+type PointKey = [i64; 3];
+
+/// Where the description places target `id` of a row of `moved_joint` on the last link, when
+/// that is not where it places the tool's target `id`: a sweep's `axis_targets` point, which
+/// then is a target of its own; `None` for the tool's target (or a point the description does
+/// not give).
+fn sweep_only_point(desc: &RobotDescription, moved_joint: usize, id: usize) -> Option<PointKey> {
+    let key = |p: Point3<f64>| p.coords.map(|c| (c * 1e6).round() as i64).into();
+    let tool = desc
+        .tool
+        .targets_mm
+        .get(id)
+        .map(|t| key(desc.tool.frame.to_isometry() * Point3::from(*t)));
+    let axis = desc.axis_targets_of(moved_joint).and_then(|t| match id {
+        0 => Some(t.target0),
+        1 => t.target1,
+        _ => None,
+    });
+    let swept = axis.map(|t| key(Point3::from(t.position_mm)));
+    swept.filter(|p| Some(*p) != tool)
+}
+
+/// The targets of the rows `free` of `set` keep: each id, and each sweep's point the
+/// description puts elsewhere than the tool's target of its id ([`sweep_only_point`]) as a
+/// target of its own, after the file's ids (and the tool's). Returns the targets' ids
+/// (ascending), their names, and each row's slot (`None` for rows not free).
+fn target_slots(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    free: impl Fn(&crate::measurement::Measurement) -> bool,
+) -> (Vec<usize>, Vec<String>, Vec<Option<usize>>) {
+    let key_of = |r: &crate::measurement::Measurement| {
+        let point = (r.moved_joint > 0)
+            .then(|| sweep_only_point(desc, r.moved_joint, r.target))
+            .flatten();
+        (r.target, point)
+    };
+    let keys: std::collections::BTreeSet<(usize, Option<PointKey>)> =
+        set.rows().iter().filter(|r| free(r)).map(key_of).collect();
+    let keys: Vec<(usize, Option<PointKey>)> = keys.into_iter().collect();
+    let first_own = (keys.iter().map(|k| k.0 + 1).max().unwrap_or(0)).max(desc.tool.targets_mm.len());
+    let mut own = first_own..;
+    let ids: Vec<usize> = keys
+        .iter()
+        .map(|(id, point)| match point {
+            None => *id,
+            Some(_) => own.next().unwrap_or(usize::MAX),
+        })
+        .collect();
+    let names: Vec<String> = keys
+        .iter()
+        .map(|(id, point)| match point {
+            None => set.target_name(*id),
+            Some(p) => {
+                let joints: std::collections::BTreeSet<usize> = (set.rows().iter())
+                    .filter(|r| free(r) && key_of(r) == (*id, Some(*p)))
+                    .map(|r| r.moved_joint)
+                    .collect();
+                let joints: Vec<String> = joints.iter().map(usize::to_string).collect();
+                format!("{} of the sweeps of joint {}", set.target_name(*id), joints.join(", "))
+            }
+        })
+        .collect();
+    // `keys` ascend by id first and the own targets' ids follow every file id: slots ascend.
+    let mut order: Vec<usize> = (0..ids.len()).collect();
+    order.sort_by_key(|&i| ids[i]);
+    let ids_sorted: Vec<usize> = order.iter().map(|&i| ids[i]).collect();
+    let names_sorted: Vec<String> = order.iter().map(|&i| names[i].clone()).collect();
+    let slot_of_key = |k: &(usize, Option<PointKey>)| {
+        let i = keys.binary_search(k).unwrap_or_default();
+        ids_sorted.binary_search(&ids[i]).unwrap_or_default()
+    };
+    let slots = (set.rows().iter())
+        .map(|r| free(r).then(|| slot_of_key(&key_of(r))))
+        .collect();
+    (ids_sorted, names_sorted, slots)
 }
 
 impl FreePoses {
@@ -126,9 +181,7 @@ impl FreePoses {
         max: usize,
     ) -> Result<Self, FreePoseError> {
         let free = |r: &crate::measurement::Measurement| all_rows || r.moved_joint == 0;
-        let mut target_ids: Vec<usize> = set.rows().iter().filter(|r| free(r)).map(|r| r.target).collect();
-        target_ids.sort_unstable();
-        target_ids.dedup();
+        let (target_ids, target_names, target_slot) = target_slots(set, desc, free);
         // Every pose's ordinal (the order of its first row, all experiments: the approaches
         // follow every pose) and its first row; the free ones in order.
         let mut ordinal: HashMap<(&str, usize), usize> = HashMap::new();
@@ -180,15 +233,13 @@ impl FreePoses {
                 return Err(FreePoseError::SetupsDiffer { pose: label() });
             }
             if let Some(k) = slot[o] {
-                let target = target_ids.binary_search(&r.target).unwrap_or_default();
-                poses[k].points_m.push((target, r.position_m()));
+                poses[k].points_m.push((target_slot[row].unwrap_or_default(), r.position_m()));
             }
         }
         for p in &mut poses {
             p.points_m.sort_by_key(|(slot, _)| *slot);
         }
         let left_out = count - poses.len();
-        let target_names = target_ids.iter().map(|&id| set.target_name(id)).collect();
         let setup_names = match set.setup_names() {
             [] => vec!["0".to_string()],
             names => names.to_vec(),
