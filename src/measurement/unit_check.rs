@@ -292,12 +292,17 @@ struct Arc {
     /// their median absolute deviation) times the median's 1.2533 over the square root of the
     /// triples (disjoint, so independent).
     radius_sigma: f64,
+    /// The standard error of `radius` \[mm\] at the noise the checks assume
+    /// ([`noise_radius_sigma`] over the square root of the triples): what one triple's radius
+    /// is worth, where its scatter gives none; in millimetres, so not for a test of the
+    /// coordinates' units.
+    noise_radius_sigma: f64,
 }
 
 /// A radius departs from the described one by more than this many of its standard errors
 /// ([`Arc::radius_sigma`]) before its size is read as a unit: a sweep whose held joints wander
 /// by a tenth of a degree scatters its point triples' radii by a fifth of a short wrist radius.
-const RADIUS_SIGMAS: f64 = 3.0;
+pub(super) const RADIUS_SIGMAS: f64 = 3.0;
 
 impl Arc {
     /// Whether the radius departs from `nominal` (the same unit) beyond [`SPREAD_WARNING`] and
@@ -349,7 +354,7 @@ fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
     if m == 0 {
         return None;
     }
-    let (mut radii, mut ratios, mut centres) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut radii, mut ratios, mut centres, mut sagittas) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for i in 0..m {
         let (a, b, c) = (rows[i], rows[i + m], rows[i + 2 * m]);
         let p = |r: &Measurement| Point3::from(Vector3::from(r.position_mm));
@@ -360,19 +365,39 @@ fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
             centres.push(centre);
             radii.push(radius);
             ratios.push(angle.to_degrees() / commanded);
+            let chord = p(c) - p(a);
+            sagittas.push((p(b) - p(a)).cross(&chord).norm() / chord.norm());
         }
     }
     let turn_ratio = median(ratios);
     let centre = Point3::from(Vector3::from_fn(|k, _| median(centres.iter().map(|c| c[k]).collect())));
     let radius = median(radii.clone());
     let deviation = median(radii.iter().map(|r| (r - radius).abs()).collect());
+    let triples = (radii.len() as f64).sqrt();
     Some(Arc {
         centre,
         radius,
         turn_ratio,
         radius_scatter: deviation / radius,
-        radius_sigma: 1.2533 * 1.4826 * deviation / (radii.len() as f64).sqrt(),
+        radius_sigma: 1.2533 * 1.4826 * deviation / triples,
+        noise_radius_sigma: 1.2533 * noise_radius_sigma(radius, median(sagittas)) / triples,
     })
+}
+
+/// The noise of a point the radius test assumes, per coordinate \[mm\]: the paper's
+/// theodolites' 0.2 mm 3-D RMS, the noisiest instrument the checks expect (a laser tracker's
+/// 0.02-0.05 mm leaves the test conservative).
+const ASSUMED_POINT_NOISE_MM: f64 = 0.2 / 1.7320508075688772;
+
+/// The standard error \[mm\] of the radius of a circle through three points of sagitta
+/// `sagitta_mm` (the middle point's distance from the chord) at [`ASSUMED_POINT_NOISE_MM`]:
+/// `r = (c/2)^2 / (2 s) + s / 2`, so `dr/ds = 1/2 - (c/2)^2 / (2 s^2)`, about `-r / s` for a
+/// short arc, and the sagitta's error is the middle point's radial error less the mean of the
+/// ends', `sqrt(1 + 1/4 + 1/4)` times a point's. With a single triple the triples' scatter
+/// gives no standard error; this floor is what the noise alone makes of it.
+fn noise_radius_sigma(radius_mm: f64, sagitta_mm: f64) -> f64 {
+    let ds = 1.5f64.sqrt() * ASSUMED_POINT_NOISE_MM;
+    (0.5 - (radius_mm - sagitta_mm / 2.0) / sagitta_mm).abs() * ds
 }
 
 /// An arc whose sagitta, as the description and the commands give it, is below this \[mm\]
@@ -1101,6 +1126,41 @@ pub fn pose_slips(positions_m: &[Point3<f64>], desc: &RobotDescription) -> Optio
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The radius's standard error at the assumed noise against the spread of the radii of
+    /// circles through three noisy points (a Monte Carlo of `circle_through`, the second path):
+    /// within 3 standard errors of a standard deviation over the draws, `sigma / sqrt(2 n)`,
+    /// and the first-order formula's own error, `s / r` of it, for arcs from 246 mm over 15
+    /// degrees (sagitta 2.1 mm) to 500 mm over 60 (67 mm).
+    #[test]
+    fn the_noise_radius_sigma_matches_circles_through_noisy_triples() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let mut rng = rand::rngs::ChaCha12Rng::seed_from_u64(9);
+        let noise = Normal::new(0.0, ASSUMED_POINT_NOISE_MM).unwrap();
+        let draws = 4000;
+        for (radius, span_deg) in [(246.0, 15.0), (72.0, 30.0), (500.0, 60.0)] {
+            let half = f64::to_radians(span_deg / 2.0);
+            let on_arc = |a: f64| Point3::new(radius * a.cos(), radius * a.sin(), 0.0);
+            let radii: Vec<f64> = (0..draws)
+                .filter_map(|_| {
+                    let mut noisy = |p: Point3<f64>| p + Vector3::from_fn(|_, _| noise.sample(&mut rng));
+                    let (a, b, c) = (noisy(on_arc(-half)), noisy(on_arc(0.0)), noisy(on_arc(half)));
+                    circle_through(&a, &b, &c).map(|(_, r, _)| r)
+                })
+                .collect();
+            let n = radii.len() as f64;
+            let mean = radii.iter().sum::<f64>() / n;
+            let sd = (radii.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+            let sagitta = radius * (1.0 - half.cos());
+            let predicted = noise_radius_sigma(radius, sagitta);
+            let tolerance = 3.0 * sd / (2.0 * n).sqrt() + predicted * sagitta / radius;
+            assert!(
+                (predicted - sd).abs() < tolerance,
+                "r {radius} over {span_deg} deg: predicted {predicted}, drawn {sd} (+- {tolerance})"
+            );
+        }
+    }
 
     /// Rows of joint 1 at `commands` (degrees), the other fields irrelevant here.
     fn at_commands(commands: &[f64]) -> Vec<Measurement> {
