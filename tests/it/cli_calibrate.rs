@@ -341,9 +341,17 @@ fn sweeps_at_their_own_configurations_calibrate_as_free_poses() {
         .assert()
         .success();
     assert!(common::stderr(&run).contains("every point is fitted as a free pose instead"));
-    let targets = common::read_record(&with_tool).reports.free_poses.expect("free poses").targets;
+    let targets = common::read_record(&with_tool)
+        .reports
+        .free_poses
+        .expect("free poses")
+        .targets;
     let names: Vec<&str> = targets.iter().map(|t| t.name.as_str()).collect();
-    assert_eq!(names, ["0", "1", "2", "0 of the sweeps of joint 1, 2, 5, 6"], "{targets:?}");
+    assert_eq!(
+        names,
+        ["0", "1", "2", "0 of the sweeps of joint 1, 2, 5, 6"],
+        "{targets:?}"
+    );
     let text = std::fs::read_to_string(&data).unwrap();
     let sweeps: String = text
         .lines()

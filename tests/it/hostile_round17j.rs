@@ -244,13 +244,25 @@ pub fn simulated_with_plan(dir: &Path, name: &str, plan: &Path, seed: u64, file:
 
 /// `simulate --sim analytic` of robot `name` with `plan`, `seed` and `validation_poses` as
 /// `file` in `dir`: one truth per seed, whatever the plan and the validation poses.
-pub fn simulated_with(dir: &Path, (name, plan): (&str, &Path), seed: u64, validation_poses: usize, file: &str) -> PathBuf {
+pub fn simulated_with(
+    dir: &Path,
+    (name, plan): (&str, &Path),
+    seed: u64,
+    validation_poses: usize,
+    file: &str,
+) -> PathBuf {
     let out = dir.join(file);
     axiscal()
         .args(["simulate", "-q", "--sim", "analytic", "--robot", &robot(name)])
         .arg("--plan")
         .arg(plan)
-        .args(["--validation-poses", &validation_poses.to_string(), "--seed", &seed.to_string(), "--out"])
+        .args([
+            "--validation-poses",
+            &validation_poses.to_string(),
+            "--seed",
+            &seed.to_string(),
+            "--out",
+        ])
         .arg(&out)
         .arg("--force")
         .assert()

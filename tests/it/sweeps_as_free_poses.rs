@@ -41,7 +41,13 @@ fn calibrated_then_validated(dir: &Path, name: &str, plan: &Path, seed: u64) -> 
     }
     axiscal()
         .current_dir(dir)
-        .args(["validate", "--robot", &robot(name), "--calibration", "cal/calibration.json"])
+        .args([
+            "validate",
+            "--robot",
+            &robot(name),
+            "--calibration",
+            "cal/calibration.json",
+        ])
         .arg(&held_out)
         .args(["--out", "val", "--force"])
         .assert()
@@ -55,7 +61,10 @@ fn calibrated_then_validated(dir: &Path, name: &str, plan: &Path, seed: u64) -> 
 /// The held-out validation poses' chi-square verdict and RMS \[mm\].
 fn verdict(summary: &serde_json::Value) -> (&str, f64) {
     let v = &summary["validation"];
-    (v["chi_square"]["verdict"].as_str().unwrap_or("none"), v["rms_mm"].as_f64().unwrap_or(f64::NAN))
+    (
+        v["chi_square"]["verdict"].as_str().unwrap_or("none"),
+        v["rms_mm"].as_f64().unwrap_or(f64::NAN),
+    )
 }
 
 /// The seven-axis arm swept 30 degrees at three poses per joint (joint 1 at 20 deg, or at -20

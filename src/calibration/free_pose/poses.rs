@@ -233,7 +233,9 @@ impl FreePoses {
                 return Err(FreePoseError::SetupsDiffer { pose: label() });
             }
             if let Some(k) = slot[o] {
-                poses[k].points_m.push((target_slot[row].unwrap_or_default(), r.position_m()));
+                poses[k]
+                    .points_m
+                    .push((target_slot[row].unwrap_or_default(), r.position_m()));
             }
         }
         for p in &mut poses {
@@ -392,5 +394,61 @@ pub fn configurations(set: &MeasurementSet, all_rows: bool) -> Configurations {
         poses: poses.len(),
         distinct: distinct.len(),
         values: distinct.len() * POSE_VALUES.min(3 * targets.len()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::measurement::Measurement;
+
+    /// A row of `experiment` (moving `moved_joint`) at `step` measuring `target`.
+    fn row(experiment: &str, moved_joint: usize, step: usize, target: usize) -> Measurement {
+        let mut cmd = vec![0.0; 7];
+        if moved_joint > 0 {
+            cmd[moved_joint - 1] = 5.0 * step as f64;
+        }
+        Measurement {
+            experiment: experiment.into(),
+            moved_joint,
+            step,
+            target,
+            position_mm: [1000.0 + step as f64, 100.0 * target as f64, 50.0 * moved_joint as f64],
+            cmd,
+            payload_kg: Measurement::DEFAULT_PAYLOAD_KG,
+            temperature_c: Measurement::DEFAULT_TEMPERATURE_C,
+        }
+    }
+
+    /// The seven-axis arm's sweeps measure one point of the last link, not the tool's target
+    /// 0: with every row a pose that point is a target of its own, after the file's ids; the
+    /// tool's rows keep theirs. With only the free poses nothing changes.
+    #[test]
+    fn a_sweeps_own_point_is_a_target_of_its_own() {
+        let desc = RobotDescription::from_file(std::path::Path::new("scenarios/robots/arm7-dh.toml")).expect("shipped");
+        let mut rows: Vec<Measurement> = (0..3).map(|t| row("tool", 0, 0, t)).collect();
+        rows.extend((0..3).flat_map(|s| [row("axis7", 7, s, 0), row("axis1", 1, s, 0)]));
+        let set = MeasurementSet::new(7, rows).expect("set");
+        let poses = FreePoses::from_set(&set, &desc, true).expect("poses");
+        assert_eq!(poses.target_ids, [0, 1, 2, 3]);
+        assert_eq!(poses.target_names[3], "0 of the sweeps of joint 1, 7");
+        for p in &poses.poses {
+            let slots: Vec<usize> = p.points_m.iter().map(|(slot, _)| *slot).collect();
+            match p.experiment.as_str() {
+                "tool" => assert_eq!(slots, [0, 1, 2]),
+                _ => assert_eq!(slots, [3], "{}", p.label()),
+            }
+        }
+        let free_only = FreePoses::from_set(&set, &desc, false).expect("poses");
+        assert_eq!(free_only.target_ids, [0, 1, 2]);
+        assert_eq!(why_sweeps_are_not_poses(&set, &desc), None);
+        // The sweeps' point moved onto the tool's target 0 (to a rounding): one target again.
+        let mut shared = desc.clone();
+        let on_link = shared.tool.frame.to_isometry() * Point3::from(shared.tool.targets_mm[0]);
+        for a in &mut shared.axis_targets {
+            a.target0.position_mm = (on_link.coords + nalgebra::Vector3::repeat(1e-12)).into();
+        }
+        let poses = FreePoses::from_set(&set, &shared, true).expect("poses");
+        assert_eq!(poses.target_ids, [0, 1, 2]);
     }
 }

@@ -246,7 +246,12 @@ const OFFSETS_DEG: [f64; 3] = [90.0, -90.0, 180.0];
 /// Arcs whose radius the noise leaves uncertain by a third or more are left out: coordinates
 /// in metres bow a thousandth of the noise the test assumes in millimetres, and no such arc
 /// may excuse a column's offset.
-fn mismatches(model: &PhiModel, desc: &RobotDescription, arcs: &[ExperimentArc], shift: (usize, f64)) -> Vec<(f64, f64)> {
+fn mismatches(
+    model: &PhiModel,
+    desc: &RobotDescription,
+    arcs: &[ExperimentArc],
+    shift: (usize, f64),
+) -> Vec<(f64, f64)> {
     let sigma = |a: &ExperimentArc| a.arc.radius_sigma.max(a.arc.noise_radius_sigma) / a.arc.radius;
     arcs.iter()
         .filter(|a| a.nominal_mm.is_some() && super::RADIUS_SIGMAS * sigma(a) < 1.0)
@@ -264,7 +269,10 @@ fn mismatches(model: &PhiModel, desc: &RobotDescription, arcs: &[ExperimentArc],
 
 /// The largest of [`mismatches`]' parts beyond the noise.
 fn worst_mismatch(model: &PhiModel, desc: &RobotDescription, arcs: &[ExperimentArc], shift: (usize, f64)) -> f64 {
-    mismatches(model, desc, arcs, shift).iter().map(|m| m.1).fold(0.0, f64::max)
+    mismatches(model, desc, arcs, shift)
+        .iter()
+        .map(|m| m.1)
+        .fold(0.0, f64::max)
 }
 
 /// A revolute command column offset by a constant (module docs), when the measured radii miss
