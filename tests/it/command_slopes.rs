@@ -9,7 +9,7 @@ use crate::hostile_round15s::{robot, simulated};
 use std::path::Path;
 
 /// `calibrate` of `file` on robot `name`: exit code and stderr.
-fn calibrate(dir: &Path, name: &str, file: &Path) -> (i32, String) {
+pub fn calibrate(dir: &Path, name: &str, file: &Path) -> (i32, String) {
     let a = axiscal()
         .current_dir(dir)
         .args(["calibrate", "--robot", &robot(name)])

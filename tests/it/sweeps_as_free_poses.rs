@@ -6,7 +6,8 @@
 //! same truth it never saw: the chi-square test of those poses against the noise and the
 //! calibration's own predicted error.
 
-use crate::common::{axiscal, stderr};
+use crate::command_slopes::calibrate;
+use crate::common::axiscal;
 use crate::hostile_round15s::robot;
 use crate::hostile_round17j::{simulated_with, three_pose_plan_of};
 use std::path::Path;
@@ -29,15 +30,9 @@ fn calibrated_then_validated(dir: &Path, name: &str, plan: &Path, seed: u64) -> 
         .collect();
     let held_out = dir.join(format!("{name}_{seed}_unseen.csv"));
     std::fs::write(&held_out, unseen).unwrap();
-    let run = axiscal()
-        .current_dir(dir)
-        .args(["calibrate", "--robot", &robot(name)])
-        .arg(&fitted)
-        .args(["--out", "cal", "--force"])
-        .assert();
-    let code = run.get_output().status.code().unwrap_or(-1);
+    let (code, e) = calibrate(dir, name, &fitted);
     if code != 0 {
-        return (code, stderr(&run), serde_json::Value::Null);
+        return (code, e, serde_json::Value::Null);
     }
     axiscal()
         .current_dir(dir)
@@ -55,16 +50,18 @@ fn calibrated_then_validated(dir: &Path, name: &str, plan: &Path, seed: u64) -> 
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("val/summary.json")).unwrap()).unwrap();
     assert_eq!(summary["validation"]["points"], 3 * 40, "the unseen poses' targets");
-    (code, stderr(&run), summary)
+    (code, e, summary)
 }
 
-/// The held-out validation poses' chi-square verdict and RMS \[mm\].
-fn verdict(summary: &serde_json::Value) -> (&str, f64) {
+/// Asserts that the held-out validation poses of `summary` pass their chi-square test
+/// (`stderr`: calibrate's, said on failure).
+fn assert_unseen_consistent(summary: &serde_json::Value, stderr: &str) {
     let v = &summary["validation"];
-    (
-        v["chi_square"]["verdict"].as_str().unwrap_or("none"),
-        v["rms_mm"].as_f64().unwrap_or(f64::NAN),
-    )
+    let rms_mm = v["rms_mm"].as_f64().unwrap_or(f64::NAN);
+    assert_eq!(
+        v["chi_square"]["verdict"], "consistent",
+        "held-out RMS {rms_mm} mm: {stderr}"
+    );
 }
 
 /// The seven-axis arm swept 30 degrees at three poses per joint (joint 1 at 20 deg, or at -20
@@ -79,8 +76,7 @@ fn a_seven_axis_arm_swept_short_at_three_poses_calibrates_as_free_poses() {
     let (code, e, summary) = calibrated_then_validated(dir.path(), "arm7-dh", &plan, 7);
     assert_eq!(code, 0, "{e}");
     assert!(e.contains("every point is fitted as a free pose instead"), "{e}");
-    let (said, rms_mm) = verdict(&summary);
-    assert_eq!(said, "consistent", "held-out RMS {rms_mm} mm: {e}");
+    assert_unseen_consistent(&summary, &e);
 }
 
 /// The UR5e swept 20 degrees at three poses: the wrist's arcs bow less than five times the
@@ -99,8 +95,7 @@ fn sweeps_too_short_at_three_poses_are_said_too_short_and_calibrate_as_free_pose
         .unwrap_or_default();
     assert!(said.contains("too short to locate the axis"), "{e}");
     assert!(!said.contains("diverged"), "{e}");
-    let (said, rms_mm) = verdict(&summary);
-    assert_eq!(said, "consistent", "held-out RMS {rms_mm} mm: {e}");
+    assert_unseen_consistent(&summary, &e);
 }
 
 /// The same campaign at seeds 204 and 212: one triple of five points over 30 degrees gives a
@@ -113,14 +108,8 @@ fn short_arcs_at_the_noise_are_not_read_as_a_command_offset() {
     let plan = three_pose_plan_of(dir.path(), "three_7.toml", 7, |_| 30.0);
     for seed in [204, 212] {
         let file = simulated_with(dir.path(), ("arm7-dh", &plan), seed, 20, &format!("arm7_{seed}.csv"));
-        let run = axiscal()
-            .current_dir(dir.path())
-            .args(["calibrate", "--robot", &robot("arm7-dh")])
-            .arg(&file)
-            .args(["--out", "cal", "--force"])
-            .assert();
-        let e = stderr(&run);
-        assert_eq!(run.get_output().status.code(), Some(0), "seed {seed}: {e}");
+        let (code, e) = calibrate(dir.path(), "arm7-dh", &file);
+        assert_eq!(code, 0, "seed {seed}: {e}");
         assert!(!e.contains("looks offset"), "seed {seed}: {e}");
     }
 }
