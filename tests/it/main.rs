@@ -22,6 +22,7 @@ mod cli_simulate;
 mod command_slopes;
 mod compensation;
 mod diagnosis;
+mod doc_links;
 mod documented_keys;
 mod effect_shapes;
 mod effects;
