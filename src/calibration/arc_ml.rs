@@ -104,7 +104,7 @@ pub fn initial_params(
     form: &TransmissionFitForm,
 ) -> Result<ArcParams, CalibrationError> {
     let circle = fit_circle(points)?;
-    let (u, v) = (circle.u.into_inner(), circle.v.into_inner());
+    let (u, mut v, mut normal) = (circle.u.into_inner(), circle.v.into_inner(), circle.normal.into_inner());
     let mut increments = Vec::with_capacity(points.len());
     let mut last = 0.0;
     for p in points {
@@ -115,8 +115,15 @@ pub fn initial_params(
         last = a + k * std::f64::consts::TAU;
         increments.push(last);
     }
+    // The circle's normal turns the points positively in their order; a sweep whose commands
+    // fall along that order (run from its high end down) turns the other way about the axis
+    // its commands turn positively about (eq. 8's increments grow with the command).
+    if falls_with_commands(&increments, commands_rad) {
+        (v, normal) = (-v, -normal);
+        increments.iter_mut().for_each(|a| *a = -*a);
+    }
     let t = fit_transmission_passes(form, &increments, commands_rad, START_PASSES)?;
-    let frame = Rotation3::from_basis_unchecked(&[u, v, circle.normal.into_inner()]);
+    let frame = Rotation3::from_basis_unchecked(&[u, v, normal]);
     Ok(ArcParams {
         centre: circle.centre,
         frame,
@@ -124,6 +131,18 @@ pub fn initial_params(
         phase_rad: 0.0,
         coefficients: t.coefficients,
     })
+}
+
+/// Whether the angles fall as the commands rise: the sign of their covariance.
+fn falls_with_commands(angles_rad: &[f64], commands_rad: &[f64]) -> bool {
+    let n = angles_rad.len() as f64;
+    let (a_mean, c_mean) = (angles_rad.iter().sum::<f64>() / n, commands_rad.iter().sum::<f64>() / n);
+    let covariance: f64 = angles_rad
+        .iter()
+        .zip(commands_rad)
+        .map(|(a, c)| (a - a_mean) * (c - c_mean))
+        .sum();
+    covariance < 0.0
 }
 
 /// Maximum-likelihood arc fit of `points` observed at absolute `commands_rad`.

@@ -128,6 +128,7 @@ mod scenario_run;
 mod seven_joints;
 mod short_sweeps;
 mod sliding_end_to_end;
+mod sweep_direction;
 mod sweeps_as_free_poses;
 mod test_robots;
 mod thread_determinism;
