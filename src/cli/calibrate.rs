@@ -267,7 +267,9 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             calibration: cal,
             verdict: None,
         };
-        super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
+        super::record::save(path, &outputs, || {
+            super::record::calibrated::write_calibrated(&campaign)
+        })?;
     }
     Ok(())
 }

@@ -91,12 +91,18 @@ enum Refit {
     Geometry,
 }
 
+/// The outputs of a run with `args`: its inputs never replaced, files replaced only with
+/// `--force`.
+fn outputs_of(args: &Args) -> Outputs {
+    Outputs::new(args.force)
+        .input("DATA", &args.data)
+        .input("--robot", &args.robot)
+}
+
 /// Runs `axiscal diagnose`.
 pub fn run(args: Args, printer: Printer) -> Result<()> {
     let printer = printer.with_json(args.json);
-    let outputs = Outputs::new(args.force)
-        .input("DATA", &args.data)
-        .input("--robot", &args.robot);
+    let outputs = outputs_of(&args);
     super::record::ensure_recordable(args.record.as_deref(), &outputs)?;
     let desc = RobotDescription::from_file(&args.robot)?;
     checks::description_units(&desc, &args.robot, args.checks.skip_unit_check)?;
@@ -448,7 +454,9 @@ fn record(args: &Args, desc: &RobotDescription, set: &MeasurementSet, noise_mm: 
             calibration: &calibration,
             verdict: Some(verdict),
         };
-        super::record::save(path, |p| super::record::calibrated::write_calibrated(p, &campaign))?;
+        super::record::save(path, &outputs_of(args), || {
+            super::record::calibrated::write_calibrated(&campaign)
+        })?;
     }
     Ok(())
 }

@@ -168,6 +168,14 @@ impl Outputs {
                 path.display()
             );
         }
+        if let Some(target) = link_to_a_stream(path) {
+            bail!(
+                "{} is a link to {} (a device or a stream, not a regular file); refusing to replace it, even with \
+                 --force: name a file for --out",
+                path.display(),
+                target.display()
+            );
+        }
         if !self.force && path.symlink_metadata().is_ok() {
             bail!("{} exists; pass --force to replace it", path.display());
         }
@@ -619,6 +627,34 @@ impl Drop for StagedSet<'_> {
             }
         }
     }
+}
+
+/// Where `path` is a symbolic link that reaches a device, a stream or the kernel's own files
+/// (`/dev/stdout` -> `/proc/self/fd/1`), or lies among them: the place it reaches. Replacing
+/// such a link would replace a system's file, not write the output. Every hop of the link is
+/// looked at: `/proc/self/fd/1` itself resolves to whatever stdout is, a regular file too.
+fn link_to_a_stream(path: &Path) -> Option<PathBuf> {
+    if !path.symlink_metadata().ok()?.is_symlink() {
+        return None;
+    }
+    let special = |p: &Path| ["/proc", "/dev", "/sys"].iter().any(|root| p.starts_with(root));
+    let folder = canonical(path).and_then(|p| p.parent().map(Path::to_path_buf));
+    if folder.as_deref().is_some_and(special) {
+        return Some(path.to_path_buf());
+    }
+    let mut hop = path.to_path_buf();
+    // A chain longer than the kernel follows (40) is not followed either.
+    for _ in 0..40 {
+        let Ok(next) = std::fs::read_link(&hop) else { break };
+        hop = match hop.parent() {
+            Some(parent) if next.is_relative() => parent.join(next),
+            _ => next,
+        };
+        if special(&hop) {
+            return Some(hop);
+        }
+    }
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file()).then_some(hop)
 }
 
 #[cfg(test)]

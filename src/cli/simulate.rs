@@ -297,7 +297,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             set: &set,
             instrument: &instrument,
         };
-        super::record::save(path, |p| super::record::simulated::write(p, &campaign))?;
+        super::record::save(path, &outputs, || super::record::simulated::write(&campaign))?;
     }
     Ok(())
 }

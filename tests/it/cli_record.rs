@@ -148,6 +148,53 @@ fn calibrate_and_diagnose_record_the_measured_data() {
     }
 }
 
+/// A recording is written as every output is: through a temporary, so a link named by
+/// `--record` is replaced and what it points at is left alone (it was overwritten through the
+/// link); a `--record` that is not an `.rrd` file (one of the command's own outputs, e.g.
+/// `calibration.json`) is refused before any work.
+#[test]
+fn a_recording_neither_writes_through_a_link_nor_replaces_an_output() {
+    let Some(mut recorder) = recording_binary() else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let notes = dir.path().join("notes.txt");
+    std::fs::write(&notes, "mine").unwrap();
+    let link = dir.path().join("link.rrd");
+    std::os::unix::fs::symlink(&notes, &link).unwrap();
+    recorder
+        .args([
+            "simulate",
+            "--instrument",
+            "isotropic",
+            "--validation-poses",
+            "1",
+            "--force",
+            "--out",
+        ])
+        .arg(dir.path().join("c.csv"))
+        .arg("--record")
+        .arg(&link)
+        .assert()
+        .success();
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+    assert_eq!(&std::fs::read(&link).unwrap()[..4], b"RRF2", "rrd magic");
+    let (data_dir, data) = common::simulated_campaign_csv(3);
+    let out = data_dir.path().join("cal");
+    let a = recording_binary()
+        .expect("checked above")
+        .arg("calibrate")
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
+        .arg("--record")
+        .arg(out.join("calibration.json"))
+        .assert()
+        .code(2);
+    assert!(common::stderr(&a).contains("`.rrd`"), "{}", common::stderr(&a));
+    assert!(!out.exists(), "refused before any work");
+}
+
 #[test]
 fn view_without_a_viewer_prints_the_matching_install_command() {
     let dir = tempfile::tempdir().expect("temp dir");

@@ -1259,3 +1259,51 @@ fn a_sweep_shorter_than_the_noise_is_named() {
         );
     }
 }
+
+/// An output that is a link into the kernel's streams (`/dev/stdout` -> `/proc/self/fd/1`) is
+/// refused even with `--force`: replacing the link replaced the system's `/dev/stdout` with a
+/// regular file. The link here is the user's own, so the test touches no system file; a link
+/// to a regular file is still replaced by the output (the target left alone).
+#[test]
+fn a_link_into_the_kernels_streams_is_not_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let stream = dir.path().join("stream.csv");
+    std::os::unix::fs::symlink("/proc/self/fd/1", &stream).unwrap();
+    let a = axiscal()
+        .args([
+            "simulate",
+            "--sim",
+            "analytic",
+            "--validation-poses",
+            "1",
+            "--force",
+            "--out",
+        ])
+        .arg(&stream)
+        .assert()
+        .code(2);
+    assert!(error_of(&a).contains("a device or a stream"), "{}", stderr(&a));
+    assert!(
+        stream.symlink_metadata().unwrap().is_symlink(),
+        "the link is left as it was"
+    );
+    let notes = dir.path().join("notes.txt");
+    std::fs::write(&notes, "mine").unwrap();
+    let link = dir.path().join("link.csv");
+    std::os::unix::fs::symlink(&notes, &link).unwrap();
+    axiscal()
+        .args([
+            "simulate",
+            "--sim",
+            "analytic",
+            "--validation-poses",
+            "1",
+            "--force",
+            "--out",
+        ])
+        .arg(&link)
+        .assert()
+        .success();
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+    assert!(link.symlink_metadata().unwrap().is_file());
+}

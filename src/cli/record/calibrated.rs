@@ -14,7 +14,6 @@ use axiscal::robot::{Controller, RobotDescription, commands_to_internal};
 use axiscal::viz::{ROBOT_COLOR, Recorder};
 use nalgebra::{Matrix3, Point3};
 use std::fmt::Write as _;
-use std::path::Path;
 
 /// Colour of the calibrated robot.
 const CALIBRATED_COLOR: [u8; 4] = [60, 110, 200, 255];
@@ -52,8 +51,8 @@ impl Robots<'_> {
     }
 }
 
-/// Writes the recording of `c` to `path`.
-pub fn write_calibrated(path: &Path, c: &CalibratedCampaign) -> Result<()> {
+/// The recording of `c`, as the bytes of an `.rrd` file.
+pub fn write_calibrated(c: &CalibratedCampaign) -> Result<Vec<u8>> {
     let rec = Recorder::new("axiscal")?;
     rec.send_default_blueprint();
     let robots = Robots {
@@ -75,8 +74,7 @@ pub fn write_calibrated(path: &Path, c: &CalibratedCampaign) -> Result<()> {
     }
     rec.reset_time();
     rec.log_note("summary", &summary(c));
-    rec.save(path)?;
-    Ok(())
+    Ok(rec.into_rrd()?)
 }
 
 /// One axis experiment: both robots and the accumulated targets per step, then the fits.

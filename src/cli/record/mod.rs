@@ -25,23 +25,31 @@ use std::path::Path;
 pub struct RecordUnavailable(String);
 
 /// Fails early, before any work, when `--record` was given but this build cannot record, or
-/// when the recording may not be written (an input of the command, or an existing file without
-/// `--force`: [`Outputs::check`]).
+/// when the recording may not be written: not an `.rrd` file (so never one of the command's own
+/// outputs), an input of the command, or an existing file without `--force`
+/// ([`Outputs::check`]).
 pub fn ensure_recordable(path: Option<&Path>, outputs: &Outputs) -> Result<()> {
     let Some(path) = path else { return Ok(()) };
     if !cfg!(feature = "viz") {
         return Err(RecordUnavailable(path.display().to_string()).into());
     }
+    if path.extension().is_none_or(|e| e != "rrd") {
+        anyhow::bail!(
+            "--record {}: a rerun recording is written to a file named `.rrd` (e.g. --record campaign.rrd), \
+             which `axiscal view` and the viewer open",
+            path.display()
+        );
+    }
     outputs.check(path)
 }
 
-/// Writes a recording to `path` with `write` (its folder created) and says where it is.
+/// Writes the recording `rrd` returns to `path` as every output is written (through a
+/// temporary beside it, placed without replacing a file unless `--force`: [`Outputs::write`])
+/// and says where it is.
 #[cfg(feature = "viz")]
-pub fn save(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    write(path).with_context(|| format!("recording {}", path.display()))?;
+pub fn save(path: &Path, outputs: &Outputs, rrd: impl FnOnce() -> Result<Vec<u8>>) -> Result<()> {
+    let bytes = rrd().with_context(|| format!("recording {}", path.display()))?;
+    outputs.write(path, bytes)?;
     println!(
         "wrote {} (view it with `axiscal view {}`)",
         path.display(),
@@ -49,6 +57,7 @@ pub fn save(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> 
     );
     Ok(())
 }
+
 #[cfg(feature = "viz")]
 mod arcs;
 #[cfg(feature = "viz")]

@@ -11,7 +11,6 @@ use axiscal::robot::commands_to_internal;
 use axiscal::robot::{Controller, RobotDescription, RobotModel};
 use axiscal::viz::{Recorder, four_bar_loop_m};
 use nalgebra::Point3;
-use std::path::Path;
 
 /// What the recording is made of.
 pub struct Campaign<'a> {
@@ -51,8 +50,8 @@ fn log_pose(rec: &Recorder, c: &Campaign, model: &PhiModel, controller: &Control
     Ok(())
 }
 
-/// Writes the recording of campaign `c` to `path`.
-pub fn write(path: &Path, c: &Campaign) -> Result<()> {
+/// The recording of campaign `c`, as the bytes of an `.rrd` file.
+pub fn write(c: &Campaign) -> Result<Vec<u8>> {
     let rec = Recorder::new("axiscal")?;
     rec.send_default_blueprint();
     let model = c.truth.phi_model();
@@ -130,6 +129,5 @@ pub fn write(path: &Path, c: &Campaign) -> Result<()> {
             tick += 1;
         }
     }
-    rec.save(path)?;
-    Ok(())
+    Ok(rec.into_rrd()?)
 }

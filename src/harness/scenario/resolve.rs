@@ -186,8 +186,18 @@ impl ResolvedScenario {
             path.file_stem()
                 .map_or_else(|| "scenario".into(), |s| s.to_string_lossy().into_owned())
         });
-        if name.is_empty() || name.contains(['/', '\\']) {
-            return Err(invalid("name", "must be a non-empty folder name".into()));
+        if name.is_empty()
+            || name == "."
+            || name == ".."
+            || name.contains(['/', '\\'])
+            || name.chars().any(char::is_control)
+        {
+            return Err(invalid(
+                "name",
+                format!(
+                    "{name:?} is not a folder name of its own under results/ (not `.` or `..`, no `/`, `\\` or control characters)"
+                ),
+            ));
         }
         Ok(ResolvedScenario {
             name,

@@ -6,7 +6,6 @@ mod robot;
 
 use super::{LengthMismatch, error_color, experiment_color, vectors_between};
 use nalgebra::Point3;
-use std::path::{Path, PathBuf};
 
 /// The timeline of poses: one tick per commanded pose, through the whole campaign.
 pub const STEP_TIMELINE: &str = "step";
@@ -22,21 +21,11 @@ pub enum VizError {
         /// Why.
         cause: rerun::RecordingStreamError,
     },
-    /// The `.rrd` file could not be created.
-    #[error("writing the rerun recording {path}: {cause}")]
-    File {
-        /// The file.
-        path: PathBuf,
+    /// The recording could not be encoded as an `.rrd` file.
+    #[error("encoding the rerun recording: {cause}")]
+    Encode {
         /// Why.
-        cause: rerun::sink::FileSinkError,
-    },
-    /// Buffered data could not be flushed to the file.
-    #[error("flushing the rerun recording {path}: {cause}")]
-    Flush {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        cause: rerun::sink::SinkFlushError,
+        cause: String,
     },
     /// Some log calls failed (serialisation); the rest of the recording was written.
     #[error("{count} rerun log call(s) failed, the first: {first}")]
@@ -55,7 +44,7 @@ pub enum VizError {
 #[derive(Debug)]
 pub struct Recorder {
     stream: rerun::RecordingStream,
-    /// Log calls that failed, and the first failure (reported by [`Recorder::save`]).
+    /// Log calls that failed, and the first failure (reported by [`Recorder::into_rrd`]).
     failures: std::cell::RefCell<(usize, Option<String>)>,
 }
 
@@ -81,7 +70,7 @@ impl Recorder {
         Ok(rec)
     }
 
-    /// Remembers a failed log call for [`Recorder::save`].
+    /// Remembers a failed log call for [`Recorder::into_rrd`].
     fn note(&self, result: rerun::RecordingStreamResult<()>) {
         if let Err(e) = result {
             let mut f = self.failures.borrow_mut();
@@ -209,21 +198,16 @@ impl Recorder {
         self.note(blueprint.send(&self.stream, BlueprintActivation::default()));
     }
 
-    /// Writes everything logged so far, and anything logged later up to drop, to the `.rrd`
-    /// file at `path` (replacing it), then finalises the file (footer written). Fails if any
-    /// log call failed (the file is written all the same).
-    pub fn save(self, path: &Path) -> Result<(), VizError> {
-        self.stream.save(path).map_err(|source| VizError::File {
-            path: path.to_owned(),
-            cause: source,
+    /// Everything logged, as the bytes of an `.rrd` file (the stream moved to a memory sink and
+    /// encoded): the caller writes them as it writes any output (through a temporary, never
+    /// through a link). Fails if any log call failed.
+    pub fn into_rrd(self) -> Result<Vec<u8>, VizError> {
+        let storage = self.stream.memory();
+        let bytes = storage.drain_as_bytes().map_err(|cause| VizError::Encode {
+            cause: cause.to_string(),
         })?;
-        self.stream.flush_blocking().map_err(|source| VizError::Flush {
-            path: path.to_owned(),
-            cause: source,
-        })?;
-        self.stream.finalize_deferred_sinks();
         match self.failures.take() {
-            (0, _) => Ok(()),
+            (0, _) => Ok(bytes),
             (count, first) => Err(VizError::Log {
                 count,
                 first: first.unwrap_or_default(),
