@@ -290,6 +290,7 @@ fn negative_values_allowed(cmd: clap::Command) -> clap::Command {
 /// Parses the command line, runs the subcommand and maps its outcome to an exit code.
 pub fn main() -> ExitCode {
     exit_2_when_output_fails();
+    options::cap_rayon_threads_from_environment();
     signals::install_cleanup();
     let cli = match parse_command_line() {
         Ok(cli) => cli,

@@ -156,6 +156,31 @@ pub const MAX_THREADS: usize = 1024;
 /// `--threads`' range.
 pub const THREADS: InRange<usize> = InRange::closed(1, MAX_THREADS, "");
 
+/// Caps `RAYON_NUM_THREADS` (which rayon reads for every pool built without a count) at
+/// [`MAX_THREADS`], as `--threads` is, with `--threads`' warning beyond 4 threads per core: a
+/// count of 20,000 held a four-trial run for more than a minute and a gigabyte. Called first
+/// thing in `main`, before any thread exists (setting the environment is sound only then).
+pub fn cap_rayon_threads_from_environment() {
+    let Some(n) = std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok())
+    else {
+        return;
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    if n > MAX_THREADS {
+        eprintln!("warning: RAYON_NUM_THREADS={n}: capped at {MAX_THREADS} worker threads, the most `--threads` takes");
+        // SAFETY: no other thread exists yet (the first statement of `main`), so nothing reads
+        // the environment while it changes.
+        unsafe { std::env::set_var("RAYON_NUM_THREADS", MAX_THREADS.to_string()) };
+    } else if n > 4 * cores {
+        eprintln!(
+            "warning: RAYON_NUM_THREADS={n} on {cores} core(s): more than 4 threads per core only costs start-up time \
+             and memory (results are the same for any count)"
+        );
+    }
+}
+
 /// A rayon pool of `threads` workers (default: one per core), with a warning when the count is
 /// far beyond the cores (it only adds start-up time and memory; results do not depend on it).
 pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {

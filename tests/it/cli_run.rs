@@ -204,3 +204,26 @@ fn four_shards_merged_equal_one_run_bit_for_bit() {
         .code(2);
     assert!(stderr(&a).contains("missing"));
 }
+
+/// A scenario named `.` or `..` is refused at load: `results/..` is the working folder, whose
+/// files `run --force` replaced (a user's `summary.md`).
+#[test]
+fn a_scenario_named_dot_or_dot_dot_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("summary.md"), "mine").unwrap();
+    for (i, name) in [".", ".."].into_iter().enumerate() {
+        let text = std::fs::read_to_string("scenarios/ci-smoke.toml").unwrap();
+        let scenario = dir.path().join(format!("s{i}.toml"));
+        std::fs::write(&scenario, format!("name = \"{name}\"\n{text}")).unwrap();
+        let a = axiscal()
+            .current_dir(dir.path())
+            .arg("run")
+            .arg(&scenario)
+            .arg("--force")
+            .assert()
+            .code(2);
+        assert!(stderr(&a).contains("not a folder name of its own"), "{}", stderr(&a));
+    }
+    assert_eq!(std::fs::read_to_string(dir.path().join("summary.md")).unwrap(), "mine");
+    assert!(!dir.path().join("results").exists());
+}
