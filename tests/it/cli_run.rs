@@ -227,3 +227,25 @@ fn a_scenario_named_dot_or_dot_dot_is_refused() {
     assert_eq!(std::fs::read_to_string(dir.path().join("summary.md")).unwrap(), "mine");
     assert!(!dir.path().join("results").exists());
 }
+
+/// A lock file that is a link is refused, never written through (the run wrote its process id
+/// over the scenario file the link pointed at).
+#[test]
+fn a_lock_file_that_is_a_link_is_not_written_through() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = dir.path().join("my.toml");
+    std::fs::copy("scenarios/ci-smoke.toml", &scenario).unwrap();
+    let before = std::fs::read_to_string(&scenario).unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::os::unix::fs::symlink(&scenario, out.join(".axiscal.lock")).unwrap();
+    let a = axiscal()
+        .arg("run")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(2);
+    assert!(stderr(&a).contains("the lock file is a link"), "{}", stderr(&a));
+    assert_eq!(std::fs::read_to_string(&scenario).unwrap(), before);
+}

@@ -174,13 +174,21 @@ impl RunLock {
         use std::io::{Read, Seek, Write};
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         let path = dir.join(LOCK_FILE);
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&path)
-            .map_err(io(&path))?;
+        let mut options = std::fs::OpenOptions::new();
+        options.read(true).write(true).create(true).truncate(false);
+        // Never through a link: the lock file is written, and a link would have it written
+        // over whatever it points at (a scenario file).
+        #[cfg(unix)]
+        std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NOFOLLOW);
+        if path.symlink_metadata().is_ok_and(|m| !m.is_file()) {
+            return Err(ExportError::Io {
+                path: path.clone(),
+                cause: std::io::Error::other(
+                    "the lock file is a link or not a regular file; remove it (axiscal creates its own)",
+                ),
+            });
+        }
+        let mut file = options.open(&path).map_err(io(&path))?;
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
