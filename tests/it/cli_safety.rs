@@ -1269,19 +1269,21 @@ fn a_link_into_the_kernels_streams_is_not_replaced() {
     let dir = tempfile::tempdir().unwrap();
     let stream = dir.path().join("stream.csv");
     std::os::unix::fs::symlink("/proc/self/fd/1", &stream).unwrap();
-    let a = axiscal()
-        .args([
-            "simulate",
-            "--sim",
-            "analytic",
-            "--validation-poses",
-            "1",
-            "--force",
-            "--out",
-        ])
-        .arg(&stream)
-        .assert()
-        .code(2);
+    let simulate_into = |out: &Path| {
+        axiscal()
+            .args([
+                "simulate",
+                "--sim",
+                "analytic",
+                "--validation-poses",
+                "1",
+                "--force",
+                "--out",
+            ])
+            .arg(out)
+            .assert()
+    };
+    let a = simulate_into(&stream).code(2);
     assert!(error_of(&a).contains("a device or a stream"), "{}", stderr(&a));
     assert!(
         stream.symlink_metadata().unwrap().is_symlink(),
@@ -1291,19 +1293,7 @@ fn a_link_into_the_kernels_streams_is_not_replaced() {
     std::fs::write(&notes, "mine").unwrap();
     let link = dir.path().join("link.csv");
     std::os::unix::fs::symlink(&notes, &link).unwrap();
-    axiscal()
-        .args([
-            "simulate",
-            "--sim",
-            "analytic",
-            "--validation-poses",
-            "1",
-            "--force",
-            "--out",
-        ])
-        .arg(&link)
-        .assert()
-        .success();
+    simulate_into(&link).success();
     assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
     assert!(link.symlink_metadata().unwrap().is_file());
 }
