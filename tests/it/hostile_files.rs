@@ -403,6 +403,36 @@ fn hostile_urdfs_name_the_urdf_joint_or_link() {
             ("[urdf]", "[urdf]\nbase_link = \"nope\""),
             "no link named `nope`; the URDF's links are base_link, link_1",
         ),
+        // A broken tree cut the chain and the robot lost its joints below the break silently.
+        (
+            (
+                "<parent link=\"link_2\"/><child link=\"link_3\"/>",
+                "<parent link=\"link_2x\"/><child link=\"link_3\"/>",
+            ),
+            none,
+            "joint `joint_3`: its parent link `link_2x` is not declared",
+        ),
+        (
+            ("<joint name=\"joint_3\"", "<joint name=\"joint_2\""),
+            none,
+            "joint `joint_2` is declared twice",
+        ),
+        (
+            (
+                "<link name=\"link_2\"/>",
+                "<link name=\"link_2\"/><link name=\"stray\"/>",
+            ),
+            none,
+            "2 links are no joint's child (base_link, stray)",
+        ),
+        (
+            (
+                "<parent link=\"link_2\"/><child link=\"link_3\"/>",
+                "<parent link=\"link_2\"/><child link=\"link_2\"/>",
+            ),
+            none,
+            "link `link_2` is the child of two joints",
+        ),
     ];
     for (k, (urdf, toml, expected)) in cases.into_iter().enumerate() {
         let robot = fanuc(dir.path(), k, urdf, toml);

@@ -349,6 +349,7 @@ type UrdfChain = (Vec<UrdfJoint>, Isometry3<f64>, Vec<JointEntry>, Vec<LinkInert
 /// joint's origin), the fixed transform from the last movable joint's child to the tip, and
 /// joint entries (kind, limits in deg or mm) for a description without `joints`.
 fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String> {
+    check_tree(robot, u.base_link.is_none())?;
     let children: std::collections::HashSet<&str> = robot.joints.iter().map(|j| j.child.link.as_str()).collect();
     for (key, name) in [("base_link", &u.base_link), ("tip_link", &u.tip_link)] {
         if let Some(name) = name {
@@ -384,6 +385,18 @@ fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String
         };
         path.push(pick);
         link = pick.child.link.clone();
+    }
+    if u.tip_link.is_none()
+        && let Some(off) = robot
+            .joints
+            .iter()
+            .find(|j| !matches!(j.joint_type, urdf_rs::JointType::Fixed) && !path.iter().any(|p| p.name == j.name))
+    {
+        return Err(format!(
+            "joint `{}` moves but is not on the chain from `{base}` down to `{link}`: a parent or child link misnamed \
+             breaks the chain there; check the joint's `parent` and `child`, or name the `tip_link` of a branched robot",
+            off.name
+        ));
     }
     let link_named = |name: &str| robot.links.iter().find(|l| l.name == name);
     let mut joints = Vec::new();
@@ -427,6 +440,53 @@ fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String
         return Err(format!("no movable joint between `{base}` and the tip"));
     }
     Ok((joints, pending, entries, inertials))
+}
+
+/// The URDF is one tree: joint and link names unique, every joint's parent and child a declared
+/// link, each link the child of one joint at most, and (without a named `base_link`) one root.
+/// A misspelt parent cut the chain there, and the robot lost its joints below it silently.
+fn check_tree(robot: &urdf_rs::Robot, one_root: bool) -> Result<(), String> {
+    let mut links = std::collections::HashSet::new();
+    if let Some(l) = robot.links.iter().find(|l| !links.insert(l.name.as_str())) {
+        return Err(format!("link `{}` is declared twice", l.name));
+    }
+    let mut names = std::collections::HashSet::new();
+    let mut children = std::collections::HashSet::new();
+    for j in &robot.joints {
+        if !names.insert(j.name.as_str()) {
+            return Err(format!("joint `{}` is declared twice", j.name));
+        }
+        for (end, link) in [("parent", &j.parent.link), ("child", &j.child.link)] {
+            if !links.contains(link.as_str()) {
+                return Err(format!(
+                    "joint `{}`: its {end} link `{link}` is not declared (no <link name=\"{link}\">)",
+                    j.name
+                ));
+            }
+        }
+        if !children.insert(j.child.link.as_str()) {
+            return Err(format!(
+                "link `{}` is the child of two joints (`{}` and another): a URDF is a tree",
+                j.child.link, j.name
+            ));
+        }
+    }
+    let roots: Vec<&str> = robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .filter(|l| !children.contains(l))
+        .collect();
+    match roots.len() {
+        0 => Err("every link is some joint's child: the joints form a loop, and a URDF is a tree".into()),
+        1 => Ok(()),
+        _ if !one_root => Ok(()),
+        _ => Err(format!(
+            "{} links are no joint's child ({}): a URDF has one root; connect them, or name the `base_link`",
+            roots.len(),
+            roots.join(", ")
+        )),
+    }
 }
 
 /// `name` (the description's `urdf.KEY`) is a link of the URDF.
