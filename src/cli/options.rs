@@ -158,8 +158,8 @@ pub const THREADS: InRange<usize> = InRange::closed(1, MAX_THREADS, "");
 
 /// Caps `RAYON_NUM_THREADS` (which rayon reads for every pool built without a count) at
 /// [`MAX_THREADS`], as `--threads` is, with `--threads`' warning beyond 4 threads per core: a
-/// count of 20,000 held a four-trial run for more than a minute and a gigabyte. Called first
-/// thing in `main`, before any thread exists (setting the environment is sound only then).
+/// count of 20,000 held a four-trial run for more than a minute and a gigabyte. Called at the
+/// start of `main`, before any thread exists (setting the environment is sound only then).
 pub fn cap_rayon_threads_from_environment() {
     let Some(n) = std::env::var("RAYON_NUM_THREADS")
         .ok()
@@ -170,8 +170,8 @@ pub fn cap_rayon_threads_from_environment() {
     let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
     if n > MAX_THREADS {
         eprintln!("warning: RAYON_NUM_THREADS={n}: capped at {MAX_THREADS} worker threads, the most `--threads` takes");
-        // SAFETY: no other thread exists yet (the first statement of `main`), so nothing reads
-        // the environment while it changes.
+        // SAFETY: no other thread exists yet (`main` has only set its panic hook), so nothing
+        // reads the environment while it changes.
         unsafe { std::env::set_var("RAYON_NUM_THREADS", MAX_THREADS.to_string()) };
     } else if n > 4 * cores {
         eprintln!(
