@@ -26,8 +26,8 @@ use axiscal::calibration::screened::{BumpsUndone, CalibrationFailed, FailingSwee
 use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccuracy, predict, swept_ranges};
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{
-    Candidate, Diagnosis, OwnPoses, OwnPosesCause, OwnPosesMiss, OwnPosesSlips, SweepSearch, ToolMoveBeyond,
-    carried_candidates, test_own_validation_poses,
+    Candidate, Diagnosis, MAX_SWEEP_SEARCH_CALIBRATIONS, OwnPoses, OwnPosesCause, OwnPosesMiss, OwnPosesSlips,
+    SweepSearch, SweepSearchTooLarge, ToolMoveBeyond, carried_candidates, test_own_validation_poses,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::unit_check::axis_scale::NullSpread;
@@ -992,8 +992,13 @@ pub(super) fn misses_own_validation_poses(
                 replaces: sweep.shadows.as_ref().and(sweep.experiment.clone()),
             });
         }
-        OwnPosesCause::Unnamed { partial, slips } => (partial, slips),
+        OwnPosesCause::Unnamed {
+            partial,
+            too_large,
+            slips,
+        } => (partial, (too_large, slips)),
     };
+    let (too_large, slips) = slips;
     let sweep_part = partial
         .as_ref()
         .map(|h| super::sweep_cause::part_words(h, &place))
@@ -1001,10 +1006,24 @@ pub(super) fn misses_own_validation_poses(
     let first = understated_repeatability(desc, stated_repeatability);
     let cause = own_poses_slips(slips, data);
     let beyond = miss.tool_move.map(tool_move_words).unwrap_or_default();
+    let unsearched = too_large.as_ref().map(sweep_search_too_large_words).unwrap_or_default();
     Some(OwnPosesWarning {
-        text: format!("{}{beyond}: {first}{sweep_part}{cause}", own_miss_words(&miss)),
+        text: format!(
+            "{}{beyond}: {first}{sweep_part}{cause}{unsearched}",
+            own_miss_words(&miss)
+        ),
         replaces: None,
     })
+}
+
+/// Why no sweep's cause of a miss was sought ([`SweepSearchTooLarge`]).
+fn sweep_search_too_large_words(t: &SweepSearchTooLarge) -> String {
+    format!(
+        "; no sweep's held command, drift or moved block was tried as its cause (its {} hypotheses would cost {} calibrations, \
+         beyond the {MAX_SWEEP_SEARCH_CALIBRATIONS} the search runs; they grow as the square of the joints): check each sweep's \
+         held commands against the controller and the reference-pose warnings above",
+        t.hypotheses, t.calibrations
+    )
 }
 
 /// The first clause of a miss of the file's own validation poses: by how much, against what.

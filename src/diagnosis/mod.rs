@@ -75,7 +75,10 @@ pub use refine::{CARRIABLE, CarryError, carriable, carried_candidates};
 pub use report::markdown;
 pub use result::{CandidateScore, Diagnosis, FeatureContrast, NamedEffect, Outcome, Parameter, WhereEntry};
 pub use slips::{ExplainedMiss, MAX_FITTED_OFFSET, acceptance, explained_misses, free_pose_misses};
-pub use sweep_causes::{SWEEP_CAUSE_FALSE_ALARM, SweepCause, SweepFault, SweepShadow, sweep_cause_of_misses};
+pub use sweep_causes::{
+    MAX_SWEEP_SEARCH_CALIBRATIONS, SWEEP_CAUSE_FALSE_ALARM, SweepCause, SweepFault, SweepSearchTooLarge, SweepShadow,
+    sweep_cause_of_misses,
+};
 pub use sweep_slips::{explained_sweep_misses, own_sweep_misses};
 pub use targets::{FAR_SIGMAS, TargetDistance, ToolTargets};
 pub use validate::{

@@ -10,7 +10,7 @@
 
 use super::combined_slips::{combined_slips_searched, explained_validation_misses};
 use super::slips::ExplainedMiss;
-use super::sweep_causes::{SweepCause, SweepFault, sweep_cause_of_misses};
+use super::sweep_causes::{SweepCause, SweepFault, SweepSearchTooLarge, sweep_cause_of_misses};
 use super::validate::{FittedToolMove, ValidationOptions, Verdict, validate, validate_free_tool};
 use crate::calibration::procedure::{
     AxisEstimator, Calibration, Implausible, PLAUSIBLE_AXIS_TILT_RAD, SIZE_TOLERANCE, longest_length_m,
@@ -106,6 +106,8 @@ pub enum OwnPosesCause {
     Unnamed {
         /// A held command's offset that explains a part of the miss.
         partial: Option<SweepCause>,
+        /// The sweep search not run, as too costly.
+        too_large: Option<SweepSearchTooLarge>,
         /// The slip search's answer.
         slips: OwnPosesSlips,
     },
@@ -199,15 +201,19 @@ pub fn test_own_validation_poses(
     // The slip search runs at most once: the sweep's guard and the answer share it.
     let named = OnceCell::new();
     let slips_named = || named.get_or_init(|| explained_validation_misses(&poses_set, cal, desc, &v));
-    let sweep = (exceeds && search == SweepSearch::Run)
-        .then(|| sweep_cause_of_misses(cal, desc, set, &poses_set))
-        .flatten()
-        .filter(|s| said_beside_slips(s, fit.tool_fitted, || slips_named().is_empty()));
+    let (sweep, too_large) =
+        match (exceeds && search == SweepSearch::Run).then(|| sweep_cause_of_misses(cal, desc, set, &poses_set)) {
+            Some(Ok(sweep)) => (sweep, None),
+            Some(Err(too_large)) => (None, Some(too_large)),
+            None => (None, None),
+        };
+    let sweep = sweep.filter(|s| said_beside_slips(s, fit.tool_fitted, || slips_named().is_empty()));
     let cause = match sweep {
         Some(s) if s.passes => OwnPosesCause::Sweep(s),
         _ if !exceeds && beyond.is_none() => return None,
         partial => OwnPosesCause::Unnamed {
             partial,
+            too_large,
             slips: slips_of(&poses_set, fit.tool_fitted, slips_named),
         },
     };

@@ -54,6 +54,7 @@
 //! that fits: the Hessian's pseudo-inverse's Newton step and covariance) with the directions.
 
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 
 use super::{ValidationOptions, Verdict, curvature_counts, validate, validate_free_tool};
 use crate::calibration::procedure::{
@@ -76,6 +77,23 @@ const CONFIRMED: usize = 3;
 /// Refining quadratics ([`refined`]).
 const REFINE_PASSES: usize = 2;
 
+/// The most calibrations the search's first pass may cost ([`SweepCorrection::trials`] summed
+/// over the hypotheses): a robot's sweeps times their held joints grow as the square of its
+/// joints, and each trial is a calibration and a validation (an 18-joint arm's 783 took a
+/// minute), so that past ten joints the search is not run and says so
+/// ([`SweepSearchTooLarge`]).
+pub const MAX_SWEEP_SEARCH_CALIBRATIONS: usize = 400;
+
+/// The search not run: its first pass would cost `calibrations`, beyond
+/// [`MAX_SWEEP_SEARCH_CALIBRATIONS`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SweepSearchTooLarge {
+    /// The hypotheses it would try.
+    pub hypotheses: usize,
+    /// The calibrations their first pass would cost.
+    pub calibrations: usize,
+}
+
 /// A correction of one sweep's records.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SweepCorrection {
@@ -97,6 +115,13 @@ impl SweepCorrection {
             Self::HeldCommand(_) => 1,
             Self::Drift | Self::Block => 3,
         }
+    }
+
+    /// The calibrations its quadratic costs ([`quadratic_least`]: two per parameter, one per
+    /// pair).
+    fn trials(self) -> usize {
+        let p = self.parameters();
+        2 * p + p * (p - 1) / 2
     }
 
     /// The trial change (1 deg or 1 mm of a held command; 1 mm of drift), about the size of
@@ -209,7 +234,7 @@ struct Score {
 type Hypothesis = (Option<usize>, SweepCorrection);
 
 /// The validation of the file as recorded (`None`) or with a hypothesis's correction.
-type ScoreOf<'a> = dyn Fn(Option<Hypothesis>, &[f64]) -> Option<Score> + 'a;
+type ScoreOf<'a> = dyn Fn(Option<Hypothesis>, &[f64]) -> Option<Score> + Sync + 'a;
 
 /// A hypothesis with its confirmed correction, that correction's covariance and its score.
 struct Confirmed {
@@ -360,15 +385,41 @@ fn sweeps_tried(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet
 /// The sweep whose records, corrected, explain the miss of the validation poses `poses` by
 /// the calibration `cal` of `set` (module docs); where none makes them pass, the one whose
 /// correction explains a part of the miss beyond chance (the F test alone;
-/// [`SweepCause::passes`] false); `None` when none does or the poses pass as recorded.
+/// [`SweepCause::passes`] false); `Ok(None)` when none does or the poses pass as recorded;
+/// [`SweepSearchTooLarge`] when the search would cost more than
+/// [`MAX_SWEEP_SEARCH_CALIBRATIONS`].
 pub fn sweep_cause_of_misses(
     cal: &Calibration,
     desc: &RobotDescription,
     set: &MeasurementSet,
     poses: &MeasurementSet,
+) -> Result<Option<SweepCause>, SweepSearchTooLarge> {
+    let Some(tried_sweeps) = sweeps_tried(cal, desc, set) else {
+        return Ok(None);
+    };
+    let mut hypotheses = tried_sweeps.hypotheses(desc);
+    if set.line_span().is_some() {
+        hypotheses.push((None, SweepCorrection::Drift));
+    }
+    let calibrations = hypotheses.iter().map(|h| h.1.trials()).sum();
+    if calibrations > MAX_SWEEP_SEARCH_CALIBRATIONS {
+        return Err(SweepSearchTooLarge {
+            hypotheses: hypotheses.len(),
+            calibrations,
+        });
+    }
+    Ok(sweep_cause_among(cal, desc, (set, poses), &tried_sweeps, &hypotheses))
+}
+
+/// [`sweep_cause_of_misses`] over `hypotheses` of the sweeps `tried_sweeps`.
+fn sweep_cause_among(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    (set, poses): (&MeasurementSet, &MeasurementSet),
+    tried_sweeps: &Tried,
+    hypotheses: &[Hypothesis],
 ) -> Option<SweepCause> {
     let file_lines = set.line_span();
-    let tried_sweeps = sweeps_tried(cal, desc, set)?;
     let (set, experiments) = (&tried_sweeps.set, &tried_sweeps.experiments);
     let mut options = ValidationOptions::of_calibration(cal, SWEEP_CAUSE_FALSE_ALARM);
     // Every hypothesis is tested with the curvature judgement of the file as recorded.
@@ -397,11 +448,7 @@ pub fn sweep_cause_of_misses(
     if recorded.passes {
         return None;
     }
-    let mut hypotheses = tried_sweeps.hypotheses(desc);
-    if file_lines.is_some() {
-        hypotheses.push((None, SweepCorrection::Drift));
-    }
-    let mut named = confirmed(&score, &hypotheses, recorded);
+    let mut named = confirmed(&score, hypotheses, recorded);
     named.sort_by(|a, b| a.left().total_cmp(&b.left()));
     // Those whose correction makes the poses pass; else the best held command, as a part of the
     // miss (a move's three parameters take in a part of most misses).
@@ -443,8 +490,9 @@ pub fn sweep_cause_of_misses(
 /// The hypotheses whose correction, fitted and confirmed, passes the F test and explains more
 /// than it leaves (module docs), against the file as `recorded`.
 fn confirmed(score: &ScoreOf, hypotheses: &[Hypothesis], recorded: Score) -> Vec<Confirmed> {
+    // Each hypothesis's quadratic is its own calibrations: run side by side, kept in order.
     let mut fitted: Vec<(Hypothesis, Vec<f64>, f64)> = hypotheses
-        .iter()
+        .par_iter()
         .filter_map(|&h| {
             let at = |c: &[f64]| score(Some(h), c).map(|s| s.chi2);
             let zero = vec![0.0; h.1.parameters()];
@@ -601,6 +649,34 @@ fn score_of(
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use std::cell::Cell;
+
+    /// The cost the cap counts is the evaluations [`quadratic_least`] makes (a second path:
+    /// counted as it runs, on a convex quadratic of each correction's parameters).
+    #[test]
+    fn a_corrections_trials_are_its_quadratics_evaluations() {
+        for correction in [
+            SweepCorrection::HeldCommand(0),
+            SweepCorrection::Drift,
+            SweepCorrection::Block,
+        ] {
+            let calls = Cell::new(0);
+            let f = |x: &[f64]| {
+                calls.set(calls.get() + 1);
+                Some(
+                    x.iter()
+                        .enumerate()
+                        .map(|(i, v)| (i + 1) as f64 * (v - 0.3).powi(2))
+                        .sum(),
+                )
+            };
+            let centre = vec![0.0; correction.parameters()];
+            let q = quadratic_least(&f, &centre, f(&centre).unwrap(), (1.0, WEAK_DIRECTION)).unwrap();
+            calls.set(calls.get() - 1);
+            assert_eq!(calls.get(), correction.trials(), "{correction:?}");
+            assert!(q.least_at.iter().all(|c| (c - 0.3).abs() < 1e-12));
+        }
+    }
 
     /// A move along a null direction is left out and the rest kept (a second path: the
     /// component along the direction written out); a null direction reads the same either sign.

@@ -129,6 +129,7 @@ mod seven_joints;
 mod short_sweeps;
 mod sliding_end_to_end;
 mod sweep_direction;
+mod sweep_search_size;
 mod sweeps_as_free_poses;
 mod test_robots;
 mod thread_determinism;
