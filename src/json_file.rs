@@ -172,7 +172,9 @@ impl Parsed<'_> {
 /// [`from_str`] checks it.
 pub fn parse(schema: Schema, text: &str) -> Result<Parsed<'_>, JsonFileError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut value: serde_json::Value = serde_json::from_str(text).map_err(|e| located(text, &e))?;
+    let mut value = serde_json::from_str::<UniqueKeys>(text)
+        .map_err(|e| located(text, &e))?
+        .0;
     if let Some(object) = value.as_object_mut() {
         let found = object.remove("schema");
         object.remove("axiscal_version");
@@ -188,6 +190,78 @@ pub fn parse(schema: Schema, text: &str) -> Result<Parsed<'_>, JsonFileError> {
         }
     }
     Ok(Parsed { text, value })
+}
+
+/// A JSON value whose objects hold each key once: `serde_json::Value` keeps the last of a
+/// repeated key silently, so that of a hand-edited file holding a value twice one would be
+/// used without a word. The error is placed at the repeated key.
+struct UniqueKeys(serde_json::Value);
+
+impl<'de> Deserialize<'de> for UniqueKeys {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(UniqueKeysVisitor).map(UniqueKeys)
+    }
+}
+
+/// Builds a [`UniqueKeys`] value as `serde_json::Value`'s own visitor does, refusing a key
+/// repeated in one object.
+struct UniqueKeysVisitor;
+
+impl<'de> serde::de::Visitor<'de> for UniqueKeysVisitor {
+    type Value = serde_json::Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+    fn visit_u64<E>(self, v: u64) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Self::Value, E> {
+        Ok(serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+    fn visit_string<E>(self, v: String) -> Result<Self::Value, E> {
+        Ok(v.into())
+    }
+    fn visit_unit<E>(self) -> Result<Self::Value, E> {
+        Ok(serde_json::Value::Null)
+    }
+    fn visit_none<E>(self) -> Result<Self::Value, E> {
+        Ok(serde_json::Value::Null)
+    }
+    fn visit_some<D: serde::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        UniqueKeys::deserialize(d).map(|v| v.0)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(UniqueKeys(v)) = seq.next_element()? {
+            items.push(v);
+        }
+        Ok(serde_json::Value::Array(items))
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+        let mut object = serde_json::Map::new();
+        // The key is checked before its value is read, so that the error stands at it.
+        while let Some(key) = map.next_key::<String>()? {
+            if object.contains_key(&key) {
+                return Err(serde::de::Error::custom(format!(
+                    "the key `{}` is given twice in one object: keep the one meant and delete the other",
+                    crate::csv_lines::shown_message(&key)
+                )));
+            }
+            let UniqueKeys(v) = map.next_value()?;
+            object.insert(key, v);
+        }
+        Ok(serde_json::Value::Object(object))
+    }
 }
 
 /// `e`, an error of reading the parsed value (which has no positions), placed in `text`: the
@@ -419,6 +493,25 @@ mod tests {
         assert!(from_str::<Body>(Schema::CALIBRATION, &v1).is_ok());
         let e1 = text.replace("axiscal.report/1", "axiscal.evaluation/1");
         assert!(from_str::<Body>(Schema::EVALUATION, &e1).is_err());
+    }
+
+    /// A key given twice in one object, at the top or nested, is refused at its line with its
+    /// path, not read as the last one; a file without repeats parses to the value serde_json's
+    /// own reader gives (a second path), numbers bit for bit.
+    #[test]
+    fn a_key_given_twice_is_refused_where_it_repeats() {
+        let text = "{\n  \"zeta_mm\": 1.5,\n  \"alpha\": [1, 2],\n  \"zeta_mm\": 2.5\n}";
+        let e = from_str::<Body>(Schema::CALIBRATION, text).unwrap_err().to_string();
+        assert!(e.starts_with("line 4, ") && e.contains("`zeta_mm` is given twice"), "{e}");
+        let nested = r#"{"a": [{"b": {"c": 1, "d": 2, "c": 3}}]}"#;
+        let e = parse(Schema::CALIBRATION, nested).unwrap_err().to_string();
+        assert!(e.contains("key `a[0].b.c`") && e.contains("`c` is given twice"), "{e}");
+        // The same key in sibling objects is no repeat.
+        let siblings = r#"{"x": [{"k": 0.1}, {"k": -3e-300}], "y": {"k": null, "z": [true, "s", 18446744073709551615]}}"#;
+        let own: serde_json::Value = serde_json::from_str(siblings).unwrap();
+        assert_eq!(parse(Schema::CALIBRATION, siblings).unwrap().value, own);
+        let k = |v: &serde_json::Value| v["x"][1]["k"].as_f64().unwrap().to_bits();
+        assert_eq!(k(&parse(Schema::CALIBRATION, siblings).unwrap().value), k(&own));
     }
 
     /// A value of the wrong type is named by its key's path, line and column, a `null` for a

@@ -141,6 +141,10 @@ pub struct ModelEffects {
     pub compliance: Vec<ComplianceTerm>,
 }
 
+/// The largest half band a model's backlash may carry, in size (rad, m for a sliding joint):
+/// half the largest band an effects file takes (0.1 rad); beyond it a value is a slip.
+pub const MAX_MODEL_HALF_BAND: f64 = 0.05;
+
 /// What a pose's effects depend on besides its joint values.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PoseLoad<'a> {
@@ -200,8 +204,21 @@ impl ModelEffects {
                     format!("must be in 1..={n}, found {}", b.joint),
                 ));
             }
-            if !b.half_band.is_finite() {
-                return Err((format!("effects.backlash[{k}].half_band"), "must be finite".into()));
+            if !(b.half_band.is_finite() && b.half_band.abs() <= MAX_MODEL_HALF_BAND) {
+                return Err((
+                    format!("effects.backlash[{k}].half_band"),
+                    format!(
+                        "{}: a half band is finite and within +-{MAX_MODEL_HALF_BAND} (rad, m for a sliding joint: half \
+                         the largest band an effects file takes, 0.1 rad)",
+                        crate::measurement::format_f64(b.half_band)
+                    ),
+                ));
+            }
+            if self.backlash[..k].iter().any(|a| a.joint == b.joint) {
+                return Err((
+                    format!("effects.backlash[{k}].joint"),
+                    format!("joint {} has a backlash entry already: one per joint", b.joint),
+                ));
             }
         }
         for (k, c) in self.compliance.iter().enumerate() {

@@ -3,6 +3,7 @@
 //! These are pure maths shared by the truth model (which evaluates them) and the calibrator
 //! (which fits their coefficients): a form carries no knowledge of any true value.
 
+use super::description::MAX_GEAR_RATIO;
 use super::four_bar::{FourBarError, FourBarGeometry};
 use serde::{Deserialize, Serialize};
 
@@ -94,11 +95,25 @@ fn turns_back(sin: &[f64], cos: &[f64]) -> Option<String> {
 
 /// Why a gear ratio is unusable: `None` when it is finite and not 0.
 fn bad_ratio(ratio: f64) -> Option<String> {
-    (!ratio.is_finite() || ratio == 0.0).then(|| {
+    (!ratio.is_finite() || ratio == 0.0 || ratio.abs() > MAX_GEAR_RATIO).then(|| {
         format!(
-            "the gear ratio must be finite and not 0, found {}",
+            "the gear ratio must be finite, not 0 and at most {MAX_GEAR_RATIO} in size (as a description's), found {}",
             crate::measurement::format_f64(ratio)
         )
+    })
+}
+
+/// Why a transmission's gear ratio is none ([`bad_ratio`], and at least `1 / MAX_GEAR_RATIO` in
+/// size: joint turns per gear turn, as a description's `transmission_fit`), if so.
+fn bad_transmission_ratio(ratio: f64) -> Option<String> {
+    bad_ratio(ratio).or_else(|| {
+        (ratio.abs() < 1.0 / MAX_GEAR_RATIO).then(|| {
+            format!(
+                "the gear ratio must be from {} to {MAX_GEAR_RATIO} in size (joint turns per gear turn, as a description's), found {}",
+                1.0 / MAX_GEAR_RATIO,
+                crate::measurement::format_f64(ratio)
+            )
+        })
     })
 }
 
@@ -109,7 +124,7 @@ impl Transmission {
             Transmission::Harmonic { sin, cos } => non_finite(sin)
                 .or_else(|| non_finite(cos))
                 .or_else(|| turns_back(sin, cos)),
-            Transmission::Gear { ratio, sin, cos } => bad_ratio(*ratio)
+            Transmission::Gear { ratio, sin, cos } => bad_transmission_ratio(*ratio)
                 .or_else(|| non_finite(sin))
                 .or_else(|| non_finite(cos))
                 .or_else(|| turns_back(sin, cos)),

@@ -31,6 +31,7 @@ mod fuzz_readers;
 mod gap_budget;
 mod hostile;
 mod hostile_calibration;
+mod hostile_calibration_file;
 mod hostile_files;
 mod hostile_inputs;
 mod hostile_results;
