@@ -433,6 +433,23 @@ fn hostile_urdfs_name_the_urdf_joint_or_link() {
             none,
             "link `link_2` is the child of two joints",
         ),
+        // Degrees where a URDF takes radians were read as 45-rad limits and a -90-rad turn.
+        (
+            ("lower=\"-1.05\" upper=\"1.31\"", "lower=\"-60\" upper=\"75\""),
+            none,
+            "joint `joint_2`: `<limit lower=\"-60\" upper=\"75\">`: 11.9 turns either way",
+        ),
+        (
+            ("rpy=\"0 -1.5707963267948966 0\"", "rpy=\"0 -90 0\""),
+            none,
+            "joint `joint_2`: `<origin rpy=\"0 -90 0\">`: -90 rad is more than a turn",
+        ),
+        // A joint following another was calibrated as a joint of its own.
+        (
+            ("<joint name=\"joint_4\" type=\"revolute\">", "<joint name=\"joint_4\" type=\"revolute\"><mimic joint=\"joint_3\"/>"),
+            none,
+            "joint `joint_4`: `<mimic joint=\"joint_3\">`",
+        ),
     ];
     for (k, (urdf, toml, expected)) in cases.into_iter().enumerate() {
         let robot = fanuc(dir.path(), k, urdf, toml);

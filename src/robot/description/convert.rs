@@ -514,6 +514,15 @@ fn check_joint_origin(j: &urdf_rs::Joint) -> Result<(), String> {
             triple(&rpy)
         ));
     }
+    if let Some(v) = rpy.iter().find(|v| v.abs() > std::f64::consts::TAU * (1.0 + 1e-6)) {
+        return Err(format!(
+            "joint `{}`: `<origin rpy=\"{}\">`: {} rad is more than a turn: a URDF's angles are radians; these look like \
+             degrees",
+            j.name,
+            triple(&rpy),
+            format_f64(*v)
+        ));
+    }
     let length_m = Vector3::from(xyz).norm();
     let longest = crate::measurement::unit_check::MAX_ROW_LENGTH_M;
     if length_m > longest {
@@ -562,11 +571,16 @@ fn reaches(robot: &urdf_rs::Robot, link: &str, target: &str) -> bool {
             .any(|j| reaches(robot, &j.child.link, target))
 }
 
+/// The most turns either way a URDF's revolute (not continuous) joint's limits may give: a
+/// robot's joints turn at most about a turn and a quarter (a wrist's +-455 deg); a limit of 45
+/// or 180 is degrees written where a URDF takes radians.
+const MAX_URDF_LIMIT_TURNS: f64 = 2.0;
+
 /// A joint entry from a URDF joint: its kind and limits (deg or mm; a continuous joint or one
 /// without limits, `lower` = `upper` as a missing `<limit>` reads, gets +-360 deg or +-1000
 /// mm), its speed (deg/s or mm/s) and effort limits where the URDF gives them (a 0 there
-/// means "not given"). Limits that are not finite numbers or are reversed are an error naming
-/// the joint.
+/// means "not given"). Limits that are not finite numbers, are reversed or lie beyond
+/// [`MAX_URDF_LIMIT_TURNS`], and a `<mimic>`, are an error naming the joint.
 fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> Result<JointEntry, String> {
     let l = &j.limit;
     let continuous = j.joint_type == urdf_rs::JointType::Continuous;
@@ -576,6 +590,25 @@ fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> Result<JointEntry, String
         return Err(format!(
             "joint `{}`: `<limit lower=\"{}\" upper=\"{}\" velocity=\"{}\" effort=\"{}\">`: every value must be a finite number",
             j.name, l.lower, l.upper, l.velocity, l.effort
+        ));
+    }
+    if let Some(m) = &j.mimic {
+        return Err(format!(
+            "joint `{}`: `<mimic joint=\"{}\">`: a joint that follows another is a passive coupling, which a URDF \
+             chain here cannot carry (it would be calibrated as a joint of its own): give the robot's `[[joints]]` and \
+             `[[couplings]]` in the description (docs/formats.md#robot-description)",
+            j.name, m.joint
+        ));
+    }
+    let turns = |v: f64| v.abs() / std::f64::consts::TAU;
+    if kind == JointKind::Revolute && !continuous && turns(l.lower).max(turns(l.upper)) > MAX_URDF_LIMIT_TURNS {
+        return Err(format!(
+            "joint `{}`: `<limit lower=\"{}\" upper=\"{}\">`: {} turns either way: a URDF's angles are radians; these \
+             look like degrees (a joint that turns further is given in the description's `[[joints]]`, its limits in deg)",
+            j.name,
+            l.lower,
+            l.upper,
+            format_f64((turns(l.lower).max(turns(l.upper)) * 10.0).round() / 10.0)
         ));
     }
     if !continuous && l.lower > l.upper {
