@@ -502,12 +502,16 @@ mod tests {
     fn a_key_given_twice_is_refused_where_it_repeats() {
         let text = "{\n  \"zeta_mm\": 1.5,\n  \"alpha\": [1, 2],\n  \"zeta_mm\": 2.5\n}";
         let e = from_str::<Body>(Schema::CALIBRATION, text).unwrap_err().to_string();
-        assert!(e.starts_with("line 4, ") && e.contains("`zeta_mm` is given twice"), "{e}");
+        assert!(
+            e.starts_with("line 4, ") && e.contains("`zeta_mm` is given twice"),
+            "{e}"
+        );
         let nested = r#"{"a": [{"b": {"c": 1, "d": 2, "c": 3}}]}"#;
         let e = parse(Schema::CALIBRATION, nested).unwrap_err().to_string();
         assert!(e.contains("key `a[0].b.c`") && e.contains("`c` is given twice"), "{e}");
         // The same key in sibling objects is no repeat.
-        let siblings = r#"{"x": [{"k": 0.1}, {"k": -3e-300}], "y": {"k": null, "z": [true, "s", 18446744073709551615]}}"#;
+        let siblings =
+            r#"{"x": [{"k": 0.1}, {"k": -3e-300}], "y": {"k": null, "z": [true, "s", 18446744073709551615]}}"#;
         let own: serde_json::Value = serde_json::from_str(siblings).unwrap();
         assert_eq!(parse(Schema::CALIBRATION, siblings).unwrap().value, own);
         let k = |v: &serde_json::Value| v["x"][1]["k"].as_f64().unwrap().to_bits();

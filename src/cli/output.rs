@@ -236,7 +236,7 @@ impl Outputs {
     pub fn create(&self, path: &Path) -> Result<OutputFile> {
         self.check(path)?;
         Self::create_parent(path)?;
-        remove_orphaned_temporaries(
+        self.remove_orphaned_temporaries(
             path.parent()
                 .filter(|d| !d.as_os_str().is_empty())
                 .unwrap_or(Path::new(".")),
@@ -254,6 +254,9 @@ impl Outputs {
         ));
         let tracked = super::signals::track_temporary(&temporary);
         let file = std::fs::File::create(&temporary).map_err(|e| cannot_create(path, &temporary, e));
+        // Held while the file is open: the sign that its run is alive, whatever PID namespace
+        // it runs in (`remove_orphaned_temporaries`).
+        let file = file.inspect(lock_held);
         let file = match file {
             Ok(file) => file,
             Err(e) => {
@@ -307,25 +310,75 @@ fn temporary_owner(name: &str) -> Option<i32> {
         .filter(|&p| p > 0)
 }
 
-/// Removes from `dir` the temporaries of axiscal runs that no longer exist (killed by a
-/// signal no process can catch: SIGKILL, the out-of-memory killer), so they do not pile up.
-/// A temporary of a running process (another axiscal writing here) is left alone.
-fn remove_orphaned_temporaries(dir: &Path) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
-    for entry in entries.flatten() {
-        let name = entry.file_name();
-        let Some(pid) = name.to_str().and_then(temporary_owner) else {
-            continue;
-        };
-        // SAFETY: signal 0 only asks whether the process exists; nothing is sent.
-        let gone =
-            unsafe { libc::kill(pid, 0) } == -1 && std::io::Error::last_os_error().raw_os_error() == Some(libc::ESRCH);
-        if gone {
+/// Takes the lock on `file` that marks an axiscal temporary (a file or the folder of plots) as
+/// its run's while it is open (`flock`, released by the kernel when the run ends, however it
+/// ends).
+fn lock_held(file: &std::fs::File) {
+    use std::os::fd::AsRawFd;
+    // SAFETY: flock on a descriptor this file owns; a failure leaves the file unlocked, and
+    // an unlocked temporary of a live run is still kept by its process id.
+    unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) };
+}
+
+/// Whether a run holds `path` ([`lock_held`]): the lock cannot be taken.
+fn held_by_a_run(path: &Path) -> bool {
+    use std::os::fd::AsRawFd;
+    let Ok(file) = std::fs::File::open(path) else {
+        return true;
+    };
+    // SAFETY: as in `lock_held`; the lock taken here goes with `file`.
+    let taken = unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } == 0;
+    !taken
+}
+
+/// Whether `path` has the shape of an axiscal temporary ([`temporary_owner`] named it): a
+/// regular file of this user, or a folder of plots of this user holding regular files only;
+/// never a link.
+fn shaped_as_temporary(path: &Path, plots: bool) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    let Ok(m) = std::fs::symlink_metadata(path) else {
+        return false;
+    };
+    // SAFETY: geteuid has no preconditions.
+    let own = m.uid() == unsafe { libc::geteuid() };
+    match plots {
+        false => own && m.is_file(),
+        true => {
+            own && m.is_dir()
+                && std::fs::read_dir(path)
+                    .is_ok_and(|entries| entries.flatten().all(|e| e.file_type().is_ok_and(|t| t.is_file())))
+        }
+    }
+}
+
+impl Outputs {
+    /// Removes from `dir` the temporaries of axiscal runs that no longer exist (killed by a
+    /// signal no process can catch: SIGKILL, the out-of-memory killer), so they do not pile
+    /// up. A temporary is removed only when its name is one (`.NAME.axiscal-PID-N.tmp`,
+    /// `.axiscal-PID-plots.tmp`), its process id is gone, no run holds its lock (a run in
+    /// another PID namespace, whose id means another process here), it has a temporary's shape
+    /// ([`shaped_as_temporary`]) and it is not one of this command's inputs.
+    fn remove_orphaned_temporaries(&self, dir: &Path) {
+        let Ok(entries) = std::fs::read_dir(dir) else { return };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let Some(pid) = name.to_str().and_then(temporary_owner) else {
+                continue;
+            };
+            // SAFETY: signal 0 only asks whether the process exists; nothing is sent.
+            let gone = unsafe { libc::kill(pid, 0) } == -1
+                && std::io::Error::last_os_error().raw_os_error() == Some(libc::ESRCH);
             let path = entry.path();
-            let _ = if path.is_dir() {
-                std::fs::remove_dir_all(&path)
-            } else {
-                std::fs::remove_file(&path)
+            let plots = name.to_string_lossy().ends_with("-plots.tmp");
+            if !gone || !shaped_as_temporary(&path, plots) || self.check_not_input(&path).is_err() {
+                continue;
+            }
+            if held_by_a_run(&path) {
+                continue;
+            }
+            let _ = match plots {
+                true => std::fs::remove_dir_all(&path),
+                false => std::fs::remove_file(&path),
             };
         }
     }
@@ -455,7 +508,7 @@ pub struct StagedSet<'a> {
     staged: Vec<Staged>,
     /// A hidden folder inside `dir` that plots are drawn into (removed when the set ends), and
     /// its slot among the temporaries a signal removes.
-    plots_dir: Option<(PathBuf, Option<usize>)>,
+    plots_dir: Option<(PathBuf, Option<usize>, Option<std::fs::File>)>,
     /// Subfolders of `dir` the set created for its files, each with its slot among the
     /// temporaries a signal removes (when empty): removed if the set is dropped uncommitted.
     created: Vec<(PathBuf, Option<usize>)>,
@@ -467,7 +520,7 @@ impl Outputs {
     pub fn staged_in(&self, dir: &Path) -> Result<StagedSet<'_>> {
         Self::check_folder(dir)?;
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        remove_orphaned_temporaries(dir);
+        self.remove_orphaned_temporaries(dir);
         Ok(StagedSet {
             outputs: self,
             dir: dir.to_owned(),
@@ -513,7 +566,9 @@ impl StagedSet<'_> {
         }
         let plots_dir = self.dir.join(format!(".axiscal-{}-plots.tmp", std::process::id()));
         std::fs::create_dir_all(&plots_dir).with_context(|| format!("creating {}", plots_dir.display()))?;
-        self.plots_dir = Some((plots_dir.clone(), super::signals::track_temporary(&plots_dir)));
+        let held = std::fs::File::open(&plots_dir).ok();
+        held.iter().for_each(lock_held);
+        self.plots_dir = Some((plots_dir.clone(), super::signals::track_temporary(&plots_dir), held));
         let tracked: Vec<Option<usize>> = names
             .iter()
             .map(|n| super::signals::track_temporary(&plots_dir.join(n)))
@@ -620,7 +675,7 @@ impl Drop for StagedSet<'_> {
                 super::signals::untrack_temporary(slot);
             }
         }
-        if let Some((dir, tracked)) = self.plots_dir.take() {
+        if let Some((dir, tracked, _held)) = self.plots_dir.take() {
             let _ = std::fs::remove_dir_all(&dir);
             if let Some(slot) = tracked {
                 super::signals::untrack_temporary(slot);
@@ -693,9 +748,48 @@ mod tests {
         std::fs::create_dir(dir.path().join(&names[1])).unwrap();
         std::fs::write(dir.path().join(&names[2]), "x").unwrap();
         std::fs::write(dir.path().join(&names[3]), "x").unwrap();
-        remove_orphaned_temporaries(dir.path());
+        Outputs::new(false).remove_orphaned_temporaries(dir.path());
         let kept: Vec<bool> = names.iter().map(|n| dir.path().join(n).exists()).collect();
         assert_eq!(kept, [false, false, true, true]);
+    }
+
+    /// Named as a dead run's temporary but not one: a run's in another PID namespace (its lock
+    /// held; here by this process), the command's own input, a link, a folder of plots holding
+    /// a folder. Each is kept; a dead run's unheld file beside them goes.
+    #[test]
+    fn what_only_looks_like_a_dead_runs_temporary_is_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let at = |n: &str| dir.path().join(n);
+        let [held, input, link, plots, orphan] = [
+            format!(".a.csv.axiscal-{dead}-0.tmp"),
+            format!(".b.csv.axiscal-{dead}-1.tmp"),
+            format!(".c.csv.axiscal-{dead}-2.tmp"),
+            format!(".axiscal-{dead}-plots.tmp"),
+            format!(".d.csv.axiscal-{dead}-3.tmp"),
+        ];
+        for name in [&held, &input, &orphan] {
+            std::fs::write(at(name), "x").unwrap();
+        }
+        std::fs::write(at("target.csv"), "x").unwrap();
+        std::os::unix::fs::symlink(at("target.csv"), at(&link)).unwrap();
+        std::fs::create_dir_all(at(&plots).join("sub")).unwrap();
+        let holder = std::fs::File::open(at(&held)).unwrap();
+        lock_held(&holder);
+        Outputs::new(true)
+            .input("--data", &at(&input))
+            .remove_orphaned_temporaries(dir.path());
+        let kept: Vec<bool> = [&held, &input, &link, &plots, &orphan]
+            .iter()
+            .map(|n| std::fs::symlink_metadata(at(n)).is_ok())
+            .collect();
+        assert_eq!(kept, [true, true, true, true, false]);
+        assert!(at("target.csv").exists());
+        drop(holder);
+        Outputs::new(false).remove_orphaned_temporaries(dir.path());
+        assert!(!at(&held).exists(), "its lock released, the dead run's temporary goes");
     }
 
     #[test]

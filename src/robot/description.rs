@@ -8,8 +8,7 @@ mod identity;
 mod validate;
 pub use validate::{
     MAX_ANGLE_DEG, MAX_GEAR_RATIO, MAX_HARMONIC_ORDER, MAX_INSTRUMENT_FRAME_MM, MAX_REPEATABILITY_SIGMA,
-    MIN_STATION_DISTANCE_MM,
-    angle_deg_problem, station_problem,
+    MIN_STATION_DISTANCE_MM, angle_deg_problem, station_problem,
 };
 
 mod convert;

@@ -32,7 +32,10 @@ fn an_edited_calibrations_ratio_band_or_repeated_key_is_refused() {
     // A key given twice: the text of the file as written, `reference_cmd` repeated at its end.
     let text = std::fs::read_to_string(dir.join("cal/calibration.json")).unwrap();
     let end = text.rfind('}').unwrap();
-    let repeated = format!("{},\n  \"reference_cmd\": [0, 0, 0, 0, 0, 0]\n}}\n", text[..end].trim_end());
+    let repeated = format!(
+        "{},\n  \"reference_cmd\": [0, 0, 0, 0, 0, 0]\n}}\n",
+        text[..end].trim_end()
+    );
     std::fs::write(dir.join("repeated.json"), &repeated).unwrap();
     let repeated_line = repeated.lines().count() - 1;
     let line = format!("repeated.json: not a calibration JSON: line {repeated_line}, ");
@@ -86,5 +89,8 @@ fn an_edited_calibrations_ratio_band_or_repeated_key_is_refused() {
         clear_outputs(dir);
     }
     // The file as written reads (each case above differs from it in its edit only).
-    run_case(dir, &case("the file as written", &joints("cal/calibration.json"), 0, &[]));
+    run_case(
+        dir,
+        &case("the file as written", &joints("cal/calibration.json"), 0, &[]),
+    );
 }

@@ -446,7 +446,10 @@ fn hostile_urdfs_name_the_urdf_joint_or_link() {
         ),
         // A joint following another was calibrated as a joint of its own.
         (
-            ("<joint name=\"joint_4\" type=\"revolute\">", "<joint name=\"joint_4\" type=\"revolute\"><mimic joint=\"joint_3\"/>"),
+            (
+                "<joint name=\"joint_4\" type=\"revolute\">",
+                "<joint name=\"joint_4\" type=\"revolute\"><mimic joint=\"joint_3\"/>",
+            ),
             none,
             "joint `joint_4`: `<mimic joint=\"joint_3\">`",
         ),
