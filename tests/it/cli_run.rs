@@ -47,11 +47,17 @@ fn ci_smoke_passes_and_writes_every_result() {
         .assert()
         .code(2);
     assert!(stderr(&a).contains("--force"));
+    // With --force the earlier run's histogram goes; a user's `hist-*.svg` (no metric of the
+    // run's) stays.
+    std::fs::write(out.join("hist-mine.svg"), "<svg/>").unwrap();
+    std::fs::write(out.join("hist-uncal_pos_rms_mm.svg"), "old").unwrap();
     axiscal()
         .args(["run", "scenarios/ci-smoke.toml", "--force", "--out"])
         .arg(&out)
         .assert()
         .code(0);
+    assert_eq!(std::fs::read_to_string(out.join("hist-mine.svg")).unwrap(), "<svg/>");
+    assert_ne!(std::fs::read_to_string(out.join("hist-uncal_pos_rms_mm.svg")).unwrap(), "old");
 }
 
 #[test]

@@ -30,13 +30,8 @@ pub const SUMMARY_MD: &str = "summary.md";
 pub const SHARD_FILE: &str = "shard.txt";
 /// Held (an OS file lock) while a run or merge writes into the folder.
 pub const LOCK_FILE: &str = ".axiscal.lock";
-/// Every file a run or merge writes, besides `hist-<metric>.svg` (see [`is_run_output`]).
+/// Every file a run or merge writes, besides `hist-<metric>.svg` (see [`run_outputs_in`]).
 pub const RUN_FILES: [&str; 5] = [RESOLVED_FILE, TRIALS_FILE, SUMMARY_JSON, SUMMARY_MD, SHARD_FILE];
-
-/// Whether a file named `name` is one a run or merge writes.
-pub fn is_run_output(name: &str) -> bool {
-    RUN_FILES.contains(&name) || (name.starts_with("hist-") && name.ends_with(".svg"))
-}
 
 /// Writing results failed.
 #[derive(Debug, thiserror::Error)]
@@ -139,17 +134,39 @@ fn existing_entries(dir: &Path) -> Result<Vec<String>, ExportError> {
         .collect())
 }
 
-/// The files of an earlier run or merge in `dir` ([`is_run_output`]; none when `dir` is missing).
+/// The files of an earlier run or merge in `dir` ([`RUN_FILES`]; none when `dir` is
+/// missing): a `hist-<metric>.svg` only where `<metric>` is a column of the folder's
+/// `trials.csv` (a run draws the histogram of one of its metrics; another such file is the
+/// user's).
 pub fn run_outputs_in(dir: &Path) -> Vec<String> {
+    let metrics = trial_columns(&dir.join(TRIALS_FILE));
+    let drawn = |n: &str| {
+        n.strip_prefix("hist-")
+            .and_then(|n| n.strip_suffix(".svg"))
+            .is_some_and(|m| metrics.iter().any(|c| c == m))
+    };
     existing_entries(dir)
         .unwrap_or_default()
         .into_iter()
-        .filter(|n| is_run_output(n))
+        .filter(|n| RUN_FILES.contains(&n.as_str()) || drawn(n))
         .collect()
 }
 
+/// The column names of the header of the trials file `path` (its first line not a `#`
+/// comment; the first 64 KiB read); none when it cannot be read.
+fn trial_columns(path: &Path) -> Vec<String> {
+    use std::io::{BufRead, Read};
+    let Ok(file) = std::fs::File::open(path) else { return Vec::new() };
+    std::io::BufReader::new(file.take(1 << 16))
+        .lines()
+        .map_while(Result::ok)
+        .find(|l| !l.starts_with('#'))
+        .map(|header| header.split(',').map(|c| c.trim().to_owned()).collect())
+        .unwrap_or_default()
+}
+
 /// Creates `dir` for a new run. A folder holding anything but the lock file is refused unless
-/// `force` ([`check_replace`]); with `force` the files of an earlier run ([`is_run_output`]) are
+/// `force` ([`check_replace`]); with `force` the files of an earlier run ([`run_outputs_in`]) are
 /// deleted first (other files stay), so no old summary sits beside new trials.
 pub fn prepare_dir(dir: &Path, force: bool) -> Result<(), ExportError> {
     check_replace(dir, force)?;
