@@ -118,6 +118,21 @@ pub fn shown_cell(text: &str) -> String {
     format!("{start}…[{count} characters]")
 }
 
+/// `text` as one line of a `#` comment: each control character (a newline or carriage return
+/// in a path, which would end the comment and start a line of content) written as its escape
+/// (`\n`).
+pub fn one_line(text: &str) -> String {
+    text.chars()
+        .flat_map(|c| {
+            let escaped: Vec<char> = match c.is_control() {
+                true => c.escape_default().collect(),
+                false => vec![c],
+            };
+            escaped
+        })
+        .collect()
+}
+
 /// A parser's message as an error shows it: each number longer than 20 characters written
 /// short (serde writes a float in full: `1e308` as 309 digits) and each word longer than
 /// [`shown_cell`] keeps whole by its start and length.
@@ -335,6 +350,14 @@ impl<R: Read> Read for LineTracking<R> {
 
 #[cfg(test)]
 mod tests {
+
+    /// A control character in a comment's text is written as its escape, the rest as given.
+    #[test]
+    fn a_comment_line_escapes_its_line_breaks() {
+        assert_eq!(one_line("a\nb\r\tc é"), "a\\nb\\r\\tc é");
+        assert_eq!(one_line("plain/path.csv"), "plain/path.csv");
+        assert_eq!(one_line("x\u{7}").lines().count(), 1);
+    }
     use super::*;
 
     /// Cells a hand-quoted writer gets wrong (a separator, a quote, a line break, a `#` first in

@@ -213,7 +213,11 @@ fn xacro_yaml(a: XacroArgs, printer: Printer) -> Result<()> {
         Offsets::Transmission => "Origins of the calibrated joint values; joint position = reading / mechanical_reduction + offset (ros_control simple transmission).".into(),
     });
     comments.push("URDF convention: x, y, z in m; roll, pitch, yaw in rad, R = Rz(yaw) Ry(pitch) Rx(roll); every joint moves along or about its +Z.".into());
-    let text: String = comments.iter().map(|c| format!("# {c}\n")).collect::<String>() + &out.yaml;
+    let text: String = comments
+        .iter()
+        .map(|c| format!("# {}\n", axiscal::csv_lines::one_line(c)))
+        .collect::<String>()
+        + &out.yaml;
     outputs.write(&a.common.out, text)?;
     say!(
         printer,

@@ -349,10 +349,13 @@ fn import_points(a: &PointsArgs) -> Result<()> {
         .map(|c| format!("# {c}\n"))
         .collect();
     let comment = format!(
-        "{recorded}# imported by `axiscal import points` from {} (unit {}) joined to the plan {}\n",
-        a.export.display(),
-        joined.unit.name(),
-        a.plan.display()
+        "{recorded}# {}\n",
+        axiscal::csv_lines::one_line(&format!(
+            "imported by `axiscal import points` from {} (unit {}) joined to the plan {}",
+            a.export.display(),
+            joined.unit.name(),
+            a.plan.display()
+        ))
     );
     write_csv_from(&a.out, outputs, &a.export, &comment, &joined.set)?;
     let how = if joined.detected { "detected" } else { "stated" };
@@ -488,7 +491,7 @@ fn import_wide(a: &WideArgs) -> Result<()> {
     let comment = format!(
         "{}# imported by `axiscal import wide` from {}\n",
         super::checks::identity_comment(&desc),
-        a.file.display()
+        axiscal::csv_lines::one_line(&a.file.display().to_string())
     );
     write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     report_experiments(&set, &a.file, &a.out);
@@ -601,9 +604,8 @@ fn import_mat(a: &MatArgs) -> Result<()> {
         target_unit_slip(&set, &a.file, &a.targets)?;
         super::checks::import_units(&set, &desc, &a.file, stated, |r, l| read_as(r, l).ok())?;
     }
-    let comment = format!(
-        "{}# imported by `axiscal import mat` from {}: joints `{}`, targets {}\n",
-        super::checks::identity_comment(&desc),
+    let source = format!(
+        "imported by `axiscal import mat` from {}: joints `{}`, targets {}",
         a.file.display(),
         a.joints,
         a.targets
@@ -612,6 +614,11 @@ fn import_mat(a: &MatArgs) -> Result<()> {
             .map(|(i, t)| format!("{i} = `{t}`"))
             .collect::<Vec<_>>()
             .join(", ")
+    );
+    let comment = format!(
+        "{}# {}\n",
+        super::checks::identity_comment(&desc),
+        axiscal::csv_lines::one_line(&source)
     );
     write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
     println!(

@@ -57,7 +57,10 @@ fn ci_smoke_passes_and_writes_every_result() {
         .assert()
         .code(0);
     assert_eq!(std::fs::read_to_string(out.join("hist-mine.svg")).unwrap(), "<svg/>");
-    assert_ne!(std::fs::read_to_string(out.join("hist-uncal_pos_rms_mm.svg")).unwrap(), "old");
+    assert_ne!(
+        std::fs::read_to_string(out.join("hist-uncal_pos_rms_mm.svg")).unwrap(),
+        "old"
+    );
 }
 
 #[test]

@@ -598,3 +598,29 @@ fn a_mirrored_frame_of_a_scara_or_a_table_is_refused_as_left_handed() {
         }
     }
 }
+
+/// A source path holding a newline (hostile run 70: it ended the provenance comment, and the
+/// rest of the name became a row of the imported file) is written escaped, on one comment line.
+#[test]
+fn a_newline_in_a_source_path_stays_inside_its_comment() {
+    let (_dir, data) = campaign();
+    let wide = wide_table(&data, 0.0, 3);
+    let evil = wide.with_file_name("w\nexperiment,moved_joint\nx.csv");
+    std::fs::rename(&wide, &evil).unwrap();
+    let out = data.with_file_name("imported.csv");
+    axiscal()
+        .args(["import", "wide"])
+        .arg(&evil)
+        .args(["--angles", "deg", "--units", "mm", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&out).unwrap();
+    let head: Vec<&str> = text.lines().take_while(|l| !l.starts_with("experiment,")).collect();
+    assert!(head.iter().all(|l| l.starts_with('#')), "{text}");
+    assert!(
+        head.iter().any(|l| l.contains("w\\nexperiment,moved_joint\\nx.csv")),
+        "{head:?}"
+    );
+    assert_eq!(text.lines().filter(|l| l.starts_with("experiment,")).count(), 1);
+}

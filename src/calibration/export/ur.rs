@@ -248,11 +248,12 @@ impl UrKinematics {
         Self { segments, hash }
     }
 
-    /// The YAML text (`comments` first, each line prefixed `# `), numbers exact.
+    /// The YAML text (`comments` first, each line prefixed `# `, its control characters escaped),
+    /// numbers exact.
     pub fn to_yaml(&self, comments: &[String]) -> String {
         let mut s = String::new();
         for line in comments {
-            let _ = writeln!(s, "# {line}");
+            let _ = writeln!(s, "# {}", crate::csv_lines::one_line(line));
         }
         let _ = writeln!(s, "kinematics:");
         for (name, values) in SEGMENTS.iter().zip(&self.segments) {

@@ -336,7 +336,7 @@ pub fn provenance_comment(source: &Path) -> String {
     format!(
         "# imported by `axiscal import boby-klimchik` from {}\n\
          # targets 0,1,2 = SMRs 2,3,1; cmd_k = controller J_k, except cmd_3 = J3 + J2 (J3 is read against the ground)\n",
-        source.display()
+        crate::csv_lines::one_line(&source.display().to_string())
     )
 }
 

@@ -207,7 +207,7 @@ pub fn provenance_comment(source: &Path, options: &RctOptions) -> String {
     };
     format!(
         "# imported by `axiscal import rct` from {} (robot_cal_tools kinematic measurements; {targets}{units})\n",
-        source.display()
+        crate::csv_lines::one_line(&source.display().to_string())
     )
 }
 

@@ -509,7 +509,7 @@ fn kind_name(kind: JointKind) -> &'static str {
 pub fn provenance_comment(source: &Path) -> String {
     format!(
         "# imported by `axiscal import sscanss2` from {} (SScanSS-2 calibration file)\n",
-        source.display()
+        crate::csv_lines::one_line(&source.display().to_string())
     )
 }
 

@@ -156,7 +156,9 @@ pub fn run_outputs_in(dir: &Path) -> Vec<String> {
 /// comment; the first 64 KiB read); none when it cannot be read.
 fn trial_columns(path: &Path) -> Vec<String> {
     use std::io::{BufRead, Read};
-    let Ok(file) = std::fs::File::open(path) else { return Vec::new() };
+    let Ok(file) = std::fs::File::open(path) else {
+        return Vec::new();
+    };
     std::io::BufReader::new(file.take(1 << 16))
         .lines()
         .map_while(Result::ok)
