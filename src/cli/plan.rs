@@ -218,6 +218,20 @@ fn span_within_limits(plan: &CalibrationPlan, args: &Args, desc: &RobotDescripti
     Ok(())
 }
 
+/// The spans of `plan`'s sweeps a user gave, each with where: `--span`'s, and a plan file's
+/// (`--plan`) where no `--span` overrides them; a default plan's are not judged.
+fn spans_given<'a>(plan: &CalibrationPlan, args: &'a Args) -> Vec<(usize, f64, inputs::SpanGiven<'a>)> {
+    let by_option = |j: usize| args.span.iter().any(|&(k, _)| k == j);
+    plan.sweeps
+        .iter()
+        .filter_map(|s| match (&args.plan, by_option(s.joint)) {
+            (_, true) => Some((s.joint, s.span, inputs::SpanGiven::Option)),
+            (Some(file), false) => Some((s.joint, s.span, inputs::SpanGiven::PlanFile(file))),
+            (None, false) => None,
+        })
+        .collect()
+}
+
 /// `plan` with the command line's `--span`, `--intervals` and `--order` applied.
 fn adjusted(mut plan: CalibrationPlan, args: &Args, desc: &RobotDescription) -> Result<CalibrationPlan> {
     for (k, &(joint, span)) in args.span.iter().enumerate() {
@@ -300,7 +314,7 @@ pub fn run(args: Args) -> Result<()> {
         ),
         None => format!("planning the campaign of {}", args.robot.display()),
     })?;
-    let warnings = inputs::short_span_warnings(&desc, &args.span, &points, args.noise_mm);
+    let warnings = inputs::short_span_warnings(&desc, &spans_given(&plan, &args), &points, args.noise_mm);
     super::checks::print_warnings(&warnings);
     let comment = args.sight.header_comment(&desc)?;
     let mut file = outputs.create(&args.out)?;

@@ -431,3 +431,44 @@ fn a_shuffled_export_without_ids_is_said_out_of_order() {
         "{e}"
     );
 }
+
+/// Hostile run 70: a plan file's `span` of 1 deg or 1e-300 deg got no warning where `--span`
+/// got one. Now each of the file's sweeps is judged as `--span`'s are and named by the file
+/// and the joint; a span too small to move the target is said so (no radius, no radians hint);
+/// the shipped Table-1 plan file gets none.
+#[test]
+fn a_plan_files_short_span_is_warned_as_the_option_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let shipped = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/asea-irb6l-table1-plan.toml"),
+    )
+    .unwrap();
+    let plan = |name: &str, span: &str| {
+        let text = shipped.replacen("span = 50.0", &format!("span = {span}"), 1);
+        assert!(shipped.contains("span = 50.0"), "the plan's first sweep spans 50 deg");
+        std::fs::write(dir.path().join(name), text).unwrap();
+        stderr(
+            &axiscal()
+                .current_dir(dir.path())
+                .args(["plan", "--plan", name, "--out", "p.csv", "--force"])
+                .assert()
+                .success(),
+        )
+    };
+    let e = plan("one.toml", "1.0");
+    assert!(
+        e.contains("one.toml: the sweep of joint 6, `span = 1`: joint 6's sweep of 1 deg bows")
+            && e.contains("widen it to at least")
+            && e.contains("(`span` is in degrees: 1 rad would be 57.3 deg)"),
+        "{e}"
+    );
+    let e = plan("tiny.toml", "1e-300");
+    assert!(
+        e.contains("tiny.toml: the sweep of joint 6, `span = 1e-300`")
+            && e.contains("moves its target by nothing the instrument resolves")
+            && !e.contains("rad would be"),
+        "{e}"
+    );
+    let e = plan("same.toml", "50.0");
+    assert!(!e.contains("too short"), "{e}");
+}

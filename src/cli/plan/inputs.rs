@@ -77,26 +77,60 @@ pub fn validation_poses(given: Option<usize>, desc: &RobotDescription, robot: &P
     }
 }
 
-/// One warning per sweep of a joint in `spans` (`--span J=SPAN`) too short for `calibrate` to
-/// locate its axis at the noise `noise_mm`, judged on the nominal arm (`points`, target 0): a
-/// rotary sweep by its arc's bow ([`short_arc_warning`]), a sliding one by its points' spread
-/// ([`short_line_warning`]).
+/// Where a sweep's span was given: `--span J=SPAN`, or a plan file's `span` key.
+#[derive(Clone, Copy, Debug)]
+pub enum SpanGiven<'a> {
+    /// `--span`.
+    Option,
+    /// A plan file (`--plan`).
+    PlanFile(&'a std::path::Path),
+}
+
+impl SpanGiven<'_> {
+    /// The warning's opening: the option as given, or the file and the sweep's key.
+    fn opening(self, joint: usize, span: f64) -> String {
+        match self {
+            SpanGiven::Option => format!("--span {joint}={}", format_f64(span)),
+            SpanGiven::PlanFile(file) => format!(
+                "{}: the sweep of joint {joint}, `span = {}`",
+                file.display(),
+                format_f64(span)
+            ),
+        }
+    }
+
+    /// The name of the value in a unit hint.
+    fn key(self) -> &'static str {
+        match self {
+            SpanGiven::Option => "--span",
+            SpanGiven::PlanFile(_) => "`span`",
+        }
+    }
+}
+
+/// One warning per sweep of a joint in `spans` (each as given: `--span J=SPAN`, or a sweep
+/// of a plan file) too short for `calibrate` to locate its axis at the noise `noise_mm`,
+/// judged on the nominal arm (`points`, target 0): a rotary sweep by its arc's bow
+/// ([`short_arc_warning`]), a sliding one by its points' spread ([`short_line_warning`]).
+/// A joint swept twice is judged once.
 pub fn short_span_warnings(
     desc: &RobotDescription,
-    spans: &[(usize, f64)],
+    spans: &[(usize, f64, SpanGiven<'_>)],
     points: &[PlannedPoint],
     noise_mm: f64,
 ) -> Vec<String> {
     spans
         .iter()
-        .filter_map(|&(joint, span)| {
+        .enumerate()
+        .filter(|&(k, (joint, ..))| !spans[..k].iter().any(|(j, ..)| j == joint))
+        .filter_map(|(_, &(joint, span, given))| {
             let sweep: Vec<&PlannedPoint> = points
                 .iter()
                 .filter(|p| p.moved_joint == joint && p.target == 0)
                 .collect();
             match desc.joints.get(joint - 1)?.kind {
-                JointKind::Revolute => short_arc_warning(joint, span, &sweep, noise_mm),
-                JointKind::Prismatic => short_line_warning(joint, span, &sweep, noise_mm),
+                JointKind::Revolute => short_arc_warning((joint, span, given), &sweep, noise_mm),
+                JointKind::Prismatic => short_line_warning((joint, span, given), &sweep, noise_mm),
             }
         })
         .collect()
@@ -106,7 +140,11 @@ pub fn short_span_warnings(
 /// bows from its chord by less than
 /// [`axiscal::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE`] times the noise: the rule by
 /// which `calibrate` refuses a sweep as too short to locate its axis.
-fn short_arc_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm: f64) -> Option<String> {
+fn short_arc_warning(
+    (joint, span, given): (usize, f64, SpanGiven<'_>),
+    sweep: &[&PlannedPoint],
+    noise_mm: f64,
+) -> Option<String> {
     let factor = axiscal::numerics::stats::SHORT_ARC_SAGITTA_OVER_NOISE;
     let first = sweep.iter().min_by_key(|p| p.step)?;
     let last = sweep.iter().max_by_key(|p| p.step)?;
@@ -119,15 +157,23 @@ fn short_arc_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm:
     if sagitta_mm >= factor * noise_mm {
         return None;
     }
+    // Below a micro-radian the points coincide to the planner's precision: no radius to read.
+    if !(radius_mm.is_finite() && half_rad > 1e-6) {
+        return Some(format!(
+            "{}: joint {joint}'s sweep of {} deg moves its target by nothing the instrument resolves: `calibrate` \
+             refuses it as too short to locate the axis; give a span of degrees (tens of them)",
+            given.opening(joint, span),
+            format_f64(span)
+        ));
+    }
     let bow = factor * noise_mm / radius_mm;
-    let needed = if bow < 2.0 {
-        format!(" to at least {:.3} deg", 2.0 * (1.0 - bow).acos().to_degrees())
-    } else {
-        String::new()
-    };
-    let radians = if span <= std::f64::consts::TAU {
+    let least_deg = (bow < 2.0).then(|| 2.0 * (1.0 - bow).acos().to_degrees());
+    let needed = least_deg.map_or_else(String::new, |d| format!(" to at least {d:.3} deg"));
+    // The hint of radians only where the value read as radians would be wide enough.
+    let radians = if span <= std::f64::consts::TAU && least_deg.is_some_and(|d| span.to_degrees() >= d) {
         format!(
-            " (--span is in degrees: {} rad would be {:.1} deg)",
+            " ({} is in degrees: {} rad would be {:.1} deg)",
+            given.key(),
             format_f64(span),
             span.to_degrees()
         )
@@ -135,10 +181,10 @@ fn short_arc_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm:
         String::new()
     };
     Some(format!(
-        "--span {joint}={}: joint {joint}'s sweep of {} deg bows its target's arc (radius {radius_mm:.1} mm) \
+        "{}: joint {joint}'s sweep of {} deg bows its target's arc (radius {radius_mm:.1} mm) \
          {sagitta_mm:.4} mm from its chord, within {factor} times the noise of a point ({noise_mm} mm, \
          --noise-mm): `calibrate` refuses it as too short to locate the axis; widen it{needed}{radians}",
-        format_f64(span),
+        given.opening(joint, span),
         format_f64(span)
     ))
 }
@@ -148,7 +194,11 @@ fn short_arc_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm:
 /// [`axiscal::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`] times the noise (the widest of
 /// its experiments): the rule by which `calibrate` names a sweep too short for the instrument
 /// to locate the axis. Points evenly along a line of length `L` spread `L / sqrt(12)`.
-fn short_line_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm: f64) -> Option<String> {
+fn short_line_warning(
+    (joint, span, given): (usize, f64, SpanGiven<'_>),
+    sweep: &[&PlannedPoint],
+    noise_mm: f64,
+) -> Option<String> {
     let factor = axiscal::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE;
     let mut experiments: Vec<&str> = sweep.iter().map(|p| p.experiment.as_str()).collect();
     experiments.dedup();
@@ -169,7 +219,8 @@ fn short_line_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm
     let needed_mm = 12f64.sqrt() * factor * noise_mm;
     let metres = if span * 1e3 >= needed_mm {
         format!(
-            " (--span is in mm: {} m would be {} mm)",
+            " ({} is in mm: {} m would be {} mm)",
+            given.key(),
             format_f64(span),
             format_f64(span * 1e3)
         )
@@ -177,10 +228,10 @@ fn short_line_warning(joint: usize, span: f64, sweep: &[&PlannedPoint], noise_mm
         String::new()
     };
     Some(format!(
-        "--span {joint}={}: joint {joint}'s sweep of {} mm spreads its target's points {spread_mm:.4} mm RMS about \
+        "{}: joint {joint}'s sweep of {} mm spreads its target's points {spread_mm:.4} mm RMS about \
          their centroid, within {factor} times the noise of a point ({noise_mm} mm, --noise-mm): `calibrate` \
          refuses it as too short for the instrument to locate the axis; widen it to at least {needed_mm:.3} mm{metres}",
-        format_f64(span),
+        given.opening(joint, span),
         format_f64(span)
     ))
 }
