@@ -258,3 +258,55 @@ fn a_lock_file_that_is_a_link_is_not_written_through() {
     assert!(stderr(&a).contains("the lock file is a link"), "{}", stderr(&a));
     assert_eq!(std::fs::read_to_string(&scenario).unwrap(), before);
 }
+
+/// Hostile run 70: a scenario whose truth is another robot's (another joint count, another
+/// joint kind) or whose ISO 9283 cube is centred outside the joint limits ran every trial into
+/// a failure and exited 1; each is now refused at load, naming the file and the key, exit 2,
+/// nothing run.
+#[test]
+fn a_truth_of_another_robot_or_a_centre_beyond_the_limits_is_refused_at_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let robots = std::fs::canonicalize("scenarios/robots").unwrap();
+    let at = |name: &str| robots.join(name).display().to_string();
+    let scara = format!("robot = \"{}\"\n", at("scara-rrpr.toml"));
+    let cases = [
+        (
+            "count.toml",
+            ("description", format!("{scara}description")),
+            String::new(),
+            "key `truth`: the truth has 6 joints, the robot",
+        ),
+        (
+            "kind.toml",
+            (
+                "kind = \"paper\"",
+                format!(
+                    "{scara}[truth]\nkind = \"file\"\npath = \"{}\"",
+                    at("table-prpp-truth.toml")
+                ),
+            ),
+            String::new(),
+            "key `truth.path`: the truth's joint 1 is prismatic",
+        ),
+        (
+            "centre.toml",
+            ("description", "description".to_string()),
+            "[iso9283]\ncycles = 3\ncentre_cmd = [0.0, 0.0, 0.0, 0.0, 0.0, 500.0]\n".to_string(),
+            "key `iso9283.centre_cmd`: joint 6's 500 deg is outside its limits",
+        ),
+    ];
+    for (name, replace, extra, expected) in cases {
+        let text = std::fs::read_to_string("scenarios/ci-smoke.toml").unwrap();
+        let text = match replace.0 {
+            "kind = \"paper\"" => text.replacen("[truth]\nkind = \"paper\"", &replace.1, 1),
+            from => text.replacen(from, &replace.1, 1),
+        };
+        let path = dir.path().join(name);
+        std::fs::write(&path, format!("{text}\n{extra}")).unwrap();
+        let out = dir.path().join(format!("out-{name}"));
+        let a = axiscal().arg("run").arg(&path).arg("--out").arg(&out).assert().code(2);
+        let e = stderr(&a);
+        assert!(e.contains(name) && e.contains(expected), "{name}: {e}");
+        assert!(!out.join("trials.csv").exists(), "{name}: no trial run");
+    }
+}

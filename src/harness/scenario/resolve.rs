@@ -180,7 +180,7 @@ impl ResolvedScenario {
             }
         }
         if let Some(iso) = &file.iso9283 {
-            check_iso(iso, robot.dof()).map_err(|(k, m)| invalid(k, m))?;
+            check_iso(iso, &robot).map_err(|(k, m)| invalid(k, m))?;
         }
         let name = file.name.clone().unwrap_or_else(|| {
             path.file_stem()
@@ -287,11 +287,14 @@ fn resolve_truth(
 ) -> Result<ResolvedTruth, (&'static str, String)> {
     Ok(match truth {
         TruthSection::Paper {} => ResolvedTruth::Fixed {
-            robot: Box::new(crate::sim::paper_robot()),
+            robot: Box::new(of_this_robot(crate::sim::paper_robot(), robot, "truth")?),
         },
-        TruthSection::File { path } => ResolvedTruth::Fixed {
-            robot: Box::new(RobotModel::from_file(&dir.join(path)).map_err(|e| ("truth.path", e.to_string()))?),
-        },
+        TruthSection::File { path } => {
+            let model = RobotModel::from_file(&dir.join(path)).map_err(|e| ("truth.path", e.to_string()))?;
+            ResolvedTruth::Fixed {
+                robot: Box::new(of_this_robot(model, robot, "truth.path")?),
+            }
+        }
         TruthSection::Perturbed { perturbation } => {
             // One throw-away draw checks the spec against the robot before any trial runs.
             perturb(robot, perturbation, &mut ChaCha12Rng::seed_from_u64(0))
@@ -301,6 +304,40 @@ fn resolve_truth(
             }
         }
     })
+}
+
+/// `truth`, refused (under `key`) when its joints are not `robot`'s: another count or another
+/// kind (a truth of another robot; every trial would fail on it).
+fn of_this_robot(
+    truth: RobotModel,
+    robot: &RobotDescription,
+    key: &'static str,
+) -> Result<RobotModel, (&'static str, String)> {
+    if truth.dof() != robot.dof() {
+        return Err((
+            key,
+            format!(
+                "the truth has {} joints, the robot {} has {}: the truth must be this robot's",
+                truth.dof(),
+                robot.name,
+                robot.dof()
+            ),
+        ));
+    }
+    let kind = |k: crate::kinematics::JointKind| format!("{k:?}").to_lowercase();
+    match (0..robot.dof()).find(|&k| truth.joints[k].kind != robot.joints[k].kind) {
+        Some(k) => Err((
+            key,
+            format!(
+                "the truth's joint {} is {}, the robot {}'s is {}: the truth must be this robot's",
+                k + 1,
+                kind(truth.joints[k].kind),
+                robot.name,
+                kind(robot.joints[k].kind)
+            ),
+        )),
+        None => Ok(truth),
+    }
 }
 
 type KeyError = (String, String);
@@ -615,8 +652,10 @@ fn check_conditions(c: &ConditionsSection) -> Result<(), (&'static str, String)>
     Ok(())
 }
 
-/// The `[iso9283]` section's values in their ranges: the key and the problem otherwise.
-fn check_iso(iso: &IsoSection, dof: usize) -> Result<(), (&'static str, String)> {
+/// The `[iso9283]` section's values in their ranges (the centre within `robot`'s limits): the key and
+/// the problem otherwise.
+fn check_iso(iso: &IsoSection, robot: &RobotDescription) -> Result<(), (&'static str, String)> {
+    let dof = robot.dof();
     if !(2..=1000).contains(&iso.cycles) {
         return Err(("iso9283.cycles", format!("must be 2 to 1000, got {}", iso.cycles)));
     }
@@ -643,6 +682,24 @@ fn check_iso(iso: &IsoSection, dof: usize) -> Result<(), (&'static str, String)>
         }
         if c.iter().any(|v| !v.is_finite()) {
             return Err(("iso9283.centre_cmd", "values must be finite".into()));
+        }
+        if let Some((k, j)) = robot
+            .joints
+            .iter()
+            .enumerate()
+            .find(|(k, j)| !(j.limits[0]..=j.limits[1]).contains(&c[*k]))
+        {
+            return Err((
+                "iso9283.centre_cmd",
+                format!(
+                    "joint {}'s {} {} is outside its limits {}..{}: the cube's centre must be a pose the robot reaches",
+                    k + 1,
+                    format_f64(c[k]),
+                    j.kind.file_unit(),
+                    format_f64(j.limits[0]),
+                    format_f64(j.limits[1])
+                ),
+            ));
         }
     }
     Ok(())
