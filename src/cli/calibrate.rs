@@ -27,7 +27,8 @@ use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccur
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{
     Candidate, Diagnosis, MAX_SWEEP_SEARCH_CALIBRATIONS, OwnPoses, OwnPosesCause, OwnPosesMiss, OwnPosesSlips,
-    SweepSearch, SweepSearchTooLarge, ToolMoveBeyond, carried_candidates, test_own_validation_poses,
+    SweepSearch, SweepSearchTooLarge, ToolMoveBeyond, carried_candidates, own_poses_outliers,
+    test_own_validation_poses,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::unit_check::axis_scale::NullSpread;
@@ -942,7 +943,17 @@ fn own_poses_miss(
         return None;
     }
     let stated = args.repeatability_rad.as_deref();
-    misses_own_validation_poses(cal, (desc, kept, &args.data), (stated, SweepSearch::after(found)))
+    let outliers = own_poses_outliers(cal, desc, kept, args.keep_outliers);
+    checks::print_warnings(&checks::outlier_warnings(
+        &outliers,
+        &args.data,
+        "its own validation poses tested",
+    ));
+    misses_own_validation_poses(
+        cal,
+        (desc, kept, &args.data),
+        (stated, SweepSearch::after(found), &outliers),
+    )
 }
 
 /// A miss of the file's own validation poses, in words ([`misses_own_validation_poses`]).
@@ -963,10 +974,10 @@ pub(super) struct OwnPosesWarning {
 pub(super) fn misses_own_validation_poses(
     cal: &Calibration,
     (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
-    (stated_repeatability, search): (Option<&[f64]>, SweepSearch),
+    (stated_repeatability, search, outliers): (Option<&[f64]>, SweepSearch, &[OutlierPoint]),
 ) -> Option<OwnPosesWarning> {
     let place = data.display().to_string();
-    let miss = match test_own_validation_poses(cal, desc, set, search)? {
+    let miss = match test_own_validation_poses(cal, desc, set, (search, outliers))? {
         OwnPoses::NotTested(fit) => {
             eprintln!(
                 "note: {place}: the calibrated model misses this file's own {} validation poses (not fitted) by {:.3} mm RMS{}; \

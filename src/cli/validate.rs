@@ -6,18 +6,16 @@ use super::checks;
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
 use anyhow::{Context, Result};
-use axiscal::calibration::procedure::{Calibration, CalibrationOptions, OutlierPoint, ProcedureError, screen_sweeps};
+use axiscal::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, screen_sweeps};
 use axiscal::diagnosis::{
     ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, validate, write_validation_residuals_csv,
 };
 use axiscal::diagnosis::{
-    PoseResiduals, combined_slips_searched, explained_validation_misses, free_poses_only, pose_point_outliers,
-    residuals_less_calibration_error, without_outliers,
+    combined_slips_searched, explained_validation_misses, free_pose_outliers, free_poses_only, without_outliers,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
 use axiscal::robot::RobotDescription;
-use nalgebra::Vector3;
 use std::path::PathBuf;
 
 /// The files `validate` writes into its output folder.
@@ -170,56 +168,6 @@ fn without_sweep_outliers(
         ) => Err(anyhow::Error::new(e).context(format!("validating on {}", args.data.display()))),
         Err(_) => Ok((set, Vec::new())),
     }
-}
-
-/// The free-pose points (`moved_joint` 0: validation and tool poses) of `set` whose residuals
-/// in `v` are gross errors, as `diagnose` finds them ([`pose_point_outliers`]: beyond the
-/// far-out fences of every point's residual and of its distance from its pose's other targets'
-/// residuals; an error of the model moves a pose's targets alike), dropped unless `keep`. A
-/// point is flagged only if it is also beyond them once the calibration's own error, which
-/// the residuals of every pose but the flagged points' estimate together, is taken out
-/// ([`residuals_less_calibration_error`]): where that error dominates the prediction, a clean
-/// point may sit tens of noise sigmas off, and it is the calibration's error, not a gross one.
-fn free_pose_outliers(
-    v: &Validation,
-    set: &MeasurementSet,
-    (cal, desc): (&Calibration, &RobotDescription),
-    keep: bool,
-) -> Result<Vec<OutlierPoint>> {
-    let raw: Vec<Vector3<f64>> = v
-        .residuals
-        .iter()
-        .map(|r| Vector3::from(r.measured_mm) - Vector3::from(r.predicted_mm))
-        .collect();
-    let sigma_m = v.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
-    let flagged = pose_point_outliers(set, &free_pose_residuals(set, &raw), sigma_m, keep);
-    if flagged.is_empty() {
-        return Ok(flagged);
-    }
-    let suspects: std::collections::BTreeSet<(&str, usize)> =
-        flagged.iter().map(|o| (o.experiment.as_str(), o.step)).collect();
-    let explained = residuals_less_calibration_error(set, cal, desc, v, &suspects)?;
-    let still = pose_point_outliers(set, &free_pose_residuals(set, &explained), sigma_m, keep);
-    let key = |o: &OutlierPoint| (o.experiment.clone(), o.step, o.target);
-    let still: std::collections::HashSet<_> = still.iter().map(key).collect();
-    Ok(flagged.into_iter().filter(|o| still.contains(&key(o))).collect())
-}
-
-/// Each free pose's targets' residuals (`residuals_mm` per row of `set`), in metres, the poses
-/// in order of first appearance.
-fn free_pose_residuals<'a>(set: &'a MeasurementSet, residuals_mm: &[Vector3<f64>]) -> Vec<PoseResiduals<'a>> {
-    let mut poses: Vec<PoseResiduals<'_>> = Vec::new();
-    // Each pose's place in `poses`: linear in the rows.
-    let mut index: std::collections::HashMap<(&str, usize), usize> = std::collections::HashMap::new();
-    for (m, r) in set.rows().iter().zip(residuals_mm).filter(|(m, _)| m.moved_joint == 0) {
-        let key = (m.experiment.as_str(), m.step);
-        let at = *index.entry(key).or_insert_with(|| {
-            poses.push((key, Vec::new()));
-            poses.len() - 1
-        });
-        poses[at].1.push((m.target, r * 1e-3));
-    }
-    poses
 }
 
 /// A verdict that the model misses DATA with `--noise-mm` far below the noise DATA's axis

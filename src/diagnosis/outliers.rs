@@ -13,7 +13,9 @@
 //! targets far off alike, stays for the diagnosis to explain. A pose with one target is not
 //! tested.
 
+use super::validate::{Validation, residuals_less_calibration_error};
 use super::{DiagnosisError, DiagnosisOptions, ordered, prepare, with_free_pose_targets};
+use crate::calibration::procedure::Calibration;
 use crate::calibration::procedure::SWEEP_POINTS_FALSE_ALARM;
 use crate::calibration::procedure::{OutlierPoint, OutlierTest};
 use crate::measurement::MeasurementSet;
@@ -127,6 +129,57 @@ pub fn pose_point_outliers(
     }
     flagged.sort_by_key(|o| (o.line, o.step, o.target));
     flagged
+}
+
+/// The free-pose points (`moved_joint` 0: validation and tool poses) of `set` whose residuals
+/// in `v` are gross errors, as `diagnose` finds them ([`pose_point_outliers`]: beyond the
+/// far-out fences of every point's residual and of its distance from its pose's other targets'
+/// residuals; an error of the model moves a pose's targets alike), dropped unless `keep`. A
+/// point is flagged only if it is also beyond them once the calibration's own error, which
+/// the residuals of every pose but the flagged points' estimate together, is taken out
+/// ([`residuals_less_calibration_error`]); what `validate` drops and `calibrate` leaves out of
+/// its test of the file's own validation poses: where that error dominates the prediction, a clean
+/// point may sit tens of noise sigmas off, and it is the calibration's error, not a gross one.
+pub fn free_pose_outliers(
+    v: &Validation,
+    set: &MeasurementSet,
+    (cal, desc): (&Calibration, &RobotDescription),
+    keep: bool,
+) -> Result<Vec<OutlierPoint>, DiagnosisError> {
+    let raw: Vec<Vector3<f64>> = v
+        .residuals
+        .iter()
+        .map(|r| Vector3::from(r.measured_mm) - Vector3::from(r.predicted_mm))
+        .collect();
+    let sigma_m = v.noise_rms_3d_mm * 1e-3 / 3f64.sqrt();
+    let flagged = pose_point_outliers(set, &free_pose_residuals(set, &raw), sigma_m, keep);
+    if flagged.is_empty() {
+        return Ok(flagged);
+    }
+    let suspects: std::collections::BTreeSet<(&str, usize)> =
+        flagged.iter().map(|o| (o.experiment.as_str(), o.step)).collect();
+    let explained = residuals_less_calibration_error(set, cal, desc, v, &suspects)?;
+    let still = pose_point_outliers(set, &free_pose_residuals(set, &explained), sigma_m, keep);
+    let key = |o: &OutlierPoint| (o.experiment.clone(), o.step, o.target);
+    let still: std::collections::HashSet<_> = still.iter().map(key).collect();
+    Ok(flagged.into_iter().filter(|o| still.contains(&key(o))).collect())
+}
+
+/// Each free pose's targets' residuals (`residuals_mm` per row of `set`), in metres, the poses
+/// in order of first appearance.
+fn free_pose_residuals<'a>(set: &'a MeasurementSet, residuals_mm: &[Vector3<f64>]) -> Vec<PoseResiduals<'a>> {
+    let mut poses: Vec<PoseResiduals<'_>> = Vec::new();
+    // Each pose's place in `poses`: linear in the rows.
+    let mut index: std::collections::HashMap<(&str, usize), usize> = std::collections::HashMap::new();
+    for (m, r) in set.rows().iter().zip(residuals_mm).filter(|(m, _)| m.moved_joint == 0) {
+        let key = (m.experiment.as_str(), m.step);
+        let at = *index.entry(key).or_insert_with(|| {
+            poses.push((key, Vec::new()));
+            poses.len() - 1
+        });
+        poses[at].1.push((m.target, r * 1e-3));
+    }
+    poses
 }
 
 /// The family-wise false-alarm rate of the validation points' test over a whole file: the

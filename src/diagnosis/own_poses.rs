@@ -9,11 +9,12 @@
 //! `diagnose` say it.
 
 use super::combined_slips::{combined_slips_searched, explained_validation_misses};
+use super::outliers::{free_pose_outliers, without_outliers};
 use super::slips::ExplainedMiss;
 use super::sweep_causes::{SweepCause, SweepFault, SweepSearchTooLarge, sweep_cause_of_misses};
 use super::validate::{FittedToolMove, ValidationOptions, Verdict, validate, validate_free_tool};
 use crate::calibration::procedure::{
-    AxisEstimator, Calibration, Implausible, PLAUSIBLE_AXIS_TILT_RAD, SIZE_TOLERANCE, longest_length_m,
+    AxisEstimator, Calibration, Implausible, OutlierPoint, PLAUSIBLE_AXIS_TILT_RAD, SIZE_TOLERANCE, longest_length_m,
 };
 use crate::measurement::{Measurement, MeasurementSet, bounded};
 use crate::plan::TOOL_EXPERIMENT;
@@ -52,6 +53,29 @@ pub fn own_validation_poses(set: &MeasurementSet, desc: &RobotDescription) -> Op
     let lines: Vec<u64> = chosen.iter().filter_map(|&i| set.line_of(i)).collect();
     let poses_set = MeasurementSet::new(desc.dof(), rows).ok()?.with_lines(lines);
     Some((poses_set, kept.len()))
+}
+
+/// The gross errors among the file's own validation poses against the calibration `cal`
+/// ([`free_pose_outliers`], flagged as dropped unless `keep`), for
+/// [`test_own_validation_poses`] to leave out: a point 500 mm off fails the test of every pose
+/// and hides the cause of a real miss. None where the poses cannot be validated.
+pub fn own_poses_outliers(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    keep: bool,
+) -> Vec<OutlierPoint> {
+    let Some((poses, _)) = own_validation_poses(set, desc) else {
+        return Vec::new();
+    };
+    let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
+    let v = match cal.tool {
+        None => validate_free_tool(&poses, cal, desc, &options).map(|(v, _)| v),
+        Some(_) => validate(&poses, cal, desc, &options),
+    };
+    v.ok()
+        .and_then(|v| free_pose_outliers(&v, &poses, (cal, desc), keep).ok())
+        .unwrap_or_default()
 }
 
 /// How the validation poses were predicted and how far they are missed.
@@ -170,9 +194,14 @@ pub fn test_own_validation_poses(
     cal: &Calibration,
     desc: &RobotDescription,
     set: &MeasurementSet,
-    search: SweepSearch,
+    (search, outliers): (SweepSearch, &[OutlierPoint]),
 ) -> Option<OwnPoses> {
     let (poses_set, n) = own_validation_poses(set, desc)?;
+    let dropped: Vec<OutlierPoint> = outliers.iter().filter(|o| o.dropped).cloned().collect();
+    let poses_set = match dropped.is_empty() {
+        true => poses_set,
+        false => without_outliers(&poses_set, &dropped),
+    };
     let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
     // A tool frame left nominal is off by an error no covariance holds: estimated from the
     // poses, so that only what no tool frame explains is judged, and a move beyond what a

@@ -624,3 +624,38 @@ fn a_newline_in_a_source_path_stays_inside_its_comment() {
     );
     assert_eq!(text.lines().filter(|l| l.starts_with("experiment,")).count(), 1);
 }
+
+/// Hostile run 70: one validation point 522 mm off (a corrupted reading) failed `calibrate`'s
+/// test of the file's own validation poses, blamed on "no slip ... the description ... an
+/// effect". It is now named by its line as an outlier, as `validate` names it, and the poses
+/// are tested without it; `--keep-outliers` keeps it (and the miss), and the clean file says
+/// nothing of either.
+#[test]
+fn a_gross_validation_point_is_named_not_blamed_on_the_model() {
+    let (_dir, data) = campaign();
+    let pick = |f: &[&str]| f[0] == "validation" && f[2] == "7" && f[3] == "1";
+    let line = line_of(&data, pick);
+    let bad = altered_csv(
+        &data,
+        "gross.csv",
+        |_| true,
+        |f| {
+            if pick(&f.iter().map(String::as_str).collect::<Vec<_>>()) {
+                f[4] = (f[4].parse::<f64>().unwrap() + 522.0).to_string();
+            }
+        },
+    );
+    let miss = "misses this file's own";
+    let err = calibrate_warns(&bad, &[]);
+    assert!(
+        err.contains(&format!(
+            "gross.csv:{line}: outlier: experiment validation step 7 target 1: 52"
+        )) && err.contains("its own validation poses tested without it"),
+        "{err}"
+    );
+    assert!(!err.contains(miss), "{err}");
+    let kept = calibrate_warns(&bad, &["--keep-outliers"]);
+    assert!(kept.contains("kept (--keep-outliers)") && kept.contains(miss), "{kept}");
+    let clean = calibrate_warns(&data, &[]);
+    assert!(!clean.contains("outlier") && !clean.contains(miss), "{clean}");
+}
