@@ -373,7 +373,9 @@ fn readable(record: &CalibrationRecord, args: &Args, (set, desc): (&MeasurementS
     }
     cal.validate().map_err(|e| {
         anyhow::anyhow!(
-            "calibrating {}: the result fails the check of calibration.json ({e}): nothing written",
+            "calibrating {}: the calibrated model is none a robot can have ({e}): the data do not fit this \
+             description; check the warnings above (a coordinate column scaled or shifted, commands in other units), the \
+             description's rows and units, and each sweep's rows; nothing written",
             data.display()
         )
     })
