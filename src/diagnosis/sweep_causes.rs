@@ -77,10 +77,10 @@ const CONFIRMED: usize = 3;
 /// Refining quadratics ([`refined`]).
 const REFINE_PASSES: usize = 2;
 
-/// The most calibrations the search's first pass may cost ([`SweepCorrection::trials`] summed
-/// over the hypotheses): a robot's sweeps times their held joints grow as the square of its
-/// joints, and each trial is a calibration and a validation (an 18-joint arm's 783 took a
-/// minute), so that past ten joints the search is not run and says so
+/// The most calibrations the search's first pass may cost (two per held command, nine per
+/// drift or block, summed over the hypotheses): a robot's sweeps times their held joints grow
+/// as the square of its joints, and each trial is a calibration and a validation (an 18-joint
+/// arm's 915 took a minute), so that past ten joints the search is not run and says so
 /// ([`SweepSearchTooLarge`]).
 pub const MAX_SWEEP_SEARCH_CALIBRATIONS: usize = 400;
 
