@@ -27,8 +27,7 @@ use axiscal::calibration::tool_accuracy::{MapPoint, PredictionOptions, ToolAccur
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
 use axiscal::diagnosis::{
     Candidate, Diagnosis, MAX_SWEEP_SEARCH_CALIBRATIONS, OwnPoses, OwnPosesCause, OwnPosesMiss, OwnPosesSlips,
-    SweepSearch, SweepSearchTooLarge, ToolMoveBeyond, carried_candidates, own_poses_outliers,
-    test_own_validation_poses,
+    SweepSearch, SweepSearchTooLarge, ToolMoveBeyond, carried_candidates, test_own_validation_poses,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::unit_check::axis_scale::NullSpread;
@@ -945,16 +944,10 @@ fn own_poses_miss(
         return None;
     }
     let stated = args.repeatability_rad.as_deref();
-    let outliers = own_poses_outliers(cal, desc, kept, args.keep_outliers);
-    checks::print_warnings(&checks::outlier_warnings(
-        &outliers,
-        &args.data,
-        "its own validation poses tested",
-    ));
     misses_own_validation_poses(
         cal,
         (desc, kept, &args.data),
-        (stated, SweepSearch::after(found), &outliers),
+        (stated, SweepSearch::after(found), args.keep_outliers),
     )
 }
 
@@ -971,15 +964,22 @@ pub(super) struct OwnPosesWarning {
 /// The axis-experiment calibration tested on the file's own validation poses, which it did not
 /// fit ([`test_own_validation_poses`], seeking a sweep's cause as `search` says), in words: a
 /// sweep's cause that makes them pass alone, else the miss with what the slip search `validate`
-/// runs names; the paper's estimator's untested miss as a note. `None` without validation poses
-/// or when they are consistent.
+/// runs names; the paper's estimator's untested miss as a note. The poses' gross errors are
+/// warned of as they are found (left out of the test unless `keep`). `None` without validation
+/// poses or when they are consistent.
 pub(super) fn misses_own_validation_poses(
     cal: &Calibration,
     (desc, set, data): (&RobotDescription, &MeasurementSet, &Path),
-    (stated_repeatability, search, outliers): (Option<&[f64]>, SweepSearch, &[OutlierPoint]),
+    (stated_repeatability, search, keep): (Option<&[f64]>, SweepSearch, bool),
 ) -> Option<OwnPosesWarning> {
     let place = data.display().to_string();
-    let miss = match test_own_validation_poses(cal, desc, set, (search, outliers))? {
+    let (outliers, tested) = test_own_validation_poses(cal, desc, set, (search, keep));
+    checks::print_warnings(&checks::outlier_warnings(
+        &outliers,
+        data,
+        "its own validation poses tested",
+    ));
+    let miss = match tested? {
         OwnPoses::NotTested(fit) => {
             eprintln!(
                 "note: {place}: the calibrated model misses this file's own {} validation poses (not fitted) by {:.3} mm RMS{}; \

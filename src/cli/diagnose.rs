@@ -216,7 +216,7 @@ fn diagnosis_options(args: &Args, noise_mm: f64, noise_dof: Option<f64>) -> Diag
 fn own_poses_miss(cal: &Calibration, desc: &RobotDescription, set: &MeasurementSet, data: &Path) -> Option<String> {
     // A held offset the miss names starts with the file and the sweep's line already.
     let file = data.display().to_string();
-    super::calibrate::misses_own_validation_poses(cal, (desc, set, data), (None, SweepSearch::Run, &[])).map(|own| {
+    super::calibrate::misses_own_validation_poses(cal, (desc, set, data), (None, SweepSearch::Run, false)).map(|own| {
         let miss = own.text;
         match miss.starts_with(&format!("{file}:")) {
             true => miss,

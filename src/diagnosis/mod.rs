@@ -64,7 +64,7 @@ pub use noise::{CleanCampaign, NoiseModel, ValidationRows, clean_positions, is_v
 pub use outliers::{PoseResiduals, free_pose_outliers, pose_point_outliers, validation_outliers, without_outliers};
 pub use own_poses::{
     OWN_POSES_CHECKED, OWN_POSES_FALSE_ALARM, OwnPoses, OwnPosesCause, OwnPosesFit, OwnPosesMiss, OwnPosesSlips,
-    SweepSearch, ToolMoveBeyond, own_poses_outliers, own_validation_poses, test_own_validation_poses,
+    SweepSearch, ToolMoveBeyond, own_validation_poses, test_own_validation_poses,
 };
 pub use plausible::{
     MAX_ALPHA_PER_K, MAX_ANGLE_RAD, MAX_HALF_BAND_RAD, MAX_PAYLOAD_OFFSET_M, MAX_SCALE_PPM, MIN_ALPHA_PER_K,

@@ -12,7 +12,7 @@ use super::combined_slips::{combined_slips_searched, explained_validation_misses
 use super::outliers::{free_pose_outliers, without_outliers};
 use super::slips::ExplainedMiss;
 use super::sweep_causes::{SweepCause, SweepFault, SweepSearchTooLarge, sweep_cause_of_misses};
-use super::validate::{FittedToolMove, ValidationOptions, Verdict, validate, validate_free_tool};
+use super::validate::{FittedToolMove, Validation, ValidationOptions, Verdict, validate, validate_free_tool};
 use crate::calibration::procedure::{
     AxisEstimator, Calibration, Implausible, OutlierPoint, PLAUSIBLE_AXIS_TILT_RAD, SIZE_TOLERANCE, longest_length_m,
 };
@@ -53,29 +53,6 @@ pub fn own_validation_poses(set: &MeasurementSet, desc: &RobotDescription) -> Op
     let lines: Vec<u64> = chosen.iter().filter_map(|&i| set.line_of(i)).collect();
     let poses_set = MeasurementSet::new(desc.dof(), rows).ok()?.with_lines(lines);
     Some((poses_set, kept.len()))
-}
-
-/// The gross errors among the file's own validation poses against the calibration `cal`
-/// ([`free_pose_outliers`], flagged as dropped unless `keep`), for
-/// [`test_own_validation_poses`] to leave out: a point 500 mm off fails the test of every pose
-/// and hides the cause of a real miss. None where the poses cannot be validated.
-pub fn own_poses_outliers(
-    cal: &Calibration,
-    desc: &RobotDescription,
-    set: &MeasurementSet,
-    keep: bool,
-) -> Vec<OutlierPoint> {
-    let Some((poses, _)) = own_validation_poses(set, desc) else {
-        return Vec::new();
-    };
-    let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
-    let v = match cal.tool {
-        None => validate_free_tool(&poses, cal, desc, &options).map(|(v, _)| v),
-        Some(_) => validate(&poses, cal, desc, &options),
-    };
-    v.ok()
-        .and_then(|v| free_pose_outliers(&v, &poses, (cal, desc), keep).ok())
-        .unwrap_or_default()
 }
 
 /// How the validation poses were predicted and how far they are missed.
@@ -187,31 +164,73 @@ impl SweepSearch {
 }
 
 /// The axis-experiment calibration `cal` of `set` tested on the file's own validation poses
-/// (module docs), seeking a sweep's cause of a miss as `search` says; `None` without
-/// validation poses, when they cannot be validated, or when they are consistent with the
-/// prediction.
+/// (module docs), seeking a sweep's cause of a miss as `search` says: the poses' gross errors
+/// (where they fail the test: [`free_pose_outliers`], flagged as dropped unless `keep`; a point
+/// 500 mm off fails the test of every pose and hides the cause of a real miss), and the test
+/// without those dropped, `None` without validation poses, when they cannot be validated, or
+/// when they are consistent with the prediction.
 pub fn test_own_validation_poses(
     cal: &Calibration,
     desc: &RobotDescription,
     set: &MeasurementSet,
-    (search, outliers): (SweepSearch, &[OutlierPoint]),
-) -> Option<OwnPoses> {
-    let (poses_set, n) = own_validation_poses(set, desc)?;
+    (search, keep): (SweepSearch, bool),
+) -> (Vec<OutlierPoint>, Option<OwnPoses>) {
+    let Some((poses_set, n)) = own_validation_poses(set, desc) else {
+        return (Vec::new(), None);
+    };
+    let Some(first) = validated(&poses_set, cal, desc) else {
+        return (Vec::new(), None);
+    };
+    let fails = |v: &Validation| {
+        v.validation
+            .as_ref()
+            .and_then(|p| p.chi_square.as_ref())
+            .is_some_and(|t| t.verdict == Verdict::Exceeds)
+    };
+    let outliers = match fails(&first.0) {
+        true => free_pose_outliers(&first.0, &poses_set, (cal, desc), keep).unwrap_or_default(),
+        false => Vec::new(),
+    };
     let dropped: Vec<OutlierPoint> = outliers.iter().filter(|o| o.dropped).cloned().collect();
-    let poses_set = match dropped.is_empty() {
-        true => poses_set,
-        false => without_outliers(&poses_set, &dropped),
+    if dropped.is_empty() {
+        return (outliers, tested(cal, desc, set, (&poses_set, n), first, search));
+    }
+    let kept = without_outliers(&poses_set, &dropped);
+    let Some(second) = validated(&kept, cal, desc) else {
+        return (outliers, None);
     };
+    (outliers, tested(cal, desc, set, (&kept, n), second, search))
+}
+
+/// The validation of the poses `poses_set` against `cal` at [`OWN_POSES_FALSE_ALARM`], with the
+/// tool frame's move where the file measured none. A tool frame left nominal is off by an
+/// error no covariance holds: estimated from the poses, so that only what no tool frame
+/// explains is judged, and a move beyond what a description may be off by is said.
+fn validated(
+    poses_set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+) -> Option<(Validation, Option<FittedToolMove>)> {
     let options = ValidationOptions::of_calibration(cal, OWN_POSES_FALSE_ALARM);
-    // A tool frame left nominal is off by an error no covariance holds: estimated from the
-    // poses, so that only what no tool frame explains is judged, and a move beyond what a
-    // description may be off by is said.
-    let (v, tool_move) = if cal.tool.is_none() {
-        let (v, fitted) = validate_free_tool(&poses_set, cal, desc, &options).ok()?;
-        (v, Some(fitted))
-    } else {
-        (validate(&poses_set, cal, desc, &options).ok()?, None)
-    };
+    match cal.tool {
+        None => {
+            let (v, fitted) = validate_free_tool(poses_set, cal, desc, &options).ok()?;
+            Some((v, Some(fitted)))
+        }
+        Some(_) => Some((validate(poses_set, cal, desc, &options).ok()?, None)),
+    }
+}
+
+/// [`test_own_validation_poses`] of the poses `poses_set` (`n` poses), validated as `(v,
+/// tool_move)`.
+fn tested(
+    cal: &Calibration,
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    (poses_set, n): (&MeasurementSet, usize),
+    (v, tool_move): (Validation, Option<FittedToolMove>),
+    search: SweepSearch,
+) -> Option<OwnPoses> {
     let part = v.validation.as_ref()?;
     let fit = OwnPosesFit {
         poses: n,
