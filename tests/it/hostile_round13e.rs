@@ -195,6 +195,10 @@ fn run_force_keeps_the_files_its_scenario_reads_in_its_folder() {
     for (key, name, content, scenario) in tables {
         std::fs::create_dir_all(d.join("o")).unwrap();
         std::fs::write(d.join("o").join(name), content).unwrap();
+        // A histogram is an earlier run's where its metric is a column of the folder's trials.
+        if name.starts_with("hist-") {
+            std::fs::write(d.join("o/trials.csv"), "case,trial,seed,cal_pos_rms_mm,error\n").unwrap();
+        }
         std::fs::write(d.join("s.toml"), &scenario).unwrap();
         let needle: &'static str = Box::leak(format!("SCENARIO s.toml: `{key}` o/{name}").into_boxed_str());
         let c = case(
@@ -206,6 +210,16 @@ fn run_force_keeps_the_files_its_scenario_reads_in_its_folder() {
         refused_leaving_all(d, &[c]);
         std::fs::remove_dir_all(d.join("o")).unwrap();
     }
+    // Without that trials file the histogram is no run's: the run goes ahead and leaves it.
+    std::fs::create_dir_all(d.join("o")).unwrap();
+    std::fs::write(d.join("o/hist-cal_pos_rms_mm.svg"), &truth).unwrap();
+    std::fs::write(d.join("s.toml"), truth_at("o/hist-cal_pos_rms_mm.svg")).unwrap();
+    crate::common::axiscal()
+        .current_dir(d)
+        .args(["run", "s.toml", "--trials", "2", "--out", "o", "--force", "-q"])
+        .assert()
+        .success();
+    assert_eq!(std::fs::read_to_string(d.join("o/hist-cal_pos_rms_mm.svg")).unwrap(), truth);
 }
 
 #[test]
