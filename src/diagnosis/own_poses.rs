@@ -248,9 +248,9 @@ fn tested(
     let exceeds = test.verdict == Verdict::Exceeds;
     // The slip search runs at most once: the sweep's guard and the answer share it.
     let named = OnceCell::new();
-    let slips_named = || named.get_or_init(|| explained_validation_misses(&poses_set, cal, desc, &v));
+    let slips_named = || named.get_or_init(|| explained_validation_misses(poses_set, cal, desc, &v));
     let (sweep, too_large) =
-        match (exceeds && search == SweepSearch::Run).then(|| sweep_cause_of_misses(cal, desc, set, &poses_set)) {
+        match (exceeds && search == SweepSearch::Run).then(|| sweep_cause_of_misses(cal, desc, set, poses_set)) {
             Some(Ok(sweep)) => (sweep, None),
             Some(Err(too_large)) => (None, Some(too_large)),
             None => (None, None),
@@ -262,7 +262,7 @@ fn tested(
         partial => OwnPosesCause::Unnamed {
             partial,
             too_large,
-            slips: slips_of(&poses_set, fit.tool_fitted, slips_named),
+            slips: slips_of(poses_set, fit.tool_fitted, slips_named),
         },
     };
     Some(OwnPoses::Misses(Box::new(OwnPosesMiss {

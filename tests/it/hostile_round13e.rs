@@ -219,7 +219,10 @@ fn run_force_keeps_the_files_its_scenario_reads_in_its_folder() {
         .args(["run", "s.toml", "--trials", "2", "--out", "o", "--force", "-q"])
         .assert()
         .success();
-    assert_eq!(std::fs::read_to_string(d.join("o/hist-cal_pos_rms_mm.svg")).unwrap(), truth);
+    assert_eq!(
+        std::fs::read_to_string(d.join("o/hist-cal_pos_rms_mm.svg")).unwrap(),
+        truth
+    );
 }
 
 #[test]
