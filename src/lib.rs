@@ -119,6 +119,7 @@ pub mod iso9283;
 pub mod json_file;
 pub mod json_schema;
 pub mod kinematics;
+pub mod markdown;
 pub mod measurement;
 pub mod numerics;
 pub mod physics;

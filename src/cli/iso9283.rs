@@ -273,7 +273,10 @@ fn evaluate_cycles(args: EvaluateArgs, printer: Printer) -> Result<()> {
             checks::read_calibration(path, &desc, &args.robot, args.checks.allow_other_robot)?
                 .calibration
                 .robot,
-            format!("the calibrated model of {}", path.display()),
+            format!(
+                "the calibrated model of {}",
+                axiscal::markdown::code(&path.display().to_string())
+            ),
         ),
         None => (
             RobotModel::ideal(&desc),
@@ -291,7 +294,11 @@ fn evaluate_cycles(args: EvaluateArgs, printer: Printer) -> Result<()> {
     for w in &figures.warnings {
         eprintln!("warning: {}: {w}", args.data.display());
     }
-    let text = markdown(&figures, &commanded_by, &args.data.display().to_string());
+    let text = markdown(
+        &figures,
+        &commanded_by,
+        &axiscal::markdown::code(&args.data.display().to_string()),
+    );
     let mut staged = outputs.staged_in(&args.out)?;
     staged.write(OUTPUTS[0], json_file::to_string(Schema::ISO9283, &figures)?)?;
     staged.write(OUTPUTS[1], &text)?;
@@ -390,7 +397,12 @@ fn predict_figures(args: PredictArgs, printer: Printer) -> Result<()> {
         args.seed,
     )
     .with_context(|| format!("predicting the ISO test of {}", args.calibration.display()))?;
-    let text = prediction_markdown(&prediction, &cube, noise_mm, &args.calibration.display().to_string());
+    let text = prediction_markdown(
+        &prediction,
+        &cube,
+        noise_mm,
+        &axiscal::markdown::code(&args.calibration.display().to_string()),
+    );
     let mut staged = outputs.staged_in(&args.out)?;
     staged.write(
         PREDICTION_OUTPUTS[0],

@@ -314,21 +314,18 @@ fn temporary_owner(name: &str) -> Option<i32> {
 /// its run's while it is open (`flock`, released by the kernel when the run ends, however it
 /// ends).
 fn lock_held(file: &std::fs::File) {
-    use std::os::fd::AsRawFd;
-    // SAFETY: flock on a descriptor this file owns; a failure leaves the file unlocked, and
-    // an unlocked temporary of a live run is still kept by its process id.
-    unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) };
+    // A failure leaves the file unlocked, and an unlocked temporary of a live run is still
+    // kept by its process id.
+    let _ = file.try_lock();
 }
 
 /// Whether a run holds `path` ([`lock_held`]): the lock cannot be taken.
 fn held_by_a_run(path: &Path) -> bool {
-    use std::os::fd::AsRawFd;
     let Ok(file) = std::fs::File::open(path) else {
         return true;
     };
-    // SAFETY: as in `lock_held`; the lock taken here goes with `file`.
-    let taken = unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } == 0;
-    !taken
+    // The lock taken here goes with `file`.
+    file.try_lock().is_err()
 }
 
 /// Whether `path` has the shape of an axiscal temporary ([`temporary_owner`] named it): a

@@ -256,7 +256,11 @@ pub fn diagnose_axes_with(
 /// Markdown report of an axis-experiments-only diagnosis of the data in `source`.
 pub fn axes_markdown(d: &AxesDiagnosis, source: &str) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# Sim-to-real gap diagnosis of `{source}` (axis experiments only)\n");
+    let _ = writeln!(
+        s,
+        "# Sim-to-real gap diagnosis of {} (axis experiments only)\n",
+        crate::markdown::code(source)
+    );
     let _ = writeln!(
         s,
         "**{}**, confidence {:.2}: {}.\n",

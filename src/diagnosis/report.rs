@@ -6,7 +6,7 @@ use std::fmt::Write;
 /// Markdown report of a diagnosis of the data in `source`.
 pub fn markdown(d: &Diagnosis, source: &str) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# Sim-to-real gap diagnosis of `{source}`\n");
+    let _ = writeln!(s, "# Sim-to-real gap diagnosis of {}\n", crate::markdown::code(source));
     let joint = match (d.outcome.joint, &d.member) {
         (Some(j), Some(m)) => format!(" (joint {j}, `{m}`)"),
         (Some(j), None) => format!(" (joint {j})"),
@@ -109,7 +109,7 @@ pub(super) fn where_table(
     let _ = writeln!(s, "| {} |\n|{}", header.join(" | "), "---|".repeat(header.len()));
     for w in entries {
         let mut row = vec![
-            w.experiment.clone(),
+            crate::markdown::text(&w.experiment),
             w.joint.map_or("-".into(), |j| j.to_string()),
             format!("{:.4}", w.residual_rms_mm),
             format!("{:.4}", w.noise_only_rms_mm),
@@ -155,7 +155,7 @@ fn outliers_section(s: &mut String, outliers: &[crate::calibration::procedure::O
             s,
             "| {} | {} | {} | {} | {:.3} | {:.1} | {:.1} | {} |",
             o.line.map_or_else(|| "-".to_string(), |l| l.to_string()),
-            o.experiment,
+            crate::markdown::text(&o.experiment),
             o.step,
             o.target,
             o.residual_mm,

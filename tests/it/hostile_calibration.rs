@@ -3,7 +3,7 @@
 //! number. Each must be one error line naming the file, the line or step and what to check
 //! (exit 2), or a `warning:` saying what is suspicious and what to check.
 
-use crate::common::{self, altered_csv, axiscal, simulate_analytic, stderr};
+use crate::common::{self, altered_csv, altered_experiment, axiscal, simulate_analytic, stderr};
 use std::path::{Path, PathBuf};
 
 /// A simulated campaign (analytic arm, 20 validation poses, seed 7) in a temporary folder.
@@ -658,4 +658,98 @@ fn a_gross_validation_point_is_named_not_blamed_on_the_model() {
     assert!(kept.contains("kept (--keep-outliers)") && kept.contains(miss), "{kept}");
     let clean = calibrate_warns(&data, &[]);
     assert!(!clean.contains("outlier") && !clean.contains(miss), "{clean}");
+}
+
+/// The unescaped `|` of each line of `markdown` that is a table row, per table (a block of
+/// such lines): a name holding a `|` that split a cell would show as a row with one more.
+fn table_widths(markdown: &str) -> Vec<Vec<usize>> {
+    let mut tables: Vec<Vec<usize>> = Vec::new();
+    let mut in_table = false;
+    for line in markdown.lines() {
+        if !line.starts_with('|') {
+            in_table = false;
+            continue;
+        }
+        let bytes = line.as_bytes();
+        let bars = (0..bytes.len())
+            .filter(|&i| bytes[i] == b'|' && (i == 0 || bytes[i - 1] != b'\\'))
+            .count();
+        match in_table {
+            true => tables.last_mut().expect("a table").push(bars),
+            false => tables.push(vec![bars]),
+        }
+        in_table = true;
+    }
+    tables
+}
+
+/// Item: a robot's name and an experiment's name holding HTML, a `|` and emphasis marks are
+/// written into `report.md` as text: no tag, no extra table cell, for the axis calibration and
+/// the free-pose one.
+#[test]
+fn html_and_table_marks_in_names_show_as_text_in_report_md() {
+    let dir = tempfile::tempdir().unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/asea-irb6l.toml");
+    let hostile_name = "<img src=x onerror=alert(1)> | *bold*";
+    let robot: String = std::fs::read_to_string(shipped)
+        .unwrap()
+        .lines()
+        .map(|l| match l.starts_with("name =") {
+            true => format!("name = {hostile_name:?}\n"),
+            false => format!("{l}\n"),
+        })
+        .collect();
+    let robot_path = dir.path().join("robot.toml");
+    std::fs::write(&robot_path, robot).unwrap();
+    axiscal()
+        .current_dir(dir.path())
+        .args([
+            "simulate",
+            "--sim",
+            "analytic",
+            "--validation-poses",
+            "20",
+            "--seed",
+            "72",
+        ])
+        .args(["--robot", "robot.toml", "--out", "campaign.csv"])
+        .assert()
+        .success();
+    let data = dir.path().join("campaign.csv");
+    let axes = altered_experiment(&data, "axes.csv", "axis6", |f| f[0] = "<b>ax|6</b>".into());
+    let poses = altered_csv(
+        &data,
+        "poses.csv",
+        |f| f[0] == "validation",
+        |f| f[0] = "<i>v|x</i>".into(),
+    );
+    for (file, name) in [(&axes, "<b>ax|6</b>"), (&poses, "<i>v|x</i>")] {
+        let out = file.with_extension("out");
+        axiscal()
+            .arg("calibrate")
+            .arg(file)
+            .arg("--robot")
+            .arg(&robot_path)
+            .arg("--out")
+            .arg(&out)
+            .assert()
+            .success();
+        let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+        assert!(
+            report.contains(r"\<img src=x onerror=alert(1)\> \| \*bold\*"),
+            "{report}"
+        );
+        for tag in ["<img", "<b>", "<i>"] {
+            let bare = report.match_indices(tag).any(|(i, _)| !report[..i].ends_with('\\'));
+            assert!(!bare, "{tag} unescaped in {}:\n{report}", file.display());
+        }
+        for widths in table_widths(&report) {
+            assert!(widths.iter().all(|&w| w == widths[0]), "{widths:?} in\n{report}");
+        }
+        let escaped = name.replace('<', r"\<").replace('>', r"\>").replace('|', r"\|");
+        assert!(
+            name != "<b>ax|6</b>" || report.contains(&escaped),
+            "{escaped} not in\n{report}"
+        );
+    }
 }

@@ -3,16 +3,19 @@
 use super::summary::FreePoseSummary;
 use crate::calibration::noise::NoiseEstimate;
 use crate::calibration::refine::ParameterUnit;
+use crate::markdown;
 use std::fmt::Write;
 
 /// The report of a free-pose calibration of `robot` from `source`.
 pub fn markdown(s: &FreePoseSummary, noise: Option<&NoiseEstimate>, robot: &str, source: &str) -> String {
     let mut md = String::new();
-    let _ = writeln!(md, "# Calibration of {robot} from free poses\n");
+    let _ = writeln!(md, "# Calibration of {} from free poses\n", markdown::text(robot));
     let _ = writeln!(
         md,
-        "Data: `{source}`: {} poses, {} points fitted. Method: `docs/method.md`, \"Calibration from free poses\".\n",
-        s.poses, s.points
+        "Data: {}: {} poses, {} points fitted. Method: `docs/method.md`, \"Calibration from free poses\".\n",
+        markdown::code(source),
+        s.poses,
+        s.points
     );
     if let Some(why) = &s.axis_rows_as_poses {
         let _ = writeln!(md, "The axis experiments' rows are fitted as free poses: {why}.\n");
@@ -160,7 +163,7 @@ fn targets(md: &mut String, s: &FreePoseSummary) {
             md,
             "| {} | {} | {} | {} | {} |",
             t.id,
-            t.name,
+            markdown::text(&t.name),
             cell(0),
             cell(1),
             cell(2)
@@ -199,7 +202,11 @@ fn outliers(md: &mut String, s: &FreePoseSummary) {
         let _ = writeln!(
             md,
             "| {} | {} | {:.4} | {:.4} | {} |",
-            o.experiment, o.step, o.rms_mm, o.fence_mm, o.dropped
+            markdown::text(&o.experiment),
+            o.step,
+            o.rms_mm,
+            o.fence_mm,
+            o.dropped
         );
     }
 }

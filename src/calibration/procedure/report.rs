@@ -7,6 +7,7 @@ use super::uncertainty::SIGNIFICANT_SIGMAS;
 use crate::calibration::record::CalibrationRecord;
 use crate::calibration::tool_accuracy::ToolAccuracy;
 use crate::kinematics::JointKind;
+use crate::markdown;
 use crate::robot::{RobotDescription, Transmission};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
@@ -325,10 +326,11 @@ pub fn markdown(
 ) -> String {
     let (cal, reports) = (&record.calibration, &record.reports);
     let mut s = String::new();
-    let _ = writeln!(s, "# Calibration of {}\n", desc.name);
+    let _ = writeln!(s, "# Calibration of {}\n", markdown::text(&desc.name));
     let _ = writeln!(
         s,
-        "Data: `{source}`. Estimator: `{}` (`--estimator`).\n",
+        "Data: {}. Estimator: `{}` (`--estimator`).\n",
+        markdown::code(source),
         cal.options.estimator.name()
     );
     write_implausible(&mut s, warnings);
@@ -376,7 +378,13 @@ fn write_outliers(s: &mut String, cal: &Calibration) {
         let _ = writeln!(
             s,
             "| {line} | {} | {} | {} | {:.3} | {:.1} | {:.1} | {} |",
-            o.experiment, o.step, o.target, o.residual_mm, o.normalised_residual, o.fence, o.dropped
+            markdown::text(&o.experiment),
+            o.step,
+            o.target,
+            o.residual_mm,
+            o.normalised_residual,
+            o.fence,
+            o.dropped
         );
     }
     s.push('\n');
@@ -384,8 +392,10 @@ fn write_outliers(s: &mut String, cal: &Calibration) {
         let lines = cal.outliers.iter().filter(|o| o.test == test);
         lines
             .map(|o| {
-                o.line
-                    .map_or_else(|| format!("{} step {}", o.experiment, o.step), |l| l.to_string())
+                o.line.map_or_else(
+                    || format!("{} step {}", markdown::text(&o.experiment), o.step),
+                    |l| l.to_string(),
+                )
             })
             .collect()
     };
@@ -553,7 +563,7 @@ fn write_sweeps(s: &mut String, cal: &Calibration, desc: &RobotDescription) {
         let _ = writeln!(
             s,
             "| {j} | {} | {} | {:.4} | {} | {:.4} {unit} | {own} |",
-            w.experiment,
+            markdown::text(&w.experiment),
             w.points,
             w.residual_rms_mm,
             held.join(", "),
@@ -692,7 +702,7 @@ fn write_axes_table(s: &mut String, cal: &Calibration) {
             s,
             "| {} | {} | {} | {:.1} {unit} | ({:.2}, {:.2}, {:.2}) | ({:.6}, {:.6}, {:.6}) | {direction_sigma} | {position_sigma} | {:.3} |",
             a.joint,
-            a.experiment,
+            markdown::text(&a.experiment),
             a.points,
             a.span.value(),
             a.point_mm[0],
@@ -740,8 +750,10 @@ fn write_tool(s: &mut String, cal: &Calibration) {
     if let Some(t) = &cal.tool {
         let _ = writeln!(
             s,
-            "\nTool frame from the three tool targets of `{}` step {} (fit RMS {:.3} mm).",
-            t.experiment, t.step, t.fit_rms_mm
+            "\nTool frame from the three tool targets of {} step {} (fit RMS {:.3} mm).",
+            markdown::code(&t.experiment),
+            t.step,
+            t.fit_rms_mm
         );
         if let Some(g) = &t.sigma {
             let _ = writeln!(

@@ -146,7 +146,7 @@ fn max_distance_m(a: &[Point3<f64>], b: &[Point3<f64>]) -> f64 {
 /// The note shown beside the 3-D view.
 fn summary(c: &CalibratedCampaign) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# {}\n", c.desc.name);
+    let _ = writeln!(s, "# {}\n", axiscal::markdown::text(&c.desc.name));
     if let Some(v) = c.verdict {
         let _ = writeln!(s, "**Diagnosis:** {v}\n");
     }

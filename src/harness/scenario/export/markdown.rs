@@ -7,7 +7,7 @@ use std::fmt::Write;
 /// The markdown summary: scenario, one statistics table per case, the verdicts.
 pub fn render(scenario: &ResolvedScenario, summary: &Summary) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# Scenario `{}`\n", scenario.name);
+    let _ = writeln!(s, "# Scenario {}\n", crate::markdown::code(&scenario.name));
     if !scenario.description.is_empty() {
         let _ = writeln!(s, "{}\n", scenario.description);
     }
@@ -29,7 +29,13 @@ pub fn render(scenario: &ResolvedScenario, summary: &Summary) -> String {
         );
     }
     for c in &summary.cases {
-        let _ = writeln!(s, "## Case `{}` ({} trials, {} failed)\n", c.case, c.trials, c.failed);
+        let _ = writeln!(
+            s,
+            "## Case {} ({} trials, {} failed)\n",
+            crate::markdown::code(&c.case),
+            c.trials,
+            c.failed
+        );
         let _ = writeln!(s, "| metric | mean | median | p95 | max |\n|---|---:|---:|---:|---:|");
         for m in &c.metrics {
             let st = &m.stats;
