@@ -22,6 +22,7 @@ use crate::robot::{RobotDescription, RowEntry, commands_to_internal};
 use nalgebra::{Point3, Vector3};
 
 pub mod axis_scale;
+pub mod column_stretch;
 mod commands;
 mod experiments;
 mod handedness;
@@ -501,7 +502,8 @@ pub fn spread_ratio(measured: &[Vector3<f64>], nominal: &[Vector3<f64>]) -> Opti
 
 /// Coordinates and commands whose units look wrong (module docs), judged over the revolute axis
 /// experiments' target 0 and the free poses ([`free_pose_slips`]). When one coordinate column
-/// alone is in another unit, that column is the one slip said.
+/// alone is in another unit, or scaled by any factor beyond 2 % ([`column_stretch`]), that
+/// column is the one slip said.
 pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
     let faults = data_faults(set, desc);
     if !faults.is_empty() {
@@ -509,9 +511,11 @@ pub fn measurement_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<U
     }
     let slips = slips_as_read(set, desc);
     if slips.is_empty() {
-        return slips;
+        return column_stretch::one_column_stretched(set, desc).into_iter().collect();
     }
-    one_column_slip(set, desc).map_or(slips, |one| vec![one])
+    one_column_slip(set, desc)
+        .or_else(|| column_stretch::one_column_stretched(set, desc))
+        .map_or(slips, |one| vec![one])
 }
 
 /// What no other unit of a column explains and the unit checks are not judged beside: rows

@@ -19,6 +19,7 @@ mod cli_run;
 mod cli_safety;
 mod cli_scripting;
 mod cli_simulate;
+mod column_stretch;
 mod command_slopes;
 mod compensation;
 mod diagnosis;

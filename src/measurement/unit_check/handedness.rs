@@ -66,7 +66,7 @@ const TARGET_ROUNDS: usize = 10;
 /// targets, each target's place on the tool fitted with it: the tool frames `tools` of the rows
 /// (the nominal robot at their commands), their target ids `targets` and measured points
 /// `measured`. Starts from every target at the tool frame's origin.
-fn fitted_targets_rms(
+pub(super) fn fitted_targets_rms(
     tools: &[nalgebra::Isometry3<f64>],
     targets: &[usize],
     measured: &[Point3<f64>],
@@ -109,12 +109,12 @@ fn free_poses_fits(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64
 }
 
 /// The nominal tool frames, target ids and measured points of free poses ([`free_pose_points`]).
-type FreePosePoints = (Vec<nalgebra::Isometry3<f64>>, Vec<usize>, Vec<Point3<f64>>);
+pub(super) type FreePosePoints = (Vec<nalgebra::Isometry3<f64>>, Vec<usize>, Vec<Point3<f64>>);
 
 /// Free poses' points to fit: the nominal robot's tool frames at the rows' commands, the
 /// rows' target ids and measured points, every n-th row of a large file. `None` unless every
 /// row is a free pose and there are [`MIN_POINTS`].
-fn free_pose_points(set: &MeasurementSet, desc: &RobotDescription) -> Option<FreePosePoints> {
+pub(super) fn free_pose_points(set: &MeasurementSet, desc: &RobotDescription) -> Option<FreePosePoints> {
     if set.rows().iter().any(|m| m.moved_joint != 0) {
         return None;
     }

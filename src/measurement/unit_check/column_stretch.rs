@@ -1,0 +1,240 @@
+//! One coordinate column scaled by a factor that is no length unit (an exporter's or a
+//! hand-edited column: `x_mm` doubled, `z_mm` read 30 % long): beyond the per cent a robot
+//! differs from its description and the per mille the profile test of [`super::axis_scale`]
+//! resolves, below the unit slips of [`super::SLIP_FACTOR`]. Such a column draws each arc as an
+//! ellipse and spreads the free poses along one instrument axis; every other check then names
+//! whichever row, sweep or transmission bends furthest to absorb it.
+//!
+//! A search over the factor, written apart from the calibration: each column in turn (and the
+//! three together, the links' own length, which this check leaves to the others) divided by a
+//! factor on a logarithmic grid, and the file's shape misfit at each: the median distance of
+//! the measured points whose targets the description places (the handedness check's points:
+//! [`super::handedness::nominal_point`], sweeps and free poses alike) from the nominal robot's
+//! at their commands, after the rigid registration of each setup
+//! ([`crate::kinematics::rigid_fit`]), over the nominal points' spread. A file of free poses
+//! alone whose description places no tool target has the targets' places on the tool fitted
+//! with the registration, as the handedness check fits them
+//! ([`super::handedness::fitted_targets_rms`], its RMS): taken at the tool frame's origin, the
+//! targets' offsets (a tool's size) would blur the misfit and bias the factor.
+//!
+//! A column is named when dividing it by one factor shrinks the misfit by [`IMPROVEMENT`] (a
+//! shape error that large is the column's, not the robot's, whose deviations from its
+//! description no scale of one instrument axis mends) and the three columns together do not do
+//! as well.
+
+use super::handedness::{FreePosePoints, fitted_targets_rms, free_pose_points, nominal_point};
+use super::{SLIP_FACTOR, UnitSlip};
+use crate::measurement::{MeasurementSet, format_f64};
+use crate::numerics::stats::rms_spread;
+use crate::robot::{Controller, RobotDescription, RobotModel};
+use nalgebra::{Isometry3, Point3};
+
+/// Dividing the column by the factor found must shrink the misfit by at least this: the
+/// nominal robot's own deviations from the measured one (per cent of its size, targets placed
+/// to centimetres) keep the misfit of a clean file where no column's scale moves it.
+pub const IMPROVEMENT: f64 = 4.0;
+
+/// A factor within this of 1 is left to the profile test ([`super::axis_scale`]), which
+/// resolves a column's scale to per mille with the calibration itself.
+const MIN_STRETCH: f64 = 1.02;
+
+/// The grid's ratio between neighbouring factors: 2 %, refined by the parabola through the
+/// best point and its neighbours.
+pub const GRID_STEP: f64 = 1.02;
+
+/// At most this many points are judged (every n-th row of more): a column's stretch shows in a
+/// few thousand points as in a million, and the search judges them about 650 times.
+const MAX_POINTS: usize = 4_000;
+
+/// Fewer placed points than this in a setup leave it out (a rigid fit of 6 parameters).
+const MIN_SETUP_POINTS: usize = 6;
+
+/// The coordinate columns by index.
+const COLUMNS: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
+
+/// What the search scales: one column, or the three together.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Scaled {
+    Column(usize),
+    All,
+}
+
+impl Scaled {
+    fn divide(self, p: &Point3<f64>, factor: f64) -> Point3<f64> {
+        match self {
+            Scaled::Column(c) => {
+                let mut q = *p;
+                q[c] /= factor;
+                q
+            }
+            Scaled::All => p / factor,
+        }
+    }
+}
+
+/// The points the misfit is judged on.
+enum Points {
+    /// The placed points of each setup: measured and nominal \[m\].
+    Placed(Vec<(Vec<Point3<f64>>, Vec<Point3<f64>>)>),
+    /// Free poses whose targets' places on the tool are fitted: the nominal tool frames, the
+    /// target ids and the measured points \[m\].
+    Unplaced(FreePosePoints),
+}
+
+/// The file's points and the nominal spread \[m\] the misfit is measured in.
+struct Shapes {
+    points: Points,
+    nominal_spread_m: f64,
+}
+
+impl Shapes {
+    fn of(set: &MeasurementSet, desc: &RobotDescription) -> Option<Self> {
+        match desc.tool_targets_m().is_empty() {
+            true => free_pose_points(set, desc).map_or_else(|| Self::placed(set, desc), Self::unplaced),
+            false => Self::placed(set, desc),
+        }
+    }
+
+    /// Free poses, their targets unplaced (module docs), every n-th of more than [`MAX_POINTS`].
+    fn unplaced((tools, targets, measured): FreePosePoints) -> Option<Self> {
+        let every = measured.len().div_ceil(MAX_POINTS).max(1);
+        let tools: Vec<Isometry3<f64>> = tools.into_iter().step_by(every).collect();
+        let targets: Vec<usize> = targets.into_iter().step_by(every).collect();
+        let measured: Vec<Point3<f64>> = measured.into_iter().step_by(every).collect();
+        let origins: Vec<Point3<f64>> = tools.iter().map(|t| Point3::from(t.translation.vector)).collect();
+        let nominal_spread_m = rms_spread(&origins);
+        (nominal_spread_m > 0.0).then_some(Shapes {
+            points: Points::Unplaced((tools, targets, measured)),
+            nominal_spread_m,
+        })
+    }
+
+    fn placed(set: &MeasurementSet, desc: &RobotDescription) -> Option<Self> {
+        let ideal = RobotModel::ideal(desc);
+        let controller = Controller::from_description(desc);
+        let rows = set.rows();
+        let every = rows.len().div_ceil(MAX_POINTS).max(1);
+        let mut by_setup: std::collections::BTreeMap<usize, (Vec<Point3<f64>>, Vec<Point3<f64>>)> =
+            std::collections::BTreeMap::new();
+        for (i, m) in rows.iter().enumerate().step_by(every) {
+            if let Some(nominal) = nominal_point(desc, &ideal, &controller, m) {
+                let entry = by_setup.entry(set.setup_of(i)).or_default();
+                entry.0.push(m.position_m());
+                entry.1.push(nominal);
+            }
+        }
+        let setups: Vec<_> = by_setup
+            .into_values()
+            .filter(|(measured, _)| measured.len() >= MIN_SETUP_POINTS)
+            .collect();
+        let (sum, count) = setups.iter().fold((0.0, 0), |(sum, count), (_, nominal)| {
+            let s = rms_spread(nominal);
+            (sum + s * s * nominal.len() as f64, count + nominal.len())
+        });
+        let nominal_spread_m = (sum / count.max(1) as f64).sqrt();
+        (count > 0 && nominal_spread_m > 0.0).then_some(Shapes {
+            points: Points::Placed(setups),
+            nominal_spread_m,
+        })
+    }
+
+    /// The misfit (module docs) with `scaled` divided by `factor`; infinite where no setup
+    /// registers.
+    fn misfit(&self, scaled: Scaled, factor: f64) -> f64 {
+        match &self.points {
+            Points::Placed(setups) => Self::placed_misfit(setups, scaled, factor) / self.nominal_spread_m,
+            Points::Unplaced((tools, targets, measured)) => {
+                let measured: Vec<Point3<f64>> = measured.iter().map(|p| scaled.divide(p, factor)).collect();
+                fitted_targets_rms(tools, targets, &measured, false).unwrap_or(f64::INFINITY) / self.nominal_spread_m
+            }
+        }
+    }
+
+    /// The median distance \[m\] of the placed points from the nominal ones after each setup's
+    /// rigid registration.
+    fn placed_misfit(setups: &[(Vec<Point3<f64>>, Vec<Point3<f64>>)], scaled: Scaled, factor: f64) -> f64 {
+        let mut distances = Vec::new();
+        for (measured, nominal) in setups {
+            let measured: Vec<Point3<f64>> = measured.iter().map(|p| scaled.divide(p, factor)).collect();
+            let Some((nominal_from_measured, _)) = crate::kinematics::rigid_fit(&measured, nominal) else {
+                continue;
+            };
+            distances.extend(
+                measured
+                    .iter()
+                    .zip(nominal)
+                    .map(|(m, n)| (nominal_from_measured * m - n).norm()),
+            );
+        }
+        match distances.is_empty() {
+            true => f64::INFINITY,
+            false => super::median(distances),
+        }
+    }
+
+    /// The factor on the grid over `[1 / SLIP_FACTOR, SLIP_FACTOR]` that minimises the
+    /// misfit, refined by the parabola through its neighbours (in the factor's logarithm), and
+    /// the misfit there.
+    fn best_factor(&self, scaled: Scaled) -> (f64, f64) {
+        let steps = (SLIP_FACTOR.ln() / GRID_STEP.ln()).ceil() as i32;
+        let h = GRID_STEP.ln();
+        let cost = |ln_factor: f64| self.misfit(scaled, ln_factor.exp());
+        let grid: Vec<(f64, f64)> = (-steps..=steps)
+            .map(|i| (f64::from(i) * h, cost(f64::from(i) * h)))
+            .collect();
+        let best = (0..grid.len())
+            .min_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
+            .unwrap_or(0);
+        let (ln_best, cost_best) = grid[best];
+        let (Some(before), Some(after)) = (best.checked_sub(1).map(|i| grid[i]), grid.get(best + 1)) else {
+            return (ln_best.exp(), cost_best);
+        };
+        // The vertex of the parabola through three equally spaced points.
+        let curvature = before.1 - 2.0 * cost_best + after.1;
+        let ln_vertex = match curvature > 0.0 {
+            true => ln_best + 0.5 * h * (before.1 - after.1) / curvature,
+            false => ln_best,
+        };
+        let refined = cost(ln_vertex);
+        match refined < cost_best {
+            true => (ln_vertex.exp(), refined),
+            false => (ln_best.exp(), cost_best),
+        }
+    }
+}
+
+/// The coordinate column that reads a factor long or short (module docs), as a slip naming the
+/// column and the factor.
+pub(super) fn one_column_stretched(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
+    let shapes = Shapes::of(set, desc)?;
+    let as_read = shapes.misfit(Scaled::All, 1.0);
+    if !(as_read.is_finite() && as_read > 0.0) {
+        return None;
+    }
+    let (_, uniform) = shapes.best_factor(Scaled::All);
+    let (column, factor, misfit) = (0..3)
+        .map(|c| {
+            let (factor, misfit) = shapes.best_factor(Scaled::Column(c));
+            (c, factor, misfit)
+        })
+        .min_by(|a, b| a.2.total_cmp(&b.2))?;
+    let stretched = factor.ln().abs() >= MIN_STRETCH.ln();
+    let mended = misfit * IMPROVEMENT <= as_read;
+    if !stretched || !mended || uniform <= misfit {
+        return None;
+    }
+    Some(UnitSlip {
+        field: COLUMNS[column].into(),
+        message: format!(
+            "its values are {} times what the description and the other two columns make them: this column alone \
+             divided by that factor brings the measured points {:.1} times closer to the nominal robot's at their \
+             commands (a typical distance of {:.1} mm against {:.1} mm as read, after the best rigid placement of each setup), while \
+             no other column and no scale of all three does; undo the scale this column was written with (an \
+             exporter's or an edit's factor), or pass --skip-unit-check if the file is right",
+            format_f64((factor * 1000.0).round() / 1000.0),
+            as_read / misfit,
+            misfit * shapes.nominal_spread_m * 1e3,
+            as_read * shapes.nominal_spread_m * 1e3
+        ),
+    })
+}
