@@ -230,25 +230,52 @@ pub fn shipped_text(path: &Path) -> Option<&'static str> {
 
 /// Reads a text file, or serves a shipped file's text for its virtual path (a virtual path
 /// that names no shipped file is "not found"). A file in another encoding is refused with
-/// what to do ([`check_encoding`]).
+/// what to do ([`check_encoding`]), from its first KiB, and a byte that is not UTF-8 as soon as
+/// it is read: a binary file named by mistake (a video, a disk image) is refused after a
+/// mebibyte, not read whole.
 pub fn read_text(path: &Path) -> std::io::Result<String> {
+    use std::io::Read;
     if path.starts_with(SHIPPED_ROOT) {
         return shipped_text(path)
             .map(str::to_owned)
             .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "no such shipped file"));
     }
     regular_file(path)?;
-    let bytes = std::fs::read(path)?;
+    let mut file = std::fs::File::open(path)?;
+    let mut bytes = Vec::new();
+    (&mut file).take(1024).read_to_end(&mut bytes)?;
     check_encoding(&bytes)?;
-    String::from_utf8(bytes).map_err(|e| {
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!(
-                "not UTF-8 text (byte {} is not UTF-8): save it as UTF-8",
-                e.utf8_error().valid_up_to() + 1
-            ),
-        )
-    })
+    let mut valid = utf8_prefix(&bytes, 0)?;
+    let mut chunk = vec![0u8; 1 << 20];
+    loop {
+        let n = match file.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        bytes.extend_from_slice(&chunk[..n]);
+        valid = utf8_prefix(&bytes, valid)?;
+    }
+    String::from_utf8(bytes).map_err(|e| not_utf8(e.utf8_error().valid_up_to()))
+}
+
+/// How many bytes of `bytes` are known UTF-8, checking on from `valid` (a sequence cut at the
+/// end waits for the next read); an error at the first byte that is not UTF-8.
+fn utf8_prefix(bytes: &[u8], valid: usize) -> std::io::Result<usize> {
+    match std::str::from_utf8(&bytes[valid..]) {
+        Ok(_) => Ok(bytes.len()),
+        Err(e) if e.error_len().is_none() => Ok(valid + e.valid_up_to()),
+        Err(e) => Err(not_utf8(valid + e.valid_up_to())),
+    }
+}
+
+/// The error of a text file whose byte at offset `at` is not UTF-8.
+fn not_utf8(at: usize) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        format!("not UTF-8 text (byte {} is not UTF-8): save it as UTF-8", at + 1),
+    )
 }
 
 /// Refuses an input that is not a regular file (after links): a device never ends
@@ -306,6 +333,24 @@ pub fn check_encoding(start: &[u8]) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Text of multi-byte characters cut at every chunk boundary reads as `std` reads it; a byte
+    /// that is not UTF-8 two mebibytes in is named by its offset, the one `std` names.
+    #[test]
+    fn text_is_checked_as_it_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.toml");
+        // 3-byte and 4-byte characters: the chunks (1 KiB, then 1 MiB) end inside them.
+        let text: String = "a = \"\u{20ac}\u{1f916}x\"\n".repeat(300_000);
+        std::fs::write(&path, &text).unwrap();
+        assert_eq!(read_text(&path).unwrap(), std::fs::read_to_string(&path).unwrap());
+        let mut bytes = text.into_bytes();
+        bytes[2_500_000] = 0xFF;
+        std::fs::write(&path, &bytes).unwrap();
+        let std_offset = String::from_utf8(bytes).unwrap_err().utf8_error().valid_up_to();
+        let err = read_text(&path).unwrap_err().to_string();
+        assert!(err.contains(&format!("byte {} is not UTF-8", std_offset + 1)), "{err}");
+    }
 
     /// UTF-16 and UTF-32, with a byte-order mark or without (NUL bytes), are named; UTF-8, with
     /// its byte-order mark too, passes.

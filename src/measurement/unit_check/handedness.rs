@@ -63,23 +63,35 @@ pub(super) fn nominal_point(
 const TARGET_ROUNDS: usize = 10;
 
 /// The RMS \[m\] of the best rigid map (of the mirror image when `mirror`) of the free poses'
-/// targets, each target's place on the tool fitted with it: the tool frames `tools` of the rows
-/// (the nominal robot at their commands), their target ids `targets` and measured points
-/// `measured`. Starts from every target at the tool frame's origin.
+/// targets, each target's place on the tool fitted with it ([`fitted_targets`]).
 pub(super) fn fitted_targets_rms(
     tools: &[nalgebra::Isometry3<f64>],
     targets: &[usize],
     measured: &[Point3<f64>],
     mirror: bool,
 ) -> Option<f64> {
+    fitted_targets(tools, targets, measured, mirror).map(|(_, rms)| rms)
+}
+
+/// The best rigid map (of the mirror image when `mirror`) of the free poses' targets, each
+/// target's place on the tool fitted with it: the tool frames `tools` of the rows (the nominal
+/// robot at their commands), their target ids `targets` and measured points `measured`.
+/// Starts from every target at the tool frame's origin. The nominal points as the last round
+/// placed them (each the placement of its target's place on its tool, flipped when `mirror`),
+/// and their RMS distance \[m\] from the measured ones.
+pub(super) fn fitted_targets(
+    tools: &[nalgebra::Isometry3<f64>],
+    targets: &[usize],
+    measured: &[Point3<f64>],
+    mirror: bool,
+) -> Option<(Vec<Point3<f64>>, f64)> {
     let flip = |p: Point3<f64>| if mirror { Point3::new(-p.x, p.y, p.z) } else { p };
     let ids = targets.iter().max()? + 1;
     let mut places = vec![Point3::origin(); ids];
-    let mut rms = f64::INFINITY;
+    let mut fitted = (Vec::new(), f64::INFINITY);
     for _ in 0..TARGET_ROUNDS {
         let nominal: Vec<Point3<f64>> = tools.iter().zip(targets).map(|(w, &t)| flip(w * places[t])).collect();
-        let (placement, fitted) = rigid_fit(&nominal, measured)?;
-        rms = fitted;
+        let (placement, rms) = rigid_fit(&nominal, measured)?;
         let mut sums = vec![(nalgebra::Vector3::zeros(), 0usize); ids];
         for ((w, &t), m) in tools.iter().zip(targets).zip(measured) {
             let on_tool = w.inverse() * flip(placement.inverse() * m);
@@ -90,8 +102,9 @@ pub(super) fn fitted_targets_rms(
             .iter()
             .map(|(sum, n)| Point3::from(sum / (*n).max(1) as f64))
             .collect();
+        fitted = (nominal.iter().map(|p| placement * p).collect(), rms);
     }
-    Some(rms)
+    Some(fitted)
 }
 
 /// The free poses of a description that places no tool target (a free-pose calibration fits
