@@ -753,3 +753,36 @@ fn html_and_table_marks_in_names_show_as_text_in_report_md() {
         );
     }
 }
+
+/// Item: every command's sign flipped (a controller that counts each joint the other way) was
+/// calibrated as a mirror-image robot, or fitted by free poses with their targets turned. Now
+/// it is refused as negated commands, on files written outside axiscal: the KR arm's free
+/// poses (targets unplaced) and the parallelogram arm's sweeps and poses (targets placed).
+#[test]
+fn every_command_negated_is_said_as_such_on_other_robots_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    for (folder, file, robot) in [
+        ("independent-freepose", "clean.csv", "kr-arm.toml"),
+        ("independent-parallelogram", "none.csv", "pg-arm.toml"),
+    ] {
+        let copy = dir.path().join(file);
+        std::fs::copy(data.join(folder).join(file), &copy).unwrap();
+        let negated = altered_csv(
+            &copy,
+            "negated.csv",
+            |_| true,
+            |f| {
+                for c in &mut f[7..13] {
+                    *c = (-c.parse::<f64>().unwrap()).to_string();
+                }
+            },
+        );
+        let robot = data.join(folder).join(robot);
+        let err = calibrate_fails(&negated, &["--robot", robot.to_str().unwrap()]);
+        assert!(
+            err.contains("`cmd_1..cmd_6`: every command's sign looks flipped"),
+            "{err}"
+        );
+    }
+}

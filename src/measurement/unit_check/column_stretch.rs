@@ -102,7 +102,7 @@ struct Shapes {
 impl Shapes {
     fn of(set: &MeasurementSet, desc: &RobotDescription) -> Option<Self> {
         let shapes = match desc.tool_targets_m().is_empty() {
-            true => free_pose_points(set, desc).map_or_else(|| Self::placed(set, desc), Self::unplaced),
+            true => free_pose_points(set.rows(), desc).map_or_else(|| Self::placed(set, desc), Self::unplaced),
             false => Self::placed(set, desc),
         }?;
         Some(shapes.without_gross_points().without_gross_points())

@@ -111,11 +111,11 @@ pub(super) fn fitted_targets(
 /// them): the best rotation's and the best mirror's RMS \[m\], each with the targets' places on
 /// the tool fitted ([`fitted_targets_rms`]); taken at the tool frame's origin, the targets'
 /// offsets (a tool's size) would blur both fits alike and hide a mirror.
-fn free_poses_fits(set: &MeasurementSet, desc: &RobotDescription) -> Option<(f64, f64, usize)> {
+fn free_poses_fits(rows: &[Measurement], desc: &RobotDescription) -> Option<(f64, f64, usize)> {
     if !desc.tool_targets_m().is_empty() {
         return None;
     }
-    let (tools, targets, measured) = free_pose_points(set, desc)?;
+    let (tools, targets, measured) = free_pose_points(rows, desc)?;
     let rotation = fitted_targets_rms(&tools, &targets, &measured, false)?;
     let mirror = fitted_targets_rms(&tools, &targets, &measured, true)?;
     Some((rotation, mirror, measured.len()))
@@ -127,15 +127,15 @@ pub(super) type FreePosePoints = (Vec<nalgebra::Isometry3<f64>>, Vec<usize>, Vec
 /// Free poses' points to fit: the nominal robot's tool frames at the rows' commands, the
 /// rows' target ids and measured points, every n-th row of a large file. `None` unless every
 /// row is a free pose and there are [`MIN_POINTS`].
-pub(super) fn free_pose_points(set: &MeasurementSet, desc: &RobotDescription) -> Option<FreePosePoints> {
-    if set.rows().iter().any(|m| m.moved_joint != 0) {
+pub(super) fn free_pose_points(rows: &[Measurement], desc: &RobotDescription) -> Option<FreePosePoints> {
+    if rows.iter().any(|m| m.moved_joint != 0) {
         return None;
     }
     let ideal = RobotModel::ideal(desc);
     let controller = Controller::from_description(desc);
     let model = ideal.phi_model();
-    let every = set.rows().len().div_ceil(MAX_ROWS).max(1);
-    let rows: Vec<&Measurement> = set.rows().iter().step_by(every).collect();
+    let every = rows.len().div_ceil(MAX_ROWS).max(1);
+    let rows: Vec<&Measurement> = rows.iter().step_by(every).collect();
     if rows.len() < MIN_POINTS {
         return None;
     }
@@ -260,7 +260,7 @@ fn mirror_slip(mirror_m: f64, rotation_m: f64, points: usize, swaps: &[(usize, u
 /// the share past which a calibrated fit is refused), where a robot its description fits misses
 /// by its drawing's tolerances, millimetres. `None` when it fits, or with too few placed points.
 pub(super) fn not_this_robot(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
-    let (tools, targets, measured) = free_pose_points(set, desc)?;
+    let (tools, targets, measured) = free_pose_points(set.rows(), desc)?;
     let rotation_m = fitted_targets_rms(&tools, &targets, &measured, false)?;
     let points = measured.len();
     let all: Vec<Point3<f64>> = set.rows().iter().map(|m| m.position_m()).collect();
@@ -280,19 +280,45 @@ pub(super) fn not_this_robot(set: &MeasurementSet, desc: &RobotDescription) -> O
     })
 }
 
+/// The best rotation's and the best mirror's RMS \[m\] of `rows` against the description's
+/// robot, and the points fitted: the free poses' fits with their targets fitted
+/// ([`free_poses_fits`]) where the description places no tool target, else the placed points'.
+fn fits(rows: &[Measurement], desc: &RobotDescription) -> Option<(f64, f64, usize)> {
+    if let Some(fits) = free_poses_fits(rows, desc) {
+        return Some(fits);
+    }
+    let (nominal, measured) = placed_points(desc, rows);
+    if nominal.len() < MIN_POINTS {
+        return None;
+    }
+    Some((
+        rigid_fit(&nominal, &measured)?.1,
+        mirror_fit_rms(&nominal, &measured)?,
+        nominal.len(),
+    ))
+}
+
+/// `rows` with every command's sign flipped.
+fn with_commands_negated(rows: &[Measurement]) -> Vec<Measurement> {
+    rows.iter()
+        .map(|m| Measurement {
+            cmd: m.cmd.iter().map(|c| -c).collect(),
+            ..m.clone()
+        })
+        .collect()
+}
+
 /// A left-handed instrument frame (module docs), said as a slip of the coordinate columns; or,
-/// where two joints' labels exchanged explain the points as well, said as that swap.
+/// where two joints' labels exchanged explain the points as well, said as that swap; or, where
+/// every command's sign flipped makes a rotation fit the points [`MIRROR_RATIO`] times better
+/// than as read (a controller that counts every joint the other way from the description; on
+/// many arms the motions of negated joints are the mirror image of the robot's), said as that.
 pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
-    let (nominal, measured) = placed_points(desc, set.rows());
-    let (rotation_m, mirror_m, points) = match free_poses_fits(set, desc) {
-        Some(fits) => fits,
-        None if nominal.len() < MIN_POINTS => return None,
-        None => (
-            rigid_fit(&nominal, &measured)?.1,
-            mirror_fit_rms(&nominal, &measured)?,
-            nominal.len(),
-        ),
-    };
+    let (rotation_m, mirror_m, points) = fits(set.rows(), desc)?;
+    let negated_m = fits(&with_commands_negated(set.rows()), desc).map(|(rotation, _, _)| rotation);
+    if let Some(negated_m) = negated_m.filter(|n| rotation_m > MIRROR_RATIO * n) {
+        return Some(negated_slip(negated_m, rotation_m, mirror_m, (points, desc.dof())));
+    }
     if rotation_m <= MIRROR_RATIO * mirror_m {
         return None;
     }
@@ -302,4 +328,29 @@ pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<
         points,
         &swapped_joints(set, desc, mirror_m),
     ))
+}
+
+/// The message of commands whose signs look flipped ([`mirrored`]): the rotation's RMS with
+/// the commands negated, as read, and the mirror's as read \[m\], over `points` of a robot of
+/// `joints`.
+fn negated_slip(negated_m: f64, rotation_m: f64, mirror_m: f64, (points, joints): (usize, usize)) -> UnitSlip {
+    let also_mirror = match mirror_m <= negated_m * (1.0 + SAME_FIT) {
+        true => format!(
+            "; a mirror image fits them as read as well ({:.3} mm), so a left-handed instrument frame would look the \
+             same: check the x_mm, y_mm, z_mm columns too",
+            mirror_m * 1e3
+        ),
+        false => String::new(),
+    };
+    UnitSlip {
+        field: format!("cmd_1..cmd_{joints}"),
+        message: format!(
+            "every command's sign looks flipped: with each cmd_k negated the measured points fit a rotation of the \
+             description's robot at {:.3} mm RMS over {points} points, against {:.3} mm as read{also_mirror}; the \
+             controller counts the joints the other way from the description (check the export's signs, or the \
+             description's joint directions)",
+            negated_m * 1e3,
+            rotation_m * 1e3
+        ),
+    }
 }
