@@ -3,7 +3,7 @@
 //! number. Each must be one error line naming the file, the line or step and what to check
 //! (exit 2), or a `warning:` saying what is suspicious and what to check.
 
-use crate::common::{self, altered_csv, altered_experiment, axiscal, simulate_analytic, stderr};
+use crate::common::{self, altered_csv, altered_experiment, axiscal, simulate_analytic, simulate_analytic_of, stderr};
 use std::path::{Path, PathBuf};
 
 /// A simulated campaign (analytic arm, 20 validation poses, seed 7) in a temporary folder.
@@ -701,20 +701,7 @@ fn html_and_table_marks_in_names_show_as_text_in_report_md() {
         .collect();
     let robot_path = dir.path().join("robot.toml");
     std::fs::write(&robot_path, robot).unwrap();
-    axiscal()
-        .current_dir(dir.path())
-        .args([
-            "simulate",
-            "--sim",
-            "analytic",
-            "--validation-poses",
-            "20",
-            "--seed",
-            "72",
-        ])
-        .args(["--robot", "robot.toml", "--out", "campaign.csv"])
-        .assert()
-        .success();
+    simulate_analytic_of(dir.path(), "robot.toml", (20, 72), "campaign.csv");
     let data = dir.path().join("campaign.csv");
     let axes = altered_experiment(&data, "axes.csv", "axis6", |f| f[0] = "<b>ax|6</b>".into());
     let poses = altered_csv(

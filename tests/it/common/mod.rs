@@ -108,9 +108,14 @@ pub fn axes_only_campaign_of(robot: &RobotModel, instrument: &MeasurementModel, 
 /// `axiscal simulate --sim analytic --validation-poses POSES --seed SEED --out OUT`, run in
 /// `dir`.
 pub fn simulate_analytic(dir: &std::path::Path, poses: usize, seed: u64, out: &str) {
+    simulate_analytic_of(dir, "asea-irb6l", (poses, seed), out);
+}
+
+/// [`simulate_analytic`] of the robot `robot` (a shipped name or a description file in `dir`).
+pub fn simulate_analytic_of(dir: &std::path::Path, robot: &str, (poses, seed): (usize, u64), out: &str) {
     axiscal()
         .current_dir(dir)
-        .args(["simulate", "--sim", "analytic", "--validation-poses"])
+        .args(["simulate", "--sim", "analytic", "--robot", robot, "--validation-poses"])
         .arg(poses.to_string())
         .arg("--seed")
         .arg(seed.to_string())
