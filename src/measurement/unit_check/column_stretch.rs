@@ -9,12 +9,12 @@
 //! three together, the links' own length, which this check leaves to the others) divided by a
 //! factor on a logarithmic grid, and the file's shape misfit at each: the median distance of
 //! the measured points whose targets the description places (the handedness check's points:
-//! [`super::handedness::nominal_point`], sweeps and free poses alike) from the nominal robot's
+//! `handedness::nominal_point`, sweeps and free poses alike) from the nominal robot's
 //! at their commands, after the rigid registration of each setup
 //! ([`crate::kinematics::rigid_fit`]), over the nominal points' spread. A file of free poses
 //! alone whose description places no tool target has the targets' places on the tool fitted
 //! with the registration, as the handedness check fits them
-//! ([`super::handedness::fitted_targets`]): taken at the tool frame's origin, the targets'
+//! (`handedness::fitted_targets`): taken at the tool frame's origin, the targets'
 //! offsets (a tool's size) would blur the misfit and bias the factor. A gross row (beyond
 //! [`GROSS_OVER_MEDIAN`] as read) is left out first.
 //!
@@ -40,7 +40,7 @@ pub const IMPROVEMENT: f64 = 4.0;
 /// warn; beyond it the calibration that absorbs the scale misses its own validation poses by
 /// tens of millimetres (the IRB/L6's `y_mm` x1.10: 51 mm against 4.9 predicted), so the file
 /// is refused instead.
-const MIN_STRETCH: f64 = 1.10;
+pub const MIN_STRETCH: f64 = 1.10;
 
 /// The grid's ratio between neighbouring factors: 2 %, refined by the parabola through the
 /// best point and its neighbours.
@@ -91,7 +91,7 @@ enum Points {
 /// A point farther than this many times the median from where the registration puts it, as
 /// read, is a gross row (a kilometre typed for a metre) the search leaves out: a least-squares
 /// registration follows it, and any scale that shrinks it would seem to mend the file.
-const GROSS_OVER_MEDIAN: f64 = 20.0;
+pub const GROSS_OVER_MEDIAN: f64 = 20.0;
 
 /// The file's points and the nominal spread \[m\] the misfit is measured in.
 struct Shapes {
