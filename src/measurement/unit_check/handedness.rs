@@ -311,42 +311,36 @@ fn with_commands_negated(rows: &[Measurement]) -> Vec<Measurement> {
 /// A left-handed instrument frame (module docs), said as a slip of the coordinate columns; or,
 /// where two joints' labels exchanged explain the points as well, said as that swap; or, where
 /// every command's sign flipped makes a rotation fit the points [`MIRROR_RATIO`] times better
-/// than as read (a controller that counts every joint the other way from the description; on
-/// many arms the motions of negated joints are the mirror image of the robot's), said as that.
+/// than as read (a controller that counts every joint the other way from the description) and
+/// better than any mirror, said as that. Where a mirror fits as well (a table of orthogonal
+/// slides: its negated motions are its mirror image), the mirror's message says both.
 pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
     let (rotation_m, mirror_m, points) = fits(set.rows(), desc)?;
     let negated_m = fits(&with_commands_negated(set.rows()), desc).map(|(rotation, _, _)| rotation);
-    if let Some(negated_m) = negated_m.filter(|n| rotation_m > MIRROR_RATIO * n) {
-        return Some(negated_slip(negated_m, rotation_m, mirror_m, (points, desc.dof())));
+    let negated_m = negated_m.filter(|n| rotation_m > MIRROR_RATIO * n);
+    if let Some(negated_m) = negated_m.filter(|n| *n < mirror_m * (1.0 - SAME_FIT)) {
+        return Some(negated_slip(negated_m, rotation_m, (points, desc.dof())));
     }
     if rotation_m <= MIRROR_RATIO * mirror_m {
         return None;
     }
-    Some(mirror_slip(
-        mirror_m,
-        rotation_m,
-        points,
-        &swapped_joints(set, desc, mirror_m),
-    ))
+    let mut slip = mirror_slip(mirror_m, rotation_m, points, &swapped_joints(set, desc, mirror_m));
+    if negated_m.is_some() {
+        slip.message += "; or every command's sign is flipped (with each cmd_k negated the points fit the robot itself \
+                         as well: on this robot negated joints move as its mirror image)";
+    }
+    Some(slip)
 }
 
-/// The message of commands whose signs look flipped ([`mirrored`]): the rotation's RMS with
-/// the commands negated, as read, and the mirror's as read \[m\], over `points` of a robot of
-/// `joints`.
-fn negated_slip(negated_m: f64, rotation_m: f64, mirror_m: f64, (points, joints): (usize, usize)) -> UnitSlip {
-    let also_mirror = match mirror_m <= negated_m * (1.0 + SAME_FIT) {
-        true => format!(
-            "; a mirror image fits them as read as well ({:.3} mm), so a left-handed instrument frame would look the \
-             same: check the x_mm, y_mm, z_mm columns too",
-            mirror_m * 1e3
-        ),
-        false => String::new(),
-    };
+/// The message of commands whose signs look flipped ([`mirrored`]), where no mirror fits as
+/// well: the rotation's RMS with the commands negated and as read \[m\], over `points` of a
+/// robot of `joints`.
+fn negated_slip(negated_m: f64, rotation_m: f64, (points, joints): (usize, usize)) -> UnitSlip {
     UnitSlip {
         field: format!("cmd_1..cmd_{joints}"),
         message: format!(
             "every command's sign looks flipped: with each cmd_k negated the measured points fit a rotation of the \
-             description's robot at {:.3} mm RMS over {points} points, against {:.3} mm as read{also_mirror}; the \
+             description's robot at {:.3} mm RMS over {points} points, against {:.3} mm as read; the \
              controller counts the joints the other way from the description (check the export's signs, or the \
              description's joint directions)",
             negated_m * 1e3,
