@@ -326,8 +326,7 @@ pub(super) fn mirrored(set: &MeasurementSet, desc: &RobotDescription) -> Option<
     }
     let mut slip = mirror_slip(mirror_m, rotation_m, points, &swapped_joints(set, desc, mirror_m));
     if negated_m.is_some() {
-        slip.message += "; or every command's sign is flipped (with each cmd_k negated the points fit the robot itself \
-                         as well: on this robot negated joints move as its mirror image)";
+        slip.message += "; or every command's sign is flipped (negated, they fit as well)";
     }
     Some(slip)
 }
