@@ -278,7 +278,7 @@ pub(super) fn one_column_stretched(set: &MeasurementSet, desc: &RobotDescription
              divided by that factor brings the measured points {:.1} times closer to the nominal robot's at their \
              commands (a typical distance of {:.1} mm against {:.1} mm as read, after the best rigid placement of each setup), while \
              no other column and no scale of all three does; undo the scale this column was written with (an \
-             exporter's or an edit's factor), or pass --skip-unit-check if the file is right",
+             exporter's or an edit's factor)",
             format_f64((factor * 1000.0).round() / 1000.0),
             as_read / misfit,
             misfit * shapes.nominal_spread_m * 1e3,
