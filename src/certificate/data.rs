@@ -150,10 +150,9 @@ fn free_pose_mismatches(fp: &FreePoseSummary, set: &MeasurementSet) -> Vec<Strin
         .map(|m| (m.experiment.as_str(), m.step))
         .collect();
     let dropped = fp.outliers.iter().filter(|o| o.dropped).count();
-    let held = fp
-        .holdout
-        .as_ref()
-        .map_or(0, |h| h.heldout_poses + h.unexecutable_poses);
+    let held = fp.holdout.as_ref().map_or(0, |h| {
+        h.heldout_poses + h.unexecutable_poses + h.outliers.iter().filter(|o| o.dropped).count()
+    });
     let recorded = fp.poses + dropped + held + fp.poses_left_out;
     let mut out = Vec::new();
     if poses.len() != recorded {

@@ -240,6 +240,9 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
         );
     }
     super::checks::print_pose_outliers(&s.outliers, set, data, "calibrated");
+    if let Some(h) = &s.holdout {
+        super::checks::print_pose_outliers(&h.outliers, set, data, "held out: the held-out RMS taken");
+    }
     if s.tool_fit_rms_mm.is_none() {
         say!(
             printer,

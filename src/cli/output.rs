@@ -248,7 +248,7 @@ impl Outputs {
         static OPENED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         let temporary = path.with_file_name(format!(
             ".{}.axiscal-{}-{}.tmp",
-            name.to_string_lossy(),
+            name_within(&name.to_string_lossy(), TEMPORARY_STEM_BYTES),
             std::process::id(),
             OPENED.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
         ));
@@ -274,6 +274,20 @@ impl Outputs {
             tracked,
         })
     }
+}
+
+/// The most bytes of an output's name kept in its temporary's name: with the dot, the process
+/// id and the count (`.NAME.axiscal-PID-N.tmp`, at most 46 more bytes) it stays within the 255
+/// bytes a file name may have, so any name the file system takes can be written.
+const TEMPORARY_STEM_BYTES: usize = 200;
+
+/// The longest start of `name` of at most `bytes` bytes that ends on a character boundary.
+fn name_within(name: &str, bytes: usize) -> &str {
+    let end = (0..=bytes.min(name.len()))
+        .rev()
+        .find(|&i| name.is_char_boundary(i))
+        .unwrap_or(0);
+    &name[..end]
 }
 
 /// The error of an output `path` whose temporary could not be created: it names the output
@@ -712,6 +726,19 @@ fn link_to_a_stream(path: &Path) -> Option<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_name_of_255_bytes_is_written_through_a_shorter_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["a".repeat(251) + ".csv", "é".repeat(125) + ".csv"] {
+            assert!(name.len() <= 255);
+            let path = dir.path().join(&name);
+            Outputs::new(false).write(&path, "x\n").unwrap();
+            assert_eq!(std::fs::read_to_string(&path).unwrap(), "x\n");
+        }
+        assert_eq!(name_within("aé", 2), "a");
+        assert_eq!(name_within("aé", 3), "aé");
+    }
 
     #[test]
     fn temporaries_are_recognised_by_their_names_only() {

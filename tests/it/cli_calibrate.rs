@@ -518,3 +518,76 @@ fn free_pose_effects_close_the_gap_on_an_independent_generator() {
         }
     }
 }
+
+/// One gross row among the held-out poses of files an independent generator wrote (a cell 50 mm
+/// off in the clean file; two target ids swapped in the backlash file, effects chosen) is
+/// flagged by its line, and the held-out RMS of the others stays at the noise floor; with
+/// `--keep-outliers` it is flagged but kept, and the RMS is then beyond that floor, so the check
+/// can fail.
+#[test]
+fn one_gross_heldout_row_is_named_and_left_out_of_the_heldout_rms() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("clean.csv", 6, "x + 50 mm"),
+        ("backlash.csv", 12, "target ids of lines 12 and 13 swapped"),
+    ];
+    for (file, line, what) in cases {
+        let text = std::fs::read_to_string(independent(file)).unwrap();
+        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+        let mut fields: Vec<Vec<String>> = [line, line + 1]
+            .iter()
+            .map(|l| lines[l - 1].split(',').map(str::to_owned).collect())
+            .collect();
+        assert_eq!(fields[0][2], fields[1][2], "{file}: one pose");
+        if line == 6 {
+            let x: f64 = fields[0][4].parse().unwrap();
+            fields[0][4] = format!("{}", x + 50.0);
+        } else {
+            let id = fields[0][3].clone();
+            fields[0][3] = std::mem::replace(&mut fields[1][3], id);
+        }
+        lines[line - 1] = fields[0].join(",");
+        lines[line] = fields[1].join(",");
+        let data = dir.path().join(file);
+        std::fs::write(&data, lines.join("\n") + "\n").unwrap();
+        let step: usize = fields[0][2].parse().unwrap();
+        let run = |extra: &[&str], out: &str| {
+            let out = dir.path().join(format!("{file}-{out}"));
+            let a = axiscal()
+                .args(["calibrate", "--holdout", "--effects", "auto", "--robot"])
+                .arg(independent("kr-arm.toml"))
+                .arg(&data)
+                .args(extra)
+                .arg("--out")
+                .arg(&out)
+                .assert()
+                .success();
+            (common::read_record(&out), common::stderr(&a))
+        };
+        let (record, err) = run(&[], "dropped");
+        let h = record.reports.free_poses.as_ref().unwrap().holdout.clone().unwrap();
+        let flagged: Vec<(usize, bool)> = h.outliers.iter().map(|o| (o.step, o.dropped)).collect();
+        assert_eq!(flagged, [(step, true)], "{file} ({what}): {:?}", h.outliers);
+        let bound = noise_floor_bound(&record);
+        assert!(
+            h.calibrated_rms_mm < bound,
+            "{file} ({what}): held out {:.4} mm against the floor {bound:.4}",
+            h.calibrated_rms_mm
+        );
+        let warning = format!("{}:{line}: outlier pose: experiment poses step {step}:", data.display());
+        assert!(
+            err.lines()
+                .any(|l| l.starts_with(&format!("warning: {warning}")) && l.contains("held out")),
+            "{file}: {err}"
+        );
+        let (kept, _) = run(&["--keep-outliers"], "kept");
+        let k = kept.reports.free_poses.as_ref().unwrap().holdout.clone().unwrap();
+        let flagged: Vec<(usize, bool)> = k.outliers.iter().map(|o| (o.step, o.dropped)).collect();
+        assert_eq!(flagged, [(step, false)], "{file} ({what}), kept");
+        assert!(
+            k.calibrated_rms_mm > bound,
+            "{file} ({what}): kept, {:.4}",
+            k.calibrated_rms_mm
+        );
+    }
+}

@@ -190,6 +190,7 @@ pub fn calibrate_free_poses(
         kept: &kept,
         flags: &flags,
         test: &test,
+        keep_outliers: options.keep_outliers,
         effects_tried,
         scales,
     })

@@ -1,6 +1,6 @@
 //! `report.md` of a free-pose calibration.
 
-use super::summary::FreePoseSummary;
+use super::summary::{FreePoseSummary, OutlierPose};
 use crate::calibration::noise::NoiseEstimate;
 use crate::calibration::refine::ParameterUnit;
 use crate::markdown;
@@ -57,6 +57,11 @@ fn residual_table(md: &mut String, s: &FreePoseSummary, noise: Option<&NoiseEsti
             "Held out ({}): {} poses fitted, {} held out; held-out RMS nominal {:.4} mm, calibrated {:.4} mm (max {:.4} mm).\n",
             h.split, h.training_poses, h.heldout_poses, h.nominal_rms_mm, h.calibrated_rms_mm, h.calibrated_max_mm
         );
+        if !h.outliers.is_empty() {
+            let _ = writeln!(md, "Held-out outlier poses (left out of that RMS where dropped):\n");
+            outlier_table(md, &h.outliers);
+            md.push('\n');
+        }
     }
 }
 
@@ -193,12 +198,17 @@ fn outliers(md: &mut String, s: &FreePoseSummary) {
         );
         return;
     }
+    let _ = writeln!(md, "## Outlier poses ({})\n", s.outliers.len());
+    outlier_table(md, &s.outliers);
+}
+
+/// The table of outlier poses.
+fn outlier_table(md: &mut String, outliers: &[OutlierPose]) {
     let _ = writeln!(
         md,
-        "## Outlier poses ({})\n\n| experiment | step | RMS (mm) | fence (mm) | dropped |\n|---|---|---|---|---|",
-        s.outliers.len()
+        "| experiment | step | RMS (mm) | fence (mm) | dropped |\n|---|---|---|---|---|"
     );
-    for o in &s.outliers {
+    for o in outliers {
         let _ = writeln!(
             md,
             "| {} | {} | {:.4} | {:.4} | {} |",

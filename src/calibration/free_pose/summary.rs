@@ -84,7 +84,8 @@ pub struct Holdout {
     pub split: String,
     /// Poses fitted.
     pub training_poses: usize,
-    /// Poses held out.
+    /// Held-out poses the RMS below covers: the held-out poses but the unexecutable ones and
+    /// the outliers left out.
     pub heldout_poses: usize,
     /// RMS distance of the held-out points from the nominal model registered on the training
     /// poses \[mm\].
@@ -97,6 +98,11 @@ pub struct Holdout {
     /// invertible there: its harmonics extrapolated beyond the fitted poses' range); left out
     /// of the RMS above.
     pub unexecutable_poses: usize,
+    /// Held-out poses the outlier test flags (the training poses' test, each held-out pose
+    /// studentised as outside the fit): left out of the RMS above (`dropped`), or kept in it
+    /// with `--keep-outliers`.
+    #[serde(default)]
+    pub outliers: Vec<OutlierPose>,
 }
 
 /// The summary (`calibration.json`'s `free_poses`, `docs/formats.md#calibration-json`).
@@ -244,6 +250,7 @@ pub(super) struct Stages<'a> {
     pub kept: &'a [usize],
     pub flags: &'a [Flag],
     pub test: &'a [usize],
+    pub keep_outliers: bool,
     pub effects_tried: Vec<EffectTrial>,
     pub scales: Vec<super::NamedScale>,
 }
@@ -553,7 +560,10 @@ fn correlation(c: &DMatrix<f64>) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The held-out check, when poses were held out.
+/// The held-out check, when poses were held out. The held-out poses are screened by the
+/// training poses' outlier test ([`heldout_flags`]): one gross row among them would otherwise
+/// make the held-out RMS its own; a flagged pose is left out of the RMS (kept with
+/// `--keep-outliers`) and listed.
 fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
     if s.test.is_empty() {
         return Ok(None);
@@ -564,10 +574,16 @@ fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
             .residuals(s.problem.controller, s.problem.poses, &[i])
             .is_ok()
     });
+    let flags = heldout_flags(s, &executable)?;
+    let counted: Vec<usize> = executable
+        .iter()
+        .copied()
+        .filter(|i| s.keep_outliers || !flags.iter().any(|f| f.pose == *i))
+        .collect();
     let r = s
         .fitted
         .model
-        .residuals(s.problem.controller, s.problem.poses, &executable)
+        .residuals(s.problem.controller, s.problem.poses, &counted)
         .map_err(|u| u.error(s.problem.poses))?;
     let max = (0..r.len() / 3)
         .map(|k| r.fixed_rows::<3>(3 * k).norm())
@@ -575,12 +591,33 @@ fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
     Ok(Some(Holdout {
         split: "configurations in order of first appearance: even ones fitted, odd ones held out (repeated visits of one configuration stay together)".into(),
         training_poses: s.kept.len(),
-        heldout_poses: executable.len(),
-        nominal_rms_mm: rms_of(&s.registered.model, s.problem, &executable)? * 1e3,
+        heldout_poses: counted.len(),
+        nominal_rms_mm: rms_of(&s.registered.model, s.problem, &counted)? * 1e3,
         calibrated_rms_mm: (r.norm_squared() / (r.len() / 3).max(1) as f64).sqrt() * 1e3,
         calibrated_max_mm: max * 1e3,
         unexecutable_poses: unexecutable.len(),
+        outliers: outliers(&flags, s.problem, &counted),
     }))
+}
+
+/// The held-out poses `heldout` the calibrated model does not explain: the training poses'
+/// test ([`super::fit::flag_outliers`]) with each held-out pose outside the fit (its residual
+/// studentised by `I + H`) against the noise of the training poses near it, and beyond Tukey's
+/// far-out fence of the held-out poses' own RMS.
+fn heldout_flags(s: &Stages<'_>, heldout: &[usize]) -> Result<Vec<Flag>, FreePoseError> {
+    if heldout.is_empty() {
+        return Ok(vec![]);
+    }
+    let which: Vec<usize> = s.kept.iter().chain(heldout).copied().collect();
+    let columns = &s.identification.fitted;
+    let r = s
+        .fitted
+        .model
+        .residuals(s.problem.controller, s.problem.poses, heldout)
+        .map_err(|u| u.error(s.problem.poses))?;
+    let tukey = super::fit::outlier_fence(&r, s.problem.poses, heldout);
+    let flags = super::fit::flag_outliers(s.problem, &s.fitted.model, &which, s.kept, columns, tukey)?;
+    Ok(flags.into_iter().filter(|f| heldout.contains(&f.pose)).collect())
 }
 
 /// A free-pose calibration: the fitted model and its summary.
