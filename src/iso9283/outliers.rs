@@ -19,7 +19,7 @@
 use super::IsoError;
 use super::evaluate::Cycle;
 use crate::calibration::procedure::OUTLIER_SHARE_MAX;
-use crate::numerics::stats::{FAR_OUT, QuantileMethod, quantile};
+use crate::numerics::stats::{FAR_OUT, QuantileMethod, median, quantile};
 use nalgebra::{Isometry3, Quaternion, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
 
@@ -72,11 +72,6 @@ impl OutlierCycle {
             }
         )
     }
-}
-
-/// The median of `v` (NaN when empty).
-fn median(v: &[f64]) -> f64 {
-    quantile(v, 0.5, QuantileMethod::Linear)
 }
 
 /// The orientation at the middle of `poses`: the per-component median of their rotation

@@ -11,7 +11,7 @@
 //! (`crate::calibration::free_pose::slip::mirrored_targets`).
 
 use super::MeasurementSet;
-use crate::numerics::stats::chi_square_quantile;
+use crate::numerics::stats::{chi_square_quantile, median};
 use std::collections::BTreeMap;
 
 /// The false-alarm rate of the test over a clean file's poses (Bonferroni): once in ten
@@ -87,16 +87,6 @@ fn distance(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// The noise of a distance \[mm\]: the root mean square over the pairs of ids of their
 /// distances' scatter over the poses (module docs); `None` with fewer than [`MIN_POSES`] poses
 /// of a pair.
@@ -111,8 +101,8 @@ fn distance_sigma(poses: &[Pose], ids: &[usize]) -> Option<f64> {
             if d.len() < MIN_POSES {
                 continue;
             }
-            let m = median(d.clone());
-            let mad = median(d.iter().map(|x| (x - m).abs()).collect());
+            let m = median(&d);
+            let mad = median(&d.iter().map(|x| (x - m).abs()).collect::<Vec<_>>());
             variances.push((SIGMA_PER_MAD * mad).powi(2));
         }
     }

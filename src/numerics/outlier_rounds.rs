@@ -137,7 +137,7 @@ mod tests {
     /// The median of the values `kept`: a fit no single gross error moves.
     fn median_of(values: &[f64], kept: &[usize]) -> f64 {
         let v: Vec<f64> = kept.iter().map(|&i| values[i]).collect();
-        crate::numerics::stats::quantile(&v, 0.5, crate::numerics::stats::QuantileMethod::Linear)
+        crate::numerics::stats::median(&v)
     }
 
     fn peel_by(values: &[f64], keep: bool, fit: fn(&[f64], &[usize]) -> f64) -> Result<Peeled<f64>, TooManyOutliers> {

@@ -152,6 +152,12 @@ pub fn quantile(v: &[f64], p: f64, method: QuantileMethod) -> f64 {
     quantile_sorted(&s, p, method)
 }
 
+/// The median of a sample in any order: the mean of the middle two for an even count
+/// ([`QuantileMethod::Linear`] at 1/2; NaN when empty).
+pub fn median(v: &[f64]) -> f64 {
+    quantile(v, 0.5, QuantileMethod::Linear)
+}
+
 /// Fraction of `v` at or above `x` (NaN when empty).
 pub fn upper_tail(v: &[f64], x: f64) -> f64 {
     if v.is_empty() {

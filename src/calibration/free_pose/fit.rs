@@ -151,6 +151,29 @@ pub(super) fn flag_outliers(
         .collect())
 }
 
+/// The poses `outside` (held out, or set aside before the fit) that the fit `model` of the poses
+/// `kept` does not explain: [`flag_outliers`] with each of them outside the fit (studentised by
+/// `I + H`) against the noise of the kept poses near it, and beyond Tukey's far-out fence of the
+/// per-pose RMS of all of them.
+pub(super) fn flag_outside(
+    problem: &Problem<'_>,
+    model: &FreePoseModel,
+    kept: &[usize],
+    outside: &[usize],
+    columns: &[usize],
+) -> Result<Vec<Flag>, FreePoseError> {
+    if outside.is_empty() {
+        return Ok(vec![]);
+    }
+    let which: Vec<usize> = kept.iter().chain(outside).copied().collect();
+    let r = model
+        .residuals(problem.controller, problem.poses, &which)
+        .map_err(|u| u.error(problem.poses))?;
+    let tukey = outlier_fence(&r, problem.poses, &which);
+    let flags = flag_outliers(problem, model, &which, kept, columns, tukey)?;
+    Ok(flags.into_iter().filter(|f| outside.contains(&f.pose)).collect())
+}
+
 /// Tukey's far-out fence ([`crate::numerics::stats::far_out_fence`]) of the per-pose RMS of
 /// the fit's residual `residual` over the poses `which` \[m\].
 pub(super) fn outlier_fence(residual: &DVector<f64>, poses: &FreePoses, which: &[usize]) -> f64 {

@@ -5,7 +5,8 @@
 //! A pipeline of stages, each a typed, immutable value:
 //! 1. [`FreePoses`]: the file's `moved_joint = 0` poses (commands, points by target);
 //! 2. [`register`]: the instrument frame and the targets on the last link in closed form from
-//!    the nominal kinematics;
+//!    the nominal kinematics, again without the [`gross`] poses (far beyond every other pose's
+//!    misfit), which sit out the fits and are tested at the end as poses outside the fit;
 //! 3. the nominal model registered: base and targets refined by least squares (the baseline
 //!    every geometric calibration is compared with);
 //! 4. [`identify`]: which parameters of [`model::layout`] the poses identify, the others named
@@ -23,6 +24,7 @@ pub mod block;
 mod effects;
 mod error;
 mod fit;
+mod gross;
 pub mod identify;
 pub mod model;
 pub mod poses;
@@ -106,6 +108,21 @@ pub fn calibrate_free_poses(
         ..model::with_fit_forms(RobotModel::ideal(desc), desc)
     };
     let (train, test) = split(&poses, options.holdout);
+    let unplaced = Problem {
+        controller: &controller,
+        poses: &poses,
+        layout: &[],
+        description_targets_m: desc.tool_targets_m(),
+    };
+    let (start, gross) = if options.keep_outliers {
+        (registered_start(&unplaced, &nominal, &train)?, vec![])
+    } else {
+        gross::registered_without_gross(&unplaced, &nominal, &train, OUTLIER_SHARE_MAX)?
+    };
+    let train: Vec<usize> = train
+        .into_iter()
+        .filter(|i| !gross.iter().any(|g| g.pose == *i))
+        .collect();
     let mut layout = layout(
         &nominal,
         &poses.target_ids,
@@ -122,7 +139,6 @@ pub fn calibrate_free_poses(
         layout: &layout,
         description_targets_m: desc.tool_targets_m(),
     };
-    let start = registered_start(&problem, &nominal, &train)?;
     let frame_columns: Vec<usize> = (0..layout.len()).filter(|&c| frame_parameter(&layout[c])).collect();
     let registered = fit::fit(&problem, &start, &train, &frame_columns)?;
     let all: Vec<usize> = (0..layout.len()).collect();
@@ -176,9 +192,10 @@ pub fn calibrate_free_poses(
     } = select_harmonics_and_effects(&problem, fitted, &kept, &identification)?;
     identification.drop_insignificant(&harmonics_left_out, &layout);
     identification.fitted.retain(|c| !effects_left_out.contains(c));
-    let (fitted, kept, flags) = converging(&mut identification, &design, &layout, |id| {
+    let screened_fit = converging(&mut identification, &design, &layout, |id| {
         screened(screens, &fitted.model, &train, &id.fitted, options)
     })?;
+    let (fitted, kept, flags) = gross_tested(&problem, screened_fit, &gross, &identification.fitted)?;
     check_plausible(&fitted, &poses, &kept)?;
     let scales = found.into_iter().map(|f| f.named).collect();
     summary::summarise(summary::Stages {
@@ -211,6 +228,44 @@ fn screened(
         return Ok((fitted, kept, flags));
     }
     Ok((fit::fit(problem, &fitted.model, &kept, columns)?, kept, flags))
+}
+
+/// The fit, the poses it kept and the flags, with the gross poses set aside before the fit
+/// (`gross`, [`gross::registered_without_gross`]) tested against it as poses outside the fit
+/// ([`fit::flag_outside`]): flagged, each joins the flags; not, it joins the fit again. A gross
+/// pose the fitted model cannot execute keeps its flag from the registration.
+fn gross_tested(
+    problem: &Problem<'_>,
+    (fitted, mut kept, mut flags): (Fitted, Vec<usize>, Vec<fit::Flag>),
+    gross: &[fit::Flag],
+    columns: &[usize],
+) -> Result<(Fitted, Vec<usize>, Vec<fit::Flag>), FreePoseError> {
+    if gross.is_empty() {
+        return Ok((fitted, kept, flags));
+    }
+    let (executable, unexecutable): (Vec<&fit::Flag>, Vec<&fit::Flag>) = gross.iter().partition(|g| {
+        fitted
+            .model
+            .residuals(problem.controller, problem.poses, &[g.pose])
+            .is_ok()
+    });
+    let outside: Vec<usize> = executable.iter().map(|g| g.pose).collect();
+    let confirmed = fit::flag_outside(problem, &fitted.model, &kept, &outside, columns)?;
+    let back: Vec<usize> = outside
+        .iter()
+        .copied()
+        .filter(|i| !confirmed.iter().any(|f| f.pose == *i))
+        .collect();
+    flags.extend(confirmed);
+    flags.extend(unexecutable.into_iter().cloned());
+    flags.sort_by_key(|f| f.pose);
+    if back.is_empty() {
+        return Ok((fitted, kept, flags));
+    }
+    kept.extend(back);
+    kept.sort_unstable();
+    let refitted = fit::fit(problem, &fitted.model, &kept, columns)?;
+    Ok((refitted, kept, flags))
 }
 
 /// `attempt` with the parameters of `identification`; while its fit does not converge, again

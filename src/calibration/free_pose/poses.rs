@@ -5,6 +5,7 @@ use super::FreePoseError;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::bounded::evenly_spaced;
+use crate::numerics::stats::median;
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::Point3;
 use std::collections::{HashMap, HashSet};
@@ -351,11 +352,6 @@ impl FreePoses {
             fence_m: z * sigma,
         })
     }
-}
-
-/// The median of `v` (linear quantiles, as the fences').
-fn median(v: &[f64]) -> f64 {
-    crate::numerics::stats::quantile(v, 0.5, crate::numerics::stats::QuantileMethod::Linear)
 }
 
 /// Independent values one configuration of the tool gives at most: its pose (a target's

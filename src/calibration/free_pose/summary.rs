@@ -561,7 +561,7 @@ fn correlation(c: &DMatrix<f64>) -> Vec<Vec<f64>> {
 }
 
 /// The held-out check, when poses were held out. The held-out poses are screened by the
-/// training poses' outlier test ([`heldout_flags`]): one gross row among them would otherwise
+/// training poses' outlier test ([`super::fit::flag_outside`]): one gross row among them would otherwise
 /// make the held-out RMS its own; a flagged pose is left out of the RMS (kept with
 /// `--keep-outliers`) and listed.
 fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
@@ -574,7 +574,13 @@ fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
             .residuals(s.problem.controller, s.problem.poses, &[i])
             .is_ok()
     });
-    let flags = heldout_flags(s, &executable)?;
+    let flags = super::fit::flag_outside(
+        s.problem,
+        &s.fitted.model,
+        s.kept,
+        &executable,
+        &s.identification.fitted,
+    )?;
     let counted: Vec<usize> = executable
         .iter()
         .copied()
@@ -598,26 +604,6 @@ fn holdout(s: &Stages<'_>) -> Result<Option<Holdout>, FreePoseError> {
         unexecutable_poses: unexecutable.len(),
         outliers: outliers(&flags, s.problem, &counted),
     }))
-}
-
-/// The held-out poses `heldout` the calibrated model does not explain: the training poses'
-/// test ([`super::fit::flag_outliers`]) with each held-out pose outside the fit (its residual
-/// studentised by `I + H`) against the noise of the training poses near it, and beyond Tukey's
-/// far-out fence of the held-out poses' own RMS.
-fn heldout_flags(s: &Stages<'_>, heldout: &[usize]) -> Result<Vec<Flag>, FreePoseError> {
-    if heldout.is_empty() {
-        return Ok(vec![]);
-    }
-    let which: Vec<usize> = s.kept.iter().chain(heldout).copied().collect();
-    let columns = &s.identification.fitted;
-    let r = s
-        .fitted
-        .model
-        .residuals(s.problem.controller, s.problem.poses, heldout)
-        .map_err(|u| u.error(s.problem.poses))?;
-    let tukey = super::fit::outlier_fence(&r, s.problem.poses, heldout);
-    let flags = super::fit::flag_outliers(s.problem, &s.fitted.model, &which, s.kept, columns, tukey)?;
-    Ok(flags.into_iter().filter(|f| heldout.contains(&f.pose)).collect())
 }
 
 /// A free-pose calibration: the fitted model and its summary.

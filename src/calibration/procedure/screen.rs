@@ -25,8 +25,9 @@ mod second_target;
 
 pub use bump::{SWEEP_BUMP_FALSE_ALARM, SweepBump, SweepEnd, bumps_undone};
 
+use crate::numerics::stats::median;
+use rounds::too_many_which;
 pub use rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, without_poses};
-use rounds::{median, too_many_which};
 pub use second_target::WorstSecondTarget;
 
 use super::experiments::actuator_commands;

@@ -4,7 +4,6 @@
 
 use super::super::outlier_point::OutlierPoint;
 use crate::measurement::MeasurementSet;
-use crate::numerics::stats::{QuantileMethod, quantile};
 
 /// At most this share of a sweep's points may be set aside: beyond it the sweep, not single
 /// points, is wrong.
@@ -50,9 +49,4 @@ pub fn without_poses(set: &MeasurementSet, outliers: &[OutlierPoint]) -> Option<
         .filter(|&i| poses.contains(&(set.rows()[i].experiment.as_str(), set.rows()[i].step)))
         .collect();
     (!dropped.is_empty()).then(|| set.without_rows(&dropped))
-}
-
-/// The median of `v` (linear interpolation between the middle two).
-pub(super) fn median(v: &[f64]) -> f64 {
-    quantile(v, 0.5, QuantileMethod::Linear)
 }

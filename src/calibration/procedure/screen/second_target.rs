@@ -6,10 +6,11 @@
 
 use super::super::outlier_point::{OutlierPoint, OutlierTest, row_of};
 use super::super::{CalibrationOptions, Detail, ProcedureError, SecondTargetData, calibrate_model};
-use super::rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, median, too_many_which, without_poses};
+use super::rounds::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, too_many_which, without_poses};
 use crate::measurement::MeasurementSet;
 use crate::numerics::lsq::linear_lsq;
 use crate::numerics::stats::chi_square_quantile;
+use crate::numerics::stats::median;
 use crate::robot::RobotDescription;
 use nalgebra::{DMatrix, DVector};
 
