@@ -11,7 +11,8 @@ use axiscal::diagnosis::{
     ChiSquare, PositionSummary, Prediction, Validation, ValidationOptions, validate, write_validation_residuals_csv,
 };
 use axiscal::diagnosis::{
-    combined_slips_searched, explained_validation_misses, free_pose_outliers, free_poses_only, without_outliers,
+    ValidationBlock, combined_slips_searched, explained_validation_misses, free_pose_outliers, free_poses_only,
+    shifted_validation_block, without_outliers,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::MeasurementSet;
@@ -109,6 +110,11 @@ pub fn run(args: Args) -> Result<()> {
             (kept, v)
         }
     };
+    if let Some(b) = shifted_validation_block(&set, &cal, &fitted, &v).ok().flatten() {
+        let words = format!("{}: {}", args.data.display(), block_words(&b));
+        eprintln!("warning: {words}");
+        warnings.push(words);
+    }
     noise_not_far_below(&args, &set, &desc, &v)?;
     drop(set);
     let v = Validation { warnings, ..v };
@@ -168,6 +174,40 @@ fn without_sweep_outliers(
         ) => Err(anyhow::Error::new(e).context(format!("validating on {}", args.data.display()))),
         Err(_) => Ok((set, Vec::new())),
     }
+}
+
+/// A [`ValidationBlock`] in words: where, by how much, how significant, what the validation
+/// becomes without it and the fix.
+fn block_words(b: &ValidationBlock) -> String {
+    let line = |l: Option<u64>| l.map_or_else(|| "?".to_owned(), |l| l.to_string());
+    format!(
+        "the validation poses of lines {}-{} (steps {}-{}, {} of the {} validated) sit about ({:.2}, {:.2}, {:.2}) mm off \
+         the others: their residuals, less the calibration's own error, step there in file order (p {} for the most \
+         significant of the {} blocks of consecutive poses tried, against a false-alarm rate of {} shared by them), and \
+         with them moved back the validation poses' chi2/dof is {:.3} against {:.3} as written (RMS {:.3} mm against \
+         {:.3} mm). The instrument or the \
+         robot moved between them (a bump, a re-setup), so the verdicts below mix two setups: validate those rows apart \
+         from the others (or measure them again)",
+        line(b.lines.0),
+        line(b.lines.1),
+        b.steps.0,
+        b.steps.1,
+        b.poses,
+        b.tested,
+        b.shift_mm[0],
+        b.shift_mm[1],
+        b.shift_mm[2],
+        match b.p_value {
+            p if p < 1e-99 => "< 1e-99".to_owned(),
+            p => format!("= {p:.1e}"),
+        },
+        b.blocks_tried,
+        axiscal::calibration::free_pose::slip::SLIP_FALSE_ALARM,
+        b.undone_chi2_per_dof,
+        b.written_chi2_per_dof,
+        b.undone_rms_mm,
+        b.written_rms_mm
+    )
 }
 
 /// A verdict that the model misses DATA with `--noise-mm` far below the noise DATA's axis

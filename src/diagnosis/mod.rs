@@ -46,6 +46,7 @@ mod sweep_causes;
 mod sweep_slips;
 mod targets;
 mod validate;
+mod validation_block;
 
 pub use crate::calibration::refine::{Block, LinearFit, NULL_DIRECTION_TOLERANCE, sensitivity};
 pub use crate::calibration::refit_model::{
@@ -86,6 +87,7 @@ pub use validate::{
     ValidationOptions, ValidationResidual, Verdict, curvature_counts, residuals_less_calibration_error, validate,
     validate_free_tool, validation_residuals_csv, write_validation_residuals_csv,
 };
+pub use validation_block::{ValidationBlock, shifted_validation_block};
 
 use crate::calibration::free_pose::{FreePoseOptions, FreePoseSummary, calibrate_free_poses, with_fitted_targets};
 use crate::calibration::procedure::{Calibration, CalibrationOptions, ProcedureError, calibrate};

@@ -140,3 +140,4 @@ mod truth_model;
 mod twice_bumped;
 mod urdf_parser;
 mod validate;
+mod validation_block;

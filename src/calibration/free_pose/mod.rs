@@ -5,8 +5,8 @@
 //! A pipeline of stages, each a typed, immutable value:
 //! 1. [`FreePoses`]: the file's `moved_joint = 0` poses (commands, points by target);
 //! 2. [`register`]: the instrument frame and the targets on the last link in closed form from
-//!    the nominal kinematics, again without the [`gross`] poses (far beyond every other pose's
-//!    misfit), which sit out the fits and are tested at the end as poses outside the fit;
+//!    the nominal kinematics, again without the gross poses (`gross.rs`: far beyond every other
+//!    pose's misfit), which sit out the fits and are tested at the end as poses outside the fit;
 //! 3. the nominal model registered: base and targets refined by least squares (the baseline
 //!    every geometric calibration is compared with);
 //! 4. [`identify`]: which parameters of [`model::layout`] the poses identify, the others named

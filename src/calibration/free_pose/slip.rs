@@ -251,7 +251,7 @@ fn cross_validated_rms_mm(summary: &FreePoseSummary) -> Option<f64> {
 }
 
 /// Poses on either side of a break at least, for a block's mean residual to be one.
-pub(super) const MIN_BLOCK_POSES: usize = 3;
+pub const MIN_BLOCK_POSES: usize = 3;
 
 /// The poses from one on shifted as a block (the instrument or the robot moved between two
 /// poses, by a bump or a re-setup): the break in file order whose later block's mean residual

@@ -190,7 +190,7 @@ impl RunLock {
     /// Creates `dir` and takes its lock, writing this process's id and host into the lock
     /// file; fails with [`ExportError::Locked`] when another process holds it.
     pub fn acquire(dir: &Path) -> Result<Self, ExportError> {
-        use std::io::{Read, Seek, Write};
+        use std::io::{Seek, Write};
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         let path = dir.join(LOCK_FILE);
         let mut options = std::fs::OpenOptions::new();
@@ -211,11 +211,9 @@ impl RunLock {
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
-                let mut holder = String::new();
-                let _ = file.read_to_string(&mut holder);
                 return Err(ExportError::Locked {
                     path: dir.to_owned(),
-                    holder: holder.trim().to_owned(),
+                    holder: lock_holder(&mut file),
                 });
             }
             Err(std::fs::TryLockError::Error(e)) => return Err(io(&path)(e)),
@@ -228,6 +226,25 @@ impl RunLock {
             .map_err(io(&path))?;
         Ok(RunLock { _file: file })
     }
+}
+
+/// Reads at most this many times a lock file its holder has not written yet.
+const HOLDER_READS: usize = 10;
+
+/// Who holds a run's lock, as its lock file says (`pid N on HOST`). The holder writes it just
+/// after taking the lock, so a file read empty is read again a few times, 20 ms apart; still
+/// empty, the words say so rather than show nothing.
+fn lock_holder(file: &mut std::fs::File) -> String {
+    use std::io::{Read, Seek};
+    for _ in 0..HOLDER_READS {
+        let mut holder = String::new();
+        let read = file.rewind().and_then(|()| file.read_to_string(&mut holder));
+        if read.is_ok() && !holder.trim().is_empty() {
+            return holder.trim().chars().take(200).collect();
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    "a process that took the lock this instant and has not written its id yet".to_owned()
 }
 
 /// Writes the resolved scenario dump.
@@ -297,4 +314,30 @@ pub fn write_final(
     }
     draw_histogram(dir, scenario, names, records)?;
     Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A second run into a folder another holds is refused naming the holder's process; a
+    /// holder that has not yet written its id is said to be one, never shown as nothing.
+    #[test]
+    fn a_locked_folder_names_its_holder() {
+        let dir = tempfile::tempdir().unwrap();
+        let first = RunLock::acquire(dir.path()).unwrap();
+        let holder = |e: Result<RunLock, ExportError>| match e {
+            Err(ExportError::Locked { holder, .. }) => holder,
+            other => panic!("{other:?}"),
+        };
+        let named = holder(RunLock::acquire(dir.path()));
+        assert!(named.starts_with(&format!("pid {} on ", std::process::id())), "{named}");
+        drop(first);
+        let other = tempfile::tempdir().unwrap();
+        let path = other.path().join(LOCK_FILE);
+        let silent = std::fs::File::create(&path).unwrap();
+        silent.try_lock().unwrap();
+        let named = holder(RunLock::acquire(other.path()));
+        assert!(named.contains("has not written its id yet"), "{named}");
+    }
 }
