@@ -51,7 +51,7 @@ pub struct Args {
     /// Measurement CSV (`docs/formats.md#measurement-csv`).
     data: PathBuf,
     /// Nominal robot description (TOML).
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]

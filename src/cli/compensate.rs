@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long)]
     calibration: PathBuf,
     /// Nominal robot description (the unchanged controller uses it).
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Required tool poses (CSV, see module docs).
     #[arg(long)]

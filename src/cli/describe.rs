@@ -11,7 +11,7 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Robot description (TOML; phi rows, `dh` rows or a `urdf` file), or a shipped one's name.
-    #[arg(value_parser = super::options::robot_file)]
+    #[arg(value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Random poses (uniform within the joint limits) for the forward-kinematics check (at most
     /// a million: a few seconds).

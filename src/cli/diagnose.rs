@@ -28,7 +28,7 @@ pub struct Args {
     /// poses, or free poses only (calibrated from the even poses, diagnosed on the odd ones).
     data: PathBuf,
     /// Nominal robot description (TOML).
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]

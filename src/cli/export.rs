@@ -36,7 +36,7 @@ struct Common {
     #[arg(long)]
     calibration: PathBuf,
     /// Nominal robot description (TOML) the calibration was made with.
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Go on even when the calibration records another robot description than `--robot`.
     #[arg(long)]

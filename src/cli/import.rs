@@ -118,7 +118,7 @@ struct WideArgs {
     /// The wide table (CSV).
     file: PathBuf,
     /// The robot description (joint count and kinds), or a shipped one's name.
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Unit of the revolute joint values.
     #[arg(long, value_enum)]
@@ -147,7 +147,7 @@ struct MatArgs {
     /// The MAT file.
     file: PathBuf,
     /// The robot description (joint count and kinds), or a shipped one's name.
-    #[arg(long, value_parser = super::options::robot_file)]
+    #[arg(long, value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// The joint array's variable name.
     #[arg(long)]
@@ -183,7 +183,7 @@ struct Sscanss2Args {
     file: PathBuf,
     /// The robot description (joint count and kinds, checked against the file's types), or a
     /// shipped one's name.
-    #[arg(long, value_parser = super::options::robot_file)]
+    #[arg(long, value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Unit of the points (SScanSS-2 works in mm).
     #[arg(long, value_enum, default_value = "mm")]
@@ -209,7 +209,7 @@ struct RctArgs {
     /// The measurement file (YAML).
     file: PathBuf,
     /// The robot description (joint count and kinds), or a shipped one's name.
-    #[arg(long, value_parser = super::options::robot_file)]
+    #[arg(long, value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Also targets 1 and 2, this far along the measured frame's x and y axes (mm): the
     /// camera's orientation as two more points (their noise is the orientation's times this).

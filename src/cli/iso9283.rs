@@ -49,7 +49,7 @@ enum What {
 #[derive(Debug, clap::Args)]
 struct CubeArgs {
     /// Nominal robot description (TOML), or a shipped robot's name.
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// The commands of the cube's centre, `cmd_1,..,cmd_N` (deg or mm): its tool position is
     /// `P1`, its tool orientation every point's. Default: the calibration plan's reference pose.
@@ -126,7 +126,7 @@ struct EvaluateArgs {
     data: PathBuf,
     /// Nominal robot description (TOML), or a shipped robot's name: the tool targets and the
     /// controller.
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// The calibration whose model commands the poses (after calibration). Without it the
     /// nominal model commands them, its base frame registered to the data (before calibration).

@@ -16,7 +16,7 @@ pub struct Args {
     #[arg(long)]
     calibration: PathBuf,
     /// Nominal robot description (TOML) the calibration was made with.
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// One pose's commands as the controller reads them, `cmd_1 .. cmd_N` (deg or mm), e.g.
     /// `10 -20.5 30 0 45 90`.

@@ -204,7 +204,7 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 
 /// A file on the command line: an existing file, or the name of a shipped one of the
 /// `accepted` kinds (`axiscal::presets`). The error lists those kinds' shipped names.
-fn shipped_or_file(text: &str, accepted: &[Kind]) -> Result<PathBuf, String> {
+pub fn shipped_or_file(text: &str, accepted: &[Kind]) -> Result<PathBuf, String> {
     axiscal::presets::resolve(Path::new(text), accepted).map_err(|e| e.to_string())
 }
 
@@ -222,30 +222,45 @@ pub fn ros_robot_name(text: &str) -> Result<String, String> {
     ))
 }
 
-/// A robot description on the command line (`asea-irb6l`).
-pub fn robot_file(text: &str) -> Result<PathBuf, String> {
-    shipped_or_file(text, &[Kind::Description])
+/// The value parser of a file on the command line that may also be a shipped file's name
+/// ([`shipped_or_file`]) of the kinds it holds. A path that is not UTF-8 (a Latin-1 file name)
+/// is taken as the system gives it: it can only name a file, since every shipped name is ASCII.
+#[derive(Clone, Copy, Debug)]
+pub struct ShippedOrFile(pub &'static [Kind]);
+
+impl TypedValueParser for ShippedOrFile {
+    type Value = PathBuf;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> Result<PathBuf, clap::Error> {
+        let kinds = self.0;
+        if value.to_str().is_some() {
+            return (move |text: &str| shipped_or_file(text, kinds)).parse_ref(cmd, arg, value);
+        }
+        axiscal::presets::resolve(Path::new(value), kinds).map_err(|e| {
+            let name = arg.map_or_else(|| "value".to_owned(), ToString::to_string);
+            clap::Error::raw(
+                clap::error::ErrorKind::ValueValidation,
+                format!("invalid value '{}' for '{name}': {e}\n", value.to_string_lossy()),
+            )
+            .with_cmd(cmd)
+        })
+    }
 }
+
+/// A robot description on the command line (`asea-irb6l`).
+pub const ROBOT_FILE: ShippedOrFile = ShippedOrFile(&[Kind::Description]);
 
 /// A simulated robot's truth: a truth model, or a description (its nominal model).
-pub fn truth_file(text: &str) -> Result<PathBuf, String> {
-    shipped_or_file(text, &[Kind::Truth, Kind::Description])
-}
+pub const TRUTH_FILE: ShippedOrFile = ShippedOrFile(&[Kind::Truth, Kind::Description]);
 
 /// An axis-experiment plan (`asea-irb6l-table1-plan`).
-pub fn plan_file(text: &str) -> Result<PathBuf, String> {
-    shipped_or_file(text, &[Kind::Plan])
-}
+pub const PLAN_FILE: ShippedOrFile = ShippedOrFile(&[Kind::Plan]);
 
 /// The shipped manufacturing errors a default truth is drawn with.
-pub fn perturbation_file(text: &str) -> Result<PathBuf, String> {
-    shipped_or_file(text, &[Kind::Perturbation])
-}
+pub const PERTURBATION_FILE: ShippedOrFile = ShippedOrFile(&[Kind::Perturbation]);
 
 /// A scenario on the command line: an existing file or a shipped scenario's name (`paper`).
-pub fn scenario_file(text: &str) -> Result<PathBuf, String> {
-    shipped_or_file(text, &[Kind::Scenario])
-}
+pub const SCENARIO_FILE: ShippedOrFile = ShippedOrFile(&[Kind::Scenario]);
 
 /// Human-readable duration of `seconds` (`45 s`, `3.2 h`, `12 years`).
 pub fn duration_words(seconds: f64) -> String {

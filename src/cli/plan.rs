@@ -23,12 +23,12 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Nominal robot description (TOML), or a shipped one's name.
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// The axis experiments (TOML: `reference`, `[[sweeps]]`; `docs/formats.md#plan-file`), or
     /// a shipped plan's name. Default: paper Table 1 for a six-joint revolute arm, its
     /// generalisation for any other robot (as `simulate`).
-    #[arg(long, value_parser = super::options::plan_file)]
+    #[arg(long, value_parser = super::options::PLAN_FILE)]
     plan: Option<PathBuf>,
     /// The span of joint J's sweeps, `J=SPAN` (deg or mm); repeatable.
     #[arg(long, value_name = "J=SPAN", value_parser = joint_value)]

@@ -28,7 +28,7 @@ pub struct Args {
     calibration: PathBuf,
     /// Nominal robot description (TOML) the calibration was made with, or a shipped robot's
     /// name: the nominal values.
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// The measurement CSV the calibration was made from: its experiments are summarised. It
     /// must hold the sweeps the calibration records, with their poses.

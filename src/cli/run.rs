@@ -24,7 +24,7 @@ use std::time::Instant;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Scenario file (TOML), e.g. `scenarios/paper.toml`, or a shipped scenario's name (`paper`).
-    #[arg(value_parser = super::options::scenario_file)]
+    #[arg(value_parser = super::options::SCENARIO_FILE)]
     scenario: PathBuf,
     /// Print `summary.json` on stdout (the human-readable lines go to stderr). Not with
     /// `--shard`: a shard has no summary until `axiscal merge` (which takes `--json`) combines them.

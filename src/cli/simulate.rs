@@ -18,7 +18,8 @@ use std::path::{Path, PathBuf};
 
 /// The shipped default manufacturing errors (`scenarios/robots/default-perturbation.toml`).
 fn default_perturbation() -> Result<axiscal::sim::PerturbationSpec> {
-    let spec_path = super::options::perturbation_file("default-perturbation").map_err(anyhow::Error::msg)?;
+    let spec_path = super::options::shipped_or_file("default-perturbation", super::options::PERTURBATION_FILE.0)
+        .map_err(anyhow::Error::msg)?;
     Ok(axiscal::sim::PerturbationSpec::from_toml_str(
         &axiscal::presets::read_text(&spec_path)?,
         "default-perturbation.toml",
@@ -28,7 +29,7 @@ fn default_perturbation() -> Result<axiscal::sim::PerturbationSpec> {
 /// The shipped description of the paper's robot (`asea-irb6l.toml`).
 fn paper_description() -> Result<RobotDescription> {
     Ok(RobotDescription::from_file(
-        &super::options::robot_file("asea-irb6l").map_err(anyhow::Error::msg)?,
+        &super::options::shipped_or_file("asea-irb6l", super::options::ROBOT_FILE.0).map_err(anyhow::Error::msg)?,
     )?)
 }
 
@@ -137,12 +138,12 @@ const TRUTH_STREAM: u64 = 1;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Nominal robot description (TOML); the controller and the plan use it.
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Truth model of the simulated robot (TOML); default: the paper robot (Table 2 actual
     /// rows and the section-4 functions) for the IRB/L6, else the description perturbed by the
     /// shipped default manufacturing errors (`default-perturbation`, drawn with --seed).
-    #[arg(long, value_parser = super::options::truth_file)]
+    #[arg(long, value_parser = super::options::TRUTH_FILE)]
     truth: Option<PathBuf>,
     /// Measurement noise: two theodolites calibrated to 0.19 mm net radial error at the
     /// description's stations (`plan` counts line of sight from the same), or isotropic
@@ -157,7 +158,7 @@ pub struct Args {
     /// The campaign plan (TOML: `reference`, `[[sweeps]]`, `held_jitter`;
     /// `docs/formats.md#plan-file`). Default: paper Table 1 for a six-joint revolute arm, its
     /// generalisation for any other robot (each joint swept within its limits).
-    #[arg(long, value_parser = super::options::plan_file)]
+    #[arg(long, value_parser = super::options::PLAN_FILE)]
     plan: Option<PathBuf>,
     /// Number of validation poses (three tool targets each). Default: 60, none for a robot
     /// without tool targets.

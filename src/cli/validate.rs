@@ -33,7 +33,7 @@ pub struct Args {
     calibration: PathBuf,
     /// Nominal robot description (TOML) the calibration was made with, or a shipped robot's
     /// name (`asea-irb6l`).
-    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::robot_file)]
+    #[arg(long, default_value = "asea-irb6l", value_parser = super::options::ROBOT_FILE)]
     robot: PathBuf,
     /// Output folder.
     #[arg(long)]

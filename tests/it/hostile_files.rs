@@ -509,3 +509,49 @@ fn hostile_plan_files_name_their_key() {
         assert!(e.contains(&format!("plan{k}.toml")) && e.contains(key), "{to}: {e}");
     }
 }
+
+/// File names that are not UTF-8 (Latin-1 `é`, as an older system writes them) are taken
+/// wherever a file may also be a shipped name: `describe ROBOT`, `simulate --robot --truth`,
+/// `run SCENARIO`, a missing one refused naming it. Before, clap refused every such path:
+/// "invalid UTF-8 was detected in one or more arguments".
+#[cfg(unix)]
+#[test]
+fn paths_that_are_not_utf8_are_read() {
+    use std::os::unix::ffi::OsStrExt;
+    let dir = tempfile::tempdir().unwrap();
+    let latin1 = |stem: &str, ext: &str| {
+        dir.path().join(std::ffi::OsStr::from_bytes(
+            &[stem.as_bytes(), b"\xe9.", ext.as_bytes()].concat(),
+        ))
+    };
+    let robot = latin1("rob", "toml");
+    std::fs::write(&robot, shipped("scenarios/robots/arm6-dh.toml")).unwrap();
+    let described = axiscal().arg("describe").arg(&robot).assert().success();
+    assert!(
+        common::stdout(&described).contains("Six-axis arm"),
+        "{}",
+        common::stdout(&described)
+    );
+    let campaign = latin1("campagne", "csv");
+    axiscal()
+        .args(["simulate", "--quiet", "--sim", "analytic", "--robot"])
+        .arg(&robot)
+        .arg("--truth")
+        .arg(&robot)
+        .arg("--out")
+        .arg(&campaign)
+        .assert()
+        .success();
+    assert!(campaign.is_file());
+    let scenario = latin1("sc", "toml");
+    std::fs::write(&scenario, shipped("scenarios/ci-smoke.toml")).unwrap();
+    axiscal()
+        .args(["run", "--quiet", "--trials", "1", "--out"])
+        .arg(dir.path().join("results"))
+        .arg(&scenario)
+        .assert()
+        .success();
+    let missing = latin1("absent", "toml");
+    let e = error_of(&axiscal().arg("describe").arg(&missing).assert().code(2));
+    assert!(e.contains("absent\u{fffd}.toml"), "{e}");
+}

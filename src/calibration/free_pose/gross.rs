@@ -22,11 +22,30 @@ pub const GROSS_OVER_MEDIAN: f64 = 20.0;
 /// gross poses themselves, the next ones are not).
 const ROUNDS: usize = 3;
 
+/// The nominal model registered in closed form, the gross poses of `train` and the others:
+/// [`registered_without_gross`], or with `--keep-outliers` none set aside.
+pub(super) fn registered_start_and_gross(
+    problem: &Problem<'_>,
+    nominal: &RobotModel,
+    train: Vec<usize>,
+    options: &super::FreePoseOptions,
+) -> Result<(FreePoseModel, Vec<Flag>, Vec<usize>), FreePoseError> {
+    if options.keep_outliers {
+        return Ok((super::registered_start(problem, nominal, &train)?, vec![], train));
+    }
+    let (start, gross) = registered_without_gross(problem, nominal, &train, super::OUTLIER_SHARE_MAX)?;
+    let rest = train
+        .into_iter()
+        .filter(|i| !gross.iter().any(|g| g.pose == *i))
+        .collect();
+    Ok((start, gross, rest))
+}
+
 /// The nominal model registered in closed form on the poses `train` but the gross ones, and
 /// the gross ones (each with its RMS and the fence it passes, [`GROSS_OVER_MEDIAN`] times the
 /// median, from that registration). Nothing is set aside where more than `share_max` of the poses would be:
 /// the description, not single poses, misses such data, which the fit's own tests then say.
-pub(super) fn registered_without_gross(
+fn registered_without_gross(
     problem: &Problem<'_>,
     nominal: &RobotModel,
     train: &[usize],

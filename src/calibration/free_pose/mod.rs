@@ -114,25 +114,8 @@ pub fn calibrate_free_poses(
         layout: &[],
         description_targets_m: desc.tool_targets_m(),
     };
-    let (start, gross) = if options.keep_outliers {
-        (registered_start(&unplaced, &nominal, &train)?, vec![])
-    } else {
-        gross::registered_without_gross(&unplaced, &nominal, &train, OUTLIER_SHARE_MAX)?
-    };
-    let train: Vec<usize> = train
-        .into_iter()
-        .filter(|i| !gross.iter().any(|g| g.pose == *i))
-        .collect();
-    let mut layout = layout(
-        &nominal,
-        &poses.target_ids,
-        options.max_harmonic_order,
-        &poses.spans(&train),
-        poses.setup_names.len(),
-    );
-    if options.effects {
-        layout.extend(effects::effect_layout(&nominal, &poses, &train));
-    }
+    let (start, gross, train) = gross::registered_start_and_gross(&unplaced, &nominal, train, options)?;
+    let layout = fitted_layout(&nominal, &poses, &train, options);
     let problem = Problem {
         controller: &controller,
         poses: &poses,
@@ -211,6 +194,28 @@ pub fn calibrate_free_poses(
         effects_tried,
         scales,
     })
+}
+
+/// The parameters the fit may take ([`layout`]): the geometry, every setup's base, the targets,
+/// the transmissions' harmonics up to `--harmonics` over the spans of the poses `train`, and
+/// with `--effects` the effects' ([`effects::effect_layout`]).
+fn fitted_layout(
+    nominal: &RobotModel,
+    poses: &FreePoses,
+    train: &[usize],
+    options: &FreePoseOptions,
+) -> Vec<RefitParameter> {
+    let mut layout = layout(
+        nominal,
+        &poses.target_ids,
+        options.max_harmonic_order,
+        &poses.spans(train),
+        poses.setup_names.len(),
+    );
+    if options.effects {
+        layout.extend(effects::effect_layout(nominal, poses, train));
+    }
+    layout
 }
 
 /// [`fit_without_outliers`] on the poses the outlier screen sees (`screening`: the file's, or
