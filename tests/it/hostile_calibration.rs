@@ -773,3 +773,58 @@ fn every_command_negated_is_said_as_such_on_other_robots_files() {
         );
     }
 }
+
+/// A description that puts a sweep's target on the swept joint's own axis (the six-axis arm's
+/// wrist at the flange centre, a SCARA's wrist 0.3 mm off its axis) gives a sweep whose points
+/// do not move: the error names the description's `axis_targets` entry and its distance from
+/// the axis, not the span or the data. A joint that did not move with its target described off
+/// its axis (the shipped arm, joint 6's commands held) is still said as the data's.
+#[test]
+fn a_target_on_its_own_joints_axis_is_blamed_on_the_description() {
+    let dir = tempfile::tempdir().unwrap();
+    let robots = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots");
+    let cases = [
+        (
+            "arm6-dh",
+            6,
+            "[60.0, 40.0, 150.0]",
+            "[0.0, 0.0, 0.0]",
+            "position_mm = [0, 0, 0]",
+        ),
+        (
+            "scara-rrpr",
+            4,
+            "[90.0, 40.0, 40.0]",
+            "[0.3, 0.0, 40.0]",
+            "position_mm = [0.3, 0, 40]",
+        ),
+    ];
+    for (robot, joint, from, to, said) in cases {
+        let text = std::fs::read_to_string(robots.join(format!("{robot}.toml"))).unwrap();
+        let old = format!("joint = {joint}\ntarget0 = {{ link = {joint}, position_mm = {from} }}");
+        assert!(text.contains(&old), "{robot}: {old}");
+        let new = format!("joint = {joint}\ntarget0 = {{ link = {joint}, position_mm = {to} }}");
+        let desc = dir.path().join(format!("{robot}-on-axis.toml"));
+        std::fs::write(&desc, text.replace(&old, &new)).unwrap();
+        let data = format!("{robot}.csv");
+        simulate_analytic_of(dir.path(), desc.to_str().unwrap(), (10, 3), &data);
+        let e = calibrate_fails(&dir.path().join(&data), &["--robot", desc.to_str().unwrap()]);
+        assert!(
+            e.contains(&format!("(`axis_targets` of joint {joint}: link {joint}, {said})"))
+                && e.contains(&format!("mm from joint {joint}'s own axis")),
+            "{robot}: {e}"
+        );
+    }
+    // The shipped arm (target 72 mm off joint 6's axis), joint 6's sweep measured as if the
+    // joint had not moved (its points 0.01 mm apart a step).
+    let shipped = robots.join("arm6-dh.toml");
+    simulate_analytic_of(dir.path(), shipped.to_str().unwrap(), (10, 3), "still.csv");
+    let still = altered_experiment(&dir.path().join("still.csv"), "still-axis6.csv", "axis6", |f| {
+        let step: f64 = f[2].parse().unwrap();
+        f[4] = format!("{}", 1000.0 + 0.01 * step);
+        f[5] = "200".into();
+        f[6] = "300".into();
+    });
+    let e = calibrate_fails(&still, &["--robot", shipped.to_str().unwrap()]);
+    assert!(!e.contains("axis_targets"), "{e}");
+}

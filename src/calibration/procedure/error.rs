@@ -95,6 +95,36 @@ pub enum ProcedureError {
         /// Its span as written and the least the fit needs.
         span: ShortSpan,
     },
+    /// A turning joint's sweep moves its target less than the noise because the description
+    /// places that target on (or next to) the joint's own axis.
+    #[error(
+        "experiment {experiment} (joint {joint}): its points spread {spread_mm:.4} mm RMS about their centroid, within {factor} times the noise of a point ({noise_mm:.3} mm): the description places the sweep's target 0 (`axis_targets` of joint {joint}: link {link}, position_mm = [{}, {}, {}]) {off_axis_mm:.3} mm from joint {joint}'s own axis, where turning the joint barely moves it; put the target at least {needed_mm:.1} mm off the axis (tens of mm locate the axis well), measure it there and give its place in `axis_targets`",
+        position_mm[0],
+        position_mm[1],
+        position_mm[2]
+    )]
+    TargetOnAxis {
+        /// The experiments of the joint.
+        experiment: String,
+        /// The joint.
+        joint: usize,
+        /// The points' RMS spread \[mm\].
+        spread_mm: f64,
+        /// The noise of a point, 3-D RMS \[mm\].
+        noise_mm: f64,
+        /// [`crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`].
+        factor: f64,
+        /// The link the description puts the target on.
+        link: usize,
+        /// Its position in that link's frame \[mm\].
+        position_mm: [f64; 3],
+        /// Its distance from the joint's axis on the nominal robot at the sweep's first
+        /// commands \[mm\].
+        off_axis_mm: f64,
+        /// The least distance off the axis to put it at \[mm\]: where the sweep's span would
+        /// move it `factor` times the noise, and no less than the margin the check holds it to.
+        needed_mm: f64,
+    },
     /// A rotary joint's points lie on a straight line: no arc to fit.
     #[error(
         "experiment {experiment} (joint {joint}): its points are collinear: they lie on a straight line ({off_line_mm:.4} mm RMS from it, within {} times the noise of a point, {noise_mm:.3} mm) though the joint turns {} as written: a turning joint moves its target on an arc; check that the sweep's target 0 sits on the swept link, that the coordinates are the target's, and the joint's kind in the description",
