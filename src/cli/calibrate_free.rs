@@ -260,6 +260,15 @@ pub(super) fn block_place(b: &BlockShift) -> String {
     }
 }
 
+/// A p-value as a block's warning gives it: `= 2.9e-57`, or `< 1e-99`.
+pub(super) fn p_value_words(p: f64) -> String {
+    if p < 1e-99 {
+        "< 1e-99".to_owned()
+    } else {
+        format!("= {p:.1e}")
+    }
+}
+
 /// A [`BlockShift`] in words: where, by how much, how significant, what it did and the fix.
 fn block_words(b: &BlockShift) -> String {
     let place = block_place(b);
@@ -275,10 +284,7 @@ fn block_words(b: &BlockShift) -> String {
         b.shift_mm[0],
         b.shift_mm[1],
         b.shift_mm[2],
-        match b.p_value {
-            p if p < 1e-99 => "< 1e-99".to_owned(),
-            p => format!("= {p:.1e}"),
-        },
+        p_value_words(b.p_value),
         b.blocks_tried,
         b.written_rms_mm,
         b.undone_rms_mm

@@ -197,10 +197,7 @@ fn block_words(b: &ValidationBlock) -> String {
         b.shift_mm[0],
         b.shift_mm[1],
         b.shift_mm[2],
-        match b.p_value {
-            p if p < 1e-99 => "< 1e-99".to_owned(),
-            p => format!("= {p:.1e}"),
-        },
+        super::calibrate_free::p_value_words(b.p_value),
         b.blocks_tried,
         axiscal::calibration::free_pose::slip::SLIP_FALSE_ALARM,
         b.undone_chi2_per_dof,

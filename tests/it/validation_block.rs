@@ -26,6 +26,23 @@ fn calibrate(robot: &Path, file: &Path, out: &Path, extra: &[&str]) {
         .success();
 }
 
+/// The parallelogram arm and the KR arm, each with its calibration (in `dir`) from its
+/// generator's clean file (the KR arm's without effects): (description, calibration folder).
+fn clean_calibrations(dir: &Path) -> [(PathBuf, PathBuf); 2] {
+    let pg = data("independent-parallelogram", "pg-arm.toml");
+    let kr = data("independent-freepose", "kr-arm.toml");
+    let pg_cal = dir.join("pg");
+    calibrate(&pg, &data("independent-parallelogram", "none.csv"), &pg_cal, &[]);
+    let kr_cal = dir.join("kr");
+    calibrate(
+        &kr,
+        &data("independent-freepose", "clean.csv"),
+        &kr_cal,
+        &["--effects", "none"],
+    );
+    [(pg, pg_cal), (kr, kr_cal)]
+}
+
 /// `axiscal validate` of `file`: its stderr and its summary.json.
 fn validate(robot: &Path, calibration: &Path, file: &Path, out: &Path) -> (String, serde_json::Value) {
     let a = axiscal()
@@ -88,17 +105,7 @@ fn named_shift(warning: &str) -> [f64; 3] {
 #[test]
 fn a_shifted_block_of_validation_poses_is_named_by_its_lines() {
     let dir = tempfile::tempdir().unwrap();
-    let pg = data("independent-parallelogram", "pg-arm.toml");
-    let kr = data("independent-freepose", "kr-arm.toml");
-    let pg_cal = dir.path().join("pg");
-    calibrate(&pg, &data("independent-parallelogram", "none.csv"), &pg_cal, &[]);
-    let kr_cal = dir.path().join("kr");
-    calibrate(
-        &kr,
-        &data("independent-freepose", "clean.csv"),
-        &kr_cal,
-        &["--effects", "none"],
-    );
+    let [(pg, pg_cal), (kr, kr_cal)] = clean_calibrations(dir.path());
     let cases = [
         (
             (&pg, &pg_cal),
@@ -153,17 +160,7 @@ fn a_shifted_block_of_validation_poses_is_named_by_its_lines() {
 #[test]
 fn an_effects_miss_names_no_block() {
     let dir = tempfile::tempdir().unwrap();
-    let pg = data("independent-parallelogram", "pg-arm.toml");
-    let kr = data("independent-freepose", "kr-arm.toml");
-    let pg_cal = dir.path().join("pg");
-    calibrate(&pg, &data("independent-parallelogram", "none.csv"), &pg_cal, &[]);
-    let kr_cal = dir.path().join("kr");
-    calibrate(
-        &kr,
-        &data("independent-freepose", "clean.csv"),
-        &kr_cal,
-        &["--effects", "none"],
-    );
+    let [(pg, pg_cal), (kr, kr_cal)] = clean_calibrations(dir.path());
     let cases = [
         (&pg, &pg_cal, data("independent-parallelogram", "balancer-f0.7.csv")),
         (&pg, &pg_cal, data("independent-parallelogram", "joint3-hi.csv")),
