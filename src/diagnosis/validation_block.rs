@@ -8,7 +8,8 @@
 //! significant block of consecutive poses by [`most_significant_block`] (three poses at least
 //! inside and outside), its p-value times the blocks tried held against
 //! [`SLIP_FALSE_ALARM`]. Only a validation that misses its prediction is searched: a block too
-//! small to fail the validation changes none of its verdicts. A block that alone explains the
+//! small to fail the validation changes none of its verdicts. Files beyond the slip search's
+//! [`MAX_SEARCH_ROWS`] are not searched (each round validates a moved copy of the file). A block that alone explains the
 //! miss is refused before, by the slip search ([`super::combined_slips`]); this names one beside
 //! a miss no slip undoes (an effect the calibration lacks), as a warning.
 //!
@@ -22,6 +23,7 @@
 //! of poses alike) but hardly moves the RMS.
 
 use super::DiagnosisError;
+use super::combined_slips::MAX_SEARCH_ROWS;
 use super::validate::{PointKind, Validation, ValidationOptions, Verdict, residuals_less_calibration_error, validate};
 use crate::calibration::free_pose::slip::{MIN_BLOCK_POSES, SLIP_FALSE_ALARM};
 use crate::calibration::procedure::Calibration;
@@ -113,6 +115,11 @@ pub fn shifted_validation_block(
     desc: &RobotDescription,
     v: &Validation,
 ) -> Result<Option<ValidationBlock>, DiagnosisError> {
+    // Each round validates a moved copy of the file: held to the slip search's size, whose
+    // note says what is not searched beyond it.
+    if set.rows().len() > MAX_SEARCH_ROWS {
+        return Ok(None);
+    }
     let Some(summary) = v.validation.as_ref() else {
         return Ok(None);
     };
