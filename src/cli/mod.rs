@@ -11,7 +11,6 @@ macro_rules! say {
 mod blind;
 mod budget;
 mod calibrate;
-mod calibrate_free;
 mod checks;
 mod compensate;
 mod describe;

@@ -197,7 +197,7 @@ fn block_words(b: &ValidationBlock) -> String {
         b.shift_mm[0],
         b.shift_mm[1],
         b.shift_mm[2],
-        super::calibrate_free::p_value_words(b.p_value),
+        super::calibrate::p_value_words(b.p_value),
         b.blocks_tried,
         axiscal::calibration::free_pose::slip::SLIP_FALSE_ALARM,
         b.undone_chi2_per_dof,

@@ -442,6 +442,51 @@ fn the_layout_check_sees_a_missing_module_and_a_missing_file() {
     );
 }
 
+/// The files of `files` (paths relative to `src/`) that break the one module-file convention: a
+/// module with children is a folder with a `mod.rs`, so a `x.rs` beside a folder `x/` is one.
+fn beside_their_folder(files: &[PathBuf]) -> Vec<String> {
+    files
+        .iter()
+        .filter(|f| f.extension().is_some_and(|x| x == "rs"))
+        .filter(|f| {
+            let folder = f.with_extension("");
+            files.iter().any(|g| g.starts_with(&folder))
+        })
+        .map(|f| {
+            format!(
+                "src/{}: move it to src/{}/mod.rs",
+                f.display(),
+                f.with_extension("").display()
+            )
+        })
+        .collect()
+}
+
+/// One module-file convention: a module with child modules is `x/mod.rs`, never `x.rs` beside
+/// `x/`.
+#[test]
+fn a_module_with_children_is_its_folders_mod_rs() {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    let files: Vec<PathBuf> = files
+        .iter()
+        .map(|f| f.strip_prefix(src()).expect("under src/").to_path_buf())
+        .collect();
+    let found = beside_their_folder(&files);
+    assert!(found.is_empty(), "{}", found.join("\n"));
+}
+
+#[test]
+fn the_convention_check_sees_a_file_beside_its_folder() {
+    let files: Vec<PathBuf> = ["a/mod.rs", "a/one.rs", "b.rs", "b/tests.rs", "c.rs", "cd/x.rs"]
+        .map(PathBuf::from)
+        .to_vec();
+    assert_eq!(
+        beside_their_folder(&files),
+        vec!["src/b.rs: move it to src/b/mod.rs".to_string()]
+    );
+}
+
 /// Every shipped file of `src/` as its module path and code (comments and strings removed).
 fn crate_code() -> imports::Crate {
     let mut files = Vec::new();

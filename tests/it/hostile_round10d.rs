@@ -1,5 +1,5 @@
 //! The ninth hostile run's sweeps moved or scaled in real files that passed (run 9, NS2 and the
-//! Part A leftovers K-S3): the shared-target test (`calibration/shared_target.rs`) did not run
+//! Part A leftovers K-S3): the shared-target test (`calibration/shared_target/`) did not run
 //! where the description gives no `axis_targets` (SScanSS-2's robots, whose sweeps measure the
 //! tool frame's origin), where every sweep moves the target along one direction at the
 //! reference pose (a planar two-link robot), nor on a noise-free file (a noise of 0 mm); and

@@ -391,7 +391,7 @@ pub(super) fn fit_joint(
 
 /// With several sweeps: the residual RMS \[mm\] of the joint's fit (transmission `form`)
 /// from every sweep but each in turn (none where that fit fails, nor with one sweep): the
-/// leave-one-out that tells the sweep carrying a joint's misfit (`sanity.rs`).
+/// leave-one-out that tells the sweep carrying a joint's misfit (`sanity/`).
 fn rms_without_each(data: &JointData<'_>, form: TransmissionFitForm, setting: &FitSetting<'_>) -> Vec<Option<f64>> {
     let n = data.sweeps.len();
     if n < 2 {

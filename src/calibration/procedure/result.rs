@@ -202,7 +202,7 @@ pub struct SweepReport {
     pub own_axis_offset_mm: Option<f64>,
     /// With several sweeps: the residual RMS of the joint's fit from its other sweeps
     /// \[mm\] (null when that fit fails): the leave-one-out the misfit check names a sweep by
-    /// (`sanity.rs`). Not written to `calibration.json`.
+    /// (`sanity/`). Not written to `calibration.json`.
     #[serde(skip)]
     #[schemars(skip)]
     pub without_rms_mm: Option<f64>,

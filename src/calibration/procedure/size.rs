@@ -1,5 +1,5 @@
 //! The robot's size and how far a description may be off it: shared by the sanity checks
-//! (`sanity.rs`) and the pipeline (`height.rs`'s move along parallel axes), which must not
+//! (`sanity/`) and the pipeline (`height.rs`'s move along parallel axes), which must not
 //! import each other.
 
 use crate::robot::RobotDescription;
@@ -14,7 +14,7 @@ pub(super) fn row_lengths(rows: &[crate::kinematics::PhiRow]) -> Vec<f64> {
 }
 
 /// The longest length of the description's rows \[m\]: the robot's size, which
-/// `SIGNIFICANT_LENGTH` (`sanity.rs`) and [`SIZE_TOLERANCE`] are shares of.
+/// `SIGNIFICANT_LENGTH` (`sanity/`) and [`SIZE_TOLERANCE`] are shares of.
 pub fn longest_length_m(desc: &RobotDescription) -> f64 {
     row_lengths(&desc.nominal_model().rows)
         .iter()

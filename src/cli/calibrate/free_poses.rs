@@ -1,7 +1,7 @@
 //! `axiscal calibrate` on a file of free poses only: the free-pose calibration
 //! ([`axiscal::calibration::free_pose`]) and its console summary.
 
-use super::printer::Printer;
+use crate::cli::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::free_pose::block::{BlockShift, block_shift};
 use axiscal::calibration::free_pose::poses::{configurations, minimal_geometry_parameters};
@@ -239,9 +239,9 @@ pub fn print(s: &FreePoseSummary, desc: &RobotDescription, set: &MeasurementSet,
             h.unexecutable_poses
         );
     }
-    super::checks::print_pose_outliers(&s.outliers, set, data, "calibrated");
+    crate::cli::checks::print_pose_outliers(&s.outliers, set, data, "calibrated");
     if let Some(h) = &s.holdout {
-        super::checks::print_pose_outliers(&h.outliers, set, data, "held out: the held-out RMS taken");
+        crate::cli::checks::print_pose_outliers(&h.outliers, set, data, "held out: the held-out RMS taken");
     }
     if s.tool_fit_rms_mm.is_none() {
         say!(
@@ -261,7 +261,7 @@ pub(super) fn block_place(b: &BlockShift) -> String {
 }
 
 /// A p-value as a block's warning gives it: `= 2.9e-57`, or `< 1e-99`.
-pub(super) fn p_value_words(p: f64) -> String {
+pub(in crate::cli) fn p_value_words(p: f64) -> String {
     if p < 1e-99 {
         "< 1e-99".to_owned()
     } else {
@@ -420,7 +420,7 @@ fn print_scales(found: &FreePoseScales, (set, named): (&MeasurementSet, &[NamedS
         print_second_scales(&second.said, &second.found, data);
     }
     if let Some(profile) = &found.profile {
-        super::calibrate::print_coordinate_scale(profile, set, data, printer);
+        super::print_coordinate_scale(profile, set, data, printer);
     }
     // The columns said above are named; the line bounds the others.
     if let Some(reach) = &found.reach {

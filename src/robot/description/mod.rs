@@ -403,7 +403,7 @@ impl RobotDescription {
 
     /// The shipped ASEA IRB/L6 description (`scenarios/robots/asea-irb6l.toml`).
     pub fn asea_irb6l() -> Self {
-        let text = include_str!("../../scenarios/robots/asea-irb6l.toml");
+        let text = include_str!("../../../scenarios/robots/asea-irb6l.toml");
         Self::from_toml_str(text, Path::new("scenarios/robots/asea-irb6l.toml"))
             .expect("the shipped ASEA IRB/L6 description is valid (checked by tests)")
     }
