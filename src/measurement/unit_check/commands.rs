@@ -20,7 +20,8 @@
 //!   ([`OFFSETS_DEG`]) makes every radius match, that column is offset, not the coordinates
 //!   scaled.
 
-use super::{ExperimentArc, SPREAD_WARNING, UnitSlip};
+use super::arcs::ExperimentArc;
+use super::{SPREAD_WARNING, UnitSlip};
 use crate::kinematics::{JointKind, PhiModel};
 use crate::measurement::{Measurement, format_f64};
 use crate::robot::{Controller, LinkTarget, RobotDescription, RobotModel, commands_to_internal};
@@ -51,8 +52,8 @@ const COMMAND_FACTORS: [(f64, &str); 2] = [
 /// points or no arc.
 pub(super) fn turn_slope(rows: &[Measurement], k: usize) -> Option<(f64, f64)> {
     // In the order of the commands, which the angles are unwrapped along.
-    let rows = super::in_command_order(&rows.iter().collect::<Vec<_>>(), k);
-    let centre = super::arc_of(&rows, k)?.centre;
+    let rows = super::arcs::in_command_order(&rows.iter().collect::<Vec<_>>(), k);
+    let centre = super::arcs::arc_of(&rows, k)?.centre;
     let points: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.position_mm)).collect();
     if points.len() < 4 {
         return None;
@@ -144,7 +145,7 @@ fn swapped_targets(
 ) -> Option<UnitSlip> {
     let other = desc.axis_targets_of(a.joint)?.target1?;
     let nominal = nominal_rows(desc, ideal, controller, &a.rows, other)?;
-    let arc = super::arc_of(&nominal.iter().collect::<Vec<_>>(), a.joint - 1)?;
+    let arc = super::arcs::arc_of(&nominal.iter().collect::<Vec<_>>(), a.joint - 1)?;
     let (turn, _) = turn_slope(&nominal, a.joint - 1)?;
     let (measured, _) = a.turn?;
     (agree(a.arc.radius, arc.radius) && agree(measured, turn)).then(|| UnitSlip {
@@ -258,7 +259,7 @@ fn mismatches(
         .map(|a| {
             let mut cmd = a.first_cmd.clone();
             cmd[shift.0] += shift.1;
-            let nominal = super::nominal_radius_with(model, desc, a.joint, &commands_to_internal(desc, &cmd));
+            let nominal = super::arcs::nominal_radius_with(model, desc, a.joint, &commands_to_internal(desc, &cmd));
             nominal.map_or((f64::INFINITY, f64::INFINITY), |n| {
                 let ratio = (a.arc.radius / n).ln().abs();
                 (ratio, (ratio - super::RADIUS_SIGMAS * sigma(a)).max(0.0))

@@ -14,7 +14,8 @@
 //! metres. Its column is named when one of its coordinate columns multiplied into millimetres
 //! ([`LENGTH_UNITS`]) puts the experiment in place, or two of its columns exchanged do.
 
-use super::{ExperimentArc, LENGTH_UNITS, MAX_SCATTER_GROWTH, SPREAD_WARNING, UnitSlip, arc_of};
+use super::arcs::{ExperimentArc, arc_of};
+use super::{LENGTH_UNITS, MAX_SCATTER_GROWTH, SPREAD_WARNING, UnitSlip};
 use crate::measurement::{Measurement, format_f64};
 use nalgebra::Point3;
 
@@ -50,7 +51,7 @@ fn centre_mismatch_mm(centre: &Point3<f64>, i: usize, arcs: &[ExperimentArc]) ->
 /// Whether experiment `i`'s arc `arc` (as measured or converted) is in place: its radius
 /// within [`SPREAD_WARNING`] of the description's or of its noise (`Arc::radius_off`) and its
 /// centre within `tolerance_mm`.
-fn in_place(arc: &super::Arc, i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> bool {
+fn in_place(arc: &super::arcs::Arc, i: usize, arcs: &[ExperimentArc], tolerance_mm: f64) -> bool {
     let radius = arcs[i].nominal_mm.is_none_or(|n| !arc.radius_off(n));
     radius && centre_mismatch_mm(&arc.centre, i, arcs).is_none_or(|d| d <= tolerance_mm)
 }
@@ -65,14 +66,14 @@ fn in_place(arc: &super::Arc, i: usize, arcs: &[ExperimentArc], tolerance_mm: f6
 /// conversion moves it, and may restore noise a coarser unit hid) and 1 for an arc in place but
 /// of another radius, whose conversion must make its ellipse a circle: a noisy arc's radius is
 /// off too, and flattening it by a column's factor fits it no better.
-fn fits(arc: &super::Arc, i: usize, arcs: &[ExperimentArc], growth: f64) -> bool {
+fn fits(arc: &super::arcs::Arc, i: usize, arcs: &[ExperimentArc], growth: f64) -> bool {
     let turn = arcs[i].nominal_turn.map_or(1.0, f64::abs);
     (arc.turn_ratio / turn).ln().abs() <= SPREAD_WARNING.ln()
         && arc.radius_scatter <= growth * arcs[i].arc.radius_scatter
 }
 
 /// Experiment `i`'s arc with each row's coordinates changed by `change`.
-fn converted(i: usize, arcs: &[ExperimentArc], change: impl Fn(&mut [f64; 3])) -> Option<super::Arc> {
+fn converted(i: usize, arcs: &[ExperimentArc], change: impl Fn(&mut [f64; 3])) -> Option<super::arcs::Arc> {
     let a = &arcs[i];
     let rows: Vec<Measurement> = a
         .rows

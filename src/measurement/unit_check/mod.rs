@@ -17,18 +17,24 @@
 //! 1000, while a real robot differs from its nominal description by percent.
 
 use crate::kinematics::JointKind;
-use crate::measurement::{Measurement, MeasurementSet, format_f64};
-use crate::robot::{RobotDescription, RowEntry, commands_to_internal};
+use crate::measurement::{MeasurementSet, format_f64};
+use crate::robot::{RobotDescription, RowEntry};
 use nalgebra::{Point3, Vector3};
 
+mod arcs;
 pub mod axis_scale;
 pub mod column_stretch;
 mod commands;
 mod experiments;
+mod free_poses;
 mod handedness;
 mod sweeps;
 mod travel;
 
+use arcs::{ExperimentArc, experiment_arcs};
+use free_poses::{one_scale, plausible_spread};
+
+pub use free_poses::{FreePoseSpread, free_pose_scale_warning, free_pose_slips, free_pose_spread};
 pub use travel::judged_checks;
 
 /// How much more the point triples' radii may scatter once a column is converted than as read:
@@ -40,6 +46,7 @@ pub(super) const MAX_SCATTER_GROWTH: f64 = 1.732;
 
 /// A ratio this far from 1 (either way) is a unit slip, not a robot's deviation.
 pub const SLIP_FACTOR: f64 = 5.0;
+
 /// The longest plausible row length \[m\] of a robot arm.
 pub const MAX_ROW_LENGTH_M: f64 = 20.0;
 
@@ -254,21 +261,6 @@ fn targets_beyond_the_arm(desc: &RobotDescription, points: &[(String, f64)]) -> 
     })
 }
 
-/// Centre, radius and the angle from `a` over `b` to `c` of the circle through three points,
-/// or `None` when they are (nearly) collinear.
-fn circle_through(a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> Option<(Point3<f64>, f64, f64)> {
-    let (u, v) = (b - a, c - a);
-    let w = u.cross(&v);
-    let w2 = w.norm_squared();
-    if w2 <= 1e-12 * u.norm_squared() * v.norm_squared() {
-        return None;
-    }
-    // Circumcentre of a triangle in 3-D.
-    let centre = a + (v.cross(&w) * u.norm_squared() + w.cross(&u) * v.norm_squared()) / (2.0 * w2);
-    let angle = |p: &Point3<f64>, q: &Point3<f64>| (p - centre).angle(&(q - centre));
-    Some((centre, (a - centre).norm(), angle(a, b) + angle(b, c)))
-}
-
 /// Median of `values` (NaN when empty).
 fn median(mut values: Vec<f64>) -> f64 {
     if values.is_empty() {
@@ -278,204 +270,10 @@ fn median(mut values: Vec<f64>) -> f64 {
     values[values.len() / 2]
 }
 
-/// One axis experiment's target-0 arc ([`arc_of`]).
-struct Arc {
-    /// Median radius \[file length units\].
-    radius: f64,
-    /// Component-wise median centre \[file length units\].
-    centre: Point3<f64>,
-    /// Median ratio of the turned angle to the commanded span (both read in degrees).
-    turn_ratio: f64,
-    /// Median absolute deviation of the point triples' radii from their median, over it: how
-    /// far the points lie from one circle.
-    radius_scatter: f64,
-    /// The standard error of `radius` \[file length units\]: the triples' spread (1.4826 times
-    /// their median absolute deviation) times the median's 1.2533 over the square root of the
-    /// triples (disjoint, so independent).
-    radius_sigma: f64,
-    /// The standard error of `radius` \[mm\] at the noise the checks assume
-    /// ([`noise_radius_sigma`] over the square root of the triples): what one triple's radius
-    /// is worth, where its scatter gives none; in millimetres, so not for a test of the
-    /// coordinates' units.
-    noise_radius_sigma: f64,
-}
-
 /// A radius departs from the described one by more than this many of its standard errors
-/// ([`Arc::radius_sigma`]) before its size is read as a unit: a sweep whose held joints wander
+/// ([`arcs::Arc::radius_sigma`]) before its size is read as a unit: a sweep whose held joints wander
 /// by a tenth of a degree scatters its point triples' radii by a fifth of a short wrist radius.
 pub(super) const RADIUS_SIGMAS: f64 = 3.0;
-
-impl Arc {
-    /// Whether the radius departs from `nominal` (the same unit) beyond [`SPREAD_WARNING`] and
-    /// beyond [`RADIUS_SIGMAS`] of its standard error.
-    fn radius_off(&self, nominal: f64) -> bool {
-        (self.radius / nominal).ln().abs() > SPREAD_WARNING.ln()
-            && (self.radius - nominal).abs() > RADIUS_SIGMAS * self.radius_sigma
-    }
-}
-
-/// `rows` in the order of command `k` (0-based) when they are not in it already (either way):
-/// a sweep's rows written in another order than the joint moved (sorted by another column, a
-/// shuffled export) keep each point beside its own command, and the triples of [`arc_of`] are
-/// taken along the arc, not across it (which would read as a turn many times the commanded).
-fn in_command_order<'a>(rows: &[&'a Measurement], k: usize) -> Vec<&'a Measurement> {
-    let monotonic = |up: bool| {
-        rows.windows(2).all(|w| match up {
-            true => w[1].cmd[k] >= w[0].cmd[k],
-            false => w[1].cmd[k] <= w[0].cmd[k],
-        })
-    };
-    let mut sorted = rows.to_vec();
-    if !monotonic(true) && !monotonic(false) {
-        sorted.sort_by(|a, b| a.cmd[k].total_cmp(&b.cmd[k]));
-    }
-    sorted
-}
-
-/// How far the command of joint `k` (0-based) moves from the first to the last point of a
-/// triple of [`arc_of`] (`rows[i]`, `rows[i + m]`, `rows[i + 2m]` in command order, `m` a third
-/// of the rows): the median over the triples, read in degrees; 0 with fewer than 3 rows. Five
-/// points over 30 degrees make one triple over 15 degrees.
-fn triple_span_deg(rows: &[&Measurement], k: usize) -> f64 {
-    let rows = in_command_order(rows, k);
-    let m = rows.len() / 3;
-    median(
-        (0..m)
-            .map(|i| (rows[i + 2 * m].cmd[k] - rows[i].cmd[k]).abs().min(360.0))
-            .collect(),
-    )
-    .max(0.0)
-}
-
-/// One axis experiment's target-0 arc from the circles through its point triples, taken in the
-/// order of the commands ([`in_command_order`]).
-fn arc_of(rows: &[&Measurement], k: usize) -> Option<Arc> {
-    let rows = in_command_order(rows, k);
-    let m = rows.len() / 3;
-    if m == 0 {
-        return None;
-    }
-    let (mut radii, mut ratios, mut centres, mut sagittas) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for i in 0..m {
-        let (a, b, c) = (rows[i], rows[i + m], rows[i + 2 * m]);
-        let p = |r: &Measurement| Point3::from(Vector3::from(r.position_mm));
-        let commanded = (c.cmd[k] - a.cmd[k]).abs();
-        if let Some((centre, radius, angle)) = circle_through(&p(a), &p(b), &p(c))
-            && commanded > 0.0
-        {
-            centres.push(centre);
-            radii.push(radius);
-            ratios.push(angle.to_degrees() / commanded);
-            let chord = p(c) - p(a);
-            sagittas.push((p(b) - p(a)).cross(&chord).norm() / chord.norm());
-        }
-    }
-    let turn_ratio = median(ratios);
-    let centre = Point3::from(Vector3::from_fn(|k, _| median(centres.iter().map(|c| c[k]).collect())));
-    let radius = median(radii.clone());
-    let deviation = median(radii.iter().map(|r| (r - radius).abs()).collect());
-    let triples = (radii.len() as f64).sqrt();
-    Some(Arc {
-        centre,
-        radius,
-        turn_ratio,
-        radius_scatter: deviation / radius,
-        radius_sigma: 1.2533 * 1.4826 * deviation / triples,
-        noise_radius_sigma: 1.2533 * noise_radius_sigma(radius, median(sagittas)) / triples,
-    })
-}
-
-/// The noise of a point the radius test assumes, per coordinate \[mm\]: the paper's
-/// theodolites' 0.2 mm 3-D RMS, the noisiest instrument the checks expect (a laser tracker's
-/// 0.02-0.05 mm leaves the test conservative).
-const ASSUMED_POINT_NOISE_MM: f64 = 0.2 / 1.7320508075688772;
-
-/// The standard error \[mm\] of the radius of a circle through three points of sagitta
-/// `sagitta_mm` (the middle point's distance from the chord) at [`ASSUMED_POINT_NOISE_MM`]:
-/// `r = (c/2)^2 / (2 s) + s / 2`, so `dr/ds = 1/2 - (c/2)^2 / (2 s^2)`, about `-r / s` for a
-/// short arc, and the sagitta's error is the middle point's radial error less the mean of the
-/// ends', `sqrt(1 + 1/4 + 1/4)` times a point's. With a single triple the triples' scatter
-/// gives no standard error; this floor is what the noise alone makes of it.
-fn noise_radius_sigma(radius_mm: f64, sagitta_mm: f64) -> f64 {
-    let ds = 1.5f64.sqrt() * ASSUMED_POINT_NOISE_MM;
-    (0.5 - (radius_mm - sagitta_mm / 2.0) / sagitta_mm).abs() * ds
-}
-
-/// An arc whose sagitta, as the description and the commands give it, is below this \[mm\]
-/// is not judged ([`too_short_to_judge`]): a circle through three of its points
-/// measures the instrument's noise (0.2 mm for the paper's theodolites, 0.02-0.05 mm for a
-/// laser tracker) more than its radius.
-const MIN_JUDGED_SAGITTA_MM: f64 = 1.0;
-
-/// The commanded span of joint `k` (0-based) over `rows` (read in degrees, at most a turn).
-fn commanded_span_deg(rows: &[&Measurement], k: usize) -> f64 {
-    let (lo, hi) = rows
-        .iter()
-        .map(|r| r.cmd[k])
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
-    (hi - lo).abs().min(360.0)
-}
-
-/// The sagitta and the chord \[mm\] of the arc a target at `radius_mm` from its axis draws
-/// over `span_deg`.
-fn arc_extent_mm(radius_mm: f64, span_deg: f64) -> (f64, f64) {
-    let half = (span_deg / 2.0).to_radians();
-    (radius_mm * (1.0 - half.cos()), 2.0 * radius_mm * half.sin())
-}
-
-/// The distance \[file length units\] between the points of `rows` at the lowest and the
-/// highest command of joint `k` (0-based): the measured arc's chord.
-fn measured_chord(rows: &[&Measurement], k: usize) -> f64 {
-    let by_command = |a: &&&Measurement, b: &&&Measurement| a.cmd[k].total_cmp(&b.cmd[k]);
-    match (rows.iter().min_by(by_command), rows.iter().max_by(by_command)) {
-        (Some(lo), Some(hi)) => (Vector3::from(hi.position_mm) - Vector3::from(lo.position_mm)).norm(),
-        _ => 0.0,
-    }
-}
-
-/// Whether the arc of `rows` (target 0 of joint `k`, 0-based, `radius_mm` from its axis by the
-/// description) is too short to judge: the sagitta of the arc through one of its point triples
-/// ([`triple_span_deg`]: the circles [`arc_of`] judges) by the description and the commands is
-/// below [`MIN_JUDGED_SAGITTA_MM`], and its points spread either that little too or as far as
-/// the commands move them (the chord of the whole sweep the description and the commands give,
-/// within [`SLIP_FACTOR`]): a short sweep, not a slip. Commands in radians draw a chord 57 times
-/// the commanded one; coordinates in metres a thousandth of it.
-fn too_short_to_judge(rows: &[&Measurement], k: usize, radius_mm: f64) -> bool {
-    let (sagitta, _) = arc_extent_mm(radius_mm, triple_span_deg(rows, k));
-    let (_, chord) = arc_extent_mm(radius_mm, commanded_span_deg(rows, k));
-    let points: Vec<Point3<f64>> = rows.iter().map(|r| Point3::from(r.position_mm)).collect();
-    sagitta < MIN_JUDGED_SAGITTA_MM
-        && (crate::numerics::stats::rms_spread(&points) < MIN_JUDGED_SAGITTA_MM
-            || !slipped(measured_chord(rows, k) / chord))
-}
-
-/// The radius \[mm\] target 0 of joint `joint` (1-based) turns on about its axis on `model`
-/// (the description's nominal) at joint values `q`.
-fn nominal_radius_with(
-    model: &crate::kinematics::PhiModel,
-    desc: &RobotDescription,
-    joint: usize,
-    q: &[f64],
-) -> Option<f64> {
-    nominal_circle(model, desc, joint, q).map(|(_, r)| r)
-}
-
-/// The centre \[mm, the nominal base frame\] and radius \[mm\] of the circle target 0 of joint
-/// `joint` (1-based) turns on about its axis on `model` at joint values `q`.
-fn nominal_circle(
-    model: &crate::kinematics::PhiModel,
-    desc: &RobotDescription,
-    joint: usize,
-    q: &[f64],
-) -> Option<(Point3<f64>, f64)> {
-    let target = desc.axis_targets_of(joint)?.target0;
-    let poses = model.poses(q);
-    let axis = poses.axis(joint - 1);
-    let p = poses.world_from_link.get(target.link - 1)? * target.position_m();
-    let d = p - axis.origin_m;
-    let along = axis.direction.into_inner() * d.dot(&axis.direction);
-    Some(((axis.origin_m + along) * 1e3, (d - along).norm() * 1e3))
-}
 
 /// The free poses may spread this much more or less (a ratio) than the nominal model at their
 /// commands before a warning: a robot within its drawing's tolerances and
@@ -534,7 +332,7 @@ pub fn data_faults(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSli
 
 /// Steps \[mm\] coordinates may be rounded to, coarsest first: a multiple of 1 mm adds
 /// `1 / sqrt(12)` = 0.29 mm of noise to each coordinate, above the 0.2 mm of the paper's
-/// theodolites that [`MIN_JUDGED_SAGITTA_MM`] assumes and far above a laser tracker's.
+/// theodolites that [`arcs::MIN_JUDGED_SAGITTA_MM`] assumes and far above a laser tracker's.
 const ROUNDING_STEPS_MM: [f64; 6] = [100.0, 50.0, 10.0, 5.0, 2.0, 1.0];
 
 /// Fewer rows than this are not judged rounded: a few round values happen.
@@ -605,68 +403,6 @@ fn one_column_slip(set: &MeasurementSet, desc: &RobotDescription) -> Option<Unit
             format_f64(1.0 / ratio)
         ),
     })
-}
-
-/// One revolute axis experiment's target-0 arc, with what the description says of it.
-struct ExperimentArc {
-    /// The moved joint (1-based).
-    joint: usize,
-    /// The experiment's id.
-    name: String,
-    /// The commands of its first target-0 row, as read.
-    first_cmd: Vec<f64>,
-    /// The arc measured.
-    arc: Arc,
-    /// The radius the description gives it at `first_cmd` \[mm\], when above 1 mm.
-    nominal_mm: Option<f64>,
-    /// The centre the description gives it at `first_cmd` \[mm, the nominal base frame\].
-    nominal_centre_mm: Option<Point3<f64>>,
-    /// Its target-0 rows, by step.
-    rows: Vec<Measurement>,
-    /// Degrees target 0 turns per degree of the command and its sigma ([`commands::turn_slope`]).
-    turn: Option<(f64, f64)>,
-    /// The same of the description's nominal robot at the same commands.
-    nominal_turn: Option<f64>,
-}
-
-/// The judged arcs of the revolute axis experiments' target 0 (a sweep too short to judge is
-/// left out: the calibration says when it is too short to locate its axis).
-fn experiment_arcs(set: &MeasurementSet, desc: &RobotDescription) -> Vec<ExperimentArc> {
-    let mut arcs = Vec::new();
-    let model = desc.nominal_model();
-    let ideal = crate::robot::RobotModel::ideal(desc);
-    let controller = crate::robot::Controller::from_description(desc);
-    for e in set.experiments().iter().filter(|e| e.moved_joint > 0) {
-        let joint = e.moved_joint;
-        if desc.joints.get(joint - 1).is_none_or(|j| j.kind != JointKind::Revolute) {
-            continue;
-        }
-        let by_step = e.by_step_target();
-        let rows: Vec<&Measurement> = by_step.iter().filter(|((_, t), _)| *t == 0).map(|(_, m)| *m).collect();
-        let Some(first) = rows.first() else {
-            continue;
-        };
-        let nominal = nominal_circle(&model, desc, joint, &commands_to_internal(desc, &first.cmd));
-        let nominal_mm = nominal.map(|c| c.1).filter(|r| *r > 1.0);
-        if nominal_mm.is_some_and(|r| too_short_to_judge(&rows, joint - 1, r)) {
-            continue;
-        }
-        if let Some(arc) = arc_of(&rows, joint - 1) {
-            let owned: Vec<Measurement> = rows.iter().map(|m| (*m).clone()).collect();
-            arcs.push(ExperimentArc {
-                joint,
-                name: e.name.to_string(),
-                first_cmd: first.cmd.clone(),
-                arc,
-                nominal_mm,
-                nominal_centre_mm: nominal.map(|c| c.0),
-                turn: commands::turn_slope(&owned, joint - 1),
-                nominal_turn: commands::nominal_turn_slope(desc, &ideal, &controller, &owned, joint),
-                rows: owned,
-            });
-        }
-    }
-    arcs
 }
 
 /// [`measurement_slips`] of the file's columns as they are.
@@ -769,303 +505,6 @@ fn slips_as_read(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip>
     slips
 }
 
-/// Free poses whose tool positions spread less than this \[mm\], measured and nominal alike,
-/// are not judged: their spread is the instrument's noise more than the robot's motion (as
-/// [`MIN_JUDGED_SAGITTA_MM`] for an arc).
-const MIN_JUDGED_SPREAD_MM: f64 = 1.0;
-
-/// Fewer free poses than this are not judged: two poses make one distance, which a robot far
-/// from its description could stretch.
-const MIN_FREE_POSES: usize = 3;
-
-/// One free pose: the centroid of its measured tool targets \[file length units\] and of the
-/// same targets on the nominal model at its commands (read in degrees) \[mm\].
-struct FreePose {
-    /// Its first row in the set.
-    row: usize,
-    setup: usize,
-    measured: Vector3<f64>,
-    nominal: Vector3<f64>,
-    targets: usize,
-}
-
-/// The free poses of `set` (rows with `moved_joint = 0` whose target is one of the
-/// description's tool targets), in order of first appearance. A description that places no
-/// tool target (a free-pose calibration fits them) has each target taken at the tool frame's
-/// origin, as the handedness check takes it: the targets' unknown offsets, a tool's size, move
-/// both spreads alike by far less than the arm's reach that a slip scales them by.
-fn free_poses(set: &MeasurementSet, desc: &RobotDescription) -> Vec<FreePose> {
-    let mut tool_targets = desc.tool_targets_m();
-    if tool_targets.is_empty() {
-        tool_targets = vec![Point3::origin(); set.rows().iter().map(|m| m.target + 1).max().unwrap_or(0)];
-    }
-    let ideal = crate::robot::RobotModel::ideal(desc);
-    let controller = crate::robot::Controller::from_description(desc);
-    let model = ideal.phi_model();
-    // The joint values the nominal robot reaches for the commands (the controller's couplings
-    // applied); the commands read as joint values where they cannot be decoupled.
-    let joint_values = |cmd: &[f64]| {
-        let internal = commands_to_internal(desc, cmd);
-        ideal.joint_values(&controller, &internal).unwrap_or(internal)
-    };
-    let mut index: std::collections::HashMap<(&str, usize), usize> = std::collections::HashMap::new();
-    let mut poses: Vec<(FreePose, nalgebra::Isometry3<f64>)> = Vec::new();
-    for (i, m) in set.rows().iter().enumerate() {
-        let Some(target) = tool_targets.get(m.target).filter(|_| m.moved_joint == 0) else {
-            continue;
-        };
-        let k = *index.entry((m.experiment.as_str(), m.step)).or_insert_with(|| {
-            let world_from_tool = model.world_from_tool(&joint_values(&m.cmd));
-            let pose = FreePose {
-                row: i,
-                setup: set.setup_of(i),
-                measured: Vector3::zeros(),
-                nominal: Vector3::zeros(),
-                targets: 0,
-            };
-            poses.push((pose, world_from_tool));
-            poses.len() - 1
-        });
-        let (pose, world_from_tool) = &mut poses[k];
-        pose.measured += Vector3::from(m.position_mm);
-        pose.nominal += (*world_from_tool * target).coords * 1e3;
-        pose.targets += 1;
-    }
-    poses
-        .into_iter()
-        .map(|(mut p, _)| {
-            p.measured /= p.targets as f64;
-            p.nominal /= p.targets as f64;
-            p
-        })
-        .collect()
-}
-
-/// The RMS distance of `points` from their setup's centroid (each setup its own instrument
-/// placement).
-fn spread(points: &[(usize, Vector3<f64>)]) -> f64 {
-    let mut centroids: std::collections::BTreeMap<usize, (Vector3<f64>, usize)> = std::collections::BTreeMap::new();
-    for (setup, p) in points {
-        let c = centroids.entry(*setup).or_insert((Vector3::zeros(), 0));
-        c.0 += p;
-        c.1 += 1;
-    }
-    let sum: f64 = points
-        .iter()
-        .map(|(setup, p)| {
-            let (sum, n) = centroids[setup];
-            (p - sum / n as f64).norm_squared()
-        })
-        .sum();
-    (sum / points.len() as f64).sqrt()
-}
-
-/// A pose whose measured distance from the median point over its nominal one is beyond this
-/// factor of the poses' median ratio is in other units than most ([`bulk`]): a robot within its
-/// description keeps every ratio within per cent of the median away from the median point
-/// (near it both distances are small and their ratio noisy: such poses count little in a
-/// spread), and the slips are 25.4 (inches), 57 (radians) or 1000 (metres).
-const BULK_RATIO_FACTOR: f64 = 3.0;
-
-/// Each point's distance from its setup's component-wise median point, in the order given.
-fn radii_by_setup(points: &[(usize, Vector3<f64>)]) -> Vec<f64> {
-    let mut setups: std::collections::BTreeMap<usize, Vec<usize>> = std::collections::BTreeMap::new();
-    for (i, (setup, _)) in points.iter().enumerate() {
-        setups.entry(*setup).or_default().push(i);
-    }
-    let mut out = vec![0.0; points.len()];
-    for members in setups.values() {
-        let r = radii(&members.iter().map(|&i| points[i].1).collect::<Vec<_>>());
-        members.iter().zip(r).for_each(|(&i, r)| out[i] = r);
-    }
-    out
-}
-
-/// The poses whose own ratio of measured to nominal distance from the median point lies within
-/// [`BULK_RATIO_FACTOR`] of the median ratio of those distances: a few poses in other units
-/// than the rest (a tool row in mm beside validation rows in metres) move neither median and
-/// are left out of the spreads, so the ratio is the bulk's. All of them when no median ratio
-/// can be taken.
-fn bulk(measured: &[(usize, Vector3<f64>)], nominal: &[(usize, Vector3<f64>)]) -> Vec<usize> {
-    let (m, n) = (radii_by_setup(measured), radii_by_setup(nominal));
-    let typical = median(m.clone()) / median(n.clone());
-    let all: Vec<usize> = (0..measured.len()).collect();
-    if !(typical.is_finite() && typical > 0.0) {
-        return all;
-    }
-    let near = |i: &usize| {
-        let r = m[*i] / n[*i] / typical;
-        r.is_finite() && (1.0 / BULK_RATIO_FACTOR..=BULK_RATIO_FACTOR).contains(&r)
-    };
-    let kept: Vec<usize> = all.iter().copied().filter(near).collect();
-    if kept.len() < MIN_FREE_POSES { all } else { kept }
-}
-
-/// How far the free poses' measured tool positions spread against the nominal model's at
-/// their commands ([`free_pose_slips`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FreePoseSpread {
-    /// Free poses judged.
-    pub poses: usize,
-    /// RMS distance of the measured positions from their setup's centroid, over the poses in
-    /// the units of most \[file length units\].
-    pub measured_mm: f64,
-    /// The same of the nominal model's positions \[mm\].
-    pub nominal_mm: f64,
-    /// `measured_mm / nominal_mm`.
-    pub ratio: f64,
-}
-
-/// The free poses' spread, or `None` when too few poses or too little motion to judge.
-pub fn free_pose_spread(set: &MeasurementSet, desc: &RobotDescription) -> Option<FreePoseSpread> {
-    let poses = free_poses(set, desc);
-    if poses.len() < MIN_FREE_POSES {
-        return None;
-    }
-    let measured: Vec<(usize, Vector3<f64>)> = poses.iter().map(|p| (p.setup, p.measured)).collect();
-    let nominal: Vec<(usize, Vector3<f64>)> = poses.iter().map(|p| (p.setup, p.nominal)).collect();
-    let kept = bulk(&measured, &nominal);
-    let of = |points: &[(usize, Vector3<f64>)]| spread(&kept.iter().map(|&i| points[i]).collect::<Vec<_>>());
-    let (measured, nominal) = (of(&measured), of(&nominal));
-    (measured.max(nominal) >= MIN_JUDGED_SPREAD_MM).then_some(FreePoseSpread {
-        poses: poses.len(),
-        measured_mm: measured,
-        nominal_mm: nominal,
-        ratio: measured / nominal,
-    })
-}
-
-/// Whether a spread ratio is a robot's within its drawing's tolerances ([`SPREAD_WARNING`]).
-fn plausible_spread(ratio: f64) -> bool {
-    (1.0 / SPREAD_WARNING..=SPREAD_WARNING).contains(&ratio)
-}
-
-/// A warning when the free poses spread beyond [`SPREAD_WARNING`] of the nominal model's but
-/// not as far as a slip ([`free_pose_slips`]): coordinates scaled on export, or another robot,
-/// when every pose is scaled alike (`one_scale`); else the poses whose commands and
-/// coordinates disagree, with their lines.
-pub fn free_pose_scale_warning(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
-    let s = free_pose_spread(set, desc)?;
-    if plausible_spread(s.ratio) || slipped(s.ratio) {
-        return None;
-    }
-    let spread = format!(
-        "the {} free poses' measured tool positions spread {:.3} times as far as the nominal model at their commands",
-        s.poses, s.ratio
-    );
-    let message = match one_scale(set, desc) {
-        Ok(()) => format!("{spread}: coordinates scaled on export, or another robot than the description?"),
-        Err(uneven) => format!("{spread}, but {uneven}"),
-    };
-    Some(UnitSlip {
-        field: "x_mm,y_mm,z_mm".into(),
-        message,
-    })
-}
-
-/// The most lines a warning names.
-const NAMED_LINES: usize = 5;
-
-/// `Ok` when the free poses' spread is one scale of the nominal model's, pose by pose: over the
-/// poses farther out than the median (near the centre a distance is mostly the robot's own
-/// deviation), each pose's distance from its setup's median point over its nominal one; their
-/// median is the bulk's scale and their quartiles lie within [`SPREAD_WARNING`] of it, as
-/// coordinates scaled on export make them (every pose alike, within the robot's per cent). Else
-/// the words of what the data show instead, with the lines of the poses farthest off: most poses
-/// match the model and a few do not (rows slipped), or the poses match no one scale.
-fn one_scale(set: &MeasurementSet, desc: &RobotDescription) -> Result<(), String> {
-    let poses = free_poses(set, desc);
-    let measured: Vec<(usize, Vector3<f64>)> = poses.iter().map(|p| (p.setup, p.measured)).collect();
-    let nominal: Vec<(usize, Vector3<f64>)> = poses.iter().map(|p| (p.setup, p.nominal)).collect();
-    let (m, n) = (radii_by_setup(&measured), radii_by_setup(&nominal));
-    let outer = median(n.clone());
-    let ratios: Vec<(usize, f64)> = (0..poses.len())
-        .filter(|&i| n[i] >= outer && n[i] > 0.0)
-        .map(|i| (i, m[i] / n[i]))
-        .collect();
-    let values: Vec<f64> = ratios.iter().map(|r| r.1).collect();
-    let q = |p: f64| crate::numerics::stats::quantile(&values, p, crate::numerics::stats::QuantileMethod::Linear);
-    let (q1, mid, q3) = (q(0.25), q(0.5), q(0.75));
-    let off = |r: f64| (r / mid).ln().abs();
-    let alike = mid / q1 <= SPREAD_WARNING && q3 / mid <= SPREAD_WARNING;
-    let every = values.iter().all(|r| off(*r) <= SPREAD_WARNING.ln());
-    if values.len() < MIN_FREE_POSES || q1.is_nan() || q1 <= 0.0 || (alike && (every || !plausible_spread(mid))) {
-        return Ok(());
-    }
-    let mut worst = ratios.clone();
-    worst.sort_by(|a, b| off(b.1).total_cmp(&off(a.1)));
-    let lines = |poses_off: &[(usize, f64)]| -> String {
-        let named: Vec<String> = poses_off
-            .iter()
-            .take(NAMED_LINES)
-            .filter_map(|(i, r)| Some(format!("line {} ({r:.2} times)", set.line_of(poses[*i].row)?)))
-            .collect();
-        named.join(", ")
-    };
-    if alike {
-        let beyond: Vec<(usize, f64)> = worst.into_iter().filter(|r| off(r.1) > SPREAD_WARNING.ln()).collect();
-        return Err(format!(
-            "not by one scale: most poses match the model (pose by pose their distances from the centre are {mid:.2} \
-             times the model's, the quartiles over the outer half of the poses within a quarter of it), and {} of \
-             those {} are not: {}: check those rows' coordinates and commands (a sign or a column slipped in some \
-             rows, another pose's reading), not the units",
-            beyond.len(),
-            values.len(),
-            lines(&beyond)
-        ));
-    }
-    Err(format!(
-        "not by one scale: pose by pose their distances from the centre are {q1:.2} to {q3:.2} times the model's (the \
-         quartiles over the outer half of the poses), where coordinates scaled on export scale every pose alike: the \
-         poses' commands and coordinates do not match each other (rows whose commands or coordinates slipped, rows in \
-         another order than their commands; the farthest off: {}), or the description is not this robot's",
-        lines(&worst)
-    ))
-}
-
-/// Coordinates or commands of the free poses whose units look wrong: the RMS spread of the
-/// poses' measured tool positions over the spread of the nominal model's at their commands (the
-/// same targets, each setup about its own centroid, so where the robot stands does not count).
-/// A robot differs from its description by per cent; coordinates in metres give 0.001,
-/// commands in radians (read as degrees) about 57.
-pub fn free_pose_slips(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSlip> {
-    let Some(spread) = free_pose_spread(set, desc).filter(|s| slipped(s.ratio)) else {
-        return Vec::new();
-    };
-    let (ratio, measured, nominal) = (spread.ratio, spread.measured_mm, spread.nominal_mm);
-    let radians = unit_of(&ANGLE_UNITS[..1], ratio).is_some();
-    let what = format!(
-        "the {} free poses' (moved_joint = 0) measured tool positions spread {measured:.4} (RMS about their centroid) where the nominal model at their commands spreads them {nominal:.1} mm, {ratio:.4} times",
-        spread.poses
-    );
-    // A unit is named only when it scales every pose alike ([`one_scale`]).
-    if let Err(uneven) = one_scale(set, desc) {
-        return vec![UnitSlip {
-            field: "x_mm,y_mm,z_mm".into(),
-            message: format!("{what}, but {uneven}"),
-        }];
-    }
-    let revolute: Vec<String> = desc
-        .joints
-        .iter()
-        .enumerate()
-        .filter(|(_, j)| j.kind == JointKind::Revolute)
-        .map(|(k, _)| format!("cmd_{}", k + 1))
-        .collect();
-    let slip = if radians && !revolute.is_empty() {
-        UnitSlip {
-            field: revolute.join(","),
-            message: format!("{what}: the commands look like radians rather than degrees"),
-        }
-    } else {
-        UnitSlip {
-            field: "x_mm,y_mm,z_mm".into(),
-            message: format!("{what}: the coordinates {}", coordinates_look(ratio)),
-        }
-    };
-    vec![slip]
-}
-
 /// Data that do not look like the description's robot at all: its nominal model, placed at best,
 /// misses the points by a good part of their spread (the handedness module's rotation fit).
 pub fn not_this_robot(set: &MeasurementSet, desc: &RobotDescription) -> Option<UnitSlip> {
@@ -1129,7 +568,10 @@ pub fn pose_slips(positions_m: &[Point3<f64>], desc: &RobotDescription) -> Optio
 
 #[cfg(test)]
 mod tests {
+    use super::arcs::{ASSUMED_POINT_NOISE_MM, circle_through, noise_radius_sigma, triple_span_deg};
     use super::*;
+    use crate::measurement::Measurement;
+    use crate::robot::commands_to_internal;
 
     /// The radius's standard error at the assumed noise against the spread of the radii of
     /// circles through three noisy points (a Monte Carlo of `circle_through`, the second path):

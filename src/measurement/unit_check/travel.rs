@@ -209,8 +209,8 @@ fn slide_slips(set: &MeasurementSet, desc: &RobotDescription, coordinates_said: 
 /// reading of a file in other units that passes the checks only because they no longer judge it
 /// (angles read so small that the nominal robot barely moves) has not been shown to fit.
 pub fn judged_checks(set: &MeasurementSet, desc: &RobotDescription) -> usize {
-    super::experiment_arcs(set, desc).len()
+    super::arcs::experiment_arcs(set, desc).len()
         + travels(set, desc).len()
         + tool_arcs(set, desc).len()
-        + usize::from(super::free_pose_spread(set, desc).is_some())
+        + usize::from(super::free_poses::free_pose_spread(set, desc).is_some())
 }
