@@ -46,6 +46,16 @@ fn src() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
 }
 
+/// Every `*.rs` file of `src/`, relative to it.
+fn src_files() -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    rust_files(&src(), &mut files);
+    files
+        .iter()
+        .map(|f| f.strip_prefix(src()).expect("under src/").to_path_buf())
+        .collect()
+}
+
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     let mut entries: Vec<_> = std::fs::read_dir(dir)
         .unwrap_or_else(|e| panic!("reading {}: {e}", dir.display()))
@@ -386,12 +396,7 @@ fn layout_problems(block: &[String], files: &[PathBuf]) -> Vec<String> {
 /// against the files, so a module named in prose passes.
 #[test]
 fn every_module_is_in_the_architecture_map() {
-    let mut files = Vec::new();
-    rust_files(&src(), &mut files);
-    let files: Vec<PathBuf> = files
-        .iter()
-        .map(|f| f.strip_prefix(src()).expect("under src/").to_path_buf())
-        .collect();
+    let files = src_files();
     let problems = layout_problems(&layout_block(), &files);
     assert!(
         problems.is_empty(),
@@ -466,12 +471,7 @@ fn beside_their_folder(files: &[PathBuf]) -> Vec<String> {
 /// `x/`.
 #[test]
 fn a_module_with_children_is_its_folders_mod_rs() {
-    let mut files = Vec::new();
-    rust_files(&src(), &mut files);
-    let files: Vec<PathBuf> = files
-        .iter()
-        .map(|f| f.strip_prefix(src()).expect("under src/").to_path_buf())
-        .collect();
+    let files = src_files();
     let found = beside_their_folder(&files);
     assert!(found.is_empty(), "{}", found.join("\n"));
 }
