@@ -26,16 +26,28 @@ use std::path::{Path, PathBuf};
 
 /// Why a plot could not be drawn or written.
 #[derive(Debug, thiserror::Error)]
-#[error("plot {path}: {message}")]
+#[error("plot {path}: {cause}")]
 pub struct PlotError {
     /// The file.
     pub path: PathBuf,
-    /// What plotters said.
-    pub message: String,
+    /// What went wrong while drawing it.
+    pub cause: DrawError,
+}
+
+/// What plotters said when a drawing step failed. Its error types are generic over the
+/// backend (bitmap or SVG), so its message is what one plot's steps have in common.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct DrawError(String);
+
+impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for DrawError {
+    fn from(e: DrawingAreaErrorKind<E>) -> Self {
+        DrawError(e.to_string())
+    }
 }
 
 /// Draws one plot to a path, PNG (`true`) or SVG.
-pub(crate) type DrawFn<'a> = dyn Fn(&Path, bool) -> Result<(), String> + 'a;
+pub(crate) type DrawFn<'a> = dyn Fn(&Path, bool) -> Result<(), DrawError> + 'a;
 
 /// Draws every `(name, draw)` job to `dir/name.png` and `dir/name.svg`; returns the files.
 pub(crate) fn write_png_and_svg(dir: &Path, jobs: &[(&str, &DrawFn)]) -> Result<Vec<PathBuf>, PlotError> {
@@ -44,9 +56,9 @@ pub(crate) fn write_png_and_svg(dir: &Path, jobs: &[(&str, &DrawFn)]) -> Result<
     for (name, draw) in jobs {
         for (ext, png) in [("png", true), ("svg", false)] {
             let path = dir.join(format!("{name}.{ext}"));
-            draw(&path, png).map_err(|message| PlotError {
+            draw(&path, png).map_err(|cause| PlotError {
                 path: path.clone(),
-                message,
+                cause,
             })?;
             written.push(path);
         }
@@ -59,14 +71,14 @@ pub(crate) fn write_png_and_svg(dir: &Path, jobs: &[(&str, &DrawFn)]) -> Result<
 pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     position: SeriesLabelPosition,
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     chart
         .configure_series_labels()
         .position(position)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .draw()
-        .map_err(|e| e.to_string())
+        .draw()?;
+    Ok(())
 }
 
 /// One bar of a [`bar_chart`].
@@ -108,8 +120,8 @@ pub(crate) fn bar_chart<DB: DrawingBackend>(
     bars: &[Bar],
     categories: &[Category],
     references: &[Reference],
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+) -> Result<(), DrawError> {
+    root.fill(&WHITE)?;
     let n = bars.len().max(1);
     let hi = bars
         .iter()
@@ -134,25 +146,21 @@ pub(crate) fn bar_chart<DB: DrawingBackend>(
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(label_width.min(360))
-        .build_cartesian_2d(from..hi, 0.0..n as f64)
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(from..hi, 0.0..n as f64)?;
     let row = |i: usize| (n - 1 - i) as f64;
     chart
         .configure_mesh()
         .disable_y_mesh()
         .y_labels(0)
         .x_desc(x_desc)
-        .draw()
-        .map_err(|e| e.to_string())?;
-    chart
-        .draw_series(bars.iter().enumerate().map(|(i, b)| {
-            let y = row(i);
-            Rectangle::new(
-                [(from, y + 0.15), (b.value.clamp(from, hi), y + 0.85)],
-                b.color.mix(0.75).filled(),
-            )
-        }))
-        .map_err(|e| e.to_string())?;
+        .draw()?;
+    chart.draw_series(bars.iter().enumerate().map(|(i, b)| {
+        let y = row(i);
+        Rectangle::new(
+            [(from, y + 0.15), (b.value.clamp(from, hi), y + 0.85)],
+            b.color.mix(0.75).filled(),
+        )
+    }))?;
     // Bar labels in the y label area, right-aligned against the axis.
     let (area_x, _) = chart.plotting_area().get_pixel_range();
     let style = TextStyle::from(("sans-serif", 13).into_font()).pos(text_anchor::Pos::new(
@@ -161,14 +169,12 @@ pub(crate) fn bar_chart<DB: DrawingBackend>(
     ));
     for (i, b) in bars.iter().enumerate() {
         let (_, py) = chart.backend_coord(&(from, row(i) + 0.5));
-        root.draw_text(&b.label, &style, (area_x.start - 6, py))
-            .map_err(|e| e.to_string())?;
+        root.draw_text(&b.label, &style, (area_x.start - 6, py))?;
     }
     for c in categories {
         let color = c.color;
         chart
-            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
-            .map_err(|e| e.to_string())?
+            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())?
             .label(c.label.clone())
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 18, y + 5)], color.mix(0.75).filled()));
     }
@@ -178,13 +184,12 @@ pub(crate) fn bar_chart<DB: DrawingBackend>(
             .draw_series(LineSeries::new(
                 [(r.value, 0.0), (r.value, n as f64)],
                 color.stroke_width(2),
-            ))
-            .map_err(|e| e.to_string())?
+            ))?
             .label(r.label.clone())
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2)));
     }
     if !references.is_empty() || !categories.is_empty() {
         draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
     }
-    root.present().map_err(|e| e.to_string())
+    Ok(root.present()?)
 }

@@ -6,7 +6,7 @@
 //! stay white, and the tool points of the poses inside the calibrated spans are marked.
 
 use super::tool_accuracy::MapPoint;
-use crate::plotting::{DrawFn, PlotError, write_png_and_svg};
+use crate::plotting::{DrawError, DrawFn, PlotError, write_png_and_svg};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -84,9 +84,8 @@ fn colour(t: f64) -> RGBColor {
     RGBColor(mix(r0, r1), mix(g0, g1), mix(b0, b1))
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -> Result<(), String> {
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
-    root.fill(&WHITE).map_err(e)?;
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -> Result<(), DrawError> {
+    root.fill(&WHITE)?;
     let workspace: Vec<&MapPoint> = points.iter().filter(|p| !p.inside_spans).collect();
     let (cells, [r0, r1, h0, h1]) = cells(&workspace);
     let (lo, hi) = cells
@@ -101,20 +100,18 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(r0 * 1e3..r1 * 1e3, h0 * 1e3..h1 * 1e3)
-        .map_err(e)?;
+        .build_cartesian_2d(r0 * 1e3..r1 * 1e3, h0 * 1e3..h1 * 1e3)?;
     chart
         .configure_mesh()
         .x_desc("reach from the base z axis [mm]")
         .y_desc("height above the base [mm]")
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     let t = |v: f64| if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
-    chart
-        .draw_series(cells.iter().map(|([a, b], [c, d], v)| {
+    chart.draw_series(
+        cells.iter().map(|([a, b], [c, d], v)| {
             Rectangle::new([(a * 1e3, c * 1e3), (b * 1e3, d * 1e3)], colour(t(*v)).filled())
-        }))
-        .map_err(e)?;
+        }),
+    )?;
     let inside: Vec<&MapPoint> = points.iter().filter(|p| p.inside_spans).collect();
     let inside_rms_mm =
         (inside.iter().map(|p| p.sigma.position_norm_mm.powi(2)).sum::<f64>() / inside.len().max(1) as f64).sqrt();
@@ -125,8 +122,7 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -
                 .iter()
                 .filter(in_view)
                 .map(|p| Circle::new((p.reach_m * 1e3, p.height_m * 1e3), 2, RED.filled())),
-        )
-        .map_err(e)?
+        )?
         .label(format!(
             "tool point of a pose inside the calibrated spans (1-sigma RMS {inside_rms_mm:.3} mm)"
         ))
@@ -138,16 +134,13 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, points: &[MapPoint]) -
         bar.draw(&Rectangle::new(
             [(20, y0), (45, y0 + 8)],
             colour(f64::from(k) / f64::from(steps - 1)).filled(),
-        ))
-        .map_err(e)?;
+        ))?;
     }
     let font = ("sans-serif", 14).into_font();
-    bar.draw(&Text::new(format!("{hi:.3}"), (50, 58), font.clone()))
-        .map_err(e)?;
-    bar.draw(&Text::new(format!("{lo:.3}"), (50, 60 + steps * 8 - 12), font.clone()))
-        .map_err(e)?;
-    bar.draw(&Text::new("mm", (20, 40), font)).map_err(e)?;
-    root.present().map_err(|e| e.to_string())
+    bar.draw(&Text::new(format!("{hi:.3}"), (50, 58), font.clone()))?;
+    bar.draw(&Text::new(format!("{lo:.3}"), (50, 60 + steps * 8 - 12), font.clone()))?;
+    bar.draw(&Text::new("mm", (20, 40), font))?;
+    Ok(root.present()?)
 }
 
 /// Writes the map of `points` into `dir` ([`TOOL_MAP_FILES`]).

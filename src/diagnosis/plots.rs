@@ -3,7 +3,7 @@
 //! (`candidates`).
 
 use super::{AxesDiagnosis, Diagnosis, WhereEntry};
-use crate::plotting::{Bar, Category, DrawFn, PlotError, Reference, bar_chart, write_png_and_svg};
+use crate::plotting::{Bar, Category, DrawError, DrawFn, PlotError, Reference, bar_chart, write_png_and_svg};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -30,7 +30,7 @@ struct Chart<'a> {
 }
 
 /// Draws a [`bar_chart`] to a PNG or SVG file.
-fn draw(path: &Path, png: bool, c: &Chart) -> Result<(), String> {
+fn draw(path: &Path, png: bool, c: &Chart) -> Result<(), DrawError> {
     if png {
         let root = BitMapBackend::new(path, SIZE).into_drawing_area();
         bar_chart(root, c.title, c.x_desc, c.from, c.bars, c.categories, c.references)

@@ -11,8 +11,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
-use crate::plotting::DrawFn;
 pub use crate::plotting::PlotError;
+use crate::plotting::{DrawError, DrawFn};
 
 /// How a series' points are drawn.
 #[derive(Clone, Copy)]
@@ -79,8 +79,8 @@ fn per_pose_chart<DB: DrawingBackend>(
     (y_desc, unit, precision): (&str, &str, usize),
     series: &[Series],
     bands: &[RegionBand],
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+) -> Result<(), DrawError> {
+    root.fill(&WHITE)?;
     let n = series.iter().map(|s| s.values.len()).max().unwrap_or(0);
     let all = series
         .iter()
@@ -97,25 +97,19 @@ fn per_pose_chart<DB: DrawingBackend>(
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
-        .build_cartesian_2d(-0.5..(n.max(1) as f64 - 0.5), (lo..hi).log_scale())
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(-0.5..(n.max(1) as f64 - 0.5), (lo..hi).log_scale())?;
     chart
         .configure_mesh()
         .x_desc("test pose")
         .y_desc(y_desc)
         .x_label_formatter(&|x| format!("{x:.0}"))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     for (k, b) in bands.iter().enumerate() {
         let (x0, x1) = (b.poses.start as f64 - 0.5, b.poses.end as f64 - 0.5);
         let shade = if k % 2 == 0 { RGBColor(235, 235, 235) } else { WHITE };
-        chart
-            .draw_series([Rectangle::new([(x0, lo), (x1, hi)], shade.filled())])
-            .map_err(|e| e.to_string())?;
+        chart.draw_series([Rectangle::new([(x0, lo), (x1, hi)], shade.filled())])?;
         let text = format!("{} ({} poses)", b.label, b.poses.len());
-        chart
-            .draw_series([Text::new(text, (x0 + 0.3, hi / 1.25), ("sans-serif", 15))])
-            .map_err(|e| e.to_string())?;
+        chart.draw_series([Text::new(text, (x0 + 0.3, hi / 1.25), ("sans-serif", 15))])?;
     }
     for s in series {
         let (color, marker) = (s.color, s.marker);
@@ -123,8 +117,7 @@ fn per_pose_chart<DB: DrawingBackend>(
         let drawn = match marker {
             Marker::Dot => chart.draw_series(points.map(|c| Circle::new(c, 3, color.filled()))),
             Marker::Cross => chart.draw_series(points.map(|c| Cross::new(c, 4, color.stroke_width(2)))),
-        }
-        .map_err(|e| e.to_string())?;
+        }?;
         drawn
             .label(legend_text(s, bands, unit, precision))
             .legend(move |(x, y)| match marker {
@@ -133,15 +126,15 @@ fn per_pose_chart<DB: DrawingBackend>(
             });
     }
     crate::plotting::draw_legend(&mut chart, SeriesLabelPosition::LowerRight)?;
-    root.present().map_err(|e| e.to_string())
+    Ok(root.present()?)
 }
 
 fn histogram<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     calibrated: &[f64],
     floor: &[f64],
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+) -> Result<(), DrawError> {
+    root.fill(&WHITE)?;
     let hi = calibrated.iter().chain(floor).copied().fold(0.0f64, f64::max).max(1e-6) * 1.05;
     let bins = 20;
     let width = hi / bins as f64;
@@ -159,14 +152,12 @@ fn histogram<DB: DrawingBackend>(
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(50)
-        .build_cartesian_2d(0.0..hi, 0u32..top)
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(0.0..hi, 0u32..top)?;
     chart
         .configure_mesh()
         .x_desc("position error [mm]")
         .y_desc("poses")
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     let bars = |c: &[u32], color: RGBColor, filled: bool| {
         let style = if filled {
             color.mix(0.6).filled()
@@ -179,22 +170,19 @@ fn histogram<DB: DrawingBackend>(
             .collect::<Vec<_>>()
     };
     chart
-        .draw_series(bars(&cc, BLUE, true))
-        .map_err(|e| e.to_string())?
+        .draw_series(bars(&cc, BLUE, true))?
         .label("calibrated + compensated")
         .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], BLUE.mix(0.6).filled()));
     chart
-        .draw_series(bars(&cf, RED, false))
-        .map_err(|e| e.to_string())?
+        .draw_series(bars(&cf, RED, false))?
         .label("noise floor")
         .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], RED.stroke_width(2)));
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .draw()
-        .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())
+        .draw()?;
+    Ok(root.present()?)
 }
 
 /// The size of figs. 9 and 10 \[px\].

@@ -33,7 +33,7 @@ pub use file::{ConditionsSection, Instrument, IsoSection, ScenarioFile, SimMode}
 pub use iso::ISO_METRICS;
 pub use metrics::{Metrics, TrialRecord};
 pub use resolve::{Case, Overrides, ResolvedScenario, ResolvedTruth};
-pub use runner::{CoverageError, Shard, complete_run, run_units, run_units_until};
+pub use runner::{CoverageError, Shard, ShardError, complete_run, run_units, run_units_until};
 pub use seed::trial_seed;
 pub use stats::{Stat, Stats, stat_of};
 pub use summary::Summary;

@@ -480,7 +480,7 @@ fn swept_cases(
         return nonempty(values, "sweep.span_scale")?
             .iter()
             .map(|v| {
-                let plan = scaled(base_plan, *v).map_err(|m| ("sweep.span_scale".to_owned(), m))?;
+                let plan = scaled(base_plan, *v).map_err(|e| ("sweep.span_scale".to_owned(), e.to_string()))?;
                 Ok(draft(
                     format!("span_scale={v}"),
                     measurement,
@@ -543,12 +543,18 @@ fn base_plan(section: &PlanSection, robot: &RobotDescription) -> Result<Calibrat
         sweeps: section.sweeps.clone().unwrap_or(table1.sweeps),
         held_jitter: None,
     };
-    scaled(&plan, section.span_scale).map_err(|m| ("plan.span_scale".into(), m))
+    scaled(&plan, section.span_scale).map_err(|e| ("plan.span_scale".into(), e.to_string()))
 }
 
-fn scaled(plan: &CalibrationPlan, scale: f64) -> Result<CalibrationPlan, String> {
+/// A span scale that is not finite and positive.
+#[derive(Debug, thiserror::Error)]
+#[error("span scale {} must be finite and > 0", format_f64(*.0))]
+struct NotAScale(f64);
+
+/// `plan` with every sweep's span and start times `scale`.
+fn scaled(plan: &CalibrationPlan, scale: f64) -> Result<CalibrationPlan, NotAScale> {
     if !(scale.is_finite() && scale > 0.0) {
-        return Err(format!("span scale {} must be finite and > 0", format_f64(scale)));
+        return Err(NotAScale(scale));
     }
     let mut plan = plan.clone();
     for s in &mut plan.sweeps {

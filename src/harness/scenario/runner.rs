@@ -28,15 +28,39 @@ impl Shard {
     }
 }
 
-impl FromStr for Shard {
-    type Err = String;
+/// Why a `--shard K/N` text is not a shard.
+#[derive(Debug, PartialEq, thiserror::Error)]
+pub enum ShardError {
+    /// No `/`.
+    #[error("shard {0:?} is not K/N")]
+    NotKOverN(String),
+    /// K or N is not a whole number.
+    #[error("shard {text:?}: {error}")]
+    NotWhole {
+        /// The whole text.
+        text: String,
+        /// Why the part did not parse.
+        error: std::num::ParseIntError,
+    },
+    /// K is 0 or above N.
+    #[error("shard {0:?}: need 1 <= K <= N")]
+    OutOfRange(String),
+}
 
-    fn from_str(s: &str) -> Result<Self, String> {
-        let (k, n) = s.split_once('/').ok_or_else(|| format!("shard {s:?} is not K/N"))?;
-        let parse = |x: &str| x.trim().parse::<usize>().map_err(|e| format!("shard {s:?}: {e}"));
+impl FromStr for Shard {
+    type Err = ShardError;
+
+    fn from_str(s: &str) -> Result<Self, ShardError> {
+        let (k, n) = s.split_once('/').ok_or_else(|| ShardError::NotKOverN(s.to_owned()))?;
+        let parse = |x: &str| {
+            x.trim().parse::<usize>().map_err(|error| ShardError::NotWhole {
+                text: s.to_owned(),
+                error,
+            })
+        };
         let (index, count) = (parse(k)?, parse(n)?);
         if count == 0 || index == 0 || index > count {
-            return Err(format!("shard {s:?}: need 1 <= K <= N"));
+            return Err(ShardError::OutOfRange(s.to_owned()));
         }
         Ok(Shard { index, count })
     }

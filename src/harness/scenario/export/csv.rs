@@ -186,10 +186,32 @@ fn read_trials_with(
                 format!("{} columns, the header has {}", rec.len(), head.len()),
             ));
         }
-        records.push(parse_row(&rec, &head, &names, has_error, scenario).map_err(|m| bad(line, m))?);
+        records.push(parse_row(&rec, &head, &names, has_error, scenario).map_err(|e| bad(line, e.to_string()))?);
         lines.push(line);
     }
     Ok((names, records, lines))
+}
+
+/// What is wrong with one cell of a trials file.
+#[derive(Debug, thiserror::Error)]
+enum TrialRowError {
+    #[error("column `case`: unknown case {0:?}")]
+    UnknownCase(String),
+    #[error("column `{column}`: {error}")]
+    NotWhole {
+        column: &'static str,
+        error: std::num::ParseIntError,
+    },
+    #[error("column `trial`: {trial} >= trials {trials}")]
+    TrialBeyond { trial: usize, trials: usize },
+    #[error("column `{column}`: {value} is not finite (a trial's metrics are)")]
+    NotFinite { column: String, value: f64 },
+    #[error("column `{column}`: {text:?}: {error}")]
+    NotANumber {
+        column: String,
+        text: String,
+        error: std::num::ParseFloatError,
+    },
 }
 
 /// One row of a trials file (`rec`, header `head`).
@@ -199,18 +221,25 @@ fn parse_row(
     names: &[String],
     has_error: bool,
     scenario: &ResolvedScenario,
-) -> Result<TrialRecord, String> {
+) -> Result<TrialRecord, TrialRowError> {
     let name = &rec[0];
     let case = scenario
         .cases
         .iter()
         .position(|c| c.name == name)
-        .ok_or_else(|| format!("column `case`: unknown case {name:?}"))?;
-    let trial: usize = rec[1].parse().map_err(|e| format!("column `trial`: {e}"))?;
-    if trial >= scenario.trials {
-        return Err(format!("column `trial`: {trial} >= trials {}", scenario.trials));
+        .ok_or_else(|| TrialRowError::UnknownCase(name.to_owned()))?;
+    let whole = |column: &'static str, text: &str| {
+        text.parse::<u64>()
+            .map_err(|error| TrialRowError::NotWhole { column, error })
+    };
+    let trial = whole("trial", &rec[1])?;
+    if trial >= scenario.trials as u64 {
+        return Err(TrialRowError::TrialBeyond {
+            trial: trial as usize,
+            trials: scenario.trials,
+        });
     }
-    let seed: u64 = rec[2].parse().map_err(|e| format!("column `seed`: {e}"))?;
+    let (trial, seed) = (trial as usize, whole("seed", &rec[2])?);
     let error = Some(rec[head.len() - 1].to_owned()).filter(|e| has_error && !e.is_empty());
     let values = if error.is_some() {
         Vec::new()
@@ -218,11 +247,15 @@ fn parse_row(
         (3..3 + names.len())
             .map(|i| match rec[i].parse::<f64>() {
                 Ok(v) if v.is_finite() => Ok(v),
-                Ok(v) => Err(format!(
-                    "column `{}`: {v} is not finite (a trial's metrics are)",
-                    head[i]
-                )),
-                Err(e) => Err(format!("column `{}`: {:?}: {e}", head[i], &rec[i])),
+                Ok(value) => Err(TrialRowError::NotFinite {
+                    column: head[i].clone(),
+                    value,
+                }),
+                Err(error) => Err(TrialRowError::NotANumber {
+                    column: head[i].clone(),
+                    text: rec[i].to_owned(),
+                    error,
+                }),
             })
             .collect::<Result<Vec<_>, _>>()?
     };

@@ -73,12 +73,12 @@ pub enum ExportError {
         message: String,
     },
     /// A plot could not be drawn.
-    #[error("{path}: plotting: {message}")]
+    #[error("{path}: plotting: {cause}")]
     Plot {
         /// The file.
         path: PathBuf,
-        /// Why.
-        message: String,
+        /// What plotters said.
+        cause: crate::plotting::DrawError,
     },
 }
 

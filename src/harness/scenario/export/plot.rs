@@ -6,6 +6,7 @@ use super::ExportError;
 use crate::harness::scenario::metrics::TrialRecord;
 use crate::harness::scenario::resolve::ResolvedScenario;
 use crate::harness::scenario::threshold::Threshold;
+use crate::plotting::DrawError;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -33,14 +34,23 @@ pub fn histogram_svg(
     index: usize,
     records: &[TrialRecord],
 ) -> Result<(), ExportError> {
-    let err = |e: String| ExportError::Plot {
+    draw_histograms(path, scenario, metric, index, records).map_err(|cause| ExportError::Plot {
         path: path.to_owned(),
-        message: e,
-    };
+        cause,
+    })
+}
+
+fn draw_histograms(
+    path: &Path,
+    scenario: &ResolvedScenario,
+    metric: &str,
+    index: usize,
+    records: &[TrialRecord],
+) -> Result<(), DrawError> {
     let panels = scenario.cases.len().max(1);
     crate::plotting::register_font();
     let root = SVGBackend::new(path, (720, 260 * panels as u32)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+    root.fill(&WHITE)?;
     let areas = root.split_evenly((panels, 1));
     let values_of = |c: usize| -> Vec<f64> {
         records
@@ -86,20 +96,13 @@ pub fn histogram_svg(
             .margin(10)
             .x_label_area_size(30)
             .y_label_area_size(40)
-            .build_cartesian_2d(lo..hi, 0usize..top + 1)
-            .map_err(|e| err(e.to_string()))?;
-        chart
-            .configure_mesh()
-            .x_desc(metric)
-            .y_desc("trials")
-            .draw()
-            .map_err(|e| err(e.to_string()))?;
+            .build_cartesian_2d(lo..hi, 0usize..top + 1)?;
+        chart.configure_mesh().x_desc(metric).y_desc("trials").draw()?;
         chart
             .draw_series(counts.iter().enumerate().map(|(i, &n)| {
                 let x0 = lo + i as f64 * width;
                 Rectangle::new([(x0, 0), (x0 + width, n)], BLUE.mix(0.6).filled())
-            }))
-            .map_err(|e| err(e.to_string()))?
+            }))?
             .label(format!("trials ({})", values.len()))
             .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 18, y + 5)], BLUE.mix(0.6).filled()));
         let applies = |t: &&&Threshold| t.case.as_ref().is_none_or(|n| *n == case.name);
@@ -109,12 +112,11 @@ pub fn histogram_svg(
                 .draw_series(LineSeries::new(
                     [(t.value, 0), (t.value, top + 1)],
                     color.stroke_width(2),
-                ))
-                .map_err(|e| err(e.to_string()))?
+                ))?
                 .label(format!("threshold {}", t.describe()))
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2)));
         }
-        crate::plotting::draw_legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(err)?;
+        crate::plotting::draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
-    root.present().map_err(|e| err(e.to_string()))
+    Ok(root.present()?)
 }
