@@ -95,7 +95,10 @@ pub fn second_target_lever_arms_m(
         .collect()
 }
 
-/// The coupling form to fit.
+/// The parameterisation eq. (15) is fitted in. The description's
+/// [`CouplingFitForm`](crate::robot::CouplingFitForm) says which form a user asks for; this is
+/// that form resolved for one sweep: a gear carries the ratio it starts from (the slope the
+/// sweep measured) or keeps, so that the function it builds and its derivatives need nothing else.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CouplingForm {
     /// [`CouplingFunction::Gear`] with `order` harmonics; the ratio fixed at `ratio` or

@@ -81,6 +81,17 @@ enum Angle {
     Deg,
 }
 
+/// The output of every import: `--out` and `--force`.
+#[derive(Debug, clap::Args)]
+struct OutputCsv {
+    /// Output measurement CSV.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
+}
+
 /// `import points PLAN EXPORT --out DATA`.
 #[derive(Debug, clap::Args)]
 struct PointsArgs {
@@ -104,12 +115,8 @@ struct PointsArgs {
     /// target, 1: target, 0: none); default: all but the last 3 fields of every line.
     #[arg(long)]
     sa_names: Option<usize>,
-    /// Output measurement CSV.
-    #[arg(long)]
-    out: PathBuf,
-    /// Replace an existing output file.
-    #[arg(long)]
-    force: bool,
+    #[command(flatten)]
+    output: OutputCsv,
 }
 
 /// `import wide FILE --robot R --angles rad|deg --units mm|m --out DATA`.
@@ -133,12 +140,8 @@ struct WideArgs {
     /// turns, `docs/formats.md#wide-table`) when the units are right after all.
     #[arg(long)]
     skip_unit_check: bool,
-    /// Output measurement CSV.
-    #[arg(long)]
-    out: PathBuf,
-    /// Replace an existing output file.
-    #[arg(long)]
-    force: bool,
+    #[command(flatten)]
+    output: OutputCsv,
 }
 
 /// `import mat FILE --robot R --joints q --targets mA,mB --angles rad --units m --out DATA`.
@@ -168,12 +171,8 @@ struct MatArgs {
     /// `docs/formats.md#unit-checks`) when the units are right after all.
     #[arg(long)]
     skip_unit_check: bool,
-    /// Output measurement CSV.
-    #[arg(long)]
-    out: PathBuf,
-    /// Replace an existing output file.
-    #[arg(long)]
-    force: bool,
+    #[command(flatten)]
+    output: OutputCsv,
 }
 
 /// `import sscanss2 FILE --robot R --out DATA`.
@@ -195,12 +194,8 @@ struct Sscanss2Args {
     /// turns, `docs/formats.md#unit-checks`) when the units are right after all.
     #[arg(long)]
     skip_unit_check: bool,
-    /// Output measurement CSV.
-    #[arg(long)]
-    out: PathBuf,
-    /// Replace an existing output file.
-    #[arg(long)]
-    force: bool,
+    #[command(flatten)]
+    output: OutputCsv,
 }
 
 /// `import rct FILE --robot R --out DATA`.
@@ -228,12 +223,8 @@ struct RctArgs {
     /// turns, `docs/formats.md#unit-checks`) when the units are right after all.
     #[arg(long)]
     skip_unit_check: bool,
-    /// Output measurement CSV.
-    #[arg(long)]
-    out: PathBuf,
-    /// Replace an existing output file.
-    #[arg(long)]
-    force: bool,
+    #[command(flatten)]
+    output: OutputCsv,
 }
 
 /// A data-set folder and the output file.
@@ -241,12 +232,8 @@ struct RctArgs {
 struct DirArgs {
     /// The data set's folder.
     dir: PathBuf,
-    /// Output measurement CSV.
-    #[arg(long)]
-    out: PathBuf,
-    /// Replace an existing output file.
-    #[arg(long)]
-    force: bool,
+    #[command(flatten)]
+    output: OutputCsv,
 }
 
 /// Writes `comment` and `set` to `out`, never over `source` (the file imported).
@@ -293,11 +280,13 @@ pub fn run(args: Args) -> Result<()> {
         Format::Rct(a) => import_rct(&a),
         Format::BobyKlimchik(a) => {
             let source = a.dir.join(boby_klimchik::DATA_FILE);
-            Outputs::new(a.force).input("DIR", &source).check(&a.out)?;
+            Outputs::new(a.output.force)
+                .input("DIR", &source)
+                .check(&a.output.out)?;
             let set = boby_klimchik::import_dir(&a.dir)?;
             write_csv(
-                &a.out,
-                a.force,
+                &a.output.out,
+                a.output.force,
                 &source,
                 &boby_klimchik::provenance_comment(&source),
                 &set,
@@ -308,7 +297,7 @@ pub fn run(args: Args) -> Result<()> {
                 set.experiments().len(),
                 boby_klimchik::TARGETS,
                 source.display(),
-                a.out.display()
+                a.output.out.display()
             );
             Ok(())
         }
@@ -316,8 +305,10 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn import_points(a: &PointsArgs) -> Result<()> {
-    let outputs = Outputs::new(a.force).input("PLAN", &a.plan).input("EXPORT", &a.export);
-    outputs.check(&a.out)?;
+    let outputs = Outputs::new(a.output.force)
+        .input("PLAN", &a.plan)
+        .input("EXPORT", &a.export);
+    outputs.check(&a.output.out)?;
     let plan = PlanSheet::from_table(&Table::read(&a.plan)?)?;
     let text = axiscal::presets::read_text(&a.export).with_context(|| format!("reading {}", a.export.display()))?;
     let sa = match a.format {
@@ -357,14 +348,14 @@ fn import_points(a: &PointsArgs) -> Result<()> {
             a.plan.display()
         ))
     );
-    write_csv_from(&a.out, outputs, &a.export, &comment, &joined.set)?;
+    write_csv_from(&a.output.out, outputs, &a.export, &comment, &joined.set)?;
     let how = if joined.detected { "detected" } else { "stated" };
     println!(
         "imported {} of {} planned points from {} to {}",
         joined.set.rows().len(),
         plan.rows.len(),
         a.export.display(),
-        a.out.display()
+        a.output.out.display()
     );
     println!(
         "  unit: {} ({how}; the points spread {:.4} times the plan's nominal points in mm)",
@@ -395,8 +386,10 @@ fn import_points(a: &PointsArgs) -> Result<()> {
 }
 
 fn import_sscanss2(a: &Sscanss2Args) -> Result<()> {
-    let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
-    outputs.check(&a.out)?;
+    let outputs = Outputs::new(a.output.force)
+        .input("FILE", &a.file)
+        .input("--robot", &a.robot);
+    outputs.check(&a.output.out)?;
     let desc = RobotDescription::from_file(&a.robot)?;
     let text = axiscal::presets::read_text(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
     let kinds: Vec<_> = desc.joints.iter().map(|j| j.kind).collect();
@@ -412,14 +405,16 @@ fn import_sscanss2(a: &Sscanss2Args) -> Result<()> {
         super::checks::identity_comment(&desc),
         sscanss2::provenance_comment(&a.file)
     );
-    write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
-    report_experiments(&set, &a.file, &a.out);
+    write_csv_from(&a.output.out, outputs, &a.file, &comment, &set)?;
+    report_experiments(&set, &a.file, &a.output.out);
     Ok(())
 }
 
 fn import_rct(a: &RctArgs) -> Result<()> {
-    let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
-    outputs.check(&a.out)?;
+    let outputs = Outputs::new(a.output.force)
+        .input("FILE", &a.file)
+        .input("--robot", &a.robot);
+    outputs.check(&a.output.out)?;
     if a.frame_points.is_some_and(|l| !(l.is_finite() && l > 0.0)) {
         anyhow::bail!("--frame-points must be a positive length in mm");
     }
@@ -446,8 +441,8 @@ fn import_rct(a: &RctArgs) -> Result<()> {
         super::checks::identity_comment(&desc),
         rct::provenance_comment(&a.file, &options)
     );
-    write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
-    report_experiments(&set, &a.file, &a.out);
+    write_csv_from(&a.output.out, outputs, &a.file, &comment, &set)?;
+    report_experiments(&set, &a.file, &a.output.out);
     warn_still_tolerance(&set, &desc, &a.file, a.still_tolerance);
     Ok(())
 }
@@ -466,8 +461,10 @@ fn report_experiments(set: &axiscal::measurement::MeasurementSet, source: &Path,
 }
 
 fn import_wide(a: &WideArgs) -> Result<()> {
-    let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
-    outputs.check(&a.out)?;
+    let outputs = Outputs::new(a.output.force)
+        .input("FILE", &a.file)
+        .input("--robot", &a.robot);
+    outputs.check(&a.output.out)?;
     let desc = RobotDescription::from_file(&a.robot)?;
     if !a.skip_unit_check {
         super::checks::print_warnings(&super::checks::description_warning_lines(&desc, &a.robot));
@@ -493,8 +490,8 @@ fn import_wide(a: &WideArgs) -> Result<()> {
         super::checks::identity_comment(&desc),
         axiscal::csv_lines::one_line(&a.file.display().to_string())
     );
-    write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
-    report_experiments(&set, &a.file, &a.out);
+    write_csv_from(&a.output.out, outputs, &a.file, &comment, &set)?;
+    report_experiments(&set, &a.file, &a.output.out);
     warn_still_tolerance(&set, &desc, &a.file, a.still_tolerance);
     if let Some(hint) = unordered.filter(|_| still_tolerance_hint(&set, a.still_tolerance).is_none()) {
         eprintln!(
@@ -581,8 +578,10 @@ fn warn_still_tolerance(set: &MeasurementSet, desc: &RobotDescription, source: &
 }
 
 fn import_mat(a: &MatArgs) -> Result<()> {
-    let outputs = Outputs::new(a.force).input("FILE", &a.file).input("--robot", &a.robot);
-    outputs.check(&a.out)?;
+    let outputs = Outputs::new(a.output.force)
+        .input("FILE", &a.file)
+        .input("--robot", &a.robot);
+    outputs.check(&a.output.out)?;
     let desc = RobotDescription::from_file(&a.robot)?;
     let bytes = axiscal::presets::regular_file(&a.file)
         .and_then(|()| std::fs::read(&a.file))
@@ -620,13 +619,13 @@ fn import_mat(a: &MatArgs) -> Result<()> {
         super::checks::identity_comment(&desc),
         axiscal::csv_lines::one_line(&source)
     );
-    write_csv_from(&a.out, outputs, &a.file, &comment, &set)?;
+    write_csv_from(&a.output.out, outputs, &a.file, &comment, &set)?;
     println!(
         "imported {} free poses x {} targets from {} to {}",
         set.rows().len() / a.targets.len(),
         a.targets.len(),
         a.file.display(),
-        a.out.display()
+        a.output.out.display()
     );
     for (name, why) in &file.skipped {
         println!("  skipped variable `{name}`: {why}");

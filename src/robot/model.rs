@@ -18,7 +18,7 @@ use super::effects::{ModelEffects, PoseLoad};
 use super::four_bar::FourBarGeometry;
 use super::functions::{CouplingFunction, Transmission};
 use super::model_error::ModelError;
-use crate::kinematics::{JointKind, PhiJoint, PhiModel};
+use crate::kinematics::{JointKind, PhiModel};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -252,19 +252,8 @@ impl RobotModel {
 
     /// The actual phi-model geometry, placed in the instrument frame.
     pub fn phi_model(&self) -> PhiModel {
-        PhiModel {
-            joints: self
-                .joints
-                .iter()
-                .map(|j| PhiJoint {
-                    kind: j.kind,
-                    phi_rad: j.phi_deg.to_radians(),
-                })
-                .collect(),
-            rows: self.rows.iter().map(RowEntry::to_row).collect(),
-            world_from_base: self.placement.to_isometry(),
-            last_link_from_tool: self.tool_frame.to_isometry(),
-        }
+        let joints = self.joints.iter().map(|j| (j.kind, j.phi_deg));
+        crate::robot::description::phi_model_of(joints, &self.rows, &self.placement, &self.tool_frame)
     }
 
     /// The repeatability sigmas of all joints \[rad or m\].

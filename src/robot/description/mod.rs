@@ -178,6 +178,27 @@ pub enum CouplingFitForm {
     Fractional,
 }
 
+/// The phi-model of a table as written in a file: each joint's kind and phi \[deg\], the rows,
+/// the placement in the instrument frame and the tool frame on the last link.
+pub(crate) fn phi_model_of(
+    joints: impl Iterator<Item = (JointKind, f64)>,
+    rows: &[RowEntry],
+    placement: &Placement,
+    tool_frame: &Placement,
+) -> PhiModel {
+    PhiModel {
+        joints: joints
+            .map(|(kind, phi_deg)| PhiJoint {
+                kind,
+                phi_rad: phi_deg.to_radians(),
+            })
+            .collect(),
+        rows: rows.iter().map(RowEntry::to_row).collect(),
+        world_from_base: placement.to_isometry(),
+        last_link_from_tool: tool_frame.to_isometry(),
+    }
+}
+
 /// One row of Table 2 as written in the file.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -415,19 +436,8 @@ impl RobotDescription {
 
     /// The nominal phi-model geometry, placed in the instrument frame by `placement`.
     pub fn nominal_model(&self) -> PhiModel {
-        PhiModel {
-            joints: self
-                .joints
-                .iter()
-                .map(|j| PhiJoint {
-                    kind: j.kind,
-                    phi_rad: j.phi_deg.to_radians(),
-                })
-                .collect(),
-            rows: self.rows.iter().map(RowEntry::to_row).collect(),
-            world_from_base: self.placement.to_isometry(),
-            last_link_from_tool: self.tool.frame.to_isometry(),
-        }
+        let joints = self.joints.iter().map(|j| (j.kind, j.phi_deg));
+        phi_model_of(joints, &self.rows, &self.placement, &self.tool.frame)
     }
 
     /// The nominal slope of the coupling that drives joint `to` (1-based), if any.
