@@ -11,8 +11,9 @@ use axiscal::calibration::procedure::{
     Calibration, CalibrationOptions, ProcedureError, calibrate, implausible, screen_sweeps,
 };
 use axiscal::diagnosis::{
-    AXES_PLOT_FILES, DiagnosisError, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, SweepSearch, axes_markdown,
-    diagnose_axes_with, diagnose_with, estimated_noise, free_pose_misses, free_poses_only, markdown, own_sweep_misses,
+    AXES_PLOT_FILES, DiagnosisError, DiagnosisOptions, PLOT_FILES, PlotError, RefitScope, SweepSearch,
+    ValidationOptions, axes_markdown, combined_slips_searched, diagnose_axes_with, diagnose_with, estimated_noise,
+    free_pose_misses, free_poses_only, markdown, own_sweep_misses, shifted_validation_block, validate,
     validation_outliers, validation_poses, without_outliers, write_axes_plots, write_plots,
 };
 use axiscal::json_file::{self, Schema};
@@ -131,10 +132,17 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         true => Cow::Borrowed(set),
         false => Cow::Owned(without_outliers(set, &outliers)),
     };
+    let block = cal
+        .as_ref()
+        .and_then(|cal| shifted_block_warning(&args, &set, cal, &desc));
+    if let Some(w) = &block {
+        eprintln!("warning: {w}");
+    }
     let progress = super::progress::Progress::stage("diagnosing", printer);
     let mut d = diagnose_with(&set, &desc, &options, &progress).map_err(|e| failed(&args, &set, &desc, e))?;
     d.noise_source = noise_source.into();
     d.outliers = outliers;
+    d.warnings = block.into_iter().collect();
     drop(progress);
     if let Some(warning) = d.tool_targets.as_ref().and_then(|t| t.warning()) {
         eprintln!("warning: {warning}");
@@ -236,6 +244,34 @@ fn print_own_miss(miss: Option<String>) {
              poses takes in what all validation poses share)"
         );
     }
+}
+
+/// The warning of a block of `set`'s validation poses shifted in file order against `cal` (the
+/// calibration of its sweeps), as `validate` names it ([`shifted_validation_block`]): the
+/// diagnosis would read the step between two setups as an effect. `None` when there is none,
+/// or the file is beyond the slip search's size.
+fn shifted_block_warning(
+    args: &Args,
+    set: &MeasurementSet,
+    cal: &Calibration,
+    desc: &RobotDescription,
+) -> Option<String> {
+    if !combined_slips_searched(set) {
+        return None;
+    }
+    let options = match args.noise_mm {
+        Some(mm) => ValidationOptions::given(mm, args.false_alarm),
+        None => ValidationOptions::of_calibration(cal, args.false_alarm),
+    };
+    let v = validate(set, cal, desc, &options).ok()?;
+    let b = shifted_validation_block(set, cal, desc, &v).ok()??;
+    let mixed = "the diagnosis below mixes two setups and may name the step between them as an effect: diagnose \
+                 those rows apart from the others";
+    Some(format!(
+        "{}: {}",
+        args.data.display(),
+        super::validate::block_words(&b, mixed)
+    ))
 }
 
 /// Refuses the data when a slip explains the miss of `cal` (the calibration of `set`'s sweeps):

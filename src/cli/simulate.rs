@@ -131,6 +131,24 @@ fn truth_is_this_robots(truth: &RobotModel, path: &Path, desc: &RobotDescription
     Ok(())
 }
 
+/// Warns of each turning joint whose sweep's described target 0 lies on its own axis
+/// ([`super::plan::on_axis_warnings`] at the simulated instrument's noise).
+fn warn_of_targets_on_axes(desc: &RobotDescription, set: &MeasurementSet) {
+    let rows: Vec<super::plan::Target0Row> = set
+        .rows()
+        .iter()
+        .filter(|m| m.target == 0 && m.moved_joint >= 1)
+        .map(|m| super::plan::Target0Row {
+            experiment: &m.experiment,
+            joint: m.moved_joint,
+            step: m.step,
+            cmd: &m.cmd,
+        })
+        .collect();
+    let on_axis = super::plan::on_axis_warnings(desc, &rows, axiscal::measurement::PAPER_NET_RADIAL_RMS_MM);
+    super::checks::print_warnings(&on_axis.into_iter().map(|(_, w)| w).collect::<Vec<_>>());
+}
+
 /// The stream of the default truth's draws (the noise uses stream 0 of the same seed).
 const TRUTH_STREAM: u64 = 1;
 
@@ -289,6 +307,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         name
     );
     print_experiments(&set, &out.occluded);
+    warn_of_targets_on_axes(&desc, &set);
     #[cfg(feature = "viz")]
     if let Some(path) = &args.record {
         let campaign = super::record::simulated::Campaign {

@@ -111,7 +111,8 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     if let Some(b) = shifted_validation_block(&set, &cal, &fitted, &v).ok().flatten() {
-        let words = format!("{}: {}", args.data.display(), block_words(&b));
+        let mixed = "the verdicts below mix two setups: validate those rows apart from the others";
+        let words = format!("{}: {}", args.data.display(), block_words(&b, mixed));
         eprintln!("warning: {words}");
         warnings.push(words);
     }
@@ -177,8 +178,9 @@ fn without_sweep_outliers(
 }
 
 /// A [`ValidationBlock`] in words: where, by how much, how significant, what the validation
-/// becomes without it and the fix.
-fn block_words(b: &ValidationBlock) -> String {
+/// becomes without it and the fix; `mixed` says what mixes the two setups and how to keep them
+/// apart (`validate`: its verdicts; `diagnose`: its diagnosis).
+pub(super) fn block_words(b: &ValidationBlock, mixed: &str) -> String {
     let line = |l: Option<u64>| l.map_or_else(|| "?".to_owned(), |l| l.to_string());
     format!(
         "the validation poses of lines {}-{} (steps {}-{}, {} of the {} validated) sit about ({:.2}, {:.2}, {:.2}) mm off \
@@ -186,8 +188,7 @@ fn block_words(b: &ValidationBlock) -> String {
          significant of the {} blocks of consecutive poses tried, against a false-alarm rate of {} shared by them), and \
          with them moved back the validation poses' chi2/dof is {:.3} against {:.3} as written (RMS {:.3} mm against \
          {:.3} mm). The instrument or the \
-         robot moved between them (a bump, a re-setup), so the verdicts below mix two setups: validate those rows apart \
-         from the others (or measure them again)",
+         robot moved between them (a bump, a re-setup), so {mixed} (or measure them again)",
         line(b.lines.0),
         line(b.lines.1),
         b.steps.0,
@@ -203,7 +204,7 @@ fn block_words(b: &ValidationBlock) -> String {
         b.undone_chi2_per_dof,
         b.written_chi2_per_dof,
         b.undone_rms_mm,
-        b.written_rms_mm
+        b.written_rms_mm,
     )
 }
 

@@ -162,6 +162,10 @@ pub struct Diagnosis {
     /// with whether the diagnosis was made without it; absent when none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub outliers: Vec<crate::calibration::procedure::OutlierPoint>,
+    /// What the run warned of about the data beside the verdict (a block of validation poses
+    /// shifted in file order); absent when none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Baseline held-out RMS \[mm\].
     pub heldout_rms_before_mm: f64,
     /// Noise-only held-out RMS of the baseline \[mm\].

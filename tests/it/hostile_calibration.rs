@@ -828,3 +828,77 @@ fn a_target_on_its_own_joints_axis_is_blamed_on_the_description() {
     let e = calibrate_fails(&still, &["--robot", shipped.to_str().unwrap()]);
     assert!(!e.contains("axis_targets"), "{e}");
 }
+
+/// The distance from the axis in an on-axis warning of `plan` or `simulate` for `joint`.
+fn warned_off_axis_mm(stderr: &str, joint: usize) -> Option<f64> {
+    let line = stderr.lines().find(|l| {
+        l.starts_with(&format!(
+            "warning: joint {joint}: the description places its sweep's target 0"
+        ))
+    })?;
+    line.split(") ")
+        .nth(1)?
+        .split(" mm from the joint's own axis")
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// `plan` and `simulate` warn of a sweep's target on its joint's own axis before the campaign is
+/// measured, with the distance `calibrate` later names: on the arm (the flange centre) and on
+/// the SCARA (0.3 mm off); the distance read against the target's distance from its link
+/// frame's z axis (the joint's axis in a DH frame), a formula of its own. The shipped
+/// descriptions (targets tens of mm off) give no such warning.
+#[test]
+fn plan_and_simulate_warn_of_a_target_on_its_own_joints_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let robots = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots");
+    let cases = [
+        ("arm6-dh", 6, "[60.0, 40.0, 150.0]", [0.0, 0.0, 0.0]),
+        ("scara-rrpr", 4, "[90.0, 40.0, 40.0]", [0.3, 0.0, 40.0]),
+    ];
+    for (robot, joint, from, [x, y, z]) in cases {
+        let text = std::fs::read_to_string(robots.join(format!("{robot}.toml"))).unwrap();
+        let old = format!("joint = {joint}\ntarget0 = {{ link = {joint}, position_mm = {from} }}");
+        assert!(text.contains(&old), "{robot}: {old}");
+        let new = format!("joint = {joint}\ntarget0 = {{ link = {joint}, position_mm = [{x:?}, {y:?}, {z:?}] }}");
+        let on_axis = dir.path().join(format!("{robot}-on-axis.toml"));
+        std::fs::write(&on_axis, text.replace(&old, &new)).unwrap();
+        let shipped = robots.join(format!("{robot}.toml"));
+        for (desc, warned) in [(&on_axis, true), (&shipped, false)] {
+            let plan = axiscal()
+                .current_dir(dir.path())
+                .args([
+                    "plan",
+                    "--robot",
+                    desc.to_str().unwrap(),
+                    "--force",
+                    "--out",
+                    "plan.csv",
+                ])
+                .assert()
+                .success();
+            let simulate = axiscal()
+                .current_dir(dir.path())
+                .args(["simulate", "--sim", "analytic", "--robot", desc.to_str().unwrap()])
+                .args(["--validation-poses", "0", "--force", "--out", "data.csv"])
+                .assert()
+                .success();
+            for (command, a) in [("plan", &plan), ("simulate", &simulate)] {
+                let e = stderr(a);
+                let said = warned_off_axis_mm(&e, joint);
+                if warned {
+                    let off = said.unwrap_or_else(|| panic!("{robot} {command}: no warning: {e}"));
+                    // The warning prints 3 decimals.
+                    assert!(
+                        (off - f64::hypot(x, y)).abs() <= 5e-4,
+                        "{robot} {command}: {off} mm: {e}"
+                    );
+                    assert!(e.contains("`calibrate` refuses such a sweep"), "{robot} {command}: {e}");
+                } else {
+                    assert!(said.is_none() && !e.contains("own axis"), "{robot} {command}: {e}");
+                }
+            }
+        }
+    }
+}

@@ -182,3 +182,50 @@ fn an_effects_miss_names_no_block() {
         );
     }
 }
+
+/// `diagnose` names the same block before it diagnoses (on the parallelogram arm's file with its
+/// 70 % balancer and a mid-file block 0.8 mm along y, calibrated from its own sweeps), in its
+/// console and in diagnosis.json's `warnings`; the file as written names none.
+#[test]
+fn diagnose_names_a_shifted_block_before_it_diagnoses() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = data("independent-parallelogram", "pg-arm.toml");
+    let text = std::fs::read_to_string(data("independent-parallelogram", "balancer-f0.7.csv")).unwrap();
+    let (moved, (first, last)) = shifted(&text, "validation", 30..50, [0.0, 0.8, 0.0]);
+    let moved_file = dir.path().join("moved.csv");
+    std::fs::write(&moved_file, moved).unwrap();
+    let as_written = dir.path().join("as-written.csv");
+    std::fs::write(&as_written, &text).unwrap();
+    for (file, named) in [(&moved_file, true), (&as_written, false)] {
+        let out = dir.path().join(format!("d-{named}"));
+        let a = axiscal()
+            .args(["diagnose", "--robot"])
+            .arg(&robot)
+            .arg(file)
+            .arg("--out")
+            .arg(&out)
+            .assert()
+            .success();
+        let err = common::stderr(&a);
+        let warning = err.lines().find(|l| l.contains("the validation poses of lines"));
+        let d: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("diagnosis.json")).unwrap()).unwrap();
+        if !named {
+            assert!(warning.is_none() && d.get("warnings").is_none(), "{err}");
+            continue;
+        }
+        let warning = warning.unwrap_or_else(|| panic!("no block named: {err}"));
+        assert!(
+            warning.contains(&format!("of lines {first}-{last} ")),
+            "lines {first}-{last}: {warning}"
+        );
+        assert!(warning.contains("diagnose those rows apart"), "{warning}");
+        let recorded = d["warnings"].as_array().unwrap();
+        assert!(
+            recorded
+                .iter()
+                .any(|w| w.as_str() == Some(&warning["warning: ".len()..])),
+            "{recorded:?}"
+        );
+    }
+}

@@ -20,7 +20,7 @@ use crate::calibration::{
 };
 use crate::kinematics::{AxisLine, JointKind};
 use crate::robot::TransmissionFitForm;
-use crate::robot::{Controller, RobotDescription, RobotModel, Transmission, commands_to_internal};
+use crate::robot::{Controller, RobotDescription, Transmission};
 use nalgebra::{Isometry3, Point3, Unit, Vector3};
 
 /// One fitted axis: the line (a sliding axis: its direction through the target's first
@@ -238,12 +238,8 @@ impl JointData<'_> {
 }
 
 /// The error of a turning joint's sweep whose points spread within the noise (`spread_mm`,
-/// `noise_mm`) because the description places its target 0 on the joint's own axis, measured
-/// on the nominal robot at the sweep's first commands: closer than [`ON_AXIS_MARGIN`] times the
-/// distance at which a sweep over the joint's whole range (at most a turn) would move it
-/// [`crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE`] times the noise (points along an
-/// arc of radius `r` over `theta` spread about `r theta / sqrt(12)`), so that no span helps.
-/// `None` for a sliding joint, a target the description does not place, or one placed farther
+/// `noise_mm`) because the description places its target 0 on the joint's own axis
+/// ([`super::on_axis::target_on_axis`] at the sweep's first commands). `None` when it does not
 /// (then the span or the data are the cause, said by the caller).
 fn on_axis(
     data: &JointData<'_>,
@@ -255,40 +251,21 @@ fn on_axis(
     if desc.joints[joint - 1].kind != JointKind::Revolute {
         return None;
     }
-    let target = &desc.axis_targets_of(joint)?.target0;
-    let sweep = data.sweeps.first()?;
-    let ideal = RobotModel::ideal(desc);
-    let internal = commands_to_internal(desc, sweep.commands.first()?);
-    let q = ideal.joint_values(controller, &internal).unwrap_or(internal);
-    let links = ideal.phi_model().poses(&q).world_from_link;
-    let point = links.get(target.link.checked_sub(1)?)? * target.position_m();
-    let axis = links.get(joint - 1)?;
-    let direction = axis.rotation * Vector3::z();
-    let off_axis_mm = (point - Point3::from(axis.translation.vector)).cross(&direction).norm() * 1e3;
-    let factor = crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE;
-    let [low, high] = desc.limits_internal(joint - 1);
-    let widest_rad = (high - low).clamp(f64::MIN_POSITIVE, std::f64::consts::TAU);
+    let first_cmd = data.sweeps.first()?.commands.first()?;
     let span_rad = data.short_span(JointKind::Revolute, None).written.to_radians();
-    let resolvable_mm = |theta: f64| 12f64.sqrt() * factor * noise_mm / theta.max(f64::MIN_POSITIVE);
-    let threshold_mm = ON_AXIS_MARGIN * resolvable_mm(widest_rad);
-    let needed_mm = resolvable_mm(span_rad).max(threshold_mm);
-    (off_axis_mm < threshold_mm).then(|| ProcedureError::TargetOnAxis {
+    let t = super::on_axis::target_on_axis(desc, controller, joint, first_cmd, span_rad, noise_mm)?;
+    Some(ProcedureError::TargetOnAxis {
         experiment: data.name(),
         joint,
         spread_mm,
         noise_mm,
-        factor,
-        link: target.link,
-        position_mm: target.position_mm,
-        off_axis_mm,
-        needed_mm,
+        factor: crate::numerics::stats::UNRESOLVED_SPREAD_OVER_NOISE,
+        link: t.link,
+        position_mm: t.position_mm,
+        off_axis_mm: t.off_axis_mm,
+        needed_mm: t.needed_mm,
     })
 }
-
-/// How many times the least resolvable distance over a joint's whole range a described target
-/// must lie off its axis not to be said on it ([`on_axis`]): a circle barely above the noise
-/// locates no axis.
-const ON_AXIS_MARGIN: f64 = 5.0;
 
 /// Fits one joint's axis from its sweeps with the estimator of `options`.
 pub(super) fn fit_joint(

@@ -33,6 +33,7 @@ mod held;
 mod joint_map;
 mod joints;
 mod misfit;
+mod on_axis;
 mod options;
 mod outlier_point;
 mod pipeline;
@@ -57,6 +58,7 @@ pub use joint_map::{
     JointMap, MapRow, MapTable, ZeroOffsetFit, calibrated_joint_values, controller_zero_offsets, joint_map,
 };
 pub use misfit::SweepMisfit;
+pub use on_axis::{TargetOnAxis, target_on_axis};
 pub use options::{AxisEstimator, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Detail};
 pub use outlier_point::{OutlierPoint, OutlierTest};
 pub use pipeline::{FittedModel, calibrate, calibrate_model};

@@ -3,10 +3,11 @@
 //! joint, tool targets for validation poses, and sweeps long enough for `calibrate`.
 
 use anyhow::{Result, bail};
+use axiscal::calibration::procedure::target_on_axis;
 use axiscal::kinematics::JointKind;
 use axiscal::measurement::format_f64;
 use axiscal::plan::{CalibrationPlan, PlannedPoint};
-use axiscal::robot::RobotDescription;
+use axiscal::robot::{Controller, RobotDescription};
 use std::path::Path;
 
 /// Validation poses by default when the robot has tool targets (`--validation-poses`).
@@ -106,6 +107,54 @@ impl SpanGiven<'_> {
             SpanGiven::PlanFile(_) => "`span`",
         }
     }
+}
+
+/// A row of target 0 of an axis experiment, planned or simulated: its experiment, moved joint
+/// (1-based), step and commands (the file's units).
+pub struct Target0Row<'a> {
+    /// The experiment's id.
+    pub experiment: &'a str,
+    /// The moved joint (1-based).
+    pub joint: usize,
+    /// The step along the sweep.
+    pub step: usize,
+    /// The commands, in the file's units.
+    pub cmd: &'a [f64],
+}
+
+/// One warning per turning joint whose first sweep (in `rows`, target 0 of every axis
+/// experiment) has its target 0 placed by the description on the joint's own axis
+/// ([`target_on_axis`] at the sweep's first commands and over its commanded span, at the noise
+/// `noise_mm`), with the joint: `calibrate` would refuse the sweep, so the target is to be moved
+/// before the campaign is measured.
+pub fn on_axis_warnings(desc: &RobotDescription, rows: &[Target0Row<'_>], noise_mm: f64) -> Vec<(usize, String)> {
+    let controller = Controller::from_description(desc);
+    let mut joints: Vec<usize> = rows.iter().map(|r| r.joint).filter(|&j| j >= 1).collect();
+    joints.sort_unstable();
+    joints.dedup();
+    joints
+        .into_iter()
+        .filter_map(|joint| {
+            let experiment = rows.iter().find(|r| r.joint == joint)?.experiment;
+            let sweep: Vec<&Target0Row> = rows.iter().filter(|r| r.experiment == experiment).collect();
+            let first = sweep.iter().min_by_key(|r| r.step)?;
+            let commanded = sweep.iter().filter_map(|r| r.cmd.get(joint - 1).copied());
+            let (low, high) = commanded.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| (a.min(c), b.max(c)));
+            let t = target_on_axis(desc, &controller, joint, first.cmd, (high - low).to_radians(), noise_mm)?;
+            let [x, y, z] = t.position_mm.map(format_f64);
+            Some((
+                joint,
+                format!(
+                    "joint {joint}: the description places its sweep's target 0 (`axis_targets` of joint {joint}: link {}, \
+                     position_mm = [{x}, {y}, {z}]) {:.3} mm from the joint's own axis, where turning the joint barely moves \
+                     it: `calibrate` refuses such a sweep at the noise of a point ({noise_mm} mm); put the target at least \
+                     {:.1} mm off the axis (tens of mm locate the axis well) and give its place in `axis_targets` before \
+                     measuring",
+                    t.link, t.off_axis_mm, t.needed_mm
+                ),
+            ))
+        })
+        .collect()
 }
 
 /// One warning per sweep of a joint in `spans` (each as given: `--span J=SPAN`, or a sweep

@@ -7,7 +7,7 @@
 mod inputs;
 mod optimize;
 
-pub use inputs::{axis_targets_for, validation_poses};
+pub use inputs::{Target0Row, axis_targets_for, on_axis_warnings, validation_poses};
 
 use super::options::{InRange, NOISE_MM};
 use super::output::Outputs;
@@ -314,7 +314,24 @@ pub fn run(args: Args) -> Result<()> {
         ),
         None => format!("planning the campaign of {}", args.robot.display()),
     })?;
-    let warnings = inputs::short_span_warnings(&desc, &spans_given(&plan, &args), &points, args.noise_mm);
+    let rows: Vec<inputs::Target0Row> = points
+        .iter()
+        .filter(|p| p.target == 0 && p.moved_joint >= 1)
+        .map(|p| inputs::Target0Row {
+            experiment: &p.experiment,
+            joint: p.moved_joint,
+            step: p.step,
+            cmd: &p.cmd,
+        })
+        .collect();
+    let on_axis = inputs::on_axis_warnings(&desc, &rows, args.noise_mm);
+    // A joint whose target is on its axis is warned of that, not of its span.
+    let spans: Vec<_> = spans_given(&plan, &args)
+        .into_iter()
+        .filter(|(j, ..)| !on_axis.iter().any(|(k, _)| k == j))
+        .collect();
+    let mut warnings: Vec<String> = on_axis.into_iter().map(|(_, w)| w).collect();
+    warnings.extend(inputs::short_span_warnings(&desc, &spans, &points, args.noise_mm));
     super::checks::print_warnings(&warnings);
     let comment = args.sight.header_comment(&desc)?;
     let mut file = outputs.create(&args.out)?;

@@ -608,6 +608,7 @@ pub(super) fn decide(prep: &Prepared, null: &NullData, options: &DiagnosisOption
             }
         },
         outliers: Vec::new(),
+        warnings: Vec::new(),
         heldout_rms_before_mm: rms_before,
         noise_only_rms_mm: noise_before,
         gap_sigmas: gap.gap_sigmas,
