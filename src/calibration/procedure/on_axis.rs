@@ -33,7 +33,7 @@ pub struct TargetOnAxis {
 /// Whether the description places target 0 of the sweep of turning joint `joint` (1-based),
 /// which starts at the commands `first_cmd` (the file's units) and spans `span_rad`, on the
 /// joint's axis at the noise `noise_mm` (3-D RMS of a point): closer, on the nominal robot at
-/// `first_cmd`, than 5 times the distance at which a sweep over the joint's
+/// `first_cmd`, than `ON_AXIS_MARGIN` (5) times the distance at which a sweep over the joint's
 /// whole range (at most a turn) would move it `UNRESOLVED_SPREAD_OVER_NOISE` times the noise
 /// (points along an arc of radius `r` over `theta` spread about `r theta / sqrt(12)`), so that
 /// no span helps. `None` for a sliding joint, a target the description does not place, or one
