@@ -259,10 +259,7 @@ fn shifted_block_warning(
     if !combined_slips_searched(set) {
         return None;
     }
-    let options = match args.noise_mm {
-        Some(mm) => ValidationOptions::given(mm, args.false_alarm),
-        None => ValidationOptions::of_calibration(cal, args.false_alarm),
-    };
+    let options = ValidationOptions::given_or_of_calibration(args.noise_mm, cal, args.false_alarm);
     let v = validate(set, cal, desc, &options).ok()?;
     let b = shifted_validation_block(set, cal, desc, &v).ok()??;
     let mixed = "the diagnosis below mixes two setups and may name the step between them as an effect: diagnose \

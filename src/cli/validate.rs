@@ -75,10 +75,7 @@ pub fn run(args: Args) -> Result<()> {
     // A free-pose calibration fitted the targets the description may not give.
     let fitted = axiscal::calibration::free_pose::with_fitted_targets(&desc, record.reports.free_poses.as_ref());
     let cal = record.calibration;
-    let options = match args.noise_mm {
-        Some(mm) => ValidationOptions::given(mm, args.false_alarm),
-        None => ValidationOptions::of_calibration(&cal, args.false_alarm),
-    };
+    let options = ValidationOptions::given_or_of_calibration(args.noise_mm, &cal, args.false_alarm);
     let validating = || format!("validating on {}", args.data.display());
     let (set, flagged) = without_sweep_outliers(&args, set, &desc, &cal, &options)?;
     checks::print_warnings(&flagged);

@@ -108,6 +108,15 @@ impl ValidationOptions {
             curvature_counts: None,
         }
     }
+
+    /// The noise the user gave (`--noise-mm`), else the one `cal` was weighted with
+    /// ([`Self::given`], [`Self::of_calibration`]).
+    pub fn given_or_of_calibration(noise_mm: Option<f64>, cal: &Calibration, false_alarm: f64) -> Self {
+        match noise_mm {
+            Some(mm) => Self::given(mm, false_alarm),
+            None => Self::of_calibration(cal, false_alarm),
+        }
+    }
 }
 
 /// Which kind of measured point a residual belongs to.
