@@ -6,6 +6,7 @@
 //! - no function in `src/` is longer than 100 lines;
 //! - the calibration names neither the diagnosis nor the planner (they stand on it), and no two
 //!   of its files import each other, directly or around a circle (`imports`);
+//! - the planner names the calibration only in the file ARCHITECTURE.md says why of;
 //! - every module is in ARCHITECTURE.md's layout.
 //!
 //! Test modules (`#[cfg(test)] mod tests`) may use the simulator to make data: only the code
@@ -140,17 +141,8 @@ fn the_calibrator_compensation_and_diagnosis_never_reach_the_simulated_truth() {
         assert!(!files.is_empty(), "no source files under src/{module}");
         for f in files {
             for (n, line) in shipped_lines(&f) {
-                let code = code_of(&line);
-                // `use crate::{sim, ..}` as well as `crate::sim::X`.
-                let compact: String = code.chars().filter(|c| !c.is_whitespace()).collect();
                 for path in *forbidden {
-                    let leaf = path.trim_start_matches("crate::");
-                    let grouped = format!("crate::{{{leaf},");
-                    let grouped_last = format!(",{leaf}}}");
-                    if compact.contains(path)
-                        || compact.contains(&grouped)
-                        || (compact.contains("crate::{") && compact.contains(&grouped_last))
-                    {
+                    if code_names(&code_of(&line), path) {
                         violations.push(format!("{}:{n}: {} names {path}", f.display(), line.trim()));
                     }
                 }
@@ -162,6 +154,64 @@ fn the_calibrator_compensation_and_diagnosis_never_reach_the_simulated_truth() {
         "truth boundary crossed:\n{}",
         violations.join("\n")
     );
+}
+
+/// Whether the code `code` (no comments or strings) names the module `path` (`crate::sim`):
+/// `crate::sim::X` as well as `use crate::{sim, ..}`.
+fn code_names(code: &str, path: &str) -> bool {
+    let compact: String = code.chars().filter(|c| !c.is_whitespace()).collect();
+    let leaf = path.trim_start_matches("crate::");
+    let grouped = format!("crate::{{{leaf},");
+    let grouped_last = format!(",{leaf}}}");
+    compact.contains(path)
+        || compact.contains(&grouped)
+        || (compact.contains("crate::{") && compact.contains(&grouped_last))
+}
+
+/// The files of `src/plan/` whose shipped code names `crate::calibration`, by name.
+fn plan_files_naming_the_calibration() -> Vec<String> {
+    let mut files = Vec::new();
+    rust_files(&src().join("plan"), &mut files);
+    let mut naming: Vec<String> = files
+        .iter()
+        .filter(|f| {
+            shipped_lines(f)
+                .iter()
+                .any(|(_, line)| code_names(&code_of(line), "crate::calibration"))
+        })
+        .map(|f| f.strip_prefix(src()).unwrap_or(f).display().to_string())
+        .collect();
+    naming.sort();
+    naming
+}
+
+#[test]
+fn the_planner_reaches_the_calibration_only_where_the_architecture_says_why() {
+    let architecture = std::fs::read_to_string(src().join("../ARCHITECTURE.md")).expect("ARCHITECTURE.md");
+    let unexplained: Vec<String> = plan_files_naming_the_calibration()
+        .into_iter()
+        .filter(|f| {
+            !architecture.contains(&format!(
+                "One arrow goes from `plan/` up to `calibration/`, on purpose: `{f}`"
+            ))
+        })
+        .collect();
+    assert!(
+        unexplained.is_empty(),
+        "plan/ names calibration/ in files ARCHITECTURE.md does not explain: {unexplained:?}"
+    );
+}
+
+#[test]
+fn the_naming_check_sees_a_path_a_group_and_not_a_neighbour() {
+    assert!(code_names(
+        "use crate::calibration::procedure::calibrate;",
+        "crate::calibration"
+    ));
+    assert!(code_names("use crate::{calibration, robot};", "crate::calibration"));
+    assert!(code_names("use crate::{robot, calibration};", "crate::calibration"));
+    assert!(!code_names("use crate::robot::Controller;", "crate::calibration"));
+    assert!(!code_names(&code_of("// see crate::calibration"), "crate::calibration"));
 }
 
 /// Lengths of the functions in `lines` (from the line of `fn` to the line of the brace that
