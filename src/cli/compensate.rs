@@ -73,8 +73,7 @@ const COLUMNS: [&str; 7] = ["id", "x_mm", "y_mm", "z_mm", "roll_deg", "pitch_deg
 
 fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
     let table = Table::read(path)?;
-    let index = COLUMNS.map(|name| table.required(&[name]));
-    let index = index.into_iter().collect::<Result<Vec<usize>, _>>()?;
+    let index = table.required_all(&COLUMNS)?;
     let mut out = Vec::with_capacity(table.row_count());
     let mut lines: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     for row in table.rows() {

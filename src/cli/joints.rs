@@ -106,9 +106,8 @@ pub fn run(args: Args) -> Result<()> {
 /// `cal` was read from `cal_path`.
 fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path: &Path) -> Result<()> {
     let table = Table::read(path)?;
-    let columns: Vec<usize> = (1..=desc.dof())
-        .map(|k| table.required(&[&format!("cmd_{k}")]))
-        .collect::<Result<_, _>>()?;
+    let names: Vec<String> = (1..=desc.dof()).map(|k| format!("cmd_{k}")).collect();
+    let columns = table.required_all(&names.iter().map(String::as_str).collect::<Vec<_>>())?;
     let added: Vec<String> = (1..=desc.dof()).map(|k| format!("q_{k}")).collect();
     if let Some(q) = added.iter().find(|q| table.column(&[q]).is_some()) {
         bail!(

@@ -114,6 +114,12 @@ fn write_inputs(dir: &Path) {
             "id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\np1,-3142.3,5341.9,-26.1,1e300,0,0\n",
         ),
         (
+            "rxyz.csv",
+            "x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg\n-3142.3,5341.9,-26.1,180,0,0\n",
+        ),
+        ("headless.csv", "1,-3142.3,5341.9,-26.1,180,0,0\n"),
+        ("three.csv", "cmd_1,cmd_2,cmd_3\n0,0,0\n"),
+        (
             "sheet.csv",
             "# axiscal measurement plan\npoint,pose,experiment,moved_joint,step,target,cmd_1,cmd_2\n1,1,axis2,2,0,0,0,-25\n",
         ),
@@ -263,6 +269,36 @@ fn cases() -> Vec<Case> {
                 "mixed/residuals.csv",
                 "no column `radial_mm`",
                 "`axiscal validate` writes",
+            ],
+        ),
+        case(
+            "tool poses with another tool's column names",
+            &format!("compensate {cal} --poses rxyz.csv --out out.csv"),
+            2,
+            &[
+                "rxyz.csv",
+                "no columns id, roll_deg, pitch_deg, yaw_deg",
+                "the header needs id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg",
+            ],
+        ),
+        case(
+            "tool poses without a header (its numbers repeat)",
+            &format!("compensate {cal} --poses headless.csv --out out.csv"),
+            2,
+            &[
+                "headless.csv",
+                "is data, not a header",
+                "id,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg",
+            ],
+        ),
+        case(
+            "three command columns for a six-joint robot",
+            &format!("joints {cal} --csv three.csv"),
+            2,
+            &[
+                "three.csv",
+                "no columns cmd_4, cmd_5, cmd_6",
+                "the header needs cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6",
             ],
         ),
         case(

@@ -167,8 +167,12 @@ impl Table {
         Ok(table)
     }
 
-    /// No column name twice.
+    /// No column name twice. A first line of data (no header) is left to the columns' lookup,
+    /// which says so with the columns the file needs.
     fn check_header(&self) -> Result<(), PointsError> {
+        if self.header_is_data() {
+            return Ok(());
+        }
         for (k, name) in self.header.iter().enumerate() {
             if self.header[..k].contains(name) {
                 return Err(PointsError::File {
@@ -188,21 +192,54 @@ impl Table {
     /// The index of a column named one of `names`, or an error naming the file and the names.
     /// A header whose cells are mostly numbers is a first line of data: the file has no header.
     pub fn required(&self, names: &[&str]) -> Result<usize, PointsError> {
-        let columns = self.header.iter().map(|h| shown_cell(h)).collect::<Vec<_>>().join(",");
-        let numbers = self.header.iter().filter(|h| h.trim().parse::<f64>().is_ok()).count();
-        let message = if 2 * numbers > self.header.len() {
-            format!(
-                "the first line (`{}`) is data, not a header: add a first line naming the columns, with {} among them",
-                shown_cell(&columns),
-                names.join(" or ")
-            )
-        } else {
-            format!("no column {} (columns: {columns})", names.join(" or "))
-        };
         self.column(names).ok_or_else(|| PointsError::File {
             path: self.path.clone(),
-            message,
+            message: self.missing_message(&names.join(" or "), &[]),
         })
+    }
+
+    /// The index of each column of `names`, every one required: an error names every missing
+    /// column and the header the file needs, so that one fix of the header is enough.
+    pub fn required_all(&self, names: &[&str]) -> Result<Vec<usize>, PointsError> {
+        let missing: Vec<&str> = names.iter().copied().filter(|n| self.column(&[n]).is_none()).collect();
+        if missing.is_empty() {
+            return Ok(names.iter().filter_map(|n| self.column(&[n])).collect());
+        }
+        Err(PointsError::File {
+            path: self.path.clone(),
+            message: self.missing_message(&missing.join(", "), names),
+        })
+    }
+
+    /// Whether the first line's cells are mostly numbers: a first line of data, not a header.
+    fn header_is_data(&self) -> bool {
+        let numbers = self.header.iter().filter(|h| h.trim().parse::<f64>().is_ok()).count();
+        2 * numbers > self.header.len()
+    }
+
+    /// Why the columns `missing` are not found: the first line is data (mostly numbers), or
+    /// the header lacks them (the header's cells shown, and `needed`, the columns the file
+    /// needs, when given).
+    fn missing_message(&self, missing: &str, needed: &[&str]) -> String {
+        let columns = self.header.iter().map(|h| shown_cell(h)).collect::<Vec<_>>().join(",");
+        if self.header_is_data() {
+            let among = if needed.is_empty() {
+                missing.to_owned()
+            } else {
+                needed.join(",")
+            };
+            return format!(
+                "the first line (`{}`) is data, not a header: add a first line naming the columns, with {among} among them",
+                shown_cell(&columns),
+            );
+        }
+        let noun = if missing.contains(", ") { "columns" } else { "column" };
+        let needs = if needed.is_empty() {
+            String::new()
+        } else {
+            format!("; the header needs {}", needed.join(","))
+        };
+        format!("no {noun} {missing} (columns: {columns}){needs}")
     }
 
     /// The cell of `row` at `column`, or an error naming file, line and column.
