@@ -1142,12 +1142,13 @@ fn a_huge_cell_is_not_echoed() {
 /// Hostile wide pose tables (`import wide`): each one error naming the file, the line and
 /// the column where the file has them, exit 2; a header with marker 1's y missing panicked,
 /// a row with one cell too many was read shifted, a coordinate of 1e300 was named by the
-/// output row's `x_mm`, a header-only file did not name the file.
+/// output row's `x_mm`, a header-only file did not name the file; a marker's `NaN` beside
+/// given coordinates was said to be empty.
 #[test]
 fn hostile_wide_tables_name_the_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let header = "q1,q2,q3,q4,q5,q6,m1_x,m1_y,m1_z";
-    let cases: [(&str, String, &[&str]); 7] = [
+    let cases: [(&str, String, &[&str]); 8] = [
         (
             "no-y.csv",
             "q1,q2,q3,q4,q5,q6,m1_x,m1_z\n0,0,0,0,0,0,1,2\n".into(),
@@ -1172,6 +1173,11 @@ fn hostile_wide_tables_name_the_file_line_and_column() {
             "part.csv",
             format!("{header}\n0,0,0,0,0,0,1,,3\n"),
             &["part.csv", "line 2", "m1_y", "empty"],
+        ),
+        (
+            "part-nan.csv",
+            format!("{header}\n0,0,0,0,0,0,1,NaN,3\n"),
+            &["part-nan.csv", "line 2", "m1_y", "\"NaN\" (missing)", "give all three"],
         ),
         (
             "far.csv",

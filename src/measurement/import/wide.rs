@@ -267,10 +267,14 @@ fn marker(t: &Table, row: &Row<'_>, columns: &[usize; 3], unit: LengthUnit) -> R
         ])),
         _ => {
             let c = columns.iter().copied().find(|&c| absent(c)).unwrap_or(columns[0]);
+            let written = row
+                .get(c)
+                .filter(|s| !s.is_empty())
+                .map_or("empty".to_owned(), |s| format!("{s:?} (missing)"));
             Err(t.row_error(
                 row.line,
                 c,
-                "empty while the marker's other coordinates are given".into(),
+                format!("{written} while the marker's other coordinates are given: give all three, or leave all three empty (or nan) for a marker not seen"),
             ))
         }
     }
