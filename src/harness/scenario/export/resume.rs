@@ -3,6 +3,7 @@
 
 use super::csv::read_partial_trials;
 use super::{ExportError, RESOLVED_FILE, TRIALS_FILE};
+use crate::csv_lines::shown_cell;
 use crate::harness::scenario::metrics::TrialRecord;
 use crate::harness::scenario::resolve::ResolvedScenario;
 use crate::harness::scenario::runner::Shard;
@@ -22,11 +23,13 @@ pub enum ResumeError {
     },
     /// The folder's resolved scenario is not the one resolved now.
     #[error(
-        "--resume: {path} differs from the scenario resolved now (another scenario, or other --trials/--seed); start over with --force instead"
+        "--resume: {path} differs from the scenario resolved now (another scenario, or other --trials/--seed): {difference}; start over with --force instead"
     )]
     OtherScenario {
         /// The folder's `scenario.resolved.toml`.
         path: PathBuf,
+        /// Where the two first differ ([`first_difference`]).
+        difference: String,
     },
     /// The trials file cannot be read.
     #[error(transparent)]
@@ -75,7 +78,10 @@ pub fn previous_trials(
         cause,
     })?;
     if text != resolved_text {
-        return Err(ResumeError::OtherScenario { path: resolved });
+        return Err(ResumeError::OtherScenario {
+            path: resolved,
+            difference: first_difference(&text, resolved_text),
+        });
     }
     let trials = folder.join(TRIALS_FILE);
     if !trials.exists() {
@@ -106,6 +112,28 @@ pub fn previous_trials(
         seen.entry(r.unit(n)).or_insert(r);
     }
     Ok(seen.into_values().collect())
+}
+
+/// Where the resolved scenario `then` (the folder's) first differs from `now`, in words: its
+/// line number, the table it is in and both lines (long lines cut short).
+fn first_difference(then: &str, now: &str) -> String {
+    let shown = |line: Option<&str>| line.map_or("the end of the file".to_owned(), |l| format!("`{}`", shown_cell(l)));
+    let (mut a, mut b) = (then.lines(), now.lines());
+    let mut table = None;
+    for number in 1.. {
+        let (x, y) = (a.next(), b.next());
+        if x == y {
+            match x {
+                None => break,
+                Some(l) if l.starts_with('[') => table = Some(l),
+                Some(_) => {}
+            }
+            continue;
+        }
+        let within = table.map_or(String::new(), |t| format!(" (in {t})"));
+        return format!("line {number}{within} reads {} there, {} now", shown(x), shown(y));
+    }
+    "their line endings differ".to_owned()
 }
 
 #[cfg(test)]
@@ -149,6 +177,23 @@ mod tests {
         let records = previous_trials(dir.path(), &scenario, "resolved", &names, Shard::ALL).unwrap();
         let units: Vec<usize> = records.iter().map(|r| r.unit(scenario.trials)).collect();
         assert_eq!(units, [0, 2]);
+    }
+
+    #[test]
+    fn the_first_difference_is_named_by_line_table_and_both_texts() {
+        let then = "trials = 4\n\n[measurement]\nnet_radial_rms_mm = 0.19\n";
+        let now = "trials = 4\n\n[measurement]\nnet_radial_rms_mm = 0.3\n";
+        assert_eq!(
+            first_difference(then, now),
+            "line 4 (in [measurement]) reads `net_radial_rms_mm = 0.19` there, `net_radial_rms_mm = 0.3` now"
+        );
+        assert_eq!(
+            first_difference("trials = 4\n", "trials = 4\nseed = 2\n"),
+            "line 2 reads the end of the file there, `seed = 2` now"
+        );
+        assert_eq!(first_difference("a = 1\n", "a = 1\r\n"), "their line endings differ");
+        let long = format!("half_range = [{}]", vec!["40.0"; 40].join(", "));
+        assert!(first_difference("x = 1\n", &long).contains("characters]"));
     }
 
     #[test]
