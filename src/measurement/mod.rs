@@ -15,8 +15,8 @@ mod theodolite;
 pub mod unit_check;
 
 pub use csv_io::{
-    MeasurementFileError, format_f64, read_measurements, read_measurements_from, write_measurements,
-    write_measurements_to,
+    MeasurementFileError, format_f64, format_f64_converted, read_measurements, read_measurements_from,
+    write_measurements, write_measurements_to,
 };
 pub use data::{
     Experiment, LoneTarget, MAX_LABEL_CHARS, MAX_PAYLOAD_KG, Measurement, MeasurementSet, MeasurementSetError,

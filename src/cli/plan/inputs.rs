@@ -5,7 +5,7 @@
 use anyhow::{Result, bail};
 use axiscal::calibration::procedure::target_on_axis;
 use axiscal::kinematics::JointKind;
-use axiscal::measurement::format_f64;
+use axiscal::measurement::{format_f64, format_f64_converted};
 use axiscal::plan::{CalibrationPlan, PlannedPoint};
 use axiscal::robot::{Controller, RobotDescription};
 use std::path::Path;
@@ -271,7 +271,7 @@ fn short_line_warning(
             " ({} is in mm: {} m would be {} mm)",
             given.key(),
             format_f64(span),
-            format_f64(span * 1e3)
+            format_f64_converted(span * 1e3)
         )
     } else {
         String::new()

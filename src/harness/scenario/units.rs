@@ -11,8 +11,8 @@
 use super::file::ScenarioFile;
 use super::resolve::{ResolvedScenario, ResolvedTruth};
 use crate::kinematics::JointKind;
-use crate::measurement::format_f64;
 use crate::measurement::unit_check::{UnitSlip, row_slips};
+use crate::measurement::{format_f64, format_f64_converted};
 
 /// The finest noise \[mm, a 3-D RMS\] of an instrument that measures a robot's tool: a laser
 /// tracker is good to about 0.01 mm, the paper's theodolites to 0.19 mm. A value below it is
@@ -33,7 +33,7 @@ pub fn noise_slip(mm: f64) -> Option<String> {
             "{} mm is finer than any instrument that measures a robot (at least {MIN_NET_RADIAL_RMS_MM} mm; a \
              laser tracker: about 0.01 mm): the noise is in mm; it looks like metres ({} mm?)",
             format_f64(mm),
-            format_f64(mm * 1e3)
+            format_f64_converted(mm * 1e3)
         )
     })
 }

@@ -808,6 +808,13 @@ pub fn format_f64(v: f64) -> String {
     }
 }
 
+/// [`format_f64`] of `v` rounded to 12 significant digits: a value converted for a message
+/// (0.00019 m as 0.19 mm, not 0.19000000000000003 mm), where the last bits of the product are
+/// the conversion's, not the user's.
+pub fn format_f64_converted(v: f64) -> String {
+    format_f64(format!("{v:.11e}").parse().unwrap_or(v))
+}
+
 /// Writes `set` to `path` with the header
 /// `experiment,moved_joint,step,target,x_mm,y_mm,z_mm,cmd_1..cmd_N,payload_kg,temperature_c`.
 /// Fails with [`MeasurementFileError::Exists`] if the file exists and `overwrite` is false.

@@ -334,3 +334,15 @@ fn json_xml_toml_binary_and_blank_files_are_named() {
         assert!(message.contains(said), "{message}");
     }
 }
+
+#[test]
+fn a_converted_value_is_shown_without_the_conversions_last_bits() {
+    // The products carry the multiplication's rounding: shown as the user would write them.
+    assert_eq!(format_f64(1e-9 * 1e3), "1.0000000000000002e-6");
+    assert_eq!(format_f64_converted(1e-9 * 1e3), "1e-6");
+    assert_eq!(format_f64(0.0049 * 1e3), "4.8999999999999995");
+    assert_eq!(format_f64_converted(0.0049 * 1e3), "4.9");
+    assert_eq!(format_f64_converted(123.456), "123.456");
+    // Twelve significant digits kept: a value the user wrote with many digits is not cut.
+    assert_eq!(format_f64_converted(0.123456789012 * 1e3), "123.456789012");
+}
