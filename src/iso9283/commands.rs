@@ -89,6 +89,22 @@ pub(super) fn one_command(
     let line = lines
         .get(&(experiment.name, *step))
         .map_or(String::new(), |l| format!("line {l}: "));
+    if 2 * agreeing <= commands.len() {
+        // No command most cycles share: the experiment holds several poses, not one pose's
+        // cycles, so no single cycle is the odd one.
+        return Err(IsoError::Cycle {
+            experiment: experiment.name.to_string(),
+            step: *step,
+            problem: format!(
+                "{line}commands {}, but the experiment's {} cycles share no command ({agreeing} of them \
+                 match the median of each joint's commands): an ISO pose is one command measured once a \
+                 cycle, and these rows hold several poses (free poses named `iso-P<k>`?): give each pose's \
+                 cycles their own experiment `iso-P<k>`, the cycle in `step`",
+                list(cmd),
+                commands.len()
+            ),
+        });
+    }
     Err(IsoError::Cycle {
         experiment: experiment.name.to_string(),
         step: *step,

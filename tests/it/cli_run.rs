@@ -158,6 +158,15 @@ fn bad_scenarios_exit_2_naming_file_and_key() {
             "key `thresholds[2].metric`",
         ),
         ("op.toml", ("", ""), threshold("occluded", "<"), "unknown variant `<`"),
+        (
+            "no-sweep.toml",
+            (
+                "[truth]",
+                "[plan]\nreference = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]\nsweeps = []\n\n[truth]",
+            ),
+            String::new(),
+            "key `plan.sweeps`: case `base`: the plan has no sweep",
+        ),
     ];
     for (name, replace, extra, key) in cases {
         let path = smoke_variant(dir.path(), name, replace, &extra);

@@ -1143,12 +1143,13 @@ fn a_huge_cell_is_not_echoed() {
 /// the column where the file has them, exit 2; a header with marker 1's y missing panicked,
 /// a row with one cell too many was read shifted, a coordinate of 1e300 was named by the
 /// output row's `x_mm`, a header-only file did not name the file; a marker's `NaN` beside
-/// given coordinates was said to be empty.
+/// given coordinates was said to be empty; markers numbered from 0, or after a gap, were
+/// dropped silently.
 #[test]
 fn hostile_wide_tables_name_the_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let header = "q1,q2,q3,q4,q5,q6,m1_x,m1_y,m1_z";
-    let cases: [(&str, String, &[&str]); 8] = [
+    let cases: [(&str, String, &[&str]); 10] = [
         (
             "no-y.csv",
             "q1,q2,q3,q4,q5,q6,m1_x,m1_z\n0,0,0,0,0,0,1,2\n".into(),
@@ -1173,6 +1174,16 @@ fn hostile_wide_tables_name_the_file_line_and_column() {
             "part.csv",
             format!("{header}\n0,0,0,0,0,0,1,,3\n"),
             &["part.csv", "line 2", "m1_y", "empty"],
+        ),
+        (
+            "zero-based.csv",
+            "q1,q2,q3,q4,q5,q6,m0_x,m0_y,m0_z,m1_x,m1_y,m1_z\n0,0,0,0,0,0,1,2,3,4,5,6\n".into(),
+            &["zero-based.csv", "column `m0_x`", "markers count from 1"],
+        ),
+        (
+            "gap.csv",
+            format!("{header},m3_x,m3_y,m3_z\n0,0,0,0,0,0,1,2,3,4,5,6\n"),
+            &["gap.csv", "column `m3_x`", "stop at m1", "without a gap"],
         ),
         (
             "part-nan.csv",

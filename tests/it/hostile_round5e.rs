@@ -311,6 +311,24 @@ fn an_iso_cycle_or_pose_in_radians_is_refused() {
     );
     let e = stderr(&evaluate(&all, &[]).code(2));
     assert!(e.contains("`iso-P4`") && e.contains("look like radians"), "{e}");
+    // Every cycle of iso-P4 at its own command (free poses named as one ISO pose): no cycle is
+    // the odd one, and the error says the rows hold several poses.
+    let spread = altered_csv(
+        &clean,
+        "spread.csv",
+        |_| true,
+        |f| {
+            if f[0] == "iso-P4" {
+                let step: f64 = f[2].parse().unwrap();
+                f[7] = (f[7].parse::<f64>().unwrap() + 3.0 * step).to_string();
+            }
+        },
+    );
+    let e = stderr(&evaluate(&spread, &[]).code(2));
+    assert!(
+        e.contains("`iso-P4`") && e.contains("share no command") && e.contains("several poses"),
+        "{e}"
+    );
     evaluate(&all, &["--skip-unit-check"]).success();
     evaluate(&clean, &[]).success();
     let other = dir.path().join("other");

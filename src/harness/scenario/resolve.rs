@@ -360,6 +360,7 @@ fn resolve_cases(file: &ScenarioFile, robot: &RobotDescription, dir: &Path) -> R
             d.plan
                 .validate(robot)
                 .map_err(|e| (d.keys.0.to_owned(), e.to_string()))?;
+            some_sweep(&d, file.plan.sweeps.is_some())?;
             coupling_measured(&d, file.plan.sweeps.is_some(), robot)?;
             Ok(Case {
                 name: d.name,
@@ -389,6 +390,28 @@ fn distinct(drafts: Vec<Draft>) -> Result<Vec<Draft>, KeyError> {
         }
     }
     Ok(drafts)
+}
+
+/// Refuses a case whose plan has no sweep: a trial calibrates from the axis experiments, so
+/// every trial would fail. `written` as for [`coupling_measured`].
+fn some_sweep(d: &Draft, written: bool) -> Result<(), KeyError> {
+    if !d.plan.sweeps.is_empty() {
+        return Ok(());
+    }
+    let key = match d.keys.0 {
+        "sweep.plans" => "sweep.plans",
+        _ if written => "plan.sweeps",
+        _ => d.keys.0,
+    };
+    Err((
+        key.to_owned(),
+        format!(
+            "case `{}`: the plan has no sweep, and a trial calibrates from its axis experiments, so every trial \
+             would fail: give `[[plan.sweeps]]` (one per joint at least), or leave `plan.sweeps` out for the \
+             robot's default plan",
+            d.name
+        ),
+    ))
 }
 
 /// Refuses a case whose plan sweeps a joint whose coupling the description fits without a

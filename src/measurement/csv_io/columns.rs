@@ -45,6 +45,15 @@ fn index_columns(header: &csv::StringRecord, path: &Path, line: u64) -> Result<H
             });
         }
         if let Some(k) = k {
+            if name != format!("cmd_{k}") {
+                return Err(MeasurementFileError::CommandColumnSpelling {
+                    path: path.into(),
+                    line,
+                    found: crate::csv_lines::shown_cell(name),
+                    joint: k,
+                    column: format!("cmd_{k}"),
+                });
+            }
             cmd.insert(k, i);
         }
     }

@@ -93,6 +93,23 @@ pub enum MeasurementFileError {
         /// The header name that looks like it (non-ASCII characters escaped).
         found: String,
     },
+    /// A joint command column spelled otherwise than `cmd_k` (`cmd_02`, `cmd_+2`): another
+    /// tool's name for it, or a second column of the same joint.
+    #[error(
+        "{path}:{line}: column `{found}`: reads as joint {joint}'s command but is not spelled `{column}`: rename it `{column}` (or, if the file has `{column}` too, remove one of them)"
+    )]
+    CommandColumnSpelling {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the header.
+        line: u64,
+        /// The header name as written (lower-cased).
+        found: String,
+        /// The joint (1-based).
+        joint: usize,
+        /// Its column's name, `cmd_k`.
+        column: String,
+    },
     /// A column appears twice in the header.
     #[error("{path}:{line}: column `{column}`: appears more than once in the header")]
     DuplicateColumn {

@@ -346,3 +346,18 @@ fn a_converted_value_is_shown_without_the_conversions_last_bits() {
     // Twelve significant digits kept: a value the user wrote with many digits is not cut.
     assert_eq!(format_f64_converted(0.123456789012 * 1e3), "123.456789012");
 }
+
+#[test]
+fn a_command_column_spelled_otherwise_is_refused_naming_it() {
+    // `cmd_02` after `cmd_2` replaced joint 2's commands silently (the last one won).
+    for (name, header) in [("cmd_02", "cmd_1,cmd_2,cmd_02"), ("cmd_+2", "cmd_1,cmd_+2")] {
+        let header = HEADER.replace("cmd_1,cmd_2", header);
+        let extra = if header.contains("cmd_02") { ",3" } else { "" };
+        let (_f, r) = read_text(&format!("{header}\naxis1,1,0,0,1,2,3,0,0{extra}\n"), Some(2));
+        let e = r.unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("column `{name}`")) && e.contains("rename it `cmd_2`"),
+            "{e}"
+        );
+    }
+}

@@ -10,6 +10,7 @@
 
 use super::points::{LengthUnit, PointsError};
 use super::table::{Row, Table};
+use crate::csv_lines::shown_cell;
 use crate::kinematics::JointKind;
 use crate::measurement::{Measurement, MeasurementSet};
 
@@ -70,6 +71,7 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
             Some([c("x")?, c("y")?, c("z")?])
         })
         .collect();
+    unread_markers(t, markers.len())?;
     if markers.is_empty() {
         // Marker 1 is incomplete: the first of its columns missing.
         for axis in ["m1_x", "m1_y", "m1_z"] {
@@ -238,6 +240,37 @@ pub(super) fn rows_of(
             path: path.to_owned(),
             cause: e,
         },
+    })
+}
+
+/// Refuses a marker column `m<i>_<axis>` the table has but the import would not read, with
+/// `read` markers `1..=read` complete: markers counted from 0, or after a gap or an incomplete
+/// marker (the reading stops at the first marker without its three columns).
+fn unread_markers(t: &Table, read: usize) -> Result<(), PointsError> {
+    let unread = t.header.iter().find_map(|name| {
+        let (number, axis) = name.strip_prefix('m')?.split_once('_')?;
+        let i: usize = number
+            .parse()
+            .ok()
+            .filter(|_| number.bytes().all(|b| b.is_ascii_digit()))?;
+        // With no marker read, marker 1's missing column is named by the caller.
+        (["x", "y", "z"].contains(&axis) && (i == 0 || (read > 0 && i > read))).then_some((name, i))
+    });
+    let Some((name, i)) = unread else {
+        return Ok(());
+    };
+    let why = if i == 0 {
+        "markers count from 1 (m1_x is target 0): number them from 1".to_owned()
+    } else {
+        format!(
+            "the markers read stop at m{read} because marker {} does not have all of m{0}_x, m{0}_y, m{0}_z: \
+             number the markers 1, 2, 3, ... without a gap, each with its three columns",
+            read + 1
+        )
+    };
+    Err(PointsError::File {
+        path: t.path.clone(),
+        message: format!("column `{}`: not read: {why}", shown_cell(name)),
     })
 }
 
