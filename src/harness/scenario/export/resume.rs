@@ -28,7 +28,7 @@ pub enum ResumeError {
     OtherScenario {
         /// The folder's `scenario.resolved.toml`.
         path: PathBuf,
-        /// Where the two first differ ([`first_difference`]).
+        /// Where the two first differ: the line number and both texts.
         difference: String,
     },
     /// The trials file cannot be read.
