@@ -66,7 +66,7 @@ pub enum IsoError {
     },
     /// So many cycles of a pose are outliers that the pose, not single cycles, is wrong.
     #[error(
-        "experiment `{experiment}`: {flagged} of its {cycles} cycles lie beyond the far-out fences (Q1 - 3 IQR, Q3 + 3 IQR of its cycles' coordinates): the pose, not single cycles, is wrong; check its rows (commands, coordinates and their units, target ids)"
+        "experiment `{experiment}`: {flagged} of its {cycles} cycles are outliers (each a coordinate beyond the generalized ESD test's fence against the other cycles): the pose, not single cycles, is wrong; check its rows (commands, coordinates and their units, target ids)"
     )]
     TooManyOutliers {
         /// The experiment.

@@ -4,28 +4,34 @@
 //!
 //! Per pose and approach direction, each cycle's attained pose is six coordinates: its position
 //! `x, y, z` in the base frame and its rotation vector `rx, ry, rz` from the pose's median
-//! orientation. A cycle is an outlier when any coordinate lies beyond Tukey's far-out fences
-//! `Q1 - 3 IQR`, `Q3 + 3 IQR` of its pose's cycles ([`FAR_OUT`], the rule of the sweeps' and
-//! the validation points' screens, [`crate::calibration::procedure::screen_sweeps`]): each
-//! coordinate against the cycles' own scatter along it (the robot's repeatability and the
-//! instrument's noise, far from isotropic: a joint's jitter moves the tool along its Jacobian's
-//! column), never one pose's scatter against another's. A Gaussian coordinate passes a fence
-//! once in about 800,000 (4.7 sigma); a cycle in metres or with swapped targets lies thousands
-//! of interquartile ranges out. A pose with fewer than [`MIN_CYCLES`] cycles is not screened,
-//! nor a coordinate its cycles share exactly (no scatter: noise-free data); more than
-//! [`OUTLIER_SHARE_MAX`] of a pose's cycles beyond the fences is an error: the pose, not single
+//! orientation. The outlier cycles are those of Rosner's generalized extreme studentised
+//! deviate test ([`generalized_esd`]): each coordinate against the other cycles' own scatter
+//! along it (the robot's repeatability and the instrument's noise, far from isotropic: a joint's
+//! jitter moves the tool along its Jacobian's column), never one pose's scatter against
+//! another's. Its fence is the Student t quantile for the cycles left, so that it holds its
+//! false-alarm rate for 8 cycles as for 300: [`ISO_CYCLES_FALSE_ALARM`] over every pose and
+//! coordinate a file's test screens. A cycle in metres or with swapped targets lies thousands
+//! of standard deviations out. A pose with fewer than [`MIN_CYCLES`] cycles is not screened,
+//! nor a coordinate its other cycles share exactly (no scatter: noise-free data); more than
+//! [`OUTLIER_SHARE_MAX`] of a pose's cycles beyond the fence is an error: the pose, not single
 //! cycles, is wrong.
 
 use super::IsoError;
 use super::evaluate::Cycle;
 use crate::calibration::procedure::OUTLIER_SHARE_MAX;
-use crate::numerics::stats::{FAR_OUT, QuantileMethod, median, quantile};
+use crate::numerics::stats::{generalized_esd, median};
 use nalgebra::{Isometry3, Quaternion, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
 
-/// A pose with fewer cycles than this is not screened: its quartiles are no fence (as the
-/// validation points' screen needs 8 points).
+/// A pose with fewer cycles than this is not screened: the other cycles' scatter is too
+/// uncertain to find any but the grossest error (as the validation points' screen needs 8
+/// points).
 pub const MIN_CYCLES: usize = 8;
+
+/// The family-wise false-alarm rate of the screen over a whole file: on clean cycles about this
+/// share of files has a cycle flagged (the sweep points' rate,
+/// [`crate::calibration::procedure::SWEEP_POINTS_FALSE_ALARM`]).
+pub const ISO_CYCLES_FALSE_ALARM: f64 = crate::calibration::procedure::SWEEP_POINTS_FALSE_ALARM;
 
 /// The names of a cycle's six coordinates.
 const COORDINATES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
@@ -46,9 +52,12 @@ pub struct OutlierCycle {
     /// Its coordinate farthest out (`x`, `y`, `z` \[base frame\], `rx`, `ry`, `rz` \[rotation
     /// vector from the pose's median orientation\]).
     pub coordinate: String,
-    /// How far that coordinate lies beyond its pose's quartile, in interquartile ranges
-    /// (beyond the far-out fence: more than 3).
-    pub beyond_iqr: f64,
+    /// Its externally studentised deviation along that coordinate: its distance from the mean
+    /// of the pose's other cycles kept, in their standard deviations (module doc).
+    pub studentised: f64,
+    /// The fence it exceeds: the Student t quantile for the pose's cycles kept, at the file's
+    /// false-alarm rate.
+    pub fence: f64,
     /// Whether the figures were computed without it (`false`: kept on request).
     pub dropped: bool,
 }
@@ -57,14 +66,15 @@ impl OutlierCycle {
     /// The cycle, where it is in the file, how far out, and what to check, in words.
     pub fn describe(&self) -> String {
         format!(
-            "{}outlier cycle: experiment {} cycle (step) {} attained {:.3} mm and {:.3} mrad from its pose's median; its {} lies {:.1} interquartile ranges beyond its pose's cycles' quartile (the far-out fence is {FAR_OUT}): {}; check this cycle's rows (coordinates and their units, target ids)",
+            "{}outlier cycle: experiment {} cycle (step) {} attained {:.3} mm and {:.3} mrad from its pose's median; its {} lies {:.1} standard deviations of the pose's other cycles from their mean (the fence for this pose is {:.1}): {}; check this cycle's rows (coordinates and their units, target ids)",
             self.line.map_or(String::new(), |l| format!("line {l}: ")),
             self.experiment,
             self.step,
             self.position_mm,
             self.angle_mrad,
             self.coordinate,
-            self.beyond_iqr,
+            self.studentised,
+            self.fence,
             if self.dropped {
                 "the figures are computed without it (--keep-outliers keeps it)"
             } else {
@@ -93,9 +103,9 @@ fn median_rotation(poses: &[&Isometry3<f64>]) -> UnitQuaternion<f64> {
     mean * UnitQuaternion::from_scaled_axis(centre)
 }
 
-/// The cycles of one pose (at least [`MIN_CYCLES`]) beyond a far-out fence (module doc), with
-/// `keep` flagged as kept.
-fn screen_pose(cycles: &[&Cycle], keep: bool) -> Vec<OutlierCycle> {
+/// The cycles of one pose (at least [`MIN_CYCLES`]) the test flags at false-alarm rate
+/// `alpha` (module doc), with `keep` flagged as kept.
+fn screen_pose(cycles: &[&Cycle], alpha: f64, keep: bool) -> Vec<OutlierCycle> {
     let rotation = median_rotation(&cycles.iter().map(|c| &c.attained).collect::<Vec<_>>());
     let coordinates: Vec<[f64; 6]> = cycles
         .iter()
@@ -106,38 +116,24 @@ fn screen_pose(cycles: &[&Cycle], keep: bool) -> Vec<OutlierCycle> {
         })
         .collect();
     let median_position = Vector3::from_fn(|i, _| median(&coordinates.iter().map(|c| c[i]).collect::<Vec<_>>()));
-    // Per coordinate: its first and third quartiles and their distance.
-    let quartiles: [(f64, f64, f64); 6] = std::array::from_fn(|k| {
-        let v: Vec<f64> = coordinates.iter().map(|c| c[k]).collect();
-        let (q1, q3) = (
-            quantile(&v, 0.25, QuantileMethod::Linear),
-            quantile(&v, 0.75, QuantileMethod::Linear),
-        );
-        (q1, q3, q3 - q1)
-    });
-    let mut out = Vec::new();
-    for (c, x) in cycles.iter().zip(&coordinates) {
-        let (k, beyond) = (0..6)
-            .filter(|&k| quartiles[k].2 > 0.0)
-            .map(|k| {
-                let (q1, q3, iqr) = quartiles[k];
-                (k, (q1 - x[k]).max(x[k] - q3) / iqr)
-            })
-            .fold((0, f64::NEG_INFINITY), |best, b| if b.1 > best.1 { b } else { best });
-        if beyond > FAR_OUT {
-            out.push(OutlierCycle {
+    let most = (OUTLIER_SHARE_MAX * cycles.len() as f64).floor() as usize + 1;
+    generalized_esd(&coordinates, alpha, most)
+        .into_iter()
+        .map(|o| {
+            let (c, x) = (cycles[o.sample], coordinates[o.sample]);
+            OutlierCycle {
                 experiment: c.experiment.clone(),
                 step: c.step,
                 line: c.line,
                 position_mm: (Vector3::new(x[0], x[1], x[2]) - median_position).norm() * 1e3,
                 angle_mrad: Vector3::new(x[3], x[4], x[5]).norm() * 1e3,
-                coordinate: COORDINATES[k].to_string(),
-                beyond_iqr: beyond,
+                coordinate: COORDINATES[o.coordinate].to_string(),
+                studentised: o.studentised,
+                fence: o.fence,
                 dropped: !keep,
-            });
-        }
-    }
-    out
+            }
+        })
+        .collect()
 }
 
 /// The outlier cycles of `cycles` (module doc), in file order; with `keep` flagged as kept.
@@ -148,9 +144,11 @@ pub(super) fn screen_cycles(cycles: &BTreeMap<usize, Vec<Cycle>>, keep: bool) ->
             groups.entry((pose, c.direction)).or_default().push(c);
         }
     }
+    let screened: Vec<&Vec<&Cycle>> = groups.values().filter(|g| g.len() >= MIN_CYCLES).collect();
+    let alpha = ISO_CYCLES_FALSE_ALARM / screened.len().max(1) as f64;
     let mut out = Vec::new();
-    for group in groups.values().filter(|g| g.len() >= MIN_CYCLES) {
-        let flagged = screen_pose(group, keep);
+    for group in screened {
+        let flagged = screen_pose(group, alpha, keep);
         if flagged.len() as f64 > OUTLIER_SHARE_MAX * group.len() as f64 {
             return Err(IsoError::TooManyOutliers {
                 experiment: group[0].experiment.clone(),

@@ -2,14 +2,16 @@
 //! quantile definitions the program uses (named, never mixed up), tail fractions, and the
 //! summary of a sample that reports and thresholds read ([`Stats`]), the chi-square
 //! distribution (the calibration's noise estimate), the F distribution (a statistic with an
-//! estimated noise) and the chi-square statistic of residuals that share one error
+//! estimated noise), Student's t and the generalized ESD outlier test ([`generalized_esd`]) and the chi-square statistic of residuals that share one error
 //! ([`SharedErrorChiSquare`]).
 
 mod chi_square;
+mod esd;
 mod f_ratio;
 mod shared_error;
 
 pub use chi_square::{chi_square_cdf, chi_square_quantile, ln_gamma, regularized_lower_gamma};
+pub use esd::{EsdOutlier, generalized_esd, student_t_two_sided};
 pub use f_ratio::{f_cdf, f_upper_quantile, f_upper_tail, regularized_incomplete_beta};
 use serde::{Deserialize, Serialize};
 pub use shared_error::{SharedErrorChiSquare, SharedErrorFit};
