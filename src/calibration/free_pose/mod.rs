@@ -54,12 +54,10 @@ use crate::robot::{Controller, RobotDescription, RobotModel};
 use fit::{Fitted, Problem};
 use nalgebra::{DMatrix, Isometry3};
 
-/// Outlier rounds at most (each refits without the poses flagged so far).
-const OUTLIER_ROUNDS: usize = 10;
-
-/// At most this fraction of the poses may be dropped as outliers: beyond it the model, not the
-/// poses, is wrong.
-const OUTLIER_SHARE_MAX: f64 = 0.2;
+// Outlier rounds at most (each refits without the poses flagged so far), and the fraction of
+// the poses that may be dropped as outliers (beyond it the model, not the poses, is wrong):
+// those of every outlier test.
+use crate::numerics::outlier_rounds::{OUTLIER_ROUNDS, OUTLIER_SHARE_MAX};
 
 /// Options of [`calibrate_free_poses`].
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,8 +6,8 @@ use super::super::outlier_point::OutlierPoint;
 use crate::measurement::MeasurementSet;
 
 /// At most this share of a sweep's points may be set aside: beyond it the sweep, not single
-/// points, is wrong.
-pub const OUTLIER_SHARE_MAX: f64 = 0.2;
+/// points, is wrong (the one share of every outlier test).
+pub use crate::numerics::outlier_rounds::OUTLIER_SHARE_MAX;
 
 /// At most this many points of one sweep are set aside, one refit each: more gross errors in
 /// one sweep make it wrong, not its points (and a million-point sweep is not refitted a
