@@ -134,10 +134,46 @@ pub fn one_line(text: &str) -> String {
 }
 
 /// A parser's message as an error shows it: each number longer than 20 characters written
-/// short (serde writes a float in full: `1e308` as 309 digits) and each word longer than
-/// [`shown_cell`] keeps whole by its start and length.
+/// short (serde writes a float in full: `1e308` as 309 digits), each word longer than
+/// [`shown_cell`] keeps whole by its start and length, and the Rust types serde expects said
+/// in words ([`plain_types`]).
 pub fn shown_message(message: &str) -> String {
-    message.split(' ').map(shown_word).collect::<Vec<_>>().join(" ")
+    plain_types(&message.split(' ').map(shown_word).collect::<Vec<_>>().join(" "))
+}
+
+/// `message` with serde's `expected u64` (and the other number types) said as what to write,
+/// `a whole number from 0 to 18446744073709551615`, and its ` as i128` (how the parser held a
+/// number out of range) left out.
+fn plain_types(message: &str) -> String {
+    const WHOLE_64: &str = "a whole number from 0 to 18446744073709551615";
+    let words: [(&str, &str); 9] = [
+        ("u8", "a whole number from 0 to 255"),
+        ("u16", "a whole number from 0 to 65535"),
+        ("u32", "a whole number from 0 to 4294967295"),
+        ("u64", WHOLE_64),
+        ("usize", WHOLE_64),
+        ("i32", "a whole number from -2147483648 to 2147483647"),
+        ("i64", "a whole number from -9223372036854775808 to 9223372036854775807"),
+        ("f32", "a number"),
+        ("f64", "a number"),
+    ];
+    let mut out = message.replace(" as i128", "").replace(" as u128", "");
+    for (rust, plain) in words {
+        let from = format!("expected {rust}");
+        let mut at = 0;
+        while let Some(found) = out[at..].find(&from).map(|i| i + at) {
+            let end = found + from.len();
+            let whole_word = out[end..]
+                .chars()
+                .next()
+                .is_none_or(|c| !c.is_alphanumeric() && c != '_');
+            if whole_word {
+                out.replace_range(found..end, &format!("expected {plain}"));
+            }
+            at = found + 1;
+        }
+    }
+    out
 }
 
 /// One word of [`shown_message`].
@@ -431,13 +467,31 @@ mod tests {
         let message = format!("invalid type: floating point `{digits}`, expected usize");
         assert_eq!(
             shown_message(&message),
-            "invalid type: floating point `1e308`, expected usize"
+            "invalid type: floating point `1e308`, expected a whole number from 0 to 18446744073709551615"
         );
         assert_eq!(shown_message("value 12.5 and -3"), "value 12.5 and -3");
         let long = "b".repeat(100);
         assert_eq!(
             shown_message(&format!("unknown `{long}`")),
             format!("unknown {}", shown_cell(&format!("`{long}`")))
+        );
+    }
+
+    /// Serde's type names become what to write, whole words only; the parser's `as i128` goes.
+    #[test]
+    fn the_types_serde_expects_are_said_in_words() {
+        assert_eq!(
+            shown_message("invalid type: integer `18446744073709551616` as i128, expected u64"),
+            "invalid type: integer `18446744073709551616`, expected a whole number from 0 to 18446744073709551615"
+        );
+        assert_eq!(
+            shown_message("invalid type: string \"x\", expected f64; expected u8"),
+            "invalid type: string \"x\", expected a number; expected a whole number from 0 to 255"
+        );
+        assert_eq!(shown_message("expected u64s or u64_x"), "expected u64s or u64_x");
+        assert_eq!(
+            shown_message("expected u32)"),
+            "expected a whole number from 0 to 4294967295)"
         );
     }
 

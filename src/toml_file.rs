@@ -294,7 +294,6 @@ fn longer_value(written: &toml::Value, read: &toml::Value, key: &str) -> Option<
     }
 }
 
-/// `line L, column C: message (at `text of the line`)`, or the message alone without a span.
 /// The line whose key (`a.b.c = ...`, `[a.b.c]`, `[[a.b]]`) has the most dotted parts, with
 /// that count and the key: where a parser error without a position (its recursion limit)
 /// comes from.
@@ -316,6 +315,7 @@ fn deepest_key(text: &str) -> Option<(usize, usize, String)> {
         .max_by_key(|&(line, depth, _)| (depth, std::cmp::Reverse(line)))
 }
 
+/// `line L, column C: message (at `text of the line`)`, or the message alone without a span.
 fn one_line_message(e: &toml::de::Error, text: &str) -> String {
     let message = e
         .message()
@@ -324,7 +324,10 @@ fn one_line_message(e: &toml::de::Error, text: &str) -> String {
         .filter(|l| !l.is_empty())
         .collect::<Vec<_>>()
         .join("; ");
-    let message = shown_message(&message);
+    let mut message = shown_message(&message);
+    if message.ends_with("value was too large") {
+        message.push_str(": a TOML file holds whole numbers up to 9223372036854775807 (64-bit signed)");
+    }
     let Some(span) = e.span() else {
         return match deepest_key(text) {
             Some((line, depth, key)) if message.contains("recursion") => format!(
@@ -366,6 +369,27 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown field `mass_kgs`") && e.contains("line 1"), "{e}");
+    }
+
+    /// A whole number a TOML file cannot hold, or a type serde names in Rust, is said as what
+    /// to write.
+    #[test]
+    fn numbers_out_of_range_say_the_range() {
+        #[derive(Debug, serde::Deserialize, serde::Serialize)]
+        struct Seeded {
+            seed: u64,
+        }
+        let e = parse::<Seeded>("seed = 18446744073709551615\n", Path::new("s.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("whole numbers up to 9223372036854775807"), "{e}");
+        let e = parse::<Seeded>("seed = -1\n", Path::new("s.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("expected a whole number from 0 to 18446744073709551615"),
+            "{e}"
+        );
     }
 
     #[test]
