@@ -136,7 +136,7 @@ pub fn one_line(text: &str) -> String {
 /// A parser's message as an error shows it: each number longer than 20 characters written
 /// short (serde writes a float in full: `1e308` as 309 digits), each word longer than
 /// [`shown_cell`] keeps whole by its start and length, and the Rust types serde expects said
-/// in words ([`plain_types`]).
+/// in words (`expected u64`: `expected a whole number from 0 to 18446744073709551615`).
 pub fn shown_message(message: &str) -> String {
     plain_types(&message.split(' ').map(shown_word).collect::<Vec<_>>().join(" "))
 }

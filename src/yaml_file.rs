@@ -37,8 +37,10 @@ pub enum YamlError {
     },
 }
 
-/// The documents of `text`, refused when their aliases expand beyond the bound.
+/// The documents of `text` (a leading byte-order mark skipped, as an editor on Windows writes
+/// one), refused when their aliases expand beyond the bound.
 pub fn load(text: &str) -> Result<Vec<Yaml>, YamlError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let syntax = |e: yaml_rust2::ScanError| YamlError::Syntax {
         line: e.marker().line(),
         message: e.info().to_owned(),
@@ -110,6 +112,13 @@ impl MarkedEventReceiver for Count {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A byte-order mark before the first key leaves the key as written.
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let docs = load("\u{feff}kinematics:\n  hash: calib_1\n").unwrap();
+        assert_eq!(docs[0]["kinematics"]["hash"].as_str(), Some("calib_1"));
+    }
 
     /// `levels` levels of ten aliases each to the level below: 10^levels leaves.
     fn laughs(levels: usize) -> String {

@@ -64,6 +64,27 @@ pub enum IsoError {
         /// Its `moved_joint`.
         moved_joint: usize,
     },
+    /// Two experiments name one pose and approach direction (`iso-P1` and `iso-P1-d1`): their
+    /// cycles would count twice.
+    #[error(
+        "experiments `{first}`{} and `{second}`{} both name pose P{pose}, approach direction {direction} (`iso-P<k>` is `iso-P<k>-d1`): their cycles would count as one pose's twice; delete the repeated rows, or rename one experiment (`iso-P{pose}-d<h>` for another approach direction)",
+        first_line.map_or(String::new(), |l| format!(" (line {l})")),
+        second_line.map_or(String::new(), |l| format!(" (line {l})"))
+    )]
+    SamePose {
+        /// The experiment seen first.
+        first: String,
+        /// The line of its first row, when known.
+        first_line: Option<u64>,
+        /// The other experiment.
+        second: String,
+        /// The line of its first row, when known.
+        second_line: Option<u64>,
+        /// Pose `k`.
+        pose: usize,
+        /// Approach direction `h`.
+        direction: usize,
+    },
     /// So many cycles of a pose are outliers that the pose, not single cycles, is wrong.
     #[error(
         "experiment `{experiment}`: {flagged} of its {cycles} cycles are outliers (each a coordinate beyond the generalized ESD test's fence against the other cycles): the pose, not single cycles, is wrong; check its rows (commands, coordinates and their units, target ids)"
@@ -251,7 +272,7 @@ fn cycle(
 /// The ISO poses of `set` by label, every experiment named like one checked
 /// ([`IsoError::NotAPose`]).
 fn iso_experiments<'a>(set: &'a MeasurementSet) -> Result<Vec<(Experiment<'a>, usize, usize)>, IsoError> {
-    let mut out = Vec::new();
+    let mut out: Vec<(Experiment<'a>, usize, usize)> = Vec::new();
     for experiment in set.experiments() {
         match label(experiment.name) {
             Label::Pose(_, _) if experiment.moved_joint != 0 => {
@@ -261,7 +282,19 @@ fn iso_experiments<'a>(set: &'a MeasurementSet) -> Result<Vec<(Experiment<'a>, u
                     moved_joint: experiment.moved_joint,
                 });
             }
-            Label::Pose(k, h) => out.push((experiment, k, h)),
+            Label::Pose(k, h) => {
+                if let Some((first, ..)) = out.iter().find(|(_, pose, direction)| (*pose, *direction) == (k, h)) {
+                    return Err(IsoError::SamePose {
+                        first: first.name.to_string(),
+                        first_line: first.lines.map(|(line, _)| line),
+                        second: experiment.name.to_string(),
+                        second_line: experiment.lines.map(|(line, _)| line),
+                        pose: k,
+                        direction: h,
+                    });
+                }
+                out.push((experiment, k, h));
+            }
             Label::Other => {}
             Label::Malformed(problem) => {
                 let line = set

@@ -1149,7 +1149,7 @@ fn a_huge_cell_is_not_echoed() {
 fn hostile_wide_tables_name_the_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let header = "q1,q2,q3,q4,q5,q6,m1_x,m1_y,m1_z";
-    let cases: [(&str, String, &[&str]); 10] = [
+    let cases: [(&str, String, &[&str]); 11] = [
         (
             "no-y.csv",
             "q1,q2,q3,q4,q5,q6,m1_x,m1_z\n0,0,0,0,0,0,1,2\n".into(),
@@ -1199,6 +1199,11 @@ fn hostile_wide_tables_name_the_file_line_and_column() {
             "long.csv",
             format!("{header}\n0,0,0,0,0,0,1,2,3,4\n"),
             &["long.csv", "line 2", "10 cells", "9 columns"],
+        ),
+        (
+            "twice.csv",
+            format!("{header}\n0,0,0,0,0,0,1,2,3\n0,0,0,0,0,1,1,2.5,3\n0,0,0,0,0,1,1,2.5,3\n"),
+            &["twice.csv", "line 4 repeats line 3 cell for cell", "delete one"],
         ),
     ];
     for (name, text, expected) in cases {

@@ -348,14 +348,61 @@ fn a_ur_export_refuses_what_the_file_cannot_hold_and_a_robot_that_is_not_a_ur() 
     .assert()
     .code(2);
     assert!(
-        stderr(&a).contains("`kinematics.hash`: missing: give --hash"),
+        stderr(&a).contains(&format!(
+            "{}: `kinematics.hash`: missing: give --hash",
+            no_hash.display()
+        )),
         "{}",
         stderr(&a)
     );
     let a = base(&["--approximate", "--force", "--hash", "calib 1"])
         .assert()
         .code(2);
-    assert!(stderr(&a).contains("the hash `calib 1`"), "{}", stderr(&a));
+    assert!(stderr(&a).contains("--hash: the hash `calib 1`"), "{}", stderr(&a));
+    // A hash of the reference file that is no plain word: the file and its key named, with the fix.
+    let bad_hash = dir.path().join("bad-hash.yaml");
+    std::fs::write(&bad_hash, like.replace("calib_12788084448423163542", "\"calib 1;x\"")).unwrap();
+    let a = export_cmd(
+        &[
+            "ur-kinematics",
+            "--robot",
+            "ur5e-dh",
+            "--approximate",
+            "--like",
+            bad_hash.to_str().unwrap(),
+        ],
+        &cal,
+        &dir.path().join("k3.yaml"),
+        &[],
+    )
+    .assert()
+    .code(2);
+    assert!(
+        stderr(&a).contains(&format!(
+            "{}: `kinematics.hash`: the hash `calib 1;x`",
+            bad_hash.display()
+        )) && stderr(&a).contains("or give --hash"),
+        "{}",
+        stderr(&a)
+    );
+    // A byte-order mark before the reference's first key, as a Windows editor writes one.
+    let bom = dir.path().join("bom.yaml");
+    std::fs::write(&bom, format!("\u{feff}{like}")).unwrap();
+    export_cmd(
+        &[
+            "ur-kinematics",
+            "--robot",
+            "ur5e-dh",
+            "--approximate",
+            "--like",
+            bom.to_str().unwrap(),
+        ],
+        &cal,
+        &dir.path().join("k4.yaml"),
+        &[],
+    )
+    .assert()
+    .success();
     // A SCARA is no UR.
     let scara = calibrated(&dir.path().join("scara"), "scara-rrpr", "scara-rrpr", 34);
     let a = export_cmd(

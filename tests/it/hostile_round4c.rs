@@ -222,6 +222,9 @@ fn payload_wide_units_and_free_poses_on_sweeps_are_said() {
     let campaign = std::fs::read_to_string(d.join("campaign.csv")).unwrap();
     std::fs::write(d.join("heavy.csv"), with_payload(&campaign, "2500")).unwrap();
     std::fs::write(d.join("wide.csv"), wide_table(&campaign)).unwrap();
+    // Marker 1's y and z headers swapped: the warning names the table's lines.
+    let swapped = wide_table(&campaign).replacen("m1_y,m1_z", "m1_z,m1_y", 1);
+    std::fs::write(d.join("wide-yz.csv"), swapped).unwrap();
     let cases = [
         case(
             "a payload of 2.5 t",
@@ -255,6 +258,12 @@ fn payload_wide_units_and_free_poses_on_sweeps_are_said() {
             "import wide wide.csv --angles rad --units m --out out.csv",
             2,
             &["pass --angles deg --units mm"],
+        ),
+        case(
+            "a marker's y and z headers swapped",
+            "import wide wide-yz.csv --angles deg --units mm --out out.csv",
+            0,
+            &["the farthest off: line "],
         ),
         case(
             "sweeps as free poses",

@@ -777,4 +777,23 @@ fn an_iso_experiment_name_that_does_not_parse_is_refused() {
             "{err}"
         );
     }
+    // Pose P1's cycles again under `iso-P1-d1`, the same pose and direction: refused, naming both.
+    let text = std::fs::read_to_string(&clean).unwrap();
+    let again: String = text
+        .lines()
+        .filter(|l| l.starts_with("iso-P1,"))
+        .map(|l| format!("{}\n", l.replacen("iso-P1,", "iso-P1-d1,", 1)))
+        .collect();
+    let twice = dir.path().join("twice.csv");
+    std::fs::write(&twice, text + &again).unwrap();
+    let (out, _) = evaluate_iso(&twice, "twice-out", &[]);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    let (first, second) = (line_of(&twice, "iso-P1", 0), line_of(&twice, "iso-P1-d1", 0));
+    assert!(
+        err.contains(&format!(
+            "experiments `iso-P1` (line {first}) and `iso-P1-d1` (line {second}) both name pose P1, approach direction 1"
+        )),
+        "{err}"
+    );
 }

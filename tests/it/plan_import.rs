@@ -271,7 +271,10 @@ fn each_mismatch_is_one_clear_error() {
     );
     // A unit stated against the data.
     let e = import_error(d, &good, &["--units", "mm"]);
-    assert!(e.contains("points are in mm") && e.contains("unit slip"), "{e}");
+    assert!(
+        e.contains("points are in mm (--units)") && e.contains("they look like m: pass --units m"),
+        "{e}"
+    );
 }
 
 /// One pose of a wide table: experiment, step, joint values (text), markers 1-3 \[m\].

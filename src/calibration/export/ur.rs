@@ -61,8 +61,15 @@ pub enum UrError {
     #[error("the UR kinematics holds six revolute joints; the robot description has {0}")]
     NotSixRevolute(String),
     /// A hash that is not one plain word.
-    #[error("the hash `{0}` must be letters, digits and `_` (as `calib_12788084448423163542`)")]
-    Hash(String),
+    #[error(
+        "{given_by}: the hash `{hash}` must be letters, digits and `_` (as `calib_12788084448423163542`): write it so, or give --hash"
+    )]
+    Hash {
+        /// Where it was given: `--hash`, or the reference file and its key.
+        given_by: String,
+        /// The hash as given.
+        hash: String,
+    },
     /// The reference's link frames cannot be kept.
     #[error("the reference kinematics: {0}")]
     Anchor(super::AnchorError),
@@ -85,6 +92,8 @@ pub struct UrKinematics {
     pub segments: [[f64; 6]; 6],
     /// The `hash` value.
     pub hash: String,
+    /// The file it was read from, as errors name it.
+    pub file: String,
 }
 
 /// `base_link_inertia` in `base_link`: a turn by pi about Z.
@@ -114,12 +123,15 @@ fn number(node: &Yaml, file: &str, key: String) -> Result<f64, UrError> {
     }
 }
 
-/// Refuses a hash that is not one plain YAML word.
-fn checked_hash(hash: &str) -> Result<String, UrError> {
+/// Refuses a hash that is not one plain YAML word; `given_by` says where it was given.
+fn checked_hash(hash: &str, given_by: impl Into<String>) -> Result<String, UrError> {
     if !hash.is_empty() && hash.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
         Ok(hash.to_string())
     } else {
-        Err(UrError::Hash(hash.to_string()))
+        Err(UrError::Hash {
+            given_by: given_by.into(),
+            hash: crate::csv_lines::shown_cell(hash),
+        })
     }
 }
 
@@ -208,7 +220,11 @@ impl UrKinematics {
                 ));
             }
         };
-        Ok(Self { segments, hash })
+        Ok(Self {
+            segments,
+            hash,
+            file: file.into(),
+        })
     }
 
     /// The chain the file describes, rooted in `base_link`, joint variables the controller's
@@ -245,7 +261,11 @@ impl UrKinematics {
             };
             segments[s] = xyz_rpy(&origin);
         }
-        Self { segments, hash }
+        Self {
+            segments,
+            hash,
+            file: "the written file".into(),
+        }
     }
 
     /// The YAML text (`comments` first, each line prefixed `# `, its control characters escaped),
@@ -308,15 +328,15 @@ pub fn export(
         )));
     }
     let hash = match hash {
-        Some(h) => checked_hash(h)?,
+        Some(h) => checked_hash(h, "--hash")?,
         None if reference.hash.is_empty() => {
             return Err(key_error(
-                "the reference",
+                &reference.file,
                 "kinematics.hash".into(),
-                "missing: give --hash",
+                "missing: give --hash (the checksum of the controller's own calibration, as the robot's file holds it)",
             ));
         }
-        None => checked_hash(&reference.hash)?,
+        None => checked_hash(&reference.hash, format!("{}: `kinematics.hash`", reference.file))?,
     };
     let (chain, left_out) = reading_chain(cal, desc);
     let nominal = OriginChain::of_phi_model(&desc.nominal_model());

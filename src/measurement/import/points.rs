@@ -349,8 +349,26 @@ pub fn join_points(
         None => (detect_unit(ratio).ok_or_else(|| unit_error(path, ratio))?, true),
     };
     if detect_unit(ratio) != Some(unit) {
+        let by = if stated.is_some() {
+            "--units"
+        } else {
+            "the column names"
+        };
+        let fix = match detect_unit(ratio) {
+            Some(fits) if stated.is_some() => format!(
+                "they look like {}: pass --units {} (or leave --units out: the unit is then told from the spread)",
+                fits.name(),
+                fits.name()
+            ),
+            Some(fits) => format!(
+                "they look like {}: check the export's unit setting (its column names say {}, its values do not)",
+                fits.name(),
+                unit.name()
+            ),
+            None => "neither mm (about 1) nor m (about 0.001) fits: check that the plan is the one measured".into(),
+        };
         return Err(file_error(format!(
-            "the points are in {}, but their spread is {ratio:.4} times the plan's nominal spread (in mm): a unit slip?",
+            "the points are in {} ({by}), but their spread is {ratio:.4} times the plan's nominal spread in mm: {fix}",
             unit.name()
         )));
     }

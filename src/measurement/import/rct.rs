@@ -68,7 +68,7 @@ pub fn parse(text: &str, path: &Path, options: &RctOptions) -> Result<Measuremen
     if poses.is_empty() {
         return Err(file_error("no observation".into()));
     }
-    rows_of(&poses, options.kinds.len(), options.still_tolerance, path)
+    rows_of(&poses, options.kinds.len(), (options.still_tolerance, false), path)
 }
 
 /// One entry's commands (deg / mm) and target points (mm).

@@ -98,11 +98,40 @@ pub fn import_wide(t: &Table, options: &WideOptions) -> Result<MeasurementSet, P
             .collect::<Result<Vec<_>, _>>()?;
         poses.push((row.line, cmd, seen));
     }
+    if let Some((line, first)) = repeated_pose(&poses) {
+        return Err(PointsError::File {
+            path: t.path.clone(),
+            message: format!(
+                "line {line} repeats line {first} cell for cell (every joint value and marker coordinate the same, which two measurements never are): a row written twice; delete one of them"
+            ),
+        });
+    }
     if let Some(broken) = broken_sweep(&poses, options.still_tolerance) {
         let column = broken.columns.first().map_or(joints[broken.joint], |&j| joints[j]);
         return Err(t.row_error(broken.line, column, broken.message(&poses, t, &joints)));
     }
-    rows_of(&poses, options.kinds.len(), options.still_tolerance, &t.path)
+    rows_of(&poses, options.kinds.len(), (options.still_tolerance, true), &t.path)
+}
+
+/// The first pose with a marker whose every value (bit for bit) repeats an earlier pose's: its
+/// line and the earlier one's.
+fn repeated_pose(poses: &[Pose]) -> Option<(usize, usize)> {
+    let mut seen: std::collections::HashMap<Vec<u64>, usize> = std::collections::HashMap::new();
+    poses.iter().find_map(|(line, cmd, markers)| {
+        if markers.iter().all(Option::is_none) {
+            return None;
+        }
+        let key: Vec<u64> = cmd
+            .iter()
+            .map(|v| v.to_bits())
+            .chain(
+                markers
+                    .iter()
+                    .flat_map(|m| m.map_or([u64::MAX; 3], |p| p.map(f64::to_bits))),
+            )
+            .collect();
+        seen.insert(key, *line).map(|first| (*line, first))
+    })
 }
 
 /// A pose that splits a sweep: its neighbours differ in joint `joint` alone by about two
@@ -201,11 +230,12 @@ impl BrokenSweep {
 }
 
 /// The measurement rows of `poses` in experiments recovered from their joint values
-/// ([`segment`]); `path` labels errors.
+/// ([`segment`]); `path` labels errors. With `file_lines` each pose's number is its line of the
+/// file, which the set keeps for later checks to name.
 pub(super) fn rows_of(
     poses: &[Pose],
     joints: usize,
-    still_tolerance: f64,
+    (still_tolerance, file_lines): (f64, bool),
     path: &std::path::Path,
 ) -> Result<MeasurementSet, PointsError> {
     let experiments = segment(poses, still_tolerance);
@@ -229,7 +259,8 @@ pub(super) fn rows_of(
             }
         }
     }
-    MeasurementSet::new(joints, rows).map_err(|e| match sources.get(e.row) {
+    let lines: Vec<u64> = sources.iter().map(|&(line, _)| line as u64).collect();
+    let set = MeasurementSet::new(joints, rows).map_err(|e| match sources.get(e.row) {
         Some(&(line, target)) => PointsError::Row {
             path: path.to_owned(),
             line,
@@ -240,7 +271,8 @@ pub(super) fn rows_of(
             path: path.to_owned(),
             cause: e,
         },
-    })
+    })?;
+    Ok(if file_lines { set.with_lines(lines) } else { set })
 }
 
 /// Refuses a marker column `m<i>_<axis>` the table has but the import would not read, with

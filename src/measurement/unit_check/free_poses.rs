@@ -242,7 +242,14 @@ pub(super) fn one_scale(set: &MeasurementSet, desc: &RobotDescription) -> Result
         let named: Vec<String> = poses_off
             .iter()
             .take(NAMED_LINES)
-            .filter_map(|(i, r)| Some(format!("line {} ({r:.2} times)", set.line_of(poses[*i].row)?)))
+            .map(|(i, r)| {
+                let row = poses[*i].row;
+                let m = &set.rows()[row];
+                match set.line_of(row) {
+                    Some(line) => format!("line {line} ({r:.2} times)"),
+                    None => format!("experiment {} step {} ({r:.2} times)", m.experiment, m.step),
+                }
+            })
             .collect();
         named.join(", ")
     };
