@@ -68,6 +68,9 @@ pub struct CertificateInputs<'a> {
     pub held_out: Option<HeldOut>,
     /// Measured ISO 9283 figures (`iso9283 evaluate`), if any.
     pub iso9283: Option<IsoFigures>,
+    /// What reading the inputs warned of (a calibration edited after `axiscal calibrate`
+    /// wrote it, another robot's calibration allowed): the certificate says it too.
+    pub read_warnings: Vec<String>,
 }
 
 /// The certificate's content (`certificate.json`, `docs/formats.md#certificate`).
@@ -538,7 +541,8 @@ fn not_calibrated(cal: &Calibration, u: &[f64], names: &[String]) -> Vec<String>
 fn warnings(inputs: &CertificateInputs<'_>) -> Vec<String> {
     let (record, held_out) = (inputs.calibration, inputs.held_out.as_ref());
     let cal = &record.calibration;
-    let mut out: Vec<String> = held_out.and_then(HeldOut::warning).into_iter().collect();
+    let mut out: Vec<String> = inputs.read_warnings.clone();
+    out.extend(held_out.and_then(HeldOut::warning));
     if let Some((file, set)) = &inputs.data {
         let mismatches = data_mismatches(record, set);
         if !mismatches.is_empty() {

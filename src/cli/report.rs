@@ -136,7 +136,9 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     }
     outputs.check_in(&args.out, &OUTPUTS)?;
     let desc = RobotDescription::from_file(&args.robot)?;
-    let record = checks::read_calibration(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
+    // Its warnings go into the certificate's, printed with them.
+    let (record, read_warnings) =
+        checks::read_calibration_warned(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
     let cal = &record.calibration;
     // A free-pose calibration fitted the targets the description may not give; the data
     // record the description as given.
@@ -183,6 +185,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         residuals: residuals.as_deref().unwrap_or(&[]),
         held_out,
         iso9283,
+        read_warnings,
     };
     let c = certificate(&inputs).with_context(|| format!("the certificate of {}", args.calibration.display()))?;
     let mut staged = outputs.staged_in(&args.out)?;

@@ -385,4 +385,33 @@ fn held_out_data_in_other_units_and_data_that_are_not_the_calibrations_are_said(
             .to_string()
             .contains("not the ones the calibration records")
     );
+
+    // A calibration edited by hand (joint 2's transmission negated): the certificate says so
+    // in its warnings and its page, and stderr once.
+    let text = std::fs::read_to_string(d.join("cal/calibration.json")).unwrap();
+    let mut edited: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for key in ["sin", "cos"] {
+        let c = &mut edited["robot"]["joints"][1]["transmission"][key][0];
+        *c = serde_json::json!(-c.as_f64().unwrap());
+    }
+    std::fs::write(d.join("cal/edited.json"), edited.to_string()).unwrap();
+    let out = axiscal()
+        .current_dir(d)
+        .args(["report", "--calibration", "cal/edited.json", "--out", "edited"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{err}");
+    assert_eq!(
+        err.matches("was edited after `axiscal calibrate` wrote it").count(),
+        1,
+        "{err}"
+    );
+    assert!(
+        json("edited")["warnings"].to_string().contains("was edited after"),
+        "{}",
+        json("edited")
+    );
+    let page = std::fs::read_to_string(d.join("edited/certificate.html")).unwrap();
+    assert!(page.contains("was edited after"));
 }
