@@ -329,24 +329,26 @@ fn a_ur_export_refuses_what_the_file_cannot_hold_and_a_robot_that_is_not_a_ur() 
     assert!(stated > 0.0);
     // Existing output without --force, a bad hash.
     assert!(stderr(&base(&["--approximate"]).assert().code(2)).contains("--force"));
-    let no_hash = dir.path().join("no-hash.yaml");
     let like = std::fs::read_to_string(UR5E_DEFAULT).unwrap();
-    std::fs::write(&no_hash, like.replace("  hash: calib_12788084448423163542\n", "")).unwrap();
-    let a = export_cmd(
-        &[
-            "ur-kinematics",
-            "--robot",
-            "ur5e-dh",
-            "--approximate",
-            "--like",
-            no_hash.to_str().unwrap(),
-        ],
-        &cal,
-        &dir.path().join("k2.yaml"),
-        &[],
-    )
-    .assert()
-    .code(2);
+    // `like`'s text edited by `edit`, written as `name` and exported against: the command's outcome.
+    let with_like = |name: &str, edit: &dyn Fn(&str) -> String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, edit(&like)).unwrap();
+        let like_arg = ["--like", path.to_str().unwrap()];
+        let args = [
+            &["ur-kinematics", "--robot", "ur5e-dh", "--approximate"][..],
+            &like_arg[..],
+        ]
+        .concat();
+        (
+            export_cmd(&args, &cal, &dir.path().join(format!("{name}.out")), &[]).assert(),
+            path,
+        )
+    };
+    let (a, no_hash) = with_like("no-hash.yaml", &|t| {
+        t.replace("  hash: calib_12788084448423163542\n", "")
+    });
+    let a = a.code(2);
     assert!(
         stderr(&a).contains(&format!(
             "{}: `kinematics.hash`: missing: give --hash",
@@ -360,23 +362,10 @@ fn a_ur_export_refuses_what_the_file_cannot_hold_and_a_robot_that_is_not_a_ur() 
         .code(2);
     assert!(stderr(&a).contains("--hash: the hash `calib 1`"), "{}", stderr(&a));
     // A hash of the reference file that is no plain word: the file and its key named, with the fix.
-    let bad_hash = dir.path().join("bad-hash.yaml");
-    std::fs::write(&bad_hash, like.replace("calib_12788084448423163542", "\"calib 1;x\"")).unwrap();
-    let a = export_cmd(
-        &[
-            "ur-kinematics",
-            "--robot",
-            "ur5e-dh",
-            "--approximate",
-            "--like",
-            bad_hash.to_str().unwrap(),
-        ],
-        &cal,
-        &dir.path().join("k3.yaml"),
-        &[],
-    )
-    .assert()
-    .code(2);
+    let (a, bad_hash) = with_like("bad-hash.yaml", &|t| {
+        t.replace("calib_12788084448423163542", "\"calib 1;x\"")
+    });
+    let a = a.code(2);
     assert!(
         stderr(&a).contains(&format!(
             "{}: `kinematics.hash`: the hash `calib 1;x`",
@@ -386,23 +375,7 @@ fn a_ur_export_refuses_what_the_file_cannot_hold_and_a_robot_that_is_not_a_ur() 
         stderr(&a)
     );
     // A byte-order mark before the reference's first key, as a Windows editor writes one.
-    let bom = dir.path().join("bom.yaml");
-    std::fs::write(&bom, format!("\u{feff}{like}")).unwrap();
-    export_cmd(
-        &[
-            "ur-kinematics",
-            "--robot",
-            "ur5e-dh",
-            "--approximate",
-            "--like",
-            bom.to_str().unwrap(),
-        ],
-        &cal,
-        &dir.path().join("k4.yaml"),
-        &[],
-    )
-    .assert()
-    .success();
+    with_like("bom.yaml", &|t| format!("\u{feff}{t}")).0.success();
     // A SCARA is no UR.
     let scara = calibrated(&dir.path().join("scara"), "scara-rrpr", "scara-rrpr", 34);
     let a = export_cmd(
