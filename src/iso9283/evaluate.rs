@@ -87,7 +87,9 @@ pub enum IsoError {
     },
     /// So many cycles of a pose are outliers that the pose, not single cycles, is wrong.
     #[error(
-        "experiment `{experiment}`: {flagged} of its {cycles} cycles are outliers (each a coordinate beyond the generalized ESD test's fence against the other cycles): the pose, not single cycles, is wrong; check its rows (commands, coordinates and their units, target ids)"
+        "experiment `{experiment}`: at least {flagged} of its {cycles} cycles are outliers (each a coordinate beyond the generalized ESD test's fence against the other cycles), more than the test sets aside ({share:.0} % of a pose's cycles, and at most {rounds}): the pose, not single cycles, is wrong; check its rows (commands, coordinates and their units, target ids)",
+        share = crate::calibration::procedure::OUTLIER_SHARE_MAX * 100.0,
+        rounds = crate::calibration::procedure::OUTLIER_ROUNDS_MAX
     )]
     TooManyOutliers {
         /// The experiment.

@@ -13,12 +13,13 @@
 //! coordinate a file's test screens. A cycle in metres or with swapped targets lies thousands
 //! of standard deviations out. A pose with fewer than [`MIN_CYCLES`] cycles is not screened,
 //! nor a coordinate its other cycles share exactly (no scatter: noise-free data); more than
-//! [`OUTLIER_SHARE_MAX`] of a pose's cycles beyond the fence is an error: the pose, not single
-//! cycles, is wrong.
+//! [`OUTLIER_SHARE_MAX`] of a pose's cycles, or more than [`OUTLIER_ROUNDS_MAX`], beyond the
+//! fence is an error: the pose, not single cycles, is wrong. The test runs one round more than
+//! it may set aside, so that a pose of 20,000 cycles is not screened in 4,000 rounds.
 
 use super::IsoError;
 use super::evaluate::Cycle;
-use crate::calibration::procedure::OUTLIER_SHARE_MAX;
+use crate::calibration::procedure::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX};
 use crate::numerics::stats::{generalized_esd, median};
 use nalgebra::{Isometry3, Quaternion, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
@@ -116,7 +117,7 @@ fn screen_pose(cycles: &[&Cycle], alpha: f64, keep: bool) -> Vec<OutlierCycle> {
         })
         .collect();
     let median_position = Vector3::from_fn(|i, _| median(&coordinates.iter().map(|c| c[i]).collect::<Vec<_>>()));
-    let most = (OUTLIER_SHARE_MAX * cycles.len() as f64).floor() as usize + 1;
+    let most = ((OUTLIER_SHARE_MAX * cycles.len() as f64).floor() as usize).min(OUTLIER_ROUNDS_MAX) + 1;
     generalized_esd(&coordinates, alpha, most)
         .into_iter()
         .map(|o| {
@@ -149,7 +150,7 @@ pub(super) fn screen_cycles(cycles: &BTreeMap<usize, Vec<Cycle>>, keep: bool) ->
     let mut out = Vec::new();
     for group in screened {
         let flagged = screen_pose(group, alpha, keep);
-        if flagged.len() as f64 > OUTLIER_SHARE_MAX * group.len() as f64 {
+        if flagged.len() > OUTLIER_ROUNDS_MAX || flagged.len() as f64 > OUTLIER_SHARE_MAX * group.len() as f64 {
             return Err(IsoError::TooManyOutliers {
                 experiment: group[0].experiment.clone(),
                 flagged: flagged.len(),

@@ -11,7 +11,7 @@
 //! (`crate::calibration::free_pose::slip::mirrored_targets`).
 
 use super::MeasurementSet;
-use crate::numerics::stats::{chi_square_quantile, median};
+use crate::numerics::stats::{chi_square_quantile, median_and_robust_sigma};
 use std::collections::BTreeMap;
 
 /// The false-alarm rate of the test over a clean file's poses (Bonferroni): once in ten
@@ -23,9 +23,6 @@ const MAX_TARGETS: usize = 4;
 
 /// The fewest poses whose scatter gives a distance's noise.
 const MIN_POSES: usize = 3;
-
-/// The normal standard deviation per median absolute deviation.
-const SIGMA_PER_MAD: f64 = 1.4826;
 
 /// Free poses whose tool target ids are in another order than the description's.
 #[derive(Clone, Debug, PartialEq)]
@@ -101,9 +98,7 @@ fn distance_sigma(poses: &[Pose], ids: &[usize]) -> Option<f64> {
             if d.len() < MIN_POSES {
                 continue;
             }
-            let m = median(&d);
-            let mad = median(&d.iter().map(|x| (x - m).abs()).collect::<Vec<_>>());
-            variances.push((SIGMA_PER_MAD * mad).powi(2));
+            variances.push(median_and_robust_sigma(&d).1.powi(2));
         }
     }
     (!variances.is_empty()).then(|| (variances.iter().sum::<f64>() / variances.len() as f64).sqrt())

@@ -746,6 +746,51 @@ fn few_clean_cycles_flag_none_and_a_cycle_in_metres_is_found() {
     );
 }
 
+/// Many cycles of one pose in metres, alike, among 200 (written here,
+/// [`rigidly_jittered_iso_csv`], seed 3): they shift the pose's mean and inflate its scatter
+/// until each lies under 3 standard deviations out, less than good cycles along a rotation
+/// coordinate. 25 are found, each, and no other cycle; 26, more than a pose may lose, make the
+/// pose wrong (exit 2, naming it).
+#[test]
+fn many_cycles_in_metres_do_not_mask_each_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = rigidly_jittered_iso_csv(dir.path(), 200, 3);
+    let in_metres = |count: usize| {
+        altered_csv(
+            &clean,
+            &format!("metres{count}.csv"),
+            |_| true,
+            |f| {
+                if f[0] == "iso-P3" && f[2].parse::<usize>().unwrap() < count {
+                    scale_fields(f, 4..7, 1e-3);
+                }
+            },
+        )
+    };
+    let (out, json) = evaluate_iso(&in_metres(25), "m25", &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut found: Vec<(String, u64)> = json.unwrap()["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| {
+            (
+                o["experiment"].as_str().unwrap().to_string(),
+                o["step"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    found.sort();
+    assert_eq!(found, (0..25).map(|k| ("iso-P3".to_string(), k)).collect::<Vec<_>>());
+    let (out, _) = evaluate_iso(&in_metres(26), "m26", &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("experiment `iso-P3`: at least 26 of its 200 cycles are outliers"),
+        "{err}"
+    );
+}
+
 /// An experiment named like an ISO pose that is not one (direction 0, pose 6, upper case) is
 /// refused, naming it and its line, instead of its cycles going missing from the table.
 #[test]

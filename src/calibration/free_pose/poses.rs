@@ -5,7 +5,7 @@ use super::FreePoseError;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
 use crate::measurement::bounded::evenly_spaced;
-use crate::numerics::stats::median;
+use crate::numerics::stats::{SIGMA_PER_MAD, median};
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::Point3;
 use std::collections::{HashMap, HashSet};
@@ -341,7 +341,7 @@ impl FreePoses {
         if all.is_empty() {
             return None;
         }
-        let sigma = 1.4826 * median(&all);
+        let sigma = SIGMA_PER_MAD * median(&all);
         if sigma.is_nan() || sigma <= 0.0 {
             return None;
         }

@@ -2,24 +2,30 @@
 //! for samples of several coordinates each: up to `r` outliers among `n` samples, with a
 //! false-alarm rate that holds for any `n` on Gaussian data.
 //!
-//! Round `i` takes the samples not yet set aside (`m = n - i + 1`) and, per coordinate, the
-//! sample farthest from their mean; its externally studentised deviation
+//! Round `i` takes the samples not yet set aside (`m = n - i + 1`) and sets aside the one
+//! farthest from them robustly: the largest, over the coordinates, distance from the
+//! coordinate's median in its robust standard deviations ([`median_and_robust_sigma`]). Many
+//! gross errors alike move the mean and inflate the standard deviation until a good sample
+//! lies farther from the mean than any of them (they mask each other); from the median they
+//! stay farthest, so they are set aside before any good sample. The round's statistic is that
+//! sample's externally studentised deviation, the largest over its coordinates:
 //! `t = |x - mean_{-j}| / (s_{-j} sqrt(1 + 1 / (m - 1)))` (mean and standard deviation of the
-//! other `m - 1`) follows Student's t with `m - 2` degrees of freedom. The round's statistic is
-//! the largest over the coordinates, its sample set aside; its fence `lambda_i` is the t
-//! quantile two-sided at `alpha / (r m d)`: Bonferroni over the `m` samples, the `d`
-//! coordinates and the `r` rounds. That is Rosner's `lambda_i`, written for `t` rather than
-//! the internally studentised deviation, with `alpha` split over the rounds as well: his rate
-//! holds because a later round tests a sample whose extreme was removed, but of `d`
-//! coordinates only the one that set the sample aside is so truncated, and the others would
-//! add nearly `alpha` per round. After `r` rounds, the outliers are the samples of the rounds
-//! up to the last whose statistic exceeds its fence, so that several outliers do not mask
-//! each other.
+//! other `m - 1`), Student's t with `m - 2` degrees of freedom. It is at most the largest `t`
+//! of the round's samples, Rosner's statistic, so the false-alarm rate is at most his. The
+//! fence `lambda_i` is the t quantile two-sided at `alpha / (r m d)`: Bonferroni over the `m`
+//! samples, the `d` coordinates and the `r` rounds. That is Rosner's `lambda_i`, written for
+//! `t` rather than the internally studentised deviation, with `alpha` split over the rounds as
+//! well: his rate holds because a later round tests a sample whose extreme was removed, but of
+//! `d` coordinates only the one that set the sample aside is so truncated, and the others
+//! would add nearly `alpha` per round. After `r` rounds, the outliers are the samples of the
+//! rounds up to the last whose statistic exceeds its fence, so that several outliers do not
+//! mask each other.
 //!
 //! A coordinate whose other samples share one value exactly (no scatter: noise-free data) is
-//! not tested in that round.
+//! not tested in that round; one whose robust standard deviation is zero (more than half its
+//! samples share one value) orders by the plain standard deviation instead.
 
-use super::f_upper_quantile;
+use super::{f_upper_quantile, median_and_robust_sigma};
 
 /// A sample set aside as an outlier.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,19 +74,34 @@ pub fn generalized_esd<const D: usize>(samples: &[[f64; D]], alpha: f64, max_out
     rounds
 }
 
-/// Among the samples `kept`, the one farthest out (module doc): its index, coordinate and
-/// externally studentised deviation; `None` when no coordinate has a scatter to test against.
+/// Among the samples `kept`, the one farthest out (module doc): its index, the coordinate of
+/// its largest externally studentised deviation, and that deviation; `None` when no coordinate
+/// has a scatter to test against.
 fn extreme_deviate<const D: usize>(samples: &[[f64; D]], kept: &[usize]) -> Option<(usize, usize, f64)> {
+    let columns: Vec<Vec<f64>> = (0..D).map(|k| kept.iter().map(|&j| samples[j][k]).collect()).collect();
+    let scales: Vec<(f64, f64)> = columns.iter().map(|c| robust_centre_and_scale(c)).collect();
+    let robust = |j: usize| {
+        (0..D)
+            .filter(|&k| scales[k].1 > 0.0)
+            .map(|k| (columns[k][j] - scales[k].0).abs() / scales[k].1)
+            .fold(0.0, f64::max)
+    };
+    let far = (0..kept.len()).max_by(|&a, &b| robust(a).total_cmp(&robust(b)))?;
     (0..D)
-        .filter_map(|k| {
-            let column: Vec<f64> = kept.iter().map(|&j| samples[j][k]).collect();
-            let mean = column.iter().sum::<f64>() / column.len() as f64;
-            let far =
-                (0..column.len()).max_by(|&a, &b| (column[a] - mean).abs().total_cmp(&(column[b] - mean).abs()))?;
-            let t = external_deviate(&column, far)?;
-            Some((kept[far], k, t))
-        })
+        .filter_map(|k| Some((kept[far], k, external_deviate(&columns[k], far)?)))
         .max_by(|a, b| a.2.total_cmp(&b.2))
+}
+
+/// A column's median and robust standard deviation, or its mean and standard deviation when
+/// more than half its values share one (module doc).
+fn robust_centre_and_scale(column: &[f64]) -> (f64, f64) {
+    let (centre, sigma) = median_and_robust_sigma(column);
+    if sigma > 0.0 {
+        return (centre, sigma);
+    }
+    let mean = column.iter().sum::<f64>() / column.len() as f64;
+    let s = (column.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (column.len() as f64 - 1.0)).sqrt();
+    (mean, s)
 }
 
 /// The externally studentised deviation of `column[j]` from the others (module doc); `None`
@@ -168,5 +189,24 @@ mod tests {
         let mut found: Vec<usize> = generalized_esd(&three, 0.01, 7).iter().map(|o| o.sample).collect();
         found.sort_unstable();
         assert_eq!(found, [3, 11, 25]);
+    }
+
+    /// Twenty-five of 200 samples moved alike by 1000 sigmas along one coordinate: they move the
+    /// mean by 125 sigmas and inflate the standard deviation to about 330, so that each lies
+    /// only 2.7 of them out, less than the largest good sample along another coordinate. The
+    /// robust order sets them aside first; the 25, and nothing else, are found, with 26 rounds.
+    #[test]
+    fn many_gross_errors_alike_do_not_mask_each_other() {
+        let mut rng = ChaCha12Rng::seed_from_u64(33);
+        let mut samples: Vec<[f64; 6]> = (0..200)
+            .map(|_| std::array::from_fn(|_| StandardNormal.sample(&mut rng)))
+            .collect();
+        let bad: Vec<usize> = (0..25).map(|i| 3 + 8 * i).collect();
+        for &j in &bad {
+            samples[j][1] += 1000.0;
+        }
+        let mut found: Vec<usize> = generalized_esd(&samples, 0.01, 26).iter().map(|o| o.sample).collect();
+        found.sort_unstable();
+        assert_eq!(found, bad);
     }
 }

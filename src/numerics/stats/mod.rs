@@ -160,6 +160,18 @@ pub fn median(v: &[f64]) -> f64 {
     quantile(v, 0.5, QuantileMethod::Linear)
 }
 
+/// Standard deviations per median absolute deviation for Gaussian data (`1 / Phi^-1(3/4)`).
+pub const SIGMA_PER_MAD: f64 = 1.4826;
+
+/// The median of a sample and its robust standard deviation: [`SIGMA_PER_MAD`] times the
+/// median absolute deviation from that median, which gross errors in fewer than half the
+/// sample barely move (NaN when empty).
+pub fn median_and_robust_sigma(v: &[f64]) -> (f64, f64) {
+    let centre = median(v);
+    let mad = median(&v.iter().map(|x| (x - centre).abs()).collect::<Vec<_>>());
+    (centre, SIGMA_PER_MAD * mad)
+}
+
 /// Fraction of `v` at or above `x` (NaN when empty).
 pub fn upper_tail(v: &[f64], x: f64) -> f64 {
     if v.is_empty() {
