@@ -8,7 +8,9 @@ use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::calibration::procedure::{PointResidual, read_residuals_csv};
 use axiscal::calibration::record::CalibrationRecord;
-use axiscal::certificate::{CertificateInputs, HELD_OUT_FALSE_ALARM, certificate, data_mismatches, held_out, html};
+use axiscal::certificate::{
+    CertificateInputs, HELD_OUT_FALSE_ALARM, HeldOut, certificate, data_mismatches, held_out, html,
+};
 use axiscal::diagnosis::free_pose_misses;
 use axiscal::iso9283::IsoFigures;
 use axiscal::json_file::{self, Schema};
@@ -35,7 +37,9 @@ pub struct Args {
     #[arg(long)]
     data: Option<PathBuf>,
     /// Summarise `--data` even when it is not the data the calibration records (other or
-    /// missing sweeps, other pose counts); the certificate then says so in its warnings.
+    /// missing sweeps, other pose counts), and show `--iso9283` even when another model
+    /// commanded its poses (the nominal one, before calibration, or another calibration's); the
+    /// certificate then says so in its warnings.
     #[arg(long)]
     allow_other_data: bool,
     /// A measurement CSV with held-out poses (`moved_joint = 0`, not `tool`): the nominal and
@@ -43,7 +47,8 @@ pub struct Args {
     /// the calibration does not use.
     #[arg(long)]
     held_out: Option<PathBuf>,
-    /// `iso9283.json` of `axiscal iso9283 evaluate`: the ISO 9283 figures.
+    /// `iso9283.json` of `axiscal iso9283 evaluate --calibration` with this calibration: the
+    /// ISO 9283 figures.
     #[arg(long)]
     iso9283: Option<PathBuf>,
     /// The instrument, in words (make, model, serial number, its own calibration).
@@ -113,10 +118,79 @@ fn same_data(set: &MeasurementSet, record: &CalibrationRecord, data: &Path, args
     )
 }
 
-/// The ISO 9283 figures of `iso9283 predict` (`--iso9283`).
-fn read_iso9283(p: &std::path::Path) -> Result<IsoFigures> {
+/// The ISO 9283 figures of `iso9283 evaluate` (`--iso9283`), checked to be figures it can have
+/// written ([`IsoFigures::impossible_value`]), of this robot, with the poses commanded by this
+/// calibration's model; with what to warn of (an older file, another robot or model allowed).
+fn read_iso9283(
+    p: &Path,
+    desc: &RobotDescription,
+    record: &CalibrationRecord,
+    args: &Args,
+) -> Result<(IsoFigures, Vec<String>)> {
     let text = axiscal::presets::read_text(p).with_context(|| format!("{}: cannot read", p.display()))?;
-    json_file::from_str(Schema::ISO9283, &text).with_context(|| format!("{}: not an iso9283.json", p.display()))
+    let iso: IsoFigures =
+        json_file::from_str(Schema::ISO9283, &text).with_context(|| format!("{}: not an iso9283.json", p.display()))?;
+    if let Some(why) = iso.impossible_value() {
+        bail!(
+            "{}: {why}; `axiscal iso9283 evaluate` writes no such value (the file was edited or damaged): evaluate the cycles again",
+            p.display()
+        );
+    }
+    let mut warnings: Vec<String> =
+        checks::same_robot(iso.robot.as_ref(), p, desc, &args.robot, args.checks.allow_other_robot)?
+            .into_iter()
+            .collect();
+    let calibrated = record.calibration.robot.digest();
+    match &iso.model_digest {
+        None => warnings.push(format!(
+            "{} records no model_digest (written by an older axiscal): cannot check that {}'s model commanded its poses",
+            p.display(),
+            args.calibration.display()
+        )),
+        Some(d) if *d == calibrated => {}
+        Some(d) => {
+            let which = if iso.registration_rms_mm.is_some() {
+                "the nominal model, before calibration (evaluated without --calibration)"
+            } else {
+                "another calibration's model"
+            };
+            let what = format!(
+                "{}: its poses were commanded by {which} (model digest {d}), not by {}'s ({calibrated})",
+                p.display(),
+                args.calibration.display()
+            );
+            if !args.allow_other_data {
+                bail!(
+                    "{what}: the certificate would show them as this calibration's figures; give --iso9283 the figures of \
+                     `axiscal iso9283 evaluate DATA --calibration {}`, or pass --allow-other-data to show these anyway (the \
+                     certificate then says so)",
+                    args.calibration.display()
+                );
+            }
+            warnings.push(format!("{what} (--allow-other-data)"));
+        }
+    }
+    Ok((iso, warnings))
+}
+
+/// The nominal and the calibrated model compared on the held-out poses of `p`
+/// (`--held-out`), after their unit checks.
+fn held_out_poses(
+    p: &Path,
+    desc: &RobotDescription,
+    record: &CalibrationRecord,
+    fitted: &RobotDescription,
+    args: &Args,
+) -> Result<HeldOut> {
+    let set = checks::read_data(p, desc, &args.robot, args.checks)?;
+    checks::one_setup(&set, p, "the held-out poses' prediction")?;
+    if !args.checks.skip_unit_check {
+        let misses = free_pose_misses(&set, &record.calibration, fitted, HELD_OUT_FALSE_ALARM)
+            .with_context(|| format!("held-out poses of {}", p.display()))?;
+        checks::refuse_explained_misses(&misses, p, false)?;
+    }
+    held_out(&p.display().to_string(), &set, record, fitted)
+        .with_context(|| format!("held-out poses of {}", p.display()))
 }
 
 /// Runs `axiscal report`.
@@ -139,7 +213,6 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     // Its warnings go into the certificate's, printed with them.
     let (record, read_warnings) =
         checks::read_calibration_warned(&args.calibration, &desc, &args.robot, args.checks.allow_other_robot)?;
-    let cal = &record.calibration;
     // A free-pose calibration fitted the targets the description may not give; the data
     // record the description as given.
     let fitted = axiscal::calibration::free_pose::with_fitted_targets(&desc, record.reports.free_poses.as_ref());
@@ -151,23 +224,17 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         }
         None => None,
     };
-    let held_out = match &args.held_out {
-        Some(p) => {
-            let set = checks::read_data(p, &desc, &args.robot, args.checks)?;
-            checks::one_setup(&set, p, "the held-out poses' prediction")?;
-            if !args.checks.skip_unit_check {
-                let misses = free_pose_misses(&set, cal, &fitted, HELD_OUT_FALSE_ALARM)
-                    .with_context(|| format!("held-out poses of {}", p.display()))?;
-                checks::refuse_explained_misses(&misses, p, false)?;
-            }
-            Some(
-                held_out(&p.display().to_string(), &set, &record, &fitted)
-                    .with_context(|| format!("held-out poses of {}", p.display()))?,
-            )
-        }
-        None => None,
-    };
-    let iso9283 = args.iso9283.as_deref().map(read_iso9283).transpose()?;
+    let held_out = args
+        .held_out
+        .as_deref()
+        .map(|p| held_out_poses(p, &desc, &record, &fitted, &args))
+        .transpose()?;
+    let iso = args
+        .iso9283
+        .as_deref()
+        .map(|p| read_iso9283(p, &desc, &record, &args))
+        .transpose()?;
+    let (iso9283, iso_warnings) = iso.map_or((None, Vec::new()), |(figures, warnings)| (Some(figures), warnings));
     let residuals = residuals_beside(&args.calibration)?;
     if residuals.is_none() {
         say!(
@@ -185,7 +252,7 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
         residuals: residuals.as_deref().unwrap_or(&[]),
         held_out,
         iso9283,
-        read_warnings,
+        read_warnings: read_warnings.into_iter().chain(iso_warnings).collect(),
     };
     let c = certificate(&inputs).with_context(|| format!("the certificate of {}", args.calibration.display()))?;
     let mut staged = outputs.staged_in(&args.out)?;

@@ -18,7 +18,7 @@ use super::outliers::{OutlierCycle, screen_cycles};
 use super::predict::CYCLE_ORDER;
 use crate::kinematics::{PhiModel, rigid_fit};
 use crate::measurement::{Experiment, Measurement, MeasurementSet};
-use crate::robot::{Controller, Placement, RobotDescription, RobotModel, commands_to_internal};
+use crate::robot::{Controller, DescriptionIdentity, Placement, RobotDescription, RobotModel, commands_to_internal};
 use nalgebra::{Isometry3, Point3};
 use std::collections::{BTreeMap, HashMap};
 
@@ -195,6 +195,15 @@ pub struct IsoFigures {
     /// the instrument frame the description contradicts), in words; empty when nothing.
     #[serde(default)]
     pub warnings: Vec<String>,
+    /// The robot description the cycles were read with (absent from files of an older
+    /// axiscal).
+    #[serde(default)]
+    pub robot: Option<DescriptionIdentity>,
+    /// [`RobotModel::digest`] of the model that commanded the poses: a calibration's (its
+    /// `model_digest`) or, before calibration, the nominal model's (absent from files of an
+    /// older axiscal).
+    #[serde(default)]
+    pub model_digest: Option<String>,
 }
 
 impl IsoFigures {
@@ -478,6 +487,8 @@ pub fn evaluate(
         distance_p2_p4,
         outliers,
         warnings,
+        robot: Some(desc.identity()),
+        model_digest: Some(model.digest()),
     })
 }
 

@@ -7,6 +7,7 @@
 //!   them.
 //! - [`mod@evaluate`]: the figures of a measured campaign (experiments `iso-P<k>`), attained poses
 //!   fitted to the tool targets, commanded ones from a robot model.
+//! - [`check`]: figures read back from a file are figures `evaluate` can have written.
 //! - [`commands`]: every cycle of a pose commands its pose's values, and no pose's commands
 //!   are in radians.
 //! - [`outliers`]: cycles far from their pose's others, set aside before the figures.
@@ -16,6 +17,7 @@
 //! - [`predict`](mod@predict): the figures predicted before a test, by Monte-Carlo over the
 //!   calibration's covariance, the robot's repeatability and the instrument's noise.
 
+pub mod check;
 pub mod commands;
 pub mod cube;
 pub mod evaluate;

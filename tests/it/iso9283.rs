@@ -142,6 +142,116 @@ fn known_deviations_come_back_as_iso_figures() {
     assert!(close(&dist["ad_x_mm"], 3.0) && close(&dist["ad_y_mm"], -3.0), "{dist}");
 }
 
+/// `report --iso9283` puts on the certificate only figures of this robot, with the poses
+/// commanded by this calibration's model, that `iso9283 evaluate` can have written: the
+/// figures of the calibrated model are taken without a word; those before calibration (the
+/// nominal model commanding) are refused unless `--allow-other-data`, which the certificate
+/// says; another robot's, a negative `AP_P` or one that is not `sqrt(AP_x^2 + AP_y^2 + AP_z^2)`
+/// are refused naming the field; a file of an older axiscal (no robot, no model digest) is
+/// taken with a warning.
+#[test]
+fn report_takes_only_this_calibrations_possible_iso_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let cal_dir = calibrated_ur5e(dir.path());
+    let desc = RobotDescription::from_file(
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
+    )
+    .unwrap();
+    let data = cycles_csv(dir.path(), &desc, &read_calibration(&cal_dir));
+    let evaluate = |out: &str, calibrated: bool| {
+        let mut c = axiscal();
+        c.args(["iso9283", "evaluate", "--robot", "ur5e-dh", "--out"])
+            .arg(dir.path().join(out))
+            .arg(&data);
+        if calibrated {
+            c.arg("--calibration").arg(cal_dir.join("calibration.json"));
+        }
+        c.assert().success();
+        dir.path().join(out).join("iso9283.json")
+    };
+    let (after, before) = (evaluate("after", true), evaluate("before", false));
+    let report = |iso: &Path, out: &str, extra: &[&str]| {
+        axiscal()
+            .args(["report", "--robot", "ur5e-dh", "--calibration"])
+            .arg(cal_dir.join("calibration.json"))
+            .arg("--iso9283")
+            .arg(iso)
+            .arg("--out")
+            .arg(dir.path().join(out))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let warnings_of = |out: &str| {
+        let text = std::fs::read_to_string(dir.path().join(out).join("certificate.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()["warnings"].to_string()
+    };
+    let o = report(&after, "cert", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!warnings_of("cert").contains("iso9283.json"), "{}", warnings_of("cert"));
+
+    let o = report(&before, "cert-before", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("the nominal model, before calibration") && err.contains("--allow-other-data"),
+        "{err}"
+    );
+    assert!(!dir.path().join("cert-before").exists());
+    let o = report(&before, "cert-before", &["--allow-other-data"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        warnings_of("cert-before").contains("before calibration"),
+        "{}",
+        warnings_of("cert-before")
+    );
+
+    let edited = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&after).unwrap()).unwrap();
+        edit(&mut v);
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+        path
+    };
+    let refused = |iso: &Path, says: &str| {
+        let o = report(iso, "cert-refused", &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&iso.display().to_string()) && err.contains(says),
+            "{says}: {err}"
+        );
+    };
+    let negative = edited("negative.json", &|v| {
+        v["poses"][1]["accuracy"]["ap_p_mm"] = (-3.0).into()
+    });
+    refused(
+        &negative,
+        "poses[1].accuracy.ap_p_mm = -3: a distance or spread is finite and not negative",
+    );
+    let smaller = edited("smaller.json", &|v| v["poses"][2]["accuracy"]["ap_p_mm"] = 0.5.into());
+    refused(
+        &smaller,
+        "poses[2].accuracy.ap_p_mm = 0.5: it is sqrt(ap_x^2 + ap_y^2 + ap_z^2)",
+    );
+    let other = edited("other.json", &|v| {
+        v["robot"]["geometry_hash"] = "fnv1a64:0123456789abcdef".into()
+    });
+    refused(&other, "was made with the robot description");
+    let older = edited("older.json", &|v| {
+        let map = v.as_object_mut().unwrap();
+        map.remove("robot");
+        map.remove("model_digest");
+    });
+    let o = report(&older, "cert-older", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let w = warnings_of("cert-older");
+    assert!(
+        w.contains("records no robot description") && w.contains("records no model_digest"),
+        "{w}"
+    );
+}
+
 #[test]
 fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
     let dir = tempfile::tempdir().unwrap();

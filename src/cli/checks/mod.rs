@@ -14,7 +14,7 @@ pub use findings::{
 };
 pub use identity::{
     data_identity, description_suspect, identity_comment, one_setup, outside_limits, read_calibration,
-    read_calibration_warned, read_data, read_data_warned,
+    read_calibration_warned, read_data, read_data_warned, same_robot,
 };
 pub use units::{description_units, description_warning_lines, import_units, pose_units, scenario_units, truth_units};
 
