@@ -9,8 +9,8 @@ use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::compensation::Compensator;
 use axiscal::iso9283::{
-    CYCLE_ORDER, Cube, EvaluateOptions, IsoFigures, IsoPrediction, PredictionInputs, approach_commands, evaluate,
-    largest_cube, plan_cube, predict,
+    CYCLE_ORDER, Cube, EvaluateOptions, IsoFigures, IsoPrediction, PredictionInputs, approach_commands, cube_of_edge,
+    evaluate, largest_cube, predict,
 };
 use axiscal::json_file::{self, Schema};
 use axiscal::measurement::{IsotropicNoise, MeasurementModel};
@@ -171,7 +171,7 @@ fn cube_of(args: &CubeArgs, desc: &RobotDescription, model: &RobotModel) -> Resu
         );
     }
     match args.edge_mm {
-        Some(mm) => plan_cube(&compensator, desc, &centre, mm * 1e-3),
+        Some(mm) => cube_of_edge(&compensator, desc, &centre, mm * 1e-3),
         None => largest_cube(&compensator, desc, &centre, 0.5),
     }
     .with_context(|| format!("the ISO cube around the centre commands {centre:?} (--centre-cmd)"))

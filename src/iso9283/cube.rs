@@ -64,6 +64,22 @@ pub enum CubeError {
         /// Its joints.
         joints: usize,
     },
+    /// A cube of the edge asked for reaches a point out of reach or beyond the joint limits.
+    #[error(
+        "P{point} of a {edge_mm:.0} mm cube is out of reach or beyond the joint limits ({problem}): {}",
+        largest_words(*largest_mm)
+    )]
+    TooLarge {
+        /// The point (1-5).
+        point: usize,
+        /// The edge asked for \[mm\].
+        edge_mm: f64,
+        /// Why the point is not reached.
+        problem: String,
+        /// The largest edge, in whole centimetres, whose five points are reached \[mm\];
+        /// `None` when no cube of 10 mm is.
+        largest_mm: Option<f64>,
+    },
     /// Not even the smallest cube fits.
     #[error(
         "no cube of 10 mm or more around the centre has all five points inside the joint limits (a centre at a singular configuration, such as a stretched arm, has none): choose another centre"
@@ -167,6 +183,41 @@ pub fn largest_cube(
         }
     }
     Err(CubeError::NoCube)
+}
+
+/// The cube of edge `edge_m` ([`plan_cube`]); when one of its points is not reached,
+/// [`CubeError::TooLarge`] with the largest edge that is ([`largest_cube`]).
+pub fn cube_of_edge(
+    compensator: &Compensator,
+    desc: &RobotDescription,
+    centre_cmd: &[f64],
+    edge_m: f64,
+) -> Result<Cube, CubeError> {
+    match plan_cube(compensator, desc, centre_cmd, edge_m) {
+        Err(CubeError::Unreachable {
+            point,
+            edge_mm,
+            problem,
+        }) => Err(CubeError::TooLarge {
+            point,
+            edge_mm,
+            problem,
+            largest_mm: largest_cube(compensator, desc, centre_cmd, edge_m)
+                .ok()
+                .map(|c| c.edge_m * 1e3),
+        }),
+        planned => planned,
+    }
+}
+
+/// What [`CubeError::TooLarge`] says of the largest cube.
+fn largest_words(largest_mm: Option<f64>) -> String {
+    match largest_mm {
+        Some(mm) => format!(
+            "the largest cube around this centre whose five points are reached inside the joint limits has an edge of {mm:.0} mm: plan an edge of {mm:.0} mm or less (--edge-mm)"
+        ),
+        None => "no cube of 10 mm or more around this centre has its five points inside the joint limits (a centre at a singular configuration, such as a stretched arm, has none): choose another centre".into(),
+    }
 }
 
 /// The commands that approach each of `cube`'s points from `distance_m` along base axis

@@ -27,7 +27,8 @@ pub mod outliers;
 pub mod predict;
 
 pub use cube::{
-    Cube, CubeError, MIN_CUBE_JOINTS, approach_commands, check_cube_robot, cube_points, largest_cube, plan_cube,
+    Cube, CubeError, MIN_CUBE_JOINTS, approach_commands, check_cube_robot, cube_of_edge, cube_points, largest_cube,
+    plan_cube,
 };
 pub use evaluate::{EvaluateOptions, IsoError, IsoFigures, PoseFigures, evaluate, pose_label};
 pub use figures::{

@@ -305,6 +305,33 @@ fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
     );
     assert!(stderr(&plan("0,0,0,0,0,0")).contains("choose another centre"));
     assert!(!dir.path().join("plan.csv").exists());
+    // An edge beyond the robot's reach names the largest that is reached; that one plans, one
+    // centimetre more does not.
+    let edge = |mm: f64| {
+        axiscal()
+            .args([
+                "iso9283",
+                "plan",
+                "--robot",
+                "ur5e-dh",
+                "--centre-cmd=10,-60,70,-90,-80,20",
+                "--out",
+            ])
+            .arg(dir.path().join(format!("plan{mm}.csv")))
+            .arg(format!("--edge-mm={mm}"))
+            .output()
+            .unwrap()
+    };
+    let o = edge(5000.0);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("of a 5000 mm cube is out of reach or beyond the joint limits"),
+        "{err}"
+    );
+    let largest = number_after(&err, "has an edge of ");
+    assert!(edge(largest).status.success(), "{err}");
+    assert_eq!(edge(largest + 10.0).status.code(), Some(2), "{err}");
 }
 
 /// `iso9283 plan` -> the robot (the calibrated model, each cycle's poses moved by `X_MM` along
