@@ -1,6 +1,6 @@
 //! Fuzzing of every reader of user files (stable Rust: proptest mutations of valid seed files
 //! instead of `cargo fuzz`, which needs nightly): the measurement CSV, robot descriptions,
-//! scenarios, effects files, `calibration.json` and the importers' tables (a tracker's point
+//! scenarios, effects files, a description's URDF, `calibration.json` and the importers' tables (a tracker's point
 //! export, SpatialAnalyzer's ASCII export, a wide pose table). Each mutated file must give a value or one
 //! error naming the file, never a panic; a value read is then used (calibrated, compensated,
 //! hashed) and must not panic either.
@@ -40,9 +40,10 @@ enum Reader {
     PointExport,
     SpatialAnalyzer,
     WideTable,
+    Urdf,
 }
 
-const READERS: [Reader; 8] = [
+const READERS: [Reader; 9] = [
     Reader::MeasurementCsv,
     Reader::Description,
     Reader::Scenario,
@@ -51,6 +52,7 @@ const READERS: [Reader; 8] = [
     Reader::PointExport,
     Reader::SpatialAnalyzer,
     Reader::WideTable,
+    Reader::Urdf,
 ];
 
 const POINT_EXPORT: &str = "id,x_mm,y_mm,z_mm,sigma_mm\n1,100.5,-20.25,300.125,0.02\n2,101.5,-19.75,\"300,5\",0.02\n\
@@ -105,6 +107,7 @@ fn seeds(reader: Reader) -> Vec<Vec<u8>> {
         Reader::PointExport => vec![POINT_EXPORT.as_bytes().to_vec()],
         Reader::SpatialAnalyzer => vec![SPATIAL_ANALYZER.as_bytes().to_vec()],
         Reader::WideTable => vec![WIDE_TABLE.as_bytes().to_vec()],
+        Reader::Urdf => vec![file("scenarios/robots/real/fanuc-r2000ic.urdf")],
         Reader::CalibrationJson => {
             let desc = RobotDescription::asea_irb6l();
             let set = read_measurements_from(campaign_csv().as_slice(), Path::new("seed.csv"), Some(6)).unwrap();
@@ -261,6 +264,18 @@ fn exercise(reader: Reader, bytes: &[u8]) -> Result<(), TestCaseError> {
                     let _ = set.experiments();
                 }
                 Err(e) => check_error("fuzz.csv", &e.to_string())?,
+            }
+        }
+        Reader::Urdf => {
+            let dir = tempfile::tempdir().unwrap();
+            let toml = std::fs::read("scenarios/robots/real/fanuc-r2000ic.toml").unwrap();
+            std::fs::write(dir.path().join("fuzz.toml"), toml).unwrap();
+            std::fs::write(dir.path().join("fanuc-r2000ic.urdf"), bytes).unwrap();
+            match RobotDescription::from_file(&dir.path().join("fuzz.toml")) {
+                Ok(d) => {
+                    let _ = (d.geometry_hash(), unit_check::description_slips(&d), d.nominal_model());
+                }
+                Err(e) => check_error("fuzz.toml", &e.to_string())?,
             }
         }
         Reader::CalibrationJson => {

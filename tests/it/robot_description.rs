@@ -77,3 +77,60 @@ fn missing_file_is_an_io_error_naming_it() {
     let e = RobotDescription::from_file(Path::new("no/such/robot.toml")).unwrap_err();
     assert!(e.to_string().contains("no/such/robot.toml"));
 }
+
+/// The shipped FANUC URDF with one slip each, as a user's editor or exporter makes them: the
+/// description is refused (exit 2) naming the URDF, the line and the joint or element, where
+/// the URDF parser said "No elements found" or "custom: invalid float literal" with no place.
+#[test]
+fn urdf_slips_are_said_with_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/real");
+    let toml = std::fs::read_to_string(shipped.join("fanuc-r2000ic.toml")).unwrap();
+    let urdf = std::fs::read_to_string(shipped.join("fanuc-r2000ic.urdf")).unwrap();
+    let line_of = |needle: &str| urdf.lines().position(|l| l.contains(needle)).unwrap() + 1;
+    let describe = |from: &str, to: &str| {
+        assert_eq!(urdf.matches(from).count(), 1, "{from}");
+        std::fs::write(dir.path().join("fanuc-r2000ic.urdf"), urdf.replace(from, to)).unwrap();
+        std::fs::write(dir.path().join("fanuc.toml"), &toml).unwrap();
+        let out = crate::common::axiscal()
+            .arg("describe")
+            .arg(dir.path().join("fanuc.toml"))
+            .args(["--poses", "10"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = describe("</robot>", "");
+    assert!(
+        err.contains("fanuc-r2000ic.urdf: `<robot>` of line") && err.contains("is never closed"),
+        "{err}"
+    );
+    let err = describe("xyz=\"1.075 0 0\"", "xyz=\"1,075 0 0\"");
+    assert!(
+        err.contains(&format!(
+            "line {}: joint `joint_3`: `<origin xyz=\"1,075 0 0\">`: `1,075` is not a number; a URDF writes a decimal point",
+            line_of("xyz=\"1.075 0 0\"")
+        )),
+        "{err}"
+    );
+    let err = describe("lower=\"-2.5\"", "lower=\"-2.5 rad\"");
+    assert!(
+        err.contains(&format!(
+            "line {}: joint `joint_3`: `<limit lower=\"-2.5 rad\">`",
+            line_of("lower=\"-2.5\"")
+        )),
+        "{err}"
+    );
+    let err = describe(
+        "<joint name=\"joint_4\" type=\"revolute\">",
+        "<joint name=\"joint_4\" type=\"rotary\">",
+    );
+    assert!(
+        err.contains(&format!(
+            "line {}: joint `joint_4`: joint type `rotary`",
+            line_of("name=\"joint_4\"")
+        )),
+        "{err}"
+    );
+}

@@ -4,6 +4,7 @@
 //! description holds `phi_deg`, `rows`, `placement` and `tool.frame` like any other, and no
 //! `dh` or `urdf` key (a resolved scenario inlines the converted form).
 
+use super::urdf_text::{MAX_URDF_DEPTH, nesting_beyond, urdf_text_problem};
 use super::{DescriptionError, DhConventionEntry, JointEntry, Placement, RobotDescription, RowEntry, UrdfEntry};
 use crate::kinematics::{DhConvention, DhParams, JointKind, PhiModel, SourceChain, UrdfJoint, phi_model_of};
 use crate::measurement::format_f64;
@@ -16,77 +17,6 @@ fn invalid(path: &Path, field: impl Into<String>, message: impl Into<String>) ->
         field: field.into(),
         message: message.into(),
     }
-}
-
-/// The deepest element nesting a URDF may have (docs/formats.md#robot-description): real
-/// URDFs nest 5 to 10 levels; the XML parser recurses once per level, so a file nested
-/// thousands deep would exhaust the stack.
-pub const MAX_URDF_DEPTH: usize = 100;
-
-/// The 1-based line where `text`'s element nesting first exceeds `max`, and that depth; `None`
-/// when it stays within. One linear pass over the bytes, before any parsing, following the
-/// markup of XML 1.0 (W3C, 5th ed.): start tags `<name ...>` open an element (3.1) unless
-/// empty-element tags `<name .../>`; end tags `</name>` close one; comments `<!-- -->` (2.5),
-/// CDATA sections `<![CDATA[ ]]>` (2.7), the document type declaration `<!DOCTYPE ... [ ... ]>`
-/// (2.8) and processing instructions `<? ?>` (2.6) open none; quoted attribute values may hold
-/// `>` (3.1).
-pub fn nesting_beyond(text: &str, max: usize) -> Option<(usize, usize)> {
-    let b = text.as_bytes();
-    let (mut i, mut line, mut depth) = (0, 1, 0usize);
-    // The index just past the first `end` at or after `from` (the text's end if none).
-    let skip_to = |from: usize, end: &[u8]| {
-        b[from..]
-            .windows(end.len())
-            .position(|w| w == end)
-            .map_or(b.len(), |p| from + p + end.len())
-    };
-    while i < b.len() {
-        if b[i] != b'<' {
-            line += usize::from(b[i] == b'\n');
-            i += 1;
-            continue;
-        }
-        let rest = &b[i..];
-        let next = if rest.starts_with(b"<!--") {
-            skip_to(i + 4, b"-->")
-        } else if rest.starts_with(b"<![CDATA[") {
-            skip_to(i + 9, b"]]>")
-        } else if rest.starts_with(b"<?") {
-            skip_to(i + 2, b"?>")
-        } else {
-            let (end, self_closing) = tag_end(b, i + 1);
-            if rest.starts_with(b"</") {
-                depth = depth.saturating_sub(1);
-            } else if !rest.starts_with(b"<!") && !self_closing {
-                depth += 1;
-                if depth > max {
-                    return Some((line, depth));
-                }
-            }
-            end
-        };
-        line += b[i..next].iter().filter(|&&c| c == b'\n').count();
-        i = next;
-    }
-    None
-}
-
-/// The index just past the `>` that ends the markup starting before `from`, skipping quoted
-/// values and a declaration's `[...]` subset; and whether it is an empty-element tag (`/>`).
-fn tag_end(b: &[u8], from: usize) -> (usize, bool) {
-    let (mut quote, mut bracket) = (None, 0usize);
-    for (k, &c) in b.iter().enumerate().skip(from) {
-        match (quote, c) {
-            (Some(q), _) if c == q => quote = None,
-            (Some(_), _) => {}
-            (None, b'"' | b'\'') => quote = Some(c),
-            (None, b'[') => bracket += 1,
-            (None, b']') => bracket = bracket.saturating_sub(1),
-            (None, b'>') if bracket == 0 => return (k + 1, k > from && b[k - 1] == b'/'),
-            _ => {}
-        }
-    }
-    (b.len(), false)
 }
 
 impl RobotDescription {
@@ -229,7 +159,7 @@ impl RobotDescription {
                 ),
             ));
         }
-        let robot = urdf_rs::read_from_string(&text).map_err(|e| {
+        let not_urdf = |e: String| {
             let message = match crate::toml_file::not_xml(&text, &file) {
                 Some(kind) => format!(
                     "{}: this is {kind}, not a URDF (the robot's XML, `<robot name=...>`): point `urdf.file` at the robot's .urdf file",
@@ -238,6 +168,15 @@ impl RobotDescription {
                 None => format!("{}: {e}", file.display()),
             };
             invalid(path, "urdf.file", message)
+        };
+        if let Some(problem) = urdf_text_problem(&text) {
+            return Err(not_urdf(problem));
+        }
+        let robot = urdf_rs::read_from_string(&text).map_err(|e| {
+            let said = e.to_string();
+            not_urdf(crate::csv_lines::shown_message(
+                said.strip_prefix("custom: ").unwrap_or(&said),
+            ))
         })?;
         let chain = urdf_chain(&robot, u).map_err(|m| invalid(path, "urdf", format!("{}: {m}", file.display())))?;
         let (joints, tail, entries, inertials) = chain;
@@ -639,20 +578,4 @@ fn joint_entry(j: &urdf_rs::Joint, kind: JointKind) -> Result<JointEntry, String
         max_velocity: (l.velocity > 0.0).then_some(l.velocity * scale),
         max_effort: (l.effort > 0.0).then_some(l.effort),
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn nesting_counts_elements_not_comments_declarations_or_empty_tags() {
-        let deep = |n: usize| format!("<robot>{}{}</robot>", "<a>".repeat(n), "</a>".repeat(n));
-        assert_eq!(nesting_beyond(&deep(99), 100), None);
-        assert_eq!(nesting_beyond(&deep(100), 100), Some((1, 101)));
-        let text = "<?xml version=\"1.0\"?>\n<!DOCTYPE r [<!ENTITY e \"<a>\">]>\n<!-- <a><a> -->\n\
-                    <robot name=\"a>b\">\n<link name=\"x\"/><![CDATA[<a><a>]]>\n<a>\n</robot>";
-        assert_eq!(nesting_beyond(text, 2), None);
-        assert_eq!(nesting_beyond(text, 1), Some((6, 2)));
-    }
 }

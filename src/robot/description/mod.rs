@@ -13,6 +13,7 @@ pub use validate::{
 
 mod convert;
 mod instrument;
+mod urdf_text;
 
 pub use identity::DescriptionIdentity;
 pub(crate) use identity::Fnv;
