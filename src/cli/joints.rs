@@ -7,6 +7,7 @@ use axiscal::calibration::procedure::{Calibration, calibrated_joint_values};
 use axiscal::measurement::format_f64;
 use axiscal::measurement::import::table::Table;
 use axiscal::robot::{RobotDescription, commands_to_file};
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal joints`.
@@ -102,8 +103,8 @@ pub fn run(args: Args) -> Result<()> {
     }
 }
 
-/// Appends `q_1 .. q_N` to every row of the CSV at `path`, to stdout.
-/// `cal` was read from `cal_path`.
+/// Appends `q_1 .. q_N` to every row of the CSV at `path`, to stdout, after its comment lines
+/// before the header. `cal` was read from `cal_path`.
 fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path: &Path) -> Result<()> {
     let table = Table::read(path)?;
     let names: Vec<String> = (1..=desc.dof()).map(|k| format!("cmd_{k}")).collect();
@@ -116,8 +117,9 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path
             desc.dof()
         );
     }
-    let mut out = axiscal::csv_lines::writer(std::io::stdout().lock());
-    out.write_record(table.header_as_written.iter().chain(&added))?;
+    // Every row is converted before any is written: a bad row leaves stdout empty, not a
+    // table cut short at it.
+    let mut records = Vec::with_capacity(table.rows().len());
     for row in table.rows() {
         let cmd: Vec<f64> = columns
             .iter()
@@ -135,7 +137,16 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path
         let mut cells: Vec<String> = row.cells().map(str::to_owned).collect();
         cells.resize(table.header.len(), String::new());
         cells.extend(values.iter().map(|v| format_f64(*v)));
-        out.write_record(&cells)?;
+        records.push(cells);
+    }
+    let mut stdout = std::io::stdout().lock();
+    for comment in &table.comments {
+        writeln!(stdout, "# {comment}")?;
+    }
+    let mut out = axiscal::csv_lines::writer(stdout);
+    out.write_record(table.header_as_written.iter().chain(&added))?;
+    for cells in &records {
+        out.write_record(cells)?;
     }
     out.flush()?;
     Ok(())

@@ -177,7 +177,14 @@ fn joints_prints_the_exact_calibrated_joint_values() {
         row[7].parse::<f64>().expect("q_1").to_bits(),
         exact[0].to_degrees().to_bits()
     );
-    std::fs::write(&csv, "id,cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6\na,10,-20,x,40,-50,60\n").expect("write");
+    // The comment lines before the header are copied; a bad row after good ones leaves stdout
+    // empty (no table cut short at it).
+    std::fs::write(
+        &csv,
+        "# robot 17, 2026-12-05\n#  operator: A\nid,cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6\na,10,-20,30,40,-50,60\n\
+         b,10,-20,30,40,-50,60\nc,10,-20,x,40,-50,60\n",
+    )
+    .expect("write");
     let a = common::axiscal()
         .args(["joints", "--calibration"])
         .arg(&path)
@@ -186,9 +193,27 @@ fn joints_prints_the_exact_calibrated_joint_values() {
         .assert()
         .code(2);
     assert!(
-        common::stderr(&a).contains(": line 2, column cmd_3"),
+        common::stderr(&a).contains(": line 6, column cmd_3"),
         "{}",
         common::stderr(&a)
+    );
+    assert_eq!(common::stdout(&a), "");
+    std::fs::write(
+        &csv,
+        "# robot 17, 2026-12-05\n#  operator: A\nid,cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6\na,10,-20,30,40,-50,60\n",
+    )
+    .expect("write");
+    let a = common::axiscal()
+        .args(["joints", "--calibration"])
+        .arg(&path)
+        .arg("--csv")
+        .arg(&csv)
+        .assert()
+        .success();
+    let out = common::stdout(&a);
+    assert!(
+        out.starts_with("# robot 17, 2026-12-05\n# operator: A\nid,cmd_1,"),
+        "{out}"
     );
 }
 
