@@ -105,6 +105,18 @@ pub fn not_text_csv(start: &[u8]) -> Option<String> {
     })
 }
 
+/// Whether `cell` is a number written with a decimal comma (`-3108,48`: an optional sign,
+/// digits, one comma, digits), as a locale with a decimal comma exports it.
+pub fn is_decimal_comma(cell: &str) -> bool {
+    cell.split_once(',').is_some_and(|(whole, fraction)| {
+        let whole = whole.strip_prefix(['-', '+']).unwrap_or(whole);
+        !whole.is_empty()
+            && !fraction.is_empty()
+            && whole.bytes().all(|b| b.is_ascii_digit())
+            && fraction.bytes().all(|b| b.is_ascii_digit())
+    })
+}
+
 /// A cell as an error message shows it: as written up to 60 characters, else its first 40 and
 /// its length (`aaaa…[5000000 characters]`), so a 5 MB field does not become a 5 MB message.
 pub fn shown_cell(text: &str) -> String {

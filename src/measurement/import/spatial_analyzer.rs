@@ -11,7 +11,7 @@
 
 use super::points::PointsError;
 use super::table::Table;
-use crate::csv_lines::shown_cell;
+use crate::csv_lines::{is_decimal_comma, shown_cell};
 use std::path::Path;
 
 /// The name fields, in SpatialAnalyzer's order, their last one the target.
@@ -44,17 +44,8 @@ pub fn headerless_point_line(text: &str) -> Option<usize> {
 /// The first of `cells` (white-space-separated) written with a decimal comma (`-3108,48`:
 /// digits, one comma, digits), when the last three (`x y z`) all are.
 fn decimal_comma<'a>(cells: &[&'a str]) -> Option<&'a str> {
-    let comma = |c: &str| {
-        c.split_once(',').is_some_and(|(whole, fraction)| {
-            let whole = whole.strip_prefix(['-', '+']).unwrap_or(whole);
-            !whole.is_empty()
-                && !fraction.is_empty()
-                && whole.bytes().all(|b| b.is_ascii_digit())
-                && fraction.bytes().all(|b| b.is_ascii_digit())
-        })
-    };
     let xyz = cells.get(cells.len().checked_sub(3)?..)?;
-    xyz.iter().all(|c| comma(c)).then_some(xyz[0])
+    xyz.iter().all(|c| is_decimal_comma(c)).then_some(xyz[0])
 }
 
 /// Reads the export `text` (`path` labels messages) with `names` name fields before `x y z`

@@ -9,7 +9,7 @@
 //! the same joint `joint<k>-2`, ...) of target 0; a held joint's command is its home value.
 
 use super::points::{LengthUnit, PointsError};
-use crate::csv_lines::{foreign_separator, shown_cell};
+use crate::csv_lines::{foreign_separator, is_decimal_comma, shown_cell};
 use crate::kinematics::JointKind;
 use crate::measurement::{Measurement, MeasurementSet};
 use std::path::{Path, PathBuf};
@@ -187,13 +187,32 @@ fn row(
         field: COLUMNS[column].to_owned(),
         message,
     };
+    let spaced: Vec<&str> = line_text.split_whitespace().collect();
+    if spaced.len() == COLUMNS.len()
+        && let Some(comma) = spaced.iter().find(|c| is_decimal_comma(c))
+    {
+        return Err(PointsError::File {
+            path: path.to_owned(),
+            message: format!(
+                "line {line}: decimal commas (`{}`): the file was written with a comma as the decimal separator, which \
+                 SScanSS-2 reads as a column separator; export it again with a decimal point, or replace each decimal \
+                 comma by a point",
+                shown_cell(comma)
+            ),
+        });
+    }
     if cells.len() != COLUMNS.len() {
         return Err(PointsError::File {
             path: path.to_owned(),
             message: format!(
-                "line {line}: {} columns, expected 7 ({})",
+                "line {line}: {} columns, expected 7 ({}){}",
                 cells.len(),
-                COLUMNS.join(", ")
+                COLUMNS.join(", "),
+                if cells.len() > COLUMNS.len() && line_text.contains(',') {
+                    " (a decimal comma splits a value in two: SScanSS-2 files write a decimal point)"
+                } else {
+                    ""
+                }
             ),
         });
     }
@@ -556,6 +575,16 @@ mod tests {
                 "1,1,0,x,-10,revolute,0\n2,0,1,0,20,prismatic,0\n",
                 "line 1, column z",
                 "`x`",
+            ),
+            (
+                "1\t-0,5\t0,25\t50\t-10\trevolute\t0\n2\t0\t1\t0\t20\tprismatic\t0\n",
+                "line 1: decimal commas (`-0,5`)",
+                "replace each decimal comma by a point",
+            ),
+            (
+                "1,1,0,0,-10,revolute,0\n2,0,1,5,0,20,prismatic,0\n",
+                "line 2: 8 columns, expected 7",
+                "a decimal comma splits a value in two",
             ),
             (
                 "1,1,0,0,-10,prismatic,0\n2,0,1,0,20,prismatic,0\n",
