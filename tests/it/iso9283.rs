@@ -63,6 +63,23 @@ fn cycles_csv(
     path
 }
 
+/// The shipped `ur5e-dh` description.
+fn ur5e_description() -> RobotDescription {
+    RobotDescription::from_file(
+        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
+    )
+    .unwrap()
+}
+
+/// A folder with the UR5e calibrated ([`calibrated_ur5e`]) and its ISO cycles of known
+/// deviations ([`cycles_csv`]): the folder, the calibration's folder, the cycles.
+fn ur5e_cycles() -> (tempfile::TempDir, std::path::PathBuf, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let cal_dir = calibrated_ur5e(dir.path());
+    let data = cycles_csv(dir.path(), &ur5e_description(), &read_calibration(&cal_dir));
+    (dir, cal_dir, data)
+}
+
 fn calibrated_ur5e(dir: &Path) -> std::path::PathBuf {
     let csv = dir.join("campaign.csv");
     let sim = [
@@ -95,10 +112,7 @@ fn calibrated_ur5e(dir: &Path) -> std::path::PathBuf {
 fn known_deviations_come_back_as_iso_figures() {
     let dir = tempfile::tempdir().unwrap();
     let cal_dir = calibrated_ur5e(dir.path());
-    let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
-    )
-    .unwrap();
+    let desc = ur5e_description();
     let cal = read_calibration(&cal_dir);
     let data = cycles_csv(dir.path(), &desc, &cal);
     let out = dir.path().join("iso");
@@ -151,13 +165,7 @@ fn known_deviations_come_back_as_iso_figures() {
 /// taken with a warning.
 #[test]
 fn report_takes_only_this_calibrations_possible_iso_figures() {
-    let dir = tempfile::tempdir().unwrap();
-    let cal_dir = calibrated_ur5e(dir.path());
-    let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
-    )
-    .unwrap();
-    let data = cycles_csv(dir.path(), &desc, &read_calibration(&cal_dir));
+    let (dir, cal_dir, data) = ur5e_cycles();
     let evaluate = |out: &str, calibrated: bool| {
         let mut c = axiscal();
         c.args(["iso9283", "evaluate", "--robot", "ur5e-dh", "--out"])
@@ -254,13 +262,7 @@ fn report_takes_only_this_calibrations_possible_iso_figures() {
 
 #[test]
 fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
-    let dir = tempfile::tempdir().unwrap();
-    let cal_dir = calibrated_ur5e(dir.path());
-    let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
-    )
-    .unwrap();
-    let data = cycles_csv(dir.path(), &desc, &read_calibration(&cal_dir));
+    let (dir, _, data) = ur5e_cycles();
     let a = axiscal()
         .args(["iso9283", "evaluate", "--robot", "ur5e-dh", "--out"])
         .arg(dir.path().join("before"))
@@ -360,10 +362,7 @@ fn a_planned_iso_test_measured_and_imported_evaluates_to_its_known_deviations() 
         .assert()
         .success();
     assert!(stdout(&a).contains("(60 points at 20 poses)"), "{}", stdout(&a));
-    let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
-    )
-    .unwrap();
+    let desc = ur5e_description();
     let cal = read_calibration(&cal_dir);
     let (model, controller) = (cal.robot.phi_model(), Controller::from_description(&desc));
     let text = std::fs::read_to_string(&plan).unwrap();
@@ -524,10 +523,7 @@ fn a_multi_directional_plan_approaches_each_pose_along_three_base_axes() {
     assert_eq!(rows.len(), 3 * 5 * 2, "3 directions x 5 points x (approach, pose)");
     // Where the calibrated model puts the tool at each row's commands \[mm\] (the plan's
     // nominal columns are the nominal model's).
-    let desc = RobotDescription::from_file(
-        &axiscal::presets::resolve(Path::new("ur5e-dh"), &[axiscal::presets::Kind::Description]).unwrap(),
-    )
-    .unwrap();
+    let desc = ur5e_description();
     let cal = read_calibration(&cal_dir);
     let (model, controller) = (cal.robot.phi_model(), Controller::from_description(&desc));
     let nominal = |f: &[String]| -> Vector3<f64> {

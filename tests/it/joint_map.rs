@@ -162,15 +162,20 @@ fn joints_prints_the_exact_calibrated_joint_values() {
     }
     // A batch: every row gets q_1 .. q_6 appended; a bad field names file, line and column.
     let csv = dir.path().join("readings.csv");
-    std::fs::write(&csv, "id,cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6\na,10,-20,30,40,-50,60\n").expect("write");
-    let a = common::axiscal()
-        .args(["joints", "--calibration"])
-        .arg(&path)
-        .arg("--csv")
-        .arg(&csv)
-        .assert()
-        .success();
-    let out = common::stdout(&a);
+    let joints_csv = |text: &str| {
+        std::fs::write(&csv, text).expect("write");
+        common::axiscal()
+            .args(["joints", "--calibration"])
+            .arg(&path)
+            .arg("--csv")
+            .arg(&csv)
+            .output()
+            .expect("runs")
+    };
+    let header = "id,cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6\n";
+    let o = joints_csv(&format!("{header}a,10,-20,30,40,-50,60\n"));
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
     let row: Vec<&str> = out.lines().nth(1).expect("a row").split(',').collect();
     assert_eq!(row.len(), 13);
     assert_eq!(
@@ -179,40 +184,18 @@ fn joints_prints_the_exact_calibrated_joint_values() {
     );
     // The comment lines before the header are copied; a bad row after good ones leaves stdout
     // empty (no table cut short at it).
-    std::fs::write(
-        &csv,
-        "# robot 17, 2026-12-05\n#  operator: A\nid,cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6\na,10,-20,30,40,-50,60\n\
-         b,10,-20,30,40,-50,60\nc,10,-20,x,40,-50,60\n",
-    )
-    .expect("write");
-    let a = common::axiscal()
-        .args(["joints", "--calibration"])
-        .arg(&path)
-        .arg("--csv")
-        .arg(&csv)
-        .assert()
-        .code(2);
+    let comments = "# robot 17, 2026-12-05\n#  operator: A\n";
+    let o = joints_csv(&format!(
+        "{comments}{header}a,10,-20,30,40,-50,60\nb,10,-20,30,40,-50,60\nc,10,-20,x,40,-50,60\n"
+    ));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(": line 6, column cmd_3"), "{err}");
+    assert!(o.stdout.is_empty());
+    let o = joints_csv(&format!("{comments}{header}a,10,-20,30,40,-50,60\n"));
+    let out = String::from_utf8_lossy(&o.stdout);
     assert!(
-        common::stderr(&a).contains(": line 6, column cmd_3"),
-        "{}",
-        common::stderr(&a)
-    );
-    assert_eq!(common::stdout(&a), "");
-    std::fs::write(
-        &csv,
-        "# robot 17, 2026-12-05\n#  operator: A\nid,cmd_1,cmd_2,cmd_3,cmd_4,cmd_5,cmd_6\na,10,-20,30,40,-50,60\n",
-    )
-    .expect("write");
-    let a = common::axiscal()
-        .args(["joints", "--calibration"])
-        .arg(&path)
-        .arg("--csv")
-        .arg(&csv)
-        .assert()
-        .success();
-    let out = common::stdout(&a);
-    assert!(
-        out.starts_with("# robot 17, 2026-12-05\n# operator: A\nid,cmd_1,"),
+        o.status.success() && out.starts_with("# robot 17, 2026-12-05\n# operator: A\nid,cmd_1,"),
         "{out}"
     );
 }
