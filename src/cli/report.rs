@@ -141,15 +141,19 @@ fn read_iso9283(
             .into_iter()
             .collect();
     let calibrated = record.calibration.robot.digest();
+    // Only an evaluation without --calibration registers the base frame: the nominal model's.
+    let before = iso.registration_rms_mm.is_some();
+    warnings.extend(iso.warnings.iter().map(|w| format!("{}: {w}", p.display())));
     match &iso.model_digest {
-        None => warnings.push(format!(
+        None if !before => warnings.push(format!(
             "{} records no model_digest (written by an older axiscal): cannot check that {}'s model commanded its poses",
             p.display(),
             args.calibration.display()
         )),
-        Some(d) if *d == calibrated => {}
-        Some(d) => {
-            let which = if iso.registration_rms_mm.is_some() {
+        Some(d) if *d == calibrated && !before => {}
+        d => {
+            let d = d.as_deref().unwrap_or("not recorded");
+            let which = if before {
                 "the nominal model, before calibration (evaluated without --calibration)"
             } else {
                 "another calibration's model"

@@ -14,13 +14,16 @@
 //! of standard deviations out. A pose with fewer than [`MIN_CYCLES`] cycles is not screened,
 //! nor a coordinate its other cycles share exactly (no scatter: noise-free data); more than
 //! [`OUTLIER_SHARE_MAX`] of a pose's cycles, or more than [`OUTLIER_ROUNDS_MAX`], beyond the
-//! fence is an error: the pose, not single cycles, is wrong. The test runs one round more than
-//! it may set aside, so that a pose of 20,000 cycles is not screened in 4,000 rounds.
+//! fence is an error: the pose, not single cycles, is wrong; so is a pose with more cycles than
+//! that beyond the first round's fence from its median in robust standard deviations, which
+//! the rounds would not reach (more bad cycles than rounds mask each other in every round).
+//! The test runs one round more than it may set aside, so that a pose of 20,000 cycles is not
+//! screened in 4,000 rounds.
 
 use super::IsoError;
 use super::evaluate::Cycle;
 use crate::calibration::procedure::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX};
-use crate::numerics::stats::{generalized_esd, median};
+use crate::numerics::stats::{generalized_esd, median, robustly_beyond, student_t_two_sided};
 use nalgebra::{Isometry3, Quaternion, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
 
@@ -105,8 +108,12 @@ fn median_rotation(poses: &[&Isometry3<f64>]) -> UnitQuaternion<f64> {
 }
 
 /// The cycles of one pose (at least [`MIN_CYCLES`]) the test flags at false-alarm rate
-/// `alpha` (module doc), with `keep` flagged as kept.
-fn screen_pose(cycles: &[&Cycle], alpha: f64, keep: bool) -> Vec<OutlierCycle> {
+/// `alpha` (module doc), with `keep` flagged as kept; and, when more cycles than the test has
+/// rounds lie beyond the first round's fence from the pose's median in robust standard
+/// deviations ([`robustly_beyond`]), their count: so many bad cycles mask each other in every
+/// round. (Up to as many as the rounds are found by them; asking for more keeps a clean pose
+/// of 8 cycles, whose median absolute deviation is too uncertain, from being refused.)
+fn screen_pose(cycles: &[&Cycle], alpha: f64, keep: bool) -> (Vec<OutlierCycle>, Option<usize>) {
     let rotation = median_rotation(&cycles.iter().map(|c| &c.attained).collect::<Vec<_>>());
     let coordinates: Vec<[f64; 6]> = cycles
         .iter()
@@ -118,7 +125,10 @@ fn screen_pose(cycles: &[&Cycle], alpha: f64, keep: bool) -> Vec<OutlierCycle> {
         .collect();
     let median_position = Vector3::from_fn(|i, _| median(&coordinates.iter().map(|c| c[i]).collect::<Vec<_>>()));
     let most = ((OUTLIER_SHARE_MAX * cycles.len() as f64).floor() as usize).min(OUTLIER_ROUNDS_MAX) + 1;
-    generalized_esd(&coordinates, alpha, most)
+    let n = cycles.len() as f64;
+    let first_fence = student_t_two_sided(alpha / (most as f64 * n * COORDINATES.len() as f64), n - 2.0);
+    let beyond = robustly_beyond(&coordinates, first_fence);
+    let flagged = generalized_esd(&coordinates, alpha, most)
         .into_iter()
         .map(|o| {
             let (c, x) = (cycles[o.sample], coordinates[o.sample]);
@@ -134,7 +144,8 @@ fn screen_pose(cycles: &[&Cycle], alpha: f64, keep: bool) -> Vec<OutlierCycle> {
                 dropped: !keep,
             }
         })
-        .collect()
+        .collect();
+    (flagged, (beyond > most).then_some(beyond))
 }
 
 /// The outlier cycles of `cycles` (module doc), in file order; with `keep` flagged as kept.
@@ -149,11 +160,12 @@ pub(super) fn screen_cycles(cycles: &BTreeMap<usize, Vec<Cycle>>, keep: bool) ->
     let alpha = ISO_CYCLES_FALSE_ALARM / screened.len().max(1) as f64;
     let mut out = Vec::new();
     for group in screened {
-        let flagged = screen_pose(group, alpha, keep);
-        if flagged.len() > OUTLIER_ROUNDS_MAX || flagged.len() as f64 > OUTLIER_SHARE_MAX * group.len() as f64 {
+        let (flagged, beyond) = screen_pose(group, alpha, keep);
+        let bad = beyond.unwrap_or(flagged.len());
+        if bad > OUTLIER_ROUNDS_MAX || bad as f64 > OUTLIER_SHARE_MAX * group.len() as f64 {
             return Err(IsoError::TooManyOutliers {
                 experiment: group[0].experiment.clone(),
-                flagged: flagged.len(),
+                flagged: bad,
                 cycles: group.len(),
             });
         }

@@ -242,6 +242,11 @@ fn report_takes_only_this_calibrations_possible_iso_figures() {
         &smaller,
         "poses[2].accuracy.ap_p_mm = 0.5: it is sqrt(ap_x^2 + ap_y^2 + ap_z^2)",
     );
+    let mut before_json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&before).unwrap()).unwrap();
+    before_json.as_object_mut().unwrap().remove("model_digest");
+    let undigested = dir.path().join("undigested.json");
+    std::fs::write(&undigested, before_json.to_string()).unwrap();
+    refused(&undigested, "the nominal model, before calibration");
     let other = edited("other.json", &|v| {
         v["robot"]["geometry_hash"] = "fnv1a64:0123456789abcdef".into()
     });
@@ -883,7 +888,8 @@ fn few_clean_cycles_flag_none_and_a_cycle_in_metres_is_found() {
 /// [`rigidly_jittered_iso_csv`], seed 3): they shift the pose's mean and inflate its scatter
 /// until each lies under 3 standard deviations out, less than good cycles along a rotation
 /// coordinate. 25 are found, each, and no other cycle; 26, more than a pose may lose, make the
-/// pose wrong (exit 2, naming it).
+/// pose wrong (exit 2, naming it), and so do 40, more than the test has rounds, as do 10 of
+/// 40 cycles moved by 1 mm.
 #[test]
 fn many_cycles_in_metres_do_not_mask_each_other() {
     let dir = tempfile::tempdir().unwrap();
@@ -915,11 +921,35 @@ fn many_cycles_in_metres_do_not_mask_each_other() {
         .collect();
     found.sort();
     assert_eq!(found, (0..25).map(|k| ("iso-P3".to_string(), k)).collect::<Vec<_>>());
-    let (out, _) = evaluate_iso(&in_metres(26), "m26", &[]);
+    for (count, name) in [(26, "m26"), (40, "m40")] {
+        let (out, _) = evaluate_iso(&in_metres(count), name, &[]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&format!(
+                "experiment `iso-P3`: at least {count} of its 200 cycles are outliers"
+            )),
+            "{err}"
+        );
+    }
+    // More bad cycles than the test has rounds (9 for 40 cycles): 10 of 40 moved by 1 mm.
+    std::fs::create_dir(dir.path().join("few")).unwrap();
+    let few = rigidly_jittered_iso_csv(&dir.path().join("few"), 40, 3);
+    let shifted = altered_csv(
+        &few,
+        "shifted.csv",
+        |_| true,
+        |f| {
+            if f[0] == "iso-P2" && f[2].parse::<usize>().unwrap() % 4 == 1 {
+                f[4] = (f[4].parse::<f64>().unwrap() + 1.0).to_string();
+            }
+        },
+    );
+    let (out, _) = evaluate_iso(&shifted, "shifted", &[]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("experiment `iso-P3`: at least 26 of its 200 cycles are outliers"),
+        err.contains("experiment `iso-P2`: at least 10 of its 40 cycles are outliers"),
         "{err}"
     );
 }

@@ -92,6 +92,18 @@ fn extreme_deviate<const D: usize>(samples: &[[f64; D]], kept: &[usize]) -> Opti
         .max_by(|a, b| a.2.total_cmp(&b.2))
 }
 
+/// How many of `samples` lie beyond `fence` robust standard deviations from the median along
+/// some coordinate ([`median_and_robust_sigma`] of all samples, the plain standard deviation
+/// where that is zero). More gross errors than [`generalized_esd`] has rounds mask each other
+/// in every round; from the median they still stand out, so a caller counts them here.
+pub fn robustly_beyond<const D: usize>(samples: &[[f64; D]], fence: f64) -> usize {
+    let columns: Vec<Vec<f64>> = (0..D).map(|k| samples.iter().map(|x| x[k]).collect()).collect();
+    let scales: Vec<(f64, f64)> = columns.iter().map(|c| robust_centre_and_scale(c)).collect();
+    (0..samples.len())
+        .filter(|&j| (0..D).any(|k| scales[k].1 > 0.0 && (columns[k][j] - scales[k].0).abs() > fence * scales[k].1))
+        .count()
+}
+
 /// A column's median and robust standard deviation, or its mean and standard deviation when
 /// more than half its values share one (module doc).
 fn robust_centre_and_scale(column: &[f64]) -> (f64, f64) {

@@ -11,7 +11,7 @@ mod f_ratio;
 mod shared_error;
 
 pub use chi_square::{chi_square_cdf, chi_square_quantile, ln_gamma, regularized_lower_gamma};
-pub use esd::{EsdOutlier, generalized_esd, student_t_two_sided};
+pub use esd::{EsdOutlier, generalized_esd, robustly_beyond, student_t_two_sided};
 pub use f_ratio::{f_cdf, f_upper_quantile, f_upper_tail, regularized_incomplete_beta};
 use serde::{Deserialize, Serialize};
 pub use shared_error::{SharedErrorChiSquare, SharedErrorFit};
