@@ -158,6 +158,11 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
 /// The cube of `args` commanded through `model` (file units).
 fn cube_of(args: &CubeArgs, desc: &RobotDescription, model: &RobotModel) -> Result<Cube> {
     axiscal::iso9283::check_cube_robot(desc).with_context(|| args.robot.display().to_string())?;
+    let targets = desc.tool_targets_m().len();
+    if targets < 3 {
+        return Err(axiscal::iso9283::IsoError::TooFewToolTargets(targets))
+            .with_context(|| format!("{}: an ISO 9283 test measures the tool's pose", args.robot.display()));
+    }
     let compensator = Compensator::new(model, desc)?;
     let centre = args
         .centre_cmd

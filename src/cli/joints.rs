@@ -117,9 +117,10 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path
             desc.dof()
         );
     }
-    // Every row is converted before any is written: a bad row leaves stdout empty, not a
-    // table cut short at it.
-    let mut records = Vec::with_capacity(table.rows().len());
+    // Every row is converted, into the table's text, before any is written: a bad row leaves
+    // stdout empty, not a table cut short at it.
+    let mut text = axiscal::csv_lines::writer(Vec::new());
+    text.write_record(table.header_as_written.iter().chain(&added))?;
     for row in table.rows() {
         let cmd: Vec<f64> = columns
             .iter()
@@ -137,17 +138,14 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path
         let mut cells: Vec<String> = row.cells().map(str::to_owned).collect();
         cells.resize(table.header.len(), String::new());
         cells.extend(values.iter().map(|v| format_f64(*v)));
-        records.push(cells);
+        text.write_record(&cells)?;
     }
+    let text = text.into_inner().map_err(|e| e.into_error())?;
     let mut stdout = std::io::stdout().lock();
     for comment in &table.comments {
         writeln!(stdout, "# {comment}")?;
     }
-    let mut out = axiscal::csv_lines::writer(stdout);
-    out.write_record(table.header_as_written.iter().chain(&added))?;
-    for cells in &records {
-        out.write_record(cells)?;
-    }
-    out.flush()?;
+    stdout.write_all(&text)?;
+    stdout.flush()?;
     Ok(())
 }

@@ -336,6 +336,22 @@ fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
         err.contains("of a 5000 mm cube is out of reach or beyond the joint limits"),
         "{err}"
     );
+    // A description without three tool targets has no ISO test (no attained orientation).
+    let fanuc = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robots/real/fanuc-r2000ic.toml");
+    let o = axiscal()
+        .args(["iso9283", "plan", "--robot"])
+        .arg(&fanuc)
+        .arg("--out")
+        .arg(dir.path().join("fanuc.csv"))
+        .output()
+        .unwrap();
+    let fanuc_err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{fanuc_err}");
+    assert!(
+        fanuc_err.contains("tool target(s); an attained pose needs three"),
+        "{fanuc_err}"
+    );
+    assert!(!dir.path().join("fanuc.csv").exists());
     let largest = number_after(&err, "has an edge of ");
     assert!(edge(largest).status.success(), "{err}");
     assert_eq!(edge(largest + 10.0).status.code(), Some(2), "{err}");

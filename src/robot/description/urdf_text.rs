@@ -11,7 +11,7 @@
 //! attribute values may hold `>` (3.1). The URDF elements and attributes are those of the ROS
 //! URDF XML specification (wiki.ros.org/urdf/XML: `joint`, `link` and their children).
 
-use crate::csv_lines::shown_cell;
+use crate::csv_lines::{is_decimal_comma, shown_cell};
 
 /// The deepest element nesting a URDF may have (docs/formats.md#robot-description): real
 /// URDFs nest 5 to 10 levels; the XML parser recurses once per level, so a file nested
@@ -196,13 +196,22 @@ fn numeric_arity(element: &str, attribute: &str) -> Option<usize> {
 /// What is wrong with one numeric attribute's value (`arity` values separated by spaces), in
 /// words; `None` when nothing is.
 fn number_problem(attribute: &str, value: &str, arity: usize) -> Option<String> {
+    if value.contains('&') {
+        // A character or entity reference (`&#10;`), which the parser resolves first.
+        return None;
+    }
     let tokens: Vec<&str> = value.split_whitespace().collect();
     if let Some(bad) = tokens.iter().find(|t| t.parse::<f64>().is_err()) {
-        let comma = bad.contains(',') && bad.split(',').all(|p| p.parse::<f64>().is_ok());
-        let hint = if comma {
+        let by_commas: Vec<&str> = value.split(',').map(str::trim).collect();
+        let hint = if tokens.len() == arity && tokens.iter().all(|t| t.parse::<f64>().is_ok() || is_decimal_comma(t)) {
             format!(
-                "; a URDF writes a decimal point, and separates values by spaces (`{}`?)",
-                shown_cell(&value.replace(',', "."))
+                "; a URDF writes a decimal point (`{}`?)",
+                shown_cell(&tokens.iter().map(|t| t.replace(',', ".")).collect::<Vec<_>>().join(" "))
+            )
+        } else if by_commas.len() == arity && by_commas.iter().all(|t| t.parse::<f64>().is_ok()) {
+            format!(
+                "; a URDF separates values by spaces (`{}`?)",
+                shown_cell(&by_commas.join(" "))
             )
         } else {
             String::new()
@@ -401,6 +410,12 @@ mod tests {
             said("type=\"revolute\"", "type=\"custom\"")
                 .starts_with("line 7: joint `j1`: joint type `custom`: a URDF joint is `revolute`")
         );
+        let separated = said("0 0 0.346", "0,0,0.346");
+        assert!(
+            separated.contains("a URDF separates values by spaces (`0 0 0.346`?)"),
+            "{separated}"
+        );
+        assert_eq!(urdf_text_problem(&clean.replace("0 0 0.346", "0&#10;0&#9;0.346")), None);
         assert!(said("<parent link=\"a\"/>", "").starts_with("line 7: joint `j1` has no `<parent link="));
         assert!(said("</robot>", "").starts_with("`<robot>` of line 2 is never closed: the file ends at line 13"));
         assert!(
