@@ -32,6 +32,9 @@ impl IsoFigures {
             if p.cycles == 0 {
                 return Some(format!("{} = 0: a pose with figures has cycles", at("cycles")));
             }
+            if let Some(why) = figures_for_cycles(p) {
+                return Some(format!("{}{why}", at("")));
+            }
             if let Some(why) = pose_values(p) {
                 return Some(format!("{}{why}", at("")));
             }
@@ -86,6 +89,26 @@ impl IsoFigures {
             .find_map(|&(field, v)| v.filter(|v| !(v.is_finite() && *v >= 0.0)).map(|v| (field, v)))
             .map(|(field, v)| format!("{field} = {v}: a distance or spread is finite and not negative"))
     }
+}
+
+/// Whether one pose's figures are those its cycle count gives, as `field = value: why` after
+/// the pose's path: repeatability with two cycles or more of the first direction (every cycle
+/// without `directional`), none with one; `directional` with two directions, so two cycles.
+fn figures_for_cycles(p: &super::PoseFigures) -> Option<String> {
+    let one_direction = p.directional.is_none();
+    if p.repeatability.is_none() && one_direction && p.cycles > 1 {
+        return Some(format!(
+            "repeatability = null: a pose of {} cycles in one direction has a repeatability",
+            p.cycles
+        ));
+    }
+    if p.cycles == 1 && (p.repeatability.is_some() || !one_direction) {
+        let field = if one_direction { "repeatability" } else { "directional" };
+        return Some(format!(
+            "{field} is given: a pose of one cycle has neither repeatability nor directional figures"
+        ));
+    }
+    None
 }
 
 /// The first impossible value of one pose's figures, as `field = value: why` after the pose's

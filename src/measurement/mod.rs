@@ -10,6 +10,7 @@ pub mod description_check;
 pub mod import;
 mod model;
 mod noise_calibration;
+pub mod resolution;
 pub mod target_ids;
 mod theodolite;
 pub mod unit_check;

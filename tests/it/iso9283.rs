@@ -242,6 +242,13 @@ fn report_takes_only_this_calibrations_possible_iso_figures() {
         &smaller,
         "poses[2].accuracy.ap_p_mm = 0.5: it is sqrt(ap_x^2 + ap_y^2 + ap_z^2)",
     );
+    let unrepeated = edited("unrepeated.json", &|v| {
+        v["poses"][0]["repeatability"] = serde_json::Value::Null
+    });
+    refused(
+        &unrepeated,
+        "poses[0].repeatability = null: a pose of 4 cycles in one direction has a repeatability",
+    );
     let mut before_json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&before).unwrap()).unwrap();
     before_json.as_object_mut().unwrap().remove("model_digest");
     let undigested = dir.path().join("undigested.json");
@@ -786,6 +793,19 @@ fn an_outlier_cycle_is_named_and_left_out() {
 /// of 0.1 mrad and a translation of 0.05 mm per axis, Gaussian), as a robot's repeatability
 /// moves its tool; the targets measured exactly.
 fn rigidly_jittered_iso_csv(dir: &Path, cycles: usize, seed: u64) -> std::path::PathBuf {
+    jittered_iso_csv(dir, cycles, seed, (1e-4, 0.05), None)
+}
+
+/// [`rigidly_jittered_iso_csv`] with a jitter of `angle_rad` and `shift_mm` (standard
+/// deviations per axis), its coordinates written with `decimals` (all of a double's digits
+/// without).
+fn jittered_iso_csv(
+    dir: &Path,
+    cycles: usize,
+    seed: u64,
+    (angle_rad, shift_mm): (f64, f64),
+    decimals: Option<usize>,
+) -> std::path::PathBuf {
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
     let one = simulated_iso_csv(dir, 1, seed);
@@ -796,7 +816,10 @@ fn rigidly_jittered_iso_csv(dir: &Path, cycles: usize, seed: u64) -> std::path::
     let fields: Vec<Vec<String>> = rows.iter().map(|l| l.split(',').map(String::from).collect()).collect();
     let point = |f: &[String]| Vector3::from_fn(|i, _| f[4 + i].parse::<f64>().unwrap());
     let mut rng = rand::rngs::ChaCha12Rng::seed_from_u64(seed);
-    let (angle, shift) = (Normal::new(0.0, 1e-4).unwrap(), Normal::new(0.0, 0.05).unwrap());
+    let (angle, shift) = (
+        Normal::new(0.0, angle_rad).unwrap(),
+        Normal::new(0.0, shift_mm).unwrap(),
+    );
     let mut out: Vec<String> = head.iter().map(|l| l.to_string()).collect();
     for pose in fields.chunk_by(|a, b| a[0] == b[0]) {
         let centroid = pose.iter().map(|f| point(f)).sum::<Vector3<f64>>() / pose.len() as f64;
@@ -807,7 +830,12 @@ fn rigidly_jittered_iso_csv(dir: &Path, cycles: usize, seed: u64) -> std::path::
                 let moved = rotation * (point(f) - centroid) + centroid + t;
                 let mut f = f.clone();
                 f[2] = cycle.to_string();
-                (4..7).for_each(|i| f[i] = format!("{:?}", moved[i - 4]));
+                (4..7).for_each(|i| {
+                    f[i] = match decimals {
+                        Some(d) => format!("{:.d$}", moved[i - 4]),
+                        None => format!("{:?}", moved[i - 4]),
+                    }
+                });
                 out.push(f.join(","));
             }
         }
@@ -841,6 +869,21 @@ fn iso_outlier_screen_false_alarms() {
     }
 }
 
+/// The most of `files` clean files the outlier screen may flag: the count a binomial of `files`
+/// at the screen's file-wise rate exceeds with probability under 1e-3.
+fn allowed_false_alarms(files: usize) -> usize {
+    let rate = axiscal::iso9283::outliers::ISO_CYCLES_FALSE_ALARM;
+    let binomial_tail = |k: usize| -> f64 {
+        (k..=files)
+            .map(|j| {
+                let ln_choose = (1..=j).map(|i| ((files - j + i) as f64 / i as f64).ln()).sum::<f64>();
+                (ln_choose + j as f64 * rate.ln() + (files - j) as f64 * (1.0 - rate).ln()).exp()
+            })
+            .sum()
+    };
+    (0..=files).find(|&k| binomial_tail(k + 1) < 1e-3).unwrap()
+}
+
 /// The outlier screen holds its false-alarm rate with few cycles: files of 8 rigidly jittered
 /// cycles per pose (written here, [`rigidly_jittered_iso_csv`]), seeds 1-20 taken once, have a
 /// cycle flagged no more often than the screen's file-wise rate allows (at most the count a
@@ -850,7 +893,6 @@ fn iso_outlier_screen_false_alarms() {
 fn few_clean_cycles_flag_none_and_a_cycle_in_metres_is_found() {
     let dir = tempfile::tempdir().unwrap();
     let files = 20;
-    let rate = axiscal::iso9283::outliers::ISO_CYCLES_FALSE_ALARM;
     let mut flagged_files = 0;
     for seed in 1..=files {
         let sub = dir.path().join(format!("s{seed}"));
@@ -883,21 +925,58 @@ fn few_clean_cycles_flag_none_and_a_cycle_in_metres_is_found() {
             "seed {seed}: {outliers}"
         );
     }
-    let binomial_tail = |k: usize| -> f64 {
-        (k..=files as usize)
-            .map(|j| {
-                let ln_choose = (1..=j)
-                    .map(|i| ((files as usize - j + i) as f64 / i as f64).ln())
-                    .sum::<f64>();
-                (ln_choose + j as f64 * rate.ln() + (files as usize - j) as f64 * (1.0 - rate).ln()).exp()
-            })
-            .sum()
-    };
-    let allowed = (0..=files as usize).find(|&k| binomial_tail(k + 1) < 1e-3).unwrap();
+    let allowed = allowed_false_alarms(files as usize);
     assert!(
         flagged_files <= allowed,
         "{flagged_files} of {files} clean files flagged (at most {allowed})"
     );
+}
+
+/// Cycles are judged at the resolution they are written with. 40 rigidly jittered cycles per
+/// pose (written here, [`jittered_iso_csv`], seeds 21-40 taken once), jittered by 0.002 mm and
+/// 0.01 mrad and written rounded to 0.01 mm, so that most cycles of a coordinate are alike and
+/// a few one step off, have a cycle flagged no more often than the screen's rate allows
+/// ([`allowed_false_alarms`]); before, their coordinates were judged against the last bits of
+/// the fit's arithmetic, cycles 1e60 standard deviations out. The same cycles without jitter,
+/// written with every digit, with one cycle moved by 0.05 mm (50 times an instrument's
+/// resolution), have it, and only it, flagged; before, a coordinate its other cycles share was
+/// not tested.
+#[test]
+fn cycles_are_judged_no_finer_than_their_resolution() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = 20;
+    let mut flagged_files = 0;
+    for seed in 21..=20 + files as u64 {
+        let sub = dir.path().join(format!("s{seed}"));
+        std::fs::create_dir(&sub).unwrap();
+        flagged_files += usize::from(flags_a_cycle(&jittered_iso_csv(&sub, 40, seed, (1e-5, 0.002), Some(2))));
+    }
+    let allowed = allowed_false_alarms(files);
+    assert!(
+        flagged_files <= allowed,
+        "{flagged_files} of {files} rounded files flagged (at most {allowed})"
+    );
+    let still = jittered_iso_csv(dir.path(), 40, 21, (0.0, 0.0), None);
+    let moved = altered_csv(
+        &still,
+        "moved.csv",
+        |_| true,
+        |f| {
+            if f[0] == "iso-P4" && f[2] == "17" {
+                f[5] = (f[5].parse::<f64>().unwrap() + 0.05).to_string();
+            }
+        },
+    );
+    let (out, json) = evaluate_iso(&moved, "moved", &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let outliers = json.unwrap()["outliers"].clone();
+    let found: Vec<(&str, u64)> = outliers
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| (o["experiment"].as_str().unwrap(), o["step"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(found, [("iso-P4", 17)], "{outliers}");
 }
 
 /// Many cycles of one pose in metres, alike, among 200 (written here,

@@ -11,6 +11,7 @@
 use super::points::{LengthUnit, PointsError};
 use crate::csv_lines::{foreign_separator, is_decimal_comma, shown_cell};
 use crate::kinematics::JointKind;
+use crate::measurement::resolution::INSTRUMENT_RESOLUTION_MM;
 use crate::measurement::{Measurement, MeasurementSet};
 use std::path::{Path, PathBuf};
 
@@ -322,10 +323,6 @@ fn homes(rows: &[Row], path: &Path, kinds: &[JointKind]) -> Result<Vec<f64>, Poi
 /// it is refused: a 3-sigma fence.
 const HOME_FENCE: f64 = 3.0;
 
-/// The least scatter \[mm\] a sweep is judged with: a laser tracker's resolution (the finest
-/// an instrument writes), so that noise-free data are not judged on rounding.
-const RESOLUTION_MM: f64 = 1e-3;
-
 /// How far apart \[the sweep's length unit\] the points of a sweep at values `a` and `b` lie
 /// per unit of its scale: the chord over the radius of a revolute joint's arc, the travel of a
 /// prismatic joint.
@@ -355,7 +352,8 @@ fn home_miss(rows: &[&Row], kind: JointKind, scale: f64, home_point: &nalgebra::
 }
 
 /// A sweep's scale (an arc's radius, a slide's travel per unit) from its points' mutual
-/// distances, and its scatter about them \[mm, at least [`RESOLUTION_MM`]\].
+/// distances, and its scatter about them \[mm, at least
+/// [`INSTRUMENT_RESOLUTION_MM`]: noise-free data are not judged on rounding\].
 fn sweep_scale(rows: &[&Row], kind: JointKind) -> Option<(f64, f64)> {
     let pairs: Vec<(f64, f64)> = (0..rows.len())
         .flat_map(|a| (a + 1..rows.len()).map(move |b| (a, b)))
@@ -370,7 +368,7 @@ fn sweep_scale(rows: &[&Row], kind: JointKind) -> Option<(f64, f64)> {
     }
     let scale = pairs.iter().map(|(c, g)| c * g).sum::<f64>() / den;
     let scatter_mm = (pairs.iter().map(|(c, g)| (c - scale * g).powi(2)).sum::<f64>() / pairs.len() as f64).sqrt();
-    Some((scale, scatter_mm.max(RESOLUTION_MM)))
+    Some((scale, scatter_mm.max(INSTRUMENT_RESOLUTION_MM)))
 }
 
 fn fit_sweep(rows: &[&Row], kind: JointKind, home_point: &nalgebra::Vector3<f64>) -> Option<SweepFit> {
@@ -420,7 +418,7 @@ pub fn check_homes(
         .collect();
     let largest_scatter = (0..kinds.len())
         .filter_map(|k| sweep_scale(&sweep(k), kinds[k]))
-        .fold(RESOLUTION_MM, |m, (_, s)| m.max(s));
+        .fold(INSTRUMENT_RESOLUTION_MM, |m, (_, s)| m.max(s));
     let median = |c: usize| {
         let mut v: Vec<f64> = at_home.iter().map(|r| r.point[c]).collect();
         v.sort_by(f64::total_cmp);

@@ -17,6 +17,7 @@
 //! 1000, while a real robot differs from its nominal description by percent.
 
 use crate::kinematics::JointKind;
+use crate::measurement::resolution::written_step_mm;
 use crate::measurement::{MeasurementSet, format_f64};
 use crate::robot::{RobotDescription, RowEntry};
 use nalgebra::{Point3, Vector3};
@@ -330,16 +331,16 @@ pub fn data_faults(set: &MeasurementSet, desc: &RobotDescription) -> Vec<UnitSli
         .collect()
 }
 
-/// Steps \[mm\] coordinates may be rounded to, coarsest first: a multiple of 1 mm adds
+/// The finest step \[mm\] coordinates are judged rounded to: a multiple of 1 mm adds
 /// `1 / sqrt(12)` = 0.29 mm of noise to each coordinate, above the 0.2 mm of the paper's
 /// theodolites that [`arcs::MIN_JUDGED_SAGITTA_MM`] assumes and far above a laser tracker's.
-const ROUNDING_STEPS_MM: [f64; 6] = [100.0, 50.0, 10.0, 5.0, 2.0, 1.0];
+const ROUNDING_STEP_MIN_MM: f64 = 1.0;
 
 /// Fewer rows than this are not judged rounded: a few round values happen.
 const MIN_ROUNDED_ROWS: usize = 20;
 
-/// Coordinates written rounded (every value a multiple of a step of [`ROUNDING_STEPS_MM`],
-/// the points not all one): the rounding is noise the arcs' checks cannot tell from a slip.
+/// Coordinates written rounded (every value a multiple of a step of at least
+/// [`ROUNDING_STEP_MIN_MM`], [`written_step_mm`], the points not all one): the rounding is noise the arcs' checks cannot tell from a slip.
 fn rounded_coordinates(set: &MeasurementSet) -> Option<UnitSlip> {
     let rows = set.rows();
     let values = || rows.iter().flat_map(|m| m.position_mm);
@@ -347,9 +348,7 @@ fn rounded_coordinates(set: &MeasurementSet) -> Option<UnitSlip> {
     if rows.len() < MIN_ROUNDED_ROWS || hi <= lo {
         return None;
     }
-    let step = ROUNDING_STEPS_MM
-        .into_iter()
-        .find(|q| values().all(|v| ((v / q).round() * q - v).abs() <= 1e-9 * v.abs().max(1.0)))?;
+    let step = written_step_mm(values()).filter(|&q| q >= ROUNDING_STEP_MIN_MM)?;
     Some(UnitSlip {
         field: "x_mm,y_mm,z_mm".into(),
         message: format!(

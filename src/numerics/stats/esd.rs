@@ -21,9 +21,13 @@
 //! rounds up to the last whose statistic exceeds its fence, so that several outliers do not
 //! mask each other.
 //!
-//! A coordinate whose other samples share one value exactly (no scatter: noise-free data) is
-//! not tested in that round; one whose robust standard deviation is zero (more than half its
-//! samples share one value) orders by the plain standard deviation instead.
+//! Every standard deviation of a coordinate, robust or plain, is taken no smaller than the
+//! caller's least one for it: the resolution its values are written and computed with, below
+//! which scatter is rounding (without it, samples that differ by one rounding step, or by the
+//! last bits of a computation, lie 1e60 standard deviations apart). A coordinate whose robust
+//! standard deviation is zero (more than half its samples share one value) orders by the plain
+//! standard deviation instead; one whose other samples share one value exactly with a least
+//! standard deviation of zero is not tested in that round.
 
 use super::{f_upper_quantile, median_and_robust_sigma};
 
@@ -48,12 +52,17 @@ pub fn student_t_two_sided(tail: f64, dof: f64) -> f64 {
 
 /// The outliers among `samples` (module doc) at family-wise false-alarm rate `alpha`, at most
 /// `max_outliers` of them (fewer when fewer than four samples would be left), in the order
-/// they were set aside.
-pub fn generalized_esd<const D: usize>(samples: &[[f64; D]], alpha: f64, max_outliers: usize) -> Vec<EsdOutlier> {
+/// they were set aside; each coordinate's standard deviations at least its `least_sigma`.
+pub fn generalized_esd<const D: usize>(
+    samples: &[[f64; D]],
+    least_sigma: &[f64; D],
+    alpha: f64,
+    max_outliers: usize,
+) -> Vec<EsdOutlier> {
     let mut kept: Vec<usize> = (0..samples.len()).collect();
     let mut rounds: Vec<EsdOutlier> = Vec::new();
     while rounds.len() < max_outliers && kept.len() >= 4 {
-        let Some(worst) = extreme_deviate(samples, &kept) else {
+        let Some(worst) = extreme_deviate(samples, least_sigma, &kept) else {
             break;
         };
         let m = kept.len() as f64;
@@ -77,9 +86,12 @@ pub fn generalized_esd<const D: usize>(samples: &[[f64; D]], alpha: f64, max_out
 /// Among the samples `kept`, the one farthest out (module doc): its index, the coordinate of
 /// its largest externally studentised deviation, and that deviation; `None` when no coordinate
 /// has a scatter to test against.
-fn extreme_deviate<const D: usize>(samples: &[[f64; D]], kept: &[usize]) -> Option<(usize, usize, f64)> {
-    let columns: Vec<Vec<f64>> = (0..D).map(|k| kept.iter().map(|&j| samples[j][k]).collect()).collect();
-    let scales: Vec<(f64, f64)> = columns.iter().map(|c| robust_centre_and_scale(c)).collect();
+fn extreme_deviate<const D: usize>(
+    samples: &[[f64; D]],
+    least_sigma: &[f64; D],
+    kept: &[usize],
+) -> Option<(usize, usize, f64)> {
+    let (columns, scales) = columns_and_scales(samples, least_sigma, kept);
     let robust = |j: usize| {
         (0..D)
             .filter(|&k| scales[k].1 > 0.0)
@@ -88,41 +100,61 @@ fn extreme_deviate<const D: usize>(samples: &[[f64; D]], kept: &[usize]) -> Opti
     };
     let far = (0..kept.len()).max_by(|&a, &b| robust(a).total_cmp(&robust(b)))?;
     (0..D)
-        .filter_map(|k| Some((kept[far], k, external_deviate(&columns[k], far)?)))
+        .filter_map(|k| Some((kept[far], k, external_deviate(&columns[k], far, least_sigma[k])?)))
         .max_by(|a, b| a.2.total_cmp(&b.2))
 }
 
 /// How many of `samples` lie beyond `fence` robust standard deviations from the median along
 /// some coordinate ([`median_and_robust_sigma`] of all samples, the plain standard deviation
-/// where that is zero). More gross errors than [`generalized_esd`] has rounds mask each other
-/// in every round; from the median they still stand out, so a caller counts them here.
-pub fn robustly_beyond<const D: usize>(samples: &[[f64; D]], fence: f64) -> usize {
-    let columns: Vec<Vec<f64>> = (0..D).map(|k| samples.iter().map(|x| x[k]).collect()).collect();
-    let scales: Vec<(f64, f64)> = columns.iter().map(|c| robust_centre_and_scale(c)).collect();
+/// where that is zero, at least `least_sigma`). More gross errors than [`generalized_esd`] has
+/// rounds mask each other in every round; from the median they still stand out, so a caller
+/// counts them here.
+pub fn robustly_beyond<const D: usize>(samples: &[[f64; D]], least_sigma: &[f64; D], fence: f64) -> usize {
+    let all: Vec<usize> = (0..samples.len()).collect();
+    let (columns, scales) = columns_and_scales(samples, least_sigma, &all);
     (0..samples.len())
         .filter(|&j| (0..D).any(|k| scales[k].1 > 0.0 && (columns[k][j] - scales[k].0).abs() > fence * scales[k].1))
         .count()
 }
 
+/// The coordinates of the samples `kept`, column by column, and each column's robust centre
+/// and scale ([`robust_centre_and_scale`]).
+#[allow(clippy::type_complexity)]
+fn columns_and_scales<const D: usize>(
+    samples: &[[f64; D]],
+    least_sigma: &[f64; D],
+    kept: &[usize],
+) -> (Vec<Vec<f64>>, Vec<(f64, f64)>) {
+    let columns: Vec<Vec<f64>> = (0..D).map(|k| kept.iter().map(|&j| samples[j][k]).collect()).collect();
+    let scales = columns
+        .iter()
+        .zip(least_sigma)
+        .map(|(c, &least)| robust_centre_and_scale(c, least))
+        .collect();
+    (columns, scales)
+}
+
 /// A column's median and robust standard deviation, or its mean and standard deviation when
-/// more than half its values share one (module doc).
-fn robust_centre_and_scale(column: &[f64]) -> (f64, f64) {
+/// more than half its values share one (module doc); the deviation at least `least_sigma`.
+fn robust_centre_and_scale(column: &[f64], least_sigma: f64) -> (f64, f64) {
     let (centre, sigma) = median_and_robust_sigma(column);
     if sigma > 0.0 {
-        return (centre, sigma);
+        return (centre, sigma.max(least_sigma));
     }
     let mean = column.iter().sum::<f64>() / column.len() as f64;
     let s = (column.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (column.len() as f64 - 1.0)).sqrt();
-    (mean, s)
+    (mean, s.max(least_sigma))
 }
 
-/// The externally studentised deviation of `column[j]` from the others (module doc); `None`
-/// when the others share one value.
-fn external_deviate(column: &[f64], j: usize) -> Option<f64> {
+/// The externally studentised deviation of `column[j]` from the others (module doc), their
+/// standard deviation at least `least_sigma`; `None` when that is zero.
+fn external_deviate(column: &[f64], j: usize, least_sigma: f64) -> Option<f64> {
     let others = || column.iter().enumerate().filter(|&(i, _)| i != j).map(|(_, &x)| x);
     let m1 = (column.len() - 1) as f64;
     let mean = others().sum::<f64>() / m1;
-    let s = (others().map(|x| (x - mean).powi(2)).sum::<f64>() / (m1 - 1.0)).sqrt();
+    let s = (others().map(|x| (x - mean).powi(2)).sum::<f64>() / (m1 - 1.0))
+        .sqrt()
+        .max(least_sigma);
     (s > 0.0).then(|| (column[j] - mean).abs() / (s * (1.0 + 1.0 / m1).sqrt()))
 }
 
@@ -159,7 +191,7 @@ mod tests {
         for j in 0..column.len() {
             let r = (column[j] - mean).abs() / s;
             let expected = r * (m * (m - 2.0) / ((m - 1.0) * (m - 1.0 - r * r * m / (m - 1.0)))).sqrt();
-            let t = external_deviate(&column, j).unwrap();
+            let t = external_deviate(&column, j, 0.0).unwrap();
             assert!((t / expected - 1.0).abs() < 1e-12, "{j}: {t} {expected}");
         }
     }
@@ -179,7 +211,7 @@ mod tests {
         let (alpha, trials) = (0.05, 2000);
         for n in [5, 8, 12, 30, 60] {
             let alarms = (0..trials)
-                .filter(|_| !generalized_esd(&draw(n), alpha, n / 5 + 1).is_empty())
+                .filter(|_| !generalized_esd(&draw(n), &[0.0; 6], alpha, n / 5 + 1).is_empty())
                 .count();
             let bound = alpha + 4.0 * (alpha * (1.0 - alpha) / trials as f64).sqrt();
             assert!(
@@ -189,7 +221,7 @@ mod tests {
         }
         let mut one = draw(30);
         one[17][4] += 1000.0;
-        let found = generalized_esd(&one, 0.01, 7);
+        let found = generalized_esd(&one, &[0.0; 6], 0.01, 7);
         assert_eq!(
             found.iter().map(|o| (o.sample, o.coordinate)).collect::<Vec<_>>(),
             [(17, 4)]
@@ -198,9 +230,40 @@ mod tests {
         for j in [3, 11, 25] {
             three[j][0] += 1000.0;
         }
-        let mut found: Vec<usize> = generalized_esd(&three, 0.01, 7).iter().map(|o| o.sample).collect();
+        let mut found: Vec<usize> = generalized_esd(&three, &[0.0; 6], 0.01, 7)
+            .iter()
+            .map(|o| o.sample)
+            .collect();
         found.sort_unstable();
         assert_eq!(found, [3, 11, 25]);
+    }
+
+    /// Forty samples rounded to steps of 0.01 (all alike but two one step off) and a coordinate
+    /// computed from them (alike to the last bits but one): with zero least standard
+    /// deviations the sample off by the last bits lies 1e5 of the others' out and is flagged;
+    /// with the step and 1e-9 nothing is, and a sample twenty steps off is found alone.
+    #[test]
+    fn scatter_below_the_least_standard_deviation_is_not_judged() {
+        let mut samples: Vec<[f64; 2]> = (0..40).map(|j| [1.0, 0.3 + 1e-16 * (j % 2) as f64]).collect();
+        samples[5][0] = 1.01;
+        samples[17][0] = 0.99;
+        samples[23][1] = 0.3 + 1e-11;
+        assert_eq!(
+            generalized_esd(&samples, &[0.0; 2], 0.01, 9)
+                .first()
+                .map(|o| (o.sample, o.coordinate)),
+            Some((23, 1))
+        );
+        let least = [0.01, 1e-9];
+        assert!(generalized_esd(&samples, &least, 0.01, 9).is_empty());
+        assert_eq!(robustly_beyond(&samples, &least, 5.0), 0);
+        samples[30][0] = 1.2;
+        let found: Vec<(usize, usize)> = generalized_esd(&samples, &least, 0.01, 9)
+            .iter()
+            .map(|o| (o.sample, o.coordinate))
+            .collect();
+        assert_eq!(found, [(30, 0)]);
+        assert_eq!(robustly_beyond(&samples, &least, 5.0), 1);
     }
 
     /// Twenty-five of 200 samples moved alike by 1000 sigmas along one coordinate: they move the
@@ -217,7 +280,10 @@ mod tests {
         for &j in &bad {
             samples[j][1] += 1000.0;
         }
-        let mut found: Vec<usize> = generalized_esd(&samples, 0.01, 26).iter().map(|o| o.sample).collect();
+        let mut found: Vec<usize> = generalized_esd(&samples, &[0.0; 6], 0.01, 26)
+            .iter()
+            .map(|o| o.sample)
+            .collect();
         found.sort_unstable();
         assert_eq!(found, bad);
     }
