@@ -401,7 +401,7 @@ fn hostile_urdfs_name_the_urdf_joint_or_link() {
         (
             ("<robot", "<robot"),
             ("[urdf]", "[urdf]\nbase_link = \"nope\""),
-            "no link named `nope`; the URDF's links are base_link, link_1",
+            "no link named `nope`; the URDF's links are `base_link`, `link_1`",
         ),
         // A broken tree cut the chain and the robot lost its joints below the break silently.
         (
@@ -423,7 +423,7 @@ fn hostile_urdfs_name_the_urdf_joint_or_link() {
                 "<link name=\"link_2\"/><link name=\"stray\"/>",
             ),
             none,
-            "2 links are no joint's child (base_link, stray)",
+            "2 links are no joint's child (`base_link`, `stray`)",
         ),
         (
             (

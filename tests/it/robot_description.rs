@@ -133,4 +133,41 @@ fn urdf_slips_are_said_with_their_line() {
         )),
         "{err}"
     );
+    let err = describe("<joint name=\"joint_4\" type=\"revolute\">", "<joint name=\"joint_4\">");
+    assert!(
+        err.contains(&format!(
+            "line {}: `<joint>` has no `type=\"...\"`",
+            line_of("name=\"joint_4\"")
+        )),
+        "{err}"
+    );
+    let err = describe("<parent link=\"link_2\"/>", "<parent name=\"link_2\"/>");
+    assert!(
+        err.contains(&format!(
+            "line {}: joint `joint_3`: `<parent>` has no `link=\"...\"`",
+            line_of("<parent link=\"link_2\"/>")
+        )),
+        "{err}"
+    );
+    let err = describe("<robot name=", "<wrapper><robot name=");
+    assert!(err.contains("line 7: the root element is `<wrapper>`"), "{err}");
+    let err = describe(
+        "<?xml version=\"1.0\"?>",
+        "<?xml version=\"1.0\"?>\n<!DOCTYPE robot [\n  <!ENTITY l \"1.075\">\n  <!ELEMENT robot ANY>\n]>",
+    );
+    assert!(
+        err.contains("Malformed XML; the document type declaration of line 2 holds an internal subset"),
+        "{err}"
+    );
+    // A camera on link 3: the chain branches there, and the error names both ways on.
+    let err = describe(
+        "  <joint name=\"joint_4\"",
+        "  <link name=\"camera\"/>\n  <joint name=\"camera_mount\" type=\"fixed\">\n    \
+         <parent link=\"link_3\"/><child link=\"camera\"/>\n  </joint>\n  <joint name=\"joint_4\"",
+    );
+    assert!(
+        err.contains("link `link_3` branches to `camera`, `link_4`: name the `tip_link`")
+            && err.contains("(a leaf below it: `link_6`, `camera`)"),
+        "{err}"
+    );
 }

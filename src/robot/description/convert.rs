@@ -4,7 +4,7 @@
 //! description holds `phi_deg`, `rows`, `placement` and `tool.frame` like any other, and no
 //! `dh` or `urdf` key (a resolved scenario inlines the converted form).
 
-use super::urdf_text::{MAX_URDF_DEPTH, nesting_beyond, urdf_text_problem};
+use super::urdf_text::{MAX_URDF_DEPTH, nesting_beyond, parser_hint, urdf_text_problem};
 use super::{DescriptionError, DhConventionEntry, JointEntry, Placement, RobotDescription, RowEntry, UrdfEntry};
 use crate::kinematics::{DhConvention, DhParams, JointKind, PhiModel, SourceChain, UrdfJoint, phi_model_of};
 use crate::measurement::format_f64;
@@ -174,9 +174,8 @@ impl RobotDescription {
         }
         let robot = urdf_rs::read_from_string(&text).map_err(|e| {
             let said = e.to_string();
-            not_urdf(crate::csv_lines::shown_message(
-                said.strip_prefix("custom: ").unwrap_or(&said),
-            ))
+            let hint = parser_hint(&text, &said).unwrap_or_default();
+            not_urdf(crate::csv_lines::shown_message(said.strip_prefix("custom: ").unwrap_or(&said)) + &hint)
         })?;
         let chain = urdf_chain(&robot, u).map_err(|m| invalid(path, "urdf", format!("{}: {m}", file.display())))?;
         let (joints, tail, entries, inertials) = chain;
@@ -316,7 +315,7 @@ fn urdf_chain(robot: &urdf_rs::Robot, u: &UrdfEntry) -> Result<UrdfChain, String
             (0, None) => break,
             (0, Some(t)) => return Err(format!("tip link `{t}` is not below base link `{base}`")),
             (1, _) => next[0],
-            (_, None) => return Err(format!("link `{link}` branches: name the `tip_link`")),
+            (_, None) => return Err(branch_message(robot, &link, &next)),
             (_, Some(t)) => *next
                 .iter()
                 .find(|j| reaches(robot, &j.child.link, t))
@@ -423,7 +422,7 @@ fn check_tree(robot: &urdf_rs::Robot, one_root: bool) -> Result<(), String> {
         _ => Err(format!(
             "{} links are no joint's child ({}): a URDF has one root; connect them, or name the `base_link`",
             roots.len(),
-            roots.join(", ")
+            listed(&roots)
         )),
     }
 }
@@ -436,7 +435,7 @@ fn link_exists(robot: &urdf_rs::Robot, key: &str, name: &str) -> Result<(), Stri
     let links: Vec<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
     Err(format!(
         "`{key}`: no link named `{name}`; the URDF's links are {}",
-        links.join(", ")
+        listed(&links)
     ))
 }
 
@@ -502,12 +501,54 @@ fn check_inertial(link: &urdf_rs::Link) -> Result<(), String> {
 
 /// Whether `target` is `link` or below it.
 fn reaches(robot: &urdf_rs::Robot, link: &str, target: &str) -> bool {
-    link == target
-        || robot
-            .joints
-            .iter()
-            .filter(|j| j.parent.link == link)
-            .any(|j| reaches(robot, &j.child.link, target))
+    below(robot, link).contains(&target)
+}
+
+/// `link` and the links below it, depth first (a stack, not recursion: a chain may be long).
+fn below<'a>(robot: &'a urdf_rs::Robot, link: &'a str) -> Vec<&'a str> {
+    let (mut out, mut stack) = (Vec::new(), vec![link]);
+    while let Some(l) = stack.pop() {
+        out.push(l);
+        stack.extend(
+            robot
+                .joints
+                .iter()
+                .filter(|j| j.parent.link == l)
+                .map(|j| j.child.link.as_str()),
+        );
+    }
+    out
+}
+
+/// The most names an error lists before it says how many more there are.
+const MAX_LISTED: usize = 12;
+
+/// `names` for an error message, quoted: at most [`MAX_LISTED`], then how many more.
+fn listed(names: &[&str]) -> String {
+    let shown: Vec<String> = names.iter().take(MAX_LISTED).map(|n| format!("`{n}`")).collect();
+    match names.len().saturating_sub(MAX_LISTED) {
+        0 => shown.join(", "),
+        more => format!("{} and {more} more", shown.join(", ")),
+    }
+}
+
+/// Why the chain cannot pass `link`, where the joints `next` branch, without a `tip_link`:
+/// the branches and the leaves below it (each a `tip_link` that can be named).
+fn branch_message(robot: &urdf_rs::Robot, link: &str, next: &[&urdf_rs::Joint]) -> String {
+    let branches: Vec<&str> = next.iter().map(|j| j.child.link.as_str()).collect();
+    let under: std::collections::HashSet<&str> = below(robot, link).into_iter().collect();
+    let parents: std::collections::HashSet<&str> = robot.joints.iter().map(|j| j.parent.link.as_str()).collect();
+    let leaves: Vec<&str> = robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .filter(|l| under.contains(l) && !parents.contains(l))
+        .collect();
+    format!(
+        "link `{link}` branches to {}: name the `tip_link`, the chain's last link (a leaf below it: {})",
+        listed(&branches),
+        listed(&leaves)
+    )
 }
 
 /// The most turns either way a URDF's revolute (not continuous) joint's limits may give: a

@@ -2,7 +2,9 @@
 //! element: element nesting deeper than a URDF has (which would exhaust the parser's stack),
 //! elements not closed or closed out of order (a file cut short), a number the parser would
 //! refuse without saying where (a decimal comma, a vector of two values), a joint type URDF
-//! does not have, a joint without its parent or child link.
+//! does not have, a joint without its parent or child link, an attribute URDF requires
+//! missing, a root element other than `<robot>`, a file without elements; and a hint for the
+//! parser's own refusal of a document type declaration's internal subset.
 //!
 //! The markup is that of XML 1.0 (W3C, 5th ed.): start tags `<name ...>` open an element (3.1)
 //! unless empty-element tags `<name .../>`; end tags `</name>` close one; comments `<!-- -->`
@@ -42,7 +44,8 @@ enum Kind {
     Other,
 }
 
-/// One piece of markup: its 1-based line, kind, element name and attribute text.
+/// One piece of markup: its 1-based line, kind, element name (a declaration's keyword) and
+/// attribute text (the rest of a declaration).
 struct Markup<'a> {
     line: usize,
     kind: Kind,
@@ -72,13 +75,14 @@ fn markup(text: &str) -> Vec<Markup<'_>> {
             (skip_to(i + 4, b"-->"), None)
         } else if rest.starts_with(b"<![CDATA[") {
             (skip_to(i + 9, b"]]>"), None)
-        } else if rest.starts_with(b"<?") || rest.starts_with(b"<!") {
-            let end = if rest.starts_with(b"<?") {
-                skip_to(i + 2, b"?>")
-            } else {
-                tag_end(b, i + 1).0
-            };
-            (end, None)
+        } else if rest.starts_with(b"<?") {
+            (skip_to(i + 2, b"?>"), None)
+        } else if rest.starts_with(b"<!") {
+            // A declaration (`<!DOCTYPE ...>`): its keyword as the name, the rest as attributes.
+            let end = tag_end(b, i + 1).0;
+            let body = &text[(i + 2).min(end)..end];
+            let keyword_end = body.find(char::is_whitespace).unwrap_or(body.len());
+            (end, Some((Kind::Other, &body[..keyword_end], &body[keyword_end..])))
         } else {
             let (end, empty) = tag_end(b, i + 1);
             let closing = rest.starts_with(b"</");
@@ -203,7 +207,9 @@ fn number_problem(attribute: &str, value: &str, arity: usize) -> Option<String> 
     let tokens: Vec<&str> = value.split_whitespace().collect();
     if let Some(bad) = tokens.iter().find(|t| t.parse::<f64>().is_err()) {
         let by_commas: Vec<&str> = value.split(',').map(str::trim).collect();
-        let hint = if tokens.len() == arity && tokens.iter().all(|t| t.parse::<f64>().is_ok() || is_decimal_comma(t)) {
+        let hint = if value.contains("${") || value.contains("$(") {
+            "; this is a xacro expression: expand the file first (`xacro robot.urdf.xacro > robot.urdf`)".to_string()
+        } else if tokens.len() == arity && tokens.iter().all(|t| t.parse::<f64>().is_ok() || is_decimal_comma(t)) {
             format!(
                 "; a URDF writes a decimal point (`{}`?)",
                 shown_cell(&tokens.iter().map(|t| t.replace(',', ".")).collect::<Vec<_>>().join(" "))
@@ -280,6 +286,65 @@ fn tag_problem(m: &Markup<'_>, open: &[Open<'_>]) -> Option<String> {
     None
 }
 
+/// The attributes URDF requires of an element (wiki.ros.org/urdf/XML) at its place: a joint's
+/// and a link's (in the robot), a joint's parent's, child's and mimic's (in a joint).
+fn required_attributes(element: &str, open: &[Open<'_>]) -> &'static [&'static str] {
+    match (open.len(), element) {
+        (1, "joint") => &["name", "type"],
+        (1, "link") => &["name"],
+        (2, "parent" | "child") if open[1].element == "joint" => &["link"],
+        (2, "mimic") if open[1].element == "joint" => &["joint"],
+        _ => &[],
+    }
+}
+
+/// The first problem of a start or empty tag's place and required attributes: the root
+/// element not `<robot>`, an attribute URDF requires missing.
+fn structure_problem(m: &Markup<'_>, open: &[Open<'_>]) -> Option<String> {
+    if open.is_empty() && m.name != "robot" {
+        return Some(format!(
+            "line {}: the root element is `<{}>`: a URDF's is `<robot name=\"...\">`, holding the links and joints",
+            m.line,
+            shown_cell(m.name)
+        ));
+    }
+    let given = attributes(m.attributes);
+    let missing = required_attributes(m.name, open)
+        .iter()
+        .find(|r| !given.iter().any(|a| a.0 == **r))?;
+    Some(format!(
+        "{}`<{}>` has no `{missing}=\"...\"`: a URDF `<{}>` {}",
+        place(m.line, open),
+        m.name,
+        m.name,
+        match *missing {
+            "link" => "names its link",
+            "joint" => "names the joint it follows",
+            "type" => "needs its type (`revolute`, `prismatic`, `fixed`, ...)",
+            _ => "needs a name",
+        }
+    ))
+}
+
+/// What to add to the XML parser's message `said` on `text`: that a document type
+/// declaration's internal subset is why it fails (the parser of urdf-rs reads an entity
+/// declaration, or an element declaration, alone, but not the one followed by the other), and
+/// what to do.
+pub fn parser_hint(text: &str, said: &str) -> Option<String> {
+    if !said.contains("Malformed XML") {
+        return None;
+    }
+    let line = markup(text)
+        .iter()
+        .find(|m| m.kind == Kind::Other && m.name == "DOCTYPE" && m.attributes.contains('['))?
+        .line;
+    Some(format!(
+        "; the document type declaration of line {line} holds an internal subset (`<!DOCTYPE robot [ ... ]>`), \
+         which the URDF parser reads only in part (an `<!ENTITY` followed by another declaration fails): delete \
+         the declarations a URDF does not need (`<!ELEMENT`, `<!ATTLIST`), keeping any `<!ENTITY` the file uses"
+    ))
+}
+
 /// The first problem of `text` as a URDF (module doc), in words with its line; `None` when the
 /// text has none of them (the parser may still refuse it).
 pub fn urdf_text_problem(text: &str) -> Option<String> {
@@ -289,7 +354,7 @@ pub fn urdf_text_problem(text: &str) -> Option<String> {
         match m.kind {
             Kind::Other => {}
             Kind::Start | Kind::Empty => {
-                if let Some(why) = tag_problem(m, &open) {
+                if let Some(why) = structure_problem(m, &open).or_else(|| tag_problem(m, &open)) {
                     return Some(why);
                 }
                 let named = attributes(m.attributes)
@@ -304,6 +369,8 @@ pub fn urdf_text_problem(text: &str) -> Option<String> {
                 };
                 if m.kind == Kind::Start {
                     open.push(this);
+                } else if let Some(why) = joint_links_problem(&this, open.len()) {
+                    return Some(why);
                 } else if let Some(parent) = open.last_mut() {
                     parent.children.push(m.name);
                 }
@@ -314,6 +381,13 @@ pub fn urdf_text_problem(text: &str) -> Option<String> {
                 }
             }
         }
+    }
+    if !pieces.iter().any(|m| m.kind != Kind::Other) {
+        return Some(
+            "the file holds no element (it is empty, or only declarations and comments): a URDF is one \
+             `<robot name=\"...\">` element holding the links and joints"
+                .into(),
+        );
     }
     let last = text.lines().count();
     open.first().map(|o| {
@@ -336,20 +410,27 @@ fn close<'a>(m: &Markup<'a>, open: &mut Vec<Open<'a>>) -> Option<String> {
             m.line, m.name, top.element, top.line
         ));
     }
-    if top.element == "joint"
-        && open.len() == 1
-        && let Some(missing) = ["parent", "child"].into_iter().find(|c| !top.children.contains(c))
-    {
-        return Some(format!(
-            "line {}: joint `{}` has no `<{missing} link=\"...\"/>`: a URDF joint names its parent and child links",
-            top.line,
-            top.named.unwrap_or("?")
-        ));
+    if let Some(why) = joint_links_problem(&top, open.len()) {
+        return Some(why);
     }
     if let Some(parent) = open.last_mut() {
         parent.children.push(top.element);
     }
     None
+}
+
+/// A joint of the robot (`depth` elements open around it) closed without its parent or child
+/// link.
+fn joint_links_problem(joint: &Open<'_>, depth: usize) -> Option<String> {
+    if joint.element != "joint" || depth != 1 {
+        return None;
+    }
+    let missing = ["parent", "child"].into_iter().find(|c| !joint.children.contains(c))?;
+    Some(format!(
+        "line {}: joint `{}` has no `<{missing} link=\"...\"/>`: a URDF joint names its parent and child links",
+        joint.line,
+        joint.named.unwrap_or("?")
+    ))
 }
 
 #[cfg(test)]
@@ -416,6 +497,7 @@ mod tests {
             "{separated}"
         );
         assert_eq!(urdf_text_problem(&clean.replace("0 0 0.346", "0&#10;0&#9;0.346")), None);
+        assert!(said("0 0 0.346", "0 0 ${l1}").ends_with("`${l1}` is not a number; this is a xacro expression: expand the file first (`xacro robot.urdf.xacro > robot.urdf`)"));
         assert!(said("<parent link=\"a\"/>", "").starts_with("line 7: joint `j1` has no `<parent link="));
         assert!(said("</robot>", "").starts_with("`<robot>` of line 2 is never closed: the file ends at line 13"));
         assert!(
@@ -425,5 +507,40 @@ mod tests {
             said("</inertial>", "</inertial></link>")
                 .starts_with("line 6: `</link>` where `<robot>` of line 2 is open")
         );
+        assert!(said(" type=\"revolute\"", "").starts_with("line 7: `<joint>` has no `type=\"...\"`"));
+        assert!(said("<link name=\"a\"/>", "<link/>").starts_with("line 3: `<link>` has no `name=\"...\"`"));
+        assert!(
+            said("<child link=\"b\"/>", "<child/>").starts_with("line 8: joint `j1`: `<child>` has no `link=\"...\"`")
+        );
+        let self_closed = clean.replace(
+            "<joint name=\"j1\" type=\"revolute\">",
+            "<joint name=\"j1\" type=\"revolute\"/><joint name=\"j2\" type=\"fixed\">",
+        );
+        assert!(
+            urdf_text_problem(&self_closed)
+                .unwrap_or_default()
+                .starts_with("line 7: joint `j1` has no `<parent link=")
+        );
+        assert!(
+            said("<robot name=\"r\">", "<urdf name=\"r\"><robot>").starts_with("line 2: the root element is `<urdf>`")
+        );
+        for empty in ["", "  \n", "<?xml version=\"1.0\"?>\n<!-- nothing -->\n"] {
+            assert!(
+                urdf_text_problem(empty)
+                    .unwrap_or_default()
+                    .starts_with("the file holds no element")
+            );
+        }
+        let subset = clean.replace(
+            "<robot name",
+            "<!DOCTYPE robot [\n<!ENTITY l \"0.1\">\n<!ELEMENT robot ANY>\n]>\n<robot name",
+        );
+        assert_eq!(urdf_text_problem(&subset), None);
+        assert!(
+            parser_hint(&subset, "Parse error; Line: 3, Column: 1, Reason: Malformed XML")
+                .is_some_and(|h| h.contains("the document type declaration of line 2 holds an internal subset"))
+        );
+        assert_eq!(parser_hint(&subset, "Duplicate attribute"), None);
+        assert_eq!(parser_hint(clean, "Malformed XML"), None);
     }
 }
