@@ -117,6 +117,16 @@ pub fn is_decimal_comma(cell: &str) -> bool {
     })
 }
 
+/// What a file whose lines end in a lone carriage return is, and what to do (after its path).
+pub const CR_ONLY: &str = "its lines end in a lone carriage return (CR, classic Mac OS line endings), not LF or \
+                           CRLF: convert them, e.g. `tr '\\r' '\\n' < FILE > NEW.csv`";
+
+/// Whether `start`, the start of a file, ends its lines in a lone carriage return ([`CR_ONLY`]):
+/// a `\r` and no `\n`.
+pub fn carriage_returns_only(start: &[u8]) -> bool {
+    start.contains(&b'\r') && !start.contains(&b'\n')
+}
+
 /// A cell as an error message shows it: as written up to 60 characters, else its first 40 and
 /// its length (`aaaa…[5000000 characters]`), so a 5 MB field does not become a 5 MB message.
 pub fn shown_cell(text: &str) -> String {

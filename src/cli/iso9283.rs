@@ -175,11 +175,23 @@ fn cube_of(args: &CubeArgs, desc: &RobotDescription, model: &RobotModel) -> Resu
             desc.dof()
         );
     }
+    if let Some(k) = centre.iter().position(|c| !c.is_finite()) {
+        bail!(
+            "--centre-cmd: cmd_{} = {}: give each joint's command as a finite number (deg or mm)",
+            k + 1,
+            centre[k]
+        );
+    }
+    let source = if args.centre_cmd.is_some() {
+        "--centre-cmd"
+    } else {
+        "the calibration plan's reference pose; --centre-cmd gives another"
+    };
     match args.edge_mm {
         Some(mm) => cube_of_edge(&compensator, desc, &centre, mm * 1e-3),
         None => largest_cube(&compensator, desc, &centre, 0.5),
     }
-    .with_context(|| format!("the ISO cube around the centre commands {centre:?} (--centre-cmd)"))
+    .with_context(|| format!("the ISO cube around the centre commands {centre:?} ({source})"))
 }
 
 fn plan(args: PlanArgs, printer: Printer) -> Result<()> {

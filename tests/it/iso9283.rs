@@ -318,6 +318,11 @@ fn before_calibration_registers_the_nominal_base_and_bad_cycles_are_named() {
         stderr(&plan("10,-60,200,-90,-80,20")).contains("cmd_3 = 200 is outside the joint's limits [-180.0, 180.0]")
     );
     assert!(stderr(&plan("0,0,0,0,0,0")).contains("choose another centre"));
+    let nan = stderr(&plan("10,NaN,70,-90,-80,20"));
+    assert!(
+        nan.contains("--centre-cmd: cmd_2 = NaN: give each joint's command as a finite number"),
+        "{nan}"
+    );
     assert!(!dir.path().join("plan.csv").exists());
     // An edge beyond the robot's reach names the largest that is reached; that one plans, one
     // centimetre more does not.

@@ -148,9 +148,7 @@ pub enum MeasurementFileError {
         fields: usize,
     },
     /// The lines end in a lone carriage return (classic Mac OS), which the reader does not split.
-    #[error(
-        "{path}: its lines end in a lone carriage return (CR, classic Mac OS line endings), not LF or CRLF: convert them, e.g. `tr '\\r' '\\n' < FILE > NEW.csv`"
-    )]
+    #[error("{path}: {}", crate::csv_lines::CR_ONLY)]
     CarriageReturnsOnly {
         /// The file.
         path: PathBuf,
@@ -386,7 +384,7 @@ pub fn read_measurements(path: &Path, joint_count: Option<usize>) -> Result<Meas
     let mut reader = io::BufReader::with_capacity(1 << 16, file);
     let start = io::BufRead::fill_buf(&mut reader).map_err(io_error)?;
     crate::presets::check_encoding(start).map_err(io_error)?;
-    if start.contains(&b'\r') && !start.contains(&b'\n') {
+    if crate::csv_lines::carriage_returns_only(start) {
         return Err(MeasurementFileError::CarriageReturnsOnly { path: path.into() });
     }
     let whole = std::fs::metadata(path).is_ok_and(|m| m.len() == start.len() as u64);

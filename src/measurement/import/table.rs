@@ -3,7 +3,9 @@
 //! ignored), every cell kept with its 1-based physical line for messages.
 
 use super::points::PointsError;
-use crate::csv_lines::{commented_row, foreign_separator, looks_like_row, shown_cell};
+use crate::csv_lines::{
+    CR_ONLY, carriage_returns_only, commented_row, foreign_separator, is_decimal_comma, looks_like_row, shown_cell,
+};
 use std::borrow::Cow;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -104,6 +106,12 @@ impl Table {
     /// Parses `text`; `path` labels messages.
     pub fn parse(text: impl Into<String>, path: &Path) -> Result<Self, PointsError> {
         let text = text.into();
+        if carriage_returns_only(text.as_bytes()) {
+            return Err(PointsError::File {
+                path: path.to_owned(),
+                message: CR_ONLY.into(),
+            });
+        }
         let mut header: Option<Vec<String>> = None;
         let mut comments = Vec::new();
         let mut rows = Vec::new();
@@ -252,14 +260,25 @@ impl Table {
         })
     }
 
-    /// A finite number at `column`.
+    /// A finite number at `column`; the error says a decimal comma, or the header repeated (two
+    /// files joined), where the cell is one.
     pub fn number(&self, row: &Row<'_>, column: usize) -> Result<f64, PointsError> {
         let text = self.cell(row, column)?;
         text.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+            let why = if is_decimal_comma(text.trim()) {
+                format!(
+                    ": a decimal comma; this table writes decimal points (`{}`)",
+                    text.trim().replace(',', ".")
+                )
+            } else if text.trim() == self.header[column].trim() {
+                format!(": line {} repeats the header (files joined?); delete it", row.line)
+            } else {
+                String::new()
+            };
             self.row_error(
                 row.line,
                 column,
-                format!("{:?} is not a finite number", shown_cell(text)),
+                format!("{:?} is not a finite number{why}", shown_cell(text)),
             )
         })
     }
@@ -438,6 +457,39 @@ mod tests {
             Path::new("t.csv"),
         );
         assert_eq!(t.unwrap().row_count(), 1);
+    }
+
+    /// A number cell with a decimal comma, or holding its column's name (a header repeated where
+    /// two files were joined), says so with its line; lines ended by a lone CR are refused as
+    /// such, not read as one header line.
+    #[test]
+    fn slips_in_number_cells_and_line_endings_are_named() {
+        let number_error = |text: &str| {
+            let t = Table::parse(text, Path::new("t.csv")).unwrap();
+            let row = t.rows().last().unwrap();
+            t.number(&row, 1).unwrap_err().to_string()
+        };
+        let comma = number_error("id,x\np1,\"1,5\"\n");
+        assert!(
+            comma.contains("line 2")
+                && comma.ends_with(
+                    "\"1,5\" is not a finite number: a decimal comma; this table writes decimal points (`1.5`)"
+                ),
+            "{comma}"
+        );
+        let header = number_error("id,x\np1,2\nid,x\n");
+        assert!(
+            header.contains("\"x\" is not a finite number: line 3 repeats the header"),
+            "{header}"
+        );
+        assert_eq!(
+            number_error("id,x\np1,abc\n"),
+            "t.csv: line 2, column x: \"abc\" is not a finite number"
+        );
+        let cr = Table::parse("id,x\rp1,2\r", Path::new("t.csv"))
+            .unwrap_err()
+            .to_string();
+        assert!(cr.starts_with("t.csv: its lines end in a lone carriage return"), "{cr}");
     }
 
     #[test]
