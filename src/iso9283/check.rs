@@ -119,14 +119,11 @@ fn pose_values(p: &super::PoseFigures) -> Option<String> {
         ("accuracy.ap_x_mm", a.ap_x_mm),
         ("accuracy.ap_y_mm", a.ap_y_mm),
         ("accuracy.ap_z_mm", a.ap_z_mm),
-    ]
-    .into_iter()
-    .chain([
         ("accuracy.ap_a_mrad", a.ap_a_mrad),
         ("accuracy.ap_b_mrad", a.ap_b_mrad),
         ("accuracy.ap_c_mrad", a.ap_c_mrad),
-    ]);
-    if let Some((field, v)) = signed.clone().find(|(_, v)| !v.is_finite()) {
+    ];
+    if let Some((field, v)) = signed.into_iter().find(|(_, v)| !v.is_finite()) {
         return Some(format!("{field} = {v}: every figure is a finite number"));
     }
     let mut spreads = vec![("accuracy.ap_p_mm", a.ap_p_mm)];
