@@ -33,6 +33,7 @@
 use super::IsoError;
 use super::evaluate::Cycle;
 use crate::calibration::procedure::{OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX};
+use crate::kinematics::centroid;
 use crate::measurement::resolution::{INSTRUMENT_RESOLUTION_MM, written_step_mm};
 use crate::numerics::stats::{generalized_esd, median, robustly_beyond, student_t_two_sided};
 use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, UnitQuaternion, Vector3};
@@ -124,11 +125,6 @@ fn coordinates_of(attained: &Isometry3<f64>, point_m: &Point3<f64>, centre: &Uni
     let p = attained * point_m;
     let r = (centre.inverse() * attained.rotation).scaled_axis();
     [p.x, p.y, p.z, r.x, r.y, r.z]
-}
-
-/// The centroid of `points`.
-fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
-    Point3::from(points.iter().map(|t| t.coords).sum::<Vector3<f64>>() / points.len() as f64)
 }
 
 /// The six coordinates of each of a pose's cycles (module doc), at the centroid of the tool

@@ -23,5 +23,5 @@ pub use ik::{
 };
 pub use jacobian::{geometric_jacobian, point_jacobian};
 pub use phi::{JointKind, NEAR_LOCK_RAD, PhiRow, frame_from_phi, joint_motion, link_from_phi, roll_pitch_yaw};
-pub use rigid_fit::{MIRROR_RATIO, mirror_fit_rms, rigid_fit};
+pub use rigid_fit::{MIRROR_RATIO, centroid, mirror_fit_rms, rigid_fit};
 pub use source::{DhConvention, DhParams, SourceChain, UrdfJoint, phi_model_of, phi_rule, row_to_line};

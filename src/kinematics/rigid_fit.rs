@@ -12,6 +12,11 @@ const RANK_ONE_RATIO: f64 = 1e-12;
 /// (quadratic convergence); a double root (the rotation not unique) halves the error a step.
 const MAX_NEWTON_STEPS: usize = 100;
 
+/// The centroid (mean) of `points`; the origin for none.
+pub fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
+    Point3::from(points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / points.len().max(1) as f64)
+}
+
 /// `dst_from_src` minimising `sum |dst_i - T src_i|^2`, and the RMS residual \[input units\].
 /// `None` with fewer than three points, collinear points or non-finite input.
 ///
@@ -31,8 +36,7 @@ pub fn rigid_fit(src: &[Point3<f64>], dst: &[Point3<f64>]) -> Option<(Isometry3<
     if n < 3 || dst.len() != n {
         return None;
     }
-    let mean = |p: &[Point3<f64>]| Point3::from(p.iter().map(|q| q.coords).sum::<Vector3<f64>>() / n as f64);
-    let (cs, cd) = (mean(src), mean(dst));
+    let (cs, cd) = (centroid(src), centroid(dst));
     let mut s = Matrix3::zeros();
     let mut spread = 0.0;
     for (a, b) in src.iter().zip(dst) {

@@ -36,7 +36,7 @@ use super::{AxisExperiment, COMMAND_TOLERANCE, CalibrationOptions, ProcedureErro
 use crate::calibration::arc_model::{ArcModel, MeasurementNoise};
 use crate::calibration::line_ml::{fit_line, predict_line};
 use crate::calibration::{ArcFitOptions, CalibrationError, Studies, fit_arc_with_angle_noise_studies};
-use crate::kinematics::JointKind;
+use crate::kinematics::{JointKind, centroid};
 use crate::measurement::MeasurementSet;
 use crate::numerics::stats::{chi3_far_out_over_median, f_upper_quantile, far_out_fence};
 use crate::robot::TransmissionFitForm;
@@ -846,10 +846,6 @@ impl<'a> Sweep<'a> {
         o.line = row_of(set, &o).and_then(|row| set.line_of(row));
         o
     }
-}
-
-fn centroid(points: &[Point3<f64>]) -> Point3<f64> {
-    Point3::from(points.iter().map(|p| p.coords).sum::<Vector3<f64>>() / points.len().max(1) as f64)
 }
 
 #[cfg(test)]
