@@ -13,21 +13,117 @@
 //!   ([`mirror_fit_rms`]). In a right-handed frame a rotation fits at least as well as any
 //!   mirror (Kabsch); where the points are nearly flat, both fit about equally. The rotation
 //!   leaving more than [`MIRROR_RATIO`] times the mirror's RMS is a left-handed frame.
+//! - **Tool fit, cycle by cycle.** The scale is a median, so one pose written in another unit,
+//!   or with two targets' numbers swapped, or a target moved on the tool, does not move it; nor
+//!   does the outlier screen see a fault its pose's cycles share. Each cycle's measured targets
+//!   are fitted to the description's ([`rigid_fit`]): the misfit `sqrt(SS / (3n - 6))` of `n`
+//!   targets is the same in every cycle of a rigid tool (its noise, and the description's
+//!   error in placing the targets, which moves with the tool). A cycle whose misfit is beyond
+//!   Tukey's far-out fence of such misfits over their median
+//!   ([`chi_far_out_over_median`] of `3n - 6` components, so that up to half the cycles may be
+//!   off), and beyond [`FAR_OUT`] times the least standard deviation of a coordinate
+//!   (`super::outliers`: the written step or an instrument's resolution), is said, per
+//!   experiment, with its line. At least [`MIN_CYCLES_JUDGED`] cycles are needed for a median.
+//!   A median misfit beyond [`ABSURD_SHARE`] of the described targets' spread
+//!   ([`rms_spread`]) is a description whose tool targets are not where the tool's are, in
+//!   every cycle: said too.
+//!
+//! Not seen: two targets' numbers swapped where the description places them symmetrically
+//! about the third (the swap is then a rotation of the tool, and reads as an orientation
+//! error of the pose).
 
 use super::evaluate::Cycle;
+use super::outliers::least_target_sigma_m;
 use crate::calibration::procedure::SIZE_TOLERANCE;
 use crate::kinematics::{MIRROR_RATIO, mirror_fit_rms, rigid_fit};
-use crate::numerics::stats::{QuantileMethod, quantile};
+use crate::numerics::stats::{ABSURD_SHARE, FAR_OUT, QuantileMethod, chi_far_out_over_median, quantile, rms_spread};
 use nalgebra::Point3;
 use std::collections::BTreeMap;
 
 /// Tool targets closer than this on the description \[m\] give no distance to compare.
 const MIN_TARGET_DISTANCE_M: f64 = 1e-3;
 
+/// The fewest cycles whose tool fits are judged against their median.
+pub const MIN_CYCLES_JUDGED: usize = 5;
+
 /// The warnings of the module doc's checks on `cycles`, in words.
 pub(super) fn frame_warnings(cycles: &BTreeMap<usize, Vec<Cycle>>) -> Vec<String> {
     let all: Vec<&Cycle> = cycles.values().flatten().collect();
-    scale_warning(&all).into_iter().chain(mirror_warning(&all)).collect()
+    scale_warning(&all)
+        .into_iter()
+        .chain(mirror_warning(&all))
+        .chain(tool_fit_warnings(&all, least_target_sigma_m(cycles)))
+        .collect()
+}
+
+/// A cycle's misfit of its measured targets to the description's: `sqrt(SS / (3n - 6))` \[m\]
+/// and `3n - 6` (module doc); `None` for three targets in a line.
+fn tool_misfit(cycle: &Cycle) -> Option<(f64, usize)> {
+    let (tool, measured): (Vec<Point3<f64>>, Vec<Point3<f64>>) = cycle.targets.iter().copied().unzip();
+    let dof = (3 * tool.len()).checked_sub(6).filter(|&d| d > 0)?;
+    let (_, rms_m) = rigid_fit(&tool, &measured)?;
+    Some((rms_m * (tool.len() as f64 / dof as f64).sqrt(), dof))
+}
+
+/// The experiments whose cycles' tool misfits are beyond the module doc's fence, in words:
+/// one warning per experiment, with its cycles and lines.
+fn tool_fit_warnings(cycles: &[&Cycle], least_sigma_m: f64) -> Vec<String> {
+    let fits: Vec<(&Cycle, f64, usize)> = cycles
+        .iter()
+        .filter_map(|c| tool_misfit(c).map(|(m, dof)| (*c, m, dof)))
+        .collect();
+    let Some(dof) = fits.iter().map(|f| f.2).min() else {
+        return Vec::new();
+    };
+    if fits.len() < MIN_CYCLES_JUDGED {
+        return Vec::new();
+    }
+    let misfits: Vec<f64> = fits.iter().map(|f| f.1).collect();
+    let median_m = quantile(&misfits, 0.5, QuantileMethod::Linear);
+    let fence_m = (chi_far_out_over_median(dof as f64) * median_m).max(FAR_OUT * least_sigma_m);
+    let mut warnings: Vec<String> = misplaced_targets_warning(cycles[0], median_m).into_iter().collect();
+    let mut by_experiment: BTreeMap<&str, Vec<(&Cycle, f64)>> = BTreeMap::new();
+    for (c, m, _) in fits.iter().filter(|f| f.1 > fence_m) {
+        by_experiment.entry(&c.experiment).or_default().push((c, *m));
+    }
+    warnings.extend(by_experiment.into_iter().map(|(experiment, off)| {
+            let of_experiment = cycles.iter().filter(|c| c.experiment == experiment).count();
+            let worst = off.iter().map(|o| o.1).fold(0.0, f64::max);
+            let places: Vec<String> = off.iter().take(5).map(|(c, _)| place(c)).collect();
+            format!(
+                "experiment {experiment}: {} of its {of_experiment} cycles' measured targets do not fit the description's tool targets (`tool.targets_mm`): a misfit of up to {:.3} mm against {:.3} mm, the median over all {} cycles (fence {:.3} mm), at {}{}: a target measured in another unit, two targets' numbers swapped, or a target moved on the tool; those cycles' figures are not the robot's",
+                off.len(),
+                worst * 1e3,
+                median_m * 1e3,
+                fits.len(),
+                fence_m * 1e3,
+                places.join(", "),
+                if off.len() > places.len() { ", ..." } else { "" }
+            )
+        }));
+    warnings
+}
+
+/// The median misfit `median_m` beyond [`ABSURD_SHARE`] of the spread of the tool targets of
+/// `cycle` (the description's), in words.
+fn misplaced_targets_warning(cycle: &Cycle, median_m: f64) -> Option<String> {
+    let tool: Vec<Point3<f64>> = cycle.targets.iter().map(|t| t.0).collect();
+    let spread_m = rms_spread(&tool);
+    (median_m > ABSURD_SHARE * spread_m).then(|| {
+        format!(
+            "the measured targets miss the description's tool targets (`tool.targets_mm`) by a misfit of {:.3} mm in the median cycle, beyond {ABSURD_SHARE} of the targets' {:.3} mm RMS spread: a target is not where the description places it on the tool (or two targets' numbers are swapped) in every cycle; the orientation figures are not the robot's",
+            median_m * 1e3,
+            spread_m * 1e3
+        )
+    })
+}
+
+/// A cycle's place in words: its step, and its line when known.
+fn place(cycle: &Cycle) -> String {
+    match cycle.line {
+        Some(line) => format!("step {} (line {line})", cycle.step),
+        None => format!("step {}", cycle.step),
+    }
 }
 
 /// The median ratio of measured to described tool-target distances, beyond

@@ -208,6 +208,17 @@ fn screen_pose(cycles: &[&Cycle], target_sigma_m: f64, alpha: f64, keep: bool) -
     (flagged, (beyond > most).then_some(beyond))
 }
 
+/// The least standard deviation \[m\] of a measured target coordinate of `cycles`: the step
+/// they are written rounded to ([`written_step_mm`]), or an instrument's resolution
+/// ([`INSTRUMENT_RESOLUTION_MM`]), whichever is coarser (module doc).
+pub(super) fn least_target_sigma_m(cycles: &BTreeMap<usize, Vec<Cycle>>) -> f64 {
+    let measured_mm = cycles
+        .values()
+        .flatten()
+        .flat_map(|c| c.targets.iter().flat_map(|t| t.1.coords.iter().map(|v| v * 1e3)));
+    written_step_mm(measured_mm).map_or(INSTRUMENT_RESOLUTION_MM, |q| q.max(INSTRUMENT_RESOLUTION_MM)) * 1e-3
+}
+
 /// The outlier cycles of `cycles` (module doc), in file order; with `keep` flagged as kept.
 pub(super) fn screen_cycles(cycles: &BTreeMap<usize, Vec<Cycle>>, keep: bool) -> Result<Vec<OutlierCycle>, IsoError> {
     let mut groups: BTreeMap<(usize, usize), Vec<&Cycle>> = BTreeMap::new();
@@ -218,12 +229,7 @@ pub(super) fn screen_cycles(cycles: &BTreeMap<usize, Vec<Cycle>>, keep: bool) ->
     }
     let screened: Vec<&Vec<&Cycle>> = groups.values().filter(|g| g.len() >= MIN_CYCLES).collect();
     let alpha = ISO_CYCLES_FALSE_ALARM / screened.len().max(1) as f64;
-    let measured_mm = cycles
-        .values()
-        .flatten()
-        .flat_map(|c| c.targets.iter().flat_map(|t| t.1.coords.iter().map(|v| v * 1e3)));
-    let target_sigma_m =
-        written_step_mm(measured_mm).map_or(INSTRUMENT_RESOLUTION_MM, |q| q.max(INSTRUMENT_RESOLUTION_MM)) * 1e-3;
+    let target_sigma_m = least_target_sigma_m(cycles);
     let mut out = Vec::new();
     for group in screened {
         let (flagged, beyond) = screen_pose(group, target_sigma_m, alpha, keep);

@@ -16,7 +16,7 @@ mod theodolite;
 pub mod unit_check;
 
 pub use csv_io::{
-    MeasurementFileError, format_f64, format_f64_converted, read_measurements, read_measurements_from,
+    MeasurementFileError, format_f64, format_f64_converted, format_f64_list, read_measurements, read_measurements_from,
     write_measurements, write_measurements_to,
 };
 pub use data::{

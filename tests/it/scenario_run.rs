@@ -142,4 +142,15 @@ fn an_iso_section_adds_measured_and_predicted_figures() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("iso9283.cycles"), "{err}");
+    // A cube beyond reach is refused when the file is read, with the largest edge that is
+    // reached, not failed in every trial after its calibration.
+    std::fs::write(&path, text.replace("edge_mm = 100.0", "edge_mm = 3000.0")).unwrap();
+    let err = ResolvedScenario::from_file(&path, Overrides::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("iso9283.edge_mm") && err.contains("3000 mm cube"), "{err}");
+    assert!(
+        err.contains("plan an edge of") && err.contains("(iso9283.edge_mm)"),
+        "{err}"
+    );
 }

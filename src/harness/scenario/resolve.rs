@@ -11,7 +11,7 @@ use super::file::{
 };
 use super::threshold::Threshold;
 use crate::measurement::{
-    IsotropicNoise, MAX_PAYLOAD_KG, MeasurementModel, TEMPERATURE_RANGE_C, TheodolitePair, format_f64,
+    IsotropicNoise, MAX_PAYLOAD_KG, MeasurementModel, TEMPERATURE_RANGE_C, TheodolitePair, format_f64, format_f64_list,
 };
 use crate::plan::{CalibrationPlan, ValidationPlan};
 use crate::robot::{RobotDescription, RobotModel};
@@ -181,6 +181,7 @@ impl ResolvedScenario {
         }
         if let Some(iso) = &file.iso9283 {
             check_iso(iso, &robot).map_err(|(k, m)| invalid(k, m))?;
+            check_iso_cube(iso, &robot, &cases).map_err(|(k, m)| invalid(k, m))?;
         }
         let name = file.name.clone().unwrap_or_else(|| {
             path.file_stem()
@@ -677,6 +678,46 @@ fn check_conditions(c: &ConditionsSection) -> Result<(), (&'static str, String)>
                 format_f64(c.temperature_c)
             ),
         ));
+    }
+    Ok(())
+}
+
+/// The `[iso9283]` cube of every case planned on the nominal model, as each trial plans it on
+/// its calibrated one ([`crate::iso9283::cube_of_edge`], [`crate::iso9283::largest_cube`]): a
+/// cube out of reach fails here, once, not in every trial. The key and the problem otherwise.
+fn check_iso_cube(iso: &IsoSection, robot: &RobotDescription, cases: &[Case]) -> Result<(), (&'static str, String)> {
+    use crate::iso9283::{check_cube_robot, cube_of_edge, largest_cube};
+    check_cube_robot(robot).map_err(|e| ("iso9283", e.to_string()))?;
+    let compensator = crate::compensation::Compensator::new(&RobotModel::ideal(robot), robot)
+        .map_err(|e| ("iso9283", e.to_string()))?;
+    let mut centres: Vec<(&[f64], &str)> = match &iso.centre_cmd {
+        Some(c) => vec![(c.as_slice(), "iso9283.centre_cmd")],
+        None => cases
+            .iter()
+            .map(|c| (c.plan.reference.as_slice(), "plan.reference"))
+            .collect(),
+    };
+    centres.dedup_by(|a, b| a.0 == b.0);
+    for (centre, source) in centres {
+        let planned = match iso.edge_mm {
+            Some(mm) => cube_of_edge(&compensator, robot, centre, mm * 1e-3),
+            None => largest_cube(&compensator, robot, centre, 0.5),
+        };
+        if let Err(e) = planned {
+            let key = if iso.edge_mm.is_some() {
+                "iso9283.edge_mm"
+            } else {
+                source
+            };
+            return Err((
+                key,
+                format!(
+                    "the ISO cube around the centre commands {} ({source}), planned on the nominal model: {}",
+                    format_f64_list(centre),
+                    e.to_string().replace("(--edge-mm)", "(iso9283.edge_mm)")
+                ),
+            ));
+        }
     }
     Ok(())
 }

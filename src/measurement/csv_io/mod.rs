@@ -823,6 +823,12 @@ pub fn format_f64(v: f64) -> String {
     }
 }
 
+/// `values` as a TOML array writes them, `[a, b, ...]`, each by [`format_f64`].
+pub fn format_f64_list(values: &[f64]) -> String {
+    let v: Vec<String> = values.iter().map(|v| format_f64(*v)).collect();
+    format!("[{}]", v.join(", "))
+}
+
 /// [`format_f64`] of `v` rounded to 12 significant digits: a value converted for a message
 /// (0.00019 m as 0.19 mm, not 0.19000000000000003 mm), where the last bits of the product are
 /// the conversion's, not the user's.

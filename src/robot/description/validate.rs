@@ -2,7 +2,7 @@
 //! invalid field is reported with the file's path.
 
 use super::{DescriptionError, RobotDescription};
-use crate::measurement::format_f64;
+use crate::measurement::{format_f64, format_f64_list};
 use nalgebra::Point3;
 use std::path::Path;
 
@@ -270,7 +270,7 @@ impl RobotDescription {
                 format!(
                     "{}: the robot's base (mm, in the instrument frame) must lie within 1 km of the instrument's origin \
                      (each coordinate within +-{MAX_INSTRUMENT_FRAME_MM:e} mm)",
-                    shown_point(&base)
+                    format_f64_list(&base)
                 ),
             ));
         }
@@ -489,10 +489,4 @@ pub fn station_problem(stations_mm: &[[f64; 3]]) -> Option<(usize, String)> {
             ),
         ))
     })
-}
-
-/// A point \[mm\] as a file writes it, `[x, y, z]` (shortest round-trip numbers).
-fn shown_point(p: &[f64; 3]) -> String {
-    let c: Vec<String> = p.iter().map(|v| format_f64(*v)).collect();
-    format!("[{}]", c.join(", "))
 }
