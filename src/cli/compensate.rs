@@ -60,15 +60,6 @@ struct PoseRow {
     rpy_deg: [f64; 3],
 }
 
-/// The largest orientation angle of `poses` when every roll, pitch and yaw lies within a
-/// radian's turn (+-2 pi, read as degrees) and some exceeds 1: the orientations are radians
-/// (a tool pointing down has a roll of pi). Degrees that small hold the tool within 6 deg of
-/// the base axes in every pose; `None` otherwise.
-fn radian_orientations(poses: &[PoseRow]) -> Option<f64> {
-    let largest = poses.iter().flat_map(|p| p.rpy_deg).fold(0.0f64, |m, a| m.max(a.abs()));
-    (largest > 1.0 && largest <= std::f64::consts::TAU).then_some(largest)
-}
-
 const COLUMNS: [&str; 7] = ["id", "x_mm", "y_mm", "z_mm", "roll_deg", "pitch_deg", "yaw_deg"];
 
 fn read_poses(path: &Path) -> Result<Vec<PoseRow>> {
@@ -200,7 +191,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let comp = Compensator::new(&cal.robot, &desc)?.with_payload_kg(args.payload_kg);
     let poses = read_poses(&args.poses)?;
-    if let Some(largest) = radian_orientations(&poses) {
+    if let Some(largest) = super::checks::within_a_radians_turn(poses.iter().flat_map(|p| p.rpy_deg)) {
         eprintln!(
             "warning: {}: every roll_deg, pitch_deg and yaw_deg lies within +-6.283 (the largest {}): radians? The \
              orientation columns are degrees (times 57.296 for radians); degrees that small keep the tool within 6 deg \

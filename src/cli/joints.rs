@@ -121,11 +121,19 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path
     // stdout empty, not a table cut short at it.
     let mut text = axiscal::csv_lines::writer(Vec::new());
     text.write_record(table.header_as_written.iter().chain(&added))?;
+    let mut revolute_deg: Vec<f64> = Vec::new();
     for row in table.rows() {
         let cmd: Vec<f64> = columns
             .iter()
             .map(|&c| table.number(&row, c))
             .collect::<Result<_, _>>()?;
+        revolute_deg.extend(
+            desc.joints
+                .iter()
+                .zip(&cmd)
+                .filter(|(j, _)| j.kind == axiscal::kinematics::JointKind::Revolute)
+                .map(|(_, c)| *c),
+        );
         let place = format!("{}:{}", path.display(), row.line);
         within_limits(desc, &cmd, &place)?;
         let q = calibrated_joint_values(cal, desc, &cmd).with_context(|| {
@@ -141,6 +149,15 @@ fn convert_csv(cal: &Calibration, desc: &RobotDescription, path: &Path, cal_path
         text.write_record(&cells)?;
     }
     let text = text.into_inner().map_err(|e| e.into_error())?;
+    if let Some(largest) = super::checks::within_a_radians_turn(revolute_deg) {
+        eprintln!(
+            "warning: {}: every revolute joint's command lies within +-6.283 (the largest {}): radians? The cmd_k \
+             columns are degrees as the controller reads them (times 57.296 for radians); degrees that small keep \
+             every joint within 6.3 deg of zero in every row",
+            path.display(),
+            format_f64(largest)
+        );
+    }
     let mut stdout = std::io::stdout().lock();
     for comment in &table.comments {
         writeln!(stdout, "# {comment}")?;

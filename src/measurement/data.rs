@@ -155,7 +155,7 @@ pub enum RowProblem {
         shown_cell(experiment),
         crate::measurement::format_f64(*value),
         crate::measurement::format_f64(*reading),
-        other_reading_hint(*value, *reading)
+        other_reading_hint(*value, *reading, *majority)
     )]
     PoseCommandsDiffer {
         /// The experiment.
@@ -171,6 +171,9 @@ pub enum RowProblem {
         /// Where that reading is: 0-based row index in a [`MeasurementSet`], 1-based line in a
         /// file.
         reading_at: u64,
+        /// Whether more than half of the pose's rows carry that reading; if not (two rows, one
+        /// each), either row may be the wrong one.
+        majority: bool,
     },
     /// An experiment whose id names a joint (`axis3`) holds free poses (`moved_joint = 0`).
     #[error(
@@ -192,12 +195,16 @@ pub const POSE_COMMAND_TOLERANCE: f64 = 1e-6;
 
 /// What a row's command `value` that differs from its pose's `reading` may be: the pose's
 /// command in radians (degrees times pi/180, to the rounding of a printed value), or a row of
-/// another pose.
-fn other_reading_hint(value: f64, reading: f64) -> &'static str {
+/// another pose; without a `majority` of the pose's rows for the reading, either row.
+fn other_reading_hint(value: f64, reading: f64, majority: bool) -> &'static str {
     let radians = reading.abs() > 1e-3 && ((value.to_degrees() - reading) / reading).abs() < 1e-3;
-    match radians {
-        true => ": this row's commands look like radians; write them in degrees as its pose's other rows",
-        false => ": correct this row (a row of another pose?)",
+    match (radians, majority) {
+        (true, _) => ": this row's commands look like radians; write them in degrees as its pose's other rows",
+        (false, true) => ": correct this row (a row of another pose?)",
+        (false, false) => {
+            ": no reading is most of the pose's rows, so either row may be the wrong one: correct the one that is \
+             (a row of another pose?)"
+        }
     }
 }
 
@@ -680,6 +687,7 @@ fn pose_commands_differ(rows: &[Measurement], keys: &[RowKey]) -> Option<Measure
         .filter_map(|pose| {
             let agreeing = |r: usize| pose.iter().filter(|k| differs(r, k.3).is_none()).count();
             let reading = pose.iter().max_by_key(|k| (agreeing(k.3), std::cmp::Reverse(k.3)))?.3;
+            let majority = 2 * agreeing(reading) > pose.len();
             let (row, k) = pose.iter().filter_map(|p| Some((p.3, differs(p.3, reading)?))).min()?;
             Some(MeasurementSetError {
                 row,
@@ -690,6 +698,7 @@ fn pose_commands_differ(rows: &[Measurement], keys: &[RowKey]) -> Option<Measure
                     value: rows[row].cmd[k],
                     reading: rows[reading].cmd[k],
                     reading_at: reading as u64,
+                    majority,
                 },
             })
         })
@@ -978,6 +987,29 @@ mod tests {
         assert_eq!(b.by_step()[&0].iter().map(|m| m.target).collect::<Vec<_>>(), [0, 1]);
         assert_eq!(b.get(1, 0).map(|m| m.step), Some(1));
         assert!(b.get(1, 1).is_none());
+    }
+
+    /// A pose whose rows disagree on a command names the odd row when most rows agree, and says
+    /// that either may be wrong when two rows disagree one against one.
+    #[test]
+    fn a_pose_without_a_majority_reading_does_not_blame_one_row() {
+        let with_cmd = |target: usize, cmd: f64| Measurement {
+            cmd: vec![cmd, 0.0],
+            ..row("poses", 0, 0, target)
+        };
+        let e = MeasurementSet::new(2, vec![with_cmd(0, 7.5), with_cmd(1, -7.5)]).unwrap_err();
+        assert!(matches!(
+            e.problem,
+            RowProblem::PoseCommandsDiffer { majority: false, .. }
+        ));
+        assert!(
+            e.problem.to_string().contains("either row may be the wrong one"),
+            "{}",
+            e.problem
+        );
+        let e = MeasurementSet::new(2, vec![with_cmd(0, 7.5), with_cmd(1, -7.5), with_cmd(2, -7.5)]).unwrap_err();
+        assert_eq!(e.row, 0);
+        assert!(e.problem.to_string().contains("correct this row"), "{}", e.problem);
     }
 
     #[test]

@@ -198,6 +198,17 @@ fn joints_prints_the_exact_calibrated_joint_values() {
         o.status.success() && out.starts_with("# robot 17, 2026-12-05\n# operator: A\nid,cmd_1,"),
         "{out}"
     );
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("radians?"));
+    // Readings in radians (every revolute command within +-2 pi, read as degrees) are converted
+    // as degrees, with a warning naming the file.
+    let radians: Vec<String> = cmd.iter().map(|c| c.to_radians().to_string()).collect();
+    let o = joints_csv(&format!("{header}a,{}\nb,{}\n", radians.join(","), radians.join(",")));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("readings.csv: every revolute joint's command lies within +-6.283") && err.contains("radians?"),
+        "{err}"
+    );
 }
 
 /// A calibration whose robot lost a row (a damaged or hand-edited file, as the fuzzer found)

@@ -16,7 +16,10 @@ pub use identity::{
     data_identity, description_suspect, identity_comment, one_setup, outside_limits, read_calibration,
     read_calibration_warned, read_data, read_data_warned, same_robot,
 };
-pub use units::{description_units, description_warning_lines, import_units, pose_units, scenario_units, truth_units};
+pub use units::{
+    description_units, description_warning_lines, import_units, pose_units, scenario_units, truth_units,
+    within_a_radians_turn,
+};
 
 /// The comment line that records, in a measurement CSV written by axiscal, the description the
 /// data were made with: this prefix, then the identity as JSON.

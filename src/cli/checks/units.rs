@@ -15,6 +15,15 @@ use axiscal::measurement::{MeasurementSet, format_f64};
 use axiscal::robot::RobotDescription;
 use std::path::Path;
 
+/// The largest of `angles_deg` when every one lies within a radian's turn (+-2 pi, read as
+/// degrees) and some exceeds 1: angles written in radians (a tool pointing down has a roll of
+/// pi; a joint reading of a few radians). Degrees that small keep every angle within 6.3 deg
+/// of zero; `None` otherwise, and for no angles.
+pub fn within_a_radians_turn(angles_deg: impl IntoIterator<Item = f64>) -> Option<f64> {
+    let largest = angles_deg.into_iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    (largest > 1.0 && largest <= std::f64::consts::TAU).then_some(largest)
+}
+
 /// One error naming `file` and every slip, or nothing.
 pub(super) fn refuse_slips(file: &Path, slips: &[UnitSlip]) -> Result<()> {
     if slips.is_empty() {

@@ -613,6 +613,7 @@ fn with_lines(problem: RowProblem, lines: &[u64]) -> RowProblem {
             value,
             reading,
             reading_at,
+            majority,
         } => RowProblem::PoseCommandsDiffer {
             experiment,
             step,
@@ -620,6 +621,7 @@ fn with_lines(problem: RowProblem, lines: &[u64]) -> RowProblem {
             value,
             reading,
             reading_at: lines[reading_at as usize],
+            majority,
         },
         other => other,
     }
