@@ -342,7 +342,7 @@ pub enum MeasurementFileError {
         column: String,
         /// What is wrong (a `DuplicateKey`'s `first_at` and a `PoseCommandsDiffer`'s `reading_at`
         /// are line numbers).
-        problem: RowProblem,
+        problem: Box<RowProblem>,
     },
 }
 
@@ -486,7 +486,7 @@ pub fn read_measurements_from<R: io::Read>(
     }
     let invalid = |e: super::MeasurementSetError| {
         let column = e.problem.column();
-        let problem = with_lines(e.problem, &lines);
+        let problem = Box::new(with_lines(e.problem, &lines));
         MeasurementFileError::InvalidRow {
             path: path.into(),
             line: lines[e.row],

@@ -144,9 +144,9 @@ fn duplicated_experiment_step_target() {
     assert!(matches!(
         e,
         MeasurementFileError::InvalidRow {
-            problem: RowProblem::DuplicateKey { first_at: 2, .. },
+            problem,
             ..
-        }
+        } if matches!(*problem, RowProblem::DuplicateKey { first_at: 2, .. })
     ));
 }
 
@@ -157,9 +157,9 @@ fn moved_joint_out_of_range() {
     assert!(matches!(
         e,
         MeasurementFileError::InvalidRow {
-            problem: RowProblem::MovedJointOutOfRange { .. },
+            problem,
             ..
-        }
+        } if matches!(*problem, RowProblem::MovedJointOutOfRange { .. })
     ));
 }
 
