@@ -124,6 +124,23 @@ pub enum DiagnosisError {
         /// Needed.
         needed: usize,
     },
+    /// The noise-only samples would not fit in memory.
+    #[error(
+        "--noise-trials {trials} x --noise-draws {draws} noise-only draws of {residuals} residuals are {} values \
+         ({:.1} GB with their split): at most {NULL_SAMPLES_MAX} values (about {:.1} GB) are held; lower \
+         --noise-trials or --noise-draws (or --max-poses)",
+        *trials as f64 * *draws as f64 * *residuals as f64,
+        *trials as f64 * *draws as f64 * *residuals as f64 * NULL_SAMPLE_BYTES / 1e9,
+        NULL_SAMPLES_MAX as f64 * NULL_SAMPLE_BYTES / 1e9
+    )]
+    TooManyNullSamples {
+        /// Noise-only replicas.
+        trials: usize,
+        /// Draws per replica.
+        draws: usize,
+        /// Residuals per draw (3 per validation point).
+        residuals: usize,
+    },
     /// The model could not predict the data.
     #[error("{message}")]
     Model {
@@ -511,6 +528,13 @@ impl Prepared {
 /// Gauss-Newton steps of [`Prepared::refine`] after the linearised solution.
 const REFINE_STEPS: usize = 2;
 
+/// The most noise-only sample values [`null_data`] holds (`noise_trials x noise_draws x`
+/// residuals): 2^25, 268 MB of `f64`, and as much again split into training and held-out rows.
+pub const NULL_SAMPLES_MAX: usize = 1 << 25;
+
+/// Bytes a noise-only sample value takes, counted twice: the samples and their split.
+const NULL_SAMPLE_BYTES: f64 = 16.0;
+
 /// Noise-only data: `noise_trials` recalibrated replicas times `noise_draws` validation-noise
 /// draws (columns, training rows first), and each replica's axis-experiment residual RMS^2.
 struct NullData {
@@ -529,14 +553,21 @@ fn null_data(
     options: &DiagnosisOptions,
     progress: &dyn crate::progress::Progress,
 ) -> Result<NullData, DiagnosisError> {
+    let n = prep.residuals.len();
+    let draws = options.noise_draws.max(1);
+    if options.noise_trials.saturating_mul(draws).saturating_mul(n) > NULL_SAMPLES_MAX {
+        return Err(DiagnosisError::TooManyNullSamples {
+            trials: options.noise_trials,
+            draws,
+            residuals: n,
+        });
+    }
     progress.start(options.noise_trials, "noise-only replicas");
     let noise = noise_model(desc, options.noise_rms_3d_mm)?;
     let tool_targets = prep.predictor.tool_targets_m().to_vec();
     let clean = CleanCampaign::new(set, &prep.cal, desc, &tool_targets)?;
     let rows = validation_rows(&prep.cal, desc, &tool_targets, &prep.poses)?;
     let mut rng = ChaCha12Rng::seed_from_u64(options.seed);
-    let n = prep.residuals.len();
-    let draws = options.noise_draws.max(1);
     let mut samples = DMatrix::zeros(n, options.noise_trials * draws);
     let mut axis_rms2 = vec![Vec::new(); prep.cal.axes.len()];
     let reference_c = reference_temperature(set);

@@ -140,6 +140,26 @@ fn the_commands_say_how_many_poses_they_left_out() {
         md.contains("14 more validation poses of the file were left out"),
         "{md}"
     );
+    // Noise-only draws beyond what is held in memory are refused before any replica, with
+    // their count (10 poses x 3 targets x 3 coordinates = 90 residuals, at most).
+    let a = axiscal()
+        .current_dir(dir.path())
+        .args([
+            "diagnose",
+            "campaign.csv",
+            "--max-poses",
+            "10",
+            "--noise-trials",
+            "100000",
+        ])
+        .args(["--noise-draws", "10000", "--out", "diag-big"])
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&a.get_output().stderr).into_owned();
+    assert!(
+        err.contains("--noise-trials 100000 x --noise-draws 10000") && err.contains("at most 33554432 values"),
+        "{err}"
+    );
 
     let out = run(&[
         "calibrate",
