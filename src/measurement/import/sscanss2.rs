@@ -43,6 +43,7 @@ pub fn parse(
     let rows = rows(text, path, kinds.len(), unit, radians)?;
     let homes = homes(&rows, path, kinds)?;
     check_runs(&rows, path)?;
+    check_repeats(&rows, path)?;
     let mut out = Vec::with_capacity(rows.len());
     let mut runs = vec![0usize; kinds.len()];
     let mut step = 0;
@@ -70,10 +71,50 @@ pub fn parse(
         });
         step += 1;
     }
-    MeasurementSet::new(kinds.len(), out).map_err(|source| PointsError::Set {
-        path: path.to_owned(),
-        cause: source,
-    })
+    MeasurementSet::new(kinds.len(), out).map_err(|e| set_error(&rows, e, path))
+}
+
+/// A [`crate::measurement::MeasurementSetError`] of the imported rows at the file's line and
+/// column (the set's `x_mm` is column `x`, its `cmd_k` the row's `value` or `home`).
+fn set_error(rows: &[Row], e: crate::measurement::MeasurementSetError, path: &Path) -> PointsError {
+    let Some(r) = rows.get(e.row) else {
+        return PointsError::Set {
+            path: path.to_owned(),
+            cause: e,
+        };
+    };
+    let column = match e.problem.column().as_str() {
+        "x_mm" => 1,
+        "y_mm" => 2,
+        "z_mm" => 3,
+        c => match c.strip_prefix("cmd_").and_then(|k| k.parse::<usize>().ok()) {
+            Some(k) if k == r.joint => 4,
+            Some(_) => 6,
+            None => 0,
+        },
+    };
+    row_error(path, r.line, column, e.problem.to_string())
+}
+
+/// Refuses a row that repeats an earlier row of its run cell for cell (the same joint value and
+/// point, which two measurements never are): a row written twice, which would count twice.
+fn check_repeats(rows: &[Row], path: &Path) -> Result<(), PointsError> {
+    let mut seen: std::collections::HashMap<(usize, u64, [u64; 3]), usize> = std::collections::HashMap::new();
+    for r in rows {
+        let key = (r.joint, r.value.to_bits(), r.point.map(f64::to_bits));
+        if let Some(first) = seen.insert(key, r.line) {
+            return Err(row_error(
+                path,
+                r.line,
+                0,
+                format!(
+                    "line {} repeats line {first} cell for cell (the joint value and the point the same, which two measurements never are): a row written twice; delete one of them",
+                    r.line
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Refuses a run of one row: a sweep needs points, and single rows between other joints' are
@@ -614,6 +655,16 @@ mod tests {
                 "1,1,0,0,inf,revolute,0\n2,0,1,0,20,prismatic,0\n",
                 "column value",
                 "finite",
+            ),
+            (
+                "# a comment\n# another\n1,1,0,0,-10,revolute,0\n1,1e300,0,0,-5,revolute,0\n2,0,1,0,20,prismatic,0\n2,0,2,0,30,prismatic,0\n",
+                "line 4, column x",
+                "1e300",
+            ),
+            (
+                "1,1,0,0,-10,revolute,0\n1,1,0,0,-10,revolute,0\n2,0,1,0,20,prismatic,0\n2,0,2,0,30,prismatic,0\n",
+                "line 2, column joint",
+                "repeats line 1 cell for cell",
             ),
         ];
         for (text, place, what) in cases {
