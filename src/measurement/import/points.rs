@@ -220,6 +220,34 @@ pub const ID_COLUMNS: [&str; 4] = ["id", "point", "point_id", "name"];
 /// Column names accepted for the uncertainty (in the file's length unit, or as its suffix says).
 pub const SIGMA_COLUMNS: [&str; 4] = ["sigma", "uncertainty", "u", "std"];
 
+/// The id column of an export: the first of [`ID_COLUMNS`] present. Another one present that
+/// holds integer ids too (not a text label such as a point's name), different on some row, is
+/// an error naming the line: which column holds the ids is not the reader's to guess.
+fn id_column(t: &Table) -> Result<Option<usize>, PointsError> {
+    let present: Vec<usize> = ID_COLUMNS.iter().filter_map(|n| t.column(&[n])).collect();
+    let Some((&id, others)) = present.split_first() else {
+        return Ok(None);
+    };
+    for &other in others {
+        let differs = t.rows().find_map(|row| {
+            let ids = (t.integer(&row, id).ok()?, t.integer(&row, other).ok()?);
+            (ids.0 != ids.1).then_some((row.line, ids))
+        });
+        let all_integers = t.rows().all(|row| t.integer(&row, other).is_ok());
+        if let (true, Some((line, (a, b)))) = (all_integers, differs) {
+            return Err(t.row_error(
+                line,
+                other,
+                format!(
+                    "{b}, where column `{}` gives {a}: two columns of point ids that disagree; keep the one that numbers the plan's points (delete or rename the other)",
+                    t.header_as_written[id]
+                ),
+            ));
+        }
+    }
+    Ok(Some(id))
+}
+
 /// The points of an export (`id,x,y,z[,sigma]`) and the unit its column names state (`x_mm`,
 /// `x_m`), if any.
 pub fn read_export(t: &Table) -> Result<(Vec<ExportPoint>, Option<LengthUnit>), PointsError> {
@@ -227,7 +255,11 @@ pub fn read_export(t: &Table) -> Result<(Vec<ExportPoint>, Option<LengthUnit>), 
     let mut xyz = [0usize; 3];
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         let (mm, m) = (format!("{axis}_mm"), format!("{axis}_m"));
-        xyz[k] = t.required(&[axis, &mm, &m])?;
+        let names = [*axis, mm.as_str(), m.as_str()];
+        xyz[k] = match t.sole_column(&names)? {
+            Some(c) => c,
+            None => t.required(&names)?,
+        };
         let name = &t.header[xyz[k]];
         let unit = match name.as_str() {
             n if n == mm => Some(LengthUnit::Mm),
@@ -238,12 +270,12 @@ pub fn read_export(t: &Table) -> Result<(Vec<ExportPoint>, Option<LengthUnit>), 
             stated = unit;
         }
     }
-    let id = t.column(&ID_COLUMNS);
+    let id = id_column(t)?;
     let sigma_names: Vec<String> = SIGMA_COLUMNS
         .iter()
         .flat_map(|s| [s.to_string(), format!("{s}_mm"), format!("{s}_m")])
         .collect();
-    let sigma = t.column(&sigma_names.iter().map(String::as_str).collect::<Vec<_>>());
+    let sigma = t.sole_column(&sigma_names.iter().map(String::as_str).collect::<Vec<_>>())?;
     let mut points = Vec::with_capacity(t.row_count());
     for row in t.rows() {
         let position = [
@@ -521,4 +553,35 @@ fn check_slips(t: &Table, pairs: &[(&PlanRow, &ExportPoint)], unit: LengthUnit) 
             plan_row.point, rm[k], rn[k]
         ),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn export(text: &str) -> Result<Vec<ExportPoint>, PointsError> {
+        read_export(&Table::parse(text, std::path::Path::new("export.csv"))?).map(|(points, _)| points)
+    }
+
+    /// Two columns that both name a coordinate are refused; two id columns are refused where
+    /// both hold integer ids that disagree, not where the other is a text label.
+    #[test]
+    fn two_columns_of_one_quantity_are_not_chosen_between() {
+        let err = export("id,x,y,z,x_mm\n1,1,2,3,4\n").unwrap_err().to_string();
+        assert!(
+            err.contains("columns `x` and `x_mm` both name one of x, x_mm, x_m"),
+            "{err}"
+        );
+        let err = export("id,point,x,y,z\n1,1,0,0,0\n2,3,0,0,0\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("line 3, column point: 3, where column `id` gives 2"),
+            "{err}"
+        );
+        let labelled = export("id,name,x,y,z\n1,P001,0,0,0\n2,P002,0,0,0\n").unwrap();
+        assert_eq!(labelled.iter().map(|p| p.id).collect::<Vec<_>>(), [Some(1), Some(2)]);
+        let agreeing = export("id,point,x,y,z\n1,1,0,0,0\n2,2,0,0,0\n").unwrap();
+        assert_eq!(agreeing.len(), 2);
+    }
 }

@@ -197,6 +197,28 @@ impl Table {
         names.iter().find_map(|n| self.header.iter().position(|h| h == n))
     }
 
+    /// The index of the column named one of `names`, if any; two of them present is an error
+    /// naming both (which one holds the values is not the file's to leave to the reader).
+    pub fn sole_column(&self, names: &[&str]) -> Result<Option<usize>, PointsError> {
+        let present: Vec<usize> = names
+            .iter()
+            .filter_map(|n| self.header.iter().position(|h| h == n))
+            .collect();
+        match present.as_slice() {
+            [first, second, ..] => Err(PointsError::File {
+                path: self.path.clone(),
+                message: format!(
+                    "columns `{}` and `{}` both name one of {}: keep one of them (delete or rename the other)",
+                    self.header_as_written[*first],
+                    self.header_as_written[*second],
+                    names.join(", ")
+                ),
+            }),
+            [one] => Ok(Some(*one)),
+            [] => Ok(None),
+        }
+    }
+
     /// The index of a column named one of `names`, or an error naming the file and the names.
     /// A header whose cells are mostly numbers is a first line of data: the file has no header.
     pub fn required(&self, names: &[&str]) -> Result<usize, PointsError> {
