@@ -105,6 +105,17 @@ pub fn not_text_csv(start: &[u8]) -> Option<String> {
     })
 }
 
+/// What a number cell with a typographic minus sign holds, in words.
+pub const TYPOGRAPHIC_MINUS: &str =
+    "a typographic minus sign (U+2212 or a dash, as a word processor or spreadsheet writes)";
+
+/// `text` with its typographic minus signs (U+2212, en and em dashes) as ASCII `-`, when that
+/// makes a finite number of it.
+pub fn with_ascii_minus(text: &str) -> Option<String> {
+    let ascii = text.replace(['\u{2212}', '\u{2013}', '\u{2014}'], "-");
+    (ascii != text && ascii.parse::<f64>().is_ok_and(f64::is_finite)).then_some(ascii)
+}
+
 /// Whether `cell` is a number written with a decimal comma (`-3108,48`: an optional sign,
 /// digits, one comma, digits), as a locale with a decimal comma exports it.
 pub fn is_decimal_comma(cell: &str) -> bool {

@@ -253,7 +253,10 @@ pub enum MeasurementFileError {
         column: String,
     },
     /// A value is not a number.
-    #[error("{path}:{line}: column `{column}`: {value:?} is not a number")]
+    #[error(
+        "{path}:{line}: column `{column}`: {value:?} is not a number{}",
+        typographic_minus_hint(value)
+    )]
     NotANumber {
         /// The file.
         path: PathBuf,
@@ -344,6 +347,13 @@ pub enum MeasurementFileError {
         /// are line numbers).
         problem: Box<RowProblem>,
     },
+}
+
+/// What a cell that is a number but for a typographic minus sign should be written as.
+fn typographic_minus_hint(value: &str) -> String {
+    crate::csv_lines::with_ascii_minus(value)
+        .map(|ascii| format!(": {}; write `{ascii}`", crate::csv_lines::TYPOGRAPHIC_MINUS))
+        .unwrap_or_default()
 }
 
 /// Column positions found in the header.

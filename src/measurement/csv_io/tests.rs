@@ -361,3 +361,14 @@ fn a_command_column_spelled_otherwise_is_refused_naming_it() {
         );
     }
 }
+
+/// A number written with a typographic minus sign (U+2212) is named, with the ASCII number.
+#[test]
+fn a_typographic_minus_is_named() {
+    let text = format!("{HEADER}\naxis1,1,0,0,\u{2212}3108.36,2,3,0,0\n");
+    let e = expect_error(&text, Some(2), 2, "x_mm").to_string();
+    assert!(
+        e.contains("a typographic minus sign") && e.ends_with("write `-3108.36`"),
+        "{e}"
+    );
+}

@@ -264,9 +264,12 @@ fn row(
             .ok()
             .filter(|v| v.is_finite())
             .ok_or_else(|| {
+                let fix = crate::csv_lines::with_ascii_minus(cells[column])
+                    .map(|ascii| format!(": {}; write `{ascii}`", crate::csv_lines::TYPOGRAPHIC_MINUS))
+                    .unwrap_or_default();
                 error(
                     column,
-                    format!("`{}` is not a finite number", shown_cell(cells[column])),
+                    format!("`{}` is not a finite number{fix}", shown_cell(cells[column])),
                 )
             })
     };

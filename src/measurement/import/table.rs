@@ -183,9 +183,14 @@ impl Table {
         }
         for (k, name) in self.header.iter().enumerate() {
             if self.header[..k].contains(name) {
+                let unnamed = if name.is_empty() {
+                    ": the header has unnamed columns (trailing commas, as a spreadsheet exports empty columns); delete them or name each column"
+                } else {
+                    ""
+                };
                 return Err(PointsError::File {
                     path: self.path.clone(),
-                    message: format!("column {:?} appears twice", shown_cell(name)),
+                    message: format!("column {:?} appears twice{unnamed}", shown_cell(name)),
                 });
             }
         }
@@ -294,6 +299,8 @@ impl Table {
                 )
             } else if text.trim() == self.header[column].trim() {
                 format!(": line {} repeats the header (files joined?); delete it", row.line)
+            } else if let Some(ascii) = crate::csv_lines::with_ascii_minus(text.trim()) {
+                format!(": {}; write `{ascii}`", crate::csv_lines::TYPOGRAPHIC_MINUS)
             } else {
                 String::new()
             };
@@ -507,6 +514,18 @@ mod tests {
         assert_eq!(
             number_error("id,x\np1,abc\n"),
             "t.csv: line 2, column x: \"abc\" is not a finite number"
+        );
+        let minus = number_error("id,x\np1,\u{2212}3108.36\n");
+        assert!(
+            minus.contains("a typographic minus sign") && minus.ends_with("write `-3108.36`"),
+            "{minus}"
+        );
+        let unnamed = Table::parse("id,x,,\np1,2,,\n", Path::new("t.csv"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            unnamed.contains("the header has unnamed columns (trailing commas"),
+            "{unnamed}"
         );
         let cr = Table::parse("id,x\rp1,2\r", Path::new("t.csv"))
             .unwrap_err()
