@@ -528,7 +528,7 @@ impl Prepared {
 /// Gauss-Newton steps of [`Prepared::refine`] after the linearised solution.
 const REFINE_STEPS: usize = 2;
 
-/// The most noise-only sample values [`null_data`] holds (`noise_trials x noise_draws x`
+/// The most noise-only sample values the diagnosis holds (`noise_trials x noise_draws x`
 /// residuals): 2^25, 268 MB of `f64`, and as much again split into training and held-out rows.
 pub const NULL_SAMPLES_MAX: usize = 1 << 25;
 
