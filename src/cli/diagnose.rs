@@ -510,7 +510,7 @@ impl Report<'_> {
     /// `force`; returns `out/{files}` for the user.
     fn write(self, plot: impl FnOnce(&Path) -> Result<Vec<PathBuf>, PlotError>) -> Result<String> {
         let names = ["diagnosis.json", "diagnosis.md"];
-        std::fs::create_dir_all(self.out).with_context(|| format!("creating {}", self.out.display()))?;
+        super::output::Outputs::create_folder(self.out)?;
         let all: Vec<&str> = names.iter().chain(self.plot_files).copied().collect();
         // Every file a diagnosis may write: an earlier run's plots this one does not draw
         // (an axes-only diagnosis has no candidates) are removed with the set, not left beside it.

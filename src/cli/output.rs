@@ -186,13 +186,34 @@ impl Outputs {
     /// writes several files into it.
     pub fn check_folder(dir: &Path) -> Result<()> {
         refuse_dash(dir)?;
-        if dir.metadata().is_ok_and(|meta| !meta.is_dir()) {
+        if let Ok(meta) = dir.metadata()
+            && !meta.is_dir()
+        {
             bail!(
-                "--out `{}` is a file; --out names a folder (the command writes its files into it): choose another name",
-                dir.display()
+                "--out `{}` is {}; --out names a folder (the command writes its files into it): choose another name",
+                dir.display(),
+                kind_of(&meta)
             );
         }
         Ok(())
+    }
+
+    /// Creates the folder `dir` and any missing parent; a parent that exists but is not a
+    /// folder is named (the system's error says only "File exists").
+    pub fn create_folder(dir: &Path) -> Result<()> {
+        std::fs::create_dir_all(dir).or_else(|e| {
+            let blocking = dir
+                .ancestors()
+                .find_map(|a| a.metadata().ok().filter(|m| !m.is_dir()).map(|m| (a, kind_of(&m))));
+            match blocking {
+                Some((a, kind)) => bail!(
+                    "creating {}: `{}` is {kind}, not a folder: choose another --out",
+                    dir.display(),
+                    a.display()
+                ),
+                None => Err(e).with_context(|| format!("creating {}", dir.display())),
+            }
+        })
     }
 
     /// Refuses a folder output `dir` that exists and is not empty, unless `--force` (then its
@@ -215,9 +236,7 @@ impl Outputs {
     /// Creates the folder of `path` (if it has one) for an output.
     pub fn create_parent(path: &Path) -> Result<()> {
         match path.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => {
-                std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))
-            }
+            Some(dir) if !dir.as_os_str().is_empty() => Self::create_folder(dir),
             _ => Ok(()),
         }
     }
@@ -530,7 +549,7 @@ impl Outputs {
     /// [`Outputs::check`] would.
     pub fn staged_in(&self, dir: &Path) -> Result<StagedSet<'_>> {
         Self::check_folder(dir)?;
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        Outputs::create_folder(dir)?;
         self.remove_orphaned_temporaries(dir);
         Ok(StagedSet {
             outputs: self,
@@ -555,7 +574,7 @@ impl StagedSet<'_> {
         let target = self.dir.join(name);
         if let Some(sub) = target.parent().filter(|d| !d.exists()) {
             self.outputs.check_not_input(sub)?;
-            std::fs::create_dir_all(sub).with_context(|| format!("creating {}", sub.display()))?;
+            Outputs::create_folder(sub)?;
             self.created
                 .push((sub.to_owned(), super::signals::track_temporary(sub)));
         }
@@ -576,7 +595,7 @@ impl StagedSet<'_> {
             self.outputs.check(&self.dir.join(name))?;
         }
         let plots_dir = self.dir.join(format!(".axiscal-{}-plots.tmp", std::process::id()));
-        std::fs::create_dir_all(&plots_dir).with_context(|| format!("creating {}", plots_dir.display()))?;
+        Outputs::create_folder(&plots_dir)?;
         let held = std::fs::File::open(&plots_dir).ok();
         held.iter().for_each(lock_held);
         self.plots_dir = Some((plots_dir.clone(), super::signals::track_temporary(&plots_dir), held));
@@ -644,7 +663,7 @@ impl Outputs {
     /// refused instead of mixing its files with this one's. Released when `self` is dropped.
     pub fn hold_folder(&mut self, dir: &Path) -> Result<()> {
         Self::check_folder(dir)?;
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        Outputs::create_folder(dir)?;
         let folder = std::fs::File::open(dir).with_context(|| format!("opening {}", dir.display()))?;
         match folder.try_lock() {
             Ok(()) => {}
@@ -908,5 +927,20 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("not a regular file"), "{e}");
+    }
+}
+
+/// What a path that is not a folder is, in words: a file, a device, a FIFO, a socket.
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt as _;
+    let t = meta.file_type();
+    if t.is_block_device() || t.is_char_device() {
+        "a device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "a file"
     }
 }

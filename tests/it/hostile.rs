@@ -344,6 +344,18 @@ fn reader_cases() -> Vec<Case> {
             &["--out `data.csv` is a file", "--out names a folder"],
         ),
         case(
+            "--out under a file (it said `File exists (os error 17)`)",
+            "simulate --seed 1 --out data.csv/x.csv --force",
+            2,
+            &["creating data.csv: `data.csv` is a file, not a folder: choose another --out"],
+        ),
+        case(
+            "--out a device (it said `is a file`)",
+            "calibrate data.csv --out /dev/null --force",
+            2,
+            &["--out `/dev/null` is a device"],
+        ),
+        case(
             "a YAML coordinate of 1e300 m",
             &format!("import rct xbig.yaml --robot {positioner} --out out.csv"),
             2,
