@@ -742,6 +742,21 @@ fn link_to_a_stream(path: &Path) -> Option<PathBuf> {
     std::fs::metadata(path).is_ok_and(|m| !m.is_file()).then_some(hop)
 }
 
+/// What a path that is not a folder is, in words: a file, a device, a FIFO, a socket.
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt as _;
+    let t = meta.file_type();
+    if t.is_block_device() || t.is_char_device() {
+        "a device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "a file"
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -927,20 +942,5 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("not a regular file"), "{e}");
-    }
-}
-
-/// What a path that is not a folder is, in words: a file, a device, a FIFO, a socket.
-fn kind_of(meta: &std::fs::Metadata) -> &'static str {
-    use std::os::unix::fs::FileTypeExt as _;
-    let t = meta.file_type();
-    if t.is_block_device() || t.is_char_device() {
-        "a device"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "a file"
     }
 }
