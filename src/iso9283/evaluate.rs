@@ -233,6 +233,8 @@ pub(super) struct Cycle {
     /// Per measured target: its position on the tool (the description's) and where it was
     /// measured (instrument frame) \[m\].
     pub(super) targets: Vec<(Point3<f64>, Point3<f64>)>,
+    /// The RMS residual of the fit of the description's targets to the measured ones \[m\].
+    pub(super) tool_fit_rms_m: f64,
 }
 
 /// The commanded and attained poses and the targets of one step's rows.
@@ -240,6 +242,7 @@ struct Fitted {
     commanded: Isometry3<f64>,
     attained: Isometry3<f64>,
     targets: Vec<(Point3<f64>, Point3<f64>)>,
+    tool_fit_rms_m: f64,
 }
 
 /// The attained and commanded poses of one step's rows.
@@ -263,7 +266,7 @@ fn cycle(
         targets.push((*t, r.position_m()));
     }
     let (src, dst): (Vec<_>, Vec<_>) = targets.iter().copied().unzip();
-    let (world_from_tool, _) = rigid_fit(&src, &dst)
+    let (world_from_tool, tool_fit_rms_m) = rigid_fit(&src, &dst)
         .ok_or("fewer than three targets measured, or they are in a line: no attained orientation")?;
     let cmd = &rows[0].cmd;
     if rows.iter().any(|r| &r.cmd != cmd) {
@@ -277,6 +280,7 @@ fn cycle(
         commanded: base_from_world * phi.world_from_tool(&q),
         attained: base_from_world * world_from_tool,
         targets,
+        tool_fit_rms_m,
     })
 }
 
@@ -363,6 +367,7 @@ fn cycles(
                 commanded: fitted.commanded,
                 attained: fitted.attained,
                 targets: fitted.targets,
+                tool_fit_rms_m: fitted.tool_fit_rms_m,
             });
         }
     }

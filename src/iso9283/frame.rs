@@ -57,12 +57,11 @@ pub(super) fn frame_warnings(cycles: &BTreeMap<usize, Vec<Cycle>>) -> Vec<String
 }
 
 /// A cycle's misfit of its measured targets to the description's: `sqrt(SS / (3n - 6))` \[m\]
-/// and `3n - 6` (module doc); `None` for three targets in a line.
+/// from its fit's RMS, and `3n - 6` (module doc); `None` without a residual degree of freedom.
 fn tool_misfit(cycle: &Cycle) -> Option<(f64, usize)> {
-    let (tool, measured): (Vec<Point3<f64>>, Vec<Point3<f64>>) = cycle.targets.iter().copied().unzip();
-    let dof = (3 * tool.len()).checked_sub(6).filter(|&d| d > 0)?;
-    let (_, rms_m) = rigid_fit(&tool, &measured)?;
-    Some((rms_m * (tool.len() as f64 / dof as f64).sqrt(), dof))
+    let n = cycle.targets.len();
+    let dof = (3 * n).checked_sub(6).filter(|&d| d > 0)?;
+    Some((cycle.tool_fit_rms_m * (n as f64 / dof as f64).sqrt(), dof))
 }
 
 /// The experiments whose cycles' tool misfits are beyond the module doc's fence, in words:
