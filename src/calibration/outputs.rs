@@ -34,13 +34,27 @@ pub struct OutputOptions {
     pub urdf: UrdfOptions,
     /// Step of the tabulated joint map (deg or mm).
     pub joint_map_step: f64,
-    /// The instrument axis whose scale explains the joints' transmission departures, found on
-    /// the data (`calibration::procedure::column_source`): said in their place.
-    pub column_source: Option<ColumnSource>,
-    /// The checks' findings ([`implausible`]) of the calibration of the data with the sweep
-    /// screen's named bumps moved back (`procedure::bumps_undone`), said in place of this
-    /// calibration's, whose fits took each bump into its joint; `None`: no bump was named.
-    pub bumps_undone: Option<Vec<Implausible>>,
+}
+
+/// The sanity checks' findings ([`implausible`]) on the calibration of `record`: none on a
+/// free-pose calibration (its own tests judge it); `bumps_undone`, the findings on the
+/// calibration of the data with the sweep screen's named bumps moved back
+/// (`procedure::bumps_undone`), in place of this calibration's, whose fits took each bump into
+/// its joint; the joints' scales that `column_source` (the instrument axis whose scale explains
+/// them, `calibration::procedure::column_source`) explains said as that axis.
+pub fn sanity_findings(
+    record: &CalibrationRecord,
+    desc: &RobotDescription,
+    column_source: Option<&ColumnSource>,
+    bumps_undone: Option<Vec<Implausible>>,
+) -> Vec<Implausible> {
+    match record.reports.free_poses {
+        None => with_column_source(
+            bumps_undone.unwrap_or_else(|| implausible(&record.calibration, desc)),
+            column_source,
+        ),
+        Some(_) => vec![],
+    }
 }
 
 /// The rendered outputs of a calibration.
@@ -54,8 +68,6 @@ pub struct CalibrationOutputs {
     pub deviation: RawReadingDeviation,
     /// Joints whose URDF speed and effort limits are unknown.
     pub missing_speed_limits: Vec<usize>,
-    /// What the checks against the description found.
-    pub implausible: Vec<Implausible>,
 }
 
 /// The calibration could not be written as JSON.
@@ -80,13 +92,6 @@ pub fn render(
 ) -> Result<CalibrationOutputs, OutputError> {
     let json = |file: &'static str, r: serde_json::Result<String>| r.map_err(|cause| OutputError { file, cause });
     let cal = &record.calibration;
-    let implausible = match record.reports.free_poses {
-        None => with_column_source(
-            options.bumps_undone.clone().unwrap_or_else(|| implausible(cal, desc)),
-            options.column_source.as_ref(),
-        ),
-        Some(_) => vec![],
-    };
     let deviation = raw_reading_deviation(cal, desc, poses);
     let mut report_findings = findings(cal, desc);
     report_findings.extend(deviation.findings());
@@ -95,7 +100,7 @@ pub fn render(
         (OUTPUT_FILES[0], json(OUTPUT_FILES[0], record.to_json())?),
         (
             OUTPUT_FILES[1],
-            report_markdown(record, desc, source, &implausible) + &deviation.markdown(),
+            report_markdown(record, desc, source) + &deviation.markdown(),
         ),
         (
             OUTPUT_FILES[2],
@@ -124,7 +129,6 @@ pub fn render(
         left_out,
         deviation,
         missing_speed_limits: joints_without_speed_limits(desc),
-        implausible,
     })
 }
 
@@ -146,20 +150,15 @@ fn turn_moves_targets(desc: &RobotDescription, commands: &[Vec<f64>], joint: usi
 }
 
 /// `report.md`: the free-pose report or the independent-axis one.
-fn report_markdown(
-    record: &CalibrationRecord,
-    desc: &RobotDescription,
-    source: &str,
-    warnings: &[Implausible],
-) -> String {
+fn report_markdown(record: &CalibrationRecord, desc: &RobotDescription, source: &str) -> String {
     match &record.reports.free_poses {
         Some(summary) => free_pose::markdown(
             summary,
             record.calibration.noise.as_ref().and_then(|n| n.estimate.as_ref()),
-            &desc.name,
-            source,
+            (&desc.name, source),
+            &record.reports.warnings,
         ),
-        None => markdown(record, desc, source, warnings),
+        None => markdown(record, desc, source),
     }
 }
 

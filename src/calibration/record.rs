@@ -29,6 +29,11 @@ pub struct Reports {
     /// poses do not identify, the outliers and the held-out check. `axes` is then empty.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub free_poses: Option<FreePoseSummary>,
+    /// The warnings `axiscal calibrate` gave on these results when it wrote them (a result no
+    /// robot of the description gives, a miss of the file's own validation poses), in words:
+    /// every command that reads the file says them again. Absent when there were none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// What `calibration.json` holds: the calibration, and the reports beside it.

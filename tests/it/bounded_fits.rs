@@ -204,3 +204,47 @@ fn the_commands_say_how_many_poses_they_left_out() {
     assert_eq!(summary.poses_left_out, 8);
     assert!(summary.poses <= 16);
 }
+
+/// A file that repeats a cycle of 12 poses 4 times, bounded to 12: every pose of the cycle
+/// once (evenly spaced, a stride of 4, kept 3 of them, 4 times each), in the diagnosis's
+/// selection and the free-pose calibration's alike; each kept pose is the first visit of its
+/// configuration, counted here over the commands by hand.
+#[test]
+fn a_repeated_cycle_of_poses_is_kept_whole_before_any_repeat() {
+    let desc = RobotDescription::asea_irb6l();
+    let set = common::jitter_free_campaign(0.19, 12, 9);
+    let cycle: Vec<Measurement> = set
+        .rows()
+        .iter()
+        .filter(|m| m.experiment == "validation")
+        .cloned()
+        .collect();
+    let mut rows: Vec<Measurement> = set.rows().to_vec();
+    for round in 1..4 {
+        rows.extend(cycle.iter().map(|m| Measurement {
+            step: m.step + 12 * round,
+            ..m.clone()
+        }));
+    }
+    let repeated = MeasurementSet::new(6, rows).expect("a set");
+    let distinct = |cmds: Vec<Vec<f64>>| {
+        let mut seen: Vec<Vec<f64>> = Vec::new();
+        for c in cmds {
+            if !seen.contains(&c) {
+                seen.push(c);
+            }
+        }
+        seen.len()
+    };
+    let (kept, left_out) = validation_poses_at_most(repeated.rows(), &desc, 12);
+    assert_eq!((kept.len(), left_out), (12, 36));
+    assert!(
+        kept.iter().all(|p| p.step < 12),
+        "{:?}",
+        kept.iter().map(|p| p.step).collect::<Vec<_>>()
+    );
+    let free =
+        axiscal::calibration::free_pose::FreePoses::from_set_at_most(&repeated, &desc, false, 12).expect("poses");
+    assert_eq!(distinct(free.poses.iter().map(|p| p.cmd_file.clone()).collect()), 12);
+    assert!(free.poses.iter().all(|p| p.step < 12));
+}

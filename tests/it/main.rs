@@ -11,6 +11,7 @@ mod build_features;
 mod calibration_procedure;
 mod calibration_study;
 mod campaign_plan;
+mod carried_warnings;
 mod certificate;
 mod cli_calibrate;
 mod cli_evaluate;

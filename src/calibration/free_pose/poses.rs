@@ -4,7 +4,7 @@
 use super::FreePoseError;
 use crate::kinematics::JointKind;
 use crate::measurement::MeasurementSet;
-use crate::measurement::bounded::evenly_spaced;
+use crate::measurement::bounded::{configuration_key, spread_over_configurations};
 use crate::numerics::stats::{SIGMA_PER_MAD, median};
 use crate::robot::{RobotDescription, commands_to_internal};
 use nalgebra::Point3;
@@ -173,8 +173,9 @@ impl FreePoses {
         Self::from_set_at_most(set, desc, all_rows, usize::MAX)
     }
 
-    /// [`FreePoses::from_set`], at most `max` poses, evenly spaced through the file
-    /// ([`evenly_spaced`]; each pose's approach still from every pose of the file).
+    /// [`FreePoses::from_set`], at most `max` poses, evenly spaced through the file over as
+    /// many distinct commands as `max` allows ([`spread_over_configurations`]; each pose's
+    /// approach still from every pose of the file).
     pub fn from_set_at_most(
         set: &MeasurementSet,
         desc: &RobotDescription,
@@ -199,7 +200,11 @@ impl FreePoses {
         }
         let count = free_ordinals.len();
         let mut slot: Vec<Option<usize>> = vec![None; first_row.len()];
-        for (k, o) in evenly_spaced(free_ordinals, max).into_iter().enumerate() {
+        let configuration = |o: &usize| configuration_key(&set.rows()[first_row[*o]].cmd);
+        for (k, o) in spread_over_configurations(free_ordinals, max, configuration)
+            .into_iter()
+            .enumerate()
+        {
             slot[o] = Some(k);
         }
         let mut approaches = crate::physics::pose_approaches(set.rows(), desc);
@@ -381,9 +386,8 @@ pub struct Configurations {
 /// The configurations of the free poses of `set` (with `all_rows`, every row counts as a pose:
 /// the sweeps fitted as free poses).
 pub fn configurations(set: &MeasurementSet, all_rows: bool) -> Configurations {
-    let key = |cmd: &[f64]| cmd.iter().map(|c| (c * 1e6).round() as i64).collect::<Vec<i64>>();
     let free = set.rows().iter().filter(|m| all_rows || m.moved_joint == 0);
-    let distinct: HashSet<Vec<i64>> = free.clone().map(|m| key(&m.cmd)).collect();
+    let distinct: HashSet<Vec<i64>> = free.clone().map(|m| configuration_key(&m.cmd)).collect();
     let targets: HashSet<usize> = free.clone().map(|m| m.target).collect();
     let poses: HashSet<(&str, usize)> = free.map(|m| (m.experiment.as_str(), m.step)).collect();
     Configurations {

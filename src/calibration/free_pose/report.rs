@@ -7,7 +7,12 @@ use crate::markdown;
 use std::fmt::Write;
 
 /// The report of a free-pose calibration of `robot` from `source`.
-pub fn markdown(s: &FreePoseSummary, noise: Option<&NoiseEstimate>, robot: &str, source: &str) -> String {
+pub fn markdown(
+    s: &FreePoseSummary,
+    noise: Option<&NoiseEstimate>,
+    (robot, source): (&str, &str),
+    warnings: &[String],
+) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "# Calibration of {} from free poses\n", markdown::text(robot));
     let _ = writeln!(
@@ -20,6 +25,7 @@ pub fn markdown(s: &FreePoseSummary, noise: Option<&NoiseEstimate>, robot: &str,
     if let Some(why) = &s.axis_rows_as_poses {
         let _ = writeln!(md, "The axis experiments' rows are fitted as free poses: {why}.\n");
     }
+    md.push_str(&crate::calibration::procedure::warnings_section(warnings));
     residual_table(&mut md, s, noise);
     effects(&mut md, s);
     parameter_table(&mut md, s);

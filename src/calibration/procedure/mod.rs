@@ -63,7 +63,7 @@ pub use options::{AxisEstimator, CalibrationOptions, DEFAULT_HELD_TOLERANCE, Det
 pub use outlier_point::{OutlierPoint, OutlierTest};
 pub use pipeline::{FittedModel, calibrate, calibrate_model};
 pub use propagation::{DerivedSigma, FrameSigma, ZeroOffsetSigma};
-pub use report::{Finding, findings, markdown, read_residuals_csv, residuals_csv};
+pub use report::{Finding, findings, markdown, read_residuals_csv, residuals_csv, warnings_section};
 pub use result::{
     AxisReport, AxisSpan, Calibration, CouplingReport, DirectionSigma, HarmonicReport, HeldOffset, NoiseReport,
     PointResidual, PositionSigma, RowSigma, SweepReport, ToolPose, ToolReport, harmonics,

@@ -318,12 +318,7 @@ fn coupling_findings(cal: &Calibration, out: &mut Vec<Finding>) {
 }
 
 /// The report of `record` as Markdown.
-pub fn markdown(
-    record: &CalibrationRecord,
-    desc: &RobotDescription,
-    source: &str,
-    warnings: &[super::Implausible],
-) -> String {
+pub fn markdown(record: &CalibrationRecord, desc: &RobotDescription, source: &str) -> String {
     let (cal, reports) = (&record.calibration, &record.reports);
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration of {}\n", markdown::text(&desc.name));
@@ -333,7 +328,7 @@ pub fn markdown(
         markdown::code(source),
         cal.options.estimator.name()
     );
-    write_implausible(&mut s, warnings);
+    s.push_str(&warnings_section(&reports.warnings));
     write_noise(&mut s, cal);
     write_outliers(&mut s, cal);
     write_scope(&mut s, cal);
@@ -350,17 +345,18 @@ pub fn markdown(
     s
 }
 
-/// What the calibration's checks against its description found
-/// ([`super::implausible`]), when anything.
-fn write_implausible(s: &mut String, found: &[super::Implausible]) {
-    if found.is_empty() {
-        return;
+/// A report's section of the warnings `calibrate` gave on its results
+/// ([`crate::calibration::record::Reports::warnings`]), empty without any.
+pub fn warnings_section(warnings: &[String]) -> String {
+    if warnings.is_empty() {
+        return String::new();
     }
-    let _ = writeln!(s, "## Warnings\n");
-    for f in found {
-        let _ = writeln!(s, "- **{f}**");
+    let mut s = String::from("## Warnings\n\n");
+    for w in warnings {
+        let _ = writeln!(s, "- **{w}**");
     }
     s.push('\n');
+    s
 }
 
 /// The sweep points the outlier test flagged (`docs/method.md`, "Outliers"), when any was.

@@ -2,7 +2,7 @@
 //! command history, conditions and measured tool targets (`docs/formats.md#measurement-csv`).
 
 use crate::measurement::TOOL_EXPERIMENT;
-use crate::measurement::bounded::evenly_spaced;
+use crate::measurement::bounded::{configuration_key, spread_over_configurations};
 use crate::measurement::{Measurement, MeasurementSet};
 use crate::numerics::stats::mean;
 use crate::physics::pose_approaches;
@@ -43,25 +43,27 @@ pub fn validation_poses(rows: &[Measurement], desc: &RobotDescription) -> Vec<Po
     validation_poses_at_most(rows, desc, usize::MAX).0
 }
 
-/// [`validation_poses`], at most `max` of them, evenly spaced through the file
-/// ([`evenly_spaced`] over their order), and how many were left out. Only the kept poses are
+/// [`validation_poses`], at most `max` of them, evenly spaced through the file over as many
+/// distinct commands as `max` allows ([`spread_over_configurations`] over their order), and
+/// how many were left out. Only the kept poses are
 /// built; the approach directions still follow every pose of the file.
 pub fn validation_poses_at_most(rows: &[Measurement], desc: &RobotDescription, max: usize) -> (Vec<Pose>, usize) {
     // Every pose's ordinal (the order of its first row) and whether it is a validation pose.
     let mut ordinal: HashMap<(&str, usize), usize> = HashMap::new();
-    let mut validation: Vec<usize> = Vec::new();
+    let mut validation: Vec<(usize, &[f64])> = Vec::new();
     for m in rows {
         let next = ordinal.len();
         if *ordinal.entry((m.experiment.as_str(), m.step)).or_insert(next) == next
             && m.moved_joint == 0
             && m.experiment != TOOL_EXPERIMENT
         {
-            validation.push(next);
+            validation.push((next, &m.cmd));
         }
     }
     let count = validation.len();
     let mut slot: Vec<Option<usize>> = vec![None; ordinal.len()];
-    for (k, o) in evenly_spaced(validation, max).into_iter().enumerate() {
+    let kept = spread_over_configurations(validation, max, |(_, cmd)| configuration_key(cmd));
+    for (k, (o, _)) in kept.into_iter().enumerate() {
         slot[o] = Some(k);
     }
     let mut poses: Vec<Pose> = Vec::new();

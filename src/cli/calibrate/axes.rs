@@ -1,10 +1,10 @@
 //! The axis-experiment path of `calibrate`: the screened calibration, its failure said (or its
 //! sweeps fitted as free poses), and the coordinate-scale profile's finding in words.
 
-use super::Args;
 use super::accuracy::{predict_free_pose_accuracy, predict_tool_accuracy};
 use super::args_view;
 use super::refine::refine;
+use super::{Args, Said};
 use crate::cli::checks;
 use crate::cli::printer::Printer;
 use anyhow::Result;
@@ -190,7 +190,8 @@ pub(super) fn calibrate_axes(
     print_wandering_outliers(&screened.cal.outliers, desc, args);
     checks::print_sweep_bumps(&screened.bumps, &args.data);
     let set = screened.screened.as_ref().unwrap_or(set);
-    print_coordinate_scale(&screened.coordinate_scale, set, &args.data, printer);
+    let mut said = Said::default();
+    print_coordinate_scale(&screened.coordinate_scale, set, &args.data, (printer, &mut said));
     let cal = screened.cal;
     let (tool_accuracy, map) = predict_tool_accuracy(&cal, desc, set, args.held_tolerance)?;
     // The prediction describes the axis experiments' model and its propagated covariance;
@@ -204,7 +205,8 @@ pub(super) fn calibrate_axes(
     let reports = Reports {
         tool_accuracy,
         refinement,
-        free_poses: None,
+        warnings: said.into_warnings(),
+        ..Reports::default()
     };
     let found = AxesFound {
         column_source: screened.column_source,
@@ -299,7 +301,7 @@ pub(in crate::cli) fn print_coordinate_scale(
     found: &CoordinateScale,
     set: &MeasurementSet,
     data: &Path,
-    printer: Printer,
+    (printer, said): (Printer, &mut Said),
 ) {
     match found {
         CoordinateScale::Untested => eprintln!(
@@ -357,14 +359,14 @@ pub(in crate::cli) fn print_coordinate_scale(
                     simulated_words(null)
                 )
             });
-            eprintln!("warning: {place}: {found}{beyond}");
+            said.warn(format!("{place}: {found}{beyond}"));
             if let Some(second) = second {
-                eprintln!(
-                    "warning: {place}: with {} divided by {:.5} about the data's centroid (the scale named above) \
+                said.warn(format!(
+                    "{place}: with {} divided by {:.5} about the data's centroid (the scale named above) \
                      the coordinate-scale profile was run again, and a second axis shows: {second}",
                     found.scaled.columns(),
                     found.factor
-                );
+                ));
             }
         }
     }

@@ -49,25 +49,34 @@ pub(super) fn with_sweep_lines(mut found: Implausible, set: &MeasurementSet) -> 
     found
 }
 
-/// The sanity checks' findings ([`axiscal::calibration::procedure::implausible`]) as warnings; a size off by a factor says
-/// that the description, not only the coordinates, may be at fault when the data do not record
-/// this very description ([`checks::description_suspect`]).
-pub(super) fn print_implausible(found: &[Implausible], desc: &RobotDescription, set: &MeasurementSet, args: &Args) {
-    for f in found {
-        let f = &with_sweep_lines(f.clone(), set);
-        let rows = tool_rows(f, set, &args.data);
-        let suspect = match f {
-            Implausible::Size { .. } => {
-                let recorded = checks::data_identity(&args.data).ok().flatten();
-                checks::description_suspect(desc, &args.robot, recorded.as_ref())
+/// The sanity checks' findings ([`axiscal::calibration::procedure::implausible`]) as warnings'
+/// words, with the file lines they are about; a size off by a factor says that the
+/// description, not only the coordinates, may be at fault when the data do not record this
+/// very description ([`checks::description_suspect`]).
+pub(super) fn implausible_warnings(
+    found: &[Implausible],
+    desc: &RobotDescription,
+    set: &MeasurementSet,
+    args: &Args,
+) -> Vec<String> {
+    found
+        .iter()
+        .map(|f| {
+            let f = &with_sweep_lines(f.clone(), set);
+            let rows = tool_rows(f, set, &args.data);
+            let suspect = match f {
+                Implausible::Size { .. } => {
+                    let recorded = checks::data_identity(&args.data).ok().flatten();
+                    checks::description_suspect(desc, &args.robot, recorded.as_ref())
+                }
+                _ => None,
+            };
+            match suspect {
+                Some(s) => format!("{f}{rows}; {s}"),
+                None => format!("{f}{rows}"),
             }
-            _ => None,
-        };
-        match suspect {
-            Some(s) => eprintln!("warning: {f}{rows}; {s}"),
-            None => eprintln!("warning: {f}{rows}"),
-        }
-    }
+        })
+        .collect()
 }
 
 /// The joints whose slope a gear's once-per-turn error and a scaled command column explain

@@ -1,6 +1,7 @@
 //! `axiscal calibrate` on a file of free poses only: the free-pose calibration
 //! ([`axiscal::calibration::free_pose`]) and its console summary.
 
+use super::Said;
 use crate::cli::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::free_pose::block::{BlockShift, block_shift};
@@ -73,19 +74,28 @@ pub fn calibrate(
     }
     let block = block_shift(set, desc, &options, &cal);
     let (cal, summary) = cal.into_calibration(desc);
-    warn_few_degrees_of_freedom(args.data, &cal, &summary);
+    let mut said = Said::default();
+    warn_few_degrees_of_freedom(args.data, &cal, &summary, &mut said);
     if let Some(words) = summary.predicts_no_better_than_nominal() {
-        eprintln!(
-            "warning: {}: the calibrated model predicts {words}: it explains nothing the description does not, \
+        said.warn(format!(
+            "{}: the calibrated model predicts {words}: it explains nothing the description does not, \
              and has fitted something no robot parameter is (a column's units, scale or sign; a block of poses \
              moved; target ids swapped; an effect it lacks): calibration.json is wrong for the robot; check the \
              columns the notes below name, or none named, each column against the controller at two poses",
             args.data.display()
-        );
+        ));
     }
-    warn_slips(args, (set, desc), &options, (&cal, &summary), block.as_ref(), printer);
+    warn_slips(
+        args,
+        (set, desc),
+        &options,
+        (&cal, &summary),
+        block.as_ref(),
+        (printer, &mut said),
+    );
     let mut record = CalibrationRecord::new(cal);
     record.reports.free_poses = Some(summary);
+    record.reports.warnings = said.into_warnings();
     Ok(record)
 }
 
@@ -309,7 +319,7 @@ fn noise_upper_factor(dof: f64) -> f64 {
 /// [`NOISE_CONFIDENCE`] interval lies beyond [`NOISE_INTERVAL_FACTOR`] times the estimate: every
 /// predicted accuracy (the tool 1-sigma, the sigmas, validate's test) scales with it. Says the
 /// degrees of freedom, the interval and the poses that would bring it within the factor.
-fn warn_few_degrees_of_freedom(data: &Path, cal: &Calibration, s: &FreePoseSummary) {
+fn warn_few_degrees_of_freedom(data: &Path, cal: &Calibration, s: &FreePoseSummary, said: &mut Said) {
     let parameters = s.parameters.len();
     let dof = (3 * s.points).saturating_sub(parameters);
     let factor = noise_upper_factor(dof as f64);
@@ -332,8 +342,8 @@ fn warn_few_degrees_of_freedom(data: &Path, cal: &Calibration, s: &FreePoseSumma
         ),
         None => "no noise estimate is left".to_owned(),
     };
-    eprintln!(
-        "warning: {}: the fit leaves {dof} degrees of freedom ({} points x 3 coordinates - {parameters} parameters fitted, \
+    said.warn(format!(
+        "{}: the fit leaves {dof} degrees of freedom ({} points x 3 coordinates - {parameters} parameters fitted, \
          from {} free poses): {estimate}; every predicted accuracy (the tool 1-sigma, the sigmas in calibration.json, \
          validate's test) scales with it, and the model holds near these poses only; measure about {poses} free poses or \
          more across the workspace ({needed} degrees of freedom bring the interval's upper end within {NOISE_INTERVAL_FACTOR} \
@@ -341,7 +351,7 @@ fn warn_few_degrees_of_freedom(data: &Path, cal: &Calibration, s: &FreePoseSumma
         data.display(),
         s.points,
         s.poses
-    );
+    ));
 }
 
 /// The error's first clause (before its advice): "the calibrated model misses the points by ...".
@@ -373,35 +383,40 @@ fn warn_slips(
     options: &FreePoseOptions,
     (cal, summary): (&Calibration, &FreePoseSummary),
     block: Option<&BlockShift>,
-    printer: Printer,
+    (printer, said): (Printer, &mut Said),
 ) {
     let data = args.data.display();
     // Sweeps fitted as free poses (at their own configurations) count every row as a pose.
     let all_rows = summary.axis_rows_as_poses.is_some();
     if let Some(few) = few_configurations(set, Parameters(summary.parameters.len(), "parameters fitted"), all_rows) {
         // Repeated configurations determine no slip either: the search would name chance ones.
-        eprintln!("warning: {data}: {few}");
+        said.warn(format!("{data}: {few}"));
         return;
     }
     match free_pose_scale_checks((set, desc), options, (cal, summary), block) {
-        FreePoseChecks::Shift(FreePoseShift::Slip(s)) => eprintln!(
-            "warning: {data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
+        FreePoseChecks::Shift(FreePoseShift::Slip(s)) => said.warn(format!(
+            "{data}: {}; the free-pose fit absorbed it into the geometry, so calibration.json is wrong for the robot",
             slip_words(&s)
-        ),
-        FreePoseChecks::Shift(FreePoseShift::Block(b)) => eprintln!("warning: {data}: {}", block_words(&b)),
+        )),
+        FreePoseChecks::Shift(FreePoseShift::Block(b)) => said.warn(format!("{data}: {}", block_words(&b))),
         FreePoseChecks::Scales(found) => {
-            print_scales(&found, (set, &summary.scales), args.data, printer);
-            warn_target_ids(set, desc, summary, &data.to_string());
+            print_scales(&found, (set, &summary.scales), args.data, (printer, &mut *said));
+            warn_target_ids(set, desc, summary, &data.to_string(), said);
         }
     }
 }
 
 /// The free-pose scale tests' findings ([`FreePoseScales`]) on `set` in words, after the
 /// column scales the screen `named`: each test run with those undone says so.
-fn print_scales(found: &FreePoseScales, (set, named): (&MeasurementSet, &[NamedScale]), data: &Path, printer: Printer) {
+fn print_scales(
+    found: &FreePoseScales,
+    (set, named): (&MeasurementSet, &[NamedScale]),
+    data: &Path,
+    (printer, said): (Printer, &mut Said),
+) {
     let shown = data.display();
     for n in named {
-        eprintln!("warning: {shown}: {}", named_scale_words(n));
+        said.warn(format!("{shown}: {}", named_scale_words(n)));
     }
     let prefix = found
         .undone
@@ -410,17 +425,17 @@ fn print_scales(found: &FreePoseScales, (set, named): (&MeasurementSet, &[NamedS
     for s in &found.scaled {
         match s.free_pose_note() {
             Some(note) => eprintln!("note: {shown}: {prefix}{note}"),
-            None => eprintln!("warning: {shown}: {prefix}{s}"),
+            None => said.warn(format!("{shown}: {prefix}{s}")),
         }
     }
     for doubt in &found.doubts {
         eprintln!("note: {shown}: {prefix}{doubt}");
     }
     if let Some(second) = &found.second {
-        print_second_scales(&second.said, &second.found, data);
+        print_second_scales(&second.said, &second.found, data, said);
     }
     if let Some(profile) = &found.profile {
-        super::print_coordinate_scale(profile, set, data, printer);
+        super::print_coordinate_scale(profile, set, data, (printer, said));
     }
     // The columns said above are named; the line bounds the others.
     if let Some(reach) = &found.reach {
@@ -430,10 +445,16 @@ fn print_scales(found: &FreePoseScales, (set, named): (&MeasurementSet, &[NamedS
 
 /// The target ids swapped between rows, or mirrored as a whole against the description's
 /// `[tool] targets_mm`, as warnings naming `data`.
-fn warn_target_ids(set: &MeasurementSet, desc: &RobotDescription, summary: &FreePoseSummary, data: &str) {
+fn warn_target_ids(
+    set: &MeasurementSet,
+    desc: &RobotDescription,
+    summary: &FreePoseSummary,
+    data: &str,
+    said: &mut Said,
+) {
     let swapped = swapped_target_ids(set, &desc.tool.targets_mm);
     for found in &swapped {
-        eprintln!("warning: {data}{}", target_ids_words(found, Some(summary), desc));
+        said.warn(format!("{data}{}", target_ids_words(found, Some(summary), desc)));
     }
     if swapped.is_empty()
         && let Some(m) = mirrored_targets(summary, desc)
@@ -445,14 +466,14 @@ fn warn_target_ids(set: &MeasurementSet, desc: &RobotDescription, summary: &Free
             .filter(|(a, b)| a != b)
             .map(|(a, b)| format!("{a} is {b}"))
             .collect();
-        eprintln!(
-            "warning: {data}: the tool frame fitted to the description's `[tool] targets_mm` turns {:.1} deg from the \
+        said.warn(format!(
+            "{data}: the tool frame fitted to the description's `[tool] targets_mm` turns {:.1} deg from the \
              description's, and {:.1} deg with the target ids read as {}: the targets' distances are symmetric, and the ids \
              are the mirror image of the description's (fix the `target` column and calibrate again)",
             m.written_deg,
             m.reordered_deg,
             moved.join(", ")
-        );
+        ));
     }
 }
 
@@ -513,8 +534,8 @@ fn named_scale_words(n: &axiscal::calibration::free_pose::NamedScale) -> String 
 /// The command columns the transmission test named with the joints `said` (`(joint, slope)`,
 /// as a warning or a note) undone ([`axiscal::calibration::recalibrated::second_command_scales`]);
 /// where it named none, that the test ran.
-fn print_second_scales(said: &[(usize, f64)], second: &[SecondCommandScale], data: &Path) {
-    let columns: Vec<String> = said
+fn print_second_scales(undone: &[(usize, f64)], second: &[SecondCommandScale], data: &Path, said: &mut Said) {
+    let columns: Vec<String> = undone
         .iter()
         .map(|(j, slope)| format!("`cmd_{j}` divided by {:.4}", 1.0 / slope))
         .collect();
@@ -535,8 +556,11 @@ fn print_second_scales(said: &[(usize, f64)], second: &[SecondCommandScale], dat
             SecondCommandScale::Slip(s) => s.free_pose_note().map_or((true, s.to_string()), |n| (false, n)),
             SecondCommandScale::Doubt(d) => (false, d.to_string()),
         };
-        let level = if firm { "warning" } else { "note" };
-        eprintln!("{level}: {data}: {undone_words}, and a second column shows: {text}");
+        let words = format!("{data}: {undone_words}, and a second column shows: {text}");
+        match firm {
+            true => said.warn(words),
+            false => eprintln!("note: {words}"),
+        }
     }
 }
 

@@ -18,7 +18,7 @@ use super::printer::Printer;
 use anyhow::Result;
 use axiscal::calibration::outputs::{self, OUTPUT_FILES, OutputOptions};
 use axiscal::calibration::procedure::{
-    AxisEstimator, Calibration, DEFAULT_HELD_TOLERANCE, UrdfOptions, UrdfRoot, implausible, ros_name,
+    AxisEstimator, Calibration, DEFAULT_HELD_TOLERANCE, Implausible, UrdfOptions, UrdfRoot, implausible, ros_name,
 };
 use axiscal::calibration::record::CalibrationRecord;
 use axiscal::calibration::tool_map::{TOOL_MAP_FILES, write_tool_map};
@@ -29,7 +29,7 @@ use std::path::PathBuf;
 
 use accuracy::predict_free_pose_accuracy;
 use axes::{AxesFound, calibrate_axes};
-use findings::{print_implausible, print_moved_sweeps, print_scale_doubts};
+use findings::{implausible_warnings, print_moved_sweeps, print_scale_doubts};
 use own_poses::own_poses_miss;
 use refine::check_refine_poses;
 use summary::{deviation_line, print_axes, print_tool_accuracy};
@@ -37,6 +37,24 @@ use summary::{deviation_line, print_axes, print_tool_accuracy};
 pub(super) use axes::print_coordinate_scale;
 pub(super) use free_poses::p_value_words;
 pub(super) use own_poses::misses_own_validation_poses;
+
+/// The warnings on a calibration's results, printed as they are found and kept for
+/// `calibration.json`'s `warnings` ([`axiscal::calibration::record::Reports::warnings`]).
+#[derive(Debug, Default)]
+pub(super) struct Said(Vec<String>);
+
+impl Said {
+    /// Prints `text` as a warning and keeps it.
+    pub(super) fn warn(&mut self, text: String) {
+        eprintln!("warning: {text}");
+        self.0.push(text);
+    }
+
+    /// The warnings kept, in the order they were said.
+    pub(super) fn into_warnings(self) -> Vec<String> {
+        self.0
+    }
+}
 
 /// The estimators by their command-line names.
 const ESTIMATORS: &[(&str, AxisEstimator)] = &[("ml", AxisEstimator::Ml), ("paper", AxisEstimator::Paper)];
@@ -111,7 +129,7 @@ pub struct Args {
     #[arg(long, value_name = "DIAGNOSIS.json", requires = "refine")]
     carry: Option<PathBuf>,
     /// Free poses `--refine` and the free-pose calibration fit at most, evenly spaced through
-    /// the file: memory grows with them (default 1000).
+    /// the file: memory grows with them (default 5000).
     #[arg(long, value_parser = super::options::InRange::closed(3usize, 1_000_000, ""))]
     max_poses: Option<usize>,
     /// Folds of `--refine`'s held-out check.
@@ -203,8 +221,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     record.calibration.data_digest = Some(set.digest());
     record.calibration.model_digest = Some(record.calibration.robot.digest());
     readable(&record, &args, (&set, &desc))?;
+    let judged = judge(&mut record, &args, (&desc, &set), &found);
     let cal = &record.calibration;
-    let source = args.data.display().to_string();
     let texts = render(&record, &args, (&desc, &set), &found)?;
     // Every file is written before any is put in place; an output left out must not leave an
     // earlier run's file beside the new calibration.
@@ -225,19 +243,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
             print_tool_accuracy(accuracy, printer);
         }
         None => {
-            print_axes((cal, accuracy), &desc, &source, printer);
-            print_implausible(&texts.implausible, &desc, &set, &args);
-            // The checks that read a sweep's fit as its joint's judge the data with a named bump
-            // moved back: the bump is not a scale's or a held joint's too.
-            // The rows the screens kept: a point dropped is no sweep's and no held joint's.
-            let kept = found.kept.as_ref().unwrap_or(&set);
-            let (judged_cal, judged) = found.bumps_undone.as_ref().map_or((cal, kept), |u| (&u.cal, &u.set));
-            print_scale_doubts((judged_cal, &desc, judged.rows()), &texts.implausible, &args.data);
-            let own = own_poses_miss(cal, (&desc, kept), &args, &texts.implausible);
-            print_moved_sweeps(judged_cal, &desc, judged, &args.data, own.as_ref());
-            if let Some(own) = own {
-                eprintln!("warning: {}", own.text);
-            }
+            print_axes((cal, accuracy), &desc, &args.data.display().to_string(), printer);
+            print_axis_findings(&judged, (cal, &desc, &set), &found, &args.data);
         }
     }
     say!(printer, "{}", deviation_line(&texts.deviation));
@@ -268,6 +275,78 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     Ok(())
 }
 
+/// What the checks said of an axis-experiment calibration before it is written.
+struct Judged {
+    /// The sanity checks' findings ([`sanity_findings`]).
+    sanity: Vec<Implausible>,
+    /// Them in words, with the file lines they are about.
+    sanity_said: Vec<String>,
+    /// The miss of the file's own validation poses.
+    own: Option<own_poses::OwnPosesWarning>,
+}
+
+/// The sanity checks and the test on the file's own validation poses of `record`'s
+/// calibration (an axis-experiment one: a free-pose fit judges itself), their warnings kept in
+/// `record` after those the calibration gave, for every command that reads it.
+fn judge(
+    record: &mut CalibrationRecord,
+    args: &Args,
+    (desc, set): (&RobotDescription, &MeasurementSet),
+    found: &AxesFound,
+) -> Judged {
+    let sanity = sanity_findings(record, desc, found);
+    // The rows the screens kept: a point dropped is no sweep's and no held joint's.
+    let kept = found.kept.as_ref().unwrap_or(set);
+    let own = match &record.reports.free_poses {
+        None => own_poses_miss(&record.calibration, (desc, kept), args, &sanity),
+        Some(_) => None,
+    };
+    let sanity_said = implausible_warnings(&sanity, desc, set, args);
+    record
+        .reports
+        .warnings
+        .extend(sanity_said.iter().chain(own.as_ref().map(|o| &o.text)).cloned());
+    Judged {
+        sanity,
+        sanity_said,
+        own,
+    }
+}
+
+/// The warnings and notes on an axis-experiment calibration `cal` of `set`: what `judged`
+/// found, the command-column scale doubts and the sweeps out of place.
+fn print_axis_findings(
+    judged: &Judged,
+    (cal, desc, set): (&Calibration, &RobotDescription, &MeasurementSet),
+    found: &AxesFound,
+    data: &std::path::Path,
+) {
+    for warning in &judged.sanity_said {
+        eprintln!("warning: {warning}");
+    }
+    // The checks that read a sweep's fit as its joint's judge the data with a named bump
+    // moved back: the bump is not a scale's or a held joint's too; a point the screens dropped
+    // is no sweep's and no held joint's.
+    let kept = found.kept.as_ref().unwrap_or(set);
+    let (judged_cal, judged_set) = found.bumps_undone.as_ref().map_or((cal, kept), |u| (&u.cal, &u.set));
+    print_scale_doubts((judged_cal, desc, judged_set.rows()), &judged.sanity, data);
+    print_moved_sweeps(judged_cal, desc, judged_set, data, judged.own.as_ref());
+    if let Some(own) = &judged.own {
+        eprintln!("warning: {}", own.text);
+    }
+}
+
+/// The sanity checks' findings on `record` ([`outputs::sanity_findings`]), with the
+/// instrument axis and the bumps the sweep screen found.
+fn sanity_findings(record: &CalibrationRecord, desc: &RobotDescription, found: &AxesFound) -> Vec<Implausible> {
+    outputs::sanity_findings(
+        record,
+        desc,
+        found.column_source.as_ref(),
+        found.bumps_undone.as_ref().map(|u| implausible(&u.cal, desc)),
+    )
+}
+
 /// Every output of `record` rendered (`outputs::render` with the options `args` give), with
 /// the detection limits in `report.md`.
 fn render(
@@ -282,8 +361,6 @@ fn render(
             root: args.urdf_root,
         },
         joint_map_step: args.joint_map_step,
-        column_source: found.column_source.clone(),
-        bumps_undone: found.bumps_undone.as_ref().map(|u| implausible(&u.cal, desc)),
     };
     let source = args.data.display().to_string();
     let poses = export_poses(set, desc, &record.calibration);

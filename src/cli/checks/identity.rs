@@ -168,6 +168,13 @@ pub fn read_calibration_warned(
     if cal.model_digest.as_deref() != Some(cal.robot.digest().as_str()) {
         cal.plausible_for(desc).with_context(|| path.display().to_string())?;
     }
+    warnings.extend(record.reports.warnings.iter().map(|w| {
+        format!(
+            "{}: `axiscal calibrate` warned of this when it wrote the file (key `warnings`), and every result made with \
+             it carries it: {w}",
+            path.display()
+        )
+    }));
     Ok((record, warnings))
 }
 
