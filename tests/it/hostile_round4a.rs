@@ -11,7 +11,12 @@ use std::path::Path;
 
 /// Writes the campaign, its calibration and every altered input into `dir`.
 fn write_inputs(dir: &Path) {
-    calibrated_campaign(dir, 5);
+    write_inputs_of(dir, 5);
+}
+
+/// [`write_inputs`] with the campaign of `seed`.
+fn write_inputs_of(dir: &Path, seed: u64) {
+    calibrated_campaign(dir, seed);
     let campaign = dir.join("campaign.csv");
     let all = |_: &[String]| true;
     let in_experiment = |name: &'static str, column: usize, factor: f64| {
@@ -188,4 +193,43 @@ fn a_clean_campaign_passes_the_round_4a_checks() {
         .success();
     let e = crate::common::stderr(&a);
     assert!(!e.contains("warning"), "{e}");
+}
+
+/// Every coordinate scaled by 1.01 (an instrument's scale setting): the tool fit misses its
+/// targets, and the warning reads the scale off their spacings, `1.01` within 3 of the sigma
+/// it states; a target moved 20 mm (S2) fits no scale and is left a point off. Seeds 5 and 6,
+/// taken once.
+#[test]
+fn tool_targets_spaced_by_a_scale_are_said_as_one() {
+    for seed in [5, 6] {
+        let dir = tempfile::tempdir().unwrap();
+        write_inputs_of(dir.path(), seed);
+        let scaled = altered_csv(
+            &dir.path().join("campaign.csv"),
+            "scaled.csv",
+            |_| true,
+            |f| scale_fields(f, 4..7, 1.01),
+        );
+        let said = |data: &Path| {
+            let a = crate::common::axiscal()
+                .current_dir(dir.path())
+                .arg("calibrate")
+                .arg(data)
+                .args(["--out", "out", "--force"])
+                .assert()
+                .success();
+            crate::common::stderr(&a)
+        };
+        let e = said(&scaled);
+        let words = "times as far apart as `[tool] targets_mm` (+- ";
+        let at = e.find(words).unwrap_or_else(|| panic!("seed {seed}: {e}"));
+        let factor: f64 = e[..at].rsplit(' ').nth(1).unwrap().parse().unwrap();
+        let sigma: f64 = e[at + words.len()..].split(')').next().unwrap().parse().unwrap();
+        assert!((factor - 1.01).abs() < 3.0 * sigma, "seed {seed}: {factor} +- {sigma}");
+        let e = said(&dir.path().join("tool-off.csv"));
+        assert!(
+            e.contains("warning: the tool frame's fit") && !e.contains(words),
+            "seed {seed}: {e}"
+        );
+    }
 }
