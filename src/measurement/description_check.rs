@@ -45,6 +45,7 @@ pub fn description_warnings(desc: &RobotDescription, source: Option<&SourceChain
     };
     let written = Written { desc, dh, fields };
     let mut warnings: Vec<UnitSlip> = twists_in_radians(dh).into_iter().collect();
+    warnings.extend(lone_radian_twists(written_twists(desc, dh, source.is_none())));
     warnings.extend(
         zero_lengths(&written)
             .or_else(|| arm_too_small(&written))
@@ -92,6 +93,59 @@ fn twists_in_radians(dh: &[DhParams]) -> Option<UnitSlip> {
             ),
         }
     })
+}
+
+/// The twists as the file writes them, each with its field \[deg\]: the `dh` rows' `alpha_deg`,
+/// or the rows' `alpha_deg` and `beta_deg` when the file writes `rows` (`as_rows`); none for a
+/// URDF (its angles are radians by the format).
+fn written_twists(desc: &RobotDescription, dh: &[DhParams], as_rows: bool) -> Vec<(String, f64)> {
+    let mut twists: Vec<(String, f64)> = dh
+        .iter()
+        .enumerate()
+        .map(|(k, r)| (format!("joints[{k}].dh.alpha_deg"), r.alpha_rad.to_degrees()))
+        .collect();
+    if as_rows {
+        for (i, r) in desc.rows.iter().enumerate() {
+            twists.push((format!("rows[{i}].alpha_deg"), r.alpha_deg));
+            twists.push((format!("rows[{i}].beta_deg"), r.beta_deg));
+        }
+    }
+    twists
+}
+
+/// A twist of `twists` in the radian form of 90 or 180 deg ([`RADIAN_TWIST_TOLERANCE_DEG`])
+/// where another twist of the file is plainly in degrees (beyond pi): one value written in
+/// radians among degrees, which turns its axis by a degree and a half (or three). Every twist
+/// in radians is [`twists_in_radians`]'s.
+fn lone_radian_twists(twists: Vec<(String, f64)>) -> Vec<UnitSlip> {
+    let in_degrees: Vec<&(String, f64)> = twists
+        .iter()
+        .filter(|(_, a)| a.abs() > PI + RADIAN_TWIST_TOLERANCE_DEG)
+        .collect();
+    let Some((other, other_deg)) = in_degrees.first() else {
+        return Vec::new();
+    };
+    twists
+        .iter()
+        .filter_map(|(field, a)| {
+            let radians = [PI / 2.0, PI]
+                .into_iter()
+                .find(|r| (a.abs() - r).abs() <= RADIAN_TWIST_TOLERANCE_DEG)?;
+            let meant = a.signum() * radians.to_degrees();
+            Some(UnitSlip {
+                field: field.clone(),
+                message: format!(
+                    "{} deg is the radian form of {} deg, where the file's other twists are in degrees (`{other}` {}): \
+                     the description turns this axis by {} deg; write {}",
+                    format_f64(*a),
+                    format_f64(meant),
+                    format_f64(*other_deg),
+                    format_f64(*a),
+                    format_f64(meant)
+                ),
+            })
+        })
+        .collect()
 }
 
 /// The revolute joints of `desc`.
@@ -265,6 +319,21 @@ mod tests {
         assert_eq!(twists_in_radians(&rows(&[90.0, 0.0, -90.0])), None);
         assert_eq!(twists_in_radians(&rows(&[0.0, 0.0])), None);
         assert_eq!(twists_in_radians(&rows(&[0.12, 180.0, 0.03])), None);
+        // One twist in radians among degrees: that one, by its field; degrees alone: none.
+        let field = |k: usize, deg: f64| (format!("rows[{k}].alpha_deg"), deg);
+        // Radians as a hand-written file rounds them, to four decimals.
+        let written = |r: f64| (r * 1e4).round() / 1e4;
+        let (half, whole) = (written(PI / 2.0), written(PI));
+        let lone = lone_radian_twists(vec![field(0, 90.0), field(1, -half), field(2, 0.0), field(3, whole)]);
+        let fields: Vec<&str> = lone.iter().map(|s| s.field.as_str()).collect();
+        assert_eq!(fields, ["rows[1].alpha_deg", "rows[3].alpha_deg"]);
+        assert!(
+            lone[0].message.contains("radian form of -90 deg"),
+            "{}",
+            lone[0].message
+        );
+        assert!(lone_radian_twists(vec![field(0, 90.0), field(1, -90.0), field(2, 1.2)]).is_empty());
+        assert!(lone_radian_twists(vec![field(0, half), field(1, 0.0)]).is_empty());
         assert_eq!(twists_in_radians(&rows(&[0.12, -0.4])), None);
     }
 }

@@ -360,6 +360,31 @@ fn a_dh_table_in_other_units_is_named() {
     assert!(e.contains("`joints[2].dh.a_mm`"), "{e}");
 }
 
+/// One twist of a DH table written in radians among degrees (the elbow's `alpha_deg = -1.5708`
+/// beside the column's -90): a warning naming that joint's key and the -90 deg meant; the
+/// table in degrees says nothing of twists.
+#[test]
+fn one_dh_twist_in_radians_among_degrees_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = dir.path().join("lone.toml");
+    let table = dh_robot(1.0, 70.0);
+    let at = table.rfind("alpha_deg = -90.0").unwrap();
+    let lone = format!(
+        "{}alpha_deg = -1.5708{}",
+        &table[..at],
+        &table[at + "alpha_deg = -90.0".len()..]
+    );
+    std::fs::write(&robot, lone).unwrap();
+    let e = crate::common::stderr(&axiscal().arg("describe").arg(&robot).assert().success());
+    assert!(
+        e.contains("warning: ") && e.contains("`joints[2].dh.alpha_deg`") && e.contains("radian form of -90 deg"),
+        "{e}"
+    );
+    std::fs::write(&robot, dh_robot(1.0, 70.0)).unwrap();
+    let e = crate::common::stderr(&axiscal().arg("describe").arg(&robot).assert().success());
+    assert!(!e.contains("alpha_deg"), "{e}");
+}
+
 /// The shipped FANUC URDF description with `from` replaced by `to` in its URDF (`urdf`) or
 /// its TOML (`toml`), in `dir`: the description's path.
 fn fanuc(dir: &Path, k: usize, urdf: (&str, &str), toml: (&str, &str)) -> PathBuf {
