@@ -8,7 +8,7 @@
 
 use super::format_f64;
 use super::unit_check::{UnitSlip, ZERO_LENGTH_M};
-use crate::kinematics::{DhParams, JointKind, SourceChain};
+use crate::kinematics::{DhConvention, DhParams, JointKind, SourceChain};
 use crate::robot::RobotDescription;
 use nalgebra::{Point3, Vector3};
 use std::f64::consts::PI;
@@ -46,6 +46,9 @@ pub fn description_warnings(desc: &RobotDescription, source: Option<&SourceChain
     let written = Written { desc, dh, fields };
     let mut warnings: Vec<UnitSlip> = twists_in_radians(dh).into_iter().collect();
     warnings.extend(lone_radian_twists(written_twists(desc, dh, source.is_none())));
+    if let Some(SourceChain::Dh { convention, rows, .. }) = source {
+        warnings.extend(other_convention(*convention, rows));
+    }
     warnings.extend(
         zero_lengths(&written)
             .or_else(|| arm_too_small(&written))
@@ -146,6 +149,34 @@ fn lone_radian_twists(twists: Vec<(String, f64)>) -> Vec<UnitSlip> {
             })
         })
         .collect()
+}
+
+/// A `dh` table whose twists are laid out as the other convention lays them out: a classic
+/// table gives the last frame the last joint's axis (the last twist 0, the flange turning with
+/// it) and twists the first row off the base's z; a modified one gives the base frame the first
+/// joint's axis (the first twist 0) and twists the last row. Said on a table with a twist of 0 at
+/// one end and not at the other, the ends the declared `dh_convention` does not fix. Every
+/// shipped DH description passes (a SCARA's twists are 0 at both ends).
+fn other_convention(convention: DhConvention, rows: &[DhParams]) -> Option<UnitSlip> {
+    let (first, last) = (rows.first()?.alpha_rad, rows.last()?.alpha_rad);
+    let zero = |a: f64| a.to_degrees().abs() < RADIAN_TWIST_TOLERANCE_DEG;
+    let (declared, laid_out) = match convention {
+        DhConvention::Modified if !zero(first) && zero(last) => ("modified", "classic"),
+        DhConvention::Classic if zero(first) && !zero(last) => ("classic", "modified"),
+        _ => return None,
+    };
+    Some(UnitSlip {
+        field: "dh_convention".into(),
+        message: format!(
+            "\"{declared}\", but the twists are laid out as a {laid_out} table's (the first row's alpha_deg {}, the last \
+             row's {}: a {laid_out} table twists its {} row and not its {} one); read as {declared}, the description is \
+             another robot: check the convention of the table's source",
+            format_f64(first.to_degrees()),
+            format_f64(last.to_degrees()),
+            if laid_out == "classic" { "first" } else { "last" },
+            if laid_out == "classic" { "last" } else { "first" },
+        ),
+    })
 }
 
 /// The revolute joints of `desc`.
@@ -297,6 +328,27 @@ fn targets_beyond_chain(w: &Written<'_>) -> Option<UnitSlip> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 6R arm's classic twists read as modified, or its modified ones as classic: said; each
+    /// under its own convention, and a SCARA's (0 at both ends) under either: not.
+    #[test]
+    fn a_table_laid_out_in_the_other_convention_is_said() {
+        let classic = rows(&[-90.0, 0.0, -90.0, 90.0, -90.0, 0.0]);
+        let modified = rows(&[0.0, -90.0, 0.0, -90.0, 90.0, -90.0]);
+        let scara = rows(&[0.0, 180.0, 0.0, 0.0]);
+        let said = other_convention(DhConvention::Modified, &classic).expect("classic read as modified");
+        assert!(
+            said.message.contains("laid out as a classic table's"),
+            "{}",
+            said.message
+        );
+        assert!(other_convention(DhConvention::Classic, &modified).is_some());
+        assert_eq!(other_convention(DhConvention::Classic, &classic), None);
+        assert_eq!(other_convention(DhConvention::Modified, &modified), None);
+        for convention in [DhConvention::Classic, DhConvention::Modified] {
+            assert_eq!(other_convention(convention, &scara), None);
+        }
+    }
 
     fn rows(twists_deg: &[f64]) -> Vec<DhParams> {
         twists_deg

@@ -385,6 +385,32 @@ fn one_dh_twist_in_radians_among_degrees_is_named() {
     assert!(!e.contains("alpha_deg"), "{e}");
 }
 
+/// The shipped classic 6R table (`arm6-dh.toml`) declared `modified`: a warning naming
+/// `dh_convention` and the layout it reads as; declared as written: none.
+#[test]
+fn a_classic_table_declared_modified_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = shipped("scenarios/robots/arm6-dh.toml");
+    let robot = dir.path().join("arm6.toml");
+    for (convention, said) in [("modified", true), ("classic", false)] {
+        std::fs::write(
+            &robot,
+            changed(
+                &table,
+                "dh_convention = \"classic\"",
+                &format!("dh_convention = \"{convention}\""),
+            ),
+        )
+        .unwrap();
+        let e = crate::common::stderr(&axiscal().arg("describe").arg(&robot).assert().success());
+        assert_eq!(
+            e.contains("`dh_convention`: \"modified\", but the twists are laid out as a classic table's"),
+            said,
+            "{convention}: {e}"
+        );
+    }
+}
+
 /// The shipped FANUC URDF description with `from` replaced by `to` in its URDF (`urdf`) or
 /// its TOML (`toml`), in `dir`: the description's path.
 fn fanuc(dir: &Path, k: usize, urdf: (&str, &str), toml: (&str, &str)) -> PathBuf {
