@@ -193,6 +193,7 @@ fn positions(set: &MeasurementSet, f: impl Fn([f64; 3]) -> [f64; 3]) -> Measurem
 #[test]
 fn mirrored_and_scaled_frames_and_a_shifted_half_sweep_are_said() {
     let paper = (RobotDescription::asea_irb6l(), common::axes_only_campaign(14));
+    let mut units_named = 0;
     for (name, (desc, clean)) in [
         ("paper", paper),
         ("table-prpp", simulated("table-prpp", 5)),
@@ -234,8 +235,37 @@ fn mirrored_and_scaled_frames_and_a_shifted_half_sweep_are_said() {
                 matches!(found[..], [Implausible::Size { factor, .. }] if (factor / scale - 1.0).abs() < 0.1),
                 "{name}, x{scale}: {found:?}"
             );
+            assert!(
+                !found[0].to_string().contains("look like"),
+                "{name}, x{scale}: {}",
+                found[0]
+            );
+        }
+        // Inches and centimetres read as mm: a size said, and the unit named where the factor
+        // is within the size tolerance of the unit's (the paper robot's; the described tool
+        // frame, held fixed, dominates a small positioner's lengths at a 25th of its size).
+        for (scale, unit) in [(1.0 / 25.4, "inches"), (0.1, "centimetres")] {
+            let scaled = positions(&clean, |p| p.map(|c| c * scale));
+            if refused(&scaled) {
+                continue;
+            }
+            let found = said(&scaled);
+            let Implausible::Size { factor, .. } = found[0] else {
+                panic!("{name}, x{scale}: {found:?}");
+            };
+            let near = (factor / scale - 1.0).abs() < axiscal::calibration::procedure::SIZE_TOLERANCE;
+            assert!(near || name != "paper", "{name}, x{scale}: {factor}");
+            let named = found[0]
+                .to_string()
+                .contains(&format!("look like {unit} read as millimetres"));
+            assert_eq!(named, near, "{name}, x{scale}: {}", found[0]);
+            units_named += usize::from(named);
         }
     }
+    assert!(
+        units_named >= 2,
+        "no scale of inches or centimetres was calibrated and named ({units_named})"
+    );
     // Half of axis 3's points moved 20 mm: no single point stands out of its sweep, the sweep
     // stands out of the others.
     let clean = common::axes_only_campaign(15);

@@ -241,10 +241,24 @@ impl std::fmt::Display for Implausible {
                 f,
                 "the calibrated robot is the mirror image of its description ({flipped} of its {lengths} lengths have the description's size with the opposite sign): the instrument frame is left-handed (one coordinate's sign flipped on export); check the x_mm, y_mm, z_mm columns"
             ),
-            Implausible::Size { factor, lengths } => write!(
-                f,
-                "the calibrated robot is {factor:.3} times its description's size (over its {lengths} lengths): check the unit and scale of x_mm, y_mm, z_mm (an instrument exporting other units), or whether the description is of this robot"
-            ),
+            Implausible::Size { factor, lengths } => {
+                // A unit's factor within the size tolerance of the one found: that unit, named.
+                let unit = crate::measurement::unit_check::LENGTH_SLIPS
+                    .iter()
+                    .find(|(u, _)| (factor / u - 1.0).abs() < SIZE_TOLERANCE)
+                    .map_or_else(String::new, |(u, name)| {
+                        let ratio = if *u < 1.0 {
+                            format!("1/{}", crate::measurement::format_f64(1.0 / u))
+                        } else {
+                            crate::measurement::format_f64(*u)
+                        };
+                        format!(" ({factor:.4} is near {ratio}: the coordinates look like {name} read as millimetres)")
+                    });
+                write!(
+                    f,
+                    "the calibrated robot is {factor:.3} times its description's size (over its {lengths} lengths){unit}: check the unit and scale of x_mm, y_mm, z_mm (an instrument exporting other units), or whether the description is of this robot"
+                )
+            }
             Implausible::FlippedAxis {
                 joint,
                 experiment,
