@@ -174,6 +174,64 @@ fn look_alike_columns(
     Ok(())
 }
 
+/// Length units a coordinate column's header may carry, as written after the coordinate's
+/// letter with every other character dropped, and the factor to millimetres.
+const HEADER_LENGTH_UNITS: [(&str, f64); 6] = [
+    ("mm", 1.0),
+    ("m", 1e3),
+    ("cm", 10.0),
+    ("in", 25.4),
+    ("inch", 25.4),
+    ("um", 1e-3),
+];
+
+/// A coordinate column (`x_mm`, `y_mm`, `z_mm`) missing from `index` whose coordinate a header
+/// name writes with its unit otherwise (`X [mm]`, `x(m)`, `X`; lower-cased, every character but
+/// letters dropped): an error naming both, with the rename (and the conversion to millimetres
+/// its unit needs), rather than the column's absence.
+fn spelled_coordinates(
+    header: &csv::StringRecord,
+    index: &HashMap<String, usize>,
+    path: &Path,
+    line: u64,
+) -> Result<(), MeasurementFileError> {
+    for axis in ["x", "y", "z"] {
+        let column = format!("{axis}_mm");
+        if index.contains_key(&column) {
+            continue;
+        }
+        for found in header.iter() {
+            let letters: String = found
+                .chars()
+                .filter(char::is_ascii_alphabetic)
+                .map(|c| c.to_ascii_lowercase())
+                .collect();
+            let Some(unit) = letters.strip_prefix(axis) else {
+                continue;
+            };
+            let advice = match HEADER_LENGTH_UNITS.iter().find(|(u, _)| *u == unit) {
+                None if unit.is_empty() => format!(
+                    "without a unit: rename it `{column}` if it holds millimetres (else convert it to millimetres first)"
+                ),
+                None => continue,
+                Some((u, _)) if *u == "mm" => format!("in {u}: rename it `{column}`"),
+                Some((u, factor)) => format!(
+                    "in {u}: multiply it by {} to millimetres and name it `{column}`",
+                    crate::measurement::format_f64(*factor)
+                ),
+            };
+            return Err(MeasurementFileError::CoordinateSpelled {
+                path: path.into(),
+                line,
+                column,
+                found: found.escape_debug().to_string(),
+                advice,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The columns of the file's `header` (at `line` of `path`), checked against `joint_count`.
 pub(super) fn find_columns(
     header: &csv::StringRecord,
@@ -199,6 +257,7 @@ pub(super) fn find_columns(
         });
     }
     look_alike_columns(header, &index, joint_count, path, line)?;
+    spelled_coordinates(header, &index, path, line)?;
     let required = |column: &str| {
         index
             .get(column)

@@ -78,6 +78,24 @@ pub enum MeasurementFileError {
         /// The separator found, in words (`';'`, `a tab`).
         separator: String,
     },
+    /// A coordinate column is missing and a header name is that coordinate with its unit written
+    /// otherwise (`X [mm]`, `x (m)`, `X`): another tool's name for it.
+    #[error(
+        "{path}:{line}: column `{column}`: missing; the header has \"{found}\", which looks like the same coordinate \
+         {advice}"
+    )]
+    CoordinateSpelled {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the header.
+        line: u64,
+        /// The missing column (`x_mm`).
+        column: String,
+        /// The header name (non-ASCII characters escaped).
+        found: String,
+        /// Its unit in words and what to do (`in m: multiply it by 1000 ...`).
+        advice: String,
+    },
     /// A required column is missing and a header name spells it with a look-alike character
     /// (a non-breaking space, a Unicode dash).
     #[error(

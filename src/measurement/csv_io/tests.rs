@@ -72,6 +72,33 @@ fn missing_column() {
     assert!(matches!(e, MeasurementFileError::MissingColumn { .. }));
 }
 
+/// Coordinates headed as other tools head them: the rename, and the conversion a unit needs;
+/// a name that only starts with the letter (`xyz_id`) is no coordinate.
+#[test]
+fn a_coordinate_headed_with_its_unit_otherwise_is_named() {
+    let row = "\naxis1,1,0,0,1,2,3,0,0\n";
+    for (names, found, says) in [
+        ("X [mm],Y [mm],Z [mm]", "X [mm]", "rename it `x_mm`"),
+        ("x_mm,y (m),z (m)", "y (m)", "multiply it by 1000 to millimetres"),
+        ("x_mm,y_mm,Z", "Z", "without a unit"),
+        ("x_mm,y_mm,Z/in", "Z/in", "multiply it by 25.4"),
+    ] {
+        let text = format!("experiment,moved_joint,step,target,{names},cmd_1,cmd_2{row}");
+        let column = format!("{}_mm", found[..1].to_ascii_lowercase());
+        let e = expect_error(&text, Some(2), 1, &column);
+        let message = e.to_string();
+        assert!(
+            matches!(e, MeasurementFileError::CoordinateSpelled { .. })
+                && message.contains(&format!("\"{found}\""))
+                && message.contains(says),
+            "{names}: {message}"
+        );
+    }
+    let text = format!("experiment,moved_joint,step,target,x_mm,xyz_id,z_mm,cmd_1,cmd_2{row}");
+    let e = expect_error(&text, Some(2), 1, "y_mm");
+    assert!(matches!(e, MeasurementFileError::MissingColumn { .. }), "{e}");
+}
+
 #[test]
 fn line_numbers_count_comment_lines() {
     let text = format!("# one\n# two\n{HEADER}\naxis1,1,0,0,1,2,3,0,0\n# three\naxis1,1,1,0,1,oops,3,0,0\n");
