@@ -11,12 +11,7 @@ use std::path::Path;
 
 /// Writes the campaign, its calibration and every altered input into `dir`.
 fn write_inputs(dir: &Path) {
-    write_inputs_of(dir, 5);
-}
-
-/// [`write_inputs`] with the campaign of `seed`.
-fn write_inputs_of(dir: &Path, seed: u64) {
-    calibrated_campaign(dir, seed);
+    calibrated_campaign(dir, 5);
     let campaign = dir.join("campaign.csv");
     let all = |_: &[String]| true;
     let in_experiment = |name: &'static str, column: usize, factor: f64| {
@@ -46,11 +41,7 @@ fn write_inputs_of(dir: &Path, seed: u64) {
         |column: usize| move |f: &mut Vec<String>| f[column] = (f[column].parse::<f64>().unwrap() + 90.0).to_string();
     altered_csv(&campaign, "off90-2.csv", all, offset(8));
     altered_csv(&campaign, "off90-3.csv", all, offset(9));
-    altered_csv(&campaign, "tool-off.csv", all, |f| {
-        if f[0] == "tool" && f[3] == "1" {
-            f[4] = (f[4].parse::<f64>().unwrap() + 20.0).to_string();
-        }
-    });
+    altered_csv(&campaign, "tool-off.csv", all, |f| tool_target_off(f));
     altered_csv(&campaign, "only-axis1.csv", |f| f[0] == "axis1", |_| {});
     let text = std::fs::read_to_string(&campaign).unwrap();
     let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
@@ -195,6 +186,13 @@ fn a_clean_campaign_passes_the_round_4a_checks() {
     assert!(!e.contains("warning"), "{e}");
 }
 
+/// Tool target 1 moved 20 mm along x, in a row of [`altered_csv`].
+fn tool_target_off(f: &mut [String]) {
+    if f[0] == "tool" && f[3] == "1" {
+        f[4] = (f[4].parse::<f64>().unwrap() + 20.0).to_string();
+    }
+}
+
 /// Every coordinate scaled by 1.01 (an instrument's scale setting): the tool fit misses its
 /// targets, and the warning reads the scale off their spacings, `1.01` within 3 of the sigma
 /// it states; a target moved 20 mm (S2) fits no scale and is left a point off. Seeds 5 and 6,
@@ -203,30 +201,18 @@ fn a_clean_campaign_passes_the_round_4a_checks() {
 fn tool_targets_spaced_by_a_scale_are_said_as_one() {
     for seed in [5, 6] {
         let dir = tempfile::tempdir().unwrap();
-        write_inputs_of(dir.path(), seed);
-        let scaled = altered_csv(
-            &dir.path().join("campaign.csv"),
-            "scaled.csv",
-            |_| true,
-            |f| scale_fields(f, 4..7, 1.01),
-        );
-        let said = |data: &Path| {
-            let a = crate::common::axiscal()
-                .current_dir(dir.path())
-                .arg("calibrate")
-                .arg(data)
-                .args(["--out", "out", "--force"])
-                .assert()
-                .success();
-            crate::common::stderr(&a)
-        };
+        crate::common::simulate_analytic(dir.path(), 40, seed, "campaign.csv");
+        let campaign = dir.path().join("campaign.csv");
+        let scaled = altered_csv(&campaign, "scaled.csv", |_| true, |f| scale_fields(f, 4..7, 1.01));
+        let off = altered_csv(&campaign, "tool-off.csv", |_| true, |f| tool_target_off(f));
+        let said = |data: &Path| crate::common::hostile::calibrate_stderr(dir.path(), data);
         let e = said(&scaled);
         let words = "times as far apart as `[tool] targets_mm` (+- ";
         let at = e.find(words).unwrap_or_else(|| panic!("seed {seed}: {e}"));
         let factor: f64 = e[..at].rsplit(' ').nth(1).unwrap().parse().unwrap();
         let sigma: f64 = e[at + words.len()..].split(')').next().unwrap().parse().unwrap();
         assert!((factor - 1.01).abs() < 3.0 * sigma, "seed {seed}: {factor} +- {sigma}");
-        let e = said(&dir.path().join("tool-off.csv"));
+        let e = said(&off);
         assert!(
             e.contains("warning: the tool frame's fit") && !e.contains(words),
             "seed {seed}: {e}"

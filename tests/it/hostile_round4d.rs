@@ -260,16 +260,7 @@ fn a_model_that_misses_the_files_own_validation_poses_is_said() {
         },
     );
     let own = "misses this file's own 40 validation poses";
-    let calibrate = |data: &Path| {
-        let a = crate::common::axiscal()
-            .current_dir(dir.path())
-            .arg("calibrate")
-            .arg(data)
-            .args(["--out", "out", "--force"])
-            .assert()
-            .success();
-        crate::common::stderr(&a)
-    };
+    let calibrate = |data: &Path| crate::common::hostile::calibrate_stderr(dir.path(), data);
     let e = calibrate(&gradians);
     assert!(e.contains(own) && e.contains("mm predicted"), "{e}");
     let miss = crate::common::number_after(&e, "(not fitted) by ");

@@ -64,6 +64,18 @@ pub fn edited_calibration(dir: &Path, name: &str, edit: impl FnOnce(&mut serde_j
     std::fs::write(dir.join(name), serde_json::to_string(&value).unwrap()).unwrap();
 }
 
+/// `calibrate DATA --out out --force` run in `dir`, which must succeed: its stderr.
+pub fn calibrate_stderr(dir: &Path, data: &Path) -> String {
+    let a = crate::common::axiscal()
+        .current_dir(dir)
+        .arg("calibrate")
+        .arg(data)
+        .args(["--out", "out", "--force"])
+        .assert()
+        .success();
+    crate::common::stderr(&a)
+}
+
 /// Removes what a case wrote as `out` or `out.csv` in `dir`.
 pub fn clear_outputs(dir: &Path) {
     let _ = std::fs::remove_dir_all(dir.join("out"));
