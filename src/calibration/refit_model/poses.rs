@@ -45,8 +45,8 @@ pub fn validation_poses(rows: &[Measurement], desc: &RobotDescription) -> Vec<Po
 
 /// [`validation_poses`], at most `max` of them, evenly spaced through the file over as many
 /// distinct commands as `max` allows ([`spread_over_configurations`] over their order), and
-/// how many were left out. Only the kept poses are
-/// built; the approach directions still follow every pose of the file.
+/// how many were left out. Only the kept poses are built; the approach directions still
+/// follow every pose of the file.
 pub fn validation_poses_at_most(rows: &[Measurement], desc: &RobotDescription, max: usize) -> (Vec<Pose>, usize) {
     // Every pose's ordinal (the order of its first row) and whether it is a validation pose.
     let mut ordinal: HashMap<(&str, usize), usize> = HashMap::new();
