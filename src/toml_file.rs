@@ -57,7 +57,13 @@ pub fn parse<T: DeserializeOwned + Serialize>(text: &str, path: &Path) -> Result
             path: path.to_owned(),
             message,
         },
-        None => parse_error(e),
+        None => match top_level_key_in_table::<T>(&e, text) {
+            Some(hint) => TomlFileError::Parse {
+                path: path.to_owned(),
+                message: format!("{}; {hint}", one_line_message(&e, text)),
+            },
+            None => parse_error(e),
+        },
     })?;
     let written: toml::Table = toml::from_str(text).map_err(parse_error)?;
     if let Some((key, v)) = non_finite_in(&written, "") {
@@ -316,6 +322,52 @@ fn deepest_key(text: &str) -> Option<(usize, usize, String)> {
 }
 
 /// `line L, column C: message (at `text of the line`)`, or the message alone without a span.
+/// When `e` is an unknown key below a table header that the file reads as a top-level key
+/// (moved to the top of `text`, the key is no longer refused): where the key belongs, in words.
+/// TOML reads every key after `[table]` as that table's, so a top-level key written at the end
+/// of a file is refused as an unknown key of its last table.
+fn top_level_key_in_table<T: DeserializeOwned>(e: &toml::de::Error, text: &str) -> Option<String> {
+    let key = e.message().strip_prefix("unknown field `")?.split('`').next()?;
+    let start = text.floor_char_boundary(e.span()?.start.min(text.len()));
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i + 1);
+    let number = |at: usize| text[..at].matches('\n').count() + 1;
+    let header_at = |at: usize| {
+        text[at..]
+            .lines()
+            .next()
+            .is_some_and(|l| l.trim_start().starts_with('['))
+    };
+    let starts = || {
+        std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .filter(|&i| i < text.len())
+    };
+    let table = starts().rfind(|&i| i < line_start && header_at(i))?;
+    let first = starts().find(|&i| header_at(i))?;
+    let line = &text[line_start..line_end];
+    let moved = format!(
+        "{}\n{}{}",
+        line.trim_end_matches(['\r', '\n']),
+        &text[..line_start],
+        &text[line_end..]
+    );
+    toml::from_str::<toml::Table>(&moved).ok()?;
+    let still_unknown = toml::from_str::<T>(&moved)
+        .err()
+        .is_some_and(|e| e.message().starts_with(&format!("unknown field `{key}`")));
+    (!still_unknown).then(|| {
+        format!(
+            "`{}` is a top-level key, and after the header `{}` (line {}) it is read as that table's: move it above the \
+             first table header (line {})",
+            shown_cell(key),
+            shown_cell(text[table..].lines().next().unwrap_or("").trim()),
+            number(table),
+            number(first)
+        )
+    })
+}
+
 fn one_line_message(e: &toml::de::Error, text: &str) -> String {
     let message = e
         .message()
@@ -355,6 +407,40 @@ mod tests {
     #[serde(deny_unknown_fields)]
     struct Small {
         mass_kg: f64,
+    }
+
+    #[derive(Debug, serde::Deserialize, serde::Serialize)]
+    #[serde(deny_unknown_fields)]
+    struct Nested {
+        name: String,
+        rate: Option<f64>,
+        table: Small,
+    }
+
+    #[test]
+    fn a_top_level_key_written_below_a_table_is_said_to_belong_above_it() {
+        let path = Path::new("s.toml");
+        let text = "name = \"a\"\n\n[table]\nmass_kg = 1.0\nrate = 0.5\n";
+        let message = parse::<Nested>(text, path).unwrap_err().to_string();
+        assert!(
+            message.contains(
+                "`rate` is a top-level key, and after the header `[table]` (line 3) it is read as that table's: move it \
+                 above the first table header (line 3)"
+            ),
+            "{message}"
+        );
+        assert!(message.contains("line 5, column 1: unknown field `rate`"), "{message}");
+        // A key unknown anywhere gets the parser's message alone.
+        let message = parse::<Nested>("name = \"a\"\n[table]\nmass_kg = 1.0\nmas_kg = 2.0\n", path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("unknown field `mas_kg`") && !message.contains("top-level"),
+            "{message}"
+        );
+        // Above the table it is read.
+        let read = parse::<Nested>("name = \"a\"\nrate = 0.5\n[table]\nmass_kg = 1.0\n", path).unwrap();
+        assert_eq!(read.rate, Some(0.5));
     }
 
     #[test]

@@ -5,7 +5,8 @@ use super::output::Outputs;
 use super::printer::Printer;
 use anyhow::{Context, Result, bail};
 use axiscal::harness::scenario::export::{self, RESOLVED_FILE, RUN_FILES, RunLock, SHARD_FILE, TRIALS_FILE};
-use axiscal::harness::scenario::{ResolvedScenario, Shard, Summary, TrialRecord, complete_run};
+use axiscal::harness::scenario::{CampaignTrial, ResolvedScenario, Shard, Summary, Trial, TrialRecord, complete_run};
+use std::path::{Path, PathBuf};
 
 /// Where a record was read: the index of its shard folder and its 1-based line in that
 /// folder's trials file.
@@ -66,7 +67,6 @@ fn check_coverage(
         scenario.cases[first / n].name
     )
 }
-use std::path::{Path, PathBuf};
 
 /// Arguments of `axiscal merge`.
 #[derive(Debug, clap::Args)]
@@ -183,7 +183,8 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
     let resolved_text = axiscal::presets::read_text(&first).with_context(|| format!("reading {}", first.display()))?;
     let scenario = ResolvedScenario::from_resolved_file(&first)?;
     check_splits(&args.dirs)?;
-    let mut names: Option<Vec<String>> = None;
+    let names = CampaignTrial::new(&scenario).metric_names();
+    scenario.check_metrics(&names, &first)?;
     let (mut records, mut origin) = (Vec::new(), Vec::new());
     for (d, dir) in args.dirs.iter().enumerate() {
         let path = dir.join(RESOLVED_FILE);
@@ -195,21 +196,12 @@ pub fn run(args: Args, printer: Printer) -> Result<()> {
                 first.display()
             );
         }
-        let (n, r, lines) = export::csv::read_trials_located(&dir.join(TRIALS_FILE), &scenario)?;
+        let (r, lines) = export::csv::read_trials_located(&dir.join(TRIALS_FILE), &scenario, &names)?;
         origin.extend(lines.into_iter().map(|l| (d, l)));
-        match &names {
-            Some(known) if *known != n => bail!(
-                "{}: metric columns {n:?} differ from the first shard's {known:?}",
-                dir.join(TRIALS_FILE).display()
-            ),
-            _ => names = Some(n),
-        }
         records.extend(r);
     }
-    let names = names.unwrap_or_default();
     check_coverage(&scenario, &args.dirs, &records, &origin)?;
     let records = complete_run(&scenario, records).context("merging the shards")?;
-    scenario.check_metrics(&names, &first)?;
     let outputs = Outputs::new(args.force).inputs_in("a shard", &args.dirs, &[RESOLVED_FILE, TRIALS_FILE]);
     Outputs::check_folder(&args.out)?;
     for name in RUN_FILES {

@@ -71,9 +71,9 @@ pub use result::{
 pub use sanity::{
     ColumnSource, DOUBT_SIGMAS, Implausible, JointSlope, LEAD_SPREAD, MISFIT_RATIO, MisfitSweep,
     PLAUSIBLE_AXIS_TILT_RAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, Refit, SCALE_SIGMAS, SIZE_TOLERANCE,
-    ScaleDoubt, ScaleReach, ScaleSlip, column_source, free_pose_scale_doubts, free_pose_scale_reach,
-    free_pose_scale_slips, implausible, joint_slopes, longest_length_m, named_joints, scale_doubts, scale_reach,
-    with_column_source,
+    SPACING_SIGMAS, ScaleDoubt, ScaleReach, ScaleSlip, SpacingScale, column_source, free_pose_scale_doubts,
+    free_pose_scale_reach, free_pose_scale_slips, implausible, joint_slopes, longest_length_m, named_joints,
+    scale_doubts, scale_reach, tool_spacing_scale, with_column_source,
 };
 pub use screen::{
     OUTLIER_ROUNDS_MAX, OUTLIER_SHARE_MAX, SWEEP_BUMP_FALSE_ALARM, SWEEP_POINTS_FALSE_ALARM, Screening, SweepBump,

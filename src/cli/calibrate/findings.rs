@@ -4,7 +4,7 @@
 use super::Args;
 use super::own_poses::OwnPosesWarning;
 use crate::cli::checks;
-use axiscal::calibration::procedure::{AxisEstimator, Calibration, Implausible, ScaleSlip};
+use axiscal::calibration::procedure::{AxisEstimator, Calibration, Implausible, ScaleSlip, tool_spacing_scale};
 use axiscal::measurement::{Measurement, MeasurementSet};
 use axiscal::plan::TOOL_EXPERIMENT;
 use axiscal::robot::RobotDescription;
@@ -29,17 +29,9 @@ pub(super) fn tool_rows(found: &Implausible, set: &MeasurementSet, data: &Path) 
     format!(" ({} lines {})", data.display(), lines.join(", "))
 }
 
-/// The outlier test's multiple of a spacing's noise: beyond it, the spacings disagree.
-const SPACING_SIGMAS: f64 = 3.0;
-
-/// For a [`Implausible::ToolMisfit`]: when one scale factor `s` of the description's
-/// `[tool] targets_mm` brings every measured spacing between two tool targets within
-/// [`SPACING_SIGMAS`] of its noise (a difference of two points' distance: `sqrt(2)` times a
-/// coordinate's noise, the 3-D RMS over root 3), and `s` departs from 1 by more than that
-/// many of its own sigma (the spacings' noise over the root of their summed squares), the
-/// factor in words: the coordinates (or the description's targets) are scaled, which the
-/// rigid tool fit reads as a point off. A second path to the misfit: distances, no fit.
-fn tool_spacing_scale(found: &Implausible, set: &MeasurementSet, desc: &RobotDescription) -> String {
+/// For a [`Implausible::ToolMisfit`]: the scale the measured tool targets' spacings read
+/// ([`tool_spacing_scale`]), in words, when one brings them all within their noise.
+fn spacing_scale_words(found: &Implausible, set: &MeasurementSet, desc: &RobotDescription) -> String {
     let Implausible::ToolMisfit {
         experiment,
         step,
@@ -49,36 +41,20 @@ fn tool_spacing_scale(found: &Implausible, set: &MeasurementSet, desc: &RobotDes
     else {
         return String::new();
     };
-    let described = &desc.tool.targets_mm;
     let measured: Vec<(usize, [f64; 3])> = set
         .rows()
         .iter()
-        .filter(|m| m.experiment == *experiment && m.step == *step && m.target < described.len())
+        .filter(|m| m.experiment == *experiment && m.step == *step)
         .map(|m| (m.target, m.position_mm))
         .collect();
-    let distance = |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
-    let pairs: Vec<(f64, f64)> = measured
-        .iter()
-        .enumerate()
-        .flat_map(|(i, a)| measured[i + 1..].iter().map(move |b| (a, b)))
-        .filter(|(a, b)| a.0 != b.0)
-        .map(|(a, b)| (distance(&a.1, &b.1), distance(&described[a.0], &described[b.0])))
-        .collect();
-    let squares: f64 = pairs.iter().map(|(_, d)| d * d).sum();
-    if pairs.len() < 2 || squares <= 0.0 {
+    let Some(s) = tool_spacing_scale(&measured, &desc.tool.targets_mm, *noise_mm) else {
         return String::new();
-    }
-    let scale = pairs.iter().map(|(m, d)| m * d).sum::<f64>() / squares;
-    let spacing_sigma_mm = std::f64::consts::SQRT_2 * noise_mm / 3f64.sqrt();
-    let worst_mm = pairs.iter().map(|(m, d)| (m - scale * d).abs()).fold(0.0, f64::max);
-    let scale_sigma = spacing_sigma_mm / squares.sqrt();
-    if worst_mm > SPACING_SIGMAS * spacing_sigma_mm || (scale - 1.0).abs() <= SPACING_SIGMAS * scale_sigma {
-        return String::new();
-    }
+    };
     format!(
-        "; the measured targets are {scale:.4} times as far apart as `[tool] targets_mm` (+- {scale_sigma:.4}), and with \
-         that factor every spacing agrees within {worst_mm:.3} mm: the coordinates are scaled (another unit, an instrument's \
-         scale setting: check a known length) or `[tool] targets_mm` are drawn at another scale, rather than a point off"
+        "; the measured targets are {:.4} times as far apart as `[tool] targets_mm` (+- {:.4}), and with \
+         that factor every spacing agrees within {:.3} mm: the coordinates are scaled (another unit, an instrument's \
+         scale setting: check a known length) or `[tool] targets_mm` are drawn at another scale, rather than a point off",
+        s.scale, s.sigma, s.worst_mm
     )
 }
 
@@ -116,7 +92,7 @@ pub(super) fn implausible_warnings(
         .iter()
         .map(|f| {
             let f = &with_sweep_lines(f.clone(), set);
-            let rows = tool_rows(f, set, &args.data) + &tool_spacing_scale(f, set, desc);
+            let rows = tool_rows(f, set, &args.data) + &spacing_scale_words(f, set, desc);
             let suspect = match f {
                 Implausible::Size { .. } => {
                     let recorded = checks::data_identity(&args.data).ok().flatten();

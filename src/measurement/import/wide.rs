@@ -356,52 +356,83 @@ fn swept_joint(a: &[f64], b: &[f64], tolerance: f64) -> Option<usize> {
     }
 }
 
-/// Per pose: experiment id, moved joint (1-based, 0 for free poses) and step.
+/// Per pose: experiment id, moved joint (1-based, 0 for free poses) and step. Consecutive
+/// poses whose joints all agree within `tolerance` (a pose measured again) are one position of
+/// the robot: a sweep runs over positions, at least 3 of them, each a step of one joint in one
+/// direction, and a pose measured again within a sweep stays in it (its own step).
 pub(super) fn segment(poses: &[Pose], tolerance: f64) -> Vec<(String, usize, usize)> {
-    let n = poses.len();
-    let mut out: Vec<Option<(usize, usize, usize)>> = vec![None; n];
+    let positions = positions(poses, tolerance);
+    let at = |g: usize| poses[positions[g].start].1.as_slice();
+    let n = positions.len();
+    let mut runs: Vec<Option<(usize, usize)>> = vec![None; n];
     let mut runs_of_joint = vec![0usize; poses.first().map_or(0, |p| p.1.len())];
     let mut start = 0;
     while start + 1 < n {
-        let Some(k) = swept_joint(&poses[start].1, &poses[start + 1].1, tolerance) else {
+        let Some(k) = swept_joint(at(start), at(start + 1), tolerance) else {
             start += 1;
             continue;
         };
-        let rising = poses[start + 1].1[k] > poses[start].1[k];
+        let rising = at(start + 1)[k] > at(start)[k];
         let mut end = start + 1;
         while end + 1 < n
-            && swept_joint(&poses[end].1, &poses[end + 1].1, tolerance) == Some(k)
-            && (poses[end + 1].1[k] > poses[end].1[k]) == rising
+            && swept_joint(at(end), at(end + 1), tolerance) == Some(k)
+            && (at(end + 1)[k] > at(end)[k]) == rising
         {
             end += 1;
         }
         if end - start + 1 >= 3 {
             runs_of_joint[k] += 1;
-            for (step, slot) in out[start..=end].iter_mut().enumerate() {
-                *slot = Some((k, runs_of_joint[k], step));
-            }
+            runs[start..=end].fill(Some((k, runs_of_joint[k])));
             start = end + 1;
         } else {
             start += 1;
         }
     }
-    let mut free_step = 0;
-    out.into_iter()
-        .map(|o| match o {
-            Some((k, run, step)) => {
-                let name = if run == 1 {
-                    format!("axis{}", k + 1)
-                } else {
-                    format!("axis{}-{run}", k + 1)
-                };
-                (name, k + 1, step)
-            }
-            None => {
-                free_step += 1;
-                ("poses".to_owned(), 0, free_step - 1)
-            }
-        })
-        .collect()
+    // Steps count poses: a run's from its first position, the free poses' through the file.
+    let (mut run_step, mut free_step) = (0, 0);
+    let mut out = Vec::with_capacity(poses.len());
+    for (g, range) in positions.iter().enumerate() {
+        if g == 0 || runs[g] != runs[g - 1] {
+            run_step = 0;
+        }
+        for _ in range.clone() {
+            out.push(match runs[g] {
+                Some((k, run)) => {
+                    run_step += 1;
+                    let name = if run == 1 {
+                        format!("axis{}", k + 1)
+                    } else {
+                        format!("axis{}-{run}", k + 1)
+                    };
+                    (name, k + 1, run_step - 1)
+                }
+                None => {
+                    free_step += 1;
+                    ("poses".to_owned(), 0, free_step - 1)
+                }
+            });
+        }
+    }
+    out
+}
+
+/// The positions of the robot among `poses`: each a range of consecutive poses whose joints
+/// all agree within `tolerance` with the pose before.
+fn positions(poses: &[Pose], tolerance: f64) -> Vec<std::ops::Range<usize>> {
+    let mut out: Vec<std::ops::Range<usize>> = Vec::new();
+    for (i, pose) in poses.iter().enumerate() {
+        let still = i > 0
+            && pose
+                .1
+                .iter()
+                .zip(&poses[i - 1].1)
+                .all(|(a, b)| (a - b).abs() <= tolerance);
+        match out.last_mut() {
+            Some(last) if still => last.end = i + 1,
+            _ => out.push(i..i + 1),
+        }
+    }
+    out
 }
 
 /// A `--still-tolerance` that recovers the axis experiments of a table whose rows nearly all
@@ -631,5 +662,88 @@ mod tests {
             assert_eq!(got, text, "{x}");
             assert!(got.parse::<f64>().unwrap() >= x);
         }
+    }
+
+    /// Poses at the joint values `q` (one marker each, unused by the segmentation).
+    fn poses(q: &[[f64; 2]]) -> Vec<Pose> {
+        q.iter()
+            .enumerate()
+            .map(|(i, q)| (i + 2, q.to_vec(), vec![Some([0.0; 3])]))
+            .collect()
+    }
+
+    fn names_and_steps(q: &[[f64; 2]]) -> Vec<(String, usize)> {
+        segment(&poses(q), 1e-6)
+            .into_iter()
+            .map(|(name, _, step)| (name, step))
+            .collect()
+    }
+
+    fn named(expected: &[(&str, usize)]) -> Vec<(String, usize)> {
+        expected.iter().map(|&(n, s)| (n.to_owned(), s)).collect()
+    }
+
+    #[test]
+    fn sweeps_of_one_joint_in_one_direction_are_experiments_and_the_rest_free_poses() {
+        let q = [
+            [0.0, 5.0],
+            [10.0, 5.0],
+            [20.0, 5.0],
+            [20.0, 15.0],
+            [20.0, 25.0],
+            [20.0, 35.0],
+            [7.0, 3.0],
+            [30.0, 5.0],
+        ];
+        let expected = [
+            ("axis1", 0),
+            ("axis1", 1),
+            ("axis1", 2),
+            ("axis2", 0),
+            ("axis2", 1),
+            ("axis2", 2),
+            ("poses", 0),
+            ("poses", 1),
+        ];
+        assert_eq!(names_and_steps(&q), named(&expected));
+        // Out and back: two sweeps of joint 1, the turning position in the first.
+        let q = [
+            [0.0, 0.0],
+            [10.0, 0.0],
+            [20.0, 0.0],
+            [10.0, 0.0],
+            [0.0, 0.0],
+            [-10.0, 0.0],
+        ];
+        let expected = [
+            ("axis1", 0),
+            ("axis1", 1),
+            ("axis1", 2),
+            ("axis1-2", 0),
+            ("axis1-2", 1),
+            ("axis1-2", 2),
+        ];
+        assert_eq!(names_and_steps(&q), named(&expected));
+    }
+
+    #[test]
+    fn a_pose_measured_again_stays_in_its_sweep() {
+        let sweep = |again: usize| -> Vec<[f64; 2]> {
+            let mut q: Vec<[f64; 2]> = (0..5).map(|i| [10.0 * i as f64, 5.0]).collect();
+            q.insert(again, q[again]);
+            q
+        };
+        for again in 0..5 {
+            let expected: Vec<(&str, usize)> = (0..6).map(|step| ("axis1", step)).collect();
+            assert_eq!(
+                names_and_steps(&sweep(again)),
+                named(&expected),
+                "pose {again} measured again"
+            );
+        }
+        // Measured again within the still tolerance (a read-back that jitters).
+        let mut q = sweep(2);
+        q[3][1] += 0.5e-6;
+        assert!(names_and_steps(&q).iter().all(|(name, _)| name == "axis1"));
     }
 }

@@ -46,6 +46,7 @@ mod scale;
 mod scale_absorption;
 mod scale_source;
 mod slope;
+mod tool_spacing;
 
 pub use scale::{
     DOUBT_SIGMAS, JointSlope, LEAD_SPREAD, PLAUSIBLE_LEAD_DEVIATION, PLAUSIBLE_TURN_DEVIATION, SCALE_SIGMAS,
@@ -53,6 +54,7 @@ pub use scale::{
     joint_slopes, named_joints, scale_doubts, scale_reach,
 };
 pub use scale_source::{ColumnSource, Refit, column_source};
+pub use tool_spacing::{SPACING_SIGMAS, SpacingScale, tool_spacing_scale};
 
 use super::{AxisReport, Calibration, SIGNIFICANT_SIGMAS};
 use crate::kinematics::JointKind;

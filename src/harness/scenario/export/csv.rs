@@ -125,33 +125,36 @@ impl PartialTrials {
     }
 }
 
-/// Reads a trials file of `scenario`: the metric names (header after `case,trial,seed`, before
-/// `error`) and the records, in file order. A file without the `error` column (written before
-/// failed trials were recorded) has none. A row without its line end at the end of the file
-/// (a run killed while writing it) is dropped when `allow_torn_end`.
-pub fn read_trials(path: &Path, scenario: &ResolvedScenario) -> Result<(Vec<String>, Vec<TrialRecord>), ExportError> {
-    read_trials_with(path, scenario, false).map(|(names, records, _)| (names, records))
+/// Reads a trials file of `scenario` whose metric columns are `expected`, with each record's
+/// 1-based file line (for messages naming a row), in file order. A header other than the one
+/// written for `expected` is refused, naming its first differing column; a file without the
+/// `error` column (written before failed trials were recorded) is read as one whose trials all
+/// succeeded.
+pub fn read_trials_located(
+    path: &Path,
+    scenario: &ResolvedScenario,
+    expected: &[String],
+) -> Result<TrialsWithLines, ExportError> {
+    read_trials_with(path, scenario, expected, false)
 }
 
-/// [`read_trials`] with each record's 1-based file line (for messages naming a row).
-pub fn read_trials_located(path: &Path, scenario: &ResolvedScenario) -> Result<TrialsWithLines, ExportError> {
-    read_trials_with(path, scenario, false)
-}
+/// A trials file's records and each one's 1-based file line.
+pub type TrialsWithLines = (Vec<TrialRecord>, Vec<u64>);
 
-/// A trials file's metric names, its records and each record's 1-based file line.
-pub type TrialsWithLines = (Vec<String>, Vec<TrialRecord>, Vec<u64>);
-
-/// [`read_trials`] of an interrupted run's file: its unfinished last row is dropped.
+/// [`read_trials_located`] of an interrupted run's file: a row without its line end at the end
+/// of the file (the run killed while writing it) is dropped.
 pub fn read_partial_trials(
     path: &Path,
     scenario: &ResolvedScenario,
-) -> Result<(Vec<String>, Vec<TrialRecord>), ExportError> {
-    read_trials_with(path, scenario, true).map(|(names, records, _)| (names, records))
+    expected: &[String],
+) -> Result<Vec<TrialRecord>, ExportError> {
+    read_trials_with(path, scenario, expected, true).map(|(records, _)| records)
 }
 
 fn read_trials_with(
     path: &Path,
     scenario: &ResolvedScenario,
+    expected: &[String],
     allow_torn_end: bool,
 ) -> Result<TrialsWithLines, ExportError> {
     let mut bytes = std::fs::read(path).map_err(io(path))?;
@@ -171,11 +174,7 @@ fn read_trials_with(
         line,
         message,
     };
-    if head.len() < 3 || head[..3] != ["case", "trial", "seed"] {
-        return Err(bad(1, "header must start with case,trial,seed".into()));
-    }
-    let has_error = head.last().is_some_and(|h| h == ERROR_COLUMN);
-    let names = head[3..head.len() - usize::from(has_error)].to_vec();
+    let has_error = check_header(&head, expected).map_err(|message| bad(1, message))?;
     let (mut records, mut lines) = (Vec::new(), Vec::new());
     for rec in reader.records() {
         let rec = rec.map_err(|e| csv_error(path, e))?;
@@ -186,10 +185,46 @@ fn read_trials_with(
                 format!("{} columns, the header has {}", rec.len(), head.len()),
             ));
         }
-        records.push(parse_row(&rec, &head, &names, has_error, scenario).map_err(|e| bad(line, e.to_string()))?);
+        records.push(parse_row(&rec, &head, expected, has_error, scenario).map_err(|e| bad(line, e.to_string()))?);
         lines.push(line);
     }
-    Ok((names, records, lines))
+    Ok((records, lines))
+}
+
+/// Checks a trials file's header `head` against the one [`header`] writes for the metrics
+/// `expected`: whether it ends with the `error` column (a file written before failed trials
+/// were recorded does not), or the first column that differs (one extra, missing, renamed or
+/// moved), by its 1-based number, with the header expected.
+fn check_header(head: &[String], expected: &[String]) -> Result<bool, String> {
+    let want = header(expected);
+    let listed = || want.join(",");
+    if let Some(i) = (0..head.len().min(want.len())).find(|&i| head[i] != want[i]) {
+        let written_before_errors = i == want.len() - 1 && head.len() == want.len() - 1;
+        if !written_before_errors {
+            return Err(format!(
+                "column {} is `{}` where this scenario's trials file has `{}` (header `{}`): the file is another \
+                 scenario's, or a column was added, removed or renamed by hand",
+                i + 1,
+                crate::csv_lines::shown_cell(&head[i]),
+                want[i],
+                listed()
+            ));
+        }
+    }
+    match head.len() {
+        n if n > want.len() => Err(format!(
+            "column {} (`{}`) is one too many: this scenario's trials file ends at `{ERROR_COLUMN}` (header `{}`)",
+            want.len() + 1,
+            crate::csv_lines::shown_cell(&head[want.len()]),
+            listed()
+        )),
+        n if n + 1 < want.len() => Err(format!(
+            "the header ends after column {n}; this scenario's trials file has `{}` next (header `{}`)",
+            want[n],
+            listed()
+        )),
+        n => Ok(n == want.len()),
+    }
 }
 
 /// What is wrong with one cell of a trials file.
@@ -227,7 +262,7 @@ fn parse_row(
         .cases
         .iter()
         .position(|c| c.name == name)
-        .ok_or_else(|| TrialRowError::UnknownCase(name.to_owned()))?;
+        .ok_or_else(|| TrialRowError::UnknownCase(crate::csv_lines::shown_cell(name)))?;
     let whole = |column: &'static str, text: &str| {
         text.parse::<u64>()
             .map_err(|error| TrialRowError::NotWhole { column, error })
@@ -253,7 +288,7 @@ fn parse_row(
                 }),
                 Err(error) => Err(TrialRowError::NotANumber {
                     column: head[i].clone(),
-                    text: rec[i].to_owned(),
+                    text: crate::csv_lines::shown_cell(&rec[i]),
                     error,
                 }),
             })
@@ -266,4 +301,37 @@ fn parse_row(
         values,
         error,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn head(text: &str) -> Vec<String> {
+        text.split(',').map(str::to_owned).collect()
+    }
+
+    #[test]
+    fn the_header_written_is_read_with_or_without_its_error_column() {
+        let names = head("a_mm,b_mm");
+        assert_eq!(check_header(&header(&names), &names), Ok(true));
+        assert_eq!(check_header(&head("case,trial,seed,a_mm,b_mm"), &names), Ok(false));
+    }
+
+    #[test]
+    fn a_header_edited_by_hand_is_refused_at_its_first_differing_column() {
+        let names = head("a_mm,b_mm");
+        let refusal = |text: &str| check_header(&head(text), &names).unwrap_err();
+        assert!(refusal("case,trial,seed,a_mm,b_mm,error,note").starts_with("column 7 (`note`) is one too many"));
+        assert!(refusal("case,trial,seed,a_mm,note,b_mm,error").starts_with("column 5 is `note` where"));
+        assert!(refusal("case,trial,seed,a_mm,b_mm,note").starts_with("column 6 is `note` where"));
+        assert!(refusal("case,trial,seed,b_mm,a_mm,error").starts_with("column 4 is `b_mm` where"));
+        assert!(
+            refusal("case,trial,seed,a_mm")
+                .starts_with("the header ends after column 4; this scenario's trials file has `b_mm` next")
+        );
+        assert!(refusal("trial,case,seed,a_mm,b_mm,error").starts_with("column 1 is `trial` where"));
+        let long = format!("case,trial,seed,a_mm,{},error", "x".repeat(10_000));
+        assert!(refusal(&long).len() < 300);
+    }
 }

@@ -34,16 +34,6 @@ pub enum ResumeError {
     /// The trials file cannot be read.
     #[error(transparent)]
     Trials(#[from] ExportError),
-    /// The trials file has other metric columns.
-    #[error("--resume: {path}: metric columns {found:?} differ from {expected:?}")]
-    OtherMetrics {
-        /// The trials file.
-        path: PathBuf,
-        /// Its metric columns.
-        found: Vec<String>,
-        /// The scenario's.
-        expected: Vec<String>,
-    },
     /// The trials file holds a trial of another shard.
     #[error("--resume: {path} holds trial {trial} of case {case}, outside shard {shard} (units {start}..{end})")]
     OutsideShard {
@@ -87,14 +77,7 @@ pub fn previous_trials(
     if !trials.exists() {
         return Ok(Vec::new());
     }
-    let (found, records) = read_partial_trials(&trials, scenario)?;
-    if found != names {
-        return Err(ResumeError::OtherMetrics {
-            path: trials,
-            found,
-            expected: names.to_vec(),
-        });
-    }
+    let records = read_partial_trials(&trials, scenario, names)?;
     let units = shard.units(scenario.units());
     let n = scenario.trials;
     if let Some(r) = records.iter().find(|r| !units.contains(&r.unit(n))) {
@@ -207,7 +190,13 @@ mod tests {
         let other = previous_trials(dir.path(), &scenario, "another", &names, Shard::ALL);
         assert!(matches!(other, Err(ResumeError::OtherScenario { .. })));
         let metrics = previous_trials(dir.path(), &scenario, "resolved", &["b_mm".to_owned()], Shard::ALL);
-        assert!(matches!(metrics, Err(ResumeError::OtherMetrics { .. })));
+        let Err(ResumeError::Trials(ExportError::Malformed { line: 1, message, .. })) = metrics else {
+            panic!("{metrics:?}")
+        };
+        assert!(
+            message.starts_with("column 4 is `a_mm` where this scenario's trials file has `b_mm`"),
+            "{message}"
+        );
         let first_half = Shard { index: 1, count: 2 };
         let shard = previous_trials(dir.path(), &scenario, "resolved", &names, first_half);
         assert!(
