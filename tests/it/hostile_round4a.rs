@@ -195,27 +195,27 @@ fn tool_target_off(f: &mut [String]) {
 
 /// Every coordinate scaled by 1.01 (an instrument's scale setting): the tool fit misses its
 /// targets, and the warning reads the scale off their spacings, `1.01` within 3 of the sigma
-/// it states; a target moved 20 mm (S2) fits no scale and is left a point off. Seeds 5 and 6,
-/// taken once.
+/// it states; a target moved 20 mm (S2) fits no scale and is left a point off. Seed 5, taken
+/// once (the factor's arithmetic on other poses and scales: the library's
+/// `sanity::tool_spacing` tests).
 #[test]
 fn tool_targets_spaced_by_a_scale_are_said_as_one() {
-    for seed in [5, 6] {
-        let dir = tempfile::tempdir().unwrap();
-        crate::common::simulate_analytic(dir.path(), 40, seed, "campaign.csv");
-        let campaign = dir.path().join("campaign.csv");
-        let scaled = altered_csv(&campaign, "scaled.csv", |_| true, |f| scale_fields(f, 4..7, 1.01));
-        let off = altered_csv(&campaign, "tool-off.csv", |_| true, |f| tool_target_off(f));
-        let said = |data: &Path| crate::common::hostile::calibrate_stderr(dir.path(), data);
-        let e = said(&scaled);
-        let words = "times as far apart as `[tool] targets_mm` (+- ";
-        let at = e.find(words).unwrap_or_else(|| panic!("seed {seed}: {e}"));
-        let factor: f64 = e[..at].rsplit(' ').nth(1).unwrap().parse().unwrap();
-        let sigma: f64 = e[at + words.len()..].split(')').next().unwrap().parse().unwrap();
-        assert!((factor - 1.01).abs() < 3.0 * sigma, "seed {seed}: {factor} +- {sigma}");
-        let e = said(&off);
-        assert!(
-            e.contains("warning: the tool frame's fit") && !e.contains(words),
-            "seed {seed}: {e}"
-        );
-    }
+    let seed = 5;
+    let dir = tempfile::tempdir().unwrap();
+    crate::common::simulate_analytic(dir.path(), 40, seed, "campaign.csv");
+    let campaign = dir.path().join("campaign.csv");
+    let scaled = altered_csv(&campaign, "scaled.csv", |_| true, |f| scale_fields(f, 4..7, 1.01));
+    let off = altered_csv(&campaign, "tool-off.csv", |_| true, |f| tool_target_off(f));
+    let said = |data: &Path| crate::common::hostile::calibrate_stderr(dir.path(), data);
+    let e = said(&scaled);
+    let words = "times as far apart as `[tool] targets_mm` (+- ";
+    let at = e.find(words).unwrap_or_else(|| panic!("seed {seed}: {e}"));
+    let factor: f64 = e[..at].rsplit(' ').nth(1).unwrap().parse().unwrap();
+    let sigma: f64 = e[at + words.len()..].split(')').next().unwrap().parse().unwrap();
+    assert!((factor - 1.01).abs() < 3.0 * sigma, "seed {seed}: {factor} +- {sigma}");
+    let e = said(&off);
+    assert!(
+        e.contains("warning: the tool frame's fit") && !e.contains(words),
+        "seed {seed}: {e}"
+    );
 }

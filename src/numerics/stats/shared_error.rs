@@ -97,7 +97,7 @@ impl SharedErrorChiSquare {
         let wr = w * r;
         let wg = w * g;
         self.independent += r.dot(&wr);
-        self.normal += g.tr_mul(&wg);
+        self.normal.gemm(1.0, &g.transpose(), &wg, 1.0);
         self.projected += g.tr_mul(&wr);
         self.shared_variance += g.columns(0, g.ncols() - self.free).norm_squared();
         self.dof += r.len();
