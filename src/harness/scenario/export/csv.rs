@@ -199,17 +199,14 @@ fn check_header(head: &[String], expected: &[String]) -> Result<bool, String> {
     let want = header(expected);
     let listed = || want.join(",");
     if let Some(i) = (0..head.len().min(want.len())).find(|&i| head[i] != want[i]) {
-        let written_before_errors = i == want.len() - 1 && head.len() == want.len() - 1;
-        if !written_before_errors {
-            return Err(format!(
-                "column {} is `{}` where this scenario's trials file has `{}` (header `{}`): the file is another \
-                 scenario's, or a column was added, removed or renamed by hand",
-                i + 1,
-                crate::csv_lines::shown_cell(&head[i]),
-                want[i],
-                listed()
-            ));
-        }
+        return Err(format!(
+            "column {} is `{}` where this scenario's trials file has `{}` (header `{}`): the file is another \
+             scenario's, or a column was added, removed or renamed by hand",
+            i + 1,
+            crate::csv_lines::shown_cell(&head[i]),
+            want[i],
+            listed()
+        ));
     }
     match head.len() {
         n if n > want.len() => Err(format!(
